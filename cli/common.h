@@ -1,0 +1,41 @@
+// Shared plumbing for the kanesim subcommands: loading a model (parse, elaborate,
+// print diagnostics) and the exit codes. Only the CLI links every layer.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "runtime/engine.h"
+#include "runtime/flat/mechanism.h"
+
+namespace CLI {
+class App;
+}
+
+namespace kanesim::cli {
+
+// Exit codes (DESIGN.md "The command line").
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitModelError = 1;    // model or usage error, with a diagnostic
+inline constexpr int kExitNumerical = 2;     // numerical failure, output so far kept
+inline constexpr int kExitRegression = 3;    // `kanesim test` found a regression
+
+struct LoadOptions {
+  std::string path;                                      // the .mech file
+  std::string model;                                     // model to elaborate ("" = last in file)
+  std::vector<std::string> sets;                         // "name=value" from --set
+  std::vector<std::string> stdlib_dirs;                  // extra search paths
+};
+
+// Parses and elaborates; on error prints diagnostics to stderr and returns false.
+bool LoadModel(const LoadOptions& options, flat::Mechanism* out);
+
+// Compiles; on error prints compile diagnostics (with source lines) and returns false.
+bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out);
+
+// Registers subcommands; each returns through `*exit_code` after it ran.
+void AddCheckCommand(CLI::App& app, int* exit_code);
+void AddRunCommand(CLI::App& app, int* exit_code);
+
+}  // namespace kanesim::cli

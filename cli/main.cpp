@@ -1,0 +1,22 @@
+// kanesim: the command line. Subcommands register themselves; only main picks exit codes.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+
+#include "cli/common.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"kanesim: mechanisms in a Modelica-like language, simulated by Kane's method"};
+  app.set_version_flag("--version", std::string("kanesim ") + KANESIM_VERSION);
+  app.require_subcommand(1);
+  int exit_code = kanesim::cli::kExitOk;
+  kanesim::cli::AddCheckCommand(app, &exit_code);
+  kanesim::cli::AddRunCommand(app, &exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int rc = app.exit(e);
+    return rc == 0 ? kanesim::cli::kExitOk : kanesim::cli::kExitModelError;
+  }
+  return exit_code;
+}

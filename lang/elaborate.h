@@ -1,0 +1,53 @@
+// Elaboration: from parsed files to the flat mechanism. Instantiates the chosen model,
+// merges modifiers (outer wins; overriding a final element is an error naming both
+// places), handles extends, replaceable/redeclare, arrays and `each`, conditional
+// components, for/if equations, evaluates parameters (with --set overrides,
+// type-checked), checks types and array sizes, and resolves connect() into frames.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lang/ast.h"
+#include "lang/diagnostics.h"
+#include "runtime/flat/mechanism.h"
+
+namespace kanesim::lang {
+
+// Limits (stated in docs/language.md): exceeding one is a clean error, never a hang.
+inline constexpr long kMaxArraySize = 100000;        // elements in one array
+inline constexpr long kMaxInstances = 1000000;       // scalar variables + components
+inline constexpr int kMaxExtendsDepth = 64;          // chain of extends / instantiation depth
+
+struct ParamOverride {
+  std::string name;   // dotted: "N", "rod.L", "world.g" or "world.g[2]"
+  std::string value;  // text, parsed as a .mech expression
+};
+
+struct ElaborateOptions {
+  std::string model;  // qualified class name; "" = the last model of the main file
+  std::vector<ParamOverride> overrides;
+};
+
+// Parsed program: the user's file(s) plus the standard library.
+struct Program {
+  SourceManager sources;
+  std::vector<std::unique_ptr<ast::StoredDefinition>> files;  // files[0] is the main file
+};
+
+// Loads and parses the main file and the standard library; diagnostics into `diags`.
+// `stdlib_files` are (display name, contents) pairs.
+bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
+                 Program* program, Diagnostics& diags);
+// Same, with the main file's text given (tests, fuzzer).
+bool LoadProgramFromText(const std::string& name, const std::string& text,
+                         const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
+                         Diagnostics& diags);
+
+bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags);
+
+// Lists the instantiable (non-partial) models of the standard library, qualified.
+std::vector<std::string> StdlibModels(const Program& program);
+
+}  // namespace kanesim::lang

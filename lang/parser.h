@@ -1,0 +1,20 @@
+// Recursive-descent parser for .mech (a subset of Modelica 3 syntax). Each parse
+// function carries its grammar rule as a comment. The parser recovers at ';' and
+// 'end' and reports every error once (capped by Diagnostics::kMaxErrors).
+#pragma once
+
+#include <memory>
+
+#include "lang/ast.h"
+#include "lang/diagnostics.h"
+#include "lang/source.h"
+
+namespace kanesim::lang {
+
+// Limit on syntactic nesting (brackets, nested classes, if/for); deeper input is an
+// error (P104), never a stack overflow.
+inline constexpr int kMaxNesting = 128;
+
+std::unique_ptr<ast::StoredDefinition> Parse(int file, const SourceManager& sm, Diagnostics& diags);
+
+}  // namespace kanesim::lang

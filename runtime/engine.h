@@ -1,0 +1,90 @@
+// The runtime's public face: compile a flat mechanism into an immutable Program, make a
+// Workspace per thread, and evaluate the equations of motion and output signals.
+// Everything the CLI, the integrators, sweeps and tests need goes through this header.
+//
+// State layout (the integrators' y): y = [q_free (nq), u_free (nu)], the coordinates and
+// speeds of all joints in spanning-tree order, prescribed (rheonomic) coordinates removed.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/flat/mechanism.h"
+
+namespace kanesim::rt {
+
+struct Program;    // immutable after Compile; share across threads
+struct Workspace;  // mutable scratch for one thread; allocated once per Program
+
+enum class SolverPath { Auto, Dense, Sparse };
+enum class IntegratorKind { Auto, IDA, CVODE, ARKODE };
+
+struct CompileOptions {
+  SolverPath solver = SolverPath::Auto;
+  IntegratorKind integrator = IntegratorKind::Auto;
+};
+
+// A model error found by the compiler (not the parser): rendered by the CLI like a
+// language diagnostic (code, file:line:col, caret, hint).
+struct CompileMessage {
+  std::string code;     // stable, e.g. "K301"
+  std::string message;
+  std::string hint;     // may be empty
+  flat::SourceLoc loc;
+  std::vector<std::pair<flat::SourceLoc, std::string>> notes;
+};
+
+struct CompileResult {
+  std::shared_ptr<const Program> program;  // null when errors is non-empty
+  std::vector<CompileMessage> errors;
+};
+
+CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options);
+
+// Same structure, new numeric parameter values (index-aligned with mech.params);
+// reuses every pattern and symbolic analysis. Used by sweeps.
+std::shared_ptr<const Program> Rebind(const Program& program, const std::vector<double>& param_values);
+
+// Facts for `kanesim check` and `--stats`.
+struct ProgramSummary {
+  int num_bodies = 0;          // rigid bodies after merging welded ones (world excluded)
+  int num_joints = 0;          // articulated joints (welds excluded)
+  int nq = 0, nu = 0;          // free coordinates and speeds
+  int dof = 0;                 // degrees of freedom (nu minus independent constraints)
+  int grubler_dof = 0;         // Grübler-style count from joint freedoms
+  SolverPath solver = SolverPath::Dense;
+  IntegratorKind integrator = IntegratorKind::IDA;
+  std::string solver_reason;      // why this path
+  std::string integrator_reason;  // why this integrator
+  std::vector<std::string> cut_joints;
+  std::vector<std::string> notes;
+};
+ProgramSummary Summarize(const Program& program);
+
+std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& program);
+
+int StateSize(const Program& program);  // nq + nu
+int NumQ(const Program& program);
+int NumU(const Program& program);
+double StartTime(const Program& program);  // from the experiment annotation
+void InitialState(const Program& program, double* y);
+
+// Status codes follow SUNDIALS callbacks: 0 ok, >0 recoverable (retry with a smaller
+// step), <0 fatal. On failure, ErrorMessage(ws) says why (e.g. "singular mass matrix",
+// "gimbal lock in joint 'ball' (Cardan angle q[2] = 1.5707963)", "NaN from expression ...").
+int Derivative(const Program& program, Workspace& ws, double t, const double* y, double* ydot);
+const std::string& ErrorMessage(const Workspace& ws);
+
+// Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",
+// "rod1.frame_b.r[1]", declared outputs by their name. Selection compiles the
+// requested names into a plan so that only what is needed gets computed.
+std::vector<std::string> AvailableSignals(const Program& program);
+std::vector<std::string> DefaultSignals(const Program& program);  // joints' q,u + outputs
+struct SignalPlan;
+std::shared_ptr<const SignalPlan> PlanSignals(const Program& program, const std::vector<std::string>& names,
+                                              std::string* error);
+int EvalSignals(const Program& program, const SignalPlan& plan, Workspace& ws, double t, const double* y,
+                double* out);
+
+}  // namespace kanesim::rt

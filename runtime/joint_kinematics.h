@@ -1,0 +1,36 @@
+// Joint kinematics, one function per question, every result resolved in the joint's
+// frame a (flat/mechanism.h conventions):
+//   pose          p_ab(q), R_ab(q)
+//   velocity      w_ab = Hw(q) u,  v_ab = d/dt_a p_ab = Hv(q) u           (Lesser eqs. 44-47)
+//   bias          cw = (d/dt Hw) u,  cv = (d/dt Hv) u  with udot = 0     (seed 000 eq. 11.17)
+//   differential  qdot = N(q) u
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+
+#include "runtime/program.h"
+
+namespace kanesim::rt {
+
+using Mat36 = Eigen::Matrix<double, 3, 6>;
+
+// R = rotation by `angle` about unit `axis` (Rodrigues).
+Mat3 AxisAngle(const Vec3& axis, double angle);
+
+// Rotation of a Spherical/Free joint's rotational coordinates (3 angles or w,x,y,z).
+Mat3 RotationFromCoords(flat::RotationCoords c, const double* q);
+
+// p_ab and R_ab from the joint's coordinates q (nq entries).
+void JointPose(const TreeJoint& j, const double* q, Vec3* p_ab, Mat3* R_ab);
+
+// Hv, Hw (first nu columns used) and the bias terms cv, cw for speeds u, given R_ab.
+void JointMotion(const TreeJoint& j, const double* q, const double* u, const Mat3& R_ab, Mat36* Hv,
+                 Mat36* Hw, Vec3* cv, Vec3* cw);
+
+// qdot = N(q) u for the joint's nq coordinates. Returns false at a singular
+// parameterization (gimbal lock) and writes the reason into *error.
+bool JointKinematicDifferential(const TreeJoint& j, const double* q, const double* u, double* qdot,
+                                std::string* error);
+
+}  // namespace kanesim::rt

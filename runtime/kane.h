@@ -1,0 +1,28 @@
+// Kane's equations: applied forces, then one of two solution paths for udot.
+#pragma once
+
+#include <string>
+
+#include "runtime/program.h"
+
+namespace kanesim::rt {
+
+// Gravity, line forces, wrenches and joint forces per body at its mass centre, and the
+// joint generalized forces Q. Returns -1 (ws.error) when an expression gives NaN.
+int AppliedForces(const Program& p, Workspace& ws);
+
+// Dense path: M = tau^T Mb tau, f = tau^T (F - Mb a_bias - gyro) + Q, Cholesky/LDLT.
+// Writes the free entries of ws.udot. Returns -1 on a singular mass matrix.
+int SolveDense(const Program& p, Workspace& ws);
+
+// Sparse path: the K-vector Newton-Euler system with per-joint tangent and complement
+// blocks, KLU. Also fills ws.lambda_W (joint reaction wrenches).
+int SolveSparse(const Program& p, Workspace& ws);
+
+// Compile time: the fixed pattern and the KLU symbolic analysis (reused when
+// `p.sparse_symbolic` is already set by Rebind).
+bool BuildSparse(Program& p, std::string* error);
+// Workspace creation: value arrays for the pattern.
+void InitSparseWorkspace(const Program& p, Workspace& ws);
+
+}  // namespace kanesim::rt

@@ -1,0 +1,196 @@
+// The compiled program (immutable after Compile) and the per-thread workspace.
+//
+// Notation (docs/notation.md): bodies L = 0..K-1 in spanning-tree order (a parent before
+// its children), ground is body -1. Every quantity is resolved in the world frame W
+// unless its name says otherwise. "full" arrays hold all joint coordinates/speeds in tree
+// order including prescribed ones; the integrator's y holds only the free ones.
+// Per body, linear before angular: a twist is [v; w], a wrench [force; torque].
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/engine.h"
+#include "runtime/flat/mechanism.h"
+#include "runtime/tape.h"
+
+namespace kanesim::rt {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+// A number the runtime reads: a folded constant, or a root of the force tape.
+struct Scalar {
+  double value = 0.0;  // used when root < 0
+  int root = -1;       // index into Program::force_tape roots
+};
+
+// One articulated joint of the spanning tree; it moves child body `child` relative to
+// `parent` (-1 = ground). The child body's frame IS the child-side joint frame.
+struct TreeJoint {
+  std::string name;
+  flat::SourceLoc loc;
+  int flat_index = -1;
+  flat::JointType type = flat::JointType::Revolute;
+  flat::RotationCoords rotation = flat::RotationCoords::Quaternion;
+  bool inverted = false;  // frame_b is on the parent side: the child moves by X_ab^-1
+  int parent = -1, child = -1;
+  int nq = 0, nu = 0;
+  int q0 = 0, u0 = 0;  // offsets in the full q / u arrays
+  Vec3 axis = Vec3::UnitZ();   // unit; Revolute/Prismatic/Cylindrical axis, Universal n1, Planar normal
+  Vec3 axis2 = Vec3::UnitX();  // unit; Universal n2 (intermediate frame), Planar e1
+  Vec3 axis3 = Vec3::UnitY();  // Planar e2 = axis x e1
+  Vec3 p_PJ = Vec3::Zero();    // parent-side joint frame origin in the parent body frame
+  Mat3 R_PJ = Mat3::Identity();
+};
+
+struct TreeBody {
+  std::string name;  // first flat body merged into it, else its reference frame's name
+  int joint = -1;    // the tree joint whose child it is (== body index)
+  double mass = 0.0;
+  Vec3 p_BBcm = Vec3::Zero();       // mass centre in the body frame
+  Mat3 I_BBcm_B = Mat3::Zero();     // central inertia, body frame
+  std::vector<int> path_speeds;     // free speed indices of the joints root..L (pattern of tau)
+  std::vector<int> path_speeds_all; // full speed indices root..L (prescribed included)
+};
+
+// Where a flat frame sits: in body `body` (-1 = ground) at pose X_BF.
+struct FramePlace {
+  int body = -2;  // -2: frame not connected to anything the program simulates
+  Vec3 p_BF = Vec3::Zero();
+  Mat3 R_BF = Mat3::Identity();
+};
+
+struct LineForceModel {
+  std::string name;
+  int frame_a = -1, frame_b = -1;
+  Scalar k, d, s0;
+};
+
+struct WrenchModel {
+  std::string name;
+  int frame = -1;
+  Scalar force[3], torque[3];
+  bool in_world = true;
+};
+
+// Flat body as a user sees it, for its signals (`rod1.r[2]`).
+struct BodySignalSource {
+  std::string name;
+  int frame = -1;        // flat frame it is attached to
+  Vec3 p_FBcm = Vec3::Zero();
+};
+
+// The sparse K-vector system: unknowns and equations per body L in blocks of 12:
+// x = [a_cm (3), alpha (3), udot_free_j (nf), s_j (6 - nf)], rows = [kinematic (6), Newton-Euler (6)].
+struct SparsePattern;  // defined in kane_sparse.cpp
+struct SparseSymbolic;  // KLU symbolic analysis, shared by all workspaces of a program
+void DestroySparseSymbolic(SparseSymbolic* s);
+struct SparseSymbolicDeleter {
+  void operator()(SparseSymbolic* s) const { DestroySparseSymbolic(s); }
+};
+
+struct Program {
+  std::shared_ptr<const flat::Mechanism> mech;  // kept for Rebind and names
+  std::vector<double> param_values;
+  CompileOptions options;
+
+  std::vector<TreeBody> bodies;   // K
+  std::vector<TreeJoint> joints;  // K (joint L moves body L)
+  std::vector<int> joint_of_flat; // flat joint index -> tree joint, -1 for welds
+  std::vector<FramePlace> frames; // one per flat frame
+  int world_frame = -1;
+  Vec3 gravity_W = Vec3::Zero();
+  bool has_gravity = false;
+
+  int nq_all = 0, nu_all = 0;  // full coordinates / speeds
+  int nq = 0, nu = 0;          // free
+  std::vector<int> q_free;     // full index of free coordinate i
+  std::vector<int> u_free;     // full index of free speed i
+  std::vector<int> u_free_of;  // full speed index -> free index or -1 (prescribed)
+  std::vector<int> q_prescribed;       // full q indices that are prescribed (q index == scalar u)
+  std::vector<int> prescribed_u;       // matching full u indices
+  Tape prescribed_tape;                // roots aligned with q_prescribed; time only
+  std::vector<double> y0;              // initial state
+
+  std::vector<Scalar> joint_tau;       // per full speed (value 0 when none)
+  std::vector<LineForceModel> line_forces;
+  std::vector<WrenchModel> wrenches;
+  Tape force_tape;                     // joint tau, wrench and line force expressions
+  Tape output_tape;                    // declared outputs (roots aligned with mech->outputs)
+  std::vector<int> state_refs_forces;  // mech state refs the force tape reads
+  std::vector<int> state_refs_outputs; // mech state refs the output tape reads
+  std::vector<BodySignalSource> body_signals;
+
+  SolverPath solver = SolverPath::Dense;
+  IntegratorKind integrator = IntegratorKind::CVODE;
+  std::string solver_reason, integrator_reason;
+  std::vector<std::string> notes;
+  int grubler_dof = 0;
+  int max_depth = 0;  // longest path_speeds
+
+  std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
+  std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind
+};
+
+// Per-thread mutable data, allocated once by MakeWorkspace. Nothing here is resized by
+// Derivative or EvalSignals.
+struct SparseNumeric;  // KLU numeric factorization, one per workspace
+void DestroySparseNumeric(SparseNumeric* s);
+struct SparseNumericDeleter {
+  void operator()(SparseNumeric* s) const { DestroySparseNumeric(s); }
+};
+
+struct Workspace {
+  double t = 0.0;                   // time of the last evaluation  ()  filled by UnpackState
+  Eigen::VectorXd q, u;             // full coordinates, speeds  (nq_all), (nu_all)  filled by UnpackState
+  Eigen::VectorXd udot;             // full accelerations; prescribed ones from the jet (nu_all)  filled by UnpackState/Solve*
+  Eigen::VectorXd qdot;             // full coordinate rates  (nq_all)  filled by KinematicDifferentials/UnpackState
+
+  std::vector<Mat3> R_WB;           // body orientation  (K)  filled by PositionKinematics
+  std::vector<Vec3> p_WB;           // body frame origin = child joint point o_L  (K)  filled by PositionKinematics
+  std::vector<Vec3> p_WBcm;         // mass centre  (K)  filled by PositionKinematics
+  std::vector<Mat3> I_W;            // central inertia resolved in W  (K)  filled by PositionKinematics
+  std::vector<Mat3> R_ab;           // joint relative rotation  (K)  filled by PositionKinematics
+  std::vector<Vec3> p_ab;           // joint relative position, in a  (K)  filled by PositionKinematics
+  Eigen::Matrix<double, 6, Eigen::Dynamic> H_W;  // twist per full speed at o_L: tangent generators  (6 x nu_all)  filled by VelocityKinematics
+  std::vector<Vec3> w_WB;           // angular velocity  (K)  filled by VelocityKinematics
+  std::vector<Vec3> v_WBo;          // velocity of body origin  (K)  filled by VelocityKinematics
+  std::vector<Vec3> v_WBcm;         // velocity of mass centre  (K)  filled by VelocityKinematics
+  std::vector<Vec3> alpha_bias;     // angular acceleration with free udot = 0  (K)  filled by BiasAccelerations
+  std::vector<Vec3> a_bias_o;       // origin acceleration with free udot = 0  (K)  filled by BiasAccelerations
+  std::vector<Vec3> a_bias_cm;      // mass-centre acceleration with free udot = 0  (K)  filled by BiasAccelerations
+
+  std::vector<double> state_values;  // mech state refs in use  (mech.state_refs)  filled by EvalStateRefs
+  std::vector<double> force_regs;    // force tape registers  filled by EvalForceTape
+  std::vector<double> output_regs;   // output tape registers  filled by EvalSignals
+  std::vector<double> jet_regs;      // prescribed tape jets (3 per register)  filled by UnpackState
+
+  std::vector<Vec3> F_W;            // applied force at the mass centre  (K)  filled by AppliedForces
+  std::vector<Vec3> T_W;            // applied torque about the mass centre  (K)  filled by AppliedForces
+  Eigen::VectorXd Q;                // joint generalized forces  (nu_all)  filled by AppliedForces
+
+  // Dense path.
+  Eigen::MatrixXd M;                // mass matrix tau^T M tau  (nu x nu)  filled by SolveDense
+  Eigen::VectorXd f;                // right side tau^T (F - M a_bias)  (nu)  filled by SolveDense
+  Eigen::LLT<Eigen::MatrixXd> llt;  //   filled by SolveDense
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> tau_L;   // one body's tangent block  (6 x max_depth)  filled by SolveDense
+  Eigen::Matrix<double, 6, Eigen::Dynamic> Mtau_L;  // mass times it  (6 x max_depth)  filled by SolveDense
+
+  // Sparse path.
+  std::vector<double> Ax;           // CSC values  (nnz)  filled by SolveSparse
+  std::vector<double> x;            // right side, then solution  (12 K)  filled by SolveSparse
+  std::vector<Vec6> lambda_W;       // joint reaction wrench on the child at o_L  (K)  filled by SolveSparse
+  std::vector<Eigen::Matrix<double, 6, 6>> D_W;  // complement basis per joint (first 6-nf cols)  (K)  filled by SolveSparse
+  std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;
+
+  std::string error;                // why the last call failed  filled by Derivative/EvalSignals
+};
+
+}  // namespace kanesim::rt

@@ -1,0 +1,49 @@
+#include "runtime/sim/csv.h"
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace kanesim::sim {
+
+static void AppendNumber(std::string* line, double x) {
+  char buf[32];
+  int len = std::snprintf(buf, sizeof buf, "%.17g", x);
+  line->append(buf, static_cast<size_t>(len));
+}
+
+std::string FormatNumber(double x) {
+  std::string s;
+  AppendNumber(&s, x);
+  return s;
+}
+
+bool CsvWriter::Begin(const std::vector<std::string>& names) {
+  line_ = "time";
+  for (const std::string& name : names) {
+    line_ += ',';
+    line_ += name;
+  }
+  line_ += '\n';
+  return Flush();
+}
+
+bool CsvWriter::Row(double t, const double* values, size_t count) {
+  line_.clear();
+  AppendNumber(&line_, t);
+  for (size_t i = 0; i < count; ++i) {
+    line_ += ',';
+    AppendNumber(&line_, values[i]);
+  }
+  line_ += '\n';
+  return Flush();
+}
+
+bool CsvWriter::End() { return std::fflush(out_) == 0 && !std::ferror(out_); }
+
+bool CsvWriter::Flush() {
+  if (std::fwrite(line_.data(), 1, line_.size(), out_) != line_.size()) return false;
+  return std::fflush(out_) == 0;
+}
+
+}  // namespace kanesim::sim

@@ -1,0 +1,56 @@
+// Signal rows and the CSV writer (DESIGN.md "Output"): a header `time,<names...>`, then
+// one row per output instant, numbers with 17 significant digits so that they
+// round-trip, each row flushed as it is written so that a failure keeps every row
+// before it on disk.
+#pragma once
+
+#include <cstddef>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace kanesim::sim {
+
+// Receives the selected signals at each output instant.
+class SignalSink {
+ public:
+  virtual ~SignalSink() = default;
+  virtual bool Begin(const std::vector<std::string>& names) = 0;  // false: cannot write
+  virtual bool Row(double t, const double* values, size_t count) = 0;
+  virtual bool End() { return true; }
+};
+
+// %.17g: enough digits that strtod gives back the same double.
+std::string FormatNumber(double x);
+
+class CsvWriter final : public SignalSink {
+ public:
+  explicit CsvWriter(std::FILE* out) : out_(out) {}  // not owned
+  bool Begin(const std::vector<std::string>& names) override;
+  bool Row(double t, const double* values, size_t count) override;
+  bool End() override;
+
+ private:
+  bool Flush();
+  std::FILE* out_;
+  std::string line_;  // reused for every row
+};
+
+// Keeps every row in memory (tests, sweeps).
+class MemorySink final : public SignalSink {
+ public:
+  bool Begin(const std::vector<std::string>& names) override {
+    this->names = names;
+    return true;
+  }
+  bool Row(double t, const double* values, size_t count) override {
+    times.push_back(t);
+    rows.emplace_back(values, values + count);
+    return true;
+  }
+  std::vector<std::string> names;
+  std::vector<double> times;
+  std::vector<std::vector<double>> rows;
+};
+
+}  // namespace kanesim::sim

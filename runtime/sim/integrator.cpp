@@ -1,0 +1,149 @@
+// The integration driver: output grid, the guarded right-hand side, and the loop over
+// output instants shared by every solver (the solvers are in integrator_*.cpp).
+#include "runtime/sim/integrator.h"
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/sim/stepper.h"
+
+namespace kanesim::sim {
+
+const char* MethodName(Method m) {
+  switch (m) {
+    case Method::IDA: return "IDA";
+    case Method::CvodeAdams: return "CVODE-Adams";
+    case Method::CvodeBdf: return "CVODE-BDF";
+    case Method::ArkodeErk: return "ARKODE-ERK";
+  }
+  return "?";
+}
+
+const char* MethodDescription(Method m) {
+  switch (m) {
+    case Method::IDA: return "IDA: variable-order BDF (1-5), Newton, dense LU, difference-quotient Jacobian";
+    case Method::CvodeAdams: return "CVODE: variable-order Adams-Moulton (1-12), fixed-point iteration";
+    case Method::CvodeBdf: return "CVODE: variable-order BDF (1-5), Newton, dense LU, difference-quotient Jacobian";
+    case Method::ArkodeErk: return "ARKODE ERKStep: explicit Runge-Kutta, Hermite dense output";
+  }
+  return "?";
+}
+
+// An instant closer than this fraction of the interval to stop is merged into stop.
+static constexpr double kMergeFraction = 1e-9;
+
+long OutputGrid::Count() const {
+  if (!(stop > start) || !(interval > 0.0)) return 1;
+  double n = (stop - start) / interval;
+  return static_cast<long>(std::ceil(n - kMergeFraction)) + 1;
+}
+
+double OutputGrid::Time(long k) const {
+  if (k >= Count() - 1) return k == 0 ? start : stop;
+  // t_k by multiplication, not accumulation, so that rounding does not drift.
+  return start + static_cast<double>(k) * interval;
+}
+
+namespace detail {
+
+int GuardedRhs::operator()(double t, const double* y, double* ydot) {
+  int status = system_.Rhs(t, y, ydot);
+  if (status != 0) {
+    failed = true;
+    fail_time = t;
+    cause = system_.FailureCause();
+    return status;
+  }
+  int n = system_.Size();
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(ydot[i])) {
+      failed = true;
+      fail_time = t;
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "non-finite derivative (component %d of y' is %g)", i, ydot[i]);
+      cause = buf;
+      return 1;
+    }
+  }
+  return 0;
+}
+
+void CaptureSundialsMessage(int /*error_code*/, const char* /*module*/, const char* function, char* msg,
+                            void* user_data) {
+  auto* messages = static_cast<SundialsMessages*>(user_data);
+  messages->last = std::string(function ? function : "SUNDIALS") + ": " + (msg ? msg : "");
+}
+
+static std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                            const IntegratorOptions& options, std::string* error) {
+  switch (options.method) {
+    case Method::IDA: return MakeIdaStepper(rhs, t0, y0, stop, options, error);
+    case Method::CvodeAdams:
+    case Method::CvodeBdf: return MakeCvodeStepper(rhs, t0, y0, stop, options, error);
+    case Method::ArkodeErk: return MakeArkodeStepper(rhs, t0, y0, stop, options, error);
+  }
+  *error = "unknown integration method";
+  return nullptr;
+}
+
+}  // namespace detail
+
+IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid& grid,
+                          const IntegratorOptions& options, const RowCallback& row) {
+  IntegrateResult result;
+  auto fail = [&result](double t, std::string cause) {
+    result.ok = false;
+    result.fail_time = t;
+    result.cause = std::move(cause);
+  };
+  detail::GuardedRhs rhs(system);
+  std::vector<double> y(y0, y0 + system.Size());
+  std::string cause;
+
+  if (row(grid.start, y.data(), &cause) != 0) {
+    fail(grid.start, cause);
+    return result;
+  }
+  result.rows = 1;
+  long count = grid.Count();
+  if (count == 1) return result;
+
+  std::string error;
+  std::unique_ptr<detail::Stepper> stepper = detail::MakeStepper(rhs, grid.start, y0, grid.stop, options, &error);
+  if (!stepper) {
+    if (rhs.failed)
+      fail(rhs.fail_time, rhs.cause);
+    else
+      fail(grid.start, error);
+    return result;
+  }
+
+  for (long k = 1; k < count; ++k) {
+    double tout = grid.Time(k);
+    rhs.ClearFailure();
+    int flag = stepper->Advance(tout, y.data());
+    if (flag < 0) {
+      detail::StepFailure why = stepper->Explain(flag);
+      if (why.from_rhs && rhs.failed) {
+        fail(rhs.fail_time, rhs.cause);
+      } else {
+        std::string text = why.cause;
+        if (rhs.failed) text += " (the right-hand side last failed with: " + rhs.cause + ")";
+        fail(stepper->CurrentTime(), text);
+      }
+      break;
+    }
+    if (row(tout, y.data(), &cause) != 0) {
+      fail(tout, cause);
+      break;
+    }
+    ++result.rows;
+  }
+  result.stats = stepper->Stats();
+  return result;
+}
+
+}  // namespace kanesim::sim

@@ -1,0 +1,71 @@
+// Simulate: one run of a compiled program from the start time to the stop time, the
+// selected signals written to a sink at every output instant. The stages, in order:
+//   1. resolve times, tolerances, integrator          (ResolveRun)
+//   2. plan the signals                                (rt::PlanSignals)
+//   3. integrate, evaluating signals at each instant   (sim::Integrate, rt::EvalSignals)
+#pragma once
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "runtime/engine.h"
+#include "runtime/sim/csv.h"
+#include "runtime/sim/integrator.h"
+
+namespace kanesim::sim {
+
+struct SimOptions {
+  double start_time = std::numeric_limits<double>::quiet_NaN();  // NaN: rt::StartTime(program)
+  double stop_time = 1.0;
+  double interval = 0.0;  // output spacing; <= 0: (stop - start) / kDefaultIntervals
+  double rtol = 1e-6;
+  double atol = 1e-6;
+  rt::IntegratorKind integrator = rt::IntegratorKind::Auto;  // Auto: rt::Summarize(program).integrator
+  bool cvode_bdf = false;       // CVODE with BDF + Newton instead of Adams + fixed point
+  long max_steps = 100000;      // internal steps allowed between two output instants
+  std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
+  std::function<void(double t)> progress;  // after each row; may be empty
+};
+
+inline constexpr int kDefaultIntervals = 500;
+
+// Wall time of each phase in seconds; load and compile are filled by the caller.
+struct PhaseTimes {
+  double load = 0.0;       // parse + elaborate
+  double compile = 0.0;
+  double integrate = 0.0;  // solver and right-hand side, output excluded
+  double output = 0.0;     // signal evaluation and writing
+};
+
+struct SimStats {
+  Method method = Method::IDA;
+  IntegratorStats integrator;
+  long rows = 0;
+  PhaseTimes times;
+};
+
+struct SimResult {
+  enum class Status {
+    kOk,
+    kUsageError,        // bad options or signal names (exit 1)
+    kOutputError,       // the sink could not write (exit 1)
+    kNumericalFailure,  // exit 2; rows before fail_time were written
+  };
+  Status status = Status::kOk;
+  double fail_time = 0.0;
+  std::string message;  // the usage error, or the cause of the numerical failure
+  SimStats stats;
+};
+
+// Maps the engine's integrator choice to a method (Auto -> IDA).
+Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf);
+
+SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink);
+
+// The `--stats` report, one fact per line.
+std::string FormatStats(const SimStats& stats);
+
+}  // namespace kanesim::sim

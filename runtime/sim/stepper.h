@@ -1,0 +1,64 @@
+// Internal to runtime/sim: one SUNDIALS solver behind a small interface, and the guard
+// around the user's right-hand side that the solvers call. Not part of the public API.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/sim/integrator.h"
+
+namespace kanesim::sim::detail {
+
+// Calls the user's f, remembers where and why it last failed, and turns a non-finite
+// derivative into a recoverable failure (the solver retries with a smaller step; if the
+// NaN persists the run fails with this cause).
+class GuardedRhs {
+ public:
+  explicit GuardedRhs(OdeSystem& system) : system_(system) {}
+  int operator()(double t, const double* y, double* ydot);
+  int Size() const { return system_.Size(); }
+
+  bool failed = false;     // an evaluation failed since the last ClearFailure()
+  double fail_time = 0.0;  // t of the last failed evaluation
+  std::string cause;       // why it failed
+  void ClearFailure() { failed = false; }
+
+ private:
+  OdeSystem& system_;
+};
+
+// What went wrong in one Advance, in words for the user.
+struct StepFailure {
+  bool from_rhs = false;  // the right-hand side failed (use GuardedRhs's time and cause)
+  std::string cause;      // the solver's reason otherwise
+};
+
+class Stepper {
+ public:
+  virtual ~Stepper() = default;
+  // Integrates to tout (NORMAL mode, interpolated) and writes y(tout) into y. Returns
+  // the solver's flag: >= 0 success, < 0 failure (then Explain(flag)).
+  virtual int Advance(double tout, double* y) = 0;
+  virtual double CurrentTime() const = 0;
+  virtual IntegratorStats Stats() const = 0;
+  virtual StepFailure Explain(int flag) const = 0;
+};
+
+// Each returns null and sets *error when the solver cannot be set up (or, for IDA, when
+// f fails at t0: then rhs.failed is set).
+std::unique_ptr<Stepper> MakeIdaStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                        const IntegratorOptions& options, std::string* error);
+std::unique_ptr<Stepper> MakeCvodeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                          const IntegratorOptions& options, std::string* error);
+std::unique_ptr<Stepper> MakeArkodeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                           const IntegratorOptions& options, std::string* error);
+
+// SUNDIALS error handler target: keeps the last message instead of printing it.
+struct SundialsMessages {
+  std::string last;  // "<function>: <message>"
+};
+void CaptureSundialsMessage(int error_code, const char* module, const char* function, char* msg,
+                            void* user_data);
+
+}  // namespace kanesim::sim::detail

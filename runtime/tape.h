@@ -1,0 +1,60 @@
+// User expressions lowered to a flat register tape: parameters and constant
+// sub-expressions folded at compile time, no allocation or string look-up at run time.
+//
+// Registers [0, num_regs): constants live in `init` and are never overwritten; `time`
+// and state refs are loaded by the caller; every instruction writes one register.
+// EvalJet evaluates the same code on truncated Taylor jets (x, dx/dt, d2x/dt2) in time,
+// which is how prescribed motions get their speed and acceleration (forward-mode, no
+// symbolic differentiation).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/flat/expr.h"
+
+namespace kanesim::rt {
+
+struct TapeInstr {
+  flat::Op op = flat::Op::Add;
+  std::int32_t dst = 0, a = -1, b = -1, c = -1;
+};
+
+struct Tape {
+  std::vector<TapeInstr> code;
+  std::vector<double> init;                  // register image with folded constants
+  int time_reg = -1;                         // -1 when no expression reads time
+  std::vector<std::pair<int, int>> state_regs;  // (mech state ref index, register)
+  std::vector<int> roots;                    // result register per root
+  std::vector<std::string> labels;           // what each root is, for error messages
+  std::vector<std::string> texts;            // each root's expression, for error messages
+
+  int num_regs() const { return static_cast<int>(init.size()); }
+  // Evaluates the code on `regs` (size num_regs, constants already present).
+  void Eval(double* regs) const;
+  // Same on jets: regs holds 3 doubles per register (value, first, second derivative).
+  void EvalJet(double* regs) const;
+};
+
+// Builds a tape from roots of `pool`, folding every node that reads neither time nor state.
+class TapeBuilder {
+ public:
+  TapeBuilder(const flat::ExprPool& pool, const std::vector<double>& param_values);
+  // Returns the root index in the finished tape.
+  int AddRoot(flat::ExprId id, std::string label, std::string text);
+  // True when `id` folds to a constant; *value receives it.
+  bool Fold(flat::ExprId id, double* value);
+  Tape Finish();
+
+ private:
+  int RegisterOf(flat::ExprId id);
+  const flat::ExprPool& pool_;
+  const std::vector<double>& params_;
+  std::vector<int> reg_;        // per expr node: register or -1
+  std::vector<signed char> const_;  // -1 unknown, 0 no, 1 yes
+  std::vector<double> value_;   // folded value when const_ == 1
+  Tape tape_;
+};
+
+}  // namespace kanesim::rt

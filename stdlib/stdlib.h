@@ -1,0 +1,23 @@
+// Access to the standard library's .mech files (embedded at build time).
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace kanesim::stdlib {
+
+struct EmbeddedFile {
+  const char* name;      // "Joints.mech"
+  const char* contents;  // not NUL-terminated within size
+  std::size_t size;
+};
+extern const EmbeddedFile kEmbeddedFiles[];  // ends with {nullptr, nullptr, 0}
+
+// The files, as (display path, contents). Display paths look like "<stdlib>/Joints.mech".
+std::vector<std::pair<std::string, std::string>> Files();
+
+// The source directory recorded at build time (for provenance hashes and docs checks).
+const char* SourceDir();
+
+}  // namespace kanesim::stdlib
