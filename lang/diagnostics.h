@@ -51,6 +51,7 @@ namespace kanesim::lang {
   X(PartialInstance, "E224", "instance of a partial class")                                   \
   X(BadImport, "E225", "import names nothing")                                                \
   X(ConflictingEquation, "E226", "conflicting equations")                                     \
+  X(Circular, "E227", "circular definition")                                                  \
   X(UnconnectedFrame, "W301", "frame connector is not connected")
 
 enum class DiagCode {

@@ -32,7 +32,8 @@ struct ElaborateOptions {
 
 // Parsed program: the user's file(s) plus the standard library.
 struct Program {
-  SourceManager sources;
+  // mutable: elaboration adds the text of --set values so diagnostics can show them.
+  mutable SourceManager sources;
   std::vector<std::unique_ptr<ast::StoredDefinition>> files;  // files[0] is the main file
 };
 

@@ -15,6 +15,12 @@ class Parser {
       : file_(file), diags_(diags), toks_(Lex(file, sm, diags)) {}
 
   std::unique_ptr<StoredDefinition> Run();
+  // expression_only := expression EOF   (for --set values)
+  ExprPtr RunExpression() {
+    ExprPtr e = Expression();
+    if (!At(Tok::Eof)) ErrorExpected("end of the value", "");
+    return e;
+  }
 
  private:
   // --- token helpers -------------------------------------------------------------
@@ -1008,6 +1014,11 @@ ExprPtr Parser::Primary() {
 std::unique_ptr<ast::StoredDefinition> Parse(int file, const SourceManager& sm, Diagnostics& diags) {
   Parser p(file, sm, diags);
   return p.Run();
+}
+
+std::unique_ptr<ast::Expr> ParseExpression(int file, const SourceManager& sm, Diagnostics& diags) {
+  Parser p(file, sm, diags);
+  return p.RunExpression();
 }
 
 }  // namespace kanesim::lang

@@ -17,4 +17,7 @@ inline constexpr int kMaxNesting = 128;
 
 std::unique_ptr<ast::StoredDefinition> Parse(int file, const SourceManager& sm, Diagnostics& diags);
 
+// Parses a whole file as one expression (values given with --set).
+std::unique_ptr<ast::Expr> ParseExpression(int file, const SourceManager& sm, Diagnostics& diags);
+
 }  // namespace kanesim::lang

@@ -1,5 +1,6 @@
 #include "runtime/joint_kinematics.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 

@@ -10,6 +10,9 @@ namespace kanesim::rt {
 // Gravity, line forces, wrenches and joint forces per body at its mass centre, and the
 // joint generalized forces Q. Returns -1 (ws.error) when an expression gives NaN.
 int AppliedForces(const Program& p, Workspace& ws);
+// Only the force tape (for potential energy); the value of a force-element number.
+int EvalForceTape(const Program& p, Workspace& ws);
+double ForceValue(const Program& p, const Workspace& ws, const Scalar& s);
 
 // Dense path: M = tau^T Mb tau, f = tau^T (F - Mb a_bias - gyro) + Q, Cholesky/LDLT.
 // Writes the free entries of ws.udot. Returns -1 on a singular mass matrix.

@@ -9,6 +9,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <memory>
 #include <string>
 #include <vector>
@@ -95,6 +96,14 @@ struct SparseSymbolicDeleter {
   void operator()(SparseSymbolic* s) const { DestroySparseSymbolic(s); }
 };
 
+// "[k+1]": a 1-based index suffix as the language writes it. Built by appending because
+// GCC 12 at -O3 reports a false -Wrestrict for "literal" + std::string&&.
+inline std::string Index1(int k) {
+  std::string s = "[";
+  s.append(std::to_string(k + 1)).append("]");
+  return s;
+}
+
 struct Program {
   std::shared_ptr<const flat::Mechanism> mech;  // kept for Rebind and names
   std::vector<double> param_values;
@@ -113,6 +122,7 @@ struct Program {
   std::vector<int> q_free;     // full index of free coordinate i
   std::vector<int> u_free;     // full index of free speed i
   std::vector<int> u_free_of;  // full speed index -> free index or -1 (prescribed)
+  std::vector<int> joint_of_speed;  // full speed index -> tree joint
   std::vector<int> q_prescribed;       // full q indices that are prescribed (q index == scalar u)
   std::vector<int> prescribed_u;       // matching full u indices
   Tape prescribed_tape;                // roots aligned with q_prescribed; time only
@@ -162,6 +172,8 @@ struct Workspace {
   std::vector<Vec3> w_WB;           // angular velocity  (K)  filled by VelocityKinematics
   std::vector<Vec3> v_WBo;          // velocity of body origin  (K)  filled by VelocityKinematics
   std::vector<Vec3> v_WBcm;         // velocity of mass centre  (K)  filled by VelocityKinematics
+  std::vector<Vec3> w_rel, v_rel;   // joint relative twist at o_L, seen from the parent  (K)  filled by VelocityKinematics
+  std::vector<Vec3> alpha_rel, a_rel;  // its derivative in the parent with udot = 0  (K)  filled by VelocityKinematics
   std::vector<Vec3> alpha_bias;     // angular acceleration with free udot = 0  (K)  filled by BiasAccelerations
   std::vector<Vec3> a_bias_o;       // origin acceleration with free udot = 0  (K)  filled by BiasAccelerations
   std::vector<Vec3> a_bias_cm;      // mass-centre acceleration with free udot = 0  (K)  filled by BiasAccelerations

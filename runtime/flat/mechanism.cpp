@@ -192,7 +192,12 @@ std::string DumpFlat(const Mechanism& m) {
   for (const auto& p : m.params) pn.push_back(p.name);
   for (const auto& s : m.state_refs) sn.push_back(m.StateRefName(s));
   auto E = [&](ExprId e) { return m.exprs.ToString(e, &pn, &sn); };
-  auto V = [&](const Vec3E& v) { return "{" + E(v[0]) + ", " + E(v[1]) + ", " + E(v[2]) + "}"; };
+  // Appends instead of "{" + std::string&&: GCC 12 -O3 reports a false -Wrestrict there.
+  auto V = [&](const Vec3E& v) {
+    std::string s = "{";
+    s.append(E(v[0])).append(", ").append(E(v[1])).append(", ").append(E(v[2])).append("}");
+    return s;
+  };
   auto F = [&](int f) {
     return (f >= 0 && static_cast<size_t>(f) < m.frames.size()) ? m.frames[static_cast<size_t>(f)].name
                                                                : std::string("<unconnected>");

@@ -39,8 +39,8 @@ class CsvWriter final : public SignalSink {
 // Keeps every row in memory (tests, sweeps).
 class MemorySink final : public SignalSink {
  public:
-  bool Begin(const std::vector<std::string>& names) override {
-    this->names = names;
+  bool Begin(const std::vector<std::string>& signal_names) override {
+    names = signal_names;
     return true;
   }
   bool Row(double t, const double* values, size_t count) override {

@@ -50,9 +50,11 @@ double OutputGrid::Time(long k) const {
 namespace detail {
 
 int GuardedRhs::operator()(double t, const double* y, double* ydot) {
+  if (fatal) return -1;
   int status = system_.Rhs(t, y, ydot);
   if (status != 0) {
     failed = true;
+    fatal = status < 0;
     fail_time = t;
     cause = system_.FailureCause();
     return status;
@@ -127,7 +129,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
     int flag = stepper->Advance(tout, y.data());
     if (flag < 0) {
       detail::StepFailure why = stepper->Explain(flag);
-      if (why.from_rhs && rhs.failed) {
+      if (rhs.fatal || (why.from_rhs && rhs.failed)) {
         fail(rhs.fail_time, rhs.cause);
       } else {
         std::string text = why.cause;

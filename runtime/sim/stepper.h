@@ -20,7 +20,9 @@ class GuardedRhs {
   int Size() const { return system_.Size(); }
 
   bool failed = false;     // an evaluation failed since the last ClearFailure()
-  double fail_time = 0.0;  // t of the last failed evaluation
+  bool fatal = false;      // an evaluation returned < 0: latched, every later call fails
+                           // without calling f, so no solver can creep up to it again
+  double fail_time = 0.0;  // t of the last failed evaluation (of the fatal one once latched)
   std::string cause;       // why it failed
   void ClearFailure() { failed = false; }
 

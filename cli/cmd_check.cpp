@@ -1,0 +1,137 @@
+// `kanesim check file.mech`: diagnostics, or a summary of the mechanism and of what the
+// compiler decided for it. `--emit ast|flat` prints an intermediate form instead.
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <iostream>
+#include <memory>
+
+#include "cli/common.h"
+#include "lang/ast.h"
+#include "lang/elaborate.h"
+#include "lang/parser.h"
+#include "stdlib/stdlib.h"
+
+namespace kanesim::cli {
+
+namespace {
+
+struct CheckArgs {
+  LoadOptions load;
+  std::string emit;
+  std::string solver = "auto";
+};
+
+const char* SolverName(rt::SolverPath s) {
+  switch (s) {
+    case rt::SolverPath::Auto: return "auto";
+    case rt::SolverPath::Dense: return "dense";
+    case rt::SolverPath::Sparse: return "sparse";
+  }
+  return "?";
+}
+
+const char* IntegratorName(rt::IntegratorKind k) {
+  switch (k) {
+    case rt::IntegratorKind::Auto: return "auto";
+    case rt::IntegratorKind::IDA: return "IDA";
+    case rt::IntegratorKind::CVODE: return "CVODE";
+    case rt::IntegratorKind::ARKODE: return "ARKODE";
+  }
+  return "?";
+}
+
+// Grübler-style count: 6 per body, minus 6 - f per joint (spatial mechanisms).
+int GrublerCount(const flat::Mechanism& m, int bodies) {
+  int dof = 6 * bodies;
+  for (const auto& j : m.joints) dof -= 6 - j.nu();
+  return dof;
+}
+
+int RunCheck(const CheckArgs& args) {
+  if (args.emit == "ast") {
+    lang::Program program;
+    lang::Diagnostics diags(&program.sources);
+    bool ok = lang::LoadProgram(args.load.path, {}, &program, diags);
+    std::cerr << diags.RenderAll();
+    if (!ok || diags.HasErrors()) return kExitModelError;
+    std::cout << lang::ast::Dump(*program.files[0]);
+    return kExitOk;
+  }
+  flat::Mechanism mech;
+  if (!LoadModel(args.load, &mech)) return kExitModelError;
+  if (args.emit == "flat") {
+    std::cout << flat::DumpFlat(mech);
+    return kExitOk;
+  }
+  rt::CompileOptions co;
+  if (args.solver == "dense") co.solver = rt::SolverPath::Dense;
+  if (args.solver == "sparse") co.solver = rt::SolverPath::Sparse;
+  rt::CompileResult cr;
+  if (!CompileModel(mech, co, &cr)) return kExitModelError;
+  rt::ProgramSummary s = rt::Summarize(*cr.program);
+
+  std::cout << fmt::format("model {}", mech.model_name);
+  if (!mech.description.empty()) std::cout << fmt::format(" \"{}\"", mech.description);
+  std::cout << "\n";
+  std::cout << fmt::format("  bodies      {} (after merging welded parts; {} Body components)\n", s.num_bodies,
+                           mech.bodies.size());
+  std::cout << fmt::format("  joints      {}\n", s.num_joints);
+  for (const auto& j : mech.joints) {
+    std::cout << fmt::format("    {:<20} {}", j.name, flat::JointTypeName(j.type));
+    if (j.type == flat::JointType::Spherical || j.type == flat::JointType::Free)
+      std::cout << fmt::format(" ({})", flat::RotationCoordsName(j.rotation));
+    bool prescribed = false;
+    for (auto p : j.prescribed) prescribed = prescribed || p != flat::kNoExpr;
+    if (prescribed) std::cout << "  prescribed";
+    if (j.cut) std::cout << "  cut";
+    std::cout << "\n";
+  }
+  std::cout << fmt::format("  coordinates q: {}, speeds u: {}\n", s.nq, s.nu);
+  std::cout << fmt::format("  degrees of freedom {} (Gruebler count {})\n", s.dof, s.grubler_dof);
+  if (!s.cut_joints.empty()) {
+    std::cout << "  loop cuts  ";
+    for (const auto& c : s.cut_joints) std::cout << " " << c;
+    std::cout << "\n";
+  }
+  std::cout << fmt::format("  constraints {} contact(s), {} line force(s), {} applied wrench(es)\n",
+                           mech.contacts.size(), mech.line_forces.size(), mech.wrenches.size());
+  std::cout << fmt::format("  solver      {} — {}\n", SolverName(s.solver), s.solver_reason);
+  std::cout << fmt::format("  integrator  {} — {}\n", IntegratorName(s.integrator), s.integrator_reason);
+  for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
+  const auto& x = mech.experiment;
+  std::cout << fmt::format("  experiment  StartTime={} StopTime={} Tolerance={}{}\n", x.start_time, x.stop_time,
+                           x.tolerance, x.has_interval ? fmt::format(" Interval={}", x.interval) : "");
+  // The model's own parameters (declared in its file); the standard library's internal
+  // ones are counted only (`--emit flat` lists them all).
+  size_t own = 0;
+  for (const auto& p : mech.params) own += p.loc.file == args.load.path;
+  std::cout << fmt::format("  parameters  {} in the model ({} in all)\n", own, mech.params.size());
+  for (const auto& p : mech.params) {
+    if (p.loc.file != args.load.path) continue;
+    std::string value = p.type == flat::ParamType::String ? "\"" + p.string_value + "\"" : fmt::format("{:.10g}", p.value);
+    std::cout << fmt::format("    {:<28} = {:<14}{}{}\n", p.name, value, p.unit.empty() ? "" : " [" + p.unit + "]",
+                             p.structural ? "  (structural)" : "");
+  }
+  std::cout << fmt::format("  outputs     {}\n", mech.outputs.size());
+  for (const auto& o : mech.outputs) std::cout << "    " << o.name << "\n";
+  (void)GrublerCount;
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddCheckCommand(CLI::App& app, int* exit_code) {
+  auto args = std::make_shared<CheckArgs>();
+  CLI::App* cmd = app.add_subcommand("check", "Check a model: diagnostics, or a summary of the mechanism");
+  cmd->add_option("file", args->load.path, "The .mech file")->required();
+  cmd->add_option("--model", args->load.model, "Model to check (default: the last model in the file)");
+  cmd->add_option("--set", args->load.sets, "Override a parameter: name=value (repeatable)");
+  cmd->add_option("--emit", args->emit, "Print an intermediate form instead: ast or flat")
+      ->check(CLI::IsMember({"ast", "flat"}));
+  cmd->add_option("--solver", args->solver, "Solution path to report: auto, dense or sparse")
+      ->check(CLI::IsMember({"auto", "dense", "sparse"}));
+  cmd->callback([args, exit_code]() { *exit_code = RunCheck(*args); });
+}
+
+}  // namespace kanesim::cli

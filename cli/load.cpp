@@ -1,0 +1,66 @@
+// Loading a model for any subcommand: parse, elaborate, print diagnostics; compile and
+// render compiler messages the same way.
+#include <cstdio>
+#include <iostream>
+
+#include "cli/common.h"
+#include "lang/diagnostics.h"
+#include "lang/elaborate.h"
+#include "stdlib/stdlib.h"
+
+namespace kanesim::cli {
+
+namespace {
+// The last loaded program stays alive so compile messages can show source lines.
+lang::Program* g_program = nullptr;
+}  // namespace
+
+bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
+  static lang::Program program;
+  program = lang::Program{};
+  g_program = &program;
+  lang::Diagnostics diags(&program.sources);
+  lang::ElaborateOptions eo;
+  eo.model = options.model;
+  for (const auto& s : options.sets) {
+    size_t eq = s.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      std::cerr << "kanesim: error[E210]: --set needs name=value, got '" << s << "'\n";
+      return false;
+    }
+    eo.overrides.push_back({s.substr(0, eq), s.substr(eq + 1)});
+  }
+  bool ok = lang::LoadProgram(options.path, stdlib::Files(), &program, diags);
+  if (ok) ok = lang::Elaborate(program, eo, out, diags);
+  std::cerr << diags.RenderAll();
+  if (!ok && diags.NumErrors() > 0)
+    std::cerr << diags.NumErrors() << " error" << (diags.NumErrors() == 1 ? "" : "s") << "\n";
+  return ok && !diags.HasErrors();
+}
+
+bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out) {
+  *out = rt::Compile(mech, options);
+  if (out->errors.empty()) return true;
+  for (const auto& e : out->errors) {
+    std::string where = e.loc.file.empty() ? "kanesim"
+                                           : e.loc.file + ":" + std::to_string(e.loc.line) + ":" +
+                                                 std::to_string(e.loc.col);
+    std::cerr << where << ": error[" << e.code << "]: " << e.message << "\n";
+    if (g_program) {
+      for (int f = 0; f < g_program->sources.NumFiles(); ++f) {
+        if (g_program->sources.Name(f) != e.loc.file || e.loc.line <= 0) continue;
+        std::string line = g_program->sources.LineText(f, e.loc.line);
+        std::string num = std::to_string(e.loc.line);
+        std::cerr << " " << num << " | " << line << "\n " << std::string(num.size(), ' ') << " | "
+                  << std::string(static_cast<size_t>(std::max(0, e.loc.col - 1)), ' ') << "^\n";
+        break;
+      }
+    }
+    for (const auto& [loc, msg] : e.notes)
+      std::cerr << loc.file << ":" << loc.line << ":" << loc.col << ": note: " << msg << "\n";
+    if (!e.hint.empty()) std::cerr << "  hint: " << e.hint << "\n";
+  }
+  return false;
+}
+
+}  // namespace kanesim::cli

@@ -1,0 +1,880 @@
+// Expression evaluation for the elaborator: AST expressions become Values (arrays of
+// scalar flat expressions). Parameters stay symbolic (Param nodes) so that a sweep can
+// change them without elaborating again; constants fold.
+#include <cmath>
+#include <functional>
+
+#include "lang/elab_internal.h"
+#include "lang/lexer.h"
+
+namespace kanesim::lang::elab {
+
+using flat::Op;
+
+const char* VTypeName(VType t) {
+  switch (t) {
+    case VType::Real: return "Real";
+    case VType::Integer: return "Integer";
+    case VType::Boolean: return "Boolean";
+    case VType::String: return "String";
+  }
+  return "?";
+}
+
+size_t Value::Size() const {
+  size_t n = 1;
+  for (int d : shape) n *= static_cast<size_t>(d);
+  return n;
+}
+
+static std::string ShapeStr(const std::vector<int>& shape) {
+  if (shape.empty()) return "scalar";
+  std::string s = "[";
+  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
+
+Value Elaborator::Const(double x, VType t) {
+  Value v;
+  v.type = t;
+  v.e.push_back(m_->exprs.Constant(x));
+  return v;
+}
+
+Value Elaborator::Scalar(ExprId e, VType t) {
+  Value v;
+  v.type = t;
+  v.e.push_back(e);
+  return v;
+}
+
+static void CollectParams(const flat::ExprPool& pool, ExprId id, std::vector<int>* out) {
+  if (id < 0) return;
+  std::vector<ExprId> stack{id};
+  while (!stack.empty()) {
+    ExprId x = stack.back();
+    stack.pop_back();
+    const auto& n = pool[x];
+    if (n.op == Op::Param) out->push_back(n.index);
+    for (ExprId c : {n.a, n.b, n.c})
+      if (c >= 0) stack.push_back(c);
+  }
+}
+
+bool Elaborator::Structural(const Value& v, Span span, double* out, const char* what) {
+  if (!v.valid) return false;
+  if (v.type == VType::String || v.Size() != 1 || !v.shape.empty()) {
+    diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be a scalar number");
+    return false;
+  }
+  ExprId e = v.e[0];
+  if (m_->exprs.DependsOnTimeOrState(e)) {
+    diags_.Error(DiagCode::NotConstantExpr, span,
+                 std::string(what) + " must be known before the simulation starts, but it depends on time or state")
+        .hint = "use parameters and constants only";
+    return false;
+  }
+  std::vector<int> ps;
+  CollectParams(m_->exprs, e, &ps);
+  for (int p : ps) m_->params[static_cast<size_t>(p)].structural = true;
+  *out = flat::EvalParamExpr(*m_, pvals_, e);
+  if (!std::isfinite(*out)) {
+    diags_.Error(DiagCode::BadValue, span, std::string(what) + " is not a finite number");
+    return false;
+  }
+  return true;
+}
+
+bool Elaborator::StructuralInt(const Value& v, Span span, long* out, const char* what) {
+  double x = 0;
+  if (!Structural(v, span, &x, what)) return false;
+  if (std::fabs(x) > 9e15 || x != std::floor(x)) {
+    diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be an Integer, got " + std::to_string(x));
+    return false;
+  }
+  *out = static_cast<long>(x);
+  return true;
+}
+
+std::vector<double> Elaborator::StructuralList(const Value& v, Span span, const char* what) {
+  std::vector<double> out;
+  if (!v.valid) return out;
+  if (v.type == VType::String) {
+    diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be numbers");
+    return out;
+  }
+  for (ExprId e : v.e) {
+    double x = 0;
+    if (!Structural(Scalar(e, v.type), span, &x, what)) return {};
+    out.push_back(x);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Elementwise helpers
+
+static bool SameShape(const Value& a, const Value& b) { return a.shape == b.shape; }
+
+static VType Promote(VType a, VType b) {
+  if (a == VType::Integer && b == VType::Integer) return VType::Integer;
+  return VType::Real;
+}
+
+namespace {
+
+struct Builtin1 {
+  const char* name;
+  Op op;
+};
+const Builtin1 kUnaryFns[] = {{"sin", Op::Sin},   {"cos", Op::Cos},   {"tan", Op::Tan},     {"asin", Op::Asin},
+                              {"acos", Op::Acos}, {"atan", Op::Atan}, {"sinh", Op::Sinh},   {"cosh", Op::Cosh},
+                              {"tanh", Op::Tanh}, {"exp", Op::Exp},   {"log", Op::Log},     {"sqrt", Op::Sqrt},
+                              {"abs", Op::Abs},   {"sign", Op::Sign}, {"floor", Op::Floor}, {"ceil", Op::Ceil}};
+
+const char* kKnownFunctions[] = {"sin",   "cos",   "tan",      "asin",     "acos",  "atan",  "atan2",    "sinh",
+                                 "cosh",  "tanh",  "exp",      "log",      "sqrt",  "abs",   "sign",     "min",
+                                 "max",   "floor", "ceil",     "mod",      "cross", "dot",   "norm",     "transpose",
+                                 "identity", "diagonal", "zeros", "ones", "fill", "size", "sum", "integer", "skew",
+                                 "outerProduct", "vector"};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+
+Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
+  auto& pool = m_->exprs;
+  auto bad = [&]() { return Value::Invalid(); };
+  auto elementwise2 = [&](const Value& a, const Value& b, Op op, VType rt, Span sp) -> Value {
+    if (!a.valid || !b.valid) return bad();
+    if (a.type == VType::String || b.type == VType::String) {
+      diags_.Error(DiagCode::TypeMismatch, sp, std::string("operator '") + flat::OpSpelling(op) +
+                                                   "' is not defined for String");
+      return bad();
+    }
+    Value r;
+    r.type = rt;
+    if (a.shape.empty()) {
+      r.shape = b.shape;
+      for (ExprId y : b.e) r.e.push_back(pool.Binary(op, a.e[0], y));
+    } else if (b.shape.empty()) {
+      r.shape = a.shape;
+      for (ExprId x : a.e) r.e.push_back(pool.Binary(op, x, b.e[0]));
+    } else if (SameShape(a, b)) {
+      r.shape = a.shape;
+      for (size_t i = 0; i < a.e.size(); ++i) r.e.push_back(pool.Binary(op, a.e[i], b.e[i]));
+    } else {
+      diags_.Error(DiagCode::SizeMismatch, sp, "operands have sizes " + ShapeStr(a.shape) + " and " +
+                                                   ShapeStr(b.shape));
+      return bad();
+    }
+    return r;
+  };
+
+  switch (e.kind) {
+    case ast::ExprKind::Number: return Const(e.number, e.is_integer ? VType::Integer : VType::Real);
+    case ast::ExprKind::Bool: return Const(e.number, VType::Boolean);
+    case ast::ExprKind::String: {
+      Value v;
+      v.type = VType::String;
+      v.s.push_back(e.text);
+      v.e.push_back(flat::kNoExpr);
+      return v;
+    }
+    case ast::ExprKind::Colon:
+    case ast::ExprKind::End:
+      diags_.Error(DiagCode::ExpectedToken, e.span, "':' and 'end' are only allowed in subscripts");
+      return bad();
+    case ast::ExprKind::Ref: {
+      // Loop iterators shadow everything.
+      if (e.parts.size() == 1 && e.parts[0].subscripts.empty() && ctx.iters) {
+        auto it = ctx.iters->find(e.parts[0].name);
+        if (it != ctx.iters->end())
+          return Const(it->second, it->second == std::floor(it->second) ? VType::Integer : VType::Real);
+      }
+      Node* first = ctx.scope ? ctx.scope->Child(e.parts[0].name) : nullptr;
+      if (!first && e.parts.size() == 1 && e.parts[0].subscripts.empty()) {
+        if (e.parts[0].name == "time") return Scalar(pool.Time());
+        if (e.parts[0].name == "pi") return Const(M_PI);
+      }
+      // Walk the reference through the instance tree.
+      Node* n = first;
+      if (!n) {
+        std::vector<std::string> cands{"time", "pi"};
+        if (ctx.scope)
+          for (auto& c : ctx.scope->children) cands.push_back(c->decl ? c->decl->name : c->name);
+        if (ctx.iters)
+          for (auto& [k, v] : *ctx.iters) cands.push_back(k);
+        auto& d = diags_.Error(DiagCode::UnknownName, e.parts[0].span, "unknown name '" + e.parts[0].name + "'");
+        std::string best = ClosestName(e.parts[0].name, cands);
+        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+        return bad();
+      }
+      for (size_t pi = 0; pi < e.parts.size(); ++pi) {
+        const ast::RefPart& part = e.parts[pi];
+        if (pi > 0) {
+          // Frame connectors expose their motion: r (position), R (orientation),
+          // v (velocity), w (angular velocity), all resolved in the world.
+          if (n->kind == Node::kClass && n->prim == Prim::Frame &&
+              (part.name == "r" || part.name == "R" || part.name == "v" || part.name == "w")) {
+            Value v;
+            flat::StateKind kind = part.name == "r"   ? flat::StateKind::FramePosition
+                                   : part.name == "R" ? flat::StateKind::FrameRotation
+                                   : part.name == "v" ? flat::StateKind::FrameVelocity
+                                                      : flat::StateKind::FrameAngVel;
+            int count = part.name == "R" ? 9 : 3;
+            v.shape = part.name == "R" ? std::vector<int>{3, 3} : std::vector<int>{3};
+            for (int k = 0; k < count; ++k)
+              v.e.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
+            if (pi + 1 != e.parts.size()) {
+              diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + part.name + "' has no members");
+              return bad();
+            }
+            if (!part.subscripts.empty()) {
+              // Apply subscripts through the generic path below.
+              ast::Expr tmp;
+              (void)tmp;
+            }
+            // Subscripts on r/R/v/w
+            Value out = v;
+            if (!part.subscripts.empty()) {
+              std::vector<std::vector<int>> idx;
+              std::vector<bool> keep;
+              for (size_t d = 0; d < part.subscripts.size() && d < v.shape.size(); ++d) {
+                const ast::Expr& s = *part.subscripts[d];
+                std::vector<int> list;
+                if (s.kind == ast::ExprKind::Colon) {
+                  for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
+                  keep.push_back(true);
+                } else {
+                  long k = 0;
+                  if (!StructuralInt(Eval(s, ctx), s.span, &k, "a subscript")) return bad();
+                  if (k < 1 || k > v.shape[d]) {
+                    diags_.Error(DiagCode::IndexOutOfRange, s.span,
+                                 "index " + std::to_string(k) + " is out of range 1.." + std::to_string(v.shape[d]));
+                    return bad();
+                  }
+                  list.push_back(static_cast<int>(k - 1));
+                  keep.push_back(false);
+                }
+                idx.push_back(list);
+              }
+              if (part.subscripts.size() > v.shape.size()) {
+                diags_.Error(DiagCode::IndexOutOfRange, part.span, "too many subscripts");
+                return bad();
+              }
+              out = Value{};
+              out.type = VType::Real;
+              if (v.shape.size() == 1) {
+                for (int i : idx[0]) out.e.push_back(v.e[static_cast<size_t>(i)]);
+                if (keep[0]) out.shape = {static_cast<int>(idx[0].size())};
+              } else {
+                std::vector<int> cols;
+                if (idx.size() > 1) cols = idx[1];
+                else for (int k = 0; k < 3; ++k) cols.push_back(k);
+                bool keepc = idx.size() > 1 ? keep[1] : true;
+                for (int i : idx[0])
+                  for (int j : cols) out.e.push_back(v.e[static_cast<size_t>(i * 3 + j)]);
+                if (keep[0]) out.shape.push_back(static_cast<int>(idx[0].size()));
+                if (keepc) out.shape.push_back(static_cast<int>(cols.size()));
+              }
+            }
+            return out;
+          }
+          if (n->kind != Node::kClass) {
+            diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
+            return bad();
+          }
+          Node* c = n->Child(part.name);
+          if (!c) {
+            std::vector<std::string> cands;
+            for (auto& ch : n->children) cands.push_back(ch->decl ? ch->decl->name : ch->name);
+            if (n->prim == Prim::Frame) cands.insert(cands.end(), {"r", "R", "v", "w"});
+            auto& d = diags_.Error(DiagCode::UnknownName, part.span,
+                                   "'" + n->path + "' has no member '" + part.name + "'");
+            std::string best = ClosestName(part.name, cands);
+            if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+            return bad();
+          }
+          n = c;
+        }
+        if (!n->enabled) {
+          diags_.Error(DiagCode::UnknownName, part.span,
+                       "'" + n->path + "' is disabled by its condition and cannot be used");
+          return bad();
+        }
+        if (n->kind == Node::kArray) {
+          if (part.subscripts.size() != 1) {
+            diags_.Error(DiagCode::TypeMismatch, part.span,
+                         "'" + n->path + "' is an array of components; index it with one subscript");
+            return bad();
+          }
+          long k = 0;
+          if (!StructuralInt(Eval(*part.subscripts[0], ctx), part.subscripts[0]->span, &k, "a subscript"))
+            return bad();
+          if (k < 1 || k > static_cast<long>(n->elems.size())) {
+            diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
+                         "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
+                             " of '" + n->path + "'");
+            return bad();
+          }
+          n = n->elems[static_cast<size_t>(k - 1)].get();
+          continue;
+        }
+        if (n->kind == Node::kVar) {
+          Value v = GetVar(n, part.span);
+          if (!v.valid) return v;
+          if (pi + 1 != e.parts.size()) {
+            diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span,
+                         "'" + n->path + "' is a variable and has no members");
+            return bad();
+          }
+          if (part.subscripts.empty()) return v;
+          // Generic subscripting of a value.
+          std::vector<std::vector<int>> idx;
+          std::vector<bool> keep;
+          if (part.subscripts.size() > v.shape.size()) {
+            diags_.Error(DiagCode::IndexOutOfRange, part.span,
+                         "'" + n->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
+            return bad();
+          }
+          for (size_t d = 0; d < v.shape.size(); ++d) {
+            std::vector<int> list;
+            bool kp = true;
+            if (d < part.subscripts.size() && part.subscripts[d]->kind != ast::ExprKind::Colon) {
+              const ast::Expr& s = *part.subscripts[d];
+              if (s.kind == ast::ExprKind::End) {
+                list.push_back(v.shape[d] - 1);
+                kp = false;
+              } else {
+                Value sv = Eval(s, ctx);
+                if (!sv.valid) return bad();
+                std::vector<double> ks = StructuralList(sv, s.span, "a subscript");
+                if (ks.empty()) return bad();
+                kp = !sv.shape.empty();
+                for (double kd : ks) {
+                  long k = static_cast<long>(kd);
+                  if (kd != std::floor(kd) || k < 1 || k > v.shape[d]) {
+                    diags_.Error(DiagCode::IndexOutOfRange, s.span,
+                                 "index " + std::to_string(kd) + " is out of range 1.." + std::to_string(v.shape[d]) +
+                                     " of '" + n->path + "'");
+                    return bad();
+                  }
+                  list.push_back(static_cast<int>(k - 1));
+                }
+              }
+            } else {
+              for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
+            }
+            idx.push_back(list);
+            keep.push_back(kp);
+          }
+          Value r;
+          r.type = v.type;
+          for (size_t d = 0; d < idx.size(); ++d)
+            if (keep[d]) r.shape.push_back(static_cast<int>(idx[d].size()));
+          // Iterate over the cartesian product.
+          std::vector<size_t> strides(v.shape.size(), 1);
+          for (size_t d = v.shape.size(); d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
+          std::function<void(size_t, size_t)> rec = [&](size_t d, size_t off) {
+            if (d == idx.size()) {
+              r.e.push_back(v.e[off]);
+              if (v.type == VType::String) r.s.push_back(v.s[off]);
+              return;
+            }
+            for (int k : idx[d]) rec(d + 1, off + static_cast<size_t>(k) * strides[d]);
+          };
+          rec(0, 0);
+          return r;
+        }
+        if (!part.subscripts.empty()) {
+          diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
+          return bad();
+        }
+      }
+      diags_.Error(DiagCode::TypeMismatch, e.span,
+                   "'" + n->path + "' is a component, not a value")
+          .hint = "components are used in connect(); their parameters and variables are values";
+      return bad();
+    }
+    case ast::ExprKind::Array: {
+      Value r;
+      r.type = VType::Integer;
+      bool first = true;
+      std::vector<int> elem_shape;
+      for (const auto& a : e.args) {
+        Value v = Eval(*a, ctx);
+        if (!v.valid) return bad();
+        if (first) {
+          elem_shape = v.shape;
+          r.type = v.type;
+          first = false;
+        } else {
+          if (v.shape != elem_shape) {
+            diags_.Error(DiagCode::SizeMismatch, a->span, "array elements have different sizes (" +
+                                                              ShapeStr(elem_shape) + " and " + ShapeStr(v.shape) + ")");
+            return bad();
+          }
+          if ((r.type == VType::String) != (v.type == VType::String) ||
+              (r.type == VType::Boolean) != (v.type == VType::Boolean)) {
+            diags_.Error(DiagCode::TypeMismatch, a->span, "array elements have different types");
+            return bad();
+          }
+          r.type = r.type == VType::String || r.type == VType::Boolean ? r.type : Promote(r.type, v.type);
+        }
+        r.e.insert(r.e.end(), v.e.begin(), v.e.end());
+        r.s.insert(r.s.end(), v.s.begin(), v.s.end());
+      }
+      if (e.args.empty()) r.type = VType::Real;
+      r.shape.push_back(static_cast<int>(e.args.size()));
+      r.shape.insert(r.shape.end(), elem_shape.begin(), elem_shape.end());
+      if (r.Size() > static_cast<size_t>(kMaxArraySize)) {
+        diags_.Error(DiagCode::ArrayTooLarge, e.span, "array too large");
+        return bad();
+      }
+      return r;
+    }
+    case ast::ExprKind::Comprehension: {
+      Value range = Eval(*e.args[1], ctx);
+      if (!range.valid) return bad();
+      if (range.Size() > static_cast<size_t>(kMaxArraySize)) {
+        diags_.Error(DiagCode::ArrayTooLarge, e.args[1]->span,
+                     "range has " + std::to_string(range.Size()) + " elements; the limit is " +
+                         std::to_string(kMaxArraySize));
+        return bad();
+      }
+      std::vector<double> xs = StructuralList(range, e.args[1]->span, "the iteration range");
+      Iters local = ctx.iters ? *ctx.iters : Iters{};
+      Value r;
+      r.type = VType::Integer;
+      std::vector<int> elem_shape;
+      for (size_t i = 0; i < xs.size(); ++i) {
+        local[e.text] = xs[i];
+        Ctx c2{ctx.scope, &local};
+        Value v = Eval(*e.args[0], c2);
+        if (!v.valid) return bad();
+        if (i == 0) {
+          elem_shape = v.shape;
+          r.type = v.type;
+        } else if (v.shape != elem_shape) {
+          diags_.Error(DiagCode::SizeMismatch, e.args[0]->span, "comprehension elements have different sizes");
+          return bad();
+        } else if (r.type != VType::String && r.type != VType::Boolean) {
+          r.type = Promote(r.type, v.type);
+        }
+        r.e.insert(r.e.end(), v.e.begin(), v.e.end());
+        r.s.insert(r.s.end(), v.s.begin(), v.s.end());
+      }
+      if (xs.empty()) r.type = VType::Real;
+      r.shape.push_back(static_cast<int>(xs.size()));
+      r.shape.insert(r.shape.end(), elem_shape.begin(), elem_shape.end());
+      return r;
+    }
+    case ast::ExprKind::Matrix: {
+      Value r;
+      r.type = VType::Integer;
+      size_t cols = 0;
+      for (size_t ri = 0; ri < e.rows.size(); ++ri) {
+        const auto& row = e.rows[ri];
+        if (ri == 0) cols = row.size();
+        if (row.size() != cols) {
+          diags_.Error(DiagCode::SizeMismatch, e.span, "matrix rows have different lengths");
+          return bad();
+        }
+        for (const auto& x : row) {
+          Value v = Eval(*x, ctx);
+          if (!v.valid) return bad();
+          if (!v.shape.empty() || v.type == VType::String) {
+            diags_.Error(DiagCode::SizeMismatch, x->span, "matrix entries must be scalars");
+            return bad();
+          }
+          r.type = Promote(r.type, v.type);
+          r.e.push_back(v.e[0]);
+        }
+      }
+      r.shape = {static_cast<int>(e.rows.size()), static_cast<int>(cols)};
+      return r;
+    }
+    case ast::ExprKind::Range: {
+      std::vector<double> xs;
+      double a = 0, b = 0, step = 1;
+      Value va = Eval(*e.args[0], ctx);
+      if (!Structural(va, e.args[0]->span, &a, "a range bound")) return bad();
+      if (e.args.size() == 3) {
+        if (!Structural(Eval(*e.args[1], ctx), e.args[1]->span, &step, "a range step")) return bad();
+        if (!Structural(Eval(*e.args[2], ctx), e.args[2]->span, &b, "a range bound")) return bad();
+      } else {
+        if (!Structural(Eval(*e.args[1], ctx), e.args[1]->span, &b, "a range bound")) return bad();
+      }
+      if (step == 0) {
+        diags_.Error(DiagCode::BadValue, e.span, "range step is zero");
+        return bad();
+      }
+      double count = std::floor((b - a) / step + 1e-10) + 1;
+      if (count > static_cast<double>(kMaxArraySize)) {
+        diags_.Error(DiagCode::ArrayTooLarge, e.span,
+                     "range has " + std::to_string(static_cast<long long>(count)) + " elements; the limit is " +
+                         std::to_string(kMaxArraySize));
+        return bad();
+      }
+      bool integer = a == std::floor(a) && step == std::floor(step);
+      Value r;
+      r.type = integer ? VType::Integer : VType::Real;
+      long n = count > 0 ? static_cast<long>(count) : 0;
+      for (long i = 0; i < n; ++i) r.e.push_back(pool.Constant(a + static_cast<double>(i) * step));
+      r.shape = {static_cast<int>(n)};
+      return r;
+    }
+    case ast::ExprKind::Unary: {
+      Value v = Eval(*e.args[0], ctx);
+      if (!v.valid) return bad();
+      Tok op = static_cast<Tok>(e.op);
+      if (op == Tok::Plus) return v;
+      if (v.type == VType::String) {
+        diags_.Error(DiagCode::TypeMismatch, e.span, "unary operator on a String");
+        return bad();
+      }
+      if (op == Tok::KwNot && v.type != VType::Boolean) {
+        diags_.Error(DiagCode::TypeMismatch, e.span, "'not' needs a Boolean, got " + std::string(VTypeName(v.type)));
+        return bad();
+      }
+      for (auto& x : v.e) x = pool.Unary(op == Tok::KwNot ? Op::Not : Op::Neg, x);
+      return v;
+    }
+    case ast::ExprKind::Binary: {
+      Value a = Eval(*e.args[0], ctx);
+      Value b = Eval(*e.args[1], ctx);
+      if (!a.valid || !b.valid) return bad();
+      Tok op = static_cast<Tok>(e.op);
+      switch (op) {
+        case Tok::Plus:
+        case Tok::Minus:
+          if (!a.shape.empty() != !b.shape.empty() && !(a.shape.empty() && b.shape.empty())) {
+            diags_.Error(DiagCode::SizeMismatch, e.span,
+                         std::string("'") + TokSpelling(op) + "' needs operands of equal size, got " +
+                             ShapeStr(a.shape) + " and " + ShapeStr(b.shape));
+            return bad();
+          }
+          return elementwise2(a, b, op == Tok::Plus ? Op::Add : Op::Sub, Promote(a.type, b.type), e.span);
+        case Tok::Star: {
+          if (a.shape.empty() || b.shape.empty())
+            return elementwise2(a, b, Op::Mul, Promote(a.type, b.type), e.span);
+          // Matrix products (Modelica semantics): vector*vector = scalar product.
+          auto dotp = [&](const std::vector<ExprId>& x, const std::vector<ExprId>& y) {
+            ExprId s = pool.Binary(Op::Mul, x[0], y[0]);
+            for (size_t i = 1; i < x.size(); ++i) s = pool.Binary(Op::Add, s, pool.Binary(Op::Mul, x[i], y[i]));
+            return s;
+          };
+          int ar = a.shape.size() == 2 ? a.shape[0] : 1, ac = a.shape.back();
+          int br = b.shape[0], bc = b.shape.size() == 2 ? b.shape[1] : 1;
+          if (a.shape.size() > 2 || b.shape.size() > 2 || ac != br) {
+            diags_.Error(DiagCode::SizeMismatch, e.span,
+                         "cannot multiply sizes " + ShapeStr(a.shape) + " and " + ShapeStr(b.shape));
+            return bad();
+          }
+          Value r;
+          r.type = Promote(a.type, b.type);
+          for (int i = 0; i < ar; ++i)
+            for (int j = 0; j < bc; ++j) {
+              std::vector<ExprId> x, y;
+              for (int k = 0; k < ac; ++k) {
+                x.push_back(a.e[static_cast<size_t>(i * ac + k)]);
+                y.push_back(b.e[static_cast<size_t>(k * bc + j)]);
+              }
+              r.e.push_back(dotp(x, y));
+            }
+          if (a.shape.size() == 2) r.shape.push_back(ar);
+          if (b.shape.size() == 2) r.shape.push_back(bc);
+          return r;
+        }
+        case Tok::Slash:
+          if (!b.shape.empty()) {
+            diags_.Error(DiagCode::SizeMismatch, e.span, "division by an array");
+            return bad();
+          }
+          return elementwise2(a, b, Op::Div, VType::Real, e.span);
+        case Tok::Caret:
+          if (!a.shape.empty() || !b.shape.empty()) {
+            diags_.Error(DiagCode::SizeMismatch, e.span, "'^' needs scalar operands");
+            return bad();
+          }
+          return elementwise2(a, b, Op::Pow, VType::Real, e.span);
+        case Tok::KwAnd:
+        case Tok::KwOr:
+          if (a.type != VType::Boolean || b.type != VType::Boolean) {
+            diags_.Error(DiagCode::TypeMismatch, e.span,
+                         std::string("'") + TokSpelling(op) + "' needs Boolean operands");
+            return bad();
+          }
+          return elementwise2(a, b, op == Tok::KwAnd ? Op::And : Op::Or, VType::Boolean, e.span);
+        default: {
+          if (!a.shape.empty() || !b.shape.empty()) {
+            diags_.Error(DiagCode::SizeMismatch, e.span, "comparison of arrays");
+            return bad();
+          }
+          if (a.type == VType::String && b.type == VType::String) {
+            if (op != Tok::EqEq && op != Tok::Ne) {
+              diags_.Error(DiagCode::TypeMismatch, e.span, "Strings compare only with == and <>");
+              return bad();
+            }
+            bool eq = a.s[0] == b.s[0];
+            return Const((op == Tok::EqEq) == eq ? 1 : 0, VType::Boolean);
+          }
+          Op fop = op == Tok::Lt ? Op::Lt : op == Tok::Le ? Op::Le : op == Tok::Gt ? Op::Gt
+                   : op == Tok::Ge ? Op::Ge : op == Tok::EqEq ? Op::Eq : Op::Ne;
+          return elementwise2(a, b, fop, VType::Boolean, e.span);
+        }
+      }
+    }
+    case ast::ExprKind::If: {
+      // Evaluate from the last else backwards, building IfElse nodes.
+      Value acc = Eval(*e.args.back(), ctx);
+      if (!acc.valid) return bad();
+      for (size_t i = e.args.size() - 1; i >= 2; i -= 2) {
+        const ast::Expr& ce = *e.args[i - 2];
+        Value c = Eval(ce, ctx);
+        Value t = Eval(*e.args[i - 1], ctx);
+        if (!c.valid || !t.valid) return bad();
+        if (c.type != VType::Boolean || !c.shape.empty()) {
+          diags_.Error(DiagCode::TypeMismatch, ce.span, "the condition must be a scalar Boolean");
+          return bad();
+        }
+        if (t.shape != acc.shape || (t.type == VType::String) != (acc.type == VType::String)) {
+          // Branches of different sizes: the condition decides structure.
+          double cv = 0;
+          if (!Structural(c, ce.span, &cv, "the condition of an if-expression with branches of different sizes"))
+            return bad();
+          if (cv != 0) acc = t;
+          continue;
+        }
+        if (t.type == VType::String) {
+          double cv = 0;
+          if (!Structural(c, ce.span, &cv, "the condition choosing a String")) return bad();
+          if (cv != 0) acc = t;
+          continue;
+        }
+        Value r;
+        r.type = (t.type == VType::Boolean && acc.type == VType::Boolean) ? VType::Boolean : Promote(t.type, acc.type);
+        r.shape = t.shape;
+        for (size_t k = 0; k < t.e.size(); ++k) r.e.push_back(pool.IfElse(c.e[0], t.e[k], acc.e[k]));
+        acc = r;
+      }
+      return acc;
+    }
+    case ast::ExprKind::Call: break;
+  }
+
+  // ---- function calls ----
+  std::string fn = e.parts.empty() ? "" : ast::JoinName([&] {
+    std::vector<std::string> v;
+    for (auto& p : e.parts) v.push_back(p.name);
+    return v;
+  }());
+  if (!e.named_args.empty()) {
+    diags_.Error(DiagCode::BadCall, e.named_args[0].span, "'" + fn + "' takes no named arguments");
+    return bad();
+  }
+  std::vector<Value> args;
+  for (const auto& a : e.args) {
+    args.push_back(Eval(*a, ctx));
+    if (!args.back().valid) return bad();
+  }
+  auto want = [&](size_t n) {
+    if (args.size() == n) return true;
+    diags_.Error(DiagCode::BadCall, e.span,
+                 "'" + fn + "' takes " + std::to_string(n) + " argument(s), got " + std::to_string(args.size()));
+    return false;
+  };
+  auto numeric = [&](const Value& v) {
+    if (v.type != VType::String) return true;
+    diags_.Error(DiagCode::TypeMismatch, e.span, "'" + fn + "' needs numbers");
+    return false;
+  };
+  auto vec3 = [&](const Value& v) {
+    if (v.shape == std::vector<int>{3} && v.type != VType::String) return true;
+    diags_.Error(DiagCode::SizeMismatch, e.span, "'" + fn + "' needs 3-vectors, got " + ShapeStr(v.shape));
+    return false;
+  };
+  for (const auto& u : kUnaryFns) {
+    if (fn == u.name) {
+      if (!want(1) || !numeric(args[0])) return bad();
+      Value r = args[0];
+      r.type = (u.op == Op::Abs && r.type == VType::Integer) ? VType::Integer : VType::Real;
+      if (u.op == Op::Sign || u.op == Op::Floor || u.op == Op::Ceil) r.type = VType::Real;
+      for (auto& x : r.e) x = pool.Unary(u.op, x);
+      return r;
+    }
+  }
+  if (fn == "atan2" || fn == "mod" || ((fn == "min" || fn == "max") && args.size() == 2)) {
+    if (!want(2) || !numeric(args[0]) || !numeric(args[1])) return bad();
+    Op op = fn == "atan2" ? Op::Atan2 : fn == "mod" ? Op::Mod : fn == "min" ? Op::Min : Op::Max;
+    VType t = (fn == "atan2") ? VType::Real : Promote(args[0].type, args[1].type);
+    return elementwise2(args[0], args[1], op, t, e.span);
+  }
+  if (fn == "min" || fn == "max" || fn == "sum") {
+    if (!want(1) || !numeric(args[0])) return bad();
+    const Value& v = args[0];
+    if (v.e.empty()) return Const(0);
+    ExprId acc = v.e[0];
+    Op op = fn == "min" ? Op::Min : fn == "max" ? Op::Max : Op::Add;
+    for (size_t i = 1; i < v.e.size(); ++i) acc = pool.Binary(op, acc, v.e[i]);
+    return Scalar(acc, v.type == VType::Integer ? VType::Integer : VType::Real);
+  }
+  if (fn == "integer") {
+    if (!want(1) || !numeric(args[0])) return bad();
+    Value r = args[0];
+    for (auto& x : r.e) x = pool.Unary(Op::Floor, x);
+    r.type = VType::Integer;
+    return r;
+  }
+  if (fn == "cross") {
+    if (!want(2) || !vec3(args[0]) || !vec3(args[1])) return bad();
+    const auto& a = args[0].e;
+    const auto& b = args[1].e;
+    Value r;
+    r.shape = {3};
+    auto m = [&](int i, int j) { return pool.Binary(Op::Mul, a[static_cast<size_t>(i)], b[static_cast<size_t>(j)]); };
+    r.e = {pool.Binary(Op::Sub, m(1, 2), m(2, 1)), pool.Binary(Op::Sub, m(2, 0), m(0, 2)),
+           pool.Binary(Op::Sub, m(0, 1), m(1, 0))};
+    return r;
+  }
+  if (fn == "skew") {
+    if (!want(1) || !vec3(args[0])) return bad();
+    const auto& a = args[0].e;
+    ExprId z = pool.Constant(0);
+    Value r;
+    r.shape = {3, 3};
+    r.e = {z, pool.Unary(Op::Neg, a[2]), a[1], a[2], z, pool.Unary(Op::Neg, a[0]), pool.Unary(Op::Neg, a[1]), a[0], z};
+    return r;
+  }
+  if (fn == "dot" || fn == "norm") {
+    if (fn == "dot" ? !want(2) : !want(1)) return bad();
+    const Value& a = args[0];
+    const Value& b = fn == "dot" ? args[1] : args[0];
+    if (a.shape.size() != 1 || a.shape != b.shape || !numeric(a) || !numeric(b)) {
+      diags_.Error(DiagCode::SizeMismatch, e.span, "'" + fn + "' needs vectors of equal length");
+      return bad();
+    }
+    ExprId s = pool.Binary(Op::Mul, a.e[0], b.e[0]);
+    for (size_t i = 1; i < a.e.size(); ++i) s = pool.Binary(Op::Add, s, pool.Binary(Op::Mul, a.e[i], b.e[i]));
+    if (fn == "norm") s = pool.Unary(Op::Sqrt, s);
+    return Scalar(s, fn == "dot" ? Promote(a.type, b.type) : VType::Real);
+  }
+  if (fn == "outerProduct") {
+    if (!want(2)) return bad();
+    const Value& a = args[0];
+    const Value& b = args[1];
+    if (a.shape.size() != 1 || b.shape.size() != 1) {
+      diags_.Error(DiagCode::SizeMismatch, e.span, "'outerProduct' needs vectors");
+      return bad();
+    }
+    Value r;
+    r.type = Promote(a.type, b.type);
+    r.shape = {a.shape[0], b.shape[0]};
+    for (ExprId x : a.e)
+      for (ExprId y : b.e) r.e.push_back(pool.Binary(Op::Mul, x, y));
+    return r;
+  }
+  if (fn == "transpose") {
+    if (!want(1)) return bad();
+    const Value& a = args[0];
+    if (a.shape.size() != 2) {
+      diags_.Error(DiagCode::SizeMismatch, e.span, "'transpose' needs a matrix, got " + ShapeStr(a.shape));
+      return bad();
+    }
+    Value r = a;
+    r.shape = {a.shape[1], a.shape[0]};
+    for (int i = 0; i < a.shape[0]; ++i)
+      for (int j = 0; j < a.shape[1]; ++j)
+        r.e[static_cast<size_t>(j * a.shape[0] + i)] = a.e[static_cast<size_t>(i * a.shape[1] + j)];
+    return r;
+  }
+  if (fn == "vector") {
+    if (!want(1)) return bad();
+    Value r = args[0];
+    r.shape = {static_cast<int>(r.e.size())};
+    return r;
+  }
+  if (fn == "identity" || fn == "diagonal") {
+    if (!want(1)) return bad();
+    long n = 0;
+    std::vector<ExprId> d;
+    if (fn == "identity") {
+      if (!StructuralInt(args[0], e.args[0]->span, &n, "the size")) return bad();
+    } else {
+      if (args[0].shape.size() != 1 || !numeric(args[0])) {
+        diags_.Error(DiagCode::SizeMismatch, e.span, "'diagonal' needs a vector");
+        return bad();
+      }
+      n = args[0].shape[0];
+      d = args[0].e;
+    }
+    if (n < 0 || n * n > kMaxArraySize) {
+      diags_.Error(DiagCode::ArrayTooLarge, e.span, "matrix size out of range");
+      return bad();
+    }
+    Value r;
+    r.type = fn == "identity" ? VType::Integer : args[0].type;
+    r.shape = {static_cast<int>(n), static_cast<int>(n)};
+    ExprId z = pool.Constant(0), one = pool.Constant(1);
+    for (long i = 0; i < n; ++i)
+      for (long j = 0; j < n; ++j) r.e.push_back(i != j ? z : (fn == "identity" ? one : d[static_cast<size_t>(i)]));
+    return r;
+  }
+  if (fn == "zeros" || fn == "ones" || fn == "fill") {
+    size_t first = fn == "fill" ? 1 : 0;
+    if (args.size() <= first) {
+      diags_.Error(DiagCode::BadCall, e.span, "'" + fn + "' needs dimensions");
+      return bad();
+    }
+    Value r;
+    r.type = fn == "fill" ? args[0].type : VType::Integer;
+    long total = 1;
+    for (size_t i = first; i < args.size(); ++i) {
+      long n = 0;
+      if (!StructuralInt(args[i], e.args[i]->span, &n, "a dimension")) return bad();
+      if (n < 0 || n > kMaxArraySize || (total *= (n == 0 ? 1 : n)) > kMaxArraySize) {
+        diags_.Error(DiagCode::ArrayTooLarge, e.args[i]->span, "array too large");
+        return bad();
+      }
+      r.shape.push_back(static_cast<int>(n));
+    }
+    size_t count = r.Size();
+    if (fn == "fill") {
+      if (!args[0].shape.empty()) {
+        diags_.Error(DiagCode::SizeMismatch, e.span, "'fill' needs a scalar value");
+        return bad();
+      }
+      r.e.assign(count, args[0].e[0]);
+      if (args[0].type == VType::String) r.s.assign(count, args[0].s[0]);
+    } else {
+      r.e.assign(count, pool.Constant(fn == "ones" ? 1 : 0));
+    }
+    return r;
+  }
+  if (fn == "size") {
+    if (args.size() == 1) {
+      Value r;
+      r.type = VType::Integer;
+      for (int d : args[0].shape) r.e.push_back(pool.Constant(d));
+      r.shape = {static_cast<int>(args[0].shape.size())};
+      return r;
+    }
+    if (!want(2)) return bad();
+    long k = 0;
+    if (!StructuralInt(args[1], e.args[1]->span, &k, "a dimension index")) return bad();
+    if (k < 1 || k > static_cast<long>(args[0].shape.size())) {
+      diags_.Error(DiagCode::IndexOutOfRange, e.args[1]->span, "dimension index out of range");
+      return bad();
+    }
+    return Const(args[0].shape[static_cast<size_t>(k - 1)], VType::Integer);
+  }
+  std::vector<std::string> cands(std::begin(kKnownFunctions), std::end(kKnownFunctions));
+  auto& d = diags_.Error(DiagCode::BadCall, e.span, "unknown function '" + fn + "'");
+  std::string best = ClosestName(fn, cands);
+  if (fn == "der") d.hint = "derivatives are not written by hand: joints provide q and u";
+  else if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+  return bad();
+}
+
+}  // namespace kanesim::lang::elab

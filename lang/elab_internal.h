@@ -1,0 +1,198 @@
+// Internal data of the elaborator: the instance tree, merged modifiers and values.
+// Only lang/elab_*.cpp and lang/elaborate.cpp include this.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "lang/ast.h"
+#include "lang/diagnostics.h"
+#include "lang/elaborate.h"
+#include "runtime/flat/mechanism.h"
+
+namespace kanesim::lang::elab {
+
+using flat::ExprId;
+
+enum class VType { Real, Integer, Boolean, String };
+const char* VTypeName(VType t);
+
+// A value: a (possibly empty-shaped = scalar) array of scalar expressions.
+struct Value {
+  VType type = VType::Real;
+  std::vector<int> shape;          // empty = scalar
+  std::vector<ExprId> e;           // numeric elements, row-major
+  std::vector<std::string> s;      // String elements
+  bool valid = true;               // false after an error (suppresses cascades)
+  size_t Size() const;
+  static Value Invalid() {
+    Value v;
+    v.valid = false;
+    return v;
+  }
+};
+
+using Iters = std::map<std::string, double>;
+
+struct Node;
+
+// One binding written somewhere in the source: an expression, where to evaluate it, and
+// the loop iterators in force there; or a value already computed (array slicing).
+struct ModValue {
+  const ast::Expr* expr = nullptr;
+  Node* scope = nullptr;
+  std::shared_ptr<const Iters> iters;
+  std::optional<Value> pre;
+  Span span;
+  bool is_final = false;
+  bool from_set = false;  // came from --set on the command line
+};
+
+// A merged modification tree (Modelica "modification environment").
+struct Mod {
+  std::optional<ModValue> value;
+  std::map<std::string, Mod> sub;
+  std::vector<std::string> order;   // sub keys in the order written
+  bool each = false;
+  bool is_final = false;
+  Span final_span;                   // where `final` was written
+  Span span;                         // where this modifier was written (name span)
+  // redeclare: the new type, looked up from `redeclare_from`.
+  std::string redeclare_type;
+  const ast::ClassDef* redeclare_from = nullptr;
+  Span redeclare_span;
+  bool empty() const { return !value && sub.empty() && redeclare_type.empty(); }
+};
+
+enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring };
+
+struct Node {
+  enum Kind { kClass, kVar, kArray } kind = kClass;
+  std::string name;  // "links[2]" for array elements
+  std::string path;  // "robot.links[2]"
+  Node* parent = nullptr;
+  const ast::Component* decl = nullptr;  // null for the root and array elements' owner copy
+  Mod mod;
+  bool enabled = true;
+  int depth = 0;
+
+  // kClass
+  const ast::ClassDef* cls = nullptr;
+  std::vector<std::unique_ptr<Node>> children;
+  std::unordered_map<std::string, Node*> by_name;
+  struct EqSource {
+    const ast::Equation* eq;
+    const ast::ClassDef* cls;  // for lookups
+  };
+  std::vector<EqSource> equations;
+  Prim prim = Prim::None;
+  std::string prim_kind;  // annotation's second key value ("revolute", "rolling_disk"...)
+  int prim_index = -1;    // frame id / joint id / flange id
+
+  // kVar
+  VType vtype = VType::Real;
+  ast::Variability variability = ast::Variability::None;
+  ast::Causality causality = ast::Causality::None;
+  std::vector<int> shape;
+  int state = 0;  // 0 unevaluated, 1 evaluating, 2 done
+  Value value;
+  std::optional<ModValue> eq_binding;            // from an equation `x = expr`
+  std::map<int, ModValue> eq_elem_binding;       // from `x[k] = expr`
+  bool is_final_decl = false;
+  Mod type_mod;  // modifiers of a short type definition (type Angle = Real(unit="rad"))
+
+  // kArray
+  std::vector<std::unique_ptr<Node>> elems;
+
+  Node* Child(const std::string& n) const {
+    auto it = by_name.find(n);
+    return it == by_name.end() ? nullptr : it->second;
+  }
+};
+
+struct ClassInfo {
+  const ast::ClassDef* cls;
+  const ast::StoredDefinition* file;
+  std::string qualified;
+};
+
+class Elaborator {
+ public:
+  Elaborator(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags);
+  bool Run();
+
+  // --- classes (elaborate.cpp) ---
+  const ast::ClassDef* FindClass(const std::vector<std::string>& parts, const ast::ClassDef* from) const;
+  const ast::StoredDefinition* FileOf(const ast::ClassDef* c) const;
+
+  // --- values (elab_eval.cpp) ---
+  struct Ctx {
+    Node* scope = nullptr;
+    const Iters* iters = nullptr;
+  };
+  Value Eval(const ast::Expr& e, const Ctx& ctx);
+  Value EvalModValue(const ModValue& mv, Span* where);
+  Value GetVar(Node* var, Span use_span);
+  // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
+  // subscripts); marks the parameters it reads as structural.
+  bool Structural(const Value& v, Span span, double* out, const char* what);
+  bool StructuralInt(const Value& v, Span span, long* out, const char* what);
+  std::vector<double> StructuralList(const Value& v, Span span, const char* what);
+  Value Const(double x, VType t = VType::Real);
+  Value Scalar(ExprId e, VType t = VType::Real);
+
+  // --- instances (elab_instantiate.cpp) ---
+  Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters);
+  void MergeInto(Mod& outer, const Mod& inner, const std::string& what);  // outer wins
+  void Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from);
+  void CollectEquations(Node* node);
+  void ProcessEquations(Node* node);
+  // Resolves a reference to an instance node; for variables with subscripts, *elem gets
+  // the flat element index (or -1 for the whole variable).
+  Node* ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem);
+  struct Collected {
+    const ast::Component* comp;
+    const ast::ClassDef* owner;
+    Mod ext_mod;
+    bool is_final = false, replaceable = false;
+  };
+  void Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
+               std::vector<Node::EqSource>& eqs, int depth);
+  void Expand(Node* node, Node* child, const Collected& c);
+  Mod SliceMod(const Mod& mod, int index, int count, Span where);
+  const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
+  const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
+  flat::SourceLoc Loc(Span s) const;
+
+  // --- emission (elab_emit.cpp) ---
+  void Emit(Node* root);
+
+  const Program& program_;
+  const ElaborateOptions& options_;
+  flat::Mechanism* m_;
+  Diagnostics& diags_;
+  std::map<std::string, ClassInfo> classes_;  // qualified name -> class
+  std::unordered_map<const ast::ClassDef*, const ast::StoredDefinition*> file_of_;
+  std::unordered_map<const ast::ClassDef*, std::string> qualified_of_;
+  std::vector<double> pvals_;  // values of m_->params, index-aligned
+  std::vector<Node*> frame_nodes_;   // provisional frame id -> node
+  std::vector<Node*> flange_nodes_;  // flange id -> node
+  std::vector<Node*> joint_nodes_;   // joint id -> node
+  std::vector<std::pair<int, int>> frame_links_;   // connect() pairs (provisional ids)
+  std::vector<std::pair<int, int>> flange_links_;
+  long instances_ = 0;
+  bool too_large_ = false;
+  std::vector<const ast::ClassDef*> extends_stack_;
+  std::unique_ptr<Node> root_;
+  std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
+  std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator
+};
+
+// Modelica-style attribute names accepted on variables.
+bool IsVarAttribute(const std::string& name);
+
+}  // namespace kanesim::lang::elab

@@ -1,0 +1,361 @@
+// Elaboration driver: loading files, the class registry and lookup, --set overrides,
+// and the order of the phases (instantiate, equations, emit).
+#include "lang/elaborate.h"
+
+#include <functional>
+#include <fstream>
+#include <sstream>
+
+#include "lang/elab_internal.h"
+#include "lang/parser.h"
+
+namespace kanesim::lang {
+
+static bool ParseInto(Program* program, int file, Diagnostics& diags) {
+  auto def = Parse(file, program->sources, diags);
+  program->files.push_back(std::move(def));
+  return true;
+}
+
+static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
+                      Diagnostics& diags) {
+  for (const auto& [name, text] : stdlib_files) {
+    int f = program->sources.Add(name, text);
+    ParseInto(program, f, diags);
+  }
+}
+
+bool LoadProgramFromText(const std::string& name, const std::string& text,
+                         const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
+                         Diagnostics& diags) {
+  int f = program->sources.Add(name, text);
+  ParseInto(program, f, diags);
+  AddStdlib(stdlib_files, program, diags);
+  return !diags.HasErrors();
+}
+
+bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
+                 Program* program, Diagnostics& diags) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    diags.Error(DiagCode::NotAModel, Span{}, "cannot open '" + path + "'").hint = "check the path";
+    return false;
+  }
+  in.seekg(0, std::ios::end);
+  std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  if (size < 0 || static_cast<std::size_t>(size) > SourceManager::kMaxFileBytes) {
+    diags.Error(DiagCode::FileTooLarge, Span{},
+                "'" + path + "' is larger than " + std::to_string(SourceManager::kMaxFileBytes) + " bytes");
+    return false;
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return LoadProgramFromText(path, ss.str(), stdlib_files, program, diags);
+}
+
+namespace elab {
+
+Elaborator::Elaborator(const Program& program, const ElaborateOptions& options, flat::Mechanism* out,
+                       Diagnostics& diags)
+    : program_(program), options_(options), m_(out), diags_(diags) {
+  std::function<void(const ast::ClassDef*, const std::string&, const ast::StoredDefinition*)> reg =
+      [&](const ast::ClassDef* c, const std::string& prefix, const ast::StoredDefinition* file) {
+        std::string q = prefix.empty() ? c->name : prefix + "." + c->name;
+        if (!classes_.count(q)) classes_[q] = {c, file, q};
+        file_of_[c] = file;
+        qualified_of_[c] = q;
+        for (const auto& el : c->elements)
+          if (el.kind == ast::Element::kClass) reg(el.class_def.get(), q, file);
+      };
+  for (const auto& f : program.files)
+    for (const auto& c : f->classes) reg(c.get(), ast::JoinName(f->within), f.get());
+}
+
+const ast::StoredDefinition* Elaborator::FileOf(const ast::ClassDef* c) const {
+  auto it = file_of_.find(c);
+  return it == file_of_.end() ? nullptr : it->second;
+}
+
+const ast::ClassDef* Elaborator::FindClass(const std::vector<std::string>& parts, const ast::ClassDef* from) const {
+  if (parts.empty()) return nullptr;
+  auto nested = [&](const ast::ClassDef* c, const std::string& n) -> const ast::ClassDef* {
+    for (const auto& el : c->elements)
+      if (el.kind == ast::Element::kClass && el.class_def->name == n) return el.class_def.get();
+    return nullptr;
+  };
+  auto by_qualified = [&](const std::string& q) -> const ast::ClassDef* {
+    auto it = classes_.find(q);
+    return it == classes_.end() ? nullptr : it->second.cls;
+  };
+  auto via_imports = [&](const std::vector<ast::Import>& imports) -> const ast::ClassDef* {
+    for (const auto& imp : imports) {
+      std::string q = ast::JoinName(imp.name);
+      if (imp.wildcard) {
+        if (auto* c = by_qualified(q + "." + parts[0])) return c;
+      } else if (!imp.alias.empty()) {
+        if (imp.alias == parts[0]) return by_qualified(q);
+      } else if (!imp.name.empty() && imp.name.back() == parts[0]) {
+        return by_qualified(q);
+      }
+    }
+    return nullptr;
+  };
+  const ast::ClassDef* first = nullptr;
+  for (const ast::ClassDef* s = from; s && !first; s = s->parent) {
+    if (s->name == parts[0] && s->parent == nullptr) first = s;
+    if (!first) first = nested(s, parts[0]);
+    if (!first) {
+      std::vector<ast::Import> imports;
+      for (const auto& el : s->elements)
+        if (el.kind == ast::Element::kImport) {
+          ast::Import copy;
+          copy.name = el.import->name;
+          copy.alias = el.import->alias;
+          copy.wildcard = el.import->wildcard;
+          imports.push_back(std::move(copy));
+        }
+      first = via_imports(imports);
+    }
+  }
+  const ast::StoredDefinition* file = from ? FileOf(from) : nullptr;
+  if (!first && file) first = via_imports(file->imports);
+  if (!first && file && !file->within.empty()) first = by_qualified(ast::JoinName(file->within) + "." + parts[0]);
+  if (!first) first = by_qualified(parts[0]);
+  if (!first) first = by_qualified("Kanesim." + parts[0]);  // the standard library is always visible
+  for (size_t i = 1; first && i < parts.size(); ++i) first = nested(first, parts[i]);
+  if (!first && parts.size() > 1) first = by_qualified(ast::JoinName(parts));
+  return first;
+}
+
+bool Elaborator::Run() {
+  // Pick the model.
+  const ast::ClassDef* top = nullptr;
+  if (!options_.model.empty()) {
+    std::vector<std::string> parts;
+    std::stringstream ss(options_.model);
+    std::string p;
+    while (std::getline(ss, p, '.')) parts.push_back(p);
+    top = FindClass(parts, nullptr);
+    if (!top && !program_.files.empty())
+      for (const auto& c : program_.files[0]->classes)
+        if (c->name == parts[0]) top = FindClass(parts, c.get());
+    if (!top) {
+      auto& d = diags_.Error(DiagCode::NotAModel, Span{}, "no class named '" + options_.model + "'");
+      std::vector<std::string> names;
+      for (auto& [k, v] : classes_) names.push_back(k);
+      std::string best = ClosestName(options_.model, names);
+      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+      return false;
+    }
+  } else if (!program_.files.empty()) {
+    for (const auto& c : program_.files[0]->classes)
+      if (c->kind == ast::ClassKind::Model && !c->partial) top = c.get();
+    if (!top) {
+      diags_.Error(DiagCode::NotAModel, Span{0, 0, 0}, "the file declares no (non-partial) model")
+          .hint = "write 'model Name ... end Name;' or choose one with --model";
+      return false;
+    }
+  }
+  if (!top) return false;
+  m_->model_name = qualified_of_.count(top) ? qualified_of_.at(top) : top->name;
+  m_->description = top->description;
+  for (int f = 0; f < program_.sources.NumFiles(); ++f) m_->source_files.push_back(program_.sources.Name(f));
+
+  root_ = std::make_unique<Node>();
+  root_->kind = Node::kClass;
+  root_->path = "";
+
+  // --set overrides become the outermost modifiers (they win over everything but final).
+  for (const auto& ov : options_.overrides) {
+    int file = program_.sources.Add("<--set " + ov.name + ">", ov.value);
+    int before = diags_.NumErrors();
+    auto expr = ParseExpression(file, program_.sources, diags_);
+    if (diags_.NumErrors() > before) {
+      diags_.Error(DiagCode::BadSet, Span{file, 0, static_cast<int32_t>(ov.value.size())},
+                   "cannot parse the value of --set " + ov.name + "=" + ov.value)
+          .hint = "values are .mech expressions: 2.5, {0, -9.81, 0}, true, \"text\"";
+      continue;
+    }
+    std::vector<std::string> path;
+    std::stringstream ss(ov.name);
+    std::string p;
+    while (std::getline(ss, p, '.')) path.push_back(p);
+    if (path.empty() || path.back().empty()) {
+      diags_.Error(DiagCode::BadSet, Span{}, "--set needs name=value, got '" + ov.name + "'");
+      continue;
+    }
+    ModValue mv;
+    mv.expr = expr.get();
+    mv.scope = root_.get();
+    mv.span = expr->span;
+    mv.from_set = true;
+    synthetic_.push_back(std::move(expr));
+    if (path.back().find('[') != std::string::npos) continue;  // element: bound after instantiation
+    Mod* target = &root_->mod;
+    for (size_t i = 0; i < path.size(); ++i) {
+      if (!target->sub.count(path[i])) target->order.push_back(path[i]);
+      target = &target->sub[path[i]];
+      target->span = mv.span;
+    }
+    target->value = mv;
+  }
+  if (diags_.HasErrors()) return false;
+
+  // The unknown-modifier check at the root would report --set names; do our own check
+  // with a better message first.
+  Instantiate(root_.get(), top, top);
+  if (!diags_.Full()) {
+    for (const auto& ov : options_.overrides) {
+      std::vector<std::string> path;
+      std::stringstream ss(ov.name);
+      std::string p;
+      while (std::getline(ss, p, '.')) path.push_back(p);
+      Node* n = root_.get();
+      int elem_index = -1;
+      for (size_t i = 0; n && i < path.size(); ++i) {
+        std::string part = path[i];
+        long sub = -1;
+        size_t br = part.find('[');
+        if (br != std::string::npos) {
+          sub = std::atol(part.c_str() + br + 1);
+          part = part.substr(0, br);
+        }
+        Node* next = n->kind == Node::kClass ? n->Child(part) : nullptr;
+        if (next && sub >= 1 && next->kind == Node::kArray && static_cast<size_t>(sub) <= next->elems.size()) {
+          next = next->elems[static_cast<size_t>(sub - 1)].get();
+        } else if (next && sub >= 1 && next->kind == Node::kVar) {
+          elem_index = static_cast<int>(sub - 1);
+        }
+        n = next;
+      }
+      if (!n) {
+        std::vector<std::string> names;
+        for (const auto& pm : m_->params) names.push_back(pm.name);
+        auto& d = diags_.Error(DiagCode::UnknownName, Span{}, "--set " + ov.name + ": no such parameter");
+        std::string best = ClosestName(ov.name, names);
+        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+        continue;
+      }
+      if (n->kind != Node::kVar || n->variability != ast::Variability::Parameter) {
+        auto& d = diags_.Error(DiagCode::NotParameter, Span{},
+                               "--set " + ov.name + ": '" + n->path + "' is not a parameter" +
+                                   (n->variability == ast::Variability::Constant ? " (it is a constant)" : ""));
+        if (n->decl) d.notes.push_back({n->decl->name_span, "declared here"});
+        continue;
+      }
+      if (n->is_final_decl || n->mod.is_final) {
+        auto& d = diags_.Error(DiagCode::FinalOverride, Span{}, "--set " + ov.name + ": '" + n->path + "' is final");
+        if (n->decl) d.notes.push_back({n->decl->name_span, "declared final here"});
+        continue;
+      }
+      if (elem_index >= 0) {
+        long size = 1;
+        for (int dsz : n->shape) size *= dsz;
+        if (elem_index >= size) {
+          diags_.Error(DiagCode::BadSet, Span{}, "--set " + ov.name + ": index out of range");
+          continue;
+        }
+      }
+    }
+  }
+  // Element overrides (name[k]=v): bind as element equations of the parameter.
+  {
+    size_t synth = 0;
+    for (const auto& ov : options_.overrides) {
+      if (synth >= synthetic_.size()) break;
+      const ast::Expr* expr = synthetic_[synth++].get();
+      std::string last = ov.name.substr(ov.name.rfind('.') == std::string::npos ? 0 : ov.name.rfind('.') + 1);
+      if (last.find('[') == std::string::npos) continue;
+      // Resolve again (errors were reported above).
+      std::vector<std::string> path;
+      std::stringstream ss(ov.name);
+      std::string p;
+      while (std::getline(ss, p, '.')) path.push_back(p);
+      Node* n = root_.get();
+      int elem_index = -1;
+      for (size_t i = 0; n && i < path.size(); ++i) {
+        std::string part = path[i];
+        long sub = -1;
+        size_t br = part.find('[');
+        if (br != std::string::npos) {
+          sub = std::atol(part.c_str() + br + 1);
+          part = part.substr(0, br);
+        }
+        Node* next = n->kind == Node::kClass ? n->Child(part) : nullptr;
+        if (next && sub >= 1 && next->kind == Node::kArray && static_cast<size_t>(sub) <= next->elems.size())
+          next = next->elems[static_cast<size_t>(sub - 1)].get();
+        else if (next && sub >= 1 && next->kind == Node::kVar)
+          elem_index = static_cast<int>(sub - 1);
+        n = next;
+      }
+      if (!n || n->kind != Node::kVar || elem_index < 0) continue;
+      ModValue mv;
+      mv.expr = expr;
+      mv.scope = root_.get();
+      mv.span = expr->span;
+      mv.from_set = true;
+      n->eq_elem_binding[elem_index] = mv;
+    }
+  }
+  if (diags_.HasErrors()) return false;
+  ProcessEquations(root_.get());
+  if (diags_.HasErrors()) return false;
+  Emit(root_.get());
+
+  // Experiment annotation.
+  if (const ast::Modification* ex = FindAnnotation(top, "experiment")) {
+    Ctx ctx{root_.get(), nullptr};
+    for (const auto& a : ex->args) {
+      if (a.path.size() != 1 || !a.mod || !a.mod->value) continue;
+      double v = 0;
+      if (!Structural(Eval(*a.mod->value, ctx), a.mod->value->span, &v, a.path[0].c_str())) continue;
+      auto& x = m_->experiment;
+      if (a.path[0] == "StartTime") x.start_time = v, x.has_start = true;
+      else if (a.path[0] == "StopTime") x.stop_time = v, x.has_stop = true;
+      else if (a.path[0] == "Tolerance") x.tolerance = v, x.has_tolerance = true;
+      else if (a.path[0] == "Interval") x.interval = v, x.has_interval = true;
+      else {
+        auto& d = diags_.Warning(DiagCode::UnknownModifier, a.name_span,
+                                 "unknown experiment setting '" + a.path[0] + "' (ignored)");
+        std::string best = ClosestName(a.path[0], {"StartTime", "StopTime", "Tolerance", "Interval"});
+        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+      }
+    }
+    auto& x = m_->experiment;
+    if (x.stop_time <= x.start_time)
+      diags_.Error(DiagCode::BadValue, top->name_span, "experiment StopTime must be after StartTime");
+    if (x.tolerance <= 0 || x.tolerance >= 1)
+      diags_.Error(DiagCode::BadValue, top->name_span, "experiment Tolerance must be in (0, 1)");
+    if (x.has_interval && x.interval <= 0)
+      diags_.Error(DiagCode::BadValue, top->name_span, "experiment Interval must be positive");
+  }
+  if (m_->worlds.size() != 1 && !diags_.HasErrors()) {
+    auto& d = diags_.Error(DiagCode::WorldCount, top->name_span,
+                           "'" + top->name + "' has " + std::to_string(m_->worlds.size()) +
+                               " World components; a mechanism needs exactly one");
+    if (m_->worlds.empty()) d.hint = "add 'World world;' and connect the first joint to world.frame_b";
+  }
+  return !diags_.HasErrors();
+}
+
+}  // namespace elab
+
+bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags) {
+  *out = flat::Mechanism{};
+  if (diags.HasErrors()) return false;
+  elab::Elaborator e(program, options, out, diags);
+  return e.Run();
+}
+
+std::vector<std::string> StdlibModels(const Program& program) {
+  std::vector<std::string> out;
+  for (const auto& f : program.files) {
+    if (ast::JoinName(f->within) != "Kanesim") continue;
+    for (const auto& c : f->classes)
+      if (c->kind == ast::ClassKind::Model && !c->partial) out.push_back("Kanesim." + c->name);
+  }
+  return out;
+}
+
+}  // namespace kanesim::lang

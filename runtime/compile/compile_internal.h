@@ -1,0 +1,29 @@
+// Stages of Compile shared between the files of runtime/compile/.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "runtime/engine.h"
+#include "runtime/program.h"
+#include "runtime/tape.h"
+
+namespace kanesim::rt {
+
+CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<double>& pv,
+                                const CompileOptions& options, const Program* reuse);
+
+// Joint axes and placements, q/u allocation, prescribed motions, start values.
+void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
+
+// Gravity, joint forces, line forces, wrenches (force tape) and outputs (output tape).
+void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);
+
+// Dense or sparse, and which integrator, with reasons (Summarize prints them).
+void ChooseSolverAndIntegrator(Program& p);
+
+// Solver choice threshold: at or above this many free speeds the sparse path is chosen
+// (measured crossover of bench/rhs_chain, see ChooseSolverAndIntegrator).
+inline constexpr int kSparseMinSpeeds = 40;
+
+}  // namespace kanesim::rt

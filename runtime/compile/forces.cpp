@@ -1,0 +1,176 @@
+// Compile stage: force elements and outputs lowered to tapes, and the choice of
+// solution path and integrator for the scene.
+#include <cmath>
+#include <sstream>
+
+#include "runtime/compile/compile_internal.h"
+
+namespace kanesim::rt {
+
+using flat::kNoExpr;
+
+namespace {
+
+CompileMessage Msg(const std::string& code, const std::string& text, const flat::SourceLoc& loc) {
+  CompileMessage e;
+  e.code = code;
+  e.message = text;
+  e.loc = loc;
+  return e;
+}
+
+// Rates above this (1/s) in a force element make the scene stiff for an explicit or
+// Adams method: a pendulum of 0.5 m is ~4 1/s, a 1e6 N/m spring on 1 kg is 1000 1/s.
+constexpr double kStiffRate = 1e3;
+
+}  // namespace
+
+void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
+  const flat::Mechanism& m = *p.mech;
+  std::vector<std::string> pn, sn;
+  for (const auto& x : m.params) pn.push_back(x.name);
+  for (const auto& r : m.state_refs) sn.push_back(m.StateRefName(r));
+  TapeBuilder forces(m.exprs, p.param_values);
+  auto scalar = [&](flat::ExprId id, const std::string& label) {
+    Scalar s;
+    if (id == kNoExpr) return s;
+    if (forces.Fold(id, &s.value)) return s;
+    s.root = forces.AddRoot(id, label, m.exprs.ToString(id, &pn, &sn));
+    return s;
+  };
+  auto placed = [&](int frame) {
+    return frame >= 0 && static_cast<size_t>(frame) < p.frames.size() && p.frames[static_cast<size_t>(frame)].body >= -1;
+  };
+
+  const flat::World& w = m.worlds[0];
+  for (int k = 0; k < 3; ++k) {
+    double g = 0.0;
+    if (w.gravity[static_cast<size_t>(k)] != kNoExpr && !forces.Fold(w.gravity[static_cast<size_t>(k)], &g))
+      errors->push_back(Msg("K304", "gravity must not depend on time or state", w.loc));
+    p.gravity_W[k] = g;
+  }
+  p.has_gravity = p.gravity_W.squaredNorm() > 0.0;
+
+  p.joint_tau.assign(static_cast<size_t>(p.nu_all), Scalar{});
+  for (const TreeJoint& j : p.joints) {
+    const flat::Joint& fj = m.joints[static_cast<size_t>(j.flat_index)];
+    for (int k = 0; k < j.nu && static_cast<size_t>(k) < fj.tau.size(); ++k)
+      p.joint_tau[static_cast<size_t>(j.u0 + k)] =
+          scalar(fj.tau[static_cast<size_t>(k)],
+                 std::string("force of joint '").append(j.name).append("' tau").append(j.nu > 1 ? Index1(k) : ""));
+  }
+  for (const auto& lf : m.line_forces) {
+    if (!placed(lf.frame_a) || !placed(lf.frame_b)) {
+      errors->push_back(Msg("K302", "line force '" + lf.name + "' is not connected to the mechanism", lf.loc));
+      continue;
+    }
+    LineForceModel l;
+    l.name = lf.name;
+    l.frame_a = lf.frame_a;
+    l.frame_b = lf.frame_b;
+    l.k = scalar(lf.k, "stiffness of '" + lf.name + "'");
+    l.d = scalar(lf.d, "damping of '" + lf.name + "'");
+    l.s0 = scalar(lf.s0, "free length of '" + lf.name + "'");
+    p.line_forces.push_back(l);
+  }
+  for (const auto& wr : m.wrenches) {
+    if (!placed(wr.frame)) {
+      errors->push_back(Msg("K302", "force '" + wr.name + "' is not connected to the mechanism", wr.loc));
+      continue;
+    }
+    WrenchModel x;
+    x.name = wr.name;
+    x.frame = wr.frame;
+    x.in_world = wr.resolve_in_world;
+    for (int k = 0; k < 3; ++k) {
+      x.force[k] = scalar(wr.force[static_cast<size_t>(k)], std::string("force").append(Index1(k)).append(" of '").append(wr.name).append("'"));
+      x.torque[k] = scalar(wr.torque[static_cast<size_t>(k)], std::string("torque").append(Index1(k)).append(" of '").append(wr.name).append("'"));
+    }
+    p.wrenches.push_back(x);
+  }
+  p.force_tape = forces.Finish();
+
+  TapeBuilder outputs(m.exprs, p.param_values);
+  for (const auto& o : m.outputs) outputs.AddRoot(o.expr, "output '" + o.name + "'", m.exprs.ToString(o.expr, &pn, &sn));
+  p.output_tape = outputs.Finish();
+
+  // State refs read by each tape; joint refs must name articulated joints.
+  auto collect = [&](const Tape& t, std::vector<int>* refs) {
+    for (const auto& [ref, reg] : t.state_regs) {
+      const flat::StateRef& r = m.state_refs[static_cast<size_t>(ref)];
+      bool ok = true;
+      if (r.kind == flat::StateKind::JointQ || r.kind == flat::StateKind::JointU)
+        ok = r.target >= 0 && static_cast<size_t>(r.target) < p.joint_of_flat.size() &&
+             p.joint_of_flat[static_cast<size_t>(r.target)] >= 0;
+      else
+        ok = placed(r.target);
+      if (!ok) errors->push_back(Msg("K307", std::string("'").append(m.StateRefName(r)).append("' is not a simulated quantity"), {}));
+      refs->push_back(ref);
+    }
+  };
+  collect(p.force_tape, &p.state_refs_forces);
+  collect(p.output_tape, &p.state_refs_outputs);
+}
+
+// The solution path: dense Cholesky costs O(sum of depth^2 + nu^3) per evaluation and
+// wins on small scenes; the sparse K-vector system costs O(K) on chains and trees. The
+// threshold kSparseMinSpeeds is the crossover bench/rhs_chain measured on chains.
+// The integrator: a scene whose force elements have a rate above kStiffRate (or a
+// stiffness given by an expression, which the compiler cannot bound) gets IDA (BDF);
+// otherwise the scene is a non-stiff ODE and gets CVODE.
+void ChooseSolverAndIntegrator(Program& p) {
+  std::ostringstream why;
+  if (p.options.solver != SolverPath::Auto) {
+    p.solver = p.options.solver;
+    why << "forced by --solver";
+  } else if (p.nu >= kSparseMinSpeeds) {
+    p.solver = SolverPath::Sparse;
+    why << p.nu << " free speeds >= " << kSparseMinSpeeds
+        << " (measured dense/sparse crossover): sparse K-vector system with KLU, cost linear in bodies";
+  } else {
+    p.solver = SolverPath::Dense;
+    why << p.nu << " free speeds < " << kSparseMinSpeeds
+        << " (measured dense/sparse crossover): dense mass matrix and Cholesky";
+  }
+  p.solver_reason = why.str();
+
+  std::ostringstream iw;
+  double max_rate = 0.0;
+  std::string stiffest;
+  bool unknown = false;
+  auto mass_at = [&](int frame) {
+    int b = p.frames[static_cast<size_t>(frame)].body;
+    return b >= 0 ? p.bodies[static_cast<size_t>(b)].mass : INFINITY;
+  };
+  for (const auto& l : p.line_forces) {
+    if (l.k.root >= 0 || l.d.root >= 0) {
+      unknown = true;
+      stiffest = l.name;
+      continue;
+    }
+    double mm = std::min(mass_at(l.frame_a), mass_at(l.frame_b));
+    if (!std::isfinite(mm)) continue;
+    double rate = mm > 0.0 ? std::max(std::sqrt(std::fabs(l.k.value) / mm), std::fabs(l.d.value) / mm) : INFINITY;
+    if (rate > max_rate) {
+      max_rate = rate;
+      stiffest = l.name;
+    }
+  }
+  if (p.options.integrator != IntegratorKind::Auto) {
+    p.integrator = p.options.integrator;
+    iw << "forced by --integrator";
+  } else if (unknown) {
+    p.integrator = IntegratorKind::IDA;
+    iw << "line force '" << stiffest << "' has a stiffness or damping given by an expression (rate unknown): IDA (BDF)";
+  } else if (max_rate >= kStiffRate) {
+    p.integrator = IntegratorKind::IDA;
+    iw << "line force '" << stiffest << "' has rate max(sqrt(k/m), d/m) = " << max_rate << " 1/s >= " << kStiffRate
+       << " 1/s: stiff, IDA (BDF)";
+  } else {
+    p.integrator = IntegratorKind::CVODE;
+    iw << "non-stiff ODE (fastest force-element rate " << max_rate << " 1/s < " << kStiffRate << " 1/s): CVODE";
+  }
+  p.integrator_reason = iw.str();
+}
+
+}  // namespace kanesim::rt

@@ -1,0 +1,109 @@
+// The right-hand side as a list of named stages (MuJoCo's mj_forward shape), and the
+// small public accessors of engine.h.
+#include "runtime/engine.h"
+
+#include <cmath>
+
+#include "runtime/kane.h"
+#include "runtime/kinematics.h"
+#include "runtime/program.h"
+
+namespace kanesim::rt {
+
+namespace {
+
+int NotFinite(const Program& p, Workspace& ws, int free_speed) {
+  const int r = p.u_free[static_cast<size_t>(free_speed)];
+  const TreeJoint& j = p.joints[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(r)])];
+  ws.error = "NaN in the equations of motion at time " + std::to_string(ws.t) + " (acceleration of joint '" +
+             j.name + "' u[" + std::to_string(r - j.u0 + 1) + "])";
+  return -1;
+}
+
+}  // namespace
+
+// ydot = [qdot_free; udot_free]:
+//   positions -> velocities (tangent generators) -> qdot = N(q) u -> bias accelerations
+//   -> applied forces -> Kane's equations M udot = f (dense or sparse).
+int Derivative(const Program& p, Workspace& ws, double t, const double* y, double* ydot) {
+  if (int s = UnpackState(p, ws, t, y); s != 0) return s;
+  PositionKinematics(p, ws);
+  VelocityKinematics(p, ws);
+  if (int s = KinematicDifferentials(p, ws); s != 0) return s;
+  BiasAccelerations(p, ws);
+  if (int s = AppliedForces(p, ws); s != 0) return s;
+  if (int s = p.solver == SolverPath::Sparse ? SolveSparse(p, ws) : SolveDense(p, ws); s != 0) return s;
+  for (int i = 0; i < p.nq; ++i) ydot[i] = ws.qdot[p.q_free[static_cast<size_t>(i)]];
+  for (int i = 0; i < p.nu; ++i) {
+    const double a = ws.udot[p.u_free[static_cast<size_t>(i)]];
+    if (!std::isfinite(a)) return NotFinite(p, ws, i);
+    ydot[p.nq + i] = a;
+  }
+  return 0;
+}
+
+const std::string& ErrorMessage(const Workspace& ws) { return ws.error; }
+
+std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p) {
+  std::unique_ptr<Workspace, void (*)(Workspace*)> w(new Workspace, [](Workspace* x) { delete x; });
+  Workspace& ws = *w;
+  const size_t K = p.bodies.size();
+  ws.q = Eigen::VectorXd::Zero(p.nq_all);
+  ws.u = Eigen::VectorXd::Zero(p.nu_all);
+  ws.udot = Eigen::VectorXd::Zero(p.nu_all);
+  ws.qdot = Eigen::VectorXd::Zero(p.nq_all);
+  ws.R_WB.assign(K, Mat3::Identity());
+  ws.R_ab.assign(K, Mat3::Identity());
+  ws.I_W.assign(K, Mat3::Zero());
+  for (auto* v : {&ws.p_WB, &ws.p_WBcm, &ws.p_ab, &ws.w_WB, &ws.v_WBo, &ws.v_WBcm, &ws.w_rel, &ws.v_rel,
+                  &ws.alpha_rel, &ws.a_rel, &ws.alpha_bias, &ws.a_bias_o, &ws.a_bias_cm, &ws.F_W, &ws.T_W})
+    v->assign(K, Vec3::Zero());
+  ws.H_W = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.nu_all);
+  ws.state_values.assign(p.mech->state_refs.size(), 0.0);
+  ws.force_regs = p.force_tape.init;
+  ws.output_regs = p.output_tape.init;
+  ws.jet_regs.assign(3 * p.prescribed_tape.init.size(), 0.0);
+  for (size_t i = 0; i < p.prescribed_tape.init.size(); ++i) ws.jet_regs[3 * i] = p.prescribed_tape.init[i];
+  ws.Q = Eigen::VectorXd::Zero(p.nu_all);
+  if (p.solver == SolverPath::Dense) {
+    ws.M = Eigen::MatrixXd::Zero(p.nu, p.nu);
+    ws.f = Eigen::VectorXd::Zero(p.nu);
+    ws.llt = Eigen::LLT<Eigen::MatrixXd>(p.nu);
+    ws.ldlt = Eigen::LDLT<Eigen::MatrixXd>(p.nu);
+    ws.tau_L = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.max_depth);
+    ws.Mtau_L = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.max_depth);
+  } else {
+    InitSparseWorkspace(p, ws);
+  }
+  ws.error.reserve(256);
+  return w;
+}
+
+int StateSize(const Program& p) { return p.nq + p.nu; }
+int NumQ(const Program& p) { return p.nq; }
+int NumU(const Program& p) { return p.nu; }
+double StartTime(const Program& p) { return p.mech->experiment.start_time; }
+
+void InitialState(const Program& p, double* y) {
+  for (size_t i = 0; i < p.y0.size(); ++i) y[i] = p.y0[i];
+}
+
+ProgramSummary Summarize(const Program& p) {
+  ProgramSummary s;
+  s.num_bodies = static_cast<int>(p.bodies.size());
+  s.num_joints = static_cast<int>(p.joints.size());
+  s.nq = p.nq;
+  s.nu = p.nu;
+  s.dof = p.nu;
+  s.grubler_dof = p.grubler_dof;
+  s.solver = p.solver;
+  s.integrator = p.integrator;
+  s.solver_reason = p.solver_reason;
+  s.integrator_reason = p.integrator_reason;
+  s.notes = p.notes;
+  if (!p.q_prescribed.empty())
+    s.notes.push_back(std::to_string(p.q_prescribed.size()) + " prescribed coordinate(s) removed from the state");
+  return s;
+}
+
+}  // namespace kanesim::rt

@@ -1,0 +1,257 @@
+#include "runtime/kinematics.h"
+
+#include <cmath>
+
+#include "runtime/joint_kinematics.h"
+
+namespace kanesim::rt {
+
+namespace {
+
+// NaN-or-infinity message for a prescribed motion (error path: may allocate).
+int PrescribedNotFinite(const Program& p, Workspace& ws, size_t i) {
+  ws.error = "NaN from expression: " + p.prescribed_tape.labels[i] + " = " + p.prescribed_tape.texts[i] +
+             " at time " + std::to_string(ws.t);
+  return -1;
+}
+
+// Orientation of the joint's frame a in W. Frame a is on the parent side (R_WP R_PJ) for
+// a joint in tree direction and is the child's own frame for an inverted one.
+Mat3 R_WFa(const Program& p, const Workspace& ws, int L) {
+  const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+  if (j.inverted) return ws.R_WB[static_cast<size_t>(L)];
+  return j.parent < 0 ? j.R_PJ : Mat3(ws.R_WB[static_cast<size_t>(j.parent)] * j.R_PJ);
+}
+
+}  // namespace
+
+int UnpackState(const Program& p, Workspace& ws, double t, const double* y) {
+  ws.t = t;
+  for (int i = 0; i < p.nq; ++i) ws.q[p.q_free[static_cast<size_t>(i)]] = y[i];
+  for (int i = 0; i < p.nu; ++i) ws.u[p.u_free[static_cast<size_t>(i)]] = y[p.nq + i];
+  if (p.q_prescribed.empty()) return 0;
+  // Prescribed q(t): evaluate its tape on jets seeded with time = (t, 1, 0).
+  const Tape& tape = p.prescribed_tape;
+  double* r = ws.jet_regs.data();
+  if (tape.time_reg >= 0) {
+    r[3 * tape.time_reg] = t;
+    r[3 * tape.time_reg + 1] = 1.0;
+    r[3 * tape.time_reg + 2] = 0.0;
+  }
+  tape.EvalJet(r);
+  for (size_t i = 0; i < p.q_prescribed.size(); ++i) {
+    const int reg = tape.roots[i];
+    const double q = r[3 * reg], qd = r[3 * reg + 1], qdd = r[3 * reg + 2];
+    if (!std::isfinite(q) || !std::isfinite(qd) || !std::isfinite(qdd)) return PrescribedNotFinite(p, ws, i);
+    ws.q[p.q_prescribed[i]] = q;
+    ws.u[p.prescribed_u[i]] = qd;
+    ws.udot[p.prescribed_u[i]] = qdd;
+  }
+  return 0;
+}
+
+// Seed 000 eq. 11.9 (positions), per joint in tree order, P = parent, J = parent-side
+// joint frame, B = child body frame (= child-side joint frame):
+//   R_WJ = R_WP R_PJ,  p_WJ = p_WP + R_WP p_PJ
+//   in tree direction (J = a, B = b):  R_WB = R_WJ R_ab,    p_WB = p_WJ + R_WJ p_ab
+//   inverted          (J = b, B = a):  R_WB = R_WJ R_ab^T,  p_WB = p_WJ - R_WB p_ab
+void PositionKinematics(const Program& p, Workspace& ws) {
+  const size_t K = p.bodies.size();
+  for (size_t L = 0; L < K; ++L) {
+    const TreeJoint& j = p.joints[L];
+    const TreeBody& b = p.bodies[L];
+    JointPose(j, ws.q.data() + j.q0, &ws.p_ab[L], &ws.R_ab[L]);
+    Mat3 R_WJ = j.R_PJ;
+    Vec3 p_WJ = j.p_PJ;
+    if (j.parent >= 0) {
+      const auto P = static_cast<size_t>(j.parent);
+      R_WJ = ws.R_WB[P] * j.R_PJ;
+      p_WJ = ws.p_WB[P] + ws.R_WB[P] * j.p_PJ;
+    }
+    if (!j.inverted) {
+      ws.R_WB[L] = R_WJ * ws.R_ab[L];
+      ws.p_WB[L] = p_WJ + R_WJ * ws.p_ab[L];
+    } else {
+      ws.R_WB[L] = R_WJ * ws.R_ab[L].transpose();
+      ws.p_WB[L] = p_WJ - ws.R_WB[L] * ws.p_ab[L];
+    }
+    ws.p_WBcm[L] = ws.p_WB[L] + ws.R_WB[L] * b.p_BBcm;
+    ws.I_W[L] = ws.R_WB[L] * b.I_BBcm_B * ws.R_WB[L].transpose();
+  }
+}
+
+// Velocities (seed 000 eqs. 11.15-11.16; Lesser eqs. 44-47). Column r of H_W is the twist
+// of body L (= joint child) at its origin o_L for the unit pseudo-speed u = e_r:
+//   in tree direction:  H_r = [R_WFa Hv_r;  R_WFa Hw_r]
+//   inverted:           H_r = [-R_WFa Hv_r + (R_WFa Hw_r) x d;  -R_WFa Hw_r],  d = p_WFb - p_WFa
+// (the motion of a seen from b: w_ba = -w_ab, v = -v_ab + w_ab x d). Then
+//   w_WB = w_WP + sum_r H^w_r u_r                                  (1)
+//   v_WBo = v_WPo + w_WP x (p_WB - p_WP) + sum_r H^v_r u_r          (2)
+//   v_WBcm = v_WBo + w_WB x (p_WBcm - p_WB)                         (3)
+// and the relative accelerations with udot = 0, seen from the parent:
+//   tree direction:  alpha_rel = R_WFa cw,  a_rel = R_WFa cv
+//   inverted:        alpha_rel = -R_WFa cw,
+//                    a_rel = -R_WFa cv + (R_WFa cw) x d + 2 w_r x v_r - w_r x (w_r x d)   (4)
+// where w_r = R_WFa Hw u, v_r = R_WFa Hv u are the motion of b seen from a.
+void VelocityKinematics(const Program& p, Workspace& ws) {
+  const size_t K = p.bodies.size();
+  Mat36 Hv, Hw;
+  Vec3 cv, cw;
+  for (size_t L = 0; L < K; ++L) {
+    const TreeJoint& j = p.joints[L];
+    const Mat3 R = R_WFa(p, ws, static_cast<int>(L));
+    JointMotion(j, ws.q.data() + j.q0, ws.u.data() + j.u0, ws.R_ab[L], &Hv, &Hw, &cv, &cw);
+    Vec3 w_rel = Vec3::Zero(), v_rel = Vec3::Zero();
+    const Vec3 d = R * ws.p_ab[L];
+    Vec3 w_r = Vec3::Zero(), v_r = Vec3::Zero();
+    for (int k = 0; k < j.nu; ++k) {
+      const Vec3 hw = R * Hw.col(k), hv = R * Hv.col(k);
+      auto col = ws.H_W.col(j.u0 + k);
+      if (!j.inverted) {
+        col.head<3>() = hv;
+        col.tail<3>() = hw;
+      } else {
+        col.head<3>() = -hv + hw.cross(d);
+        col.tail<3>() = -hw;
+      }
+      const double uk = ws.u[j.u0 + k];
+      v_rel += col.head<3>() * uk;
+      w_rel += col.tail<3>() * uk;
+      w_r += hw * uk;
+      v_r += hv * uk;
+    }
+    ws.w_rel[L] = w_rel;
+    ws.v_rel[L] = v_rel;
+    if (!j.inverted) {
+      ws.alpha_rel[L] = R * cw;
+      ws.a_rel[L] = R * cv;
+    } else {
+      const Vec3 alpha_r = R * cw;
+      ws.alpha_rel[L] = -alpha_r;
+      ws.a_rel[L] = -(R * cv) + alpha_r.cross(d) + 2.0 * w_r.cross(v_r) - w_r.cross(w_r.cross(d));  // (4)
+    }
+    Vec3 w_P = Vec3::Zero(), v_Po = Vec3::Zero(), p_WP = Vec3::Zero();
+    if (j.parent >= 0) {
+      const auto P = static_cast<size_t>(j.parent);
+      w_P = ws.w_WB[P];
+      v_Po = ws.v_WBo[P];
+      p_WP = ws.p_WB[P];
+    }
+    ws.w_WB[L] = w_P + w_rel;                                   // (1)
+    ws.v_WBo[L] = v_Po + w_P.cross(ws.p_WB[L] - p_WP) + v_rel;  // (2)
+    ws.v_WBcm[L] = ws.v_WBo[L] + ws.w_WB[L].cross(ws.p_WBcm[L] - ws.p_WB[L]);  // (3)
+  }
+}
+
+// Seed 000 eq. 11.17: accelerations with the free udot = 0 (prescribed udot included):
+//   alpha_B = alpha_P + w_P x w_rel + alpha_rel + sum_presc H^w_r udot_r                 (5)
+//   a_Bo = a_Po + alpha_P x r + w_P x (w_P x r) + 2 w_P x v_rel + a_rel
+//          + sum_presc H^v_r udot_r,   r = p_WB - p_WP                                    (6)
+//   a_Bcm = a_Bo + alpha_B x c + w_B x (w_B x c),   c = p_WBcm - p_WB                     (7)
+void BiasAccelerations(const Program& p, Workspace& ws) {
+  const size_t K = p.bodies.size();
+  for (size_t L = 0; L < K; ++L) {
+    const TreeJoint& j = p.joints[L];
+    Vec3 w_P = Vec3::Zero(), alpha_P = Vec3::Zero(), a_Po = Vec3::Zero(), p_WP = Vec3::Zero();
+    if (j.parent >= 0) {
+      const auto P = static_cast<size_t>(j.parent);
+      w_P = ws.w_WB[P];
+      alpha_P = ws.alpha_bias[P];
+      a_Po = ws.a_bias_o[P];
+      p_WP = ws.p_WB[P];
+    }
+    Vec3 alpha = alpha_P + w_P.cross(ws.w_rel[L]) + ws.alpha_rel[L];  // (5)
+    const Vec3 r = ws.p_WB[L] - p_WP;
+    Vec3 a = a_Po + alpha_P.cross(r) + w_P.cross(w_P.cross(r)) + 2.0 * w_P.cross(ws.v_rel[L]) + ws.a_rel[L];  // (6)
+    for (int k = 0; k < j.nu; ++k) {
+      if (p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) continue;
+      const double ud = ws.udot[j.u0 + k];
+      a += ws.H_W.col(j.u0 + k).head<3>() * ud;
+      alpha += ws.H_W.col(j.u0 + k).tail<3>() * ud;
+    }
+    ws.alpha_bias[L] = alpha;
+    ws.a_bias_o[L] = a;
+    const Vec3 c = ws.p_WBcm[L] - ws.p_WB[L];
+    ws.a_bias_cm[L] = a + alpha.cross(c) + ws.w_WB[L].cross(ws.w_WB[L].cross(c));  // (7)
+  }
+}
+
+int KinematicDifferentials(const Program& p, Workspace& ws) {
+  for (const TreeJoint& j : p.joints)
+    if (!JointKinematicDifferential(j, ws.q.data() + j.q0, ws.u.data() + j.u0, ws.qdot.data() + j.q0, &ws.error))
+      return -1;
+  return 0;
+}
+
+// Lesser eq. 22 with a unit pseudo-speed: the column r of body L's tangent block is the
+// twist H_r carried rigidly from the joint point o_J to L's mass centre:
+//   tau_{L,r} = [H^v_r + H^w_r x (p_WLcm - p_WJo);  H^w_r].
+Vec6 TangentColumn(const Program& p, const Workspace& ws, int body, int full_speed) {
+  Vec6 t = Vec6::Zero();
+  const int J = p.joint_of_speed[static_cast<size_t>(full_speed)];
+  for (int L = body; L >= 0; L = p.joints[static_cast<size_t>(L)].parent) {
+    if (L != J) continue;
+    const auto h = ws.H_W.col(full_speed);
+    t.head<3>() = h.head<3>() + h.tail<3>().cross(ws.p_WBcm[static_cast<size_t>(body)] - ws.p_WB[static_cast<size_t>(J)]);
+    t.tail<3>() = h.tail<3>();
+    break;
+  }
+  return t;
+}
+
+void FramePose(const Program& p, const Workspace& ws, int frame, Vec3* p_WF, Mat3* R_WF) {
+  const FramePlace& F = p.frames[static_cast<size_t>(frame)];
+  if (F.body < 0) {
+    *p_WF = F.p_BF;
+    *R_WF = F.R_BF;
+    return;
+  }
+  const auto B = static_cast<size_t>(F.body);
+  *p_WF = ws.p_WB[B] + ws.R_WB[B] * F.p_BF;
+  *R_WF = ws.R_WB[B] * F.R_BF;
+}
+
+void FrameMotion(const Program& p, const Workspace& ws, int frame, Vec3* v_WF, Vec3* w_WF) {
+  const FramePlace& F = p.frames[static_cast<size_t>(frame)];
+  if (F.body < 0) {
+    v_WF->setZero();
+    w_WF->setZero();
+    return;
+  }
+  const auto B = static_cast<size_t>(F.body);
+  *w_WF = ws.w_WB[B];
+  *v_WF = ws.v_WBo[B] + ws.w_WB[B].cross(ws.R_WB[B] * F.p_BF);
+}
+
+void EvalStateRefs(const Program& p, Workspace& ws, const std::vector<int>& refs) {
+  for (int idx : refs) {
+    const flat::StateRef& r = p.mech->state_refs[static_cast<size_t>(idx)];
+    double v = 0.0;
+    switch (r.kind) {
+      case flat::StateKind::JointQ:
+      case flat::StateKind::JointU: {
+        const TreeJoint& j = p.joints[static_cast<size_t>(p.joint_of_flat[static_cast<size_t>(r.target)])];
+        v = r.kind == flat::StateKind::JointQ ? ws.q[j.q0 + r.k] : ws.u[j.u0 + r.k];
+        break;
+      }
+      case flat::StateKind::FramePosition:
+      case flat::StateKind::FrameRotation: {
+        Vec3 pos;
+        Mat3 R;
+        FramePose(p, ws, r.target, &pos, &R);
+        v = r.kind == flat::StateKind::FramePosition ? pos[r.k] : R(r.k / 3, r.k % 3);
+        break;
+      }
+      case flat::StateKind::FrameVelocity:
+      case flat::StateKind::FrameAngVel: {
+        Vec3 vel, w;
+        FrameMotion(p, ws, r.target, &vel, &w);
+        v = r.kind == flat::StateKind::FrameVelocity ? vel[r.k] : w[r.k];
+        break;
+      }
+    }
+    ws.state_values[static_cast<size_t>(idx)] = v;
+  }
+}
+
+}  // namespace kanesim::rt

@@ -1,0 +1,212 @@
+// Output signals: names, plans (only what a selection needs is computed), evaluation.
+#include <cmath>
+
+#include "runtime/engine.h"
+#include "runtime/kane.h"
+#include "runtime/kinematics.h"
+#include "runtime/program.h"
+
+namespace kanesim::rt {
+
+enum class SignalKind : std::uint8_t {
+  JointQ,           // a = full q index
+  JointU,           // a = full u index
+  Output,           // a = output tape root
+  KineticEnergy,
+  PotentialEnergy,  // gravity + line-force springs
+  BodyPosition,     // a = body_signals index, k: mass centre in W
+  BodyVelocity,     // mass-centre velocity in W
+  BodyAngVel,       // angular velocity in W
+  BodyRotation,     // R_WF of the body's frame, k = 3 i + j
+  FramePosition,    // a = flat frame, k
+};
+
+struct SignalItem {
+  SignalKind kind;
+  int a = 0, k = 0;
+};
+
+struct SignalPlan {
+  std::vector<SignalItem> items;
+  bool velocity = false;  // VelocityKinematics needed
+  bool outputs = false;   // output tape needed
+  bool forces = false;    // force tape needed (spring energy with expression stiffness)
+};
+
+namespace {
+
+std::string Idx(int k) { return Index1(k); }
+
+// Every signal with its name, in the order AvailableSignals lists them.
+std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
+  std::vector<std::pair<std::string, SignalItem>> s;
+  for (const TreeJoint& j : p.joints) {
+    for (int k = 0; k < j.nq; ++k) s.push_back({j.name + ".q" + (j.nq > 1 ? Idx(k) : ""), {SignalKind::JointQ, j.q0 + k, 0}});
+    for (int k = 0; k < j.nu; ++k) s.push_back({j.name + ".u" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::JointU, j.u0 + k, 0}});
+  }
+  const auto& outs = p.mech->outputs;
+  for (size_t i = 0; i < outs.size(); ++i) s.push_back({outs[i].name, {SignalKind::Output, static_cast<int>(i), 0}});
+  s.push_back({"kinetic_energy", {SignalKind::KineticEnergy, 0, 0}});
+  s.push_back({"potential_energy", {SignalKind::PotentialEnergy, 0, 0}});
+  for (size_t i = 0; i < p.body_signals.size(); ++i) {
+    const BodySignalSource& b = p.body_signals[i];
+    if (p.frames[static_cast<size_t>(b.frame)].body < -1) continue;
+    const int a = static_cast<int>(i);
+    for (int k = 0; k < 3; ++k) s.push_back({b.name + ".r" + Idx(k), {SignalKind::BodyPosition, a, k}});
+    for (int k = 0; k < 3; ++k) s.push_back({b.name + ".v" + Idx(k), {SignalKind::BodyVelocity, a, k}});
+    for (int k = 0; k < 3; ++k) s.push_back({b.name + ".w" + Idx(k), {SignalKind::BodyAngVel, a, k}});
+    for (int k = 0; k < 9; ++k)
+      s.push_back({b.name + ".R[" + std::to_string(k / 3 + 1) + "," + std::to_string(k % 3 + 1) + "]",
+                   {SignalKind::BodyRotation, a, k}});
+  }
+  for (size_t f = 0; f < p.frames.size(); ++f) {
+    if (p.frames[f].body < -1) continue;
+    for (int k = 0; k < 3; ++k)
+      s.push_back({p.mech->frames[f].name + ".r" + Idx(k), {SignalKind::FramePosition, static_cast<int>(f), k}});
+  }
+  return s;
+}
+
+double SpringEnergy(const Program& p, const Workspace& ws) {
+  double e = 0.0;
+  for (const LineForceModel& l : p.line_forces) {
+    Vec3 pa, pb;
+    Mat3 R;
+    FramePose(p, ws, l.frame_a, &pa, &R);
+    FramePose(p, ws, l.frame_b, &pb, &R);
+    const double x = (pb - pa).norm() - ForceValue(p, ws, l.s0);
+    e += 0.5 * ForceValue(p, ws, l.k) * x * x;
+  }
+  return e;
+}
+
+}  // namespace
+
+std::vector<std::string> AvailableSignals(const Program& p) {
+  std::vector<std::string> names;
+  for (auto& [n, item] : AllSignals(p)) names.push_back(n);
+  return names;
+}
+
+std::vector<std::string> DefaultSignals(const Program& p) {
+  std::vector<std::string> names;
+  for (auto& [n, item] : AllSignals(p))
+    if (item.kind == SignalKind::JointQ || item.kind == SignalKind::JointU || item.kind == SignalKind::Output)
+      names.push_back(n);
+  return names;
+}
+
+std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vector<std::string>& names,
+                                              std::string* error) {
+  const auto all = AllSignals(p);
+  auto plan = std::make_shared<SignalPlan>();
+  for (const std::string& n : names) {
+    const SignalItem* found = nullptr;
+    for (const auto& [name, item] : all)
+      if (name == n) {
+        found = &item;
+        break;
+      }
+    SignalItem alias{SignalKind::FramePosition, -1, 0};
+    if (!found) {
+      // Frame positions by any alias: "<alias>.r[k]".
+      const size_t dot = n.rfind(".r[");
+      if (dot != std::string::npos && n.size() == dot + 5 && n[dot + 4] == ']' && n[dot + 3] >= '1' && n[dot + 3] <= '3') {
+        const int f = p.mech->FindFrame(n.substr(0, dot));
+        if (f >= 0 && p.frames[static_cast<size_t>(f)].body >= -1) {
+          alias.a = f;
+          alias.k = n[dot + 3] - '1';
+          found = &alias;
+        }
+      }
+    }
+    if (!found) {
+      if (error) *error = "unknown signal '" + n + "'";
+      return nullptr;
+    }
+    const SignalItem it = *found;
+    plan->items.push_back(it);
+    switch (it.kind) {
+      case SignalKind::Output: plan->outputs = plan->velocity = true; break;
+      case SignalKind::KineticEnergy:
+      case SignalKind::BodyVelocity:
+      case SignalKind::BodyAngVel: plan->velocity = true; break;
+      case SignalKind::PotentialEnergy:
+        if (!p.force_tape.roots.empty()) plan->forces = plan->velocity = true;
+        break;
+      default: break;
+    }
+  }
+  return plan;
+}
+
+int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out) {
+  if (int s = UnpackState(p, ws, t, y); s != 0) return s;
+  PositionKinematics(p, ws);
+  if (plan.velocity) VelocityKinematics(p, ws);
+  if (plan.forces)
+    if (int s = EvalForceTape(p, ws); s != 0) return s;
+  if (plan.outputs && !p.output_tape.roots.empty()) {
+    const Tape& tape = p.output_tape;
+    double* r = ws.output_regs.data();
+    if (tape.time_reg >= 0) r[tape.time_reg] = t;
+    EvalStateRefs(p, ws, p.state_refs_outputs);
+    for (const auto& [ref, reg] : tape.state_regs) r[reg] = ws.state_values[static_cast<size_t>(ref)];
+    tape.Eval(r);
+  }
+  for (size_t i = 0; i < plan.items.size(); ++i) {
+    const SignalItem& it = plan.items[i];
+    double v = 0.0;
+    switch (it.kind) {
+      case SignalKind::JointQ: v = ws.q[it.a]; break;
+      case SignalKind::JointU: v = ws.u[it.a]; break;
+      case SignalKind::Output: {
+        v = ws.output_regs[static_cast<size_t>(p.output_tape.roots[static_cast<size_t>(it.a)])];
+        if (!std::isfinite(v)) {
+          ws.error = "NaN from expression: " + p.output_tape.labels[static_cast<size_t>(it.a)] + " = " +
+                     p.output_tape.texts[static_cast<size_t>(it.a)] + " at time " + std::to_string(t);
+          return -1;
+        }
+        break;
+      }
+      case SignalKind::KineticEnergy:
+        // T = sum_L 1/2 m_L |v_Lcm|^2 + 1/2 w_L . I_L w_L
+        for (size_t L = 0; L < p.bodies.size(); ++L)
+          v += 0.5 * p.bodies[L].mass * ws.v_WBcm[L].squaredNorm() + 0.5 * ws.w_WB[L].dot(ws.I_W[L] * ws.w_WB[L]);
+        break;
+      case SignalKind::PotentialEnergy:
+        // V = -sum_L m_L g . p_WLcm + sum_springs 1/2 k (s - s0)^2
+        for (size_t L = 0; L < p.bodies.size(); ++L) v -= p.bodies[L].mass * p.gravity_W.dot(ws.p_WBcm[L]);
+        v += SpringEnergy(p, ws);
+        break;
+      case SignalKind::BodyPosition:
+      case SignalKind::BodyVelocity:
+      case SignalKind::BodyAngVel:
+      case SignalKind::BodyRotation: {
+        const BodySignalSource& b = p.body_signals[static_cast<size_t>(it.a)];
+        Vec3 pos, vel, w;
+        Mat3 R;
+        FramePose(p, ws, b.frame, &pos, &R);
+        const Vec3 r_cm = R * b.p_FBcm;
+        if (it.kind == SignalKind::BodyPosition) v = (pos + r_cm)[it.k];
+        if (it.kind == SignalKind::BodyRotation) v = R(it.k / 3, it.k % 3);
+        if (it.kind == SignalKind::BodyVelocity || it.kind == SignalKind::BodyAngVel) {
+          FrameMotion(p, ws, b.frame, &vel, &w);
+          v = it.kind == SignalKind::BodyAngVel ? w[it.k] : (vel + w.cross(r_cm))[it.k];
+        }
+        break;
+      }
+      case SignalKind::FramePosition: {
+        Vec3 pos;
+        Mat3 R;
+        FramePose(p, ws, it.a, &pos, &R);
+        v = pos[it.k];
+        break;
+      }
+    }
+    out[i] = v;
+  }
+  return 0;
+}
+
+}  // namespace kanesim::rt

@@ -1,0 +1,266 @@
+// Lexer: token kinds (from the one token table), comments, strings, numbers, and the
+// lexical diagnostics L001-L005 with their spans. A failure here means the parser is fed
+// wrong tokens or a user gets a lexical error at the wrong place.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <iterator>
+#include <string>
+
+#include "lang_test_util.h"
+
+namespace kanesim::lang {
+namespace {
+
+using testing::LexText;
+
+std::vector<Tok> Kinds(const std::vector<Token>& toks) {
+  std::vector<Tok> k;
+  for (const auto& t : toks) k.push_back(t.kind);
+  return k;
+}
+
+// Every fixed-spelling entry of KANESIM_TOKENS lexes, alone, to exactly its own kind:
+// a keyword or operator missing from the lexer (or spelled twice) fails here.
+TEST(Lexer, EveryTokenKindOfTheTableLexesFromItsSpelling) {
+  struct Entry {
+    Tok kind;
+    const char* name;
+    const char* spelling;
+  };
+  const Entry table[] = {
+#define KANESIM_X(e, s) {Tok::e, #e, s},
+      KANESIM_TOKENS(KANESIM_X)
+#undef KANESIM_X
+  };
+  int checked = 0;
+  for (const Entry& e : table) {
+    if (e.kind == Tok::Eof || e.kind == Tok::Ident || e.kind == Tok::Number || e.kind == Tok::String) continue;
+    auto r = LexText(e.spelling);
+    ASSERT_EQ(r->tokens.size(), 2u) << e.name;
+    EXPECT_EQ(r->tokens[0].kind, e.kind) << e.name << " from '" << e.spelling << "'";
+    EXPECT_EQ(r->tokens[0].span.begin, 0) << e.name;
+    EXPECT_EQ(r->tokens[0].span.end, static_cast<int>(std::strlen(e.spelling))) << e.name;
+    EXPECT_EQ(r->tokens[1].kind, Tok::Eof);
+    EXPECT_FALSE(r->diags.HasErrors()) << e.name;
+    EXPECT_STREQ(TokSpelling(e.kind), e.spelling);
+    ++checked;
+  }
+  EXPECT_EQ(checked, static_cast<int>(std::size(table)) - 4);  // all but Eof, Ident, Number, String
+}
+
+TEST(Lexer, IdentifiersNumbersStringsAndEof) {
+  auto r = LexText("abc _x1 A_B2 42 \"s\"");
+  EXPECT_EQ(Kinds(r->tokens),
+            (std::vector<Tok>{Tok::Ident, Tok::Ident, Tok::Ident, Tok::Number, Tok::String, Tok::Eof}));
+  EXPECT_EQ(r->tokens[0].text, "abc");
+  EXPECT_EQ(r->tokens[1].text, "_x1");
+  EXPECT_EQ(r->tokens[2].text, "A_B2");
+  EXPECT_EQ(r->tokens[4].text, "s");
+  EXPECT_FALSE(r->diags.HasErrors());
+}
+
+TEST(Lexer, KeywordsAreCaseSensitiveAndWholeWords) {
+  auto r = LexText("Model model models end_ endfor");
+  EXPECT_EQ(Kinds(r->tokens),
+            (std::vector<Tok>{Tok::Ident, Tok::KwModel, Tok::Ident, Tok::Ident, Tok::Ident, Tok::Eof}));
+}
+
+// Longest match for two-character operators; the pieces are not glued across spaces.
+TEST(Lexer, TwoCharacterOperatorsUseLongestMatch) {
+  auto r = LexText("<= <> < = >= > == = := : a.b");
+  EXPECT_EQ(Kinds(r->tokens),
+            (std::vector<Tok>{Tok::Le, Tok::Ne, Tok::Lt, Tok::Assign, Tok::Ge, Tok::Gt, Tok::EqEq, Tok::Assign,
+                              Tok::ColonAssign, Tok::Colon, Tok::Ident, Tok::Dot, Tok::Ident, Tok::Eof}));
+}
+
+TEST(Lexer, LineAndBlockCommentsAreSkipped) {
+  auto r = LexText("a // line comment b\n c /* block\n d * / */ e /**/ f // at eof");
+  EXPECT_EQ(Kinds(r->tokens), (std::vector<Tok>{Tok::Ident, Tok::Ident, Tok::Ident, Tok::Ident, Tok::Eof}));
+  EXPECT_EQ(r->tokens[1].text, "c");
+  EXPECT_EQ(r->tokens[2].text, "e");
+  EXPECT_EQ(r->tokens[3].text, "f");
+  EXPECT_FALSE(r->diags.HasErrors());
+}
+
+TEST(Lexer, CommentMarkersInsideStringsAreText) {
+  auto r = LexText("\"a // b /* c\" x");
+  ASSERT_EQ(r->tokens.size(), 3u);
+  EXPECT_EQ(r->tokens[0].text, "a // b /* c");
+  EXPECT_EQ(r->tokens[1].text, "x");
+}
+
+TEST(Lexer, StringEscapesAreUnescaped) {
+  auto r = LexText(R"("q\"b\\s\nn\tt\'a\qz" "")");
+  ASSERT_EQ(r->tokens.size(), 3u);
+  EXPECT_EQ(r->tokens[0].kind, Tok::String);
+  EXPECT_EQ(r->tokens[0].text, "q\"b\\s\nn\tt'aqz");
+  EXPECT_EQ(r->tokens[1].text, "");
+  EXPECT_FALSE(r->diags.HasErrors());
+}
+
+TEST(Lexer, StringsMaySpanLines) {
+  auto r = LexText("\"two\nlines\" x");
+  ASSERT_EQ(r->tokens.size(), 3u);
+  EXPECT_EQ(r->tokens[0].text, "two\nlines");
+  EXPECT_EQ(r->sm.Locate(r->file, r->tokens[1].span.begin).line, 2);
+}
+
+TEST(Lexer, IntegersAreToldApartFromReals) {
+  struct Case {
+    const char* text;
+    double value;
+    bool integer;
+  };
+  const Case cases[] = {{"0", 0, true},        {"42", 42, true},    {"3.", 3, false},  {"3.25", 3.25, false},
+                        {".5", 0.5, false},    {"1e3", 1e3, false}, {"1E3", 1e3, false}, {"2.5E+4", 2.5e4, false},
+                        {"1e-3", 1e-3, false}, {"1.e2", 100, false}, {"007", 7, true}};
+  for (const Case& c : cases) {
+    auto r = LexText(c.text);
+    ASSERT_EQ(r->tokens.size(), 2u) << c.text;
+    EXPECT_EQ(r->tokens[0].kind, Tok::Number) << c.text;
+    EXPECT_DOUBLE_EQ(r->tokens[0].number, c.value) << c.text;
+    EXPECT_EQ(r->tokens[0].is_integer, c.integer) << c.text;
+    EXPECT_EQ(r->tokens[0].text, c.text);
+    EXPECT_FALSE(r->diags.HasErrors()) << c.text;
+  }
+}
+
+// A component access after a subscript, x[1].y, must not glue "1]" or ".y" into a number.
+TEST(Lexer, DotAfterNumberAndBracket) {
+  auto r = LexText("x[1].y");
+  EXPECT_EQ(Kinds(r->tokens), (std::vector<Tok>{Tok::Ident, Tok::LBracket, Tok::Number, Tok::RBracket, Tok::Dot,
+                                                Tok::Ident, Tok::Eof}));
+}
+
+TEST(Lexer, SpansMapToLineAndColumn) {
+  auto r = LexText("model M\n  Real  x;\nend M;");
+  // tokens: model M Real x ; end M ; Eof
+  ASSERT_EQ(r->tokens.size(), 9u);
+  LineCol real = r->sm.Locate(r->file, r->tokens[2].span.begin);
+  EXPECT_EQ(real.line, 2);
+  EXPECT_EQ(real.col, 3);
+  LineCol x = r->sm.Locate(r->file, r->tokens[3].span.begin);
+  EXPECT_EQ(x.line, 2);
+  EXPECT_EQ(x.col, 9);
+  EXPECT_EQ(r->tokens[3].span.end - r->tokens[3].span.begin, 1);
+  LineCol eof = r->sm.Locate(r->file, r->tokens.back().span.begin);
+  EXPECT_EQ(eof.line, 3);
+  EXPECT_EQ(eof.col, 7);
+}
+
+// --- L001 .. L005 ------------------------------------------------------------------
+
+const Diagnostic& OnlyError(const testing::Lexed& r) {
+  EXPECT_EQ(r.diags.All().size(), 1u) << r.diags.RenderAll();
+  return r.diags.All().front();
+}
+
+TEST(LexerErrors, L001UnexpectedCharacterIsSkippedAndPointedAt) {
+  auto r = LexText("a $ b");
+  const Diagnostic& d = OnlyError(*r);
+  EXPECT_EQ(d.code, DiagCode::UnexpectedChar);
+  EXPECT_STREQ(DiagCodeString(d.code), "L001");
+  EXPECT_EQ(d.span.begin, 2);
+  EXPECT_EQ(d.span.end, 3);
+  EXPECT_NE(d.message.find("'$'"), std::string::npos) << d.message;
+  // The lexer goes on after the bad character.
+  EXPECT_EQ(Kinds(r->tokens), (std::vector<Tok>{Tok::Ident, Tok::Ident, Tok::Eof}));
+}
+
+TEST(LexerErrors, L001HintsForQuotesAndHashComments) {
+  auto q = LexText("'x'");
+  ASSERT_GE(q->diags.All().size(), 1u);
+  EXPECT_NE(q->diags.All()[0].hint.find("quoted identifiers"), std::string::npos);
+  auto h = LexText("# note");
+  ASSERT_GE(h->diags.All().size(), 1u);
+  EXPECT_NE(h->diags.All()[0].hint.find("//"), std::string::npos);
+}
+
+TEST(LexerErrors, L001NonPrintableBytesAreShownInHex) {
+  auto r = LexText(std::string("a \x01 \xff b"));
+  ASSERT_EQ(r->diags.All().size(), 2u);
+  EXPECT_NE(r->diags.All()[0].message.find("0x01"), std::string::npos);
+  EXPECT_NE(r->diags.All()[1].message.find("0xff"), std::string::npos);
+  EXPECT_EQ(r->diags.All()[1].span.begin, 4);
+}
+
+TEST(LexerErrors, L002UnterminatedStringPointsAtTheOpeningQuote) {
+  auto r = LexText("x = \"never closed\n y");
+  const Diagnostic& d = OnlyError(*r);
+  EXPECT_EQ(d.code, DiagCode::UnterminatedString);
+  EXPECT_EQ(d.span.begin, 4);
+  EXPECT_EQ(d.span.end, 5);
+  EXPECT_EQ(r->tokens.back().kind, Tok::Eof);
+}
+
+TEST(LexerErrors, L002BackslashAtEndOfFile) {
+  auto r = LexText("\"abc\\");
+  const Diagnostic& d = OnlyError(*r);
+  EXPECT_EQ(d.code, DiagCode::UnterminatedString);
+}
+
+TEST(LexerErrors, L003UnterminatedBlockCommentPointsAtItsStart) {
+  auto r = LexText("a\n  /* never closed *");
+  const Diagnostic& d = OnlyError(*r);
+  EXPECT_EQ(d.code, DiagCode::UnterminatedComment);
+  LineCol lc = r->sm.Locate(d.span.file, d.span.begin);
+  EXPECT_EQ(lc.line, 2);
+  EXPECT_EQ(lc.col, 3);
+  EXPECT_EQ(d.span.end - d.span.begin, 2);
+  EXPECT_EQ(Kinds(r->tokens), (std::vector<Tok>{Tok::Ident, Tok::Eof}));
+}
+
+TEST(LexerErrors, L004MalformedNumbersCoverTheWholeLiteral) {
+  const char* cases[] = {"1e", "1e+", ".5E-", "12abc", "3.0x1", "1e999"};
+  for (const char* c : cases) {
+    auto r = LexText(std::string("y = ") + c + ";");
+    const Diagnostic& d = OnlyError(*r);
+    EXPECT_EQ(d.code, DiagCode::BadNumber) << c;
+    EXPECT_EQ(d.span.begin, 4) << c;
+    EXPECT_EQ(d.span.end, 4 + static_cast<int>(std::strlen(c))) << c;
+    // Still one Number token, so the parser sees a well-formed statement.
+    ASSERT_EQ(r->tokens.size(), 5u) << c;
+    EXPECT_EQ(r->tokens[2].kind, Tok::Number) << c;
+    EXPECT_EQ(r->tokens[3].kind, Tok::Semicolon) << c;
+  }
+}
+
+TEST(LexerErrors, L005FileTooLargeIsOneErrorAndNoTokens) {
+  std::string big(SourceManager::kMaxFileBytes + 1, ' ');
+  auto r = LexText(big);
+  const Diagnostic& d = OnlyError(*r);
+  EXPECT_EQ(d.code, DiagCode::FileTooLarge);
+  EXPECT_EQ(d.span.begin, 0);
+  ASSERT_EQ(r->tokens.size(), 1u);
+  EXPECT_EQ(r->tokens[0].kind, Tok::Eof);
+}
+
+TEST(LexerErrors, FileExactlyAtTheLimitIsAccepted) {
+  std::string text(SourceManager::kMaxFileBytes, ' ');
+  text[0] = 'a';
+  auto r = LexText(text);
+  EXPECT_FALSE(r->diags.HasErrors());
+  EXPECT_EQ(Kinds(r->tokens), (std::vector<Tok>{Tok::Ident, Tok::Eof}));
+}
+
+// Thousands of bad characters stop at the error cap (P105) instead of flooding.
+TEST(LexerErrors, ErrorsAreCapped) {
+  auto r = LexText(std::string(10000, '$'));
+  EXPECT_EQ(r->diags.NumErrors(), Diagnostics::kMaxErrors);
+  EXPECT_EQ(r->diags.All().back().code, DiagCode::TooManyErrors);
+  EXPECT_EQ(r->tokens.back().kind, Tok::Eof);
+}
+
+TEST(LexerErrors, RenderedDiagnosticHasLocationCaretAndHint) {
+  auto r = LexText("model M\n  Real x = 1 # mass\nend M;");
+  ASSERT_EQ(r->diags.All().size(), 1u);
+  std::string s = r->diags.Render(r->diags.All()[0]);
+  EXPECT_NE(s.find("test.mech:2:14: error[L001]"), std::string::npos) << s;
+  EXPECT_NE(s.find(" 2 |   Real x = 1 # mass\n"), std::string::npos) << s;
+  EXPECT_NE(s.find("   |              ^\n"), std::string::npos) << s;
+  EXPECT_NE(s.find("hint: "), std::string::npos) << s;
+}
+
+}  // namespace
+}  // namespace kanesim::lang

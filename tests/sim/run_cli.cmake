@@ -1,0 +1,31 @@
+# Runs `kanesim run MECH --stop-time STOP -o OUT` and checks: exit code 0, a header that
+# starts with `time,`, the first row at time 0 (or START if given), the last row at
+# exactly STOP (as %.17g prints it), and at least 3 rows.
+# Usage: cmake -DKANESIM=... -DMECH=... -DOUT=... -DSTOP=1.25 [-DSTART=0] -P run_cli.cmake
+if(NOT DEFINED START)
+  set(START 0)
+endif()
+execute_process(COMMAND ${KANESIM} run ${MECH} --stop-time ${STOP} -o ${OUT}
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "kanesim run ${MECH} exited with ${rc}:\n${err}")
+endif()
+file(STRINGS ${OUT} lines)
+list(LENGTH lines n)
+if(n LESS 4)
+  message(FATAL_ERROR "expected a header and at least 3 rows, got ${n} lines")
+endif()
+list(GET lines 0 header)
+list(GET lines 1 first)
+list(GET lines -1 last)
+if(NOT header MATCHES "^time,")
+  message(FATAL_ERROR "header does not start with 'time,': ${header}")
+endif()
+string(REGEX MATCH "^[^,]*" t_first "${first}")
+string(REGEX MATCH "^[^,]*" t_last "${last}")
+if(NOT t_first STREQUAL START)
+  message(FATAL_ERROR "first row time is ${t_first}, expected ${START}")
+endif()
+if(NOT t_last STREQUAL STOP)
+  message(FATAL_ERROR "last row time is ${t_last}, expected exactly ${STOP}")
+endif()
