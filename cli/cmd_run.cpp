@@ -19,6 +19,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli/common.h"
@@ -114,6 +115,12 @@ int RunCommand(const RunArgs& a) {
   sim::SimOptions so;
   if (a.start_opt->count() > 0) so.start_time = a.start_time;
   so.stop_time = a.stop_opt->count() > 0 ? a.stop_time : ex.stop_time;
+  for (auto [opt, value] : {std::pair{a.interval_opt, a.interval}, {a.rtol_opt, a.rtol}, {a.atol_opt, a.atol}}) {
+    if (opt->count() > 0 && !(value > 0.0 && std::isfinite(value))) {
+      fmt::print(stderr, "kanesim: error: {} must be a positive number, got {}\n", opt->get_name(), value);
+      return kExitModelError;
+    }
+  }
   if (a.interval_opt->count() > 0)
     so.interval = a.interval;
   else if (ex.has_interval)
@@ -184,11 +191,9 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   a->start_opt = run->add_option("--start-time", a->start_time, "Start time (default: experiment StartTime)");
   a->stop_opt = run->add_option("--stop-time", a->stop_time, "Stop time (default: experiment StopTime)");
   a->interval_opt = run->add_option("--interval", a->interval, "Output interval (default: experiment Interval, "
-                                                                 "else (stop - start) / 500)")
-                        ->check(CLI::PositiveNumber);
-  a->rtol_opt = run->add_option("--rtol", a->rtol, "Relative tolerance (default: experiment Tolerance)")
-                    ->check(CLI::PositiveNumber);
-  a->atol_opt = run->add_option("--atol", a->atol, "Absolute tolerance (default: = rtol)")->check(CLI::PositiveNumber);
+                                                                 "else (stop - start) / 500)");
+  a->rtol_opt = run->add_option("--rtol", a->rtol, "Relative tolerance (default: experiment Tolerance)");
+  a->atol_opt = run->add_option("--atol", a->atol, "Absolute tolerance (default: = rtol)");
   run->add_option("--output", a->patterns,
                   "Signals to write: a glob over dotted names, * any run, ? one character (repeatable)")
       ->allow_extra_args(false);

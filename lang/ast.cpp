@@ -15,6 +15,30 @@ std::string JoinName(const std::vector<std::string>& parts) {
   return s;
 }
 
+ExprPtr Clone(const Expr& e) {
+  auto c = std::make_unique<Expr>();
+  c->kind = e.kind;
+  c->span = e.span;
+  c->number = e.number;
+  c->is_integer = e.is_integer;
+  c->text = e.text;
+  c->op = e.op;
+  for (const auto& p : e.parts) {
+    RefPart q;
+    q.name = p.name;
+    q.span = p.span;
+    for (const auto& s : p.subscripts) q.subscripts.push_back(Clone(*s));
+    c->parts.push_back(std::move(q));
+  }
+  for (const auto& a : e.args) c->args.push_back(Clone(*a));
+  for (const auto& n : e.named_args) c->named_args.push_back({n.name, Clone(*n.value), n.span});
+  for (const auto& r : e.rows) {
+    c->rows.emplace_back();
+    for (const auto& x : r) c->rows.back().push_back(Clone(*x));
+  }
+  return c;
+}
+
 static void DumpExprTo(const Expr& e, std::ostringstream& os, int depth);
 
 static void DumpRef(const std::vector<RefPart>& parts, std::ostringstream& os, int depth) {

@@ -160,6 +160,9 @@ struct StoredDefinition {
 
 std::string JoinName(const std::vector<std::string>& parts);
 
+// Deep copy of an expression tree.
+ExprPtr Clone(const Expr& e);
+
 // Readable dump for `kanesim check --emit ast` and parser tests.
 std::string Dump(const StoredDefinition& def);
 std::string DumpExpr(const Expr& e);

@@ -181,8 +181,10 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
       v.e.push_back(flat::kNoExpr);
       return v;
     }
-    case ast::ExprKind::Colon:
     case ast::ExprKind::End:
+      if (!end_stack_.empty()) return Const(end_stack_.back(), VType::Integer);
+      [[fallthrough]];
+    case ast::ExprKind::Colon:
       diags_.Error(DiagCode::ExpectedToken, e.span, "':' and 'end' are only allowed in subscripts");
       return bad();
     case ast::ExprKind::Ref: {
@@ -310,8 +312,10 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
             return bad();
           }
           long k = 0;
-          if (!StructuralInt(Eval(*part.subscripts[0], ctx), part.subscripts[0]->span, &k, "a subscript"))
-            return bad();
+          end_stack_.push_back(static_cast<int>(n->elems.size()));
+          Value kv = Eval(*part.subscripts[0], ctx);
+          end_stack_.pop_back();
+          if (!StructuralInt(kv, part.subscripts[0]->span, &k, "a subscript")) return bad();
           if (k < 1 || k > static_cast<long>(n->elems.size())) {
             diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
                          "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
@@ -347,7 +351,9 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
                 list.push_back(v.shape[d] - 1);
                 kp = false;
               } else {
+                end_stack_.push_back(v.shape[d]);
                 Value sv = Eval(s, ctx);
+                end_stack_.pop_back();
                 if (!sv.valid) return bad();
                 std::vector<double> ks = StructuralList(sv, s.span, "a subscript");
                 if (ks.empty()) return bad();

@@ -2,6 +2,7 @@
 // outer one winning (Modelica 3.5 §7.2); `final` elements refuse outer modification;
 // extends copies the base's elements and equations; arrays of components slice array
 // modifiers unless `each` is given; conditional components are dropped when false.
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
@@ -74,6 +75,10 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
 
 // outer wins over inner; `what` names the element for messages.
 void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
+  // --set on a final parameter is reported once by Elaborator::Run.
+  if (outer.value && outer.value->from_set && inner.is_final) {
+    outer.value.reset();
+  }
   if (inner.is_final && (outer.value || !outer.sub.empty() || !outer.redeclare_type.empty())) {
     Span at = outer.value ? outer.value->span : outer.span;
     auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + what + "' is final and cannot be modified");
@@ -106,23 +111,21 @@ void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what
   }
 }
 
+// Breadth-first over the class and its bases (each visited once, so cyclic extends
+// cannot loop; the cycle itself is reported by Collect).
 const ast::Modification* Elaborator::FindAnnotation(const ast::ClassDef* cls, const std::string& key) const {
-  for (int guard = 0; cls && guard < kMaxExtendsDepth; ++guard) {
-    if (cls->annotation)
-      for (const auto& a : cls->annotation->args)
+  std::vector<const ast::ClassDef*> queue{cls};
+  for (size_t i = 0; i < queue.size() && i < 256; ++i) {
+    const ast::ClassDef* c = queue[i];
+    if (c->annotation)
+      for (const auto& a : c->annotation->args)
         if (a.path.size() == 1 && a.path[0] == key) return a.mod.get();
-    // Inherit from the first base that has it.
-    const ast::ClassDef* next = nullptr;
-    for (const auto& el : cls->elements)
-      if (el.kind == ast::Element::kExtends) {
-        const ast::ClassDef* b = FindClass(el.extends->base, cls);
-        if (b && b != cls) {
-          const ast::Modification* found = FindAnnotation(b, key);
-          if (found) return found;
-        }
-      }
-    if (cls->is_short) next = FindClass(cls->short_base, cls);
-    cls = next;
+    auto push = [&](const ast::ClassDef* b) {
+      if (b && std::find(queue.begin(), queue.end(), b) == queue.end()) queue.push_back(b);
+    };
+    for (const auto& el : c->elements)
+      if (el.kind == ast::Element::kExtends) push(FindClass(el.extends->base, c));
+    if (c->is_short) push(FindClass(c->short_base, c));
   }
   return nullptr;
 }
@@ -287,9 +290,10 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     bool found = false;
     for (const auto& c : elems) found = found || c.comp->name == key;
     if (found) continue;
+    const Mod& sm = node->mod.sub[key];
+    if (sm.value && sm.value->from_set) continue;  // --set names are checked by Run()
     std::vector<std::string> names;
     for (const auto& c : elems) names.push_back(c.comp->name);
-    const Mod& sm = node->mod.sub[key];
     auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span,
                            "'" + cls->name + "' has no element '" + key + "'");
     std::string best = ClosestName(key, names);
@@ -307,7 +311,7 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     Mod outer;
     auto it = node->mod.sub.find(c.comp->name);
     if (it != node->mod.sub.end()) outer = it->second;
-    if (c.is_final && !outer.empty()) {
+    if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
       Span at = outer.value ? outer.value->span : outer.span;
       auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
       d.notes.push_back({c.comp->span, "declared final here"});
@@ -364,6 +368,13 @@ Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
   return out;
 }
 
+// The declaration in the model being elaborated that (transitively) holds `node`.
+static Span TopDeclSpan(Node* node, const ast::Component& fallback) {
+  Node* n = node;
+  while (n && n->parent && n->parent->parent) n = n->parent;
+  return n && n->decl ? n->decl->span : fallback.span;
+}
+
 void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   const ast::Component& comp = *c.comp;
   Ctx ctx{node, nullptr};
@@ -394,7 +405,6 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
       if (n < 0 || n > kMaxArraySize) {
         diags_.Error(DiagCode::ArrayTooLarge, d->span,
                      "array size " + std::to_string(n) + " is outside 0.." + std::to_string(kMaxArraySize));
-        too_large_ = n > kMaxArraySize;
         n = 0;
       }
       dims.push_back(static_cast<int>(n));
@@ -487,8 +497,9 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     instances_ += size;
     if (instances_ > kMaxInstances && !too_large_) {
       too_large_ = true;
-      diags_.Error(DiagCode::InstanceTooLarge, comp.span,
-                   "the model has more than " + std::to_string(kMaxInstances) + " variables");
+      diags_.Error(DiagCode::InstanceTooLarge, TopDeclSpan(child, comp),
+                   "the model has more than " + std::to_string(kMaxInstances) + " variables")
+          .hint = "reduce the array sizes";
     }
     for (const auto& key : child->mod.order) {
       if (IsVarAttribute(key)) continue;
@@ -514,8 +525,9 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   instances_ += dims.empty() ? 1 : dims[0];
   if (instances_ > kMaxInstances && !too_large_) {
     too_large_ = true;
-    diags_.Error(DiagCode::InstanceTooLarge, comp.span,
-                 "the model has more than " + std::to_string(kMaxInstances) + " components");
+    diags_.Error(DiagCode::InstanceTooLarge, TopDeclSpan(child, comp),
+                 "the model has more than " + std::to_string(kMaxInstances) + " components")
+        .hint = "reduce the array sizes";
     return;
   }
   if (dims.empty()) {

@@ -187,6 +187,7 @@ class Elaborator {
   long instances_ = 0;
   bool too_large_ = false;
   std::vector<const ast::ClassDef*> extends_stack_;
+  std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
   std::unique_ptr<Node> root_;
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
   std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator

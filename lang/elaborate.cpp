@@ -158,6 +158,31 @@ bool Elaborator::Run() {
     }
   }
   if (!top) return false;
+  // Every import of the user's file must name something.
+  if (!program_.files.empty()) {
+    auto check = [&](const std::string& q, bool wildcard, Span span) {
+      bool ok = classes_.count(q) > 0;
+      if (!ok && wildcard)
+        for (const auto& [k, v] : classes_) ok = ok || k.rfind(q + ".", 0) == 0;
+      if (!ok && wildcard && q == "Kanesim") ok = true;
+      if (ok) return;
+      auto& d = diags_.Error(DiagCode::BadImport, span, "import names nothing: no class or package '" + q + "'");
+      std::vector<std::string> names;
+      for (const auto& [k, v] : classes_) names.push_back(k);
+      std::string best = ClosestName(q, names);
+      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+    };
+    const auto& f = *program_.files[0];
+    for (const auto& imp : f.imports) check(ast::JoinName(imp.name), imp.wildcard, imp.span);
+    std::function<void(const ast::ClassDef&)> walk = [&](const ast::ClassDef& c) {
+      for (const auto& el : c.elements) {
+        if (el.kind == ast::Element::kImport) check(ast::JoinName(el.import->name), el.import->wildcard, el.import->span);
+        if (el.kind == ast::Element::kClass) walk(*el.class_def);
+      }
+    };
+    for (const auto& c : f.classes) walk(*c);
+    if (diags_.HasErrors()) return false;
+  }
   m_->model_name = qualified_of_.count(top) ? qualified_of_.at(top) : top->name;
   m_->description = top->description;
   for (int f = 0; f < program_.sources.NumFiles(); ++f) m_->source_files.push_back(program_.sources.Name(f));

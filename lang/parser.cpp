@@ -9,6 +9,9 @@ namespace {
 
 using namespace ast;
 
+bool IsClassKeyword(Tok t);
+bool IsClassStart(Tok t);
+
 class Parser {
  public:
   Parser(int file, const SourceManager& sm, Diagnostics& diags)
@@ -91,7 +94,9 @@ class Parser {
   struct DepthGuard {
     Parser* p;
     bool ok;
-    explicit DepthGuard(Parser* parser) : p(parser), ok(++parser->depth_ <= kMaxNesting) {
+    bool counted;
+    explicit DepthGuard(Parser* parser, bool count = true)
+        : p(parser), ok(!count || ++parser->depth_ <= kMaxNesting), counted(count) {
       if (!ok && !p->depth_reported_) {
         p->depth_reported_ = true;
         p->diags_.Error(DiagCode::NestingTooDeep, p->Peek().span,
@@ -99,7 +104,9 @@ class Parser {
             .hint = "simplify the expression or split the class";
       }
     }
-    ~DepthGuard() { --p->depth_; }
+    ~DepthGuard() {
+      if (counted) --p->depth_;
+    }
   };
   Span SpanFrom(const Span& b) const {
     int32_t end = pos_ > 0 ? toks_[pos_ - 1].span.end : b.end;
@@ -140,6 +147,7 @@ class Parser {
   size_t pos_ = 0;
   size_t last_error_pos_ = static_cast<size_t>(-1);
   int depth_ = 0;
+  int subscript_depth_ = 0;  // > 0 inside [...] subscripts, where `end` is an expression
   bool depth_reported_ = false;
 };
 
@@ -174,7 +182,7 @@ std::unique_ptr<StoredDefinition> Parser::Run() {
     auto c = ClassDefinition(nullptr);
     if (c) {
       def->classes.push_back(std::move(c));
-      if (!Expect(Tok::Semicolon, "after class definition")) Recover();
+      if (!Expect(Tok::Semicolon, "after class definition") && !IsClassStart(Peek().kind)) Recover();
     } else {
       Recover();
     }
@@ -212,7 +220,11 @@ std::string Parser::StringComment() {
   return s;
 }
 
-static bool IsClassKeyword(Tok t) {
+bool IsClassStart(Tok t) {
+  return IsClassKeyword(t) || t == Tok::KwPartial || t == Tok::KwEncapsulated || t == Tok::KwImport;
+}
+
+bool IsClassKeyword(Tok t) {
   return t == Tok::KwModel || t == Tok::KwPackage || t == Tok::KwConnector || t == Tok::KwRecord ||
          t == Tok::KwBlock || t == Tok::KwClass || t == Tok::KwType || t == Tok::KwFunction;
 }
@@ -412,15 +424,10 @@ void Parser::ComponentClause(ClassDef& c, Element prefix, bool is_protected, Var
                              Causality caus) {
   Span tspan;
   std::vector<std::string> type_name = Name(&tspan);
-  // Type dimensions (Real[3] a, b) belong to every component of the clause: remember
-  // where they are and parse them once per component.
-  size_t dims_pos = pos_;
-  bool has_type_dims = At(Tok::LBracket);
-  if (has_type_dims) {
-    std::vector<ExprPtr> scratch;
-    Subscripts(scratch);
-  }
-  bool first = true;
+  // Type dimensions (Real[3] a, b) belong to every component of the clause: parse them
+  // once and give each component its own copy.
+  std::vector<ExprPtr> type_dims;
+  if (At(Tok::LBracket)) Subscripts(type_dims);
   do {
     if (!At(Tok::Ident)) {
       ErrorExpected("a component name", "after the type");
@@ -435,16 +442,7 @@ void Parser::ComponentClause(ClassDef& c, Element prefix, bool is_protected, Var
     comp->is_protected = is_protected;
     comp->type_name = type_name;
     comp->type_span = tspan;
-    if (has_type_dims) {
-      size_t save = pos_;
-      size_t save_err = last_error_pos_;
-      pos_ = dims_pos;
-      if (!first) last_error_pos_ = pos_;  // errors were reported the first time
-      Subscripts(comp->type_dims);
-      pos_ = save;
-      last_error_pos_ = save_err;
-    }
-    first = false;
+    for (const auto& d : type_dims) comp->type_dims.push_back(ast::Clone(*d));
     Span b = Peek().span;
     comp->name_span = b;
     comp->name = Advance().text;
@@ -654,9 +652,9 @@ bool Parser::EquationItem(std::vector<Equation>& out) {
 //             | if expression then expression { elseif expression then expression }
 //               else expression
 ExprPtr Parser::Expression() {
-  DepthGuard guard(this);
-  if (!guard.ok) return ErrorExpr(Peek().span);
   if (At(Tok::KwIf)) {
+    DepthGuard guard(this);
+    if (!guard.ok) return ErrorExpr(Peek().span);
     Span b = Advance().span;
     auto e = std::make_unique<Expr>();
     e->kind = ExprKind::If;
@@ -698,8 +696,6 @@ ExprPtr Parser::SimpleExpression() {
 // logical_factor := [not] relation
 // relation := arithmetic_expression [ rel_op arithmetic_expression ]
 ExprPtr Parser::Logical(int level) {
-  DepthGuard guard(this);
-  if (!guard.ok) return ErrorExpr(Peek().span);
   Span b = Peek().span;
   if (level == 0 || level == 1) {
     Tok op = level == 0 ? Tok::KwOr : Tok::KwAnd;
@@ -718,6 +714,8 @@ ExprPtr Parser::Logical(int level) {
   }
   if (level == 2) {
     if (At(Tok::KwNot)) {
+      DepthGuard guard(this);
+      if (!guard.ok) return ErrorExpr(b);
       Advance();
       auto e = std::make_unique<Expr>();
       e->kind = ExprKind::Unary;
@@ -838,13 +836,10 @@ void Parser::Subscripts(std::vector<ExprPtr>& out) {
       e->kind = ExprKind::Colon;
       e->span = Advance().span;
       out.push_back(std::move(e));
-    } else if (At(Tok::KwEnd)) {
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::End;
-      e->span = Advance().span;
-      out.push_back(std::move(e));
     } else {
+      ++subscript_depth_;
       out.push_back(Expression());
+      --subscript_depth_;
     }
   } while (Accept(Tok::Comma));
   ExpectClose(Tok::RBracket, open);
@@ -882,10 +877,18 @@ ExprPtr Parser::ComponentRef() {
 // function_call_args := '(' [ expression { ',' expression } { ',' IDENT '=' expression }
 //                       | expression for IDENT in expression ] ')'
 ExprPtr Parser::Primary() {
-  DepthGuard guard(this);
   Span b = Peek().span;
-  if (!guard.ok) return ErrorExpr(b);
   const Token& t = Peek();
+  // Brackets nest; each level counts once against kMaxNesting.
+  bool opens = t.kind == Tok::LParen || t.kind == Tok::LBrace || t.kind == Tok::LBracket || t.kind == Tok::Ident;
+  DepthGuard guard(this, opens);
+  if (!guard.ok) return ErrorExpr(b);
+  if (t.kind == Tok::KwEnd && subscript_depth_ > 0) {
+    auto e = std::make_unique<Expr>();
+    e->kind = ExprKind::End;
+    e->span = Advance().span;
+    return e;
+  }
   switch (t.kind) {
     case Tok::Number: {
       auto e = std::make_unique<Expr>();

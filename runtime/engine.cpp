@@ -76,6 +76,14 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
     InitSparseWorkspace(p, ws);
   }
   ws.error.reserve(256);
+  // Warm-up at the initial state: the sparse path's first KLU factorization allocates,
+  // so it happens here and Derivative only refactors (an error here is reported by the
+  // integrator's first call instead).
+  if (p.solver == SolverPath::Sparse && StateSize(p) >= 0) {
+    std::vector<double> y(p.y0), ydot(p.y0.size());
+    Derivative(p, ws, StartTime(p), y.data(), ydot.data());
+    ws.error.clear();
+  }
   return w;
 }
 

@@ -1,20 +1,346 @@
+// Sparse path: Newton-Euler per body, joined by per-joint kinematic rows, solved as one
+// sparse linear system whose pattern is fixed at compile time (Lesser eqs. 26-29, 68-73).
+//
+// Unknowns per body L (block of 12): A_L = [a_L; alpha_L] (mass-centre and angular
+// acceleration), the free udot of joint L (nf), and the constraint-force coefficients
+// s_L (6 - nf) on the complement basis gamma_L of joint L. Rows per body:
+//
+//   kinematic (6):     A_L - X_LP A_P - S_L udot_L = kappa_L                          (1)
+//   Newton-Euler (6):  Mb_L A_L - G_L gamma_L s_L + sum_C G_LC gamma_C s_C
+//                        = W_L - [0; w_L x I_L w_L] + G_L W^Q_L - sum_C G_LC W^Q_C      (2)
+// where
+//   S_L       tangent block: columns tau_{L,r} = [H^v_r + H^w_r x (c_L - o_L); H^w_r]
+//   X_LP      rigid transport of P's acceleration: a_L = a_P + alpha_P x (c_L - c_P)
+//   kappa_L   = A_bias_L - X_LP A_bias_P (bias accelerations with free udot = 0)
+//   gamma_L   orthonormal complement of the free columns of H_L (twists at o_L):
+//             H_L^T gamma_L = 0, so the constraint wrench does no work (Lesser eq. 27)
+//   G_L       moves a wrench at o_L to c_L: [f; t + (o_L - c_L) x f]
+//   G_LC      the same from child joint point o_C to c_L
+//   W^Q_L     = H_L (H_L^T H_L)^-1 Q_L: the joint force as a wrench with H_L^T W^Q = Q
+//   lambda_L  = gamma_L s_L + W^Q_L: the wrench the parent exerts on L at o_L.
+// Each block couples only a body, its parent and its children, so KLU factors a chain
+// or tree in time linear in K (the symbolic analysis is done once at compile time).
+#include <klu.h>
+
+#include <algorithm>
+#include <cmath>
+
 #include "runtime/kane.h"
 
 namespace kanesim::rt {
 
-struct SparsePattern {};
-struct SparseSymbolic {};
-struct SparseNumeric {};
-void DestroySparseSymbolic(SparseSymbolic* s) { delete s; }
-void DestroySparseNumeric(SparseNumeric* s) { delete s; }
-bool BuildSparse(Program&, std::string* error) {
-  *error = "not implemented";
-  return false;
+struct SparsePattern {
+  int n = 0;                          // 12 K
+  std::vector<int> Ap, Ai;            // CSC pattern
+  std::vector<int> slot;              // entry number (visit order) -> CSC value index
+  std::vector<std::vector<int>> children;
+  std::vector<int> nf;                // free speeds per joint
+  std::vector<std::vector<int>> free_speeds;  // full speed indices per joint
+};
+
+struct SparseSymbolic {
+  klu_common common;
+  klu_symbolic* symbolic = nullptr;
+};
+
+struct SparseNumeric {
+  klu_common common;
+  klu_numeric* numeric = nullptr;
+};
+
+void DestroySparseSymbolic(SparseSymbolic* s) {
+  if (!s) return;
+  if (s->symbolic) klu_free_symbolic(&s->symbolic, &s->common);
+  delete s;
 }
-void InitSparseWorkspace(const Program&, Workspace&) {}
-int SolveSparse(const Program&, Workspace& ws) {
-  ws.error = "sparse path not implemented";
+
+void DestroySparseNumeric(SparseNumeric* s) {
+  if (!s) return;
+  if (s->numeric) klu_free_numeric(&s->numeric, &s->common);
+  delete s;
+}
+
+namespace {
+
+// Reciprocal pivot growth bound: below it the pivot order chosen by the last full
+// factorization is no longer trusted and KLU factors again with fresh pivoting.
+constexpr double kRefactorRcond = 1e-12;
+// Below this after a fresh factorization the system is singular (e.g. a massless link).
+constexpr double kSingularRcond = 1e-15;
+
+Mat3 Skew(const Vec3& v) {
+  Mat3 K;
+  K << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return K;
+}
+
+// Orthonormal basis of span(S)'s complement in R^6 by Householder QR of S (6 x nf):
+// S = Q R with Q = H_0 ... H_{nf-1}; the last 6 - nf columns of Q are the complement.
+void Complement(Mat6 A, int nf, Mat6* Q) {
+  Q->setIdentity();
+  for (int k = 0; k < nf; ++k) {
+    Vec6 v = Vec6::Zero();
+    double norm2 = 0.0;
+    for (int i = k; i < 6; ++i) norm2 += A(i, k) * A(i, k);
+    const double norm = std::sqrt(norm2);
+    if (norm == 0.0) continue;
+    const double alpha = A(k, k) > 0.0 ? -norm : norm;
+    for (int i = k; i < 6; ++i) v[i] = A(i, k);
+    v[k] -= alpha;
+    const double vn = v.norm();
+    if (vn == 0.0) continue;
+    v /= vn;
+    for (int c = k; c < 6; ++c) {  // A <- H A
+      const double d = 2.0 * v.dot(A.col(c));
+      A.col(c) -= d * v;
+    }
+    for (int r = 0; r < 6; ++r) {  // Q <- Q H
+      const double d = 2.0 * Q->row(r).dot(v);
+      Q->row(r) -= d * v.transpose();
+    }
+  }
+}
+
+// Visits every structural entry of the system in one fixed order; `values` false
+// visits the pattern only (compile time). put(row, col, value).
+template <class Put>
+void VisitSystem(const Program& p, const SparsePattern& sp, const Workspace* ws, Put put) {
+  const bool values = ws != nullptr;
+  const int K = static_cast<int>(p.bodies.size());
+  for (int L = 0; L < K; ++L) {
+    const auto uL = static_cast<size_t>(L);
+    const int P = p.joints[uL].parent;
+    const int nf = sp.nf[uL], nc = 6 - nf;
+    const int base = 12 * L;
+    // (1) kinematic rows.
+    for (int i = 0; i < 6; ++i) put(base + i, base + i, 1.0);
+    if (P >= 0) {
+      const int pb = 12 * P;
+      Mat3 rx = Mat3::Zero();
+      if (values) rx = Skew(ws->p_WBcm[uL] - ws->p_WBcm[static_cast<size_t>(P)]);
+      for (int i = 0; i < 3; ++i) put(base + i, pb + i, -1.0);
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) put(base + i, pb + 3 + k, rx(i, k));
+      for (int i = 0; i < 3; ++i) put(base + 3 + i, pb + 3 + i, -1.0);
+    }
+    for (int c = 0; c < nf; ++c) {
+      Vec6 t = Vec6::Zero();
+      if (values) {
+        const auto h = ws->H_W.col(sp.free_speeds[uL][static_cast<size_t>(c)]);
+        t.head<3>() = h.head<3>() + h.tail<3>().cross(ws->p_WBcm[uL] - ws->p_WB[uL]);
+        t.tail<3>() = h.tail<3>();
+      }
+      for (int i = 0; i < 6; ++i) put(base + i, base + 6 + c, -t[i]);
+    }
+    // (2) Newton-Euler rows.
+    const double m = p.bodies[uL].mass;
+    for (int i = 0; i < 3; ++i) put(base + 6 + i, base + i, m);
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) put(base + 9 + i, base + 3 + k, values ? ws->I_W[uL](i, k) : 0.0);
+    for (int c = 0; c < nc; ++c) {
+      Vec6 g = Vec6::Zero();
+      if (values) {
+        const Vec6 d = ws->D_W[uL].col(c);
+        g.head<3>() = d.head<3>();
+        g.tail<3>() = d.tail<3>() + (ws->p_WB[uL] - ws->p_WBcm[uL]).cross(d.head<3>());
+      }
+      for (int i = 0; i < 6; ++i) put(base + 6 + i, base + 6 + nf + c, -g[i]);
+    }
+    for (int C : sp.children[uL]) {
+      const auto uC = static_cast<size_t>(C);
+      const int ncC = 6 - sp.nf[uC];
+      for (int c = 0; c < ncC; ++c) {
+        Vec6 g = Vec6::Zero();
+        if (values) {
+          const Vec6 d = ws->D_W[uC].col(c);
+          g.head<3>() = d.head<3>();
+          g.tail<3>() = d.tail<3>() + (ws->p_WB[uC] - ws->p_WBcm[uL]).cross(d.head<3>());
+        }
+        for (int i = 0; i < 6; ++i) put(base + 6 + i, 12 * C + 6 + sp.nf[uC] + c, g[i]);
+      }
+    }
+  }
+}
+
+int Fail(Workspace& ws, const char* what) {
+  ws.error = what;
   return -1;
+}
+
+}  // namespace
+
+bool BuildSparse(Program& p, std::string* error) {
+  auto sp = std::make_shared<SparsePattern>();
+  const int K = static_cast<int>(p.bodies.size());
+  sp->n = 12 * K;
+  sp->children.assign(static_cast<size_t>(K), {});
+  sp->nf.assign(static_cast<size_t>(K), 0);
+  sp->free_speeds.assign(static_cast<size_t>(K), {});
+  for (int L = 0; L < K; ++L) {
+    const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+    if (j.parent >= 0) sp->children[static_cast<size_t>(j.parent)].push_back(L);
+    for (int k = 0; k < j.nu; ++k)
+      if (p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) sp->free_speeds[static_cast<size_t>(L)].push_back(j.u0 + k);
+    sp->nf[static_cast<size_t>(L)] = static_cast<int>(sp->free_speeds[static_cast<size_t>(L)].size());
+  }
+  // Triplets in visit order, then CSC with each entry's slot.
+  std::vector<int> rows, cols;
+  VisitSystem(p, *sp, nullptr, [&](int r, int c, double) {
+    rows.push_back(r);
+    cols.push_back(c);
+  });
+  const size_t nnz = rows.size();
+  sp->Ap.assign(static_cast<size_t>(sp->n) + 1, 0);
+  for (int c : cols) sp->Ap[static_cast<size_t>(c) + 1]++;
+  for (int c = 0; c < sp->n; ++c) sp->Ap[static_cast<size_t>(c) + 1] += sp->Ap[static_cast<size_t>(c)];
+  std::vector<int> next(sp->Ap.begin(), sp->Ap.end() - 1);
+  sp->Ai.assign(nnz, 0);
+  sp->slot.assign(nnz, 0);
+  for (size_t e = 0; e < nnz; ++e) {
+    const int at = next[static_cast<size_t>(cols[e])]++;
+    sp->Ai[static_cast<size_t>(at)] = rows[e];
+    sp->slot[e] = at;
+  }
+  // KLU wants sorted row indices within a column: sort each column, carrying slots.
+  std::vector<int> entry_at(nnz);
+  for (size_t e = 0; e < nnz; ++e) entry_at[static_cast<size_t>(sp->slot[e])] = static_cast<int>(e);
+  std::vector<int> perm;
+  for (int c = 0; c < sp->n; ++c) {
+    const int b = sp->Ap[static_cast<size_t>(c)], end = sp->Ap[static_cast<size_t>(c) + 1];
+    perm.assign(entry_at.begin() + b, entry_at.begin() + end);
+    std::sort(perm.begin(), perm.end(),
+              [&](int x, int y) { return rows[static_cast<size_t>(x)] < rows[static_cast<size_t>(y)]; });
+    for (int i = b; i < end; ++i) {
+      const auto entry = static_cast<size_t>(perm[static_cast<size_t>(i - b)]);
+      sp->Ai[static_cast<size_t>(i)] = rows[entry];
+      sp->slot[entry] = i;
+    }
+  }
+  p.sparse = sp;
+  if (!p.sparse_symbolic && sp->n > 0) {
+    std::shared_ptr<SparseSymbolic> sym(new SparseSymbolic, DestroySparseSymbolic);
+    klu_defaults(&sym->common);
+    sym->symbolic = klu_analyze(sp->n, sp->Ap.data(), sp->Ai.data(), &sym->common);
+    if (!sym->symbolic) {
+      *error = "klu_analyze failed (status " + std::to_string(sym->common.status) + ")";
+      return false;
+    }
+    p.sparse_symbolic = sym;
+  }
+  return true;
+}
+
+void InitSparseWorkspace(const Program& p, Workspace& ws) {
+  const size_t K = p.bodies.size();
+  ws.Ax.assign(p.sparse->Ai.size(), 0.0);
+  ws.x.assign(static_cast<size_t>(p.sparse->n), 0.0);
+  ws.b.assign(static_cast<size_t>(p.sparse->n), 0.0);
+  ws.r.assign(static_cast<size_t>(p.sparse->n), 0.0);
+  ws.lambda_W.assign(K, Vec6::Zero());
+  ws.D_W.assign(K, Mat6::Zero());
+  ws.klu.reset(new SparseNumeric);
+  klu_defaults(&ws.klu->common);
+}
+
+int SolveSparse(const Program& p, Workspace& ws) {
+  const SparsePattern& sp = *p.sparse;
+  const size_t K = p.bodies.size();
+  if (K == 0) return 0;
+  // Complement bases and the joint-force wrenches W^Q (kept in lambda_W for now).
+  for (size_t L = 0; L < K; ++L) {
+    const int nf = sp.nf[L];
+    Mat6 S = Mat6::Zero();
+    for (int c = 0; c < nf; ++c) S.col(c) = ws.H_W.col(sp.free_speeds[L][static_cast<size_t>(c)]);
+    Mat6 Q;
+    Complement(S, nf, &Q);
+    ws.D_W[L].leftCols(6 - nf) = Q.rightCols(6 - nf);
+    Vec6 WQ = Vec6::Zero();
+    if (nf > 0) {
+      Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> Qj(nf);
+      for (int c = 0; c < nf; ++c) Qj[c] = ws.Q[sp.free_speeds[L][static_cast<size_t>(c)]];
+      if (Qj.squaredNorm() > 0.0) {
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> StS = S.leftCols(nf).transpose() * S.leftCols(nf);
+        Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> z = StS.ldlt().solve(Qj);
+        WQ = S.leftCols(nf) * z;
+      }
+    }
+    ws.lambda_W[L] = WQ;
+  }
+  // Values, in the visit order of the pattern.
+  size_t e = 0;
+  double* Ax = ws.Ax.data();
+  const int* slot = sp.slot.data();
+  VisitSystem(p, sp, &ws, [&](int, int, double v) { Ax[slot[e++]] = v; });
+  // Right-hand sides (1) and (2).
+  for (size_t L = 0; L < K; ++L) {
+    double* b = ws.x.data() + 12 * L;
+    const int P = p.joints[L].parent;
+    Vec3 ka = ws.a_bias_cm[L], kw = ws.alpha_bias[L];
+    if (P >= 0) {
+      const auto uP = static_cast<size_t>(P);
+      ka -= ws.a_bias_cm[uP] + ws.alpha_bias[uP].cross(ws.p_WBcm[L] - ws.p_WBcm[uP]);
+      kw -= ws.alpha_bias[uP];
+    }
+    const Vec3 gyro = ws.w_WB[L].cross(ws.I_W[L] * ws.w_WB[L]);
+    const Vec6& WQ = ws.lambda_W[L];
+    Vec3 f = ws.F_W[L] + WQ.head<3>();
+    Vec3 t = ws.T_W[L] - gyro + WQ.tail<3>() + (ws.p_WB[L] - ws.p_WBcm[L]).cross(WQ.head<3>());
+    for (int C : sp.children[L]) {
+      const auto uC = static_cast<size_t>(C);
+      const Vec6& WC = ws.lambda_W[uC];
+      f -= WC.head<3>();
+      t -= WC.tail<3>() + (ws.p_WB[uC] - ws.p_WBcm[L]).cross(WC.head<3>());
+    }
+    for (int i = 0; i < 3; ++i) {
+      b[i] = ka[i];
+      b[3 + i] = kw[i];
+      b[6 + i] = f[i];
+      b[9 + i] = t[i];
+    }
+  }
+  // Factor: the numeric object is created once (first call) and refactored after.
+  SparseSymbolic& sym = *p.sparse_symbolic;
+  SparseNumeric& num = *ws.klu;
+  int* Ap = const_cast<int*>(sp.Ap.data());
+  int* Ai = const_cast<int*>(sp.Ai.data());
+  bool fresh = false;
+  if (num.numeric) {
+    if (!klu_refactor(Ap, Ai, Ax, sym.symbolic, num.numeric, &num.common)) return Fail(ws, "singular mass matrix (sparse refactorization failed)");
+    klu_rcond(sym.symbolic, num.numeric, &num.common);
+    if (!(num.common.rcond > kRefactorRcond)) {
+      klu_free_numeric(&num.numeric, &num.common);
+    }
+  }
+  if (!num.numeric) {
+    num.numeric = klu_factor(Ap, Ai, Ax, sym.symbolic, &num.common);
+    if (!num.numeric) return Fail(ws, "singular mass matrix (sparse factorization failed)");
+    fresh = true;
+    klu_rcond(sym.symbolic, num.numeric, &num.common);
+  }
+  if (fresh && !(num.common.rcond > kSingularRcond)) return Fail(ws, "singular mass matrix");
+  std::copy(ws.x.begin(), ws.x.end(), ws.b.begin());
+  if (!klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.x.data(), &num.common))
+    return Fail(ws, "singular mass matrix (sparse solve failed)");
+  // One step of iterative refinement, r = b - A x, x += A^-1 r: refactorization keeps
+  // the pivot order of the first factorization, whose growth at a far-away
+  // configuration can cost digits (seen as 2e-12 relative error without it).
+  if (!fresh) {
+    std::copy(ws.b.begin(), ws.b.end(), ws.r.begin());
+    for (int c = 0; c < sp.n; ++c) {
+      const double xc = ws.x[static_cast<size_t>(c)];
+      for (int k = Ap[c]; k < Ap[c + 1]; ++k) ws.r[static_cast<size_t>(Ai[k])] -= Ax[k] * xc;
+    }
+    klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.r.data(), &num.common);
+    for (int i = 0; i < sp.n; ++i) ws.x[static_cast<size_t>(i)] += ws.r[static_cast<size_t>(i)];
+  }
+  // Read udot and the joint reaction wrenches lambda_L = gamma_L s_L + W^Q_L.
+  for (size_t L = 0; L < K; ++L) {
+    const double* x = ws.x.data() + 12 * L;
+    const int nf = sp.nf[L];
+    for (int c = 0; c < nf; ++c) ws.udot[sp.free_speeds[L][static_cast<size_t>(c)]] = x[6 + c];
+    for (int c = 0; c < 6 - nf; ++c) ws.lambda_W[L] += ws.D_W[L].col(c) * x[6 + nf + c];
+  }
+  return 0;
 }
 
 }  // namespace kanesim::rt

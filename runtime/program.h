@@ -198,6 +198,7 @@ struct Workspace {
   // Sparse path.
   std::vector<double> Ax;           // CSC values  (nnz)  filled by SolveSparse
   std::vector<double> x;            // right side, then solution  (12 K)  filled by SolveSparse
+  std::vector<double> b, r;         // right side kept, residual for refinement  (12 K)  filled by SolveSparse
   std::vector<Vec6> lambda_W;       // joint reaction wrench on the child at o_L  (K)  filled by SolveSparse
   std::vector<Eigen::Matrix<double, 6, 6>> D_W;  // complement basis per joint (first 6-nf cols)  (K)  filled by SolveSparse
   std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;

@@ -128,39 +128,49 @@ bool Compiler::Topology(Program& p) {
   group_of_frame_.resize(nf);
   for (size_t i = 0; i < nf; ++i) group_of_frame_[i] = uf.Find(static_cast<int>(i));
 
-  // Spanning tree: breadth-first from ground over articulated joints.
+  // Spanning tree (Kruskal over rigid groups): joints in declaration order, a joint the
+  // user marked `cut` last; a joint whose two groups are already connected closes a
+  // loop. Then breadth-first from ground over the tree joints orders bodies and
+  // orients each joint (parent side = the side nearer ground).
   const int ground = group_of_frame_[static_cast<size_t>(p.world_frame)];
+  std::vector<int> order;
+  for (int pass = 0; pass < 2; ++pass)
+    for (size_t ji = 0; ji < m_.joints.size(); ++ji)
+      if (m_.joints[ji].type != JointType::Weld && m_.joints[ji].cut == (pass == 1)) order.push_back(static_cast<int>(ji));
+  UnionFind groups(nf);
+  std::vector<char> used(m_.joints.size(), 0);
+  std::vector<std::vector<int>> joints_at(nf);
+  for (int ji : order) {
+    const auto& j = m_.joints[static_cast<size_t>(ji)];
+    const int ga = group_of_frame_[static_cast<size_t>(j.frame_a)];
+    const int gb = group_of_frame_[static_cast<size_t>(j.frame_b)];
+    if (groups.Find(ga) == groups.Find(gb)) {
+      Error("K310", "joint '" + j.name + "' closes a kinematic loop; closed loops arrive with issue #4", j.loc,
+            "remove the joint or model the loop with a force element for now");
+      continue;
+    }
+    groups.Unite(ga, gb);
+    used[static_cast<size_t>(ji)] = 1;
+    joints_at[static_cast<size_t>(ga)].push_back(ji);
+    joints_at[static_cast<size_t>(gb)].push_back(ji);
+  }
   body_of_group_.assign(nf, -2);
   body_of_group_[static_cast<size_t>(ground)] = -1;
-  std::vector<std::vector<int>> joints_at(nf);
-  for (size_t ji = 0; ji < m_.joints.size(); ++ji) {
-    const auto& j = m_.joints[ji];
-    if (j.type == JointType::Weld) continue;
-    joints_at[static_cast<size_t>(group_of_frame_[static_cast<size_t>(j.frame_a)])].push_back(static_cast<int>(ji));
-    joints_at[static_cast<size_t>(group_of_frame_[static_cast<size_t>(j.frame_b)])].push_back(static_cast<int>(ji));
-  }
   p.joint_of_flat.assign(m_.joints.size(), -1);
   std::vector<int> ref_frame_of_group(nf, -1);
   ref_frame_of_group[static_cast<size_t>(ground)] = p.world_frame;
   std::deque<int> queue{ground};
-  std::vector<char> used(m_.joints.size(), 0);
+  std::vector<char> placed_joint(m_.joints.size(), 0);
   while (!queue.empty()) {
     int g = queue.front();
     queue.pop_front();
     for (int ji : joints_at[static_cast<size_t>(g)]) {
-      if (used[static_cast<size_t>(ji)]) continue;
-      used[static_cast<size_t>(ji)] = 1;
+      if (placed_joint[static_cast<size_t>(ji)]) continue;
+      placed_joint[static_cast<size_t>(ji)] = 1;
       const auto& fj = m_.joints[static_cast<size_t>(ji)];
       const int ga = group_of_frame_[static_cast<size_t>(fj.frame_a)];
-      const int gb = group_of_frame_[static_cast<size_t>(fj.frame_b)];
       const bool inverted = ga != g;
-      const int child_group = inverted ? ga : gb;
-      if (body_of_group_[static_cast<size_t>(child_group)] != -2) {
-        Error("K310",
-              "joint '" + fj.name + "' closes a kinematic loop; closed loops arrive with issue #4",
-              fj.loc, "remove the joint or model the loop with a force element for now");
-        continue;
-      }
+      const int child_group = inverted ? ga : group_of_frame_[static_cast<size_t>(fj.frame_b)];
       TreeJoint tj;
       tj.name = fj.name;
       tj.loc = fj.loc;
@@ -201,7 +211,7 @@ bool Compiler::Topology(Program& p) {
   for (size_t ji = 0; ji < m_.joints.size(); ++ji) {
     const auto& j = m_.joints[ji];
     int g = group_of_frame_[static_cast<size_t>(j.frame_a)];
-    if (j.type != JointType::Weld && !used[ji] && !reported[static_cast<size_t>(g)]) {
+    if (j.type != JointType::Weld && used[ji] && !placed_joint[ji] && !reported[static_cast<size_t>(g)]) {
       reported[static_cast<size_t>(g)] = 1;
       Error("K303", "joint '" + j.name + "' belongs to a mechanism not connected to the world", j.loc);
     }

@@ -43,8 +43,14 @@ long OutputGrid::Count() const {
 
 double OutputGrid::Time(long k) const {
   if (k >= Count() - 1) return k == 0 ? start : stop;
-  // t_k by multiplication, not accumulation, so that rounding does not drift.
-  return start + static_cast<double>(k) * interval;
+  // t_k by multiplication, not accumulation, so that rounding does not drift. When the
+  // interval is 1/N for an integer N (0.1, 0.01, 0.02, ...), k / N is the correctly
+  // rounded decimal (0.3, not 0.1 * 3 = 0.30000000000000004).
+  double kd = static_cast<double>(k);
+  double per_unit = 1.0 / interval;
+  double n = std::round(per_unit);
+  if (n >= 1.0 && std::abs(per_unit - n) <= 1e-12 * per_unit) return start + kd / n;
+  return start + kd * interval;
 }
 
 namespace detail {

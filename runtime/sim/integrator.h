@@ -75,7 +75,9 @@ struct IntegratorStats {
   int last_order = 0;          // last method order used (0 for ERK)
 };
 
-// Output instants: t_k = start + k * interval for k = 0 .. n-1, the last one replaced by
+// Output instants: t_k = start + k * interval for k = 0 .. n-1 (computed as start + k / N
+// when interval = 1/N for an integer N, so that 0.1 steps print as 0.3, not
+// 0.30000000000000004), the last one replaced by
 // exactly `stop` (it may then be closer than `interval` to the one before). An instant
 // within 1e-9 interval of stop is merged into it, so rounding never adds a sliver row.
 struct OutputGrid {

@@ -17,9 +17,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -68,34 +68,66 @@ std::string ReadFile(const fs::path& p) {
   return ss.str();
 }
 
+std::string Trim(const std::string& s) {
+  size_t b = s.find_first_not_of(" \t\r");
+  size_t e = s.find_last_not_of(" \t\r");
+  return b == std::string::npos ? "" : s.substr(b, e - b + 1);
+}
+
+// "// key: value" -> value if `comment` is that directive, else "".
+std::string Directive(const std::string& comment, const std::string& key) {
+  std::string body = Trim(comment.substr(2));
+  return body.rfind(key, 0) == 0 ? Trim(body.substr(key.size())) : "";
+}
+
+// Reads every "expect[-global]: CODE ["text"] [col N]" of one comment.
+void ParseExpectations(const std::string& comment, int line, std::vector<Expectation>* out) {
+  for (size_t p = comment.find("expect"); p != std::string::npos; p = comment.find("expect", p + 1)) {
+    Expectation e;
+    size_t i;
+    if (comment.compare(p, 7, "expect:") == 0) {
+      e.line = line;
+      i = p + 7;
+    } else if (comment.compare(p, 14, "expect-global:") == 0) {
+      i = p + 14;
+    } else {
+      continue;
+    }
+    while (i < comment.size() && comment[i] == ' ') ++i;
+    e.code = comment.substr(i, 4);
+    i += 4;
+    while (i < comment.size() && comment[i] == ' ') ++i;
+    if (i < comment.size() && comment[i] == '"') {
+      size_t close = comment.find('"', i + 1);
+      if (close == std::string::npos) close = comment.size();
+      e.text = comment.substr(i + 1, close - i - 1);
+      i = close + 1;
+      while (i < comment.size() && comment[i] == ' ') ++i;
+    }
+    if (comment.compare(i, 4, "col ") == 0) e.col = std::atoi(comment.c_str() + i + 4);
+    out->push_back(e);
+  }
+}
+
 // Parses the inline expectations and directives of one file.
 DiagFile LoadDiagFile(const fs::path& path) {
   DiagFile f;
   f.name = path.filename().string();
   f.text = ReadFile(path);
-  static const std::regex expect_re(R"re(expect(-global)?:\s*([LPEW]\d{3})(?:\s+"([^"]*)")?(?:\s+col\s+(\d+))?)re");
-  static const std::regex set_re(R"re(//\s*set:\s*([^=\s]+)\s*=\s*(.*\S))re");
-  static const std::regex model_re(R"re(//\s*model:\s*(\S+))re");
-  static const std::regex pad_re(R"re(//\s*pad-to-bytes:\s*(\d+))re");
   std::istringstream lines(f.text);
   std::string line;
   size_t pad_to = 0;
   for (int n = 1; std::getline(lines, line); ++n) {
-    size_t comment = line.find("//");
-    if (comment == std::string::npos) continue;
-    std::string tail = line.substr(comment);
-    for (std::sregex_iterator it(tail.begin(), tail.end(), expect_re), end; it != end; ++it) {
-      Expectation e;
-      e.code = (*it)[2];
-      e.line = (*it)[1].matched ? 0 : n;
-      e.text = (*it)[3];
-      if ((*it)[4].matched) e.col = std::stoi((*it)[4]);
-      f.expects.push_back(e);
+    size_t slashes = line.find("//");
+    if (slashes == std::string::npos) continue;
+    std::string comment = line.substr(slashes);
+    ParseExpectations(comment, n, &f.expects);
+    if (std::string set = Directive(comment, "set:"); !set.empty()) {
+      size_t eq = set.find('=');
+      f.overrides.emplace_back(Trim(set.substr(0, eq)), eq == std::string::npos ? "" : Trim(set.substr(eq + 1)));
     }
-    std::smatch m;
-    if (std::regex_search(tail, m, set_re)) f.overrides.emplace_back(m[1], m[2]);
-    if (std::regex_search(tail, m, model_re)) f.model = m[1];
-    if (std::regex_search(tail, m, pad_re)) pad_to = std::stoul(m[1]);
+    if (std::string model = Directive(comment, "model:"); !model.empty()) f.model = model;
+    if (std::string pad = Directive(comment, "pad-to-bytes:"); !pad.empty()) pad_to = std::stoul(pad);
   }
   if (f.text.size() < pad_to) f.text.append(pad_to - f.text.size(), ' ');
   return f;

@@ -175,7 +175,11 @@ TEST(SimOutputGrid, RowsAreStartPlusMultiplesAndEndExactlyAtStop) {
   for (long k = 1; k < 501; ++k) EXPECT_GT(h.Time(k), h.Time(k - 1));
 
   EXPECT_EQ((OutputGrid{2.0, 2.0, 0.1}.Count()), 1);
-  EXPECT_EQ((OutputGrid{0.0, 1.0, 0.1}.Count()), 11);
+  OutputGrid tenth{0.0, 1.0, 0.1};
+  ASSERT_EQ(tenth.Count(), 11);
+  EXPECT_EQ(tenth.Time(3), 0.3);  // k / 10, not 3 * 0.1 = 0.30000000000000004
+  EXPECT_EQ(tenth.Time(7), 0.7);
+  EXPECT_EQ(tenth.Time(10), 1.0);
   EXPECT_EQ((OutputGrid{0.0, 1.0, 2.0}.Count()), 2);
 }
 

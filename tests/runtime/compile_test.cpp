@@ -1,0 +1,174 @@
+// Compile: topology errors with stable codes and locations, the summary (sizes, chosen
+// solver and integrator with reasons), prescribed-coordinate bookkeeping, jets.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "runtime/engine.h"
+#include "runtime/tape.h"
+#include "tests/runtime/builders.h"
+
+namespace kanesim {
+namespace {
+
+using flat::Op;
+using test::Vec3;
+
+bool HasError(const rt::CompileResult& r, const std::string& code, const std::string& text) {
+  for (const auto& e : r.errors)
+    if (e.code == code && e.message.find(text) != std::string::npos) return true;
+  return false;
+}
+
+std::string Dump(const rt::CompileResult& r) {
+  std::string s;
+  for (const auto& e : r.errors) s += e.code + ": " + e.message + "\n";
+  return s;
+}
+
+TEST(Compile, ClosedLoopIsReportedWithTheJoint) {
+  // If this fails, a kinematic loop is silently accepted (or not attributed to the
+  // joint that closes it) before loops are supported (issue #4).
+  auto m = test::Chain(2);
+  const int tip = m.FindFrame("rod[2].frame_b");
+  test::MechBuilder b;
+  b.m = m;
+  b.Joint("closer", flat::JointType::Revolute, tip, m.worlds[0].frame, Vec3::UnitZ());
+  auto r = rt::Compile(b.m, {});
+  EXPECT_FALSE(r.program);
+  ASSERT_TRUE(HasError(r, "K310", "joint 'closer'")) << Dump(r);
+  EXPECT_GT(r.errors[0].loc.line, 0);
+}
+
+TEST(Compile, ContactsAreNotSimulatedYet) {
+  // If this fails, a rolling contact is silently dropped instead of reported.
+  auto m = test::Pendulum();
+  flat::Contact c;
+  c.name = "wheel";
+  c.frame = 1;
+  m.contacts.push_back(c);
+  auto r = rt::Compile(m, {});
+  EXPECT_TRUE(HasError(r, "K311", "contact 'wheel'")) << Dump(r);
+}
+
+TEST(Compile, FloatingBodyAndUnconnectedFrameAreErrors) {
+  // If this fails, a body with no path to the world, or a joint with a dangling frame,
+  // reaches the runtime.
+  test::MechBuilder b;
+  b.World(Vec3(0, -9.81, 0));
+  int f = b.Frame("lost.frame");
+  b.Body("lost", f, 1.0, Vec3::Zero(), test::Diag(1, 1, 1));
+  auto r = rt::Compile(b.m, {});
+  EXPECT_TRUE(HasError(r, "K303", "body 'lost'")) << Dump(r);
+
+  auto& j = b.Joint("dangling", flat::JointType::Revolute, 0, f);
+  j.frame_b = -1;
+  r = rt::Compile(b.m, {});
+  EXPECT_TRUE(HasError(r, "K302", "joint 'dangling': frame_b")) << Dump(r);
+
+  test::MechBuilder none;
+  none.Frame("x");
+  r = rt::Compile(none.m, {});
+  EXPECT_TRUE(HasError(r, "K301", "no world")) << Dump(r);
+}
+
+TEST(Compile, SummaryCountsAndChoices) {
+  // If this fails, `kanesim check` reports wrong sizes or an unexplained or wrong
+  // choice of solution path or integrator.
+  auto r = rt::Compile(test::Chain(5), {});
+  ASSERT_TRUE(r.program);
+  auto s = rt::Summarize(*r.program);
+  EXPECT_EQ(s.num_bodies, 5);
+  EXPECT_EQ(s.num_joints, 5);
+  EXPECT_EQ(s.nq, 5);
+  EXPECT_EQ(s.nu, 5);
+  EXPECT_EQ(s.dof, 5);
+  EXPECT_EQ(s.grubler_dof, 5);
+  EXPECT_EQ(s.solver, rt::SolverPath::Dense);
+  EXPECT_EQ(s.integrator, rt::IntegratorKind::CVODE);
+  EXPECT_FALSE(s.solver_reason.empty());
+  EXPECT_FALSE(s.integrator_reason.empty());
+
+  auto big = rt::Compile(test::Chain(200), {});
+  ASSERT_TRUE(big.program);
+  EXPECT_EQ(rt::Summarize(*big.program).solver, rt::SolverPath::Sparse);
+
+  // A stiff spring (sqrt(k/m) = 3162 1/s) makes the scene stiff: IDA.
+  auto m = test::Pendulum();
+  flat::LineForce lf;
+  lf.name = "stiff";
+  lf.frame_a = 0;
+  lf.frame_b = 1;
+  lf.k = m.exprs.Constant(1e7);
+  lf.d = m.exprs.Constant(0.0);
+  lf.s0 = m.exprs.Constant(0.1);
+  m.line_forces.push_back(lf);
+  auto st = rt::Compile(m, {});
+  ASSERT_TRUE(st.program);
+  EXPECT_EQ(rt::Summarize(*st.program).integrator, rt::IntegratorKind::IDA);
+  EXPECT_NE(rt::Summarize(*st.program).integrator_reason.find("stiff"), std::string::npos);
+
+  rt::CompileOptions o;
+  o.solver = rt::SolverPath::Sparse;
+  o.integrator = rt::IntegratorKind::ARKODE;
+  auto forced = rt::Compile(test::Chain(3), o);
+  EXPECT_EQ(rt::Summarize(*forced.program).solver, rt::SolverPath::Sparse);
+  EXPECT_EQ(rt::Summarize(*forced.program).integrator, rt::IntegratorKind::ARKODE);
+}
+
+TEST(Compile, InitialStateFromStartValues) {
+  // If this fails, start values (or the identity default of a quaternion) do not reach
+  // the integrator's y0.
+  auto r = rt::Compile(test::Chain(4), {});
+  std::vector<double> y(static_cast<size_t>(rt::StateSize(*r.program)));
+  rt::InitialState(*r.program, y.data());
+  EXPECT_EQ(y, (std::vector<double>{0.1, 0.1, 0.1, 0.1, 0, 0, 0, 0}));
+  test::MechBuilder b;
+  int w = b.World(Vec3::Zero());
+  int f = b.Frame("b.frame");
+  b.Body("b", f, 1.0, Vec3::Zero(), test::Diag(1, 1, 1));
+  b.Joint("ball", flat::JointType::Spherical, w, f);
+  auto s = rt::Compile(b.m, {});
+  std::vector<double> y2(7);
+  rt::InitialState(*s.program, y2.data());
+  EXPECT_EQ(y2, (std::vector<double>{1, 0, 0, 0, 0, 0, 0}));
+  const auto names = rt::DefaultSignals(*s.program);
+  EXPECT_EQ(names.front(), "ball.q[1]");
+  EXPECT_EQ(names.back(), "ball.u[3]");
+}
+
+TEST(Tape, JetsMatchAnalyticDerivatives) {
+  // If this fails, the forward-mode jets that give prescribed speeds and accelerations
+  // are wrong for some operator. f(t) = t^2 sin(2t) + exp(t/3) / (1 + t) + atan2(t, 2).
+  flat::ExprPool e;
+  const flat::ExprId t = e.Time();
+  auto c = [&](double v) { return e.Constant(v); };
+  const flat::ExprId f = e.Binary(
+      Op::Add,
+      e.Binary(Op::Add, e.Binary(Op::Mul, e.Binary(Op::Pow, t, c(2)), e.Unary(Op::Sin, e.Binary(Op::Mul, c(2), t))),
+               e.Binary(Op::Div, e.Unary(Op::Exp, e.Binary(Op::Div, t, c(3))), e.Binary(Op::Add, c(1), t))),
+      e.Binary(Op::Atan2, t, c(2)));
+  std::vector<double> params;
+  rt::TapeBuilder tb(e, params);
+  tb.AddRoot(f, "f", "f");
+  rt::Tape tape = tb.Finish();
+  std::vector<double> r(3 * tape.init.size(), 0.0);
+  for (size_t i = 0; i < tape.init.size(); ++i) r[3 * i] = tape.init[i];
+  const double T = 0.7;
+  r[3 * static_cast<size_t>(tape.time_reg)] = T;
+  r[3 * static_cast<size_t>(tape.time_reg) + 1] = 1.0;
+  tape.EvalJet(r.data());
+  const size_t o = 3 * static_cast<size_t>(tape.roots[0]);
+  // Analytic: with s = sin 2t, k = cos 2t, E = exp(t/3), D = 1 + t.
+  const double s = std::sin(2 * T), k = std::cos(2 * T), E = std::exp(T / 3), D = 1 + T;
+  const double f0 = T * T * s + E / D + std::atan2(T, 2.0);
+  const double f1 = 2 * T * s + 2 * T * T * k + (E / 3) / D - E / (D * D) + 2.0 / (4 + T * T);
+  const double f2 = 2 * s + 8 * T * k - 4 * T * T * s + (E / 9) / D - 2 * (E / 3) / (D * D) + 2 * E / (D * D * D) -
+                    4.0 * T / ((4 + T * T) * (4 + T * T));
+  EXPECT_NEAR(r[o], f0, 1e-14);
+  EXPECT_NEAR(r[o + 1], f1, 1e-13);
+  EXPECT_NEAR(r[o + 2], f2, 1e-12);
+}
+
+}  // namespace
+}  // namespace kanesim
