@@ -65,6 +65,9 @@ namespace {
 // Reciprocal pivot growth bound: below it the pivot order chosen by the last full
 // factorization is no longer trusted and KLU factors again with fresh pivoting.
 constexpr double kRefactorRcond = 1e-12;
+// Relative residual (against the largest product |A_ij x_j|) above which one step of
+// iterative refinement runs: a few units of round-off.
+constexpr double kRefineResidual = 1e-15;
 // Below this after a fresh factorization the system is singular (e.g. a massless link).
 constexpr double kSingularRcond = 1e-15;
 
@@ -321,17 +324,25 @@ int SolveSparse(const Program& p, Workspace& ws) {
   std::copy(ws.x.begin(), ws.x.end(), ws.b.begin());
   if (!klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.x.data(), &num.common))
     return Fail(ws, "singular mass matrix (sparse solve failed)");
-  // One step of iterative refinement, r = b - A x, x += A^-1 r: refactorization keeps
-  // the pivot order of the first factorization, whose growth at a far-away
-  // configuration can cost digits (seen as 2e-12 relative error without it).
+  // Iterative refinement, r = b - A x, x += A^-1 r, when the residual is not at
+  // round-off level: refactorization keeps the pivot order of the first factorization,
+  // whose growth at a far-away configuration can cost digits (seen as 2e-12 relative
+  // error without it).
   if (!fresh) {
     std::copy(ws.b.begin(), ws.b.end(), ws.r.begin());
+    double r_max = 0.0, b_max = 0.0;
     for (int c = 0; c < sp.n; ++c) {
       const double xc = ws.x[static_cast<size_t>(c)];
-      for (int k = Ap[c]; k < Ap[c + 1]; ++k) ws.r[static_cast<size_t>(Ai[k])] -= Ax[k] * xc;
+      for (int k = Ap[c]; k < Ap[c + 1]; ++k) {
+        ws.r[static_cast<size_t>(Ai[k])] -= Ax[k] * xc;
+        b_max = std::max(b_max, std::fabs(Ax[k] * xc));
+      }
     }
-    klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.r.data(), &num.common);
-    for (int i = 0; i < sp.n; ++i) ws.x[static_cast<size_t>(i)] += ws.r[static_cast<size_t>(i)];
+    for (int i = 0; i < sp.n; ++i) r_max = std::max(r_max, std::fabs(ws.r[static_cast<size_t>(i)]));
+    if (r_max > kRefineResidual * b_max) {
+      klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.r.data(), &num.common);
+      for (int i = 0; i < sp.n; ++i) ws.x[static_cast<size_t>(i)] += ws.r[static_cast<size_t>(i)];
+    }
   }
   // Read udot and the joint reaction wrenches lambda_L = gamma_L s_L + W^Q_L.
   for (size_t L = 0; L < K; ++L) {
