@@ -67,7 +67,7 @@ namespace {
 constexpr double kRefactorRcond = 1e-12;
 // Relative residual (against the largest product |A_ij x_j|) above which one step of
 // iterative refinement runs: a few units of round-off.
-constexpr double kRefineResidual = 1e-15;
+constexpr double kRefineResidual = 1e-13;
 // Below this after a fresh factorization the system is singular (e.g. a massless link).
 constexpr double kSingularRcond = 1e-15;
 
@@ -243,6 +243,9 @@ void InitSparseWorkspace(const Program& p, Workspace& ws) {
   ws.D_W.assign(K, Mat6::Zero());
   ws.klu.reset(new SparseNumeric);
   klu_defaults(&ws.klu->common);
+  // No row scaling: the blocks are O(1) in SI units for mechanisms of everyday size and
+  // iterative refinement guards accuracy; scaling cost 8% of a refactorization.
+  ws.klu->common.scale = 0;
 }
 
 int SolveSparse(const Program& p, Workspace& ws) {
