@@ -252,8 +252,8 @@ void Elaborator::Emit(Node* root) {
           if ((j.type == flat::JointType::Spherical || j.type == flat::JointType::Free) &&
               j.rotation == flat::RotationCoords::Quaternion) {
             diags_.Error(DiagCode::BadEquation, q->eq_binding ? q->eq_binding->span : Span{},
-                         "quaternion coordinates cannot be prescribed")
-                .hint = "use coordinates = \"cardan_xyz\" to prescribe angles";
+                         "spherical and free joints cannot be prescribed")
+                .hint = "prescribe rotations with revolute or universal joints in series";
             break;
           }
           std::vector<std::pair<int, const ModValue*>> items;

@@ -243,9 +243,6 @@ void InitSparseWorkspace(const Program& p, Workspace& ws) {
   ws.D_W.assign(K, Mat6::Zero());
   ws.klu.reset(new SparseNumeric);
   klu_defaults(&ws.klu->common);
-  // No row scaling: the blocks are O(1) in SI units for mechanisms of everyday size and
-  // iterative refinement guards accuracy; scaling cost 8% of a refactorization.
-  ws.klu->common.scale = 0;
 }
 
 int SolveSparse(const Program& p, Workspace& ws) {

@@ -148,7 +148,7 @@ void VelocityKinematics(const Program& p, Workspace& ws) {
 //   a_Bo = a_Po + alpha_P x r + w_P x (w_P x r) + 2 w_P x v_rel + a_rel
 //          + sum_presc H^v_r udot_r,   r = p_WB - p_WP                                    (6)
 //   a_Bcm = a_Bo + alpha_B x c + w_B x (w_B x c),   c = p_WBcm - p_WB                     (7)
-void BiasAccelerations(const Program& p, Workspace& ws) {
+void BiasAccelerations(const Program& p, Workspace& ws, bool include_free) {
   const size_t K = p.bodies.size();
   for (size_t L = 0; L < K; ++L) {
     const TreeJoint& j = p.joints[L];
@@ -164,7 +164,7 @@ void BiasAccelerations(const Program& p, Workspace& ws) {
     const Vec3 r = ws.p_WB[L] - p_WP;
     Vec3 a = a_Po + alpha_P.cross(r) + w_P.cross(w_P.cross(r)) + 2.0 * w_P.cross(ws.v_rel[L]) + ws.a_rel[L];  // (6)
     for (int k = 0; k < j.nu; ++k) {
-      if (p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) continue;
+      if (!include_free && p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) continue;
       const double ud = ws.udot[j.u0 + k];
       a += ws.H_W.col(j.u0 + k).head<3>() * ud;
       alpha += ws.H_W.col(j.u0 + k).tail<3>() * ud;

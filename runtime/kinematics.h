@@ -22,7 +22,9 @@ void PositionKinematics(const Program& p, Workspace& ws);
 void VelocityKinematics(const Program& p, Workspace& ws);
 
 // Accelerations with free udot = 0 and prescribed udot from the jet (seed 000 eq. 11.17).
-void BiasAccelerations(const Program& p, Workspace& ws);
+// With `include_free` the free udot in ws.udot are included too: the body accelerations
+// themselves (used by signals that need reactions).
+void BiasAccelerations(const Program& p, Workspace& ws, bool include_free = false);
 
 // qdot = N(q) u for every joint (Lesser eqs. 44-47). Returns -1 at gimbal lock.
 int KinematicDifferentials(const Program& p, Workspace& ws);

@@ -92,9 +92,6 @@ struct BodySignalSource {
 struct SparsePattern;  // defined in kane_sparse.cpp
 struct SparseSymbolic;  // KLU symbolic analysis, shared by all workspaces of a program
 void DestroySparseSymbolic(SparseSymbolic* s);
-struct SparseSymbolicDeleter {
-  void operator()(SparseSymbolic* s) const { DestroySparseSymbolic(s); }
-};
 
 // "[k+1]": a 1-based index suffix as the language writes it. Built by appending because
 // GCC 12 at -O3 reports a false -Wrestrict for "literal" + std::string&&.

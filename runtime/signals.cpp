@@ -19,6 +19,7 @@ enum class SignalKind : std::uint8_t {
   BodyAngVel,       // angular velocity in W
   BodyRotation,     // R_WF of the body's frame, k = 3 i + j
   FramePosition,    // a = flat frame, k
+  Drive,            // a = full u index of a prescribed coordinate: force that drives it
 };
 
 struct SignalItem {
@@ -31,6 +32,7 @@ struct SignalPlan {
   bool velocity = false;  // VelocityKinematics needed
   bool outputs = false;   // output tape needed
   bool forces = false;    // force tape needed (spring energy with expression stiffness)
+  bool dynamics = false;  // full accelerations needed (drive forces)
 };
 
 namespace {
@@ -43,6 +45,9 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
   for (const TreeJoint& j : p.joints) {
     for (int k = 0; k < j.nq; ++k) s.push_back({j.name + ".q" + (j.nq > 1 ? Idx(k) : ""), {SignalKind::JointQ, j.q0 + k, 0}});
     for (int k = 0; k < j.nu; ++k) s.push_back({j.name + ".u" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::JointU, j.u0 + k, 0}});
+    for (int k = 0; k < j.nu; ++k)
+      if (p.u_free_of[static_cast<size_t>(j.u0 + k)] < 0)
+        s.push_back({j.name + ".drive" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::Drive, j.u0 + k, 0}});
   }
   const auto& outs = p.mech->outputs;
   for (size_t i = 0; i < outs.size(); ++i) s.push_back({outs[i].name, {SignalKind::Output, static_cast<int>(i), 0}});
@@ -134,16 +139,39 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
       case SignalKind::PotentialEnergy:
         if (!p.force_tape.roots.empty()) plan->forces = plan->velocity = true;
         break;
+      case SignalKind::Drive: plan->dynamics = plan->velocity = true; break;
       default: break;
     }
   }
   return plan;
 }
 
+// The generalized force a prescription must supply along its speed r so that Kane's
+// equation for r holds (Lesser eq. 25 with r not free):
+//   drive_r = sum_L tau_{L,r}^T ( Mb_L A_L + [0; w_L x I_L w_L] - [F_L; T_L] ) - Q_r.
+double DriveForce(const Program& p, const Workspace& ws, int r) {
+  double d = -ws.Q[r];
+  for (size_t L = 0; L < p.bodies.size(); ++L) {
+    const Vec6 t = TangentColumn(p, ws, static_cast<int>(L), r);
+    if (t.squaredNorm() == 0.0) continue;
+    const Vec3 f = p.bodies[L].mass * ws.a_bias_cm[L] - ws.F_W[L];
+    const Vec3 m = ws.I_W[L] * ws.alpha_bias[L] + ws.w_WB[L].cross(ws.I_W[L] * ws.w_WB[L]) - ws.T_W[L];
+    d += t.head<3>().dot(f) + t.tail<3>().dot(m);
+  }
+  return d;
+}
+
 int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
   if (plan.velocity) VelocityKinematics(p, ws);
+  if (plan.dynamics) {
+    // The accelerations: the right-hand side's stages, then the body accelerations.
+    BiasAccelerations(p, ws);
+    if (int s = AppliedForces(p, ws); s != 0) return s;
+    if (int s = p.solver == SolverPath::Sparse ? SolveSparse(p, ws) : SolveDense(p, ws); s != 0) return s;
+    BiasAccelerations(p, ws, /*include_free=*/true);
+  }
   if (plan.forces)
     if (int s = EvalForceTape(p, ws); s != 0) return s;
   if (plan.outputs && !p.output_tape.roots.empty()) {
@@ -196,6 +224,7 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
         }
         break;
       }
+      case SignalKind::Drive: v = DriveForce(p, ws, it.a); break;
       case SignalKind::FramePosition: {
         Vec3 pos;
         Mat3 R;

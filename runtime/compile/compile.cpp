@@ -347,6 +347,7 @@ CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options
 }
 
 std::shared_ptr<const Program> Rebind(const Program& program, const std::vector<double>& param_values) {
+  if (param_values.size() != program.mech->params.size()) return nullptr;
   CompileResult r = CompileWithParams(*program.mech, param_values, program.options, &program);
   return r.program;
 }

@@ -11,12 +11,10 @@
 
 #include "lang/ast.h"
 #include "lang/diagnostics.h"
+#include "lang/elaborate.h"
 #include "lang/parser.h"
 #include "lang/source.h"
 #include "stdlib/stdlib.h"
-#ifdef KANESIM_HAVE_ELABORATE
-#include "lang/elaborate.h"
-#endif
 
 namespace {
 
@@ -30,7 +28,6 @@ void LexAndParse(const std::string& text) {
   (void)diags.RenderAll();
 }
 
-#ifdef KANESIM_HAVE_ELABORATE
 void LoadAndElaborate(const std::string& text) {
   using namespace kanesim::lang;
   static const std::vector<std::pair<std::string, std::string>> stdlib = kanesim::stdlib::Files();
@@ -42,15 +39,12 @@ void LoadAndElaborate(const std::string& text) {
   }
   (void)diags.RenderAll();
 }
-#endif
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   LexAndParse(text);
-#ifdef KANESIM_HAVE_ELABORATE
   LoadAndElaborate(text);
-#endif
   return 0;
 }

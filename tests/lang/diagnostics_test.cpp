@@ -25,12 +25,9 @@
 #include <vector>
 
 #include "lang/diagnostics.h"
-#include "lang/parser.h"
+#include "lang/elaborate.h"
 #include "lang/source.h"
 #include "stdlib/stdlib.h"
-#ifdef KANESIM_HAVE_ELABORATE
-#include "lang/elaborate.h"
-#endif
 
 namespace kanesim::lang {
 namespace {
@@ -133,12 +130,6 @@ DiagFile LoadDiagFile(const fs::path& path) {
   return f;
 }
 
-bool NeedsElaborator(const DiagFile& f) {
-  for (const auto& e : f.expects)
-    if (e.code[0] == 'E' || e.code[0] == 'W') return true;
-  return false;
-}
-
 std::string Describe(const Expectation& e) {
   std::string s = e.code + (e.line ? " at line " + std::to_string(e.line) : " anywhere");
   if (e.col) s += " col " + std::to_string(e.col);
@@ -177,9 +168,7 @@ class DiagnosticFileTest : public ::testing::TestWithParam<fs::path> {};
 TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
   DiagFile f = LoadDiagFile(GetParam());
   ASSERT_FALSE(f.expects.empty()) << f.name << " has no '// expect:' comment";
-#ifdef KANESIM_HAVE_ELABORATE
   const auto stdlib = kanesim::stdlib::Files();
-  if (NeedsElaborator(f) && stdlib.empty()) GTEST_SKIP() << "the standard library (stdlib/*.mech) is not written yet";
   Program program;
   Diagnostics diags(&program.sources);
   if (LoadProgramFromText(f.name, f.text, stdlib, &program, diags)) {
@@ -193,14 +182,6 @@ TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
   for (int i = 0; i < program.sources.NumFiles(); ++i)
     if (program.sources.Name(i) == f.name) main_file = i;
   EXPECT_EQ(Check(f, diags, main_file), "") << f.name;
-#else
-  if (NeedsElaborator(f)) GTEST_SKIP() << "lang/elaborate.cpp is not written yet";
-  SourceManager sm;
-  Diagnostics diags(&sm);
-  int file = sm.Add(f.name, f.text);
-  Parse(file, sm, diags);
-  EXPECT_EQ(Check(f, diags, file), "") << f.name;
-#endif
 }
 
 std::string TestName(const ::testing::TestParamInfo<fs::path>& info) {

@@ -81,7 +81,8 @@ TEST(FreeBody, TorqueFreeMatchesEulerEquations) {
 //   I_O qdd = -m (L/2) (g sin q + xdd cos q),   I_O = m L^2 / 3.
 TEST(Prescribed, PendulumOnShakenBaseMatchesClosedForm) {
   // If this fails, prescribed coordinates (removed from the state, q/qdot/qddot from
-  // the time jet) do not drive the rest of the system correctly.
+  // the time jet) do not drive the rest of the system correctly, or the reported drive
+  // force (the reaction along the prescribed coordinate) is wrong.
   const double m = 0.8, L = 0.6, g = 9.81, A = 0.2, W = 3.0;
   test::MechBuilder b;
   int w = b.World(Vec3(0, -g, 0));
@@ -101,10 +102,10 @@ TEST(Prescribed, PendulumOnShakenBaseMatchesClosedForm) {
     ASSERT_EQ(rt::StateSize(*r.program), 2);
     auto ws = rt::MakeWorkspace(*r.program);
     std::string err;
-    auto plan = rt::PlanSignals(*r.program, {"base.q", "base.u", "swing.q"}, &err);
+    auto plan = rt::PlanSignals(*r.program, {"base.q", "base.u", "swing.q", "base.drive"}, &err);
     ASSERT_TRUE(plan) << err;
     for (double t : {0.0, 0.4, 1.3}) {
-      double y[2] = {0.5, -0.3}, yd[2], out[3];
+      double y[2] = {0.5, -0.3}, yd[2], out[4];
       ASSERT_EQ(rt::Derivative(*r.program, *ws, t, y, yd), 0) << rt::ErrorMessage(*ws);
       const double xdd = -A * W * W * std::sin(W * t);
       EXPECT_NEAR(yd[1], -m * (L / 2) * (g * std::sin(0.5) + xdd * std::cos(0.5)) / (m * L * L / 3), kClosedFormTol);
@@ -112,6 +113,9 @@ TEST(Prescribed, PendulumOnShakenBaseMatchesClosedForm) {
       EXPECT_NEAR(out[0], A * std::sin(W * t), kClosedFormTol);
       EXPECT_NEAR(out[1], A * W * std::cos(W * t), kClosedFormTol);
       EXPECT_NEAR(out[2], 0.5, 0.0);
+      // Drive force = horizontal momentum rate: M_cart xdd + m (xdd + (L/2)(cos q qdd - sin q qd^2)).
+      const double drive = 5.0 * xdd + m * (xdd + (L / 2) * (std::cos(0.5) * yd[1] - std::sin(0.5) * 0.09));
+      EXPECT_NEAR(out[3], drive, kClosedFormTol * 10);
     }
   }
 }
@@ -234,6 +238,24 @@ TEST(Signals, PendulumEnergiesAndPositions) {
   EXPECT_NEAR(o[6], u, kClosedFormTol);
 }
 
+TEST(Singular, MasslessLinkIsFatalOnBothPaths) {
+  // If this fails, a mass matrix that is singular (a joint that moves nothing with
+  // mass or inertia) yields garbage accelerations instead of a fatal status.
+  auto mech = test::Pendulum();
+  mech.bodies[0].mass = mech.exprs.Constant(0.0);
+  for (auto& e : mech.bodies[0].inertia) e = mech.exprs.Constant(0.0);
+  for (auto path : {rt::SolverPath::Dense, rt::SolverPath::Sparse}) {
+    rt::CompileOptions o;
+    o.solver = path;
+    auto r = rt::Compile(mech, o);
+    ASSERT_TRUE(r.errors.empty());
+    auto ws = rt::MakeWorkspace(*r.program);
+    double y[2] = {0.2, 0.0}, yd[2];
+    EXPECT_LT(rt::Derivative(*r.program, *ws, 0.0, y, yd), 0);
+    EXPECT_NE(rt::ErrorMessage(*ws).find("singular mass matrix"), std::string::npos) << rt::ErrorMessage(*ws);
+  }
+}
+
 TEST(Rebind, NewParameterValuesSameStructure) {
   // If this fails, Rebind does not fold the new parameter values into every number
   // (mass centre, inertia) while keeping the structure.
@@ -256,6 +278,7 @@ TEST(Rebind, NewParameterValuesSameStructure) {
   ASSERT_TRUE(r.errors.empty());
   auto p2 = rt::Rebind(*r.program, {2.0});
   ASSERT_TRUE(p2);
+  EXPECT_FALSE(rt::Rebind(*r.program, {2.0, 3.0}));  // wrong size
   for (auto [prog, len] : {std::pair{r.program, 0.5}, std::pair{p2, 2.0}}) {
     auto ws = rt::MakeWorkspace(*prog);
     double y[2] = {0.4, 0.0}, yd[2];
