@@ -421,7 +421,9 @@ void Elaborator::Emit(Node* root) {
   std::function<void(Node*)> params = [&](Node* n) {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kVar) {
-      if (n->variability == ast::Variability::Parameter) GetVar(n, n->decl ? n->decl->name_span : Span{});
+      bool in_primitive = n->parent && n->parent->prim != Prim::None;
+      if (n->variability == ast::Variability::Parameter || !in_primitive)
+        GetVar(n, n->decl ? n->decl->name_span : Span{});
       return;
     }
     for (auto& e : n->elems) params(e.get());

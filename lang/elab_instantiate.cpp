@@ -288,7 +288,16 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
   // Every outer modifier must name an element.
   for (const auto& key : node->mod.order) {
     bool found = false;
-    for (const auto& c : elems) found = found || c.comp->name == key;
+    for (const auto& c : elems) {
+      if (c.comp->name != key) continue;
+      found = true;
+      const Mod& pm = node->mod.sub[key];
+      if (c.comp->is_protected && !(pm.value && pm.value->from_set)) {
+        auto& d = diags_.Error(DiagCode::UnknownModifier, pm.span,
+                               "'" + key + "' is protected in '" + cls->name + "' and cannot be modified");
+        d.notes.push_back({c.comp->name_span, "declared protected here"});
+      }
+    }
     if (found) continue;
     const Mod& sm = node->mod.sub[key];
     if (sm.value && sm.value->from_set) continue;  // --set names are checked by Run()
@@ -336,11 +345,32 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
   }
 }
 
+// Evaluates the non-`each` values of an array component's modifier once, checking their
+// leading size, so that slicing per element neither re-evaluates nor repeats errors.
+static void PreEvaluate(Elaborator& el, Mod& mod, int count, Diagnostics& diags) {
+  if (mod.each) return;
+  if (mod.value && !mod.value->pre) {
+    Value v = el.EvalModValue(*mod.value, nullptr);
+    if (!v.valid) {
+      mod.value.reset();
+    } else if (v.shape.empty() || v.shape[0] != count) {
+      auto& d = diags.Error(DiagCode::SizeMismatch, mod.value->span,
+                            "modifier of an array of " + std::to_string(count) + " components needs " +
+                                std::to_string(count) + " values");
+      d.hint = "write 'each' before the name to give every element the same value";
+      mod.value.reset();
+    } else {
+      mod.value->pre = v;
+    }
+  }
+  for (auto& [k, sm] : mod.sub) PreEvaluate(el, sm, count, diags);
+}
+
 Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
   Mod out = mod;
   if (mod.each) return out;  // `each` applies the whole modifier to every element
   if (mod.value && !mod.each) {
-    Value v = EvalModValue(*mod.value, nullptr);
+    Value v = mod.value->pre ? *mod.value->pre : EvalModValue(*mod.value, nullptr);
     if (v.valid) {
       if (v.shape.empty() || v.shape[0] != count) {
         auto& d = diags_.Error(DiagCode::SizeMismatch, mod.value->span,
@@ -538,6 +568,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   child->kind = Node::kArray;
   child->cls = tcls;
   int n = dims[0] < 0 ? 0 : dims[0];
+  PreEvaluate(*this, child->mod, n, diags_);
   for (int i = 0; i < n && !diags_.Full() && !too_large_; ++i) {
     auto el = std::make_unique<Node>();
     el->parent = node;  // elements resolve names in the same scope as the array
@@ -607,6 +638,16 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
   Value v;
   if (!binding) {
     bool any_elem = !var->eq_elem_binding.empty();
+    if (any_elem && !(owner && owner->prim != Prim::None) && var->eq_elem_binding.size() != count) {
+      for (size_t k = 0; k < count; ++k) {
+        if (var->eq_elem_binding.count(static_cast<int>(k))) continue;
+        auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
+                               "element " + std::to_string(k + 1) + " of '" + var->path + "' has no equation");
+        d.hint = "give every element an equation, or bind the whole variable";
+        break;
+      }
+      return finish(Value::Invalid());
+    }
     if ((owner && owner->prim != Prim::None && !is_param) || any_elem) {
       v.type = var->vtype;
       v.shape = var->shape;
@@ -773,6 +814,12 @@ Node* Elaborator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
   Node* n = nullptr;
   for (size_t pi = 0; pi < ref.parts.size(); ++pi) {
     const ast::RefPart& part = ref.parts[pi];
+    if (pi > 0 && n->kind == Node::kArray) {
+      auto& d = diags_.Error(DiagCode::TypeMismatch, ref.parts[pi - 1].span,
+                             "'" + n->path + "' is an array of components; index it before '." + part.name + "'");
+      d.hint = "write " + ref.parts[pi - 1].name + "[i]." + part.name + " inside a for-loop";
+      return nullptr;
+    }
     Node* next = pi == 0 ? (ctx.scope ? ctx.scope->Child(part.name) : nullptr)
                          : (n->kind == Node::kClass ? n->Child(part.name) : nullptr);
     if (!next) {

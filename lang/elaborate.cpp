@@ -2,6 +2,7 @@
 // and the order of the phases (instantiate, equations, emit).
 #include "lang/elaborate.h"
 
+#include <algorithm>
 #include <functional>
 #include <fstream>
 #include <sstream>
@@ -269,6 +270,11 @@ bool Elaborator::Run() {
         if (n->decl) d.notes.push_back({n->decl->name_span, "declared here"});
         continue;
       }
+      if (n->decl && n->decl->is_protected) {
+        auto& d = diags_.Error(DiagCode::NotParameter, Span{}, "--set " + ov.name + ": '" + n->path + "' is protected");
+        d.notes.push_back({n->decl->name_span, "declared protected here"});
+        continue;
+      }
       if (n->is_final_decl || n->mod.is_final) {
         auto& d = diags_.Error(DiagCode::FinalOverride, Span{}, "--set " + ov.name + ": '" + n->path + "' is final");
         if (n->decl) d.notes.push_back({n->decl->name_span, "declared final here"});
@@ -333,6 +339,14 @@ bool Elaborator::Run() {
     Ctx ctx{root_.get(), nullptr};
     for (const auto& a : ex->args) {
       if (a.path.size() != 1 || !a.mod || !a.mod->value) continue;
+      static const std::vector<std::string> kKnown{"StartTime", "StopTime", "Tolerance", "Interval"};
+      if (std::find(kKnown.begin(), kKnown.end(), a.path[0]) == kKnown.end()) {
+        auto& d = diags_.Warning(DiagCode::UnknownModifier, a.name_span,
+                                 "unknown experiment setting '" + a.path[0] + "' (ignored)");
+        std::string best = ClosestName(a.path[0], kKnown);
+        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+        continue;
+      }
       double v = 0;
       if (!Structural(Eval(*a.mod->value, ctx), a.mod->value->span, &v, a.path[0].c_str())) continue;
       auto& x = m_->experiment;

@@ -68,8 +68,8 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
   if (p.solver == SolverPath::Dense) {
     ws.M = Eigen::MatrixXd::Zero(p.nu, p.nu);
     ws.f = Eigen::VectorXd::Zero(p.nu);
-    ws.llt = Eigen::LLT<Eigen::MatrixXd>(p.nu);
-    ws.ldlt = Eigen::LDLT<Eigen::MatrixXd>(p.nu);
+    ws.llt.emplace(p.nu);
+    ws.ldlt.emplace(p.nu);
     ws.tau_L = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.max_depth);
     ws.Mtau_L = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.max_depth);
   } else {

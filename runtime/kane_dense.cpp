@@ -66,23 +66,23 @@ int SolveDense(const Program& p, Workspace& ws) {
 
   const double scale = ws.M.diagonal().cwiseAbs().maxCoeff();
   if (!(scale > 0.0)) return Singular(ws);
-  ws.llt.compute(ws.M);  // reads the lower triangle
-  bool ok = ws.llt.info() == Eigen::Success;
+  ws.llt->compute(ws.M);  // reads the lower triangle
+  bool ok = ws.llt->info() == Eigen::Success;
   if (ok) {
-    const double min_pivot = ws.llt.matrixLLT().diagonal().minCoeff();
+    const double min_pivot = ws.llt->matrixLLT().diagonal().minCoeff();
     ok = min_pivot * min_pivot > kSingularPivot * scale;
   }
   if (ok) {
-    ws.llt.solveInPlace(ws.f);
+    ws.llt->solveInPlace(ws.f);
   } else {
     // Fallback: LDLT (pivoted) tells a singular or indefinite matrix apart from a
     // badly scaled one.
     ws.M.triangularView<Eigen::StrictlyUpper>() = ws.M.transpose().triangularView<Eigen::StrictlyUpper>();
-    ws.ldlt.compute(ws.M);
-    if (ws.ldlt.info() != Eigen::Success) return Singular(ws);
-    const auto D = ws.ldlt.vectorD();
+    ws.ldlt->compute(ws.M);
+    if (ws.ldlt->info() != Eigen::Success) return Singular(ws);
+    const auto D = ws.ldlt->vectorD();
     if (D.minCoeff() <= kSingularPivot * scale) return Singular(ws);
-    ws.ldlt.solveInPlace(ws.f);
+    ws.ldlt->solveInPlace(ws.f);
   }
   for (int i = 0; i < p.nu; ++i) ws.udot[p.u_free[static_cast<size_t>(i)]] = ws.f[i];
   return 0;

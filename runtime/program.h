@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -187,8 +188,10 @@ struct Workspace {
   // Dense path.
   Eigen::MatrixXd M;                // mass matrix tau^T M tau  (nu x nu)  filled by SolveDense
   Eigen::VectorXd f;                // right side tau^T (F - M a_bias)  (nu)  filled by SolveDense
-  Eigen::LLT<Eigen::MatrixXd> llt;  //   filled by SolveDense
-  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+  // Factorizations sized once (emplaced: Eigen leaves their status uninitialized, so
+  // they are never copied).
+  std::optional<Eigen::LLT<Eigen::MatrixXd>> llt;    // Cholesky of M  filled by SolveDense
+  std::optional<Eigen::LDLT<Eigen::MatrixXd>> ldlt;  // fallback  filled by SolveDense
   Eigen::Matrix<double, 6, Eigen::Dynamic> tau_L;   // one body's tangent block  (6 x max_depth)  filled by SolveDense
   Eigen::Matrix<double, 6, Eigen::Dynamic> Mtau_L;  // mass times it  (6 x max_depth)  filled by SolveDense
 

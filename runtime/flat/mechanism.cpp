@@ -263,7 +263,11 @@ std::string DumpFlat(const Mechanism& m) {
     os << "wrench " << w.name << " at " << F(w.frame) << (w.resolve_in_world ? " (world)" : " (frame)")
        << " f=" << V(w.force) << " t=" << V(w.torque) << "\n";
   for (const auto& c : m.contacts)
-    os << "contact " << c.name << " type=" << static_cast<int>(c.type) << " at " << F(c.frame)
+    os << "contact " << c.name << " "
+       << (c.type == ContactType::RollingDisk     ? "rolling_disk"
+           : c.type == ContactType::RollingSphere ? "rolling_sphere"
+                                                  : "knife_edge")
+       << " at " << F(c.frame)
        << " radius=" << E(c.radius) << " normal=" << V(c.plane_normal) << "\n";
   for (const auto& o : m.outputs) os << "output " << o.name << " = " << E(o.expr) << "\n";
   const auto& x = m.experiment;
