@@ -37,5 +37,7 @@ bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code);
 void AddRunCommand(CLI::App& app, int* exit_code);
+void AddSweepCommand(CLI::App& app, int* exit_code);  // cmd_sweep.cpp
+void AddTestCommand(CLI::App& app, int* exit_code);   // cmd_test.cpp
 
 }  // namespace kanesim::cli

@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
   int exit_code = kanesim::cli::kExitOk;
   kanesim::cli::AddCheckCommand(app, &exit_code);
   kanesim::cli::AddRunCommand(app, &exit_code);
+  kanesim::cli::AddSweepCommand(app, &exit_code);
+  kanesim::cli::AddTestCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -70,8 +70,8 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
     ws.f = Eigen::VectorXd::Zero(p.nu);
     ws.llt.emplace(p.nu);
     ws.ldlt.emplace(p.nu);
-    ws.tau_L = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.max_depth);
-    ws.Mtau_L = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.max_depth);
+    ws.Ic.assign(K, Mat6::Zero());
+    ws.Wc.assign(K, Vec6::Zero());
   } else {
     InitSparseWorkspace(p, ws);
   }

@@ -220,12 +220,16 @@ bool BuildSparse(Program& p, std::string* error) {
     }
   }
   p.sparse = sp;
+  std::string note = "sparse K-vector system: ";
+  note.append(std::to_string(sp->n)).append(" unknowns, ").append(std::to_string(nnz));
+  note.append(" non-zeros, KLU symbolic analysis done once");
+  p.notes.push_back(note);
   if (!p.sparse_symbolic && sp->n > 0) {
     std::shared_ptr<SparseSymbolic> sym(new SparseSymbolic, DestroySparseSymbolic);
     klu_defaults(&sym->common);
     sym->symbolic = klu_analyze(sp->n, sp->Ap.data(), sp->Ai.data(), &sym->common);
     if (!sym->symbolic) {
-      *error = "klu_analyze failed (status " + std::to_string(sym->common.status) + ")";
+      *error = std::string("klu_analyze failed (status ").append(std::to_string(sym->common.status)).append(")");
       return false;
     }
     p.sparse_symbolic = sym;

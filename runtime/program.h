@@ -140,7 +140,6 @@ struct Program {
   std::string solver_reason, integrator_reason;
   std::vector<std::string> notes;
   int grubler_dof = 0;
-  int max_depth = 0;  // longest path_speeds
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind
@@ -186,14 +185,14 @@ struct Workspace {
   Eigen::VectorXd Q;                // joint generalized forces  (nu_all)  filled by AppliedForces
 
   // Dense path.
-  Eigen::MatrixXd M;                // mass matrix tau^T M tau  (nu x nu)  filled by SolveDense
+  Eigen::MatrixXd M;                // mass matrix tau^T Mb tau, lower triangle  (nu x nu)  filled by SolveDense
   Eigen::VectorXd f;                // right side tau^T (F - M a_bias)  (nu)  filled by SolveDense
   // Factorizations sized once (emplaced: Eigen leaves their status uninitialized, so
   // they are never copied).
   std::optional<Eigen::LLT<Eigen::MatrixXd>> llt;    // Cholesky of M  filled by SolveDense
   std::optional<Eigen::LDLT<Eigen::MatrixXd>> ldlt;  // fallback  filled by SolveDense
-  Eigen::Matrix<double, 6, Eigen::Dynamic> tau_L;   // one body's tangent block  (6 x max_depth)  filled by SolveDense
-  Eigen::Matrix<double, 6, Eigen::Dynamic> Mtau_L;  // mass times it  (6 x max_depth)  filled by SolveDense
+  std::vector<Mat6> Ic;             // composite spatial inertia of the subtree about o_L  (K)  filled by SolveDense
+  std::vector<Vec6> Wc;             // composite wrench of the subtree about o_L  (K)  filled by SolveDense
 
   // Sparse path.
   std::vector<double> Ax;           // CSC values  (nnz)  filled by SolveSparse

@@ -5,7 +5,8 @@ set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config git
       libeigen3-dev libsundials-dev libsuitesparse-dev libassimp-dev
       libcli11-dev libfmt-dev libtomlplusplus-dev libgtest-dev libgmock-dev libbenchmark-dev
-      clang-14 libclang-rt-14-dev libomp-14-dev python3 python3-venv)
+      clang-14 libclang-rt-14-dev libomp-14-dev python3 python3-venv
+      openmpi-bin libopenmpi-dev)  # OpenMPI: kanesim sweep --mpi (optional at build time)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -24,6 +24,6 @@ void ChooseSolverAndIntegrator(Program& p);
 
 // Solver choice threshold: at or above this many free speeds the sparse path is chosen
 // (measured crossover of bench/rhs_chain, see ChooseSolverAndIntegrator).
-inline constexpr int kSparseMinSpeeds = 40;
+inline constexpr int kSparseMinSpeeds = 120;
 
 }  // namespace kanesim::rt

@@ -162,7 +162,6 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
   for (int i : p.u_free) p.y0.push_back(u_start_all[static_cast<size_t>(i)]);
 
   // Pattern of the tangent basis: body L moves with the speeds of the joints root..L.
-  p.max_depth = 0;
   for (size_t L = 0; L < p.bodies.size(); ++L) {
     const TreeJoint& j = p.joints[L];
     TreeBody& b = p.bodies[L];
@@ -174,7 +173,6 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       b.path_speeds_all.push_back(j.u0 + k);
       if (p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) b.path_speeds.push_back(j.u0 + k);
     }
-    p.max_depth = std::max(p.max_depth, static_cast<int>(b.path_speeds.size()));
   }
 }
 

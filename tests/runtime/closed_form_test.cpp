@@ -15,6 +15,9 @@ namespace {
 
 // Closed forms evaluated in double precision: a few ulps of the largest term.
 constexpr double kClosedFormTol = 1e-12;
+// Closed forms that go through a 3x3 inverse, rotations of inertia or a sum over two
+// bodies: an order of magnitude more round-off.
+constexpr double kClosedFormLooseTol = 1e-11;
 
 TEST(Pendulum, AccelerationMatchesClosedForm) {
   // If this fails, Kane's equations for one revolute joint (gravity projected on the
@@ -68,8 +71,8 @@ TEST(FreeBody, TorqueFreeMatchesEulerEquations) {
         y.segment(nq + 3, 3) = om;
         ASSERT_EQ(rt::Derivative(*r.program, *ws, 0.0, y.data(), yd.data()), 0) << rt::ErrorMessage(*ws);
         const Vec3 wdot = I.inverse() * (-om.cross(I * om));
-        EXPECT_LT((yd.segment(nq + 3, 3) - wdot).norm(), kClosedFormTol * 10);
-        EXPECT_LT((yd.segment(nq, 3) - Vec3(0, -g, 0)).norm(), kClosedFormTol * 10);
+        EXPECT_LT((yd.segment(nq + 3, 3) - wdot).norm(), kClosedFormLooseTol);
+        EXPECT_LT((yd.segment(nq, 3) - Vec3(0, -g, 0)).norm(), kClosedFormLooseTol);
         EXPECT_LT((yd.head(3) - v).norm(), kClosedFormTol);
       }
     }
@@ -115,7 +118,7 @@ TEST(Prescribed, PendulumOnShakenBaseMatchesClosedForm) {
       EXPECT_NEAR(out[2], 0.5, 0.0);
       // Drive force = horizontal momentum rate: M_cart xdd + m (xdd + (L/2)(cos q qdd - sin q qd^2)).
       const double drive = 5.0 * xdd + m * (xdd + (L / 2) * (std::cos(0.5) * yd[1] - std::sin(0.5) * 0.09));
-      EXPECT_NEAR(out[3], drive, kClosedFormTol * 10);
+      EXPECT_NEAR(out[3], drive, kClosedFormLooseTol);
     }
   }
 }

@@ -1,0 +1,214 @@
+// Peer for the work-precision benchmark (issue 6): Pinocchio's articulated-body algorithm
+// (pinocchio::aba, compiled C++) driven by a hand-written adaptive Dormand-Prince 8(5,3)
+// (DOP853; Hairer, Norsett & Wanner, Solving ODEs I, sec. II.10; coefficients in
+// dop853_tableau.h), and a timer of one aba call for the RHS-cost-vs-N table.
+//
+//   pin_driver integrate MODEL N T RTOL ATOL REPS   ->  one line: key=value ...
+//   pin_driver rhs N REPS                           ->  ns per aba call (chain N)
+//
+// MODEL: "chain" (examples/chain.mech: N rods 1 kg, 0.5 m, axes z,y,z,... fixed in the
+// parent, every q = 0.1) or "pendulum" (examples/double_pendulum.mech: 2 rods 1 kg, 1 m,
+// axes z,z, q = pi/2). Rods lie along body x, CoM at L/2, inertia diag(0, mL^2/12, mL^2/12);
+// gravity 9.81 along -y; u = dq/dt. The model is built joint by joint (no URDF).
+// Built by bench/run_work_precision.sh with the flags kanesim's Release build uses (-O3).
+#include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/multibody.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <string>
+#include <vector>
+
+#include "dop853_tableau.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Vec = Eigen::VectorXd;
+
+struct Scene {
+  pinocchio::Model model;
+  Vec q0;
+};
+
+Scene MakeScene(const std::string& kind, int n) {
+  const bool pendulum = kind == "pendulum";
+  if (pendulum) n = 2;
+  const double L = pendulum ? 1.0 : 0.5, m = 1.0;
+  Scene s;
+  s.model.gravity = pinocchio::Motion(Eigen::Vector3d(0, -9.81, 0), Eigen::Vector3d::Zero());
+  Eigen::Matrix3d I = Eigen::Matrix3d::Zero();
+  I(1, 1) = I(2, 2) = m * L * L / 12;
+  const pinocchio::Inertia inertia(m, Eigen::Vector3d(L / 2, 0, 0), I);
+  pinocchio::JointIndex parent = 0;
+  for (int i = 1; i <= n; ++i) {
+    const pinocchio::SE3 place(Eigen::Matrix3d::Identity(), Eigen::Vector3d(i == 1 ? 0.0 : L, 0, 0));
+    const std::string name = "j" + std::to_string(i);
+    pinocchio::JointIndex j = (pendulum || i % 2 == 1)
+                                  ? s.model.addJoint(parent, pinocchio::JointModelRZ(), place, name)
+                                  : s.model.addJoint(parent, pinocchio::JointModelRY(), place, name);
+    s.model.appendBodyToJoint(j, inertia, pinocchio::SE3::Identity());
+    parent = j;
+  }
+  s.q0 = Vec::Constant(n, pendulum ? M_PI / 2 : 0.1);
+  return s;
+}
+
+// y = [q, u], y' = [u, aba(q, u, 0)].
+struct Rhs {
+  const pinocchio::Model& model;
+  pinocchio::Data data;
+  Vec tau;
+  long evals = 0;
+  explicit Rhs(const pinocchio::Model& m) : model(m), data(m), tau(Vec::Zero(m.nv)) {}
+  void operator()(const Vec& y, Vec& dy) {
+    const int n = model.nv;
+    pinocchio::aba(model, data, y.head(n), y.tail(n), tau);
+    dy.head(n) = y.tail(n);
+    dy.tail(n) = data.ddq;
+    ++evals;
+  }
+};
+
+struct Result {
+  Vec y;
+  long steps = 0, rejected = 0, evals = 0;
+};
+
+// Adaptive DOP853 from 0 to T (the last step clipped onto T). Error norm and step control
+// as in Hairer's dop853.f: err = |h| err5 / sqrt(n (err5^2 + 0.01 err3^2)) with err5, err3
+// the root-sum-squares of the scaled 5th- and 3rd-order estimates, scale atol + rtol max|y|;
+// new h = h * clamp(0.9 err^(-1/8), 0.2, 10). The FSAL stage is the next step's first.
+Result Dop853(Rhs& f, const Vec& y0, double T, double rtol, double atol) {
+  using namespace dop853;
+  const int n = static_cast<int>(y0.size());
+  std::vector<Vec> K(kStages + 1, Vec(n));
+  Vec y = y0, ynew(n), ytmp(n), sc(n), e3(n), e5(n);
+  f(y, K[0]);
+  // Initial step (Hairer, Solving ODEs I, sec. II.4), as SciPy's select_initial_step.
+  sc = atol + rtol * y.array().abs();
+  double d0 = (y.array() / sc.array()).matrix().norm() / std::sqrt(n);
+  double d1 = (K[0].array() / sc.array()).matrix().norm() / std::sqrt(n);
+  double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+  ytmp = y + h0 * K[0];
+  f(ytmp, K[1]);
+  double d2 = ((K[1] - K[0]).array() / sc.array()).matrix().norm() / std::sqrt(n) / h0;
+  double h1 = std::max(d1, d2) <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / std::max(d1, d2), 1.0 / 8);
+  double h = std::min({100 * h0, h1, T});
+  Result r;
+  double t = 0;
+  while (t < T) {
+    bool last = false;
+    if (t + h >= T) {
+      h = T - t;
+      last = true;
+    }
+    for (int s = 1; s < kStages; ++s) {
+      ytmp = y;
+      for (int j = 0; j < s; ++j)
+        if (A[s][j] != 0.0) ytmp += (h * A[s][j]) * K[j];
+      f(ytmp, K[s]);
+    }
+    ynew = y;
+    e3.setZero();
+    e5.setZero();
+    for (int j = 0; j < kStages; ++j) {
+      if (B[j] != 0.0) ynew += (h * B[j]) * K[j];
+      if (E3[j] != 0.0) e3 += E3[j] * K[j];
+      if (E5[j] != 0.0) e5 += E5[j] * K[j];
+    }
+    sc = (atol + rtol * y.array().abs().max(ynew.array().abs())).matrix();
+    const double err5 = (e5.array() / sc.array()).square().sum();
+    const double err3 = (e3.array() / sc.array()).square().sum();
+    double deno = err5 + 0.01 * err3;
+    const double err = deno > 0 ? std::abs(h) * err5 / std::sqrt(n * deno) : 0.0;
+    if (err <= 1.0) {
+      t = last ? T : t + h;
+      y = ynew;
+      f(y, K[kStages]);
+      std::swap(K[0], K[kStages]);
+      ++r.steps;
+      h *= err == 0 ? 10.0 : std::min(10.0, 0.9 * std::pow(err, -1.0 / 8));
+    } else {
+      ++r.rejected;
+      h *= std::max(0.2, 0.9 * std::pow(err, -1.0 / 8));
+    }
+    if (h < 1e-14 * std::max(1.0, std::abs(t))) {
+      std::fprintf(stderr, "step size underflow at t=%g\n", t);
+      std::exit(2);
+    }
+  }
+  r.y = y;
+  r.evals = f.evals;
+  return r;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+int Integrate(const std::string& kind, int n, double T, double rtol, double atol, int reps) {
+  Scene s = MakeScene(kind, n);
+  const int nv = s.model.nv;
+  Vec y0 = Vec::Zero(2 * nv);
+  y0.head(nv) = s.q0;
+  std::vector<double> walls;
+  Result r;
+  for (int k = 0; k < reps; ++k) {
+    Rhs f(s.model);
+    auto t0 = Clock::now();
+    r = Dop853(f, y0, T, rtol, atol);
+    walls.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  std::printf("wall=%.9g steps=%ld rejected=%ld evals=%ld q=", Median(walls), r.steps, r.rejected, r.evals);
+  for (int i = 0; i < nv; ++i) std::printf("%s%.17g", i ? "," : "", r.y[i]);
+  std::printf("\n");
+  return 0;
+}
+
+double CpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// Median over REPS batches of the time of one aba call at a state with non-zero speeds,
+// wall and process CPU time in ns (CPU time as Google Benchmark's "CPU" column, which
+// bench/rhs_chain reports for kanesim: on a loaded machine it is the steadier of the two).
+int TimeRhs(int n, int reps) {
+  Scene s = MakeScene("chain", n);
+  Rhs f(s.model);
+  Vec y(2 * n), dy(2 * n);
+  y.head(n) = s.q0;
+  y.tail(n).setConstant(0.3);
+  const long inner = std::max(10L, 2000000L / (50L * n));
+  std::vector<double> wall, cpu;
+  for (int k = 0; k < reps; ++k) {
+    auto t0 = Clock::now();
+    const double c0 = CpuSeconds();
+    for (long i = 0; i < inner; ++i) {
+      f(y, dy);
+      asm volatile("" : : "r"(dy.data()) : "memory");
+    }
+    cpu.push_back((CpuSeconds() - c0) * 1e9 / inner);
+    wall.push_back(std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / inner);
+  }
+  std::printf("wall_ns=%.6g cpu_ns=%.6g\n", Median(wall), Median(cpu));
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc == 8 && std::string(argv[1]) == "integrate")
+    return Integrate(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atof(argv[5]), std::atof(argv[6]),
+                     std::atoi(argv[7]));
+  if (argc == 4 && std::string(argv[1]) == "rhs") return TimeRhs(std::atoi(argv[2]), std::atoi(argv[3]));
+  std::fprintf(stderr, "usage: pin_driver integrate chain|pendulum N T RTOL ATOL REPS | pin_driver rhs N REPS\n");
+  return 1;
+}

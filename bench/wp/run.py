@@ -1,0 +1,333 @@
+"""Work-precision runs (issue 6): kanesim and its peers on the problems of problems.py, in
+one run on one machine. Writes bench/results/results.json; report.py turns it into plots
+and tables. Called by bench/run_work_precision.sh, which builds what this needs.
+
+    bench/.venv/bin/python bench/wp/run.py --kanesim build-w/cli/kanesim --pin-driver DRIVER
+        [--rhs-bench build-w/bench/rhs_chain] [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,sympy,rhs]
+
+Timing: wall time of the integration only (kanesim: the `integrate` phase of --stats;
+peers: around their integrate call, model construction excluded), median of REPS runs.
+A sweep over tolerances (or time steps) goes from loose to tight and stops after the first
+run that takes longer than RUN_BUDGET seconds, so the whole benchmark fits on 2 cores.
+"""
+import argparse
+import json
+import os
+import platform
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from problems import BENCH, ROOT, Problem, all_problems, mjcf, pin_model  # noqa: E402
+
+RTOLS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
+RTOLS_QUICK = [1e-3, 1e-6, 1e-9, 1e-12]
+PIN_RTOLS = RTOLS + [1e-13]
+MJ_STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5]
+
+
+class Sweep:
+    """Runs fn(param) for each param, REPS times while a run is cheap; stops after a
+    run slower than the budget. fn returns dict(time=..., q=..., ok=bool, ...)."""
+
+    def __init__(self, reps, budget):
+        self.reps, self.budget = reps, budget
+
+    def run(self, problem, params, fn, label):
+        pts = []
+        for prm in params:
+            runs = []
+            for k in range(self.reps):
+                r = fn(prm)
+                runs.append(r)
+                if not r.get("ok", True) or r["time"] > self.budget / 4:
+                    break
+            r = runs[-1]
+            if not r.get("ok", True):
+                pts.append(dict(param=prm, ok=False, message=r.get("message", "")))
+                print("  %-28s %-8g FAILED %s" % (label, prm, r.get("message", "")[:80]), flush=True)
+                break
+            t = statistics.median(x["time"] for x in runs)
+            err = problem.error(r["q"])
+            extra = {k: v for k, v in r.items() if k not in ("q", "time", "ok")}
+            pts.append(dict(param=prm, ok=True, time=t, error=err, reps=len(runs), **extra))
+            print("  %-28s %-8g time %.4g s  error %.3g" % (label, prm, t, err), flush=True)
+            if t > self.budget:
+                break
+        return pts
+
+
+# --------------------------------------------------------------------------- kanesim
+def kanesim_run(exe, p, integrator, solver, rtol, out_csv, extra=()):
+    cmd = [exe, "run", p.mech, "-o", out_csv, "--rtol", repr(rtol), "--atol", repr(rtol),
+           "--integrator", integrator, "--solver", solver, "--stop-time", repr(p.T),
+           "--interval", repr(p.T), "--stats"] + [a for s in p.sets for a in ("--set", s)] + list(extra)
+    pr = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    stats = {}
+    for key, pat in (("integrate", r"integrate\s+([0-9.eE+-]+)"), ("compile", r"compile\s+([0-9.eE+-]+)"),
+                     ("load", r"load \+ elaborate\s+([0-9.eE+-]+)"), ("rhs", r"right-hand sides\s+(\d+)"),
+                     ("rhs_jac", r"\(\+ (\d+) for difference"), ("steps", r"steps\s+(\d+)")):
+        m = re.search(pat, pr.stderr)
+        if m:
+            stats[key] = float(m.group(1))
+    if pr.returncode != 0:
+        return dict(ok=False, time=0.0, message="exit %d: %s" % (pr.returncode, pr.stderr.strip()[-200:]))
+    with open(out_csv) as fh:
+        lines = fh.read().split("\n")
+    head = lines[0].split(",")
+    last = [float(x) for x in lines[-2].split(",")] if lines[-1] == "" else [float(x) for x in lines[-1].split(",")]
+    names = ["shoulder.q", "elbow.q"] if p.kind == "pendulum" else ["j[%d].q" % i for i in range(1, p.n + 1)]
+    q = [last[head.index(nm)] for nm in names]
+    return dict(ok=True, time=stats.get("integrate", 0.0), q=q, load=stats.get("load"),
+                compile=stats.get("compile"), rhs=stats.get("rhs"), rhs_jac=stats.get("rhs_jac"),
+                steps=stats.get("steps"))
+
+
+def run_kanesim(args, problems, sweep, rtols, res):
+    tmp = tempfile.mkdtemp(prefix="wp_kanesim_")
+    for p in problems:
+        print("kanesim:", p.title, flush=True)
+        for integ in ("ida", "cvode", "arkode"):
+            for solver in ("dense", "sparse"):
+                label = "kanesim %s %s" % (integ, solver)
+                out = os.path.join(tmp, "out.csv")
+                pts = sweep.run(p, rtols, lambda r: kanesim_run(args.kanesim, p, integ, solver, r, out), label)
+                res["runs"].setdefault(p.name, {})[label] = pts
+
+
+# --------------------------------------------------------------------------- Pinocchio C++
+def pin_cpp_run(driver, p, rtol, reps):
+    pr = subprocess.run([driver, "integrate", p.kind, str(p.n), repr(p.T), repr(rtol), repr(rtol), str(reps)],
+                        capture_output=True, text=True, timeout=600)
+    if pr.returncode != 0:
+        return dict(ok=False, time=0.0, message=pr.stderr.strip())
+    kv = dict(tok.split("=", 1) for tok in pr.stdout.split())
+    return dict(ok=True, time=float(kv["wall"]), q=[float(x) for x in kv["q"].split(",")],
+                rhs=int(kv["evals"]), steps=int(kv["steps"]))
+
+
+def run_pin_cpp(args, problems, sweep, res):
+    for p in problems:
+        print("pinocchio C++:", p.title, flush=True)
+        reps = sweep.reps
+        # The driver repeats internally (median); the sweep calls it once per tolerance.
+        one = Sweep(1, sweep.budget)
+        pts = one.run(p, PIN_RTOLS, lambda r: pin_cpp_run(args.pin_driver, p, r, reps), "pinocchio-aba C++ DOP853")
+        res["runs"].setdefault(p.name, {})["pinocchio-aba C++ DOP853"] = pts
+
+
+# --------------------------------------------------------------------------- SciPy + pin.aba
+def run_scipy(args, problems, sweep, rtols, res):
+    import pinocchio as pin
+    from scipy.integrate import odeint, solve_ivp
+    for p in problems:
+        print("scipy + pinocchio:", p.title, flush=True)
+        model = pin_model(p)
+        data = model.createData()
+        n = model.nq
+        zero = np.zeros(n)
+        y0 = np.concatenate([np.full(n, p.q0), np.zeros(n)])
+
+        def f(t, y):
+            return np.concatenate([y[n:], pin.aba(model, data, y[:n], y[n:], zero)])
+
+        def dop(rtol):
+            t0 = time.perf_counter()
+            s = solve_ivp(f, (0.0, p.T), y0, method="DOP853", rtol=rtol, atol=rtol)
+            wall = time.perf_counter() - t0
+            return dict(ok=s.success, time=wall, q=s.y[:n, -1], rhs=s.nfev, message=s.message)
+
+        def lsoda(rtol):
+            t0 = time.perf_counter()
+            y, info = odeint(lambda y, t: f(t, y), y0, [0.0, p.T], rtol=rtol, atol=rtol, full_output=True,
+                             mxstep=10 ** 7)
+            wall = time.perf_counter() - t0
+            return dict(ok=info["message"].startswith("Integration successful"), time=wall, q=y[-1, :n],
+                        rhs=int(info["nfe"][-1]), message=info["message"])
+
+        res["runs"].setdefault(p.name, {})["scipy DOP853 + pin.aba"] = sweep.run(p, rtols, dop, "scipy DOP853")
+        res["runs"][p.name]["scipy LSODA + pin.aba"] = sweep.run(p, rtols, lsoda, "scipy LSODA (odeint)")
+
+
+# --------------------------------------------------------------------------- MuJoCo
+def run_mujoco(args, problems, sweep, res):
+    import mujoco
+    kinds = (("Euler", mujoco.mjtIntegrator.mjINT_EULER), ("implicitfast", mujoco.mjtIntegrator.mjINT_IMPLICITFAST),
+             ("RK4", mujoco.mjtIntegrator.mjINT_RK4))
+    os.makedirs(os.path.join(BENCH, "results", "mjcf"), exist_ok=True)
+    for p in problems:
+        print("mujoco:", p.title, flush=True)
+        text = mjcf(p)
+        with open(os.path.join(BENCH, "results", "mjcf", p.name.split("_T")[0] + ".xml"), "w") as fh:
+            fh.write(text + "\n")
+        t0 = time.perf_counter()
+        m = mujoco.MjModel.from_xml_string(text)
+        load = time.perf_counter() - t0
+        d = mujoco.MjData(m)
+        for name, integ in kinds:
+            m.opt.integrator = integ
+
+            def step(dt):
+                m.opt.timestep = dt
+                nstep = int(round(p.T / dt))
+                mujoco.mj_resetData(m, d)
+                d.qpos[:] = p.q0
+                t0 = time.perf_counter()
+                mujoco.mj_step(m, d, nstep)
+                wall = time.perf_counter() - t0
+                ok = bool(np.all(np.isfinite(d.qpos)))
+                return dict(ok=ok, time=wall, q=d.qpos.copy(), steps=nstep, load=load, message="non-finite state")
+
+            label = "mujoco %s" % name
+            res["runs"].setdefault(p.name, {})[label] = sweep.run(p, MJ_STEPS, step, label)
+
+
+# --------------------------------------------------------------------------- Exudyn
+def run_exudyn(args, problems, sweep, rtols, res):
+    import exudyn_tree
+    for p in problems:
+        print("exudyn:", p.title, flush=True)
+        try:
+            runner = exudyn_tree.Runner(p)
+        except Exception as e:  # report, do not stop the benchmark
+            res["notes"].append("exudyn on %s: %s" % (p.name, e))
+            print("  exudyn failed to build:", e)
+            continue
+        res["runs"].setdefault(p.name, {})["exudyn KinematicTree DOPRI5"] = sweep.run(
+            p, rtols, runner.run, "exudyn DOPRI5")
+
+
+# --------------------------------------------------------------------------- sympy vs kanesim compile
+def run_sympy(args, res, quick):
+    import sympy_kane
+    ns = [1, 2, 3, 4] if quick else [1, 2, 3, 4, 5, 6, 8]
+    mech = os.path.join(BENCH, "models", "planar_chain.mech")
+    rows = []
+    for n in ns:
+        ts = sympy_kane.derive_time(n)
+        times = []
+        for k in range(3):
+            pr = subprocess.run([args.kanesim, "run", mech, "--set", "N=%d" % n, "--stop-time", "0.001",
+                                 "--interval", "0.001", "--stats", "-o", os.devnull],
+                                capture_output=True, text=True, timeout=60)
+            lo = float(re.search(r"load \+ elaborate\s+([0-9.eE+-]+)", pr.stderr).group(1))
+            co = float(re.search(r"compile\s+([0-9.eE+-]+)", pr.stderr).group(1))
+            times.append((lo, co))
+        lo = statistics.median(t[0] for t in times)
+        co = statistics.median(t[1] for t in times)
+        rows.append(dict(n=n, sympy_derive=ts["derive"], sympy_total=ts["total"], kanesim_load=lo,
+                         kanesim_compile=co))
+        print("  N=%d sympy derive %.3g s (with lambdify %.3g s)  kanesim load %.3g s compile %.3g s"
+              % (n, ts["derive"], ts["total"], lo, co), flush=True)
+        if ts["total"] > (20 if not quick else 5):
+            break
+    res["sympy"] = rows
+
+
+# --------------------------------------------------------------------------- RHS cost vs N
+def run_rhs(args, res, quick):
+    ns = [5, 10, 20, 50, 100] if quick else [5, 10, 20, 30, 40, 50, 60, 80, 100, 200, 500, 1000]
+    pin = {}
+    for n in ns:
+        pr = subprocess.run([args.pin_driver, "rhs", str(n), "5"], capture_output=True, text=True, timeout=300)
+        kv = dict(tok.split("=") for tok in pr.stdout.split())
+        pin[n] = dict(wall_ns=float(kv["wall_ns"]), cpu_ns=float(kv["cpu_ns"]))
+        print("  pinocchio aba N=%d  %.0f ns cpu" % (n, pin[n]["cpu_ns"]), flush=True)
+    kane = {}
+    if args.rhs_bench and os.path.exists(args.rhs_bench):
+        filt = "BM_Rhs(Dense|Sparse)/(%s)$" % "|".join(str(n) for n in ns)
+        out = os.path.join(tempfile.mkdtemp(), "rhs.json")
+        subprocess.run([args.rhs_bench, "--benchmark_filter=" + filt, "--benchmark_min_time=%s" %
+                        ("0.05" if quick else "0.2"), "--benchmark_out=" + out, "--benchmark_out_format=json"],
+                       capture_output=True, text=True, timeout=900)
+        with open(out) as fh:
+            for b in json.load(fh)["benchmarks"]:
+                m = re.match(r"BM_Rhs(Dense|Sparse)/(\d+)$", b["name"])
+                if m:
+                    unit = {"ns": 1.0, "us": 1e3, "ms": 1e6}[b["time_unit"]]
+                    kane.setdefault(int(m.group(2)), {})[m.group(1).lower()] = dict(
+                        wall_ns=b["real_time"] * unit, cpu_ns=b["cpu_time"] * unit)
+    res["rhs"] = dict(pinocchio=pin, kanesim=kane)
+
+
+def machine_info():
+    info = dict(platform=platform.platform(), python=platform.python_version())
+    try:
+        with open("/proc/cpuinfo") as fh:
+            info["cpu"] = re.search(r"model name\s*:\s*(.*)", fh.read()).group(1)
+    except Exception:
+        pass
+    info["cores"] = os.cpu_count()
+    info["loadavg_start"] = os.getloadavg()
+    vers = {}
+    for mod in ("numpy", "scipy", "sympy", "pinocchio", "mujoco", "exudyn", "matplotlib"):
+        try:
+            vers[mod] = __import__(mod).__version__
+        except Exception as e:
+            vers[mod] = "unavailable (%s)" % e
+    info["versions"] = vers
+    info["gxx"] = subprocess.run(["g++", "--version"], capture_output=True, text=True).stdout.split("\n")[0]
+    try:
+        sund = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "libsundials-dev"], capture_output=True,
+                              text=True).stdout
+        info["sundials"] = sund
+    except Exception:
+        pass
+    info["kanesim_commit"] = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
+                                            capture_output=True, text=True).stdout.strip()
+    return info
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--kanesim", required=True)
+    ap.add_argument("--pin-driver", required=True)
+    ap.add_argument("--rhs-bench", default="")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--only", default="kanesim,pin,scipy,mujoco,exudyn,sympy,rhs")
+    ap.add_argument("--out", default=os.path.join(BENCH, "results", "results.json"))
+    args = ap.parse_args()
+    parts = args.only.split(",")
+    problems = all_problems(args.quick)
+    rtols = RTOLS_QUICK if args.quick else RTOLS
+    sweep = Sweep(reps=1 if args.quick else 3, budget=1.0 if args.quick else 4.0)
+    os.makedirs(os.path.dirname(args.out), exist_ok=True)
+    res = dict(machine=machine_info(), quick=args.quick, runs={}, notes=[],
+               problems={p.name: dict(title=p.title, T=p.T, n=p.n, kind=p.kind, trust_floor=p.trust_floor(),
+                                      ref=os.path.relpath(p.ref_path(), ROOT)) for p in problems})
+    if os.path.exists(args.out) and args.only != ap.get_default("only"):
+        with open(args.out) as fh:  # partial re-run: keep the other tools' numbers
+            old = json.load(fh)
+        for k in ("runs", "sympy", "rhs"):
+            if k in old:
+                res[k] = old[k]
+    t_start = time.time()
+    steps = [("kanesim", lambda: run_kanesim(args, problems, sweep, rtols, res)),
+             ("pin", lambda: run_pin_cpp(args, problems, sweep, res)),
+             ("scipy", lambda: run_scipy(args, problems, sweep, rtols, res)),
+             ("mujoco", lambda: run_mujoco(args, problems, sweep, res)),
+             ("exudyn", lambda: run_exudyn(args, problems, sweep, rtols, res)),
+             ("sympy", lambda: run_sympy(args, res, args.quick)),
+             ("rhs", lambda: run_rhs(args, res, args.quick))]
+    for name, fn in steps:
+        if name in parts:
+            t0 = time.time()
+            fn()
+            res.setdefault("phase_seconds", {})[name] = time.time() - t0
+            with open(args.out, "w") as fh:
+                json.dump(res, fh, indent=1, default=float)
+    res["machine"]["loadavg_end"] = os.getloadavg()
+    res["machine"]["total_seconds"] = time.time() - t_start
+    with open(args.out, "w") as fh:
+        json.dump(res, fh, indent=1, default=float)
+    print("wrote", args.out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,310 @@
+// `kanesim test DIR|SPEC.toml...`: golden-output regression tests (docs/golden_tests.md).
+// For each spec: load and compile the model (one at a time: the front end is not
+// re-entrant), simulate (tests in parallel, -j), compare with the stored output and
+// check the spec's invariants. Prints PASS/FAIL per test in the order given.
+// Exit codes: 0 all pass; 3 a regression (a comparison or invariant failed, or the model
+// no longer loads or runs); 1 a usage error (bad spec, missing golden without --update).
+// --update rewrites the stored outputs and prints what changed.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fmt/core.h>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli/batch_cli.h"
+#include "cli/common.h"
+#include "runtime/batch/csv_util.h"
+#include "runtime/batch/golden.h"
+#include "runtime/batch/summary.h"
+#include "runtime/sim/csv.h"
+#include "runtime/sim/signal_select.h"
+#include "stdlib/stdlib.h"
+
+namespace kanesim::cli {
+namespace {
+
+struct TestArgs {
+  std::vector<std::string> paths;
+  bool update = false;
+  int threads = 0;
+  std::vector<std::string> sets;
+  bool verbose = false;
+};
+
+enum class Outcome { kPass, kFail, kError, kUpdated };
+
+struct TestResult {
+  Outcome outcome = Outcome::kPass;
+  std::string report;  // lines printed for this test
+};
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string StdlibHash() {
+  std::string all;
+  for (const auto& [name, text] : stdlib::Files()) all.append(name).append("\n").append(text).append("\n");
+  return batch::Fnv1a64Hex(all);
+}
+
+std::string G(double x) { return fmt::format("{:.3g}", x); }
+
+// What changed between an old golden and a new one, one line per signal that moved.
+std::string DescribeChanges(const batch::GoldenSpec& spec, const batch::Trajectory& old_golden,
+                            const batch::Trajectory& fresh) {
+  std::string out;
+  batch::CompareResult c = batch::Compare(spec, old_golden, fresh);
+  for (const std::string& p : c.problems) out += "    " + p + "\n";
+  int unchanged = 0;
+  for (const batch::SignalDeviation& d : c.signals) {
+    if (d.max_dev == 0.0) {
+      ++unchanged;
+      continue;
+    }
+    out += fmt::format("    {}: changed by at most {} at t = {} ({} of its tolerance){}\n", d.signal, G(d.max_dev),
+                       G(d.t_max), G(d.worst_ratio), d.failed() ? "  <- beyond tolerance" : "");
+  }
+  if (unchanged > 0) out += fmt::format("    {} signal{} unchanged\n", unchanged, unchanged == 1 ? "" : "s");
+  for (const auto& [k, v] : fresh.provenance) {
+    auto it = old_golden.provenance.find(k);
+    if (k != "recorded" && (it == old_golden.provenance.end() || it->second != v))
+      out += fmt::format("    provenance {}: {} -> {}\n", k, it == old_golden.provenance.end() ? "(none)" : it->second, v);
+  }
+  return out;
+}
+
+TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex& load_mutex) {
+  TestResult r;
+  auto t0 = std::chrono::steady_clock::now();
+  batch::GoldenSpec spec;
+  std::string err;
+  if (!batch::ReadGoldenSpec(spec_path, &spec, &err)) {
+    r.outcome = Outcome::kError;
+    r.report = "ERROR " + spec_path + "\n    " + err + "\n";
+    return r;
+  }
+  const std::string label = spec.name;
+  auto fail = [&](const std::string& why) {
+    r.outcome = Outcome::kFail;
+    r.report = "FAIL  " + label + "\n    " + why + "\n";
+    return r;
+  };
+
+  // Load and compile (serialized).
+  std::shared_ptr<const rt::Program> program;
+  flat::Mechanism mech;
+  {
+    std::lock_guard<std::mutex> lock(load_mutex);
+    LoadOptions lo;
+    lo.path = spec.model;
+    lo.model = spec.model_name;
+    lo.sets = spec.sets;
+    lo.sets.insert(lo.sets.end(), args.sets.begin(), args.sets.end());
+    rt::CompileOptions copts;
+    copts.solver = SolverFromName(spec.solver);
+    copts.integrator = IntegratorFromName(spec.integrator);
+    rt::CompileResult compiled;
+    if (!std::filesystem::exists(spec.model)) {
+      r.outcome = Outcome::kError;
+      r.report = "ERROR " + label + "\n    the model '" + spec.model + "' does not exist\n";
+      return r;
+    }
+    if (!LoadModel(lo, &mech) || !CompileModel(mech, copts, &compiled))
+      return fail("the model no longer loads or compiles (diagnostics above)");
+    program = compiled.program;
+  }
+
+  // Signals: the stored ones, then what the invariants need.
+  std::vector<std::string> available = rt::AvailableSignals(*program);
+  std::vector<std::string> stored;
+  if (spec.signals.empty()) {
+    stored = rt::DefaultSignals(*program);
+  } else if (!sim::SelectSignals(available, spec.signals, &stored, &err)) {
+    return fail("signals: " + err);
+  }
+  std::vector<std::string> names = stored;
+  for (const batch::Invariant& inv : spec.invariants)
+    for (const std::string& n : batch::InvariantSignals(inv, available))
+      if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+
+  sim::SimOptions so =
+      ResolveSimOptions(mech.experiment, spec.start_time, spec.stop_time, spec.interval, spec.rtol, spec.atol,
+                        spec.integrator);
+  so.signals = names;
+  sim::MemorySink sink;
+  sim::SimResult result = sim::Simulate(*program, so, sink);
+  if (result.status == sim::SimResult::Status::kNumericalFailure)
+    return fail(fmt::format("numerical failure at t = {}: {}", result.fail_time, result.message));
+  if (result.status != sim::SimResult::Status::kOk) return fail(result.message);
+
+  batch::Trajectory actual;
+  actual.names = sink.names;
+  actual.t = sink.times;
+  actual.rows = sink.rows;
+  batch::Trajectory fresh;  // the stored columns only, with provenance
+  fresh.names = stored;
+  fresh.t = sink.times;
+  for (const auto& row : sink.rows) fresh.rows.emplace_back(row.begin(), row.begin() + static_cast<long>(stored.size()));
+  fresh.provenance["kanesim_version"] = KANESIM_VERSION;
+  fresh.provenance["model"] = std::filesystem::path(spec.model).filename().string() + " fnv1a64:" +
+                              batch::Fnv1a64Hex(ReadFile(spec.model));
+  fresh.provenance["stdlib"] = "fnv1a64:" + StdlibHash();
+  fresh.provenance["settings"] = "fnv1a64:" + batch::Fnv1a64Hex(batch::SettingsText(spec));
+  fresh.provenance["integrator"] = sim::MethodName(result.stats.method);
+
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  batch::Trajectory golden;
+  bool have_golden = std::filesystem::exists(spec.golden_path) &&
+                     batch::ReadTrajectoryCsv(spec.golden_path, &golden, &err);
+
+  if (args.update) {
+    std::string text = batch::FormatTrajectoryCsv(fresh);
+    if (have_golden && ReadFile(spec.golden_path) == text) {
+      r.outcome = Outcome::kUpdated;
+      r.report = fmt::format("SAME  {} (golden unchanged, {} signals x {} instants)\n", label, stored.size(),
+                             fresh.t.size());
+      return r;
+    }
+    if (!batch::WriteFileAtomic(spec.golden_path, text, &err)) {
+      r.outcome = Outcome::kError;
+      r.report = "ERROR " + label + "\n    " + err + "\n";
+      return r;
+    }
+    r.outcome = Outcome::kUpdated;
+    r.report = have_golden ? fmt::format("UPDATED {} -> {}\n{}", label, spec.golden_path,
+                                         DescribeChanges(spec, golden, fresh))
+                           : fmt::format("NEW   {} -> {} ({} signals x {} instants)\n", label, spec.golden_path,
+                                         stored.size(), fresh.t.size());
+    return r;
+  }
+  if (!have_golden) {
+    r.outcome = Outcome::kError;
+    r.report = "ERROR " + label + "\n    no stored output '" + spec.golden_path +
+               "'" + (err.empty() ? "" : " (" + err + ")") + "; record it with kanesim test --update " + spec_path +
+               "\n";
+    return r;
+  }
+
+  // Compare, then the invariants.
+  std::string lines;
+  bool pass = true;
+  auto settings = golden.provenance.find("settings");
+  if (settings != golden.provenance.end() && settings->second != fresh.provenance["settings"]) {
+    pass = false;
+    lines += "    the spec's run settings changed since the golden was recorded; run kanesim test --update\n";
+  }
+  batch::CompareResult c = batch::Compare(spec, golden, fresh);
+  pass = pass && c.pass;
+  for (const std::string& p : c.problems) lines += "    " + p + "\n";
+  const batch::SignalDeviation* worst = nullptr;
+  for (const batch::SignalDeviation& d : c.signals) {
+    if (!worst || d.worst_ratio > worst->worst_ratio) worst = &d;
+    if (!d.failed()) continue;
+    lines += fmt::format(
+        "    {}: largest deviation {} at t = {} (tolerance there {}, {}x); first beyond tolerance at t = {}\n",
+        d.signal, G(d.max_dev), fmt::format("{:.6g}", d.t_max), G(d.tol_at_max), G(d.worst_ratio),
+        fmt::format("{:.6g}", d.first_exceed));
+  }
+  for (const batch::Invariant& inv : spec.invariants) {
+    batch::InvariantResult ir = batch::CheckInvariant(inv, actual, available);
+    if (ir.status == batch::InvariantResult::Status::kFail) pass = false;
+    if (ir.status != batch::InvariantResult::Status::kPass || args.verbose)
+      lines += std::string("    ") + (ir.status == batch::InvariantResult::Status::kFail ? "" : "note: ") + ir.text +
+               "\n";
+  }
+  for (const char* key : {"model", "stdlib", "kanesim_version"}) {
+    auto it = golden.provenance.find(key);
+    if (it != golden.provenance.end() && it->second != fresh.provenance[key])
+      lines += fmt::format("    note: {} changed since the golden was recorded ({} -> {})\n", key, it->second,
+                           fresh.provenance[key]);
+  }
+  r.outcome = pass ? Outcome::kPass : Outcome::kFail;
+  r.report = fmt::format("{} {} ({} signals x {} instants, {:.2f} s{})\n{}", pass ? "PASS " : "FAIL ", label,
+                         golden.names.size(), golden.t.size(), secs,
+                         worst ? fmt::format("; worst {} at {} of its tolerance", worst->signal, G(worst->worst_ratio))
+                               : "",
+                         lines);
+  return r;
+}
+
+int TestCommand(const TestArgs& a) {
+  if (a.update && !a.sets.empty()) {
+    fmt::print(stderr, "kanesim: error: --update with --set would record perturbed goldens; drop one\n");
+    return kExitModelError;
+  }
+  std::vector<std::string> specs;
+  for (const std::string& p : a.paths) {
+    if (std::filesystem::is_directory(p)) {
+      std::vector<std::string> found;
+      for (const auto& e : std::filesystem::recursive_directory_iterator(p))
+        if (e.is_regular_file() && e.path().extension() == ".toml") found.push_back(e.path().string());
+      std::sort(found.begin(), found.end());
+      if (found.empty()) fmt::print(stderr, "kanesim: warning: no golden specs (*.toml) in '{}'\n", p);
+      specs.insert(specs.end(), found.begin(), found.end());
+    } else if (std::filesystem::path(p).extension() == ".toml") {
+      specs.push_back(p);
+    } else {
+      fmt::print(stderr, "kanesim: error: '{}' is not a folder or a golden spec (.toml)\n", p);
+      return kExitModelError;
+    }
+  }
+  std::vector<TestResult> results(specs.size());
+  std::mutex load_mutex;
+  std::atomic<size_t> next{0};
+  unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  size_t n = std::max<size_t>(1, std::min<size_t>(a.threads > 0 ? static_cast<size_t>(a.threads) : hw, specs.size()));
+  auto work = [&] {
+    for (size_t k = next.fetch_add(1); k < specs.size(); k = next.fetch_add(1))
+      results[k] = RunOne(specs[k], a, load_mutex);
+  };
+  {
+    std::vector<std::jthread> pool;
+    for (size_t i = 1; i < n; ++i) pool.emplace_back(work);
+    work();
+  }
+  int pass = 0, fail = 0, error = 0, updated = 0;
+  for (const TestResult& r : results) {
+    fmt::print("{}", r.report);
+    switch (r.outcome) {
+      case Outcome::kPass: ++pass; break;
+      case Outcome::kFail: ++fail; break;
+      case Outcome::kError: ++error; break;
+      case Outcome::kUpdated: ++updated; break;
+    }
+  }
+  if (a.update)
+    fmt::print("{} golden{} recorded, {} error{}\n", updated, updated == 1 ? "" : "s", error, error == 1 ? "" : "s");
+  else
+    fmt::print("{} passed, {} failed, {} error{}\n", pass, fail, error, error == 1 ? "" : "s");
+  std::fflush(stdout);
+  if (fail > 0) return kExitRegression;
+  return error > 0 ? kExitModelError : kExitOk;
+}
+
+}  // namespace
+
+void AddTestCommand(CLI::App& app, int* exit_code) {
+  auto a = std::make_shared<TestArgs>();
+  CLI::App* t = app.add_subcommand("test", "Golden-output regression tests: run, compare, report deviations");
+  t->add_option("paths", a->paths, "Golden specs (.toml) or folders holding them")->required();
+  t->add_flag("--update", a->update, "Rewrite the stored outputs and print what changed");
+  t->add_option("-j,--jobs", a->threads, "Tests run in parallel (default: all cores)");
+  t->add_option("--set", a->sets, "Override a parameter in every test, name=value (what-if checks)")
+      ->allow_extra_args(false);
+  t->add_flag("-v,--verbose", a->verbose, "Also print invariants that passed");
+  t->callback([a, exit_code] { *exit_code = TestCommand(*a); });
+}
+
+}  // namespace kanesim::cli

@@ -1,0 +1,342 @@
+#include "runtime/batch/sweep.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <stdexcept>
+#include <filesystem>
+#include <set>
+#include <thread>
+
+#include "runtime/batch/csv_util.h"
+#include "runtime/batch/summary.h"
+#include "runtime/flat/mechanism.h"
+#include "runtime/program.h"
+
+namespace kanesim::batch {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string Num(double x) { return std::isnan(x) ? std::string() : sim::FormatNumber(x); }
+
+// Parameter values of `mech` with `overrides` (index -> value) applied: the same order
+// and rule as flat::EvaluateParams, so that parameters bound to an overridden one follow
+// it (a rod's inertia follows its mass).
+std::vector<double> ParamValues(const flat::Mechanism& mech, const std::map<size_t, double>& overrides) {
+  std::vector<double> pv(mech.params.size(), 0.0);
+  for (size_t i = 0; i < mech.params.size(); ++i) {
+    const flat::Param& p = mech.params[i];
+    auto it = overrides.find(i);
+    if (it != overrides.end())
+      pv[i] = it->second;
+    else
+      pv[i] = (p.binding == flat::kNoExpr || p.user_set) ? p.value : flat::EvalParamExpr(mech, pv, p.binding);
+  }
+  return pv;
+}
+
+// rt::Rebind says only that it failed; compiling a copy with the values set as literals
+// recovers the compiler's message (only on this failure path).
+std::string CompileFailure(const flat::Mechanism& mech, const std::map<size_t, double>& overrides,
+                           const rt::CompileOptions& options) {
+  flat::Mechanism copy = mech;
+  for (const auto& [i, v] : overrides) {
+    copy.params[i].value = v;
+    copy.params[i].user_set = true;
+  }
+  rt::CompileResult r = rt::Compile(copy, options);
+  std::string msg = "the model does not compile with these parameter values";
+  for (const rt::CompileMessage& e : r.errors) msg += "; " + e.code + ": " + e.message;
+  return msg;
+}
+
+std::vector<std::string> SignalsFor(const rt::Program& program, const SweepConfig& c) {
+  std::vector<std::string> names;
+  for (const Metric& m : c.metrics)
+    if (std::find(names.begin(), names.end(), m.signal) == names.end()) names.push_back(m.signal);
+  if (c.trajectories) {
+    std::vector<std::string> t = c.trajectory_signals.empty() ? rt::DefaultSignals(program) : c.trajectory_signals;
+    for (const std::string& n : t)
+      if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+  }
+  return names;
+}
+
+}  // namespace
+
+std::string SummaryFileName(const SweepConfig& config) {
+  if (config.shard_count <= 1) return "summary.csv";
+  return "summary.shard-" + std::to_string(config.shard_index + 1) + "-of-" + std::to_string(config.shard_count) +
+         ".csv";
+}
+
+bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::string* error) {
+  const flat::Mechanism& mech = *base.mech;
+  for (const std::string& name : config.param_names) {
+    int i = mech.FindParam(name);
+    if (i < 0) {
+      *error = "the model has no parameter '" + name + "' (kanesim check lists them)";
+      return false;
+    }
+    const flat::Param& p = mech.params[static_cast<size_t>(i)];
+    if (p.is_constant) {
+      *error = "'" + name + "' is a constant; a sweep cannot change it";
+      return false;
+    }
+    if (p.type == flat::ParamType::String) {
+      *error = "'" + name + "' is a String parameter; a sweep varies numbers only";
+      return false;
+    }
+  }
+  std::vector<std::string> available = rt::AvailableSignals(base);
+  for (const Metric& m : config.metrics) {
+    if (std::find(available.begin(), available.end(), m.signal) == available.end()) {
+      *error = "metric '" + m.Column() + "': the model has no signal '" + m.signal + "'";
+      return false;
+    }
+  }
+  for (const std::string& s : config.trajectory_signals) {
+    if (std::find(available.begin(), available.end(), s) == available.end()) {
+      *error = "the model has no signal '" + s + "'";
+      return false;
+    }
+  }
+  if (config.shard_count < 1 || config.shard_index < 0 || config.shard_index >= config.shard_count) {
+    *error = "bad shard " + std::to_string(config.shard_index + 1) + "/" + std::to_string(config.shard_count);
+    return false;
+  }
+  return true;
+}
+
+bool RowMatchesScenario(const std::string& line, const Scenario& s) {
+  std::vector<std::string> f = SplitCsvLine(line);
+  if (f.size() < s.values.size() + 1 || f[0] != std::to_string(s.id)) return false;
+  for (size_t j = 0; j < s.values.size(); ++j)
+    if (f[j + 1] != Num(s.values[j])) return false;
+  return true;
+}
+
+ScenarioRunner::ScenarioRunner(std::shared_ptr<const rt::Program> base, VariantBuilder build, const SweepConfig& config)
+    : base_(std::move(base)), build_(std::move(build)), config_(config) {
+  base_values_ = base_->param_values;
+  auto v = std::make_unique<Variant>();
+  v->program = base_;
+  variants_[""] = std::move(v);
+}
+
+int ScenarioRunner::NumVariants() const {
+  int n = 0;
+  for (const auto& [key, v] : variants_) n += v->program ? 1 : 0;
+  return n;
+}
+
+std::string ScenarioRunner::Header() const {
+  std::string h = "id";
+  for (const std::string& n : config_.param_names) h.append(",").append(QuoteCsv(n));
+  h.append(",stop_time,rtol,atol,status,message,fail_time");
+  for (const Metric& m : config_.metrics) h.append(",").append(QuoteCsv(m.Column()));
+  h.append(",method,steps,rhs_evals,jac_rhs_evals,err_test_fails,wall_time");
+  return h;
+}
+
+const ScenarioRunner::Variant& ScenarioRunner::GetVariant(
+    const std::vector<std::pair<std::string, double>>& structural) {
+  std::string key;
+  for (const auto& [name, value] : structural) key.append(name).append("=").append(Num(value)).append(";");
+  Variant* v = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(variants_mutex_);
+    auto& slot = variants_[key];
+    if (!slot) slot = std::make_unique<Variant>();
+    v = slot.get();
+  }
+  // One build at a time (the front end is not re-entrant); a variant is built once.
+  std::lock_guard<std::mutex> lock(build_mutex_);
+  if (!v->program && v->error.empty()) {
+    v->program = build_ ? build_(structural, &v->error) : nullptr;
+    if (!v->program && v->error.empty()) v->error = "the structural variant could not be built";
+  }
+  return *v;
+}
+
+std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
+  Clock::time_point t0 = Clock::now();
+  sim::SimOptions so = config_.sim;
+  if (!std::isnan(s.run.stop_time)) so.stop_time = s.run.stop_time;
+  if (!std::isnan(s.run.rtol)) so.rtol = s.run.rtol;
+  if (!std::isnan(s.run.atol)) so.atol = s.run.atol;
+  else if (!std::isnan(s.run.rtol)) so.atol = std::min(so.atol, s.run.rtol);
+
+  std::string message;
+  double fail_time = kUnset;
+  std::vector<double> metric_values(config_.metrics.size(), kUnset);
+  sim::SimStats stats;
+  bool ok = false, simulated = false;
+  try {
+    // a. Structural values that differ from the base program's select a variant.
+    const flat::Mechanism& base_mech = *base_->mech;
+    std::vector<std::pair<std::string, double>> structural;
+    std::vector<std::pair<std::string, double>> numeric;
+    for (size_t j = 0; j < config_.param_names.size(); ++j) {
+      const double v = s.values[j];
+      if (std::isnan(v)) continue;
+      const std::string& name = config_.param_names[j];
+      const auto i = static_cast<size_t>(base_mech.FindParam(name));
+      if (base_mech.params[i].structural) {
+        if (v != base_values_[i]) structural.emplace_back(name, v);
+      } else {
+        numeric.emplace_back(name, v);
+      }
+    }
+    const Variant& variant = GetVariant(structural);
+    if (!variant.program) throw std::runtime_error(variant.error);
+    std::shared_ptr<const rt::Program> program = variant.program;
+
+    // b. Numeric values: rebind (type checks first: a sweep must not truncate silently).
+    if (!numeric.empty()) {
+      const flat::Mechanism& mech = *program->mech;
+      std::map<size_t, double> overrides;
+      for (const auto& [name, v] : numeric) {
+        int i = mech.FindParam(name);
+        if (i < 0) throw std::runtime_error("parameter '" + name + "' does not exist in this structural variant");
+        const flat::Param& p = mech.params[static_cast<size_t>(i)];
+        if ((p.type == flat::ParamType::Integer || p.type == flat::ParamType::Boolean) && v != std::round(v))
+          throw std::runtime_error("'" + name + "' is an Integer/Boolean parameter, got " + Num(v));
+        if (v < p.min || v > p.max)
+          throw std::runtime_error("'" + name + "' = " + Num(v) + " is outside [" + Num(p.min) + ", " +
+                                   Num(p.max) + "]");
+        overrides[static_cast<size_t>(i)] = v;
+      }
+      std::shared_ptr<const rt::Program> rebound = rt::Rebind(*program, ParamValues(mech, overrides));
+      if (!rebound) throw std::runtime_error(CompileFailure(mech, overrides, program->options));
+      program = rebound;
+    }
+
+    // c. Simulate into the metrics (and the trajectory file).
+    so.signals = SignalsFor(*program, config_);
+    std::FILE* traj = nullptr;
+    std::string traj_path, traj_tmp;
+    if (config_.trajectories) {
+      traj_path = config_.out_dir + "/trajectories/scenario_" + std::to_string(s.id) + ".csv";
+      traj_tmp = traj_path + ".tmp";
+      traj = std::fopen(traj_tmp.c_str(), "w");
+      if (!traj) throw std::runtime_error("cannot write '" + traj_tmp + "'");
+    }
+    sim::CsvWriter writer(traj);
+    MetricSink sink(config_.metrics, traj ? &writer : nullptr);
+    sim::SimResult r = sim::Simulate(*program, so, sink);
+    if (traj) {
+      bool closed = std::fclose(traj) == 0;
+      if (!closed || std::rename(traj_tmp.c_str(), traj_path.c_str()) != 0)
+        throw std::runtime_error("cannot write '" + traj_path + "'");
+    }
+    stats = r.stats;
+    simulated = true;
+    if (r.status == sim::SimResult::Status::kOk) {
+      ok = true;
+      metric_values = sink.Values();
+    } else {
+      message = r.message.empty() ? sink.error() : r.message;
+      if (r.status == sim::SimResult::Status::kNumericalFailure) fail_time = r.fail_time;
+    }
+  } catch (const std::exception& e) {
+    message = e.what();
+  }
+  const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+
+  // d. The line.
+  std::string line = std::to_string(s.id);
+  for (double v : s.values) line.append(",").append(Num(v));
+  line.append(",").append(Num(so.stop_time)).append(",").append(Num(so.rtol)).append(",").append(Num(so.atol));
+  line.append(ok ? ",ok," : ",failed,").append(QuoteCsv(message)).append(",").append(Num(fail_time));
+  for (double v : metric_values) line.append(",").append(Num(v));
+  const sim::IntegratorStats& is = stats.integrator;
+  line.append(",").append(simulated ? sim::MethodName(stats.method) : "");
+  for (long c : {is.steps, is.rhs_evals, is.rhs_evals_jac, is.err_test_fails}) line.append(",").append(std::to_string(c));
+  char wall_text[32];
+  std::snprintf(wall_text, sizeof wall_text, "%.6f", wall);
+  line.append(",").append(wall_text);
+  *failed = !ok;
+  return line;
+}
+
+bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
+              SweepReport* report, std::string* error) {
+  // 1. Validate.
+  if (!ValidateSweep(*base, config, error)) return false;
+  std::error_code ec;
+  std::filesystem::create_directories(config.out_dir + (config.trajectories ? "/trajectories" : ""), ec);
+  if (ec) {
+    *error = "cannot create '" + config.out_dir + "': " + ec.message();
+    return false;
+  }
+  // 2. Summary (and what is already done).
+  ScenarioRunner runner(base, build, config);
+  SummaryFile summary;
+  std::map<int, std::string> done;
+  report->summary_path = config.out_dir + "/" + SummaryFileName(config);
+  if (!summary.Open(report->summary_path, runner.Header(), config.resume, &done, error)) return false;
+  std::vector<const Scenario*> pending;
+  SweepProgress& pr = report->progress;
+  pr = SweepProgress{};
+  for (const Scenario& s : config.scenarios) {
+    if (s.id % config.shard_count != config.shard_index) continue;
+    ++pr.total;
+    auto it = done.find(s.id);
+    if (it == done.end()) {
+      pending.push_back(&s);
+      continue;
+    }
+    if (!RowMatchesScenario(it->second, s)) {
+      *error = "cannot resume: scenario " + std::to_string(s.id) + " in '" + report->summary_path +
+               "' has other parameter values (another sweep?)";
+      return false;
+    }
+    ++pr.skipped;
+  }
+
+  // 3. Workers take the next pending scenario until none is left.
+  unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  size_t nthreads = config.threads > 0 ? static_cast<size_t>(config.threads) : hw;
+  nthreads = std::max<size_t>(1, std::min(nthreads, pending.size()));
+  std::atomic<size_t> next{0};
+  std::mutex progress_mutex;
+  std::string io_error;
+  Clock::time_point start = Clock::now();
+  auto work = [&] {
+    while (true) {
+      if (config.cancel && config.cancel->load()) return;
+      size_t k = next.fetch_add(1);
+      if (k >= pending.size()) return;
+      bool failed = false;
+      std::string line = runner.Run(*pending[k], &failed);
+      std::string err;
+      bool appended = summary.Append(pending[k]->id, line, &err);
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      if (!appended && io_error.empty()) io_error = err;
+      ++pr.done;
+      pr.failed += failed ? 1 : 0;
+      pr.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+      if (config.progress) config.progress(pr);
+    }
+  };
+  {
+    std::vector<std::jthread> pool;
+    for (size_t i = 1; i < nthreads; ++i) pool.emplace_back(work);
+    work();
+  }
+  report->interrupted = config.cancel && config.cancel->load() && pr.done + pr.skipped < pr.total;
+  report->variants = runner.NumVariants();
+  // 4. Sorted, atomically.
+  if (!summary.Finish(error)) return false;
+  if (!io_error.empty()) {
+    *error = io_error;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace kanesim::batch

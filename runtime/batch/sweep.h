@@ -1,0 +1,116 @@
+// `kanesim sweep`: run many scenarios of one model and write one summary row each.
+//
+// Stages (RunSweep):
+//   1. validate: every swept parameter exists and is not a constant, every metric names
+//      an available signal                                        (ValidateSweep)
+//   2. open the summary, keeping finished rows with --resume       (SummaryFile::Open)
+//   3. hand out this shard's remaining scenarios to worker threads; each scenario is
+//        a. its structural variant's program: built once per distinct set of structural
+//           values (re-elaboration through the caller's VariantBuilder), cached
+//        b. its numeric values bound with rt::Rebind (patterns and KLU's symbolic
+//           analysis reused), or the variant's program itself when nothing numeric changes
+//        c. simulated with sim::Simulate into a MetricSink (and a trajectory file)
+//        d. formatted as one line and appended durably              (ScenarioRunner::Run)
+//   4. rewrite the summary sorted by id                             (SummaryFile::Finish)
+// Every scenario starts from the shared immutable programs and owns its workspaces, so
+// its row does not depend on the thread count, the order, shards or MPI ranks (only the
+// wall_time column does).
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "runtime/batch/metrics.h"
+#include "runtime/batch/scenario.h"
+#include "runtime/engine.h"
+#include "runtime/sim/simulate.h"
+
+namespace kanesim::batch {
+
+struct SweepProgress {
+  int total = 0;    // scenarios of this shard
+  int skipped = 0;  // already done (--resume)
+  int done = 0;     // finished in this run, failed included
+  int failed = 0;
+  double elapsed = 0.0;  // seconds since the first scenario started
+};
+
+struct SweepConfig {
+  std::vector<std::string> param_names;  // columns of Scenario::values
+  std::vector<Scenario> scenarios;       // the whole sweep, ids 0..n-1
+  std::vector<Metric> metrics;
+  sim::SimOptions sim;                   // defaults for every scenario (signals ignored)
+  bool trajectories = false;             // write <out_dir>/trajectories/scenario_<id>.csv
+  std::vector<std::string> trajectory_signals;  // exact names; empty: rt::DefaultSignals
+  std::string out_dir = "sweep-out";
+  int threads = 0;                       // 0: all cores
+  bool resume = false;
+  int shard_index = 0, shard_count = 1;  // run scenarios with id % count == index
+  const std::atomic<bool>* cancel = nullptr;  // set (e.g. by SIGINT): stop handing out work
+  std::function<void(const SweepProgress&)> progress;  // called under a lock
+};
+
+struct SweepReport {
+  std::string summary_path;
+  SweepProgress progress;
+  int variants = 0;          // structural variants compiled (the base program counts)
+  bool interrupted = false;
+  bool is_root = true;       // false on MPI worker ranks (they write nothing)
+};
+
+// Builds the program of a structural variant: the model elaborated again with these
+// structural parameter values (on top of the sweep's fixed --set values). Called at most
+// once per variant and never concurrently.
+using VariantBuilder = std::function<std::shared_ptr<const rt::Program>(
+    const std::vector<std::pair<std::string, double>>& structural, std::string* error)>;
+
+// The summary's file name: summary.csv, or summary.shard-K-of-N.csv for a shard.
+std::string SummaryFileName(const SweepConfig& config);
+
+bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::string* error);
+
+// Runs one scenario into its summary line; thread-safe.
+class ScenarioRunner {
+ public:
+  ScenarioRunner(std::shared_ptr<const rt::Program> base, VariantBuilder build, const SweepConfig& config);
+  std::string Header() const;
+  // The line for scenario `s` (its id first); *failed when its status is "failed".
+  std::string Run(const Scenario& s, bool* failed);
+  int NumVariants() const;
+
+ private:
+  struct Variant {
+    std::shared_ptr<const rt::Program> program;
+    std::string error;
+  };
+  const Variant& GetVariant(const std::vector<std::pair<std::string, double>>& structural);
+
+  std::shared_ptr<const rt::Program> base_;
+  std::vector<double> base_values_;
+  VariantBuilder build_;
+  const SweepConfig& config_;
+  std::mutex variants_mutex_;
+  std::mutex build_mutex_;
+  std::map<std::string, std::unique_ptr<Variant>> variants_;
+};
+
+// Stages 2-4 with threads. False on a usage or I/O error (failed scenarios are rows).
+bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
+              SweepReport* report, std::string* error);
+
+// The same over MPI ranks (rank 0 hands out scenario ids on request and writes the
+// summary; the others simulate). Without MPI at build time: false with a message.
+bool MpiAvailable();
+bool RunSweepMpi(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
+                 SweepReport* report, std::string* error);
+
+// Resume support: false when the line's parameter fields differ from the scenario's.
+bool RowMatchesScenario(const std::string& line, const Scenario& s);
+
+}  // namespace kanesim::batch

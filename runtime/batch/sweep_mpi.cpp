@@ -1,0 +1,152 @@
+// MPI mode of the sweep: `mpirun -n R kanesim sweep --mpi ...`.
+//
+// Dynamic load balancing by a manager/worker protocol: rank 0 owns the summary and the
+// list of pending scenario ids; ranks 1..R-1 each ask for work (kTagReady), receive an
+// id (kTagWork; -1 = no more work), simulate it and send back its summary line
+// (kTagResult), which is also their next request. Fast ranks therefore take more
+// scenarios, and no rank waits on a static partition. Rank 0 only coordinates (its
+// waits are blocking receives), so R ranks give R - 1 simulating processes; with R = 1
+// the sweep runs on threads as without MPI.
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+
+#include "runtime/batch/summary.h"
+#include "runtime/batch/sweep.h"
+
+#ifdef KANESIM_MPI
+// The C API only: OpenMPI's deprecated C++ bindings would need libmpi_cxx.
+#define OMPI_SKIP_MPICXX 1
+#define MPICH_SKIP_MPICXX 1
+#include <mpi.h>
+#endif
+
+namespace kanesim::batch {
+
+#ifndef KANESIM_MPI
+
+bool MpiAvailable() { return false; }
+
+bool RunSweepMpi(std::shared_ptr<const rt::Program>, const VariantBuilder&, const SweepConfig&, SweepReport*,
+                 std::string* error) {
+  *error = "this kanesim was built without MPI (install libopenmpi-dev and configure with -DKANESIM_MPI=ON)";
+  return false;
+}
+
+#else
+
+namespace {
+
+constexpr int kTagReady = 1, kTagWork = 2, kTagResult = 3;
+
+bool Manager(ScenarioRunner& runner, const SweepConfig& config, int size, SweepReport* report, std::string* error) {
+  std::filesystem::create_directories(config.out_dir + (config.trajectories ? "/trajectories" : ""));
+  SummaryFile summary;
+  std::map<int, std::string> done;
+  report->summary_path = config.out_dir + "/" + SummaryFileName(config);
+  bool ok = summary.Open(report->summary_path, runner.Header(), config.resume, &done, error);
+  std::vector<int> pending;
+  SweepProgress& pr = report->progress;
+  pr = SweepProgress{};
+  for (const Scenario& s : config.scenarios) {
+    if (!ok || s.id % config.shard_count != config.shard_index) continue;
+    ++pr.total;
+    auto it = done.find(s.id);
+    if (it == done.end()) {
+      pending.push_back(s.id);
+    } else if (!RowMatchesScenario(it->second, s)) {
+      *error = "cannot resume: scenario " + std::to_string(s.id) + " has other parameter values (another sweep?)";
+      ok = false;
+    } else {
+      ++pr.skipped;
+    }
+  }
+  if (!ok) pending.clear();  // still release the workers
+  auto start = std::chrono::steady_clock::now();
+  size_t next = 0;
+  int active = size - 1;
+  std::string io_error;
+  while (active > 0) {
+    MPI_Status st;
+    MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
+    int count = 0;
+    MPI_Get_count(&st, MPI_CHAR, &count);
+    std::string msg(static_cast<size_t>(count), '\0');
+    MPI_Recv(msg.data(), count, MPI_CHAR, st.MPI_SOURCE, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (st.MPI_TAG == kTagResult && msg.size() > 1) {
+      // "F" or "O" (failed / ok), then the line.
+      bool failed = msg[0] == 'F';
+      std::string line = msg.substr(1);
+      int id = std::atoi(line.c_str());
+      std::string err;
+      if (!summary.Append(id, line, &err) && io_error.empty()) io_error = err;
+      ++pr.done;
+      pr.failed += failed ? 1 : 0;
+      pr.elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (config.progress) config.progress(pr);
+    }
+    bool cancelled = config.cancel && config.cancel->load();
+    int id = (!cancelled && next < pending.size()) ? pending[next++] : -1;
+    MPI_Send(&id, 1, MPI_INT, st.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
+    if (id < 0) --active;
+  }
+  report->interrupted = config.cancel && config.cancel->load() && next < pending.size();
+  if (!ok) return false;
+  if (!summary.Finish(error)) return false;
+  if (!io_error.empty()) {
+    *error = io_error;
+    return false;
+  }
+  return true;
+}
+
+void Worker(ScenarioRunner& runner, const SweepConfig& config) {
+  std::map<int, const Scenario*> by_id;
+  for (const Scenario& s : config.scenarios) by_id[s.id] = &s;
+  char ready = 'R';
+  MPI_Send(&ready, 1, MPI_CHAR, 0, kTagReady, MPI_COMM_WORLD);
+  while (true) {
+    int id = -1;
+    MPI_Recv(&id, 1, MPI_INT, 0, kTagWork, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (id < 0) return;
+    bool failed = false;
+    std::string msg = runner.Run(*by_id.at(id), &failed);
+    msg.insert(msg.begin(), failed ? 'F' : 'O');
+    MPI_Send(msg.data(), static_cast<int>(msg.size()), MPI_CHAR, 0, kTagResult, MPI_COMM_WORLD);
+  }
+}
+
+}  // namespace
+
+bool MpiAvailable() { return true; }
+
+bool RunSweepMpi(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
+                 SweepReport* report, std::string* error) {
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (!initialized) MPI_Init(nullptr, nullptr);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  report->is_root = rank == 0;
+  bool ok = true;
+  if (size == 1) {
+    ok = RunSweep(std::move(base), build, config, report, error);
+  } else if (!ValidateSweep(*base, config, error)) {
+    ok = false;  // every rank validates the same inputs, so all stop here
+  } else {
+    ScenarioRunner runner(base, build, config);
+    if (rank == 0) {
+      ok = Manager(runner, config, size, report, error);
+    } else {
+      Worker(runner, config);
+    }
+    report->variants = runner.NumVariants();
+  }
+  MPI_Finalize();
+  return ok;
+}
+
+#endif
+
+}  // namespace kanesim::batch

@@ -1,0 +1,37 @@
+# Runs a golden test on a perturbed model and requires it to FAIL with exit code 3,
+# naming the expected signal. Either -DSET=name=value (kanesim test --set), or a modified
+# copy: -DMECH=model.mech -DFROM=text -DTO=text (the spec and its golden are copied next
+# to the modified model, with the spec's model path pointing at the copy).
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+get_filename_component(spec_dir ${SPEC} DIRECTORY)
+get_filename_component(name ${SPEC} NAME_WE)
+if(DEFINED SET)
+  execute_process(COMMAND ${KANESIM} test ${SPEC} --set ${SET} RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                  ERROR_VARIABLE err)
+else()
+  file(READ ${MECH} text)
+  string(FIND "${text}" "${FROM}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "'${FROM}' not found in ${MECH}: update this test with the model")
+  endif()
+  string(REPLACE "${FROM}" "${TO}" text "${text}")
+  get_filename_component(mech_name ${MECH} NAME)
+  file(WRITE ${WORK}/${mech_name} "${text}")
+  file(READ ${SPEC} spec_text)
+  string(REGEX REPLACE "model = \"[^\"]*\"" "model = \"${mech_name}\"" spec_text "${spec_text}")
+  file(WRITE ${WORK}/${name}.toml "${spec_text}")
+  file(COPY ${spec_dir}/${name}.csv DESTINATION ${WORK})
+  execute_process(COMMAND ${KANESIM} test ${WORK}/${name}.toml RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                  ERROR_VARIABLE err)
+endif()
+message("${out}${err}")
+if(NOT rc EQUAL 3)
+  message(FATAL_ERROR "expected exit code 3 (regression) for the perturbed model, got ${rc}")
+endif()
+if(NOT out MATCHES "FAIL  ${name}" OR NOT out MATCHES "${EXPECT}[^\n]*largest deviation")
+  message(FATAL_ERROR "the report does not name the deviating signal '${EXPECT}'")
+endif()
+if(NOT out MATCHES "first beyond tolerance at t = ")
+  message(FATAL_ERROR "the report does not give the first time beyond tolerance")
+endif()
