@@ -15,7 +15,8 @@ if [ ! -x "$VENV/bin/python" ]; then
     "$PYTHON" -m venv "$VENV"
 fi
 
-# Versions checked with `pip index versions NAME` (Python 3.11). mpmath is 1.3.0,
+# Versions checked with `pip index versions NAME` (Python 3.11). exudyn (the Exudyn
+# peer of the work-precision benchmark) is 1.13.6. mpmath is 1.3.0,
 # not the newest 1.4.x, because sympy 1.14 requires mpmath<1.4.
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check \
     numpy==2.4.6 \
@@ -24,11 +25,12 @@ fi
     sympy==1.14.0 \
     matplotlib==3.11.2 \
     pin==4.1.0 \
-    mujoco==4.0.0
+    mujoco==4.0.0 \
+    exudyn==1.13.6
 
 "$VENV/bin/python" - <<'PY'
-import numpy, scipy, mpmath, sympy, matplotlib, pinocchio, mujoco, sys
+import numpy, scipy, mpmath, sympy, matplotlib, pinocchio, mujoco, exudyn, sys
 print("python", sys.version.split()[0])
-for m in (numpy, scipy, mpmath, sympy, matplotlib, pinocchio, mujoco):
+for m in (numpy, scipy, mpmath, sympy, matplotlib, pinocchio, mujoco, exudyn):
     print(m.__name__, m.__version__)
 PY
