@@ -1,0 +1,98 @@
+#include "run_kanesim.h"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace kanesim::stress {
+namespace {
+
+std::string Quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::vector<std::string> SplitComma(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string cell;
+  while (std::getline(ss, cell, ',')) out.push_back(cell);
+  return out;
+}
+
+void ParseCsv(const std::string& path, RunResult* r) {
+  std::ifstream in(path);
+  std::string line;
+  if (!std::getline(in, line)) return;
+  r->header = SplitComma(line);
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::vector<double> row;
+    for (const std::string& c : SplitComma(line)) row.push_back(std::strtod(c.c_str(), nullptr));
+    r->rows.push_back(std::move(row));
+  }
+}
+
+}  // namespace
+
+std::string SourcePath(const std::string& rel) { return std::string(KANESIM_SOURCE_DIR) + "/" + rel; }
+
+int RunResult::Index(const std::string& name) const {
+  for (size_t i = 0; i < header.size(); ++i)
+    if (header[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+std::vector<double> RunResult::Column(const std::string& name) const {
+  const int i = Index(name);
+  EXPECT_GE(i, 0) << "no column '" << name << "'";
+  std::vector<double> out;
+  if (i < 0) return out;
+  for (const auto& row : rows) out.push_back(row[static_cast<size_t>(i)]);
+  return out;
+}
+
+const std::vector<double>& RunResult::RowAt(double t) const {
+  size_t best = 0;
+  for (size_t k = 0; k < rows.size(); ++k)
+    if (std::fabs(rows[k][0] - t) < std::fabs(rows[best][0] - t)) best = k;
+  return rows.at(best);
+}
+
+RunResult RunKanesim(const std::string& model, const std::vector<std::string>& args) {
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string stem = ::testing::TempDir() + "kanesim_stress_" + info->test_suite_name() + "_" + info->name();
+  const std::string csv = stem + ".csv", err = stem + ".err";
+  std::remove(csv.c_str());
+  std::string cmd = Quote(KANESIM_EXE) + " run " + Quote(SourcePath(model));
+  for (const std::string& a : args) cmd += " " + Quote(a);
+  cmd += " -o " + Quote(csv) + " 2> " + Quote(err);
+  RunResult r;
+  const auto t0 = std::chrono::steady_clock::now();
+  const int status = std::system(cmd.c_str());
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err);
+  std::stringstream ss;
+  ss << e.rdbuf();
+  r.stderr_text = ss.str();
+  ParseCsv(csv, &r);
+  return r;
+}
+
+RunResult ReadCsv(const std::string& path_in_source) {
+  RunResult r;
+  r.exit_code = 0;
+  ParseCsv(SourcePath(path_in_source), &r);
+  EXPECT_FALSE(r.rows.empty()) << "cannot read " << path_in_source;
+  return r;
+}
+
+}  // namespace kanesim::stress
