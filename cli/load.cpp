@@ -12,11 +12,11 @@ namespace kanesim::cli {
 
 namespace {
 // The last loaded program stays alive so compile messages can show source lines.
-lang::Program* g_program = nullptr;
+thread_local lang::Program* g_program = nullptr;
 }  // namespace
 
 bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
-  static lang::Program program;
+  thread_local lang::Program program;  // one per thread: sweeps load variants concurrently
   program = lang::Program{};
   g_program = &program;
   lang::Diagnostics diags(&program.sources);

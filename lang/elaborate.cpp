@@ -217,7 +217,9 @@ bool Elaborator::Run() {
     mv.span = expr->span;
     mv.from_set = true;
     synthetic_.push_back(std::move(expr));
-    if (path.back().find('[') != std::string::npos) continue;  // element: bound after instantiation
+    // Anything with a subscript (world.g[2], links[3].m) is bound after instantiation,
+    // on the instance it names (modifiers cannot address single array elements).
+    if (ov.name.find('[') != std::string::npos) continue;
     Mod* target = &root_->mod;
     for (size_t i = 0; i < path.size(); ++i) {
       if (!target->sub.count(path[i])) target->order.push_back(path[i]);
@@ -296,8 +298,7 @@ bool Elaborator::Run() {
     for (const auto& ov : options_.overrides) {
       if (synth >= synthetic_.size()) break;
       const ast::Expr* expr = synthetic_[synth++].get();
-      std::string last = ov.name.substr(ov.name.rfind('.') == std::string::npos ? 0 : ov.name.rfind('.') + 1);
-      if (last.find('[') == std::string::npos) continue;
+      if (ov.name.find('[') == std::string::npos) continue;
       // Resolve again (errors were reported above).
       std::vector<std::string> path;
       std::stringstream ss(ov.name);
@@ -320,13 +321,20 @@ bool Elaborator::Run() {
           elem_index = static_cast<int>(sub - 1);
         n = next;
       }
-      if (!n || n->kind != Node::kVar || elem_index < 0) continue;
+      if (!n || n->kind != Node::kVar || n->variability != ast::Variability::Parameter) continue;
       ModValue mv;
       mv.expr = expr;
       mv.scope = root_.get();
       mv.span = expr->span;
       mv.from_set = true;
-      n->eq_elem_binding[elem_index] = mv;
+      if (n->state == 2) {
+        diags_.Error(DiagCode::BadSet, expr->span,
+                     "--set " + ov.name + ": '" + n->path + "' sizes the model and was fixed before this override")
+            .hint = "set the parameter it depends on instead";
+        continue;
+      }
+      if (elem_index >= 0) n->eq_elem_binding[elem_index] = mv;
+      else n->mod.value = mv;
     }
   }
   if (diags_.HasErrors()) return false;

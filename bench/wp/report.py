@@ -41,9 +41,9 @@ def fmt_t(t):
 
 
 def plot_problem(name, prob, tools, out):
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    styles = {}
-    for tool, pts in sorted(tools.items()):
+    fig, ax = plt.subplots(figsize=(9, 5.5))
+    cmap = plt.get_cmap("tab20")
+    for idx, (tool, pts) in enumerate(sorted(tools.items())):
         good = [pt for pt in pts if pt.get("ok")]
         if not good:
             continue
@@ -51,14 +51,15 @@ def plot_problem(name, prob, tools, out):
         ys = [max(pt["error"], 1e-17) for pt in good]
         ls = "-" if is_kanesim(tool) else "--"
         mk = "o" if is_kanesim(tool) else "s"
-        styles[tool] = ax.loglog(xs, ys, ls, marker=mk, ms=3.5, lw=1.6 if is_kanesim(tool) else 1.1, label=tool)
+        ax.loglog(xs, ys, ls, marker=mk, ms=3.5, lw=1.8 if is_kanesim(tool) else 1.1, label=tool,
+                  color=cmap(idx % 20))
     ax.axhline(prob["trust_floor"], color="k", ls=":", lw=1)
     ax.text(ax.get_xlim()[0], prob["trust_floor"], " reference trust floor", va="bottom", fontsize=8)
     ax.set_xlabel("integration wall time (s)")
     ax.set_ylabel("max over joints |q(T) - q_ref(T)|")
     ax.set_title("Work-precision: %s" % prob["title"])
     ax.grid(True, which="major", alpha=0.3)
-    ax.legend(fontsize=7, ncol=2, loc="lower left")
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     fig.savefig(out, dpi=90)
     plt.close(fig)

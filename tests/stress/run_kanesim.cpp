@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 namespace kanesim::stress {
 namespace {
@@ -19,11 +20,20 @@ std::string Quote(const std::string& s) {
   return q + "'";
 }
 
+// Splits a CSV line at commas outside brackets: kanesim's header writes signal names such
+// as s.body.R[1,2] unquoted.
 std::vector<std::string> SplitComma(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, ',')) out.push_back(cell);
+  std::vector<std::string> out(1);
+  int depth = 0;
+  for (char c : line) {
+    if (c == '[') ++depth;
+    if (c == ']') --depth;
+    if (c == ',' && depth == 0) {
+      out.emplace_back();
+      continue;
+    }
+    out.back() += c;
+  }
   return out;
 }
 
@@ -68,7 +78,10 @@ const std::vector<double>& RunResult::RowAt(double t) const {
 
 RunResult RunKanesim(const std::string& model, const std::vector<std::string>& args) {
   const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string stem = ::testing::TempDir() + "kanesim_stress_" + info->test_suite_name() + "_" + info->name();
+  std::string id = std::string(info->test_suite_name()) + "_" + info->name();
+  for (char& c : id)
+    if (c == '/') c = '_';  // parameterized names: "AllPaths/Suite.Name/3"
+  const std::string stem = ::testing::TempDir() + "kanesim_stress_" + id;
   const std::string csv = stem + ".csv", err = stem + ".err";
   std::remove(csv.c_str());
   std::string cmd = Quote(KANESIM_EXE) + " run " + Quote(SourcePath(model));
