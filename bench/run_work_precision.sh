@@ -4,7 +4,8 @@
 # 1. bench/.venv (pinned packages), 2. kanesim Release build in $BUILD_DIR (default build-w),
 # 3. the Pinocchio C++ driver against the pin wheel's headers, 4. missing chain references,
 # 5. every run (bench/wp/run.py -> bench/results/results.json), 6. plots and tables
-# (bench/wp/report.py -> docs/benchmarks/). Full run ~15-20 min on 2 cores, --quick ~2 min.
+# (bench/wp/report.py -> docs/benchmarks/; --quick: bench/results/quick/). Full run ~16 min
+# on 2 cores under load, --quick ~4-5 min including the build check.
 set -eu
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(dirname "$HERE")
@@ -36,6 +37,12 @@ for n in 10 50 100; do
     fi
 done
 
+# --quick writes beside the committed full results, never over them.
+RESULTS="$HERE/results/results.json"
+DOCS="$ROOT/docs/benchmarks"
+case " $* " in
+  *" --quick "*) RESULTS="$HERE/results/quick/results.json"; DOCS="$HERE/results/quick" ;;
+esac
 "$PY" "$HERE/wp/run.py" --kanesim "$BUILD_DIR/cli/kanesim" --pin-driver "$PIN_DRIVER" \
-    --rhs-bench "$BUILD_DIR/bench/rhs_chain" "$@"
-"$PY" "$HERE/wp/report.py"
+    --rhs-bench "$BUILD_DIR/bench/rhs_chain" --out "$RESULTS" "$@"
+"$PY" "$HERE/wp/report.py" --results "$RESULTS" --out "$DOCS"

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "runtime/constraints.h"
 #include "runtime/kane.h"
 #include "runtime/kinematics.h"
 #include "runtime/program.h"
@@ -22,17 +23,24 @@ int NotFinite(const Program& p, Workspace& ws, int free_speed) {
 
 }  // namespace
 
+int SolveAccelerations(const Program& p, Workspace& ws) {
+  if (!p.rows.empty()) return SolveConstrained(p, ws);
+  return p.solver == SolverPath::Sparse ? SolveSparse(p, ws) : SolveDense(p, ws);
+}
+
 // ydot = [qdot_free; udot_free]:
-//   positions -> velocities (tangent generators) -> qdot = N(q) u -> bias accelerations
-//   -> applied forces -> Kane's equations M udot = f (dense or sparse).
+//   positions -> velocities (tangent generators) -> [closed loops: projection onto the
+//   constraints] -> qdot = N(q) u -> bias accelerations -> applied forces -> Kane's
+//   equations M udot = f (dense, sparse, or reduced on the constrained basis).
 int Derivative(const Program& p, Workspace& ws, double t, const double* y, double* ydot) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
   VelocityKinematics(p, ws);
+  if (int s = ProjectState(p, ws); s != 0) return s;
   if (int s = KinematicDifferentials(p, ws); s != 0) return s;
   BiasAccelerations(p, ws);
   if (int s = AppliedForces(p, ws); s != 0) return s;
-  if (int s = p.solver == SolverPath::Sparse ? SolveSparse(p, ws) : SolveDense(p, ws); s != 0) return s;
+  if (int s = SolveAccelerations(p, ws); s != 0) return s;
   for (int i = 0; i < p.nq; ++i) ydot[i] = ws.qdot[p.q_free[static_cast<size_t>(i)]];
   for (int i = 0; i < p.nu; ++i) {
     const double a = ws.udot[p.u_free[static_cast<size_t>(i)]];
@@ -75,6 +83,7 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
   } else {
     InitSparseWorkspace(p, ws);
   }
+  InitConstraintWorkspace(p, ws);
   ws.error.reserve(256);
   // Warm-up at the initial state: the sparse path's first KLU factorization allocates,
   // so it happens here and Derivative only refactors (an error here is reported by the
@@ -102,7 +111,8 @@ ProgramSummary Summarize(const Program& p) {
   s.num_joints = static_cast<int>(p.joints.size());
   s.nq = p.nq;
   s.nu = p.nu;
-  s.dof = p.nu;
+  s.dof = p.rows.empty() ? p.nu : p.dof;
+  for (const LoopClosure& l : p.loops) s.cut_joints.push_back(l.name);
   s.grubler_dof = p.grubler_dof;
   s.solver = p.solver;
   s.integrator = p.integrator;

@@ -44,7 +44,7 @@ bool RotationRates(const TreeJoint& j, RotationCoords c, const double* q, const 
         std::snprintf(buf, sizeof buf, "Cardan angle q[%d] = %.8g (cos = %.3g)", j.type == JointType::Free ? 5 : 2,
                       q[1], cb);
         *error = "gimbal lock in joint '" + j.name + "': " + buf +
-                 "; hint: use quaternion coordinates (rotation = \"quaternion\")";
+                 "; hint: use quaternion coordinates (coordinates = \"quaternion\")";
         return false;
       }
       const double k = (cc * w[0] - sc * w[1]) / cb;
@@ -60,7 +60,7 @@ bool RotationRates(const TreeJoint& j, RotationCoords c, const double* q, const 
         std::snprintf(buf, sizeof buf, "Euler angle q[%d] = %.8g (sin = %.3g)", j.type == JointType::Free ? 5 : 2,
                       q[1], sb);
         *error = "gimbal lock in joint '" + j.name + "': " + buf +
-                 "; hint: use quaternion coordinates (rotation = \"quaternion\")";
+                 "; hint: use quaternion coordinates (coordinates = \"quaternion\")";
         return false;
       }
       const double k = (-cc * w[0] + sc * w[1]) / sb;

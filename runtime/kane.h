@@ -17,10 +17,15 @@ double ForceValue(const Program& p, const Workspace& ws, const Scalar& s);
 // Dense path: M = tau^T Mb tau, f = tau^T (F - Mb a_bias - gyro) + Q, Cholesky/LDLT.
 // Writes the free entries of ws.udot. Returns -1 on a singular mass matrix.
 int SolveDense(const Program& p, Workspace& ws);
+// Its first half: ws.M (lower triangle) and ws.f, eqs. (4) and (5) of kane_dense.cpp.
+void AssembleDense(const Program& p, Workspace& ws);
 
 // Sparse path: the K-vector Newton-Euler system with per-joint tangent and complement
 // blocks, KLU. Also fills ws.lambda_W (joint reaction wrenches).
 int SolveSparse(const Program& p, Workspace& ws);
+
+// The accelerations by the scene's path: reduced (closed loops), sparse or dense.
+int SolveAccelerations(const Program& p, Workspace& ws);
 
 // Compile time: the fixed pattern and the KLU symbolic analysis (reused when
 // `p.sparse_symbolic` is already set by Rebind).

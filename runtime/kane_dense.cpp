@@ -77,8 +77,7 @@ inline Vec6 MoveWrench(const Vec6& w, const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
-int SolveDense(const Program& p, Workspace& ws) {
-  if (p.nu == 0) return 0;
+void AssembleDense(const Program& p, Workspace& ws) {
   const int K = static_cast<int>(p.bodies.size());
   // Composite inertias and wrenches, leaves to root (children follow parents).
   for (int L = K - 1; L >= 0; --L) {
@@ -127,6 +126,11 @@ int SolveDense(const Program& p, Workspace& ws) {
     ws.Ic[static_cast<size_t>(L)].setZero();
     ws.Wc[static_cast<size_t>(L)].setZero();
   }
+}
+
+int SolveDense(const Program& p, Workspace& ws) {
+  if (p.nu == 0) return 0;
+  AssembleDense(p, ws);
 
   const double scale = ws.M.diagonal().cwiseAbs().maxCoeff();
   if (!(scale > 0.0)) return Singular(ws);

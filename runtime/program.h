@@ -10,6 +10,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <Eigen/QR>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -88,6 +90,30 @@ struct BodySignalSource {
   Vec3 p_FBcm = Vec3::Zero();
 };
 
+// One scalar position constraint of a loop closure (runtime/constraints.h), between the
+// cut joint's frame a (on body A) and frame b (on body B):
+//   Translation:  phi = d_W . (p_Wb - p_Wa),    d_W = R_Wa d_a   (a direction fixed in a)
+//   Alignment:    phi = e_W . n_W - offset,      e_W = R_Wa e_a, n_W = R_Wb n_b
+enum class RowKind : std::uint8_t { Translation, Alignment };
+struct ConstraintRow {
+  int loop = -1;                // index into Program::loops
+  RowKind kind = RowKind::Translation;
+  Vec3 d_a = Vec3::UnitX();     // Translation: d; Alignment: e (fixed in frame a, in a's axes)
+  Vec3 n_b = Vec3::UnitZ();     // Alignment: n (fixed in frame b, in b's axes)
+  double offset = 0.0;          // Alignment: e . n at a consistent configuration
+  std::string what;             // "translation along x", "tilt about e1" (for messages)
+};
+
+// A cut joint: the loop closure it stands for (its constrained directions, the
+// complement of its motion subspace, become rows row0 .. row0 + nrows - 1).
+struct LoopClosure {
+  std::string name;
+  flat::SourceLoc loc;
+  int flat_index = -1;
+  int frame_a = -1, frame_b = -1;  // flat frames
+  int row0 = 0, nrows = 0;
+};
+
 // The sparse K-vector system: unknowns and equations per body L in blocks of 12:
 // x = [a_cm (3), alpha (3), udot_free_j (nf), s_j (6 - nf)], rows = [kinematic (6), Newton-Euler (6)].
 struct SparsePattern;  // defined in kane_sparse.cpp
@@ -140,6 +166,13 @@ struct Program {
   std::string solver_reason, integrator_reason;
   std::vector<std::string> notes;
   int grubler_dof = 0;
+
+  // Closed loops (runtime/constraints.h). Empty for trees.
+  std::vector<LoopClosure> loops;       // one per cut joint
+  std::vector<ConstraintRow> rows;      // n_c position constraints, loop by loop
+  int loop_rank = 0;                    // rank of the constraint Jacobian (free speeds) at the assembled start
+  double loop_length = 1.0;             // length scale of the position tolerance (m)
+  int dof = 0;                          // nu - loop_rank
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind
@@ -201,6 +234,26 @@ struct Workspace {
   std::vector<Vec6> lambda_W;       // joint reaction wrench on the child at o_L  (K)  filled by SolveSparse
   std::vector<Eigen::Matrix<double, 6, 6>> D_W;  // complement basis per joint (first 6-nf cols)  (K)  filled by SolveSparse
   std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;
+
+  // Closed loops (runtime/constraints.cpp); sized n_c = p.rows.size(), nu = p.nu.
+  Eigen::VectorXd phi;              // position residuals  (n_c)  filled by ProjectState
+  Eigen::VectorXd phi_drift;        // phi of the integrator's state before projection  (n_c)  filled by EvalSignals
+  Eigen::VectorXd psi;              // velocity residuals A u + b  (n_c)  filled by ProjectState
+  Eigen::VectorXd cbias;            // acceleration residuals with free udot = 0  (n_c)  filled by SolveConstrained
+  Eigen::MatrixXd A;                // constraint Jacobian on the free speeds  (n_c x nu)  filled by ConstraintJacobian
+  Eigen::MatrixXd A_dep;            // columns of A for the dependent speeds  (n_c x rank)  filled by ProjectState
+  std::optional<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>> qr_A;    // partition choice  filled by ProjectState
+  std::optional<Eigen::HouseholderQR<Eigen::MatrixXd>> qr_dep;        // A_dep = Q R  filled by ProjectState
+  std::vector<int> dep, ind;        // free speed indices: dependent (rank), independent (nu - rank)  filled by ProjectState
+  bool partition_valid = false;     // dep/ind chosen  set by ProjectState
+  long partition_changes = 0;       // how often the partition was re-chosen  filled by ProjectState
+  Eigen::VectorXd vc, xd;           // scratch  (n_c), (n_c)
+  Eigen::VectorXd du_full;          // a step in full speeds  (nu_all)  filled by ProjectState
+  Eigen::MatrixXd beta;             // constrained basis in free-speed space  (nu x nind)  filled by SolveConstrained
+  Eigen::MatrixXd Mfull, MB;        // symmetric M, M beta  (nu x nu), (nu x nind)  filled by SolveConstrained
+  Eigen::MatrixXd Mr;               // beta^T M beta  (nind x nind)  filled by SolveConstrained
+  Eigen::VectorXd fr, udot_p;       // reduced right side (nind), particular udot (nu)  filled by SolveConstrained
+  std::optional<Eigen::LLT<Eigen::MatrixXd>> llt_r;  // Cholesky of Mr  filled by SolveConstrained
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
 };

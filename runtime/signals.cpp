@@ -2,6 +2,7 @@
 #include <cmath>
 
 #include "runtime/engine.h"
+#include "runtime/constraints.h"
 #include "runtime/kane.h"
 #include "runtime/kinematics.h"
 #include "runtime/program.h"
@@ -20,6 +21,7 @@ enum class SignalKind : std::uint8_t {
   BodyRotation,     // R_WF of the body's frame, k = 3 i + j
   FramePosition,    // a = flat frame, k
   Drive,            // a = full u index of a prescribed coordinate: force that drives it
+  LoopResidual,     // a = loop; k = 0: max |phi| of its rows, 1: max |A u + b|, 2: max |phi| before projection
 };
 
 struct SignalItem {
@@ -33,6 +35,7 @@ struct SignalPlan {
   bool outputs = false;   // output tape needed
   bool forces = false;    // force tape needed (spring energy with expression stiffness)
   bool dynamics = false;  // full accelerations needed (drive forces)
+  bool drift = false;     // loop residuals of the integrator's state, before projection
 };
 
 namespace {
@@ -48,6 +51,12 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
     for (int k = 0; k < j.nu; ++k)
       if (p.u_free_of[static_cast<size_t>(j.u0 + k)] < 0)
         s.push_back({j.name + ".drive" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::Drive, j.u0 + k, 0}});
+  }
+  for (size_t l = 0; l < p.loops.size(); ++l) {
+    const int a = static_cast<int>(l);
+    s.push_back({p.loops[l].name + ".constraint_residual", {SignalKind::LoopResidual, a, 0}});
+    s.push_back({p.loops[l].name + ".constraint_residual_velocity", {SignalKind::LoopResidual, a, 1}});
+    s.push_back({p.loops[l].name + ".constraint_drift", {SignalKind::LoopResidual, a, 2}});
   }
   const auto& outs = p.mech->outputs;
   for (size_t i = 0; i < outs.size(); ++i) s.push_back({outs[i].name, {SignalKind::Output, static_cast<int>(i), 0}});
@@ -140,6 +149,7 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
         if (!p.force_tape.roots.empty()) plan->forces = plan->velocity = true;
         break;
       case SignalKind::Drive: plan->dynamics = plan->velocity = true; break;
+      case SignalKind::LoopResidual: plan->drift = plan->drift || it.k == 2; break;
       default: break;
     }
   }
@@ -161,15 +171,35 @@ double DriveForce(const Program& p, const Workspace& ws, int r) {
   return d;
 }
 
+// With closed loops the prescribed speed r also moves the dependent speeds: along the
+// admissible direction beta_r = e_r - sum_k x_k e_dep(k), x = A_dep^+ A_r (Lesser
+// eq. 51 for a prescribed speed), on which the loop forces do no work:
+//   drive_r = G_r - sum_k x_k G_dep(k),   G_s = DriveForce of speed s on the tree.
+double LoopDriveForce(const Program& p, Workspace& ws, int r) {
+  double d = DriveForce(p, ws, r);
+  if (p.rows.empty() || p.loop_rank == 0) return d;
+  ConstraintColumn(p, ws, r, &ws.vc);
+  SolveDependent(ws, ws.vc, &ws.xd);
+  for (int k = 0; k < p.loop_rank; ++k)
+    d -= ws.xd[k] * DriveForce(p, ws, p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]);
+  return d;
+}
+
 int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
-  if (plan.velocity) VelocityKinematics(p, ws);
+  if (plan.velocity || !p.rows.empty()) VelocityKinematics(p, ws);
+  // Closed loops: outputs are evaluated on the constraint manifold, as the right-hand side.
+  if (plan.drift) {
+    ConstraintResiduals(p, ws);
+    ws.phi_drift = ws.phi;
+  }
+  if (int s = ProjectState(p, ws); s != 0) return s;
   if (plan.dynamics) {
     // The accelerations: the right-hand side's stages, then the body accelerations.
     BiasAccelerations(p, ws);
     if (int s = AppliedForces(p, ws); s != 0) return s;
-    if (int s = p.solver == SolverPath::Sparse ? SolveSparse(p, ws) : SolveDense(p, ws); s != 0) return s;
+    if (int s = SolveAccelerations(p, ws); s != 0) return s;
     BiasAccelerations(p, ws, /*include_free=*/true);
   }
   if (plan.forces)
@@ -224,7 +254,14 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
         }
         break;
       }
-      case SignalKind::Drive: v = DriveForce(p, ws, it.a); break;
+      case SignalKind::Drive: v = LoopDriveForce(p, ws, it.a); break;
+      case SignalKind::LoopResidual: {
+        const LoopClosure& l = p.loops[static_cast<size_t>(it.a)];
+        const Eigen::VectorXd& r = it.k == 0 ? ws.phi : it.k == 1 ? ws.psi : ws.phi_drift;
+        if (it.k == 1) ConstraintJacobian(p, ws);  // psi of the projected speeds
+        v = l.nrows > 0 ? r.segment(l.row0, l.nrows).cwiseAbs().maxCoeff() : 0.0;
+        break;
+      }
       case SignalKind::FramePosition: {
         Vec3 pos;
         Mat3 R;

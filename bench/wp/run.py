@@ -236,6 +236,9 @@ def run_rhs(args, res, quick):
     pin = {}
     for n in ns:
         pr = subprocess.run([args.pin_driver, "rhs", str(n), "5"], capture_output=True, text=True, timeout=300)
+        if pr.returncode != 0:  # N = 1000 was killed (memory) on the 2-core machine
+            res["notes"].append("pin_driver rhs %d failed (exit %d)" % (n, pr.returncode))
+            continue
         kv = dict(tok.split("=") for tok in pr.stdout.split())
         pin[n] = dict(wall_ns=float(kv["wall_ns"]), cpu_ns=float(kv["cpu_ns"]))
         print("  pinocchio aba N=%d  %.0f ns cpu" % (n, pin[n]["cpu_ns"]), flush=True)
@@ -304,9 +307,10 @@ def main():
     if os.path.exists(args.out) and args.only != ap.get_default("only"):
         with open(args.out) as fh:  # partial re-run: keep the other tools' numbers
             old = json.load(fh)
-        for k in ("runs", "sympy", "rhs"):
+        for k in ("runs", "sympy", "rhs", "machine", "notes"):
             if k in old:
                 res[k] = old[k]
+        res["notes"].append("re-ran %s at load average %s" % (args.only, ", ".join("%.1f" % x for x in os.getloadavg())))
     t_start = time.time()
     steps = [("kanesim", lambda: run_kanesim(args, problems, sweep, rtols, res)),
              ("pin", lambda: run_pin_cpp(args, problems, sweep, res)),
@@ -322,8 +326,9 @@ def main():
             res.setdefault("phase_seconds", {})[name] = time.time() - t0
             with open(args.out, "w") as fh:
                 json.dump(res, fh, indent=1, default=float)
-    res["machine"]["loadavg_end"] = os.getloadavg()
-    res["machine"]["total_seconds"] = time.time() - t_start
+    if args.only == ap.get_default("only"):
+        res["machine"]["loadavg_end"] = os.getloadavg()
+        res["machine"]["total_seconds"] = time.time() - t_start
     with open(args.out, "w") as fh:
         json.dump(res, fh, indent=1, default=float)
     print("wrote", args.out)

@@ -1,6 +1,7 @@
 // Compile: flat mechanism -> Program. Everything decided before t = 0 is decided here:
 // rigid groups (frames joined by Fixed elements and welds, merged into one body), the
-// spanning tree by breadth-first search from ground, q/u allocation in tree order, the
+// spanning tree by breadth-first search from ground (joints closing a loop become cut
+// joints: position constraints, compile/loops.cpp), q/u allocation in tree order, the
 // pattern of the tangent basis (each body's path of speeds), folded numbers, expression
 // tapes, and the choice of solution path and integrator.
 #include <cmath>
@@ -85,6 +86,7 @@ class Compiler {
   TapeBuilder folder_;
   std::vector<int> group_of_frame_;  // union-find root
   std::vector<int> body_of_group_;   // indexed by root frame: tree body, -1 ground, -2 unreached
+  std::vector<int> cut_joints_;      // flat joints that close a loop
 };
 
 bool Compiler::Topology(Program& p) {
@@ -145,8 +147,7 @@ bool Compiler::Topology(Program& p) {
     const int ga = group_of_frame_[static_cast<size_t>(j.frame_a)];
     const int gb = group_of_frame_[static_cast<size_t>(j.frame_b)];
     if (groups.Find(ga) == groups.Find(gb)) {
-      Error("K310", "joint '" + j.name + "' closes a kinematic loop; closed loops arrive with issue #4", j.loc,
-            "remove the joint or model the loop with a force element for now");
+      cut_joints_.push_back(ji);  // closes a loop: becomes constraints (compile/loops.cpp)
       continue;
     }
     groups.Unite(ga, gb);
@@ -326,9 +327,14 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
   if (!c.Topology(p)) return out;
   c.MassProperties(p);
   CompileJointsAndState(p, c.folder_, &out.errors);
+  CompileLoops(p, c.cut_joints_, c.folder_, &out.errors);
   CompileForcesAndOutputs(p, &out.errors);
   if (!out.errors.empty()) return out;
   ChooseSolverAndIntegrator(p);
+  if (!p.loops.empty()) {
+    AssembleLoops(p, &out.errors);
+    if (!out.errors.empty()) return out;
+  }
   if (reuse) p.sparse_symbolic = reuse->sparse_symbolic;
   std::string err;
   if (p.solver == SolverPath::Sparse && !BuildSparse(p, &err)) {

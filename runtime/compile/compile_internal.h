@@ -16,6 +16,14 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
 // Joint axes and placements, q/u allocation, prescribed motions, start values.
 void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 
+// Cut joints (flat indices) -> Program::loops and ::rows (their constrained directions).
+void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,
+                  std::vector<CompileMessage>* errors);
+
+// Assembly at the start time: Newton to a consistent q and u (coordinates marked fixed
+// held), the rank of the constraint Jacobian, DOF, redundant constraints; y0 updated.
+void AssembleLoops(Program& p, std::vector<CompileMessage>* errors);
+
 // Gravity, joint forces, line forces, wrenches (force tape) and outputs (output tape).
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);
 

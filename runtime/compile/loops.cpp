@@ -1,0 +1,291 @@
+// Compile stage: closed loops. Each cut joint (a joint whose two sides the spanning tree
+// already connects; `cut = true` makes a joint the preferred cut) becomes position
+// constraints, one per direction it does NOT allow — the complement of its motion
+// subspace — between its frames a and b (rows of runtime/constraints.cpp, eqs. 1-2):
+//
+//   joint        rows (n = axis in a, e1 = n.unitOrthogonal(), e2 = n x e1)
+//   Revolute     translation along x, y, z of a;  tilt: e1 . n_b, e2 . n_b
+//   Prismatic    translation along e1, e2;        rotation: a_y . b_z, a_z . b_x, a_x . b_y
+//   Cylindrical  translation along e1, e2;        tilt about e1, e2
+//   Universal    translation along x, y, z;       n1 . (R_ab n2) = n1 . n2
+//   Spherical    translation along x, y, z
+//   Planar       translation along n;             tilt about e1, e2
+//   Free         none
+//
+// Assembly (AssembleLoops) at the start time: Gauss-Newton with minimum-norm steps over
+// the speeds not held (coordinates marked `fixed = true` are held, with their speeds),
+//   du = -A_S^+ phi,  q += N(q) du                                              (1)
+// until |phi| <= kAssemblyTol; then the speeds du = -A_S^+ (A u + b). The rank of A
+// (column-pivoted QR, relative threshold kRankTol) gives the DOF = nu - rank; rows
+// that pivoted QR of A^T leaves out are redundant (a planar loop from spatial joints)
+// and are named with their joint's source location.
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <cmath>
+#include <sstream>
+
+#include "runtime/compile/compile_internal.h"
+#include "runtime/constraints.h"
+#include "runtime/kinematics.h"
+
+namespace kanesim::rt {
+
+using flat::JointType;
+using flat::kNoExpr;
+
+namespace {
+
+constexpr double kAssemblyTol = 1e-12;  // position residual (relative to the loop length scale)
+constexpr int kAssemblyIters = 50;
+constexpr double kRankTol = 1e-9;       // |R_ii| / max |R_ii| below it: rank deficient
+
+CompileMessage Msg(const std::string& code, const std::string& text, const flat::SourceLoc& loc,
+                   const std::string& hint = "") {
+  CompileMessage e;
+  e.code = code;
+  e.message = text;
+  e.hint = hint;
+  e.loc = loc;
+  return e;
+}
+
+std::string LocText(const flat::SourceLoc& l) {
+  return l.file + ":" + std::to_string(l.line) + ":" + std::to_string(l.col);
+}
+
+ConstraintRow Trans(const Vec3& d, const std::string& what) {
+  ConstraintRow r;
+  r.kind = RowKind::Translation;
+  r.d_a = d;
+  r.what = what;
+  return r;
+}
+ConstraintRow Align(const Vec3& e, const Vec3& n, double offset, const std::string& what) {
+  ConstraintRow r;
+  r.kind = RowKind::Alignment;
+  r.d_a = e;
+  r.n_b = n;
+  r.offset = offset;
+  r.what = what;
+  return r;
+}
+
+}  // namespace
+
+void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,
+                  std::vector<CompileMessage>* errors) {
+  const flat::Mechanism& m = *p.mech;
+  auto num3 = [&](const flat::Vec3E& e, const flat::SourceLoc& loc) {
+    Vec3 v = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const flat::ExprId id = e[static_cast<size_t>(k)];
+      if (id != kNoExpr && !folder.Fold(id, &v[k]))
+        errors->push_back(Msg("K304", "joint axis must not depend on time or state", loc));
+    }
+    return v;
+  };
+  for (int fi : cut_flat) {
+    const flat::Joint& fj = m.joints[static_cast<size_t>(fi)];
+    LoopClosure l;
+    l.name = fj.name;
+    l.loc = fj.loc;
+    l.flat_index = fi;
+    l.frame_a = fj.frame_a;
+    l.frame_b = fj.frame_b;
+    l.row0 = static_cast<int>(p.rows.size());
+    const int loop = static_cast<int>(p.loops.size());
+    Vec3 n = Vec3::UnitZ(), n2 = Vec3::UnitX();
+    if (fj.type != JointType::Spherical && fj.type != JointType::Free) {
+      n = num3(fj.axis, fj.loc);
+      if (n.norm() < 1e-12) {
+        errors->push_back(Msg("K306", "joint '" + fj.name + "' has a zero axis", fj.loc));
+        n = Vec3::UnitZ();
+      }
+      n.normalize();
+    }
+    if (fj.type == JointType::Universal) {
+      n2 = num3(fj.axis2, fj.loc);
+      if (n2.norm() < 1e-12) n2 = n.unitOrthogonal();
+      n2.normalize();
+    }
+    const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+    const Vec3 X = Vec3::UnitX(), Y = Vec3::UnitY(), Z = Vec3::UnitZ();
+    std::vector<ConstraintRow> rows;
+    auto xyz = [&]() {
+      rows.push_back(Trans(X, "translation along x"));
+      rows.push_back(Trans(Y, "translation along y"));
+      rows.push_back(Trans(Z, "translation along z"));
+    };
+    auto tilt = [&]() {
+      rows.push_back(Align(e1, n, 0.0, "tilt of the axis towards e1"));
+      rows.push_back(Align(e2, n, 0.0, "tilt of the axis towards e2"));
+    };
+    switch (fj.type) {
+      case JointType::Revolute: xyz(); tilt(); break;
+      case JointType::Prismatic:
+        rows.push_back(Trans(e1, "translation across the axis (e1)"));
+        rows.push_back(Trans(e2, "translation across the axis (e2)"));
+        rows.push_back(Align(Y, Z, 0.0, "rotation about x"));
+        rows.push_back(Align(Z, X, 0.0, "rotation about y"));
+        rows.push_back(Align(X, Y, 0.0, "rotation about z"));
+        break;
+      case JointType::Cylindrical:
+        rows.push_back(Trans(e1, "translation across the axis (e1)"));
+        rows.push_back(Trans(e2, "translation across the axis (e2)"));
+        tilt();
+        break;
+      case JointType::Universal: xyz(); rows.push_back(Align(n, n2, n.dot(n2), "twist about the cross axis")); break;
+      case JointType::Spherical: xyz(); break;
+      case JointType::Planar: rows.push_back(Trans(n, "translation along the normal")); tilt(); break;
+      case JointType::Free:
+      case JointType::Weld: break;
+    }
+    for (auto& r : rows) {
+      r.loop = loop;
+      p.rows.push_back(r);
+    }
+    l.nrows = static_cast<int>(rows.size());
+    for (int f : {l.frame_a, l.frame_b})
+      if (f < 0 || p.frames[static_cast<size_t>(f)].body < -1)
+        errors->push_back(Msg("K303", "cut joint '" + fj.name + "' is not connected to the mechanism", fj.loc));
+    p.loops.push_back(l);
+  }
+  p.grubler_dof -= static_cast<int>(p.rows.size());
+}
+
+void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
+  const flat::Mechanism& m = *p.mech;
+  p.solver = SolverPath::Dense;
+  p.solver_reason = std::to_string(p.loops.size()) +
+                    " closed loop(s): dense mass matrix reduced to the constrained basis (Lesser eq. 51)";
+  p.loop_rank = 0;
+  auto wsp = MakeWorkspace(p);
+  Workspace& ws = *wsp;
+  const auto nc = static_cast<Eigen::Index>(p.rows.size());
+  const double t0 = StartTime(p);
+  if (UnpackState(p, ws, t0, p.y0.data()) != 0) {
+    errors->push_back(Msg("K310", "prescribed motion not finite at the start time", p.loops[0].loc));
+    return;
+  }
+  PositionKinematics(p, ws);
+  VelocityKinematics(p, ws);
+  double len = 1.0;
+  for (const Vec3& x : ws.p_WB) len = std::max(len, x.norm());
+  p.loop_length = len;
+
+  // Held speeds: those of coordinates marked fixed (scalar joints per coordinate; a
+  // rotation block of a spherical or free joint when any of its coordinates is).
+  std::vector<int> S;  // free speed indices that assembly may move
+  for (int i = 0; i < p.nu; ++i) {
+    const int s = p.u_free[static_cast<size_t>(i)];
+    const TreeJoint& j = p.joints[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(s)])];
+    const flat::Joint& fj = m.joints[static_cast<size_t>(j.flat_index)];
+    const int k = s - j.u0;
+    bool held = false;
+    const bool rot_block = j.type == JointType::Spherical || (j.type == JointType::Free && k >= 3);
+    if (!rot_block) {
+      held = static_cast<size_t>(k) < fj.q_start_fixed.size() && fj.q_start_fixed[static_cast<size_t>(k)];
+    } else {
+      for (int c = j.type == JointType::Free ? 3 : 0; c < j.nq; ++c)
+        held = held || (static_cast<size_t>(c) < fj.q_start_fixed.size() && fj.q_start_fixed[static_cast<size_t>(c)]);
+    }
+    if (!held) S.push_back(i);
+  }
+  Eigen::MatrixXd AS(nc, static_cast<Eigen::Index>(S.size()));
+  auto gather = [&]() {
+    for (size_t c = 0; c < S.size(); ++c) AS.col(static_cast<Eigen::Index>(c)) = ws.A.col(S[c]);
+  };
+  auto step = [&](const Eigen::VectorXd& dx, double scale) {
+    ws.du_full.setZero();
+    for (size_t c = 0; c < S.size(); ++c) ws.du_full[p.u_free[static_cast<size_t>(S[c])]] = scale * dx[static_cast<Eigen::Index>(c)];
+  };
+  const double tol = kAssemblyTol * len;
+  double r = 0.0;
+  int it = 0;
+  for (;; ++it) {
+    ConstraintResiduals(p, ws);
+    ConstraintJacobian(p, ws);
+    r = ws.phi.cwiseAbs().maxCoeff();
+    if (r <= tol || it == kAssemblyIters || S.empty()) break;
+    gather();
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(AS);
+    cod.setThreshold(kRankTol);
+    const Eigen::VectorXd dx = cod.solve(-ws.phi);
+    // Backtracking: halve the step until the residual decreases (far from the solution).
+    const Eigen::VectorXd q_old = ws.q;
+    double scale = 1.0;
+    for (int h = 0; h < 30; ++h, scale *= 0.5) {
+      ws.q = q_old;
+      step(dx, scale);
+      ApplyCoordinateStep(p, ws, ws.du_full);
+      PositionKinematics(p, ws);
+      ConstraintResiduals(p, ws);
+      if (ws.phi.cwiseAbs().maxCoeff() < r) break;
+    }
+    PositionKinematics(p, ws);
+    VelocityKinematics(p, ws);
+  }
+  if (r > tol) {
+    Eigen::Index worst = 0;
+    ws.phi.cwiseAbs().maxCoeff(&worst);
+    const ConstraintRow& row = p.rows[static_cast<size_t>(worst)];
+    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+    std::ostringstream msg;
+    msg << "joint '" << l.name << "' closes a kinematic loop that cannot be assembled: " << row.what
+        << " residual " << r << " after " << it << " Newton iterations";
+    errors->push_back(Msg("K310", msg.str(), l.loc,
+                          "check the link lengths and the start values; mark the coordinates you know with "
+                          "`fixed = true` and leave the others free"));
+    return;
+  }
+  // Speeds: minimum-norm correction over the speeds not held.
+  ConstraintJacobian(p, ws);
+  if (!S.empty()) {
+    gather();
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(AS);
+    cod.setThreshold(kRankTol);
+    const Eigen::VectorXd dx = cod.solve(-ws.psi);
+    for (size_t c = 0; c < S.size(); ++c) ws.u[p.u_free[static_cast<size_t>(S[c])]] += dx[static_cast<Eigen::Index>(c)];
+    VelocityKinematics(p, ws);
+    ConstraintJacobian(p, ws);
+  }
+  const double rv = ws.psi.size() ? ws.psi.cwiseAbs().maxCoeff() : 0.0;
+  if (rv > 1e-9 * (1.0 + ws.u.cwiseAbs().maxCoeff()) * len) {
+    errors->push_back(Msg("K310", "the start speeds cannot satisfy the loop closed by joint '" + p.loops[0].name +
+                                      "' (velocity residual " + std::to_string(rv) + ")",
+                          p.loops[0].loc, "leave more start speeds free (not fixed)"));
+    return;
+  }
+
+  // Rank, DOF and redundant rows at the assembled configuration.
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(ws.A);
+  qr.setThreshold(kRankTol);
+  p.loop_rank = static_cast<int>(qr.rank());
+  p.dof = p.nu - p.loop_rank;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qrt(ws.A.transpose());
+  qrt.setThreshold(kRankTol);
+  const auto& perm = qrt.colsPermutation().indices();
+  for (size_t li = 0; li < p.loops.size(); ++li) {
+    const LoopClosure& l = p.loops[li];
+    std::string redundant;
+    for (Eigen::Index k = qrt.rank(); k < nc; ++k) {
+      const ConstraintRow& row = p.rows[static_cast<size_t>(perm[k])];
+      if (row.loop != static_cast<int>(li)) continue;
+      redundant += (redundant.empty() ? "" : ", ") + row.what;
+    }
+    std::string note = "loop closed by joint '" + l.name + "' (" + LocText(l.loc) + "): " +
+                       std::to_string(l.nrows) + " constraint(s)";
+    if (!redundant.empty())
+      note += "; redundant (indeterminate constraint-force components): " + redundant;
+    p.notes.push_back(note);
+  }
+  std::ostringstream dof;
+  dof << "degrees of freedom " << p.dof << " = " << p.nu << " free speeds - rank " << p.loop_rank
+      << " of the " << nc << "-row constraint Jacobian at the assembled start";
+  p.notes.push_back(dof.str());
+  // The assembled start: the state the integrators begin from.
+  for (int i = 0; i < p.nq; ++i) p.y0[static_cast<size_t>(i)] = ws.q[p.q_free[static_cast<size_t>(i)]];
+  for (int i = 0; i < p.nu; ++i) p.y0[static_cast<size_t>(p.nq + i)] = ws.u[p.u_free[static_cast<size_t>(i)]];
+}
+
+}  // namespace kanesim::rt

@@ -1,0 +1,354 @@
+// Loop-closure constraints and the reduced equations (runtime/constraints.h).
+//
+// Every row is one scalar position constraint between frame a (body A) and frame b
+// (body B) of a cut joint, r = p_Wb - p_Wa:
+//   Translation  phi = d . r,             d = R_Wa d_a                                  (1)
+//   Alignment    phi = e . n - offset,    e = R_Wa e_a,  n = R_Wb n_b                    (2)
+// Their exact time derivatives are linear in the speeds (Lesser eq. 48, A u + b = 0):
+//   (1)  phid = d . (v_b - v_a - w_A x r)                                               (3)
+//   (2)  phid = k . (w_B - w_A),   k = n x e                                            (4)
+// with v_a, v_b the velocities of the frame origins; a column r of A is (3)/(4) for the
+// unit pseudo-speed u = e_r (seed 000 eq. 11.16). Differentiating once more with
+// udot = 0 gives the acceleration bias c (seed 000 eq. 11.17):
+//   (1)  c = (w_A x d) . s + d . (a_b - a_a - alpha_A x r - w_A x (v_b - v_a)),
+//        s = v_b - v_a - w_A x r                                                        (5)
+//   (2)  c = ((w_B x n) x e + n x (w_A x e)) . (w_B - w_A) + k . (alpha_B - alpha_A)     (6)
+//
+// Reduced equations (Lesser eqs. 49-51): the free speeds are split by column-pivoted QR
+// of A into dependent ones (rank of them, pivot columns) and independent ones. With
+// A_dep = Q R (least squares: redundant rows drop out),
+//   u_dep = -A_dep^+ (A_ind u_ind + b)                                                  (7)
+//   beta  = [1 on ind;  -A_dep^+ A_ind on dep]      (constrained tangent basis, eq. 51) (8)
+//   udot  = beta z + udot_p,   udot_p = [0 on ind;  -A_dep^+ c on dep]                   (9)
+//   (beta^T M beta) z = beta^T (f - M udot_p)        (Kane's equations on beta)         (10)
+// The partition is kept while its block stays well conditioned (min/max |R_ii| above
+// kDegraded) and re-chosen by pivoting when it degrades.
+#include "runtime/constraints.h"
+
+#include <cmath>
+
+#include "runtime/joint_kinematics.h"
+#include "runtime/kane.h"
+#include "runtime/kinematics.h"
+
+namespace kanesim::rt {
+
+namespace {
+
+// Conditioning (min/max |R_ii|) of the dependent block below which the partition is
+// re-chosen by pivoting; and below which, after re-choosing, the configuration is
+// singular (a loop at a dead point: the Jacobian lost rank).
+constexpr double kDegraded = 1e-2;
+constexpr double kSingular = 1e-10;
+// Newton on positions: iterate to round-off (kTight) so that the right-hand side is a
+// smooth function of y for difference-quotient Jacobians; fail above kLoose.
+constexpr double kTight = 1e-13;
+constexpr double kLoose = 1e-8;
+constexpr int kMaxNewton = 8;
+
+struct FrameState {
+  int body = -1;
+  Vec3 p = Vec3::Zero();
+  Mat3 R = Mat3::Identity();
+};
+
+FrameState FrameAt(const Program& p, const Workspace& ws, int frame) {
+  FrameState f;
+  f.body = p.frames[static_cast<size_t>(frame)].body;
+  FramePose(p, ws, frame, &f.p, &f.R);
+  return f;
+}
+
+// Acceleration of a frame origin with free udot = 0 (after BiasAccelerations).
+Vec3 FrameBiasAccel(const Program& p, const Workspace& ws, int frame, Vec3* alpha) {
+  const FramePlace& F = p.frames[static_cast<size_t>(frame)];
+  alpha->setZero();
+  if (F.body < 0) return Vec3::Zero();
+  const auto B = static_cast<size_t>(F.body);
+  const Vec3 rho = ws.R_WB[B] * F.p_BF;
+  *alpha = ws.alpha_bias[B];
+  return ws.a_bias_o[B] + ws.alpha_bias[B].cross(rho) + ws.w_WB[B].cross(ws.w_WB[B].cross(rho));
+}
+
+// Row value of (3)/(4) for the point velocities/angular velocities given.
+double RowRate(const ConstraintRow& row, const Vec3& d_or_k, const Vec3& r, const Vec3& v_a, const Vec3& w_A,
+               const Vec3& v_b, const Vec3& w_B) {
+  if (row.kind == RowKind::Translation) return d_or_k.dot(v_b - v_a - w_A.cross(r));
+  return d_or_k.dot(w_B - w_A);
+}
+
+// Adds sign * (contribution of every speed on body's path) to row `i` of A: the twist
+// column of speed s carried to point x.
+void AddBodyColumns(const Program& p, Workspace& ws, int body, const Vec3& x, double sign,
+                    const ConstraintRow& row, const Vec3& d_or_k, const Vec3& r, bool is_a, int i) {
+  if (body < 0) return;
+  for (int s : p.bodies[static_cast<size_t>(body)].path_speeds) {
+    const auto h = ws.H_W.col(s);
+    const Vec3 hw = h.tail<3>();
+    const Vec3 v = h.head<3>() + hw.cross(x - ws.p_WB[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(s)])]);
+    double val;
+    if (row.kind == RowKind::Translation)
+      val = d_or_k.dot(v) + (is_a ? r.cross(d_or_k).dot(hw) : 0.0);  // (3): d . (w_A x r) = (r x d) . w_A
+    else
+      val = d_or_k.dot(hw);  // (4)
+    ws.A(i, p.u_free_of[static_cast<size_t>(s)]) += sign * val;
+  }
+}
+
+// Direction of a row: d (translation) or k = n x e (alignment), and r = p_b - p_a.
+Vec3 RowDirection(const ConstraintRow& row, const FrameState& a, const FrameState& b) {
+  if (row.kind == RowKind::Translation) return a.R * row.d_a;
+  return (b.R * row.n_b).cross(a.R * row.d_a);
+}
+
+}  // namespace
+
+void ConstraintResiduals(const Program& p, Workspace& ws) {
+  for (size_t i = 0; i < p.rows.size(); ++i) {
+    const ConstraintRow& row = p.rows[i];
+    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
+    if (row.kind == RowKind::Translation)
+      ws.phi[static_cast<Eigen::Index>(i)] = (a.R * row.d_a).dot(b.p - a.p);  // (1)
+    else
+      ws.phi[static_cast<Eigen::Index>(i)] = (a.R * row.d_a).dot(b.R * row.n_b) - row.offset;  // (2)
+  }
+}
+
+void ConstraintJacobian(const Program& p, Workspace& ws) {
+  ws.A.setZero();
+  for (size_t ii = 0; ii < p.rows.size(); ++ii) {
+    const auto i = static_cast<int>(ii);
+    const ConstraintRow& row = p.rows[ii];
+    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
+    const Vec3 dk = RowDirection(row, a, b);
+    const Vec3 r = b.p - a.p;
+    AddBodyColumns(p, ws, b.body, b.p, 1.0, row, dk, r, false, i);
+    AddBodyColumns(p, ws, a.body, a.p, -1.0, row, dk, r, true, i);
+    Vec3 v_a, w_A, v_b, w_B;
+    FrameMotion(p, ws, l.frame_a, &v_a, &w_A);
+    FrameMotion(p, ws, l.frame_b, &v_b, &w_B);
+    ws.psi[i] = RowRate(row, dk, r, v_a, w_A, v_b, w_B);
+  }
+}
+
+void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::VectorXd* col) {
+  const int J = p.joint_of_speed[static_cast<size_t>(s)];
+  const auto h = ws.H_W.col(s);
+  const Vec3 hw = h.tail<3>();
+  // Does speed s move body X? (J on X's path from the root.)
+  auto moves = [&](int X) {
+    for (int L = X; L >= 0; L = p.joints[static_cast<size_t>(L)].parent)
+      if (L == J) return true;
+    return false;
+  };
+  for (size_t ii = 0; ii < p.rows.size(); ++ii) {
+    const ConstraintRow& row = p.rows[ii];
+    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
+    const Vec3 dk = RowDirection(row, a, b);
+    const Vec3 r = b.p - a.p;
+    const Vec3 o = ws.p_WB[static_cast<size_t>(J)];
+    Vec3 v_a = Vec3::Zero(), w_A = Vec3::Zero(), v_b = Vec3::Zero(), w_B = Vec3::Zero();
+    if (moves(a.body)) {
+      w_A = hw;
+      v_a = h.head<3>() + hw.cross(a.p - o);
+    }
+    if (moves(b.body)) {
+      w_B = hw;
+      v_b = h.head<3>() + hw.cross(b.p - o);
+    }
+    (*col)[static_cast<Eigen::Index>(ii)] = RowRate(row, dk, r, v_a, w_A, v_b, w_B);
+  }
+}
+
+void ConstraintBias(const Program& p, Workspace& ws) {
+  for (size_t ii = 0; ii < p.rows.size(); ++ii) {
+    const ConstraintRow& row = p.rows[ii];
+    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
+    Vec3 v_a, w_A, v_b, w_B, alpha_A, alpha_B;
+    FrameMotion(p, ws, l.frame_a, &v_a, &w_A);
+    FrameMotion(p, ws, l.frame_b, &v_b, &w_B);
+    const Vec3 a_a = FrameBiasAccel(p, ws, l.frame_a, &alpha_A);
+    const Vec3 a_b = FrameBiasAccel(p, ws, l.frame_b, &alpha_B);
+    double c;
+    if (row.kind == RowKind::Translation) {
+      const Vec3 d = a.R * row.d_a, r = b.p - a.p;
+      const Vec3 s = v_b - v_a - w_A.cross(r);
+      c = w_A.cross(d).dot(s) + d.dot(a_b - a_a - alpha_A.cross(r) - w_A.cross(v_b - v_a));  // (5)
+    } else {
+      const Vec3 e = a.R * row.d_a, n = b.R * row.n_b;
+      c = (w_B.cross(n).cross(e) + n.cross(w_A.cross(e))).dot(w_B - w_A) + n.cross(e).dot(alpha_B - alpha_A);  // (6)
+    }
+    ws.cbias[static_cast<Eigen::Index>(ii)] = c;
+  }
+}
+
+int FactorDependent(const Program& p, Workspace& ws) {
+  const int rank = p.loop_rank;
+  if (rank == 0) return 0;
+  auto ratio = [&]() {
+    for (int k = 0; k < rank; ++k) ws.A_dep.col(k) = ws.A.col(ws.dep[static_cast<size_t>(k)]);
+    ws.qr_dep->compute(ws.A_dep);
+    const auto d = ws.qr_dep->matrixQR().diagonal().head(rank).cwiseAbs();
+    const double mx = d.maxCoeff();
+    return mx > 0.0 ? d.minCoeff() / mx : 0.0;
+  };
+  auto choose = [&]() {
+    ws.qr_A->compute(ws.A);
+    const auto& perm = ws.qr_A->colsPermutation().indices();
+    for (int k = 0; k < rank; ++k) ws.dep[static_cast<size_t>(k)] = perm[k];
+    // Independent speeds in increasing order (deterministic beta columns).
+    int n = 0;
+    for (int s = 0; s < p.nu; ++s) {
+      bool d = false;
+      for (int k = 0; k < rank; ++k) d = d || ws.dep[static_cast<size_t>(k)] == s;
+      if (!d) ws.ind[static_cast<size_t>(n++)] = s;
+    }
+    ws.partition_valid = true;
+    ++ws.partition_changes;
+  };
+  bool fresh = false;
+  if (!ws.partition_valid) {
+    choose();
+    fresh = true;
+  }
+  double q = ratio();
+  if (q < kDegraded && !fresh) {
+    choose();
+    q = ratio();
+  }
+  if (q < kSingular) {
+    ws.error = "closed loop at a singular configuration (the constraint Jacobian lost rank; a dead point?)";
+    return 1;
+  }
+  return 0;
+}
+
+void SolveDependent(const Workspace& ws_c, const Eigen::VectorXd& v, Eigen::VectorXd* x) {
+  auto& ws = const_cast<Workspace&>(ws_c);
+  const auto rank = ws.qr_dep->matrixQR().cols();
+  ws.vc = v;
+  ws.vc.applyOnTheLeft(ws.qr_dep->householderQ().transpose());
+  ws.qr_dep->matrixQR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().solveInPlace(ws.vc.head(rank));
+  x->head(rank) = ws.vc.head(rank);
+}
+
+void ApplyCoordinateStep(const Program& p, Workspace& ws, const Eigen::VectorXd& du) {
+  std::string unused;
+  for (const TreeJoint& j : p.joints) {
+    bool any = false;
+    for (int k = 0; k < j.nu; ++k) any = any || du[j.u0 + k] != 0.0;
+    if (!any) continue;
+    double dq[7];
+    if (!JointKinematicDifferential(j, ws.q.data() + j.q0, du.data() + j.u0, dq, &unused)) continue;
+    for (int k = 0; k < j.nq; ++k) ws.q[j.q0 + k] += dq[k];
+    const bool quat = (j.type == flat::JointType::Spherical || j.type == flat::JointType::Free) &&
+                      j.rotation == flat::RotationCoords::Quaternion;
+    if (quat) {
+      const int r0 = j.q0 + (j.type == flat::JointType::Free ? 3 : 0);
+      ws.q.segment<4>(r0).normalize();
+    }
+  }
+}
+
+int ProjectState(const Program& p, Workspace& ws) {
+  if (p.rows.empty()) return 0;
+  const double tight = kTight * p.loop_length, loose = kLoose * p.loop_length;
+  const int rank = p.loop_rank;
+  for (int it = 0;; ++it) {
+    ConstraintResiduals(p, ws);
+    ConstraintJacobian(p, ws);
+    if (int s = FactorDependent(p, ws); s != 0) return s;
+    const double r = ws.phi.cwiseAbs().maxCoeff();
+    if (r <= tight || rank == 0 || it == kMaxNewton) break;
+    // Newton step on the dependent coordinates: A_dep du_dep = -phi (7).
+    SolveDependent(ws, ws.phi, &ws.xd);
+    ws.du_full.setZero();
+    for (int k = 0; k < rank; ++k) ws.du_full[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] = -ws.xd[k];
+    ApplyCoordinateStep(p, ws, ws.du_full);
+    PositionKinematics(p, ws);
+    VelocityKinematics(p, ws);
+  }
+  const double r = ws.phi.cwiseAbs().maxCoeff();
+  if (r > loose) {
+    ws.error = "closed loop cannot be closed (position residual " + std::to_string(r) + " at time " +
+               std::to_string(ws.t) + ")";
+    return 1;
+  }
+  if (rank == 0) return 0;
+  // Dependent speeds from the velocity constraints (7): u_dep -= A_dep^+ (A u + b).
+  SolveDependent(ws, ws.psi, &ws.xd);
+  for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.xd[k];
+  VelocityKinematics(p, ws);
+  return 0;
+}
+
+int SolveConstrained(const Program& p, Workspace& ws) {
+  if (p.nu == 0) return 0;
+  AssembleDense(p, ws);
+  ConstraintBias(p, ws);
+  const int rank = p.loop_rank, nind = p.nu - rank;
+  ws.Mfull = ws.M.selfadjointView<Eigen::Lower>();
+  // udot_p (9) and beta (8).
+  ws.udot_p.setZero();
+  if (rank > 0) {
+    SolveDependent(ws, ws.cbias, &ws.xd);
+    for (int k = 0; k < rank; ++k) ws.udot_p[ws.dep[static_cast<size_t>(k)]] = -ws.xd[k];
+  }
+  ws.beta.setZero();
+  for (int c = 0; c < nind; ++c) {
+    const int s = ws.ind[static_cast<size_t>(c)];
+    ws.beta(s, c) = 1.0;
+    if (rank == 0) continue;
+    ws.vc = ws.A.col(s);
+    SolveDependent(ws, ws.vc, &ws.xd);
+    for (int k = 0; k < rank; ++k) ws.beta(ws.dep[static_cast<size_t>(k)], c) = -ws.xd[k];
+  }
+  // (10)
+  ws.f.noalias() -= ws.Mfull * ws.udot_p;
+  if (nind > 0) {
+    ws.MB.noalias() = ws.Mfull * ws.beta;
+    ws.Mr.noalias() = ws.beta.transpose() * ws.MB;
+    ws.fr.noalias() = ws.beta.transpose() * ws.f;
+    ws.llt_r->compute(ws.Mr);
+    if (ws.llt_r->info() != Eigen::Success) {
+      ws.error = "singular reduced mass matrix (closed loop)";
+      return -1;
+    }
+    ws.llt_r->solveInPlace(ws.fr);
+    ws.udot_p.noalias() += ws.beta * ws.fr;
+  }
+  for (int i = 0; i < p.nu; ++i) ws.udot[p.u_free[static_cast<size_t>(i)]] = ws.udot_p[i];
+  return 0;
+}
+
+void InitConstraintWorkspace(const Program& p, Workspace& ws) {
+  const auto nc = static_cast<Eigen::Index>(p.rows.size());
+  const int rank = p.loop_rank, nind = p.nu - rank;
+  ws.phi = Eigen::VectorXd::Zero(nc);
+  ws.phi_drift = Eigen::VectorXd::Zero(nc);
+  ws.psi = Eigen::VectorXd::Zero(nc);
+  ws.cbias = Eigen::VectorXd::Zero(nc);
+  ws.vc = Eigen::VectorXd::Zero(nc);
+  ws.xd = Eigen::VectorXd::Zero(nc);
+  ws.du_full = Eigen::VectorXd::Zero(p.nu_all);
+  ws.A = Eigen::MatrixXd::Zero(nc, p.nu);
+  ws.A_dep = Eigen::MatrixXd::Zero(nc, rank);
+  ws.qr_A.emplace(nc, p.nu);
+  ws.qr_dep.emplace(nc, rank);
+  ws.dep.assign(static_cast<size_t>(rank), 0);
+  ws.ind.assign(static_cast<size_t>(nind), 0);
+  ws.partition_valid = false;
+  ws.beta = Eigen::MatrixXd::Zero(p.nu, nind);
+  ws.Mfull = Eigen::MatrixXd::Zero(p.nu, p.nu);
+  ws.MB = Eigen::MatrixXd::Zero(p.nu, nind);
+  ws.Mr = Eigen::MatrixXd::Zero(nind, nind);
+  ws.fr = Eigen::VectorXd::Zero(nind);
+  ws.udot_p = Eigen::VectorXd::Zero(p.nu);
+  ws.llt_r.emplace(nind);
+}
+
+}  // namespace kanesim::rt

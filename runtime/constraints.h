@@ -1,0 +1,49 @@
+// Closed kinematic loops: the cut joints' position constraints phi(q) = 0, their
+// velocity form A(q) u + b(q, t) = 0 (Lesser §4c eq. 48) and the reduced Kane's
+// equations on the constrained basis beta (Lesser eqs. 49-51). docs/constraints.md.
+//
+// Stages, as Derivative calls them after VelocityKinematics:
+//   ProjectState      Newton on the dependent coordinates (phi = 0), then the dependent
+//                     speeds (A u + b = 0): the right-hand side is always evaluated on the
+//                     constraint manifold, so the loops cannot drift.
+//   SolveConstrained  after AppliedForces: M udot = f restricted to beta.
+// None allocates.
+#pragma once
+
+#include "runtime/program.h"
+
+namespace kanesim::rt {
+
+// ws.phi from the current poses (after PositionKinematics).
+void ConstraintResiduals(const Program& p, Workspace& ws);
+
+// ws.A (free speeds), ws.psi = A u + b (after VelocityKinematics).
+void ConstraintJacobian(const Program& p, Workspace& ws);
+
+// Column of the constraint Jacobian for full speed r (free or prescribed), into *col (n_c).
+void ConstraintColumn(const Program& p, const Workspace& ws, int r, Eigen::VectorXd* col);
+
+// ws.cbias: d/dt (A u + b) with free udot = 0 (after BiasAccelerations).
+void ConstraintBias(const Program& p, Workspace& ws);
+
+// Chooses (or keeps) the dependent speeds by column pivoting and factors A_dep.
+// Returns 0, or 1 (recoverable, ws.error) at a singular configuration.
+int FactorDependent(const Program& p, Workspace& ws);
+
+// x = A_dep^+ v (n_c -> rank) with the factorization of FactorDependent; v is kept.
+void SolveDependent(const Workspace& ws, const Eigen::VectorXd& v, Eigen::VectorXd* x);
+
+// q += N(q) du for a full-speed step du (quaternions renormalized).
+void ApplyCoordinateStep(const Program& p, Workspace& ws, const Eigen::VectorXd& du_full);
+
+// Newton on the dependent coordinates, then the dependent speeds; leaves the position
+// and velocity kinematics of the projected state in ws. 0, or 1 (recoverable).
+int ProjectState(const Program& p, Workspace& ws);
+
+// Reduced Kane's equations (beta^T M beta) z = beta^T (f - M udot_p); writes ws.udot.
+int SolveConstrained(const Program& p, Workspace& ws);
+
+// Workspace creation: the loop arrays.
+void InitConstraintWorkspace(const Program& p, Workspace& ws);
+
+}  // namespace kanesim::rt
