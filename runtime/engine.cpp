@@ -21,6 +21,20 @@ int NotFinite(const Program& p, Workspace& ws, int free_speed) {
   return -1;
 }
 
+// Closed loops: the right-hand side is evaluated at the projection (q*, u*) of y onto
+// the constraints, so the exact solution never leaves them; the integrator's own y
+// would still wander off by its local errors. A relaxation term that vanishes on the
+// manifold pulls it back (docs/constraints.md, "drift"):
+//   ydot = f(q*, u*) + k_drift (y* - y)                                             (1)
+// with k_drift (1/s) slow enough to add no stiffness to an explicit or Adams method.
+constexpr double kDriftRate = 10.0;
+
+void PullToManifold(const Program& p, const Workspace& ws, const double* y, double* ydot) {
+  for (int i = 0; i < p.nq; ++i) ydot[i] += kDriftRate * (ws.q[p.q_free[static_cast<size_t>(i)]] - y[i]);
+  for (int i = 0; i < p.nu; ++i)
+    ydot[p.nq + i] += kDriftRate * (ws.u[p.u_free[static_cast<size_t>(i)]] - y[p.nq + i]);
+}
+
 }  // namespace
 
 int SolveAccelerations(const Program& p, Workspace& ws) {
@@ -47,6 +61,7 @@ int Derivative(const Program& p, Workspace& ws, double t, const double* y, doubl
     if (!std::isfinite(a)) return NotFinite(p, ws, i);
     ydot[p.nq + i] = a;
   }
+  if (!p.rows.empty()) PullToManifold(p, ws, y, ydot);
   return 0;
 }
 

@@ -51,6 +51,10 @@ struct TreeJoint {
   Vec3 axis3 = Vec3::UnitY();  // Planar e2 = axis x e1
   Vec3 p_PJ = Vec3::Zero();    // parent-side joint frame origin in the parent body frame
   Mat3 R_PJ = Mat3::Identity();
+  // Cardan/Euler joints: which branch between two singular values of the middle angle the
+  // motion started in (Cardan: floor((q2 + pi/2) / pi), Euler: floor(q2 / pi)); leaving it
+  // means the motion went through gimbal lock.   filled by BuildStateLayout
+  int chart0 = 0;
 };
 
 struct TreeBody {

@@ -105,6 +105,11 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       if (quat && k >= rot0 && e != kNoExpr) any_rot_start = true;
       q_start_all.push_back(num(e, 0.0, "start value of " + j.name + ".q", fj.loc));
     }
+    if ((j.type == JointType::Spherical || j.type == JointType::Free) && !quat) {
+      const double b = q_start_all[static_cast<size_t>(j.q0 + rot0 + 1)];
+      j.chart0 = static_cast<int>(j.rotation == flat::RotationCoords::CardanXYZ ? std::floor((b + M_PI / 2) / M_PI)
+                                                                                 : std::floor(b / M_PI));
+    }
     if (quat) {
       double* qq = &q_start_all[static_cast<size_t>(j.q0 + rot0)];
       if (!any_rot_start) qq[0] = 1.0;
