@@ -167,6 +167,7 @@ class Elaborator {
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
   flat::SourceLoc Loc(Span s) const;
+  Node* FindOverrideTarget(const std::string& name, int* elem_index);
 
   // --- emission (elab_emit.cpp) ---
   void Emit(Node* root);

@@ -129,6 +129,32 @@ const ast::ClassDef* Elaborator::FindClass(const std::vector<std::string>& parts
   return first;
 }
 
+// The instance a --set name denotes: dotted parts, a subscript on a component array
+// selects an element, a subscript on a variable an element of it (*elem_index).
+Node* Elaborator::FindOverrideTarget(const std::string& name, int* elem_index) {
+  std::vector<std::string> path;
+  std::stringstream ss(name);
+  for (std::string p; std::getline(ss, p, '.');) path.push_back(p);
+  Node* n = root_.get();
+  *elem_index = -1;
+  for (size_t i = 0; n && i < path.size(); ++i) {
+    std::string part = path[i];
+    long sub = -1;
+    size_t br = part.find('[');
+    if (br != std::string::npos) {
+      sub = std::atol(part.c_str() + br + 1);
+      part = part.substr(0, br);
+    }
+    Node* next = n->kind == Node::kClass ? n->Child(part) : nullptr;
+    if (next && sub >= 1 && next->kind == Node::kArray && static_cast<size_t>(sub) <= next->elems.size())
+      next = next->elems[static_cast<size_t>(sub - 1)].get();
+    else if (next && sub >= 1 && next->kind == Node::kVar)
+      *elem_index = static_cast<int>(sub - 1);
+    n = next;
+  }
+  return n;
+}
+
 bool Elaborator::Run() {
   // Pick the model.
   const ast::ClassDef* top = nullptr;
@@ -235,28 +261,8 @@ bool Elaborator::Run() {
   Instantiate(root_.get(), top, top);
   if (!diags_.Full()) {
     for (const auto& ov : options_.overrides) {
-      std::vector<std::string> path;
-      std::stringstream ss(ov.name);
-      std::string p;
-      while (std::getline(ss, p, '.')) path.push_back(p);
-      Node* n = root_.get();
       int elem_index = -1;
-      for (size_t i = 0; n && i < path.size(); ++i) {
-        std::string part = path[i];
-        long sub = -1;
-        size_t br = part.find('[');
-        if (br != std::string::npos) {
-          sub = std::atol(part.c_str() + br + 1);
-          part = part.substr(0, br);
-        }
-        Node* next = n->kind == Node::kClass ? n->Child(part) : nullptr;
-        if (next && sub >= 1 && next->kind == Node::kArray && static_cast<size_t>(sub) <= next->elems.size()) {
-          next = next->elems[static_cast<size_t>(sub - 1)].get();
-        } else if (next && sub >= 1 && next->kind == Node::kVar) {
-          elem_index = static_cast<int>(sub - 1);
-        }
-        n = next;
-      }
+      Node* n = FindOverrideTarget(ov.name, &elem_index);
       if (!n) {
         std::vector<std::string> names;
         for (const auto& pm : m_->params) names.push_back(pm.name);
@@ -299,28 +305,8 @@ bool Elaborator::Run() {
       if (synth >= synthetic_.size()) break;
       const ast::Expr* expr = synthetic_[synth++].get();
       if (ov.name.find('[') == std::string::npos) continue;
-      // Resolve again (errors were reported above).
-      std::vector<std::string> path;
-      std::stringstream ss(ov.name);
-      std::string p;
-      while (std::getline(ss, p, '.')) path.push_back(p);
-      Node* n = root_.get();
       int elem_index = -1;
-      for (size_t i = 0; n && i < path.size(); ++i) {
-        std::string part = path[i];
-        long sub = -1;
-        size_t br = part.find('[');
-        if (br != std::string::npos) {
-          sub = std::atol(part.c_str() + br + 1);
-          part = part.substr(0, br);
-        }
-        Node* next = n->kind == Node::kClass ? n->Child(part) : nullptr;
-        if (next && sub >= 1 && next->kind == Node::kArray && static_cast<size_t>(sub) <= next->elems.size())
-          next = next->elems[static_cast<size_t>(sub - 1)].get();
-        else if (next && sub >= 1 && next->kind == Node::kVar)
-          elem_index = static_cast<int>(sub - 1);
-        n = next;
-      }
+      Node* n = FindOverrideTarget(ov.name, &elem_index);  // errors were reported above
       if (!n || n->kind != Node::kVar || n->variability != ast::Variability::Parameter) continue;
       ModValue mv;
       mv.expr = expr;

@@ -1,0 +1,30 @@
+// Constraint forces on request (Lesser §3c, eqs. 26-29): joint reaction wrenches of tree
+// and cut joints, loop multipliers, and the power of all constraint forces. Computed by
+// EvalSignals only when a signal asks, after the accelerations are known (the
+// right-hand side never calls these). None allocates.
+#pragma once
+
+#include "runtime/program.h"
+
+namespace kanesim::rt {
+
+// Loop multipliers lambda (n_c) with A^T lambda = M udot - f on the free speeds: the
+// minimum-norm solution from the dependent block, lambda = Q [R^-T g_dep; 0]; along
+// redundant rows (statically indeterminate) it is the minimum-norm choice.
+// Needs the accelerations (SolveAccelerations, BiasAccelerations with include_free).
+void LoopMultipliers(const Program& p, Workspace& ws);
+
+// ws.reaction_W[L]: the wrench the parent side exerts on tree body L's subtree through
+// joint L, at o_L, world axes (Newton-Euler of the subtree, loop forces included).
+void JointReactions(const Program& p, Workspace& ws);
+
+// Reaction of flat joint `flat_joint` on its frame_b side, at frame_b's origin, resolved
+// in frame_b: [force; torque]. Includes the joint's own applied force (tau, drive).
+Vec6 JointReactionInFrameB(const Program& p, const Workspace& ws, int flat_joint);
+
+// Power of every ideal constraint force: sum over joints of (reaction wrench) . (joint
+// relative twist) minus the joints' applied generalized forces times their speeds, plus
+// the loop forces' lambda . (A u + b). Zero on admissible motions.
+double ConstraintPower(const Program& p, Workspace& ws);
+
+}  // namespace kanesim::rt
