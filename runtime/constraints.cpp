@@ -349,6 +349,9 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.fr = Eigen::VectorXd::Zero(nind);
   ws.udot_p = Eigen::VectorXd::Zero(p.nu);
   ws.llt_r.emplace(nind);
+  ws.lambda_c = Eigen::VectorXd::Zero(nc);
+  ws.g_dep = Eigen::VectorXd::Zero(nc);
+  ws.reaction_W.assign(p.bodies.size(), Vec6::Zero());
 }
 
 }  // namespace kanesim::rt

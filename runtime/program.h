@@ -259,6 +259,11 @@ struct Workspace {
   Eigen::VectorXd fr, udot_p;       // reduced right side (nind), particular udot (nu)  filled by SolveConstrained
   std::optional<Eigen::LLT<Eigen::MatrixXd>> llt_r;  // Cholesky of Mr  filled by SolveConstrained
 
+  // Constraint forces on request (runtime/reactions.cpp); not touched by Derivative.
+  Eigen::VectorXd lambda_c;         // loop multipliers, A^T lambda = M udot - f  (n_c)  filled by LoopMultipliers
+  Eigen::VectorXd g_dep;            // (M udot - f) at the dependent speeds  (n_c)  filled by LoopMultipliers
+  std::vector<Vec6> reaction_W;     // wrench of the parent side on subtree L at o_L  (K)  filled by JointReactions
+
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
 };
 

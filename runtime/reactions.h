@@ -22,6 +22,11 @@ void JointReactions(const Program& p, Workspace& ws);
 // in frame_b: [force; torque]. Includes the joint's own applied force (tau, drive).
 Vec6 JointReactionInFrameB(const Program& p, const Workspace& ws, int flat_joint);
 
+// The generalized force a prescribed speed r needs (signals.cpp): on the tree, and with
+// the loops' dependent speeds (the `.drive` signal). For a free r: (M udot - f)_r.
+double DriveForce(const Program& p, const Workspace& ws, int r);
+double LoopDriveForce(const Program& p, Workspace& ws, int r);
+
 // Power of every ideal constraint force: sum over joints of (reaction wrench) . (joint
 // relative twist) minus the joints' applied generalized forces times their speeds, plus
 // the loop forces' lambda . (A u + b). Zero on admissible motions.

@@ -3,6 +3,7 @@
 
 #include "runtime/engine.h"
 #include "runtime/constraints.h"
+#include "runtime/reactions.h"
 #include "runtime/kane.h"
 #include "runtime/kinematics.h"
 #include "runtime/program.h"
@@ -21,6 +22,8 @@ enum class SignalKind : std::uint8_t {
   BodyRotation,     // R_WF of the body's frame, k = 3 i + j
   FramePosition,    // a = flat frame, k
   Drive,            // a = full u index of a prescribed coordinate: force that drives it
+  Reaction,         // a = flat joint, k = 0..2 force, 3..5 torque on frame_b's side, frame_b axes
+  ConstraintPower,  // power of all ideal constraint forces (0 on admissible motions)
   LoopResidual,     // a = loop; k = 0: max |phi| of its rows, 1: max |A u + b|, 2: max |phi| before projection
 };
 
@@ -36,6 +39,7 @@ struct SignalPlan {
   bool forces = false;    // force tape needed (spring energy with expression stiffness)
   bool dynamics = false;  // full accelerations needed (drive forces)
   bool drift = false;     // loop residuals of the integrator's state, before projection
+  bool reactions = false; // joint reaction wrenches (and loop multipliers) needed
 };
 
 namespace {
@@ -52,6 +56,13 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
       if (p.u_free_of[static_cast<size_t>(j.u0 + k)] < 0)
         s.push_back({j.name + ".drive" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::Drive, j.u0 + k, 0}});
   }
+  auto reactions = [&s](const std::string& name, int flat_joint) {
+    for (int k = 0; k < 3; ++k) s.push_back({name + ".reaction_force" + Idx(k), {SignalKind::Reaction, flat_joint, k}});
+    for (int k = 0; k < 3; ++k) s.push_back({name + ".reaction_torque" + Idx(k), {SignalKind::Reaction, flat_joint, 3 + k}});
+  };
+  for (const TreeJoint& j : p.joints) reactions(j.name, j.flat_index);
+  for (const LoopClosure& l : p.loops) reactions(l.name, l.flat_index);
+  s.push_back({"constraint_power", {SignalKind::ConstraintPower, 0, 0}});
   for (size_t l = 0; l < p.loops.size(); ++l) {
     const int a = static_cast<int>(l);
     s.push_back({p.loops[l].name + ".constraint_residual", {SignalKind::LoopResidual, a, 0}});
@@ -149,6 +160,8 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
         if (!p.force_tape.roots.empty()) plan->forces = plan->velocity = true;
         break;
       case SignalKind::Drive: plan->dynamics = plan->velocity = true; break;
+      case SignalKind::Reaction:
+      case SignalKind::ConstraintPower: plan->reactions = plan->dynamics = plan->velocity = true; break;
       case SignalKind::LoopResidual: plan->drift = plan->drift || it.k == 2; break;
       default: break;
     }
@@ -201,6 +214,10 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
     if (int s = AppliedForces(p, ws); s != 0) return s;
     if (int s = SolveAccelerations(p, ws); s != 0) return s;
     BiasAccelerations(p, ws, /*include_free=*/true);
+    if (plan.reactions) {
+      LoopMultipliers(p, ws);
+      JointReactions(p, ws);
+    }
   }
   if (plan.forces)
     if (int s = EvalForceTape(p, ws); s != 0) return s;
@@ -255,6 +272,8 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
         break;
       }
       case SignalKind::Drive: v = LoopDriveForce(p, ws, it.a); break;
+      case SignalKind::Reaction: v = JointReactionInFrameB(p, ws, it.a)[it.k]; break;
+      case SignalKind::ConstraintPower: v = ConstraintPower(p, ws); break;
       case SignalKind::LoopResidual: {
         const LoopClosure& l = p.loops[static_cast<size_t>(it.a)];
         const Eigen::VectorXd& r = it.k == 0 ? ws.phi : it.k == 1 ? ws.psi : ws.phi_drift;

@@ -58,6 +58,11 @@ TEST(ConstraintsAlloc, FourBarRightHandSideAllocatesNothing) {
                          "coupler_rocker.constraint_residual_velocity"});
 }
 
+TEST(ConstraintsAlloc, ReactionsAndConstraintPowerAllocateNothing) {
+  // If this fails, the constraint forces computed on request allocate per output row.
+  Check("fourbar.mech", {"crank_pivot.reaction_force[1]", "coupler_rocker.reaction_torque[3]", "constraint_power"});
+}
+
 TEST(ConstraintsAlloc, SliderCrankDriveAllocatesNothing) {
   // If this fails, the zero-DOF path or the loop drive torque allocates.
   Check("slider_crank.mech", {"slide.q", "crank_pivot.drive"});

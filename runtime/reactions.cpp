@@ -1,0 +1,133 @@
+// Constraint forces on request (runtime/reactions.h).
+//
+// Loop multipliers (Lesser eq. 27 on the complement of the loop's tangent space): the
+// reduced equations leave the residual of the full equations in the loop directions,
+//   M udot - f = A^T lambda                                                         (1)
+// and with A_dep = Q R (constraints.cpp) the dependent rows give R^T Q1^T lambda = g_dep,
+// whose minimum-norm solution is lambda = Q [R^-T g_dep; 0]                         (2)
+// (redundant rows get the minimum-norm share: statically indeterminate).
+// The loop force of row i acts between the cut joint's bodies at p_b (virtual work of
+// lambda_i delta phi_i, constraints.cpp eqs. 1-2):
+//   translation row:  force lambda_i d on B, -lambda_i d on A, both at p_b           (3)
+//   alignment row:    torque lambda_i k on B, -lambda_i k on A,  k = n x e             (4)
+// Tree joints: Newton-Euler of the subtree below joint L (Lesser eqs. 26-29 summed):
+//   lambda_L = sum_{B in subtree(L)} X_{B->o_L} ( [m_B a_B - F_B;
+//              I_B alpha_B + w_B x I_B w_B - T_B] - loop wrenches on B )           (5)
+// the wrench the parent side exerts on the subtree at o_L.
+#include "runtime/reactions.h"
+
+#include "runtime/constraints.h"
+#include "runtime/kinematics.h"
+
+namespace kanesim::rt {
+
+namespace {
+
+inline Vec6 MoveWrench(const Vec6& w, const Vec3& from, const Vec3& to) {
+  Vec6 x = w;
+  x.tail<3>() += (from - to).cross(w.head<3>());
+  return x;
+}
+
+// (3)-(4): the loop force of cut joint `l` on its body B, at p_b.
+Vec6 CutWrenchOnB(const Program& p, const Workspace& ws, const LoopClosure& l) {
+  Vec3 pa, pb;
+  Mat3 Ra, Rb;
+  FramePose(p, ws, l.frame_a, &pa, &Ra);
+  FramePose(p, ws, l.frame_b, &pb, &Rb);
+  Vec6 w = Vec6::Zero();
+  for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+    const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+    const double lam = ws.lambda_c[i];
+    if (row.kind == RowKind::Translation)
+      w.head<3>() += lam * (Ra * row.d_a);
+    else
+      w.tail<3>() += lam * (Rb * row.n_b).cross(Ra * row.d_a);
+  }
+  return w;
+}
+
+}  // namespace
+
+void LoopMultipliers(const Program& p, Workspace& ws) {
+  const int rank = p.loop_rank;
+  ws.lambda_c.setZero();
+  if (p.rows.empty() || rank == 0) return;
+  for (int k = 0; k < rank; ++k)
+    ws.g_dep[k] = DriveForce(p, ws, p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]);
+  // (2): R^T w = g_dep, lambda = Q [w; 0].
+  ws.vc.setZero();
+  ws.vc.head(rank) = ws.g_dep.head(rank);
+  ws.qr_dep->matrixQR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().transpose().solveInPlace(
+      ws.vc.head(rank));
+  ws.vc.applyOnTheLeft(ws.qr_dep->householderQ());
+  ws.lambda_c = ws.vc;
+}
+
+void JointReactions(const Program& p, Workspace& ws) {
+  const size_t K = p.bodies.size();
+  for (size_t L = 0; L < K; ++L) {
+    const TreeBody& b = p.bodies[L];
+    Vec6 w;
+    w.head<3>() = b.mass * ws.a_bias_cm[L] - ws.F_W[L];
+    w.tail<3>() = ws.I_W[L] * ws.alpha_bias[L] + ws.w_WB[L].cross(ws.I_W[L] * ws.w_WB[L]) - ws.T_W[L];
+    ws.reaction_W[L] = MoveWrench(w, ws.p_WBcm[L], ws.p_WB[L]);  // (5), own term
+  }
+  for (const LoopClosure& l : p.loops) {
+    const Vec6 wb = CutWrenchOnB(p, ws, l);
+    Vec3 pb;
+    Mat3 Rb;
+    FramePose(p, ws, l.frame_b, &pb, &Rb);
+    const int A = p.frames[static_cast<size_t>(l.frame_a)].body, B = p.frames[static_cast<size_t>(l.frame_b)].body;
+    if (B >= 0) ws.reaction_W[static_cast<size_t>(B)] -= MoveWrench(wb, pb, ws.p_WB[static_cast<size_t>(B)]);
+    if (A >= 0) ws.reaction_W[static_cast<size_t>(A)] += MoveWrench(wb, pb, ws.p_WB[static_cast<size_t>(A)]);
+  }
+  for (size_t L = K; L-- > 0;) {
+    const int P = p.joints[L].parent;
+    if (P >= 0)
+      ws.reaction_W[static_cast<size_t>(P)] += MoveWrench(ws.reaction_W[L], ws.p_WB[L], ws.p_WB[static_cast<size_t>(P)]);
+  }
+}
+
+Vec6 JointReactionInFrameB(const Program& p, const Workspace& ws, int flat_joint) {
+  const flat::Joint& fj = p.mech->joints[static_cast<size_t>(flat_joint)];
+  Vec3 pa, pb;
+  Mat3 Ra, Rb;
+  FramePose(p, ws, fj.frame_a, &pa, &Ra);
+  FramePose(p, ws, fj.frame_b, &pb, &Rb);
+  Vec6 w = Vec6::Zero();  // on the frame_b side, at p_b, world axes
+  const int L = p.joint_of_flat[static_cast<size_t>(flat_joint)];
+  if (L >= 0) {
+    const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+    const Vec6& lam = ws.reaction_W[static_cast<size_t>(L)];
+    w = j.inverted ? Vec6(MoveWrench(-lam, pa, pb)) : lam;  // inverted: the child is frame a's side
+  } else {
+    for (const LoopClosure& l : p.loops)
+      if (l.flat_index == flat_joint) w = CutWrenchOnB(p, ws, l);
+  }
+  Vec6 out;
+  out.head<3>() = Rb.transpose() * w.head<3>();
+  out.tail<3>() = Rb.transpose() * w.tail<3>();
+  return out;
+}
+
+double ConstraintPower(const Program& p, Workspace& ws) {
+  double P = 0.0;
+  for (size_t L = 0; L < p.bodies.size(); ++L) {
+    const TreeJoint& j = p.joints[L];
+    const Vec6& lam = ws.reaction_W[L];
+    P += lam.head<3>().dot(ws.v_rel[L]) + lam.tail<3>().dot(ws.w_rel[L]);
+    for (int k = 0; k < j.nu; ++k) {
+      const int s = j.u0 + k;
+      const double applied = p.u_free_of[static_cast<size_t>(s)] >= 0 ? ws.Q[s] : LoopDriveForce(p, ws, s);
+      P -= applied * ws.u[s];
+    }
+  }
+  if (!p.rows.empty()) {
+    ConstraintJacobian(p, ws);
+    P += ws.lambda_c.dot(ws.psi);
+  }
+  return P;
+}
+
+}  // namespace kanesim::rt
