@@ -27,6 +27,7 @@
 
 #include <cmath>
 
+#include "runtime/contacts.h"
 #include "runtime/joint_kinematics.h"
 #include "runtime/kane.h"
 #include "runtime/kinematics.h"
@@ -106,6 +107,10 @@ Vec3 RowDirection(const ConstraintRow& row, const FrameState& a, const FrameStat
 void ConstraintResiduals(const Program& p, Workspace& ws) {
   for (size_t i = 0; i < p.rows.size(); ++i) {
     const ConstraintRow& row = p.rows[i];
+    if (row.contact >= 0) {
+      ws.phi[static_cast<Eigen::Index>(i)] = ContactResidual(p, ws, row);
+      continue;
+    }
     const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
     const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
     if (row.kind == RowKind::Translation)
@@ -120,6 +125,10 @@ void ConstraintJacobian(const Program& p, Workspace& ws) {
   for (size_t ii = 0; ii < p.rows.size(); ++ii) {
     const auto i = static_cast<int>(ii);
     const ConstraintRow& row = p.rows[ii];
+    if (row.contact >= 0) {
+      ws.psi[i] = ContactJacobianRow(p, ws, row, i);
+      continue;
+    }
     const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
     const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
     const Vec3 dk = RowDirection(row, a, b);
@@ -145,6 +154,10 @@ void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::Vecto
   };
   for (size_t ii = 0; ii < p.rows.size(); ++ii) {
     const ConstraintRow& row = p.rows[ii];
+    if (row.contact >= 0) {
+      (*col)[static_cast<Eigen::Index>(ii)] = ContactColumn(p, ws, row, s);
+      continue;
+    }
     const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
     const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
     const Vec3 dk = RowDirection(row, a, b);
@@ -166,6 +179,10 @@ void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::Vecto
 void ConstraintBias(const Program& p, Workspace& ws) {
   for (size_t ii = 0; ii < p.rows.size(); ++ii) {
     const ConstraintRow& row = p.rows[ii];
+    if (row.contact >= 0) {
+      ws.cbias[static_cast<Eigen::Index>(ii)] = ContactBias(p, ws, row);
+      continue;
+    }
     const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
     const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
     Vec3 v_a, w_A, v_b, w_B, alpha_A, alpha_B;

@@ -37,9 +37,16 @@ void PullToManifold(const Program& p, const Workspace& ws, const double* y, doub
 
 }  // namespace
 
-int SolveAccelerations(const Program& p, Workspace& ws) {
+namespace {
+int SolvePath(const Program& p, Workspace& ws) {
   if (!p.rows.empty()) return SolveConstrained(p, ws);
   return p.solver == SolverPath::Sparse ? SolveSparse(p, ws) : SolveDense(p, ws);
+}
+}  // namespace
+
+int SolveAccelerations(const Program& p, Workspace& ws) {
+  if (p.friction_joints.empty()) return SolvePath(p, ws);
+  return SolveWithFriction(p, ws, SolvePath);
 }
 
 // ydot = [qdot_free; udot_free]:
@@ -99,6 +106,8 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
     InitSparseWorkspace(p, ws);
   }
   InitConstraintWorkspace(p, ws);
+  ws.friction_tau.assign(p.friction_joints.size(), 0.0);
+  ws.friction_Q0.assign(p.friction_joints.size(), 0.0);
   ws.error.reserve(256);
   // Warm-up at the initial state: the sparse path's first KLU factorization allocates,
   // so it happens here and Derivative only refactors (an error here is reported by the

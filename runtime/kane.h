@@ -27,6 +27,10 @@ int SolveSparse(const Program& p, Workspace& ws);
 // The accelerations by the scene's path: reduced (closed loops), sparse or dense.
 int SolveAccelerations(const Program& p, Workspace& ws);
 
+// Coulomb friction depending on joint normal forces (runtime/friction.cpp): iterates
+// `path` (the scene's solve) with the friction forces in ws.Q until they agree.
+int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program&, Workspace&));
+
 // Compile time: the fixed pattern and the KLU symbolic analysis (reused when
 // `p.sparse_symbolic` is already set by Rebind).
 bool BuildSparse(Program& p, std::string* error);

@@ -55,6 +55,9 @@ struct TreeJoint {
   // motion started in (Cardan: floor((q2 + pi/2) / pi), Euler: floor(q2 / pi)); leaving it
   // means the motion went through gimbal lock.   filled by BuildStateLayout
   int chart0 = 0;
+  double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/friction.cpp
+  double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
+  double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
 };
 
 struct TreeBody {
@@ -98,9 +101,15 @@ struct BodySignalSource {
 // cut joint's frame a (on body A) and frame b (on body B):
 //   Translation:  phi = d_W . (p_Wb - p_Wa),    d_W = R_Wa d_a   (a direction fixed in a)
 //   Alignment:    phi = e_W . n_W - offset,      e_W = R_Wa e_a, n_W = R_Wb n_b
-enum class RowKind : std::uint8_t { Translation, Alignment };
+// Rolling contacts (non-holonomic, runtime/contacts.cpp): rows on the velocity of the
+// body's material point P at the contact,  d . v_P = 0:
+//   ContactNormal   d = n (plane normal); also a position constraint n . (P - p0) = 0
+//   ContactTangent  d = t1 or t2 (fixed in W): velocity only, never a position constraint
+//   ContactLateral  d = n x e_W (knife edge, e the blade): velocity only
+enum class RowKind : std::uint8_t { Translation, Alignment, ContactNormal, ContactTangent, ContactLateral };
 struct ConstraintRow {
-  int loop = -1;                // index into Program::loops
+  int loop = -1;                // index into Program::loops (-1 for a contact row)
+  int contact = -1;             // index into Program::contacts (-1 for a loop row)
   RowKind kind = RowKind::Translation;
   Vec3 d_a = Vec3::UnitX();     // Translation: d; Alignment: e (fixed in frame a, in a's axes)
   Vec3 n_b = Vec3::UnitZ();     // Alignment: n (fixed in frame b, in b's axes)
@@ -115,6 +124,21 @@ struct LoopClosure {
   flat::SourceLoc loc;
   int flat_index = -1;
   int frame_a = -1, frame_b = -1;  // flat frames
+  int row0 = 0, nrows = 0;
+};
+
+// A rolling contact of a body against a fixed plane (flat::Contact).
+struct ContactModel {
+  std::string name;
+  flat::SourceLoc loc;
+  flat::ContactType type = flat::ContactType::RollingDisk;
+  int frame = -1;              // flat frame: disk/sphere centre, knife-edge contact point
+  int body = -1;               // tree body of that frame
+  Vec3 axis_F = Vec3::UnitZ(); // disk axis / blade direction in the frame's axes (unit)
+  double radius = 0.0;
+  Vec3 n_W = Vec3::UnitY();    // plane normal (unit), world
+  Vec3 p0_W = Vec3::Zero();    // a point of the plane, world
+  Vec3 t1_W = Vec3::UnitX(), t2_W = Vec3::UnitZ();  // tangent basis of the plane, t1 x t2 = n
   int row0 = 0, nrows = 0;
 };
 
@@ -173,10 +197,12 @@ struct Program {
 
   // Closed loops (runtime/constraints.h). Empty for trees.
   std::vector<LoopClosure> loops;       // one per cut joint
-  std::vector<ConstraintRow> rows;      // n_c position constraints, loop by loop
+  std::vector<ContactModel> contacts;   // rolling contacts and knife edges
+  std::vector<ConstraintRow> rows;      // n_c constraints: loops' rows, then contacts' rows
   int loop_rank = 0;                    // rank of the constraint Jacobian (free speeds) at the assembled start
   double loop_length = 1.0;             // length scale of the position tolerance (m)
   int dof = 0;                          // nu - loop_rank
+  std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/friction.cpp)
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind
@@ -263,6 +289,9 @@ struct Workspace {
   Eigen::VectorXd lambda_c;         // loop multipliers, A^T lambda = M udot - f  (n_c)  filled by LoopMultipliers
   Eigen::VectorXd g_dep;            // (M udot - f) at the dependent speeds  (n_c)  filled by LoopMultipliers
   std::vector<Vec6> reaction_W;     // wrench of the parent side on subtree L at o_L  (K)  filled by JointReactions
+  std::vector<double> friction_tau; // friction force per friction joint, last converged  (nfric)  filled by SolveWithFriction
+  std::vector<double> friction_Q0;  // the joint's applied force without friction  (nfric)  filled by SolveWithFriction
+  long friction_iterations = 0;     // fixed-point iterations so far  filled by SolveWithFriction
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
 };

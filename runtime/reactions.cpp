@@ -17,6 +17,7 @@
 #include "runtime/reactions.h"
 
 #include "runtime/constraints.h"
+#include "runtime/contacts.h"
 #include "runtime/kinematics.h"
 
 namespace kanesim::rt {
@@ -48,6 +49,17 @@ Vec6 CutWrenchOnB(const Program& p, const Workspace& ws, const LoopClosure& l) {
 }
 
 }  // namespace
+
+// The plane's force on the body at P: F = sum_i lambda_i d_i over the contact's rows.
+Vec3 ContactForce(const Program& p, const Workspace& ws, int contact, ContactPoint* cp_out) {
+  const ContactModel& c = p.contacts[static_cast<size_t>(contact)];
+  const ContactPoint cp = ContactAt(p, ws, c);
+  Vec3 F = Vec3::Zero();
+  for (int i = c.row0; i < c.row0 + c.nrows; ++i)
+    F += ws.lambda_c[i] * ContactRowDirection(c, p.rows[static_cast<size_t>(i)], cp, nullptr);
+  if (cp_out) *cp_out = cp;
+  return F;
+}
 
 void LoopMultipliers(const Program& p, Workspace& ws) {
   const int rank = p.loop_rank;
@@ -81,6 +93,13 @@ void JointReactions(const Program& p, Workspace& ws) {
     const int A = p.frames[static_cast<size_t>(l.frame_a)].body, B = p.frames[static_cast<size_t>(l.frame_b)].body;
     if (B >= 0) ws.reaction_W[static_cast<size_t>(B)] -= MoveWrench(wb, pb, ws.p_WB[static_cast<size_t>(B)]);
     if (A >= 0) ws.reaction_W[static_cast<size_t>(A)] += MoveWrench(wb, pb, ws.p_WB[static_cast<size_t>(A)]);
+  }
+  for (size_t ci = 0; ci < p.contacts.size(); ++ci) {
+    ContactPoint cp;
+    Vec6 w = Vec6::Zero();
+    w.head<3>() = ContactForce(p, ws, static_cast<int>(ci), &cp);
+    const auto B = static_cast<size_t>(p.contacts[ci].body);
+    ws.reaction_W[B] -= MoveWrench(w, cp.P, ws.p_WB[B]);
   }
   for (size_t L = K; L-- > 0;) {
     const int P = p.joints[L].parent;

@@ -27,6 +27,11 @@ Vec6 JointReactionInFrameB(const Program& p, const Workspace& ws, int flat_joint
 double DriveForce(const Program& p, const Workspace& ws, int r);
 double LoopDriveForce(const Program& p, Workspace& ws, int r);
 
+// The plane's force on a contact's body, at its contact point (world axes; after
+// LoopMultipliers); *cp receives the contact point's geometry when not null.
+struct ContactPoint;
+Vec3 ContactForce(const Program& p, const Workspace& ws, int contact, ContactPoint* cp);
+
 // Power of every ideal constraint force: sum over joints of (reaction wrench) . (joint
 // relative twist) minus the joints' applied generalized forces times their speeds, plus
 // the loop forces' lambda . (A u + b). Zero on admissible motions.

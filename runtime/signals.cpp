@@ -3,6 +3,7 @@
 
 #include "runtime/engine.h"
 #include "runtime/constraints.h"
+#include "runtime/contacts.h"
 #include "runtime/reactions.h"
 #include "runtime/kane.h"
 #include "runtime/kinematics.h"
@@ -24,6 +25,8 @@ enum class SignalKind : std::uint8_t {
   Drive,            // a = full u index of a prescribed coordinate: force that drives it
   Reaction,         // a = flat joint, k = 0..2 force, 3..5 torque on frame_b's side, frame_b axes
   ConstraintPower,  // power of all ideal constraint forces (0 on admissible motions)
+  Contact,          // a = contact; k = 0..2 point, 3 normal, 4 longitudinal, 5 lateral force,
+                    // 6 |phi| normal, 7 max |A u + b| of its rows
   LoopResidual,     // a = loop; k = 0: max |phi| of its rows, 1: max |A u + b|, 2: max |phi| before projection
 };
 
@@ -63,6 +66,16 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
   for (const TreeJoint& j : p.joints) reactions(j.name, j.flat_index);
   for (const LoopClosure& l : p.loops) reactions(l.name, l.flat_index);
   s.push_back({"constraint_power", {SignalKind::ConstraintPower, 0, 0}});
+  for (size_t c = 0; c < p.contacts.size(); ++c) {
+    const int a = static_cast<int>(c);
+    const std::string& n = p.contacts[c].name;
+    for (int k = 0; k < 3; ++k) s.push_back({n + ".point" + Idx(k), {SignalKind::Contact, a, k}});
+    s.push_back({n + ".normal_force", {SignalKind::Contact, a, 3}});
+    s.push_back({n + ".longitudinal_force", {SignalKind::Contact, a, 4}});
+    s.push_back({n + ".lateral_force", {SignalKind::Contact, a, 5}});
+    s.push_back({n + ".constraint_residual", {SignalKind::Contact, a, 6}});
+    s.push_back({n + ".constraint_residual_velocity", {SignalKind::Contact, a, 7}});
+  }
   for (size_t l = 0; l < p.loops.size(); ++l) {
     const int a = static_cast<int>(l);
     s.push_back({p.loops[l].name + ".constraint_residual", {SignalKind::LoopResidual, a, 0}});
@@ -162,6 +175,9 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
       case SignalKind::Drive: plan->dynamics = plan->velocity = true; break;
       case SignalKind::Reaction:
       case SignalKind::ConstraintPower: plan->reactions = plan->dynamics = plan->velocity = true; break;
+      case SignalKind::Contact:
+        if (it.k >= 3 && it.k <= 5) plan->reactions = plan->dynamics = plan->velocity = true;
+        break;
       case SignalKind::LoopResidual: plan->drift = plan->drift || it.k == 2; break;
       default: break;
     }
@@ -274,6 +290,25 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
       case SignalKind::Drive: v = LoopDriveForce(p, ws, it.a); break;
       case SignalKind::Reaction: v = JointReactionInFrameB(p, ws, it.a)[it.k]; break;
       case SignalKind::ConstraintPower: v = ConstraintPower(p, ws); break;
+      case SignalKind::Contact: {
+        const ContactModel& c = p.contacts[static_cast<size_t>(it.a)];
+        if (it.k >= 6) {
+          if (it.k == 7) ConstraintJacobian(p, ws);
+          const Eigen::VectorXd& r = it.k == 6 ? ws.phi : ws.psi;
+          v = it.k == 6 ? std::fabs(r[c.row0]) : r.segment(c.row0, c.nrows).cwiseAbs().maxCoeff();
+          break;
+        }
+        if (it.k < 3) {
+          v = ContactAt(p, ws, c).P[it.k];
+          break;
+        }
+        ContactPoint cp;
+        const Vec3 F = ContactForce(p, ws, it.a, &cp);
+        Vec3 lon, lat;
+        ContactDirections(c, cp, &lon, &lat);
+        v = F.dot(it.k == 3 ? c.n_W : it.k == 4 ? lon : lat);
+        break;
+      }
       case SignalKind::LoopResidual: {
         const LoopClosure& l = p.loops[static_cast<size_t>(it.a)];
         const Eigen::VectorXd& r = it.k == 0 ? ws.phi : it.k == 1 ? ws.psi : ws.phi_drift;

@@ -96,8 +96,6 @@ bool Compiler::Topology(Program& p) {
           "add exactly one `World world;` component");
     return false;
   }
-  for (const auto& c : m_.contacts)
-    Error("K311", "contact '" + c.name + "' is not simulated yet (rolling contacts arrive with issue #4)", c.loc);
   p.world_frame = m_.worlds[0].frame;
   if (p.world_frame < 0 || static_cast<size_t>(p.world_frame) >= nf) {
     Error("K301", "the world has no frame", m_.worlds[0].loc);
@@ -328,10 +326,11 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
   c.MassProperties(p);
   CompileJointsAndState(p, c.folder_, &out.errors);
   CompileLoops(p, c.cut_joints_, c.folder_, &out.errors);
+  CompileContacts(p, c.folder_, &out.errors);
   CompileForcesAndOutputs(p, &out.errors);
   if (!out.errors.empty()) return out;
   ChooseSolverAndIntegrator(p);
-  if (!p.loops.empty()) {
+  if (!p.rows.empty()) {
     AssembleLoops(p, &out.errors);
     if (!out.errors.empty()) return out;
   }

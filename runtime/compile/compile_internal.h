@@ -20,6 +20,9 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
 void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,
                   std::vector<CompileMessage>* errors);
 
+// Rolling contacts -> Program::contacts and their rows (runtime/contacts.h).
+void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
+
 // Assembly at the start time: Newton to a consistent q and u (coordinates marked fixed
 // held), the rank of the constraint Jacobian, DOF, redundant constraints; y0 updated.
 void AssembleLoops(Program& p, std::vector<CompileMessage>* errors);

@@ -70,7 +70,84 @@ ConstraintRow Align(const Vec3& e, const Vec3& n, double offset, const std::stri
   return r;
 }
 
+// Who owns a row, for messages: the cut joint or the contact.
+const std::string& RowOwner(const Program& p, const ConstraintRow& row) {
+  return row.contact >= 0 ? p.contacts[static_cast<size_t>(row.contact)].name : p.loops[static_cast<size_t>(row.loop)].name;
+}
+const flat::SourceLoc& RowLoc(const Program& p, const ConstraintRow& row) {
+  return row.contact >= 0 ? p.contacts[static_cast<size_t>(row.contact)].loc : p.loops[static_cast<size_t>(row.loop)].loc;
+}
+
 }  // namespace
+
+// Contacts (runtime/contacts.cpp): rows d . v_P = 0 with
+//   RollingSphere, RollingDisk  n (position constraint too), t1, t2 (velocity only)
+//   KnifeEdge                   n (position constraint too), l = n x e (velocity only)
+void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {
+  const flat::Mechanism& m = *p.mech;
+  auto num = [&](flat::ExprId id, double dflt, const flat::SourceLoc& loc) {
+    double v = dflt;
+    if (id != kNoExpr && !folder.Fold(id, &v))
+      errors->push_back(Msg("K304", "contact geometry must not depend on time or state", loc));
+    return v;
+  };
+  auto num3 = [&](const flat::Vec3E& e, const flat::SourceLoc& loc) {
+    return Vec3(num(e[0], 0.0, loc), num(e[1], 0.0, loc), num(e[2], 0.0, loc));
+  };
+  for (const flat::Contact& fc : m.contacts) {
+    ContactModel c;
+    c.name = fc.name;
+    c.loc = fc.loc;
+    c.type = fc.type;
+    c.frame = fc.frame;
+    if (fc.frame < 0 || p.frames[static_cast<size_t>(fc.frame)].body < -1) {
+      errors->push_back(Msg("K311", "contact '" + fc.name + "' is not connected to the mechanism", fc.loc));
+      continue;
+    }
+    c.body = p.frames[static_cast<size_t>(fc.frame)].body;
+    if (c.body < 0) {
+      errors->push_back(Msg("K311", "contact '" + fc.name + "' is attached to the ground", fc.loc,
+                            "connect its frame to a moving body"));
+      continue;
+    }
+    c.radius = num(fc.radius, 0.0, fc.loc);
+    c.axis_F = num3(fc.axis, fc.loc);
+    c.n_W = num3(fc.plane_normal, fc.loc);
+    c.p0_W = num3(fc.plane_point, fc.loc);
+    if (c.n_W.norm() < 1e-12 || (fc.type != flat::ContactType::RollingSphere && c.axis_F.norm() < 1e-12)) {
+      errors->push_back(Msg("K311", "contact '" + fc.name + "' has a zero plane normal or axis", fc.loc));
+      continue;
+    }
+    if (fc.type != flat::ContactType::KnifeEdge && !(c.radius > 0.0)) {
+      errors->push_back(Msg("K311", "contact '" + fc.name + "' needs a positive radius", fc.loc));
+      continue;
+    }
+    c.n_W.normalize();
+    if (c.axis_F.norm() > 0.0) c.axis_F.normalize();
+    c.t1_W = c.n_W.unitOrthogonal();
+    c.t2_W = c.n_W.cross(c.t1_W);
+    const int ci = static_cast<int>(p.contacts.size());
+    c.row0 = static_cast<int>(p.rows.size());
+    auto add = [&](RowKind k, const Vec3& d, const std::string& what) {
+      ConstraintRow r;
+      r.contact = ci;
+      r.kind = k;
+      r.d_a = d;
+      r.what = what;
+      p.rows.push_back(r);
+    };
+    add(RowKind::ContactNormal, c.n_W, "contact along the normal");
+    if (fc.type == flat::ContactType::KnifeEdge) {
+      add(RowKind::ContactLateral, Vec3::Zero(), "lateral sliding");
+    } else {
+      add(RowKind::ContactTangent, c.t1_W, "slip along t1");
+      add(RowKind::ContactTangent, c.t2_W, "slip along t2");
+    }
+    c.nrows = static_cast<int>(p.rows.size()) - c.row0;
+    p.contacts.push_back(c);
+    p.grubler_dof -= c.nrows;
+  }
+}
 
 void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,
                   std::vector<CompileMessage>* errors) {
@@ -156,15 +233,15 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
 void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
   p.solver = SolverPath::Dense;
-  p.solver_reason = std::to_string(p.loops.size()) +
-                    " closed loop(s): dense mass matrix reduced to the constrained basis (Lesser eq. 51)";
+  p.solver_reason = std::to_string(p.loops.size()) + " closed loop(s), " + std::to_string(p.contacts.size()) +
+                    " contact(s): dense mass matrix reduced to the constrained basis (Lesser eq. 51)";
   p.loop_rank = 0;
   auto wsp = MakeWorkspace(p);
   Workspace& ws = *wsp;
   const auto nc = static_cast<Eigen::Index>(p.rows.size());
   const double t0 = StartTime(p);
   if (UnpackState(p, ws, t0, p.y0.data()) != 0) {
-    errors->push_back(Msg("K310", "prescribed motion not finite at the start time", p.loops[0].loc));
+    errors->push_back(Msg("K310", "prescribed motion not finite at the start time", RowLoc(p, p.rows[0])));
     return;
   }
   PositionKinematics(p, ws);
@@ -229,11 +306,13 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     Eigen::Index worst = 0;
     ws.phi.cwiseAbs().maxCoeff(&worst);
     const ConstraintRow& row = p.rows[static_cast<size_t>(worst)];
-    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
     std::ostringstream msg;
-    msg << "joint '" << l.name << "' closes a kinematic loop that cannot be assembled: " << row.what
-        << " residual " << r << " after " << it << " Newton iterations";
-    errors->push_back(Msg("K310", msg.str(), l.loc,
+    if (row.contact >= 0)
+      msg << "contact '" << RowOwner(p, row) << "' cannot be assembled on its plane: ";
+    else
+      msg << "joint '" << RowOwner(p, row) << "' closes a kinematic loop that cannot be assembled: ";
+    msg << row.what << " residual " << r << " after " << it << " Newton iterations";
+    errors->push_back(Msg("K310", msg.str(), RowLoc(p, row),
                           "check the link lengths and the start values; mark the coordinates you know with "
                           "`fixed = true` and leave the others free"));
     return;
@@ -251,9 +330,12 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   }
   const double rv = ws.psi.size() ? ws.psi.cwiseAbs().maxCoeff() : 0.0;
   if (rv > 1e-9 * (1.0 + ws.u.cwiseAbs().maxCoeff()) * len) {
-    errors->push_back(Msg("K310", "the start speeds cannot satisfy the loop closed by joint '" + p.loops[0].name +
+    Eigen::Index worst = 0;
+    ws.psi.cwiseAbs().maxCoeff(&worst);
+    const ConstraintRow& row = p.rows[static_cast<size_t>(worst)];
+    errors->push_back(Msg("K310", "the start speeds cannot satisfy the constraints of '" + RowOwner(p, row) +
                                       "' (velocity residual " + std::to_string(rv) + ")",
-                          p.loops[0].loc, "leave more start speeds free (not fixed)"));
+                          RowLoc(p, row), "leave more start speeds free (not fixed)"));
     return;
   }
 
@@ -277,6 +359,18 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
                        std::to_string(l.nrows) + " constraint(s)";
     if (!redundant.empty())
       note += "; redundant (indeterminate constraint-force components): " + redundant;
+    p.notes.push_back(note);
+  }
+  for (size_t ci = 0; ci < p.contacts.size(); ++ci) {
+    const ContactModel& c = p.contacts[ci];
+    std::string redundant;
+    for (Eigen::Index k = qrt.rank(); k < nc; ++k) {
+      const ConstraintRow& row = p.rows[static_cast<size_t>(perm[k])];
+      if (row.contact == static_cast<int>(ci)) redundant += (redundant.empty() ? "" : ", ") + row.what;
+    }
+    std::string note = "contact '" + c.name + "' (" + LocText(c.loc) + "): " + std::to_string(c.nrows) +
+                       " velocity constraint(s), 1 of them also on positions";
+    if (!redundant.empty()) note += "; redundant (already enforced by the joints): " + redundant;
     p.notes.push_back(note);
   }
   std::ostringstream dof;

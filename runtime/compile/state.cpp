@@ -126,6 +126,23 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       u_start_all.push_back(num(e, 0.0, "start value of " + j.name + ".u", fj.loc));
     }
 
+    // Coulomb friction (runtime/friction.cpp): a free Prismatic or Revolute joint.
+    if (fj.friction_mu != kNoExpr) {
+      j.mu = num(fj.friction_mu, 0.0, "friction coefficient of " + j.name, fj.loc);
+      j.mu_radius = num(fj.friction_radius, 1.0, "friction radius of " + j.name, fj.loc);
+      j.mu_v = num(fj.friction_v, 1e-3, "friction speed scale of " + j.name, fj.loc);
+      const bool prescribed = !fj.prescribed.empty() && fj.prescribed[0] != kNoExpr;
+      if ((j.type != JointType::Prismatic && j.type != JointType::Revolute) || prescribed || j.mu < 0.0 ||
+          !(j.mu_v > 0.0))
+        errors->push_back(Msg("K312",
+                              "joint '" + j.name +
+                                  "': Coulomb friction needs a free prismatic or revolute joint, mu >= 0 and a "
+                                  "positive speed scale",
+                              fj.loc));
+      else if (j.mu > 0.0)
+        p.friction_joints.push_back(j.child);
+    }
+
     // Prescribed (rheonomic) coordinates: q_k(time), speed and acceleration from jets.
     for (int k = 0; k < j.nq && static_cast<size_t>(k) < fj.prescribed.size(); ++k) {
       flat::ExprId e = fj.prescribed[static_cast<size_t>(k)];

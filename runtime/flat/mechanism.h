@@ -124,6 +124,11 @@ struct Joint {
   std::vector<ExprId> tau;        // nu entries: applied generalized force, kNoExpr = none
   std::vector<ExprId> prescribed; // nq entries: q_k(time) when rheonomic, else kNoExpr
   bool cut = false;               // user asks this joint to be the loop cut
+  // Coulomb friction on a Prismatic or Revolute joint, regularized over a speed scale
+  // (runtime/friction.cpp):  tau_f = -mu N tanh(u / v)  (Revolute: times the pin radius),
+  // N = the joint's reaction force across its axis. kNoExpr: no friction. Not yet reached
+  // from the language (set by the runtime API and tests).
+  ExprId friction_mu = kNoExpr, friction_radius = kNoExpr, friction_v = kNoExpr;
   SourceLoc loc;
   int nq() const;
   int nu() const;

@@ -9,6 +9,7 @@
 
 #include "runtime/program.h"
 #include "tests/constraints/load_util.h"
+#include "tests/runtime/builders.h"
 
 namespace {
 std::atomic<long> g_allocations{0};
@@ -66,6 +67,36 @@ TEST(ConstraintsAlloc, ReactionsAndConstraintPowerAllocateNothing) {
 TEST(ConstraintsAlloc, SliderCrankDriveAllocatesNothing) {
   // If this fails, the zero-DOF path or the loop drive torque allocates.
   Check("slider_crank.mech", {"slide.q", "crank_pivot.drive"});
+}
+
+TEST(ConstraintsAlloc, RollingContactsAllocateNothing) {
+  // If this fails, the contact rows (geometry, Jacobian, bias) or their outputs allocate.
+  Check("sphere_incline.mech", {"contact.normal_force", "contact.point[1]", "contact.constraint_residual_velocity"});
+  Check("rolling_disk.mech", {"lean", "contact.lateral_force", "constraint_power"});
+  Check("sleigh.mech", {"blade.lateral_force", "plane.reaction_force[1]"});
+}
+
+TEST(ConstraintsAlloc, JointFrictionIterationAllocatesNothing) {
+  // If this fails, the friction fixed point (reactions inside the right-hand side) allocates.
+  MechBuilder b;
+  const int world = b.World(Vec3(0, -9.81, 0));
+  const int cart = b.Frame("cart.frame"), arm = b.Frame("arm.frame");
+  b.Body("cart", cart, 1.0, Vec3::Zero(), Diag(0.01, 0.01, 0.01));
+  b.Body("bob", arm, 0.7, Vec3(0, -0.5, 0), Mat3::Zero());
+  auto& slide = b.Joint("slide", JointType::Prismatic, world, cart, Vec3::UnitX());
+  slide.friction_mu = b.C(0.4);
+  slide.friction_v = b.C(1e-3);
+  slide.u_start[0] = b.C(0.5);
+  b.Joint("hinge", JointType::Revolute, cart, arm, Vec3::UnitZ());
+  auto cr = rt::Compile(b.m, {});
+  ASSERT_TRUE(cr.program);
+  const rt::Program& p = *cr.program;
+  auto ws = rt::MakeWorkspace(p);
+  std::vector<double> y = {0.0, 0.9, 0.8, -1.5}, yd(4);
+  ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), yd.data()), 0);
+  const long before = g_allocations.load();
+  for (int k = 0; k < 5; ++k) ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), yd.data()), 0);
+  EXPECT_EQ(g_allocations.load() - before, 0);
 }
 
 }  // namespace

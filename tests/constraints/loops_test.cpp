@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "runtime/constraints.h"
 #include "runtime/program.h"
 #include "tests/constraints/load_util.h"
 
@@ -165,6 +166,31 @@ TEST(FourBar, ProjectionHoldsAroundAFullCrankTurn) {
   }
   std::printf("partition chosen %ld time(s) around a full turn\n", ws->partition_changes);
   EXPECT_GE(ws->partition_changes, 1);
+}
+
+TEST(FourBar, DegradedPartitionIsRechosenByPivoting) {
+  // If this fails, a dependent block that has become ill-conditioned is kept (the
+  // reduced equations then lose digits or fail near a toggle position).
+  auto l = LoadModel(kRoot + "/examples/fourbar.mech");
+  ASSERT_TRUE(l && l->prog);
+  const rt::Program& p = *l->prog;
+  auto ws = rt::MakeWorkspace(p);
+  std::vector<double> y(static_cast<size_t>(rt::StateSize(p))), yd(y.size());
+  rt::InitialState(p, y.data());
+  ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), yd.data()), 0);
+  ASSERT_EQ(ws->partition_changes, 1);
+  const int d0 = ws->dep[0], d1 = ws->dep[1], i0 = ws->ind[0];
+  // A Jacobian whose current dependent columns are nearly parallel (conditioning 1e-4,
+  // below the re-choice threshold 1e-2) while the independent column is not.
+  ws->A.setZero();
+  ws->A(0, d0) = 1.0;
+  ws->A(0, d1) = 1.0;
+  ws->A(1, d1) = 1e-4;
+  ws->A(1, i0) = 1.0;
+  ASSERT_EQ(rt::FactorDependent(p, *ws), 0);
+  EXPECT_EQ(ws->partition_changes, 2);
+  const bool i0_now_dependent = ws->dep[0] == i0 || ws->dep[1] == i0;
+  EXPECT_TRUE(i0_now_dependent);
 }
 
 double SliderCrankEnergy(double theta, double* x_out) {

@@ -1,0 +1,63 @@
+// Coulomb friction in prismatic and revolute joints whose magnitude follows the joint's
+// normal force (the seed's dry-friction case, Lesser §3c: a force law that depends on a
+// constraint force couples the tangent and the complement projections).
+//
+// For tree joint j with unit axis a (world), reaction force F_j on its child
+// (runtime/reactions.cpp eq. 5) and speed u_j:
+//   N_j = | F_j - (F_j . a) a |                       (normal force across the axis)   (1)
+//   Q_f,j = -mu_j r_j N_j tanh(u_j / v_j)              (r_j = pin radius; 1 if prismatic) (2)
+// regularized over the speed scale v_j (a bare sign() chatters where u_j crosses 0).
+// N depends on the accelerations and the accelerations on Q_f, so both projections are
+// solved together by the fixed-point iteration
+//   Q_f^(k+1) = Q_f( N( udot( Q_f^(k) ) ) )                                               (3)
+// warm-started from the last converged Q_f, until the change is below kTol (1 + |Q_f|);
+// the accelerations are then solved once more with the converged Q_f. It converges when
+// mu times the sensitivity of N to the joint's own force is below 1 (every case but
+// self-locking wedges; a failure is reported, recoverable: the integrator retries).
+#include <cmath>
+
+#include "runtime/kane.h"
+#include "runtime/kinematics.h"
+#include "runtime/reactions.h"
+
+namespace kanesim::rt {
+
+namespace {
+constexpr double kTol = 1e-12;
+constexpr int kMaxIterations = 60;
+}  // namespace
+
+int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program&, Workspace&)) {
+  const size_t nf = p.friction_joints.size();
+  for (size_t i = 0; i < nf; ++i) {
+    const int s = p.joints[static_cast<size_t>(p.friction_joints[i])].u0;
+    ws.friction_Q0[i] = ws.Q[s];
+    ws.Q[s] = ws.friction_Q0[i] + ws.friction_tau[i];
+  }
+  for (int it = 0; it < kMaxIterations; ++it) {
+    if (int st = path(p, ws); st != 0) return st;
+    ++ws.friction_iterations;
+    BiasAccelerations(p, ws, /*include_free=*/true);
+    LoopMultipliers(p, ws);
+    JointReactions(p, ws);
+    double change = 0.0;
+    for (size_t i = 0; i < nf; ++i) {
+      const auto L = static_cast<size_t>(p.friction_joints[i]);
+      const TreeJoint& j = p.joints[L];
+      const Vec3 a = ws.R_WB[L] * j.axis;  // the axis is fixed in both joint frames
+      const Vec3 F = ws.reaction_W[L].head<3>();
+      const double N = (F - F.dot(a) * a).norm();  // (1)
+      const double r = j.type == flat::JointType::Revolute ? j.mu_radius : 1.0;
+      const double tau = -j.mu * r * N * std::tanh(ws.u[j.u0] / j.mu_v);  // (2)
+      change = std::max(change, std::fabs(tau - ws.friction_tau[i]) / (1.0 + std::fabs(tau)));
+      ws.friction_tau[i] = tau;
+      ws.Q[j.u0] = ws.friction_Q0[i] + tau;
+    }
+    BiasAccelerations(p, ws);  // back to free udot = 0 for the next solve
+    if (change <= kTol) return path(p, ws);  // (3) converged: udot with the final Q_f
+  }
+  ws.error = "Coulomb friction: the normal-force iteration did not converge (self-locking joint?)";
+  return 1;
+}
+
+}  // namespace kanesim::rt
