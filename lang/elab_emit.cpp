@@ -181,6 +181,18 @@ void Elaborator::Emit(Node* root) {
         j.axis = ax1 ? vec3(field(n, ax1, {3})) : vec3(Value::Invalid());
         j.axis2 = ax2 ? vec3(field(n, ax2, {3})) : vec3(Value::Invalid());
         j.cut = boolean(n, "cut", false);
+        // Coulomb friction from the joint's normal force: only when mu is not zero, so a
+        // scene without friction pays nothing (mu = 0 vs not is a structural choice).
+        if (Node* mu = n->Child("mu"); mu && mu->kind == Node::kVar) {
+          Value mv = GetVar(mu, Span{});
+          double muv = 0;
+          if (mv.valid && Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
+            j.friction_mu = mv.e[0];
+            j.friction_v = scalar(field(n, "friction_v", {}));
+            j.friction_radius =
+                n->Child("friction_radius") ? scalar(field(n, "friction_radius", {})) : pool.Constant(1.0);
+          }
+        }
         int nq = j.nq(), nu = j.nu();
         j.q_start.assign(static_cast<size_t>(nq), flat::kNoExpr);
         j.u_start.assign(static_cast<size_t>(nu), flat::kNoExpr);
