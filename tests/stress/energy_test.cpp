@@ -28,7 +28,7 @@ constexpr double kDriftFactor = 1e3;  // drift allowed per (rtol * max kinetic e
 TEST(StressLongHorizon, Chain5EnergyDriftBounded) {
   RunResult r = RunKanesim("examples/chain.mech",
                            {"--set", "N=5", "--stop-time", std::to_string(kHorizon), "--interval",
-                            std::to_string(kHorizon / 100), "--rtol", "1e-6",
+                            std::to_string(kHorizon / 100.0), "--rtol", "1e-6",
                             "--integrator", "cvode", "--output", "kinetic_energy", "--output", "potential_energy"});
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
   ASSERT_EQ(r.rows.size(), 101u);
