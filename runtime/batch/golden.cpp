@@ -9,6 +9,8 @@
 #include <fstream>
 #include <toml++/toml.h>
 
+#include "runtime/batch/toml_util.h"
+
 #include "runtime/batch/csv_util.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/signal_select.h"
@@ -16,15 +18,8 @@
 namespace kanesim::batch {
 namespace {
 
-std::string Resolve(const std::string& base_file, const std::string& rel) {
-  std::filesystem::path p(rel);
-  if (p.is_absolute()) return rel;
-  return (std::filesystem::path(base_file).parent_path() / p).lexically_normal().string();
-}
-
-std::string Where(const std::string& path, const toml::node& n) {
-  return path + ":" + std::to_string(n.source().begin.line) + ": ";
-}
+std::string Resolve(const std::string& base_file, const std::string& rel) { return ResolveRelative(base_file, rel); }
+std::string Where(const std::string& path, const toml::node& n) { return TomlWhere(path, n); }
 
 bool ReadTolerance(const std::string& path, const std::string& pattern, const toml::node& n, Tolerance* out,
                    std::string* error) {

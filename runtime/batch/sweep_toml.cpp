@@ -5,20 +5,15 @@
 #include <filesystem>
 #include <toml++/toml.h>
 
+#include "runtime/batch/toml_util.h"
+
 #include "runtime/sim/csv.h"
 
 namespace kanesim::batch {
 namespace {
 
-std::string Resolve(const std::string& base_file, const std::string& rel) {
-  std::filesystem::path p(rel);
-  if (p.is_absolute()) return rel;
-  return (std::filesystem::path(base_file).parent_path() / p).lexically_normal().string();
-}
-
-std::string Where(const std::string& path, const toml::node& n) {
-  return path + ":" + std::to_string(n.source().begin.line) + ": ";
-}
+std::string Resolve(const std::string& base_file, const std::string& rel) { return ResolveRelative(base_file, rel); }
+std::string Where(const std::string& path, const toml::node& n) { return TomlWhere(path, n); }
 
 // A number, "a:step:b", "v1,v2", or an array of numbers.
 bool NodeValues(const std::string& path, const std::string& key, const toml::node& n, std::vector<double>* out,
