@@ -10,6 +10,18 @@
 
 namespace kanesim::rt {
 
+// A compiler message at a source location (every compile stage reports through it).
+inline CompileMessage Msg(const std::string& code, const std::string& text, const flat::SourceLoc& loc,
+                          const std::string& hint = "") {
+  CompileMessage e;
+  e.code = code;
+  e.message = text;
+  e.hint = hint;
+  e.loc = loc;
+  return e;
+}
+
+
 CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<double>& pv,
                                 const CompileOptions& options, const Program* reuse);
 

@@ -11,13 +11,6 @@ using flat::kNoExpr;
 
 namespace {
 
-CompileMessage Msg(const std::string& code, const std::string& text, const flat::SourceLoc& loc) {
-  CompileMessage e;
-  e.code = code;
-  e.message = text;
-  e.loc = loc;
-  return e;
-}
 
 // Rates above this (1/s) in a force element make the scene stiff for an explicit or
 // Adams method: a pendulum of 0.5 m is ~4 1/s, a 1e6 N/m spring on 1 kg is 1000 1/s.

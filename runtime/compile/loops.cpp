@@ -39,15 +39,6 @@ constexpr double kAssemblyTol = 1e-12;  // position residual (relative to the lo
 constexpr int kAssemblyIters = 50;
 constexpr double kRankTol = 1e-9;       // |R_ii| / max |R_ii| below it: rank deficient
 
-CompileMessage Msg(const std::string& code, const std::string& text, const flat::SourceLoc& loc,
-                   const std::string& hint = "") {
-  CompileMessage e;
-  e.code = code;
-  e.message = text;
-  e.hint = hint;
-  e.loc = loc;
-  return e;
-}
 
 std::string LocText(const flat::SourceLoc& l) {
   return l.file + ":" + std::to_string(l.line) + ":" + std::to_string(l.col);

@@ -12,15 +12,6 @@ using flat::kNoExpr;
 
 namespace {
 
-CompileMessage Msg(const std::string& code, const std::string& text, const flat::SourceLoc& loc,
-                   const std::string& hint = "") {
-  CompileMessage e;
-  e.code = code;
-  e.message = text;
-  e.hint = hint;
-  e.loc = loc;
-  return e;
-}
 
 bool ScalarCoordinates(JointType t) {
   return t == JointType::Revolute || t == JointType::Prismatic || t == JointType::Cylindrical ||
