@@ -329,7 +329,8 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
   CompileContacts(p, c.folder_, &out.errors);
   CompileForcesAndOutputs(p, &out.errors);
   if (!out.errors.empty()) return out;
-  ChooseSolverAndIntegrator(p);
+  ChooseSolver(p);
+  ChooseIntegrator(p);
   if (!p.rows.empty()) {
     AssembleLoops(p, &out.errors);
     if (!out.errors.empty()) return out;

@@ -43,10 +43,11 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors);
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);
 
 // Dense or sparse, and which integrator, with reasons (Summarize prints them).
-void ChooseSolverAndIntegrator(Program& p);
+void ChooseSolver(Program& p);
+void ChooseIntegrator(Program& p);
 
 // Solver choice threshold: at or above this many free speeds the sparse path is chosen
-// (measured crossover of bench/rhs_chain, see ChooseSolverAndIntegrator).
+// (measured crossover of bench/rhs_chain, see ChooseSolver).
 inline constexpr int kSparseMinSpeeds = 120;
 
 }  // namespace kanesim::rt

@@ -110,10 +110,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
 // on chains and trees. kSparseMinSpeeds is the crossover bench/rhs_chain measured on
 // chains (CPU time per evaluation: dense 176 us vs sparse 181 us at N = 120, 268 vs
 // 238 us at N = 150).
-// The integrator: a scene whose force elements have a rate above kStiffRate (or a
-// stiffness given by an expression, which the compiler cannot bound) gets IDA (BDF);
-// otherwise the scene is a non-stiff ODE and gets CVODE.
-void ChooseSolverAndIntegrator(Program& p) {
+void ChooseSolver(Program& p) {
   std::ostringstream why;
   if (p.options.solver != SolverPath::Auto) {
     p.solver = p.options.solver;
@@ -128,7 +125,12 @@ void ChooseSolverAndIntegrator(Program& p) {
         << " (measured dense/sparse crossover): dense mass matrix and Cholesky";
   }
   p.solver_reason = why.str();
+}
 
+// The integrator: a scene whose force elements have a rate above kStiffRate (or a
+// stiffness given by an expression, which the compiler cannot bound) gets IDA (BDF);
+// otherwise the scene is a non-stiff ODE and gets CVODE.
+void ChooseIntegrator(Program& p) {
   std::ostringstream iw;
   double max_rate = 0.0;
   std::string stiffest;
