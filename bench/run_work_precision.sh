@@ -1,8 +1,10 @@
 #!/bin/sh
 # The work-precision benchmark of issue 6 in one command (see bench/README.md):
 #   bench/run_work_precision.sh [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,sympy,rhs]
+#                               [--problems fourbar,rolling_disk]   (name prefixes)
 # 1. bench/.venv (pinned packages), 2. kanesim Release build in $BUILD_DIR (default build-w),
-# 3. the Pinocchio C++ driver against the pin wheel's headers, 4. missing chain references,
+# 3. the Pinocchio C++ driver against the pin wheel's headers, 4. missing chain, four-bar and
+# rolling-disk references,
 # 5. every run (bench/wp/run.py -> bench/results/results.json), 6. plots and tables
 # (bench/wp/report.py -> docs/benchmarks/; --quick: bench/results/quick/). Full run ~16 min
 # on 2 cores under load, --quick ~4-5 min including the build check.
@@ -36,6 +38,9 @@ for n in 10 50 100; do
         break
     fi
 done
+# The constrained problems' references (mpmath, ~2 min and ~1 min; bench/reference/README.md).
+[ -f "$HERE/data/fourbar_ref.csv" ] || "$PY" "$HERE/reference/fourbar.py"
+[ -f "$HERE/data/rolling_disk_ref.csv" ] || "$PY" "$HERE/reference/rolling_disk.py"
 
 # --quick writes beside the committed full results, never over them.
 RESULTS="$HERE/results/results.json"

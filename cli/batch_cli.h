@@ -20,6 +20,7 @@ namespace kanesim::cli {
 inline rt::SolverPath SolverFromName(const std::string& s) {
   if (s == "dense") return rt::SolverPath::Dense;
   if (s == "sparse") return rt::SolverPath::Sparse;
+  if (s == "recursive") return rt::SolverPath::Recursive;
   return rt::SolverPath::Auto;
 }
 

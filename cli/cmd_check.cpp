@@ -27,6 +27,7 @@ const char* SolverName(rt::SolverPath s) {
     case rt::SolverPath::Auto: return "auto";
     case rt::SolverPath::Dense: return "dense";
     case rt::SolverPath::Sparse: return "sparse";
+    case rt::SolverPath::Recursive: return "recursive";
   }
   return "?";
 }
@@ -67,6 +68,7 @@ int RunCheck(const CheckArgs& args) {
   rt::CompileOptions co;
   if (args.solver == "dense") co.solver = rt::SolverPath::Dense;
   if (args.solver == "sparse") co.solver = rt::SolverPath::Sparse;
+  if (args.solver == "recursive") co.solver = rt::SolverPath::Recursive;
   rt::CompileResult cr;
   if (!CompileModel(mech, co, &cr)) return kExitModelError;
   rt::ProgramSummary s = rt::Summarize(*cr.program);
@@ -99,6 +101,14 @@ int RunCheck(const CheckArgs& args) {
   std::cout << fmt::format("  solver      {} — {}\n", SolverName(s.solver), s.solver_reason);
   std::cout << fmt::format("  integrator  {} — {}\n", IntegratorName(s.integrator), s.integrator_reason);
   for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
+  const std::vector<std::string> indeterminate =
+      rt::IndeterminateSignals(*cr.program, rt::AvailableSignals(*cr.program));
+  if (!indeterminate.empty()) {
+    std::cout << fmt::format("  indeterminate constraint-force components ({}; `kanesim run` writes them as nan, "
+                             "`--reactions min-norm` as the minimum-norm share):\n",
+                             indeterminate.size());
+    for (const auto& n : indeterminate) std::cout << "    " << n << "\n";
+  }
   const auto& x = mech.experiment;
   std::cout << fmt::format("  experiment  StartTime={} StopTime={} Tolerance={}{}\n", x.start_time, x.stop_time,
                            x.tolerance, x.has_interval ? fmt::format(" Interval={}", x.interval) : "");
@@ -129,8 +139,8 @@ void AddCheckCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--set", args->load.sets, "Override a parameter: name=value (repeatable)");
   cmd->add_option("--emit", args->emit, "Print an intermediate form instead: ast or flat")
       ->check(CLI::IsMember({"ast", "flat"}));
-  cmd->add_option("--solver", args->solver, "Solution path to report: auto, dense or sparse")
-      ->check(CLI::IsMember({"auto", "dense", "sparse"}));
+  cmd->add_option("--solver", args->solver, "Solution path to report: auto, dense, sparse or recursive")
+      ->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   cmd->callback([args, exit_code]() { *exit_code = RunCheck(*args); });
 }
 

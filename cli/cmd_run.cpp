@@ -45,6 +45,7 @@ struct RunArgs {
   std::vector<std::string> patterns;
   std::string solver = "auto";
   std::string integrator = "auto";
+  std::string reactions = "nan";
   bool stats = false;
 };
 
@@ -86,6 +87,7 @@ double Since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 rt::SolverPath SolverFromName(const std::string& s) {
   if (s == "dense") return rt::SolverPath::Dense;
   if (s == "sparse") return rt::SolverPath::Sparse;
+  if (s == "recursive") return rt::SolverPath::Recursive;
   return rt::SolverPath::Auto;
 }
 
@@ -106,6 +108,10 @@ int RunCommand(const RunArgs& a) {
   rt::CompileOptions copts;
   copts.solver = SolverFromName(a.solver);
   copts.integrator = IntegratorFromName(a.integrator);
+  ReactionsFromName(a.reactions, &copts);
+  if (a.start_opt->count() > 0) copts.start_time = a.start_time;  // the integrator choice
+  if (a.stop_opt->count() > 0) copts.stop_time = a.stop_time;     // depends on the horizon
+  if (a.rtol_opt->count() > 0) copts.rtol = a.rtol;               // and the tolerance
   rt::CompileResult compiled;
   if (!CompileModel(mech, copts, &compiled)) return kExitModelError;
   const rt::Program& program = *compiled.program;
@@ -137,6 +143,7 @@ int RunCommand(const RunArgs& a) {
       return kExitModelError;
     }
   }
+  WarnIndeterminate(program, so.signals);
 
   bool to_stdout = a.out_path.empty() || a.out_path == "-";
   std::FILE* out = to_stdout ? stdout : std::fopen(a.out_path.c_str(), "w");
@@ -197,9 +204,12 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   run->add_option("--output", a->patterns,
                   "Signals to write: a glob over dotted names, * any run, ? one character (repeatable)")
       ->allow_extra_args(false);
-  run->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse"}));
+  run->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   run->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode"}));
+  run->add_option("--reactions", a->reactions,
+                  "Statically indeterminate constraint-force components: nan, or their min-norm share")
+      ->check(CLI::IsMember({"nan", "min-norm"}));
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }

@@ -48,6 +48,7 @@ struct SweepArgs {
   bool no_progress = false;
   double start_time = kNaN, stop_time = kNaN, interval = kNaN, rtol = kNaN, atol = kNaN;
   std::string solver = "auto", integrator = "auto";
+  std::string reactions = "nan";
 };
 
 struct MergeArgs {
@@ -172,6 +173,10 @@ int SweepCommand(SweepArgs a) {
   rt::CompileOptions copts;
   copts.solver = SolverFromName(a.solver);
   copts.integrator = IntegratorFromName(a.integrator);
+  copts.start_time = a.start_time;  // NaN when not given: the experiment's
+  copts.stop_time = a.stop_time;
+  copts.rtol = a.rtol;
+  ReactionsFromName(a.reactions, &copts);
   rt::CompileResult compiled;
   if (!CompileModel(mech, copts, &compiled)) return kExitModelError;
   std::shared_ptr<const rt::Program> base = compiled.program;
@@ -182,6 +187,9 @@ int SweepCommand(SweepArgs a) {
       return FailExit(err);
     config.trajectories = true;
   }
+  std::vector<std::string> used = config.trajectory_signals;
+  for (const batch::Metric& m : config.metrics) used.push_back(m.signal);
+  WarnIndeterminate(*base, used);
   if (config.metrics.empty() && !config.trajectories)
     fmt::print(stderr, "kanesim: note: no --metric given; the summary has status and statistics only\n");
 
@@ -318,9 +326,12 @@ void AddSweepCommand(CLI::App& app, int* exit_code) {
   sw->add_option("--interval", a->interval, "Output interval (default: experiment Interval)");
   sw->add_option("--rtol", a->rtol, "Relative tolerance (default: experiment Tolerance)");
   sw->add_option("--atol", a->atol, "Absolute tolerance (default: = rtol)");
-  sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse"}));
+  sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   sw->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode"}));
+  sw->add_option("--reactions", a->reactions,
+                 "Statically indeterminate constraint-force components: nan, or their min-norm share")
+      ->check(CLI::IsMember({"nan", "min-norm"}));
 
   auto m = std::make_shared<MergeArgs>();
   CLI::App* merge = sw->add_subcommand("merge", "Join shard summaries into one");

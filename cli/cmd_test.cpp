@@ -115,6 +115,9 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     rt::CompileOptions copts;
     copts.solver = SolverFromName(spec.solver);
     copts.integrator = IntegratorFromName(spec.integrator);
+    copts.start_time = spec.start_time;  // NaN when the spec leaves it to the experiment
+    copts.stop_time = spec.stop_time;
+    copts.rtol = spec.rtol;
     rt::CompileResult compiled;
     if (!std::filesystem::exists(spec.model)) {
       r.outcome = Outcome::kError;

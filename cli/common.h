@@ -34,6 +34,17 @@ bool LoadModel(const LoadOptions& options, flat::Mechanism* out);
 // Compiles; on error prints compile diagnostics (with source lines) and returns false.
 bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out);
 
+// Prints a compiler message like a language diagnostic: "file:line:col: SEVERITY[CODE]:
+// message", the source line with a caret, notes, hint.
+void PrintCompileMessage(const rt::CompileMessage& message, const char* severity);
+
+// Warning W313 on stderr when `signals` (the selected output) holds statically
+// indeterminate constraint-force components that are written as NaN.
+void WarnIndeterminate(const rt::Program& program, const std::vector<std::string>& signals);
+
+// `--reactions nan|min-norm` (run, sweep) into CompileOptions::indeterminate.
+bool ReactionsFromName(const std::string& name, rt::CompileOptions* options);
+
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code);
 void AddRunCommand(CLI::App& app, int* exit_code);

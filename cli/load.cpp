@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli/common.h"
+#include "runtime/program.h"
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
 #include "stdlib/stdlib.h"
@@ -38,29 +39,43 @@ bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
   return ok && !diags.HasErrors();
 }
 
+void PrintCompileMessage(const rt::CompileMessage& e, const char* severity) {
+  std::string where = e.loc.file.empty() ? "kanesim"
+                                         : e.loc.file + ":" + std::to_string(e.loc.line) + ":" +
+                                               std::to_string(e.loc.col);
+  std::cerr << where << ": " << severity << "[" << e.code << "]: " << e.message << "\n";
+  if (g_program) {
+    for (int f = 0; f < g_program->sources.NumFiles(); ++f) {
+      if (g_program->sources.Name(f) != e.loc.file || e.loc.line <= 0) continue;
+      std::string line = g_program->sources.LineText(f, e.loc.line);
+      std::string num = std::to_string(e.loc.line);
+      std::cerr << " " << num << " | " << line << "\n " << std::string(num.size(), ' ') << " | "
+                << std::string(static_cast<size_t>(std::max(0, e.loc.col - 1)), ' ') << "^\n";
+      break;
+    }
+  }
+  for (const auto& [loc, msg] : e.notes)
+    std::cerr << loc.file << ":" << loc.line << ":" << loc.col << ": note: " << msg << "\n";
+  if (!e.hint.empty()) std::cerr << "  hint: " << e.hint << "\n";
+}
+
 bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out) {
   *out = rt::Compile(mech, options);
   if (out->errors.empty()) return true;
-  for (const auto& e : out->errors) {
-    std::string where = e.loc.file.empty() ? "kanesim"
-                                           : e.loc.file + ":" + std::to_string(e.loc.line) + ":" +
-                                                 std::to_string(e.loc.col);
-    std::cerr << where << ": error[" << e.code << "]: " << e.message << "\n";
-    if (g_program) {
-      for (int f = 0; f < g_program->sources.NumFiles(); ++f) {
-        if (g_program->sources.Name(f) != e.loc.file || e.loc.line <= 0) continue;
-        std::string line = g_program->sources.LineText(f, e.loc.line);
-        std::string num = std::to_string(e.loc.line);
-        std::cerr << " " << num << " | " << line << "\n " << std::string(num.size(), ' ') << " | "
-                  << std::string(static_cast<size_t>(std::max(0, e.loc.col - 1)), ' ') << "^\n";
-        break;
-      }
-    }
-    for (const auto& [loc, msg] : e.notes)
-      std::cerr << loc.file << ":" << loc.line << ":" << loc.col << ": note: " << msg << "\n";
-    if (!e.hint.empty()) std::cerr << "  hint: " << e.hint << "\n";
-  }
+  for (const auto& e : out->errors) PrintCompileMessage(e, "error");
   return false;
+}
+
+void WarnIndeterminate(const rt::Program& program, const std::vector<std::string>& signals) {
+  if (program.options.indeterminate != rt::IndeterminateReactions::NaN) return;
+  const std::vector<std::string> which = rt::IndeterminateSignals(program, signals);
+  if (!which.empty()) PrintCompileMessage(rt::IndeterminateWarning(program, which), "warning");
+}
+
+bool ReactionsFromName(const std::string& name, rt::CompileOptions* options) {
+  if (name != "nan" && name != "min-norm") return false;
+  options->indeterminate = name == "nan" ? rt::IndeterminateReactions::NaN : rt::IndeterminateReactions::MinNorm;
+  return true;
 }
 
 }  // namespace kanesim::cli

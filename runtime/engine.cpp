@@ -40,7 +40,11 @@ void PullToManifold(const Program& p, const Workspace& ws, const double* y, doub
 namespace {
 int SolvePath(const Program& p, Workspace& ws) {
   if (!p.rows.empty()) return SolveConstrained(p, ws);
-  return p.solver == SolverPath::Sparse ? SolveSparse(p, ws) : SolveDense(p, ws);
+  switch (p.solver) {
+    case SolverPath::Sparse: return SolveSparse(p, ws);
+    case SolverPath::Recursive: return SolveTree(p, ws);
+    default: return SolveDense(p, ws);
+  }
 }
 }  // namespace
 
@@ -52,7 +56,7 @@ int SolveAccelerations(const Program& p, Workspace& ws) {
 // ydot = [qdot_free; udot_free]:
 //   positions -> velocities (tangent generators) -> [closed loops: projection onto the
 //   constraints] -> qdot = N(q) u -> bias accelerations -> applied forces -> Kane's
-//   equations M udot = f (dense, sparse, or reduced on the constrained basis).
+//   equations M udot = f (dense, sparse, recursive, or reduced on the constrained basis).
 int Derivative(const Program& p, Workspace& ws, double t, const double* y, double* ydot) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
@@ -102,6 +106,8 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
     ws.ldlt.emplace(p.nu);
     ws.Ic.assign(K, Mat6::Zero());
     ws.Wc.assign(K, Vec6::Zero());
+  } else if (p.solver == SolverPath::Recursive) {
+    InitTreeWorkspace(p, ws);
   } else {
     InitSparseWorkspace(p, ws);
   }

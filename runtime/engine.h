@@ -6,6 +6,7 @@
 // speeds of all joints in spanning-tree order, prescribed (rheonomic) coordinates removed.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,12 +18,24 @@ namespace kanesim::rt {
 struct Program;    // immutable after Compile; share across threads
 struct Workspace;  // mutable scratch for one thread; allocated once per Program
 
-enum class SolverPath { Auto, Dense, Sparse };
+enum class SolverPath { Auto, Dense, Sparse, Recursive };
 enum class IntegratorKind { Auto, IDA, CVODE, ARKODE };
+
+// What reaction and contact-force signals report for a component the equations leave
+// undetermined (redundant constraints make it statically indeterminate,
+// docs/constraints.md "Indeterminate constraint forces"): NaN, or the share of the
+// minimum-norm multipliers (`kanesim run --reactions min-norm`).
+enum class IndeterminateReactions { NaN, MinNorm };
 
 struct CompileOptions {
   SolverPath solver = SolverPath::Auto;
   IntegratorKind integrator = IntegratorKind::Auto;
+  // The run settings the automatic integrator choice depends on (horizon, tolerance);
+  // NaN: the model's experiment annotation.
+  double start_time = std::numeric_limits<double>::quiet_NaN();
+  double stop_time = std::numeric_limits<double>::quiet_NaN();
+  double rtol = std::numeric_limits<double>::quiet_NaN();
+  IndeterminateReactions indeterminate = IndeterminateReactions::NaN;
 };
 
 // A model error found by the compiler (not the parser): rendered by the CLI like a
@@ -86,5 +99,15 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& program, const std:
                                               std::string* error);
 int EvalSignals(const Program& program, const SignalPlan& plan, Workspace& ws, double t, const double* y,
                 double* out);
+
+// The signals among `names` (reaction and contact-force components) whose value the
+// equations do not determine, in the order given; empty for a mechanism without redundant
+// constraints. Decided at the assembled start (runtime/compile/indeterminate.cpp).
+std::vector<std::string> IndeterminateSignals(const Program& program, const std::vector<std::string>& names);
+
+// Warning W313 for `signals` (from IndeterminateSignals, not empty): names them and the
+// redundant constraints with their source locations, and says how they are written
+// (NaN, or the minimum-norm share, per CompileOptions::indeterminate).
+CompileMessage IndeterminateWarning(const Program& program, const std::vector<std::string>& signals);
 
 }  // namespace kanesim::rt

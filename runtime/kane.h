@@ -1,8 +1,10 @@
-// Kane's equations: applied forces, then one of two solution paths for udot.
+// Kane's equations: applied forces, then one of three solution paths for udot (dense,
+// sparse, recursive: runtime/kane_tree.h).
 #pragma once
 
 #include <string>
 
+#include "runtime/kane_tree.h"
 #include "runtime/program.h"
 
 namespace kanesim::rt {
@@ -24,7 +26,7 @@ void AssembleDense(const Program& p, Workspace& ws);
 // blocks, KLU. Also fills ws.lambda_W (joint reaction wrenches).
 int SolveSparse(const Program& p, Workspace& ws);
 
-// The accelerations by the scene's path: reduced (closed loops), sparse or dense.
+// The accelerations by the scene's path: reduced (closed loops), sparse, recursive or dense.
 int SolveAccelerations(const Program& p, Workspace& ws);
 
 // Coulomb friction depending on joint normal forces (runtime/friction.cpp): iterates

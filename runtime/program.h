@@ -147,6 +147,7 @@ struct ContactModel {
 struct SparsePattern;  // defined in kane_sparse.cpp
 struct SparseSymbolic;  // KLU symbolic analysis, shared by all workspaces of a program
 void DestroySparseSymbolic(SparseSymbolic* s);
+struct TreeLayout;  // the recursive path's per-joint blocks, defined in kane_tree.h
 
 // "[k+1]": a 1-based index suffix as the language writes it. Built by appending because
 // GCC 12 at -O3 reports a false -Wrestrict for "literal" + std::string&&.
@@ -202,10 +203,16 @@ struct Program {
   int loop_rank = 0;                    // rank of the constraint Jacobian (free speeds) at the assembled start
   double loop_length = 1.0;             // length scale of the position tolerance (m)
   int dof = 0;                          // nu - loop_rank
+  std::vector<int> redundant_rows;      // rows pivoted QR of A^T leaves out at the assembled start  (n_c - rank)
+  // Statically indeterminate constraint-force components (the multipliers' null space
+  // moves them), decided at the assembled start by FindIndeterminateReactions:
+  std::vector<std::uint8_t> reaction_indeterminate;  // per flat joint, bit k: reaction component k (0-2 force, 3-5 torque)
+  std::vector<std::uint8_t> contact_indeterminate;   // per contact, bit k: 0 normal, 1 longitudinal, 2 lateral force
   std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/friction.cpp)
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind
+  std::shared_ptr<const TreeLayout> tree;                 // per-joint blocks (recursive path only)
 };
 
 // Per-thread mutable data, allocated once by MakeWorkspace. Nothing here is resized by
@@ -264,6 +271,14 @@ struct Workspace {
   std::vector<Vec6> lambda_W;       // joint reaction wrench on the child at o_L  (K)  filled by SolveSparse
   std::vector<Eigen::Matrix<double, 6, 6>> D_W;  // complement basis per joint (first 6-nf cols)  (K)  filled by SolveSparse
   std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;
+
+  // Recursive path (runtime/kane_tree.cpp); Ia and pa are zero between calls.
+  std::vector<Mat6> tree_Ia;        // articulated inertia at o_L, children's share accumulated  (K)  filled by SolveTree
+  std::vector<Vec6> tree_pa;        // articulated bias wrench at o_L, the same  (K)  filled by SolveTree
+  std::vector<Vec6> tree_A;         // udot-dependent acceleration [a_o; alpha] of body L  (K)  filled by SolveTree
+  Eigen::VectorXd tree_U;           // U_L = Ia_L S_L, 6 x nf column-major at 6 f0  (6 nu)  filled by SolveTree
+  Eigen::VectorXd tree_Dinv;        // D_L^-1 = (S_L^T U_L)^-1, nf x nf at d0  (sum nf^2)  filled by SolveTree
+  Eigen::VectorXd tree_u;           // Q_L - S_L^T pa_L at f0  (nu)  filled by SolveTree
 
   // Closed loops (runtime/constraints.cpp); sized n_c = p.rows.size(), nu = p.nu.
   Eigen::VectorXd phi;              // position residuals  (n_c)  filled by ProjectState

@@ -76,15 +76,11 @@ void LoopMultipliers(const Program& p, Workspace& ws) {
   ws.lambda_c = ws.vc;
 }
 
-void JointReactions(const Program& p, Workspace& ws) {
-  const size_t K = p.bodies.size();
-  for (size_t L = 0; L < K; ++L) {
-    const TreeBody& b = p.bodies[L];
-    Vec6 w;
-    w.head<3>() = b.mass * ws.a_bias_cm[L] - ws.F_W[L];
-    w.tail<3>() = ws.I_W[L] * ws.alpha_bias[L] + ws.w_WB[L].cross(ws.I_W[L] * ws.w_WB[L]) - ws.T_W[L];
-    ws.reaction_W[L] = MoveWrench(w, ws.p_WBcm[L], ws.p_WB[L]);  // (5), own term
-  }
+namespace {
+
+// (5), the multipliers' part: the loop forces on both bodies of every cut joint and the
+// planes' forces on the contacts' bodies, subtracted from the bodies' own terms.
+void SubtractMultiplierWrenches(const Program& p, Workspace& ws) {
   for (const LoopClosure& l : p.loops) {
     const Vec6 wb = CutWrenchOnB(p, ws, l);
     Vec3 pb;
@@ -101,11 +97,36 @@ void JointReactions(const Program& p, Workspace& ws) {
     const auto B = static_cast<size_t>(p.contacts[ci].body);
     ws.reaction_W[B] -= MoveWrench(w, cp.P, ws.p_WB[B]);
   }
-  for (size_t L = K; L-- > 0;) {
+}
+
+// (5), the sum over the subtree: children before parents (tree order reversed).
+void AccumulateSubtrees(const Program& p, Workspace& ws) {
+  for (size_t L = p.bodies.size(); L-- > 0;) {
     const int P = p.joints[L].parent;
     if (P >= 0)
       ws.reaction_W[static_cast<size_t>(P)] += MoveWrench(ws.reaction_W[L], ws.p_WB[L], ws.p_WB[static_cast<size_t>(P)]);
   }
+}
+
+}  // namespace
+
+void JointReactions(const Program& p, Workspace& ws) {
+  const size_t K = p.bodies.size();
+  for (size_t L = 0; L < K; ++L) {
+    const TreeBody& b = p.bodies[L];
+    Vec6 w;
+    w.head<3>() = b.mass * ws.a_bias_cm[L] - ws.F_W[L];
+    w.tail<3>() = ws.I_W[L] * ws.alpha_bias[L] + ws.w_WB[L].cross(ws.I_W[L] * ws.w_WB[L]) - ws.T_W[L];
+    ws.reaction_W[L] = MoveWrench(w, ws.p_WBcm[L], ws.p_WB[L]);  // (5), own term
+  }
+  SubtractMultiplierWrenches(p, ws);
+  AccumulateSubtrees(p, ws);
+}
+
+void MultiplierReactions(const Program& p, Workspace& ws) {
+  for (Vec6& w : ws.reaction_W) w.setZero();
+  SubtractMultiplierWrenches(p, ws);
+  AccumulateSubtrees(p, ws);
 }
 
 Vec6 JointReactionInFrameB(const Program& p, const Workspace& ws, int flat_joint) {

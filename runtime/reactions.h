@@ -18,6 +18,12 @@ void LoopMultipliers(const Program& p, Workspace& ws);
 // joint L, at o_L, world axes (Newton-Euler of the subtree, loop forces included).
 void JointReactions(const Program& p, Workspace& ws);
 
+// ws.reaction_W from the multipliers ws.lambda_c alone (the bodies' inertia and applied
+// forces left out): the linear map lambda -> reactions whose null space decides which
+// reaction components are statically indeterminate (runtime/compile/indeterminate.cpp).
+// Needs the positions only.
+void MultiplierReactions(const Program& p, Workspace& ws);
+
 // Reaction of flat joint `flat_joint` on its frame_b side, at frame_b's origin, resolved
 // in frame_b: [force; torque]. Includes the joint's own applied force (tau, drive).
 Vec6 JointReactionInFrameB(const Program& p, const Workspace& ws, int flat_joint);

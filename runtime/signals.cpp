@@ -1,5 +1,6 @@
 // Output signals: names, plans (only what a selection needs is computed), evaluation.
 #include <cmath>
+#include <limits>
 
 #include "runtime/engine.h"
 #include "runtime/constraints.h"
@@ -33,6 +34,7 @@ enum class SignalKind : std::uint8_t {
 struct SignalItem {
   SignalKind kind;
   int a = 0, k = 0;
+  bool nan = false;  // statically indeterminate and written as NaN (IndeterminateReactions::NaN)
 };
 
 struct SignalPlan {
@@ -105,6 +107,16 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
   return s;
 }
 
+// Reaction and contact-force components that redundant constraints leave undetermined
+// (Program::reaction_indeterminate, ::contact_indeterminate).
+bool Indeterminate(const Program& p, const SignalItem& it) {
+  if (it.kind == SignalKind::Reaction && !p.reaction_indeterminate.empty())
+    return ((p.reaction_indeterminate[static_cast<size_t>(it.a)] >> it.k) & 1u) != 0;
+  if (it.kind == SignalKind::Contact && it.k >= 3 && it.k <= 5 && !p.contact_indeterminate.empty())
+    return ((p.contact_indeterminate[static_cast<size_t>(it.a)] >> (it.k - 3)) & 1u) != 0;
+  return false;
+}
+
 double SpringEnergy(const Program& p, const Workspace& ws) {
   double e = 0.0;
   for (const LineForceModel& l : p.line_forces) {
@@ -162,7 +174,8 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
       if (error) *error = "unknown signal '" + n + "'";
       return nullptr;
     }
-    const SignalItem it = *found;
+    SignalItem it = *found;
+    it.nan = p.options.indeterminate == IndeterminateReactions::NaN && Indeterminate(p, it);
     plan->items.push_back(it);
     switch (it.kind) {
       case SignalKind::Output: plan->outputs = plan->velocity = true; break;
@@ -214,6 +227,16 @@ double LoopDriveForce(const Program& p, Workspace& ws, int r) {
   return d;
 }
 
+std::vector<std::string> IndeterminateSignals(const Program& p, const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  if (p.redundant_rows.empty()) return out;
+  const auto all = AllSignals(p);
+  for (const std::string& n : names)
+    for (const auto& [name, item] : all)
+      if (name == n && Indeterminate(p, item)) out.push_back(n);
+  return out;
+}
+
 int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
@@ -247,6 +270,10 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
   }
   for (size_t i = 0; i < plan.items.size(); ++i) {
     const SignalItem& it = plan.items[i];
+    if (it.nan) {
+      out[i] = std::numeric_limits<double>::quiet_NaN();
+      continue;
+    }
     double v = 0.0;
     switch (it.kind) {
       case SignalKind::JointQ: v = ws.q[it.a]; break;

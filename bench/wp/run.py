@@ -4,6 +4,7 @@ and tables. Called by bench/run_work_precision.sh, which builds what this needs.
 
     bench/.venv/bin/python bench/wp/run.py --kanesim build-w/cli/kanesim --pin-driver DRIVER
         [--rhs-bench build-w/bench/rhs_chain] [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,sympy,rhs]
+        [--problems fourbar,rolling_disk]   (name prefixes; other problems' results are kept)
 
 Timing: wall time of the integration only (kanesim: the `integrate` phase of --stats;
 peers: around their integrate call, model construction excluded), median of REPS runs.
@@ -24,12 +25,21 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import problems as P  # noqa: E402
 from problems import BENCH, ROOT, Problem, all_problems, mjcf, pin_model  # noqa: E402
 
 RTOLS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
 RTOLS_QUICK = [1e-3, 1e-6, 1e-9, 1e-12]
 PIN_RTOLS = RTOLS + [1e-13]
 MJ_STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5]
+CONSTRAINED = ("fourbar", "disk")   # loops and rolling contacts: not trees
+# Why a peer does not run a problem (written to results.json's notes and the report).
+NOT_RUN = {
+    ("pin", "fourbar"): "Pinocchio C++ / SciPy + pin.aba: aba is for trees; a loop needs "
+    "constraintDynamics (acceleration-level KKT with Baumgarte drift correction), a different "
+    "formulation and driver, not written here",
+    ("pin", "disk"): "Pinocchio C++ / SciPy + pin.aba: no rolling (non-holonomic) constraint in Pinocchio",
+}
 
 
 class Sweep:
@@ -82,8 +92,7 @@ def kanesim_run(exe, p, integrator, solver, rtol, out_csv, extra=()):
         lines = fh.read().split("\n")
     head = lines[0].split(",")
     last = [float(x) for x in lines[-2].split(",")] if lines[-1] == "" else [float(x) for x in lines[-1].split(",")]
-    names = ["shoulder.q", "elbow.q"] if p.kind == "pendulum" else ["j[%d].q" % i for i in range(1, p.n + 1)]
-    q = [last[head.index(nm)] for nm in names]
+    q = [last[head.index(nm)] for nm in p.q_names]
     return dict(ok=True, time=stats.get("integrate", 0.0), q=q, load=stats.get("load"),
                 compile=stats.get("compile"), rhs=stats.get("rhs"), rhs_jac=stats.get("rhs_jac"),
                 steps=stats.get("steps"))
@@ -93,8 +102,11 @@ def run_kanesim(args, problems, sweep, rtols, res):
     tmp = tempfile.mkdtemp(prefix="wp_kanesim_")
     for p in problems:
         print("kanesim:", p.title, flush=True)
-        for integ in ("ida", "cvode", "arkode"):
-            for solver in ("dense", "sparse"):
+        # Loops and contacts always take the dense constrained path (runtime/engine.cpp:
+        # SolveConstrained); `--solver sparse` is accepted and ignored there, so only dense.
+        constrained = p.kind in CONSTRAINED
+        for integ in ("ida", "cvode", "cvode-bdf", "arkode") if constrained else ("ida", "cvode", "arkode"):
+            for solver in ("dense",) if constrained else ("dense", "sparse"):
                 label = "kanesim %s %s" % (integ, solver)
                 out = os.path.join(tmp, "out.csv")
                 pts = sweep.run(p, rtols, lambda r: kanesim_run(args.kanesim, p, integ, solver, r, out), label)
@@ -114,6 +126,9 @@ def pin_cpp_run(driver, p, rtol, reps):
 
 def run_pin_cpp(args, problems, sweep, res):
     for p in problems:
+        if p.kind in CONSTRAINED:
+            res["notes"].append("%s: %s" % (p.name, NOT_RUN[("pin", p.kind)]))
+            continue
         print("pinocchio C++:", p.title, flush=True)
         reps = sweep.reps
         # The driver repeats internally (median); the sweep calls it once per tolerance.
@@ -127,6 +142,8 @@ def run_scipy(args, problems, sweep, rtols, res):
     import pinocchio as pin
     from scipy.integrate import odeint, solve_ivp
     for p in problems:
+        if p.kind in CONSTRAINED:
+            continue
         print("scipy + pinocchio:", p.title, flush=True)
         model = pin_model(p)
         data = model.createData()
@@ -163,7 +180,15 @@ def run_mujoco(args, problems, sweep, res):
     os.makedirs(os.path.join(BENCH, "results", "mjcf"), exist_ok=True)
     for p in problems:
         print("mujoco:", p.title, flush=True)
-        text = mjcf(p)
+        q0, u0 = [p.q0] * p.n, [0.0] * p.n
+        if p.kind == "fourbar":
+            text = P.mjcf_fourbar(p)
+            q0, u0 = P.fourbar_start(p)
+        elif p.kind == "disk":
+            text = P.mjcf_disk(p)
+            q0, u0 = P.disk_start()
+        else:
+            text = mjcf(p)
         with open(os.path.join(BENCH, "results", "mjcf", p.name.split("_T")[0] + ".xml"), "w") as fh:
             fh.write(text + "\n")
         t0 = time.perf_counter()
@@ -177,7 +202,8 @@ def run_mujoco(args, problems, sweep, res):
                 m.opt.timestep = dt
                 nstep = int(round(p.T / dt))
                 mujoco.mj_resetData(m, d)
-                d.qpos[:] = p.q0
+                d.qpos[:] = q0
+                d.qvel[:] = u0
                 t0 = time.perf_counter()
                 mujoco.mj_step(m, d, nstep)
                 wall = time.perf_counter() - t0
@@ -191,8 +217,14 @@ def run_mujoco(args, problems, sweep, res):
 # --------------------------------------------------------------------------- Exudyn
 def run_exudyn(args, problems, sweep, rtols, res):
     import exudyn_tree
+    import exudyn_constrained
     for p in problems:
         print("exudyn:", p.title, flush=True)
+        if p.kind in CONSTRAINED:
+            runner = exudyn_constrained.runner(p)
+            label = "exudyn %s gen-alpha (fixed step)" % ("Revolute2D" if p.kind == "fourbar" else "RollingDisc")
+            res["runs"].setdefault(p.name, {})[label] = sweep.run(p, exudyn_constrained.STEPS, runner.run, label)
+            continue
         try:
             runner = exudyn_tree.Runner(p)
         except Exception as e:  # report, do not stop the benchmark
@@ -294,23 +326,37 @@ def main():
     ap.add_argument("--rhs-bench", default="")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", default="kanesim,pin,scipy,mujoco,exudyn,sympy,rhs")
+    ap.add_argument("--problems", default="", help="comma-separated name prefixes (default: all)")
     ap.add_argument("--out", default=os.path.join(BENCH, "results", "results.json"))
     args = ap.parse_args()
     parts = args.only.split(",")
-    problems = all_problems(args.quick)
+    problems = all_problems(args.quick, args.problems.split(",") if args.problems else None)
+    partial = args.only != ap.get_default("only") or bool(args.problems)
     rtols = RTOLS_QUICK if args.quick else RTOLS
     sweep = Sweep(reps=1 if args.quick else 3, budget=1.0 if args.quick else 4.0)
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
     res = dict(machine=machine_info(), quick=args.quick, runs={}, notes=[],
                problems={p.name: dict(title=p.title, T=p.T, n=p.n, kind=p.kind, trust_floor=p.trust_floor(),
                                       ref=os.path.relpath(p.ref_path(), ROOT)) for p in problems})
-    if os.path.exists(args.out) and args.only != ap.get_default("only"):
-        with open(args.out) as fh:  # partial re-run: keep the other tools' numbers
+    if os.path.exists(args.out) and partial:
+        with open(args.out) as fh:  # partial re-run: keep the other tools' and problems' numbers
             old = json.load(fh)
-        for k in ("runs", "sympy", "rhs", "machine", "notes"):
+        new_problems = res["problems"]
+        for k in ("runs", "sympy", "rhs", "machine", "notes", "problems"):
             if k in old:
                 res[k] = old[k]
-        res["notes"].append("re-ran %s at load average %s" % (args.only, ", ".join("%.1f" % x for x in os.getloadavg())))
+        res["problems"].update(new_problems)
+        if args.problems:  # the selected problems' runs of the selected tools start afresh
+            for p in problems:
+                for tool in list(res["runs"].get(p.name, {})):
+                    tkey = "pin" if tool.startswith(("pinocchio", "scipy")) else tool.split()[0]
+                    if tkey in parts or (tkey == "pin" and "scipy" in parts):
+                        del res["runs"][p.name][tool]
+            res["notes"] = [n for n in res["notes"] if not any(n.startswith(p.name + ":") for p in problems)]
+        res.setdefault("partial_runs", []).append(dict(
+            only=args.only, problems=args.problems, loadavg_start=os.getloadavg(), machine=machine_info()))
+        res["notes"].append("re-ran %s%s at load average %s" % (
+            args.only, " on " + args.problems if args.problems else "", ", ".join("%.1f" % x for x in os.getloadavg())))
     t_start = time.time()
     steps = [("kanesim", lambda: run_kanesim(args, problems, sweep, rtols, res)),
              ("pin", lambda: run_pin_cpp(args, problems, sweep, res)),
@@ -326,7 +372,10 @@ def main():
             res.setdefault("phase_seconds", {})[name] = time.time() - t0
             with open(args.out, "w") as fh:
                 json.dump(res, fh, indent=1, default=float)
-    if args.only == ap.get_default("only"):
+    if partial:
+        res["partial_runs"][-1]["loadavg_end"] = os.getloadavg()
+        res["partial_runs"][-1]["seconds"] = time.time() - t_start
+    else:
         res["machine"]["loadavg_end"] = os.getloadavg()
         res["machine"]["total_seconds"] = time.time() - t_start
     with open(args.out, "w") as fh:

@@ -336,6 +336,7 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
     if (!out.errors.empty()) return out;
   }
   if (reuse) p.sparse_symbolic = reuse->sparse_symbolic;
+  if (p.solver == SolverPath::Recursive) BuildTree(p);
   std::string err;
   if (p.solver == SolverPath::Sparse && !BuildSparse(p, &err)) {
     CompileMessage e;

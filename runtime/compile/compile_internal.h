@@ -39,6 +39,14 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
 // held), the rank of the constraint Jacobian, DOF, redundant constraints; y0 updated.
 void AssembleLoops(Program& p, std::vector<CompileMessage>* errors);
 
+// Relative threshold on |R_ii| / max |R_ii| of column-pivoted QR below which the
+// constraint Jacobian counts as rank deficient (assembly, DOF, redundant rows).
+inline constexpr double kRankTol = 1e-9;
+
+// Program::reaction_indeterminate and ::contact_indeterminate from the null space of
+// A^T at the assembled start (ws: positions, velocities and A of that state).
+void FindIndeterminateReactions(Program& p, Workspace& ws);
+
 // Gravity, joint forces, line forces, wrenches (force tape) and outputs (output tape).
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);
 

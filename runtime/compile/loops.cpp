@@ -21,6 +21,7 @@
 // and are named with their joint's source location.
 #include <Eigen/QR>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -37,8 +38,6 @@ namespace {
 
 constexpr double kAssemblyTol = 1e-12;  // position residual (relative to the loop length scale)
 constexpr int kAssemblyIters = 50;
-constexpr double kRankTol = 1e-9;       // |R_ii| / max |R_ii| below it: rank deficient
-
 
 std::string LocText(const flat::SourceLoc& l) {
   return l.file + ":" + std::to_string(l.line) + ":" + std::to_string(l.col);
@@ -338,6 +337,10 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qrt(ws.A.transpose());
   qrt.setThreshold(kRankTol);
   const auto& perm = qrt.colsPermutation().indices();
+  p.redundant_rows.clear();
+  for (Eigen::Index k = qrt.rank(); k < nc; ++k) p.redundant_rows.push_back(perm[k]);
+  std::sort(p.redundant_rows.begin(), p.redundant_rows.end());
+  FindIndeterminateReactions(p, ws);
   for (size_t li = 0; li < p.loops.size(); ++li) {
     const LoopClosure& l = p.loops[li];
     std::string redundant;

@@ -1,0 +1,269 @@
+// Recursive path: Kane's equations of an open tree (Lesser eqs. 22-25, grouped per
+// subtree as in kane_dense.cpp eq. (3)) eliminated leaves to root, then solved root to
+// leaves. The unknowns are the free udot; the body accelerations are linear in them:
+//
+//   A_L = X_LP A_P + S_L udot_L,   X_LP A = [a + alpha x (o_L - o_P);  alpha],  A_ground = 0  (1)
+//   S_L^T sum_{B in subtree(L)} X*_BL (Mb_B A_B - w_B) = Q_L                                 (2)
+//
+// where A_L = [a; alpha] is the part of body L's acceleration at its origin o_L that
+// depends on the free udot (the rest, with free udot = 0, is in the bias accelerations),
+// S_L the free columns of the joint's tangent generators H_W (twists at o_L), Mb_B the
+// spatial inertia of body B about o_B, w_B = [F_B - m_B a_bias_B; T_B - I_B alpha_bias_B
+// - w_B x I_B w_B] moved from c_B to o_B (the applied and bias-inertia wrench, as in the
+// dense path), X*_BL moves a wrench from o_B to o_L, and Q_L the joint forces of joint L.
+//
+// Elimination (the articulated-body recursion, Featherstone 2008 §7.3, read as Gaussian
+// block elimination of (2) in leaf-first order). Suppose that for every child C of L
+//   sum_{B in subtree(C)} X*_BC (Mb_B A_B - w_B) = Ia_C A_C + pa_C.                         (3)
+// Then (2) for C with (1) gives its udot in terms of its parent's acceleration:
+//   U_C = Ia_C S_C,  D_C = S_C^T U_C,  u_C = Q_C - S_C^T pa_C                               (4)
+//   udot_C = D_C^-1 (u_C - U_C^T X_CL A_L)                                                 (5)
+// and substituting (5) into (3) makes it linear in A_L alone, so (3) holds for L with
+//   Ia_L = Mb_L + sum_C X*_CL (Ia_C - U_C D_C^-1 U_C^T) X_CL                                 (6)
+//   pa_L = -w_L + sum_C X*_CL (pa_C + U_C D_C^-1 u_C)                                        (7)
+// (at a leaf: Ia = Mb, pa = -w). Backward pass: (4), (6), (7) for L = K-1 .. 0 (children
+// follow parents in tree order). Forward pass: (5) and (1) for L = 0 .. K-1.
+//
+// The D_L are the pivot blocks of the mass matrix M = tau^T Mb tau eliminated in
+// leaf-first order (Schur complements), so they are positive definite exactly when M is;
+// a pivot below kSingularPivot of the largest diagonal entry means M is singular to
+// working precision, the same test as the dense path's Cholesky.
+#include "runtime/kane_tree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace kanesim::rt {
+
+namespace {
+
+// A squared pivot of a D_L below this fraction of the largest diagonal entry of the D_L
+// means a singular mass matrix (kane_dense.cpp uses the same bound for Cholesky).
+constexpr double kSingularPivot = 1e-13;
+
+template <int NF>
+using Mat6N = Eigen::Matrix<double, 6, NF>;
+template <int NF>
+using MatN = Eigen::Matrix<double, NF, NF>;
+template <int NF>
+using VecN = Eigen::Matrix<double, NF, 1>;
+
+// The smallest squared pivot and the largest diagonal entry of the D_L seen so far.
+struct PivotRange {
+  double min_pivot_sq = std::numeric_limits<double>::infinity();
+  double max_diag = 0.0;
+};
+
+// Spatial inertia of a body (mass m, centre c, central inertia I, world axes) about o,
+// mapping the acceleration [a_o; alpha] to the wrench [f; n_o]:
+//   [m 1, -m D; m D, I - m D D],  D = [c - o]x.
+Mat6 SpatialInertia(double m, const Vec3& c, const Mat3& I, const Vec3& o) {
+  const Vec3 r = c - o;
+  Mat3 D;
+  D << 0.0, -r.z(), r.y(), r.z(), 0.0, -r.x(), -r.y(), r.x(), 0.0;
+  const Mat3 mD = m * D;
+  Mat6 S;
+  S.topLeftCorner<3, 3>() = m * Mat3::Identity();
+  S.topRightCorner<3, 3>() = -mD;
+  S.bottomLeftCorner<3, 3>() = mD;
+  S.bottomRightCorner<3, 3>() = I - mD * D;
+  return S;
+}
+
+// X*_LP Ia X_LP of (6): the inertia Ia about a moved to b, with X = [1, -R; 0, 1],
+// R = [a - b]x. With Ia = [A, B; B^T, C] (A, C symmetric):
+//   [A, B - A R; B^T + R A, C + R B - B^T R - R A R]
+// added into Ib. R A = -(A R)^T, -B^T R = (R B)^T, -R A R = (A R)^T R.
+void AddMovedInertia(const Mat6& Ia, const Vec3& a, const Vec3& b, Mat6* Ib) {
+  const Vec3 d = a - b;
+  Mat3 R;
+  R << 0.0, -d.z(), d.y(), d.z(), 0.0, -d.x(), -d.y(), d.x(), 0.0;
+  const Mat3 A = Ia.topLeftCorner<3, 3>(), B = Ia.topRightCorner<3, 3>();
+  const Mat3 AR = A * R;
+  const Mat3 RB = R * B;
+  const Mat3 B2 = B - AR;
+  Ib->topLeftCorner<3, 3>() += A;
+  Ib->topRightCorner<3, 3>() += B2;
+  Ib->bottomLeftCorner<3, 3>() += B2.transpose();
+  Ib->bottomRightCorner<3, 3>() += Ia.bottomRightCorner<3, 3>() + RB + RB.transpose() + AR.transpose() * R;
+}
+
+// A wrench [f; n_a] moved to point b: n_b = n_a + (a - b) x f.
+inline void AddMovedWrench(const Vec6& w, const Vec3& a, const Vec3& b, Vec6* wb) {
+  wb->head<3>() += w.head<3>();
+  wb->tail<3>() += w.tail<3>() + (a - b).cross(w.head<3>());
+}
+
+// S_L: the free columns of the joint's tangent generators.
+template <int NF>
+Mat6N<NF> FreeColumns(const Workspace& ws, const TreeLayout::JointBlock& J) {
+  if (J.contiguous) return ws.H_W.middleCols<NF>(J.cols[0]);
+  Mat6N<NF> S;
+  for (int k = 0; k < NF; ++k) S.col(k) = ws.H_W.col(J.cols[static_cast<size_t>(k)]);
+  return S;
+}
+
+// Backward step of joint L: (4), then Ia and pa turned into the brackets of (6) and (7).
+// Returns false when D_L is not positive definite.
+template <int NF>
+bool Eliminate(const Workspace& ws, const TreeLayout::JointBlock& J, double* U_data, double* Dinv_data,
+               double* u_data, Mat6* Ia, Vec6* pa, PivotRange* piv) {
+  const Mat6N<NF> S = FreeColumns<NF>(ws, J);
+  Eigen::Map<Mat6N<NF>> U(U_data);
+  Eigen::Map<MatN<NF>> Dinv(Dinv_data);
+  Eigen::Map<VecN<NF>> u(u_data);
+  U.noalias() = *Ia * S;                        // (4)
+  const MatN<NF> D = S.transpose() * U;         // (4)
+  for (int k = 0; k < NF; ++k) u[k] = ws.Q[J.cols[static_cast<size_t>(k)]] - S.col(k).dot(*pa);  // (4)
+  piv->max_diag = std::max(piv->max_diag, D.diagonal().maxCoeff());
+  if constexpr (NF == 1) {
+    const double d = D(0, 0);
+    if (!(d > 0.0)) return false;
+    piv->min_pivot_sq = std::min(piv->min_pivot_sq, d);
+    Dinv(0, 0) = 1.0 / d;
+  } else {
+    const Eigen::LLT<MatN<NF>> llt(D);
+    if (llt.info() != Eigen::Success) return false;
+    piv->min_pivot_sq = std::min(piv->min_pivot_sq, llt.matrixLLT().diagonal().cwiseAbs2().minCoeff());
+    Dinv = llt.solve(MatN<NF>::Identity());
+  }
+  const Mat6N<NF> UD = U * Dinv;
+  Ia->noalias() -= UD * U.transpose();  // bracket of (6)
+  pa->noalias() += UD * u;              // bracket of (7)
+  return true;
+}
+
+// Forward step of joint L: (5) and (1), given A = X_LP A_P; writes udot_L.
+template <int NF>
+void Substitute(const TreeLayout::JointBlock& J, const double* U_data, const double* Dinv_data,
+                const double* u_data, Workspace& ws, Vec6* A) {
+  const Eigen::Map<const Mat6N<NF>> U(U_data);
+  const Eigen::Map<const MatN<NF>> Dinv(Dinv_data);
+  const Eigen::Map<const VecN<NF>> u(u_data);
+  const VecN<NF> ud = Dinv * (u - U.transpose() * *A);  // (5)
+  *A += FreeColumns<NF>(ws, J) * ud;                    // (1)
+  for (int k = 0; k < NF; ++k) ws.udot[J.cols[static_cast<size_t>(k)]] = ud[k];
+}
+
+// Dispatch on the joint's number of free speeds (fixed-size blocks for each).
+bool EliminateJoint(const Workspace& ws, const TreeLayout::JointBlock& J, double* U, double* Dinv, double* u,
+                    Mat6* Ia, Vec6* pa, PivotRange* piv) {
+  switch (J.nf) {
+    case 0: return true;
+    case 1: return Eliminate<1>(ws, J, U, Dinv, u, Ia, pa, piv);
+    case 2: return Eliminate<2>(ws, J, U, Dinv, u, Ia, pa, piv);
+    case 3: return Eliminate<3>(ws, J, U, Dinv, u, Ia, pa, piv);
+    case 4: return Eliminate<4>(ws, J, U, Dinv, u, Ia, pa, piv);
+    case 5: return Eliminate<5>(ws, J, U, Dinv, u, Ia, pa, piv);
+    default: return Eliminate<6>(ws, J, U, Dinv, u, Ia, pa, piv);
+  }
+}
+
+void SubstituteJoint(const TreeLayout::JointBlock& J, const double* U, const double* Dinv, const double* u,
+                     Workspace& ws, Vec6* A) {
+  switch (J.nf) {
+    case 0: return;
+    case 1: return Substitute<1>(J, U, Dinv, u, ws, A);
+    case 2: return Substitute<2>(J, U, Dinv, u, ws, A);
+    case 3: return Substitute<3>(J, U, Dinv, u, ws, A);
+    case 4: return Substitute<4>(J, U, Dinv, u, ws, A);
+    case 5: return Substitute<5>(J, U, Dinv, u, ws, A);
+    default: return Substitute<6>(J, U, Dinv, u, ws, A);
+  }
+}
+
+// Error path: the accumulators must be zero for the next call.
+int Singular(Workspace& ws) {
+  for (Mat6& I : ws.tree_Ia) I.setZero();
+  for (Vec6& w : ws.tree_pa) w.setZero();
+  ws.error = "singular mass matrix (a body without mass or inertia moved by a joint?)";
+  return -1;
+}
+
+}  // namespace
+
+void BuildTree(Program& p) {
+  auto layout = std::make_shared<TreeLayout>();
+  layout->joints.resize(p.joints.size());
+  int d0 = 0;
+  for (size_t L = 0; L < p.joints.size(); ++L) {
+    const TreeJoint& j = p.joints[L];
+    TreeLayout::JointBlock& J = layout->joints[L];
+    for (int k = 0; k < j.nu; ++k) {
+      const int s = j.u0 + k;
+      const int f = p.u_free_of[static_cast<size_t>(s)];
+      if (f < 0) continue;
+      if (J.nf == 0) J.f0 = f;
+      J.cols[static_cast<size_t>(J.nf++)] = s;
+    }
+    J.contiguous = J.nf == j.nu;
+    J.d0 = d0;
+    d0 += J.nf * J.nf;
+  }
+  layout->d_size = d0;
+  p.tree = std::move(layout);
+}
+
+void InitTreeWorkspace(const Program& p, Workspace& ws) {
+  const size_t K = p.bodies.size();
+  ws.tree_Ia.assign(K, Mat6::Zero());
+  ws.tree_pa.assign(K, Vec6::Zero());
+  ws.tree_A.assign(K, Vec6::Zero());
+  ws.tree_U = Eigen::VectorXd::Zero(6 * p.nu);
+  ws.tree_Dinv = Eigen::VectorXd::Zero(p.tree->d_size);
+  ws.tree_u = Eigen::VectorXd::Zero(p.nu);
+}
+
+int SolveTree(const Program& p, Workspace& ws) {
+  if (p.nu == 0) return 0;
+  const TreeLayout& T = *p.tree;
+  const int K = static_cast<int>(p.bodies.size());
+  PivotRange piv;
+  // Backward pass, leaves to root: (4), (6), (7).
+  for (int L = K - 1; L >= 0; --L) {
+    const auto uL = static_cast<size_t>(L);
+    const TreeBody& b = p.bodies[uL];
+    const TreeLayout::JointBlock& J = T.joints[uL];
+    const Vec3& o = ws.p_WB[uL];
+    const Vec3& c = ws.p_WBcm[uL];
+    Mat6 Ia = SpatialInertia(b.mass, c, ws.I_W[uL], o);
+    Ia += ws.tree_Ia[uL];
+    ws.tree_Ia[uL].setZero();
+    Vec6 w;  // w_L at c_L
+    w.head<3>() = ws.F_W[uL] - b.mass * ws.a_bias_cm[uL];
+    w.tail<3>() = ws.T_W[uL] - ws.I_W[uL] * ws.alpha_bias[uL] - ws.w_WB[uL].cross(ws.I_W[uL] * ws.w_WB[uL]);
+    Vec6 pa = ws.tree_pa[uL];
+    ws.tree_pa[uL].setZero();
+    pa.head<3>() -= w.head<3>();
+    pa.tail<3>() -= w.tail<3>() + (c - o).cross(w.head<3>());
+    if (!EliminateJoint(ws, J, ws.tree_U.data() + 6 * J.f0, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0,
+                        &Ia, &pa, &piv))
+      return Singular(ws);
+    const int P = p.joints[uL].parent;
+    if (P >= 0) {
+      const auto uP = static_cast<size_t>(P);
+      AddMovedInertia(Ia, o, ws.p_WB[uP], &ws.tree_Ia[uP]);  // (6)
+      AddMovedWrench(pa, o, ws.p_WB[uP], &ws.tree_pa[uP]);   // (7)
+    }
+  }
+  if (!(piv.min_pivot_sq > kSingularPivot * piv.max_diag)) return Singular(ws);
+  // Forward pass, root to leaves: (5), (1).
+  for (int L = 0; L < K; ++L) {
+    const auto uL = static_cast<size_t>(L);
+    const TreeLayout::JointBlock& J = T.joints[uL];
+    const int P = p.joints[uL].parent;
+    Vec6 A = Vec6::Zero();
+    if (P >= 0) {
+      const auto uP = static_cast<size_t>(P);
+      const Vec6& AP = ws.tree_A[uP];
+      A.head<3>() = AP.head<3>() + AP.tail<3>().cross(ws.p_WB[uL] - ws.p_WB[uP]);  // X_LP A_P
+      A.tail<3>() = AP.tail<3>();
+    }
+    SubstituteJoint(J, ws.tree_U.data() + 6 * J.f0, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0, ws, &A);
+    ws.tree_A[uL] = A;
+  }
+  return 0;
+}
+
+}  // namespace kanesim::rt

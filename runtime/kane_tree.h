@@ -1,0 +1,34 @@
+// Recursive path: Kane's equations of an open tree solved by eliminating the K-vector
+// system body by body, leaves to root, then substituting back root to leaves
+// (runtime/kane_tree.cpp). O(K) with 6x6 and 6 x nf blocks, no general sparse LU.
+// Trees only: closed loops and rolling contacts keep the reduced dense path.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "runtime/program.h"
+
+namespace kanesim::rt {
+
+// Everything structural the recursion needs, fixed by the compiler (BuildTree).
+struct TreeLayout {
+  struct JointBlock {
+    int nf = 0;                  // free speeds of the joint (0..6): columns of its tangent block S_L
+    int f0 = 0;                  // free index of its first free speed (its free speeds are consecutive)
+    int d0 = 0;                  // offset of its nf x nf block D_L^-1 in Workspace::tree_Dinv
+    bool contiguous = true;      // all its speeds are free: S_L = H_W.middleCols(cols[0], nf)
+    std::array<int, 6> cols{};   // full speed index of free speed k (k < nf)
+  };
+  std::vector<JointBlock> joints;  // K, in tree order
+  int d_size = 0;                  // sum of nf^2
+};
+
+// Compile time: the layout (Program::tree) for p.solver == SolverPath::Recursive.
+void BuildTree(Program& p);
+// Workspace creation: the per-body and per-joint arrays of the recursion.
+void InitTreeWorkspace(const Program& p, Workspace& ws);
+// Writes the free entries of ws.udot. Returns -1 on a singular mass matrix.
+int SolveTree(const Program& p, Workspace& ws);
+
+}  // namespace kanesim::rt
