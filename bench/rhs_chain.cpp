@@ -7,28 +7,38 @@
 //   build-t/bench/rhs_chain --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
+#include <random>
 #include <vector>
 
 #include "runtime/engine.h"
 #include "tests/runtime/builders.h"
+#include "tests/runtime/random_state.h"
 
 namespace {
 
 using kanesim::rt::SolverPath;
 
-void RhsChain(benchmark::State& state, SolverPath path) {
+// One Derivative call at y0 (chains: the start, q = 0.1) with every speed 0.3, or at a
+// random valid state (fixed seed) when `random_state`.
+void Rhs(benchmark::State& state, const kanesim::flat::Mechanism& m, SolverPath path, bool random_state = false) {
   const int N = static_cast<int>(state.range(0));
   kanesim::rt::CompileOptions o;
   o.solver = path;
-  auto r = kanesim::rt::Compile(kanesim::test::Chain(N), o);
+  auto r = kanesim::rt::Compile(m, o);
   if (!r.program) {
     state.SkipWithError("compile failed");
     return;
   }
   auto ws = kanesim::rt::MakeWorkspace(*r.program);
+  const int nq = kanesim::rt::NumQ(*r.program);
   std::vector<double> y(static_cast<size_t>(kanesim::rt::StateSize(*r.program))), ydot(y.size());
   kanesim::rt::InitialState(*r.program, y.data());
-  for (size_t i = y.size() / 2; i < y.size(); ++i) y[i] = 0.3;  // non-zero speeds: full bias terms
+  if (random_state) {
+    std::mt19937 rng(2);
+    const Eigen::VectorXd yr = kanesim::test::RandomState(*r.program, rng);
+    for (size_t i = 0; i < y.size(); ++i) y[i] = yr[static_cast<Eigen::Index>(i)];
+  }
+  for (size_t i = static_cast<size_t>(nq); i < y.size(); ++i) y[i] = 0.3;  // non-zero speeds: full bias terms
   for (auto _ : state) {
     if (kanesim::rt::Derivative(*r.program, *ws, 0.0, y.data(), ydot.data()) != 0) {
       state.SkipWithError("Derivative failed");
@@ -40,17 +50,35 @@ void RhsChain(benchmark::State& state, SolverPath path) {
   state.counters["N"] = N;
 }
 
+void RhsChain(benchmark::State& state, SolverPath path) {
+  Rhs(state, kanesim::test::Chain(static_cast<int>(state.range(0))), path);
+}
+
+// A random tree of N bodies whose joints cycle through revolute, prismatic, cylindrical,
+// universal, spherical, planar and free (1, 1, 2, 2, 3, 3, 6 speeds), fixed seed, at a
+// random state (Euler angles at their start value 0 would be in gimbal lock).
+void RhsMixedTree(benchmark::State& state, SolverPath path) {
+  std::mt19937 rng(1);
+  Rhs(state, kanesim::test::RandomTree(rng, {static_cast<int>(state.range(0)), true, false, false}), path, true);
+}
+
 void BM_RhsDense(benchmark::State& state) { RhsChain(state, SolverPath::Dense); }
 void BM_RhsSparse(benchmark::State& state) { RhsChain(state, SolverPath::Sparse); }
 void BM_RhsRecursive(benchmark::State& state) { RhsChain(state, SolverPath::Recursive); }
+void BM_TreeDense(benchmark::State& state) { RhsMixedTree(state, SolverPath::Dense); }
+void BM_TreeSparse(benchmark::State& state) { RhsMixedTree(state, SolverPath::Sparse); }
+void BM_TreeRecursive(benchmark::State& state) { RhsMixedTree(state, SolverPath::Recursive); }
 
 // Dense costs O(N^2) assembly (composite inertias) plus an O(N^3) Cholesky: stop at 500.
-BENCHMARK(BM_RhsDense)->Arg(5)->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Arg(50)->Arg(60)->Arg(80)->Arg(100)->Arg(120)
-    ->Arg(150)->Arg(200)->Arg(500)->Complexity(benchmark::oNCubed);
+BENCHMARK(BM_RhsDense)->Arg(1)->Arg(2)->Arg(3)->Arg(5)->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Arg(50)->Arg(60)
+    ->Arg(80)->Arg(100)->Arg(120)->Arg(150)->Arg(200)->Arg(500)->Complexity(benchmark::oNCubed);
 BENCHMARK(BM_RhsSparse)->Arg(5)->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Arg(50)->Arg(60)->Arg(80)->Arg(100)->Arg(120)
     ->Arg(150)->Arg(200)->Arg(500)->Arg(1000)->Complexity(benchmark::oN);
-BENCHMARK(BM_RhsRecursive)->Arg(5)->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Arg(50)->Arg(60)->Arg(80)->Arg(100)
-    ->Arg(120)->Arg(150)->Arg(200)->Arg(500)->Arg(1000)->Complexity(benchmark::oN);
+BENCHMARK(BM_RhsRecursive)->Arg(1)->Arg(2)->Arg(3)->Arg(5)->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Arg(50)->Arg(60)
+    ->Arg(80)->Arg(100)->Arg(120)->Arg(150)->Arg(200)->Arg(500)->Arg(1000)->Complexity(benchmark::oN);
+BENCHMARK(BM_TreeDense)->Arg(1)->Arg(2)->Arg(4)->Arg(7)->Arg(14)->Arg(28)->Arg(70);
+BENCHMARK(BM_TreeSparse)->Arg(1)->Arg(2)->Arg(4)->Arg(7)->Arg(14)->Arg(28)->Arg(70);
+BENCHMARK(BM_TreeRecursive)->Arg(1)->Arg(2)->Arg(4)->Arg(7)->Arg(14)->Arg(28)->Arg(70);
 
 }  // namespace
 

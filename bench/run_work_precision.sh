@@ -1,6 +1,6 @@
 #!/bin/sh
 # The work-precision benchmark of issue 6 in one command (see bench/README.md):
-#   bench/run_work_precision.sh [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,sympy,rhs]
+#   bench/run_work_precision.sh [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,baseline,sympy,rhs]
 #                               [--problems fourbar,rolling_disk]   (name prefixes)
 # 1. bench/.venv (pinned packages), 2. kanesim Release build in $BUILD_DIR (default build-w),
 # 3. the Pinocchio C++ driver against the pin wheel's headers, 4. missing chain, four-bar and

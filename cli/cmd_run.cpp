@@ -45,6 +45,7 @@ struct RunArgs {
   std::vector<std::string> patterns;
   std::string solver = "auto";
   std::string integrator = "auto";
+  std::string linear_solver = "auto";
   std::string reactions = "nan";
   bool stats = false;
 };
@@ -135,6 +136,7 @@ int RunCommand(const RunArgs& a) {
   so.atol = a.atol_opt->count() > 0 ? a.atol : so.rtol;
   so.integrator = copts.integrator;
   so.cvode_bdf = a.integrator == "cvode-bdf";
+  so.ida_linear_solver = IdaLinearSolverFromName(a.linear_solver);
 
   if (!a.patterns.empty()) {
     std::string error;
@@ -207,6 +209,9 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   run->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   run->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode"}));
+  run->add_option("--linear-solver", a->linear_solver,
+                  "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
+      ->check(CLI::IsMember({"auto", "dense", "klu"}));
   run->add_option("--reactions", a->reactions,
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember({"nan", "min-norm"}));

@@ -47,7 +47,7 @@ struct SweepArgs {
   bool mpi = false;
   bool no_progress = false;
   double start_time = kNaN, stop_time = kNaN, interval = kNaN, rtol = kNaN, atol = kNaN;
-  std::string solver = "auto", integrator = "auto";
+  std::string solver = "auto", integrator = "auto", linear_solver = "auto";
   std::string reactions = "nan";
 };
 
@@ -181,6 +181,7 @@ int SweepCommand(SweepArgs a) {
   if (!CompileModel(mech, copts, &compiled)) return kExitModelError;
   std::shared_ptr<const rt::Program> base = compiled.program;
   config.sim = ResolveSimOptions(mech.experiment, a.start_time, a.stop_time, a.interval, a.rtol, a.atol, a.integrator);
+  config.sim.ida_linear_solver = IdaLinearSolverFromName(a.linear_solver);
   if (!a.patterns.empty()) {
     std::string err;
     if (!sim::SelectSignals(rt::AvailableSignals(*base), a.patterns, &config.trajectory_signals, &err))
@@ -329,6 +330,9 @@ void AddSweepCommand(CLI::App& app, int* exit_code) {
   sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   sw->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode"}));
+  sw->add_option("--linear-solver", a->linear_solver,
+                 "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
+      ->check(CLI::IsMember({"auto", "dense", "klu"}));
   sw->add_option("--reactions", a->reactions,
                  "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember({"nan", "min-norm"}));

@@ -8,6 +8,7 @@
 
 #include "runtime/engine.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/sim/integrator.h"
 
 namespace CLI {
 class App;
@@ -44,6 +45,13 @@ void WarnIndeterminate(const rt::Program& program, const std::vector<std::string
 
 // `--reactions nan|min-norm` (run, sweep) into CompileOptions::indeterminate.
 bool ReactionsFromName(const std::string& name, rt::CompileOptions* options);
+
+// `--linear-solver auto|dense|klu` (run, sweep): IDA's Newton matrix.
+inline sim::IdaLinearSolver IdaLinearSolverFromName(const std::string& name) {
+  if (name == "dense") return sim::IdaLinearSolver::Dense;
+  if (name == "klu") return sim::IdaLinearSolver::Klu;
+  return sim::IdaLinearSolver::Auto;
+}
 
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code);

@@ -25,7 +25,9 @@
 // kDegraded) and re-chosen by pivoting when it degrades.
 #include "runtime/constraints.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "runtime/contacts.h"
 #include "runtime/joint_kinematics.h"
@@ -46,6 +48,14 @@ constexpr double kSingular = 1e-10;
 constexpr double kTight = 1e-13;
 constexpr double kLoose = 1e-8;
 constexpr int kMaxNewton = 8;
+// A rolling disk lies flat when the sine of its axis' angle to the plane normal, |m| of
+// contacts.cpp eq. 2, falls below kFlatDisk (0.57 degrees: a thin disk's face reaches
+// the plane, and the lowest rim point P is undefined at 0). A step that passes through
+// flat is caught as well: P jumps to the opposite side of the rim, and the integrator's
+// speeds give the new P a normal velocity of the order of |v_C| + r |w| (kJumped of it)
+// instead of the integration error.
+constexpr double kFlatDisk = 1e-2;
+constexpr double kJumped = 0.1;
 
 struct FrameState {
   int body = -1;
@@ -100,6 +110,37 @@ void AddBodyColumns(const Program& p, Workspace& ws, int body, const Vec3& x, do
 Vec3 RowDirection(const ConstraintRow& row, const FrameState& a, const FrameState& b) {
   if (row.kind == RowKind::Translation) return a.R * row.d_a;
   return (b.R * row.n_b).cross(a.R * row.d_a);
+}
+
+// The cut joints and contacts with rows, for messages: "'coupler_rocker'".
+std::string Owners(const Program& p) {
+  std::string names;
+  for (const LoopClosure& l : p.loops) names += (names.empty() ? "'" : ", '") + l.name + "'";
+  for (const ContactModel& c : p.contacts) names += (names.empty() ? "contact '" : ", contact '") + c.name + "'";
+  return names;
+}
+
+// With ws.error: -1 (fatal) when a rolling disk lies flat, 1 (recoverable) when a step went
+// through flat (after the positions are projected; ws.psi of the integrator's speeds).
+int CheckDisksUpright(const Program& p, Workspace& ws) {
+  for (const ContactModel& c : p.contacts) {
+    if (c.type != flat::ContactType::RollingDisk) continue;
+    const ContactPoint cp = ContactAt(p, ws, c);
+    const double sin_flat = (c.n_W - c.n_W.dot(cp.e_W) * cp.e_W).norm();
+    const Vec3 v_C = cp.vPm - cp.w.cross(cp.P - cp.C);
+    const double jump = std::fabs(ws.psi[c.row0]) / (v_C.norm() + c.radius * cp.w.norm() + 1e-6);
+    if (sin_flat >= kFlatDisk && jump <= kJumped) continue;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%.3g degrees", std::asin(std::min(1.0, sin_flat)) * 180.0 / M_PI);
+    ws.error = "rolling disk '" + c.name + "' " + (sin_flat < kFlatDisk ? "lies flat on its plane" : "passed through flat") +
+               " at time " + std::to_string(ws.t) + " (its axis " + buf +
+               " from the plane normal): the lowest rim point is undefined there and the disk's face reaches the "
+               "plane; the rolling contact ends (a fall, not modelled)";
+    // Flat is the end of the model (fatal: retrying creeps towards it in ever smaller
+    // steps); a jump may be a rejected trial step, so the integrator retries it smaller.
+    return sin_flat < kFlatDisk ? -1 : 1;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -238,7 +279,12 @@ int FactorDependent(const Program& p, Workspace& ws) {
     q = ratio();
   }
   if (q < kSingular) {
-    ws.error = "closed loop at a singular configuration (the constraint Jacobian lost rank; a dead point?)";
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "%.2g", q);
+    ws.error = "closed loop " + Owners(p) + " at a singular configuration at time " + std::to_string(ws.t) +
+               ": the constraint Jacobian lost rank (pivot ratio " + buf +
+               "; a change point where assembly branches meet, or a dead point), so the loop equations do not "
+               "determine the motion through it";
     return 1;
   }
   return 0;
@@ -295,6 +341,7 @@ int ProjectState(const Program& p, Workspace& ws) {
                std::to_string(ws.t) + ")";
     return 1;
   }
+  if (int s = CheckDisksUpright(p, ws); s != 0) return s;
   if (rank == 0) return 0;
   // Dependent speeds from the velocity constraints (7): u_dep -= A_dep^+ (A u + b).
   SolveDependent(ws, ws.psi, &ws.xd);

@@ -78,6 +78,10 @@ ProgramSummary Summarize(const Program& program);
 std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& program);
 
 int StateSize(const Program& program);  // nq + nu
+// Per entry of y = [q_free; u_free], a group number (0, 1, ...): d(ydot_i)/d(y_j) can be
+// non-zero only when i and j are in the same group (runtime/coupling.cpp). One group per
+// set of subtrees joined by forces, loops or force laws; one group in all for a chain.
+std::vector<int> StateCouplingGroups(const Program& program);
 int NumQ(const Program& program);
 int NumU(const Program& program);
 double StartTime(const Program& program);  // from the experiment annotation

@@ -57,36 +57,40 @@ struct PivotRange {
 
 // Spatial inertia of a body (mass m, centre c, central inertia I, world axes) about o,
 // mapping the acceleration [a_o; alpha] to the wrench [f; n_o]:
-//   [m 1, -m D; m D, I - m D D],  D = [c - o]x.
+//   [m 1, -m D; m D, I - m D D],  D = [r]x,  r = c - o,  -D D = |r|^2 1 - r r^T.
 Mat6 SpatialInertia(double m, const Vec3& c, const Mat3& I, const Vec3& o) {
   const Vec3 r = c - o;
-  Mat3 D;
-  D << 0.0, -r.z(), r.y(), r.z(), 0.0, -r.x(), -r.y(), r.x(), 0.0;
-  const Mat3 mD = m * D;
+  const Vec3 mr = m * r;
+  Mat3 mD;
+  mD << 0.0, -mr.z(), mr.y(), mr.z(), 0.0, -mr.x(), -mr.y(), mr.x(), 0.0;
   Mat6 S;
   S.topLeftCorner<3, 3>() = m * Mat3::Identity();
   S.topRightCorner<3, 3>() = -mD;
   S.bottomLeftCorner<3, 3>() = mD;
-  S.bottomRightCorner<3, 3>() = I - mD * D;
+  S.bottomRightCorner<3, 3>() = I - mr * r.transpose();
+  S.bottomRightCorner<3, 3>().diagonal().array() += mr.dot(r);
   return S;
 }
 
 // X*_LP Ia X_LP of (6): the inertia Ia about a moved to b, with X = [1, -R; 0, 1],
-// R = [a - b]x. With Ia = [A, B; B^T, C] (A, C symmetric):
+// R = [d]x, d = a - b. With Ia = [A, B; B^T, C] (A, C symmetric):
 //   [A, B - A R; B^T + R A, C + R B - B^T R - R A R]
-// added into Ib. R A = -(A R)^T, -B^T R = (R B)^T, -R A R = (A R)^T R.
+// added into Ib. With P = R A (columns d x A_j; A R = -P^T since A is symmetric):
+//   B - A R = B + P^T,   -B^T R = (R B)^T,   -R A R = R P^T,
+// so every product is a column-wise cross product with d.
 void AddMovedInertia(const Mat6& Ia, const Vec3& a, const Vec3& b, Mat6* Ib) {
   const Vec3 d = a - b;
-  Mat3 R;
-  R << 0.0, -d.z(), d.y(), d.z(), 0.0, -d.x(), -d.y(), d.x(), 0.0;
-  const Mat3 A = Ia.topLeftCorner<3, 3>(), B = Ia.topRightCorner<3, 3>();
-  const Mat3 AR = A * R;
-  const Mat3 RB = R * B;
-  const Mat3 B2 = B - AR;
-  Ib->topLeftCorner<3, 3>() += A;
+  Mat3 P, RB, RPt;
+  for (int k = 0; k < 3; ++k) {
+    P.col(k) = d.cross(Ia.block<3, 1>(0, k));
+    RB.col(k) = d.cross(Ia.block<3, 1>(0, 3 + k));
+  }
+  for (int k = 0; k < 3; ++k) RPt.col(k) = d.cross(P.row(k).transpose());
+  const Mat3 B2 = Ia.topRightCorner<3, 3>() + P.transpose();
+  Ib->topLeftCorner<3, 3>() += Ia.topLeftCorner<3, 3>();
   Ib->topRightCorner<3, 3>() += B2;
   Ib->bottomLeftCorner<3, 3>() += B2.transpose();
-  Ib->bottomRightCorner<3, 3>() += Ia.bottomRightCorner<3, 3>() + RB + RB.transpose() + AR.transpose() * R;
+  Ib->bottomRightCorner<3, 3>() += Ia.bottomRightCorner<3, 3>() + RB + RB.transpose() + RPt;
 }
 
 // A wrench [f; n_a] moved to point b: n_b = n_a + (a - b) x f.

@@ -222,16 +222,18 @@ def mat_to_quat(R):
     return q
 
 
-def mjcf_fourbar(p, solref=None):
+def mjcf_fourbar(p, solref=None, solimp=None):
     """The four-bar in MuJoCo: crank and coupler a hinge chain from the world, the rocker a
     hinge on the world at (d, 0, 0), the loop closed by an equality `connect` at the coupler
-    tip. Bodies are placed at the assembled start and `ref` makes qpos the joint angles."""
+    tip. Bodies are placed at the assembled start and `ref` makes qpos the joint angles.
+    MuJoCo's equality constraints are soft: solref/solimp (None: MuJoCo's defaults) set how
+    soft; MJ_STIFF_LOOP is the stiffest setting that stayed stable in our tests."""
     fb = FOURBAR
     (q1, q2, q3), _ = fourbar_start(p)
     I = [m * L ** 2 / 12 for m, L in zip(fb["m"], (fb["a"], fb["b"], fb["c"]))]
     inert = lambda k, L: '<inertial pos="%r 0 0" mass="%r" diaginertia="%r %r %r"/>' % (  # noqa: E731
         L / 2, fb["m"][k], I[k] * 1e-12, I[k], I[k])
-    sr = ' solref="%s"' % solref if solref else ""
+    sr = (' solref="%s"' % solref if solref else "") + (' solimp="%s"' % solimp if solimp else "")
     return "\n".join([
         '<mujoco model="fourbar">', '  <compiler angle="radian"/>',
         '  <option gravity="0 -9.81 0" timestep="0.001"><flag contact="disable"/></option>',
@@ -249,6 +251,9 @@ def mjcf_fourbar(p, solref=None):
         '    </body>', '  </worldbody>',
         '  <equality><connect body1="coupler" body2="rocker" anchor="%r 0 0"%s/></equality>' % (fb["b"], sr),
         '</mujoco>'])
+
+
+MJ_STIFF_LOOP = dict(solref="0.002 1", solimp="0.9999 0.9999 0.001")
 
 
 def mjcf_disk(p, solref=None):

@@ -25,6 +25,11 @@ def is_kanesim(tool):
     return tool.startswith("kanesim")
 
 
+def is_baseline(tool):
+    """Not a simulator: a hand-derived minimal ODE (run.py: run_baseline); never "best peer"."""
+    return tool.startswith("baseline")
+
+
 def time_to(points, level):
     ok = [pt["time"] for pt in points if pt.get("ok") and pt["error"] <= level]
     return min(ok) if ok else None
@@ -49,7 +54,7 @@ def plot_problem(name, prob, tools, out):
             continue
         xs = [pt["time"] for pt in good]
         ys = [max(pt["error"], 1e-17) for pt in good]
-        ls = "-" if is_kanesim(tool) else "--"
+        ls = "-" if is_kanesim(tool) else (":" if is_baseline(tool) else "--")
         mk = "o" if is_kanesim(tool) else "s"
         ax.loglog(xs, ys, ls, marker=mk, ms=3.5, lw=1.8 if is_kanesim(tool) else 1.1, label=tool,
                   color=cmap(idx % 20))
@@ -112,10 +117,13 @@ def main():
             if lv < prob["trust_floor"]:
                 continue
             kane = [(time_to(p, lv), t) for t, p in tools.items() if is_kanesim(t)]
-            peer = [(time_to(p, lv), t) for t, p in tools.items() if not is_kanesim(t)]
+            peer = [(time_to(p, lv), t) for t, p in tools.items() if not is_kanesim(t) and not is_baseline(t)]
             kane = min([k for k in kane if k[0] is not None], default=(None, "—"))
             peer = min([k for k in peer if k[0] is not None], default=(None, "—"))
-            ratio = "%.2f" % (kane[0] / peer[0]) if kane[0] and peer[0] else "—"
+            ratio = "—"
+            if kane[0] and peer[0]:
+                r = kane[0] / peer[0]
+                ratio = "%.2f" % r if r >= 0.1 else "%.2g" % r
             summary.append("| %s | %.0e | %s | %s | %s | %s | %s |" % (
                 prob["title"], lv, kane[1].replace("kanesim ", ""), fmt_t(kane[0]), peer[1], fmt_t(peer[0]), ratio))
     md += summary + [""]

@@ -3,7 +3,7 @@ one run on one machine. Writes bench/results/results.json; report.py turns it in
 and tables. Called by bench/run_work_precision.sh, which builds what this needs.
 
     bench/.venv/bin/python bench/wp/run.py --kanesim build-w/cli/kanesim --pin-driver DRIVER
-        [--rhs-bench build-w/bench/rhs_chain] [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,sympy,rhs]
+        [--rhs-bench build-w/bench/rhs_chain] [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,baseline,sympy,rhs]
         [--problems fourbar,rolling_disk]   (name prefixes; other problems' results are kept)
 
 Timing: wall time of the integration only (kanesim: the `integrate` phase of --stats;
@@ -180,7 +180,6 @@ def run_mujoco(args, problems, sweep, res):
     os.makedirs(os.path.join(BENCH, "results", "mjcf"), exist_ok=True)
     for p in problems:
         print("mujoco:", p.title, flush=True)
-        q0, u0 = [p.q0] * p.n, [0.0] * p.n
         if p.kind == "fourbar":
             text = P.mjcf_fourbar(p)
             q0, u0 = P.fourbar_start(p)
@@ -189,29 +188,75 @@ def run_mujoco(args, problems, sweep, res):
             q0, u0 = P.disk_start()
         else:
             text = mjcf(p)
+            q0, u0 = [p.q0] * p.n, [0.0] * p.n
         with open(os.path.join(BENCH, "results", "mjcf", p.name.split("_T")[0] + ".xml"), "w") as fh:
             fh.write(text + "\n")
-        t0 = time.perf_counter()
-        m = mujoco.MjModel.from_xml_string(text)
-        load = time.perf_counter() - t0
-        d = mujoco.MjData(m)
-        for name, integ in kinds:
-            m.opt.integrator = integ
+        variants = [("", text)]
+        if p.kind == "fourbar":  # MuJoCo's default (soft) loop and a stiff one
+            variants.append((" stiff loop", P.mjcf_fourbar(p, **P.MJ_STIFF_LOOP)))
+        for suffix, text in variants:
+            run_mujoco_model(p, sweep, res, kinds, text, q0, u0, suffix)
 
-            def step(dt):
-                m.opt.timestep = dt
-                nstep = int(round(p.T / dt))
-                mujoco.mj_resetData(m, d)
-                d.qpos[:] = q0
-                d.qvel[:] = u0
-                t0 = time.perf_counter()
-                mujoco.mj_step(m, d, nstep)
-                wall = time.perf_counter() - t0
-                ok = bool(np.all(np.isfinite(d.qpos)))
-                return dict(ok=ok, time=wall, q=d.qpos.copy(), steps=nstep, load=load, message="non-finite state")
 
-            label = "mujoco %s" % name
-            res["runs"].setdefault(p.name, {})[label] = sweep.run(p, MJ_STEPS, step, label)
+def run_mujoco_model(p, sweep, res, kinds, text, q0, u0, suffix):
+    import mujoco
+    t0 = time.perf_counter()
+    m = mujoco.MjModel.from_xml_string(text)
+    load = time.perf_counter() - t0
+    d = mujoco.MjData(m)
+    for name, integ in kinds:
+        m.opt.integrator = integ
+
+        def step(dt):
+            m.opt.timestep = dt
+            nstep = int(round(p.T / dt))
+            mujoco.mj_resetData(m, d)
+            d.qpos[:] = q0
+            d.qvel[:] = u0
+            t0 = time.perf_counter()
+            mujoco.mj_step(m, d, nstep)
+            wall = time.perf_counter() - t0
+            ok = bool(np.all(np.isfinite(d.qpos)))
+            return dict(ok=ok, time=wall, q=d.qpos.copy(), steps=nstep, load=load, message="non-finite state")
+
+        label = "mujoco %s%s" % (name, suffix)
+        res["runs"].setdefault(p.name, {})[label] = sweep.run(p, MJ_STEPS, step, label)
+
+
+# --------------------------------------------------------------------------- baseline
+def run_baseline(args, problems, sweep, rtols, res):
+    """Not a peer: the references' own minimal-coordinate ODEs (the four-bar's one-DOF
+    Lagrange equation, the disk's lean/heading/spin equations; bench/reference/) in double
+    precision with SciPy DOP853, rtol = atol. What a hand derivation buys on these problems."""
+    sys.path.insert(0, os.path.join(BENCH, "reference"))
+    from scipy.integrate import solve_ivp
+    for p in problems:
+        if p.kind not in CONSTRAINED:
+            continue
+        print("baseline:", p.title, flush=True)
+        if p.kind == "fourbar":
+            import sympy as sp
+            import fourbar as ref
+            syms, acc, _, q_joint, _, _ = ref.derive()
+            f_acc = sp.lambdify(syms, acc, modules="math", cse=True)
+            f_q = sp.lambdify(syms, q_joint, modules="math")
+            f = lambda t, y: [y[1], f_acc(y[0], y[1])]  # noqa: E731
+            y0 = [float(ref.THETA0), float(ref.OMEGA0)]
+            to_q = lambda y: f_q(y[0], y[1])  # noqa: E731
+        else:
+            import rolling_disk as ref
+            f = lambda t, y: ref.rhs(y, np)  # noqa: E731
+            y0 = ref.start(ref.LEAN_RATE, np)[0]
+            to_q = lambda y: ref.kanesim_q(y, np)  # noqa: E731
+
+        def dop(rtol):
+            t0 = time.perf_counter()
+            r = solve_ivp(f, (0.0, p.T), y0, method="DOP853", rtol=rtol, atol=rtol)
+            wall = time.perf_counter() - t0
+            return dict(ok=r.success, time=wall, q=to_q(r.y[:, -1]), rhs=r.nfev, message=r.message)
+
+        label = "baseline: minimal ODE + SciPy DOP853"
+        res["runs"].setdefault(p.name, {})[label] = sweep.run(p, rtols, dop, label)
 
 
 # --------------------------------------------------------------------------- Exudyn
@@ -314,8 +359,9 @@ def machine_info():
         info["sundials"] = sund
     except Exception:
         pass
-    info["kanesim_commit"] = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
-                                            capture_output=True, text=True).stdout.strip()
+    # KANESIM_COMMIT: say which source the kanesim binary was built from when it is not HEAD
+    info["kanesim_commit"] = os.environ.get("KANESIM_COMMIT") or subprocess.run(
+        ["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
     return info
 
 
@@ -325,7 +371,7 @@ def main():
     ap.add_argument("--pin-driver", required=True)
     ap.add_argument("--rhs-bench", default="")
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--only", default="kanesim,pin,scipy,mujoco,exudyn,sympy,rhs")
+    ap.add_argument("--only", default="kanesim,pin,scipy,mujoco,exudyn,baseline,sympy,rhs")
     ap.add_argument("--problems", default="", help="comma-separated name prefixes (default: all)")
     ap.add_argument("--out", default=os.path.join(BENCH, "results", "results.json"))
     args = ap.parse_args()
@@ -342,7 +388,7 @@ def main():
         with open(args.out) as fh:  # partial re-run: keep the other tools' and problems' numbers
             old = json.load(fh)
         new_problems = res["problems"]
-        for k in ("runs", "sympy", "rhs", "machine", "notes", "problems"):
+        for k in ("runs", "sympy", "rhs", "machine", "notes", "problems", "partial_runs"):
             if k in old:
                 res[k] = old[k]
         res["problems"].update(new_problems)
@@ -363,6 +409,7 @@ def main():
              ("scipy", lambda: run_scipy(args, problems, sweep, rtols, res)),
              ("mujoco", lambda: run_mujoco(args, problems, sweep, res)),
              ("exudyn", lambda: run_exudyn(args, problems, sweep, rtols, res)),
+             ("baseline", lambda: run_baseline(args, problems, sweep, rtols, res)),
              ("sympy", lambda: run_sympy(args, res, args.quick)),
              ("rhs", lambda: run_rhs(args, res, args.quick))]
     for name, fn in steps:

@@ -8,12 +8,14 @@
 //
 // Methods and their linear algebra:
 // - IDA: variable-order (1-5) variable-step BDF on the residual F(t, y, y') = y' - f(t, y).
-//   Newton iteration with a dense LU of dF/dy + cj dF/dy' = cj I - df/dy, whose
-//   Jacobian is formed by IDA's difference quotients (n extra evaluations of f).
-//   Why not KLU: rt::Derivative gives y' = f(t, y) of Kane's equations solved for u'
-//   (u' = M(q)^-1 f), whose Jacobian df/dy is dense even for a chain (M^-1 couples every
-//   speed), so there is no sparse Jacobian to hand to KLU at this interface; the sparse
-//   K-vector system lives inside the engine's right-hand side instead.
+//   Newton iteration on dF/dy + cj dF/dy' = cj I - df/dy, formed by our own column-
+//   grouped difference quotients (runtime/sim/integrator_ida.cpp) and factored by dense
+//   LU or by KLU. The block structure comes from `coupling` (rt::StateCouplingGroups):
+//   d(ydot_i)/d(y_j) = 0 unless i and j share a group. In minimal coordinates a chain is
+//   one group (u' = M(q)^-1 f couples every speed of a subtree), so KLU pays only for
+//   scenes made of several independent or weakly joined subsystems; columns of different
+//   groups are perturbed together, so a Jacobian costs (largest group) evaluations of f,
+//   not n.
 // - CVODE Adams: variable-order (1-12) Adams-Moulton with fixed-point (functional)
 //   iteration: no Jacobian, no linear solves; for non-stiff scenes.
 // - CVODE BDF: variable-order (1-5) BDF, Newton with dense LU and DQ Jacobian.
@@ -30,6 +32,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace kanesim::sim {
 
@@ -51,6 +54,13 @@ const char* MethodDescription(Method m);  // one line: order, iteration, linear 
 
 enum class ErkTable { Verner65, Fehlberg87 };
 
+// IDA's linear solver. Auto: KLU when the Jacobian's block pattern fills at most
+// kKluMaxFill of the n x n matrix and n >= kKluMinStates (measured in
+// bench/ida_linear_solver.cpp), dense LU otherwise.
+enum class IdaLinearSolver { Auto, Dense, Klu };
+inline constexpr double kKluMaxFill = 0.25;
+inline constexpr int kKluMinStates = 40;
+
 struct IntegratorOptions {
   Method method = Method::IDA;
   double rtol = 1e-6;
@@ -59,6 +69,8 @@ struct IntegratorOptions {
   double max_step = 0.0;           // |h| bound; 0 = none
   double initial_step = 0.0;       // 0 = the solver's estimate
   ErkTable erk_table = ErkTable::Fehlberg87;
+  IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;
+  std::vector<int> coupling;       // per state: its group (empty: one group, a dense df/dy)
 };
 
 // Counters from the solver (cumulative over the run).
@@ -73,6 +85,8 @@ struct IntegratorStats {
   long nonlin_conv_fails = 0;  // nonlinear convergence failures
   double last_step = 0.0;      // last step size taken
   int last_order = 0;          // last method order used (0 for ERK)
+  const char* linear_solver = "none";  // "dense LU", "KLU" (IDA, CVODE-BDF), "none"
+  long jac_nonzeros = 0;       // structural non-zeros of the Newton matrix (IDA)
 };
 
 // Output instants: t_k = start + k * interval for k = 0 .. n-1 (computed as start + k / N

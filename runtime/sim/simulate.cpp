@@ -68,6 +68,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.rtol = options.rtol;
   iopt.atol = options.atol;
   iopt.max_steps = options.max_steps;
+  iopt.ida_linear_solver = options.ida_linear_solver;
+  if (iopt.method == Method::IDA) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
@@ -131,6 +133,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
 std::string FormatStats(const SimStats& s) {
   const IntegratorStats& i = s.integrator;
   const PhaseTimes& t = s.times;
+  char nnz[64] = "";
+  if (i.jac_nonzeros > 0) std::snprintf(nnz, sizeof nnz, ", %ld structural non-zeros", i.jac_nonzeros);
   char buf[1536];
   std::snprintf(buf, sizeof buf,
                 "integrator                 %s\n"
@@ -138,7 +142,7 @@ std::string FormatStats(const SimStats& s) {
                 "  steps                    %ld (last step %.3g, last order %d)\n"
                 "  right-hand sides         %ld (+ %ld for difference-quotient Jacobians)\n"
                 "  Jacobian evaluations     %ld\n"
-                "  linear setups (LU)       %ld\n"
+                "  linear setups            %ld (%s%s)\n"
                 "  error-test failures      %ld\n"
                 "  nonlinear iterations     %ld (%ld convergence failures)\n"
                 "  output rows              %ld\n"
@@ -149,7 +153,7 @@ std::string FormatStats(const SimStats& s) {
                 "  output                   %.6f\n"
                 "  total                    %.6f\n",
                 MethodName(s.method), MethodDescription(s.method), i.steps, i.last_step, i.last_order, i.rhs_evals,
-                i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
+                i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
   return buf;
 }

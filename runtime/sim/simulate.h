@@ -25,6 +25,7 @@ struct SimOptions {
   double atol = 1e-6;
   rt::IntegratorKind integrator = rt::IntegratorKind::Auto;  // Auto: rt::Summarize(program).integrator
   bool cvode_bdf = false;       // CVODE with BDF + Newton instead of Adams + fixed point
+  IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;  // IDA's Newton matrix: dense LU or KLU
   long max_steps = 100000;      // internal steps allowed between two output instants
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty
