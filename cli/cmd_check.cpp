@@ -100,6 +100,24 @@ int RunCheck(const CheckArgs& args) {
                            mech.contacts.size(), mech.line_forces.size(), mech.wrenches.size());
   std::cout << fmt::format("  solver      {} — {}\n", SolverName(s.solver), s.solver_reason);
   std::cout << fmt::format("  integrator  {} — {}\n", IntegratorName(s.integrator), s.integrator_reason);
+  if (s.integrator == rt::IntegratorKind::IDA) {
+    // IDA's Newton matrix: the block pattern and the automatic dense/KLU choice
+    // (docs/integrators.md; the same rule as runtime/sim/integrator_ida.cpp).
+    std::vector<int> groups = rt::StateCouplingGroups(*cr.program);
+    std::vector<long> size;
+    for (int g : groups) {
+      if (static_cast<size_t>(g) >= size.size()) size.resize(static_cast<size_t>(g) + 1, 0);
+      ++size[static_cast<size_t>(g)];
+    }
+    long n = static_cast<long>(groups.size()), nnz = 0;
+    for (long b : size) nnz += b * b;
+    double fill = n > 0 ? static_cast<double>(nnz) / (static_cast<double>(n) * static_cast<double>(n)) : 1.0;
+    bool klu = n >= sim::kKluMinStates && fill <= sim::kKluMaxFill;
+    std::cout << fmt::format("  newton      {} — {} states in {} coupling group(s), Jacobian fill {:.3g} ({} KLU: n >= {} "
+                             "and fill <= {})\n",
+                             klu ? "KLU" : "dense LU", n, size.size(), fill, klu ? "so" : "not", sim::kKluMinStates,
+                             sim::kKluMaxFill);
+  }
   for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
   const std::vector<std::string> indeterminate =
       rt::IndeterminateSignals(*cr.program, rt::AvailableSignals(*cr.program));

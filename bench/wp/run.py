@@ -395,14 +395,15 @@ def main():
         if args.problems:  # the selected problems' runs of the selected tools start afresh
             for p in problems:
                 for tool in list(res["runs"].get(p.name, {})):
-                    tkey = "pin" if tool.startswith(("pinocchio", "scipy")) else tool.split()[0]
+                    tkey = "pin" if tool.startswith(("pinocchio", "scipy")) else tool.split()[0].rstrip(":")
                     if tkey in parts or (tkey == "pin" and "scipy" in parts):
                         del res["runs"][p.name][tool]
             res["notes"] = [n for n in res["notes"] if not any(n.startswith(p.name + ":") for p in problems)]
-        res.setdefault("partial_runs", []).append(dict(
-            only=args.only, problems=args.problems, loadavg_start=os.getloadavg(), machine=machine_info()))
         res["notes"].append("re-ran %s%s at load average %s" % (
             args.only, " on " + args.problems if args.problems else "", ", ".join("%.1f" % x for x in os.getloadavg())))
+    if partial:
+        res.setdefault("partial_runs", []).append(dict(
+            only=args.only, problems=args.problems, loadavg_start=os.getloadavg(), machine=machine_info()))
     t_start = time.time()
     steps = [("kanesim", lambda: run_kanesim(args, problems, sweep, rtols, res)),
              ("pin", lambda: run_pin_cpp(args, problems, sweep, res)),

@@ -105,24 +105,25 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   collect(p.output_tape, &p.state_refs_outputs);
 }
 
-// The solution path: the dense path costs O(sum of body depths) to assemble plus
-// nu^3 / 3 for Cholesky and wins on small scenes; the sparse K-vector system costs O(K)
-// on chains and trees. kSparseMinSpeeds is the crossover bench/rhs_chain measured on
-// chains (CPU time per evaluation: dense 176 us vs sparse 181 us at N = 120, 268 vs
-// 238 us at N = 150).
+// The solution path, from bench/rhs_chain (docs/benchmarks.md, "Cost of one right-hand
+// side"; CPU time per evaluation, medians of 5, all paths and Pinocchio's aba in one run):
+// the recursive elimination (runtime/kane_tree.cpp) is the cheapest path for every open
+// tree measured, at every size:
+//   chains    N = 1: recursive 0.21 us, dense 0.23;  N = 5: 1.21, dense 1.52, sparse 7.0;
+//             N = 100: 25.2, dense 122, sparse 152;  N = 1000: 255, sparse 1601; 0.81-0.85x aba
+//   mixed trees (all joint types)  N = 4: 1.07 vs dense 1.18;  N = 14: 5.9 vs 9.6;  N = 70: 29.5 vs 189
+// so auto never takes dense or sparse for a tree. Closed loops and rolling contacts keep
+// the dense path reduced to the constrained basis (AssembleLoops overrides this choice).
 void ChooseSolver(Program& p) {
   std::ostringstream why;
   if (p.options.solver != SolverPath::Auto) {
     p.solver = p.options.solver;
     why << "forced by --solver";
-  } else if (p.nu >= kSparseMinSpeeds) {
-    p.solver = SolverPath::Sparse;
-    why << p.nu << " free speeds >= " << kSparseMinSpeeds
-        << " (measured dense/sparse crossover): sparse K-vector system with KLU, cost linear in bodies";
   } else {
-    p.solver = SolverPath::Dense;
-    why << p.nu << " free speeds < " << kSparseMinSpeeds
-        << " (measured dense/sparse crossover): dense mass matrix and Cholesky";
+    p.solver = SolverPath::Recursive;
+    why << "open tree, " << p.nu
+        << " free speeds: recursive elimination leaves to root, cost linear in bodies (measured the cheapest "
+           "path for trees at every size: 0.8-0.9x dense at 1-5 bodies, 5-6x cheaper than sparse)";
   }
   p.solver_reason = why.str();
 }

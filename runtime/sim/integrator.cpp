@@ -24,7 +24,7 @@ const char* MethodName(Method m) {
 
 const char* MethodDescription(Method m) {
   switch (m) {
-    case Method::IDA: return "IDA: variable-order BDF (1-5), Newton, dense LU, difference-quotient Jacobian";
+    case Method::IDA: return "IDA: variable-order BDF (1-5), Newton, dense LU or KLU, grouped difference-quotient Jacobian";
     case Method::CvodeAdams: return "CVODE: variable-order Adams-Moulton (1-12), fixed-point iteration";
     case Method::CvodeBdf: return "CVODE: variable-order BDF (1-5), Newton, dense LU, difference-quotient Jacobian";
     case Method::ArkodeErk: return "ARKODE ERKStep: explicit Runge-Kutta, Hermite dense output";

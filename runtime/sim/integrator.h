@@ -59,7 +59,7 @@ enum class ErkTable { Verner65, Fehlberg87 };
 // bench/ida_linear_solver.cpp), dense LU otherwise.
 enum class IdaLinearSolver { Auto, Dense, Klu };
 inline constexpr double kKluMaxFill = 0.25;
-inline constexpr int kKluMinStates = 40;
+inline constexpr int kKluMinStates = 20;
 
 struct IntegratorOptions {
   Method method = Method::IDA;

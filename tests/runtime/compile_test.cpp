@@ -84,14 +84,14 @@ TEST(Compile, SummaryCountsAndChoices) {
   EXPECT_EQ(s.nu, 5);
   EXPECT_EQ(s.dof, 5);
   EXPECT_EQ(s.grubler_dof, 5);
-  EXPECT_EQ(s.solver, rt::SolverPath::Dense);
+  EXPECT_EQ(s.solver, rt::SolverPath::Recursive);
   EXPECT_EQ(s.integrator, rt::IntegratorKind::CVODE);
   EXPECT_FALSE(s.solver_reason.empty());
   EXPECT_FALSE(s.integrator_reason.empty());
 
   auto big = rt::Compile(test::Chain(200), {});
   ASSERT_TRUE(big.program);
-  EXPECT_EQ(rt::Summarize(*big.program).solver, rt::SolverPath::Sparse);
+  EXPECT_EQ(rt::Summarize(*big.program).solver, rt::SolverPath::Recursive);
 
   // A stiff spring (sqrt(k/m) = 3162 1/s) makes the scene stiff: IDA.
   auto m = test::Pendulum();
