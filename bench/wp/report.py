@@ -87,6 +87,10 @@ def main():
         "Versions: %s; %s; SUNDIALS %s; kanesim %s%s." % (
         ", ".join("%s %s" % kv for kv in mach.get("versions", {}).items()), mach.get("gxx"),
         mach.get("sundials"), mach.get("kanesim_commit"), " (--quick)" if res.get("quick") else ""), ""]
+    for pr in res.get("partial_runs", []):  # later runs of some tools or problems (run.py --only/--problems)
+        md += ["Re-run of %s%s: kanesim %s, load average %s at start, %.0f s." % (
+            pr["only"], " on " + pr["problems"] if pr.get("problems") else "", pr["machine"].get("kanesim_commit"),
+            ", ".join("%.1f" % x for x in pr.get("loadavg_start", [])), pr.get("seconds", 0)), ""]
     summary = ["## Summary: best kanesim configuration against the best peer", "",
                "| problem | error ≤ | best kanesim | time | best peer | time | kanesim / peer |",
                "|---|---|---|---|---|---|---|"]
@@ -109,7 +113,8 @@ def main():
             fail = [pt for pt in pts if not pt.get("ok")]
             tail = "%.1e" % best["error"] if best else "—"
             if fail:
-                tail += " (failed at %g: %s)" % (fail[0]["param"], fail[0].get("message", "")[:60].replace("|", "/"))
+                tail += " (failed at %s: %s)" % (", ".join("%g" % f["param"] for f in fail),
+                                                 fail[0].get("message", "")[-90:].replace("|", "/"))
             rhs = best.get("rhs") if best else None
             md.append("| %s | %s | %s | %s |" % (tool, " | ".join(cells), tail, "%d" % rhs if rhs else "—"))
         md.append("")

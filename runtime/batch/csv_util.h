@@ -5,9 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "runtime/sim/csv.h"
+
 namespace kanesim::batch {
 
-std::string QuoteCsv(const std::string& field);
+inline std::string QuoteCsv(const std::string& field) { return sim::QuoteCsvField(field); }
 // Splits one line (no line breaks inside fields) into unquoted fields.
 std::vector<std::string> SplitCsvLine(const std::string& line);
 

@@ -123,7 +123,7 @@ void ChooseSolver(Program& p) {
     p.solver = SolverPath::Recursive;
     why << "open tree, " << p.nu
         << " free speeds: recursive elimination leaves to root, cost linear in bodies (measured the cheapest "
-           "path for trees at every size: 0.8-0.9x dense at 1-5 bodies, 5-6x cheaper than sparse)";
+           "path for trees at every size: 0.8-0.9x dense at 1-5 bodies, 3-6x cheaper than sparse)";
   }
   p.solver_reason = why.str();
 }

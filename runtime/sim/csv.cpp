@@ -18,11 +18,22 @@ std::string FormatNumber(double x) {
   return s;
 }
 
+std::string QuoteCsvField(const std::string& field) {
+  if (field.find_first_of(",\"\n\r") == std::string::npos) return field;
+  std::string out = "\"";
+  for (char c : field) {
+    if (c == '"') out += '"';
+    out += (c == '\n' || c == '\r') ? ' ' : c;
+  }
+  out += '"';
+  return out;
+}
+
 bool CsvWriter::Begin(const std::vector<std::string>& names) {
   line_ = "time";
   for (const std::string& name : names) {
     line_ += ',';
-    line_ += name;
+    line_ += QuoteCsvField(name);
   }
   line_ += '\n';
   return Flush();

@@ -62,5 +62,22 @@ TEST(SimCsv, HeaderRowsAndEveryRowFlushedAsWritten) {
   EXPECT_EQ(all, "time,a.q,b[2].u\n0,0.10000000000000001,-0.33333333333333331\n0.5,2,1e-300\n");
 }
 
+// Names with commas (matrix entries) or quotes are quoted as RFC 4180 says, so that a
+// CSV reader sees one column per signal.
+TEST(SimCsv, HeaderNamesWithCommasAreQuoted) {
+  char path[] = "/tmp/kanesim_csv_testXXXXXX";
+  int fd = mkstemp(path);
+  ASSERT_GE(fd, 0);
+  std::FILE* f = fdopen(fd, "w");
+  CsvWriter w(f);
+  ASSERT_TRUE(w.Begin({"rod.body.R[1,2]", "a.q", "odd\"name"}));
+  ASSERT_TRUE(w.End());
+  std::fclose(f);
+  std::string all = ReadAll(path);
+  std::remove(path);
+  EXPECT_EQ(all, "time,\"rod.body.R[1,2]\",a.q,\"odd\"\"name\"\n");
+  EXPECT_EQ(QuoteCsvField("plain"), "plain");
+}
+
 }  // namespace
 }  // namespace kanesim::sim
