@@ -56,8 +56,9 @@ struct CompileResult {
 CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options);
 
 // Same structure, new numeric parameter values (index-aligned with mech.params);
-// reuses every pattern and symbolic analysis. Used by sweeps.
-std::shared_ptr<const Program> Rebind(const Program& program, const std::vector<double>& param_values);
+// reuses every pattern and symbolic analysis. Used by sweeps. On failure (a negative
+// mass, a singular assembly, a wrong number of values) `errors` says why, as Compile's do.
+CompileResult Rebind(const Program& program, const std::vector<double>& param_values);
 
 // Facts for `kanesim check` and `--stats`.
 struct ProgramSummary {

@@ -31,7 +31,6 @@
 #include "runtime/kane_tree.h"
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
 
 namespace kanesim::rt {

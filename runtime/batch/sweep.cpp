@@ -38,21 +38,6 @@ std::vector<double> ParamValues(const flat::Mechanism& mech, const std::map<size
   return pv;
 }
 
-// rt::Rebind says only that it failed; compiling a copy with the values set as literals
-// recovers the compiler's message (only on this failure path).
-std::string CompileFailure(const flat::Mechanism& mech, const std::map<size_t, double>& overrides,
-                           const rt::CompileOptions& options) {
-  flat::Mechanism copy = mech;
-  for (const auto& [i, v] : overrides) {
-    copy.params[i].value = v;
-    copy.params[i].user_set = true;
-  }
-  rt::CompileResult r = rt::Compile(copy, options);
-  std::string msg = "the model does not compile with these parameter values";
-  for (const rt::CompileMessage& e : r.errors) msg += "; " + e.code + ": " + e.message;
-  return msg;
-}
-
 std::vector<std::string> SignalsFor(const rt::Program& program, const SweepConfig& c) {
   std::vector<std::string> names;
   for (const Metric& m : c.metrics)
@@ -210,9 +195,13 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
                                    Num(p.max) + "]");
         overrides[static_cast<size_t>(i)] = v;
       }
-      std::shared_ptr<const rt::Program> rebound = rt::Rebind(*program, ParamValues(mech, overrides));
-      if (!rebound) throw std::runtime_error(CompileFailure(mech, overrides, program->options));
-      program = rebound;
+      rt::CompileResult rebound = rt::Rebind(*program, ParamValues(mech, overrides));
+      if (!rebound.program) {
+        std::string msg = "the model does not compile with these parameter values";
+        for (const rt::CompileMessage& e : rebound.errors) msg += "; " + e.code + ": " + e.message;
+        throw std::runtime_error(msg);
+      }
+      program = rebound.program;
     }
 
     // c. Simulate into the metrics (and the trajectory file).

@@ -353,10 +353,15 @@ CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options
   return CompileWithParams(mech, flat::EvaluateParams(mech), options, nullptr);
 }
 
-std::shared_ptr<const Program> Rebind(const Program& program, const std::vector<double>& param_values) {
-  if (param_values.size() != program.mech->params.size()) return nullptr;
-  CompileResult r = CompileWithParams(*program.mech, param_values, program.options, &program);
-  return r.program;
+CompileResult Rebind(const Program& program, const std::vector<double>& param_values) {
+  if (param_values.size() != program.mech->params.size()) {
+    CompileResult r;
+    r.errors.push_back(Msg("K300", "Rebind: " + std::to_string(param_values.size()) + " parameter values for " +
+                                       std::to_string(program.mech->params.size()) + " parameters",
+                           {}));
+    return r;
+  }
+  return CompileWithParams(*program.mech, param_values, program.options, &program);
 }
 
 }  // namespace kanesim::rt

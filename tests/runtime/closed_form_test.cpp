@@ -279,9 +279,12 @@ TEST(Rebind, NewParameterValuesSameStructure) {
   b.Joint("pivot", flat::JointType::Revolute, w, f, Vec3::UnitZ());
   auto r = rt::Compile(b.m, {});
   ASSERT_TRUE(r.errors.empty());
-  auto p2 = rt::Rebind(*r.program, {2.0});
+  auto p2 = rt::Rebind(*r.program, {2.0}).program;
   ASSERT_TRUE(p2);
-  EXPECT_FALSE(rt::Rebind(*r.program, {2.0, 3.0}));  // wrong size
+  rt::CompileResult wrong = rt::Rebind(*r.program, {2.0, 3.0});  // wrong size
+  EXPECT_FALSE(wrong.program);
+  ASSERT_EQ(wrong.errors.size(), 1u);
+  EXPECT_NE(wrong.errors[0].message.find("2 parameter values for 1"), std::string::npos);
   for (auto [prog, len] : {std::pair{r.program, 0.5}, std::pair{p2, 2.0}}) {
     auto ws = rt::MakeWorkspace(*prog);
     double y[2] = {0.4, 0.0}, yd[2];
