@@ -53,9 +53,13 @@ constexpr int kMaxNewton = 8;
 // the plane, and the lowest rim point P is undefined at 0). A step that passes through
 // flat is caught as well: P jumps to the opposite side of the rim, and the integrator's
 // speeds give the new P a normal velocity of the order of |v_C| + r |w| (kJumped of it)
-// instead of the integration error.
+// instead of the integration error. Only within kNearFlat (30 degrees) of flat: farther
+// out, a large normal velocity is the integrator's own drift off the velocity
+// constraint at a loose tolerance (ARKODE at rtol 1e-3 on a disk wobbling between 2 and
+// 19 degrees of lean reached 10 % of it), not a jump, and the step goes on as usual.
 constexpr double kFlatDisk = 1e-2;
 constexpr double kJumped = 0.1;
+constexpr double kNearFlat = 0.5;
 
 struct FrameState {
   int body = -1;
@@ -129,7 +133,7 @@ int CheckDisksUpright(const Program& p, Workspace& ws) {
     const double sin_flat = (c.n_W - c.n_W.dot(cp.e_W) * cp.e_W).norm();
     const Vec3 v_C = cp.vPm - cp.w.cross(cp.P - cp.C);
     const double jump = std::fabs(ws.psi[c.row0]) / (v_C.norm() + c.radius * cp.w.norm() + 1e-6);
-    if (sin_flat >= kFlatDisk && jump <= kJumped) continue;
+    if (sin_flat >= kFlatDisk && (jump <= kJumped || sin_flat >= kNearFlat)) continue;
     char buf[96];
     std::snprintf(buf, sizeof buf, "%.3g degrees", std::asin(std::min(1.0, sin_flat)) * 180.0 / M_PI);
     ws.error = "rolling disk '" + c.name + "' " + (sin_flat < kFlatDisk ? "lies flat on its plane" : "passed through flat") +

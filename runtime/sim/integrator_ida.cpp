@@ -6,8 +6,8 @@
 // grouped by the block structure of options.coupling (Curtis-Powell-Reid: columns whose
 // row sets do not overlap are perturbed in one evaluation of f), so a Jacobian costs
 // (size of the largest group) evaluations of f rather than n. The increment per column
-// follows IDA's own DQ rule: sqrt(unit round-off) * max(|y_j|, |h y'_j|, 1/w_j), with
-// w the error weights and the sign of h y'_j. J is factored by dense LU or by KLU on the
+// follows IDA's own DQ rule: max(sqrt(unit round-off) * max(|y_j|, |h y'_j|), 1/w_j),
+// with w the error weights (1/w_j = rtol |y_j| + atol) and the sign of h y'_j. J is factored by dense LU or by KLU on the
 // fixed block pattern (symbolic analysis once, numeric refactorization afterwards).
 #include <ida/ida.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -203,7 +203,7 @@ class IdaStepper final : public Stepper {
     for (const auto& color : colors_) {
       for (int j : color) {
         const auto uj = static_cast<size_t>(j);
-        double inc = srur * std::max({std::fabs(y[j]), std::fabs(h * yp[j]), 1.0 / w[j]});
+        double inc = std::max(srur * std::max(std::fabs(y[j]), std::fabs(h * yp[j])), 1.0 / w[j]);
         if (h * yp[j] < 0.0) inc = -inc;
         y1_[uj] = y[j] + inc;
         inc_[uj] = y1_[uj] - y[j];  // the increment actually represented

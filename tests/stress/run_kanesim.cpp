@@ -20,15 +20,17 @@ std::string Quote(const std::string& s) {
   return q + "'";
 }
 
-// Splits a CSV line at commas outside brackets: kanesim's header writes signal names such
-// as s.body.R[1,2] unquoted.
+// Splits a CSV line at commas outside double quotes (kanesim quotes signal names such as
+// "s.body.R[1,2]"; no name holds a quote).
 std::vector<std::string> SplitComma(const std::string& line) {
   std::vector<std::string> out(1);
-  int depth = 0;
+  bool quoted = false;
   for (char c : line) {
-    if (c == '[') ++depth;
-    if (c == ']') --depth;
-    if (c == ',' && depth == 0) {
+    if (c == '"') {
+      quoted = !quoted;
+      continue;
+    }
+    if (c == ',' && !quoted) {
       out.emplace_back();
       continue;
     }
