@@ -5,35 +5,14 @@
 #include <numeric>
 
 #include "lang/elab_internal.h"
+#include "runtime/flat/union_find.h"
 
 namespace kanesim::lang::elab {
 
 using flat::ExprId;
 using flat::Op;
 
-namespace {
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int Find(int x) {
-    while (parent[static_cast<size_t>(x)] != x) {
-      parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
-      x = parent[static_cast<size_t>(x)];
-    }
-    return x;
-  }
-  void Unite(int a, int b) {
-    a = Find(a);
-    b = Find(b);
-    if (a == b) return;
-    // Keep the smaller (earlier declared) id as the root: its name becomes canonical.
-    if (b < a) std::swap(a, b);
-    parent[static_cast<size_t>(b)] = a;
-  }
-};
-
-}  // namespace
+using flat::UnionFind;
 
 void Elaborator::Emit(Node* root) {
   auto& pool = m_->exprs;

@@ -11,37 +11,20 @@
 //   representative of the subtrees it depends on; an instruction joining two operands
 //   merges their subtrees, which can only over-merge (never miss a dependency).
 // Contacts and prescribed motion act between a body and the world and join nothing.
-#include <numeric>
-
 #include "runtime/engine.h"
+#include "runtime/flat/union_find.h"
 #include "runtime/program.h"
 
 namespace kanesim::rt {
 namespace {
 
-class UnionFind {
- public:
-  explicit UnionFind(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
-  int Find(int x) {
-    while (parent_[static_cast<size_t>(x)] != x) {
-      parent_[static_cast<size_t>(x)] = parent_[static_cast<size_t>(parent_[static_cast<size_t>(x)])];
-      x = parent_[static_cast<size_t>(x)];
-    }
-    return x;
-  }
-  // Joins the sets of a and b (either may be -1: nothing to join).
-  int Join(int a, int b) {
-    if (a < 0) return b < 0 ? -1 : Find(b);
-    if (b < 0) return Find(a);
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent_[static_cast<size_t>(b)] = a;
-    return a;
-  }
-
- private:
-  std::vector<int> parent_;
-};
+// Joins the sets of a and b, either of which may be -1 (nothing to join); returns the
+// set's root or -1.
+int Join(flat::UnionFind& uf, int a, int b) {
+  if (a < 0) return b < 0 ? -1 : uf.Find(b);
+  if (b < 0) return uf.Find(a);
+  return uf.Unite(a, b);
+}
 
 }  // namespace
 
@@ -49,11 +32,11 @@ std::vector<int> StateCouplingGroups(const Program& p) {
   const size_t K = p.bodies.size();
   // Bodies are numbered like the tree joints that move them; the set of a body starts as
   // the subtree root above it.
-  UnionFind uf(K);
+  flat::UnionFind uf(K);
   for (size_t b = 0; b < K; ++b) {
     int root = static_cast<int>(b);
     while (p.joints[static_cast<size_t>(root)].parent >= 0) root = p.joints[static_cast<size_t>(root)].parent;
-    uf.Join(root, static_cast<int>(b));
+    Join(uf, root, static_cast<int>(b));
   }
   auto body_of_frame = [&](int frame) {
     if (frame < 0 || static_cast<size_t>(frame) >= p.frames.size()) return -1;
@@ -69,8 +52,8 @@ std::vector<int> StateCouplingGroups(const Program& p) {
     return body_of_frame(r.target);
   };
 
-  for (const LineForceModel& l : p.line_forces) uf.Join(body_of_frame(l.frame_a), body_of_frame(l.frame_b));
-  for (const LoopClosure& l : p.loops) uf.Join(body_of_frame(l.frame_a), body_of_frame(l.frame_b));
+  for (const LineForceModel& l : p.line_forces) Join(uf, body_of_frame(l.frame_a), body_of_frame(l.frame_b));
+  for (const LoopClosure& l : p.loops) Join(uf, body_of_frame(l.frame_a), body_of_frame(l.frame_b));
 
   // Force laws: the subtrees each tape root depends on join the body it acts on.
   const Tape& tape = p.force_tape;
@@ -79,26 +62,26 @@ std::vector<int> StateCouplingGroups(const Program& p) {
   for (const TapeInstr& in : tape.code) {
     int d = -1;
     for (int operand : {in.a, in.b, in.c})
-      if (operand >= 0) d = uf.Join(d, dep[static_cast<size_t>(operand)]);
+      if (operand >= 0) d = Join(uf, d, dep[static_cast<size_t>(operand)]);
     dep[static_cast<size_t>(in.dst)] = d;
   }
   auto root_dep = [&](const Scalar& s) { return s.root >= 0 ? dep[static_cast<size_t>(tape.roots[static_cast<size_t>(s.root)])] : -1; };
   for (size_t s = 0; s < p.joint_tau.size(); ++s) {
     int d = root_dep(p.joint_tau[s]);
-    if (d >= 0) uf.Join(p.joint_of_speed[s], d);
+    if (d >= 0) Join(uf, p.joint_of_speed[s], d);
   }
   for (const LineForceModel& l : p.line_forces)
     for (const Scalar* s : {&l.k, &l.d, &l.s0}) {
       int d = root_dep(*s);
       if (d < 0) continue;
-      uf.Join(body_of_frame(l.frame_a), d);
-      uf.Join(body_of_frame(l.frame_b), d);
+      Join(uf, body_of_frame(l.frame_a), d);
+      Join(uf, body_of_frame(l.frame_b), d);
     }
   for (const WrenchModel& w : p.wrenches)
     for (int k = 0; k < 3; ++k)
       for (const Scalar* s : {&w.force[k], &w.torque[k]}) {
         int d = root_dep(*s);
-        if (d >= 0) uf.Join(body_of_frame(w.frame), d);
+        if (d >= 0) Join(uf, body_of_frame(w.frame), d);
       }
 
   // Number the groups densely in order of first appearance along y = [q_free; u_free].
