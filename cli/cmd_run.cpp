@@ -116,6 +116,8 @@ int RunCommand(const RunArgs& a) {
   rt::CompileResult compiled;
   if (!CompileModel(mech, copts, &compiled)) return kExitModelError;
   const rt::Program& program = *compiled.program;
+  if (copts.solver != rt::SolverPath::Auto && rt::Summarize(program).solver != copts.solver)
+    fmt::print(stderr, "kanesim: note: solver {}\n", rt::Summarize(program).solver_reason);
   double compile_seconds = Since(t_compile);
 
   const flat::Experiment& ex = mech.experiment;

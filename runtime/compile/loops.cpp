@@ -225,6 +225,9 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   p.solver = SolverPath::Dense;
   p.solver_reason = std::to_string(p.loops.size()) + " closed loop(s), " + std::to_string(p.contacts.size()) +
                     " contact(s): dense mass matrix reduced to the constrained basis (Lesser eq. 51)";
+  if (p.options.solver == SolverPath::Sparse || p.options.solver == SolverPath::Recursive)
+    p.solver_reason += std::string("; --solver ") + (p.options.solver == SolverPath::Sparse ? "sparse" : "recursive") +
+                       " applies to open trees only and is ignored here";
   p.loop_rank = 0;
   auto wsp = MakeWorkspace(p);
   Workspace& ws = *wsp;
