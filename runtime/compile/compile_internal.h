@@ -50,12 +50,8 @@ void FindIndeterminateReactions(Program& p, Workspace& ws);
 // Gravity, joint forces, line forces, wrenches (force tape) and outputs (output tape).
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);
 
-// Dense or sparse, and which integrator, with reasons (Summarize prints them).
+// The solution path and the integrator, with reasons (Summarize prints them).
 void ChooseSolver(Program& p);
 void ChooseIntegrator(Program& p);
-
-// Solver choice threshold: at or above this many free speeds the sparse path is chosen
-// (measured crossover of bench/rhs_chain, see ChooseSolver).
-inline constexpr int kSparseMinSpeeds = 120;
 
 }  // namespace kanesim::rt
