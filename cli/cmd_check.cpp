@@ -119,6 +119,8 @@ int RunCheck(const CheckArgs& args) {
                              sim::kKluMaxFill);
   }
   for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(*cr.program); !f.code.empty())
+    std::cout << fmt::format("  warning[{}]: {}\n", f.code, f.message);
   const std::vector<std::string> indeterminate =
       rt::IndeterminateSignals(*cr.program, rt::AvailableSignals(*cr.program));
   if (!indeterminate.empty()) {

@@ -67,6 +67,8 @@ bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options
 }
 
 void WarnIndeterminate(const rt::Program& program, const std::vector<std::string>& signals) {
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.code.empty())
+    PrintCompileMessage(f, "warning");
   if (program.options.indeterminate != rt::IndeterminateReactions::NaN) return;
   const std::vector<std::string> which = rt::IndeterminateSignals(program, signals);
   if (!which.empty()) PrintCompileMessage(rt::IndeterminateWarning(program, which), "warning");

@@ -115,4 +115,9 @@ std::vector<std::string> IndeterminateSignals(const Program& program, const std:
 // (NaN, or the minimum-norm share, per CompileOptions::indeterminate).
 CompileMessage IndeterminateWarning(const Program& program, const std::vector<std::string>& signals);
 
+// Warning W314, or a message with an empty code when there is nothing to say: Coulomb
+// friction in a joint whose normal force is statically indeterminate follows the
+// minimum-norm share of that force (runtime/compile/indeterminate.cpp).
+CompileMessage FrictionIndeterminateWarning(const Program& program);
+
 }  // namespace kanesim::rt

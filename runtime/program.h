@@ -208,6 +208,7 @@ struct Program {
   // moves them), decided at the assembled start by FindIndeterminateReactions:
   std::vector<std::uint8_t> reaction_indeterminate;  // per flat joint, bit k: reaction component k (0-2 force, 3-5 torque)
   std::vector<std::uint8_t> contact_indeterminate;   // per contact, bit k: 0 normal, 1 longitudinal, 2 lateral force
+  std::vector<int> friction_indeterminate;  // tree joints whose Coulomb friction reads an indeterminate normal force
   std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/friction.cpp)
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)

@@ -23,6 +23,7 @@
 // mechanisms whose redundancy is structural (planar loops, a contact on a planar joint).
 #include <Eigen/QR>
 #include <algorithm>
+#include <cmath>
 
 #include "runtime/compile/compile_internal.h"
 #include "runtime/contacts.h"
@@ -86,6 +87,19 @@ void FindIndeterminateReactions(Program& p, Workspace& ws) {
     else
       p.contact_indeterminate[static_cast<size_t>((k - 6 * nj) / 3)] |= bit;
   }
+
+  // Coulomb friction reads the force across its joint's axis (friction.cpp eq. 1): when
+  // a component of it is indeterminate, the friction force follows the minimum-norm share
+  // of the normal force, which is one admissible distribution, not a determined one.
+  for (int L : p.friction_joints) {
+    const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+    const std::uint8_t bits = p.reaction_indeterminate[static_cast<size_t>(j.flat_index)];
+    for (int k = 0; k < 3; ++k)
+      if (((bits >> k) & 1u) != 0 && std::fabs(j.axis[k]) < 1.0 - 1e-12) {
+        p.friction_indeterminate.push_back(L);
+        break;
+      }
+  }
 }
 
 CompileMessage IndeterminateWarning(const Program& p, const std::vector<std::string>& signals) {
@@ -118,6 +132,25 @@ CompileMessage IndeterminateWarning(const Program& p, const std::vector<std::str
   }
   w.hint = "the equations fix only what these constraints carry together; `--reactions min-norm` writes the "
            "minimum-norm share (one admissible distribution, not a measured one)";
+  return w;
+}
+
+CompileMessage FrictionIndeterminateWarning(const Program& p) {
+  CompileMessage w;
+  if (p.friction_indeterminate.empty()) return w;
+  w.code = "W314";
+  std::string names;
+  for (int L : p.friction_indeterminate) {
+    const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+    names += (names.empty() ? "'" : ", '") + j.name + "'";
+    if (w.loc.file.empty()) w.loc = j.loc;
+    w.notes.push_back({j.loc, "joint '" + j.name + "' has friction (mu = " + std::to_string(j.mu) +
+                                  ") and a statically indeterminate force across its axis"});
+  }
+  w.message = "Coulomb friction in " + names +
+              " reads a normal force that redundant constraints leave undetermined; it uses the minimum-norm share";
+  w.hint = "the friction force then depends on an arbitrary split of the load; remove the redundancy (e.g. a "
+           "spherical or universal joint in the loop) to make the normal force determined";
   return w;
 }
 
