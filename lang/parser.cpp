@@ -1,5 +1,7 @@
 #include "lang/parser.h"
 
+#include <algorithm>
+#include <cctype>
 #include <utility>
 
 #include "lang/lexer.h"
@@ -61,6 +63,16 @@ class Parser {
     if (what == "';'" && pos_ > 0) {
       d.span = Span{file_, toks_[pos_ - 1].span.end, toks_[pos_ - 1].span.end + 1};
       d.hint = "add ';' at the end of the previous declaration or equation";
+    } else if (t.kind != Tok::Ident && (what.find("name") != std::string::npos ||
+                                         what.find("reference") != std::string::npos)) {
+      // A reserved word where a name belongs ("Body block(...)"): say so.
+      const std::string word = TokSpelling(t.kind);
+      const bool is_word = !word.empty() && std::all_of(word.begin(), word.end(), [](char c) {
+        return std::isalpha(static_cast<unsigned char>(c)) != 0 || c == '_';
+      });
+      if (is_word)
+        d.hint = "'" + word + "' is a reserved word of the language and cannot name a component or class; choose another "
+                 "name, such as '" + word + "_'";
     }
   }
   // Closing bracket: names both ends when missing.
