@@ -14,29 +14,25 @@
 #include <memory>
 #include <string>
 
-#include "lang/elaborate.h"
 #include "runtime/engine.h"
 #include "runtime/sim/simulate.h"
-#include "stdlib/stdlib.h"
+#include "tests/model_loader.h"
 
 namespace {
 
 using namespace kanesim;
 
+// The mechanism and its compiled program (test::LoadMech keeps the sources alive).
 struct Model {
-  lang::Program program;
-  flat::Mechanism mech;
+  std::unique_ptr<test::LoadedMech> loaded;
   std::shared_ptr<const rt::Program> prog;
 };
 
 std::unique_ptr<Model> Load(const std::string& path, std::vector<lang::ParamOverride> sets) {
   auto m = std::make_unique<Model>();
-  lang::Diagnostics diags(&m->program.sources);
-  lang::ElaborateOptions eo;
-  eo.overrides = std::move(sets);
-  if (!lang::LoadProgram(path, stdlib::Files(), &m->program, diags) || !lang::Elaborate(m->program, eo, &m->mech, diags))
-    return nullptr;
-  m->prog = rt::Compile(m->mech, {}).program;
+  m->loaded = test::LoadMech(path, std::move(sets));
+  if (!m->loaded) return nullptr;
+  m->prog = rt::Compile(m->loaded->mech, {}).program;
   return m->prog ? std::move(m) : nullptr;
 }
 

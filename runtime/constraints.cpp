@@ -48,6 +48,14 @@ constexpr double kSingular = 1e-10;
 constexpr double kTight = 1e-13;
 constexpr double kLoose = 1e-8;
 constexpr int kMaxNewton = 8;
+// The sparse path's projection first iterates with the factorization of the previous
+// evaluation (chord steps: no new factorization) while each step shrinks the residual by
+// at least kChordRate, at most kMaxChord times, then takes Newton steps.
+constexpr int kMaxChord = 4;
+constexpr double kChordRate = 0.1;
+// Below this pivot ratio (KLU's rcond estimate, rows scaled) of the sparse path's
+// factorization at the projected positions, the loop is at a singular configuration.
+constexpr double kSparseSingular = 1e-12;
 // A rolling disk lies flat when the sine of its axis' angle to the plane normal, |m| of
 // contacts.cpp eq. 2, falls below kFlatDisk (0.57 degrees: a thin disk's face reaches
 // the plane, and the lowest rim point P is undefined at 0). A step that passes through
@@ -321,8 +329,124 @@ void ApplyCoordinateStep(const Program& p, Workspace& ws, const Eigen::VectorXd&
   }
 }
 
+void RowBodies(const Program& p, int i, int* body_a, int* body_b) {
+  const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+  if (row.contact >= 0) {
+    *body_a = p.contacts[static_cast<size_t>(row.contact)].body;
+    *body_b = -1;
+    return;
+  }
+  const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+  *body_a = std::max(-1, p.frames[static_cast<size_t>(l.frame_a)].body);
+  *body_b = std::max(-1, p.frames[static_cast<size_t>(l.frame_b)].body);
+}
+
+// (3), (4) and contacts.cpp eq. 4 on the mass-centre twists, c the mass centre:
+//   translation  J_b = [d; (p_b - c_B) x d],   J_a = -[d; (p_b - c_A) x d]
+//   alignment    J_b = [0; k],                 J_a = -[0; k]
+//   contact      J   = [d; (P - c) x d]
+void RowJacobians(const Program& p, const Workspace& ws, int i, Vec6* Ja, Vec6* Jb) {
+  Ja->setZero();
+  Jb->setZero();
+  const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+  if (row.contact >= 0) {
+    const ContactModel& c = p.contacts[static_cast<size_t>(row.contact)];
+    if (c.body < 0) return;
+    const ContactPoint cp = ContactAt(p, ws, c);
+    const Vec3 d = ContactRowDirection(c, row, cp, nullptr);
+    Ja->head<3>() = d;
+    Ja->tail<3>() = (cp.P - ws.p_WBcm[static_cast<size_t>(c.body)]).cross(d);
+    return;
+  }
+  const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+  const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
+  const Vec3 dk = RowDirection(row, a, b);
+  if (row.kind == RowKind::Translation) {
+    if (b.body >= 0) *Jb << dk, (b.p - ws.p_WBcm[static_cast<size_t>(b.body)]).cross(dk);
+    if (a.body >= 0) *Ja << -dk, -(b.p - ws.p_WBcm[static_cast<size_t>(a.body)]).cross(dk);
+  } else {
+    if (b.body >= 0) Jb->tail<3>() = dk;
+    if (a.body >= 0) Ja->tail<3>() = -dk;
+  }
+}
+
+void ConstraintRates(const Program& p, Workspace& ws) {
+  for (size_t ii = 0; ii < p.rows.size(); ++ii) {
+    const ConstraintRow& row = p.rows[ii];
+    const auto i = static_cast<Eigen::Index>(ii);
+    if (row.contact >= 0) {
+      const ContactModel& c = p.contacts[static_cast<size_t>(row.contact)];
+      const ContactPoint cp = ContactAt(p, ws, c);
+      ws.psi[i] = ContactRowDirection(c, row, cp, nullptr).dot(cp.vPm);
+      continue;
+    }
+    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
+    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
+    Vec3 v_a, w_A, v_b, w_B;
+    FrameMotion(p, ws, l.frame_a, &v_a, &w_A);
+    FrameMotion(p, ws, l.frame_b, &v_b, &w_B);
+    ws.psi[i] = RowRate(row, RowDirection(row, a, b), b.p - a.p, v_a, w_A, v_b, w_B);
+  }
+}
+
+namespace {
+
+// `factored`: the factorization went through with a small pivot ratio (else it met an
+// exactly zero pivot).
+int SparseSingular(const Program& p, Workspace& ws, bool factored) {
+  char buf[64];
+  if (factored)
+    std::snprintf(buf, sizeof buf, "pivot ratio of the multiplier system %.2g", ws.sparse_rcond);
+  else
+    std::snprintf(buf, sizeof buf, "the multiplier system has a zero pivot");
+  ws.error = "closed loop " + Owners(p) + " at a singular configuration at time " + std::to_string(ws.t) +
+             ": the constraint rows lost rank (" + buf +
+             "; a change point where assembly branches meet, or a dead point), so the loop equations do not "
+             "determine the motion through it";
+  return 1;
+}
+
+// ProjectState on the sparse path: the steps of kane.h SparseCorrection, chord steps with
+// the previous evaluation's factorization while they contract, Newton after.
+int ProjectStateSparse(const Program& p, Workspace& ws) {
+  const double tight = kTight * p.loop_length, loose = kLoose * p.loop_length;
+  ConstraintResiduals(p, ws);
+  bool newton = !SparseHasFactor(ws);
+  double last = INFINITY;
+  for (int it = 0;; ++it) {
+    const double r = ws.phi.cwiseAbs().maxCoeff();
+    if (r <= tight || it == kMaxChord + kMaxNewton) break;
+    if (r > kChordRate * last || it >= kMaxChord) newton = true;
+    last = r;
+    if (newton && !ws.sparse_ready && FactorSparse(p, ws) != 0) return SparseSingular(p, ws, false);
+    if (int s = SparseCorrection(p, ws, ws.phi, &ws.du_full); s != 0) return s;
+    ApplyCoordinateStep(p, ws, ws.du_full);
+    PositionKinematics(p, ws);
+    VelocityKinematics(p, ws);
+    ws.sparse_ready = false;
+    ConstraintResiduals(p, ws);
+  }
+  const double r = ws.phi.cwiseAbs().maxCoeff();
+  if (r > loose) {
+    ws.error = "closed loop cannot be closed (position residual " + std::to_string(r) + " at time " +
+               std::to_string(ws.t) + ")";
+    return 1;
+  }
+  if (!ws.sparse_ready && FactorSparse(p, ws) != 0) return SparseSingular(p, ws, false);
+  if (!(ws.sparse_rcond > kSparseSingular)) return SparseSingular(p, ws, true);
+  ConstraintRates(p, ws);
+  if (int s = CheckDisksUpright(p, ws); s != 0) return s;
+  if (int s = SparseCorrection(p, ws, ws.psi, &ws.du_full); s != 0) return s;
+  ws.u += ws.du_full;
+  VelocityKinematics(p, ws);
+  return 0;
+}
+
+}  // namespace
+
 int ProjectState(const Program& p, Workspace& ws) {
   if (p.rows.empty()) return 0;
+  if (p.solver == SolverPath::Sparse) return ProjectStateSparse(p, ws);
   const double tight = kTight * p.loop_length, loose = kLoose * p.loop_length;
   const int rank = p.loop_rank;
   for (int it = 0;; ++it) {

@@ -38,7 +38,19 @@ void ApplyCoordinateStep(const Program& p, Workspace& ws, const Eigen::VectorXd&
 
 // Newton on the dependent coordinates, then the dependent speeds; leaves the position
 // and velocity kinematics of the projected state in ws. 0, or 1 (recoverable).
+// On the sparse (multiplier) path the steps are instead the kinetic-metric corrections
+// of kane.h SparseCorrection, and the factorization is left for SolveSparse.
 int ProjectState(const Program& p, Workspace& ws);
+
+// The bodies a row reads: frame a's and frame b's for a loop row, (the contact's body, -1)
+// for a contact row; -1 for the world.
+void RowBodies(const Program& p, int row, int* body_a, int* body_b);
+// Row i's rate as a function of those bodies' mass-centre twists [v_cm; w]:
+//   d/dt phi_i (or the velocity row) = Ja . V_a + Jb . V_b.
+void RowJacobians(const Program& p, const Workspace& ws, int row, Vec6* Ja, Vec6* Jb);
+
+// ws.psi only (A u + b without forming A), after VelocityKinematics.
+void ConstraintRates(const Program& p, Workspace& ws);
 
 // Reduced Kane's equations (beta^T M beta) z = beta^T (f - M udot_p); writes ws.udot.
 int SolveConstrained(const Program& p, Workspace& ws);

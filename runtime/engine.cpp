@@ -39,7 +39,7 @@ void PullToManifold(const Program& p, const Workspace& ws, const double* y, doub
 
 namespace {
 int SolvePath(const Program& p, Workspace& ws) {
-  if (!p.rows.empty()) return SolveConstrained(p, ws);
+  if (!p.rows.empty() && p.solver != SolverPath::Sparse) return SolveConstrained(p, ws);
   switch (p.solver) {
     case SolverPath::Sparse: return SolveSparse(p, ws);
     case SolverPath::Recursive: return SolveTree(p, ws);

@@ -23,8 +23,18 @@ int SolveDense(const Program& p, Workspace& ws);
 void AssembleDense(const Program& p, Workspace& ws);
 
 // Sparse path: the K-vector Newton-Euler system with per-joint tangent and complement
-// blocks, KLU. Also fills ws.lambda_W (joint reaction wrenches).
+// blocks, and a multiplier per independent constraint row (closed loops, contacts), KLU.
+// Also fills ws.lambda_W (joint reaction wrenches) and, with constraints, ws.lambda_c.
+// Factors first unless ws.sparse_ready (the factorization is of the current positions).
 int SolveSparse(const Program& p, Workspace& ws);
+// Its position-dependent half: complement bases, matrix values, KLU (re)factorization.
+// Returns -1 (ws.error) when the matrix is singular; sets ws.sparse_ready.
+int FactorSparse(const Program& p, Workspace& ws);
+bool SparseHasFactor(const Workspace& ws);
+// With the current factorization (possibly of nearby positions): the free-speed step
+// du_full (full speed indices, prescribed zero) of least kinetic energy with
+// A du = -residual on the kept constraint rows (kane_sparse.cpp eqs. 3-4).
+int SparseCorrection(const Program& p, Workspace& ws, const Eigen::VectorXd& residual, Eigen::VectorXd* du_full);
 
 // The accelerations by the scene's path: reduced (closed loops), sparse, recursive or dense.
 int SolveAccelerations(const Program& p, Workspace& ws);

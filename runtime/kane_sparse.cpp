@@ -20,17 +20,38 @@
 //   lambda_L  = gamma_L s_L + W^Q_L: the wrench the parent exerts on L at o_L.
 // Each block couples only a body, its parent and its children, so KLU factors a chain
 // or tree in time linear in K (the symbolic analysis is done once at compile time).
+//
+// Closed loops and rolling contacts (the multiplier form; the reduced form is in
+// constraints.cpp): each independent constraint row i adds one unknown mu_i and one row.
+// A row reads the velocities of at most two bodies, d/dt phi_i = sum_L J_iL . [v_cm; w]_L
+// (constraints.cpp RowJacobians), so on the mass-centre accelerations it is
+//   constraint (1 per row):  sum_L J_iL . A_L = J_i . A_bias - c_i                      (3)
+// (c_i the acceleration residual with free udot = 0, J_i . A_bias its body part), and its
+// force J_iL mu_i enters the Newton-Euler rows (2) of those bodies:
+//   Mb_L A_L - ... - sum_i J_iL mu_i = ...                                               (4)
+// so mu = lambda of reactions.cpp (A^T lambda = M udot - f). The rows touch only the two
+// bodies of a cut joint, so the system stays as sparse as the tree's. Rows that pivoted QR
+// found redundant at the assembled start (Program::redundant_rows) are left out: their
+// multipliers are zero, a particular solution of the indeterminate components. With a
+// zero right side except -phi (or -psi) in the rows (3), the same matrix gives the
+// smallest correction in the kinetic metric, du^T M du, that closes the constraints to
+// first order: the projection of constraints.cpp ProjectStateSparse.
 #include <klu.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
+#include "runtime/constraints.h"
 #include "runtime/kane.h"
 
 namespace kanesim::rt {
 
 struct SparsePattern {
-  int n = 0;                          // 12 K
+  int n = 0;                          // 12 K + kept constraint rows
+  int n_body = 0;                     // 12 K
+  std::vector<int> kept_rows;         // multiplier m -> constraint row (Program::rows)
+  std::vector<std::array<int, 2>> row_bodies;  // per multiplier: its bodies (-1: none), as RowBodies
   std::vector<int> Ap, Ai;            // CSC pattern
   std::vector<int> slot;              // entry number (visit order) -> CSC value index
   std::vector<std::vector<int>> children;
@@ -46,6 +67,7 @@ struct SparseSymbolic {
 struct SparseNumeric {
   klu_common common;
   klu_numeric* numeric = nullptr;
+  bool fresh = false;  // the last factorization chose its pivots (klu_factor, not klu_refactor)
 };
 
 void DestroySparseSymbolic(SparseSymbolic* s) {
@@ -163,6 +185,17 @@ void VisitSystem(const Program& p, const SparsePattern& sp, const Workspace* ws,
       }
     }
   }
+  // (3) and (4): a row and a column per kept constraint row.
+  for (size_t m = 0; m < sp.kept_rows.size(); ++m) {
+    const int row = sp.n_body + static_cast<int>(m);
+    for (int k = 0; k < 2; ++k) {
+      const int L = sp.row_bodies[m][static_cast<size_t>(k)];
+      if (L < 0) continue;
+      const Vec6 J = values ? ws->row_J[2 * m + static_cast<size_t>(k)] : Vec6::Zero();
+      for (int i = 0; i < 6; ++i) put(row, 12 * L + i, J[i]);
+      for (int i = 0; i < 6; ++i) put(12 * L + 6 + i, row, -J[i]);
+    }
+  }
 }
 
 int Fail(Workspace& ws, const char* what) {
@@ -175,7 +208,20 @@ int Fail(Workspace& ws, const char* what) {
 bool BuildSparse(Program& p, std::string* error) {
   auto sp = std::make_shared<SparsePattern>();
   const int K = static_cast<int>(p.bodies.size());
-  sp->n = 12 * K;
+  sp->n_body = 12 * K;
+  for (int i = 0; i < static_cast<int>(p.rows.size()); ++i) {
+    if (std::binary_search(p.redundant_rows.begin(), p.redundant_rows.end(), i)) continue;
+    std::array<int, 2> bodies;
+    RowBodies(p, i, &bodies[0], &bodies[1]);
+    if (bodies[0] == bodies[1]) bodies[1] = -1;  // both frames on one body: one block
+    if (bodies[0] < 0 && bodies[1] < 0) {
+      *error = "constraint row " + std::to_string(i) + " moves no body";
+      return false;
+    }
+    sp->kept_rows.push_back(i);
+    sp->row_bodies.push_back(bodies);
+  }
+  sp->n = sp->n_body + static_cast<int>(sp->kept_rows.size());
   sp->children.assign(static_cast<size_t>(K), {});
   sp->nf.assign(static_cast<size_t>(K), 0);
   sp->free_speeds.assign(static_cast<size_t>(K), {});
@@ -221,12 +267,20 @@ bool BuildSparse(Program& p, std::string* error) {
   }
   p.sparse = sp;
   std::string note = "sparse K-vector system: ";
-  note.append(std::to_string(sp->n)).append(" unknowns, ").append(std::to_string(nnz));
-  note.append(" non-zeros, KLU symbolic analysis done once");
+  note.append(std::to_string(sp->n)).append(" unknowns");
+  if (!sp->kept_rows.empty())
+    note.append(" (").append(std::to_string(sp->kept_rows.size())).append(" constraint multipliers)");
+  note.append(", ").append(std::to_string(nnz)).append(" non-zeros, KLU symbolic analysis done once");
   p.notes.push_back(note);
   if (!p.sparse_symbolic && sp->n > 0) {
     std::shared_ptr<SparseSymbolic> sym(new SparseSymbolic, DestroySparseSymbolic);
     klu_defaults(&sym->common);
+    // No block triangular form: the system is one irreducible block, and BTF's maximum
+    // transversal, which puts non-zeros on the diagonal before AMD orders it, doubled
+    // the fill of L + U on the four-bar ladder (N = 32: 27 000 entries without, 49 000
+    // with) and made the factorization 2-3x slower; partial pivoting handles the zero
+    // diagonal of the multiplier rows instead.
+    sym->common.btf = 0;
     sym->symbolic = klu_analyze(sp->n, sp->Ap.data(), sp->Ai.data(), &sym->common);
     if (!sym->symbolic) {
       *error = std::string("klu_analyze failed (status ").append(std::to_string(sym->common.status)).append(")");
@@ -245,15 +299,52 @@ void InitSparseWorkspace(const Program& p, Workspace& ws) {
   ws.r.assign(static_cast<size_t>(p.sparse->n), 0.0);
   ws.lambda_W.assign(K, Vec6::Zero());
   ws.D_W.assign(K, Mat6::Zero());
+  ws.row_J.assign(2 * p.sparse->kept_rows.size(), Vec6::Zero());
   ws.klu.reset(new SparseNumeric);
   klu_defaults(&ws.klu->common);
+  ws.klu->common.btf = 0;  // as the symbolic analysis
 }
 
-int SolveSparse(const Program& p, Workspace& ws) {
+namespace {
+
+// Solves in place on ws.x with the current factorization; after a refactorization (pivot
+// order of an earlier configuration) one step of iterative refinement, r = b - A x,
+// x += A^-1 r, when the residual is not at round-off level: the old pivot order's growth
+// at a far-away configuration can cost digits (seen as 2e-12 relative error without it).
+int SolveInPlace(const Program& p, Workspace& ws) {
+  const SparsePattern& sp = *p.sparse;
+  SparseSymbolic& sym = *p.sparse_symbolic;
+  SparseNumeric& num = *ws.klu;
+  const int* Ap = sp.Ap.data();
+  const int* Ai = sp.Ai.data();
+  const double* Ax = ws.Ax.data();
+  std::copy(ws.x.begin(), ws.x.end(), ws.b.begin());
+  if (!klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.x.data(), &num.common))
+    return Fail(ws, "singular mass matrix (sparse solve failed)");
+  if (num.fresh) return 0;
+  std::copy(ws.b.begin(), ws.b.end(), ws.r.begin());
+  double r_max = 0.0, b_max = 0.0;
+  for (int c = 0; c < sp.n; ++c) {
+    const double xc = ws.x[static_cast<size_t>(c)];
+    for (int k = Ap[c]; k < Ap[c + 1]; ++k) {
+      ws.r[static_cast<size_t>(Ai[k])] -= Ax[k] * xc;
+      b_max = std::max(b_max, std::fabs(Ax[k] * xc));
+    }
+  }
+  for (int i = 0; i < sp.n; ++i) r_max = std::max(r_max, std::fabs(ws.r[static_cast<size_t>(i)]));
+  if (r_max > kRefineResidual * b_max) {
+    klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.r.data(), &num.common);
+    for (int i = 0; i < sp.n; ++i) ws.x[static_cast<size_t>(i)] += ws.r[static_cast<size_t>(i)];
+  }
+  return 0;
+}
+
+}  // namespace
+
+int FactorSparse(const Program& p, Workspace& ws) {
   const SparsePattern& sp = *p.sparse;
   const size_t K = p.bodies.size();
-  if (K == 0) return 0;
-  // Complement bases and the joint-force wrenches W^Q (kept in lambda_W for now).
+  // Complement bases (they depend on the positions only).
   for (size_t L = 0; L < K; ++L) {
     const int nf = sp.nf[L];
     Mat6 S = Mat6::Zero();
@@ -261,23 +352,85 @@ int SolveSparse(const Program& p, Workspace& ws) {
     Mat6 Q;
     Complement(S, nf, &Q);
     ws.D_W[L].leftCols(6 - nf) = Q.rightCols(6 - nf);
-    Vec6 WQ = Vec6::Zero();
-    if (nf > 0) {
-      Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> Qj(nf);
-      for (int c = 0; c < nf; ++c) Qj[c] = ws.Q[sp.free_speeds[L][static_cast<size_t>(c)]];
-      if (Qj.squaredNorm() > 0.0) {
-        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> StS = S.leftCols(nf).transpose() * S.leftCols(nf);
-        Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> z = StS.ldlt().solve(Qj);
-        WQ = S.leftCols(nf) * z;
-      }
-    }
-    ws.lambda_W[L] = WQ;
+  }
+  for (size_t m = 0; m < sp.kept_rows.size(); ++m) {
+    Vec6 Ja, Jb;
+    RowJacobians(p, ws, sp.kept_rows[m], &Ja, &Jb);
+    // As RowBodies; one body carrying both frames gets their sum.
+    int a, b;
+    RowBodies(p, sp.kept_rows[m], &a, &b);
+    ws.row_J[2 * m] = a == b ? Vec6(Ja + Jb) : Ja;
+    ws.row_J[2 * m + 1] = Jb;
   }
   // Values, in the visit order of the pattern.
   size_t e = 0;
   double* Ax = ws.Ax.data();
   const int* slot = sp.slot.data();
   VisitSystem(p, sp, &ws, [&](int, int, double v) { Ax[slot[e++]] = v; });
+  // Factor: the numeric object is created once (first call) and refactored after.
+  SparseSymbolic& sym = *p.sparse_symbolic;
+  SparseNumeric& num = *ws.klu;
+  int* Ap = const_cast<int*>(sp.Ap.data());
+  int* Ai = const_cast<int*>(sp.Ai.data());
+  ws.sparse_ready = false;
+  num.fresh = false;
+  if (num.numeric) {
+    if (!klu_refactor(Ap, Ai, Ax, sym.symbolic, num.numeric, &num.common))
+      return Fail(ws, "singular mass matrix (sparse refactorization failed)");
+    klu_rcond(sym.symbolic, num.numeric, &num.common);
+    if (!(num.common.rcond > kRefactorRcond)) klu_free_numeric(&num.numeric, &num.common);
+  }
+  if (!num.numeric) {
+    num.numeric = klu_factor(Ap, Ai, Ax, sym.symbolic, &num.common);
+    if (!num.numeric) return Fail(ws, "singular mass matrix (sparse factorization failed)");
+    num.fresh = true;
+    klu_rcond(sym.symbolic, num.numeric, &num.common);
+  }
+  ws.sparse_rcond = num.common.rcond;
+  if (num.fresh && !(num.common.rcond > kSingularRcond)) return Fail(ws, "singular mass matrix");
+  ws.sparse_ready = true;
+  return 0;
+}
+
+bool SparseHasFactor(const Workspace& ws) { return ws.klu && ws.klu->numeric; }
+
+int SparseCorrection(const Program& p, Workspace& ws, const Eigen::VectorXd& residual, Eigen::VectorXd* du_full) {
+  const SparsePattern& sp = *p.sparse;
+  std::fill(ws.x.begin(), ws.x.end(), 0.0);
+  for (size_t m = 0; m < sp.kept_rows.size(); ++m)
+    ws.x[static_cast<size_t>(sp.n_body) + m] = -residual[sp.kept_rows[m]];
+  if (int s = SolveInPlace(p, ws); s != 0) return s;
+  du_full->setZero();
+  for (size_t L = 0; L < p.bodies.size(); ++L) {
+    const double* x = ws.x.data() + 12 * L;
+    for (int c = 0; c < sp.nf[L]; ++c) (*du_full)[sp.free_speeds[L][static_cast<size_t>(c)]] = x[6 + c];
+  }
+  return 0;
+}
+
+int SolveSparse(const Program& p, Workspace& ws) {
+  const SparsePattern& sp = *p.sparse;
+  const size_t K = p.bodies.size();
+  if (K == 0) return 0;
+  if (!ws.sparse_ready)
+    if (int s = FactorSparse(p, ws); s != 0) return s;
+  // The joint-force wrenches W^Q (kept in lambda_W for now).
+  for (size_t L = 0; L < K; ++L) {
+    const int nf = sp.nf[L];
+    Vec6 WQ = Vec6::Zero();
+    if (nf > 0) {
+      Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> Qj(nf);
+      for (int c = 0; c < nf; ++c) Qj[c] = ws.Q[sp.free_speeds[L][static_cast<size_t>(c)]];
+      if (Qj.squaredNorm() > 0.0) {
+        Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6> S(6, nf);
+        for (int c = 0; c < nf; ++c) S.col(c) = ws.H_W.col(sp.free_speeds[L][static_cast<size_t>(c)]);
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> StS = S.transpose() * S;
+        Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> z = StS.ldlt().solve(Qj);
+        WQ = S * z;
+      }
+    }
+    ws.lambda_W[L] = WQ;
+  }
   // Right-hand sides (1) and (2).
   for (size_t L = 0; L < K; ++L) {
     double* b = ws.x.data() + 12 * L;
@@ -305,55 +458,34 @@ int SolveSparse(const Program& p, Workspace& ws) {
       b[9 + i] = t[i];
     }
   }
-  // Factor: the numeric object is created once (first call) and refactored after.
-  SparseSymbolic& sym = *p.sparse_symbolic;
-  SparseNumeric& num = *ws.klu;
-  int* Ap = const_cast<int*>(sp.Ap.data());
-  int* Ai = const_cast<int*>(sp.Ai.data());
-  bool fresh = false;
-  if (num.numeric) {
-    if (!klu_refactor(Ap, Ai, Ax, sym.symbolic, num.numeric, &num.common)) return Fail(ws, "singular mass matrix (sparse refactorization failed)");
-    klu_rcond(sym.symbolic, num.numeric, &num.common);
-    if (!(num.common.rcond > kRefactorRcond)) {
-      klu_free_numeric(&num.numeric, &num.common);
-    }
-  }
-  if (!num.numeric) {
-    num.numeric = klu_factor(Ap, Ai, Ax, sym.symbolic, &num.common);
-    if (!num.numeric) return Fail(ws, "singular mass matrix (sparse factorization failed)");
-    fresh = true;
-    klu_rcond(sym.symbolic, num.numeric, &num.common);
-  }
-  if (fresh && !(num.common.rcond > kSingularRcond)) return Fail(ws, "singular mass matrix");
-  std::copy(ws.x.begin(), ws.x.end(), ws.b.begin());
-  if (!klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.x.data(), &num.common))
-    return Fail(ws, "singular mass matrix (sparse solve failed)");
-  // Iterative refinement, r = b - A x, x += A^-1 r, when the residual is not at
-  // round-off level: refactorization keeps the pivot order of the first factorization,
-  // whose growth at a far-away configuration can cost digits (seen as 2e-12 relative
-  // error without it).
-  if (!fresh) {
-    std::copy(ws.b.begin(), ws.b.end(), ws.r.begin());
-    double r_max = 0.0, b_max = 0.0;
-    for (int c = 0; c < sp.n; ++c) {
-      const double xc = ws.x[static_cast<size_t>(c)];
-      for (int k = Ap[c]; k < Ap[c + 1]; ++k) {
-        ws.r[static_cast<size_t>(Ai[k])] -= Ax[k] * xc;
-        b_max = std::max(b_max, std::fabs(Ax[k] * xc));
+  // (3): J_i . A_bias - c_i.
+  if (!sp.kept_rows.empty()) {
+    ConstraintBias(p, ws);
+    for (size_t m = 0; m < sp.kept_rows.size(); ++m) {
+      double v = -ws.cbias[sp.kept_rows[m]];
+      for (int k = 0; k < 2; ++k) {
+        const int L = sp.row_bodies[m][static_cast<size_t>(k)];
+        if (L < 0) continue;
+        const Vec6& J = ws.row_J[2 * m + static_cast<size_t>(k)];
+        const auto uL = static_cast<size_t>(L);
+        v += J.head<3>().dot(ws.a_bias_cm[uL]) + J.tail<3>().dot(ws.alpha_bias[uL]);
       }
-    }
-    for (int i = 0; i < sp.n; ++i) r_max = std::max(r_max, std::fabs(ws.r[static_cast<size_t>(i)]));
-    if (r_max > kRefineResidual * b_max) {
-      klu_solve(sym.symbolic, num.numeric, sp.n, 1, ws.r.data(), &num.common);
-      for (int i = 0; i < sp.n; ++i) ws.x[static_cast<size_t>(i)] += ws.r[static_cast<size_t>(i)];
+      ws.x[static_cast<size_t>(sp.n_body) + m] = v;
     }
   }
-  // Read udot and the joint reaction wrenches lambda_L = gamma_L s_L + W^Q_L.
+  if (int s = SolveInPlace(p, ws); s != 0) return s;
+  // Read udot, the joint reaction wrenches lambda_L = gamma_L s_L + W^Q_L and the
+  // constraint multipliers.
   for (size_t L = 0; L < K; ++L) {
     const double* x = ws.x.data() + 12 * L;
     const int nf = sp.nf[L];
     for (int c = 0; c < nf; ++c) ws.udot[sp.free_speeds[L][static_cast<size_t>(c)]] = x[6 + c];
     for (int c = 0; c < 6 - nf; ++c) ws.lambda_W[L] += ws.D_W[L].col(c) * x[6 + nf + c];
+  }
+  if (!sp.kept_rows.empty()) {
+    ws.lambda_c.setZero();
+    for (size_t m = 0; m < sp.kept_rows.size(); ++m)
+      ws.lambda_c[sp.kept_rows[m]] = ws.x[static_cast<size_t>(sp.n_body) + m];
   }
   return 0;
 }

@@ -27,6 +27,7 @@ Mat3 R_WFa(const Program& p, const Workspace& ws, int L) {
 
 int UnpackState(const Program& p, Workspace& ws, double t, const double* y) {
   ws.t = t;
+  ws.sparse_ready = false;  // new positions: the sparse path factors again
   for (int i = 0; i < p.nq; ++i) ws.q[p.q_free[static_cast<size_t>(i)]] = y[i];
   for (int i = 0; i < p.nu; ++i) ws.u[p.u_free[static_cast<size_t>(i)]] = y[p.nq + i];
   if (p.q_prescribed.empty()) return 0;

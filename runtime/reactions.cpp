@@ -1,7 +1,9 @@
 // Constraint forces on request (runtime/reactions.h).
 //
-// Loop multipliers (Lesser eq. 27 on the complement of the loop's tangent space): the
-// reduced equations leave the residual of the full equations in the loop directions,
+// Loop multipliers (Lesser eq. 27 on the complement of the loop's tangent space): on the
+// sparse path they are unknowns of its system (kane_sparse.cpp eq. 4); on the reduced
+// path they are recovered afterwards. The reduced equations leave the residual of the
+// full equations in the loop directions,
 //   M udot - f = A^T lambda                                                         (1)
 // and with A_dep = Q R (constraints.cpp) the dependent rows give R^T Q1^T lambda = g_dep,
 // whose minimum-norm solution is lambda = Q [R^-T g_dep; 0]                         (2)
@@ -62,6 +64,8 @@ Vec3 ContactForce(const Program& p, const Workspace& ws, int contact, ContactPoi
 }
 
 void LoopMultipliers(const Program& p, Workspace& ws) {
+  // The sparse path solved for them with the accelerations (kane_sparse.cpp eq. 4).
+  if (p.solver == SolverPath::Sparse) return;
   const int rank = p.loop_rank;
   ws.lambda_c.setZero();
   if (p.rows.empty() || rank == 0) return;

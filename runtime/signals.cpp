@@ -220,6 +220,11 @@ double DriveForce(const Program& p, const Workspace& ws, int r) {
 double LoopDriveForce(const Program& p, Workspace& ws, int r) {
   double d = DriveForce(p, ws, r);
   if (p.rows.empty() || p.loop_rank == 0) return d;
+  if (p.solver == SolverPath::Sparse) {
+    // The multipliers are known (kane_sparse.cpp eq. 4): G_r = drive_r + (A^T lambda)_r.
+    ConstraintColumn(p, ws, r, &ws.vc);
+    return d - ws.vc.dot(ws.lambda_c);
+  }
   ConstraintColumn(p, ws, r, &ws.vc);
   SolveDependent(ws, ws.vc, &ws.xd);
   for (int k = 0; k < p.loop_rank; ++k)

@@ -334,6 +334,7 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
   if (!p.rows.empty()) {
     AssembleLoops(p, &out.errors);
     if (!out.errors.empty()) return out;
+    ChooseLoopSolver(p);
   }
   if (reuse) p.sparse_symbolic = reuse->sparse_symbolic;
   if (p.solver == SolverPath::Recursive) BuildTree(p);

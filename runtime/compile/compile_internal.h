@@ -39,6 +39,12 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
 // held), the rank of the constraint Jacobian, DOF, redundant constraints; y0 updated.
 void AssembleLoops(Program& p, std::vector<CompileMessage>* errors);
 
+// The reduced (dense) or multiplier (sparse) path for a scene with constraints, after
+// AssembleLoops; auto takes the multiplier form from this many free speeds on
+// (bench/loop_solvers.cpp).
+inline constexpr int kSparseLoopMinSpeeds = 40;
+void ChooseLoopSolver(Program& p);
+
 // Relative threshold on |R_ii| / max |R_ii| of column-pivoted QR below which the
 // constraint Jacobian counts as rank deficient (assembly, DOF, redundant rows).
 inline constexpr double kRankTol = 1e-9;

@@ -222,12 +222,7 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
 
 void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
-  p.solver = SolverPath::Dense;
-  p.solver_reason = std::to_string(p.loops.size()) + " closed loop(s), " + std::to_string(p.contacts.size()) +
-                    " contact(s): dense mass matrix reduced to the constrained basis (Lesser eq. 51)";
-  if (p.options.solver == SolverPath::Sparse || p.options.solver == SolverPath::Recursive)
-    p.solver_reason += std::string("; --solver ") + (p.options.solver == SolverPath::Sparse ? "sparse" : "recursive") +
-                       " applies to open trees only and is ignored here";
+  p.solver = SolverPath::Dense;  // assembly works on the reduced path's arrays
   p.loop_rank = 0;
   auto wsp = MakeWorkspace(p);
   Workspace& ws = *wsp;
@@ -377,6 +372,42 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   // The assembled start: the state the integrators begin from.
   for (int i = 0; i < p.nq; ++i) p.y0[static_cast<size_t>(i)] = ws.q[p.q_free[static_cast<size_t>(i)]];
   for (int i = 0; i < p.nu; ++i) p.y0[static_cast<size_t>(p.nq + i)] = ws.u[p.u_free[static_cast<size_t>(i)]];
+}
+
+// The path for a scene with constraints (after AssembleLoops: it needs the redundant
+// rows). Measured by bench/loop_solvers.cpp on ladders of N four-bars (docs/constraints.md
+// "Reduced or multiplier form"): the reduced form costs O(nu^3) per evaluation, the
+// multiplier form O(bodies + rows) but with a larger constant; the multiplier form wins
+// from kSparseLoopMinSpeeds free speeds on.
+void ChooseLoopSolver(Program& p) {
+  const std::string counts = std::to_string(p.loops.size()) + " closed loop(s), " + std::to_string(p.contacts.size()) +
+                             " contact(s), " + std::to_string(p.nu) + " free speeds";
+  const std::string reduced = ": dense mass matrix reduced to the constrained basis (Lesser eq. 51)";
+  const std::string sparse = ": sparse K-vector system with a multiplier per independent constraint row, KLU";
+  // The multipliers of the sparse path are one particular solution where constraints are
+  // redundant; the minimum-norm share and friction that reads it need the reduced path.
+  std::string blocked;
+  if (!p.redundant_rows.empty() && p.options.indeterminate == IndeterminateReactions::MinNorm)
+    blocked = "--reactions min-norm needs the reduced path";
+  if (!p.redundant_rows.empty() && !p.friction_joints.empty())
+    blocked = "Coulomb friction with redundant constraints reads the minimum-norm normal force of the reduced path";
+  const SolverPath want = p.options.solver;
+  if (want == SolverPath::Sparse && blocked.empty()) {
+    p.solver = SolverPath::Sparse;
+    p.solver_reason = counts + sparse + " (forced by --solver)";
+  } else if (want == SolverPath::Auto && blocked.empty() && p.nu >= kSparseLoopMinSpeeds) {
+    p.solver = SolverPath::Sparse;
+    p.solver_reason = counts + sparse + " (measured cheaper than the reduced form from " +
+                      std::to_string(kSparseLoopMinSpeeds) + " free speeds on)";
+  } else {
+    p.solver = SolverPath::Dense;
+    p.solver_reason = counts + reduced;
+    if (want == SolverPath::Sparse) p.solver_reason += "; --solver sparse is ignored here: " + blocked;
+    if (want == SolverPath::Recursive) p.solver_reason += "; --solver recursive applies to open trees only and is ignored here";
+    if (want == SolverPath::Auto && p.nu < kSparseLoopMinSpeeds)
+      p.solver_reason += " (measured cheaper than the multiplier form below " + std::to_string(kSparseLoopMinSpeeds) +
+                         " free speeds)";
+  }
 }
 
 }  // namespace kanesim::rt

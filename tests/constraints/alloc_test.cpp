@@ -15,10 +15,15 @@
 namespace kanesim::test {
 namespace {
 
-void Check(const std::string& example, const std::vector<std::string>& signals) {
+void Check(const std::string& example, const std::vector<std::string>& signals,
+           rt::SolverPath solver = rt::SolverPath::Auto) {
   auto l = LoadModel(kRoot + "/examples/" + example);
   ASSERT_TRUE(l && l->prog);
-  const rt::Program& p = *l->prog;
+  rt::CompileOptions o;
+  o.solver = solver;
+  auto cr = rt::Compile(l->mech, o);
+  ASSERT_TRUE(cr.program);
+  const rt::Program& p = *cr.program;
   auto ws = rt::MakeWorkspace(p);
   std::vector<double> y(static_cast<size_t>(rt::StateSize(p))), yd(y.size()), out(signals.size());
   rt::InitialState(p, y.data());
@@ -56,6 +61,16 @@ TEST(ConstraintsAlloc, RollingContactsAllocateNothing) {
   Check("sphere_incline.mech", {"contact.normal_force", "contact.point[1]", "contact.constraint_residual_velocity"});
   Check("rolling_disk.mech", {"lean", "contact.lateral_force", "constraint_power"});
   Check("sleigh.mech", {"blade.lateral_force", "plane.reaction_force[1]"});
+}
+
+TEST(ConstraintsAlloc, MultiplierFormAllocatesNothing) {
+  // If this fails, the sparse multiplier path (KLU refactorization, kinetic-metric
+  // projection, multipliers as reactions) allocates per evaluation.
+  Check("fourbar.mech", {"crank_coupler.q", "coupler_rocker.constraint_residual", "crank_pivot.reaction_force[1]",
+                         "constraint_power"},
+        rt::SolverPath::Sparse);
+  Check("slider_crank.mech", {"slide.q", "crank_pivot.drive"}, rt::SolverPath::Sparse);
+  Check("rolling_disk.mech", {"lean", "contact.lateral_force"}, rt::SolverPath::Sparse);
 }
 
 TEST(ConstraintsAlloc, JointFrictionIterationAllocatesNothing) {

@@ -1,0 +1,163 @@
+// The multiplier form of the constrained equations (runtime/kane_sparse.cpp eqs. 3-4:
+// a multiplier per independent constraint row in the sparse K-vector system, KLU; the
+// projection in the kinetic metric, runtime/constraints.cpp ProjectStateSparse) against
+// the reduced form (dependent speeds eliminated, Lesser eqs. 48-51), which the other
+// constraint tests hold against closed forms. Two different algorithms: the same
+// accelerations on the manifold, the same trajectories and constraint forces to the
+// integration tolerance; and the multiplier form's own invariants on a ladder of loops
+// large enough for the automatic choice to take it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "runtime/program.h"
+#include "tests/constraints/load_util.h"
+
+namespace kanesim::test {
+namespace {
+
+std::shared_ptr<const rt::Program> CompileOn(const flat::Mechanism& m, rt::SolverPath path) {
+  rt::CompileOptions o;
+  o.solver = path;
+  rt::CompileResult r = rt::Compile(m, o);
+  EXPECT_TRUE(r.program) << (r.errors.empty() ? "" : r.errors[0].message);
+  return r.program;
+}
+
+// Every signal but the integrator-path ones (the drift before projection).
+std::vector<std::string> Compared(const rt::Program& p) {
+  std::vector<std::string> out;
+  for (const std::string& s : rt::AvailableSignals(p))
+    if (s.find("constraint_drift") == std::string::npos) out.push_back(s);
+  return out;
+}
+
+void AgreeWithReducedForm(const std::string& path) {
+  SCOPED_TRACE(path);
+  auto l = LoadModel(kRoot + "/" + path);
+  ASSERT_TRUE(l && l->prog);
+  auto reduced = CompileOn(l->mech, rt::SolverPath::Dense);
+  auto multiplier = CompileOn(l->mech, rt::SolverPath::Sparse);
+  ASSERT_TRUE(reduced && multiplier);
+  ASSERT_EQ(rt::Summarize(*multiplier).solver, rt::SolverPath::Sparse) << rt::Summarize(*multiplier).solver_reason;
+  ASSERT_EQ(rt::Summarize(*reduced).solver, rt::SolverPath::Dense);
+  // The assembled start lies on the manifold, where both projections are the identity:
+  // the accelerations agree to round-off.
+  const size_t n = static_cast<size_t>(rt::StateSize(*reduced));
+  std::vector<double> y(n), a(n), b(n);
+  rt::InitialState(*reduced, y.data());
+  auto wr = rt::MakeWorkspace(*reduced);
+  auto wm = rt::MakeWorkspace(*multiplier);
+  ASSERT_EQ(rt::Derivative(*reduced, *wr, 0.0, y.data(), a.data()), 0) << rt::ErrorMessage(*wr);
+  ASSERT_EQ(rt::Derivative(*multiplier, *wm, 0.0, y.data(), b.data()), 0) << rt::ErrorMessage(*wm);
+  for (size_t i = 0; i < n; ++i) EXPECT_NEAR(a[i], b[i], 1e-10 * (1.0 + std::fabs(a[i]))) << "ydot[" << i << "]";
+  // Whole runs at a tight tolerance: coordinates, speeds, energies, reactions, contact
+  // forces, drive forces, constraint residuals and power.
+  const std::vector<std::string> names = Compared(*reduced);
+  sim::MemorySink sr = RunModel(*reduced, 1.0, 0.1, 1e-10, names);
+  sim::MemorySink sm = RunModel(*multiplier, 1.0, 0.1, 1e-10, names);
+  ASSERT_EQ(sr.rows.size(), sm.rows.size());
+  for (size_t k = 0; k < sr.rows.size(); ++k)
+    for (size_t c = 0; c < names.size(); ++c) {
+      const double x = sr.rows[k][c], z = sm.rows[k][c];
+      if (std::isnan(x)) {  // indeterminate components: nan on both paths
+        EXPECT_TRUE(std::isnan(z)) << names[c] << " at t = " << sr.times[k];
+        continue;
+      }
+      EXPECT_NEAR(x, z, 2e-6 * (1.0 + std::fabs(x))) << names[c] << " at t = " << sr.times[k];
+    }
+}
+
+TEST(MultiplierForm, FourBarAgreesWithReducedForm) { AgreeWithReducedForm("examples/fourbar.mech"); }
+TEST(MultiplierForm, SliderCrankDriveAgreesWithReducedForm) { AgreeWithReducedForm("examples/slider_crank.mech"); }
+TEST(MultiplierForm, RollingDiskAgreesWithReducedForm) { AgreeWithReducedForm("examples/rolling_disk.mech"); }
+TEST(MultiplierForm, SphereOnInclineAgreesWithReducedForm) { AgreeWithReducedForm("examples/sphere_incline.mech"); }
+TEST(MultiplierForm, SleighAgreesWithReducedForm) { AgreeWithReducedForm("examples/sleigh.mech"); }
+TEST(MultiplierForm, SpatialFourBarAgreesWithReducedForm) {
+  AgreeWithReducedForm("tests/constraints/models/rusr_fourbar.mech");
+}
+
+const std::string kLadder = "bench/models/fourbar_ladder.mech";
+
+TEST(MultiplierForm, AutomaticChoiceFollowsTheLadderBenchmark) {
+  // bench/loop_solvers: the reduced form is cheaper up to about 13 loops (39 speeds), the
+  // multiplier form from there on. If this fails, the threshold or the reason changed.
+  auto small = LoadModel(kRoot + "/" + kLadder, {{"N", "4"}});
+  auto large = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}});
+  ASSERT_TRUE(small && small->prog && large && large->prog);
+  EXPECT_EQ(rt::Summarize(*small->prog).solver, rt::SolverPath::Dense);
+  const rt::ProgramSummary s = rt::Summarize(*large->prog);
+  EXPECT_EQ(s.solver, rt::SolverPath::Sparse);
+  EXPECT_NE(s.solver_reason.find("measured cheaper than the reduced form from 40 free speeds"), std::string::npos)
+      << s.solver_reason;
+  EXPECT_EQ(s.dof, 16);
+}
+
+TEST(MultiplierForm, LadderKeepsEnergyAndConstraintsAndMatchesReducedForm) {
+  // 16 loops, 48 bodies: conservative, so kinetic + potential energy is constant; every
+  // loop's position and velocity residual stays at round-off (the projection) and the
+  // trajectory is the reduced form's to the tolerance.
+  auto l = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}});
+  ASSERT_TRUE(l && l->prog);
+  std::vector<std::string> names = {"kinetic_energy", "potential_energy"};
+  for (int i = 1; i <= 16; i += 5) {
+    names.push_back("jr[" + std::to_string(i) + "].q");
+    names.push_back("c[" + std::to_string(i) + "].constraint_residual");
+    names.push_back("c[" + std::to_string(i) + "].constraint_residual_velocity");
+  }
+  const double rtol = 1e-8;
+  sim::MemorySink m = RunModel(*l->prog, 2.0, 0.05, rtol, names);
+  double e_max = 0.0, t_max = 0.0, res = 0.0;
+  const double e0 = m.rows[0][0] + m.rows[0][1];
+  for (const auto& row : m.rows) {
+    e_max = std::max(e_max, std::fabs(row[0] + row[1] - e0));
+    t_max = std::max(t_max, row[0]);
+    for (size_t c = 2; c < names.size(); ++c)
+      if (names[c].find("constraint_residual") != std::string::npos) res = std::max(res, std::fabs(row[c]));
+  }
+  ASSERT_GT(t_max, 1.0);  // it moves (J)
+  EXPECT_LT(e_max, 100 * rtol * t_max) << "energy drift";
+  EXPECT_LT(res, 1e-11) << "constraint residuals";
+  auto reduced = CompileOn(l->mech, rt::SolverPath::Dense);
+  ASSERT_TRUE(reduced);
+  sim::MemorySink r = RunModel(*reduced, 2.0, 0.05, rtol, names);
+  ASSERT_EQ(r.rows.size(), m.rows.size());
+  for (size_t c = 2; c < names.size(); ++c) {
+    if (names[c].find(".q") == std::string::npos) continue;
+    EXPECT_NEAR(r.rows.back()[c], m.rows.back()[c], 1e-5) << names[c];
+  }
+}
+
+TEST(MultiplierForm, RebindKeepsTheSparsePattern) {
+  // A sweep re-binds parameters: the symbolic analysis is reused and the run still closes
+  // its loops (a wider start swing).
+  auto l = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}});
+  ASSERT_TRUE(l && l->prog);
+  std::vector<double> values = l->prog->param_values;
+  for (size_t i = 0; i < l->mech.params.size(); ++i)
+    if (l->mech.params[i].name == "swing") values[i] = 0.5;
+  rt::CompileResult r = rt::Rebind(*l->prog, values);
+  ASSERT_TRUE(r.program);
+  EXPECT_EQ(r.program->sparse_symbolic, l->prog->sparse_symbolic);
+  sim::MemorySink m = RunModel(*r.program, 0.5, 0.25, 1e-8, {"jl[1].q", "c[16].constraint_residual"});
+  EXPECT_NEAR(m.rows[0][0], -M_PI / 2 + 0.5, 1e-9);  // held at assembly; projected in the kinetic metric
+  EXPECT_LT(std::fabs(m.rows.back()[1]), 1e-11);
+}
+
+TEST(MultiplierForm, FrictionOnRedundantConstraintsKeepsTheReducedForm) {
+  // The cart on two rails: its friction reads the minimum-norm share of an indeterminate
+  // normal force, which only the reduced form computes; a forced --solver sparse says so.
+  auto l = LoadModel(kRoot + "/tests/constraints/models/double_rail.mech");
+  ASSERT_TRUE(l && l->prog);
+  auto p = CompileOn(l->mech, rt::SolverPath::Sparse);
+  ASSERT_TRUE(p);
+  const rt::ProgramSummary s = rt::Summarize(*p);
+  EXPECT_EQ(s.solver, rt::SolverPath::Dense);
+  EXPECT_NE(s.solver_reason.find("--solver sparse is ignored here: Coulomb friction"), std::string::npos)
+      << s.solver_reason;
+}
+
+}  // namespace
+}  // namespace kanesim::test
