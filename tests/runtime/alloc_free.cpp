@@ -22,28 +22,9 @@ using flat::Op;
 // time- and state-dependent joint force, a spring-damper and a wrench.
 flat::Mechanism BusyScene(std::mt19937& rng) {
   auto m = test::RandomTree(rng, {9, true, true, true});
-  auto& e = m.exprs;
-  // j1 is revolute: prescribe it; j2 (prismatic) gets a state- and time-dependent force.
-  m.joints[0].prescribed[0] = e.Unary(Op::Sin, e.Binary(Op::Mul, e.Constant(2.0), e.Time()));
-  const int ref = m.AddStateRef({flat::StateKind::JointQ, 1, 0});
-  const int ref_v = m.AddStateRef({flat::StateKind::FrameVelocity, 3, 1});
-  m.joints[1].tau[0] = e.Binary(Op::Add, e.Binary(Op::Mul, e.Constant(-3.0), e.State(ref)),
-                                e.Binary(Op::Mul, e.Unary(Op::Cos, e.Time()), e.State(ref_v)));
-  flat::LineForce lf;
-  lf.name = "spring";
-  lf.frame_a = m.worlds[0].frame;
-  lf.frame_b = 5;
-  lf.k = e.Constant(20.0);
-  lf.d = e.Constant(0.5);
-  lf.s0 = e.Constant(0.3);
-  m.line_forces.push_back(lf);
-  flat::Wrench w;
-  w.name = "push";
-  w.frame = 7;
-  w.force = {e.Unary(Op::Sin, e.Time()), e.Constant(0.0), e.Constant(1.0)};
-  w.torque = {e.Constant(0.1), e.Constant(0.0), e.Constant(0.0)};
-  w.resolve_in_world = false;
-  m.wrenches.push_back(w);
+  // j1 is revolute: prescribe it.
+  m.joints[0].prescribed[0] = m.exprs.Unary(Op::Sin, m.exprs.Binary(Op::Mul, m.exprs.Constant(2.0), m.exprs.Time()));
+  test::AddBusyForces(m);
   return m;
 }
 

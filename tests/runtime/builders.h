@@ -204,4 +204,31 @@ inline flat::Mechanism RandomTree(std::mt19937& rng, const TreeOptions& opt) {
   return b.m;
 }
 
+// Force elements of every kind on a RandomTree of at least 8 bodies (joint j2 prismatic):
+// on j2 a force that reads a coordinate, the time and a frame velocity; a spring-damper
+// from the world to frame 5; a body-fixed wrench on frame 7 (torque about its z given).
+inline void AddBusyForces(flat::Mechanism& m, double wrench_torque_z = 0.0) {
+  using flat::Op;
+  auto& e = m.exprs;
+  const int q2 = m.AddStateRef({flat::StateKind::JointQ, 1, 0});
+  const int v4 = m.AddStateRef({flat::StateKind::FrameVelocity, 3, 1});
+  m.joints[1].tau[0] = e.Binary(Op::Add, e.Binary(Op::Mul, e.Constant(-3.0), e.State(q2)),
+                                e.Binary(Op::Mul, e.Unary(Op::Cos, e.Time()), e.State(v4)));
+  flat::LineForce lf;
+  lf.name = "spring";
+  lf.frame_a = m.worlds[0].frame;
+  lf.frame_b = 5;
+  lf.k = e.Constant(20.0);
+  lf.d = e.Constant(0.5);
+  lf.s0 = e.Constant(0.3);
+  m.line_forces.push_back(lf);
+  flat::Wrench w;
+  w.name = "push";
+  w.frame = 7;
+  w.force = {e.Unary(Op::Sin, e.Time()), e.Constant(0.0), e.Constant(1.0)};
+  w.torque = {e.Constant(0.1), e.Constant(0.0), e.Constant(wrench_torque_z)};
+  w.resolve_in_world = false;
+  m.wrenches.push_back(w);
+}
+
 }  // namespace kanesim::test

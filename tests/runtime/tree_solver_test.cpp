@@ -75,26 +75,8 @@ flat::Mechanism DrivenTree(std::mt19937& rng, bool friction) {
   m.joints[3].prescribed[0] = sin_t(0.7);                          // j4: both prescribed
   m.joints[3].prescribed[1] = e.Binary(Op::Mul, e.Constant(0.3), e.Time());
   m.joints[5].prescribed[1] = sin_t(0.9);                          // j6: speeds 1 and 3 free
-  const int q2 = m.AddStateRef({flat::StateKind::JointQ, 1, 0});
-  const int v4 = m.AddStateRef({flat::StateKind::FrameVelocity, 3, 1});
-  m.joints[1].tau[0] = e.Binary(Op::Add, e.Binary(Op::Mul, e.Constant(-3.0), e.State(q2)),
-                                e.Binary(Op::Mul, e.Unary(Op::Cos, e.Time()), e.State(v4)));
   m.joints[6].tau[4] = e.Constant(0.4);  // a torque on the free joint
-  flat::LineForce lf;
-  lf.name = "spring";
-  lf.frame_a = m.worlds[0].frame;
-  lf.frame_b = 5;
-  lf.k = e.Constant(20.0);
-  lf.d = e.Constant(0.5);
-  lf.s0 = e.Constant(0.3);
-  m.line_forces.push_back(lf);
-  flat::Wrench w;
-  w.name = "push";
-  w.frame = 7;
-  w.force = {e.Unary(Op::Sin, e.Time()), e.Constant(0.0), e.Constant(1.0)};
-  w.torque = {e.Constant(0.1), e.Constant(0.0), e.Constant(-0.2)};
-  w.resolve_in_world = false;
-  m.wrenches.push_back(w);
+  test::AddBusyForces(m, -0.2);
   if (friction) {
     m.joints[7].friction_mu = e.Constant(0.3);   // j8 revolute
     m.joints[7].friction_radius = e.Constant(0.05);
