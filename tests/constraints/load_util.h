@@ -1,5 +1,5 @@
-// Loading a .mech model (file or text) through the language front end, for the
-// constraint tests, and running it into memory.
+// Loading a .mech model (file or text) through the language front end and compiling it,
+// for the tests, and running it into memory (tests/model_loader.h without GoogleTest).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -8,33 +8,29 @@
 #include <string>
 #include <vector>
 
-#include "lang/elaborate.h"
 #include "runtime/engine.h"
 #include "runtime/sim/simulate.h"
-#include "stdlib/stdlib.h"
+#include "tests/model_loader.h"
 
 namespace kanesim::test {
 
 inline const std::string kRoot = KANESIM_SOURCE_DIR;
 
-struct Loaded {
-  lang::Program program;
-  flat::Mechanism mech;
+struct Loaded : LoadedMech {
   std::shared_ptr<const rt::Program> prog;
   std::vector<rt::CompileMessage> errors;
 };
 
-// Elaborates and compiles; compile errors are kept in `errors` (prog is then null).
-inline std::unique_ptr<Loaded> LoadModel(const std::string& path, std::vector<lang::ParamOverride> sets = {}) {
+// Elaborates (a file, or `text` itself when is_text) and compiles with `options`; compile
+// errors are kept in `errors` (prog is then null), language errors fail the test.
+inline std::unique_ptr<Loaded> LoadModel(const std::string& path_or_text, std::vector<lang::ParamOverride> sets = {},
+                                         const rt::CompileOptions& options = {}, bool is_text = false) {
   auto l = std::make_unique<Loaded>();
-  lang::Diagnostics diags(&l->program.sources);
-  bool ok = lang::LoadProgram(path, stdlib::Files(), &l->program, diags);
-  lang::ElaborateOptions eo;
-  eo.overrides = std::move(sets);
-  ok = ok && lang::Elaborate(l->program, eo, &l->mech, diags);
-  EXPECT_TRUE(ok) << diags.RenderAll();
+  std::string diags;
+  const bool ok = LoadInto(l.get(), path_or_text, std::move(sets), is_text, &diags);
+  EXPECT_TRUE(ok) << diags;
   if (!ok) return nullptr;
-  rt::CompileResult cr = rt::Compile(l->mech, {});
+  rt::CompileResult cr = rt::Compile(l->mech, options);
   l->errors = cr.errors;
   l->prog = cr.program;
   return l;

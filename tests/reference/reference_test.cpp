@@ -12,10 +12,7 @@
 #include <map>
 #include <sstream>
 
-#include "lang/elaborate.h"
-#include "runtime/engine.h"
-#include "runtime/sim/simulate.h"
-#include "stdlib/stdlib.h"
+#include "tests/constraints/load_util.h"
 
 namespace kanesim {
 namespace {
@@ -46,41 +43,15 @@ Table ReadCsv(const std::string& path) {
   return t;
 }
 
-struct Loaded {
-  lang::Program program;
-  flat::Mechanism mech;
-  std::shared_ptr<const rt::Program> prog;
-};
+using test::kRoot;
+using test::LoadModel;
+using test::RunModel;
 
-std::unique_ptr<Loaded> Load(const std::string& path_or_text, bool is_text,
-                             std::vector<lang::ParamOverride> sets = {}) {
-  auto l = std::make_unique<Loaded>();
-  lang::Diagnostics diags(&l->program.sources);
-  bool ok = is_text ? lang::LoadProgramFromText("model.mech", path_or_text, stdlib::Files(), &l->program, diags)
-                    : lang::LoadProgram(path_or_text, stdlib::Files(), &l->program, diags);
-  lang::ElaborateOptions eo;
-  eo.overrides = std::move(sets);
-  ok = ok && lang::Elaborate(l->program, eo, &l->mech, diags);
-  EXPECT_TRUE(ok) << diags.RenderAll();
-  if (!ok) return nullptr;
-  rt::CompileResult cr = rt::Compile(l->mech, {});
-  EXPECT_TRUE(cr.errors.empty()) << (cr.errors.empty() ? "" : cr.errors[0].message);
-  l->prog = cr.program;
-  return l->prog ? std::move(l) : nullptr;
-}
-
-sim::MemorySink Simulate(const rt::Program& p, rt::IntegratorKind integrator, double stop, double interval,
-                         double tol, std::vector<std::string> signals) {
-  sim::SimOptions o;
-  o.stop_time = stop;
-  o.interval = interval;
-  o.rtol = o.atol = tol;
-  o.integrator = integrator;
-  o.signals = std::move(signals);
-  sim::MemorySink sink;
-  sim::SimResult r = sim::Simulate(p, o, sink);
-  EXPECT_EQ(r.status, sim::SimResult::Status::kOk) << r.message;
-  return sink;
+// A model given as text, compiled; fails the test on any error.
+std::unique_ptr<test::Loaded> LoadText(const std::string& text, std::vector<lang::ParamOverride> sets = {}) {
+  auto l = LoadModel(text, std::move(sets), {}, /*is_text=*/true);
+  if (l && !l->errors.empty()) ADD_FAILURE() << l->errors[0].message;
+  return l && l->prog ? std::move(l) : nullptr;
 }
 
 // Max |kanesim - reference| over the reference's rows with time <= t_max.
@@ -108,7 +79,6 @@ double MaxError(const sim::MemorySink& s, const Table& ref, const std::vector<st
   return worst;
 }
 
-const std::string kRoot = KANESIM_SOURCE_DIR;
 
 // The double pendulum is chaotic: bench/reference/double_pendulum.md shows a double-
 // precision solver can keep about 13 digits to t = 3 s (sigma_max ~ 1e3). With
@@ -116,7 +86,7 @@ const std::string kRoot = KANESIM_SOURCE_DIR;
 // degree-5 dense output, not its steps, limits the error), 1e-8 (CVODE-Adams) and 9e-9
 // (IDA) up to t = 3 s; the bounds leave a factor of about 10 to the measurements.
 TEST(Reference, DoublePendulumAgainstLagrange40Digits) {
-  auto l = Load(kRoot + "/examples/double_pendulum.mech", false);
+  auto l = LoadModel(kRoot + "/examples/double_pendulum.mech");
   ASSERT_TRUE(l);
   Table ref = ReadCsv(kRoot + "/tests/data/double_pendulum_ref.csv");
   std::vector<std::string> cols{"shoulder.q", "elbow.q", "shoulder.u", "elbow.u"};
@@ -126,7 +96,7 @@ TEST(Reference, DoublePendulumAgainstLagrange40Digits) {
   };
   for (Case c : {Case{rt::IntegratorKind::ARKODE, 5e-8}, Case{rt::IntegratorKind::CVODE, 1e-7},
                  Case{rt::IntegratorKind::IDA, 1e-7}}) {
-    auto s = Simulate(*l->prog, c.kind, 3.0, 0.1, 1e-12, cols);
+    auto s = RunModel(*l->prog, 3.0, 0.1, 1e-12, cols, c.kind);
     double err = MaxError(s, ref, cols, 3.0);
     EXPECT_LT(err, c.bound) << "integrator " << static_cast<int>(c.kind);
     RecordProperty("max_error_" + std::to_string(static_cast<int>(c.kind)), std::to_string(err));
@@ -142,17 +112,11 @@ void CheckChain(int n) {
   std::vector<std::string> cols;
   for (int i = 1; i <= n; ++i) cols.push_back("j[" + std::to_string(i) + "].q");
   for (const char* path : {"dense", "sparse"}) {
-    auto l = std::make_unique<Loaded>();
-    lang::Diagnostics diags(&l->program.sources);
-    ASSERT_TRUE(lang::LoadProgram(kRoot + "/examples/chain.mech", stdlib::Files(), &l->program, diags));
-    lang::ElaborateOptions eo;
-    eo.overrides = {{"N", std::to_string(n)}};
-    ASSERT_TRUE(lang::Elaborate(l->program, eo, &l->mech, diags)) << diags.RenderAll();
     rt::CompileOptions co;
     co.solver = std::string(path) == "dense" ? rt::SolverPath::Dense : rt::SolverPath::Sparse;
-    auto cr = rt::Compile(l->mech, co);
-    ASSERT_TRUE(cr.program);
-    auto s = Simulate(*cr.program, rt::IntegratorKind::ARKODE, 3.0, 0.05, 1e-12, cols);
+    auto l = LoadModel(kRoot + "/examples/chain.mech", {{"N", std::to_string(n)}}, co);
+    ASSERT_TRUE(l && l->prog);
+    auto s = RunModel(*l->prog, 3.0, 0.05, 1e-12, cols, rt::IntegratorKind::ARKODE);
     double err = MaxError(s, ref, cols, 3.0);
     EXPECT_LT(err, 1e-8) << "N = " << n << ", " << path;
   }
@@ -176,13 +140,13 @@ equation
   connect(free.frame_b, b.frame_a);
 end Tumbling;
 )";
-  auto l = Load(model, true);
+  auto l = LoadText(model);
   ASSERT_TRUE(l);
   std::vector<std::string> sig{"kinetic_energy", "free.u[5]"};
   for (int i = 1; i <= 3; ++i) sig.push_back("b.w[" + std::to_string(i) + "]");
   for (int i = 1; i <= 3; ++i)
     for (int j = 1; j <= 3; ++j) sig.push_back("b.R[" + std::to_string(i) + "," + std::to_string(j) + "]");
-  auto s = Simulate(*l->prog, rt::IntegratorKind::Auto, 20.0, 0.01, 1e-10, sig);
+  auto s = RunModel(*l->prog, 20.0, 0.01, 1e-10, sig);
   ASSERT_FALSE(s.rows.empty());
   const double I[3] = {1, 2, 3};
   auto momentum = [&](const std::vector<double>& r) {
@@ -229,10 +193,10 @@ equation
 end Incline;
 )";
   for (double mu : {0.2, 0.8}) {
-    auto l = Load(model, true, {{"mu", std::to_string(mu)}});
+    auto l = LoadText(model, {{"mu", std::to_string(mu)}});
     ASSERT_TRUE(l);
     // Sticking makes the regularized law stiff (rate mu N / (m v) ~ 3e3 1/s): BDF.
-    auto s = Simulate(*l->prog, rt::IntegratorKind::IDA, 1.0, 0.5, 1e-10, {"slide.q", "slide.u"});
+    auto s = RunModel(*l->prog, 1.0, 0.5, 1e-10, {"slide.q", "slide.u"}, rt::IntegratorKind::IDA);
     ASSERT_EQ(s.rows.size(), 3u);
     const double a = 9.81 * (std::sin(0.5) - mu * std::cos(0.5));
     if (a > 0) {
