@@ -4,7 +4,9 @@
 // system, KLU: runtime/kane_sparse.cpp), on bench/models/fourbar_ladder.mech, N four-bar
 // loops stacked between two hanging rails (3 N bodies, 3 N speeds, 2 N independent rows).
 // The crossover sets kSparseLoopMinSpeeds (runtime/compile/compile_internal.h);
-// docs/constraints.md "Reduced or multiplier form" has the numbers.
+// docs/constraints.md "Reduced or multiplier form" has the numbers. Also the cost of one
+// right-hand side of the examples with constraints (the four-bar against Pinocchio's
+// constraintDynamics: docs/benchmarks.md).
 //
 //   build/bench/loop_solvers --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -78,6 +80,37 @@ void Run(benchmark::State& state, rt::SolverPath path) {
   state.counters["speeds"] = rt::NumU(*p);
   state.counters["rhs"] = static_cast<double>(rhs);
 }
+
+// One right-hand side of an example with constraints on its automatic path, at the
+// assembled start with the coordinates moved 1e-9 off the manifold (as an integrator's
+// states are: the projection takes its Newton step) and every speed 0.3.
+void ExampleRhs(benchmark::State& state, const char* example) {
+  auto m = test::LoadMech(std::string(KANESIM_SOURCE_DIR) + "/examples/" + example);
+  auto r = m ? rt::Compile(m->mech, {}) : rt::CompileResult{};
+  if (!r.program) {
+    state.SkipWithError("cannot compile the example");
+    return;
+  }
+  const rt::Program& p = *r.program;
+  auto ws = rt::MakeWorkspace(p);
+  std::vector<double> y(static_cast<size_t>(rt::StateSize(p))), ydot(y.size());
+  rt::InitialState(p, y.data());
+  for (size_t i = 0; i < y.size(); ++i) y[i] += i < static_cast<size_t>(rt::NumQ(p)) ? 1e-9 : 0.3;
+  for (auto _ : state) {
+    if (rt::Derivative(p, *ws, 0.0, y.data(), ydot.data()) != 0) {
+      state.SkipWithError(rt::ErrorMessage(*ws).c_str());
+      break;
+    }
+    benchmark::DoNotOptimize(ydot.data());
+  }
+}
+
+void BM_FourBarRhs(benchmark::State& s) { ExampleRhs(s, "fourbar.mech"); }
+void BM_SliderCrankRhs(benchmark::State& s) { ExampleRhs(s, "slider_crank.mech"); }
+void BM_RollingDiskRhs(benchmark::State& s) { ExampleRhs(s, "rolling_disk.mech"); }
+BENCHMARK(BM_FourBarRhs);
+BENCHMARK(BM_SliderCrankRhs);
+BENCHMARK(BM_RollingDiskRhs);
 
 void BM_LadderRhsReduced(benchmark::State& s) { Rhs(s, rt::SolverPath::Dense); }
 void BM_LadderRhsMultiplier(benchmark::State& s) { Rhs(s, rt::SolverPath::Sparse); }

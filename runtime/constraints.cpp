@@ -157,41 +157,59 @@ int CheckDisksUpright(const Program& p, Workspace& ws) {
 
 }  // namespace
 
+namespace {
+
+// A cut joint's two frames and, when asked, their motion: computed once for all its rows.
+struct LoopFrames {
+  FrameState a, b;
+  Vec3 v_a = Vec3::Zero(), w_A = Vec3::Zero(), v_b = Vec3::Zero(), w_B = Vec3::Zero();
+};
+
+LoopFrames FramesOf(const Program& p, const Workspace& ws, const LoopClosure& l, bool motion) {
+  LoopFrames f{FrameAt(p, ws, l.frame_a), FrameAt(p, ws, l.frame_b)};
+  if (motion) {
+    FrameMotion(p, ws, l.frame_a, &f.v_a, &f.w_A);
+    FrameMotion(p, ws, l.frame_b, &f.v_b, &f.w_B);
+  }
+  return f;
+}
+
+}  // namespace
+
 void ConstraintResiduals(const Program& p, Workspace& ws) {
-  for (size_t i = 0; i < p.rows.size(); ++i) {
-    const ConstraintRow& row = p.rows[i];
-    if (row.contact >= 0) {
-      ws.phi[static_cast<Eigen::Index>(i)] = ContactResidual(p, ws, row);
-      continue;
+  for (const LoopClosure& l : p.loops) {
+    const LoopFrames f = FramesOf(p, ws, l, false);
+    for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+      const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+      if (row.kind == RowKind::Translation)
+        ws.phi[i] = (f.a.R * row.d_a).dot(f.b.p - f.a.p);  // (1)
+      else
+        ws.phi[i] = (f.a.R * row.d_a).dot(f.b.R * row.n_b) - row.offset;  // (2)
     }
-    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
-    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
-    if (row.kind == RowKind::Translation)
-      ws.phi[static_cast<Eigen::Index>(i)] = (a.R * row.d_a).dot(b.p - a.p);  // (1)
-    else
-      ws.phi[static_cast<Eigen::Index>(i)] = (a.R * row.d_a).dot(b.R * row.n_b) - row.offset;  // (2)
+  }
+  for (const ContactModel& c : p.contacts) {
+    const ContactPoint cp = ContactAt(p, ws, c);
+    for (int i = c.row0; i < c.row0 + c.nrows; ++i) ws.phi[i] = ContactResidual(p, p.rows[static_cast<size_t>(i)], cp);
   }
 }
 
 void ConstraintJacobian(const Program& p, Workspace& ws) {
   ws.A.setZero();
-  for (size_t ii = 0; ii < p.rows.size(); ++ii) {
-    const auto i = static_cast<int>(ii);
-    const ConstraintRow& row = p.rows[ii];
-    if (row.contact >= 0) {
-      ws.psi[i] = ContactJacobianRow(p, ws, row, i);
-      continue;
+  for (const LoopClosure& l : p.loops) {
+    const LoopFrames f = FramesOf(p, ws, l, true);
+    const Vec3 r = f.b.p - f.a.p;
+    for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+      const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+      const Vec3 dk = RowDirection(row, f.a, f.b);
+      AddBodyColumns(p, ws, f.b.body, f.b.p, 1.0, row, dk, r, false, i);
+      AddBodyColumns(p, ws, f.a.body, f.a.p, -1.0, row, dk, r, true, i);
+      ws.psi[i] = RowRate(row, dk, r, f.v_a, f.w_A, f.v_b, f.w_B);
     }
-    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
-    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
-    const Vec3 dk = RowDirection(row, a, b);
-    const Vec3 r = b.p - a.p;
-    AddBodyColumns(p, ws, b.body, b.p, 1.0, row, dk, r, false, i);
-    AddBodyColumns(p, ws, a.body, a.p, -1.0, row, dk, r, true, i);
-    Vec3 v_a, w_A, v_b, w_B;
-    FrameMotion(p, ws, l.frame_a, &v_a, &w_A);
-    FrameMotion(p, ws, l.frame_b, &v_b, &w_B);
-    ws.psi[i] = RowRate(row, dk, r, v_a, w_A, v_b, w_B);
+  }
+  for (const ContactModel& c : p.contacts) {
+    const ContactPoint cp = ContactAt(p, ws, c);
+    for (int i = c.row0; i < c.row0 + c.nrows; ++i)
+      ws.psi[i] = ContactJacobianRow(p, ws, p.rows[static_cast<size_t>(i)], i, cp);
   }
 }
 
@@ -230,29 +248,29 @@ void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::Vecto
 }
 
 void ConstraintBias(const Program& p, Workspace& ws) {
-  for (size_t ii = 0; ii < p.rows.size(); ++ii) {
-    const ConstraintRow& row = p.rows[ii];
-    if (row.contact >= 0) {
-      ws.cbias[static_cast<Eigen::Index>(ii)] = ContactBias(p, ws, row);
-      continue;
-    }
-    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
-    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
-    Vec3 v_a, w_A, v_b, w_B, alpha_A, alpha_B;
-    FrameMotion(p, ws, l.frame_a, &v_a, &w_A);
-    FrameMotion(p, ws, l.frame_b, &v_b, &w_B);
+  for (const LoopClosure& l : p.loops) {
+    const LoopFrames f = FramesOf(p, ws, l, true);
+    Vec3 alpha_A, alpha_B;
     const Vec3 a_a = FrameBiasAccel(p, ws, l.frame_a, &alpha_A);
     const Vec3 a_b = FrameBiasAccel(p, ws, l.frame_b, &alpha_B);
-    double c;
-    if (row.kind == RowKind::Translation) {
-      const Vec3 d = a.R * row.d_a, r = b.p - a.p;
-      const Vec3 s = v_b - v_a - w_A.cross(r);
-      c = w_A.cross(d).dot(s) + d.dot(a_b - a_a - alpha_A.cross(r) - w_A.cross(v_b - v_a));  // (5)
-    } else {
-      const Vec3 e = a.R * row.d_a, n = b.R * row.n_b;
-      c = (w_B.cross(n).cross(e) + n.cross(w_A.cross(e))).dot(w_B - w_A) + n.cross(e).dot(alpha_B - alpha_A);  // (6)
+    for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+      const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+      double c;
+      if (row.kind == RowKind::Translation) {
+        const Vec3 d = f.a.R * row.d_a, r = f.b.p - f.a.p;
+        const Vec3 s = f.v_b - f.v_a - f.w_A.cross(r);
+        c = f.w_A.cross(d).dot(s) + d.dot(a_b - a_a - alpha_A.cross(r) - f.w_A.cross(f.v_b - f.v_a));  // (5)
+      } else {
+        const Vec3 e = f.a.R * row.d_a, n = f.b.R * row.n_b;
+        c = (f.w_B.cross(n).cross(e) + n.cross(f.w_A.cross(e))).dot(f.w_B - f.w_A) +
+            n.cross(e).dot(alpha_B - alpha_A);  // (6)
+      }
+      ws.cbias[i] = c;
     }
-    ws.cbias[static_cast<Eigen::Index>(ii)] = c;
+  }
+  for (const ContactModel& c : p.contacts) {
+    const ContactPoint cp = ContactAt(p, ws, c);
+    for (int i = c.row0; i < c.row0 + c.nrows; ++i) ws.cbias[i] = ContactBias(p, ws, p.rows[static_cast<size_t>(i)], cp);
   }
 }
 
@@ -371,21 +389,17 @@ void RowJacobians(const Program& p, const Workspace& ws, int i, Vec6* Ja, Vec6* 
 }
 
 void ConstraintRates(const Program& p, Workspace& ws) {
-  for (size_t ii = 0; ii < p.rows.size(); ++ii) {
-    const ConstraintRow& row = p.rows[ii];
-    const auto i = static_cast<Eigen::Index>(ii);
-    if (row.contact >= 0) {
-      const ContactModel& c = p.contacts[static_cast<size_t>(row.contact)];
-      const ContactPoint cp = ContactAt(p, ws, c);
-      ws.psi[i] = ContactRowDirection(c, row, cp, nullptr).dot(cp.vPm);
-      continue;
+  for (const LoopClosure& l : p.loops) {
+    const LoopFrames f = FramesOf(p, ws, l, true);
+    for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+      const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+      ws.psi[i] = RowRate(row, RowDirection(row, f.a, f.b), f.b.p - f.a.p, f.v_a, f.w_A, f.v_b, f.w_B);
     }
-    const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
-    const FrameState a = FrameAt(p, ws, l.frame_a), b = FrameAt(p, ws, l.frame_b);
-    Vec3 v_a, w_A, v_b, w_B;
-    FrameMotion(p, ws, l.frame_a, &v_a, &w_A);
-    FrameMotion(p, ws, l.frame_b, &v_b, &w_B);
-    ws.psi[i] = RowRate(row, RowDirection(row, a, b), b.p - a.p, v_a, w_A, v_b, w_B);
+  }
+  for (const ContactModel& c : p.contacts) {
+    const ContactPoint cp = ContactAt(p, ws, c);
+    for (int i = c.row0; i < c.row0 + c.nrows; ++i)
+      ws.psi[i] = ContactRowDirection(c, p.rows[static_cast<size_t>(i)], cp, nullptr).dot(cp.vPm);
   }
 }
 

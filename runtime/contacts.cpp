@@ -81,15 +81,14 @@ Vec3 ContactRowDirection(const ContactModel& c, const ConstraintRow& row, const 
   }
 }
 
-double ContactResidual(const Program& p, const Workspace& ws, const ConstraintRow& row) {
+double ContactResidual(const Program& p, const ConstraintRow& row, const ContactPoint& cp) {
   if (row.kind != RowKind::ContactNormal) return 0.0;
   const ContactModel& c = Of(p, row);
-  return c.n_W.dot(ContactAt(p, ws, c).P - c.p0_W);
+  return c.n_W.dot(cp.P - c.p0_W);
 }
 
-double ContactJacobianRow(const Program& p, Workspace& ws, const ConstraintRow& row, int i) {
+double ContactJacobianRow(const Program& p, Workspace& ws, const ConstraintRow& row, int i, const ContactPoint& cp) {
   const ContactModel& c = Of(p, row);
-  const ContactPoint cp = ContactAt(p, ws, c);
   const Vec3 d = ContactRowDirection(c, row, cp, nullptr);
   if (c.body >= 0)
     for (int s : p.bodies[static_cast<size_t>(c.body)].path_speeds) {
@@ -112,10 +111,9 @@ double ContactColumn(const Program& p, const Workspace& ws, const ConstraintRow&
   return d.dot(h.head<3>() + h.tail<3>().cross(cp.P - ws.p_WB[static_cast<size_t>(J)]));
 }
 
-double ContactBias(const Program& p, const Workspace& ws, const ConstraintRow& row) {
+double ContactBias(const Program& p, const Workspace& ws, const ConstraintRow& row, const ContactPoint& cp) {
   const ContactModel& c = Of(p, row);
   if (c.body < 0) return 0.0;
-  const ContactPoint cp = ContactAt(p, ws, c);
   Vec3 d_dot;
   const Vec3 d = ContactRowDirection(c, row, cp, &d_dot);
   const auto B = static_cast<size_t>(c.body);
