@@ -201,15 +201,18 @@ void ConstraintJacobian(const Program& p, Workspace& ws) {
     for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
       const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
       const Vec3 dk = RowDirection(row, f.a, f.b);
-      AddBodyColumns(p, ws, f.b.body, f.b.p, 1.0, row, dk, r, false, i);
-      AddBodyColumns(p, ws, f.a.body, f.a.p, -1.0, row, dk, r, true, i);
+      const int k = p.active_of_row[static_cast<size_t>(i)];
+      if (k >= 0) {
+        AddBodyColumns(p, ws, f.b.body, f.b.p, 1.0, row, dk, r, false, k);
+        AddBodyColumns(p, ws, f.a.body, f.a.p, -1.0, row, dk, r, true, k);
+      }
       ws.psi[i] = RowRate(row, dk, r, f.v_a, f.w_A, f.v_b, f.w_B);
     }
   }
   for (const ContactModel& c : p.contacts) {
     const ContactPoint cp = ContactAt(p, ws, c);
     for (int i = c.row0; i < c.row0 + c.nrows; ++i)
-      ws.psi[i] = ContactJacobianRow(p, ws, p.rows[static_cast<size_t>(i)], i, cp);
+      ws.psi[i] = ContactJacobianRow(p, ws, p.rows[static_cast<size_t>(i)], p.active_of_row[static_cast<size_t>(i)], cp);
   }
 }
 
@@ -279,10 +282,13 @@ int FactorDependent(const Program& p, Workspace& ws) {
   if (rank == 0) return 0;
   auto ratio = [&]() {
     for (int k = 0; k < rank; ++k) ws.A_dep.col(k) = ws.A.col(ws.dep[static_cast<size_t>(k)]);
-    ws.qr_dep->compute(ws.A_dep);
-    const auto d = ws.qr_dep->matrixQR().diagonal().head(rank).cwiseAbs();
-    const double mx = d.maxCoeff();
-    return mx > 0.0 ? d.minCoeff() / mx : 0.0;
+    ws.qr_dep.Compute(ws.A_dep);
+    double mn = INFINITY, mx = 0.0;
+    for (int k = 0; k < rank; ++k) {
+      mn = std::min(mn, ws.qr_dep.DiagAbs(k));
+      mx = std::max(mx, ws.qr_dep.DiagAbs(k));
+    }
+    return mx > 0.0 ? mn / mx : 0.0;
   };
   auto choose = [&]() {
     ws.qr_A->compute(ws.A);
@@ -320,12 +326,16 @@ int FactorDependent(const Program& p, Workspace& ws) {
   return 0;
 }
 
+void GatherActive(const Program& p, const Eigen::VectorXd& full, Eigen::VectorXd* active) {
+  for (size_t k = 0; k < p.active_rows.size(); ++k) (*active)[static_cast<Eigen::Index>(k)] = full[p.active_rows[k]];
+}
+
 void SolveDependent(const Workspace& ws_c, const Eigen::VectorXd& v, Eigen::VectorXd* x) {
   auto& ws = const_cast<Workspace&>(ws_c);
-  const auto rank = ws.qr_dep->matrixQR().cols();
+  const auto rank = ws.qr_dep.Cols();
   ws.vc = v;
-  ws.vc.applyOnTheLeft(ws.qr_dep->householderQ().transpose());
-  ws.qr_dep->matrixQR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().solveInPlace(ws.vc.head(rank));
+  ws.qr_dep.ApplyQt(&ws.vc);
+  ws.qr_dep.SolveR(ws.vc.data());
   x->head(rank) = ws.vc.head(rank);
 }
 
@@ -470,7 +480,8 @@ int ProjectState(const Program& p, Workspace& ws) {
     const double r = ws.phi.cwiseAbs().maxCoeff();
     if (r <= tight || rank == 0 || it == kMaxNewton) break;
     // Newton step on the dependent coordinates: A_dep du_dep = -phi (7).
-    SolveDependent(ws, ws.phi, &ws.xd);
+    GatherActive(p, ws.phi, &ws.vg);
+    SolveDependent(ws, ws.vg, &ws.xd);
     ws.du_full.setZero();
     for (int k = 0; k < rank; ++k) ws.du_full[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] = -ws.xd[k];
     ApplyCoordinateStep(p, ws, ws.du_full);
@@ -486,7 +497,8 @@ int ProjectState(const Program& p, Workspace& ws) {
   if (int s = CheckDisksUpright(p, ws); s != 0) return s;
   if (rank == 0) return 0;
   // Dependent speeds from the velocity constraints (7): u_dep -= A_dep^+ (A u + b).
-  SolveDependent(ws, ws.psi, &ws.xd);
+  GatherActive(p, ws.psi, &ws.vg);
+  SolveDependent(ws, ws.vg, &ws.xd);
   for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.xd[k];
   VelocityKinematics(p, ws);
   return 0;
@@ -501,7 +513,8 @@ int SolveConstrained(const Program& p, Workspace& ws) {
   // udot_p (9) and beta (8).
   ws.udot_p.setZero();
   if (rank > 0) {
-    SolveDependent(ws, ws.cbias, &ws.xd);
+    GatherActive(p, ws.cbias, &ws.vg);
+    SolveDependent(ws, ws.vg, &ws.xd);
     for (int k = 0; k < rank; ++k) ws.udot_p[ws.dep[static_cast<size_t>(k)]] = -ws.xd[k];
   }
   ws.beta.setZero();
@@ -533,18 +546,21 @@ int SolveConstrained(const Program& p, Workspace& ws) {
 
 void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   const auto nc = static_cast<Eigen::Index>(p.rows.size());
+  const auto na = static_cast<Eigen::Index>(p.active_rows.size());
   const int rank = p.loop_rank, nind = p.nu - rank;
   ws.phi = Eigen::VectorXd::Zero(nc);
   ws.phi_drift = Eigen::VectorXd::Zero(nc);
   ws.psi = Eigen::VectorXd::Zero(nc);
   ws.cbias = Eigen::VectorXd::Zero(nc);
-  ws.vc = Eigen::VectorXd::Zero(nc);
-  ws.xd = Eigen::VectorXd::Zero(nc);
+  ws.vc = Eigen::VectorXd::Zero(na);
+  ws.xd = Eigen::VectorXd::Zero(na);
+  ws.vg = Eigen::VectorXd::Zero(na);
+  ws.vcol = Eigen::VectorXd::Zero(nc);
   ws.du_full = Eigen::VectorXd::Zero(p.nu_all);
-  ws.A = Eigen::MatrixXd::Zero(nc, p.nu);
-  ws.A_dep = Eigen::MatrixXd::Zero(nc, rank);
-  ws.qr_A.emplace(nc, p.nu);
-  ws.qr_dep.emplace(nc, rank);
+  ws.A = Eigen::MatrixXd::Zero(na, p.nu);
+  ws.A_dep = Eigen::MatrixXd::Zero(na, rank);
+  ws.qr_A.emplace(na, p.nu);
+  ws.qr_dep.Resize(na, rank);
   ws.dep.assign(static_cast<size_t>(rank), 0);
   ws.ind.assign(static_cast<size_t>(nind), 0);
   ws.partition_valid = false;

@@ -17,7 +17,8 @@ namespace kanesim::rt {
 // ws.phi from the current poses (after PositionKinematics).
 void ConstraintResiduals(const Program& p, Workspace& ws);
 
-// ws.A (free speeds), ws.psi = A u + b (after VelocityKinematics).
+// ws.A (free speeds; the active rows, Program::active_rows), ws.psi = A u + b (every
+// row), after VelocityKinematics.
 void ConstraintJacobian(const Program& p, Workspace& ws);
 
 // Column of the constraint Jacobian for full speed r (free or prescribed), into *col (n_c).
@@ -30,7 +31,10 @@ void ConstraintBias(const Program& p, Workspace& ws);
 // Returns 0, or 1 (recoverable, ws.error) at a singular configuration.
 int FactorDependent(const Program& p, Workspace& ws);
 
-// x = A_dep^+ v (n_c -> rank) with the factorization of FactorDependent; v is kept.
+// The active rows' entries of a per-row vector (phi, psi, cbias, a column): n_c -> n_a.
+void GatherActive(const Program& p, const Eigen::VectorXd& full, Eigen::VectorXd* active);
+
+// x = A_dep^+ v (n_a -> rank) with the factorization of FactorDependent; v is kept.
 void SolveDependent(const Workspace& ws, const Eigen::VectorXd& v, Eigen::VectorXd* x);
 
 // q += N(q) du for a full-speed step du (quaternions renormalized).

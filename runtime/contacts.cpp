@@ -90,7 +90,7 @@ double ContactResidual(const Program& p, const ConstraintRow& row, const Contact
 double ContactJacobianRow(const Program& p, Workspace& ws, const ConstraintRow& row, int i, const ContactPoint& cp) {
   const ContactModel& c = Of(p, row);
   const Vec3 d = ContactRowDirection(c, row, cp, nullptr);
-  if (c.body >= 0)
+  if (c.body >= 0 && i >= 0)
     for (int s : p.bodies[static_cast<size_t>(c.body)].path_speeds) {
       const auto h = ws.H_W.col(s);
       const Vec3 o = ws.p_WB[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(s)])];

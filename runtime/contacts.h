@@ -26,7 +26,8 @@ Vec3 ContactRowDirection(const ContactModel& c, const ConstraintRow& row, const 
 // Per row, with cp = ContactAt of the row's contact (computed once for all its rows):
 // phi of a contact row (n . (P - p0) for the normal row, 0 otherwise).
 double ContactResidual(const Program& p, const ConstraintRow& row, const ContactPoint& cp);
-// Adds the row's Jacobian into ws.A row i and returns its velocity residual d . v_P.
+// Adds the row's Jacobian into ws.A row i (none when i < 0) and returns its velocity
+// residual d . v_P.
 double ContactJacobianRow(const Program& p, Workspace& ws, const ConstraintRow& row, int i, const ContactPoint& cp);
 // d/dt (d . v_P) with free udot = 0 (after BiasAccelerations).
 double ContactBias(const Program& p, const Workspace& ws, const ConstraintRow& row, const ContactPoint& cp);

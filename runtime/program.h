@@ -19,6 +19,7 @@
 
 #include "runtime/engine.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/small_qr.h"
 #include "runtime/tape.h"
 
 namespace kanesim::rt {
@@ -204,6 +205,12 @@ struct Program {
   double loop_length = 1.0;             // length scale of the position tolerance (m)
   int dof = 0;                          // nu - loop_rank
   std::vector<int> redundant_rows;      // rows pivoted QR of A^T leaves out at the assembled start  (n_c - rank)
+  // The rows the reduced path's projection and equations use (rows of ws.A, in order):
+  // every row during assembly, then the independent ones (redundant rows left out: they
+  // hold with the others), unless the minimum-norm share of the multipliers is needed
+  // (--reactions min-norm, friction reading an indeterminate normal force).
+  std::vector<int> active_rows;
+  std::vector<int> active_of_row;       // row -> its index in active_rows, or -1
   // Statically indeterminate constraint-force components (the multipliers' null space
   // moves them), decided at the assembled start by FindIndeterminateReactions:
   std::vector<std::uint8_t> reaction_indeterminate;  // per flat joint, bit k: reaction component k (0-2 force, 3-5 torque)
@@ -289,14 +296,15 @@ struct Workspace {
   Eigen::VectorXd phi_drift;        // phi of the integrator's state before projection  (n_c)  filled by EvalSignals
   Eigen::VectorXd psi;              // velocity residuals A u + b  (n_c)  filled by ProjectState
   Eigen::VectorXd cbias;            // acceleration residuals with free udot = 0  (n_c)  filled by SolveConstrained
-  Eigen::MatrixXd A;                // constraint Jacobian on the free speeds  (n_c x nu)  filled by ConstraintJacobian
-  Eigen::MatrixXd A_dep;            // columns of A for the dependent speeds  (n_c x rank)  filled by ProjectState
+  Eigen::MatrixXd A;                // constraint Jacobian on the free speeds, active rows  (n_a x nu)  filled by ConstraintJacobian
+  Eigen::MatrixXd A_dep;            // columns of A for the dependent speeds  (n_a x rank)  filled by ProjectState
   std::optional<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>> qr_A;    // partition choice  filled by ProjectState
-  std::optional<Eigen::HouseholderQR<Eigen::MatrixXd>> qr_dep;        // A_dep = Q R  filled by ProjectState
+  SmallQR qr_dep;                   // A_dep = Q R  filled by ProjectState
   std::vector<int> dep, ind;        // free speed indices: dependent (rank), independent (nu - rank)  filled by ProjectState
   bool partition_valid = false;     // dep/ind chosen  set by ProjectState
   long partition_changes = 0;       // how often the partition was re-chosen  filled by ProjectState
-  Eigen::VectorXd vc, xd;           // scratch  (n_c), (n_c)
+  Eigen::VectorXd vc, xd, vg;       // scratch  (n_a), (n_a), (n_a)
+  Eigen::VectorXd vcol;             // a column of the constraint Jacobian, every row  (n_c)  filled by ConstraintColumn's callers
   Eigen::VectorXd du_full;          // a step in full speeds  (nu_all)  filled by ProjectState
   Eigen::MatrixXd beta;             // constrained basis in free-speed space  (nu x nind)  filled by SolveConstrained
   Eigen::MatrixXd Mfull, MB;        // symmetric M, M beta  (nu x nu), (nu x nind)  filled by SolveConstrained

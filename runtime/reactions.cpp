@@ -7,7 +7,9 @@
 //   M udot - f = A^T lambda                                                         (1)
 // and with A_dep = Q R (constraints.cpp) the dependent rows give R^T Q1^T lambda = g_dep,
 // whose minimum-norm solution is lambda = Q [R^-T g_dep; 0]                         (2)
-// (redundant rows get the minimum-norm share: statically indeterminate).
+// (redundant rows get the minimum-norm share: statically indeterminate; when they are
+// not among the active rows, Program::active_rows, their multipliers are zero, another
+// particular solution with the same determinate components).
 // The loop force of row i acts between the cut joint's bodies at p_b (virtual work of
 // lambda_i delta phi_i, constraints.cpp eqs. 1-2):
 //   translation row:  force lambda_i d on B, -lambda_i d on A, both at p_b           (3)
@@ -74,10 +76,9 @@ void LoopMultipliers(const Program& p, Workspace& ws) {
   // (2): R^T w = g_dep, lambda = Q [w; 0].
   ws.vc.setZero();
   ws.vc.head(rank) = ws.g_dep.head(rank);
-  ws.qr_dep->matrixQR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().transpose().solveInPlace(
-      ws.vc.head(rank));
-  ws.vc.applyOnTheLeft(ws.qr_dep->householderQ());
-  ws.lambda_c = ws.vc;
+  ws.qr_dep.SolveRt(ws.vc.data());
+  ws.qr_dep.ApplyQ(&ws.vc);
+  for (size_t k = 0; k < p.active_rows.size(); ++k) ws.lambda_c[p.active_rows[k]] = ws.vc[static_cast<Eigen::Index>(k)];
 }
 
 namespace {

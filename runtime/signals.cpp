@@ -222,11 +222,12 @@ double LoopDriveForce(const Program& p, Workspace& ws, int r) {
   if (p.rows.empty() || p.loop_rank == 0) return d;
   if (p.solver == SolverPath::Sparse) {
     // The multipliers are known (kane_sparse.cpp eq. 4): G_r = drive_r + (A^T lambda)_r.
-    ConstraintColumn(p, ws, r, &ws.vc);
-    return d - ws.vc.dot(ws.lambda_c);
+    ConstraintColumn(p, ws, r, &ws.vcol);
+    return d - ws.vcol.dot(ws.lambda_c);
   }
-  ConstraintColumn(p, ws, r, &ws.vc);
-  SolveDependent(ws, ws.vc, &ws.xd);
+  ConstraintColumn(p, ws, r, &ws.vcol);
+  GatherActive(p, ws.vcol, &ws.vg);
+  SolveDependent(ws, ws.vg, &ws.xd);
   for (int k = 0; k < p.loop_rank; ++k)
     d -= ws.xd[k] * DriveForce(p, ws, p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]);
   return d;

@@ -222,8 +222,11 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
 
 void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
-  p.solver = SolverPath::Dense;  // assembly works on the reduced path's arrays
+  p.solver = SolverPath::Dense;  // assembly works on the reduced path's arrays, every row
   p.loop_rank = 0;
+  p.active_rows.resize(p.rows.size());
+  p.active_of_row.resize(p.rows.size());
+  for (size_t i = 0; i < p.rows.size(); ++i) p.active_rows[i] = p.active_of_row[i] = static_cast<int>(i);
   auto wsp = MakeWorkspace(p);
   Workspace& ws = *wsp;
   const auto nc = static_cast<Eigen::Index>(p.rows.size());
@@ -369,6 +372,18 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   dof << "degrees of freedom " << p.dof << " = " << p.nu << " free speeds - rank " << p.loop_rank
       << " of the " << nc << "-row constraint Jacobian at the assembled start";
   p.notes.push_back(dof.str());
+  // From here on the redundant rows hold with the others: the reduced path leaves them
+  // out (docs/constraints.md "Redundant rows"), unless the minimum-norm multipliers are
+  // needed, which take every row.
+  const bool min_norm = p.options.indeterminate == IndeterminateReactions::MinNorm || !p.friction_joints.empty();
+  if (!min_norm && !p.redundant_rows.empty()) {
+    p.active_rows.clear();
+    for (size_t i = 0; i < p.rows.size(); ++i) {
+      const bool redundant = std::binary_search(p.redundant_rows.begin(), p.redundant_rows.end(), static_cast<int>(i));
+      p.active_of_row[i] = redundant ? -1 : static_cast<int>(p.active_rows.size());
+      if (!redundant) p.active_rows.push_back(static_cast<int>(i));
+    }
+  }
   // The assembled start: the state the integrators begin from.
   for (int i = 0; i < p.nq; ++i) p.y0[static_cast<size_t>(i)] = ws.q[p.q_free[static_cast<size_t>(i)]];
   for (int i = 0; i < p.nu; ++i) p.y0[static_cast<size_t>(p.nq + i)] = ws.u[p.u_free[static_cast<size_t>(i)]];

@@ -1,0 +1,92 @@
+// Householder QR of a small m x n matrix (m >= n) in plain loops, for the dependent block
+// of closed loops (runtime/constraints.cpp): a few rows and columns per loop, factored
+// twice per right-hand side. Eigen's dynamic-size HouseholderQR spends most of its time
+// in block and expression set-up at these sizes (measured on the four-bar, 2 x 2: 23 % of
+// the right-hand side in the QR, its Q applications and triangular solves).
+//
+// A = Q R with Q = H_0 H_1 ... H_{n-1}, H_k = I - tau_k v_k v_k^T, v_k(k) = 1 and its
+// entries below the diagonal stored in column k under R (LAPACK's layout).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+namespace kanesim::rt {
+
+class SmallQR {
+ public:
+  void Resize(Eigen::Index m, Eigen::Index n) {
+    qr_.setZero(m, n);
+    tau_.setZero(n);
+  }
+  Eigen::Index Cols() const { return qr_.cols(); }
+  double DiagAbs(Eigen::Index k) const { return std::fabs(qr_(k, k)); }
+
+  void Compute(const Eigen::MatrixXd& A) {
+    qr_ = A;  // same size: no allocation
+    const Eigen::Index m = qr_.rows(), n = qr_.cols();
+    for (Eigen::Index k = 0; k < n; ++k) {
+      double* c = &qr_(0, k);
+      double norm2 = 0.0;
+      for (Eigen::Index i = k + 1; i < m; ++i) norm2 += c[i] * c[i];
+      const double x0 = c[k];
+      if (norm2 == 0.0) {  // already upper triangular in this column
+        tau_[k] = 0.0;
+        continue;
+      }
+      const double alpha = x0 > 0.0 ? -std::sqrt(x0 * x0 + norm2) : std::sqrt(x0 * x0 + norm2);
+      const double v0 = x0 - alpha;
+      for (Eigen::Index i = k + 1; i < m; ++i) c[i] /= v0;  // v = [1; c(k+1:) / v0]
+      tau_[k] = (alpha - x0) / alpha;
+      c[k] = alpha;
+      for (Eigen::Index j = k + 1; j < n; ++j) {  // H_k applied to the remaining columns
+        double* a = &qr_(0, j);
+        double s = a[k];
+        for (Eigen::Index i = k + 1; i < m; ++i) s += c[i] * a[i];
+        s *= tau_[k];
+        a[k] -= s;
+        for (Eigen::Index i = k + 1; i < m; ++i) a[i] -= s * c[i];
+      }
+    }
+  }
+
+  // v <- Q^T v (v has m entries).
+  void ApplyQt(Eigen::VectorXd* v) const {
+    for (Eigen::Index k = 0; k < qr_.cols(); ++k) Reflect(k, v->data());
+  }
+  // v <- Q v.
+  void ApplyQ(Eigen::VectorXd* v) const {
+    for (Eigen::Index k = qr_.cols(); k-- > 0;) Reflect(k, v->data());
+  }
+  // x(0:n) <- R^-1 x(0:n).
+  void SolveR(double* x) const {
+    for (Eigen::Index i = qr_.cols(); i-- > 0;) {
+      double s = x[i];
+      for (Eigen::Index j = i + 1; j < qr_.cols(); ++j) s -= qr_(i, j) * x[j];
+      x[i] = s / qr_(i, i);
+    }
+  }
+  // x(0:n) <- R^-T x(0:n).
+  void SolveRt(double* x) const {
+    for (Eigen::Index i = 0; i < qr_.cols(); ++i) {
+      double s = x[i];
+      for (Eigen::Index j = 0; j < i; ++j) s -= qr_(j, i) * x[j];
+      x[i] = s / qr_(i, i);
+    }
+  }
+
+ private:
+  void Reflect(Eigen::Index k, double* v) const {
+    const double* c = &qr_(0, k);
+    double s = v[k];
+    for (Eigen::Index i = k + 1; i < qr_.rows(); ++i) s += c[i] * v[i];
+    s *= tau_[k];
+    v[k] -= s;
+    for (Eigen::Index i = k + 1; i < qr_.rows(); ++i) v[i] -= s * c[i];
+  }
+
+  Eigen::MatrixXd qr_;
+  Eigen::VectorXd tau_;
+};
+
+}  // namespace kanesim::rt
