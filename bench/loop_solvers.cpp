@@ -117,10 +117,10 @@ void BM_LadderRhsMultiplier(benchmark::State& s) { Rhs(s, rt::SolverPath::Sparse
 void BM_LadderRunReduced(benchmark::State& s) { Run(s, rt::SolverPath::Dense); }
 void BM_LadderRunMultiplier(benchmark::State& s) { Run(s, rt::SolverPath::Sparse); }
 
-BENCHMARK(BM_LadderRhsReduced)->Arg(1)->Arg(2)->Arg(3)->Arg(4)->Arg(6)->Arg(8)->Arg(16)->Arg(32)->Arg(64);
-BENCHMARK(BM_LadderRhsMultiplier)->Arg(1)->Arg(2)->Arg(3)->Arg(4)->Arg(6)->Arg(8)->Arg(16)->Arg(32)->Arg(64)->Arg(128);
-BENCHMARK(BM_LadderRunReduced)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LadderRunMultiplier)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LadderRhsReduced)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(20)->Arg(24)->Arg(32)->Arg(64);
+BENCHMARK(BM_LadderRhsMultiplier)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(20)->Arg(24)->Arg(32)->Arg(64)->Arg(128);
+BENCHMARK(BM_LadderRunReduced)->Arg(1)->Arg(4)->Arg(8)->Arg(16)->Arg(20)->Arg(24)->Arg(32)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LadderRunMultiplier)->Arg(1)->Arg(4)->Arg(8)->Arg(16)->Arg(20)->Arg(24)->Arg(32)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

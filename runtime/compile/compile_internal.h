@@ -42,7 +42,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors);
 // The reduced (dense) or multiplier (sparse) path for a scene with constraints, after
 // AssembleLoops; auto takes the multiplier form from this many free speeds on
 // (bench/loop_solvers.cpp).
-inline constexpr int kSparseLoopMinSpeeds = 40;
+inline constexpr int kSparseLoopMinSpeeds = 60;
 void ChooseLoopSolver(Program& p);
 
 // Relative threshold on |R_ii| / max |R_ii| of column-pivoted QR below which the

@@ -82,25 +82,32 @@ TEST(MultiplierForm, SpatialFourBarAgreesWithReducedForm) {
 const std::string kLadder = "bench/models/fourbar_ladder.mech";
 
 TEST(MultiplierForm, AutomaticChoiceFollowsTheLadderBenchmark) {
-  // bench/loop_solvers: the reduced form is cheaper up to about 13 loops (39 speeds), the
+  // bench/loop_solvers: the reduced form is cheaper up to about 20 loops (60 speeds), the
   // multiplier form from there on. If this fails, the threshold or the reason changed.
-  auto small = LoadModel(kRoot + "/" + kLadder, {{"N", "4"}});
-  auto large = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}});
+  auto small = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}});
+  auto large = LoadModel(kRoot + "/" + kLadder, {{"N", "20"}});
   ASSERT_TRUE(small && small->prog && large && large->prog);
   EXPECT_EQ(rt::Summarize(*small->prog).solver, rt::SolverPath::Dense);
   const rt::ProgramSummary s = rt::Summarize(*large->prog);
   EXPECT_EQ(s.solver, rt::SolverPath::Sparse);
-  EXPECT_NE(s.solver_reason.find("measured cheaper than the reduced form from 40 free speeds"), std::string::npos)
+  EXPECT_NE(s.solver_reason.find("measured cheaper than the reduced form from 60 free speeds"), std::string::npos)
       << s.solver_reason;
-  EXPECT_EQ(s.dof, 16);
+  EXPECT_EQ(s.dof, 20);
+}
+
+rt::CompileOptions Multiplier() {
+  rt::CompileOptions o;
+  o.solver = rt::SolverPath::Sparse;
+  return o;
 }
 
 TEST(MultiplierForm, LadderKeepsEnergyAndConstraintsAndMatchesReducedForm) {
   // 16 loops, 48 bodies: conservative, so kinetic + potential energy is constant; every
   // loop's position and velocity residual stays at round-off (the projection) and the
   // trajectory is the reduced form's to the tolerance.
-  auto l = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}});
+  auto l = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}}, Multiplier());
   ASSERT_TRUE(l && l->prog);
+  ASSERT_EQ(rt::Summarize(*l->prog).solver, rt::SolverPath::Sparse);
   std::vector<std::string> names = {"kinetic_energy", "potential_energy"};
   for (int i = 1; i <= 16; i += 5) {
     names.push_back("jr[" + std::to_string(i) + "].q");
@@ -133,8 +140,8 @@ TEST(MultiplierForm, LadderKeepsEnergyAndConstraintsAndMatchesReducedForm) {
 TEST(MultiplierForm, RebindKeepsTheSparsePattern) {
   // A sweep re-binds parameters: the symbolic analysis is reused and the run still closes
   // its loops (a wider start swing).
-  auto l = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}});
-  ASSERT_TRUE(l && l->prog);
+  auto l = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}}, Multiplier());
+  ASSERT_TRUE(l && l->prog && l->prog->sparse_symbolic);
   std::vector<double> values = l->prog->param_values;
   for (size_t i = 0; i < l->mech.params.size(); ++i)
     if (l->mech.params[i].name == "swing") values[i] = 0.5;
