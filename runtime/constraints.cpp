@@ -415,6 +415,22 @@ void ConstraintRates(const Program& p, Workspace& ws) {
 
 namespace {
 
+// After the projection's iterations: 1 (recoverable) when a row is still above kLoose.
+int CheckClosed(const Program& p, Workspace& ws) {
+  const double r = ws.phi.cwiseAbs().maxCoeff();
+  if (r <= kLoose * p.loop_length) return 0;
+  ws.error = "closed loop cannot be closed (position residual " + std::to_string(r) + " at time " +
+             std::to_string(ws.t) + ")";
+  return 1;
+}
+
+// q += N(q) du_full, and the kinematics of the new positions.
+void StepCoordinates(const Program& p, Workspace& ws) {
+  ApplyCoordinateStep(p, ws, ws.du_full);
+  PositionKinematics(p, ws);
+  VelocityKinematics(p, ws);
+}
+
 // `factored`: the factorization went through with a small pivot ratio (else it met an
 // exactly zero pivot).
 int SparseSingular(const Program& p, Workspace& ws, bool factored) {
@@ -433,7 +449,7 @@ int SparseSingular(const Program& p, Workspace& ws, bool factored) {
 // ProjectState on the sparse path: the steps of kane.h SparseCorrection, chord steps with
 // the previous evaluation's factorization while they contract, Newton after.
 int ProjectStateSparse(const Program& p, Workspace& ws) {
-  const double tight = kTight * p.loop_length, loose = kLoose * p.loop_length;
+  const double tight = kTight * p.loop_length;
   ConstraintResiduals(p, ws);
   bool newton = !SparseHasFactor(ws);
   double last = INFINITY;
@@ -444,18 +460,11 @@ int ProjectStateSparse(const Program& p, Workspace& ws) {
     last = r;
     if (newton && !ws.sparse_ready && FactorSparse(p, ws) != 0) return SparseSingular(p, ws, false);
     if (int s = SparseCorrection(p, ws, ws.phi, &ws.du_full); s != 0) return s;
-    ApplyCoordinateStep(p, ws, ws.du_full);
-    PositionKinematics(p, ws);
-    VelocityKinematics(p, ws);
+    StepCoordinates(p, ws);
     ws.sparse_ready = false;
     ConstraintResiduals(p, ws);
   }
-  const double r = ws.phi.cwiseAbs().maxCoeff();
-  if (r > loose) {
-    ws.error = "closed loop cannot be closed (position residual " + std::to_string(r) + " at time " +
-               std::to_string(ws.t) + ")";
-    return 1;
-  }
+  if (int s = CheckClosed(p, ws); s != 0) return s;
   if (!ws.sparse_ready && FactorSparse(p, ws) != 0) return SparseSingular(p, ws, false);
   if (!(ws.sparse_rcond > kSparseSingular)) return SparseSingular(p, ws, true);
   ConstraintRates(p, ws);
@@ -471,7 +480,7 @@ int ProjectStateSparse(const Program& p, Workspace& ws) {
 int ProjectState(const Program& p, Workspace& ws) {
   if (p.rows.empty()) return 0;
   if (p.solver == SolverPath::Sparse) return ProjectStateSparse(p, ws);
-  const double tight = kTight * p.loop_length, loose = kLoose * p.loop_length;
+  const double tight = kTight * p.loop_length;
   const int rank = p.loop_rank;
   for (int it = 0;; ++it) {
     ConstraintResiduals(p, ws);
@@ -484,16 +493,9 @@ int ProjectState(const Program& p, Workspace& ws) {
     SolveDependent(ws, ws.vg, &ws.xd);
     ws.du_full.setZero();
     for (int k = 0; k < rank; ++k) ws.du_full[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] = -ws.xd[k];
-    ApplyCoordinateStep(p, ws, ws.du_full);
-    PositionKinematics(p, ws);
-    VelocityKinematics(p, ws);
+    StepCoordinates(p, ws);
   }
-  const double r = ws.phi.cwiseAbs().maxCoeff();
-  if (r > loose) {
-    ws.error = "closed loop cannot be closed (position residual " + std::to_string(r) + " at time " +
-               std::to_string(ws.t) + ")";
-    return 1;
-  }
+  if (int s = CheckClosed(p, ws); s != 0) return s;
   if (int s = CheckDisksUpright(p, ws); s != 0) return s;
   if (rank == 0) return 0;
   // Dependent speeds from the velocity constraints (7): u_dep -= A_dep^+ (A u + b).
