@@ -25,11 +25,12 @@ cmake --build "$BUILD_DIR" -j2 --target kanesim rhs_chain
 CMEEL=$("$PY" -c 'import cmeel, os; print(os.path.join(os.path.dirname(cmeel.__file__), "..", "cmeel.prefix"))' 2>/dev/null ||
         echo "$HERE/.venv/lib/python3.11/site-packages/cmeel.prefix")
 PIN_DRIVER="$BUILD_DIR/bench/pin_driver"
-if [ ! -x "$PIN_DRIVER" ] || [ "$HERE/pin/pin_driver.cpp" -nt "$PIN_DRIVER" ]; then
+TABLEAU="$ROOT/runtime/sim/dop853_tableau.h"  # shared with kanesim's own DOP853
+if [ ! -x "$PIN_DRIVER" ] || [ "$HERE/pin/pin_driver.cpp" -nt "$PIN_DRIVER" ] || [ "$TABLEAU" -nt "$PIN_DRIVER" ]; then
     echo "building $PIN_DRIVER"
     g++ -std=c++17 -O3 -DNDEBUG -DBOOST_MPL_LIMIT_LIST_SIZE=30 -DBOOST_MPL_LIMIT_VECTOR_SIZE=30 \
         -DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS -DBOOST_FUSION_INVOKE_MAX_ARITY=12 \
-        -I"$CMEEL/include" -I/usr/include/eigen3 "$HERE/pin/pin_driver.cpp" -o "$PIN_DRIVER"
+        -I"$CMEEL/include" -I/usr/include/eigen3 -I"$ROOT" "$HERE/pin/pin_driver.cpp" -o "$PIN_DRIVER"
 fi
 
 for n in 10 50 100; do

@@ -24,11 +24,20 @@ inline rt::SolverPath SolverFromName(const std::string& s) {
   return rt::SolverPath::Auto;
 }
 
+// The integrator names of --integrator (run, sweep, test) and of `integrator = ...` in
+// sweep and golden files; the CLI11 lists in cmd_run.cpp and cmd_sweep.cpp say the same.
+inline constexpr const char* kIntegratorNames = "auto, ida, cvode, cvode-bdf, arkode, dop853";
+
 inline rt::IntegratorKind IntegratorFromName(const std::string& s) {
   if (s == "ida") return rt::IntegratorKind::IDA;
   if (s == "cvode" || s == "cvode-bdf") return rt::IntegratorKind::CVODE;
   if (s == "arkode") return rt::IntegratorKind::ARKODE;
+  if (s == "dop853") return rt::IntegratorKind::DOP853;
   return rt::IntegratorKind::Auto;
+}
+
+inline bool IsIntegratorName(const std::string& s) {
+  return s == "auto" || s == "cvode-bdf" || IntegratorFromName(s) != rt::IntegratorKind::Auto;
 }
 
 // Times and tolerances: given values (NaN = not given) over the experiment annotation

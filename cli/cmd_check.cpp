@@ -38,6 +38,7 @@ const char* IntegratorName(rt::IntegratorKind k) {
     case rt::IntegratorKind::IDA: return "IDA";
     case rt::IntegratorKind::CVODE: return "CVODE";
     case rt::IntegratorKind::ARKODE: return "ARKODE";
+    case rt::IntegratorKind::DOP853: return "DOP853";
   }
   return "?";
 }

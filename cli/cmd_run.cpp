@@ -96,6 +96,7 @@ rt::IntegratorKind IntegratorFromName(const std::string& s) {
   if (s == "ida") return rt::IntegratorKind::IDA;
   if (s == "cvode" || s == "cvode-bdf") return rt::IntegratorKind::CVODE;
   if (s == "arkode") return rt::IntegratorKind::ARKODE;
+  if (s == "dop853") return rt::IntegratorKind::DOP853;
   return rt::IntegratorKind::Auto;
 }
 
@@ -210,7 +211,7 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
       ->allow_extra_args(false);
   run->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   run->add_option("--integrator", a->integrator, "Time integrator")
-      ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode"}));
+      ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode", "dop853"}));
   run->add_option("--linear-solver", a->linear_solver,
                   "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
       ->check(CLI::IsMember({"auto", "dense", "klu"}));

@@ -103,6 +103,8 @@ bool BuildConfig(SweepArgs& a, batch::SweepConfig* c, std::vector<batch::Block>*
                             {file.interval, &a.interval}, {file.rtol, &a.rtol}, {file.atol, &a.atol}})
       if (std::isnan(*to)) *to = from;
     if (a.integrator == "auto" && !file.integrator.empty()) a.integrator = file.integrator;
+    if (!IsIntegratorName(a.integrator))
+      return Fail(a.file + ": integrator = \"" + a.integrator + "\": unknown (" + kIntegratorNames + ")");
     if (a.solver == "auto" && !file.solver.empty()) a.solver = file.solver;
     if (a.out_dir.empty()) a.out_dir = file.output_dir;
     a.trajectories = a.trajectories || file.trajectories;
@@ -329,7 +331,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code) {
   sw->add_option("--atol", a->atol, "Absolute tolerance (default: = rtol)");
   sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   sw->add_option("--integrator", a->integrator, "Time integrator")
-      ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode"}));
+      ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode", "dop853"}));
   sw->add_option("--linear-solver", a->linear_solver,
                  "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
       ->check(CLI::IsMember({"auto", "dense", "klu"}));

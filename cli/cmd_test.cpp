@@ -95,6 +95,12 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     r.report = "ERROR " + spec_path + "\n    " + err + "\n";
     return r;
   }
+  if (!IsIntegratorName(spec.integrator)) {
+    r.outcome = Outcome::kError;
+    r.report = "ERROR " + spec_path + "\n    run.integrator = \"" + spec.integrator + "\": unknown (" +
+               kIntegratorNames + ")\n";
+    return r;
+  }
   const std::string label = spec.name;
   auto fail = [&](const std::string& why) {
     r.outcome = Outcome::kFail;

@@ -133,24 +133,20 @@ void ChooseSolver(Program& p) {
 // - a scene whose force elements have a rate above kStiffRate (or a stiffness given by
 //   an expression, which the compiler cannot bound) is stiff and gets IDA (BDF): on the
 //   1e8 N/m stress scene IDA takes 130 steps where explicit RK needs 182 050;
-// - a non-stiff scene gets ARKODE (Fehlberg 8(7)) when rtol <= kTightRtol or the horizon
-//   spans at least kLongHorizon natural time units: at a given rtol its error grows far
-//   less with the horizon (chain N = 10 over 5 s at rtol 1e-8: 1.2e-6 against CVODE's
-//   3.1e-5, at 2.3x the time) and it keeps energy 10x better than Adams (17 rtol of drift
-//   over 100 pendulum periods against 180); CVODE (Adams) otherwise (best in 19 of 23
-//   benchmark rows at the 1e-3 and 1e-6 error levels).
-// The ARKODE rules need a smooth right-hand side: a high-order explicit method loses to
-// Adams on forces that switch (measured: the damped driven pendulum's tanh(u/0.01)
-// friction, rtol 1e-7: ARKODE 2.6e-4 from the converged solution, CVODE 1.1e-5), and on
-// the projected constraint scenes, whose dependent-speed partition may be re-chosen
-// (the Chaplygin sleigh stops with step-size underflow under ARKODE). So they apply only
-// to scenes without loops, contacts, joint friction or force laws that read speeds.
-// The natural time unit is the fastest of sqrt(l/g) over the bodies (l: the body's size,
-// the largest of its mass-centre and child-joint offsets) and 1/rate over the springs
-// and dampers. A scene with neither (a torque-free body) has no horizon rule.
-constexpr double kTightRtol = 1e-10;
-constexpr double kLongHorizon = 20.0;
-
+// - a smooth non-stiff scene gets our DOP853 (runtime/sim/integrator_dop853.cpp): on
+//   every tree problem of the benchmark (double pendulum, chains of 5-100 links, 1-10 s)
+//   it reached every error level (1e-3, 1e-6, 1e-9) in less time than ARKODE's Fehlberg
+//   8(7) and CVODE's Adams (0.3-0.9x the better of the two; e.g. the 10-chain over 1 s at
+//   1e-6: 0.90 ms, ARKODE 2.15 ms, CVODE 1.87 ms), at short horizons and loose
+//   tolerances as well as long and tight ones; it keeps energy like ARKODE (16 rtol of
+//   drift over 10 s of the double pendulum at rtol 1e-8);
+// - CVODE (Adams) otherwise.
+// DOP853 needs a smooth right-hand side: a high-order explicit method loses to Adams on
+// forces that switch (measured with ARKODE: the damped driven pendulum's tanh(u/0.01)
+// friction, rtol 1e-7: 2.6e-4 from the converged solution, CVODE 1.1e-5), and on the
+// projected constraint scenes, whose dependent-speed partition may be re-chosen (the
+// Chaplygin sleigh stops with step-size underflow under ARKODE). So it applies only to
+// scenes without loops, contacts, joint friction or force laws that read speeds.
 void ChooseIntegrator(Program& p) {
   std::ostringstream iw;
   double max_rate = 0.0;
@@ -175,33 +171,6 @@ void ChooseIntegrator(Program& p) {
     }
   }
 
-  // Natural time unit of the scene and the run's horizon and tolerance.
-  double unit = INFINITY;
-  std::string unit_from;
-  if (max_rate > 0.0) {
-    unit = 1.0 / max_rate;
-    unit_from = "1/rate of '" + stiffest + "'";
-  }
-  double g = p.has_gravity ? p.gravity_W.norm() : 0.0;
-  if (g > 0.0) {
-    std::vector<double> size(p.bodies.size(), 0.0);
-    for (size_t b = 0; b < p.bodies.size(); ++b) size[b] = p.bodies[b].p_BBcm.norm();
-    for (const auto& j : p.joints)
-      if (j.parent >= 0) size[static_cast<size_t>(j.parent)] = std::max(size[static_cast<size_t>(j.parent)], j.p_PJ.norm());
-    for (size_t b = 0; b < p.bodies.size(); ++b) {
-      if (!(size[b] > 0.0) || !(p.bodies[b].mass > 0.0)) continue;
-      double t = std::sqrt(size[b] / g);
-      if (t < unit) {
-        unit = t;
-        unit_from = "sqrt(l/g) of body '" + p.bodies[b].name + "'";
-      }
-    }
-  }
-  const flat::Experiment& ex = p.mech->experiment;
-  double t0 = std::isnan(p.options.start_time) ? ex.start_time : p.options.start_time;
-  double t1 = std::isnan(p.options.stop_time) ? ex.stop_time : p.options.stop_time;
-  double rtol = std::isnan(p.options.rtol) ? ex.tolerance : p.options.rtol;
-  double units = std::isfinite(unit) ? std::fabs(t1 - t0) / unit : 0.0;
   std::string rough;  // why the right-hand side may not be smooth; empty when it is
   if (!p.loops.empty() || !p.contacts.empty())
     rough = "closed loops or contacts (projected constraints)";
@@ -224,22 +193,17 @@ void ChooseIntegrator(Program& p) {
     p.integrator = IntegratorKind::IDA;
     iw << "line force '" << stiffest << "' has rate max(sqrt(k/m), d/m) = " << max_rate << " 1/s >= " << kStiffRate
        << " 1/s: stiff, IDA (BDF)";
-  } else if (rtol <= kTightRtol && rough.empty()) {
-    p.integrator = IntegratorKind::ARKODE;
-    iw << "non-stiff ODE at rtol " << rtol << " <= " << kTightRtol << ": ARKODE (8th order)";
-  } else if (units >= kLongHorizon && rough.empty()) {
-    p.integrator = IntegratorKind::ARKODE;
-    iw << "non-stiff ODE over a long horizon (" << std::fabs(t1 - t0) << " s = " << units << " natural time units >= "
-       << kLongHorizon << "; unit " << unit << " s, " << unit_from << "): ARKODE (8th order)";
   } else {
-    p.integrator = IntegratorKind::CVODE;
     iw << "non-stiff ODE";
     if (max_rate > 0.0) iw << " (fastest force-element rate " << max_rate << " 1/s < " << kStiffRate << " 1/s)";
-    if (!rough.empty())
-      iw << ", not smooth enough for the 8th-order ARKODE (" << rough << ")";
-    else if (std::isfinite(unit))
-      iw << ", horizon " << units << " natural time units < " << kLongHorizon;
-    iw << ": CVODE (Adams)";
+    if (rough.empty()) {
+      p.integrator = IntegratorKind::DOP853;
+      iw << " with a smooth right-hand side: DOP853 (8th-order Runge-Kutta; the fastest at every error level on "
+            "the tree benchmark)";
+    } else {
+      p.integrator = IntegratorKind::CVODE;
+      iw << ", not smooth enough for an 8th-order Runge-Kutta (" << rough << "): CVODE (Adams)";
+    }
   }
   p.integrator_reason = iw.str();
 }

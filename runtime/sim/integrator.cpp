@@ -18,6 +18,7 @@ const char* MethodName(Method m) {
     case Method::CvodeAdams: return "CVODE-Adams";
     case Method::CvodeBdf: return "CVODE-BDF";
     case Method::ArkodeErk: return "ARKODE-ERK";
+    case Method::Dop853: return "DOP853";
   }
   return "?";
 }
@@ -28,6 +29,7 @@ const char* MethodDescription(Method m) {
     case Method::CvodeAdams: return "CVODE: variable-order Adams-Moulton (1-12), fixed-point iteration";
     case Method::CvodeBdf: return "CVODE: variable-order BDF (1-5), Newton, dense LU, difference-quotient Jacobian";
     case Method::ArkodeErk: return "ARKODE ERKStep: explicit Runge-Kutta, Hermite dense output";
+    case Method::Dop853: return "DOP853: explicit Runge-Kutta 8(5,3) of Dormand-Prince, dense output of order 7";
   }
   return "?";
 }
@@ -92,6 +94,7 @@ static std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const do
     case Method::CvodeAdams:
     case Method::CvodeBdf: return MakeCvodeStepper(rhs, t0, y0, stop, options, error);
     case Method::ArkodeErk: return MakeArkodeStepper(rhs, t0, y0, stop, options, error);
+    case Method::Dop853: return MakeDop853Stepper(rhs, t0, y0, stop, options, error);
   }
   *error = "unknown integration method";
   return nullptr;

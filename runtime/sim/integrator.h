@@ -1,4 +1,4 @@
-// Time integration of an ODE y' = f(t, y) with SUNDIALS, generic over the right-hand
+// Time integration of an ODE y' = f(t, y) with SUNDIALS or our DOP853, generic over the right-hand
 // side so that it can be tested on closed-form ODEs without a mechanism.
 //
 // Output instants come from the integrator's own dense output: each solver is run in
@@ -28,6 +28,11 @@
 //     Verner 6(5)    203 steps 2e-4    1003 steps 1e-6   7002 steps 3e-9
 //   and with 10000 output rows, Hermite degree 3 (no extra f) was 100x less accurate,
 //   Lagrange degree 5 (no extra f) 1.5-4x less accurate than Hermite degree 5.
+// - DOP853: our own Dormand-Prince 8(5,3) (runtime/sim/integrator_dop853.cpp; Hairer,
+//   Norsett & Wanner, Solving ODEs I, sec. II.10): 12 evaluations of f per step (the
+//   13th stage is the next step's first), error estimate from its 5th- and 3rd-order
+//   embedded solutions, and its 7th-order dense output, which costs 3 evaluations of f
+//   once per step that holds output instants (not per instant).
 #pragma once
 
 #include <functional>
@@ -48,7 +53,7 @@ class OdeSystem {
   virtual std::string FailureCause() const { return "the right-hand side reported a failure"; }
 };
 
-enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk };
+enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };
 const char* MethodName(Method m);         // "IDA", "CVODE-Adams", ...
 const char* MethodDescription(Method m);  // one line: order, iteration, linear solver
 

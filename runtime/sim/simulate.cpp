@@ -43,6 +43,7 @@ Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf) {
   switch (kind) {
     case rt::IntegratorKind::CVODE: return cvode_bdf ? Method::CvodeBdf : Method::CvodeAdams;
     case rt::IntegratorKind::ARKODE: return Method::ArkodeErk;
+    case rt::IntegratorKind::DOP853: return Method::Dop853;
     case rt::IntegratorKind::IDA:
     case rt::IntegratorKind::Auto: return Method::IDA;
   }

@@ -1,4 +1,4 @@
-// Internal to runtime/sim: one SUNDIALS solver behind a small interface, and the guard
+// Internal to runtime/sim: one solver (SUNDIALS' or our DOP853) behind a small interface, and the guard
 // around the user's right-hand side that the solvers call. Not part of the public API.
 #pragma once
 
@@ -54,6 +54,9 @@ std::unique_ptr<Stepper> MakeIdaStepper(GuardedRhs& rhs, double t0, const double
 std::unique_ptr<Stepper> MakeCvodeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                           const IntegratorOptions& options, std::string* error);
 std::unique_ptr<Stepper> MakeArkodeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                           const IntegratorOptions& options, std::string* error);
+// Our own DOP853 (runtime/sim/integrator_dop853.cpp): null when f fails at t0.
+std::unique_ptr<Stepper> MakeDop853Stepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                            const IntegratorOptions& options, std::string* error);
 
 // SUNDIALS error handler target: keeps the last message instead of printing it.

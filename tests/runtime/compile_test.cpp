@@ -85,7 +85,7 @@ TEST(Compile, SummaryCountsAndChoices) {
   EXPECT_EQ(s.dof, 5);
   EXPECT_EQ(s.grubler_dof, 5);
   EXPECT_EQ(s.solver, rt::SolverPath::Recursive);
-  EXPECT_EQ(s.integrator, rt::IntegratorKind::CVODE);
+  EXPECT_EQ(s.integrator, rt::IntegratorKind::DOP853);  // smooth and non-stiff
   EXPECT_FALSE(s.solver_reason.empty());
   EXPECT_FALSE(s.integrator_reason.empty());
 

@@ -46,7 +46,8 @@ struct Rows {
 class EveryMethod : public ::testing::TestWithParam<Method> {};
 
 INSTANTIATE_TEST_SUITE_P(Sim, EveryMethod,
-                         ::testing::Values(Method::IDA, Method::CvodeAdams, Method::CvodeBdf, Method::ArkodeErk),
+                         ::testing::Values(Method::IDA, Method::CvodeAdams, Method::CvodeBdf, Method::ArkodeErk,
+                                           Method::Dop853),
                          [](const ::testing::TestParamInfo<Method>& param_info) {
                            std::string s = MethodName(param_info.param);
                            for (char& c : s)

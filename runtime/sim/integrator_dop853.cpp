@@ -1,0 +1,378 @@
+// DOP853: the explicit Runge-Kutta pair of Dormand and Prince of order 8 with error
+// estimators of orders 5 and 3, adaptive steps, and its dense output of order 7.
+// Hairer, Norsett & Wanner, Solving Ordinary Differential Equations I, 2nd ed., Springer
+// 1993, sec. II.10 (the method and its step control), sec. II.6 (dense output), sec. II.4
+// (the initial step). Coefficients: runtime/sim/dop853_tableau.h.
+//
+// One step from (t, y) with size h, stages k_0 .. k_11 (k_0 = f(t, y), reused from the
+// previous step: the first stage is the last one's f, "FSAL"):
+//   k_s = f(t + c_s h, y + h sum_{j<s} a_sj k_j),   y1 = y + h sum_j b_j k_j          (1)
+// Error (one scalar for the step, scaled by sc_i = atol + rtol max(|y_i|, |y1_i|)):
+//   e5 = |sum_j E5_j k_j / sc|^2,  e3 = |sum_j E3_j k_j / sc|^2   (Euclidean norms)
+//   err = |h| e5 / sqrt(n (e5 + 0.01 e3))                                              (2)
+// a 5th-order estimate whose denominator, through the 3rd-order one, keeps it from
+// becoming too optimistic when h is large. The step is accepted when err <= 1; either way
+//   h_new = h min(kMaxGrow, max(kMinShrink, kSafety err^(-1/8)))                       (3)
+// (no growth right after a rejection). After an accepted step k_12 = f(t + h, y1).
+// Dense output at t + theta h, 0 <= theta <= 1, with dy = y1 - y:
+//   y(theta) = y + theta (r0 + (1 - theta) (r1 + theta (r2 + (1 - theta) (r3
+//              + theta (r4 + (1 - theta) (r5 + theta r6))))))                         (4)
+//   r0 = dy,  r1 = h k_0 - dy,  r2 = 2 dy - h (k_0 + k_12),  r_{3+m} = h sum_j D_mj k_j
+// where j runs over k_0 .. k_15 and k_13 .. k_15 are three more stages of (1) (rows 13..15
+// of the tableau). They cost 3 evaluations of f, spent only on steps that hold an output
+// instant; the further instants in that step cost no f at all.
+//
+// Failures: f returning > 0 in a step rejects it and retries with a quarter of h
+// (kMaxRhsFails in a row end the run); f returning < 0 ends it at once.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/sim/dop853_tableau.h"
+#include "runtime/sim/stepper.h"
+
+namespace kanesim::sim::detail {
+namespace {
+
+namespace tab = dop853;
+
+// Eq. (3)'s constants are those of the book's code. The clamps rarely bind: with 0.2 and 10
+// instead, the double pendulum (2 s) and the 20-chain (5 s) take the same steps.
+constexpr double kSafety = 0.9;         // Eq. (3)
+constexpr double kMinShrink = 1.0 / 3;  // Eq. (3): at most 3x smaller per step
+constexpr double kMaxGrow = 6.0;        // Eq. (3): at most 6x larger per step
+constexpr double kRhsShrink = 0.25;     // h after a recoverable failure of f
+constexpr int kMaxRhsFails = 10;        // recoverable failures of f in a row (as ARKODE's default)
+constexpr double kStretch = 1.01;       // a step within 1% of the stop time goes onto it
+constexpr double kMaxStepSlack = 1e-9;  // relative: what rounding may add to max_step
+
+// Advance's flags (>= 0 success).
+enum Flag : int { kOk = 0, kTooMuchWork = -1, kUnderflow = -2, kRhsRepeated = -3, kRhsFatal = -4 };
+
+class Dop853Stepper final : public Stepper {
+ public:
+  Dop853Stepper(GuardedRhs& rhs, double t0, double stop, const IntegratorOptions& options)
+      : rhs_(rhs),
+        n_(rhs.Size()),
+        options_(options),
+        stop_(stop),
+        t_(t0),
+        y_(static_cast<size_t>(n_)),
+        y_old_(static_cast<size_t>(n_)),
+        y_new_(static_cast<size_t>(n_)),
+        stage_y_(static_cast<size_t>(n_)),
+        k_(static_cast<size_t>(n_) * tab::kStagesDense),
+        r_(static_cast<size_t>(n_) * 7) {}
+
+  // f(t0, y0) and the first step size. False when f fails at t0 (rhs_.failed is set).
+  bool Init(const double* y0) {
+    std::copy(y0, y0 + n_, y_.begin());
+    if (Eval(t_, y_.data(), K(0)) != 0) return false;
+    if (options_.initial_step > 0.0) {
+      h_ = options_.initial_step;
+    } else if (!InitialStep(&h_)) {
+      return false;
+    }
+    if (options_.max_step > 0.0) h_ = std::min(h_, options_.max_step);
+    return true;
+  }
+
+  int Advance(double tout, double* y) override {
+    long steps_here = 0;
+    for (;;) {
+      if (t_ >= tout) {  // the last accepted step [t_old_, t_] holds tout
+        if (tout == t_) {
+          std::copy(y_.begin(), y_.end(), y);
+          return kOk;
+        }
+        int status = PrepareDense();
+        if (status == 0) {
+          Interpolate(tout, y);
+          return kOk;
+        }
+        if (status < 0) return kRhsFatal;
+        // f failed inside the step: take it again, shorter.
+        Undo();
+        if (++rhs_fails_ >= kMaxRhsFails) return kRhsRepeated;
+        h_ = kRhsShrink * h_last_;
+      }
+      if (steps_here++ >= options_.max_steps) return kTooMuchWork;
+      int flag = Step();
+      if (flag != kOk) return flag;
+    }
+  }
+
+  double CurrentTime() const override { return t_; }
+
+  IntegratorStats Stats() const override {
+    IntegratorStats st;
+    st.steps = steps_;
+    st.rhs_evals = rhs_evals_;
+    st.err_test_fails = err_test_fails_;
+    st.last_step = h_last_;
+    st.last_order = 8;
+    return st;
+  }
+
+  StepFailure Explain(int flag) const override {
+    switch (flag) {
+      case kRhsFatal: return {true, "the right-hand side failed"};
+      case kRhsRepeated:
+        return {true, "the right-hand side failed " + std::to_string(kMaxRhsFails) + " times in a row"};
+      case kTooMuchWork:
+        return {false, "too much work (" + std::to_string(options_.max_steps) +
+                           " steps between output instants)"};
+      case kUnderflow: return {underflow_from_rhs_, underflow_};
+      default: return {false, "DOP853 failed"};
+    }
+  }
+
+ private:
+  double* K(int s) { return k_.data() + static_cast<size_t>(s) * static_cast<size_t>(n_); }
+  const double* K(int s) const { return k_.data() + static_cast<size_t>(s) * static_cast<size_t>(n_); }
+
+  int Eval(double t, const double* y, double* ydot) {
+    ++rhs_evals_;
+    return rhs_(t, y, ydot);
+  }
+
+  // out = y + h sum_{j<s} A[s][j] k_j: the argument of stage s, Eq. (1).
+  void StageArgument(int s, const double* y, double h, double* out) const {
+    std::copy(y, y + n_, out);
+    for (int j = 0; j < s; ++j) {
+      if (tab::A[s][j] == 0.0) continue;
+      const double a = h * tab::A[s][j];
+      const double* kj = K(j);
+      for (int i = 0; i < n_; ++i) out[i] += a * kj[i];
+    }
+  }
+
+  // Root-mean-square norm of v / (atol + rtol |y|).
+  double RmsNorm(const double* v, const double* y) const {
+    double sum = 0.0;
+    for (int i = 0; i < n_; ++i) {
+      double w = v[i] / (options_.atol + options_.rtol * std::abs(y[i]));
+      sum += w * w;
+    }
+    return std::sqrt(sum / n_);
+  }
+
+  // Hairer, Norsett & Wanner sec. II.4, "Starting step size", for order 8: from the size
+  // of y, f and a difference quotient of f along an explicit Euler step. Uses K(1) as
+  // scratch (Step overwrites it). False only when f fails fatally.
+  bool InitialStep(double* h) {
+    const double span = stop_ - t_;
+    const double d0 = RmsNorm(y_.data(), y_.data());
+    const double d1 = RmsNorm(K(0), y_.data());
+    double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+    h0 = std::min(h0, span);
+    for (int i = 0; i < n_; ++i) stage_y_[static_cast<size_t>(i)] = y_[static_cast<size_t>(i)] + h0 * K(0)[i];
+    int status = Eval(t_ + h0, stage_y_.data(), K(1));
+    if (status < 0) return false;
+    if (status > 0) {  // f cannot be evaluated there: start small, Step shrinks further
+      *h = h0;
+      return true;
+    }
+    for (int i = 0; i < n_; ++i) stage_y_[static_cast<size_t>(i)] = (K(1)[i] - K(0)[i]) / h0;
+    const double d2 = RmsNorm(stage_y_.data(), y_.data());
+    const double dmax = std::max(d1, d2);
+    const double h1 = dmax <= 1e-15 ? std::max(1e-6, 1e-3 * h0) : std::pow(0.01 / dmax, 1.0 / 8);
+    *h = std::min({100.0 * h0, h1, span});
+    return true;
+  }
+
+  // One accepted step from t_ (retrying rejected ones), toward stop_ and never past it.
+  int Step() {
+    if (fsal_pending_) {
+      std::copy(K(tab::kStages), K(tab::kStages) + n_, K(0));
+      fsal_pending_ = false;
+    }
+    bool rejected = false;
+    for (;;) {
+      double h = h_;
+      if (options_.max_step > 0.0) h = std::min(h, options_.max_step);
+      // Never past stop_; onto it when it is within 1% of h and within max_step (up to
+      // the rounding of t_ + h + h + ..., so that fixed steps that divide the span end on it).
+      bool last = false;
+      const double limit = options_.max_step > 0.0 ? options_.max_step * (1.0 + kMaxStepSlack) : INFINITY;
+      if (stop_ - t_ <= std::min(kStretch * h, limit)) {
+        h = stop_ - t_;
+        last = true;
+      }
+      if (!(h > 16.0 * kEps * std::max(1.0, std::abs(t_)))) return Underflow(h);
+
+      // Stages 1..11 (Eq. 1); stage 0 is f(t_, y_), already in K(0).
+      int status = 0;
+      for (int s = 1; s < tab::kStages && status == 0; ++s) {
+        StageArgument(s, y_.data(), h, stage_y_.data());
+        status = Eval(t_ + tab::C[s] * h, stage_y_.data(), K(s));
+      }
+      if (status == 0) {
+        const double err = ErrorNorm(h);  // also forms y_new_
+        if (!(err <= 1.0)) {               // a NaN or infinite estimate rejects as well
+          ++err_test_fails_;
+          rejected = true;
+          const double shrink = std::isfinite(err) ? kSafety * std::pow(err, -1.0 / 8) : kMinShrink;
+          h_ = h * std::max(kMinShrink, shrink);
+          continue;
+        }
+        // Accepted: f at the new point, the next step's first stage (k_12 here).
+        const double t_new = last ? stop_ : t_ + h;
+        status = Eval(t_new, y_new_.data(), K(tab::kStages));
+        if (status == 0) {
+          double grow = err == 0.0 ? kMaxGrow : std::min(kMaxGrow, kSafety * std::pow(err, -1.0 / 8));
+          if (rejected) grow = std::min(grow, 1.0);
+          Accept(t_new, h);
+          h_ = h * grow;
+          return kOk;
+        }
+      }
+      if (status < 0) return kRhsFatal;
+      if (++rhs_fails_ >= kMaxRhsFails) return kRhsRepeated;
+      rejected = true;
+      h_ = kRhsShrink * h;
+    }
+  }
+
+  // Eq. (2), and y_new_ = y1 of Eq. (1).
+  double ErrorNorm(double h) {
+    double e5 = 0.0, e3 = 0.0;
+    for (int i = 0; i < n_; ++i) {
+      double sum_b = 0.0, sum_5 = 0.0, sum_3 = 0.0;
+      for (int j = 0; j < tab::kStages; ++j) {
+        const double kj = k_[static_cast<size_t>(j) * static_cast<size_t>(n_) + static_cast<size_t>(i)];
+        sum_b += tab::B[j] * kj;
+        sum_5 += tab::E5[j] * kj;
+        sum_3 += tab::E3[j] * kj;
+      }
+      const double y0 = y_[static_cast<size_t>(i)];
+      const double y1 = y0 + h * sum_b;
+      y_new_[static_cast<size_t>(i)] = y1;
+      const double sc = options_.atol + options_.rtol * std::max(std::abs(y0), std::abs(y1));
+      e5 += (sum_5 / sc) * (sum_5 / sc);
+      e3 += (sum_3 / sc) * (sum_3 / sc);
+    }
+    const double deno = e5 + 0.01 * e3;
+    return deno > 0.0 ? std::abs(h) * e5 / std::sqrt(n_ * deno) : 0.0;
+  }
+
+  // Moves to the new point. The step's start (y_old_, k_0 .. k_12) stays for the dense
+  // output until the next step begins and copies k_12 into its k_0 (FSAL).
+  void Accept(double t_new, double h) {
+    y_old_.swap(y_);
+    y_.swap(y_new_);
+    t_old_ = t_;
+    t_ = t_new;
+    h_last_ = h;
+    ++steps_;
+    rhs_fails_ = 0;
+    dense_ready_ = false;
+    fsal_pending_ = true;
+  }
+
+  // Returns to the start of the last step after f failed in its dense-output stages.
+  void Undo() {
+    y_.swap(y_old_);
+    t_ = t_old_;
+    --steps_;
+    dense_ready_ = false;
+    fsal_pending_ = false;  // K(0) still holds f(t_old_, y_old_)
+  }
+
+  // Stages 13..15 and r0..r6 of Eq. (4) for the last step, once. 0, or f's status.
+  int PrepareDense() {
+    if (dense_ready_) return 0;
+    const double h = h_last_;
+    for (int s = tab::kStages + 1; s < tab::kStagesDense; ++s) {
+      StageArgument(s, y_old_.data(), h, stage_y_.data());
+      int status = Eval(t_old_ + tab::C[s] * h, stage_y_.data(), K(s));
+      if (status != 0) return status;
+    }
+    double* r = r_.data();
+    const size_t n = static_cast<size_t>(n_);
+    for (size_t i = 0; i < n; ++i) {
+      const double dy = y_[i] - y_old_[i];
+      const double k0 = K(0)[i], k12 = K(tab::kStages)[i];
+      r[i] = dy;
+      r[n + i] = h * k0 - dy;
+      r[2 * n + i] = 2.0 * dy - h * (k0 + k12);
+    }
+    for (int m = 0; m < tab::kDenseRows; ++m) {
+      double* rm = r + (3 + static_cast<size_t>(m)) * n;
+      for (size_t i = 0; i < n; ++i) {
+        double sum = 0.0;
+        for (int j = 0; j < tab::kStagesDense; ++j) sum += tab::D[m][j] * K(j)[i];
+        rm[i] = h * sum;
+      }
+    }
+    dense_ready_ = true;
+    return 0;
+  }
+
+  // Eq. (4) at tout in [t_old_, t_].
+  void Interpolate(double tout, double* y) const {
+    const double theta = (tout - t_old_) / h_last_, theta1 = 1.0 - theta;
+    const size_t n = static_cast<size_t>(n_);
+    const double* r = r_.data();
+    for (size_t i = 0; i < n; ++i) {
+      double v = r[6 * n + i];
+      v = r[5 * n + i] + theta * v;
+      v = r[4 * n + i] + theta1 * v;
+      v = r[3 * n + i] + theta * v;
+      v = r[2 * n + i] + theta1 * v;
+      v = r[n + i] + theta * v;
+      v = r[i] + theta1 * v;
+      y[i] = y_old_[i] + theta * v;
+    }
+  }
+
+  int Underflow(double h) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "step size underflow: h = %.3g at t = %.17g (%s)", h, t_,
+                  rhs_fails_ > 0 ? "the right-hand side kept failing" : "the error test failed repeatedly");
+    underflow_ = buf;
+    underflow_from_rhs_ = rhs_fails_ > 0;  // then the driver reports f's own time and cause
+    return kUnderflow;
+  }
+
+  static constexpr double kEps = 2.220446049250313e-16;
+
+  GuardedRhs& rhs_;
+  const int n_;
+  const IntegratorOptions options_;
+  const double stop_;
+  double t_;                     // time of y_
+  double t_old_ = 0.0;           // start of the last accepted step
+  double h_ = 0.0;               // size of the next step to try
+  double h_last_ = 0.0;          // size of the last accepted step
+  std::vector<double> y_;        // state at t_  (n)
+  std::vector<double> y_old_;    // state at t_old_  (n)
+  std::vector<double> y_new_;    // candidate y1 of Eq. (1)  (n)
+  std::vector<double> stage_y_;  // argument of one stage  (n)
+  std::vector<double> k_;        // stages k_0 .. k_15, row s at s n  (16 n)
+  std::vector<double> r_;        // r0 .. r6 of Eq. (4), row m at m n  (7 n)
+  bool dense_ready_ = false;     // r_ holds the last step's dense output
+  bool fsal_pending_ = false;    // K(tab::kStages) is f(t_, y_), not yet copied into K(0)
+  int rhs_fails_ = 0;            // recoverable failures of f in a row
+  long steps_ = 0, rhs_evals_ = 0, err_test_fails_ = 0;
+  std::string underflow_;        // Explain's text for kUnderflow
+  bool underflow_from_rhs_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<Stepper> MakeDop853Stepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                           const IntegratorOptions& options, std::string* error) {
+  auto stepper = std::make_unique<Dop853Stepper>(rhs, t0, stop, options);
+  if (!stepper->Init(y0)) {
+    *error = "the right-hand side failed at the start";
+    return nullptr;
+  }
+  return stepper;
+}
+
+}  // namespace kanesim::sim::detail
