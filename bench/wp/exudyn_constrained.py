@@ -19,6 +19,7 @@ import numpy as np
 import exudyn as exu
 import exudyn.itemInterface as eii
 
+import fourbar_geometry
 import problems as P
 
 warnings.filterwarnings("ignore", category=DeprecationWarning)
@@ -52,16 +53,8 @@ class FourBar:
     def __init__(self, p):
         self.p = p
         fb = P.FOURBAR
-        (q1, q2, q3), (u1, u2, u3) = P.fourbar_start(p)
         a, b, c, d = fb["a"], fb["b"], fb["c"], fb["d"]
-        ang = [q1, q1 + q2, q3]
-        rate = [u1, u1 + u2, u3]
-        e = lambda t: np.array([np.cos(t), np.sin(t)])  # noqa: E731
-        ep = lambda t: np.array([-np.sin(t), np.cos(t)])  # noqa: E731
-        A = a * e(ang[0])
-        com = [a / 2 * e(ang[0]), A + b / 2 * e(ang[1]), np.array([d, 0]) + c / 2 * e(ang[2])]
-        vA = a * rate[0] * ep(ang[0])
-        vel = [a / 2 * rate[0] * ep(ang[0]), vA + b / 2 * rate[1] * ep(ang[1]), c / 2 * rate[2] * ep(ang[2])]
+        com, vel, ang, rate = zip(*fourbar_geometry.bodies(*P.fourbar_start(p)))
         self.SC = exu.SystemContainer()
         mbs = self.mbs = self.SC.AddSystem()
         ground = mbs.AddObject(eii.ObjectGround())

@@ -11,6 +11,8 @@ import os
 
 import numpy as np
 
+import fourbar_geometry
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 BENCH = os.path.dirname(HERE)
 ROOT = os.path.dirname(BENCH)
@@ -182,7 +184,7 @@ def fourbar_start(p):
     return q, u
 
 
-FOURBAR = dict(a=0.2, b=0.6, c=0.5, d=0.6, m=(0.5, 1.0, 0.8))
+FOURBAR = fourbar_geometry.FOURBAR  # lengths and masses: defined once, fourbar_geometry.py
 DISK = dict(a=0.3, m=1.5, theta=0.2, rc=1.0)
 
 

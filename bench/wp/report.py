@@ -5,7 +5,8 @@
 Writes OUT/wp_<problem>.png (log error against log integration wall time, one curve per
 tool/configuration, the reference's trust floor as a dashed line), OUT/rhs_cost.png and
 OUT/results.md (every table). "Time to reach error <= e" is the cheapest measured point of a
-tool whose error is <= e; levels below the reference's trust floor are not reported.
+tool whose error is <= e; levels below the reference's trust floor are not reported. Tools
+that record a loop-closure residual (Pinocchio on the four-bar) get a drift table beside it.
 """
 import argparse
 import json
@@ -33,6 +34,31 @@ def is_baseline(tool):
 def time_to(points, level):
     ok = [pt["time"] for pt in points if pt.get("ok") and pt["error"] <= level]
     return min(ok) if ok else None
+
+
+def point_at(points, level):
+    """The cheapest measured point whose error is <= level (the one time_to reports)."""
+    ok = [pt for pt in points if pt.get("ok") and pt["error"] <= level]
+    return min(ok, key=lambda pt: pt["time"]) if ok else None
+
+
+def drift_table(tools, prob):
+    """Loop-closure residual at T (run.py records "gap", "vgap" for the tools that carry
+    redundant coordinates on the four-bar: Pinocchio's constraintDynamics)."""
+    rows = [(t, pts) for t, pts in sorted(tools.items()) if any("gap" in pt for pt in pts)]
+    if not rows:
+        return []
+    md = ["Loop-closure residual at T, |B_coupler − B_rocker| (m) / |v_B difference| (m/s) "
+          "(`fourbar_geometry.loop_gap`), at the point of each level and at the best error:", "",
+          "| tool | " + " | ".join("at error ≤ %.0e" % lv for lv in LEVELS) + " | at best error |",
+          "|---|" + "---|" * (len(LEVELS) + 1)]
+    for tool, pts in rows:
+        good = [pt for pt in pts if pt.get("ok")]
+        best = min(good, key=lambda pt: pt["error"]) if good else None
+        pick = [None if lv < prob["trust_floor"] else point_at(pts, lv) for lv in LEVELS] + [best]
+        md.append("| %s | %s |" % (tool, " | ".join(
+            "%.1e / %.1e" % (pt["gap"], pt["vgap"]) if pt and "gap" in pt else "—" for pt in pick)))
+    return md + [""]
 
 
 def fmt_t(t):
@@ -118,6 +144,7 @@ def main():
             rhs = best.get("rhs") if best else None
             md.append("| %s | %s | %s | %s |" % (tool, " | ".join(cells), tail, "%d" % rhs if rhs else "—"))
         md.append("")
+        md += drift_table(tools, prob)
         for lv in LEVELS:
             if lv < prob["trust_floor"]:
                 continue

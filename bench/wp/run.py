@@ -25,6 +25,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import fourbar_geometry  # noqa: E402
 import problems as P  # noqa: E402
 from problems import BENCH, ROOT, Problem, all_problems, mjcf, pin_model  # noqa: E402
 
@@ -33,11 +34,11 @@ RTOLS_QUICK = [1e-3, 1e-6, 1e-9, 1e-12]
 PIN_RTOLS = RTOLS + [1e-13]
 MJ_STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5]
 CONSTRAINED = ("fourbar", "disk")   # loops and rolling contacts: not trees
+# Pinocchio on the four-bar: constraintDynamics (Baumgarte, proximal; fourbar_geometry.PIN_LOOP)
+PIN_LOOP_CPP = "pinocchio-constraintDynamics C++ DOP853"
+PIN_LOOP_SCIPY = "scipy DOP853 + pin.constraintDynamics"
 # Why a peer does not run a problem (written to results.json's notes and the report).
 NOT_RUN = {
-    ("pin", "fourbar"): "Pinocchio C++ / SciPy + pin.aba: aba is for trees; a loop needs "
-    "constraintDynamics (acceleration-level KKT with Baumgarte drift correction), a different "
-    "formulation and driver, not written here",
     ("pin", "disk"): "Pinocchio C++ / SciPy + pin.aba: no rolling (non-holonomic) constraint in Pinocchio",
 }
 
@@ -109,7 +110,7 @@ def run_kanesim(args, problems, sweep, rtols, res):
         # Loops and contacts always take the dense constrained path (runtime/engine.cpp:
         # SolveConstrained); `--solver sparse` is accepted and ignored there, so only dense.
         constrained = p.kind in CONSTRAINED
-        for integ in ("ida", "cvode", "cvode-bdf", "arkode") if constrained else ("ida", "cvode", "arkode"):
+        for integ in ("ida", "cvode", "cvode-bdf", "arkode") if constrained else ("ida", "cvode", "arkode", "dop853"):
             # Trees: the recursive path (the automatic choice) and dense; the sparse (KLU)
             # path costs 5-6x recursive per right-hand side at every size (bench/rhs_chain)
             # and is measured there, not in these sweeps.
@@ -122,25 +123,40 @@ def run_kanesim(args, problems, sweep, rtols, res):
 
 
 # --------------------------------------------------------------------------- Pinocchio C++
-def pin_cpp_run(driver, p, rtol, reps):
-    pr = subprocess.run([driver, "integrate", p.kind, str(p.n), repr(p.T), repr(rtol), repr(rtol), str(reps)],
-                        capture_output=True, text=True, timeout=600)
+def pin_cpp_run(driver, p, rtol, reps, loop=None):
+    """loop: for the four-bar, the constraintDynamics settings (fourbar_geometry.PIN_LOOP)."""
+    cmd = [driver, "integrate", p.kind, str(p.n), repr(p.T), repr(rtol), repr(rtol), str(reps)]
+    if p.kind == "fourbar":
+        cmd += [",".join(repr(x) for x in v) for v in P.fourbar_start(p)]
+        cmd += [repr(float(loop[k])) for k in ("kp", "kd", "mu", "accuracy")] + [str(int(loop["max_iter"]))]
+    pr = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     if pr.returncode != 0:
         return dict(ok=False, time=0.0, message=pr.stderr.strip())
     kv = dict(tok.split("=", 1) for tok in pr.stdout.split())
-    return dict(ok=True, time=float(kv["wall"]), q=[float(x) for x in kv["q"].split(",")],
-                rhs=int(kv["evals"]), steps=int(kv["steps"]))
+    out = dict(ok=True, time=float(kv["wall"]), q=[float(x) for x in kv["q"].split(",")],
+               rhs=int(kv["evals"]), steps=int(kv["steps"]))
+    if p.kind == "fourbar":  # loop drift at T, from q(T), u(T) (Pinocchio's own gap beside it)
+        out["gap"], out["vgap"] = fourbar_geometry.loop_gap(out["q"], [float(x) for x in kv["u"].split(",")])
+        out["pin_gap"] = float(kv["gap"])
+    return out
 
 
 def run_pin_cpp(args, problems, sweep, res):
     for p in problems:
+        reps = sweep.reps
+        # The driver repeats internally (median); the sweep calls it once per tolerance.
+        one = Sweep(1, sweep.budget)
+        if p.kind == "fourbar":  # constraintDynamics with Pinocchio's Baumgarte gains, and without
+            print("pinocchio C++ constraintDynamics:", p.title, flush=True)
+            no_bg = dict(fourbar_geometry.PIN_LOOP, kp=0.0, kd=0.0)
+            for label, loop in ((PIN_LOOP_CPP, fourbar_geometry.PIN_LOOP), (PIN_LOOP_CPP + " no Baumgarte", no_bg)):
+                res["runs"].setdefault(p.name, {})[label] = one.run(
+                    p, PIN_RTOLS, lambda r: pin_cpp_run(args.pin_driver, p, r, reps, loop), label)
+            continue
         if p.kind in CONSTRAINED:
             res["notes"].append("%s: %s" % (p.name, NOT_RUN[("pin", p.kind)]))
             continue
         print("pinocchio C++:", p.title, flush=True)
-        reps = sweep.reps
-        # The driver repeats internally (median); the sweep calls it once per tolerance.
-        one = Sweep(1, sweep.budget)
         pts = one.run(p, PIN_RTOLS, lambda r: pin_cpp_run(args.pin_driver, p, r, reps), "pinocchio-aba C++ DOP853")
         res["runs"].setdefault(p.name, {})["pinocchio-aba C++ DOP853"] = pts
 
@@ -150,6 +166,8 @@ def run_scipy(args, problems, sweep, rtols, res):
     import pinocchio as pin
     from scipy.integrate import odeint, solve_ivp
     for p in problems:
+        if p.kind == "fourbar":
+            run_scipy_loop(p, sweep, rtols, res)
         if p.kind in CONSTRAINED:
             continue
         print("scipy + pinocchio:", p.title, flush=True)
@@ -178,6 +196,35 @@ def run_scipy(args, problems, sweep, rtols, res):
 
         res["runs"].setdefault(p.name, {})["scipy DOP853 + pin.aba"] = sweep.run(p, rtols, dop, "scipy DOP853")
         res["runs"][p.name]["scipy LSODA + pin.aba"] = sweep.run(p, rtols, lsoda, "scipy LSODA (odeint)")
+
+
+def run_scipy_loop(p, sweep, rtols, res):
+    """The four-bar: pin.constraintDynamics (fourbar_geometry.pin_loop) as the right-hand side of
+    solve_ivp(method="DOP853"); the loop drift at T is recorded beside the error."""
+    import pinocchio as pin
+    from scipy.integrate import solve_ivp
+    print("scipy + pinocchio constraintDynamics:", p.title, flush=True)
+    model, loops, prox = fourbar_geometry.pin_loop()
+    data = model.createData()
+    datas = pin.StdVec_RigidConstraintData()
+    for c in loops:
+        datas.append(c.createData())
+    pin.initConstraintDynamics(model, data, loops, datas)
+    n = model.nv
+    zero = np.zeros(n)
+    y0 = np.concatenate(P.fourbar_start(p))
+
+    def f(t, y):
+        return np.concatenate([y[n:], pin.constraintDynamics(model, data, y[:n], y[n:], zero, loops, datas, prox)])
+
+    def dop(rtol):
+        t0 = time.perf_counter()
+        s = solve_ivp(f, (0.0, p.T), y0, method="DOP853", rtol=rtol, atol=rtol)
+        wall = time.perf_counter() - t0
+        gap, vgap = fourbar_geometry.loop_gap(s.y[:n, -1], s.y[n:, -1])
+        return dict(ok=s.success, time=wall, q=s.y[:n, -1], rhs=s.nfev, gap=gap, vgap=vgap, message=s.message)
+
+    res["runs"].setdefault(p.name, {})[PIN_LOOP_SCIPY] = sweep.run(p, rtols, dop, PIN_LOOP_SCIPY)
 
 
 # --------------------------------------------------------------------------- MuJoCo
