@@ -140,13 +140,18 @@ void ChooseSolver(Program& p) {
 //   1e-6: 0.90 ms, ARKODE 2.15 ms, CVODE 1.87 ms), at short horizons and loose
 //   tolerances as well as long and tight ones; it keeps energy like ARKODE (16 rtol of
 //   drift over 10 s of the double pendulum at rtol 1e-8);
-// - CVODE (Adams) otherwise.
-// DOP853 needs a smooth right-hand side: a high-order explicit method loses to Adams on
-// forces that switch (measured with ARKODE: the damped driven pendulum's tanh(u/0.01)
-// friction, rtol 1e-7: 2.6e-4 from the converged solution, CVODE 1.1e-5), and on the
-// projected constraint scenes, whose dependent-speed partition may be re-chosen (the
-// Chaplygin sleigh stops with step-size underflow under ARKODE). So it applies only to
-// scenes without loops, contacts, joint friction or force laws that read speeds.
+// - and so does every other non-stiff scene: closed loops, rolling contacts, joint
+//   friction and force laws that read speeds. Measured against CVODE (Adams), error at
+//   the end against a CVODE run at rtol 1e-13, median of 3 (docs/integrators.md):
+//   four-bar 10 s at rtol 1e-8: DOP853 1.1e-6 in 27.6 ms, CVODE 2.0e-5 in 31.9 ms;
+//   sphere on an incline, rolling disk, Chaplygin sleigh: 10-2000x smaller errors in
+//   0.3-0.9x the time at rtol 1e-4 ... 1e-10; the damped driven pendulum's tanh(u/0.01)
+//   friction: 3.7e-10 in 2.3 ms against 1.3e-9 in 7.6 ms at 1e-10; the cart with Coulomb
+//   friction on two rails: 0.3-0.9x the time; the parallelogram through its change
+//   points on both forms: energy within 3.6e-7 of E at rtol 1e-8. (ARKODE's Fehlberg
+//   8(7), measured before DOP853 existed, lost to Adams on the friction and stopped on
+//   the sleigh; DOP853 does neither.)
+// CVODE and ARKODE remain for --integrator.
 void ChooseIntegrator(Program& p) {
   std::ostringstream iw;
   double max_rate = 0.0;
@@ -171,18 +176,6 @@ void ChooseIntegrator(Program& p) {
     }
   }
 
-  std::string rough;  // why the right-hand side may not be smooth; empty when it is
-  if (!p.loops.empty() || !p.contacts.empty())
-    rough = "closed loops or contacts (projected constraints)";
-  else if (!p.friction_joints.empty())
-    rough = "joint friction";
-  for (int r : p.state_refs_forces) {
-    if (!rough.empty()) break;
-    flat::StateKind k = p.mech->state_refs[static_cast<size_t>(r)].kind;
-    if (k == flat::StateKind::JointU || k == flat::StateKind::FrameVelocity || k == flat::StateKind::FrameAngVel)
-      rough = "a force law that reads speeds";
-  }
-
   if (p.options.integrator != IntegratorKind::Auto) {
     p.integrator = p.options.integrator;
     iw << "forced by --integrator";
@@ -196,14 +189,9 @@ void ChooseIntegrator(Program& p) {
   } else {
     iw << "non-stiff ODE";
     if (max_rate > 0.0) iw << " (fastest force-element rate " << max_rate << " 1/s < " << kStiffRate << " 1/s)";
-    if (rough.empty()) {
-      p.integrator = IntegratorKind::DOP853;
-      iw << " with a smooth right-hand side: DOP853 (8th-order Runge-Kutta; the fastest at every error level on "
-            "the tree benchmark)";
-    } else {
-      p.integrator = IntegratorKind::CVODE;
-      iw << ", not smooth enough for an 8th-order Runge-Kutta (" << rough << "): CVODE (Adams)";
-    }
+    p.integrator = IntegratorKind::DOP853;
+    iw << ": DOP853 (8th-order Runge-Kutta; the fastest at every error level on the tree benchmark and on the "
+          "examples with loops, contacts and friction)";
   }
   p.integrator_reason = iw.str();
 }
