@@ -15,28 +15,11 @@
 #include "runtime/sim/integrator.h"
 #include "tests/constraints/load_util.h"
 
+#include "tests/sim/lambda_ode.h"
+
 namespace kanesim::sim {
 namespace {
 
-// An ODE from a lambda; counts its evaluations and the largest t it was asked for.
-class LambdaOde final : public OdeSystem {
- public:
-  using Fn = std::function<int(double, const double*, double*)>;
-  LambdaOde(int n, Fn f) : n_(n), f_(std::move(f)) {}
-  int Size() const override { return n_; }
-  int Rhs(double t, const double* y, double* ydot) override {
-    ++evals;
-    max_t = std::max(max_t, t);
-    return f_(t, y, ydot);
-  }
-  std::string FailureCause() const override { return "test failure cause"; }
-  long evals = 0;
-  double max_t = -INFINITY;
-
- private:
-  int n_;
-  Fn f_;
-};
 
 // x'' = -w^2 x, x(0) = 1, x'(0) = 0: x = cos(w t), x' = -w sin(w t).
 constexpr double kW = 2.0;

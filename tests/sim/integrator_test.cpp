@@ -10,26 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "tests/sim/lambda_ode.h"
+
 namespace kanesim::sim {
 namespace {
 
-// An ODE from a lambda.
-class LambdaOde final : public OdeSystem {
- public:
-  using Fn = std::function<int(double, const double*, double*)>;
-  LambdaOde(int n, Fn f) : n_(n), f_(std::move(f)) {}
-  int Size() const override { return n_; }
-  int Rhs(double t, const double* y, double* ydot) override {
-    ++evals;
-    return f_(t, y, ydot);
-  }
-  std::string FailureCause() const override { return "test failure cause"; }
-  long evals = 0;
-
- private:
-  int n_;
-  Fn f_;
-};
 
 struct Rows {
   std::vector<double> t;
