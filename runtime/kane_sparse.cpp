@@ -356,10 +356,9 @@ int FactorSparse(const Program& p, Workspace& ws) {
   for (size_t m = 0; m < sp.kept_rows.size(); ++m) {
     Vec6 Ja, Jb;
     RowJacobians(p, ws, sp.kept_rows[m], &Ja, &Jb);
-    // As RowBodies; one body carrying both frames gets their sum.
-    int a, b;
-    RowBodies(p, sp.kept_rows[m], &a, &b);
-    ws.row_J[2 * m] = a == b ? Vec6(Ja + Jb) : Ja;
+    // Slot 1 empty (frame b on the world, a contact, or both frames on one body, merged by
+    // BuildSparse): slot 0 takes the sum, Jb being zero in the first two cases.
+    ws.row_J[2 * m] = sp.row_bodies[m][1] < 0 ? Vec6(Ja + Jb) : Ja;
     ws.row_J[2 * m + 1] = Jb;
   }
   // Values, in the visit order of the pattern.
