@@ -86,6 +86,18 @@ Mat3 AxisAngle(const Vec3& n, double a) {
   return Mat3::Identity() + std::sin(a) * K + (1.0 - std::cos(a)) * (K * K);
 }
 
+void PrepareJointConstants(TreeJoint* j) {
+  const Vec3& n = j->axis;
+  j->K_axis << 0.0, -n.z(), n.y(), n.z(), 0.0, -n.x(), -n.y(), n.x(), 0.0;
+  j->K2_axis = j->K_axis * j->K_axis;
+  j->axis_P = j->R_PJ * n;
+  j->R_PJ_identity = j->R_PJ == Mat3::Identity();
+  j->single_axis = !j->inverted && (j->type == JointType::Revolute || j->type == JointType::Prismatic);
+  j->axis_index = -1;
+  for (int k = 0; k < 3; ++k)
+    if (n == Vec3::Unit(k)) j->axis_index = k;
+}
+
 Mat3 RotationFromCoords(RotationCoords c, const double* q) {
   switch (c) {
     case RotationCoords::Quaternion: {
@@ -105,17 +117,17 @@ void JointPose(const TreeJoint& j, const double* q, Vec3* p_ab, Mat3* R_ab) {
   p_ab->setZero();
   R_ab->setIdentity();
   switch (j.type) {
-    case JointType::Revolute: *R_ab = AxisAngle(j.axis, q[0]); break;
+    case JointType::Revolute: *R_ab = RotationAboutAxis(j, q[0]); break;
     case JointType::Prismatic: *p_ab = j.axis * q[0]; break;
     case JointType::Cylindrical:
       *p_ab = j.axis * q[0];
-      *R_ab = AxisAngle(j.axis, q[1]);
+      *R_ab = RotationAboutAxis(j, q[1]);
       break;
-    case JointType::Universal: *R_ab = AxisAngle(j.axis, q[0]) * AxisAngle(j.axis2, q[1]); break;
+    case JointType::Universal: *R_ab = RotationAboutAxis(j, q[0]) * AxisAngle(j.axis2, q[1]); break;
     case JointType::Spherical: *R_ab = RotationFromCoords(j.rotation, q); break;
     case JointType::Planar:
       *p_ab = q[0] * j.axis2 + q[1] * j.axis3;
-      *R_ab = AxisAngle(j.axis, q[2]);
+      *R_ab = RotationAboutAxis(j, q[2]);
       break;
     case JointType::Free:
       *p_ab = Vec3(q[0], q[1], q[2]);
@@ -140,7 +152,7 @@ void JointMotion(const TreeJoint& j, const double* q, const double* u, const Mat
       break;
     case JointType::Universal: {
       // w_ab = n1 q1' + R1 n2 q2';  d/dt (R1 n2) = (n1 q1') x (R1 n2).
-      const Vec3 n2_a = AxisAngle(j.axis, q[0]) * j.axis2;
+      const Vec3 n2_a = RotationAboutAxis(j, q[0]) * j.axis2;
       Hw->col(0) = j.axis;
       Hw->col(1) = n2_a;
       *cw = j.axis.cross(n2_a) * (u[0] * u[1]);

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 
 #include "runtime/program.h"
@@ -17,6 +18,18 @@ using Mat36 = Eigen::Matrix<double, 3, 6>;
 
 // R = rotation by `angle` about unit `axis` (Rodrigues).
 Mat3 AxisAngle(const Vec3& axis, double angle);
+
+// Fills the joint's hot-path constants (K_axis, K2_axis, axis_P, R_PJ_identity,
+// single_axis) from its type, axis, R_PJ and direction; the compiler calls it once.
+void PrepareJointConstants(TreeJoint* j);
+
+// Rotation by `angle` about the joint's axis, from the constants above (Rodrigues).
+inline Mat3 RotationAboutAxis(const TreeJoint& j, double angle) {
+  const double s = std::sin(angle), c1 = 1.0 - std::cos(angle);
+  Mat3 R = s * j.K_axis + c1 * j.K2_axis;
+  R.diagonal().array() += 1.0;
+  return R;
+}
 
 // Rotation of a Spherical/Free joint's rotational coordinates (3 angles or w,x,y,z).
 Mat3 RotationFromCoords(flat::RotationCoords c, const double* q);

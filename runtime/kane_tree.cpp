@@ -57,18 +57,16 @@ struct PivotRange {
 // Spatial inertia of a body (mass m, centre c, central inertia I, world axes) about o,
 // mapping the acceleration [a_o; alpha] to the wrench [f; n_o]:
 //   [m 1, -m D; m D, I - m D D],  D = [r]x,  r = c - o,  -D D = |r|^2 1 - r r^T.
-Mat6 SpatialInertia(double m, const Vec3& c, const Mat3& I, const Vec3& o) {
+void SpatialInertia(double m, const Vec3& c, const Mat3& I, const Vec3& o, Mat6* S) {
   const Vec3 r = c - o;
   const Vec3 mr = m * r;
   Mat3 mD;
   mD << 0.0, -mr.z(), mr.y(), mr.z(), 0.0, -mr.x(), -mr.y(), mr.x(), 0.0;
-  Mat6 S;
-  S.topLeftCorner<3, 3>() = m * Mat3::Identity();
-  S.topRightCorner<3, 3>() = -mD;
-  S.bottomLeftCorner<3, 3>() = mD;
-  S.bottomRightCorner<3, 3>() = I - mr * r.transpose();
-  S.bottomRightCorner<3, 3>().diagonal().array() += mr.dot(r);
-  return S;
+  S->topLeftCorner<3, 3>() = m * Mat3::Identity();
+  S->topRightCorner<3, 3>() = -mD;
+  S->bottomLeftCorner<3, 3>() = mD;
+  S->bottomRightCorner<3, 3>() = I - mr * r.transpose();
+  S->bottomRightCorner<3, 3>().diagonal().array() += mr.dot(r);
 }
 
 // X*_LP Ia X_LP of (6): the inertia Ia about a moved to b, with X = [1, -R; 0, 1],
@@ -149,12 +147,52 @@ void Substitute(const TreeLayout::JointBlock& J, const double* U_data, const dou
   for (int k = 0; k < NF; ++k) ws.udot[J.cols[static_cast<size_t>(k)]] = ud[k];
 }
 
+// One free speed (the common case), S_L a single column s; on a revolute joint in tree
+// direction s = [0; h] and only Ia's right half and pa's torque enter (4).
+bool Eliminate1(const Workspace& ws, const TreeLayout::JointBlock& J, double* U_data, double* Dinv_data,
+                double* u_data, Mat6* Ia, Vec6* pa, PivotRange* piv) {
+  const auto s = ws.H_W.col(J.cols[0]);
+  Eigen::Map<Vec6> U(U_data);
+  double d = 0.0, u = ws.Q[J.cols[0]];
+  if (J.angular) {
+    U.noalias() = Ia->rightCols<3>() * s.tail<3>();     // (4)
+    d = s.tail<3>().dot(U.tail<3>());
+    u -= s.tail<3>().dot(pa->tail<3>());
+  } else {
+    U.noalias() = *Ia * s;
+    d = s.dot(U);
+    u -= s.dot(*pa);
+  }
+  piv->max_diag = std::max(piv->max_diag, d);
+  if (!(d > 0.0)) return false;
+  piv->min_pivot_sq = std::min(piv->min_pivot_sq, d);
+  const double dinv = 1.0 / d;
+  *Dinv_data = dinv;
+  *u_data = u;
+  const Vec6 Ud = U * dinv;
+  Ia->noalias() -= Ud * U.transpose();  // bracket of (6)
+  *pa += Ud * u;                        // bracket of (7)
+  return true;
+}
+
+void Substitute1(const TreeLayout::JointBlock& J, const double* U_data, const double* Dinv_data, const double* u_data,
+                 Workspace& ws, Vec6* A) {
+  const Eigen::Map<const Vec6> U(U_data);
+  const double ud = *Dinv_data * (*u_data - U.dot(*A));  // (5)
+  const auto s = ws.H_W.col(J.cols[0]);
+  if (J.angular)
+    A->tail<3>() += s.tail<3>() * ud;  // (1)
+  else
+    *A += s * ud;
+  ws.udot[J.cols[0]] = ud;
+}
+
 // Dispatch on the joint's number of free speeds (fixed-size blocks for each).
 bool EliminateJoint(const Workspace& ws, const TreeLayout::JointBlock& J, double* U, double* Dinv, double* u,
                     Mat6* Ia, Vec6* pa, PivotRange* piv) {
   switch (J.nf) {
     case 0: return true;
-    case 1: return Eliminate<1>(ws, J, U, Dinv, u, Ia, pa, piv);
+    case 1: return Eliminate1(ws, J, U, Dinv, u, Ia, pa, piv);
     case 2: return Eliminate<2>(ws, J, U, Dinv, u, Ia, pa, piv);
     case 3: return Eliminate<3>(ws, J, U, Dinv, u, Ia, pa, piv);
     case 4: return Eliminate<4>(ws, J, U, Dinv, u, Ia, pa, piv);
@@ -167,7 +205,7 @@ void SubstituteJoint(const TreeLayout::JointBlock& J, const double* U, const dou
                      Workspace& ws, Vec6* A) {
   switch (J.nf) {
     case 0: return;
-    case 1: return Substitute<1>(J, U, Dinv, u, ws, A);
+    case 1: return Substitute1(J, U, Dinv, u, ws, A);
     case 2: return Substitute<2>(J, U, Dinv, u, ws, A);
     case 3: return Substitute<3>(J, U, Dinv, u, ws, A);
     case 4: return Substitute<4>(J, U, Dinv, u, ws, A);
@@ -176,10 +214,7 @@ void SubstituteJoint(const TreeLayout::JointBlock& J, const double* U, const dou
   }
 }
 
-// Error path: the accumulators must be zero for the next call.
 int Singular(Workspace& ws) {
-  for (Mat6& I : ws.tree_Ia) I.setZero();
-  for (Vec6& w : ws.tree_pa) w.setZero();
   ws.error = "singular mass matrix (a body without mass or inertia moved by a joint?)";
   return -1;
 }
@@ -201,6 +236,7 @@ void BuildTree(Program& p) {
       J.cols[static_cast<size_t>(J.nf++)] = s;
     }
     J.contiguous = J.nf == j.nu;
+    J.angular = J.nf == 1 && j.single_axis && j.type == flat::JointType::Revolute;
     J.d0 = d0;
     d0 += J.nf * J.nf;
   }
@@ -223,29 +259,34 @@ int SolveTree(const Program& p, Workspace& ws) {
   const TreeLayout& T = *p.tree;
   const int K = static_cast<int>(p.bodies.size());
   PivotRange piv;
-  // Backward pass, leaves to root: (4), (6), (7).
-  for (int L = K - 1; L >= 0; --L) {
+  // Each body's own inertia Mb_L and -w_L, both about o_L: the leaf values of (6), (7).
+  for (int L = 0; L < K; ++L) {
     const auto uL = static_cast<size_t>(L);
     const TreeBody& b = p.bodies[uL];
-    const TreeLayout::JointBlock& J = T.joints[uL];
     const Vec3& o = ws.p_WB[uL];
     const Vec3& c = ws.p_WBcm[uL];
-    Mat6 Ia = SpatialInertia(b.mass, c, ws.I_W[uL], o);
-    Ia += ws.tree_Ia[uL];
-    ws.tree_Ia[uL].setZero();
-    Vec6 w;  // w_L at c_L
-    w.head<3>() = ws.F_W[uL] - b.mass * ws.a_bias_cm[uL];
-    w.tail<3>() = ws.T_W[uL] - ws.I_W[uL] * ws.alpha_bias[uL] - ws.w_WB[uL].cross(ws.I_W[uL] * ws.w_WB[uL]);
-    Vec6 pa = ws.tree_pa[uL];
-    ws.tree_pa[uL].setZero();
-    pa.head<3>() -= w.head<3>();
-    pa.tail<3>() -= w.tail<3>() + (c - o).cross(w.head<3>());
+    const Mat3& I = ws.I_W[uL];
+    const Vec3& w_B = ws.w_WB[uL];
+    SpatialInertia(b.mass, c, I, o, &ws.tree_Ia[uL]);
+    const Vec3 f = ws.F_W[uL] - b.mass * ws.a_bias_cm[uL];                      // w_L at c_L
+    const Vec3 n = ws.T_W[uL] - I * ws.alpha_bias[uL] - w_B.cross(I * w_B);
+    Vec6& pa = ws.tree_pa[uL];
+    pa.head<3>() = -f;
+    pa.tail<3>() = -n - (c - o).cross(f);
+  }
+  // Backward pass, leaves to root: (4), (6), (7); a child adds its share into its parent.
+  for (int L = K - 1; L >= 0; --L) {
+    const auto uL = static_cast<size_t>(L);
+    const TreeLayout::JointBlock& J = T.joints[uL];
+    Mat6& Ia = ws.tree_Ia[uL];
+    Vec6& pa = ws.tree_pa[uL];
     if (!EliminateJoint(ws, J, ws.tree_U.data() + 6 * J.f0, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0,
                         &Ia, &pa, &piv))
       return Singular(ws);
     const int P = p.joints[uL].parent;
     if (P >= 0) {
       const auto uP = static_cast<size_t>(P);
+      const Vec3& o = ws.p_WB[uL];
       AddMovedInertia(Ia, o, ws.p_WB[uP], &ws.tree_Ia[uP]);  // (6)
       AddMovedWrench(pa, o, ws.p_WB[uP], &ws.tree_pa[uP]);   // (7)
     }

@@ -18,6 +18,7 @@ struct TreeLayout {
     int f0 = 0;                  // free index of its first free speed (its free speeds are consecutive)
     int d0 = 0;                  // offset of its nf x nf block D_L^-1 in Workspace::tree_Dinv
     bool contiguous = true;      // all its speeds are free: S_L = H_W.middleCols(cols[0], nf)
+    bool angular = false;        // nf = 1 on a revolute joint in tree direction: S_L = [0; h], half the products
     std::array<int, 6> cols{};   // full speed index of free speed k (k < nf)
   };
   std::vector<JointBlock> joints;  // K, in tree order

@@ -23,6 +23,9 @@ Mat3 R_WFa(const Program& p, const Workspace& ws, int L) {
   return j.parent < 0 ? j.R_PJ : Mat3(ws.R_WB[static_cast<size_t>(j.parent)] * j.R_PJ);
 }
 
+void JointRelativeMotion(const Program& p, Workspace& ws, size_t L);
+void PlaceBody(const Program& p, Workspace& ws, size_t L);
+
 }  // namespace
 
 int UnpackState(const Program& p, Workspace& ws, double t, const double* y) {
@@ -61,25 +64,84 @@ void PositionKinematics(const Program& p, Workspace& ws) {
   for (size_t L = 0; L < K; ++L) {
     const TreeJoint& j = p.joints[L];
     const TreeBody& b = p.bodies[L];
-    JointPose(j, ws.q.data() + j.q0, &ws.p_ab[L], &ws.R_ab[L]);
-    Mat3 R_WJ = j.R_PJ;
-    Vec3 p_WJ = j.p_PJ;
-    if (j.parent >= 0) {
-      const auto P = static_cast<size_t>(j.parent);
-      R_WJ = ws.R_WB[P] * j.R_PJ;
-      p_WJ = ws.p_WB[P] + ws.R_WB[P] * j.p_PJ;
-    }
-    if (!j.inverted) {
-      ws.R_WB[L] = R_WJ * ws.R_ab[L];
-      ws.p_WB[L] = p_WJ + R_WJ * ws.p_ab[L];
+    Mat3& R_WB = ws.R_WB[L];
+    Vec3& p_WB = ws.p_WB[L];
+    if (j.single_axis && j.axis_index >= 0 && j.type == flat::JointType::Revolute) {
+      // The most common joint: a revolute joint about a coordinate axis e_k of its frame a.
+      // R_ab turns columns i, j = k+1, k+2 (mod 3) by the angle, so R_WB = R_WJ R_ab is
+      // R_WJ with those two columns turned: no 3x3 product.
+      const int k = j.axis_index, i1 = (k + 1) % 3, i2 = (k + 2) % 3;
+      const double a = ws.q[j.q0], s = std::sin(a), c = std::cos(a);
+      Mat3& R_ab = ws.R_ab[L];
+      R_ab.setIdentity();
+      R_ab(i1, i1) = c;
+      R_ab(i2, i2) = c;
+      R_ab(i2, i1) = s;
+      R_ab(i1, i2) = -s;
+      ws.p_ab[L].setZero();
+      if (j.parent >= 0) {
+        const auto P = static_cast<size_t>(j.parent);
+        const Mat3& R_WP = ws.R_WB[P];
+        if (j.R_PJ_identity)
+          R_WB = R_WP;
+        else
+          R_WB.noalias() = R_WP * j.R_PJ;
+        p_WB = ws.p_WB[P] + R_WP * j.p_PJ;
+      } else {
+        R_WB = j.R_PJ;
+        p_WB = j.p_PJ;
+      }
+      const Vec3 ci = R_WB.col(i1), cj = R_WB.col(i2);
+      R_WB.col(i1) = c * ci + s * cj;
+      R_WB.col(i2) = c * cj - s * ci;
     } else {
-      ws.R_WB[L] = R_WJ * ws.R_ab[L].transpose();
-      ws.p_WB[L] = p_WJ - ws.R_WB[L] * ws.p_ab[L];
+      PlaceBody(p, ws, L);
     }
-    ws.p_WBcm[L] = ws.p_WB[L] + ws.R_WB[L] * b.p_BBcm;
-    ws.I_W[L] = ws.R_WB[L] * b.I_BBcm_B * ws.R_WB[L].transpose();
+    ws.p_WBcm[L] = p_WB + R_WB * b.p_BBcm;
+    // I_W = R I R^T, symmetric: T = R I, then the six entries T_i . R_k.
+    const Mat3 T = b.I_diagonal ? Mat3(R_WB * b.I_BBcm_B.diagonal().asDiagonal()) : Mat3(R_WB * b.I_BBcm_B);
+    Mat3& I = ws.I_W[L];
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k <= i; ++k) I(i, k) = I(k, i) = T.row(i).dot(R_WB.row(k));
   }
 }
+
+namespace {
+// Eq. 11.9 for any joint: its relative pose from JointPose, then the body's pose.
+void PlaceBody(const Program& p, Workspace& ws, size_t L) {
+  const TreeJoint& j = p.joints[L];
+  Mat3& R_WB = ws.R_WB[L];
+  Vec3& p_WB = ws.p_WB[L];
+  if (j.type == flat::JointType::Revolute) {  // p_ab = 0: no JointPose
+    ws.R_ab[L] = RotationAboutAxis(j, ws.q[j.q0]);
+    ws.p_ab[L].setZero();
+  } else {
+    JointPose(j, ws.q.data() + j.q0, &ws.p_ab[L], &ws.R_ab[L]);
+  }
+  const Mat3& R_ab = ws.R_ab[L];
+  Mat3 R_WJ_own;
+  const Mat3* R_WJ = &j.R_PJ;
+  if (j.parent >= 0) {
+    const auto P = static_cast<size_t>(j.parent);
+    R_WJ = &ws.R_WB[P];
+    if (!j.R_PJ_identity) {
+      R_WJ_own.noalias() = ws.R_WB[P] * j.R_PJ;
+      R_WJ = &R_WJ_own;
+    }
+    p_WB = ws.p_WB[P] + ws.R_WB[P] * j.p_PJ;
+  } else {
+    p_WB = j.p_PJ;
+  }
+  const bool translates = j.type != flat::JointType::Revolute && !ws.p_ab[L].isZero(0.0);
+  if (!j.inverted) {
+    R_WB.noalias() = *R_WJ * R_ab;
+    if (translates) p_WB += *R_WJ * ws.p_ab[L];
+  } else {
+    R_WB.noalias() = *R_WJ * R_ab.transpose();
+    if (translates) p_WB -= R_WB * ws.p_ab[L];
+  }
+}
+}  // namespace
 
 // Velocities (seed 000 eqs. 11.15-11.16; Lesser eqs. 44-47). Column r of H_W is the twist
 // of body L (= joint child) at its origin o_L for the unit pseudo-speed u = e_r:
@@ -96,41 +158,8 @@ void PositionKinematics(const Program& p, Workspace& ws) {
 // where w_r = R_WFa Hw u, v_r = R_WFa Hv u are the motion of b seen from a.
 void VelocityKinematics(const Program& p, Workspace& ws) {
   const size_t K = p.bodies.size();
-  Mat36 Hv, Hw;
-  Vec3 cv, cw;
   for (size_t L = 0; L < K; ++L) {
     const TreeJoint& j = p.joints[L];
-    const Mat3 R = R_WFa(p, ws, static_cast<int>(L));
-    JointMotion(j, ws.q.data() + j.q0, ws.u.data() + j.u0, ws.R_ab[L], &Hv, &Hw, &cv, &cw);
-    Vec3 w_rel = Vec3::Zero(), v_rel = Vec3::Zero();
-    const Vec3 d = R * ws.p_ab[L];
-    Vec3 w_r = Vec3::Zero(), v_r = Vec3::Zero();
-    for (int k = 0; k < j.nu; ++k) {
-      const Vec3 hw = R * Hw.col(k), hv = R * Hv.col(k);
-      auto col = ws.H_W.col(j.u0 + k);
-      if (!j.inverted) {
-        col.head<3>() = hv;
-        col.tail<3>() = hw;
-      } else {
-        col.head<3>() = -hv + hw.cross(d);
-        col.tail<3>() = -hw;
-      }
-      const double uk = ws.u[j.u0 + k];
-      v_rel += col.head<3>() * uk;
-      w_rel += col.tail<3>() * uk;
-      w_r += hw * uk;
-      v_r += hv * uk;
-    }
-    ws.w_rel[L] = w_rel;
-    ws.v_rel[L] = v_rel;
-    if (!j.inverted) {
-      ws.alpha_rel[L] = R * cw;
-      ws.a_rel[L] = R * cv;
-    } else {
-      const Vec3 alpha_r = R * cw;
-      ws.alpha_rel[L] = -alpha_r;
-      ws.a_rel[L] = -(R * cv) + alpha_r.cross(d) + 2.0 * w_r.cross(v_r) - w_r.cross(w_r.cross(d));  // (4)
-    }
     Vec3 w_P = Vec3::Zero(), v_Po = Vec3::Zero(), p_WP = Vec3::Zero();
     if (j.parent >= 0) {
       const auto P = static_cast<size_t>(j.parent);
@@ -138,11 +167,73 @@ void VelocityKinematics(const Program& p, Workspace& ws) {
       v_Po = ws.v_WBo[P];
       p_WP = ws.p_WB[P];
     }
-    ws.w_WB[L] = w_P + w_rel;                                   // (1)
-    ws.v_WBo[L] = v_Po + w_P.cross(ws.p_WB[L] - p_WP) + v_rel;  // (2)
+    if (j.single_axis) {  // Revolute or Prismatic in tree direction: one column, no bias terms
+      // A revolute joint about e_k leaves column k of R_WJ as it is: h = R_WB e_k.
+      const Vec3 h = j.axis_index >= 0 && j.type == flat::JointType::Revolute ? Vec3(ws.R_WB[L].col(j.axis_index))
+                     : j.parent >= 0 ? Vec3(ws.R_WB[static_cast<size_t>(j.parent)] * j.axis_P)
+                                     : j.axis_P;
+      const double uk = ws.u[j.u0];
+      auto col = ws.H_W.col(j.u0);
+      ws.alpha_rel[L].setZero();
+      ws.a_rel[L].setZero();
+      if (j.type == flat::JointType::Revolute) {
+        col << 0.0, 0.0, 0.0, h;
+        ws.w_rel[L] = h * uk;
+        ws.v_rel[L].setZero();
+      } else {
+        col << h, 0.0, 0.0, 0.0;
+        ws.w_rel[L].setZero();
+        ws.v_rel[L] = h * uk;
+      }
+    } else {
+      JointRelativeMotion(p, ws, L);
+    }
+    ws.w_WB[L] = w_P + ws.w_rel[L];                                   // (1)
+    ws.v_WBo[L] = v_Po + w_P.cross(ws.p_WB[L] - p_WP) + ws.v_rel[L];  // (2)
     ws.v_WBcm[L] = ws.v_WBo[L] + ws.w_WB[L].cross(ws.p_WBcm[L] - ws.p_WB[L]);  // (3)
   }
 }
+
+namespace {
+// The general joint's columns of H_W, its relative twist seen from the parent and that
+// twist's derivative with udot = 0, eq. (4).
+void JointRelativeMotion(const Program& p, Workspace& ws, size_t L) {
+  const TreeJoint& j = p.joints[L];
+  Mat36 Hv, Hw;
+  Vec3 cv, cw;
+  const Mat3 R = R_WFa(p, ws, static_cast<int>(L));
+  JointMotion(j, ws.q.data() + j.q0, ws.u.data() + j.u0, ws.R_ab[L], &Hv, &Hw, &cv, &cw);
+  Vec3 w_rel = Vec3::Zero(), v_rel = Vec3::Zero();
+  const Vec3 d = R * ws.p_ab[L];
+  Vec3 w_r = Vec3::Zero(), v_r = Vec3::Zero();
+  for (int k = 0; k < j.nu; ++k) {
+    const Vec3 hw = R * Hw.col(k), hv = R * Hv.col(k);
+    auto col = ws.H_W.col(j.u0 + k);
+    if (!j.inverted) {
+      col.head<3>() = hv;
+      col.tail<3>() = hw;
+    } else {
+      col.head<3>() = -hv + hw.cross(d);
+      col.tail<3>() = -hw;
+    }
+    const double uk = ws.u[j.u0 + k];
+    v_rel += col.head<3>() * uk;
+    w_rel += col.tail<3>() * uk;
+    w_r += hw * uk;
+    v_r += hv * uk;
+  }
+  ws.w_rel[L] = w_rel;
+  ws.v_rel[L] = v_rel;
+  if (!j.inverted) {
+    ws.alpha_rel[L] = R * cw;
+    ws.a_rel[L] = R * cv;
+  } else {
+    const Vec3 alpha_r = R * cw;
+    ws.alpha_rel[L] = -alpha_r;
+    ws.a_rel[L] = -(R * cv) + alpha_r.cross(d) + 2.0 * w_r.cross(v_r) - w_r.cross(w_r.cross(d));  // (4)
+  }
+}
+}  // namespace
 
 // Seed 000 eq. 11.17: accelerations with the free udot = 0 (prescribed udot included):
 //   alpha_B = alpha_P + w_P x w_rel + alpha_rel + sum_presc H^w_r udot_r                 (5)

@@ -59,6 +59,14 @@ struct TreeJoint {
   double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
+  // Constants of the hot path, set by PrepareJointConstants (runtime/joint_kinematics.h)
+  // once the axes and R_PJ are known:
+  Mat3 K_axis = Mat3::Zero();   // [axis]x: rotation by a about axis = 1 + sin(a) K + (1 - cos(a)) K^2
+  Mat3 K2_axis = Mat3::Zero();  // [axis]x^2
+  Vec3 axis_P = Vec3::UnitZ();  // R_PJ axis: the axis in the parent body's frame (W for a root joint)
+  bool R_PJ_identity = false;   // R_PJ == 1 exactly: R_WJ = R_WP, no product
+  bool single_axis = false;     // Revolute or Prismatic in tree direction: H = [0; axis] or [axis; 0], no bias
+  int axis_index = -1;          // 0, 1, 2 when axis is exactly +x, +y, +z: a rotation about it turns two columns
 };
 
 struct TreeBody {
@@ -67,6 +75,7 @@ struct TreeBody {
   double mass = 0.0;
   Vec3 p_BBcm = Vec3::Zero();       // mass centre in the body frame
   Mat3 I_BBcm_B = Mat3::Zero();     // central inertia, body frame
+  bool I_diagonal = false;          // I_BBcm_B is diagonal (principal axes along the body's): R I R^T is cheaper
   std::vector<int> path_speeds;     // free speed indices of the joints root..L (pattern of tau)
   std::vector<int> path_speeds_all; // full speed indices root..L (prescribed included)
 };
@@ -283,9 +292,9 @@ struct Workspace {
   double sparse_rcond = 0.0;        // KLU's pivot-ratio estimate of the last factorization  filled by FactorSparse
   std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;
 
-  // Recursive path (runtime/kane_tree.cpp); Ia and pa are zero between calls.
-  std::vector<Mat6> tree_Ia;        // articulated inertia at o_L, children's share accumulated  (K)  filled by SolveTree
-  std::vector<Vec6> tree_pa;        // articulated bias wrench at o_L, the same  (K)  filled by SolveTree
+  // Recursive path (runtime/kane_tree.cpp).
+  std::vector<Mat6> tree_Ia;        // body inertia at o_L, then the children's shares added: articulated inertia  (K)  filled by SolveTree
+  std::vector<Vec6> tree_pa;        // body bias wrench at o_L, the same: articulated bias wrench  (K)  filled by SolveTree
   std::vector<Vec6> tree_A;         // udot-dependent acceleration [a_o; alpha] of body L  (K)  filled by SolveTree
   Eigen::VectorXd tree_U;           // U_L = Ia_L S_L, 6 x nf column-major at 6 f0  (6 nu)  filled by SolveTree
   Eigen::VectorXd tree_Dinv;        // D_L^-1 = (S_L^T U_L)^-1, nf x nf at d0  (sum nf^2)  filled by SolveTree

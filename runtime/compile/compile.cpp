@@ -305,6 +305,7 @@ void Compiler::MassProperties(Program& p) {
     const Vec3 d = part.c - B.p_BBcm;
     B.I_BBcm_B += part.I + part.m * (d.squaredNorm() * Mat3::Identity() - d * d.transpose());
   }
+  for (TreeBody& B : p.bodies) B.I_diagonal = B.I_BBcm_B.isDiagonal(0.0);
   int merged = 0;
   for (const auto& j : m_.joints) merged += j.type == JointType::Weld ? 1 : 0;
   if (merged > 0) p.notes.push_back(std::to_string(merged) + " weld joint(s) merged into rigid bodies");

@@ -79,6 +79,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     const int parent_frame = j.inverted ? fj.frame_b : fj.frame_a;
     j.p_PJ = p.frames[static_cast<size_t>(parent_frame)].p_BF;
     j.R_PJ = p.frames[static_cast<size_t>(parent_frame)].R_BF;
+    PrepareJointConstants(&j);
     j.q0 = p.nq_all;
     j.u0 = p.nu_all;
     p.nq_all += j.nq;

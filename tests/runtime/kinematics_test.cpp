@@ -7,6 +7,7 @@
 #include <random>
 
 #include "runtime/engine.h"
+#include "runtime/kane_tree.h"
 #include "runtime/kinematics.h"
 #include "runtime/program.h"
 #include "tests/runtime/builders.h"
@@ -196,6 +197,61 @@ flat::Mechanism OffsetPendulum(bool inverted) {
   else
     b.Joint("pivot", flat::JointType::Revolute, w, pivot, Vec3::UnitZ());
   return b.m;
+}
+
+// A chain of revolute joints about coordinate axes, each rod's tip frame turned by
+// `R_tip` (identity: R_PJ = 1 exactly, the cheapest case), with random inertias.
+flat::Mechanism AxisChain(int N, const Mat3& R_tip, std::mt19937& rng) {
+  test::MechBuilder b;
+  int prev = b.World(Vec3(0, -9.81, 0));
+  for (int i = 1; i <= N; ++i) {
+    const std::string rod = "rod" + std::to_string(i);
+    const int fa = b.Frame(rod + ".frame_a"), fb = b.Frame(rod + ".frame_b");
+    b.Fixed(rod + ".fixed", fa, fb, Vec3(0.5, 0.1 * i, -0.05), R_tip);
+    b.Body(rod, fa, 1.0 + 0.1 * i, test::RandomVec(rng, 0.3), test::RandomInertia(rng));
+    b.Joint("j" + std::to_string(i), flat::JointType::Revolute, prev, fa, Vec3::Unit(i % 3));
+    prev = fb;
+  }
+  return b.m;
+}
+
+TEST(Kinematics, CoordinateAxisShortcutsMatchTheGeneralJointPath) {
+  // If this fails, the revolute-about-a-coordinate-axis shortcuts of PositionKinematics
+  // and VelocityKinematics (two columns of R_WJ turned; h = R_WB e_k) or the recursive
+  // solve's angular-column elimination differ from the general joint path they skip.
+  std::mt19937 rng(77);
+  for (const Mat3& R_tip : {Mat3(Mat3::Identity()), test::RandomRotation(rng)}) {
+    auto r = rt::Compile(AxisChain(9, R_tip, rng), {});
+    ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
+    const rt::Program& fast = *r.program;
+    ASSERT_EQ(fast.solver, rt::SolverPath::Recursive);
+    for (const rt::TreeJoint& j : fast.joints) ASSERT_GE(j.axis_index, 0);
+    rt::Program general = fast;  // the same program with every shortcut switched off
+    for (rt::TreeJoint& j : general.joints) {
+      j.axis_index = -1;
+      j.single_axis = false;
+      j.R_PJ_identity = false;
+    }
+    rt::BuildTree(general);
+    auto wf = rt::MakeWorkspace(fast);
+    auto wg = rt::MakeWorkspace(general);
+    const Eigen::Index n = rt::StateSize(fast);
+    for (int trial = 0; trial < 4; ++trial) {
+      const Eigen::VectorXd y = test::RandomState(fast, rng);
+      Eigen::VectorXd yf(n), yg(n);
+      ASSERT_EQ(rt::Derivative(fast, *wf, 0.0, y.data(), yf.data()), 0) << rt::ErrorMessage(*wf);
+      ASSERT_EQ(rt::Derivative(general, *wg, 0.0, y.data(), yg.data()), 0) << rt::ErrorMessage(*wg);
+      EXPECT_LT((yf - yg).norm(), kRoundoffTol * yg.norm()) << "trial " << trial;
+      for (size_t L = 0; L < fast.bodies.size(); ++L) {
+        EXPECT_LT((wf->R_WB[L] - wg->R_WB[L]).norm(), kRoundoffTol) << "body " << L;
+        EXPECT_LT((wf->p_WBcm[L] - wg->p_WBcm[L]).norm(), kRoundoffTol) << "body " << L;
+        EXPECT_LT((wf->I_W[L] - wg->I_W[L]).norm(), kRoundoffTol) << "body " << L;
+        EXPECT_LT((wf->w_WB[L] - wg->w_WB[L]).norm(), kRoundoffTol) << "body " << L;
+        EXPECT_LT((wf->a_bias_cm[L] - wg->a_bias_cm[L]).norm(), kRoundoffTol * 10) << "body " << L;
+      }
+      EXPECT_LT((wf->H_W - wg->H_W).norm(), kRoundoffTol);
+    }
+  }
 }
 
 TEST(Kinematics, InvertedJointMirrorsTreeDirection) {

@@ -29,12 +29,16 @@ constexpr char kModel[] = "tests/stress/models/parallelogram.mech";
 constexpr double kRtol = 1e-8;
 constexpr double kBranchTol = 1e-9;     // rad; Newton to round-off (measured <= 1e-11)
 constexpr double kResidualTol = 1e-12;  // m; the outputs are projected (round-off)
+// Speeds: the parallelogram's relations hold to round-off amplified by the velocity
+// solve's 1/sigma_min near a change point: measured 4.0e-8 rad/s on 11 rad/s (3.6e-9 of the
+// speed) 7 mrad from one (ARKODE, multiplier form); off the branch they differ by O(speed).
+constexpr double kSpeedTol = 1e-8;      // of the largest crank speed
 
 const std::vector<std::string> kOutputs = {"--output", "*.q", "--output", "*.u", "--output", "kinetic_energy",
                                            "--output", "potential_energy", "--output", "*constraint_residual*"};
 
 struct Check {
-  double branch = 0.0, speed = 0.0, residual = 0.0, energy = 0.0, energy_scale = 0.0;
+  double branch = 0.0, speed = 0.0, residual = 0.0, energy = 0.0, energy_scale = 0.0, speed_scale = 0.0;
 };
 
 // The parallelogram relations, residuals and energy over every row of `r`.
@@ -50,6 +54,7 @@ Check Measure(const RunResult& r) {
     c.branch = std::max({c.branch, std::fabs(std::remainder(rock[i] - th[i], 2 * M_PI)),
                          std::fabs(std::remainder(coup[i] + th[i], 2 * M_PI))});
     c.speed = std::max({c.speed, std::fabs(wr[i] - w[i]), std::fabs(wc[i] + w[i])});
+    c.speed_scale = std::max(c.speed_scale, std::fabs(w[i]));
     c.residual = std::max({c.residual, res[i], resv[i]});
     c.energy = std::max(c.energy, std::fabs(T[i] + V[i] - T[0] - V[0]));
     c.energy_scale = std::max(c.energy_scale, T[i]);
@@ -77,7 +82,7 @@ void ThroughChangePoints(const std::string& integrator, double energy_factor, co
     }
     const Check c = Measure(r);
     EXPECT_LT(c.branch, kBranchTol);
-    EXPECT_LT(c.speed, kBranchTol * c.energy_scale);
+    EXPECT_LT(c.speed, kSpeedTol * c.speed_scale);
     EXPECT_LT(c.residual, kResidualTol);
     EXPECT_LT(c.energy, energy_factor * kRtol * c.energy_scale);
   }
