@@ -54,19 +54,30 @@ struct PivotRange {
   double max_diag = 0.0;
 };
 
+// kBlocks: a spatial inertia [A, B; B^T, C] (A, C symmetric) in tree_Ia is kept by its
+// blocks A, B and C only; its lower-left block is stale. The one-column elimination of a
+// revolute joint and AddMovedInertia read and write only A, B and C; every other use
+// calls Mirror first.
+inline void Mirror(Mat6* Ia) { Ia->bottomLeftCorner<3, 3>() = Ia->topRightCorner<3, 3>().transpose(); }
+
 // Spatial inertia of a body (mass m, centre c, central inertia I, world axes) about o,
 // mapping the acceleration [a_o; alpha] to the wrench [f; n_o]:
 //   [m 1, -m D; m D, I - m D D],  D = [r]x,  r = c - o,  -D D = |r|^2 1 - r r^T.
 void SpatialInertia(double m, const Vec3& c, const Mat3& I, const Vec3& o, Mat6* S) {
   const Vec3 r = c - o;
-  const Vec3 mr = m * r;
-  Mat3 mD;
-  mD << 0.0, -mr.z(), mr.y(), mr.z(), 0.0, -mr.x(), -mr.y(), mr.x(), 0.0;
-  S->topLeftCorner<3, 3>() = m * Mat3::Identity();
-  S->topRightCorner<3, 3>() = -mD;
-  S->bottomLeftCorner<3, 3>() = mD;
-  S->bottomRightCorner<3, 3>() = I - mr * r.transpose();
-  S->bottomRightCorner<3, 3>().diagonal().array() += mr.dot(r);
+  const double x = m * r.x(), y = m * r.y(), z = m * r.z();  // m r
+  Mat6& M = *S;
+  // The blocks A = m 1, B = -m D and C = I - m D D, D = [r]x (the lower block B^T = m D
+  // is not written, see kBlocks).
+  M(0, 0) = m, M(1, 0) = 0.0, M(2, 0) = 0.0;
+  M(0, 1) = 0.0, M(1, 1) = m, M(2, 1) = 0.0;
+  M(0, 2) = 0.0, M(1, 2) = 0.0, M(2, 2) = m;
+  M(0, 3) = 0.0, M(1, 3) = -z, M(2, 3) = y;
+  M(0, 4) = z, M(1, 4) = 0.0, M(2, 4) = -x;
+  M(0, 5) = -y, M(1, 5) = x, M(2, 5) = 0.0;
+  const double mrr = x * r.x() + y * r.y() + z * r.z();
+  M.bottomRightCorner<3, 3>() = I - Vec3(x, y, z) * r.transpose();
+  M.bottomRightCorner<3, 3>().diagonal().array() += mrr;
 }
 
 // X*_LP Ia X_LP of (6): the inertia Ia about a moved to b, with X = [1, -R; 0, 1],
@@ -85,8 +96,7 @@ void AddMovedInertia(const Mat6& Ia, const Vec3& a, const Vec3& b, Mat6* Ib) {
   for (int k = 0; k < 3; ++k) RPt.col(k) = d.cross(P.row(k).transpose());
   const Mat3 B2 = Ia.topRightCorner<3, 3>() + P.transpose();
   Ib->topLeftCorner<3, 3>() += Ia.topLeftCorner<3, 3>();
-  Ib->topRightCorner<3, 3>() += B2;
-  Ib->bottomLeftCorner<3, 3>() += B2.transpose();
+  Ib->topRightCorner<3, 3>() += B2;  // (the lower-left block: kBlocks)
   Ib->bottomRightCorner<3, 3>() += Ia.bottomRightCorner<3, 3>() + RB + RB.transpose() + RPt;
 }
 
@@ -110,6 +120,7 @@ Mat6N<NF> FreeColumns(const Workspace& ws, const TreeLayout::JointBlock& J) {
 template <int NF>
 bool Eliminate(const Workspace& ws, const TreeLayout::JointBlock& J, double* U_data, double* Dinv_data,
                double* u_data, Mat6* Ia, Vec6* pa, PivotRange* piv) {
+  Mirror(Ia);
   const Mat6N<NF> S = FreeColumns<NF>(ws, J);
   Eigen::Map<Mat6N<NF>> U(U_data);
   Eigen::Map<MatN<NF>> Dinv(Dinv_data);
@@ -135,14 +146,15 @@ bool Eliminate(const Workspace& ws, const TreeLayout::JointBlock& J, double* U_d
   return true;
 }
 
-// Forward step of joint L: (5) and (1), given A = X_LP A_P; writes udot_L.
+// Forward step of joint L: (5) and (1), given the parent's A_P and A = X_LP A_P; writes
+// udot_L. The stored U is X_LP^T U (see SolveTree), so (5) reads A_P, not A.
 template <int NF>
 void Substitute(const TreeLayout::JointBlock& J, const double* U_data, const double* Dinv_data,
-                const double* u_data, Workspace& ws, Vec6* A) {
+                const double* u_data, const Vec6& AP, Workspace& ws, Vec6* A) {
   const Eigen::Map<const Mat6N<NF>> U(U_data);
   const Eigen::Map<const MatN<NF>> Dinv(Dinv_data);
   const Eigen::Map<const VecN<NF>> u(u_data);
-  const VecN<NF> ud = Dinv * (u - U.transpose() * *A);  // (5)
+  const VecN<NF> ud = Dinv * (u - U.transpose() * AP);  // (5)
   *A += FreeColumns<NF>(ws, J) * ud;                    // (1)
   for (int k = 0; k < NF; ++k) ws.udot[J.cols[static_cast<size_t>(k)]] = ud[k];
 }
@@ -155,10 +167,13 @@ bool Eliminate1(const Workspace& ws, const TreeLayout::JointBlock& J, double* U_
   Eigen::Map<Vec6> U(U_data);
   double d = 0.0, u = ws.Q[J.cols[0]];
   if (J.angular) {
-    U.noalias() = Ia->rightCols<3>() * s.tail<3>();     // (4)
-    d = s.tail<3>().dot(U.tail<3>());
-    u -= s.tail<3>().dot(pa->tail<3>());
+    const Vec3 h = s.tail<3>();
+    U.head<3>().noalias() = Ia->topRightCorner<3, 3>() * h;  // (4): U = [B h; C h]
+    U.tail<3>().noalias() = Ia->bottomRightCorner<3, 3>() * h;
+    d = h.dot(U.tail<3>());
+    u -= h.dot(pa->tail<3>());
   } else {
+    Mirror(Ia);
     U.noalias() = *Ia * s;
     d = s.dot(U);
     u -= s.dot(*pa);
@@ -170,15 +185,18 @@ bool Eliminate1(const Workspace& ws, const TreeLayout::JointBlock& J, double* U_
   *Dinv_data = dinv;
   *u_data = u;
   const Vec6 Ud = U * dinv;
-  Ia->noalias() -= Ud * U.transpose();  // bracket of (6)
-  *pa += Ud * u;                        // bracket of (7)
+  // Bracket of (6), blocks A, B, C only (kBlocks).
+  Ia->topLeftCorner<3, 3>().noalias() -= Ud.head<3>() * U.head<3>().transpose();
+  Ia->topRightCorner<3, 3>().noalias() -= Ud.head<3>() * U.tail<3>().transpose();
+  Ia->bottomRightCorner<3, 3>().noalias() -= Ud.tail<3>() * U.tail<3>().transpose();
+  *pa += Ud * u;  // bracket of (7)
   return true;
 }
 
 void Substitute1(const TreeLayout::JointBlock& J, const double* U_data, const double* Dinv_data, const double* u_data,
-                 Workspace& ws, Vec6* A) {
+                 const Vec6& AP, Workspace& ws, Vec6* A) {
   const Eigen::Map<const Vec6> U(U_data);
-  const double ud = *Dinv_data * (*u_data - U.dot(*A));  // (5)
+  const double ud = *Dinv_data * (*u_data - U.dot(AP));  // (5)
   const auto s = ws.H_W.col(J.cols[0]);
   if (J.angular)
     A->tail<3>() += s.tail<3>() * ud;  // (1)
@@ -202,15 +220,15 @@ bool EliminateJoint(const Workspace& ws, const TreeLayout::JointBlock& J, double
 }
 
 void SubstituteJoint(const TreeLayout::JointBlock& J, const double* U, const double* Dinv, const double* u,
-                     Workspace& ws, Vec6* A) {
+                     const Vec6& AP, Workspace& ws, Vec6* A) {
   switch (J.nf) {
     case 0: return;
-    case 1: return Substitute1(J, U, Dinv, u, ws, A);
-    case 2: return Substitute<2>(J, U, Dinv, u, ws, A);
-    case 3: return Substitute<3>(J, U, Dinv, u, ws, A);
-    case 4: return Substitute<4>(J, U, Dinv, u, ws, A);
-    case 5: return Substitute<5>(J, U, Dinv, u, ws, A);
-    default: return Substitute<6>(J, U, Dinv, u, ws, A);
+    case 1: return Substitute1(J, U, Dinv, u, AP, ws, A);
+    case 2: return Substitute<2>(J, U, Dinv, u, AP, ws, A);
+    case 3: return Substitute<3>(J, U, Dinv, u, AP, ws, A);
+    case 4: return Substitute<4>(J, U, Dinv, u, AP, ws, A);
+    case 5: return Substitute<5>(J, U, Dinv, u, AP, ws, A);
+    default: return Substitute<6>(J, U, Dinv, u, AP, ws, A);
   }
 }
 
@@ -224,10 +242,12 @@ int Singular(Workspace& ws) {
 void BuildTree(Program& p) {
   auto layout = std::make_shared<TreeLayout>();
   layout->joints.resize(p.joints.size());
+  layout->parent.resize(p.joints.size());
   int d0 = 0;
   for (size_t L = 0; L < p.joints.size(); ++L) {
     const TreeJoint& j = p.joints[L];
     TreeLayout::JointBlock& J = layout->joints[L];
+    layout->parent[L] = j.parent;
     for (int k = 0; k < j.nu; ++k) {
       const int s = j.u0 + k;
       const int f = p.u_free_of[static_cast<size_t>(s)];
@@ -283,12 +303,21 @@ int SolveTree(const Program& p, Workspace& ws) {
     if (!EliminateJoint(ws, J, ws.tree_U.data() + 6 * J.f0, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0,
                         &Ia, &pa, &piv))
       return Singular(ws);
-    const int P = p.joints[uL].parent;
+    const int P = T.parent[uL];
     if (P >= 0) {
       const auto uP = static_cast<size_t>(P);
       const Vec3& o = ws.p_WB[uL];
       AddMovedInertia(Ia, o, ws.p_WB[uP], &ws.tree_Ia[uP]);  // (6)
       AddMovedWrench(pa, o, ws.p_WB[uP], &ws.tree_pa[uP]);   // (7)
+      // U_L^T X_LP A_P = (X_LP^T U_L)^T A_P with X_LP^T [U_v; U_w] = [U_v; U_w + r x U_v],
+      // r = o_L - o_P: stored so, (5) in the forward pass waits only for A_P, not for the
+      // shift of A_P to o_L as well.
+      const Vec3 r = o - ws.p_WB[uP];
+      double* U = ws.tree_U.data() + 6 * J.f0;
+      for (int k = 0; k < J.nf; ++k, U += 6) {
+        Eigen::Map<Vec6> col(U);
+        col.tail<3>() += r.cross(col.head<3>());
+      }
     }
   }
   if (!(piv.min_pivot_sq > kSingularPivot * piv.max_diag)) return Singular(ws);
@@ -296,15 +325,19 @@ int SolveTree(const Program& p, Workspace& ws) {
   for (int L = 0; L < K; ++L) {
     const auto uL = static_cast<size_t>(L);
     const TreeLayout::JointBlock& J = T.joints[uL];
-    const int P = p.joints[uL].parent;
+    const int P = T.parent[uL];
     Vec6 A = Vec6::Zero();
     if (P >= 0) {
       const auto uP = static_cast<size_t>(P);
       const Vec6& AP = ws.tree_A[uP];
       A.head<3>() = AP.head<3>() + AP.tail<3>().cross(ws.p_WB[uL] - ws.p_WB[uP]);  // X_LP A_P
       A.tail<3>() = AP.tail<3>();
+      SubstituteJoint(J, ws.tree_U.data() + 6 * J.f0, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0, AP, ws,
+                      &A);
+    } else {
+      SubstituteJoint(J, ws.tree_U.data() + 6 * J.f0, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0, A, ws,
+                      &A);
     }
-    SubstituteJoint(J, ws.tree_U.data() + 6 * J.f0, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0, ws, &A);
     ws.tree_A[uL] = A;
   }
   return 0;

@@ -22,6 +22,7 @@ struct TreeLayout {
     std::array<int, 6> cols{};   // full speed index of free speed k (k < nf)
   };
   std::vector<JointBlock> joints;  // K, in tree order
+  std::vector<int> parent;         // K: p.joints[L].parent, packed for the passes
   int d_size = 0;                  // sum of nf^2
 };
 

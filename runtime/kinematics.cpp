@@ -177,11 +177,13 @@ void VelocityKinematics(const Program& p, Workspace& ws) {
       ws.alpha_rel[L].setZero();
       ws.a_rel[L].setZero();
       if (j.type == flat::JointType::Revolute) {
-        col << 0.0, 0.0, 0.0, h;
+        col.head<3>().setZero();
+        col.tail<3>() = h;
         ws.w_rel[L] = h * uk;
         ws.v_rel[L].setZero();
       } else {
-        col << h, 0.0, 0.0, 0.0;
+        col.head<3>() = h;
+        col.tail<3>().setZero();
         ws.w_rel[L].setZero();
         ws.v_rel[L] = h * uk;
       }
@@ -252,9 +254,15 @@ void BiasAccelerations(const Program& p, Workspace& ws, bool include_free) {
       a_Po = ws.a_bias_o[P];
       p_WP = ws.p_WB[P];
     }
-    Vec3 alpha = alpha_P + w_P.cross(ws.w_rel[L]) + ws.alpha_rel[L];  // (5)
     const Vec3 r = ws.p_WB[L] - p_WP;
-    Vec3 a = a_Po + alpha_P.cross(r) + w_P.cross(w_P.cross(r)) + 2.0 * w_P.cross(ws.v_rel[L]) + ws.a_rel[L];  // (6)
+    Vec3 alpha, a;
+    if (j.single_axis && j.type == flat::JointType::Revolute) {  // v_rel = alpha_rel = a_rel = 0
+      alpha = alpha_P + w_P.cross(ws.w_rel[L]);                        // (5)
+      a = a_Po + alpha_P.cross(r) + w_P.cross(w_P.cross(r));           // (6)
+    } else {
+      alpha = alpha_P + w_P.cross(ws.w_rel[L]) + ws.alpha_rel[L];                                           // (5)
+      a = a_Po + alpha_P.cross(r) + w_P.cross(w_P.cross(r)) + 2.0 * w_P.cross(ws.v_rel[L]) + ws.a_rel[L];  // (6)
+    }
     for (int k = 0; k < j.nu; ++k) {
       if (!include_free && p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) continue;
       const double ud = ws.udot[j.u0 + k];

@@ -38,20 +38,26 @@ struct Scalar {
 // One articulated joint of the spanning tree; it moves child body `child` relative to
 // `parent` (-1 = ground). The child body's frame IS the child-side joint frame.
 struct TreeJoint {
-  std::string name;
-  flat::SourceLoc loc;
-  int flat_index = -1;
+  // The fields every right-hand side reads come first (one or two cache lines per joint).
   flat::JointType type = flat::JointType::Revolute;
   flat::RotationCoords rotation = flat::RotationCoords::Quaternion;
   bool inverted = false;  // frame_b is on the parent side: the child moves by X_ab^-1
+  // Constants of the hot path, set by PrepareJointConstants (runtime/joint_kinematics.h)
+  // once the axes and R_PJ are known:
+  bool single_axis = false;     // Revolute or Prismatic in tree direction: H = [0; axis] or [axis; 0], no bias
+  bool R_PJ_identity = false;   // R_PJ == 1 exactly: R_WJ = R_WP, no product
+  int axis_index = -1;          // 0, 1, 2 when axis is exactly +x, +y, +z: a rotation about it turns two columns
   int parent = -1, child = -1;
   int nq = 0, nu = 0;
   int q0 = 0, u0 = 0;  // offsets in the full q / u arrays
+  Vec3 p_PJ = Vec3::Zero();    // parent-side joint frame origin in the parent body frame
+  Vec3 axis_P = Vec3::UnitZ();  // R_PJ axis: the axis in the parent body's frame (W for a root joint)
+  Mat3 R_PJ = Mat3::Identity();
   Vec3 axis = Vec3::UnitZ();   // unit; Revolute/Prismatic/Cylindrical axis, Universal n1, Planar normal
+  Mat3 K_axis = Mat3::Zero();   // [axis]x: rotation by a about axis = 1 + sin(a) K + (1 - cos(a)) K^2
+  Mat3 K2_axis = Mat3::Zero();  // [axis]x^2
   Vec3 axis2 = Vec3::UnitX();  // unit; Universal n2 (intermediate frame), Planar e1
   Vec3 axis3 = Vec3::UnitY();  // Planar e2 = axis x e1
-  Vec3 p_PJ = Vec3::Zero();    // parent-side joint frame origin in the parent body frame
-  Mat3 R_PJ = Mat3::Identity();
   // Cardan/Euler joints: which branch between two singular values of the middle angle the
   // motion started in (Cardan: floor((q2 + pi/2) / pi), Euler: floor(q2 / pi)); leaving it
   // means the motion went through gimbal lock.   filled by BuildStateLayout
@@ -59,14 +65,9 @@ struct TreeJoint {
   double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
-  // Constants of the hot path, set by PrepareJointConstants (runtime/joint_kinematics.h)
-  // once the axes and R_PJ are known:
-  Mat3 K_axis = Mat3::Zero();   // [axis]x: rotation by a about axis = 1 + sin(a) K + (1 - cos(a)) K^2
-  Mat3 K2_axis = Mat3::Zero();  // [axis]x^2
-  Vec3 axis_P = Vec3::UnitZ();  // R_PJ axis: the axis in the parent body's frame (W for a root joint)
-  bool R_PJ_identity = false;   // R_PJ == 1 exactly: R_WJ = R_WP, no product
-  bool single_axis = false;     // Revolute or Prismatic in tree direction: H = [0; axis] or [axis; 0], no bias
-  int axis_index = -1;          // 0, 1, 2 when axis is exactly +x, +y, +z: a rotation about it turns two columns
+  std::string name;
+  flat::SourceLoc loc;
+  int flat_index = -1;
 };
 
 struct TreeBody {
