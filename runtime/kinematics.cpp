@@ -71,14 +71,8 @@ void PositionKinematics(const Program& p, Workspace& ws) {
       // R_ab turns columns i, j = k+1, k+2 (mod 3) by the angle, so R_WB = R_WJ R_ab is
       // R_WJ with those two columns turned: no 3x3 product.
       const int k = j.axis_index, i1 = (k + 1) % 3, i2 = (k + 2) % 3;
+      // (R_ab and p_ab are not written: only the general joint path reads them.)
       const double a = ws.q[j.q0], s = std::sin(a), c = std::cos(a);
-      Mat3& R_ab = ws.R_ab[L];
-      R_ab.setIdentity();
-      R_ab(i1, i1) = c;
-      R_ab(i2, i2) = c;
-      R_ab(i2, i1) = s;
-      R_ab(i1, i2) = -s;
-      ws.p_ab[L].setZero();
       if (j.parent >= 0) {
         const auto P = static_cast<size_t>(j.parent);
         const Mat3& R_WP = ws.R_WB[P];
@@ -173,9 +167,7 @@ void VelocityKinematics(const Program& p, Workspace& ws) {
                      : j.parent >= 0 ? Vec3(ws.R_WB[static_cast<size_t>(j.parent)] * j.axis_P)
                                      : j.axis_P;
       const double uk = ws.u[j.u0];
-      auto col = ws.H_W.col(j.u0);
-      ws.alpha_rel[L].setZero();
-      ws.a_rel[L].setZero();
+      auto col = ws.H_W.col(j.u0);  // (alpha_rel and a_rel stay 0 from MakeWorkspace)
       if (j.type == flat::JointType::Revolute) {
         col.head<3>().setZero();
         col.tail<3>() = h;

@@ -251,14 +251,14 @@ struct Workspace {
   std::vector<Vec3> p_WB;           // body frame origin = child joint point o_L  (K)  filled by PositionKinematics
   std::vector<Vec3> p_WBcm;         // mass centre  (K)  filled by PositionKinematics
   std::vector<Mat3> I_W;            // central inertia resolved in W  (K)  filled by PositionKinematics
-  std::vector<Mat3> R_ab;           // joint relative rotation  (K)  filled by PositionKinematics
-  std::vector<Vec3> p_ab;           // joint relative position, in a  (K)  filled by PositionKinematics
+  std::vector<Mat3> R_ab;           // joint relative rotation  (K)  filled by PositionKinematics (not for revolute joints about a coordinate axis)
+  std::vector<Vec3> p_ab;           // joint relative position, in a  (K)  filled by PositionKinematics (the same)
   Eigen::Matrix<double, 6, Eigen::Dynamic> H_W;  // twist per full speed at o_L: tangent generators  (6 x nu_all)  filled by VelocityKinematics
   std::vector<Vec3> w_WB;           // angular velocity  (K)  filled by VelocityKinematics
   std::vector<Vec3> v_WBo;          // velocity of body origin  (K)  filled by VelocityKinematics
   std::vector<Vec3> v_WBcm;         // velocity of mass centre  (K)  filled by VelocityKinematics
   std::vector<Vec3> w_rel, v_rel;   // joint relative twist at o_L, seen from the parent  (K)  filled by VelocityKinematics
-  std::vector<Vec3> alpha_rel, a_rel;  // its derivative in the parent with udot = 0  (K)  filled by VelocityKinematics
+  std::vector<Vec3> alpha_rel, a_rel;  // its derivative in the parent with udot = 0  (K)  filled by VelocityKinematics (0 for single_axis joints)
   std::vector<Vec3> alpha_bias;     // angular acceleration with free udot = 0  (K)  filled by BiasAccelerations
   std::vector<Vec3> a_bias_o;       // origin acceleration with free udot = 0  (K)  filled by BiasAccelerations
   std::vector<Vec3> a_bias_cm;      // mass-centre acceleration with free udot = 0  (K)  filled by BiasAccelerations
