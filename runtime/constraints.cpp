@@ -176,44 +176,71 @@ LoopFrames FramesOf(const Program& p, const Workspace& ws, const LoopClosure& l,
 
 }  // namespace
 
-void ConstraintResiduals(const Program& p, Workspace& ws) {
-  for (const LoopClosure& l : p.loops) {
-    const LoopFrames f = FramesOf(p, ws, l, false);
-    for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
-      const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
-      if (row.kind == RowKind::Translation)
-        ws.phi[i] = (f.a.R * row.d_a).dot(f.b.p - f.a.p);  // (1)
-      else
-        ws.phi[i] = (f.a.R * row.d_a).dot(f.b.R * row.n_b) - row.offset;  // (2)
+namespace {
+
+// (1), (2) for a cut joint's rows, into ws.phi.
+void LoopResiduals(const Program& p, Workspace& ws, const LoopClosure& l, const LoopFrames& f) {
+  for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+    const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+    if (row.kind == RowKind::Translation)
+      ws.phi[i] = (f.a.R * row.d_a).dot(f.b.p - f.a.p);  // (1)
+    else
+      ws.phi[i] = (f.a.R * row.d_a).dot(f.b.R * row.n_b) - row.offset;  // (2)
+  }
+}
+
+// (3), (4) for a cut joint's rows: the active ones into ws.A (zeroed by the caller), all
+// into ws.psi.
+void LoopJacobian(const Program& p, Workspace& ws, const LoopClosure& l, const LoopFrames& f) {
+  const Vec3 r = f.b.p - f.a.p;
+  for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+    const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+    const Vec3 dk = RowDirection(row, f.a, f.b);
+    const int k = p.active_of_row[static_cast<size_t>(i)];
+    if (k >= 0) {
+      AddBodyColumns(p, ws, f.b.body, f.b.p, 1.0, row, dk, r, false, k);
+      AddBodyColumns(p, ws, f.a.body, f.a.p, -1.0, row, dk, r, true, k);
     }
+    ws.psi[i] = RowRate(row, dk, r, f.v_a, f.w_A, f.v_b, f.w_B);
+  }
+}
+
+void ContactResiduals(const Program& p, Workspace& ws, const ContactModel& c, const ContactPoint& cp) {
+  for (int i = c.row0; i < c.row0 + c.nrows; ++i) ws.phi[i] = ContactResidual(p, p.rows[static_cast<size_t>(i)], cp);
+}
+
+void ContactJacobian(const Program& p, Workspace& ws, const ContactModel& c, const ContactPoint& cp) {
+  for (int i = c.row0; i < c.row0 + c.nrows; ++i)
+    ws.psi[i] = ContactJacobianRow(p, ws, p.rows[static_cast<size_t>(i)], p.active_of_row[static_cast<size_t>(i)], cp);
+}
+
+// ConstraintResiduals and ConstraintJacobian at the same positions, as each projection
+// iterate needs both: the frames and contact points are placed once for the two.
+void ResidualsAndJacobian(const Program& p, Workspace& ws) {
+  ws.A.setZero();
+  for (const LoopClosure& l : p.loops) {
+    const LoopFrames f = FramesOf(p, ws, l, true);
+    LoopResiduals(p, ws, l, f);
+    LoopJacobian(p, ws, l, f);
   }
   for (const ContactModel& c : p.contacts) {
     const ContactPoint cp = ContactAt(p, ws, c);
-    for (int i = c.row0; i < c.row0 + c.nrows; ++i) ws.phi[i] = ContactResidual(p, p.rows[static_cast<size_t>(i)], cp);
+    ContactResiduals(p, ws, c, cp);
+    ContactJacobian(p, ws, c, cp);
   }
+}
+
+}  // namespace
+
+void ConstraintResiduals(const Program& p, Workspace& ws) {
+  for (const LoopClosure& l : p.loops) LoopResiduals(p, ws, l, FramesOf(p, ws, l, false));
+  for (const ContactModel& c : p.contacts) ContactResiduals(p, ws, c, ContactAt(p, ws, c));
 }
 
 void ConstraintJacobian(const Program& p, Workspace& ws) {
   ws.A.setZero();
-  for (const LoopClosure& l : p.loops) {
-    const LoopFrames f = FramesOf(p, ws, l, true);
-    const Vec3 r = f.b.p - f.a.p;
-    for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
-      const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
-      const Vec3 dk = RowDirection(row, f.a, f.b);
-      const int k = p.active_of_row[static_cast<size_t>(i)];
-      if (k >= 0) {
-        AddBodyColumns(p, ws, f.b.body, f.b.p, 1.0, row, dk, r, false, k);
-        AddBodyColumns(p, ws, f.a.body, f.a.p, -1.0, row, dk, r, true, k);
-      }
-      ws.psi[i] = RowRate(row, dk, r, f.v_a, f.w_A, f.v_b, f.w_B);
-    }
-  }
-  for (const ContactModel& c : p.contacts) {
-    const ContactPoint cp = ContactAt(p, ws, c);
-    for (int i = c.row0; i < c.row0 + c.nrows; ++i)
-      ws.psi[i] = ContactJacobianRow(p, ws, p.rows[static_cast<size_t>(i)], p.active_of_row[static_cast<size_t>(i)], cp);
-  }
+  for (const LoopClosure& l : p.loops) LoopJacobian(p, ws, l, FramesOf(p, ws, l, true));
+  for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
 }
 
 void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::VectorXd* col) {
@@ -483,8 +510,7 @@ int ProjectState(const Program& p, Workspace& ws) {
   const double tight = kTight * p.loop_length;
   const int rank = p.loop_rank;
   for (int it = 0;; ++it) {
-    ConstraintResiduals(p, ws);
-    ConstraintJacobian(p, ws);
+    ResidualsAndJacobian(p, ws);
     if (int s = FactorDependent(p, ws); s != 0) return s;
     const double r = ws.phi.cwiseAbs().maxCoeff();
     if (r <= tight || rank == 0 || it == kMaxNewton) break;
@@ -506,43 +532,81 @@ int ProjectState(const Program& p, Workspace& ws) {
   return 0;
 }
 
+namespace {
+
+// Entry (i, j) of the symmetric mass matrix from the lower triangle AssembleDense fills.
+inline double MassEntry(const Eigen::MatrixXd& M, int i, int j) { return i >= j ? M(i, j) : M(j, i); }
+
+}  // namespace
+
+// (10) on the structure of beta (8): column c of beta is 1 at speed ind[c] and non-zero
+// elsewhere only at the rank dependent speeds, and udot_p (9) only at those, so
+//   (M beta)_c = M_{:,ind[c]} + sum_k beta_{dep[k],c} M_{:,dep[k]},
+//   Mr_cd = (M beta)_{ind[c],d} + sum_k beta_{dep[k],c} (M beta)_{dep[k],d},
+// nu (1 + rank) per column instead of nu^2, read from M's lower triangle directly.
 int SolveConstrained(const Program& p, Workspace& ws) {
   if (p.nu == 0) return 0;
   AssembleDense(p, ws);
   ConstraintBias(p, ws);
-  const int rank = p.loop_rank, nind = p.nu - rank;
-  ws.Mfull = ws.M.selfadjointView<Eigen::Lower>();
+  const int nu = p.nu, rank = p.loop_rank, nind = nu - rank;
+  const auto dep = [&](int k) { return ws.dep[static_cast<size_t>(k)]; };
+  const auto ind = [&](int c) { return ws.ind[static_cast<size_t>(c)]; };
   // udot_p (9) and beta (8).
   ws.udot_p.setZero();
   if (rank > 0) {
     GatherActive(p, ws.cbias, &ws.vg);
     SolveDependent(ws, ws.vg, &ws.xd);
-    for (int k = 0; k < rank; ++k) ws.udot_p[ws.dep[static_cast<size_t>(k)]] = -ws.xd[k];
+    for (int k = 0; k < rank; ++k) ws.udot_p[dep(k)] = -ws.xd[k];
   }
   ws.beta.setZero();
   for (int c = 0; c < nind; ++c) {
-    const int s = ws.ind[static_cast<size_t>(c)];
+    const int s = ind(c);
     ws.beta(s, c) = 1.0;
     if (rank == 0) continue;
     ws.vc = ws.A.col(s);
     SolveDependent(ws, ws.vc, &ws.xd);
-    for (int k = 0; k < rank; ++k) ws.beta(ws.dep[static_cast<size_t>(k)], c) = -ws.xd[k];
+    for (int k = 0; k < rank; ++k) ws.beta(dep(k), c) = -ws.xd[k];
   }
-  // (10)
-  ws.f.noalias() -= ws.Mfull * ws.udot_p;
+  // (10): f - M udot_p.
+  for (int k = 0; k < rank; ++k) {
+    const int s = dep(k);
+    const double x = ws.udot_p[s];
+    for (int i = 0; i < nu; ++i) ws.f[i] -= MassEntry(ws.M, i, s) * x;
+  }
   if (nind > 0) {
-    ws.MB.noalias() = ws.Mfull * ws.beta;
-    ws.Mr.noalias() = ws.beta.transpose() * ws.MB;
-    ws.fr.noalias() = ws.beta.transpose() * ws.f;
+    for (int c = 0; c < nind; ++c) {
+      const int s = ind(c);
+      for (int i = 0; i < nu; ++i) ws.MB(i, c) = MassEntry(ws.M, i, s);
+      for (int k = 0; k < rank; ++k) {
+        const double b = ws.beta(dep(k), c);
+        for (int i = 0; i < nu; ++i) ws.MB(i, c) += MassEntry(ws.M, i, dep(k)) * b;
+      }
+    }
+    for (int c = 0; c < nind; ++c) {
+      double fc = ws.f[ind(c)];
+      for (int k = 0; k < rank; ++k) fc += ws.beta(dep(k), c) * ws.f[dep(k)];
+      ws.fr[c] = fc;
+      for (int d = 0; d <= c; ++d) {  // lower triangle: what the Cholesky reads
+        double m = ws.MB(ind(c), d);
+        for (int k = 0; k < rank; ++k) m += ws.beta(dep(k), c) * ws.MB(dep(k), d);
+        ws.Mr(c, d) = m;
+      }
+    }
     ws.llt_r->compute(ws.Mr);
     if (ws.llt_r->info() != Eigen::Success) {
       ws.error = "singular reduced mass matrix (closed loop)";
       return -1;
     }
     ws.llt_r->solveInPlace(ws.fr);
-    ws.udot_p.noalias() += ws.beta * ws.fr;
+    // udot = beta z + udot_p (9).
+    for (int c = 0; c < nind; ++c) ws.udot_p[ind(c)] += ws.fr[c];
+    for (int k = 0; k < rank; ++k) {
+      double x = 0.0;
+      for (int c = 0; c < nind; ++c) x += ws.beta(dep(k), c) * ws.fr[c];
+      ws.udot_p[dep(k)] += x;
+    }
   }
-  for (int i = 0; i < p.nu; ++i) ws.udot[p.u_free[static_cast<size_t>(i)]] = ws.udot_p[i];
+  for (int i = 0; i < nu; ++i) ws.udot[p.u_free[static_cast<size_t>(i)]] = ws.udot_p[i];
   return 0;
 }
 
@@ -567,7 +631,6 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.ind.assign(static_cast<size_t>(nind), 0);
   ws.partition_valid = false;
   ws.beta = Eigen::MatrixXd::Zero(p.nu, nind);
-  ws.Mfull = Eigen::MatrixXd::Zero(p.nu, p.nu);
   ws.MB = Eigen::MatrixXd::Zero(p.nu, nind);
   ws.Mr = Eigen::MatrixXd::Zero(nind, nind);
   ws.fr = Eigen::VectorXd::Zero(nind);

@@ -39,33 +39,52 @@ Mat3 Skew(const Vec3& v) {
   return K;
 }
 
-// Spatial inertia about point o of a body with mass m, centre c and central inertia I
-// (world axes), mapping the twist [v_o; w] to the wrench [f; n_o]:
-//   [m 1, -m D; m D, I - m D D],  D = [c - o]x.
-Mat6 SpatialInertia(double m, const Vec3& c, const Mat3& I, const Vec3& o) {
-  const Mat3 D = Skew(c - o);
-  Mat6 S;
-  S.topLeftCorner<3, 3>() = m * Mat3::Identity();
-  S.topRightCorner<3, 3>() = -m * D;
-  S.bottomLeftCorner<3, 3>() = m * D;
-  S.bottomRightCorner<3, 3>() = I - m * D * D;
-  return S;
+// Spatial inertia about a point o, in blocks, of a body or subtree with mass m, first
+// moment h = m (c - o) and rotational inertia J about o (world axes), mapping the twist
+// [v_o; w] to the wrench [f; n_o]:
+//   Ic = [m 1, -[h]x;  [h]x, J].                                                  (6)
+// A body's own, with central inertia I:
+//   h = m x,  J = I + m (|x|^2 1 - x x^T),  x = c - o.                              (7)
+// Moved from point a to point b (the twist at b seen at a), r = a - b, by the identity
+// [a]x [b]x = b a^T - (a . b) 1 applied to X^T Ic X, X = [1, -[r]x; 0, 1]:
+//   h_b = h_a + m r,   J_b = J_a + 2 (h_a . r) 1 - r h_a^T - h_a r^T + m (|r|^2 1 - r r^T).  (8)
+// Only the blocks are written: no 3x3 or 6x6 products.
+inline Vec3 FirstMoment(const Mat6& Ic) { return Vec3(Ic(5, 1), Ic(3, 2), Ic(4, 0)); }  // from [h]x
+
+// *Ic = (6) (set) or *Ic += (6) (add).
+template <bool kAdd>
+inline void WriteBlocks(Mat6* Ic, double m, const Vec3& h, const Mat3& J) {
+  const Mat3 H = Skew(h);
+  if constexpr (kAdd) {
+    for (int i = 0; i < 3; ++i) (*Ic)(i, i) += m;
+    Ic->topRightCorner<3, 3>() -= H;
+    Ic->bottomLeftCorner<3, 3>() += H;
+    Ic->bottomRightCorner<3, 3>() += J;
+  } else {
+    Ic->topLeftCorner<3, 3>() = m * Mat3::Identity();
+    Ic->topRightCorner<3, 3>() = -H;
+    Ic->bottomLeftCorner<3, 3>() = H;
+    Ic->bottomRightCorner<3, 3>() = J;
+  }
 }
 
-// Moves a spatial inertia from point a to point b: Ic_b = X^T Ic_a X with
-// X = [1, -R; 0, 1], R = [a - b]x (the twist at b seen at a). In blocks, with
-// Ic_a = [A, B; B^T, D]:  Ic_b = [A, B - A R; B^T + R A, D + R B - B^T R - R A R].
-Mat6 MoveInertia(const Mat6& Ia, const Vec3& a, const Vec3& b) {
-  const Mat3 R = Skew(a - b);
-  const Mat3 A = Ia.topLeftCorner<3, 3>(), B = Ia.topRightCorner<3, 3>(), D = Ia.bottomRightCorner<3, 3>();
-  const Mat3 AR = A * R;
-  const Mat3 RB = R * B;
-  Mat6 Ib;
-  Ib.topLeftCorner<3, 3>() = A;
-  Ib.topRightCorner<3, 3>() = B - AR;
-  Ib.bottomLeftCorner<3, 3>() = B.transpose() - AR.transpose();  // R A = -(A R)^T (A symmetric)
-  Ib.bottomRightCorner<3, 3>() = D + RB + RB.transpose() + AR.transpose() * R;  // -B^T R = (R B)^T, -R A R = (AR)^T R
-  return Ib;
+// *Ic = the spatial inertia about o of a body with mass m, centre c, central inertia I (7).
+void SetSpatialInertia(Mat6* Ic, double m, const Vec3& c, const Mat3& I, const Vec3& o) {
+  const Vec3 x = c - o;
+  Mat3 J = I - m * x * x.transpose();
+  J.diagonal().array() += m * x.squaredNorm();
+  WriteBlocks<false>(Ic, m, m * x, J);
+}
+
+// *Ib += Ia moved from point a to point b (8).
+void AddMovedInertia(Mat6* Ib, const Mat6& Ia, const Vec3& a, const Vec3& b) {
+  const Vec3 r = a - b;
+  const double m = Ia(0, 0);
+  const Vec3 h = FirstMoment(Ia);
+  const Vec3 s = h + 0.5 * m * r;  // -r h^T - h r^T - m r r^T = -(r s^T + s r^T)
+  Mat3 J = Ia.bottomRightCorner<3, 3>() - r * s.transpose() - s * r.transpose();
+  J.diagonal().array() += 2.0 * h.dot(r) + m * r.squaredNorm();
+  WriteBlocks<true>(Ib, m, h + m * r, J);
 }
 
 // Moves a wrench [f; n_a] to point b: n_b = n_a + (a - b) x f.
@@ -79,23 +98,26 @@ inline Vec6 MoveWrench(const Vec6& w, const Vec3& a, const Vec3& b) {
 
 void AssembleDense(const Program& p, Workspace& ws) {
   const int K = static_cast<int>(p.bodies.size());
-  // Composite inertias and wrenches, leaves to root (children follow parents).
-  for (int L = K - 1; L >= 0; --L) {
+  // Each body's own inertia and bracketed wrench about its origin (set: no zeroing
+  // between calls), then the composites, leaves to root (children follow parents).
+  for (int L = 0; L < K; ++L) {
     const auto uL = static_cast<size_t>(L);
     const TreeBody& b = p.bodies[uL];
     const Vec3& o = ws.p_WB[uL];
     const Vec3& c = ws.p_WBcm[uL];
-    ws.Ic[uL] += SpatialInertia(b.mass, c, ws.I_W[uL], o);
+    SetSpatialInertia(&ws.Ic[uL], b.mass, c, ws.I_W[uL], o);
     Vec6 w;
     w.head<3>() = ws.F_W[uL] - b.mass * ws.a_bias_cm[uL];
     w.tail<3>() = ws.T_W[uL] - ws.I_W[uL] * ws.alpha_bias[uL] - ws.w_WB[uL].cross(ws.I_W[uL] * ws.w_WB[uL]);
-    ws.Wc[uL] += MoveWrench(w, c, o);
+    ws.Wc[uL] = MoveWrench(w, c, o);
+  }
+  for (int L = K - 1; L >= 0; --L) {
+    const auto uL = static_cast<size_t>(L);
     const int P = p.joints[uL].parent;
-    if (P >= 0) {
-      const auto uP = static_cast<size_t>(P);
-      ws.Ic[uP] += MoveInertia(ws.Ic[uL], o, ws.p_WB[uP]);
-      ws.Wc[uP] += MoveWrench(ws.Wc[uL], o, ws.p_WB[uP]);
-    }
+    if (P < 0) continue;
+    const auto uP = static_cast<size_t>(P);
+    AddMovedInertia(&ws.Ic[uP], ws.Ic[uL], ws.p_WB[uL], ws.p_WB[uP]);
+    ws.Wc[uP] += MoveWrench(ws.Wc[uL], ws.p_WB[uL], ws.p_WB[uP]);
   }
   // (4) and (5): each free speed s pushes its wrench Ic h_s up to the root.
   for (int L = 0; L < K; ++L) {
@@ -121,10 +143,6 @@ void AssembleDense(const Program& p, Workspace& ws) {
         }
       }
     }
-  }
-  for (int L = 0; L < K; ++L) {
-    ws.Ic[static_cast<size_t>(L)].setZero();
-    ws.Wc[static_cast<size_t>(L)].setZero();
   }
 }
 

@@ -317,8 +317,8 @@ struct Workspace {
   Eigen::VectorXd vcol;             // a column of the constraint Jacobian, every row  (n_c)  filled by ConstraintColumn's callers
   Eigen::VectorXd du_full;          // a step in full speeds  (nu_all)  filled by ProjectState
   Eigen::MatrixXd beta;             // constrained basis in free-speed space  (nu x nind)  filled by SolveConstrained
-  Eigen::MatrixXd Mfull, MB;        // symmetric M, M beta  (nu x nu), (nu x nind)  filled by SolveConstrained
-  Eigen::MatrixXd Mr;               // beta^T M beta  (nind x nind)  filled by SolveConstrained
+  Eigen::MatrixXd MB;               // M beta  (nu x nind)  filled by SolveConstrained
+  Eigen::MatrixXd Mr;               // beta^T M beta, lower triangle  (nind x nind)  filled by SolveConstrained
   Eigen::VectorXd fr, udot_p;       // reduced right side (nind), particular udot (nu)  filled by SolveConstrained
   std::optional<Eigen::LLT<Eigen::MatrixXd>> llt_r;  // Cholesky of Mr  filled by SolveConstrained
 
