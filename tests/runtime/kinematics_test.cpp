@@ -29,41 +29,91 @@ constexpr double kRoundoffTol = 1e-12;
 
 Vec3 Vee(const Mat3& W) { return Vec3(W(2, 1) - W(1, 2), W(0, 2) - W(2, 0), W(1, 0) - W(0, 1)) / 2.0; }
 
+// A chain of revolute joints about coordinate axes, each rod's tip frame turned by
+// `R_tip` (identity: R_PJ = 1 exactly, the cheapest case), with random inertias.
+flat::Mechanism AxisChain(int N, const Mat3& R_tip, std::mt19937& rng) {
+  test::MechBuilder b;
+  int prev = b.World(Vec3(0, -9.81, 0));
+  for (int i = 1; i <= N; ++i) {
+    const std::string rod = "rod" + std::to_string(i);
+    const int fa = b.Frame(rod + ".frame_a"), fb = b.Frame(rod + ".frame_b");
+    b.Fixed(rod + ".fixed", fa, fb, Vec3(0.5, 0.1 * i, -0.05), R_tip);
+    b.Body(rod, fa, 1.0 + 0.1 * i, test::RandomVec(rng, 0.3), test::RandomInertia(rng));
+    b.Joint("j" + std::to_string(i), flat::JointType::Revolute, prev, fa, Vec3::Unit(i % 3));
+    prev = fb;
+  }
+  return b.m;
+}
+
+// Each column of the tangent basis against central differences of the body positions and
+// orientations along qdot = N(q) e_i.
+void ExpectTangentBasisMatchesFd(const flat::Mechanism& m, std::mt19937& rng) {
+  auto r = rt::Compile(m, {});
+  ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
+  const rt::Program& p = *r.program;
+  auto ws = rt::MakeWorkspace(p);
+  auto ws2 = rt::MakeWorkspace(p);
+  const Eigen::VectorXd y = test::RandomState(p, rng);
+  for (int i = 0; i < p.nu; ++i) {
+    // qdot = N(q) e_i: the coordinate direction of the unit pseudo-speed u = e_i.
+    Eigen::VectorXd yi = y, ydot(y.size());
+    yi.tail(p.nu).setZero();
+    yi[p.nq + i] = 1.0;
+    ASSERT_EQ(rt::Derivative(p, *ws, 0.0, yi.data(), ydot.data()), 0) << rt::ErrorMessage(*ws);
+    std::vector<Vec3> pos[2];
+    std::vector<Mat3> rot[2];
+    for (int side = 0; side < 2; ++side) {
+      Eigen::VectorXd ys = y;
+      ys.head(p.nq) += (side == 0 ? kFdStep : -kFdStep) * ydot.head(p.nq);
+      ASSERT_EQ(rt::UnpackState(p, *ws2, 0.0, ys.data()), 0);
+      rt::PositionKinematics(p, *ws2);
+      pos[side] = ws2->p_WBcm;
+      rot[side] = ws2->R_WB;
+    }
+    for (size_t L = 0; L < p.bodies.size(); ++L) {
+      const rt::Vec6 t = rt::TangentColumn(p, *ws, static_cast<int>(L), p.u_free[static_cast<size_t>(i)]);
+      const Vec3 v_fd = (pos[0][L] - pos[1][L]) / (2 * kFdStep);
+      const Vec3 w_fd = Vee((rot[0][L] - rot[1][L]) / (2 * kFdStep) * ws->R_WB[L].transpose());
+      EXPECT_LT((t.head<3>() - v_fd).norm(), kFdTol) << "body " << p.bodies[L].name << " speed " << i;
+      EXPECT_LT((t.tail<3>() - w_fd).norm(), kFdTol) << "body " << p.bodies[L].name << " speed " << i;
+    }
+  }
+}
+
 TEST(Kinematics, TangentBasisMatchesFiniteDifferencesOfPositions) {
   // If this fails, a partial velocity or partial angular velocity (tau, Lesser eq. 22)
   // is wrong for some joint type, rotation parameterization, inverted joint or merged body.
   std::mt19937 rng(1234);
-  for (int tree = 0; tree < 3; ++tree) {
-    auto r = rt::Compile(test::RandomTree(rng, {14, true, true, true}), {});
-    ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
-    const rt::Program& p = *r.program;
-    auto ws = rt::MakeWorkspace(p);
-    auto ws2 = rt::MakeWorkspace(p);
-    const Eigen::VectorXd y = test::RandomState(p, rng);
-    for (int i = 0; i < p.nu; ++i) {
-      // qdot = N(q) e_i: the coordinate direction of the unit pseudo-speed u = e_i.
-      Eigen::VectorXd yi = y, ydot(y.size());
-      yi.tail(p.nu).setZero();
-      yi[p.nq + i] = 1.0;
-      ASSERT_EQ(rt::Derivative(p, *ws, 0.0, yi.data(), ydot.data()), 0) << rt::ErrorMessage(*ws);
-      std::vector<Vec3> pos[2];
-      std::vector<Mat3> rot[2];
-      for (int side = 0; side < 2; ++side) {
-        Eigen::VectorXd ys = y;
-        ys.head(p.nq) += (side == 0 ? kFdStep : -kFdStep) * ydot.head(p.nq);
-        ASSERT_EQ(rt::UnpackState(p, *ws2, 0.0, ys.data()), 0);
-        rt::PositionKinematics(p, *ws2);
-        pos[side] = ws2->p_WBcm;
-        rot[side] = ws2->R_WB;
-      }
-      for (size_t L = 0; L < p.bodies.size(); ++L) {
-        const rt::Vec6 t = rt::TangentColumn(p, *ws, static_cast<int>(L), p.u_free[static_cast<size_t>(i)]);
-        const Vec3 v_fd = (pos[0][L] - pos[1][L]) / (2 * kFdStep);
-        const Vec3 w_fd = Vee((rot[0][L] - rot[1][L]) / (2 * kFdStep) * ws->R_WB[L].transpose());
-        EXPECT_LT((t.head<3>() - v_fd).norm(), kFdTol) << "body " << p.bodies[L].name << " speed " << i;
-        EXPECT_LT((t.tail<3>() - w_fd).norm(), kFdTol) << "body " << p.bodies[L].name << " speed " << i;
-      }
-    }
+  for (int tree = 0; tree < 3; ++tree) ExpectTangentBasisMatchesFd(test::RandomTree(rng, {14, true, true, true}), rng);
+  // Revolute joints about coordinate axes take the shortcuts of PositionKinematics and
+  // VelocityKinematics (two columns turned, h = R_WB e_k); random trees never do.
+  ExpectTangentBasisMatchesFd(AxisChain(9, Mat3::Identity(), rng), rng);
+  ExpectTangentBasisMatchesFd(AxisChain(9, test::RandomRotation(rng), rng), rng);
+}
+
+// The bias accelerations against central differences of the velocities with u held fixed.
+void ExpectBiasMatchesFd(const flat::Mechanism& m, std::mt19937& rng) {
+  auto r = rt::Compile(m, {});
+  ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
+  const rt::Program& p = *r.program;
+  auto ws = rt::MakeWorkspace(p);
+  auto ws2 = rt::MakeWorkspace(p);
+  const Eigen::VectorXd y = test::RandomState(p, rng);
+  Eigen::VectorXd ydot(y.size());
+  ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), ydot.data()), 0) << rt::ErrorMessage(*ws);
+  std::vector<Vec3> v[2], w[2];
+  for (int side = 0; side < 2; ++side) {
+    Eigen::VectorXd ys = y;  // q moves along qdot = N(q) u, u stays: udot = 0
+    ys.head(p.nq) += (side == 0 ? kFdStep : -kFdStep) * ydot.head(p.nq);
+    ASSERT_EQ(rt::UnpackState(p, *ws2, 0.0, ys.data()), 0);
+    rt::PositionKinematics(p, *ws2);
+    rt::VelocityKinematics(p, *ws2);
+    v[side] = ws2->v_WBcm;
+    w[side] = ws2->w_WB;
+  }
+  for (size_t L = 0; L < p.bodies.size(); ++L) {
+    EXPECT_LT((ws->a_bias_cm[L] - (v[0][L] - v[1][L]) / (2 * kFdStep)).norm(), kFdTol) << p.bodies[L].name;
+    EXPECT_LT((ws->alpha_bias[L] - (w[0][L] - w[1][L]) / (2 * kFdStep)).norm(), kFdTol) << p.bodies[L].name;
   }
 }
 
@@ -72,30 +122,9 @@ TEST(Kinematics, BiasAccelerationsMatchFiniteDifferencesOfVelocities) {
   // Coriolis, gyroscopic; seed 000 eq. 11.17) are wrong for some joint type or an
   // inverted joint: they must equal d/dt of the velocities with u held fixed.
   std::mt19937 rng(4321);
-  for (int tree = 0; tree < 3; ++tree) {
-    auto r = rt::Compile(test::RandomTree(rng, {14, true, true, true}), {});
-    ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
-    const rt::Program& p = *r.program;
-    auto ws = rt::MakeWorkspace(p);
-    auto ws2 = rt::MakeWorkspace(p);
-    const Eigen::VectorXd y = test::RandomState(p, rng);
-    Eigen::VectorXd ydot(y.size());
-    ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), ydot.data()), 0) << rt::ErrorMessage(*ws);
-    std::vector<Vec3> v[2], w[2];
-    for (int side = 0; side < 2; ++side) {
-      Eigen::VectorXd ys = y;  // q moves along qdot = N(q) u, u stays: udot = 0
-      ys.head(p.nq) += (side == 0 ? kFdStep : -kFdStep) * ydot.head(p.nq);
-      ASSERT_EQ(rt::UnpackState(p, *ws2, 0.0, ys.data()), 0);
-      rt::PositionKinematics(p, *ws2);
-      rt::VelocityKinematics(p, *ws2);
-      v[side] = ws2->v_WBcm;
-      w[side] = ws2->w_WB;
-    }
-    for (size_t L = 0; L < p.bodies.size(); ++L) {
-      EXPECT_LT((ws->a_bias_cm[L] - (v[0][L] - v[1][L]) / (2 * kFdStep)).norm(), kFdTol) << p.bodies[L].name;
-      EXPECT_LT((ws->alpha_bias[L] - (w[0][L] - w[1][L]) / (2 * kFdStep)).norm(), kFdTol) << p.bodies[L].name;
-    }
-  }
+  for (int tree = 0; tree < 3; ++tree) ExpectBiasMatchesFd(test::RandomTree(rng, {14, true, true, true}), rng);
+  ExpectBiasMatchesFd(AxisChain(9, Mat3::Identity(), rng), rng);  // the coordinate-axis shortcuts
+  ExpectBiasMatchesFd(AxisChain(9, test::RandomRotation(rng), rng), rng);
 }
 
 flat::Mechanism Ball(flat::RotationCoords rc, flat::JointType type = flat::JointType::Spherical) {
@@ -196,22 +225,6 @@ flat::Mechanism OffsetPendulum(bool inverted) {
     b.Joint("pivot", flat::JointType::Revolute, pivot, w, Vec3::UnitZ());
   else
     b.Joint("pivot", flat::JointType::Revolute, w, pivot, Vec3::UnitZ());
-  return b.m;
-}
-
-// A chain of revolute joints about coordinate axes, each rod's tip frame turned by
-// `R_tip` (identity: R_PJ = 1 exactly, the cheapest case), with random inertias.
-flat::Mechanism AxisChain(int N, const Mat3& R_tip, std::mt19937& rng) {
-  test::MechBuilder b;
-  int prev = b.World(Vec3(0, -9.81, 0));
-  for (int i = 1; i <= N; ++i) {
-    const std::string rod = "rod" + std::to_string(i);
-    const int fa = b.Frame(rod + ".frame_a"), fb = b.Frame(rod + ".frame_b");
-    b.Fixed(rod + ".fixed", fa, fb, Vec3(0.5, 0.1 * i, -0.05), R_tip);
-    b.Body(rod, fa, 1.0 + 0.1 * i, test::RandomVec(rng, 0.3), test::RandomInertia(rng));
-    b.Joint("j" + std::to_string(i), flat::JointType::Revolute, prev, fa, Vec3::Unit(i % 3));
-    prev = fb;
-  }
   return b.m;
 }
 
