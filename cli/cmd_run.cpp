@@ -46,6 +46,7 @@ struct RunArgs {
   std::string solver = "auto";
   std::string integrator = "auto";
   std::string linear_solver = "auto";
+  std::string projection = "eval";
   std::string reactions = "nan";
   bool stats = false;
 };
@@ -140,6 +141,7 @@ int RunCommand(const RunArgs& a) {
   so.integrator = copts.integrator;
   so.cvode_bdf = a.integrator == "cvode-bdf";
   so.ida_linear_solver = IdaLinearSolverFromName(a.linear_solver);
+  so.project_steps = a.projection == "step";
 
   if (!a.patterns.empty()) {
     std::string error;
@@ -215,6 +217,7 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   run->add_option("--linear-solver", a->linear_solver,
                   "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
       ->check(CLI::IsMember({"auto", "dense", "klu"}));
+  run->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   run->add_option("--reactions", a->reactions,
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember({"nan", "min-norm"}));

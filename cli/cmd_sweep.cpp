@@ -49,6 +49,7 @@ struct SweepArgs {
   double start_time = kNaN, stop_time = kNaN, interval = kNaN, rtol = kNaN, atol = kNaN;
   std::string solver = "auto", integrator = "auto", linear_solver = "auto";
   std::string reactions = "nan";
+  std::string projection = "eval";
 };
 
 struct MergeArgs {
@@ -184,6 +185,7 @@ int SweepCommand(SweepArgs a) {
   std::shared_ptr<const rt::Program> base = compiled.program;
   config.sim = ResolveSimOptions(mech.experiment, a.start_time, a.stop_time, a.interval, a.rtol, a.atol, a.integrator);
   config.sim.ida_linear_solver = IdaLinearSolverFromName(a.linear_solver);
+  config.sim.project_steps = a.projection == "step";
   if (!a.patterns.empty()) {
     std::string err;
     if (!sim::SelectSignals(rt::AvailableSignals(*base), a.patterns, &config.trajectory_signals, &err))
@@ -335,6 +337,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code) {
   sw->add_option("--linear-solver", a->linear_solver,
                  "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
       ->check(CLI::IsMember({"auto", "dense", "klu"}));
+  sw->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   sw->add_option("--reactions", a->reactions,
                  "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember({"nan", "min-norm"}));

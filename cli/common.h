@@ -53,6 +53,11 @@ inline sim::IdaLinearSolver IdaLinearSolverFromName(const std::string& name) {
   return sim::IdaLinearSolver::Auto;
 }
 
+// `--projection eval|step` (run, sweep): SimOptions::project_steps.
+inline constexpr const char* kProjectionHelp =
+    "Closed loops and contacts with --integrator dop853: project onto the constraints at every evaluation "
+    "(eval) or once per accepted step (step: cheaper evaluations, a larger error at the same tolerance)";
+
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code);
 void AddRunCommand(CLI::App& app, int* exit_code);

@@ -532,6 +532,21 @@ int ProjectState(const Program& p, Workspace& ws) {
   return 0;
 }
 
+// The same dependent-speed solve as the end of ProjectState, without the Newton loop.
+int ProjectSpeeds(const Program& p, Workspace& ws) {
+  if (p.rows.empty()) return 0;
+  ResidualsAndJacobian(p, ws);
+  if (int s = FactorDependent(p, ws); s != 0) return s;
+  if (int s = CheckDisksUpright(p, ws); s != 0) return s;
+  const int rank = p.loop_rank;
+  if (rank == 0) return 0;
+  GatherActive(p, ws.psi, &ws.vg);
+  SolveDependent(ws, ws.vg, &ws.xd);
+  for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.xd[k];
+  VelocityKinematics(p, ws);
+  return 0;
+}
+
 namespace {
 
 // Entry (i, j) of the symmetric mass matrix from the lower triangle AssembleDense fills.

@@ -53,6 +53,11 @@ void RowBodies(const Program& p, int row, int* body_a, int* body_b);
 //   d/dt phi_i (or the velocity row) = Ja . V_a + Jb . V_b.
 void RowJacobians(const Program& p, const Workspace& ws, int row, Vec6* Ja, Vec6* Jb);
 
+// The speeds half of ProjectState: the dependent speeds from the velocity constraints at
+// the positions as they are (ws.phi is left at their residual), for solvers that project
+// their steps (engine.h SetStepProjection). 0, or 1 (recoverable). Not on the sparse path.
+int ProjectSpeeds(const Program& p, Workspace& ws);
+
 // ws.psi only (A u + b without forming A), after VelocityKinematics.
 void ConstraintRates(const Program& p, Workspace& ws);
 

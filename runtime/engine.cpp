@@ -61,7 +61,8 @@ int Derivative(const Program& p, Workspace& ws, double t, const double* y, doubl
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
   VelocityKinematics(p, ws);
-  if (int s = ProjectState(p, ws); s != 0) return s;
+  const bool step_projection = ws.step_projection && StepProjectionAvailable(p);
+  if (int s = step_projection ? ProjectSpeeds(p, ws) : ProjectState(p, ws); s != 0) return s;
   if (int s = KinematicDifferentials(p, ws); s != 0) return s;
   BiasAccelerations(p, ws);
   if (int s = AppliedForces(p, ws); s != 0) return s;
@@ -72,7 +73,22 @@ int Derivative(const Program& p, Workspace& ws, double t, const double* y, doubl
     if (!std::isfinite(a)) return NotFinite(p, ws, i);
     ydot[p.nq + i] = a;
   }
-  if (!p.rows.empty()) PullToManifold(p, ws, y, ydot);
+  if (!p.rows.empty() && !step_projection) PullToManifold(p, ws, y, ydot);
+  return 0;
+}
+
+bool StepProjectionAvailable(const Program& p) { return !p.rows.empty() && p.solver != SolverPath::Sparse; }
+
+void SetStepProjection(Workspace& ws, bool on) { ws.step_projection = on; }
+
+int ProjectOntoConstraints(const Program& p, Workspace& ws, double t, double* y) {
+  if (p.rows.empty()) return 0;
+  if (int s = UnpackState(p, ws, t, y); s != 0) return s;
+  PositionKinematics(p, ws);
+  VelocityKinematics(p, ws);
+  if (int s = ProjectState(p, ws); s != 0) return s;
+  for (int i = 0; i < p.nq; ++i) y[i] = ws.q[p.q_free[static_cast<size_t>(i)]];
+  for (int i = 0; i < p.nu; ++i) y[p.nq + i] = ws.u[p.u_free[static_cast<size_t>(i)]];
   return 0;
 }
 

@@ -93,6 +93,21 @@ void InitialState(const Program& program, double* y);
 // step), <0 fatal. On failure, ErrorMessage(ws) says why (e.g. "singular mass matrix",
 // "gimbal lock in joint 'ball' (Cardan angle q[2] = 1.5707963)", "NaN from expression ...").
 int Derivative(const Program& program, Workspace& ws, double t, const double* y, double* ydot);
+
+// Manifold projection per step (Hairer, Lubich & Wanner, Geometric Numerical Integration,
+// 2nd ed., sec. IV.4; docs/constraints.md "Drift"). By default Derivative projects y onto
+// the constraints at every evaluation (Newton on the dependent coordinates, then the
+// dependent speeds) and adds a pull toward the projection. A one-step solver may instead
+// project each accepted step with ProjectOntoConstraints and switch the workspace to
+// SetStepProjection(ws, true): Derivative then takes the positions as they are (off the
+// manifold by at most one step's local error), solves only the dependent speeds from the
+// velocity constraints, and adds no pull. Available on the reduced path with constraint
+// rows (StepProjectionAvailable); elsewhere the switch has no effect.
+bool StepProjectionAvailable(const Program& program);
+void SetStepProjection(Workspace& ws, bool on);
+// y := its projection onto the position and velocity constraints. 0, or 1 (recoverable:
+// the loop cannot be closed, or a singular configuration; ErrorMessage says which).
+int ProjectOntoConstraints(const Program& program, Workspace& ws, double t, double* y);
 const std::string& ErrorMessage(const Workspace& ws);
 
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",

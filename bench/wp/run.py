@@ -120,6 +120,11 @@ def run_kanesim(args, problems, sweep, rtols, res):
                 pts = sweep.run(p, rtols, lambda r: kanesim_run(args.kanesim, p, integ, solver, r, out), label,
                                 go_on_after_failure=constrained)
                 res["runs"].setdefault(p.name, {})[label] = pts
+        if constrained:  # DOP853 projecting once per accepted step (`--projection step`)
+            label = "kanesim dop853 dense step-projection"
+            pts = sweep.run(p, rtols, lambda r: kanesim_run(args.kanesim, p, "dop853", "dense", r, out,
+                                                            ("--projection", "step")), label, go_on_after_failure=True)
+            res["runs"].setdefault(p.name, {})[label] = pts
 
 
 # --------------------------------------------------------------------------- Pinocchio C++

@@ -81,6 +81,18 @@ int GuardedRhs::operator()(double t, const double* y, double* ydot) {
   return 0;
 }
 
+int GuardedRhs::Project(double t, double* y) {
+  if (fatal) return -1;
+  int status = system_.Project(t, y);
+  if (status != 0) {
+    failed = true;
+    fatal = status < 0;
+    fail_time = t;
+    cause = system_.FailureCause();
+  }
+  return status;
+}
+
 void CaptureSundialsMessage(int /*error_code*/, const char* /*module*/, const char* function, char* msg,
                             void* user_data) {
   auto* messages = static_cast<SundialsMessages*>(user_data);

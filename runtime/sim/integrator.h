@@ -49,8 +49,16 @@ class OdeSystem {
   virtual int Size() const = 0;
   // ydot = f(t, y); y and ydot have Size() entries.
   virtual int Rhs(double t, const double* y, double* ydot) = 0;
-  // Why the last non-zero return of Rhs happened ("singular mass matrix", ...).
+  // Why the last non-zero return of Rhs or Project happened ("singular mass matrix", ...).
   virtual std::string FailureCause() const { return "the right-hand side reported a failure"; }
+  // Manifold projection (Hairer, Lubich & Wanner, Geometric Numerical Integration, sec.
+  // IV.4) for a system whose states obey constraints. A one-step solver (DOP853) that can
+  // project calls EnableStepProjection once before its first Rhs, then Project on every
+  // accepted step; the system may then skip its own projection inside Rhs. Project
+  // returns Rhs's status codes.
+  virtual bool CanProject() const { return false; }
+  virtual void EnableStepProjection() {}
+  virtual int Project(double /*t*/, double* /*y*/) { return 0; }
 };
 
 enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };
@@ -75,6 +83,7 @@ struct IntegratorOptions {
   double initial_step = 0.0;       // 0 = the solver's estimate
   ErkTable erk_table = ErkTable::Fehlberg87;
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;
+  bool project_steps = false;      // DOP853: project accepted steps (OdeSystem::Project)
   std::vector<int> coupling;       // per state: its group (empty: one group, a dense df/dy)
 };
 

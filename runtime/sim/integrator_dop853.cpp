@@ -22,8 +22,16 @@
 // of the tableau). They cost 3 evaluations of f, spent only on steps that hold an output
 // instant; the further instants in that step cost no f at all.
 //
-// Failures: f returning > 0 in a step rejects it and retries with a quarter of h
-// (kMaxRhsFails in a row end the run); f returning < 0 ends it at once.
+// Constraints (OdeSystem::CanProject): each accepted y1 is projected onto the manifold
+// before k_12 = f(t + h, y1) is evaluated there (Hairer, Lubich & Wanner, Geometric
+// Numerical Integration, 2nd ed., sec. IV.4, Algorithm 4.2: the projection keeps the
+// order, and the drift cannot accumulate from step to step). The error estimate (2) is
+// that of the unprojected y1; the dense output (4) runs from y to the projected y1, so
+// it stays continuous. The system's f may then skip its own projection (the stage
+// arguments are off the manifold by at most one step's local error).
+//
+// Failures: f or the projection returning > 0 in a step rejects it and retries with a
+// quarter of h (kMaxRhsFails in a row end the run); < 0 ends it at once.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -69,6 +77,8 @@ class Dop853Stepper final : public Stepper {
 
   // f(t0, y0) and the first step size. False when f fails at t0 (rhs_.failed is set).
   bool Init(const double* y0) {
+    project_ = options_.project_steps && rhs_.CanProject();
+    if (project_) rhs_.EnableStepProjection();
     std::copy(y0, y0 + n_, y_.begin());
     if (Eval(t_, y_.data(), K(0)) != 0) return false;
     if (options_.initial_step > 0.0) {
@@ -219,9 +229,10 @@ class Dop853Stepper final : public Stepper {
           h_ = h * std::max(kMinShrink, shrink);
           continue;
         }
-        // Accepted: f at the new point, the next step's first stage (k_12 here).
+        // Accepted: projected, then f at the new point, the next step's first stage (k_12 here).
         const double t_new = last ? stop_ : t_ + h;
-        status = Eval(t_new, y_new_.data(), K(tab::kStages));
+        if (project_) status = rhs_.Project(t_new, y_new_.data());
+        if (status == 0) status = Eval(t_new, y_new_.data(), K(tab::kStages));
         if (status == 0) {
           double grow = err == 0.0 ? kMaxGrow : std::min(kMaxGrow, kSafety * std::pow(err, -1.0 / 8));
           if (rejected) grow = std::min(grow, 1.0);
@@ -355,6 +366,7 @@ class Dop853Stepper final : public Stepper {
   std::vector<double> stage_y_;  // argument of one stage  (n)
   std::vector<double> k_;        // stages k_0 .. k_15, row s at s n  (16 n)
   std::vector<double> r_;        // r0 .. r6 of Eq. (4), row m at m n  (7 n)
+  bool project_ = false;         // accepted steps are projected (OdeSystem::Project)
   bool dense_ready_ = false;     // r_ holds the last step's dense output
   bool fsal_pending_ = false;    // K(tab::kStages) is f(t_, y_), not yet copied into K(0)
   int rhs_fails_ = 0;            // recoverable failures of f in a row

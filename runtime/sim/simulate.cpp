@@ -24,6 +24,9 @@ class EngineOde final : public OdeSystem {
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }
+  bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
+  void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
+  int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
 
  private:
   const rt::Program& program_;
@@ -70,6 +73,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.atol = options.atol;
   iopt.max_steps = options.max_steps;
   iopt.ida_linear_solver = options.ida_linear_solver;
+  iopt.project_steps = options.project_steps;
   if (iopt.method == Method::IDA) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.

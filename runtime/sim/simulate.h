@@ -27,6 +27,9 @@ struct SimOptions {
   bool cvode_bdf = false;       // CVODE with BDF + Newton instead of Adams + fixed point
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;  // IDA's Newton matrix: dense LU or KLU
   long max_steps = 100000;      // internal steps allowed between two output instants
+  // Closed loops and contacts with DOP853: project once per accepted step instead of at every
+  // evaluation (`--projection step`; engine.h SetStepProjection, docs/constraints.md "Drift").
+  bool project_steps = false;
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty
 };

@@ -18,6 +18,10 @@ class GuardedRhs {
   explicit GuardedRhs(OdeSystem& system) : system_(system) {}
   int operator()(double t, const double* y, double* ydot);
   int Size() const { return system_.Size(); }
+  // The system's projection (OdeSystem::Project), failures recorded as operator()'s.
+  bool CanProject() const { return system_.CanProject(); }
+  void EnableStepProjection() { system_.EnableStepProjection(); }
+  int Project(double t, double* y);
 
   bool failed = false;     // an evaluation failed since the last ClearFailure()
   bool fatal = false;      // an evaluation returned < 0: latched, every later call fails
