@@ -100,7 +100,7 @@ int Derivative(const Program& program, Workspace& ws, double t, const double* y,
 // dependent speeds) and adds a pull toward the projection. A one-step solver may instead
 // project each accepted step with ProjectOntoConstraints and switch the workspace to
 // SetStepProjection(ws, true): Derivative then takes the positions as they are (off the
-// manifold by at most one step's local error), solves only the dependent speeds from the
+// manifold: an explicit Runge-Kutta stage's own error is O(h^2)), solves only the dependent speeds from the
 // velocity constraints, and adds no pull. Available on the reduced path with constraint
 // rows (StepProjectionAvailable); elsewhere the switch has no effect.
 bool StepProjectionAvailable(const Program& program);

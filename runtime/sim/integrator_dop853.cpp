@@ -28,7 +28,7 @@
 // order, and the drift cannot accumulate from step to step). The error estimate (2) is
 // that of the unprojected y1; the dense output (4) runs from y to the projected y1, so
 // it stays continuous. The system's f may then skip its own projection (the stage
-// arguments are off the manifold by at most one step's local error).
+// arguments are off the manifold by their own error, which is O(h^2), not the step's).
 //
 // Failures: f or the projection returning > 0 in a step rejects it and retries with a
 // quarter of h (kMaxRhsFails in a row end the run); < 0 ends it at once.
