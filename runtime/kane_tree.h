@@ -23,6 +23,9 @@ struct TreeLayout {
   };
   std::vector<JointBlock> joints;  // K, in tree order
   std::vector<int> parent;         // K: p.joints[L].parent, packed for the passes
+  std::vector<char> has_children;  // K: some joint has body L as its parent
+  std::vector<char> first_share;   // K: L is its parent's last child in tree order, the first the backward
+                                   //    pass reaches: it writes its share into the parent, the others add
   int d_size = 0;                  // sum of nf^2
 };
 
