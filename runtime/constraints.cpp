@@ -473,6 +473,20 @@ int SparseSingular(const Program& p, Workspace& ws, bool factored) {
   return 1;
 }
 
+// After A and its factorization at the final positions: the rolling disks' check, then the
+// dependent speeds from the velocity constraints (7), u_dep -= A_dep^+ (A u + b), and the
+// velocity kinematics of the new speeds. 0, or 1 (recoverable).
+int SolveDependentSpeeds(const Program& p, Workspace& ws) {
+  if (int s = CheckDisksUpright(p, ws); s != 0) return s;
+  const int rank = p.loop_rank;
+  if (rank == 0) return 0;
+  GatherActive(p, ws.psi, &ws.vg);
+  SolveDependent(ws, ws.vg, &ws.xd);
+  for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.xd[k];
+  VelocityKinematics(p, ws);
+  return 0;
+}
+
 // ProjectState on the sparse path: the steps of kane.h SparseCorrection, chord steps with
 // the previous evaluation's factorization while they contract, Newton after.
 int ProjectStateSparse(const Program& p, Workspace& ws) {
@@ -522,29 +536,15 @@ int ProjectState(const Program& p, Workspace& ws) {
     StepCoordinates(p, ws);
   }
   if (int s = CheckClosed(p, ws); s != 0) return s;
-  if (int s = CheckDisksUpright(p, ws); s != 0) return s;
-  if (rank == 0) return 0;
-  // Dependent speeds from the velocity constraints (7): u_dep -= A_dep^+ (A u + b).
-  GatherActive(p, ws.psi, &ws.vg);
-  SolveDependent(ws, ws.vg, &ws.xd);
-  for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.xd[k];
-  VelocityKinematics(p, ws);
-  return 0;
+  return SolveDependentSpeeds(p, ws);
 }
 
-// The same dependent-speed solve as the end of ProjectState, without the Newton loop.
+// ProjectState without the Newton loop: the dependent speeds at the positions as they are.
 int ProjectSpeeds(const Program& p, Workspace& ws) {
   if (p.rows.empty()) return 0;
   ResidualsAndJacobian(p, ws);
   if (int s = FactorDependent(p, ws); s != 0) return s;
-  if (int s = CheckDisksUpright(p, ws); s != 0) return s;
-  const int rank = p.loop_rank;
-  if (rank == 0) return 0;
-  GatherActive(p, ws.psi, &ws.vg);
-  SolveDependent(ws, ws.vg, &ws.xd);
-  for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.xd[k];
-  VelocityKinematics(p, ws);
-  return 0;
+  return SolveDependentSpeeds(p, ws);
 }
 
 namespace {

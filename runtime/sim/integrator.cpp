@@ -57,16 +57,17 @@ double OutputGrid::Time(long k) const {
 
 namespace detail {
 
+int GuardedRhs::Failed(double t, int status) {
+  failed = true;
+  fatal = status < 0;
+  fail_time = t;
+  cause = system_.FailureCause();
+  return status;
+}
+
 int GuardedRhs::operator()(double t, const double* y, double* ydot) {
   if (fatal) return -1;
-  int status = system_.Rhs(t, y, ydot);
-  if (status != 0) {
-    failed = true;
-    fatal = status < 0;
-    fail_time = t;
-    cause = system_.FailureCause();
-    return status;
-  }
+  if (int status = system_.Rhs(t, y, ydot); status != 0) return Failed(t, status);
   int n = system_.Size();
   for (int i = 0; i < n; ++i) {
     if (!std::isfinite(ydot[i])) {
@@ -83,14 +84,8 @@ int GuardedRhs::operator()(double t, const double* y, double* ydot) {
 
 int GuardedRhs::Project(double t, double* y) {
   if (fatal) return -1;
-  int status = system_.Project(t, y);
-  if (status != 0) {
-    failed = true;
-    fatal = status < 0;
-    fail_time = t;
-    cause = system_.FailureCause();
-  }
-  return status;
+  if (int status = system_.Project(t, y); status != 0) return Failed(t, status);
+  return 0;
 }
 
 void CaptureSundialsMessage(int /*error_code*/, const char* /*module*/, const char* function, char* msg,

@@ -31,6 +31,7 @@ class GuardedRhs {
   void ClearFailure() { failed = false; }
 
  private:
+  int Failed(double t, int status);  // records a failure of f or of the projection; returns status
   OdeSystem& system_;
 };
 

@@ -38,8 +38,9 @@ inline std::unique_ptr<Loaded> LoadModel(const std::string& path_or_text, std::v
 
 inline sim::MemorySink RunModel(const rt::Program& p, double stop, double interval, double tol,
                            std::vector<std::string> signals,
-                           rt::IntegratorKind integrator = rt::IntegratorKind::Auto) {
+                           rt::IntegratorKind integrator = rt::IntegratorKind::Auto, bool project_steps = false) {
   sim::SimOptions o;
+  o.project_steps = project_steps;
   o.stop_time = stop;
   o.interval = interval;
   o.rtol = o.atol = tol;

@@ -139,23 +139,6 @@ TEST(FourBar, ResidualsStayAtToleranceOverALongRun) {
   }
 }
 
-// DOP853 with --projection step (engine.h SetStepProjection): the right-hand side takes
-// the positions as they are, and the stepper projects each accepted step.
-sim::MemorySink RunStepProjected(const rt::Program& p, double stop, double interval, double tol,
-                                 std::vector<std::string> signals) {
-  sim::SimOptions o;
-  o.stop_time = stop;
-  o.interval = interval;
-  o.rtol = o.atol = tol;
-  o.integrator = rt::IntegratorKind::DOP853;
-  o.project_steps = true;
-  o.signals = std::move(signals);
-  sim::MemorySink sink;
-  sim::SimResult r = sim::Simulate(p, o, sink);
-  EXPECT_EQ(r.status, sim::SimResult::Status::kOk) << r.message;
-  return sink;
-}
-
 TEST(FourBar, StepProjectionKeepsTheLoopClosedOverALongRun) {
   // If this fails, the accepted steps are not projected (the loop then drifts off by the
   // integration error, step after step), or the cheaper right-hand side is wrong (the
@@ -163,9 +146,12 @@ TEST(FourBar, StepProjectionKeepsTheLoopClosedOverALongRun) {
   auto l = LoadModel(kRoot + "/examples/fourbar.mech");
   ASSERT_TRUE(l && l->prog);
   for (double tol : {1e-6, 1e-9}) {
-    auto s = RunStepProjected(*l->prog, 100.0, 0.1, tol,
-                              {"crank_pivot.q", "crank_coupler.q", "rocker_pivot.q", "coupler_rocker.constraint_drift",
-                               "kinetic_energy", "potential_energy"});
+    // DOP853 with --projection step: the right-hand side takes the positions as they are,
+    // the stepper projects each accepted step (engine.h SetStepProjection).
+    auto s = RunModel(*l->prog, 100.0, 0.1, tol,
+                      {"crank_pivot.q", "crank_coupler.q", "rocker_pivot.q", "coupler_rocker.constraint_drift",
+                       "kinetic_energy", "potential_energy"},
+                      rt::IntegratorKind::DOP853, /*project_steps=*/true);
     const double E0 = s.rows[0][4] + s.rows[0][5];
     double kin = 0.0, drift = 0.0, de = 0.0;
     for (const auto& r : s.rows) {
