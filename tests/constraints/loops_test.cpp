@@ -29,6 +29,22 @@ namespace {
 
 double Wrap(double x) { return std::remainder(x, 2.0 * M_PI); }
 
+// The state indices of the four-bar's coordinates (crank, coupler, rocker).
+struct FourBarIndices {
+  size_t crank, coupler, rocker;
+};
+FourBarIndices FourBarCoordinates(const rt::Program& p) {
+  FourBarIndices ix{0, 0, 0};
+  for (const rt::TreeJoint& j : p.joints) {
+    const auto q0 = static_cast<size_t>(j.q0);
+    if (j.name == "crank_pivot") ix.crank = q0;
+    if (j.name == "crank_coupler") ix.coupler = q0;
+    if (j.name == "rocker_pivot") ix.rocker = q0;
+  }
+  EXPECT_NE(ix.coupler, ix.rocker);
+  return ix;
+}
+
 struct FourBarAngles {
   double phi3, phi4;
 };
@@ -188,22 +204,16 @@ TEST(FourBar, StepProjectedDerivativeEqualsTheProjectedOneOnTheLoop) {
   const size_t n = static_cast<size_t>(rt::StateSize(p));
   std::vector<double> y(n), y0(n), yd(n), yd_step(n);
   rt::InitialState(p, y0.data());
-  int crank = -1, coupler = -1, rocker = -1;
-  for (const rt::TreeJoint& j : p.joints) {
-    if (j.name == "crank_pivot") crank = j.q0;
-    if (j.name == "crank_coupler") coupler = j.q0;
-    if (j.name == "rocker_pivot") rocker = j.q0;
-  }
-  ASSERT_EQ(crank, 0);  // the independent coordinate at the start, and the first state
+  const auto [crank, coupler, rocker] = FourBarCoordinates(p);
   for (int k = 0; k < 36; ++k) {
     // Around a crank turn, the dependent coordinates 1e-4 off the closed form, every
     // speed 1e-4 off the start's; then projected.
     y = y0;
     const double th = 0.3 + 2 * M_PI * k / 36.0;
     const FourBarAngles cf = FourBarClosedForm(0.2, 0.6, 0.5, 0.6, th);
-    y[static_cast<size_t>(crank)] = th;
-    y[static_cast<size_t>(coupler)] = cf.phi3 - th + 1e-4;
-    y[static_cast<size_t>(rocker)] = cf.phi4 - 1e-4;
+    y[crank] = th;
+    y[coupler] = cf.phi3 - th + 1e-4;
+    y[rocker] = cf.phi4 - 1e-4;
     for (size_t i = static_cast<size_t>(p.nq); i < n; ++i) y[i] += 1e-4;
     const std::vector<double> y_before = y;
     ASSERT_EQ(rt::ProjectOntoConstraints(p, *ws_step, 0.0, y.data()), 0) << rt::ErrorMessage(*ws_step);
@@ -213,6 +223,10 @@ TEST(FourBar, StepProjectedDerivativeEqualsTheProjectedOneOnTheLoop) {
     const size_t s = static_cast<size_t>(ws_step->ind[0]);
     EXPECT_EQ(y[s], y_before[s]);
     EXPECT_EQ(y[static_cast<size_t>(p.nq) + s], y_before[static_cast<size_t>(p.nq) + s]);
+    // ... and lands on the closed-form loop kinematics of the (projected) crank angle.
+    const FourBarAngles on = FourBarClosedForm(0.2, 0.6, 0.5, 0.6, y[crank]);
+    EXPECT_LT(std::fabs(Wrap(y[crank] + y[coupler] - on.phi3)), 1e-12) << "k = " << k;
+    EXPECT_LT(std::fabs(Wrap(y[rocker] - on.phi4)), 1e-12) << "k = " << k;
     ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), yd.data()), 0);
     ASSERT_EQ(rt::Derivative(p, *ws_step, 0.0, y.data(), yd_step.data()), 0);
     EXPECT_LT(ws_step->phi.cwiseAbs().maxCoeff(), 1e-13 * p.loop_length) << "k = " << k;
@@ -230,20 +244,15 @@ TEST(FourBar, ProjectionHoldsAroundAFullCrankTurn) {
   auto ws = rt::MakeWorkspace(p);
   std::vector<double> y(static_cast<size_t>(rt::StateSize(p))), yd(y.size());
   rt::InitialState(p, y.data());
-  int crank = -1, coupler = -1, rocker = -1;
-  for (const rt::TreeJoint& j : p.joints) {
-    if (j.name == "crank_pivot") crank = j.q0;
-    if (j.name == "crank_coupler") coupler = j.q0;
-    if (j.name == "rocker_pivot") rocker = j.q0;
-  }
+  const auto [crank, coupler, rocker] = FourBarCoordinates(p);
   // States on the closed form all the way round, each coordinate off by 1e-6 rad: the
   // integrator's state is never further off than that.
   for (int k = 0; k < 720; ++k) {
     const double th = 0.3 + 2 * M_PI * k / 720.0;
     const FourBarAngles cf = FourBarClosedForm(0.2, 0.6, 0.5, 0.6, th);
-    y[static_cast<size_t>(crank)] = th + 1e-6;
-    y[static_cast<size_t>(coupler)] = cf.phi3 - th - 1e-6;
-    y[static_cast<size_t>(rocker)] = cf.phi4 + 1e-6;
+    y[crank] = th + 1e-6;
+    y[coupler] = cf.phi3 - th - 1e-6;
+    y[rocker] = cf.phi4 + 1e-6;
     ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), yd.data()), 0) << rt::ErrorMessage(*ws) << " at k = " << k;
     EXPECT_LT(ws->phi.cwiseAbs().maxCoeff(), 1e-13 * p.loop_length);
   }

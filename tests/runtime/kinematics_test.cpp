@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 
 #include "runtime/engine.h"
@@ -45,14 +46,20 @@ flat::Mechanism AxisChain(int N, const Mat3& R_tip, std::mt19937& rng) {
   return b.m;
 }
 
+// The finite-difference checks' mechanism, compiled (null, and a failure, on errors).
+std::shared_ptr<const rt::Program> CompileForFd(const flat::Mechanism& m) {
+  auto r = rt::Compile(m, {});
+  EXPECT_TRUE(r.errors.empty()) << (r.errors.empty() ? "" : r.errors[0].message);
+  return r.program;
+}
+
 // Each column of the tangent basis against central differences of the body positions and
 // orientations along qdot = N(q) e_i.
 void ExpectTangentBasisMatchesFd(const flat::Mechanism& m, std::mt19937& rng) {
-  auto r = rt::Compile(m, {});
-  ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
-  const rt::Program& p = *r.program;
-  auto ws = rt::MakeWorkspace(p);
-  auto ws2 = rt::MakeWorkspace(p);
+  const auto program = CompileForFd(m);
+  ASSERT_TRUE(program);
+  const rt::Program& p = *program;
+  auto ws = rt::MakeWorkspace(p), ws2 = rt::MakeWorkspace(p);
   const Eigen::VectorXd y = test::RandomState(p, rng);
   for (int i = 0; i < p.nu; ++i) {
     // qdot = N(q) e_i: the coordinate direction of the unit pseudo-speed u = e_i.
@@ -93,11 +100,10 @@ TEST(Kinematics, TangentBasisMatchesFiniteDifferencesOfPositions) {
 
 // The bias accelerations against central differences of the velocities with u held fixed.
 void ExpectBiasMatchesFd(const flat::Mechanism& m, std::mt19937& rng) {
-  auto r = rt::Compile(m, {});
-  ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
-  const rt::Program& p = *r.program;
-  auto ws = rt::MakeWorkspace(p);
-  auto ws2 = rt::MakeWorkspace(p);
+  const auto program = CompileForFd(m);
+  ASSERT_TRUE(program);
+  const rt::Program& p = *program;
+  auto ws = rt::MakeWorkspace(p), ws2 = rt::MakeWorkspace(p);
   const Eigen::VectorXd y = test::RandomState(p, rng);
   Eigen::VectorXd ydot(y.size());
   ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), ydot.data()), 0) << rt::ErrorMessage(*ws);
