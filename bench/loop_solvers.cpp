@@ -84,7 +84,8 @@ void Run(benchmark::State& state, rt::SolverPath path) {
 // One right-hand side of an example with constraints on its automatic path, at the
 // assembled start with the coordinates moved 1e-9 off the manifold (as an integrator's
 // states are: the projection takes its Newton step) and every speed 0.3.
-void ExampleRhs(benchmark::State& state, const char* example) {
+// step = true: the right-hand side of --projection step (dependent speeds only).
+void ExampleRhs(benchmark::State& state, const char* example, bool step = false) {
   auto m = test::LoadMech(std::string(KANESIM_SOURCE_DIR) + "/examples/" + example);
   auto r = m ? rt::Compile(m->mech, {}) : rt::CompileResult{};
   if (!r.program) {
@@ -93,6 +94,7 @@ void ExampleRhs(benchmark::State& state, const char* example) {
   }
   const rt::Program& p = *r.program;
   auto ws = rt::MakeWorkspace(p);
+  rt::SetStepProjection(*ws, step);
   std::vector<double> y(static_cast<size_t>(rt::StateSize(p))), ydot(y.size());
   rt::InitialState(p, y.data());
   for (size_t i = 0; i < y.size(); ++i) y[i] += i < static_cast<size_t>(rt::NumQ(p)) ? 1e-9 : 0.3;
@@ -106,9 +108,11 @@ void ExampleRhs(benchmark::State& state, const char* example) {
 }
 
 void BM_FourBarRhs(benchmark::State& s) { ExampleRhs(s, "fourbar.mech"); }
+void BM_FourBarRhsStep(benchmark::State& s) { ExampleRhs(s, "fourbar.mech", true); }
 void BM_SliderCrankRhs(benchmark::State& s) { ExampleRhs(s, "slider_crank.mech"); }
 void BM_RollingDiskRhs(benchmark::State& s) { ExampleRhs(s, "rolling_disk.mech"); }
 BENCHMARK(BM_FourBarRhs);
+BENCHMARK(BM_FourBarRhsStep);
 BENCHMARK(BM_SliderCrankRhs);
 BENCHMARK(BM_RollingDiskRhs);
 

@@ -357,13 +357,10 @@ void GatherActive(const Program& p, const Eigen::VectorXd& full, Eigen::VectorXd
   for (size_t k = 0; k < p.active_rows.size(); ++k) (*active)[static_cast<Eigen::Index>(k)] = full[p.active_rows[k]];
 }
 
-void SolveDependent(const Workspace& ws_c, const Eigen::VectorXd& v, Eigen::VectorXd* x) {
-  auto& ws = const_cast<Workspace&>(ws_c);
-  const auto rank = ws.qr_dep.Cols();
-  ws.vc = v;
-  ws.qr_dep.ApplyQt(&ws.vc);
-  ws.qr_dep.SolveR(ws.vc.data());
-  x->head(rank) = ws.vc.head(rank);
+void SolveDependent(const Workspace& ws, const Eigen::VectorXd& v, Eigen::VectorXd* x) {
+  *x = v;  // both have the active rows' size: no allocation; Q^T v in place, then R^-1
+  ws.qr_dep.ApplyQt(x);
+  ws.qr_dep.SolveR(x->data());
 }
 
 void ApplyCoordinateStep(const Program& p, Workspace& ws, const Eigen::VectorXd& du) {
@@ -542,7 +539,7 @@ int ProjectState(const Program& p, Workspace& ws) {
 // ProjectState without the Newton loop: the dependent speeds at the positions as they are.
 int ProjectSpeeds(const Program& p, Workspace& ws) {
   if (p.rows.empty()) return 0;
-  ResidualsAndJacobian(p, ws);
+  ConstraintJacobian(p, ws);  // (no residuals: nothing here reads them)
   if (int s = FactorDependent(p, ws); s != 0) return s;
   return SolveDependentSpeeds(p, ws);
 }

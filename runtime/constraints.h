@@ -34,7 +34,8 @@ int FactorDependent(const Program& p, Workspace& ws);
 // The active rows' entries of a per-row vector (phi, psi, cbias, a column): n_c -> n_a.
 void GatherActive(const Program& p, const Eigen::VectorXd& full, Eigen::VectorXd* active);
 
-// x = A_dep^+ v (n_a -> rank) with the factorization of FactorDependent; v is kept.
+// x = A_dep^+ v (n_a -> rank) with the factorization of FactorDependent; v is kept. Only
+// x(0:rank) is the solution (the entries after it hold the rest of Q^T v).
 void SolveDependent(const Workspace& ws, const Eigen::VectorXd& v, Eigen::VectorXd* x);
 
 // q += N(q) du for a full-speed step du (quaternions renormalized).

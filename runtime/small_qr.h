@@ -18,6 +18,7 @@ class SmallQR {
   void Resize(Eigen::Index m, Eigen::Index n) {
     qr_.setZero(m, n);
     tau_.setZero(n);
+    inv_diag_.setZero(n);
   }
   Eigen::Index Cols() const { return qr_.cols(); }
   double DiagAbs(Eigen::Index k) const { return std::fabs(qr_(k, k)); }
@@ -32,6 +33,7 @@ class SmallQR {
       const double x0 = c[k];
       if (norm2 == 0.0) {  // already upper triangular in this column
         tau_[k] = 0.0;
+        inv_diag_[k] = 1.0 / x0;
         continue;
       }
       const double alpha = x0 > 0.0 ? -std::sqrt(x0 * x0 + norm2) : std::sqrt(x0 * x0 + norm2);
@@ -39,6 +41,7 @@ class SmallQR {
       for (Eigen::Index i = k + 1; i < m; ++i) c[i] /= v0;  // v = [1; c(k+1:) / v0]
       tau_[k] = (alpha - x0) / alpha;
       c[k] = alpha;
+      inv_diag_[k] = 1.0 / alpha;
       for (Eigen::Index j = k + 1; j < n; ++j) {  // H_k applied to the remaining columns
         double* a = &qr_(0, j);
         double s = a[k];
@@ -63,7 +66,7 @@ class SmallQR {
     for (Eigen::Index i = qr_.cols(); i-- > 0;) {
       double s = x[i];
       for (Eigen::Index j = i + 1; j < qr_.cols(); ++j) s -= qr_(i, j) * x[j];
-      x[i] = s / qr_(i, i);
+      x[i] = s * inv_diag_[i];
     }
   }
   // x(0:n) <- R^-T x(0:n).
@@ -71,7 +74,7 @@ class SmallQR {
     for (Eigen::Index i = 0; i < qr_.cols(); ++i) {
       double s = x[i];
       for (Eigen::Index j = 0; j < i; ++j) s -= qr_(j, i) * x[j];
-      x[i] = s / qr_(i, i);
+      x[i] = s * inv_diag_[i];
     }
   }
 
@@ -87,6 +90,7 @@ class SmallQR {
 
   Eigen::MatrixXd qr_;
   Eigen::VectorXd tau_;
+  Eigen::VectorXd inv_diag_;  // 1 / R_kk, so that the solves multiply (off the division's latency)
 };
 
 }  // namespace kanesim::rt
