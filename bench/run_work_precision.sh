@@ -17,7 +17,7 @@ PY="$HERE/.venv/bin/python"
 sh "$HERE/setup_venv.sh"
 
 cmake -S "$ROOT" -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$BUILD_DIR" -j2 --target kanesim rhs_chain
+cmake --build "$BUILD_DIR" -j2 --target kanesim kanesim_driver rhs_chain
 
 # Pinocchio's aba is header-only C++ templates: compile the driver with the same -O3 as
 # kanesim's Release build (no -march=native for either). The defines are those of the
@@ -49,6 +49,7 @@ DOCS="$ROOT/docs/benchmarks"
 case " $* " in
   *" --quick "*) RESULTS="$HERE/results/quick/results.json"; DOCS="$HERE/results/quick" ;;
 esac
-"$PY" "$HERE/wp/run.py" --kanesim "$BUILD_DIR/cli/kanesim" --pin-driver "$PIN_DRIVER" \
+"$PY" "$HERE/wp/run.py" --kanesim "$BUILD_DIR/cli/kanesim" --kanesim-driver "$BUILD_DIR/bench/kanesim_driver" \
+    --pin-driver "$PIN_DRIVER" \
     --rhs-bench "$BUILD_DIR/bench/rhs_chain" --out "$RESULTS" "$@"
 "$PY" "$HERE/wp/report.py" --results "$RESULTS" --out "$DOCS"

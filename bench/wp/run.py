@@ -3,11 +3,16 @@ one run on one machine. Writes bench/results/results.json; report.py turns it in
 and tables. Called by bench/run_work_precision.sh, which builds what this needs.
 
     bench/.venv/bin/python bench/wp/run.py --kanesim build-w/cli/kanesim --pin-driver DRIVER
+        [--kanesim-driver build-w/bench/kanesim_driver]
         [--rhs-bench build-w/bench/rhs_chain] [--quick] [--only kanesim,pin,scipy,mujoco,exudyn,baseline,sympy,rhs]
         [--problems fourbar,rolling_disk]   (name prefixes; other problems' results are kept)
 
 Timing: wall time of the integration only (kanesim: the `integrate` phase of --stats;
 peers: around their integrate call, model construction excluded), median of REPS runs.
+The two C++ programs, bench/kanesim_driver.cpp and bench/pin/pin_driver.cpp, are timed the
+same way: compiled once, integrated CPP_REPS times in one process, the median. Without
+--kanesim-driver, kanesim is timed by `kanesim run` instead, one cold integration per
+process (start-up and first-touch costs included, ~20 us on this machine).
 A sweep over tolerances (or time steps) goes from loose to tight and stops after the first
 run that takes longer than RUN_BUDGET seconds, so the whole benchmark fits on 2 cores.
 """
@@ -31,6 +36,13 @@ from problems import BENCH, ROOT, Problem, all_problems, mjcf, pin_model  # noqa
 
 RTOLS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
 RTOLS_QUICK = [1e-3, 1e-6, 1e-9, 1e-12]
+# Repetitions inside the C++ drivers (pin_driver, kanesim_driver; median): both are timed
+# the same way, warm and in process.
+CPP_REPS = 5
+
+
+def cpp_reps(sweep):
+    return CPP_REPS if sweep.reps > 1 else 1  # --quick: one run
 PIN_RTOLS = RTOLS + [1e-13]
 MJ_STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5]
 CONSTRAINED = ("fourbar", "disk")   # loops and rolling contacts: not trees
@@ -79,6 +91,19 @@ class Sweep:
 
 
 # --------------------------------------------------------------------------- kanesim
+def kanesim_driver_run(driver, p, integrator, solver, rtol, reps, projection="eval"):
+    """bench/kanesim_driver.cpp: compiled once, integrated REPS times in one process, the
+    median of the integrate phase (timed as pin_driver times Pinocchio: warm, in process)."""
+    cmd = [driver, p.mech, repr(p.T), repr(rtol), integrator, solver, projection, str(reps)] + list(p.sets)
+    pr = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    if pr.returncode != 0:
+        return dict(ok=False, time=0.0, message="exit %d: %s" % (pr.returncode, pr.stderr.strip()[-200:]))
+    kv = dict(tok.split("=", 1) for tok in pr.stdout.split())
+    names, last = kv["names"].split(","), [float(x) for x in kv["last"].split(",")]
+    q = [last[names.index(nm)] for nm in p.q_names]
+    return dict(ok=True, time=float(kv["wall"]), q=q, rhs=int(kv["rhs"]), steps=int(kv["steps"]))
+
+
 def kanesim_run(exe, p, integrator, solver, rtol, out_csv, extra=()):
     cmd = [exe, "run", p.mech, "-o", out_csv, "--rtol", repr(rtol), "--atol", repr(rtol),
            "--integrator", integrator, "--solver", solver, "--stop-time", repr(p.T),
@@ -105,6 +130,17 @@ def kanesim_run(exe, p, integrator, solver, rtol, out_csv, extra=()):
 
 def run_kanesim(args, problems, sweep, rtols, res):
     tmp = tempfile.mkdtemp(prefix="wp_kanesim_")
+    if args.kanesim_driver:  # in-process repetitions (the driver's median): the sweep calls it once
+        one = Sweep(1, sweep.budget)
+
+        def measure(p, integ, solver, r, extra=()):
+            proj = "step" if "step" in extra else "eval"
+            return kanesim_driver_run(args.kanesim_driver, p, integ, solver, r, cpp_reps(sweep), proj)
+    else:  # `kanesim run`, one cold integration per process, the sweep's median
+        one = sweep
+
+        def measure(p, integ, solver, r, extra=()):
+            return kanesim_run(args.kanesim, p, integ, solver, r, os.path.join(tmp, "out.csv"), extra)
     for p in problems:
         print("kanesim:", p.title, flush=True)
         # Loops and contacts: the reduced form (`--solver dense`, the automatic choice for
@@ -116,14 +152,13 @@ def run_kanesim(args, problems, sweep, rtols, res):
             # and is measured there, not in these sweeps.
             for solver in ("dense",) if constrained else ("dense", "recursive"):
                 label = "kanesim %s %s" % (integ, solver)
-                out = os.path.join(tmp, "out.csv")
-                pts = sweep.run(p, rtols, lambda r: kanesim_run(args.kanesim, p, integ, solver, r, out), label,
-                                go_on_after_failure=constrained)
+                pts = one.run(p, rtols, lambda r: measure(p, integ, solver, r), label,
+                              go_on_after_failure=constrained)
                 res["runs"].setdefault(p.name, {})[label] = pts
         if constrained:  # DOP853 projecting once per accepted step (`--projection step`)
             label = "kanesim dop853 dense step-projection"
-            pts = sweep.run(p, rtols, lambda r: kanesim_run(args.kanesim, p, "dop853", "dense", r, out,
-                                                            ("--projection", "step")), label, go_on_after_failure=True)
+            pts = one.run(p, rtols, lambda r: measure(p, "dop853", "dense", r, ("--projection", "step")), label,
+                          go_on_after_failure=True)
             res["runs"].setdefault(p.name, {})[label] = pts
 
 
@@ -148,7 +183,7 @@ def pin_cpp_run(driver, p, rtol, reps, loop=None):
 
 def run_pin_cpp(args, problems, sweep, res):
     for p in problems:
-        reps = sweep.reps
+        reps = cpp_reps(sweep)
         # The driver repeats internally (median); the sweep calls it once per tolerance.
         one = Sweep(1, sweep.budget)
         if p.kind == "fourbar":  # constraintDynamics with Pinocchio's Baumgarte gains, and without
@@ -429,6 +464,9 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--kanesim", required=True)
     ap.add_argument("--pin-driver", required=True)
+    ap.add_argument("--kanesim-driver", default="",
+                    help="bench/kanesim_driver: time kanesim in process as pin_driver times Pinocchio "
+                         "(default: `kanesim run`, one cold integration per process)")
     ap.add_argument("--rhs-bench", default="")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", default="kanesim,pin,scipy,mujoco,exudyn,baseline,sympy,rhs")
