@@ -43,7 +43,12 @@ CPP_REPS = 5
 
 def cpp_reps(sweep):
     return CPP_REPS if sweep.reps > 1 else 1  # --quick: one run
-PIN_RTOLS = RTOLS + [1e-13]
+# Three tolerances per decade for the candidates for "best" (kanesim DOP853, Pinocchio C++,
+# SciPy + pin.aba): the time to reach a level is that of the cheapest point at or below
+# it, so a one-per-decade grid overstates it by up to 10^(1/8) = 1.33x for an 8th-order
+# method (one decade of tolerance); three per decade, by up to 1.10x.
+RTOLS_FINE = [10.0 ** (-k / 3.0) for k in range(9, 37)]          # 1e-3 ... 1e-12
+PIN_RTOLS_FINE = RTOLS_FINE + [10.0 ** (-k / 3.0) for k in range(37, 40)]  # ... 1e-13
 MJ_STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5]
 CONSTRAINED = ("fourbar", "disk")   # loops and rolling contacts: not trees
 # Pinocchio on the four-bar: constraintDynamics (Baumgarte, proximal; fourbar_geometry.PIN_LOOP)
@@ -128,7 +133,7 @@ def kanesim_run(exe, p, integrator, solver, rtol, out_csv, extra=()):
                 steps=stats.get("steps"))
 
 
-def run_kanesim(args, problems, sweep, rtols, res):
+def run_kanesim(args, problems, sweep, rtols, res, fine):
     tmp = tempfile.mkdtemp(prefix="wp_kanesim_")
     if args.kanesim_driver:  # in-process repetitions (the driver's median): the sweep calls it once
         one = Sweep(1, sweep.budget)
@@ -152,12 +157,12 @@ def run_kanesim(args, problems, sweep, rtols, res):
             # and is measured there, not in these sweeps.
             for solver in ("dense",) if constrained else ("dense", "recursive"):
                 label = "kanesim %s %s" % (integ, solver)
-                pts = one.run(p, rtols, lambda r: measure(p, integ, solver, r), label,
+                pts = one.run(p, fine if integ == "dop853" else rtols, lambda r: measure(p, integ, solver, r), label,
                               go_on_after_failure=constrained)
                 res["runs"].setdefault(p.name, {})[label] = pts
         if constrained:  # DOP853 projecting once per accepted step (`--projection step`)
             label = "kanesim dop853 dense step-projection"
-            pts = one.run(p, rtols, lambda r: measure(p, "dop853", "dense", r, ("--projection", "step")), label,
+            pts = one.run(p, fine, lambda r: measure(p, "dop853", "dense", r, ("--projection", "step")), label,
                           go_on_after_failure=True)
             res["runs"].setdefault(p.name, {})[label] = pts
 
@@ -181,7 +186,7 @@ def pin_cpp_run(driver, p, rtol, reps, loop=None):
     return out
 
 
-def run_pin_cpp(args, problems, sweep, res):
+def run_pin_cpp(args, problems, sweep, res, pin_rtols):
     for p in problems:
         reps = cpp_reps(sweep)
         # The driver repeats internally (median); the sweep calls it once per tolerance.
@@ -191,13 +196,13 @@ def run_pin_cpp(args, problems, sweep, res):
             no_bg = dict(fourbar_geometry.PIN_LOOP, kp=0.0, kd=0.0)
             for label, loop in ((PIN_LOOP_CPP, fourbar_geometry.PIN_LOOP), (PIN_LOOP_CPP + " no Baumgarte", no_bg)):
                 res["runs"].setdefault(p.name, {})[label] = one.run(
-                    p, PIN_RTOLS, lambda r: pin_cpp_run(args.pin_driver, p, r, reps, loop), label)
+                    p, pin_rtols, lambda r: pin_cpp_run(args.pin_driver, p, r, reps, loop), label)
             continue
         if p.kind in CONSTRAINED:
             res["notes"].append("%s: %s" % (p.name, NOT_RUN[("pin", p.kind)]))
             continue
         print("pinocchio C++:", p.title, flush=True)
-        pts = one.run(p, PIN_RTOLS, lambda r: pin_cpp_run(args.pin_driver, p, r, reps), "pinocchio-aba C++ DOP853")
+        pts = one.run(p, pin_rtols, lambda r: pin_cpp_run(args.pin_driver, p, r, reps), "pinocchio-aba C++ DOP853")
         res["runs"].setdefault(p.name, {})["pinocchio-aba C++ DOP853"] = pts
 
 
@@ -477,6 +482,8 @@ def main():
     problems = all_problems(args.quick, args.problems.split(",") if args.problems else None)
     partial = args.only != ap.get_default("only") or bool(args.problems)
     rtols = RTOLS_QUICK if args.quick else RTOLS
+    fine = RTOLS_QUICK if args.quick else RTOLS_FINE
+    pin_rtols = RTOLS_QUICK + [1e-13] if args.quick else PIN_RTOLS_FINE
     sweep = Sweep(reps=1 if args.quick else 3, budget=1.0 if args.quick else 4.0)
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
     res = dict(machine=machine_info(), quick=args.quick, runs={}, notes=[],
@@ -504,9 +511,9 @@ def main():
         res.setdefault("partial_runs", []).append(dict(
             only=args.only, problems=args.problems, loadavg_start=os.getloadavg(), machine=machine_info()))
     t_start = time.time()
-    steps = [("kanesim", lambda: run_kanesim(args, problems, sweep, rtols, res)),
-             ("pin", lambda: run_pin_cpp(args, problems, sweep, res)),
-             ("scipy", lambda: run_scipy(args, problems, sweep, rtols, res)),
+    steps = [("kanesim", lambda: run_kanesim(args, problems, sweep, rtols, res, fine)),
+             ("pin", lambda: run_pin_cpp(args, problems, sweep, res, pin_rtols)),
+             ("scipy", lambda: run_scipy(args, problems, sweep, fine, res)),
              ("mujoco", lambda: run_mujoco(args, problems, sweep, res)),
              ("exudyn", lambda: run_exudyn(args, problems, sweep, rtols, res)),
              ("baseline", lambda: run_baseline(args, problems, sweep, rtols, res)),
