@@ -59,12 +59,17 @@ int SolveAccelerations(const Program& p, Workspace& ws) {
 //   equations M udot = f (dense, sparse, recursive, or reduced on the constrained basis).
 int Derivative(const Program& p, Workspace& ws, double t, const double* y, double* ydot) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
-  PositionKinematics(p, ws);
-  VelocityKinematics(p, ws);
   const bool step_projection = ws.step_projection && StepProjectionAvailable(p);
-  if (int s = step_projection ? ProjectSpeeds(p, ws) : ProjectState(p, ws); s != 0) return s;
-  if (int s = KinematicDifferentials(p, ws); s != 0) return s;
-  BiasAccelerations(p, ws);
+  if (p.rows.empty()) {  // a tree: nothing to project, the kinematics in one pass
+    MotionKinematics(p, ws);
+    if (int s = KinematicDifferentials(p, ws); s != 0) return s;
+  } else {
+    PositionKinematics(p, ws);
+    VelocityKinematics(p, ws);
+    if (int s = step_projection ? ProjectSpeeds(p, ws) : ProjectState(p, ws); s != 0) return s;
+    if (int s = KinematicDifferentials(p, ws); s != 0) return s;
+    BiasAccelerations(p, ws);
+  }
   if (int s = AppliedForces(p, ws); s != 0) return s;
   if (int s = SolveAccelerations(p, ws); s != 0) return s;
   for (int i = 0; i < p.nq; ++i) ydot[i] = ws.qdot[p.q_free[static_cast<size_t>(i)]];

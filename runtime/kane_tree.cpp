@@ -59,9 +59,8 @@ struct PivotRange {
 
 // kBlocks: a spatial inertia [A, B; B^T, C] (A, C symmetric) in tree_Ia is kept by its
 // upper-right block B and the upper triangles of A and C only; the lower-left block and
-// the strict lower triangles of A and C are stale. The body inertias (PutBody), the
-// one-column elimination of a revolute joint (EliminateAngular) and MoveInertia read and
-// write only those; every other use calls Mirror first.
+// the strict lower triangles of A and C are stale. Articulated (below) holds just those
+// entries; the general joints' elimination (Eliminate, Eliminate1) calls Mirror first.
 inline void Mirror(Mat6* Ia) {
   Mat6& M = *Ia;
   M.bottomLeftCorner<3, 3>() = M.topRightCorner<3, 3>().transpose();
@@ -69,83 +68,121 @@ inline void Mirror(Mat6* Ia) {
   M(4, 3) = M(3, 4), M(5, 3) = M(3, 5), M(5, 4) = M(4, 5);
 }
 
-// x = v, or x += v when kAdd.
-template <bool kAdd>
-inline void Put(double& x, double v) {
-  if constexpr (kAdd)
-    x += v;
-  else
-    x = v;
+// An articulated inertia and bias wrench (Ia, pa) as named scalars, kBlocks. A step of
+// the backward pass works on one of these in registers and hands it to the next step
+// directly when that step is the parent (a chain); a round trip through tree_Ia would
+// store it in 8-byte pieces and read it back in 16-byte ones, which stalls the store
+// forwarding of every entry.
+struct Articulated {
+  double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;                             // A
+  double b00 = 0, b01 = 0, b02 = 0, b10 = 0, b11 = 0, b12 = 0, b20 = 0, b21 = 0, b22 = 0;  // B: b_ik = Ia(i, 3 + k)
+  double c00 = 0, c01 = 0, c02 = 0, c11 = 0, c12 = 0, c22 = 0;                             // C
+  double p0 = 0, p1 = 0, p2 = 0, p3 = 0, p4 = 0, p5 = 0;                                   // pa = [force; torque]
+};
+
+// The kBlocks entries of tree_Ia[L], tree_pa[L] and back.
+inline Articulated Load(const Mat6& M, const Vec6& p) {
+  Articulated X;
+  X.a00 = M(0, 0), X.a01 = M(0, 1), X.a02 = M(0, 2), X.a11 = M(1, 1), X.a12 = M(1, 2), X.a22 = M(2, 2);
+  X.b00 = M(0, 3), X.b01 = M(0, 4), X.b02 = M(0, 5);
+  X.b10 = M(1, 3), X.b11 = M(1, 4), X.b12 = M(1, 5);
+  X.b20 = M(2, 3), X.b21 = M(2, 4), X.b22 = M(2, 5);
+  X.c00 = M(3, 3), X.c01 = M(3, 4), X.c02 = M(3, 5), X.c11 = M(4, 4), X.c12 = M(4, 5), X.c22 = M(5, 5);
+  X.p0 = p[0], X.p1 = p[1], X.p2 = p[2], X.p3 = p[3], X.p4 = p[4], X.p5 = p[5];
+  return X;
+}
+
+inline void Store(const Articulated& X, Mat6* Ia, Vec6* pa) {
+  Mat6& M = *Ia;
+  M(0, 0) = X.a00, M(0, 1) = X.a01, M(0, 2) = X.a02, M(1, 1) = X.a11, M(1, 2) = X.a12, M(2, 2) = X.a22;
+  M(0, 3) = X.b00, M(0, 4) = X.b01, M(0, 5) = X.b02;
+  M(1, 3) = X.b10, M(1, 4) = X.b11, M(1, 5) = X.b12;
+  M(2, 3) = X.b20, M(2, 4) = X.b21, M(2, 5) = X.b22;
+  M(3, 3) = X.c00, M(3, 4) = X.c01, M(3, 5) = X.c02, M(4, 4) = X.c11, M(4, 5) = X.c12, M(5, 5) = X.c22;
+  Vec6& p = *pa;
+  p[0] = X.p0, p[1] = X.p1, p[2] = X.p2, p[3] = X.p3, p[4] = X.p4, p[5] = X.p5;
+}
+
+// Y += Z, entry by entry.
+inline void Add(const Articulated& Z, Articulated* Y) {
+  Articulated& X = *Y;
+  X.a00 += Z.a00, X.a01 += Z.a01, X.a02 += Z.a02, X.a11 += Z.a11, X.a12 += Z.a12, X.a22 += Z.a22;
+  X.b00 += Z.b00, X.b01 += Z.b01, X.b02 += Z.b02;
+  X.b10 += Z.b10, X.b11 += Z.b11, X.b12 += Z.b12;
+  X.b20 += Z.b20, X.b21 += Z.b21, X.b22 += Z.b22;
+  X.c00 += Z.c00, X.c01 += Z.c01, X.c02 += Z.c02, X.c11 += Z.c11, X.c12 += Z.c12, X.c22 += Z.c22;
+  X.p0 += Z.p0, X.p1 += Z.p1, X.p2 += Z.p2, X.p3 += Z.p3, X.p4 += Z.p4, X.p5 += Z.p5;
 }
 
 // Body L's own spatial inertia Mb_L about o_L (mass m, central inertia I, world axes,
 // r = c_L - o_L), mapping the acceleration [a_o; alpha] to the wrench [f; n_o]:
 //   [m 1, -m D; m D, I - m D D],  D = [r]x,  -D D = |r|^2 1 - r r^T,
 // and -w_L = [-f; -n - r x f] (f, n the wrench w_L at c_L): the leaf values of (6), (7),
-// written into Ia, pa, or added to the children's shares there when kAdd (kBlocks).
-template <bool kAdd>
-void PutBody(double m, const Vec3& r, const Mat3& I, const Vec3& f, const Vec3& n, Mat6* Ia, Vec6* pa) {
-  Mat6& M = *Ia;
-  const double x = m * r.x(), y = m * r.y(), z = m * r.z();  // m r
-  const double mrr = x * r.x() + y * r.y() + z * r.z();
-  Put<kAdd>(M(0, 0), m), Put<kAdd>(M(1, 1), m), Put<kAdd>(M(2, 2), m);  // A = m 1
-  if constexpr (!kAdd) M(0, 1) = 0.0, M(0, 2) = 0.0, M(1, 2) = 0.0;
-  Put<kAdd>(M(1, 3), -z), Put<kAdd>(M(2, 3), y);  // B = -m D
-  Put<kAdd>(M(0, 4), z), Put<kAdd>(M(2, 4), -x);
-  Put<kAdd>(M(0, 5), -y), Put<kAdd>(M(1, 5), x);
-  if constexpr (!kAdd) M(0, 3) = 0.0, M(1, 4) = 0.0, M(2, 5) = 0.0;
-  Put<kAdd>(M(3, 3), I(0, 0) + mrr - x * r.x()), Put<kAdd>(M(3, 4), I(0, 1) - x * r.y());  // C = I - m D D
-  Put<kAdd>(M(4, 4), I(1, 1) + mrr - y * r.y()), Put<kAdd>(M(3, 5), I(0, 2) - x * r.z());
-  Put<kAdd>(M(5, 5), I(2, 2) + mrr - z * r.z()), Put<kAdd>(M(4, 5), I(1, 2) - y * r.z());
-  Vec6& p = *pa;
-  Put<kAdd>(p[0], -f.x()), Put<kAdd>(p[1], -f.y()), Put<kAdd>(p[2], -f.z());
-  Put<kAdd>(p[3], -n.x() - (r.y() * f.z() - r.z() * f.y()));
-  Put<kAdd>(p[4], -n.y() - (r.z() * f.x() - r.x() * f.z()));
-  Put<kAdd>(p[5], -n.z() - (r.x() * f.y() - r.y() * f.x()));
+// added to the children's shares in X (zero at a leaf). With w_L of the class comment,
+//   f = F - m a_bias_cm,  n = T - I alpha_bias - w x I w.
+void AddBody(const Program& p, const Workspace& ws, size_t L, Articulated* X) {
+  const double m = p.bodies[L].mass;
+  const Mat3& I = ws.I_W[L];
+  const double i00 = I(0, 0), i01 = I(0, 1), i02 = I(0, 2), i11 = I(1, 1), i12 = I(1, 2), i22 = I(2, 2);
+  const Vec3 &o = ws.p_WB[L], &c = ws.p_WBcm[L];
+  const double r0 = c.x() - o.x(), r1 = c.y() - o.y(), r2 = c.z() - o.z();
+  const Vec3 &F = ws.F_W[L], &a = ws.a_bias_cm[L];
+  const double f0 = F.x() - m * a.x(), f1 = F.y() - m * a.y(), f2 = F.z() - m * a.z();
+  const Vec3 &w = ws.w_WB[L], &al = ws.alpha_bias[L], &T = ws.T_W[L];
+  const double w0 = w.x(), w1 = w.y(), w2 = w.z(), l0 = al.x(), l1 = al.y(), l2 = al.z();
+  const double k0 = i00 * w0 + i01 * w1 + i02 * w2;  // I w
+  const double k1 = i01 * w0 + i11 * w1 + i12 * w2;
+  const double k2 = i02 * w0 + i12 * w1 + i22 * w2;
+  const double n0 = T.x() - (i00 * l0 + i01 * l1 + i02 * l2) - (w1 * k2 - w2 * k1);
+  const double n1 = T.y() - (i01 * l0 + i11 * l1 + i12 * l2) - (w2 * k0 - w0 * k2);
+  const double n2 = T.z() - (i02 * l0 + i12 * l1 + i22 * l2) - (w0 * k1 - w1 * k0);
+  Articulated& M = *X;
+  const double x = m * r0, y = m * r1, z = m * r2;  // m r
+  const double mrr = x * r0 + y * r1 + z * r2;
+  M.a00 += m, M.a11 += m, M.a22 += m;  // A = m 1
+  M.b10 -= z, M.b20 += y;              // B = -m D
+  M.b01 += z, M.b21 -= x;
+  M.b02 -= y, M.b12 += x;
+  M.c00 += i00 + mrr - x * r0, M.c01 += i01 - x * r1;  // C = I - m D D
+  M.c11 += i11 + mrr - y * r1, M.c02 += i02 - x * r2;
+  M.c22 += i22 + mrr - z * r2, M.c12 += i12 - y * r2;
+  M.p0 -= f0, M.p1 -= f1, M.p2 -= f2;
+  M.p3 += -n0 - (r1 * f2 - r2 * f1);
+  M.p4 += -n1 - (r2 * f0 - r0 * f2);
+  M.p5 += -n2 - (r0 * f1 - r1 * f0);
 }
 
-// X*_LP Ia X_LP of (6): the inertia Ia about o_L moved to o_P, with X = [1, -R; 0, 1],
-// R = [r]x, r = o_L - o_P. With Ia = [A, B; B^T, C] (A, C symmetric) it is
+// X*_LP Ia X_LP of (6) and X*_LP pa of (7): the inertia and wrench about o_L moved to
+// o_P, with X = [1, -R; 0, 1], R = [r]x, r = o_L - o_P. With Ia = [A, B; B^T, C] it is
 //   [A, B + G; B^T + G^T, C + R B + B^T R^T + R A R^T],  G = A R^T (row i: r x A_i),
 // and with F = R (B + G/2) the lower-right block is C + F + F^T (R A R^T = R G is
-// symmetric), so every product is a column-wise cross product with r. Written into Ib
-// (the parent's first share), or added to it when kAdd; kBlocks on both sides.
-template <bool kAdd>
-void MoveInertia(const Mat6& Ia, const Vec3& r, Mat6* Ib) {
-  const Mat6& M = Ia;
-  Mat6& N = *Ib;
-  const double r0 = r.x(), r1 = r.y(), r2 = r.z();
-  const double a00 = M(0, 0), a01 = M(0, 1), a02 = M(0, 2), a11 = M(1, 1), a12 = M(1, 2), a22 = M(2, 2);
+// symmetric), so every product is a column-wise cross product with r; the wrench's
+// torque gains r x f.
+Articulated Moved(const Articulated& M, double r0, double r1, double r2) {
+  Articulated N;
+  const double a00 = M.a00, a01 = M.a01, a02 = M.a02, a11 = M.a11, a12 = M.a12, a22 = M.a22;
   // G(i, k) = (r x A_i)_k, A_i = column i of A.
   const double g00 = r1 * a02 - r2 * a01, g01 = r2 * a00 - r0 * a02, g02 = r0 * a01 - r1 * a00;
   const double g10 = r1 * a12 - r2 * a11, g11 = r2 * a01 - r0 * a12, g12 = r0 * a11 - r1 * a01;
   const double g20 = r1 * a22 - r2 * a12, g21 = r2 * a02 - r0 * a22, g22 = r0 * a12 - r1 * a02;
-  const double G[3][3] = {{g00, g01, g02}, {g10, g11, g12}, {g20, g21, g22}};
-  double F[3][3];  // F(i, k) = (r x E_k)_i, E = B + G / 2
-  for (int k = 0; k < 3; ++k) {
-    const double e0 = M(0, 3 + k) + 0.5 * G[0][k], e1 = M(1, 3 + k) + 0.5 * G[1][k], e2 = M(2, 3 + k) + 0.5 * G[2][k];
-    F[0][k] = r1 * e2 - r2 * e1;
-    F[1][k] = r2 * e0 - r0 * e2;
-    F[2][k] = r0 * e1 - r1 * e0;
-  }
-  Put<kAdd>(N(0, 0), a00), Put<kAdd>(N(0, 1), a01), Put<kAdd>(N(0, 2), a02);
-  Put<kAdd>(N(1, 1), a11), Put<kAdd>(N(1, 2), a12), Put<kAdd>(N(2, 2), a22);
-  for (int k = 0; k < 3; ++k)
-    for (int i = 0; i < 3; ++i) Put<kAdd>(N(i, 3 + k), M(i, 3 + k) + G[i][k]);
-  for (int k = 0; k < 3; ++k)
-    for (int i = 0; i <= k; ++i) Put<kAdd>(N(3 + i, 3 + k), M(3 + i, 3 + k) + F[i][k] + F[k][i]);
-}
-
-// A wrench [f; n_a] moved to point b: n_b = n_a + r x f, r = a - b; written into wb, or
-// added to it when kAdd.
-template <bool kAdd>
-inline void MoveWrench(const Vec6& w, const Vec3& r, Vec6* wb) {
-  Vec6& W = *wb;
-  const double f0 = w[0], f1 = w[1], f2 = w[2];
-  Put<kAdd>(W[0], f0), Put<kAdd>(W[1], f1), Put<kAdd>(W[2], f2);
-  Put<kAdd>(W[3], w[3] + r.y() * f2 - r.z() * f1);
-  Put<kAdd>(W[4], w[4] + r.z() * f0 - r.x() * f2);
-  Put<kAdd>(W[5], w[5] + r.x() * f1 - r.y() * f0);
+  // E = B + G / 2, F(i, k) = (r x E_k)_i.
+  const double e00 = M.b00 + 0.5 * g00, e10 = M.b10 + 0.5 * g10, e20 = M.b20 + 0.5 * g20;
+  const double e01 = M.b01 + 0.5 * g01, e11 = M.b11 + 0.5 * g11, e21 = M.b21 + 0.5 * g21;
+  const double e02 = M.b02 + 0.5 * g02, e12 = M.b12 + 0.5 * g12, e22 = M.b22 + 0.5 * g22;
+  const double f00 = r1 * e20 - r2 * e10, f10 = r2 * e00 - r0 * e20, f20 = r0 * e10 - r1 * e00;
+  const double f01 = r1 * e21 - r2 * e11, f11 = r2 * e01 - r0 * e21, f21 = r0 * e11 - r1 * e01;
+  const double f02 = r1 * e22 - r2 * e12, f12 = r2 * e02 - r0 * e22, f22 = r0 * e12 - r1 * e02;
+  N.a00 = a00, N.a01 = a01, N.a02 = a02, N.a11 = a11, N.a12 = a12, N.a22 = a22;
+  N.b00 = M.b00 + g00, N.b01 = M.b01 + g01, N.b02 = M.b02 + g02;
+  N.b10 = M.b10 + g10, N.b11 = M.b11 + g11, N.b12 = M.b12 + g12;
+  N.b20 = M.b20 + g20, N.b21 = M.b21 + g21, N.b22 = M.b22 + g22;
+  N.c00 = M.c00 + f00 + f00, N.c01 = M.c01 + f01 + f10, N.c02 = M.c02 + f02 + f20;
+  N.c11 = M.c11 + f11 + f11, N.c12 = M.c12 + f12 + f21, N.c22 = M.c22 + f22 + f22;
+  N.p0 = M.p0, N.p1 = M.p1, N.p2 = M.p2;
+  N.p3 = M.p3 + r1 * M.p2 - r2 * M.p1;
+  N.p4 = M.p4 + r2 * M.p0 - r0 * M.p2;
+  N.p5 = M.p5 + r0 * M.p1 - r1 * M.p0;
+  return N;
 }
 
 // S_L: the free columns of the joint's tangent generators.
@@ -204,39 +241,34 @@ void Substitute(const TreeLayout::JointBlock& J, const double* U_data, const dou
 // One free speed on a revolute joint in tree direction (the common case): S_L = [0; h],
 // so only Ia's right half and pa's torque enter (4): U = [B h; C h], d = h . C h. The
 // bracket of (6) updates B and the upper triangles of A and C only (kBlocks).
-bool EliminateAngular(const Vec3& h, double Q, double* U_data, double* Dinv_data, double* u_data, Mat6* Ia,
-                      Vec6* pa, PivotRange* piv) {
-  Mat6& M = *Ia;
-  Vec6& p = *pa;
+bool EliminateAngular(const Vec3& h, double Q, double* U_data, double* Dinv_data, double* u_data, Articulated* Ia,
+                      PivotRange* piv) {
+  Articulated& M = *Ia;
   const double h0 = h.x(), h1 = h.y(), h2 = h.z();
-  double U[6];
-  for (int i = 0; i < 3; ++i) U[i] = M(i, 3) * h0 + M(i, 4) * h1 + M(i, 5) * h2;  // (4): B h
-  const double c00 = M(3, 3), c01 = M(3, 4), c02 = M(3, 5), c11 = M(4, 4), c12 = M(4, 5), c22 = M(5, 5);
-  U[3] = c00 * h0 + c01 * h1 + c02 * h2;  // (4): C h
-  U[4] = c01 * h0 + c11 * h1 + c12 * h2;
-  U[5] = c02 * h0 + c12 * h1 + c22 * h2;
-  const double d = h0 * U[3] + h1 * U[4] + h2 * U[5];
-  const double u = Q - (h0 * p[3] + h1 * p[4] + h2 * p[5]);
+  const double U0 = M.b00 * h0 + M.b01 * h1 + M.b02 * h2;  // (4): B h
+  const double U1 = M.b10 * h0 + M.b11 * h1 + M.b12 * h2;
+  const double U2 = M.b20 * h0 + M.b21 * h1 + M.b22 * h2;
+  const double U3 = M.c00 * h0 + M.c01 * h1 + M.c02 * h2;  // (4): C h
+  const double U4 = M.c01 * h0 + M.c11 * h1 + M.c12 * h2;
+  const double U5 = M.c02 * h0 + M.c12 * h1 + M.c22 * h2;
+  const double d = h0 * U3 + h1 * U4 + h2 * U5;
+  const double u = Q - (h0 * M.p3 + h1 * M.p4 + h2 * M.p5);
   piv->max_diag = std::max(piv->max_diag, d);
   if (!(d > 0.0)) return false;
   piv->min_pivot_sq = std::min(piv->min_pivot_sq, d);
   const double dinv = 1.0 / d;
   *Dinv_data = dinv;
   *u_data = u;
-  double Ud[6];
-  for (int i = 0; i < 6; ++i) {
-    U_data[i] = U[i];
-    Ud[i] = U[i] * dinv;
-  }
-  // Bracket of (6), blocks A, B, C only (kBlocks).
-  for (int k = 0; k < 3; ++k) {
-    for (int i = 0; i <= k; ++i) {
-      M(i, k) -= Ud[i] * U[k];
-      M(3 + i, 3 + k) -= Ud[3 + i] * U[3 + k];
-    }
-    for (int i = 0; i < 3; ++i) M(i, 3 + k) -= Ud[i] * U[3 + k];
-  }
-  for (int i = 0; i < 6; ++i) p[i] += Ud[i] * u;  // bracket of (7)
+  U_data[0] = U0, U_data[1] = U1, U_data[2] = U2, U_data[3] = U3, U_data[4] = U4, U_data[5] = U5;
+  const double V0 = U0 * dinv, V1 = U1 * dinv, V2 = U2 * dinv, V3 = U3 * dinv, V4 = U4 * dinv, V5 = U5 * dinv;
+  // Bracket of (6): Ia - U D^-1 U^T, blocks A, B, C only (kBlocks).
+  M.a00 -= V0 * U0, M.a01 -= V0 * U1, M.a02 -= V0 * U2, M.a11 -= V1 * U1, M.a12 -= V1 * U2, M.a22 -= V2 * U2;
+  M.b00 -= V0 * U3, M.b01 -= V0 * U4, M.b02 -= V0 * U5;
+  M.b10 -= V1 * U3, M.b11 -= V1 * U4, M.b12 -= V1 * U5;
+  M.b20 -= V2 * U3, M.b21 -= V2 * U4, M.b22 -= V2 * U5;
+  M.c00 -= V3 * U3, M.c01 -= V3 * U4, M.c02 -= V3 * U5, M.c11 -= V4 * U4, M.c12 -= V4 * U5, M.c22 -= V5 * U5;
+  // Bracket of (7): pa + U D^-1 u.
+  M.p0 += V0 * u, M.p1 += V1 * u, M.p2 += V2 * u, M.p3 += V3 * u, M.p4 += V4 * u, M.p5 += V5 * u;
   return true;
 }
 
@@ -355,52 +387,55 @@ int SolveTree(const Program& p, Workspace& ws) {
   const int K = static_cast<int>(p.bodies.size());
   PivotRange piv;
   // Backward pass, leaves to root: (4), (6), (7); a child moves its share into its parent.
+  // The share of a child whose parent is the next body of the pass (a chain) stays in
+  // `carry`, the others go through tree_Ia, tree_pa.
+  Articulated carry;
+  bool carried = false;  // carry holds body L's children's shares
   for (int L = K - 1; L >= 0; --L) {
     const auto uL = static_cast<size_t>(L);
     const TreeLayout::JointBlock& J = T.joints[uL];
     Mat6& Ia = ws.tree_Ia[uL];
     Vec6& pa = ws.tree_pa[uL];
-    const Vec3& o = ws.p_WB[uL];
-    {  // Body L's own inertia Mb_L and -w_L about o_L: (6), (7) at a leaf, else added.
-      const double m = p.bodies[uL].mass;
-      const Mat3& I = ws.I_W[uL];
-      const Vec3& w_B = ws.w_WB[uL];
-      const Vec3 r = ws.p_WBcm[uL] - o;
-      const Vec3 f = ws.F_W[uL] - m * ws.a_bias_cm[uL];  // w_L at c_L
-      const Vec3 n = ws.T_W[uL] - I * ws.alpha_bias[uL] - w_B.cross(I * w_B);
-      if (T.has_children[uL])
-        PutBody<true>(m, r, I, f, n, &Ia, &pa);
-      else
-        PutBody<false>(m, r, I, f, n, &Ia, &pa);
-    }
+    // Body L's own inertia Mb_L and -w_L about o_L: (6), (7) at a leaf, else added.
+    Articulated X = carried ? carry : T.has_children[uL] ? Load(Ia, pa) : Articulated();
+    AddBody(p, ws, uL, &X);
     double* U = ws.tree_U.data() + 6 * J.f0;
-    const bool ok = J.angular ? EliminateAngular(ws.H_W.col(J.cols[0]).tail<3>(), ws.Q[J.cols[0]], U,
-                                                 ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0, &Ia, &pa, &piv)
-                              : EliminateJoint(ws, J, U, ws.tree_Dinv.data() + J.d0, ws.tree_u.data() + J.f0, &Ia,
-                                               &pa, &piv);
-    if (!ok) return Singular(ws);
+    double* Dinv = ws.tree_Dinv.data() + J.d0;
+    double* u = ws.tree_u.data() + J.f0;
+    if (J.angular) {
+      if (!EliminateAngular(ws.H_W.col(J.cols[0]).tail<3>(), ws.Q[J.cols[0]], U, Dinv, u, &X, &piv))
+        return Singular(ws);
+    } else if (J.nf > 0) {
+      Store(X, &Ia, &pa);
+      if (!EliminateJoint(ws, J, U, Dinv, u, &Ia, &pa, &piv)) return Singular(ws);
+      X = Load(Ia, pa);
+    }
     const int P = T.parent[uL];
+    carried = P >= 0 && P == L - 1;
     if (P < 0) continue;
     const auto uP = static_cast<size_t>(P);
-    const Vec3 r = o - ws.p_WB[uP];
-    if (T.first_share[uL]) {
-      MoveInertia<false>(Ia, r, &ws.tree_Ia[uP]);  // (6)
-      MoveWrench<false>(pa, r, &ws.tree_pa[uP]);   // (7)
-    } else {
-      MoveInertia<true>(Ia, r, &ws.tree_Ia[uP]);
-      MoveWrench<true>(pa, r, &ws.tree_pa[uP]);
-    }
+    const Vec3 &o = ws.p_WB[uL], &oP = ws.p_WB[uP];
+    const double r0 = o.x() - oP.x(), r1 = o.y() - oP.y(), r2 = o.z() - oP.z();
+    Articulated S = Moved(X, r0, r1, r2);  // (6), (7)
+    if (!T.first_share[uL]) Add(Load(ws.tree_Ia[uP], ws.tree_pa[uP]), &S);
+    if (carried)
+      carry = S;
+    else
+      Store(S, &ws.tree_Ia[uP], &ws.tree_pa[uP]);
     // U_L^T X_LP A_P = (X_LP^T U_L)^T A_P with X_LP^T [U_v; U_w] = [U_v; U_w + r x U_v],
     // r = o_L - o_P: stored so, (5) in the forward pass waits only for A_P, not for the
     // shift of A_P to o_L as well.
     for (int k = 0; k < J.nf; ++k, U += 6) {
-      U[3] += r.y() * U[2] - r.z() * U[1];
-      U[4] += r.z() * U[0] - r.x() * U[2];
-      U[5] += r.x() * U[1] - r.y() * U[0];
+      U[3] += r1 * U[2] - r2 * U[1];
+      U[4] += r2 * U[0] - r0 * U[2];
+      U[5] += r0 * U[1] - r1 * U[0];
     }
   }
   if (!(piv.min_pivot_sq > kSingularPivot * piv.max_diag)) return Singular(ws);
-  // Forward pass, root to leaves: (5), (1).
+  // Forward pass, root to leaves: (5), (1). A revolute joint's child takes A_P from the
+  // previous step in registers when P = L - 1 (a chain); everything else goes through
+  // tree_A, which every step writes.
+  double c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0, c5 = 0;  // A of the previous step
   for (int L = 0; L < K; ++L) {
     const auto uL = static_cast<size_t>(L);
     const TreeLayout::JointBlock& J = T.joints[uL];
@@ -412,26 +447,30 @@ int SolveTree(const Program& p, Workspace& ws) {
     if (P < 0) {
       A.setZero();
       SubstituteJoint(J, U, Dinv, u, A, ws, &A);
-      continue;
-    }
-    const auto uP = static_cast<size_t>(P);
-    const Vec6& AP = ws.tree_A[uP];
-    const Vec3 r = ws.p_WB[uL] - ws.p_WB[uP];
-    const double a0 = AP[0], a1 = AP[1], a2 = AP[2], w0 = AP[3], w1 = AP[4], w2 = AP[5];
-    A[0] = a0 + w1 * r.z() - w2 * r.y();  // X_LP A_P
-    A[1] = a1 + w2 * r.x() - w0 * r.z();
-    A[2] = a2 + w0 * r.y() - w1 * r.x();
-    if (J.angular) {
-      const double ud = *Dinv * (*u - (U[0] * a0 + U[1] * a1 + U[2] * a2 + U[3] * w0 + U[4] * w1 + U[5] * w2));  // (5)
-      const auto h = ws.H_W.col(J.cols[0]);
-      A[3] = w0 + h[3] * ud;  // (1)
-      A[4] = w1 + h[4] * ud;
-      A[5] = w2 + h[5] * ud;
-      ws.udot[J.cols[0]] = ud;
     } else {
-      A[3] = w0, A[4] = w1, A[5] = w2;
+      const auto uP = static_cast<size_t>(P);
+      const Vec6& AP = ws.tree_A[uP];
+      if (P != L - 1) c0 = AP[0], c1 = AP[1], c2 = AP[2], c3 = AP[3], c4 = AP[4], c5 = AP[5];
+      const Vec3 &o = ws.p_WB[uL], &oP = ws.p_WB[uP];
+      const double r0 = o.x() - oP.x(), r1 = o.y() - oP.y(), r2 = o.z() - oP.z();
+      const double a0 = c0 + c4 * r2 - c5 * r1;  // X_LP A_P
+      const double a1 = c1 + c5 * r0 - c3 * r2;
+      const double a2 = c2 + c3 * r1 - c4 * r0;
+      if (J.angular) {
+        const double ud = *Dinv * (*u - (U[0] * c0 + U[1] * c1 + U[2] * c2 + U[3] * c3 + U[4] * c4 + U[5] * c5));  // (5)
+        const auto h = ws.H_W.col(J.cols[0]);
+        c0 = a0, c1 = a1, c2 = a2;
+        c3 += h[3] * ud;  // (1)
+        c4 += h[4] * ud;
+        c5 += h[5] * ud;
+        A[0] = c0, A[1] = c1, A[2] = c2, A[3] = c3, A[4] = c4, A[5] = c5;
+        ws.udot[J.cols[0]] = ud;
+        continue;
+      }
+      A[0] = a0, A[1] = a1, A[2] = a2, A[3] = c3, A[4] = c4, A[5] = c5;
       SubstituteJoint(J, U, Dinv, u, AP, ws, &A);
     }
+    c0 = A[0], c1 = A[1], c2 = A[2], c3 = A[3], c4 = A[4], c5 = A[5];
   }
   return 0;
 }

@@ -1,6 +1,6 @@
 // The kinematic stages of the right-hand side, in the order Derivative calls them:
-//   UnpackState -> PositionKinematics -> VelocityKinematics -> BiasAccelerations
-//   -> KinematicDifferentials.
+//   UnpackState -> PositionKinematics -> VelocityKinematics -> KinematicDifferentials
+//   -> BiasAccelerations (for a tree the three kinematic passes fused: MotionKinematics).
 // Each reads the Program and writes only the Workspace fields its comment in
 // program.h names. None allocates.
 #pragma once
@@ -25,6 +25,11 @@ void VelocityKinematics(const Program& p, Workspace& ws);
 // With `include_free` the free udot in ws.udot are included too: the body accelerations
 // themselves (used by signals that need reactions).
 void BiasAccelerations(const Program& p, Workspace& ws, bool include_free = false);
+
+// PositionKinematics, VelocityKinematics and BiasAccelerations (free udot = 0) at once,
+// for a tree: the same results in one pass over the bodies. (Closed loops project the
+// speeds between velocities and accelerations, so they call the three one by one.)
+void MotionKinematics(const Program& p, Workspace& ws);
 
 // qdot = N(q) u for every joint (Lesser eqs. 44-47). Returns -1 at gimbal lock.
 int KinematicDifferentials(const Program& p, Workspace& ws);

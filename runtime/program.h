@@ -295,7 +295,7 @@ struct Workspace {
   std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;
 
   // Recursive path (runtime/kane_tree.cpp).
-  std::vector<Mat6> tree_Ia;        // children's shares moved to o_L, then body L's inertia added: articulated inertia; B and the upper triangles of A, C only (kBlocks in kane_tree.cpp)  (K)  filled by SolveTree
+  std::vector<Mat6> tree_Ia;        // children's shares moved to o_L (those not handed on in registers, see SolveTree), for a general joint then body L's inertia added: articulated inertia; B and the upper triangles of A, C only (kBlocks in kane_tree.cpp)  (K)  filled by SolveTree
   std::vector<Vec6> tree_pa;        // the same for the bias wrenches: articulated bias wrench  (K)  filled by SolveTree
   std::vector<Vec6> tree_A;         // udot-dependent acceleration [a_o; alpha] of body L  (K)  filled by SolveTree
   Eigen::VectorXd tree_U;           // U_L = Ia_L S_L, then X_LP^T U_L for a non-root joint; 6 x nf column-major at 6 f0  (6 nu)  filled by SolveTree
