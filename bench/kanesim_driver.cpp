@@ -1,8 +1,9 @@
 // The work-precision benchmark's in-process kanesim runner, the counterpart of
 // bench/pin/pin_driver.cpp: loads and compiles a .mech file once, then integrates it REPS
-// times in the same process and prints the median wall time of the integration (the same
-// "integrate" phase `kanesim run --stats` reports), so that kanesim and the Pinocchio driver
-// are timed the same way: warm, repeated, process start-up and first-touch costs excluded.
+// times in the same process (fewer when the runs so far took over 1 s in all) and prints the
+// median wall time of the integration (the "integrate" phase `kanesim run --stats`
+// reports), so that kanesim and the Pinocchio driver are timed the same way: warm,
+// repeated, process start-up and first-touch costs excluded.
 // `kanesim run` (cold, one integration per process) is what bench/wp/run.py used before;
 // docs/benchmarks.md compares the two.
 //
@@ -78,7 +79,11 @@ int main(int argc, char** argv) {
   std::vector<double> walls;
   sim::MemorySink last_sink;
   sim::SimResult last;
-  for (int k = 0; k < reps; ++k) {
+  // Up to REPS runs; no further one once the runs so far took kRepeatBudget in all (as
+  // pin_driver and run.py's Sweep for the Python peers).
+  constexpr double kRepeatBudget = 1.0;  // s
+  double total = 0.0;
+  for (int k = 0; k < reps && (k == 0 || total < kRepeatBudget); ++k) {
     sim::MemorySink sink;
     last = sim::Simulate(*c.program, o, sink);
     if (last.status != sim::SimResult::Status::kOk) {
@@ -86,6 +91,7 @@ int main(int argc, char** argv) {
       return last.status == sim::SimResult::Status::kNumericalFailure ? 2 : 1;
     }
     walls.push_back(last.stats.times.integrate);
+    total += walls.back();
     last_sink = std::move(sink);
   }
   std::nth_element(walls.begin(), walls.begin() + static_cast<long>(walls.size() / 2), walls.end());
