@@ -101,6 +101,7 @@ int RunCheck(const CheckArgs& args) {
                            mech.contacts.size(), mech.line_forces.size(), mech.wrenches.size());
   std::cout << fmt::format("  solver      {} — {}\n", SolverName(s.solver), s.solver_reason);
   std::cout << fmt::format("  integrator  {} — {}\n", IntegratorName(s.integrator), s.integrator_reason);
+  if (!s.equations.empty()) std::cout << "  equations   " << s.equations << "\n";
   if (rt::StepProjectionAvailable(*cr.program)) {
     // The projection of closed loops and rolling contacts (docs/constraints.md, "Projecting
     // once per step"; numbers of the four-bar in docs/benchmarks.md). Eval stays the

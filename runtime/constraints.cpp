@@ -68,6 +68,12 @@ constexpr double kSparseSingular = 1e-12;
 constexpr double kFlatDisk = 1e-2;
 constexpr double kJumped = 0.1;
 constexpr double kNearFlat = 0.5;
+// Kane's equations on the constrained basis by velocity passes (ReduceByPasses) up to this
+// many degrees of freedom, through the composite M above. bench/loop_solvers, minimum of
+// 3-4 alternating rounds, passes / through M: four-bar 0.86-0.90, rolling disk 0.97,
+// slider-crank 1.01, ladder of N loops (N DOF) 0.82-0.90 for N = 1-8, 0.96 at 16, 1.06 at
+// 20, 32 and 64.
+constexpr int kPassesMaxDof = 16;
 
 struct FrameState {
   int body = -1;
@@ -549,16 +555,115 @@ namespace {
 // Entry (i, j) of the symmetric mass matrix from the lower triangle AssembleDense fills.
 inline double MassEntry(const Eigen::MatrixXd& M, int i, int j) { return i >= j ? M(i, j) : M(j, i); }
 
-}  // namespace
-
-// (10) on the structure of beta (8): column c of beta is 1 at speed ind[c] and non-zero
-// elsewhere only at the rank dependent speeds, and udot_p (9) only at those, so
+// (10) through M: the composite-rigid-body M of kane_dense.cpp, then on the structure of
+// beta (8): column c of beta is 1 at speed ind[c] and non-zero elsewhere only at the rank
+// dependent speeds, and udot_p (9) only at those, so
 //   (M beta)_c = M_{:,ind[c]} + sum_k beta_{dep[k],c} M_{:,dep[k]},
 //   Mr_cd = (M beta)_{ind[c],d} + sum_k beta_{dep[k],c} (M beta)_{dep[k],d},
 // nu (1 + rank) per column instead of nu^2, read from M's lower triangle directly.
+int ReduceThroughM(const Program& p, Workspace& ws) {
+  AssembleDense(p, ws);
+  const int nu = p.nu, rank = p.loop_rank, nind = nu - rank;
+  const auto dep = [&](int k) { return ws.dep[static_cast<size_t>(k)]; };
+  const auto ind = [&](int c) { return ws.ind[static_cast<size_t>(c)]; };
+  // (10): f - M udot_p.
+  for (int k = 0; k < rank; ++k) {
+    const int s = dep(k);
+    const double x = ws.udot_p[s];
+    for (int i = 0; i < nu; ++i) ws.f[i] -= MassEntry(ws.M, i, s) * x;
+  }
+  for (int c = 0; c < nind; ++c) {
+    const int s = ind(c);
+    for (int i = 0; i < nu; ++i) ws.MB(i, c) = MassEntry(ws.M, i, s);
+    for (int k = 0; k < rank; ++k) {
+      const double b = ws.beta(dep(k), c);
+      for (int i = 0; i < nu; ++i) ws.MB(i, c) += MassEntry(ws.M, i, dep(k)) * b;
+    }
+  }
+  for (int c = 0; c < nind; ++c) {
+    double fc = ws.f[ind(c)];
+    for (int k = 0; k < rank; ++k) fc += ws.beta(dep(k), c) * ws.f[dep(k)];
+    ws.fr[c] = fc;
+    for (int d = 0; d <= c; ++d) {  // lower triangle: what the Cholesky reads
+      double m = ws.MB(ind(c), d);
+      for (int k = 0; k < rank; ++k) m += ws.beta(dep(k), c) * ws.MB(dep(k), d);
+      ws.Mr(c, d) = m;
+    }
+  }
+  return 0;
+}
+
+// (10) by Kane's method itself, on the constrained partial velocities: column c of beta
+// is a set of joint speeds, and the twist every body then has is its partial twist for
+// the independent speed c, T_{L,c} = sum_s tau_{L,s} beta_{s,c} (Lesser eq. 51). A
+// velocity pass without bias terms gives it (at the body origins o_L, then carried to the
+// mass centres), and one more with the joint accelerations udot_p gives the particular
+// accelerations A_{p,L}. With W_L = [F_L - m_L a_bias_L; T_L - I_L alpha_bias_L - w_L x I_L w_L]
+// (the bracket of kane_dense.cpp eq. 2) and Mb_L = diag(m_L 1, I_L):
+//   Mr_cd = sum_L T_{L,c}^T Mb_L T_{L,d}                                                (11)
+//   fr_c  = sum_L T_{L,c}^T (W_L - Mb_L A_{p,L}) + sum_s beta_{s,c} Q_s                  (12)
+// O(K nind^2), against the composite M's O(sum of depths) + O(nu nind (1 + rank)): the
+// cheaper one for a mechanism with few degrees of freedom (PassesCheaper).
+int ReduceByPasses(const Program& p, Workspace& ws) {
+  const int nind = p.nu - p.loop_rank;
+  const int K = static_cast<int>(p.bodies.size());
+  ws.fr.setZero();
+  ws.Mr.setZero();
+  for (int L = 0; L < K; ++L) {
+    const auto uL = static_cast<size_t>(L);
+    const TreeJoint& j = p.joints[uL];
+    auto T = ws.beta_twists.middleCols(static_cast<Eigen::Index>(L) * nind, nind);
+    Vec6& Ap = ws.accel_p[uL];
+    if (j.parent >= 0) {  // the parent's twists carried to o_L: v += w x (o_L - o_P)
+      const auto uP = static_cast<size_t>(j.parent);
+      const Vec3 r = ws.p_WB[uL] - ws.p_WB[uP];
+      T = ws.beta_twists.middleCols(static_cast<Eigen::Index>(j.parent) * nind, nind);
+      for (int c = 0; c < nind; ++c) T.col(c).head<3>() += T.col(c).tail<3>().cross(r);
+      Ap = ws.accel_p[uP];
+      Ap.head<3>() += Ap.tail<3>().cross(r);
+    } else {
+      T.setZero();
+      Ap.setZero();
+    }
+    for (int k = 0; k < j.nu; ++k) {
+      const int fs = p.u_free_of[static_cast<size_t>(j.u0 + k)];
+      if (fs < 0) continue;  // prescribed: in the bias accelerations already
+      const auto h = ws.H_W.col(j.u0 + k);
+      for (int c = 0; c < nind; ++c) T.col(c) += h * ws.beta(fs, c);
+      Ap += h * ws.udot_p[fs];
+      const double Qs = ws.Q[j.u0 + k];
+      for (int c = 0; c < nind; ++c) ws.fr[c] += ws.beta(fs, c) * Qs;  // (12), last sum
+    }
+    // Body L's share of (11) and (12), at its mass centre.
+    const TreeBody& b = p.bodies[uL];
+    const Mat3& I = ws.I_W[uL];
+    const Vec3 x = ws.p_WBcm[uL] - ws.p_WB[uL];
+    const Vec3 alpha_p = Ap.tail<3>();
+    const Vec3 a_p = Ap.head<3>() + alpha_p.cross(x);
+    const Vec3 w = ws.w_WB[uL];
+    const Vec3 Wf = ws.F_W[uL] - b.mass * (ws.a_bias_cm[uL] + a_p);
+    const Vec3 Wt = ws.T_W[uL] - I * (ws.alpha_bias[uL] + alpha_p) - w.cross(I * w);
+    for (int c = 0; c < nind; ++c) {
+      const Vec3 wc = T.col(c).tail<3>();
+      const Vec3 vc = T.col(c).head<3>() + wc.cross(x);
+      ws.fr[c] += vc.dot(Wf) + wc.dot(Wt);
+      const Vec3 mv = b.mass * vc, Iw = I * wc;
+      for (int d = 0; d <= c; ++d) {
+        const Vec3 wd = T.col(d).tail<3>();
+        const Vec3 vd = T.col(d).head<3>() + wd.cross(x);
+        ws.Mr(c, d) += vd.dot(mv) + wd.dot(Iw);
+      }
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+bool PassesCheaper(int dof) { return dof <= kPassesMaxDof; }
+
 int SolveConstrained(const Program& p, Workspace& ws) {
   if (p.nu == 0) return 0;
-  AssembleDense(p, ws);
   ConstraintBias(p, ws);
   const int nu = p.nu, rank = p.loop_rank, nind = nu - rank;
   const auto dep = [&](int k) { return ws.dep[static_cast<size_t>(k)]; };
@@ -579,31 +684,11 @@ int SolveConstrained(const Program& p, Workspace& ws) {
     SolveDependent(ws, ws.vc, &ws.xd);
     for (int k = 0; k < rank; ++k) ws.beta(dep(k), c) = -ws.xd[k];
   }
-  // (10): f - M udot_p.
-  for (int k = 0; k < rank; ++k) {
-    const int s = dep(k);
-    const double x = ws.udot_p[s];
-    for (int i = 0; i < nu; ++i) ws.f[i] -= MassEntry(ws.M, i, s) * x;
-  }
+  if (p.reduce_by_passes)
+    ReduceByPasses(p, ws);
+  else
+    ReduceThroughM(p, ws);
   if (nind > 0) {
-    for (int c = 0; c < nind; ++c) {
-      const int s = ind(c);
-      for (int i = 0; i < nu; ++i) ws.MB(i, c) = MassEntry(ws.M, i, s);
-      for (int k = 0; k < rank; ++k) {
-        const double b = ws.beta(dep(k), c);
-        for (int i = 0; i < nu; ++i) ws.MB(i, c) += MassEntry(ws.M, i, dep(k)) * b;
-      }
-    }
-    for (int c = 0; c < nind; ++c) {
-      double fc = ws.f[ind(c)];
-      for (int k = 0; k < rank; ++k) fc += ws.beta(dep(k), c) * ws.f[dep(k)];
-      ws.fr[c] = fc;
-      for (int d = 0; d <= c; ++d) {  // lower triangle: what the Cholesky reads
-        double m = ws.MB(ind(c), d);
-        for (int k = 0; k < rank; ++k) m += ws.beta(dep(k), c) * ws.MB(dep(k), d);
-        ws.Mr(c, d) = m;
-      }
-    }
     ws.llt_r->compute(ws.Mr);
     if (ws.llt_r->info() != Eigen::Success) {
       ws.error = "singular reduced mass matrix (closed loop)";
@@ -648,6 +733,8 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.fr = Eigen::VectorXd::Zero(nind);
   ws.udot_p = Eigen::VectorXd::Zero(p.nu);
   ws.llt_r.emplace(nind);
+  ws.beta_twists = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(p.bodies.size()) * nind);
+  ws.accel_p.assign(p.bodies.size(), Vec6::Zero());
   ws.lambda_c = Eigen::VectorXd::Zero(nc);
   ws.g_dep = Eigen::VectorXd::Zero(nc);
   ws.reaction_W.assign(p.bodies.size(), Vec6::Zero());

@@ -64,6 +64,10 @@ void ConstraintRates(const Program& p, Workspace& ws);
 
 // Reduced Kane's equations (beta^T M beta) z = beta^T (f - M udot_p); writes ws.udot.
 int SolveConstrained(const Program& p, Workspace& ws);
+// Whether forming them by velocity passes on the columns of beta (one per degree of
+// freedom) is cheaper than through the composite mass matrix: the compiler's choice of
+// Program::reduce_by_passes, from bench/loop_solvers.
+bool PassesCheaper(int dof);
 
 // Workspace creation: the loop arrays.
 void InitConstraintWorkspace(const Program& p, Workspace& ws);

@@ -72,6 +72,7 @@ struct ProgramSummary {
   IntegratorKind integrator = IntegratorKind::IDA;
   std::string solver_reason;      // why this path
   std::string integrator_reason;  // why this integrator
+  std::string equations;          // closed loops on the reduced path: how Kane's equations on beta are formed
   std::vector<std::string> cut_joints;
   std::vector<std::string> notes;
 };

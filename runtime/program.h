@@ -214,6 +214,7 @@ struct Program {
   int loop_rank = 0;                    // rank of the constraint Jacobian (free speeds) at the assembled start
   double loop_length = 1.0;             // length scale of the position tolerance (m)
   int dof = 0;                          // nu - loop_rank
+  bool reduce_by_passes = false;        // reduced equations by velocity passes (constraints.h PassesCheaper)
   std::vector<int> redundant_rows;      // rows pivoted QR of A^T leaves out at the assembled start  (n_c - rank)
   // The rows the reduced path's projection and equations use (rows of ws.A, in order):
   // every row during assembly, then the independent ones (redundant rows left out: they
@@ -322,6 +323,8 @@ struct Workspace {
   Eigen::MatrixXd Mr;               // beta^T M beta, lower triangle  (nind x nind)  filled by SolveConstrained
   Eigen::VectorXd fr, udot_p;       // reduced right side (nind), particular udot (nu)  filled by SolveConstrained
   std::optional<Eigen::LLT<Eigen::MatrixXd>> llt_r;  // Cholesky of Mr  filled by SolveConstrained
+  Eigen::Matrix<double, 6, Eigen::Dynamic> beta_twists;  // twist of body L at o_L for u = beta column c, at column L nind + c  (6 x K nind)  filled by SolveConstrained (ReducedByPasses)
+  std::vector<Vec6> accel_p;        // acceleration [a_o; alpha] of body L from udot_p alone  (K)  filled by SolveConstrained (ReducedByPasses)
 
   // Constraint forces on request (runtime/reactions.cpp); not touched by Derivative.
   Eigen::VectorXd lambda_c;         // loop multipliers, A^T lambda = M udot - f  (n_c)  filled by LoopMultipliers

@@ -335,6 +335,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   qr.setThreshold(kRankTol);
   p.loop_rank = static_cast<int>(qr.rank());
   p.dof = p.nu - p.loop_rank;
+  p.reduce_by_passes = PassesCheaper(p.dof);
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qrt(ws.A.transpose());
   qrt.setThreshold(kRankTol);
   const auto& perm = qrt.colsPermutation().indices();
@@ -397,7 +398,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
 void ChooseLoopSolver(Program& p) {
   const std::string counts = std::to_string(p.loops.size()) + " closed loop(s), " + std::to_string(p.contacts.size()) +
                              " contact(s), " + std::to_string(p.nu) + " free speeds";
-  const std::string reduced = ": dense mass matrix reduced to the constrained basis (Lesser eq. 51)";
+  const std::string reduced = ": reduced form: Kane's equations on the constrained basis (Lesser eq. 51)";
   const std::string sparse = ": sparse K-vector system with a multiplier per independent constraint row, KLU";
   // The multipliers of the sparse path are one particular solution where constraints are
   // redundant; the minimum-norm share and friction that reads it need the reduced path.

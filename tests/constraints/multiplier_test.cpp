@@ -75,6 +75,9 @@ TEST(MultiplierForm, SliderCrankDriveAgreesWithReducedForm) { AgreeWithReducedFo
 TEST(MultiplierForm, RollingDiskAgreesWithReducedForm) { AgreeWithReducedForm("examples/rolling_disk.mech"); }
 TEST(MultiplierForm, SphereOnInclineAgreesWithReducedForm) { AgreeWithReducedForm("examples/sphere_incline.mech"); }
 TEST(MultiplierForm, SleighAgreesWithReducedForm) { AgreeWithReducedForm("examples/sleigh.mech"); }
+TEST(MultiplierForm, FourBarWithJointTorquesAgreesWithReducedForm) {
+  AgreeWithReducedForm("tests/constraints/models/fourbar_torques.mech");
+}
 TEST(MultiplierForm, SpatialFourBarAgreesWithReducedForm) {
   AgreeWithReducedForm("tests/constraints/models/rusr_fourbar.mech");
 }
@@ -151,6 +154,70 @@ TEST(MultiplierForm, RebindKeepsTheSparsePattern) {
   sim::MemorySink m = RunModel(*r.program, 0.5, 0.25, 1e-8, {"jl[1].q", "c[16].constraint_residual"});
   EXPECT_NEAR(m.rows[0][0], -M_PI / 2 + 0.5, 1e-9);  // held at assembly; projected in the kinetic metric
   EXPECT_LT(std::fabs(m.rows.back()[1]), 1e-11);
+}
+
+// The reduced form's two ways to Kane's equations on the constrained basis
+// (runtime/constraints.cpp (10)-(12)): the composite mass matrix reduced by beta, and the
+// bodies' partial twists from one velocity pass per degree of freedom. Same scene, same
+// state (off the manifold, so the projection works too), both projection modes: the
+// accelerations agree to round-off. With the multiplier-form comparisons above (which see
+// whichever way the compiler chose), each way is held against an independent algorithm.
+void PassesAgreeWithMassMatrix(const std::string& path, std::vector<lang::ParamOverride> sets = {}) {
+  SCOPED_TRACE(path);
+  auto l = LoadModel(kRoot + "/" + path, sets, [] {
+    rt::CompileOptions o;
+    o.solver = rt::SolverPath::Dense;
+    return o;
+  }());
+  ASSERT_TRUE(l && l->prog);
+  ASSERT_EQ(rt::Summarize(*l->prog).solver, rt::SolverPath::Dense);
+  rt::Program by_m = *l->prog, by_passes = *l->prog;
+  by_m.reduce_by_passes = false;
+  by_passes.reduce_by_passes = true;
+  const size_t n = static_cast<size_t>(rt::StateSize(by_m));
+  const size_t nq = static_cast<size_t>(rt::NumQ(by_m));
+  std::vector<double> y(n), a(n), b(n);
+  rt::InitialState(by_m, y.data());
+  for (size_t i = 0; i < n; ++i) y[i] += (i < nq ? 1e-7 : 0.2) * std::cos(1.0 + static_cast<double>(i));
+  for (bool step : {false, true}) {
+    auto wm = rt::MakeWorkspace(by_m);
+    auto wp = rt::MakeWorkspace(by_passes);
+    rt::SetStepProjection(*wm, step);
+    rt::SetStepProjection(*wp, step);
+    ASSERT_EQ(rt::Derivative(by_m, *wm, 0.0, y.data(), a.data()), 0) << rt::ErrorMessage(*wm);
+    ASSERT_EQ(rt::Derivative(by_passes, *wp, 0.0, y.data(), b.data()), 0) << rt::ErrorMessage(*wp);
+    double scale = 0.0;
+    for (size_t i = nq; i < n; ++i) scale = std::max(scale, std::fabs(a[i]));
+    ASSERT_GT(scale, 0.1);  // it accelerates
+    for (size_t i = 0; i < n; ++i)
+      EXPECT_NEAR(a[i], b[i], 1e-12 * (1.0 + scale)) << "ydot[" << i << "], step projection " << step;
+  }
+}
+
+TEST(ReducedForm, PassesAgreeWithMassMatrix) {
+  PassesAgreeWithMassMatrix("examples/fourbar.mech");
+  PassesAgreeWithMassMatrix("examples/slider_crank.mech");
+  PassesAgreeWithMassMatrix("examples/rolling_disk.mech");
+  PassesAgreeWithMassMatrix("examples/sphere_incline.mech");
+  PassesAgreeWithMassMatrix("examples/sleigh.mech");
+  PassesAgreeWithMassMatrix("tests/constraints/models/rusr_fourbar.mech");
+  PassesAgreeWithMassMatrix("tests/constraints/models/fourbar_torques.mech");
+  PassesAgreeWithMassMatrix(kLadder, {{"N", "5"}});
+}
+
+TEST(ReducedForm, CompilerChoosesPassesForFewDegreesOfFreedom) {
+  // bench/loop_solvers: by passes up to 16 degrees of freedom (the ladder of 16 loops,
+  // 0.96x the mass matrix route), through M from the ladder of 20 (1.06x) on.
+  rt::CompileOptions dense;
+  dense.solver = rt::SolverPath::Dense;
+  auto fourbar = LoadModel(kRoot + "/examples/fourbar.mech");
+  auto l16 = LoadModel(kRoot + "/" + kLadder, {{"N", "16"}}, dense);
+  auto l17 = LoadModel(kRoot + "/" + kLadder, {{"N", "17"}}, dense);
+  ASSERT_TRUE(fourbar && fourbar->prog && l16 && l16->prog && l17 && l17->prog);
+  EXPECT_TRUE(fourbar->prog->reduce_by_passes);
+  EXPECT_TRUE(l16->prog->reduce_by_passes);
+  EXPECT_FALSE(l17->prog->reduce_by_passes);
+  EXPECT_EQ(l17->prog->dof, 17);
 }
 
 TEST(MultiplierForm, FrictionOnRedundantConstraintsKeepsTheReducedForm) {
