@@ -37,8 +37,10 @@ from problems import BENCH, ROOT, Problem, all_problems, mjcf, pin_model  # noqa
 RTOLS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
 RTOLS_QUICK = [1e-3, 1e-6, 1e-9, 1e-12]
 # Repetitions inside the C++ drivers (pin_driver, kanesim_driver; median): both are timed
-# the same way, warm and in process.
-CPP_REPS = 5
+# the same way, warm and in process, up to this many times or 1 s of runs. The shared
+# machine's speed wanders by up to 1.6x between identical runs seconds apart (four-bar,
+# session 7): 9 runs give a steadier median than 5, at a few ms per point.
+CPP_REPS = 9
 
 
 def cpp_reps(sweep):
@@ -519,6 +521,23 @@ def main():
              ("baseline", lambda: run_baseline(args, problems, sweep, rtols, res)),
              ("sympy", lambda: run_sympy(args, res, args.quick)),
              ("rhs", lambda: run_rhs(args, res, args.quick))]
+    if "kanesim" in parts and "pin" in parts:
+        # kanesim and the Pinocchio C++ driver (the best peer on most rows) problem by
+        # problem, so that the two sides of a ratio are timed minutes apart at most, not a
+        # whole sweep apart: the machine is shared and its speed drifts.
+        secs = res.setdefault("phase_seconds", {})
+        secs["kanesim"] = secs["pin"] = 0.0
+        for p in problems:
+            for name, fn in (("kanesim", run_kanesim), ("pin", run_pin_cpp)):
+                t0 = time.time()
+                if name == "kanesim":
+                    fn(args, [p], sweep, rtols, res, fine)
+                else:
+                    fn(args, [p], sweep, res, pin_rtols)
+                secs[name] += time.time() - t0
+            with open(args.out, "w") as fh:
+                json.dump(res, fh, indent=1, default=float)
+        parts = [x for x in parts if x not in ("kanesim", "pin")]
     for name, fn in steps:
         if name in parts:
             t0 = time.time()
