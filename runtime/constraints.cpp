@@ -733,8 +733,10 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.fr = Eigen::VectorXd::Zero(nind);
   ws.udot_p = Eigen::VectorXd::Zero(p.nu);
   ws.llt_r.emplace(nind);
-  ws.beta_twists = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(p.bodies.size()) * nind);
-  ws.accel_p.assign(p.bodies.size(), Vec6::Zero());
+  if (p.reduce_by_passes) {  // (trees and the mass-matrix way: none)
+    ws.beta_twists = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(p.bodies.size()) * nind);
+    ws.accel_p.assign(p.bodies.size(), Vec6::Zero());
+  }
   ws.lambda_c = Eigen::VectorXd::Zero(nc);
   ws.g_dep = Eigen::VectorXd::Zero(nc);
   ws.reaction_W.assign(p.bodies.size(), Vec6::Zero());
