@@ -68,12 +68,6 @@ constexpr double kSparseSingular = 1e-12;
 constexpr double kFlatDisk = 1e-2;
 constexpr double kJumped = 0.1;
 constexpr double kNearFlat = 0.5;
-// Kane's equations on the constrained basis by velocity passes (ReduceByPasses) up to this
-// many degrees of freedom, through the composite M above. bench/loop_solvers, minimum of
-// 3-4 alternating rounds, passes / through M: four-bar 0.86-0.90, rolling disk 0.97,
-// slider-crank 1.01, ladder of N loops (N DOF) 0.82-0.90 for N = 1-8, 0.96 at 16, 1.06 at
-// 20, 32 and 64.
-constexpr int kPassesMaxDof = 16;
 
 struct FrameState {
   int body = -1;
@@ -561,7 +555,7 @@ inline double MassEntry(const Eigen::MatrixXd& M, int i, int j) { return i >= j 
 //   (M beta)_c = M_{:,ind[c]} + sum_k beta_{dep[k],c} M_{:,dep[k]},
 //   Mr_cd = (M beta)_{ind[c],d} + sum_k beta_{dep[k],c} (M beta)_{dep[k],d},
 // nu (1 + rank) per column instead of nu^2, read from M's lower triangle directly.
-int ReduceThroughM(const Program& p, Workspace& ws) {
+void ReduceThroughM(const Program& p, Workspace& ws) {
   AssembleDense(p, ws);
   const int nu = p.nu, rank = p.loop_rank, nind = nu - rank;
   const auto dep = [&](int k) { return ws.dep[static_cast<size_t>(k)]; };
@@ -590,7 +584,6 @@ int ReduceThroughM(const Program& p, Workspace& ws) {
       ws.Mr(c, d) = m;
     }
   }
-  return 0;
 }
 
 // (10) by Kane's method itself, on the constrained partial velocities: column c of beta
@@ -598,13 +591,13 @@ int ReduceThroughM(const Program& p, Workspace& ws) {
 // the independent speed c, T_{L,c} = sum_s tau_{L,s} beta_{s,c} (Lesser eq. 51). A
 // velocity pass without bias terms gives it (at the body origins o_L, then carried to the
 // mass centres), and one more with the joint accelerations udot_p gives the particular
-// accelerations A_{p,L}. With W_L = [F_L - m_L a_bias_L; T_L - I_L alpha_bias_L - w_L x I_L w_L]
-// (the bracket of kane_dense.cpp eq. 2) and Mb_L = diag(m_L 1, I_L):
+// accelerations A_{p,L}. With W_L the bracketed wrench of kane_dense.cpp eq. 2 (kane.h
+// BiasBracket) and Mb_L = diag(m_L 1, I_L):
 //   Mr_cd = sum_L T_{L,c}^T Mb_L T_{L,d}                                                (11)
 //   fr_c  = sum_L T_{L,c}^T (W_L - Mb_L A_{p,L}) + sum_s beta_{s,c} Q_s                  (12)
 // O(K nind^2), against the composite M's O(sum of depths) + O(nu nind (1 + rank)): the
 // cheaper one for a mechanism with few degrees of freedom (PassesCheaper).
-int ReduceByPasses(const Program& p, Workspace& ws) {
+void ReduceByPasses(const Program& p, Workspace& ws) {
   const int nind = p.nu - p.loop_rank;
   const int K = static_cast<int>(p.bodies.size());
   ws.fr.setZero();
@@ -640,9 +633,9 @@ int ReduceByPasses(const Program& p, Workspace& ws) {
     const Vec3 x = ws.p_WBcm[uL] - ws.p_WB[uL];
     const Vec3 alpha_p = Ap.tail<3>();
     const Vec3 a_p = Ap.head<3>() + alpha_p.cross(x);
-    const Vec3 w = ws.w_WB[uL];
-    const Vec3 Wf = ws.F_W[uL] - b.mass * (ws.a_bias_cm[uL] + a_p);
-    const Vec3 Wt = ws.T_W[uL] - I * (ws.alpha_bias[uL] + alpha_p) - w.cross(I * w);
+    const Vec6 W = BiasBracket(p, ws, L);  // minus Mb_L A_p,L, eq. (12)
+    const Vec3 Wf = W.head<3>() - b.mass * a_p;
+    const Vec3 Wt = W.tail<3>() - I * alpha_p;
     for (int c = 0; c < nind; ++c) {
       const Vec3 wc = T.col(c).tail<3>();
       const Vec3 vc = T.col(c).head<3>() + wc.cross(x);
@@ -655,7 +648,6 @@ int ReduceByPasses(const Program& p, Workspace& ws) {
       }
     }
   }
-  return 0;
 }
 
 }  // namespace

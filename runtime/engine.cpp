@@ -170,12 +170,14 @@ ProgramSummary Summarize(const Program& p) {
   s.solver_reason = p.solver_reason;
   s.integrator_reason = p.integrator_reason;
   s.notes = p.notes;
-  if (!p.rows.empty() && p.solver != SolverPath::Sparse)
+  if (!p.rows.empty() && p.solver != SolverPath::Sparse) {
+    const std::string limit = std::to_string(kPassesMaxDof) + " degrees of freedom";
     s.equations = p.reduce_by_passes
                       ? "by velocity passes: one per degree of freedom gives the bodies' partial twists on the "
-                        "constrained basis (up to 16 degrees of freedom, where it is cheaper than the mass matrix)"
-                      : "through the composite mass matrix, reduced on the constrained basis (above 16 degrees of "
-                        "freedom, where it is cheaper than one velocity pass per degree of freedom)";
+                        "constrained basis (up to " + limit + ", where it is cheaper than the mass matrix)"
+                      : "through the composite mass matrix, reduced on the constrained basis (above " + limit +
+                            ", where it is cheaper than one velocity pass per degree of freedom)";
+  }
   if (!p.q_prescribed.empty())
     s.notes.push_back(std::to_string(p.q_prescribed.size()) + " prescribed coordinate(s) removed from the state");
   return s;

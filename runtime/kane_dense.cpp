@@ -96,6 +96,16 @@ inline Vec6 MoveWrench(const Vec6& w, const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
+Vec6 BiasBracket(const Program& p, const Workspace& ws, int L) {
+  const auto uL = static_cast<size_t>(L);
+  const Mat3& I = ws.I_W[uL];
+  const Vec3& w = ws.w_WB[uL];
+  Vec6 W;
+  W.head<3>() = ws.F_W[uL] - p.bodies[uL].mass * ws.a_bias_cm[uL];
+  W.tail<3>() = ws.T_W[uL] - I * ws.alpha_bias[uL] - w.cross(I * w);
+  return W;
+}
+
 void AssembleDense(const Program& p, Workspace& ws) {
   const int K = static_cast<int>(p.bodies.size());
   // Each body's own inertia and bracketed wrench about its origin (set: no zeroing
@@ -106,10 +116,7 @@ void AssembleDense(const Program& p, Workspace& ws) {
     const Vec3& o = ws.p_WB[uL];
     const Vec3& c = ws.p_WBcm[uL];
     SetSpatialInertia(&ws.Ic[uL], b.mass, c, ws.I_W[uL], o);
-    Vec6 w;
-    w.head<3>() = ws.F_W[uL] - b.mass * ws.a_bias_cm[uL];
-    w.tail<3>() = ws.T_W[uL] - ws.I_W[uL] * ws.alpha_bias[uL] - ws.w_WB[uL].cross(ws.I_W[uL] * ws.w_WB[uL]);
-    ws.Wc[uL] = MoveWrench(w, c, o);
+    ws.Wc[uL] = MoveWrench(BiasBracket(p, ws, L), c, o);
   }
   for (int L = K - 1; L >= 0; --L) {
     const auto uL = static_cast<size_t>(L);
