@@ -69,28 +69,49 @@ constexpr double kFlatDisk = 1e-2;
 constexpr double kJumped = 0.1;
 constexpr double kNearFlat = 0.5;
 
+// A cut joint's frame: its origin in W and the rotation of the body it is fixed on (the
+// identity for the world). The rows' directions are stored in that body's axes
+// (ConstraintRow::d_aB, n_bB), so the frame's own rotation is never formed.
 struct FrameState {
   int body = -1;
   Vec3 p = Vec3::Zero();
-  Mat3 R = Mat3::Identity();
+  const Mat3* R = nullptr;
+  Vec3 rho = Vec3::Zero();  // p - p_WB of the body (computed directly: no cancellation)
+  Vec3 Dir(const Vec3& v_body) const { return R ? Vec3(*R * v_body) : v_body; }
 };
 
 FrameState FrameAt(const Program& p, const Workspace& ws, int frame) {
+  const FramePlace& F = p.frames[static_cast<size_t>(frame)];
   FrameState f;
-  f.body = p.frames[static_cast<size_t>(frame)].body;
-  FramePose(p, ws, frame, &f.p, &f.R);
+  f.body = F.body;
+  if (F.body < 0) {
+    f.p = F.p_BF;
+    return f;
+  }
+  const auto B = static_cast<size_t>(F.body);
+  f.R = &ws.R_WB[B];
+  f.rho = ws.R_WB[B] * F.p_BF;
+  f.p = ws.p_WB[B] + f.rho;
   return f;
 }
 
-// Acceleration of a frame origin with free udot = 0 (after BiasAccelerations).
-Vec3 FrameBiasAccel(const Program& p, const Workspace& ws, int frame, Vec3* alpha) {
-  const FramePlace& F = p.frames[static_cast<size_t>(frame)];
+// Acceleration of a frame origin with free udot = 0 (after BiasAccelerations), and its
+// body's angular acceleration alpha.
+Vec3 FrameBiasAccel(const Workspace& ws, const FrameState& f, Vec3* alpha) {
   alpha->setZero();
-  if (F.body < 0) return Vec3::Zero();
-  const auto B = static_cast<size_t>(F.body);
-  const Vec3 rho = ws.R_WB[B] * F.p_BF;
+  if (f.body < 0) return Vec3::Zero();
+  const auto B = static_cast<size_t>(f.body);
+  const Vec3& rho = f.rho;
   *alpha = ws.alpha_bias[B];
   return ws.a_bias_o[B] + ws.alpha_bias[B].cross(rho) + ws.w_WB[B].cross(ws.w_WB[B].cross(rho));
+}
+
+// Velocity of a frame origin and its body's angular velocity.
+void FrameVelocity(const Workspace& ws, const FrameState& f, Vec3* v, Vec3* w) {
+  if (f.body < 0) return;  // (both stay zero)
+  const auto B = static_cast<size_t>(f.body);
+  *w = ws.w_WB[B];
+  *v = ws.v_WBo[B] + ws.w_WB[B].cross(f.rho);
 }
 
 // Row value of (3)/(4) for the point velocities/angular velocities given.
@@ -120,8 +141,8 @@ void AddBodyColumns(const Program& p, Workspace& ws, int body, const Vec3& x, do
 
 // Direction of a row: d (translation) or k = n x e (alignment), and r = p_b - p_a.
 Vec3 RowDirection(const ConstraintRow& row, const FrameState& a, const FrameState& b) {
-  if (row.kind == RowKind::Translation) return a.R * row.d_a;
-  return (b.R * row.n_b).cross(a.R * row.d_a);
+  if (row.kind == RowKind::Translation) return a.Dir(row.d_aB);
+  return b.Dir(row.n_bB).cross(a.Dir(row.d_aB));
 }
 
 // The cut joints and contacts with rows, for messages: "'coupler_rocker'".
@@ -168,8 +189,8 @@ struct LoopFrames {
 LoopFrames FramesOf(const Program& p, const Workspace& ws, const LoopClosure& l, bool motion) {
   LoopFrames f{FrameAt(p, ws, l.frame_a), FrameAt(p, ws, l.frame_b)};
   if (motion) {
-    FrameMotion(p, ws, l.frame_a, &f.v_a, &f.w_A);
-    FrameMotion(p, ws, l.frame_b, &f.v_b, &f.w_B);
+    FrameVelocity(ws, f.a, &f.v_a, &f.w_A);
+    FrameVelocity(ws, f.b, &f.v_b, &f.w_B);
   }
   return f;
 }
@@ -183,15 +204,15 @@ void LoopResiduals(const Program& p, Workspace& ws, const LoopClosure& l, const 
   for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
     const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
     if (row.kind == RowKind::Translation)
-      ws.phi[i] = (f.a.R * row.d_a).dot(f.b.p - f.a.p);  // (1)
+      ws.phi[i] = f.a.Dir(row.d_aB).dot(f.b.p - f.a.p);  // (1)
     else
-      ws.phi[i] = (f.a.R * row.d_a).dot(f.b.R * row.n_b) - row.offset;  // (2)
+      ws.phi[i] = f.a.Dir(row.d_aB).dot(f.b.Dir(row.n_bB)) - row.offset;  // (2)
   }
 }
 
 // (3), (4) for a cut joint's rows: the active ones into ws.A (zeroed by the caller), all
 // into ws.psi.
-void LoopJacobian(const Program& p, Workspace& ws, const LoopClosure& l, const LoopFrames& f) {
+void LoopJacobian(const Program& p, Workspace& ws, const LoopClosure& l, const LoopFrames& f, bool rates = true) {
   const Vec3 r = f.b.p - f.a.p;
   for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
     const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
@@ -201,7 +222,7 @@ void LoopJacobian(const Program& p, Workspace& ws, const LoopClosure& l, const L
       AddBodyColumns(p, ws, f.b.body, f.b.p, 1.0, row, dk, r, false, k);
       AddBodyColumns(p, ws, f.a.body, f.a.p, -1.0, row, dk, r, true, k);
     }
-    ws.psi[i] = RowRate(row, dk, r, f.v_a, f.w_A, f.v_b, f.w_B);
+    if (rates) ws.psi[i] = RowRate(row, dk, r, f.v_a, f.w_A, f.v_b, f.w_B);
   }
 }
 
@@ -278,20 +299,24 @@ void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::Vecto
 }
 
 void ConstraintBias(const Program& p, Workspace& ws) {
+  // The reduced path reads the active rows only (SolveConstrained); the sparse path its
+  // own selection of rows (kane_sparse.cpp kept_rows), so every row there.
+  const bool all_rows = p.solver == SolverPath::Sparse;
   for (const LoopClosure& l : p.loops) {
     const LoopFrames f = FramesOf(p, ws, l, true);
     Vec3 alpha_A, alpha_B;
-    const Vec3 a_a = FrameBiasAccel(p, ws, l.frame_a, &alpha_A);
-    const Vec3 a_b = FrameBiasAccel(p, ws, l.frame_b, &alpha_B);
+    const Vec3 a_a = FrameBiasAccel(ws, f.a, &alpha_A);
+    const Vec3 a_b = FrameBiasAccel(ws, f.b, &alpha_B);
     for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+      if (!all_rows && p.active_of_row[static_cast<size_t>(i)] < 0) continue;
       const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
       double c;
       if (row.kind == RowKind::Translation) {
-        const Vec3 d = f.a.R * row.d_a, r = f.b.p - f.a.p;
+        const Vec3 d = f.a.Dir(row.d_aB), r = f.b.p - f.a.p;
         const Vec3 s = f.v_b - f.v_a - f.w_A.cross(r);
         c = f.w_A.cross(d).dot(s) + d.dot(a_b - a_a - alpha_A.cross(r) - f.w_A.cross(f.v_b - f.v_a));  // (5)
       } else {
-        const Vec3 e = f.a.R * row.d_a, n = f.b.R * row.n_b;
+        const Vec3 e = f.a.Dir(row.d_aB), n = f.b.Dir(row.n_bB);
         c = (f.w_B.cross(n).cross(e) + n.cross(f.w_A.cross(e))).dot(f.w_B - f.w_A) +
             n.cross(e).dot(alpha_B - alpha_A);  // (6)
       }
@@ -536,12 +561,15 @@ int ProjectState(const Program& p, Workspace& ws) {
   return SolveDependentSpeeds(p, ws);
 }
 
-// ProjectState without the Newton loop: the dependent speeds at the positions as they are.
-int ProjectSpeeds(const Program& p, Workspace& ws) {
+int FactorConstraintsAsIs(const Program& p, Workspace& ws) {
   if (p.rows.empty()) return 0;
-  ConstraintJacobian(p, ws);  // (no residuals: nothing here reads them)
+  // A without residuals (nothing here reads them), and without the loops' rates A u + b
+  // (only the disks' check reads rates: the contacts' rows).
+  ws.A.setZero();
+  for (const LoopClosure& l : p.loops) LoopJacobian(p, ws, l, FramesOf(p, ws, l, false), false);
+  for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
   if (int s = FactorDependent(p, ws); s != 0) return s;
-  return SolveDependentSpeeds(p, ws);
+  return CheckDisksUpright(p, ws);
 }
 
 namespace {

@@ -54,10 +54,13 @@ void RowBodies(const Program& p, int row, int* body_a, int* body_b);
 //   d/dt phi_i (or the velocity row) = Ja . V_a + Jb . V_b.
 void RowJacobians(const Program& p, const Workspace& ws, int row, Vec6* Ja, Vec6* Jb);
 
-// The speeds half of ProjectState: the dependent speeds from the velocity constraints at
-// the positions as they are (ws.phi is left at their residual), for solvers that project
-// their steps (engine.h SetStepProjection). 0, or 1 (recoverable). Not on the sparse path.
-int ProjectSpeeds(const Program& p, Workspace& ws);
+// For solvers that project their steps (engine.h SetStepProjection): the constraint
+// Jacobian A at the positions as they are and its dependent block's factorization, what
+// the reduced equations need, and the rolling disks' check (ws.psi = A u + b of the
+// speeds as they are). Nothing is projected: off the manifold the reduced equations are
+// still a smooth ODE (docs/constraints.md, "Projecting once per step"). 0, or 1
+// (recoverable), or -1. Not on the sparse path.
+int FactorConstraintsAsIs(const Program& p, Workspace& ws);
 
 // ws.psi only (A u + b without forming A), after VelocityKinematics.
 void ConstraintRates(const Program& p, Workspace& ws);

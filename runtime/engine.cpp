@@ -60,13 +60,17 @@ int SolveAccelerations(const Program& p, Workspace& ws) {
 int Derivative(const Program& p, Workspace& ws, double t, const double* y, double* ydot) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   const bool step_projection = ws.step_projection && StepProjectionAvailable(p);
-  if (p.rows.empty()) {  // a tree: nothing to project, the kinematics in one pass
+  if (p.rows.empty() || step_projection) {
+    // A tree, or a solver that projects its steps: q and u are taken as they are, and the
+    // kinematics is one pass. (Hairer, Lubich & Wanner, sec. IV.4, algorithm 4.2: the
+    // ODE of the reduced equations, the accepted step projected by ProjectOntoConstraints.)
     MotionKinematics(p, ws);
     if (int s = KinematicDifferentials(p, ws); s != 0) return s;
+    if (int s = FactorConstraintsAsIs(p, ws); s != 0) return s;
   } else {
     PositionKinematics(p, ws);
     VelocityKinematics(p, ws);
-    if (int s = step_projection ? ProjectSpeeds(p, ws) : ProjectState(p, ws); s != 0) return s;
+    if (int s = ProjectState(p, ws); s != 0) return s;
     if (int s = KinematicDifferentials(p, ws); s != 0) return s;
     BiasAccelerations(p, ws);
   }

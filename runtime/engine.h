@@ -100,10 +100,11 @@ int Derivative(const Program& program, Workspace& ws, double t, const double* y,
 // the constraints at every evaluation (Newton on the dependent coordinates, then the
 // dependent speeds) and adds a pull toward the projection. A one-step solver may instead
 // project each accepted step with ProjectOntoConstraints and switch the workspace to
-// SetStepProjection(ws, true): Derivative then takes the positions as they are (off the
-// manifold: an explicit Runge-Kutta stage's own error is O(h^2)), solves only the dependent speeds from the
-// velocity constraints, and adds no pull. Available on the reduced path with constraint
-// rows (StepProjectionAvailable); elsewhere the switch has no effect.
+// SetStepProjection(ws, true): Derivative then takes positions and speeds as they are (off
+// the manifold: an explicit Runge-Kutta stage's own error is O(h^2)), runs the kinematics
+// in one pass as for a tree, and adds no pull: the reduced equations are a smooth ODE off
+// the manifold as well. Available on the reduced path with constraint rows
+// (StepProjectionAvailable); elsewhere the switch has no effect.
 bool StepProjectionAvailable(const Program& program);
 void SetStepProjection(Workspace& ws, bool on);
 // y := its projection onto the position and velocity constraints. 0, or 1 (recoverable:

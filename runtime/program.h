@@ -124,6 +124,8 @@ struct ConstraintRow {
   RowKind kind = RowKind::Translation;
   Vec3 d_a = Vec3::UnitX();     // Translation: d; Alignment: e (fixed in frame a, in a's axes)
   Vec3 n_b = Vec3::UnitZ();     // Alignment: n (fixed in frame b, in b's axes)
+  Vec3 d_aB = Vec3::UnitX();    // loop rows: d_a in the axes of frame a's body (R_BF d_a; W's for the world)
+  Vec3 n_bB = Vec3::UnitZ();    // loop rows: n_b in the axes of frame b's body
   double offset = 0.0;          // Alignment: e . n at a consistent configuration
   std::string what;             // "translation along x", "tilt about e1" (for messages)
 };

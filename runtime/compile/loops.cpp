@@ -207,14 +207,21 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
       case JointType::Free:
       case JointType::Weld: break;
     }
+    bool connected = true;
+    for (int f : {l.frame_a, l.frame_b})
+      if (f < 0 || p.frames[static_cast<size_t>(f)].body < -1) {
+        errors->push_back(Msg("K303", "cut joint '" + fj.name + "' is not connected to the mechanism", fj.loc));
+        connected = false;
+      }
     for (auto& r : rows) {
       r.loop = loop;
+      if (connected) {  // the directions in the bodies' axes (constraints.cpp FrameState)
+        r.d_aB = p.frames[static_cast<size_t>(l.frame_a)].R_BF * r.d_a;
+        r.n_bB = p.frames[static_cast<size_t>(l.frame_b)].R_BF * r.n_b;
+      }
       p.rows.push_back(r);
     }
     l.nrows = static_cast<int>(rows.size());
-    for (int f : {l.frame_a, l.frame_b})
-      if (f < 0 || p.frames[static_cast<size_t>(f)].body < -1)
-        errors->push_back(Msg("K303", "cut joint '" + fj.name + "' is not connected to the mechanism", fj.loc));
     p.loops.push_back(l);
   }
   p.grubler_dof -= static_cast<int>(p.rows.size());
