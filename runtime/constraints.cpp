@@ -121,24 +121,6 @@ double RowRate(const ConstraintRow& row, const Vec3& d_or_k, const Vec3& r, cons
   return d_or_k.dot(w_B - w_A);
 }
 
-// Adds sign * (contribution of every speed on body's path) to row `i` of A: the twist
-// column of speed s carried to point x.
-void AddBodyColumns(const Program& p, Workspace& ws, int body, const Vec3& x, double sign,
-                    const ConstraintRow& row, const Vec3& d_or_k, const Vec3& r, bool is_a, int i) {
-  if (body < 0) return;
-  for (int s : p.bodies[static_cast<size_t>(body)].path_speeds) {
-    const auto h = ws.H_W.col(s);
-    const Vec3 hw = h.tail<3>();
-    const Vec3 v = h.head<3>() + hw.cross(x - ws.p_WB[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(s)])]);
-    double val;
-    if (row.kind == RowKind::Translation)
-      val = d_or_k.dot(v) + (is_a ? r.cross(d_or_k).dot(hw) : 0.0);  // (3): d . (w_A x r) = (r x d) . w_A
-    else
-      val = d_or_k.dot(hw);  // (4)
-    ws.A(i, p.u_free_of[static_cast<size_t>(s)]) += sign * val;
-  }
-}
-
 // Direction of a row: d (translation) or k = n x e (alignment), and r = p_b - p_a.
 Vec3 RowDirection(const ConstraintRow& row, const FrameState& a, const FrameState& b) {
   if (row.kind == RowKind::Translation) return a.Dir(row.d_aB);
@@ -211,19 +193,44 @@ void LoopResiduals(const Program& p, Workspace& ws, const LoopClosure& l, const 
 }
 
 // (3), (4) for a cut joint's rows: the active ones into ws.A (zeroed by the caller), all
-// into ws.psi.
+// into ws.psi (with `rates`). Each speed's twist column is carried to the frame point once
+// for all the rows: v_s = H^v_s + H^w_s x (x - o_J), and then per row
+//   translation: d . v_s (frame b),  -(d . v_s + (r x d) . H^w_s) (frame a: d . (w_A x r))
+//   alignment:   k . H^w_s (b),  -k . H^w_s (a).
 void LoopJacobian(const Program& p, Workspace& ws, const LoopClosure& l, const LoopFrames& f, bool rates = true) {
   const Vec3 r = f.b.p - f.a.p;
+  // A cut joint has at most 5 rows (compile/loops.cpp CompileLoops).
+  constexpr int kMaxRows = 6;
+  Vec3 dk[kMaxRows], rxd[kMaxRows];
+  int active[kMaxRows];
+  bool translation[kMaxRows];
+  int na = 0;
   for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
     const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
-    const Vec3 dk = RowDirection(row, f.a, f.b);
+    const Vec3 d = RowDirection(row, f.a, f.b);
+    if (rates) ws.psi[i] = RowRate(row, d, r, f.v_a, f.w_A, f.v_b, f.w_B);
     const int k = p.active_of_row[static_cast<size_t>(i)];
-    if (k >= 0) {
-      AddBodyColumns(p, ws, f.b.body, f.b.p, 1.0, row, dk, r, false, k);
-      AddBodyColumns(p, ws, f.a.body, f.a.p, -1.0, row, dk, r, true, k);
-    }
-    if (rates) ws.psi[i] = RowRate(row, dk, r, f.v_a, f.w_A, f.v_b, f.w_B);
+    if (k < 0 || na == kMaxRows) continue;
+    dk[na] = d;
+    translation[na] = row.kind == RowKind::Translation;
+    rxd[na] = r.cross(d);
+    active[na++] = k;
   }
+  auto side = [&](const FrameState& fr, double sign, bool is_a) {
+    if (fr.body < 0) return;
+    for (int s : p.bodies[static_cast<size_t>(fr.body)].path_speeds) {
+      const auto h = ws.H_W.col(s);
+      const Vec3 hw = h.tail<3>();
+      const Vec3 v = h.head<3>() + hw.cross(fr.p - ws.p_WB[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(s)])]);
+      const int col = p.u_free_of[static_cast<size_t>(s)];
+      for (int m = 0; m < na; ++m) {
+        const double val = translation[m] ? dk[m].dot(v) + (is_a ? rxd[m].dot(hw) : 0.0) : dk[m].dot(hw);
+        ws.A(active[m], col) += sign * val;
+      }
+    }
+  };
+  side(f.b, 1.0, false);
+  side(f.a, -1.0, true);
 }
 
 void ContactResiduals(const Program& p, Workspace& ws, const ContactModel& c, const ContactPoint& cp) {
