@@ -108,9 +108,9 @@ int RunCheck(const CheckArgs& args) {
     // default: its error follows the tolerance.
     std::cout << "  projection  eval — Newton onto the constraints at every evaluation of f, so the error "
                  "follows the tolerance; `--projection step` (DOP853) projects once per accepted step "
-                 "instead: an evaluation costs about a third less and the same error is reached in "
-                 "0.6-1.1x the time on the four-bar (0.7x at most levels), but the error per "
-                 "tolerance is up to 30x larger (docs/constraints.md)\n";
+                 "instead and takes positions and speeds as they are in between: an evaluation costs "
+                 "about half and the same error is reached in 0.4-0.7x the time on the four-bar, but "
+                 "the error per tolerance is up to 20x larger (docs/constraints.md)\n";
   }
   if (s.integrator == rt::IntegratorKind::IDA) {
     // IDA's Newton matrix: the block pattern and the automatic dense/KLU choice
