@@ -199,7 +199,8 @@ void LoopResiduals(const Program& p, Workspace& ws, const LoopClosure& l, const 
 //   alignment:   k . H^w_s (b),  -k . H^w_s (a).
 void LoopJacobian(const Program& p, Workspace& ws, const LoopClosure& l, const LoopFrames& f, bool rates = true) {
   const Vec3 r = f.b.p - f.a.p;
-  // A cut joint has at most 5 rows (compile/loops.cpp CompileLoops).
+  // A cut joint has at most 5 rows (compile/loops.cpp CompileLoops), so the guard on na
+  // below never drops one.
   constexpr int kMaxRows = 6;
   Vec3 dk[kMaxRows], rxd[kMaxRows];
   int active[kMaxRows];

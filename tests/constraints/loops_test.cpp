@@ -273,7 +273,7 @@ TEST(FourBar, StepProjectedDerivativeTakesTheSpeedsAsTheyAre) {
     y[crank] = th;  // on the loop
     y[coupler] = cf.phi3 - th;
     y[rocker] = cf.phi4;
-    y[static_cast<size_t>(p.nq) + crank] = 6.0;  // the speeds 0.05 rad/s off it
+    y[static_cast<size_t>(p.nq) + crank] = 6.0;  // speeds that do not satisfy A u = 0 (below)
     y[static_cast<size_t>(p.nq) + coupler] = -8.0;
     y[static_cast<size_t>(p.nq) + rocker] = 1.0;
     const Eigen::VectorXd psi0 = psi(y);
