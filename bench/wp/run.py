@@ -43,6 +43,13 @@ RTOLS_QUICK = [1e-3, 1e-6, 1e-9, 1e-12]
 CPP_REPS = 9
 
 
+# PairedSweep (kanesim DOP853 beside Pinocchio C++): rounds per tolerance, each a driver
+# call (itself the median of CPP_REPS runs); a series takes further rounds only while one
+# run of it is cheaper than PAIRED_CHEAP seconds.
+PAIRED_ROUNDS = 3
+PAIRED_CHEAP = 0.02
+
+
 def cpp_reps(sweep):
     return CPP_REPS if sweep.reps > 1 else 1  # --quick: one run
 # Three tolerances per decade for the candidates for "best" (kanesim DOP853, Pinocchio C++,
@@ -97,6 +104,52 @@ class Sweep:
         return pts
 
 
+class PairedSweep:
+    """The candidates for "best" on one grid, side by side: at each parameter every series
+    still going runs once per round, the rounds alternate the order (A B C, C B A, A B C),
+    and a series' time at the point is the median of its rounds. So the two sides of a
+    ratio are timed seconds apart, in the same stretch of the machine's load, instead of
+    one sweep after the other. A series takes further rounds only while one of its runs
+    is cheaper than `cheap` seconds (the long runs are timed over many steps already and
+    would cost minutes). series: list of dict(label, fn, params, go_on_after_failure)."""
+
+    def __init__(self, rounds, budget, cheap):
+        self.rounds, self.budget, self.cheap = rounds, budget, cheap
+
+    def run(self, problem, series):
+        grid = sorted({prm for s in series for prm in s["params"]}, reverse=True)  # loose -> tight
+        pts = {s["label"]: [] for s in series}
+        alive = {s["label"]: True for s in series}
+        for prm in grid:
+            live = [s for s in series if alive[s["label"]] and prm in s["params"]]
+            runs = {s["label"]: [] for s in live}
+            for k in range(self.rounds):
+                order = live if k % 2 == 0 else live[::-1]
+                for s in order:
+                    done = runs[s["label"]]
+                    if done and (not done[-1].get("ok", True) or done[-1]["time"] > self.cheap):
+                        continue  # failed, or too dear for another round
+                    done.append(s["fn"](prm))
+            for s in live:
+                lab, done = s["label"], runs[s["label"]]
+                r = done[-1]
+                if not r.get("ok", True):
+                    pts[lab].append(dict(param=prm, ok=False, message=r.get("message", "")))
+                    print("  %-28s %-8g FAILED %s" % (lab, prm, r.get("message", "")[:80]), flush=True)
+                    if not s.get("go_on_after_failure"):
+                        alive[lab] = False
+                    continue
+                t = statistics.median(x["time"] for x in done)
+                err = problem.error(r["q"])
+                extra = {key: v for key, v in r.items() if key not in ("q", "time", "ok")}
+                pts[lab].append(dict(param=prm, ok=True, time=t, error=err, rounds=len(done),
+                                     round_times=[x["time"] for x in done], **extra))
+                print("  %-28s %-8g time %.4g s  error %.3g  (%d rounds)" % (lab, prm, t, err, len(done)), flush=True)
+                if t > self.budget:
+                    alive[lab] = False
+        return pts
+
+
 # --------------------------------------------------------------------------- kanesim
 def kanesim_driver_run(driver, p, integrator, solver, rtol, reps, projection="eval"):
     """bench/kanesim_driver.cpp: compiled once, integrated REPS times in one process, the
@@ -135,25 +188,71 @@ def kanesim_run(exe, p, integrator, solver, rtol, out_csv, extra=()):
                 steps=stats.get("steps"))
 
 
-def run_kanesim(args, problems, sweep, rtols, res, fine):
-    tmp = tempfile.mkdtemp(prefix="wp_kanesim_")
-    if args.kanesim_driver:  # in-process repetitions (the driver's median): the sweep calls it once
-        one = Sweep(1, sweep.budget)
-
+def kanesim_measure(args, sweep):
+    """measure(p, integrator, solver, rtol, extra) -> one timed point of kanesim."""
+    if args.kanesim_driver:  # in-process repetitions (the driver's median)
         def measure(p, integ, solver, r, extra=()):
             proj = "step" if "step" in extra else "eval"
             return kanesim_driver_run(args.kanesim_driver, p, integ, solver, r, cpp_reps(sweep), proj)
-    else:  # `kanesim run`, one cold integration per process, the sweep's median
-        one = sweep
+    else:  # `kanesim run`, one cold integration per process
+        tmp = tempfile.mkdtemp(prefix="wp_kanesim_")
 
         def measure(p, integ, solver, r, extra=()):
             return kanesim_run(args.kanesim, p, integ, solver, r, os.path.join(tmp, "out.csv"), extra)
+    return measure
+
+
+def kanesim_dop853_series(args, p, sweep, fine):
+    """kanesim's DOP853 series of problem p (the candidates for its best), for PairedSweep."""
+    measure = kanesim_measure(args, sweep)
+    constrained = p.kind in CONSTRAINED
+    out = []
+    for solver in ("dense",) if constrained else ("dense", "recursive"):
+        out.append(dict(label="kanesim dop853 %s" % solver, params=fine, go_on_after_failure=constrained,
+                        fn=lambda r, solver=solver: measure(p, "dop853", solver, r)))
+    if constrained:  # DOP853 projecting once per accepted step (`--projection step`)
+        out.append(dict(label="kanesim dop853 dense step-projection", params=fine, go_on_after_failure=True,
+                        fn=lambda r: measure(p, "dop853", "dense", r, ("--projection", "step"))))
+    return out
+
+
+def pin_cpp_series(args, p, sweep, pin_rtols):
+    """Pinocchio C++'s series of problem p (DOP853 with aba, or constraintDynamics on the
+    four-bar with and without Baumgarte), for PairedSweep; [] where Pinocchio cannot run it."""
+    reps = cpp_reps(sweep)
+    if p.kind == "fourbar":
+        no_bg = dict(fourbar_geometry.PIN_LOOP, kp=0.0, kd=0.0)
+        return [dict(label=label, params=pin_rtols, fn=lambda r, loop=loop: pin_cpp_run(args.pin_driver, p, r, reps, loop))
+                for label, loop in ((PIN_LOOP_CPP, fourbar_geometry.PIN_LOOP), (PIN_LOOP_CPP + " no Baumgarte", no_bg))]
+    if p.kind in CONSTRAINED:
+        return []
+    return [dict(label="pinocchio-aba C++ DOP853", params=pin_rtols,
+                 fn=lambda r: pin_cpp_run(args.pin_driver, p, r, reps))]
+
+
+def run_paired(args, p, sweep, res, fine, pin_rtols):
+    """kanesim's DOP853 series and Pinocchio C++ on problem p, side by side (PairedSweep)."""
+    series = kanesim_dop853_series(args, p, sweep, fine) + pin_cpp_series(args, p, sweep, pin_rtols)
+    print("kanesim DOP853 and Pinocchio C++, side by side:", p.title, flush=True)
+    paired = PairedSweep(PAIRED_ROUNDS if sweep.reps > 1 else 1, sweep.budget, PAIRED_CHEAP)
+    for label, pts in paired.run(p, series).items():
+        res["runs"].setdefault(p.name, {})[label] = pts
+    if p.kind in CONSTRAINED and p.kind != "fourbar":
+        res["notes"].append("%s: %s" % (p.name, NOT_RUN[("pin", p.kind)]))
+
+
+def run_kanesim(args, problems, sweep, rtols, res, fine, skip_dop853=False):
+    """skip_dop853: the DOP853 series run in run_paired instead."""
+    measure = kanesim_measure(args, sweep)
+    # The driver repeats in process (its median): then the sweep calls it once per point.
+    one = Sweep(1, sweep.budget) if args.kanesim_driver else sweep
     for p in problems:
         print("kanesim:", p.title, flush=True)
         # Loops and contacts: the reduced form (`--solver dense`, the automatic choice for
         # these small scenes; the multiplier form is measured by bench/loop_solvers).
         constrained = p.kind in CONSTRAINED
-        for integ in ("ida", "cvode", "cvode-bdf", "arkode", "dop853") if constrained else ("ida", "cvode", "arkode", "dop853"):
+        integrators = ("ida", "cvode", "cvode-bdf", "arkode", "dop853") if constrained else ("ida", "cvode", "arkode", "dop853")
+        for integ in integrators[:-1] if skip_dop853 else integrators:
             # Trees: the recursive path (the automatic choice) and dense; the sparse (KLU)
             # path costs 5-6x recursive per right-hand side at every size (bench/rhs_chain)
             # and is measured there, not in these sweeps.
@@ -162,7 +261,7 @@ def run_kanesim(args, problems, sweep, rtols, res, fine):
                 pts = one.run(p, fine if integ == "dop853" else rtols, lambda r: measure(p, integ, solver, r), label,
                               go_on_after_failure=constrained)
                 res["runs"].setdefault(p.name, {})[label] = pts
-        if constrained:  # DOP853 projecting once per accepted step (`--projection step`)
+        if constrained and not skip_dop853:  # DOP853 projecting once per accepted step (`--projection step`)
             label = "kanesim dop853 dense step-projection"
             pts = one.run(p, fine, lambda r: measure(p, "dop853", "dense", r, ("--projection", "step")), label,
                           go_on_after_failure=True)
@@ -521,20 +620,20 @@ def main():
              ("baseline", lambda: run_baseline(args, problems, sweep, rtols, res)),
              ("sympy", lambda: run_sympy(args, res, args.quick)),
              ("rhs", lambda: run_rhs(args, res, args.quick))]
-    if "kanesim" in parts and "pin" in parts:
-        # kanesim and the Pinocchio C++ driver (the best peer on most rows) problem by
-        # problem, so that the two sides of a ratio are timed minutes apart at most, not a
-        # whole sweep apart: the machine is shared and its speed drifts.
+    if "kanesim" in parts and "pin" in parts and args.kanesim_driver:
+        # kanesim's DOP853 series and the Pinocchio C++ driver (the best peer on most rows)
+        # side by side, tolerance by tolerance (PairedSweep): the machine is shared and its
+        # speed drifts, so the two sides of a ratio are timed seconds apart. Then kanesim's
+        # other integrators, problem by problem.
         secs = res.setdefault("phase_seconds", {})
-        secs["kanesim"] = secs["pin"] = 0.0
+        secs["kanesim+pin paired"] = secs["kanesim"] = 0.0
         for p in problems:
-            for name, fn in (("kanesim", run_kanesim), ("pin", run_pin_cpp)):
-                t0 = time.time()
-                if name == "kanesim":
-                    fn(args, [p], sweep, rtols, res, fine)
-                else:
-                    fn(args, [p], sweep, res, pin_rtols)
-                secs[name] += time.time() - t0
+            t0 = time.time()
+            run_paired(args, p, sweep, res, fine, pin_rtols)
+            t1 = time.time()
+            run_kanesim(args, [p], sweep, rtols, res, fine, skip_dop853=True)
+            secs["kanesim+pin paired"] += t1 - t0
+            secs["kanesim"] += time.time() - t1
             with open(args.out, "w") as fh:
                 json.dump(res, fh, indent=1, default=float)
         parts = [x for x in parts if x not in ("kanesim", "pin")]
