@@ -106,14 +106,6 @@ Vec3 FrameBiasAccel(const Workspace& ws, const FrameState& f, Vec3* alpha) {
   return ws.a_bias_o[B] + ws.alpha_bias[B].cross(rho) + ws.w_WB[B].cross(ws.w_WB[B].cross(rho));
 }
 
-// Velocity of a frame origin and its body's angular velocity.
-void FrameVelocity(const Workspace& ws, const FrameState& f, Vec3* v, Vec3* w) {
-  if (f.body < 0) return;  // (both stay zero)
-  const auto B = static_cast<size_t>(f.body);
-  *w = ws.w_WB[B];
-  *v = ws.v_WBo[B] + ws.w_WB[B].cross(f.rho);
-}
-
 // Row value of (3)/(4) for the point velocities/angular velocities given.
 double RowRate(const ConstraintRow& row, const Vec3& d_or_k, const Vec3& r, const Vec3& v_a, const Vec3& w_A,
                const Vec3& v_b, const Vec3& w_B) {
@@ -171,8 +163,8 @@ struct LoopFrames {
 LoopFrames FramesOf(const Program& p, const Workspace& ws, const LoopClosure& l, bool motion) {
   LoopFrames f{FrameAt(p, ws, l.frame_a), FrameAt(p, ws, l.frame_b)};
   if (motion) {
-    FrameVelocity(ws, f.a, &f.v_a, &f.w_A);
-    FrameVelocity(ws, f.b, &f.v_b, &f.w_B);
+    PointMotion(ws, f.a.body, f.a.rho, &f.v_a, &f.w_A);
+    PointMotion(ws, f.b.body, f.b.rho, &f.v_b, &f.w_B);
   }
   return f;
 }

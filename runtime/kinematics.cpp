@@ -419,16 +419,21 @@ void FramePose(const Program& p, const Workspace& ws, int frame, Vec3* p_WF, Mat
   *R_WF = ws.R_WB[B] * F.R_BF;
 }
 
-void FrameMotion(const Program& p, const Workspace& ws, int frame, Vec3* v_WF, Vec3* w_WF) {
-  const FramePlace& F = p.frames[static_cast<size_t>(frame)];
-  if (F.body < 0) {
-    v_WF->setZero();
-    w_WF->setZero();
+void PointMotion(const Workspace& ws, int body, const Vec3& rho, Vec3* v_WP, Vec3* w_WB) {
+  if (body < 0) {
+    v_WP->setZero();
+    w_WB->setZero();
     return;
   }
-  const auto B = static_cast<size_t>(F.body);
-  *w_WF = ws.w_WB[B];
-  *v_WF = ws.v_WBo[B] + ws.w_WB[B].cross(ws.R_WB[B] * F.p_BF);
+  const auto B = static_cast<size_t>(body);
+  *w_WB = ws.w_WB[B];
+  *v_WP = ws.v_WBo[B] + ws.w_WB[B].cross(rho);
+}
+
+void FrameMotion(const Program& p, const Workspace& ws, int frame, Vec3* v_WF, Vec3* w_WF) {
+  const FramePlace& F = p.frames[static_cast<size_t>(frame)];
+  const Vec3 rho = F.body < 0 ? Vec3::Zero() : Vec3(ws.R_WB[static_cast<size_t>(F.body)] * F.p_BF);
+  PointMotion(ws, F.body, rho, v_WF, w_WF);
 }
 
 void EvalStateRefs(const Program& p, Workspace& ws, const std::vector<int>& refs) {

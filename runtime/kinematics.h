@@ -42,6 +42,9 @@ Vec6 TangentColumn(const Program& p, const Workspace& ws, int body, int full_spe
 // World pose and motion of a flat frame (after Position/VelocityKinematics).
 void FramePose(const Program& p, const Workspace& ws, int frame, Vec3* p_WF, Mat3* R_WF);
 void FrameMotion(const Program& p, const Workspace& ws, int frame, Vec3* v_WF, Vec3* w_WF);
+// The same for a point fixed on body B (-1: the world) at rho = p_WP - p_WB (world axes),
+// when the caller has rho already (closed loops' frames, constraints.cpp).
+void PointMotion(const Workspace& ws, int body, const Vec3& rho, Vec3* v_WP, Vec3* w_WB);
 
 // Fills ws.state_values for the listed mech state refs.
 void EvalStateRefs(const Program& p, Workspace& ws, const std::vector<int>& refs);
