@@ -237,7 +237,7 @@ def run_paired(args, p, sweep, res, fine, pin_rtols):
     paired = PairedSweep(PAIRED_ROUNDS if sweep.reps > 1 else 1, sweep.budget, PAIRED_CHEAP)
     for label, pts in paired.run(p, series).items():
         res["runs"].setdefault(p.name, {})[label] = pts
-    if p.kind in CONSTRAINED and p.kind != "fourbar":
+    if not pin_cpp_series(args, p, sweep, pin_rtols):
         res["notes"].append("%s: %s" % (p.name, NOT_RUN[("pin", p.kind)]))
 
 
@@ -251,21 +251,19 @@ def run_kanesim(args, problems, sweep, rtols, res, fine, skip_dop853=False):
         # Loops and contacts: the reduced form (`--solver dense`, the automatic choice for
         # these small scenes; the multiplier form is measured by bench/loop_solvers).
         constrained = p.kind in CONSTRAINED
-        integrators = ("ida", "cvode", "cvode-bdf", "arkode", "dop853") if constrained else ("ida", "cvode", "arkode", "dop853")
-        for integ in integrators[:-1] if skip_dop853 else integrators:
+        integrators = ("ida", "cvode", "cvode-bdf", "arkode") if constrained else ("ida", "cvode", "arkode")
+        for integ in integrators:
             # Trees: the recursive path (the automatic choice) and dense; the sparse (KLU)
             # path costs 5-6x recursive per right-hand side at every size (bench/rhs_chain)
             # and is measured there, not in these sweeps.
             for solver in ("dense",) if constrained else ("dense", "recursive"):
                 label = "kanesim %s %s" % (integ, solver)
-                pts = one.run(p, fine if integ == "dop853" else rtols, lambda r: measure(p, integ, solver, r), label,
-                              go_on_after_failure=constrained)
+                pts = one.run(p, rtols, lambda r: measure(p, integ, solver, r), label, go_on_after_failure=constrained)
                 res["runs"].setdefault(p.name, {})[label] = pts
-        if constrained and not skip_dop853:  # DOP853 projecting once per accepted step (`--projection step`)
-            label = "kanesim dop853 dense step-projection"
-            pts = one.run(p, fine, lambda r: measure(p, "dop853", "dense", r, ("--projection", "step")), label,
-                          go_on_after_failure=True)
-            res["runs"].setdefault(p.name, {})[label] = pts
+        if not skip_dop853:  # DOP853 (on loops and contacts also with `--projection step`)
+            for s in kanesim_dop853_series(args, p, sweep, fine):
+                res["runs"].setdefault(p.name, {})[s["label"]] = one.run(
+                    p, s["params"], s["fn"], s["label"], go_on_after_failure=s["go_on_after_failure"])
 
 
 # --------------------------------------------------------------------------- Pinocchio C++
@@ -288,23 +286,16 @@ def pin_cpp_run(driver, p, rtol, reps, loop=None):
 
 
 def run_pin_cpp(args, problems, sweep, res, pin_rtols):
+    """Pinocchio C++ alone (--only pin without kanesim); run_paired times it beside kanesim."""
+    one = Sweep(1, sweep.budget)  # the driver repeats internally (median): one call per tolerance
     for p in problems:
-        reps = cpp_reps(sweep)
-        # The driver repeats internally (median); the sweep calls it once per tolerance.
-        one = Sweep(1, sweep.budget)
-        if p.kind == "fourbar":  # constraintDynamics with Pinocchio's Baumgarte gains, and without
-            print("pinocchio C++ constraintDynamics:", p.title, flush=True)
-            no_bg = dict(fourbar_geometry.PIN_LOOP, kp=0.0, kd=0.0)
-            for label, loop in ((PIN_LOOP_CPP, fourbar_geometry.PIN_LOOP), (PIN_LOOP_CPP + " no Baumgarte", no_bg)):
-                res["runs"].setdefault(p.name, {})[label] = one.run(
-                    p, pin_rtols, lambda r: pin_cpp_run(args.pin_driver, p, r, reps, loop), label)
-            continue
-        if p.kind in CONSTRAINED:
+        series = pin_cpp_series(args, p, sweep, pin_rtols)
+        if not series:
             res["notes"].append("%s: %s" % (p.name, NOT_RUN[("pin", p.kind)]))
             continue
         print("pinocchio C++:", p.title, flush=True)
-        pts = one.run(p, pin_rtols, lambda r: pin_cpp_run(args.pin_driver, p, r, reps), "pinocchio-aba C++ DOP853")
-        res["runs"].setdefault(p.name, {})["pinocchio-aba C++ DOP853"] = pts
+        for s in series:
+            res["runs"].setdefault(p.name, {})[s["label"]] = one.run(p, s["params"], s["fn"], s["label"])
 
 
 # --------------------------------------------------------------------------- SciPy + pin.aba
