@@ -1,6 +1,7 @@
 // Recursive path: Kane's equations of an open tree solved by eliminating the K-vector
 // system body by body, leaves to root, then substituting back root to leaves
-// (runtime/kane_tree.cpp). O(K) with 6x6 and 6 x nf blocks, no general sparse LU.
+// (runtime/kane_tree.cpp). O(K) with 6x6 and 6 x nf blocks, no general sparse LU; a
+// tree of revolute joints about parallel axes (a planar mechanism) with 3x3 blocks.
 // Trees only: closed loops and rolling contacts keep the reduced dense path.
 #pragma once
 
@@ -27,6 +28,12 @@ struct TreeLayout {
   std::vector<char> first_share;   // K: L is its parent's last child in tree order, the first the backward
                                    //    pass reaches: it writes its share into the parent, the others add
   int d_size = 0;                  // sum of nf^2
+  // Planar trees (SolveTreePlanar): every joint `angular` about axes parallel to one world
+  // direction in every configuration (PlanarLayout's test, made on the constant axes).
+  bool planar = false;
+  Vec3 plane_n = Vec3::UnitZ(), plane_e1 = Vec3::UnitX(), plane_e2 = Vec3::UnitY();  // right-handed
+  std::vector<double> plane_s;     // K: h_L = s_L n (s_L = +-1 for unit axes)
+  std::vector<double> plane_Inn;   // K: n . I n of body L (central inertia), = axis^T I_BBcm_B axis
 };
 
 // Compile time: the layout (Program::tree) for p.solver == SolverPath::Recursive.
@@ -34,6 +41,13 @@ void BuildTree(Program& p);
 // Workspace creation: the per-body and per-joint arrays of the recursion.
 void InitTreeWorkspace(const Program& p, Workspace& ws);
 // Writes the free entries of ws.udot. Returns -1 on a singular mass matrix.
+// SolveTreePlanar when p.tree->planar, else SolveTreeSpatial; the two solve the same
+// equations (tests/runtime/tree_solver_test.cpp).
 int SolveTree(const Program& p, Workspace& ws);
+// The recursion with 6x6 spatial blocks: any open tree.
+int SolveTreeSpatial(const Program& p, Workspace& ws);
+// The recursion of a planar tree (p.tree->planar) with 3x3 blocks in the plane's
+// coordinates (e1, e2, n).
+int SolveTreePlanar(const Program& p, Workspace& ws);
 
 }  // namespace kanesim::rt

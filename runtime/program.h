@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <Eigen/QR>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -304,6 +305,7 @@ struct Workspace {
   Eigen::VectorXd tree_U;           // U_L = Ia_L S_L, then X_LP^T U_L for a non-root joint; 6 x nf column-major at 6 f0  (6 nu)  filled by SolveTree
   Eigen::VectorXd tree_Dinv;        // D_L^-1 = (S_L^T U_L)^-1, nf x nf at d0  (sum nf^2)  filled by SolveTree
   Eigen::VectorXd tree_u;           // Q_L - S_L^T pa_L at f0  (nu)  filled by SolveTree
+  std::vector<std::array<double, 12>> tree_plane;  // planar recursion (SolveTreePlanar): a child's share (Ia 6, pa 3 in plane coordinates) in 0..8, A of body L in 9..11  (K)  filled by SolveTreePlanar
 
   // Closed loops (runtime/constraints.cpp); sized n_c = p.rows.size(), nu = p.nu.
   Eigen::VectorXd phi;              // position residuals  (n_c)  filled by ProjectState

@@ -119,8 +119,8 @@ inline flat::Mechanism Pendulum(double m = 1.0, double L = 0.5, double g = 9.81,
 // examples/chain.mech: N uniform thin rods (1 kg, 0.5 m) along body x, mass centre at
 // L/2, central inertia diag(0, mL^2/12, mL^2/12); j[1] at the world origin, j[i] at the
 // tip of rod i-1; axes fixed in the parent alternate z, y, z, ...; gravity 9.81 along
-// -y; every q starts at 0.1.
-inline flat::Mechanism Chain(int N, double m = 1.0, double L = 0.5) {
+// -y; every q starts at 0.1. planar: every axis z (the planar N-link pendulum).
+inline flat::Mechanism Chain(int N, double m = 1.0, double L = 0.5, bool planar = false) {
   MechBuilder b;
   int prev = b.World(Vec3(0, -9.81, 0));
   for (int i = 1; i <= N; ++i) {
@@ -130,7 +130,7 @@ inline flat::Mechanism Chain(int N, double m = 1.0, double L = 0.5) {
     b.Fixed(rod + ".fixed", fa, fb, Vec3(L, 0, 0));
     b.Body(rod, fa, m, Vec3(L / 2, 0, 0), Diag(0.0, m * L * L / 12, m * L * L / 12));
     auto& j = b.Joint(Name("j[", i, "]"), JointType::Revolute, prev, fa,
-                      i % 2 == 1 ? Vec3::UnitZ() : Vec3::UnitY());
+                      i % 2 == 1 || planar ? Vec3::UnitZ() : Vec3::UnitY());
     j.q_start[0] = b.C(0.1);
     prev = fb;
   }
@@ -201,6 +201,46 @@ inline flat::Mechanism RandomTree(std::mt19937& rng, const TreeOptions& opt) {
     b.Joint("weld", JointType::Weld, host, f);
   }
   b.m.model_name = "RandomTree";
+  return b.m;
+}
+
+// A random planar tree (runtime/kane_tree.cpp, "planar trees"): `bodies` bodies, each on a
+// revolute joint to a random earlier body or to the world (several roots), whose axis a_i
+// (random in the joint's frame, which is the body's frame) the mount on the parent turns
+// to +-(the parent's own axis), or +-n for a root, then a random turn about a_i; random
+// offsets, mass centres off the plane, full inertia tensors, a body welded onto body 2,
+// gravity at an angle to the plane. `tilt` turns the last joint's axis by that angle
+// (radians) out of parallel: 0 gives a planar tree, anything else a spatial one.
+inline flat::Mechanism RandomPlanarTree(std::mt19937& rng, int bodies, const Vec3& n, double tilt = 0.0) {
+  MechBuilder b;
+  int world = b.World(Vec3(0.3, -9.81, 0.2));
+  std::vector<int> body_frames{world};
+  std::vector<Vec3> axes{n.normalized()};  // per body frame: its joint's axis in it (the world: n)
+  std::uniform_real_distribution<double> mass(0.5, 2.0), angle(-3.0, 3.0), coin(0.0, 1.0);
+  for (int i = 1; i <= bodies; ++i) {
+    const std::string name = Name("b", i);
+    const auto parent = static_cast<size_t>(std::uniform_int_distribution<int>(0, i - 1)(rng));
+    int fb = b.Frame(name + ".frame");
+    b.Body(name, fb, mass(rng), RandomVec(rng, 0.4), RandomInertia(rng));
+    const Vec3 a = RandomVec(rng).normalized();
+    Vec3 to = (coin(rng) < 0.5 ? -1.0 : 1.0) * axes[parent];
+    if (i == bodies && tilt != 0.0) to = Eigen::AngleAxisd(tilt, to.unitOrthogonal()) * to;
+    const Mat3 R = Eigen::Quaterniond::FromTwoVectors(a, to).toRotationMatrix() *
+                   Eigen::AngleAxisd(angle(rng), a).toRotationMatrix();
+    int pj = b.Frame(name + ".mount");
+    b.Fixed(name + ".mount_fix", body_frames[parent], pj, RandomVec(rng, 0.5), R);
+    b.Joint(Name("j", i), JointType::Revolute, pj, fb, a);
+    body_frames.push_back(fb);
+    axes.push_back(a);
+  }
+  if (bodies >= 2) {
+    int f = b.Frame("extra.frame");
+    b.Body("extra", f, 0.7, RandomVec(rng, 0.2), RandomInertia(rng));
+    int host = b.Frame("extra.host");
+    b.Fixed("extra.host_fix", body_frames[2], host, RandomVec(rng, 0.5), RandomRotation(rng));
+    b.Joint("weld", JointType::Weld, host, f);
+  }
+  b.m.model_name = "RandomPlanarTree";
   return b.m;
 }
 

@@ -1,5 +1,6 @@
 // The recursive path (runtime/kane_tree.cpp) against the dense path on random trees of
-// every joint type, with prescribed coordinates and every force element; energy of a
+// every joint type, with prescribed coordinates and every force element; its planar form
+// against the dense path and the spatial recursion on random planar trees; energy of a
 // chain integrated on it; and its right-hand side allocates nothing. Its own binary,
 // because it replaces the global operator new to count allocations.
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 
 #include "runtime/engine.h"
 #include "runtime/kane.h"
+#include "runtime/kane_tree.h"
 #include "runtime/program.h"
 #include "runtime/sim/simulate.h"
 #include "tests/alloc_counter.h"
@@ -116,6 +118,67 @@ TEST(TreeSolver, AgreesWithDenseWithCoulombFriction) {
   ExpectRecursiveAgreesWithDense(DrivenTree(rng, true), rng, 4);
 }
 
+// A tilted plane: its normal is no coordinate axis, so e1, e2 and every projection count.
+const Eigen::Vector3d kTiltedNormal = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+
+bool Planar(const rt::CompileResult& r) { return r.program->tree && r.program->tree->planar; }
+
+TEST(TreeSolver, PlanarTreesAreRecognised) {
+  // If this fails, the planar recursion is taken for a tree that moves out of its plane
+  // (axes alternating z, y; one axis tilted by 1e-6 rad; a prismatic joint), or refused
+  // for one that cannot (parallel axes with flipped signs, several roots, a tilted plane).
+  std::mt19937 rng(31);
+  auto compile = [](const flat::Mechanism& m) { return CompileWith(m, rt::SolverPath::Recursive); };
+  EXPECT_TRUE(Planar(compile(test::RandomPlanarTree(rng, 9, Eigen::Vector3d::UnitZ()))));
+  EXPECT_TRUE(Planar(compile(test::RandomPlanarTree(rng, 9, kTiltedNormal))));
+  EXPECT_TRUE(Planar(compile(test::Pendulum())));
+  EXPECT_FALSE(Planar(compile(test::RandomPlanarTree(rng, 9, kTiltedNormal, 1e-6))));
+  EXPECT_FALSE(Planar(compile(test::Chain(4))));
+  EXPECT_FALSE(Planar(compile(test::RandomTree(rng, {8, true, true, true}))));
+  const auto r = compile(test::RandomPlanarTree(rng, 5, Eigen::Vector3d::UnitY()));
+  EXPECT_NE(r.program->solver_reason.find("planar"), std::string::npos) << r.program->solver_reason;
+}
+
+TEST(TreeSolver, PlanarAgreesWithDenseAndSpatial) {
+  // If this fails, the 3x3 recursion of planar trees is wrong: a projection onto the
+  // plane, a sign of an axis flipped against the normal, a branch's share, a root other
+  // than the first, the welded body, a force element whose out-of-plane part must drop out.
+  std::mt19937 rng(41);
+  for (const Eigen::Vector3d& n : {Eigen::Vector3d(Eigen::Vector3d::UnitZ()), kTiltedNormal}) {
+    for (int trees = 0; trees < 3; ++trees) {
+      auto m = test::RandomPlanarTree(rng, 9, n);
+      test::AddBusyForces(m, 0.3);
+      ExpectRecursiveAgreesWithDense(m, rng, 4);
+      // The same state on the spatial recursion: the same udot to rounding.
+      auto r = CompileWith(m, rt::SolverPath::Recursive);
+      ASSERT_TRUE(Planar(r));
+      const rt::Program& p = *r.program;
+      auto ws = rt::MakeWorkspace(p);
+      Eigen::VectorXd y = test::RandomState(p, rng), yd(rt::StateSize(p));
+      ASSERT_EQ(rt::Derivative(p, *ws, 0.2, y.data(), yd.data()), 0) << rt::ErrorMessage(*ws);
+      const Eigen::VectorXd planar = ws->udot;
+      ASSERT_EQ(rt::SolveTreeSpatial(p, *ws), 0);
+      EXPECT_LT((ws->udot - planar).norm() / planar.norm(), kPathsAgreeTol);
+    }
+  }
+}
+
+TEST(TreeSolver, PlanarChainWithoutMassIsSingular) {
+  // If this fails, a massless link on the planar recursion gives garbage instead of the
+  // fatal status of the other paths.
+  std::mt19937 rng(43);
+  auto mech = test::RandomPlanarTree(rng, 4, Eigen::Vector3d::UnitZ());
+  mech.bodies[3].mass = mech.exprs.Constant(0.0);  // b4: a leaf (parents come earlier), nothing welded on
+  for (auto& e : mech.bodies[3].inertia) e = mech.exprs.Constant(0.0);
+  auto r = CompileWith(mech, rt::SolverPath::Recursive);
+  ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
+  ASSERT_TRUE(Planar(r));
+  auto ws = rt::MakeWorkspace(*r.program);
+  Eigen::VectorXd y = test::RandomState(*r.program, rng), yd(y.size());
+  EXPECT_LT(rt::Derivative(*r.program, *ws, 0.0, y.data(), yd.data()), 0);
+  EXPECT_NE(rt::ErrorMessage(*ws).find("singular mass matrix"), std::string::npos) << rt::ErrorMessage(*ws);
+}
+
 TEST(TreeSolver, SolvesLongChainToWorkingPrecision) {
   // If this fails, the recursion loses accuracy down a chain of 60 revolute joints
   // (examples/chain.mech, the case the benchmark measures). cond(M) ~ 1e6 here, so two
@@ -184,7 +247,7 @@ TEST(TreeSolver, DerivativeAllocatesNothing) {
   // If this fails, the recursive right-hand side (or the signals after it) allocates:
   // a dynamic-size temporary in the recursion, or a workspace array resized per call.
   std::mt19937 rng(2);
-  for (const flat::Mechanism& m : {DrivenTree(rng, true), test::Chain(50)}) {
+  for (const flat::Mechanism& m : {DrivenTree(rng, true), test::Chain(50), test::RandomPlanarTree(rng, 20, kTiltedNormal)}) {
     auto r = CompileWith(m, rt::SolverPath::Recursive);
     ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
     const rt::Program& p = *r.program;
