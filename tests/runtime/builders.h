@@ -159,6 +159,15 @@ inline Mat3 RandomInertia(std::mt19937& rng) {
   return R * Diag(a, b, c) * R.transpose();
 }
 
+// A body "extra" welded at a random offset and turn onto the body whose frame is `host_frame`.
+inline void AddWeldedBody(MechBuilder& b, std::mt19937& rng, int host_frame) {
+  int f = b.Frame("extra.frame");
+  b.Body("extra", f, 0.7, RandomVec(rng, 0.2), RandomInertia(rng));
+  int host = b.Frame("extra.host");
+  b.Fixed("extra.host_fix", host_frame, host, RandomVec(rng, 0.5), RandomRotation(rng));
+  b.Joint("weld", JointType::Weld, host, f);
+}
+
 struct TreeOptions {
   int bodies = 8;
   bool mixed = true;     // every joint type and rotation coordinate, else revolute only
@@ -193,13 +202,7 @@ inline flat::Mechanism RandomTree(std::mt19937& rng, const TreeOptions& opt) {
     b.Joint(Name("j", i), t, inv ? cj : pj, inv ? pj : cj, axis, axis2, rc);
     body_frames.push_back(fb);
   }
-  if (opt.weld && opt.bodies >= 2) {
-    int f = b.Frame("extra.frame");
-    b.Body("extra", f, 0.7, RandomVec(rng, 0.2), RandomInertia(rng));
-    int host = b.Frame("extra.host");
-    b.Fixed("extra.host_fix", body_frames[2], host, RandomVec(rng, 0.5), RandomRotation(rng));
-    b.Joint("weld", JointType::Weld, host, f);
-  }
+  if (opt.weld && opt.bodies >= 2) AddWeldedBody(b, rng, body_frames[2]);
   b.m.model_name = "RandomTree";
   return b.m;
 }
@@ -233,13 +236,7 @@ inline flat::Mechanism RandomPlanarTree(std::mt19937& rng, int bodies, const Vec
     body_frames.push_back(fb);
     axes.push_back(a);
   }
-  if (bodies >= 2) {
-    int f = b.Frame("extra.frame");
-    b.Body("extra", f, 0.7, RandomVec(rng, 0.2), RandomInertia(rng));
-    int host = b.Frame("extra.host");
-    b.Fixed("extra.host_fix", body_frames[2], host, RandomVec(rng, 0.5), RandomRotation(rng));
-    b.Joint("weld", JointType::Weld, host, f);
-  }
+  if (bodies >= 2) AddWeldedBody(b, rng, body_frames[2]);
   b.m.model_name = "RandomPlanarTree";
   return b.m;
 }
