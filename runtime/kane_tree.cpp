@@ -34,7 +34,6 @@
 #include "runtime/kane_tree.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -374,9 +373,7 @@ void PlanarLayout(const Program& p, TreeLayout* T) {
   }
   T->planar = !T->joints.empty();
   T->plane_n = n;
-  // e1 perpendicular to n, from the coordinate axis least aligned with it; e2 = n x e1.
-  T->plane_e1 = std::fabs(n.x()) < 0.9 ? Vec3(Vec3::UnitX() - n.x() * n) : Vec3(Vec3::UnitY() - n.y() * n);
-  T->plane_e1.normalize();
+  T->plane_e1 = n.unitOrthogonal();  // as the loops' joint rows (compile/loops.cpp)
   T->plane_e2 = n.cross(T->plane_e1);
   T->plane_s = std::move(s);
   T->plane_Inn = std::move(Inn);
