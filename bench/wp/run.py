@@ -32,6 +32,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fourbar_geometry  # noqa: E402
 import problems as P  # noqa: E402
+from readings import LEVELS, READINGS, best_of  # noqa: E402
 from problems import BENCH, ROOT, Problem, all_problems, mjcf, pin_model  # noqa: E402
 
 RTOLS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
@@ -48,6 +49,8 @@ CPP_REPS = 9
 # run of it is cheaper than PAIRED_CHEAP seconds.
 PAIRED_ROUNDS = 3
 PAIRED_CHEAP = 0.02
+# retime_decisive: rounds per side for the two points that decide a level.
+RETIME_ROUNDS = 4
 
 
 def cpp_reps(sweep):
@@ -230,13 +233,51 @@ def pin_cpp_series(args, p, sweep, pin_rtols):
                  fn=lambda r: pin_cpp_run(args.pin_driver, p, r, reps))]
 
 
+def retime_decisive(p, series, pts, rounds):
+    """The sweep's point that decides a level is timed in one stretch of the machine's load,
+    its rival's in another: the shared machine's speed wanders by up to 1.6x for seconds
+    to minutes, and a ratio can turn on which tool's decisive point met a slow stretch
+    (the four-bar over 2 s at 1e-3 in session 10). So, per level and reading
+    (readings.py), the decisive kanesim point and the decisive Pinocchio C++ point are
+    timed again back to back, `rounds` times each in the order K P P K K P P K ...; the
+    report gives the ratio of the medians beside the sweep's. Each pair is timed once
+    however many levels and readings pick it."""
+    fns = {s["label"]: s["fn"] for s in series}
+    out, done = [], {}
+    for lv in LEVELS:
+        if lv < p.trust_floor():
+            continue
+        for reading in READINGS:
+            _, kt, kp = best_of(pts, lv, reading, True)
+            _, qt, qp = best_of(pts, lv, reading, False)
+            if kp is None or qp is None:
+                continue
+            key = (kt, kp["param"], qt, qp["param"])
+            if key not in done:
+                times = {kt: [], qt: []}
+                for i in range(rounds):
+                    for side in ((kt, kp), (qt, qp)) if i % 2 == 0 else ((qt, qp), (kt, kp)):
+                        r = fns[side[0]](side[1]["param"])
+                        times[side[0]].append(r["time"] if r.get("ok", True) else None)
+                done[key] = dict(kanesim=kt, kanesim_param=kp["param"], kanesim_times=times[kt],
+                                 peer=qt, peer_param=qp["param"], peer_times=times[qt])
+                print("  side by side at %g (%s): %s %s / %s %s" % (
+                    lv, reading, kt, " ".join("%.4g" % t for t in times[kt] if t),
+                    qt, " ".join("%.4g" % t for t in times[qt] if t)), flush=True)
+            out.append(dict(level=lv, reading=reading, **done[key]))
+    return out
+
+
 def run_paired(args, p, sweep, res, fine, pin_rtols):
-    """kanesim's DOP853 series and Pinocchio C++ on problem p, side by side (PairedSweep)."""
+    """kanesim's DOP853 series and Pinocchio C++ on problem p, side by side (PairedSweep),
+    then their decisive points re-timed back to back (retime_decisive)."""
     series = kanesim_dop853_series(args, p, sweep, fine) + pin_cpp_series(args, p, sweep, pin_rtols)
     print("kanesim DOP853 and Pinocchio C++, side by side:", p.title, flush=True)
     paired = PairedSweep(PAIRED_ROUNDS if sweep.reps > 1 else 1, sweep.budget, PAIRED_CHEAP)
-    for label, pts in paired.run(p, series).items():
-        res["runs"].setdefault(p.name, {})[label] = pts
+    pts = paired.run(p, series)
+    for label, series_pts in pts.items():
+        res["runs"].setdefault(p.name, {})[label] = series_pts
+    res.setdefault("retimed", {})[p.name] = retime_decisive(p, series, pts, RETIME_ROUNDS if sweep.reps > 1 else 1)
     if not pin_cpp_series(args, p, sweep, pin_rtols):
         res["notes"].append("%s: %s" % (p.name, NOT_RUN[("pin", p.kind)]))
 
@@ -585,12 +626,14 @@ def main():
         with open(args.out) as fh:  # partial re-run: keep the other tools' and problems' numbers
             old = json.load(fh)
         new_problems = res["problems"]
-        for k in ("runs", "sympy", "rhs", "machine", "notes", "problems", "partial_runs"):
+        for k in ("runs", "retimed", "sympy", "rhs", "machine", "notes", "problems", "partial_runs"):
             if k in old:
                 res[k] = old[k]
         res["problems"].update(new_problems)
         if args.problems:  # the selected problems' runs of the selected tools start afresh
             for p in problems:
+                if "kanesim" in parts or "pin" in parts:  # re-timed pairs of stale points
+                    res.get("retimed", {}).pop(p.name, None)
                 for tool in list(res["runs"].get(p.name, {})):
                     tkey = "pin" if tool.startswith(("pinocchio", "scipy")) else tool.split()[0].rstrip(":")
                     if tkey in parts or (tkey == "pin" and "scipy" in parts):
