@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/sim/dop853_control.h"
 #include "runtime/sim/dop853_tableau.h"
 
 namespace {
@@ -94,7 +95,9 @@ struct Result {
 // Adaptive DOP853 from 0 to T (the last step clipped onto T). Error norm and step control
 // as in Hairer's dop853.f: err = |h| err5 / sqrt(n (err5^2 + 0.01 err3^2)) with err5, err3
 // the root-sum-squares of the scaled 5th- and 3rd-order estimates, scale atol + rtol max|y|;
-// new h = h * clamp(0.9 err^(-1/8), 0.2, 10). The FSAL stage is the next step's first.
+// the new step from runtime/sim/dop853_control.h, the control kanesim's DOP853 uses (Hairer's:
+// 0.9 err^(-1/8) clamped to [1/3, 6], no growth right after a rejection; a step within 1 % of
+// T goes onto it), so that both take the same steps. The FSAL stage is the next step's first.
 template <class F>
 Result Dop853(F& f, const Vec& y0, double T, double rtol, double atol) {
   using namespace kanesim::sim::dop853;
@@ -107,6 +110,7 @@ Result Dop853(F& f, const Vec& y0, double T, double rtol, double atol) {
   double d0 = (y.array() / sc.array()).matrix().norm() / std::sqrt(n);
   double d1 = (K[0].array() / sc.array()).matrix().norm() / std::sqrt(n);
   double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+  h0 = std::min(h0, T);
   ytmp = y + h0 * K[0];
   f(ytmp, K[1]);
   double d2 = ((K[1] - K[0]).array() / sc.array()).matrix().norm() / std::sqrt(n) / h0;
@@ -114,9 +118,10 @@ Result Dop853(F& f, const Vec& y0, double T, double rtol, double atol) {
   double h = std::min({100 * h0, h1, T});
   Result r;
   double t = 0;
+  bool rejected = false;
   while (t < T) {
     bool last = false;
-    if (t + h >= T) {
+    if (T - t <= kStretch * h) {
       h = T - t;
       last = true;
     }
@@ -145,10 +150,12 @@ Result Dop853(F& f, const Vec& y0, double T, double rtol, double atol) {
       f(y, K[kStages]);
       std::swap(K[0], K[kStages]);
       ++r.steps;
-      h *= err == 0 ? 10.0 : std::min(10.0, 0.9 * std::pow(err, -1.0 / 8));
+      h *= GrowFactor(err, rejected);
+      rejected = false;
     } else {
       ++r.rejected;
-      h *= std::max(0.2, 0.9 * std::pow(err, -1.0 / 8));
+      h *= ShrinkFactor(err);
+      rejected = true;
     }
     if (h < 1e-14 * std::max(1.0, std::abs(t))) {
       std::fprintf(stderr, "step size underflow at t=%g\n", t);

@@ -2,7 +2,8 @@
 // estimators of orders 5 and 3, adaptive steps, and its dense output of order 7.
 // Hairer, Norsett & Wanner, Solving Ordinary Differential Equations I, 2nd ed., Springer
 // 1993, sec. II.10 (the method and its step control), sec. II.6 (dense output), sec. II.4
-// (the initial step). Coefficients: runtime/sim/dop853_tableau.h.
+// (the initial step). Coefficients: runtime/sim/dop853_tableau.h; step control:
+// runtime/sim/dop853_control.h.
 //
 // One step from (t, y) with size h, stages k_0 .. k_11 (k_0 = f(t, y), reused from the
 // previous step: the first stage is the last one's f, "FSAL"):
@@ -39,6 +40,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/sim/dop853_control.h"
 #include "runtime/sim/dop853_tableau.h"
 #include "runtime/sim/stepper.h"
 
@@ -47,14 +49,9 @@ namespace {
 
 namespace tab = dop853;
 
-// Eq. (3)'s constants are those of the book's code. The clamps rarely bind: with 0.2 and 10
-// instead, the double pendulum (2 s) and the 20-chain (5 s) take the same steps.
-constexpr double kSafety = 0.9;         // Eq. (3)
-constexpr double kMinShrink = 1.0 / 3;  // Eq. (3): at most 3x smaller per step
-constexpr double kMaxGrow = 6.0;        // Eq. (3): at most 6x larger per step
+// Eq. (3)'s constants and the stretch onto the stop time: runtime/sim/dop853_control.h.
 constexpr double kRhsShrink = 0.25;     // h after a recoverable failure of f
 constexpr int kMaxRhsFails = 10;        // recoverable failures of f in a row (as ARKODE's default)
-constexpr double kStretch = 1.01;       // a step within 1% of the stop time goes onto it
 constexpr double kMaxStepSlack = 1e-9;  // relative: what rounding may add to max_step
 
 // Advance's flags (>= 0 success).
@@ -208,7 +205,7 @@ class Dop853Stepper final : public Stepper {
       // the rounding of t_ + h + h + ..., so that fixed steps that divide the span end on it).
       bool last = false;
       const double limit = options_.max_step > 0.0 ? options_.max_step * (1.0 + kMaxStepSlack) : INFINITY;
-      if (stop_ - t_ <= std::min(kStretch * h, limit)) {
+      if (stop_ - t_ <= std::min(tab::kStretch * h, limit)) {
         h = stop_ - t_;
         last = true;
       }
@@ -225,8 +222,7 @@ class Dop853Stepper final : public Stepper {
         if (!(err <= 1.0)) {               // a NaN or infinite estimate rejects as well
           ++err_test_fails_;
           rejected = true;
-          const double shrink = std::isfinite(err) ? kSafety * std::pow(err, -1.0 / 8) : kMinShrink;
-          h_ = h * std::max(kMinShrink, shrink);
+          h_ = h * tab::ShrinkFactor(err);
           continue;
         }
         // Accepted: projected, then f at the new point, the next step's first stage (k_12 here).
@@ -234,10 +230,8 @@ class Dop853Stepper final : public Stepper {
         if (project_) status = rhs_.Project(t_new, y_new_.data());
         if (status == 0) status = Eval(t_new, y_new_.data(), K(tab::kStages));
         if (status == 0) {
-          double grow = err == 0.0 ? kMaxGrow : std::min(kMaxGrow, kSafety * std::pow(err, -1.0 / 8));
-          if (rejected) grow = std::min(grow, 1.0);
           Accept(t_new, h);
-          h_ = h * grow;
+          h_ = h * tab::GrowFactor(err, rejected);
           return kOk;
         }
       }
