@@ -554,14 +554,14 @@ def run_rhs(args, res, quick):
         print("  pinocchio aba N=%d  %.0f ns cpu" % (n, pin[n]["cpu_ns"]), flush=True)
     kane = {}
     if args.rhs_bench and os.path.exists(args.rhs_bench):
-        filt = "BM_Rhs(Dense|Sparse)/(%s)$" % "|".join(str(n) for n in ns)
+        filt = "BM_Rhs(Recursive|Dense|Sparse)/(%s)$" % "|".join(str(n) for n in ns)
         out = os.path.join(tempfile.mkdtemp(), "rhs.json")
         subprocess.run([args.rhs_bench, "--benchmark_filter=" + filt, "--benchmark_min_time=%s" %
                         ("0.05" if quick else "0.2"), "--benchmark_out=" + out, "--benchmark_out_format=json"],
                        capture_output=True, text=True, timeout=900)
         with open(out) as fh:
             for b in json.load(fh)["benchmarks"]:
-                m = re.match(r"BM_Rhs(Dense|Sparse)/(\d+)$", b["name"])
+                m = re.match(r"BM_Rhs(Recursive|Dense|Sparse)/(\d+)$", b["name"])
                 if m:
                     unit = {"ns": 1.0, "us": 1e3, "ms": 1e6}[b["time_unit"]]
                     kane.setdefault(int(m.group(2)), {})[m.group(1).lower()] = dict(
