@@ -640,6 +640,8 @@ def main():
                         del res["runs"][p.name][tool]
             if "pin" in parts:  # the "not run" notes are written again by run_pin_cpp
                 res["notes"] = [n for n in res["notes"] if not any(n.startswith(p.name + ":") for p in problems)]
+            if "rhs" in parts:  # run_rhs writes its notes again
+                res["notes"] = [n for n in res["notes"] if not n.startswith("pin_driver rhs")]
         res["notes"].append("re-ran %s%s at load average %s" % (
             args.only, " on " + args.problems if args.problems else "", ", ".join("%.1f" % x for x in os.getloadavg())))
     if partial:
