@@ -27,12 +27,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import run as R  # noqa: E402
 from problems import BENCH, all_problems  # noqa: E402
-
-
-def ratio_of(rec):
-    tk = [t for t in rec["kanesim_times"] if t is not None]
-    tp = [t for t in rec["peer_times"] if t is not None]
-    return statistics.median(tk) / statistics.median(tp) if tk and tp else None
+from readings import retimed_ratio  # noqa: E402
 
 
 def pick_rows(retimed, wanted):
@@ -44,7 +39,7 @@ def pick_rows(retimed, wanted):
             if key in seen:
                 continue
             if wanted is None:
-                r = ratio_of(rec)
+                r = retimed_ratio(rec)
                 if r is None or r <= 0.5:
                     continue
             elif (prob, rec["level"]) not in wanted:
@@ -88,27 +83,17 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     for prob, level, rec in rows:
         p = problems[prob]
-        if rec["kanesim"].endswith("step-projection"):
-            integ, solver, proj = "dop853", "dense", "step"
-        else:
-            integ, solver, proj = "dop853", rec["kanesim"].split()[-1], "eval"
-        loop = None
-        if p.kind == "fourbar":
-            import fourbar_geometry
-            loop = dict(fourbar_geometry.PIN_LOOP)
-            if rec["peer"].endswith("no Baumgarte"):
-                loop.update(kp=0.0, kd=0.0)
+        # The run functions of run.py's own series, by label (as retime_decisive takes them).
+        sweep = R.Sweep(R.CPP_REPS, 0.0)
+        fns = {x["label"]: x["fn"] for x in
+               R.kanesim_dop853_series(args, p, sweep, []) + R.pin_cpp_series(args, p, sweep, [])}
+        run_k = lambda: fns[rec["kanesim"]](rec["kanesim_param"])  # noqa: E731
+        run_p = lambda: fns[rec["peer"]](rec["peer_param"])  # noqa: E731
         ratios, kt, pt = [], [], []
         start = time.time()
         for i in range(args.pairs):
             sides = ("k", "p") if i % 2 == 0 else ("p", "k")
-            got = {}
-            for s in sides:
-                if s == "k":
-                    got[s] = R.kanesim_driver_run(args.kanesim_driver, p, integ, solver, rec["kanesim_param"],
-                                                  R.CPP_REPS, proj)
-                else:
-                    got[s] = R.pin_cpp_run(args.pin_driver, p, rec["peer_param"], R.CPP_REPS, loop)
+            got = {side: (run_k if side == "k" else run_p)() for side in sides}
             if not (got["k"]["ok"] and got["p"]["ok"]):
                 print("  pair %d failed: %s" % (i, got), file=sys.stderr)
                 break
@@ -120,7 +105,7 @@ def main():
         if not ratios:
             continue
         rec_out = dict(problem=prob, level=level, kanesim=rec["kanesim"], kanesim_param=rec["kanesim_param"],
-                       peer=rec["peer"], peer_param=rec["peer_param"], run_ratio=ratio_of(rec),
+                       peer=rec["peer"], peer_param=rec["peer_param"], run_ratio=retimed_ratio(rec),
                        kanesim_times=kt, peer_times=pt, ratios=ratios)
         report.append(rec_out)
         print("| %s | %g | %d | %.2f | %.3f | %.3f–%.3f | %.3f | %d of %d |" % (

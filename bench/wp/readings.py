@@ -14,6 +14,8 @@ Both are reported (bench/wp/report.py); run.py re-times the two tools' decisive 
 each reading side by side (decisive_pairs).
 """
 
+import statistics
+
 LEVELS = (1e-3, 1e-6, 1e-9)  # the error levels of the summary tables
 READINGS = ("first", "stays")
 READING_TITLES = {"first": "first reach", "stays": "stays below"}
@@ -58,3 +60,12 @@ def best_of(tools, level, reading, want_kanesim):
         if pt and (best[0] is None or pt["time"] < best[0]):
             best = (pt["time"], tool, pt)
     return best
+
+
+def retimed_ratio(rec):
+    """kanesim / peer of a decisive pair re-timed back to back (run.py retime_decisive,
+    pairs.py): the ratio of the medians of the two sides' timings, failed runs (None) left
+    out; None when a side has no timing."""
+    tk = [t for t in rec["kanesim_times"] if t is not None]
+    tp = [t for t in rec["peer_times"] if t is not None]
+    return statistics.median(tk) / statistics.median(tp) if tk and tp else None

@@ -12,7 +12,6 @@ that record a loop-closure residual (Pinocchio on the four-bar) get a drift tabl
 import argparse
 import json
 import os
-import statistics
 import sys
 
 import matplotlib
@@ -23,7 +22,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
-from readings import LEVELS, READING_TITLES, best_of, is_baseline, is_kanesim, point_at, time_to  # noqa: E402
+from readings import (LEVELS, READING_TITLES, best_of, is_baseline, is_kanesim, point_at,  # noqa: E402
+                      retimed_ratio, time_to)
 
 
 def drift_table(tools, prob):
@@ -70,10 +70,7 @@ def side_by_side(retimed, level, reading, kane, peer):
         if (rec["kanesim"], rec["kanesim_param"], rec["peer"], rec["peer_param"]) != (
                 kane[1], kane[2]["param"], peer[1], peer[2]["param"]):
             return None
-        tk = [t for t in rec["kanesim_times"] if t is not None]
-        tp = [t for t in rec["peer_times"] if t is not None]
-        if tk and tp:
-            return statistics.median(tk) / statistics.median(tp)
+        return retimed_ratio(rec)
     return None
 
 

@@ -54,6 +54,13 @@ class Readings(unittest.TestCase):
         self.assertEqual((t, tool), (5.0, "pinocchio"))  # the baseline is never a peer
         self.assertEqual(readings.best_of(tools, 1e-9, "stays", False), (None, None, None))
 
+    def test_retimed_ratio_is_the_ratio_of_medians_without_failed_runs(self):
+        # kanesim 1, 7, 2 (the failed run left out): median 2; peer 4, 100, 6, 5: median
+        # (5 + 6) / 2 = 5.5, the outlier 100 without weight.
+        rec = dict(kanesim_times=[1.0, None, 7.0, 2.0], peer_times=[4.0, 100.0, 6.0, 5.0])
+        self.assertAlmostEqual(readings.retimed_ratio(rec), 2.0 / 5.5)
+        self.assertIsNone(readings.retimed_ratio(dict(kanesim_times=[None], peer_times=[1.0])))
+
 
 if __name__ == "__main__":
     unittest.main()
