@@ -15,12 +15,15 @@ namespace kanesim::rt {
 enum class SignalKind : std::uint8_t {
   JointQ,           // a = full q index
   JointU,           // a = full u index
+  JointA,           // a = full u index: its acceleration udot (the free ones solved, prescribed from the jet)
   Output,           // a = output tape root
   KineticEnergy,
   PotentialEnergy,  // gravity + line-force springs
   BodyPosition,     // a = body_signals index, k: mass centre in W
   BodyVelocity,     // mass-centre velocity in W
   BodyAngVel,       // angular velocity in W
+  BodyAccel,        // mass-centre acceleration in W
+  BodyAngAccel,     // angular acceleration in W
   BodyRotation,     // R_WF of the body's frame, k = 3 i + j
   FramePosition,    // a = flat frame, k
   Drive,            // a = full u index of a prescribed coordinate: force that drives it
@@ -57,6 +60,7 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
   for (const TreeJoint& j : p.joints) {
     for (int k = 0; k < j.nq; ++k) s.push_back({j.name + ".q" + (j.nq > 1 ? Idx(k) : ""), {SignalKind::JointQ, j.q0 + k, 0}});
     for (int k = 0; k < j.nu; ++k) s.push_back({j.name + ".u" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::JointU, j.u0 + k, 0}});
+    for (int k = 0; k < j.nu; ++k) s.push_back({j.name + ".a" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::JointA, j.u0 + k, 0}});
     for (int k = 0; k < j.nu; ++k)
       if (p.u_free_of[static_cast<size_t>(j.u0 + k)] < 0)
         s.push_back({j.name + ".drive" + (j.nu > 1 ? Idx(k) : ""), {SignalKind::Drive, j.u0 + k, 0}});
@@ -95,6 +99,8 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
     for (int k = 0; k < 3; ++k) s.push_back({b.name + ".r" + Idx(k), {SignalKind::BodyPosition, a, k}});
     for (int k = 0; k < 3; ++k) s.push_back({b.name + ".v" + Idx(k), {SignalKind::BodyVelocity, a, k}});
     for (int k = 0; k < 3; ++k) s.push_back({b.name + ".w" + Idx(k), {SignalKind::BodyAngVel, a, k}});
+    for (int k = 0; k < 3; ++k) s.push_back({b.name + ".a" + Idx(k), {SignalKind::BodyAccel, a, k}});
+    for (int k = 0; k < 3; ++k) s.push_back({b.name + ".alpha" + Idx(k), {SignalKind::BodyAngAccel, a, k}});
     for (int k = 0; k < 9; ++k)
       s.push_back({b.name + ".R[" + std::to_string(k / 3 + 1) + "," + std::to_string(k % 3 + 1) + "]",
                    {SignalKind::BodyRotation, a, k}});
@@ -128,6 +134,24 @@ double SpringEnergy(const Program& p, const Workspace& ws) {
     e += 0.5 * ForceValue(p, ws, l.k) * x * x;
   }
   return e;
+}
+
+// The acceleration of a body signal's mass centre, or its body's angular acceleration, in
+// W (after BiasAccelerations with the free udot included). For the point C of body B at
+// rho = p_WC - p_WBo, rigid-body kinematics gives
+//   a_C = a_Bo + alpha_B x rho + w_B x (w_B x rho),                                  (1)
+// the same relation as BiasStep's eq. (7) for the merged body's own mass centre.
+Vec3 BodySignalAcceleration(const Program& p, const Workspace& ws, const SignalItem& it) {
+  const BodySignalSource& b = p.body_signals[static_cast<size_t>(it.a)];
+  const int body = p.frames[static_cast<size_t>(b.frame)].body;
+  if (body < 0) return Vec3::Zero();
+  const auto B = static_cast<size_t>(body);
+  if (it.kind == SignalKind::BodyAngAccel) return ws.alpha_bias[B];
+  Vec3 pos;
+  Mat3 R;
+  FramePose(p, ws, b.frame, &pos, &R);
+  const Vec3 rho = pos + R * b.p_FBcm - ws.p_WB[B];
+  return ws.a_bias_o[B] + ws.alpha_bias[B].cross(rho) + ws.w_WB[B].cross(ws.w_WB[B].cross(rho));  // (1)
 }
 
 }  // namespace
@@ -185,7 +209,10 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
       case SignalKind::PotentialEnergy:
         if (!p.force_tape.roots.empty()) plan->forces = plan->velocity = true;
         break;
-      case SignalKind::Drive: plan->dynamics = plan->velocity = true; break;
+      case SignalKind::Drive:
+      case SignalKind::JointA:
+      case SignalKind::BodyAccel:
+      case SignalKind::BodyAngAccel: plan->dynamics = plan->velocity = true; break;
       case SignalKind::Reaction:
       case SignalKind::ConstraintPower: plan->reactions = plan->dynamics = plan->velocity = true; break;
       case SignalKind::Contact:
@@ -284,6 +311,7 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
     switch (it.kind) {
       case SignalKind::JointQ: v = ws.q[it.a]; break;
       case SignalKind::JointU: v = ws.u[it.a]; break;
+      case SignalKind::JointA: v = ws.udot[it.a]; break;
       case SignalKind::Output: {
         v = ws.output_regs[static_cast<size_t>(p.output_tape.roots[static_cast<size_t>(it.a)])];
         if (!std::isfinite(v)) {
@@ -320,6 +348,8 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
         }
         break;
       }
+      case SignalKind::BodyAccel:
+      case SignalKind::BodyAngAccel: v = BodySignalAcceleration(p, ws, it)[it.k]; break;
       case SignalKind::Drive: v = LoopDriveForce(p, ws, it.a); break;
       case SignalKind::Reaction: v = JointReactionInFrameB(p, ws, it.a)[it.k]; break;
       case SignalKind::ConstraintPower: v = ConstraintPower(p, ws); break;

@@ -69,9 +69,30 @@ std::vector<std::string> CloseNames(const std::vector<std::string>& available, s
   return out;
 }
 
-bool SelectSignals(const std::vector<std::string>& available, const std::vector<std::string>& patterns,
+bool DerivativeAlias(const std::string& pattern, std::string* canonical, std::string* error) {
+  *canonical = pattern;
+  if (pattern.rfind("der(", 0) != 0) return true;
+  const std::string inner = pattern.size() > 5 && pattern.back() == ')' ? pattern.substr(4, pattern.size() - 5) : "";
+  const size_t dot = inner.rfind('.');
+  const size_t bracket = inner.find('[', dot == std::string::npos ? 0 : dot);
+  const std::string field = dot == std::string::npos ? "" : inner.substr(dot + 1, bracket == std::string::npos ? std::string::npos : bracket - dot - 1);
+  const std::string index = bracket == std::string::npos ? "" : inner.substr(bracket);
+  const char* to = field == "u" || field == "v" ? "a" : field == "w" ? "alpha" : nullptr;
+  if (!to) {
+    *error = "'" + pattern + "': der() selects the derivative of a joint's speed (der(j.u)) or of a body's "
+             "velocity (der(b.v[k]), der(b.w[k]))";
+    return false;
+  }
+  *canonical = inner.substr(0, dot + 1) + to + index;
+  return true;
+}
+
+bool SelectSignals(const std::vector<std::string>& available, const std::vector<std::string>& given,
                    std::vector<std::string>* selected, std::string* error) {
   selected->clear();
+  std::vector<std::string> patterns(given.size());
+  for (size_t i = 0; i < given.size(); ++i)
+    if (!DerivativeAlias(given[i], &patterns[i], error)) return false;
   for (const std::string& pattern : patterns) {
     bool any = std::any_of(available.begin(), available.end(),
                            [&](const std::string& name) { return GlobMatch(pattern, name); });
