@@ -11,46 +11,32 @@
 namespace kanesim::sim::detail {
 namespace {
 
-class ArkodeStepper final : public Stepper {
+constexpr ModuleSetters kArkode{"ARKODE",           ERKStepSStolerances,   ERKStepSetUserData, ERKStepSetStopTime,
+                                ERKStepSetMaxNumSteps, ERKStepSetMaxStep,     ERKStepSetInitStep};
+
+class ArkodeStepper final : public SundialsStepper {
  public:
-  explicit ArkodeStepper(GuardedRhs& rhs) : rhs_(rhs) {}
+  explicit ArkodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs) {}
   ~ArkodeStepper() override {
     if (mem_) ERKStepFree(&mem_);
   }
 
   bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
-    int n = rhs_.Size();
-    if (!s_.ok()) return Fail(error, "SUNContext_Create failed");
-    s_.y = N_VNew_Serial(n, s_.ctx);
-    if (!s_.y) return Fail(error, "out of memory");
-    double* y = N_VGetArrayPointer(s_.y);
-    for (int i = 0; i < n; ++i) y[i] = y0[i];
+    if (!MakeState(y0, /*with_yp=*/false, error)) return false;
     mem_ = ERKStepCreate(&ArkodeStepper::Rhs, t0, s_.y, s_.ctx);
     if (!mem_) return Fail(error, "ERKStepCreate failed");
     ARKODE_ERKTableID table =
         options.erk_table == ErkTable::Fehlberg87 ? ARKODE_FEHLBERG_13_7_8 : ARKODE_VERNER_8_5_6;
     if (ERKStepSetErrHandlerFn(mem_, CaptureSundialsMessage, &messages_) != ARK_SUCCESS ||
-        ERKStepSStolerances(mem_, options.rtol, options.atol) != ARK_SUCCESS ||
-        ERKStepSetUserData(mem_, this) != ARK_SUCCESS || ERKStepSetTableNum(mem_, table) != ARK_SUCCESS ||
-        ERKStepSetInterpolantDegree(mem_, ARK_INTERP_MAX_DEGREE) != ARK_SUCCESS ||
-        ERKStepSetStopTime(mem_, stop) != ARK_SUCCESS ||
-        ERKStepSetMaxNumSteps(mem_, options.max_steps) != ARK_SUCCESS)
+        ERKStepSetTableNum(mem_, table) != ARK_SUCCESS ||
+        ERKStepSetInterpolantDegree(mem_, ARK_INTERP_MAX_DEGREE) != ARK_SUCCESS)
       return Fail(error, WithDetail("ARKODE setup failed", messages_.last));
-    if (options.max_step > 0.0 && ERKStepSetMaxStep(mem_, options.max_step) != ARK_SUCCESS)
-      return Fail(error, WithDetail("ERKStepSetMaxStep failed", messages_.last));
-    if (options.initial_step > 0.0 && ERKStepSetInitStep(mem_, options.initial_step) != ARK_SUCCESS)
-      return Fail(error, WithDetail("ERKStepSetInitStep failed", messages_.last));
-    return true;
+    return SetCommonOptions(kArkode, stop, options, error);
   }
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL);
-    if (flag >= 0) {
-      const double* ys = N_VGetArrayPointer(s_.y);
-      for (int i = 0, n = rhs_.Size(); i < n; ++i) y[i] = ys[i];
-    }
-    return flag;
+    return CopyOut(ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL), y);
   }
 
   double CurrentTime() const override {
@@ -69,17 +55,18 @@ class ArkodeStepper final : public Stepper {
   }
 
   StepFailure Explain(int flag) const override {
-    const std::string& d = messages_.last;
+    FailureKind kind = FailureKind::kOther;
     switch (flag) {
       case ARK_RHSFUNC_FAIL:
       case ARK_FIRST_RHSFUNC_ERR:
       case ARK_REPTD_RHSFUNC_ERR:
-      case ARK_UNREC_RHSFUNC_ERR: return {true, WithDetail("the right-hand side failed", d)};
-      case ARK_TOO_MUCH_WORK: return {false, WithDetail("too much work (step limit reached between output instants)", d)};
-      case ARK_TOO_MUCH_ACC: return {false, WithDetail("too much accuracy requested", d)};
-      case ARK_ERR_FAILURE: return {false, WithDetail("step size underflow: the error test failed repeatedly", d)};
-      default: return {false, WithDetail(std::string("ARKODE failed: ") + ERKStepGetReturnFlagName(flag), d)};
+      case ARK_UNREC_RHSFUNC_ERR: kind = FailureKind::kRhs; break;
+      case ARK_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
+      case ARK_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
+      case ARK_ERR_FAILURE: kind = FailureKind::kErrorTest; break;
+      default: break;
     }
+    return Describe(kind, "ARKODE", ERKStepGetReturnFlagName(flag));
   }
 
  private:
@@ -87,16 +74,6 @@ class ArkodeStepper final : public Stepper {
     auto* self = static_cast<ArkodeStepper*>(user_data);
     return self->rhs_(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   }
-
-  static bool Fail(std::string* error, const std::string& what) {
-    *error = what;
-    return false;
-  }
-
-  GuardedRhs& rhs_;
-  SundialsObjects s_;
-  SundialsMessages messages_;
-  void* mem_ = nullptr;
 };
 
 }  // namespace

@@ -15,33 +15,26 @@
 namespace kanesim::sim::detail {
 namespace {
 
-class CvodeStepper final : public Stepper {
+constexpr ModuleSetters kCvode{"CVODE",           CVodeSStolerances,   CVodeSetUserData, CVodeSetStopTime,
+                               CVodeSetMaxNumSteps, CVodeSetMaxStep,     CVodeSetInitStep};
+
+class CvodeStepper final : public SundialsStepper {
  public:
-  explicit CvodeStepper(GuardedRhs& rhs) : rhs_(rhs) {}
+  explicit CvodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs) {}
   ~CvodeStepper() override {
     if (mem_) CVodeFree(&mem_);
   }
 
   bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
-    int n = rhs_.Size();
-    bool bdf = options.method == Method::CvodeBdf;
-    if (!s_.ok()) return Fail(error, "SUNContext_Create failed");
-    s_.y = N_VNew_Serial(n, s_.ctx);
-    if (!s_.y) return Fail(error, "out of memory");
-    double* y = N_VGetArrayPointer(s_.y);
-    for (int i = 0; i < n; ++i) y[i] = y0[i];
+    const int n = rhs_.Size();
+    const bool bdf = options.method == Method::CvodeBdf;
+    if (!MakeState(y0, /*with_yp=*/false, error)) return false;
     mem_ = CVodeCreate(bdf ? CV_BDF : CV_ADAMS, s_.ctx);
     if (!mem_) return Fail(error, "CVodeCreate failed");
     if (CVodeSetErrHandlerFn(mem_, CaptureSundialsMessage, &messages_) != CV_SUCCESS ||
-        CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS ||
-        CVodeSStolerances(mem_, options.rtol, options.atol) != CV_SUCCESS ||
-        CVodeSetUserData(mem_, this) != CV_SUCCESS || CVodeSetStopTime(mem_, stop) != CV_SUCCESS ||
-        CVodeSetMaxNumSteps(mem_, options.max_steps) != CV_SUCCESS)
+        CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE setup failed", messages_.last));
-    if (options.max_step > 0.0 && CVodeSetMaxStep(mem_, options.max_step) != CV_SUCCESS)
-      return Fail(error, WithDetail("CVodeSetMaxStep failed", messages_.last));
-    if (options.initial_step > 0.0 && CVodeSetInitStep(mem_, options.initial_step) != CV_SUCCESS)
-      return Fail(error, WithDetail("CVodeSetInitStep failed", messages_.last));
+    if (!SetCommonOptions(kCvode, stop, options, error)) return false;
     if (bdf) {
       s_.A = SUNDenseMatrix(n, n, s_.ctx);
       s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
@@ -57,12 +50,7 @@ class CvodeStepper final : public Stepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    int flag = CVode(mem_, tout, s_.y, &tret, CV_NORMAL);
-    if (flag >= 0) {
-      const double* ys = N_VGetArrayPointer(s_.y);
-      for (int i = 0, n = rhs_.Size(); i < n; ++i) y[i] = ys[i];
-    }
-    return flag;
+    return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
   }
 
   double CurrentTime() const override {
@@ -89,20 +77,21 @@ class CvodeStepper final : public Stepper {
   }
 
   StepFailure Explain(int flag) const override {
-    const std::string& d = messages_.last;
+    FailureKind kind = FailureKind::kOther;
     switch (flag) {
       case CV_RHSFUNC_FAIL:
       case CV_FIRST_RHSFUNC_ERR:
       case CV_REPTD_RHSFUNC_ERR:
-      case CV_UNREC_RHSFUNC_ERR: return {true, WithDetail("the right-hand side failed", d)};
-      case CV_TOO_MUCH_WORK: return {false, WithDetail("too much work (step limit reached between output instants)", d)};
-      case CV_TOO_MUCH_ACC: return {false, WithDetail("too much accuracy requested", d)};
-      case CV_ERR_FAILURE: return {false, WithDetail("step size underflow: the error test failed repeatedly", d)};
-      case CV_CONV_FAILURE: return {false, WithDetail("the corrector iteration failed to converge repeatedly", d)};
+      case CV_UNREC_RHSFUNC_ERR: kind = FailureKind::kRhs; break;
+      case CV_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
+      case CV_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
+      case CV_ERR_FAILURE: kind = FailureKind::kErrorTest; break;
+      case CV_CONV_FAILURE: kind = FailureKind::kConvergence; break;
       case CV_LSETUP_FAIL:
-      case CV_LSOLVE_FAIL: return {false, WithDetail("the linear solver failed (singular Newton matrix)", d)};
-      default: return {false, WithDetail(std::string("CVODE failed: ") + CVodeGetReturnFlagName(flag), d)};
+      case CV_LSOLVE_FAIL: kind = FailureKind::kLinearSolver; break;
+      default: break;
     }
+    return Describe(kind, "CVODE", CVodeGetReturnFlagName(flag));
   }
 
  private:
@@ -110,16 +99,6 @@ class CvodeStepper final : public Stepper {
     auto* self = static_cast<CvodeStepper*>(user_data);
     return self->rhs_(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   }
-
-  static bool Fail(std::string* error, const std::string& what) {
-    *error = what;
-    return false;
-  }
-
-  GuardedRhs& rhs_;
-  SundialsObjects s_;
-  SundialsMessages messages_;
-  void* mem_ = nullptr;
 };
 
 }  // namespace

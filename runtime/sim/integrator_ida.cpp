@@ -27,36 +27,29 @@
 namespace kanesim::sim::detail {
 namespace {
 
-class IdaStepper final : public Stepper {
+constexpr ModuleSetters kIda{"IDA",           IDASStolerances, IDASetUserData, IDASetStopTime,
+                             IDASetMaxNumSteps, IDASetMaxStep,   IDASetInitStep};
+
+class IdaStepper final : public SundialsStepper {
  public:
-  explicit IdaStepper(GuardedRhs& rhs) : rhs_(rhs) {}
+  explicit IdaStepper(GuardedRhs& rhs) : SundialsStepper(rhs) {}
   ~IdaStepper() override {
     if (mem_) IDAFree(&mem_);
     if (ewt_) N_VDestroy(ewt_);
   }
 
   bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
-    int n = rhs_.Size();
-    if (!s_.ok()) return Fail(error, "SUNContext_Create failed");
-    s_.y = N_VNew_Serial(n, s_.ctx);
-    s_.yp = N_VNew_Serial(n, s_.ctx);
-    if (!s_.y || !s_.yp) return Fail(error, "out of memory");
-    double* y = N_VGetArrayPointer(s_.y);
-    for (int i = 0; i < n; ++i) y[i] = y0[i];
+    const int n = rhs_.Size();
+    if (!MakeState(y0, /*with_yp=*/true, error)) return false;
+    const double* y = N_VGetArrayPointer(s_.y);
     // Consistent y'(t0) = f(t0, y0): no IDACalcIC needed for an ODE.
     if (rhs_(t0, y, N_VGetArrayPointer(s_.yp)) != 0) return Fail(error, rhs_.cause);
     mem_ = IDACreate(s_.ctx);
     if (!mem_) return Fail(error, "IDACreate failed");
     if (IDASetErrHandlerFn(mem_, CaptureSundialsMessage, &messages_) != IDA_SUCCESS ||
-        IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS ||
-        IDASStolerances(mem_, options.rtol, options.atol) != IDA_SUCCESS ||
-        IDASetUserData(mem_, this) != IDA_SUCCESS || IDASetStopTime(mem_, stop) != IDA_SUCCESS ||
-        IDASetMaxNumSteps(mem_, options.max_steps) != IDA_SUCCESS)
+        IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS)
       return Fail(error, WithDetail("IDA setup failed", messages_.last));
-    if (options.max_step > 0.0 && IDASetMaxStep(mem_, options.max_step) != IDA_SUCCESS)
-      return Fail(error, WithDetail("IDASetMaxStep failed", messages_.last));
-    if (options.initial_step > 0.0 && IDASetInitStep(mem_, options.initial_step) != IDA_SUCCESS)
-      return Fail(error, WithDetail("IDASetInitStep failed", messages_.last));
+    if (!SetCommonOptions(kIda, stop, options, error)) return false;
     BuildPattern(options.coupling);
     const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
     klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
@@ -80,12 +73,7 @@ class IdaStepper final : public Stepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    int flag = IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL);
-    if (flag >= 0) {
-      const double* ys = N_VGetArrayPointer(s_.y);
-      for (int i = 0, n = rhs_.Size(); i < n; ++i) y[i] = ys[i];
-    }
-    return flag;
+    return CopyOut(IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL), y);
   }
 
   double CurrentTime() const override {
@@ -115,19 +103,20 @@ class IdaStepper final : public Stepper {
   }
 
   StepFailure Explain(int flag) const override {
-    const std::string& d = messages_.last;
+    FailureKind kind = FailureKind::kOther;
     switch (flag) {
       case IDA_RES_FAIL:
       case IDA_REP_RES_ERR:
-      case IDA_FIRST_RES_FAIL: return {true, WithDetail("the right-hand side failed", d)};
-      case IDA_TOO_MUCH_WORK: return {false, WithDetail("too much work (step limit reached between output instants)", d)};
-      case IDA_TOO_MUCH_ACC: return {false, WithDetail("too much accuracy requested", d)};
-      case IDA_ERR_FAIL: return {false, WithDetail("step size underflow: the error test failed repeatedly", d)};
-      case IDA_CONV_FAIL: return {false, WithDetail("the Newton iteration failed to converge repeatedly", d)};
+      case IDA_FIRST_RES_FAIL: kind = FailureKind::kRhs; break;
+      case IDA_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
+      case IDA_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
+      case IDA_ERR_FAIL: kind = FailureKind::kErrorTest; break;
+      case IDA_CONV_FAIL: kind = FailureKind::kConvergence; break;
       case IDA_LSETUP_FAIL:
-      case IDA_LSOLVE_FAIL: return {false, WithDetail("the linear solver failed (singular Newton matrix)", d)};
-      default: return {false, WithDetail(std::string("IDA failed: ") + IDAGetReturnFlagName(flag), d)};
+      case IDA_LSOLVE_FAIL: kind = FailureKind::kLinearSolver; break;
+      default: break;
     }
+    return Describe(kind, "IDA", IDAGetReturnFlagName(flag));
   }
 
  private:
@@ -227,15 +216,6 @@ class IdaStepper final : public Stepper {
     return 0;
   }
 
-  static bool Fail(std::string* error, const std::string& what) {
-    *error = what;
-    return false;
-  }
-
-  GuardedRhs& rhs_;
-  SundialsObjects s_;
-  SundialsMessages messages_;
-  void* mem_ = nullptr;
   N_Vector ewt_ = nullptr;
   bool klu_ = false;
   std::vector<int> group_, pos_;

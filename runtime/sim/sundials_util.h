@@ -9,6 +9,8 @@
 
 #include <string>
 
+#include "runtime/sim/stepper.h"
+
 namespace kanesim::sim::detail {
 
 // A SUNContext plus the vectors, matrix and solvers made in it, freed in reverse order.
@@ -42,5 +44,56 @@ class SundialsObjects {
 inline std::string WithDetail(const std::string& what, const std::string& detail) {
   return detail.empty() ? what : what + " [" + detail + "]";
 }
+
+// The optional inputs every SUNDIALS integrator module has, each under its own prefix
+// (CVodeSet..., ERKStepSet..., IDASet...), with the same signatures.
+struct ModuleSetters {
+  const char* module;  // "CVODE", "ARKODE", "IDA": named in setup failures
+  int (*tolerances)(void* mem, double rtol, double atol);
+  int (*user_data)(void* mem, void* data);
+  int (*stop_time)(void* mem, double t);
+  int (*max_num_steps)(void* mem, long steps);
+  int (*max_step)(void* mem, double h);
+  int (*init_step)(void* mem, double h);
+};
+
+// Why an integrator module gave up, in the terms shared by CVODE, ARKODE and IDA; each
+// stepper maps its own return flags onto these.
+enum class FailureKind {
+  kRhs,              // the right-hand side (or residual) failed: GuardedRhs has the time and cause
+  kTooMuchWork,      // the step limit between output instants
+  kTooMuchAccuracy,
+  kErrorTest,        // repeated error-test failures: the step size underflowed
+  kConvergence,      // repeated failures of the nonlinear (corrector or Newton) iteration
+  kLinearSolver,     // the Newton matrix could not be set up or solved
+  kOther,            // anything else: named by the module's own flag name
+};
+
+// One SUNDIALS solver behind the Stepper interface: the context and vectors, the captured
+// messages, the guarded right-hand side, and the steps they all take alike.
+class SundialsStepper : public Stepper {
+ public:
+  explicit SundialsStepper(GuardedRhs& rhs) : rhs_(rhs) {}
+
+ protected:
+  // s_.y (and s_.yp when with_yp) of the right-hand side's size, y = y0. False, with *error.
+  bool MakeState(const double* y0, bool with_yp, std::string* error);
+  // Sets the user data (this), tolerances, stop time and step limits of `options` on mem_.
+  // Call after the module's own Init. False, with *error.
+  bool SetCommonOptions(const ModuleSetters& m, double stop, const IntegratorOptions& options, std::string* error);
+  // y := s_.y when flag >= 0 (a successful return of the module's solve); returns flag.
+  int CopyOut(int flag, double* y) const;
+  // The user's message for a failure of this kind; `flag_name` names kOther.
+  StepFailure Describe(FailureKind kind, const char* module, const char* flag_name) const;
+  static bool Fail(std::string* error, const std::string& what) {
+    *error = what;
+    return false;
+  }
+
+  GuardedRhs& rhs_;
+  SundialsObjects s_;
+  SundialsMessages messages_;
+  void* mem_ = nullptr;  // the module's memory, freed by the derived class's destructor
+};
 
 }  // namespace kanesim::sim::detail
