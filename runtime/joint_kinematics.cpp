@@ -81,14 +81,13 @@ bool RotationRates(const TreeJoint& j, RotationCoords c, const double* q, const 
 
 // Rodrigues: R = I + sin(a) [n]x + (1 - cos(a)) [n]x^2.
 Mat3 AxisAngle(const Vec3& n, double a) {
-  Mat3 K;
-  K << 0.0, -n.z(), n.y(), n.z(), 0.0, -n.x(), -n.y(), n.x(), 0.0;
+  const Mat3 K = Skew(n);
   return Mat3::Identity() + std::sin(a) * K + (1.0 - std::cos(a)) * (K * K);
 }
 
 void PrepareJointConstants(TreeJoint* j) {
   const Vec3& n = j->axis;
-  j->K_axis << 0.0, -n.z(), n.y(), n.z(), 0.0, -n.x(), -n.y(), n.x(), 0.0;
+  j->K_axis = Skew(n);
   j->K2_axis = j->K_axis * j->K_axis;
   j->axis_P = j->R_PJ * n;
   j->R_PJ_identity = j->R_PJ == Mat3::Identity();

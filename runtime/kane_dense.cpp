@@ -33,12 +33,6 @@ int Singular(Workspace& ws) {
   return -1;
 }
 
-Mat3 Skew(const Vec3& v) {
-  Mat3 K;
-  K << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return K;
-}
-
 // Spatial inertia about a point o, in blocks, of a body or subtree with mass m, first
 // moment h = m (c - o) and rotational inertia J about o (world axes), mapping the twist
 // [v_o; w] to the wrench [f; n_o]:

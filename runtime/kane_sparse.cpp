@@ -93,12 +93,6 @@ constexpr double kRefineResidual = 1e-13;
 // Below this after a fresh factorization the system is singular (e.g. a massless link).
 constexpr double kSingularRcond = 1e-15;
 
-Mat3 Skew(const Vec3& v) {
-  Mat3 K;
-  K << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return K;
-}
-
 // Orthonormal basis of span(S)'s complement in R^6 by Householder QR of S (6 x nf):
 // S = Q R with Q = H_0 ... H_{nf-1}; the last 6 - nf columns of Q are the complement.
 void Complement(Mat6 A, int nf, Mat6* Q) {

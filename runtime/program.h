@@ -30,6 +30,13 @@ using Mat3 = Eigen::Matrix3d;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 
+// The cross-product matrix: Skew(v) w = v x w.
+inline Mat3 Skew(const Vec3& v) {
+  Mat3 K;
+  K << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return K;
+}
+
 // A number the runtime reads: a folded constant, or a root of the force tape.
 struct Scalar {
   double value = 0.0;  // used when root < 0

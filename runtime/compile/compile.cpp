@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "runtime/compile/compile_internal.h"
+#include "runtime/flat/union_find.h"
 #include "runtime/joint_kinematics.h"
 #include "runtime/kane.h"
 
@@ -16,23 +17,9 @@ namespace kanesim::rt {
 
 using flat::JointType;
 using flat::kNoExpr;
+using flat::UnionFind;
 
 namespace {
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(size_t n) : parent(n) {
-    for (size_t i = 0; i < n; ++i) parent[i] = static_cast<int>(i);
-  }
-  int Find(int x) {
-    while (parent[static_cast<size_t>(x)] != x) {
-      parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
-      x = parent[static_cast<size_t>(x)];
-    }
-    return x;
-  }
-  void Unite(int a, int b) { parent[static_cast<size_t>(Find(a))] = Find(b); }
-};
 
 // A rigid edge between two frames: X_ab = (p_ab, R_ab).
 struct RigidEdge {
