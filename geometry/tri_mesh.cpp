@@ -40,14 +40,27 @@ Vec3 AreaVector(const std::vector<Vec3>& v, const Tri& t) {
 }  // namespace
 
 TriMesh WeldByPosition(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
+  // Open addressing with linear probing: a table of indices into out.vertices, at least twice
+  // as large as the number of vertices, so probes stay short.
   TriMesh out;
-  std::unordered_map<PositionKey, uint32_t, PositionHash> index;
-  index.reserve(vertices.size());
+  size_t size = 16;
+  while (size < 2 * vertices.size()) size *= 2;
+  constexpr uint32_t kEmpty = UINT32_MAX;
+  std::vector<uint32_t> table(size, kEmpty);
+  std::vector<PositionKey> keys;
+  keys.reserve(vertices.size());
+  out.vertices.reserve(vertices.size());
   std::vector<uint32_t> remap(vertices.size());
   for (size_t i = 0; i < vertices.size(); ++i) {
-    auto [it, inserted] = index.try_emplace(KeyOf(vertices[i]), static_cast<uint32_t>(out.vertices.size()));
-    if (inserted) out.vertices.push_back(vertices[i]);
-    remap[i] = it->second;
+    const PositionKey key = KeyOf(vertices[i]);
+    size_t slot = PositionHash{}(key) & (size - 1);
+    while (table[slot] != kEmpty && !(keys[table[slot]] == key)) slot = (slot + 1) & (size - 1);
+    if (table[slot] == kEmpty) {
+      table[slot] = static_cast<uint32_t>(out.vertices.size());
+      out.vertices.push_back(vertices[i]);
+      keys.push_back(key);
+    }
+    remap[i] = table[slot];
   }
   out.triangles.reserve(triangles.size());
   for (const Tri& t : triangles) out.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});

@@ -39,6 +39,14 @@ ImportReply ImportMesh(const ImportRequest& request) {
     if (reply.error.empty()) reply.error = "unknown error";
     return reply;
   }
+  size_t n_vertices = 0, n_faces = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    n_vertices += scene->mMeshes[m]->mNumVertices;
+    n_faces += scene->mMeshes[m]->mNumFaces;
+  }
+  reply.vertices.reserve(n_vertices);
+  if (request.with_normals) reply.normals.reserve(n_vertices);
+  reply.triangles.reserve(n_faces);
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh& mesh = *scene->mMeshes[m];
     const auto offset = static_cast<uint32_t>(reply.vertices.size());
