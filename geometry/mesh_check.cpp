@@ -178,7 +178,7 @@ SolidReport CheckSolid(TriMesh& mesh) {
   for (const Vec3& p : mesh.vertices) non_finite += !p.allFinite();
   if (non_finite > 0) {
     r.problems.push_back(MakeProblem(MeshProblemKind::kNonFinite,
-                                     fmt::format("{} vertices have NaN or infinite coordinates", non_finite),
+                                     fmt::format("{} vert{} NaN or infinite coordinates", non_finite, non_finite == 1 ? "ex has" : "ices have"),
                                      non_finite));
     return r;
   }

@@ -109,7 +109,7 @@ VisualMeshResult LoadVisualMesh(const std::string& path, const LoadMeshOptions& 
   for (const Vec3& p : reply.vertices) non_finite += !p.allFinite();
   if (non_finite > 0) {
     result.problems.push_back(MakeProblem(
-        MeshProblemKind::kNonFinite, fmt::format("{} vertices of {} have NaN or infinite coordinates", non_finite, path),
+        MeshProblemKind::kNonFinite, fmt::format("{} vert{} of {} {} NaN or infinite coordinates", non_finite, non_finite == 1 ? "ex" : "ices", path, non_finite == 1 ? "has" : "have"),
         non_finite));
     return result;
   }
