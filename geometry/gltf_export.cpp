@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cmath>
+#include <numbers>
 #include <set>
 
 #include "geometry/assimp_module.h"
@@ -104,7 +106,7 @@ std::array<double, 4> Wxyz(const Eigen::Quaterniond& q) { return {q.w(), q.x(), 
 
 Eigen::Quaterniond UpToY(const Vec3& up_W) {
   const Vec3 up = up_W.normalized();
-  if (up.dot(Vec3::UnitY()) < -1 + 1e-12) return Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Vec3::UnitX()));
+  if (up.dot(Vec3::UnitY()) < -1 + 1e-12) return Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
   return Eigen::Quaterniond::FromTwoVectors(up, Vec3::UnitY());
 }
 

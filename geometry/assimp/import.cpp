@@ -33,6 +33,8 @@ ImportReply ImportMesh(const ImportRequest& request) {
                                                           aiComponent_TEXCOORDS | aiComponent_BONEWEIGHTS |
                                                           aiComponent_ANIMATIONS | aiComponent_TEXTURES |
                                                           aiComponent_LIGHTS | aiComponent_CAMERAS);
+  // The file's own axes: Collada's up axis is not turned into Y (its unit is applied).
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   const aiScene* scene = importer.ReadFile(request.path, Flags(request.with_normals));
   if (!scene) {
     reply.error = importer.GetErrorString();

@@ -29,6 +29,8 @@ const MeshProblem* Find(const std::vector<MeshProblem>& problems, MeshProblemKin
   return nullptr;
 }
 
+bool Has(const std::vector<MeshProblem>& problems, MeshProblemKind kind) { return Find(problems, kind) != nullptr; }
+
 std::string Describe(const std::vector<MeshProblem>& problems) {
   std::string s;
   for (const MeshProblem& p : problems) s += std::string(InfoOf(p.kind).id) + ": " + p.message + "\n";
@@ -107,8 +109,8 @@ TEST(MeshProblems, FileMissingNamesThePath) {
 TEST(MeshProblems, DirectoryIsUnreadable) {
   const std::string dir = testing::TempDir("unreadable");
   std::filesystem::create_directories(dir + "/part.stl");
-  EXPECT_NE(Find(LoadMesh(dir + "/part.stl").problems, MeshProblemKind::kFileUnreadable), nullptr);
-  EXPECT_NE(Find(LoadVisualMesh(dir + "/part.stl").problems, MeshProblemKind::kFileUnreadable), nullptr);
+  EXPECT_TRUE(Has(LoadMesh(dir + "/part.stl").problems, MeshProblemKind::kFileUnreadable));
+  EXPECT_TRUE(Has(LoadVisualMesh(dir + "/part.stl").problems, MeshProblemKind::kFileUnreadable));
 }
 
 TEST(MeshProblems, ImportFailureCarriesAssimpsMessage) {
@@ -126,17 +128,21 @@ TEST(MeshProblems, SizeLimits) {
   testing::WriteBinaryStl(dir + "/sphere.stl", IcosphereSolid(1, 2));  // 320 triangles, 162 vertices
   LoadMeshOptions bytes;
   bytes.limits.max_file_bytes = 1000;
-  const MeshProblem* p = Find(LoadMesh(dir + "/sphere.stl", bytes).problems, MeshProblemKind::kTooLarge);
+  // Keep each result alive while its problem is looked at.
+  const MeshLoadResult too_many_bytes = LoadMesh(dir + "/sphere.stl", bytes);
+  const MeshProblem* p = Find(too_many_bytes.problems, MeshProblemKind::kTooLarge);
   ASSERT_NE(p, nullptr);
   EXPECT_EQ(p->count, 84u + 50u * 320u);
   LoadMeshOptions triangles;
   triangles.limits.max_triangles = 319;
-  p = Find(LoadMesh(dir + "/sphere.stl", triangles).problems, MeshProblemKind::kTooLarge);
+  const MeshLoadResult too_many_triangles = LoadMesh(dir + "/sphere.stl", triangles);
+  p = Find(too_many_triangles.problems, MeshProblemKind::kTooLarge);
   ASSERT_NE(p, nullptr);
   EXPECT_EQ(p->count, 320u);
   LoadMeshOptions vertices;
   vertices.limits.max_vertices = 161;
-  p = Find(LoadMesh(dir + "/sphere.stl", vertices).problems, MeshProblemKind::kTooLarge);
+  const MeshLoadResult too_many_vertices = LoadMesh(dir + "/sphere.stl", vertices);
+  p = Find(too_many_vertices.problems, MeshProblemKind::kTooLarge);
   ASSERT_NE(p, nullptr);
   EXPECT_EQ(p->count, 162u);
   vertices.limits.max_vertices = 162;
@@ -147,7 +153,7 @@ TEST(MeshProblems, BadScale) {
   const std::string dir = testing::TempDir("scale");
   testing::WriteBinaryStl(dir + "/box.stl", TestBox());
   for (double s : {0.0, -1.0, double(NAN), double(INFINITY)})
-    EXPECT_NE(Find(LoadMesh(dir + "/box.stl", testing::Scaled(s)).problems, MeshProblemKind::kBadScale), nullptr) << s;
+    EXPECT_TRUE(Has(LoadMesh(dir + "/box.stl", testing::Scaled(s)).problems, MeshProblemKind::kBadScale)) << s;
 }
 
 TEST(MeshProblems, NoTriangles) {
@@ -156,7 +162,7 @@ TEST(MeshProblems, NoTriangles) {
   const MeshLoadResult r = LoadMesh(dir + "/lines.obj");
   EXPECT_NE(Find(r.problems, MeshProblemKind::kNoTriangles), nullptr) << Describe(r.problems);
   EXPECT_FALSE(r.ok());
-  EXPECT_NE(Find(LoadVisualMesh(dir + "/lines.obj").problems, MeshProblemKind::kNoTriangles), nullptr);
+  EXPECT_TRUE(Has(LoadVisualMesh(dir + "/lines.obj").problems, MeshProblemKind::kNoTriangles));
 }
 
 TEST(MeshProblems, NonFiniteCoordinates) {
@@ -168,7 +174,7 @@ TEST(MeshProblems, NonFiniteCoordinates) {
   const MeshProblem* p = Find(r.problems, MeshProblemKind::kNonFinite);
   ASSERT_NE(p, nullptr) << Describe(r.problems);
   EXPECT_EQ(p->count, 1u);
-  EXPECT_NE(Find(LoadVisualMesh(dir + "/box.stl").problems, MeshProblemKind::kNonFinite), nullptr);
+  EXPECT_TRUE(Has(LoadVisualMesh(dir + "/box.stl").problems, MeshProblemKind::kNonFinite));
 }
 
 TEST(MeshProblems, NotClosedCountsOpenEdges) {
@@ -188,7 +194,8 @@ TEST(MeshProblems, InconsistentOrientation) {
   TriMesh box = TestBox();
   std::swap(box.triangles[0][1], box.triangles[0][2]);
   testing::WriteObj(dir + "/box.obj", box, 1);
-  const MeshProblem* p = Find(LoadMesh(dir + "/box.obj").problems, MeshProblemKind::kInconsistentOrientation);
+  const MeshLoadResult r = LoadMesh(dir + "/box.obj");
+  const MeshProblem* p = Find(r.problems, MeshProblemKind::kInconsistentOrientation);
   ASSERT_NE(p, nullptr);
   EXPECT_EQ(p->count, 3u);
 }
@@ -209,7 +216,7 @@ TEST(MeshProblems, InsideOutIsFlippedWithWarning) {
 TEST(MeshProblems, ZeroVolume) {
   const std::string dir = testing::TempDir("zero_volume");
   testing::WriteText(dir + "/flat.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\nf 1 3 2\nf 1 4 3\n");
-  EXPECT_NE(Find(LoadMesh(dir + "/flat.obj").problems, MeshProblemKind::kZeroVolume), nullptr);
+  EXPECT_TRUE(Has(LoadMesh(dir + "/flat.obj").problems, MeshProblemKind::kZeroVolume));
 }
 
 TEST(MeshProblems, DegenerateTriangles) {
