@@ -128,6 +128,38 @@ VisualMesh DrawDisk(double radius, double thickness, const Vec3& axis, int segme
   return m;
 }
 
+VisualMesh DrawGrid(const Vec3& normal, double half_size, double spacing, double line_width) {
+  const Vec3 n = normal.normalized();
+  // Two directions in the plane: e1 ⟂ n, e2 = n × e1.
+  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  const int per_side = static_cast<int>(std::min(100.0, std::floor(half_size / spacing)));
+  const double step = per_side > 0 ? std::max(spacing, half_size / per_side) : spacing;
+  VisualMesh grid;
+  for (int direction = 0; direction < 2; ++direction) {
+    const Vec3 along = direction == 0 ? e1 : e2, across = direction == 0 ? e2 : e1;
+    Mat3 R;  // box x along the line, y across it, z along the normal
+    R.col(0) = along;
+    R.col(1) = across;
+    R.col(2) = along.cross(across);
+    for (int i = -per_side; i <= per_side; ++i) {
+      VisualMesh line = DrawBox(Vec3(2 * half_size, line_width, line_width / 5));
+      Transform(line, R, i * step * across);
+      Append(grid, line);
+    }
+  }
+  return grid;
+}
+
+std::array<VisualMesh, 3> DrawAxes(double length) {
+  std::array<VisualMesh, 3> axes;
+  for (int i = 0; i < 3; ++i) {
+    axes[i] = DrawRod(length, length / 25, 12);
+    const Mat3 R = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitX(), Vec3::Unit(i)).toRotationMatrix();
+    Transform(axes[i], R, Vec3::Zero());
+  }
+  return axes;
+}
+
 EquivalentShape InertiaBox(double m, const Vec3& p_BBcm, const Mat3& I_Bcm_B) {
   return Equivalent(m, p_BBcm, I_Bcm_B, 6.0);
 }

@@ -6,6 +6,8 @@
 // Rod is a thin cylinder along x from 0 to L; Sphere is centred.
 #pragma once
 
+#include <array>
+
 #include "geometry/tri_mesh.h"
 
 namespace kanesim::geometry {
@@ -32,6 +34,16 @@ VisualMesh DrawRod(double length, double radius, int segments = 16);
 // A disk of `radius` and `thickness` centred on the origin with its axis along `axis`
 // (any non-zero vector).
 VisualMesh DrawDisk(double radius, double thickness, const Vec3& axis, int segments = 48);
+
+// A ground grid for a contact plane through the origin with unit normal `normal`: lines
+// `spacing` apart in both directions of the plane, from −half_size to half_size, each a flat
+// box `line_width` wide and line_width / 5 thick. At most 201 lines per direction (the spacing
+// is widened beyond that).
+VisualMesh DrawGrid(const Vec3& normal, double half_size, double spacing, double line_width);
+
+// Small axes for a frame: thin rods of `length` from the origin along x, y and z (drawn in
+// red, green, blue by convention; the caller chooses the materials).
+std::array<VisualMesh, 3> DrawAxes(double length);
 
 // The uniform box or ellipsoid with the same mass and principal moments as a body, as MuJoCo
 // draws inertias. With principal moments I1, I2, I3 of the central inertia and mass m:

@@ -101,6 +101,32 @@ TEST(Primitives, DrawnEquivalentBoxHasTheInertia) {
   EXPECT_EQ(Draw(s, false).vertices.size(), 24u);
 }
 
+// Wrong if the grid leaves its plane or its extent, or the axes point the wrong way: every grid
+// vertex is within the line thickness of the plane and within half_size (+ the half width) of
+// the origin along the plane; 11 lines each way of 24 vertices; axis i spans 0..length along i.
+TEST(Primitives, GridAndAxes) {
+  const Vec3 n = Vec3(0, 1, 0.2).normalized();
+  const VisualMesh grid = DrawGrid(n, 1.0, 0.2, 0.01);
+  EXPECT_EQ(grid.vertices.size(), 2u * 11u * 24u);
+  for (const Vec3& p : grid.vertices) {
+    EXPECT_LE(std::abs(p.dot(n)), 0.001 + 1e-12);
+    const Vec3 in_plane = p - p.dot(n) * n;
+    EXPECT_LE(in_plane.cwiseAbs().maxCoeff(), std::sqrt(2.0) * (1.0 + 0.005) + 1e-12);
+  }
+  const auto axes = DrawAxes(0.5);
+  for (int i = 0; i < 3; ++i) {
+    double lo = 1e9, hi = -1e9;
+    for (const Vec3& p : axes[i].vertices) {
+      lo = std::min(lo, p[i]);
+      hi = std::max(hi, p[i]);
+      EXPECT_LE((p - p[i] * Vec3::Unit(i)).norm(), 0.02 + 1e-12);
+    }
+    EXPECT_NEAR(lo, 0, 1e-12);
+    EXPECT_NEAR(hi, 0.5, 1e-12);
+  }
+  EXPECT_LE(DrawGrid(Vec3::UnitY(), 100.0, 0.001, 0.01).vertices.size(), 2u * 201u * 24u);
+}
+
 bool AssimpMapped() {
   std::ifstream maps("/proc/self/maps");
   std::stringstream text;
