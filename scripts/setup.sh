@@ -11,13 +11,28 @@ missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "setup: all dependencies present"
-  exit 0
-fi
-echo "setup: installing ${missing[*]}"
 SUDO=""
 [ "$(id -u)" -eq 0 ] || SUDO="sudo"
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all dependencies present"
+else
+  echo "setup: installing ${missing[*]}"
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# Test tools (not needed to build or run kanesim): the Khronos glTF validator, from npm at the
+# version pinned in tests/tools/package-lock.json. Node and npm come from Debian (nodejs, npm)
+# when the machine has none; without them the validator's test is skipped (tests/geometry).
+tools="$(cd "$(dirname "$0")/.." && pwd)/tests/tools"
+if ! command -v npm >/dev/null 2>&1; then
+  echo "setup: installing nodejs npm (for the glTF validator test)"
+  { $SUDO apt-get update -qq && $SUDO apt-get install -y -qq --no-install-recommends nodejs npm; } ||
+    echo "setup: could not install npm; the glTF validator test will be skipped"
+fi
+if command -v npm >/dev/null 2>&1 && [ ! -d "$tools/node_modules/gltf-validator" ]; then
+  echo "setup: npm ci in tests/tools (gltf-validator)"
+  (cd "$tools" && npm ci --no-audit --no-fund --loglevel=error) ||
+    echo "setup: npm ci failed; the glTF validator test will be skipped"
+fi
