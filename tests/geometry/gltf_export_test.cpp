@@ -1,12 +1,12 @@
 // ExportAnimation's input checks, naming, orientation and decimation (geometry/gltf_export.h).
 // The written files themselves are parsed back by check_gltf.py and the Khronos validator.
-#include "geometry/gltf_export.h"
+#include "runtime/geometry/gltf_export.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
-#include "geometry/primitives.h"
+#include "runtime/geometry/primitives.h"
 #include "mesh_files.h"
 
 namespace kanesim::geometry {

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "geometry/mesh_load.h"
-#include "geometry/tri_mesh.h"
+#include "runtime/geometry/mesh_load.h"
+#include "runtime/geometry/tri_mesh.h"
 
 namespace kanesim::geometry::testing {
 

@@ -14,8 +14,8 @@
 #include <iomanip>
 #include <string>
 
-#include "geometry/gltf_export.h"
-#include "geometry/primitives.h"
+#include "runtime/geometry/gltf_export.h"
+#include "runtime/geometry/primitives.h"
 
 using namespace kanesim::geometry;
 

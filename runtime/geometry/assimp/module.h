@@ -1,7 +1,7 @@
 // The two functions of the assimp module (import.cpp, export.cpp).
 #pragma once
 
-#include "geometry/assimp_module.h"
+#include "runtime/geometry/assimp_module.h"
 
 namespace kanesim::geometry::assimp_io {
 

@@ -1,11 +1,11 @@
-#include "geometry/primitives.h"
+#include "runtime/geometry/primitives.h"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
 
-#include "geometry/mass_properties.h"
+#include "runtime/geometry/mass_properties.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -5,7 +5,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include "geometry/assimp/module.h"
+#include "runtime/geometry/assimp/module.h"
 
 namespace kanesim::geometry::assimp_io {
 namespace {

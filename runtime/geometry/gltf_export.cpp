@@ -1,4 +1,4 @@
-#include "geometry/gltf_export.h"
+#include "runtime/geometry/gltf_export.h"
 
 #include <fmt/format.h>
 
@@ -7,7 +7,7 @@
 #include <numbers>
 #include <set>
 
-#include "geometry/assimp_module.h"
+#include "runtime/geometry/assimp_module.h"
 
 namespace kanesim::geometry {
 namespace {

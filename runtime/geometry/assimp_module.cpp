@@ -1,4 +1,4 @@
-#include "geometry/assimp_module.h"
+#include "runtime/geometry/assimp_module.h"
 
 #include <dlfcn.h>
 

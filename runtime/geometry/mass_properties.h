@@ -1,7 +1,7 @@
 // Mass properties of a closed triangle mesh (uniform density), in double precision.
 #pragma once
 
-#include "geometry/tri_mesh.h"
+#include "runtime/geometry/tri_mesh.h"
 
 namespace kanesim::geometry {
 

@@ -12,7 +12,7 @@
 
 #include <memory>
 
-#include "geometry/assimp/module.h"
+#include "runtime/geometry/assimp/module.h"
 
 namespace kanesim::geometry::assimp_io {
 namespace {

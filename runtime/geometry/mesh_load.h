@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "geometry/mesh_check.h"
-#include "geometry/tri_mesh.h"
+#include "runtime/geometry/mesh_check.h"
+#include "runtime/geometry/tri_mesh.h"
 
 namespace kanesim::geometry {
 

@@ -8,7 +8,7 @@
 
 #include <array>
 
-#include "geometry/tri_mesh.h"
+#include "runtime/geometry/tri_mesh.h"
 
 namespace kanesim::geometry {
 

@@ -1,5 +1,5 @@
 // The module's entry point: the table of its functions (geometry/assimp_module.h).
-#include "geometry/assimp/module.h"
+#include "runtime/geometry/assimp/module.h"
 
 namespace {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "geometry/tri_mesh.h"
+#include "runtime/geometry/tri_mesh.h"
 
 namespace kanesim::geometry {
 

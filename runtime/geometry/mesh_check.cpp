@@ -8,7 +8,7 @@
 //   n = n_ab + n_ba = 1        an open edge                       (kNotClosed, error)
 //   n_ab != n_ba, n >= 2       orientation inconsistent here      (kInconsistentOrientation, error)
 //   n_ab == n_ba, n >= 4       non-manifold but balanced          (kNonManifold, warning)
-#include "geometry/mesh_check.h"
+#include "runtime/geometry/mesh_check.h"
 
 #include <fmt/format.h>
 
@@ -17,7 +17,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "geometry/mass_properties.h"
+#include "runtime/geometry/mass_properties.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -1,4 +1,4 @@
-#include "geometry/tri_mesh.h"
+#include "runtime/geometry/tri_mesh.h"
 
 #include <cmath>
 #include <cstring>

@@ -30,7 +30,7 @@
 //
 // Precision: o is the centre of the mesh's bounding box, so that a part far from its frame's
 // origin does not lose digits to cancellation in (5); everything is accumulated in double.
-#include "geometry/mass_properties.h"
+#include "runtime/geometry/mass_properties.h"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>

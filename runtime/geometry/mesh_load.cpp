@@ -1,4 +1,4 @@
-#include "geometry/mesh_load.h"
+#include "runtime/geometry/mesh_load.h"
 
 #include <fmt/format.h>
 
@@ -8,7 +8,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "geometry/assimp_module.h"
+#include "runtime/geometry/assimp_module.h"
 
 namespace kanesim::geometry {
 namespace {
