@@ -1,5 +1,6 @@
 #include "lang/ast.h"
 
+#include <cstdio>
 #include <sstream>
 
 #include "lang/lexer.h"
@@ -83,10 +84,9 @@ struct Piece {
 };
 
 std::string NumberText(double x) {
-  std::ostringstream v;
-  v.precision(17);
-  v << x;
-  return v.str();
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", x);  // as an ostream with precision(17)
+  return buffer;
 }
 
 void AppendRef(const std::vector<RefPart>& parts, std::vector<Piece>* out) {
