@@ -62,15 +62,11 @@ const Lookalike kLookalikes[] = {
     {0x03C0, "Greek small letter pi", "write pi"},
 };
 
-const char* ControlName(unsigned char c) {
-  switch (c) {
-    case 0x00: return "null";
-    case 0x07: return "bell";
-    case 0x08: return "backspace";
-    case 0x1B: return "escape";
-    case 0x7F: return "delete";
-    default: return "control character";
-  }
+// "control character U+001B (escape)".
+std::string ControlName(unsigned char c) {
+  const char* name = c == 0x00 ? "null" : c == 0x07 ? "bell" : c == 0x08 ? "backspace" : c == 0x1B ? "escape"
+                     : c == 0x7F ? "delete" : nullptr;
+  return "control character " + CodePointName(c) + (name ? std::string(" (") + name + ")" : "");
 }
 
 // A run of bytes that are not valid UTF-8, from s[i]: its length.
@@ -110,7 +106,7 @@ std::int32_t ReportBadCharacter(const std::string& s, std::int32_t b, int file, 
     return 1;
   }
   if (uc < 0x80) {
-    error(1, "unexpected " + std::string(ControlName(uc)) + " " + CodePointName(uc)).hint =
+    error(1, "unexpected " + ControlName(uc)).hint =
         "delete it: only spaces, tabs and line breaks may separate tokens";
     return 1;
   }
@@ -149,8 +145,8 @@ std::int32_t StringCharacter(const std::string& s, std::int32_t i, int file, Dia
   if (!IsUnsafeForTerminal(c.code)) return c.length;
   *skip = c.length;
   diags.Error(DiagCode::UnexpectedChar, Span{file, i, i + c.length},
-              (c.code < 0x80 ? std::string(ControlName(uc)) + " " : std::string("invisible or control character ")) +
-                  CodePointName(c.code) + " in a string")
+              (c.code < 0x80 ? ControlName(uc) : "invisible or control character " + CodePointName(c.code)) +
+                  " in a string")
       .hint = "delete it: strings may hold printable text, tabs and line breaks (write \\n for a new line)";
   return 0;
 }

@@ -85,7 +85,7 @@ Utf8Char DecodeUtf8(std::string_view s, std::size_t i) {
 
 std::string CodePointName(char32_t c) {
   std::string s = "U+";
-  const int digits = c > 0xFFFF ? 6 : 4;
+  const int digits = c > 0xFFFFF ? 6 : c > 0xFFFF ? 5 : 4;  // at least 4 digits, as Unicode writes them
   for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4) s += "0123456789ABCDEF"[(c >> shift) & 15];
   return s;
 }
