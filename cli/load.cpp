@@ -8,6 +8,7 @@
 #include "runtime/program.h"
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
+#include "lang/set_argument.h"
 #include "lang/text.h"
 #include "stdlib/stdlib.h"
 
@@ -26,12 +27,12 @@ bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
   lang::ElaborateOptions eo;
   eo.model = options.model;
   for (const auto& s : options.sets) {
-    size_t eq = s.find('=');
-    if (eq == std::string::npos || eq == 0) {
+    lang::ParamOverride o;
+    if (!lang::ParseSetArgument(s, &o)) {
       std::cerr << "kanesim: error[E210]: --set needs name=value, got '" << lang::ClipMessage(s) << "'\n";
       return false;
     }
-    eo.overrides.push_back({s.substr(0, eq), s.substr(eq + 1)});
+    eo.overrides.push_back(std::move(o));
   }
   bool ok = lang::LoadProgram(options.path, stdlib::Files(), &program, diags);
   if (ok) ok = lang::Elaborate(program, eo, out, diags);
