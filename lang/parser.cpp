@@ -44,12 +44,13 @@ class Parser {
     Advance();
     return true;
   }
-  // Reports "expected X, found Y" once per position (no cascades); null when suppressed.
   bool Expect(Tok t, const char* context) {
     if (Accept(t)) return true;
     ErrorExpected(std::string("'") + TokSpelling(t) + "'", context);
     return false;
   }
+  // Reports "expected X[ context], found Y" once per position (no cascades); the
+  // diagnostic, or null when suppressed.
   Diagnostic* ErrorExpected(const std::string& what, const char* context) {
     if (last_error_pos_ == pos_ && pos_ != 0) return nullptr;
     last_error_pos_ = pos_;
