@@ -68,10 +68,15 @@ void PrintCompileMessage(const rt::CompileMessage& e, const char* severity) {
   if (!e.hint.empty()) std::cerr << "  hint: " << lang::ClipMessage(e.hint) << "\n";
 }
 
+// The compiler's errors are capped like the language's (Diagnostics::kMaxErrors): a model
+// with thousands of unconnected bodies gives 50 messages and a count, not thousands.
 bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out) {
   *out = rt::Compile(mech, options);
   if (out->errors.empty()) return true;
-  for (const auto& e : out->errors) PrintCompileMessage(e, "error");
+  const size_t shown = std::min(out->errors.size(), static_cast<size_t>(lang::Diagnostics::kMaxErrors));
+  for (size_t i = 0; i < shown; ++i) PrintCompileMessage(out->errors[i], "error");
+  if (out->errors.size() > shown)
+    std::cerr << "kanesim: " << out->errors.size() - shown << " more errors like these are not shown\n";
   return false;
 }
 

@@ -27,7 +27,7 @@ std::string CodePointName(char32_t c);
 bool IsUnsafeForTerminal(char32_t c);
 
 // `s` with every unsafe character written as an escape: "\x1b" for a control byte,
-// "\u202e" for a unsafe code point, "\xff" for a byte that is not valid UTF-8. Tabs are
+// "\u202e" for an unsafe code point, "\xff" for a byte that is not valid UTF-8. Tabs are
 // kept (the caret line copies them). Everything else is copied unchanged.
 std::string EscapeForTerminal(std::string_view s);
 
