@@ -106,12 +106,19 @@ class Parser {
       Advance();
     }
   }
+  // After P104 in nested classes or equations: every enclosing level would report its
+  // missing 'end' (one error per level, up to the cap), so the rest of the file is skipped.
+  void SkipRest() {
+    pos_ = toks_.size() - 1;  // the Eof token
+    last_error_pos_ = pos_;
+  }
   struct DepthGuard {
     Parser* p;
     bool ok;
     bool counted;
     explicit DepthGuard(Parser* parser, bool count = true)
         : p(parser), ok(!count || ++parser->depth_ <= kMaxNesting), counted(count) {
+      if (!ok) p->last_error_pos_ = p->pos_;  // no "expected ..." cascade at the same token
       if (!ok && !p->depth_reported_) {
         p->depth_reported_ = true;
         p->diags_.Error(DiagCode::NestingTooDeep, p->Peek().span,
@@ -281,7 +288,7 @@ bool IsClassKeyword(Tok t) {
 //     ( string_comment composition end IDENT | '=' name [class_modification] comment )
 std::unique_ptr<ClassDef> Parser::ClassDefinition(ClassDef* parent) {
   DepthGuard guard(this);
-  if (!guard.ok) return nullptr;
+  if (!guard.ok) return SkipRest(), nullptr;
   auto c = std::make_unique<ClassDef>();
   c->parent = parent;
   Span b = Peek().span;
@@ -613,7 +620,7 @@ std::unique_ptr<Modification> Parser::AnnotationOpt() {
 //                [ else { equation ';' } ] end if
 bool Parser::EquationItem(std::vector<Equation>& out) {
   DepthGuard guard(this);
-  if (!guard.ok) return false;
+  if (!guard.ok) return SkipRest(), false;
   Equation eq;
   Span b = Peek().span;
   if (At(Tok::KwConnect)) {
