@@ -1,5 +1,6 @@
 // Loading a model for any subcommand: parse, elaborate, print diagnostics; compile and
 // render compiler messages the same way.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 
@@ -7,6 +8,8 @@
 #include "runtime/program.h"
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
+#include "lang/set_argument.h"
+#include "lang/text.h"
 #include "stdlib/stdlib.h"
 
 namespace kanesim::cli {
@@ -24,12 +27,12 @@ bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
   lang::ElaborateOptions eo;
   eo.model = options.model;
   for (const auto& s : options.sets) {
-    size_t eq = s.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      std::cerr << "kanesim: error[E210]: --set needs name=value, got '" << s << "'\n";
+    lang::ParamOverride o;
+    if (!lang::ParseSetArgument(s, &o)) {
+      std::cerr << "kanesim: error[E210]: --set needs name=value, got '" << lang::ClipMessage(s) << "'\n";
       return false;
     }
-    eo.overrides.push_back({s.substr(0, eq), s.substr(eq + 1)});
+    eo.overrides.push_back(std::move(o));
   }
   bool ok = lang::LoadProgram(options.path, stdlib::Files(), &program, diags);
   if (ok) ok = lang::Elaborate(program, eo, out, diags);
@@ -39,30 +42,41 @@ bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
   return ok && !diags.HasErrors();
 }
 
+// The compiler's messages go through the language's renderer (lang/diagnostics.cpp): the
+// same clipped, escaped source line and caret, and the same caps on notes.
 void PrintCompileMessage(const rt::CompileMessage& e, const char* severity) {
   std::string where = e.loc.file.empty() ? "kanesim"
-                                         : e.loc.file + ":" + std::to_string(e.loc.line) + ":" +
+                                         : lang::ClipMessage(e.loc.file) + ":" + std::to_string(e.loc.line) + ":" +
                                                std::to_string(e.loc.col);
-  std::cerr << where << ": " << severity << "[" << e.code << "]: " << e.message << "\n";
+  std::cerr << where << ": " << severity << "[" << e.code << "]: " << lang::ClipMessage(e.message) << "\n";
   if (g_program) {
-    for (int f = 0; f < g_program->sources.NumFiles(); ++f) {
-      if (g_program->sources.Name(f) != e.loc.file || e.loc.line <= 0) continue;
-      std::string line = g_program->sources.LineText(f, e.loc.line);
-      std::string num = std::to_string(e.loc.line);
-      std::cerr << " " << num << " | " << line << "\n " << std::string(num.size(), ' ') << " | "
-                << std::string(static_cast<size_t>(std::max(0, e.loc.col - 1)), ' ') << "^\n";
+    const lang::SourceManager& sm = g_program->sources;
+    for (int f = 0; f < sm.NumFiles(); ++f) {
+      if (sm.Name(f) != e.loc.file || e.loc.line <= 0) continue;
+      const std::int32_t at = sm.Offset(f, e.loc.line, e.loc.col);
+      if (at >= 0) std::cerr << lang::RenderSnippet(sm, lang::Span{f, at, at + 1});
       break;
     }
   }
-  for (const auto& [loc, msg] : e.notes)
-    std::cerr << loc.file << ":" << loc.line << ":" << loc.col << ": note: " << msg << "\n";
-  if (!e.hint.empty()) std::cerr << "  hint: " << e.hint << "\n";
+  const size_t shown = std::min(e.notes.size(), lang::Diagnostics::kMaxNotesShown);
+  for (size_t i = 0; i < shown; ++i) {
+    const auto& [loc, msg] = e.notes[i];
+    std::cerr << lang::ClipMessage(loc.file) << ":" << loc.line << ":" << loc.col << ": note: " << lang::ClipMessage(msg)
+              << "\n";
+  }
+  if (e.notes.size() > shown) std::cerr << "  note: " << e.notes.size() - shown << " more notes not shown\n";
+  if (!e.hint.empty()) std::cerr << "  hint: " << lang::ClipMessage(e.hint) << "\n";
 }
 
+// The compiler's errors are capped like the language's (Diagnostics::kMaxErrors): a model
+// with thousands of unconnected bodies gives 50 messages and a count, not thousands.
 bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out) {
   *out = rt::Compile(mech, options);
   if (out->errors.empty()) return true;
-  for (const auto& e : out->errors) PrintCompileMessage(e, "error");
+  const size_t shown = std::min(out->errors.size(), static_cast<size_t>(lang::Diagnostics::kMaxErrors));
+  for (size_t i = 0; i < shown; ++i) PrintCompileMessage(out->errors[i], "error");
+  if (out->errors.size() > shown)
+    std::cerr << "kanesim: " << out->errors.size() - shown << " more errors like these are not shown\n";
   return false;
 }
 

@@ -1,5 +1,6 @@
 #include "lang/ast.h"
 
+#include <cstdio>
 #include <sstream>
 
 #include "lang/lexer.h"
@@ -15,144 +16,192 @@ std::string JoinName(const std::vector<std::string>& parts) {
   return s;
 }
 
-ExprPtr Clone(const Expr& e) {
-  auto c = std::make_unique<Expr>();
-  c->kind = e.kind;
-  c->span = e.span;
-  c->number = e.number;
-  c->is_integer = e.is_integer;
-  c->text = e.text;
-  c->op = e.op;
-  for (const auto& p : e.parts) {
+Expr::~Expr() {
+  // Children are moved onto a heap stack before their parent goes, so each node is
+  // destroyed with no children left: no recursion, whatever the depth.
+  std::vector<ExprPtr> pending;
+  auto take = [&pending](ExprPtr& c) {
+    if (c) pending.push_back(std::move(c));
+  };
+  ForEachChild(*this, take);
+  while (!pending.empty()) {
+    ExprPtr e = std::move(pending.back());
+    pending.pop_back();
+    ForEachChild(*e, take);
+  }
+}
+
+// Copies everything of `from` but its children; each child slot of `to` gets a fresh
+// empty node (or stays null), for the caller to fill.
+static void CopyNode(const Expr& from, Expr* to) {
+  to->kind = from.kind;
+  to->span = from.span;
+  to->number = from.number;
+  to->is_integer = from.is_integer;
+  to->text = from.text;
+  to->op = from.op;
+  to->depth = from.depth;
+  for (const auto& p : from.parts) {
     RefPart q;
     q.name = p.name;
     q.span = p.span;
-    for (const auto& s : p.subscripts) q.subscripts.push_back(Clone(*s));
-    c->parts.push_back(std::move(q));
+    q.subscripts.resize(p.subscripts.size());
+    to->parts.push_back(std::move(q));
   }
-  for (const auto& a : e.args) c->args.push_back(Clone(*a));
-  for (const auto& n : e.named_args) c->named_args.push_back({n.name, Clone(*n.value), n.span});
-  for (const auto& r : e.rows) {
-    c->rows.emplace_back();
-    for (const auto& x : r) c->rows.back().push_back(Clone(*x));
-  }
-  return c;
+  to->args.resize(from.args.size());
+  for (const auto& n : from.named_args) to->named_args.push_back({n.name, nullptr, n.span});
+  for (const auto& r : from.rows) to->rows.emplace_back(r.size());
 }
 
-static void DumpExprTo(const Expr& e, std::ostringstream& os, int depth);
+ExprPtr Clone(const Expr& root) {
+  auto out = std::make_unique<Expr>();
+  std::vector<std::pair<const Expr*, Expr*>> todo{{&root, out.get()}};
+  std::vector<const Expr*> from_children;
+  while (!todo.empty()) {
+    auto [from, to] = todo.back();
+    todo.pop_back();
+    CopyNode(*from, to);
+    from_children.clear();
+    ForEachChild(*from, [&](const ExprPtr& c) { from_children.push_back(c.get()); });
+    size_t i = 0;
+    ForEachChild(*to, [&](ExprPtr& c) {
+      const Expr* src = from_children[i++];
+      if (!src) return;
+      c = std::make_unique<Expr>();
+      todo.push_back({src, c.get()});
+    });
+  }
+  return out;
+}
 
-static void DumpRef(const std::vector<RefPart>& parts, std::ostringstream& os, int depth) {
+namespace {
+
+// The expression printer works from an explicit stack of pieces, each either text to
+// write or a node to expand, so that chains of any length print without recursion.
+struct Piece {
+  const Expr* node = nullptr;  // expand this node, or, if null, write `text`
+  std::string text;
+};
+
+std::string NumberText(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", x);  // as an ostream with precision(17)
+  return buffer;
+}
+
+void AppendRef(const std::vector<RefPart>& parts, std::vector<Piece>* out) {
   for (size_t i = 0; i < parts.size(); ++i) {
-    if (i) os << '.';
-    os << parts[i].name;
-    if (!parts[i].subscripts.empty()) {
-      os << '[';
-      for (size_t k = 0; k < parts[i].subscripts.size(); ++k) {
-        if (k) os << ", ";
-        DumpExprTo(*parts[i].subscripts[k], os, depth + 1);
-      }
-      os << ']';
+    out->push_back({nullptr, (i ? "." : "") + parts[i].name});
+    if (parts[i].subscripts.empty()) continue;
+    out->push_back({nullptr, "["});
+    for (size_t k = 0; k < parts[i].subscripts.size(); ++k) {
+      if (k) out->push_back({nullptr, ", "});
+      out->push_back({parts[i].subscripts[k].get(), ""});
     }
+    out->push_back({nullptr, "]"});
   }
 }
 
-static void DumpExprTo(const Expr& e, std::ostringstream& os, int depth) {
-  if (depth > 256) {
-    os << "...";
-    return;
+void AppendList(const std::vector<ExprPtr>& xs, const char* sep, std::vector<Piece>* out) {
+  for (size_t i = 0; i < xs.size(); ++i) {
+    if (i) out->push_back({nullptr, sep});
+    out->push_back({xs[i].get(), ""});
   }
+}
+
+// The pieces of one node, in output order.
+void Expand(const Expr& e, std::vector<Piece>* out) {
+  auto text = [out](std::string s) { out->push_back({nullptr, std::move(s)}); };
+  auto node = [out](const ExprPtr& x) { out->push_back({x.get(), ""}); };
   switch (e.kind) {
-    case ExprKind::Number: {
-      std::ostringstream v;
-      v.precision(17);
-      v << e.number;
-      os << v.str();
-      break;
-    }
-    case ExprKind::String: os << '"' << e.text << '"'; break;
-    case ExprKind::Bool: os << (e.number != 0 ? "true" : "false"); break;
-    case ExprKind::Ref: DumpRef(e.parts, os, depth); break;
+    case ExprKind::Number: text(NumberText(e.number)); break;
+    case ExprKind::String: text('"' + e.text + '"'); break;
+    case ExprKind::Bool: text(e.number != 0 ? "true" : "false"); break;
+    case ExprKind::Ref: AppendRef(e.parts, out); break;
     case ExprKind::Call:
-      DumpRef(e.parts, os, depth);
-      os << '(';
-      for (size_t i = 0; i < e.args.size(); ++i) {
-        if (i) os << ", ";
-        DumpExprTo(*e.args[i], os, depth + 1);
-      }
+      AppendRef(e.parts, out);
+      text("(");
+      AppendList(e.args, ", ", out);
       for (size_t i = 0; i < e.named_args.size(); ++i) {
-        if (i || !e.args.empty()) os << ", ";
-        os << e.named_args[i].name << " = ";
-        DumpExprTo(*e.named_args[i].value, os, depth + 1);
+        text(std::string(i || !e.args.empty() ? ", " : "") + e.named_args[i].name + " = ");
+        node(e.named_args[i].value);
       }
-      os << ')';
+      text(")");
       break;
     case ExprKind::Array:
-      os << '{';
-      for (size_t i = 0; i < e.args.size(); ++i) {
-        if (i) os << ", ";
-        DumpExprTo(*e.args[i], os, depth + 1);
-      }
-      os << '}';
+      text("{");
+      AppendList(e.args, ", ", out);
+      text("}");
       break;
     case ExprKind::Comprehension:
-      os << '{';
-      DumpExprTo(*e.args[0], os, depth + 1);
-      os << " for " << e.text << " in ";
-      DumpExprTo(*e.args[1], os, depth + 1);
-      os << '}';
+      text("{");
+      node(e.args[0]);
+      text(" for " + e.text + " in ");
+      node(e.args[1]);
+      text("}");
       break;
     case ExprKind::Matrix:
-      os << '[';
+      text("[");
       for (size_t r = 0; r < e.rows.size(); ++r) {
-        if (r) os << "; ";
-        for (size_t i = 0; i < e.rows[r].size(); ++i) {
-          if (i) os << ", ";
-          DumpExprTo(*e.rows[r][i], os, depth + 1);
-        }
+        if (r) text("; ");
+        AppendList(e.rows[r], ", ", out);
       }
-      os << ']';
+      text("]");
       break;
     case ExprKind::Range:
-      os << '(';
-      for (size_t i = 0; i < e.args.size(); ++i) {
-        if (i) os << ':';
-        DumpExprTo(*e.args[i], os, depth + 1);
-      }
-      os << ')';
+      text("(");
+      AppendList(e.args, ":", out);
+      text(")");
       break;
-    case ExprKind::Colon: os << ':'; break;
-    case ExprKind::End: os << "end"; break;
+    case ExprKind::Colon: text(":"); break;
+    case ExprKind::End: text("end"); break;
     case ExprKind::Unary:
-      os << '(' << TokSpelling(static_cast<Tok>(e.op)) << (e.op == static_cast<int>(Tok::KwNot) ? " " : "");
-      DumpExprTo(*e.args[0], os, depth + 1);
-      os << ')';
+      text(std::string("(") + TokSpelling(static_cast<Tok>(e.op)) + (e.op == static_cast<int>(Tok::KwNot) ? " " : ""));
+      node(e.args[0]);
+      text(")");
       break;
     case ExprKind::Binary:
-      os << '(';
-      DumpExprTo(*e.args[0], os, depth + 1);
-      os << ' ' << TokSpelling(static_cast<Tok>(e.op)) << ' ';
-      DumpExprTo(*e.args[1], os, depth + 1);
-      os << ')';
+      text("(");
+      node(e.args[0]);
+      text(std::string(" ") + TokSpelling(static_cast<Tok>(e.op)) + " ");
+      node(e.args[1]);
+      text(")");
       break;
     case ExprKind::If:
-      os << "(if ";
+      text("(if ");
       for (size_t i = 0; i + 1 < e.args.size(); i += 2) {
-        if (i) os << " elseif ";
-        DumpExprTo(*e.args[i], os, depth + 1);
-        os << " then ";
-        DumpExprTo(*e.args[i + 1], os, depth + 1);
+        if (i) text(" elseif ");
+        node(e.args[i]);
+        text(" then ");
+        node(e.args[i + 1]);
       }
-      os << " else ";
-      DumpExprTo(*e.args.back(), os, depth + 1);
-      os << ')';
+      text(" else ");
+      node(e.args.back());
+      text(")");
       break;
   }
 }
 
-std::string DumpExpr(const Expr& e) {
-  std::ostringstream os;
-  DumpExprTo(e, os, 0);
-  return os.str();
+}  // namespace
+
+std::string DumpExpr(const Expr& root) {
+  std::string s;
+  std::vector<Piece> stack{{&root, ""}};
+  std::vector<Piece> pieces;
+  while (!stack.empty()) {
+    Piece p = std::move(stack.back());
+    stack.pop_back();
+    if (!p.node) {
+      s += p.text;
+      continue;
+    }
+    pieces.clear();
+    Expand(*p.node, &pieces);
+    for (auto it = pieces.rbegin(); it != pieces.rend(); ++it) {
+      if (it->node || !it->text.empty()) stack.push_back(std::move(*it));
+    }
+  }
+  return s;
 }
 
 static void DumpMod(const Modification* m, std::ostringstream& os) {

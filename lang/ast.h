@@ -2,6 +2,7 @@
 // keeps its span. The parser builds it, the elaborator reads it, nothing else does.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,7 +44,17 @@ struct NamedArg {
   Span span;
 };
 
+// Expression trees can be as deep as the input is long (a + b + c + ... is a left-deep
+// chain, one level per operator): nothing here recurses over them. The destructor, Clone
+// and Dump use explicit stacks; the parser records each node's depth and bounds it by
+// kMaxExprDepth (lang/parser.h).
 struct Expr {
+  Expr() = default;
+  Expr(Expr&&) = default;
+  Expr(const Expr&) = delete;
+  Expr& operator=(const Expr&) = delete;
+  ~Expr();  // iterative: frees any depth of children without recursion
+
   ExprKind kind = ExprKind::Number;
   Span span;
   double number = 0;
@@ -54,7 +65,22 @@ struct Expr {
   std::vector<ExprPtr> args;
   std::vector<NamedArg> named_args; // Call
   std::vector<std::vector<ExprPtr>> rows;  // Matrix
+  // Nodes on the longest path from this node down to a leaf (1 for a leaf). Set by the
+  // parser, which keeps it <= kMaxExprDepth; informational for every other reader.
+  std::int32_t depth = 1;
 };
+
+// Calls f(child) for every direct child slot of `e` (an ExprPtr, possibly null), in source
+// order: subscripts of the reference parts, args, named_args' values, matrix rows.
+template <class E, class F>
+void ForEachChild(E& e, F&& f) {
+  for (auto& p : e.parts)
+    for (auto& s : p.subscripts) f(s);
+  for (auto& a : e.args) f(a);
+  for (auto& n : e.named_args) f(n.value);
+  for (auto& r : e.rows)
+    for (auto& x : r) f(x);
+}
 
 struct Modification;
 
@@ -160,10 +186,10 @@ struct StoredDefinition {
 
 std::string JoinName(const std::vector<std::string>& parts);
 
-// Deep copy of an expression tree.
+// Deep copy of an expression tree (iterative: any depth).
 ExprPtr Clone(const Expr& e);
 
-// Readable dump for `kanesim check --emit ast` and parser tests.
+// Readable dump for `kanesim check --emit ast` and parser tests (iterative: any depth).
 std::string Dump(const StoredDefinition& def);
 std::string DumpExpr(const Expr& e);
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <sstream>
 
+#include "lang/text.h"
+
 namespace kanesim::lang {
 
 const char* DiagCodeString(DiagCode c) {
@@ -43,7 +45,14 @@ Diagnostic& Diagnostics::Error(DiagCode code, Span span, std::string message) {
 }
 
 Diagnostic& Diagnostics::Warning(DiagCode code, Span span, std::string message) {
-  if (diags_.size() > 4 * kMaxErrors) {
+  if (num_warnings_ >= kMaxWarnings) {
+    overflow_ = Diagnostic{};
+    return overflow_;
+  }
+  ++num_warnings_;
+  if (num_warnings_ == kMaxWarnings) {
+    diags_.push_back({Severity::Warning, DiagCode::TooManyErrors, "too many warnings; the rest are not shown", span,
+                      {}, ""});
     overflow_ = Diagnostic{};
     return overflow_;
   }
@@ -54,39 +63,33 @@ Diagnostic& Diagnostics::Warning(DiagCode code, Span span, std::string message) 
 std::string RenderSnippet(const SourceManager& sm, Span span) {
   if (!span.valid() || span.file >= sm.NumFiles()) return "";
   LineCol lc = sm.Locate(span.file, span.begin);
-  std::string text = sm.LineText(span.file, lc.line);
-  std::ostringstream os;
+  const std::size_t begin = static_cast<std::size_t>(lc.col - 1);
+  const std::size_t end = begin + static_cast<std::size_t>(std::max(1, span.end - span.begin));
+  ShownLine shown = ShowLine(sm.LineView(span.file, lc.line), begin, end);
   std::string num = std::to_string(lc.line);
   std::string pad(num.size(), ' ');
-  os << " " << num << " | " << text << "\n";
-  os << " " << pad << " | ";
-  for (int i = 1; i < lc.col && static_cast<size_t>(i - 1) < text.size(); ++i)
-    os << (text[static_cast<size_t>(i - 1)] == '\t' ? '\t' : ' ');
-  os << '^';
-  // Underline the rest of the span on this line.
-  int len = std::max(1, span.end - span.begin);
-  int room = static_cast<int>(text.size()) - (lc.col - 1);
-  for (int i = 1; i < std::min(len, room); ++i) os << '~';
-  os << "\n";
-  return os.str();
+  return " " + num + " | " + shown.text + "\n " + pad + " | " + shown.marks + "\n";
 }
 
 static std::string Where(const SourceManager& sm, Span span) {
   if (!span.valid() || span.file >= sm.NumFiles()) return "kanesim";
   LineCol lc = sm.Locate(span.file, span.begin);
-  return sm.Name(span.file) + ":" + std::to_string(lc.line) + ":" + std::to_string(lc.col);
+  return ClipMessage(sm.Name(span.file)) + ":" + std::to_string(lc.line) + ":" + std::to_string(lc.col);
 }
 
 std::string Diagnostics::Render(const Diagnostic& d) const {
   std::ostringstream os;
   os << Where(*sources_, d.span) << ": " << (d.severity == Severity::Error ? "error" : "warning") << "["
-     << DiagCodeString(d.code) << "]: " << d.message << "\n";
+     << DiagCodeString(d.code) << "]: " << ClipMessage(d.message) << "\n";
   os << RenderSnippet(*sources_, d.span);
-  for (const auto& n : d.notes) {
-    os << Where(*sources_, n.span) << ": note: " << n.message << "\n";
+  const std::size_t shown = std::min(d.notes.size(), kMaxNotesShown);
+  for (std::size_t i = 0; i < shown; ++i) {
+    const DiagNote& n = d.notes[i];
+    os << Where(*sources_, n.span) << ": note: " << ClipMessage(n.message) << "\n";
     os << RenderSnippet(*sources_, n.span);
   }
-  if (!d.hint.empty()) os << "  hint: " << d.hint << "\n";
+  if (d.notes.size() > shown) os << "  note: " << d.notes.size() - shown << " more notes not shown\n";
+  if (!d.hint.empty()) os << "  hint: " << ClipMessage(d.hint) << "\n";
   return os.str();
 }
 

@@ -2,6 +2,7 @@
 // User mistakes are reported here, never thrown; only `main` chooses exit codes.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,8 @@ namespace kanesim::lang {
   X(UnclosedBracket, "P102", "unclosed bracket")                                              \
   X(EndNameMismatch, "P103", "end name does not match the class name")                       \
   X(NestingTooDeep, "P104", "nesting too deep")                                               \
-  X(TooManyErrors, "P105", "too many errors")                                                 \
+  X(TooManyErrors, "P105", "too many errors or warnings")                                     \
+  X(ExpressionTooDeep, "P106", "expression too deep (operator chain too long)")               \
   /* elaboration */                                                                           \
   X(UnknownName, "E201", "unknown name")                                                      \
   X(UnknownClass, "E202", "unknown class")                                                    \
@@ -79,9 +81,15 @@ struct Diagnostic {
   std::string hint;
 };
 
+// Output stays bounded whatever the input (limits in docs/language.md §10): at most
+// kMaxErrors errors and kMaxWarnings warnings are kept (the last of each is P105), each
+// renders at most kMaxNotesShown notes, and Render clips long messages and source lines
+// (lang/text.h) and escapes control characters.
 class Diagnostics {
  public:
   static constexpr int kMaxErrors = 50;
+  static constexpr int kMaxWarnings = 50;
+  static constexpr std::size_t kMaxNotesShown = 8;
 
   explicit Diagnostics(const SourceManager* sources) : sources_(sources) {}
 
@@ -104,9 +112,11 @@ class Diagnostics {
   std::vector<Diagnostic> diags_;
   Diagnostic overflow_;  // sink once the cap is reached
   int num_errors_ = 0;
+  int num_warnings_ = 0;
 };
 
-// Renders a location snippet (used for compiler messages too).
+// Renders a location snippet: the line, clipped around the span and escaped, and a caret
+// line (used for compiler messages too).
 std::string RenderSnippet(const SourceManager& sm, Span span);
 
 // Closest candidate by edit distance, for "did you mean 'axis'?" hints; "" if none close.

@@ -37,22 +37,19 @@ bool LoadProgramFromText(const std::string& name, const std::string& text,
 
 bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
                  Program* program, Diagnostics& diags) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    diags.Error(DiagCode::NotAModel, Span{}, "cannot open '" + path + "'").hint = "check the path";
-    return false;
+  std::string text, message;
+  switch (ReadSourceFile(path, &text, &message)) {
+    case ReadStatus::Ok: return LoadProgramFromText(path, text, stdlib_files, program, diags);
+    case ReadStatus::TooLarge:
+      diags.Error(DiagCode::FileTooLarge, Span{}, message).hint = "split the model into several files";
+      return false;
+    case ReadStatus::NotAFile:
+      diags.Error(DiagCode::NotAModel, Span{}, message).hint = "give the path of a .mech file";
+      return false;
+    case ReadStatus::CannotOpen: break;
   }
-  in.seekg(0, std::ios::end);
-  std::streamoff size = in.tellg();
-  in.seekg(0, std::ios::beg);
-  if (size < 0 || static_cast<std::size_t>(size) > SourceManager::kMaxFileBytes) {
-    diags.Error(DiagCode::FileTooLarge, Span{},
-                "'" + path + "' is larger than " + std::to_string(SourceManager::kMaxFileBytes) + " bytes");
-    return false;
-  }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return LoadProgramFromText(path, ss.str(), stdlib_files, program, diags);
+  diags.Error(DiagCode::NotAModel, Span{}, message).hint = "check the path";
+  return false;
 }
 
 namespace elab {

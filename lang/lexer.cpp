@@ -5,6 +5,8 @@
 #include <cstring>
 #include <unordered_map>
 
+#include "lang/text.h"
+
 namespace kanesim::lang {
 
 const char* TokSpelling(Tok t) {
@@ -29,6 +31,127 @@ static const std::unordered_map<std::string, Tok>& Keywords() {
   }();
   return table;
 }
+
+namespace {
+
+// Characters that are mistaken for ASCII ones (pasted from documents), with the fix.
+struct Lookalike {
+  char32_t code;
+  const char* name;
+  const char* hint;
+};
+const Lookalike kLookalikes[] = {
+    {0x00A0, "no-break space", "replace it with an ordinary space"},
+    {0x200B, "zero-width space", "delete it: it is invisible"},
+    {0xFEFF, "byte-order mark", "a byte-order mark may only open the file; delete this one"},
+    {0x2212, "minus sign", "write the ASCII '-'"},
+    {0x2013, "en dash", "write the ASCII '-'"},
+    {0x2014, "em dash", "write the ASCII '-'"},
+    {0x00D7, "multiplication sign", "write '*'"},
+    {0x00B7, "middle dot", "write '*'"},
+    {0x22C5, "dot operator", "write '*'"},
+    {0x00F7, "division sign", "write '/'"},
+    {0x2264, "less-than or equal to", "write '<='"},
+    {0x2265, "greater-than or equal to", "write '>='"},
+    {0x2260, "not equal to", "write '<>'"},
+    {0x201C, "left double quotation mark", "strings use the ASCII '\"'"},
+    {0x201D, "right double quotation mark", "strings use the ASCII '\"'"},
+    {0x2018, "left single quotation mark", "strings use the ASCII '\"'; quoted identifiers are not supported"},
+    {0x2019, "right single quotation mark", "strings use the ASCII '\"'; quoted identifiers are not supported"},
+    {0x00B2, "superscript two", "write x^2"},
+    {0x03C0, "Greek small letter pi", "write pi"},
+};
+
+// "control character U+001B (escape)".
+std::string ControlName(unsigned char c) {
+  const char* name = c == 0x00 ? "null" : c == 0x07 ? "bell" : c == 0x08 ? "backspace" : c == 0x1B ? "escape"
+                     : c == 0x7F ? "delete" : nullptr;
+  return "control character " + CodePointName(c) + (name ? std::string(" (") + name + ")" : "");
+}
+
+// A run of bytes that are not valid UTF-8, from s[i]: its length.
+std::int32_t InvalidRun(const std::string& s, std::int32_t i) {
+  std::int32_t j = i;
+  const auto n = static_cast<std::int32_t>(s.size());
+  while (j < n && static_cast<unsigned char>(s[static_cast<size_t>(j)]) >= 0x80 &&
+         DecodeUtf8(s, static_cast<size_t>(j)).length == 0)
+    ++j;
+  return j - i;
+}
+
+std::string ByteList(const std::string& s, std::int32_t b, std::int32_t len) {
+  std::string out;
+  const char* hx = "0123456789abcdef";
+  for (std::int32_t k = 0; k < std::min(len, 4); ++k) {
+    auto u = static_cast<unsigned char>(s[static_cast<size_t>(b + k)]);
+    out += std::string(k ? " " : "") + "0x" + hx[u >> 4] + hx[u & 15];
+  }
+  if (len > 4) out += " and " + std::to_string(len - 4) + " more";
+  return out;
+}
+
+const char* const kUtf8Hint = "a .mech file is UTF-8 (or plain ASCII); re-save it as UTF-8 (it may be Latin-1)";
+
+// A character that starts no token, at s[b]: one L001 per character (a whole UTF-8
+// sequence, or a run of invalid bytes), saying which it is. Returns its length.
+std::int32_t ReportBadCharacter(const std::string& s, std::int32_t b, int file, Diagnostics& diags) {
+  const unsigned char uc = static_cast<unsigned char>(s[static_cast<size_t>(b)]);
+  auto error = [&](std::int32_t len, const std::string& message) -> Diagnostic& {
+    return diags.Error(DiagCode::UnexpectedChar, Span{file, b, b + len}, message);
+  };
+  if (uc < 0x80 && !IsUnsafeForTerminal(uc)) {
+    auto& d = error(1, std::string("unexpected character '") + static_cast<char>(uc) + "'");
+    if (uc == '\'') d.hint = "quoted identifiers are not supported; strings use double quotes";
+    else if (uc == '#' || uc == '%') d.hint = "comments start with // or /*";
+    return 1;
+  }
+  if (uc < 0x80) {
+    error(1, "unexpected " + ControlName(uc)).hint =
+        "delete it: only spaces, tabs and line breaks may separate tokens";
+    return 1;
+  }
+  const Utf8Char c = DecodeUtf8(s, static_cast<size_t>(b));
+  if (c.length == 0) {
+    const std::int32_t len = InvalidRun(s, b);
+    error(len, "invalid UTF-8: byte" + std::string(len > 1 ? "s " : " ") + ByteList(s, b, len)).hint = kUtf8Hint;
+    return len;
+  }
+  for (const Lookalike& l : kLookalikes) {
+    if (l.code != c.code) continue;
+    error(c.length, "unexpected character " + CodePointName(c.code) + " (" + l.name + ")").hint = l.hint;
+    return c.length;
+  }
+  const std::string shown = IsUnsafeForTerminal(c.code) ? std::string(" (invisible or a control character)")
+                                                        : " '" + s.substr(static_cast<size_t>(b), static_cast<size_t>(c.length)) + "'";
+  error(c.length, "unexpected character " + CodePointName(c.code) + shown).hint =
+      "names, keywords and operators are ASCII; other characters may appear only in strings and comments";
+  return c.length;
+}
+
+// Checks one character inside a string literal at s[i]: control characters (but tab and
+// line breaks), bytes that are not UTF-8 and characters that reorder the displayed text
+// are errors, so a description never carries them to a terminal. Returns the length to
+// copy (0: skip `skip` bytes, already reported).
+std::int32_t StringCharacter(const std::string& s, std::int32_t i, int file, Diagnostics& diags, std::int32_t* skip) {
+  const unsigned char uc = static_cast<unsigned char>(s[static_cast<size_t>(i)]);
+  if (uc == '\t' || uc == '\n' || uc == '\r' || (uc >= 0x20 && uc < 0x7F)) return 1;
+  const Utf8Char c = DecodeUtf8(s, static_cast<size_t>(i));
+  if (c.length == 0) {
+    *skip = InvalidRun(s, i);
+    diags.Error(DiagCode::UnexpectedChar, Span{file, i, i + *skip}, "invalid UTF-8 in a string: " + ByteList(s, i, *skip))
+        .hint = kUtf8Hint;
+    return 0;
+  }
+  if (!IsUnsafeForTerminal(c.code)) return c.length;
+  *skip = c.length;
+  diags.Error(DiagCode::UnexpectedChar, Span{file, i, i + c.length},
+              (c.code < 0x80 ? ControlName(uc) : "invisible or control character " + CodePointName(c.code)) +
+                  " in a string")
+      .hint = "delete it: strings may hold printable text, tabs and line breaks (write \\n for a new line)";
+  return 0;
+}
+
+}  // namespace
 
 static bool IsIdentStart(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
 static bool IsDigit(char c) { return c >= '0' && c <= '9'; }
@@ -133,7 +256,13 @@ std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
           ++i;
           break;
         }
-        if (d == '\\' && i + 1 < n) {
+        std::int32_t skip = 0;
+        const std::int32_t escaped = d == '\\' && i + 1 < n ? StringCharacter(s, i + 1, file, diags, &skip) : -1;
+        if (escaped == 0) {  // a backslash before a bad character, reported
+          i += 1 + skip;
+          continue;
+        }
+        if (escaped == 1) {
           char e = s[static_cast<size_t>(i + 1)];
           switch (e) {
             case 'n': val += '\n'; break;
@@ -146,8 +275,13 @@ std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
           i += 2;
           continue;
         }
-        val += d;
-        ++i;
+        const std::int32_t len = StringCharacter(s, i, file, diags, &skip);
+        if (len == 0) {
+          i += skip;
+          continue;
+        }
+        val.append(s, static_cast<size_t>(i), static_cast<size_t>(len));
+        i += len;
       }
       if (!closed) {
         diags.Error(DiagCode::UnterminatedString, span(b, b + 1), "string literal is never closed").hint =
@@ -192,18 +326,9 @@ std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
       case '>':
         if (next('=')) { k = Tok::Ge; len = 2; } else { k = Tok::Gt; }
         break;
-      default: {
-        unsigned char uc = static_cast<unsigned char>(c);
-        std::string shown = (uc >= 32 && uc < 127) ? std::string("'") + c + "'" : "byte 0x" + [&] {
-          const char* hx = "0123456789abcdef";
-          return std::string{hx[uc >> 4], hx[uc & 15]};
-        }();
-        auto& d = diags.Error(DiagCode::UnexpectedChar, span(b, b + 1), "unexpected character " + shown);
-        if (c == '\'') d.hint = "quoted identifiers are not supported; strings use double quotes";
-        else if (c == '#' || c == '%') d.hint = "comments start with // or /*";
-        ++i;
+      default:
+        i += ReportBadCharacter(s, b, file, diags);
         continue;
-      }
     }
     push(k, b, b + len);
     i += len;

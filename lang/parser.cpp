@@ -44,22 +44,24 @@ class Parser {
     Advance();
     return true;
   }
-  // Reports "expected X, found Y" once per position (no cascades).
   bool Expect(Tok t, const char* context) {
     if (Accept(t)) return true;
     ErrorExpected(std::string("'") + TokSpelling(t) + "'", context);
     return false;
   }
-  void ErrorExpected(const std::string& what, const char* context) {
-    if (last_error_pos_ == pos_ && pos_ != 0) return;
+  // Reports "expected X[ context], found Y" once per position (no cascades); the
+  // diagnostic, or null when suppressed.
+  Diagnostic* ErrorExpected(const std::string& what, const char* context) {
+    if (last_error_pos_ == pos_ && pos_ != 0) return nullptr;
     last_error_pos_ = pos_;
     const Token& t = Peek();
     std::string found = t.kind == Tok::Ident ? "identifier '" + t.text + "'"
                         : t.kind == Tok::Number ? "number " + t.text
                         : t.kind == Tok::Eof    ? std::string("end of file")
                                                 : std::string("'") + TokSpelling(t.kind) + "'";
-    auto& d = diags_.Error(DiagCode::ExpectedToken, t.span,
-                           "expected " + what + " " + context + ", found " + found);
+    std::string message = "expected " + what;
+    if (*context != '\0') message += std::string(" ") + context;
+    auto& d = diags_.Error(DiagCode::ExpectedToken, t.span, message + ", found " + found);
     if (what == "';'" && pos_ > 0) {
       d.span = Span{file_, toks_[pos_ - 1].span.end, toks_[pos_ - 1].span.end + 1};
       d.hint = "add ';' at the end of the previous declaration or equation";
@@ -74,6 +76,7 @@ class Parser {
         d.hint = "'" + word + "' is a reserved word of the language and cannot name a component or class; choose another "
                  "name, such as '" + word + "_'";
     }
+    return &d;
   }
   // Closing bracket: names both ends when missing.
   void ExpectClose(Tok close, const Token& open) {
@@ -103,12 +106,19 @@ class Parser {
       Advance();
     }
   }
+  // After P104 in nested classes or equations: every enclosing level would report its
+  // missing 'end' (one error per level, up to the cap), so the rest of the file is skipped.
+  void SkipRest() {
+    pos_ = toks_.size() - 1;  // the Eof token
+    last_error_pos_ = pos_;
+  }
   struct DepthGuard {
     Parser* p;
     bool ok;
     bool counted;
     explicit DepthGuard(Parser* parser, bool count = true)
         : p(parser), ok(!count || ++parser->depth_ <= kMaxNesting), counted(count) {
+      if (!ok) p->last_error_pos_ = p->pos_;  // no "expected ..." cascade at the same token
       if (!ok && !p->depth_reported_) {
         p->depth_reported_ = true;
         p->diags_.Error(DiagCode::NestingTooDeep, p->Peek().span,
@@ -130,6 +140,37 @@ class Parser {
     e->span = s;
     return e;
   }
+  // Every node with children passes through here once its children are parsed: it records
+  // the node's depth (ast::Expr::depth) and enforces kMaxExprDepth. A deeper node is
+  // reported once (P106) at `where` and replaced by an error leaf, so the tree stays
+  // bounded however long the input is.
+  ExprPtr Finish(ExprPtr e, Span where) {
+    std::int32_t below = 0;
+    ForEachChild(*e, [&below](const ExprPtr& c) {
+      if (c && c->depth > below) below = c->depth;
+    });
+    e->depth = below + 1;
+    if (e->depth <= kMaxExprDepth) return e;
+    if (!expr_depth_reported_) {
+      expr_depth_reported_ = true;
+      diags_.Error(DiagCode::ExpressionTooDeep, where,
+                   "expression deeper than " + std::to_string(kMaxExprDepth) +
+                       " levels (each operator of a chain such as a + b + c counts one level)")
+          .hint = "write a long sum as sum({a, b, c, ...}), or split it into partial results in separate "
+                  "parameters (s1 = a1 + ... + a1000; s = s1 + s2)";
+    }
+    return ErrorExpr(e->span);
+  }
+  // Binary node `lhs op rhs`, finished.
+  ExprPtr MakeBinary(Tok op, ExprPtr lhs, ExprPtr rhs, const Span& begin, const Span& op_span) {
+    auto e = std::make_unique<Expr>();
+    e->kind = ExprKind::Binary;
+    e->op = static_cast<int>(op);
+    e->args.push_back(std::move(lhs));
+    e->args.push_back(std::move(rhs));
+    e->span = SpanFrom(begin);
+    return Finish(std::move(e), op_span);
+  }
 
   // --- grammar ---------------------------------------------------------------------
   std::vector<std::string> Name(Span* span);
@@ -150,6 +191,7 @@ class Parser {
   ExprPtr Unary();
   ExprPtr Power();
   ExprPtr Primary();
+  ExprPtr MissingOperand(const Span& b);
   void Subscripts(std::vector<ExprPtr>& out);
   ExprPtr ComponentRef();
 
@@ -161,6 +203,7 @@ class Parser {
   int depth_ = 0;
   int subscript_depth_ = 0;  // > 0 inside [...] subscripts, where `end` is an expression
   bool depth_reported_ = false;
+  bool expr_depth_reported_ = false;
 };
 
 // stored_definition := [within name ';'] { import_clause ';' | class_definition ';' }
@@ -245,7 +288,7 @@ bool IsClassKeyword(Tok t) {
 //     ( string_comment composition end IDENT | '=' name [class_modification] comment )
 std::unique_ptr<ClassDef> Parser::ClassDefinition(ClassDef* parent) {
   DepthGuard guard(this);
-  if (!guard.ok) return nullptr;
+  if (!guard.ok) return SkipRest(), nullptr;
   auto c = std::make_unique<ClassDef>();
   c->parent = parent;
   Span b = Peek().span;
@@ -577,7 +620,7 @@ std::unique_ptr<Modification> Parser::AnnotationOpt() {
 //                [ else { equation ';' } ] end if
 bool Parser::EquationItem(std::vector<Equation>& out) {
   DepthGuard guard(this);
-  if (!guard.ok) return false;
+  if (!guard.ok) return SkipRest(), false;
   Equation eq;
   Span b = Peek().span;
   if (At(Tok::KwConnect)) {
@@ -681,7 +724,7 @@ ExprPtr Parser::Expression() {
     Expect(Tok::KwElse, "in the if-expression (it needs an else branch)");
     e->args.push_back(Expression());
     e->span = SpanFrom(b);
-    return e;
+    return Finish(std::move(e), b);
   }
   return SimpleExpression();
 }
@@ -698,7 +741,7 @@ ExprPtr Parser::SimpleExpression() {
   r->args.push_back(Logical(0));
   if (Accept(Tok::Colon)) r->args.push_back(Logical(0));
   r->span = SpanFrom(b);
-  return r;
+  return Finish(std::move(r), b);
 }
 
 // Operator precedence, lowest first (Modelica 3.5 §3.2):
@@ -713,14 +756,9 @@ ExprPtr Parser::Logical(int level) {
     Tok op = level == 0 ? Tok::KwOr : Tok::KwAnd;
     ExprPtr lhs = Logical(level + 1);
     while (At(op)) {
-      Advance();
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::Binary;
-      e->op = static_cast<int>(op);
-      e->args.push_back(std::move(lhs));
-      e->args.push_back(Logical(level + 1));
-      e->span = SpanFrom(b);
-      lhs = std::move(e);
+      Span op_span = Advance().span;
+      ExprPtr rhs = Logical(level + 1);
+      lhs = MakeBinary(op, std::move(lhs), std::move(rhs), b, op_span);
     }
     return lhs;
   }
@@ -734,7 +772,7 @@ ExprPtr Parser::Logical(int level) {
       e->op = static_cast<int>(Tok::KwNot);
       e->args.push_back(Logical(2));
       e->span = SpanFrom(b);
-      return e;
+      return Finish(std::move(e), b);
     }
     return Logical(3);
   }
@@ -742,14 +780,9 @@ ExprPtr Parser::Logical(int level) {
   ExprPtr lhs = Arithmetic(0);
   Tok k = Peek().kind;
   if (k == Tok::Lt || k == Tok::Le || k == Tok::Gt || k == Tok::Ge || k == Tok::EqEq || k == Tok::Ne) {
-    Advance();
-    auto e = std::make_unique<Expr>();
-    e->kind = ExprKind::Binary;
-    e->op = static_cast<int>(k);
-    e->args.push_back(std::move(lhs));
-    e->args.push_back(Arithmetic(0));
-    e->span = SpanFrom(b);
-    return e;
+    Span op_span = Advance().span;
+    ExprPtr rhs = Arithmetic(0);
+    return MakeBinary(k, std::move(lhs), std::move(rhs), b, op_span);
   }
   return lhs;
 }
@@ -761,27 +794,17 @@ ExprPtr Parser::Arithmetic(int level) {
   if (level == 0) {
     ExprPtr lhs = Unary();
     while (At(Tok::Plus) || At(Tok::Minus)) {
-      Tok op = Advance().kind;
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::Binary;
-      e->op = static_cast<int>(op);
-      e->args.push_back(std::move(lhs));
-      e->args.push_back(Arithmetic(1));
-      e->span = SpanFrom(b);
-      lhs = std::move(e);
+      Token op = Advance();
+      ExprPtr rhs = Arithmetic(1);
+      lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
     }
     return lhs;
   }
   ExprPtr lhs = Power();
   while (At(Tok::Star) || At(Tok::Slash)) {
-    Tok op = Advance().kind;
-    auto e = std::make_unique<Expr>();
-    e->kind = ExprKind::Binary;
-    e->op = static_cast<int>(op);
-    e->args.push_back(std::move(lhs));
-    e->args.push_back(Power());
-    e->span = SpanFrom(b);
-    lhs = std::move(e);
+    Token op = Advance();
+    ExprPtr rhs = Power();
+    lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
   }
   return lhs;
 }
@@ -798,7 +821,7 @@ ExprPtr Parser::Unary() {
     e->op = static_cast<int>(op);
     e->args.push_back(Arithmetic(1));
     e->span = SpanFrom(b);
-    return e;
+    return Finish(std::move(e), b);
   }
   return Arithmetic(1);
 }
@@ -823,11 +846,12 @@ ExprPtr Parser::Power() {
     u->op = static_cast<int>(op);
     u->args.push_back(Primary());
     u->span = SpanFrom(ub);
-    e->args.push_back(std::move(u));
+    e->args.push_back(Finish(std::move(u), ub));
   } else {
     e->args.push_back(Primary());
   }
   e->span = SpanFrom(b);
+  e = Finish(std::move(e), b);
   if (At(Tok::Caret)) {
     diags_.Error(DiagCode::ExpectedToken, Peek().span, "'^' does not chain").hint =
         "add parentheses: a^(b^c) or (a^b)^c";
@@ -835,6 +859,25 @@ ExprPtr Parser::Power() {
     Primary();
   }
   return e;
+}
+
+// No expression where one must begin. After an operator ('1 - - 2', 'a * / b', a run of
+// 200 000 signs) the whole run of operators gets one error, and parsing goes on with the
+// operand that follows it, so the run neither cascades into one error per sign nor grows
+// the tree.
+ExprPtr Parser::MissingOperand(const Span& b) {
+  const Tok k = Peek().kind;
+  const bool sign = k == Tok::Plus || k == Tok::Minus;
+  const bool op = sign || k == Tok::Star || k == Tok::Slash || k == Tok::Caret;
+  Diagnostic* d = ErrorExpected("an expression", "");
+  if (!op) return ErrorExpr(b);
+  if (d) {
+    d->hint = sign ? std::string("a sign cannot follow another operator: write a - (-b), a * (-b)")
+                   : std::string("an operand is missing before '") + TokSpelling(k) + "'";
+  }
+  while (At(Tok::Plus) || At(Tok::Minus) || At(Tok::Star) || At(Tok::Slash) || At(Tok::Caret)) Advance();
+  last_error_pos_ = pos_;  // nothing to parse here either: no second error
+  return Primary();
 }
 
 // subscripts := '[' subscript { ',' subscript } ']';  subscript := ':' | expression
@@ -880,7 +923,7 @@ ExprPtr Parser::ComponentRef() {
     e->parts.push_back(std::move(p));
   } while (Accept(Tok::Dot));
   e->span = SpanFrom(b);
-  return e;
+  return Finish(std::move(e), b);
 }
 
 // primary := NUMBER | STRING | false | true | component_reference
@@ -958,7 +1001,7 @@ ExprPtr Parser::Primary() {
       }
       ExpectClose(Tok::RBrace, open);
       e->span = SpanFrom(b);
-      return e;
+      return Finish(std::move(e), b);
     }
     case Tok::LBracket: {
       Token open = Advance();
@@ -975,7 +1018,7 @@ ExprPtr Parser::Primary() {
       }
       ExpectClose(Tok::RBracket, open);
       e->span = SpanFrom(b);
-      return e;
+      return Finish(std::move(e), b);
     }
     case Tok::Ident: {
       ExprPtr ref = ComponentRef();
@@ -1007,7 +1050,8 @@ ExprPtr Parser::Primary() {
               else ErrorExpected("an iterator name", "after 'for'");
               Expect(Tok::KwIn, "after the iterator");
               comp->args.push_back(Expression());
-              call->args.push_back(std::move(comp));
+              const Span comp_span = comp->span;
+              call->args.push_back(Finish(std::move(comp), comp_span));
               break;
             }
             call->args.push_back(std::move(a));
@@ -1016,11 +1060,10 @@ ExprPtr Parser::Primary() {
       }
       ExpectClose(Tok::RParen, open);
       call->span = SpanFrom(b);
-      return call;
+      return Finish(std::move(call), b);
     }
     default:
-      ErrorExpected("an expression", "");
-      return ErrorExpr(b);
+      return MissingOperand(b);
   }
 }
 

@@ -1,18 +1,46 @@
 #include "lang/source.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 
 namespace kanesim::lang {
+
+// A UTF-8 byte-order mark (EF BB BF) that opens a file is dropped: offsets and columns then
+// count from the first character the user sees.
+static std::string WithoutBom(std::string text) {
+  if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
+  return text;
+}
+
+static std::vector<std::int32_t> LineStarts(const std::string& text) {
+  std::vector<std::int32_t> starts{0};
+  for (size_t i = 0; i < text.size(); ++i)
+    if (text[i] == '\n') starts.push_back(static_cast<std::int32_t>(i + 1));
+  return starts;
+}
 
 int SourceManager::Add(std::string name, std::string contents) {
   File f;
   f.name = std::move(name);
-  f.text = std::move(contents);
-  f.line_starts.push_back(0);
-  for (size_t i = 0; i < f.text.size(); ++i)
-    if (f.text[i] == '\n') f.line_starts.push_back(static_cast<std::int32_t>(i + 1));
+  f.text = WithoutBom(std::move(contents));
+  f.line_starts = LineStarts(f.text);
   files_.push_back(std::move(f));
   return static_cast<int>(files_.size() - 1);
+}
+
+void SourceManager::Replace(int file, std::string contents) {
+  File& f = files_.at(static_cast<size_t>(file));
+  f.text = WithoutBom(std::move(contents));
+  f.line_starts = LineStarts(f.text);
+}
+
+void SourceManager::Truncate(int num_files) {
+  if (num_files >= 0 && static_cast<size_t>(num_files) < files_.size()) files_.resize(static_cast<size_t>(num_files));
 }
 
 LineCol SourceManager::Locate(int file, std::int32_t offset) const {
@@ -24,16 +52,78 @@ LineCol SourceManager::Locate(int file, std::int32_t offset) const {
   return {line, col};
 }
 
-std::string SourceManager::LineText(int file, int line) const {
+std::string_view SourceManager::LineView(int file, int line) const {
   if (file < 0 || file >= NumFiles()) return {};
   const File& f = files_[static_cast<size_t>(file)];
   if (line < 1 || static_cast<size_t>(line) > f.line_starts.size()) return {};
   size_t b = static_cast<size_t>(f.line_starts[static_cast<size_t>(line - 1)]);
   size_t e = f.text.find('\n', b);
   if (e == std::string::npos) e = f.text.size();
-  std::string s = f.text.substr(b, e - b);
-  if (!s.empty() && s.back() == '\r') s.pop_back();
+  std::string_view s(f.text.data() + b, e - b);
+  if (!s.empty() && s.back() == '\r') s.remove_suffix(1);
   return s;
+}
+
+std::string SourceManager::LineText(int file, int line) const { return std::string(LineView(file, line)); }
+
+std::int32_t SourceManager::Offset(int file, int line, int col) const {
+  if (file < 0 || file >= NumFiles()) return -1;
+  const File& f = files_[static_cast<size_t>(file)];
+  if (line < 1 || static_cast<size_t>(line) > f.line_starts.size()) return -1;
+  const std::int32_t begin = f.line_starts[static_cast<size_t>(line - 1)];
+  const std::int32_t length = static_cast<std::int32_t>(LineView(file, line).size());
+  return begin + std::clamp(col - 1, 0, length);
+}
+
+namespace {
+
+const char* FileKind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+}  // namespace
+
+ReadStatus ReadSourceFile(const std::string& path, std::string* text, std::string* message) {
+  // O_NONBLOCK: opening a pipe nobody writes to must not wait; cleared again below.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    *message = "cannot open '" + path + "': " + std::strerror(errno);
+    return ReadStatus::CannotOpen;
+  }
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !(S_ISREG(st.st_mode) || S_ISFIFO(st.st_mode))) {
+    *message = "'" + path + "' is " + FileKind(st.st_mode) + ", not a model file";
+    ::close(fd);
+    return ReadStatus::NotAFile;
+  }
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  const auto too_large = [&] {
+    *message = "'" + path + "' is larger than " + std::to_string(SourceManager::kMaxFileBytes) + " bytes";
+    ::close(fd);
+    return ReadStatus::TooLarge;
+  };
+  if (S_ISREG(st.st_mode) && static_cast<std::size_t>(st.st_size) > SourceManager::kMaxFileBytes) return too_large();
+  // Read at most one byte past the limit: a pipe or a growing file is cut there.
+  text->clear();
+  char buffer[1 << 16];
+  while (text->size() <= SourceManager::kMaxFileBytes) {
+    const ssize_t got = ::read(fd, buffer, sizeof buffer);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) {
+      *message = "cannot read '" + path + "': " + std::strerror(errno);
+      ::close(fd);
+      return ReadStatus::CannotOpen;
+    }
+    if (got == 0) break;
+    text->append(buffer, static_cast<std::size_t>(got));
+  }
+  if (text->size() > SourceManager::kMaxFileBytes) return too_large();
+  ::close(fd);
+  return ReadStatus::Ok;
 }
 
 }  // namespace kanesim::lang

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace kanesim::lang {
@@ -25,12 +26,20 @@ class SourceManager {
   // Limits on input (stated in docs/language.md).
   static constexpr std::size_t kMaxFileBytes = 4u << 20;  // 4 MiB
 
+  // A UTF-8 byte-order mark opening `contents` is dropped (offsets count from after it).
   int Add(std::string name, std::string contents);
+  // For a long-lived driver that parses the standard library once and reuses it (the
+  // fuzzers): gives file `file` new contents, or drops every file from `num_files` on.
+  void Replace(int file, std::string contents);
+  void Truncate(int num_files);
   const std::string& Name(int file) const { return files_[static_cast<size_t>(file)].name; }
   const std::string& Text(int file) const { return files_[static_cast<size_t>(file)].text; }
   int NumFiles() const { return static_cast<int>(files_.size()); }
   LineCol Locate(int file, std::int32_t offset) const;
   std::string LineText(int file, int line) const;  // without newline
+  std::string_view LineView(int file, int line) const;  // the same, without a copy
+  // Byte offset of 1-based (line, col), clamped to the file; -1 if there is no such line.
+  std::int32_t Offset(int file, int line, int col) const;
 
  private:
   struct File {
@@ -40,5 +49,11 @@ class SourceManager {
   };
   std::vector<File> files_;
 };
+
+// Reads a model file for SourceManager::Add: a regular file, or a pipe read to its end,
+// of at most kMaxFileBytes. A directory, device or socket is refused with a message that
+// says what the path is; so is a file that cannot be opened (with the system's reason).
+enum class ReadStatus { Ok, CannotOpen, NotAFile, TooLarge };
+ReadStatus ReadSourceFile(const std::string& path, std::string* text, std::string* message);
 
 }  // namespace kanesim::lang

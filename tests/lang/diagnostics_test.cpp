@@ -8,6 +8,7 @@
 //   // set: N=abc                 (an ElaborateOptions override, like --set N=abc)
 //   // model: Pkg.M               (the model to elaborate; default: the last one)
 //   // pad-to-bytes: 4194305      (pads the text with spaces, for L005)
+//   // repeat: CHAIN "+1" 100000  (replaces each @CHAIN@ in the text by "+1" 100000 times)
 //
 // Each expected code must be reported on that line (and column, if given) of the file, with
 // the quoted text somewhere in the rendered diagnostic (message, snippet, notes, hint). Every
@@ -106,6 +107,21 @@ void ParseExpectations(const std::string& comment, int line, std::vector<Expecta
   }
 }
 
+// "NAME "text" COUNT": replaces every @NAME@ of `text` by the quoted text repeated COUNT
+// times (a generated input too large to keep in the file: a 100 000-term chain). The
+// quoted text holds no newline, so line numbers of the expectations do not move.
+void Expand(const std::string& directive, std::string* text) {
+  size_t q1 = directive.find('"'), q2 = directive.rfind('"');
+  ASSERT_TRUE(q1 != std::string::npos && q2 > q1) << "bad repeat directive: " << directive;
+  const std::string placeholder = "@" + Trim(directive.substr(0, q1)) + "@";
+  const std::string unit = directive.substr(q1 + 1, q2 - q1 - 1);
+  const size_t count = std::stoul(directive.substr(q2 + 1));
+  std::string expansion;
+  for (size_t i = 0; i < count; ++i) expansion += unit;
+  for (size_t at = text->find(placeholder); at != std::string::npos; at = text->find(placeholder, at + expansion.size()))
+    text->replace(at, placeholder.size(), expansion);
+}
+
 // Parses the inline expectations and directives of one file.
 DiagFile LoadDiagFile(const fs::path& path) {
   DiagFile f;
@@ -114,6 +130,7 @@ DiagFile LoadDiagFile(const fs::path& path) {
   std::istringstream lines(f.text);
   std::string line;
   size_t pad_to = 0;
+  std::vector<std::string> repeats;
   for (int n = 1; std::getline(lines, line); ++n) {
     size_t slashes = line.find("//");
     if (slashes == std::string::npos) continue;
@@ -125,8 +142,10 @@ DiagFile LoadDiagFile(const fs::path& path) {
     }
     if (std::string model = Directive(comment, "model:"); !model.empty()) f.model = model;
     if (std::string pad = Directive(comment, "pad-to-bytes:"); !pad.empty()) pad_to = std::stoul(pad);
+    if (std::string rep = Directive(comment, "repeat:"); !rep.empty()) repeats.push_back(rep);
   }
   if (f.text.size() < pad_to) f.text.append(pad_to - f.text.size(), ' ');
+  for (const std::string& rep : repeats) Expand(rep, &f.text);
   return f;
 }
 

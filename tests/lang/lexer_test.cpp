@@ -3,6 +3,7 @@
 // wrong tokens or a user gets a lexical error at the wrong place.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstring>
 #include <iterator>
 #include <string>
@@ -177,12 +178,125 @@ TEST(LexerErrors, L001HintsForQuotesAndHashComments) {
   EXPECT_NE(h->diags.All()[0].hint.find("//"), std::string::npos);
 }
 
-TEST(LexerErrors, L001NonPrintableBytesAreShownInHex) {
+// A control byte is named by its code point, a byte that is not UTF-8 says so; neither is
+// echoed raw in the message.
+TEST(LexerErrors, L001ControlAndInvalidBytesAreNamed) {
   auto r = LexText(std::string("a \x01 \xff b"));
   ASSERT_EQ(r->diags.All().size(), 2u);
-  EXPECT_NE(r->diags.All()[0].message.find("0x01"), std::string::npos);
-  EXPECT_NE(r->diags.All()[1].message.find("0xff"), std::string::npos);
+  EXPECT_NE(r->diags.All()[0].message.find("U+0001"), std::string::npos) << r->diags.All()[0].message;
+  EXPECT_NE(r->diags.All()[1].message.find("invalid UTF-8: byte 0xff"), std::string::npos);
   EXPECT_EQ(r->diags.All()[1].span.begin, 4);
+}
+
+std::string Utf8(char32_t c) {
+  std::string s;
+  if (c < 0x80) return std::string(1, static_cast<char>(c));
+  if (c < 0x800) {
+    s += static_cast<char>(0xC0 | (c >> 6));
+  } else if (c < 0x10000) {
+    s += static_cast<char>(0xE0 | (c >> 12));
+    s += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+  } else {
+    s += static_cast<char>(0xF0 | (c >> 18));
+    s += static_cast<char>(0x80 | ((c >> 12) & 0x3F));
+    s += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+  }
+  s += static_cast<char>(0x80 | (c & 0x3F));
+  return s;
+}
+
+std::string Hex4(char32_t c) {
+  char buffer[16];
+  std::snprintf(buffer, sizeof buffer, "U+%04X", static_cast<unsigned>(c));
+  return buffer;
+}
+
+// Non-ASCII characters of every UTF-8 length, outside strings and comments: one L001 per
+// character (not per byte) naming its code point and spanning its bytes, and the tokens
+// around it intact. Inside strings and comments they are text.
+TEST(LexerEncoding, OneErrorPerNonAsciiCharacterNamingItsCodePoint) {
+  for (char32_t c : {0x00E9, 0x00A0, 0x03C0, 0x2212, 0x4E2D, 0xFEFF, 0x1F600, 0x10FFFF}) {
+    const std::string ch = Utf8(c);
+    for (int copies : {1, 3}) {
+      std::string run;
+      for (int k = 0; k < copies; ++k) run += ch;
+      auto r = LexText("a " + run + " b");
+      ASSERT_EQ(r->diags.NumErrors(), copies) << Hex4(c) << "\n" << r->diags.RenderAll();
+      const Diagnostic& d = r->diags.All()[0];
+      EXPECT_EQ(d.code, DiagCode::UnexpectedChar);
+      EXPECT_NE(d.message.find(Hex4(c)), std::string::npos) << d.message;
+      EXPECT_FALSE(d.hint.empty());
+      EXPECT_EQ(d.span.begin, 2);
+      EXPECT_EQ(d.span.end, 2 + static_cast<int>(ch.size()));
+      EXPECT_EQ(Kinds(r->tokens), (std::vector<Tok>{Tok::Ident, Tok::Ident, Tok::Eof}));
+    }
+    if (c == 0xFEFF) continue;  // invisible: an error in a string too (ControlCharactersAreNamedNeverEchoed)
+    auto text = LexText("a \"" + ch + "\" // " + ch + "\n /* " + ch + " */ b");
+    EXPECT_FALSE(text->diags.HasErrors()) << Hex4(c) << "\n" << text->diags.RenderAll();
+    EXPECT_EQ(text->tokens.at(1).text, ch);
+  }
+}
+
+// Byte sequences that are not UTF-8, of every kind (RFC 3629): a stray continuation byte,
+// an overlong form, a surrogate, a value past U+10FFFF, a truncated sequence, bytes that
+// never occur. One L001 "invalid UTF-8" per run, outside and inside strings; comments may
+// hold anything.
+TEST(LexerEncoding, InvalidUtf8IsNamedOncePerRun) {
+  for (const char* bad : {"\x80", "\xbf\xbf", "\xc0\xaf", "\xe0\x80\xaf", "\xed\xa0\x80", "\xf4\x90\x80\x80",
+                          "\xe2\x88", "\xf0\x9f", "\xfe", "\xff\xff\xff\xff\xff\xff"}) {
+    auto r = LexText(std::string("a ") + bad + " b");
+    ASSERT_EQ(r->diags.NumErrors(), 1) << r->diags.RenderAll();
+    EXPECT_NE(r->diags.All()[0].message.find("invalid UTF-8"), std::string::npos) << r->diags.All()[0].message;
+    EXPECT_EQ(Kinds(r->tokens), (std::vector<Tok>{Tok::Ident, Tok::Ident, Tok::Eof}));
+    auto in_string = LexText(std::string("\"x") + bad + "y\"");
+    ASSERT_EQ(in_string->diags.NumErrors(), 1) << in_string->diags.RenderAll();
+    EXPECT_NE(in_string->diags.All()[0].message.find("invalid UTF-8 in a string"), std::string::npos);
+    EXPECT_EQ(in_string->tokens.at(0).text, "xy");
+    auto in_comment = LexText(std::string("a // ") + bad + "\n/* " + bad + " */ b");
+    EXPECT_FALSE(in_comment->diags.HasErrors()) << in_comment->diags.RenderAll();
+  }
+}
+
+// Every control character (C0 but the separators tab, LF, CR, FF, VT; DEL), outside and
+// inside strings, and the C1 controls and text-reordering characters inside strings: one
+// L001 naming its code point, and no raw control byte in the message.
+TEST(LexerEncoding, ControlCharactersAreNamedNeverEchoed) {
+  std::vector<char32_t> controls;
+  for (char32_t c = 0; c < 0x20; ++c)
+    if (c != '\t' && c != '\n' && c != '\r' && c != '\f' && c != '\v') controls.push_back(c);
+  controls.push_back(0x7F);
+  for (char32_t c : controls) {
+    const std::string ch = Utf8(c);
+    auto r = LexText("a " + ch + " b");
+    ASSERT_EQ(r->diags.NumErrors(), 1) << Hex4(c);
+    EXPECT_NE(r->diags.All()[0].message.find(Hex4(c)), std::string::npos) << r->diags.All()[0].message;
+    EXPECT_EQ(r->diags.All()[0].message.find(ch), std::string::npos) << Hex4(c);
+  }
+  for (char32_t c : controls) {
+    if (c == '\t') continue;
+    auto r = LexText("\"a" + Utf8(c) + "b\"");
+    ASSERT_EQ(r->diags.NumErrors(), 1) << Hex4(c);
+    EXPECT_NE(r->diags.All()[0].message.find("in a string"), std::string::npos) << r->diags.All()[0].message;
+    EXPECT_EQ(r->tokens.at(0).text, "ab");
+  }
+  for (char32_t c : {0x85, 0x9B, 0x202E, 0x2066, 0x200F}) {
+    auto r = LexText("\"a" + Utf8(c) + "b\\" + Utf8(c) + "\"");
+    ASSERT_EQ(r->diags.NumErrors(), 2) << Hex4(c) << r->diags.RenderAll();
+    EXPECT_NE(r->diags.All()[0].message.find(Hex4(c)), std::string::npos) << r->diags.All()[0].message;
+    EXPECT_EQ(r->tokens.at(0).text, "ab");
+  }
+}
+
+// A byte-order mark opening the file is accepted (editors write one); anywhere else it is
+// an L001 that names it.
+TEST(LexerEncoding, ByteOrderMarkAcceptedOnlyAtTheStart) {
+  auto r = LexText("\xEF\xBB\xBFmodel M end M;");
+  EXPECT_FALSE(r->diags.HasErrors()) << r->diags.RenderAll();
+  EXPECT_EQ(r->tokens.at(0).kind, Tok::KwModel);
+  EXPECT_EQ(r->sm.Locate(r->file, r->tokens.at(0).span.begin).col, 1);
+  auto twice = LexText("\xEF\xBB\xBF\xEF\xBB\xBFmodel");
+  ASSERT_EQ(twice->diags.NumErrors(), 1);
+  EXPECT_NE(twice->diags.All()[0].message.find("byte-order mark"), std::string::npos);
 }
 
 TEST(LexerErrors, L002UnterminatedStringPointsAtTheOpeningQuote) {
