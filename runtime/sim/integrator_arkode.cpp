@@ -66,7 +66,7 @@ class ArkodeStepper final : public SundialsStepper {
       case ARK_ERR_FAILURE: kind = FailureKind::kErrorTest; break;
       default: break;
     }
-    return Describe(kind, "ARKODE", ERKStepGetReturnFlagName(flag));
+    return Describe(kind, "ARKODE", ERKStepGetReturnFlagName, flag);
   }
 
  private:

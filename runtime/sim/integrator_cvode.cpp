@@ -91,7 +91,7 @@ class CvodeStepper final : public SundialsStepper {
       case CV_LSOLVE_FAIL: kind = FailureKind::kLinearSolver; break;
       default: break;
     }
-    return Describe(kind, "CVODE", CVodeGetReturnFlagName(flag));
+    return Describe(kind, "CVODE", CVodeGetReturnFlagName, flag);
   }
 
  private:

@@ -116,7 +116,7 @@ class IdaStepper final : public SundialsStepper {
       case IDA_LSOLVE_FAIL: kind = FailureKind::kLinearSolver; break;
       default: break;
     }
-    return Describe(kind, "IDA", IDAGetReturnFlagName(flag));
+    return Describe(kind, "IDA", IDAGetReturnFlagName, flag);
   }
 
  private:

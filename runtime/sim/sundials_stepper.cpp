@@ -1,4 +1,5 @@
 // The steps CVODE, ARKODE and IDA take alike (runtime/sim/sundials_util.h).
+#include <cstdlib>
 #include <string>
 
 #include "runtime/sim/sundials_util.h"
@@ -36,7 +37,8 @@ int SundialsStepper::CopyOut(int flag, double* y) const {
   return flag;
 }
 
-StepFailure SundialsStepper::Describe(FailureKind kind, const char* module, const char* flag_name) const {
+StepFailure SundialsStepper::Describe(FailureKind kind, const char* module, char* (*flag_name)(long int),
+                                      int flag) const {
   const std::string& d = messages_.last;
   switch (kind) {
     case FailureKind::kRhs: return {true, WithDetail("the right-hand side failed", d)};
@@ -47,7 +49,10 @@ StepFailure SundialsStepper::Describe(FailureKind kind, const char* module, cons
     case FailureKind::kLinearSolver: return {false, WithDetail("the linear solver failed (singular Newton matrix)", d)};
     case FailureKind::kOther: break;
   }
-  return {false, WithDetail(std::string(module) + " failed: " + flag_name, d)};
+  char* name = flag_name(flag);  // malloc'd by SUNDIALS
+  std::string what = std::string(module) + " failed: " + (name != nullptr ? name : "unknown flag");
+  free(name);
+  return {false, WithDetail(what, d)};
 }
 
 }  // namespace kanesim::sim::detail

@@ -84,7 +84,9 @@ class SundialsStepper : public Stepper {
   // y := s_.y when flag >= 0 (a successful return of the module's solve); returns flag.
   int CopyOut(int flag, double* y) const;
   // The user's message for a failure of this kind; `flag_name` names kOther.
-  StepFailure Describe(FailureKind kind, const char* module, const char* flag_name) const;
+  // `flag_name` is the module's *GetReturnFlagName, whose string the caller frees; it is
+  // called only for a flag outside the kinds above.
+  StepFailure Describe(FailureKind kind, const char* module, char* (*flag_name)(long int), int flag) const;
   static bool Fail(std::string* error, const std::string& what) {
     *error = what;
     return false;
