@@ -103,6 +103,7 @@ void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what
   }
   if (!outer.span.valid()) outer.span = inner.span;
   outer.each = outer.each || inner.each;
+  if (!inner.empty() && !inner.set_only) outer.set_only = false;
   for (const auto& key : inner.order) {
     auto it = inner.sub.find(key);
     if (it == inner.sub.end()) continue;
@@ -300,7 +301,7 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     }
     if (found) continue;
     const Mod& sm = node->mod.sub[key];
-    if (sm.value && sm.value->from_set) continue;  // --set names are checked by Run()
+    if (sm.set_only) continue;  // --set names are checked by BindSetOverrides
     std::vector<std::string> names;
     for (const auto& c : elems) names.push_back(c.comp->name);
     auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span,
@@ -357,7 +358,8 @@ static void PreEvaluate(Elaborator& el, Mod& mod, int count, Diagnostics& diags)
       auto& d = diags.Error(DiagCode::SizeMismatch, mod.value->span,
                             "modifier of an array of " + std::to_string(count) + " components needs " +
                                 std::to_string(count) + " values");
-      d.hint = "write 'each' before the name to give every element the same value";
+      d.hint = mod.value->from_set ? "set one element (--set name[k].x=...), or give " + std::to_string(count) + " values"
+                                   : "write 'each' before the name to give every element the same value";
       mod.value.reset();
     } else {
       mod.value->pre = v;
@@ -366,34 +368,50 @@ static void PreEvaluate(Elaborator& el, Mod& mod, int count, Diagnostics& diags)
   for (auto& [k, sm] : mod.sub) PreEvaluate(el, sm, count, diags);
 }
 
+// Element `index` of an array component's modifier. Copies everything but the values,
+// and of a value only the slice: copying the whole array value for every element would
+// cost O(count^2) time and memory.
 Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
-  Mod out = mod;
-  if (mod.each) return out;  // `each` applies the whole modifier to every element
-  if (mod.value && !mod.each) {
-    Value v = mod.value->pre ? *mod.value->pre : EvalModValue(*mod.value, nullptr);
-    if (v.valid) {
-      if (v.shape.empty() || v.shape[0] != count) {
-        auto& d = diags_.Error(DiagCode::SizeMismatch, mod.value->span,
-                               "modifier of an array of " + std::to_string(count) +
-                                   " components needs " + std::to_string(count) + " values");
-        d.hint = "write 'each' before the name to give every element the same value";
-        out.value.reset();
-      } else {
-        Value s;
-        s.type = v.type;
-        s.shape.assign(v.shape.begin() + 1, v.shape.end());
-        size_t stride = v.Size() / static_cast<size_t>(count);
-        for (size_t k = 0; k < stride; ++k) {
-          s.e.push_back(v.e[static_cast<size_t>(index) * stride + k]);
-          if (v.type == VType::String) s.s.push_back(v.s[static_cast<size_t>(index) * stride + k]);
-        }
-        out.value->pre = s;
+  if (mod.each) return mod;  // `each` applies the whole modifier to every element
+  Mod out;
+  out.order = mod.order;
+  out.each = mod.each;
+  out.is_final = mod.is_final;
+  out.final_span = mod.final_span;
+  out.span = mod.span;
+  out.redeclare_type = mod.redeclare_type;
+  out.redeclare_from = mod.redeclare_from;
+  out.redeclare_span = mod.redeclare_span;
+  out.set_only = mod.set_only;
+  if (mod.value) {
+    std::optional<Value> evaluated;
+    if (!mod.value->pre) evaluated = EvalModValue(*mod.value, nullptr);
+    const Value& v = mod.value->pre ? *mod.value->pre : *evaluated;
+    if (v.valid && (v.shape.empty() || v.shape[0] != count)) {
+      auto& d = diags_.Error(DiagCode::SizeMismatch, mod.value->span,
+                             "modifier of an array of " + std::to_string(count) + " components needs " +
+                                 std::to_string(count) + " values");
+      d.hint = "write 'each' before the name to give every element the same value";
+    } else if (v.valid) {
+      ModValue mv;
+      mv.expr = mod.value->expr;
+      mv.scope = mod.value->scope;
+      mv.iters = mod.value->iters;
+      mv.span = mod.value->span;
+      mv.is_final = mod.value->is_final;
+      mv.from_set = mod.value->from_set;
+      Value s;
+      s.type = v.type;
+      s.shape.assign(v.shape.begin() + 1, v.shape.end());
+      size_t stride = v.Size() / static_cast<size_t>(count);
+      for (size_t k = 0; k < stride; ++k) {
+        s.e.push_back(v.e[static_cast<size_t>(index) * stride + k]);
+        if (v.type == VType::String) s.s.push_back(v.s[static_cast<size_t>(index) * stride + k]);
       }
-    } else {
-      out.value.reset();
+      mv.pre = std::move(s);
+      out.value = std::move(mv);
     }
   }
-  out.sub.clear();
   for (const auto& [k, sm] : mod.sub) out.sub[k] = SliceMod(sm, index, count, where);
   return out;
 }
@@ -532,7 +550,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
           .hint = "reduce the array sizes";
     }
     for (const auto& key : child->mod.order) {
-      if (IsVarAttribute(key)) continue;
+      if (IsVarAttribute(key) || child->mod.sub[key].set_only) continue;
       auto& d = diags_.Error(DiagCode::UnknownModifier, child->mod.sub[key].span,
                              "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
                                  child->path + "'");
@@ -778,7 +796,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       continue;
     }
     ExprId x = v.e[k];
-    double val = flat::EvalParamExpr(*m_, pvals_, x);
+    double val = param_eval_.Eval(x);
     p.value = val;
     p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
     if (!std::isfinite(val)) {
@@ -928,6 +946,7 @@ void Elaborator::ProcessEquations(Node* node) {
         }
         std::vector<double> xs = StructuralList(r, eq.range->span, "a for-loop range");
         for (double x : xs) {
+          if (!ChargeSteps(1, eq.range->span)) return;
           auto local = std::make_shared<Iters>(iters ? *iters : Iters{});
           (*local)[eq.iter] = x;
           for (const auto& b : eq.body) one(b, local);

@@ -11,8 +11,10 @@
 
 #include "lang/ast.h"
 #include "lang/diagnostics.h"
+#include "lang/elab_budget.h"
 #include "lang/elaborate.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/flat/param_eval.h"
 
 namespace kanesim::lang::elab {
 
@@ -65,6 +67,7 @@ struct Mod {
   std::string redeclare_type;
   const ast::ClassDef* redeclare_from = nullptr;
   Span redeclare_span;
+  bool set_only = false;  // made by --set alone: its names are checked by BindSetOverrides
   bool empty() const { return !value && sub.empty() && redeclare_type.empty(); }
 };
 
@@ -103,7 +106,6 @@ struct Node {
   std::optional<ModValue> eq_binding;            // from an equation `x = expr`
   std::map<int, ModValue> eq_elem_binding;       // from `x[k] = expr`
   bool is_final_decl = false;
-  Mod type_mod;  // modifiers of a short type definition (type Angle = Real(unit="rad"))
 
   // kArray
   std::vector<std::unique_ptr<Node>> elems;
@@ -112,6 +114,23 @@ struct Node {
     auto it = by_name.find(n);
     return it == by_name.end() ? nullptr : it->second;
   }
+};
+
+// One part of a --set name: `g[2]` of `world.g[2]`; offsets into the name.
+struct SetPart {
+  std::string name;
+  std::vector<long> subs;                      // 1-based indices as written
+  int begin = 0, end = 0;                      // the identifier
+  std::vector<std::pair<int, int>> sub_spans;  // each index
+};
+
+// A parsed --set: its name, its value, and the "<--set>" pseudo-file holding `name=value`.
+struct SetOverride {
+  std::string name;
+  std::vector<SetPart> parts;
+  const ast::Expr* value = nullptr;
+  int file = -1;
+  bool subscripted = false;
 };
 
 struct ClassInfo {
@@ -135,12 +154,31 @@ class Elaborator {
     const Iters* iters = nullptr;
   };
   Value Eval(const ast::Expr& e, const Ctx& ctx);
+  // One kind each (elab_eval.cpp); EvalNested bounds their recursion (elab_budget.cpp).
+  Value EvalNested(const ast::Expr& e, const Ctx& ctx);
+  Value EvalNode(const ast::Expr& e, const Ctx& ctx);
+  Value EvalRef(const ast::Expr& e, const Ctx& ctx);
+  Value EvalArray(const ast::Expr& e, const Ctx& ctx);
+  Value EvalComprehension(const ast::Expr& e, const Ctx& ctx);
+  Value EvalMatrix(const ast::Expr& e, const Ctx& ctx);
+  Value EvalRange(const ast::Expr& e, const Ctx& ctx);
+  Value EvalIf(const ast::Expr& e, const Ctx& ctx);
+  Value EvalCall(const ast::Expr& e, const Ctx& ctx);
+  // Operators (elab_operators.cpp): chains of them with an explicit stack.
+  Value EvalOperators(const ast::Expr& root, const Ctx& ctx);
+  Value UnaryOp(const ast::Expr& e, Value v);
+  Value BinaryOp(const ast::Expr& e, const Value& a, const Value& b);
+  Value Elementwise2(const Value& a, const Value& b, flat::Op op, VType rt, Span sp);
+  // Work budget (elab_budget.cpp): false once the elaboration has used it up.
+  bool ChargeSteps(std::int64_t steps, Span where);
+  bool Charge(const Value& v, Span where);
   Value EvalModValue(const ModValue& mv, Span* where);
   Value GetVar(Node* var, Span use_span);
   // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
   bool StructuralInt(const Value& v, Span span, long* out, const char* what);
+  void MarkStructural(ExprId id);
   std::vector<double> StructuralList(const Value& v, Span span, const char* what);
   Value Const(double x, VType t = VType::Real);
   Value Scalar(ExprId e, VType t = VType::Real);
@@ -167,7 +205,13 @@ class Elaborator {
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
   flat::SourceLoc Loc(Span s) const;
-  Node* FindOverrideTarget(const std::string& name, int* elem_index);
+
+  // --- --set overrides (elab_set.cpp) ---
+  bool ParseSetOverrides();
+  void BindSetOverrides();
+  Node* ResolveSetTarget(const SetOverride& so, int* elem);
+  ModValue SetValue(const SetOverride& so);
+  Span SetSpan(const SetOverride& so, int begin, int end) const;
 
   // --- emission (elab_emit.cpp) ---
   void Emit(Node* root);
@@ -180,18 +224,25 @@ class Elaborator {
   std::unordered_map<const ast::ClassDef*, const ast::StoredDefinition*> file_of_;
   std::unordered_map<const ast::ClassDef*, std::string> qualified_of_;
   std::vector<double> pvals_;  // values of m_->params, index-aligned
+  flat::ParamEvaluator param_eval_{m_->exprs, pvals_};  // memoized values of pool nodes
+  std::vector<std::uint8_t> structural_seen_;  // per pool node: walked by MarkStructural
   std::vector<Node*> frame_nodes_;   // provisional frame id -> node
   std::vector<Node*> flange_nodes_;  // flange id -> node
   std::vector<Node*> joint_nodes_;   // joint id -> node
   std::vector<std::pair<int, int>> frame_links_;   // connect() pairs (provisional ids)
   std::vector<std::pair<int, int>> flange_links_;
   long instances_ = 0;
+  WorkBudget budget_{kMaxElabWork};
+  bool budget_reported_ = false;
+  int eval_depth_ = 0;  // EvalNested frames on the native stack
+  bool depth_reported_ = false;
   bool too_large_ = false;
   std::vector<const ast::ClassDef*> extends_stack_;
   std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
   std::unique_ptr<Node> root_;
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
   std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator
+  std::vector<SetOverride> sets_;                      // parsed --set overrides
 };
 
 // Modelica-style attribute names accepted on variables.

@@ -19,6 +19,13 @@ namespace kanesim::lang {
 inline constexpr long kMaxArraySize = 100000;        // elements in one array
 inline constexpr long kMaxInstances = 250000;        // scalar variables + components
 inline constexpr int kMaxExtendsDepth = 64;          // chain of extends / instantiation depth
+// Steps of one elaboration: values produced by evaluating expressions, loop iterations,
+// multiply-adds of matrix products (lang/elab_budget.h).
+inline constexpr long kMaxElabWork = 10000000;
+// Nested evaluation: sub-expressions inside brackets, calls and if-expressions, plus
+// parameters whose value reads another parameter. Operator chains (a + b + ...) do not
+// count: they are evaluated without recursion, at any length.
+inline constexpr int kMaxEvalDepth = 500;
 
 struct ParamOverride {
   std::string name;   // dotted: "N", "rod.L", "world.g" or "world.g[2]"
