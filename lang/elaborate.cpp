@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "lang/elab_internal.h"
+#include "lang/library_cache.h"
 #include "lang/parser.h"
 
 namespace kanesim::lang {
@@ -18,11 +19,15 @@ static bool ParseInto(Program* program, int file, Diagnostics& diags) {
   return true;
 }
 
+// The library's text goes into this Program's sources (for diagnostics); its ASTs are
+// the process-wide parsed copy, whose file ids match because the main file is file 0.
 static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
                       Diagnostics& diags) {
-  for (const auto& [name, text] : stdlib_files) {
-    int f = program->sources.Add(name, text);
-    ParseInto(program, f, diags);
+  auto shared = program->sources.NumFiles() == 1 ? SharedParsedLibrary(stdlib_files) : nullptr;
+  for (size_t i = 0; i < stdlib_files.size(); ++i) {
+    int f = program->sources.Add(stdlib_files[i].first, stdlib_files[i].second);
+    if (shared) program->files.push_back(shared->defs[i]);
+    else ParseInto(program, f, diags);
   }
 }
 

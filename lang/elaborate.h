@@ -41,11 +41,13 @@ struct ElaborateOptions {
 struct Program {
   // mutable: elaboration adds the text of --set values so diagnostics can show them.
   mutable SourceManager sources;
-  std::vector<std::unique_ptr<ast::StoredDefinition>> files;  // files[0] is the main file
+  // files[0] is the main file; the library's files are shared with every other Program
+  // of the process (lang/library_cache.h).
+  std::vector<std::shared_ptr<const ast::StoredDefinition>> files;
 };
 
 // Loads and parses the main file and the standard library; diagnostics into `diags`.
-// `stdlib_files` are (display name, contents) pairs.
+// `stdlib_files` are (display name, contents) pairs; they are parsed once per process.
 bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
                  Program* program, Diagnostics& diags);
 // Same, with the main file's text given (tests, fuzzer).
