@@ -75,20 +75,33 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
 
 // outer wins over inner; `what` names the element for messages.
 void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
+  std::vector<const std::string*> keys;
+  MergeMods(outer, inner, what, keys);
+}
+
+// The recursion of MergeInto (as deep as the modifier is written). The name for messages
+// is `what` followed by `keys`, built only when a message needs it.
+void Elaborator::MergeMods(Mod& outer, const Mod& inner, const std::string& what,
+                           std::vector<const std::string*>& keys) {
+  auto name = [&] {
+    std::string s = what;
+    for (const std::string* k : keys) s += "." + *k;
+    return s;
+  };
   // --set on a final parameter is reported once by Elaborator::Run.
   if (outer.value && outer.value->from_set && inner.is_final) {
     outer.value.reset();
   }
   if (inner.is_final && (outer.value || !outer.sub.empty() || !outer.redeclare_type.empty())) {
     Span at = outer.value ? outer.value->span : outer.span;
-    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + what + "' is final and cannot be modified");
+    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.final_span.valid() ? inner.final_span : inner.span, "declared final here"});
     outer.value.reset();
     outer.sub.clear();
   }
   if (!outer.value && inner.value) outer.value = inner.value;
   else if (outer.value && inner.value && inner.value->is_final) {
-    auto& d = diags_.Error(DiagCode::FinalOverride, outer.value->span, "'" + what + "' is final and cannot be modified");
+    auto& d = diags_.Error(DiagCode::FinalOverride, outer.value->span, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.value->span, "final value given here"});
     outer.value = inner.value;
   }
@@ -107,8 +120,11 @@ void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what
   for (const auto& key : inner.order) {
     auto it = inner.sub.find(key);
     if (it == inner.sub.end()) continue;
-    if (!outer.sub.count(key)) outer.order.push_back(key);
-    MergeInto(outer.sub[key], it->second, what + "." + key);
+    auto [slot, added] = outer.sub.try_emplace(key);
+    if (added) outer.order.push_back(key);
+    keys.push_back(&key);
+    MergeMods(slot->second, it->second, what, keys);
+    keys.pop_back();
   }
 }
 
@@ -337,7 +353,6 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     MergeInto(outer, decl, child->path);
     child->mod = std::move(outer);
     child->is_final_decl = c.is_final;
-    node->by_name[child->name] = child.get();
     node->children.push_back(std::move(child));
   }
   for (size_t i = 0; i < elems.size() && i < node->children.size(); ++i) {
@@ -763,6 +778,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     if (a.valid && a.type == VType::String && !a.s.empty()) unit = a.s[0];
   }
   Value out = v;
+  const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
   for (size_t k = 0; k < v.e.size(); ++k) {
     std::string name = var->path;
     if (!var->shape.empty()) {
@@ -778,7 +794,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       name += "]";
     }
     flat::Param p;
-    p.name = name;
+    p.name = std::move(name);
     p.type = var->vtype == VType::Real      ? flat::ParamType::Real
              : var->vtype == VType::Integer ? flat::ParamType::Integer
              : var->vtype == VType::Boolean ? flat::ParamType::Boolean
@@ -788,10 +804,10 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     p.max = vmax;
     p.is_constant = var->variability == ast::Variability::Constant;
     p.user_set = binding && binding->from_set;
-    p.loc = Loc(var->decl ? var->decl->name_span : use_span);
+    p.loc = loc;
     if (var->vtype == VType::String) {
       p.string_value = v.s.empty() ? "" : v.s[k];
-      m_->params.push_back(p);
+      m_->params.push_back(std::move(p));
       pvals_.push_back(0.0);
       continue;
     }
@@ -801,11 +817,11 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
     if (!std::isfinite(val)) {
       auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
-                             "parameter '" + name + "' evaluates to " + std::to_string(val));
+                             "parameter '" + p.name + "' evaluates to " + std::to_string(val));
       if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     } else if (val < vmin || val > vmax) {
       auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
-                             "parameter '" + name + "' = " + std::to_string(val) + " is outside its range [" +
+                             "parameter '" + p.name + "' = " + std::to_string(val) + " is outside its range [" +
                                  (vmin <= -1e299 ? std::string("-inf") : std::to_string(vmin)) + ", " +
                                  (vmax >= 1e299 ? std::string("inf") : std::to_string(vmax)) + "]");
       if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
@@ -814,7 +830,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       out.e[k] = m_->exprs.Constant(val);
       continue;
     }
-    m_->params.push_back(p);
+    m_->params.push_back(std::move(p));
     pvals_.push_back(val);
     out.e[k] = m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
   }

@@ -40,6 +40,38 @@ struct Value {
 
 using Iters = std::map<std::string, double>;
 
+// An optional value kept on the heap: like std::optional (bool test, *, ->, reset,
+// assignment of a T), copied deeply, but one pointer wide while empty. Instance nodes and
+// modifiers have several of these fields and most are empty, so this keeps the instance
+// tree small (memory is linear in the model, and this is its constant).
+template <class T>
+class Boxed {
+ public:
+  Boxed() = default;
+  Boxed(const Boxed& o) : p_(o.p_ ? std::make_unique<T>(*o.p_) : nullptr) {}
+  Boxed(Boxed&&) noexcept = default;
+  Boxed& operator=(const Boxed& o) {
+    if (this != &o) p_ = o.p_ ? std::make_unique<T>(*o.p_) : nullptr;
+    return *this;
+  }
+  Boxed& operator=(Boxed&&) noexcept = default;
+  Boxed& operator=(const T& v) {
+    p_ = std::make_unique<T>(v);
+    return *this;
+  }
+  Boxed& operator=(T&& v) {
+    p_ = std::make_unique<T>(std::move(v));
+    return *this;
+  }
+  explicit operator bool() const { return p_ != nullptr; }
+  T& operator*() const { return *p_; }
+  T* operator->() const { return p_.get(); }
+  void reset() { p_.reset(); }
+
+ private:
+  std::unique_ptr<T> p_;
+};
+
 struct Node;
 
 // One binding written somewhere in the source: an expression, where to evaluate it, and
@@ -48,7 +80,7 @@ struct ModValue {
   const ast::Expr* expr = nullptr;
   Node* scope = nullptr;
   std::shared_ptr<const Iters> iters;
-  std::optional<Value> pre;
+  Boxed<Value> pre;
   Span span;
   bool is_final = false;
   bool from_set = false;  // came from --set on the command line
@@ -56,7 +88,7 @@ struct ModValue {
 
 // A merged modification tree (Modelica "modification environment").
 struct Mod {
-  std::optional<ModValue> value;
+  Boxed<ModValue> value;
   std::map<std::string, Mod> sub;
   std::vector<std::string> order;   // sub keys in the order written
   bool each = false;
@@ -86,7 +118,8 @@ struct Node {
   // kClass
   const ast::ClassDef* cls = nullptr;
   std::vector<std::unique_ptr<Node>> children;
-  std::unordered_map<std::string, Node*> by_name;
+  mutable std::unique_ptr<std::unordered_map<std::string, Node*>> by_name;  // index of `children`, built by
+                                                                           // Child() for large classes
   struct EqSource {
     const ast::Equation* eq;
     const ast::ClassDef* cls;  // for lookups
@@ -103,16 +136,28 @@ struct Node {
   std::vector<int> shape;
   int state = 0;  // 0 unevaluated, 1 evaluating, 2 done
   Value value;
-  std::optional<ModValue> eq_binding;            // from an equation `x = expr`
+  Boxed<ModValue> eq_binding;                    // from an equation `x = expr`
   std::map<int, ModValue> eq_elem_binding;       // from `x[k] = expr`
   bool is_final_decl = false;
 
   // kArray
   std::vector<std::unique_ptr<Node>> elems;
 
+  static constexpr size_t kScanChildren = 16;
   Node* Child(const std::string& n) const {
-    auto it = by_name.find(n);
-    return it == by_name.end() ? nullptr : it->second;
+    // Most classes have a handful of elements: a scan beats hashing. Large ones (a model
+    // with many declared components) get an index, so that lookups stay O(1).
+    if (children.size() <= kScanChildren) {
+      for (size_t i = children.size(); i-- > 0;)
+        if (children[i]->name == n) return children[i].get();
+      return nullptr;
+    }
+    if (!by_name || by_name->size() != children.size()) {
+      by_name = std::make_unique<std::unordered_map<std::string, Node*>>();
+      for (const auto& c : children) (*by_name)[c->name] = c.get();
+    }
+    auto it = by_name->find(n);
+    return it == by_name->end() ? nullptr : it->second;
   }
 };
 
@@ -186,6 +231,7 @@ class Elaborator {
   // --- instances (elab_instantiate.cpp) ---
   Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters);
   void MergeInto(Mod& outer, const Mod& inner, const std::string& what);  // outer wins
+  void MergeMods(Mod& outer, const Mod& inner, const std::string& what, std::vector<const std::string*>& keys);
   void Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from);
   void CollectEquations(Node* node);
   void ProcessEquations(Node* node);
