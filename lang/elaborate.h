@@ -17,7 +17,7 @@ namespace kanesim::lang {
 
 // Limits (stated in docs/language.md): exceeding one is a clean error, never a hang.
 inline constexpr long kMaxArraySize = 100000;        // elements in one array
-inline constexpr long kMaxInstances = 250000;        // scalar variables + components
+inline constexpr long kMaxInstances = 600000;        // scalar variables + components
 inline constexpr int kMaxExtendsDepth = 64;          // chain of extends / instantiation depth
 // Steps of one elaboration: values produced by evaluating expressions, loop iterations,
 // multiply-adds of matrix products (lang/elab_budget.h).
