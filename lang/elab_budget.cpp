@@ -1,6 +1,10 @@
 // The elaborator's bounds: the work budget and the nesting depth of evaluation.
 #include "lang/elab_budget.h"
 
+#include <pthread.h>
+
+#include <algorithm>
+
 #include "lang/elab_internal.h"
 
 namespace kanesim::lang::elab {
@@ -26,17 +30,44 @@ bool Elaborator::Charge(const Value& v, Span where) {
   return ChargeSteps(static_cast<std::int64_t>(v.e.size()) + 1, where);
 }
 
+// The native stack this thread has left below the caller's frame; 0 when unknown.
+static std::size_t StackLeft(const char* frame) {
+  pthread_attr_t attr;
+  if (pthread_getattr_np(pthread_self(), &attr) != 0) return 0;
+  void* low = nullptr;
+  std::size_t size = 0;
+  const bool ok = pthread_attr_getstack(&attr, &low, &size) == 0;
+  pthread_attr_destroy(&attr);
+  if (!ok || frame <= static_cast<const char*>(low)) return 0;
+  return static_cast<std::size_t>(frame - static_cast<const char*>(low));
+}
+
+StackGuard::StackGuard() : base_(static_cast<const char*>(__builtin_frame_address(0))) {
+  // Evaluation may use half of what is left (the rest is for what it calls: diagnostics,
+  // the allocator); 8 MB threads leave 4 MB, a sanitizer's larger frames reach it sooner.
+  const std::size_t left = StackLeft(base_);
+  budget_ = left > 0 ? left / 2 : std::size_t{1} << 20;
+}
+
+bool StackGuard::Exceeded() const {
+  const char* here = static_cast<const char*>(__builtin_frame_address(0));
+  return base_ > here && static_cast<std::size_t>(base_ - here) > budget_;
+}
+
 // Everything but operator chains recurses through here: sub-expressions (arguments,
 // array elements, subscripts, if-branches) and, through GetVar, the parameters a value
 // reads. The parser bounds the nesting of brackets; this bounds the sum of both.
 Value Elaborator::EvalNested(const ast::Expr& e, const Ctx& ctx) {
   if (budget_.Exhausted()) return Value::Invalid();
-  if (eval_depth_ >= kMaxEvalDepth) {
+  if (eval_depth_ >= kMaxEvalDepth || stack_.Exceeded()) {
     if (!depth_reported_) {
       depth_reported_ = true;
+      const std::string what = eval_depth_ >= kMaxEvalDepth
+                                   ? std::to_string(kMaxEvalDepth) + " levels"
+                                   : std::to_string(eval_depth_) + " levels, more than this thread's stack allows";
       diags_.Error(DiagCode::EvalTooDeep, e.span,
-                   "evaluation nested deeper than " + std::to_string(kMaxEvalDepth) +
-                       " levels (expressions inside expressions, or parameters defined by parameters)")
+                   "evaluation nested deeper than " + what +
+                       " (expressions inside expressions, or parameters defined by parameters)")
           .hint = "define long sequences as arrays (parameter Real x[n] = {...}) instead of one parameter per step";
     }
     return Value::Invalid();

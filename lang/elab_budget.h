@@ -7,6 +7,7 @@
 // limit, so that no combination of legal parts can run for hours or exhaust memory.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace kanesim::lang::elab {
@@ -26,6 +27,20 @@ class WorkBudget {
  private:
   std::int64_t limit_;
   std::int64_t used_ = 0;
+};
+
+// How much native stack the evaluation below the guard's creation has used, against a
+// budget of half the stack the thread has left there. kMaxEvalDepth bounds the nesting
+// the same way on every machine; this guard catches a smaller stack (a thread made with
+// a small one, a sanitizer's larger frames) before it overflows.
+class StackGuard {
+ public:
+  StackGuard();
+  bool Exceeded() const;
+
+ private:
+  const char* base_;
+  std::size_t budget_ = 0;
 };
 
 }  // namespace kanesim::lang::elab

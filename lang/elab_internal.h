@@ -281,6 +281,7 @@ class Elaborator {
   WorkBudget budget_{kMaxElabWork};
   bool budget_reported_ = false;
   int eval_depth_ = 0;  // EvalNested frames on the native stack
+  StackGuard stack_;    // made with the Elaborator: the base of its evaluation
   bool depth_reported_ = false;
   bool too_large_ = false;
   std::vector<const ast::ClassDef*> extends_stack_;

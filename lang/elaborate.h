@@ -24,8 +24,9 @@ inline constexpr int kMaxExtendsDepth = 64;          // chain of extends / insta
 inline constexpr long kMaxElabWork = 10000000;
 // Nested evaluation: sub-expressions inside brackets, calls and if-expressions, plus
 // parameters whose value reads another parameter. Operator chains (a + b + ...) do not
-// count: they are evaluated without recursion, at any length.
-inline constexpr int kMaxEvalDepth = 500;
+// count: they are evaluated without recursion, at any length. A thread with a small
+// stack stops earlier (at half of the stack it has left), with the same diagnostic.
+inline constexpr int kMaxEvalDepth = 1000;
 
 struct ParamOverride {
   std::string name;   // dotted: "N", "rod.L", "world.g" or "world.g[2]"
