@@ -30,16 +30,25 @@ bool Elaborator::Charge(const Value& v, Span where) {
   return ChargeSteps(static_cast<std::int64_t>(v.e.size()) + 1, where);
 }
 
-// The native stack this thread has left below the caller's frame; 0 when unknown.
+// The lowest address of this thread's stack; null when unknown. Asked once per thread
+// (for the main thread glibc reads /proc/self/maps to answer).
+static const char* StackLow() {
+  thread_local const char* low = [] {
+    pthread_attr_t attr;
+    if (pthread_getattr_np(pthread_self(), &attr) != 0) return static_cast<const char*>(nullptr);
+    void* addr = nullptr;
+    std::size_t size = 0;
+    const bool ok = pthread_attr_getstack(&attr, &addr, &size) == 0;
+    pthread_attr_destroy(&attr);
+    return ok ? static_cast<const char*>(addr) : nullptr;
+  }();
+  return low;
+}
+
+// The native stack this thread has left below `frame`; 0 when unknown.
 static std::size_t StackLeft(const char* frame) {
-  pthread_attr_t attr;
-  if (pthread_getattr_np(pthread_self(), &attr) != 0) return 0;
-  void* low = nullptr;
-  std::size_t size = 0;
-  const bool ok = pthread_attr_getstack(&attr, &low, &size) == 0;
-  pthread_attr_destroy(&attr);
-  if (!ok || frame <= static_cast<const char*>(low)) return 0;
-  return static_cast<std::size_t>(frame - static_cast<const char*>(low));
+  const char* low = StackLow();
+  return low && frame > low ? static_cast<std::size_t>(frame - low) : 0;
 }
 
 StackGuard::StackGuard() : base_(static_cast<const char*>(__builtin_frame_address(0))) {
