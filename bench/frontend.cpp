@@ -6,6 +6,7 @@
 // the steady cost is the best of `repeats` further loads.
 //   build/bench/frontend [N ...]            (default: 10 100 1000 10000)
 //   KANESIM_FRONTEND_REPEATS=5              (default: 5; 1 above N = 2000)
+//   KANESIM_FRONTEND_NOFORK=1               (in this process: for profilers; RSS is then shared)
 // Output: one row per model: ms for load+elaborate, compile, their sum (first load and
 // best steady load), microseconds per link, peak RSS in MB.
 #include <sys/resource.h>
@@ -83,6 +84,7 @@ int Measure(const std::string& label, const std::string& path, const std::vector
 int InChild(const std::string& label, const std::string& path, const std::vector<lang::ParamOverride>& sets, int links,
             int repeats) {
   std::fflush(stdout);
+  if (std::getenv("KANESIM_FRONTEND_NOFORK")) return Measure(label, path, sets, links, repeats);
   pid_t pid = fork();
   if (pid == 0) std::_Exit(Measure(label, path, sets, links, repeats));
   int status = 0;
