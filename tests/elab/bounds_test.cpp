@@ -18,6 +18,8 @@
 #include <sstream>
 
 #include "runtime/flat/param_eval.h"
+#include "runtime/program.h"
+#include "runtime/tape.h"
 #include "tests/elab/elab_text.h"
 
 namespace kanesim::lang::test {
@@ -181,6 +183,36 @@ TEST(Bounds, NestedEvaluationIsBounded) {
         EXPECT_TRUE(e->HasCode("E229")) << op << " depth " << depth << "\n" << e->errors.substr(0, 2000);
       }
     }
+  }
+}
+
+// If this fails, the compiler's walk of user expressions (folding, the register tape, the
+// text kept for messages) recurses per term or treats a shared graph as a tree: an output
+// that is a 20,000-term chain of a joint coordinate, and one that is an entry of the 30th
+// power of a time-dependent matrix, compiled and evaluated against closed forms.
+TEST(Bounds, CompiledExpressionsOfAnySize) {
+  const int n = 20000;
+  auto e = ElaborateText(
+      "model M\n  World world;\n  Revolute j(q(start = 0.5));\n  Rod rod;\n"
+      "  Real T[2, 2] = {{cos(time), sin(time)}, {-sin(time), cos(time)}};\n"
+      "  Real P[2, 2] = " + Chain("T", "*", 30) + ";\n"
+      "  output Real y = " + Chain("j.q", "+", n) + ";\n"
+      "  output Real z = P[1, 2];\n"
+      "equation\n  connect(world.frame_b, j.frame_a);\n  connect(j.frame_b, rod.frame_a);\nend M;\n");
+  ASSERT_TRUE(e->ok) << e->errors.substr(0, 2000);
+  rt::CompileResult r = rt::Compile(e->mech, rt::CompileOptions{});
+  ASSERT_TRUE(r.program) << (r.errors.empty() ? "" : r.errors[0].message);
+  const rt::Tape& tape = r.program->output_tape;
+  ASSERT_EQ(tape.roots.size(), 2u);
+  EXPECT_LE(tape.texts[0].size(), flat::ExprPool::kToStringChars + 16);
+  for (double t : {0.0, 0.3}) {
+    std::vector<double> regs = tape.init;
+    if (tape.time_reg >= 0) regs[static_cast<size_t>(tape.time_reg)] = t;
+    for (const auto& [ref, reg] : tape.state_regs) regs[static_cast<size_t>(reg)] = 0.5;  // j.q
+    tape.Eval(regs.data());
+    EXPECT_NEAR(regs[static_cast<size_t>(tape.roots[0])], 0.5 * n, 1e-9 * n);
+    // T(t) is a rotation by -t, so P = T^30 is a rotation by -30 t: P[1,2] = sin(30 t).
+    EXPECT_NEAR(regs[static_cast<size_t>(tape.roots[1])], std::sin(30 * t), 1e-12) << t;
   }
 }
 
