@@ -3,8 +3,6 @@
 
 #include <pthread.h>
 
-#include <algorithm>
-
 #include "lang/elab_internal.h"
 
 namespace kanesim::lang::elab {

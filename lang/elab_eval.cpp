@@ -27,13 +27,6 @@ size_t Value::Size() const {
   return n;
 }
 
-static std::string ShapeStr(const std::vector<int>& shape) {
-  if (shape.empty()) return "scalar";
-  std::string s = "[";
-  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
-
 Value Elaborator::Const(double x, VType t) {
   Value v;
   v.type = t;
@@ -117,11 +110,6 @@ std::vector<double> Elaborator::StructuralList(const Value& v, Span span, const 
 // ---------------------------------------------------------------------------------------
 // Elementwise helpers
 
-
-static VType Promote(VType a, VType b) {
-  if (a == VType::Integer && b == VType::Integer) return VType::Integer;
-  return VType::Real;
-}
 
 namespace {
 

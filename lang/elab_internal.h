@@ -23,6 +23,19 @@ using flat::ExprId;
 enum class VType { Real, Integer, Boolean, String };
 const char* VTypeName(VType t);
 
+// The type of an arithmetic result: Integer only when both operands are.
+inline VType Promote(VType a, VType b) {
+  return a == VType::Integer && b == VType::Integer ? VType::Integer : VType::Real;
+}
+
+// "scalar" or "[2, 3]", for messages.
+inline std::string ShapeStr(const std::vector<int>& shape) {
+  if (shape.empty()) return "scalar";
+  std::string s = "[";
+  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
+
 // A value: a (possibly empty-shaped = scalar) array of scalar expressions.
 struct Value {
   VType type = VType::Real;

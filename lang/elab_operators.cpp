@@ -10,19 +10,7 @@ using flat::Op;
 
 namespace {
 
-std::string ShapeStr(const std::vector<int>& shape) {
-  if (shape.empty()) return "scalar";
-  std::string s = "[";
-  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
-
 bool SameShape(const Value& a, const Value& b) { return a.shape == b.shape; }
-
-VType Promote(VType a, VType b) {
-  if (a == VType::Integer && b == VType::Integer) return VType::Integer;
-  return VType::Real;
-}
 
 bool IsOperator(const ast::Expr& e) { return e.kind == ast::ExprKind::Unary || e.kind == ast::ExprKind::Binary; }
 
