@@ -2,6 +2,9 @@
 #include "lang/elab_budget.h"
 
 #include <pthread.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include "lang/elab_internal.h"
 
@@ -28,9 +31,16 @@ bool Elaborator::Charge(const Value& v, Span where) {
   return ChargeSteps(static_cast<std::int64_t>(v.e.size()) + 1, where);
 }
 
-// The lowest address of this thread's stack; null when unknown. Asked once per thread
-// (for the main thread glibc reads /proc/self/maps to answer).
-static const char* StackLow() {
+// The native stack this thread has left below `frame`; 0 when unknown. The main thread's
+// stack is RLIMIT_STACK (8 MB unless changed) and `frame` sits near its top; another
+// thread's bounds come from pthread (asked once per thread: for the main thread glibc
+// would read /proc/self/maps to answer, which costs more than a small elaboration).
+static std::size_t StackLeft(const char* frame) {
+  if (getpid() == static_cast<pid_t>(syscall(SYS_gettid))) {
+    rlimit rl{};
+    if (getrlimit(RLIMIT_STACK, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY) return std::size_t{8} << 20;
+    return static_cast<std::size_t>(rl.rlim_cur);
+  }
   thread_local const char* low = [] {
     pthread_attr_t attr;
     if (pthread_getattr_np(pthread_self(), &attr) != 0) return static_cast<const char*>(nullptr);
@@ -40,12 +50,6 @@ static const char* StackLow() {
     pthread_attr_destroy(&attr);
     return ok ? static_cast<const char*>(addr) : nullptr;
   }();
-  return low;
-}
-
-// The native stack this thread has left below `frame`; 0 when unknown.
-static std::size_t StackLeft(const char* frame) {
-  const char* low = StackLow();
   return low && frame > low ? static_cast<std::size_t>(frame - low) : 0;
 }
 

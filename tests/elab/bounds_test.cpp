@@ -8,6 +8,7 @@
 // - nesting that recursion would follow is bounded (E229), never a stack overflow;
 // - a model over the instance limit is a diagnostic in bounded memory, never bad_alloc.
 #include <gtest/gtest.h>
+#include <pthread.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -214,6 +215,33 @@ TEST(Bounds, CompiledExpressionsOfAnySize) {
     // T(t) is a rotation by -t, so P = T^30 is a rotation by -30 t: P[1,2] = sin(30 t).
     EXPECT_NEAR(regs[static_cast<size_t>(tape.roots[1])], std::sin(30 * t), 1e-12) << t;
   }
+}
+
+// If this fails, the stack guard does not see a thread's own stack: parameters 1,000 deep
+// elaborated on a thread with a 1 MB stack (sweeps elaborate on worker threads) must stop
+// with E229, not overflow.
+TEST(Bounds, NestedEvaluationOnASmallThreadStack) {
+  std::string decls;
+  for (int i = kMaxEvalDepth; i >= 1; --i)
+    decls += "  parameter Real p" + std::to_string(i) + " = p" + std::to_string(i - 1) + " + 1;\n";
+  decls += "  parameter Real p0 = 1;";
+  struct Job {
+    std::string text;
+    bool has_e229 = false;
+  } job{ModelWith(decls)};
+  pthread_attr_t attr;
+  pthread_attr_init(&attr);
+  pthread_attr_setstacksize(&attr, std::size_t{1} << 20);
+  pthread_t thread;
+  auto run = [](void* arg) -> void* {
+    auto* j = static_cast<Job*>(arg);
+    j->has_e229 = ElaborateText(j->text)->HasCode("E229");
+    return nullptr;
+  };
+  ASSERT_EQ(pthread_create(&thread, &attr, run, &job), 0);
+  pthread_join(thread, nullptr);
+  pthread_attr_destroy(&attr);
+  EXPECT_TRUE(job.has_e229);
 }
 
 // Runs `body` in a child process whose address space is limited to `bytes`; returns the
