@@ -8,13 +8,15 @@
 //   KANESIM_FRONTEND_REPEATS=5              (default: 5; 1 above N = 2000)
 //   KANESIM_FRONTEND_NOFORK=1               (in this process: for profilers; RSS is then shared)
 // Output: one row per model: ms for load+elaborate, compile, their sum (first load and
-// best steady load), microseconds per link, peak RSS in MB.
+// best steady load), microseconds per link, peak RSS in MB. Times are the process's CPU
+// time (CLOCK_PROCESS_CPUTIME_ID; single-threaded work), steadier than wall time on a
+// shared machine.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -29,7 +31,12 @@
 namespace {
 
 using namespace kanesim;
-using Clock = std::chrono::steady_clock;
+// CPU seconds of this process.
+double CpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 struct Cost {
   double elaborate = 0;  // load + elaborate, seconds
@@ -38,7 +45,7 @@ struct Cost {
 
 // One load + elaborate + compile of `path` with `sets`; false on an error.
 bool LoadOnce(const std::string& path, const std::vector<lang::ParamOverride>& sets, Cost* cost) {
-  auto t0 = Clock::now();
+  const double t0 = CpuSeconds();
   lang::Program program;
   lang::Diagnostics diags(&program.sources);
   lang::ElaborateOptions eo;
@@ -48,15 +55,15 @@ bool LoadOnce(const std::string& path, const std::vector<lang::ParamOverride>& s
     std::cerr << diags.RenderAll().substr(0, 4000);
     return false;
   }
-  auto t1 = Clock::now();
+  const double t1 = CpuSeconds();
   rt::CompileResult r = rt::Compile(mech, rt::CompileOptions{});
-  auto t2 = Clock::now();
+  const double t2 = CpuSeconds();
   if (!r.program) {
     std::cerr << "compile failed\n";
     return false;
   }
-  cost->elaborate = std::chrono::duration<double>(t1 - t0).count();
-  cost->compile = std::chrono::duration<double>(t2 - t1).count();
+  cost->elaborate = t1 - t0;
+  cost->compile = t2 - t1;
   return true;
 }
 
