@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <new>
 
 #include "cli/common.h"
 
@@ -19,6 +20,12 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     int rc = app.exit(e);
     return rc == 0 ? kanesim::cli::kExitOk : kanesim::cli::kExitModelError;
+  } catch (const std::bad_alloc&) {
+    // A last resort: the front end's limits (docs/language.md) keep models within memory.
+    std::fprintf(stderr,
+                 "kanesim: error: out of memory\n"
+                 "  hint: a smaller model, or more memory; the limits are in docs/language.md\n");
+    return kanesim::cli::kExitModelError;
   }
   return exit_code;
 }

@@ -54,6 +54,8 @@ namespace kanesim::lang {
   X(BadImport, "E225", "import names nothing")                                                \
   X(ConflictingEquation, "E226", "conflicting equations")                                     \
   X(Circular, "E227", "circular definition")                                                  \
+  X(WorkLimit, "E228", "elaboration exceeds its work limit")                                  \
+  X(EvalTooDeep, "E229", "evaluation nested too deep")                                        \
   X(UnconnectedFrame, "W301", "frame connector is not connected")
 
 enum class DiagCode {

@@ -27,13 +27,6 @@ size_t Value::Size() const {
   return n;
 }
 
-static std::string ShapeStr(const std::vector<int>& shape) {
-  if (shape.empty()) return "scalar";
-  std::string s = "[";
-  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
-
 Value Elaborator::Const(double x, VType t) {
   Value v;
   v.type = t;
@@ -48,14 +41,19 @@ Value Elaborator::Scalar(ExprId e, VType t) {
   return v;
 }
 
-static void CollectParams(const flat::ExprPool& pool, ExprId id, std::vector<int>* out) {
-  if (id < 0) return;
+// Marks every parameter that `id` reads as structural. Nodes already walked are marked
+// in structural_seen_ and never walked again, so all calls together cost O(pool size).
+void Elaborator::MarkStructural(ExprId id) {
+  const auto& pool = m_->exprs;
+  if (structural_seen_.size() < pool.size()) structural_seen_.resize(pool.size(), 0);
   std::vector<ExprId> stack{id};
   while (!stack.empty()) {
     ExprId x = stack.back();
     stack.pop_back();
+    if (x < 0 || structural_seen_[static_cast<size_t>(x)]) continue;
+    structural_seen_[static_cast<size_t>(x)] = 1;
     const auto& n = pool[x];
-    if (n.op == Op::Param) out->push_back(n.index);
+    if (n.op == Op::Param) m_->params[static_cast<size_t>(n.index)].structural = true;
     for (ExprId c : {n.a, n.b, n.c})
       if (c >= 0) stack.push_back(c);
   }
@@ -74,10 +72,8 @@ bool Elaborator::Structural(const Value& v, Span span, double* out, const char* 
         .hint = "use parameters and constants only";
     return false;
   }
-  std::vector<int> ps;
-  CollectParams(m_->exprs, e, &ps);
-  for (int p : ps) m_->params[static_cast<size_t>(p)].structural = true;
-  *out = flat::EvalParamExpr(*m_, pvals_, e);
+  MarkStructural(e);
+  *out = param_eval_.Eval(e);
   if (!std::isfinite(*out)) {
     diags_.Error(DiagCode::BadValue, span, std::string(what) + " is not a finite number");
     return false;
@@ -114,12 +110,6 @@ std::vector<double> Elaborator::StructuralList(const Value& v, Span span, const 
 // ---------------------------------------------------------------------------------------
 // Elementwise helpers
 
-static bool SameShape(const Value& a, const Value& b) { return a.shape == b.shape; }
-
-static VType Promote(VType a, VType b) {
-  if (a == VType::Integer && b == VType::Integer) return VType::Integer;
-  return VType::Real;
-}
 
 namespace {
 
@@ -142,35 +132,15 @@ const char* kKnownFunctions[] = {"sin",   "cos",   "tan",      "asin",     "acos
 
 // ---------------------------------------------------------------------------------------
 
+// Operator chains (a + b + ... , - - x) are evaluated with an explicit stack by
+// EvalOperators (lang/elab_operators.cpp); every other kind recurses through EvalNested,
+// whose depth the parser's nesting limit and kMaxEvalDepth bound.
 Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
-  auto& pool = m_->exprs;
-  auto bad = [&]() { return Value::Invalid(); };
-  auto elementwise2 = [&](const Value& a, const Value& b, Op op, VType rt, Span sp) -> Value {
-    if (!a.valid || !b.valid) return bad();
-    if (a.type == VType::String || b.type == VType::String) {
-      diags_.Error(DiagCode::TypeMismatch, sp, std::string("operator '") + flat::OpSpelling(op) +
-                                                   "' is not defined for String");
-      return bad();
-    }
-    Value r;
-    r.type = rt;
-    if (a.shape.empty()) {
-      r.shape = b.shape;
-      for (ExprId y : b.e) r.e.push_back(pool.Binary(op, a.e[0], y));
-    } else if (b.shape.empty()) {
-      r.shape = a.shape;
-      for (ExprId x : a.e) r.e.push_back(pool.Binary(op, x, b.e[0]));
-    } else if (SameShape(a, b)) {
-      r.shape = a.shape;
-      for (size_t i = 0; i < a.e.size(); ++i) r.e.push_back(pool.Binary(op, a.e[i], b.e[i]));
-    } else {
-      diags_.Error(DiagCode::SizeMismatch, sp, "operands have sizes " + ShapeStr(a.shape) + " and " +
-                                                   ShapeStr(b.shape));
-      return bad();
-    }
-    return r;
-  };
+  if (e.kind == ast::ExprKind::Unary || e.kind == ast::ExprKind::Binary) return EvalOperators(e, ctx);
+  return EvalNested(e, ctx);
+}
 
+Value Elaborator::EvalNode(const ast::Expr& e, const Ctx& ctx) {
   switch (e.kind) {
     case ast::ExprKind::Number: return Const(e.number, e.is_integer ? VType::Integer : VType::Real);
     case ast::ExprKind::Bool: return Const(e.number, VType::Boolean);
@@ -186,491 +156,417 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
       [[fallthrough]];
     case ast::ExprKind::Colon:
       diags_.Error(DiagCode::ExpectedToken, e.span, "':' and 'end' are only allowed in subscripts");
-      return bad();
-    case ast::ExprKind::Ref: {
-      // Loop iterators shadow everything.
-      if (e.parts.size() == 1 && e.parts[0].subscripts.empty() && ctx.iters) {
-        auto it = ctx.iters->find(e.parts[0].name);
-        if (it != ctx.iters->end())
-          return Const(it->second, it->second == std::floor(it->second) ? VType::Integer : VType::Real);
-      }
-      Node* first = ctx.scope ? ctx.scope->Child(e.parts[0].name) : nullptr;
-      if (!first && e.parts.size() == 1 && e.parts[0].subscripts.empty()) {
-        if (e.parts[0].name == "time") return Scalar(pool.Time());
-        if (e.parts[0].name == "pi") return Const(M_PI);
-      }
-      // Walk the reference through the instance tree.
-      Node* n = first;
-      if (!n) {
-        std::vector<std::string> cands{"time", "pi"};
-        if (ctx.scope)
-          for (auto& c : ctx.scope->children) cands.push_back(c->decl ? c->decl->name : c->name);
-        if (ctx.iters)
-          for (auto& [k, v] : *ctx.iters) cands.push_back(k);
-        auto& d = diags_.Error(DiagCode::UnknownName, e.parts[0].span, "unknown name '" + e.parts[0].name + "'");
-        std::string best = ClosestName(e.parts[0].name, cands);
-        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-        return bad();
-      }
-      for (size_t pi = 0; pi < e.parts.size(); ++pi) {
-        const ast::RefPart& part = e.parts[pi];
-        if (pi > 0) {
-          // Frame connectors expose their motion: r (position), R (orientation),
-          // v (velocity), w (angular velocity), all resolved in the world.
-          if (n->kind == Node::kClass && n->prim == Prim::Frame &&
-              (part.name == "r" || part.name == "R" || part.name == "v" || part.name == "w")) {
-            Value v;
-            flat::StateKind kind = part.name == "r"   ? flat::StateKind::FramePosition
-                                   : part.name == "R" ? flat::StateKind::FrameRotation
-                                   : part.name == "v" ? flat::StateKind::FrameVelocity
-                                                      : flat::StateKind::FrameAngVel;
-            int count = part.name == "R" ? 9 : 3;
-            v.shape = part.name == "R" ? std::vector<int>{3, 3} : std::vector<int>{3};
-            for (int k = 0; k < count; ++k)
-              v.e.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
-            if (pi + 1 != e.parts.size()) {
-              diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + part.name + "' has no members");
-              return bad();
-            }
-            if (!part.subscripts.empty()) {
-              // Apply subscripts through the generic path below.
-              ast::Expr tmp;
-              (void)tmp;
-            }
-            // Subscripts on r/R/v/w
-            Value out = v;
-            if (!part.subscripts.empty()) {
-              std::vector<std::vector<int>> idx;
-              std::vector<bool> keep;
-              for (size_t d = 0; d < part.subscripts.size() && d < v.shape.size(); ++d) {
-                const ast::Expr& s = *part.subscripts[d];
-                std::vector<int> list;
-                if (s.kind == ast::ExprKind::Colon) {
-                  for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
-                  keep.push_back(true);
-                } else {
-                  long k = 0;
-                  if (!StructuralInt(Eval(s, ctx), s.span, &k, "a subscript")) return bad();
-                  if (k < 1 || k > v.shape[d]) {
-                    diags_.Error(DiagCode::IndexOutOfRange, s.span,
-                                 "index " + std::to_string(k) + " is out of range 1.." + std::to_string(v.shape[d]));
-                    return bad();
-                  }
-                  list.push_back(static_cast<int>(k - 1));
-                  keep.push_back(false);
-                }
-                idx.push_back(list);
-              }
-              if (part.subscripts.size() > v.shape.size()) {
-                diags_.Error(DiagCode::IndexOutOfRange, part.span, "too many subscripts");
-                return bad();
-              }
-              out = Value{};
-              out.type = VType::Real;
-              if (v.shape.size() == 1) {
-                for (int i : idx[0]) out.e.push_back(v.e[static_cast<size_t>(i)]);
-                if (keep[0]) out.shape = {static_cast<int>(idx[0].size())};
-              } else {
-                std::vector<int> cols;
-                if (idx.size() > 1) cols = idx[1];
-                else for (int k = 0; k < 3; ++k) cols.push_back(k);
-                bool keepc = idx.size() > 1 ? keep[1] : true;
-                for (int i : idx[0])
-                  for (int j : cols) out.e.push_back(v.e[static_cast<size_t>(i * 3 + j)]);
-                if (keep[0]) out.shape.push_back(static_cast<int>(idx[0].size()));
-                if (keepc) out.shape.push_back(static_cast<int>(cols.size()));
-              }
-            }
-            return out;
-          }
-          if (n->kind != Node::kClass) {
-            diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
-            return bad();
-          }
-          Node* c = n->Child(part.name);
-          if (!c) {
-            std::vector<std::string> cands;
-            for (auto& ch : n->children) cands.push_back(ch->decl ? ch->decl->name : ch->name);
-            if (n->prim == Prim::Frame) cands.insert(cands.end(), {"r", "R", "v", "w"});
-            auto& d = diags_.Error(DiagCode::UnknownName, part.span,
-                                   "'" + n->path + "' has no member '" + part.name + "'");
-            std::string best = ClosestName(part.name, cands);
-            if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-            return bad();
-          }
-          n = c;
-        }
-        if (!n->enabled) {
-          diags_.Error(DiagCode::UnknownName, part.span,
-                       "'" + n->path + "' is disabled by its condition and cannot be used");
-          return bad();
-        }
-        if (n->kind == Node::kArray) {
-          if (part.subscripts.size() != 1) {
-            diags_.Error(DiagCode::TypeMismatch, part.span,
-                         "'" + n->path + "' is an array of components; index it with one subscript");
-            return bad();
-          }
-          long k = 0;
-          end_stack_.push_back(static_cast<int>(n->elems.size()));
-          Value kv = Eval(*part.subscripts[0], ctx);
-          end_stack_.pop_back();
-          if (!StructuralInt(kv, part.subscripts[0]->span, &k, "a subscript")) return bad();
-          if (k < 1 || k > static_cast<long>(n->elems.size())) {
-            diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
-                         "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
-                             " of '" + n->path + "'");
-            return bad();
-          }
-          n = n->elems[static_cast<size_t>(k - 1)].get();
-          continue;
-        }
-        if (n->kind == Node::kVar) {
-          Value v = GetVar(n, part.span);
-          if (!v.valid) return v;
-          if (pi + 1 != e.parts.size()) {
-            diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span,
-                         "'" + n->path + "' is a variable and has no members");
-            return bad();
-          }
-          if (part.subscripts.empty()) return v;
-          // Generic subscripting of a value.
-          std::vector<std::vector<int>> idx;
-          std::vector<bool> keep;
-          if (part.subscripts.size() > v.shape.size()) {
-            diags_.Error(DiagCode::IndexOutOfRange, part.span,
-                         "'" + n->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
-            return bad();
-          }
-          for (size_t d = 0; d < v.shape.size(); ++d) {
-            std::vector<int> list;
-            bool kp = true;
-            if (d < part.subscripts.size() && part.subscripts[d]->kind != ast::ExprKind::Colon) {
-              const ast::Expr& s = *part.subscripts[d];
-              if (s.kind == ast::ExprKind::End) {
-                list.push_back(v.shape[d] - 1);
-                kp = false;
-              } else {
-                end_stack_.push_back(v.shape[d]);
-                Value sv = Eval(s, ctx);
-                end_stack_.pop_back();
-                if (!sv.valid) return bad();
-                std::vector<double> ks = StructuralList(sv, s.span, "a subscript");
-                if (ks.empty()) return bad();
-                kp = !sv.shape.empty();
-                for (double kd : ks) {
-                  long k = static_cast<long>(kd);
-                  if (kd != std::floor(kd) || k < 1 || k > v.shape[d]) {
-                    diags_.Error(DiagCode::IndexOutOfRange, s.span,
-                                 "index " + std::to_string(kd) + " is out of range 1.." + std::to_string(v.shape[d]) +
-                                     " of '" + n->path + "'");
-                    return bad();
-                  }
-                  list.push_back(static_cast<int>(k - 1));
-                }
-              }
-            } else {
-              for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
-            }
-            idx.push_back(list);
-            keep.push_back(kp);
-          }
-          Value r;
-          r.type = v.type;
-          for (size_t d = 0; d < idx.size(); ++d)
-            if (keep[d]) r.shape.push_back(static_cast<int>(idx[d].size()));
-          // Iterate over the cartesian product.
-          std::vector<size_t> strides(v.shape.size(), 1);
-          for (size_t d = v.shape.size(); d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
-          std::function<void(size_t, size_t)> rec = [&](size_t d, size_t off) {
-            if (d == idx.size()) {
-              r.e.push_back(v.e[off]);
-              if (v.type == VType::String) r.s.push_back(v.s[off]);
-              return;
-            }
-            for (int k : idx[d]) rec(d + 1, off + static_cast<size_t>(k) * strides[d]);
-          };
-          rec(0, 0);
-          return r;
+      return Value::Invalid();
+    case ast::ExprKind::Ref: return EvalRef(e, ctx);
+    case ast::ExprKind::Array: return EvalArray(e, ctx);
+    case ast::ExprKind::Comprehension: return EvalComprehension(e, ctx);
+    case ast::ExprKind::Matrix: return EvalMatrix(e, ctx);
+    case ast::ExprKind::Range: return EvalRange(e, ctx);
+    case ast::ExprKind::If: return EvalIf(e, ctx);
+    case ast::ExprKind::Call: return EvalCall(e, ctx);
+    case ast::ExprKind::Unary:
+    case ast::ExprKind::Binary: return EvalOperators(e, ctx);
+  }
+  return Value::Invalid();
+}
+
+Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
+  auto& pool = m_->exprs;
+  // Loop iterators shadow everything.
+  if (e.parts.size() == 1 && e.parts[0].subscripts.empty() && ctx.iters) {
+    auto it = ctx.iters->find(e.parts[0].name);
+    if (it != ctx.iters->end())
+      return Const(it->second, it->second == std::floor(it->second) ? VType::Integer : VType::Real);
+  }
+  Node* first = ctx.scope ? ctx.scope->Child(e.parts[0].name) : nullptr;
+  if (!first && e.parts.size() == 1 && e.parts[0].subscripts.empty()) {
+    if (e.parts[0].name == "time") return Scalar(pool.Time());
+    if (e.parts[0].name == "pi") return Const(M_PI);
+  }
+  // Walk the reference through the instance tree.
+  Node* n = first;
+  if (!n) {
+    std::vector<std::string> cands{"time", "pi"};
+    if (ctx.scope)
+      for (auto& c : ctx.scope->children) cands.push_back(c->decl ? c->decl->name : c->name);
+    if (ctx.iters)
+      for (auto& [k, v] : *ctx.iters) cands.push_back(k);
+    auto& d = diags_.Error(DiagCode::UnknownName, e.parts[0].span, "unknown name '" + e.parts[0].name + "'");
+    std::string best = ClosestName(e.parts[0].name, cands);
+    if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+    return Value::Invalid();
+  }
+  for (size_t pi = 0; pi < e.parts.size(); ++pi) {
+    const ast::RefPart& part = e.parts[pi];
+    if (pi > 0) {
+      // Frame connectors expose their motion: r (position), R (orientation),
+      // v (velocity), w (angular velocity), all resolved in the world.
+      if (n->kind == Node::kClass && n->prim == Prim::Frame &&
+          (part.name == "r" || part.name == "R" || part.name == "v" || part.name == "w")) {
+        Value v;
+        flat::StateKind kind = part.name == "r"   ? flat::StateKind::FramePosition
+                               : part.name == "R" ? flat::StateKind::FrameRotation
+                               : part.name == "v" ? flat::StateKind::FrameVelocity
+                                                  : flat::StateKind::FrameAngVel;
+        int count = part.name == "R" ? 9 : 3;
+        v.shape = part.name == "R" ? std::vector<int>{3, 3} : std::vector<int>{3};
+        for (int k = 0; k < count; ++k)
+          v.e.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
+        if (pi + 1 != e.parts.size()) {
+          diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + part.name + "' has no members");
+          return Value::Invalid();
         }
         if (!part.subscripts.empty()) {
-          diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
-          return bad();
+          // Apply subscripts through the generic path below.
+          ast::Expr tmp;
+          (void)tmp;
         }
-      }
-      diags_.Error(DiagCode::TypeMismatch, e.span,
-                   "'" + n->path + "' is a component, not a value")
-          .hint = "components are used in connect(); their parameters and variables are values";
-      return bad();
-    }
-    case ast::ExprKind::Array: {
-      Value r;
-      r.type = VType::Integer;
-      bool first = true;
-      std::vector<int> elem_shape;
-      for (const auto& a : e.args) {
-        Value v = Eval(*a, ctx);
-        if (!v.valid) return bad();
-        if (first) {
-          elem_shape = v.shape;
-          r.type = v.type;
-          first = false;
-        } else {
-          if (v.shape != elem_shape) {
-            diags_.Error(DiagCode::SizeMismatch, a->span, "array elements have different sizes (" +
-                                                              ShapeStr(elem_shape) + " and " + ShapeStr(v.shape) + ")");
-            return bad();
-          }
-          if ((r.type == VType::String) != (v.type == VType::String) ||
-              (r.type == VType::Boolean) != (v.type == VType::Boolean)) {
-            diags_.Error(DiagCode::TypeMismatch, a->span, "array elements have different types");
-            return bad();
-          }
-          r.type = r.type == VType::String || r.type == VType::Boolean ? r.type : Promote(r.type, v.type);
-        }
-        r.e.insert(r.e.end(), v.e.begin(), v.e.end());
-        r.s.insert(r.s.end(), v.s.begin(), v.s.end());
-      }
-      if (e.args.empty()) r.type = VType::Real;
-      r.shape.push_back(static_cast<int>(e.args.size()));
-      r.shape.insert(r.shape.end(), elem_shape.begin(), elem_shape.end());
-      if (r.Size() > static_cast<size_t>(kMaxArraySize)) {
-        diags_.Error(DiagCode::ArrayTooLarge, e.span, "array too large");
-        return bad();
-      }
-      return r;
-    }
-    case ast::ExprKind::Comprehension: {
-      Value range = Eval(*e.args[1], ctx);
-      if (!range.valid) return bad();
-      if (range.Size() > static_cast<size_t>(kMaxArraySize)) {
-        diags_.Error(DiagCode::ArrayTooLarge, e.args[1]->span,
-                     "range has " + std::to_string(range.Size()) + " elements; the limit is " +
-                         std::to_string(kMaxArraySize));
-        return bad();
-      }
-      std::vector<double> xs = StructuralList(range, e.args[1]->span, "the iteration range");
-      Iters local = ctx.iters ? *ctx.iters : Iters{};
-      Value r;
-      r.type = VType::Integer;
-      std::vector<int> elem_shape;
-      for (size_t i = 0; i < xs.size(); ++i) {
-        local[e.text] = xs[i];
-        Ctx c2{ctx.scope, &local};
-        Value v = Eval(*e.args[0], c2);
-        if (!v.valid) return bad();
-        if (i == 0) {
-          elem_shape = v.shape;
-          r.type = v.type;
-        } else if (v.shape != elem_shape) {
-          diags_.Error(DiagCode::SizeMismatch, e.args[0]->span, "comprehension elements have different sizes");
-          return bad();
-        } else if (r.type != VType::String && r.type != VType::Boolean) {
-          r.type = Promote(r.type, v.type);
-        }
-        r.e.insert(r.e.end(), v.e.begin(), v.e.end());
-        r.s.insert(r.s.end(), v.s.begin(), v.s.end());
-      }
-      if (xs.empty()) r.type = VType::Real;
-      r.shape.push_back(static_cast<int>(xs.size()));
-      r.shape.insert(r.shape.end(), elem_shape.begin(), elem_shape.end());
-      return r;
-    }
-    case ast::ExprKind::Matrix: {
-      Value r;
-      r.type = VType::Integer;
-      size_t cols = 0;
-      for (size_t ri = 0; ri < e.rows.size(); ++ri) {
-        const auto& row = e.rows[ri];
-        if (ri == 0) cols = row.size();
-        if (row.size() != cols) {
-          diags_.Error(DiagCode::SizeMismatch, e.span, "matrix rows have different lengths");
-          return bad();
-        }
-        for (const auto& x : row) {
-          Value v = Eval(*x, ctx);
-          if (!v.valid) return bad();
-          if (!v.shape.empty() || v.type == VType::String) {
-            diags_.Error(DiagCode::SizeMismatch, x->span, "matrix entries must be scalars");
-            return bad();
-          }
-          r.type = Promote(r.type, v.type);
-          r.e.push_back(v.e[0]);
-        }
-      }
-      r.shape = {static_cast<int>(e.rows.size()), static_cast<int>(cols)};
-      return r;
-    }
-    case ast::ExprKind::Range: {
-      std::vector<double> xs;
-      double a = 0, b = 0, step = 1;
-      Value va = Eval(*e.args[0], ctx);
-      if (!Structural(va, e.args[0]->span, &a, "a range bound")) return bad();
-      if (e.args.size() == 3) {
-        if (!Structural(Eval(*e.args[1], ctx), e.args[1]->span, &step, "a range step")) return bad();
-        if (!Structural(Eval(*e.args[2], ctx), e.args[2]->span, &b, "a range bound")) return bad();
-      } else {
-        if (!Structural(Eval(*e.args[1], ctx), e.args[1]->span, &b, "a range bound")) return bad();
-      }
-      if (step == 0) {
-        diags_.Error(DiagCode::BadValue, e.span, "range step is zero");
-        return bad();
-      }
-      double count = std::floor((b - a) / step + 1e-10) + 1;
-      if (count > static_cast<double>(kMaxArraySize)) {
-        diags_.Error(DiagCode::ArrayTooLarge, e.span,
-                     "range has " + std::to_string(static_cast<long long>(count)) + " elements; the limit is " +
-                         std::to_string(kMaxArraySize));
-        return bad();
-      }
-      bool integer = a == std::floor(a) && step == std::floor(step);
-      Value r;
-      r.type = integer ? VType::Integer : VType::Real;
-      long n = count > 0 ? static_cast<long>(count) : 0;
-      for (long i = 0; i < n; ++i) r.e.push_back(pool.Constant(a + static_cast<double>(i) * step));
-      r.shape = {static_cast<int>(n)};
-      return r;
-    }
-    case ast::ExprKind::Unary: {
-      Value v = Eval(*e.args[0], ctx);
-      if (!v.valid) return bad();
-      Tok op = static_cast<Tok>(e.op);
-      if (op == Tok::Plus) return v;
-      if (v.type == VType::String) {
-        diags_.Error(DiagCode::TypeMismatch, e.span, "unary operator on a String");
-        return bad();
-      }
-      if (op == Tok::KwNot && v.type != VType::Boolean) {
-        diags_.Error(DiagCode::TypeMismatch, e.span, "'not' needs a Boolean, got " + std::string(VTypeName(v.type)));
-        return bad();
-      }
-      for (auto& x : v.e) x = pool.Unary(op == Tok::KwNot ? Op::Not : Op::Neg, x);
-      return v;
-    }
-    case ast::ExprKind::Binary: {
-      Value a = Eval(*e.args[0], ctx);
-      Value b = Eval(*e.args[1], ctx);
-      if (!a.valid || !b.valid) return bad();
-      Tok op = static_cast<Tok>(e.op);
-      switch (op) {
-        case Tok::Plus:
-        case Tok::Minus:
-          if (!a.shape.empty() != !b.shape.empty() && !(a.shape.empty() && b.shape.empty())) {
-            diags_.Error(DiagCode::SizeMismatch, e.span,
-                         std::string("'") + TokSpelling(op) + "' needs operands of equal size, got " +
-                             ShapeStr(a.shape) + " and " + ShapeStr(b.shape));
-            return bad();
-          }
-          return elementwise2(a, b, op == Tok::Plus ? Op::Add : Op::Sub, Promote(a.type, b.type), e.span);
-        case Tok::Star: {
-          if (a.shape.empty() || b.shape.empty())
-            return elementwise2(a, b, Op::Mul, Promote(a.type, b.type), e.span);
-          // Matrix products (Modelica semantics): vector*vector = scalar product.
-          auto dotp = [&](const std::vector<ExprId>& x, const std::vector<ExprId>& y) {
-            ExprId s = pool.Binary(Op::Mul, x[0], y[0]);
-            for (size_t i = 1; i < x.size(); ++i) s = pool.Binary(Op::Add, s, pool.Binary(Op::Mul, x[i], y[i]));
-            return s;
-          };
-          int ar = a.shape.size() == 2 ? a.shape[0] : 1, ac = a.shape.back();
-          int br = b.shape[0], bc = b.shape.size() == 2 ? b.shape[1] : 1;
-          if (a.shape.size() > 2 || b.shape.size() > 2 || ac != br) {
-            diags_.Error(DiagCode::SizeMismatch, e.span,
-                         "cannot multiply sizes " + ShapeStr(a.shape) + " and " + ShapeStr(b.shape));
-            return bad();
-          }
-          Value r;
-          r.type = Promote(a.type, b.type);
-          for (int i = 0; i < ar; ++i)
-            for (int j = 0; j < bc; ++j) {
-              std::vector<ExprId> x, y;
-              for (int k = 0; k < ac; ++k) {
-                x.push_back(a.e[static_cast<size_t>(i * ac + k)]);
-                y.push_back(b.e[static_cast<size_t>(k * bc + j)]);
+        // Subscripts on r/R/v/w
+        Value out = v;
+        if (!part.subscripts.empty()) {
+          std::vector<std::vector<int>> idx;
+          std::vector<bool> keep;
+          for (size_t d = 0; d < part.subscripts.size() && d < v.shape.size(); ++d) {
+            const ast::Expr& s = *part.subscripts[d];
+            std::vector<int> list;
+            if (s.kind == ast::ExprKind::Colon) {
+              for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
+              keep.push_back(true);
+            } else {
+              long k = 0;
+              if (!StructuralInt(Eval(s, ctx), s.span, &k, "a subscript")) return Value::Invalid();
+              if (k < 1 || k > v.shape[d]) {
+                diags_.Error(DiagCode::IndexOutOfRange, s.span,
+                             "index " + std::to_string(k) + " is out of range 1.." + std::to_string(v.shape[d]));
+                return Value::Invalid();
               }
-              r.e.push_back(dotp(x, y));
+              list.push_back(static_cast<int>(k - 1));
+              keep.push_back(false);
             }
-          if (a.shape.size() == 2) r.shape.push_back(ar);
-          if (b.shape.size() == 2) r.shape.push_back(bc);
-          return r;
+            idx.push_back(list);
+          }
+          if (part.subscripts.size() > v.shape.size()) {
+            diags_.Error(DiagCode::IndexOutOfRange, part.span, "too many subscripts");
+            return Value::Invalid();
+          }
+          out = Value{};
+          out.type = VType::Real;
+          if (v.shape.size() == 1) {
+            for (int i : idx[0]) out.e.push_back(v.e[static_cast<size_t>(i)]);
+            if (keep[0]) out.shape = {static_cast<int>(idx[0].size())};
+          } else {
+            std::vector<int> cols;
+            if (idx.size() > 1) cols = idx[1];
+            else for (int k = 0; k < 3; ++k) cols.push_back(k);
+            bool keepc = idx.size() > 1 ? keep[1] : true;
+            for (int i : idx[0])
+              for (int j : cols) out.e.push_back(v.e[static_cast<size_t>(i * 3 + j)]);
+            if (keep[0]) out.shape.push_back(static_cast<int>(idx[0].size()));
+            if (keepc) out.shape.push_back(static_cast<int>(cols.size()));
+          }
         }
-        case Tok::Slash:
-          if (!b.shape.empty()) {
-            diags_.Error(DiagCode::SizeMismatch, e.span, "division by an array");
-            return bad();
-          }
-          return elementwise2(a, b, Op::Div, VType::Real, e.span);
-        case Tok::Caret:
-          if (!a.shape.empty() || !b.shape.empty()) {
-            diags_.Error(DiagCode::SizeMismatch, e.span, "'^' needs scalar operands");
-            return bad();
-          }
-          return elementwise2(a, b, Op::Pow, VType::Real, e.span);
-        case Tok::KwAnd:
-        case Tok::KwOr:
-          if (a.type != VType::Boolean || b.type != VType::Boolean) {
-            diags_.Error(DiagCode::TypeMismatch, e.span,
-                         std::string("'") + TokSpelling(op) + "' needs Boolean operands");
-            return bad();
-          }
-          return elementwise2(a, b, op == Tok::KwAnd ? Op::And : Op::Or, VType::Boolean, e.span);
-        default: {
-          if (!a.shape.empty() || !b.shape.empty()) {
-            diags_.Error(DiagCode::SizeMismatch, e.span, "comparison of arrays");
-            return bad();
-          }
-          if (a.type == VType::String && b.type == VType::String) {
-            if (op != Tok::EqEq && op != Tok::Ne) {
-              diags_.Error(DiagCode::TypeMismatch, e.span, "Strings compare only with == and <>");
-              return bad();
+        return out;
+      }
+      if (n->kind != Node::kClass) {
+        diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
+        return Value::Invalid();
+      }
+      Node* c = n->Child(part.name);
+      if (!c) {
+        std::vector<std::string> cands;
+        for (auto& ch : n->children) cands.push_back(ch->decl ? ch->decl->name : ch->name);
+        if (n->prim == Prim::Frame) cands.insert(cands.end(), {"r", "R", "v", "w"});
+        auto& d = diags_.Error(DiagCode::UnknownName, part.span,
+                               "'" + n->path + "' has no member '" + part.name + "'");
+        std::string best = ClosestName(part.name, cands);
+        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+        return Value::Invalid();
+      }
+      n = c;
+    }
+    if (!n->enabled) {
+      diags_.Error(DiagCode::UnknownName, part.span,
+                   "'" + n->path + "' is disabled by its condition and cannot be used");
+      return Value::Invalid();
+    }
+    if (n->kind == Node::kArray) {
+      if (part.subscripts.size() != 1) {
+        diags_.Error(DiagCode::TypeMismatch, part.span,
+                     "'" + n->path + "' is an array of components; index it with one subscript");
+        return Value::Invalid();
+      }
+      long k = 0;
+      end_stack_.push_back(static_cast<int>(n->elems.size()));
+      Value kv = Eval(*part.subscripts[0], ctx);
+      end_stack_.pop_back();
+      if (!StructuralInt(kv, part.subscripts[0]->span, &k, "a subscript")) return Value::Invalid();
+      if (k < 1 || k > static_cast<long>(n->elems.size())) {
+        diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
+                     "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
+                         " of '" + n->path + "'");
+        return Value::Invalid();
+      }
+      n = n->elems[static_cast<size_t>(k - 1)].get();
+      continue;
+    }
+    if (n->kind == Node::kVar) {
+      Value v = GetVar(n, part.span);
+      if (!v.valid) return v;
+      if (pi + 1 != e.parts.size()) {
+        diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span,
+                     "'" + n->path + "' is a variable and has no members");
+        return Value::Invalid();
+      }
+      if (part.subscripts.empty()) return v;
+      // Generic subscripting of a value.
+      std::vector<std::vector<int>> idx;
+      std::vector<bool> keep;
+      if (part.subscripts.size() > v.shape.size()) {
+        diags_.Error(DiagCode::IndexOutOfRange, part.span,
+                     "'" + n->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
+        return Value::Invalid();
+      }
+      for (size_t d = 0; d < v.shape.size(); ++d) {
+        std::vector<int> list;
+        bool kp = true;
+        if (d < part.subscripts.size() && part.subscripts[d]->kind != ast::ExprKind::Colon) {
+          const ast::Expr& s = *part.subscripts[d];
+          if (s.kind == ast::ExprKind::End) {
+            list.push_back(v.shape[d] - 1);
+            kp = false;
+          } else {
+            end_stack_.push_back(v.shape[d]);
+            Value sv = Eval(s, ctx);
+            end_stack_.pop_back();
+            if (!sv.valid) return Value::Invalid();
+            std::vector<double> ks = StructuralList(sv, s.span, "a subscript");
+            if (ks.empty()) return Value::Invalid();
+            kp = !sv.shape.empty();
+            for (double kd : ks) {
+              long k = static_cast<long>(kd);
+              if (kd != std::floor(kd) || k < 1 || k > v.shape[d]) {
+                diags_.Error(DiagCode::IndexOutOfRange, s.span,
+                             "index " + std::to_string(kd) + " is out of range 1.." + std::to_string(v.shape[d]) +
+                                 " of '" + n->path + "'");
+                return Value::Invalid();
+              }
+              list.push_back(static_cast<int>(k - 1));
             }
-            bool eq = a.s[0] == b.s[0];
-            return Const((op == Tok::EqEq) == eq ? 1 : 0, VType::Boolean);
           }
-          Op fop = op == Tok::Lt ? Op::Lt : op == Tok::Le ? Op::Le : op == Tok::Gt ? Op::Gt
-                   : op == Tok::Ge ? Op::Ge : op == Tok::EqEq ? Op::Eq : Op::Ne;
-          return elementwise2(a, b, fop, VType::Boolean, e.span);
+        } else {
+          for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
         }
+        idx.push_back(list);
+        keep.push_back(kp);
       }
+      Value r;
+      r.type = v.type;
+      for (size_t d = 0; d < idx.size(); ++d)
+        if (keep[d]) r.shape.push_back(static_cast<int>(idx[d].size()));
+      // Iterate over the cartesian product.
+      std::vector<size_t> strides(v.shape.size(), 1);
+      for (size_t d = v.shape.size(); d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
+      std::function<void(size_t, size_t)> rec = [&](size_t d, size_t off) {
+        if (d == idx.size()) {
+          r.e.push_back(v.e[off]);
+          if (v.type == VType::String) r.s.push_back(v.s[off]);
+          return;
+        }
+        for (int k : idx[d]) rec(d + 1, off + static_cast<size_t>(k) * strides[d]);
+      };
+      rec(0, 0);
+      return r;
     }
-    case ast::ExprKind::If: {
-      // Evaluate from the last else backwards, building IfElse nodes.
-      Value acc = Eval(*e.args.back(), ctx);
-      if (!acc.valid) return bad();
-      for (size_t i = e.args.size() - 1; i >= 2; i -= 2) {
-        const ast::Expr& ce = *e.args[i - 2];
-        Value c = Eval(ce, ctx);
-        Value t = Eval(*e.args[i - 1], ctx);
-        if (!c.valid || !t.valid) return bad();
-        if (c.type != VType::Boolean || !c.shape.empty()) {
-          diags_.Error(DiagCode::TypeMismatch, ce.span, "the condition must be a scalar Boolean");
-          return bad();
-        }
-        if (t.shape != acc.shape || (t.type == VType::String) != (acc.type == VType::String)) {
-          // Branches of different sizes: the condition decides structure.
-          double cv = 0;
-          if (!Structural(c, ce.span, &cv, "the condition of an if-expression with branches of different sizes"))
-            return bad();
-          if (cv != 0) acc = t;
-          continue;
-        }
-        if (t.type == VType::String) {
-          double cv = 0;
-          if (!Structural(c, ce.span, &cv, "the condition choosing a String")) return bad();
-          if (cv != 0) acc = t;
-          continue;
-        }
-        Value r;
-        r.type = (t.type == VType::Boolean && acc.type == VType::Boolean) ? VType::Boolean : Promote(t.type, acc.type);
-        r.shape = t.shape;
-        for (size_t k = 0; k < t.e.size(); ++k) r.e.push_back(pool.IfElse(c.e[0], t.e[k], acc.e[k]));
-        acc = r;
-      }
-      return acc;
+    if (!part.subscripts.empty()) {
+      diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
+      return Value::Invalid();
     }
-    case ast::ExprKind::Call: break;
   }
+  diags_.Error(DiagCode::TypeMismatch, e.span,
+               "'" + n->path + "' is a component, not a value")
+      .hint = "components are used in connect(); their parameters and variables are values";
+  return Value::Invalid();
+}
 
-  // ---- function calls ----
+Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
+  Value r;
+  r.type = VType::Integer;
+  bool first = true;
+  std::vector<int> elem_shape;
+  for (const auto& a : e.args) {
+    Value v = Eval(*a, ctx);
+    if (!v.valid) return Value::Invalid();
+    if (first) {
+      elem_shape = v.shape;
+      r.type = v.type;
+      first = false;
+    } else {
+      if (v.shape != elem_shape) {
+        diags_.Error(DiagCode::SizeMismatch, a->span, "array elements have different sizes (" +
+                                                          ShapeStr(elem_shape) + " and " + ShapeStr(v.shape) + ")");
+        return Value::Invalid();
+      }
+      if ((r.type == VType::String) != (v.type == VType::String) ||
+          (r.type == VType::Boolean) != (v.type == VType::Boolean)) {
+        diags_.Error(DiagCode::TypeMismatch, a->span, "array elements have different types");
+        return Value::Invalid();
+      }
+      r.type = r.type == VType::String || r.type == VType::Boolean ? r.type : Promote(r.type, v.type);
+    }
+    r.e.insert(r.e.end(), v.e.begin(), v.e.end());
+    r.s.insert(r.s.end(), v.s.begin(), v.s.end());
+  }
+  if (e.args.empty()) r.type = VType::Real;
+  r.shape.push_back(static_cast<int>(e.args.size()));
+  r.shape.insert(r.shape.end(), elem_shape.begin(), elem_shape.end());
+  if (r.Size() > static_cast<size_t>(kMaxArraySize)) {
+    diags_.Error(DiagCode::ArrayTooLarge, e.span, "array too large");
+    return Value::Invalid();
+  }
+  return r;
+}
+
+Value Elaborator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
+  Value range = Eval(*e.args[1], ctx);
+  if (!range.valid) return Value::Invalid();
+  if (range.Size() > static_cast<size_t>(kMaxArraySize)) {
+    diags_.Error(DiagCode::ArrayTooLarge, e.args[1]->span,
+                 "range has " + std::to_string(range.Size()) + " elements; the limit is " +
+                     std::to_string(kMaxArraySize));
+    return Value::Invalid();
+  }
+  std::vector<double> xs = StructuralList(range, e.args[1]->span, "the iteration range");
+  Iters local = ctx.iters ? *ctx.iters : Iters{};
+  Value r;
+  r.type = VType::Integer;
+  std::vector<int> elem_shape;
+  for (size_t i = 0; i < xs.size(); ++i) {
+    if (!ChargeSteps(1, e.span)) return Value::Invalid();
+    local[e.text] = xs[i];
+    Ctx c2{ctx.scope, &local};
+    Value v = Eval(*e.args[0], c2);
+    if (!v.valid) return Value::Invalid();
+    if (i == 0) {
+      elem_shape = v.shape;
+      r.type = v.type;
+    } else if (v.shape != elem_shape) {
+      diags_.Error(DiagCode::SizeMismatch, e.args[0]->span, "comprehension elements have different sizes");
+      return Value::Invalid();
+    } else if (r.type != VType::String && r.type != VType::Boolean) {
+      r.type = Promote(r.type, v.type);
+    }
+    r.e.insert(r.e.end(), v.e.begin(), v.e.end());
+    r.s.insert(r.s.end(), v.s.begin(), v.s.end());
+    if (r.e.size() > static_cast<size_t>(kMaxArraySize)) {
+      diags_.Error(DiagCode::ArrayTooLarge, e.span,
+                   "the comprehension has more than " + std::to_string(kMaxArraySize) + " elements");
+      return Value::Invalid();
+    }
+  }
+  if (xs.empty()) r.type = VType::Real;
+  r.shape.push_back(static_cast<int>(xs.size()));
+  r.shape.insert(r.shape.end(), elem_shape.begin(), elem_shape.end());
+  return r;
+}
+
+Value Elaborator::EvalMatrix(const ast::Expr& e, const Ctx& ctx) {
+  Value r;
+  r.type = VType::Integer;
+  size_t cols = 0;
+  for (size_t ri = 0; ri < e.rows.size(); ++ri) {
+    const auto& row = e.rows[ri];
+    if (ri == 0) cols = row.size();
+    if (row.size() != cols) {
+      diags_.Error(DiagCode::SizeMismatch, e.span, "matrix rows have different lengths");
+      return Value::Invalid();
+    }
+    for (const auto& x : row) {
+      Value v = Eval(*x, ctx);
+      if (!v.valid) return Value::Invalid();
+      if (!v.shape.empty() || v.type == VType::String) {
+        diags_.Error(DiagCode::SizeMismatch, x->span, "matrix entries must be scalars");
+        return Value::Invalid();
+      }
+      r.type = Promote(r.type, v.type);
+      r.e.push_back(v.e[0]);
+    }
+  }
+  r.shape = {static_cast<int>(e.rows.size()), static_cast<int>(cols)};
+  return r;
+}
+
+Value Elaborator::EvalRange(const ast::Expr& e, const Ctx& ctx) {
+  auto& pool = m_->exprs;
+  std::vector<double> xs;
+  double a = 0, b = 0, step = 1;
+  Value va = Eval(*e.args[0], ctx);
+  if (!Structural(va, e.args[0]->span, &a, "a range bound")) return Value::Invalid();
+  if (e.args.size() == 3) {
+    if (!Structural(Eval(*e.args[1], ctx), e.args[1]->span, &step, "a range step")) return Value::Invalid();
+    if (!Structural(Eval(*e.args[2], ctx), e.args[2]->span, &b, "a range bound")) return Value::Invalid();
+  } else {
+    if (!Structural(Eval(*e.args[1], ctx), e.args[1]->span, &b, "a range bound")) return Value::Invalid();
+  }
+  if (step == 0) {
+    diags_.Error(DiagCode::BadValue, e.span, "range step is zero");
+    return Value::Invalid();
+  }
+  double count = std::floor((b - a) / step + 1e-10) + 1;
+  if (count > static_cast<double>(kMaxArraySize)) {
+    diags_.Error(DiagCode::ArrayTooLarge, e.span,
+                 "range has " + std::to_string(static_cast<long long>(count)) + " elements; the limit is " +
+                     std::to_string(kMaxArraySize));
+    return Value::Invalid();
+  }
+  bool integer = a == std::floor(a) && step == std::floor(step);
+  Value r;
+  r.type = integer ? VType::Integer : VType::Real;
+  long n = count > 0 ? static_cast<long>(count) : 0;
+  for (long i = 0; i < n; ++i) r.e.push_back(pool.Constant(a + static_cast<double>(i) * step));
+  r.shape = {static_cast<int>(n)};
+  return r;
+}
+
+Value Elaborator::EvalIf(const ast::Expr& e, const Ctx& ctx) {
+  auto& pool = m_->exprs;
+  // Evaluate from the last else backwards, building IfElse nodes.
+  Value acc = Eval(*e.args.back(), ctx);
+  if (!acc.valid) return Value::Invalid();
+  for (size_t i = e.args.size() - 1; i >= 2; i -= 2) {
+    const ast::Expr& ce = *e.args[i - 2];
+    Value c = Eval(ce, ctx);
+    Value t = Eval(*e.args[i - 1], ctx);
+    if (!c.valid || !t.valid) return Value::Invalid();
+    if (c.type != VType::Boolean || !c.shape.empty()) {
+      diags_.Error(DiagCode::TypeMismatch, ce.span, "the condition must be a scalar Boolean");
+      return Value::Invalid();
+    }
+    if (t.shape != acc.shape || (t.type == VType::String) != (acc.type == VType::String)) {
+      // Branches of different sizes: the condition decides structure.
+      double cv = 0;
+      if (!Structural(c, ce.span, &cv, "the condition of an if-expression with branches of different sizes"))
+        return Value::Invalid();
+      if (cv != 0) acc = t;
+      continue;
+    }
+    if (t.type == VType::String) {
+      double cv = 0;
+      if (!Structural(c, ce.span, &cv, "the condition choosing a String")) return Value::Invalid();
+      if (cv != 0) acc = t;
+      continue;
+    }
+    Value r;
+    r.type = (t.type == VType::Boolean && acc.type == VType::Boolean) ? VType::Boolean : Promote(t.type, acc.type);
+    r.shape = t.shape;
+    for (size_t k = 0; k < t.e.size(); ++k) r.e.push_back(pool.IfElse(c.e[0], t.e[k], acc.e[k]));
+    acc = r;
+  }
+  return acc;
+}
+
+// Built-in functions.
+Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
+  auto& pool = m_->exprs;
   std::string fn = e.parts.empty() ? "" : ast::JoinName([&] {
     std::vector<std::string> v;
     for (auto& p : e.parts) v.push_back(p.name);
@@ -678,12 +574,12 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
   }());
   if (!e.named_args.empty()) {
     diags_.Error(DiagCode::BadCall, e.named_args[0].span, "'" + fn + "' takes no named arguments");
-    return bad();
+    return Value::Invalid();
   }
   std::vector<Value> args;
   for (const auto& a : e.args) {
     args.push_back(Eval(*a, ctx));
-    if (!args.back().valid) return bad();
+    if (!args.back().valid) return Value::Invalid();
   }
   auto want = [&](size_t n) {
     if (args.size() == n) return true;
@@ -703,7 +599,7 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
   };
   for (const auto& u : kUnaryFns) {
     if (fn == u.name) {
-      if (!want(1) || !numeric(args[0])) return bad();
+      if (!want(1) || !numeric(args[0])) return Value::Invalid();
       Value r = args[0];
       r.type = (u.op == Op::Abs && r.type == VType::Integer) ? VType::Integer : VType::Real;
       if (u.op == Op::Sign || u.op == Op::Floor || u.op == Op::Ceil) r.type = VType::Real;
@@ -712,13 +608,13 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     }
   }
   if (fn == "atan2" || fn == "mod" || ((fn == "min" || fn == "max") && args.size() == 2)) {
-    if (!want(2) || !numeric(args[0]) || !numeric(args[1])) return bad();
+    if (!want(2) || !numeric(args[0]) || !numeric(args[1])) return Value::Invalid();
     Op op = fn == "atan2" ? Op::Atan2 : fn == "mod" ? Op::Mod : fn == "min" ? Op::Min : Op::Max;
     VType t = (fn == "atan2") ? VType::Real : Promote(args[0].type, args[1].type);
-    return elementwise2(args[0], args[1], op, t, e.span);
+    return Elementwise2(args[0], args[1], op, t, e.span);
   }
   if (fn == "min" || fn == "max" || fn == "sum") {
-    if (!want(1) || !numeric(args[0])) return bad();
+    if (!want(1) || !numeric(args[0])) return Value::Invalid();
     const Value& v = args[0];
     if (v.e.empty()) return Const(0);
     ExprId acc = v.e[0];
@@ -727,14 +623,14 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     return Scalar(acc, v.type == VType::Integer ? VType::Integer : VType::Real);
   }
   if (fn == "integer") {
-    if (!want(1) || !numeric(args[0])) return bad();
+    if (!want(1) || !numeric(args[0])) return Value::Invalid();
     Value r = args[0];
     for (auto& x : r.e) x = pool.Unary(Op::Floor, x);
     r.type = VType::Integer;
     return r;
   }
   if (fn == "cross") {
-    if (!want(2) || !vec3(args[0]) || !vec3(args[1])) return bad();
+    if (!want(2) || !vec3(args[0]) || !vec3(args[1])) return Value::Invalid();
     const auto& a = args[0].e;
     const auto& b = args[1].e;
     Value r;
@@ -745,7 +641,7 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     return r;
   }
   if (fn == "skew") {
-    if (!want(1) || !vec3(args[0])) return bad();
+    if (!want(1) || !vec3(args[0])) return Value::Invalid();
     const auto& a = args[0].e;
     ExprId z = pool.Constant(0);
     Value r;
@@ -754,12 +650,12 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     return r;
   }
   if (fn == "dot" || fn == "norm") {
-    if (fn == "dot" ? !want(2) : !want(1)) return bad();
+    if (fn == "dot" ? !want(2) : !want(1)) return Value::Invalid();
     const Value& a = args[0];
     const Value& b = fn == "dot" ? args[1] : args[0];
     if (a.shape.size() != 1 || a.shape != b.shape || !numeric(a) || !numeric(b)) {
       diags_.Error(DiagCode::SizeMismatch, e.span, "'" + fn + "' needs vectors of equal length");
-      return bad();
+      return Value::Invalid();
     }
     ExprId s = pool.Binary(Op::Mul, a.e[0], b.e[0]);
     for (size_t i = 1; i < a.e.size(); ++i) s = pool.Binary(Op::Add, s, pool.Binary(Op::Mul, a.e[i], b.e[i]));
@@ -767,12 +663,12 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     return Scalar(s, fn == "dot" ? Promote(a.type, b.type) : VType::Real);
   }
   if (fn == "outerProduct") {
-    if (!want(2)) return bad();
+    if (!want(2)) return Value::Invalid();
     const Value& a = args[0];
     const Value& b = args[1];
     if (a.shape.size() != 1 || b.shape.size() != 1) {
       diags_.Error(DiagCode::SizeMismatch, e.span, "'outerProduct' needs vectors");
-      return bad();
+      return Value::Invalid();
     }
     Value r;
     r.type = Promote(a.type, b.type);
@@ -782,11 +678,11 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     return r;
   }
   if (fn == "transpose") {
-    if (!want(1)) return bad();
+    if (!want(1)) return Value::Invalid();
     const Value& a = args[0];
     if (a.shape.size() != 2) {
       diags_.Error(DiagCode::SizeMismatch, e.span, "'transpose' needs a matrix, got " + ShapeStr(a.shape));
-      return bad();
+      return Value::Invalid();
     }
     Value r = a;
     r.shape = {a.shape[1], a.shape[0]};
@@ -796,28 +692,28 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     return r;
   }
   if (fn == "vector") {
-    if (!want(1)) return bad();
+    if (!want(1)) return Value::Invalid();
     Value r = args[0];
     r.shape = {static_cast<int>(r.e.size())};
     return r;
   }
   if (fn == "identity" || fn == "diagonal") {
-    if (!want(1)) return bad();
+    if (!want(1)) return Value::Invalid();
     long n = 0;
     std::vector<ExprId> d;
     if (fn == "identity") {
-      if (!StructuralInt(args[0], e.args[0]->span, &n, "the size")) return bad();
+      if (!StructuralInt(args[0], e.args[0]->span, &n, "the size")) return Value::Invalid();
     } else {
       if (args[0].shape.size() != 1 || !numeric(args[0])) {
         diags_.Error(DiagCode::SizeMismatch, e.span, "'diagonal' needs a vector");
-        return bad();
+        return Value::Invalid();
       }
       n = args[0].shape[0];
       d = args[0].e;
     }
     if (n < 0 || n * n > kMaxArraySize) {
       diags_.Error(DiagCode::ArrayTooLarge, e.span, "matrix size out of range");
-      return bad();
+      return Value::Invalid();
     }
     Value r;
     r.type = fn == "identity" ? VType::Integer : args[0].type;
@@ -831,17 +727,17 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     size_t first = fn == "fill" ? 1 : 0;
     if (args.size() <= first) {
       diags_.Error(DiagCode::BadCall, e.span, "'" + fn + "' needs dimensions");
-      return bad();
+      return Value::Invalid();
     }
     Value r;
     r.type = fn == "fill" ? args[0].type : VType::Integer;
     long total = 1;
     for (size_t i = first; i < args.size(); ++i) {
       long n = 0;
-      if (!StructuralInt(args[i], e.args[i]->span, &n, "a dimension")) return bad();
+      if (!StructuralInt(args[i], e.args[i]->span, &n, "a dimension")) return Value::Invalid();
       if (n < 0 || n > kMaxArraySize || (total *= (n == 0 ? 1 : n)) > kMaxArraySize) {
         diags_.Error(DiagCode::ArrayTooLarge, e.args[i]->span, "array too large");
-        return bad();
+        return Value::Invalid();
       }
       r.shape.push_back(static_cast<int>(n));
     }
@@ -849,7 +745,7 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
     if (fn == "fill") {
       if (!args[0].shape.empty()) {
         diags_.Error(DiagCode::SizeMismatch, e.span, "'fill' needs a scalar value");
-        return bad();
+        return Value::Invalid();
       }
       r.e.assign(count, args[0].e[0]);
       if (args[0].type == VType::String) r.s.assign(count, args[0].s[0]);
@@ -866,12 +762,12 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
       r.shape = {static_cast<int>(args[0].shape.size())};
       return r;
     }
-    if (!want(2)) return bad();
+    if (!want(2)) return Value::Invalid();
     long k = 0;
-    if (!StructuralInt(args[1], e.args[1]->span, &k, "a dimension index")) return bad();
+    if (!StructuralInt(args[1], e.args[1]->span, &k, "a dimension index")) return Value::Invalid();
     if (k < 1 || k > static_cast<long>(args[0].shape.size())) {
       diags_.Error(DiagCode::IndexOutOfRange, e.args[1]->span, "dimension index out of range");
-      return bad();
+      return Value::Invalid();
     }
     return Const(args[0].shape[static_cast<size_t>(k - 1)], VType::Integer);
   }
@@ -880,7 +776,8 @@ Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
   std::string best = ClosestName(fn, cands);
   if (fn == "der") d.hint = "derivatives are not written by hand: joints provide q and u";
   else if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-  return bad();
+  return Value::Invalid();
 }
+
 
 }  // namespace kanesim::lang::elab

@@ -75,20 +75,33 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
 
 // outer wins over inner; `what` names the element for messages.
 void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
+  std::vector<const std::string*> keys;
+  MergeMods(outer, inner, what, keys);
+}
+
+// The recursion of MergeInto (as deep as the modifier is written). The name for messages
+// is `what` followed by `keys`, built only when a message needs it.
+void Elaborator::MergeMods(Mod& outer, const Mod& inner, const std::string& what,
+                           std::vector<const std::string*>& keys) {
+  auto name = [&] {
+    std::string s = what;
+    for (const std::string* k : keys) s += "." + *k;
+    return s;
+  };
   // --set on a final parameter is reported once by Elaborator::Run.
   if (outer.value && outer.value->from_set && inner.is_final) {
     outer.value.reset();
   }
   if (inner.is_final && (outer.value || !outer.sub.empty() || !outer.redeclare_type.empty())) {
     Span at = outer.value ? outer.value->span : outer.span;
-    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + what + "' is final and cannot be modified");
+    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.final_span.valid() ? inner.final_span : inner.span, "declared final here"});
     outer.value.reset();
     outer.sub.clear();
   }
   if (!outer.value && inner.value) outer.value = inner.value;
   else if (outer.value && inner.value && inner.value->is_final) {
-    auto& d = diags_.Error(DiagCode::FinalOverride, outer.value->span, "'" + what + "' is final and cannot be modified");
+    auto& d = diags_.Error(DiagCode::FinalOverride, outer.value->span, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.value->span, "final value given here"});
     outer.value = inner.value;
   }
@@ -103,11 +116,15 @@ void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what
   }
   if (!outer.span.valid()) outer.span = inner.span;
   outer.each = outer.each || inner.each;
+  if (!inner.empty() && !inner.set_only) outer.set_only = false;
   for (const auto& key : inner.order) {
     auto it = inner.sub.find(key);
     if (it == inner.sub.end()) continue;
-    if (!outer.sub.count(key)) outer.order.push_back(key);
-    MergeInto(outer.sub[key], it->second, what + "." + key);
+    auto [slot, added] = outer.sub.try_emplace(key);
+    if (added) outer.order.push_back(key);
+    keys.push_back(&key);
+    MergeMods(slot->second, it->second, what, keys);
+    keys.pop_back();
   }
 }
 
@@ -300,7 +317,7 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     }
     if (found) continue;
     const Mod& sm = node->mod.sub[key];
-    if (sm.value && sm.value->from_set) continue;  // --set names are checked by Run()
+    if (sm.set_only) continue;  // --set names are checked by BindSetOverrides
     std::vector<std::string> names;
     for (const auto& c : elems) names.push_back(c.comp->name);
     auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span,
@@ -336,7 +353,6 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     MergeInto(outer, decl, child->path);
     child->mod = std::move(outer);
     child->is_final_decl = c.is_final;
-    node->by_name[child->name] = child.get();
     node->children.push_back(std::move(child));
   }
   for (size_t i = 0; i < elems.size() && i < node->children.size(); ++i) {
@@ -357,7 +373,8 @@ static void PreEvaluate(Elaborator& el, Mod& mod, int count, Diagnostics& diags)
       auto& d = diags.Error(DiagCode::SizeMismatch, mod.value->span,
                             "modifier of an array of " + std::to_string(count) + " components needs " +
                                 std::to_string(count) + " values");
-      d.hint = "write 'each' before the name to give every element the same value";
+      d.hint = mod.value->from_set ? "set one element (--set name[k].x=...), or give " + std::to_string(count) + " values"
+                                   : "write 'each' before the name to give every element the same value";
       mod.value.reset();
     } else {
       mod.value->pre = v;
@@ -366,34 +383,50 @@ static void PreEvaluate(Elaborator& el, Mod& mod, int count, Diagnostics& diags)
   for (auto& [k, sm] : mod.sub) PreEvaluate(el, sm, count, diags);
 }
 
+// Element `index` of an array component's modifier. Copies everything but the values,
+// and of a value only the slice: copying the whole array value for every element would
+// cost O(count^2) time and memory.
 Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
-  Mod out = mod;
-  if (mod.each) return out;  // `each` applies the whole modifier to every element
-  if (mod.value && !mod.each) {
-    Value v = mod.value->pre ? *mod.value->pre : EvalModValue(*mod.value, nullptr);
-    if (v.valid) {
-      if (v.shape.empty() || v.shape[0] != count) {
-        auto& d = diags_.Error(DiagCode::SizeMismatch, mod.value->span,
-                               "modifier of an array of " + std::to_string(count) +
-                                   " components needs " + std::to_string(count) + " values");
-        d.hint = "write 'each' before the name to give every element the same value";
-        out.value.reset();
-      } else {
-        Value s;
-        s.type = v.type;
-        s.shape.assign(v.shape.begin() + 1, v.shape.end());
-        size_t stride = v.Size() / static_cast<size_t>(count);
-        for (size_t k = 0; k < stride; ++k) {
-          s.e.push_back(v.e[static_cast<size_t>(index) * stride + k]);
-          if (v.type == VType::String) s.s.push_back(v.s[static_cast<size_t>(index) * stride + k]);
-        }
-        out.value->pre = s;
+  if (mod.each) return mod;  // `each` applies the whole modifier to every element
+  Mod out;
+  out.order = mod.order;
+  out.each = mod.each;
+  out.is_final = mod.is_final;
+  out.final_span = mod.final_span;
+  out.span = mod.span;
+  out.redeclare_type = mod.redeclare_type;
+  out.redeclare_from = mod.redeclare_from;
+  out.redeclare_span = mod.redeclare_span;
+  out.set_only = mod.set_only;
+  if (mod.value) {
+    std::optional<Value> evaluated;
+    if (!mod.value->pre) evaluated = EvalModValue(*mod.value, nullptr);
+    const Value& v = mod.value->pre ? *mod.value->pre : *evaluated;
+    if (v.valid && (v.shape.empty() || v.shape[0] != count)) {
+      auto& d = diags_.Error(DiagCode::SizeMismatch, mod.value->span,
+                             "modifier of an array of " + std::to_string(count) + " components needs " +
+                                 std::to_string(count) + " values");
+      d.hint = "write 'each' before the name to give every element the same value";
+    } else if (v.valid) {
+      ModValue mv;
+      mv.expr = mod.value->expr;
+      mv.scope = mod.value->scope;
+      mv.iters = mod.value->iters;
+      mv.span = mod.value->span;
+      mv.is_final = mod.value->is_final;
+      mv.from_set = mod.value->from_set;
+      Value s;
+      s.type = v.type;
+      s.shape.assign(v.shape.begin() + 1, v.shape.end());
+      size_t stride = v.Size() / static_cast<size_t>(count);
+      for (size_t k = 0; k < stride; ++k) {
+        s.e.push_back(v.e[static_cast<size_t>(index) * stride + k]);
+        if (v.type == VType::String) s.s.push_back(v.s[static_cast<size_t>(index) * stride + k]);
       }
-    } else {
-      out.value.reset();
+      mv.pre = std::move(s);
+      out.value = std::move(mv);
     }
   }
-  out.sub.clear();
   for (const auto& [k, sm] : mod.sub) out.sub[k] = SliceMod(sm, index, count, where);
   return out;
 }
@@ -532,7 +565,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
           .hint = "reduce the array sizes";
     }
     for (const auto& key : child->mod.order) {
-      if (IsVarAttribute(key)) continue;
+      if (IsVarAttribute(key) || child->mod.sub[key].set_only) continue;
       auto& d = diags_.Error(DiagCode::UnknownModifier, child->mod.sub[key].span,
                              "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
                                  child->path + "'");
@@ -745,6 +778,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     if (a.valid && a.type == VType::String && !a.s.empty()) unit = a.s[0];
   }
   Value out = v;
+  const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
   for (size_t k = 0; k < v.e.size(); ++k) {
     std::string name = var->path;
     if (!var->shape.empty()) {
@@ -760,7 +794,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       name += "]";
     }
     flat::Param p;
-    p.name = name;
+    p.name = std::move(name);
     p.type = var->vtype == VType::Real      ? flat::ParamType::Real
              : var->vtype == VType::Integer ? flat::ParamType::Integer
              : var->vtype == VType::Boolean ? flat::ParamType::Boolean
@@ -770,24 +804,24 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     p.max = vmax;
     p.is_constant = var->variability == ast::Variability::Constant;
     p.user_set = binding && binding->from_set;
-    p.loc = Loc(var->decl ? var->decl->name_span : use_span);
+    p.loc = loc;
     if (var->vtype == VType::String) {
       p.string_value = v.s.empty() ? "" : v.s[k];
-      m_->params.push_back(p);
+      m_->params.push_back(std::move(p));
       pvals_.push_back(0.0);
       continue;
     }
     ExprId x = v.e[k];
-    double val = flat::EvalParamExpr(*m_, pvals_, x);
+    double val = param_eval_.Eval(x);
     p.value = val;
     p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
     if (!std::isfinite(val)) {
       auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
-                             "parameter '" + name + "' evaluates to " + std::to_string(val));
+                             "parameter '" + p.name + "' evaluates to " + std::to_string(val));
       if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     } else if (val < vmin || val > vmax) {
       auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
-                             "parameter '" + name + "' = " + std::to_string(val) + " is outside its range [" +
+                             "parameter '" + p.name + "' = " + std::to_string(val) + " is outside its range [" +
                                  (vmin <= -1e299 ? std::string("-inf") : std::to_string(vmin)) + ", " +
                                  (vmax >= 1e299 ? std::string("inf") : std::to_string(vmax)) + "]");
       if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
@@ -796,7 +830,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       out.e[k] = m_->exprs.Constant(val);
       continue;
     }
-    m_->params.push_back(p);
+    m_->params.push_back(std::move(p));
     pvals_.push_back(val);
     out.e[k] = m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
   }
@@ -928,6 +962,7 @@ void Elaborator::ProcessEquations(Node* node) {
         }
         std::vector<double> xs = StructuralList(r, eq.range->span, "a for-loop range");
         for (double x : xs) {
+          if (!ChargeSteps(1, eq.range->span)) return;
           auto local = std::make_shared<Iters>(iters ? *iters : Iters{});
           (*local)[eq.iter] = x;
           for (const auto& b : eq.body) one(b, local);

@@ -11,8 +11,10 @@
 
 #include "lang/ast.h"
 #include "lang/diagnostics.h"
+#include "lang/elab_budget.h"
 #include "lang/elaborate.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/flat/param_eval.h"
 
 namespace kanesim::lang::elab {
 
@@ -20,6 +22,19 @@ using flat::ExprId;
 
 enum class VType { Real, Integer, Boolean, String };
 const char* VTypeName(VType t);
+
+// The type of an arithmetic result: Integer only when both operands are.
+inline VType Promote(VType a, VType b) {
+  return a == VType::Integer && b == VType::Integer ? VType::Integer : VType::Real;
+}
+
+// "scalar" or "[2, 3]", for messages.
+inline std::string ShapeStr(const std::vector<int>& shape) {
+  if (shape.empty()) return "scalar";
+  std::string s = "[";
+  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
 
 // A value: a (possibly empty-shaped = scalar) array of scalar expressions.
 struct Value {
@@ -38,6 +53,38 @@ struct Value {
 
 using Iters = std::map<std::string, double>;
 
+// An optional value kept on the heap: like std::optional (bool test, *, ->, reset,
+// assignment of a T), copied deeply, but one pointer wide while empty. Instance nodes and
+// modifiers have several of these fields and most are empty, so this keeps the instance
+// tree small (memory is linear in the model, and this is its constant).
+template <class T>
+class Boxed {
+ public:
+  Boxed() = default;
+  Boxed(const Boxed& o) : p_(o.p_ ? std::make_unique<T>(*o.p_) : nullptr) {}
+  Boxed(Boxed&&) noexcept = default;
+  Boxed& operator=(const Boxed& o) {
+    if (this != &o) p_ = o.p_ ? std::make_unique<T>(*o.p_) : nullptr;
+    return *this;
+  }
+  Boxed& operator=(Boxed&&) noexcept = default;
+  Boxed& operator=(const T& v) {
+    p_ = std::make_unique<T>(v);
+    return *this;
+  }
+  Boxed& operator=(T&& v) {
+    p_ = std::make_unique<T>(std::move(v));
+    return *this;
+  }
+  explicit operator bool() const { return p_ != nullptr; }
+  T& operator*() const { return *p_; }
+  T* operator->() const { return p_.get(); }
+  void reset() { p_.reset(); }
+
+ private:
+  std::unique_ptr<T> p_;
+};
+
 struct Node;
 
 // One binding written somewhere in the source: an expression, where to evaluate it, and
@@ -46,7 +93,7 @@ struct ModValue {
   const ast::Expr* expr = nullptr;
   Node* scope = nullptr;
   std::shared_ptr<const Iters> iters;
-  std::optional<Value> pre;
+  Boxed<Value> pre;
   Span span;
   bool is_final = false;
   bool from_set = false;  // came from --set on the command line
@@ -54,7 +101,7 @@ struct ModValue {
 
 // A merged modification tree (Modelica "modification environment").
 struct Mod {
-  std::optional<ModValue> value;
+  Boxed<ModValue> value;
   std::map<std::string, Mod> sub;
   std::vector<std::string> order;   // sub keys in the order written
   bool each = false;
@@ -65,6 +112,7 @@ struct Mod {
   std::string redeclare_type;
   const ast::ClassDef* redeclare_from = nullptr;
   Span redeclare_span;
+  bool set_only = false;  // made by --set alone: its names are checked by BindSetOverrides
   bool empty() const { return !value && sub.empty() && redeclare_type.empty(); }
 };
 
@@ -83,7 +131,8 @@ struct Node {
   // kClass
   const ast::ClassDef* cls = nullptr;
   std::vector<std::unique_ptr<Node>> children;
-  std::unordered_map<std::string, Node*> by_name;
+  mutable std::unique_ptr<std::unordered_map<std::string, Node*>> by_name;  // index of `children`, built by
+                                                                           // Child() for large classes
   struct EqSource {
     const ast::Equation* eq;
     const ast::ClassDef* cls;  // for lookups
@@ -100,18 +149,46 @@ struct Node {
   std::vector<int> shape;
   int state = 0;  // 0 unevaluated, 1 evaluating, 2 done
   Value value;
-  std::optional<ModValue> eq_binding;            // from an equation `x = expr`
+  Boxed<ModValue> eq_binding;                    // from an equation `x = expr`
   std::map<int, ModValue> eq_elem_binding;       // from `x[k] = expr`
   bool is_final_decl = false;
-  Mod type_mod;  // modifiers of a short type definition (type Angle = Real(unit="rad"))
 
   // kArray
   std::vector<std::unique_ptr<Node>> elems;
 
+  static constexpr size_t kScanChildren = 16;
   Node* Child(const std::string& n) const {
-    auto it = by_name.find(n);
-    return it == by_name.end() ? nullptr : it->second;
+    // Most classes have a handful of elements: a scan beats hashing. Large ones (a model
+    // with many declared components) get an index, so that lookups stay O(1).
+    if (children.size() <= kScanChildren) {
+      for (size_t i = children.size(); i-- > 0;)
+        if (children[i]->name == n) return children[i].get();
+      return nullptr;
+    }
+    if (!by_name || by_name->size() != children.size()) {
+      by_name = std::make_unique<std::unordered_map<std::string, Node*>>();
+      for (const auto& c : children) (*by_name)[c->name] = c.get();
+    }
+    auto it = by_name->find(n);
+    return it == by_name->end() ? nullptr : it->second;
   }
+};
+
+// One part of a --set name: `g[2]` of `world.g[2]`; offsets into the name.
+struct SetPart {
+  std::string name;
+  std::vector<long> subs;                      // 1-based indices as written
+  int begin = 0, end = 0;                      // the identifier
+  std::vector<std::pair<int, int>> sub_spans;  // each index
+};
+
+// A parsed --set: its name, its value, and the "<--set>" pseudo-file holding `name=value`.
+struct SetOverride {
+  std::string name;
+  std::vector<SetPart> parts;
+  const ast::Expr* value = nullptr;
+  int file = -1;
+  bool subscripted = false;
 };
 
 struct ClassInfo {
@@ -135,12 +212,31 @@ class Elaborator {
     const Iters* iters = nullptr;
   };
   Value Eval(const ast::Expr& e, const Ctx& ctx);
+  // One kind each (elab_eval.cpp); EvalNested bounds their recursion (elab_budget.cpp).
+  Value EvalNested(const ast::Expr& e, const Ctx& ctx);
+  Value EvalNode(const ast::Expr& e, const Ctx& ctx);
+  Value EvalRef(const ast::Expr& e, const Ctx& ctx);
+  Value EvalArray(const ast::Expr& e, const Ctx& ctx);
+  Value EvalComprehension(const ast::Expr& e, const Ctx& ctx);
+  Value EvalMatrix(const ast::Expr& e, const Ctx& ctx);
+  Value EvalRange(const ast::Expr& e, const Ctx& ctx);
+  Value EvalIf(const ast::Expr& e, const Ctx& ctx);
+  Value EvalCall(const ast::Expr& e, const Ctx& ctx);
+  // Operators (elab_operators.cpp): chains of them with an explicit stack.
+  Value EvalOperators(const ast::Expr& root, const Ctx& ctx);
+  Value UnaryOp(const ast::Expr& e, Value v);
+  Value BinaryOp(const ast::Expr& e, const Value& a, const Value& b);
+  Value Elementwise2(const Value& a, const Value& b, flat::Op op, VType rt, Span sp);
+  // Work budget (elab_budget.cpp): false once the elaboration has used it up.
+  bool ChargeSteps(std::int64_t steps, Span where);
+  bool Charge(const Value& v, Span where);
   Value EvalModValue(const ModValue& mv, Span* where);
   Value GetVar(Node* var, Span use_span);
   // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
   bool StructuralInt(const Value& v, Span span, long* out, const char* what);
+  void MarkStructural(ExprId id);
   std::vector<double> StructuralList(const Value& v, Span span, const char* what);
   Value Const(double x, VType t = VType::Real);
   Value Scalar(ExprId e, VType t = VType::Real);
@@ -148,6 +244,7 @@ class Elaborator {
   // --- instances (elab_instantiate.cpp) ---
   Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters);
   void MergeInto(Mod& outer, const Mod& inner, const std::string& what);  // outer wins
+  void MergeMods(Mod& outer, const Mod& inner, const std::string& what, std::vector<const std::string*>& keys);
   void Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from);
   void CollectEquations(Node* node);
   void ProcessEquations(Node* node);
@@ -167,7 +264,13 @@ class Elaborator {
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
   flat::SourceLoc Loc(Span s) const;
-  Node* FindOverrideTarget(const std::string& name, int* elem_index);
+
+  // --- --set overrides (elab_set.cpp) ---
+  bool ParseSetOverrides();
+  void BindSetOverrides();
+  Node* ResolveSetTarget(const SetOverride& so, int* elem);
+  ModValue SetValue(const SetOverride& so);
+  Span SetSpan(const SetOverride& so, int begin, int end) const;
 
   // --- emission (elab_emit.cpp) ---
   void Emit(Node* root);
@@ -180,18 +283,26 @@ class Elaborator {
   std::unordered_map<const ast::ClassDef*, const ast::StoredDefinition*> file_of_;
   std::unordered_map<const ast::ClassDef*, std::string> qualified_of_;
   std::vector<double> pvals_;  // values of m_->params, index-aligned
+  flat::ParamEvaluator param_eval_{m_->exprs, pvals_};  // memoized values of pool nodes
+  std::vector<std::uint8_t> structural_seen_;  // per pool node: walked by MarkStructural
   std::vector<Node*> frame_nodes_;   // provisional frame id -> node
   std::vector<Node*> flange_nodes_;  // flange id -> node
   std::vector<Node*> joint_nodes_;   // joint id -> node
   std::vector<std::pair<int, int>> frame_links_;   // connect() pairs (provisional ids)
   std::vector<std::pair<int, int>> flange_links_;
   long instances_ = 0;
+  WorkBudget budget_{kMaxElabWork};
+  bool budget_reported_ = false;
+  int eval_depth_ = 0;  // EvalNested frames on the native stack
+  StackGuard stack_;    // made with the Elaborator: the base of its evaluation
+  bool depth_reported_ = false;
   bool too_large_ = false;
   std::vector<const ast::ClassDef*> extends_stack_;
   std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
   std::unique_ptr<Node> root_;
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
   std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator
+  std::vector<SetOverride> sets_;                      // parsed --set overrides
 };
 
 // Modelica-style attribute names accepted on variables.

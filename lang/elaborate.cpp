@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "lang/elab_internal.h"
+#include "lang/library_cache.h"
 #include "lang/parser.h"
 
 namespace kanesim::lang {
@@ -18,11 +19,15 @@ static bool ParseInto(Program* program, int file, Diagnostics& diags) {
   return true;
 }
 
+// The library's text goes into this Program's sources (for diagnostics); its ASTs are
+// the process-wide parsed copy, whose file ids match because the main file is file 0.
 static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
                       Diagnostics& diags) {
-  for (const auto& [name, text] : stdlib_files) {
-    int f = program->sources.Add(name, text);
-    ParseInto(program, f, diags);
+  auto shared = program->sources.NumFiles() == 1 ? SharedParsedLibrary(stdlib_files) : nullptr;
+  for (size_t i = 0; i < stdlib_files.size(); ++i) {
+    int f = program->sources.Add(stdlib_files[i].first, stdlib_files[i].second);
+    if (shared) program->files.push_back(shared->defs[i]);
+    else ParseInto(program, f, diags);
   }
 }
 
@@ -126,32 +131,6 @@ const ast::ClassDef* Elaborator::FindClass(const std::vector<std::string>& parts
   return first;
 }
 
-// The instance a --set name denotes: dotted parts, a subscript on a component array
-// selects an element, a subscript on a variable an element of it (*elem_index).
-Node* Elaborator::FindOverrideTarget(const std::string& name, int* elem_index) {
-  std::vector<std::string> path;
-  std::stringstream ss(name);
-  for (std::string p; std::getline(ss, p, '.');) path.push_back(p);
-  Node* n = root_.get();
-  *elem_index = -1;
-  for (size_t i = 0; n && i < path.size(); ++i) {
-    std::string part = path[i];
-    long sub = -1;
-    size_t br = part.find('[');
-    if (br != std::string::npos) {
-      sub = std::atol(part.c_str() + br + 1);
-      part = part.substr(0, br);
-    }
-    Node* next = n->kind == Node::kClass ? n->Child(part) : nullptr;
-    if (next && sub >= 1 && next->kind == Node::kArray && static_cast<size_t>(sub) <= next->elems.size())
-      next = next->elems[static_cast<size_t>(sub - 1)].get();
-    else if (next && sub >= 1 && next->kind == Node::kVar)
-      *elem_index = static_cast<int>(sub - 1);
-    n = next;
-  }
-  return n;
-}
-
 bool Elaborator::Run() {
   // Pick the model.
   const ast::ClassDef* top = nullptr;
@@ -215,111 +194,12 @@ bool Elaborator::Run() {
   root_->kind = Node::kClass;
   root_->path = "";
 
-  // --set overrides become the outermost modifiers (they win over everything but final).
-  for (const auto& ov : options_.overrides) {
-    int file = program_.sources.Add("<--set " + ov.name + ">", ov.value);
-    int before = diags_.NumErrors();
-    auto expr = ParseExpression(file, program_.sources, diags_);
-    if (diags_.NumErrors() > before) {
-      diags_.Error(DiagCode::BadSet, Span{file, 0, static_cast<int32_t>(ov.value.size())},
-                   "cannot parse the value of --set " + ov.name + "=" + ov.value)
-          .hint = "values are .mech expressions: 2.5, {0, -9.81, 0}, true, \"text\"";
-      continue;
-    }
-    std::vector<std::string> path;
-    std::stringstream ss(ov.name);
-    std::string p;
-    while (std::getline(ss, p, '.')) path.push_back(p);
-    if (path.empty() || path.back().empty()) {
-      diags_.Error(DiagCode::BadSet, Span{}, "--set needs name=value, got '" + ov.name + "'");
-      continue;
-    }
-    ModValue mv;
-    mv.expr = expr.get();
-    mv.scope = root_.get();
-    mv.span = expr->span;
-    mv.from_set = true;
-    synthetic_.push_back(std::move(expr));
-    // Anything with a subscript (world.g[2], links[3].m) is bound after instantiation,
-    // on the instance it names (modifiers cannot address single array elements).
-    if (ov.name.find('[') != std::string::npos) continue;
-    Mod* target = &root_->mod;
-    for (size_t i = 0; i < path.size(); ++i) {
-      if (!target->sub.count(path[i])) target->order.push_back(path[i]);
-      target = &target->sub[path[i]];
-      target->span = mv.span;
-    }
-    target->value = mv;
-  }
-  if (diags_.HasErrors()) return false;
+  if (!ParseSetOverrides()) return false;
 
   // The unknown-modifier check at the root would report --set names; do our own check
   // with a better message first.
   Instantiate(root_.get(), top, top);
-  if (!diags_.Full()) {
-    for (const auto& ov : options_.overrides) {
-      int elem_index = -1;
-      Node* n = FindOverrideTarget(ov.name, &elem_index);
-      if (!n) {
-        std::vector<std::string> names;
-        for (const auto& pm : m_->params) names.push_back(pm.name);
-        auto& d = diags_.Error(DiagCode::UnknownName, Span{}, "--set " + ov.name + ": no such parameter");
-        std::string best = ClosestName(ov.name, names);
-        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-        continue;
-      }
-      if (n->kind != Node::kVar || n->variability != ast::Variability::Parameter) {
-        auto& d = diags_.Error(DiagCode::NotParameter, Span{},
-                               "--set " + ov.name + ": '" + n->path + "' is not a parameter" +
-                                   (n->variability == ast::Variability::Constant ? " (it is a constant)" : ""));
-        if (n->decl) d.notes.push_back({n->decl->name_span, "declared here"});
-        continue;
-      }
-      if (n->decl && n->decl->is_protected) {
-        auto& d = diags_.Error(DiagCode::NotParameter, Span{}, "--set " + ov.name + ": '" + n->path + "' is protected");
-        d.notes.push_back({n->decl->name_span, "declared protected here"});
-        continue;
-      }
-      if (n->is_final_decl || n->mod.is_final) {
-        auto& d = diags_.Error(DiagCode::FinalOverride, Span{}, "--set " + ov.name + ": '" + n->path + "' is final");
-        if (n->decl) d.notes.push_back({n->decl->name_span, "declared final here"});
-        continue;
-      }
-      if (elem_index >= 0) {
-        long size = 1;
-        for (int dsz : n->shape) size *= dsz;
-        if (elem_index >= size) {
-          diags_.Error(DiagCode::BadSet, Span{}, "--set " + ov.name + ": index out of range");
-          continue;
-        }
-      }
-    }
-  }
-  // Element overrides (name[k]=v): bind as element equations of the parameter.
-  {
-    size_t synth = 0;
-    for (const auto& ov : options_.overrides) {
-      if (synth >= synthetic_.size()) break;
-      const ast::Expr* expr = synthetic_[synth++].get();
-      if (ov.name.find('[') == std::string::npos) continue;
-      int elem_index = -1;
-      Node* n = FindOverrideTarget(ov.name, &elem_index);  // errors were reported above
-      if (!n || n->kind != Node::kVar || n->variability != ast::Variability::Parameter) continue;
-      ModValue mv;
-      mv.expr = expr;
-      mv.scope = root_.get();
-      mv.span = expr->span;
-      mv.from_set = true;
-      if (n->state == 2) {
-        diags_.Error(DiagCode::BadSet, expr->span,
-                     "--set " + ov.name + ": '" + n->path + "' sizes the model and was fixed before this override")
-            .hint = "set the parameter it depends on instead";
-        continue;
-      }
-      if (elem_index >= 0) n->eq_elem_binding[elem_index] = mv;
-      else n->mod.value = mv;
-    }
-  }
+  BindSetOverrides();
   if (diags_.HasErrors()) return false;
   ProcessEquations(root_.get());
   if (diags_.HasErrors()) return false;

@@ -17,8 +17,16 @@ namespace kanesim::lang {
 
 // Limits (stated in docs/language.md): exceeding one is a clean error, never a hang.
 inline constexpr long kMaxArraySize = 100000;        // elements in one array
-inline constexpr long kMaxInstances = 250000;        // scalar variables + components
+inline constexpr long kMaxInstances = 600000;        // scalar variables + components
 inline constexpr int kMaxExtendsDepth = 64;          // chain of extends / instantiation depth
+// Steps of one elaboration: values produced by evaluating expressions, loop iterations,
+// multiply-adds of matrix products (lang/elab_budget.h).
+inline constexpr long kMaxElabWork = 10000000;
+// Nested evaluation: sub-expressions inside brackets, calls and if-expressions, plus
+// parameters whose value reads another parameter. Operator chains (a + b + ...) do not
+// count: they are evaluated without recursion, at any length. A thread with a small
+// stack stops earlier (at half of the stack it has left), with the same diagnostic.
+inline constexpr int kMaxEvalDepth = 1000;
 
 struct ParamOverride {
   std::string name;   // dotted: "N", "rod.L", "world.g" or "world.g[2]"
@@ -34,11 +42,13 @@ struct ElaborateOptions {
 struct Program {
   // mutable: elaboration adds the text of --set values so diagnostics can show them.
   mutable SourceManager sources;
-  std::vector<std::unique_ptr<ast::StoredDefinition>> files;  // files[0] is the main file
+  // files[0] is the main file; the library's files are shared with every other Program
+  // of the process (lang/library_cache.h).
+  std::vector<std::shared_ptr<const ast::StoredDefinition>> files;
 };
 
 // Loads and parses the main file and the standard library; diagnostics into `diags`.
-// `stdlib_files` are (display name, contents) pairs.
+// `stdlib_files` are (display name, contents) pairs; they are parsed once per process.
 bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
                  Program* program, Diagnostics& diags);
 // Same, with the main file's text given (tests, fuzzer).

@@ -85,9 +85,13 @@ struct TreeBody {
   Vec3 p_BBcm = Vec3::Zero();       // mass centre in the body frame
   Mat3 I_BBcm_B = Mat3::Zero();     // central inertia, body frame
   bool I_diagonal = false;          // I_BBcm_B is diagonal (principal axes along the body's): R I R^T is cheaper
-  std::vector<int> path_speeds;     // free speed indices of the joints root..L (pattern of tau)
-  std::vector<int> path_speeds_all; // full speed indices root..L (prescribed included)
+  // Free speed indices of the joints root..L (the pattern of tau for this body). Filled by
+  // the compiler only for the bodies that closed loops' frames and contacts sit on (their
+  // constraint rows need it at run time); for a chain, every body's list would take
+  // O(N^2) memory. PathSpeeds(p, L) computes it for any body.
+  std::vector<int> path_speeds;
 };
+
 
 // Where a flat frame sits: in body `body` (-1 = ground) at pose X_BF.
 struct FramePlace {
@@ -243,6 +247,10 @@ struct Program {
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind
   std::shared_ptr<const TreeLayout> tree;                 // per-joint blocks (recursive path only)
 };
+
+// Free speed indices of the joints root..L of body L, in that order (the pattern of its
+// tangent basis; allocates, so not for the hot path).
+std::vector<int> PathSpeeds(const Program& p, int body);
 
 // Per-thread mutable data, allocated once by MakeWorkspace. Nothing here is resized by
 // Derivative or EvalSignals.

@@ -27,6 +27,8 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
 
 // Joint axes and placements, q/u allocation, prescribed motions, start values.
 void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
+// Fills bodies[body].path_speeds (a body that a loop frame or a contact sits on).
+void EnsurePathSpeeds(Program& p, int body);
 
 // Cut joints (flat indices) -> Program::loops and ::rows (their constrained directions).
 void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,

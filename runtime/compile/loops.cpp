@@ -95,6 +95,7 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
       continue;
     }
     c.body = p.frames[static_cast<size_t>(fc.frame)].body;
+    EnsurePathSpeeds(p, c.body);
     if (c.body < 0) {
       errors->push_back(Msg("K311", "contact '" + fc.name + "' is attached to the ground", fc.loc,
                             "connect its frame to a moving body"));
@@ -212,6 +213,8 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
       if (f < 0 || p.frames[static_cast<size_t>(f)].body < -1) {
         errors->push_back(Msg("K303", "cut joint '" + fj.name + "' is not connected to the mechanism", fj.loc));
         connected = false;
+      } else {
+        EnsurePathSpeeds(p, p.frames[static_cast<size_t>(f)].body);
       }
     for (auto& r : rows) {
       r.loop = loop;

@@ -174,20 +174,23 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
   p.y0.clear();
   for (int i : p.q_free) p.y0.push_back(q_start_all[static_cast<size_t>(i)]);
   for (int i : p.u_free) p.y0.push_back(u_start_all[static_cast<size_t>(i)]);
+}
 
-  // Pattern of the tangent basis: body L moves with the speeds of the joints root..L.
-  for (size_t L = 0; L < p.bodies.size(); ++L) {
-    const TreeJoint& j = p.joints[L];
-    TreeBody& b = p.bodies[L];
-    if (j.parent >= 0) {
-      b.path_speeds = p.bodies[static_cast<size_t>(j.parent)].path_speeds;
-      b.path_speeds_all = p.bodies[static_cast<size_t>(j.parent)].path_speeds_all;
-    }
-    for (int k = 0; k < j.nu; ++k) {
-      b.path_speeds_all.push_back(j.u0 + k);
-      if (p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) b.path_speeds.push_back(j.u0 + k);
-    }
+// Pattern of the tangent basis: body L moves with the speeds of the joints root..L.
+std::vector<int> PathSpeeds(const Program& p, int body) {
+  std::vector<int> joints;
+  for (int L = body; L >= 0; L = p.joints[static_cast<size_t>(L)].parent) joints.push_back(L);
+  std::vector<int> out;
+  for (size_t i = joints.size(); i-- > 0;) {
+    const TreeJoint& j = p.joints[static_cast<size_t>(joints[i])];
+    for (int k = 0; k < j.nu; ++k)
+      if (p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) out.push_back(j.u0 + k);
   }
+  return out;
+}
+
+void EnsurePathSpeeds(Program& p, int body) {
+  if (body >= 0) p.bodies[static_cast<size_t>(body)].path_speeds = PathSpeeds(p, body);
 }
 
 }  // namespace kanesim::rt

@@ -28,7 +28,11 @@ const char* OpSpelling(Op op) {
 }
 
 ExprId ExprPool::Push(const ExprNode& n) {
+  std::uint8_t reads = n.op == Op::Time ? kReadsTime : n.op == Op::State ? kReadsState : 0;
+  for (ExprId c : {n.a, n.b, n.c})
+    if (c >= 0) reads |= reads_[static_cast<size_t>(c)];
   nodes_.push_back(n);
+  reads_.push_back(reads);
   return static_cast<ExprId>(nodes_.size() - 1);
 }
 
@@ -87,25 +91,13 @@ ExprId ExprPool::IfElse(ExprId cond, ExprId then_e, ExprId else_e) {
   return Push(n);
 }
 
-static bool DependsOn(const ExprPool& p, ExprId id, bool include_time) {
-  if (id < 0) return false;
-  // Children have smaller indices; an explicit stack avoids deep recursion.
-  std::vector<ExprId> stack{id};
-  while (!stack.empty()) {
-    ExprId e = stack.back();
-    stack.pop_back();
-    const ExprNode& n = p[e];
-    if (n.op == Op::State) return true;
-    if (include_time && n.op == Op::Time) return true;
-    if (n.a >= 0) stack.push_back(n.a);
-    if (n.b >= 0) stack.push_back(n.b);
-    if (n.c >= 0) stack.push_back(n.c);
-  }
-  return false;
+bool ExprPool::DependsOnTimeOrState(ExprId id) const {
+  return id >= 0 && (reads_[static_cast<size_t>(id)] & (kReadsTime | kReadsState)) != 0;
 }
 
-bool ExprPool::DependsOnTimeOrState(ExprId id) const { return DependsOn(*this, id, true); }
-bool ExprPool::DependsOnState(ExprId id) const { return DependsOn(*this, id, false); }
+bool ExprPool::DependsOnState(ExprId id) const {
+  return id >= 0 && (reads_[static_cast<size_t>(id)] & kReadsState) != 0;
+}
 
 double ApplyOp(Op op, double a, double b, double c) {
   switch (op) {
@@ -155,74 +147,87 @@ double ApplyOp(Op op, double a, double b, double c) {
   return 0.0;
 }
 
-static void Print(const ExprPool& p, ExprId id, const std::vector<std::string>* pn,
-                  const std::vector<std::string>* sn, std::ostringstream& os, int depth) {
-  if (depth > 200) {
-    os << "...";
-    return;
-  }
-  const ExprNode& n = p[id];
+namespace {
+
+// One pending piece of ExprPool::ToString's output: a node to print or literal text.
+struct PrintItem {
+  ExprId node = kNoExpr;  // kNoExpr: emit `text`
+  const char* text = nullptr;
+  int depth = 0;
+};
+
+// The text of one leaf node.
+std::string LeafText(const ExprNode& n, const std::vector<std::string>* pn, const std::vector<std::string>* sn) {
+  std::ostringstream os;
   switch (n.op) {
-    case Op::Const: {
-      std::ostringstream v;
-      v.precision(17);
-      v << n.value;
-      os << v.str();
-      return;
-    }
+    case Op::Const: os.precision(17); os << n.value; break;
     case Op::Param:
-      if (pn && n.index >= 0 && static_cast<size_t>(n.index) < pn->size())
-        os << (*pn)[static_cast<size_t>(n.index)];
-      else
-        os << "param#" << n.index;
-      return;
-    case Op::Time: os << "time"; return;
+      if (pn && n.index >= 0 && static_cast<size_t>(n.index) < pn->size()) os << (*pn)[static_cast<size_t>(n.index)];
+      else os << "param#" << n.index;
+      break;
+    case Op::Time: os << "time"; break;
     case Op::State:
-      if (sn && n.index >= 0 && static_cast<size_t>(n.index) < sn->size())
-        os << (*sn)[static_cast<size_t>(n.index)];
-      else
-        os << "state#" << n.index;
-      return;
-    case Op::IfElse:
-      os << "(if ";
-      Print(p, n.a, pn, sn, os, depth + 1);
-      os << " then ";
-      Print(p, n.b, pn, sn, os, depth + 1);
-      os << " else ";
-      Print(p, n.c, pn, sn, os, depth + 1);
-      os << ")";
-      return;
+      if (sn && n.index >= 0 && static_cast<size_t>(n.index) < sn->size()) os << (*sn)[static_cast<size_t>(n.index)];
+      else os << "state#" << n.index;
+      break;
     default: break;
   }
-  int arity = OpArity(n.op);
-  bool infix = arity == 2 && (n.op <= Op::Or && n.op >= Op::Add);
-  if (n.op == Op::Neg || n.op == Op::Not) {
-    os << "(" << OpSpelling(n.op) << (n.op == Op::Not ? " " : "");
-    Print(p, n.a, pn, sn, os, depth + 1);
-    os << ")";
-  } else if (infix) {
-    os << "(";
-    Print(p, n.a, pn, sn, os, depth + 1);
-    os << " " << OpSpelling(n.op) << " ";
-    Print(p, n.b, pn, sn, os, depth + 1);
-    os << ")";
-  } else {
-    os << OpSpelling(n.op) << "(";
-    Print(p, n.a, pn, sn, os, depth + 1);
-    if (arity == 2) {
-      os << ", ";
-      Print(p, n.b, pn, sn, os, depth + 1);
-    }
-    os << ")";
-  }
+  return os.str();
 }
 
-std::string ExprPool::ToString(ExprId id, const std::vector<std::string>* param_names,
-                               const std::vector<std::string>* state_names) const {
+}  // namespace
+
+// Prints with an explicit stack (no recursion over the expression's depth): a node
+// pushes its pieces in reverse order. Deeper than kMaxDepth levels or longer than
+// max_chars, the text ends with "...".
+std::string ExprPool::ToString(ExprId id, const std::vector<std::string>* pn, const std::vector<std::string>* sn,
+                               std::size_t max_chars) const {
   if (id < 0) return "<none>";
-  std::ostringstream os;
-  Print(*this, id, param_names, state_names, os, 0);
-  return os.str();
+  constexpr int kMaxDepth = 200;
+  std::string out;
+  std::vector<PrintItem> stack{{id, nullptr, 0}};
+  while (!stack.empty()) {
+    if (out.size() > max_chars) {
+      out += "...";
+      break;
+    }
+    PrintItem it = stack.back();
+    stack.pop_back();
+    if (it.node == kNoExpr) {
+      out += it.text;
+      continue;
+    }
+    if (it.depth > kMaxDepth) {
+      out += "...";
+      continue;
+    }
+    const ExprNode& n = (*this)[it.node];
+    int arity = OpArity(n.op);
+    if (arity == 0) {
+      out += LeafText(n, pn, sn);
+      continue;
+    }
+    // Pieces in reading order; pushed reversed below.
+    std::vector<PrintItem> parts;
+    auto text = [&](const char* t) { parts.push_back({kNoExpr, t, 0}); };
+    auto child = [&](ExprId c) { parts.push_back({c, nullptr, it.depth + 1}); };
+    bool infix = arity == 2 && (n.op <= Op::Or && n.op >= Op::Add);
+    if (n.op == Op::IfElse) {
+      text("(if "), child(n.a), text(" then "), child(n.b), text(" else "), child(n.c), text(")");
+    } else if (n.op == Op::Neg) {
+      text("(-"), child(n.a), text(")");
+    } else if (n.op == Op::Not) {
+      text("(not "), child(n.a), text(")");
+    } else if (infix) {
+      text("("), child(n.a), text(" "), text(OpSpelling(n.op)), text(" "), child(n.b), text(")");
+    } else {
+      text(OpSpelling(n.op)), text("("), child(n.a);
+      if (arity == 2) text(", "), child(n.b);
+      text(")");
+    }
+    stack.insert(stack.end(), parts.rbegin(), parts.rend());
+  }
+  return out;
 }
 
 }  // namespace kanesim::flat

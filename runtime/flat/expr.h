@@ -113,18 +113,25 @@ class ExprPool {
   // True when the expression is a Const node (after the elaborator's own folding).
   bool IsConstant(ExprId id) const { return id >= 0 && (*this)[id].op == Op::Const; }
 
-  // True when the expression (transitively) reads time or state.
+  // True when the expression (transitively) reads time or state. O(1): every node
+  // records what its sub-DAG reads when it is pushed.
   bool DependsOnTimeOrState(ExprId id) const;
   bool DependsOnState(ExprId id) const;
 
-  // Human-readable form for `kanesim check --emit flat`; params and state refs by index
-  // unless names are provided.
+  // Human-readable form for `kanesim check --emit flat` and messages; params and state
+  // refs by index unless names are provided. A shared sub-expression prints once per
+  // use, so the text of a DAG can be exponentially longer than the DAG: the text stops
+  // with "..." after `max_chars` characters (kToStringChars by default).
+  static constexpr std::size_t kToStringChars = 20000;
   std::string ToString(ExprId id, const std::vector<std::string>* param_names = nullptr,
-                       const std::vector<std::string>* state_names = nullptr) const;
+                       const std::vector<std::string>* state_names = nullptr,
+                       std::size_t max_chars = kToStringChars) const;
 
  private:
+  enum : std::uint8_t { kReadsTime = 1, kReadsState = 2 };
   ExprId Push(const ExprNode& n);
   std::vector<ExprNode> nodes_;
+  std::vector<std::uint8_t> reads_;  // per node: kReadsTime | kReadsState of its sub-DAG
 };
 
 // Evaluates one op on already-evaluated operands (used by every evaluator so the

@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <sstream>
+#include <unordered_map>
+
+#include "runtime/flat/param_eval.h"
 
 namespace kanesim::flat {
 
@@ -131,25 +134,27 @@ std::string Mechanism::StateRefName(const StateRef& r) const {
   return os.str();
 }
 
+// Post-order over the sub-DAG of `id` only (a hash map, not an array the size of the
+// pool, so that calling it once per parameter stays linear overall).
 double EvalParamExpr(const Mechanism& m, const std::vector<double>& pv, ExprId id) {
   if (id < 0) return 0.0;
-  // Iterative post-order evaluation over the sub-DAG (children have smaller ids).
-  std::vector<std::pair<ExprId, double>> memo;
+  std::unordered_map<ExprId, double> val;
   std::vector<ExprId> stack{id};
-  std::vector<double> val(static_cast<size_t>(id) + 1, std::nan(""));
-  std::vector<char> done(static_cast<size_t>(id) + 1, 0);
   while (!stack.empty()) {
-    ExprId e = stack.back();
+    const ExprId e = stack.back();
+    if (val.count(e)) {
+      stack.pop_back();
+      continue;
+    }
     const ExprNode& n = m.exprs[e];
     bool ready = true;
     for (ExprId c : {n.a, n.b, n.c})
-      if (c >= 0 && !done[static_cast<size_t>(c)]) {
+      if (c >= 0 && !val.count(c)) {
         stack.push_back(c);
         ready = false;
       }
     if (!ready) continue;
     stack.pop_back();
-    if (done[static_cast<size_t>(e)]) continue;
     double r = 0.0;
     switch (n.op) {
       case Op::Const: r = n.value; break;
@@ -159,24 +164,21 @@ double EvalParamExpr(const Mechanism& m, const std::vector<double>& pv, ExprId i
         break;
       case Op::Time:
       case Op::State: r = std::nan(""); break;
-      default: {
-        double a = n.a >= 0 ? val[static_cast<size_t>(n.a)] : 0.0;
-        double b = n.b >= 0 ? val[static_cast<size_t>(n.b)] : 0.0;
-        double c = n.c >= 0 ? val[static_cast<size_t>(n.c)] : 0.0;
-        r = ApplyOp(n.op, a, b, c);
-      }
+      default:
+        r = ApplyOp(n.op, n.a >= 0 ? val[n.a] : 0.0, n.b >= 0 ? val[n.b] : 0.0, n.c >= 0 ? val[n.c] : 0.0);
     }
-    val[static_cast<size_t>(e)] = r;
-    done[static_cast<size_t>(e)] = 1;
+    val[e] = r;
   }
-  return val[static_cast<size_t>(id)];
+  return val[id];
 }
 
+// One evaluator for all parameters: a node shared by several bindings is evaluated once.
 std::vector<double> EvaluateParams(const Mechanism& m) {
   std::vector<double> pv(m.params.size(), 0.0);
+  ParamEvaluator eval(m.exprs, pv);
   for (size_t i = 0; i < m.params.size(); ++i) {
     const Param& p = m.params[i];
-    pv[i] = (p.binding == kNoExpr || p.user_set) ? p.value : EvalParamExpr(m, pv, p.binding);
+    pv[i] = (p.binding == kNoExpr || p.user_set) ? p.value : eval.Eval(p.binding);
   }
   return pv;
 }

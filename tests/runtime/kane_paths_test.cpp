@@ -73,7 +73,7 @@ TEST(KanePaths, NewtonEulerBalanceWithReactionsInComplement) {
     rt::Vec6 A;
     A.head<3>() = ws->a_bias_cm[L];
     A.tail<3>() = ws->alpha_bias[L];
-    for (int s : p.bodies[L].path_speeds) A += rt::TangentColumn(p, *ws, static_cast<int>(L), s) * ws->udot[s];
+    for (int s : rt::PathSpeeds(p, static_cast<int>(L))) A += rt::TangentColumn(p, *ws, static_cast<int>(L), s) * ws->udot[s];
     // Wrench balance at c_L: applied + parent reaction - children reactions - inertia.
     const rt::Vec3 c = ws->p_WBcm[L];
     auto at_c = [&](const rt::Vec6& w, const rt::Vec3& o) {

@@ -1,0 +1,266 @@
+// --set overrides: the name is parsed (dotted parts, 1-based integer subscripts), the
+// value is parsed as a .mech expression and becomes the outermost modifier; after
+// instantiation the target is checked (it exists, indices are in range, it is a
+// parameter that may be set) and subscripted names are bound on the instance they name.
+// Mistakes in the name are reported in "<--set>", a pseudo-file holding `name=value`, with
+// a caret under the offending part.
+#include <cctype>
+#include <sstream>
+
+#include "lang/elab_internal.h"
+#include "lang/parser.h"
+
+namespace kanesim::lang::elab {
+
+namespace {
+
+std::string PartText(const std::vector<SetPart>& parts, size_t upto) {
+  std::string s;
+  for (size_t i = 0; i <= upto && i < parts.size(); ++i) s += (i ? "." : "") + parts[i].name;
+  return s;
+}
+
+// name := part { '.' part };  part := IDENT [ '[' INT { ',' INT } ']' ];  INT := ['-'] digit {digit}
+// On failure *bad is the offset of the offending character and *why says what was expected.
+bool ParseSetName(const std::string& s, std::vector<SetPart>* parts, size_t* bad, std::string* why) {
+  size_t i = 0;
+  auto fail = [&](const char* what) {
+    *bad = i;
+    *why = what;
+    return false;
+  };
+  while (true) {
+    SetPart p;
+    p.begin = static_cast<int>(i);
+    if (i >= s.size() || !(std::isalpha(static_cast<unsigned char>(s[i])) || s[i] == '_'))
+      return fail("expected a name");
+    while (i < s.size() && (std::isalnum(static_cast<unsigned char>(s[i])) || s[i] == '_')) p.name += s[i++];
+    p.end = static_cast<int>(i);
+    if (i < s.size() && s[i] == '[') {
+      ++i;
+      while (true) {
+        size_t b = i;
+        if (i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+        size_t digits = i;
+        while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
+        if (i == digits) {
+          i = b;
+          return fail("expected an integer index");
+        }
+        if (i - digits > 15) {
+          i = b;
+          return fail("the index is too large");
+        }
+        p.subs.push_back(std::stol(s.substr(b, i - b)));
+        p.sub_spans.push_back({static_cast<int>(b), static_cast<int>(i)});
+        if (i < s.size() && s[i] == ',') {
+          ++i;
+          continue;
+        }
+        if (i < s.size() && s[i] == ']') {
+          ++i;
+          break;
+        }
+        return fail("expected ',' or ']'");
+      }
+    }
+    parts->push_back(std::move(p));
+    if (i == s.size()) return true;
+    if (s[i] != '.') return fail("expected '.' or '='");
+    ++i;
+  }
+}
+
+}  // namespace
+
+Span Elaborator::SetSpan(const SetOverride& so, int begin, int end) const {
+  return Span{so.file, begin, std::max(end, begin + 1)};
+}
+
+// Before instantiation: parse every --set; names without subscripts become the
+// outermost modifiers (they win over everything but final).
+bool Elaborator::ParseSetOverrides() {
+  for (const auto& ov : options_.overrides) {
+    SetOverride so;
+    so.name = ov.name;
+    so.file = program_.sources.Add("<--set>", ov.name + "=" + ov.value);
+    size_t bad = 0;
+    std::string why;
+    if (!ParseSetName(ov.name, &so.parts, &bad, &why)) {
+      auto& d = diags_.Error(DiagCode::BadSet, SetSpan(so, static_cast<int>(bad), static_cast<int>(bad) + 1),
+                             "--set " + ov.name + ": " + why);
+      d.hint = "write a dotted parameter name with 1-based indices: N=5, rod.L=0.3, world.g[2]=-1.6, I[1,2]=0";
+      continue;
+    }
+    int value_file = program_.sources.Add("<--set " + ov.name + ">", ov.value);
+    int before = diags_.NumErrors();
+    auto expr = ParseExpression(value_file, program_.sources, diags_);
+    if (diags_.NumErrors() > before) {
+      diags_.Error(DiagCode::BadSet, Span{value_file, 0, static_cast<int32_t>(ov.value.size())},
+                   "cannot parse the value of --set " + ov.name + "=" + ov.value)
+          .hint = "values are .mech expressions: 2.5, {0, -9.81, 0}, true, \"text\"";
+      continue;
+    }
+    so.value = expr.get();
+    synthetic_.push_back(std::move(expr));
+    for (const auto& p : so.parts) so.subscripted = so.subscripted || !p.subs.empty();
+    // Subscripted names (world.g[2], links[3].m) are bound after instantiation, on the
+    // instance they name: modifiers cannot address single array elements.
+    if (!so.subscripted) {
+      Mod* target = &root_->mod;
+      for (const auto& p : so.parts) {
+        if (!target->sub.count(p.name)) {
+          target->order.push_back(p.name);
+          target->sub[p.name].set_only = true;
+        }
+        target = &target->sub[p.name];
+        target->span = so.value->span;
+      }
+      target->value = SetValue(so);
+    }
+    sets_.push_back(std::move(so));
+  }
+  return !diags_.HasErrors();
+}
+
+ModValue Elaborator::SetValue(const SetOverride& so) {
+  ModValue mv;
+  mv.expr = so.value;
+  mv.scope = root_.get();
+  mv.span = so.value->span;
+  mv.from_set = true;
+  return mv;
+}
+
+// The instance a parsed --set name denotes, with a diagnostic when there is none: an
+// unknown part, an index out of range, an index on something that is not an array, or
+// the wrong number of indices. *elem receives the row-major element of an indexed
+// variable (-1: the whole variable).
+Node* Elaborator::ResolveSetTarget(const SetOverride& so, int* elem) {
+  *elem = -1;
+  Node* n = root_.get();
+  const std::string& full = so.name;
+  for (size_t i = 0; i < so.parts.size(); ++i) {
+    const SetPart& p = so.parts[i];
+    const bool last = i + 1 == so.parts.size();
+    Span at = SetSpan(so, p.begin, p.end);
+    if (n->kind != Node::kClass) {
+      diags_.Error(DiagCode::UnknownName, at,
+                   "--set " + full + ": '" + n->path + "' is a variable and has no member '" + p.name + "'");
+      return nullptr;
+    }
+    Node* next = n->Child(p.name);
+    if (!next) {
+      std::vector<std::string> names;
+      for (const auto& c : n->children) names.push_back(c->name);
+      auto& d = diags_.Error(DiagCode::UnknownName, at,
+                             "--set " + full + ": no such parameter" +
+                                 (n == root_.get() ? "" : " ('" + n->path + "' has no element '" + p.name + "')"));
+      std::string best = ClosestName(p.name, names);
+      if (!best.empty()) d.hint = "did you mean '" + (i == 0 ? best : PartText(so.parts, i - 1) + "." + best) + "'?";
+      return nullptr;
+    }
+    n = next;
+    if (n->kind == Node::kArray) {
+      if (p.subs.empty()) {
+        // j.axis = {...}: a modifier of the whole array; check the name on an element.
+        if (!last && !n->elems.empty()) n = n->elems[0].get();
+        continue;
+      }
+      if (p.subs.size() != 1) {
+        diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[1].first, p.sub_spans.back().second),
+                     "--set " + full + ": '" + n->path + "' is an array of components and takes one index");
+        return nullptr;
+      }
+      long k = p.subs[0];
+      if (k < 1 || k > static_cast<long>(n->elems.size())) {
+        diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[0].first, p.sub_spans[0].second),
+                     "--set " + full + ": index " + std::to_string(k) + " is out of range 1.." +
+                         std::to_string(n->elems.size()) + " of '" + n->path + "'")
+            .hint = "indices are 1-based";
+        return nullptr;
+      }
+      n = n->elems[static_cast<size_t>(k - 1)].get();
+      continue;
+    }
+    if (p.subs.empty()) continue;
+    if (n->kind != Node::kVar) {
+      diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second),
+                   "--set " + full + ": '" + n->path + "' is not an array and takes no index");
+      return nullptr;
+    }
+    if (n->shape.empty()) {
+      diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second),
+                   "--set " + full + ": '" + n->path + "' is a scalar and takes no index");
+      return nullptr;
+    }
+    if (p.subs.size() != n->shape.size()) {
+      diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second),
+                   "--set " + full + ": '" + n->path + "' has " + std::to_string(n->shape.size()) +
+                       " dimension(s) but " + std::to_string(p.subs.size()) + " indices are given");
+      return nullptr;
+    }
+    long flat = 0;
+    for (size_t d = 0; d < p.subs.size(); ++d) {
+      long k = p.subs[d];
+      long size = n->shape[d];
+      if (k < 1 || k > size) {
+        diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[d].first, p.sub_spans[d].second),
+                     "--set " + full + ": index " + std::to_string(k) + " is out of range 1.." + std::to_string(size) +
+                         " of '" + n->path + "'")
+            .hint = "indices are 1-based";
+        return nullptr;
+      }
+      flat = flat * size + (k - 1);
+    }
+    if (!last) {
+      diags_.Error(DiagCode::UnknownName, SetSpan(so, so.parts[i + 1].begin, so.parts[i + 1].end),
+                   "--set " + full + ": '" + n->path + "' is a variable and has no members");
+      return nullptr;
+    }
+    *elem = static_cast<int>(flat);
+  }
+  return n;
+}
+
+// After instantiation: every target must be a settable parameter; subscripted ones are
+// bound here, as element equations of the parameter or as its whole value.
+void Elaborator::BindSetOverrides() {
+  for (const SetOverride& so : sets_) {
+    if (diags_.Full()) return;
+    const std::string& full = so.name;
+    Span whole = SetSpan(so, 0, so.parts.back().sub_spans.empty() ? so.parts.back().end
+                                                                     : so.parts.back().sub_spans.back().second + 1);
+    int elem = -1;
+    Node* n = ResolveSetTarget(so, &elem);
+    if (!n) continue;
+    if (n->kind != Node::kVar || n->variability != ast::Variability::Parameter) {
+      auto& d = diags_.Error(DiagCode::NotParameter, whole,
+                             "--set " + full + ": '" + n->path + "' is not a parameter" +
+                                 (n->variability == ast::Variability::Constant ? " (it is a constant)" : ""));
+      if (n->decl) d.notes.push_back({n->decl->name_span, "declared here"});
+      continue;
+    }
+    if (n->decl && n->decl->is_protected) {
+      auto& d = diags_.Error(DiagCode::NotParameter, whole, "--set " + full + ": '" + n->path + "' is protected");
+      d.notes.push_back({n->decl->name_span, "declared protected here"});
+      continue;
+    }
+    if (n->is_final_decl || n->mod.is_final) {
+      auto& d = diags_.Error(DiagCode::FinalOverride, whole, "--set " + full + ": '" + n->path + "' is final");
+      if (n->decl) d.notes.push_back({n->decl->name_span, "declared final here"});
+      continue;
+    }
+    if (!so.subscripted) continue;  // bound as a modifier before instantiation
+    if (n->state == 2) {
+      diags_.Error(DiagCode::BadSet, so.value->span,
+                   "--set " + full + ": '" + n->path + "' sizes the model and was fixed before this override")
+          .hint = "set the parameter it depends on instead";
+      continue;
+    }
+    if (elem >= 0) n->eq_elem_binding[elem] = SetValue(so);
+    else n->mod.value = SetValue(so);
+  }
+}
+
+}  // namespace kanesim::lang::elab

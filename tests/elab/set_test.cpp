@@ -1,0 +1,96 @@
+// --set: names with 1-based indices reach the element they name, and every bad target is
+// a diagnostic with a stable code pointing into "<--set>" (issue 24, "Clear messages").
+#include <gtest/gtest.h>
+
+#include "tests/elab/elab_text.h"
+
+namespace kanesim::lang::test {
+namespace {
+
+const char* kModel = R"(model M
+  parameter Integer N = 3;
+  parameter Real I[2, 3] = {{1, 2, 3}, {4, 5, 6}};
+  parameter Real s = 1;
+  World world;
+  Rod links[N];
+end M;
+)";
+
+// If this fails, a --set with indices changes another element than the one named (the
+// old parser read "I[2,3]" as I[2]), or a plain one does not reach its parameter.
+TEST(Set, IndicesReachTheElementNamed) {
+  struct Case {
+    const char* name;
+    const char* value;
+    const char* param;
+    double want;
+  };
+  const Case cases[] = {
+      {"I[2,3]", "7", "I[2,3]", 7},          {"I[1,2]", "-1", "I[1,2]", -1},
+      {"world.g[2]", "-1.6", "world.g[2]", -1.6}, {"links[2].L", "0.3", "links[2].L", 0.3},
+      {"s", "2.5", "s", 2.5},
+  };
+  for (const auto& c : cases) {
+    auto e = ElaborateText(kModel, {{c.name, c.value}});
+    ASSERT_TRUE(e->ok) << c.name << "\n" << e->errors;
+    EXPECT_DOUBLE_EQ(e->P(c.param), c.want) << c.name;
+    // Neighbours keep their values.
+    EXPECT_DOUBLE_EQ(e->P("I[1,3]"), 3) << c.name;
+    EXPECT_DOUBLE_EQ(e->P("I[2,2]"), 5) << c.name;
+    EXPECT_DOUBLE_EQ(e->P("links[1].L"), 1) << c.name;
+  }
+}
+
+// If this fails, a bad --set target is accepted silently, crashes, or is reported with a
+// misleading message: every class of mistake in the name and in the value.
+TEST(Set, BadTargetsAreDiagnostics) {
+  struct Case {
+    const char* assignment;  // name=value
+    const char* code;
+    const char* text;        // in the rendered diagnostic
+    bool first = true;       // the first error has `code` (else: one of the errors)
+  };
+  const Case cases[] = {
+      {"world.g[0]=1", "E219", "<--set>:1:9: error[E219]: --set world.g[0]: index 0 is out of range 1..3"},
+      {"world.g[4]=1", "E219", "index 4 is out of range 1..3 of 'world.g'"},
+      {"world.g[-1]=1", "E219", "index -1 is out of range 1..3"},
+      {"links[0].L=1", "E219", "index 0 is out of range 1..3 of 'links'"},
+      {"links[4].L=1", "E219", "index 4 is out of range 1..3 of 'links'"},
+      {"I[3,1]=1", "E219", "index 3 is out of range 1..2 of 'I'"},
+      {"s[1]=2", "E210", "'s' is a scalar and takes no index"},
+      {"I[1]=2", "E210", "'I' has 2 dimension(s) but 1 indices are given"},
+      {"world.g[1,2]=1", "E210", "'world.g' has 1 dimension(s) but 2 indices"},
+      {"world.g[1][2]=1", "E210", "expected '.' or '='"},
+      {"world.g[x]=1", "E210", "expected an integer index"},
+      {"world.g[1.5]=1", "E210", "expected ',' or ']'"},
+      {"world.g[1=2", "E210", "expected ',' or ']'"},
+      {"N.=1", "E210", "expected a name"},
+      {".N=1", "E210", "expected a name"},
+      {"world..g=1", "E210", "expected a name"},
+      {"world.g[99999999999999999999]=1", "E210", "the index is too large"},
+      {"nosuch=1", "E201", "--set nosuch: no such parameter"},
+      {"world.nosuch=1", "E201", "'world' has no element 'nosuch'"},
+      {"wrld.g=1", "E201", "did you mean 'world'?"},
+      {"world.g.x=1", "E201", "'world.g' is a variable and has no member 'x'"},
+      {"links=1", "E211", "'links' is not a parameter", false},
+      {"s=abc", "E201", "unknown name 'abc'"},
+      {"world.g=1", "E210", "has size [3] but its value has size scalar"},
+      {"N=1.5", "E210", "'N' is Integer but its value is Real"},
+      {"s=\"text\"", "E210", "'s' is Real but its value is String"},
+  };
+  for (const auto& c : cases) {
+    std::string a = c.assignment;
+    size_t eq = a.find('=');
+    auto e = ElaborateText(kModel, {{a.substr(0, eq), a.substr(eq + 1)}});
+    EXPECT_FALSE(e->ok) << a;
+    ASSERT_FALSE(e->codes.empty()) << a;
+    if (c.first) {
+      EXPECT_EQ(e->codes[0], c.code) << a << "\n" << e->errors;
+    }
+    EXPECT_TRUE(e->HasCode(c.code)) << a << "\n" << e->errors;
+    EXPECT_NE(e->errors.find(c.text), std::string::npos) << a << "\n" << e->errors;
+  }
+}
+
+}  // namespace
+}  // namespace kanesim::lang::test
