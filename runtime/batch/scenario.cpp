@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <numbers>
@@ -11,6 +12,7 @@
 #include <sstream>
 
 #include "runtime/batch/csv_util.h"
+#include "runtime/flat/number.h"
 
 namespace kanesim::batch {
 namespace {
@@ -24,15 +26,10 @@ std::string Trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
+// The language's number syntax (runtime/flat/number.h), spaces around it allowed.
 bool ParseNumber(const std::string& text, double* out) {
-  std::string t = Trim(text);
-  if (t.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  double v = std::strtod(t.c_str(), &end);
-  if (end != t.c_str() + t.size() || errno == ERANGE || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
+  std::string unused;
+  return flat::ParseNumber(Trim(text), out, &unused);
 }
 
 std::vector<std::string> Split(const std::string& s, char sep) {
@@ -289,8 +286,10 @@ bool CombineBlocks(const std::vector<Block>& blocks, std::vector<std::string>* n
     total *= static_cast<double>(b.rows.size());
   }
   if (blocks.empty()) total = 0.0;
-  if (total > static_cast<double>(kMaxValues) * 10) {
-    *error = "the sweep has " + std::to_string(static_cast<long long>(total)) + " scenarios (more than 10 million)";
+  if (!(total <= static_cast<double>(kMaxScenarios))) {  // compared as a double: never an overflowed count
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", total);
+    *error = std::string("the sweep has ") + buf + " scenarios (more than " + std::to_string(kMaxScenarios) + ")";
     return false;
   }
   const size_t count = static_cast<size_t>(total);

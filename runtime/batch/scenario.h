@@ -18,6 +18,8 @@
 namespace kanesim::batch {
 
 inline constexpr double kUnset = std::numeric_limits<double>::quiet_NaN();
+// The most scenarios one sweep may have (ids are ints; the summary is one line each).
+inline constexpr int kMaxScenarios = 10'000'000;
 
 // Per-scenario run settings; NaN = the sweep's default.
 struct RunOverride {
