@@ -200,20 +200,21 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     std::string text = batch::FormatTrajectoryCsv(fresh);
     if (have_golden && ReadFileText(spec.golden_path) == text) {
       r.outcome = Outcome::kUpdated;
-      r.report = fmt::format("SAME  {} (golden unchanged, {} signals x {} instants)\n", label, stored.size(),
-                             fresh.t.size());
+      r.report = fmt::format("SAME  {} (golden unchanged, {} signals x {} instants)\n{}", label, stored.size(),
+                             fresh.t.size(), notes);
       return r;
     }
     batch::RemoveStaleTemps(spec.golden_path);  // left by an --update that was killed
     if (!batch::WriteFileAtomic(spec.golden_path, text, &err)) return error(err);
     r.outcome = Outcome::kUpdated;
-    r.report = have_golden ? fmt::format("UPDATED {} -> {}\n{}", label, spec.golden_path,
+    r.report = have_golden ? fmt::format("UPDATED {} -> {}\n{}{}", label, spec.golden_path, notes,
                                          DescribeChanges(spec, golden, fresh))
                : golden_exists
                    ? fmt::format("UPDATED {} -> {} ({} signals x {} instants; it replaces a corrupt file: {})\n",
                                  label, spec.golden_path, stored.size(), fresh.t.size(), corrupt)
                    : fmt::format("NEW   {} -> {} ({} signals x {} instants)\n", label, spec.golden_path,
                                  stored.size(), fresh.t.size());
+    if (!have_golden) r.report += notes;
     return r;
   }
   if (!golden_exists)

@@ -92,9 +92,14 @@ int Trajectory::Column(const std::string& name) const {
 }
 
 bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error) {
+  std::string text;
+  return ReadTextFile(path, kMaxSpecBytes, &text, error) && ReadGoldenSpecText(path, text, out, error);
+}
+
+bool ReadGoldenSpecText(const std::string& path, const std::string& text, GoldenSpec* out, std::string* error) {
   toml::table root;
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     *error = path + ":" + std::to_string(e.source().begin.line) + ":" + std::to_string(e.source().begin.column) +
              ": " + std::string(e.description());
@@ -244,14 +249,11 @@ std::string SettingsText(const GoldenSpec& s) {
 }
 
 bool ReadTrajectoryCsv(const std::string& path, Trajectory* out, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    *error = "cannot read '" + path + "'";
-    return false;
-  }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  std::string text;
+  return ReadTextFile(path, kMaxDataBytes, &text, error) && ReadTrajectoryCsvText(path, text, out, error);
+}
+
+bool ReadTrajectoryCsvText(const std::string& path, const std::string& text, Trajectory* out, std::string* error) {
   *out = Trajectory{};
   auto fail = [&](int line_no, const std::string& why) {
     *error = path + (line_no > 0 ? ":" + std::to_string(line_no) : std::string()) + ": " + why;

@@ -53,6 +53,8 @@ struct GoldenSpec {
 };
 
 bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error);
+// The same from the file's text (`path` names it in messages and anchors relative paths).
+bool ReadGoldenSpecText(const std::string& path, const std::string& text, GoldenSpec* out, std::string* error);
 // The text hashed into the `settings` provenance line: what the run depends on.
 std::string SettingsText(const GoldenSpec& spec);
 
@@ -69,6 +71,7 @@ struct Trajectory {
 // values only), times that do not increase, or a row count or checksum that differs from
 // the `rows` and `data` provenance lines written with it.
 bool ReadTrajectoryCsv(const std::string& path, Trajectory* out, std::string* error);
+bool ReadTrajectoryCsvText(const std::string& path, const std::string& text, Trajectory* out, std::string* error);
 // Provenance lines (with `rows` = the row count and `data` = fnv1a64 of the row lines
 // added), header, rows.
 std::string FormatTrajectoryCsv(const Trajectory& t);

@@ -207,11 +207,12 @@ Block SampleBlock(const SampleSpec& spec) {
 }
 
 bool ReadListCsv(const std::string& path, Block* out, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = "cannot read '" + path + "'";
-    return false;
-  }
+  std::string text;
+  return ReadTextFile(path, kMaxDataBytes, &text, error) && ReadListCsvText(path, text, out, error);
+}
+
+bool ReadListCsvText(const std::string& path, const std::string& text, Block* out, std::string* error) {
+  std::istringstream in(text);
   *out = Block{};
   std::string line;
   int line_no = 0;
@@ -257,6 +258,10 @@ bool ReadListCsv(const std::string& path, Block* out, std::string* error) {
       else if (k == -1) run.stop_time = v;
       else if (k == -2) run.rtol = v;
       else run.atol = v;
+    }
+    if (out->rows.size() >= static_cast<size_t>(kMaxScenarios)) {
+      *error = path + ":" + std::to_string(line_no) + ": more than " + std::to_string(kMaxScenarios) + " scenarios";
+      return false;
     }
     out->rows.push_back(std::move(row));
     out->run.push_back(run);

@@ -74,6 +74,7 @@ Block SampleBlock(const SampleSpec& spec);
 // stop_time, rtol, atol) and one row per scenario; '#' lines and blank lines ignored,
 // an empty field keeps the model's value.
 bool ReadListCsv(const std::string& path, Block* out, std::string* error);
+bool ReadListCsvText(const std::string& path, const std::string& text, Block* out, std::string* error);
 
 // The Cartesian product of the blocks. A parameter may appear in one block only.
 bool CombineBlocks(const std::vector<Block>& blocks, std::vector<std::string>* names, std::vector<Scenario>* out,

@@ -139,9 +139,14 @@ bool Distributions(const std::string& path, const toml::table& sample, const cha
 }  // namespace
 
 bool ReadSweepToml(const std::string& path, SweepFileSpec* out, std::string* error) {
+  std::string text;
+  return ReadTextFile(path, kMaxSpecBytes, &text, error) && ReadSweepTomlText(path, text, out, error);
+}
+
+bool ReadSweepTomlText(const std::string& path, const std::string& text, SweepFileSpec* out, std::string* error) {
   toml::table root;
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     *error = path + ":" + std::to_string(e.source().begin.line) + ":" + std::to_string(e.source().begin.column) +
              ": " + std::string(e.description());

@@ -7,6 +7,7 @@
 #include <toml++/toml.h>
 #include <vector>
 
+#include "runtime/batch/csv_util.h"
 #include "runtime/sim/csv.h"
 
 namespace kanesim::batch {
