@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fmt/core.h>
 #include <limits>
 #include <memory>
@@ -23,6 +24,8 @@
 #include <vector>
 
 #include "cli/common.h"
+#include "cli/number_options.h"
+#include "runtime/batch/file_guard.h"
 #include "runtime/engine.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/signal_select.h"
@@ -152,7 +155,32 @@ int RunCommand(const RunArgs& a) {
   }
   WarnIndeterminate(program, so.signals);
 
+  if (std::string w = sim::ToleranceWarning(so.rtol); !w.empty()) fmt::print(stderr, "kanesim: warning: {}\n", w);
+  const sim::OutputGrid grid = sim::ResolveGrid(program, so);
+  if (std::string why = sim::CheckRun(grid, so.rtol, so.atol); !why.empty()) {
+    fmt::print(stderr, "kanesim: error: {}\n", why);
+    return kExitModelError;
+  }
+
+  // The output: never the model itself, and one writer at a time (locked while written;
+  // only a regular file, not /dev/null or a pipe, which many may share).
   bool to_stdout = a.out_path.empty() || a.out_path == "-";
+  batch::FileLock out_lock;
+  if (!to_stdout) {
+    if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing the CSV there would destroy it\n",
+                 a.out_path, in);
+      return kExitModelError;
+    }
+    std::error_code ec;
+    const auto status = std::filesystem::status(a.out_path, ec);
+    std::string lock_error;
+    if ((ec || std::filesystem::is_regular_file(status) || !std::filesystem::exists(status)) &&
+        !out_lock.Acquire(a.out_path, "'" + a.out_path + "'", &lock_error)) {
+      fmt::print(stderr, "kanesim: error: {}\n", lock_error);
+      return kExitModelError;
+    }
+  }
   std::FILE* out = to_stdout ? stdout : std::fopen(a.out_path.c_str(), "w");
   if (!out) {
     fmt::print(stderr, "kanesim: error: cannot open '{}' for writing: {}\n", a.out_path, std::strerror(errno));
@@ -202,12 +230,12 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   run->add_option("-o,--out", a->out_path, "Write the CSV to this file (default: stdout)");
   run->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
   run->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
-  a->start_opt = run->add_option("--start-time", a->start_time, "Start time (default: experiment StartTime)");
-  a->stop_opt = run->add_option("--stop-time", a->stop_time, "Stop time (default: experiment StopTime)");
-  a->interval_opt = run->add_option("--interval", a->interval, "Output interval (default: experiment Interval, "
-                                                                 "else (stop - start) / 500)");
-  a->rtol_opt = run->add_option("--rtol", a->rtol, "Relative tolerance (default: experiment Tolerance)");
-  a->atol_opt = run->add_option("--atol", a->atol, "Absolute tolerance (default: = rtol)");
+  a->start_opt = AddNumberOption(run, "--start-time", &a->start_time, "Start time (default: experiment StartTime)");
+  a->stop_opt = AddNumberOption(run, "--stop-time", &a->stop_time, "Stop time (default: experiment StopTime)");
+  a->interval_opt = AddNumberOption(run, "--interval", &a->interval,
+                                    "Output interval (default: experiment Interval, else (stop - start) / 500)");
+  a->rtol_opt = AddNumberOption(run, "--rtol", &a->rtol, "Relative tolerance (default: experiment Tolerance)");
+  a->atol_opt = AddNumberOption(run, "--atol", &a->atol, "Absolute tolerance (default: = rtol)");
   run->add_option("--output", a->patterns,
                   "Signals to write: a glob over dotted names, * any run, ? one character (repeatable)")
       ->allow_extra_args(false);

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
+#include <climits>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +20,10 @@
 
 #include "cli/batch_cli.h"
 #include "cli/common.h"
+#include "cli/number_options.h"
+#include "runtime/batch/csv_util.h"
+#include "runtime/batch/file_guard.h"
+#include "runtime/batch/settings_record.h"
 #include "runtime/batch/summary.h"
 #include "runtime/batch/sweep.h"
 #include "runtime/batch/sweep_toml.h"
@@ -70,12 +75,18 @@ int FailExit(const std::string& msg) {
   return kExitModelError;
 }
 
-// "K/N" (no std::regex: GCC 12 reports false maybe-uninitialized warnings in it under
-// the sanitizers).
+// "K/N", two integers (no std::regex: GCC 12 reports false maybe-uninitialized warnings
+// in it under the sanitizers).
 bool ParseShard(const std::string& text, int* k, int* n) {
-  int used = 0;
-  if (std::sscanf(text.c_str(), "%d/%d%n", k, n, &used) != 2 || used != static_cast<int>(text.size())) return false;
-  return *n >= 1 && *k >= 1 && *k <= *n;
+  const size_t slash = text.find('/');
+  long long kk = 0, nn = 0;
+  std::string unused;
+  if (slash == std::string::npos || !flat::ParseInteger(text.substr(0, slash), 1, INT_MAX, &kk, &unused) ||
+      !flat::ParseInteger(text.substr(slash + 1), 1, INT_MAX, &nn, &unused) || kk > nn)
+    return false;
+  *k = static_cast<int>(kk);
+  *n = static_cast<int>(nn);
+  return true;
 }
 
 // K and N of ".../summary.shard-K-of-N.csv"; false for other names.
@@ -164,6 +175,49 @@ bool BuildConfig(SweepArgs& a, batch::SweepConfig* c, std::vector<batch::Block>*
   return true;
 }
 
+std::string Join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& x : items) out.append(out.empty() ? "" : "; ").append(x);
+  return out;
+}
+
+// What the summary is made with (runtime/batch/settings_record.h): everything that
+// decides a scenario's row, resolved (the experiment's defaults filled in).
+batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig& c, const rt::Program& base) {
+  batch::SettingsRecord r;
+  r.Set("kanesim_version", KANESIM_VERSION);
+  r.Set("model", a.load.path);
+  r.Set("model_text", "fnv1a64:" + batch::Fnv1a64Hex(ReadFileText(a.load.path)));
+  r.Set("stdlib", "fnv1a64:" + StdlibHash());
+  r.Set("model_name", a.load.model);
+  r.Set("set", Join(a.load.sets));
+  const sim::OutputGrid grid = sim::ResolveGrid(base, c.sim);
+  r.Set("start_time", sim::FormatNumber(grid.start));
+  r.Set("stop_time", sim::FormatNumber(grid.stop));
+  r.Set("interval", sim::FormatNumber(grid.interval));
+  r.Set("rtol", sim::FormatNumber(c.sim.rtol));
+  r.Set("atol", sim::FormatNumber(c.sim.atol));
+  r.Set("integrator", a.integrator);
+  r.Set("solver", a.solver);
+  r.Set("linear_solver", a.linear_solver);
+  r.Set("projection", a.projection);
+  r.Set("reactions", a.reactions);
+  std::vector<std::string> metrics;
+  for (const batch::Metric& m : c.metrics) metrics.push_back(m.Column());
+  r.Set("metrics", Join(metrics));
+  r.Set("trajectories", c.trajectories ? "true" : "false");
+  r.Set("signals", Join(c.trajectory_signals));
+  std::string defs = Join(c.param_names) + "\n";
+  for (const batch::Scenario& sc : c.scenarios) {
+    for (double v : sc.values) defs.append(sim::FormatNumber(v)).append(",");
+    for (double v : {sc.run.stop_time, sc.run.rtol, sc.run.atol}) defs.append(sim::FormatNumber(v)).append(",");
+    defs.append("\n");
+  }
+  r.Set("scenarios", std::to_string(c.scenarios.size()) + " fnv1a64:" + batch::Fnv1a64Hex(defs));
+  r.Set("shard", std::to_string(c.shard_index + 1) + "/" + std::to_string(c.shard_count));
+  return r;
+}
+
 int SweepCommand(SweepArgs a) {
   batch::SweepConfig config;
   std::vector<batch::Block> blocks;
@@ -192,6 +246,12 @@ int SweepCommand(SweepArgs a) {
       return FailExit(err);
     config.trajectories = true;
   }
+  config.settings = SweepSettings(a, config, *base);
+  config.inputs = {a.load.path};
+  if (a.file != a.load.path) config.inputs.push_back(a.file);
+  if (!a.list.empty()) config.inputs.push_back(a.list);
+  if (std::string w = sim::ToleranceWarning(config.sim.rtol); !w.empty())
+    fmt::print(stderr, "kanesim: warning: {}\n", w);
   std::vector<std::string> used = config.trajectory_signals;
   for (const batch::Metric& m : config.metrics) used.push_back(m.signal);
   WarnIndeterminate(*base, used);
@@ -278,12 +338,39 @@ int MergeCommand(const MergeArgs& a) {
     int k = 0, n = 0;
     if (ShardOfFile(f, &k, &n)) seen.insert(k), count = n;
   }
+  // Every input must come from the same sweep: same settings record (shard aside).
+  batch::SettingsRecord merged_settings;
+  for (size_t i = 0; i < files.size(); ++i) {
+    const std::string sp = batch::SettingsPathFor(files[i]);
+    batch::SettingsRecord rec;
+    std::string err;
+    if (!std::filesystem::exists(sp))
+      return FailExit("'" + files[i] + "' has no settings record ('" + sp +
+                      "'), so it cannot be checked to come from the same sweep as the other inputs");
+    if (!batch::ReadSettings(sp, &rec, &err)) return FailExit(err);
+    if (i == 0) {
+      merged_settings = rec;
+      continue;
+    }
+    std::vector<std::string> diff = batch::SettingsDifferences(merged_settings, rec, files[0], files[i]);
+    if (!diff.empty()) {
+      std::string msg = "'" + files[i] + "' was made with other settings than '" + files[0] + "':";
+      for (const std::string& d : diff) msg += "\n    " + d;
+      return FailExit(msg);
+    }
+  }
+  merged_settings.Set("shard", "merged from " + std::to_string(files.size()) + " file" + (files.size() == 1 ? "" : "s"));
+  for (const std::string& path : {a.out, batch::SettingsPathFor(a.out)})
+    if (std::string in = batch::OverwrittenInput(path, files); !in.empty())
+      return FailExit("the merged summary '" + path + "' would overwrite the input '" + in + "'; choose another -o");
   batch::SummaryTable table;
   std::string err;
   if (!batch::MergeSummaries(files, &table, &err)) return FailExit(err);
   std::filesystem::path out(a.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-  if (!batch::WriteFileAtomic(a.out, batch::FormatSummary(table), &err)) return FailExit(err);
+  if (!batch::WriteFileAtomic(a.out, batch::FormatSummary(table), &err) ||
+      !batch::WriteFileAtomic(batch::SettingsPathFor(a.out), batch::FormatSettings(merged_settings), &err))
+    return FailExit(err);
   fmt::print(stderr, "merge: {} file{}, {} scenarios -> {}\n", files.size(), files.size() == 1 ? "" : "s",
              table.rows.size(), a.out);
   if (count > 0 && static_cast<int>(seen.size()) < count) {
@@ -308,10 +395,11 @@ void AddSweepCommand(CLI::App& app, int* exit_code) {
   sw->add_option("--grid", a->grids, "name=a:step:b or name=v1,v2,... (repeatable; Cartesian product)")
       ->allow_extra_args(false);
   sw->add_option("--list", a->list, "CSV of scenarios: a header of parameter names (and stop_time, rtol, atol)");
-  sw->add_option("--sample", a->sample, "Number of random scenarios (with --uniform / --normal)");
+  AddIntegerOption(sw, "--sample", &a->sample, 1, batch::kMaxScenarios,
+                   "Number of random scenarios (with --uniform / --normal)");
   sw->add_option("--uniform", a->uniforms, "name=low:high (repeatable)")->allow_extra_args(false);
   sw->add_option("--normal", a->normals, "name=mean,sd (repeatable)")->allow_extra_args(false);
-  sw->add_option("--seed", a->seed, "Random seed (default 1)");
+  AddIntegerOption(sw, "--seed", &a->seed, LLONG_MIN, LLONG_MAX, "Random seed (default 1; taken modulo 2^64)");
   sw->add_flag("--lhs,--latin-hypercube", a->lhs, "Latin hypercube instead of independent draws");
   sw->add_option("--metric", a->metrics,
                  "final|min|max|mean|rms:SIGNAL or cross:SIGNAL=LEVEL (repeatable)")
@@ -321,16 +409,16 @@ void AddSweepCommand(CLI::App& app, int* exit_code) {
   sw->add_option("--output", a->patterns, "Trajectory signals, globs like `kanesim run --output` (implies "
                                           "--trajectories)")
       ->allow_extra_args(false);
-  sw->add_option("-j,--jobs", a->threads, "Threads (default: all cores)");
+  AddIntegerOption(sw, "-j,--jobs", &a->threads, 0, kMaxJobs, "Threads (default 0: all cores)");
   sw->add_flag("--resume", a->resume, "Keep the scenarios already in the summary and run the rest");
   sw->add_option("--shard", a->shard, "K/N: run the K-th of N disjoint slices (id mod N == K-1)");
   sw->add_flag("--mpi", a->mpi, "Spread scenarios over MPI ranks (mpirun -n R kanesim sweep --mpi ...)");
   sw->add_flag("--no-progress", a->no_progress, "No progress bar");
-  sw->add_option("--start-time", a->start_time, "Start time (default: experiment StartTime)");
-  sw->add_option("--stop-time", a->stop_time, "Stop time (default: experiment StopTime)");
-  sw->add_option("--interval", a->interval, "Output interval (default: experiment Interval)");
-  sw->add_option("--rtol", a->rtol, "Relative tolerance (default: experiment Tolerance)");
-  sw->add_option("--atol", a->atol, "Absolute tolerance (default: = rtol)");
+  AddNumberOption(sw, "--start-time", &a->start_time, "Start time (default: experiment StartTime)");
+  AddNumberOption(sw, "--stop-time", &a->stop_time, "Stop time (default: experiment StopTime)");
+  AddNumberOption(sw, "--interval", &a->interval, "Output interval (default: experiment Interval)");
+  AddNumberOption(sw, "--rtol", &a->rtol, "Relative tolerance (default: experiment Tolerance)");
+  AddNumberOption(sw, "--atol", &a->atol, "Absolute tolerance (default: = rtol)");
   sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   sw->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode", "dop853"}));

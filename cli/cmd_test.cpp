@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fmt/core.h>
 #include <fstream>
@@ -21,7 +22,9 @@
 
 #include "cli/batch_cli.h"
 #include "cli/common.h"
+#include "cli/number_options.h"
 #include "runtime/batch/csv_util.h"
+#include "runtime/batch/file_guard.h"
 #include "runtime/batch/golden.h"
 #include "runtime/batch/summary.h"
 #include "runtime/sim/csv.h"
@@ -46,18 +49,6 @@ struct TestResult {
   std::string report;  // lines printed for this test
 };
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string StdlibHash() {
-  std::string all;
-  for (const auto& [name, text] : stdlib::Files()) all.append(name).append("\n").append(text).append("\n");
-  return batch::Fnv1a64Hex(all);
-}
 
 std::string G(double x) { return fmt::format("{:.3g}", x); }
 
@@ -79,7 +70,7 @@ std::string DescribeChanges(const batch::GoldenSpec& spec, const batch::Trajecto
   if (unchanged > 0) out += fmt::format("    {} signal{} unchanged\n", unchanged, unchanged == 1 ? "" : "s");
   for (const auto& [k, v] : fresh.provenance) {
     auto it = old_golden.provenance.find(k);
-    if (k != "recorded" && (it == old_golden.provenance.end() || it->second != v))
+    if (k != "recorded" && k != "rows" && k != "data" && (it == old_golden.provenance.end() || it->second != v))
       out += fmt::format("    provenance {}: {} -> {}\n", k, it == old_golden.provenance.end() ? "(none)" : it->second, v);
   }
   return out;
@@ -105,6 +96,11 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
   auto fail = [&](const std::string& why) {
     r.outcome = Outcome::kFail;
     r.report = "FAIL  " + label + "\n    " + why + "\n";
+    return r;
+  };
+  auto error = [&](const std::string& why) {
+    r.outcome = Outcome::kError;
+    r.report = "ERROR " + label + "\n    " + why + "\n";
     return r;
   };
 
@@ -152,10 +148,20 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
       ResolveSimOptions(mech.experiment, spec.start_time, spec.stop_time, spec.interval, spec.rtol, spec.atol,
                         spec.integrator);
   so.signals = names;
+  // Settings a run cannot take are the spec's mistake (exit 1), not a regression.
+  const sim::OutputGrid grid = sim::ResolveGrid(*program, so);
+  if (std::string why = sim::CheckRun(grid, so.rtol, so.atol); !why.empty()) return error(spec_path + ": " + why);
+  if (grid.Count() > batch::kMaxGoldenRows)
+    return error(fmt::format("{}: the run would have {} instants; a golden stores at most {} (give a larger "
+                             "run.interval)",
+                             spec_path, grid.Count(), batch::kMaxGoldenRows));
+  std::string notes;
+  if (std::string w = sim::ToleranceWarning(so.rtol); !w.empty()) notes += "    warning: " + w + "\n";
   sim::MemorySink sink;
   sim::SimResult result = sim::Simulate(*program, so, sink);
   if (result.status == sim::SimResult::Status::kNumericalFailure)
     return fail(fmt::format("numerical failure at t = {}: {}", result.fail_time, result.message));
+  if (result.status == sim::SimResult::Status::kUsageError) return error(spec_path + ": " + result.message);
   if (result.status != sim::SimResult::Status::kOk) return fail(result.message);
 
   batch::Trajectory actual;
@@ -168,51 +174,66 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
   for (const auto& row : sink.rows) fresh.rows.emplace_back(row.begin(), row.begin() + static_cast<long>(stored.size()));
   fresh.provenance["kanesim_version"] = KANESIM_VERSION;
   fresh.provenance["model"] = std::filesystem::path(spec.model).filename().string() + " fnv1a64:" +
-                              batch::Fnv1a64Hex(ReadFile(spec.model));
+                              batch::Fnv1a64Hex(ReadFileText(spec.model));
   fresh.provenance["stdlib"] = "fnv1a64:" + StdlibHash();
   fresh.provenance["settings"] = "fnv1a64:" + batch::Fnv1a64Hex(batch::SettingsText(spec));
   fresh.provenance["integrator"] = sim::MethodName(result.stats.method);
 
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   batch::Trajectory golden;
-  bool have_golden = std::filesystem::exists(spec.golden_path) &&
-                     batch::ReadTrajectoryCsv(spec.golden_path, &golden, &err);
+  const bool golden_exists = std::filesystem::exists(spec.golden_path);
+  std::string corrupt;  // why the stored output cannot be used, when it exists
+  if (golden_exists && !batch::ReadTrajectoryCsv(spec.golden_path, &golden, &corrupt) && corrupt.empty())
+    corrupt = "unreadable";
+  const bool have_golden = golden_exists && corrupt.empty();
 
   if (args.update) {
+    if (std::string in = batch::OverwrittenInput(spec.golden_path, {spec_path, spec.model}); !in.empty())
+      return error("the stored output '" + spec.golden_path + "' is the input '" + in +
+                   "'; give the spec another golden = \"...\"");
+    for (size_t k = 0; k < fresh.t.size(); ++k)
+      for (size_t j = 0; j < fresh.names.size(); ++j)
+        if (!std::isfinite(fresh.rows[k][j]))
+          return error(fmt::format("signal '{}' is {} at t = {}; a golden stores finite values only (leave the "
+                                   "signal out of `signals`)",
+                                   fresh.names[j], fresh.rows[k][j], fresh.t[k]));
     std::string text = batch::FormatTrajectoryCsv(fresh);
-    if (have_golden && ReadFile(spec.golden_path) == text) {
+    if (have_golden && ReadFileText(spec.golden_path) == text) {
       r.outcome = Outcome::kUpdated;
-      r.report = fmt::format("SAME  {} (golden unchanged, {} signals x {} instants)\n", label, stored.size(),
-                             fresh.t.size());
+      r.report = fmt::format("SAME  {} (golden unchanged, {} signals x {} instants)\n{}", label, stored.size(),
+                             fresh.t.size(), notes);
       return r;
     }
-    if (!batch::WriteFileAtomic(spec.golden_path, text, &err)) {
-      r.outcome = Outcome::kError;
-      r.report = "ERROR " + label + "\n    " + err + "\n";
-      return r;
-    }
+    batch::RemoveStaleTemps(spec.golden_path);  // left by an --update that was killed
+    if (!batch::WriteFileAtomic(spec.golden_path, text, &err)) return error(err);
     r.outcome = Outcome::kUpdated;
-    r.report = have_golden ? fmt::format("UPDATED {} -> {}\n{}", label, spec.golden_path,
+    r.report = have_golden ? fmt::format("UPDATED {} -> {}\n{}{}", label, spec.golden_path, notes,
                                          DescribeChanges(spec, golden, fresh))
-                           : fmt::format("NEW   {} -> {} ({} signals x {} instants)\n", label, spec.golden_path,
-                                         stored.size(), fresh.t.size());
+               : golden_exists
+                   ? fmt::format("UPDATED {} -> {} ({} signals x {} instants; it replaces a corrupt file: {})\n",
+                                 label, spec.golden_path, stored.size(), fresh.t.size(), corrupt)
+                   : fmt::format("NEW   {} -> {} ({} signals x {} instants)\n", label, spec.golden_path,
+                                 stored.size(), fresh.t.size());
+    if (!have_golden) r.report += notes;
     return r;
   }
-  if (!have_golden) {
-    r.outcome = Outcome::kError;
-    r.report = "ERROR " + label + "\n    no stored output '" + spec.golden_path +
-               "'" + (err.empty() ? "" : " (" + err + ")") + "; record it with kanesim test --update " + spec_path +
-               "\n";
-    return r;
-  }
+  if (!golden_exists)
+    return error("no stored output '" + spec.golden_path + "'; record it with kanesim test --update " + spec_path);
+  if (!have_golden)
+    return error("the stored output is corrupt: " + corrupt +
+                 "\n    it was neither compared nor changed; restore it (e.g. from version control)");
 
   // Compare, then the invariants.
-  std::string lines;
+  std::string lines = notes;
   bool pass = true;
   auto settings = golden.provenance.find("settings");
   if (settings != golden.provenance.end() && settings->second != fresh.provenance["settings"]) {
     pass = false;
     lines += "    the spec's run settings changed since the golden was recorded; run kanesim test --update\n";
+  }
+  if (std::string g = batch::CompareGrids(golden, fresh); !g.empty()) {
+    pass = false;
+    lines += "    " + g + "\n";
   }
   batch::CompareResult c = batch::Compare(spec, golden, fresh);
   pass = pass && c.pass;
@@ -309,7 +330,7 @@ void AddTestCommand(CLI::App& app, int* exit_code) {
   CLI::App* t = app.add_subcommand("test", "Golden-output regression tests: run, compare, report deviations");
   t->add_option("paths", a->paths, "Golden specs (.toml) or folders holding them")->required();
   t->add_flag("--update", a->update, "Rewrite the stored outputs and print what changed");
-  t->add_option("-j,--jobs", a->threads, "Tests run in parallel (default: all cores)");
+  AddIntegerOption(t, "-j,--jobs", &a->threads, 0, kMaxJobs, "Tests run in parallel (default 0: all cores)");
   t->add_option("--set", a->sets, "Override a parameter in every test, name=value (what-if checks)")
       ->allow_extra_args(false);
   t->add_flag("-v,--verbose", a->verbose, "Also print invariants that passed");

@@ -29,6 +29,14 @@ struct LoadOptions {
   std::vector<std::string> stdlib_dirs;                  // extra search paths
 };
 
+// The most threads -j may ask for.
+inline constexpr int kMaxJobs = 1024;
+
+// A file's bytes ("" when it cannot be read), and the hash of the embedded standard
+// library: what provenance lines and sweep settings records are made of.
+std::string ReadFileText(const std::string& path);
+std::string StdlibHash();
+
 // Parses and elaborates; on error prints diagnostics to stderr and returns false.
 bool LoadModel(const LoadOptions& options, flat::Mechanism* out);
 

@@ -2,9 +2,12 @@
 // render compiler messages the same way.
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "cli/common.h"
+#include "runtime/batch/csv_util.h"
 #include "runtime/program.h"
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
@@ -18,6 +21,19 @@ namespace {
 // The last loaded program stays alive so compile messages can show source lines.
 thread_local lang::Program* g_program = nullptr;
 }  // namespace
+
+std::string ReadFileText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string StdlibHash() {
+  std::string all;
+  for (const auto& [name, text] : stdlib::Files()) all.append(name).append("\n").append(text).append("\n");
+  return batch::Fnv1a64Hex(all);
+}
 
 bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
   thread_local lang::Program program;  // one per thread: sweeps load variants concurrently

@@ -13,12 +13,16 @@ namespace kanesim::rt {
 
 namespace {
 
+// A NaN is recoverable (> 0), not fatal: a stage of a long step may probe past the point
+// where the model turns NaN (sqrt(0.35 - time) evaluated at 0.4), and the solver must
+// then retry shorter, keeping every row before that point; a NaN that persists ends the
+// run there with this cause (runtime/sim/integrator.h, GuardedRhs).
 int NotFinite(const Program& p, Workspace& ws, int free_speed) {
   const int r = p.u_free[static_cast<size_t>(free_speed)];
   const TreeJoint& j = p.joints[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(r)])];
   ws.error = "NaN in the equations of motion at time " + std::to_string(ws.t) + " (acceleration of joint '" +
              j.name + "' u[" + std::to_string(r - j.u0 + 1) + "])";
-  return -1;
+  return 1;
 }
 
 // Closed loops: the right-hand side is evaluated at the projection (q*, u*) of y onto

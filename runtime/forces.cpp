@@ -39,7 +39,7 @@ int EvalForceTape(const Program& p, Workspace& ws) {
   for (size_t i = 0; i < tape.roots.size(); ++i)
     if (!std::isfinite(r[tape.roots[i]])) {
       ws.error = "NaN from expression: " + tape.labels[i] + " = " + tape.texts[i] + " at time " + std::to_string(ws.t);
-      return -1;
+      return 1;  // recoverable, as a NaN acceleration (engine.cpp NotFinite)
     }
   return 0;
 }

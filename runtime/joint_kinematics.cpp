@@ -41,7 +41,7 @@ bool RotationRates(const TreeJoint& j, RotationCoords c, const double* q, const 
       const double cb = std::cos(q[1]), sb = std::sin(q[1]), cc = std::cos(q[2]), sc = std::sin(q[2]);
       // At |cos q2| -> 0 the map is singular; a trajectory that steps over the singular
       // value changes branch (chart), which is the same failure seen one step late.
-      const bool crossed = static_cast<int>(std::floor((q[1] + M_PI / 2) / M_PI)) != j.chart0;
+      const bool crossed = std::floor((q[1] + M_PI / 2) / M_PI) != j.chart0;
       if (std::fabs(cb) < kGimbalLockTol || crossed) {
         char buf[160];
         std::snprintf(buf, sizeof buf, "Cardan angle q[%d] = %.8g (cos = %.3g)", j.type == JointType::Free ? 5 : 2,
@@ -58,7 +58,7 @@ bool RotationRates(const TreeJoint& j, RotationCoords c, const double* q, const 
     }
     case RotationCoords::EulerZYZ: {
       const double cb = std::cos(q[1]), sb = std::sin(q[1]), cc = std::cos(q[2]), sc = std::sin(q[2]);
-      const bool crossed = static_cast<int>(std::floor(q[1] / M_PI)) != j.chart0;
+      const bool crossed = std::floor(q[1] / M_PI) != j.chart0;
       if (std::fabs(sb) < kGimbalLockTol || crossed) {
         char buf[160];
         std::snprintf(buf, sizeof buf, "Euler angle q[%d] = %.8g (sin = %.3g)", j.type == JointType::Free ? 5 : 2,

@@ -380,7 +380,8 @@ int FactorSparse(const Program& p, Workspace& ws) {
     klu_rcond(sym.symbolic, num.numeric, &num.common);
   }
   ws.sparse_rcond = num.common.rcond;
-  if (num.fresh && !(num.common.rcond > kSingularRcond)) return Fail(ws, "singular mass matrix");
+  if (num.fresh && !(num.common.rcond > kSingularRcond))
+    return Fail(ws, "singular mass matrix (a body without mass or inertia moved by a joint?)");
   ws.sparse_ready = true;
   return 0;
 }

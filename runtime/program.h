@@ -68,8 +68,9 @@ struct TreeJoint {
   Vec3 axis3 = Vec3::UnitY();  // Planar e2 = axis x e1
   // Cardan/Euler joints: which branch between two singular values of the middle angle the
   // motion started in (Cardan: floor((q2 + pi/2) / pi), Euler: floor(q2 / pi)); leaving it
-  // means the motion went through gimbal lock.   filled by BuildStateLayout
-  int chart0 = 0;
+  // means the motion went through gimbal lock. A whole number kept as a double, so that
+  // no angle (however large) is ever converted to an int.   filled by BuildStateLayout
+  double chart0 = 0.0;
   double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)

@@ -2,6 +2,9 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 
 namespace kanesim::batch {
 
@@ -28,6 +31,31 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
     }
   }
   return fields;
+}
+
+bool ReadTextFile(const std::string& path, std::uintmax_t max_bytes, std::string* text, std::string* error) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    *error = "cannot read '" + path + "': no such file";
+    return false;
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    *error = "cannot read '" + path + "': not a regular file";
+    return false;
+  }
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec || size > max_bytes) {
+    *error = "cannot read '" + path + "': " + (ec ? ec.message() : "larger than " + std::to_string(max_bytes) + " bytes");
+    return false;
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = "cannot read '" + path + "'";
+    return false;
+  }
+  text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return true;
 }
 
 std::string Fnv1a64Hex(const std::string& bytes) {

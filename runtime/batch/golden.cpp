@@ -7,11 +7,13 @@
 #include <limits>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <toml++/toml.h>
 
 #include "runtime/batch/toml_util.h"
 
 #include "runtime/batch/csv_util.h"
+#include "runtime/flat/number.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/signal_select.h"
 
@@ -35,21 +37,44 @@ bool ReadTolerance(const std::string& path, const std::string& pattern, const to
     }
   }
   out->pattern = pattern;
-  out->abs = (*t)["abs"].value_or(0.0);
-  out->rel = (*t)["rel"].value_or(0.0);
-  if (out->abs < 0 || out->rel < 0 || (out->abs == 0 && out->rel == 0)) {
+  for (auto [key, field] : {std::pair{"abs", &out->abs}, {"rel", &out->rel}}) {
+    const toml::node* v = t->get(key);
+    if (!v) continue;
+    auto d = v->value<double>();
+    if (!d || !std::isfinite(*d) || *d < 0) {
+      *error = Where(path, *v) + "tolerance " + key + " for '" + pattern + "' must be a finite number >= 0";
+      return false;
+    }
+    *field = *d;
+  }
+  if (out->abs == 0 && out->rel == 0) {
     *error = Where(path, n) + "tolerance for '" + pattern + "' must have abs or rel > 0";
     return false;
   }
   return true;
 }
 
+// A stored number: the language's syntax (what %.17g writes for a finite value); a
+// stored output holds finite values only.
 double Num(const std::string& s, bool* ok) {
-  errno = 0;
-  char* end = nullptr;
-  double v = std::strtod(s.c_str(), &end);
-  *ok = !s.empty() && end == s.c_str() + s.size();
+  double v = 0.0;
+  std::string unused;
+  *ok = flat::ParseNumber(s, &v, &unused);
   return v;
+}
+
+// A string-valued key: absent, or a string (never silently another type).
+bool OptionalString(const std::string& path, const toml::table& t, const char* key, std::string* out,
+                    std::string* error) {
+  const toml::node* n = t.get(key);
+  if (!n) return true;
+  auto s = n->value<std::string>();
+  if (!s) {
+    *error = Where(path, *n) + key + " must be a string";
+    return false;
+  }
+  *out = *s;
+  return true;
 }
 
 const Tolerance& ToleranceFor(const GoldenSpec& spec, const std::string& name) {
@@ -67,9 +92,14 @@ int Trajectory::Column(const std::string& name) const {
 }
 
 bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error) {
+  std::string text;
+  return ReadTextFile(path, kMaxSpecBytes, &text, error) && ReadGoldenSpecText(path, text, out, error);
+}
+
+bool ReadGoldenSpecText(const std::string& path, const std::string& text, GoldenSpec* out, std::string* error) {
   toml::table root;
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     *error = path + ":" + std::to_string(e.source().begin.line) + ":" + std::to_string(e.source().begin.column) +
              ": " + std::string(e.description());
@@ -87,20 +117,18 @@ bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error
       return false;
     }
   }
-  auto model = root["model"].value<std::string>();
-  if (!model) {
+  std::string model, golden = out->name + ".csv";
+  if (!OptionalString(path, root, "model", &model, error) || !OptionalString(path, root, "golden", &golden, error) ||
+      !OptionalString(path, root, "model_name", &out->model_name, error))
+    return false;
+  if (model.empty()) {
     *error = path + ": the spec needs model = \"path/to/file.mech\"";
     return false;
   }
-  out->model = Resolve(path, *model);
-  out->model_name = root["model_name"].value_or(std::string());
-  out->golden_path = Resolve(path, root["golden"].value_or(out->name + ".csv"));
-  if (const toml::table* set = root["set"].as_table()) {
-    for (const auto& [name, v] : *set) {
-      if (auto b = v.is_boolean() ? v.value<bool>() : std::nullopt) out->sets.push_back(std::string(name.str()) + "=" + (*b ? "true" : "false"));
-      else if (auto d = v.value<double>()) out->sets.push_back(std::string(name.str()) + "=" + sim::FormatNumber(*d));
-      else if (auto s = v.value<std::string>()) out->sets.push_back(std::string(name.str()) + "=" + *s);
-    }
+  out->model = Resolve(path, model);
+  out->golden_path = Resolve(path, golden);
+  if (const toml::node* set = root.get("set")) {
+    if (!ReadSetTable(path, *set, &out->sets, error)) return false;
   }
   if (const toml::table* run = root["run"].as_table()) {
     for (const auto& [k, v] : *run) {
@@ -121,14 +149,26 @@ bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error
                       : key == "atol"      ? &out->atol
                                            : nullptr;
       auto d = v.value<double>();
-      if (!field || !d) {
+      if (!field || !d || !std::isfinite(*d)) {
         *error = Where(path, v) + "run." + key +
-                 (field ? " must be a number" : ": unknown (start_time, stop_time, interval, rtol, atol, integrator, "
-                                                "solver)");
+                 (field ? " must be a finite number" : ": unknown (start_time, stop_time, interval, rtol, atol, integrator, "
+                                                       "solver)");
+        return false;
+      }
+      if (field != &out->start_time && field != &out->stop_time && !(*d > 0.0)) {
+        *error = Where(path, v) + "run." + key + " must be positive";
         return false;
       }
       *field = *d;
     }
+    if (out->stop_time < out->start_time) {  // false when either is not given (NaN)
+      *error = path + ": run.stop_time (" + sim::FormatNumber(out->stop_time) + ") is before run.start_time (" +
+               sim::FormatNumber(out->start_time) + ")";
+      return false;
+    }
+  } else if (root.get("run")) {
+    *error = Where(path, *root.get("run")) + "run must be a table ([run])";
+    return false;
   }
   if (const toml::node* sig = root.get("signals")) {
     const toml::array* a = sig->as_array();
@@ -143,6 +183,14 @@ bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error
         return false;
       }
       out->signals.push_back(*s);
+    }
+  }
+  for (const char* key : {"tolerance", "invariant"}) {
+    const toml::node* n = root.get(key);
+    if (n && !(key == std::string("tolerance") ? n->is_table() : n->is_array_of_tables())) {
+      *error = Where(path, *n) + key + (key == std::string("tolerance") ? " must be a table ([tolerance])"
+                                                                          : " must be an array of tables ([[invariant]])");
+      return false;
     }
   }
   if (const toml::table* tol = root["tolerance"].as_table()) {
@@ -160,9 +208,20 @@ bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error
       const toml::table* t = n.as_table();
       auto kind = t ? (*t)["kind"].value<std::string>() : std::nullopt;
       auto tolv = t ? (*t)["tol"].value<double>() : std::nullopt;
-      if (!kind || !tolv || !(*tolv > 0)) {
-        *error = Where(path, n) + "an [[invariant]] needs kind = \"...\" and tol > 0";
+      if (!kind || !tolv || !(*tolv > 0) || !std::isfinite(*tolv)) {
+        *error = Where(path, n) + "an [[invariant]] needs kind = \"...\" and a finite tol > 0";
         return false;
+      }
+      for (const auto& [k, v] : *t) {
+        const std::string key(k.str());
+        if (key != "kind" && key != "tol" && key != "from" && key != "to") {
+          *error = Where(path, v) + "unknown invariant key '" + key + "' (kind, tol, from, to)";
+          return false;
+        }
+        if ((key == "from" || key == "to") && !(v.value<double>() && std::isfinite(*v.value<double>()))) {
+          *error = Where(path, v) + "invariant " + key + " must be a finite number (a time)";
+          return false;
+        }
       }
       if (*kind != "energy_balance" && *kind != "constraint_residual" && *kind != "constraint_work") {
         *error = Where(path, n) + "unknown invariant '" + *kind +
@@ -170,6 +229,10 @@ bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error
         return false;
       }
       Invariant iv{*kind, *tolv, (*t)["from"].value_or(kUnset), (*t)["to"].value_or(kUnset)};
+      if (iv.to < iv.from) {
+        *error = Where(path, n) + "the invariant's window is empty (to < from)";
+        return false;
+      }
       out->invariants.push_back(iv);
     }
   }
@@ -186,16 +249,24 @@ std::string SettingsText(const GoldenSpec& s) {
 }
 
 bool ReadTrajectoryCsv(const std::string& path, Trajectory* out, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = "cannot read '" + path + "'";
-    return false;
-  }
+  std::string text;
+  return ReadTextFile(path, kMaxDataBytes, &text, error) && ReadTrajectoryCsvText(path, text, out, error);
+}
+
+bool ReadTrajectoryCsvText(const std::string& path, const std::string& text, Trajectory* out, std::string* error) {
   *out = Trajectory{};
-  std::string line;
+  auto fail = [&](int line_no, const std::string& why) {
+    *error = path + (line_no > 0 ? ":" + std::to_string(line_no) : std::string()) + ": " + why;
+    return false;
+  };
+  if (!text.empty() && text.back() != '\n') return fail(0, "the last line is cut off (no line break at the end)");
   bool header = false;
   int line_no = 0;
-  while (std::getline(in, line)) {
+  size_t data_begin = std::string::npos;
+  for (size_t pos = 0; pos < text.size();) {
+    const size_t nl = text.find('\n', pos);
+    std::string line = text.substr(pos, nl - pos);
+    pos = nl + 1;
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
@@ -212,49 +283,65 @@ bool ReadTrajectoryCsv(const std::string& path, Trajectory* out, std::string* er
     }
     std::vector<std::string> f = SplitCsvLine(line);
     if (!header) {
-      if (f.empty() || f[0] != "time") {
-        *error = path + ":" + std::to_string(line_no) + ": the header must start with 'time'";
-        return false;
-      }
+      if (f.empty() || f[0] != "time") return fail(line_no, "the header must start with 'time'");
       out->names.assign(f.begin() + 1, f.end());
       header = true;
+      data_begin = pos;
       continue;
     }
-    if (f.size() != out->names.size() + 1) {
-      *error = path + ":" + std::to_string(line_no) + ": " + std::to_string(f.size()) + " fields, expected " +
-               std::to_string(out->names.size() + 1);
-      return false;
-    }
+    if (f.size() != out->names.size() + 1)
+      return fail(line_no, std::to_string(f.size()) + " fields, expected " + std::to_string(out->names.size() + 1));
     std::vector<double> row(out->names.size());
     bool ok = true;
     double t = Num(f[0], &ok);
     for (size_t j = 0; ok && j < row.size(); ++j) row[j] = Num(f[j + 1], &ok);
-    if (!ok) {
-      *error = path + ":" + std::to_string(line_no) + ": a field is not a number";
-      return false;
-    }
+    if (!ok) return fail(line_no, "a field is not a finite number");
+    if (!out->t.empty() && !(t > out->t.back())) return fail(line_no, "the times do not increase");
     out->t.push_back(t);
     out->rows.push_back(std::move(row));
   }
-  if (!header) {
-    *error = "'" + path + "' has no header";
-    return false;
-  }
+  if (!header) return fail(0, "no header");
+  if (out->t.empty()) return fail(0, "no rows (a run writes at least the start instant)");
+  // What the recording said about itself (goldens recorded since these lines exist).
+  auto rows = out->provenance.find("rows");
+  if (rows != out->provenance.end() && rows->second != std::to_string(out->t.size()))
+    return fail(0, std::to_string(out->t.size()) + " rows, but it was recorded with " + rows->second +
+                       " (truncated?)");
+  auto data = out->provenance.find("data");
+  if (data != out->provenance.end() && data->second != "fnv1a64:" + Fnv1a64Hex(text.substr(data_begin)))
+    return fail(0, "its rows do not match the checksum recorded with them (edited or damaged?)");
   return true;
 }
 
 std::string FormatTrajectoryCsv(const Trajectory& tr) {
+  std::string rows;
+  for (size_t k = 0; k < tr.t.size(); ++k) {
+    rows.append(sim::FormatNumber(tr.t[k]));
+    for (double v : tr.rows[k]) rows.append(",").append(sim::FormatNumber(v));
+    rows.append("\n");
+  }
+  std::map<std::string, std::string> provenance = tr.provenance;
+  provenance["rows"] = std::to_string(tr.t.size());
+  provenance["data"] = "fnv1a64:" + Fnv1a64Hex(rows);
   std::string s;
-  for (const auto& [k, v] : tr.provenance) s.append("# ").append(k).append(" = ").append(v).append("\n");
+  for (const auto& [k, v] : provenance) s.append("# ").append(k).append(" = ").append(v).append("\n");
   s.append("time");
   for (const std::string& n : tr.names) s.append(",").append(QuoteCsv(n));
   s.append("\n");
-  for (size_t k = 0; k < tr.t.size(); ++k) {
-    s.append(sim::FormatNumber(tr.t[k]));
-    for (double v : tr.rows[k]) s.append(",").append(sim::FormatNumber(v));
-    s.append("\n");
-  }
-  return s;
+  return s + rows;
+}
+
+std::string CompareGrids(const Trajectory& golden, const Trajectory& run) {
+  if (golden.t.size() == run.t.size() && !run.t.empty() && golden.t.front() == run.t.front() &&
+      golden.t.back() == run.t.back())
+    return "";
+  auto span = [](const Trajectory& t) {
+    return std::to_string(t.t.size()) + " instant" + (t.t.size() == 1 ? "" : "s") +
+           (t.t.empty() ? std::string() : " over [" + sim::FormatNumber(t.t.front()) + ", " +
+                                               sim::FormatNumber(t.t.back()) + "]");
+  };
+  return "the golden holds " + span(golden) + ", the run " + span(run) +
+         " (the model's experiment or the output grid changed, or the golden is incomplete)";
 }
 
 double Interpolate(const Trajectory& tr, int j, double t) {
@@ -347,6 +434,12 @@ InvariantResult CheckInvariant(const Invariant& inv, const Trajectory& run, cons
   auto in_window = [&](double t) {
     return (std::isnan(inv.from) || t >= inv.from) && (std::isnan(inv.to) || t <= inv.to);
   };
+  if (std::none_of(run.t.begin(), run.t.end(), in_window)) {
+    r.status = InvariantResult::Status::kFail;
+    r.text = inv.kind + ": no output instant in its window [" + sim::FormatNumber(inv.from) + ", " +
+             sim::FormatNumber(inv.to) + "], so nothing was checked";
+    return r;
+  }
   char buf[256];
   if (inv.kind == "energy_balance") {
     // max_t |E(t) - E(t0)| <= tol * scale, E = KE + PE, scale = max(max_t KE, |E(t0)|):

@@ -34,6 +34,9 @@ struct Invariant {
   double from = kUnset, to = kUnset;  // time window (NaN = whole run)
 };
 
+// The most instants a golden stores (it is kept in memory and in version control).
+inline constexpr long kMaxGoldenRows = 1'000'000;
+
 struct GoldenSpec {
   std::string spec_path;    // NAME.toml
   std::string golden_path;  // NAME.csv (or `golden = "..."`), resolved
@@ -50,6 +53,8 @@ struct GoldenSpec {
 };
 
 bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error);
+// The same from the file's text (`path` names it in messages and anchors relative paths).
+bool ReadGoldenSpecText(const std::string& path, const std::string& text, GoldenSpec* out, std::string* error);
 // The text hashed into the `settings` provenance line: what the run depends on.
 std::string SettingsText(const GoldenSpec& spec);
 
@@ -61,8 +66,19 @@ struct Trajectory {
   int Column(const std::string& name) const;      // -1 if absent
 };
 
+// Reads a stored output; false with the reason when it is unreadable or corrupt: a last
+// line cut off, no rows, a field that is not a finite number (a golden holds finite
+// values only), times that do not increase, or a row count or checksum that differs from
+// the `rows` and `data` provenance lines written with it.
 bool ReadTrajectoryCsv(const std::string& path, Trajectory* out, std::string* error);
-std::string FormatTrajectoryCsv(const Trajectory& t);  // provenance lines, header, rows
+bool ReadTrajectoryCsvText(const std::string& path, const std::string& text, Trajectory* out, std::string* error);
+// Provenance lines (with `rows` = the row count and `data` = fnv1a64 of the row lines
+// added), header, rows.
+std::string FormatTrajectoryCsv(const Trajectory& t);
+
+// "" when both hold the same instants (count, first and last time); else what differs.
+// With unchanged settings the grids of a golden and of a new run are equal.
+std::string CompareGrids(const Trajectory& golden, const Trajectory& run);
 
 // Linear interpolation of column j at time t (clamped to the run's ends).
 double Interpolate(const Trajectory& tr, int j, double t);

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <limits>
 
+#include "runtime/flat/number.h"
+
 namespace kanesim::batch {
 namespace {
 
@@ -55,12 +57,9 @@ bool ParseMetric(const std::string& text, Metric* out, std::string* error) {
       *error = "cross needs a level: cross:SIGNAL=LEVEL, got '" + text + "'";
       return false;
     }
-    std::string lv = rest.substr(eq + 1);
-    errno = 0;
-    char* end = nullptr;
-    m.level = std::strtod(lv.c_str(), &end);
-    if (lv.empty() || end != lv.c_str() + lv.size() || !std::isfinite(m.level)) {
-      *error = "the level of '" + text + "' is not a number";
+    std::string why;
+    if (!flat::ParseNumber(rest.substr(eq + 1), &m.level, &why)) {
+      *error = "the level of '" + text + "': " + why;
       return false;
     }
     rest = rest.substr(0, eq);

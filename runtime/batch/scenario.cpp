@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <numbers>
@@ -11,6 +12,7 @@
 #include <sstream>
 
 #include "runtime/batch/csv_util.h"
+#include "runtime/flat/number.h"
 
 namespace kanesim::batch {
 namespace {
@@ -24,15 +26,10 @@ std::string Trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
+// The language's number syntax (runtime/flat/number.h), spaces around it allowed.
 bool ParseNumber(const std::string& text, double* out) {
-  std::string t = Trim(text);
-  if (t.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  double v = std::strtod(t.c_str(), &end);
-  if (end != t.c_str() + t.size() || errno == ERANGE || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
+  std::string unused;
+  return flat::ParseNumber(Trim(text), out, &unused);
 }
 
 std::vector<std::string> Split(const std::string& s, char sep) {
@@ -210,11 +207,12 @@ Block SampleBlock(const SampleSpec& spec) {
 }
 
 bool ReadListCsv(const std::string& path, Block* out, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = "cannot read '" + path + "'";
-    return false;
-  }
+  std::string text;
+  return ReadTextFile(path, kMaxDataBytes, &text, error) && ReadListCsvText(path, text, out, error);
+}
+
+bool ReadListCsvText(const std::string& path, const std::string& text, Block* out, std::string* error) {
+  std::istringstream in(text);
   *out = Block{};
   std::string line;
   int line_no = 0;
@@ -261,6 +259,10 @@ bool ReadListCsv(const std::string& path, Block* out, std::string* error) {
       else if (k == -2) run.rtol = v;
       else run.atol = v;
     }
+    if (out->rows.size() >= static_cast<size_t>(kMaxScenarios)) {
+      *error = path + ":" + std::to_string(line_no) + ": more than " + std::to_string(kMaxScenarios) + " scenarios";
+      return false;
+    }
     out->rows.push_back(std::move(row));
     out->run.push_back(run);
   }
@@ -289,8 +291,10 @@ bool CombineBlocks(const std::vector<Block>& blocks, std::vector<std::string>* n
     total *= static_cast<double>(b.rows.size());
   }
   if (blocks.empty()) total = 0.0;
-  if (total > static_cast<double>(kMaxValues) * 10) {
-    *error = "the sweep has " + std::to_string(static_cast<long long>(total)) + " scenarios (more than 10 million)";
+  if (!(total <= static_cast<double>(kMaxScenarios))) {  // compared as a double: never an overflowed count
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", total);
+    *error = std::string("the sweep has ") + buf + " scenarios (more than " + std::to_string(kMaxScenarios) + ")";
     return false;
   }
   const size_t count = static_cast<size_t>(total);

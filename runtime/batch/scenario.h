@@ -18,6 +18,8 @@
 namespace kanesim::batch {
 
 inline constexpr double kUnset = std::numeric_limits<double>::quiet_NaN();
+// The most scenarios one sweep may have (ids are ints; the summary is one line each).
+inline constexpr int kMaxScenarios = 10'000'000;
 
 // Per-scenario run settings; NaN = the sweep's default.
 struct RunOverride {
@@ -72,6 +74,7 @@ Block SampleBlock(const SampleSpec& spec);
 // stop_time, rtol, atol) and one row per scenario; '#' lines and blank lines ignored,
 // an empty field keeps the model's value.
 bool ReadListCsv(const std::string& path, Block* out, std::string* error);
+bool ReadListCsvText(const std::string& path, const std::string& text, Block* out, std::string* error);
 
 // The Cartesian product of the blocks. A parameter may appear in one block only.
 bool CombineBlocks(const std::vector<Block>& blocks, std::vector<std::string>* names, std::vector<Scenario>* out,

@@ -4,12 +4,14 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "runtime/batch/csv_util.h"
+#include "runtime/batch/file_guard.h"
 
 namespace kanesim::batch {
 namespace {
@@ -31,7 +33,7 @@ bool ParseId(const std::string& line, int* id) {
   if (f.empty()) return false;
   char* end = nullptr;
   long v = std::strtol(f.c_str(), &end, 10);
-  if (end != f.c_str() + f.size() || v < 0) return false;
+  if (end != f.c_str() + f.size() || v < 0 || v > INT_MAX) return false;  // ids fit an int (scenario.cpp)
   *id = static_cast<int>(v);
   return true;
 }
@@ -49,7 +51,7 @@ std::string WithoutColumn(const std::string& line, int wall) {
 }  // namespace
 
 bool WriteFileAtomic(const std::string& path, const std::string& contents, std::string* error) {
-  std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const std::string tmp = TempPathFor(path);
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {
     *error = "cannot write '" + tmp + "': " + std::strerror(errno);

@@ -15,7 +15,8 @@
 
 namespace kanesim::batch {
 
-// Writes `contents` to `path` through `path.tmp.<pid>` + fsync + rename.
+// Writes `contents` to `path` through a temporary (TempPathFor: <path>.tmp.<host>.<pid>)
+// + fsync + rename.
 bool WriteFileAtomic(const std::string& path, const std::string& contents, std::string* error);
 
 struct SummaryTable {

@@ -58,6 +58,64 @@ std::string SummaryFileName(const SweepConfig& config) {
          ".csv";
 }
 
+bool OpenSweepOutput(const SweepConfig& config, const std::string& header, SweepOutput* out, std::string* error) {
+  namespace fs = std::filesystem;
+  const std::string traj_dir = config.out_dir + "/trajectories";
+  std::error_code ec;
+  fs::create_directories(config.trajectories ? traj_dir : config.out_dir, ec);
+  if (ec) {
+    *error = "cannot create '" + config.out_dir + "': " + ec.message();
+    return false;
+  }
+  const std::string name = SummaryFileName(config);
+  out->summary_path = config.out_dir + "/" + name;
+  const std::string settings_path = SettingsPathFor(out->summary_path);
+  const std::string lock_path = config.out_dir + "/." + name + ".lock";
+  for (const std::string& path : {out->summary_path, settings_path, lock_path}) {
+    if (std::string in = OverwrittenInput(path, config.inputs); !in.empty()) {
+      *error = "the sweep would overwrite its input '" + in + "' (as '" + path + "'); choose another -o";
+      return false;
+    }
+  }
+  if (config.trajectories)
+    for (const std::string& in : config.inputs)
+      if (SameFile(fs::path(in).parent_path().empty() ? "." : fs::path(in).parent_path().string(), traj_dir)) {
+        *error = "the input '" + in + "' is in '" + traj_dir + "', where the sweep writes its trajectories";
+        return false;
+      }
+  if (!out->lock.Acquire(lock_path, "'" + out->summary_path + "'", error)) return false;
+  RemoveStaleTemps(out->summary_path);
+  RemoveStaleTemps(settings_path);
+  if (config.trajectories) RemoveStaleTempsIn(traj_dir);
+  const bool resuming = config.resume && fs::exists(out->summary_path);
+  if (resuming && !config.settings.empty()) {
+    SettingsRecord old;
+    std::string err;
+    if (!fs::exists(settings_path)) {
+      *error = "cannot resume: '" + out->summary_path + "' has no settings record ('" + settings_path +
+               "'), so it cannot be checked to come from this sweep; run without --resume to start over";
+      return false;
+    }
+    if (!ReadSettings(settings_path, &old, &err)) {
+      *error = "cannot resume: " + err;
+      return false;
+    }
+    std::vector<std::string> diff = SettingsDifferences(old, config.settings, "recorded", "this run");
+    if (!diff.empty()) {
+      *error = "cannot resume: '" + out->summary_path + "' was made with other settings:";
+      for (const std::string& d : diff) *error += "\n    " + d;
+      *error += "\n  resume with the same settings, or run without --resume (or with another -o) to start over";
+      return false;
+    }
+  }
+  if (!out->summary.Open(out->summary_path, header, config.resume, &out->done, error)) return false;
+  // After the summary: a sweep killed in between leaves an empty summary beside the old
+  // record, which a resume refuses, never old rows beside a new record.
+  if (!config.settings.empty() && !WriteFileAtomic(settings_path, FormatSettings(config.settings), error))
+    return false;
+  return true;
+}
+
 bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::string* error) {
   const flat::Mechanism& mech = *base.mech;
   for (const std::string& name : config.param_names) {
@@ -86,6 +144,24 @@ bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::stri
   for (const std::string& s : config.trajectory_signals) {
     if (std::find(available.begin(), available.end(), s) == available.end()) {
       *error = "the model has no signal '" + s + "'";
+      return false;
+    }
+  }
+  // Every scenario's times and tolerances, before anything runs (a scenario's own
+  // stop_time, rtol, atol override the sweep's).
+  if (std::string why = sim::CheckRun(sim::ResolveGrid(base, config.sim), config.sim.rtol, config.sim.atol);
+      !why.empty()) {
+    *error = why;
+    return false;
+  }
+  for (const Scenario& s : config.scenarios) {
+    if (std::isnan(s.run.stop_time) && std::isnan(s.run.rtol) && std::isnan(s.run.atol)) continue;
+    sim::SimOptions so = config.sim;
+    if (!std::isnan(s.run.stop_time)) so.stop_time = s.run.stop_time;
+    if (!std::isnan(s.run.rtol)) so.rtol = s.run.rtol;
+    if (!std::isnan(s.run.atol)) so.atol = s.run.atol;
+    if (std::string why = sim::CheckRun(sim::ResolveGrid(base, so), so.rtol, so.atol); !why.empty()) {
+      *error = "scenario " + std::to_string(s.id) + ": " + why;
       return false;
     }
   }
@@ -210,7 +286,7 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
     std::string traj_path, traj_tmp;
     if (config_.trajectories) {
       traj_path = config_.out_dir + "/trajectories/scenario_" + std::to_string(s.id) + ".csv";
-      traj_tmp = traj_path + ".tmp";
+      traj_tmp = TempPathFor(traj_path);
       traj = std::fopen(traj_tmp.c_str(), "w");
       if (!traj) throw std::runtime_error("cannot write '" + traj_tmp + "'");
     }
@@ -256,18 +332,13 @@ bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& bui
               SweepReport* report, std::string* error) {
   // 1. Validate.
   if (!ValidateSweep(*base, config, error)) return false;
-  std::error_code ec;
-  std::filesystem::create_directories(config.out_dir + (config.trajectories ? "/trajectories" : ""), ec);
-  if (ec) {
-    *error = "cannot create '" + config.out_dir + "': " + ec.message();
-    return false;
-  }
-  // 2. Summary (and what is already done).
+  // 2. Output (and what is already done).
   ScenarioRunner runner(base, build, config);
-  SummaryFile summary;
-  std::map<int, std::string> done;
-  report->summary_path = config.out_dir + "/" + SummaryFileName(config);
-  if (!summary.Open(report->summary_path, runner.Header(), config.resume, &done, error)) return false;
+  SweepOutput output;
+  if (!OpenSweepOutput(config, runner.Header(), &output, error)) return false;
+  report->summary_path = output.summary_path;
+  SummaryFile& summary = output.summary;
+  const std::map<int, std::string>& done = output.done;
   std::vector<const Scenario*> pending;
   SweepProgress& pr = report->progress;
   pr = SweepProgress{};

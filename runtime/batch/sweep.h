@@ -3,7 +3,8 @@
 // Stages (RunSweep):
 //   1. validate: every swept parameter exists and is not a constant, every metric names
 //      an available signal                                        (ValidateSweep)
-//   2. open the summary, keeping finished rows with --resume       (SummaryFile::Open)
+//   2. lock the output, check the settings record, open the summary, keeping finished
+//      rows with --resume                                          (OpenSweepOutput)
 //   3. hand out this shard's remaining scenarios to worker threads; each scenario is
 //        a. its structural variant's program: built once per distinct set of structural
 //           values (re-elaboration through the caller's VariantBuilder), cached
@@ -26,8 +27,11 @@
 #include <utility>
 #include <vector>
 
+#include "runtime/batch/file_guard.h"
 #include "runtime/batch/metrics.h"
 #include "runtime/batch/scenario.h"
+#include "runtime/batch/settings_record.h"
+#include "runtime/batch/summary.h"
 #include "runtime/engine.h"
 #include "runtime/sim/simulate.h"
 
@@ -54,6 +58,10 @@ struct SweepConfig {
   int shard_index = 0, shard_count = 1;  // run scenarios with id % count == index
   const std::atomic<bool>* cancel = nullptr;  // set (e.g. by SIGINT): stop handing out work
   std::function<void(const SweepProgress&)> progress;  // called under a lock
+  // What the summary is made with (settings_record.h); written beside it, and compared
+  // with the record of the summary that --resume continues. Empty: no record.
+  SettingsRecord settings;
+  std::vector<std::string> inputs;       // files the sweep reads: never overwritten
 };
 
 struct SweepReport {
@@ -72,6 +80,19 @@ using VariantBuilder = std::function<std::shared_ptr<const rt::Program>(
 
 // The summary's file name: summary.csv, or summary.shard-K-of-N.csv for a shard.
 std::string SummaryFileName(const SweepConfig& config);
+
+// Stage 2, the output of this process: the directory made; locked against a second
+// sweep writing the same summary at once (a shard locks its own summary, so shards may
+// share a directory); no input overwritten; temporaries of killed sweeps removed; with
+// --resume the settings record compared with the one beside the old summary; the summary
+// opened (finished rows kept with --resume, in `done`); the settings record written.
+struct SweepOutput {
+  std::string summary_path;
+  FileLock lock;
+  SummaryFile summary;
+  std::map<int, std::string> done;  // id -> line already in the summary (--resume)
+};
+bool OpenSweepOutput(const SweepConfig& config, const std::string& header, SweepOutput* out, std::string* error);
 
 bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::string* error);
 

@@ -40,11 +40,11 @@ namespace {
 constexpr int kTagReady = 1, kTagWork = 2, kTagResult = 3;
 
 bool Manager(ScenarioRunner& runner, const SweepConfig& config, int size, SweepReport* report, std::string* error) {
-  std::filesystem::create_directories(config.out_dir + (config.trajectories ? "/trajectories" : ""));
-  SummaryFile summary;
-  std::map<int, std::string> done;
-  report->summary_path = config.out_dir + "/" + SummaryFileName(config);
-  bool ok = summary.Open(report->summary_path, runner.Header(), config.resume, &done, error);
+  SweepOutput output;
+  bool ok = OpenSweepOutput(config, runner.Header(), &output, error);
+  report->summary_path = output.summary_path;
+  SummaryFile& summary = output.summary;
+  const std::map<int, std::string>& done = output.done;
   std::vector<int> pending;
   SweepProgress& pr = report->progress;
   pr = SweepProgress{};

@@ -25,15 +25,23 @@ bool NodeValues(const std::string& path, const std::string& key, const toml::nod
     *error = Where(path, n) + key + ": " + e;
     return false;
   }
-  if (auto d = n.value<double>()) {
+  if (auto d = n.is_number() ? n.value<double>() : std::nullopt) {
+    if (!std::isfinite(*d)) {
+      *error = Where(path, n) + key + ": " + sim::FormatNumber(*d) + " is not a finite number";
+      return false;
+    }
     out->push_back(*d);
     return true;
   }
   if (const toml::array* a = n.as_array()) {
+    if (a->size() > static_cast<size_t>(kMaxScenarios)) {
+      *error = Where(path, n) + key + ": more than " + std::to_string(kMaxScenarios) + " values";
+      return false;
+    }
     for (const toml::node& x : *a) {
-      auto d = x.value<double>();
-      if (!d) {
-        *error = Where(path, x) + key + ": every element must be a number";
+      auto d = x.is_number() ? x.value<double>() : std::nullopt;
+      if (!d || !std::isfinite(*d)) {
+        *error = Where(path, x) + key + ": every element must be a finite number";
         return false;
       }
       out->push_back(*d);
@@ -47,12 +55,37 @@ bool NodeValues(const std::string& path, const std::string& key, const toml::nod
 bool Number(const std::string& path, const toml::table& t, const char* key, double* out, std::string* error) {
   const toml::node* n = t.get(key);
   if (!n) return true;
-  auto d = n->value<double>();
+  auto d = n->is_number() ? n->value<double>() : std::nullopt;
   if (!d || !std::isfinite(*d)) {
-    *error = Where(path, *n) + key + " must be a number";
+    *error = Where(path, *n) + key + " must be a finite number";
     return false;
   }
   *out = *d;
+  return true;
+}
+
+// Keys of one type: absent, or that type (never silently ignored).
+bool String(const std::string& path, const toml::table& t, const char* key, std::string* out, std::string* error) {
+  const toml::node* n = t.get(key);
+  if (!n) return true;
+  auto s = n->value<std::string>();
+  if (!s) {
+    *error = Where(path, *n) + key + " must be a string";
+    return false;
+  }
+  *out = *s;
+  return true;
+}
+
+bool Bool(const std::string& path, const toml::table& t, const char* key, bool* out, std::string* error) {
+  const toml::node* n = t.get(key);
+  if (!n) return true;
+  auto b = n->is_boolean() ? n->value<bool>() : std::nullopt;
+  if (!b) {
+    *error = Where(path, *n) + key + " must be true or false";
+    return false;
+  }
+  *out = *b;
   return true;
 }
 
@@ -106,9 +139,14 @@ bool Distributions(const std::string& path, const toml::table& sample, const cha
 }  // namespace
 
 bool ReadSweepToml(const std::string& path, SweepFileSpec* out, std::string* error) {
+  std::string text;
+  return ReadTextFile(path, kMaxSpecBytes, &text, error) && ReadSweepTomlText(path, text, out, error);
+}
+
+bool ReadSweepTomlText(const std::string& path, const std::string& text, SweepFileSpec* out, std::string* error) {
   toml::table root;
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     *error = path + ":" + std::to_string(e.source().begin.line) + ":" + std::to_string(e.source().begin.column) +
              ": " + std::string(e.description());
@@ -126,26 +164,39 @@ bool ReadSweepToml(const std::string& path, SweepFileSpec* out, std::string* err
       return false;
     }
   }
-  auto model = root["model"].value<std::string>();
-  if (model) out->model = Resolve(path, *model);
-  out->model_name = root["model_name"].value_or(std::string());
-  out->integrator = root["integrator"].value_or(std::string());
-  out->solver = root["solver"].value_or(std::string());
-  if (auto o = root["output"].value<std::string>()) out->output_dir = Resolve(path, *o);
-  out->trajectories = root["trajectories"].value_or(false);
+  std::string model, output, list;
+  if (!String(path, root, "model", &model, error) || !String(path, root, "model_name", &out->model_name, error) ||
+      !String(path, root, "integrator", &out->integrator, error) || !String(path, root, "solver", &out->solver, error) ||
+      !String(path, root, "output", &output, error) || !String(path, root, "list", &list, error) ||
+      !Bool(path, root, "trajectories", &out->trajectories, error))
+    return false;
+  if (!model.empty()) out->model = Resolve(path, model);
+  if (!output.empty()) out->output_dir = Resolve(path, output);
   if (!Strings(path, root, "metrics", &out->metrics, error) || !Strings(path, root, "signals", &out->signals, error))
     return false;
   for (auto [key, field] : {std::pair{"start_time", &out->start_time}, {"stop_time", &out->stop_time},
                             {"interval", &out->interval}, {"rtol", &out->rtol}, {"atol", &out->atol}})
     if (!Number(path, root, key, field, error)) return false;
-  if (const toml::table* set = root["set"].as_table()) {
-    for (const auto& [name, v] : *set) {
-      auto d = v.value<double>();
-      auto b = v.is_boolean() ? v.value<bool>() : std::nullopt;
-      if (b) out->sets.push_back(std::string(name.str()) + "=" + (*b ? "true" : "false"));
-      else if (d) out->sets.push_back(std::string(name.str()) + "=" + sim::FormatNumber(*d));
-      else if (auto s = v.value<std::string>()) out->sets.push_back(std::string(name.str()) + "=" + *s);
+  for (auto [key, value] : {std::pair{"interval", out->interval}, {"rtol", out->rtol}, {"atol", out->atol}})
+    if (!(std::isnan(value) || value > 0.0)) {
+      *error = Where(path, *root.get(key)) + key + " must be positive";
+      return false;
     }
+  if (out->stop_time < out->start_time) {  // false when either is not given (NaN)
+    *error = Where(path, *root.get("stop_time")) + "stop_time (" + sim::FormatNumber(out->stop_time) +
+             ") is before start_time (" + sim::FormatNumber(out->start_time) + ")";
+    return false;
+  }
+  if (const toml::node* set = root.get("set"))
+    if (!ReadSetTable(path, *set, &out->sets, error)) return false;
+  for (const char* key : {"grid", "sample"})
+    if (const toml::node* n = root.get(key); n && !n->is_table()) {
+      *error = Where(path, *n) + key + " must be a table ([" + key + "])";
+      return false;
+    }
+  if (const toml::node* n = root.get("scenario"); n && !n->is_array_of_tables()) {
+    *error = Where(path, *n) + "scenario must be an array of tables ([[scenario]])";
+    return false;
   }
   if (const toml::table* grid = root["grid"].as_table()) {
     for (const auto& [name, v] : *grid) {
@@ -157,20 +208,38 @@ bool ReadSweepToml(const std::string& path, SweepFileSpec* out, std::string* err
       out->blocks.push_back(std::move(b));
     }
   }
-  if (auto list = root["list"].value<std::string>()) {
+  if (!list.empty()) {
     Block b;
-    if (!ReadListCsv(Resolve(path, *list), &b, error)) return false;
+    if (!ReadListCsv(Resolve(path, list), &b, error)) return false;
     out->blocks.push_back(std::move(b));
   }
   if (const toml::table* sample = root["sample"].as_table()) {
     SampleSpec spec;
-    spec.n = static_cast<int>((*sample)["n"].value_or(int64_t{0}));
-    spec.seed = static_cast<std::uint64_t>((*sample)["seed"].value_or(int64_t{1}));
-    spec.latin_hypercube = (*sample)["latin_hypercube"].value_or(false);
-    if (spec.n <= 0) {
-      *error = path + ": [sample] needs n > 0";
+    for (const auto& [k, v] : *sample) {
+      const std::string key(k.str());
+      if (key != "n" && key != "seed" && key != "latin_hypercube" && key != "uniform" && key != "normal") {
+        *error = Where(path, v) + "unknown key 'sample." + key + "' (n, seed, latin_hypercube, uniform, normal)";
+        return false;
+      }
+    }
+    // Integers are checked as integers before any narrowing: n = 2^32 + 5 is not 5.
+    const toml::node* n = sample->get("n");
+    auto count = n ? n->value_exact<int64_t>() : std::nullopt;
+    if (!count || *count < 1 || *count > kMaxScenarios) {
+      *error = (n ? Where(path, *n) : path + ": ") + "[sample] needs n, an integer from 1 to " +
+               std::to_string(kMaxScenarios);
       return false;
     }
+    spec.n = static_cast<int>(*count);
+    if (const toml::node* seed = sample->get("seed")) {
+      auto s = seed->value_exact<int64_t>();
+      if (!s) {
+        *error = Where(path, *seed) + "sample.seed must be an integer";
+        return false;
+      }
+      spec.seed = static_cast<std::uint64_t>(*s);  // modulo 2^64, as --seed
+    }
+    if (!Bool(path, *sample, "latin_hypercube", &spec.latin_hypercube, error)) return false;
     if (!Distributions(path, *sample, "uniform", Distribution::Kind::Uniform, &spec, error) ||
         !Distributions(path, *sample, "normal", Distribution::Kind::Normal, &spec, error))
       return false;
@@ -197,9 +266,9 @@ bool ReadSweepToml(const std::string& path, SweepFileSpec* out, std::string* err
       std::vector<double> row(b.names.size(), kUnset);
       RunOverride run;
       for (const auto& [name, v] : *t) {
-        auto d = v.value<double>();
-        if (!d) {
-          *error = Where(path, v) + std::string(name.str()) + " must be a number";
+        auto d = v.is_number() ? v.value<double>() : std::nullopt;
+        if (!d || !std::isfinite(*d)) {
+          *error = Where(path, v) + std::string(name.str()) + " must be a finite number";
           return false;
         }
         std::string k(name.str());

@@ -46,5 +46,7 @@ struct SweepFileSpec {
 };
 
 bool ReadSweepToml(const std::string& path, SweepFileSpec* out, std::string* error);
+// The same from the file's text (`path` names it in messages and anchors relative paths).
+bool ReadSweepTomlText(const std::string& path, const std::string& text, SweepFileSpec* out, std::string* error);
 
 }  // namespace kanesim::batch

@@ -269,10 +269,17 @@ void Compiler::MassProperties(Program& p) {
     src.frame = b.frame;
     src.p_FBcm = Num3(b.r_cm, "body mass centre", b.loc);
     p.body_signals.push_back(src);
-    if (F.body < 0) continue;  // mass fixed to ground (or unreached: reported) costs nothing
     const double mass = Num(b.mass, 0.0, "body mass", b.loc);
     if (mass < 0.0) Error("K306", "body '" + b.name + "' has negative mass", b.loc);
-    Mat3 I = NumMat(b.inertia, false, "body inertia", b.loc);
+    if (!std::isfinite(mass) || !src.p_FBcm.allFinite())
+      Error("K308", "body '" + b.name + "' has a non-finite " + (std::isfinite(mass) ? "centre of mass" : "mass"),
+            b.loc);
+    Mat3 I;
+    if (std::string why = CheckInertia(NumMat(b.inertia, false, "body inertia", b.loc), &I); !why.empty())
+      Error("K308", "body '" + b.name + "': " + why, b.loc,
+            "a rigid body's central inertia is symmetric, its principal moments are >= 0 and the two smaller "
+            "add up to at least the largest (docs/language.md \"Mass properties\")");
+    if (F.body < 0) continue;  // mass fixed to ground (or unreached: reported) costs nothing
     const auto L = static_cast<size_t>(F.body);
     if (!named[L]) {
       p.bodies[L].name = b.name;

@@ -25,6 +25,13 @@ inline CompileMessage Msg(const std::string& code, const std::string& text, cons
 CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<double>& pv,
                                 const CompileOptions& options, const Program* reuse);
 
+// Eq. (1)-(3) of compile/inertia.cpp: "" when the central inertia I of one body can be
+// that of a rigid body (symmetric, positive semi-definite, triangle inequality, within
+// kInertiaTol of |I_11| + |I_22| + |I_33|), and then *symmetric = (I + I^T) / 2; else
+// what is wrong ("its inertia is not symmetric: ...").
+inline constexpr double kInertiaTol = 1e-6;
+std::string CheckInertia(const Mat3& I, Mat3* symmetric);
+
 // Joint axes and placements, q/u allocation, prescribed motions, start values.
 void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 // Fills bodies[body].path_speeds (a body that a loop frame or a contact sits on).

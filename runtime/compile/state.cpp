@@ -99,8 +99,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     }
     if ((j.type == JointType::Spherical || j.type == JointType::Free) && !quat) {
       const double b = q_start_all[static_cast<size_t>(j.q0 + rot0 + 1)];
-      j.chart0 = static_cast<int>(j.rotation == flat::RotationCoords::CardanXYZ ? std::floor((b + M_PI / 2) / M_PI)
-                                                                                 : std::floor(b / M_PI));
+      j.chart0 = j.rotation == flat::RotationCoords::CardanXYZ ? std::floor((b + M_PI / 2) / M_PI) : std::floor(b / M_PI);
     }
     if (quat) {
       double* qq = &q_start_all[static_cast<size_t>(j.q0 + rot0)];

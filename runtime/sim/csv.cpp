@@ -1,5 +1,6 @@
 #include "runtime/sim/csv.h"
 
+#include <charconv>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -16,6 +17,12 @@ std::string FormatNumber(double x) {
   std::string s;
   AppendNumber(&s, x);
   return s;
+}
+
+std::string FormatShortest(double x) {
+  char buf[32];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
+  return ec == std::errc() ? std::string(buf, end) : FormatNumber(x);
 }
 
 std::string QuoteCsvField(const std::string& field) {

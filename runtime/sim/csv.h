@@ -22,6 +22,8 @@ class SignalSink {
 
 // %.17g: enough digits that strtod gives back the same double.
 std::string FormatNumber(double x);
+// The shortest text that reads back as x (0.1, not 0.10000000000000001): for messages.
+std::string FormatShortest(double x);
 // A CSV field as RFC 4180 wants it: quoted when it holds a comma, quote or line break
 // (signal names such as `rod.body.R[1,2]`), inner quotes doubled, line breaks blanked.
 std::string QuoteCsvField(const std::string& field);

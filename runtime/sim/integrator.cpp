@@ -2,12 +2,14 @@
 // output instants shared by every solver (the solvers are in integrator_*.cpp).
 #include "runtime/sim/integrator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "runtime/sim/csv.h"
 #include "runtime/sim/stepper.h"
 
 namespace kanesim::sim {
@@ -37,9 +39,34 @@ const char* MethodDescription(Method m) {
 // An instant closer than this fraction of the interval to stop is merged into stop.
 static constexpr double kMergeFraction = 1e-9;
 
+std::string OutputGrid::Check() const {
+  auto num = [](double x) { return FormatShortest(x); };
+  if (!std::isfinite(start)) return "the start time (" + num(start) + ") is not a finite number";
+  if (!std::isfinite(stop)) return "the stop time (" + num(stop) + ") is not a finite number";
+  if (stop < start) return "the stop time (" + num(stop) + ") is before the start time (" + num(start) + ")";
+  if (!std::isfinite(stop - start))
+    return "the time span from " + num(start) + " to " + num(stop) + " is out of range";
+  if (stop == start) return "";
+  if (!(interval > 0.0) || !std::isfinite(interval))
+    return "the output interval (" + num(interval) + ") must be a positive finite number";
+  const double n = (stop - start) / interval;
+  if (!(n <= static_cast<double>(kMaxOutputRows - 1)))
+    return "the output from " + num(start) + " to " + num(stop) + " every " + num(interval) + " would have " +
+           num(std::floor(n) + 1) + " rows, more than the limit of " + std::to_string(kMaxOutputRows) +
+           "; give a larger output interval";
+  const double scale = std::max(std::abs(start), std::abs(stop));
+  if (interval < kMinIntervalFraction * scale)
+    return "the output interval (" + num(interval) + ") is too small for times as large as " + num(scale) +
+           ": it must be at least " + num(kMinIntervalFraction) + " of |t| for the instants to differ";
+  return "";
+}
+
 long OutputGrid::Count() const {
   if (!(stop > start) || !(interval > 0.0)) return 1;
-  double n = (stop - start) / interval;
+  const double n = (stop - start) / interval;
+  // Compared as doubles before any conversion: a grid past the limit (or a NaN) stops at
+  // the limit instead of overflowing the conversion to long.
+  if (!(n <= static_cast<double>(kMaxOutputRows))) return kMaxOutputRows + 1;
   return static_cast<long>(std::ceil(n - kMergeFraction)) + 1;
 }
 
@@ -57,12 +84,18 @@ double OutputGrid::Time(long k) const {
 
 namespace detail {
 
+int GuardedRhs::Recoverable() {
+  if (++recoverable_ <= kMaxRecoverableFailures) return 1;
+  fatal = true;
+  return -1;
+}
+
 int GuardedRhs::Failed(double t, int status) {
   failed = true;
   fatal = status < 0;
   fail_time = t;
   cause = system_.FailureCause();
-  return status;
+  return status < 0 ? status : Recoverable();
 }
 
 int GuardedRhs::operator()(double t, const double* y, double* ydot) {
@@ -76,7 +109,7 @@ int GuardedRhs::operator()(double t, const double* y, double* ydot) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "non-finite derivative (component %d of y' is %g)", i, ydot[i]);
       cause = buf;
-      return 1;
+      return Recoverable();
     }
   }
   return 0;
@@ -117,6 +150,10 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
     result.fail_time = t;
     result.cause = std::move(cause);
   };
+  if (std::string why = grid.Check(); !why.empty()) {  // Simulate reports this as a usage error first
+    fail(grid.start, why);
+    return result;
+  }
   detail::GuardedRhs rhs(system);
   std::vector<double> y(y0, y0 + system.Size());
   std::string cause;

@@ -108,11 +108,22 @@ struct IntegratorStats {
 // 0.30000000000000004), the last one replaced by
 // exactly `stop` (it may then be closer than `interval` to the one before). An instant
 // within 1e-9 interval of stop is merged into it, so rounding never adds a sliver row.
+//
+// Limits (Check): finite times, stop >= start, a positive finite interval of at least
+// kMinIntervalFraction of the largest |t| (so that consecutive instants differ in double
+// precision and a solver can step between them), and at most kMaxOutputRows rows.
+inline constexpr long kMaxOutputRows = 100'000'000;
+inline constexpr double kMinIntervalFraction = 1e-12;
+
 struct OutputGrid {
   double start = 0.0;
   double stop = 1.0;
   double interval = 0.0;  // > 0
-  long Count() const;      // number of rows, >= 1
+  // Why this grid cannot be run, in words ("" when it can).
+  std::string Check() const;
+  // Number of rows, >= 1; for a grid that fails Check, at most kMaxOutputRows + 1 (never
+  // an overflowed conversion).
+  long Count() const;
   double Time(long k) const;
 };
 

@@ -1,9 +1,20 @@
 // ARKODE's ERKStep on y' = f(t, y): an explicit embedded Runge-Kutta pair with
 // adaptive steps; output instants from its Hermite interpolant (degree 5).
+//
+// A recoverable failure of f (> 0, e.g. a NaN from a stage past the onset of a NaN) ends
+// ERKStepEvolve with ARK_UNREC_RHSFUNC_ERR: ERKStep (SUNDIALS 6.4) retries only steps
+// that failed the error test. So that such a stage shrinks the step as in the other
+// solvers instead of ending the run at the start of the step (and losing the output
+// instants inside it), the stepper restarts ERKStep with a quarter of its last step:
+// the first time from the last output instant, later from the last accepted step, which
+// a post-step hook records from then on (only then: with the hook installed ERKStep's
+// dense output loses about a digit). GuardedRhs bounds the retries.
 #include <arkode/arkode_erkstep.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "runtime/sim/stepper.h"
 #include "runtime/sim/sundials_util.h"
@@ -31,12 +42,23 @@ class ArkodeStepper final : public SundialsStepper {
         ERKStepSetTableNum(mem_, table) != ARK_SUCCESS ||
         ERKStepSetInterpolantDegree(mem_, ARK_INTERP_MAX_DEGREE) != ARK_SUCCESS)
       return Fail(error, WithDetail("ARKODE setup failed", messages_.last));
-    return SetCommonOptions(kArkode, stop, options, error);
+    if (!SetCommonOptions(kArkode, stop, options, error)) return false;
+    stop_ = stop;
+    t_accepted_ = t0;
+    y_accepted_.assign(y0, y0 + rhs_.Size());
+    return true;
   }
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    return CopyOut(ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL), y);
+    int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL);
+    while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret);
+    if (flag >= 0 && !hooked_) {  // the restart point until the hook keeps accepted steps
+      const double* ys = N_VGetArrayPointer(s_.y);
+      t_accepted_ = tout;
+      std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());
+    }
+    return CopyOut(flag, y);
   }
 
   double CurrentTime() const override {
@@ -51,6 +73,9 @@ class ArkodeStepper final : public SundialsStepper {
     ERKStepGetNumRhsEvals(mem_, &st.rhs_evals);
     ERKStepGetNumErrTestFails(mem_, &st.err_test_fails);
     ERKStepGetLastStep(mem_, &st.last_step);
+    st.steps += before_restarts_.steps;
+    st.rhs_evals += before_restarts_.rhs_evals;
+    st.err_test_fails += before_restarts_.err_test_fails;
     return st;
   }
 
@@ -70,10 +95,48 @@ class ArkodeStepper final : public SundialsStepper {
   }
 
  private:
+  // After each accepted step: where a restart begins.
+  static int Accepted(double t, N_Vector y, void* user_data) {
+    auto* self = static_cast<ArkodeStepper*>(user_data);
+    const double* ys = N_VGetArrayPointer(y);
+    self->t_accepted_ = t;
+    std::copy(ys, ys + self->y_accepted_.size(), self->y_accepted_.begin());
+    return 0;
+  }
+
+  // ERKStep again from the restart point, with a quarter of the last accepted step (of
+  // the step it was about to try when none was accepted yet), toward tout.
+  int Restart(double tout, double* tret) {
+    double h = 0.0;
+    ERKStepGetLastStep(mem_, &h);
+    if (h == 0.0) ERKStepGetCurrentStep(mem_, &h);
+    const IntegratorStats st = Stats();
+    before_restarts_.steps = st.steps;
+    before_restarts_.rhs_evals = st.rhs_evals;
+    before_restarts_.err_test_fails = st.err_test_fails;
+    double* ys = N_VGetArrayPointer(s_.y);
+    std::copy(y_accepted_.begin(), y_accepted_.end(), ys);
+    if (!hooked_ && ERKStepSetPostprocessStepFn(mem_, &ArkodeStepper::Accepted) != ARK_SUCCESS)
+      return ARK_UNREC_RHSFUNC_ERR;
+    hooked_ = true;
+    if (ERKStepReInit(mem_, &ArkodeStepper::Rhs, t_accepted_, s_.y) != ARK_SUCCESS ||
+        ERKStepSetInitStep(mem_, kRhsShrink * h) != ARK_SUCCESS || ERKStepSetStopTime(mem_, stop_) != ARK_SUCCESS)
+      return ARK_UNREC_RHSFUNC_ERR;
+    return ERKStepEvolve(mem_, tout, s_.y, tret, ARK_NORMAL);
+  }
+
+  static constexpr double kRhsShrink = 0.25;  // as DOP853 after a failure of f
+
   static int Rhs(double t, N_Vector y, N_Vector ydot, void* user_data) {
     auto* self = static_cast<ArkodeStepper*>(user_data);
     return self->rhs_(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   }
+
+  double stop_ = 0.0;
+  bool hooked_ = false;              // Accepted() is installed (after the first restart)
+  double t_accepted_ = 0.0;          // restart point: the last output instant, or once
+  std::vector<double> y_accepted_;   // hooked the last accepted step; its state  (n)
+  IntegratorStats before_restarts_;  // counters of the ERKStep runs before the last restart
 };
 
 }  // namespace

@@ -42,6 +42,32 @@ SimResult UsageError(std::string message) {
 
 }  // namespace
 
+std::string CheckRun(const OutputGrid& grid, double rtol, double atol) {
+  if (std::string why = grid.Check(); !why.empty()) return why;
+  for (auto [name, tol] : {std::pair{"rtol", rtol}, {"atol", atol}})
+    if (!(tol > 0.0) || !std::isfinite(tol))
+      return std::string("the tolerance ") + name + " (" + FormatShortest(tol) + ") must be a positive finite number";
+  return "";
+}
+
+std::string ToleranceWarning(double rtol) {
+  if (rtol > kMaxSensibleRtol)
+    return "rtol = " + FormatShortest(rtol) + " allows errors larger than " + FormatShortest(100 * kMaxSensibleRtol) +
+           "% of the solution (rtol is relative: 1e-6 asks for about six digits)";
+  if (rtol > 0.0 && rtol < kMinSensibleRtol)
+    return "rtol = " + FormatShortest(rtol) + " is below what double precision delivers (" +
+           FormatShortest(kMinSensibleRtol) + "); the integrator may fail with too much work";
+  return "";
+}
+
+OutputGrid ResolveGrid(const rt::Program& program, const SimOptions& options) {
+  OutputGrid grid;
+  grid.start = std::isnan(options.start_time) ? rt::StartTime(program) : options.start_time;
+  grid.stop = options.stop_time;
+  grid.interval = options.interval > 0.0 ? options.interval : (grid.stop - grid.start) / kDefaultIntervals;
+  return grid;
+}
+
 Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf) {
   switch (kind) {
     case rt::IntegratorKind::CVODE: return cvode_bdf ? Method::CvodeBdf : Method::CvodeAdams;
@@ -55,16 +81,8 @@ Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf) {
 
 SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink) {
   // 1. Times, tolerances, integrator.
-  OutputGrid grid;
-  grid.start = std::isnan(options.start_time) ? rt::StartTime(program) : options.start_time;
-  grid.stop = options.stop_time;
-  if (!std::isfinite(grid.start) || !std::isfinite(grid.stop) || grid.stop < grid.start)
-    return UsageError("the stop time (" + FormatNumber(grid.stop) + ") must not be before the start time (" +
-                      FormatNumber(grid.start) + ")");
-  grid.interval = options.interval > 0.0 ? options.interval : (grid.stop - grid.start) / kDefaultIntervals;
-  if (!(options.rtol > 0.0) || !(options.atol > 0.0))
-    return UsageError("tolerances must be positive (rtol = " + FormatNumber(options.rtol) +
-                      ", atol = " + FormatNumber(options.atol) + ")");
+  const OutputGrid grid = ResolveGrid(program, options);
+  if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageError(why);
   rt::IntegratorKind kind = options.integrator;
   if (kind == rt::IntegratorKind::Auto) kind = rt::Summarize(program).integrator;
   IntegratorOptions iopt;

@@ -64,6 +64,22 @@ struct SimResult {
   SimStats stats;
 };
 
+// The output grid of a run: the start time (the options' or the program's), the stop
+// time, the interval (the options', else (stop - start) / kDefaultIntervals).
+OutputGrid ResolveGrid(const rt::Program& program, const SimOptions& options);
+
+// Why a run with these settings cannot start, in words ("" when it can): the grid's limits
+// (OutputGrid::Check) and positive finite tolerances. Simulate reports it as a usage
+// error; sweeps and golden tests call it before they run anything.
+std::string CheckRun(const OutputGrid& grid, double rtol, double atol);
+
+// A relative tolerance that is legal but almost certainly a mistake: above
+// kMaxSensibleRtol (errors as large as the solution) or below kMinSensibleRtol (beyond
+// double precision). The warning's text, or "".
+inline constexpr double kMaxSensibleRtol = 0.1;
+inline constexpr double kMinSensibleRtol = 1e-14;
+std::string ToleranceWarning(double rtol);
+
 // Maps the engine's integrator choice to a method (Auto -> IDA).
 Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf);
 

@@ -28,10 +28,22 @@ class GuardedRhs {
                            // without calling f, so no solver can creep up to it again
   double fail_time = 0.0;  // t of the last failed evaluation (of the fatal one once latched)
   std::string cause;       // why it failed
-  void ClearFailure() { failed = false; }
+  void ClearFailure() {
+    failed = false;
+    recoverable_ = 0;
+  }
+
+  // Recoverable failures between two output instants (since ClearFailure) after which
+  // the next one is fatal: a solver without a minimum step (CVODE, IDA) would otherwise
+  // creep toward a lasting failure (a NaN from t = 0.35 on) in ever smaller steps until
+  // its step limit, 1e5 steps later; a transient failure of a stage off the trajectory
+  // costs a handful.
+  static constexpr int kMaxRecoverableFailures = 200;
 
  private:
   int Failed(double t, int status);  // records a failure of f or of the projection; returns status
+  int Recoverable();                 // counts one; 1, or -1 (latched fatal) past the limit
+  int recoverable_ = 0;
   OdeSystem& system_;
 };
 

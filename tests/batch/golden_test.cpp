@@ -3,6 +3,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "runtime/batch/golden.h"
 
@@ -139,6 +142,93 @@ TEST(TrajectoryCsv, RoundTrip) {
   EXPECT_EQ(back.t, t.t);
   EXPECT_EQ(back.rows, t.rows);
   EXPECT_EQ(back.provenance["model"], "m.mech fnv1a64:0123");
+}
+
+
+// Wrong if a stored output that cannot guard anything reads as a valid golden: cut off,
+// no rows, a non-finite value (inf <= abs + rel * inf passes everything), times out of
+// order, or rows unlike the count and checksum recorded with them.
+TEST(TrajectoryCsv, CorruptFilesAreRefused) {
+  Trajectory t = Line(0.5, 0.1, 6);
+  const std::string good = FormatTrajectoryCsv(t);
+  const std::string path = ::testing::TempDir() + "/corrupt.csv";
+  Trajectory back;
+  std::string err;
+  std::ofstream(path) << good;
+  ASSERT_TRUE(ReadTrajectoryCsv(path, &back, &err)) << err;
+  EXPECT_EQ(back.provenance["rows"], "6");
+  const size_t header_end = good.find("time,x\n") + 7;
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {good.substr(0, good.size() - 3), "cut off"},
+      {good.substr(0, header_end), "no rows"},
+      {good.substr(0, good.rfind('\n', good.size() - 2) + 1), "recorded with 6"},
+      {good.substr(0, good.rfind(',') + 1) + "inf\n", "not a finite number"},
+      {good.substr(0, good.rfind(',') + 1) + "nan\n", "not a finite number"},
+      {good.substr(0, good.rfind(',') + 1) + "0x1\n", "not a finite number"},
+      {good.substr(0, good.rfind('\n', good.size() - 2) + 1) + "0.1,0.05\n", "do not increase"},
+  };
+  for (const auto& [text, why] : bad) {
+    std::ofstream(path) << text;
+    EXPECT_FALSE(ReadTrajectoryCsv(path, &back, &err)) << why;
+    EXPECT_NE(err.find(why), std::string::npos) << err;
+  }
+  std::string edited = good;
+  edited[edited.size() - 2] = edited[edited.size() - 2] == '5' ? '6' : '5';
+  std::ofstream(path) << edited;
+  EXPECT_FALSE(ReadTrajectoryCsv(path, &back, &err));
+  EXPECT_NE(err.find("checksum"), std::string::npos) << err;
+}
+
+// Wrong if a golden over other instants than the run (fewer rows, an earlier end)
+// compares as equal.
+TEST(Compare, GridsMustMatch) {
+  Trajectory golden = Line(1.0, 0.1, 11), run = golden;
+  EXPECT_EQ(CompareGrids(golden, run), "");
+  Trajectory one = Line(1.0, 0.1, 1);
+  EXPECT_NE(CompareGrids(one, run).find("the golden holds 1 instant over [0, 0], the run 11 instants"),
+            std::string::npos)
+      << CompareGrids(one, run);
+  EXPECT_NE(CompareGrids(Line(1.0, 0.1, 10), run), "");
+  EXPECT_NE(CompareGrids(Line(1.0, 0.2, 11), run), "");
+}
+
+// Wrong if an invariant whose window holds no instant passes (it checked nothing).
+TEST(Invariant, EmptyWindowFails) {
+  Trajectory run;
+  run.names = {"kinetic_energy", "potential_energy"};
+  for (int k = 0; k <= 10; ++k) {
+    run.t.push_back(k);
+    run.rows.push_back({1.0, 0.0});
+  }
+  InvariantResult r = CheckInvariant({"energy_balance", 1e-3, 20.0, 30.0}, run, run.names);
+  EXPECT_EQ(r.status, InvariantResult::Status::kFail) << r.text;
+  EXPECT_NE(r.text.find("no output instant"), std::string::npos) << r.text;
+}
+
+// Wrong if a spec value that makes the test pass anything (an infinite or NaN
+// tolerance) or run nothing (a non-finite or non-positive time setting), or a value of
+// the wrong type, is accepted.
+TEST(ReadGoldenSpec, ValuesThatCannotGuardAreRefused) {
+  const std::string dir = ::testing::TempDir();
+  const std::vector<std::string> bad = {
+      "[tolerance]\ndefault = { abs = inf }",  "[tolerance]\ndefault = { rel = nan }",
+      "[tolerance]\nx = { abs = -1 }",         "[tolerance]\nx = { abs = \"1\" }",
+      "[run]\nstop_time = inf",                "[run]\nstop_time = nan",
+      "[run]\ninterval = 0",                   "[run]\nrtol = -1e-6",
+      "[run]\nstart_time = 2\nstop_time = 1", "[[invariant]]\nkind = \"energy_balance\"\ntol = inf",
+      "[[invariant]]\nkind = \"energy_balance\"\ntol = 1\nfrom = 2\nto = 1",
+      "[[invariant]]\nkind = \"energy_balance\"\ntol = 1\nform = 2",
+      "set = { k = [1, 2] }",                     "model_name = 3",
+      "golden = 1",                               "run = 3",
+      "tolerance = 1",                            "invariant = 1",
+  };
+  for (const std::string& body : bad) {
+    std::ofstream(dir + "/bad.toml") << "model = \"m.mech\"\n" << body << "\n";
+    GoldenSpec s;
+    std::string err;
+    EXPECT_FALSE(ReadGoldenSpec(dir + "/bad.toml", &s, &err)) << body;
+    EXPECT_NE(err.find("bad.toml"), std::string::npos) << body << ": " << err;
+  }
 }
 
 }  // namespace

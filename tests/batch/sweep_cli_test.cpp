@@ -114,6 +114,7 @@ TEST(SweepCli, ResumeAfterTruncation) {
   for (int i = 0; i < 4; ++i) cut = text.find('\n', cut) + 1;
   std::string kept = text.substr(0, cut) + text.substr(cut, 20);
   std::ofstream(part + "/summary.csv") << kept;
+  std::filesystem::copy_file(full + "/summary.settings", part + "/summary.settings");  // written before any row
   ASSERT_EQ(Sh(kBin + " sweep " + kSpring + kSpringSweep + " -j2 --resume -o " + part), 0);
   std::string resumed = Slurp(part + "/summary.csv");
   EXPECT_EQ(resumed.substr(0, cut), text.substr(0, cut));  // the 3 rows, wall_time included: not rerun

@@ -44,7 +44,7 @@ TEST(FreeBody, TorqueFreeMatchesEulerEquations) {
   // If this fails, the gyroscopic term or the free joint's speeds (body-fixed angular
   // velocity, translational u = d p_ab / dt) are wrong: I wdot = -w x I w and vdot = g.
   std::mt19937 rng(3);
-  const Mat3 I = test::Diag(1.0, 2.0, 3.5);
+  const Mat3 I = test::Diag(1.0, 2.0, 2.5);  // a rigid body's: 1 + 2 >= 2.5 (compile/inertia.cpp)
   for (auto rc : {flat::RotationCoords::Quaternion, flat::RotationCoords::CardanXYZ}) {
     for (double g : {0.0, 9.81}) {
       test::MechBuilder b;
@@ -189,9 +189,11 @@ TEST(Forces, LineForceWrenchAndJointForceMatchClosedForm) {
   }
 }
 
-TEST(Forces, NaNFromAnExpressionIsFatalAndNamed) {
+TEST(Forces, NaNFromAnExpressionIsRecoverableAndNamed) {
   // If this fails, a NaN from a user expression silently propagates into the state
-  // instead of stopping with a message naming the expression.
+  // instead of stopping with a message naming the expression, or it is fatal, so that a
+  // solver stage probing past the NaN's onset ends the run before the rows up to it
+  // (recoverable, > 0: the solver retries shorter; engine.cpp NotFinite).
   auto mech = test::Pendulum();
   auto& e = mech.exprs;
   mech.joints[0].tau[0] = e.Unary(Op::Sqrt, e.Binary(Op::Sub, e.Time(), e.Constant(5.0)));
@@ -199,7 +201,7 @@ TEST(Forces, NaNFromAnExpressionIsFatalAndNamed) {
   ASSERT_TRUE(r.errors.empty());
   auto ws = rt::MakeWorkspace(*r.program);
   double y[2] = {0.1, 0.0}, yd[2];
-  EXPECT_LT(rt::Derivative(*r.program, *ws, 0.0, y, yd), 0);
+  EXPECT_GT(rt::Derivative(*r.program, *ws, 0.0, y, yd), 0);
   EXPECT_NE(rt::ErrorMessage(*ws).find("force of joint 'pivot'"), std::string::npos) << rt::ErrorMessage(*ws);
   EXPECT_NE(rt::ErrorMessage(*ws).find("sqrt"), std::string::npos) << rt::ErrorMessage(*ws);
   EXPECT_EQ(rt::Derivative(*r.program, *ws, 6.0, y, yd), 0);
@@ -241,13 +243,13 @@ TEST(Signals, PendulumEnergiesAndPositions) {
   EXPECT_NEAR(o[6], u, kClosedFormTol);
 }
 
-TEST(Singular, MasslessLinkIsFatalOnBothPaths) {
+TEST(Singular, MasslessLinkIsFatalOnEveryPath) {
   // If this fails, a mass matrix that is singular (a joint that moves nothing with
   // mass or inertia) yields garbage accelerations instead of a fatal status.
   auto mech = test::Pendulum();
   mech.bodies[0].mass = mech.exprs.Constant(0.0);
   for (auto& e : mech.bodies[0].inertia) e = mech.exprs.Constant(0.0);
-  for (auto path : {rt::SolverPath::Dense, rt::SolverPath::Sparse}) {
+  for (auto path : {rt::SolverPath::Dense, rt::SolverPath::Sparse, rt::SolverPath::Recursive}) {
     rt::CompileOptions o;
     o.solver = path;
     auto r = rt::Compile(mech, o);

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
+#include "runtime/compile/compile_internal.h"
 #include "runtime/engine.h"
 #include "runtime/tape.h"
 #include "tests/runtime/builders.h"
@@ -171,6 +173,75 @@ TEST(Tape, JetsMatchAnalyticDerivatives) {
   EXPECT_NEAR(r[o], f0, kJetTol);
   EXPECT_NEAR(r[o + 1], f1, kJetTol);
   EXPECT_NEAR(r[o + 2], f2, kJetTol);
+}
+
+
+// Eq. (1)-(3) of compile/inertia.cpp over a generator of rotated tensors: every rigid
+// body's inertia passes (and comes back symmetric), and a tensor broken in one way
+// (asymmetric, a negative principal moment, the triangle inequality, a non-finite entry)
+// is refused with that reason, whatever its orientation.
+TEST(InertiaCheck, RigidBodiesPassBrokenTensorsFailInEveryOrientation) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(0.2, 1.0);
+  auto rotated = [&](double a, double b, double c) {
+    const test::Mat3 R = test::RandomRotation(rng);
+    return test::Mat3(R * test::Diag(a, b, c) * R.transpose());
+  };
+  auto why = [](const test::Mat3& I) {
+    test::Mat3 sym;
+    return rt::CheckInertia(I, &sym);
+  };
+  for (int k = 0; k < 300; ++k) {
+    const test::Mat3 I = test::RandomInertia(rng);
+    test::Mat3 sym;
+    EXPECT_EQ(rt::CheckInertia(I, &sym), "") << I;
+    EXPECT_LE((sym - I).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_NE(why(rotated(0, u(rng), 0)).find("triangle"), std::string::npos) << "a line of mass has no such moments";
+    const double a = u(rng), b = u(rng);
+    EXPECT_EQ(why(rotated(a, b, a + b)), "") << "a plane lamina";
+    EXPECT_EQ(why(rotated(0, a, a)), "") << "a thin rod";
+    EXPECT_NE(why(rotated(a, b, (a + b) * (1 + 1e-3))).find("triangle"), std::string::npos);
+    EXPECT_NE(why(rotated(-1e-3 * a, b, b)).find("negative principal"), std::string::npos);
+    test::Mat3 skew = I;
+    const int i = static_cast<int>(rng() % 3), j = (i + 1 + static_cast<int>(rng() % 2)) % 3;
+    skew(i, j) += 1e-4 * I.trace();
+    EXPECT_NE(why(skew).find("not symmetric"), std::string::npos) << skew;
+    skew(i, j) = I(i, j) + 1e-8 * I.trace();  // inside the tolerance (1e-6): accepted, symmetrized
+    EXPECT_EQ(why(skew), "");
+    test::Mat3 bad = I;
+    bad(i, j) = std::nan("");
+    EXPECT_NE(why(bad).find("non-finite"), std::string::npos);
+  }
+}
+
+// Every path that makes a program checks: Compile and Rebind (sweeps, --set through
+// re-elaboration compiles anew), with K308 at the body's declaration.
+TEST(InertiaCheck, CompileAndRebindReportK308AtTheBody) {
+  test::MechBuilder b;
+  const int iJ = b.Param("J", 1.0);
+  auto& e = b.m.exprs;
+  const flat::ExprId J = e.Parameter(iJ);
+  int w = b.World(Vec3(0, -9.81, 0));
+  int f = b.Frame("wheel.frame_a");
+  flat::Body body;
+  body.name = "wheel";
+  body.frame = f;
+  body.mass = b.C(1.0);
+  body.r_cm = {b.C(0.0), b.C(0.0), b.C(0.0)};
+  body.inertia = {J, b.C(0), b.C(0), b.C(0), b.C(1), b.C(0), b.C(0), b.C(0), b.C(1)};
+  body.loc = {"w.mech", 7, 3};
+  b.m.bodies.push_back(body);
+  b.Joint("pivot", flat::JointType::Revolute, w, f, Vec3::UnitZ());
+  auto r = rt::Compile(b.m, {});
+  ASSERT_TRUE(r.errors.empty()) << Dump(r);
+  for (double j : {-1.0, 2.5, std::nan("")}) {  // negative; 1 + 1 < 2.5; not a number
+    rt::CompileResult bad = rt::Rebind(*r.program, {j});
+    EXPECT_FALSE(bad.program) << j;
+    ASSERT_TRUE(HasError(bad, "K308", "body 'wheel'")) << j << "\n" << Dump(bad);
+    EXPECT_EQ(bad.errors[0].loc.line, 7);
+    EXPECT_EQ(bad.errors[0].loc.col, 3);
+  }
+  EXPECT_TRUE(rt::Rebind(*r.program, {1.9}).program);
 }
 
 }  // namespace

@@ -1,0 +1,115 @@
+#include "runtime/batch/file_guard.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <signal.h>
+
+namespace kanesim::batch {
+namespace {
+
+std::string HostName() {
+  char buf[256] = {};
+  if (::gethostname(buf, sizeof buf - 1) != 0 || buf[0] == '\0') return "localhost";
+  std::string h(buf);
+  for (char& c : h)
+    if (c == '/' || c == '.') c = '_';  // one path component, and '.' separates the pid
+  return h;
+}
+
+bool AllDigits(const std::string& s) {
+  if (s.empty() || s.size() > 9) return false;
+  for (char c : s)
+    if (c < '0' || c > '9') return false;
+  return true;
+}
+
+// The pid of a temporary name's tail "<host>.<pid>" or "<pid>" when it is ours to judge
+// (this machine), else 0.
+long OwnPid(const std::string& tail, const std::string& host) {
+  if (AllDigits(tail)) return std::stol(tail);
+  size_t dot = tail.rfind('.');
+  if (dot == std::string::npos || tail.substr(0, dot) != host || !AllDigits(tail.substr(dot + 1))) return 0;
+  return std::stol(tail.substr(dot + 1));
+}
+
+bool Running(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
+
+// Removes `entry` when its name is <prefix>.tmp.<tail> with a dead pid of this machine.
+bool RemoveIfStale(const std::filesystem::path& entry, const std::string& prefix, const std::string& host) {
+  const std::string name = entry.filename().string();
+  const std::string marker = ".tmp.";
+  size_t at = prefix.empty() ? name.rfind(marker) : prefix.size();
+  if (at == std::string::npos || name.compare(0, at, prefix.empty() ? name.substr(0, at) : prefix) != 0 ||
+      name.compare(at, marker.size(), marker) != 0)
+    return false;
+  const long pid = OwnPid(name.substr(at + marker.size()), host);
+  if (pid == 0 || pid == static_cast<long>(::getpid()) || Running(pid)) return false;
+  std::error_code ec;
+  return std::filesystem::remove(entry, ec);
+}
+
+}  // namespace
+
+bool SameFile(const std::string& a, const std::string& b) {
+  struct stat sa, sb;
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev &&
+         sa.st_ino == sb.st_ino;
+}
+
+std::string OverwrittenInput(const std::string& output, const std::vector<std::string>& inputs) {
+  for (const std::string& in : inputs)
+    if (!in.empty() && SameFile(output, in)) return in;
+  return "";
+}
+
+std::string TempPathFor(const std::string& target) {
+  return target + ".tmp." + HostName() + "." + std::to_string(::getpid());
+}
+
+int RemoveStaleTemps(const std::string& target) {
+  const std::filesystem::path t(target);
+  const std::filesystem::path dir = t.has_parent_path() ? t.parent_path() : std::filesystem::path(".");
+  const std::string prefix = t.filename().string(), host = HostName();
+  std::error_code ec;
+  int removed = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    if (e.path().filename().string().starts_with(prefix + ".tmp.")) removed += RemoveIfStale(e.path(), prefix, host);
+  return removed;
+}
+
+int RemoveStaleTempsIn(const std::string& dir) {
+  const std::string host = HostName();
+  std::error_code ec;
+  int removed = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) removed += RemoveIfStale(e.path(), "", host);
+  return removed;
+}
+
+FileLock::~FileLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing the descriptor releases the lock
+}
+
+bool FileLock::Acquire(const std::string& path, const std::string& what, std::string* error) {
+  int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    *error = "cannot open '" + path + "': " + std::strerror(errno);
+    return false;
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(fd);
+    *error = err == EWOULDBLOCK ? "another kanesim process is writing " + what + "; wait for it to finish or choose another output"
+                                : "cannot lock '" + path + "': " + std::strerror(err);
+    return false;
+  }
+  fd_ = fd;
+  return true;
+}
+
+}  // namespace kanesim::batch

@@ -1,0 +1,65 @@
+// Running the kanesim binary from a test: its exit code, stdout and stderr, and files.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace kanesim::clitest {
+
+inline std::string Bin() {
+  const char* b = std::getenv("KANESIM_TEST_BIN");
+  return b && *b ? b : KANESIM_BIN;
+}
+inline const std::string kSrc = KANESIM_SOURCE_DIR;
+
+// A fresh folder under the build tree's work directory.
+inline std::string Work(const std::string& name) {
+  std::string d = std::string(KANESIM_WORK_DIR) + "/" + name;
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+inline std::string Slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+inline void Write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+struct Result {
+  int rc = -1;
+  std::string out, err;
+};
+
+// `kanesim ARGS` (a shell command line after the binary), run in `dir`.
+inline Result Kanesim(const std::string& args, const std::string& dir = KANESIM_WORK_DIR) {
+  const std::string out = dir + "/.stdout", err = dir + "/.stderr";
+  // A time limit, so that a binary without the fixes fails instead of hanging.
+  int rc = std::system(("cd '" + dir + "' && timeout 120 '" + Bin() + "' " + args + " >'" + out + "' 2>'" + err + "'")
+                           .c_str());
+  Result r;
+  r.rc = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  r.out = Slurp(out);
+  r.err = Slurp(err);
+  return r;
+}
+
+inline bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Data rows of a CSV (lines after the header, '#' lines skipped).
+inline int CsvRows(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  int n = -1;
+  while (std::getline(in, line))
+    if (!line.empty() && line[0] != '#') ++n;
+  return n < 0 ? 0 : n;
+}
+
+}  // namespace kanesim::clitest

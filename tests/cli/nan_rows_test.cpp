@@ -1,0 +1,95 @@
+// Item 12 of issue 24: a model that turns NaN at some time must stop with exit 2 at
+// about that time, and every output instant before it must be on disk, whichever the
+// integrator and the solver path (a stage of a long DOP853 step probing past the NaN
+// used to end the run at the step's start: rows to t = 0.1 for a NaN from t = 0.35), and
+// in a sweep's trajectory files too.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "cli_util.h"
+
+namespace kanesim::clitest {
+namespace {
+
+constexpr double kInterval = 0.1;
+
+// A pendulum whose hinge torque is `tau` (NaN past some time or state).
+std::string Model(const std::string& tau) {
+  return "model NaNPendulum\n  parameter Real c = 0.35;\n  World world;\n"
+         "  Revolute hinge(axis = {0, 0, 1}, q(start = 0));\n  Rod rod(L = 1, m = 1);\nequation\n"
+         "  connect(world.frame_b, hinge.frame_a);\n  connect(hinge.frame_b, rod.frame_a);\n"
+         "  hinge.tau = " + tau + ";\n  annotation(experiment(StopTime = 1, Interval = 0.1));\nend NaNPendulum;\n";
+}
+
+// The time in "numerical failure at t = <time>:".
+double FailTime(const std::string& err) {
+  const std::string key = "numerical failure at t = ";
+  size_t at = err.find(key);
+  return at == std::string::npos ? std::nan("") : std::stod(err.substr(at + key.size()));
+}
+
+// Times of the rows of a CSV.
+std::vector<double> Times(const std::string& path) {
+  std::vector<double> t;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) t.push_back(std::stod(line));
+  return t;
+}
+
+// Every instant k * kInterval before `fail` is a row, and no row is at or past it.
+void ExpectRowsBefore(const std::vector<double>& t, double fail, const std::string& what) {
+  const int expected = static_cast<int>(std::floor(fail / kInterval - 1e-9)) + 1;
+  EXPECT_EQ(static_cast<int>(t.size()), expected) << what << ": failure at " << fail;
+  for (size_t k = 0; k < t.size(); ++k) EXPECT_NEAR(t[k], kInterval * static_cast<double>(k), 1e-12) << what;
+}
+
+TEST(NaNRows, EveryRowBeforeATimeNaNIsKeptByEveryIntegratorAndPath) {
+  std::string d = Work("nan_time");
+  Write(d + "/m.mech", Model("sqrt(c - time)"));
+  for (double c : {0.35, 0.55, 0.72})
+    for (std::string integrator : {"auto", "dop853", "cvode", "cvode-bdf", "arkode", "ida"})
+      for (std::string solver : {"dense", "sparse", "recursive"}) {
+        const std::string what = "c=" + std::to_string(c) + " " + integrator + " " + solver;
+        Result r = Kanesim("run m.mech --set c=" + std::to_string(c) + " --integrator " + integrator + " --solver " +
+                               solver + " -o out.csv",
+                           d);
+        ASSERT_EQ(r.rc, 2) << what << "\n" << r.err;
+        const double fail = FailTime(r.err);
+        EXPECT_GE(fail, c) << what;
+        EXPECT_LT(fail, c + 1e-3) << what << ": the failure is reported where the NaN begins";
+        EXPECT_TRUE(Has(r.err, "NaN")) << what << "\n" << r.err;
+        ExpectRowsBefore(Times(d + "/out.csv"), fail, what);
+      }
+}
+
+// A NaN that depends on the state (the angle passing a value), not on time.
+TEST(NaNRows, EveryRowBeforeAStateNaNIsKept) {
+  std::string d = Work("nan_state");
+  Write(d + "/m.mech", Model("10 + sqrt(0.4 - hinge.q)"));  // driven forward, NaN once q > 0.4 (t ~ 0.23)
+  for (std::string integrator : {"dop853", "cvode", "arkode", "ida"}) {
+    Result r = Kanesim("run m.mech --integrator " + integrator + " -o out.csv", d);
+    ASSERT_EQ(r.rc, 2) << integrator << "\n" << r.err;
+    ExpectRowsBefore(Times(d + "/out.csv"), FailTime(r.err), integrator);
+  }
+}
+
+// In a sweep: the failed scenario's row says when, and its trajectory file keeps every
+// row before that time.
+TEST(NaNRows, SweepTrajectoriesKeepTheRowsBeforeTheFailure) {
+  std::string d = Work("nan_sweep");
+  Write(d + "/m.mech", Model("sqrt(c - time)"));
+  Result r = Kanesim("sweep m.mech --grid c=0.35,0.55,2 --metric final:hinge.q --trajectories --no-progress -o out", d);
+  ASSERT_EQ(r.rc, 2) << r.err;
+  for (int id : {0, 1}) {
+    const std::vector<double> t = Times(d + "/out/trajectories/scenario_" + std::to_string(id) + ".csv");
+    ExpectRowsBefore(t, id == 0 ? 0.35 + 1e-6 : 0.55 + 1e-6, "scenario " + std::to_string(id));
+  }
+  EXPECT_EQ(Times(d + "/out/trajectories/scenario_2.csv").size(), 11u);
+}
+
+}  // namespace
+}  // namespace kanesim::clitest
