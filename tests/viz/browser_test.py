@@ -15,6 +15,8 @@ world matrices with the display rotation undone).
   controls   --page P --up U   (c) the slider, a click on a plot, the arrow keys, play, pause
                                and speed move the time and the plot cursors; hover names;
                                the signal picker
+  edge       --page P          a page of corner cases (one instant, a body without a drawing,
+                               a signal of NaN only, markup in names) opens without errors
   screenshot --page P --up U --png OUT   (e) a PNG of the page, checked for the bodies' and the
                                cursor's colours where they should be
 Exit 0 when every check passes; 1 with the failures listed.
@@ -313,6 +315,39 @@ def run_controls(args):
         check(not page.evaluate("kanesimViewer.errors"), f"errors: {page.evaluate('kanesimViewer.errors')}")
 
 
+def run_edge(args):
+    url = pathlib.Path(args.page).resolve().as_uri()
+    with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+        page = browser.new_page(WIDTH, HEIGHT)
+        if not open_page(page, url, "edge"):
+            return
+        check(page.evaluate("kanesimViewer.time()") == 2.0, "edge: not at its one instant")
+        check(page.evaluate("kanesimViewer.seek(5)") == 2.0, "edge: seeking past the one instant")
+        check(page.evaluate("document.getElementById('slider').disabled"), "edge: the slider should be disabled")
+        shown = page.evaluate("kanesimViewer.bodyPoses()")
+        check(sorted(shown) == ["</script><b>x", "frame"], f"edge: bodies {sorted(shown)}")
+        frame = shown.get("frame", {"p": None, "R": None})
+        check(frame["p"] and max(abs(a - b) for a, b in zip(frame["p"], (1, 2, 3))) < POSE_TOL,
+              f"edge: frame at {frame['p']}")
+        quarter = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+        check(frame["R"] and max(abs(frame["R"][i][j] - quarter[i][j]) for i in range(3) for j in range(3)) < POSE_TOL,
+              f"edge: frame turned {frame['R']}")
+        check(page.evaluate("document.title") == "edge <cases>", "edge: title")
+        check(page.evaluate("kanesimViewer.plotted()") == ["gap", "<i>one</i>"], "edge: plots")
+        check(page.evaluate("document.querySelectorAll('#signal-list i, #plots i, #tooltip b').length") == 0,
+              "edge: markup in a name became elements")
+        # Up is −x: W's −x axis is drawn going up the screen.
+        o, a = page.evaluate("kanesimViewer.screenPoint([0, 0, 0])"), page.evaluate("kanesimViewer.screenPoint([-1, 0, 0])")
+        check(o[1] - a[1] > 50, f"edge: up (−x) is drawn from {o} to {a}")
+        sx, sy = page.evaluate("kanesimViewer.screenPosition('</script><b>x')")
+        page.mouse("mouseMoved", sx, sy)
+        wait_frames(page)
+        text = page.evaluate("kanesimViewer.hoverText()")
+        check(text == "</script><b>x\n<label>", f"edge: hovering the box shows {text!r}")
+        check(not page.evaluate("kanesimViewer.errors"), f"edge: errors {page.evaluate('kanesimViewer.errors')}")
+        check_requests(page, [url, "data:", "blob:"], "edge page")
+
+
 def decode_png(data):
     """RGB(A) 8-bit, non-interlaced PNG → (width, height, channels, rows of bytes)."""
     check(data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG")
@@ -376,7 +411,7 @@ def run_screenshot(args):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("case", choices=["offline", "served", "controls", "screenshot"])
+    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot"])
     parser.add_argument("--chromium", default="chromium")
     parser.add_argument("--page")
     parser.add_argument("--fixture")
@@ -385,7 +420,7 @@ def main():
     args = parser.parse_args()
     start = time.monotonic()
     try:
-        {"offline": run_offline, "served": run_served, "controls": run_controls,
+        {"offline": run_offline, "served": run_served, "controls": run_controls, "edge": run_edge,
          "screenshot": run_screenshot}[args.case](args)
     except cdp.ProtocolError as e:
         failures.append(f"browser: {e}")

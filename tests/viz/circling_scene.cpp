@@ -1,6 +1,7 @@
 #include "tests/viz/circling_scene.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include "runtime/geometry/primitives.h"
@@ -67,6 +68,19 @@ ViewerScene CirclingScene(char up, int n_times, int n_bodies) {
     energy.values.push_back(1 + 0.5 * sn * sn);
   }
   s.signals = {x, y, height, angle, energy};
+  return s;
+}
+
+ViewerScene EdgeScene() {
+  ViewerScene s;
+  s.title = "edge <cases>";
+  s.up_W = -Vec3::UnitX();
+  s.bodies.push_back({"frame", "", {}, {0.5f, 0.5f, 0.5f, 1}});
+  s.bodies.push_back({"</script><b>x", "<label>", geometry::DrawBox(Vec3(0.2, 0.2, 0.2)), {0.9f, 0.6f, 0.1f, 0.5f}});
+  s.poses.times = {2.0};
+  AddPose(s, Vec3(1, 2, 3), Quaterniond(AngleAxisd(std::acos(-1.0) / 2, Vec3::UnitZ())));
+  AddPose(s, Vec3::Zero(), Quaterniond::Identity());
+  s.signals = {{"gap", "", {NAN}, true}, {"<i>one</i>", "m", {7.5}, true}};
   return s;
 }
 

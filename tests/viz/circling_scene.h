@@ -20,4 +20,9 @@ namespace kanesim::viz::testing {
 
 ViewerScene CirclingScene(char up, int n_times = 101, int n_bodies = 2);
 
+// Corner cases the page must survive: one instant at t = 2 s; "frame" (no drawing) at
+// (1, 2, 3) turned a quarter turn about z; "</script><b>x" (a 0.2 m box) at the origin, half
+// transparent; signals "gap" (NaN only) and "<i>one</i>" (7.5); gravity along +x (up −x).
+ViewerScene EdgeScene();
+
 }  // namespace kanesim::viz::testing
