@@ -6,7 +6,10 @@ pkgs=(build-essential cmake ninja-build pkg-config git
       libeigen3-dev libsundials-dev libsuitesparse-dev libassimp-dev
       libcli11-dev libfmt-dev libtomlplusplus-dev libgtest-dev libgmock-dev libbenchmark-dev
       clang-14 libclang-rt-14-dev libomp-14-dev python3 python3-venv
-      openmpi-bin libopenmpi-dev)  # OpenMPI: kanesim sweep --mpi (optional at build time)
+      openmpi-bin libopenmpi-dev  # OpenMPI: kanesim sweep --mpi (optional at build time)
+      libcpp-httplib-dev          # the viewer's HTTP server (runtime/viz)
+      libjs-three libjs-dygraphs  # the viewer page's libraries, read at run time
+      chromium)                   # the viewer's browser tests (headless, tests/viz)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

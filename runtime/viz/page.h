@@ -1,0 +1,38 @@
+// Assembling the viewer page from its own files (page_files.h), the third-party libraries
+// read from Debian's installed files, and the scene JSON (scene_json.h).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace kanesim::viz {
+
+// A third-party file the page needs.
+struct LibraryFile {
+  std::string name;     // the name it is served under: /lib/<name>
+  std::string path;     // the installed file read
+  std::string package;  // the Debian package that installs it
+  bool css = false;     // a style sheet (else a script)
+  std::string text;     // its contents
+};
+
+// Reads three.js, OrbitControls and dygraphs (script and style) from js_root (normally
+// /usr/share/javascript). On a missing or unreadable file *error names it and its Debian
+// package, and the result is empty.
+std::vector<LibraryFile> ReadLibraries(const std::string& js_root, std::string* error);
+
+enum class PageMode {
+  kOffline,  // one file: libraries, page script and style, scene JSON inline
+  kServed,   // libraries from lib/<name> and the scene from scene.json, on the same origin
+};
+
+// The page's HTML. `libraries` and `scene_json` are inlined when offline; when served only the
+// libraries' names are used and scene_json is ignored.
+std::string RenderPage(PageMode mode, const std::string& title, const std::vector<LibraryFile>& libraries,
+                       const std::string& scene_json);
+
+// Content-Security-Policy of the page in each mode: nothing outside the file (offline) or the
+// origin (served) can be loaded.
+const char* PagePolicy(PageMode mode);
+
+}  // namespace kanesim::viz

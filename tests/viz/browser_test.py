@@ -1,0 +1,434 @@
+#!/usr/bin/env python3
+"""The viewer page in a real browser: Debian's chromium, headless, WebGL through SwiftShader,
+driven over the DevTools protocol (cdp.py).
+
+The page shows tests/viz/circling_scene.h's scene. The poses expected here are that file's
+closed forms, computed again below (not read from the page's data), and compared with what
+the page reads back from the rendered three.js objects (window.kanesimViewer.bodyPoses: the
+world matrices with the display rotation undone).
+
+  offline    --page P --up U   (a) poses at instants and between them, through ?t= and seek;
+                               gravity points down on the screen; bodies drawn in their
+                               colours where they are; (d) no request leaves the file
+  served     --fixture F --up U (b) the same through ServeViewer on 127.0.0.1, any free port;
+                               (d) no request leaves the origin
+  controls   --page P --up U   (c) the slider, a click on a plot, the arrow keys, play, pause
+                               and speed move the time and the plot cursors; hover names;
+                               the signal picker
+  edge       --page P          a page of corner cases (one instant, a body without a drawing,
+                               a signal of NaN only, markup in names) opens without errors
+  screenshot --page P --up U --png OUT   (e) a PNG of the page, checked for the bodies' and the
+                               cursor's colours where they should be
+Exit 0 when every check passes; 1 with the failures listed.
+"""
+import argparse
+import math
+import os
+import pathlib
+import struct
+import subprocess
+import sys
+import time
+import urllib.request
+import zlib
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cdp  # noqa: E402
+
+# Poses reach the page in single precision and are multiplied in double precision by three.js:
+# 2e-6 is ~20 float roundings of numbers up to 1.1. A wrong quaternion order, a wrong
+# interpolation or a lost display rotation is off by 1e-2 or more.
+POSE_TOL = 2e-6
+WIDTH, HEIGHT = 1200, 700
+R, OMEGA, H = 0.8, 1.3, 0.3
+DT = 1 / 20  # t_k = k / 20, k = 0 … 100
+N_TIMES = 101
+failures = []
+
+
+def check(ok, message):
+    if not ok:
+        failures.append(message)
+    return ok
+
+
+# ---- the closed forms of circling_scene.h --------------------------------------------------
+
+def axes(up):
+    """(e1, e2, e_up), right-handed."""
+    if up == "y":
+        return (0, 0, 1), (1, 0, 0), (0, 1, 0)
+    return (1, 0, 0), (0, 1, 0), (0, 0, 1)
+
+
+def add(*terms):
+    return [sum(c * v[i] for c, v in terms) for i in range(3)]
+
+
+def axis_angle(axis, angle):
+    n = math.sqrt(sum(a * a for a in axis))
+    s = math.sin(angle / 2) / n
+    return (math.cos(angle / 2), axis[0] * s, axis[1] * s, axis[2] * s)
+
+
+def qmul(a, b):
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
+
+
+def rotation(q):
+    w, x, y, z = q
+    return [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
+
+
+def pose(name, t, up):
+    """(p_WB, q_WB) of a body at t."""
+    e1, e2, eu = axes(up)
+    if name == "orbiter":
+        p = add((R * math.cos(OMEGA * t), e1), (R * math.sin(OMEGA * t), e2), (H, eu))
+        return p, axis_angle((1, 2, 3), 2.1 * t)
+    p = add((0.9 + 0.2 * math.sin(2 * t), eu))
+    return p, qmul(axis_angle(eu, 1.1 * t), axis_angle(e1, 0.6))
+
+
+def slerp(a, b, s):
+    dot = sum(x * y for x, y in zip(a, b))
+    if dot < 0:
+        b, dot = tuple(-x for x in b), -dot
+    theta = math.acos(min(1.0, dot))
+    if theta < 1e-12:
+        return a
+    wa, wb = math.sin((1 - s) * theta) / math.sin(theta), math.sin(s * theta) / math.sin(theta)
+    return tuple(wa * x + wb * y for x, y in zip(a, b))
+
+
+def expected_pose(name, t, up):
+    """What the page must show at t: the closed form at an instant; between instants positions
+    interpolated linearly and rotations by slerp."""
+    k = min(int(math.floor(t / DT + 1e-9)), N_TIMES - 1)
+    if abs(t - k * DT) < 1e-12 or k == N_TIMES - 1:
+        p, q = pose(name, t, up)
+    else:
+        s = (t - k * DT) / DT
+        (pa, qa), (pb, qb) = pose(name, k * DT, up), pose(name, (k + 1) * DT, up)
+        p, q = [a + s * (b - a) for a, b in zip(pa, pb)], slerp(qa, qb, s)
+    return p, rotation(q)
+
+
+def check_poses(page, t, up, where):
+    shown = page.evaluate("kanesimViewer.bodyPoses()")
+    for name in ("orbiter", "spinner"):
+        p, rot = expected_pose(name, t, up)
+        got = shown.get(name)
+        if not check(got is not None, f"{where}: no body {name} on the page"):
+            continue
+        dp = max(abs(a - b) for a, b in zip(got["p"], p))
+        dr = max(abs(got["R"][i][j] - rot[i][j]) for i in range(3) for j in range(3))
+        check(dp <= POSE_TOL, f"{where}: {name} at {got['p']}, expected {p} (off by {dp:.2e})")
+        check(dr <= POSE_TOL, f"{where}: {name} rotation {got['R']}, expected {rot} (off by {dr:.2e})")
+
+
+# A shaded body keeps its hue: its own channel leads the others by a margin (the background
+# (233, 237, 242) and the grey grid do not).
+def reddish(rgb):
+    return rgb[0] > max(rgb[1], rgb[2]) + 50
+
+
+def bluish(rgb):
+    return rgb[2] > max(rgb[0], rgb[1]) + 50
+
+
+def check_drawing(page, up, where):
+    """Gravity points down on the screen: W's up axis, from W's origin, is drawn going up and
+    more steeply than either horizontal axis; and each body is drawn in its colour at its
+    projected origin."""
+    e1, e2, eu = axes(up)
+    o, a1, a2, au = (page.evaluate(f"kanesimViewer.screenPoint({list(v)})") for v in ((0, 0, 0), e1, e2, eu))
+    rise = o[1] - au[1]  # CSS pixels, y down
+    check(rise > 50 and rise > 1.5 * max(abs(o[1] - a1[1]), abs(o[1] - a2[1])),
+          f"{where}: W's up axis (up={up}) is drawn from {o} to {au}, horizontal axes to {a1} and {a2}")
+    so = page.evaluate("kanesimViewer.screenPosition('orbiter')")
+    ss = page.evaluate("kanesimViewer.screenPosition('spinner')")
+    if math.dist(so, ss) < 60:
+        return  # one may hide the other
+    red = page.evaluate(f"kanesimViewer.pixel({so[0]}, {so[1]})")
+    blue = page.evaluate(f"kanesimViewer.pixel({ss[0]}, {ss[1]})")
+    check(reddish(red), f"{where}: the orbiter (red) is drawn as {red}")
+    check(bluish(blue), f"{where}: the spinner (blue) is drawn as {blue}")
+
+
+def open_page(page, url, what):
+    page.navigate(url)
+    page.wait_for("window.kanesimViewer && (kanesimViewer.ready || kanesimViewer.failed)", 60, what + " ready")
+    errors = page.evaluate("kanesimViewer.errors")
+    check(page.evaluate("kanesimViewer.ready") and not errors, f"{what}: the page failed: {errors}")
+    return not errors
+
+
+def check_poses_and_drawing(page, base, up):
+    # Opened at an instant and between two (?t= opens paused there).
+    for t in (1.25, 1.2625):
+        if not open_page(page, f"{base}?t={t}", f"?t={t}"):
+            return
+        check(page.evaluate("kanesimViewer.time()") == t and not page.evaluate("kanesimViewer.playing()"),
+              f"?t={t}: the page is at t={page.evaluate('kanesimViewer.time()')}, not paused at {t}")
+        check_poses(page, t, up, f"?t={t}")
+        check_drawing(page, up, f"?t={t}")
+    # Seeking: instants (the first, the last), between them, and beyond the ends (clamped).
+    for t, at in ((0.0, 0.0), (2.5, 2.5), (3.35, 3.35), (4.0375, 4.0375), (0.71, 0.71), (5.0, 5.0),
+                  (7.0, 5.0), (-1.0, 0.0)):
+        got = page.evaluate(f"kanesimViewer.seek({t})")
+        check(abs(got - at) < 1e-12, f"seek({t}) went to {got}, not {at}")
+        check_poses(page, at, up, f"seek({t})")
+        check_drawing(page, up, f"seek({t})")
+
+
+def check_requests(page, allowed, where):
+    """(d) Every request the page made stayed on the file or the origin."""
+    urls = [e["request"]["url"] for e in page.events("Network.requestWillBeSent")]
+    check(urls, f"{where}: no request seen (the network events are not working)")
+    outside = [u for u in urls if not any(u.startswith(a) for a in allowed)]
+    check(not outside, f"{where}: requests outside {allowed}: {outside}")
+    problems = [e["entry"]["text"] for e in page.events("Log.entryAdded") if e["entry"]["level"] == "error"]
+    problems += [e["exceptionDetails"].get("text", "") for e in page.events("Runtime.exceptionThrown")]
+    check(not problems, f"{where}: errors in the console: {problems}")
+
+
+def run_offline(args):
+    url = pathlib.Path(args.page).resolve().as_uri()
+    with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+        page = browser.new_page(WIDTH, HEIGHT)
+        check_poses_and_drawing(page, url, args.up)
+        check_requests(page, [url, "data:", "blob:"], "offline page")
+
+
+def run_served(args):
+    server = subprocess.Popen([args.fixture, "serve", args.up], stdout=subprocess.PIPE, text=True)
+    try:
+        url = server.stdout.readline().strip()
+        if not check(url.startswith("http://127.0.0.1:"), f"the server printed {url!r}, not its URL"):
+            return
+        with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+            page = browser.new_page(WIDTH, HEIGHT)
+            check_poses_and_drawing(page, url, args.up)
+            check_requests(page, [url, "data:", "blob:"], "served page")
+            urls = {e["request"]["url"] for e in page.events("Network.requestWillBeSent")}
+            check(url + "scene.json" in urls and url + "lib/three.min.js" in urls,
+                  f"the served page did not load its scene and libraries from the server: {sorted(urls)}")
+        with urllib.request.urlopen(url + "quit", timeout=10) as reply:
+            check(reply.status == 200, f"GET /quit answered {reply.status}")
+        check(server.wait(timeout=10) == 0, f"the server exited with {server.returncode}")
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait()
+
+
+def cursor_check(page, t, where, tol):
+    """Every plot's cursor is at t, as a time and as a place on the plot."""
+    times = page.evaluate("kanesimViewer.cursorTimes()")
+    check(times, f"{where}: no plot cursors")
+    for name, at in times.items():
+        check(at is not None and abs(at - t) <= tol, f"{where}: the cursor of {name} is at {at}, not {t}")
+        left = page.evaluate(f"document.querySelector('.plot[data-signal=\"{name}\"] .plot-cursor')"
+                             ".getBoundingClientRect().left")
+        x = page.evaluate(f"kanesimViewer.plotPoint('{name}', {t})[0]")
+        check(abs(left - x) <= 1.0, f"{where}: the cursor of {name} is drawn at x={left}, the plot has t={t} at {x}")
+
+
+def wait_frames(page, n=3):
+    page.evaluate(f"new Promise(r => {{ let k = {n}; const f = () => (--k > 0 ? requestAnimationFrame(f) : r(1)); "
+                  "requestAnimationFrame(f); })")
+
+
+def run_controls(args):
+    url = pathlib.Path(args.page).resolve().as_uri()
+    with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+        page = browser.new_page(WIDTH, HEIGHT)
+        if not open_page(page, url + "?t=0", "controls"):
+            return
+        plotted = page.evaluate("kanesimViewer.plotted()")
+        check(plotted == ["orbiter.x", "spinner.height", "energy"], f"default plots: {plotted}")
+        # Scrubbing: the slider, as a user's input event.
+        page.evaluate("(() => { const s = document.getElementById('slider'); s.value = 2; "
+                      "s.dispatchEvent(new Event('input', {bubbles: true})); })()")
+        check(page.evaluate("kanesimViewer.time()") == 2, f"slider: time {page.evaluate('kanesimViewer.time()')}")
+        check_poses(page, 2.0, args.up, "slider at 2")
+        cursor_check(page, 2.0, "slider at 2", 1e-3)
+        # A click on a plot seeks there (to within a pixel).
+        area_w = page.evaluate("document.querySelector('.plot-graph').getBoundingClientRect().width")
+        x, y = page.evaluate("kanesimViewer.plotPoint('energy', 3.3)")
+        page.click(x, y)
+        t = page.evaluate("kanesimViewer.time()")
+        check(abs(t - 3.3) <= 2 * 5.0 / area_w, f"a click on the energy plot at t=3.3 went to {t}")
+        check(not page.evaluate("kanesimViewer.playing()"), "a click on a plot should pause")
+        cursor_check(page, t, "after the plot click", 1e-3)
+        check_poses(page, t, args.up, "after the plot click")
+        # The arrow keys step one written instant.
+        page.evaluate("kanesimViewer.seek(3.3)")
+        page.key("ArrowRight", "ArrowRight", 39)
+        check(page.evaluate("kanesimViewer.time()") == 67 / 20, f"→ from 3.3: {page.evaluate('kanesimViewer.time()')}")
+        page.key("ArrowLeft", "ArrowLeft", 37)
+        page.key("ArrowLeft", "ArrowLeft", 37)
+        check(page.evaluate("kanesimViewer.time()") == 65 / 20, f"←← from 3.35: {page.evaluate('kanesimViewer.time()')}")
+        # Play at 4× for a second of the page's own clock, then pause.
+        page.evaluate("kanesimViewer.seek(0)")
+        page.evaluate("(() => { const s = document.getElementById('speed'); s.value = '4'; "
+                      "s.dispatchEvent(new Event('change')); })()")
+        bx, by = page.evaluate("(() => { const r = document.getElementById('play').getBoundingClientRect(); "
+                               "return [r.left + r.width / 2, r.top + r.height / 2]; })()")
+        page.click(bx, by)
+        rate = page.evaluate("(async () => { const t0 = kanesimViewer.time(), w0 = performance.now(); "
+                             "await new Promise(r => setTimeout(r, 1000)); "
+                             "return (kanesimViewer.time() - t0) / ((performance.now() - w0) / 1000); })()")
+        check(page.evaluate("kanesimViewer.playing()"), "the play button did not start playing")
+        check(2.5 < rate < 4.6, f"playing at 4x advanced {rate:.2f} s per second")
+        page.click(bx, by)
+        t1 = page.evaluate("kanesimViewer.time()")
+        wait_frames(page, 5)
+        check(not page.evaluate("kanesimViewer.playing()") and page.evaluate("kanesimViewer.time()") == t1,
+              "the pause button did not stop the time")
+        cursor_check(page, t1, "after pause", 1e-3)
+        # Hover: the body's name (and label) under the mouse; nothing over the background.
+        sx, sy = page.evaluate("kanesimViewer.screenPosition('spinner')")
+        page.mouse("mouseMoved", sx, sy)
+        wait_frames(page)
+        text = page.evaluate("kanesimViewer.hoverText()")
+        check(text == "spinner\nCylinder r 0.1 m", f"hovering the spinner shows {text!r}")
+        vx, vy = page.evaluate("(() => { const r = document.querySelector('#view canvas').getBoundingClientRect(); "
+                               "return [r.left + 5, r.top + 5]; })()")
+        page.mouse("mouseMoved", vx, vy)
+        wait_frames(page)
+        check(page.evaluate("kanesimViewer.hoverText()") == "", "hovering the background shows a name")
+        # The signal picker: hide one plot, show another (its cursor at the current time).
+        for name in ("energy", "orbiter.angle"):
+            cx, cy = page.evaluate(f"(() => {{ const r = document.querySelector('#signal-list input[data-signal=\"{name}\"]')"
+                                   ".getBoundingClientRect(); return [r.left + r.width / 2, r.top + r.height / 2]; })()")
+            page.click(cx, cy)
+        plotted = page.evaluate("kanesimViewer.plotted()")
+        check(plotted == ["orbiter.x", "spinner.height", "orbiter.angle"], f"after the picker: {plotted}")
+        cursor_check(page, t1, "new plot", 1e-3)
+        check(not page.evaluate("kanesimViewer.errors"), f"errors: {page.evaluate('kanesimViewer.errors')}")
+
+
+def run_edge(args):
+    url = pathlib.Path(args.page).resolve().as_uri()
+    with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+        page = browser.new_page(WIDTH, HEIGHT)
+        if not open_page(page, url, "edge"):
+            return
+        check(page.evaluate("kanesimViewer.time()") == 2.0, "edge: not at its one instant")
+        check(page.evaluate("kanesimViewer.seek(5)") == 2.0, "edge: seeking past the one instant")
+        check(page.evaluate("document.getElementById('slider').disabled"), "edge: the slider should be disabled")
+        shown = page.evaluate("kanesimViewer.bodyPoses()")
+        check(sorted(shown) == ["</script><b>x", "frame"], f"edge: bodies {sorted(shown)}")
+        frame = shown.get("frame", {"p": None, "R": None})
+        check(frame["p"] and max(abs(a - b) for a, b in zip(frame["p"], (1, 2, 3))) < POSE_TOL,
+              f"edge: frame at {frame['p']}")
+        quarter = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+        check(frame["R"] and max(abs(frame["R"][i][j] - quarter[i][j]) for i in range(3) for j in range(3)) < POSE_TOL,
+              f"edge: frame turned {frame['R']}")
+        check(page.evaluate("document.title") == "edge <cases>", "edge: title")
+        check(page.evaluate("kanesimViewer.plotted()") == ["gap", "<i>one</i>"], "edge: plots")
+        check(page.evaluate("document.querySelectorAll('#signal-list i, #plots i, #tooltip b').length") == 0,
+              "edge: markup in a name became elements")
+        # Up is −x: W's −x axis is drawn going up the screen.
+        o, a = page.evaluate("kanesimViewer.screenPoint([0, 0, 0])"), page.evaluate("kanesimViewer.screenPoint([-1, 0, 0])")
+        check(o[1] - a[1] > 50, f"edge: up (−x) is drawn from {o} to {a}")
+        sx, sy = page.evaluate("kanesimViewer.screenPosition('</script><b>x')")
+        page.mouse("mouseMoved", sx, sy)
+        wait_frames(page)
+        text = page.evaluate("kanesimViewer.hoverText()")
+        check(text == "</script><b>x\n<label>", f"edge: hovering the box shows {text!r}")
+        check(not page.evaluate("kanesimViewer.errors"), f"edge: errors {page.evaluate('kanesimViewer.errors')}")
+        check_requests(page, [url, "data:", "blob:"], "edge page")
+
+
+def decode_png(data):
+    """RGB(A) 8-bit, non-interlaced PNG → (width, height, channels, rows of bytes)."""
+    check(data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG")
+    pos, idat = 8, b""
+    while pos < len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        if kind == b"IHDR":
+            width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            assert depth == 8 and colour in (2, 6) and interlace == 0, (depth, colour, interlace)
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + length
+    channels = 4 if colour == 6 else 3
+    raw, stride, rows, prev = zlib.decompress(idat), width * channels, [], bytearray(width * channels)
+    for y in range(height):
+        kind, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - channels] if i >= channels else 0
+            b, c = prev[i], prev[i - channels] if i >= channels else 0
+            if kind == 1:
+                line[i] = (line[i] + a) & 255
+            elif kind == 2:
+                line[i] = (line[i] + b) & 255
+            elif kind == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif kind == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append(line)
+        prev = line
+    return width, height, channels, rows
+
+
+def run_screenshot(args):
+    url = pathlib.Path(args.page).resolve().as_uri()
+    width, height = 1000, 560
+    with cdp.Chromium(args.chromium, width, height) as browser:
+        page = browser.new_page(width, height)
+        if not open_page(page, url + "?t=2.1", "screenshot"):
+            return
+        wait_frames(page)
+        so = page.evaluate("kanesimViewer.screenPosition('orbiter')")
+        ss = page.evaluate("kanesimViewer.screenPosition('spinner')")
+        cursor = page.evaluate("(() => { const r = document.querySelector('.plot[data-signal=\"orbiter.x\"] .plot-cursor')"
+                               ".getBoundingClientRect(); return [r.left, r.top, r.bottom]; })()")
+        png = page.screenshot()
+    pathlib.Path(args.png).write_bytes(png)
+    w, h, ch, rows = decode_png(png)
+    check((w, h) == (width, height), f"the screenshot is {w}x{h}, not {width}x{height}")
+    pixel = lambda x, y: tuple(rows[int(y)][int(x) * ch:int(x) * ch + 3])  # noqa: E731
+    red, blue = pixel(*so), pixel(*ss)
+    check(reddish(red), f"screenshot: the orbiter's pixel is {red}, not red")
+    check(bluish(blue), f"screenshot: the spinner's pixel is {blue}, not blue")
+    column = [pixel(cursor[0] + 1, y) for y in range(int(cursor[1]) + 2, int(cursor[2]) - 2)]
+    reds = sum(1 for p in column if p[0] > 180 and p[1] < 110 and p[2] < 110)
+    check(reds > 0.8 * len(column), f"screenshot: the orbiter.x plot's cursor column is red in {reds} of {len(column)} px")
+    print(f"screenshot: {args.png}, {len(png)} bytes")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot"])
+    parser.add_argument("--chromium", default="chromium")
+    parser.add_argument("--page")
+    parser.add_argument("--fixture")
+    parser.add_argument("--up", choices=["z", "y"], default="z")
+    parser.add_argument("--png")
+    args = parser.parse_args()
+    start = time.monotonic()
+    try:
+        {"offline": run_offline, "served": run_served, "controls": run_controls, "edge": run_edge,
+         "screenshot": run_screenshot}[args.case](args)
+    except cdp.ProtocolError as e:
+        failures.append(f"browser: {e}")
+    for f in failures:
+        print("FAIL:", f)
+    print(f"{args.case} (up {args.up}): {'FAILED' if failures else 'passed'} in {time.monotonic() - start:.1f} s")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
