@@ -30,12 +30,6 @@ enum class IndeterminateReactions { NaN, MinNorm };
 struct CompileOptions {
   SolverPath solver = SolverPath::Auto;
   IntegratorKind integrator = IntegratorKind::Auto;
-  // The run's horizon and tolerance (NaN: the model's experiment annotation), passed by
-  // run, sweep and test for the automatic integrator choice. No rule reads them since
-  // DOP853 won at every horizon and tolerance measured (runtime/compile/forces.cpp).
-  double start_time = std::numeric_limits<double>::quiet_NaN();
-  double stop_time = std::numeric_limits<double>::quiet_NaN();
-  double rtol = std::numeric_limits<double>::quiet_NaN();
   IndeterminateReactions indeterminate = IndeterminateReactions::NaN;
 };
 
