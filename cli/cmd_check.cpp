@@ -129,8 +129,8 @@ int RunCheck(const CheckArgs& args) {
                              sim::kKluMaxFill);
   }
   for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
-  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.code.empty())
-    std::cout << fmt::format("  warning[{}]: {}\n", f.code, f.message);
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.message.empty())
+    std::cout << fmt::format("  warning[{}]: {}\n", flat::DiagCodeString(f.code), f.message);
   const std::vector<std::string> indeterminate =
       rt::IndeterminateSignals(program, rt::AvailableSignals(program));
   if (!indeterminate.empty()) {

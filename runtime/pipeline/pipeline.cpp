@@ -57,11 +57,24 @@ bool CompileStage(const RunSpec& spec, Model* m, std::string* text) {
     m->program = std::move(r.program);
     return true;
   }
-  const size_t shown = std::min(r.errors.size(), static_cast<size_t>(lang::Diagnostics::kMaxErrors));
-  for (size_t i = 0; i < shown; ++i) *text += RenderCompileMessage(*m, r.errors[i], "error");
-  if (r.errors.size() > shown)
+  lang::Diagnostics diags(&m->source.sources);
+  for (const rt::CompileMessage& e : r.errors) AddCompileMessage(e, lang::Severity::Error, diags);
+  *text += diags.RenderAll();
+  const size_t shown = static_cast<size_t>(lang::Diagnostics::kMaxErrors) - 1;  // the last slot says "too many"
+  if (r.errors.size() > static_cast<size_t>(lang::Diagnostics::kMaxErrors))
     *text += "kanesim: " + std::to_string(r.errors.size() - shown) + " more errors like these are not shown\n";
   return false;
+}
+
+// The span of a compiler location in `sm`: one byte at line:col of the file of that name.
+lang::Span SpanOf(const lang::SourceManager& sm, const flat::SourceLoc& loc) {
+  if (loc.file.empty() || loc.line <= 0) return {};
+  for (int f = 0; f < sm.NumFiles(); ++f) {
+    if (sm.Name(f) != loc.file) continue;
+    const std::int32_t at = sm.Offset(f, loc.line, loc.col);
+    return at >= 0 ? lang::Span{f, at, at + 1} : lang::Span{};
+  }
+  return {};
 }
 
 }  // namespace
@@ -81,29 +94,18 @@ LoadResult LoadModel(const Source& source, const LoadOptions& options, const Run
   return result;
 }
 
-// The compiler's messages go through the language's renderer (lang/diagnostics.cpp): the
-// same clipped, escaped source line and caret, and the same caps on notes.
-std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& e, const char* severity) {
-  std::string out = e.loc.file.empty() ? "kanesim"
-                                       : lang::ClipMessage(e.loc.file) + ":" + std::to_string(e.loc.line) + ":" +
-                                             std::to_string(e.loc.col);
-  out += std::string(": ") + severity + "[" + e.code + "]: " + lang::ClipMessage(e.message) + "\n";
-  const lang::SourceManager& sm = model.source.sources;
-  for (int f = 0; f < sm.NumFiles(); ++f) {
-    if (sm.Name(f) != e.loc.file || e.loc.line <= 0) continue;
-    const std::int32_t at = sm.Offset(f, e.loc.line, e.loc.col);
-    if (at >= 0) out += lang::RenderSnippet(sm, lang::Span{f, at, at + 1});
-    break;
-  }
-  const size_t shown = std::min(e.notes.size(), lang::Diagnostics::kMaxNotesShown);
-  for (size_t i = 0; i < shown; ++i) {
-    const auto& [loc, msg] = e.notes[i];
-    out += lang::ClipMessage(loc.file) + ":" + std::to_string(loc.line) + ":" + std::to_string(loc.col) +
-           ": note: " + lang::ClipMessage(msg) + "\n";
-  }
-  if (e.notes.size() > shown) out += "  note: " + std::to_string(e.notes.size() - shown) + " more notes not shown\n";
-  if (!e.hint.empty()) out += "  hint: " + lang::ClipMessage(e.hint) + "\n";
-  return out;
+void AddCompileMessage(const rt::CompileMessage& e, lang::Severity severity, lang::Diagnostics& diags) {
+  const lang::SourceManager& sm = diags.Sources();
+  lang::Diagnostic& d = severity == lang::Severity::Error ? diags.Error(e.code, SpanOf(sm, e.loc), e.message)
+                                                          : diags.Warning(e.code, SpanOf(sm, e.loc), e.message);
+  for (const auto& [loc, msg] : e.notes) d.notes.push_back({SpanOf(sm, loc), msg});
+  d.hint = e.hint;
+}
+
+std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& e, lang::Severity severity) {
+  lang::Diagnostics diags(&model.source.sources);
+  AddCompileMessage(e, severity, diags);
+  return diags.RenderAll();
 }
 
 std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out, RunProblem* problem) {
@@ -150,11 +152,11 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
 std::string RunWarnings(const Model& model, double rtol, const std::vector<std::string>& signals) {
   std::string out;
   const rt::Program& program = *model.program;
-  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.code.empty())
-    out += RenderCompileMessage(model, f, "warning");
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.message.empty())
+    out += RenderCompileMessage(model, f, lang::Severity::Warning);
   if (program.options.indeterminate == rt::IndeterminateReactions::NaN) {
     const std::vector<std::string> which = rt::IndeterminateSignals(program, signals);
-    if (!which.empty()) out += RenderCompileMessage(model, rt::IndeterminateWarning(program, which), "warning");
+    if (!which.empty()) out += RenderCompileMessage(model, rt::IndeterminateWarning(program, which), lang::Severity::Warning);
   }
   if (std::string w = sim::ToleranceWarning(rtol); !w.empty()) out += "kanesim: warning: " + w + "\n";
   return out;

@@ -133,9 +133,12 @@ struct LoadResult {
 
 LoadResult LoadModel(const Source& source, const LoadOptions& options, const RunSpec& spec);
 
-// A compiler message (K3xx, W3xx) rendered like a language diagnostic, with the source
-// line from `model`'s files: "file:line:col: SEVERITY[CODE]: message\n  caret...".
-std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& message, const char* severity);
+// A compiler message (K3xx, W31x) as a language diagnostic in `diags` (its caps apply):
+// the location and the notes' become spans in diags.Sources() (no span when the file is
+// not among them), the code, message and hint are kept.
+void AddCompileMessage(const rt::CompileMessage& message, lang::Severity severity, lang::Diagnostics& diags);
+// The same, rendered alone with the source lines of `model`'s files.
+std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& message, lang::Severity severity);
 
 // ---------------------------------------------------------------------------------------
 // Stages 4-6: run it.

@@ -80,7 +80,7 @@ flat::Mechanism Pendulum(double amplitude, bool nan_torque_after_half_second = f
 
 std::shared_ptr<const rt::Program> CompilePendulum(const flat::Mechanism& m) {
   rt::CompileResult r = rt::Compile(m, rt::CompileOptions{});
-  for (const rt::CompileMessage& msg : r.errors) ADD_FAILURE() << msg.code << ": " << msg.message;
+  for (const rt::CompileMessage& msg : r.errors) ADD_FAILURE() << flat::DiagCodeString(msg.code) << ": " << msg.message;
   return r.program;
 }
 
