@@ -16,28 +16,19 @@
 #include <string>
 #include <thread>
 
-#include "lang/diagnostics.h"
-#include "lang/elaborate.h"
 #include "runtime/batch/sweep.h"
-#include "runtime/engine.h"
-#include "stdlib/stdlib.h"
+#include "runtime/pipeline/pipeline.h"
 
 namespace {
 
 using namespace kanesim;
 
 std::shared_ptr<const rt::Program> LoadChain(const std::string& path, int n) {
-  lang::Program program;
-  lang::Diagnostics diags(&program.sources);
-  lang::ElaborateOptions eo;
-  eo.overrides.push_back({"N", std::to_string(n)});
-  flat::Mechanism mech;
-  if (!lang::LoadProgram(path, stdlib::Files(), &program, diags) || !lang::Elaborate(program, eo, &mech, diags)) {
-    std::cerr << diags.RenderAll();
-    return nullptr;
-  }
-  rt::CompileResult r = rt::Compile(mech, rt::CompileOptions{});
-  return r.program;
+  pipeline::LoadOptions options;
+  options.sets = {"N=" + std::to_string(n)};
+  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(path), options, pipeline::RunSpec{});
+  std::cerr << r.diagnostics;
+  return r.model ? r.model->program : nullptr;
 }
 
 struct Timing {

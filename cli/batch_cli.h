@@ -1,6 +1,5 @@
-// Helpers shared by `kanesim sweep` and `kanesim test`: option names to engine enums,
-// run defaults from the experiment annotation (the same rules as `kanesim run`), and a
-// terminal progress line.
+// Helpers shared by `kanesim sweep` and `kanesim test`: run settings named in files into a
+// pipeline::RunSpec (runtime/pipeline/pipeline.h), and a terminal progress line.
 #pragma once
 
 #include <unistd.h>
@@ -11,49 +10,23 @@
 #include <fmt/core.h>
 #include <string>
 
-#include "runtime/engine.h"
-#include "runtime/flat/mechanism.h"
-#include "runtime/sim/simulate.h"
+#include "runtime/pipeline/pipeline.h"
 
 namespace kanesim::cli {
 
-inline rt::SolverPath SolverFromName(const std::string& s) {
-  if (s == "dense") return rt::SolverPath::Dense;
-  if (s == "sparse") return rt::SolverPath::Sparse;
-  if (s == "recursive") return rt::SolverPath::Recursive;
-  return rt::SolverPath::Auto;
-}
-
-// The integrator names of --integrator (run, sweep, test) and of `integrator = ...` in
-// sweep and golden files; the CLI11 lists in cmd_run.cpp and cmd_sweep.cpp say the same.
-inline constexpr const char* kIntegratorNames = "auto, ida, cvode, cvode-bdf, arkode, dop853";
-
-inline rt::IntegratorKind IntegratorFromName(const std::string& s) {
-  if (s == "ida") return rt::IntegratorKind::IDA;
-  if (s == "cvode" || s == "cvode-bdf") return rt::IntegratorKind::CVODE;
-  if (s == "arkode") return rt::IntegratorKind::ARKODE;
-  if (s == "dop853") return rt::IntegratorKind::DOP853;
-  return rt::IntegratorKind::Auto;
-}
-
-inline bool IsIntegratorName(const std::string& s) {
-  return s == "auto" || s == "cvode-bdf" || IntegratorFromName(s) != rt::IntegratorKind::Auto;
-}
-
-// Times and tolerances: given values (NaN = not given) over the experiment annotation
-// over the defaults, exactly as `kanesim run` resolves them (atol defaults to rtol).
-inline sim::SimOptions ResolveSimOptions(const flat::Experiment& ex, double start, double stop, double interval,
-                                         double rtol, double atol, const std::string& integrator) {
-  sim::SimOptions so;
-  if (!std::isnan(start)) so.start_time = start;
-  so.stop_time = !std::isnan(stop) ? stop : ex.stop_time;
-  if (!std::isnan(interval)) so.interval = interval;
-  else if (ex.has_interval) so.interval = ex.interval;
-  so.rtol = !std::isnan(rtol) ? rtol : ex.tolerance;
-  so.atol = !std::isnan(atol) ? atol : so.rtol;
-  so.integrator = IntegratorFromName(integrator);
-  so.cvode_bdf = integrator == "cvode-bdf";
-  return so;
+// A sweep file's or golden spec's run settings (names as on the command line, numbers
+// NaN when not given) into the spec; false with *error naming the unknown name.
+inline bool SpecFromNames(const std::string& solver, const std::string& integrator, pipeline::RunSpec* spec,
+                          std::string* error) {
+  if (!pipeline::IntegratorFromName(integrator, &spec->integrator)) {
+    *error = "integrator = \"" + integrator + "\": unknown (" + pipeline::JoinNames(pipeline::IntegratorNames()) + ")";
+    return false;
+  }
+  if (!pipeline::SolverFromName(solver, &spec->solver)) {
+    *error = "solver = \"" + solver + "\": unknown (" + pipeline::JoinNames(pipeline::SolverNames()) + ")";
+    return false;
+  }
+  return true;
 }
 
 // "[=====     ] 37/100  2 failed  ETA 12 s" on stderr, only on a terminal, at most ten

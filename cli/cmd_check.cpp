@@ -60,19 +60,17 @@ int RunCheck(const CheckArgs& args) {
     std::cout << lang::ast::Dump(*program.files[0]);
     return kExitOk;
   }
-  flat::Mechanism mech;
-  if (!LoadModel(args.load, &mech)) return kExitModelError;
+  pipeline::RunSpec spec;
+  pipeline::SolverFromName(args.solver, &spec.solver);
+  std::unique_ptr<pipeline::Model> model = LoadAndCompile(args.load, spec, args.emit != "flat");
+  if (!model) return kExitModelError;
+  const flat::Mechanism& mech = model->mech;
   if (args.emit == "flat") {
     std::cout << flat::DumpFlat(mech);
     return kExitOk;
   }
-  rt::CompileOptions co;
-  if (args.solver == "dense") co.solver = rt::SolverPath::Dense;
-  if (args.solver == "sparse") co.solver = rt::SolverPath::Sparse;
-  if (args.solver == "recursive") co.solver = rt::SolverPath::Recursive;
-  rt::CompileResult cr;
-  if (!CompileModel(mech, co, &cr)) return kExitModelError;
-  rt::ProgramSummary s = rt::Summarize(*cr.program);
+  const rt::Program& program = *model->program;
+  rt::ProgramSummary s = rt::Summarize(program);
 
   std::cout << fmt::format("model {}", mech.model_name);
   if (!mech.description.empty()) std::cout << fmt::format(" \"{}\"", mech.description);
@@ -102,7 +100,7 @@ int RunCheck(const CheckArgs& args) {
   std::cout << fmt::format("  solver      {} — {}\n", SolverName(s.solver), s.solver_reason);
   std::cout << fmt::format("  integrator  {} — {}\n", IntegratorName(s.integrator), s.integrator_reason);
   if (!s.equations.empty()) std::cout << "  equations   " << s.equations << "\n";
-  if (rt::StepProjectionAvailable(*cr.program)) {
+  if (rt::StepProjectionAvailable(program)) {
     // The projection of closed loops and rolling contacts (docs/constraints.md, "Projecting
     // once per step"; numbers of the four-bar in docs/benchmarks.md). Eval stays the
     // default: its error follows the tolerance.
@@ -115,7 +113,7 @@ int RunCheck(const CheckArgs& args) {
   if (s.integrator == rt::IntegratorKind::IDA) {
     // IDA's Newton matrix: the block pattern and the automatic dense/KLU choice
     // (docs/integrators.md; the same rule as runtime/sim/integrator_ida.cpp).
-    std::vector<int> groups = rt::StateCouplingGroups(*cr.program);
+    std::vector<int> groups = rt::StateCouplingGroups(program);
     std::vector<long> size;
     for (int g : groups) {
       if (static_cast<size_t>(g) >= size.size()) size.resize(static_cast<size_t>(g) + 1, 0);
@@ -131,10 +129,10 @@ int RunCheck(const CheckArgs& args) {
                              sim::kKluMaxFill);
   }
   for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
-  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(*cr.program); !f.code.empty())
-    std::cout << fmt::format("  warning[{}]: {}\n", f.code, f.message);
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.message.empty())
+    std::cout << fmt::format("  warning[{}]: {}\n", flat::DiagCodeString(f.code), f.message);
   const std::vector<std::string> indeterminate =
-      rt::IndeterminateSignals(*cr.program, rt::AvailableSignals(*cr.program));
+      rt::IndeterminateSignals(program, rt::AvailableSignals(program));
   if (!indeterminate.empty()) {
     std::cout << fmt::format("  indeterminate constraint-force components ({}; `kanesim run` writes them as nan, "
                              "`--reactions min-norm` as the minimum-norm share):\n",
@@ -172,7 +170,7 @@ void AddCheckCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--emit", args->emit, "Print an intermediate form instead: ast or flat")
       ->check(CLI::IsMember({"ast", "flat"}));
   cmd->add_option("--solver", args->solver, "Solution path to report: auto, dense, sparse or recursive")
-      ->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
+      ->check(CLI::IsMember(pipeline::SolverNames()));
   cmd->callback([args, exit_code]() { *exit_code = RunCheck(*args); });
 }
 

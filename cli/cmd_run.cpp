@@ -1,13 +1,7 @@
 // `kanesim run file.mech`: load, compile, simulate, write CSV (DESIGN.md "The command
-// line"). Defaults come from the model's experiment annotation:
-//   start time  experiment StartTime, else 0         (--start-time)
-//   stop time   experiment StopTime, else 1          (--stop-time)
-//   interval    experiment Interval, else (stop - start) / 500   (--interval)
-//   rtol        experiment Tolerance, else 1e-6      (--rtol)
-//   atol        = rtol                               (--atol)
-// atol = rtol because the states are angles (rad), lengths (m) and their rates, all of
-// order one in the units mechanisms are written in; a scene with very small or very
-// large states should set --atol.
+// line"), through the pipeline (runtime/pipeline/pipeline.h): the options fill one
+// pipeline::RunSpec; times and tolerances not given come from the model's experiment
+// annotation (pipeline::RunSpec says which and the defaults).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -39,13 +33,7 @@ using Clock = std::chrono::steady_clock;
 struct RunArgs {
   LoadOptions load;
   std::string out_path;  // "" or "-": stdout
-  double start_time = 0.0, stop_time = 0.0, interval = 0.0, rtol = 0.0, atol = 0.0;
-  CLI::Option* start_opt = nullptr;
-  CLI::Option* stop_opt = nullptr;
-  CLI::Option* interval_opt = nullptr;
-  CLI::Option* rtol_opt = nullptr;
-  CLI::Option* atol_opt = nullptr;
-  std::vector<std::string> patterns;
+  pipeline::RunSpec spec;  // times, tolerances (NaN: not given) and outputs; the names below
   std::string solver = "auto";
   std::string integrator = "auto";
   std::string linear_solver = "auto";
@@ -87,80 +75,37 @@ class ProgressBar {
   Clock::time_point last_draw_{};
 };
 
-double Since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-rt::SolverPath SolverFromName(const std::string& s) {
-  if (s == "dense") return rt::SolverPath::Dense;
-  if (s == "sparse") return rt::SolverPath::Sparse;
-  if (s == "recursive") return rt::SolverPath::Recursive;
-  return rt::SolverPath::Auto;
-}
-
-rt::IntegratorKind IntegratorFromName(const std::string& s) {
-  if (s == "ida") return rt::IntegratorKind::IDA;
-  if (s == "cvode" || s == "cvode-bdf") return rt::IntegratorKind::CVODE;
-  if (s == "arkode") return rt::IntegratorKind::ARKODE;
-  if (s == "dop853") return rt::IntegratorKind::DOP853;
-  return rt::IntegratorKind::Auto;
+// The option names into the spec (CLI11 has checked them against the same tables).
+pipeline::RunSpec SpecFor(const RunArgs& a) {
+  pipeline::RunSpec spec = a.spec;
+  pipeline::SolverFromName(a.solver, &spec.solver);
+  pipeline::IntegratorFromName(a.integrator, &spec.integrator);
+  pipeline::ReactionsFromName(a.reactions, &spec.reactions);
+  pipeline::LinearSolverFromName(a.linear_solver, &spec.linear_solver);
+  spec.project_steps = a.projection == "step";
+  return spec;
 }
 
 int RunCommand(const RunArgs& a) {
-  Clock::time_point t_load = Clock::now();
-  flat::Mechanism mech;
-  if (!LoadModel(a.load, &mech)) return kExitModelError;
-  double load_seconds = Since(t_load);
-
-  Clock::time_point t_compile = Clock::now();
-  rt::CompileOptions copts;
-  copts.solver = SolverFromName(a.solver);
-  copts.integrator = IntegratorFromName(a.integrator);
-  ReactionsFromName(a.reactions, &copts);
-  if (a.start_opt->count() > 0) copts.start_time = a.start_time;  // the integrator choice
-  if (a.stop_opt->count() > 0) copts.stop_time = a.stop_time;     // depends on the horizon
-  if (a.rtol_opt->count() > 0) copts.rtol = a.rtol;               // and the tolerance
-  rt::CompileResult compiled;
-  if (!CompileModel(mech, copts, &compiled)) return kExitModelError;
-  const rt::Program& program = *compiled.program;
-  if (copts.solver != rt::SolverPath::Auto && rt::Summarize(program).solver != copts.solver)
+  // Stages 1-3: parse, elaborate, compile.
+  const pipeline::RunSpec spec = SpecFor(a);
+  std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
+  if (!model) return kExitModelError;
+  const rt::Program& program = *model->program;
+  if (spec.solver != rt::SolverPath::Auto && rt::Summarize(program).solver != spec.solver)
     fmt::print(stderr, "kanesim: note: solver {}\n", rt::Summarize(program).solver_reason);
-  double compile_seconds = Since(t_compile);
 
-  const flat::Experiment& ex = mech.experiment;
-  sim::SimOptions so;
-  if (a.start_opt->count() > 0) so.start_time = a.start_time;
-  so.stop_time = a.stop_opt->count() > 0 ? a.stop_time : ex.stop_time;
-  for (auto [opt, value] : {std::pair{a.interval_opt, a.interval}, {a.rtol_opt, a.rtol}, {a.atol_opt, a.atol}}) {
-    if (opt->count() > 0 && !(value > 0.0 && std::isfinite(value))) {
-      fmt::print(stderr, "kanesim: error: {} must be a positive number, got {}\n", opt->get_name(), value);
-      return kExitModelError;
-    }
-  }
-  if (a.interval_opt->count() > 0)
-    so.interval = a.interval;
-  else if (ex.has_interval)
-    so.interval = ex.interval;
-  so.rtol = a.rtol_opt->count() > 0 ? a.rtol : ex.tolerance;
-  so.atol = a.atol_opt->count() > 0 ? a.atol : so.rtol;
-  so.integrator = copts.integrator;
-  so.cvode_bdf = a.integrator == "cvode-bdf";
-  so.ida_linear_solver = IdaLinearSolverFromName(a.linear_solver);
-  so.project_steps = a.projection == "step";
-
-  if (!a.patterns.empty()) {
-    std::string error;
-    if (!sim::SelectSignals(rt::AvailableSignals(program), a.patterns, &so.signals, &error)) {
-      fmt::print(stderr, "kanesim: error: {}\n", error);
-      return kExitModelError;
-    }
-  }
-  WarnIndeterminate(program, so.signals);
-
-  if (std::string w = sim::ToleranceWarning(so.rtol); !w.empty()) fmt::print(stderr, "kanesim: warning: {}\n", w);
-  const sim::OutputGrid grid = sim::ResolveGrid(program, so);
-  if (std::string why = sim::CheckRun(grid, so.rtol, so.atol); !why.empty()) {
-    fmt::print(stderr, "kanesim: error: {}\n", why);
+  // Stage 4: the run's options, resolved once.
+  pipeline::ResolvedRun run;
+  pipeline::RunProblem problem = pipeline::RunProblem::kNone;
+  std::string why = pipeline::ResolveRun(*model, spec, &run, &problem);
+  if (problem == pipeline::RunProblem::kNone || problem == pipeline::RunProblem::kGrid)
+    std::cerr << pipeline::RunWarnings(*model, run.sim.rtol, run.sim.signals);
+  if (!why.empty()) {
+    fmt::print(stderr, "kanesim: error: {}{}\n", problem == pipeline::RunProblem::kValue ? "--" : "", why);
     return kExitModelError;
   }
+  sim::SimOptions& so = run.sim;
 
   // The output: never the model itself, and one writer at a time (locked while written;
   // only a regular file, not /dev/null or a pipe, which many may share).
@@ -186,20 +131,19 @@ int RunCommand(const RunArgs& a) {
     fmt::print(stderr, "kanesim: error: cannot open '{}' for writing: {}\n", a.out_path, std::strerror(errno));
     return kExitModelError;
   }
-  double start_for_bar = std::isnan(so.start_time) ? rt::StartTime(program) : so.start_time;
   bool bar_enabled = isatty(STDERR_FILENO) && !(to_stdout && isatty(STDOUT_FILENO));
   sim::SimResult result;
   {
-    ProgressBar bar(start_for_bar, so.stop_time, bar_enabled);
+    ProgressBar bar(run.grid.start, run.grid.stop, bar_enabled);
     so.progress = [&bar](double t) { bar.Update(t); };
     sim::CsvWriter writer(out);
-    result = sim::Simulate(program, so, writer);
+    result = pipeline::Run(*model, run, writer);  // stages 5-6
   }
   bool close_ok = to_stdout ? std::fflush(stdout) == 0 : std::fclose(out) == 0;
 
   if (a.stats) {
-    result.stats.times.load = load_seconds;
-    result.stats.times.compile = compile_seconds;
+    result.stats.times.load = model->load_seconds;
+    result.stats.times.compile = model->compile_seconds;
     fmt::print(stderr, "{}", sim::FormatStats(result.stats));
   }
   switch (result.status) {
@@ -230,25 +174,25 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   run->add_option("-o,--out", a->out_path, "Write the CSV to this file (default: stdout)");
   run->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
   run->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
-  a->start_opt = AddNumberOption(run, "--start-time", &a->start_time, "Start time (default: experiment StartTime)");
-  a->stop_opt = AddNumberOption(run, "--stop-time", &a->stop_time, "Stop time (default: experiment StopTime)");
-  a->interval_opt = AddNumberOption(run, "--interval", &a->interval,
-                                    "Output interval (default: experiment Interval, else (stop - start) / 500)");
-  a->rtol_opt = AddNumberOption(run, "--rtol", &a->rtol, "Relative tolerance (default: experiment Tolerance)");
-  a->atol_opt = AddNumberOption(run, "--atol", &a->atol, "Absolute tolerance (default: = rtol)");
-  run->add_option("--output", a->patterns,
+  AddNumberOption(run, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");
+  AddNumberOption(run, "--stop-time", &a->spec.stop_time, "Stop time (default: experiment StopTime)");
+  AddNumberOption(run, "--interval", &a->spec.interval,
+                  "Output interval (default: experiment Interval, else (stop - start) / 500)");
+  AddNumberOption(run, "--rtol", &a->spec.rtol, "Relative tolerance (default: experiment Tolerance)");
+  AddNumberOption(run, "--atol", &a->spec.atol, "Absolute tolerance (default: = rtol)");
+  run->add_option("--output", a->spec.outputs,
                   "Signals to write: a glob over dotted names, * any run, ? one character (repeatable)")
       ->allow_extra_args(false);
-  run->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
+  run->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember(pipeline::SolverNames()));
   run->add_option("--integrator", a->integrator, "Time integrator")
-      ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode", "dop853"}));
+      ->check(CLI::IsMember(pipeline::IntegratorNames()));
   run->add_option("--linear-solver", a->linear_solver,
                   "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
-      ->check(CLI::IsMember({"auto", "dense", "klu"}));
+      ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   run->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   run->add_option("--reactions", a->reactions,
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
-      ->check(CLI::IsMember({"nan", "min-norm"}));
+      ->check(CLI::IsMember(pipeline::ReactionsNames()));
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }

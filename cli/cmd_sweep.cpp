@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fmt/core.h>
+#include <iostream>
 #include <memory>
 #include <set>
 #include <string>
@@ -115,9 +116,9 @@ bool BuildConfig(SweepArgs& a, batch::SweepConfig* c, std::vector<batch::Block>*
                             {file.interval, &a.interval}, {file.rtol, &a.rtol}, {file.atol, &a.atol}})
       if (std::isnan(*to)) *to = from;
     if (a.integrator == "auto" && !file.integrator.empty()) a.integrator = file.integrator;
-    if (!IsIntegratorName(a.integrator))
-      return Fail(a.file + ": integrator = \"" + a.integrator + "\": unknown (" + kIntegratorNames + ")");
     if (a.solver == "auto" && !file.solver.empty()) a.solver = file.solver;
+    pipeline::RunSpec names_only;
+    if (!SpecFromNames(a.solver, a.integrator, &names_only, &err)) return Fail(a.file + ": " + err);
     if (a.out_dir.empty()) a.out_dir = file.output_dir;
     a.trajectories = a.trajectories || file.trajectories;
   } else {
@@ -170,8 +171,6 @@ bool BuildConfig(SweepArgs& a, batch::SweepConfig* c, std::vector<batch::Block>*
     c->shard_index = k - 1;
     c->shard_count = n;
   }
-  for (double v : {a.interval, a.rtol, a.atol})
-    if (!std::isnan(v) && !(v > 0.0 && std::isfinite(v))) return Fail("intervals and tolerances must be positive");
   return true;
 }
 
@@ -224,60 +223,66 @@ int SweepCommand(SweepArgs a) {
   std::string model_name;
   if (!BuildConfig(a, &config, &blocks, &model_name)) return kExitModelError;
 
+  // The run settings, resolved once: the options over the sweep file over the experiment.
+  pipeline::RunSpec spec;
+  std::string err;
+  if (!SpecFromNames(a.solver, a.integrator, &spec, &err)) return FailExit(err);
+  pipeline::ReactionsFromName(a.reactions, &spec.reactions);
+  pipeline::LinearSolverFromName(a.linear_solver, &spec.linear_solver);
+  spec.project_steps = a.projection == "step";
+  spec.start_time = a.start_time;
+  spec.stop_time = a.stop_time;
+  spec.interval = a.interval;
+  spec.rtol = a.rtol;
+  spec.atol = a.atol;
+  spec.outputs = a.patterns;
+
   // The base program: the model with the fixed --set values.
-  flat::Mechanism mech;
-  if (!LoadModel(a.load, &mech)) return kExitModelError;
-  rt::CompileOptions copts;
-  copts.solver = SolverFromName(a.solver);
-  copts.integrator = IntegratorFromName(a.integrator);
-  copts.start_time = a.start_time;  // NaN when not given: the experiment's
-  copts.stop_time = a.stop_time;
-  copts.rtol = a.rtol;
-  ReactionsFromName(a.reactions, &copts);
-  rt::CompileResult compiled;
-  if (!CompileModel(mech, copts, &compiled)) return kExitModelError;
-  std::shared_ptr<const rt::Program> base = compiled.program;
-  config.sim = ResolveSimOptions(mech.experiment, a.start_time, a.stop_time, a.interval, a.rtol, a.atol, a.integrator);
-  config.sim.ida_linear_solver = IdaLinearSolverFromName(a.linear_solver);
-  config.sim.project_steps = a.projection == "step";
+  std::shared_ptr<const pipeline::Model> model = LoadAndCompile(a.load, spec);
+  if (!model) return kExitModelError;
+  std::shared_ptr<const rt::Program> base = model->program;
+  // A scenario may override the stop time and tolerances: each scenario's grid is checked
+  // by the sweep itself (kGrid is not an error here).
+  pipeline::ResolvedRun run;
+  pipeline::RunProblem problem = pipeline::RunProblem::kNone;
+  if (std::string why = pipeline::ResolveRun(*model, spec, &run, &problem);
+      !why.empty() && problem != pipeline::RunProblem::kGrid)
+    return FailExit(why);
+  config.sim = run.sim;
   if (!a.patterns.empty()) {
-    std::string err;
-    if (!sim::SelectSignals(rt::AvailableSignals(*base), a.patterns, &config.trajectory_signals, &err))
-      return FailExit(err);
+    config.trajectory_signals = run.sim.signals;
     config.trajectories = true;
   }
+  config.sim.signals.clear();  // the sweep's signals are trajectory_signals and the metrics'
   config.settings = SweepSettings(a, config, *base);
   config.inputs = {a.load.path};
   if (a.file != a.load.path) config.inputs.push_back(a.file);
   if (!a.list.empty()) config.inputs.push_back(a.list);
-  if (std::string w = sim::ToleranceWarning(config.sim.rtol); !w.empty())
-    fmt::print(stderr, "kanesim: warning: {}\n", w);
   std::vector<std::string> used = config.trajectory_signals;
   for (const batch::Metric& m : config.metrics) used.push_back(m.signal);
-  WarnIndeterminate(*base, used);
+  std::cerr << pipeline::RunWarnings(*model, config.sim.rtol, used);
   if (config.metrics.empty() && !config.trajectories)
     fmt::print(stderr, "kanesim: note: no --metric given; the summary has status and statistics only\n");
 
   // Structural variants: the model elaborated again with the structural values.
   LoadOptions load = a.load;
   std::shared_ptr<const flat::Mechanism> base_mech = base->mech;
-  batch::VariantBuilder build = [load, copts, base_mech](const std::vector<std::pair<std::string, double>>& structural,
-                                                         std::string* error) -> std::shared_ptr<const rt::Program> {
+  batch::VariantBuilder build = [load, spec, base_mech](const std::vector<std::pair<std::string, double>>& structural,
+                                                        std::string* error) -> std::shared_ptr<const rt::Program> {
     LoadOptions lo = load;
     for (const auto& [name, v] : structural) {
       int i = base_mech->FindParam(name);
       bool boolean = i >= 0 && base_mech->params[static_cast<size_t>(i)].type == flat::ParamType::Boolean;
       lo.sets.push_back(name + "=" + (boolean ? (v != 0.0 ? "true" : "false") : sim::FormatNumber(v)));
     }
-    flat::Mechanism m;
-    rt::CompileResult r;
     std::string what;
     for (const auto& [name, v] : structural) what += " " + name + "=" + sim::FormatNumber(v);
-    if (!LoadModel(lo, &m) || !CompileModel(m, copts, &r)) {
+    std::unique_ptr<pipeline::Model> variant = LoadAndCompile(lo, spec);
+    if (!variant) {
       *error = "the model does not elaborate or compile with" + what + " (diagnostics on stderr)";
       return nullptr;
     }
-    return r.program;
+    return variant->program;
   };
 
   CountProgress bar(!a.no_progress);
@@ -288,7 +293,6 @@ int SweepCommand(SweepArgs a) {
   config.cancel = &g_interrupted;
   auto old_handler = std::signal(SIGINT, OnSigint);
   batch::SweepReport report;
-  std::string err;
   auto t0 = std::chrono::steady_clock::now();
   bool ok = a.mpi ? batch::RunSweepMpi(base, build, config, &report, &err)
                   : batch::RunSweep(base, build, config, &report, &err);
@@ -419,16 +423,15 @@ void AddSweepCommand(CLI::App& app, int* exit_code) {
   AddNumberOption(sw, "--interval", &a->interval, "Output interval (default: experiment Interval)");
   AddNumberOption(sw, "--rtol", &a->rtol, "Relative tolerance (default: experiment Tolerance)");
   AddNumberOption(sw, "--atol", &a->atol, "Absolute tolerance (default: = rtol)");
-  sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
-  sw->add_option("--integrator", a->integrator, "Time integrator")
-      ->check(CLI::IsMember({"auto", "ida", "cvode", "cvode-bdf", "arkode", "dop853"}));
+  sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember(pipeline::SolverNames()));
+  sw->add_option("--integrator", a->integrator, "Time integrator")->check(CLI::IsMember(pipeline::IntegratorNames()));
   sw->add_option("--linear-solver", a->linear_solver,
                  "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
-      ->check(CLI::IsMember({"auto", "dense", "klu"}));
+      ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   sw->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   sw->add_option("--reactions", a->reactions,
                  "Statically indeterminate constraint-force components: nan, or their min-norm share")
-      ->check(CLI::IsMember({"nan", "min-norm"}));
+      ->check(CLI::IsMember(pipeline::ReactionsNames()));
 
   auto m = std::make_shared<MergeArgs>();
   CLI::App* merge = sw->add_subcommand("merge", "Join shard summaries into one");

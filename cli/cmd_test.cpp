@@ -86,12 +86,18 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     r.report = "ERROR " + spec_path + "\n    " + err + "\n";
     return r;
   }
-  if (!IsIntegratorName(spec.integrator)) {
+  pipeline::RunSpec run_spec;
+  if (!SpecFromNames(spec.solver, spec.integrator, &run_spec, &err)) {
     r.outcome = Outcome::kError;
-    r.report = "ERROR " + spec_path + "\n    run.integrator = \"" + spec.integrator + "\": unknown (" +
-               kIntegratorNames + ")\n";
+    r.report = "ERROR " + spec_path + "\n    run." + err + "\n";
     return r;
   }
+  run_spec.start_time = spec.start_time;  // NaN when the spec leaves it to the experiment
+  run_spec.stop_time = spec.stop_time;
+  run_spec.interval = spec.interval;
+  run_spec.rtol = spec.rtol;
+  run_spec.atol = spec.atol;
+  run_spec.outputs = spec.signals;
   const std::string label = spec.name;
   auto fail = [&](const std::string& why) {
     r.outcome = Outcome::kFail;
@@ -104,9 +110,8 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     return r;
   };
 
-  // Load and compile (serialized).
-  std::shared_ptr<const rt::Program> program;
-  flat::Mechanism mech;
+  // Stages 1-3, serialized.
+  std::unique_ptr<pipeline::Model> model;
   {
     std::lock_guard<std::mutex> lock(load_mutex);
     LoadOptions lo;
@@ -114,43 +119,31 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     lo.model = spec.model_name;
     lo.sets = spec.sets;
     lo.sets.insert(lo.sets.end(), args.sets.begin(), args.sets.end());
-    rt::CompileOptions copts;
-    copts.solver = SolverFromName(spec.solver);
-    copts.integrator = IntegratorFromName(spec.integrator);
-    copts.start_time = spec.start_time;  // NaN when the spec leaves it to the experiment
-    copts.stop_time = spec.stop_time;
-    copts.rtol = spec.rtol;
-    rt::CompileResult compiled;
     if (!std::filesystem::exists(spec.model)) {
       r.outcome = Outcome::kError;
       r.report = "ERROR " + label + "\n    the model '" + spec.model + "' does not exist\n";
       return r;
     }
-    if (!LoadModel(lo, &mech) || !CompileModel(mech, copts, &compiled))
-      return fail("the model no longer loads or compiles (diagnostics above)");
-    program = compiled.program;
+    model = LoadAndCompile(lo, run_spec);
+    if (!model) return fail("the model no longer loads or compiles (diagnostics above)");
   }
+  const rt::Program& program = *model->program;
 
-  // Signals: the stored ones, then what the invariants need.
-  std::vector<std::string> available = rt::AvailableSignals(*program);
-  std::vector<std::string> stored;
-  if (spec.signals.empty()) {
-    stored = rt::DefaultSignals(*program);
-  } else if (!sim::SelectSignals(available, spec.signals, &stored, &err)) {
-    return fail("signals: " + err);
-  }
+  // Stage 4. Signals: the stored ones, then what the invariants need. Settings a run
+  // cannot take are the spec's mistake (exit 1), not a regression.
+  pipeline::ResolvedRun run;
+  pipeline::RunProblem problem = pipeline::RunProblem::kNone;
+  if (std::string why = pipeline::ResolveRun(*model, run_spec, &run, &problem); !why.empty())
+    return problem == pipeline::RunProblem::kSignals ? fail("signals: " + why) : error(spec_path + ": " + why);
+  std::vector<std::string> available = rt::AvailableSignals(program);
+  std::vector<std::string> stored = run.sim.signals.empty() ? rt::DefaultSignals(program) : run.sim.signals;
   std::vector<std::string> names = stored;
   for (const batch::Invariant& inv : spec.invariants)
     for (const std::string& n : batch::InvariantSignals(inv, available))
       if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
-
-  sim::SimOptions so =
-      ResolveSimOptions(mech.experiment, spec.start_time, spec.stop_time, spec.interval, spec.rtol, spec.atol,
-                        spec.integrator);
-  so.signals = names;
-  // Settings a run cannot take are the spec's mistake (exit 1), not a regression.
-  const sim::OutputGrid grid = sim::ResolveGrid(*program, so);
-  if (std::string why = sim::CheckRun(grid, so.rtol, so.atol); !why.empty()) return error(spec_path + ": " + why);
+  run.sim.signals = names;
+  const sim::OutputGrid& grid = run.grid;
+  const sim::SimOptions& so = run.sim;
   if (grid.Count() > batch::kMaxGoldenRows)
     return error(fmt::format("{}: the run would have {} instants; a golden stores at most {} (give a larger "
                              "run.interval)",
@@ -158,7 +151,7 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
   std::string notes;
   if (std::string w = sim::ToleranceWarning(so.rtol); !w.empty()) notes += "    warning: " + w + "\n";
   sim::MemorySink sink;
-  sim::SimResult result = sim::Simulate(*program, so, sink);
+  sim::SimResult result = pipeline::Run(*model, run, sink);  // stages 5-6
   if (result.status == sim::SimResult::Status::kNumericalFailure)
     return fail(fmt::format("numerical failure at t = {}: {}", result.fail_time, result.message));
   if (result.status == sim::SimResult::Status::kUsageError) return error(spec_path + ": " + result.message);

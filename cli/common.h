@@ -2,12 +2,14 @@
 // print diagnostics) and the exit codes. Only the CLI links every layer.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "runtime/engine.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/pipeline/pipeline.h"
 #include "runtime/sim/integrator.h"
 
 namespace CLI {
@@ -22,11 +24,11 @@ inline constexpr int kExitModelError = 1;    // model or usage error, with a dia
 inline constexpr int kExitNumerical = 2;     // numerical failure, output so far kept
 inline constexpr int kExitRegression = 3;    // `kanesim test` found a regression
 
+// What a command names to load: the .mech file, the model in it, the --set values.
 struct LoadOptions {
   std::string path;                                      // the .mech file
   std::string model;                                     // model to elaborate ("" = last in file)
   std::vector<std::string> sets;                         // "name=value" from --set
-  std::vector<std::string> stdlib_dirs;                  // extra search paths
 };
 
 // The most threads -j may ask for.
@@ -37,34 +39,29 @@ inline constexpr int kMaxJobs = 1024;
 std::string ReadFileText(const std::string& path);
 std::string StdlibHash();
 
-// Parses and elaborates; on error prints diagnostics to stderr and returns false.
-bool LoadModel(const LoadOptions& options, flat::Mechanism* out);
+// Stages 1-3 of the pipeline (runtime/pipeline/pipeline.h) for a command: loads, prints
+// the diagnostics (warnings too) to stderr; null when a stage failed. With compile false,
+// the model stops at the flat mechanism.
+std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, const pipeline::RunSpec& spec,
+                                                bool compile = true);
 
-// Compiles; on error prints compile diagnostics (with source lines) and returns false.
-bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out);
-
-// Prints a compiler message like a language diagnostic: "file:line:col: SEVERITY[CODE]:
-// message", the source line with a caret, notes, hint.
-void PrintCompileMessage(const rt::CompileMessage& message, const char* severity);
-
-// Warning W313 on stderr when `signals` (the selected output) holds statically
-// indeterminate constraint-force components that are written as NaN.
-void WarnIndeterminate(const rt::Program& program, const std::vector<std::string>& signals);
-
-// `--reactions nan|min-norm` (run, sweep) into CompileOptions::indeterminate.
-bool ReactionsFromName(const std::string& name, rt::CompileOptions* options);
-
-// `--linear-solver auto|dense|klu` (run, sweep): IDA's Newton matrix.
-inline sim::IdaLinearSolver IdaLinearSolverFromName(const std::string& name) {
-  if (name == "dense") return sim::IdaLinearSolver::Dense;
-  if (name == "klu") return sim::IdaLinearSolver::Klu;
-  return sim::IdaLinearSolver::Auto;
-}
-
-// `--projection eval|step` (run, sweep): SimOptions::project_steps.
+// `--projection eval|step` (run, sweep): RunSpec::project_steps.
 inline constexpr const char* kProjectionHelp =
     "Closed loops and contacts with --integrator dop853: project onto the constraints at every evaluation "
     "(eval) or once per accepted step (step: cheaper evaluations, a larger error at the same tolerance)";
+
+// Older entry points, kept while branches written against them are merged; new code calls
+// pipeline::LoadModel (TODO(#21): remove). They print what they find to stderr.
+bool LoadModel(const LoadOptions& options, flat::Mechanism* out);
+bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out);
+void PrintCompileMessage(const rt::CompileMessage& message, const char* severity);
+void WarnIndeterminate(const rt::Program& program, const std::vector<std::string>& signals);
+bool ReactionsFromName(const std::string& name, rt::CompileOptions* options);
+inline sim::IdaLinearSolver IdaLinearSolverFromName(const std::string& name) {
+  sim::IdaLinearSolver s = sim::IdaLinearSolver::Auto;
+  pipeline::LinearSolverFromName(name, &s);
+  return s;
+}
 
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code);

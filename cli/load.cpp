@@ -1,26 +1,16 @@
-// Loading a model for any subcommand: parse, elaborate, print diagnostics; compile and
-// render compiler messages the same way.
-#include <algorithm>
-#include <cstdio>
+// Loading a model for any subcommand through the pipeline (runtime/pipeline/pipeline.h),
+// with its diagnostics on stderr.
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "cli/common.h"
 #include "runtime/batch/csv_util.h"
-#include "runtime/program.h"
 #include "lang/diagnostics.h"
-#include "lang/elaborate.h"
-#include "lang/set_argument.h"
-#include "lang/text.h"
+#include "runtime/program.h"
 #include "stdlib/stdlib.h"
 
 namespace kanesim::cli {
-
-namespace {
-// The last loaded program stays alive so compile messages can show source lines.
-thread_local lang::Program* g_program = nullptr;
-}  // namespace
 
 std::string ReadFileText(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -35,69 +25,52 @@ std::string StdlibHash() {
   return batch::Fnv1a64Hex(all);
 }
 
+std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, const pipeline::RunSpec& spec,
+                                                bool compile) {
+  pipeline::LoadOptions lo;
+  lo.model = options.model;
+  lo.sets = options.sets;
+  lo.compile = compile;
+  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(options.path), lo, spec);
+  std::cerr << r.diagnostics;
+  return std::move(r.model);
+}
+
 bool LoadModel(const LoadOptions& options, flat::Mechanism* out) {
-  thread_local lang::Program program;  // one per thread: sweeps load variants concurrently
-  program = lang::Program{};
-  g_program = &program;
-  lang::Diagnostics diags(&program.sources);
-  lang::ElaborateOptions eo;
-  eo.model = options.model;
-  for (const auto& s : options.sets) {
-    lang::ParamOverride o;
-    if (!lang::ParseSetArgument(s, &o)) {
-      std::cerr << "kanesim: error[E210]: --set needs name=value, got '" << lang::ClipMessage(s) << "'\n";
-      return false;
-    }
-    eo.overrides.push_back(std::move(o));
-  }
-  bool ok = lang::LoadProgram(options.path, stdlib::Files(), &program, diags);
-  if (ok) ok = lang::Elaborate(program, eo, out, diags);
-  std::cerr << diags.RenderAll();
-  if (!ok && diags.NumErrors() > 0)
-    std::cerr << diags.NumErrors() << " error" << (diags.NumErrors() == 1 ? "" : "s") << "\n";
-  return ok && !diags.HasErrors();
+  std::unique_ptr<pipeline::Model> m = LoadAndCompile(options, pipeline::RunSpec{}, false);
+  if (!m) return false;
+  *out = std::move(m->mech);
+  return true;
 }
 
-// The compiler's messages go through the language's renderer (lang/diagnostics.cpp): the
-// same clipped, escaped source line and caret, and the same caps on notes.
-void PrintCompileMessage(const rt::CompileMessage& e, const char* severity) {
-  std::string where = e.loc.file.empty() ? "kanesim"
-                                         : lang::ClipMessage(e.loc.file) + ":" + std::to_string(e.loc.line) + ":" +
-                                               std::to_string(e.loc.col);
-  std::cerr << where << ": " << severity << "[" << e.code << "]: " << lang::ClipMessage(e.message) << "\n";
-  if (g_program) {
-    const lang::SourceManager& sm = g_program->sources;
-    for (int f = 0; f < sm.NumFiles(); ++f) {
-      if (sm.Name(f) != e.loc.file || e.loc.line <= 0) continue;
-      const std::int32_t at = sm.Offset(f, e.loc.line, e.loc.col);
-      if (at >= 0) std::cerr << lang::RenderSnippet(sm, lang::Span{f, at, at + 1});
-      break;
-    }
-  }
-  const size_t shown = std::min(e.notes.size(), lang::Diagnostics::kMaxNotesShown);
-  for (size_t i = 0; i < shown; ++i) {
-    const auto& [loc, msg] = e.notes[i];
-    std::cerr << lang::ClipMessage(loc.file) << ":" << loc.line << ":" << loc.col << ": note: " << lang::ClipMessage(msg)
-              << "\n";
-  }
-  if (e.notes.size() > shown) std::cerr << "  note: " << e.notes.size() - shown << " more notes not shown\n";
-  if (!e.hint.empty()) std::cerr << "  hint: " << lang::ClipMessage(e.hint) << "\n";
-}
-
-// The compiler's errors are capped like the language's (Diagnostics::kMaxErrors): a model
-// with thousands of unconnected bodies gives 50 messages and a count, not thousands.
 bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out) {
   *out = rt::Compile(mech, options);
-  if (out->errors.empty()) return true;
-  const size_t shown = std::min(out->errors.size(), static_cast<size_t>(lang::Diagnostics::kMaxErrors));
-  for (size_t i = 0; i < shown; ++i) PrintCompileMessage(out->errors[i], "error");
-  if (out->errors.size() > shown)
-    std::cerr << "kanesim: " << out->errors.size() - shown << " more errors like these are not shown\n";
-  return false;
+  for (const rt::CompileMessage& e : out->errors) PrintCompileMessage(e, "error");
+  return out->errors.empty();
+}
+
+// Without the model at hand, the files the message names are read again for its source lines.
+void PrintCompileMessage(const rt::CompileMessage& message, const char* severity) {
+  pipeline::Model files;
+  lang::SourceManager& sm = files.source.sources;
+  std::vector<std::string> names = {message.loc.file};
+  for (const auto& [loc, text] : message.notes) names.push_back(loc.file);
+  const auto stdlib_files = stdlib::Files();
+  for (const std::string& name : names) {
+    bool known = name.empty();
+    for (int f = 0; f < sm.NumFiles() && !known; ++f) known = sm.Name(f) == name;
+    if (known) continue;
+    std::string text = ReadFileText(name);
+    for (const auto& [lib_name, lib_text] : stdlib_files)
+      if (lib_name == name) text = lib_text;
+    sm.Add(name, std::move(text));
+  }
+  const bool error = std::string(severity) == "error";
+  std::cerr << pipeline::RenderCompileMessage(files, message, error ? lang::Severity::Error : lang::Severity::Warning);
 }
 
 void WarnIndeterminate(const rt::Program& program, const std::vector<std::string>& signals) {
-  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.code.empty())
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.message.empty())
     PrintCompileMessage(f, "warning");
   if (program.options.indeterminate != rt::IndeterminateReactions::NaN) return;
   const std::vector<std::string> which = rt::IndeterminateSignals(program, signals);
@@ -105,9 +78,7 @@ void WarnIndeterminate(const rt::Program& program, const std::vector<std::string
 }
 
 bool ReactionsFromName(const std::string& name, rt::CompileOptions* options) {
-  if (name != "nan" && name != "min-norm") return false;
-  options->indeterminate = name == "nan" ? rt::IndeterminateReactions::NaN : rt::IndeterminateReactions::MinNorm;
-  return true;
+  return pipeline::ReactionsFromName(name, &options->indeterminate);
 }
 
 }  // namespace kanesim::cli

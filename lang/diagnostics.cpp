@@ -7,28 +7,6 @@
 
 namespace kanesim::lang {
 
-const char* DiagCodeString(DiagCode c) {
-  switch (c) {
-#define KANESIM_X(e, code, summary) \
-  case DiagCode::e:                 \
-    return code;
-    KANESIM_DIAGNOSTICS(KANESIM_X)
-#undef KANESIM_X
-  }
-  return "?";
-}
-
-const char* DiagCodeSummary(DiagCode c) {
-  switch (c) {
-#define KANESIM_X(e, code, summary) \
-  case DiagCode::e:                 \
-    return summary;
-    KANESIM_DIAGNOSTICS(KANESIM_X)
-#undef KANESIM_X
-  }
-  return "?";
-}
-
 Diagnostic& Diagnostics::Error(DiagCode code, Span span, std::string message) {
   if (num_errors_ >= kMaxErrors) {
     overflow_ = Diagnostic{};

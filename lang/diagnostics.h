@@ -7,65 +7,14 @@
 #include <vector>
 
 #include "lang/source.h"
+#include "runtime/flat/diagnostic_codes.h"
 
 namespace kanesim::lang {
 
-// The one table of diagnostic codes: X(enumerator, "code", one-line summary).
-// Codes are stable: tests and users refer to them. Add new ones at the end of a group.
-#define KANESIM_DIAGNOSTICS(X)                                                                \
-  /* lexer */                                                                                 \
-  X(UnexpectedChar, "L001", "unexpected character")                                           \
-  X(UnterminatedString, "L002", "unterminated string literal")                                \
-  X(UnterminatedComment, "L003", "unterminated block comment")                                \
-  X(BadNumber, "L004", "malformed number")                                                    \
-  X(FileTooLarge, "L005", "file too large")                                                   \
-  /* parser */                                                                                \
-  X(ExpectedToken, "P101", "unexpected token")                                                \
-  X(UnclosedBracket, "P102", "unclosed bracket")                                              \
-  X(EndNameMismatch, "P103", "end name does not match the class name")                       \
-  X(NestingTooDeep, "P104", "nesting too deep")                                               \
-  X(TooManyErrors, "P105", "too many errors or warnings")                                     \
-  X(ExpressionTooDeep, "P106", "expression too deep (operator chain too long)")               \
-  /* elaboration */                                                                           \
-  X(UnknownName, "E201", "unknown name")                                                      \
-  X(UnknownClass, "E202", "unknown class")                                                    \
-  X(UnknownModifier, "E203", "modifier names no element of the class")                       \
-  X(TypeMismatch, "E204", "type mismatch")                                                    \
-  X(SizeMismatch, "E205", "array size mismatch")                                              \
-  X(FinalOverride, "E206", "modification of a final element")                                \
-  X(RecursiveExtends, "E207", "recursive extends")                                            \
-  X(Duplicate, "E208", "duplicate declaration")                                               \
-  X(ArrayTooLarge, "E209", "array too large")                                                 \
-  X(BadSet, "E210", "bad --set value")                                                        \
-  X(NotParameter, "E211", "not a parameter")                                                  \
-  X(BadConnect, "E212", "connect needs two frame connectors")                                 \
-  X(BadValue, "E213", "parameter value out of range or not finite")                          \
-  X(BadCall, "E214", "unknown function or wrong arguments")                                   \
-  X(NotConstantExpr, "E215", "expression must be a parameter expression")                    \
-  X(BadEquation, "E216", "equation kind not supported")                                       \
-  X(WorldCount, "E217", "a mechanism needs exactly one World")                               \
-  X(NotReplaceable, "E218", "redeclare of an element that is not replaceable")               \
-  X(IndexOutOfRange, "E219", "index out of range")                                            \
-  X(MissingValue, "E220", "parameter has no value")                                           \
-  X(NotAModel, "E221", "no model to elaborate")                                               \
-  X(InstanceTooLarge, "E222", "model too large")                                              \
-  X(BadPrimitive, "E223", "invalid primitive declaration")                                    \
-  X(PartialInstance, "E224", "instance of a partial class")                                   \
-  X(BadImport, "E225", "import names nothing")                                                \
-  X(ConflictingEquation, "E226", "conflicting equations")                                     \
-  X(Circular, "E227", "circular definition")                                                  \
-  X(WorkLimit, "E228", "elaboration exceeds its work limit")                                  \
-  X(EvalTooDeep, "E229", "evaluation nested too deep")                                        \
-  X(UnconnectedFrame, "W301", "frame connector is not connected")
-
-enum class DiagCode {
-#define KANESIM_X(e, code, summary) e,
-  KANESIM_DIAGNOSTICS(KANESIM_X)
-#undef KANESIM_X
-};
-
-const char* DiagCodeString(DiagCode c);   // "E203"
-const char* DiagCodeSummary(DiagCode c);
+// The codes: runtime/flat/diagnostic_codes.h (one table with the compiler's).
+using flat::DiagCode;
+using flat::DiagCodeString;
+using flat::DiagCodeSummary;
 
 enum class Severity { Error, Warning };
 

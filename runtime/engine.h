@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/flat/diagnostic_codes.h"
 #include "runtime/flat/mechanism.h"
 
 namespace kanesim::rt {
@@ -30,19 +31,14 @@ enum class IndeterminateReactions { NaN, MinNorm };
 struct CompileOptions {
   SolverPath solver = SolverPath::Auto;
   IntegratorKind integrator = IntegratorKind::Auto;
-  // The run's horizon and tolerance (NaN: the model's experiment annotation), passed by
-  // run, sweep and test for the automatic integrator choice. No rule reads them since
-  // DOP853 won at every horizon and tolerance measured (runtime/compile/forces.cpp).
-  double start_time = std::numeric_limits<double>::quiet_NaN();
-  double stop_time = std::numeric_limits<double>::quiet_NaN();
-  double rtol = std::numeric_limits<double>::quiet_NaN();
   IndeterminateReactions indeterminate = IndeterminateReactions::NaN;
 };
 
-// A model error found by the compiler (not the parser): rendered by the CLI like a
-// language diagnostic (code, file:line:col, caret, hint).
+// A model error found by the compiler (not the parser), with a code of the one table
+// (runtime/flat/diagnostic_codes.h); pipeline::AddCompileMessage turns it into a language
+// diagnostic (file:line:col, caret, notes, hint) rendered by the same renderer.
 struct CompileMessage {
-  std::string code;     // stable, e.g. "K301"
+  flat::DiagCode code = flat::DiagCode::WorldMissing;
   std::string message;
   std::string hint;     // may be empty
   flat::SourceLoc loc;
@@ -133,7 +129,7 @@ std::vector<std::string> IndeterminateSignals(const Program& program, const std:
 // (NaN, or the minimum-norm share, per CompileOptions::indeterminate).
 CompileMessage IndeterminateWarning(const Program& program, const std::vector<std::string>& signals);
 
-// Warning W314, or a message with an empty code when there is nothing to say: Coulomb
+// Warning W314, or a message with an empty message when there is nothing to say: Coulomb
 // friction in a joint whose normal force is statically indeterminate follows the
 // minimum-norm share of that force (runtime/compile/indeterminate.cpp).
 CompileMessage FrictionIndeterminateWarning(const Program& program);

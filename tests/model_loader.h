@@ -1,5 +1,6 @@
-// Loading a .mech file through the language front end into a flat mechanism, for tests
-// and benchmarks that read models from the source tree (no GoogleTest dependency).
+// Loading a .mech file through the pipeline's first two stages (runtime/pipeline/
+// pipeline.h: parse, elaborate) into a flat mechanism, for tests and benchmarks that read
+// models from the source tree (no GoogleTest dependency).
 #pragma once
 
 #include <memory>
@@ -7,8 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "lang/elaborate.h"
-#include "stdlib/stdlib.h"
+#include "runtime/pipeline/pipeline.h"
 
 namespace kanesim::test {
 
@@ -22,14 +22,19 @@ struct LoadedMech {
 // False, with the rendered diagnostics in *error, on failure.
 inline bool LoadInto(LoadedMech* l, const std::string& path_or_text, std::vector<lang::ParamOverride> sets,
                      bool is_text, std::string* error) {
-  lang::Diagnostics diags(&l->program.sources);
-  lang::ElaborateOptions eo;
-  eo.overrides = std::move(sets);
-  const bool loaded = is_text ? lang::LoadProgramFromText("model.mech", path_or_text, stdlib::Files(), &l->program, diags)
-                              : lang::LoadProgram(path_or_text, stdlib::Files(), &l->program, diags);
-  if (loaded && lang::Elaborate(l->program, eo, &l->mech, diags)) return true;
-  if (error) *error = diags.RenderAll();
-  return false;
+  pipeline::LoadOptions lo;
+  lo.compile = false;
+  for (const lang::ParamOverride& o : sets) lo.sets.push_back(o.name + "=" + o.value);
+  pipeline::LoadResult r = pipeline::LoadModel(
+      is_text ? pipeline::Source::Text("model.mech", path_or_text) : pipeline::Source::File(path_or_text), lo, {});
+  if (!r.model) {
+    l->diagnostics = r.diagnostics;
+    if (error) *error = r.diagnostics;
+    return false;
+  }
+  l->program = std::move(r.model->source);
+  l->mech = std::move(r.model->mech);
+  return true;
 }
 
 // A .mech file's mechanism, or null (diagnostics in *error).

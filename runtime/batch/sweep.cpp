@@ -274,7 +274,7 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
       rt::CompileResult rebound = rt::Rebind(*program, ParamValues(mech, overrides));
       if (!rebound.program) {
         std::string msg = "the model does not compile with these parameter values";
-        for (const rt::CompileMessage& e : rebound.errors) msg += "; " + e.code + ": " + e.message;
+        for (const rt::CompileMessage& e : rebound.errors) msg += std::string("; ") + flat::DiagCodeString(e.code) + ": " + e.message;
         throw std::runtime_error(msg);
       }
       program = rebound.program;

@@ -33,7 +33,7 @@ class Compiler {
   Compiler(const flat::Mechanism& m, const std::vector<double>& pv, CompileResult* out)
       : m_(m), pv_(pv), out_(out), folder_(m.exprs, pv) {}
 
-  void Error(const std::string& code, const std::string& msg, const flat::SourceLoc& loc,
+  void Error(flat::DiagCode code, const std::string& msg, const flat::SourceLoc& loc,
              const std::string& hint = "") {
     CompileMessage e;
     e.code = code;
@@ -48,7 +48,7 @@ class Compiler {
     if (id == kNoExpr) return dflt;
     double v = 0.0;
     if (!folder_.Fold(id, &v)) {
-      Error("K304", what + " must not depend on time or state", loc,
+      Error(flat::DiagCode::NotFixed, what + " must not depend on time or state", loc,
             "only forces, prescribed motions and outputs may use time and state");
       return dflt;
     }
@@ -79,13 +79,13 @@ class Compiler {
 bool Compiler::Topology(Program& p) {
   const size_t nf = m_.frames.size();
   if (m_.worlds.size() != 1) {
-    Error("K301", m_.worlds.empty() ? "the model has no world" : "the model has more than one world", {},
+    Error(flat::DiagCode::WorldMissing, m_.worlds.empty() ? "the model has no world" : "the model has more than one world", {},
           "add exactly one `World world;` component");
     return false;
   }
   p.world_frame = m_.worlds[0].frame;
   if (p.world_frame < 0 || static_cast<size_t>(p.world_frame) >= nf) {
-    Error("K301", "the world has no frame", m_.worlds[0].loc);
+    Error(flat::DiagCode::WorldMissing, "the world has no frame", m_.worlds[0].loc);
     return false;
   }
 
@@ -93,7 +93,7 @@ bool Compiler::Topology(Program& p) {
   std::vector<RigidEdge> rigid;
   for (const auto& f : m_.fixed) {
     if (f.frame_a < 0 || f.frame_b < 0) {
-      Error("K302", "fixed element '" + f.name + "' has an unconnected frame", f.loc);
+      Error(flat::DiagCode::NotAttached, "fixed element '" + f.name + "' has an unconnected frame", f.loc);
       continue;
     }
     rigid.push_back({f.frame_a, f.frame_b, Num3(f.r, "fixed translation", f.loc),
@@ -102,7 +102,7 @@ bool Compiler::Topology(Program& p) {
   bool ok = true;
   for (const auto& j : m_.joints) {
     if (j.frame_a < 0 || j.frame_b < 0) {
-      Error("K302", "joint '" + j.name + "': " + (j.frame_a < 0 ? "frame_a" : "frame_b") + " is not connected",
+      Error(flat::DiagCode::NotAttached, "joint '" + j.name + "': " + (j.frame_a < 0 ? "frame_a" : "frame_b") + " is not connected",
             j.loc, "connect both frames of a joint");
       ok = false;
     } else if (j.type == JointType::Weld) {
@@ -184,13 +184,13 @@ bool Compiler::Topology(Program& p) {
   std::vector<char> reported(nf, 0);
   for (const auto& b : m_.bodies) {
     if (b.frame < 0) {
-      Error("K302", "body '" + b.name + "' is not attached to a frame", b.loc);
+      Error(flat::DiagCode::NotAttached, "body '" + b.name + "' is not attached to a frame", b.loc);
       continue;
     }
     int g = group_of_frame_[static_cast<size_t>(b.frame)];
     if (body_of_group_[static_cast<size_t>(g)] == -2 && !reported[static_cast<size_t>(g)]) {
       reported[static_cast<size_t>(g)] = 1;
-      Error("K303", "body '" + b.name + "' is not connected to the world", b.loc,
+      Error(flat::DiagCode::NotConnectedToWorld, "body '" + b.name + "' is not connected to the world", b.loc,
             "connect it through a joint (a free joint for a floating body)");
     }
   }
@@ -199,7 +199,7 @@ bool Compiler::Topology(Program& p) {
     int g = group_of_frame_[static_cast<size_t>(j.frame_a)];
     if (j.type != JointType::Weld && used[ji] && !placed_joint[ji] && !reported[static_cast<size_t>(g)]) {
       reported[static_cast<size_t>(g)] = 1;
-      Error("K303", "joint '" + j.name + "' belongs to a mechanism not connected to the world", j.loc);
+      Error(flat::DiagCode::NotConnectedToWorld, "joint '" + j.name + "' belongs to a mechanism not connected to the world", j.loc);
     }
   }
 
@@ -270,13 +270,13 @@ void Compiler::MassProperties(Program& p) {
     src.p_FBcm = Num3(b.r_cm, "body mass centre", b.loc);
     p.body_signals.push_back(src);
     const double mass = Num(b.mass, 0.0, "body mass", b.loc);
-    if (mass < 0.0) Error("K306", "body '" + b.name + "' has negative mass", b.loc);
+    if (mass < 0.0) Error(flat::DiagCode::Degenerate, "body '" + b.name + "' has negative mass", b.loc);
     if (!std::isfinite(mass) || !src.p_FBcm.allFinite())
-      Error("K308", "body '" + b.name + "' has a non-finite " + (std::isfinite(mass) ? "centre of mass" : "mass"),
+      Error(flat::DiagCode::BadMassProperties, "body '" + b.name + "' has a non-finite " + (std::isfinite(mass) ? "centre of mass" : "mass"),
             b.loc);
     Mat3 I;
     if (std::string why = CheckInertia(NumMat(b.inertia, false, "body inertia", b.loc), &I); !why.empty())
-      Error("K308", "body '" + b.name + "': " + why, b.loc,
+      Error(flat::DiagCode::BadMassProperties, "body '" + b.name + "': " + why, b.loc,
             "a rigid body's central inertia is symmetric, its principal moments are >= 0 and the two smaller "
             "add up to at least the largest (docs/language.md \"Mass properties\")");
     if (F.body < 0) continue;  // mass fixed to ground (or unreached: reported) costs nothing
@@ -336,7 +336,7 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
   std::string err;
   if (p.solver == SolverPath::Sparse && !BuildSparse(p, &err)) {
     CompileMessage e;
-    e.code = "K320";
+    e.code = flat::DiagCode::SparseAnalysis;
     e.message = "sparse analysis failed: " + err;
     out.errors.push_back(e);
     return out;
@@ -352,7 +352,7 @@ CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options
 CompileResult Rebind(const Program& program, const std::vector<double>& param_values) {
   if (param_values.size() != program.mech->params.size()) {
     CompileResult r;
-    r.errors.push_back(Msg("K300", "Rebind: " + std::to_string(param_values.size()) + " parameter values for " +
+    r.errors.push_back(Msg(flat::DiagCode::RebindCount, "Rebind: " + std::to_string(param_values.size()) + " parameter values for " +
                                        std::to_string(program.mech->params.size()) + " parameters",
                            {}));
     return r;

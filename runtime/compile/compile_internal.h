@@ -11,7 +11,7 @@
 namespace kanesim::rt {
 
 // A compiler message at a source location (every compile stage reports through it).
-inline CompileMessage Msg(const std::string& code, const std::string& text, const flat::SourceLoc& loc,
+inline CompileMessage Msg(flat::DiagCode code, const std::string& text, const flat::SourceLoc& loc,
                           const std::string& hint = "") {
   CompileMessage e;
   e.code = code;

@@ -39,7 +39,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   for (int k = 0; k < 3; ++k) {
     double g = 0.0;
     if (w.gravity[static_cast<size_t>(k)] != kNoExpr && !forces.Fold(w.gravity[static_cast<size_t>(k)], &g))
-      errors->push_back(Msg("K304", "gravity must not depend on time or state", w.loc));
+      errors->push_back(Msg(flat::DiagCode::NotFixed, "gravity must not depend on time or state", w.loc));
     p.gravity_W[k] = g;
   }
   p.has_gravity = p.gravity_W.squaredNorm() > 0.0;
@@ -54,7 +54,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   }
   for (const auto& lf : m.line_forces) {
     if (!placed(lf.frame_a) || !placed(lf.frame_b)) {
-      errors->push_back(Msg("K302", "line force '" + lf.name + "' is not connected to the mechanism", lf.loc));
+      errors->push_back(Msg(flat::DiagCode::NotAttached, "line force '" + lf.name + "' is not connected to the mechanism", lf.loc));
       continue;
     }
     LineForceModel l;
@@ -68,7 +68,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   }
   for (const auto& wr : m.wrenches) {
     if (!placed(wr.frame)) {
-      errors->push_back(Msg("K302", "force '" + wr.name + "' is not connected to the mechanism", wr.loc));
+      errors->push_back(Msg(flat::DiagCode::NotAttached, "force '" + wr.name + "' is not connected to the mechanism", wr.loc));
       continue;
     }
     WrenchModel x;
@@ -97,7 +97,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
              p.joint_of_flat[static_cast<size_t>(r.target)] >= 0;
       else
         ok = placed(r.target);
-      if (!ok) errors->push_back(Msg("K307", std::string("'").append(m.StateRefName(r)).append("' is not a simulated quantity"), {}));
+      if (!ok) errors->push_back(Msg(flat::DiagCode::NotSimulated, std::string("'").append(m.StateRefName(r)).append("' is not a simulated quantity"), {}));
       refs->push_back(ref);
     }
   };

@@ -106,7 +106,7 @@ CompileMessage IndeterminateWarning(const Program& p, const std::vector<std::str
   std::string list;
   for (const std::string& s : signals) list += (list.empty() ? "" : ", ") + s;
   CompileMessage w;
-  w.code = "W313";
+  w.code = flat::DiagCode::IndeterminateSignals;
   w.message = std::to_string(signals.size()) + " constraint-force component" + (signals.size() == 1 ? " is" : "s are") +
               " statically indeterminate (redundant constraints) and written as nan: " + list;
   // One note per owner of redundant rows (a cut joint or a contact), in row order
@@ -138,7 +138,7 @@ CompileMessage IndeterminateWarning(const Program& p, const std::vector<std::str
 CompileMessage FrictionIndeterminateWarning(const Program& p) {
   CompileMessage w;
   if (p.friction_indeterminate.empty()) return w;
-  w.code = "W314";
+  w.code = flat::DiagCode::FrictionIndeterminate;
   std::string names;
   for (int L : p.friction_indeterminate) {
     const TreeJoint& j = p.joints[static_cast<size_t>(L)];

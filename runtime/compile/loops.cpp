@@ -78,7 +78,7 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
   auto num = [&](flat::ExprId id, double dflt, const flat::SourceLoc& loc) {
     double v = dflt;
     if (id != kNoExpr && !folder.Fold(id, &v))
-      errors->push_back(Msg("K304", "contact geometry must not depend on time or state", loc));
+      errors->push_back(Msg(flat::DiagCode::NotFixed, "contact geometry must not depend on time or state", loc));
     return v;
   };
   auto num3 = [&](const flat::Vec3E& e, const flat::SourceLoc& loc) {
@@ -91,13 +91,13 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
     c.type = fc.type;
     c.frame = fc.frame;
     if (fc.frame < 0 || p.frames[static_cast<size_t>(fc.frame)].body < -1) {
-      errors->push_back(Msg("K311", "contact '" + fc.name + "' is not connected to the mechanism", fc.loc));
+      errors->push_back(Msg(flat::DiagCode::BadContact, "contact '" + fc.name + "' is not connected to the mechanism", fc.loc));
       continue;
     }
     c.body = p.frames[static_cast<size_t>(fc.frame)].body;
     EnsurePathSpeeds(p, c.body);
     if (c.body < 0) {
-      errors->push_back(Msg("K311", "contact '" + fc.name + "' is attached to the ground", fc.loc,
+      errors->push_back(Msg(flat::DiagCode::BadContact, "contact '" + fc.name + "' is attached to the ground", fc.loc,
                             "connect its frame to a moving body"));
       continue;
     }
@@ -106,11 +106,11 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
     c.n_W = num3(fc.plane_normal, fc.loc);
     c.p0_W = num3(fc.plane_point, fc.loc);
     if (c.n_W.norm() < 1e-12 || (fc.type != flat::ContactType::RollingSphere && c.axis_F.norm() < 1e-12)) {
-      errors->push_back(Msg("K311", "contact '" + fc.name + "' has a zero plane normal or axis", fc.loc));
+      errors->push_back(Msg(flat::DiagCode::BadContact, "contact '" + fc.name + "' has a zero plane normal or axis", fc.loc));
       continue;
     }
     if (fc.type != flat::ContactType::KnifeEdge && !(c.radius > 0.0)) {
-      errors->push_back(Msg("K311", "contact '" + fc.name + "' needs a positive radius", fc.loc));
+      errors->push_back(Msg(flat::DiagCode::BadContact, "contact '" + fc.name + "' needs a positive radius", fc.loc));
       continue;
     }
     c.n_W.normalize();
@@ -148,7 +148,7 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
     for (int k = 0; k < 3; ++k) {
       const flat::ExprId id = e[static_cast<size_t>(k)];
       if (id != kNoExpr && !folder.Fold(id, &v[k]))
-        errors->push_back(Msg("K304", "joint axis must not depend on time or state", loc));
+        errors->push_back(Msg(flat::DiagCode::NotFixed, "joint axis must not depend on time or state", loc));
     }
     return v;
   };
@@ -166,7 +166,7 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
     if (fj.type != JointType::Spherical && fj.type != JointType::Free) {
       n = num3(fj.axis, fj.loc);
       if (n.norm() < 1e-12) {
-        errors->push_back(Msg("K306", "joint '" + fj.name + "' has a zero axis", fj.loc));
+        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + fj.name + "' has a zero axis", fj.loc));
         n = Vec3::UnitZ();
       }
       n.normalize();
@@ -211,7 +211,7 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
     bool connected = true;
     for (int f : {l.frame_a, l.frame_b})
       if (f < 0 || p.frames[static_cast<size_t>(f)].body < -1) {
-        errors->push_back(Msg("K303", "cut joint '" + fj.name + "' is not connected to the mechanism", fj.loc));
+        errors->push_back(Msg(flat::DiagCode::NotConnectedToWorld, "cut joint '" + fj.name + "' is not connected to the mechanism", fj.loc));
         connected = false;
       } else {
         EnsurePathSpeeds(p, p.frames[static_cast<size_t>(f)].body);
@@ -242,7 +242,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   const auto nc = static_cast<Eigen::Index>(p.rows.size());
   const double t0 = StartTime(p);
   if (UnpackState(p, ws, t0, p.y0.data()) != 0) {
-    errors->push_back(Msg("K310", "prescribed motion not finite at the start time", RowLoc(p, p.rows[0])));
+    errors->push_back(Msg(flat::DiagCode::CannotAssemble, "prescribed motion not finite at the start time", RowLoc(p, p.rows[0])));
     return;
   }
   PositionKinematics(p, ws);
@@ -313,7 +313,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     else
       msg << "joint '" << RowOwner(p, row) << "' closes a kinematic loop that cannot be assembled: ";
     msg << row.what << " residual " << r << " after " << it << " Newton iterations";
-    errors->push_back(Msg("K310", msg.str(), RowLoc(p, row),
+    errors->push_back(Msg(flat::DiagCode::CannotAssemble, msg.str(), RowLoc(p, row),
                           "check the link lengths and the start values; mark the coordinates you know with "
                           "`fixed = true` and leave the others free"));
     return;
@@ -334,7 +334,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     Eigen::Index worst = 0;
     ws.psi.cwiseAbs().maxCoeff(&worst);
     const ConstraintRow& row = p.rows[static_cast<size_t>(worst)];
-    errors->push_back(Msg("K310", "the start speeds cannot satisfy the constraints of '" + RowOwner(p, row) +
+    errors->push_back(Msg(flat::DiagCode::CannotAssemble, "the start speeds cannot satisfy the constraints of '" + RowOwner(p, row) +
                                       "' (velocity residual " + std::to_string(rv) + ")",
                           RowLoc(p, row), "leave more start speeds free (not fixed)"));
     return;

@@ -44,7 +44,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     if (id == kNoExpr) return dflt;
     double v = 0.0;
     if (!folder.Fold(id, &v)) {
-      errors->push_back(Msg("K304", what + " must not depend on time or state", loc));
+      errors->push_back(Msg(flat::DiagCode::NotFixed, what + " must not depend on time or state", loc));
       return dflt;
     }
     return v;
@@ -60,7 +60,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     if (NeedsAxis(j.type)) {
       Vec3 a = num3(fj.axis, "joint axis", fj.loc);
       if (a.norm() < 1e-12) {
-        errors->push_back(Msg("K306", "joint '" + j.name + "' has a zero axis", fj.loc));
+        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "' has a zero axis", fj.loc));
         a = Vec3::UnitZ();
       }
       j.axis = a.normalized();
@@ -70,7 +70,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       // Planar: e1 is axis2 with its normal component removed (Gram-Schmidt), e2 = n x e1.
       if (j.type == JointType::Planar) a2 -= j.axis * j.axis.dot(a2);
       if (a2.norm() < 1e-12) {
-        errors->push_back(Msg("K306", "joint '" + j.name + "' has a zero or degenerate axis2", fj.loc));
+        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "' has a zero or degenerate axis2", fj.loc));
         a2 = j.axis.unitOrthogonal();
       }
       j.axis2 = a2.normalized();
@@ -106,7 +106,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       if (!any_rot_start) qq[0] = 1.0;
       double n = std::sqrt(qq[0] * qq[0] + qq[1] * qq[1] + qq[2] * qq[2] + qq[3] * qq[3]);
       if (n == 0.0) {
-        errors->push_back(Msg("K306", "joint '" + j.name + "' starts with a zero quaternion", fj.loc));
+        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "' starts with a zero quaternion", fj.loc));
         n = 1.0;
         qq[0] = 1.0;
       }
@@ -125,7 +125,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       const bool prescribed = !fj.prescribed.empty() && fj.prescribed[0] != kNoExpr;
       if ((j.type != JointType::Prismatic && j.type != JointType::Revolute) || prescribed || j.mu < 0.0 ||
           !(j.mu_v > 0.0))
-        errors->push_back(Msg("K312",
+        errors->push_back(Msg(flat::DiagCode::BadFriction,
                               "joint '" + j.name +
                                   "': Coulomb friction needs a free prismatic or revolute joint, mu >= 0 and a "
                                   "positive speed scale",
@@ -140,12 +140,12 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       if (e == kNoExpr) continue;
       std::string label = std::string("prescribed motion ").append(j.name).append(".q").append(j.nq > 1 ? Index1(k) : "");
       if (!ScalarCoordinates(j.type)) {
-        errors->push_back(Msg("K305", label + ": only joints whose speeds are coordinate rates can be prescribed",
+        errors->push_back(Msg(flat::DiagCode::BadPrescribed, label + ": only joints whose speeds are coordinate rates can be prescribed",
                               fj.loc, "prescribe a revolute, prismatic, cylindrical, universal or planar joint"));
         continue;
       }
       if (m.exprs.DependsOnState(e)) {
-        errors->push_back(Msg("K304", label + " may depend on time and parameters only", fj.loc));
+        errors->push_back(Msg(flat::DiagCode::NotFixed, label + " may depend on time and parameters only", fj.loc));
         continue;
       }
       presc.AddRoot(e, label, m.exprs.ToString(e, &pn, &sn));

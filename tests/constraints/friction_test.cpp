@@ -119,7 +119,7 @@ TEST(Friction, OnlyPrismaticAndRevoluteJointsTakeFriction) {
   auto cr = rt::Compile(m, {});
   EXPECT_FALSE(cr.program);
   ASSERT_FALSE(cr.errors.empty());
-  EXPECT_EQ(cr.errors[0].code, "K312");
+  EXPECT_STREQ(flat::DiagCodeString(cr.errors[0].code), "K312");
 }
 
 }  // namespace

@@ -107,7 +107,7 @@ TEST(FourBar, LoopThatCannotCloseIsAClearError) {
   ASSERT_TRUE(l);
   EXPECT_FALSE(l->prog);
   ASSERT_FALSE(l->errors.empty());
-  EXPECT_EQ(l->errors[0].code, "K310");
+  EXPECT_STREQ(flat::DiagCodeString(l->errors[0].code), "K310");
   EXPECT_NE(l->errors[0].message.find("coupler_rocker"), std::string::npos);
   EXPECT_EQ(l->errors[0].loc.line, 25);
 }

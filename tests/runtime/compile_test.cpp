@@ -18,13 +18,13 @@ using test::Vec3;
 
 bool HasError(const rt::CompileResult& r, const std::string& code, const std::string& text) {
   for (const auto& e : r.errors)
-    if (e.code == code && e.message.find(text) != std::string::npos) return true;
+    if (flat::DiagCodeString(e.code) == code && e.message.find(text) != std::string::npos) return true;
   return false;
 }
 
 std::string Dump(const rt::CompileResult& r) {
   std::string s;
-  for (const auto& e : r.errors) s += e.code + ": " + e.message + "\n";
+  for (const auto& e : r.errors) s += std::string(flat::DiagCodeString(e.code)) + ": " + e.message + "\n";
   return s;
 }
 
@@ -72,6 +72,17 @@ TEST(Compile, FloatingBodyAndUnconnectedFrameAreErrors) {
   none.Frame("x");
   r = rt::Compile(none.m, {});
   EXPECT_TRUE(HasError(r, "K301", "no world")) << Dump(r);
+}
+
+// An API misuse is a message (code K300), not a crash: Rebind with a value too few.
+TEST(Compile, RebindWithTheWrongNumberOfValuesIsK300) {
+  const flat::Mechanism chain = test::Chain(2);
+  auto r = rt::Compile(chain, {});
+  ASSERT_TRUE(r.program) << Dump(r);
+  std::vector<double> one_too_many(chain.params.size() + 1, 1.0);
+  rt::CompileResult bad = rt::Rebind(*r.program, one_too_many);
+  EXPECT_FALSE(bad.program);
+  EXPECT_TRUE(HasError(bad, "K300", std::to_string(one_too_many.size()) + " parameter values for")) << Dump(bad);
 }
 
 TEST(Compile, SummaryCountsAndChoices) {

@@ -1,0 +1,168 @@
+// The pipeline (runtime/pipeline/pipeline.h): what every command and test loads and runs
+// through. If these fail, `run`, `sweep` and `test` resolve a different run than the
+// model and the options say, or report mistakes without their code and source line.
+#include "runtime/pipeline/pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "lang/diagnostics.h"
+#include "runtime/sim/csv.h"
+#include "stdlib/stdlib.h"
+
+namespace kanesim {
+namespace {
+
+const std::string kRoot = KANESIM_SOURCE_DIR;
+
+// A mass on a spring (k/m = 4, so x(t) = x0 cos(2 t)), its experiment annotation given.
+std::string Oscillator(const std::string& body = "Body cart(m = 2, I = identity(3) * 0.01);") {
+  return "model Osc\n"
+         "  World world(g = {0, 0, 0});\n"
+         "  Prismatic slider(axis = {1, 0, 0}, q(start = 0.1));\n"
+         "  " + body + "\n"
+         "  SpringDamper sd(c = 8, d = 0, s_unstretched = 0);\n"
+         "equation\n"
+         "  connect(world.frame_b, slider.frame_a);\n"
+         "  connect(slider.frame_b, cart.frame_a);\n"
+         "  connect(world.frame_b, sd.frame_a);\n"
+         "  connect(slider.frame_b, sd.frame_b);\n"
+         "  annotation(experiment(StopTime = 3, Tolerance = 1e-7, Interval = 0.25));\n"
+         "end Osc;\n";
+}
+
+pipeline::LoadResult Load(const std::string& text, const pipeline::RunSpec& spec = {},
+                          std::vector<std::string> sets = {}) {
+  pipeline::LoadOptions o;
+  o.sets = std::move(sets);
+  return pipeline::LoadModel(pipeline::Source::Text("osc.mech", text), o, spec);
+}
+
+TEST(PipelineNames, EveryNameMapsToOneChoiceAndBack) {
+  for (const std::string& n : pipeline::IntegratorNames()) {
+    std::optional<sim::Method> m = sim::Method::IDA;
+    ASSERT_TRUE(pipeline::IntegratorFromName(n, &m)) << n;
+    EXPECT_EQ(pipeline::IntegratorName(m), n);
+  }
+  std::optional<sim::Method> m;
+  ASSERT_TRUE(pipeline::IntegratorFromName("cvode", &m));
+  EXPECT_EQ(m, sim::Method::CvodeAdams);  // docs/integrators.md: plain cvode is Adams
+  ASSERT_TRUE(pipeline::IntegratorFromName("auto", &m));
+  EXPECT_FALSE(m.has_value());
+  EXPECT_FALSE(pipeline::IntegratorFromName("rk4", &m));
+  rt::SolverPath s = rt::SolverPath::Auto;
+  EXPECT_FALSE(pipeline::SolverFromName("fast", &s));
+  ASSERT_TRUE(pipeline::SolverFromName("recursive", &s));
+  EXPECT_EQ(s, rt::SolverPath::Recursive);
+  EXPECT_EQ(pipeline::SolverNames().size(), 4u);
+}
+
+TEST(PipelineResolve, UnsetValuesComeFromTheExperimentGivenOnesWin) {
+  pipeline::LoadResult r = Load(Oscillator());
+  ASSERT_TRUE(r.model) << r.diagnostics;
+  pipeline::ResolvedRun run;
+  ASSERT_EQ(pipeline::ResolveRun(*r.model, {}, &run), "");
+  EXPECT_EQ(run.grid.start, 0.0);
+  EXPECT_EQ(run.grid.stop, 3.0);
+  EXPECT_EQ(run.grid.interval, 0.25);
+  EXPECT_EQ(run.sim.rtol, 1e-7);
+  EXPECT_EQ(run.sim.atol, 1e-7);  // atol = rtol
+  EXPECT_TRUE(run.sim.signals.empty());
+
+  pipeline::RunSpec spec;
+  spec.stop_time = 2;
+  spec.rtol = 1e-9;
+  spec.outputs = {"slider.*"};
+  spec.integrator = sim::Method::CvodeBdf;
+  ASSERT_EQ(pipeline::ResolveRun(*r.model, spec, &run), "");
+  EXPECT_EQ(run.grid.stop, 2.0);
+  EXPECT_EQ(run.sim.rtol, 1e-9);
+  EXPECT_EQ(run.sim.atol, 1e-9);
+  EXPECT_EQ(run.sim.integrator, rt::IntegratorKind::CVODE);
+  EXPECT_TRUE(run.sim.cvode_bdf);
+  EXPECT_FALSE(run.sim.signals.empty());
+  for (const std::string& s : run.sim.signals) EXPECT_EQ(s.rfind("slider.", 0), 0u) << s;
+}
+
+TEST(PipelineResolve, EachMistakeIsClassified) {
+  pipeline::LoadResult r = Load(Oscillator());
+  ASSERT_TRUE(r.model) << r.diagnostics;
+  pipeline::ResolvedRun run;
+  pipeline::RunProblem p = pipeline::RunProblem::kNone;
+  pipeline::RunSpec bad_tol;
+  bad_tol.atol = -1;
+  EXPECT_NE(pipeline::ResolveRun(*r.model, bad_tol, &run, &p).find("atol"), std::string::npos);
+  EXPECT_EQ(p, pipeline::RunProblem::kValue);
+  pipeline::RunSpec bad_signal;
+  bad_signal.outputs = {"nosuch.q"};
+  EXPECT_NE(pipeline::ResolveRun(*r.model, bad_signal, &run, &p), "");
+  EXPECT_EQ(p, pipeline::RunProblem::kSignals);
+  pipeline::RunSpec backwards;
+  backwards.start_time = 5;  // after the experiment's StopTime = 3
+  EXPECT_NE(pipeline::ResolveRun(*r.model, backwards, &run, &p), "");
+  EXPECT_EQ(p, pipeline::RunProblem::kGrid);
+  sim::MemorySink sink;
+  EXPECT_EQ(pipeline::Run(*r.model, backwards, sink).status, sim::SimResult::Status::kUsageError);
+}
+
+// The run through the pipeline follows x(t) = x0 cos(2 t) (k/m = 8/2), with the forced
+// integrator, and writes the experiment's grid.
+TEST(PipelineRun, MatchesTheClosedFormWithTheIntegratorAsked) {
+  for (const std::string& name : pipeline::IntegratorNames()) {
+    pipeline::RunSpec spec;
+    ASSERT_TRUE(pipeline::IntegratorFromName(name, &spec.integrator));
+    spec.outputs = {"slider.q"};
+    pipeline::LoadResult r = Load(Oscillator(), spec);
+    ASSERT_TRUE(r.model) << r.diagnostics;
+    sim::MemorySink sink;
+    sim::SimResult result = pipeline::Run(*r.model, spec, sink);
+    ASSERT_EQ(result.status, sim::SimResult::Status::kOk) << name << ": " << result.message;
+    if (spec.integrator) {
+      EXPECT_EQ(result.stats.method, *spec.integrator) << name;
+    }
+    ASSERT_EQ(sink.times.size(), 13u) << name;  // 0, 0.25, ..., 3
+    constexpr double kTol = 1e-5;  // rtol 1e-7 over 1 period, amplitude 0.1: far inside
+    for (size_t k = 0; k < sink.times.size(); ++k)
+      EXPECT_NEAR(sink.rows[k][0], 0.1 * std::cos(2 * sink.times[k]), kTol) << name << " t=" << sink.times[k];
+  }
+}
+
+TEST(PipelineLoad, SetValuesApplyAndBadOnesAreE210) {
+  pipeline::LoadResult ok = Load(Oscillator("parameter Real mm = 1; Body cart(m = mm, I = identity(3) * 0.01);"),
+                                 {}, {"mm=2"});
+  ASSERT_TRUE(ok.model) << ok.diagnostics;
+  EXPECT_EQ(ok.model->mech.params[static_cast<size_t>(ok.model->mech.FindParam("mm"))].value, 2.0);
+  pipeline::LoadResult bad = Load(Oscillator(), {}, {"mm"});
+  EXPECT_FALSE(bad.model);
+  EXPECT_NE(bad.diagnostics.find("error[E210]"), std::string::npos) << bad.diagnostics;
+}
+
+TEST(PipelineLoad, LanguageAndCompilerErrorsAreRenderedWithTheirLine) {
+  pipeline::LoadResult lang_error = Load(Oscillator("Bdy cart(m = 2);"));
+  EXPECT_FALSE(lang_error.model);
+  EXPECT_NE(lang_error.diagnostics.find("osc.mech:4:3: error[E202]"), std::string::npos) << lang_error.diagnostics;
+  EXPECT_NE(lang_error.diagnostics.find("1 error\n"), std::string::npos) << lang_error.diagnostics;
+  // The triangle inequality broken (0.1 + 0.1 < 1): the compiler's K308, at the body's name, with
+  // the source line and a caret like a language diagnostic.
+  pipeline::LoadResult compile_error = Load(Oscillator("Body cart(m = 2, I = diagonal({0.1, 0.1, 1}));"));
+  EXPECT_FALSE(compile_error.model);
+  EXPECT_NE(compile_error.diagnostics.find("osc.mech:4:8: error[K308]"), std::string::npos)
+      << compile_error.diagnostics;
+  EXPECT_NE(compile_error.diagnostics.find("Body cart(m = 2, I = diagonal"), std::string::npos)
+      << compile_error.diagnostics;
+  EXPECT_NE(compile_error.diagnostics.find("^"), std::string::npos) << compile_error.diagnostics;
+}
+
+TEST(PipelineLoad, CompileFalseStopsAtTheFlatMechanism) {
+  pipeline::LoadOptions o;
+  o.compile = false;
+  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(kRoot + "/examples/chain.mech"), o, {});
+  ASSERT_TRUE(r.model) << r.diagnostics;
+  EXPECT_FALSE(r.model->program);
+  EXPECT_FALSE(r.model->mech.joints.empty());
+}
+
+}  // namespace
+}  // namespace kanesim
