@@ -7,19 +7,17 @@
 // scenarios, and no rank waits on a static partition. Rank 0 only coordinates (its
 // waits are blocking receives), so R ranks give R - 1 simulating processes; with R = 1
 // the sweep runs on threads as without MPI.
+//
+// The MPI calls are in the module libkanesim_batch_mpi.so (mpi_module.h), loaded here only
+// when an MPI sweep starts: kanesim does not map libmpi at start.
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <string>
 
+#include "runtime/batch/mpi_module.h"
 #include "runtime/batch/summary.h"
 #include "runtime/batch/sweep.h"
-
-#ifdef KANESIM_MPI
-// The C API only: OpenMPI's deprecated C++ bindings would need libmpi_cxx.
-#define OMPI_SKIP_MPICXX 1
-#define MPICH_SKIP_MPICXX 1
-#include <mpi.h>
-#endif
 
 namespace kanesim::batch {
 
@@ -39,7 +37,8 @@ namespace {
 
 constexpr int kTagReady = 1, kTagWork = 2, kTagResult = 3;
 
-bool Manager(ScenarioRunner& runner, const SweepConfig& config, int size, SweepReport* report, std::string* error) {
+bool Manager(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfig& config, int size,
+             SweepReport* report, std::string* error) {
   SweepOutput output;
   bool ok = OpenSweepOutput(config, runner.Header(), &output, error);
   report->summary_path = output.summary_path;
@@ -67,13 +66,10 @@ bool Manager(ScenarioRunner& runner, const SweepConfig& config, int size, SweepR
   int active = size - 1;
   std::string io_error;
   while (active > 0) {
-    MPI_Status st;
-    MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
-    int count = 0;
-    MPI_Get_count(&st, MPI_CHAR, &count);
-    std::string msg(static_cast<size_t>(count), '\0');
-    MPI_Recv(msg.data(), count, MPI_CHAR, st.MPI_SOURCE, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-    if (st.MPI_TAG == kTagResult && msg.size() > 1) {
+    std::string msg;
+    int source = 0, tag = 0;
+    mpi.receive_any(&msg, &source, &tag);
+    if (tag == kTagResult && msg.size() > 1) {
       // "F" or "O" (failed / ok), then the line.
       bool failed = msg[0] == 'F';
       std::string line = msg.substr(1);
@@ -87,7 +83,8 @@ bool Manager(ScenarioRunner& runner, const SweepConfig& config, int size, SweepR
     }
     bool cancelled = config.cancel && config.cancel->load();
     int id = (!cancelled && next < pending.size()) ? pending[next++] : -1;
-    MPI_Send(&id, 1, MPI_INT, st.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
+    const std::string work = std::to_string(id);  // the id as text; -1: no more work
+    mpi.send(work.data(), static_cast<int>(work.size()), source, kTagWork);
     if (id < 0) --active;
   }
   report->interrupted = config.cancel && config.cancel->load() && next < pending.size();
@@ -100,19 +97,20 @@ bool Manager(ScenarioRunner& runner, const SweepConfig& config, int size, SweepR
   return true;
 }
 
-void Worker(ScenarioRunner& runner, const SweepConfig& config) {
+void Worker(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfig& config) {
   std::map<int, const Scenario*> by_id;
   for (const Scenario& s : config.scenarios) by_id[s.id] = &s;
-  char ready = 'R';
-  MPI_Send(&ready, 1, MPI_CHAR, 0, kTagReady, MPI_COMM_WORLD);
+  const char ready = 'R';
+  mpi.send(&ready, 1, 0, kTagReady);
   while (true) {
-    int id = -1;
-    MPI_Recv(&id, 1, MPI_INT, 0, kTagWork, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    std::string work;
+    mpi.receive(&work, 0, kTagWork);
+    const int id = std::atoi(work.c_str());
     if (id < 0) return;
     bool failed = false;
     std::string msg = runner.Run(*by_id.at(id), &failed);
     msg.insert(msg.begin(), failed ? 'F' : 'O');
-    MPI_Send(msg.data(), static_cast<int>(msg.size()), MPI_CHAR, 0, kTagResult, MPI_COMM_WORLD);
+    mpi.send(msg.data(), static_cast<int>(msg.size()), 0, kTagResult);
   }
 }
 
@@ -122,12 +120,11 @@ bool MpiAvailable() { return true; }
 
 bool RunSweepMpi(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
                  SweepReport* report, std::string* error) {
-  int initialized = 0;
-  MPI_Initialized(&initialized);
-  if (!initialized) MPI_Init(nullptr, nullptr);
+  const mpi::ModuleApi* module = mpi::Module(error);
+  if (!module) return false;
+  const mpi::ModuleApi& mpi = *module;
   int rank = 0, size = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  mpi.init(&rank, &size);
   report->is_root = rank == 0;
   bool ok = true;
   if (size == 1) {
@@ -137,13 +134,13 @@ bool RunSweepMpi(std::shared_ptr<const rt::Program> base, const VariantBuilder& 
   } else {
     ScenarioRunner runner(base, build, config);
     if (rank == 0) {
-      ok = Manager(runner, config, size, report, error);
+      ok = Manager(mpi, runner, config, size, report, error);
     } else {
-      Worker(runner, config);
+      Worker(mpi, runner, config);
     }
     report->variants = runner.NumVariants();
   }
-  MPI_Finalize();
+  mpi.finalize();
   return ok;
 }
 
