@@ -122,6 +122,7 @@ void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
     const lin::Mode& md = m.modes[k];
     std::string dom;
     for (const auto& [name, w] : md.dominant) dom += (dom.empty() ? "" : ", ") + fmt::format("{} {:.2f}", name, w);
+    if (md.omega_n == 0) dom = "(zero: an ignorable or neutral direction)";
     const std::string damping = md.omega_n > 0 ? fmt::format("{:9.4f}", md.zeta) : fmt::format("{:>9}", "-");
     fmt::print("  {:>3}  {:>14.7g} {:>14.7g}  {:>11.5g} {}  {}\n", k + 1, md.lambda.real(), md.lambda.imag(),
                md.freq_hz, damping, dom);

@@ -12,6 +12,11 @@
 // Upright thin disk (radius a, I_axis = m a^2 / 2, I_diam = m a^2 / 4) rolling at speed v,
 // spin W = v / a (linearized lean equation; Kane & Levinson 1985, ch. 5; Neimark & Fufaev):
 //   lambda^2 = (4 g / a - 12 W^2) / 5,  stable above v = sqrt(g a / 3)                    (5)
+// Sleeping heavy symmetric top (mass m, centre at l above the pivot, axial moment C,
+// transverse moment A about the pivot, spin s), small tilts z = alpha + i beta:
+//   A z'' - i C s z' - m g l z = 0,  lambda = i (C s +- sqrt(C^2 s^2 - 4 A m g l)) / (2 A)
+// and conjugates: stable (all imaginary) for C^2 s^2 > 4 A m g l (Klein & Sommerfeld;
+// Goldstein, Classical Mechanics, sec. 5.7)                                              (6)
 #include <gtest/gtest.h>
 
 #include <unsupported/Eigen/MatrixFunctions>
@@ -270,6 +275,58 @@ TEST(Linearize, UprightRollingDiskEigenvaluesAgainstSpeed) {
   }
 }
 
+const char* kSleepingTop = R"(
+// A symmetric top on two tilt hinges and a spin hinge (the spin innermost, so the spin
+// angle is ignorable); the pivot at the origin, the axis along world z, gravity -z.
+model Top
+  parameter Real m = 1.2;
+  parameter Real l = 0.08;
+  parameter Real A0 = 2e-3 "transverse central moment";
+  parameter Real C = 3e-3 "axial moment";
+  parameter Real s = 60 "spin";
+  World world(g = {0, 0, -9.81});
+  Revolute tilt1(axis = {1, 0, 0});
+  Revolute tilt2(axis = {0, 1, 0});
+  Revolute spin(axis = {0, 0, 1}, u(start = s));
+  Body top(m = m, r_CM = {0, 0, l}, I = diagonal({A0, A0, C}));
+equation
+  connect(world.frame_b, tilt1.frame_a);
+  connect(tilt1.frame_b, tilt2.frame_a);
+  connect(tilt2.frame_b, spin.frame_a);
+  connect(spin.frame_b, top.frame_a);
+end Top;
+)";
+
+TEST(Linearize, SleepingTopStabilityLimit) {
+  // If this fails, gyroscopic coupling is linearized wrongly: the sleeping top's
+  // eigenvalues (6) on both sides of its stability limit s_c = 2 sqrt(A m g l) / C.
+  const double m = 1.2, l = 0.08, A = 2e-3 + m * l * l, C = 3e-3;
+  const double sc = 2 * std::sqrt(A * m * kG * l) / C;  // 27.2 rad/s
+  for (double s : {0.5 * sc, 0.95 * sc, 1.05 * sc, 2.0 * sc}) {
+    auto lt = LoadModel(kSleepingTop, {{"s", std::to_string(s)}}, {}, true);
+    ASSERT_TRUE(lt && lt->prog);
+    const lin::LinearModel md = LinearizeAt(*lt->prog, lin::StartPoint(*lt->prog));
+    EXPECT_LT(md.unsteady, 1e-6);
+    const auto ev = NonZero(md, 1e-6);
+    ASSERT_EQ(ev.size(), 4u) << "s = " << s;
+    const std::complex<double> disc = std::sqrt(std::complex<double>(C * C * s * s - 4 * A * m * kG * l));
+    std::vector<std::complex<double>> want;
+    for (double sign : {1.0, -1.0}) {
+      const std::complex<double> lam = std::complex<double>(0, 1) * (C * s + sign * disc) / (2 * A);
+      want.push_back(lam);
+      want.push_back(std::conj(lam));
+    }
+    for (const auto& w : want) {
+      double best = 1e300;
+      for (const auto& e : ev) best = std::min(best, std::abs(e - w));
+      EXPECT_LT(best, 1e-7 * std::abs(w)) << "s = " << s << " lambda " << w;
+    }
+    double rmax = -1;
+    for (const auto& e : ev) rmax = std::max(rmax, e.real());
+    EXPECT_EQ(rmax > 1e-6, s < sc) << "s = " << s;
+  }
+}
+
 TEST(Linearize, SpinningQuaternionChartIsFlaggedUnsteady) {
   // If this fails, the frozen-instant linearization of examples/rolling_disk.mech (a
   // spinning free joint: its quaternion chart does not follow the spin) would be printed
@@ -309,6 +366,22 @@ TEST(Linearize, SmallDisturbanceFollowsTheLinearModelToSecondOrder) {
   EXPECT_GT(err[0] / err[1], 7.5) << err[0] << " " << err[1];
   EXPECT_LT(err[0] / err[1], 8.5) << err[0] << " " << err[1];
   EXPECT_LT(err[0], 0.02 * 0.02 * 10);
+}
+
+TEST(Linearize, AtATimeOfTheLoopedMotion) {
+  // If this fails, the state of a run (integrated, then projected) is not a consistent
+  // operating point, or the energy of the four-bar's motion is not kept to --at.
+  auto l = LoadModel(kRoot + "/examples/fourbar.mech");
+  ASSERT_TRUE(l && l->prog);
+  lin::OperatingPoint op;
+  const lin::Status s = lin::PointAtTime(*l->prog, 0.5, &op);
+  ASSERT_TRUE(s.ok()) << s.message;
+  EXPECT_DOUBLE_EQ(op.t, 0.5);
+  const lin::LinearModel m = LinearizeAt(*l->prog, op);
+  EXPECT_EQ(m.states.size(), 2u);
+  EXPECT_GT(m.unsteady, 1e-6);  // a moving crank-rocker is no steady motion
+  lin::OperatingPoint before;
+  EXPECT_EQ(lin::PointAtTime(*l->prog, -1.0, &before).code, 1);
 }
 
 TEST(Linearize, OperatingPointOffTheLoopIsRefused) {
