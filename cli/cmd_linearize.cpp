@@ -237,6 +237,7 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
     lin::LinearModel m;
     lin::Status s = OperatingPointFor(*p, a, false, &op);
     if (s.ok()) s = lin::Linearize(*p, op, o, &m);
+    if (s.ok()) lin::ComputeModes(&m);
     if (!s.ok()) {
       s.message = fmt::format("{} = {}: {}", name, v, s.message);
       return Fail(s);
@@ -302,6 +303,7 @@ int RunLinearize(const LinearizeArgs& a) {
   o.outputs = a.outputs;
   lin::LinearModel m;
   if (lin::Status s = lin::Linearize(program, op, o, &m); !s.ok()) return Fail(s);
+  lin::ComputeModes(&m);
   Print(m, op);
   if (m.unsteady > 1e-6)
     fmt::print(stderr,

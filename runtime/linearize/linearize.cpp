@@ -248,29 +248,39 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
     errBD.col(k) = e;
   }
 
-  // Steady? A a moment later along f(0) against A now (single central differences).
+  // Steady? A a moment later along f(0) against A now, compared on three fixed
+  // pseudo-random directions v (J v by one central difference each): a change of A shows
+  // in J v for all but a measure-zero set of directions, at 12 evaluations instead of 4n.
   const double f0max = n > 0 ? F0.head(n).cwiseAbs().maxCoeff() : 0.0;
   if (f0max > 1e-12 * std::max(1.0, MaxAbs(out->A))) {
-    const double tau = 0.05 / f0max;
-    auto jacobian_at = [&](const VectorXd& xc, MatrixXd* J) -> Status {
-      J->resize(n, n);
-      for (int j = 0; j < n; ++j) {
-        const double hj = 1e-5 * std::max(1.0, std::abs(xc[j]));
-        VectorXd x = xc, fp, fm;
-        x[j] = xc[j] + hj;
-        if (Status s = eval(x, *prog, *ws, nullptr, &fp); !s.ok()) return s;
-        x[j] = xc[j] - hj;
-        if (Status s = eval(x, *prog, *ws, nullptr, &fm); !s.ok()) return s;
-        J->col(j) = (fp - fm).head(n) / (2 * hj);
+    const double tau = 0.05 / f0max, hv = 1e-5;
+    const VectorXd x1 = tau * F0.head(n);
+    double diff = 0.0, size = 1.0;
+    unsigned seed = 12345u;
+    for (int k = 0; k < 3; ++k) {
+      VectorXd v(n);
+      for (int i = 0; i < n; ++i) {
+        seed = seed * 1664525u + 1013904223u;  // Numerical Recipes' LCG: fixed, portable
+        v[i] = static_cast<double>(seed >> 8) / static_cast<double>(1u << 24) - 0.5;
       }
-      return {};
-    };
-    MatrixXd J0, J1;
-    if (Status s = jacobian_at(VectorXd::Zero(n), &J0); !s.ok()) return s;
-    if (Status s = jacobian_at(tau * F0.head(n), &J1); s.ok())
-      out->unsteady = MaxAbs(J1 - J0) / std::max(1.0, MaxAbs(J0));
-    else
-      out->unsteady = std::numeric_limits<double>::infinity();
+      v /= v.cwiseAbs().maxCoeff();
+      VectorXd jv[2];
+      for (int at = 0; at < 2; ++at) {
+        const VectorXd xc = at == 0 ? VectorXd::Zero(n) : x1;
+        VectorXd fp, fm;
+        Status sp = eval(xc + hv * v, *prog, *ws, nullptr, &fp);
+        Status sm = sp.ok() ? eval(xc - hv * v, *prog, *ws, nullptr, &fm) : sp;
+        if (!sm.ok()) {
+          diff = std::numeric_limits<double>::infinity();
+          break;
+        }
+        jv[at] = (fp - fm).head(n) / (2 * hv);
+      }
+      if (!std::isfinite(diff)) break;
+      diff = std::max(diff, MaxAbs(jv[1] - jv[0]));
+      size = std::max(size, MaxAbs(jv[0]));
+    }
+    out->unsteady = diff / size;
   }
 
   out->error_A = MaxAbs(errAC.topRows(n)) / std::max(1.0, MaxAbs(out->A));
@@ -278,7 +288,6 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   if (np > 0) ebcd = std::max(ebcd, MaxAbs(errAC.bottomRows(np)) / std::max(1.0, MaxAbs(out->C)));
   if (m > 0) ebcd = std::max(ebcd, MaxAbs(errBD) / std::max(1.0, std::max(MaxAbs(out->B), MaxAbs(out->D))));
   out->error_BCD = ebcd;
-  ComputeModes(out);
   return {};
 }
 

@@ -84,19 +84,21 @@ struct LinearModel {
   double h = 0.0;                    // base step used
   double error_A = 0.0;              // achieved accuracy: max |A_richardson(h/2) - A_richardson(h)| / max(1, max |A|)
   double error_BCD = 0.0;            // the same for B, C, D together
+  // Filled by ComputeModes:
   std::vector<Mode> modes;           // sorted by |lambda|, then by imaginary part descending
-  std::vector<std::string> ignorable;  // coordinates no other state reads (ComputeModes); each gives a zero eigenvalue
+  std::vector<std::string> ignorable;  // coordinates no other state reads; each gives a zero eigenvalue
   std::vector<double> x0_rates;      // f(0): zero at an equilibrium; steady rates of ignorable coordinates
   // Whether the operating point is an equilibrium or a steady motion: A at x = tau f(0)
-  // (the motion a moment later, tau so that it moves 0.05) against A at 0,
-  // max |A(tau f0) - A(0)| / max(1, max |A|); 0 at an equilibrium. Above 1e-6 the
+  // (the motion a moment later, tau so that it moves 0.05) against A at 0, on three fixed
+  // directions v: max |(A(tau f0) - A(0)) v| / max(1, |A(0) v|); 0 at an equilibrium. Above 1e-6 the
   // eigenvalues are those of a frozen instant of a changing motion (not stability
   // exponents): not an equilibrium, or coordinates that do not follow the motion's
   // symmetry (a spinning quaternion joint; docs/linearize.md "Steady motions").
   double unsteady = 0.0;
 };
 
-// Linearizes `program` about `op`. On failure *status says why.
+// Linearizes `program` about `op`: A, B, C, D and the accuracy; the modes are left to
+// ComputeModes (an eigendecomposition, O(n^3)). On failure the status says why.
 Status Linearize(const rt::Program& program, const OperatingPoint& op, const LinearizeOptions& options,
                  LinearModel* out);
 

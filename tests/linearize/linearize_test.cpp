@@ -46,6 +46,7 @@ lin::LinearModel LinearizeAt(const rt::Program& p, const lin::OperatingPoint& op
   lin::LinearModel m;
   const lin::Status s = lin::Linearize(p, op, o, &m);
   EXPECT_TRUE(s.ok()) << s.message;
+  lin::ComputeModes(&m);
   return m;
 }
 
