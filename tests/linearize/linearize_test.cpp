@@ -385,6 +385,51 @@ TEST(Linearize, AtATimeOfTheLoopedMotion) {
   EXPECT_EQ(lin::PointAtTime(*l->prog, -1.0, &before).code, 1);
 }
 
+TEST(Linearize, FourBarSmallDisturbanceFollowsTheLinearModelToSecondOrder) {
+  // If this fails, the looped linear model (one coordinate left by the loop) does not
+  // describe the nonlinear four-bar near its equilibrium: the difference must shrink
+  // like the square of the disturbance (the potential is not symmetric about it).
+  auto l = LoadModel(kRoot + "/examples/fourbar.mech");
+  ASSERT_TRUE(l && l->prog);
+  lin::EquilibriumResult eq;
+  ASSERT_TRUE(lin::FindEquilibrium(*l->prog, lin::StartPoint(*l->prog), &eq).ok());
+  const lin::LinearModel m = LinearizeAt(*l->prog, eq.point);
+  ASSERT_EQ(m.states.front(), "crank_pivot.q");
+  const double th = eq.point.y[static_cast<size_t>(FreeQ(*l->prog, "crank_pivot"))];
+  double err[2];
+  for (int k = 0; k < 2; ++k) {
+    const double eps = 0.01 / (1 << k);
+    char th0[64];
+    std::snprintf(th0, sizeof th0, "%.17g", th + eps);
+    auto lk = LoadModel(kRoot + "/examples/fourbar.mech", {{"theta0", th0}, {"omega0", "0"}});
+    ASSERT_TRUE(lk && lk->prog);
+    auto s = RunModel(*lk->prog, 1.5, 0.05, 1e-11, {"crank_pivot.q"});
+    double e = 0.0;
+    for (size_t i = 0; i < s.times.size(); ++i) {
+      const Eigen::Vector2d x = (m.A * s.times[i]).exp() * Eigen::Vector2d(eps, 0);
+      e = std::max(e, std::abs(s.rows[i][0] - th - x[0]));
+    }
+    err[k] = e;
+  }
+  EXPECT_GT(err[0] / err[1], 3.5) << err[0] << " " << err[1];
+  EXPECT_LT(err[0] / err[1], 4.5) << err[0] << " " << err[1];
+}
+
+TEST(Linearize, UprightDiskReducedAndMultiplierFormsAgree) {
+  // If this fails, the rolling rows' linear model depends on how the equations are solved.
+  rt::CompileOptions dense, sparse;
+  dense.solver = rt::SolverPath::Dense;
+  sparse.solver = rt::SolverPath::Sparse;
+  auto ld = LoadModel(kRoot + "/examples/rolling_disk_upright.mech", {}, dense);
+  auto ls = LoadModel(kRoot + "/examples/rolling_disk_upright.mech", {}, sparse);
+  ASSERT_TRUE(ld && ld->prog && ls && ls->prog);
+  ASSERT_EQ(ls->prog->solver, rt::SolverPath::Sparse);
+  const lin::LinearModel md = LinearizeAt(*ld->prog, lin::StartPoint(*ld->prog));
+  const lin::LinearModel ms = LinearizeAt(*ls->prog, lin::StartPoint(*ls->prog));
+  ASSERT_EQ(md.states, ms.states);
+  EXPECT_LT((md.A - ms.A).cwiseAbs().maxCoeff(), 1e-8 * std::max(1.0, md.A.cwiseAbs().maxCoeff()));
+}
+
 TEST(Linearize, OperatingPointOffTheLoopIsRefused) {
   // If this fails, a state that does not close the loop is linearized as if it did.
   auto l = LoadModel(kRoot + "/examples/fourbar.mech");
@@ -421,6 +466,11 @@ TEST(Linearize, UnknownInputIsABadInput) {
   const lin::Status s = lin::Linearize(*l->prog, lin::StartPoint(*l->prog), o, &m);
   EXPECT_EQ(s.code, 1);
   EXPECT_NE(s.message.find("neither a joint's generalized force"), std::string::npos) << s.message;
+  o.inputs = {"hinge.tau[2]"};
+  EXPECT_EQ(lin::Linearize(*l->prog, lin::StartPoint(*l->prog), o, &m).code, 1);
+  o.inputs.clear();
+  o.outputs = {"hinge.qq"};
+  EXPECT_EQ(lin::Linearize(*l->prog, lin::StartPoint(*l->prog), o, &m).code, 1);
 }
 
 }  // namespace
