@@ -108,6 +108,11 @@ std::string Json(const lin::LinearModel& m, const lin::OperatingPoint& op) {
 void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
   const int nc = m.n_coords, n = static_cast<int>(m.states.size());
   fmt::print("states      {} coordinate(s), {} speed(s) at t = {}\n", nc, n - nc, op.t);
+  if (n == 0) {
+    fmt::print("  none: constraints and prescribed motions fix every coordinate (0 degrees of freedom); nothing to "
+               "linearize\n");
+    return;
+  }
   for (int i = 0; i < n; ++i) fmt::print("  x{:<3} {}\n", i + 1, m.states[static_cast<size_t>(i)]);
   if (!m.inputs.empty()) fmt::print("inputs      {}\n", fmt::join(m.inputs, ", "));
   if (!m.outputs.empty()) fmt::print("outputs     {}\n", fmt::join(m.outputs, ", "));

@@ -1,7 +1,7 @@
 // Static equilibrium: Newton on the independent accelerations with every speed zero,
 //
 //   r(xi_I) = u_I'(xi_I, u = 0) = 0,   J = dr/dxi_I (central differences),
-//   xi_I <- xi_I - alpha J^+ r,        alpha = 1, 1/2, ... until |r| decreases        (8)
+//   xi_I <- xi_I - alpha J^+ r,        alpha = 1, 1/2, ... until |r|_2 decreases      (8)
 //
 // where J^+ is the minimum-norm pseudo-inverse (complete orthogonal decomposition):
 // directions without stiffness (ignorable coordinates) do not move. After each step the
@@ -58,7 +58,7 @@ Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, Equili
     if (Status s = red.Init(p, op, true); !s.ok()) return s;
     const int n = static_cast<int>(red.indep_coords().size());
     if (Status s = Residual(p, *ws, red, VectorXd::Zero(n), &r, &y); !s.ok()) return s;
-    const double rn = r.size() ? r.cwiseAbs().maxCoeff() : 0.0;
+    const double rn = r.size() ? r.cwiseAbs().maxCoeff() : 0.0, rn2 = r.norm();
     if (tol < 0) tol = 1e-10 * std::max({g, rn, 1e-2});
     out->residual = rn;
     if (rn <= tol || n == 0) break;
@@ -82,10 +82,10 @@ Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, Equili
     cod.setThreshold(1e-10);
     const VectorXd step = -cod.solve(r);
     bool improved = false;
-    for (double alpha = 1.0; alpha >= 1.0 / 1024; alpha /= 2) {
+    for (double alpha = 1.0; alpha >= 1.0 / (1 << 20); alpha /= 2) {
       VectorXd r2, y2;
       if (Status s = Residual(p, *ws, red, alpha * step, &r2, &y2); !s.ok()) continue;
-      if (r2.cwiseAbs().maxCoeff() < rn) {
+      if (r2.norm() < rn2) {
         improved = true;
         op.y.assign(y2.data(), y2.data() + y2.size());
         break;
