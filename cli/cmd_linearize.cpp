@@ -179,8 +179,13 @@ lin::Status OperatingPointFor(const rt::Program& p, const LinearizeArgs& a, bool
     if (lin::Status s = lin::FindEquilibrium(p, start, &eq); !s.ok()) return s;
     *op = eq.point;
     if (report) {
-      fmt::print("equilibrium found in {} Newton iteration(s), residual {:.2e} (largest acceleration)\n",
-                 eq.iterations, eq.residual);
+      fmt::print("equilibrium found in {} Newton iteration(s){}, residual {:.2e} (largest acceleration)\n",
+                 eq.iterations,
+                 eq.relaxation_steps > 0
+                     ? fmt::format(" (Newton stalled: {} relaxation steps toward a potential minimum first)",
+                                   eq.relaxation_steps)
+                     : "",
+                 eq.residual);
       if (eq.moved.empty()) fmt::print("  the start values are an equilibrium: nothing moved\n");
       for (const auto& [name, d] : eq.moved) fmt::print("  moved  {:<24} {:+.10g}\n", name, d);
     }

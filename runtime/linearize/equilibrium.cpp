@@ -37,6 +37,44 @@ Status Residual(const rt::Program& p, rt::Workspace& ws, Reduction& red, const V
   return {};
 }
 
+// Fallback when Newton stalls (a residual minimum that is no zero): the motion with its
+// kinetic energy taken away whenever it climbs (v . r < 0), in the spirit of FIRE
+// (Bitzek et al., Phys. Rev. Lett. 97, 170201, 2006), on the chart coordinates with
+// v' = r (the accelerations at rest), xi' = v (symplectic Euler, step halved when it
+// climbs, grown by 10% while it descends). It settles near a minimum of the potential,
+// where Newton then converges. Only for as many speeds as coordinates (no rolling rows).
+// The chart is rebuilt every 20 steps. *steps counts them.
+Status Relax(const rt::Program& p, rt::Workspace& ws, double until, OperatingPoint* op, long* steps) {
+  VectorXd v;
+  double dt = 1e-3;
+  for (int block = 0; block < 2000; ++block) {
+    Reduction red;
+    if (Status s = red.Init(p, *op, true); !s.ok()) return s;
+    const int n = static_cast<int>(red.indep_coords().size());
+    if (n != static_cast<int>(red.indep_speeds().size())) return {2, "rolling rows: no relaxation"};
+    if (v.size() != n) v = VectorXd::Zero(n);
+    VectorXd xi = VectorXd::Zero(n), r, y;
+    for (int k = 0; k < 20; ++k, ++*steps) {
+      if (Status s = Residual(p, ws, red, xi, &r, &y); !s.ok()) return s;
+      if (r.cwiseAbs().maxCoeff() <= until) {
+        op->y.assign(y.data(), y.data() + y.size());
+        return {};
+      }
+      if (v.dot(r) < 0) {
+        v.setZero();
+        dt = std::max(dt / 2, 1e-6);
+      } else {
+        dt = std::min(dt * 1.1, 0.05);
+      }
+      v += dt * r;
+      xi += dt * v;
+    }
+    if (Status s = red.StateOf(xi, VectorXd::Zero(n), &y); !s.ok()) return s;
+    op->y.assign(y.data(), y.data() + y.size());
+  }
+  return {2, "the relaxation did not settle"};
+}
+
 }  // namespace
 
 Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, EquilibriumResult* out) {
@@ -53,6 +91,7 @@ Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, Equili
   const int kMaxIter = 100;
   VectorXd r, y;
   int it = 0;
+  bool relaxed = false;
   for (;; ++it) {
     Reduction red;
     if (Status s = red.Init(p, op, true); !s.ok()) return s;
@@ -89,6 +128,17 @@ Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, Equili
         improved = true;
         op.y.assign(y2.data(), y2.data() + y2.size());
         break;
+      }
+    }
+    if (!improved && !relaxed) {
+      // Settle near a potential minimum first, then Newton again from there.
+      relaxed = true;
+      long steps = 0;
+      OperatingPoint moved_op = op;
+      if (Relax(p, *ws, 1e-3 * std::max({g, rn, 1e-2}), &moved_op, &steps).ok()) {
+        op = moved_op;
+        out->relaxation_steps = steps;
+        continue;
       }
     }
     if (!improved) {

@@ -252,7 +252,8 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   // pseudo-random directions v (J v by one central difference each): a change of A shows
   // in J v for all but a measure-zero set of directions, at 12 evaluations instead of 4n.
   const double f0max = n > 0 ? F0.head(n).cwiseAbs().maxCoeff() : 0.0;
-  if (f0max > 1e-12 * std::max(1.0, MaxAbs(out->A))) {
+  // (Rates at the level of an equilibrium search's tolerance are rounding, not motion.)
+  if (f0max > 1e-8 * std::max(1.0, MaxAbs(out->A))) {
     const double tau = 0.05 / f0max, hv = 1e-5;
     const VectorXd x1 = tau * F0.head(n);
     double diff = 0.0, size = 1.0;

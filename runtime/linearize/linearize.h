@@ -107,14 +107,16 @@ void ComputeModes(LinearModel* model);
 
 struct EquilibriumResult {
   OperatingPoint point;
-  int iterations = 0;
+  int iterations = 0;                // Newton iterations
+  long relaxation_steps = 0;         // steps of the relaxation when Newton stalled (equilibrium.cpp Relax)
   double residual = 0.0;             // max |u'_I| at the point found (acceleration units)
   std::vector<std::pair<std::string, double>> moved;  // (coordinate, change) beyond 1e-9
 };
 
 // Static equilibrium from `start`: Newton on the independent accelerations u'_I(xi_I) =
 // 0 with every free speed zero (a pseudo-inverse step: directions without stiffness
-// stay where they are). Status 2 when no equilibrium is found within the iterations.
+// stay where they are); when Newton stalls, a relaxation toward a potential minimum, then
+// Newton again. Status 2 when no equilibrium is found.
 Status FindEquilibrium(const rt::Program& program, const OperatingPoint& start, EquilibriumResult* out);
 
 }  // namespace kanesim::lin

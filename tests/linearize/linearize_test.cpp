@@ -134,6 +134,28 @@ equation
 end DP;
 )";
 
+TEST(Linearize, ChainEquilibriumAfterNewtonStallsIsTheHangingOne) {
+  // If this fails, the relaxation that takes over when Newton stalls (a 10-link spatial
+  // chain bent 0.1 rad at every joint, nearly horizontal) does not reach the hanging
+  // chain: potential -m g L sum(i - 1/2) = -245.25 J (m = 1, L = 0.5), every eigenvalue
+  // on the imaginary axis.
+  auto l = LoadModel(kRoot + "/examples/chain.mech");
+  ASSERT_TRUE(l && l->prog);
+  lin::EquilibriumResult eq;
+  const lin::Status s = lin::FindEquilibrium(*l->prog, lin::StartPoint(*l->prog), &eq);
+  ASSERT_TRUE(s.ok()) << s.message;
+  EXPECT_GT(eq.relaxation_steps, 0);
+  std::string err;
+  auto plan = rt::PlanSignals(*l->prog, {"potential_energy"}, &err);
+  ASSERT_TRUE(plan) << err;
+  auto ws = rt::MakeWorkspace(*l->prog);
+  double V = 0.0;
+  ASSERT_EQ(rt::EvalSignals(*l->prog, *plan, *ws, eq.point.t, eq.point.y.data(), &V), 0);
+  EXPECT_NEAR(V, -kG * 0.5 * 50, 1e-9);
+  const lin::LinearModel m = LinearizeAt(*l->prog, eq.point);
+  for (const lin::Mode& md : m.modes) EXPECT_NEAR(md.lambda.real(), 0.0, 1e-6);
+}
+
 TEST(Linearize, DoublePendulumMatchesTheTwoByTwoGeneralizedEigenproblem) {
   // If this fails, coupled inertia or gravity stiffness is linearized wrongly.
   auto l = LoadModel(kDoublePendulum, {}, {}, true);
