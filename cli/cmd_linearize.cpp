@@ -290,6 +290,14 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
 }
 
 int RunLinearize(const LinearizeArgs& a) {
+  // An output is never an input: refused before any work.
+  if (!a.out_path.empty() && a.out_path != "-") {
+    if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing there would destroy it\n", a.out_path,
+                 in);
+      return kExitModelError;
+    }
+  }
   flat::Mechanism mech;
   if (!LoadModel(a.load, &mech)) return kExitModelError;
   rt::CompileOptions co;
