@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <new>
 
+#include "cli/cmd_linearize.h"
 #include "cli/common.h"
 
 int main(int argc, char** argv) {
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
   kanesim::cli::AddRunCommand(app, &exit_code);
   kanesim::cli::AddSweepCommand(app, &exit_code);
   kanesim::cli::AddTestCommand(app, &exit_code);
+  kanesim::cli::AddLinearizeCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

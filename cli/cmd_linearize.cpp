@@ -1,0 +1,369 @@
+// `kanesim linearize FILE`: the linear state-space model about an operating point, its
+// eigenvalues and modes (runtime/linearize, docs/linearize.md); `--sweep` a root locus.
+#include "cli/cmd_linearize.h"
+
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+#include <fmt/ranges.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli/common.h"
+#include "cli/number_options.h"
+#include "runtime/batch/file_guard.h"
+#include "runtime/flat/number.h"
+#include "runtime/linearize/linearize.h"
+#include "runtime/program.h"
+
+namespace kanesim::cli {
+
+namespace {
+
+struct LinearizeArgs {
+  LoadOptions load;
+  std::string out_path;
+  std::string solver = "auto";
+  double at = 0.0;
+  CLI::Option* at_opt = nullptr;
+  bool equilibrium = false;
+  std::vector<std::string> inputs, outputs;
+  double step = 1e-3;
+  std::string sweep;
+};
+
+// Numbers in JSON: 17 significant digits (round-trip), null for a non-finite value.
+std::string Num(double x) { return std::isfinite(x) ? fmt::format("{:.17g}", x) : "null"; }
+
+std::string Str(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      o += fmt::format("\\u{:04x}", c);
+      continue;
+    }
+    o += c;
+  }
+  return o + "\"";
+}
+
+std::string Names(const std::vector<std::string>& v) {
+  std::string o = "[";
+  for (size_t i = 0; i < v.size(); ++i) o += (i ? ", " : "") + Str(v[i]);
+  return o + "]";
+}
+
+std::string Matrix(const Eigen::MatrixXd& m) {
+  std::string o = "[";
+  for (int i = 0; i < m.rows(); ++i) {
+    o += i ? ",\n    [" : "\n    [";
+    for (int j = 0; j < m.cols(); ++j) o += (j ? ", " : "") + Num(m(i, j));
+    o += "]";
+  }
+  return o + (m.rows() ? "\n  ]" : "]");
+}
+
+std::string Json(const lin::LinearModel& m, const lin::OperatingPoint& op) {
+  std::string o = "{\n";
+  o += "  \"states\": " + Names(m.states) + ",\n";
+  o += fmt::format("  \"n_coordinates\": {},\n", m.n_coords);
+  o += "  \"inputs\": " + Names(m.inputs) + ",\n";
+  o += "  \"outputs\": " + Names(m.outputs) + ",\n";
+  o += "  \"time\": " + Num(op.t) + ",\n";
+  o += "  \"A\": " + Matrix(m.A) + ",\n";
+  o += "  \"B\": " + Matrix(m.B) + ",\n";
+  o += "  \"C\": " + Matrix(m.C) + ",\n";
+  o += "  \"D\": " + Matrix(m.D) + ",\n";
+  o += "  \"eigenvalues\": [";
+  for (size_t k = 0; k < m.modes.size(); ++k)
+    o += (k ? ", " : "") + fmt::format("[{}, {}]", Num(m.modes[k].lambda.real()), Num(m.modes[k].lambda.imag()));
+  o += "],\n  \"modes\": [";
+  for (size_t k = 0; k < m.modes.size(); ++k) {
+    const lin::Mode& md = m.modes[k];
+    o += k ? ",\n    {" : "\n    {";
+    o += fmt::format("\"eigenvalue\": [{}, {}], \"natural_frequency\": {}, \"frequency_hz\": {}, \"damping_ratio\": {}, ",
+                     Num(md.lambda.real()), Num(md.lambda.imag()), Num(md.omega_n), Num(md.freq_hz), Num(md.zeta));
+    o += "\"dominant\": [";
+    for (size_t i = 0; i < md.dominant.size(); ++i)
+      o += (i ? ", " : "") + fmt::format("[{}, {}]", Str(md.dominant[i].first), Num(md.dominant[i].second));
+    o += "], \"shape\": [";
+    for (int i = 0; i < md.shape.size(); ++i)
+      o += (i ? ", " : "") + fmt::format("[{}, {}]", Num(md.shape[i].real()), Num(md.shape[i].imag()));
+    o += "]}";
+  }
+  o += m.modes.empty() ? "],\n" : "\n  ],\n";
+  o += "  \"ignorable\": " + Names(m.ignorable) + ",\n";
+  o += fmt::format("  \"accuracy\": {{\"step\": {}, \"A\": {}, \"BCD\": {}, \"unsteady\": {}}}\n", Num(m.h),
+                   Num(m.error_A), Num(m.error_BCD), Num(m.unsteady));
+  return o + "}\n";
+}
+
+// The printed report: states, accuracy, eigenvalues with frequency, damping and the
+// dominant coordinates, the ignorable coordinates.
+void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
+  const int nc = m.n_coords, n = static_cast<int>(m.states.size());
+  fmt::print("states      {} coordinate(s), {} speed(s) at t = {}\n", nc, n - nc, op.t);
+  if (n == 0) {
+    fmt::print("  none: constraints and prescribed motions fix every coordinate (0 degrees of freedom); nothing to "
+               "linearize\n");
+    return;
+  }
+  for (int i = 0; i < n; ++i) fmt::print("  x{:<3} {}\n", i + 1, m.states[static_cast<size_t>(i)]);
+  if (!m.inputs.empty()) fmt::print("inputs      {}\n", fmt::join(m.inputs, ", "));
+  if (!m.outputs.empty()) fmt::print("outputs     {}\n", fmt::join(m.outputs, ", "));
+  fmt::print("accuracy    A to {:.1e} relative (central differences, Richardson over h = {:g}, h/2, h/4)", m.error_A,
+             m.h);
+  if (!m.inputs.empty() || !m.outputs.empty()) fmt::print("; B, C, D to {:.1e}", m.error_BCD);
+  fmt::print("\n");
+  fmt::print("eigenvalues (sorted by modulus)\n");
+  fmt::print("  {:>3}  {:>14} {:>14}  {:>11} {:>9}  {}\n", "#", "real [1/s]", "imag [rad/s]", "freq [Hz]", "damping",
+             "dominant coordinates");
+  for (size_t k = 0; k < m.modes.size(); ++k) {
+    const lin::Mode& md = m.modes[k];
+    std::string dom;
+    for (const auto& [name, w] : md.dominant) dom += (dom.empty() ? "" : ", ") + fmt::format("{} {:.2f}", name, w);
+    if (md.omega_n == 0) dom = "(zero: an ignorable or neutral direction)";
+    const std::string damping = md.omega_n > 0 ? fmt::format("{:9.4f}", md.zeta) : fmt::format("{:>9}", "-");
+    fmt::print("  {:>3}  {:>14.7g} {:>14.7g}  {:>11.5g} {}  {}\n", k + 1, md.lambda.real(), md.lambda.imag(),
+               md.freq_hz, damping, dom);
+  }
+  if (!m.ignorable.empty())
+    fmt::print("ignorable   {} (zero eigenvalues: no other state reads them)\n", fmt::join(m.ignorable, ", "));
+  double rmax = -INFINITY;
+  for (const lin::Mode& md : m.modes) rmax = std::max(rmax, md.lambda.real());
+  if (!m.modes.empty())
+    fmt::print("stability   {} (largest real part {:.3g})\n",
+               rmax > 1e-9 ? "unstable" : (rmax < -1e-9 ? "asymptotically stable" : "marginal (no growing mode)"),
+               rmax);
+}
+
+bool OpenOutput(const LinearizeArgs& a, batch::FileLock* lock, std::FILE** out) {
+  if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
+    fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing there would destroy it\n", a.out_path, in);
+    return false;
+  }
+  std::string lock_error;
+  std::error_code ec;
+  const auto status = std::filesystem::status(a.out_path, ec);
+  if ((ec || std::filesystem::is_regular_file(status) || !std::filesystem::exists(status)) &&
+      !lock->Acquire(a.out_path, "'" + a.out_path + "'", &lock_error)) {
+    fmt::print(stderr, "kanesim: error: {}\n", lock_error);
+    return false;
+  }
+  *out = std::fopen(a.out_path.c_str(), "w");
+  if (!*out) {
+    fmt::print(stderr, "kanesim: error: cannot open '{}' for writing\n", a.out_path);
+    return false;
+  }
+  return true;
+}
+
+int Fail(const lin::Status& s) {
+  fmt::print(stderr, "kanesim linearize: {}: {}\n", s.code == 1 ? "error" : "numerical failure", s.message);
+  return s.code == 1 ? kExitModelError : kExitNumerical;
+}
+
+// The operating point per the options: start values, the motion at --at, or an
+// equilibrium found from the start values (reported).
+lin::Status OperatingPointFor(const rt::Program& p, const LinearizeArgs& a, bool report, lin::OperatingPoint* op) {
+  if (a.equilibrium) {
+    lin::EquilibriumResult eq;
+    lin::OperatingPoint start = lin::StartPoint(p);
+    if (a.at_opt->count() > 0)
+      if (lin::Status s = lin::PointAtTime(p, a.at, &start); !s.ok()) return s;
+    if (lin::Status s = lin::FindEquilibrium(p, start, &eq); !s.ok()) return s;
+    *op = eq.point;
+    if (report) {
+      fmt::print("equilibrium found in {} Newton iteration(s){}, residual {:.2e} (largest acceleration)\n",
+                 eq.iterations,
+                 eq.relaxation_steps > 0
+                     ? fmt::format(" (Newton stalled: {} relaxation steps toward a potential minimum first)",
+                                   eq.relaxation_steps)
+                     : "",
+                 eq.residual);
+      if (eq.moved.empty()) fmt::print("  the start values are an equilibrium: nothing moved\n");
+      for (const auto& [name, d] : eq.moved) fmt::print("  moved  {:<24} {:+.10g}\n", name, d);
+    }
+    return {};
+  }
+  if (a.at_opt->count() > 0) return lin::PointAtTime(p, a.at, op);
+  *op = lin::StartPoint(p);
+  return {};
+}
+
+// --sweep NAME=A:STEP:B into its parts.
+bool ParseSweep(const std::string& text, std::string* name, std::vector<double>* values, std::string* why) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    *why = "--sweep needs NAME=FROM:STEP:TO, e.g. v=0:0.1:10";
+    return false;
+  }
+  *name = text.substr(0, eq);
+  std::string rest = text.substr(eq + 1);
+  double v[3];
+  for (int k = 0; k < 3; ++k) {
+    const size_t c = rest.find(':');
+    if ((k < 2) == (c == std::string::npos)) {
+      *why = "--sweep needs NAME=FROM:STEP:TO, e.g. v=0:0.1:10";
+      return false;
+    }
+    if (!flat::ParseNumber(rest.substr(0, c), &v[k], why)) return false;
+    rest = c == std::string::npos ? "" : rest.substr(c + 1);
+  }
+  if (!(v[1] > 0) || v[2] < v[0]) {
+    *why = "--sweep: STEP must be positive and TO not below FROM";
+    return false;
+  }
+  const double count = std::floor((v[2] - v[0]) / v[1] * (1 + 1e-12)) + 1;
+  if (count > 100000) {
+    *why = "--sweep: more than 100000 values";
+    return false;
+  }
+  for (long i = 0; i < static_cast<long>(count); ++i) values->push_back(v[0] + static_cast<double>(i) * v[1]);
+  return true;
+}
+
+// Root locus: one row per value, the eigenvalues sorted by modulus (re, im pairs).
+int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
+  std::string name, why;
+  std::vector<double> values;
+  if (!ParseSweep(a.sweep, &name, &values, &why)) {
+    fmt::print(stderr, "kanesim: error: {}\n", why);
+    return kExitModelError;
+  }
+  lin::LinearizeOptions o;
+  o.step = a.step;
+  std::vector<std::vector<std::complex<double>>> rows;
+  std::vector<double> unsteady;
+  for (double v : values) {
+    std::shared_ptr<const rt::Program> p;
+    if (lin::Status s = lin::RebindParameter(program, name, v, &p); !s.ok()) return Fail(s);
+    lin::OperatingPoint op;
+    lin::LinearModel m;
+    lin::Status s = OperatingPointFor(*p, a, false, &op);
+    if (s.ok()) s = lin::Linearize(*p, op, o, &m);
+    if (s.ok()) lin::ComputeModes(&m);
+    if (!s.ok()) {
+      s.message = fmt::format("{} = {}: {}", name, v, s.message);
+      return Fail(s);
+    }
+    std::vector<std::complex<double>> ev;
+    for (const lin::Mode& md : m.modes) ev.push_back(md.lambda);
+    rows.push_back(ev);
+    unsteady.push_back(m.unsteady);
+  }
+  const size_t n = rows.empty() ? 0 : rows.front().size();
+  std::FILE* out = stdout;
+  batch::FileLock lock;
+  if (!a.out_path.empty() && a.out_path != "-" && !OpenOutput(a, &lock, &out)) return kExitModelError;
+  fmt::print(out, "{}", name);
+  for (size_t k = 0; k < n; ++k) fmt::print(out, ",lambda{}.re,lambda{}.im", k + 1, k + 1);
+  fmt::print(out, ",max_real\n");
+  bool warned = false;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    fmt::print(out, "{}", Num(values[r]));
+    double rmax = -INFINITY;
+    for (const auto& e : rows[r]) {
+      fmt::print(out, ",{},{}", Num(e.real()), Num(e.imag()));
+      rmax = std::max(rmax, e.real());
+    }
+    fmt::print(out, ",{}\n", Num(rmax));
+    if (unsteady[r] > 1e-6 && !warned) {
+      fmt::print(stderr,
+                 "kanesim linearize: warning: at {} = {} the operating point is neither an equilibrium nor a steady "
+                 "motion in these coordinates (A changes by {:.1e} along the motion): the eigenvalues are those of a "
+                 "frozen instant (docs/linearize.md, \"Steady motions\")\n",
+                 name, values[r], unsteady[r]);
+      warned = true;
+    }
+  }
+  if (out != stdout && std::fclose(out) != 0) {
+    fmt::print(stderr, "kanesim: error: cannot write '{}'\n", a.out_path);
+    return kExitModelError;
+  }
+  return kExitOk;
+}
+
+int RunLinearize(const LinearizeArgs& a) {
+  // An output is never an input: refused before any work.
+  if (!a.out_path.empty() && a.out_path != "-") {
+    if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing there would destroy it\n", a.out_path,
+                 in);
+      return kExitModelError;
+    }
+  }
+  flat::Mechanism mech;
+  if (!LoadModel(a.load, &mech)) return kExitModelError;
+  rt::CompileOptions co;
+  if (a.solver == "dense") co.solver = rt::SolverPath::Dense;
+  if (a.solver == "sparse") co.solver = rt::SolverPath::Sparse;
+  if (a.solver == "recursive") co.solver = rt::SolverPath::Recursive;
+  rt::CompileResult cr;
+  if (!CompileModel(mech, co, &cr)) return kExitModelError;
+  const rt::Program& program = *cr.program;
+  if (!(a.step > 0) || a.step > 0.1) {
+    fmt::print(stderr, "kanesim: error: --step must be in (0, 0.1]\n");
+    return kExitModelError;
+  }
+  if (!a.sweep.empty()) return RunSweep(program, a);
+
+  lin::OperatingPoint op;
+  if (lin::Status s = OperatingPointFor(program, a, true, &op); !s.ok()) return Fail(s);
+  lin::LinearizeOptions o;
+  o.step = a.step;
+  o.inputs = a.inputs;
+  o.outputs = a.outputs;
+  lin::LinearModel m;
+  if (lin::Status s = lin::Linearize(program, op, o, &m); !s.ok()) return Fail(s);
+  lin::ComputeModes(&m);
+  Print(m, op);
+  if (m.unsteady > 1e-6)
+    fmt::print(stderr,
+               "kanesim linearize: warning: the operating point is neither an equilibrium nor a steady motion in "
+               "these coordinates (A changes by {:.1e} relative along the motion): the eigenvalues are those of a "
+               "frozen instant, not stability exponents. Use --equilibrium, or coordinates that follow the motion's "
+               "symmetry (joint angles instead of a spinning quaternion; docs/linearize.md, \"Steady motions\")\n",
+               m.unsteady);
+  if (!a.out_path.empty()) {
+    std::FILE* out = nullptr;
+    batch::FileLock lock;
+    if (!OpenOutput(a, &lock, &out)) return kExitModelError;
+    const std::string text = Json(m, op);
+    const bool ok = std::fwrite(text.data(), 1, text.size(), out) == text.size();
+    if (std::fclose(out) != 0 || !ok) {
+      fmt::print(stderr, "kanesim: error: cannot write '{}'\n", a.out_path);
+      return kExitModelError;
+    }
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddLinearizeCommand(CLI::App& app, int* exit_code) {
+  auto a = std::make_shared<LinearizeArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "linearize", "Linear state-space model (A, B, C, D) about an operating point: eigenvalues, modes, root locus");
+  cmd->add_option("file", a->load.path, "The .mech file")->required();
+  cmd->add_option("-o,--out", a->out_path, "Write the model as JSON (with --sweep: the table as CSV)");
+  cmd->add_option("--model", a->load.model, "Model to linearize (default: the last one in the file)");
+  cmd->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
+  a->at_opt = AddNumberOption(cmd, "--at", &a->at, "Linearize about the motion at time T (default: the start values)");
+  cmd->add_flag("--equilibrium", a->equilibrium,
+                "Find a static equilibrium from the start values (or from --at) and linearize about it");
+  cmd->add_option("--input", a->inputs, "An input: JOINT.tau, JOINT.tau[k] or a real parameter (repeatable)")
+      ->allow_extra_args(false);
+  cmd->add_option("--output", a->outputs, "An output signal, by its exact name (repeatable)")->allow_extra_args(false);
+  AddNumberOption(cmd, "--step", &a->step, "Base difference step h (default 1e-3; speeds scale it by their size)");
+  cmd->add_option("--sweep", a->sweep, "Root locus: NAME=FROM:STEP:TO, one row of eigenvalues per value");
+  cmd->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
+  cmd->callback([a, exit_code] { *exit_code = RunLinearize(*a); });
+}
+
+}  // namespace kanesim::cli
