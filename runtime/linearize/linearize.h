@@ -26,6 +26,7 @@
 #include <complex>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/engine.h"
@@ -36,8 +37,13 @@ namespace kanesim::lin {
 // constraints); 2 numerical (singular configuration, no equilibrium found, a failing
 // evaluation). The CLI uses it as the exit code.
 struct Status {
+  Status() = default;
+  Status(int c, std::string m, std::string h = {}, flat::SourceLoc w = {})
+      : code(c), message(std::move(m)), hint(std::move(h)), where(std::move(w)) {}
   int code = 0;
   std::string message;
+  std::string hint;                  // what to do about it (may be empty)
+  flat::SourceLoc where;             // the loop or contact concerned (line 0: none)
   bool ok() const { return code == 0; }
 };
 

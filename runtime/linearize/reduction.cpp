@@ -44,6 +44,15 @@ rt::Mat3 RightJacobianInverse(const Vec3& v) {
   return rt::Mat3::Identity() + 0.5 * K + c * K * K;
 }
 
+// "loop 'cut'" or "contact 'c'", and where it is declared.
+std::string RowOwner(const rt::Program& p, const rt::ConstraintRow& row) {
+  return row.loop >= 0 ? "loop '" + p.loops[static_cast<size_t>(row.loop)].name + "'"
+                       : "contact '" + p.contacts[static_cast<size_t>(row.contact)].name + "'";
+}
+flat::SourceLoc RowLoc(const rt::Program& p, const rt::ConstraintRow& row) {
+  return row.loop >= 0 ? p.loops[static_cast<size_t>(row.loop)].loc : p.contacts[static_cast<size_t>(row.contact)].loc;
+}
+
 bool Holonomic(rt::RowKind k) {
   return k == rt::RowKind::Translation || k == rt::RowKind::Alignment || k == rt::RowKind::ContactNormal;
 }
@@ -101,10 +110,10 @@ Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_
     const double err = phi0.cwiseAbs().maxCoeff(&worst);
     if (err > 1e-7 * length_) {
       const rt::ConstraintRow& row = p.rows[static_cast<size_t>(hol_rows_[static_cast<size_t>(worst)])];
-      const std::string who = row.loop >= 0 ? "loop '" + p.loops[static_cast<size_t>(row.loop)].name + "'"
-                                            : "contact '" + p.contacts[static_cast<size_t>(row.contact)].name + "'";
-      return {1, fmt::format("the operating point violates the position constraint {} ({}) by {:.3g}", who,
-                             row.what, err)};
+      return {1,
+              fmt::format("the operating point violates the position constraint {} ({}) by {:.3g}", RowOwner(p, row),
+                          row.what, err),
+              "linearize about the start values as assembled, or a state of the motion (--at T)", RowLoc(p, row)};
     }
   }
 
@@ -160,9 +169,12 @@ Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_
     qr_all.setThreshold(1e-10);
     ru = static_cast<int>(qr_all.rank());
     if (ru < p.loop_rank)
-      return {2, fmt::format("singular configuration: the constraint Jacobian has rank {} here, {} at the assembled "
-                             "start (a dead point or a locked loop; the linear model would not be valid)",
-                             ru, p.loop_rank)};
+      return {2,
+              fmt::format("singular configuration: the constraint Jacobian has rank {} here, {} at the assembled "
+                          "start (a dead point or a locked loop; the linear model would not be valid)",
+                          ru, p.loop_rank),
+              "linearize about a configuration away from it (other start values, --at T)",
+              p.loops.empty() ? flat::SourceLoc{} : p.loops.front().loc};
     // The dependent coordinates' speeds first, when they are independent columns of A.
     std::vector<int> S;
     if (rq > 0) {
@@ -207,10 +219,11 @@ Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_
       for (int i = 0; i < nu; ++i) y0_[static_cast<size_t>(nq + i)] = u0_[i];
     } else if (Eigen::Index worst = 0; psi0.cwiseAbs().maxCoeff(&worst) > 1e-7 * vscale) {
       const rt::ConstraintRow& row = p.rows[static_cast<size_t>(worst)];
-      const std::string who = row.loop >= 0 ? "loop '" + p.loops[static_cast<size_t>(row.loop)].name + "'"
-                                            : "contact '" + p.contacts[static_cast<size_t>(row.contact)].name + "'";
-      return {1, fmt::format("the operating point violates the velocity constraint {} ({}) by {:.3g}", who,
-                             row.what, std::abs(psi0[worst]))};
+      return {1,
+              fmt::format("the operating point violates the velocity constraint {} ({}) by {:.3g}", RowOwner(p, row),
+                          row.what, std::abs(psi0[worst])),
+              "start speeds must satisfy the loops and rolling contacts (leave the dependent ones to the assembly)",
+              RowLoc(p, row)};
     }
   }
   return {};
