@@ -24,15 +24,6 @@ import kanesim
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def per_call(fn, repeat=7, number=200):
-    best = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        best.append((time.perf_counter() - t0) / number)
-    return min(best), statistics.median(best)
-
 
 def main():
     ap = argparse.ArgumentParser()
@@ -41,33 +32,40 @@ def main():
     args = ap.parse_args()
 
     m = kanesim.load(os.path.join(ROOT, "examples", "double_pendulum.mech"))
-    print("| what | per call (min / median) | sim::Simulate inside (stats) | overhead |")
+    print("| what | Model.run, per call | sim::Simulate inside it | overhead (the difference, per call) |")
     print("|---|---|---|---|")
     for label, kw in [("run, 1 row (stop_time = start)", dict(stop_time=0.0, interval=1.0)),
                       ("run, 1 row, outputs=['*.q']", dict(stop_time=0.0, interval=1.0, outputs=["*.q"])),
                       ("run, 501 rows x 4 (0.5 s of the double pendulum)", dict(stop_time=0.5, interval=0.001))]:
-        r = m.run(**kw)
-        inner = []
-        for _ in range(50):
-            s = m.run(**kw).stats
-            inner.append(s["simulate_seconds"])
-        cpp = min(inner)
-        lo, med = per_call(lambda: m.run(**kw), number=200 if len(r) < 10 else 50)
-        print(f"| {label} | {lo * 1e6:.1f} / {med * 1e6:.1f} µs | {cpp * 1e6:.1f} µs | {(lo - cpp) * 1e6:.1f} µs |")
+        total, inner, over = [], [], []
+        for _ in range(2000 if kw["stop_time"] == 0 else 300):
+            t0 = time.perf_counter()
+            r = m.run(**kw)
+            dt = time.perf_counter() - t0
+            total.append(dt)
+            inner.append(r.stats["simulate_seconds"])
+            over.append(dt - r.stats["simulate_seconds"])
+        f = lambda xs: f"{min(xs) * 1e6:.1f} / {statistics.median(xs) * 1e6:.1f} µs"
+        print(f"| {label} | {f(total)} | {f(inner)} | {f(over)} |")
+    print("(min / median over the calls)")
 
     model = os.path.join(ROOT, "examples", "spring_mass.mech")
     grid = {"k": [10 + 10 * i for i in range(20)], "mass": [1, 2, 3, 4, 5]}
     metrics = ["final:slider.q", "max:slider.q", "cross:slider.q=0"]
     sm = kanesim.load(model, set={"F0": 0})
-    times_py = []
-    for _ in range(3):
+    times_py, times_py_load = [], []
+    for _ in range(5):
         t0 = time.perf_counter()
         t = kanesim.sweep(sm, grid=grid, metrics=metrics, stop_time=3, threads=args.threads)
         times_py.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        kanesim.sweep(kanesim.load(model, set={"F0": 0}), grid=grid, metrics=metrics, stop_time=3,
+                      threads=args.threads)
+        times_py_load.append(time.perf_counter() - t0)
     assert t.failed == 0 and len(t) == 100
     times_cli = []
     with tempfile.TemporaryDirectory() as tmp:
-        for i in range(3):
+        for i in range(5):
             cmd = [args.kanesim, "sweep", model, "--set", "F0=0", "--grid", "k=10:10:200", "--grid", "mass=1:1:5",
                    "--stop-time", "3", "-j", str(args.threads), "-o", os.path.join(tmp, str(i)), "--no-progress"]
             for x in metrics:
@@ -76,9 +74,10 @@ def main():
             subprocess.run(cmd, check=True, capture_output=True)
             times_cli.append(time.perf_counter() - t0)
     print()
-    print(f"| sweep, 100 scenarios of spring_mass (3 s, 3 metrics), {args.threads} threads | min of 3 |")
+    print(f"| sweep, 100 scenarios of spring_mass (3 s, 3 metrics), {args.threads} threads | min of 5 |")
     print("|---|---|")
     print(f"| kanesim.sweep (model loaded before) | {min(times_py) * 1e3:.1f} ms |")
+    print(f"| kanesim.load + kanesim.sweep | {min(times_py_load) * 1e3:.1f} ms |")
     print(f"| kanesim sweep (process, load, files) | {min(times_cli) * 1e3:.1f} ms |")
 
 

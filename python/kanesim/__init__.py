@@ -81,7 +81,23 @@ def _set_list(values: Optional[Mapping[str, Any]]) -> List[str]:
         return []
     if not isinstance(values, Mapping):
         raise TypeError("set= takes a dict of parameter name -> value")
-    return [f"{name}={_value_text(v)}" for name, v in values.items()]
+    out = []
+    for name, v in values.items():
+        if not isinstance(name, str) or not name or "=" in name:
+            raise ValueError(f"set: {name!r} is not a parameter name")
+        out.append(f"{name}={_value_text(v)}")
+    return out
+
+
+def _choice(value: str, name: str, allowed: Sequence[str]) -> str:
+    if value not in allowed:
+        raise ValueError(f"{name}={value!r}: unknown ({', '.join(allowed)})")
+    return value
+
+
+_SOLVERS = ("auto", "dense", "sparse", "recursive")
+_INTEGRATORS = ("auto", "ida", "cvode", "cvode-bdf", "arkode", "dop853")
+_REACTIONS = ("nan", "min-norm")
 
 
 def _time(x: Optional[float], name: str) -> float:
@@ -242,8 +258,9 @@ def load(path, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = N
     """Loads, elaborates and compiles a .mech file. set: parameter values as --set takes
     them ({"N": 20, "world.g": [0, 0, -9.81], "flag": True}); model: the model to
     elaborate (default: the last in the file). Raises ModelError."""
-    args = dict(path=os.fspath(path), text="", from_text=False, model=model, solver=solver, integrator=integrator,
-                reactions=reactions)
+    args = dict(path=os.fspath(path), text="", from_text=False, model=model,
+                solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
+                reactions=_choice(reactions, "reactions", _REACTIONS))
     return _load(args, dict(set or {}))
 
 
@@ -251,8 +268,11 @@ def loads(text: str, set: Optional[Mapping[str, Any]] = None, model: Optional[st
           name: str = "<string>.mech", solver: str = "auto", integrator: str = "auto",
           reactions: str = "nan") -> Model:
     """Like load(), from the model's text; diagnostics name it `name`."""
-    args = dict(path=name, text=text, from_text=True, model=model, solver=solver, integrator=integrator,
-                reactions=reactions)
+    if not isinstance(text, str):
+        raise TypeError("loads() takes the model's text as a str")
+    args = dict(path=name, text=text, from_text=True, model=model,
+                solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
+                reactions=_choice(reactions, "reactions", _REACTIONS))
     return _load(args, dict(set or {}))
 
 
@@ -303,7 +323,10 @@ def _columns(arg, what: str):
     for name, values in arg.items():
         if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
             values = [values]
-        out.append((str(name), [float(v) for v in values]))
+        values = [float(v) for v in values]
+        if any(math.isnan(v) for v in values):
+            raise ValueError(f"{what}: {name!r} has a NaN (leave a parameter out to keep the model's value)")
+        out.append((str(name), values))
     return out
 
 

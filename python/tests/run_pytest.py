@@ -28,6 +28,16 @@ if venv:
     if not where.startswith(os.path.realpath(venv) + os.sep):
         print(f"python.installed: kanesim imported from {where}, not from {venv}")
         sys.exit(1)
+    # Older than this tree's package or build/'s module: the install is stale (rerun
+    # scripts/pip_install.sh; scripts/test.sh always does) and is not what to test.
+    here = os.path.dirname(os.path.abspath(__file__))
+    newer = [os.path.join(here, "..", "kanesim", "__init__.py")]
+    build_pkg = os.path.join(os.path.dirname(venv), "python", "kanesim")
+    if os.path.isdir(build_pkg):
+        newer += [os.path.join(build_pkg, f) for f in os.listdir(build_pkg) if f.startswith("_kanesim")]
+    if any(os.path.getmtime(f) > os.path.getmtime(where) for f in newer if os.path.exists(f)):
+        print(f"python.installed skipped: {where} is older than the tree's package (scripts/pip_install.sh)")
+        sys.exit(77)
     print(f"testing the installed package {os.path.dirname(where)}")
 
 sys.exit(pytest.main(["-q", "-p", "no:cacheprovider", *sys.argv[1:]]))

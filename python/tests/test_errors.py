@@ -75,3 +75,18 @@ def test_numerical_failure_keeps_the_rows(source_dir):
     r = err.result
     assert 5 <= len(r) <= 6 and np.all(r.time < err.time + 1e-12)
     assert np.all(np.isfinite(r.values))
+
+
+def test_names_and_choices_are_checked(examples):
+    path = examples / "spring_mass.mech"
+    with pytest.raises(ValueError, match="solver"):
+        kanesim.load(path, solver="bogus")
+    with pytest.raises(ValueError, match="not a parameter name"):
+        kanesim.load(path, set={"k=1": 2})
+    with pytest.raises(ValueError, match="NaN"):
+        kanesim.sweep(kanesim.load(path), grid={"k": [float("nan"), 1.0]})
+    with pytest.raises(kanesim.ModelError) as e:
+        kanesim.loads("model M\0 end M;")
+    assert e.value.code == "L001" and e.value.line == 1
+    with pytest.raises(kanesim.ModelError, match="directory"):
+        kanesim.load(examples)
