@@ -164,7 +164,7 @@ namespace {
 // Rows into one contiguous buffer.
 class BufferSink final : public sim::SignalSink {
  public:
-  explicit BufferSink(RunOutput* out) : out_(out) {}
+  BufferSink(RunOutput* out, const std::function<bool()>& interrupted) : out_(out), interrupted_(interrupted) {}
   bool Begin(const std::vector<std::string>& names) override {
     out_->columns = names;
     return true;
@@ -172,24 +172,38 @@ class BufferSink final : public sim::SignalSink {
   bool Row(double t, const double* values, size_t count) override {
     out_->time.push_back(t);
     out_->values.insert(out_->values.end(), values, values + count);
+    if (interrupted_) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_poll_ >= std::chrono::milliseconds(100)) {
+        last_poll_ = now;
+        if (interrupted_()) {
+          out_->interrupted = true;
+          return false;  // Simulate stops: "cannot write the output", read as the interruption
+        }
+      }
+    }
     return true;
   }
 
  private:
   RunOutput* out_;
+  const std::function<bool()>& interrupted_;
+  std::chrono::steady_clock::time_point last_poll_ = std::chrono::steady_clock::now();
 };
 }  // namespace
 
-bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutput* out, std::string* error) {
+bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutput* out, std::string* error,
+              const std::function<bool()>& interrupted) {
   const sim::OutputGrid grid = sim::ResolveGrid(*model.program, options);
   const long rows = grid.Count();
   out->time.reserve(static_cast<size_t>(rows));
   if (!options.signals.empty()) out->values.reserve(static_cast<size_t>(rows) * options.signals.size());
-  BufferSink sink(out);
+  BufferSink sink(out, interrupted);
   const auto t0 = std::chrono::steady_clock::now();
   const sim::SimResult result = sim::Simulate(*model.program, options, sink);
   out->simulate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out->stats = result.stats;
+  if (out->interrupted) return true;
   switch (result.status) {
     case sim::SimResult::Status::kOk: return true;
     case sim::SimResult::Status::kUsageError:
@@ -355,18 +369,21 @@ bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* ou
   threads = std::min<unsigned>(threads, static_cast<unsigned>(std::max<size_t>(1, config.scenarios.size())));
   std::atomic<size_t> next{0};
   std::atomic<int> failed{0};
-  auto work = [&] {
-    for (size_t i = next++; i < config.scenarios.size(); i = next++) {
+  std::atomic<bool> stop{false};
+  auto work = [&](bool poll) {
+    for (size_t i = next++; i < config.scenarios.size() && !stop; i = next++) {
       bool f = false;
       out->lines[i] = runner.Run(config.scenarios[i], &f);
       if (f) ++failed;
+      if (poll && request.interrupted && request.interrupted()) stop = true;
     }
   };
   std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work, false);
+  work(true);
   for (std::thread& t : pool) t.join();
   out->failed = failed.load();
+  out->interrupted = stop.load();
   return true;
 }
 

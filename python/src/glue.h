@@ -5,6 +5,7 @@
 // pipeline API (runtime/pipeline/, when it lands) by changing Load and ResolveRun only.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -80,12 +81,16 @@ struct RunOutput {
   std::string message;         // the cause of the failure
   sim::SimStats stats;
   double simulate_seconds = 0.0;  // wall time of sim::Simulate (the C++ run, setup included)
+  bool interrupted = false;       // `interrupted` said stop (Ctrl-C): the rows so far are kept
 };
 
 // Simulates; thread-safe for one model from many threads (the program is immutable,
 // every run owns its workspace). False with a usage message; a numerical failure
-// returns true with out->failed set.
-bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutput* out, std::string* error);
+// returns true with out->failed set. `interrupted`, when given, is asked at an output row at
+// most every 0.1 s whether to stop (the bindings check Python's signals there); a stop
+// returns true with out->interrupted set.
+bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutput* out, std::string* error,
+              const std::function<bool()>& interrupted = {});
 
 // The facts of `kanesim check`, as (key, value) trees for a Python dict.
 struct Value;
@@ -104,11 +109,15 @@ struct SweepRequest {
   std::vector<std::string> metrics;  // "final:j.q", "cross:x.q=0", ...
   RunRequest run;
   int threads = 0;  // 0: all cores
+  // Asked by the calling thread between its scenarios whether to stop (Ctrl-C); the
+  // scenarios running then finish, no new one starts, and Sweep sets out->interrupted.
+  std::function<bool()> interrupted;
 };
 struct SweepTable {
   std::string header;              // the summary.csv header of `kanesim sweep`
   std::vector<std::string> lines;  // one per scenario, by id
   int failed = 0;
+  bool interrupted = false;
 };
 bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* out, std::string* error);
 

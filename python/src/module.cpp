@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 
 #include "python/src/glue.h"
 #include "runtime/sim/integrator.h"
@@ -100,10 +101,17 @@ py::tuple Run(const LoadedModel& model, double start_time, double stop_time, dou
   if (!kanesim::py::ResolveRun(model, r, &so, &warnings, &error)) throw py::value_error(error);
   kanesim::py::RunOutput out;
   bool ok = false;
+  // Ctrl-C: Python's signal handlers run when asked (PyErr_CheckSignals, with the GIL); a
+  // KeyboardInterrupt they raise stops the run and is raised here.
+  const std::function<bool()> interrupted = [] {
+    py::gil_scoped_acquire gil;
+    return PyErr_CheckSignals() != 0;
+  };
   {
     py::gil_scoped_release release;
-    ok = kanesim::py::Simulate(model, so, &out, &error);
+    ok = kanesim::py::Simulate(model, so, &out, &error, interrupted);
   }
+  if (out.interrupted) throw py::error_already_set();
   if (!ok) throw py::value_error(error);
   const auto n = static_cast<py::ssize_t>(out.time.size());
   const auto m = static_cast<py::ssize_t>(out.columns.size());
@@ -133,6 +141,10 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
   req.run.rtol = rtol;
   req.run.atol = atol;
   req.run.integrator = integrator;
+  req.interrupted = [] {
+    py::gil_scoped_acquire gil;
+    return PyErr_CheckSignals() != 0;
+  };
   kanesim::py::SweepTable table;
   std::string error;
   bool ok = false;
@@ -140,6 +152,7 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
     py::gil_scoped_release release;
     ok = kanesim::py::Sweep(model, req, &table, &error);
   }
+  if (table.interrupted) throw py::error_already_set();
   if (!ok) throw py::value_error(error);
   return py::make_tuple(table.header, table.lines, table.failed);
 }

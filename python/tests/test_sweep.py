@@ -64,3 +64,20 @@ def test_sweep_failed_scenarios_are_rows(source_dir):
     t = kanesim.sweep(m, grid={"rod.m": [1, 2]}, metrics=["final:hinge.q"])
     assert t.failed == 2 and t["status"] == ["failed", "failed"]
     assert np.all((t["fail_time"] >= 0.5) & (t["fail_time"] <= 0.6))
+
+
+def test_ctrl_c_stops_a_sweep(examples):
+    import _thread
+    import threading
+    import time
+
+    m = kanesim.load(examples / "spring_mass.mech")
+    timer = threading.Timer(0.2, _thread.interrupt_main)
+    t0 = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            kanesim.sweep(m, grid={"k": list(range(1, 20001))}, stop_time=10, threads=2)  # ~ a minute in all
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - t0 < 5

@@ -3,6 +3,7 @@ import threading
 import time
 
 import numpy as np
+import pytest
 
 import kanesim
 
@@ -59,3 +60,24 @@ def test_the_gil_is_released_while_integrating(examples):
         time.sleep(0)
     th.join()
     assert count > 100, f"the main thread ran {count} times during a {seconds[0]:.3f} s run"
+
+
+def test_ctrl_c_stops_a_long_run(examples):
+    # SIGINT's flag raised from a timer (as Ctrl-C does) while a run of several seconds
+    # integrates: the run stops within a poll (0.1 s) and raises KeyboardInterrupt.
+    import _thread
+
+    m = kanesim.load(examples / "chain.mech", set={"N": 20})
+    t0 = time.perf_counter()
+    m.run(stop_time=20, interval=0.01)
+    full = (time.perf_counter() - t0) * 50  # stop_time=1000 below
+    timer = threading.Timer(0.2, _thread.interrupt_main)
+    t0 = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            m.run(stop_time=1000, interval=0.01)
+    finally:
+        timer.cancel()
+    elapsed = time.perf_counter() - t0
+    assert elapsed < max(0.2 + 1.0, 0.5 * full), (elapsed, full)
