@@ -9,7 +9,9 @@ pkgs=(build-essential cmake ninja-build pkg-config git
       openmpi-bin libopenmpi-dev  # OpenMPI: kanesim sweep --mpi (optional at build time)
       libcpp-httplib-dev          # the viewer's HTTP server (runtime/viz)
       libjs-three libjs-dygraphs  # the viewer page's libraries, read at run time
-      chromium)                   # the viewer's browser tests (headless, tests/viz)
+      chromium                    # the viewer's browser tests (headless, tests/viz)
+      ccache                      # scripts/test.sh: the pip build reuses build/'s objects
+      pybind11-dev python3-dev python3-numpy python3-pytest)  # the Python module (python/)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

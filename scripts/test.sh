@@ -8,6 +8,16 @@ cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build}
 scripts/setup.sh  # installs only what is missing (a no-op on a prepared machine)
 jobs=${JOBS:-$(nproc)}
-cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
+# ccache when present (scripts/setup.sh installs it): the pip build below reuses the objects.
+launcher=()
+if command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@"
 cmake --build "$build_dir" -j"$jobs"
+# `pip install .` into $build_dir/pyvenv when this build has the Python module (not under
+# the sanitizers); ctest's python.installed runs pytest on the installed package.
+if compgen -G "$build_dir/python/kanesim/_kanesim*.so" >/dev/null; then
+  BUILD_DIR="$build_dir" scripts/pip_install.sh
+fi
 ctest --test-dir "$build_dir" --output-on-failure -j"$jobs"

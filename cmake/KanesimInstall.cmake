@@ -1,0 +1,26 @@
+# `cmake --install build --prefix PREFIX`: the kanesim command, its documentation and the
+# examples, in the GNU layout:
+#   PREFIX/bin/kanesim                       (the standard library is embedded)
+#   PREFIX/share/doc/kanesim/README.md, *.md, images/
+#   PREFIX/share/doc/kanesim/examples/*.mech
+# The Python module is not part of it (component `python`, installed by pip).
+include(GNUInstallDirs)
+# The binary keeps the run path of the libraries it was linked with outside the build tree
+# (OpenMPI's libmpi lives in a directory of its own) and is installed as built: no run path
+# to rewrite (CMake's rewrite fails on the build's "dir:" form of it).
+set_target_properties(kanesim PROPERTIES BUILD_WITH_INSTALL_RPATH ON INSTALL_RPATH_USE_LINK_PATH ON)
+install(TARGETS kanesim RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT cli)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT docs)
+file(GLOB KANESIM_DOC_PAGES ${PROJECT_SOURCE_DIR}/docs/*.md)
+install(FILES ${KANESIM_DOC_PAGES} DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT docs)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/images DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT docs)
+file(GLOB KANESIM_EXAMPLE_FILES ${PROJECT_SOURCE_DIR}/examples/*.mech)
+install(FILES ${KANESIM_EXAMPLE_FILES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples COMPONENT examples)
+
+if(KANESIM_BUILD_TESTS)
+  # Installs this build into a fresh temporary prefix and runs an example from there.
+  add_test(NAME install.prefix
+           COMMAND ${CMAKE_COMMAND} -DBUILD=${CMAKE_BINARY_DIR} -DPREFIX=${CMAKE_BINARY_DIR}/install-test
+                   -DDOCDIR=${CMAKE_INSTALL_DOCDIR} -DBINDIR=${CMAKE_INSTALL_BINDIR}
+                   -P ${PROJECT_SOURCE_DIR}/cmake/install_test.cmake)
+endif()

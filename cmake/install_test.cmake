@@ -1,0 +1,35 @@
+# ctest install.prefix: `cmake --install BUILD --prefix PREFIX` into an empty PREFIX, then
+# the installed kanesim runs an installed example from a directory outside the source and
+# build trees, and its first row is the example's initial state.
+file(REMOVE_RECURSE ${PREFIX})
+execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD} --prefix ${PREFIX} RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "cmake --install failed (${rc}):\n${out}\n${err}")
+endif()
+foreach(f ${BINDIR}/kanesim ${DOCDIR}/README.md ${DOCDIR}/language.md ${DOCDIR}/python.md
+          ${DOCDIR}/examples/double_pendulum.mech)
+  if(NOT EXISTS ${PREFIX}/${f})
+    message(FATAL_ERROR "not installed: ${PREFIX}/${f}")
+  endif()
+endforeach()
+if(EXISTS ${PREFIX}/kanesim OR EXISTS ${PREFIX}/lib/kanesim)
+  message(FATAL_ERROR "the Python module was installed by cmake --install (it is pip's)")
+endif()
+set(work ${PREFIX}/work)
+file(MAKE_DIRECTORY ${work})
+execute_process(COMMAND ${PREFIX}/${BINDIR}/kanesim run ${PREFIX}/${DOCDIR}/examples/double_pendulum.mech
+                        --stop-time 0.1 -o out.csv
+                WORKING_DIRECTORY ${work} RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the installed kanesim failed (${rc}):\n${err}")
+endif()
+file(STRINGS ${work}/out.csv lines)
+list(LENGTH lines n)
+list(GET lines 0 header)
+list(GET lines 1 first)
+if(NOT n EQUAL 12 OR NOT header STREQUAL "time,shoulder.q,shoulder.u,elbow.q,elbow.u"
+   OR NOT first STREQUAL "0,1.5707963267948966,0,1.5707963267948966,0")
+  message(FATAL_ERROR "unexpected output of the installed kanesim (${n} lines):\n${header}\n${first}")
+endif()
+message(STATUS "installed into ${PREFIX}; the installed kanesim ran examples/double_pendulum.mech")

@@ -1,0 +1,349 @@
+"""kanesim from Python: load a .mech model, check it, run it into NumPy arrays, sweep it.
+
+    import kanesim
+    m = kanesim.load("examples/double_pendulum.mech", set={"shoulder_damping": 0.1})
+    r = m.run(stop_time=2, outputs=["*.q"])
+    r.time, r["shoulder.q"]
+
+See docs/python.md. The compiled core is kanesim._kanesim; this file is the Python face.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import numbers
+import os
+import threading
+import warnings as _warnings
+from collections import OrderedDict
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence
+
+import numpy as np
+
+from . import _kanesim
+
+__all__ = ["load", "loads", "sweep", "Model", "Result", "Table", "ModelError", "SimulationError", "KanesimWarning"]
+__version__ = "0.1.0"
+
+_NAN = float("nan")
+
+
+class ModelError(Exception):
+    """A model error: the message is the rendered diagnostic (file:line:col, the source
+    line with a caret, notes, hint), as `kanesim check` prints it.
+
+    .code    the diagnostic code ("E203", "K308"; "" when there is none)
+    .file    the file of the first error ("" when it has no location)
+    .line, .column   1-based place of the first error (0 when none)
+    """
+
+    def __init__(self, message: str, code: str = "", file: str = "", line: int = 0, column: int = 0):
+        super().__init__(message)
+        self.code = code
+        self.file = file
+        self.line = line
+        self.column = column
+
+
+class SimulationError(RuntimeError):
+    """A numerical failure (the command line's exit 2): the run stopped at .time because of
+    .cause; .result holds the rows computed before it."""
+
+    def __init__(self, message: str, time: float, cause: str, result: "Result"):
+        super().__init__(message)
+        self.time = time
+        self.cause = cause
+        self.result = result
+
+
+class KanesimWarning(UserWarning):
+    """A warning from the model or the run (a diagnostic warning, W313, a suspicious rtol)."""
+
+
+def _value_text(value: Any) -> str:
+    """A Python value as the text of `--set name=VALUE`."""
+    if isinstance(value, str):
+        return value  # an expression, as on the command line ('2*pi', '"text"' for a String)
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        return repr(float(value))  # shortest text that reads back as the same double
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "{" + ", ".join(_value_text(v) for v in value) + "}"
+    raise TypeError(f"set: cannot pass a {type(value).__name__} as a parameter value")
+
+
+def _set_list(values: Optional[Mapping[str, Any]]) -> List[str]:
+    if values is None:
+        return []
+    if not isinstance(values, Mapping):
+        raise TypeError("set= takes a dict of parameter name -> value")
+    out = []
+    for name, v in values.items():
+        if not isinstance(name, str) or not name or "=" in name:
+            raise ValueError(f"set: {name!r} is not a parameter name")
+        out.append(f"{name}={_value_text(v)}")
+    return out
+
+
+def _choice(value: str, name: str, allowed: Sequence[str]) -> str:
+    if value not in allowed:
+        raise ValueError(f"{name}={value!r}: unknown ({', '.join(allowed)})")
+    return value
+
+
+_SOLVERS = ("auto", "dense", "sparse", "recursive")
+_INTEGRATORS = ("auto", "ida", "cvode", "cvode-bdf", "arkode", "dop853")
+_REACTIONS = ("nan", "min-norm")
+
+
+def _time(x: Optional[float], name: str) -> float:
+    if x is None:
+        return _NAN
+    try:
+        value = float(x)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number, got {x!r}") from None
+    if math.isnan(value):  # NaN means "not given" below; a NaN given is refused here
+        raise ValueError(f"{name} must be a number, got nan")
+    return value
+
+
+def _warn(messages: Iterable[str]) -> None:
+    for w in messages:
+        _warnings.warn(w.rstrip("\n"), KanesimWarning, stacklevel=3)
+
+
+class Result:
+    """The rows of a run: .time (1-D), .values (rows x columns), .columns (signal names),
+    r["name"] (one column, 1-D), .stats (integrator statistics)."""
+
+    def __init__(self, columns: List[str], time: np.ndarray, values: np.ndarray, stats: Dict[str, Any]):
+        self.columns = list(columns)
+        self.time = time
+        self.values = values
+        self.stats = stats
+        self._index = {c: i for i, c in enumerate(self.columns)}
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name == "time":
+            return self.time
+        try:
+            return self.values[:, self._index[name]]
+        except KeyError:
+            raise KeyError(f"no column {name!r} in this result (columns: {', '.join(self.columns)})") from None
+
+    def __contains__(self, name: str) -> bool:
+        return name == "time" or name in self._index
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    def keys(self) -> List[str]:
+        return ["time"] + self.columns
+
+    def to_pandas(self):
+        """A pandas DataFrame with a `time` column first (needs pandas)."""
+        import pandas as pd
+
+        data = {"time": self.time}
+        for i, c in enumerate(self.columns):
+            data[c] = self.values[:, i]
+        return pd.DataFrame(data)
+
+    def __repr__(self) -> str:
+        return f"<kanesim.Result {len(self)} rows x {len(self.columns)} columns>"
+
+
+class Model:
+    """A loaded and compiled model. Immutable: run() may be called from several threads at
+    once (each run has its own workspace; the GIL is released while it integrates)."""
+
+    _MAX_VARIANTS = 16
+
+    def __init__(self, compiled, load_args: Dict[str, Any], sets: Dict[str, Any]):
+        self._compiled = compiled
+        self._load_args = load_args
+        self._sets = dict(sets)
+        self._variants: "OrderedDict[tuple, Model]" = OrderedDict()
+        self._lock = threading.Lock()
+
+    @property
+    def path(self) -> str:
+        return self._compiled.path
+
+    @property
+    def warnings(self) -> List[str]:
+        """The diagnostics' warnings, rendered."""
+        return list(self._compiled.warnings)
+
+    @property
+    def signals(self) -> List[str]:
+        """Every signal run(outputs=...) can select (dotted names)."""
+        return self._compiled.signals()
+
+    def check(self) -> Dict[str, Any]:
+        """The summary of `kanesim check`: bodies, joints, DOF, solver, integrator (with the
+        reasons), the experiment, the model's parameters and outputs."""
+        return self._compiled.check()
+
+    def with_set(self, values: Mapping[str, Any]) -> "Model":
+        """This model with more parameter values set (loaded and compiled again; cached)."""
+        merged = dict(self._sets)
+        merged.update(values)
+        key = tuple(_set_list(merged))
+        with self._lock:
+            hit = self._variants.get(key)
+            if hit is not None:
+                self._variants.move_to_end(key)
+                return hit
+        variant = _load(dict(self._load_args), merged)
+        with self._lock:
+            self._variants[key] = variant
+            while len(self._variants) > self._MAX_VARIANTS:
+                self._variants.popitem(last=False)
+        return variant
+
+    def run(
+        self,
+        stop_time: Optional[float] = None,
+        rtol: Optional[float] = None,
+        atol: Optional[float] = None,
+        interval: Optional[float] = None,
+        outputs: Optional[Sequence[str]] = None,
+        set: Optional[Mapping[str, Any]] = None,
+        start_time: Optional[float] = None,
+        integrator: str = "auto",
+        linear_solver: str = "auto",
+        projection: str = "eval",
+    ) -> Result:
+        """Simulates, like `kanesim run`: None takes the model's experiment annotation
+        (atol defaults to rtol); outputs are the --output globs. Raises SimulationError
+        (with the rows so far) on a numerical failure, ValueError on bad settings."""
+        if set:
+            return self.with_set(set).run(stop_time, rtol, atol, interval, outputs, None, start_time, integrator,
+                                          linear_solver, projection)
+        if isinstance(outputs, str):
+            outputs = [outputs]
+        columns, time, values, stats, failure, warns = _kanesim.run(
+            self._compiled, _time(start_time, "start_time"), _time(stop_time, "stop_time"),
+            _time(interval, "interval"), _time(rtol, "rtol"), _time(atol, "atol"), list(outputs or []),
+            integrator, linear_solver, projection)
+        _warn(warns)
+        result = Result(columns, time, values, stats)
+        if failure is not None:
+            t, cause = failure
+            raise SimulationError(f"numerical failure at t = {t!r}: {cause}", t, cause, result)
+        return result
+
+    def __repr__(self) -> str:
+        return f"<kanesim.Model {self.path!r}>"
+
+
+def _load(args: Dict[str, Any], sets: Dict[str, Any]) -> Model:
+    compiled, error = _kanesim.load(args["path"], args["text"], args["from_text"], args["model"] or "",
+                                    _set_list(sets), args["solver"], args["integrator"], args["reactions"])
+    if compiled is None:
+        code, file, line, column, rendered = error
+        raise ModelError(rendered.rstrip("\n"), code, file, line, column)
+    _warn(compiled.warnings)
+    return Model(compiled, args, sets)
+
+
+def load(path, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = None, solver: str = "auto",
+         integrator: str = "auto", reactions: str = "nan") -> Model:
+    """Loads, elaborates and compiles a .mech file. set: parameter values as --set takes
+    them ({"N": 20, "world.g": [0, 0, -9.81], "flag": True}); model: the model to
+    elaborate (default: the last in the file). Raises ModelError."""
+    args = dict(path=os.fspath(path), text="", from_text=False, model=model,
+                solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
+                reactions=_choice(reactions, "reactions", _REACTIONS))
+    return _load(args, dict(set or {}))
+
+
+def loads(text: str, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = None,
+          name: str = "<string>.mech", solver: str = "auto", integrator: str = "auto",
+          reactions: str = "nan") -> Model:
+    """Like load(), from the model's text; diagnostics name it `name`."""
+    if not isinstance(text, str):
+        raise TypeError("loads() takes the model's text as a str")
+    args = dict(path=name, text=text, from_text=True, model=model,
+                solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
+                reactions=_choice(reactions, "reactions", _REACTIONS))
+    return _load(args, dict(set or {}))
+
+
+class Table:
+    """A sweep's summary: the columns of `kanesim sweep`'s summary.csv (id, the parameters,
+    stop_time, rtol, atol, status, message, fail_time, the metrics, integrator statistics,
+    wall_time), numbers as NumPy arrays, text as lists."""
+
+    _TEXT = {"status", "message", "method"}
+
+    def __init__(self, header: str, lines: List[str], failed: int):
+        names = next(csv.reader([header]))
+        rows = list(csv.reader(lines))
+        self.columns: List[str] = names
+        self.failed = failed
+        self._data: Dict[str, Any] = {}
+        for j, name in enumerate(names):
+            cells = [r[j] for r in rows]
+            if name in self._TEXT:
+                self._data[name] = cells
+            elif name == "id":
+                self._data[name] = np.array([int(c) for c in cells], dtype=np.int64)
+            else:
+                self._data[name] = np.array([float(c) if c != "" else math.nan for c in cells], dtype=float)
+
+    def __getitem__(self, name: str):
+        return self._data[name]
+
+    def __len__(self) -> int:
+        return len(self._data["id"]) if "id" in self._data else 0
+
+    def to_pandas(self):
+        """A pandas DataFrame, one row per scenario (needs pandas)."""
+        import pandas as pd
+
+        return pd.DataFrame({c: self._data[c] for c in self.columns})
+
+    def __repr__(self) -> str:
+        return f"<kanesim.Table {len(self)} scenarios, {self.failed} failed>"
+
+
+def _columns(arg, what: str):
+    if arg is None:
+        return []
+    if not isinstance(arg, Mapping):
+        raise TypeError(f"{what}= takes a dict of parameter name -> values")
+    out = []
+    for name, values in arg.items():
+        if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+            values = [values]
+        values = [float(v) for v in values]
+        if any(math.isnan(v) for v in values):
+            raise ValueError(f"{what}: {name!r} has a NaN (leave a parameter out to keep the model's value)")
+        out.append((str(name), values))
+    return out
+
+
+def sweep(model: Model, grid: Optional[Mapping[str, Sequence[float]]] = None,
+          samples: Optional[Mapping[str, Sequence[float]]] = None, metrics: Sequence[str] = (), threads: int = 0,
+          stop_time: Optional[float] = None, rtol: Optional[float] = None, atol: Optional[float] = None,
+          interval: Optional[float] = None, start_time: Optional[float] = None, integrator: str = "auto") -> Table:
+    """Runs many scenarios of one model in parallel threads, like `kanesim sweep`:
+    grid={"k": [10, 20], "m": [1, 2]} is the Cartesian product (first key slowest);
+    samples={"k": [...], "m": [...]} are rows taken together (equal lengths); both combine
+    as a product. metrics as --metric ("final:S", "min:S", "max:S", "mean:S", "rms:S",
+    "cross:S=L"). threads=0: all cores. Returns a Table; failed scenarios are rows with
+    status "failed"."""
+    if isinstance(metrics, str):
+        metrics = [metrics]
+    header, lines, failed = _kanesim.sweep(
+        model._compiled, _columns(grid, "grid"), _columns(samples, "samples"), list(metrics), int(threads),
+        _time(start_time, "start_time"), _time(stop_time, "stop_time"), _time(interval, "interval"),
+        _time(rtol, "rtol"), _time(atol, "atol"), integrator)
+    return Table(header, lines, failed)

@@ -1,0 +1,390 @@
+// Loading and running for the Python module (glue.h). Binds to what main has today:
+// lang::LoadProgram + lang::Elaborate + rt::Compile for loading, sim::Simulate for runs and
+// batch::ScenarioRunner for sweeps, with the option rules of `kanesim run` and `kanesim
+// sweep` (cli/batch_cli.h). When the library pipeline API lands, Load and ResolveRun are
+// what changes.
+#include "python/src/glue.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <thread>
+
+#include "cli/batch_cli.h"
+#include "lang/diagnostics.h"
+#include "lang/elaborate.h"
+#include "lang/set_argument.h"
+#include "lang/text.h"
+#include "runtime/batch/metrics.h"
+#include "runtime/batch/scenario.h"
+#include "runtime/batch/sweep.h"
+#include "runtime/program.h"
+#include "runtime/sim/signal_select.h"
+#include "stdlib/stdlib.h"
+
+namespace kanesim::py {
+namespace {
+
+// One front-end load at a time: loads are short, and the front end shares the parsed
+// standard library between programs.
+std::mutex g_load_mutex;
+
+// A compiler message rendered like a language diagnostic (as cli/load.cpp does).
+std::string RenderCompileMessage(const rt::CompileMessage& e, const char* severity, const lang::SourceManager& sm) {
+  std::string out = e.loc.file.empty() ? "kanesim"
+                                       : lang::ClipMessage(e.loc.file) + ":" + std::to_string(e.loc.line) + ":" +
+                                             std::to_string(e.loc.col);
+  out += std::string(": ") + severity + "[" + e.code + "]: " + lang::ClipMessage(e.message) + "\n";
+  for (int f = 0; f < sm.NumFiles(); ++f) {
+    if (sm.Name(f) != e.loc.file || e.loc.line <= 0) continue;
+    const std::int32_t at = sm.Offset(f, e.loc.line, e.loc.col);
+    if (at >= 0) out += lang::RenderSnippet(sm, lang::Span{f, at, at + 1});
+    break;
+  }
+  const size_t shown = std::min(e.notes.size(), lang::Diagnostics::kMaxNotesShown);
+  for (size_t i = 0; i < shown; ++i) {
+    const auto& [loc, msg] = e.notes[i];
+    out += lang::ClipMessage(loc.file) + ":" + std::to_string(loc.line) + ":" + std::to_string(loc.col) +
+           ": note: " + lang::ClipMessage(msg) + "\n";
+  }
+  if (e.notes.size() > shown) out += "  note: " + std::to_string(e.notes.size() - shown) + " more notes not shown\n";
+  if (!e.hint.empty()) out += "  hint: " + lang::ClipMessage(e.hint) + "\n";
+  return out;
+}
+
+bool Fail(std::string* error, std::string message) {
+  *error = std::move(message);
+  return false;
+}
+
+}  // namespace
+
+bool Load(const LoadRequest& req, LoadedModel* out, ModelErrorInfo* error) {
+  std::lock_guard<std::mutex> lock(g_load_mutex);
+  lang::Program program;
+  lang::Diagnostics diags(&program.sources);
+  lang::ElaborateOptions eo;
+  eo.model = req.model;
+  for (const std::string& s : req.sets) {
+    lang::ParamOverride o;
+    if (!lang::ParseSetArgument(s, &o)) {
+      error->code = "E210";
+      error->rendered = "kanesim: error[E210]: set needs name=value, got '" + lang::ClipMessage(s) + "'\n";
+      return false;
+    }
+    eo.overrides.push_back(std::move(o));
+  }
+  bool ok = req.from_text ? lang::LoadProgramFromText(req.path, req.text, stdlib::Files(), &program, diags)
+                          : lang::LoadProgram(req.path, stdlib::Files(), &program, diags);
+  flat::Mechanism mech;
+  if (ok) ok = lang::Elaborate(program, eo, &mech, diags);
+  if (!ok || diags.HasErrors()) {
+    error->rendered = diags.RenderAll();
+    for (const lang::Diagnostic& d : diags.All()) {
+      if (d.severity != lang::Severity::Error) continue;
+      error->code = lang::DiagCodeString(d.code);
+      if (d.span.valid()) {
+        const lang::LineCol lc = program.sources.Locate(d.span.file, d.span.begin);
+        error->file = program.sources.Name(d.span.file);
+        error->line = lc.line;
+        error->column = lc.col;
+      }
+      break;
+    }
+    if (error->rendered.empty()) error->rendered = "kanesim: error: the model could not be loaded\n";
+    return false;
+  }
+  for (const lang::Diagnostic& d : diags.All()) out->warnings.push_back(diags.Render(d));
+
+  rt::CompileOptions copts;
+  copts.solver = cli::SolverFromName(req.solver);
+  copts.integrator = cli::IntegratorFromName(req.integrator);
+  copts.indeterminate = req.reactions == "min-norm" ? rt::IndeterminateReactions::MinNorm : rt::IndeterminateReactions::NaN;
+  rt::CompileResult compiled = rt::Compile(mech, copts);
+  if (!compiled.errors.empty()) {
+    const rt::CompileMessage& first = compiled.errors.front();
+    error->code = first.code;
+    error->file = first.loc.file;
+    error->line = first.loc.line;
+    error->column = first.loc.col;
+    const size_t shown = std::min(compiled.errors.size(), static_cast<size_t>(lang::Diagnostics::kMaxErrors));
+    for (size_t i = 0; i < shown; ++i)
+      error->rendered += RenderCompileMessage(compiled.errors[i], "error", program.sources);
+    if (compiled.errors.size() > shown)
+      error->rendered += "kanesim: " + std::to_string(compiled.errors.size() - shown) + " more errors like these are not shown\n";
+    return false;
+  }
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(*compiled.program); !f.code.empty())
+    out->warnings.push_back(RenderCompileMessage(f, "warning", program.sources));
+  out->request = req;
+  out->program = compiled.program;
+  return true;
+}
+
+const std::vector<std::string>& LoadedModel::Signals() const {
+  std::call_once(signals_once_, [this] { signals_ = rt::AvailableSignals(*program); });
+  return signals_;
+}
+
+bool ResolveRun(const LoadedModel& model, const RunRequest& r, sim::SimOptions* so, std::vector<std::string>* warnings,
+                std::string* error) {
+  const rt::Program& program = *model.program;
+  if (!cli::IsIntegratorName(r.integrator)) return Fail(error, "integrator '" + r.integrator + "': unknown (" + cli::kIntegratorNames + ")");
+  if (r.linear_solver != "auto" && r.linear_solver != "dense" && r.linear_solver != "klu")
+    return Fail(error, "linear_solver '" + r.linear_solver + "': unknown (auto, dense, klu)");
+  if (r.projection != "eval" && r.projection != "step")
+    return Fail(error, "projection '" + r.projection + "': unknown (eval, step)");
+  for (auto [name, value] : {std::pair{"interval", r.interval}, {"rtol", r.rtol}, {"atol", r.atol}})
+    if (!std::isnan(value) && !(value > 0.0 && std::isfinite(value)))
+      return Fail(error, std::string(name) + " must be a positive number, got " + sim::FormatShortest(value));
+  for (auto [name, value] : {std::pair{"start_time", r.start_time}, {"stop_time", r.stop_time}})
+    if (!std::isnan(value) && !std::isfinite(value))
+      return Fail(error, std::string(name) + " must be finite, got " + sim::FormatShortest(value));
+  *so = cli::ResolveSimOptions(program.mech->experiment, r.start_time, r.stop_time, r.interval, r.rtol, r.atol,
+                               r.integrator);
+  so->ida_linear_solver = r.linear_solver == "dense" ? sim::IdaLinearSolver::Dense
+                          : r.linear_solver == "klu" ? sim::IdaLinearSolver::Klu
+                                                     : sim::IdaLinearSolver::Auto;
+  so->project_steps = r.projection == "step";
+  if (!r.outputs.empty() && !sim::SelectSignals(model.Signals(), r.outputs, &so->signals, error))
+    return false;
+  if (std::string w = sim::ToleranceWarning(so->rtol); !w.empty()) warnings->push_back(w);
+  if (program.options.indeterminate == rt::IndeterminateReactions::NaN) {
+    const std::vector<std::string> which = rt::IndeterminateSignals(program, so->signals);
+    if (!which.empty()) warnings->push_back(rt::IndeterminateWarning(program, which).message);
+  }
+  const sim::OutputGrid grid = sim::ResolveGrid(program, *so);
+  if (std::string why = sim::CheckRun(grid, so->rtol, so->atol); !why.empty()) return Fail(error, why);
+  return true;
+}
+
+namespace {
+// Rows into one contiguous buffer.
+class BufferSink final : public sim::SignalSink {
+ public:
+  BufferSink(RunOutput* out, const std::function<bool()>& interrupted) : out_(out), interrupted_(interrupted) {}
+  bool Begin(const std::vector<std::string>& names) override {
+    out_->columns = names;
+    return true;
+  }
+  bool Row(double t, const double* values, size_t count) override {
+    out_->time.push_back(t);
+    out_->values.insert(out_->values.end(), values, values + count);
+    if (interrupted_) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_poll_ >= std::chrono::milliseconds(100)) {
+        last_poll_ = now;
+        if (interrupted_()) {
+          out_->interrupted = true;
+          return false;  // Simulate stops: "cannot write the output", read as the interruption
+        }
+      }
+    }
+    return true;
+  }
+
+ private:
+  RunOutput* out_;
+  const std::function<bool()>& interrupted_;
+  std::chrono::steady_clock::time_point last_poll_ = std::chrono::steady_clock::now();
+};
+}  // namespace
+
+bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutput* out, std::string* error,
+              const std::function<bool()>& interrupted) {
+  const sim::OutputGrid grid = sim::ResolveGrid(*model.program, options);
+  const long rows = grid.Count();
+  out->time.reserve(static_cast<size_t>(rows));
+  if (!options.signals.empty()) out->values.reserve(static_cast<size_t>(rows) * options.signals.size());
+  BufferSink sink(out, interrupted);
+  const auto t0 = std::chrono::steady_clock::now();
+  const sim::SimResult result = sim::Simulate(*model.program, options, sink);
+  out->simulate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out->stats = result.stats;
+  if (out->interrupted) return true;
+  switch (result.status) {
+    case sim::SimResult::Status::kOk: return true;
+    case sim::SimResult::Status::kUsageError:
+    case sim::SimResult::Status::kOutputError: return Fail(error, result.message);
+    case sim::SimResult::Status::kNumericalFailure:
+      out->failed = true;
+      out->fail_time = result.fail_time;
+      out->message = result.message;
+      return true;
+  }
+  return true;
+}
+
+namespace {
+const char* SolverName(rt::SolverPath s) {
+  switch (s) {
+    case rt::SolverPath::Auto: return "auto";
+    case rt::SolverPath::Dense: return "dense";
+    case rt::SolverPath::Sparse: return "sparse";
+    case rt::SolverPath::Recursive: return "recursive";
+  }
+  return "?";
+}
+const char* IntegratorName(rt::IntegratorKind k) {
+  switch (k) {
+    case rt::IntegratorKind::Auto: return "auto";
+    case rt::IntegratorKind::IDA: return "IDA";
+    case rt::IntegratorKind::CVODE: return "CVODE";
+    case rt::IntegratorKind::ARKODE: return "ARKODE";
+    case rt::IntegratorKind::DOP853: return "DOP853";
+  }
+  return "?";
+}
+Value V(std::string s) { return Value{std::move(s)}; }
+Value V(const char* s) { return Value{std::string(s)}; }
+Value V(double d) { return Value{d}; }
+Value V(int i) { return Value{static_cast<long>(i)}; }
+Value V(bool b) { return Value{b}; }
+Value V(Dict d) { return Value{std::make_shared<Dict>(std::move(d))}; }
+Value V(List l) { return Value{std::make_shared<List>(std::move(l))}; }
+}  // namespace
+
+Dict Check(const LoadedModel& model) {
+  const rt::Program& program = *model.program;
+  const flat::Mechanism& mech = *program.mech;
+  const rt::ProgramSummary s = rt::Summarize(program);
+  Dict d;
+  d.emplace_back("model", V(mech.model_name));
+  d.emplace_back("description", V(mech.description));
+  d.emplace_back("bodies", V(s.num_bodies));
+  List joints;
+  for (const auto& j : mech.joints) {
+    bool prescribed = false;
+    for (auto p : j.prescribed) prescribed = prescribed || p != flat::kNoExpr;
+    joints.push_back(V(Dict{{"name", V(j.name)},
+                            {"type", V(flat::JointTypeName(j.type))},
+                            {"prescribed", V(prescribed)},
+                            {"cut", V(j.cut)}}));
+  }
+  d.emplace_back("joints", V(std::move(joints)));
+  d.emplace_back("nq", V(s.nq));
+  d.emplace_back("nu", V(s.nu));
+  d.emplace_back("dof", V(s.dof));
+  d.emplace_back("grubler_dof", V(s.grubler_dof));
+  d.emplace_back("solver", V(SolverName(s.solver)));
+  d.emplace_back("solver_reason", V(s.solver_reason));
+  d.emplace_back("integrator", V(IntegratorName(s.integrator)));
+  d.emplace_back("integrator_reason", V(s.integrator_reason));
+  List cuts;
+  for (const auto& c : s.cut_joints) cuts.push_back(V(c));
+  d.emplace_back("cut_joints", V(std::move(cuts)));
+  List notes;
+  for (const auto& n : s.notes) notes.push_back(V(n));
+  d.emplace_back("notes", V(std::move(notes)));
+  const flat::Experiment& x = mech.experiment;
+  Dict ex{{"start_time", V(x.start_time)}, {"stop_time", V(x.stop_time)}, {"tolerance", V(x.tolerance)}};
+  if (x.has_interval) ex.emplace_back("interval", V(x.interval));
+  d.emplace_back("experiment", V(std::move(ex)));
+  // The model's own parameters (declared in its file), as `kanesim check` lists them.
+  Dict params;
+  for (const auto& p : mech.params) {
+    if (p.loc.file != model.request.path) continue;
+    Dict one;
+    if (p.type == flat::ParamType::String) one.emplace_back("value", V(p.string_value));
+    else if (p.type == flat::ParamType::Boolean) one.emplace_back("value", V(p.value != 0.0));
+    else if (p.type == flat::ParamType::Integer) one.emplace_back("value", Value{static_cast<long>(p.value)});
+    else one.emplace_back("value", V(p.value));
+    one.emplace_back("unit", V(p.unit));
+    one.emplace_back("structural", V(p.structural));
+    params.emplace_back(p.name, V(std::move(one)));
+  }
+  d.emplace_back("parameters", V(std::move(params)));
+  List outputs;
+  for (const auto& o : mech.outputs) outputs.push_back(V(o.name));
+  d.emplace_back("outputs", V(std::move(outputs)));
+  return d;
+}
+
+std::vector<std::string> AvailableSignals(const LoadedModel& model) { return model.Signals(); }
+
+bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* out, std::string* error) {
+  batch::SweepConfig config;
+  std::vector<batch::Block> blocks;
+  for (const auto& [name, values] : request.grid) {
+    batch::Block b;
+    b.names = {name};
+    for (double v : values) b.rows.push_back({v});
+    blocks.push_back(std::move(b));
+  }
+  if (!request.samples.empty()) {
+    batch::Block b;
+    const size_t n = request.samples.front().second.size();
+    for (const auto& [name, values] : request.samples) {
+      if (values.size() != n) return Fail(error, "samples: every column needs the same length ('" + name + "' has " +
+                                                     std::to_string(values.size()) + ", not " + std::to_string(n) + ")");
+      b.names.push_back(name);
+    }
+    for (size_t i = 0; i < n; ++i) {
+      std::vector<double> row;
+      for (const auto& col : request.samples) row.push_back(col.second[i]);
+      b.rows.push_back(std::move(row));
+    }
+    blocks.push_back(std::move(b));
+  }
+  if (blocks.empty()) return Fail(error, "no scenarios: give grid= or samples=");
+  if (!batch::CombineBlocks(blocks, &config.param_names, &config.scenarios, error)) return false;
+  for (const std::string& m : request.metrics) {
+    batch::Metric metric;
+    if (!batch::ParseMetric(m, &metric, error)) return false;
+    config.metrics.push_back(metric);
+  }
+  std::vector<std::string> warnings;
+  if (!ResolveRun(model, request.run, &config.sim, &warnings, error)) return false;
+  config.sim.signals.clear();
+  if (!batch::ValidateSweep(*model.program, config, error)) return false;
+
+  // Structural variants: the model loaded again with the structural values set.
+  const std::shared_ptr<const rt::Program> base = model.program;
+  const LoadRequest base_request = model.request;
+  batch::VariantBuilder build = [base, base_request](const std::vector<std::pair<std::string, double>>& structural,
+                                                     std::string* err) -> std::shared_ptr<const rt::Program> {
+    LoadRequest lr = base_request;
+    std::string what;
+    for (const auto& [name, v] : structural) {
+      const int i = base->mech->FindParam(name);
+      const bool boolean = i >= 0 && base->mech->params[static_cast<size_t>(i)].type == flat::ParamType::Boolean;
+      lr.sets.push_back(name + "=" + (boolean ? (v != 0.0 ? "true" : "false") : sim::FormatNumber(v)));
+      what += " " + name + "=" + sim::FormatNumber(v);
+    }
+    LoadedModel variant;
+    ModelErrorInfo info;
+    if (!Load(lr, &variant, &info)) {
+      *err = "the model does not elaborate or compile with" + what + ": " + info.rendered;
+      return nullptr;
+    }
+    return variant.program;
+  };
+  batch::ScenarioRunner runner(base, build, config);
+  out->header = runner.Header();
+  out->lines.assign(config.scenarios.size(), std::string());
+  unsigned threads = request.threads > 0 ? static_cast<unsigned>(request.threads)
+                                         : std::max(1u, std::thread::hardware_concurrency());
+  threads = std::min<unsigned>(threads, static_cast<unsigned>(std::max<size_t>(1, config.scenarios.size())));
+  std::atomic<size_t> next{0};
+  std::atomic<int> failed{0};
+  std::atomic<bool> stop{false};
+  auto work = [&](bool poll) {
+    for (size_t i = next++; i < config.scenarios.size() && !stop; i = next++) {
+      bool f = false;
+      out->lines[i] = runner.Run(config.scenarios[i], &f);
+      if (f) ++failed;
+      if (poll && request.interrupted && request.interrupted()) stop = true;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work, false);
+  work(true);
+  for (std::thread& t : pool) t.join();
+  out->failed = failed.load();
+  out->interrupted = stop.load();
+  return true;
+}
+
+}  // namespace kanesim::py

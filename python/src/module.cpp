@@ -1,0 +1,173 @@
+// kanesim._kanesim: the compiled half of the Python package (python/kanesim/__init__.py is
+// the other). Thin bindings over glue.h: Python values in, NumPy arrays out, the GIL
+// released while a model loads, integrates or sweeps.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+
+#include "python/src/glue.h"
+#include "runtime/sim/integrator.h"
+
+namespace py = pybind11;
+using kanesim::py::LoadedModel;
+
+namespace {
+
+py::object ToPython(const kanesim::py::Value& value) {
+  return std::visit(
+      [](const auto& x) -> py::object {
+        using T = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<T, std::monostate>) return py::none();
+        else if constexpr (std::is_same_v<T, std::shared_ptr<kanesim::py::Dict>>) {
+          py::dict d;
+          for (const auto& [k, v] : *x) d[py::str(k)] = ToPython(v);
+          return d;
+        } else if constexpr (std::is_same_v<T, std::shared_ptr<kanesim::py::List>>) {
+          py::list l;
+          for (const auto& v : *x) l.append(ToPython(v));
+          return l;
+        } else {
+          return py::cast(x);
+        }
+      },
+      value.v);
+}
+
+py::dict StatsDict(const kanesim::sim::SimStats& s) {
+  py::dict d;
+  d["method"] = kanesim::sim::MethodName(s.method);
+  d["steps"] = s.integrator.steps;
+  d["rhs_evals"] = s.integrator.rhs_evals;
+  d["jac_rhs_evals"] = s.integrator.rhs_evals_jac;
+  d["jac_evals"] = s.integrator.jac_evals;
+  d["lin_setups"] = s.integrator.lin_setups;
+  d["err_test_fails"] = s.integrator.err_test_fails;
+  d["nonlin_iters"] = s.integrator.nonlin_iters;
+  d["nonlin_conv_fails"] = s.integrator.nonlin_conv_fails;
+  d["last_step"] = s.integrator.last_step;
+  d["linear_solver"] = s.integrator.linear_solver;
+  d["rows"] = s.rows;
+  d["integrate_seconds"] = s.times.integrate;
+  d["output_seconds"] = s.times.output;
+  return d;
+}
+
+// (model, warnings) or raises ModelError via the Python side: returns (None, error tuple).
+py::tuple Load(const std::string& path, const std::string& text, bool from_text, const std::string& model,
+               const std::vector<std::string>& sets, const std::string& solver, const std::string& integrator,
+               const std::string& reactions) {
+  kanesim::py::LoadRequest req;
+  req.path = path;
+  req.text = text;
+  req.from_text = from_text;
+  req.model = model;
+  req.sets = sets;
+  req.solver = solver;
+  req.integrator = integrator;
+  req.reactions = reactions;
+  auto loaded = std::make_shared<LoadedModel>();
+  kanesim::py::ModelErrorInfo error;
+  bool ok = false;
+  {
+    py::gil_scoped_release release;
+    ok = kanesim::py::Load(req, loaded.get(), &error);
+  }
+  if (!ok) return py::make_tuple(py::none(), py::make_tuple(error.code, error.file, error.line, error.column, error.rendered));
+  return py::make_tuple(loaded, py::none());
+}
+
+// (columns, time, values 2-D, stats, failure or None, warnings); raises ValueError on a
+// usage error.
+py::tuple Run(const LoadedModel& model, double start_time, double stop_time, double interval, double rtol, double atol,
+              const std::vector<std::string>& outputs, const std::string& integrator, const std::string& linear_solver,
+              const std::string& projection) {
+  kanesim::py::RunRequest r;
+  r.start_time = start_time;
+  r.stop_time = stop_time;
+  r.interval = interval;
+  r.rtol = rtol;
+  r.atol = atol;
+  r.outputs = outputs;
+  r.integrator = integrator;
+  r.linear_solver = linear_solver;
+  r.projection = projection;
+  kanesim::sim::SimOptions so;
+  std::vector<std::string> warnings;
+  std::string error;
+  if (!kanesim::py::ResolveRun(model, r, &so, &warnings, &error)) throw py::value_error(error);
+  kanesim::py::RunOutput out;
+  bool ok = false;
+  // Ctrl-C: Python's signal handlers run when asked (PyErr_CheckSignals, with the GIL); a
+  // KeyboardInterrupt they raise stops the run and is raised here.
+  const std::function<bool()> interrupted = [] {
+    py::gil_scoped_acquire gil;
+    return PyErr_CheckSignals() != 0;
+  };
+  {
+    py::gil_scoped_release release;
+    ok = kanesim::py::Simulate(model, so, &out, &error, interrupted);
+  }
+  if (out.interrupted) throw py::error_already_set();
+  if (!ok) throw py::value_error(error);
+  const auto n = static_cast<py::ssize_t>(out.time.size());
+  const auto m = static_cast<py::ssize_t>(out.columns.size());
+  py::array_t<double> time(n);
+  if (n > 0) std::memcpy(time.mutable_data(), out.time.data(), out.time.size() * sizeof(double));
+  py::array_t<double> values({n, m});
+  if (n > 0 && m > 0) std::memcpy(values.mutable_data(), out.values.data(), out.values.size() * sizeof(double));
+  py::object failure = py::none();
+  if (out.failed) failure = py::make_tuple(out.fail_time, out.message);
+  py::dict stats = StatsDict(out.stats);
+  stats["simulate_seconds"] = out.simulate_seconds;
+  return py::make_tuple(out.columns, time, values, stats, failure, warnings);
+}
+
+py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::string, std::vector<double>>>& grid,
+                const std::vector<std::pair<std::string, std::vector<double>>>& samples,
+                const std::vector<std::string>& metrics, int threads, double start_time, double stop_time,
+                double interval, double rtol, double atol, const std::string& integrator) {
+  kanesim::py::SweepRequest req;
+  req.grid = grid;
+  req.samples = samples;
+  req.metrics = metrics;
+  req.threads = threads;
+  req.run.start_time = start_time;
+  req.run.stop_time = stop_time;
+  req.run.interval = interval;
+  req.run.rtol = rtol;
+  req.run.atol = atol;
+  req.run.integrator = integrator;
+  req.interrupted = [] {
+    py::gil_scoped_acquire gil;
+    return PyErr_CheckSignals() != 0;
+  };
+  kanesim::py::SweepTable table;
+  std::string error;
+  bool ok = false;
+  {
+    py::gil_scoped_release release;
+    ok = kanesim::py::Sweep(model, req, &table, &error);
+  }
+  if (table.interrupted) throw py::error_already_set();
+  if (!ok) throw py::value_error(error);
+  return py::make_tuple(table.header, table.lines, table.failed);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_kanesim, m) {
+  m.doc() = "kanesim's compiled core; use the kanesim package";
+  py::class_<LoadedModel, std::shared_ptr<LoadedModel>>(m, "CompiledModel")
+      .def_property_readonly("warnings", [](const LoadedModel& x) { return x.warnings; })
+      .def_property_readonly("path", [](const LoadedModel& x) { return x.request.path; })
+      .def_property_readonly("sets", [](const LoadedModel& x) { return x.request.sets; })
+      .def("check", [](const LoadedModel& x) { return ToPython(kanesim::py::Value{std::make_shared<kanesim::py::Dict>(kanesim::py::Check(x))}); })
+      .def("signals", [](const LoadedModel& x) { return kanesim::py::AvailableSignals(x); });
+  m.def("load", &Load);
+  m.def("run", &Run);
+  m.def("sweep", &Sweep);
+}
