@@ -41,6 +41,12 @@ namespace {
 constexpr double kZone = 1e-2;
 constexpr double kTurn = 0.05;  // rad
 constexpr double kSlow = 1e-3;  // of the reference's speed (kinetic-metric norm)
+// Accepted steps inside one near-singular zone after which the run stops: a passage
+// takes a few (measured: at most 9 on the equal-link parallelogram, every integrator,
+// rtol 1e-4 ... 1e-10);
+// a solver creeping towards the singular configuration in ever smaller steps would
+// otherwise run into its step limit per output instant, minutes later.
+constexpr long kMaxZoneSteps = 1000;
 constexpr double kRankTol = 1e-9;  // sigma / sigma_max below which a row counts as dependent (assembly's)
 }  // namespace
 
@@ -49,6 +55,7 @@ struct BranchMonitor {
   bool have_ref = false, in_zone = false;
   double ref_t = 0.0, zone_t = 0.0, zone_rho = 1.0;
   int zone_loop = -1;
+  long zone_steps = 0;
   std::vector<int> loop_rank;  // per loop: independent rows at the first check
   Eigen::VectorXd ref_u, cur_u;     // all joint speeds
   std::vector<Vec3> cur_v, cur_w;  // the current step's mass-centre and angular velocities
@@ -151,8 +158,20 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
       m.zone_t = t;
       m.zone_loop = worst;
       m.zone_rho = rho;
+      m.zone_steps = 0;
     }
     m.zone_rho = std::min(m.zone_rho, rho);
+    if (++m.zone_steps > kMaxZoneSteps) {
+      char buf[512];
+      std::snprintf(buf, sizeof buf,
+                    "closed loop '%s' at a singular configuration at time %.9g: the integrator took %ld steps since "
+                    "time %.9g without passing the change point (the constraint rows within %.2g of losing rank, "
+                    "sigma_min/sigma_max); near it the loop equations are too ill-conditioned for this tolerance "
+                    "(try a looser --rtol, or --solver sparse)",
+                    p.loops[static_cast<size_t>(m.zone_loop)].name.c_str(), t, m.zone_steps, m.zone_t, m.zone_rho);
+      m.error = buf;
+      return -1;
+    }
   } else {
     m.in_zone = false;
   }
