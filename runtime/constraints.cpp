@@ -48,6 +48,10 @@ constexpr double kSingular = 1e-10;
 constexpr double kTight = 1e-13;
 constexpr double kLoose = 1e-8;
 constexpr int kMaxNewton = 8;
+// Near a singular configuration (pivot ratio below kDegraded) Newton goes on below kTight
+// until the residual is at round-off (kRoundOff) or stops shrinking (by kStall per step).
+constexpr double kRoundOff = 1e-16;
+constexpr double kStall = 0.5;
 // The sparse path's projection first iterates with the factorization of the previous
 // evaluation (chord steps: no new factorization) while each step shrinks the residual by
 // at least kChordRate, at most kMaxChord times, then takes Newton steps.
@@ -329,6 +333,18 @@ void ConstraintBias(const Program& p, Workspace& ws) {
   }
 }
 
+namespace {
+// min/max |R_ii| of the dependent block's factorization (FactorDependent's pivot ratio).
+double DependentRatio(const Workspace& ws, int rank) {
+  double mn = INFINITY, mx = 0.0;
+  for (int k = 0; k < rank; ++k) {
+    mn = std::min(mn, ws.qr_dep.DiagAbs(k));
+    mx = std::max(mx, ws.qr_dep.DiagAbs(k));
+  }
+  return mx > 0.0 ? mn / mx : 0.0;
+}
+}  // namespace
+
 int FactorDependent(const Program& p, Workspace& ws) {
   const int rank = p.loop_rank;
   if (rank == 0) return 0;
@@ -545,11 +561,18 @@ int ProjectState(const Program& p, Workspace& ws) {
   if (p.solver == SolverPath::Sparse) return ProjectStateSparse(p, ws);
   const double tight = kTight * p.loop_length;
   const int rank = p.loop_rank;
+  double last = INFINITY;
   for (int it = 0;; ++it) {
     ResidualsAndJacobian(p, ws);
     if (int s = FactorDependent(p, ws); s != 0) return s;
     const double r = ws.phi.cwiseAbs().maxCoeff();
-    if (r <= tight || rank == 0 || it == kMaxNewton) break;
+    if (rank == 0 || it == kMaxNewton) break;
+    // Near a singular configuration, on to round-off: a residual c leaves the state on
+    // the level set phi = c, which bends from one branch onto another within sqrt(c) of
+    // a change point (docs/constraints.md, "Singular configurations").
+    if (r <= tight && (r <= kRoundOff * p.loop_length || r > kStall * last || DependentRatio(ws, rank) >= kDegraded))
+      break;
+    last = r;
     // Newton step on the dependent coordinates: A_dep du_dep = -phi (7).
     GatherActive(p, ws.phi, &ws.vg);
     SolveDependent(ws, ws.vg, &ws.xd);

@@ -108,6 +108,16 @@ void SetStepProjection(Workspace& ws, bool on);
 int ProjectOntoConstraints(const Program& program, Workspace& ws, double t, double* y);
 const std::string& ErrorMessage(const Workspace& ws);
 
+// Closed loops through singular configurations (runtime/branch_monitor.cpp): after each
+// accepted step, CheckBranch(y) returns -1 (fatal; BranchMonitorError says why: the loop,
+// the time and the turn) when the motion left its assembly branch near a change point
+// (the velocity turned by a finite angle where the loop's rows nearly lost rank), else 0.
+struct BranchMonitor;
+bool BranchMonitorActive(const Program& program);  // the program has closed loops
+std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& program);
+int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y);
+const std::string& BranchMonitorError(const BranchMonitor& monitor);
+
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",
 // "rod1.frame_b.r[1]", declared outputs by their name. Selection compiles the
 // requested names into a plan so that only what is needed gets computed.

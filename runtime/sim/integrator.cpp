@@ -121,6 +121,12 @@ int GuardedRhs::Project(double t, double* y) {
   return 0;
 }
 
+int GuardedRhs::StepAccepted(double t, const double* y) {
+  if (fatal) return -1;
+  if (int status = system_.StepAccepted(t, y); status != 0) return Failed(t, status);
+  return 0;
+}
+
 void CaptureSundialsMessage(int /*error_code*/, const char* /*module*/, const char* function, char* msg,
                             void* user_data) {
   auto* messages = static_cast<SundialsMessages*>(user_data);

@@ -59,6 +59,13 @@ class OdeSystem {
   virtual bool CanProject() const { return false; }
   virtual void EnableStepProjection() {}
   virtual int Project(double /*t*/, double* /*y*/) { return 0; }
+  // A check of each accepted step (closed loops: the branch monitor, engine.h
+  // CheckBranch). Solvers call StepAccepted(t, y) after every accepted step when
+  // ChecksSteps(): 0 goes on, > 0 asks to take the step again shorter (DOP853; the
+  // SUNDIALS solvers, which cannot take back an accepted step, stop as for < 0), < 0 stops
+  // the run with FailureCause().
+  virtual bool ChecksSteps() const { return false; }
+  virtual int StepAccepted(double /*t*/, const double* /*y*/) { return 0; }
 };
 
 enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };

@@ -51,6 +51,7 @@ class ArkodeStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
+    if (rhs_.ChecksSteps()) return AdvanceChecked(tout, y);
     int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL);
     while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret);
     if (flag >= 0 && !hooked_) {  // the restart point until the hook keeps accepted steps
@@ -85,7 +86,8 @@ class ArkodeStepper final : public SundialsStepper {
       case ARK_RHSFUNC_FAIL:
       case ARK_FIRST_RHSFUNC_ERR:
       case ARK_REPTD_RHSFUNC_ERR:
-      case ARK_UNREC_RHSFUNC_ERR: kind = FailureKind::kRhs; break;
+      case ARK_UNREC_RHSFUNC_ERR:
+      case kStepCheckFailed: kind = FailureKind::kRhs; break;
       case ARK_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
       case ARK_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
       case ARK_ERR_FAILURE: kind = FailureKind::kErrorTest; break;
@@ -104,9 +106,26 @@ class ArkodeStepper final : public SundialsStepper {
     return 0;
   }
 
+  // Advance one step at a time, each checked (OdeSystem::StepAccepted) and kept as the
+  // restart point, then the output instant from ERKStep's interpolant.
+  int AdvanceChecked(double tout, double* y) {
+    double tret = 0.0;
+    for (;;) {
+      if (stepped_ && CurrentTime() >= tout) return CopyOut(ERKStepGetDky(mem_, tout, 0, s_.y), y);
+      int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_ONE_STEP);
+      while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret, ARK_ONE_STEP);
+      if (flag < 0) return flag;
+      stepped_ = true;
+      const double* ys = N_VGetArrayPointer(s_.y);
+      if (rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
+      t_accepted_ = tret;
+      std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());
+    }
+  }
+
   // ERKStep again from the restart point, with a quarter of the last accepted step (of
   // the step it was about to try when none was accepted yet), toward tout.
-  int Restart(double tout, double* tret) {
+  int Restart(double tout, double* tret, int mode = ARK_NORMAL) {
     double h = 0.0;
     ERKStepGetLastStep(mem_, &h);
     if (h == 0.0) ERKStepGetCurrentStep(mem_, &h);
@@ -116,13 +135,13 @@ class ArkodeStepper final : public SundialsStepper {
     before_restarts_.err_test_fails = st.err_test_fails;
     double* ys = N_VGetArrayPointer(s_.y);
     std::copy(y_accepted_.begin(), y_accepted_.end(), ys);
-    if (!hooked_ && ERKStepSetPostprocessStepFn(mem_, &ArkodeStepper::Accepted) != ARK_SUCCESS)
+    if (mode == ARK_NORMAL && !hooked_ && ERKStepSetPostprocessStepFn(mem_, &ArkodeStepper::Accepted) != ARK_SUCCESS)
       return ARK_UNREC_RHSFUNC_ERR;
-    hooked_ = true;
+    hooked_ = hooked_ || mode == ARK_NORMAL;
     if (ERKStepReInit(mem_, &ArkodeStepper::Rhs, t_accepted_, s_.y) != ARK_SUCCESS ||
         ERKStepSetInitStep(mem_, kRhsShrink * h) != ARK_SUCCESS || ERKStepSetStopTime(mem_, stop_) != ARK_SUCCESS)
       return ARK_UNREC_RHSFUNC_ERR;
-    return ERKStepEvolve(mem_, tout, s_.y, tret, ARK_NORMAL);
+    return ERKStepEvolve(mem_, tout, s_.y, tret, mode);
   }
 
   static constexpr double kRhsShrink = 0.25;  // as DOP853 after a failure of f

@@ -50,7 +50,16 @@ class CvodeStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
+    if (!rhs_.ChecksSteps()) return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
+    // One step at a time, each checked (OdeSystem::StepAccepted), then the output instant
+    // from CVODE's interpolant, as in CV_NORMAL mode.
+    for (;;) {
+      if (stepped_ && CurrentTime() >= tout) return CopyOut(CVodeGetDky(mem_, tout, 0, s_.y), y);
+      const int flag = CVode(mem_, tout, s_.y, &tret, CV_ONE_STEP);
+      if (flag < 0) return flag;
+      stepped_ = true;
+      if (rhs_.StepAccepted(tret, N_VGetArrayPointer(s_.y)) != 0) return kStepCheckFailed;
+    }
   }
 
   double CurrentTime() const override {
@@ -82,7 +91,8 @@ class CvodeStepper final : public SundialsStepper {
       case CV_RHSFUNC_FAIL:
       case CV_FIRST_RHSFUNC_ERR:
       case CV_REPTD_RHSFUNC_ERR:
-      case CV_UNREC_RHSFUNC_ERR: kind = FailureKind::kRhs; break;
+      case CV_UNREC_RHSFUNC_ERR:
+      case kStepCheckFailed: kind = FailureKind::kRhs; break;
       case CV_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
       case CV_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
       case CV_ERR_FAILURE: kind = FailureKind::kErrorTest; break;

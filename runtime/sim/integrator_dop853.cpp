@@ -76,6 +76,7 @@ class Dop853Stepper final : public Stepper {
   bool Init(const double* y0) {
     project_ = options_.project_steps && rhs_.CanProject();
     if (project_) rhs_.EnableStepProjection();
+    check_ = rhs_.ChecksSteps();
     std::copy(y0, y0 + n_, y_.begin());
     if (Eval(t_, y_.data(), K(0)) != 0) return false;
     if (options_.initial_step > 0.0) {
@@ -229,6 +230,7 @@ class Dop853Stepper final : public Stepper {
         const double t_new = last ? stop_ : t_ + h;
         if (project_) status = rhs_.Project(t_new, y_new_.data());
         if (status == 0) status = Eval(t_new, y_new_.data(), K(tab::kStages));
+        if (status == 0 && check_) status = rhs_.StepAccepted(t_new, y_new_.data());
         if (status == 0) {
           Accept(t_new, h);
           h_ = h * tab::GrowFactor(err, rejected);
@@ -361,6 +363,7 @@ class Dop853Stepper final : public Stepper {
   std::vector<double> k_;        // stages k_0 .. k_15, row s at s n  (16 n)
   std::vector<double> r_;        // r0 .. r6 of Eq. (4), row m at m n  (7 n)
   bool project_ = false;         // accepted steps are projected (OdeSystem::Project)
+  bool check_ = false;           // accepted steps are checked (OdeSystem::StepAccepted)
   bool dense_ready_ = false;     // r_ holds the last step's dense output
   bool fsal_pending_ = false;    // K(tab::kStages) is f(t_, y_), not yet copied into K(0)
   int rhs_fails_ = 0;            // recoverable failures of f in a row

@@ -73,7 +73,16 @@ class IdaStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    return CopyOut(IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL), y);
+    if (!rhs_.ChecksSteps()) return CopyOut(IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL), y);
+    // One step at a time, each checked (OdeSystem::StepAccepted), then the output instant
+    // from IDA's interpolant, as in IDA_NORMAL mode.
+    for (;;) {
+      if (stepped_ && CurrentTime() >= tout) return CopyOut(IDAGetDky(mem_, tout, 0, s_.y), y);
+      const int flag = IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_ONE_STEP);
+      if (flag < 0) return flag;
+      stepped_ = true;
+      if (rhs_.StepAccepted(tret, N_VGetArrayPointer(s_.y)) != 0) return kStepCheckFailed;
+    }
   }
 
   double CurrentTime() const override {
@@ -107,7 +116,8 @@ class IdaStepper final : public SundialsStepper {
     switch (flag) {
       case IDA_RES_FAIL:
       case IDA_REP_RES_ERR:
-      case IDA_FIRST_RES_FAIL: kind = FailureKind::kRhs; break;
+      case IDA_FIRST_RES_FAIL:
+      case kStepCheckFailed: kind = FailureKind::kRhs; break;
       case IDA_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
       case IDA_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
       case IDA_ERR_FAIL: kind = FailureKind::kErrorTest; break;

@@ -17,10 +17,22 @@ double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 // The engine's equations of motion as an ODE: y = [q, u], y' = rt::Derivative.
 class EngineOde final : public OdeSystem {
  public:
-  EngineOde(const rt::Program& program, rt::Workspace& ws) : program_(program), ws_(ws) {}
+  EngineOde(const rt::Program& program, rt::Workspace& ws) : program_(program), ws_(ws) {
+    if (rt::BranchMonitorActive(program)) monitor_ = rt::MakeBranchMonitor(program);
+  }
   int Size() const override { return rt::StateSize(program_); }
-  int Rhs(double t, const double* y, double* ydot) override { return rt::Derivative(program_, ws_, t, y, ydot); }
+  int Rhs(double t, const double* y, double* ydot) override {
+    from_monitor_ = false;
+    return rt::Derivative(program_, ws_, t, y, ydot);
+  }
+  bool ChecksSteps() const override { return monitor_ != nullptr; }
+  int StepAccepted(double t, const double* y) override {
+    const int s = rt::CheckBranch(program_, *monitor_, t, y);
+    from_monitor_ = s != 0;
+    return s;
+  }
   std::string FailureCause() const override {
+    if (from_monitor_) return rt::BranchMonitorError(*monitor_);
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }
@@ -31,6 +43,8 @@ class EngineOde final : public OdeSystem {
  private:
   const rt::Program& program_;
   rt::Workspace& ws_;
+  std::unique_ptr<rt::BranchMonitor, void (*)(rt::BranchMonitor*)> monitor_{nullptr, [](rt::BranchMonitor*) {}};
+  bool from_monitor_ = false;  // the last failure was the branch monitor's
 };
 
 SimResult UsageError(std::string message) {

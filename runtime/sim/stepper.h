@@ -22,6 +22,11 @@ class GuardedRhs {
   bool CanProject() const { return system_.CanProject(); }
   void EnableStepProjection() { system_.EnableStepProjection(); }
   int Project(double t, double* y);
+  // The system's check of an accepted step (OdeSystem::StepAccepted), failures recorded
+  // as operator()'s; a failed check is always fatal for the SUNDIALS solvers
+  // (kStepCheckFailed).
+  bool ChecksSteps() const { return system_.ChecksSteps(); }
+  int StepAccepted(double t, const double* y);
 
   bool failed = false;     // an evaluation failed since the last ClearFailure()
   bool fatal = false;      // an evaluation returned < 0: latched, every later call fails
@@ -46,6 +51,9 @@ class GuardedRhs {
   int recoverable_ = 0;
   OdeSystem& system_;
 };
+
+// A SUNDIALS stepper's Advance flag when the system's check of an accepted step failed.
+inline constexpr int kStepCheckFailed = -100000;
 
 // What went wrong in one Advance, in words for the user.
 struct StepFailure {

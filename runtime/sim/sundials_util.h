@@ -96,6 +96,7 @@ class SundialsStepper : public Stepper {
   SundialsObjects s_;
   SundialsMessages messages_;
   void* mem_ = nullptr;  // the module's memory, freed by the derived class's destructor
+  bool stepped_ = false;  // one step taken in one-step mode (checked steps): an interpolant exists
 };
 
 }  // namespace kanesim::sim::detail

@@ -1,0 +1,94 @@
+// The branch monitor (runtime/branch_monitor.cpp, issue 20) on constructed states of the
+// equal-link parallelogram (tests/stress/models/parallelogram.mech with a = b = 0.6): at
+// crank angle pi all four links are in line and three assembly branches meet, the
+// parallelogram (rocker angle = crank angle, coupler relative angle = -crank angle, all
+// speeds equal up to sign) and the folded one where the rocker tip rests on the crank
+// pivot (rocker angle pi, coupler relative angle pi, only the crank turning). Both are
+// exact closed-form configurations, so the states below are on the constraints without
+// any integrator: a step from the parallelogram onto the folded branch near the change
+// point must be refused, and continuing on the parallelogram (also backwards) must not.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "runtime/engine.h"
+#include "runtime/program.h"
+#include "tests/constraints/load_util.h"
+
+namespace kanesim::test {
+namespace {
+
+struct Rig {
+  std::unique_ptr<Loaded> l;
+  int q_crank = -1, q_coupler = -1, q_rocker = -1;
+  std::vector<double> y;
+  int Index(const char* joint, bool speed) const {
+    for (const rt::TreeJoint& j : l->prog->joints)
+      if (j.name == joint) return speed ? l->prog->nq + j.u0 : j.q0;
+    ADD_FAILURE() << joint;
+    return 0;
+  }
+  // The parallelogram at crank angle th, all links turning at w.
+  const double* Parallelogram(double th, double w) {
+    Set(th, -th, th, w, -w, w);
+    return y.data();
+  }
+  // The folded branch: rocker at pi (its tip on the crank pivot), coupler folded back.
+  const double* Folded(double th, double w) {
+    Set(th, M_PI, M_PI, w, 0.0, 0.0);
+    return y.data();
+  }
+  void Set(double a, double b, double c, double wa, double wb, double wc) {
+    y[static_cast<size_t>(Index("crank_pivot", false))] = a;
+    y[static_cast<size_t>(Index("crank_coupler", false))] = b;
+    y[static_cast<size_t>(Index("rocker_pivot", false))] = c;
+    y[static_cast<size_t>(Index("crank_pivot", true))] = wa;
+    y[static_cast<size_t>(Index("crank_coupler", true))] = wb;
+    y[static_cast<size_t>(Index("rocker_pivot", true))] = wc;
+  }
+};
+
+Rig MakeRig() {
+  Rig r;
+  r.l = LoadModel(kRoot + "/tests/stress/models/parallelogram.mech", {{"a", "0.6"}});
+  EXPECT_TRUE(r.l && r.l->prog);
+  if (r.l && r.l->prog) r.y.assign(static_cast<size_t>(rt::StateSize(*r.l->prog)), 0.0);
+  return r;
+}
+
+TEST(BranchMonitor, RefusesATurnOntoTheFoldedBranchAtTheChangePoint) {
+  // If this fails, a solution that turns from the parallelogram onto the folded branch at
+  // the change point passes unnoticed (the run would end with exit code 0 off the branch).
+  Rig r = MakeRig();
+  ASSERT_TRUE(r.l && r.l->prog);
+  const rt::Program& p = *r.l->prog;
+  auto m = rt::MakeBranchMonitor(p);
+  ASSERT_TRUE(rt::BranchMonitorActive(p));
+  EXPECT_EQ(rt::CheckBranch(p, *m, 1.0, r.Parallelogram(M_PI - 0.3, 11.0)), 0);
+  EXPECT_EQ(rt::CheckBranch(p, *m, 1.02, r.Parallelogram(M_PI - 1e-3, 11.0)), 0) << rt::BranchMonitorError(*m);
+  EXPECT_EQ(rt::CheckBranch(p, *m, 1.0201, r.Folded(M_PI - 5e-4, 19.0)), -1);
+  const std::string& e = rt::BranchMonitorError(*m);
+  EXPECT_NE(e.find("closed loop 'coupler_rocker' left its assembly branch"), std::string::npos) << e;
+  EXPECT_NE(e.find("at time 1.0201"), std::string::npos) << e;
+}
+
+TEST(BranchMonitor, LetsTheParallelogramThroughForwardAndBack) {
+  // If this fails, the monitor refuses the physical continuation: through the change point
+  // at constant speed, or stopping there and turning back (the speed changes sign, the
+  // line of the motion does not).
+  Rig r = MakeRig();
+  ASSERT_TRUE(r.l && r.l->prog);
+  const rt::Program& p = *r.l->prog;
+  auto m = rt::MakeBranchMonitor(p);
+  const double ths[] = {M_PI - 0.3, M_PI - 1e-3, M_PI - 1e-6, M_PI + 1e-6, M_PI + 1e-3, M_PI + 0.3};
+  double t = 0.0;
+  for (double th : ths) EXPECT_EQ(rt::CheckBranch(p, *m, t += 0.01, r.Parallelogram(th, 11.0)), 0) << rt::BranchMonitorError(*m);
+  for (double th : {M_PI + 1e-3, M_PI + 1e-5, M_PI + 1e-3, M_PI + 0.3})
+    EXPECT_EQ(rt::CheckBranch(p, *m, t += 0.01, r.Parallelogram(th, th == M_PI + 1e-5 ? 1e-2 : -5.0)), 0)
+        << rt::BranchMonitorError(*m);
+}
+
+}  // namespace
+}  // namespace kanesim::test
