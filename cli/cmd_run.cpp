@@ -25,6 +25,7 @@
 
 #include "cli/common.h"
 #include "cli/number_options.h"
+#include "cli/scene.h"
 #include "runtime/batch/file_guard.h"
 #include "runtime/engine.h"
 #include "runtime/sim/csv.h"
@@ -52,6 +53,7 @@ struct RunArgs {
   std::string projection = "eval";
   std::string reactions = "nan";
   bool stats = false;
+  std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
 };
 
 // A one-line bar on stderr, drawn only when stderr is a terminal and the run has taken
@@ -154,6 +156,8 @@ int RunCommand(const RunArgs& a) {
     }
   }
   WarnIndeterminate(program, so.signals);
+  AnimationRun animation(a.animation);  // the bodies' poses ride along with the CSV's signals
+  if (!animation.Prepare(mech, program, &so.signals)) return kExitModelError;
 
   if (std::string w = sim::ToleranceWarning(so.rtol); !w.empty()) fmt::print(stderr, "kanesim: warning: {}\n", w);
   const sim::OutputGrid grid = sim::ResolveGrid(program, so);
@@ -193,9 +197,10 @@ int RunCommand(const RunArgs& a) {
     ProgressBar bar(start_for_bar, so.stop_time, bar_enabled);
     so.progress = [&bar](double t) { bar.Update(t); };
     sim::CsvWriter writer(out);
-    result = sim::Simulate(program, so, writer);
+    result = sim::Simulate(program, so, animation.Wrap(writer));
   }
   bool close_ok = to_stdout ? std::fflush(stdout) == 0 : std::fclose(out) == 0;
+  const bool animation_ok = animation.Finish();  // also the rows before a numerical failure
 
   if (a.stats) {
     result.stats.times.load = load_seconds;
@@ -218,6 +223,7 @@ int RunCommand(const RunArgs& a) {
     fmt::print(stderr, "kanesim: error: cannot write the output ({})\n", to_stdout ? "stdout" : a.out_path);
     return kExitModelError;
   }
+  if (!animation_ok) return kExitModelError;
   return kExitOk;
 }
 
@@ -250,6 +256,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember({"nan", "min-norm"}));
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
+  run->add_option("--animation", a->animation,
+                  "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }
 

@@ -56,7 +56,16 @@ namespace kanesim::lang {
   X(Circular, "E227", "circular definition")                                                  \
   X(WorkLimit, "E228", "elaboration exceeds its work limit")                                  \
   X(EvalTooDeep, "E229", "evaluation nested too deep")                                        \
-  X(UnconnectedFrame, "W301", "frame connector is not connected")
+  /* meshes (MeshBody; lang/elab_mesh.cpp) */                                                \
+  X(MeshFileMissing, "E230", "mesh file not found")                                           \
+  X(MeshUnreadable, "E231", "mesh file cannot be read")                                       \
+  X(MeshTooLarge, "E232", "mesh over a size limit")                                           \
+  X(MeshNotClosed, "E233", "mesh surface not closed")                                         \
+  X(MeshOrientation, "E234", "mesh triangles inconsistently oriented")                        \
+  X(MeshZeroVolume, "E235", "mesh encloses no volume")                                        \
+  X(UnconnectedFrame, "W301", "frame connector is not connected")                            \
+  X(MeshInsideOut, "W302", "mesh triangles face inward (flipped)")                            \
+  X(MeshDegenerate, "W303", "mesh has degenerate or non-manifold parts")
 
 enum class DiagCode {
 #define KANESIM_X(e, code, summary) e,
