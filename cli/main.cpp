@@ -5,6 +5,7 @@
 #include <new>
 
 #include "cli/common.h"
+#include "cli/scene.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"kanesim: mechanisms in a Modelica-like language, simulated by Kane's method"};
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
   kanesim::cli::AddRunCommand(app, &exit_code);
   kanesim::cli::AddSweepCommand(app, &exit_code);
   kanesim::cli::AddTestCommand(app, &exit_code);
+  kanesim::cli::AddViewCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -12,6 +12,10 @@
 #include "runtime/geometry/gltf_export.h"
 #include "runtime/sim/csv.h"
 
+namespace CLI {
+class App;
+}
+
 namespace kanesim::cli {
 
 // `kanesim check`: each MeshBody's file, volume, mass, centre of mass and central inertia.
@@ -79,5 +83,8 @@ class AnimationRun {
   std::unique_ptr<PoseRecorder> recorder_;
   size_t n_shown_ = 0;
 };
+
+// `kanesim view` (cmd_view.cpp).
+void AddViewCommand(CLI::App& app, int* exit_code);
 
 }  // namespace kanesim::cli
