@@ -10,6 +10,7 @@ interpolates; the CSV of a run at a 4x finer interval gives the truth there), or
 errors, or it asks for something outside the file.
 
 Usage: view_browser_test.py --page P.html --csv C.csv --fine F.csv --body NAME=FRAME:BODY ...
+                            [--png OUT.png]   (then a 1000x560 screenshot at mid-run, for the docs)
 """
 import argparse
 import csv
@@ -62,6 +63,7 @@ def main():
     ap.add_argument("--csv", required=True)
     ap.add_argument("--fine", required=True)
     ap.add_argument("--body", action="append", required=True)
+    ap.add_argument("--png")
     args = ap.parse_args()
     bodies = {}
     for item in args.body:
@@ -91,6 +93,15 @@ def main():
         urls = [e["request"]["url"] for e in page.events("Network.requestWillBeSent")]
         outside = [u for u in urls if not (u.startswith(url) or u.startswith("data:") or u.startswith("blob:"))]
         check(not outside, f"requests outside the file: {outside}")
+    if args.png and not failures:
+        with cdp.Chromium(args.chromium, 1000, 560) as browser:
+            page = browser.new_page(1000, 560)
+            page.navigate(f"{url}?t={times[len(times) // 2]}")
+            page.wait_for("window.kanesimViewer && kanesimViewer.ready", 60, "page ready")
+            page.wait_for("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(() => r(true))))", 10)
+            png = page.screenshot()
+            check(png.startswith(b"\x89PNG"), "the screenshot is not a PNG")
+            pathlib.Path(args.png).write_bytes(png)
     for f in failures:
         print("FAIL:", f)
     print(f"view page: {len(bodies)} bodies: {'FAILED' if failures else 'passed'}")
