@@ -27,6 +27,18 @@ constexpr std::array<std::array<float, 4>, 8> kPalette{{{0.80f, 0.25f, 0.20f, 1.
                                                        {0.75f, 0.45f, 0.55f, 1.0f},
                                                        {0.55f, 0.55f, 0.58f, 1.0f}}};
 
+// "#rrggbb" (sRGB, as written by lang/elab_shapes.cpp) as linear RGBA (glTF's and the
+// viewer's base colour): c = ((s + 0.055) / 1.055)^2.4, or s / 12.92 below 0.04045.
+std::array<float, 4> LinearRgba(const std::string& hex) {
+  std::array<float, 4> out{0, 0, 0, 1};
+  for (int i = 0; i < 3; ++i) {
+    const double s = std::stoi(hex.substr(1 + 2 * static_cast<size_t>(i), 2), nullptr, 16) / 255.0;
+    out[static_cast<size_t>(i)] =
+        static_cast<float>(s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4));
+  }
+  return out;
+}
+
 // The drawing of a stdlib shape in its body frame, with this run's sizes (flat::Shape).
 VisualMesh DrawShape(const flat::Shape& s, const std::vector<double>& size, std::string* error) {
   VisualMesh mesh;
@@ -106,9 +118,12 @@ bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, S
     for (int k = 0; k < 9; ++k) signals.push_back(fmt::format("{}.R[{},{}]", b.name, k / 3 + 1, k % 3 + 1));
     if (!std::all_of(signals.begin(), signals.end(), [&](const std::string& s) { return have.count(s) > 0; }))
       continue;  // not simulated (connected to nothing that moves or is grounded)
+    if (shape_of[i] && !shape_of[i]->visual) continue;  // visual = false
     geometry::AnimatedBody ab;
+    ab.rgba = kPalette[out->bodies.size() % kPalette.size()];
     std::string label;
     if (const flat::Shape* s = shape_of[i]) {
+      if (!s->color.empty()) ab.rgba = LinearRgba(s->color);
       std::vector<double> size{val(s->size[0]), val(s->size[1]), val(s->size[2])};
       ab.name = s->name;
       ab.mesh = DrawShape(*s, size, error);
@@ -126,7 +141,6 @@ bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, S
     }
     const flat::SourceLoc& at = shape_of[i] ? shape_of[i]->loc : b.loc;
     if (!at.file.empty()) label += fmt::format(", {}:{}", at.file, at.line);
-    ab.rgba = kPalette[out->bodies.size() % kPalette.size()];
     out->bodies.push_back(std::move(ab));
     out->labels.push_back(label);
     out->pose_signals.insert(out->pose_signals.end(), signals.begin(), signals.end());

@@ -1,6 +1,7 @@
 // Shapes: what a stdlib part looks like, recorded for drawing (flat::Shape). A class
 // annotated __kanesim(primitive = "shape", kind = K) names its sizes by parameters (the
 // table below) and contains a Body named `body` that carries its mass properties.
+#include <cctype>
 #include <map>
 
 #include "lang/elab_internal.h"
@@ -22,6 +23,27 @@ const ShapeRow kShapeRows[] = {
     {"sphere", flat::ShapeKind::Sphere, {"radius", nullptr, nullptr}},
     {"mesh", flat::ShapeKind::Mesh, {"scale", nullptr, nullptr}},
 };
+
+// The colour names a shape's `color` accepts, as sRGB.
+const std::pair<const char*, const char*> kColorNames[] = {
+    {"red", "#cc3322"},    {"green", "#339944"}, {"blue", "#3366cc"},  {"yellow", "#e6c619"},
+    {"orange", "#e67e22"}, {"purple", "#8e44ad"}, {"cyan", "#1fa2b5"},  {"grey", "#8c8c91"},
+    {"gray", "#8c8c91"},   {"steel", "#a9b0b8"},  {"black", "#1a1a1a"}, {"white", "#f2f2f2"},
+};
+
+// "#rrggbb" (any case) or a name, as lower-case "#rrggbb"; "" when it is neither.
+std::string NormalColor(const std::string& c) {
+  for (const auto& [name, hex] : kColorNames)
+    if (c == name) return hex;
+  if (c.size() != 7 || c[0] != '#') return "";
+  std::string out = "#";
+  for (size_t i = 1; i < 7; ++i) {
+    const char h = static_cast<char>(std::tolower(static_cast<unsigned char>(c[i])));
+    if (!std::isxdigit(static_cast<unsigned char>(h))) return "";
+    out += h;
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -58,6 +80,27 @@ void Elaborator::EmitShape(Node* n) {
     const ModValue* b = f->mod.value ? &*f->mod.value : f->eq_binding ? &*f->eq_binding : nullptr;
     if (b) origin = b->expr ? ValueOrigin(*b->expr, Ctx{b->scope, b->iters.get()}) : b->span;
     s.mesh_file = MeshPath(v.s[0], origin);
+  }
+  if (Node* c = n->Child("color"); c && c->kind == Node::kVar) {
+    Value v = GetVar(c, Span{});
+    if (v.valid && v.type == VType::String && v.s.size() == 1 && !v.s[0].empty()) {
+      s.color = NormalColor(v.s[0]);
+      if (s.color.empty()) {
+        const Span at = c->mod.value ? c->mod.value->span : c->decl ? c->decl->name_span : Span{};
+        std::vector<std::string> names;
+        for (const auto& [name, hex] : kColorNames) names.push_back(name);
+        auto& d = diags_.Error(DiagCode::BadValue, at, "'" + v.s[0] + "' is not a colour");
+        const std::string best = ClosestName(v.s[0], names);
+        d.hint = "write \"#rrggbb\" or one of red, green, blue, yellow, orange, purple, cyan, grey, steel, black, "
+                 "white" + (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)");
+      }
+    }
+  }
+  if (Node* vis = n->Child("visual"); vis && vis->kind == Node::kVar) {
+    Value v = GetVar(vis, Span{});
+    double x = 1;
+    if (v.valid && v.type == VType::Boolean && Structural(v, vis->decl ? vis->decl->name_span : Span{}, &x, "visual"))
+      s.visual = x != 0;
   }
   m_->shapes.push_back(std::move(s));
 }

@@ -182,6 +182,8 @@ struct Shape {
   // of the body frame; Sphere is centred on it; a mesh is in its file's frame.
   Vec3E size{kNoExpr, kNoExpr, kNoExpr};
   std::string mesh_file;     // Mesh: the path read (resolved against the .mech file)
+  std::string color;         // "#rrggbb" (sRGB), or "" for the next colour of the drawing's palette
+  bool visual = true;        // false: not drawn
   SourceLoc loc;
 };
 

@@ -12,6 +12,7 @@ Usage: check_animation.py FILE.glb|FILE.gltf FILE.csv --up X,Y,Z
          --body NODE=FRAME:BODY ...      node "body_NODE" has p_WB = FRAME.r[*], R_WB = BODY.R[*,*]
          [--bounds NODE=X0,X1,Y0,Y1,Z0,Z1 ...]   its drawing's bounding box in its body frame
          [--radius NODE=R ...]           its drawing's farthest vertex from the body frame's origin
+         [--color NODE=R,G,B ...]        its material's base colour (linear)
 """
 import argparse
 import csv
@@ -51,6 +52,7 @@ def main():
     ap.add_argument("--body", action="append", required=True)
     ap.add_argument("--bounds", action="append")
     ap.add_argument("--radius", action="append")
+    ap.add_argument("--color", action="append")
     args = ap.parse_args()
 
     cols, n_rows = read_csv(args.csv)
@@ -113,6 +115,13 @@ def main():
     for name, spec in parse_map(args.radius).items():
         r = max(math.sqrt(sum(c * c for c in p)) for p in vertices(name))
         assert abs(r - float(spec)) <= TOL, (name, "radius", r, spec)
+
+    for name, spec in parse_map(args.color).items():
+        node = nodes[body_nodes["body_" + name]]
+        prim = gltf["meshes"][node["mesh"]]["primitives"][0]
+        got_c = gltf["materials"][prim["material"]]["pbrMetallicRoughness"]["baseColorFactor"][:3]
+        want_c = [float(x) for x in spec.split(",")]
+        assert all(abs(a - b) <= TOL for a, b in zip(got_c, want_c)), (name, "colour", got_c, want_c)
 
     print("%s: %d bodies, %d keys each, poses equal to %s: OK" % (args.gltf, len(bodies), n_rows, args.csv))
 

@@ -15,7 +15,7 @@ namespace kanesim::scenetest {
 inline const char* kShapes = R"(model Shapes
   World world(g = {0, 0, -9.81});
   Revolute j1(axis = {0, 1, 0}, q(start = 0.3));
-  Box arm(lx = 0.5, ly = 0.08, lz = 0.04, density = 2700);
+  Box arm(lx = 0.5, ly = 0.08, lz = 0.04, density = 2700, color = "#FF0000");
   Revolute j2(axis = {0, 1, 0}, q(start = -0.5), u(start = 1));
   MeshBody link(file = "meshes/link.stl", density = 2700);
   FixedTranslation tip(r = {1, 0, 0});
@@ -27,6 +27,7 @@ inline const char* kShapes = R"(model Shapes
   Body slab(m = 2, I = diagonal({0.02, 0.03, 0.04}));
   Revolute j5(axis = {0, 1, 0}, q(start = 1));
   Rod rod(L = 0.4, m = 0.5);
+  Sphere hidden(radius = 0.02, m = 0.1, visual = false);
 equation
   connect(world.frame_b, j1.frame_a);
   connect(j1.frame_b, arm.frame_a);
@@ -41,6 +42,7 @@ equation
   connect(s.frame_b, slab.frame_a);
   connect(slab.frame_a, j5.frame_a);
   connect(j5.frame_b, rod.frame_a);
+  connect(rod.frame_b, hidden.frame_a);
   annotation(experiment(StopTime = 1, Interval = 0.01));
 end Shapes;
 )";
@@ -52,12 +54,13 @@ inline const char* kBodies =
 // Drawings in their body frames: the Box and the mesh (the box 1 × 0.1 × 0.05 m) span
 // x = 0 .. length centred in y and z, the Cylinder too (32 segments reach ±r on y and z);
 // the bare Body is its inertia-equivalent box, sides sqrt(6 (I2 + I3 − I1) / m) =
-// sqrt(0.15), sqrt(0.09), sqrt(0.03) m (primitives.h); the Sphere's farthest vertex is r.
+// sqrt(0.15), sqrt(0.09), sqrt(0.03) m (primitives.h); the Sphere's farthest vertex is r;
+// the arm's color "#FF0000" is linear (1, 0, 0); `hidden` (visual = false) has no node.
 inline const char* kShapesDrawn =
     " --bounds arm=0,0.5,-0.04,0.04,-0.02,0.02 --bounds link=0,1,-0.05,0.05,-0.025,0.025"
     " --bounds cyl=0,0.3,-0.03,0.03,-0.03,0.03"
     " --bounds slab=-0.19364916731,0.19364916731,-0.15,0.15,-0.08660254038,0.08660254038"
-    " --radius ball=0.05";
+    " --radius ball=0.05 --color arm=1,0,0";
 
 // A fresh work folder with shapes.mech and meshes/link.stl.
 inline std::string ShapesDir(const std::string& name) {
