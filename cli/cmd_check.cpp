@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "cli/common.h"
+#include "cli/scene.h"
 #include "lang/ast.h"
 #include "lang/elaborate.h"
 #include "lang/parser.h"
@@ -153,6 +154,7 @@ int RunCheck(const CheckArgs& args) {
     std::cout << fmt::format("    {:<28} = {:<14}{}{}\n", p.name, value, p.unit.empty() ? "" : " [" + p.unit + "]",
                              p.structural ? "  (structural)" : "");
   }
+  PrintMeshBodies(mech, std::cout);
   std::cout << fmt::format("  outputs     {}\n", mech.outputs.size());
   for (const auto& o : mech.outputs) std::cout << "    " << o.name << "\n";
   (void)GrublerCount;

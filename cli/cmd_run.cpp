@@ -19,6 +19,7 @@
 
 #include "cli/common.h"
 #include "cli/number_options.h"
+#include "cli/scene.h"
 #include "runtime/batch/file_guard.h"
 #include "runtime/engine.h"
 #include "runtime/sim/csv.h"
@@ -40,6 +41,7 @@ struct RunArgs {
   std::string projection = "eval";
   std::string reactions = "nan";
   bool stats = false;
+  std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
 };
 
 // A one-line bar on stderr, drawn only when stderr is a terminal and the run has taken
@@ -106,6 +108,8 @@ int RunCommand(const RunArgs& a) {
     return kExitModelError;
   }
   sim::SimOptions& so = run.sim;
+  AnimationRun animation(a.animation);  // the bodies' poses ride along with the CSV's signals
+  if (!animation.Prepare(model->mech, program, &so.signals)) return kExitModelError;
 
   // The output: never the model itself, and one writer at a time (locked while written;
   // only a regular file, not /dev/null or a pipe, which many may share).
@@ -137,9 +141,10 @@ int RunCommand(const RunArgs& a) {
     ProgressBar bar(run.grid.start, run.grid.stop, bar_enabled);
     so.progress = [&bar](double t) { bar.Update(t); };
     sim::CsvWriter writer(out);
-    result = pipeline::Run(*model, run, writer);  // stages 5-6
+    result = pipeline::Run(*model, run, animation.Wrap(writer));  // stages 5-6
   }
   bool close_ok = to_stdout ? std::fflush(stdout) == 0 : std::fclose(out) == 0;
+  const bool animation_ok = animation.Finish();  // also the rows before a numerical failure
 
   if (a.stats) {
     result.stats.times.load = model->load_seconds;
@@ -162,6 +167,7 @@ int RunCommand(const RunArgs& a) {
     fmt::print(stderr, "kanesim: error: cannot write the output ({})\n", to_stdout ? "stdout" : a.out_path);
     return kExitModelError;
   }
+  if (!animation_ok) return kExitModelError;
   return kExitOk;
 }
 
@@ -194,6 +200,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember(pipeline::ReactionsNames()));
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
+  run->add_option("--animation", a->animation,
+                  "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }
 

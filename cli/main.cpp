@@ -6,6 +6,7 @@
 
 #include "cli/cmd_linearize.h"
 #include "cli/common.h"
+#include "cli/scene.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"kanesim: mechanisms in a Modelica-like language, simulated by Kane's method"};
@@ -17,6 +18,7 @@ int main(int argc, char** argv) {
   kanesim::cli::AddSweepCommand(app, &exit_code);
   kanesim::cli::AddTestCommand(app, &exit_code);
   kanesim::cli::AddLinearizeCommand(app, &exit_code);
+  kanesim::cli::AddViewCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -313,11 +313,13 @@ void Elaborator::Emit(Node* root) {
         break;
       }
       case Prim::RotSpring: springs.push_back(n); break;
+      case Prim::Shape: EmitShape(n); break;
       default: break;
     }
     for (auto& c : n->children) walk(c.get());
   };
   walk(root);
+  LinkShapes();
 
   // ---- flanges: springs/dampers acting on joint coordinates ----
   UnionFind fu(flange_nodes_.size());

@@ -126,7 +126,7 @@ const char* kKnownFunctions[] = {"sin",   "cos",   "tan",      "asin",     "acos
                                  "cosh",  "tanh",  "exp",      "log",      "sqrt",  "abs",   "sign",     "min",
                                  "max",   "floor", "ceil",     "mod",      "cross", "dot",   "norm",     "transpose",
                                  "identity", "diagonal", "zeros", "ones", "fill", "size", "sum", "integer", "skew",
-                                 "outerProduct", "vector"};
+                                 "outerProduct", "vector", "meshVolume", "meshCentre", "meshInertia"};
 
 }  // namespace
 
@@ -581,6 +581,7 @@ Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
     args.push_back(Eval(*a, ctx));
     if (!args.back().valid) return Value::Invalid();
   }
+  if (fn == "meshVolume" || fn == "meshCentre" || fn == "meshInertia") return EvalMeshCall(fn, e, args, ctx);
   auto want = [&](size_t n) {
     if (args.size() == n) return true;
     diags_.Error(DiagCode::BadCall, e.span,

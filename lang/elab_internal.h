@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -15,6 +16,8 @@
 #include "lang/elaborate.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/flat/param_eval.h"
+#include "runtime/geometry/mesh_check.h"
+#include "runtime/geometry/tri_mesh.h"
 
 namespace kanesim::lang::elab {
 
@@ -116,7 +119,9 @@ struct Mod {
   bool empty() const { return !value && sub.empty() && redeclare_type.empty(); }
 };
 
-enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring };
+// Shape: a stdlib part drawn as what it is (kind "rod", "box", "cylinder", "sphere", "mesh";
+// lang/elab_shapes.cpp); it only describes, its Body does the physics.
+enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring, Shape };
 
 struct Node {
   enum Kind { kClass, kVar, kArray } kind = kClass;
@@ -241,6 +246,30 @@ class Elaborator {
   Value Const(double x, VType t = VType::Real);
   Value Scalar(ExprId e, VType t = VType::Real);
 
+  // --- meshes (elab_mesh.cpp) ---
+  // One mesh file read at one scale: its mass properties at unit density, or its problems.
+  struct MeshEntry {
+    bool ok = false;
+    std::uint64_t triangles = 0;
+    double volume = 0;                                      // V  (m³)
+    geometry::Vec3 centre = geometry::Vec3::Zero();          // p_MBcm  (m)
+    geometry::Mat3 unit_inertia = geometry::Mat3::Zero();    // I_Bcm_M at density 1  (m⁵)
+    std::vector<geometry::MeshProblem> problems;
+    std::set<std::pair<int, int>> reported;                 // (file, offset) of places told of the problems
+  };
+  // meshVolume / meshCentre / meshInertia(file, scale).
+  Value EvalMeshCall(const std::string& fn, const ast::Expr& e, const std::vector<Value>& args, const Ctx& ctx);
+  // Reads (once) and reports its problems at `where` (once per place); null when unusable.
+  const MeshEntry* LoadMeshFor(const std::string& path, double scale, Span where);
+  // `file` resolved against the directory of the source file `origin` is in.
+  std::string MeshPath(const std::string& file, Span origin) const;
+  // Where an argument's value was written: follows references to the binding they take
+  // their value from (a MeshBody's `file` to the user's `file = "..."`).
+  Span ValueOrigin(const ast::Expr& arg, const Ctx& ctx);
+  // Records a shape for drawing (elab_shapes.cpp), and links them to their bodies.
+  void EmitShape(Node* n);
+  void LinkShapes();
+
   // --- instances (elab_instantiate.cpp) ---
   Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters);
   void MergeInto(Mod& outer, const Mod& inner, const std::string& what);  // outer wins
@@ -303,6 +332,7 @@ class Elaborator {
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
   std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator
   std::vector<SetOverride> sets_;                      // parsed --set overrides
+  std::map<std::string, MeshEntry> meshes_;            // "path\nscale" -> the mesh read (elab_mesh.cpp)
 };
 
 // Modelica-style attribute names accepted on variables.

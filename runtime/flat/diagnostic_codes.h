@@ -54,7 +54,16 @@ namespace kanesim::flat {
   X(Circular, "E227", "circular definition")                                                  \
   X(WorkLimit, "E228", "elaboration exceeds its work limit")                                  \
   X(EvalTooDeep, "E229", "evaluation nested too deep")                                        \
+  /* meshes (MeshBody; lang/elab_mesh.cpp) */                                                \
+  X(MeshFileMissing, "E230", "mesh file not found")                                           \
+  X(MeshUnreadable, "E231", "mesh file cannot be read")                                       \
+  X(MeshTooLarge, "E232", "mesh over a size limit")                                           \
+  X(MeshNotClosed, "E233", "mesh surface not closed")                                         \
+  X(MeshOrientation, "E234", "mesh triangles inconsistently oriented")                        \
+  X(MeshZeroVolume, "E235", "mesh encloses no volume")                                        \
   X(UnconnectedFrame, "W301", "frame connector is not connected")                            \
+  X(MeshInsideOut, "W302", "mesh triangles face inward (flipped)")                            \
+  X(MeshDegenerate, "W303", "mesh has degenerate or non-manifold parts")                      \
   /* compiler (runtime/compile): the flat mechanism cannot be made a program */                \
   X(RebindCount, "K300", "internal: rt::Rebind given the wrong number of parameter values")   \
   X(WorldMissing, "K301", "internal: no world, or more than one (E217 comes first)")                                       \

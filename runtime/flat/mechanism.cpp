@@ -279,4 +279,15 @@ std::string DumpFlat(const Mechanism& m) {
   return os.str();
 }
 
+const char* ShapeKindName(ShapeKind k) {
+  switch (k) {
+    case ShapeKind::Rod: return "rod";
+    case ShapeKind::Box: return "box";
+    case ShapeKind::Cylinder: return "cylinder";
+    case ShapeKind::Sphere: return "sphere";
+    case ShapeKind::Mesh: return "mesh";
+  }
+  return "?";
+}
+
 }  // namespace kanesim::flat

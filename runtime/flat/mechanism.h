@@ -167,6 +167,26 @@ struct Contact {
   SourceLoc loc;
 };
 
+// How a body looks (the stdlib shapes, annotated __kanesim(primitive = "shape", kind = ...);
+// lang/elab_shapes.cpp): for drawing (`kanesim view`, `run --animation`) and for `kanesim
+// check`'s report of mesh bodies. It carries no physics: its Body does.
+enum class ShapeKind : std::uint8_t { Rod, Box, Cylinder, Sphere, Mesh };
+const char* ShapeKindName(ShapeKind k);
+
+struct Shape {
+  std::string name;          // the shape component: "crank", "links[2]"
+  ShapeKind kind = ShapeKind::Box;
+  std::int32_t body = -1;    // index into bodies: the shape's own Body, drawn in its frame (-1: none)
+  // Rod {L, 0, 0}, Box {lx, ly, lz}, Cylinder {length, radius, 0}, Sphere {radius, 0, 0},
+  // Mesh {scale, 0, 0}: parameter expressions (m). Rod, Box and Cylinder span x = 0 .. length
+  // of the body frame; Sphere is centred on it; a mesh is in its file's frame.
+  Vec3E size{kNoExpr, kNoExpr, kNoExpr};
+  std::string mesh_file;     // Mesh: the path read (resolved against the .mech file)
+  std::string color;         // "#rrggbb" (sRGB), or "" for the next colour of the drawing's palette
+  bool visual = true;        // false: not drawn
+  SourceLoc loc;
+};
+
 struct Output {
   std::string name;
   ExprId expr = kNoExpr;
@@ -196,6 +216,7 @@ struct Mechanism {
   std::vector<Wrench> wrenches;
   std::vector<Contact> contacts;
   std::vector<Output> outputs;
+  std::vector<Shape> shapes;      // drawing only; empty for a model of bare Bodies
   Experiment experiment;
 
   // Index of the state reference, adding it once.

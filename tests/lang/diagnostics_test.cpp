@@ -11,6 +11,8 @@
 //   // repeat: CHAIN "+1" 100000  (replaces each @CHAIN@ in the text by "+1" 100000 times)
 //   // stage: compile             (also compile, when elaboration succeeds: the compiler's
 //                                 K3xx errors, and its W313/W314 warnings for every signal)
+//   // mesh: part.stl open        (writes a test mesh beside the file, tests/lang/mesh_fixtures.h;
+//                                 the file is then loaded from that folder, named by its path)
 //
 // Each expected code must be reported on that line (and column, if given) of the file, with
 // the quoted text somewhere in the rendered diagnostic (message, snippet, notes, hint). Every
@@ -33,6 +35,7 @@
 #include "runtime/engine.h"
 #include "runtime/pipeline/pipeline.h"
 #include "stdlib/stdlib.h"
+#include "tests/lang/mesh_fixtures.h"
 
 namespace kanesim::lang {
 namespace {
@@ -54,6 +57,7 @@ struct DiagFile {
   std::vector<std::pair<std::string, std::string>> overrides;
   std::string model;
   bool compile = false;
+  std::vector<std::pair<std::string, std::string>> meshes;  // (file name, kind) to write first
 };
 
 std::vector<fs::path> DiagnosticFiles() {
@@ -149,6 +153,10 @@ DiagFile LoadDiagFile(const fs::path& path) {
     if (std::string pad = Directive(comment, "pad-to-bytes:"); !pad.empty()) pad_to = std::stoul(pad);
     if (std::string rep = Directive(comment, "repeat:"); !rep.empty()) repeats.push_back(rep);
     if (Directive(comment, "stage:") == "compile") f.compile = true;
+    if (std::string mesh = Directive(comment, "mesh:"); !mesh.empty()) {
+      size_t sp = mesh.find(' ');
+      f.meshes.emplace_back(Trim(mesh.substr(0, sp)), sp == std::string::npos ? "" : Trim(mesh.substr(sp)));
+    }
   }
   if (f.text.size() < pad_to) f.text.append(pad_to - f.text.size(), ' ');
   for (const std::string& rep : repeats) Expand(rep, &f.text);
@@ -196,7 +204,13 @@ TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
   const auto stdlib = kanesim::stdlib::Files();
   Program program;
   Diagnostics diags(&program.sources);
-  if (LoadProgramFromText(f.name, f.text, stdlib, &program, diags)) {
+  std::string display = f.name;
+  if (!f.meshes.empty()) {
+    const std::string dir = meshfix::MeshFixtureDir(GetParam().stem().string());
+    for (const auto& [file, kind] : f.meshes) ASSERT_TRUE(meshfix::WriteMeshFixture(dir + "/" + file, kind)) << kind;
+    display = dir + "/" + f.name;
+  }
+  if (LoadProgramFromText(display, f.text, stdlib, &program, diags)) {
     ElaborateOptions options;
     options.model = f.model;
     for (const auto& [name, value] : f.overrides) options.overrides.push_back({name, value});
@@ -216,8 +230,9 @@ TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
   }
   int main_file = -1;
   for (int i = 0; i < program.sources.NumFiles(); ++i)
-    if (program.sources.Name(i) == f.name) main_file = i;
+    if (program.sources.Name(i) == display) main_file = i;
   EXPECT_EQ(Check(f, diags, main_file), "") << f.name;
+  if (!f.meshes.empty()) std::filesystem::remove_all(fs::path(display).parent_path());
 }
 
 std::string TestName(const ::testing::TestParamInfo<fs::path>& info) {

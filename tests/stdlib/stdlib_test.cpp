@@ -45,6 +45,7 @@ TEST(Stdlib, EveryModelElaboratesOnItsOwn) {
   ASSERT_GE(models.size(), 25u);
   for (const auto& m : models) {
     if (m == "Kanesim.World") continue;
+    if (m == "Kanesim.MeshBody") continue;  // needs a mesh file: tests/scene/mesh_body_test.cpp
     auto e = ElaborateText("model T\n  World world;\n  " + m + " x;\nend T;\n");
     EXPECT_TRUE(e->ok) << m << "\n" << e->errors;
   }

@@ -1,0 +1,198 @@
+// `kanesim view file.mech [run options] [--port N] [--html out.html]`: runs the model and
+// shows the motion in the browser (runtime/viz): the bodies drawn as their shapes beside
+// time plots of the signals, served on 127.0.0.1 or written as one offline page
+// (docs/visualization.md, "kanesim view").
+//
+// The run options are those of `kanesim run` that decide the motion (times, tolerances,
+// integrator, solver, --set), resolved the same way: command line, else the model's
+// experiment annotation, else the defaults. --output chooses the plotted signals (default:
+// the joints' coordinates and speeds, the model's outputs and the energies).
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "cli/common.h"
+#include "cli/number_options.h"
+#include "cli/scene.h"
+#include "runtime/geometry/primitives.h"
+#include "runtime/pipeline/pipeline.h"
+#include "runtime/sim/signal_select.h"
+#include "runtime/sim/simulate.h"
+#include "runtime/viz/server.h"
+#include "runtime/viz/viewer.h"
+
+namespace kanesim::cli {
+namespace {
+
+struct ViewArgs {
+  LoadOptions load;
+  pipeline::RunSpec spec;  // times and tolerances (NaN: not given), resolved like `kanesim run`
+  std::vector<std::string> patterns;
+  std::string solver = "auto";
+  std::string integrator = "auto";
+  std::string html;      // --html out.html: write the offline page instead of serving
+  int port = 0;          // --port: 0 = any free port
+  double timeout = 0;    // --timeout: stop serving after this many seconds (0: at Ctrl-C)
+};
+
+// The unit of a signal, from its name's last part (for the plots' axes).
+std::string UnitOf(const std::string& name) {
+  if (name == "kinetic_energy" || name == "potential_energy") return "J";
+  if (name.find("reaction_force") != std::string::npos || name.find("_force") != std::string::npos) return "N";
+  if (name.find("reaction_torque") != std::string::npos) return "N.m";
+  return "";
+}
+
+// Ground grids under the rolling contacts' planes (one per distinct plane).
+void AddContactPlanes(const flat::Mechanism& mech, viz::ViewerScene* scene) {
+  const std::vector<double> p = flat::EvaluateParams(mech);
+  auto val = [&](flat::ExprId e) { return e == flat::kNoExpr ? 0.0 : flat::EvalParamExpr(mech, p, e); };
+  std::vector<std::pair<geometry::Vec3, double>> done;  // planes drawn: unit normal n, offset n·o
+  for (const auto& c : mech.contacts) {
+    geometry::Vec3 n(val(c.plane_normal[0]), val(c.plane_normal[1]), val(c.plane_normal[2]));
+    const geometry::Vec3 o(val(c.plane_point[0]), val(c.plane_point[1]), val(c.plane_point[2]));
+    if (!n.allFinite() || n.norm() == 0 || !o.allFinite()) continue;
+    n.normalize();
+    bool seen = false;
+    for (const auto& [dn, dd] : done) seen = seen || ((dn - n).norm() < 1e-9 && std::fabs(dd - n.dot(o)) < 1e-9);
+    if (seen) continue;
+    done.push_back({n, n.dot(o)});
+    viz::ViewerDecoration grid;
+    grid.name = "ground (" + c.name + ")";
+    grid.mesh = geometry::DrawGrid(n, 5.0, 0.5, 0.01);
+    geometry::Transform(grid.mesh, geometry::Mat3::Identity(), n * n.dot(o));
+    scene->decorations.push_back(std::move(grid));
+  }
+}
+
+int RunView(const ViewArgs& a) {
+  // The pipeline's stages 1-4, as `kanesim run` calls them (runtime/pipeline/pipeline.h).
+  pipeline::RunSpec spec = a.spec;
+  pipeline::SolverFromName(a.solver, &spec.solver);
+  pipeline::IntegratorFromName(a.integrator, &spec.integrator);
+  spec.outputs = a.patterns;
+  std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
+  if (!model) return kExitModelError;
+  const flat::Mechanism& mech = model->mech;
+  const rt::Program& program = *model->program;
+  pipeline::ResolvedRun run;
+  pipeline::RunProblem problem = pipeline::RunProblem::kNone;
+  if (std::string why = pipeline::ResolveRun(*model, spec, &run, &problem); !why.empty()) {
+    fmt::print(stderr, "kanesim: error: {}{}\n", problem == pipeline::RunProblem::kValue ? "--" : "", why);
+    return kExitModelError;
+  }
+  std::cerr << pipeline::RunWarnings(*model, run.sim.rtol, run.sim.signals);
+  sim::SimOptions& so = run.sim;
+  if (so.signals.empty()) {
+    so.signals = rt::DefaultSignals(program);
+    so.signals.push_back("kinetic_energy");
+    so.signals.push_back("potential_energy");
+  }
+
+  SceneBodies bodies;
+  std::string error;
+  if (!BuildSceneBodies(mech, program, &bodies, &error)) {
+    fmt::print(stderr, "kanesim: error: {}\n", error);
+    return kExitModelError;
+  }
+  const size_t n_shown = so.signals.size();
+  so.signals.insert(so.signals.end(), bodies.pose_signals.begin(), bodies.pose_signals.end());
+  PoseRecorder recorder(nullptr, n_shown, bodies.bodies.size(), true);
+  const sim::SimResult result = pipeline::Run(*model, run, recorder);  // stages 5-6
+  if (result.status == sim::SimResult::Status::kUsageError || result.status == sim::SimResult::Status::kOutputError) {
+    fmt::print(stderr, "kanesim: error: {}\n", result.message);
+    return kExitModelError;
+  }
+  const bool failed = result.status == sim::SimResult::Status::kNumericalFailure;
+  if (failed)
+    fmt::print(stderr, "kanesim: numerical failure at t = {}: {} (showing the motion up to there)\n", result.fail_time,
+               result.message);
+  if (recorder.poses().times.empty()) {
+    fmt::print(stderr, "kanesim: error: no instant was computed; nothing to show\n");
+    return failed ? kExitNumerical : kExitModelError;
+  }
+
+  viz::ViewerScene scene;
+  scene.title = mech.model_name;
+  scene.up_W = bodies.up_W;
+  for (size_t b = 0; b < bodies.bodies.size(); ++b) {
+    viz::ViewerBody vb;
+    vb.name = bodies.bodies[b].name;
+    vb.label = bodies.labels[b];
+    vb.mesh = bodies.bodies[b].mesh;
+    vb.rgba = bodies.bodies[b].rgba;
+    scene.bodies.push_back(std::move(vb));
+  }
+  AddContactPlanes(mech, &scene);
+  scene.poses = recorder.poses();
+  const size_t n_times = scene.poses.times.size();
+  for (size_t i = 0; i < n_shown; ++i) {
+    viz::ViewerSignal s;
+    s.name = recorder.shown_names()[i];
+    s.unit = UnitOf(s.name);
+    s.values.resize(n_times);
+    for (size_t k = 0; k < n_times; ++k) s.values[k] = recorder.shown_values()[k * n_shown + i];
+    scene.signals.push_back(std::move(s));
+  }
+  const int done = failed ? kExitNumerical : kExitOk;
+
+  if (!a.html.empty()) {
+    const viz::PageResult r = viz::WriteViewerHtml(scene, a.html);
+    if (!r.ok) {
+      fmt::print(stderr, "kanesim: error: {}\n", r.error);
+      return kExitModelError;
+    }
+    fmt::print(stderr, "kanesim: wrote {} ({} bodies, {} instants{}, {:.1f} MB); open it in a browser\n", a.html,
+               scene.bodies.size(), r.instants, r.stride > 1 ? fmt::format(", every {}th", r.stride) : "",
+               static_cast<double>(r.bytes) / 1e6);
+    return done;
+  }
+  viz::ServeOptions options;
+  options.port = a.port;
+  options.timeout_s = a.timeout;
+  options.on_ready = [&](const std::string& url) {
+    fmt::print("kanesim: serving {} at {} (Ctrl-C to stop)\n", mech.model_name, url);
+    std::fflush(stdout);
+  };
+  const viz::ServeResult r = viz::ServeViewer(scene, options);
+  if (!r.ok) {
+    fmt::print(stderr, "kanesim: error: {}\n", r.error);
+    return kExitModelError;
+  }
+  return done;
+}
+
+}  // namespace
+
+void AddViewCommand(CLI::App& app, int* exit_code) {
+  auto a = std::make_shared<ViewArgs>();
+  CLI::App* cmd = app.add_subcommand("view", "Simulate a model and show the motion and plots in the browser");
+  cmd->add_option("file", a->load.path, "The .mech file")->required();
+  cmd->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
+  cmd->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
+  AddNumberOption(cmd, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");
+  AddNumberOption(cmd, "--stop-time", &a->spec.stop_time, "Stop time (default: experiment StopTime)");
+  AddNumberOption(cmd, "--interval", &a->spec.interval,
+                  "Output interval (default: experiment Interval, else (stop - start) / 500)");
+  AddNumberOption(cmd, "--rtol", &a->spec.rtol, "Relative tolerance (default: experiment Tolerance)");
+  AddNumberOption(cmd, "--atol", &a->spec.atol, "Absolute tolerance (default: = rtol)");
+  cmd->add_option("--output", a->patterns,
+                  "Signals to plot: a glob over dotted names (repeatable; default: joint coordinates and speeds, "
+                  "outputs, energies)")
+      ->allow_extra_args(false);
+  cmd->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember(pipeline::SolverNames()));
+  cmd->add_option("--integrator", a->integrator, "Time integrator")
+      ->check(CLI::IsMember(pipeline::IntegratorNames()));
+  cmd->add_option("--html", a->html, "Write one offline page (opens by double-click) instead of serving");
+  cmd->add_option("--port", a->port, "Serve on this port of 127.0.0.1 (default: any free port)")
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--timeout", a->timeout, "Stop serving after this many seconds (default: at Ctrl-C)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([a, exit_code] { *exit_code = RunView(*a); });
+}
+
+}  // namespace kanesim::cli
