@@ -1,8 +1,8 @@
 // The Python module's only contact with loading and running: parse + elaborate + compile
 // a model (Load), resolve a run's options and simulate it into memory (Run), summarize it
 // (Check) and sweep it (Sweep). Everything here is plain C++ (no Python types), so that
-// the bindings (module.cpp) stay thin and this file can be re-pointed to the library
-// pipeline API (runtime/pipeline/, when it lands) by changing Load and ResolveRun only.
+// the bindings (module.cpp) stay thin. Loading and run settings go through the library
+// pipeline (runtime/pipeline/pipeline.h), as the command line's.
 #pragma once
 
 #include <functional>
@@ -17,6 +17,7 @@
 
 #include "runtime/engine.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/pipeline/pipeline.h"
 #include "runtime/sim/simulate.h"
 
 namespace kanesim::py {
@@ -45,7 +46,8 @@ struct LoadRequest {
 
 struct LoadedModel {
   LoadRequest request;  // kept to load variants (run(set=...), structural sweeps)
-  std::shared_ptr<const rt::Program> program;
+  std::shared_ptr<const pipeline::Model> model;  // the pipeline's stages 1-3
+  std::shared_ptr<const rt::Program> program;    // model->program
   std::vector<std::string> warnings;  // rendered
   // rt::AvailableSignals, made on first use (output globs select among them).
   const std::vector<std::string>& Signals() const;
