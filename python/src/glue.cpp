@@ -366,4 +366,32 @@ bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* ou
   return true;
 }
 
+bool Linearize(const LoadedModel& model, const LinearizeRequest& r, LinearizeOutput* out, std::string* error) {
+  if (!(r.step > 0.0) || r.step > 0.1) return Fail(error, "step must be in (0, 0.1], got " + sim::FormatShortest(r.step));
+  if (r.has_at && !std::isfinite(r.at)) return Fail(error, "at must be finite, got " + sim::FormatShortest(r.at));
+  const auto t0 = std::chrono::steady_clock::now();
+  const rt::Program& program = *model.program;
+  // The operating point as `kanesim linearize` takes it (cli/cmd_linearize.cpp).
+  lin::OperatingPoint op = lin::StartPoint(program);
+  lin::Status s;
+  if (r.has_at) s = lin::PointAtTime(program, r.at, &op);
+  if (s.ok() && r.equilibrium) {
+    out->has_equilibrium = true;
+    s = lin::FindEquilibrium(program, op, &out->equilibrium);
+    if (s.ok()) op = out->equilibrium.point;
+  }
+  out->point = op;
+  if (s.ok()) {
+    lin::LinearizeOptions o;
+    o.step = r.step;
+    o.inputs = r.inputs;
+    o.outputs = r.outputs;
+    s = lin::Linearize(program, op, o, &out->model);
+    if (s.ok()) lin::ComputeModes(&out->model);
+  }
+  out->status = std::move(s);
+  out->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return true;
+}
+
 }  // namespace kanesim::py

@@ -17,6 +17,7 @@
 
 #include "runtime/engine.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/linearize/linearize.h"
 #include "runtime/pipeline/pipeline.h"
 #include "runtime/sim/simulate.h"
 
@@ -122,5 +123,27 @@ struct SweepTable {
   bool interrupted = false;
 };
 bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* out, std::string* error);
+
+// A linear model about an operating point, as `kanesim linearize` (runtime/linearize,
+// docs/linearize.md): the start values, the motion at `at`, or an equilibrium found from
+// either.
+struct LinearizeRequest {
+  bool has_at = false;
+  double at = 0.0;
+  bool equilibrium = false;
+  std::vector<std::string> inputs, outputs;
+  double step = 1e-3;
+};
+struct LinearizeOutput {
+  lin::LinearModel model;       // with its modes (lin::ComputeModes)
+  lin::OperatingPoint point;    // where it was linearized
+  bool has_equilibrium = false;
+  lin::EquilibriumResult equilibrium;
+  lin::Status status;           // code 1: bad input (a model error), 2: numerical failure
+  double seconds = 0.0;         // wall time
+};
+// False with a usage message (a step outside (0, 0.1], a non-finite time). Otherwise
+// true; out->status says whether the linearization succeeded. Thread-safe like Simulate.
+bool Linearize(const LoadedModel& model, const LinearizeRequest& request, LinearizeOutput* out, std::string* error);
 
 }  // namespace kanesim::py
