@@ -1,4 +1,5 @@
-"""kanesim from Python: load a .mech model, check it, run it into NumPy arrays, sweep it.
+"""kanesim from Python: load a .mech model, check it, run it into NumPy arrays, sweep it,
+linearize it.
 
     import kanesim
     m = kanesim.load("examples/double_pendulum.mech", set={"shoulder_damping": 0.1})
@@ -23,7 +24,7 @@ import numpy as np
 
 from . import _kanesim
 
-__all__ = ["load", "loads", "sweep", "Model", "Result", "Table", "ModelError", "SimulationError", "KanesimWarning"]
+__all__ = ["load", "loads", "sweep", "Model", "Result", "LinearModel", "Table", "ModelError", "SimulationError", "KanesimWarning"]
 __version__ = "0.1.0"
 
 _NAN = float("nan")
@@ -48,7 +49,7 @@ class ModelError(Exception):
 
 class SimulationError(RuntimeError):
     """A numerical failure (the command line's exit 2): the run stopped at .time because of
-    .cause; .result holds the rows computed before it."""
+    .cause; .result holds the rows computed before it (None from Model.linearize)."""
 
     def __init__(self, message: str, time: float, cause: str, result: "Result"):
         super().__init__(message)
@@ -158,6 +159,52 @@ class Result:
         return f"<kanesim.Result {len(self)} rows x {len(self.columns)} columns>"
 
 
+class LinearModel:
+    """A linear state-space model x' = A x + B w, y = C x + D w about an operating point
+    (as `kanesim linearize`; docs/linearize.md).
+
+    .A, .B, .C, .D     NumPy arrays (n x n, n x m, p x n, p x m)
+    .states            state names: the independent coordinates, then the speeds
+    .n_coordinates     how many of the states are coordinates
+    .inputs, .outputs  the names of w and y
+    .eigenvalues       complex NumPy array, sorted by modulus (then imaginary part descending)
+    .modes             one dict per eigenvalue: eigenvalue, natural_frequency, frequency_hz,
+                       damping_ratio, dominant [(state, weight)], shape (complex array)
+    .ignorable         coordinates no other state reads (each gives a zero eigenvalue)
+    .accuracy          {"step", "A", "BCD", "unsteady"}: the achieved accuracy of A and of
+                       B, C, D, and how much A changes along the motion (0 at an equilibrium)
+    .time              the time of the operating point
+    .equilibrium       with equilibrium=True: {"iterations", "relaxation_steps", "residual",
+                       "moved": [(coordinate, change)]}; else None
+    """
+
+    def __init__(self, data: Dict[str, Any]):
+        self.A = data["A"]
+        self.B = data["B"]
+        self.C = data["C"]
+        self.D = data["D"]
+        self.states: List[str] = list(data["states"])
+        self.n_coordinates: int = data["n_coordinates"]
+        self.inputs: List[str] = list(data["inputs"])
+        self.outputs: List[str] = list(data["outputs"])
+        self.eigenvalues: np.ndarray = data["eigenvalues"]
+        self.modes: List[Dict[str, Any]] = list(data["modes"])
+        self.ignorable: List[str] = list(data["ignorable"])
+        self.accuracy: Dict[str, float] = dict(data["accuracy"])
+        self.time: float = data["time"]
+        self.equilibrium: Optional[Dict[str, Any]] = data["equilibrium"]
+        self.seconds: float = data["seconds"]
+
+    @property
+    def stable(self) -> bool:
+        """True when every eigenvalue has a negative real part (asymptotically stable)."""
+        return bool(len(self.eigenvalues) > 0 and np.all(self.eigenvalues.real < 0))
+
+    def __repr__(self) -> str:
+        return (f"<kanesim.LinearModel {len(self.states)} states, {len(self.inputs)} inputs, "
+                f"{len(self.outputs)} outputs at t = {self.time!r}>")
+
+
 class Model:
     """A loaded and compiled model. Immutable: run() may be called from several threads at
     once (each run has its own workspace; the GIL is released while it integrates)."""
@@ -238,6 +285,49 @@ class Model:
             t, cause = failure
             raise SimulationError(f"numerical failure at t = {t!r}: {cause}", t, cause, result)
         return result
+
+    def linearize(
+        self,
+        at: Optional[float] = None,
+        equilibrium: bool = False,
+        inputs: Optional[Sequence[str]] = None,
+        outputs: Optional[Sequence[str]] = None,
+        set: Optional[Mapping[str, Any]] = None,
+        step: float = 1e-3,
+    ) -> LinearModel:
+        """The linear model about an operating point, like `kanesim linearize`: the start
+        values, the motion at time `at`, or (equilibrium=True) a static equilibrium found
+        from either. inputs: "JOINT.tau", "JOINT.tau[k]" or real parameters; outputs:
+        signal names. Raises ModelError for bad input (an unknown input or output, an
+        operating point off the constraints), SimulationError for a numerical failure
+        (singular configuration, no equilibrium), ValueError for a bad step or time."""
+        if set:
+            return self.with_set(set).linearize(at, equilibrium, inputs, outputs, None, step)
+        if isinstance(inputs, str):
+            inputs = [inputs]
+        if isinstance(outputs, str):
+            outputs = [outputs]
+        at_value = _time(at, "at")
+        data = _kanesim.linearize(self._compiled, at is not None, 0.0 if at is None else at_value, bool(equilibrium),
+                                  [str(x) for x in inputs or []], [str(x) for x in outputs or []],
+                                  float(step))
+        failure = data["failure"]
+        if failure is not None:
+            code, message, hint, file, line, column = failure
+            text = f"kanesim linearize: {'error' if code == 1 else 'numerical failure'}: {message}"
+            if line > 0:
+                text += f"\n{file}:{line}:{column}: note: declared here"
+            if hint:
+                text += f"\n  hint: {hint}"
+            if code == 1:
+                raise ModelError(text, "", file if line > 0 else "", line, column)
+            raise SimulationError(text, data["time"], message, None)
+        model = LinearModel(data)
+        if model.accuracy["unsteady"] > 1e-6:
+            _warn([f"the operating point is neither an equilibrium nor a steady motion in these coordinates "
+                   f"(A changes by {model.accuracy['unsteady']:.1e} relative along the motion): the eigenvalues "
+                   f"are those of a frozen instant, not stability exponents (docs/linearize.md, \"Steady motions\")"])
+        return model
 
     def __repr__(self) -> str:
         return f"<kanesim.Model {self.path!r}>"

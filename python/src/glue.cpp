@@ -1,8 +1,7 @@
-// Loading and running for the Python module (glue.h). Binds to what main has today:
-// lang::LoadProgram + lang::Elaborate + rt::Compile for loading, sim::Simulate for runs and
-// batch::ScenarioRunner for sweeps, with the option rules of `kanesim run` and `kanesim
-// sweep` (cli/batch_cli.h). When the library pipeline API lands, Load and ResolveRun are
-// what changes.
+// Loading and running for the Python module (glue.h), through the library pipeline
+// (runtime/pipeline/pipeline.h) as the `kanesim` commands: pipeline::LoadModel loads,
+// pipeline::ResolveRun resolves a run's settings, sim::Simulate (pipeline::Run's stage
+// 5-6) runs into memory, batch::ScenarioRunner sweeps.
 #include "python/src/glue.h"
 
 #include <algorithm>
@@ -12,17 +11,13 @@
 #include <mutex>
 #include <thread>
 
-#include "cli/batch_cli.h"
 #include "lang/diagnostics.h"
-#include "lang/elaborate.h"
-#include "lang/set_argument.h"
-#include "lang/text.h"
 #include "runtime/batch/metrics.h"
 #include "runtime/batch/scenario.h"
 #include "runtime/batch/sweep.h"
 #include "runtime/program.h"
 #include "runtime/sim/signal_select.h"
-#include "stdlib/stdlib.h"
+#include "runtime/pipeline/pipeline.h"
 
 namespace kanesim::py {
 namespace {
@@ -31,95 +26,76 @@ namespace {
 // standard library between programs.
 std::mutex g_load_mutex;
 
-// A compiler message rendered like a language diagnostic (as cli/load.cpp does).
-std::string RenderCompileMessage(const rt::CompileMessage& e, const char* severity, const lang::SourceManager& sm) {
-  std::string out = e.loc.file.empty() ? "kanesim"
-                                       : lang::ClipMessage(e.loc.file) + ":" + std::to_string(e.loc.line) + ":" +
-                                             std::to_string(e.loc.col);
-  out += std::string(": ") + severity + "[" + e.code + "]: " + lang::ClipMessage(e.message) + "\n";
-  for (int f = 0; f < sm.NumFiles(); ++f) {
-    if (sm.Name(f) != e.loc.file || e.loc.line <= 0) continue;
-    const std::int32_t at = sm.Offset(f, e.loc.line, e.loc.col);
-    if (at >= 0) out += lang::RenderSnippet(sm, lang::Span{f, at, at + 1});
-    break;
-  }
-  const size_t shown = std::min(e.notes.size(), lang::Diagnostics::kMaxNotesShown);
-  for (size_t i = 0; i < shown; ++i) {
-    const auto& [loc, msg] = e.notes[i];
-    out += lang::ClipMessage(loc.file) + ":" + std::to_string(loc.line) + ":" + std::to_string(loc.col) +
-           ": note: " + lang::ClipMessage(msg) + "\n";
-  }
-  if (e.notes.size() > shown) out += "  note: " + std::to_string(e.notes.size() - shown) + " more notes not shown\n";
-  if (!e.hint.empty()) out += "  hint: " + lang::ClipMessage(e.hint) + "\n";
-  return out;
-}
-
 bool Fail(std::string* error, std::string message) {
   *error = std::move(message);
   return false;
 }
 
+// The code and place of the first error in rendered diagnostics: its line reads
+// "FILE:LINE:COL: error[CODE]: ..." or "kanesim: error[CODE]: ..." (lang/diagnostics.h).
+void FirstError(const std::string& rendered, ModelErrorInfo* error) {
+  size_t line_start = 0;
+  while (line_start < rendered.size()) {
+    size_t line_end = rendered.find('\n', line_start);
+    if (line_end == std::string::npos) line_end = rendered.size();
+    const std::string line = rendered.substr(line_start, line_end - line_start);
+    line_start = line_end + 1;
+    const size_t at = line.find(": error");
+    if (at == std::string::npos) continue;
+    const size_t open = at + 7;
+    if (open < line.size() && line[open] == '[') {
+      const size_t close = line.find(']', open);
+      if (close != std::string::npos) error->code = line.substr(open + 1, close - open - 1);
+    }
+    // FILE:LINE:COL: the last two colon-separated fields are numbers.
+    const std::string where = line.substr(0, at);
+    const size_t c2 = where.rfind(':');
+    const size_t c1 = c2 == std::string::npos || c2 == 0 ? std::string::npos : where.rfind(':', c2 - 1);
+    if (c1 != std::string::npos) {
+      const std::string l = where.substr(c1 + 1, c2 - c1 - 1), c = where.substr(c2 + 1);
+      const auto digits = [](const std::string& x) {
+        return !x.empty() && x.size() < 10 && std::all_of(x.begin(), x.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+      };
+      if (digits(l) && digits(c)) {
+        error->file = where.substr(0, c1);
+        error->line = std::stoi(l);
+        error->column = std::stoi(c);
+      }
+    }
+    return;
+  }
+}
+
 }  // namespace
 
 bool Load(const LoadRequest& req, LoadedModel* out, ModelErrorInfo* error) {
-  std::lock_guard<std::mutex> lock(g_load_mutex);
-  lang::Program program;
-  lang::Diagnostics diags(&program.sources);
-  lang::ElaborateOptions eo;
-  eo.model = req.model;
-  for (const std::string& s : req.sets) {
-    lang::ParamOverride o;
-    if (!lang::ParseSetArgument(s, &o)) {
-      error->code = "E210";
-      error->rendered = "kanesim: error[E210]: set needs name=value, got '" + lang::ClipMessage(s) + "'\n";
-      return false;
-    }
-    eo.overrides.push_back(std::move(o));
-  }
-  bool ok = req.from_text ? lang::LoadProgramFromText(req.path, req.text, stdlib::Files(), &program, diags)
-                          : lang::LoadProgram(req.path, stdlib::Files(), &program, diags);
-  flat::Mechanism mech;
-  if (ok) ok = lang::Elaborate(program, eo, &mech, diags);
-  if (!ok || diags.HasErrors()) {
-    error->rendered = diags.RenderAll();
-    for (const lang::Diagnostic& d : diags.All()) {
-      if (d.severity != lang::Severity::Error) continue;
-      error->code = lang::DiagCodeString(d.code);
-      if (d.span.valid()) {
-        const lang::LineCol lc = program.sources.Locate(d.span.file, d.span.begin);
-        error->file = program.sources.Name(d.span.file);
-        error->line = lc.line;
-        error->column = lc.col;
-      }
-      break;
-    }
-    if (error->rendered.empty()) error->rendered = "kanesim: error: the model could not be loaded\n";
+  pipeline::RunSpec spec;
+  if (!pipeline::SolverFromName(req.solver, &spec.solver) ||
+      !pipeline::IntegratorFromName(req.integrator, &spec.integrator) ||
+      !pipeline::ReactionsFromName(req.reactions, &spec.reactions)) {
+    error->rendered = "kanesim: error: unknown solver, integrator or reactions choice\n";
     return false;
   }
-  for (const lang::Diagnostic& d : diags.All()) out->warnings.push_back(diags.Render(d));
-
-  rt::CompileOptions copts;
-  copts.solver = cli::SolverFromName(req.solver);
-  copts.integrator = cli::IntegratorFromName(req.integrator);
-  copts.indeterminate = req.reactions == "min-norm" ? rt::IndeterminateReactions::MinNorm : rt::IndeterminateReactions::NaN;
-  rt::CompileResult compiled = rt::Compile(mech, copts);
-  if (!compiled.errors.empty()) {
-    const rt::CompileMessage& first = compiled.errors.front();
-    error->code = first.code;
-    error->file = first.loc.file;
-    error->line = first.loc.line;
-    error->column = first.loc.col;
-    const size_t shown = std::min(compiled.errors.size(), static_cast<size_t>(lang::Diagnostics::kMaxErrors));
-    for (size_t i = 0; i < shown; ++i)
-      error->rendered += RenderCompileMessage(compiled.errors[i], "error", program.sources);
-    if (compiled.errors.size() > shown)
-      error->rendered += "kanesim: " + std::to_string(compiled.errors.size() - shown) + " more errors like these are not shown\n";
+  pipeline::LoadResult r;
+  {
+    std::lock_guard<std::mutex> lock(g_load_mutex);
+    const pipeline::Source source = req.from_text ? pipeline::Source::Text(req.path, req.text)
+                                                  : pipeline::Source::File(req.path);
+    r = pipeline::LoadModel(source, pipeline::LoadOptions{req.model, req.sets, true}, spec);
+  }
+  if (!r.model) {
+    error->rendered = r.diagnostics.empty() ? "kanesim: error: the model could not be loaded\n" : r.diagnostics;
+    FirstError(error->rendered, error);
     return false;
   }
-  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(*compiled.program); !f.code.empty())
-    out->warnings.push_back(RenderCompileMessage(f, "warning", program.sources));
+  // Warnings: the diagnostics' (also on success) and W314 (friction on an indeterminate
+  // normal force), which `kanesim run` prints for every run (pipeline::RunWarnings).
+  if (!r.diagnostics.empty()) out->warnings.push_back(r.diagnostics);
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(*r.model->program); !f.message.empty())
+    out->warnings.push_back(pipeline::RenderCompileMessage(*r.model, f, lang::Severity::Warning));
   out->request = req;
-  out->program = compiled.program;
+  out->program = r.model->program;
+  out->model = std::shared_ptr<const pipeline::Model>(std::move(r.model));
   return true;
 }
 
@@ -131,32 +107,35 @@ const std::vector<std::string>& LoadedModel::Signals() const {
 bool ResolveRun(const LoadedModel& model, const RunRequest& r, sim::SimOptions* so, std::vector<std::string>* warnings,
                 std::string* error) {
   const rt::Program& program = *model.program;
-  if (!cli::IsIntegratorName(r.integrator)) return Fail(error, "integrator '" + r.integrator + "': unknown (" + cli::kIntegratorNames + ")");
-  if (r.linear_solver != "auto" && r.linear_solver != "dense" && r.linear_solver != "klu")
-    return Fail(error, "linear_solver '" + r.linear_solver + "': unknown (auto, dense, klu)");
+  pipeline::RunSpec spec;
+  if (!pipeline::IntegratorFromName(r.integrator, &spec.integrator))
+    return Fail(error, "integrator '" + r.integrator + "': unknown (" + pipeline::JoinNames(pipeline::IntegratorNames()) + ")");
+  if (!pipeline::LinearSolverFromName(r.linear_solver, &spec.linear_solver))
+    return Fail(error, "linear_solver '" + r.linear_solver + "': unknown (" +
+                           pipeline::JoinNames(pipeline::LinearSolverNames()) + ")");
   if (r.projection != "eval" && r.projection != "step")
     return Fail(error, "projection '" + r.projection + "': unknown (eval, step)");
-  for (auto [name, value] : {std::pair{"interval", r.interval}, {"rtol", r.rtol}, {"atol", r.atol}})
-    if (!std::isnan(value) && !(value > 0.0 && std::isfinite(value)))
-      return Fail(error, std::string(name) + " must be a positive number, got " + sim::FormatShortest(value));
+  spec.project_steps = r.projection == "step";
   for (auto [name, value] : {std::pair{"start_time", r.start_time}, {"stop_time", r.stop_time}})
     if (!std::isnan(value) && !std::isfinite(value))
       return Fail(error, std::string(name) + " must be finite, got " + sim::FormatShortest(value));
-  *so = cli::ResolveSimOptions(program.mech->experiment, r.start_time, r.stop_time, r.interval, r.rtol, r.atol,
-                               r.integrator);
-  so->ida_linear_solver = r.linear_solver == "dense" ? sim::IdaLinearSolver::Dense
-                          : r.linear_solver == "klu" ? sim::IdaLinearSolver::Klu
-                                                     : sim::IdaLinearSolver::Auto;
-  so->project_steps = r.projection == "step";
-  if (!r.outputs.empty() && !sim::SelectSignals(model.Signals(), r.outputs, &so->signals, error))
-    return false;
-  if (std::string w = sim::ToleranceWarning(so->rtol); !w.empty()) warnings->push_back(w);
+  spec.start_time = r.start_time;
+  spec.stop_time = r.stop_time;
+  spec.interval = r.interval;
+  spec.rtol = r.rtol;
+  spec.atol = r.atol;
+  spec.outputs = r.outputs;
+  pipeline::ResolvedRun resolved;
+  if (std::string why = pipeline::ResolveRun(*model.model, spec, &resolved); !why.empty()) return Fail(error, why);
+  *so = resolved.sim;
+  // W313 and a suspicious rtol (W314 came with the load).
   if (program.options.indeterminate == rt::IndeterminateReactions::NaN) {
     const std::vector<std::string> which = rt::IndeterminateSignals(program, so->signals);
-    if (!which.empty()) warnings->push_back(rt::IndeterminateWarning(program, which).message);
+    if (!which.empty())
+      warnings->push_back(pipeline::RenderCompileMessage(*model.model, rt::IndeterminateWarning(program, which),
+                                                         lang::Severity::Warning));
   }
-  const sim::OutputGrid grid = sim::ResolveGrid(program, *so);
-  if (std::string why = sim::CheckRun(grid, so->rtol, so->atol); !why.empty()) return Fail(error, why);
+  if (std::string w = sim::ToleranceWarning(so->rtol); !w.empty()) warnings->push_back("kanesim: warning: " + w);
   return true;
 }
 
@@ -384,6 +363,34 @@ bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* ou
   for (std::thread& t : pool) t.join();
   out->failed = failed.load();
   out->interrupted = stop.load();
+  return true;
+}
+
+bool Linearize(const LoadedModel& model, const LinearizeRequest& r, LinearizeOutput* out, std::string* error) {
+  if (!(r.step > 0.0) || r.step > 0.1) return Fail(error, "step must be in (0, 0.1], got " + sim::FormatShortest(r.step));
+  if (r.has_at && !std::isfinite(r.at)) return Fail(error, "at must be finite, got " + sim::FormatShortest(r.at));
+  const auto t0 = std::chrono::steady_clock::now();
+  const rt::Program& program = *model.program;
+  // The operating point as `kanesim linearize` takes it (cli/cmd_linearize.cpp).
+  lin::OperatingPoint op = lin::StartPoint(program);
+  lin::Status s;
+  if (r.has_at) s = lin::PointAtTime(program, r.at, &op);
+  if (s.ok() && r.equilibrium) {
+    out->has_equilibrium = true;
+    s = lin::FindEquilibrium(program, op, &out->equilibrium);
+    if (s.ok()) op = out->equilibrium.point;
+  }
+  out->point = op;
+  if (s.ok()) {
+    lin::LinearizeOptions o;
+    o.step = r.step;
+    o.inputs = r.inputs;
+    o.outputs = r.outputs;
+    s = lin::Linearize(program, op, o, &out->model);
+    if (s.ok()) lin::ComputeModes(&out->model);
+  }
+  out->status = std::move(s);
+  out->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return true;
 }
 

@@ -1,8 +1,8 @@
 // The Python module's only contact with loading and running: parse + elaborate + compile
 // a model (Load), resolve a run's options and simulate it into memory (Run), summarize it
 // (Check) and sweep it (Sweep). Everything here is plain C++ (no Python types), so that
-// the bindings (module.cpp) stay thin and this file can be re-pointed to the library
-// pipeline API (runtime/pipeline/, when it lands) by changing Load and ResolveRun only.
+// the bindings (module.cpp) stay thin. Loading and run settings go through the library
+// pipeline (runtime/pipeline/pipeline.h), as the command line's.
 #pragma once
 
 #include <functional>
@@ -17,6 +17,8 @@
 
 #include "runtime/engine.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/linearize/linearize.h"
+#include "runtime/pipeline/pipeline.h"
 #include "runtime/sim/simulate.h"
 
 namespace kanesim::py {
@@ -45,7 +47,8 @@ struct LoadRequest {
 
 struct LoadedModel {
   LoadRequest request;  // kept to load variants (run(set=...), structural sweeps)
-  std::shared_ptr<const rt::Program> program;
+  std::shared_ptr<const pipeline::Model> model;  // the pipeline's stages 1-3
+  std::shared_ptr<const rt::Program> program;    // model->program
   std::vector<std::string> warnings;  // rendered
   // rt::AvailableSignals, made on first use (output globs select among them).
   const std::vector<std::string>& Signals() const;
@@ -120,5 +123,27 @@ struct SweepTable {
   bool interrupted = false;
 };
 bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* out, std::string* error);
+
+// A linear model about an operating point, as `kanesim linearize` (runtime/linearize,
+// docs/linearize.md): the start values, the motion at `at`, or an equilibrium found from
+// either.
+struct LinearizeRequest {
+  bool has_at = false;
+  double at = 0.0;
+  bool equilibrium = false;
+  std::vector<std::string> inputs, outputs;
+  double step = 1e-3;
+};
+struct LinearizeOutput {
+  lin::LinearModel model;       // with its modes (lin::ComputeModes)
+  lin::OperatingPoint point;    // where it was linearized
+  bool has_equilibrium = false;
+  lin::EquilibriumResult equilibrium;
+  lin::Status status;           // code 1: bad input (a model error), 2: numerical failure
+  double seconds = 0.0;         // wall time
+};
+// False with a usage message (a step outside (0, 0.1], a non-finite time). Otherwise
+// true; out->status says whether the linearization succeeded. Thread-safe like Simulate.
+bool Linearize(const LoadedModel& model, const LinearizeRequest& request, LinearizeOutput* out, std::string* error);
 
 }  // namespace kanesim::py

@@ -2,10 +2,12 @@
 // the other). Thin bindings over glue.h: Python values in, NumPy arrays out, the GIL
 // released while a model loads, integrates or sweeps.
 #include <pybind11/numpy.h>
+#include <pybind11/complex.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <complex>
 #include <cstring>
 #include <functional>
 
@@ -157,6 +159,95 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
   return py::make_tuple(table.header, table.lines, table.failed);
 }
 
+py::array_t<double> Matrix(const Eigen::MatrixXd& m) {
+  py::array_t<double> a({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
+  auto w = a.mutable_unchecked<2>();
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j) w(i, j) = m(i, j);
+  return a;
+}
+
+// A dict with the linear model (A, B, C, D, names, eigenvalues, modes, accuracy, the
+// operating point, the equilibrium search) and, on failure, "failure": (code, message,
+// hint, file, line, column).
+py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equilibrium,
+                   const std::vector<std::string>& inputs, const std::vector<std::string>& outputs, double step) {
+  kanesim::py::LinearizeRequest r;
+  r.has_at = has_at;
+  r.at = at;
+  r.equilibrium = equilibrium;
+  r.inputs = inputs;
+  r.outputs = outputs;
+  r.step = step;
+  kanesim::py::LinearizeOutput out;
+  std::string error;
+  bool ok = false;
+  {
+    py::gil_scoped_release release;
+    ok = kanesim::py::Linearize(model, r, &out, &error);
+  }
+  if (!ok) throw py::value_error(error);
+  py::dict d;
+  d["time"] = out.point.t;
+  d["seconds"] = out.seconds;
+  if (out.has_equilibrium) {
+    const auto& eq = out.equilibrium;
+    py::dict e;
+    e["iterations"] = eq.iterations;
+    e["relaxation_steps"] = eq.relaxation_steps;
+    e["residual"] = eq.residual;
+    py::list moved;
+    for (const auto& [name, change] : eq.moved) moved.append(py::make_tuple(name, change));
+    e["moved"] = moved;
+    d["equilibrium"] = e;
+  } else {
+    d["equilibrium"] = py::none();
+  }
+  if (!out.status.ok()) {
+    const auto& s = out.status;
+    d["failure"] = py::make_tuple(s.code, s.message, s.hint, s.where.file, s.where.line, s.where.col);
+    return d;
+  }
+  d["failure"] = py::none();
+  const kanesim::lin::LinearModel& m = out.model;
+  d["states"] = m.states;
+  d["n_coordinates"] = m.n_coords;
+  d["inputs"] = m.inputs;
+  d["outputs"] = m.outputs;
+  d["A"] = Matrix(m.A);
+  d["B"] = Matrix(m.B);
+  d["C"] = Matrix(m.C);
+  d["D"] = Matrix(m.D);
+  py::array_t<std::complex<double>> eig(static_cast<py::ssize_t>(m.modes.size()));
+  py::list modes;
+  for (size_t k = 0; k < m.modes.size(); ++k) {
+    const kanesim::lin::Mode& md = m.modes[k];
+    eig.mutable_data()[k] = md.lambda;
+    py::dict one;
+    one["eigenvalue"] = md.lambda;
+    one["natural_frequency"] = md.omega_n;
+    one["frequency_hz"] = md.freq_hz;
+    one["damping_ratio"] = md.zeta;
+    py::list dom;
+    for (const auto& [name, w] : md.dominant) dom.append(py::make_tuple(name, w));
+    one["dominant"] = dom;
+    py::array_t<std::complex<double>> shape(static_cast<py::ssize_t>(md.shape.size()));
+    for (Eigen::Index i = 0; i < md.shape.size(); ++i) shape.mutable_data()[i] = md.shape[i];
+    one["shape"] = shape;
+    modes.append(one);
+  }
+  d["eigenvalues"] = eig;
+  d["modes"] = modes;
+  d["ignorable"] = m.ignorable;
+  py::dict acc;
+  acc["step"] = m.h;
+  acc["A"] = m.error_A;
+  acc["BCD"] = m.error_BCD;
+  acc["unsteady"] = m.unsteady;
+  d["accuracy"] = acc;
+  return d;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_kanesim, m) {
@@ -170,4 +261,5 @@ PYBIND11_MODULE(_kanesim, m) {
   m.def("load", &Load);
   m.def("run", &Run);
   m.def("sweep", &Sweep);
+  m.def("linearize", &Linearize);
 }

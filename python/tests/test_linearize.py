@@ -1,0 +1,153 @@
+"""Model.linearize: the pendulum's closed form, bit-for-bit agreement with `kanesim
+linearize -o`, the operating points (at=, equilibrium=, set=) and the errors."""
+import json
+import math
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import kanesim
+
+G, L, M = 9.81, 0.7, 2.0  # tests/linearize/models/pendulum.mech
+
+
+@pytest.fixture(scope="module")
+def pendulum_path(source_dir):
+    return source_dir / "tests" / "linearize" / "models" / "pendulum.mech"
+
+
+@pytest.fixture(scope="module")
+def pendulum(pendulum_path):
+    return kanesim.load(pendulum_path)
+
+
+def _cli_json(exe, tmp_path, *args):
+    out = tmp_path / "lin.json"
+    subprocess.run([exe, "linearize", *[str(a) for a in args], "-o", str(out)], check=True, capture_output=True)
+    with open(out) as f:
+        return json.load(f)
+
+
+def _none_to_nan(rows):
+    return np.array([[math.nan if x is None else x for x in row] for row in rows], dtype=float)
+
+
+def _assert_same_as_cli(lm, d):
+    """Every number of the JSON (17 significant digits: read back exactly) equals Python's."""
+    assert lm.states == d["states"] and lm.n_coordinates == d["n_coordinates"]
+    assert lm.inputs == d["inputs"] and lm.outputs == d["outputs"]
+    assert lm.time == d["time"]
+    for name in "ABCD":
+        want = _none_to_nan(d[name]).reshape(getattr(lm, name).shape)
+        np.testing.assert_array_equal(getattr(lm, name), want, err_msg=name)
+    ev = np.array([complex(re, im) for re, im in d["eigenvalues"]])
+    np.testing.assert_array_equal(lm.eigenvalues, ev)
+    assert len(lm.modes) == len(d["modes"])
+    for mine, theirs in zip(lm.modes, d["modes"]):
+        assert mine["eigenvalue"] == complex(*theirs["eigenvalue"])
+        assert mine["natural_frequency"] == theirs["natural_frequency"]
+        assert mine["frequency_hz"] == theirs["frequency_hz"]
+        assert mine["damping_ratio"] == theirs["damping_ratio"]
+        assert [list(x) for x in mine["dominant"]] == theirs["dominant"]
+        np.testing.assert_array_equal(mine["shape"], np.array([complex(re, im) for re, im in theirs["shape"]]))
+    assert lm.ignorable == d["ignorable"]
+    for key in ("step", "A", "BCD", "unsteady"):
+        assert lm.accuracy[key] == d["accuracy"][key], key
+
+
+def test_pendulum_closed_form(pendulum):
+    lm = pendulum.linearize(inputs=["hinge.tau"], outputs=["tip_y"])
+    assert lm.states == ["hinge.q", "hinge.u"] and lm.n_coordinates == 1
+    assert lm.A.shape == (2, 2) and lm.B.shape == (2, 1) and lm.C.shape == (1, 2) and lm.D.shape == (1, 1)
+    w = math.sqrt(G / L)
+    np.testing.assert_allclose(lm.A, [[0, 1], [-G / L, 0]], atol=1e-9)
+    assert lm.B[1, 0] == pytest.approx(1 / (M * L * L), rel=1e-12)
+    assert lm.eigenvalues.dtype == np.complex128
+    np.testing.assert_allclose(sorted(lm.eigenvalues.imag), [-w, w], rtol=1e-11)
+    assert np.all(np.abs(lm.eigenvalues.real) < 1e-9)
+    assert lm.modes[0]["dominant"][0][0] == "hinge.q"
+    assert lm.modes[0]["natural_frequency"] == pytest.approx(w, rel=1e-11)
+    assert lm.accuracy["A"] < 1e-9 and lm.equilibrium is None and not lm.stable
+    # y = tip_y = l sin(q) - l about q = -pi/2: dy/dq = l cos(-pi/2) = 0, dy/du = 0
+    np.testing.assert_allclose(lm.C, [[0, 0]], atol=1e-9)
+
+
+def test_equals_cli_json(pendulum, pendulum_path, kanesim_exe, tmp_path):
+    lm = pendulum.linearize(inputs=["hinge.tau", "l"], outputs=["tip_y"])
+    d = _cli_json(kanesim_exe, tmp_path, pendulum_path, "--input", "hinge.tau", "--input", "l", "--output", "tip_y")
+    _assert_same_as_cli(lm, d)
+
+
+def test_equilibrium_and_set_equal_cli(examples, kanesim_exe, tmp_path):
+    m = kanesim.load(examples / "fourbar.mech")
+    lm = m.linearize(equilibrium=True)
+    assert lm.equilibrium["residual"] < 1e-10 and lm.equilibrium["iterations"] > 0
+    assert [name for name, _ in lm.equilibrium["moved"]][0] == "crank_pivot.q"
+    _assert_same_as_cli(lm, _cli_json(kanesim_exe, tmp_path, examples / "fourbar.mech", "--equilibrium"))
+    # set= and at= as --set and --at
+    disk = kanesim.load(examples / "rolling_disk_upright.mech")
+    lm = disk.linearize(set={"v": 0.5}, at=0.25)
+    assert lm.time == pytest.approx(0.25, abs=0)
+    _assert_same_as_cli(lm, _cli_json(kanesim_exe, tmp_path, examples / "rolling_disk_upright.mech",
+                                      "--set", "v=0.5", "--at", "0.25"))
+
+
+def test_rolling_disk_lean_mode(examples):
+    # Upright disk at v = 0.5 m/s (below sqrt(g a / 3)): lambda^2 = (4 g / a - 12 v^2 / a^2) / 5
+    m = kanesim.load(examples / "rolling_disk_upright.mech")
+    a = m.check()["parameters"]["a"]["value"]
+    v = 0.5
+    lam2 = (4 * 9.81 / a - 12 * v * v / (a * a)) / 5
+    lm = m.linearize(set={"v": v})
+    assert max(lm.eigenvalues.real) == pytest.approx(math.sqrt(lam2), rel=1e-8)
+    assert set(lm.ignorable) >= {"px.q", "pz.q"}
+
+
+def test_bad_input_is_model_error(pendulum):
+    with pytest.raises(kanesim.ModelError) as e:
+        pendulum.linearize(inputs=["nosuch.tau"])
+    assert "nosuch.tau" in str(e.value)
+    with pytest.raises(kanesim.ModelError):
+        pendulum.linearize(outputs=["nosuch.q"])
+
+
+def test_no_equilibrium_is_simulation_error(pendulum_path):
+    m = kanesim.load(pendulum_path, set={"tau0": 20})  # more than m g l = 13.73 N.m
+    with pytest.raises(kanesim.SimulationError) as e:
+        m.linearize(equilibrium=True)
+    assert "equilibrium" in str(e.value) and e.value.result is None
+    # without equilibrium=True the motion at t = 0.3 linearizes (not an equilibrium: the
+    # warning of the command line, "A changes by 2.7e-02")
+    with pytest.warns(kanesim.KanesimWarning, match="neither an equilibrium"):
+        lm = m.linearize(at=0.3)
+    assert lm.A.shape == (2, 2) and lm.accuracy["unsteady"] > 1e-3
+
+
+def test_bad_settings(pendulum):
+    with pytest.raises(ValueError):
+        pendulum.linearize(step=0)
+    with pytest.raises(ValueError):
+        pendulum.linearize(step=0.5)
+    with pytest.raises(ValueError):
+        pendulum.linearize(at=float("nan"))
+    with pytest.raises(TypeError):
+        pendulum.linearize(at="soon")
+
+
+def test_threads_give_the_same_model(examples):
+    m = kanesim.load(examples / "fourbar.mech")
+    results = [None] * 3
+
+    def work(i):
+        results[i] = m.linearize(equilibrium=True)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results[1:]:
+        np.testing.assert_array_equal(r.A, results[0].A)
+        np.testing.assert_array_equal(r.eigenvalues, results[0].eigenvalues)
