@@ -126,7 +126,7 @@ const char* kKnownFunctions[] = {"sin",   "cos",   "tan",      "asin",     "acos
                                  "cosh",  "tanh",  "exp",      "log",      "sqrt",  "abs",   "sign",     "min",
                                  "max",   "floor", "ceil",     "mod",      "cross", "dot",   "norm",     "transpose",
                                  "identity", "diagonal", "zeros", "ones", "fill", "size", "sum", "integer", "skew",
-                                 "outerProduct", "vector", "meshVolume", "meshCentre", "meshInertia"};
+                                 "outerProduct", "vector", "meshVolume", "meshCentre", "meshInertia", "cat"};
 
 }  // namespace
 
@@ -403,7 +403,9 @@ Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
     } else {
       if (v.shape != elem_shape) {
         diags_.Error(DiagCode::SizeMismatch, a->span, "array elements have different sizes (" +
-                                                          ShapeStr(elem_shape) + " and " + ShapeStr(v.shape) + ")");
+                                                          ShapeStr(elem_shape) + " and " + ShapeStr(v.shape) + ")")
+            .hint = "{a, b} makes each element a row of a new dimension; to join arrays end to end write "
+                    "cat(1, a, b) or [a; b]";
         return Value::Invalid();
       }
       if ((r.type == VType::String) != (v.type == VType::String) ||
@@ -469,31 +471,7 @@ Value Elaborator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
   return r;
 }
 
-Value Elaborator::EvalMatrix(const ast::Expr& e, const Ctx& ctx) {
-  Value r;
-  r.type = VType::Integer;
-  size_t cols = 0;
-  for (size_t ri = 0; ri < e.rows.size(); ++ri) {
-    const auto& row = e.rows[ri];
-    if (ri == 0) cols = row.size();
-    if (row.size() != cols) {
-      diags_.Error(DiagCode::SizeMismatch, e.span, "matrix rows have different lengths");
-      return Value::Invalid();
-    }
-    for (const auto& x : row) {
-      Value v = Eval(*x, ctx);
-      if (!v.valid) return Value::Invalid();
-      if (!v.shape.empty() || v.type == VType::String) {
-        diags_.Error(DiagCode::SizeMismatch, x->span, "matrix entries must be scalars");
-        return Value::Invalid();
-      }
-      r.type = Promote(r.type, v.type);
-      r.e.push_back(v.e[0]);
-    }
-  }
-  r.shape = {static_cast<int>(e.rows.size()), static_cast<int>(cols)};
-  return r;
-}
+// EvalMatrix ([a, b; c, d]) is in elab_concat.cpp, with cat().
 
 Value Elaborator::EvalRange(const ast::Expr& e, const Ctx& ctx) {
   auto& pool = m_->exprs;
@@ -582,6 +560,7 @@ Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
     if (!args.back().valid) return Value::Invalid();
   }
   if (fn == "meshVolume" || fn == "meshCentre" || fn == "meshInertia") return EvalMeshCall(fn, e, args, ctx);
+  if (fn == "cat") return EvalCat(e, args);  // elab_concat.cpp
   auto want = [&](size_t n) {
     if (args.size() == n) return true;
     diags_.Error(DiagCode::BadCall, e.span,

@@ -227,6 +227,11 @@ class Elaborator {
   Value EvalRange(const ast::Expr& e, const Ctx& ctx);
   Value EvalIf(const ast::Expr& e, const Ctx& ctx);
   Value EvalCall(const ast::Expr& e, const Ctx& ctx);
+  // Concatenation (elab_concat.cpp): cat(k, ...), and EvalMatrix above.
+  Value EvalCat(const ast::Expr& e, const std::vector<Value>& args);
+  Value Concatenate(size_t k, const std::vector<Value>& parts, const std::vector<Span>& spans,
+                    const std::vector<std::string>& names, Span whole, const std::string& what,
+                    const std::string& hint);
   // Operators (elab_operators.cpp): chains of them with an explicit stack.
   Value EvalOperators(const ast::Expr& root, const Ctx& ctx);
   Value UnaryOp(const ast::Expr& e, Value v);
