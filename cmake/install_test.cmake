@@ -13,7 +13,7 @@ foreach(f ${BINDIR}/kanesim ${DOCDIR}/README.md ${DOCDIR}/language.md ${DOCDIR}/
     message(FATAL_ERROR "not installed: ${PREFIX}/${f}")
   endif()
 endforeach()
-if(EXISTS ${PREFIX}/kanesim OR EXISTS ${PREFIX}/lib/kanesim)
+if(EXISTS ${PREFIX}/kanesim/__init__.py OR EXISTS ${PREFIX}/lib/kanesim/__init__.py)
   message(FATAL_ERROR "the Python module was installed by cmake --install (it is pip's)")
 endif()
 set(work ${PREFIX}/work)
@@ -32,4 +32,19 @@ if(NOT n EQUAL 12 OR NOT header STREQUAL "time,shoulder.q,shoulder.u,elbow.q,elb
    OR NOT first STREQUAL "0,1.5707963267948966,0,1.5707963267948966,0")
   message(FATAL_ERROR "unexpected output of the installed kanesim (${n} lines):\n${header}\n${first}")
 endif()
-message(STATUS "installed into ${PREFIX}; the installed kanesim ran examples/double_pendulum.mech")
+
+# The mesh example from the prefix, with its animation: the installed mesh module
+# (PREFIX/MODULEDIR/libkanesim_geometry_assimp.so) reads the STL parts and writes the glTF.
+set(assimp_module ${PREFIX}/${MODULEDIR}/libkanesim_geometry_assimp.so)
+if(NOT EXISTS ${assimp_module} OR NOT EXISTS ${PREFIX}/${MODULEDIR}/libkanesim_viz_http.so)
+  message(FATAL_ERROR "the dlopen modules were not installed in ${PREFIX}/${MODULEDIR}")
+endif()
+set(ENV{KANESIM_GEOMETRY_MODULE} ${assimp_module})
+execute_process(COMMAND ${PREFIX}/${BINDIR}/kanesim run ${PREFIX}/${DOCDIR}/examples/slider_crank_meshes.mech
+                        --stop-time 0.1 -o meshes.csv --animation meshes.glb
+                WORKING_DIRECTORY ${work} RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${work}/meshes.glb)
+  message(FATAL_ERROR "the installed kanesim failed on the mesh example (${rc}):\n${err}")
+endif()
+message(STATUS "installed into ${PREFIX}; the installed kanesim ran examples/double_pendulum.mech and "
+               "examples/slider_crank_meshes.mech (--animation) with the installed mesh module")

@@ -1,56 +1,37 @@
 #include "runtime/viz/http_module.h"
 
-#include <dlfcn.h>
-
-#include <cstdlib>
-#include <filesystem>
+#include "runtime/util/dynamic_module.h"
 
 namespace kanesim::viz::http {
 namespace {
-
-constexpr const char* kFileName = "libkanesim_viz_http.so";
 
 struct Loaded {
   const ModuleApi* api = nullptr;
   std::string error;
 };
 
-std::vector<std::string> Candidates() {
-  std::vector<std::string> paths;
-  if (const char* env = std::getenv("KANESIM_VIZ_HTTP_MODULE"); env && *env) return {env};
-  std::error_code ec;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) paths.push_back((exe.parent_path() / kFileName).string());
-#ifdef KANESIM_VIZ_HTTP_MODULE_PATH
-  paths.emplace_back(KANESIM_VIZ_HTTP_MODULE_PATH);
-#endif
-  return paths;
-}
-
 Loaded LoadOnce() {
+  dynamic_module::Spec spec;
+  spec.file_name = "libkanesim_viz_http.so";
+  spec.env_variable = "KANESIM_VIZ_HTTP_MODULE";
+#ifdef KANESIM_VIZ_HTTP_MODULE_PATH
+  spec.build_path = KANESIM_VIZ_HTTP_MODULE_PATH;
+#else
+  spec.build_path = nullptr;
+#endif
+  spec.entry_point = kEntryPoint;
+  spec.what = "the viewer's HTTP server library";
+  spec.global_symbols = false;
   Loaded out;
-  std::string tried;
-  for (const std::string& path : Candidates()) {
-    if (!std::filesystem::exists(path)) {
-      tried += "\n  " + path + " (absent)";
-      continue;
-    }
-    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // its symbols stay its own
-    if (!handle) {
-      tried += "\n  " + path + " (" + dlerror() + ")";
-      continue;
-    }
-    auto entry = reinterpret_cast<EntryFunction>(dlsym(handle, kEntryPoint));
-    const ModuleApi* api = entry ? entry() : nullptr;
-    if (!api || api->abi_version != kAbiVersion) {
-      tried += "\n  " + path + " (stale or not the kanesim viewer's HTTP module)";
-      dlclose(handle);
-      continue;
-    }
-    out.api = api;  // the handle stays open for the life of the process
-    return out;
-  }
-  out.error = std::string("cannot load the viewer's HTTP server library ") + kFileName + "; tried:" + tried;
+  dynamic_module::Open(
+      spec,
+      [&out](void* entry) {
+        const ModuleApi* api = reinterpret_cast<EntryFunction>(entry)();
+        if (!api || api->abi_version != kAbiVersion) return false;
+        out.api = api;
+        return true;
+      },
+      &out.error);
   return out;
 }
 
