@@ -27,21 +27,24 @@ std::vector<std::string> Candidates(const Spec& spec) {
 }  // namespace
 
 bool Open(const Spec& spec, const std::function<bool(void* entry)>& accept, std::string* error) {
-  std::string tried;
+  std::string tried;  // "path (why), path (why)": one line, so a diagnostic can quote it
+  auto note = [&tried](const std::string& path, const std::string& why) {
+    tried += (tried.empty() ? " " : ", ") + path + " (" + why + ")";
+  };
   for (const std::string& path : Candidates(spec)) {
     if (!std::filesystem::exists(path)) {
-      tried += "\n  " + path + " (absent)";
+      note(path, "absent");
       continue;
     }
     // RTLD_LOCAL by default: the module's libraries keep their symbols to themselves.
     void* handle = dlopen(path.c_str(), RTLD_NOW | (spec.global_symbols ? RTLD_GLOBAL : RTLD_LOCAL));
     if (!handle) {
-      tried += "\n  " + path + " (" + dlerror() + ")";
+      note(path, dlerror());
       continue;
     }
     void* entry = dlsym(handle, spec.entry_point);
     if (!entry || !accept(entry)) {
-      tried += "\n  " + path + " (stale, or not " + spec.what + ")";
+      note(path, std::string("stale, or not ") + spec.what);
       dlclose(handle);
       continue;
     }

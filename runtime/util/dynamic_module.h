@@ -31,4 +31,28 @@ struct Spec {
 // life of the process. Returns false with *error listing every path tried and why not.
 bool Open(const Spec& spec, const std::function<bool(void* entry)>& accept, std::string* error);
 
+// A module's table of functions, or why there is none.
+template <class Api>
+struct Loaded {
+  const Api* api = nullptr;
+  std::string error;
+};
+
+// The common case: the entry point is `const Api* entry()` and the table's first field,
+// `abi_version`, must equal this build's. Call once per process (a function-local static).
+template <class Api>
+Loaded<Api> LoadTable(const Spec& spec, int abi_version) {
+  Loaded<Api> out;
+  Open(
+      spec,
+      [&out, abi_version](void* entry) {
+        const Api* api = reinterpret_cast<const Api* (*)()>(entry)();
+        if (!api || api->abi_version != abi_version) return false;
+        out.api = api;
+        return true;
+      },
+      &out.error);
+  return out;
+}
+
 }  // namespace kanesim::dynamic_module

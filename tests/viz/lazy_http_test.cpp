@@ -41,7 +41,7 @@ TEST(LazyHttp, ModuleMissing) {
   options.timeout_s = 5;
   const ServeResult r = ServeViewer(testing::CirclingScene('z', 3), options);
   EXPECT_FALSE(r.ok);
-  EXPECT_EQ(r.error, std::string("cannot load the viewer's HTTP server library libkanesim_viz_http.so; tried:\n  ") +
+  EXPECT_EQ(r.error, std::string("cannot load the viewer's HTTP server library libkanesim_viz_http.so; tried: ") +
                          path + " (absent)");
 }
 
