@@ -70,6 +70,10 @@ TEST(SceneGaps, BodyShapeMeshIsLooksOnly) {
     EXPECT_EQ(Check(dir, name + "_pose.glb " + name + "_pose.csv --up 0,0,1 --body cart=s.frame_b:cart "
                     "--body link=j.frame_b:link.body --bounds link=0,1,-0.05,0.05,-0.025,0.025"), "") << name;
   }
+  // The viewer draws it too: its page holds the body's label with the file.
+  clitest::Result v = Kanesim("view mm.mech --html mm.html", dir);
+  ASSERT_EQ(v.rc, 0) << v.err;
+  EXPECT_TRUE(clitest::Has(clitest::Slurp(dir + "/mm.html"), "BodyShape link (")) << v.err;
   // `check` reports no mesh body: the mesh gives no mass properties.
   clitest::Result c = Kanesim("check mm.mech", dir);
   EXPECT_EQ(c.rc, 0) << c.err;
@@ -93,6 +97,9 @@ TEST(SceneGaps, RollingDiskDrawnAsDisk) {
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_EQ(Check(dir, "disk.glb disk.csv --up 0,1,0 --body disk=free.frame_b:disk "
                   "--bounds disk=-0.3,0.3,-0.3,0.3,-0.015,0.015"), "");
+  r = Kanesim("view '" + ex + "' --stop-time 1 --html disk.html", dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_TRUE(clitest::Has(clitest::Slurp(dir + "/disk.html"), "rolling disk contact, radius 0.3 m"));
 }
 
 // If this fails, --show-frames does not draw each joint frame that moves as three axes at the
