@@ -24,7 +24,7 @@ bool AnimationRun::Prepare(const flat::Mechanism& mech, const rt::Program& progr
     return false;
   }
   std::string error;
-  if (!BuildSceneBodies(mech, program, &scene_, &error)) {
+  if (!BuildSceneBodies(mech, program, &scene_, &error, show_frames_)) {
     fmt::print(stderr, "kanesim: error: {}\n", error);
     return false;
   }

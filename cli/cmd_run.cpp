@@ -42,6 +42,7 @@ struct RunArgs {
   std::string reactions = "nan";
   bool stats = false;
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
+  bool show_frames = false;  // --show-frames: the joints' frames as small axes in the animation
 };
 
 // A one-line bar on stderr, drawn only when stderr is a terminal and the run has taken
@@ -108,7 +109,7 @@ int RunCommand(const RunArgs& a) {
     return kExitModelError;
   }
   sim::SimOptions& so = run.sim;
-  AnimationRun animation(a.animation);  // the bodies' poses ride along with the CSV's signals
+  AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
   if (!animation.Prepare(model->mech, program, &so.signals)) return kExitModelError;
 
   // The output: never the model itself, and one writer at a time (locked while written;
@@ -200,8 +201,11 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember(pipeline::ReactionsNames()));
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
-  run->add_option("--animation", a->animation,
-                  "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");
+  CLI::Option* animation =
+      run->add_option("--animation", a->animation,
+                      "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");
+  run->add_flag("--show-frames", a->show_frames, "With --animation: draw every joint's frames as small x/y/z axes")
+      ->needs(animation);
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }
 

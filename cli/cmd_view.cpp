@@ -37,6 +37,7 @@ struct ViewArgs {
   std::string html;      // --html out.html: write the offline page instead of serving
   int port = 0;          // --port: 0 = any free port
   double timeout = 0;    // --timeout: stop serving after this many seconds (0: at Ctrl-C)
+  bool show_frames = false;  // --show-frames: every joint's frames as small axes
 };
 
 // The unit of a signal, from its name's last part (for the plots' axes).
@@ -95,7 +96,7 @@ int RunView(const ViewArgs& a) {
 
   SceneBodies bodies;
   std::string error;
-  if (!BuildSceneBodies(mech, program, &bodies, &error)) {
+  if (!BuildSceneBodies(mech, program, &bodies, &error, a.show_frames)) {
     fmt::print(stderr, "kanesim: error: {}\n", error);
     return kExitModelError;
   }
@@ -187,6 +188,7 @@ void AddViewCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember(pipeline::SolverNames()));
   cmd->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember(pipeline::IntegratorNames()));
+  cmd->add_flag("--show-frames", a->show_frames, "Draw every joint's frames as small x/y/z axes");
   cmd->add_option("--html", a->html, "Write one offline page (opens by double-click) instead of serving");
   cmd->add_option("--port", a->port, "Serve on this port of 127.0.0.1 (default: any free port)")
       ->check(CLI::Range(0, 65535));

@@ -10,13 +10,17 @@ namespace kanesim::cli {
 
 void PrintMeshBodies(const flat::Mechanism& mech, std::ostream& out) {
   size_t n = 0;
-  for (const auto& s : mech.shapes) n += s.kind == flat::ShapeKind::Mesh && s.body >= 0;
+  // A BodyShape's mesh (no `volume`) is drawn only; its mass properties are given.
+  auto solid = [&](const flat::Shape& s) {
+    return s.kind == flat::ShapeKind::Mesh && s.body >= 0 && mech.FindParam(s.name + ".volume") >= 0;
+  };
+  for (const auto& s : mech.shapes) n += solid(s);
   if (n == 0) return;
   const std::vector<double> p = flat::EvaluateParams(mech);
   auto val = [&](flat::ExprId e) { return flat::EvalParamExpr(mech, p, e); };
   out << fmt::format("  mesh bodies {} (mass properties from the closed mesh, uniform density)\n", n);
   for (const auto& s : mech.shapes) {
-    if (s.kind != flat::ShapeKind::Mesh || s.body < 0) continue;
+    if (!solid(s)) continue;
     const flat::Body& b = mech.bodies[static_cast<size_t>(s.body)];
     const int vi = mech.FindParam(s.name + ".volume");
     const double volume = vi >= 0 ? p[static_cast<size_t>(vi)] : 0;

@@ -8,6 +8,7 @@
 #include "cli/scene.h"
 #include "runtime/geometry/mesh_load.h"
 #include "runtime/geometry/primitives.h"
+#include "runtime/program.h"
 
 namespace kanesim::cli {
 
@@ -93,9 +94,60 @@ VisualMesh DrawBareBody(double m, const Vec3& c, const Mat3& I) {
   return s;
 }
 
+// --show-frames: each joint's frame_a and frame_b (once each) as three nodes. A frame F is
+// fixed in a simulated body B; its rotation is not a signal, but that of a body frame G on the
+// same B is (<body>.R): R_WF = R_WG R_BG^T R_BF, so the node takes G's rotation and F's origin,
+// and its axes are drawn turned by the constant R_GF = R_BG^T R_BF. Frames fixed in the world
+// are not drawn (the viewer's world axes show W).
+void AddFrameAxes(const flat::Mechanism& mech, const rt::Program& program,
+                  const std::unordered_set<std::string>& have, double length, SceneBodies* out) {
+  if (!(length > 0)) {
+    double extent = 0;
+    for (const auto& b : out->bodies)
+      for (const auto& v : b.mesh.vertices) extent = std::max(extent, v.norm());
+    length = extent > 0 ? extent / 10 : 0.1;
+  }
+  const std::array<VisualMesh, 3> axes = geometry::DrawAxes(length);
+  static constexpr std::array<std::array<float, 4>, 3> kAxisColor{
+      {{0.85f, 0.1f, 0.1f, 1.0f}, {0.1f, 0.7f, 0.1f, 1.0f}, {0.1f, 0.2f, 0.9f, 1.0f}}};
+  std::unordered_set<int> done;
+  for (const flat::Joint& j : mech.joints) {
+    for (const std::int32_t f : {j.frame_a, j.frame_b}) {
+      if (f < 0 || !done.insert(f).second) continue;
+      const rt::FramePlace& place = program.frames[static_cast<size_t>(f)];
+      if (place.body < 0) continue;  // the world's, or not simulated
+      const std::string& frame = mech.frames[static_cast<size_t>(f)].name;
+      const rt::BodySignalSource* g = nullptr;
+      for (const auto& bs : program.body_signals)
+        if (program.frames[static_cast<size_t>(bs.frame)].body == place.body) {
+          g = &bs;
+          break;
+        }
+      if (!g) continue;  // a body without mass properties: no rotation signal to follow
+      std::vector<std::string> signals;
+      for (int k = 1; k <= 3; ++k) signals.push_back(fmt::format("{}.r[{}]", frame, k));
+      for (int k = 0; k < 9; ++k) signals.push_back(fmt::format("{}.R[{},{}]", g->name, k / 3 + 1, k % 3 + 1));
+      if (!std::all_of(signals.begin(), signals.end(), [&](const std::string& s) { return have.count(s) > 0; }))
+        continue;
+      const Mat3 R_GF = program.frames[static_cast<size_t>(g->frame)].R_BF.transpose() * place.R_BF;
+      for (int i = 0; i < 3; ++i) {
+        geometry::AnimatedBody ab;
+        ab.name = fmt::format("axes_{}_{}", frame, "xyz"[i]);
+        ab.mesh = axes[static_cast<size_t>(i)];
+        geometry::Transform(ab.mesh, R_GF, Vec3::Zero());
+        ab.rgba = kAxisColor[static_cast<size_t>(i)];
+        out->bodies.push_back(std::move(ab));
+        out->labels.push_back(fmt::format("{} axis of frame {} (joint {})", "xyz"[i], frame, j.name));
+        out->pose_signals.insert(out->pose_signals.end(), signals.begin(), signals.end());
+      }
+    }
+  }
+}
+
 }  // namespace
 
-bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, SceneBodies* out, std::string* error) {
+bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, SceneBodies* out, std::string* error,
+                      bool show_frames, double frame_axes_length) {
   *out = SceneBodies{};
   const std::vector<double> p = flat::EvaluateParams(mech);
   auto val = [&](flat::ExprId e) { return e == flat::kNoExpr ? 0.0 : flat::EvalParamExpr(mech, p, e); };
@@ -107,6 +159,12 @@ bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, S
   std::vector<const flat::Shape*> shape_of(mech.bodies.size(), nullptr);
   for (const auto& s : mech.shapes)
     if (s.body >= 0) shape_of[static_cast<size_t>(s.body)] = &s;
+  // The RollingDisk contact whose centre is frame f, if any.
+  auto disk_of = [&](std::int32_t f) -> const flat::Contact* {
+    for (const flat::Contact& c : mech.contacts)
+      if (c.type == flat::ContactType::RollingDisk && c.frame == f) return &c;
+    return nullptr;
+  };
   const std::vector<std::string> available = rt::AvailableSignals(program);
   const std::unordered_set<std::string> have(available.begin(), available.end());
   for (size_t i = 0; i < mech.bodies.size(); ++i) {
@@ -129,8 +187,17 @@ bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, S
       ab.mesh = DrawShape(*s, size, error);
       if (!error->empty()) return false;
       static const char* kClass[] = {"Rod", "Box", "Cylinder", "Sphere", "MeshBody"};
-      label = fmt::format("{} {}", kClass[static_cast<int>(s->kind)], s->name);
+      const bool looks_only = s->kind == flat::ShapeKind::Mesh && mech.FindParam(s->name + ".volume") < 0;
+      label = fmt::format("{} {}", looks_only ? "BodyShape" : kClass[static_cast<int>(s->kind)], s->name);
       if (s->kind == flat::ShapeKind::Mesh) label += " (" + s->mesh_file + ")";
+    } else if (const flat::Contact* d = disk_of(b.frame)) {
+      // A bare Body rolling on a RollingDisk contact: the disk, centred on the contact's frame
+      // (its centre) with its axis, radius / 10 thick.
+      const double radius = val(d->radius);
+      ab.name = b.name;
+      const Vec3 axis(val(d->axis[0]), val(d->axis[1]), val(d->axis[2]));
+      if (radius > 0 && axis.allFinite() && axis.norm() > 0) ab.mesh = geometry::DrawDisk(radius, radius / 10, axis);
+      label = fmt::format("Body {} (rolling disk {}, radius {:.6g} m)", b.name, d->name, radius);
     } else {
       const Vec3 c(val(b.r_cm[0]), val(b.r_cm[1]), val(b.r_cm[2]));
       Mat3 I;
@@ -145,6 +212,7 @@ bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, S
     out->labels.push_back(label);
     out->pose_signals.insert(out->pose_signals.end(), signals.begin(), signals.end());
   }
+  if (show_frames) AddFrameAxes(mech, program, have, frame_axes_length, out);
   return true;
 }
 

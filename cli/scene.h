@@ -35,7 +35,12 @@ struct SceneBodies {
 
 // Builds the drawings with the parameter values of this run; false with a message when a
 // mesh cannot be read for drawing (it was read at elaboration, so only if it changed since).
-bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, SceneBodies* out, std::string* error);
+// With `show_frames` (--show-frames), every joint's frame_a and frame_b that moves with a body
+// is drawn as small axes too: three nodes "axes_<frame>_x|y|z" (red, green, blue rods of
+// `frame_axes_length`, or a tenth of the largest drawing when 0), placed at the frame's
+// origin <frame>.r[*] and turned with it.
+bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, SceneBodies* out, std::string* error,
+                      bool show_frames = false, double frame_axes_length = 0);
 
 // A sink in front of another: the first `n_shown` signals of each row go on to `inner` (the
 // CSV), the rest are the pose signals, kept. Optionally keeps the shown values too (the
@@ -66,7 +71,8 @@ class PoseRecorder final : public sim::SignalSink {
 // and are written through runtime/geometry's glTF export after the run.
 class AnimationRun {
  public:
-  explicit AnimationRun(std::string path) : path_(std::move(path)) {}
+  explicit AnimationRun(std::string path, bool show_frames = false)
+      : path_(std::move(path)), show_frames_(show_frames) {}
   bool enabled() const { return !path_.empty(); }
   // Adds the pose signals to `signals` (the CSV's; filled with the defaults when empty).
   // False, with a message on stderr, when the path or the drawings are unusable.
@@ -79,6 +85,7 @@ class AnimationRun {
 
  private:
   std::string path_;
+  bool show_frames_ = false;
   SceneBodies scene_;
   std::unique_ptr<PoseRecorder> recorder_;
   size_t n_shown_ = 0;

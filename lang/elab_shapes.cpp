@@ -22,6 +22,9 @@ const ShapeRow kShapeRows[] = {
     {"cylinder", flat::ShapeKind::Cylinder, {"length", "radius", nullptr}},
     {"sphere", flat::ShapeKind::Sphere, {"radius", nullptr, nullptr}},
     {"mesh", flat::ShapeKind::Mesh, {"scale", nullptr, nullptr}},
+    // BodyShape: a Body with given mass properties drawn as a mesh (no `volume` parameter:
+    // the mesh is read for drawing only, cli/scene.cpp LoadVisualMesh).
+    {"visual_mesh", flat::ShapeKind::Mesh, {"scale", nullptr, nullptr}},
 };
 
 // The colour names a shape's `color` accepts, as sRGB.
@@ -76,6 +79,7 @@ void Elaborator::EmitShape(Node* n) {
     if (!f || f->kind != Node::kVar) return;
     Value v = GetVar(f, Span{});
     if (!v.valid || v.type != VType::String || v.s.size() != 1) return;
+    if (v.s[0].empty() && n->prim_kind == "visual_mesh") return;  // a BodyShape without a file: its inertia box
     Span origin = f->decl ? f->decl->name_span : Span{};
     const ModValue* b = f->mod.value ? &*f->mod.value : f->eq_binding ? &*f->eq_binding : nullptr;
     if (b) origin = b->expr ? ValueOrigin(*b->expr, Ctx{b->scope, b->iters.get()}) : b->span;
