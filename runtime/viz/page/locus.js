@@ -75,7 +75,9 @@
       xlabel: 'real part [1/s]', ylabel: 'imaginary part [rad/s]', drawAxesAtZero: true,
       xRangePad: 12, yRangePad: 12,
     });
-    // Real parts against the parameter: one series per eigenvalue (by its index).
+    // Real parts against the parameter: one series per eigenvalue index, drawn as points
+    // only (the index follows the sort by modulus, which swaps a pair ±σ between values:
+    // lines would zigzag between branches).
     const rrows = [];
     for (let i = 0; i < n; ++i) {
       const row = [values[i]];
@@ -85,7 +87,7 @@
     const rlabels = [name];
     for (let k = 0; k < m; ++k) rlabels.push('Re λ' + (k + 1));
     const real = new Dygraph(document.getElementById('real'), rrows, {
-      labels: rlabels, drawPoints: true, strokeWidth: 1, pointSize: 2, legend: 'onmouseover',
+      labels: rlabels, drawPoints: true, strokeWidth: 0, pointSize: 2.5, legend: 'onmouseover',
       labelsSeparateLines: true, xlabel: name, ylabel: 'real part [1/s]', drawAxesAtZero: true, yRangePad: 12,
     });
     hook.locusPoints = () => {
