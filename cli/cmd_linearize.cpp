@@ -19,6 +19,8 @@
 #include "runtime/flat/number.h"
 #include "runtime/linearize/linearize.h"
 #include "runtime/program.h"
+#include "runtime/viz/locus_page.h"
+#include "runtime/viz/viewer.h"
 
 namespace kanesim::cli {
 
@@ -34,7 +36,31 @@ struct LinearizeArgs {
   std::vector<std::string> inputs, outputs;
   double step = 1e-3;
   std::string sweep;
+  std::string html_path;
+  bool frozen = false;
 };
+
+// Above this change of A along the motion (relative) the operating point is no equilibrium
+// nor steady motion in these coordinates and the eigenvalues are no stability exponents.
+constexpr double kUnsteadyLimit = 1e-6;
+
+std::string UnsteadyCause(double unsteady) {
+  return fmt::format(
+      "the operating point is neither an equilibrium nor a steady motion in these coordinates (A changes by {:.1e} "
+      "relative along the motion): the eigenvalues would be those of a frozen instant, not stability exponents",
+      unsteady);
+}
+
+// The refusal (exit 2) for an unsteady operating point without --frozen.
+int FailUnsteady(double t, double unsteady, const std::string& where) {
+  std::fflush(stdout);  // rows printed before come first
+  fmt::print(stderr, "kanesim linearize: numerical failure at t = {}{}: {}\n", t, where, UnsteadyCause(unsteady));
+  fmt::print(stderr,
+             "  hint: use --equilibrium, or joints whose coordinates follow the motion's symmetry (joint angles "
+             "instead of a spinning quaternion; docs/linearize.md, \"Steady motions\"); --frozen accepts the "
+             "eigenvalues of the frozen instant\n");
+  return kExitNumerical;
+}
 
 // Numbers in JSON: 17 significant digits (round-trip), null for a non-finite value.
 std::string Num(double x) { return std::isfinite(x) ? fmt::format("{:.17g}", x) : "null"; }
@@ -242,7 +268,7 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
   lin::LinearizeOptions o;
   o.step = a.step;
   std::vector<std::vector<std::complex<double>>> rows;
-  std::vector<double> unsteady;
+  std::vector<double> unsteady, times;
   for (double v : values) {
     std::shared_ptr<const rt::Program> p;
     if (lin::Status s = lin::RebindParameter(program, name, v, &p); !s.ok()) return Fail(s);
@@ -259,6 +285,8 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
     for (const lin::Mode& md : m.modes) ev.push_back(md.lambda);
     rows.push_back(ev);
     unsteady.push_back(m.unsteady);
+    times.push_back(op.t);
+    if (m.unsteady > kUnsteadyLimit && !a.frozen) break;  // nothing after it is computed
   }
   const size_t n = rows.empty() ? 0 : rows.front().size();
   std::FILE* out = stdout;
@@ -268,7 +296,14 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
   for (size_t k = 0; k < n; ++k) fmt::print(out, ",lambda{}.re,lambda{}.im", k + 1, k + 1);
   fmt::print(out, ",max_real\n");
   bool warned = false;
+  int code = kExitOk;
   for (size_t r = 0; r < rows.size(); ++r) {
+    if (unsteady[r] > kUnsteadyLimit && !a.frozen) {
+      // The rows before are kept; this one and the rest are not trustworthy.
+      code = FailUnsteady(times[r], unsteady[r], fmt::format(" ({} = {})", name, values[r]));
+      rows.resize(r);
+      break;
+    }
     fmt::print(out, "{}", Num(values[r]));
     double rmax = -INFINITY;
     for (const auto& e : rows[r]) {
@@ -276,12 +311,10 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
       rmax = std::max(rmax, e.real());
     }
     fmt::print(out, ",{}\n", Num(rmax));
-    if (unsteady[r] > 1e-6 && !warned) {
-      fmt::print(stderr,
-                 "kanesim linearize: warning: at {} = {} the operating point is neither an equilibrium nor a steady "
-                 "motion in these coordinates (A changes by {:.1e} along the motion): the eigenvalues are those of a "
-                 "frozen instant (docs/linearize.md, \"Steady motions\")\n",
-                 name, values[r], unsteady[r]);
+    if (unsteady[r] > kUnsteadyLimit && !warned) {
+      std::fflush(out);
+      fmt::print(stderr, "kanesim linearize: warning (--frozen): at {} = {}: {}\n", name, values[r],
+                 UnsteadyCause(unsteady[r]));
       warned = true;
     }
   }
@@ -289,7 +322,20 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
     fmt::print(stderr, "kanesim: error: cannot write '{}'\n", a.out_path);
     return kExitModelError;
   }
-  return kExitOk;
+  if (!a.html_path.empty() && !rows.empty()) {  // the rows kept, as in the table
+    viz::LocusData data;
+    data.title = fmt::format("Root locus of {}: {} = {}", std::filesystem::path(a.load.path).filename().string(),
+                             name, a.sweep.substr(a.sweep.find('=') + 1));
+    data.parameter = name;
+    data.values.assign(values.begin(), values.begin() + static_cast<long>(rows.size()));
+    data.eigenvalues = rows;
+    std::string error;
+    if (!viz::WriteLocusHtml(data, a.html_path, viz::kDebianJavaScriptRoot, &error)) {
+      fmt::print(stderr, "kanesim: error: {}\n", error);
+      return code == kExitOk ? kExitModelError : code;
+    }
+  }
+  return code;
 }
 
 int RunLinearize(const LinearizeArgs& a) {
@@ -298,6 +344,13 @@ int RunLinearize(const LinearizeArgs& a) {
     if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
       fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing there would destroy it\n", a.out_path,
                  in);
+      return kExitModelError;
+    }
+  }
+  if (!a.html_path.empty()) {
+    if (std::string in = batch::OverwrittenInput(a.html_path, {a.load.path}); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: --html '{}' is the model '{}'; writing there would destroy it\n",
+                 a.html_path, in);
       return kExitModelError;
     }
   }
@@ -314,6 +367,10 @@ int RunLinearize(const LinearizeArgs& a) {
     fmt::print(stderr, "kanesim: error: --step must be in (0, 0.1]\n");
     return kExitModelError;
   }
+  if (!a.html_path.empty() && a.sweep.empty()) {
+    fmt::print(stderr, "kanesim: error: --html writes the root locus of --sweep; add --sweep NAME=FROM:STEP:TO\n");
+    return kExitModelError;
+  }
   if (!a.sweep.empty()) return RunSweep(program, a);
 
   lin::OperatingPoint op;
@@ -325,14 +382,11 @@ int RunLinearize(const LinearizeArgs& a) {
   lin::LinearModel m;
   if (lin::Status s = lin::Linearize(program, op, o, &m); !s.ok()) return Fail(s);
   lin::ComputeModes(&m);
+  if (m.unsteady > kUnsteadyLimit && !a.frozen) return FailUnsteady(op.t, m.unsteady, "");
   Print(m, op);
-  if (m.unsteady > 1e-6)
-    fmt::print(stderr,
-               "kanesim linearize: warning: the operating point is neither an equilibrium nor a steady motion in "
-               "these coordinates (A changes by {:.1e} relative along the motion): the eigenvalues are those of a "
-               "frozen instant, not stability exponents. Use --equilibrium, or coordinates that follow the motion's "
-               "symmetry (joint angles instead of a spinning quaternion; docs/linearize.md, \"Steady motions\")\n",
-               m.unsteady);
+  std::fflush(stdout);
+  if (m.unsteady > kUnsteadyLimit)
+    fmt::print(stderr, "kanesim linearize: warning (--frozen): {}\n", UnsteadyCause(m.unsteady));
   if (!a.out_path.empty()) {
     std::FILE* out = nullptr;
     batch::FileLock lock;
@@ -365,6 +419,12 @@ void AddLinearizeCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--output", a->outputs, "An output signal, by its exact name (repeatable)")->allow_extra_args(false);
   AddNumberOption(cmd, "--step", &a->step, "Base difference step h (default 1e-3; speeds scale it by their size)");
   cmd->add_option("--sweep", a->sweep, "Root locus: NAME=FROM:STEP:TO, one row of eigenvalues per value");
+  cmd->add_option("--html", a->html_path,
+                  "With --sweep: also write the root locus as an offline HTML page (eigenvalues in the complex plane "
+                  "coloured by the parameter; real parts against it)");
+  cmd->add_flag("--frozen", a->frozen,
+                "Accept the eigenvalues of a frozen instant at an operating point that is neither an equilibrium nor a "
+                "steady motion (a warning, exit 0; without it: exit 2)");
   cmd->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember({"auto", "dense", "sparse", "recursive"}));
   cmd->callback([a, exit_code] { *exit_code = RunLinearize(*a); });
 }

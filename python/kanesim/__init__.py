@@ -294,15 +294,19 @@ class Model:
         outputs: Optional[Sequence[str]] = None,
         set: Optional[Mapping[str, Any]] = None,
         step: float = 1e-3,
+        frozen: bool = False,
     ) -> LinearModel:
         """The linear model about an operating point, like `kanesim linearize`: the start
         values, the motion at time `at`, or (equilibrium=True) a static equilibrium found
         from either. inputs: "JOINT.tau", "JOINT.tau[k]" or real parameters; outputs:
         signal names. Raises ModelError for bad input (an unknown input or output, an
         operating point off the constraints), SimulationError for a numerical failure
-        (singular configuration, no equilibrium), ValueError for a bad step or time."""
+        (singular configuration, no equilibrium, or an operating point that is neither an
+        equilibrium nor a steady motion in these coordinates), ValueError for a bad step or
+        time. frozen=True accepts the eigenvalues of such a frozen instant with a
+        KanesimWarning, like `kanesim linearize --frozen`."""
         if set:
-            return self.with_set(set).linearize(at, equilibrium, inputs, outputs, None, step)
+            return self.with_set(set).linearize(at, equilibrium, inputs, outputs, None, step, frozen)
         if isinstance(inputs, str):
             inputs = [inputs]
         if isinstance(outputs, str):
@@ -323,10 +327,18 @@ class Model:
                 raise ModelError(text, "", file if line > 0 else "", line, column)
             raise SimulationError(text, data["time"], message, None)
         model = LinearModel(data)
-        if model.accuracy["unsteady"] > 1e-6:
-            _warn([f"the operating point is neither an equilibrium nor a steady motion in these coordinates "
-                   f"(A changes by {model.accuracy['unsteady']:.1e} relative along the motion): the eigenvalues "
-                   f"are those of a frozen instant, not stability exponents (docs/linearize.md, \"Steady motions\")"])
+        unsteady = model.accuracy["unsteady"]
+        if unsteady > 1e-6:
+            cause = (f"the operating point is neither an equilibrium nor a steady motion in these coordinates "
+                     f"(A changes by {unsteady:.1e} relative along the motion): the eigenvalues would be those "
+                     f"of a frozen instant, not stability exponents")
+            if not frozen:
+                raise SimulationError(
+                    f"kanesim linearize: numerical failure at t = {data['time']!r}: {cause}\n  hint: use "
+                    f"equilibrium=True, or joints whose coordinates follow the motion's symmetry (docs/linearize.md, "
+                    f"\"Steady motions\"); frozen=True accepts the eigenvalues of the frozen instant",
+                    data["time"], cause, None)
+            _warn([f"(frozen=True) {cause}"])
         return model
 
     def __repr__(self) -> str:

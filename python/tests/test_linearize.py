@@ -118,11 +118,19 @@ def test_no_equilibrium_is_simulation_error(pendulum_path):
     with pytest.raises(kanesim.SimulationError) as e:
         m.linearize(equilibrium=True)
     assert "equilibrium" in str(e.value) and e.value.result is None
-    # without equilibrium=True the motion at t = 0.3 linearizes (not an equilibrium: the
-    # warning of the command line, "A changes by 2.7e-02")
+    # without equilibrium=True the motion at t = 0.3 is no equilibrium nor steady motion
+    # ("A changes by 2.7e-02"): refused like the command line's exit 2, with the time ...
+    with pytest.raises(kanesim.SimulationError, match="neither an equilibrium") as e:
+        m.linearize(at=0.3)
+    assert e.value.time == pytest.approx(0.3) and "frozen=True" in str(e.value) and e.value.result is None
+    # ... unless frozen=True accepts the frozen instant (the command line's --frozen)
     with pytest.warns(kanesim.KanesimWarning, match="neither an equilibrium"):
-        lm = m.linearize(at=0.3)
+        lm = m.linearize(at=0.3, frozen=True)
     assert lm.A.shape == (2, 2) and lm.accuracy["unsteady"] > 1e-3
+    with pytest.warns(kanesim.KanesimWarning, match="neither an equilibrium"):
+        m.linearize(at=0.3, set={"tau0": 1}, frozen=True)  # through with_set
+    with pytest.raises(kanesim.SimulationError, match="neither an equilibrium"):
+        m.linearize(at=0.3, set={"tau0": 1})
 
 
 def test_bad_settings(pendulum):

@@ -47,6 +47,38 @@ std::string WithoutSourceMap(std::string text) {
   return text;
 }
 
+void AppendStyles(std::string& out, PageMode mode, const std::vector<LibraryFile>& libraries) {
+  for (const LibraryFile& lib : libraries) {
+    if (!lib.css) continue;
+    if (mode == PageMode::kOffline)
+      out += "<style>\n" + Inlinable(lib.text, "</style") + "\n</style>\n";
+    else
+      out += fmt::format("<link rel=\"stylesheet\" href=\"lib/{}\">\n", lib.name);
+  }
+  for (const char* name : kOwnStyles) out += "<style>\n" + Inlinable(PageFileText(name), "</style") + "</style>\n";
+}
+
+void AppendScripts(std::string& out, PageMode mode, const std::vector<LibraryFile>& libraries,
+                   const std::string& scene_json) {
+  for (const LibraryFile& lib : libraries) {
+    if (lib.css) continue;
+    if (mode == PageMode::kOffline)
+      out += "<script>\n" + Inlinable(lib.text, "</script") + "\n</script>\n";
+    else
+      out += fmt::format("<script src=\"lib/{}\"></script>\n", lib.name);
+  }
+  if (mode == PageMode::kOffline) {
+    out += "<script id=\"kanesim-scene\" type=\"application/json\">";
+    out += scene_json;  // JsonString escapes '<': no end tag inside
+    out += "</script>\n";
+  } else {
+    out += "<script id=\"kanesim-scene\" type=\"application/json\" data-src=\"scene.json\"></script>\n";
+  }
+  for (const char* name : kOwnScripts) out += "<script>\n" + Inlinable(PageFileText(name), "</script") + "</script>\n";
+}
+
+}  // namespace
+
 // Text placed inside <script> or <style> must not contain its end tag; "<\/" means the same
 // inside JavaScript strings, regular expressions and CSS.
 std::string Inlinable(std::string_view text, std::string_view end_tag) {
@@ -80,38 +112,6 @@ std::string HtmlEscape(std::string_view text) {
   }
   return out;
 }
-
-void AppendStyles(std::string& out, PageMode mode, const std::vector<LibraryFile>& libraries) {
-  for (const LibraryFile& lib : libraries) {
-    if (!lib.css) continue;
-    if (mode == PageMode::kOffline)
-      out += "<style>\n" + Inlinable(lib.text, "</style") + "\n</style>\n";
-    else
-      out += fmt::format("<link rel=\"stylesheet\" href=\"lib/{}\">\n", lib.name);
-  }
-  for (const char* name : kOwnStyles) out += "<style>\n" + Inlinable(PageFileText(name), "</style") + "</style>\n";
-}
-
-void AppendScripts(std::string& out, PageMode mode, const std::vector<LibraryFile>& libraries,
-                   const std::string& scene_json) {
-  for (const LibraryFile& lib : libraries) {
-    if (lib.css) continue;
-    if (mode == PageMode::kOffline)
-      out += "<script>\n" + Inlinable(lib.text, "</script") + "\n</script>\n";
-    else
-      out += fmt::format("<script src=\"lib/{}\"></script>\n", lib.name);
-  }
-  if (mode == PageMode::kOffline) {
-    out += "<script id=\"kanesim-scene\" type=\"application/json\">";
-    out += scene_json;  // JsonString escapes '<': no end tag inside
-    out += "</script>\n";
-  } else {
-    out += "<script id=\"kanesim-scene\" type=\"application/json\" data-src=\"scene.json\"></script>\n";
-  }
-  for (const char* name : kOwnScripts) out += "<script>\n" + Inlinable(PageFileText(name), "</script") + "</script>\n";
-}
-
-}  // namespace
 
 std::string_view PageFileText(std::string_view name) {
   for (const PageFile* f = kPageFiles; f->name != nullptr; ++f)

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace kanesim::viz {
@@ -30,6 +31,13 @@ enum class PageMode {
 // libraries' names are used and scene_json is ignored.
 std::string RenderPage(PageMode mode, const std::string& title, const std::vector<LibraryFile>& libraries,
                        const std::string& scene_json);
+
+// `text` made safe to place inside <script> or <style>: "</" + end_tag (e.g. "</script")
+// becomes "<\/…", which means the same inside JavaScript strings and regular expressions and CSS.
+std::string Inlinable(std::string_view text, std::string_view end_tag);
+
+// Text for HTML content or an attribute value: < > & " escaped.
+std::string HtmlEscape(std::string_view text);
 
 // Content-Security-Policy of the page in each mode: nothing outside the file (offline) or the
 // origin (served) can be loaded.
