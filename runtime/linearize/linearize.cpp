@@ -254,34 +254,43 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   const double f0max = n > 0 ? F0.head(n).cwiseAbs().maxCoeff() : 0.0;
   // (Rates at the level of an equilibrium search's tolerance are rounding, not motion.)
   if (f0max > 1e-8 * std::max(1.0, MaxAbs(out->A))) {
-    const double tau = 0.05 / f0max, hv = 1e-5;
-    const VectorXd x1 = tau * F0.head(n);
-    double diff = 0.0, size = 1.0;
-    unsigned seed = 12345u;
-    for (int k = 0; k < 3; ++k) {
-      VectorXd v(n);
-      for (int i = 0; i < n; ++i) {
-        seed = seed * 1664525u + 1013904223u;  // Numerical Recipes' LCG: fixed, portable
-        v[i] = static_cast<double>(seed >> 8) / static_cast<double>(1u << 24) - 0.5;
-      }
-      v /= v.cwiseAbs().maxCoeff();
-      VectorXd jv[2];
-      for (int at = 0; at < 2; ++at) {
-        const VectorXd xc = at == 0 ? VectorXd::Zero(n) : x1;
-        VectorXd fp, fm;
-        Status sp = eval(xc + hv * v, *prog, *ws, nullptr, &fp);
-        Status sm = sp.ok() ? eval(xc - hv * v, *prog, *ws, nullptr, &fm) : sp;
-        if (!sm.ok()) {
-          diff = std::numeric_limits<double>::infinity();
-          break;
+    const double hv = 1e-5;
+    // max |J v (x1) - J v (0)| / max(1, |J v (0)|) over the three directions.
+    auto change = [&](const VectorXd& x1) {
+      double diff = 0.0, size = 1.0;
+      unsigned seed = 12345u;
+      for (int k = 0; k < 3; ++k) {
+        VectorXd v(n);
+        for (int i = 0; i < n; ++i) {
+          seed = seed * 1664525u + 1013904223u;  // Numerical Recipes' LCG: fixed, portable
+          v[i] = static_cast<double>(seed >> 8) / static_cast<double>(1u << 24) - 0.5;
         }
-        jv[at] = (fp - fm).head(n) / (2 * hv);
+        v /= v.cwiseAbs().maxCoeff();
+        VectorXd jv[2];
+        for (int at = 0; at < 2; ++at) {
+          const VectorXd xc = at == 0 ? VectorXd::Zero(n) : x1;
+          VectorXd fp, fm;
+          Status sp = eval(xc + hv * v, *prog, *ws, nullptr, &fp);
+          Status sm = sp.ok() ? eval(xc - hv * v, *prog, *ws, nullptr, &fm) : sp;
+          if (!sm.ok()) return std::numeric_limits<double>::infinity();
+          jv[at] = (fp - fm).head(n) / (2 * hv);
+        }
+        diff = std::max(diff, MaxAbs(jv[1] - jv[0]));
+        size = std::max(size, MaxAbs(jv[0]));
       }
-      if (!std::isfinite(diff)) break;
-      diff = std::max(diff, MaxAbs(jv[1] - jv[0]));
-      size = std::max(size, MaxAbs(jv[0]));
+      return diff / size;
+    };
+    out->unsteady = change((0.05 / f0max) * F0.head(n));
+    // Second order along the motion, x(τ) ≈ τ f + τ²/2 A f: from rest with an acceleration
+    // (a pendulum pushed from its bottom) the first-order step moves only the speeds, which
+    // A may not read, while the motion goes on to move the coordinates. A steady motion has
+    // A f = 0 (f does not change along it), so this step is taken only when A f is not.
+    const VectorXd g = out->A * F0.head(n);
+    const double gmax = n > 0 ? g.cwiseAbs().maxCoeff() : 0.0;
+    if (std::isfinite(out->unsteady) && gmax > 1e-6 * std::max(1.0, f0max)) {
+      const double tau = std::min(std::sqrt(0.1 / gmax), 0.5 / f0max);
+      out->unsteady = std::max(out->unsteady, change(tau * F0.head(n) + 0.5 * tau * tau * g));
     }
-    out->unsteady = diff / size;
   }
 
   out->error_A = MaxAbs(errAC.topRows(n)) / std::max(1.0, MaxAbs(out->A));
