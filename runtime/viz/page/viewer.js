@@ -5,7 +5,7 @@
 // play=0 opens paused; signals=<name>,<name> chooses the plots.
 //
 // Test hook window.kanesimViewer (docs/visualization.md, "The browser test"): ready, errors,
-// time(), seek(t), play(), pause(), playing(), bodyPositions(), bodyPoses(), screenPosition(name),
+// time(), clock(), seek(t), play(), pause(), playing(), bodyPositions(), bodyPoses(), screenPosition(name),
 // screenPoint([x, y, z]), pixel(x, y), hoverText(), cursorTimes(), plotPoint(name, t), plotted(). Positions and
 // rotations are read back from the rendered objects' world matrices with the display rotation
 // undone, i.e. in the simulation's world frame W.
@@ -225,6 +225,7 @@
 
   Viewer.prototype.installHook = function () {
     hook.time = () => this.t;
+    hook.clock = () => this.last;  // the frame timestamp (ms) of the last advance; null when paused
     hook.seek = (t) => { this.pause(); const at = this.seek(t); this.render(); return at; };
     hook.play = () => this.play();
     hook.pause = () => this.pause();
