@@ -23,26 +23,6 @@ struct CheckArgs {
   std::string solver = "auto";
 };
 
-const char* SolverName(rt::SolverPath s) {
-  switch (s) {
-    case rt::SolverPath::Auto: return "auto";
-    case rt::SolverPath::Dense: return "dense";
-    case rt::SolverPath::Sparse: return "sparse";
-    case rt::SolverPath::Recursive: return "recursive";
-  }
-  return "?";
-}
-
-const char* IntegratorName(rt::IntegratorKind k) {
-  switch (k) {
-    case rt::IntegratorKind::Auto: return "auto";
-    case rt::IntegratorKind::IDA: return "IDA";
-    case rt::IntegratorKind::CVODE: return "CVODE";
-    case rt::IntegratorKind::ARKODE: return "ARKODE";
-    case rt::IntegratorKind::DOP853: return "DOP853";
-  }
-  return "?";
-}
 
 // Grübler-style count: 6 per body, minus 6 - f per joint (spatial mechanisms).
 int GrublerCount(const flat::Mechanism& m, int bodies) {
@@ -98,8 +78,8 @@ int RunCheck(const CheckArgs& args) {
   }
   std::cout << fmt::format("  constraints {} contact(s), {} line force(s), {} applied wrench(es)\n",
                            mech.contacts.size(), mech.line_forces.size(), mech.wrenches.size());
-  std::cout << fmt::format("  solver      {} — {}\n", SolverName(s.solver), s.solver_reason);
-  std::cout << fmt::format("  integrator  {} — {}\n", IntegratorName(s.integrator), s.integrator_reason);
+  std::cout << fmt::format("  solver      {} — {}\n", pipeline::SolverName(s.solver), s.solver_reason);
+  std::cout << fmt::format("  integrator  {} — {}\n", pipeline::IntegratorName(s.integrator), s.integrator_reason);
   if (!s.equations.empty()) std::cout << "  equations   " << s.equations << "\n";
   if (rt::StepProjectionAvailable(program)) {
     // The projection of closed loops and rolling contacts (docs/constraints.md, "Projecting

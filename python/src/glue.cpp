@@ -197,25 +197,6 @@ bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutpu
 }
 
 namespace {
-const char* SolverName(rt::SolverPath s) {
-  switch (s) {
-    case rt::SolverPath::Auto: return "auto";
-    case rt::SolverPath::Dense: return "dense";
-    case rt::SolverPath::Sparse: return "sparse";
-    case rt::SolverPath::Recursive: return "recursive";
-  }
-  return "?";
-}
-const char* IntegratorName(rt::IntegratorKind k) {
-  switch (k) {
-    case rt::IntegratorKind::Auto: return "auto";
-    case rt::IntegratorKind::IDA: return "IDA";
-    case rt::IntegratorKind::CVODE: return "CVODE";
-    case rt::IntegratorKind::ARKODE: return "ARKODE";
-    case rt::IntegratorKind::DOP853: return "DOP853";
-  }
-  return "?";
-}
 Value V(std::string s) { return Value{std::move(s)}; }
 Value V(const char* s) { return Value{std::string(s)}; }
 Value V(double d) { return Value{d}; }
@@ -247,9 +228,9 @@ Dict Check(const LoadedModel& model) {
   d.emplace_back("nu", V(s.nu));
   d.emplace_back("dof", V(s.dof));
   d.emplace_back("grubler_dof", V(s.grubler_dof));
-  d.emplace_back("solver", V(SolverName(s.solver)));
+  d.emplace_back("solver", V(pipeline::SolverName(s.solver)));
   d.emplace_back("solver_reason", V(s.solver_reason));
-  d.emplace_back("integrator", V(IntegratorName(s.integrator)));
+  d.emplace_back("integrator", V(pipeline::IntegratorName(s.integrator)));
   d.emplace_back("integrator_reason", V(s.integrator_reason));
   List cuts;
   for (const auto& c : s.cut_joints) cuts.push_back(V(c));

@@ -113,4 +113,25 @@ rt::CompileOptions CompileOptionsFor(const RunSpec& spec) {
   return o;
 }
 
+const char* SolverName(rt::SolverPath s) {
+  switch (s) {
+    case rt::SolverPath::Auto: return "auto";
+    case rt::SolverPath::Dense: return "dense";
+    case rt::SolverPath::Sparse: return "sparse";
+    case rt::SolverPath::Recursive: return "recursive";
+  }
+  return "?";
+}
+
+const char* IntegratorName(rt::IntegratorKind k) {
+  switch (k) {
+    case rt::IntegratorKind::Auto: return "auto";
+    case rt::IntegratorKind::IDA: return "IDA";
+    case rt::IntegratorKind::CVODE: return "CVODE";
+    case rt::IntegratorKind::ARKODE: return "ARKODE";
+    case rt::IntegratorKind::DOP853: return "DOP853";
+  }
+  return "?";
+}
+
 }  // namespace kanesim::pipeline

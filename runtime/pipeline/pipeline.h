@@ -92,6 +92,9 @@ const std::vector<std::string>& LinearSolverNames();
 std::string IntegratorName(const std::optional<sim::Method>& integrator);
 // "auto, ida, cvode, ..." for messages.
 std::string JoinNames(const std::vector<std::string>& names);
+// The compiler's choices as `kanesim check` prints them ("dense", "IDA", ...).
+const char* SolverName(rt::SolverPath solver);
+const char* IntegratorName(rt::IntegratorKind integrator);
 
 // What rt::Compile takes from the spec (the solver path, the integrator kind, reactions).
 rt::CompileOptions CompileOptionsFor(const RunSpec& spec);
