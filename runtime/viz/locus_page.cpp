@@ -49,15 +49,7 @@ std::string DataJson(const LocusData& d) {
 }  // namespace
 
 std::string RenderLocusPage(const LocusData& data, const std::vector<LibraryFile>& libraries) {
-  const std::string_view page = PageFileText("locus.html");
-  std::string out;
-  constexpr std::string_view kOpen = "<!--kanesim:", kClose = "-->";
-  size_t from = 0;
-  for (size_t at = page.find(kOpen); at != std::string_view::npos; at = page.find(kOpen, from)) {
-    out.append(page.substr(from, at - from));
-    const size_t end = page.find(kClose, at);
-    if (end == std::string_view::npos) throw std::logic_error("locus.html: an unclosed <!--kanesim: marker");
-    const std::string_view name = page.substr(at + kOpen.size(), end - at - kOpen.size());
+  return ExpandPageFile("locus.html", [&](std::string_view name, std::string& out) {
     if (name == "csp") {
       out += fmt::format("<meta http-equiv=\"Content-Security-Policy\" content=\"{}\">", PagePolicy(PageMode::kOffline));
     } else if (name == "title") {
@@ -73,39 +65,18 @@ std::string RenderLocusPage(const LocusData& data, const std::vector<LibraryFile
       out += "<script id=\"kanesim-locus\" type=\"application/json\">" + DataJson(data) + "</script>\n";
       out += "<script>\n" + Inlinable(PageFileText("locus.js"), "</script") + "</script>\n";
     } else {
-      throw std::logic_error(fmt::format("locus.html: unknown marker '{}'", name));
+      return false;
     }
-    from = end + kClose.size();
-  }
-  out.append(page.substr(from));
-  return out;
+    return true;
+  });
 }
 
 bool WriteLocusHtml(const LocusData& data, const std::string& path, const std::string& js_root, std::string* error) {
   const std::vector<LibraryFile> libraries = ReadLibraries(js_root, error);
   if (!error->empty()) return false;
   const std::string html = RenderLocusPage(data, libraries);
-  const std::string temporary = path + ".part";
-  std::FILE* file = std::fopen(temporary.c_str(), "wb");
-  if (file == nullptr) {
-    *error = fmt::format("cannot write {}: {}", path, std::strerror(errno));
-    return false;
-  }
-  const bool written = std::fwrite(html.data(), 1, html.size(), file) == html.size();
-  const bool closed = std::fclose(file) == 0;
-  std::error_code ec;
-  if (!written || !closed) {
-    *error = fmt::format("cannot write {}: {}", path, std::strerror(errno));
-    std::filesystem::remove(temporary, ec);
-    return false;
-  }
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) {
-    *error = fmt::format("cannot write {}: {}", path, ec.message());
-    std::filesystem::remove(temporary, ec);
-    return false;
-  }
-  return true;
+  *error = WriteFileReplacing(path, html);
+  return error->empty();
 }
 
 }  // namespace kanesim::viz

@@ -145,19 +145,50 @@ const char* PagePolicy(PageMode mode) {
          "img-src 'self' data: blob:; connect-src 'self'";
 }
 
-// The template has markers <!--kanesim:NAME--> for csp, title, styles and scripts.
-std::string RenderPage(PageMode mode, const std::string& title, const std::vector<LibraryFile>& libraries,
-                       const std::string& scene_json) {
-  const std::string_view page = PageFileText("viewer.html");
+std::string ExpandPageFile(std::string_view file,
+                           const std::function<bool(std::string_view name, std::string& out)>& fill) {
+  const std::string_view page = PageFileText(file);
   std::string out;
-  out.reserve(page.size() + scene_json.size() + (2 << 20));
   constexpr std::string_view kOpen = "<!--kanesim:", kClose = "-->";
   size_t from = 0;
   for (size_t at = page.find(kOpen); at != std::string_view::npos; at = page.find(kOpen, from)) {
     out.append(page.substr(from, at - from));
     const size_t end = page.find(kClose, at);
-    if (end == std::string_view::npos) throw std::logic_error("viewer.html: an unclosed <!--kanesim: marker");
+    if (end == std::string_view::npos)
+      throw std::logic_error(fmt::format("{}: an unclosed <!--kanesim: marker", file));
     const std::string_view name = page.substr(at + kOpen.size(), end - at - kOpen.size());
+    if (!fill(name, out)) throw std::logic_error(fmt::format("{}: unknown marker '{}'", file, name));
+    from = end + kClose.size();
+  }
+  out.append(page.substr(from));
+  return out;
+}
+
+std::string WriteFileReplacing(const std::string& path, const std::string& text) {
+  const std::string temporary = path + ".part";
+  std::FILE* file = std::fopen(temporary.c_str(), "wb");
+  if (file == nullptr) return fmt::format("cannot write {}: {}", path, std::strerror(errno));
+  const bool written = std::fwrite(text.data(), 1, text.size(), file) == text.size();
+  const bool closed = std::fclose(file) == 0;
+  std::error_code ec;
+  if (!written || !closed) {
+    std::string why = fmt::format("cannot write {}: {}", path, std::strerror(errno));
+    std::filesystem::remove(temporary, ec);
+    return why;
+  }
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) {
+    std::string why = fmt::format("cannot write {}: {}", path, ec.message());
+    std::filesystem::remove(temporary, ec);
+    return why;
+  }
+  return "";
+}
+
+// The template has markers <!--kanesim:NAME--> for csp, title, styles and scripts.
+std::string RenderPage(PageMode mode, const std::string& title, const std::vector<LibraryFile>& libraries,
+                       const std::string& scene_json) {
+  return ExpandPageFile("viewer.html", [&](std::string_view name, std::string& out) {
     if (name == "csp")
       out += fmt::format("<meta http-equiv=\"Content-Security-Policy\" content=\"{}\">", PagePolicy(mode));
     else if (name == "title")
@@ -167,11 +198,9 @@ std::string RenderPage(PageMode mode, const std::string& title, const std::vecto
     else if (name == "scripts")
       AppendScripts(out, mode, libraries, scene_json);
     else
-      throw std::logic_error(fmt::format("viewer.html: unknown marker '{}'", name));
-    from = end + kClose.size();
-  }
-  out.append(page.substr(from));
-  return out;
+      return false;
+    return true;
+  });
 }
 
 PageResult WriteViewerHtml(const ViewerScene& scene, const std::string& path, const PageOptions& options) {
@@ -182,26 +211,8 @@ PageResult WriteViewerHtml(const ViewerScene& scene, const std::string& path, co
   if (!result.error.empty()) return result;
   const std::string html = RenderPage(PageMode::kOffline, scene.title, libraries, encoded.json);
 
-  const std::string temporary = path + ".part";
-  std::FILE* file = std::fopen(temporary.c_str(), "wb");
-  if (file == nullptr) {
-    result.error = fmt::format("cannot write {}: {}", path, std::strerror(errno));
-    return result;
-  }
-  const bool written = std::fwrite(html.data(), 1, html.size(), file) == html.size();
-  const bool closed = std::fclose(file) == 0;
-  std::error_code ec;
-  if (!written || !closed) {
-    result.error = fmt::format("cannot write {}: {}", path, std::strerror(errno));
-    std::filesystem::remove(temporary, ec);
-    return result;
-  }
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) {
-    result.error = fmt::format("cannot write {}: {}", path, ec.message());
-    std::filesystem::remove(temporary, ec);
-    return result;
-  }
+  result.error = WriteFileReplacing(path, html);
+  if (!result.error.empty()) return result;
   result.ok = true;
   result.stride = encoded.stride;
   result.instants = encoded.instants;

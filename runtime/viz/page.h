@@ -2,6 +2,7 @@
 // read from Debian's installed files, and the scene JSON (scene_json.h).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,6 +39,16 @@ std::string Inlinable(std::string_view text, std::string_view end_tag);
 
 // Text for HTML content or an attribute value: < > & " escaped.
 std::string HtmlEscape(std::string_view text);
+
+// The embedded page file `file` (page_files.h) with each marker <!--kanesim:NAME--> replaced
+// by what `fill(NAME, out)` appends to out; fill returns false for a name it does not know
+// (a std::logic_error then names the file and the marker).
+std::string ExpandPageFile(std::string_view file,
+                           const std::function<bool(std::string_view name, std::string& out)>& fill);
+
+// Writes `text` to `path` through `path`.part and a rename, so a reader never sees half a
+// page; "" or why not.
+std::string WriteFileReplacing(const std::string& path, const std::string& text);
 
 // Content-Security-Policy of the page in each mode: nothing outside the file (offline) or the
 // origin (served) can be loaded.
