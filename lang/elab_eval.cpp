@@ -2,6 +2,7 @@
 // scalar flat expressions). Parameters stay symbolic (Param nodes) so that a sweep can
 // change them without elaborating again; constants fold.
 #include <cmath>
+#include <cstdio>
 #include <functional>
 
 #include "lang/elab_internal.h"
@@ -343,8 +344,10 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
             if (ks.empty()) return Value::Invalid();
             kp = !sv.shape.empty();
             for (double kd : ks) {
-              long k = static_cast<long>(kd);
-              if (kd != std::floor(kd) || k < 1 || k > v.shape[d]) {
+              // Compare as doubles first: casting an out-of-range double is undefined.
+              const bool in_range = kd == std::floor(kd) && kd >= 1 && kd <= v.shape[d];
+              const long k = in_range ? static_cast<long>(kd) : 0;
+              if (!in_range) {
                 diags_.Error(DiagCode::IndexOutOfRange, s.span,
                              "index " + std::to_string(kd) + " is out of range 1.." + std::to_string(v.shape[d]) +
                                  " of '" + n->path + "'");
@@ -490,10 +493,11 @@ Value Elaborator::EvalRange(const ast::Expr& e, const Ctx& ctx) {
     return Value::Invalid();
   }
   double count = std::floor((b - a) / step + 1e-10) + 1;
-  if (count > static_cast<double>(kMaxArraySize)) {
+  if (!(count <= static_cast<double>(kMaxArraySize))) {  // also NaN: never cast an unchecked double
+    char n[32];
+    std::snprintf(n, sizeof n, "%.4g", count);
     diags_.Error(DiagCode::ArrayTooLarge, e.span,
-                 "range has " + std::to_string(static_cast<long long>(count)) + " elements; the limit is " +
-                     std::to_string(kMaxArraySize));
+                 std::string("range has ") + n + " elements; the limit is " + std::to_string(kMaxArraySize));
     return Value::Invalid();
   }
   bool integer = a == std::floor(a) && step == std::floor(step);
@@ -691,7 +695,7 @@ Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
       n = args[0].shape[0];
       d = args[0].e;
     }
-    if (n < 0 || n * n > kMaxArraySize) {
+    if (n < 0 || n > kMaxArraySize || n * n > kMaxArraySize) {
       diags_.Error(DiagCode::ArrayTooLarge, e.span, "matrix size out of range");
       return Value::Invalid();
     }
