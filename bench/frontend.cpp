@@ -25,6 +25,7 @@
 
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
+#include "runtime/engine.h"
 #include "runtime/program.h"
 #include "stdlib/stdlib.h"
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/compile_options.h"
 #include "runtime/flat/diagnostic_codes.h"
 #include "runtime/flat/mechanism.h"
 
@@ -18,21 +19,6 @@ namespace kanesim::rt {
 
 struct Program;    // immutable after Compile; share across threads
 struct Workspace;  // mutable scratch for one thread; allocated once per Program
-
-enum class SolverPath { Auto, Dense, Sparse, Recursive };
-enum class IntegratorKind { Auto, IDA, CVODE, ARKODE, DOP853 };
-
-// What reaction and contact-force signals report for a component the equations leave
-// undetermined (redundant constraints make it statically indeterminate,
-// docs/constraints.md "Indeterminate constraint forces"): NaN, or the share of the
-// minimum-norm multipliers (`kanesim run --reactions min-norm`).
-enum class IndeterminateReactions { NaN, MinNorm };
-
-struct CompileOptions {
-  SolverPath solver = SolverPath::Auto;
-  IntegratorKind integrator = IntegratorKind::Auto;
-  IndeterminateReactions indeterminate = IndeterminateReactions::NaN;
-};
 
 // A model error found by the compiler (not the parser), with a code of the one table
 // (runtime/flat/diagnostic_codes.h); pipeline::AddCompileMessage turns it into a language

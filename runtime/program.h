@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/compile_options.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/small_qr.h"
 #include "runtime/tape.h"

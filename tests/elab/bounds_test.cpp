@@ -18,6 +18,7 @@
 #include <functional>
 #include <sstream>
 
+#include "runtime/engine.h"
 #include "runtime/flat/param_eval.h"
 #include "runtime/program.h"
 #include "runtime/tape.h"
