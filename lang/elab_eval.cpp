@@ -82,11 +82,20 @@ bool Elaborator::Structural(const Value& v, Span span, double* out, const char* 
   return true;
 }
 
+namespace {
+// A number as a user wrote it (%.15g: 3, 2.5, 1e+28), not std::to_string's fixed six decimals.
+std::string ShortNumber(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.15g", x);
+  return buf;
+}
+}  // namespace
+
 bool Elaborator::StructuralInt(const Value& v, Span span, long* out, const char* what) {
   double x = 0;
   if (!Structural(v, span, &x, what)) return false;
   if (std::fabs(x) > 9e15 || x != std::floor(x)) {
-    diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be an Integer, got " + std::to_string(x));
+    diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be an Integer, got " + ShortNumber(x));
     return false;
   }
   *out = static_cast<long>(x);
@@ -349,7 +358,7 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
               const long k = in_range ? static_cast<long>(kd) : 0;
               if (!in_range) {
                 diags_.Error(DiagCode::IndexOutOfRange, s.span,
-                             "index " + std::to_string(kd) + " is out of range 1.." + std::to_string(v.shape[d]) +
+                             "index " + ShortNumber(kd) + " is out of range 1.." + std::to_string(v.shape[d]) +
                                  " of '" + n->path + "'");
                 return Value::Invalid();
               }

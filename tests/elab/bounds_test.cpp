@@ -17,6 +17,7 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <tuple>
 
 #include "runtime/engine.h"
 #include "runtime/flat/param_eval.h"
@@ -162,6 +163,27 @@ TEST(Bounds, WorkOfTheWholeElaborationIsBounded) {
     EXPECT_FALSE(e->ok) << m;
     EXPECT_TRUE(e->HasCode("E228")) << m << "\n" << e->errors.substr(0, 2000);
     EXPECT_NE(e->errors.find(std::to_string(kMaxElabWork)), std::string::npos) << e->errors.substr(0, 2000);
+  }
+}
+
+// If this fails, a count or index far outside every integer type is cast before it is
+// checked (undefined behaviour; UBSan's fuzzing found 1:1.11e28) or reported as garbage.
+// Each member is one diagnostic with its code, and the number as written.
+TEST(Bounds, CountsAndIndicesBeyondIntegerTypesAreDiagnostics) {
+  const std::vector<std::tuple<std::string, std::string, std::string>> members = {
+      {"  parameter Real r[:] = 1:1.11111e28;", "E209", "1.111e+28 elements"},
+      {"  parameter Real r[:] = 1:-1e-300:-1e300;", "E209", "inf elements"},
+      {"  parameter Real a[3] = {1, 2, 3};\n  parameter Real x = a[1e28];", "E219", "index 1e+28 is out of range"},
+      {"  parameter Real a[3] = {1, 2, 3};\n  parameter Real y[2] = a[{1, -1e28}];", "E219",
+       "index -1e+28 is out of range"},
+      {"  parameter Real I[:, :] = identity(3000000000);", "E209", "matrix size"},
+      {"  parameter Real z[:] = zeros(1e15);", "E209", "array too large"},
+  };
+  for (const auto& [m, code, text] : members) {
+    auto e = ElaborateText(ModelWith(m));
+    EXPECT_FALSE(e->ok) << m;
+    EXPECT_TRUE(e->HasCode(code)) << m << "\n" << e->errors.substr(0, 2000);
+    EXPECT_NE(e->errors.find(text), std::string::npos) << m << "\n" << e->errors.substr(0, 2000);
   }
 }
 
