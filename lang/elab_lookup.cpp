@@ -1,0 +1,294 @@
+// Lookup: a variable's value, evaluated on first use from its binding (GetVar), and a
+// component reference resolved to the instance node it names (ResolveNode).
+#include <algorithm>
+#include <cmath>
+
+#include "lang/elab_internal.h"
+
+namespace kanesim::lang::elab {
+
+Value Elaborator::GetVar(Node* var, Span use_span) {
+  if (var->state == 2) return var->value;
+  if (var->state == 1) {
+    auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->path + "' is defined in terms of itself");
+    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+    var->state = 2;
+    var->value = Value::Invalid();
+    return var->value;
+  }
+  var->state = 1;
+  auto finish = [&](Value v) {
+    var->value = std::move(v);
+    var->state = 2;
+    return var->value;
+  };
+  Node* owner = var->parent;
+  bool is_param = var->variability != ast::Variability::None;
+  size_t count = 1;
+  for (int d : var->shape) count *= static_cast<size_t>(d < 0 ? 0 : d);
+
+  // Joint coordinates and speeds are the mechanism's state.
+  if (owner && owner->prim == Prim::Joint && !is_param && (var->name == "q" || var->name == "u")) {
+    Value v;
+    v.shape = var->shape;
+    for (size_t k = 0; k < count; ++k)
+      v.e.push_back(m_->exprs.State(m_->AddStateRef(
+          {var->name == "q" ? flat::StateKind::JointQ : flat::StateKind::JointU, owner->prim_index,
+           static_cast<int>(k)})));
+    return finish(v);
+  }
+
+  const ModValue* binding = nullptr;
+  if (var->eq_binding) binding = &*var->eq_binding;
+  if (var->mod.value) {
+    if (binding) {
+      auto& d = diags_.Error(DiagCode::ConflictingEquation, var->eq_binding->span,
+                             "'" + var->path + "' already has a value from its declaration or a modifier");
+      d.notes.push_back({var->mod.value->span, "value given here"});
+    }
+    binding = &*var->mod.value;
+  }
+  Value v;
+  if (!binding) {
+    bool any_elem = !var->eq_elem_binding.empty();
+    if (any_elem && !(owner && owner->prim != Prim::None) && var->eq_elem_binding.size() != count) {
+      for (size_t k = 0; k < count; ++k) {
+        if (var->eq_elem_binding.count(static_cast<int>(k))) continue;
+        auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
+                               "element " + std::to_string(k + 1) + " of '" + var->path + "' has no equation");
+        d.hint = "give every element an equation, or bind the whole variable";
+        break;
+      }
+      return finish(Value::Invalid());
+    }
+    if ((owner && owner->prim != Prim::None && !is_param) || any_elem) {
+      v.type = var->vtype;
+      v.shape = var->shape;
+      v.e.assign(count, m_->exprs.Constant(0));
+    } else {
+      auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
+                             std::string(is_param ? "parameter" : "variable") + " '" + var->path + "' has no value");
+      d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->path + "=..."
+                        : "bind it in its declaration (Real x = ...;) or with an equation 'x = ...;'";
+      if (use_span.valid() && var->decl && use_span.begin != var->decl->name_span.begin)
+        d.notes.push_back({use_span, "used here"});
+      return finish(Value::Invalid());
+    }
+  } else {
+    Span where;
+    v = EvalModValue(*binding, &where);
+    if (!v.valid) return finish(v);
+    DiagCode tcode = binding->from_set ? DiagCode::BadSet : DiagCode::TypeMismatch;
+    bool ok = true;
+    if (var->vtype == VType::String || v.type == VType::String) ok = var->vtype == v.type;
+    else if (var->vtype == VType::Boolean || v.type == VType::Boolean) ok = var->vtype == v.type;
+    else if (var->vtype == VType::Integer && v.type == VType::Real) {
+      // Accept Real values that are whole numbers only from literal folding.
+      ok = false;
+    }
+    if (!ok) {
+      auto& d = diags_.Error(tcode, where,
+                             "'" + var->path + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
+      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+      if (var->vtype == VType::Integer) d.hint = "use a whole number, or integer(...)";
+      return finish(Value::Invalid());
+    }
+    if (v.type == VType::Integer && var->vtype == VType::Real) v.type = VType::Real;
+    // Shape: ':' dims adopt the value's size.
+    bool shape_ok = v.shape.size() == var->shape.size();
+    for (size_t i = 0; shape_ok && i < v.shape.size(); ++i) {
+      if (var->shape[i] < 0) var->shape[i] = v.shape[i];
+      shape_ok = var->shape[i] == v.shape[i];
+    }
+    if (!shape_ok && var->shape.size() > 0 && v.shape.empty() && binding->from_set == false && false) {
+    }
+    if (!shape_ok) {
+      auto& d = diags_.Error(binding->from_set ? DiagCode::BadSet : DiagCode::SizeMismatch, where,
+                             "'" + var->path + "' has size " + [&] {
+                               std::string s = "[";
+                               for (size_t i = 0; i < var->shape.size(); ++i)
+                                 s += (i ? ", " : "") + std::to_string(var->shape[i]);
+                               return var->shape.empty() ? std::string("scalar") : s + "]";
+                             }() + " but its value has size " + [&] {
+                               std::string s = "[";
+                               for (size_t i = 0; i < v.shape.size(); ++i) s += (i ? ", " : "") + std::to_string(v.shape[i]);
+                               return v.shape.empty() ? std::string("scalar") : s + "]";
+                             }());
+      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+      return finish(Value::Invalid());
+    }
+    count = v.e.size();
+  }
+  // Element equations (x[2] = ...).
+  for (const auto& [k, mv] : var->eq_elem_binding) {
+    if (k < 0 || static_cast<size_t>(k) >= v.e.size()) continue;
+    Value ev = EvalModValue(mv, nullptr);
+    if (!ev.valid) continue;
+    if (!ev.shape.empty()) {
+      diags_.Error(DiagCode::SizeMismatch, mv.span, "an element equation needs a scalar value");
+      continue;
+    }
+    v.e[static_cast<size_t>(k)] = ev.e[0];
+  }
+  if (!is_param) return finish(v);
+
+  // Parameters and constants: no time, no state.
+  for (ExprId x : v.e) {
+    if (x >= 0 && m_->exprs.DependsOnTimeOrState(x)) {
+      auto& d = diags_.Error(DiagCode::NotConstantExpr, binding ? binding->span : use_span,
+                             "the value of parameter '" + var->path + "' depends on time or on the motion");
+      d.hint = "parameters are fixed before the simulation; use a variable (Real x = ...) instead";
+      return finish(Value::Invalid());
+    }
+  }
+  // Attributes for flat parameters.
+  std::string unit;
+  double vmin = -1e300, vmax = 1e300;
+  auto attr_num = [&](const char* key, double* out) {
+    auto it = var->mod.sub.find(key);
+    if (it == var->mod.sub.end() || !it->second.value) return;
+    Value a = EvalModValue(*it->second.value, nullptr);
+    if (a.valid && a.shape.empty() && a.type != VType::String)
+      Structural(a, it->second.value->span, out, key);
+  };
+  attr_num("min", &vmin);
+  attr_num("max", &vmax);
+  if (auto it = var->mod.sub.find("unit"); it != var->mod.sub.end() && it->second.value) {
+    Value a = EvalModValue(*it->second.value, nullptr);
+    if (a.valid && a.type == VType::String && !a.s.empty()) unit = a.s[0];
+  }
+  Value out = v;
+  const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
+  for (size_t k = 0; k < v.e.size(); ++k) {
+    std::string name = var->path;
+    if (!var->shape.empty()) {
+      // Row-major multi-index, 1-based.
+      std::vector<int> idx(var->shape.size());
+      size_t rem = k;
+      for (size_t d = var->shape.size(); d-- > 0;) {
+        idx[d] = static_cast<int>(rem % static_cast<size_t>(var->shape[d])) + 1;
+        rem /= static_cast<size_t>(var->shape[d]);
+      }
+      name += "[";
+      for (size_t d = 0; d < idx.size(); ++d) name += (d ? "," : "") + std::to_string(idx[d]);
+      name += "]";
+    }
+    flat::Param p;
+    p.name = std::move(name);
+    p.type = var->vtype == VType::Real      ? flat::ParamType::Real
+             : var->vtype == VType::Integer ? flat::ParamType::Integer
+             : var->vtype == VType::Boolean ? flat::ParamType::Boolean
+                                            : flat::ParamType::String;
+    p.unit = unit;
+    p.min = vmin;
+    p.max = vmax;
+    p.is_constant = var->variability == ast::Variability::Constant;
+    p.user_set = binding && binding->from_set;
+    p.loc = loc;
+    if (var->vtype == VType::String) {
+      p.string_value = v.s.empty() ? "" : v.s[k];
+      m_->params.push_back(std::move(p));
+      pvals_.push_back(0.0);
+      continue;
+    }
+    ExprId x = v.e[k];
+    double val = param_eval_.Eval(x);
+    p.value = val;
+    p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
+    if (!std::isfinite(val)) {
+      auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
+                             "parameter '" + p.name + "' evaluates to " + std::to_string(val));
+      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+    } else if (val < vmin || val > vmax) {
+      auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
+                             "parameter '" + p.name + "' = " + std::to_string(val) + " is outside its range [" +
+                                 (vmin <= -1e299 ? std::string("-inf") : std::to_string(vmin)) + ", " +
+                                 (vmax >= 1e299 ? std::string("inf") : std::to_string(vmax)) + "]");
+      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+    }
+    if (p.is_constant) {
+      out.e[k] = m_->exprs.Constant(val);
+      continue;
+    }
+    m_->params.push_back(std::move(p));
+    pvals_.push_back(val);
+    out.e[k] = m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
+  }
+  return finish(out);
+}
+Node* Elaborator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
+  if (elem) *elem = -1;
+  if (ref.kind != ast::ExprKind::Ref || ref.parts.empty()) {
+    diags_.Error(DiagCode::BadEquation, ref.span, "expected a component reference");
+    return nullptr;
+  }
+  Node* n = nullptr;
+  for (size_t pi = 0; pi < ref.parts.size(); ++pi) {
+    const ast::RefPart& part = ref.parts[pi];
+    if (pi > 0 && n->kind == Node::kArray) {
+      auto& d = diags_.Error(DiagCode::TypeMismatch, ref.parts[pi - 1].span,
+                             "'" + n->path + "' is an array of components; index it before '." + part.name + "'");
+      d.hint = "write " + ref.parts[pi - 1].name + "[i]." + part.name + " inside a for-loop";
+      return nullptr;
+    }
+    Node* next = pi == 0 ? (ctx.scope ? ctx.scope->Child(part.name) : nullptr)
+                         : (n->kind == Node::kClass ? n->Child(part.name) : nullptr);
+    if (!next) {
+      std::vector<std::string> cands;
+      Node* where = pi == 0 ? ctx.scope : n;
+      if (where)
+        for (auto& c : where->children) cands.push_back(c->name);
+      auto& d = diags_.Error(DiagCode::UnknownName, part.span,
+                             pi == 0 ? "unknown name '" + part.name + "'"
+                                     : "'" + n->path + "' has no member '" + part.name + "'");
+      std::string best = ClosestName(part.name, cands);
+      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+      return nullptr;
+    }
+    n = next;
+    if (!n->enabled) return n;  // callers skip disabled components
+    if (!part.subscripts.empty()) {
+      if (n->kind == Node::kArray) {
+        if (part.subscripts.size() != 1) {
+          diags_.Error(DiagCode::TypeMismatch, part.span, "arrays of components take one subscript");
+          return nullptr;
+        }
+        long k = 0;
+        if (!StructuralInt(Eval(*part.subscripts[0], ctx), part.subscripts[0]->span, &k, "a subscript")) return nullptr;
+        if (k < 1 || k > static_cast<long>(n->elems.size())) {
+          diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
+                       "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
+                           " of '" + n->path + "'");
+          return nullptr;
+        }
+        n = n->elems[static_cast<size_t>(k - 1)].get();
+      } else if (n->kind == Node::kVar && pi + 1 == ref.parts.size()) {
+        size_t flatk = 0, stride = 1;
+        if (part.subscripts.size() != n->shape.size()) {
+          diags_.Error(DiagCode::IndexOutOfRange, part.span, "'" + n->path + "' needs " +
+                                                                std::to_string(n->shape.size()) + " subscript(s)");
+          return nullptr;
+        }
+        for (size_t d = part.subscripts.size(); d-- > 0;) {
+          long k = 0;
+          if (!StructuralInt(Eval(*part.subscripts[d], ctx), part.subscripts[d]->span, &k, "a subscript"))
+            return nullptr;
+          if (k < 1 || k > n->shape[d]) {
+            diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[d]->span,
+                         "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->shape[d]));
+            return nullptr;
+          }
+          flatk += static_cast<size_t>(k - 1) * stride;
+          stride *= static_cast<size_t>(n->shape[d]);
+        }
+        if (elem) *elem = static_cast<int>(flatk);
+      } else {
+        diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
+        return nullptr;
+      }
+    }
+  }
+  return n;
+}
+
+}  // namespace kanesim::lang::elab

@@ -1,0 +1,172 @@
+// Modifiers: built from the syntax with the scope and loop iterators they are evaluated
+// in, merged with the outer one winning (Modelica 3.5 §7.2; `final` elements refuse outer
+// modification), and sliced per element for arrays of components unless `each` is given.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lang/elab_internal.h"
+
+namespace kanesim::lang::elab {
+
+bool IsVarAttribute(const std::string& n) {
+  return n == "start" || n == "fixed" || n == "unit" || n == "min" || n == "max" || n == "displayUnit" ||
+         n == "quantity" || n == "nominal" || n == "stateSelect";
+}
+Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters) {
+  Mod out;
+  if (!m) return out;
+  out.span = m->span;
+  if (m->value) {
+    ModValue v;
+    v.expr = m->value.get();
+    v.scope = scope;
+    v.iters = iters;
+    v.span = m->value->span;
+    out.value = v;
+  }
+  for (const auto& a : m->args) {
+    // a.b.c = x  ==  a(b(c = x))
+    Mod* target = &out;
+    for (size_t i = 0; i < a.path.size(); ++i) {
+      const std::string& key = a.path[i];
+      if (!target->sub.count(key)) target->order.push_back(key);
+      Mod& next = target->sub[key];
+      if (i + 1 < a.path.size()) {
+        if (!next.span.valid()) next.span = a.name_span;
+        target = &next;
+        continue;
+      }
+      Mod built = BuildMod(a.mod.get(), scope, iters);
+      built.span = a.name_span;
+      built.each = a.each;
+      if (a.is_final) {
+        built.is_final = true;
+        built.final_span = a.span;
+        if (built.value) built.value->is_final = true;
+      }
+      if (a.redeclare) {
+        built.redeclare_type = a.redeclare_type;
+        built.redeclare_from = scope && scope->cls ? scope->cls : nullptr;
+        built.redeclare_span = a.span;
+      }
+      if (next.value || !next.sub.empty()) {
+        auto& d = diags_.Error(DiagCode::Duplicate, a.name_span, "'" + ast::JoinName(a.path) + "' is modified twice");
+        d.notes.push_back({next.span, "first modified here"});
+      }
+      next = std::move(built);
+    }
+  }
+  return out;
+}
+
+// outer wins over inner; `what` names the element for messages.
+void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
+  std::vector<const std::string*> keys;
+  MergeMods(outer, inner, what, keys);
+}
+
+// The recursion of MergeInto (as deep as the modifier is written). The name for messages
+// is `what` followed by `keys`, built only when a message needs it.
+void Elaborator::MergeMods(Mod& outer, const Mod& inner, const std::string& what,
+                           std::vector<const std::string*>& keys) {
+  auto name = [&] {
+    std::string s = what;
+    for (const std::string* k : keys) s += "." + *k;
+    return s;
+  };
+  // --set on a final parameter is reported once by Elaborator::Run.
+  if (outer.value && outer.value->from_set && inner.is_final) {
+    outer.value.reset();
+  }
+  if (inner.is_final && (outer.value || !outer.sub.empty() || !outer.redeclare_type.empty())) {
+    Span at = outer.value ? outer.value->span : outer.span;
+    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + name() + "' is final and cannot be modified");
+    d.notes.push_back({inner.final_span.valid() ? inner.final_span : inner.span, "declared final here"});
+    outer.value.reset();
+    outer.sub.clear();
+  }
+  if (!outer.value && inner.value) outer.value = inner.value;
+  else if (outer.value && inner.value && inner.value->is_final) {
+    auto& d = diags_.Error(DiagCode::FinalOverride, outer.value->span, "'" + name() + "' is final and cannot be modified");
+    d.notes.push_back({inner.value->span, "final value given here"});
+    outer.value = inner.value;
+  }
+  if (inner.is_final) {
+    outer.is_final = true;
+    outer.final_span = inner.final_span;
+  }
+  if (outer.redeclare_type.empty() && !inner.redeclare_type.empty()) {
+    outer.redeclare_type = inner.redeclare_type;
+    outer.redeclare_from = inner.redeclare_from;
+    outer.redeclare_span = inner.redeclare_span;
+  }
+  if (!outer.span.valid()) outer.span = inner.span;
+  outer.each = outer.each || inner.each;
+  if (!inner.empty() && !inner.set_only) outer.set_only = false;
+  for (const auto& key : inner.order) {
+    auto it = inner.sub.find(key);
+    if (it == inner.sub.end()) continue;
+    auto [slot, added] = outer.sub.try_emplace(key);
+    if (added) outer.order.push_back(key);
+    keys.push_back(&key);
+    MergeMods(slot->second, it->second, what, keys);
+    keys.pop_back();
+  }
+}
+// Element `index` of an array component's modifier. Copies everything but the values,
+// and of a value only the slice: copying the whole array value for every element would
+// cost O(count^2) time and memory.
+Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
+  if (mod.each) return mod;  // `each` applies the whole modifier to every element
+  Mod out;
+  out.order = mod.order;
+  out.each = mod.each;
+  out.is_final = mod.is_final;
+  out.final_span = mod.final_span;
+  out.span = mod.span;
+  out.redeclare_type = mod.redeclare_type;
+  out.redeclare_from = mod.redeclare_from;
+  out.redeclare_span = mod.redeclare_span;
+  out.set_only = mod.set_only;
+  if (mod.value) {
+    std::optional<Value> evaluated;
+    if (!mod.value->pre) evaluated = EvalModValue(*mod.value, nullptr);
+    const Value& v = mod.value->pre ? *mod.value->pre : *evaluated;
+    if (v.valid && (v.shape.empty() || v.shape[0] != count)) {
+      auto& d = diags_.Error(DiagCode::SizeMismatch, mod.value->span,
+                             "modifier of an array of " + std::to_string(count) + " components needs " +
+                                 std::to_string(count) + " values");
+      d.hint = "write 'each' before the name to give every element the same value";
+    } else if (v.valid) {
+      ModValue mv;
+      mv.expr = mod.value->expr;
+      mv.scope = mod.value->scope;
+      mv.iters = mod.value->iters;
+      mv.span = mod.value->span;
+      mv.is_final = mod.value->is_final;
+      mv.from_set = mod.value->from_set;
+      Value s;
+      s.type = v.type;
+      s.shape.assign(v.shape.begin() + 1, v.shape.end());
+      size_t stride = v.Size() / static_cast<size_t>(count);
+      for (size_t k = 0; k < stride; ++k) {
+        s.e.push_back(v.e[static_cast<size_t>(index) * stride + k]);
+        if (v.type == VType::String) s.s.push_back(v.s[static_cast<size_t>(index) * stride + k]);
+      }
+      mv.pre = std::move(s);
+      out.value = std::move(mv);
+    }
+  }
+  for (const auto& [k, sm] : mod.sub) out.sub[k] = SliceMod(sm, index, count, where);
+  return out;
+}
+Value Elaborator::EvalModValue(const ModValue& mv, Span* where) {
+  if (where) *where = mv.span;
+  if (mv.pre) return *mv.pre;
+  if (!mv.expr) return Value::Invalid();
+  Ctx ctx{mv.scope, mv.iters.get()};
+  return Eval(*mv.expr, ctx);
+}
+
+}  // namespace kanesim::lang::elab

@@ -1,0 +1,373 @@
+// Expressions, by operator precedence from `if` down to primaries (each function carries
+// its grammar rule). The Parser class is in lang/parser_internal.h.
+#include <utility>
+
+#include "lang/parser_internal.h"
+
+namespace kanesim::lang::parsing {
+
+// expression := simple_expression
+//             | if expression then expression { elseif expression then expression }
+//               else expression
+ExprPtr Parser::Expression() {
+  if (At(Tok::KwIf)) {
+    DepthGuard guard(this);
+    if (!guard.ok) return ErrorExpr(Peek().span);
+    Span b = Advance().span;
+    auto e = std::make_unique<Expr>();
+    e->kind = ExprKind::If;
+    e->args.push_back(Expression());
+    Expect(Tok::KwThen, "in the if-expression");
+    e->args.push_back(Expression());
+    while (Accept(Tok::KwElseif)) {
+      e->args.push_back(Expression());
+      Expect(Tok::KwThen, "in the if-expression");
+      e->args.push_back(Expression());
+    }
+    Expect(Tok::KwElse, "in the if-expression (it needs an else branch)");
+    e->args.push_back(Expression());
+    e->span = SpanFrom(b);
+    return Finish(std::move(e), b);
+  }
+  return SimpleExpression();
+}
+
+// simple_expression := logical_expression [ ':' logical_expression [ ':' logical_expression ] ]
+ExprPtr Parser::SimpleExpression() {
+  Span b = Peek().span;
+  ExprPtr first = Logical(0);
+  if (!At(Tok::Colon)) return first;
+  auto r = std::make_unique<Expr>();
+  r->kind = ExprKind::Range;
+  r->args.push_back(std::move(first));
+  Advance();
+  r->args.push_back(Logical(0));
+  if (Accept(Tok::Colon)) r->args.push_back(Logical(0));
+  r->span = SpanFrom(b);
+  return Finish(std::move(r), b);
+}
+
+// Operator precedence, lowest first (Modelica 3.5 §3.2):
+//   or; and; not; relational; additive (+ -); multiplicative (* /); unary +-; ^
+// logical_expression := logical_term { or logical_term }
+// logical_term := logical_factor { and logical_factor }
+// logical_factor := [not] relation
+// relation := arithmetic_expression [ rel_op arithmetic_expression ]
+ExprPtr Parser::Logical(int level) {
+  Span b = Peek().span;
+  if (level == 0 || level == 1) {
+    Tok op = level == 0 ? Tok::KwOr : Tok::KwAnd;
+    ExprPtr lhs = Logical(level + 1);
+    while (At(op)) {
+      Span op_span = Advance().span;
+      ExprPtr rhs = Logical(level + 1);
+      lhs = MakeBinary(op, std::move(lhs), std::move(rhs), b, op_span);
+    }
+    return lhs;
+  }
+  if (level == 2) {
+    if (At(Tok::KwNot)) {
+      DepthGuard guard(this);
+      if (!guard.ok) return ErrorExpr(b);
+      Advance();
+      auto e = std::make_unique<Expr>();
+      e->kind = ExprKind::Unary;
+      e->op = static_cast<int>(Tok::KwNot);
+      e->args.push_back(Logical(2));
+      e->span = SpanFrom(b);
+      return Finish(std::move(e), b);
+    }
+    return Logical(3);
+  }
+  // relation
+  ExprPtr lhs = Arithmetic(0);
+  Tok k = Peek().kind;
+  if (k == Tok::Lt || k == Tok::Le || k == Tok::Gt || k == Tok::Ge || k == Tok::EqEq || k == Tok::Ne) {
+    Span op_span = Advance().span;
+    ExprPtr rhs = Arithmetic(0);
+    return MakeBinary(k, std::move(lhs), std::move(rhs), b, op_span);
+  }
+  return lhs;
+}
+
+// arithmetic_expression := [add_op] term { add_op term }
+// term := factor { mul_op factor }
+ExprPtr Parser::Arithmetic(int level) {
+  Span b = Peek().span;
+  if (level == 0) {
+    ExprPtr lhs = Unary();
+    while (At(Tok::Plus) || At(Tok::Minus)) {
+      Token op = Advance();
+      ExprPtr rhs = Arithmetic(1);
+      lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
+    }
+    return lhs;
+  }
+  ExprPtr lhs = Power();
+  while (At(Tok::Star) || At(Tok::Slash)) {
+    Token op = Advance();
+    ExprPtr rhs = Power();
+    lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
+  }
+  return lhs;
+}
+
+// Leading unary +/- applies to the whole first term: -a*b = -(a*b), -a^2 = -(a^2).
+ExprPtr Parser::Unary() {
+  Span b = Peek().span;
+  if (At(Tok::Minus) || At(Tok::Plus)) {
+    Tok op = Advance().kind;
+    DepthGuard guard(this);
+    if (!guard.ok) return ErrorExpr(b);
+    auto e = std::make_unique<Expr>();
+    e->kind = ExprKind::Unary;
+    e->op = static_cast<int>(op);
+    e->args.push_back(Arithmetic(1));
+    e->span = SpanFrom(b);
+    return Finish(std::move(e), b);
+  }
+  return Arithmetic(1);
+}
+
+// factor := primary [ '^' primary ]   (Modelica: no chaining without parentheses; we
+// accept a^b^c as a^(b^c)? No: reported as an error, like Modelica.)
+ExprPtr Parser::Power() {
+  Span b = Peek().span;
+  ExprPtr base = Primary();
+  if (!At(Tok::Caret)) return base;
+  Advance();
+  auto e = std::make_unique<Expr>();
+  e->kind = ExprKind::Binary;
+  e->op = static_cast<int>(Tok::Caret);
+  e->args.push_back(std::move(base));
+  if (At(Tok::Minus) || At(Tok::Plus)) {
+    // a ^ -2 : Modelica requires parentheses; accept and note via hint-free parse.
+    Span ub = Peek().span;
+    Tok op = Advance().kind;
+    auto u = std::make_unique<Expr>();
+    u->kind = ExprKind::Unary;
+    u->op = static_cast<int>(op);
+    u->args.push_back(Primary());
+    u->span = SpanFrom(ub);
+    e->args.push_back(Finish(std::move(u), ub));
+  } else {
+    e->args.push_back(Primary());
+  }
+  e->span = SpanFrom(b);
+  e = Finish(std::move(e), b);
+  if (At(Tok::Caret)) {
+    diags_.Error(DiagCode::ExpectedToken, Peek().span, "'^' does not chain").hint =
+        "add parentheses: a^(b^c) or (a^b)^c";
+    Advance();
+    Primary();
+  }
+  return e;
+}
+
+// No expression where one must begin. After an operator ('1 - - 2', 'a * / b', a run of
+// 200 000 signs) the whole run of operators gets one error, and parsing goes on with the
+// operand that follows it, so the run neither cascades into one error per sign nor grows
+// the tree.
+ExprPtr Parser::MissingOperand(const Span& b) {
+  const Tok k = Peek().kind;
+  const bool sign = k == Tok::Plus || k == Tok::Minus;
+  const bool op = sign || k == Tok::Star || k == Tok::Slash || k == Tok::Caret;
+  Diagnostic* d = ErrorExpected("an expression", "");
+  if (!op) return ErrorExpr(b);
+  if (d) {
+    d->hint = sign ? std::string("a sign cannot follow another operator: write a - (-b), a * (-b)")
+                   : std::string("an operand is missing before '") + TokSpelling(k) + "'";
+  }
+  while (At(Tok::Plus) || At(Tok::Minus) || At(Tok::Star) || At(Tok::Slash) || At(Tok::Caret)) Advance();
+  last_error_pos_ = pos_;  // nothing to parse here either: no second error
+  return Primary();
+}
+
+// subscripts := '[' subscript { ',' subscript } ']';  subscript := ':' | expression
+void Parser::Subscripts(std::vector<ExprPtr>& out) {
+  Token open = Advance();  // '['
+  DepthGuard guard(this);
+  if (!guard.ok) return;
+  do {
+    if (At(Tok::Colon) && (Peek(1).kind == Tok::Comma || Peek(1).kind == Tok::RBracket)) {
+      auto e = std::make_unique<Expr>();
+      e->kind = ExprKind::Colon;
+      e->span = Advance().span;
+      out.push_back(std::move(e));
+    } else {
+      ++subscript_depth_;
+      out.push_back(Expression());
+      --subscript_depth_;
+    }
+  } while (Accept(Tok::Comma));
+  ExpectClose(Tok::RBracket, open);
+}
+
+// component_reference := IDENT [subscripts] { '.' IDENT [subscripts] }
+ExprPtr Parser::ComponentRef() {
+  Span b = Peek().span;
+  auto e = std::make_unique<Expr>();
+  e->kind = ExprKind::Ref;
+  if (!At(Tok::Ident)) {
+    ErrorExpected("a component reference", "");
+    e->span = b;
+    return e;
+  }
+  do {
+    if (!At(Tok::Ident)) {
+      ErrorExpected("a name", "after '.'");
+      break;
+    }
+    RefPart p;
+    p.span = Peek().span;
+    p.name = Advance().text;
+    if (At(Tok::LBracket)) Subscripts(p.subscripts);
+    p.span = SpanFrom(p.span);
+    e->parts.push_back(std::move(p));
+  } while (Accept(Tok::Dot));
+  e->span = SpanFrom(b);
+  return Finish(std::move(e), b);
+}
+
+// primary := NUMBER | STRING | false | true | component_reference
+//          | component_reference function_call_args
+//          | '(' expression ')' | '{' array_arguments '}' | '[' matrix ']'
+// function_call_args := '(' [ expression { ',' expression } { ',' IDENT '=' expression }
+//                       | expression for IDENT in expression ] ')'
+ExprPtr Parser::Primary() {
+  Span b = Peek().span;
+  const Token& t = Peek();
+  // Brackets nest; each level counts once against kMaxNesting.
+  bool opens = t.kind == Tok::LParen || t.kind == Tok::LBrace || t.kind == Tok::LBracket || t.kind == Tok::Ident;
+  DepthGuard guard(this, opens);
+  if (!guard.ok) return ErrorExpr(b);
+  if (t.kind == Tok::KwEnd && subscript_depth_ > 0) {
+    auto e = std::make_unique<Expr>();
+    e->kind = ExprKind::End;
+    e->span = Advance().span;
+    return e;
+  }
+  switch (t.kind) {
+    case Tok::Number: {
+      auto e = std::make_unique<Expr>();
+      e->kind = ExprKind::Number;
+      e->number = t.number;
+      e->is_integer = t.is_integer;
+      e->span = t.span;
+      Advance();
+      return e;
+    }
+    case Tok::String: {
+      auto e = std::make_unique<Expr>();
+      e->kind = ExprKind::String;
+      e->text = t.text;
+      e->span = t.span;
+      Advance();
+      return e;
+    }
+    case Tok::KwTrue:
+    case Tok::KwFalse: {
+      auto e = std::make_unique<Expr>();
+      e->kind = ExprKind::Bool;
+      e->number = t.kind == Tok::KwTrue ? 1 : 0;
+      e->span = t.span;
+      Advance();
+      return e;
+    }
+    case Tok::LParen: {
+      Token open = Advance();
+      ExprPtr inner = Expression();
+      ExpectClose(Tok::RParen, open);
+      return inner;
+    }
+    case Tok::LBrace: {
+      Token open = Advance();
+      auto e = std::make_unique<Expr>();
+      e->kind = ExprKind::Array;
+      if (!At(Tok::RBrace)) {
+        ExprPtr first = Expression();
+        if (At(Tok::KwFor)) {
+          Advance();
+          e->kind = ExprKind::Comprehension;
+          e->args.push_back(std::move(first));
+          if (At(Tok::Ident)) {
+            e->text = Advance().text;
+          } else {
+            ErrorExpected("an iterator name", "after 'for'");
+          }
+          Expect(Tok::KwIn, "after the iterator");
+          e->args.push_back(Expression());
+        } else {
+          e->args.push_back(std::move(first));
+          while (Accept(Tok::Comma)) e->args.push_back(Expression());
+        }
+      }
+      ExpectClose(Tok::RBrace, open);
+      e->span = SpanFrom(b);
+      return Finish(std::move(e), b);
+    }
+    case Tok::LBracket: {
+      Token open = Advance();
+      auto e = std::make_unique<Expr>();
+      e->kind = ExprKind::Matrix;
+      e->rows.emplace_back();
+      if (!At(Tok::RBracket)) {
+        do {
+          do {
+            e->rows.back().push_back(Expression());
+          } while (Accept(Tok::Comma));
+          if (At(Tok::Semicolon)) e->rows.emplace_back();
+        } while (Accept(Tok::Semicolon));
+      }
+      ExpectClose(Tok::RBracket, open);
+      e->span = SpanFrom(b);
+      return Finish(std::move(e), b);
+    }
+    case Tok::Ident: {
+      ExprPtr ref = ComponentRef();
+      if (!At(Tok::LParen)) return ref;
+      Token open = Advance();
+      auto call = std::make_unique<Expr>();
+      call->kind = ExprKind::Call;
+      call->parts = std::move(ref->parts);
+      if (!At(Tok::RParen)) {
+        do {
+          if (At(Tok::Ident) && Peek(1).kind == Tok::Assign) {
+            NamedArg na;
+            na.span = Peek().span;
+            na.name = Advance().text;
+            Advance();
+            na.value = Expression();
+            call->named_args.push_back(std::move(na));
+          } else {
+            ExprPtr a = Expression();
+            if (At(Tok::KwFor)) {
+              // f(expr for i in range): a reduction like sum(...) — represented as a
+              // call whose single argument is a comprehension.
+              Advance();
+              auto comp = std::make_unique<Expr>();
+              comp->kind = ExprKind::Comprehension;
+              comp->span = a->span;
+              comp->args.push_back(std::move(a));
+              if (At(Tok::Ident)) comp->text = Advance().text;
+              else ErrorExpected("an iterator name", "after 'for'");
+              Expect(Tok::KwIn, "after the iterator");
+              comp->args.push_back(Expression());
+              const Span comp_span = comp->span;
+              call->args.push_back(Finish(std::move(comp), comp_span));
+              break;
+            }
+            call->args.push_back(std::move(a));
+          }
+        } while (Accept(Tok::Comma));
+      }
+      ExpectClose(Tok::RParen, open);
+      call->span = SpanFrom(b);
+      return Finish(std::move(call), b);
+    }
+    default:
+      return MissingOperand(b);
+  }
+}
+
+}  // namespace kanesim::lang::parsing
