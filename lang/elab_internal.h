@@ -226,6 +226,7 @@ class Elaborator {
   Value EvalMatrix(const ast::Expr& e, const Ctx& ctx);
   Value EvalRange(const ast::Expr& e, const Ctx& ctx);
   Value EvalIf(const ast::Expr& e, const Ctx& ctx);
+  // Built-in functions (elab_builtins.cpp): one table {name, arity, lowering}.
   Value EvalCall(const ast::Expr& e, const Ctx& ctx);
   // Concatenation (elab_concat.cpp): cat(k, ...), and EvalMatrix above.
   Value EvalCat(const ast::Expr& e, const std::vector<Value>& args);

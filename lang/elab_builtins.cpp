@@ -1,0 +1,359 @@
+// Built-in functions, in one table {name, arity, lowering}. EvalCall evaluates the
+// arguments, finds the name in the table, checks the number of arguments when it is fixed,
+// and calls the lowering, which turns the argument Values into pool expressions
+// (parameters stay symbolic, constants fold). A name not in the table is diagnosed with
+// the closest one from the table as a suggestion.
+#include <string>
+#include <vector>
+
+#include "lang/elab_internal.h"
+
+namespace kanesim::lang::elab {
+
+using flat::Op;
+
+namespace {
+
+// One call being lowered, with the checks its lowering shares with others (each reports
+// its diagnostic and returns false).
+struct Call {
+  Elaborator& el;
+  const ast::Expr& e;
+  const std::string& fn;
+  const std::vector<Value>& args;
+  const Elaborator::Ctx& ctx;
+  Op op;  // the table's operation, for lowerings shared by several functions
+
+  flat::ExprPool& Pool() const { return el.m_->exprs; }
+  bool Want(size_t n) const {
+    if (args.size() == n) return true;
+    el.diags_.Error(DiagCode::BadCall, e.span,
+                    "'" + fn + "' takes " + std::to_string(n) + " argument(s), got " + std::to_string(args.size()));
+    return false;
+  }
+  bool Numeric(const Value& v) const {
+    if (v.type != VType::String) return true;
+    el.diags_.Error(DiagCode::TypeMismatch, e.span, "'" + fn + "' needs numbers");
+    return false;
+  }
+  bool Vec3(const Value& v) const {
+    if (v.shape == std::vector<int>{3} && v.type != VType::String) return true;
+    el.diags_.Error(DiagCode::SizeMismatch, e.span, "'" + fn + "' needs 3-vectors, got " + ShapeStr(v.shape));
+    return false;
+  }
+};
+
+// sin(x), abs(x), ...: elementwise; abs keeps Integer, the others give Real.
+Value LowerUnary(Call& c) {
+  if (!c.Numeric(c.args[0])) return Value::Invalid();
+  Value r = c.args[0];
+  r.type = (c.op == Op::Abs && r.type == VType::Integer) ? VType::Integer : VType::Real;
+  if (c.op == Op::Sign || c.op == Op::Floor || c.op == Op::Ceil) r.type = VType::Real;
+  for (auto& x : r.e) x = c.Pool().Unary(c.op, x);
+  return r;
+}
+
+// atan2(a, b), mod(a, b), min(a, b), max(a, b): elementwise.
+Value LowerBinary(Call& c) {
+  if (!c.Numeric(c.args[0]) || !c.Numeric(c.args[1])) return Value::Invalid();
+  VType t = c.op == Op::Atan2 ? VType::Real : Promote(c.args[0].type, c.args[1].type);
+  return c.el.Elementwise2(c.args[0], c.args[1], c.op, t, c.e.span);
+}
+
+// sum(A), min(A), max(A): over the elements of A.
+Value LowerReduce(Call& c) {
+  if (!c.Numeric(c.args[0])) return Value::Invalid();
+  const Value& v = c.args[0];
+  if (v.e.empty()) return c.el.Const(0);
+  ExprId acc = v.e[0];
+  for (size_t i = 1; i < v.e.size(); ++i) acc = c.Pool().Binary(c.op, acc, v.e[i]);
+  return c.el.Scalar(acc, v.type == VType::Integer ? VType::Integer : VType::Real);
+}
+
+// min and max take two arguments (elementwise) or one (over its elements).
+Value LowerMinMax(Call& c) {
+  if (c.args.size() == 2) return LowerBinary(c);
+  if (!c.Want(1)) return Value::Invalid();
+  return LowerReduce(c);
+}
+
+Value LowerInteger(Call& c) {
+  if (!c.Numeric(c.args[0])) return Value::Invalid();
+  Value r = c.args[0];
+  for (auto& x : r.e) x = c.Pool().Unary(Op::Floor, x);
+  r.type = VType::Integer;
+  return r;
+}
+
+Value LowerCross(Call& c) {
+  if (!c.Vec3(c.args[0]) || !c.Vec3(c.args[1])) return Value::Invalid();
+  auto& pool = c.Pool();
+  const auto& a = c.args[0].e;
+  const auto& b = c.args[1].e;
+  Value r;
+  r.shape = {3};
+  auto m = [&](int i, int j) { return pool.Binary(Op::Mul, a[static_cast<size_t>(i)], b[static_cast<size_t>(j)]); };
+  r.e = {pool.Binary(Op::Sub, m(1, 2), m(2, 1)), pool.Binary(Op::Sub, m(2, 0), m(0, 2)),
+         pool.Binary(Op::Sub, m(0, 1), m(1, 0))};
+  return r;
+}
+
+Value LowerSkew(Call& c) {
+  if (!c.Vec3(c.args[0])) return Value::Invalid();
+  auto& pool = c.Pool();
+  const auto& a = c.args[0].e;
+  ExprId z = pool.Constant(0);
+  Value r;
+  r.shape = {3, 3};
+  r.e = {z, pool.Unary(Op::Neg, a[2]), a[1], a[2], z, pool.Unary(Op::Neg, a[0]), pool.Unary(Op::Neg, a[1]), a[0], z};
+  return r;
+}
+
+// sum_i a_i b_i into *s, for dot and norm.
+bool InnerProduct(Call& c, const Value& a, const Value& b, ExprId* s) {
+  if (a.shape.size() != 1 || a.shape != b.shape || !c.Numeric(a) || !c.Numeric(b)) {
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'" + c.fn + "' needs vectors of equal length");
+    return false;
+  }
+  auto& pool = c.Pool();
+  *s = pool.Binary(Op::Mul, a.e[0], b.e[0]);
+  for (size_t i = 1; i < a.e.size(); ++i) *s = pool.Binary(Op::Add, *s, pool.Binary(Op::Mul, a.e[i], b.e[i]));
+  return true;
+}
+
+Value LowerDot(Call& c) {
+  ExprId s = 0;
+  if (!InnerProduct(c, c.args[0], c.args[1], &s)) return Value::Invalid();
+  return c.el.Scalar(s, Promote(c.args[0].type, c.args[1].type));
+}
+
+Value LowerNorm(Call& c) {
+  ExprId s = 0;
+  if (!InnerProduct(c, c.args[0], c.args[0], &s)) return Value::Invalid();
+  return c.el.Scalar(c.Pool().Unary(Op::Sqrt, s), VType::Real);
+}
+
+Value LowerOuterProduct(Call& c) {
+  const Value& a = c.args[0];
+  const Value& b = c.args[1];
+  if (a.shape.size() != 1 || b.shape.size() != 1) {
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'outerProduct' needs vectors");
+    return Value::Invalid();
+  }
+  Value r;
+  r.type = Promote(a.type, b.type);
+  r.shape = {a.shape[0], b.shape[0]};
+  for (ExprId x : a.e)
+    for (ExprId y : b.e) r.e.push_back(c.Pool().Binary(Op::Mul, x, y));
+  return r;
+}
+
+Value LowerTranspose(Call& c) {
+  const Value& a = c.args[0];
+  if (a.shape.size() != 2) {
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'transpose' needs a matrix, got " + ShapeStr(a.shape));
+    return Value::Invalid();
+  }
+  Value r = a;
+  r.shape = {a.shape[1], a.shape[0]};
+  for (int i = 0; i < a.shape[0]; ++i)
+    for (int j = 0; j < a.shape[1]; ++j)
+      r.e[static_cast<size_t>(j * a.shape[0] + i)] = a.e[static_cast<size_t>(i * a.shape[1] + j)];
+  return r;
+}
+
+Value LowerVector(Call& c) {
+  Value r = c.args[0];
+  r.shape = {static_cast<int>(r.e.size())};
+  return r;
+}
+
+// The n-by-n matrix with `diag` on its diagonal (ones when null), zeros elsewhere.
+Value DiagonalMatrix(Call& c, long n, VType type, const std::vector<ExprId>* diag) {
+  if (n < 0 || n > kMaxArraySize || n * n > kMaxArraySize) {
+    c.el.diags_.Error(DiagCode::ArrayTooLarge, c.e.span, "matrix size out of range");
+    return Value::Invalid();
+  }
+  auto& pool = c.Pool();
+  Value r;
+  r.type = type;
+  r.shape = {static_cast<int>(n), static_cast<int>(n)};
+  ExprId z = pool.Constant(0), one = pool.Constant(1);
+  for (long i = 0; i < n; ++i)
+    for (long j = 0; j < n; ++j) r.e.push_back(i != j ? z : (diag ? (*diag)[static_cast<size_t>(i)] : one));
+  return r;
+}
+
+Value LowerIdentity(Call& c) {
+  long n = 0;
+  if (!c.el.StructuralInt(c.args[0], c.e.args[0]->span, &n, "the size")) return Value::Invalid();
+  return DiagonalMatrix(c, n, VType::Integer, nullptr);
+}
+
+Value LowerDiagonal(Call& c) {
+  if (c.args[0].shape.size() != 1 || !c.Numeric(c.args[0])) {
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'diagonal' needs a vector");
+    return Value::Invalid();
+  }
+  return DiagonalMatrix(c, c.args[0].shape[0], c.args[0].type, &c.args[0].e);
+}
+
+// The dimensions given by arguments first, first + 1, ... into r->shape.
+bool Dimensions(Call& c, size_t first, Value* r) {
+  if (c.args.size() <= first) {
+    c.el.diags_.Error(DiagCode::BadCall, c.e.span, "'" + c.fn + "' needs dimensions");
+    return false;
+  }
+  long total = 1;
+  for (size_t i = first; i < c.args.size(); ++i) {
+    long n = 0;
+    if (!c.el.StructuralInt(c.args[i], c.e.args[i]->span, &n, "a dimension")) return false;
+    if (n < 0 || n > kMaxArraySize || (total *= (n == 0 ? 1 : n)) > kMaxArraySize) {
+      c.el.diags_.Error(DiagCode::ArrayTooLarge, c.e.args[i]->span, "array too large");
+      return false;
+    }
+    r->shape.push_back(static_cast<int>(n));
+  }
+  return true;
+}
+
+// zeros(n1, n2, ...) and ones(...): Integer arrays of one constant.
+Value ConstantArray(Call& c, double x) {
+  Value r;
+  r.type = VType::Integer;
+  if (!Dimensions(c, 0, &r)) return Value::Invalid();
+  r.e.assign(r.Size(), c.Pool().Constant(x));
+  return r;
+}
+
+Value LowerZeros(Call& c) { return ConstantArray(c, 0); }
+Value LowerOnes(Call& c) { return ConstantArray(c, 1); }
+
+// fill(x, n1, n2, ...)
+Value LowerFill(Call& c) {
+  Value r;
+  r.type = c.args.empty() ? VType::Integer : c.args[0].type;
+  if (!Dimensions(c, 1, &r)) return Value::Invalid();
+  size_t count = r.Size();
+  if (!c.args[0].shape.empty()) {
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'fill' needs a scalar value");
+    return Value::Invalid();
+  }
+  r.e.assign(count, c.args[0].e[0]);
+  if (c.args[0].type == VType::String) r.s.assign(count, c.args[0].s[0]);
+  return r;
+}
+
+// size(A): the vector of A's dimensions; size(A, k): its k-th.
+Value LowerSize(Call& c) {
+  if (c.args.size() == 1) {
+    Value r;
+    r.type = VType::Integer;
+    for (int d : c.args[0].shape) r.e.push_back(c.Pool().Constant(d));
+    r.shape = {static_cast<int>(c.args[0].shape.size())};
+    return r;
+  }
+  if (!c.Want(2)) return Value::Invalid();
+  long k = 0;
+  if (!c.el.StructuralInt(c.args[1], c.e.args[1]->span, &k, "a dimension index")) return Value::Invalid();
+  if (k < 1 || k > static_cast<long>(c.args[0].shape.size())) {
+    c.el.diags_.Error(DiagCode::IndexOutOfRange, c.e.args[1]->span, "dimension index out of range");
+    return Value::Invalid();
+  }
+  return c.el.Const(c.args[0].shape[static_cast<size_t>(k - 1)], VType::Integer);
+}
+
+// meshVolume / meshCentre / meshInertia(file, scale): lang/elab_mesh.cpp.
+Value LowerMesh(Call& c) { return c.el.EvalMeshCall(c.fn, c.e, c.args, c.ctx); }
+
+// cat(k, A, B, ...): lang/elab_concat.cpp.
+Value LowerCat(Call& c) { return c.el.EvalCat(c.e, c.args); }
+
+// `arity`: the number of arguments, checked before the lowering runs. kOwnArity: the
+// function takes several counts (min, max, size, zeros, ones, fill, cat) or words its own
+// message (the mesh functions), and the lowering checks.
+constexpr int kOwnArity = -1;
+
+struct Builtin {
+  const char* name;
+  int arity;
+  Value (*lower)(Call&);
+  Op op = Op::Const;  // for lowerings shared by several functions
+};
+
+// The order is the order of suggestions among equally close names.
+const Builtin kBuiltins[] = {
+    {"sin", 1, LowerUnary, Op::Sin},
+    {"cos", 1, LowerUnary, Op::Cos},
+    {"tan", 1, LowerUnary, Op::Tan},
+    {"asin", 1, LowerUnary, Op::Asin},
+    {"acos", 1, LowerUnary, Op::Acos},
+    {"atan", 1, LowerUnary, Op::Atan},
+    {"atan2", 2, LowerBinary, Op::Atan2},
+    {"sinh", 1, LowerUnary, Op::Sinh},
+    {"cosh", 1, LowerUnary, Op::Cosh},
+    {"tanh", 1, LowerUnary, Op::Tanh},
+    {"exp", 1, LowerUnary, Op::Exp},
+    {"log", 1, LowerUnary, Op::Log},
+    {"sqrt", 1, LowerUnary, Op::Sqrt},
+    {"abs", 1, LowerUnary, Op::Abs},
+    {"sign", 1, LowerUnary, Op::Sign},
+    {"min", kOwnArity, LowerMinMax, Op::Min},
+    {"max", kOwnArity, LowerMinMax, Op::Max},
+    {"floor", 1, LowerUnary, Op::Floor},
+    {"ceil", 1, LowerUnary, Op::Ceil},
+    {"mod", 2, LowerBinary, Op::Mod},
+    {"cross", 2, LowerCross},
+    {"dot", 2, LowerDot},
+    {"norm", 1, LowerNorm},
+    {"transpose", 1, LowerTranspose},
+    {"identity", 1, LowerIdentity},
+    {"diagonal", 1, LowerDiagonal},
+    {"zeros", kOwnArity, LowerZeros},
+    {"ones", kOwnArity, LowerOnes},
+    {"fill", kOwnArity, LowerFill},
+    {"size", kOwnArity, LowerSize},
+    {"sum", 1, LowerReduce, Op::Add},
+    {"integer", 1, LowerInteger},
+    {"skew", 1, LowerSkew},
+    {"outerProduct", 2, LowerOuterProduct},
+    {"vector", 1, LowerVector},
+    {"meshVolume", kOwnArity, LowerMesh},
+    {"meshCentre", kOwnArity, LowerMesh},
+    {"meshInertia", kOwnArity, LowerMesh},
+    {"cat", kOwnArity, LowerCat},
+};
+
+}  // namespace
+
+Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
+  std::string fn = e.parts.empty() ? "" : ast::JoinName([&] {
+    std::vector<std::string> v;
+    for (auto& p : e.parts) v.push_back(p.name);
+    return v;
+  }());
+  if (!e.named_args.empty()) {
+    diags_.Error(DiagCode::BadCall, e.named_args[0].span, "'" + fn + "' takes no named arguments");
+    return Value::Invalid();
+  }
+  std::vector<Value> args;
+  for (const auto& a : e.args) {
+    args.push_back(Eval(*a, ctx));
+    if (!args.back().valid) return Value::Invalid();
+  }
+  for (const Builtin& b : kBuiltins) {
+    if (fn != b.name) continue;
+    Call call{*this, e, fn, args, ctx, b.op};
+    if (b.arity != kOwnArity && !call.Want(static_cast<size_t>(b.arity))) return Value::Invalid();
+    return b.lower(call);
+  }
+  std::vector<std::string> cands;
+  for (const Builtin& b : kBuiltins) cands.push_back(b.name);
+  auto& d = diags_.Error(DiagCode::BadCall, e.span, "unknown function '" + fn + "'");
+  std::string best = ClosestName(fn, cands);
+  if (fn == "der") d.hint = "derivatives are not written by hand: joints provide q and u";
+  else if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+  return Value::Invalid();
+}
+
+}  // namespace kanesim::lang::elab
