@@ -28,7 +28,7 @@ bool Elaborator::ChargeSteps(std::int64_t steps, Span where) {
 }
 
 bool Elaborator::Charge(const Value& v, Span where) {
-  return ChargeSteps(static_cast<std::int64_t>(v.e.size()) + 1, where);
+  return ChargeSteps(static_cast<std::int64_t>(v.elements.size()) + 1, where);
 }
 
 // The native stack this thread has left below `frame`; 0 when unknown. The main thread's

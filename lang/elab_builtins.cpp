@@ -18,7 +18,7 @@ namespace {
 // its diagnostic and returns false).
 struct Call {
   Elaborator& el;
-  const ast::Expr& e;
+  const ast::Expr& expr;
   const std::string& fn;
   const std::vector<Value>& args;
   const Elaborator::Ctx& ctx;
@@ -27,18 +27,18 @@ struct Call {
   flat::ExprPool& Pool() const { return el.m_->exprs; }
   bool Want(size_t n) const {
     if (args.size() == n) return true;
-    el.diags_.Error(DiagCode::BadCall, e.span,
+    el.diags_.Error(DiagCode::BadCall, expr.span,
                     "'" + fn + "' takes " + std::to_string(n) + " argument(s), got " + std::to_string(args.size()));
     return false;
   }
   bool Numeric(const Value& v) const {
     if (v.type != VType::String) return true;
-    el.diags_.Error(DiagCode::TypeMismatch, e.span, "'" + fn + "' needs numbers");
+    el.diags_.Error(DiagCode::TypeMismatch, expr.span, "'" + fn + "' needs numbers");
     return false;
   }
   bool Vec3(const Value& v) const {
     if (v.shape == std::vector<int>{3} && v.type != VType::String) return true;
-    el.diags_.Error(DiagCode::SizeMismatch, e.span, "'" + fn + "' needs 3-vectors, got " + ShapeStr(v.shape));
+    el.diags_.Error(DiagCode::SizeMismatch, expr.span, "'" + fn + "' needs 3-vectors, got " + ShapeStr(v.shape));
     return false;
   }
 };
@@ -49,7 +49,7 @@ Value LowerUnary(Call& c) {
   Value r = c.args[0];
   r.type = (c.op == Op::Abs && r.type == VType::Integer) ? VType::Integer : VType::Real;
   if (c.op == Op::Sign || c.op == Op::Floor || c.op == Op::Ceil) r.type = VType::Real;
-  for (auto& x : r.e) x = c.Pool().Unary(c.op, x);
+  for (auto& x : r.elements) x = c.Pool().Unary(c.op, x);
   return r;
 }
 
@@ -57,16 +57,16 @@ Value LowerUnary(Call& c) {
 Value LowerBinary(Call& c) {
   if (!c.Numeric(c.args[0]) || !c.Numeric(c.args[1])) return Value::Invalid();
   VType t = c.op == Op::Atan2 ? VType::Real : Promote(c.args[0].type, c.args[1].type);
-  return c.el.Elementwise2(c.args[0], c.args[1], c.op, t, c.e.span);
+  return c.el.Elementwise2(c.args[0], c.args[1], c.op, t, c.expr.span);
 }
 
 // sum(A), min(A), max(A): over the elements of A.
 Value LowerReduce(Call& c) {
   if (!c.Numeric(c.args[0])) return Value::Invalid();
   const Value& v = c.args[0];
-  if (v.e.empty()) return c.el.Const(0);
-  ExprId acc = v.e[0];
-  for (size_t i = 1; i < v.e.size(); ++i) acc = c.Pool().Binary(c.op, acc, v.e[i]);
+  if (v.elements.empty()) return c.el.Const(0);
+  ExprId acc = v.elements[0];
+  for (size_t i = 1; i < v.elements.size(); ++i) acc = c.Pool().Binary(c.op, acc, v.elements[i]);
   return c.el.Scalar(acc, v.type == VType::Integer ? VType::Integer : VType::Real);
 }
 
@@ -80,7 +80,7 @@ Value LowerMinMax(Call& c) {
 Value LowerInteger(Call& c) {
   if (!c.Numeric(c.args[0])) return Value::Invalid();
   Value r = c.args[0];
-  for (auto& x : r.e) x = c.Pool().Unary(Op::Floor, x);
+  for (auto& x : r.elements) x = c.Pool().Unary(Op::Floor, x);
   r.type = VType::Integer;
   return r;
 }
@@ -88,12 +88,12 @@ Value LowerInteger(Call& c) {
 Value LowerCross(Call& c) {
   if (!c.Vec3(c.args[0]) || !c.Vec3(c.args[1])) return Value::Invalid();
   auto& pool = c.Pool();
-  const auto& a = c.args[0].e;
-  const auto& b = c.args[1].e;
+  const auto& a = c.args[0].elements;
+  const auto& b = c.args[1].elements;
   Value r;
   r.shape = {3};
   auto m = [&](int i, int j) { return pool.Binary(Op::Mul, a[static_cast<size_t>(i)], b[static_cast<size_t>(j)]); };
-  r.e = {pool.Binary(Op::Sub, m(1, 2), m(2, 1)), pool.Binary(Op::Sub, m(2, 0), m(0, 2)),
+  r.elements = {pool.Binary(Op::Sub, m(1, 2), m(2, 1)), pool.Binary(Op::Sub, m(2, 0), m(0, 2)),
          pool.Binary(Op::Sub, m(0, 1), m(1, 0))};
   return r;
 }
@@ -101,23 +101,25 @@ Value LowerCross(Call& c) {
 Value LowerSkew(Call& c) {
   if (!c.Vec3(c.args[0])) return Value::Invalid();
   auto& pool = c.Pool();
-  const auto& a = c.args[0].e;
+  const auto& a = c.args[0].elements;
   ExprId z = pool.Constant(0);
   Value r;
   r.shape = {3, 3};
-  r.e = {z, pool.Unary(Op::Neg, a[2]), a[1], a[2], z, pool.Unary(Op::Neg, a[0]), pool.Unary(Op::Neg, a[1]), a[0], z};
+  r.elements = {z, pool.Unary(Op::Neg, a[2]), a[1], a[2], z, pool.Unary(Op::Neg, a[0]),
+                pool.Unary(Op::Neg, a[1]), a[0], z};
   return r;
 }
 
 // sum_i a_i b_i into *s, for dot and norm.
 bool InnerProduct(Call& c, const Value& a, const Value& b, ExprId* s) {
   if (a.shape.size() != 1 || a.shape != b.shape || !c.Numeric(a) || !c.Numeric(b)) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'" + c.fn + "' needs vectors of equal length");
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'" + c.fn + "' needs vectors of equal length");
     return false;
   }
   auto& pool = c.Pool();
-  *s = pool.Binary(Op::Mul, a.e[0], b.e[0]);
-  for (size_t i = 1; i < a.e.size(); ++i) *s = pool.Binary(Op::Add, *s, pool.Binary(Op::Mul, a.e[i], b.e[i]));
+  *s = pool.Binary(Op::Mul, a.elements[0], b.elements[0]);
+  for (size_t i = 1; i < a.elements.size(); ++i)
+    *s = pool.Binary(Op::Add, *s, pool.Binary(Op::Mul, a.elements[i], b.elements[i]));
   return true;
 }
 
@@ -137,41 +139,41 @@ Value LowerOuterProduct(Call& c) {
   const Value& a = c.args[0];
   const Value& b = c.args[1];
   if (a.shape.size() != 1 || b.shape.size() != 1) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'outerProduct' needs vectors");
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'outerProduct' needs vectors");
     return Value::Invalid();
   }
   Value r;
   r.type = Promote(a.type, b.type);
   r.shape = {a.shape[0], b.shape[0]};
-  for (ExprId x : a.e)
-    for (ExprId y : b.e) r.e.push_back(c.Pool().Binary(Op::Mul, x, y));
+  for (ExprId x : a.elements)
+    for (ExprId y : b.elements) r.elements.push_back(c.Pool().Binary(Op::Mul, x, y));
   return r;
 }
 
 Value LowerTranspose(Call& c) {
   const Value& a = c.args[0];
   if (a.shape.size() != 2) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'transpose' needs a matrix, got " + ShapeStr(a.shape));
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'transpose' needs a matrix, got " + ShapeStr(a.shape));
     return Value::Invalid();
   }
   Value r = a;
   r.shape = {a.shape[1], a.shape[0]};
   for (int i = 0; i < a.shape[0]; ++i)
     for (int j = 0; j < a.shape[1]; ++j)
-      r.e[static_cast<size_t>(j * a.shape[0] + i)] = a.e[static_cast<size_t>(i * a.shape[1] + j)];
+      r.elements[static_cast<size_t>(j * a.shape[0] + i)] = a.elements[static_cast<size_t>(i * a.shape[1] + j)];
   return r;
 }
 
 Value LowerVector(Call& c) {
   Value r = c.args[0];
-  r.shape = {static_cast<int>(r.e.size())};
+  r.shape = {static_cast<int>(r.elements.size())};
   return r;
 }
 
 // The n-by-n matrix with `diag` on its diagonal (ones when null), zeros elsewhere.
 Value DiagonalMatrix(Call& c, long n, VType type, const std::vector<ExprId>* diag) {
   if (n < 0 || n > kMaxArraySize || n * n > kMaxArraySize) {
-    c.el.diags_.Error(DiagCode::ArrayTooLarge, c.e.span, "matrix size out of range");
+    c.el.diags_.Error(DiagCode::ArrayTooLarge, c.expr.span, "matrix size out of range");
     return Value::Invalid();
   }
   auto& pool = c.Pool();
@@ -180,36 +182,36 @@ Value DiagonalMatrix(Call& c, long n, VType type, const std::vector<ExprId>* dia
   r.shape = {static_cast<int>(n), static_cast<int>(n)};
   ExprId z = pool.Constant(0), one = pool.Constant(1);
   for (long i = 0; i < n; ++i)
-    for (long j = 0; j < n; ++j) r.e.push_back(i != j ? z : (diag ? (*diag)[static_cast<size_t>(i)] : one));
+    for (long j = 0; j < n; ++j) r.elements.push_back(i != j ? z : (diag ? (*diag)[static_cast<size_t>(i)] : one));
   return r;
 }
 
 Value LowerIdentity(Call& c) {
   long n = 0;
-  if (!c.el.StructuralInt(c.args[0], c.e.args[0]->span, &n, "the size")) return Value::Invalid();
+  if (!c.el.StructuralInt(c.args[0], c.expr.args[0]->span, &n, "the size")) return Value::Invalid();
   return DiagonalMatrix(c, n, VType::Integer, nullptr);
 }
 
 Value LowerDiagonal(Call& c) {
   if (c.args[0].shape.size() != 1 || !c.Numeric(c.args[0])) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'diagonal' needs a vector");
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'diagonal' needs a vector");
     return Value::Invalid();
   }
-  return DiagonalMatrix(c, c.args[0].shape[0], c.args[0].type, &c.args[0].e);
+  return DiagonalMatrix(c, c.args[0].shape[0], c.args[0].type, &c.args[0].elements);
 }
 
 // The dimensions given by arguments first, first + 1, ... into r->shape.
 bool Dimensions(Call& c, size_t first, Value* r) {
   if (c.args.size() <= first) {
-    c.el.diags_.Error(DiagCode::BadCall, c.e.span, "'" + c.fn + "' needs dimensions");
+    c.el.diags_.Error(DiagCode::BadCall, c.expr.span, "'" + c.fn + "' needs dimensions");
     return false;
   }
   long total = 1;
   for (size_t i = first; i < c.args.size(); ++i) {
     long n = 0;
-    if (!c.el.StructuralInt(c.args[i], c.e.args[i]->span, &n, "a dimension")) return false;
+    if (!c.el.StructuralInt(c.args[i], c.expr.args[i]->span, &n, "a dimension")) return false;
     if (n < 0 || n > kMaxArraySize || (total *= (n == 0 ? 1 : n)) > kMaxArraySize) {
-      c.el.diags_.Error(DiagCode::ArrayTooLarge, c.e.args[i]->span, "array too large");
+      c.el.diags_.Error(DiagCode::ArrayTooLarge, c.expr.args[i]->span, "array too large");
       return false;
     }
     r->shape.push_back(static_cast<int>(n));
@@ -222,7 +224,7 @@ Value ConstantArray(Call& c, double x) {
   Value r;
   r.type = VType::Integer;
   if (!Dimensions(c, 0, &r)) return Value::Invalid();
-  r.e.assign(r.Size(), c.Pool().Constant(x));
+  r.elements.assign(r.Size(), c.Pool().Constant(x));
   return r;
 }
 
@@ -236,11 +238,11 @@ Value LowerFill(Call& c) {
   if (!Dimensions(c, 1, &r)) return Value::Invalid();
   size_t count = r.Size();
   if (!c.args[0].shape.empty()) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.e.span, "'fill' needs a scalar value");
+    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'fill' needs a scalar value");
     return Value::Invalid();
   }
-  r.e.assign(count, c.args[0].e[0]);
-  if (c.args[0].type == VType::String) r.s.assign(count, c.args[0].s[0]);
+  r.elements.assign(count, c.args[0].elements[0]);
+  if (c.args[0].type == VType::String) r.strings.assign(count, c.args[0].strings[0]);
   return r;
 }
 
@@ -249,25 +251,25 @@ Value LowerSize(Call& c) {
   if (c.args.size() == 1) {
     Value r;
     r.type = VType::Integer;
-    for (int d : c.args[0].shape) r.e.push_back(c.Pool().Constant(d));
+    for (int d : c.args[0].shape) r.elements.push_back(c.Pool().Constant(d));
     r.shape = {static_cast<int>(c.args[0].shape.size())};
     return r;
   }
   if (!c.Want(2)) return Value::Invalid();
   long k = 0;
-  if (!c.el.StructuralInt(c.args[1], c.e.args[1]->span, &k, "a dimension index")) return Value::Invalid();
+  if (!c.el.StructuralInt(c.args[1], c.expr.args[1]->span, &k, "a dimension index")) return Value::Invalid();
   if (k < 1 || k > static_cast<long>(c.args[0].shape.size())) {
-    c.el.diags_.Error(DiagCode::IndexOutOfRange, c.e.args[1]->span, "dimension index out of range");
+    c.el.diags_.Error(DiagCode::IndexOutOfRange, c.expr.args[1]->span, "dimension index out of range");
     return Value::Invalid();
   }
   return c.el.Const(c.args[0].shape[static_cast<size_t>(k - 1)], VType::Integer);
 }
 
 // meshVolume / meshCentre / meshInertia(file, scale): lang/elab_mesh.cpp.
-Value LowerMesh(Call& c) { return c.el.EvalMeshCall(c.fn, c.e, c.args, c.ctx); }
+Value LowerMesh(Call& c) { return c.el.EvalMeshCall(c.fn, c.expr, c.args, c.ctx); }
 
 // cat(k, A, B, ...): lang/elab_concat.cpp.
-Value LowerCat(Call& c) { return c.el.EvalCat(c.e, c.args); }
+Value LowerCat(Call& c) { return c.el.EvalCat(c.expr, c.args); }
 
 // `arity`: the number of arguments, checked before the lowering runs. kOwnArity: the
 // function takes several counts (min, max, size, zeros, ones, fill, cat) or words its own

@@ -75,16 +75,16 @@ Value Elaborator::Concatenate(size_t k, const std::vector<Value>& parts, const s
   size_t outer = 1, inner = 1;
   for (size_t d = 0; d < k; ++d) outer *= static_cast<size_t>(first.shape[d]);
   for (size_t d = k + 1; d < first.shape.size(); ++d) inner *= static_cast<size_t>(first.shape[d]);
-  r.e.reserve(total);
+  r.elements.reserve(total);
   const bool strings = type == VType::String;
   for (size_t o = 0; o < outer; ++o) {
     for (const Value& v : parts) {
       const size_t block = static_cast<size_t>(v.shape[k]) * inner;
-      r.e.insert(r.e.end(), v.e.begin() + static_cast<std::ptrdiff_t>(o * block),
-                 v.e.begin() + static_cast<std::ptrdiff_t>((o + 1) * block));
+      r.elements.insert(r.elements.end(), v.elements.begin() + static_cast<std::ptrdiff_t>(o * block),
+                 v.elements.begin() + static_cast<std::ptrdiff_t>((o + 1) * block));
       if (strings)
-        r.s.insert(r.s.end(), v.s.begin() + static_cast<std::ptrdiff_t>(o * block),
-                   v.s.begin() + static_cast<std::ptrdiff_t>((o + 1) * block));
+        r.strings.insert(r.strings.end(), v.strings.begin() + static_cast<std::ptrdiff_t>(o * block),
+                   v.strings.begin() + static_cast<std::ptrdiff_t>((o + 1) * block));
     }
   }
   return r;

@@ -67,15 +67,16 @@ void Elaborator::Emit(Node* root) {
   };
   auto vec3 = [&](const Value& v) {
     flat::Vec3E out{pool.Constant(0), pool.Constant(0), pool.Constant(0)};
-    if (v.valid && v.e.size() == 3) out = {v.e[0], v.e[1], v.e[2]};
+    if (v.valid && v.elements.size() == 3) out = {v.elements[0], v.elements[1], v.elements[2]};
     return out;
   };
   auto mat3 = [&](const Value& v) {
     flat::Mat3E out;
-    for (size_t i = 0; i < 9; ++i) out[i] = v.valid && v.e.size() == 9 ? v.e[i] : pool.Constant(i % 4 == 0 ? 1 : 0);
+    for (size_t i = 0; i < 9; ++i)
+      out[i] = v.valid && v.elements.size() == 9 ? v.elements[i] : pool.Constant(i % 4 == 0 ? 1 : 0);
     return out;
   };
-  auto scalar = [&](const Value& v) { return v.valid && v.e.size() == 1 ? v.e[0] : pool.Constant(0); };
+  auto scalar = [&](const Value& v) { return v.valid && v.elements.size() == 1 ? v.elements[0] : pool.Constant(0); };
   auto boolean = [&](Node* n, const char* name, bool dflt) {
     Node* c = n->Child(name);
     if (!c) return dflt;
@@ -138,11 +139,11 @@ void Elaborator::Emit(Node* root) {
         j.frame_b = frame_of(n, "frame_b");
         if (Node* c = n->Child("coordinates")) {
           Value v = GetVar(c, Span{});
-          if (v.valid && v.type == VType::String && !v.s.empty() &&
-              !flat::RotationCoordsFromName(v.s[0], &j.rotation)) {
+          if (v.valid && v.type == VType::String && !v.strings.empty() &&
+              !flat::RotationCoordsFromName(v.strings[0], &j.rotation)) {
             auto& d = diags_.Error(DiagCode::BadValue, c->mod.value ? c->mod.value->span : Span{},
-                                   "unknown coordinates \"" + v.s[0] + "\" for joint '" + n->path + "'");
-            std::string best = ClosestName(v.s[0], {"quaternion", "cardan_xyz", "euler_zyz"});
+                                   "unknown coordinates \"" + v.strings[0] + "\" for joint '" + n->path + "'");
+            std::string best = ClosestName(v.strings[0], {"quaternion", "cardan_xyz", "euler_zyz"});
             d.hint = "use \"quaternion\", \"cardan_xyz\" or \"euler_zyz\"" +
                      (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)");
           }
@@ -166,7 +167,7 @@ void Elaborator::Emit(Node* root) {
           Value mv = GetVar(mu, Span{});
           double muv = 0;
           if (mv.valid && Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
-            j.friction_mu = mv.e[0];
+            j.friction_mu = mv.elements[0];
             j.friction_v = scalar(field(n, "friction_v", {}));
             j.friction_radius =
                 n->Child("friction_radius") ? scalar(field(n, "friction_radius", {})) : pool.Constant(1.0);
@@ -200,9 +201,9 @@ void Elaborator::Emit(Node* root) {
             Value v = EvalModValue(*it->second.value, &where);
             if (v.valid) {
               if (v.shape.empty() && out->size() == 1) {
-                (*out)[0] = v.e[0];
-              } else if (v.e.size() == out->size() && v.shape.size() == 1) {
-                for (size_t k = 0; k < out->size(); ++k) (*out)[k] = v.e[k];
+                (*out)[0] = v.elements[0];
+              } else if (v.elements.size() == out->size() && v.shape.size() == 1) {
+                for (size_t k = 0; k < out->size(); ++k) (*out)[k] = v.elements[k];
               } else {
                 diags_.Error(DiagCode::SizeMismatch, where,
                              "start value of '" + var->path + "' needs " + std::to_string(out->size()) + " element(s)");
@@ -229,7 +230,7 @@ void Elaborator::Emit(Node* root) {
         if (bound(tau)) {
           Value tv = GetVar(tau, Span{});
           if (tv.valid)
-            for (size_t k = 0; k < j.tau.size() && k < tv.e.size(); ++k) j.tau[k] = tv.e[k];
+            for (size_t k = 0; k < j.tau.size() && k < tv.elements.size(); ++k) j.tau[k] = tv.elements[k];
         }
         // Prescribed motion: q = f(time).
         if (bound(q) || bound(u)) {
@@ -255,19 +256,21 @@ void Elaborator::Emit(Node* root) {
             Span where;
             Value v = EvalModValue(*mv, &where);
             if (!v.valid) continue;
-            bool ok = k >= 0 ? v.shape.empty() : (nq == 1 ? v.shape.empty() : v.e.size() == static_cast<size_t>(nq));
+            bool ok = k >= 0    ? v.shape.empty()
+                      : nq == 1 ? v.shape.empty()
+                                : v.elements.size() == static_cast<size_t>(nq);
             if (!ok) {
               diags_.Error(DiagCode::SizeMismatch, where, "prescribed motion of '" + q->path + "' has the wrong size");
               continue;
             }
-            for (size_t e = 0; e < v.e.size(); ++e) {
-              if (pool.DependsOnState(v.e[e])) {
+            for (size_t e = 0; e < v.elements.size(); ++e) {
+              if (pool.DependsOnState(v.elements[e])) {
                 diags_.Error(DiagCode::BadEquation, where,
                              "prescribed motion of '" + q->path + "' must depend on time and parameters only")
                     .hint = "to drive a joint with a force law, write '" + n->path + ".tau = ...' instead";
                 break;
               }
-              j.prescribed[static_cast<size_t>(k >= 0 ? k : static_cast<int>(e))] = v.e[e];
+              j.prescribed[static_cast<size_t>(k >= 0 ? k : static_cast<int>(e))] = v.elements[e];
             }
           }
         }
@@ -401,10 +404,10 @@ void Elaborator::Emit(Node* root) {
       diags_.Error(DiagCode::TypeMismatch, c->decl->name_span, "outputs must be numbers");
       continue;
     }
-    for (size_t k = 0; k < v.e.size(); ++k) {
+    for (size_t k = 0; k < v.elements.size(); ++k) {
       flat::Output o;
-      o.name = c->path + (v.e.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
-      o.expr = v.e[k];
+      o.name = c->path + (v.elements.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
+      o.expr = v.elements[k];
       o.loc = Loc(c->decl->name_span);
       m_->outputs.push_back(o);
     }

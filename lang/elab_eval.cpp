@@ -32,14 +32,14 @@ size_t Value::Size() const {
 Value Elaborator::Const(double x, VType t) {
   Value v;
   v.type = t;
-  v.e.push_back(m_->exprs.Constant(x));
+  v.elements.push_back(m_->exprs.Constant(x));
   return v;
 }
 
 Value Elaborator::Scalar(ExprId e, VType t) {
   Value v;
   v.type = t;
-  v.e.push_back(e);
+  v.elements.push_back(e);
   return v;
 }
 
@@ -67,7 +67,7 @@ bool Elaborator::Structural(const Value& v, Span span, double* out, const char* 
     diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be a scalar number");
     return false;
   }
-  ExprId e = v.e[0];
+  ExprId e = v.elements[0];
   if (m_->exprs.DependsOnTimeOrState(e)) {
     diags_.Error(DiagCode::NotConstantExpr, span,
                  std::string(what) + " must be known before the simulation starts, but it depends on time or state")
@@ -110,7 +110,7 @@ std::vector<double> Elaborator::StructuralList(const Value& v, Span span, const 
     diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be numbers");
     return out;
   }
-  for (ExprId e : v.e) {
+  for (ExprId e : v.elements) {
     double x = 0;
     if (!Structural(Scalar(e, v.type), span, &x, what)) return {};
     out.push_back(x);
@@ -135,8 +135,8 @@ Value Elaborator::EvalNode(const ast::Expr& e, const Ctx& ctx) {
     case ast::ExprKind::String: {
       Value v;
       v.type = VType::String;
-      v.s.push_back(e.text);
-      v.e.push_back(flat::kNoExpr);
+      v.strings.push_back(e.text);
+      v.elements.push_back(flat::kNoExpr);
       return v;
     }
     case ast::ExprKind::End:
@@ -199,7 +199,7 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
         int count = part.name == "R" ? 9 : 3;
         v.shape = part.name == "R" ? std::vector<int>{3, 3} : std::vector<int>{3};
         for (int k = 0; k < count; ++k)
-          v.e.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
+          v.elements.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
         if (pi + 1 != e.parts.size()) {
           diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + part.name + "' has no members");
           return Value::Invalid();
@@ -240,7 +240,7 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
           out = Value{};
           out.type = VType::Real;
           if (v.shape.size() == 1) {
-            for (int i : idx[0]) out.e.push_back(v.e[static_cast<size_t>(i)]);
+            for (int i : idx[0]) out.elements.push_back(v.elements[static_cast<size_t>(i)]);
             if (keep[0]) out.shape = {static_cast<int>(idx[0].size())};
           } else {
             std::vector<int> cols;
@@ -248,7 +248,7 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
             else for (int k = 0; k < 3; ++k) cols.push_back(k);
             bool keepc = idx.size() > 1 ? keep[1] : true;
             for (int i : idx[0])
-              for (int j : cols) out.e.push_back(v.e[static_cast<size_t>(i * 3 + j)]);
+              for (int j : cols) out.elements.push_back(v.elements[static_cast<size_t>(i * 3 + j)]);
             if (keep[0]) out.shape.push_back(static_cast<int>(idx[0].size()));
             if (keepc) out.shape.push_back(static_cast<int>(cols.size()));
           }
@@ -358,8 +358,8 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
       for (size_t d = v.shape.size(); d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
       std::function<void(size_t, size_t)> rec = [&](size_t d, size_t off) {
         if (d == idx.size()) {
-          r.e.push_back(v.e[off]);
-          if (v.type == VType::String) r.s.push_back(v.s[off]);
+          r.elements.push_back(v.elements[off]);
+          if (v.type == VType::String) r.strings.push_back(v.strings[off]);
           return;
         }
         for (int k : idx[d]) rec(d + 1, off + static_cast<size_t>(k) * strides[d]);
@@ -405,8 +405,8 @@ Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
       }
       r.type = r.type == VType::String || r.type == VType::Boolean ? r.type : Promote(r.type, v.type);
     }
-    r.e.insert(r.e.end(), v.e.begin(), v.e.end());
-    r.s.insert(r.s.end(), v.s.begin(), v.s.end());
+    r.elements.insert(r.elements.end(), v.elements.begin(), v.elements.end());
+    r.strings.insert(r.strings.end(), v.strings.begin(), v.strings.end());
   }
   if (e.args.empty()) r.type = VType::Real;
   r.shape.push_back(static_cast<int>(e.args.size()));
@@ -447,9 +447,9 @@ Value Elaborator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
     } else if (r.type != VType::String && r.type != VType::Boolean) {
       r.type = Promote(r.type, v.type);
     }
-    r.e.insert(r.e.end(), v.e.begin(), v.e.end());
-    r.s.insert(r.s.end(), v.s.begin(), v.s.end());
-    if (r.e.size() > static_cast<size_t>(kMaxArraySize)) {
+    r.elements.insert(r.elements.end(), v.elements.begin(), v.elements.end());
+    r.strings.insert(r.strings.end(), v.strings.begin(), v.strings.end());
+    if (r.elements.size() > static_cast<size_t>(kMaxArraySize)) {
       diags_.Error(DiagCode::ArrayTooLarge, e.span,
                    "the comprehension has more than " + std::to_string(kMaxArraySize) + " elements");
       return Value::Invalid();
@@ -491,7 +491,7 @@ Value Elaborator::EvalRange(const ast::Expr& e, const Ctx& ctx) {
   Value r;
   r.type = integer ? VType::Integer : VType::Real;
   long n = count > 0 ? static_cast<long>(count) : 0;
-  for (long i = 0; i < n; ++i) r.e.push_back(pool.Constant(a + static_cast<double>(i) * step));
+  for (long i = 0; i < n; ++i) r.elements.push_back(pool.Constant(a + static_cast<double>(i) * step));
   r.shape = {static_cast<int>(n)};
   return r;
 }
@@ -527,7 +527,8 @@ Value Elaborator::EvalIf(const ast::Expr& e, const Ctx& ctx) {
     Value r;
     r.type = (t.type == VType::Boolean && acc.type == VType::Boolean) ? VType::Boolean : Promote(t.type, acc.type);
     r.shape = t.shape;
-    for (size_t k = 0; k < t.e.size(); ++k) r.e.push_back(pool.IfElse(c.e[0], t.e[k], acc.e[k]));
+    for (size_t k = 0; k < t.elements.size(); ++k)
+      r.elements.push_back(pool.IfElse(c.elements[0], t.elements[k], acc.elements[k]));
     acc = r;
   }
   return acc;

@@ -43,8 +43,8 @@ inline std::string ShapeStr(const std::vector<int>& shape) {
 struct Value {
   VType type = VType::Real;
   std::vector<int> shape;          // empty = scalar
-  std::vector<ExprId> e;           // numeric elements, row-major
-  std::vector<std::string> s;      // String elements
+  std::vector<ExprId> elements;       // the elements' expressions in the pool, row-major
+  std::vector<std::string> strings;  // a String value's elements, row-major (elements too holds one id each)
   bool valid = true;               // false after an error (suppresses cascades)
   size_t Size() const;
   static Value Invalid() {
@@ -123,6 +123,10 @@ struct Mod {
 // lang/elab_shapes.cpp); it only describes, its Body does the physics.
 enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring, Shape };
 
+// Where GetVar (lang/elab_lookup.cpp) is with a variable: not yet asked for, being
+// evaluated (asked again now means a cycle), or `value` final.
+enum class EvalState { Unevaluated, Evaluating, Done };
+
 struct Node {
   enum Kind { kClass, kVar, kArray } kind = kClass;
   std::string name;  // "links[2]" for array elements
@@ -152,7 +156,7 @@ struct Node {
   ast::Variability variability = ast::Variability::None;
   ast::Causality causality = ast::Causality::None;
   std::vector<int> shape;
-  int state = 0;  // 0 unevaluated, 1 evaluating, 2 done
+  EvalState state = EvalState::Unevaluated;  // GetVar's progress on `value`
   Value value;
   Boxed<ModValue> eq_binding;                    // from an equation `x = expr`
   std::map<int, ModValue> eq_elem_binding;       // from `x[k] = expr`

@@ -8,18 +8,18 @@
 namespace kanesim::lang::elab {
 
 Value Elaborator::GetVar(Node* var, Span use_span) {
-  if (var->state == 2) return var->value;
-  if (var->state == 1) {
+  if (var->state == EvalState::Done) return var->value;
+  if (var->state == EvalState::Evaluating) {
     auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->path + "' is defined in terms of itself");
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-    var->state = 2;
+    var->state = EvalState::Done;
     var->value = Value::Invalid();
     return var->value;
   }
-  var->state = 1;
+  var->state = EvalState::Evaluating;
   auto finish = [&](Value v) {
     var->value = std::move(v);
-    var->state = 2;
+    var->state = EvalState::Done;
     return var->value;
   };
   Node* owner = var->parent;
@@ -32,7 +32,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     Value v;
     v.shape = var->shape;
     for (size_t k = 0; k < count; ++k)
-      v.e.push_back(m_->exprs.State(m_->AddStateRef(
+      v.elements.push_back(m_->exprs.State(m_->AddStateRef(
           {var->name == "q" ? flat::StateKind::JointQ : flat::StateKind::JointU, owner->prim_index,
            static_cast<int>(k)})));
     return finish(v);
@@ -64,7 +64,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     if ((owner && owner->prim != Prim::None && !is_param) || any_elem) {
       v.type = var->vtype;
       v.shape = var->shape;
-      v.e.assign(count, m_->exprs.Constant(0));
+      v.elements.assign(count, m_->exprs.Constant(0));
     } else {
       auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
                              std::string(is_param ? "parameter" : "variable") + " '" + var->path + "' has no value");
@@ -117,23 +117,23 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
       return finish(Value::Invalid());
     }
-    count = v.e.size();
+    count = v.elements.size();
   }
   // Element equations (x[2] = ...).
   for (const auto& [k, mv] : var->eq_elem_binding) {
-    if (k < 0 || static_cast<size_t>(k) >= v.e.size()) continue;
+    if (k < 0 || static_cast<size_t>(k) >= v.elements.size()) continue;
     Value ev = EvalModValue(mv, nullptr);
     if (!ev.valid) continue;
     if (!ev.shape.empty()) {
       diags_.Error(DiagCode::SizeMismatch, mv.span, "an element equation needs a scalar value");
       continue;
     }
-    v.e[static_cast<size_t>(k)] = ev.e[0];
+    v.elements[static_cast<size_t>(k)] = ev.elements[0];
   }
   if (!is_param) return finish(v);
 
   // Parameters and constants: no time, no state.
-  for (ExprId x : v.e) {
+  for (ExprId x : v.elements) {
     if (x >= 0 && m_->exprs.DependsOnTimeOrState(x)) {
       auto& d = diags_.Error(DiagCode::NotConstantExpr, binding ? binding->span : use_span,
                              "the value of parameter '" + var->path + "' depends on time or on the motion");
@@ -155,11 +155,11 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
   attr_num("max", &vmax);
   if (auto it = var->mod.sub.find("unit"); it != var->mod.sub.end() && it->second.value) {
     Value a = EvalModValue(*it->second.value, nullptr);
-    if (a.valid && a.type == VType::String && !a.s.empty()) unit = a.s[0];
+    if (a.valid && a.type == VType::String && !a.strings.empty()) unit = a.strings[0];
   }
   Value out = v;
   const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
-  for (size_t k = 0; k < v.e.size(); ++k) {
+  for (size_t k = 0; k < v.elements.size(); ++k) {
     std::string name = var->path;
     if (!var->shape.empty()) {
       // Row-major multi-index, 1-based.
@@ -186,12 +186,12 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     p.user_set = binding && binding->from_set;
     p.loc = loc;
     if (var->vtype == VType::String) {
-      p.string_value = v.s.empty() ? "" : v.s[k];
+      p.string_value = v.strings.empty() ? "" : v.strings[k];
       m_->params.push_back(std::move(p));
       pvals_.push_back(0.0);
       continue;
     }
-    ExprId x = v.e[k];
+    ExprId x = v.elements[k];
     double val = param_eval_.Eval(x);
     p.value = val;
     p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
@@ -207,12 +207,12 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     }
     if (p.is_constant) {
-      out.e[k] = m_->exprs.Constant(val);
+      out.elements[k] = m_->exprs.Constant(val);
       continue;
     }
     m_->params.push_back(std::move(p));
     pvals_.push_back(val);
-    out.e[k] = m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
+    out.elements[k] = m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
   }
   return finish(out);
 }

@@ -132,30 +132,30 @@ Value Elaborator::EvalMeshCall(const std::string& fn, const ast::Expr& e, const 
                  "'" + fn + "' takes 2 argument(s) (file, scale), got " + std::to_string(args.size()));
     return Value::Invalid();
   }
-  if (args[0].type != VType::String || !args[0].shape.empty() || args[0].s.size() != 1) {
+  if (args[0].type != VType::String || !args[0].shape.empty() || args[0].strings.size() != 1) {
     diags_.Error(DiagCode::TypeMismatch, e.args[0]->span, "'" + fn + "' needs the mesh file's name as a String");
     return Value::Invalid();
   }
   double scale = 1;
   if (!Structural(args[1], e.args[1]->span, &scale, "the mesh scale")) return Value::Invalid();
   const Span origin = ValueOrigin(*e.args[0], ctx);
-  if (args[0].s[0].empty()) {
+  if (args[0].strings[0].empty()) {
     diags_.Error(DiagCode::MeshFileMissing, origin, "no mesh file given (file = \"\")").hint =
         "name the mesh, e.g. MeshBody crank(file = \"meshes/crank.stl\", density = 7800)";
     return Value::Invalid();
   }
-  const MeshEntry* mesh = LoadMeshFor(MeshPath(args[0].s[0], origin), scale, origin);
+  const MeshEntry* mesh = LoadMeshFor(MeshPath(args[0].strings[0], origin), scale, origin);
   if (!mesh) return Value::Invalid();
   Value v;
   if (fn == "meshVolume") {
-    v.e = {pool.Constant(mesh->volume)};
+    v.elements = {pool.Constant(mesh->volume)};
   } else if (fn == "meshCentre") {
     v.shape = {3};
-    for (int i = 0; i < 3; ++i) v.e.push_back(pool.Constant(mesh->centre[i]));
+    for (int i = 0; i < 3; ++i) v.elements.push_back(pool.Constant(mesh->centre[i]));
   } else {
     v.shape = {3, 3};
     for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) v.e.push_back(pool.Constant(mesh->unit_inertia(i, j)));
+      for (int j = 0; j < 3; ++j) v.elements.push_back(pool.Constant(mesh->unit_inertia(i, j)));
   }
   return v;
 }

@@ -151,8 +151,8 @@ Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
       s.shape.assign(v.shape.begin() + 1, v.shape.end());
       size_t stride = v.Size() / static_cast<size_t>(count);
       for (size_t k = 0; k < stride; ++k) {
-        s.e.push_back(v.e[static_cast<size_t>(index) * stride + k]);
-        if (v.type == VType::String) s.s.push_back(v.s[static_cast<size_t>(index) * stride + k]);
+        s.elements.push_back(v.elements[static_cast<size_t>(index) * stride + k]);
+        if (v.type == VType::String) s.strings.push_back(v.strings[static_cast<size_t>(index) * stride + k]);
       }
       mv.pre = std::move(s);
       out.value = std::move(mv);

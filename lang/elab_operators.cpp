@@ -66,13 +66,13 @@ Value Elaborator::Elementwise2(const Value& a, const Value& b, Op op, VType rt, 
   r.type = rt;
   if (a.shape.empty()) {
     r.shape = b.shape;
-    for (ExprId y : b.e) r.e.push_back(pool.Binary(op, a.e[0], y));
+    for (ExprId y : b.elements) r.elements.push_back(pool.Binary(op, a.elements[0], y));
   } else if (b.shape.empty()) {
     r.shape = a.shape;
-    for (ExprId x : a.e) r.e.push_back(pool.Binary(op, x, b.e[0]));
+    for (ExprId x : a.elements) r.elements.push_back(pool.Binary(op, x, b.elements[0]));
   } else if (SameShape(a, b)) {
     r.shape = a.shape;
-    for (size_t i = 0; i < a.e.size(); ++i) r.e.push_back(pool.Binary(op, a.e[i], b.e[i]));
+    for (size_t i = 0; i < a.elements.size(); ++i) r.elements.push_back(pool.Binary(op, a.elements[i], b.elements[i]));
   } else {
     diags_.Error(DiagCode::SizeMismatch, sp, "operands have sizes " + ShapeStr(a.shape) + " and " +
                                                  ShapeStr(b.shape));
@@ -94,7 +94,7 @@ Value Elaborator::UnaryOp(const ast::Expr& e, Value v) {
     diags_.Error(DiagCode::TypeMismatch, e.span, "'not' needs a Boolean, got " + std::string(VTypeName(v.type)));
     return Value::Invalid();
   }
-  for (auto& x : v.e) x = pool.Unary(op == Tok::KwNot ? Op::Not : Op::Neg, x);
+  for (auto& x : v.elements) x = pool.Unary(op == Tok::KwNot ? Op::Not : Op::Neg, x);
   return v;
 }
 
@@ -135,10 +135,10 @@ Value Elaborator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
         for (int j = 0; j < bc; ++j) {
           std::vector<ExprId> x, y;
           for (int k = 0; k < ac; ++k) {
-            x.push_back(a.e[static_cast<size_t>(i * ac + k)]);
-            y.push_back(b.e[static_cast<size_t>(k * bc + j)]);
+            x.push_back(a.elements[static_cast<size_t>(i * ac + k)]);
+            y.push_back(b.elements[static_cast<size_t>(k * bc + j)]);
           }
-          r.e.push_back(dotp(x, y));
+          r.elements.push_back(dotp(x, y));
         }
       if (a.shape.size() == 2) r.shape.push_back(ar);
       if (b.shape.size() == 2) r.shape.push_back(bc);
@@ -174,7 +174,7 @@ Value Elaborator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
           diags_.Error(DiagCode::TypeMismatch, e.span, "Strings compare only with == and <>");
           return Value::Invalid();
         }
-        bool eq = a.s[0] == b.s[0];
+        bool eq = a.strings[0] == b.strings[0];
         return Const((op == Tok::EqEq) == eq ? 1 : 0, VType::Boolean);
       }
       Op fop = op == Tok::Lt ? Op::Lt : op == Tok::Le ? Op::Le : op == Tok::Gt ? Op::Gt

@@ -252,7 +252,7 @@ void Elaborator::BindSetOverrides() {
       continue;
     }
     if (!so.subscripted) continue;  // bound as a modifier before instantiation
-    if (n->state == 2) {
+    if (n->state == EvalState::Done) {
       diags_.Error(DiagCode::BadSet, so.value->span,
                    "--set " + full + ": '" + n->path + "' sizes the model and was fixed before this override")
           .hint = "set the parameter it depends on instead";

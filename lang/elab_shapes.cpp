@@ -71,30 +71,30 @@ void Elaborator::EmitShape(Node* n) {
       return;
     }
     Value v = GetVar(c, c->decl ? c->decl->name_span : Span{});
-    if (!v.valid || v.type == VType::String || v.e.size() != 1) return;
-    s.size[static_cast<size_t>(i)] = v.e[0];
+    if (!v.valid || v.type == VType::String || v.elements.size() != 1) return;
+    s.size[static_cast<size_t>(i)] = v.elements[0];
   }
   if (s.kind == flat::ShapeKind::Mesh) {
     Node* f = n->Child("file");
     if (!f || f->kind != Node::kVar) return;
     Value v = GetVar(f, Span{});
-    if (!v.valid || v.type != VType::String || v.s.size() != 1) return;
-    if (v.s[0].empty() && n->prim_kind == "visual_mesh") return;  // a BodyShape without a file: its inertia box
+    if (!v.valid || v.type != VType::String || v.strings.size() != 1) return;
+    if (v.strings[0].empty() && n->prim_kind == "visual_mesh") return;  // a BodyShape without a file: its inertia box
     Span origin = f->decl ? f->decl->name_span : Span{};
     const ModValue* b = f->mod.value ? &*f->mod.value : f->eq_binding ? &*f->eq_binding : nullptr;
     if (b) origin = b->expr ? ValueOrigin(*b->expr, Ctx{b->scope, b->iters.get()}) : b->span;
-    s.mesh_file = MeshPath(v.s[0], origin);
+    s.mesh_file = MeshPath(v.strings[0], origin);
   }
   if (Node* c = n->Child("color"); c && c->kind == Node::kVar) {
     Value v = GetVar(c, Span{});
-    if (v.valid && v.type == VType::String && v.s.size() == 1 && !v.s[0].empty()) {
-      s.color = NormalColor(v.s[0]);
+    if (v.valid && v.type == VType::String && v.strings.size() == 1 && !v.strings[0].empty()) {
+      s.color = NormalColor(v.strings[0]);
       if (s.color.empty()) {
         const Span at = c->mod.value ? c->mod.value->span : c->decl ? c->decl->name_span : Span{};
         std::vector<std::string> names;
         for (const auto& [name, hex] : kColorNames) names.push_back(name);
-        auto& d = diags_.Error(DiagCode::BadValue, at, "'" + v.s[0] + "' is not a colour");
-        const std::string best = ClosestName(v.s[0], names);
+        auto& d = diags_.Error(DiagCode::BadValue, at, "'" + v.strings[0] + "' is not a colour");
+        const std::string best = ClosestName(v.strings[0], names);
         d.hint = "write \"#rrggbb\" or one of red, green, blue, yellow, orange, purple, cyan, grey, steel, black, "
                  "white" + (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)");
       }
