@@ -1,6 +1,7 @@
-// Emission: the instance tree's primitives become the flat mechanism. connect() sets of
-// frames collapse into one frame each (union-find); flange connections turn rotational
-// springs and dampers into generalized forces on joint coordinates.
+// Emission: the instance tree's primitives become the flat mechanism, one function per
+// primitive. connect() sets of frames collapse into one frame each (union-find); flange
+// connections turn rotational springs and dampers into generalized forces on joint
+// coordinates.
 #include <functional>
 #include <numeric>
 
@@ -14,28 +15,54 @@ using flat::Op;
 
 using flat::UnionFind;
 
-void Elaborator::Emit(Node* root) {
-  auto& pool = m_->exprs;
-  // ---- frames ----
-  UnionFind uf(frame_nodes_.size());
-  for (auto [a, b] : frame_links_) uf.Unite(a, b);
-  std::vector<int> canon(frame_nodes_.size(), -1);
-  std::vector<int> set_size(frame_nodes_.size(), 0);
-  for (size_t i = 0; i < frame_nodes_.size(); ++i) set_size[static_cast<size_t>(uf.Find(static_cast<int>(i)))]++;
-  for (size_t i = 0; i < frame_nodes_.size(); ++i) {
-    int r = uf.Find(static_cast<int>(i));
-    if (canon[static_cast<size_t>(r)] < 0) {
-      canon[static_cast<size_t>(r)] = static_cast<int>(m_->frames.size());
-      flat::Frame f;
-      f.name = frame_nodes_[static_cast<size_t>(r)]->path;
-      f.loc = Loc(frame_nodes_[static_cast<size_t>(r)]->decl ? frame_nodes_[static_cast<size_t>(r)]->decl->name_span
-                                                             : Span{});
-      m_->frames.push_back(f);
-    }
-    canon[i] = canon[static_cast<size_t>(r)];
-    m_->frames[static_cast<size_t>(canon[i])].aliases.push_back(frame_nodes_[i]->path);
+namespace {
+
+// One emission: Run lists its stages; the frame sets and the springs the walk finds are
+// kept here between them.
+class Emitter {
+ public:
+  explicit Emitter(Elaborator& elaborator)
+      : el(elaborator),
+        pool(elaborator.m_->exprs),
+        diags_(elaborator.diags_),
+        m_(elaborator.m_),
+        uf(elaborator.frame_nodes_.size()) {}
+
+  void Run(Node* root) {
+    CollapseFrames();
+    tau_extra.resize(m_->joints.size());
+    Walk(root);
+    el.LinkShapes();
+    SpringsOnFlanges();
+    Outputs(root);
+    EveryParameter(root);
+    RetargetFrameStates();
   }
-  auto frame_of = [&](Node* n, const char* name) -> int {
+
+ private:
+  // Each connect() set of frames becomes one flat frame.
+  void CollapseFrames() {
+    for (auto [a, b] : el.frame_links_) uf.Unite(a, b);
+    canon.assign(el.frame_nodes_.size(), -1);
+    set_size.assign(el.frame_nodes_.size(), 0);
+    for (size_t i = 0; i < el.frame_nodes_.size(); ++i) set_size[static_cast<size_t>(uf.Find(static_cast<int>(i)))]++;
+    for (size_t i = 0; i < el.frame_nodes_.size(); ++i) {
+      int r = uf.Find(static_cast<int>(i));
+      if (canon[static_cast<size_t>(r)] < 0) {
+        canon[static_cast<size_t>(r)] = static_cast<int>(m_->frames.size());
+        flat::Frame f;
+        const Node* first = el.frame_nodes_[static_cast<size_t>(r)];
+        f.name = first->path;
+        f.loc = el.Loc(first->decl ? first->decl->name_span : Span{});
+        m_->frames.push_back(f);
+      }
+      canon[i] = canon[static_cast<size_t>(r)];
+      m_->frames[static_cast<size_t>(canon[i])].aliases.push_back(el.frame_nodes_[i]->path);
+    }
+  }
+
+  // The flat frame of primitive n's Frame `name`; warns when it is connected to nothing.
+  int FrameOf(Node* n, const char* name) {
     Node* c = n->Child(name);
     if (!c || c->prim != Prim::Frame) {
       diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
@@ -49,389 +76,430 @@ void Elaborator::Emit(Node* root) {
       d.hint = "connect it, e.g. connect(" + c->path + ", world.frame_b)";
     }
     return canon[static_cast<size_t>(pid)];
-  };
-  auto field = [&](Node* n, const char* name, std::vector<int> shape) -> Value {
+  }
+
+  // Primitive n's variable `name`, which must have `shape`.
+  Value Field(Node* n, const char* name, std::vector<int> shape) {
     Node* c = n->Child(name);
     if (!c || c->kind != Node::kVar) {
       diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
                    "primitive '" + n->path + "' lacks '" + name + "'");
       return Value::Invalid();
     }
-    Value v = GetVar(c, c->decl ? c->decl->name_span : Span{});
+    Value v = el.GetVar(c, c->decl ? c->decl->name_span : Span{});
     if (v.valid && v.shape != shape) {
       diags_.Error(DiagCode::SizeMismatch, c->decl ? c->decl->name_span : Span{},
                    "'" + c->path + "' has the wrong size for its primitive");
       return Value::Invalid();
     }
     return v;
-  };
-  auto vec3 = [&](const Value& v) {
+  }
+
+  // v as a 3-vector of expressions; zeros when invalid.
+  flat::Vec3E AsVec3(const Value& v) {
     flat::Vec3E out{pool.Constant(0), pool.Constant(0), pool.Constant(0)};
     if (v.valid && v.elements.size() == 3) out = {v.elements[0], v.elements[1], v.elements[2]};
     return out;
-  };
-  auto mat3 = [&](const Value& v) {
+  }
+
+  // v as a 3x3 matrix of expressions; the identity when invalid.
+  flat::Mat3E AsMat3(const Value& v) {
     flat::Mat3E out;
     for (size_t i = 0; i < 9; ++i)
       out[i] = v.valid && v.elements.size() == 9 ? v.elements[i] : pool.Constant(i % 4 == 0 ? 1 : 0);
     return out;
-  };
-  auto scalar = [&](const Value& v) { return v.valid && v.elements.size() == 1 ? v.elements[0] : pool.Constant(0); };
-  auto boolean = [&](Node* n, const char* name, bool dflt) {
+  }
+
+  // v as one expression; zero when invalid.
+  ExprId AsScalar(const Value& v) { return v.valid && v.elements.size() == 1 ? v.elements[0] : pool.Constant(0); }
+
+  // Primitive n's Boolean `name`, evaluated now; `dflt` when absent.
+  bool Boolean(Node* n, const char* name, bool dflt) {
     Node* c = n->Child(name);
     if (!c) return dflt;
-    Value v = GetVar(c, Span{});
+    Value v = el.GetVar(c, Span{});
     double x = dflt ? 1 : 0;
-    if (v.valid && Structural(v, c->decl ? c->decl->name_span : Span{}, &x, name)) return x != 0;
+    if (v.valid && el.Structural(v, c->decl ? c->decl->name_span : Span{}, &x, name)) return x != 0;
     return dflt;
-  };
-  // Whether a variable has any binding, and its value if so.
-  auto bound = [&](Node* var) {
+  }
+
+  // Whether a variable has any binding.
+  static bool Bound(Node* var) {
     return var && (var->eq_binding || var->mod.value || !var->eq_elem_binding.empty());
-  };
+  }
 
-  // Extra generalized forces from rotational/translational springs on flanges.
-  std::vector<std::vector<ExprId>> tau_extra(m_->joints.size());
-  std::vector<Node*> springs;
-
-  std::function<void(Node*)> walk = [&](Node* n) {
+  // Every enabled instance, depth first: each primitive becomes its flat element.
+  void Walk(Node* n) {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kArray) {
-      for (auto& e : n->elems) walk(e.get());
+      for (auto& e : n->elems) Walk(e.get());
       return;
     }
     if (n->kind != Node::kClass) return;
-    flat::SourceLoc loc = Loc(n->decl ? n->decl->name_span : Span{});
+    flat::SourceLoc loc = el.Loc(n->decl ? n->decl->name_span : Span{});
     switch (n->prim) {
-      case Prim::World: {
-        flat::World w;
-        w.frame = frame_of(n, "frame_b");
-        w.gravity = vec3(field(n, "g", {3}));
-        w.loc = loc;
-        m_->worlds.push_back(w);
-        break;
-      }
-      case Prim::Body: {
-        flat::Body b;
-        b.name = n->path;
-        b.frame = frame_of(n, "frame_a");
-        b.mass = scalar(field(n, "m", {}));
-        b.r_cm = vec3(field(n, "r_CM", {3}));
-        b.inertia = mat3(field(n, "I", {3, 3}));
-        b.loc = loc;
-        m_->bodies.push_back(b);
-        break;
-      }
-      case Prim::Fixed: {
-        flat::Fixed f;
-        f.name = n->path;
-        f.frame_a = frame_of(n, "frame_a");
-        f.frame_b = frame_of(n, "frame_b");
-        f.r = vec3(field(n, "r", {3}));
-        f.R = mat3(field(n, "R", {3, 3}));
-        f.loc = loc;
-        m_->fixed.push_back(f);
-        break;
-      }
-      case Prim::Joint: {
-        flat::Joint& j = m_->joints[static_cast<size_t>(n->prim_index)];
-        j.frame_a = frame_of(n, "frame_a");
-        j.frame_b = frame_of(n, "frame_b");
-        if (Node* c = n->Child("coordinates")) {
-          Value v = GetVar(c, Span{});
-          if (v.valid && v.type == VType::String && !v.strings.empty() &&
-              !flat::RotationCoordsFromName(v.strings[0], &j.rotation)) {
-            auto& d = diags_.Error(DiagCode::BadValue, c->mod.value ? c->mod.value->span : Span{},
-                                   "unknown coordinates \"" + v.strings[0] + "\" for joint '" + n->path + "'");
-            std::string best = ClosestName(v.strings[0], {"quaternion", "cardan_xyz", "euler_zyz"});
-            d.hint = "use \"quaternion\", \"cardan_xyz\" or \"euler_zyz\"" +
-                     (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)");
-          }
-        }
-        const char* ax1 = nullptr;
-        const char* ax2 = nullptr;
-        switch (j.type) {
-          case flat::JointType::Revolute:
-          case flat::JointType::Prismatic:
-          case flat::JointType::Cylindrical: ax1 = "axis"; break;
-          case flat::JointType::Universal: ax1 = "axis_a"; ax2 = "axis_b"; break;
-          case flat::JointType::Planar: ax1 = "n"; ax2 = "axis_x"; break;
-          default: break;
-        }
-        j.axis = ax1 ? vec3(field(n, ax1, {3})) : vec3(Value::Invalid());
-        j.axis2 = ax2 ? vec3(field(n, ax2, {3})) : vec3(Value::Invalid());
-        j.cut = boolean(n, "cut", false);
-        // Coulomb friction from the joint's normal force: only when mu is not zero, so a
-        // scene without friction pays nothing (mu = 0 vs not is a structural choice).
-        if (Node* mu = n->Child("mu"); mu && mu->kind == Node::kVar) {
-          Value mv = GetVar(mu, Span{});
-          double muv = 0;
-          if (mv.valid && Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
-            j.friction_mu = mv.elements[0];
-            j.friction_v = scalar(field(n, "friction_v", {}));
-            j.friction_radius =
-                n->Child("friction_radius") ? scalar(field(n, "friction_radius", {})) : pool.Constant(1.0);
-          }
-        }
-        int nq = j.nq(), nu = j.nu();
-        j.q_start.assign(static_cast<size_t>(nq), flat::kNoExpr);
-        j.u_start.assign(static_cast<size_t>(nu), flat::kNoExpr);
-        j.q_start_fixed.assign(static_cast<size_t>(nq), false);
-        j.tau.assign(static_cast<size_t>(nu), flat::kNoExpr);
-        j.prescribed.assign(static_cast<size_t>(nq), flat::kNoExpr);
-        Node* q = n->Child("q");
-        Node* u = n->Child("u");
-        Node* tau = n->Child("tau");
-        auto size_of = [](Node* v) {
-          size_t c = 1;
-          for (int d : v->shape) c *= static_cast<size_t>(d < 0 ? 0 : d);
-          return static_cast<int>(c);
-        };
-        if (nq > 0 && (!q || !u || !tau || size_of(q) != nq || size_of(u) != nu || size_of(tau) != nu)) {
-          diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
-                       "joint primitive '" + n->path + "' needs q[" + std::to_string(nq) + "], u[" +
-                           std::to_string(nu) + "] and tau[" + std::to_string(nu) + "]");
-          break;
-        }
-        if (nq == 0) break;
-        auto start_of = [&](Node* var, std::vector<ExprId>* out, std::vector<bool>* fixed) {
-          auto it = var->mod.sub.find("start");
-          if (it != var->mod.sub.end() && it->second.value) {
-            Span where;
-            Value v = EvalModValue(*it->second.value, &where);
-            if (v.valid) {
-              if (v.shape.empty() && out->size() == 1) {
-                (*out)[0] = v.elements[0];
-              } else if (v.elements.size() == out->size() && v.shape.size() == 1) {
-                for (size_t k = 0; k < out->size(); ++k) (*out)[k] = v.elements[k];
-              } else {
-                diags_.Error(DiagCode::SizeMismatch, where,
-                             "start value of '" + var->path + "' needs " + std::to_string(out->size()) + " element(s)");
-              }
-              for (ExprId x : *out)
-                if (x >= 0 && pool.DependsOnTimeOrState(x)) {
-                  diags_.Error(DiagCode::NotConstantExpr, where, "a start value must be a parameter expression");
-                  break;
-                }
-            }
-          }
-          if (fixed) {
-            auto fit = var->mod.sub.find("fixed");
-            if (fit != var->mod.sub.end() && fit->second.value) {
-              Value fv = EvalModValue(*fit->second.value, nullptr);
-              double x = 0;
-              if (fv.valid && fv.shape.empty() && Structural(fv, fit->second.value->span, &x, "fixed"))
-                fixed->assign(fixed->size(), x != 0);
-            }
-          }
-        };
-        start_of(q, &j.q_start, &j.q_start_fixed);
-        start_of(u, &j.u_start, nullptr);
-        if (bound(tau)) {
-          Value tv = GetVar(tau, Span{});
-          if (tv.valid)
-            for (size_t k = 0; k < j.tau.size() && k < tv.elements.size(); ++k) j.tau[k] = tv.elements[k];
-        }
-        // Prescribed motion: q = f(time).
-        if (bound(q) || bound(u)) {
-          Node* which = bound(q) ? q : u;
-          if (which == u) {
-            diags_.Error(DiagCode::BadEquation, u->eq_binding ? u->eq_binding->span : Span{},
-                         "prescribe the coordinate q, not the speed u")
-                .hint = "write '" + n->path + ".q = f(time)'; its speed and acceleration follow";
-            break;
-          }
-          if ((j.type == flat::JointType::Spherical || j.type == flat::JointType::Free) &&
-              j.rotation == flat::RotationCoords::Quaternion) {
-            diags_.Error(DiagCode::BadEquation, q->eq_binding ? q->eq_binding->span : Span{},
-                         "spherical and free joints cannot be prescribed")
-                .hint = "prescribe rotations with revolute or universal joints in series";
-            break;
-          }
-          std::vector<std::pair<int, const ModValue*>> items;
-          if (q->eq_binding) items.push_back({-1, &*q->eq_binding});
-          if (q->mod.value) items.push_back({-1, &*q->mod.value});
-          for (auto& [k, mv] : q->eq_elem_binding) items.push_back({k, &mv});
-          for (auto [k, mv] : items) {
-            Span where;
-            Value v = EvalModValue(*mv, &where);
-            if (!v.valid) continue;
-            bool ok = k >= 0    ? v.shape.empty()
-                      : nq == 1 ? v.shape.empty()
-                                : v.elements.size() == static_cast<size_t>(nq);
-            if (!ok) {
-              diags_.Error(DiagCode::SizeMismatch, where, "prescribed motion of '" + q->path + "' has the wrong size");
-              continue;
-            }
-            for (size_t e = 0; e < v.elements.size(); ++e) {
-              if (pool.DependsOnState(v.elements[e])) {
-                diags_.Error(DiagCode::BadEquation, where,
-                             "prescribed motion of '" + q->path + "' must depend on time and parameters only")
-                    .hint = "to drive a joint with a force law, write '" + n->path + ".tau = ...' instead";
-                break;
-              }
-              j.prescribed[static_cast<size_t>(k >= 0 ? k : static_cast<int>(e))] = v.elements[e];
-            }
-          }
-        }
-        break;
-      }
-      case Prim::LineForce: {
-        flat::LineForce l;
-        l.name = n->path;
-        l.frame_a = frame_of(n, "frame_a");
-        l.frame_b = frame_of(n, "frame_b");
-        l.k = scalar(field(n, "c", {}));
-        l.d = scalar(field(n, "d", {}));
-        l.s0 = scalar(field(n, "s_unstretched", {}));
-        l.loc = loc;
-        m_->line_forces.push_back(l);
-        break;
-      }
-      case Prim::Wrench: {
-        flat::Wrench w;
-        w.name = n->path;
-        w.frame = frame_of(n, "frame_b");
-        w.force = vec3(field(n, "force", {3}));
-        w.torque = vec3(field(n, "torque", {3}));
-        w.resolve_in_world = boolean(n, "resolve_in_world", true);
-        w.loc = loc;
-        m_->wrenches.push_back(w);
-        break;
-      }
-      case Prim::Contact: {
-        flat::Contact c;
-        c.name = n->path;
-        if (n->prim_kind == "rolling_disk") c.type = flat::ContactType::RollingDisk;
-        else if (n->prim_kind == "rolling_sphere") c.type = flat::ContactType::RollingSphere;
-        else if (n->prim_kind == "knife_edge") c.type = flat::ContactType::KnifeEdge;
-        else diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{}, "unknown contact kind");
-        c.frame = frame_of(n, "frame_a");
-        c.axis = vec3(field(n, "axis", {3}));
-        c.radius = c.type == flat::ContactType::KnifeEdge ? pool.Constant(0) : scalar(field(n, "radius", {}));
-        c.plane_normal = vec3(field(n, "n", {3}));
-        c.plane_point = vec3(field(n, "p", {3}));
-        c.loc = loc;
-        m_->contacts.push_back(c);
-        break;
-      }
+      case Prim::World: EmitWorld(n, loc); break;
+      case Prim::Body: EmitBody(n, loc); break;
+      case Prim::Fixed: EmitFixed(n, loc); break;
+      case Prim::Joint: EmitJoint(n); break;
+      case Prim::LineForce: EmitLineForce(n, loc); break;
+      case Prim::Wrench: EmitWrench(n, loc); break;
+      case Prim::Contact: EmitContact(n, loc); break;
       case Prim::RotSpring: springs.push_back(n); break;
-      case Prim::Shape: EmitShape(n); break;
+      case Prim::Shape: el.EmitShape(n); break;
       default: break;
     }
-    for (auto& c : n->children) walk(c.get());
-  };
-  walk(root);
-  LinkShapes();
-
-  // ---- flanges: springs/dampers acting on joint coordinates ----
-  UnionFind fu(flange_nodes_.size());
-  for (auto [a, b] : flange_links_) fu.Unite(a, b);
-  for (Node* s : springs) {
-    struct End {
-      int joint = -1;  // -1 = ground (a support flange, or nothing)
-    };
-    auto end_of = [&](const char* name, End* out) {
-      Node* f = s->Child(name);
-      if (!f || f->prim != Prim::Flange) {
-        diags_.Error(DiagCode::BadPrimitive, s->cls ? s->cls->name_span : Span{}, "spring lacks flange");
-        return false;
-      }
-      int root_id = fu.Find(f->prim_index);
-      int found = 0;
-      for (size_t i = 0; i < flange_nodes_.size(); ++i) {
-        if (fu.Find(static_cast<int>(i)) != root_id) continue;
-        Node* g = flange_nodes_[i];
-        if (!g->parent || g->parent->prim != Prim::Joint) continue;
-        if (g->name == "drive") {
-          if (found++ == 0) out->joint = g->parent->prim_index;
-        }
-      }
-      if (found > 1) {
-        diags_.Error(DiagCode::BadConnect, s->decl ? s->decl->name_span : Span{},
-                     "'" + f->path + "' is connected to the drive flanges of more than one joint");
-        return false;
-      }
-      return true;
-    };
-    End a, b;
-    if (!end_of("flange_a", &a) || !end_of("flange_b", &b)) continue;
-    if (a.joint < 0 && b.joint < 0) {
-      diags_.Warning(DiagCode::UnconnectedFrame, s->decl ? s->decl->name_span : Span{},
-                     "'" + s->path + "' is not connected to any joint's drive flange; it does nothing");
-      continue;
-    }
-    for (int j : {a.joint, b.joint}) {
-      if (j < 0) continue;
-      const auto& jt = m_->joints[static_cast<size_t>(j)];
-      if (jt.nu() != 1) {
-        diags_.Error(DiagCode::BadConnect, s->decl ? s->decl->name_span : Span{},
-                     "springs on flanges need one-coordinate joints; '" + jt.name + "' has " +
-                         std::to_string(jt.nu()));
-        j = -2;
-      }
-    }
-    if (a.joint == -2 || b.joint == -2) continue;
-    auto q_of = [&](int j) {
-      return j < 0 ? pool.Constant(0) : pool.State(m_->AddStateRef({flat::StateKind::JointQ, j, 0}));
-    };
-    auto u_of = [&](int j) {
-      return j < 0 ? pool.Constant(0) : pool.State(m_->AddStateRef({flat::StateKind::JointU, j, 0}));
-    };
-    ExprId c = scalar(field(s, "c", {}));
-    ExprId d = scalar(field(s, "d", {}));
-    ExprId phi0 = scalar(field(s, "phi_rel0", {}));
-    // Eq. (S1): T = c (phi_b - phi_a - phi_rel0) + d (w_b - w_a), acting -T on b, +T on a.
-    ExprId rel = pool.Binary(Op::Sub, pool.Binary(Op::Sub, q_of(b.joint), q_of(a.joint)), phi0);
-    ExprId rate = pool.Binary(Op::Sub, u_of(b.joint), u_of(a.joint));
-    ExprId T = pool.Binary(Op::Add, pool.Binary(Op::Mul, c, rel), pool.Binary(Op::Mul, d, rate));
-    if (b.joint >= 0) tau_extra[static_cast<size_t>(b.joint)].push_back(pool.Unary(Op::Neg, T));
-    if (a.joint >= 0) tau_extra[static_cast<size_t>(a.joint)].push_back(T);
-  }
-  for (size_t j = 0; j < tau_extra.size(); ++j) {
-    for (ExprId t : tau_extra[j]) {
-      auto& slot = m_->joints[j].tau[0];
-      slot = slot == flat::kNoExpr ? t : pool.Binary(Op::Add, slot, t);
-    }
+    for (auto& c : n->children) Walk(c.get());
   }
 
-  // ---- outputs of the top-level model ----
-  for (auto& c : root->children) {
-    if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
-    Value v = GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
-    if (!v.valid) continue;
-    if (v.type == VType::String) {
-      diags_.Error(DiagCode::TypeMismatch, c->decl->name_span, "outputs must be numbers");
-      continue;
-    }
-    for (size_t k = 0; k < v.elements.size(); ++k) {
-      flat::Output o;
-      o.name = c->path + (v.elements.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
-      o.expr = v.elements[k];
-      o.loc = Loc(c->decl->name_span);
-      m_->outputs.push_back(o);
-    }
+  void EmitWorld(Node* n, const flat::SourceLoc& loc) {
+    flat::World w;
+    w.frame = FrameOf(n, "frame_b");
+    w.gravity = AsVec3(Field(n, "g", {3}));
+    w.loc = loc;
+    m_->worlds.push_back(w);
   }
 
-  // ---- every parameter, even unused ones, for `kanesim check` and sweeps ----
-  std::function<void(Node*)> params = [&](Node* n) {
-    if (!n->enabled || diags_.Full()) return;
-    if (n->kind == Node::kVar) {
-      bool in_primitive = n->parent && n->parent->prim != Prim::None;
-      if (n->variability == ast::Variability::Parameter || !in_primitive)
-        GetVar(n, n->decl ? n->decl->name_span : Span{});
+  void EmitBody(Node* n, const flat::SourceLoc& loc) {
+    flat::Body b;
+    b.name = n->path;
+    b.frame = FrameOf(n, "frame_a");
+    b.mass = AsScalar(Field(n, "m", {}));
+    b.r_cm = AsVec3(Field(n, "r_CM", {3}));
+    b.inertia = AsMat3(Field(n, "I", {3, 3}));
+    b.loc = loc;
+    m_->bodies.push_back(b);
+  }
+
+  void EmitFixed(Node* n, const flat::SourceLoc& loc) {
+    flat::Fixed f;
+    f.name = n->path;
+    f.frame_a = FrameOf(n, "frame_a");
+    f.frame_b = FrameOf(n, "frame_b");
+    f.r = AsVec3(Field(n, "r", {3}));
+    f.R = AsMat3(Field(n, "R", {3, 3}));
+    f.loc = loc;
+    m_->fixed.push_back(f);
+  }
+
+  void EmitJoint(Node* n) {
+    flat::Joint& j = m_->joints[static_cast<size_t>(n->prim_index)];
+    j.frame_a = FrameOf(n, "frame_a");
+    j.frame_b = FrameOf(n, "frame_b");
+    if (Node* c = n->Child("coordinates")) {
+      Value v = el.GetVar(c, Span{});
+      if (v.valid && v.type == VType::String && !v.strings.empty() &&
+          !flat::RotationCoordsFromName(v.strings[0], &j.rotation)) {
+        auto& d = diags_.Error(DiagCode::BadValue, c->mod.value ? c->mod.value->span : Span{},
+                               "unknown coordinates \"" + v.strings[0] + "\" for joint '" + n->path + "'");
+        std::string best = ClosestName(v.strings[0], {"quaternion", "cardan_xyz", "euler_zyz"});
+        d.hint = "use \"quaternion\", \"cardan_xyz\" or \"euler_zyz\"" +
+                 (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)");
+      }
+    }
+    const char* ax1 = nullptr;
+    const char* ax2 = nullptr;
+    switch (j.type) {
+      case flat::JointType::Revolute:
+      case flat::JointType::Prismatic:
+      case flat::JointType::Cylindrical: ax1 = "axis"; break;
+      case flat::JointType::Universal: ax1 = "axis_a"; ax2 = "axis_b"; break;
+      case flat::JointType::Planar: ax1 = "n"; ax2 = "axis_x"; break;
+      default: break;
+    }
+    j.axis = ax1 ? AsVec3(Field(n, ax1, {3})) : AsVec3(Value::Invalid());
+    j.axis2 = ax2 ? AsVec3(Field(n, ax2, {3})) : AsVec3(Value::Invalid());
+    j.cut = Boolean(n, "cut", false);
+    // Coulomb friction from the joint's normal force: only when mu is not zero, so a
+    // scene without friction pays nothing (mu = 0 vs not is a structural choice).
+    if (Node* mu = n->Child("mu"); mu && mu->kind == Node::kVar) {
+      Value mv = el.GetVar(mu, Span{});
+      double muv = 0;
+      if (mv.valid && el.Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
+        j.friction_mu = mv.elements[0];
+        j.friction_v = AsScalar(Field(n, "friction_v", {}));
+        j.friction_radius =
+            n->Child("friction_radius") ? AsScalar(Field(n, "friction_radius", {})) : pool.Constant(1.0);
+      }
+    }
+    int nq = j.nq(), nu = j.nu();
+    j.q_start.assign(static_cast<size_t>(nq), flat::kNoExpr);
+    j.u_start.assign(static_cast<size_t>(nu), flat::kNoExpr);
+    j.q_start_fixed.assign(static_cast<size_t>(nq), false);
+    j.tau.assign(static_cast<size_t>(nu), flat::kNoExpr);
+    j.prescribed.assign(static_cast<size_t>(nq), flat::kNoExpr);
+    Node* q = n->Child("q");
+    Node* u = n->Child("u");
+    Node* tau = n->Child("tau");
+    auto size_of = [](Node* v) {
+      size_t c = 1;
+      for (int d : v->shape) c *= static_cast<size_t>(d < 0 ? 0 : d);
+      return static_cast<int>(c);
+    };
+    if (nq > 0 && (!q || !u || !tau || size_of(q) != nq || size_of(u) != nu || size_of(tau) != nu)) {
+      diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
+                   "joint primitive '" + n->path + "' needs q[" + std::to_string(nq) + "], u[" +
+                       std::to_string(nu) + "] and tau[" + std::to_string(nu) + "]");
       return;
     }
-    for (auto& e : n->elems) params(e.get());
-    for (auto& c : n->children) params(c.get());
-  };
-  params(root);
-
-  // ---- frame state references now point at canonical frames ----
-  for (auto& r : m_->state_refs) {
-    if (r.kind == flat::StateKind::JointQ || r.kind == flat::StateKind::JointU) continue;
-    if (r.target >= 0 && static_cast<size_t>(r.target) < canon.size()) r.target = canon[static_cast<size_t>(r.target)];
+    if (nq == 0) return;
+    StartOf(q, &j.q_start, &j.q_start_fixed);
+    StartOf(u, &j.u_start, nullptr);
+    if (Bound(tau)) {
+      Value tv = el.GetVar(tau, Span{});
+      if (tv.valid)
+        for (size_t k = 0; k < j.tau.size() && k < tv.elements.size(); ++k) j.tau[k] = tv.elements[k];
+    }
+    EmitPrescribedMotion(n, j, q, u, nq);
   }
-}
+
+  // The `start` (and `fixed`) modifiers of a joint's q or u.
+  void StartOf(Node* var, std::vector<ExprId>* out, std::vector<bool>* fixed) {
+    auto it = var->mod.sub.find("start");
+    if (it != var->mod.sub.end() && it->second.value) {
+      Span where;
+      Value v = el.EvalModValue(*it->second.value, &where);
+      if (v.valid) {
+        if (v.shape.empty() && out->size() == 1) {
+          (*out)[0] = v.elements[0];
+        } else if (v.elements.size() == out->size() && v.shape.size() == 1) {
+          for (size_t k = 0; k < out->size(); ++k) (*out)[k] = v.elements[k];
+        } else {
+          diags_.Error(DiagCode::SizeMismatch, where,
+                       "start value of '" + var->path + "' needs " + std::to_string(out->size()) + " element(s)");
+        }
+        for (ExprId x : *out)
+          if (x >= 0 && pool.DependsOnTimeOrState(x)) {
+            diags_.Error(DiagCode::NotConstantExpr, where, "a start value must be a parameter expression");
+            break;
+          }
+      }
+    }
+    if (fixed) {
+      auto fit = var->mod.sub.find("fixed");
+      if (fit != var->mod.sub.end() && fit->second.value) {
+        Value fv = el.EvalModValue(*fit->second.value, nullptr);
+        double x = 0;
+        if (fv.valid && fv.shape.empty() && el.Structural(fv, fit->second.value->span, &x, "fixed"))
+          fixed->assign(fixed->size(), x != 0);
+      }
+    }
+  }
+
+  // Prescribed motion: q = f(time).
+  void EmitPrescribedMotion(Node* n, flat::Joint& j, Node* q, Node* u, int nq) {
+    if (!Bound(q) && !Bound(u)) return;
+    Node* which = Bound(q) ? q : u;
+    if (which == u) {
+      diags_.Error(DiagCode::BadEquation, u->eq_binding ? u->eq_binding->span : Span{},
+                   "prescribe the coordinate q, not the speed u")
+          .hint = "write '" + n->path + ".q = f(time)'; its speed and acceleration follow";
+      return;
+    }
+    if ((j.type == flat::JointType::Spherical || j.type == flat::JointType::Free) &&
+        j.rotation == flat::RotationCoords::Quaternion) {
+      diags_.Error(DiagCode::BadEquation, q->eq_binding ? q->eq_binding->span : Span{},
+                   "spherical and free joints cannot be prescribed")
+          .hint = "prescribe rotations with revolute or universal joints in series";
+      return;
+    }
+    std::vector<std::pair<int, const ModValue*>> items;
+    if (q->eq_binding) items.push_back({-1, &*q->eq_binding});
+    if (q->mod.value) items.push_back({-1, &*q->mod.value});
+    for (auto& [k, mv] : q->eq_elem_binding) items.push_back({k, &mv});
+    for (auto [k, mv] : items) {
+      Span where;
+      Value v = el.EvalModValue(*mv, &where);
+      if (!v.valid) continue;
+      bool ok = k >= 0    ? v.shape.empty()
+                : nq == 1 ? v.shape.empty()
+                          : v.elements.size() == static_cast<size_t>(nq);
+      if (!ok) {
+        diags_.Error(DiagCode::SizeMismatch, where, "prescribed motion of '" + q->path + "' has the wrong size");
+        continue;
+      }
+      for (size_t e = 0; e < v.elements.size(); ++e) {
+        if (pool.DependsOnState(v.elements[e])) {
+          diags_.Error(DiagCode::BadEquation, where,
+                       "prescribed motion of '" + q->path + "' must depend on time and parameters only")
+              .hint = "to drive a joint with a force law, write '" + n->path + ".tau = ...' instead";
+          break;
+        }
+        j.prescribed[static_cast<size_t>(k >= 0 ? k : static_cast<int>(e))] = v.elements[e];
+      }
+    }
+  }
+
+  void EmitLineForce(Node* n, const flat::SourceLoc& loc) {
+    flat::LineForce l;
+    l.name = n->path;
+    l.frame_a = FrameOf(n, "frame_a");
+    l.frame_b = FrameOf(n, "frame_b");
+    l.k = AsScalar(Field(n, "c", {}));
+    l.d = AsScalar(Field(n, "d", {}));
+    l.s0 = AsScalar(Field(n, "s_unstretched", {}));
+    l.loc = loc;
+    m_->line_forces.push_back(l);
+  }
+
+  void EmitWrench(Node* n, const flat::SourceLoc& loc) {
+    flat::Wrench w;
+    w.name = n->path;
+    w.frame = FrameOf(n, "frame_b");
+    w.force = AsVec3(Field(n, "force", {3}));
+    w.torque = AsVec3(Field(n, "torque", {3}));
+    w.resolve_in_world = Boolean(n, "resolve_in_world", true);
+    w.loc = loc;
+    m_->wrenches.push_back(w);
+  }
+
+  void EmitContact(Node* n, const flat::SourceLoc& loc) {
+    flat::Contact c;
+    c.name = n->path;
+    if (n->prim_kind == "rolling_disk") c.type = flat::ContactType::RollingDisk;
+    else if (n->prim_kind == "rolling_sphere") c.type = flat::ContactType::RollingSphere;
+    else if (n->prim_kind == "knife_edge") c.type = flat::ContactType::KnifeEdge;
+    else diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{}, "unknown contact kind");
+    c.frame = FrameOf(n, "frame_a");
+    c.axis = AsVec3(Field(n, "axis", {3}));
+    c.radius = c.type == flat::ContactType::KnifeEdge ? pool.Constant(0) : AsScalar(Field(n, "radius", {}));
+    c.plane_normal = AsVec3(Field(n, "n", {3}));
+    c.plane_point = AsVec3(Field(n, "p", {3}));
+    c.loc = loc;
+    m_->contacts.push_back(c);
+  }
+
+  // Springs and dampers on flanges act on the coordinates of the joints whose drive
+  // flanges they are connected to.
+  void SpringsOnFlanges() {
+    UnionFind fu(el.flange_nodes_.size());
+    for (auto [a, b] : el.flange_links_) fu.Unite(a, b);
+    for (Node* s : springs) {
+      struct End {
+        int joint = -1;  // -1 = ground (a support flange, or nothing)
+      };
+      auto end_of = [&](const char* name, End* out) {
+        Node* f = s->Child(name);
+        if (!f || f->prim != Prim::Flange) {
+          diags_.Error(DiagCode::BadPrimitive, s->cls ? s->cls->name_span : Span{}, "spring lacks flange");
+          return false;
+        }
+        int root_id = fu.Find(f->prim_index);
+        int found = 0;
+        for (size_t i = 0; i < el.flange_nodes_.size(); ++i) {
+          if (fu.Find(static_cast<int>(i)) != root_id) continue;
+          Node* g = el.flange_nodes_[i];
+          if (!g->parent || g->parent->prim != Prim::Joint) continue;
+          if (g->name == "drive") {
+            if (found++ == 0) out->joint = g->parent->prim_index;
+          }
+        }
+        if (found > 1) {
+          diags_.Error(DiagCode::BadConnect, s->decl ? s->decl->name_span : Span{},
+                       "'" + f->path + "' is connected to the drive flanges of more than one joint");
+          return false;
+        }
+        return true;
+      };
+      End a, b;
+      if (!end_of("flange_a", &a) || !end_of("flange_b", &b)) continue;
+      if (a.joint < 0 && b.joint < 0) {
+        diags_.Warning(DiagCode::UnconnectedFrame, s->decl ? s->decl->name_span : Span{},
+                       "'" + s->path + "' is not connected to any joint's drive flange; it does nothing");
+        continue;
+      }
+      for (int j : {a.joint, b.joint}) {
+        if (j < 0) continue;
+        const auto& jt = m_->joints[static_cast<size_t>(j)];
+        if (jt.nu() != 1) {
+          diags_.Error(DiagCode::BadConnect, s->decl ? s->decl->name_span : Span{},
+                       "springs on flanges need one-coordinate joints; '" + jt.name + "' has " +
+                           std::to_string(jt.nu()));
+          j = -2;
+        }
+      }
+      if (a.joint == -2 || b.joint == -2) continue;
+      auto q_of = [&](int j) {
+        return j < 0 ? pool.Constant(0) : pool.State(m_->AddStateRef({flat::StateKind::JointQ, j, 0}));
+      };
+      auto u_of = [&](int j) {
+        return j < 0 ? pool.Constant(0) : pool.State(m_->AddStateRef({flat::StateKind::JointU, j, 0}));
+      };
+      ExprId c = AsScalar(Field(s, "c", {}));
+      ExprId d = AsScalar(Field(s, "d", {}));
+      ExprId phi0 = AsScalar(Field(s, "phi_rel0", {}));
+      // Eq. (S1): T = c (phi_b - phi_a - phi_rel0) + d (w_b - w_a), acting -T on b, +T on a.
+      ExprId rel = pool.Binary(Op::Sub, pool.Binary(Op::Sub, q_of(b.joint), q_of(a.joint)), phi0);
+      ExprId rate = pool.Binary(Op::Sub, u_of(b.joint), u_of(a.joint));
+      ExprId T = pool.Binary(Op::Add, pool.Binary(Op::Mul, c, rel), pool.Binary(Op::Mul, d, rate));
+      if (b.joint >= 0) tau_extra[static_cast<size_t>(b.joint)].push_back(pool.Unary(Op::Neg, T));
+      if (a.joint >= 0) tau_extra[static_cast<size_t>(a.joint)].push_back(T);
+    }
+    for (size_t j = 0; j < tau_extra.size(); ++j) {
+      for (ExprId t : tau_extra[j]) {
+        auto& slot = m_->joints[j].tau[0];
+        slot = slot == flat::kNoExpr ? t : pool.Binary(Op::Add, slot, t);
+      }
+    }
+  }
+
+  // Outputs of the top-level model.
+  void Outputs(Node* root) {
+    for (auto& c : root->children) {
+      if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
+      Value v = el.GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
+      if (!v.valid) continue;
+      if (v.type == VType::String) {
+        diags_.Error(DiagCode::TypeMismatch, c->decl->name_span, "outputs must be numbers");
+        continue;
+      }
+      for (size_t k = 0; k < v.elements.size(); ++k) {
+        flat::Output o;
+        o.name = c->path + (v.elements.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
+        o.expr = v.elements[k];
+        o.loc = el.Loc(c->decl->name_span);
+        m_->outputs.push_back(o);
+      }
+    }
+  }
+
+  // Every parameter, even unused ones, for `kanesim check` and sweeps.
+  void EveryParameter(Node* root) {
+    std::function<void(Node*)> params = [&](Node* n) {
+      if (!n->enabled || diags_.Full()) return;
+      if (n->kind == Node::kVar) {
+        bool in_primitive = n->parent && n->parent->prim != Prim::None;
+        if (n->variability == ast::Variability::Parameter || !in_primitive)
+          el.GetVar(n, n->decl ? n->decl->name_span : Span{});
+        return;
+      }
+      for (auto& e : n->elems) params(e.get());
+      for (auto& c : n->children) params(c.get());
+    };
+    params(root);
+  }
+
+  // Frame state references now point at canonical frames.
+  void RetargetFrameStates() {
+    for (auto& r : m_->state_refs) {
+      if (r.kind == flat::StateKind::JointQ || r.kind == flat::StateKind::JointU) continue;
+      if (r.target >= 0 && static_cast<size_t>(r.target) < canon.size()) r.target = canon[static_cast<size_t>(r.target)];
+    }
+  }
+
+  Elaborator& el;
+  flat::ExprPool& pool;
+  Diagnostics& diags_;
+  flat::Mechanism* m_;
+  UnionFind uf;                                // connect() sets of provisional frame ids
+  std::vector<int> canon;                      // provisional frame id -> flat frame id
+  std::vector<int> set_size;                   // per set root: the number of frames in the set
+  std::vector<Node*> springs;                  // rotational springs and dampers found by Walk
+  std::vector<std::vector<ExprId>> tau_extra;  // per joint: generalized forces of springs on flanges
+};
+
+}  // namespace
+
+void Elaborator::Emit(Node* root) { Emitter(*this).Run(root); }
 
 }  // namespace kanesim::lang::elab
