@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -83,7 +84,8 @@ RunResult RunKanesim(const std::string& model, const std::vector<std::string>& a
   std::string id = std::string(info->test_suite_name()) + "_" + info->name();
   for (char& c : id)
     if (c == '/') c = '_';  // parameterized names: "AllPaths/Suite.Name/3"
-  const std::string stem = ::testing::TempDir() + "kanesim_stress_" + id;
+  // The process id too: several builds' suites (CI beside a developer's) share /tmp.
+  const std::string stem = ::testing::TempDir() + "kanesim_stress_" + id + "_" + std::to_string(::getpid());
   const std::string csv = stem + ".csv", err = stem + ".err";
   std::remove(csv.c_str());
   std::string cmd = Quote(KANESIM_EXE) + " run " + Quote(SourcePath(model));
@@ -99,6 +101,8 @@ RunResult RunKanesim(const std::string& model, const std::vector<std::string>& a
   ss << e.rdbuf();
   r.stderr_text = ss.str();
   ParseCsv(csv, &r);
+  std::remove(csv.c_str());
+  std::remove(err.c_str());
   return r;
 }
 

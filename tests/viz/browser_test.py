@@ -286,10 +286,14 @@ def run_controls(args):
         # loops at the end; read its time and the timestamp of its last advance together, twice,
         # and compare the advance with 4 x the clock's, modulo the loop's length: exact however
         # slow the frames and late the timers of a loaded machine (which may loop past the end).
+        # The first read waits for the first advance after play (clock() is null until then: a
+        # loaded machine's first frame can come later than 200 ms; 2 = no frame within 10 s).
         rate_error = page.evaluate(
             "(async () => { const s = document.getElementById('slider'), T = s.max - s.min; "
             "const read = () => [kanesimViewer.time(), kanesimViewer.clock()]; "
-            "await new Promise(r => setTimeout(r, 200)); const [t0, c0] = read(); "
+            "await new Promise(r => setTimeout(r, 200)); "
+            "for (let i = 0; i < 500 && kanesimViewer.clock() === null; ++i) await new Promise(r => setTimeout(r, 20)); "
+            "const [t0, c0] = read(); if (c0 === null) return 2; "
             "await new Promise(r => setTimeout(r, 500)); const [t1, c1] = read(); "
             "if (!(c1 > c0)) return 1; const r = (((t1 - t0) - 4 * (c1 - c0) / 1000) % T + T) % T; "
             "return Math.min(r, T - r); })()")

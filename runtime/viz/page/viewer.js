@@ -163,15 +163,16 @@
 
   Viewer.prototype.advance = function (now) {
     if (!this.playing) return;
-    if (this.last !== null) {
-      let t = this.t + ((now - this.last) / 1000) * this.speed;
+    const last = this.last;
+    this.last = now;  // before seek: whatever seek does, no frame's advance is counted twice
+    if (last !== null) {
+      let t = this.t + ((now - last) / 1000) * this.speed;
       if (t > this.t1) {
         if (this.loop.checked && this.t1 > this.t0) t = this.t0 + ((t - this.t0) % (this.t1 - this.t0));
         else { t = this.t1; this.pause(); }
       }
       this.seek(t);
     }
-    this.last = now;
   };
 
   // The body (or named decoration) under the mouse, once per frame.
