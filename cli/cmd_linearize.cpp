@@ -18,7 +18,7 @@
 #include "runtime/batch/file_guard.h"
 #include "runtime/flat/number.h"
 #include "runtime/linearize/linearize.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "runtime/viz/locus_page.h"
 #include "runtime/viz/viewer.h"
 

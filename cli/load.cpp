@@ -7,7 +7,7 @@
 #include "cli/common.h"
 #include "runtime/batch/csv_util.h"
 #include "lang/diagnostics.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "stdlib/stdlib.h"
 
 namespace kanesim::cli {

@@ -107,7 +107,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
 
 // The solution path, from bench/rhs_chain (docs/benchmarks.md, "Cost of one right-hand
 // side"; CPU time per evaluation, medians of 5, all paths and Pinocchio's aba in one run):
-// the recursive elimination (runtime/kane_tree.cpp) is the cheapest path for every open
+// the recursive elimination (runtime/kane/kane_tree.cpp) is the cheapest path for every open
 // tree measured, at every size:
 //   chains    N = 1: recursive 0.21 us, dense 0.23;  N = 5: 1.21, dense 1.52, sparse 7.0;
 //             N = 100: 25.2, dense 122, sparse 152;  N = 1000: 255, sparse 1601; 0.81-0.85x aba
