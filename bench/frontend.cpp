@@ -25,8 +25,8 @@
 
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
-#include "runtime/engine.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/program/program.h"
 #include "stdlib/stdlib.h"
 
 namespace {

@@ -14,7 +14,7 @@
 #include <memory>
 #include <string>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/sim/simulate.h"
 #include "tests/model_loader.h"
 

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/simulate.h"
 #include "tests/model_loader.h"

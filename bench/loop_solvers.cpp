@@ -1,7 +1,7 @@
 // The two forms of the constrained equations against the number of loops: the reduced
-// form (dependent speeds eliminated, Lesser eqs. 48-51: runtime/constraints.cpp) and the
+// form (dependent speeds eliminated, Lesser eqs. 48-51: runtime/constraints/constraints.cpp) and the
 // multiplier form (a multiplier per independent constraint row in the sparse K-vector
-// system, KLU: runtime/kane_sparse.cpp), on bench/models/fourbar_ladder.mech, N four-bar
+// system, KLU: runtime/kane/kane_sparse.cpp), on bench/models/fourbar_ladder.mech, N four-bar
 // loops stacked between two hanging rails (3 N bodies, 3 N speeds, 2 N independent rows).
 // The crossover sets kSparseLoopMinSpeeds (runtime/compile/compile_internal.h);
 // docs/constraints.md "Reduced or multiplier form" has the numbers. Also the cost of one
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/sim/simulate.h"
 #include "tests/model_loader.h"
 

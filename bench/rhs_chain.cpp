@@ -12,9 +12,9 @@
 #include <random>
 #include <vector>
 
-#include "runtime/engine.h"
-#include "runtime/kane_tree.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/kane/kane_tree.h"
+#include "runtime/program/program.h"
 #include "tests/runtime/builders.h"
 #include "tests/runtime/random_state.h"
 
@@ -67,7 +67,7 @@ void RhsMixedTree(benchmark::State& state, SolverPath path) {
 }
 
 // The recursion alone on the planar chain (every axis z), after one Derivative: the
-// 3x3 planar form against the 6x6 spatial form of the same tree (runtime/kane_tree.cpp).
+// 3x3 planar form against the 6x6 spatial form of the same tree (runtime/kane/kane_tree.cpp).
 void SolvePlanarChain(benchmark::State& state, bool planar) {
   const int N = static_cast<int>(state.range(0));
   kanesim::rt::CompileOptions o;

@@ -18,7 +18,7 @@
 #include "runtime/batch/file_guard.h"
 #include "runtime/flat/number.h"
 #include "runtime/linearize/linearize.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "runtime/viz/locus_page.h"
 #include "runtime/viz/viewer.h"
 
@@ -354,15 +354,13 @@ int RunLinearize(const LinearizeArgs& a) {
       return kExitModelError;
     }
   }
-  flat::Mechanism mech;
-  if (!LoadModel(a.load, &mech)) return kExitModelError;
-  rt::CompileOptions co;
-  if (a.solver == "dense") co.solver = rt::SolverPath::Dense;
-  if (a.solver == "sparse") co.solver = rt::SolverPath::Sparse;
-  if (a.solver == "recursive") co.solver = rt::SolverPath::Recursive;
-  rt::CompileResult cr;
-  if (!CompileModel(mech, co, &cr)) return kExitModelError;
-  const rt::Program& program = *cr.program;
+  pipeline::RunSpec spec;
+  if (a.solver == "dense") spec.solver = rt::SolverPath::Dense;
+  if (a.solver == "sparse") spec.solver = rt::SolverPath::Sparse;
+  if (a.solver == "recursive") spec.solver = rt::SolverPath::Recursive;
+  const std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
+  if (!model) return kExitModelError;
+  const rt::Program& program = *model->program;
   if (!(a.step > 0) || a.step > 0.1) {
     fmt::print(stderr, "kanesim: error: --step must be in (0, 0.1]\n");
     return kExitModelError;

@@ -21,7 +21,7 @@
 #include "cli/number_options.h"
 #include "cli/scene.h"
 #include "runtime/batch/file_guard.h"
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/signal_select.h"
 #include "runtime/sim/simulate.h"

@@ -28,7 +28,7 @@
 #include "runtime/batch/summary.h"
 #include "runtime/batch/sweep.h"
 #include "runtime/batch/sweep_toml.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/signal_select.h"
 

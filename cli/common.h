@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/pipeline/pipeline.h"
 #include "runtime/sim/integrator.h"
@@ -49,19 +49,6 @@ std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, cons
 inline constexpr const char* kProjectionHelp =
     "Closed loops and contacts with --integrator dop853: project onto the constraints at every evaluation "
     "(eval) or once per accepted step (step: cheaper evaluations, a larger error at the same tolerance)";
-
-// Older entry points, kept while branches written against them are merged; new code calls
-// pipeline::LoadModel (TODO(#21): remove). They print what they find to stderr.
-bool LoadModel(const LoadOptions& options, flat::Mechanism* out);
-bool CompileModel(const flat::Mechanism& mech, const rt::CompileOptions& options, rt::CompileResult* out);
-void PrintCompileMessage(const rt::CompileMessage& message, const char* severity);
-void WarnIndeterminate(const rt::Program& program, const std::vector<std::string>& signals);
-bool ReactionsFromName(const std::string& name, rt::CompileOptions* options);
-inline sim::IdaLinearSolver IdaLinearSolverFromName(const std::string& name) {
-  sim::IdaLinearSolver s = sim::IdaLinearSolver::Auto;
-  pipeline::LinearSolverFromName(name, &s);
-  return s;
-}
 
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code);

@@ -8,7 +8,7 @@
 #include "cli/scene.h"
 #include "runtime/geometry/mesh_load.h"
 #include "runtime/geometry/primitives.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::cli {
 

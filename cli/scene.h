@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/geometry/gltf_export.h"
 #include "runtime/sim/csv.h"

@@ -15,7 +15,7 @@
 #include "runtime/batch/metrics.h"
 #include "runtime/batch/scenario.h"
 #include "runtime/batch/sweep.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "runtime/sim/signal_select.h"
 #include "runtime/pipeline/pipeline.h"
 

@@ -15,7 +15,7 @@
 #include <variant>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/linearize/linearize.h"
 #include "runtime/pipeline/pipeline.h"

@@ -13,7 +13,7 @@
 #include "runtime/batch/csv_util.h"
 #include "runtime/batch/summary.h"
 #include "runtime/flat/mechanism.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::batch {
 namespace {

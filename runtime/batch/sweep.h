@@ -32,7 +32,7 @@
 #include "runtime/batch/scenario.h"
 #include "runtime/batch/settings_record.h"
 #include "runtime/batch/summary.h"
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/sim/simulate.h"
 
 namespace kanesim::batch {

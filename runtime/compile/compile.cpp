@@ -10,8 +10,8 @@
 
 #include "runtime/compile/compile_internal.h"
 #include "runtime/flat/union_find.h"
-#include "runtime/joint_kinematics.h"
-#include "runtime/kane.h"
+#include "runtime/kinematics/joint_kinematics.h"
+#include "runtime/kane/kane.h"
 
 namespace kanesim::rt {
 

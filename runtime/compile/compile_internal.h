@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
-#include "runtime/program.h"
-#include "runtime/tape.h"
+#include "runtime/engine/engine.h"
+#include "runtime/program/program.h"
+#include "runtime/program/tape.h"
 
 namespace kanesim::rt {
 
@@ -41,7 +41,7 @@ void EnsurePathSpeeds(Program& p, int body);
 void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,
                   std::vector<CompileMessage>* errors);
 
-// Rolling contacts -> Program::contacts and their rows (runtime/contacts.h).
+// Rolling contacts -> Program::contacts and their rows (runtime/constraints/contacts.h).
 void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 
 // Assembly at the start time: Newton to a consistent q and u (coordinates marked fixed

@@ -105,15 +105,11 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   collect(p.output_tape, &p.state_refs_outputs);
 }
 
-// The solution path, from bench/rhs_chain (docs/benchmarks.md, "Cost of one right-hand
-// side"; CPU time per evaluation, medians of 5, all paths and Pinocchio's aba in one run):
-// the recursive elimination (runtime/kane_tree.cpp) is the cheapest path for every open
-// tree measured, at every size:
-//   chains    N = 1: recursive 0.21 us, dense 0.23;  N = 5: 1.21, dense 1.52, sparse 7.0;
-//             N = 100: 25.2, dense 122, sparse 152;  N = 1000: 255, sparse 1601; 0.81-0.85x aba
-//   mixed trees (all joint types)  N = 4: 1.07 vs dense 1.18;  N = 14: 5.9 vs 9.6;  N = 70: 29.5 vs 189
-// so auto never takes dense or sparse for a tree. Closed loops and rolling contacts keep
-// the dense path reduced to the constrained basis (AssembleLoops overrides this choice).
+// The solution path. For an open tree the recursive elimination (runtime/kane/kane_tree.cpp)
+// is the cheapest path at every size measured, chains and mixed trees with every joint type
+// (bench/rhs_chain; docs/benchmarks.md, "Cost of one right-hand side" and "Choosing the
+// path"), so auto never takes dense or sparse for a tree. Closed loops and rolling contacts
+// keep the dense path reduced to the constrained basis (AssembleLoops overrides this choice).
 void ChooseSolver(Program& p) {
   std::ostringstream why;
   if (p.options.solver != SolverPath::Auto) {
@@ -128,29 +124,14 @@ void ChooseSolver(Program& p) {
   p.solver_reason = why.str();
 }
 
-// The integrator, from the work-precision benchmark (docs/benchmarks.md, "Choosing the
-// path"):
+// The integrator (docs/integrators.md, "The automatic choice", with the measurements; the
+// work-precision benchmark in docs/benchmarks.md):
 // - a scene whose force elements have a rate above kStiffRate (or a stiffness given by
-//   an expression, which the compiler cannot bound) is stiff and gets IDA (BDF): on the
-//   1e8 N/m stress scene IDA takes 130 steps where explicit RK needs 182 050;
-// - a smooth non-stiff scene gets our DOP853 (runtime/sim/integrator_dop853.cpp): on
-//   every tree problem of the benchmark (double pendulum, chains of 5-100 links, 1-10 s)
-//   it reached every error level (1e-3, 1e-6, 1e-9) in less time than ARKODE's Fehlberg
-//   8(7) and CVODE's Adams (0.3-0.9x the better of the two; e.g. the 10-chain over 1 s at
-//   1e-6: 0.90 ms, ARKODE 2.15 ms, CVODE 1.87 ms), at short horizons and loose
-//   tolerances as well as long and tight ones; it keeps energy like ARKODE (16 rtol of
-//   drift over 10 s of the double pendulum at rtol 1e-8);
-// - and so does every other non-stiff scene: closed loops, rolling contacts, joint
-//   friction and force laws that read speeds. Measured against CVODE (Adams), error at
-//   the end against a CVODE run at rtol 1e-13, median of 3 (docs/integrators.md):
-//   four-bar 10 s at rtol 1e-8: DOP853 1.1e-6 in 27.6 ms, CVODE 2.0e-5 in 31.9 ms;
-//   sphere on an incline, rolling disk, Chaplygin sleigh: 10-2000x smaller errors in
-//   0.3-0.9x the time at rtol 1e-4 ... 1e-10; the damped driven pendulum's tanh(u/0.01)
-//   friction: 3.7e-10 in 2.3 ms against 1.3e-9 in 7.6 ms at 1e-10; the cart with Coulomb
-//   friction on two rails: 0.3-0.9x the time; the parallelogram through its change
-//   points on both forms: energy within 3.6e-7 of E at rtol 1e-8. (ARKODE's Fehlberg
-//   8(7), measured before DOP853 existed, lost to Adams on the friction and stopped on
-//   the sleigh; DOP853 does neither.)
+//   an expression, which the compiler cannot bound) is stiff and gets IDA (BDF);
+// - every other scene gets our DOP853 (runtime/sim/integrator_dop853.cpp), trees as well
+//   as closed loops, rolling contacts, joint friction and force laws that read speeds: it
+//   reached every error level measured in less time than CVODE's Adams and ARKODE, at
+//   short horizons and loose tolerances as well as long and tight ones.
 // CVODE and ARKODE remain for --integrator.
 void ChooseIntegrator(Program& p) {
   std::ostringstream iw;

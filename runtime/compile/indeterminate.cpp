@@ -2,14 +2,14 @@
 // (docs/constraints.md "Indeterminate constraint forces").
 //
 // The multipliers enter the equations only through the generalized force they exert on
-// the free speeds (runtime/reactions.cpp eq. 1):
+// the free speeds (runtime/constraints/reactions.cpp eq. 1):
 //   A^T lambda = M udot - f                                                         (1)
 // so with redundant constraints (rank A < n_c: a planar loop built from spatial joints, a
 // contact row a joint already enforces) lambda is fixed only up to the null space of the
 // constraint-force map A^T:
 //   lambda = lambda_0 + N y,   A^T N = 0,   N orthonormal (n_c x (n_c - rank))         (2)
 // Every reaction signal is linear in lambda, the bodies' terms being fixed by the motion
-// (runtime/reactions.cpp eq. 5):
+// (runtime/constraints/reactions.cpp eq. 5):
 //   r_k = r_k0 + c_k . lambda                                                        (3)
 // so r_k is determined iff c_k is orthogonal to N (c_k in the row space of A^T, the range
 // of A), and statically indeterminate otherwise. Numerically:
@@ -26,8 +26,8 @@
 #include <cmath>
 
 #include "runtime/compile/compile_internal.h"
-#include "runtime/contacts.h"
-#include "runtime/reactions.h"
+#include "runtime/constraints/contacts.h"
+#include "runtime/constraints/reactions.h"
 
 namespace kanesim::rt {
 

@@ -1,7 +1,7 @@
 // Compile stage: closed loops. Each cut joint (a joint whose two sides the spanning tree
 // already connects; `cut = true` makes a joint the preferred cut) becomes position
 // constraints, one per direction it does NOT allow — the complement of its motion
-// subspace — between its frames a and b (rows of runtime/constraints.cpp, eqs. 1-2):
+// subspace — between its frames a and b (rows of runtime/constraints/constraints.cpp, eqs. 1-2):
 //
 //   joint        rows (n = axis in a, e1 = n.unitOrthogonal(), e2 = n x e1)
 //   Revolute     translation along x, y, z of a;  tilt: e1 . n_b, e2 . n_b
@@ -26,8 +26,8 @@
 #include <sstream>
 
 #include "runtime/compile/compile_internal.h"
-#include "runtime/constraints.h"
-#include "runtime/kinematics.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {
 
@@ -70,7 +70,7 @@ const flat::SourceLoc& RowLoc(const Program& p, const ConstraintRow& row) {
 
 }  // namespace
 
-// Contacts (runtime/contacts.cpp): rows d . v_P = 0 with
+// Contacts (runtime/constraints/contacts.cpp): rows d . v_P = 0 with
 //   RollingSphere, RollingDisk  n (position constraint too), t1, t2 (velocity only)
 //   KnifeEdge                   n (position constraint too), l = n x e (velocity only)
 void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {

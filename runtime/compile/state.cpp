@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "runtime/compile/compile_internal.h"
-#include "runtime/joint_kinematics.h"
+#include "runtime/kinematics/joint_kinematics.h"
 
 namespace kanesim::rt {
 
@@ -117,7 +117,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       u_start_all.push_back(num(e, 0.0, "start value of " + j.name + ".u", fj.loc));
     }
 
-    // Coulomb friction (runtime/friction.cpp): a free Prismatic or Revolute joint.
+    // Coulomb friction (runtime/kane/friction.cpp): a free Prismatic or Revolute joint.
     if (fj.friction_mu != kNoExpr) {
       j.mu = num(fj.friction_mu, 0.0, "friction coefficient of " + j.name, fj.loc);
       j.mu_radius = num(fj.friction_radius, 1.0, "friction radius of " + j.name, fj.loc);

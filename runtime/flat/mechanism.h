@@ -125,7 +125,7 @@ struct Joint {
   std::vector<ExprId> prescribed; // nq entries: q_k(time) when rheonomic, else kNoExpr
   bool cut = false;               // user asks this joint to be the loop cut
   // Coulomb friction on a Prismatic or Revolute joint, regularized over a speed scale
-  // (runtime/friction.cpp):  tau_f = -mu N tanh(u / v)  (Revolute: times the pin radius),
+  // (runtime/kane/friction.cpp):  tau_f = -mu N tanh(u / v)  (Revolute: times the pin radius),
   // N = the joint's reaction force across its axis. kNoExpr: no friction. Set from the
   // stdlib joints' `mu`, `friction_v`, `friction_radius` when mu is not zero.
   ExprId friction_mu = kNoExpr, friction_radius = kNoExpr, friction_v = kNoExpr;

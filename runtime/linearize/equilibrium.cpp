@@ -15,7 +15,7 @@
 
 #include "runtime/linearize/linearize.h"
 #include "runtime/linearize/reduction.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::lin {
 

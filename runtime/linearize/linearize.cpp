@@ -19,7 +19,7 @@
 #include <memory>
 
 #include "runtime/linearize/reduction.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::lin {
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 
 #include "runtime/linearize/linearize.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "runtime/sim/simulate.h"
 
 namespace kanesim::lin {

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "runtime/constraints.h"
-#include "runtime/kinematics.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::lin {
 

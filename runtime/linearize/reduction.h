@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "runtime/linearize/linearize.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::lin {
 

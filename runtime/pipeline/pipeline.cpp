@@ -11,7 +11,7 @@
 #include "lang/diagnostics.h"
 #include "lang/set_argument.h"
 #include "lang/text.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "runtime/sim/signal_select.h"
 #include "stdlib/stdlib.h"
 

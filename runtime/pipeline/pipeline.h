@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "lang/elaborate.h"
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/sim/integrator.h"
 #include "runtime/sim/simulate.h"

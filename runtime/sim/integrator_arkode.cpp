@@ -22,15 +22,34 @@
 namespace kanesim::sim::detail {
 namespace {
 
-constexpr ModuleSetters kArkode{"ARKODE",           ERKStepSStolerances,   ERKStepSetUserData, ERKStepSetStopTime,
-                                ERKStepSetMaxNumSteps, ERKStepSetMaxStep,     ERKStepSetInitStep};
+constexpr ModuleFunctions kArkode{
+    .module = "ARKODE",
+    .err_handler = ERKStepSetErrHandlerFn,
+    .tolerances = ERKStepSStolerances,
+    .user_data = ERKStepSetUserData,
+    .stop_time = ERKStepSetStopTime,
+    .max_num_steps = ERKStepSetMaxNumSteps,
+    .max_step = ERKStepSetMaxStep,
+    .init_step = ERKStepSetInitStep,
+    .current_time = ERKStepGetCurrentTime,
+    .dky = ERKStepGetDky,
+    .free = ERKStepFree,
+    .flag_name = ERKStepGetReturnFlagName,
+    .num_steps = ERKStepGetNumSteps,
+    .num_rhs_evals = ERKStepGetNumRhsEvals,
+    .num_err_test_fails = ERKStepGetNumErrTestFails,
+    .last_step = ERKStepGetLastStep,
+    .num_lin_setups = nullptr,  // an explicit method: no iteration, no linear solver
+    .num_nonlin_iters = nullptr,
+    .num_nonlin_conv_fails = nullptr,
+    .last_order = nullptr,
+    .num_jac_evals = nullptr,
+    .num_lin_rhs_evals = nullptr
+};
 
 class ArkodeStepper final : public SundialsStepper {
  public:
-  explicit ArkodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs) {}
-  ~ArkodeStepper() override {
-    if (mem_) ERKStepFree(&mem_);
-  }
+  explicit ArkodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs, kArkode) {}
 
   bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
     if (!MakeState(y0, /*with_yp=*/false, error)) return false;
@@ -38,11 +57,11 @@ class ArkodeStepper final : public SundialsStepper {
     if (!mem_) return Fail(error, "ERKStepCreate failed");
     ARKODE_ERKTableID table =
         options.erk_table == ErkTable::Fehlberg87 ? ARKODE_FEHLBERG_13_7_8 : ARKODE_VERNER_8_5_6;
-    if (ERKStepSetErrHandlerFn(mem_, CaptureSundialsMessage, &messages_) != ARK_SUCCESS ||
+    if (CaptureMessages() != ARK_SUCCESS ||
         ERKStepSetTableNum(mem_, table) != ARK_SUCCESS ||
         ERKStepSetInterpolantDegree(mem_, ARK_INTERP_MAX_DEGREE) != ARK_SUCCESS)
       return Fail(error, WithDetail("ARKODE setup failed", messages_.last));
-    if (!SetCommonOptions(kArkode, stop, options, error)) return false;
+    if (!SetCommonOptions(stop, options, error)) return false;
     stop_ = stop;
     t_accepted_ = t0;
     y_accepted_.assign(y0, y0 + rhs_.Size());
@@ -62,64 +81,46 @@ class ArkodeStepper final : public SundialsStepper {
     return CopyOut(flag, y);
   }
 
-  double CurrentTime() const override {
-    double t = 0.0;
-    ERKStepGetCurrentTime(mem_, &t);
-    return t;
-  }
-
   IntegratorStats Stats() const override {
-    IntegratorStats st;
-    ERKStepGetNumSteps(mem_, &st.steps);
-    ERKStepGetNumRhsEvals(mem_, &st.rhs_evals);
-    ERKStepGetNumErrTestFails(mem_, &st.err_test_fails);
-    ERKStepGetLastStep(mem_, &st.last_step);
+    IntegratorStats st = SundialsStepper::Stats();
     st.steps += before_restarts_.steps;
     st.rhs_evals += before_restarts_.rhs_evals;
     st.err_test_fails += before_restarts_.err_test_fails;
     return st;
   }
 
-  StepFailure Explain(int flag) const override {
-    FailureKind kind = FailureKind::kOther;
-    switch (flag) {
-      case ARK_RHSFUNC_FAIL:
-      case ARK_FIRST_RHSFUNC_ERR:
-      case ARK_REPTD_RHSFUNC_ERR:
-      case ARK_UNREC_RHSFUNC_ERR:
-      case kStepCheckFailed: kind = FailureKind::kRhs; break;
-      case ARK_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
-      case ARK_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
-      case ARK_ERR_FAILURE: kind = FailureKind::kErrorTest; break;
-      default: break;
-    }
-    return Describe(kind, "ARKODE", ERKStepGetReturnFlagName, flag);
-  }
-
  private:
   // After each accepted step: where a restart begins.
   static int Accepted(double t, N_Vector y, void* user_data) {
-    auto* self = static_cast<ArkodeStepper*>(user_data);
-    const double* ys = N_VGetArrayPointer(y);
-    self->t_accepted_ = t;
-    std::copy(ys, ys + self->y_accepted_.size(), self->y_accepted_.begin());
+    static_cast<ArkodeStepper*>(static_cast<SundialsStepper*>(user_data))->StepChecked(t, N_VGetArrayPointer(y));
     return 0;
   }
 
   // Advance one step at a time, each checked (OdeSystem::StepAccepted) and kept as the
-  // restart point, then the output instant from ERKStep's interpolant.
+  // restart point (StepChecked), then the output instant from ERKStep's interpolant.
   int AdvanceChecked(double tout, double* y) {
-    double tret = 0.0;
-    for (;;) {
-      if (stepped_ && CurrentTime() >= tout) return CopyOut(ERKStepGetDky(mem_, tout, 0, s_.y), y);
-      int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_ONE_STEP);
-      while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret, ARK_ONE_STEP);
-      if (flag < 0) return flag;
-      stepped_ = true;
-      const double* ys = N_VGetArrayPointer(s_.y);
-      if (rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
-      t_accepted_ = tret;
-      std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());
+    return AdvanceCheckedSteps(tout, y, [&](double* tret) {
+      int flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
+      while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, tret, ARK_ONE_STEP);
+      return flag;
+    });
+  }
+
+  void StepChecked(double t, const double* y) override {
+    t_accepted_ = t;
+    std::copy(y, y + y_accepted_.size(), y_accepted_.begin());
+  }
+
+  FailureKind Kind(int flag) const override {
+    switch (flag) {
+      case ARK_RHSFUNC_FAIL:
+      case ARK_FIRST_RHSFUNC_ERR:
+      case ARK_REPTD_RHSFUNC_ERR:
+      case ARK_UNREC_RHSFUNC_ERR: return FailureKind::kRhs;
+      case ARK_TOO_MUCH_WORK: return FailureKind::kTooMuchWork;
+      case ARK_TOO_MUCH_ACC: return FailureKind::kTooMuchAccuracy;
+      case ARK_ERR_FAILURE: return FailureKind::kErrorTest;
+      default: return FailureKind::kOther;
     }
   }
 
@@ -146,11 +147,6 @@ class ArkodeStepper final : public SundialsStepper {
 
   static constexpr double kRhsShrink = 0.25;  // as DOP853 after a failure of f
 
-  static int Rhs(double t, N_Vector y, N_Vector ydot, void* user_data) {
-    auto* self = static_cast<ArkodeStepper*>(user_data);
-    return self->rhs_(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
-  }
-
   double stop_ = 0.0;
   bool hooked_ = false;              // Accepted() is installed (after the first restart)
   double t_accepted_ = 0.0;          // restart point: the last output instant, or once
@@ -162,9 +158,7 @@ class ArkodeStepper final : public SundialsStepper {
 
 std::unique_ptr<Stepper> MakeArkodeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                            const IntegratorOptions& options, std::string* error) {
-  auto stepper = std::make_unique<ArkodeStepper>(rhs);
-  if (!stepper->Init(t0, y0, stop, options, error)) return nullptr;
-  return stepper;
+  return MakeSundialsStepper<ArkodeStepper>(rhs, t0, y0, stop, options, error);
 }
 
 }  // namespace kanesim::sim::detail

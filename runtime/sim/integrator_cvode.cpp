@@ -15,15 +15,34 @@
 namespace kanesim::sim::detail {
 namespace {
 
-constexpr ModuleSetters kCvode{"CVODE",           CVodeSStolerances,   CVodeSetUserData, CVodeSetStopTime,
-                               CVodeSetMaxNumSteps, CVodeSetMaxStep,     CVodeSetInitStep};
+constexpr ModuleFunctions kCvode{
+    .module = "CVODE",
+    .err_handler = CVodeSetErrHandlerFn,
+    .tolerances = CVodeSStolerances,
+    .user_data = CVodeSetUserData,
+    .stop_time = CVodeSetStopTime,
+    .max_num_steps = CVodeSetMaxNumSteps,
+    .max_step = CVodeSetMaxStep,
+    .init_step = CVodeSetInitStep,
+    .current_time = CVodeGetCurrentTime,
+    .dky = CVodeGetDky,
+    .free = CVodeFree,
+    .flag_name = CVodeGetReturnFlagName,
+    .num_steps = CVodeGetNumSteps,
+    .num_rhs_evals = CVodeGetNumRhsEvals,
+    .num_err_test_fails = CVodeGetNumErrTestFails,
+    .last_step = CVodeGetLastStep,
+    .num_lin_setups = CVodeGetNumLinSolvSetups,
+    .num_nonlin_iters = CVodeGetNumNonlinSolvIters,
+    .num_nonlin_conv_fails = CVodeGetNumNonlinSolvConvFails,
+    .last_order = CVodeGetLastOrder,
+    .num_jac_evals = CVodeGetNumJacEvals,
+    .num_lin_rhs_evals = CVodeGetNumLinRhsEvals
+};
 
 class CvodeStepper final : public SundialsStepper {
  public:
-  explicit CvodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs) {}
-  ~CvodeStepper() override {
-    if (mem_) CVodeFree(&mem_);
-  }
+  explicit CvodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs, kCvode) {}
 
   bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
     const int n = rhs_.Size();
@@ -31,10 +50,9 @@ class CvodeStepper final : public SundialsStepper {
     if (!MakeState(y0, /*with_yp=*/false, error)) return false;
     mem_ = CVodeCreate(bdf ? CV_BDF : CV_ADAMS, s_.ctx);
     if (!mem_) return Fail(error, "CVodeCreate failed");
-    if (CVodeSetErrHandlerFn(mem_, CaptureSundialsMessage, &messages_) != CV_SUCCESS ||
-        CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
+    if (CaptureMessages() != CV_SUCCESS || CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE setup failed", messages_.last));
-    if (!SetCommonOptions(kCvode, stop, options, error)) return false;
+    if (!SetCommonOptions(stop, options, error)) return false;
     if (bdf) {
       s_.A = SUNDenseMatrix(n, n, s_.ctx);
       s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
@@ -51,63 +69,24 @@ class CvodeStepper final : public SundialsStepper {
   int Advance(double tout, double* y) override {
     double tret = 0.0;
     if (!rhs_.ChecksSteps()) return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
-    // One step at a time, each checked (OdeSystem::StepAccepted), then the output instant
-    // from CVODE's interpolant, as in CV_NORMAL mode.
-    for (;;) {
-      if (stepped_ && CurrentTime() >= tout) return CopyOut(CVodeGetDky(mem_, tout, 0, s_.y), y);
-      const int flag = CVode(mem_, tout, s_.y, &tret, CV_ONE_STEP);
-      if (flag < 0) return flag;
-      stepped_ = true;
-      if (rhs_.StepAccepted(tret, N_VGetArrayPointer(s_.y)) != 0) return kStepCheckFailed;
-    }
+    return AdvanceCheckedSteps(tout, y, [&](double* t) { return CVode(mem_, tout, s_.y, t, CV_ONE_STEP); });
   }
 
-  double CurrentTime() const override {
-    double t = 0.0;
-    CVodeGetCurrentTime(mem_, &t);
-    return t;
-  }
-
-  IntegratorStats Stats() const override {
-    IntegratorStats st;
-    CVodeGetNumSteps(mem_, &st.steps);
-    CVodeGetNumRhsEvals(mem_, &st.rhs_evals);
-    CVodeGetNumLinSolvSetups(mem_, &st.lin_setups);
-    CVodeGetNumErrTestFails(mem_, &st.err_test_fails);
-    CVodeGetNumNonlinSolvIters(mem_, &st.nonlin_iters);
-    CVodeGetNumNonlinSolvConvFails(mem_, &st.nonlin_conv_fails);
-    CVodeGetLastStep(mem_, &st.last_step);
-    CVodeGetLastOrder(mem_, &st.last_order);
-    if (s_.ls) {
-      CVodeGetNumJacEvals(mem_, &st.jac_evals);
-      CVodeGetNumLinRhsEvals(mem_, &st.rhs_evals_jac);
-    }
-    return st;
-  }
-
-  StepFailure Explain(int flag) const override {
-    FailureKind kind = FailureKind::kOther;
+ private:
+  FailureKind Kind(int flag) const override {
     switch (flag) {
       case CV_RHSFUNC_FAIL:
       case CV_FIRST_RHSFUNC_ERR:
       case CV_REPTD_RHSFUNC_ERR:
-      case CV_UNREC_RHSFUNC_ERR:
-      case kStepCheckFailed: kind = FailureKind::kRhs; break;
-      case CV_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
-      case CV_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
-      case CV_ERR_FAILURE: kind = FailureKind::kErrorTest; break;
-      case CV_CONV_FAILURE: kind = FailureKind::kConvergence; break;
+      case CV_UNREC_RHSFUNC_ERR: return FailureKind::kRhs;
+      case CV_TOO_MUCH_WORK: return FailureKind::kTooMuchWork;
+      case CV_TOO_MUCH_ACC: return FailureKind::kTooMuchAccuracy;
+      case CV_ERR_FAILURE: return FailureKind::kErrorTest;
+      case CV_CONV_FAILURE: return FailureKind::kConvergence;
       case CV_LSETUP_FAIL:
-      case CV_LSOLVE_FAIL: kind = FailureKind::kLinearSolver; break;
-      default: break;
+      case CV_LSOLVE_FAIL: return FailureKind::kLinearSolver;
+      default: return FailureKind::kOther;
     }
-    return Describe(kind, "CVODE", CVodeGetReturnFlagName, flag);
-  }
-
- private:
-  static int Rhs(double t, N_Vector y, N_Vector ydot, void* user_data) {
-    auto* self = static_cast<CvodeStepper*>(user_data);
-    return self->rhs_(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   }
 };
 
@@ -115,9 +94,7 @@ class CvodeStepper final : public SundialsStepper {
 
 std::unique_ptr<Stepper> MakeCvodeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                           const IntegratorOptions& options, std::string* error) {
-  auto stepper = std::make_unique<CvodeStepper>(rhs);
-  if (!stepper->Init(t0, y0, stop, options, error)) return nullptr;
-  return stepper;
+  return MakeSundialsStepper<CvodeStepper>(rhs, t0, y0, stop, options, error);
 }
 
 }  // namespace kanesim::sim::detail

@@ -27,14 +27,35 @@
 namespace kanesim::sim::detail {
 namespace {
 
-constexpr ModuleSetters kIda{"IDA",           IDASStolerances, IDASetUserData, IDASetStopTime,
-                             IDASetMaxNumSteps, IDASetMaxStep,   IDASetInitStep};
+constexpr ModuleFunctions kIda{
+    .module = "IDA",
+    .err_handler = IDASetErrHandlerFn,
+    .tolerances = IDASStolerances,
+    .user_data = IDASetUserData,
+    .stop_time = IDASetStopTime,
+    .max_num_steps = IDASetMaxNumSteps,
+    .max_step = IDASetMaxStep,
+    .init_step = IDASetInitStep,
+    .current_time = IDAGetCurrentTime,
+    .dky = IDAGetDky,
+    .free = IDAFree,
+    .flag_name = IDAGetReturnFlagName,
+    .num_steps = IDAGetNumSteps,
+    .num_rhs_evals = IDAGetNumResEvals,
+    .num_err_test_fails = IDAGetNumErrTestFails,
+    .last_step = IDAGetLastStep,
+    .num_lin_setups = IDAGetNumLinSolvSetups,
+    .num_nonlin_iters = IDAGetNumNonlinSolvIters,
+    .num_nonlin_conv_fails = IDAGetNumNonlinSolvConvFails,
+    .last_order = IDAGetLastOrder,
+    .num_jac_evals = IDAGetNumJacEvals,
+    .num_lin_rhs_evals = IDAGetNumLinResEvals
+};
 
 class IdaStepper final : public SundialsStepper {
  public:
-  explicit IdaStepper(GuardedRhs& rhs) : SundialsStepper(rhs) {}
+  explicit IdaStepper(GuardedRhs& rhs) : SundialsStepper(rhs, kIda) {}
   ~IdaStepper() override {
-    if (mem_) IDAFree(&mem_);
     if (ewt_) N_VDestroy(ewt_);
   }
 
@@ -46,10 +67,9 @@ class IdaStepper final : public SundialsStepper {
     if (rhs_(t0, y, N_VGetArrayPointer(s_.yp)) != 0) return Fail(error, rhs_.cause);
     mem_ = IDACreate(s_.ctx);
     if (!mem_) return Fail(error, "IDACreate failed");
-    if (IDASetErrHandlerFn(mem_, CaptureSundialsMessage, &messages_) != IDA_SUCCESS ||
-        IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS)
+    if (CaptureMessages() != IDA_SUCCESS || IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS)
       return Fail(error, WithDetail("IDA setup failed", messages_.last));
-    if (!SetCommonOptions(kIda, stop, options, error)) return false;
+    if (!SetCommonOptions(stop, options, error)) return false;
     BuildPattern(options.coupling);
     const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
     klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
@@ -74,64 +94,35 @@ class IdaStepper final : public SundialsStepper {
   int Advance(double tout, double* y) override {
     double tret = 0.0;
     if (!rhs_.ChecksSteps()) return CopyOut(IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL), y);
-    // One step at a time, each checked (OdeSystem::StepAccepted), then the output instant
-    // from IDA's interpolant, as in IDA_NORMAL mode.
-    for (;;) {
-      if (stepped_ && CurrentTime() >= tout) return CopyOut(IDAGetDky(mem_, tout, 0, s_.y), y);
-      const int flag = IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_ONE_STEP);
-      if (flag < 0) return flag;
-      stepped_ = true;
-      if (rhs_.StepAccepted(tret, N_VGetArrayPointer(s_.y)) != 0) return kStepCheckFailed;
-    }
-  }
-
-  double CurrentTime() const override {
-    double t = 0.0;
-    IDAGetCurrentTime(mem_, &t);
-    return t;
+    return AdvanceCheckedSteps(tout, y, [&](double* t) { return IDASolve(mem_, tout, t, s_.y, s_.yp, IDA_ONE_STEP); });
   }
 
   IntegratorStats Stats() const override {
-    IntegratorStats st;
-    long nje = 0, nreLS = 0;
-    IDAGetNumSteps(mem_, &st.steps);
-    IDAGetNumResEvals(mem_, &st.rhs_evals);
-    IDAGetNumLinSolvSetups(mem_, &st.lin_setups);
-    IDAGetNumErrTestFails(mem_, &st.err_test_fails);
-    IDAGetNumNonlinSolvIters(mem_, &st.nonlin_iters);
-    IDAGetNumNonlinSolvConvFails(mem_, &st.nonlin_conv_fails);
-    IDAGetNumJacEvals(mem_, &nje);
-    IDAGetNumLinResEvals(mem_, &nreLS);
-    IDAGetLastStep(mem_, &st.last_step);
-    IDAGetLastOrder(mem_, &st.last_order);
-    st.jac_evals = nje;
-    st.rhs_evals_jac = nreLS + jac_rhs_evals_;
+    IntegratorStats st = SundialsStepper::Stats();
+    st.rhs_evals_jac += jac_rhs_evals_;  // our own difference quotients (FormJacobian)
     st.linear_solver = klu_ ? "KLU" : "dense LU";
     st.jac_nonzeros = nnz_;
     return st;
   }
 
-  StepFailure Explain(int flag) const override {
-    FailureKind kind = FailureKind::kOther;
+ private:
+  FailureKind Kind(int flag) const override {
     switch (flag) {
       case IDA_RES_FAIL:
       case IDA_REP_RES_ERR:
-      case IDA_FIRST_RES_FAIL:
-      case kStepCheckFailed: kind = FailureKind::kRhs; break;
-      case IDA_TOO_MUCH_WORK: kind = FailureKind::kTooMuchWork; break;
-      case IDA_TOO_MUCH_ACC: kind = FailureKind::kTooMuchAccuracy; break;
-      case IDA_ERR_FAIL: kind = FailureKind::kErrorTest; break;
-      case IDA_CONV_FAIL: kind = FailureKind::kConvergence; break;
+      case IDA_FIRST_RES_FAIL: return FailureKind::kRhs;
+      case IDA_TOO_MUCH_WORK: return FailureKind::kTooMuchWork;
+      case IDA_TOO_MUCH_ACC: return FailureKind::kTooMuchAccuracy;
+      case IDA_ERR_FAIL: return FailureKind::kErrorTest;
+      case IDA_CONV_FAIL: return FailureKind::kConvergence;
       case IDA_LSETUP_FAIL:
-      case IDA_LSOLVE_FAIL: kind = FailureKind::kLinearSolver; break;
-      default: break;
+      case IDA_LSOLVE_FAIL: return FailureKind::kLinearSolver;
+      default: return FailureKind::kOther;
     }
-    return Describe(kind, "IDA", IDAGetReturnFlagName, flag);
   }
 
- private:
   static int Residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void* user_data) {
-    auto* self = static_cast<IdaStepper*>(user_data);
+    auto* self = static_cast<IdaStepper*>(static_cast<SundialsStepper*>(user_data));
     double* r = N_VGetArrayPointer(rr);
     int status = self->rhs_(t, N_VGetArrayPointer(yy), r);  // r = f(t, y)
     if (status != 0) return status;
@@ -175,7 +166,7 @@ class IdaStepper final : public SundialsStepper {
   // J = cj I - df/dy by grouped difference quotients; f(t, y) = y' - F(t, y, y').
   static int Jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J, void* user_data,
                       N_Vector, N_Vector, N_Vector) {
-    auto* self = static_cast<IdaStepper*>(user_data);
+    auto* self = static_cast<IdaStepper*>(static_cast<SundialsStepper*>(user_data));
     return self->FormJacobian(t, cj, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), N_VGetArrayPointer(rr), J);
   }
 
@@ -240,9 +231,7 @@ class IdaStepper final : public SundialsStepper {
 
 std::unique_ptr<Stepper> MakeIdaStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                         const IntegratorOptions& options, std::string* error) {
-  auto stepper = std::make_unique<IdaStepper>(rhs);
-  if (!stepper->Init(t0, y0, stop, options, error)) return nullptr;
-  return stepper;
+  return MakeSundialsStepper<IdaStepper>(rhs, t0, y0, stop, options, error);
 }
 
 }  // namespace kanesim::sim::detail

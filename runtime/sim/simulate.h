@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/integrator.h"
 

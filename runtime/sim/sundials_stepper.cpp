@@ -17,8 +17,8 @@ bool SundialsStepper::MakeState(const double* y0, bool with_yp, std::string* err
   return true;
 }
 
-bool SundialsStepper::SetCommonOptions(const ModuleSetters& m, double stop, const IntegratorOptions& options,
-                                       std::string* error) {
+bool SundialsStepper::SetCommonOptions(double stop, const IntegratorOptions& options, std::string* error) {
+  const ModuleFunctions& m = module_;
   const std::string module = m.module;
   if (m.tolerances(mem_, options.rtol, options.atol) != 0 || m.user_data(mem_, this) != 0 ||
       m.stop_time(mem_, stop) != 0 || m.max_num_steps(mem_, options.max_steps) != 0)
@@ -37,10 +37,31 @@ int SundialsStepper::CopyOut(int flag, double* y) const {
   return flag;
 }
 
-StepFailure SundialsStepper::Describe(FailureKind kind, const char* module, char* (*flag_name)(long int),
-                                      int flag) const {
+double SundialsStepper::CurrentTime() const {
+  double t = 0.0;
+  module_.current_time(mem_, &t);
+  return t;
+}
+
+IntegratorStats SundialsStepper::Stats() const {
+  const ModuleFunctions& m = module_;
+  IntegratorStats st;
+  m.num_steps(mem_, &st.steps);
+  m.num_rhs_evals(mem_, &st.rhs_evals);
+  m.num_err_test_fails(mem_, &st.err_test_fails);
+  m.last_step(mem_, &st.last_step);
+  if (m.num_lin_setups) m.num_lin_setups(mem_, &st.lin_setups);
+  if (m.num_nonlin_iters) m.num_nonlin_iters(mem_, &st.nonlin_iters);
+  if (m.num_nonlin_conv_fails) m.num_nonlin_conv_fails(mem_, &st.nonlin_conv_fails);
+  if (m.last_order) m.last_order(mem_, &st.last_order);
+  if (s_.ls && m.num_jac_evals) m.num_jac_evals(mem_, &st.jac_evals);
+  if (s_.ls && m.num_lin_rhs_evals) m.num_lin_rhs_evals(mem_, &st.rhs_evals_jac);
+  return st;
+}
+
+StepFailure SundialsStepper::Explain(int flag) const {
   const std::string& d = messages_.last;
-  switch (kind) {
+  switch (flag == kStepCheckFailed ? FailureKind::kRhs : Kind(flag)) {
     case FailureKind::kRhs: return {true, WithDetail("the right-hand side failed", d)};
     case FailureKind::kTooMuchWork: return {false, WithDetail("too much work (step limit reached between output instants)", d)};
     case FailureKind::kTooMuchAccuracy: return {false, WithDetail("too much accuracy requested", d)};
@@ -49,10 +70,15 @@ StepFailure SundialsStepper::Describe(FailureKind kind, const char* module, char
     case FailureKind::kLinearSolver: return {false, WithDetail("the linear solver failed (singular Newton matrix)", d)};
     case FailureKind::kOther: break;
   }
-  char* name = flag_name(flag);  // malloc'd by SUNDIALS
-  std::string what = std::string(module) + " failed: " + (name != nullptr ? name : "unknown flag");
+  char* name = module_.flag_name(flag);  // malloc'd by SUNDIALS
+  std::string what = std::string(module_.module) + " failed: " + (name != nullptr ? name : "unknown flag");
   free(name);
   return {false, WithDetail(what, d)};
+}
+
+int SundialsStepper::Rhs(double t, N_Vector y, N_Vector ydot, void* user_data) {
+  auto* self = static_cast<SundialsStepper*>(user_data);
+  return self->rhs_(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
 }
 
 }  // namespace kanesim::sim::detail

@@ -7,6 +7,7 @@
 #include <sundials/sundials_matrix.h>
 #include <sundials/sundials_nonlinearsolver.h>
 
+#include <memory>
 #include <string>
 
 #include "runtime/sim/stepper.h"
@@ -45,16 +46,35 @@ inline std::string WithDetail(const std::string& what, const std::string& detail
   return detail.empty() ? what : what + " [" + detail + "]";
 }
 
-// The optional inputs every SUNDIALS integrator module has, each under its own prefix
-// (CVodeSet..., ERKStepSet..., IDASet...), with the same signatures.
-struct ModuleSetters {
+// The functions every SUNDIALS integrator module has, each under its own prefix
+// (CVodeSet..., ERKStepSet..., IDASet...), with the same signatures. The counters of an
+// implicit method (Newton or fixed-point iteration, linear solver) are null for ERKStep.
+struct ModuleFunctions {
   const char* module;  // "CVODE", "ARKODE", "IDA": named in setup failures
+  // Optional inputs.
+  int (*err_handler)(void* mem, void (*handler)(int, const char*, const char*, char*, void*), void* data);
   int (*tolerances)(void* mem, double rtol, double atol);
   int (*user_data)(void* mem, void* data);
   int (*stop_time)(void* mem, double t);
   int (*max_num_steps)(void* mem, long steps);
   int (*max_step)(void* mem, double h);
   int (*init_step)(void* mem, double h);
+  // The solution and the module's memory.
+  int (*current_time)(void* mem, double* t);
+  int (*dky)(void* mem, double t, int k, N_Vector dky);  // k-th derivative of the interpolant at t
+  void (*free)(void** mem);
+  char* (*flag_name)(long int flag);  // malloc'd, freed by the caller
+  // Counters (IntegratorStats).
+  int (*num_steps)(void* mem, long* n);
+  int (*num_rhs_evals)(void* mem, long* n);  // of f, or of the residual (IDA)
+  int (*num_err_test_fails)(void* mem, long* n);
+  int (*last_step)(void* mem, double* h);
+  int (*num_lin_setups)(void* mem, long* n);
+  int (*num_nonlin_iters)(void* mem, long* n);
+  int (*num_nonlin_conv_fails)(void* mem, long* n);
+  int (*last_order)(void* mem, int* order);
+  int (*num_jac_evals)(void* mem, long* n);
+  int (*num_lin_rhs_evals)(void* mem, long* n);  // of f for difference-quotient Jacobians
 };
 
 // Why an integrator module gave up, in the terms shared by CVODE, ARKODE and IDA; each
@@ -73,30 +93,69 @@ enum class FailureKind {
 // messages, the guarded right-hand side, and the steps they all take alike.
 class SundialsStepper : public Stepper {
  public:
-  explicit SundialsStepper(GuardedRhs& rhs) : rhs_(rhs) {}
+  SundialsStepper(GuardedRhs& rhs, const ModuleFunctions& module) : rhs_(rhs), module_(module) {}
+  ~SundialsStepper() override {
+    if (mem_) module_.free(&mem_);
+  }
+
+  double CurrentTime() const override;
+  // The counters every module has, and an implicit method's when it has them.
+  IntegratorStats Stats() const override;
+  StepFailure Explain(int flag) const override;
 
  protected:
   // s_.y (and s_.yp when with_yp) of the right-hand side's size, y = y0. False, with *error.
   bool MakeState(const double* y0, bool with_yp, std::string* error);
+  // SUNDIALS' messages go to messages_ (the module's return flag).
+  int CaptureMessages() { return module_.err_handler(mem_, CaptureSundialsMessage, &messages_); }
   // Sets the user data (this), tolerances, stop time and step limits of `options` on mem_.
   // Call after the module's own Init. False, with *error.
-  bool SetCommonOptions(const ModuleSetters& m, double stop, const IntegratorOptions& options, std::string* error);
+  bool SetCommonOptions(double stop, const IntegratorOptions& options, std::string* error);
   // y := s_.y when flag >= 0 (a successful return of the module's solve); returns flag.
   int CopyOut(int flag, double* y) const;
-  // The user's message for a failure of this kind; `flag_name` names kOther.
-  // `flag_name` is the module's *GetReturnFlagName, whose string the caller frees; it is
-  // called only for a flag outside the kinds above.
-  StepFailure Describe(FailureKind kind, const char* module, char* (*flag_name)(long int), int flag) const;
+  // One step at a time, each checked (OdeSystem::StepAccepted), then the output instant
+  // from the module's interpolant, as in its NORMAL mode. one_step(&tret) takes one step
+  // toward tout into s_.y (the module's ONE_STEP mode) and returns its flag; StepChecked
+  // sees each step that passed the check.
+  template <class OneStep>
+  int AdvanceCheckedSteps(double tout, double* y, OneStep one_step) {
+    double tret = 0.0;
+    for (;;) {
+      if (stepped_ && CurrentTime() >= tout) return CopyOut(module_.dky(mem_, tout, 0, s_.y), y);
+      const int flag = one_step(&tret);
+      if (flag < 0) return flag;
+      stepped_ = true;
+      const double* ys = N_VGetArrayPointer(s_.y);
+      if (rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
+      StepChecked(tret, ys);
+    }
+  }
+  virtual void StepChecked(double /*t*/, const double* /*y*/) {}
+  // The module's return flag as one of the shared kinds (kOther for the rest).
+  virtual FailureKind Kind(int flag) const = 0;
   static bool Fail(std::string* error, const std::string& what) {
     *error = what;
     return false;
   }
+  // f(t, y) for CVODE and ARKODE (user data: this).
+  static int Rhs(double t, N_Vector y, N_Vector ydot, void* user_data);
 
   GuardedRhs& rhs_;
+  const ModuleFunctions& module_;
   SundialsObjects s_;
   SundialsMessages messages_;
-  void* mem_ = nullptr;  // the module's memory, freed by the derived class's destructor
+  void* mem_ = nullptr;  // the module's memory, freed by module_.free
   bool stepped_ = false;  // one step taken in one-step mode (checked steps): an interpolant exists
 };
+
+// A stepper of type S (constructed from rhs), initialized by its Init; null, with *error,
+// when that fails.
+template <class S>
+std::unique_ptr<Stepper> MakeSundialsStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                             const IntegratorOptions& options, std::string* error) {
+  auto stepper = std::make_unique<S>(rhs);
+  if (!stepper->Init(t0, y0, stop, options, error)) return nullptr;
+  return stepper;
+}
 
 }  // namespace kanesim::sim::detail

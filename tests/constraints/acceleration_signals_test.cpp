@@ -1,4 +1,4 @@
-// Acceleration signals (joint `j.a`, body `b.a[k]`, `b.alpha[k]`; runtime/signals.cpp)
+// Acceleration signals (joint `j.a`, body `b.a[k]`, `b.alpha[k]`; runtime/engine/signals.cpp)
 // against closed forms and against a second method.
 //
 // Physical pendulum (tests/runtime/builders.h Pendulum): a thin rod of mass m and length L

@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <new>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "tests/alloc_counter.h"
 #include "tests/constraints/load_util.h"
 #include "tests/runtime/builders.h"

@@ -1,4 +1,4 @@
-// The branch monitor (runtime/branch_monitor.cpp, issue 20) on constructed states of the
+// The branch monitor (runtime/engine/branch_monitor.cpp, issue 20) on constructed states of the
 // equal-link parallelogram (tests/stress/models/parallelogram.mech with a = b = 0.6): at
 // crank angle pi all four links are in line and three assembly branches meet, the
 // parallelogram (rocker angle = crank angle, coupler relative angle = -crank angle, all
@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 
 namespace kanesim::test {

@@ -1,4 +1,4 @@
-// Rolling contacts (runtime/contacts.*) against closed forms and known behaviour.
+// Rolling contacts (runtime/constraints/contacts.*) against closed forms and known behaviour.
 //
 // Sphere on an incline of angle alpha (examples/sphere_incline.mech), solid sphere
 // I = 2/5 m r^2, rolling without slip (Kane & Levinson 1985; any dynamics text):
@@ -13,7 +13,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 
 namespace kanesim::test {

@@ -1,4 +1,4 @@
-// Coulomb friction that follows a joint's normal force (runtime/friction.cpp).
+// Coulomb friction that follows a joint's normal force (runtime/kane/friction.cpp).
 //
 // A bead (mass m) slides in a tube that turns at constant rate w about the vertical,
 // without gravity. In the tube's frame the radial equation is m r'' = m w^2 r + Q_f and
@@ -13,7 +13,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 #include "tests/runtime/builders.h"
 

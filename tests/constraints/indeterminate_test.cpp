@@ -23,7 +23,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 
 namespace kanesim::test {

@@ -1,4 +1,4 @@
-// Closed loops (runtime/constraints.*, runtime/compile/loops.cpp) against closed forms:
+// Closed loops (runtime/constraints/constraints.*, runtime/compile/loops.cpp) against closed forms:
 //
 // Four-bar (examples/fourbar.mech): crank a from O2 = 0 at angle theta, coupler b,
 // rocker c from O4 = (d, 0). With A = a (cos theta, sin theta), the rocker tip B lies on
@@ -19,10 +19,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include "runtime/constraints.h"
-#include "runtime/engine.h"
-#include "runtime/kinematics.h"
-#include "runtime/program.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/engine/engine.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 
 namespace kanesim::test {

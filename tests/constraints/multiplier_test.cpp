@@ -1,6 +1,6 @@
-// The multiplier form of the constrained equations (runtime/kane_sparse.cpp eqs. 3-4:
+// The multiplier form of the constrained equations (runtime/kane/kane_sparse.cpp eqs. 3-4:
 // a multiplier per independent constraint row in the sparse K-vector system, KLU; the
-// projection in the kinetic metric, runtime/constraints.cpp ProjectStateSparse) against
+// projection in the kinetic metric, runtime/constraints/constraints.cpp ProjectStateSparse) against
 // the reduced form (dependent speeds eliminated, Lesser eqs. 48-51), which the other
 // constraint tests hold against closed forms. Two different algorithms: the same
 // accelerations on the manifold, the same trajectories and constraint forces to the
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 
 namespace kanesim::test {
@@ -157,7 +157,7 @@ TEST(MultiplierForm, RebindKeepsTheSparsePattern) {
 }
 
 // The reduced form's two ways to Kane's equations on the constrained basis
-// (runtime/constraints.cpp (10)-(12)): the composite mass matrix reduced by beta, and the
+// (runtime/constraints/constraints.cpp (10)-(12)): the composite mass matrix reduced by beta, and the
 // bodies' partial twists from one velocity pass per degree of freedom. Same scene, same
 // state (off the manifold, so the projection works too), both projection modes: the
 // accelerations agree to round-off. With the multiplier-form comparisons above (which see

@@ -1,4 +1,4 @@
-// Constraint forces on request (runtime/reactions.*) against closed forms.
+// Constraint forces on request (runtime/constraints/reactions.*) against closed forms.
 //
 // Physical pendulum (tests/runtime/builders.h Pendulum): a thin rod of mass m and length
 // L hanging along -y of its frame from a revolute joint about z at the origin; mass
@@ -15,7 +15,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 #include "tests/runtime/builders.h"
 

@@ -19,10 +19,10 @@
 #include <sstream>
 #include <tuple>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/flat/param_eval.h"
-#include "runtime/program.h"
-#include "runtime/tape.h"
+#include "runtime/program/program.h"
+#include "runtime/program/tape.h"
 #include "tests/elab/elab_text.h"
 
 namespace kanesim::lang::test {

@@ -32,7 +32,7 @@
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
 #include "lang/source.h"
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/pipeline/pipeline.h"
 #include "stdlib/stdlib.h"
 #include "tests/lang/mesh_fixtures.h"

@@ -25,7 +25,7 @@
 #include <complex>
 
 #include "runtime/linearize/linearize.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 
 namespace kanesim::test {

@@ -7,8 +7,8 @@
 #include <new>
 #include <random>
 
-#include "runtime/engine.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/program/program.h"
 #include "tests/alloc_counter.h"
 #include "tests/runtime/builders.h"
 #include "tests/runtime/random_state.h"

@@ -207,7 +207,7 @@ inline flat::Mechanism RandomTree(std::mt19937& rng, const TreeOptions& opt) {
   return b.m;
 }
 
-// A random planar tree (runtime/kane_tree.cpp, "planar trees"): `bodies` bodies, each on a
+// A random planar tree (runtime/kane/kane_tree.cpp, "planar trees"): `bodies` bodies, each on a
 // revolute joint to a random earlier body or to the world (several roots), whose axis a_i
 // (random in the joint's frame, which is the body's frame) the mount on the parent turns
 // to +-(the parent's own axis), or +-n for a root, then a random turn about a_i; random

@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 #include <random>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "tests/runtime/builders.h"
 
 namespace kanesim {

@@ -6,8 +6,8 @@
 #include <random>
 
 #include "runtime/compile/compile_internal.h"
-#include "runtime/engine.h"
-#include "runtime/tape.h"
+#include "runtime/engine/engine.h"
+#include "runtime/program/tape.h"
 #include "tests/runtime/builders.h"
 
 namespace kanesim {

@@ -5,9 +5,9 @@
 
 #include <random>
 
-#include "runtime/engine.h"
-#include "runtime/kinematics.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/program/program.h"
 #include "tests/runtime/builders.h"
 #include "tests/runtime/random_state.h"
 

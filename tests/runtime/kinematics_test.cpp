@@ -7,10 +7,10 @@
 #include <memory>
 #include <random>
 
-#include "runtime/engine.h"
-#include "runtime/kane_tree.h"
-#include "runtime/kinematics.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/kane/kane_tree.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/program/program.h"
 #include "tests/runtime/builders.h"
 #include "tests/runtime/random_state.h"
 

@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "tests/runtime/builders.h"
 
 namespace kanesim {

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <random>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::test {
 

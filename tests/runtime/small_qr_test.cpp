@@ -1,4 +1,4 @@
-// rt::SmallQR (runtime/small_qr.h) against the definition: Q R reproduces A, Q is
+// rt::SmallQR (runtime/program/small_qr.h) against the definition: Q R reproduces A, Q is
 // orthogonal, R is upper triangular, and the least-squares solve agrees with Eigen's
 // HouseholderQR, on random tall and square matrices, with a zero column thrown in.
 #include <gtest/gtest.h>
@@ -6,7 +6,7 @@
 #include <Eigen/QR>
 #include <random>
 
-#include "runtime/small_qr.h"
+#include "runtime/program/small_qr.h"
 
 namespace kanesim::rt {
 namespace {

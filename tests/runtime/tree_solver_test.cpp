@@ -1,4 +1,4 @@
-// The recursive path (runtime/kane_tree.cpp) against the dense path on random trees of
+// The recursive path (runtime/kane/kane_tree.cpp) against the dense path on random trees of
 // every joint type, with prescribed coordinates and every force element; its planar form
 // against the dense path and the spatial recursion on random planar trees; energy of a
 // chain integrated on it; and its right-hand side allocates nothing. Its own binary,
@@ -11,10 +11,10 @@
 #include <new>
 #include <random>
 
-#include "runtime/engine.h"
-#include "runtime/kane.h"
-#include "runtime/kane_tree.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/kane/kane.h"
+#include "runtime/kane/kane_tree.h"
+#include "runtime/program/program.h"
 #include "runtime/sim/simulate.h"
 #include "tests/alloc_counter.h"
 #include "tests/runtime/builders.h"

@@ -15,8 +15,8 @@
 #include <cstdio>
 #include <set>
 
-#include "runtime/engine.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
 
 namespace kanesim::test {

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/simulate.h"

@@ -1,6 +1,6 @@
 // A rolling disk falling over (models/disk_fall.mech): upright, at v = 0 with a small lean
 // rate it falls to flat in about 1 s. At flat its axis is along the plane normal, the
-// lowest rim point (the contact point, runtime/contacts.cpp eq. 2) is undefined, and a
+// lowest rim point (the contact point, runtime/constraints/contacts.cpp eq. 2) is undefined, and a
 // step through flat would move it to the opposite side of the rim and carry on as if the
 // disk had passed through the ground (what the runtime did before: the lean bounced back
 // with energy "conserved"). What must hold:

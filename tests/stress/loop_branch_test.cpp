@@ -14,7 +14,7 @@
 //  - or exit code 2 with the time and the cause (naming the loop when the loop is the
 //    cause), and every row written before it on the parallelogram.
 // Never exit code 0 off the branch: that is what the branch monitor
-// (runtime/branch_monitor.cpp) and the singular-configuration checks guarantee.
+// (runtime/engine/branch_monitor.cpp) and the singular-configuration checks guarantee.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 // right-hand side never calls these). None allocates.
 #pragma once
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

@@ -2,8 +2,8 @@
 // (the resultant and moment of Lesser eq. 23), and joint generalized forces Q.
 #include <cmath>
 
-#include "runtime/kane.h"
-#include "runtime/kinematics.h"
+#include "runtime/kane/kane.h"
+#include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {
 

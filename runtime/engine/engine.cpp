@@ -1,13 +1,13 @@
 // The right-hand side as a list of named stages (MuJoCo's mj_forward shape), and the
 // small public accessors of engine.h.
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 
 #include <cmath>
 
-#include "runtime/constraints.h"
-#include "runtime/kane.h"
-#include "runtime/kinematics.h"
-#include "runtime/program.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/kane/kane.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

@@ -30,10 +30,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/constraints.h"
-#include "runtime/engine.h"
-#include "runtime/kinematics.h"
-#include "runtime/program.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/engine/engine.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

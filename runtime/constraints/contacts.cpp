@@ -1,4 +1,4 @@
-// Rolling contacts (runtime/contacts.h). Body B carries the contact frame F (origin C,
+// Rolling contacts (runtime/constraints/contacts.h). Body B carries the contact frame F (origin C,
 // rotation R_WF, angular velocity w); the plane has unit normal n and point p0.
 //
 // Contact point P:
@@ -16,11 +16,11 @@
 // (seed 000 eq. 11.17), o the body origin, r = P - o:
 //   c = ddot . v_Pm + d . (a_o + alpha x r + w x (v_Pg - v_o)),                      (6)
 //   ddot = n x (w x e_W) for the knife's l, 0 otherwise.
-#include "runtime/contacts.h"
+#include "runtime/constraints/contacts.h"
 
 #include <cmath>
 
-#include "runtime/kinematics.h"
+#include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {
 

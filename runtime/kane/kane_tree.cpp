@@ -31,7 +31,7 @@
 // leaf-first order (Schur complements), so they are positive definite exactly when M is;
 // a pivot below kSingularPivot of the largest diagonal entry means M is singular to
 // working precision, the same test as the dense path's Cholesky.
-#include "runtime/kane_tree.h"
+#include "runtime/kane/kane_tree.h"
 
 #include <algorithm>
 #include <cstdio>

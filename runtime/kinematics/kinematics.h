@@ -5,7 +5,7 @@
 // program.h names. None allocates.
 #pragma once
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

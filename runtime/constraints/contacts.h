@@ -5,7 +5,7 @@
 // are not integrable and are never turned into position constraints.
 #pragma once
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

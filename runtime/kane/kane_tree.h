@@ -1,6 +1,6 @@
 // Recursive path: Kane's equations of an open tree solved by eliminating the K-vector
 // system body by body, leaves to root, then substituting back root to leaves
-// (runtime/kane_tree.cpp). O(K) with 6x6 and 6 x nf blocks, no general sparse LU; a
+// (runtime/kane/kane_tree.cpp). O(K) with 6x6 and 6 x nf blocks, no general sparse LU; a
 // tree of revolute joints about parallel axes (a planar mechanism) with 3x3 blocks.
 // Trees only: closed loops and rolling contacts keep the reduced dense path.
 #pragma once
@@ -8,7 +8,7 @@
 #include <array>
 #include <vector>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

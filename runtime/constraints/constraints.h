@@ -10,7 +10,7 @@
 // None allocates.
 #pragma once
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

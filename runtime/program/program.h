@@ -18,10 +18,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/compile_options.h"
+#include "runtime/program/compile_options.h"
 #include "runtime/flat/mechanism.h"
-#include "runtime/small_qr.h"
-#include "runtime/tape.h"
+#include "runtime/program/small_qr.h"
+#include "runtime/program/tape.h"
 
 namespace kanesim::rt {
 
@@ -50,7 +50,7 @@ struct TreeJoint {
   flat::JointType type = flat::JointType::Revolute;
   flat::RotationCoords rotation = flat::RotationCoords::Quaternion;
   bool inverted = false;  // frame_b is on the parent side: the child moves by X_ab^-1
-  // Constants of the hot path, set by PrepareJointConstants (runtime/joint_kinematics.h)
+  // Constants of the hot path, set by PrepareJointConstants (runtime/kinematics/joint_kinematics.h)
   // once the axes and R_PJ are known:
   bool single_axis = false;     // Revolute or Prismatic in tree direction: H = [0; axis] or [axis; 0], no bias
   bool R_PJ_identity = false;   // R_PJ == 1 exactly: R_WJ = R_WP, no product
@@ -71,7 +71,7 @@ struct TreeJoint {
   // means the motion went through gimbal lock. A whole number kept as a double, so that
   // no angle (however large) is ever converted to an int.   filled by BuildStateLayout
   double chart0 = 0.0;
-  double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/friction.cpp
+  double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/kane/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
   std::string name;
@@ -121,11 +121,11 @@ struct BodySignalSource {
   Vec3 p_FBcm = Vec3::Zero();
 };
 
-// One scalar position constraint of a loop closure (runtime/constraints.h), between the
+// One scalar position constraint of a loop closure (runtime/constraints/constraints.h), between the
 // cut joint's frame a (on body A) and frame b (on body B):
 //   Translation:  phi = d_W . (p_Wb - p_Wa),    d_W = R_Wa d_a   (a direction fixed in a)
 //   Alignment:    phi = e_W . n_W - offset,      e_W = R_Wa e_a, n_W = R_Wb n_b
-// Rolling contacts (non-holonomic, runtime/contacts.cpp): rows on the velocity of the
+// Rolling contacts (non-holonomic, runtime/constraints/contacts.cpp): rows on the velocity of the
 // body's material point P at the contact,  d . v_P = 0:
 //   ContactNormal   d = n (plane normal); also a position constraint n . (P - p0) = 0
 //   ContactTangent  d = t1 or t2 (fixed in W): velocity only, never a position constraint
@@ -222,7 +222,7 @@ struct Program {
   std::vector<std::string> notes;
   int grubler_dof = 0;
 
-  // Closed loops (runtime/constraints.h). Empty for trees.
+  // Closed loops (runtime/constraints/constraints.h). Empty for trees.
   std::vector<LoopClosure> loops;       // one per cut joint
   std::vector<ContactModel> contacts;   // rolling contacts and knife edges
   std::vector<ConstraintRow> rows;      // n_c constraints: loops' rows, then contacts' rows
@@ -242,7 +242,7 @@ struct Program {
   std::vector<std::uint8_t> reaction_indeterminate;  // per flat joint, bit k: reaction component k (0-2 force, 3-5 torque)
   std::vector<std::uint8_t> contact_indeterminate;   // per contact, bit k: 0 normal, 1 longitudinal, 2 lateral force
   std::vector<int> friction_indeterminate;  // tree joints whose Coulomb friction reads an indeterminate normal force
-  std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/friction.cpp)
+  std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/kane/friction.cpp)
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind
@@ -314,7 +314,7 @@ struct Workspace {
   double sparse_rcond = 0.0;        // KLU's pivot-ratio estimate of the last factorization  filled by FactorSparse
   std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;
 
-  // Recursive path (runtime/kane_tree.cpp).
+  // Recursive path (runtime/kane/kane_tree.cpp).
   std::vector<Mat6> tree_Ia;        // children's shares moved to o_L (those not handed on in registers, see SolveTree), for a general joint then body L's inertia added: articulated inertia; B and the upper triangles of A, C only (kBlocks in kane_tree.cpp)  (K)  filled by SolveTree
   std::vector<Vec6> tree_pa;        // the same for the bias wrenches: articulated bias wrench  (K)  filled by SolveTree
   std::vector<Vec6> tree_A;         // udot-dependent acceleration [a_o; alpha] of body L  (K)  filled by SolveTree
@@ -323,7 +323,7 @@ struct Workspace {
   Eigen::VectorXd tree_u;           // Q_L - S_L^T pa_L at f0  (nu)  filled by SolveTree
   std::vector<std::array<double, 12>> tree_plane;  // planar recursion (SolveTreePlanar): a child's share (Ia 6, pa 3 in plane coordinates) in 0..8, A of body L in 9..11  (K)  filled by SolveTreePlanar
 
-  // Closed loops (runtime/constraints.cpp); sized n_c = p.rows.size(), nu = p.nu.
+  // Closed loops (runtime/constraints/constraints.cpp); sized n_c = p.rows.size(), nu = p.nu.
   Eigen::VectorXd phi;              // position residuals  (n_c)  filled by ProjectState
   Eigen::VectorXd phi_drift;        // phi of the integrator's state before projection  (n_c)  filled by EvalSignals
   Eigen::VectorXd psi;              // velocity residuals A u + b  (n_c)  filled by ProjectState
@@ -346,7 +346,7 @@ struct Workspace {
   Eigen::Matrix<double, 6, Eigen::Dynamic> beta_twists;  // twist of body L at o_L for u = beta column c, at column L nind + c  (6 x K nind)  filled by SolveConstrained (ReducedByPasses)
   std::vector<Vec6> accel_p;        // acceleration [a_o; alpha] of body L from udot_p alone  (K)  filled by SolveConstrained (ReducedByPasses)
 
-  // Constraint forces on request (runtime/reactions.cpp); not touched by Derivative.
+  // Constraint forces on request (runtime/constraints/reactions.cpp); not touched by Derivative.
   Eigen::VectorXd lambda_c;         // loop multipliers, A^T lambda = M udot - f  (n_c)  filled by LoopMultipliers
   Eigen::VectorXd g_dep;            // (M udot - f) at the dependent speeds  (n_c)  filled by LoopMultipliers
   std::vector<Vec6> reaction_W;     // wrench of the parent side on subtree L at o_L  (K)  filled by JointReactions

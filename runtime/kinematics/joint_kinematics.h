@@ -10,7 +10,7 @@
 #include <cmath>
 #include <string>
 
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

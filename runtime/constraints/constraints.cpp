@@ -23,16 +23,16 @@
 //   (beta^T M beta) z = beta^T (f - M udot_p)        (Kane's equations on beta)         (10)
 // The partition is kept while its block stays well conditioned (min/max |R_ii| above
 // kDegraded) and re-chosen by pivoting when it degrades.
-#include "runtime/constraints.h"
+#include "runtime/constraints/constraints.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
-#include "runtime/contacts.h"
-#include "runtime/joint_kinematics.h"
-#include "runtime/kane.h"
-#include "runtime/kinematics.h"
+#include "runtime/constraints/contacts.h"
+#include "runtime/kinematics/joint_kinematics.h"
+#include "runtime/kane/kane.h"
+#include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {
 

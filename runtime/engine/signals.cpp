@@ -2,13 +2,13 @@
 #include <cmath>
 #include <limits>
 
-#include "runtime/engine.h"
-#include "runtime/constraints.h"
-#include "runtime/contacts.h"
-#include "runtime/reactions.h"
-#include "runtime/kane.h"
-#include "runtime/kinematics.h"
-#include "runtime/program.h"
+#include "runtime/engine/engine.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/constraints/contacts.h"
+#include "runtime/constraints/reactions.h"
+#include "runtime/kane/kane.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 

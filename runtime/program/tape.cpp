@@ -1,4 +1,4 @@
-#include "runtime/tape.h"
+#include "runtime/program/tape.h"
 
 #include <cmath>
 

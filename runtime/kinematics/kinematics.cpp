@@ -1,8 +1,8 @@
-#include "runtime/kinematics.h"
+#include "runtime/kinematics/kinematics.h"
 
 #include <cmath>
 
-#include "runtime/joint_kinematics.h"
+#include "runtime/kinematics/joint_kinematics.h"
 
 namespace kanesim::rt {
 

@@ -1,4 +1,4 @@
-#include "runtime/joint_kinematics.h"
+#include "runtime/kinematics/joint_kinematics.h"
 
 #include <Eigen/Geometry>
 #include <cmath>

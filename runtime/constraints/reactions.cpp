@@ -1,4 +1,4 @@
-// Constraint forces on request (runtime/reactions.h).
+// Constraint forces on request (runtime/constraints/reactions.h).
 //
 // Loop multipliers (Lesser eq. 27 on the complement of the loop's tangent space): on the
 // sparse path they are unknowns of its system (kane_sparse.cpp eq. 4); on the reduced
@@ -18,11 +18,11 @@
 //   lambda_L = sum_{B in subtree(L)} X_{B->o_L} ( [m_B a_B - F_B;
 //              I_B alpha_B + w_B x I_B w_B - T_B] - loop wrenches on B )           (5)
 // the wrench the parent side exerts on the subtree at o_L.
-#include "runtime/reactions.h"
+#include "runtime/constraints/reactions.h"
 
-#include "runtime/constraints.h"
-#include "runtime/contacts.h"
-#include "runtime/kinematics.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/constraints/contacts.h"
+#include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {
 

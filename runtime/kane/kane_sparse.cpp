@@ -42,8 +42,8 @@
 #include <array>
 #include <cmath>
 
-#include "runtime/constraints.h"
-#include "runtime/kane.h"
+#include "runtime/constraints/constraints.h"
+#include "runtime/kane/kane.h"
 
 namespace kanesim::rt {
 

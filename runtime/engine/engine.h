@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/compile_options.h"
+#include "runtime/program/compile_options.h"
 #include "runtime/flat/diagnostic_codes.h"
 #include "runtime/flat/mechanism.h"
 
@@ -64,7 +64,7 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& pr
 
 int StateSize(const Program& program);  // nq + nu
 // Per entry of y = [q_free; u_free], a group number (0, 1, ...): d(ydot_i)/d(y_j) can be
-// non-zero only when i and j are in the same group (runtime/coupling.cpp). One group per
+// non-zero only when i and j are in the same group (runtime/engine/coupling.cpp). One group per
 // set of subtrees joined by forces, loops or force laws; one group in all for a chain.
 std::vector<int> StateCouplingGroups(const Program& program);
 int NumQ(const Program& program);
@@ -94,7 +94,7 @@ void SetStepProjection(Workspace& ws, bool on);
 int ProjectOntoConstraints(const Program& program, Workspace& ws, double t, double* y);
 const std::string& ErrorMessage(const Workspace& ws);
 
-// Closed loops through singular configurations (runtime/branch_monitor.cpp): after each
+// Closed loops through singular configurations (runtime/engine/branch_monitor.cpp): after each
 // accepted step, CheckBranch(y) returns -1 (fatal; BranchMonitorError says why: the loop,
 // the time and the turn) when the motion left its assembly branch near a change point
 // (the velocity turned by a finite angle where the loop's rows nearly lost rank), else 0.

@@ -1,6 +1,6 @@
 // What the user chooses for Compile: the solver path, the integrator, and how undetermined
-// reaction components are reported. Kept apart from the engine facade (runtime/engine.h) so
-// that the Program (runtime/program.h), which stores them, sits below the facade.
+// reaction components are reported. Kept apart from the engine facade (runtime/engine/engine.h) so
+// that the Program (runtime/program/program.h), which stores them, sits below the facade.
 #pragma once
 
 namespace kanesim::rt {

@@ -1,11 +1,11 @@
 // Kane's equations: applied forces, then one of three solution paths for udot (dense,
-// sparse, recursive: runtime/kane_tree.h).
+// sparse, recursive: runtime/kane/kane_tree.h).
 #pragma once
 
 #include <string>
 
-#include "runtime/kane_tree.h"
-#include "runtime/program.h"
+#include "runtime/kane/kane_tree.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 
@@ -42,7 +42,7 @@ int SparseCorrection(const Program& p, Workspace& ws, const Eigen::VectorXd& res
 // The accelerations by the scene's path: reduced (closed loops), sparse, recursive or dense.
 int SolveAccelerations(const Program& p, Workspace& ws);
 
-// Coulomb friction depending on joint normal forces (runtime/friction.cpp): iterates
+// Coulomb friction depending on joint normal forces (runtime/kane/friction.cpp): iterates
 // `path` (the scene's solve) with the friction forces in ws.Q until they agree.
 int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program&, Workspace&));
 

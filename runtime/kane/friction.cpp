@@ -3,7 +3,7 @@
 // constraint force couples the tangent and the complement projections).
 //
 // For tree joint j with unit axis a (world), reaction force F_j on its child
-// (runtime/reactions.cpp eq. 5) and speed u_j:
+// (runtime/constraints/reactions.cpp eq. 5) and speed u_j:
 //   N_j = | F_j - (F_j . a) a |                       (normal force across the axis)   (1)
 //   Q_f,j = -mu_j r_j N_j tanh(u_j / v_j)              (r_j = pin radius; 1 if prismatic) (2)
 // regularized over the speed scale v_j (a bare sign() chatters where u_j crosses 0).
@@ -16,9 +16,9 @@
 // self-locking wedges; a failure is reported, recoverable: the integrator retries).
 #include <cmath>
 
-#include "runtime/kane.h"
-#include "runtime/kinematics.h"
-#include "runtime/reactions.h"
+#include "runtime/kane/kane.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/constraints/reactions.h"
 
 namespace kanesim::rt {
 

@@ -11,9 +11,9 @@
 //   representative of the subtrees it depends on; an instruction joining two operands
 //   merges their subtrees, which can only over-merge (never miss a dependency).
 // Contacts and prescribed motion act between a body and the world and join nothing.
-#include "runtime/engine.h"
+#include "runtime/engine/engine.h"
 #include "runtime/flat/union_find.h"
-#include "runtime/program.h"
+#include "runtime/program/program.h"
 
 namespace kanesim::rt {
 namespace {

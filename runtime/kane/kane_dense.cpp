@@ -18,7 +18,7 @@
 // the subtree's bracketed wrenches about o_J; X^* moves a wrench between points.
 #include <cmath>
 
-#include "runtime/kane.h"
+#include "runtime/kane/kane.h"
 
 namespace kanesim::rt {
 

@@ -1,5 +1,5 @@
 // Householder QR of a small m x n matrix (m >= n) in plain loops, for the dependent block
-// of closed loops (runtime/constraints.cpp): a few rows and columns per loop, factored
+// of closed loops (runtime/constraints/constraints.cpp): a few rows and columns per loop, factored
 // twice per right-hand side. Eigen's dynamic-size HouseholderQR spends most of its time
 // in block and expression set-up at these sizes (measured on the four-bar, 2 x 2: 23 % of
 // the right-hand side in the QR, its Q applications and triangular solves).
