@@ -63,6 +63,8 @@ TEST(StartSpeeds, LeanRateOfARollingDiskIsProjectedAndNamed) {
   EXPECT_NE(w.message.find("largest change " + G6(largest) + " (free.u[" + std::to_string(k + 1) + "])"),
             std::string::npos)
       << w.message;
+  // The contact's rows are the normal (world y) and the two ground tangents (world x, z
+  // here, rolling along x), so their residuals are the components of A u0 up to sign.
   EXPECT_NE(w.message.find("largest residual " + G6((A * u0).cwiseAbs().maxCoeff())), std::string::npos) << w.message;
   EXPECT_EQ(w.loc.line, 32);  // the RollingDisk line of examples/rolling_disk.mech
 }
