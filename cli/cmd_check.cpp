@@ -112,6 +112,8 @@ int RunCheck(const CheckArgs& args) {
   for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
   if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.message.empty())
     std::cout << fmt::format("  warning[{}]: {}\n", flat::DiagCodeString(f.code), f.message);
+  if (rt::CompileMessage w = rt::StartSpeedsWarning(program); !w.message.empty())
+    std::cout << fmt::format("  warning[{}]: {}\n", flat::DiagCodeString(w.code), w.message);
   const std::vector<std::string> indeterminate =
       rt::IndeterminateSignals(program, rt::AvailableSignals(program));
   if (!indeterminate.empty()) {

@@ -68,7 +68,83 @@ const flat::SourceLoc& RowLoc(const Program& p, const ConstraintRow& row) {
   return row.contact >= 0 ? p.contacts[static_cast<size_t>(row.contact)].loc : p.loops[static_cast<size_t>(row.loop)].loc;
 }
 
+// Warning W315 (engine.h StartSpeedsWarning): the start speeds u0 violated the velocity
+// constraints (residuals psi0) and the minimum-norm correction moved a speed the model
+// gave a non-zero start value. Speeds that start at zero and move are the dependent ones
+// left to the assembly (a start of 0 is also the library's default, so the two cannot be
+// told apart) and are named only alongside. A change counts above 1e-9 of the largest
+// start speed (at least 1e-9): consistent starts computed in floating point move by
+// round-off.
+void DescribeStartSpeedChange(Program& p, const Eigen::VectorXd& psi0, const Eigen::VectorXd& u0,
+                              const Eigen::VectorXd& u1) {
+  const double tol = 1e-9 * std::max(1.0, u0.cwiseAbs().maxCoeff());
+  struct Change {
+    int s;
+    double du;
+  };
+  std::vector<Change> changed;
+  bool given_changed = false;
+  for (int i = 0; i < p.nu; ++i) {
+    const int s = p.u_free[static_cast<size_t>(i)];
+    const double du = u1[s] - u0[s];
+    if (!(std::fabs(du) > tol)) continue;
+    changed.push_back({s, du});
+    given_changed = given_changed || u0[s] != 0.0;
+  }
+  if (!given_changed) return;
+  std::sort(changed.begin(), changed.end(),
+            [](const Change& a, const Change& b) { return std::fabs(a.du) > std::fabs(b.du); });
+  auto name = [&](int s) {
+    const TreeJoint& j = p.joints[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(s)])];
+    return j.name + ".u" + (j.nu > 1 ? Index1(s - j.u0) : std::string());
+  };
+  // The constraints whose start residual was above the tolerance, the largest first.
+  struct Owner {
+    double res;
+    std::string who;
+    flat::SourceLoc loc;
+  };
+  std::vector<Owner> owners;
+  for (Eigen::Index r = 0; r < psi0.size(); ++r) {
+    const double res = std::fabs(psi0[r]);
+    if (!(res > tol)) continue;
+    const ConstraintRow& row = p.rows[static_cast<size_t>(r)];
+    const std::string who = (row.contact >= 0 ? "contact '" : "the loop closed by '") + RowOwner(p, row) + "'";
+    auto it = std::find_if(owners.begin(), owners.end(), [&](const Owner& o) { return o.who == who; });
+    if (it == owners.end())
+      owners.push_back({res, who, RowLoc(p, row)});
+    else
+      it->res = std::max(it->res, res);
+  }
+  std::sort(owners.begin(), owners.end(), [](const Owner& a, const Owner& b) { return a.res > b.res; });
+  if (!owners.empty()) p.start_speeds_loc = owners.front().loc;
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << "start speeds violate the velocity constraints of ";
+  for (size_t k = 0; k < owners.size(); ++k)
+    msg << (k ? ", " : "") << (owners.size() > 1 && k + 1 == owners.size() ? "and " : "") << owners[k].who;
+  msg << " (largest residual " << (owners.empty() ? 0.0 : owners.front().res)
+      << ") and were projected onto them: ";
+  const size_t shown = std::min<size_t>(changed.size(), 6);
+  for (size_t k = 0; k < shown; ++k)
+    msg << (k ? ", " : "") << name(changed[k].s) << " " << u0[changed[k].s] << " -> " << u1[changed[k].s];
+  if (changed.size() > shown) msg << " and " << changed.size() - shown << " more";
+  msg << "; largest change " << std::fabs(changed.front().du) << " (" << name(changed.front().s) << ")";
+  p.start_speeds_changed = msg.str();
+}
+
 }  // namespace
+
+CompileMessage StartSpeedsWarning(const Program& p) {
+  CompileMessage w;
+  if (p.start_speeds_changed.empty()) return w;
+  w.code = flat::DiagCode::StartSpeedsProjected;
+  w.message = p.start_speeds_changed;
+  w.loc = p.start_speeds_loc;
+  w.hint = "the run starts from the projected speeds (the smallest change in the sum of squares of the speeds "
+           "not held); give start speeds that satisfy the constraints, or leave the dependent ones at 0";
+  return w;
+}
 
 // Contacts (runtime/constraints/contacts.cpp): rows d . v_P = 0 with
 //   RollingSphere, RollingDisk  n (position constraint too), t1, t2 (velocity only)
@@ -320,14 +396,17 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   }
   // Speeds: minimum-norm correction over the speeds not held.
   ConstraintJacobian(p, ws);
+  p.start_speeds_changed.clear();
   if (!S.empty()) {
     gather();
     Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(AS);
     cod.setThreshold(kRankTol);
+    const Eigen::VectorXd psi0 = ws.psi, u0 = ws.u;
     const Eigen::VectorXd dx = cod.solve(-ws.psi);
     for (size_t c = 0; c < S.size(); ++c) ws.u[p.u_free[static_cast<size_t>(S[c])]] += dx[static_cast<Eigen::Index>(c)];
     VelocityKinematics(p, ws);
     ConstraintJacobian(p, ws);
+    DescribeStartSpeedChange(p, psi0, u0, ws.u);
   }
   const double rv = ws.psi.size() ? ws.psi.cwiseAbs().maxCoeff() : 0.0;
   if (rv > 1e-9 * (1.0 + ws.u.cwiseAbs().maxCoeff()) * len) {

@@ -1,4 +1,4 @@
-// Loop-closure constraints and the reduced equations (runtime/constraints.h).
+// Loop-closure constraints and the reduced equations (runtime/constraints/constraints.h).
 //
 // Every row is one scalar position constraint between frame a (body A) and frame b
 // (body B) of a cut joint, r = p_Wb - p_Wa:

@@ -130,4 +130,10 @@ CompileMessage IndeterminateWarning(const Program& program, const std::vector<st
 // minimum-norm share of that force (runtime/compile/indeterminate.cpp).
 CompileMessage FrictionIndeterminateWarning(const Program& program);
 
+// Warning W315, or a message with an empty message when there is nothing to say: the
+// start speeds violated the velocity constraints and the assembly changed a speed given a
+// non-zero start value (runtime/compile/loops.cpp): names the constraints, the speeds
+// changed (from -> to) and the largest change.
+CompileMessage StartSpeedsWarning(const Program& program);
+
 }  // namespace kanesim::rt

@@ -79,6 +79,7 @@ namespace kanesim::flat {
   X(BadFriction, "K312", "friction on a joint that cannot take it")                           \
   X(IndeterminateSignals, "W313", "statically indeterminate constraint-force components")    \
   X(FrictionIndeterminate, "W314", "friction reads an indeterminate normal force")            \
+  X(StartSpeedsProjected, "W315", "start speeds changed to satisfy the velocity constraints")  \
   X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")
 
 enum class DiagCode {

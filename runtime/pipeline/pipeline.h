@@ -167,7 +167,8 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
 
 // Warnings for a run that writes or measures `signals` (exact names; empty = the
 // defaults) at tolerance `rtol`, rendered: W314 (friction on an indeterminate normal
-// force), W313 (indeterminate reaction components among the signals), and a relative
+// force), W315 (start speeds projected onto the velocity constraints), W313
+// (indeterminate reaction components among the signals), and a relative
 // tolerance that is almost certainly a mistake. "" when there is nothing to say.
 std::string RunWarnings(const Model& model, double rtol, const std::vector<std::string>& signals);
 

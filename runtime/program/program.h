@@ -243,6 +243,11 @@ struct Program {
   std::vector<std::uint8_t> contact_indeterminate;   // per contact, bit k: 0 normal, 1 longitudinal, 2 lateral force
   std::vector<int> friction_indeterminate;  // tree joints whose Coulomb friction reads an indeterminate normal force
   std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/kane/friction.cpp)
+  // Start speeds given non-zero that the assembly's velocity projection changed (warning
+  // W315, engine.h StartSpeedsWarning): the message ("" when none) and the place of the
+  // constraint with the largest start residual.
+  std::string start_speeds_changed;
+  flat::SourceLoc start_speeds_loc;
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind

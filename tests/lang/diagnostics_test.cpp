@@ -10,7 +10,7 @@
 //   // pad-to-bytes: 4194305      (pads the text with spaces, for L005)
 //   // repeat: CHAIN "+1" 100000  (replaces each @CHAIN@ in the text by "+1" 100000 times)
 //   // stage: compile             (also compile, when elaboration succeeds: the compiler's
-//                                 K3xx errors, and its W313/W314 warnings for every signal)
+//                                 K3xx errors, and its W313/W314/W315 warnings for every signal)
 //   // mesh: part.stl open        (writes a test mesh beside the file, tests/lang/mesh_fixtures.h;
 //                                 the file is then loaded from that folder, named by its path)
 //
@@ -222,6 +222,8 @@ TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
       if (r.program) {
         rt::CompileMessage friction = rt::FrictionIndeterminateWarning(*r.program);
         if (!friction.message.empty()) pipeline::AddCompileMessage(friction, Severity::Warning, diags);
+        rt::CompileMessage start = rt::StartSpeedsWarning(*r.program);
+        if (!start.message.empty()) pipeline::AddCompileMessage(start, Severity::Warning, diags);
         std::vector<std::string> which = rt::IndeterminateSignals(*r.program, rt::AvailableSignals(*r.program));
         if (!which.empty())
           pipeline::AddCompileMessage(rt::IndeterminateWarning(*r.program, which), Severity::Warning, diags);
