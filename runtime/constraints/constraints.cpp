@@ -518,9 +518,9 @@ int SolveDependentSpeeds(const Program& p, Workspace& ws) {
   if (int s = CheckDisksUpright(p, ws); s != 0) return s;
   const int rank = p.loop_rank;
   if (rank == 0) return 0;
-  GatherActive(p, ws.psi, &ws.vg);
-  SolveDependent(ws, ws.vg, &ws.xd);
-  for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.xd[k];
+  GatherActive(p, ws.psi, &ws.active_rhs);
+  SolveDependent(ws, ws.active_rhs, &ws.dep_solution);
+  for (int k = 0; k < rank; ++k) ws.u[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] -= ws.dep_solution[k];
   VelocityKinematics(p, ws);
   return 0;
 }
@@ -574,10 +574,10 @@ int ProjectState(const Program& p, Workspace& ws) {
       break;
     last = r;
     // Newton step on the dependent coordinates: A_dep du_dep = -phi (7).
-    GatherActive(p, ws.phi, &ws.vg);
-    SolveDependent(ws, ws.vg, &ws.xd);
+    GatherActive(p, ws.phi, &ws.active_rhs);
+    SolveDependent(ws, ws.active_rhs, &ws.dep_solution);
     ws.du_full.setZero();
-    for (int k = 0; k < rank; ++k) ws.du_full[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] = -ws.xd[k];
+    for (int k = 0; k < rank; ++k) ws.du_full[p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]] = -ws.dep_solution[k];
     StepCoordinates(p, ws);
   }
   if (int s = CheckClosed(p, ws); s != 0) return s;
@@ -687,15 +687,15 @@ void ReduceByPasses(const Program& p, Workspace& ws) {
     const Vec6 W = BiasBracket(p, ws, L);  // minus Mb_L A_p,L, eq. (12)
     const Vec3 Wf = W.head<3>() - b.mass * a_p;
     const Vec3 Wt = W.tail<3>() - I * alpha_p;
-    for (int c = 0; c < nind; ++c) {
-      const Vec3 wc = T.col(c).tail<3>();
-      const Vec3 vc = T.col(c).head<3>() + wc.cross(x);
-      ws.fr[c] += vc.dot(Wf) + wc.dot(Wt);
-      const Vec3 mv = b.mass * vc, Iw = I * wc;
+    for (int c = 0; c < nind; ++c) {  // partial twist c at the mass centre: (v_cm_c, w_c)
+      const Vec3 w_c = T.col(c).tail<3>();
+      const Vec3 v_cm_c = T.col(c).head<3>() + w_c.cross(x);
+      ws.fr[c] += v_cm_c.dot(Wf) + w_c.dot(Wt);
+      const Vec3 mv = b.mass * v_cm_c, Iw = I * w_c;
       for (int d = 0; d <= c; ++d) {
-        const Vec3 wd = T.col(d).tail<3>();
-        const Vec3 vd = T.col(d).head<3>() + wd.cross(x);
-        ws.Mr(c, d) += vd.dot(mv) + wd.dot(Iw);
+        const Vec3 w_d = T.col(d).tail<3>();
+        const Vec3 v_cm_d = T.col(d).head<3>() + w_d.cross(x);
+        ws.Mr(c, d) += v_cm_d.dot(mv) + w_d.dot(Iw);
       }
     }
   }
@@ -714,18 +714,18 @@ int SolveConstrained(const Program& p, Workspace& ws) {
   // udot_p (9) and beta (8).
   ws.udot_p.setZero();
   if (rank > 0) {
-    GatherActive(p, ws.cbias, &ws.vg);
-    SolveDependent(ws, ws.vg, &ws.xd);
-    for (int k = 0; k < rank; ++k) ws.udot_p[dep(k)] = -ws.xd[k];
+    GatherActive(p, ws.cbias, &ws.active_rhs);
+    SolveDependent(ws, ws.active_rhs, &ws.dep_solution);
+    for (int k = 0; k < rank; ++k) ws.udot_p[dep(k)] = -ws.dep_solution[k];
   }
   ws.beta.setZero();
   for (int c = 0; c < nind; ++c) {
     const int s = ind(c);
     ws.beta(s, c) = 1.0;
     if (rank == 0) continue;
-    ws.vc = ws.A.col(s);
-    SolveDependent(ws, ws.vc, &ws.xd);
-    for (int k = 0; k < rank; ++k) ws.beta(dep(k), c) = -ws.xd[k];
+    ws.active_rhs = ws.A.col(s);
+    SolveDependent(ws, ws.active_rhs, &ws.dep_solution);
+    for (int k = 0; k < rank; ++k) ws.beta(dep(k), c) = -ws.dep_solution[k];
   }
   if (p.reduce_by_passes)
     ReduceByPasses(p, ws);
@@ -758,9 +758,9 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.phi_drift = Eigen::VectorXd::Zero(nc);
   ws.psi = Eigen::VectorXd::Zero(nc);
   ws.cbias = Eigen::VectorXd::Zero(nc);
-  ws.vc = Eigen::VectorXd::Zero(na);
-  ws.xd = Eigen::VectorXd::Zero(na);
-  ws.vg = Eigen::VectorXd::Zero(na);
+  ws.lambda_active = Eigen::VectorXd::Zero(na);
+  ws.dep_solution = Eigen::VectorXd::Zero(na);
+  ws.active_rhs = Eigen::VectorXd::Zero(na);
   ws.vcol = Eigen::VectorXd::Zero(nc);
   ws.du_full = Eigen::VectorXd::Zero(p.nu_all);
   ws.A = Eigen::MatrixXd::Zero(na, p.nu);

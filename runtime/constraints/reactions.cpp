@@ -74,11 +74,11 @@ void LoopMultipliers(const Program& p, Workspace& ws) {
   for (int k = 0; k < rank; ++k)
     ws.g_dep[k] = DriveForce(p, ws, p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]);
   // (2): R^T w = g_dep, lambda = Q [w; 0].
-  ws.vc.setZero();
-  ws.vc.head(rank) = ws.g_dep.head(rank);
-  ws.qr_dep.SolveRt(ws.vc.data());
-  ws.qr_dep.ApplyQ(&ws.vc);
-  for (size_t k = 0; k < p.active_rows.size(); ++k) ws.lambda_c[p.active_rows[k]] = ws.vc[static_cast<Eigen::Index>(k)];
+  ws.lambda_active.setZero();
+  ws.lambda_active.head(rank) = ws.g_dep.head(rank);
+  ws.qr_dep.SolveRt(ws.lambda_active.data());
+  ws.qr_dep.ApplyQ(&ws.lambda_active);
+  for (size_t k = 0; k < p.active_rows.size(); ++k) ws.lambda_c[p.active_rows[k]] = ws.lambda_active[static_cast<Eigen::Index>(k)];
 }
 
 namespace {

@@ -253,10 +253,10 @@ double LoopDriveForce(const Program& p, Workspace& ws, int r) {
     return d - ws.vcol.dot(ws.lambda_c);
   }
   ConstraintColumn(p, ws, r, &ws.vcol);
-  GatherActive(p, ws.vcol, &ws.vg);
-  SolveDependent(ws, ws.vg, &ws.xd);
+  GatherActive(p, ws.vcol, &ws.active_rhs);
+  SolveDependent(ws, ws.active_rhs, &ws.dep_solution);
   for (int k = 0; k < p.loop_rank; ++k)
-    d -= ws.xd[k] * DriveForce(p, ws, p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]);
+    d -= ws.dep_solution[k] * DriveForce(p, ws, p.u_free[static_cast<size_t>(ws.dep[static_cast<size_t>(k)])]);
   return d;
 }
 

@@ -1,5 +1,5 @@
 // The pipeline: from .mech text to output rows, in named stages. Every front end (the
-// `kanesim` commands, the benchmark drivers, the tests, later the viewer, linearization
+// `kanesim` commands, the benchmark drivers, the tests, the viewer, linearization
 // and Python) goes through these functions; docs/architecture.md draws them.
 //
 //   LoadModel                                                    (pipeline.cpp)

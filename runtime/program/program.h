@@ -340,7 +340,9 @@ struct Workspace {
   std::vector<int> dep, ind;        // free speed indices: dependent (rank), independent (nu - rank)  filled by ProjectState
   bool partition_valid = false;     // dep/ind chosen  set by ProjectState
   long partition_changes = 0;       // how often the partition was re-chosen  filled by ProjectState
-  Eigen::VectorXd vc, xd, vg;       // scratch  (n_a), (n_a), (n_a)
+  Eigen::VectorXd active_rhs;       // right side v of SolveDependent: a per-row vector on the active rows  (n_a)  filled by its callers
+  Eigen::VectorXd dep_solution;     // x = A_dep^+ v of SolveDependent; x(0:rank) on the dependent speeds  (n_a)  filled by SolveDependent's callers
+  Eigen::VectorXd lambda_active;    // constraint multipliers on the active rows, Q [w; 0]  (n_a)  filled by LoopMultipliers
   Eigen::VectorXd vcol;             // a column of the constraint Jacobian, every row  (n_c)  filled by ConstraintColumn's callers
   Eigen::VectorXd du_full;          // a step in full speeds  (nu_all)  filled by ProjectState
   Eigen::MatrixXd beta;             // constrained basis in free-speed space  (nu x nind)  filled by SolveConstrained

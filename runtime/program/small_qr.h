@@ -1,8 +1,8 @@
 // Householder QR of a small m x n matrix (m >= n) in plain loops, for the dependent block
 // of closed loops (runtime/constraints/constraints.cpp): a few rows and columns per loop, factored
 // twice per right-hand side. Eigen's dynamic-size HouseholderQR spends most of its time
-// in block and expression set-up at these sizes (measured on the four-bar, 2 x 2: 23 % of
-// the right-hand side in the QR, its Q applications and triangular solves).
+// in block and expression set-up at these sizes (docs/benchmarks.md, the four-bar's
+// profile).
 //
 // A = Q R with Q = H_0 H_1 ... H_{n-1}, H_k = I - tau_k v_k v_k^T, v_k(k) = 1 and its
 // entries below the diagonal stored in column k under R (LAPACK's layout).

@@ -21,13 +21,9 @@
 // - CVODE BDF: variable-order (1-5) BDF, Newton with dense LU and DQ Jacobian.
 // - ARKODE ERK: explicit Runge-Kutta (ERKStep), Fehlberg 8(7) (13 stages, order 8, the
 //   highest-order table in SUNDIALS 6.4.1) by default. Dense output is ARKODE's Hermite
-//   interpolant of degree 5, which costs ~4 extra evaluations of f per output instant.
-//   Measured on x'' = -4x over [0, 10] (rtol = atol):
-//                        1e-6              1e-9              1e-12
-//     Fehlberg 8(7)   64 steps 7e-6     190 steps 1e-8    431 steps 2e-10
-//     Verner 6(5)    203 steps 2e-4    1003 steps 1e-6   7002 steps 3e-9
-//   and with 10000 output rows, Hermite degree 3 (no extra f) was 100x less accurate,
-//   Lagrange degree 5 (no extra f) 1.5-4x less accurate than Hermite degree 5.
+//   interpolant of degree 5, which costs ~4 extra evaluations of f per output instant
+//   (the table and the interpolant chosen by measurement: docs/benchmarks.md, "ARKODE's
+//   table and interpolant").
 // - DOP853: our own Dormand-Prince 8(5,3) (runtime/sim/integrator_dop853.cpp; Hairer,
 //   Norsett & Wanner, Solving ODEs I, sec. II.10): 12 evaluations of f per step (the
 //   13th stage is the next step's first), error estimate from its 5th- and 3rd-order
