@@ -27,6 +27,7 @@
 
 #include "runtime/compile/compile_internal.h"
 #include "runtime/constraints/constraints.h"
+#include "runtime/kane/kane.h"
 #include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {

@@ -1,12 +1,15 @@
-// Closed kinematic loops: the cut joints' position constraints phi(q) = 0, their
-// velocity form A(q) u + b(q, t) = 0 (Lesser §4c eq. 48) and the reduced Kane's
-// equations on the constrained basis beta (Lesser eqs. 49-51). docs/constraints.md.
+// Closed kinematic loops and rolling contacts as constraint rows: the cut joints' position
+// constraints phi(q) = 0, their velocity form A(q) u + b(q, t) = 0 (Lesser §4c eq. 48), the
+// acceleration bias, and the partition of the free speeds into dependent and independent
+// ones (Lesser eqs. 49-51). docs/constraints.md. Kinematics only: the equations of motion
+// on these rows (the reduced form, the multiplier form, the projection in the kinetic
+// metric) are kane/'s, one layer up (kane/kane.h).
 //
 // Stages, as Derivative calls them after VelocityKinematics:
-//   ProjectState      Newton on the dependent coordinates (phi = 0), then the dependent
-//                     speeds (A u + b = 0): the right-hand side is always evaluated on the
-//                     constraint manifold, so the loops cannot drift.
-//   SolveConstrained  after AppliedForces: M udot = f restricted to beta.
+//   ProjectState (kane.h)  Newton on the dependent coordinates (phi = 0), then the
+//                          dependent speeds (A u + b = 0): the right-hand side is always
+//                          evaluated on the constraint manifold, so the loops cannot drift.
+//   SolveConstrained (kane.h)  after AppliedForces: M udot = f restricted to beta.
 // None allocates.
 #pragma once
 
@@ -42,10 +45,25 @@ void SolveDependent(const Workspace& ws, const Eigen::VectorXd& v, Eigen::Vector
 void ApplyCoordinateStep(const Program& p, Workspace& ws, const Eigen::VectorXd& du_full);
 
 // Newton on the dependent coordinates, then the dependent speeds; leaves the position
-// and velocity kinematics of the projected state in ws. 0, or 1 (recoverable).
-// On the sparse (multiplier) path the steps are instead the kinetic-metric corrections
-// of kane.h SparseCorrection, and the factorization is left for SolveSparse.
-int ProjectState(const Program& p, Workspace& ws);
+// and velocity kinematics of the projected state in ws. 0, or 1 (recoverable). The
+// reduced form's projection; kane.h ProjectState chooses it or the multiplier form's.
+int ProjectStateByPartition(const Program& p, Workspace& ws);
+
+// Pieces of the projections (kane_sparse.cpp's uses them too).
+// Newton on positions iterates to round-off (kProjectTight, relative to the loops' length)
+// so that the right-hand side is a smooth function of y for difference-quotient
+// Jacobians, at most kProjectMaxNewton steps.
+constexpr double kProjectTight = 1e-13;
+constexpr int kProjectMaxNewton = 8;
+// 1 (recoverable, ws.error) when a row of ws.phi is still above the loose limit.
+int CheckLoopsClosed(const Program& p, Workspace& ws);
+// q += N(q) ws.du_full, and the position and velocity kinematics of the new positions.
+void StepCoordinates(const Program& p, Workspace& ws);
+// With ws.error: -1 (fatal) when a rolling disk lies flat, 1 (recoverable) when a step went
+// through flat (after the positions are projected; ws.psi of the integrator's speeds).
+int CheckDisksUpright(const Program& p, Workspace& ws);
+// The cut joints and contacts with rows, for messages: "'coupler_rocker'".
+std::string LoopOwners(const Program& p);
 
 // The bodies a row reads: frame a's and frame b's for a loop row, (the contact's body, -1)
 // for a contact row; -1 for the world.
@@ -64,17 +82,6 @@ int FactorConstraintsAsIs(const Program& p, Workspace& ws);
 
 // ws.psi only (A u + b without forming A), after VelocityKinematics.
 void ConstraintRates(const Program& p, Workspace& ws);
-
-// Reduced Kane's equations (beta^T M beta) z = beta^T (f - M udot_p); writes ws.udot.
-int SolveConstrained(const Program& p, Workspace& ws);
-// Whether forming them by velocity passes on the columns of beta (one per degree of
-// freedom) is cheaper than through the composite mass matrix: the compiler's choice of
-// Program::reduce_by_passes, up to kPassesMaxDof degrees of freedom. bench/loop_solvers,
-// minimum of 3-4 alternating rounds, passes / through M: four-bar 0.86-0.90, rolling disk
-// 0.97, slider-crank 1.01, ladder of N loops (N DOF) 0.82-0.90 for N = 1-8, 0.96 at 16,
-// 1.06 at 20, 32 and 64.
-constexpr int kPassesMaxDof = 16;
-bool PassesCheaper(int dof);
 
 // Workspace creation: the loop arrays.
 void InitConstraintWorkspace(const Program& p, Workspace& ws);

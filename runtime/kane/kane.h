@@ -38,6 +38,28 @@ bool SparseHasFactor(const Workspace& ws);
 // du_full (full speed indices, prescribed zero) of least kinetic energy with
 // A du = -residual on the kept constraint rows (kane_sparse.cpp eqs. 3-4).
 int SparseCorrection(const Program& p, Workspace& ws, const Eigen::VectorXd& residual, Eigen::VectorXd* du_full);
+// ProjectState (below) on this path: steps of SparseCorrection.
+int ProjectStateSparse(const Program& p, Workspace& ws);
+
+// Closed loops and rolling contacts (the rows of runtime/constraints/constraints.h).
+// ProjectState: onto the constraint manifold, positions then speeds; leaves the position
+// and velocity kinematics of the projected state in ws. 0, or 1 (recoverable). On the
+// reduced form Newton on the dependent coordinates (constraints.h
+// ProjectStateByPartition); on the sparse (multiplier) path the steps are the
+// kinetic-metric corrections of SparseCorrection, and the factorization is left for
+// SolveSparse (kane_sparse.cpp).
+int ProjectState(const Program& p, Workspace& ws);
+// Reduced Kane's equations (beta^T M beta) z = beta^T (f - M udot_p); writes ws.udot.
+int SolveConstrained(const Program& p, Workspace& ws);
+// Whether forming them by velocity passes on the columns of beta (one per degree of
+// freedom) is cheaper than through the composite mass matrix: the compiler's choice of
+// Program::reduce_by_passes, up to kPassesMaxDof degrees of freedom. bench/loop_solvers,
+// minimum of 3-4 alternating rounds, passes / through M: four-bar 0.86-0.90, rolling disk
+// 0.97, slider-crank 1.01, ladder of N loops (N DOF) 0.82-0.90 for N = 1-8, 0.96 at 16,
+// 1.06 at 20, 32 and 64.
+constexpr int kPassesMaxDof = 16;
+bool PassesCheaper(int dof);
+
 
 // The accelerations by the scene's path: reduced (closed loops), sparse, recursive or dense.
 int SolveAccelerations(const Program& p, Workspace& ws);

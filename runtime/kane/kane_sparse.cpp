@@ -35,7 +35,7 @@
 // multipliers are zero, a particular solution of the indeterminate components. With a
 // zero right side except -phi (or -psi) in the rows (3), the same matrix gives the
 // smallest correction in the kinetic metric, du^T M du, that closes the constraints to
-// first order: the projection of constraints.cpp ProjectStateSparse.
+// first order: the projection ProjectStateSparse (at the end of this file).
 #include <klu.h>
 
 #include <algorithm>
@@ -44,6 +44,7 @@
 
 #include "runtime/constraints/constraints.h"
 #include "runtime/kane/kane.h"
+#include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {
 
@@ -481,6 +482,65 @@ int SolveSparse(const Program& p, Workspace& ws) {
     for (size_t m = 0; m < sp.kept_rows.size(); ++m)
       ws.lambda_c[sp.kept_rows[m]] = ws.x[static_cast<size_t>(sp.n_body) + m];
   }
+  return 0;
+}
+
+
+// The projection onto the constraint manifold on this path (kane.h ProjectState).
+namespace {
+
+// The sparse path's projection first iterates with the factorization of the previous
+// evaluation (chord steps: no new factorization) while each step shrinks the residual by
+// at least kChordRate, at most kMaxChord times, then takes Newton steps.
+constexpr int kMaxChord = 4;
+constexpr double kChordRate = 0.1;
+// Below this pivot ratio (KLU's rcond estimate, rows scaled) of the sparse path's
+// factorization at the projected positions, the loop is at a singular configuration.
+constexpr double kSparseSingular = 1e-12;
+
+// `factored`: the factorization went through with a small pivot ratio (else it met an
+// exactly zero pivot).
+int SparseSingular(const Program& p, Workspace& ws, bool factored) {
+  char buf[64];
+  if (factored)
+    std::snprintf(buf, sizeof buf, "pivot ratio of the multiplier system %.2g", ws.sparse_rcond);
+  else
+    std::snprintf(buf, sizeof buf, "the multiplier system has a zero pivot");
+  ws.error = "closed loop " + LoopOwners(p) + " at a singular configuration at time " + std::to_string(ws.t) +
+             ": the constraint rows lost rank (" + buf +
+             "; a change point where assembly branches meet, or a dead point), so the loop equations do not "
+             "determine the motion through it";
+  return 1;
+}
+
+}  // namespace
+
+// ProjectState on the sparse path: the steps of kane.h SparseCorrection, chord steps with
+// the previous evaluation's factorization while they contract, Newton after.
+int ProjectStateSparse(const Program& p, Workspace& ws) {
+  const double tight = kProjectTight * p.loop_length;
+  ConstraintResiduals(p, ws);
+  bool newton = !SparseHasFactor(ws);
+  double last = INFINITY;
+  for (int it = 0;; ++it) {
+    const double r = ws.phi.cwiseAbs().maxCoeff();
+    if (r <= tight || it == kMaxChord + kProjectMaxNewton) break;
+    if (r > kChordRate * last || it >= kMaxChord) newton = true;
+    last = r;
+    if (newton && !ws.sparse_ready && FactorSparse(p, ws) != 0) return SparseSingular(p, ws, false);
+    if (int s = SparseCorrection(p, ws, ws.phi, &ws.du_full); s != 0) return s;
+    StepCoordinates(p, ws);
+    ws.sparse_ready = false;
+    ConstraintResiduals(p, ws);
+  }
+  if (int s = CheckLoopsClosed(p, ws); s != 0) return s;
+  if (!ws.sparse_ready && FactorSparse(p, ws) != 0) return SparseSingular(p, ws, false);
+  if (!(ws.sparse_rcond > kSparseSingular)) return SparseSingular(p, ws, true);
+  ConstraintRates(p, ws);
+  if (int s = CheckDisksUpright(p, ws); s != 0) return s;
+  if (int s = SparseCorrection(p, ws, ws.psi, &ws.du_full); s != 0) return s;
+  ws.u += ws.du_full;
+  VelocityKinematics(p, ws);
   return 0;
 }
 

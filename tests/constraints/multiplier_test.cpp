@@ -1,6 +1,6 @@
 // The multiplier form of the constrained equations (runtime/kane/kane_sparse.cpp eqs. 3-4:
 // a multiplier per independent constraint row in the sparse K-vector system, KLU; the
-// projection in the kinetic metric, runtime/constraints/constraints.cpp ProjectStateSparse) against
+// projection in the kinetic metric, runtime/kane/kane_sparse.cpp ProjectStateSparse) against
 // the reduced form (dependent speeds eliminated, Lesser eqs. 48-51), which the other
 // constraint tests hold against closed forms. Two different algorithms: the same
 // accelerations on the manifold, the same trajectories and constraint forces to the
