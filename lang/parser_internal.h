@@ -38,8 +38,9 @@ class Parser {
     return i < toks_.size() ? toks_[i] : toks_.back();
   }
   bool At(Tok t) const { return Peek().kind == t; }
-  Token Advance() {
-    Token t = Peek();
+  // The current token, then moves past it (a reference into toks_, which never changes).
+  const Token& Advance() {
+    const Token& t = Peek();
     if (pos_ + 1 < toks_.size()) ++pos_;
     return t;
   }
@@ -59,8 +60,8 @@ class Parser {
     if (last_error_pos_ == pos_ && pos_ != 0) return nullptr;
     last_error_pos_ = pos_;
     const Token& t = Peek();
-    std::string found = t.kind == Tok::Ident ? "identifier '" + t.text + "'"
-                        : t.kind == Tok::Number ? "number " + t.text
+    std::string found = t.kind == Tok::Ident ? "identifier '" + std::string(t.text) + "'"
+                        : t.kind == Tok::Number ? "number " + std::string(t.text)
                         : t.kind == Tok::Eof    ? std::string("end of file")
                                                 : std::string("'") + TokSpelling(t.kind) + "'";
     std::string message = "expected " + what;
