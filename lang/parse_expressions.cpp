@@ -139,6 +139,7 @@ ExprPtr Parser::Power() {
   auto e = std::make_unique<Expr>();
   e->kind = ExprKind::Binary;
   e->op = static_cast<int>(Tok::Caret);
+  e->args.reserve(2);
   e->args.push_back(std::move(base));
   if (At(Tok::Minus) || At(Tok::Plus)) {
     // a ^ -2 : Modelica requires parentheses; accept and note via hint-free parse.
