@@ -336,6 +336,11 @@ std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
       bool closed = false;
       while (i < n) {
         char d = s[static_cast<size_t>(i)];
+        if (Is(d, kPlainInString)) {
+          val += d;
+          ++i;
+          continue;
+        }
         if (d == '"') {
           closed = true;
           ++i;

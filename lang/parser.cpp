@@ -304,7 +304,6 @@ void Parser::ComponentClause(ClassDef& c, Element prefix, bool is_protected, Var
     comp->replaceable = prefix.replaceable;
     comp->redeclare = prefix.redeclare;
     comp->is_protected = is_protected;
-    comp->type_name = type_name;
     comp->type_span = tspan;
     for (const auto& d : type_dims) comp->type_dims.push_back(ast::Clone(*d));
     Span b = Peek().span;
@@ -316,6 +315,9 @@ void Parser::ComponentClause(ClassDef& c, Element prefix, bool is_protected, Var
     comp->description = StringComment();
     comp->annotation = AnnotationOpt();
     comp->span = SpanFrom(tspan);
+    // The last component of the clause takes the type's name; the others copy it.
+    if (At(Tok::Comma)) comp->type_name = type_name;
+    else comp->type_name = std::move(type_name);
     Element el;
     el.kind = Element::kComponent;
     el.is_final = prefix.is_final;
