@@ -24,12 +24,25 @@ namespace {
 
 // The keywords, bucketed by first letter (every keyword is lower-case ASCII): a name is
 // a keyword only if its first letter's bucket holds it, so most names cost one compare.
+constexpr int kKeywordsPerLetter = 8;
+
+// Whether every letter's keywords fit in a bucket (checked when the token table changes).
+constexpr bool KeywordBucketsFit() {
+  int count[26] = {};
+#define KANESIM_X(e, s) \
+  if (#e[0] == 'K' && #e[1] == 'w' && ++count[s[0] - 'a'] > kKeywordsPerLetter) return false;
+  KANESIM_TOKENS(KANESIM_X)
+#undef KANESIM_X
+  return true;
+}
+static_assert(KeywordBucketsFit(), "a letter begins more than kKeywordsPerLetter keywords: raise it");
+
 struct KeywordTable {
   struct Entry {
     std::string_view word;
     Tok kind;
   };
-  Entry bucket[26][8] = {};
+  Entry bucket[26][kKeywordsPerLetter] = {};
   int size[26] = {};
   KeywordTable() {
     auto add = [this](const char* word, Tok kind) {

@@ -18,7 +18,9 @@ static std::string WithoutBom(std::string text) {
 }
 
 static std::vector<std::int32_t> LineStarts(const std::string& text) {
-  std::vector<std::int32_t> starts{0};
+  std::vector<std::int32_t> starts;
+  starts.reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
+  starts.push_back(0);
   const char* const begin = text.data();
   const char* const end = begin + text.size();
   for (const char* p = begin; (p = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p))));)
