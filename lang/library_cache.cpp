@@ -22,8 +22,8 @@ std::shared_ptr<const ParsedLibrary> ParseLibrary(const std::vector<std::pair<st
   // that the smaller files' tokens and nodes reuse, so less fresh heap is touched.
   std::vector<int> order(files.size());
   for (size_t i = 0; i < files.size(); ++i) order[i] = static_cast<int>(i);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return files[static_cast<size_t>(a)].second.size() > files[static_cast<size_t>(b)].second.size(); });
+  auto bytes = [&](int i) { return files[static_cast<size_t>(i)].second.size(); };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return bytes(a) > bytes(b); });
   lib->defs.resize(files.size());
   for (int i : order) lib->defs[static_cast<size_t>(i)] = lang::Parse(i + 1, sources, diags);
   if (diags.HasErrors()) return nullptr;
