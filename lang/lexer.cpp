@@ -3,7 +3,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
-#include <unordered_map>
+#include <string_view>
 
 #include "lang/text.h"
 
@@ -20,17 +20,52 @@ const char* TokSpelling(Tok t) {
   return "?";
 }
 
-static const std::unordered_map<std::string, Tok>& Keywords() {
-  static const std::unordered_map<std::string, Tok> table = [] {
-    std::unordered_map<std::string, Tok> m;
+namespace {
+
+// The keywords, bucketed by first letter (every keyword is lower-case ASCII): a name is
+// a keyword only if its first letter's bucket holds it, so most names cost one compare.
+constexpr int kKeywordsPerLetter = 8;
+
+// Whether every letter's keywords fit in a bucket (checked when the token table changes).
+constexpr bool KeywordBucketsFit() {
+  int count[26] = {};
 #define KANESIM_X(e, s) \
-  if (std::strncmp(#e, "Kw", 2) == 0) m.emplace(s, Tok::e);
+  if (#e[0] == 'K' && #e[1] == 'w' && ++count[s[0] - 'a'] > kKeywordsPerLetter) return false;
+  KANESIM_TOKENS(KANESIM_X)
+#undef KANESIM_X
+  return true;
+}
+static_assert(KeywordBucketsFit(), "a letter begins more than kKeywordsPerLetter keywords: raise it");
+
+struct KeywordTable {
+  struct Entry {
+    std::string_view word;
+    Tok kind;
+  };
+  Entry bucket[26][kKeywordsPerLetter] = {};
+  int size[26] = {};
+  KeywordTable() {
+    auto add = [this](const char* word, Tok kind) {
+      const int letter = word[0] - 'a';
+      bucket[letter][size[letter]++] = {word, kind};
+    };
+#define KANESIM_X(e, s) \
+  if (std::strncmp(#e, "Kw", 2) == 0) add(s, Tok::e);
     KANESIM_TOKENS(KANESIM_X)
 #undef KANESIM_X
-    return m;
-  }();
-  return table;
+  }
+};
+
+Tok KeywordOrIdent(std::string_view word) {
+  static const KeywordTable table;
+  const int letter = word[0] - 'a';
+  if (letter < 0 || letter >= 26) return Tok::Ident;
+  for (int k = 0; k < table.size[letter]; ++k)
+    if (table.bucket[letter][k].word == word) return table.bucket[letter][k].kind;
+  return Tok::Ident;
 }
+
+}  // namespace
 
 namespace {
 
@@ -153,8 +188,67 @@ std::int32_t StringCharacter(const std::string& s, std::int32_t i, int file, Dia
 
 }  // namespace
 
-static bool IsIdentStart(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
-static bool IsDigit(char c) { return c >= '0' && c <= '9'; }
+namespace {
+
+// Character classes of ASCII bytes (a byte >= 0x80 is in none of them).
+enum : unsigned char { kSpace = 1, kIdentStart = 2, kDigit = 4, kPlainInString = 8 };
+
+struct CharClasses {
+  unsigned char of[256] = {};
+  CharClasses() {
+    for (int c : {' ', '\t', '\r', '\n', '\f', '\v'}) of[c] |= kSpace;
+    for (int c = 'a'; c <= 'z'; ++c) of[c] |= kIdentStart;
+    for (int c = 'A'; c <= 'Z'; ++c) of[c] |= kIdentStart;
+    of[static_cast<unsigned char>('_')] |= kIdentStart;
+    for (int c = '0'; c <= '9'; ++c) of[c] |= kDigit;
+    // A string literal's characters that need neither a check nor a rewrite.
+    for (int c = 0x20; c < 0x7F; ++c)
+      if (c != '"' && c != '\\') of[c] |= kPlainInString;
+    for (int c : {'\t', '\n', '\r'}) of[c] |= kPlainInString;
+  }
+};
+const CharClasses kClasses;
+
+bool Is(char c, unsigned char cls) { return (kClasses.of[static_cast<unsigned char>(c)] & cls) != 0; }
+
+// The value of a number literal s[b, e) (its text is already checked by the caller).
+double NumberValue(const std::string& s, std::int32_t b, std::int32_t e, bool integer, bool* out_of_range) {
+  const auto len = static_cast<size_t>(e - b);
+  *out_of_range = false;
+  if (integer && len <= 15) {  // exact in a double: no rounding to get wrong
+    double v = 0;
+    for (size_t k = 0; k < len; ++k) v = 10 * v + (s[static_cast<size_t>(b) + k] - '0');
+    return v;
+  }
+  const std::string text = s.substr(static_cast<size_t>(b), len);
+  errno = 0;
+  const double v = std::strtod(text.c_str(), nullptr);
+  *out_of_range = errno == ERANGE;
+  return v;
+}
+
+// The contents of the string literal opened by the '"' at s[b] when none of its
+// characters needs a rewrite (an escape) or a diagnostic: its end (the closing quote),
+// or -1 to take the slow path.
+std::int32_t PlainString(const std::string& s, std::int32_t b) {
+  const auto n = static_cast<std::int32_t>(s.size());
+  std::int32_t j = b + 1;
+  while (j < n) {
+    const char d = s[static_cast<size_t>(j)];
+    if (Is(d, kPlainInString)) {
+      ++j;
+      continue;
+    }
+    if (d == '"') return j;
+    if (static_cast<unsigned char>(d) < 0x80) return -1;  // '\\' or a control character
+    const Utf8Char c = DecodeUtf8(s, static_cast<size_t>(j));
+    if (c.length == 0 || IsUnsafeForTerminal(c.code)) return -1;
+    j += c.length;
+  }
+  return -1;  // never closed
+}
+
+}  // namespace
 
 std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
   const std::string& s = sm.Text(file);
@@ -162,11 +256,14 @@ std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
   const std::int32_t n = static_cast<std::int32_t>(s.size());
   std::int32_t i = 0;
   auto span = [&](std::int32_t b, std::int32_t e) { return Span{file, b, e}; };
-  auto push = [&](Tok k, std::int32_t b, std::int32_t e) {
-    Token t;
+  auto view = [&](std::int32_t b, std::int32_t e) {
+    return std::string_view(s.data() + b, static_cast<size_t>(e - b));
+  };
+  auto push = [&](Tok k, std::int32_t b, std::int32_t e) -> Token& {
+    Token& t = out.emplace_back();
     t.kind = k;
     t.span = span(b, e);
-    out.push_back(std::move(t));
+    return t;
   };
   if (s.size() > SourceManager::kMaxFileBytes) {
     diags.Error(DiagCode::FileTooLarge, span(0, 1),
@@ -176,81 +273,87 @@ std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
     push(Tok::Eof, 0, 0);
     return out;
   }
+  out.reserve(static_cast<size_t>(n) / 5 + 16);  // about one token per 5-7 bytes of source
   while (i < n && !diags.Full()) {
     char c = s[static_cast<size_t>(i)];
-    if (c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v') {
+    if (Is(c, kSpace)) {
       ++i;
+      while (i < n && Is(s[static_cast<size_t>(i)], kSpace)) ++i;
       continue;
     }
     std::int32_t b = i;
     if (c == '/' && i + 1 < n && s[static_cast<size_t>(i + 1)] == '/') {
-      while (i < n && s[static_cast<size_t>(i)] != '\n') ++i;
+      const size_t eol = s.find('\n', static_cast<size_t>(i));
+      i = eol == std::string::npos ? n : static_cast<std::int32_t>(eol);
       continue;
     }
     if (c == '/' && i + 1 < n && s[static_cast<size_t>(i + 1)] == '*') {
-      i += 2;
-      while (i + 1 < n && !(s[static_cast<size_t>(i)] == '*' && s[static_cast<size_t>(i + 1)] == '/')) ++i;
-      if (i + 1 >= n) {
+      const size_t close = s.find("*/", static_cast<size_t>(i + 2));
+      if (close == std::string::npos) {
         diags.Error(DiagCode::UnterminatedComment, span(b, b + 2), "block comment is never closed")
             .hint = "close it with */";
         i = n;
       } else {
-        i += 2;
+        i = static_cast<std::int32_t>(close) + 2;
       }
       continue;
     }
-    if (IsIdentStart(c)) {
-      while (i < n && (IsIdentStart(s[static_cast<size_t>(i)]) || IsDigit(s[static_cast<size_t>(i)]))) ++i;
-      std::string word = s.substr(static_cast<size_t>(b), static_cast<size_t>(i - b));
-      auto it = Keywords().find(word);
-      Token t;
-      t.kind = it == Keywords().end() ? Tok::Ident : it->second;
-      t.span = span(b, i);
-      t.text = std::move(word);
-      out.push_back(std::move(t));
+    if (Is(c, kIdentStart)) {
+      ++i;
+      while (i < n && Is(s[static_cast<size_t>(i)], kIdentStart | kDigit)) ++i;
+      const std::string_view word = view(b, i);
+      push(KeywordOrIdent(word), b, i).text = word;
       continue;
     }
-    if (IsDigit(c) || (c == '.' && i + 1 < n && IsDigit(s[static_cast<size_t>(i + 1)]))) {
+    if (Is(c, kDigit) || (c == '.' && i + 1 < n && Is(s[static_cast<size_t>(i + 1)], kDigit))) {
       bool integer = true;
-      while (i < n && IsDigit(s[static_cast<size_t>(i)])) ++i;
+      while (i < n && Is(s[static_cast<size_t>(i)], kDigit)) ++i;
       if (i < n && s[static_cast<size_t>(i)] == '.') {
         integer = false;
         ++i;
-        while (i < n && IsDigit(s[static_cast<size_t>(i)])) ++i;
+        while (i < n && Is(s[static_cast<size_t>(i)], kDigit)) ++i;
       }
       bool bad = false;
       if (i < n && (s[static_cast<size_t>(i)] == 'e' || s[static_cast<size_t>(i)] == 'E')) {
         integer = false;
         ++i;
         if (i < n && (s[static_cast<size_t>(i)] == '+' || s[static_cast<size_t>(i)] == '-')) ++i;
-        if (i >= n || !IsDigit(s[static_cast<size_t>(i)])) bad = true;
-        while (i < n && IsDigit(s[static_cast<size_t>(i)])) ++i;
+        if (i >= n || !Is(s[static_cast<size_t>(i)], kDigit)) bad = true;
+        while (i < n && Is(s[static_cast<size_t>(i)], kDigit)) ++i;
       }
-      if (i < n && IsIdentStart(s[static_cast<size_t>(i)])) {
+      if (i < n && Is(s[static_cast<size_t>(i)], kIdentStart)) {
         bad = true;
-        while (i < n && (IsIdentStart(s[static_cast<size_t>(i)]) || IsDigit(s[static_cast<size_t>(i)]))) ++i;
+        while (i < n && Is(s[static_cast<size_t>(i)], kIdentStart | kDigit)) ++i;
       }
-      Token t;
-      t.kind = Tok::Number;
-      t.span = span(b, i);
-      t.text = s.substr(static_cast<size_t>(b), static_cast<size_t>(i - b));
+      Token& t = push(Tok::Number, b, i);
+      t.text = view(b, i);
       t.is_integer = integer;
-      errno = 0;
-      t.number = std::strtod(t.text.c_str(), nullptr);
-      if (bad || errno == ERANGE) {
-        diags.Error(DiagCode::BadNumber, t.span, "malformed number '" + t.text + "'").hint =
+      bool out_of_range = false;
+      t.number = NumberValue(s, b, i, integer, &out_of_range);
+      if (bad || out_of_range) {
+        diags.Error(DiagCode::BadNumber, t.span, "malformed number '" + std::string(t.text) + "'").hint =
             "numbers look like 3, 0.5, 1e-3 or 2.5E+4";
         t.number = 0;
       }
-      out.push_back(std::move(t));
       continue;
     }
     if (c == '"') {
+      const std::int32_t close = PlainString(s, b);
+      if (close >= 0) {  // the common case: the literal's text is its value
+        i = close + 1;
+        push(Tok::String, b, i).text = view(b + 1, close);
+        continue;
+      }
       ++i;
       std::string val;
       bool closed = false;
       while (i < n) {
         char d = s[static_cast<size_t>(i)];
+        if (Is(d, kPlainInString)) {
+          val += d;
+          ++i;
+          continue;
+        }
         if (d == '"') {
           closed = true;
           ++i;
@@ -287,11 +390,9 @@ std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
         diags.Error(DiagCode::UnterminatedString, span(b, b + 1), "string literal is never closed").hint =
             "add the closing '\"'";
       }
-      Token t;
-      t.kind = Tok::String;
-      t.span = span(b, i);
-      t.text = std::move(val);
-      out.push_back(std::move(t));
+      Token& t = push(Tok::String, b, i);
+      t.decoded = std::make_shared<const std::string>(std::move(val));
+      t.text = *t.decoded;
       continue;
     }
     auto next = [&](char d) { return i + 1 < n && s[static_cast<size_t>(i + 1)] == d; };

@@ -2,7 +2,9 @@
 // escapes, unsigned numbers, keywords).
 #pragma once
 
+#include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "lang/diagnostics.h"
@@ -45,14 +47,19 @@ const char* TokSpelling(Tok t);
 
 struct Token {
   Tok kind = Tok::Eof;
-  Span span;
-  std::string text;    // identifier name, string contents (unescaped) or number text
-  double number = 0;   // Number
   bool is_integer = false;  // Number written without '.' or exponent
+  Span span;
+  // Identifier name, string contents (unescaped) or number text: a view into the
+  // SourceManager's text of the file (valid while that file is neither replaced nor
+  // dropped), or into `decoded` for a string literal whose escapes had to be rewritten.
+  std::string_view text;
+  double number = 0;  // Number
+  std::shared_ptr<const std::string> decoded;  // null unless the literal had escapes
 };
 
 // Tokenizes a whole file. Errors go to `diags`; the lexer skips the bad character and
-// goes on, so the parser still sees the rest.
+// goes on, so the parser still sees the rest. The tokens' texts view the SourceManager's
+// text of `file` (see Token::text).
 std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags);
 
 }  // namespace kanesim::lang

@@ -24,7 +24,7 @@ bool Parser::EquationItem(std::vector<Equation>& out) {
       ErrorExpected("'('", "after 'connect'");
       return false;
     }
-    Token open = Advance();
+    const Token& open = Advance();
     eq.lhs = ComponentRef();
     if (!Expect(Tok::Comma, "between the two connectors")) return false;
     eq.rhs = ComponentRef();

@@ -97,7 +97,7 @@ ExprPtr Parser::Arithmetic(int level) {
   if (level == 0) {
     ExprPtr lhs = Unary();
     while (At(Tok::Plus) || At(Tok::Minus)) {
-      Token op = Advance();
+      const Token& op = Advance();
       ExprPtr rhs = Arithmetic(1);
       lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
     }
@@ -105,7 +105,7 @@ ExprPtr Parser::Arithmetic(int level) {
   }
   ExprPtr lhs = Power();
   while (At(Tok::Star) || At(Tok::Slash)) {
-    Token op = Advance();
+    const Token& op = Advance();
     ExprPtr rhs = Power();
     lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
   }
@@ -139,6 +139,7 @@ ExprPtr Parser::Power() {
   auto e = std::make_unique<Expr>();
   e->kind = ExprKind::Binary;
   e->op = static_cast<int>(Tok::Caret);
+  e->args.reserve(2);
   e->args.push_back(std::move(base));
   if (At(Tok::Minus) || At(Tok::Plus)) {
     // a ^ -2 : Modelica requires parentheses; accept and note via hint-free parse.
@@ -185,7 +186,7 @@ ExprPtr Parser::MissingOperand(const Span& b) {
 
 // subscripts := '[' subscript { ',' subscript } ']';  subscript := ':' | expression
 void Parser::Subscripts(std::vector<ExprPtr>& out) {
-  Token open = Advance();  // '['
+  const Token& open = Advance();  // '['
   DepthGuard guard(this);
   if (!guard.ok) return;
   do {
@@ -275,13 +276,13 @@ ExprPtr Parser::Primary() {
       return e;
     }
     case Tok::LParen: {
-      Token open = Advance();
+      const Token& open = Advance();
       ExprPtr inner = Expression();
       ExpectClose(Tok::RParen, open);
       return inner;
     }
     case Tok::LBrace: {
-      Token open = Advance();
+      const Token& open = Advance();
       auto e = std::make_unique<Expr>();
       e->kind = ExprKind::Array;
       if (!At(Tok::RBrace)) {
@@ -307,7 +308,7 @@ ExprPtr Parser::Primary() {
       return Finish(std::move(e), b);
     }
     case Tok::LBracket: {
-      Token open = Advance();
+      const Token& open = Advance();
       auto e = std::make_unique<Expr>();
       e->kind = ExprKind::Matrix;
       e->rows.emplace_back();
@@ -326,7 +327,7 @@ ExprPtr Parser::Primary() {
     case Tok::Ident: {
       ExprPtr ref = ComponentRef();
       if (!At(Tok::LParen)) return ref;
-      Token open = Advance();
+      const Token& open = Advance();
       auto call = std::make_unique<Expr>();
       call->kind = ExprKind::Call;
       call->parts = std::move(ref->parts);

@@ -35,7 +35,7 @@ std::unique_ptr<StoredDefinition> Parser::Run() {
   while (!At(Tok::Eof) && !diags_.Full()) {
     size_t before = pos_;
     if (At(Tok::KwImport)) {
-      Token kw = Advance();
+      const Token& kw = Advance();
       Import imp;
       imp.span = kw.span;
       if (At(Tok::Ident) && Peek(1).kind == Tok::Assign) {
@@ -72,10 +72,10 @@ std::vector<std::string> Parser::Name(Span* span) {
     ErrorExpected("a name", "");
     return parts;
   }
-  parts.push_back(Advance().text);
+  parts.emplace_back(Advance().text);
   while (At(Tok::Dot) && Peek(1).kind == Tok::Ident) {
     Advance();
-    parts.push_back(Advance().text);
+    parts.emplace_back(Advance().text);
   }
   if (span) *span = SpanFrom(b);
   return parts;
@@ -143,10 +143,10 @@ std::unique_ptr<ClassDef> Parser::ClassDefinition(ClassDef* parent) {
   }
   Advance();
   if (At(Tok::Ident)) {
-    Token endname = Advance();
+    const Token& endname = Advance();
     if (endname.text != c->name) {
       auto& d = diags_.Error(DiagCode::EndNameMismatch, endname.span,
-                             "'end " + endname.text + "' closes class '" + c->name + "'");
+                             "'end " + std::string(endname.text) + "' closes class '" + c->name + "'");
       d.notes.push_back({c->name_span, "class '" + c->name + "' begins here"});
       d.hint = "write 'end " + c->name + ";'";
     }
@@ -210,7 +210,7 @@ void Parser::Composition(ClassDef& c) {
 //          | [redeclare] [final] [inner|outer] [replaceable] (class_definition | component_clause)
 bool Parser::ElementDecl(ClassDef& c, bool is_protected) {
   if (At(Tok::KwImport)) {
-    Token kw = Advance();
+    const Token& kw = Advance();
     Element el;
     el.kind = Element::kImport;
     el.import = std::make_unique<Import>();
@@ -228,7 +228,7 @@ bool Parser::ElementDecl(ClassDef& c, bool is_protected) {
     return Expect(Tok::Semicolon, "after import");
   }
   if (At(Tok::KwExtends)) {
-    Token kw = Advance();
+    const Token& kw = Advance();
     Element el;
     el.kind = Element::kExtends;
     el.extends = std::make_unique<Extends>();
@@ -304,7 +304,6 @@ void Parser::ComponentClause(ClassDef& c, Element prefix, bool is_protected, Var
     comp->replaceable = prefix.replaceable;
     comp->redeclare = prefix.redeclare;
     comp->is_protected = is_protected;
-    comp->type_name = type_name;
     comp->type_span = tspan;
     for (const auto& d : type_dims) comp->type_dims.push_back(ast::Clone(*d));
     Span b = Peek().span;
@@ -316,6 +315,9 @@ void Parser::ComponentClause(ClassDef& c, Element prefix, bool is_protected, Var
     comp->description = StringComment();
     comp->annotation = AnnotationOpt();
     comp->span = SpanFrom(tspan);
+    // The last component of the clause takes the type's name; the others copy it.
+    if (At(Tok::Comma)) comp->type_name = type_name;
+    else comp->type_name = std::move(type_name);
     Element el;
     el.kind = Element::kComponent;
     el.is_final = prefix.is_final;
@@ -347,7 +349,7 @@ std::unique_ptr<Modification> Parser::ClassModification() {
   DepthGuard guard(this);
   auto m = std::make_unique<Modification>();
   m->has_args = true;
-  Token open = Advance();  // '('
+  const Token& open = Advance();  // '('
   m->span = open.span;
   if (!guard.ok) {
     Recover();
@@ -394,7 +396,7 @@ bool Parser::ArgumentItem(Argument& a) {
       return false;
     }
     a.name_span = Peek().span;
-    a.path = {Advance().text};
+    a.path = {std::string(Advance().text)};
     if (At(Tok::LParen)) a.mod = ClassModification();
     a.span = SpanFrom(b);
     return true;

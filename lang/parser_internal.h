@@ -33,14 +33,17 @@ class Parser {
 
  private:
   // --- token helpers -------------------------------------------------------------
-  const Token& Peek(int k = 0) const {
+  // toks_ ends with the one Eof token, and pos_ never passes it.
+  const Token& Peek() const { return toks_[pos_]; }
+  const Token& Peek(int k) const {
     size_t i = pos_ + static_cast<size_t>(k);
     return i < toks_.size() ? toks_[i] : toks_.back();
   }
-  bool At(Tok t) const { return Peek().kind == t; }
-  Token Advance() {
-    Token t = Peek();
-    if (pos_ + 1 < toks_.size()) ++pos_;
+  bool At(Tok t) const { return toks_[pos_].kind == t; }
+  // The current token, then moves past it (a reference into toks_, which never changes).
+  const Token& Advance() {
+    const Token& t = toks_[pos_];
+    if (t.kind != Tok::Eof) ++pos_;
     return t;
   }
   bool Accept(Tok t) {
@@ -59,8 +62,8 @@ class Parser {
     if (last_error_pos_ == pos_ && pos_ != 0) return nullptr;
     last_error_pos_ = pos_;
     const Token& t = Peek();
-    std::string found = t.kind == Tok::Ident ? "identifier '" + t.text + "'"
-                        : t.kind == Tok::Number ? "number " + t.text
+    std::string found = t.kind == Tok::Ident ? "identifier '" + std::string(t.text) + "'"
+                        : t.kind == Tok::Number ? "number " + std::string(t.text)
                         : t.kind == Tok::Eof    ? std::string("end of file")
                                                 : std::string("'") + TokSpelling(t.kind) + "'";
     std::string message = "expected " + what;
@@ -170,6 +173,7 @@ class Parser {
     auto e = std::make_unique<Expr>();
     e->kind = ExprKind::Binary;
     e->op = static_cast<int>(op);
+    e->args.reserve(2);  // one allocation, not two
     e->args.push_back(std::move(lhs));
     e->args.push_back(std::move(rhs));
     e->span = SpanFrom(begin);

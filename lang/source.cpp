@@ -18,9 +18,13 @@ static std::string WithoutBom(std::string text) {
 }
 
 static std::vector<std::int32_t> LineStarts(const std::string& text) {
-  std::vector<std::int32_t> starts{0};
-  for (size_t i = 0; i < text.size(); ++i)
-    if (text[i] == '\n') starts.push_back(static_cast<std::int32_t>(i + 1));
+  std::vector<std::int32_t> starts;
+  starts.reserve(text.size() / 32 + 16);  // most lines are longer than 32 bytes: one allocation
+  starts.push_back(0);
+  const char* const begin = text.data();
+  const char* const end = begin + text.size();
+  for (const char* p = begin; (p = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p))));)
+    starts.push_back(static_cast<std::int32_t>(++p - begin));
   return starts;
 }
 

@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kanesim::stdlib {
@@ -15,7 +16,8 @@ struct EmbeddedFile {
 extern const EmbeddedFile kEmbeddedFiles[];  // ends with {nullptr, nullptr, 0}
 
 // The files, as (display path, contents). Display paths look like "<stdlib>/Joints.mech".
-std::vector<std::pair<std::string, std::string>> Files();
+// Built on first use and kept for the process (every load reads them).
+const std::vector<std::pair<std::string, std::string>>& Files();
 
 // The source directory recorded at build time (for provenance hashes and docs checks).
 const char* SourceDir();

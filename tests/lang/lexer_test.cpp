@@ -100,6 +100,25 @@ TEST(Lexer, StringEscapesAreUnescaped) {
   EXPECT_FALSE(r->diags.HasErrors());
 }
 
+// A literal without escapes is taken as it is from the source; one with escapes is decoded
+// character by character: both give the same value for the same characters, UTF-8 included.
+TEST(Lexer, StringValueIsTheSameWithOrWithoutEscapes) {
+  const std::string body = "a \xC2\xB0 b\t\xE2\x80\x94 c";  // a ° b<tab>— c
+  auto plain = LexText("\"" + body + "\"");
+  auto escaped = LexText("\"" + body + "\\n\"");
+  ASSERT_EQ(plain->tokens.size(), 2u);
+  ASSERT_EQ(escaped->tokens.size(), 2u);
+  EXPECT_EQ(plain->tokens[0].text, body);
+  EXPECT_EQ(escaped->tokens[0].text, body + "\n");
+  EXPECT_EQ(escaped->tokens[0].span.end, static_cast<int>(body.size()) + 4);
+  EXPECT_FALSE(plain->diags.HasErrors());
+  EXPECT_FALSE(escaped->diags.HasErrors());
+  // A copy of a token (the parser's, a test's) keeps its decoded text.
+  const Token copy = escaped->tokens[0];
+  escaped->tokens.clear();
+  EXPECT_EQ(copy.text, body + "\n");
+}
+
 TEST(Lexer, StringsMaySpanLines) {
   auto r = LexText("\"two\nlines\" x");
   ASSERT_EQ(r->tokens.size(), 3u);
