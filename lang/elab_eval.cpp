@@ -48,7 +48,8 @@ Value Elaborator::Scalar(ExprId e, VType t) {
 void Elaborator::MarkStructural(ExprId id) {
   const auto& pool = m_->exprs;
   if (structural_seen_.size() < pool.size()) structural_seen_.resize(pool.size(), 0);
-  std::vector<ExprId> stack{id};
+  std::vector<ExprId>& stack = structural_stack_;  // scratch, empty between calls
+  stack.assign(1, id);
   while (!stack.empty()) {
     ExprId x = stack.back();
     stack.pop_back();

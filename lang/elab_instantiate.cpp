@@ -4,7 +4,7 @@
 // when false.
 #include <algorithm>
 #include <cmath>
-#include <functional>
+#include <utility>
 
 #include "lang/elab_internal.h"
 
@@ -168,7 +168,9 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     d.hint = "extend it in a class of your own";
   }
   // Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
-  if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
+  auto [ann, fresh] = primitive_annotation_.try_emplace(cls, nullptr);
+  if (fresh) ann->second = FindAnnotation(cls, "__kanesim");  // the same for every instance of cls
+  if (const ast::Modification* pm = ann->second) {
     for (const auto& a : pm->args) {
       if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
       if (a.path[0] == "primitive") node->prim = PrimFromName(a.mod->value->text);
@@ -189,7 +191,7 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     if (!flat::JointTypeFromName(node->prim_kind, &j.type))
       diags_.Error(DiagCode::BadPrimitive, cls->name_span, "unknown joint kind '" + node->prim_kind + "'");
     j.loc = Loc(node->decl ? node->decl->name_span : cls->name_span);
-    m_->joints.push_back(j);
+    m_->joints.push_back(std::move(j));
   }
 
   std::vector<Collected> elems;
@@ -229,21 +231,21 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     child->depth = node->depth + 1;
     Mod outer;
     auto it = node->mod.sub.find(c.comp->name);
-    if (it != node->mod.sub.end()) outer = it->second;
+    if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
     if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
       Span at = outer.value ? outer.value->span : outer.span;
       auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
       d.notes.push_back({c.comp->span, "declared final here"});
       outer = Mod{};
     }
-    MergeInto(outer, c.ext_mod, child->path);
+    MergeInto(outer, std::move(c.ext_mod), child->path);  // Expand reads c's other fields only
     Mod decl = BuildMod(c.comp->mod.get(), node, nullptr);
     if (c.is_final) {
       decl.is_final = true;
       decl.final_span = c.comp->span;
       if (decl.value) decl.value->is_final = true;
     }
-    MergeInto(outer, decl, child->path);
+    MergeInto(outer, std::move(decl), child->path);
     child->mod = std::move(outer);
     child->is_final_decl = c.is_final;
     node->children.push_back(std::move(child));
@@ -359,7 +361,14 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     }
   }
   if (!is_builtin && !tcls) {
-    tcls = FindClass(comp.type_name, c.owner);
+    // The declared type: the same for every instance of the class declaring comp.
+    auto found = component_type_.find(&comp);
+    if (found != component_type_.end() && found->second.first == c.owner) {
+      tcls = found->second.second;
+    } else {
+      tcls = FindClass(comp.type_name, c.owner);
+      if (tcls) component_type_[&comp] = {c.owner, tcls};
+    }
     if (!tcls) {
       auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + tname + "'");
       std::vector<std::string> names{"Real", "Integer", "Boolean", "String"};

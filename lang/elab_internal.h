@@ -246,7 +246,8 @@ class Elaborator {
   bool ChargeSteps(std::int64_t steps, Span where);
   bool Charge(const Value& v, Span where);
   Value EvalModValue(const ModValue& mv, Span* where);
-  Value GetVar(Node* var, Span use_span);
+  // The variable's value, evaluated on first use; valid as long as the instance tree.
+  const Value& GetVar(Node* var, Span use_span);
   // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
@@ -283,10 +284,11 @@ class Elaborator {
   // --- instances (elab_instantiate.cpp) ---
   Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters);
   void MergeInto(Mod& outer, const Mod& inner, const std::string& what);  // outer wins
-  void MergeMods(Mod& outer, const Mod& inner, const std::string& what, std::vector<const std::string*>& keys);
+  void MergeInto(Mod& outer, Mod&& inner, const std::string& what);       // the same, moving inner's values
   void Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from);
   void CollectEquations(Node* node);
   void ProcessEquations(Node* node);
+  void ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
   // Resolves a reference to an instance node; for variables with subscripts, *elem gets
   // the flat element index (or -1 for the whole variable).
   Node* ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem);
@@ -324,6 +326,7 @@ class Elaborator {
   std::vector<double> pvals_;  // values of m_->params, index-aligned
   flat::ParamEvaluator param_eval_{m_->exprs, pvals_};  // memoized values of pool nodes
   std::vector<std::uint8_t> structural_seen_;  // per pool node: walked by MarkStructural
+  std::vector<ExprId> structural_stack_;        // MarkStructural's scratch
   std::vector<Node*> frame_nodes_;   // provisional frame id -> node
   std::vector<Node*> flange_nodes_;  // flange id -> node
   std::vector<Node*> joint_nodes_;   // joint id -> node
@@ -337,6 +340,11 @@ class Elaborator {
   bool depth_reported_ = false;
   bool too_large_ = false;
   std::vector<const ast::ClassDef*> extends_stack_;
+  // Lookups that depend on the class alone, made once per class rather than per instance:
+  // the __kanesim annotation (null: none), and a component's declared type (with the
+  // class it was looked up from).
+  std::unordered_map<const ast::ClassDef*, const ast::Modification*> primitive_annotation_;
+  std::unordered_map<const ast::Component*, std::pair<const ast::ClassDef*, const ast::ClassDef*>> component_type_;
   std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
   std::unique_ptr<Node> root_;
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
