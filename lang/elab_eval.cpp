@@ -198,7 +198,7 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
                                : part.name == "v" ? flat::StateKind::FrameVelocity
                                                   : flat::StateKind::FrameAngVel;
         int count = part.name == "R" ? 9 : 3;
-        v.shape = part.name == "R" ? std::vector<int>{3, 3} : std::vector<int>{3};
+        v.shape = part.name == "R" ? Dims{3, 3} : Dims{3};
         for (int k = 0; k < count; ++k)
           v.elements.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
         if (pi + 1 != e.parts.size()) {
@@ -383,7 +383,7 @@ Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
   Value r;
   r.type = VType::Integer;
   bool first = true;
-  std::vector<int> elem_shape;
+  Dims elem_shape;
   for (const auto& a : e.args) {
     Value v = Eval(*a, ctx);
     if (!v.valid) return Value::Invalid();
@@ -432,7 +432,7 @@ Value Elaborator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
   Iters local = ctx.iters ? *ctx.iters : Iters{};
   Value r;
   r.type = VType::Integer;
-  std::vector<int> elem_shape;
+  Dims elem_shape;
   for (size_t i = 0; i < xs.size(); ++i) {
     if (!ChargeSteps(1, e.span)) return Value::Invalid();
     local[e.text] = xs[i];

@@ -407,7 +407,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     child->vtype = builtin;
     child->variability = comp.variability;
     child->causality = comp.causality;
-    child->shape = dims;
+    child->shape.assign(dims.begin(), dims.end());
     long size = 1;
     for (int d : dims) size *= (d < 0 ? 1 : d);
     instances_ += size;

@@ -13,6 +13,7 @@
 #include "lang/ast.h"
 #include "lang/diagnostics.h"
 #include "lang/elab_budget.h"
+#include "lang/elab_small_vec.h"
 #include "lang/elaborate.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/flat/param_eval.h"
@@ -31,19 +32,25 @@ inline VType Promote(VType a, VType b) {
   return a == VType::Integer && b == VType::Integer ? VType::Integer : VType::Real;
 }
 
+// An array's sizes: empty for a scalar; vectors and matrices without a heap allocation.
+using Dims = SmallVec<int, 2>;
+
 // "scalar" or "[2, 3]", for messages.
-inline std::string ShapeStr(const std::vector<int>& shape) {
+inline std::string ShapeStr(const Dims& shape) {
   if (shape.empty()) return "scalar";
   std::string s = "[";
   for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
   return s + "]";
 }
 
+// A value's element expressions: a scalar, 3-vector or 3x3 matrix without a heap allocation.
+using Elements = SmallVec<ExprId, 9>;
+
 // A value: a (possibly empty-shaped = scalar) array of scalar expressions.
 struct Value {
   VType type = VType::Real;
-  std::vector<int> shape;          // empty = scalar
-  std::vector<ExprId> elements;       // the elements' expressions in the pool, row-major
+  Dims shape;                     // empty = scalar
+  Elements elements;               // the elements' expressions in the pool, row-major (up to 3x3 inline)
   std::vector<std::string> strings;  // a String value's elements, row-major (elements too holds one id each)
   bool valid = true;               // false after an error (suppresses cascades)
   size_t Size() const;
@@ -155,7 +162,7 @@ struct Node {
   VType vtype = VType::Real;
   ast::Variability variability = ast::Variability::None;
   ast::Causality causality = ast::Causality::None;
-  std::vector<int> shape;
+  Dims shape;
   EvalState state = EvalState::Unevaluated;  // GetVar's progress on `value`
   Value value;
   Boxed<ModValue> eq_binding;                    // from an equation `x = expr`
@@ -346,6 +353,13 @@ class Elaborator {
   std::unordered_map<const ast::ClassDef*, const ast::Modification*> primitive_annotation_;
   std::unordered_map<const ast::Component*, std::pair<const ast::ClassDef*, const ast::ClassDef*>> component_type_;
   std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
+  // EvalOperators' explicit stacks (lang/elab_operators.cpp), kept between calls.
+  struct OpItem {
+    const ast::Expr* e;
+    bool combine;  // operands already evaluated: their values are on top of op_values_
+  };
+  std::vector<OpItem> op_work_;
+  std::vector<Value> op_values_;
   std::unique_ptr<Node> root_;
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
   std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator
