@@ -135,6 +135,15 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
   extends_stack_.pop_back();
 }
 
+// "prefix.name", or "name" at the root; one allocation (paths are made for every instance).
+static std::string JoinPath(const std::string& prefix, const std::string& name) {
+  if (prefix.empty()) return name;
+  std::string p;
+  p.reserve(prefix.size() + 1 + name.size());
+  p.append(prefix).append(".").append(name);
+  return p;
+}
+
 static Prim PrimFromName(const std::string& s) {
   if (s == "frame") return Prim::Frame;
   if (s == "flange") return Prim::Flange;
@@ -227,7 +236,7 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     child->parent = node;
     child->decl = c.comp;
     child->name = c.comp->name;
-    child->path = node->path.empty() ? c.comp->name : node->path + "." + c.comp->name;
+    child->path = JoinPath(node->path, c.comp->name);
     child->depth = node->depth + 1;
     Mod outer;
     auto it = node->mod.sub.find(c.comp->name);
@@ -459,8 +468,10 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     auto el = std::make_unique<Node>();
     el->parent = node;  // elements resolve names in the same scope as the array
     el->decl = &comp;
-    el->name = comp.name + "[" + std::to_string(i + 1) + "]";
-    el->path = (node->path.empty() ? "" : node->path + ".") + el->name;
+    const std::string index = std::to_string(i + 1);
+    el->name.reserve(comp.name.size() + index.size() + 2);
+    el->name.append(comp.name).append("[").append(index).append("]");
+    el->path = JoinPath(node->path, el->name);
     el->depth = child->depth;
     el->mod = SliceMod(child->mod, i, n, comp.span);
     el->kind = Node::kClass;

@@ -32,8 +32,9 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
     Mod* target = &out;
     for (size_t i = 0; i < a.path.size(); ++i) {
       const std::string& key = a.path[i];
-      if (!target->sub.count(key)) target->order.push_back(key);
-      Mod& next = target->sub[key];
+      auto [slot, added] = target->sub.try_emplace(key);
+      if (added) target->order.push_back(key);
+      Mod& next = slot->second;
       if (i + 1 < a.path.size()) {
         if (!next.span.valid()) next.span = a.name_span;
         target = &next;
