@@ -89,7 +89,7 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
       Mod em = BuildMod(ex.mod.get(), node, nullptr);
       Mod effective;
       if (ext_mod) effective = *ext_mod;
-      MergeInto(effective, em, ast::JoinName(ex.base));
+      MergeInto(effective, std::move(em), ast::JoinName(ex.base));
       // Short class as a base: fold its modifiers in.
       base = ResolveShort(base, node, &effective);
       if (!base) continue;
@@ -204,6 +204,8 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
   }
 
   std::vector<Collected> elems;
+  elems.reserve(cls->elements.size());  // enough unless cls extends another class
+  node->equations.reserve(cls->equations.size());
   Collect(cls, node, nullptr, elems, node->equations, 0);
 
   // Every outer modifier must name an element.
@@ -231,6 +233,7 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     d.notes.push_back({cls->name_span, "'" + cls->name + "' is declared here"});
   }
 
+  node->children.reserve(elems.size());
   for (auto& c : elems) {
     auto child = std::make_unique<Node>();
     child->parent = node;
