@@ -37,7 +37,7 @@ struct Call {
     return false;
   }
   bool Vec3(const Value& v) const {
-    if (v.shape == std::vector<int>{3} && v.type != VType::String) return true;
+    if (v.shape == Dims{3} && v.type != VType::String) return true;
     el.diags_.Error(DiagCode::SizeMismatch, expr.span, "'" + fn + "' needs 3-vectors, got " + ShapeStr(v.shape));
     return false;
   }
@@ -171,7 +171,7 @@ Value LowerVector(Call& c) {
 }
 
 // The n-by-n matrix with `diag` on its diagonal (ones when null), zeros elsewhere.
-Value DiagonalMatrix(Call& c, long n, VType type, const std::vector<ExprId>* diag) {
+Value DiagonalMatrix(Call& c, long n, VType type, const Elements* diag) {
   if (n < 0 || n > kMaxArraySize || n * n > kMaxArraySize) {
     c.el.diags_.Error(DiagCode::ArrayTooLarge, c.expr.span, "matrix size out of range");
     return Value::Invalid();

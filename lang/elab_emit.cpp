@@ -2,8 +2,10 @@
 // primitive. connect() sets of frames collapse into one frame each (union-find); flange
 // connections turn rotational springs and dampers into generalized forces on joint
 // coordinates.
-#include <functional>
+#include <algorithm>
+#include <initializer_list>
 #include <numeric>
+#include <utility>
 
 #include "lang/elab_internal.h"
 #include "runtime/flat/union_find.h"
@@ -54,7 +56,7 @@ class Emitter {
         const Node* first = el.frame_nodes_[static_cast<size_t>(r)];
         f.name = first->path;
         f.loc = el.Loc(first->decl ? first->decl->name_span : Span{});
-        m_->frames.push_back(f);
+        m_->frames.push_back(std::move(f));
       }
       canon[i] = canon[static_cast<size_t>(r)];
       m_->frames[static_cast<size_t>(canon[i])].aliases.push_back(el.frame_nodes_[i]->path);
@@ -78,28 +80,28 @@ class Emitter {
     return canon[static_cast<size_t>(pid)];
   }
 
-  // Primitive n's variable `name`, which must have `shape`.
-  Value Field(Node* n, const char* name, std::vector<int> shape) {
+  // Primitive n's variable `name`, which must have `shape`. The value is the variable's
+  // own (GetVar's): it lives as long as the instance tree.
+  const Value& Field(Node* n, const char* name, std::initializer_list<int> shape) {
     Node* c = n->Child(name);
     if (!c || c->kind != Node::kVar) {
       diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
                    "primitive '" + n->path + "' lacks '" + name + "'");
-      return Value::Invalid();
+      return invalid_;
     }
-    Value v = el.GetVar(c, c->decl ? c->decl->name_span : Span{});
-    if (v.valid && v.shape != shape) {
+    const Value& v = el.GetVar(c, c->decl ? c->decl->name_span : Span{});
+    if (v.valid && !std::equal(v.shape.begin(), v.shape.end(), shape.begin(), shape.end())) {
       diags_.Error(DiagCode::SizeMismatch, c->decl ? c->decl->name_span : Span{},
                    "'" + c->path + "' has the wrong size for its primitive");
-      return Value::Invalid();
+      return invalid_;
     }
     return v;
   }
 
   // v as a 3-vector of expressions; zeros when invalid.
   flat::Vec3E AsVec3(const Value& v) {
-    flat::Vec3E out{pool.Constant(0), pool.Constant(0), pool.Constant(0)};
-    if (v.valid && v.elements.size() == 3) out = {v.elements[0], v.elements[1], v.elements[2]};
-    return out;
+    if (v.valid && v.elements.size() == 3) return {v.elements[0], v.elements[1], v.elements[2]};
+    return {pool.Constant(0), pool.Constant(0), pool.Constant(0)};
   }
 
   // v as a 3x3 matrix of expressions; the identity when invalid.
@@ -117,7 +119,7 @@ class Emitter {
   bool Boolean(Node* n, const char* name, bool dflt) {
     Node* c = n->Child(name);
     if (!c) return dflt;
-    Value v = el.GetVar(c, Span{});
+    const Value& v = el.GetVar(c, Span{});
     double x = dflt ? 1 : 0;
     if (v.valid && el.Structural(v, c->decl ? c->decl->name_span : Span{}, &x, name)) return x != 0;
     return dflt;
@@ -136,15 +138,16 @@ class Emitter {
       return;
     }
     if (n->kind != Node::kClass) return;
-    flat::SourceLoc loc = el.Loc(n->decl ? n->decl->name_span : Span{});
+    // Where the primitive is declared (made only for the kinds that keep it).
+    auto loc = [&] { return el.Loc(n->decl ? n->decl->name_span : Span{}); };
     switch (n->prim) {
-      case Prim::World: EmitWorld(n, loc); break;
-      case Prim::Body: EmitBody(n, loc); break;
-      case Prim::Fixed: EmitFixed(n, loc); break;
+      case Prim::World: EmitWorld(n, loc()); break;
+      case Prim::Body: EmitBody(n, loc()); break;
+      case Prim::Fixed: EmitFixed(n, loc()); break;
       case Prim::Joint: EmitJoint(n); break;
-      case Prim::LineForce: EmitLineForce(n, loc); break;
-      case Prim::Wrench: EmitWrench(n, loc); break;
-      case Prim::Contact: EmitContact(n, loc); break;
+      case Prim::LineForce: EmitLineForce(n, loc()); break;
+      case Prim::Wrench: EmitWrench(n, loc()); break;
+      case Prim::Contact: EmitContact(n, loc()); break;
       case Prim::RotSpring: springs.push_back(n); break;
       case Prim::Shape: el.EmitShape(n); break;
       default: break;
@@ -157,7 +160,7 @@ class Emitter {
     w.frame = FrameOf(n, "frame_b");
     w.gravity = AsVec3(Field(n, "g", {3}));
     w.loc = loc;
-    m_->worlds.push_back(w);
+    m_->worlds.push_back(std::move(w));
   }
 
   void EmitBody(Node* n, const flat::SourceLoc& loc) {
@@ -168,7 +171,7 @@ class Emitter {
     b.r_cm = AsVec3(Field(n, "r_CM", {3}));
     b.inertia = AsMat3(Field(n, "I", {3, 3}));
     b.loc = loc;
-    m_->bodies.push_back(b);
+    m_->bodies.push_back(std::move(b));
   }
 
   void EmitFixed(Node* n, const flat::SourceLoc& loc) {
@@ -179,7 +182,7 @@ class Emitter {
     f.r = AsVec3(Field(n, "r", {3}));
     f.R = AsMat3(Field(n, "R", {3, 3}));
     f.loc = loc;
-    m_->fixed.push_back(f);
+    m_->fixed.push_back(std::move(f));
   }
 
   void EmitJoint(Node* n) {
@@ -187,7 +190,7 @@ class Emitter {
     j.frame_a = FrameOf(n, "frame_a");
     j.frame_b = FrameOf(n, "frame_b");
     if (Node* c = n->Child("coordinates")) {
-      Value v = el.GetVar(c, Span{});
+      const Value& v = el.GetVar(c, Span{});
       if (v.valid && v.type == VType::String && !v.strings.empty() &&
           !flat::RotationCoordsFromName(v.strings[0], &j.rotation)) {
         auto& d = diags_.Error(DiagCode::BadValue, c->mod.value ? c->mod.value->span : Span{},
@@ -213,7 +216,7 @@ class Emitter {
     // Coulomb friction from the joint's normal force: only when mu is not zero, so a
     // scene without friction pays nothing (mu = 0 vs not is a structural choice).
     if (Node* mu = n->Child("mu"); mu && mu->kind == Node::kVar) {
-      Value mv = el.GetVar(mu, Span{});
+      const Value& mv = el.GetVar(mu, Span{});
       double muv = 0;
       if (mv.valid && el.Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
         j.friction_mu = mv.elements[0];
@@ -246,7 +249,7 @@ class Emitter {
     StartOf(q, &j.q_start, &j.q_start_fixed);
     StartOf(u, &j.u_start, nullptr);
     if (Bound(tau)) {
-      Value tv = el.GetVar(tau, Span{});
+      const Value& tv = el.GetVar(tau, Span{});
       if (tv.valid)
         for (size_t k = 0; k < j.tau.size() && k < tv.elements.size(); ++k) j.tau[k] = tv.elements[k];
     }
@@ -339,7 +342,7 @@ class Emitter {
     l.d = AsScalar(Field(n, "d", {}));
     l.s0 = AsScalar(Field(n, "s_unstretched", {}));
     l.loc = loc;
-    m_->line_forces.push_back(l);
+    m_->line_forces.push_back(std::move(l));
   }
 
   void EmitWrench(Node* n, const flat::SourceLoc& loc) {
@@ -350,7 +353,7 @@ class Emitter {
     w.torque = AsVec3(Field(n, "torque", {3}));
     w.resolve_in_world = Boolean(n, "resolve_in_world", true);
     w.loc = loc;
-    m_->wrenches.push_back(w);
+    m_->wrenches.push_back(std::move(w));
   }
 
   void EmitContact(Node* n, const flat::SourceLoc& loc) {
@@ -366,7 +369,7 @@ class Emitter {
     c.plane_normal = AsVec3(Field(n, "n", {3}));
     c.plane_point = AsVec3(Field(n, "p", {3}));
     c.loc = loc;
-    m_->contacts.push_back(c);
+    m_->contacts.push_back(std::move(c));
   }
 
   // Springs and dampers on flanges act on the coordinates of the joints whose drive
@@ -447,7 +450,7 @@ class Emitter {
   void Outputs(Node* root) {
     for (auto& c : root->children) {
       if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
-      Value v = el.GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
+      const Value& v = el.GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
       if (!v.valid) continue;
       if (v.type == VType::String) {
         diags_.Error(DiagCode::TypeMismatch, c->decl->name_span, "outputs must be numbers");
@@ -458,25 +461,22 @@ class Emitter {
         o.name = c->path + (v.elements.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
         o.expr = v.elements[k];
         o.loc = el.Loc(c->decl->name_span);
-        m_->outputs.push_back(o);
+        m_->outputs.push_back(std::move(o));
       }
     }
   }
 
   // Every parameter, even unused ones, for `kanesim check` and sweeps.
-  void EveryParameter(Node* root) {
-    std::function<void(Node*)> params = [&](Node* n) {
-      if (!n->enabled || diags_.Full()) return;
-      if (n->kind == Node::kVar) {
-        bool in_primitive = n->parent && n->parent->prim != Prim::None;
-        if (n->variability == ast::Variability::Parameter || !in_primitive)
-          el.GetVar(n, n->decl ? n->decl->name_span : Span{});
-        return;
-      }
-      for (auto& e : n->elems) params(e.get());
-      for (auto& c : n->children) params(c.get());
-    };
-    params(root);
+  void EveryParameter(Node* n) {
+    if (!n->enabled || diags_.Full()) return;
+    if (n->kind == Node::kVar) {
+      bool in_primitive = n->parent && n->parent->prim != Prim::None;
+      if (n->variability == ast::Variability::Parameter || !in_primitive)
+        el.GetVar(n, n->decl ? n->decl->name_span : Span{});
+      return;
+    }
+    for (auto& e : n->elems) EveryParameter(e.get());
+    for (auto& c : n->children) EveryParameter(c.get());
   }
 
   // Frame state references now point at canonical frames.
@@ -496,6 +496,7 @@ class Emitter {
   std::vector<int> set_size;                   // per set root: the number of frames in the set
   std::vector<Node*> springs;                  // rotational springs and dampers found by Walk
   std::vector<std::vector<ExprId>> tau_extra;  // per joint: generalized forces of springs on flanges
+  const Value invalid_ = Value::Invalid();     // what Field returns for a missing or ill-sized field
 };
 
 }  // namespace

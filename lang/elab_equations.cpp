@@ -1,6 +1,5 @@
 // Equations of the instance tree: connect() pairs frames and flanges, `x = expr` binds a
 // variable (or one element), for- and if-equations are unrolled at elaboration time.
-#include <functional>
 #include <memory>
 
 #include "lang/elab_internal.h"
@@ -14,120 +13,121 @@ void Elaborator::ProcessEquations(Node* node) {
     return;
   }
   if (node->kind != Node::kClass) return;
-  std::function<void(const ast::Equation&, const std::shared_ptr<const Iters>&)> one;
-  one = [&](const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
-    if (diags_.Full()) return;
-    Ctx ctx{node, iters.get()};
-    switch (eq.kind) {
-      case ast::EqKind::Connect: {
-        Node* a = ResolveNode(*eq.lhs, ctx, nullptr);
-        Node* b = ResolveNode(*eq.rhs, ctx, nullptr);
-        if (!a || !b) return;
-        if (!a->enabled || !b->enabled) return;  // a conditional component that is absent
-        auto is_conn = [](Node* n) { return n->kind == Node::kClass && (n->prim == Prim::Frame || n->prim == Prim::Flange); };
-        if (a->kind == Node::kArray && b->kind == Node::kArray && a->elems.size() == b->elems.size()) {
-          for (size_t i = 0; i < a->elems.size(); ++i) {
-            Node* x = a->elems[i].get();
-            Node* y = b->elems[i].get();
-            if (is_conn(x) && is_conn(y) && x->prim == y->prim)
-              (x->prim == Prim::Frame ? frame_links_ : flange_links_).push_back({x->prim_index, y->prim_index});
-          }
-          return;
-        }
-        if (!is_conn(a) || !is_conn(b) || a->prim != b->prim) {
-          Node* badn = !is_conn(a) ? a : b;
-          auto& d = diags_.Error(DiagCode::BadConnect, (badn == a ? eq.lhs : eq.rhs)->span,
-                                 !is_conn(a) || !is_conn(b)
-                                     ? "'" + badn->path + "' is not a connector"
-                                     : "cannot connect a Frame to a Flange");
-          d.hint = "connect frames (frame_a, frame_b of bodies and joints) or flanges (drive, support)";
-          return;
-        }
-        (a->prim == Prim::Frame ? frame_links_ : flange_links_).push_back({a->prim_index, b->prim_index});
-        return;
-      }
-      case ast::EqKind::For: {
-        Value r = Eval(*eq.range, ctx);
-        if (!r.valid) return;
-        if (r.Size() > static_cast<size_t>(kMaxArraySize)) {
-          diags_.Error(DiagCode::ArrayTooLarge, eq.range->span, "for-loop range too large");
-          return;
-        }
-        std::vector<double> xs = StructuralList(r, eq.range->span, "a for-loop range");
-        for (double x : xs) {
-          if (!ChargeSteps(1, eq.range->span)) return;
-          auto local = std::make_shared<Iters>(iters ? *iters : Iters{});
-          (*local)[eq.iter] = x;
-          for (const auto& b : eq.body) one(b, local);
+  for (const auto& src : node->equations) ProcessEquation(node, *src.eq, nullptr);
+  for (auto& c : node->children) ProcessEquations(c.get());
+}
+
+// One equation of `node` (for- and if-equations: their bodies, recursively).
+void Elaborator::ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
+  if (diags_.Full()) return;
+  Ctx ctx{node, iters.get()};
+  switch (eq.kind) {
+    case ast::EqKind::Connect: {
+      Node* a = ResolveNode(*eq.lhs, ctx, nullptr);
+      Node* b = ResolveNode(*eq.rhs, ctx, nullptr);
+      if (!a || !b) return;
+      if (!a->enabled || !b->enabled) return;  // a conditional component that is absent
+      auto is_conn = [](Node* n) { return n->kind == Node::kClass && (n->prim == Prim::Frame || n->prim == Prim::Flange); };
+      if (a->kind == Node::kArray && b->kind == Node::kArray && a->elems.size() == b->elems.size()) {
+        for (size_t i = 0; i < a->elems.size(); ++i) {
+          Node* x = a->elems[i].get();
+          Node* y = b->elems[i].get();
+          if (is_conn(x) && is_conn(y) && x->prim == y->prim)
+            (x->prim == Prim::Frame ? frame_links_ : flange_links_).push_back({x->prim_index, y->prim_index});
         }
         return;
       }
-      case ast::EqKind::If: {
-        for (size_t i = 0; i < eq.branches.size(); ++i) {
-          if (i < eq.conditions.size()) {
-            double cv = 0;
-            Value c = Eval(*eq.conditions[i], ctx);
-            if (!c.valid) return;
-            if (c.type != VType::Boolean) {
-              diags_.Error(DiagCode::TypeMismatch, eq.conditions[i]->span, "an if-equation condition must be Boolean");
-              return;
-            }
-            if (!Structural(c, eq.conditions[i]->span, &cv, "an if-equation condition")) return;
-            if (cv == 0) continue;
-          }
-          for (const auto& b : eq.branches[i]) one(b, iters);
-          return;
-        }
+      if (!is_conn(a) || !is_conn(b) || a->prim != b->prim) {
+        Node* badn = !is_conn(a) ? a : b;
+        auto& d = diags_.Error(DiagCode::BadConnect, (badn == a ? eq.lhs : eq.rhs)->span,
+                               !is_conn(a) || !is_conn(b)
+                                   ? "'" + badn->path + "' is not a connector"
+                                   : "cannot connect a Frame to a Flange");
+        d.hint = "connect frames (frame_a, frame_b of bodies and joints) or flanges (drive, support)";
         return;
       }
-      case ast::EqKind::Equality: {
-        if (eq.lhs->kind != ast::ExprKind::Ref) {
-          diags_.Error(DiagCode::BadEquation, eq.lhs->span,
-                       "equations must have the form 'variable = expression'")
-              .hint = "write the variable being defined on the left, e.g. 'j.tau = -k * j.q;'";
-          return;
-        }
-        int elem = -1;
-        Node* v = ResolveNode(*eq.lhs, ctx, &elem);
-        if (!v || !v->enabled) return;
-        if (v->kind != Node::kVar) {
-          diags_.Error(DiagCode::BadEquation, eq.lhs->span, "'" + v->path + "' is a component, not a variable");
-          return;
-        }
-        if (v->variability != ast::Variability::None) {
-          auto& d = diags_.Error(DiagCode::BadEquation, eq.lhs->span,
-                                 "'" + v->path + "' is a parameter; equations define variables");
-          d.hint = "give parameters values in their declaration, with a modifier, or with --set";
-          return;
-        }
-        ModValue mv;
-        mv.expr = eq.rhs.get();
-        mv.scope = node;
-        mv.iters = iters;
-        mv.span = eq.span;
-        if (elem >= 0) {
-          auto it = v->eq_elem_binding.find(elem);
-          if (it != v->eq_elem_binding.end()) {
-            auto& d = diags_.Error(DiagCode::ConflictingEquation, eq.span,
-                                   "element " + std::to_string(elem + 1) + " of '" + v->path + "' has two equations");
-            d.notes.push_back({it->second.span, "first equation here"});
+      (a->prim == Prim::Frame ? frame_links_ : flange_links_).push_back({a->prim_index, b->prim_index});
+      return;
+    }
+    case ast::EqKind::For: {
+      Value r = Eval(*eq.range, ctx);
+      if (!r.valid) return;
+      if (r.Size() > static_cast<size_t>(kMaxArraySize)) {
+        diags_.Error(DiagCode::ArrayTooLarge, eq.range->span, "for-loop range too large");
+        return;
+      }
+      std::vector<double> xs = StructuralList(r, eq.range->span, "a for-loop range");
+      for (double x : xs) {
+        if (!ChargeSteps(1, eq.range->span)) return;
+        auto local = std::make_shared<Iters>(iters ? *iters : Iters{});
+        (*local)[eq.iter] = x;
+        for (const auto& b : eq.body) ProcessEquation(node, b, local);
+      }
+      return;
+    }
+    case ast::EqKind::If: {
+      for (size_t i = 0; i < eq.branches.size(); ++i) {
+        if (i < eq.conditions.size()) {
+          double cv = 0;
+          Value c = Eval(*eq.conditions[i], ctx);
+          if (!c.valid) return;
+          if (c.type != VType::Boolean) {
+            diags_.Error(DiagCode::TypeMismatch, eq.conditions[i]->span, "an if-equation condition must be Boolean");
             return;
           }
-          v->eq_elem_binding[elem] = mv;
-          return;
+          if (!Structural(c, eq.conditions[i]->span, &cv, "an if-equation condition")) return;
+          if (cv == 0) continue;
         }
-        if (v->eq_binding) {
-          auto& d = diags_.Error(DiagCode::ConflictingEquation, eq.span, "'" + v->path + "' has two equations");
-          d.notes.push_back({v->eq_binding->span, "first equation here"});
-          return;
-        }
-        v->eq_binding = mv;
+        for (const auto& b : eq.branches[i]) ProcessEquation(node, b, iters);
         return;
       }
+      return;
     }
-  };
-  for (const auto& src : node->equations) one(*src.eq, nullptr);
-  for (auto& c : node->children) ProcessEquations(c.get());
+    case ast::EqKind::Equality: {
+      if (eq.lhs->kind != ast::ExprKind::Ref) {
+        diags_.Error(DiagCode::BadEquation, eq.lhs->span,
+                     "equations must have the form 'variable = expression'")
+            .hint = "write the variable being defined on the left, e.g. 'j.tau = -k * j.q;'";
+        return;
+      }
+      int elem = -1;
+      Node* v = ResolveNode(*eq.lhs, ctx, &elem);
+      if (!v || !v->enabled) return;
+      if (v->kind != Node::kVar) {
+        diags_.Error(DiagCode::BadEquation, eq.lhs->span, "'" + v->path + "' is a component, not a variable");
+        return;
+      }
+      if (v->variability != ast::Variability::None) {
+        auto& d = diags_.Error(DiagCode::BadEquation, eq.lhs->span,
+                               "'" + v->path + "' is a parameter; equations define variables");
+        d.hint = "give parameters values in their declaration, with a modifier, or with --set";
+        return;
+      }
+      ModValue mv;
+      mv.expr = eq.rhs.get();
+      mv.scope = node;
+      mv.iters = iters;
+      mv.span = eq.span;
+      if (elem >= 0) {
+        auto it = v->eq_elem_binding.find(elem);
+        if (it != v->eq_elem_binding.end()) {
+          auto& d = diags_.Error(DiagCode::ConflictingEquation, eq.span,
+                                 "element " + std::to_string(elem + 1) + " of '" + v->path + "' has two equations");
+          d.notes.push_back({it->second.span, "first equation here"});
+          return;
+        }
+        v->eq_elem_binding[elem] = std::move(mv);
+        return;
+      }
+      if (v->eq_binding) {
+        auto& d = diags_.Error(DiagCode::ConflictingEquation, eq.span, "'" + v->path + "' has two equations");
+        d.notes.push_back({v->eq_binding->span, "first equation here"});
+        return;
+      }
+      v->eq_binding = std::move(mv);
+      return;
+    }
+  }
 }
 
 }  // namespace kanesim::lang::elab

@@ -48,7 +48,8 @@ Value Elaborator::Scalar(ExprId e, VType t) {
 void Elaborator::MarkStructural(ExprId id) {
   const auto& pool = m_->exprs;
   if (structural_seen_.size() < pool.size()) structural_seen_.resize(pool.size(), 0);
-  std::vector<ExprId> stack{id};
+  std::vector<ExprId>& stack = structural_stack_;  // scratch, empty between calls
+  stack.assign(1, id);
   while (!stack.empty()) {
     ExprId x = stack.back();
     stack.pop_back();
@@ -197,7 +198,7 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
                                : part.name == "v" ? flat::StateKind::FrameVelocity
                                                   : flat::StateKind::FrameAngVel;
         int count = part.name == "R" ? 9 : 3;
-        v.shape = part.name == "R" ? std::vector<int>{3, 3} : std::vector<int>{3};
+        v.shape = part.name == "R" ? Dims{3, 3} : Dims{3};
         for (int k = 0; k < count; ++k)
           v.elements.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
         if (pi + 1 != e.parts.size()) {
@@ -382,7 +383,7 @@ Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
   Value r;
   r.type = VType::Integer;
   bool first = true;
-  std::vector<int> elem_shape;
+  Dims elem_shape;
   for (const auto& a : e.args) {
     Value v = Eval(*a, ctx);
     if (!v.valid) return Value::Invalid();
@@ -431,7 +432,7 @@ Value Elaborator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
   Iters local = ctx.iters ? *ctx.iters : Iters{};
   Value r;
   r.type = VType::Integer;
-  std::vector<int> elem_shape;
+  Dims elem_shape;
   for (size_t i = 0; i < xs.size(); ++i) {
     if (!ChargeSteps(1, e.span)) return Value::Invalid();
     local[e.text] = xs[i];

@@ -4,7 +4,7 @@
 // when false.
 #include <algorithm>
 #include <cmath>
-#include <functional>
+#include <utility>
 
 #include "lang/elab_internal.h"
 
@@ -89,7 +89,7 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
       Mod em = BuildMod(ex.mod.get(), node, nullptr);
       Mod effective;
       if (ext_mod) effective = *ext_mod;
-      MergeInto(effective, em, ast::JoinName(ex.base));
+      MergeInto(effective, std::move(em), ast::JoinName(ex.base));
       // Short class as a base: fold its modifiers in.
       base = ResolveShort(base, node, &effective);
       if (!base) continue;
@@ -135,6 +135,15 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
   extends_stack_.pop_back();
 }
 
+// "prefix.name", or "name" at the root; one allocation (paths are made for every instance).
+static std::string JoinPath(const std::string& prefix, const std::string& name) {
+  if (prefix.empty()) return name;
+  std::string p;
+  p.reserve(prefix.size() + 1 + name.size());
+  p.append(prefix).append(".").append(name);
+  return p;
+}
+
 static Prim PrimFromName(const std::string& s) {
   if (s == "frame") return Prim::Frame;
   if (s == "flange") return Prim::Flange;
@@ -168,7 +177,9 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     d.hint = "extend it in a class of your own";
   }
   // Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
-  if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
+  auto [ann, fresh] = primitive_annotation_.try_emplace(cls, nullptr);
+  if (fresh) ann->second = FindAnnotation(cls, "__kanesim");  // the same for every instance of cls
+  if (const ast::Modification* pm = ann->second) {
     for (const auto& a : pm->args) {
       if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
       if (a.path[0] == "primitive") node->prim = PrimFromName(a.mod->value->text);
@@ -189,10 +200,12 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     if (!flat::JointTypeFromName(node->prim_kind, &j.type))
       diags_.Error(DiagCode::BadPrimitive, cls->name_span, "unknown joint kind '" + node->prim_kind + "'");
     j.loc = Loc(node->decl ? node->decl->name_span : cls->name_span);
-    m_->joints.push_back(j);
+    m_->joints.push_back(std::move(j));
   }
 
   std::vector<Collected> elems;
+  elems.reserve(cls->elements.size());  // enough unless cls extends another class
+  node->equations.reserve(cls->equations.size());
   Collect(cls, node, nullptr, elems, node->equations, 0);
 
   // Every outer modifier must name an element.
@@ -220,30 +233,31 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     d.notes.push_back({cls->name_span, "'" + cls->name + "' is declared here"});
   }
 
+  node->children.reserve(elems.size());
   for (auto& c : elems) {
     auto child = std::make_unique<Node>();
     child->parent = node;
     child->decl = c.comp;
     child->name = c.comp->name;
-    child->path = node->path.empty() ? c.comp->name : node->path + "." + c.comp->name;
+    child->path = JoinPath(node->path, c.comp->name);
     child->depth = node->depth + 1;
     Mod outer;
     auto it = node->mod.sub.find(c.comp->name);
-    if (it != node->mod.sub.end()) outer = it->second;
+    if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
     if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
       Span at = outer.value ? outer.value->span : outer.span;
       auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
       d.notes.push_back({c.comp->span, "declared final here"});
       outer = Mod{};
     }
-    MergeInto(outer, c.ext_mod, child->path);
+    MergeInto(outer, std::move(c.ext_mod), child->path);  // Expand reads c's other fields only
     Mod decl = BuildMod(c.comp->mod.get(), node, nullptr);
     if (c.is_final) {
       decl.is_final = true;
       decl.final_span = c.comp->span;
       if (decl.value) decl.value->is_final = true;
     }
-    MergeInto(outer, decl, child->path);
+    MergeInto(outer, std::move(decl), child->path);
     child->mod = std::move(outer);
     child->is_final_decl = c.is_final;
     node->children.push_back(std::move(child));
@@ -359,7 +373,14 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     }
   }
   if (!is_builtin && !tcls) {
-    tcls = FindClass(comp.type_name, c.owner);
+    // The declared type: the same for every instance of the class declaring comp.
+    auto found = component_type_.find(&comp);
+    if (found != component_type_.end() && found->second.first == c.owner) {
+      tcls = found->second.second;
+    } else {
+      tcls = FindClass(comp.type_name, c.owner);
+      if (tcls) component_type_[&comp] = {c.owner, tcls};
+    }
     if (!tcls) {
       auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + tname + "'");
       std::vector<std::string> names{"Real", "Integer", "Boolean", "String"};
@@ -398,7 +419,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     child->vtype = builtin;
     child->variability = comp.variability;
     child->causality = comp.causality;
-    child->shape = dims;
+    child->shape.assign(dims.begin(), dims.end());
     long size = 1;
     for (int d : dims) size *= (d < 0 ? 1 : d);
     instances_ += size;
@@ -450,8 +471,10 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     auto el = std::make_unique<Node>();
     el->parent = node;  // elements resolve names in the same scope as the array
     el->decl = &comp;
-    el->name = comp.name + "[" + std::to_string(i + 1) + "]";
-    el->path = (node->path.empty() ? "" : node->path + ".") + el->name;
+    const std::string index = std::to_string(i + 1);
+    el->name.reserve(comp.name.size() + index.size() + 2);
+    el->name.append(comp.name).append("[").append(index).append("]");
+    el->path = JoinPath(node->path, el->name);
     el->depth = child->depth;
     el->mod = SliceMod(child->mod, i, n, comp.span);
     el->kind = Node::kClass;

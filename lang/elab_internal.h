@@ -13,6 +13,7 @@
 #include "lang/ast.h"
 #include "lang/diagnostics.h"
 #include "lang/elab_budget.h"
+#include "lang/elab_small_vec.h"
 #include "lang/elaborate.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/flat/param_eval.h"
@@ -31,19 +32,25 @@ inline VType Promote(VType a, VType b) {
   return a == VType::Integer && b == VType::Integer ? VType::Integer : VType::Real;
 }
 
+// An array's sizes: empty for a scalar; vectors and matrices without a heap allocation.
+using Dims = SmallVec<int, 2>;
+
 // "scalar" or "[2, 3]", for messages.
-inline std::string ShapeStr(const std::vector<int>& shape) {
+inline std::string ShapeStr(const Dims& shape) {
   if (shape.empty()) return "scalar";
   std::string s = "[";
   for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
   return s + "]";
 }
 
+// A value's element expressions: a scalar, 3-vector or 3x3 matrix without a heap allocation.
+using Elements = SmallVec<ExprId, 9>;
+
 // A value: a (possibly empty-shaped = scalar) array of scalar expressions.
 struct Value {
   VType type = VType::Real;
-  std::vector<int> shape;          // empty = scalar
-  std::vector<ExprId> elements;       // the elements' expressions in the pool, row-major
+  Dims shape;                     // empty = scalar
+  Elements elements;               // the elements' expressions in the pool, row-major (up to 3x3 inline)
   std::vector<std::string> strings;  // a String value's elements, row-major (elements too holds one id each)
   bool valid = true;               // false after an error (suppresses cascades)
   size_t Size() const;
@@ -155,7 +162,7 @@ struct Node {
   VType vtype = VType::Real;
   ast::Variability variability = ast::Variability::None;
   ast::Causality causality = ast::Causality::None;
-  std::vector<int> shape;
+  Dims shape;
   EvalState state = EvalState::Unevaluated;  // GetVar's progress on `value`
   Value value;
   Boxed<ModValue> eq_binding;                    // from an equation `x = expr`
@@ -246,7 +253,8 @@ class Elaborator {
   bool ChargeSteps(std::int64_t steps, Span where);
   bool Charge(const Value& v, Span where);
   Value EvalModValue(const ModValue& mv, Span* where);
-  Value GetVar(Node* var, Span use_span);
+  // The variable's value, evaluated on first use; valid as long as the instance tree.
+  const Value& GetVar(Node* var, Span use_span);
   // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
@@ -283,10 +291,11 @@ class Elaborator {
   // --- instances (elab_instantiate.cpp) ---
   Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters);
   void MergeInto(Mod& outer, const Mod& inner, const std::string& what);  // outer wins
-  void MergeMods(Mod& outer, const Mod& inner, const std::string& what, std::vector<const std::string*>& keys);
+  void MergeInto(Mod& outer, Mod&& inner, const std::string& what);       // the same, moving inner's values
   void Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from);
   void CollectEquations(Node* node);
   void ProcessEquations(Node* node);
+  void ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
   // Resolves a reference to an instance node; for variables with subscripts, *elem gets
   // the flat element index (or -1 for the whole variable).
   Node* ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem);
@@ -324,6 +333,7 @@ class Elaborator {
   std::vector<double> pvals_;  // values of m_->params, index-aligned
   flat::ParamEvaluator param_eval_{m_->exprs, pvals_};  // memoized values of pool nodes
   std::vector<std::uint8_t> structural_seen_;  // per pool node: walked by MarkStructural
+  std::vector<ExprId> structural_stack_;        // MarkStructural's scratch
   std::vector<Node*> frame_nodes_;   // provisional frame id -> node
   std::vector<Node*> flange_nodes_;  // flange id -> node
   std::vector<Node*> joint_nodes_;   // joint id -> node
@@ -337,7 +347,19 @@ class Elaborator {
   bool depth_reported_ = false;
   bool too_large_ = false;
   std::vector<const ast::ClassDef*> extends_stack_;
+  // Lookups that depend on the class alone, made once per class rather than per instance:
+  // the __kanesim annotation (null: none), and a component's declared type (with the
+  // class it was looked up from).
+  std::unordered_map<const ast::ClassDef*, const ast::Modification*> primitive_annotation_;
+  std::unordered_map<const ast::Component*, std::pair<const ast::ClassDef*, const ast::ClassDef*>> component_type_;
   std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
+  // EvalOperators' explicit stacks (lang/elab_operators.cpp), kept between calls.
+  struct OpItem {
+    const ast::Expr* e;
+    bool combine;  // operands already evaluated: their values are on top of op_values_
+  };
+  std::vector<OpItem> op_work_;
+  std::vector<Value> op_values_;
   std::unique_ptr<Node> root_;
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
   std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator

@@ -7,7 +7,7 @@
 
 namespace kanesim::lang::elab {
 
-Value Elaborator::GetVar(Node* var, Span use_span) {
+const Value& Elaborator::GetVar(Node* var, Span use_span) {
   if (var->state == EvalState::Done) return var->value;
   if (var->state == EvalState::Evaluating) {
     auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->path + "' is defined in terms of itself");
@@ -17,7 +17,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     return var->value;
   }
   var->state = EvalState::Evaluating;
-  auto finish = [&](Value v) {
+  auto finish = [&](Value v) -> const Value& {
     var->value = std::move(v);
     var->state = EvalState::Done;
     return var->value;
@@ -35,7 +35,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
       v.elements.push_back(m_->exprs.State(m_->AddStateRef(
           {var->name == "q" ? flat::StateKind::JointQ : flat::StateKind::JointU, owner->prim_index,
            static_cast<int>(k)})));
-    return finish(v);
+    return finish(std::move(v));
   }
 
   const ModValue* binding = nullptr;
@@ -77,7 +77,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
   } else {
     Span where;
     v = EvalModValue(*binding, &where);
-    if (!v.valid) return finish(v);
+    if (!v.valid) return finish(std::move(v));
     DiagCode tcode = binding->from_set ? DiagCode::BadSet : DiagCode::TypeMismatch;
     bool ok = true;
     if (var->vtype == VType::String || v.type == VType::String) ok = var->vtype == v.type;
@@ -130,7 +130,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     }
     v.elements[static_cast<size_t>(k)] = ev.elements[0];
   }
-  if (!is_param) return finish(v);
+  if (!is_param) return finish(std::move(v));
 
   // Parameters and constants: no time, no state.
   for (ExprId x : v.elements) {
@@ -157,20 +157,23 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     Value a = EvalModValue(*it->second.value, nullptr);
     if (a.valid && a.type == VType::String && !a.strings.empty()) unit = a.strings[0];
   }
-  Value out = v;
+  Value out = std::move(v);  // element k is read before it is replaced
   const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
-  for (size_t k = 0; k < v.elements.size(); ++k) {
+  std::vector<int> idx(var->shape.size());
+  for (size_t k = 0; k < out.elements.size(); ++k) {
     std::string name = var->path;
     if (!var->shape.empty()) {
       // Row-major multi-index, 1-based.
-      std::vector<int> idx(var->shape.size());
       size_t rem = k;
       for (size_t d = var->shape.size(); d-- > 0;) {
         idx[d] = static_cast<int>(rem % static_cast<size_t>(var->shape[d])) + 1;
         rem /= static_cast<size_t>(var->shape[d]);
       }
       name += "[";
-      for (size_t d = 0; d < idx.size(); ++d) name += (d ? "," : "") + std::to_string(idx[d]);
+      for (size_t d = 0; d < idx.size(); ++d) {
+        if (d) name += ',';
+        name += std::to_string(idx[d]);
+      }
       name += "]";
     }
     flat::Param p;
@@ -186,12 +189,12 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     p.user_set = binding && binding->from_set;
     p.loc = loc;
     if (var->vtype == VType::String) {
-      p.string_value = v.strings.empty() ? "" : v.strings[k];
+      p.string_value = out.strings.empty() ? "" : out.strings[k];
       m_->params.push_back(std::move(p));
       pvals_.push_back(0.0);
       continue;
     }
-    ExprId x = v.elements[k];
+    ExprId x = out.elements[k];
     double val = param_eval_.Eval(x);
     p.value = val;
     p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
@@ -214,7 +217,7 @@ Value Elaborator::GetVar(Node* var, Span use_span) {
     pvals_.push_back(val);
     out.elements[k] = m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
   }
-  return finish(out);
+  return finish(std::move(out));
 }
 Node* Elaborator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
   if (elem) *elem = -1;

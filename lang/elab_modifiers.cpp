@@ -3,6 +3,8 @@
 // modification), and sliced per element for arrays of components unless `each` is given.
 #include <optional>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "lang/elab_internal.h"
@@ -30,8 +32,9 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
     Mod* target = &out;
     for (size_t i = 0; i < a.path.size(); ++i) {
       const std::string& key = a.path[i];
-      if (!target->sub.count(key)) target->order.push_back(key);
-      Mod& next = target->sub[key];
+      auto [slot, added] = target->sub.try_emplace(key);
+      if (added) target->order.push_back(key);
+      Mod& next = slot->second;
       if (i + 1 < a.path.size()) {
         if (!next.span.valid()) next.span = a.name_span;
         target = &next;
@@ -60,60 +63,79 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
   return out;
 }
 
-// outer wins over inner; `what` names the element for messages.
-void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
-  std::vector<const std::string*> keys;
-  MergeMods(outer, inner, what, keys);
-}
+namespace {
 
-// The recursion of MergeInto (as deep as the modifier is written). The name for messages
-// is `what` followed by `keys`, built only when a message needs it.
-void Elaborator::MergeMods(Mod& outer, const Mod& inner, const std::string& what,
-                           std::vector<const std::string*>& keys) {
+// The recursion of MergeInto (as deep as the modifier is written), for an inner modifier
+// that is kept (const Mod&: its values are copied) or given up (Mod&&: they are moved).
+// The name for messages is `what` followed by `keys`, built only when a message needs it.
+template <class InnerRef>
+void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::string& what,
+                   std::vector<const std::string*>& keys) {
+  constexpr bool kMove = !std::is_lvalue_reference_v<InnerRef>;
+  auto take = [](auto& x) -> decltype(auto) {
+    if constexpr (kMove) return std::move(x);
+    else return static_cast<const std::remove_reference_t<decltype(x)>&>(x);
+  };
   auto name = [&] {
     std::string s = what;
     for (const std::string* k : keys) s += "." + *k;
     return s;
   };
+  const bool inner_empty = inner.empty();  // before anything moves out of inner
   // --set on a final parameter is reported once by Elaborator::Run.
   if (outer.value && outer.value->from_set && inner.is_final) {
     outer.value.reset();
   }
   if (inner.is_final && (outer.value || !outer.sub.empty() || !outer.redeclare_type.empty())) {
     Span at = outer.value ? outer.value->span : outer.span;
-    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + name() + "' is final and cannot be modified");
+    auto& d = diags.Error(DiagCode::FinalOverride, at, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.final_span.valid() ? inner.final_span : inner.span, "declared final here"});
     outer.value.reset();
     outer.sub.clear();
   }
-  if (!outer.value && inner.value) outer.value = inner.value;
+  if (!outer.value && inner.value) outer.value = take(inner.value);
   else if (outer.value && inner.value && inner.value->is_final) {
-    auto& d = diags_.Error(DiagCode::FinalOverride, outer.value->span, "'" + name() + "' is final and cannot be modified");
+    auto& d = diags.Error(DiagCode::FinalOverride, outer.value->span, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.value->span, "final value given here"});
-    outer.value = inner.value;
+    outer.value = take(inner.value);
   }
   if (inner.is_final) {
     outer.is_final = true;
     outer.final_span = inner.final_span;
   }
   if (outer.redeclare_type.empty() && !inner.redeclare_type.empty()) {
-    outer.redeclare_type = inner.redeclare_type;
+    outer.redeclare_type = take(inner.redeclare_type);
     outer.redeclare_from = inner.redeclare_from;
     outer.redeclare_span = inner.redeclare_span;
   }
   if (!outer.span.valid()) outer.span = inner.span;
   outer.each = outer.each || inner.each;
-  if (!inner.empty() && !inner.set_only) outer.set_only = false;
+  if (!inner_empty && !inner.set_only) outer.set_only = false;
   for (const auto& key : inner.order) {
     auto it = inner.sub.find(key);
     if (it == inner.sub.end()) continue;
     auto [slot, added] = outer.sub.try_emplace(key);
     if (added) outer.order.push_back(key);
     keys.push_back(&key);
-    MergeMods(slot->second, it->second, what, keys);
+    MergeModsImpl(diags, slot->second, take(it->second), what, keys);
     keys.pop_back();
   }
 }
+
+}  // namespace
+
+// outer wins over inner; `what` names the element for messages.
+void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
+  std::vector<const std::string*> keys;
+  MergeModsImpl(diags_, outer, inner, what, keys);
+}
+
+// The same, giving up `inner`: its values move into `outer` instead of being copied.
+void Elaborator::MergeInto(Mod& outer, Mod&& inner, const std::string& what) {
+  std::vector<const std::string*> keys;
+  MergeModsImpl(diags_, outer, std::move(inner), what, keys);
+}
+
 // Element `index` of an array component's modifier. Copies everything but the values,
 // and of a value only the slice: copying the whole array value for every element would
 // cost O(count^2) time and memory.

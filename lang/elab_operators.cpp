@@ -21,18 +21,21 @@ bool IsOperator(const ast::Expr& e) { return e.kind == ast::ExprKind::Unary || e
 // that are not operators are evaluated by EvalNested. Operands are evaluated left to
 // right, as a recursive evaluator would, so diagnostics come in source order.
 Value Elaborator::EvalOperators(const ast::Expr& root, const Ctx& ctx) {
-  struct Item {
-    const ast::Expr* e;
-    bool combine;  // operands already evaluated: their values are on top of `values`
-  };
-  std::vector<Item> work{{&root, false}};
-  std::vector<Value> values;
-  while (!work.empty()) {
-    Item it = work.back();
+  // The stacks are the Elaborator's, shared with the evaluations this one nests (an
+  // operand may hold an operator chain of its own): this call owns what lies above the
+  // sizes they had on entry, and leaves them at those sizes.
+  std::vector<OpItem>& work = op_work_;
+  std::vector<Value>& values = op_values_;
+  const size_t work_base = work.size();
+  const size_t value_base = values.size();
+  work.push_back({&root, false});
+  while (work.size() > work_base) {
+    OpItem it = work.back();
     work.pop_back();
     const ast::Expr& e = *it.e;
     if (!IsOperator(e)) {
-      values.push_back(EvalNested(e, ctx));
+      Value v = EvalNested(e, ctx);  // may use the stacks above their current sizes
+      values.push_back(std::move(v));
       continue;
     }
     if (!it.combine) {
@@ -51,7 +54,9 @@ Value Elaborator::EvalOperators(const ast::Expr& root, const Ctx& ctx) {
     }
     Charge(values.back(), e.span);
   }
-  return std::move(values.back());
+  Value result = std::move(values.back());
+  values.resize(value_base);
+  return result;
 }
 
 Value Elaborator::Elementwise2(const Value& a, const Value& b, Op op, VType rt, Span sp) {

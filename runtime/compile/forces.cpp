@@ -20,15 +20,24 @@ constexpr double kStiffRate = 1e3;
 
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
+  // Parameter and state names for the text of force and output expressions, made on
+  // first use (a mechanism whose forces all fold to numbers needs none).
   std::vector<std::string> pn, sn;
-  for (const auto& x : m.params) pn.push_back(x.name);
-  for (const auto& r : m.state_refs) sn.push_back(m.StateRefName(r));
+  bool named = false;
+  auto text = [&](flat::ExprId id) {
+    if (!named) {
+      for (const auto& x : m.params) pn.push_back(x.name);
+      for (const auto& r : m.state_refs) sn.push_back(m.StateRefName(r));
+      named = true;
+    }
+    return m.exprs.ToString(id, &pn, &sn);
+  };
   TapeBuilder forces(m.exprs, p.param_values);
   auto scalar = [&](flat::ExprId id, const std::string& label) {
     Scalar s;
     if (id == kNoExpr) return s;
     if (forces.Fold(id, &s.value)) return s;
-    s.root = forces.AddRoot(id, label, m.exprs.ToString(id, &pn, &sn));
+    s.root = forces.AddRoot(id, label, text(id));
     return s;
   };
   auto placed = [&](int frame) {
@@ -84,7 +93,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   p.force_tape = forces.Finish();
 
   TapeBuilder outputs(m.exprs, p.param_values);
-  for (const auto& o : m.outputs) outputs.AddRoot(o.expr, "output '" + o.name + "'", m.exprs.ToString(o.expr, &pn, &sn));
+  for (const auto& o : m.outputs) outputs.AddRoot(o.expr, "output '" + o.name + "'", text(o.expr));
   p.output_tape = outputs.Finish();
 
   // State refs read by each tape; joint refs must name articulated joints.

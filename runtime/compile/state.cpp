@@ -38,19 +38,30 @@ std::vector<std::string> StateNames(const flat::Mechanism& m) {
 
 void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
-  const auto pn = ParamNames(m);
-  const auto sn = StateNames(m);
-  auto num = [&](flat::ExprId id, double dflt, const std::string& what, const flat::SourceLoc& loc) {
+  // Parameter and state names for the text of prescribed motions, made on first use.
+  std::vector<std::string> pn, sn;
+  bool named = false;
+  auto text = [&](flat::ExprId id) {
+    if (!named) pn = ParamNames(m), sn = StateNames(m), named = true;
+    return m.exprs.ToString(id, &pn, &sn);
+  };
+  // The value of a parameter expression; its name for the message is what + of + ".q"
+  // (built only for the message).
+  auto num = [&](flat::ExprId id, double dflt, const char* what, const std::string& of, const char* suffix,
+                 const flat::SourceLoc& loc) {
     if (id == kNoExpr) return dflt;
     double v = 0.0;
     if (!folder.Fold(id, &v)) {
-      errors->push_back(Msg(flat::DiagCode::NotFixed, what + " must not depend on time or state", loc));
+      errors->push_back(
+          Msg(flat::DiagCode::NotFixed, std::string(what) + of + suffix + " must not depend on time or state", loc));
       return dflt;
     }
     return v;
   };
-  auto num3 = [&](const flat::Vec3E& e, const std::string& what, const flat::SourceLoc& loc) {
-    return Vec3(num(e[0], 0.0, what, loc), num(e[1], 0.0, what, loc), num(e[2], 0.0, what, loc));
+  const std::string none;
+  auto num3 = [&](const flat::Vec3E& e, const char* what, const flat::SourceLoc& loc) {
+    return Vec3(num(e[0], 0.0, what, none, "", loc), num(e[1], 0.0, what, none, "", loc),
+                num(e[2], 0.0, what, none, "", loc));
   };
 
   TapeBuilder presc(m.exprs, p.param_values);
@@ -95,7 +106,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     for (int k = 0; k < j.nq; ++k) {
       flat::ExprId e = static_cast<size_t>(k) < fj.q_start.size() ? fj.q_start[static_cast<size_t>(k)] : kNoExpr;
       if (quat && k >= rot0 && e != kNoExpr) any_rot_start = true;
-      q_start_all.push_back(num(e, 0.0, "start value of " + j.name + ".q", fj.loc));
+      q_start_all.push_back(num(e, 0.0, "start value of ", j.name, ".q", fj.loc));
     }
     if ((j.type == JointType::Spherical || j.type == JointType::Free) && !quat) {
       const double b = q_start_all[static_cast<size_t>(j.q0 + rot0 + 1)];
@@ -114,14 +125,14 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     }
     for (int k = 0; k < j.nu; ++k) {
       flat::ExprId e = static_cast<size_t>(k) < fj.u_start.size() ? fj.u_start[static_cast<size_t>(k)] : kNoExpr;
-      u_start_all.push_back(num(e, 0.0, "start value of " + j.name + ".u", fj.loc));
+      u_start_all.push_back(num(e, 0.0, "start value of ", j.name, ".u", fj.loc));
     }
 
     // Coulomb friction (runtime/kane/friction.cpp): a free Prismatic or Revolute joint.
     if (fj.friction_mu != kNoExpr) {
-      j.mu = num(fj.friction_mu, 0.0, "friction coefficient of " + j.name, fj.loc);
-      j.mu_radius = num(fj.friction_radius, 1.0, "friction radius of " + j.name, fj.loc);
-      j.mu_v = num(fj.friction_v, 1e-3, "friction speed scale of " + j.name, fj.loc);
+      j.mu = num(fj.friction_mu, 0.0, "friction coefficient of ", j.name, "", fj.loc);
+      j.mu_radius = num(fj.friction_radius, 1.0, "friction radius of ", j.name, "", fj.loc);
+      j.mu_v = num(fj.friction_v, 1e-3, "friction speed scale of ", j.name, "", fj.loc);
       const bool prescribed = !fj.prescribed.empty() && fj.prescribed[0] != kNoExpr;
       if ((j.type != JointType::Prismatic && j.type != JointType::Revolute) || prescribed || j.mu < 0.0 ||
           !(j.mu_v > 0.0))
@@ -148,7 +159,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
         errors->push_back(Msg(flat::DiagCode::NotFixed, label + " may depend on time and parameters only", fj.loc));
         continue;
       }
-      presc.AddRoot(e, label, m.exprs.ToString(e, &pn, &sn));
+      presc.AddRoot(e, label, text(e));
       p.q_prescribed.push_back(j.q0 + k);
       p.prescribed_u.push_back(j.u0 + k);
     }
