@@ -195,7 +195,7 @@ enum : unsigned char { kSpace = 1, kIdentStart = 2, kDigit = 4, kPlainInString =
 
 struct CharClasses {
   unsigned char of[256] = {};
-  CharClasses() {
+  constexpr CharClasses() {
     for (int c : {' ', '\t', '\r', '\n', '\f', '\v'}) of[c] |= kSpace;
     for (int c = 'a'; c <= 'z'; ++c) of[c] |= kIdentStart;
     for (int c = 'A'; c <= 'Z'; ++c) of[c] |= kIdentStart;
@@ -207,7 +207,7 @@ struct CharClasses {
     for (int c : {'\t', '\n', '\r'}) of[c] |= kPlainInString;
   }
 };
-const CharClasses kClasses;
+constexpr CharClasses kClasses;  // built at compile time: usable from any static initializer
 
 bool Is(char c, unsigned char cls) { return (kClasses.of[static_cast<unsigned char>(c)] & cls) != 0; }
 
