@@ -203,6 +203,11 @@ bool Elaborator::Run() {
   if (diags_.HasErrors()) return false;
   ProcessEquations(root_.get());
   if (diags_.HasErrors()) return false;
+  // Every parameter is one element of a scalar variable, all counted by instances_: the
+  // parameter table grows to its size once instead of by doubling (each step moving
+  // every Param).
+  m_->params.reserve(static_cast<size_t>(instances_));
+  pvals_.reserve(static_cast<size_t>(instances_));
   Emit(root_.get());
 
   // Experiment annotation.
