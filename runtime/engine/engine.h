@@ -103,6 +103,15 @@ bool BranchMonitorActive(const Program& program);  // the program has closed loo
 std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& program);
 int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y);
 const std::string& BranchMonitorError(const BranchMonitor& monitor);
+// After a solver failed inside a near-singular zone (stalled before a change point): a state
+// y_b (StateSize entries) at time t_b just past the crossing, extrapolated from the zone's
+// accepted steps and projected onto the constraints, from which a fresh solver goes on; the
+// bridged motion is BridgeState on [t_from, t_b]. 0, or 1 when no bridge can be trusted
+// (BridgeRefused says why; the failure stands). Once per zone.
+int BridgeChangePoint(const Program& program, BranchMonitor& monitor, double rtol, double atol, double* t_from,
+                      double* t_b, double* y_b);
+void BridgeState(const BranchMonitor& monitor, double t, double* y);
+const std::string& BridgeRefused(const BranchMonitor& monitor);
 
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",
 // "rod1.frame_b.r[1]", declared outputs by their name. Selection compiles the

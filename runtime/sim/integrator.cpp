@@ -148,6 +148,20 @@ static std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const do
 
 }  // namespace detail
 
+namespace {
+// Counters of a solver before a bridge, added to the next one's.
+void AddStats(IntegratorStats* to, const IntegratorStats& s) {
+  to->steps += s.steps;
+  to->rhs_evals += s.rhs_evals;
+  to->rhs_evals_jac += s.rhs_evals_jac;
+  to->jac_evals += s.jac_evals;
+  to->lin_setups += s.lin_setups;
+  to->err_test_fails += s.err_test_fails;
+  to->nonlin_iters += s.nonlin_iters;
+  to->nonlin_conv_fails += s.nonlin_conv_fails;
+}
+}  // namespace
+
 IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid& grid,
                           const IntegratorOptions& options, const RowCallback& row) {
   IntegrateResult result;
@@ -182,6 +196,8 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
     return result;
   }
 
+  IntegratorStats done;  // of the solvers before the last bridge
+  std::vector<double> yb(y.size());
   for (long k = 1; k < count; ++k) {
     double tout = grid.Time(k);
     rhs.ClearFailure();
@@ -195,7 +211,46 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
         if (rhs.failed) text += " (the right-hand side last failed with: " + rhs.cause + ")";
         fail(stepper->CurrentTime(), text);
       }
-      break;
+      // A singular configuration the solver could not pass: bridged, the output instants
+      // in the gap from the bridged motion, then a fresh solver from past it.
+      double t_from = 0.0, t_b = 0.0;
+      if (!options.bridge || !system.Bridge(options.rtol, options.atol, &t_from, &t_b, yb.data()) || !(t_b < grid.stop) || tout < t_from)
+        break;
+      bool row_failed = false;
+      for (; k < count && grid.Time(k) <= t_b; ++k) {
+        const double tk = grid.Time(k);
+        system.BridgeState(tk, y.data());
+        if (row(tk, y.data(), &cause) != 0) {
+          fail(tk, cause);
+          row_failed = true;
+          break;
+        }
+        ++result.rows;
+      }
+      if (row_failed) break;
+      rhs.Reset();
+      // The bridged state is an accepted step: checked (the turn against the velocity
+      // before the zone).
+      if (rhs.StepAccepted(t_b, yb.data()) != 0) {
+        fail(t_b, rhs.cause);
+        break;
+      }
+      AddStats(&done, stepper->Stats());
+      stepper.reset();
+      stepper = detail::MakeStepper(rhs, t_b, yb.data(), grid.stop, options, &error);
+      if (!stepper) {
+        if (rhs.failed)
+          fail(rhs.fail_time, rhs.cause);
+        else
+          fail(t_b, error);
+        result.stats = done;
+        return result;
+      }
+      result.ok = true;
+      result.cause.clear();
+      ++result.bridges;
+      --k;  // the instant after the gap, from the fresh solver
+      continue;
     }
     if (row(tout, y.data(), &cause) != 0) {
       fail(tout, cause);
@@ -204,6 +259,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
     ++result.rows;
   }
   result.stats = stepper->Stats();
+  AddStats(&result.stats, done);
   return result;
 }
 

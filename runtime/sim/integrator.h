@@ -62,6 +62,15 @@ class OdeSystem {
   // the run with FailureCause().
   virtual bool ChecksSteps() const { return false; }
   virtual int StepAccepted(double /*t*/, const double* /*y*/) { return 0; }
+  // A bridge over a singular configuration (closed loops through a change point;
+  // docs/constraints.md "Singular configurations"): after a failed solver step, a state
+  // y_b (Size()) at *t_b past it from which a fresh solver goes on, and BridgeState(t, y),
+  // the bridged motion on [*t_from, *t_b] for the output instants in the gap. False when
+  // there is none (the failure stands).
+  virtual bool Bridge(double /*rtol*/, double /*atol*/, double* /*t_from*/, double* /*t_b*/, double* /*y_b*/) {
+    return false;
+  }
+  virtual void BridgeState(double /*t*/, double* /*y*/) {}
 };
 
 enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };
@@ -88,6 +97,7 @@ struct IntegratorOptions {
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;
   bool project_steps = false;      // DOP853: project accepted steps (OdeSystem::Project)
   std::vector<int> coupling;       // per state: its group (empty: one group, a dense df/dy)
+  bool bridge = true;              // restart past a singular configuration (OdeSystem::Bridge)
 };
 
 // Counters from the solver (cumulative over the run).
@@ -139,6 +149,7 @@ struct IntegrateResult {
   double fail_time = 0.0;  // where it failed (the failing f evaluation, else the solver's time)
   std::string cause;       // why, for "numerical failure at t = ...: <cause>"
   long rows = 0;           // rows handed to the callback
+  long bridges = 0;        // singular configurations stepped over (OdeSystem::Bridge)
   IntegratorStats stats;
 };
 

@@ -36,6 +36,10 @@ class EngineOde final : public OdeSystem {
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }
+  bool Bridge(double rtol, double atol, double* t_from, double* t_b, double* y_b) override {
+    return monitor_ && rt::BridgeChangePoint(program_, *monitor_, rtol, atol, t_from, t_b, y_b) == 0;
+  }
+  void BridgeState(double t, double* y) override { rt::BridgeState(*monitor_, t, y); }
   bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
   void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
   int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
@@ -106,6 +110,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.max_steps = options.max_steps;
   iopt.ida_linear_solver = options.ida_linear_solver;
   iopt.project_steps = options.project_steps;
+  iopt.bridge = options.bridge;
   if (iopt.method == Method::IDA) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.

@@ -30,6 +30,7 @@ struct SimOptions {
   // Closed loops and contacts with DOP853: project once per accepted step instead of at every
   // evaluation (`--projection step`; engine.h SetStepProjection, docs/constraints.md "Drift").
   bool project_steps = false;
+  bool bridge = true;           // step over singular configurations of closed loops (docs/constraints.md)
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty
 };

@@ -37,6 +37,13 @@ class GuardedRhs {
     failed = false;
     recoverable_ = 0;
   }
+  // Everything cleared, the fatal latch too: for a fresh solver after a bridge.
+  void Reset() {
+    ClearFailure();
+    fatal = false;
+    fail_time = 0.0;
+    cause.clear();
+  }
 
   // Recoverable failures between two output instants (since ClearFailure) after which
   // the next one is fatal: a solver without a minimum step (CVODE, IDA) would otherwise
