@@ -81,6 +81,7 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
       if (!base) {
         auto& d = diags_.Error(DiagCode::UnknownClass, ex.span, "unknown base class '" + ast::JoinName(ex.base) + "'");
         std::vector<std::string> names;
+        LoadWholeLibrary();  // the hint considers every class
         for (auto& [k, v] : classes_) names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
         std::string best = ClosestName(ast::JoinName(ex.base), names);
         if (!best.empty()) d.hint = "did you mean '" + best + "'?";
@@ -384,6 +385,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
     if (!tcls) {
       auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + tname + "'");
       std::vector<std::string> names{"Real", "Integer", "Boolean", "String"};
+      LoadWholeLibrary();  // the hint considers every class
       for (auto& [k, v] : classes_) names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
       std::string best = ClosestName(tname, names);
       if (!best.empty()) d.hint = "did you mean '" + best + "'?";

@@ -13,6 +13,7 @@
 #include "lang/ast.h"
 #include "lang/diagnostics.h"
 #include "lang/elab_budget.h"
+#include "lang/library_cache.h"
 #include "lang/elab_small_vec.h"
 #include "lang/elaborate.h"
 #include "runtime/flat/mechanism.h"
@@ -221,6 +222,15 @@ class Elaborator {
   // --- classes (elaborate.cpp) ---
   const ast::ClassDef* FindClass(const std::vector<std::string>& parts, const ast::ClassDef* from) const;
   const ast::StoredDefinition* FileOf(const ast::ClassDef* c) const;
+  // The registry of classes by qualified name. The embedded library's classes join it
+  // when a lookup first names them (LookupClass), or all at once (LoadWholeLibrary) before
+  // anything lists the registry (the hints of an error): either way every answer is the
+  // one a registry of the whole library would give.
+  const ClassInfo* LookupClass(const std::string& q) const;
+  void LoadWholeLibrary() const;
+  void Register(const ast::ClassDef* c, const std::string& prefix, const ast::StoredDefinition* file) const;
+  bool LoadLibraryClass(const std::string& q) const;
+  void LoadUnit(int u) const;
 
   // --- values (elab_eval.cpp) ---
   struct Ctx {
@@ -327,9 +337,12 @@ class Elaborator {
   const ElaborateOptions& options_;
   flat::Mechanism* m_;
   Diagnostics& diags_;
-  std::map<std::string, ClassInfo> classes_;  // qualified name -> class
-  std::unordered_map<const ast::ClassDef*, const ast::StoredDefinition*> file_of_;
-  std::unordered_map<const ast::ClassDef*, std::string> qualified_of_;
+  const Library* library_;  // null when the library is in program_.files
+  // mutable: a lookup (const) registers the library's classes it is the first to name.
+  mutable std::vector<char> unit_loaded_;  // per library unit
+  mutable std::map<std::string, ClassInfo> classes_;  // qualified name -> class
+  mutable std::unordered_map<const ast::ClassDef*, const ast::StoredDefinition*> file_of_;
+  mutable std::unordered_map<const ast::ClassDef*, std::string> qualified_of_;
   std::vector<double> pvals_;  // values of m_->params, index-aligned
   flat::ParamEvaluator param_eval_{m_->exprs, pvals_};  // memoized values of pool nodes
   std::vector<std::uint8_t> structural_seen_;  // per pool node: walked by MarkStructural

@@ -19,16 +19,18 @@ static bool ParseInto(Program* program, int file, Diagnostics& diags) {
   return true;
 }
 
-// The library's text goes into this Program's sources (for diagnostics); its ASTs are
-// the process-wide parsed copy, whose file ids match because the main file is file 0.
+// The library's text goes into this Program's sources (for diagnostics), shared, not
+// copied. Its classes are parsed on demand, once per process (lang/library_cache.h); that
+// needs the main file to be file 0 so that their file ids match (otherwise the library is
+// parsed here, whole).
 static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
                       Diagnostics& diags) {
-  auto shared = program->sources.NumFiles() == 1 ? SharedParsedLibrary(stdlib_files) : nullptr;
-  for (size_t i = 0; i < stdlib_files.size(); ++i) {
-    int f = program->sources.Add(stdlib_files[i].first, stdlib_files[i].second);
-    if (shared) program->files.push_back(shared->defs[i]);
-    else ParseInto(program, f, diags);
+  program->library = program->sources.NumFiles() == 1 ? SharedLibrary(stdlib_files) : nullptr;
+  if (program->library) {
+    for (const auto& src : program->library->Sources()) program->sources.AddShared(src);
+    return;
   }
+  for (const auto& [name, text] : stdlib_files) ParseInto(program, program->sources.Add(name, text), diags);
 }
 
 bool LoadProgramFromText(const std::string& name, const std::string& text,
@@ -61,18 +63,57 @@ namespace elab {
 
 Elaborator::Elaborator(const Program& program, const ElaborateOptions& options, flat::Mechanism* out,
                        Diagnostics& diags)
-    : program_(program), options_(options), m_(out), diags_(diags) {
-  std::function<void(const ast::ClassDef*, const std::string&, const ast::StoredDefinition*)> reg =
-      [&](const ast::ClassDef* c, const std::string& prefix, const ast::StoredDefinition* file) {
-        std::string q = prefix.empty() ? c->name : prefix + "." + c->name;
-        if (!classes_.count(q)) classes_[q] = {c, file, q};
-        file_of_[c] = file;
-        qualified_of_[c] = q;
-        for (const auto& el : c->elements)
-          if (el.kind == ast::Element::kClass) reg(el.class_def.get(), q, file);
-      };
+    : program_(program), options_(options), m_(out), diags_(diags), library_(program.library.get()) {
   for (const auto& f : program.files)
-    for (const auto& c : f->classes) reg(c.get(), ast::JoinName(f->within), f.get());
+    for (const auto& c : f->classes) Register(c.get(), ast::JoinName(f->within), f.get());
+  if (library_) unit_loaded_.assign(static_cast<size_t>(library_->NumUnits()), 0);
+}
+
+void Elaborator::Register(const ast::ClassDef* c, const std::string& prefix, const ast::StoredDefinition* file) const {
+  std::string q = prefix.empty() ? c->name : prefix + "." + c->name;
+  if (!classes_.count(q)) classes_[q] = {c, file, q};
+  file_of_[c] = file;
+  qualified_of_[c] = q;
+  for (const auto& el : c->elements)
+    if (el.kind == ast::Element::kClass) Register(el.class_def.get(), q, file);
+}
+
+void Elaborator::LoadUnit(int u) const {
+  if (unit_loaded_[static_cast<size_t>(u)]) return;
+  unit_loaded_[static_cast<size_t>(u)] = 1;
+  const ast::StoredDefinition* f = library_->Unit(u).get();
+  for (const Diagnostic& d : library_->UnitDiagnostics(u))  // none for the embedded library
+    (d.severity == Severity::Error ? diags_.Error(d.code, d.span, d.message) : diags_.Warning(d.code, d.span, d.message)) = d;
+  for (const auto& c : f->classes) Register(c.get(), ast::JoinName(f->within), f);
+}
+
+// The library's unit that declares `q` or a class that encloses it, registered; true if
+// one was newly registered. The registry then answers `q` exactly as if the whole library
+// had been registered at the start: the main file's classes come first either way, and
+// the library declares each top-level name once.
+bool Elaborator::LoadLibraryClass(const std::string& q) const {
+  if (!library_) return false;
+  for (std::string_view name(q);;) {
+    int u = library_->FindUnit(name);
+    if (u >= 0 && !unit_loaded_[static_cast<size_t>(u)]) {
+      LoadUnit(u);
+      return true;
+    }
+    size_t dot = name.rfind('.');
+    if (dot == std::string_view::npos) return false;
+    name = name.substr(0, dot);
+  }
+}
+
+void Elaborator::LoadWholeLibrary() const {
+  if (library_)
+    for (int u = 0; u < library_->NumUnits(); ++u) LoadUnit(u);
+}
+
+const ClassInfo* Elaborator::LookupClass(const std::string& q) const {
+  auto it = classes_.find(q);
+  if (it == classes_.end() && LoadLibraryClass(q)) it = classes_.find(q);
+  return it == classes_.end() ? nullptr : &it->second;
 }
 
 const ast::StoredDefinition* Elaborator::FileOf(const ast::ClassDef* c) const {
@@ -88,8 +129,8 @@ const ast::ClassDef* Elaborator::FindClass(const std::vector<std::string>& parts
     return nullptr;
   };
   auto by_qualified = [&](const std::string& q) -> const ast::ClassDef* {
-    auto it = classes_.find(q);
-    return it == classes_.end() ? nullptr : it->second.cls;
+    const ClassInfo* info = LookupClass(q);
+    return info ? info->cls : nullptr;
   };
   auto via_imports = [&](const std::vector<ast::Import>& imports) -> const ast::ClassDef* {
     for (const auto& imp : imports) {
@@ -145,6 +186,7 @@ bool Elaborator::Run() {
         if (c->name == parts[0]) top = FindClass(parts, c.get());
     if (!top) {
       auto& d = diags_.Error(DiagCode::NotAModel, Span{}, "no class named '" + options_.model + "'");
+      LoadWholeLibrary();  // the hint considers every class
       std::vector<std::string> names;
       for (auto& [k, v] : classes_) names.push_back(k);
       std::string best = ClosestName(options_.model, names);
@@ -164,11 +206,14 @@ bool Elaborator::Run() {
   // Every import of the user's file must name something.
   if (!program_.files.empty()) {
     auto check = [&](const std::string& q, bool wildcard, Span span) {
-      bool ok = classes_.count(q) > 0;
-      if (!ok && wildcard)
-        for (const auto& [k, v] : classes_) ok = ok || k.rfind(q + ".", 0) == 0;
+      bool ok = LookupClass(q) != nullptr;
       if (!ok && wildcard && q == "Kanesim") ok = true;
+      if (!ok && wildcard) {
+        LoadWholeLibrary();  // a package's classes may be in any unit
+        for (const auto& [k, v] : classes_) ok = ok || k.rfind(q + ".", 0) == 0;
+      }
       if (ok) return;
+      LoadWholeLibrary();  // the hint considers every class
       auto& d = diags_.Error(DiagCode::BadImport, span, "import names nothing: no class or package '" + q + "'");
       std::vector<std::string> names;
       for (const auto& [k, v] : classes_) names.push_back(k);
@@ -265,7 +310,10 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
 
 std::vector<std::string> StdlibModels(const Program& program) {
   std::vector<std::string> out;
-  for (const auto& f : program.files) {
+  std::vector<std::shared_ptr<const ast::StoredDefinition>> files = program.files;
+  if (program.library)
+    for (int u = 0; u < program.library->NumUnits(); ++u) files.push_back(program.library->Unit(u));
+  for (const auto& f : files) {
     if (ast::JoinName(f->within) != "Kanesim") continue;
     for (const auto& c : f->classes)
       if (c->kind == ast::ClassKind::Model && !c->partial) out.push_back("Kanesim." + c->name);

@@ -15,6 +15,8 @@
 
 namespace kanesim::lang {
 
+class Library;  // lang/library_cache.h
+
 // Limits (stated in docs/language.md): exceeding one is a clean error, never a hang.
 inline constexpr long kMaxArraySize = 100000;        // elements in one array
 inline constexpr long kMaxInstances = 600000;        // scalar variables + components
@@ -42,9 +44,12 @@ struct ElaborateOptions {
 struct Program {
   // mutable: elaboration adds the text of --set values so diagnostics can show them.
   mutable SourceManager sources;
-  // files[0] is the main file; the library's files are shared with every other Program
-  // of the process (lang/library_cache.h).
+  // files[0] is the main file. The standard library's files are either in `files` too
+  // (parsed for this Program), or, for the embedded library, in `library`: parsed one
+  // class at a time when elaboration first looks its name up, and shared with every other
+  // Program of the process (lang/library_cache.h). Either way they are source files 1...
   std::vector<std::shared_ptr<const ast::StoredDefinition>> files;
+  std::shared_ptr<const Library> library;
 };
 
 // Loads and parses the main file and the standard library; diagnostics into `diags`.

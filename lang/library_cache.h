@@ -1,28 +1,78 @@
-// The standard library parsed once per process.
+// The standard library, parsed on demand, once per process.
 //
 // Every load (a `kanesim run`, each scenario of a sweep that changes a structural
-// parameter, every test, every fuzzer input) needs the same library ASTs. They are
-// parsed on first use and shared read-only by all Programs after that, across threads.
+// parameter, every test, every fuzzer input) needs the same library. Its files' texts
+// and line starts are made once per process and shared by every Program's SourceManager;
+// its classes are parsed one top-level class at a time, on the first lookup of that
+// class's name, and shared read-only by every Program after that, across threads.
+//
+// A unit is one top-level class of one file, parsed from the file's header (its `within`
+// clause and imports) and the class's lines, the rest of the file blanked, so that spans
+// and the AST are exactly those of parsing the whole file (tests/lang/library_cache_test).
+// The class boundaries come from a scan of the text for declarations at the start of a
+// line (`[partial] model Name` ... `end Name;`); a file the scan does not understand is one
+// unit holding all its classes, parsed when the library is made.
 #pragma once
 
+#include <atomic>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "lang/ast.h"
+#include "lang/diagnostics.h"
+#include "lang/source.h"
 
 namespace kanesim::lang {
 
-struct ParsedLibrary {
-  std::vector<std::pair<std::string, std::string>> files;  // (display name, contents)
-  // files[i] parsed as source file i + 1 (file 0 is the model being loaded).
-  std::vector<std::shared_ptr<const ast::StoredDefinition>> defs;
+class Library {
+ public:
+  // `files` are (display name, contents); file i becomes source file i + 1 of a Program
+  // (file 0 is the model being loaded).
+  explicit Library(const std::vector<std::pair<std::string, std::string>>& files);
+  Library(const Library&) = delete;
+  Library& operator=(const Library&) = delete;
+
+  const std::vector<std::shared_ptr<const SourceFile>>& Sources() const { return sources_; }
+  int NumUnits() const { return static_cast<int>(units_.size()); }
+  // The unit that declares the top-level class with qualified name `q` ("Kanesim.Revolute"),
+  // or -1.
+  int FindUnit(std::string_view q) const;
+  // Unit u's parse (within, imports and its class or classes); parsed on the first call,
+  // then shared. Thread-safe.
+  const std::shared_ptr<const ast::StoredDefinition>& Unit(int u) const;
+  // The diagnostics of unit u's parse (after Unit(u)): none for the embedded library
+  // (tests/lang/library_cache_test.cpp); a library that does not parse reports its errors
+  // when elaboration first needs the unit, instead of when the model is loaded.
+  const std::vector<Diagnostic>& UnitDiagnostics(int u) const;
+  // How many units have been parsed so far (for tests).
+  int NumParsed() const;
+
+ private:
+  struct UnitSlot {
+    int file = 0;              // index into files (source file file + 1)
+    std::int32_t header_end = 0;  // the file's header: [0, header_end)
+    std::int32_t begin = 0, end = 0;  // the class: [begin, end); a whole-file unit: [0, size)
+    mutable std::once_flag once;
+    mutable std::shared_ptr<const ast::StoredDefinition> def;
+    mutable std::vector<Diagnostic> diags;
+  };
+  void ParseUnit(const UnitSlot& slot) const;
+
+  std::vector<std::shared_ptr<const SourceFile>> sources_;
+  std::vector<std::unique_ptr<UnitSlot>> units_;
+  std::unordered_map<std::string, int> index_;  // qualified top-level class name -> unit
+  mutable std::atomic<int> parsed_{0};
 };
 
-// The parsed library for `files`, or null when it does not parse cleanly (the caller
-// then parses it itself, so that its diagnostics reach the user). Thread-safe; the
-// result stays valid while a Program holds it, even if later calls ask for other files.
-std::shared_ptr<const ParsedLibrary> SharedParsedLibrary(const std::vector<std::pair<std::string, std::string>>& files);
+// The library of `files`, made on first use and kept for the process: every call with the
+// same files (the embedded standard library, stdlib::Files(), in practice) returns the same
+// library. A call with other files makes a new one, which later calls with those files
+// share; a Program holding the previous one keeps it. Null for no files. Thread-safe.
+std::shared_ptr<const Library> SharedLibrary(const std::vector<std::pair<std::string, std::string>>& files);
 
 }  // namespace kanesim::lang

@@ -28,19 +28,26 @@ static std::vector<std::int32_t> LineStarts(const std::string& text) {
   return starts;
 }
 
+std::shared_ptr<const SourceFile> MakeSourceFile(std::string name, std::string contents) {
+  auto f = std::make_shared<SourceFile>();
+  f->name = std::move(name);
+  f->text = WithoutBom(std::move(contents));
+  f->line_starts = LineStarts(f->text);
+  return f;
+}
+
 int SourceManager::Add(std::string name, std::string contents) {
-  File f;
-  f.name = std::move(name);
-  f.text = WithoutBom(std::move(contents));
-  f.line_starts = LineStarts(f.text);
-  files_.push_back(std::move(f));
+  return AddShared(MakeSourceFile(std::move(name), std::move(contents)));
+}
+
+int SourceManager::AddShared(std::shared_ptr<const SourceFile> file) {
+  files_.push_back(std::move(file));
   return static_cast<int>(files_.size() - 1);
 }
 
 void SourceManager::Replace(int file, std::string contents) {
-  File& f = files_.at(static_cast<size_t>(file));
-  f.text = WithoutBom(std::move(contents));
-  f.line_starts = LineStarts(f.text);
+  auto& f = files_.at(static_cast<size_t>(file));
+  f = MakeSourceFile(f->name, std::move(contents));
 }
 
 void SourceManager::Truncate(int num_files) {
@@ -49,7 +56,7 @@ void SourceManager::Truncate(int num_files) {
 
 LineCol SourceManager::Locate(int file, std::int32_t offset) const {
   if (file < 0 || file >= NumFiles()) return {};
-  const File& f = files_[static_cast<size_t>(file)];
+  const SourceFile& f = *files_[static_cast<size_t>(file)];
   auto it = std::upper_bound(f.line_starts.begin(), f.line_starts.end(), offset);
   int line = static_cast<int>(it - f.line_starts.begin());
   int col = offset - f.line_starts[static_cast<size_t>(line - 1)] + 1;
@@ -58,7 +65,7 @@ LineCol SourceManager::Locate(int file, std::int32_t offset) const {
 
 std::string_view SourceManager::LineView(int file, int line) const {
   if (file < 0 || file >= NumFiles()) return {};
-  const File& f = files_[static_cast<size_t>(file)];
+  const SourceFile& f = *files_[static_cast<size_t>(file)];
   if (line < 1 || static_cast<size_t>(line) > f.line_starts.size()) return {};
   size_t b = static_cast<size_t>(f.line_starts[static_cast<size_t>(line - 1)]);
   size_t e = f.text.find('\n', b);
@@ -72,7 +79,7 @@ std::string SourceManager::LineText(int file, int line) const { return std::stri
 
 std::int32_t SourceManager::Offset(int file, int line, int col) const {
   if (file < 0 || file >= NumFiles()) return -1;
-  const File& f = files_[static_cast<size_t>(file)];
+  const SourceFile& f = *files_[static_cast<size_t>(file)];
   if (line < 1 || static_cast<size_t>(line) > f.line_starts.size()) return -1;
   const std::int32_t begin = f.line_starts[static_cast<size_t>(line - 1)];
   const std::int32_t length = static_cast<std::int32_t>(LineView(file, line).size());

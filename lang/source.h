@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -21,6 +22,17 @@ struct LineCol {
   int col = 0;   // 1-based, in bytes
 };
 
+// One file's name, text and line starts, immutable once made. The standard library's
+// files are made once per process and shared by every SourceManager (AddShared), so a
+// load neither copies their text nor recomputes their line starts.
+struct SourceFile {
+  std::string name;
+  std::string text;
+  std::vector<std::int32_t> line_starts;
+};
+// A UTF-8 byte-order mark opening `contents` is dropped, as by SourceManager::Add.
+std::shared_ptr<const SourceFile> MakeSourceFile(std::string name, std::string contents);
+
 class SourceManager {
  public:
   // Limits on input (stated in docs/language.md).
@@ -28,12 +40,13 @@ class SourceManager {
 
   // A UTF-8 byte-order mark opening `contents` is dropped (offsets count from after it).
   int Add(std::string name, std::string contents);
+  int AddShared(std::shared_ptr<const SourceFile> file);
   // For a long-lived driver that parses the standard library once and reuses it (the
   // fuzzers): gives file `file` new contents, or drops every file from `num_files` on.
   void Replace(int file, std::string contents);
   void Truncate(int num_files);
-  const std::string& Name(int file) const { return files_[static_cast<size_t>(file)].name; }
-  const std::string& Text(int file) const { return files_[static_cast<size_t>(file)].text; }
+  const std::string& Name(int file) const { return files_[static_cast<size_t>(file)]->name; }
+  const std::string& Text(int file) const { return files_[static_cast<size_t>(file)]->text; }
   int NumFiles() const { return static_cast<int>(files_.size()); }
   LineCol Locate(int file, std::int32_t offset) const;
   std::string LineText(int file, int line) const;  // without newline
@@ -42,12 +55,7 @@ class SourceManager {
   std::int32_t Offset(int file, int line, int col) const;
 
  private:
-  struct File {
-    std::string name;
-    std::string text;
-    std::vector<std::int32_t> line_starts;
-  };
-  std::vector<File> files_;
+  std::vector<std::shared_ptr<const SourceFile>> files_;
 };
 
 // Reads a model file for SourceManager::Add: a regular file, or a pipe read to its end,
