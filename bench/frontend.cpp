@@ -20,7 +20,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lang/diagnostics.h"
@@ -51,13 +53,13 @@ bool LoadOnce(const std::string& path, const std::vector<lang::ParamOverride>& s
   lang::Diagnostics diags(&program.sources);
   lang::ElaborateOptions eo;
   eo.overrides = sets;
-  flat::Mechanism mech;
-  if (!lang::LoadProgram(path, stdlib::Files(), &program, diags) || !lang::Elaborate(program, eo, &mech, diags)) {
+  auto mech = std::make_shared<flat::Mechanism>();  // shared with the program, as pipeline::LoadModel does
+  if (!lang::LoadProgram(path, stdlib::Files(), &program, diags) || !lang::Elaborate(program, eo, mech.get(), diags)) {
     std::cerr << diags.RenderAll().substr(0, 4000);
     return false;
   }
   const double t1 = CpuSeconds();
-  rt::CompileResult r = rt::Compile(mech, rt::CompileOptions{});
+  rt::CompileResult r = rt::Compile(std::shared_ptr<const flat::Mechanism>(std::move(mech)), rt::CompileOptions{});
   const double t2 = CpuSeconds();
   if (!r.program) {
     std::cerr << "compile failed\n";

@@ -45,7 +45,7 @@ int RunCheck(const CheckArgs& args) {
   pipeline::SolverFromName(args.solver, &spec.solver);
   std::unique_ptr<pipeline::Model> model = LoadAndCompile(args.load, spec, args.emit != "flat");
   if (!model) return kExitModelError;
-  const flat::Mechanism& mech = model->mech;
+  const flat::Mechanism& mech = *model->mech;
   if (args.emit == "flat") {
     std::cout << flat::DumpFlat(mech);
     return kExitOk;

@@ -192,7 +192,7 @@ bool OpenOutput(const LinearizeArgs& a, batch::FileLock* lock, std::FILE** out) 
 int Fail(const lin::Status& s) {
   fmt::print(stderr, "kanesim linearize: {}: {}\n", s.code == 1 ? "error" : "numerical failure", s.message);
   if (s.where.line > 0)
-    fmt::print(stderr, "{}:{}:{}: note: declared here\n", s.where.file, s.where.line, s.where.col);
+    fmt::print(stderr, "{}:{}:{}: note: declared here\n", s.where.file.str(), s.where.line, s.where.col);
   if (!s.hint.empty()) fmt::print(stderr, "  hint: {}\n", s.hint);
   return s.code == 1 ? kExitModelError : kExitNumerical;
 }

@@ -110,7 +110,7 @@ int RunCommand(const RunArgs& a) {
   }
   sim::SimOptions& so = run.sim;
   AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
-  if (!animation.Prepare(model->mech, program, &so.signals)) return kExitModelError;
+  if (!animation.Prepare(*model->mech, program, &so.signals)) return kExitModelError;
 
   // The output: never the model itself, and one writer at a time (locked while written;
   // only a regular file, not /dev/null or a pipe, which many may share).

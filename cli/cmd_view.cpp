@@ -78,7 +78,7 @@ int RunView(const ViewArgs& a) {
   spec.outputs = a.patterns;
   std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
   if (!model) return kExitModelError;
-  const flat::Mechanism& mech = model->mech;
+  const flat::Mechanism& mech = *model->mech;
   const rt::Program& program = *model->program;
   pipeline::ResolvedRun run;
   pipeline::RunProblem problem = pipeline::RunProblem::kNone;

@@ -69,7 +69,7 @@ VisualMesh DrawShape(const flat::Shape& s, const std::vector<double>& size, std:
       geometry::VisualMeshResult r = geometry::LoadVisualMesh(s.mesh_file, options);
       for (const auto& p : r.problems)
         if (p.severity == geometry::Severity::kError) {
-          *error = fmt::format("{}:{}:{}: cannot draw '{}': {}", s.loc.file, s.loc.line, s.loc.col, s.name, p.message);
+          *error = fmt::format("{}:{}:{}: cannot draw '{}': {}", s.loc.file.str(), s.loc.line, s.loc.col, s.name, p.message);
           return {};
         }
       mesh = std::move(r.mesh);
@@ -207,7 +207,7 @@ bool BuildSceneBodies(const flat::Mechanism& mech, const rt::Program& program, S
       label = fmt::format("Body {} (inertia-equivalent box)", b.name);
     }
     const flat::SourceLoc& at = shape_of[i] ? shape_of[i]->loc : b.loc;
-    if (!at.file.empty()) label += fmt::format(", {}:{}", at.file, at.line);
+    if (!at.file.empty()) label += fmt::format(", {}:{}", at.file.str(), at.line);
     out->bodies.push_back(std::move(ab));
     out->labels.push_back(label);
     out->pose_signals.insert(out->pose_signals.end(), signals.begin(), signals.end());

@@ -33,7 +33,7 @@ inline bool LoadInto(LoadedMech* l, const std::string& path_or_text, std::vector
     return false;
   }
   l->program = std::move(r.model->source);
-  l->mech = std::move(r.model->mech);
+  l->mech = *r.model->mech;  // a copy: the model shares its mechanism as const
   return true;
 }
 

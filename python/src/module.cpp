@@ -205,7 +205,7 @@ py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equili
   }
   if (!out.status.ok()) {
     const auto& s = out.status;
-    d["failure"] = py::make_tuple(s.code, s.message, s.hint, s.where.file, s.where.line, s.where.col);
+    d["failure"] = py::make_tuple(s.code, s.message, s.hint, s.where.file.str(), s.where.line, s.where.col);
     return d;
   }
   d["failure"] = py::none();

@@ -308,13 +308,13 @@ void Compiler::MassProperties(Program& p) {
 }  // namespace
 
 // Runs every compile stage; `reuse` (from Rebind) supplies the sparse symbolic analysis.
-CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<double>& pv,
+CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std::vector<double> pv,
                                 const CompileOptions& options, const Program* reuse) {
   CompileResult out;
   auto prog = std::make_shared<Program>();
   Program& p = *prog;
-  p.mech = reuse ? reuse->mech : std::make_shared<const flat::Mechanism>(mech);
-  p.param_values = pv;
+  p.mech = std::move(mech);
+  p.param_values = std::move(pv);
   p.options = options;
   Compiler c(*p.mech, p.param_values, &out);
   if (!c.Topology(p)) return out;
@@ -346,7 +346,12 @@ CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<d
 }
 
 CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options) {
-  return CompileWithParams(mech, flat::EvaluateParams(mech), options, nullptr);
+  return Compile(std::make_shared<const flat::Mechanism>(mech), options);
+}
+
+CompileResult Compile(std::shared_ptr<const flat::Mechanism> mech, const CompileOptions& options) {
+  std::vector<double> pv = flat::EvaluateParams(*mech);
+  return CompileWithParams(std::move(mech), std::move(pv), options, nullptr);
 }
 
 CompileResult Rebind(const Program& program, const std::vector<double>& param_values) {
@@ -357,7 +362,7 @@ CompileResult Rebind(const Program& program, const std::vector<double>& param_va
                            {}));
     return r;
   }
-  return CompileWithParams(*program.mech, param_values, program.options, &program);
+  return CompileWithParams(program.mech, param_values, program.options, &program);
 }
 
 }  // namespace kanesim::rt

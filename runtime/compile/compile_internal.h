@@ -22,7 +22,8 @@ inline CompileMessage Msg(flat::DiagCode code, const std::string& text, const fl
 }
 
 
-CompileResult CompileWithParams(const flat::Mechanism& mech, const std::vector<double>& pv,
+// Runs every compile stage on the shared mechanism `mech` (Program::mech keeps it).
+CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std::vector<double> pv,
                                 const CompileOptions& options, const Program* reuse);
 
 // Eq. (1)-(3) of compile/inertia.cpp: "" when the central inertia I of one body can be

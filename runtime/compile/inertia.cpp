@@ -51,10 +51,11 @@ std::string CheckInertia(const Mat3& I, Mat3* symmetric) {
   // Eq. (2), (3) on the principal moments, ascending.
   Eigen::SelfAdjointEigenSolver<Mat3> eig(*symmetric, Eigen::EigenvaluesOnly);
   const Vec3 l = eig.eigenvalues();
-  const std::string moments = G(l[0]) + ", " + G(l[1]) + ", " + G(l[2]);
-  if (l[0] < -tol) return "its inertia has a negative principal moment (principal moments " + moments + ")";
+  // Formatted only for a message (every body of every compile passes through here).
+  auto moments = [&l] { return G(l[0]) + ", " + G(l[1]) + ", " + G(l[2]); };
+  if (l[0] < -tol) return "its inertia has a negative principal moment (principal moments " + moments() + ")";
   if (l[0] + l[1] < l[2] - tol)
-    return "its principal moments of inertia " + moments + " violate the triangle inequality (" + G(l[0]) +
+    return "its principal moments of inertia " + moments() + " violate the triangle inequality (" + G(l[0]) +
            " + " + G(l[1]) + " < " + G(l[2]) + ")";
   return "";
 }

@@ -41,7 +41,7 @@ constexpr double kAssemblyTol = 1e-12;  // position residual (relative to the lo
 constexpr int kAssemblyIters = 50;
 
 std::string LocText(const flat::SourceLoc& l) {
-  return l.file + ":" + std::to_string(l.line) + ":" + std::to_string(l.col);
+  return l.file.str() + ":" + std::to_string(l.line) + ":" + std::to_string(l.col);
 }
 
 ConstraintRow Trans(const Vec3& d, const std::string& what) {

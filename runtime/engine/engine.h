@@ -37,6 +37,9 @@ struct CompileResult {
 };
 
 CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options);
+// The same without a copy of the mechanism: the program shares `mech` (Program::mech).
+// The first form copies it once into the program; pipeline::LoadModel uses this one.
+CompileResult Compile(std::shared_ptr<const flat::Mechanism> mech, const CompileOptions& options);
 
 // Same structure, new numeric parameter values (index-aligned with mech.params);
 // reuses every pattern and symbolic analysis. Used by sweeps. On failure (a negative

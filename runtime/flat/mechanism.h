@@ -22,11 +22,12 @@
 #include <vector>
 
 #include "runtime/flat/expr.h"
+#include "runtime/flat/file_name.h"
 
 namespace kanesim::flat {
 
 struct SourceLoc {
-  std::string file;  // path as given, or "<stdlib>/Joints.mech" for the standard library
+  FileName file;     // path as given, or "<stdlib>/Joints.mech" for the standard library
   int line = 0;      // 1-based; 0 = unknown
   int col = 0;       // 1-based
 };

@@ -42,7 +42,11 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
                 ? lang::LoadProgramFromText(source.path, source.text, stdlib::Files(), &m->source, diags)
                 : lang::LoadProgram(source.path, stdlib::Files(), &m->source, diags);
   // 2. Elaborate into the flat mechanism.
-  if (ok) ok = lang::Elaborate(m->source, eo, &m->mech, diags);
+  if (ok) {
+    auto mech = std::make_shared<flat::Mechanism>();
+    ok = lang::Elaborate(m->source, eo, mech.get(), diags);
+    m->mech = std::move(mech);
+  }
   *text += diags.RenderAll();
   if (!ok && diags.NumErrors() > 0)
     *text += std::to_string(diags.NumErrors()) + " error" + (diags.NumErrors() == 1 ? "" : "s") + "\n";
@@ -112,7 +116,7 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
   RunProblem unused;
   RunProblem& why = problem ? *problem : unused;
   why = RunProblem::kNone;
-  const flat::Experiment& ex = model.mech.experiment;
+  const flat::Experiment& ex = model.mech->experiment;
   const rt::Program& program = *model.program;
 
   for (auto [name, value] : {std::pair{"interval", spec.interval}, {"rtol", spec.rtol}, {"atol", spec.atol}}) {

@@ -121,7 +121,8 @@ struct LoadOptions {
 // A loaded model. Immutable once loaded; the program may be shared across threads.
 struct Model {
   lang::Program source;     // stage 1: parsed files; owns the text diagnostics point into
-  flat::Mechanism mech;     // stage 2: the flat mechanism (mech.experiment: the run defaults)
+  // Stage 2: the flat mechanism (mech->experiment: the run defaults); the program shares it.
+  std::shared_ptr<const flat::Mechanism> mech;
   std::shared_ptr<const rt::Program> program;  // stage 3; null when LoadOptions::compile is false
   double load_seconds = 0.0;     // wall time of stages 1-2
   double compile_seconds = 0.0;  // wall time of stage 3

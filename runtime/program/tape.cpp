@@ -18,7 +18,8 @@ TapeBuilder::TapeBuilder(const flat::ExprPool& pool, const std::vector<double>& 
 // Post-order over the sub-DAG of `id` (children have smaller ids, so an explicit stack
 // terminates); a node folds when it reads neither time nor state.
 bool TapeBuilder::Fold(ExprId id, double* value) {
-  std::vector<ExprId> stack{id};
+  std::vector<ExprId>& stack = stack_;
+  stack.assign(1, id);
   while (!stack.empty()) {
     ExprId e = stack.back();
     auto ue = static_cast<size_t>(e);

@@ -54,6 +54,7 @@ class TapeBuilder {
   std::vector<int> reg_;        // per expr node: register or -1
   std::vector<signed char> const_;  // -1 unknown, 0 no, 1 yes
   std::vector<double> value_;   // folded value when const_ == 1
+  std::vector<flat::ExprId> stack_;  // Fold's explicit stack, kept between calls
   Tape tape_;
 };
 

@@ -127,7 +127,7 @@ TEST(Indeterminate, PlanarFourBarNamesTheOutOfPlaneComponents) {
   // The warning names the cut joint with its location and the redundant rows.
   const rt::CompileMessage w = rt::IndeterminateWarning(*l->prog, all);
   EXPECT_STREQ(flat::DiagCodeString(w.code), "W313");
-  EXPECT_NE(w.loc.file.find("fourbar.mech"), std::string::npos);
+  EXPECT_NE(w.loc.file.str().find("fourbar.mech"), std::string::npos);
   ASSERT_EQ(w.notes.size(), 1u);
   EXPECT_NE(w.notes[0].second.find("joint 'coupler_rocker': translation along z, tilt of the axis towards e1, "
                                    "tilt of the axis towards e2"),

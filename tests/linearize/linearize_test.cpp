@@ -462,7 +462,7 @@ TEST(Linearize, OperatingPointOffTheLoopIsRefused) {
   const lin::Status s = lin::Linearize(*l->prog, op, {}, &m);
   EXPECT_EQ(s.code, 1);
   EXPECT_NE(s.message.find("violates the position constraint loop 'coupler_rocker'"), std::string::npos) << s.message;
-  EXPECT_NE(s.where.file.find("fourbar.mech"), std::string::npos);  // the cut joint's declaration
+  EXPECT_NE(s.where.file.str().find("fourbar.mech"), std::string::npos);  // the cut joint's declaration
   EXPECT_EQ(s.where.line, 25);
 }
 

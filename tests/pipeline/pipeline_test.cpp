@@ -7,8 +7,12 @@
 
 #include <cmath>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "lang/diagnostics.h"
+#include "runtime/flat/file_name.h"
+#include "runtime/program/program.h"
 #include "runtime/sim/csv.h"
 #include "stdlib/stdlib.h"
 
@@ -133,7 +137,7 @@ TEST(PipelineLoad, SetValuesApplyAndBadOnesAreE210) {
   pipeline::LoadResult ok = Load(Oscillator("parameter Real mm = 1; Body cart(m = mm, I = identity(3) * 0.01);"),
                                  {}, {"mm=2"});
   ASSERT_TRUE(ok.model) << ok.diagnostics;
-  EXPECT_EQ(ok.model->mech.params[static_cast<size_t>(ok.model->mech.FindParam("mm"))].value, 2.0);
+  EXPECT_EQ(ok.model->mech->params[static_cast<size_t>(ok.model->mech->FindParam("mm"))].value, 2.0);
   pipeline::LoadResult bad = Load(Oscillator(), {}, {"mm"});
   EXPECT_FALSE(bad.model);
   EXPECT_NE(bad.diagnostics.find("error[E210]"), std::string::npos) << bad.diagnostics;
@@ -161,7 +165,58 @@ TEST(PipelineLoad, CompileFalseStopsAtTheFlatMechanism) {
   pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(kRoot + "/examples/chain.mech"), o, {});
   ASSERT_TRUE(r.model) << r.diagnostics;
   EXPECT_FALSE(r.model->program);
-  EXPECT_FALSE(r.model->mech.joints.empty());
+  EXPECT_FALSE(r.model->mech->joints.empty());
+}
+
+// The program shares the model's mechanism (no copy), and Rebind keeps sharing it.
+TEST(PipelineLoad, TheProgramSharesTheModelsMechanism) {
+  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(kRoot + "/examples/chain.mech"), {}, {});
+  ASSERT_TRUE(r.model && r.model->program) << r.diagnostics;
+  EXPECT_EQ(r.model->program->mech.get(), r.model->mech.get());
+  rt::CompileResult again = rt::Rebind(*r.model->program, r.model->program->param_values);
+  ASSERT_TRUE(again.program);
+  EXPECT_EQ(again.program->mech.get(), r.model->mech.get());
+  // The copying form still gives the program a mechanism of its own.
+  rt::CompileResult copied = rt::Compile(*r.model->mech, {});
+  ASSERT_TRUE(copied.program);
+  EXPECT_NE(copied.program->mech.get(), r.model->mech.get());
+  EXPECT_EQ(copied.program->mech->params.size(), r.model->mech->params.size());
+}
+
+// File names are interned: equal names are one entry (from any thread), different names
+// are not, "" is empty, and a location reads back the name it was given.
+TEST(FlatFileName, EqualNamesShareOneEntry) {
+  const std::string parts = std::string("<stdlib>/") + "Parts.mech";
+  flat::FileName a(parts), b("<stdlib>/Parts.mech"), c("<stdlib>/Joints.mech"), none(""), unset;
+  EXPECT_EQ(&a.str(), &b.str());
+  EXPECT_TRUE(a == b);
+  EXPECT_FALSE(a == c);
+  EXPECT_EQ(a.str(), "<stdlib>/Parts.mech");
+  EXPECT_TRUE(a == parts);
+  EXPECT_TRUE(none.empty() && unset.empty() && none == unset && none.str().empty());
+  EXPECT_FALSE(a.empty());
+  std::vector<const std::string*> seen(4);
+  std::vector<std::thread> threads;
+  for (size_t t = 0; t < seen.size(); ++t)
+    threads.emplace_back([&seen, t] {
+      for (int i = 0; i < 100; ++i) flat::FileName("thread" + std::to_string(i) + ".mech");
+      seen[t] = &flat::FileName("thread7.mech").str();
+    });
+  for (std::thread& th : threads) th.join();
+  for (const std::string* s : seen) EXPECT_EQ(s, &flat::FileName("thread7.mech").str());
+  // The locations of two loads of one file name the same entries.
+  pipeline::LoadOptions o;
+  o.compile = false;
+  pipeline::LoadResult r1 = pipeline::LoadModel(pipeline::Source::File(kRoot + "/examples/chain.mech"), o, {});
+  pipeline::LoadResult r2 = pipeline::LoadModel(pipeline::Source::File(kRoot + "/examples/chain.mech"), o, {});
+  ASSERT_TRUE(r1.model && r2.model);
+  const int i = r1.model->mech->FindParam("N");
+  ASSERT_GE(i, 0);
+  const flat::SourceLoc& l1 = r1.model->mech->params[static_cast<size_t>(i)].loc;
+  const flat::SourceLoc& l2 = r2.model->mech->params[static_cast<size_t>(r2.model->mech->FindParam("N"))].loc;
+  EXPECT_EQ(l1.file.str(), kRoot + "/examples/chain.mech");
+  EXPECT_EQ(&l1.file.str(), &l2.file.str());
+  EXPECT_GT(l1.line, 0);
 }
 
 }  // namespace
