@@ -23,32 +23,15 @@
 #include "runtime/engine/engine.h"
 #include "runtime/sim/simulate.h"
 #include "tests/constraints/load_util.h"
+#include "tests/stress/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {
 
-// max |theta - theta_ref| over the rows, theta_ref from the first row's angle and speed.
-double AgainstLumpedCrank(double a, const std::vector<double>& t, const std::vector<double>& th,
-                          const std::vector<double>& w) {
+// The lumped crank of parallelogram.mech (rods m1, m2 and coupler m3, all of length a).
+lumped_crank::Crank LumpedCrank(double a) {
   const double m1 = 0.5, m2 = 0.8, m3 = 1.0, g = 9.81;
-  const double J = (m1 + m2) * a * a / 3.0 + m3 * a * a, G = g * a * ((m1 + m2) / 2.0 + m3);
-  const double k = G / J;
-  auto acc = [k](double q) { return -k * std::cos(q); };
-  double x = th[0], v = w[0], now = t[0], err = 0.0;
-  for (size_t i = 0; i < t.size(); ++i) {
-    while (now < t[i] - 1e-13) {
-      const double h = std::min(1e-5, t[i] - now);
-      const double k1x = v, k1v = acc(x);
-      const double k2x = v + h / 2 * k1v, k2v = acc(x + h / 2 * k1x);
-      const double k3x = v + h / 2 * k2v, k3v = acc(x + h / 2 * k2x);
-      const double k4x = v + h * k3v, k4v = acc(x + h * k3x);
-      x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
-      v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-      now += h;
-    }
-    err = std::max(err, std::fabs(th[i] - x));
-  }
-  return err;
+  return {(m1 + m2) * a * a / 3.0 + m3 * a * a, g * a * ((m1 + m2) / 2.0 + m3)};
 }
 
 struct Outcome {
@@ -85,7 +68,7 @@ Outcome RunParallelogram(const char* a, rt::SolverPath solver, rt::IntegratorKin
     o.speed = std::max(o.speed, std::fabs(r[3] - r[1]));
   }
   o.last_t = sink.times.back();
-  o.theta_error = AgainstLumpedCrank(std::stod(a), sink.times, th, w);
+  o.theta_error = lumped_crank::MaxAngleError(LumpedCrank(std::stod(a)), sink.times, th, w, 1e-5);
   return o;
 }
 

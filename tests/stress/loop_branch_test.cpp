@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "lumped_crank.h"
 #include "run_kanesim.h"
 
 namespace kanesim::stress {
@@ -29,9 +30,7 @@ namespace {
 
 constexpr double kG = 9.81;
 
-struct Pendulum {
-  double J = 0.0, G = 0.0;
-};
+using Pendulum = lumped_crank::Crank;
 
 // The lumped crank of `rods` rods (masses m_rods) and `couplers` couplers of mass m_coupler,
 // all of length a.
@@ -44,28 +43,6 @@ Pendulum Lumped(double a, const std::vector<double>& m_rods, int couplers, doubl
   p.J += couplers * m_coupler * a * a;
   p.G += kG * couplers * m_coupler * a;
   return p;
-}
-
-// Max |theta_run - theta_ref| over the rows; theta_ref from the run's first row.
-double AgainstPendulum(const Pendulum& P, const std::vector<double>& t, const std::vector<double>& th,
-                       const std::vector<double>& w) {
-  double x = th[0], v = w[0], now = t[0], err = 0.0;
-  const double k = P.G / P.J;
-  auto acc = [k](double q) { return -k * std::cos(q); };
-  for (size_t i = 0; i < t.size(); ++i) {
-    while (now < t[i] - 1e-12) {
-      const double h = std::min(2e-5, t[i] - now);
-      const double k1x = v, k1v = acc(x);
-      const double k2x = v + h / 2 * k1v, k2v = acc(x + h / 2 * k1x);
-      const double k3x = v + h / 2 * k2v, k3v = acc(x + h / 2 * k2x);
-      const double k4x = v + h * k3v, k4v = acc(x + h * k3x);
-      x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
-      v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-      now += h;
-    }
-    err = std::max(err, std::fabs(th[i] - x));
-  }
-  return err;
 }
 
 struct Outcome {
@@ -95,7 +72,7 @@ Outcome RunAndMeasure(const std::string& model, std::vector<std::string> args, c
     }
   }
   for (double x : w) o.speed_scale = std::max(o.speed_scale, std::fabs(x));
-  o.theta_error = AgainstPendulum(P, t, th, w);
+  o.theta_error = lumped_crank::MaxAngleError(P, t, th, w, 2e-5);
   return o;
 }
 

@@ -1,0 +1,45 @@
+// The independent reference of the equal-link parallelogram tests (issue 20): on the
+// parallelogram branch the rods turn together and the couplers translate, so the whole
+// mechanism is one crank with lumped inertia, T = (1/2) J w^2, V = G sin(theta), and
+//   theta'' = -(G / J) cos(theta).
+// Used by tests/stress/loop_branch_test.cpp (the CLI, every integrator and form) and
+// tests/constraints/change_point_bridge_test.cpp (the bridge over change points), which
+// derive J and G for their models.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace kanesim::lumped_crank {
+
+struct Crank {
+  double J = 0.0;  // lumped moment of inertia about the crank pivot
+  double G = 0.0;  // gravity's moment amplitude: V = G sin(theta)
+};
+
+// Max |theta_i - theta_ref(t_i)| over the rows (t, th, w: time, crank angle and speed),
+// theta_ref integrated from the first row's angle and speed by classical Runge-Kutta with
+// steps of at most h (its own error far below the tests' bounds).
+inline double MaxAngleError(const Crank& c, const std::vector<double>& t, const std::vector<double>& th,
+                            const std::vector<double>& w, double h_max) {
+  const double k = c.G / c.J;
+  auto acc = [k](double q) { return -k * std::cos(q); };
+  double x = th[0], v = w[0], now = t[0], err = 0.0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    while (now < t[i] - 1e-13) {
+      const double h = std::min(h_max, t[i] - now);
+      const double k1x = v, k1v = acc(x);
+      const double k2x = v + h / 2 * k1v, k2v = acc(x + h / 2 * k1x);
+      const double k3x = v + h / 2 * k2v, k3v = acc(x + h / 2 * k2x);
+      const double k4x = v + h * k3v, k4v = acc(x + h * k3x);
+      x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
+      v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+      now += h;
+    }
+    err = std::max(err, std::fabs(th[i] - x));
+  }
+  return err;
+}
+
+}  // namespace kanesim::lumped_crank
