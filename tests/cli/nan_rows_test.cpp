@@ -5,7 +5,9 @@
 // in a sweep's trajectory files too.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <vector>
 
 #include "cli_util.h"
@@ -64,6 +66,36 @@ TEST(NaNRows, EveryRowBeforeATimeNaNIsKeptByEveryIntegratorAndPath) {
         EXPECT_TRUE(Has(r.err, "NaN")) << what << "\n" << r.err;
         ExpectRowsBefore(Times(d + "/out.csv"), fail, what);
       }
+}
+
+// A run killed from outside (SIGKILL: no handler, no flush) leaves whole rows only: the
+// writer gathers rows and writes them in one piece per 50 ms, never a row cut by a full
+// stdio buffer. Wrong if the file ends inside a row or a row is missing in the middle.
+TEST(NaNRows, AKilledRunLeavesWholeRowsOnly) {
+  std::string d = Work("killed");
+  for (double after : {0.3, 0.7}) {
+    std::remove((d + "/out.csv").c_str());
+    // Killed `after` seconds once its first row is on disk (however slow the machine).
+    std::system(("cd '" + d + "' && { '" + Bin() + "' run '" + kSrc +
+                 "/examples/chain.mech' --set N=20 --stop-time 1e4 --interval 1e-3 -o out.csv 2>/dev/null & pid=$!; "
+                 "for i in $(seq 600); do [ \"$(wc -l < out.csv 2>/dev/null || echo 0)\" -ge 2 ] && break; sleep 0.05; done; "
+                 "sleep " + std::to_string(after) + "; kill -KILL $pid; wait $pid; }")
+                    .c_str());
+    const std::string text = Slurp(d + "/out.csv");
+    ASSERT_FALSE(text.empty()) << "killed " << after << " s after its first row";
+    EXPECT_EQ(text.back(), '\n') << "the file ends inside a row";
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);
+    const long fields = std::count(line.begin(), line.end(), ',');
+    long k = 0;
+    while (std::getline(in, line)) {
+      ASSERT_EQ(std::count(line.begin(), line.end(), ','), fields) << "row " << k << ": " << line;
+      ASSERT_NEAR(std::stod(line), 1e-3 * static_cast<double>(k), 1e-9) << "row " << k;
+      ++k;
+    }
+    EXPECT_GE(k, 1) << "the first row is written at once";
+  }
 }
 
 // A NaN that depends on the state (the angle passing a value), not on time.

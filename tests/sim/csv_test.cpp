@@ -1,9 +1,10 @@
 // CSV output: if these fail, numbers do not round-trip (fewer than 17 digits), the
-// header is wrong, or rows sit in a buffer and would be lost on a failure.
+// header is wrong, or rows sit in a buffer longer than the flush interval.
 #include "runtime/sim/csv.h"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace kanesim::sim {
@@ -32,6 +34,25 @@ TEST(SimCsv, SeventeenDigitsRoundTrip) {
   }
 }
 
+// FormatNumber writes with std::to_chars; the text must stay what printf's "%.17g" gives
+// (the CSV files of earlier versions, and the golden files, were written that way), for
+// any bit pattern: NaNs, infinities, subnormals included.
+TEST(SimCsv, NumbersAreExactlyPrintfSeventeenG) {
+  std::mt19937_64 rng(7);
+  std::vector<double> xs = {std::nan(""), -std::nan(""), HUGE_VAL, -HUGE_VAL, 0.0, -0.0, 1e16, 1e17};
+  for (int i = 0; i < 200000; ++i) {
+    uint64_t bits = rng();
+    double x;
+    std::memcpy(&x, &bits, sizeof x);
+    xs.push_back(x);
+  }
+  char buf[64];
+  for (double x : xs) {
+    std::snprintf(buf, sizeof buf, "%.17g", x);
+    ASSERT_EQ(FormatNumber(x), buf);
+  }
+}
+
 std::string ReadAll(const char* path) {
   std::FILE* f = std::fopen(path, "r");
   std::string s;
@@ -42,7 +63,7 @@ std::string ReadAll(const char* path) {
   return s;
 }
 
-TEST(SimCsv, HeaderRowsAndEveryRowFlushedAsWritten) {
+TEST(SimCsv, HeaderRowsFlushedFirstRowAtOnceLaterRowsWithinTheInterval) {
   char path[] = "/tmp/kanesim_csv_testXXXXXX";
   int fd = mkstemp(path);
   ASSERT_GE(fd, 0);
@@ -51,15 +72,24 @@ TEST(SimCsv, HeaderRowsAndEveryRowFlushedAsWritten) {
   ASSERT_TRUE(w.Begin({"a.q", "b[2].u"}));
   const double row1[2] = {0.1, -1.0 / 3.0};
   ASSERT_TRUE(w.Row(0.0, row1, 2));
-  // Read through another handle before End(): the row must already be on disk.
-  EXPECT_EQ(ReadAll(path), "time,a.q,b[2].u\n0,0.10000000000000001,-0.33333333333333331\n");
+  // Read through another handle before End(): the header and the first row are on disk.
+  const std::string first = "time,a.q,b[2].u\n0,0.10000000000000001,-0.33333333333333331\n";
+  EXPECT_EQ(ReadAll(path), first);
   const double row2[2] = {2.0, 1e-300};
   ASSERT_TRUE(w.Row(0.5, row2, 2));
+  // A row more than the flush interval (50 ms) after the last flush goes out with those
+  // before it.
+  std::this_thread::sleep_for(std::chrono::milliseconds(60));
+  const double row3[2] = {-0.0, 4.9e-324};
+  ASSERT_TRUE(w.Row(1.0, row3, 2));
+  const std::string all3 = first + "0.5,2,1e-300\n1,-0,4.9406564584124654e-324\n";
+  EXPECT_EQ(ReadAll(path), all3);
+  ASSERT_TRUE(w.Row(1.5, row2, 2));  // right after a flush: buffered until End()
   ASSERT_TRUE(w.End());
   std::fclose(f);
   std::string all = ReadAll(path);
   std::remove(path);
-  EXPECT_EQ(all, "time,a.q,b[2].u\n0,0.10000000000000001,-0.33333333333333331\n0.5,2,1e-300\n");
+  EXPECT_EQ(all, all3 + "1.5,2,1e-300\n");
 }
 
 // Names with commas (matrix entries) or quotes are quoted as RFC 4180 says, so that a
