@@ -145,9 +145,10 @@ int RunCheck(const CheckArgs& args) {
 
 }  // namespace
 
-void AddCheckCommand(CLI::App& app, int* exit_code) {
+void AddCheckCommand(CLI::App& app, int* exit_code, bool options) {
   auto args = std::make_shared<CheckArgs>();
   CLI::App* cmd = app.add_subcommand("check", "Check a model: diagnostics, or a summary of the mechanism");
+  if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", args->load.path, "The .mech file")->required();
   cmd->add_option("--model", args->load.model, "Model to check (default: the last model in the file)");
   cmd->add_option("--set", args->load.sets, "Override a parameter: name=value (repeatable)");

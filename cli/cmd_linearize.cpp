@@ -401,10 +401,11 @@ int RunLinearize(const LinearizeArgs& a) {
 
 }  // namespace
 
-void AddLinearizeCommand(CLI::App& app, int* exit_code) {
+void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<LinearizeArgs>();
   CLI::App* cmd = app.add_subcommand(
       "linearize", "Linear state-space model (A, B, C, D) about an operating point: eigenvalues, modes, root locus");
+  if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", a->load.path, "The .mech file")->required();
   cmd->add_option("-o,--out", a->out_path, "Write the model as JSON (with --sweep: the table as CSV)");
   cmd->add_option("--model", a->load.model, "Model to linearize (default: the last one in the file)");

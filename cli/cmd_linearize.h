@@ -6,5 +6,5 @@ class App;
 }
 
 namespace kanesim::cli {
-void AddLinearizeCommand(CLI::App& app, int* exit_code);
+void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options = true);
 }  // namespace kanesim::cli

@@ -174,9 +174,10 @@ int RunCommand(const RunArgs& a) {
 
 }  // namespace
 
-void AddRunCommand(CLI::App& app, int* exit_code) {
+void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<RunArgs>();
   CLI::App* run = app.add_subcommand("run", "Simulate a model and write its motion as CSV");
+  if (!options) return;  // only its name and description (main.cpp)
   run->add_option("file", a->load.path, "The .mech file")->required();
   run->add_option("-o,--out", a->out_path, "Write the CSV to this file (default: stdout)");
   run->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");

@@ -389,9 +389,10 @@ int MergeCommand(const MergeArgs& a) {
 
 }  // namespace
 
-void AddSweepCommand(CLI::App& app, int* exit_code) {
+void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<SweepArgs>();
   CLI::App* sw = app.add_subcommand("sweep", "Run many scenarios of a model; one summary row per scenario");
+  if (!options) return;  // only its name and description (main.cpp)
   sw->add_option("file", a->file, "The .mech file, or a sweep .toml file");
   sw->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
   sw->add_option("--set", a->load.sets, "Fix a parameter for every scenario, name=value (repeatable)")

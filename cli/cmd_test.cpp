@@ -318,9 +318,10 @@ int TestCommand(const TestArgs& a) {
 
 }  // namespace
 
-void AddTestCommand(CLI::App& app, int* exit_code) {
+void AddTestCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<TestArgs>();
   CLI::App* t = app.add_subcommand("test", "Golden-output regression tests: run, compare, report deviations");
+  if (!options) return;  // only its name and description (main.cpp)
   t->add_option("paths", a->paths, "Golden specs (.toml) or folders holding them")->required();
   t->add_flag("--update", a->update, "Rewrite the stored outputs and print what changed");
   AddIntegerOption(t, "-j,--jobs", &a->threads, 0, kMaxJobs, "Tests run in parallel (default 0: all cores)");

@@ -169,9 +169,10 @@ int RunView(const ViewArgs& a) {
 
 }  // namespace
 
-void AddViewCommand(CLI::App& app, int* exit_code) {
+void AddViewCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<ViewArgs>();
   CLI::App* cmd = app.add_subcommand("view", "Simulate a model and show the motion and plots in the browser");
+  if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", a->load.path, "The .mech file")->required();
   cmd->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
   cmd->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);

@@ -51,9 +51,9 @@ inline constexpr const char* kProjectionHelp =
     "(eval) or once per accepted step (step: cheaper evaluations, a larger error at the same tolerance)";
 
 // Registers subcommands; each returns through `*exit_code` after it ran.
-void AddCheckCommand(CLI::App& app, int* exit_code);
-void AddRunCommand(CLI::App& app, int* exit_code);
-void AddSweepCommand(CLI::App& app, int* exit_code);  // cmd_sweep.cpp
-void AddTestCommand(CLI::App& app, int* exit_code);   // cmd_test.cpp
+void AddCheckCommand(CLI::App& app, int* exit_code, bool options = true);
+void AddRunCommand(CLI::App& app, int* exit_code, bool options = true);
+void AddSweepCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_sweep.cpp
+void AddTestCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_test.cpp
 
 }  // namespace kanesim::cli

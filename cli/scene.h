@@ -92,6 +92,6 @@ class AnimationRun {
 };
 
 // `kanesim view` (cmd_view.cpp).
-void AddViewCommand(CLI::App& app, int* exit_code);
+void AddViewCommand(CLI::App& app, int* exit_code, bool options = true);
 
 }  // namespace kanesim::cli
