@@ -178,15 +178,19 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     d.hint = "extend it in a class of your own";
   }
   // Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
-  auto [ann, fresh] = primitive_annotation_.try_emplace(cls, nullptr);
-  if (fresh) ann->second = FindAnnotation(cls, "__kanesim");  // the same for every instance of cls
-  if (const ast::Modification* pm = ann->second) {
-    for (const auto& a : pm->args) {
-      if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
-      if (a.path[0] == "primitive") node->prim = PrimFromName(a.mod->value->text);
-      if (a.path[0] == "kind") node->prim_kind = a.mod->value->text;
+  // The same for every instance of cls: read once per class.
+  auto [ann, fresh] = primitive_annotation_.try_emplace(cls);
+  if (fresh) {
+    if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
+      for (const auto& a : pm->args) {
+        if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
+        if (a.path[0] == "primitive") ann->second.prim = PrimFromName(a.mod->value->text), ann->second.has_prim = true;
+        if (a.path[0] == "kind") ann->second.kind = &a.mod->value->text;
+      }
     }
   }
+  if (ann->second.has_prim) node->prim = ann->second.prim;
+  if (ann->second.kind) node->prim_kind = *ann->second.kind;
   if (node->prim == Prim::Frame) {
     node->prim_index = static_cast<int>(frame_nodes_.size());
     frame_nodes_.push_back(node);
@@ -335,15 +339,21 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   add_dims(comp.dims);
   add_dims(comp.type_dims);
 
-  std::string tname = ast::JoinName(comp.type_name);
+  // The declared type's name, joined only for a message (a builtin named by a redeclare
+  // replaces it there).
+  std::string redeclared_name;
+  auto tname = [&] { return redeclared_name.empty() ? ast::JoinName(comp.type_name) : redeclared_name; };
   const ast::ClassDef* tcls = nullptr;
   VType builtin = VType::Real;
-  bool is_builtin = true;
-  if (tname == "Real") builtin = VType::Real;
-  else if (tname == "Integer") builtin = VType::Integer;
-  else if (tname == "Boolean") builtin = VType::Boolean;
-  else if (tname == "String") builtin = VType::String;
-  else is_builtin = false;
+  bool is_builtin = comp.type_name.size() == 1;
+  if (is_builtin) {
+    const std::string& n = comp.type_name[0];
+    if (n == "Real") builtin = VType::Real;
+    else if (n == "Integer") builtin = VType::Integer;
+    else if (n == "Boolean") builtin = VType::Boolean;
+    else if (n == "String") builtin = VType::String;
+    else is_builtin = false;
+  }
 
   if (!child->mod.redeclare_type.empty()) {
     if (!c.replaceable) {
@@ -362,7 +372,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
       }
       const ast::ClassDef* from = child->mod.redeclare_from ? child->mod.redeclare_from : c.owner;
       if (parts.size() == 1 && (t == "Real" || t == "Integer" || t == "Boolean" || t == "String")) {
-        tname = t;
+        redeclared_name = t;
       } else {
         tcls = FindClass(parts, from);
         if (!tcls) {
@@ -383,11 +393,11 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
       if (tcls) component_type_[&comp] = {c.owner, tcls};
     }
     if (!tcls) {
-      auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + tname + "'");
+      auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + tname() + "'");
       std::vector<std::string> names{"Real", "Integer", "Boolean", "String"};
       LoadWholeLibrary();  // the hint considers every class
       for (auto& [k, v] : classes_) names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
-      std::string best = ClosestName(tname, names);
+      std::string best = ClosestName(tname(), names);
       if (!best.empty()) d.hint = "did you mean '" + best + "'?";
       return;
     }
@@ -409,7 +419,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
       t = FindClass(t->short_base, t);
     }
     if (!is_builtin) {
-      diags_.Error(DiagCode::UnknownClass, comp.type_span, "type '" + tname + "' is not a Real/Integer/Boolean/String");
+      diags_.Error(DiagCode::UnknownClass, comp.type_span, "type '" + tname() + "' is not a Real/Integer/Boolean/String");
       return;
     }
     MergeInto(child->mod, tm, child->path);
@@ -445,7 +455,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   }
   // A component of class type (or an array of them).
   if (tcls->kind == ast::ClassKind::Package || tcls->kind == ast::ClassKind::Function) {
-    diags_.Error(DiagCode::TypeMismatch, comp.type_span, "'" + tname + "' is a package or function, not a model");
+    diags_.Error(DiagCode::TypeMismatch, comp.type_span, "'" + tname() + "' is a package or function, not a model");
     return;
   }
   if (dims.size() > 1) {

@@ -363,7 +363,12 @@ class Elaborator {
   // Lookups that depend on the class alone, made once per class rather than per instance:
   // the __kanesim annotation (null: none), and a component's declared type (with the
   // class it was looked up from).
-  std::unordered_map<const ast::ClassDef*, const ast::Modification*> primitive_annotation_;
+  struct ClassPrim {  // a class's __kanesim annotation: primitive and kind, if given
+    bool has_prim = false;
+    Prim prim = Prim::None;
+    const std::string* kind = nullptr;
+  };
+  std::unordered_map<const ast::ClassDef*, ClassPrim> primitive_annotation_;
   std::unordered_map<const ast::Component*, std::pair<const ast::ClassDef*, const ast::ClassDef*>> component_type_;
   std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
   // EvalOperators' explicit stacks (lang/elab_operators.cpp), kept between calls.

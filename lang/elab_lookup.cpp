@@ -159,9 +159,12 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
   }
   Value out = std::move(v);  // element k is read before it is replaced
   const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
-  std::vector<int> idx(var->shape.size());
+  Dims idx;
+  idx.assign(var->shape.size(), 0);
   for (size_t k = 0; k < out.elements.size(); ++k) {
-    std::string name = var->path;
+    std::string name;  // sized once: appending to a copy of the path allocated twice
+    name.reserve(var->path.size() + 12 * var->shape.size() + 2);
+    name.append(var->path);
     if (!var->shape.empty()) {
       // Row-major multi-index, 1-based.
       size_t rem = k;

@@ -19,6 +19,7 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
   Mod out;
   if (!m) return out;
   out.span = m->span;
+  out.order.reserve(m->args.size());
   if (m->value) {
     ModValue v;
     v.expr = m->value.get();
@@ -68,9 +69,12 @@ namespace {
 // The recursion of MergeInto (as deep as the modifier is written), for an inner modifier
 // that is kept (const Mod&: its values are copied) or given up (Mod&&: they are moved).
 // The name for messages is `what` followed by `keys`, built only when a message needs it.
+// The keys from `what` down to the modifier being merged; as deep as a modifier is written,
+// so no heap allocation.
+using MergeKeys = SmallVec<const std::string*, 8>;
+
 template <class InnerRef>
-void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::string& what,
-                   std::vector<const std::string*>& keys) {
+void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::string& what, MergeKeys& keys) {
   constexpr bool kMove = !std::is_lvalue_reference_v<InnerRef>;
   auto take = [](auto& x) -> decltype(auto) {
     if constexpr (kMove) return std::move(x);
@@ -111,6 +115,7 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
   if (!outer.span.valid()) outer.span = inner.span;
   outer.each = outer.each || inner.each;
   if (!inner_empty && !inner.set_only) outer.set_only = false;
+  if (outer.order.empty()) outer.order.reserve(inner.order.size());  // later merges grow it geometrically
   for (const auto& key : inner.order) {
     auto it = inner.sub.find(key);
     if (it == inner.sub.end()) continue;
@@ -126,13 +131,13 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
 
 // outer wins over inner; `what` names the element for messages.
 void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
-  std::vector<const std::string*> keys;
+  MergeKeys keys;
   MergeModsImpl(diags_, outer, inner, what, keys);
 }
 
 // The same, giving up `inner`: its values move into `outer` instead of being copied.
 void Elaborator::MergeInto(Mod& outer, Mod&& inner, const std::string& what) {
-  std::vector<const std::string*> keys;
+  MergeKeys keys;
   MergeModsImpl(diags_, outer, std::move(inner), what, keys);
 }
 

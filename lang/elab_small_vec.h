@@ -70,6 +70,7 @@ class SmallVec {
     cap_ = n;
   }
   void clear() { size_ = 0; }
+  void pop_back() { --size_; }
   void push_back(const T& x) {
     if (size_ == cap_) {
       const T copy = x;  // x may live in this vector
