@@ -419,7 +419,8 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
       t = FindClass(t->short_base, t);
     }
     if (!is_builtin) {
-      diags_.Error(DiagCode::UnknownClass, comp.type_span, "type '" + tname() + "' is not a Real/Integer/Boolean/String");
+      diags_.Error(DiagCode::UnknownClass, comp.type_span,
+                   "type '" + tname() + "' is not a Real/Integer/Boolean/String");
       return;
     }
     MergeInto(child->mod, tm, child->path);
