@@ -329,16 +329,20 @@ const Builtin kBuiltins[] = {
 }  // namespace
 
 Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
-  std::string fn = e.parts.empty() ? "" : ast::JoinName([&] {
+  // The function's name: most are one part (`sin`), read in place; a qualified one is joined.
+  std::string joined;
+  if (e.parts.size() > 1) {
     std::vector<std::string> v;
     for (auto& p : e.parts) v.push_back(p.name);
-    return v;
-  }());
+    joined = ast::JoinName(v);
+  }
+  const std::string& fn = e.parts.size() == 1 ? e.parts[0].name : joined;
   if (!e.named_args.empty()) {
     diags_.Error(DiagCode::BadCall, e.named_args[0].span, "'" + fn + "' takes no named arguments");
     return Value::Invalid();
   }
   std::vector<Value> args;
+  args.reserve(e.args.size());
   for (const auto& a : e.args) {
     args.push_back(Eval(*a, ctx));
     if (!args.back().valid) return Value::Invalid();
