@@ -48,6 +48,9 @@ constexpr double kSlow = 1e-3;  // of the reference's speed (kinetic-metric norm
 // a solver creeping towards the singular configuration in ever smaller steps would
 // otherwise run into its step limit per output instant, minutes later.
 constexpr long kMaxZoneSteps = 1000;
+// After this many accepted steps inside one zone (SetEarlyBridge on) the bridge is tried at
+// once rather than after kMaxZoneSteps; refused, the solver goes on as before.
+constexpr long kEarlyBridgeSteps = 50;
 constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
 constexpr double kRankTol = 1e-9;  // sigma / sigma_max below which a row counts as dependent (assembly's)
 }  // namespace
@@ -77,6 +80,12 @@ struct BranchMonitor {
   std::vector<double> nt, nrho;  // the bridge's own approach (Runge-Kutta nodes: t, y, y')
   std::vector<std::vector<double>> ny, nf;  // 0: the quintic through the three; 1: the cubic through the last two
   std::string bridge_refused;  // why the last bridge was refused
+  // The early bridge (SetEarlyBridge): its tolerances (0: off), whether it was tried in this
+  // zone, and a bridge computed by CheckBranch for the integrator's next Bridge call.
+  double early_rtol = 0.0, early_atol = 0.0;
+  bool early_tried = false, pending = false;
+  double pend_from = 0.0, pend_tb = 0.0;
+  std::vector<double> pend_y;
   double bridge_estimate = 0.0;  // the last bridge's error estimate, in units of the tolerance
 };
 
@@ -190,6 +199,7 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
       m.zone_rho = rho;
       m.zone_steps = 0;
       m.bridged = false;
+      m.early_tried = false;
       m.trace_t.clear();
       m.trace_rho.clear();
       m.trace_y.clear();
@@ -203,7 +213,26 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
       m.trace_y.emplace_back(y, y + n);
     }
     m.zone_rho = std::min(m.zone_rho, rho);
-    if (++m.zone_steps > kMaxZoneSteps) {
+    ++m.zone_steps;
+    if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried && m.zone_steps >= kEarlyBridgeSteps) {
+      // Stalling: a passage takes a few steps. Bridged now, if the bridge can be trusted;
+      // the solver's failure below hands it to the integrator (Bridge returns it).
+      m.early_tried = true;
+      m.pend_y.assign(n, 0.0);
+      if (BridgeChangePoint(p, m, m.early_rtol, m.early_atol, &m.pend_from, &m.pend_tb, m.pend_y.data()) == 0) {
+        m.pending = true;
+        char buf[512];
+        std::snprintf(buf, sizeof buf,
+                      "closed loop '%s' at a singular configuration at time %.9g: the integrator took %ld steps since "
+                      "time %.9g without passing the change point (the constraint rows within %.2g of losing rank, "
+                      "sigma_min/sigma_max), and the bridge over it could not be used here",
+                      p.loops[static_cast<size_t>(m.zone_loop)].name.c_str(), t, m.zone_steps, m.zone_t, m.zone_rho);
+        m.error = buf;
+        return -1;
+      }
+      // Refused: the solver goes on (the stop at kMaxZoneSteps tries the bridge once more).
+    }
+    if (m.zone_steps > kMaxZoneSteps) {
       char buf[512];
       std::snprintf(buf, sizeof buf,
                     "closed loop '%s' at a singular configuration at time %.9g: the integrator took %ld steps since "
@@ -575,8 +604,20 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   return 0;
 }
 
+void SetEarlyBridge(BranchMonitor& m, double rtol, double atol) {
+  m.early_rtol = rtol;
+  m.early_atol = atol;
+}
+
 int BridgeChangePoint(const Program& p, BranchMonitor& m, double rtol, double atol, double* t_from, double* t_b,
                       double* y_b) {
+  if (m.pending) {  // computed by CheckBranch
+    m.pending = false;
+    *t_from = m.pend_from;
+    *t_b = m.pend_tb;
+    std::copy(m.pend_y.begin(), m.pend_y.end(), y_b);
+    return 0;
+  }
   if (!p.loops.empty() && m.in_zone && m.bridged) {
     m.bridge_refused = "this zone was bridged once already";
     return 1;

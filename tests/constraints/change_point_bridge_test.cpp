@@ -170,6 +170,17 @@ TEST(ChangePointBridge, AtRtol1e12TheReducedFormIsAccurateOrStops) {
     }
 }
 
+// A stall is bridged after 50 accepted steps inside the zone, not after the 1000 of the
+// stuck stop (rt::SetEarlyBridge): DOP853 on the multiplier form at rtol 1e-12 took 23 026
+// steps over the 20 s with the bridge tried only at the stop (~37 crossings, most stalling
+// for 1000 steps), 2086 with it tried at 50.
+TEST(ChangePointBridge, AStallIsBridgedEarly) {
+  const Outcome o = RunParallelogram("0.6", rt::SolverPath::Sparse, rt::IntegratorKind::DOP853, false, 1e-12, true);
+  ExpectOnTheBranch(o, 1e-12);
+  EXPECT_LT(o.result.stats.integrator.steps, 5000);
+  EXPECT_GT(o.result.stats.integrator.steps, 500);
+}
+
 // Without the bridge the required runs stop (exit code 2) at a change point, with every row
 // before it on the branch: these cases fail if the bridge is switched off.
 TEST(ChangePointBridge, WithoutTheBridgeTheSameRunsStop) {
