@@ -43,6 +43,12 @@ namespace {
 // singular (a loop at a dead point: the Jacobian lost rank).
 constexpr double kDegraded = 1e-2;
 constexpr double kSingular = 1e-10;
+// From this many dependent speeds on, they are factored in the order of the rows they
+// move (BandedOrder) rather than in the pivoting order: a chain of loops has a
+// block-banded A_dep, whose QR then stays banded (small_qr.h; docs/benchmarks.md, "Change
+// points"). Below it the dense QR costs microseconds and keeps the pivoting order, which
+// makes min/max |R_ii| rank-revealing at the moment the partition is chosen.
+constexpr int kBandedMinRank = 16;
 // Newton on positions: iterate to round-off (kTight) so that the right-hand side is a
 // smooth function of y for difference-quotient Jacobians; fail above kLoose.
 constexpr double kTight = kProjectTight;
@@ -336,6 +342,44 @@ double DependentRatio(const Workspace& ws, int rank) {
 }
 }  // namespace
 
+namespace {
+// The dependent speeds sorted by the first active row they move, then the last (ws.col_rows;
+// rows are numbered loop by loop): for a chain of loops, A_dep becomes block-banded, and
+// its Householder QR creates no fill outside the band.
+void BandedOrder(Workspace& ws) {
+  const auto first = [&](int s) { return ws.col_rows[2 * static_cast<size_t>(s)]; };
+  const auto last = [&](int s) { return ws.col_rows[2 * static_cast<size_t>(s) + 1]; };
+  std::stable_sort(ws.dep.begin(), ws.dep.end(),
+                   [&](int x, int y) { return first(x) != first(y) ? first(x) < first(y) : last(x) < last(y); });
+}
+
+// ws.col_rows: for each free speed s, the first and last active row whose bodies it moves
+// (its joint on the path from either body of the row to the root); (n_a, -1) for none.
+void StructuralRows(const Program& p, Workspace& ws) {
+  const auto na = static_cast<int>(p.active_rows.size());
+  ws.col_rows.assign(2 * static_cast<size_t>(p.nu), 0);
+  for (int s = 0; s < p.nu; ++s) {
+    const int J = p.joint_of_speed[static_cast<size_t>(p.u_free[static_cast<size_t>(s)])];
+    const auto moves = [&](int X) {
+      for (int L = X; L >= 0; L = p.joints[static_cast<size_t>(L)].parent)
+        if (L == J) return true;
+      return false;
+    };
+    int lo = na, hi = -1;
+    for (int k = 0; k < na; ++k) {
+      int a = -1, b = -1;
+      RowBodies(p, p.active_rows[static_cast<size_t>(k)], &a, &b);
+      if (moves(a) || moves(b)) {
+        lo = std::min(lo, k);
+        hi = k;
+      }
+    }
+    ws.col_rows[2 * static_cast<size_t>(s)] = lo;
+    ws.col_rows[2 * static_cast<size_t>(s) + 1] = hi;
+  }
+}
+}  // namespace
+
 int FactorDependent(const Program& p, Workspace& ws) {
   const int rank = p.loop_rank;
   if (rank == 0) return 0;
@@ -353,6 +397,7 @@ int FactorDependent(const Program& p, Workspace& ws) {
     ws.qr_A->compute(ws.A);
     const auto& perm = ws.qr_A->colsPermutation().indices();
     for (int k = 0; k < rank; ++k) ws.dep[static_cast<size_t>(k)] = perm[k];
+    if (rank >= kBandedMinRank) BandedOrder(ws);
     // Independent speeds in increasing order (deterministic beta columns).
     int n = 0;
     for (int s = 0; s < p.nu; ++s) {
@@ -559,6 +604,7 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.dep.assign(static_cast<size_t>(rank), 0);
   ws.ind.assign(static_cast<size_t>(nind), 0);
   ws.partition_valid = false;
+  StructuralRows(p, ws);
   ws.beta = Eigen::MatrixXd::Zero(p.nu, nind);
   ws.MB = Eigen::MatrixXd::Zero(p.nu, nind);
   ws.Mr = Eigen::MatrixXd::Zero(nind, nind);
