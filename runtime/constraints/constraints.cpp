@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "runtime/constraints/contacts.h"
 #include "runtime/kinematics/joint_kinematics.h"
@@ -43,6 +44,15 @@ namespace {
 // singular (a loop at a dead point: the Jacobian lost rank).
 constexpr double kDegraded = 1e-2;
 constexpr double kSingular = 1e-10;
+// From this many dependent speeds on, the order they are factored in is chosen by the fill
+// of A_dep's QR (BandedOrder): a chain of loops has a block-banded A_dep, whose QR stays
+// banded in the order of the rows the speeds move but fills in the pivoting order
+// (small_qr.h; docs/benchmarks.md, "Change points"). The banded order is taken when its
+// symbolic cost is below kBandedGain of the pivoting order's; otherwise, and below
+// kBandedMinRank (where the dense QR costs microseconds), the pivoting order stays, which
+// makes min/max |R_ii| rank-revealing at the moment the partition is chosen.
+constexpr int kBandedMinRank = 16;
+constexpr double kBandedGain = 0.5;
 // Newton on positions: iterate to round-off (kTight) so that the right-hand side is a
 // smooth function of y for difference-quotient Jacobians; fail above kLoose.
 constexpr double kTight = kProjectTight;
@@ -336,6 +346,80 @@ double DependentRatio(const Workspace& ws, int rank) {
 }
 }  // namespace
 
+namespace {
+// Multiply-adds of SmallQR::Compute on ws.dep's columns in their current order, from the
+// structural extents ws.col_rows alone: reflector k spans rows k .. end_k, and touches the
+// later columns whose extents overlap it, widening them (small_qr.h). O(rank^2).
+double SymbolicQRCost(Workspace& ws, int rank) {
+  int* lo = ws.order_scratch.data() + rank;
+  int* hi = lo + rank;
+  for (int j = 0; j < rank; ++j) {
+    const auto s = static_cast<size_t>(ws.dep[static_cast<size_t>(j)]);
+    lo[j] = ws.col_rows[2 * s];
+    hi[j] = ws.col_rows[2 * s + 1] + 1;
+  }
+  double cost = 0.0;
+  for (int k = 0; k < rank; ++k) {
+    const int end = std::max(hi[k], k + 1);
+    for (int j = k + 1; j < rank; ++j) {
+      if (std::max(lo[j], k) >= std::min(hi[j], end)) continue;
+      cost += end - k;
+      lo[j] = std::min(lo[j], k);
+      hi[j] = std::max(hi[j], end);
+    }
+  }
+  return cost;
+}
+
+// The dependent speeds sorted by the first active row they move, then the last (ws.col_rows;
+// rows are numbered loop by loop), when that makes A_dep's QR at least 1 / kBandedGain
+// times cheaper than in the pivoting order: for a chain of loops A_dep becomes
+// block-banded, and its Householder QR creates no fill outside the band. Insertion sort:
+// stable, and no allocation.
+void BandedOrder(Workspace& ws, int rank) {
+  const auto key = [&](int s) {
+    return std::make_pair(ws.col_rows[2 * static_cast<size_t>(s)], ws.col_rows[2 * static_cast<size_t>(s) + 1]);
+  };
+  const double pivoting = SymbolicQRCost(ws, rank);
+  std::copy(ws.dep.begin(), ws.dep.end(), ws.order_scratch.begin());
+  for (int i = 1; i < rank; ++i) {
+    const int s = ws.dep[static_cast<size_t>(i)];
+    int j = i;
+    for (; j > 0 && key(s) < key(ws.dep[static_cast<size_t>(j - 1)]); --j)
+      ws.dep[static_cast<size_t>(j)] = ws.dep[static_cast<size_t>(j - 1)];
+    ws.dep[static_cast<size_t>(j)] = s;
+  }
+  if (SymbolicQRCost(ws, rank) > kBandedGain * pivoting)
+    std::copy(ws.order_scratch.begin(), ws.order_scratch.begin() + rank, ws.dep.begin());
+}
+
+// ws.col_rows: for each free speed s, the first and last active row whose bodies it moves
+// (its joint on the path from either body of the row to the root); (n_a, -1) for none.
+void StructuralRows(const Program& p, Workspace& ws) {
+  const auto na = static_cast<int>(p.active_rows.size());
+  ws.col_rows.assign(2 * static_cast<size_t>(p.nu), 0);
+  for (int s = 0; s < p.nu; ++s) {
+    const int J = p.joint_of_speed[static_cast<size_t>(p.u_free[static_cast<size_t>(s)])];
+    const auto moves = [&](int X) {
+      for (int L = X; L >= 0; L = p.joints[static_cast<size_t>(L)].parent)
+        if (L == J) return true;
+      return false;
+    };
+    int lo = na, hi = -1;
+    for (int k = 0; k < na; ++k) {
+      int a = -1, b = -1;
+      RowBodies(p, p.active_rows[static_cast<size_t>(k)], &a, &b);
+      if (moves(a) || moves(b)) {
+        lo = std::min(lo, k);
+        hi = k;
+      }
+    }
+    ws.col_rows[2 * static_cast<size_t>(s)] = lo;
+    ws.col_rows[2 * static_cast<size_t>(s) + 1] = hi;
+  }
+}
+}  // namespace
+
 int FactorDependent(const Program& p, Workspace& ws) {
   const int rank = p.loop_rank;
   if (rank == 0) return 0;
@@ -353,6 +437,7 @@ int FactorDependent(const Program& p, Workspace& ws) {
     ws.qr_A->compute(ws.A);
     const auto& perm = ws.qr_A->colsPermutation().indices();
     for (int k = 0; k < rank; ++k) ws.dep[static_cast<size_t>(k)] = perm[k];
+    if (rank >= kBandedMinRank) BandedOrder(ws, rank);
     // Independent speeds in increasing order (deterministic beta columns).
     int n = 0;
     for (int s = 0; s < p.nu; ++s) {
@@ -559,6 +644,8 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.dep.assign(static_cast<size_t>(rank), 0);
   ws.ind.assign(static_cast<size_t>(nind), 0);
   ws.partition_valid = false;
+  StructuralRows(p, ws);
+  ws.order_scratch.assign(3 * static_cast<size_t>(rank), 0);
   ws.beta = Eigen::MatrixXd::Zero(p.nu, nind);
   ws.MB = Eigen::MatrixXd::Zero(p.nu, nind);
   ws.Mr = Eigen::MatrixXd::Zero(nind, nind);

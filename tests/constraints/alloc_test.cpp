@@ -73,6 +73,28 @@ TEST(ConstraintsAlloc, MultiplierFormAllocatesNothing) {
   Check("rolling_disk.mech", {"lean", "contact.lateral_force"}, rt::SolverPath::Sparse);
 }
 
+TEST(ConstraintsAlloc, BandedPartitionChoiceAllocatesNothing) {
+  // If this fails, choosing the partition of a chain of loops (pivoted QR of A, the banded
+  // order of the dependent speeds and its symbolic cost, the profile QR) allocates.
+  rt::CompileOptions o;
+  o.solver = rt::SolverPath::Dense;
+  auto l = LoadModel(kRoot + "/tests/stress/models/parallelogram_chain.mech", {{"N", "10"}}, o);
+  ASSERT_TRUE(l && l->prog);
+  const rt::Program& p = *l->prog;
+  ASSERT_GE(p.loop_rank, 16);  // at or above kBandedMinRank (constraints.cpp)
+  auto ws = rt::MakeWorkspace(p);
+  std::vector<double> y(static_cast<size_t>(rt::StateSize(p))), yd(y.size());
+  rt::InitialState(p, y.data());
+  ASSERT_EQ(rt::Derivative(p, *ws, 0.0, y.data(), yd.data()), 0) << rt::ErrorMessage(*ws);
+  for (size_t i = 0; i < y.size(); ++i) y[i] += 1e-4;
+  const long before = g_allocations.load();
+  for (int k = 0; k < 5; ++k) {
+    ws->partition_valid = false;  // re-choose at every evaluation
+    ASSERT_EQ(rt::Derivative(p, *ws, 0.01 * k, y.data(), yd.data()), 0) << rt::ErrorMessage(*ws);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0) << "operator new called in the chain's right-hand side";
+}
+
 TEST(ConstraintsAlloc, JointFrictionIterationAllocatesNothing) {
   // If this fails, the friction fixed point (reactions inside the right-hand side) allocates.
   MechBuilder b;
