@@ -480,11 +480,28 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   for (int i = 0; i < p.nu; ++i) p.y0[static_cast<size_t>(p.nq + i)] = ws.u[p.u_free[static_cast<size_t>(i)]];
 }
 
+namespace {
+// Whether the reduced form factors the dependent block at the assembled start in the
+// banded order (constraints.cpp BandedOrder: a chain of loops, each coupled to its
+// neighbours only), where its QR grows linearly with the loops instead of as rank^3.
+bool DependentBlockBanded(const Program& p) {
+  auto wsp = MakeWorkspace(p);
+  Workspace& ws = *wsp;
+  if (UnpackState(p, ws, StartTime(p), p.y0.data()) != 0) return false;
+  PositionKinematics(p, ws);
+  VelocityKinematics(p, ws);  // the partial velocities the Jacobian is made of
+  return FactorConstraintsAsIs(p, ws) == 0 && ws.dep_banded;
+}
+}  // namespace
+
 // The path for a scene with constraints (after AssembleLoops: it needs the redundant
 // rows). Measured by bench/loop_solvers.cpp on ladders of N four-bars (docs/constraints.md
 // "Reduced or multiplier form"): the reduced form costs O(nu^3) per evaluation, the
 // multiplier form O(bodies + rows) but with a larger constant; the multiplier form wins
-// from kSparseLoopMinSpeeds free speeds on.
+// from kSparseLoopMinSpeeds free speeds on — unless the dependent block is banded (a chain
+// of loops), where the reduced form's factorization is linear too and the reduced form
+// stays cheaper (chain of 40 parallelograms, 81 free speeds: 56 against 233 us per
+// right-hand side; docs/benchmarks.md "Change points").
 void ChooseLoopSolver(Program& p) {
   const std::string counts = std::to_string(p.loops.size()) + " closed loop(s), " + std::to_string(p.contacts.size()) +
                              " contact(s), " + std::to_string(p.nu) + " free speeds";
@@ -498,10 +515,12 @@ void ChooseLoopSolver(Program& p) {
   if (!p.redundant_rows.empty() && !p.friction_joints.empty())
     blocked = "Coulomb friction with redundant constraints reads the minimum-norm normal force of the reduced path";
   const SolverPath want = p.options.solver;
+  const bool banded = want == SolverPath::Auto && blocked.empty() && p.nu >= kSparseLoopMinSpeeds &&
+                      DependentBlockBanded(p);
   if (want == SolverPath::Sparse && blocked.empty()) {
     p.solver = SolverPath::Sparse;
     p.solver_reason = counts + sparse + " (forced by --solver)";
-  } else if (want == SolverPath::Auto && blocked.empty() && p.nu >= kSparseLoopMinSpeeds) {
+  } else if (want == SolverPath::Auto && blocked.empty() && p.nu >= kSparseLoopMinSpeeds && !banded) {
     p.solver = SolverPath::Sparse;
     p.solver_reason = counts + sparse + " (measured cheaper than the reduced form from " +
                       std::to_string(kSparseLoopMinSpeeds) + " free speeds on)";
@@ -513,6 +532,9 @@ void ChooseLoopSolver(Program& p) {
     if (want == SolverPath::Auto && p.nu < kSparseLoopMinSpeeds)
       p.solver_reason += " (measured cheaper than the multiplier form below " + std::to_string(kSparseLoopMinSpeeds) +
                          " free speeds)";
+    if (banded)
+      p.solver_reason += " (the dependent block is banded, a chain of loops: its factorization grows linearly, "
+                         "measured cheaper than the multiplier form)";
   }
 }
 

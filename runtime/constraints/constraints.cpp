@@ -389,8 +389,8 @@ void BandedOrder(Workspace& ws, int rank) {
       ws.dep[static_cast<size_t>(j)] = ws.dep[static_cast<size_t>(j - 1)];
     ws.dep[static_cast<size_t>(j)] = s;
   }
-  if (SymbolicQRCost(ws, rank) > kBandedGain * pivoting)
-    std::copy(ws.order_scratch.begin(), ws.order_scratch.begin() + rank, ws.dep.begin());
+  ws.dep_banded = SymbolicQRCost(ws, rank) <= kBandedGain * pivoting;
+  if (!ws.dep_banded) std::copy(ws.order_scratch.begin(), ws.order_scratch.begin() + rank, ws.dep.begin());
 }
 
 // ws.col_rows: for each free speed s, the first and last active row whose bodies it moves
@@ -437,6 +437,7 @@ int FactorDependent(const Program& p, Workspace& ws) {
     ws.qr_A->compute(ws.A);
     const auto& perm = ws.qr_A->colsPermutation().indices();
     for (int k = 0; k < rank; ++k) ws.dep[static_cast<size_t>(k)] = perm[k];
+    ws.dep_banded = false;
     if (rank >= kBandedMinRank) BandedOrder(ws, rank);
     // Independent speeds in increasing order (deterministic beta columns).
     int n = 0;

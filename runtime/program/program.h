@@ -339,6 +339,7 @@ struct Workspace {
   SmallQR qr_dep;                   // A_dep = Q R  filled by ProjectState
   std::vector<int> dep, ind;        // free speed indices: dependent (rank), independent (nu - rank)  filled by ProjectState
   bool partition_valid = false;     // dep/ind chosen  set by ProjectState
+  bool dep_banded = false;          // dep is in the banded order (BandedOrder), not the pivoting one  set by FactorDependent
   std::vector<int> col_rows;        // per free speed: first and last active row it can move (structural), 2 s and 2 s + 1, for the banded order of the dependent speeds  (2 nu)  filled by InitConstraintWorkspace
   std::vector<int> order_scratch;   // the pivoting order of the dependent speeds, then column extents of the symbolic QR  (3 rank)  filled by FactorDependent
   long partition_changes = 0;       // how often the partition was re-chosen  filled by ProjectState

@@ -14,6 +14,7 @@
 
 #include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"
+#include "tests/stress/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {
@@ -231,6 +232,53 @@ TEST(MultiplierForm, FrictionOnRedundantConstraintsKeepsTheReducedForm) {
   EXPECT_EQ(s.solver, rt::SolverPath::Dense);
   EXPECT_NE(s.solver_reason.find("--solver sparse is ignored here: Coulomb friction"), std::string::npos)
       << s.solver_reason;
+}
+
+}  // namespace
+}  // namespace kanesim::test
+
+namespace kanesim::test {
+namespace {
+
+// The automatic choice between the forms: from 60 free speeds on the multiplier form, as
+// measured on the ladder of four-bars (its dependent block fills in: the reduced form is
+// O(nu^3)) — except when the dependent block is banded (a chain of loops, each coupled to
+// its neighbours), where the reduced form factors it in linear time and stays cheaper
+// (docs/constraints.md "Reduced or multiplier form"). Wrong if the ladder leaves the
+// multiplier form or the chain of 40 parallelograms (81 free speeds) takes it; and the
+// reduced form the chain gets must follow its independent one-degree-of-freedom model
+// (tests/stress/lumped_crank.h).
+TEST(AutoForm, BandedChainOfLoopsKeepsTheReducedFormLadderTakesTheMultiplierForm) {
+  auto ladder = LoadModel(kRoot + "/bench/models/fourbar_ladder.mech", {{"N", "30"}});
+  ASSERT_TRUE(ladder && ladder->prog);
+  EXPECT_EQ(ladder->prog->nu, 90);
+  EXPECT_EQ(ladder->prog->solver, rt::SolverPath::Sparse) << ladder->prog->solver_reason;
+
+  const double a = 0.6, m_rod = 0.5, m_coupler = 1.0, g = 9.81;
+  for (int n : {29, 40}) {
+    SCOPED_TRACE(n);
+    auto chain = LoadModel(kRoot + "/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}});
+    ASSERT_TRUE(chain && chain->prog);
+    const rt::Program& p = *chain->prog;
+    EXPECT_EQ(p.nu, 2 * n + 1);
+    EXPECT_EQ(p.solver, rt::SolverPath::Dense) << p.solver_reason;
+    if (n == 40) {
+      EXPECT_NE(p.solver_reason.find("banded"), std::string::npos) << p.solver_reason;
+    }
+    // 0.2 s from theta0 = -0.5 at 12 rad/s: rod 0 turns through the change point at 0
+    // (all links collinear) to about 1.7 rad.
+    sim::MemorySink rows = RunModel(p, 0.2, 0.01, 1e-10, {"rj0.q", "rj0.u"});
+    ASSERT_EQ(rows.times.size(), 21u);
+    std::vector<double> th, w;
+    for (const auto& r : rows.rows) {
+      th.push_back(r[0]);
+      w.push_back(r[1]);
+    }
+    lumped_crank::Crank c;
+    c.J = (n + 1) * m_rod * a * a / 3 + n * m_coupler * a * a;
+    c.G = g * ((n + 1) * m_rod * a / 2 + n * m_coupler * a);
+    EXPECT_LT(lumped_crank::MaxAngleError(c, rows.times, th, w, 1e-4), 1e-7);
+  }
 }
 
 }  // namespace
