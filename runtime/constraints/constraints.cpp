@@ -62,6 +62,16 @@ constexpr int kMaxNewton = kProjectMaxNewton;
 // until the residual is at round-off (kRoundOff) or stops shrinking (by kStall per step).
 constexpr double kRoundOff = 1e-16;
 constexpr double kStall = 0.5;
+// ... below kToRoundOff, not only below kDegraded: the reduced form's accelerations are off
+// by ~c/rho^3 for the residual c Newton leaves (docs/constraints.md), 3e-7 relative at rho
+// 9e-3 with c = 1e-13, which the bridge's approach and a solver's own passage carry
+// (measured on the equal-link parallelogram at rtol 1e-12: 0.01 -> 3 of 10 reduced-form
+// cells on the branch, 0.1 -> 5, 0.3 -> 6, 0.5 -> 10; docs/benchmarks.md "Change points").
+constexpr double kToRoundOff = 0.5;
+// ... for dependent blocks of one loop's size at most (a chain of loops' block has a pivot
+// ratio below 0.5 everywhere: Newton to round-off at every evaluation cost ARKODE on the
+// chain of ten at rtol 1e-9 its accuracy, 1.4e-4 rad off the lumped crank).
+constexpr int kToRoundOffMaxRank = 6;
 // A rolling disk lies flat when the sine of its axis' angle to the plane normal, |m| of
 // contacts.cpp eq. 2, falls below kFlatDisk (0.57 degrees: a thin disk's face reaches
 // the plane, and the lowest rim point P is undefined at 0). A step that passes through
@@ -600,7 +610,7 @@ int ProjectStateByPartition(const Program& p, Workspace& ws) {
     // Near a singular configuration, on to round-off: a residual c leaves the state on
     // the level set phi = c, which bends from one branch onto another within sqrt(c) of
     // a change point (docs/constraints.md, "Singular configurations").
-    if (r <= tight && (r <= kRoundOff * p.loop_length || r > kStall * last || DependentRatio(ws, rank) >= kDegraded))
+    if (r <= tight && (r <= kRoundOff * p.loop_length || r > kStall * last || DependentRatio(ws, rank) >= (rank <= kToRoundOffMaxRank ? kToRoundOff : kDegraded)))
       break;
     last = r;
     // Newton step on the dependent coordinates: A_dep du_dep = -phi (7).

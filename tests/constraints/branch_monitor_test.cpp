@@ -90,5 +90,54 @@ TEST(BranchMonitor, LetsTheParallelogramThroughForwardAndBack) {
         << rt::BranchMonitorError(*m);
 }
 
+// Feeds the monitor the exact motion of the lumped crank (theta'' = -(G/J) cos theta; the
+// model's gravity, J and G as in change_point_bridge_test.cpp) through the change point at
+// theta = pi in accepted steps of 1 ms, the speed off by dw once past it; returns the first
+// non-zero CheckBranch (0: none up to pi + 0.05).
+int PassTheChangePoint(const rt::Program& p, rt::BranchMonitor& m, Rig& r, double dw) {
+  const double a = 0.6, J = (0.5 + 0.8) * a * a / 3.0 + 1.0 * a * a, G = 9.81 * a * ((0.5 + 0.8) / 2.0 + 1.0);
+  double th = M_PI - 0.3, w = 11.0, t = 0.0;
+  const auto acc = [&](double x) { return -(G / J) * std::cos(x); };
+  while (th < M_PI + 0.05) {
+    const int s = rt::CheckBranch(p, m, t, r.Parallelogram(th, w + (th > M_PI ? dw : 0.0)));
+    if (s != 0) return s;
+    for (int i = 0; i < 100; ++i) {  // classical Runge-Kutta, h = 1e-5 s
+      const double h = 1e-5;
+      const double k1x = w, k1v = acc(th);
+      const double k2x = w + 0.5 * h * k1v, k2v = acc(th + 0.5 * h * k1x);
+      const double k3x = w + 0.5 * h * k2v, k3v = acc(th + 0.5 * h * k2x);
+      const double k4x = w + h * k3v, k4v = acc(th + h * k3x);
+      th += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+      w += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+      t += h;
+    }
+  }
+  return 0;
+}
+
+TEST(BranchMonitor, ChecksAPassageTheSolverMadeByItself) {
+  // If this fails, a solver stepping over a change point by itself (no bridge) with a wrong
+  // speed passes unnoticed: the turn check cannot see a speed off by 1e-6 rad/s (measured:
+  // ARKODE at rtol 1e-12 ended 3.6e-5 rad off the lumped crank that way). The exact motion
+  // passes the check; 1e-6 rad/s off (8e4 tolerance units at rtol 1e-12) fails the step and
+  // hands the integrator the bridge over the crossing.
+  Rig r = MakeRig();
+  ASSERT_TRUE(r.l && r.l->prog);
+  const rt::Program& p = *r.l->prog;
+  auto exact = rt::MakeBranchMonitor(p);
+  rt::SetEarlyBridge(*exact, 1e-12, 1e-12);
+  EXPECT_EQ(PassTheChangePoint(p, *exact, r, 0.0), 0) << rt::BranchMonitorError(*exact);
+  auto off = rt::MakeBranchMonitor(p);
+  rt::SetEarlyBridge(*off, 1e-12, 1e-12);
+  ASSERT_EQ(PassTheChangePoint(p, *off, r, 1e-6), -1);
+  const std::string& e = rt::BranchMonitorError(*off);
+  EXPECT_NE(e.find("closed loop 'coupler_rocker' at a singular configuration"), std::string::npos) << e;
+  EXPECT_NE(e.find("passed the change point"), std::string::npos) << e;
+  double t_from = 0.0, t_b = 0.0;
+  std::vector<double> yb(r.y.size());
+  ASSERT_EQ(rt::BridgeChangePoint(p, *off, 1e-12, 1e-12, &t_from, &t_b, yb.data()), 0) << rt::BridgeRefused(*off);
+  EXPECT_LT(t_from, t_b);
+}
+
 }  // namespace
 }  // namespace kanesim::test

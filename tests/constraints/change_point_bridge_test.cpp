@@ -133,40 +133,24 @@ TEST(ChangePointBridge, EqualLinksEveryIntegratorBothFormsAtRtol1e10) {
   }
 }
 
-// rtol 1e-12, the multiplier form at a = 0.5 and 0.6 and DOP853 on the reduced form at
-// a = 0.6: on the branch (before the bridge every cell stopped at the first change point;
-// before the bridge's own approach DOP853 reduced and CVODE-BDF multiplier at a = 0.5
-// stopped: the zone's accepted steps did not fit).
+// The runs that stop without the bridge (before it every cell stopped at the first change
+// point at rtol 1e-12; before the bridge's own approach DOP853 reduced and CVODE-BDF
+// multiplier at a = 0.5 stopped: the zone's accepted steps did not fit).
 bool Required(const Cell& c, const char* a) {
   return c.solver == rt::SolverPath::Sparse ||
          (c.integrator == rt::IntegratorKind::DOP853 && std::string(a) == "0.6");
 }
 
-TEST(ChangePointBridge, AtRtol1e12TheMultiplierFormEveryIntegrator) {
+// rtol 1e-12, both forms, a = 0.5 and 0.6, every integrator: on the branch with accurate
+// rows. The reduced form needs its projection's Newton at round-off wherever the dependent
+// block's pivot ratio is below 0.5 (constraints.cpp kToRoundOff): with it at 1e-2, 7 of its
+// 10 cells stopped (exit code 2), at 0.3 four stopped and ARKODE at a = 0.5 ended 3.6e-5
+// rad off the lumped crank without the passage check (docs/benchmarks.md "Change points").
+TEST(ChangePointBridge, AtRtol1e12EveryIntegratorBothForms) {
   for (const char* a : {"0.5", "0.6"})
     for (const Cell& c : kCells) {
-      if (!Required(c, a)) continue;
       SCOPED_TRACE(std::string(c.name) + " a = " + a);
       ExpectOnTheBranch(RunParallelogram(a, c.solver, c.integrator, c.bdf, 1e-12, true), 1e-12);
-    }
-}
-
-// The reduced form's other cells at rtol 1e-12: on the branch with accurate rows, or an
-// honest stop (exit code 2, the rows so far on the branch and accurate). Its bridges are
-// refused when their error estimates exceed 1e3 tolerance units (the equations near the
-// crossing are too inaccurate there: docs/constraints.md).
-TEST(ChangePointBridge, AtRtol1e12TheReducedFormIsAccurateOrStops) {
-  for (const char* a : {"0.5", "0.6"})
-    for (const Cell& c : kCells) {
-      if (Required(c, a)) continue;
-      SCOPED_TRACE(std::string(c.name) + " a = " + a);
-      const Outcome o = RunParallelogram(a, c.solver, c.integrator, c.bdf, 1e-12, true);
-      if (o.result.status == sim::SimResult::Status::kOk) {
-        EXPECT_NEAR(o.last_t, 20.0, 1e-12);
-      } else {
-        EXPECT_EQ(o.result.status, sim::SimResult::Status::kNumericalFailure);
-      }
-      ExpectAccurateRows(o, 1e-12);
     }
 }
 

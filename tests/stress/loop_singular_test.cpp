@@ -123,7 +123,9 @@ void StopsAtTheChangePoint(const std::string& solver) {
   EXPECT_NEAR(r.rows.back()[0], 0.24, 1e-12);
   const Check c = Measure(r);
   EXPECT_LT(c.branch, kBranchTol);
-  for (double w : r.Column("crank_pivot.u")) EXPECT_NEAR(w, 2.0, 1e-12);
+  // 1e-10: the projection's Newton goes on to round-off near the change point, and the
+  // round-off there is amplified by the loop's conditioning (measured 2.6e-11 at t = 0.24).
+  for (double w : r.Column("crank_pivot.u")) EXPECT_NEAR(w, 2.0, 1e-10);
 }
 
 TEST(LoopSingular, AnOutputOnTheChangePointStopsWithTimeAndCause) { StopsAtTheChangePoint("auto"); }
