@@ -156,6 +156,19 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
 
 }  // namespace
 
+namespace {
+// "The integrator took N steps in the zone without passing the change point", then `tail`.
+std::string StuckMessage(const Program& p, const BranchMonitor& m, double t, const char* tail) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "closed loop '%s' at a singular configuration at time %.9g: the integrator took %ld steps since "
+                "time %.9g without passing the change point (the constraint rows within %.2g of losing rank, "
+                "sigma_min/sigma_max)%s",
+                p.loops[static_cast<size_t>(m.zone_loop)].name.c_str(), t, m.zone_steps, m.zone_t, m.zone_rho, tail);
+  return buf;
+}
+}  // namespace
+
 int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
   if (p.loops.empty()) return 0;
   Workspace& ws = *m.ws;
@@ -230,26 +243,15 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
       m.pend_y.assign(n, 0.0);
       if (BridgeChangePoint(p, m, m.early_rtol, m.early_atol, &m.pend_from, &m.pend_tb, m.pend_y.data()) == 0) {
         m.pending = true;
-        char buf[512];
-        std::snprintf(buf, sizeof buf,
-                      "closed loop '%s' at a singular configuration at time %.9g: the integrator took %ld steps since "
-                      "time %.9g without passing the change point (the constraint rows within %.2g of losing rank, "
-                      "sigma_min/sigma_max), and the bridge over it could not be used here",
-                      p.loops[static_cast<size_t>(m.zone_loop)].name.c_str(), t, m.zone_steps, m.zone_t, m.zone_rho);
-        m.error = buf;
+        m.error = StuckMessage(p, m, t, ", and the bridge over it could not be used here");
         return -1;
       }
       // Refused: the solver goes on (the stop at kMaxZoneSteps tries the bridge once more).
     }
     if (m.zone_steps > kMaxZoneSteps) {
-      char buf[512];
-      std::snprintf(buf, sizeof buf,
-                    "closed loop '%s' at a singular configuration at time %.9g: the integrator took %ld steps since "
-                    "time %.9g without passing the change point (the constraint rows within %.2g of losing rank, "
-                    "sigma_min/sigma_max); near it the loop equations are too ill-conditioned for this tolerance "
-                    "(try a looser --rtol, or --solver sparse)",
-                    p.loops[static_cast<size_t>(m.zone_loop)].name.c_str(), t, m.zone_steps, m.zone_t, m.zone_rho);
-      m.error = buf;
+      m.error = StuckMessage(p, m, t,
+                             "; near it the loop equations are too ill-conditioned for this tolerance (try a looser "
+                             "--rtol, or --solver sparse)");
       return -1;
     }
   } else {
