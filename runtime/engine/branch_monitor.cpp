@@ -157,6 +157,26 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
 }  // namespace
 
 namespace {
+struct RungeKuttaScratch {
+  explicit RungeKuttaScratch(size_t n) : k2(n), k3(n), k4(n), tmp(n) {}
+  std::vector<double> k2, k3, k4, tmp;
+};
+
+// One classical Runge-Kutta step of y from t by h, given f = y'(t, y): the bridge's
+// approach and the passage check's carry take the same steps. Nonzero if the equations fail.
+int RungeKuttaStep(const Program& p, Workspace& ws, double t, double h, const double* f, double* y,
+                   RungeKuttaScratch& s) {
+  const size_t n = s.tmp.size();
+  for (size_t i = 0; i < n; ++i) s.tmp[i] = y[i] + 0.5 * h * f[i];
+  if (Derivative(p, ws, t + 0.5 * h, s.tmp.data(), s.k2.data()) != 0) return 1;
+  for (size_t i = 0; i < n; ++i) s.tmp[i] = y[i] + 0.5 * h * s.k2[i];
+  if (Derivative(p, ws, t + 0.5 * h, s.tmp.data(), s.k3.data()) != 0) return 1;
+  for (size_t i = 0; i < n; ++i) s.tmp[i] = y[i] + h * s.k3[i];
+  if (Derivative(p, ws, t + h, s.tmp.data(), s.k4.data()) != 0) return 1;
+  for (size_t i = 0; i < n; ++i) y[i] += h / 6.0 * (f[i] + 2.0 * s.k2[i] + 2.0 * s.k3[i] + s.k4[i]);
+  return 0;
+}
+
 // "The integrator took N steps in the zone without passing the change point", then `tail`.
 std::string StuckMessage(const Program& p, const BranchMonitor& m, double t, const char* tail) {
   char buf[512];
@@ -511,7 +531,8 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   m.ny.clear();
   m.nf.clear();
   m.nrho.clear();
-  std::vector<double> y(ty[static_cast<size_t>(is)]), f(nn), k2(nn), k3(nn), k4(nn), tmp(nn);
+  std::vector<double> y(ty[static_cast<size_t>(is)]), f(nn), tmp(nn);
+  RungeKuttaScratch rk(nn);
   double t = tt[static_cast<size_t>(is)], rho = rho_s;
   // rho's rate of fall, from a short Euler step.
   if (Deriv(t, y.data(), f.data()) != 0) return refuse("the equations failed on the approach");
@@ -530,13 +551,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
     m.nrho.push_back(rho);
     if (rho <= fit_rho) break;
     if (step > kBridgeMaxSteps) return refuse("the approach to the crossing took too many steps");
-    for (size_t i = 0; i < nn; ++i) tmp[i] = y[i] + 0.5 * h * f[i];
-    if (Deriv(t + 0.5 * h, tmp.data(), k2.data()) != 0) return refuse("the equations failed on the approach");
-    for (size_t i = 0; i < nn; ++i) tmp[i] = y[i] + 0.5 * h * k2[i];
-    if (Deriv(t + 0.5 * h, tmp.data(), k3.data()) != 0) return refuse("the equations failed on the approach");
-    for (size_t i = 0; i < nn; ++i) tmp[i] = y[i] + h * k3[i];
-    if (Deriv(t + h, tmp.data(), k4.data()) != 0) return refuse("the equations failed on the approach");
-    for (size_t i = 0; i < nn; ++i) y[i] += h / 6.0 * (f[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    if (RungeKuttaStep(p, ws, t, h, f.data(), y.data(), rk) != 0) return refuse("the equations failed on the approach");
     t += h;
     const double r = RhoAt(p, m, t, y.data());
     if (!(r >= 0.0)) return refuse("the approach left the valid configurations");
@@ -669,18 +684,13 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
     const long steps = std::max(1L, std::lround(std::ceil(std::fabs(t - tb) / std::max(1e-300, m.bridge_h))));
     if (steps > kBridgeMaxSteps) return 0;
     const double h = (t - tb) / static_cast<double>(steps);
-    std::vector<double> f(n), k2(n), k3(n), k4(n), tmp(n);
+    std::vector<double> f(n);
+    RungeKuttaScratch rk(n);
     yr = yb;
     double tt = tb;
     for (long i = 0; i < steps; ++i) {
       if (Derivative(p, ws, tt, yr.data(), f.data()) != 0) return 0;
-      for (size_t j = 0; j < n; ++j) tmp[j] = yr[j] + 0.5 * h * f[j];
-      if (Derivative(p, ws, tt + 0.5 * h, tmp.data(), k2.data()) != 0) return 0;
-      for (size_t j = 0; j < n; ++j) tmp[j] = yr[j] + 0.5 * h * k2[j];
-      if (Derivative(p, ws, tt + 0.5 * h, tmp.data(), k3.data()) != 0) return 0;
-      for (size_t j = 0; j < n; ++j) tmp[j] = yr[j] + h * k3[j];
-      if (Derivative(p, ws, tt + h, tmp.data(), k4.data()) != 0) return 0;
-      for (size_t j = 0; j < n; ++j) yr[j] += h / 6.0 * (f[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
+      if (RungeKuttaStep(p, ws, tt, h, f.data(), yr.data(), rk) != 0) return 0;
       tt += h;
     }
   }
