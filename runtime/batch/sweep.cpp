@@ -87,7 +87,15 @@ bool OpenSweepOutput(const SweepConfig& config, const std::string& header, Sweep
   RemoveStaleTemps(out->summary_path);
   RemoveStaleTemps(settings_path);
   if (config.trajectories) RemoveStaleTempsIn(traj_dir);
-  const bool resuming = config.resume && fs::exists(out->summary_path);
+  // A summary without one complete row (a sweep killed between creating it and writing
+  // its settings record, or before its first scenario finished) has nothing to keep: a
+  // resume starts it over, whatever record lies beside it.
+  bool resuming = config.resume && fs::exists(out->summary_path);
+  if (resuming) {
+    SummaryTable kept;
+    std::string err;
+    resuming = ReadSummary(out->summary_path, &kept, &err) ? !kept.rows.empty() : !kept.header.empty();
+  }
   if (resuming && !config.settings.empty()) {
     SettingsRecord old;
     std::string err;
@@ -108,9 +116,9 @@ bool OpenSweepOutput(const SweepConfig& config, const std::string& header, Sweep
       return false;
     }
   }
-  if (!out->summary.Open(out->summary_path, header, config.resume, &out->done, error)) return false;
+  if (!out->summary.Open(out->summary_path, header, resuming, &out->done, error)) return false;
   // After the summary: a sweep killed in between leaves an empty summary beside the old
-  // record, which a resume refuses, never old rows beside a new record.
+  // record (or none), which a resume starts over, never old rows beside a new record.
   if (!config.settings.empty() && !WriteFileAtomic(settings_path, FormatSettings(config.settings), error))
     return false;
   return true;
