@@ -319,6 +319,14 @@ class Elaborator {
                std::vector<Node::EqSource>& eqs, int depth);
   void Expand(Node* node, Node* child, const Collected& c);
   Mod SliceMod(const Mod& mod, int index, int count, Span where);
+  void RegisterPrimitive(Node* node, const ast::ClassDef* cls);
+  // Arrays of components (elab_share.cpp): element 1 instantiated, the others bound
+  // copies of it when that is provably the same, else instantiated each.
+  void InstantiateArray(Node* node, Node* array, const ast::Component& comp, const ast::ClassDef* tcls,
+                        const ast::ClassDef* owner, int n);
+  struct ShareBinding;
+  std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
+  void BindMod(const Mod& src, Mod& dst, ShareBinding& b);
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
   flat::SourceLoc Loc(Span s) const;
@@ -384,6 +392,9 @@ class Elaborator {
   std::vector<SetOverride> sets_;                      // parsed --set overrides
   std::map<std::string, MeshEntry> meshes_;            // "path\nscale" -> the mesh read (elab_mesh.cpp)
 };
+
+// "prefix.name", or "name" at the root (lang/elab_instantiate.cpp).
+std::string JoinPath(const std::string& prefix, const std::string& name);
 
 // Modelica-style attribute names accepted on variables.
 bool IsVarAttribute(const std::string& name);

@@ -1,0 +1,212 @@
+// Arrays of components of one class: one instance description shared by the elements.
+//
+// Element 1 is instantiated as any component is. When nothing in that instantiation
+// depended on which element it was, elements 2..n are copies of element 1's instance tree
+// bound to their own element: name and path, primitive ids (frames, flanges, joints, in
+// the order instantiation would have given them), and the values of their slice of the
+// array's modifier. Sharing is taken only when it is provably the same as instantiating:
+//   - element 1's slice of the modifier holds no --set value (those are bound by name later);
+//   - instantiating element 1 reported nothing;
+//   - no variable inside element 1 was evaluated (so no size, condition or value inside the
+//     element was computed from its parameters: they may differ per element);
+//   - every value inside element 1 that carries a computed value is one of the element's
+//     slice values, moved there unread, and each of those is found exactly once (so that
+//     element k's slice can take its place);
+//   - every modifier inside element 1 is evaluated in a scope outside the element or in an
+//     ancestor of (or the very) node holding it (so that scopes map to element k's nodes).
+// Otherwise every element is instantiated (tests/elab/array_share_test.cpp compares both).
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lang/elab_internal.h"
+
+namespace kanesim::lang::elab {
+
+namespace {
+
+// A value of element 1's slice of the array's modifier: where it is, and its keys in the
+// modifier (`axis`, or `body`, `m`).
+struct SliceValue {
+  const ModValue* at;
+  std::vector<std::string> keys;
+};
+
+void FindSliceValues(const Mod& mod, std::vector<std::string>& keys, std::vector<SliceValue>* out, bool* from_set) {
+  if (mod.set_only || (mod.value && mod.value->from_set)) *from_set = true;
+  if (mod.value && mod.value->pre) out->push_back({&*mod.value, keys});
+  for (const auto& [k, sm] : mod.sub) {
+    keys.push_back(k);
+    FindSliceValues(sm, keys, out, from_set);
+    keys.pop_back();
+  }
+}
+
+// The computed value at `keys` in element k's slice, or null.
+const Value* SliceAt(const Mod& mod, const std::vector<std::string>& keys) {
+  const Mod* m = &mod;
+  for (const auto& k : keys) {
+    auto it = m->sub.find(k);
+    if (it == m->sub.end()) return nullptr;
+    m = &it->second;
+  }
+  return m->value && m->value->pre ? &*m->value->pre : nullptr;
+}
+
+bool IsAncestorOrSelf(const Node* a, const Node* n) {
+  for (; n; n = n->parent)
+    if (n == a) return true;
+  return false;
+}
+
+// The checks of the file's head on element 1's instance tree.
+class ShareCheck {
+ public:
+  explicit ShareCheck(const std::vector<SliceValue>& slice) : slice_(slice), found_(slice.size(), 0) {}
+
+  bool Run(const Node* root) {
+    Gather(root);
+    for (const Node* n : nodes_)
+      if (!NodeOk(n) || !ModOk(n, n->mod)) return false;
+    for (int f : found_)
+      if (f != 1) return false;
+    return true;
+  }
+
+ private:
+  void Gather(const Node* n) {
+    nodes_.push_back(n);
+    for (const auto& c : n->children) Gather(c.get());
+    for (const auto& e : n->elems) Gather(e.get());
+  }
+  bool Inside(const Node* n) const {
+    for (const Node* m : nodes_)
+      if (m == n) return true;
+    return false;
+  }
+  bool NodeOk(const Node* n) const {
+    return n->state == EvalState::Unevaluated && !n->eq_binding && n->eq_elem_binding.empty() && n->value.valid &&
+           n->value.elements.empty();
+  }
+  bool ModOk(const Node* holder, const Mod& mod) {
+    if (mod.value) {
+      const ModValue& v = *mod.value;
+      if (v.scope && Inside(v.scope) && !IsAncestorOrSelf(v.scope, holder)) return false;
+      if (v.pre) {
+        size_t i = 0;
+        while (i < slice_.size() && slice_[i].at != &v) ++i;
+        if (i == slice_.size()) return false;
+        ++found_[i];
+      }
+    }
+    for (const auto& [k, sm] : mod.sub)
+      if (!ModOk(holder, sm)) return false;
+    return true;
+  }
+
+  const std::vector<SliceValue>& slice_;
+  std::vector<int> found_;
+  std::vector<const Node*> nodes_;
+};
+
+}  // namespace
+
+// Element 1's instance tree bound to element k: copies of the nodes with element k's names,
+// scopes and slice values; `slice` and `values` are aligned (element k's value of each).
+struct Elaborator::ShareBinding {
+  const std::vector<SliceValue>* slice;
+  std::vector<const Value*> values;
+  std::vector<std::pair<const Node*, Node*>> ancestors;  // (element 1's node, element k's)
+};
+
+void Elaborator::BindMod(const Mod& src, Mod& dst, ShareBinding& b) {
+  if (src.value) {
+    ModValue& v = *dst.value;
+    for (size_t i = b.ancestors.size(); i-- > 0;)
+      if (b.ancestors[i].first == src.value->scope) v.scope = b.ancestors[i].second;
+    for (size_t i = 0; i < b.slice->size(); ++i)
+      if ((*b.slice)[i].at == &*src.value) v.pre = *b.values[i];
+  }
+  auto d = dst.sub.begin();
+  for (auto s = src.sub.begin(); s != src.sub.end(); ++s, ++d) BindMod(s->second, d->second, b);
+}
+
+std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, const std::string& name,
+                                                ShareBinding& b) {
+  auto n = std::make_unique<Node>();
+  n->kind = src.kind;
+  n->name = name;
+  n->path = JoinPath(parent->path, name);
+  n->parent = parent;
+  n->decl = src.decl;
+  n->enabled = src.enabled;
+  n->depth = src.depth;
+  n->cls = src.cls;
+  n->equations = src.equations;
+  n->prim = src.prim;
+  n->prim_kind = src.prim_kind;
+  n->vtype = src.vtype;
+  n->variability = src.variability;
+  n->causality = src.causality;
+  n->shape = src.shape;
+  n->is_final_decl = src.is_final_decl;
+  b.ancestors.emplace_back(&src, n.get());
+  n->mod = src.mod;
+  BindMod(src.mod, n->mod, b);
+  if (src.prim != Prim::None) RegisterPrimitive(n.get(), n->cls);
+  n->children.reserve(src.children.size());
+  for (const auto& c : src.children) n->children.push_back(CloneInstance(*c, n.get(), c->name, b));
+  n->elems.reserve(src.elems.size());
+  for (const auto& e : src.elems) n->elems.push_back(CloneInstance(*e, parent, e->name, b));
+  b.ancestors.pop_back();
+  return n;
+}
+
+void Elaborator::InstantiateArray(Node* node, Node* array, const ast::Component& comp, const ast::ClassDef* tcls,
+                                  const ast::ClassDef* owner, int n) {
+  std::vector<SliceValue> slice;
+  bool shareable = n > 1;
+  long per_element = 0;  // instances_ counted by element 1
+  const Node* first = nullptr;
+  for (int i = 0; i < n && !diags_.Full() && !too_large_; ++i) {
+    auto el = std::make_unique<Node>();
+    el->parent = node;  // elements resolve names in the same scope as the array
+    el->decl = &comp;
+    const std::string index = std::to_string(i + 1);
+    el->name.reserve(comp.name.size() + index.size() + 2);
+    el->name.append(comp.name).append("[").append(index).append("]");
+    el->mod = SliceMod(array->mod, i, n, comp.span);
+    if (i > 0 && shareable && instances_ + per_element <= kMaxInstances) {
+      ShareBinding b{&slice, {}, {}};
+      for (const auto& s : slice) b.values.push_back(SliceAt(el->mod, s.keys));
+      bool all = true;
+      for (const Value* v : b.values) all = all && v;
+      if (all) {
+        instances_ += per_element;
+        array->elems.push_back(CloneInstance(*first, node, el->name, b));
+        continue;
+      }
+    }
+    el->path = JoinPath(node->path, el->name);
+    el->depth = array->depth;
+    el->kind = Node::kClass;
+    if (i == 0) {
+      std::vector<std::string> keys;
+      bool from_set = false;
+      FindSliceValues(el->mod, keys, &slice, &from_set);
+      shareable = shareable && !from_set;
+    }
+    const size_t diags_before = diags_.All().size();
+    const long instances_before = instances_;
+    Node* raw = el.get();
+    array->elems.push_back(std::move(el));
+    Instantiate(raw, tcls, owner);
+    if (i == 0 && shareable) {
+      per_element = instances_ - instances_before;
+      shareable = diags_.All().size() == diags_before && !diags_.HasErrors() && ShareCheck(slice).Run(raw);
+      first = raw;
+    }
+  }
+}
+
+}  // namespace kanesim::lang::elab
