@@ -119,6 +119,23 @@ struct Elaborator::ShareBinding {
   std::vector<std::pair<const Node*, Node*>> ancestors;  // (element 1's node, element k's)
 };
 
+// What a class or array node keeps of its modifier once instantiated: its sub-modifiers
+// were for its elements (moved into them, or sliced for an array's) and are read nowhere
+// after instantiation, so element k needs only the node's own value and flags.
+static Mod ModHead(const Mod& m) {
+  Mod out;
+  out.value = m.value;
+  out.each = m.each;
+  out.is_final = m.is_final;
+  out.final_span = m.final_span;
+  out.span = m.span;
+  out.redeclare_type = m.redeclare_type;
+  out.redeclare_from = m.redeclare_from;
+  out.redeclare_span = m.redeclare_span;
+  out.set_only = m.set_only;
+  return out;
+}
+
 void Elaborator::BindMod(const Mod& src, Mod& dst, ShareBinding& b) {
   if (src.value) {
     ModValue& v = *dst.value;
@@ -127,6 +144,7 @@ void Elaborator::BindMod(const Mod& src, Mod& dst, ShareBinding& b) {
     for (size_t i = 0; i < b.slice->size(); ++i)
       if ((*b.slice)[i].at == &*src.value) v.pre = *b.values[i];
   }
+  if (dst.sub.empty()) return;  // a head (ModHead)
   auto d = dst.sub.begin();
   for (auto s = src.sub.begin(); s != src.sub.end(); ++s, ++d) BindMod(s->second, d->second, b);
 }
@@ -151,7 +169,8 @@ std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, c
   n->shape = src.shape;
   n->is_final_decl = src.is_final_decl;
   b.ancestors.emplace_back(&src, n.get());
-  n->mod = src.mod;
+  if (src.kind == Node::kVar) n->mod = src.mod;
+  else n->mod = ModHead(src.mod);
   BindMod(src.mod, n->mod, b);
   if (src.prim != Prim::None) RegisterPrimitive(n.get(), n->cls);
   n->children.reserve(src.children.size());
