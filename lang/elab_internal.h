@@ -113,7 +113,7 @@ struct ModValue {
 // A merged modification tree (Modelica "modification environment").
 struct Mod {
   Boxed<ModValue> value;
-  std::map<std::string, Mod> sub;
+  std::map<std::string, Mod, std::less<>> sub;  // transparent: find("unit") makes no string
   std::vector<std::string> order;   // sub keys in the order written
   bool each = false;
   bool is_final = false;
@@ -326,7 +326,7 @@ class Elaborator {
                         const ast::ClassDef* owner, int n);
   struct ShareBinding;
   std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
-  void BindMod(const Mod& src, Mod& dst, ShareBinding& b);
+  Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
   flat::SourceLoc Loc(Span s) const;

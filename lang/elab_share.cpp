@@ -119,34 +119,36 @@ struct Elaborator::ShareBinding {
   std::vector<std::pair<const Node*, Node*>> ancestors;  // (element 1's node, element k's)
 };
 
-// What a class or array node keeps of its modifier once instantiated: its sub-modifiers
-// were for its elements (moved into them, or sliced for an array's) and are read nowhere
-// after instantiation, so element k needs only the node's own value and flags.
-static Mod ModHead(const Mod& m) {
+// Element k's copy of a modifier of element 1's tree: its value rebound to element k (the
+// scope mapped to element k's node, a slice value replaced by element k's), its flags, and
+// for a variable its sub-modifiers (attributes: start, unit, ...). Not copied, as read
+// nowhere after instantiation: the order the keys were written in (for messages about
+// them), and a class or array node's sub-modifiers (moved into its elements, or sliced
+// for an array's elements).
+Mod Elaborator::BoundCopy(const Mod& src, ShareBinding& b, bool with_sub) {
   Mod out;
-  out.value = m.value;
-  out.each = m.each;
-  out.is_final = m.is_final;
-  out.final_span = m.final_span;
-  out.span = m.span;
-  out.redeclare_type = m.redeclare_type;
-  out.redeclare_from = m.redeclare_from;
-  out.redeclare_span = m.redeclare_span;
-  out.set_only = m.set_only;
-  return out;
-}
-
-void Elaborator::BindMod(const Mod& src, Mod& dst, ShareBinding& b) {
   if (src.value) {
-    ModValue& v = *dst.value;
+    out.value = *src.value;
+    ModValue& v = *out.value;
     for (size_t i = b.ancestors.size(); i-- > 0;)
-      if (b.ancestors[i].first == src.value->scope) v.scope = b.ancestors[i].second;
+      if (b.ancestors[i].first == v.scope) {
+        v.scope = b.ancestors[i].second;
+        break;
+      }
     for (size_t i = 0; i < b.slice->size(); ++i)
       if ((*b.slice)[i].at == &*src.value) v.pre = *b.values[i];
   }
-  if (dst.sub.empty()) return;  // a head (ModHead)
-  auto d = dst.sub.begin();
-  for (auto s = src.sub.begin(); s != src.sub.end(); ++s, ++d) BindMod(s->second, d->second, b);
+  out.each = src.each;
+  out.is_final = src.is_final;
+  out.final_span = src.final_span;
+  out.span = src.span;
+  out.redeclare_type = src.redeclare_type;
+  out.redeclare_from = src.redeclare_from;
+  out.redeclare_span = src.redeclare_span;
+  out.set_only = src.set_only;
+  if (with_sub)
+    for (const auto& [k, sm] : src.sub) out.sub.emplace_hint(out.sub.end(), k, BoundCopy(sm, b, true));
+  return out;
 }
 
 std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, const std::string& name,
@@ -169,9 +171,7 @@ std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, c
   n->shape = src.shape;
   n->is_final_decl = src.is_final_decl;
   b.ancestors.emplace_back(&src, n.get());
-  if (src.kind == Node::kVar) n->mod = src.mod;
-  else n->mod = ModHead(src.mod);
-  BindMod(src.mod, n->mod, b);
+  n->mod = BoundCopy(src.mod, b, src.kind == Node::kVar);
   if (src.prim != Prim::None) RegisterPrimitive(n.get(), n->cls);
   n->children.reserve(src.children.size());
   for (const auto& c : src.children) n->children.push_back(CloneInstance(*c, n.get(), c->name, b));
