@@ -325,6 +325,9 @@ class Elaborator {
   void InstantiateArray(Node* node, Node* array, const ast::Component& comp, const ast::ClassDef* tcls,
                         const ast::ClassDef* owner, int n);
   struct ShareBinding;
+  struct ArrayShare;
+  void InstantiateFirst(Node* el, const ast::ClassDef* tcls, const ast::ClassDef* owner, ArrayShare* share);
+  bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, const Mod& mod);
   std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
   Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);

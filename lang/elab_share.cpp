@@ -181,50 +181,66 @@ std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, c
   return n;
 }
 
+// What element 1 of an array taught: whether elements 2..n may be copies of it.
+struct Elaborator::ArrayShare {
+  bool ok = false;
+  const Node* first = nullptr;    // element 1
+  long per_element = 0;           // instances_ counted by element 1
+  std::vector<SliceValue> slice;  // its values from the array's modifier
+};
+
+// Element k as a copy of element 1 bound to its slice `mod`; false (nothing done) when the
+// slice lacks a value element 1 had, or the copy would pass the instance limit.
+bool Elaborator::ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name,
+                              const Mod& mod) {
+  if (!share.ok || instances_ + share.per_element > kMaxInstances) return false;
+  ShareBinding b{&share.slice, {}, {}};
+  for (const auto& s : share.slice) {
+    b.values.push_back(SliceAt(mod, s.keys));
+    if (!b.values.back()) return false;
+  }
+  instances_ += share.per_element;
+  array->elems.push_back(CloneInstance(*share.first, node, name, b));
+  return true;
+}
+
+// Element 1: instantiated, and whether the others may share it (the checks at the top).
+void Elaborator::InstantiateFirst(Node* el, const ast::ClassDef* tcls, const ast::ClassDef* owner,
+                                  ArrayShare* share) {
+  std::vector<std::string> keys;
+  bool from_set = false;
+  FindSliceValues(el->mod, keys, &share->slice, &from_set);  // before Instantiate moves them
+  const size_t diags_before = diags_.All().size();
+  const long instances_before = instances_;
+  Instantiate(el, tcls, owner);
+  share->first = el;
+  share->per_element = instances_ - instances_before;
+  share->ok = !from_set && diags_.All().size() == diags_before && !diags_.HasErrors() &&
+              ShareCheck(share->slice).Run(el);
+}
+
 void Elaborator::InstantiateArray(Node* node, Node* array, const ast::Component& comp, const ast::ClassDef* tcls,
                                   const ast::ClassDef* owner, int n) {
-  std::vector<SliceValue> slice;
-  bool shareable = n > 1;
-  long per_element = 0;  // instances_ counted by element 1
-  const Node* first = nullptr;
+  ArrayShare share;
   for (int i = 0; i < n && !diags_.Full() && !too_large_; ++i) {
+    const std::string index = std::to_string(i + 1);
+    std::string name;
+    name.reserve(comp.name.size() + index.size() + 2);
+    name.append(comp.name).append("[").append(index).append("]");
+    Mod mod = SliceMod(array->mod, i, n, comp.span);
+    if (i > 0 && ShareElement(share, node, array, name, mod)) continue;
     auto el = std::make_unique<Node>();
     el->parent = node;  // elements resolve names in the same scope as the array
     el->decl = &comp;
-    const std::string index = std::to_string(i + 1);
-    el->name.reserve(comp.name.size() + index.size() + 2);
-    el->name.append(comp.name).append("[").append(index).append("]");
-    el->mod = SliceMod(array->mod, i, n, comp.span);
-    if (i > 0 && shareable && instances_ + per_element <= kMaxInstances) {
-      ShareBinding b{&slice, {}, {}};
-      for (const auto& s : slice) b.values.push_back(SliceAt(el->mod, s.keys));
-      bool all = true;
-      for (const Value* v : b.values) all = all && v;
-      if (all) {
-        instances_ += per_element;
-        array->elems.push_back(CloneInstance(*first, node, el->name, b));
-        continue;
-      }
-    }
-    el->path = JoinPath(node->path, el->name);
+    el->path = JoinPath(node->path, name);
+    el->name = std::move(name);
     el->depth = array->depth;
+    el->mod = std::move(mod);
     el->kind = Node::kClass;
-    if (i == 0) {
-      std::vector<std::string> keys;
-      bool from_set = false;
-      FindSliceValues(el->mod, keys, &slice, &from_set);
-      shareable = shareable && !from_set;
-    }
-    const size_t diags_before = diags_.All().size();
-    const long instances_before = instances_;
     Node* raw = el.get();
     array->elems.push_back(std::move(el));
-    Instantiate(raw, tcls, owner);
-    if (i == 0 && shareable) {
-      per_element = instances_ - instances_before;
-      shareable = diags_.All().size() == diags_before && !diags_.HasErrors() && ShareCheck(slice).Run(raw);
-      first = raw;
-    }
+    if (i == 0 && n > 1) InstantiateFirst(raw, tcls, owner, &share);
+    else Instantiate(raw, tcls, owner);
   }
 }
 
