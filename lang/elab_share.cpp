@@ -15,6 +15,7 @@
 //   - every modifier inside element 1 is evaluated in a scope outside the element or in an
 //     ancestor of (or the very) node holding it (so that scopes map to element k's nodes).
 // Otherwise every element is instantiated (tests/elab/array_share_test.cpp compares both).
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -66,6 +67,8 @@ class ShareCheck {
 
   bool Run(const Node* root) {
     Gather(root);
+    sorted_ = nodes_;
+    std::sort(sorted_.begin(), sorted_.end());
     for (const Node* n : nodes_)
       if (!NodeOk(n) || !ModOk(n, n->mod)) return false;
     for (int f : found_)
@@ -79,11 +82,7 @@ class ShareCheck {
     for (const auto& c : n->children) Gather(c.get());
     for (const auto& e : n->elems) Gather(e.get());
   }
-  bool Inside(const Node* n) const {
-    for (const Node* m : nodes_)
-      if (m == n) return true;
-    return false;
-  }
+  bool Inside(const Node* n) const { return std::binary_search(sorted_.begin(), sorted_.end(), n); }
   bool NodeOk(const Node* n) const {
     return n->state == EvalState::Unevaluated && !n->eq_binding && n->eq_elem_binding.empty() && n->value.valid &&
            n->value.elements.empty();
@@ -106,7 +105,8 @@ class ShareCheck {
 
   const std::vector<SliceValue>& slice_;
   std::vector<int> found_;
-  std::vector<const Node*> nodes_;
+  std::vector<const Node*> nodes_;   // element 1's tree, in order
+  std::vector<const Node*> sorted_;  // the same, sorted (for Inside)
 };
 
 }  // namespace
