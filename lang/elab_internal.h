@@ -327,7 +327,7 @@ class Elaborator {
   struct ShareBinding;
   struct ArrayShare;
   void InstantiateFirst(Node* el, const ast::ClassDef* tcls, const ast::ClassDef* owner, ArrayShare* share);
-  bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, const Mod& mod);
+  bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index, int count);
   std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
   Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
@@ -395,6 +395,10 @@ class Elaborator {
   std::vector<SetOverride> sets_;                      // parsed --set overrides
   std::map<std::string, MeshEntry> meshes_;            // "path\nscale" -> the mesh read (elab_mesh.cpp)
 };
+
+// Element `index` (0-based) of `v`, an array value of `count` elements along its first
+// dimension (lang/elab_modifiers.cpp).
+Value ElementOf(const Value& v, int index, int count);
 
 // "prefix.name", or "name" at the root (lang/elab_instantiate.cpp).
 std::string JoinPath(const std::string& prefix, const std::string& name);

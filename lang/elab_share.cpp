@@ -43,15 +43,21 @@ void FindSliceValues(const Mod& mod, std::vector<std::string>& keys, std::vector
   }
 }
 
-// The computed value at `keys` in element k's slice, or null.
-const Value* SliceAt(const Mod& mod, const std::vector<std::string>& keys) {
-  const Mod* m = &mod;
+// Element `index` of the array's value at `keys` in the array's modifier (what SliceMod
+// would give element `index` there); false when there is none.
+bool SliceAt(const Mod& array_mod, const std::vector<std::string>& keys, int index, int count, Value* out) {
+  const Mod* m = &array_mod;
   for (const auto& k : keys) {
+    if (m->each) return false;
     auto it = m->sub.find(k);
-    if (it == m->sub.end()) return nullptr;
+    if (it == m->sub.end()) return false;
     m = &it->second;
   }
-  return m->value && m->value->pre ? &*m->value->pre : nullptr;
+  if (m->each || !m->value || !m->value->pre) return false;
+  const Value& v = *m->value->pre;
+  if (!v.valid || v.shape.empty() || v.shape[0] != count) return false;
+  *out = ElementOf(v, index, count);
+  return true;
 }
 
 bool IsAncestorOrSelf(const Node* a, const Node* n) {
@@ -189,15 +195,17 @@ struct Elaborator::ArrayShare {
   std::vector<SliceValue> slice;  // its values from the array's modifier
 };
 
-// Element k as a copy of element 1 bound to its slice `mod`; false (nothing done) when the
-// slice lacks a value element 1 had, or the copy would pass the instance limit.
-bool Elaborator::ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name,
-                              const Mod& mod) {
+// Element `index` as a copy of element 1 bound to its slice of the array's modifier; false
+// (nothing done) when its slice lacks a value element 1 had, or the copy would pass the
+// instance limit.
+bool Elaborator::ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index,
+                              int count) {
   if (!share.ok || instances_ + share.per_element > kMaxInstances) return false;
+  std::vector<Value> values(share.slice.size());
   ShareBinding b{&share.slice, {}, {}};
-  for (const auto& s : share.slice) {
-    b.values.push_back(SliceAt(mod, s.keys));
-    if (!b.values.back()) return false;
+  for (size_t i = 0; i < share.slice.size(); ++i) {
+    if (!SliceAt(array->mod, share.slice[i].keys, index, count, &values[i])) return false;
+    b.values.push_back(&values[i]);
   }
   instances_ += share.per_element;
   array->elems.push_back(CloneInstance(*share.first, node, name, b));
@@ -227,15 +235,14 @@ void Elaborator::InstantiateArray(Node* node, Node* array, const ast::Component&
     std::string name;
     name.reserve(comp.name.size() + index.size() + 2);
     name.append(comp.name).append("[").append(index).append("]");
-    Mod mod = SliceMod(array->mod, i, n, comp.span);
-    if (i > 0 && ShareElement(share, node, array, name, mod)) continue;
+    if (i > 0 && ShareElement(share, node, array, name, i, n)) continue;
     auto el = std::make_unique<Node>();
     el->parent = node;  // elements resolve names in the same scope as the array
     el->decl = &comp;
     el->path = JoinPath(node->path, name);
     el->name = std::move(name);
     el->depth = array->depth;
-    el->mod = std::move(mod);
+    el->mod = SliceMod(array->mod, i, n, comp.span);
     el->kind = Node::kClass;
     Node* raw = el.get();
     array->elems.push_back(std::move(el));
