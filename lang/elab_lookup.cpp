@@ -147,7 +147,8 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
   // An attribute written as a literal (min = 0, unit = "m": nearly all) is read from the
   // syntax; evaluating it would give the same value through a pool node nothing reads.
   auto literal = [](const ModValue& mv, ast::ExprKind kind) {
-    return !mv.pre && mv.expr && mv.expr->kind == kind && (kind != ast::ExprKind::Number || std::isfinite(mv.expr->number));
+    return !mv.pre && mv.expr && mv.expr->kind == kind &&
+           (kind != ast::ExprKind::Number || std::isfinite(mv.expr->number));
   };
   auto attr_num = [&](const char* key, double* out) {
     auto it = var->mod.sub.find(key);
