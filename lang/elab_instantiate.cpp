@@ -137,7 +137,7 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
 }
 
 // "prefix.name", or "name" at the root; one allocation (paths are made for every instance).
-static std::string JoinPath(const std::string& prefix, const std::string& name) {
+std::string JoinPath(const std::string& prefix, const std::string& name) {
   if (prefix.empty()) return name;
   std::string p;
   p.reserve(prefix.size() + 1 + name.size());
@@ -158,6 +158,27 @@ static Prim PrimFromName(const std::string& s) {
   if (s == "rotspring") return Prim::RotSpring;
   if (s == "shape") return Prim::Shape;
   return Prim::None;
+}
+
+// Gives a frame, flange or joint its id (in the order of instantiation) and a joint its
+// entry in the mechanism.
+void Elaborator::RegisterPrimitive(Node* node, const ast::ClassDef* cls) {
+  if (node->prim == Prim::Frame) {
+    node->prim_index = static_cast<int>(frame_nodes_.size());
+    frame_nodes_.push_back(node);
+  } else if (node->prim == Prim::Flange) {
+    node->prim_index = static_cast<int>(flange_nodes_.size());
+    flange_nodes_.push_back(node);
+  } else if (node->prim == Prim::Joint) {
+    node->prim_index = static_cast<int>(joint_nodes_.size());
+    joint_nodes_.push_back(node);
+    flat::Joint j;
+    j.name = node->path;
+    if (!flat::JointTypeFromName(node->prim_kind, &j.type))
+      diags_.Error(DiagCode::BadPrimitive, cls->name_span, "unknown joint kind '" + node->prim_kind + "'");
+    j.loc = Loc(node->decl ? node->decl->name_span : cls->name_span);
+    m_->joints.push_back(std::move(j));
+  }
 }
 
 void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from) {
@@ -191,22 +212,7 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
   }
   if (ann->second.has_prim) node->prim = ann->second.prim;
   if (ann->second.kind) node->prim_kind = *ann->second.kind;
-  if (node->prim == Prim::Frame) {
-    node->prim_index = static_cast<int>(frame_nodes_.size());
-    frame_nodes_.push_back(node);
-  } else if (node->prim == Prim::Flange) {
-    node->prim_index = static_cast<int>(flange_nodes_.size());
-    flange_nodes_.push_back(node);
-  } else if (node->prim == Prim::Joint) {
-    node->prim_index = static_cast<int>(joint_nodes_.size());
-    joint_nodes_.push_back(node);
-    flat::Joint j;
-    j.name = node->path;
-    if (!flat::JointTypeFromName(node->prim_kind, &j.type))
-      diags_.Error(DiagCode::BadPrimitive, cls->name_span, "unknown joint kind '" + node->prim_kind + "'");
-    j.loc = Loc(node->decl ? node->decl->name_span : cls->name_span);
-    m_->joints.push_back(std::move(j));
-  }
+  RegisterPrimitive(node, cls);
 
   std::vector<Collected> elems;
   elems.reserve(cls->elements.size());  // enough unless cls extends another class
@@ -480,21 +486,7 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   child->cls = tcls;
   int n = dims[0] < 0 ? 0 : dims[0];
   PreEvaluate(*this, child->mod, n, diags_);
-  for (int i = 0; i < n && !diags_.Full() && !too_large_; ++i) {
-    auto el = std::make_unique<Node>();
-    el->parent = node;  // elements resolve names in the same scope as the array
-    el->decl = &comp;
-    const std::string index = std::to_string(i + 1);
-    el->name.reserve(comp.name.size() + index.size() + 2);
-    el->name.append(comp.name).append("[").append(index).append("]");
-    el->path = JoinPath(node->path, el->name);
-    el->depth = child->depth;
-    el->mod = SliceMod(child->mod, i, n, comp.span);
-    el->kind = Node::kClass;
-    Node* raw = el.get();
-    child->elems.push_back(std::move(el));
-    Instantiate(raw, tcls, c.owner);
-  }
+  InstantiateArray(node, child, comp, tcls, c.owner, n);
 }
 
 }  // namespace kanesim::lang::elab

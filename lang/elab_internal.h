@@ -113,7 +113,7 @@ struct ModValue {
 // A merged modification tree (Modelica "modification environment").
 struct Mod {
   Boxed<ModValue> value;
-  std::map<std::string, Mod> sub;
+  std::map<std::string, Mod, std::less<>> sub;  // transparent: find("unit") makes no string
   std::vector<std::string> order;   // sub keys in the order written
   bool each = false;
   bool is_final = false;
@@ -319,6 +319,17 @@ class Elaborator {
                std::vector<Node::EqSource>& eqs, int depth);
   void Expand(Node* node, Node* child, const Collected& c);
   Mod SliceMod(const Mod& mod, int index, int count, Span where);
+  void RegisterPrimitive(Node* node, const ast::ClassDef* cls);
+  // Arrays of components (elab_share.cpp): element 1 instantiated, the others bound
+  // copies of it when that is provably the same, else instantiated each.
+  void InstantiateArray(Node* node, Node* array, const ast::Component& comp, const ast::ClassDef* tcls,
+                        const ast::ClassDef* owner, int n);
+  struct ShareBinding;
+  struct ArrayShare;
+  void InstantiateFirst(Node* el, const ast::ClassDef* tcls, const ast::ClassDef* owner, ArrayShare* share);
+  bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index, int count);
+  std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
+  Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
   flat::SourceLoc Loc(Span s) const;
@@ -384,6 +395,13 @@ class Elaborator {
   std::vector<SetOverride> sets_;                      // parsed --set overrides
   std::map<std::string, MeshEntry> meshes_;            // "path\nscale" -> the mesh read (elab_mesh.cpp)
 };
+
+// Element `index` (0-based) of `v`, an array value of `count` elements along its first
+// dimension (lang/elab_modifiers.cpp).
+Value ElementOf(const Value& v, int index, int count);
+
+// "prefix.name", or "name" at the root (lang/elab_instantiate.cpp).
+std::string JoinPath(const std::string& prefix, const std::string& name);
 
 // Modelica-style attribute names accepted on variables.
 bool IsVarAttribute(const std::string& name);

@@ -144,9 +144,19 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
   // Attributes for flat parameters.
   std::string unit;
   double vmin = -1e300, vmax = 1e300;
+  // An attribute written as a literal (min = 0, unit = "m": nearly all) is read from the
+  // syntax; evaluating it would give the same value through a pool node nothing reads.
+  auto literal = [](const ModValue& mv, ast::ExprKind kind) {
+    return !mv.pre && mv.expr && mv.expr->kind == kind &&
+           (kind != ast::ExprKind::Number || std::isfinite(mv.expr->number));
+  };
   auto attr_num = [&](const char* key, double* out) {
     auto it = var->mod.sub.find(key);
     if (it == var->mod.sub.end() || !it->second.value) return;
+    if (literal(*it->second.value, ast::ExprKind::Number)) {
+      *out = it->second.value->expr->number;
+      return;
+    }
     Value a = EvalModValue(*it->second.value, nullptr);
     if (a.valid && a.shape.empty() && a.type != VType::String)
       Structural(a, it->second.value->span, out, key);
@@ -154,8 +164,12 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
   attr_num("min", &vmin);
   attr_num("max", &vmax);
   if (auto it = var->mod.sub.find("unit"); it != var->mod.sub.end() && it->second.value) {
-    Value a = EvalModValue(*it->second.value, nullptr);
-    if (a.valid && a.type == VType::String && !a.strings.empty()) unit = a.strings[0];
+    if (literal(*it->second.value, ast::ExprKind::String)) {
+      unit = it->second.value->expr->text;
+    } else {
+      Value a = EvalModValue(*it->second.value, nullptr);
+      if (a.valid && a.type == VType::String && !a.strings.empty()) unit = a.strings[0];
+    }
   }
   Value out = std::move(v);  // element k is read before it is replaced
   const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);

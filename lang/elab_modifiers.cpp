@@ -141,6 +141,18 @@ void Elaborator::MergeInto(Mod& outer, Mod&& inner, const std::string& what) {
   MergeModsImpl(diags_, outer, std::move(inner), what, keys);
 }
 
+Value ElementOf(const Value& v, int index, int count) {
+  Value s;
+  s.type = v.type;
+  s.shape.assign(v.shape.begin() + 1, v.shape.end());
+  size_t stride = v.Size() / static_cast<size_t>(count);
+  for (size_t k = 0; k < stride; ++k) {
+    s.elements.push_back(v.elements[static_cast<size_t>(index) * stride + k]);
+    if (v.type == VType::String) s.strings.push_back(v.strings[static_cast<size_t>(index) * stride + k]);
+  }
+  return s;
+}
+
 // Element `index` of an array component's modifier. Copies everything but the values,
 // and of a value only the slice: copying the whole array value for every element would
 // cost O(count^2) time and memory.
@@ -173,15 +185,7 @@ Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
       mv.span = mod.value->span;
       mv.is_final = mod.value->is_final;
       mv.from_set = mod.value->from_set;
-      Value s;
-      s.type = v.type;
-      s.shape.assign(v.shape.begin() + 1, v.shape.end());
-      size_t stride = v.Size() / static_cast<size_t>(count);
-      for (size_t k = 0; k < stride; ++k) {
-        s.elements.push_back(v.elements[static_cast<size_t>(index) * stride + k]);
-        if (v.type == VType::String) s.strings.push_back(v.strings[static_cast<size_t>(index) * stride + k]);
-      }
-      mv.pre = std::move(s);
+      mv.pre = ElementOf(v, index, count);
       out.value = std::move(mv);
     }
   }
