@@ -1,7 +1,9 @@
 // Signal rows and the CSV writer (DESIGN.md "Output"): a header `time,<names...>`, then
 // one row per output instant, numbers with 17 significant digits so that they
 // round-trip. The header and the first row are flushed at once, later rows at least every
-// 50 ms and at the end, so a numerical failure keeps every row before it on disk.
+// 50 ms and at the end, so a numerical failure keeps every row before it on disk. A process
+// killed from outside leaves whole rows plus at most one last row cut short (SIGKILL may
+// end a write(2) between two pages).
 #pragma once
 
 #include <chrono>

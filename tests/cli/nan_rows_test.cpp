@@ -68,9 +68,12 @@ TEST(NaNRows, EveryRowBeforeATimeNaNIsKeptByEveryIntegratorAndPath) {
       }
 }
 
-// A run killed from outside (SIGKILL: no handler, no flush) leaves whole rows only: the
-// writer gathers rows and writes them in one piece per 50 ms, never a row cut by a full
-// stdio buffer. Wrong if the file ends inside a row or a row is missing in the middle.
+// A run killed from outside (SIGKILL: no handler, no flush) leaves whole rows, in order,
+// plus at most one last row cut short: the writer gathers rows and writes them in one
+// piece per 50 ms (never a row cut by a full stdio buffer), but Linux lets SIGKILL end a
+// write(2) to a file between two pages (measured: 1 file in 40 killed at random ended
+// inside a row; a reader drops a last line without its '\n', as with a sweep's summary).
+// Wrong if a row is missing or cut in the middle of the file.
 TEST(NaNRows, AKilledRunLeavesWholeRowsOnly) {
   std::string d = Work("killed");
   for (double after : {0.3, 0.7}) {
@@ -81,9 +84,9 @@ TEST(NaNRows, AKilledRunLeavesWholeRowsOnly) {
                  "for i in $(seq 600); do [ \"$(wc -l < out.csv 2>/dev/null || echo 0)\" -ge 2 ] && break; sleep 0.05; done; "
                  "sleep " + std::to_string(after) + "; kill -KILL $pid; wait $pid; }")
                     .c_str());
-    const std::string text = Slurp(d + "/out.csv");
+    std::string text = Slurp(d + "/out.csv");
     ASSERT_FALSE(text.empty()) << "killed " << after << " s after its first row";
-    EXPECT_EQ(text.back(), '\n') << "the file ends inside a row";
+    text.erase(text.rfind('\n') + 1);  // a last row cut short by the kill
     std::istringstream in(text);
     std::string line;
     std::getline(in, line);
