@@ -61,6 +61,7 @@ struct BranchMonitor {
   double ref_t = 0.0, zone_t = 0.0, zone_rho = 1.0;
   int zone_loop = -1;
   long zone_steps = 0;
+  int zone_near = 0;  // loops near singular (rho < kZone) at the zone's latest accepted step
   std::vector<int> loop_rank;  // per loop: independent rows at the first check
   Eigen::VectorXd ref_u, cur_u;     // all joint speeds
   std::vector<Vec3> cur_v, cur_w;  // the current step's mass-centre and angular velocities
@@ -197,7 +198,8 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
   VelocityKinematics(p, ws);
   ConstraintJacobian(p, ws);
   double rho = 1.0;
-  const int worst = NearestSingularLoop(p, m, &rho);
+  int near_loops = 0;
+  const int worst = NearestSingularLoop(p, m, &rho, &near_loops);
   const bool near = rho < kZone;
   const bool was_in_zone = m.in_zone, was_bridged = m.bridged;
   if (m.have_ref && (near || m.in_zone)) {
@@ -255,6 +257,7 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
       m.trace_y.emplace_back(y, y + n);
     }
     m.zone_rho = std::min(m.zone_rho, rho);
+    m.zone_near = near_loops;
     ++m.zone_steps;
     if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried && m.zone_steps >= kEarlyBridgeSteps) {
       // Stalling: a passage takes a few steps. Bridged now, if the bridge can be trusted;
@@ -344,6 +347,7 @@ constexpr double kBridgePast = 3e-3;     // rho past the crossing where the brid
                                          // past it cost up to 1.6e-6 rad on the multiplier form at rtol 1e-12)
 constexpr double kBridgeMaxError = 1e5;  // the limit of both estimates, in units of atol + rtol |y|
 constexpr double kBridgeMaxErrorReduced = 1e3;  // ... on the reduced form (docs/benchmarks.md "Change points")
+constexpr const char* kSeveralLoops = "more than one loop is near a singular configuration";
 constexpr double kBridgeMoved = 1e-6;    // largest change by the projection (of max(1, |y|))
 
 // Component i at t of the Hermite interpolant through y and y' at the m nodes (tn[k], yn[k],
@@ -472,7 +476,7 @@ int BridgeByZoneFit(const Program& p, BranchMonitor& m, double rtol, double atol
       // Measured: a chain of two equal-link parallelograms (both loops singular at once)
       // bridged onto the branch but 1.7e-4 rad off the lumped crank after 20 s at rtol
       // 1e-12; not understood, so not bridged.
-      why = "more than one loop is near a singular configuration";
+      why = kSeveralLoops;
       break;
     }
     if (rho_b < 0.25 * std::max(rho2, kZonePast)) {
@@ -499,6 +503,11 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   };
   if (p.loops.empty()) return refuse("no closed loops");
   if (m.bridged && m.in_zone) return refuse("this zone was bridged once already");
+  // Refused below at the bridged state when more than one loop is near singular there; a
+  // zone whose latest accepted step already has several is refused before the approach is
+  // integrated (the chain of 40 equal-link parallelograms at rtol 1e-8: every passage
+  // checked by CheckPassage, 0.40 -> 0.52 s with the approach integrated first).
+  if (m.in_zone && m.zone_near > 1) return refuse(kSeveralLoops);
   // The accepted steps: the zone's (with the few before it), or, when the solver failed
   // before entering a zone, the last few.
   const std::vector<double>& tt = m.in_zone ? m.trace_t : m.pre_t;
@@ -622,7 +631,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
       // Measured: a chain of two equal-link parallelograms (both loops singular at once)
       // bridged onto the branch but 1.7e-4 rad off the lumped crank after 20 s at rtol
       // 1e-12; not understood, so not bridged.
-      why = "more than one loop is near a singular configuration";
+      why = kSeveralLoops;
     else if (rho_b < 0.25 * past)
       why = "the bridged state is not past the crossing";
   }
