@@ -94,6 +94,7 @@ struct BranchMonitor {
   // the last bridge (a zone starting there was bridged).
   bool passage_checked = false;
   double last_tb = -INFINITY;
+  long passages_checked = 0, passages_unchecked = 0;  // PassageCounts
 };
 
 std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& p) {
@@ -699,7 +700,10 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
   // speeds, so it would replace accurate passages with noisier bridges (measured: ARKODE on
   // the chain of two at rtol 1e-12 ended 2e-6 rad off the lumped crank with these passages
   // checked, 3.9e-7 without; docs/constraints.md).
-  if (m.zone_near > 1) return 0;
+  if (m.zone_near > 1) {
+    ++m.passages_unchecked;
+    return 0;
+  }
   const bool in_zone = m.in_zone;
   m.in_zone = true;
   const size_t n = static_cast<size_t>(StateSize(p));
@@ -713,6 +717,7 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
     m.trace_y.push_back(std::move(keep_y));
   }
   if (s != 0) {
+    ++m.passages_unchecked;
     return 0;
   }
   // The bridge's state carried to the current step (the same Runge-Kutta steps; the
@@ -720,15 +725,20 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
   {
     Workspace& ws = *m.ws;
     const long steps = std::max(1L, std::lround(std::ceil(std::fabs(t - tb) / std::max(1e-300, m.bridge_h))));
-    if (steps > kBridgeMaxSteps) return 0;
+    if (steps > kBridgeMaxSteps) {
+      ++m.passages_unchecked;
+      return 0;
+    }
     const double h = (t - tb) / static_cast<double>(steps);
     std::vector<double> f(n);
     RungeKuttaScratch rk(n);
     yr = yb;
     double tt = tb;
     for (long i = 0; i < steps; ++i) {
-      if (Derivative(p, ws, tt, yr.data(), f.data()) != 0) return 0;
-      if (RungeKuttaStep(p, ws, tt, h, f.data(), yr.data(), rk) != 0) return 0;
+      if (Derivative(p, ws, tt, yr.data(), f.data()) != 0 || RungeKuttaStep(p, ws, tt, h, f.data(), yr.data(), rk) != 0) {
+        ++m.passages_unchecked;
+        return 0;
+      }
       tt += h;
     }
   }
@@ -738,6 +748,7 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
     d = std::isnan(e) ? INFINITY : std::max(d, e);
   }
   const double limit = p.solver == SolverPath::Sparse ? kBridgeMaxError : kBridgeMaxErrorReduced;
+  ++m.passages_checked;
   if (d <= limit) return 0;
   // Replaced by the bridge.
   m.pending = true;
@@ -760,6 +771,11 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
 }  // namespace
 
 void SetBridgeSeveralLoops(BranchMonitor& m, bool on) { m.several_loops = on; }
+
+void PassageCounts(const BranchMonitor& m, long* checked, long* unchecked) {
+  *checked = m.passages_checked;
+  *unchecked = m.passages_unchecked;
+}
 
 void SetEarlyBridge(BranchMonitor& m, double rtol, double atol) {
   m.early_rtol = rtol;

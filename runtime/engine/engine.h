@@ -122,6 +122,10 @@ void SetEarlyBridge(BranchMonitor& monitor, double rtol, double atol);
 // chain of equal-link parallelograms; on by default). Off: such zones are refused, as before
 // (tests switch it off to show what it does).
 void SetBridgeSeveralLoops(BranchMonitor& monitor, bool on);
+// The change points the solver passed by itself (with SetEarlyBridge on): how many were
+// checked against the bridge's approach, and how many stood unchecked (the approach
+// refused, or several loops near singular at once; docs/constraints.md).
+void PassageCounts(const BranchMonitor& monitor, long* checked, long* unchecked);
 const std::string& BridgeRefused(const BranchMonitor& monitor);
 
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",

@@ -46,6 +46,10 @@ class EngineOde final : public OdeSystem {
       rt::SetBridgeSeveralLoops(*monitor_, several_loops);
     }
   }
+  void PassageCounts(long* checked, long* unchecked) const {
+    *checked = *unchecked = 0;
+    if (monitor_) rt::PassageCounts(*monitor_, checked, unchecked);
+  }
   bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
   void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
   int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
@@ -166,6 +170,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
 
   result.stats.integrator = ir.stats;
   result.stats.rows = ir.rows;
+  result.stats.bridges = ir.bridges;
+  ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
   result.stats.times.output = Seconds(output_time);
   result.stats.times.integrate = Seconds(total - output_time);
   if (sink_failed || (ir.ok && !end_ok)) {
@@ -204,7 +210,18 @@ std::string FormatStats(const SimStats& s) {
                 MethodName(s.method), MethodDescription(s.method), i.steps, i.last_step, i.last_order, i.rhs_evals,
                 i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
-  return buf;
+  std::string out = buf;
+  if (s.bridges + s.passages_checked + s.passages_unchecked > 0) {
+    // Closed loops through change points (only where there were any).
+    std::snprintf(buf, sizeof buf,
+                  "change points\n"
+                  "  bridged                  %ld\n"
+                  "  passed, checked          %ld\n"
+                  "  passed, not checked      %ld\n",
+                  s.bridges, s.passages_checked, s.passages_unchecked);
+    out += buf;
+  }
+  return out;
 }
 
 }  // namespace kanesim::sim

@@ -50,6 +50,9 @@ struct SimStats {
   Method method = Method::IDA;
   IntegratorStats integrator;
   long rows = 0;
+  // Closed loops through change points: bridged, and passed by the solver itself, checked
+  // against the bridge's approach or not (docs/constraints.md "Singular configurations").
+  long bridges = 0, passages_checked = 0, passages_unchecked = 0;
   PhaseTimes times;
 };
 
