@@ -610,7 +610,7 @@ int ProjectStateByPartition(const Program& p, Workspace& ws) {
     // Near a singular configuration, on to round-off: a residual c leaves the state on
     // the level set phi = c, which bends from one branch onto another within sqrt(c) of
     // a change point (docs/constraints.md, "Singular configurations").
-    if (r <= tight && (r <= kRoundOff * p.loop_length || r > kStall * last || DependentRatio(ws, rank) >= (rank <= kToRoundOffMaxRank ? kToRoundOff : kDegraded)))
+    if (r <= tight && (r <= kRoundOff * p.loop_length || r > kStall * last || DependentRatio(ws, rank) >= (rank <= kToRoundOffMaxRank || ws.newton_to_round_off ? kToRoundOff : kDegraded)))
       break;
     last = r;
     // Newton step on the dependent coordinates: A_dep du_dep = -phi (7).

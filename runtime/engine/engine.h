@@ -118,6 +118,14 @@ void BridgeState(const BranchMonitor& monitor, double t, double* y);
 // one near-singular zone (a stall; a passage takes a few) and, when it can be trusted,
 // fails the step so that the integrator's next BridgeChangePoint returns it.
 void SetEarlyBridge(BranchMonitor& monitor, double rtol, double atol);
+// Whether the bridge steps over zones where several loops are near singular at once (a
+// chain of equal-link parallelograms; on by default). Off: such zones are refused, as before
+// (tests switch it off to show what it does).
+void SetBridgeSeveralLoops(BranchMonitor& monitor, bool on);
+// The change points the solver passed by itself (with SetEarlyBridge on): how many were
+// checked against the bridge's approach, and how many stood unchecked (the approach
+// refused, or several loops near singular at once; docs/constraints.md).
+void PassageCounts(const BranchMonitor& monitor, long* checked, long* unchecked);
 const std::string& BridgeRefused(const BranchMonitor& monitor);
 
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",

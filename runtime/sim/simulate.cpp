@@ -40,8 +40,15 @@ class EngineOde final : public OdeSystem {
     return monitor_ && rt::BridgeChangePoint(program_, *monitor_, rtol, atol, t_from, t_b, y_b) == 0;
   }
   void BridgeState(double t, double* y) override { rt::BridgeState(*monitor_, t, y); }
-  void EnableEarlyBridge(double rtol, double atol) {
-    if (monitor_) rt::SetEarlyBridge(*monitor_, rtol, atol);
+  void EnableEarlyBridge(double rtol, double atol, bool several_loops) {
+    if (monitor_) {
+      rt::SetEarlyBridge(*monitor_, rtol, atol);
+      rt::SetBridgeSeveralLoops(*monitor_, several_loops);
+    }
+  }
+  void PassageCounts(long* checked, long* unchecked) const {
+    *checked = *unchecked = 0;
+    if (monitor_) rt::PassageCounts(*monitor_, checked, unchecked);
   }
   bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
   void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
@@ -155,7 +162,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return status;
   };
   EngineOde ode(program, *ws_rhs);
-  if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol);
+  if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops);
   Clock::time_point start = Clock::now();
   IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
   Clock::duration total = Clock::now() - start;
@@ -163,6 +170,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
 
   result.stats.integrator = ir.stats;
   result.stats.rows = ir.rows;
+  result.stats.bridges = ir.bridges;
+  ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
   result.stats.times.output = Seconds(output_time);
   result.stats.times.integrate = Seconds(total - output_time);
   if (sink_failed || (ir.ok && !end_ok)) {
@@ -201,7 +210,18 @@ std::string FormatStats(const SimStats& s) {
                 MethodName(s.method), MethodDescription(s.method), i.steps, i.last_step, i.last_order, i.rhs_evals,
                 i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
-  return buf;
+  std::string out = buf;
+  if (s.bridges + s.passages_checked + s.passages_unchecked > 0) {
+    // Closed loops through change points (only where there were any).
+    std::snprintf(buf, sizeof buf,
+                  "change points\n"
+                  "  bridged                  %ld\n"
+                  "  passed, checked          %ld\n"
+                  "  passed, not checked      %ld\n",
+                  s.bridges, s.passages_checked, s.passages_unchecked);
+    out += buf;
+  }
+  return out;
 }
 
 }  // namespace kanesim::sim

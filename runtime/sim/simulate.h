@@ -31,6 +31,7 @@ struct SimOptions {
   // evaluation (`--projection step`; engine.h SetStepProjection, docs/constraints.md "Drift").
   bool project_steps = false;
   bool bridge = true;           // step over singular configurations of closed loops (docs/constraints.md)
+  bool bridge_several_loops = true;  // ... also where several loops are singular at once (tests only)
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty
 };
@@ -49,6 +50,9 @@ struct SimStats {
   Method method = Method::IDA;
   IntegratorStats integrator;
   long rows = 0;
+  // Closed loops through change points: bridged, and passed by the solver itself, checked
+  // against the bridge's approach or not (docs/constraints.md "Singular configurations").
+  long bridges = 0, passages_checked = 0, passages_unchecked = 0;
   PhaseTimes times;
 };
 
