@@ -284,6 +284,7 @@ std::string ChainName(const ChainCell& c) {
 
 TEST(ChangePointBridge, ChainsOfParallelogramsEveryLoopSingularAtOnce) {
   for (const ChainCell& c : kChainCells) {
+    if (kSanitized && c.n > 2) continue;  // the chain of ten: 5.6 s in Release
     SCOPED_TRACE(ChainName(c));
     const Outcome o = RunChain(c.n, c.integrator, c.rtol, true);
     EXPECT_EQ(o.result.status, sim::SimResult::Status::kOk) << o.result.message;
@@ -306,6 +307,7 @@ TEST(ChangePointBridge, ChainsOfParallelogramsEveryLoopSingularAtOnce) {
 // exit code 2 at a change point, every row before it on the branch.
 TEST(ChangePointBridge, ChainsStopWithoutBridgingSeveralLoops) {
   for (const ChainCell& c : kChainCells) {
+    if (kSanitized && c.n > 2) continue;
     SCOPED_TRACE(ChainName(c));
     const Outcome o = RunChain(c.n, c.integrator, c.rtol, false);
     EXPECT_EQ(o.result.status, sim::SimResult::Status::kNumericalFailure);
