@@ -97,7 +97,8 @@ void SetStepProjection(Workspace& ws, bool on);
 int ProjectOntoConstraints(const Program& program, Workspace& ws, double t, double* y);
 const std::string& ErrorMessage(const Workspace& ws);
 
-// Closed loops through singular configurations (runtime/engine/branch_monitor.cpp): after each
+// Closed loops through singular configurations (runtime/engine/branch_monitor.cpp; the
+// bridge in change_point_bridge.cpp): after each
 // accepted step, CheckBranch(y) returns -1 (fatal; BranchMonitorError says why: the loop,
 // the time and the turn) when the motion left its assembly branch near a change point
 // (the velocity turned by a finite angle where the loop's rows nearly lost rank), else 0.
