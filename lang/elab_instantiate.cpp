@@ -181,6 +181,8 @@ void Elaborator::RegisterPrimitive(Node* node, const ast::ClassDef* cls) {
   }
 }
 
+// A class instance: its primitive (if any), its elements collected through extends, one
+// child node each with its merged modifier, then each child expanded.
 void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from) {
   (void)lookup_from;
   if (node->depth > kMaxExtendsDepth) {
@@ -198,28 +200,42 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     d.notes.push_back({cls->name_span, "declared partial here"});
     d.hint = "extend it in a class of your own";
   }
-  // Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
-  // The same for every instance of cls: read once per class.
-  auto [ann, fresh] = primitive_annotation_.try_emplace(cls);
-  if (fresh) {
-    if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
-      for (const auto& a : pm->args) {
-        if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
-        if (a.path[0] == "primitive") ann->second.prim = PrimFromName(a.mod->value->text), ann->second.has_prim = true;
-        if (a.path[0] == "kind") ann->second.kind = &a.mod->value->text;
-      }
-    }
-  }
-  if (ann->second.has_prim) node->prim = ann->second.prim;
-  if (ann->second.kind) node->prim_kind = *ann->second.kind;
+  const ClassPrim& ann = PrimitiveAnnotation(cls);
+  if (ann.has_prim) node->prim = ann.prim;
+  if (ann.kind) node->prim_kind = *ann.kind;
   RegisterPrimitive(node, cls);
 
   std::vector<Collected> elems;
   elems.reserve(cls->elements.size());  // enough unless cls extends another class
   node->equations.reserve(cls->equations.size());
   Collect(cls, node, nullptr, elems, node->equations, 0);
+  CheckOuterModifiers(node, cls, elems);
 
-  // Every outer modifier must name an element.
+  node->children.reserve(elems.size());
+  for (auto& c : elems) node->children.push_back(MakeChild(node, c));
+  for (size_t i = 0; i < elems.size() && i < node->children.size(); ++i) {
+    if (diags_.Full() || too_large_) break;
+    Expand(node, node->children[i].get(), elems[i]);
+  }
+}
+
+// Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
+// The same for every instance of cls: read once per class.
+const Elaborator::ClassPrim& Elaborator::PrimitiveAnnotation(const ast::ClassDef* cls) {
+  auto [ann, fresh] = primitive_annotation_.try_emplace(cls);
+  if (!fresh) return ann->second;
+  if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
+    for (const auto& a : pm->args) {
+      if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
+      if (a.path[0] == "primitive") ann->second.prim = PrimFromName(a.mod->value->text), ann->second.has_prim = true;
+      if (a.path[0] == "kind") ann->second.kind = &a.mod->value->text;
+    }
+  }
+  return ann->second;
+}
+
+// Every outer modifier must name an element, and not a protected one.
+void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems) {
   for (const auto& key : node->mod.order) {
     bool found = false;
     for (const auto& c : elems) {
@@ -237,46 +253,42 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     if (sm.set_only) continue;  // --set names are checked by BindSetOverrides
     std::vector<std::string> names;
     for (const auto& c : elems) names.push_back(c.comp->name);
-    auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span,
-                           "'" + cls->name + "' has no element '" + key + "'");
+    auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span, "'" + cls->name + "' has no element '" + key + "'");
     std::string best = ClosestName(key, names);
     if (!best.empty()) d.hint = "did you mean '" + best + "'?";
     d.notes.push_back({cls->name_span, "'" + cls->name + "' is declared here"});
   }
+}
 
-  node->children.reserve(elems.size());
-  for (auto& c : elems) {
-    auto child = std::make_unique<Node>();
-    child->parent = node;
-    child->decl = c.comp;
-    child->name = c.comp->name;
-    child->path = JoinPath(node->path, c.comp->name);
-    child->depth = node->depth + 1;
-    Mod outer;
-    auto it = node->mod.sub.find(c.comp->name);
-    if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
-    if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
-      Span at = outer.value ? outer.value->span : outer.span;
-      auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
-      d.notes.push_back({c.comp->span, "declared final here"});
-      outer = Mod{};
-    }
-    MergeInto(outer, std::move(c.ext_mod), child->path);  // Expand reads c's other fields only
-    Mod decl = BuildMod(c.comp->mod.get(), node, nullptr);
-    if (c.is_final) {
-      decl.is_final = true;
-      decl.final_span = c.comp->span;
-      if (decl.value) decl.value->is_final = true;
-    }
-    MergeInto(outer, std::move(decl), child->path);
-    child->mod = std::move(outer);
-    child->is_final_decl = c.is_final;
-    node->children.push_back(std::move(child));
+// The child node of element c, its modifier merged: outer (the instance's) over the
+// extends clause's over the declaration's.
+std::unique_ptr<Node> Elaborator::MakeChild(Node* node, Collected& c) {
+  auto child = std::make_unique<Node>();
+  child->parent = node;
+  child->decl = c.comp;
+  child->name = c.comp->name;
+  child->path = JoinPath(node->path, c.comp->name);
+  child->depth = node->depth + 1;
+  Mod outer;
+  auto it = node->mod.sub.find(c.comp->name);
+  if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
+  if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
+    Span at = outer.value ? outer.value->span : outer.span;
+    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
+    d.notes.push_back({c.comp->span, "declared final here"});
+    outer = Mod{};
   }
-  for (size_t i = 0; i < elems.size() && i < node->children.size(); ++i) {
-    if (diags_.Full() || too_large_) break;
-    Expand(node, node->children[i].get(), elems[i]);
+  MergeInto(outer, std::move(c.ext_mod), child->path);  // Expand reads c's other fields only
+  Mod decl = BuildMod(c.comp->mod.get(), node, nullptr);
+  if (c.is_final) {
+    decl.is_final = true;
+    decl.final_span = c.comp->span;
+    if (decl.value) decl.value->is_final = true;
   }
+  MergeInto(outer, std::move(decl), child->path);
+  child->mod = std::move(outer);
+  child->is_final_decl = c.is_final;
+  return child;
 }
 
 // Evaluates the non-`each` values of an array component's modifier once, checking their

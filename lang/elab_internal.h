@@ -275,6 +275,8 @@ class Elaborator {
   Value EvalOperators(const ast::Expr& root, const Ctx& ctx);
   Value UnaryOp(const ast::Expr& e, Value v);
   Value BinaryOp(const ast::Expr& e, const Value& a, const Value& b);
+  Value MatrixProduct(const ast::Expr& e, const Value& a, const Value& b);
+  Value Comparison(const ast::Expr& e, const Value& a, const Value& b);
   Value Elementwise2(const Value& a, const Value& b, flat::Op op, VType rt, Span sp);
   // Work budget (elab_budget.cpp): false once the elaboration has used it up.
   bool ChargeSteps(std::int64_t steps, Span where);
@@ -298,7 +300,7 @@ class Elaborator {
   };
   ParamAttributes ReadParamAttributes(Node* var);
   // Adds one element as a flat parameter (a constant is folded instead); its pool node.
-  ExprId AddParamElement(Node* var, flat::Param p, ExprId x, Span value_span);
+  ExprId AddParamElement(Node* var, flat::Param&& p, ExprId x, Span value_span);
   // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
@@ -340,6 +342,12 @@ class Elaborator {
   void CollectEquations(Node* node);
   void ProcessEquations(Node* node);
   void ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  // One kind each (elab_equations.cpp).
+  void ProcessConnect(Node* node, const ast::Equation& eq, const Iters* iters);
+  void ProcessFor(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void ProcessIf(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void ProcessEquality(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void BindEquation(Node* v, int elem, const ast::Equation& eq, ModValue mv);  // x = ... or x[k] = ...
   // Resolves a reference to an instance node; for variables with subscripts, *elem gets
   // the flat element index (or -1 for the whole variable).
   Node* ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem);
@@ -351,6 +359,11 @@ class Elaborator {
   };
   void Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
                std::vector<Node::EqSource>& eqs, int depth);
+  // Instantiate's steps (elab_instantiate.cpp).
+  struct ClassPrim;
+  const ClassPrim& PrimitiveAnnotation(const ast::ClassDef* cls);
+  void CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems);
+  std::unique_ptr<Node> MakeChild(Node* node, Collected& c);
   void Expand(Node* node, Node* child, const Collected& c);
   // Expand's steps (elab_instantiate.cpp).
   struct ComponentType {  // what a component's declared (or redeclared) type turned out to be
@@ -394,6 +407,9 @@ class Elaborator {
   bool ParseSetOverrides();
   void BindSetOverrides();
   Node* ResolveSetTarget(const SetOverride& so, int* elem);
+  Node* SetMember(const SetOverride& so, size_t i, Node* n);
+  Node* SetArrayElement(const SetOverride& so, size_t i, Node* array);
+  bool SetVarElement(const SetOverride& so, size_t i, const Node* n, int* elem);
   ModValue SetValue(const SetOverride& so);
   Span SetSpan(const SetOverride& so, int begin, int end) const;
 

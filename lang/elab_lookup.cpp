@@ -260,7 +260,7 @@ Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
   return attrs;
 }
 
-ExprId Elaborator::AddParamElement(Node* var, flat::Param p, ExprId x, Span value_span) {
+ExprId Elaborator::AddParamElement(Node* var, flat::Param&& p, ExprId x, Span value_span) {
   double val = param_eval_.Eval(x);
   p.value = val;
   p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
