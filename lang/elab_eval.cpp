@@ -160,118 +160,30 @@ Value Elaborator::EvalNode(const ast::Expr& e, const Ctx& ctx) {
 }
 
 Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
-  auto& pool = m_->exprs;
+  const ast::RefPart& head = e.parts[0];
+  const bool bare = e.parts.size() == 1 && head.subscripts.empty();
   // Loop iterators shadow everything.
-  if (e.parts.size() == 1 && e.parts[0].subscripts.empty() && ctx.iters) {
-    auto it = ctx.iters->find(e.parts[0].name);
+  if (bare && ctx.iters) {
+    auto it = ctx.iters->find(head.name);
     if (it != ctx.iters->end())
       return Const(it->second, it->second == std::floor(it->second) ? VType::Integer : VType::Real);
   }
-  Node* first = ctx.scope ? ctx.scope->Child(e.parts[0].name) : nullptr;
-  if (!first && e.parts.size() == 1 && e.parts[0].subscripts.empty()) {
-    if (e.parts[0].name == "time") return Scalar(pool.Time());
-    if (e.parts[0].name == "pi") return Const(M_PI);
+  Node* n = ctx.scope ? ctx.scope->Child(head.name) : nullptr;
+  if (!n && bare) {
+    if (head.name == "time") return Scalar(m_->exprs.Time());
+    if (head.name == "pi") return Const(M_PI);
   }
-  // Walk the reference through the instance tree.
-  Node* n = first;
   if (!n) {
-    std::vector<std::string> cands{"time", "pi"};
-    if (ctx.scope)
-      for (auto& c : ctx.scope->children) cands.push_back(c->decl ? c->decl->name : c->name);
-    if (ctx.iters)
-      for (auto& [k, v] : *ctx.iters) cands.push_back(k);
-    auto& d = diags_.Error(DiagCode::UnknownName, e.parts[0].span, "unknown name '" + e.parts[0].name + "'");
-    std::string best = ClosestName(e.parts[0].name, cands);
-    if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+    ReportUnknownName(head, ctx);
     return Value::Invalid();
   }
+  // Walk the reference through the instance tree.
   for (size_t pi = 0; pi < e.parts.size(); ++pi) {
     const ast::RefPart& part = e.parts[pi];
     if (pi > 0) {
-      // Frame connectors expose their motion: r (position), R (orientation),
-      // v (velocity), w (angular velocity), all resolved in the world.
-      if (n->kind == Node::kClass && n->prim == Prim::Frame &&
-          (part.name == "r" || part.name == "R" || part.name == "v" || part.name == "w")) {
-        Value v;
-        flat::StateKind kind = part.name == "r"   ? flat::StateKind::FramePosition
-                               : part.name == "R" ? flat::StateKind::FrameRotation
-                               : part.name == "v" ? flat::StateKind::FrameVelocity
-                                                  : flat::StateKind::FrameAngVel;
-        int count = part.name == "R" ? 9 : 3;
-        v.shape = part.name == "R" ? Dims{3, 3} : Dims{3};
-        for (int k = 0; k < count; ++k)
-          v.elements.push_back(pool.State(m_->AddStateRef({kind, n->prim_index, k})));
-        if (pi + 1 != e.parts.size()) {
-          diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + part.name + "' has no members");
-          return Value::Invalid();
-        }
-        if (!part.subscripts.empty()) {
-          // Apply subscripts through the generic path below.
-          ast::Expr tmp;
-          (void)tmp;
-        }
-        // Subscripts on r/R/v/w
-        Value out = v;
-        if (!part.subscripts.empty()) {
-          std::vector<std::vector<int>> idx;
-          std::vector<bool> keep;
-          for (size_t d = 0; d < part.subscripts.size() && d < v.shape.size(); ++d) {
-            const ast::Expr& s = *part.subscripts[d];
-            std::vector<int> list;
-            if (s.kind == ast::ExprKind::Colon) {
-              for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
-              keep.push_back(true);
-            } else {
-              long k = 0;
-              if (!StructuralInt(Eval(s, ctx), s.span, &k, "a subscript")) return Value::Invalid();
-              if (k < 1 || k > v.shape[d]) {
-                diags_.Error(DiagCode::IndexOutOfRange, s.span,
-                             "index " + std::to_string(k) + " is out of range 1.." + std::to_string(v.shape[d]));
-                return Value::Invalid();
-              }
-              list.push_back(static_cast<int>(k - 1));
-              keep.push_back(false);
-            }
-            idx.push_back(list);
-          }
-          if (part.subscripts.size() > v.shape.size()) {
-            diags_.Error(DiagCode::IndexOutOfRange, part.span, "too many subscripts");
-            return Value::Invalid();
-          }
-          out = Value{};
-          out.type = VType::Real;
-          if (v.shape.size() == 1) {
-            for (int i : idx[0]) out.elements.push_back(v.elements[static_cast<size_t>(i)]);
-            if (keep[0]) out.shape = {static_cast<int>(idx[0].size())};
-          } else {
-            std::vector<int> cols;
-            if (idx.size() > 1) cols = idx[1];
-            else for (int k = 0; k < 3; ++k) cols.push_back(k);
-            bool keepc = idx.size() > 1 ? keep[1] : true;
-            for (int i : idx[0])
-              for (int j : cols) out.elements.push_back(v.elements[static_cast<size_t>(i * 3 + j)]);
-            if (keep[0]) out.shape.push_back(static_cast<int>(idx[0].size()));
-            if (keepc) out.shape.push_back(static_cast<int>(cols.size()));
-          }
-        }
-        return out;
-      }
-      if (n->kind != Node::kClass) {
-        diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
-        return Value::Invalid();
-      }
-      Node* c = n->Child(part.name);
-      if (!c) {
-        std::vector<std::string> cands;
-        for (auto& ch : n->children) cands.push_back(ch->decl ? ch->decl->name : ch->name);
-        if (n->prim == Prim::Frame) cands.insert(cands.end(), {"r", "R", "v", "w"});
-        auto& d = diags_.Error(DiagCode::UnknownName, part.span,
-                               "'" + n->path + "' has no member '" + part.name + "'");
-        std::string best = ClosestName(part.name, cands);
-        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-        return Value::Invalid();
-      }
-      n = c;
+      if (IsFrameMotion(n, part.name)) return FrameMotion(e, pi, n, ctx);
+      n = Member(n, part);
+      if (!n) return Value::Invalid();
     }
     if (!n->enabled) {
       diags_.Error(DiagCode::UnknownName, part.span,
@@ -279,95 +191,11 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
       return Value::Invalid();
     }
     if (n->kind == Node::kArray) {
-      if (part.subscripts.size() != 1) {
-        diags_.Error(DiagCode::TypeMismatch, part.span,
-                     "'" + n->path + "' is an array of components; index it with one subscript");
-        return Value::Invalid();
-      }
-      long k = 0;
-      end_stack_.push_back(static_cast<int>(n->elems.size()));
-      Value kv = Eval(*part.subscripts[0], ctx);
-      end_stack_.pop_back();
-      if (!StructuralInt(kv, part.subscripts[0]->span, &k, "a subscript")) return Value::Invalid();
-      if (k < 1 || k > static_cast<long>(n->elems.size())) {
-        diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
-                     "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
-                         " of '" + n->path + "'");
-        return Value::Invalid();
-      }
-      n = n->elems[static_cast<size_t>(k - 1)].get();
+      n = ArrayElement(n, part, ctx);
+      if (!n) return Value::Invalid();
       continue;
     }
-    if (n->kind == Node::kVar) {
-      Value v = GetVar(n, part.span);
-      if (!v.valid) return v;
-      if (pi + 1 != e.parts.size()) {
-        diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span,
-                     "'" + n->path + "' is a variable and has no members");
-        return Value::Invalid();
-      }
-      if (part.subscripts.empty()) return v;
-      // Generic subscripting of a value.
-      std::vector<std::vector<int>> idx;
-      std::vector<bool> keep;
-      if (part.subscripts.size() > v.shape.size()) {
-        diags_.Error(DiagCode::IndexOutOfRange, part.span,
-                     "'" + n->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
-        return Value::Invalid();
-      }
-      for (size_t d = 0; d < v.shape.size(); ++d) {
-        std::vector<int> list;
-        bool kp = true;
-        if (d < part.subscripts.size() && part.subscripts[d]->kind != ast::ExprKind::Colon) {
-          const ast::Expr& s = *part.subscripts[d];
-          if (s.kind == ast::ExprKind::End) {
-            list.push_back(v.shape[d] - 1);
-            kp = false;
-          } else {
-            end_stack_.push_back(v.shape[d]);
-            Value sv = Eval(s, ctx);
-            end_stack_.pop_back();
-            if (!sv.valid) return Value::Invalid();
-            std::vector<double> ks = StructuralList(sv, s.span, "a subscript");
-            if (ks.empty()) return Value::Invalid();
-            kp = !sv.shape.empty();
-            for (double kd : ks) {
-              // Compare as doubles first: casting an out-of-range double is undefined.
-              const bool in_range = kd == std::floor(kd) && kd >= 1 && kd <= v.shape[d];
-              const long k = in_range ? static_cast<long>(kd) : 0;
-              if (!in_range) {
-                diags_.Error(DiagCode::IndexOutOfRange, s.span,
-                             "index " + ShortNumber(kd) + " is out of range 1.." + std::to_string(v.shape[d]) +
-                                 " of '" + n->path + "'");
-                return Value::Invalid();
-              }
-              list.push_back(static_cast<int>(k - 1));
-            }
-          }
-        } else {
-          for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
-        }
-        idx.push_back(list);
-        keep.push_back(kp);
-      }
-      Value r;
-      r.type = v.type;
-      for (size_t d = 0; d < idx.size(); ++d)
-        if (keep[d]) r.shape.push_back(static_cast<int>(idx[d].size()));
-      // Iterate over the cartesian product.
-      std::vector<size_t> strides(v.shape.size(), 1);
-      for (size_t d = v.shape.size(); d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
-      std::function<void(size_t, size_t)> rec = [&](size_t d, size_t off) {
-        if (d == idx.size()) {
-          r.elements.push_back(v.elements[off]);
-          if (v.type == VType::String) r.strings.push_back(v.strings[off]);
-          return;
-        }
-        for (int k : idx[d]) rec(d + 1, off + static_cast<size_t>(k) * strides[d]);
-      };
-      rec(0, 0);
-      return r;
-    }
+    if (n->kind == Node::kVar) return VarReference(e, pi, n, ctx);
     if (!part.subscripts.empty()) {
       diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
       return Value::Invalid();
@@ -377,6 +205,200 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
                "'" + n->path + "' is a component, not a value")
       .hint = "components are used in connect(); their parameters and variables are values";
   return Value::Invalid();
+}
+
+void Elaborator::ReportUnknownName(const ast::RefPart& head, const Ctx& ctx) {
+  std::vector<std::string> cands{"time", "pi"};
+  if (ctx.scope)
+    for (auto& c : ctx.scope->children) cands.push_back(c->decl ? c->decl->name : c->name);
+  if (ctx.iters)
+    for (auto& [k, v] : *ctx.iters) cands.push_back(k);
+  auto& d = diags_.Error(DiagCode::UnknownName, head.span, "unknown name '" + head.name + "'");
+  std::string best = ClosestName(head.name, cands);
+  if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+}
+
+// Frame connectors expose their motion: r (position), R (orientation), v (velocity),
+// w (angular velocity), all resolved in the world.
+bool Elaborator::IsFrameMotion(const Node* n, const std::string& name) {
+  return n->kind == Node::kClass && n->prim == Prim::Frame &&
+         (name == "r" || name == "R" || name == "v" || name == "w");
+}
+
+Value Elaborator::FrameMotion(const ast::Expr& e, size_t pi, const Node* frame, const Ctx& ctx) {
+  const ast::RefPart& part = e.parts[pi];
+  Value v;
+  flat::StateKind kind = part.name == "r"   ? flat::StateKind::FramePosition
+                         : part.name == "R" ? flat::StateKind::FrameRotation
+                         : part.name == "v" ? flat::StateKind::FrameVelocity
+                                            : flat::StateKind::FrameAngVel;
+  int count = part.name == "R" ? 9 : 3;
+  v.shape = part.name == "R" ? Dims{3, 3} : Dims{3};
+  for (int k = 0; k < count; ++k)
+    v.elements.push_back(m_->exprs.State(m_->AddStateRef({kind, frame->prim_index, k})));
+  if (pi + 1 != e.parts.size()) {
+    diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + part.name + "' has no members");
+    return Value::Invalid();
+  }
+  if (part.subscripts.empty()) return v;
+  return SubscriptFrameMotion(v, part, ctx);
+}
+
+Value Elaborator::SubscriptFrameMotion(const Value& v, const ast::RefPart& part, const Ctx& ctx) {
+  std::vector<std::vector<int>> idx;
+  std::vector<bool> keep;
+  for (size_t d = 0; d < part.subscripts.size() && d < v.shape.size(); ++d) {
+    const ast::Expr& s = *part.subscripts[d];
+    std::vector<int> list;
+    if (s.kind == ast::ExprKind::Colon) {
+      for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
+      keep.push_back(true);
+    } else {
+      long k = 0;
+      if (!StructuralInt(Eval(s, ctx), s.span, &k, "a subscript")) return Value::Invalid();
+      if (k < 1 || k > v.shape[d]) {
+        diags_.Error(DiagCode::IndexOutOfRange, s.span,
+                     "index " + std::to_string(k) + " is out of range 1.." + std::to_string(v.shape[d]));
+        return Value::Invalid();
+      }
+      list.push_back(static_cast<int>(k - 1));
+      keep.push_back(false);
+    }
+    idx.push_back(list);
+  }
+  if (part.subscripts.size() > v.shape.size()) {
+    diags_.Error(DiagCode::IndexOutOfRange, part.span, "too many subscripts");
+    return Value::Invalid();
+  }
+  Value out;
+  out.type = VType::Real;
+  if (v.shape.size() == 1) {
+    for (int i : idx[0]) out.elements.push_back(v.elements[static_cast<size_t>(i)]);
+    if (keep[0]) out.shape = {static_cast<int>(idx[0].size())};
+    return out;
+  }
+  std::vector<int> cols;
+  if (idx.size() > 1) cols = idx[1];
+  else for (int k = 0; k < 3; ++k) cols.push_back(k);
+  bool keepc = idx.size() > 1 ? keep[1] : true;
+  for (int i : idx[0])
+    for (int j : cols) out.elements.push_back(v.elements[static_cast<size_t>(i * 3 + j)]);
+  if (keep[0]) out.shape.push_back(static_cast<int>(idx[0].size()));
+  if (keepc) out.shape.push_back(static_cast<int>(cols.size()));
+  return out;
+}
+
+Node* Elaborator::Member(Node* n, const ast::RefPart& part) {
+  if (n->kind != Node::kClass) {
+    diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
+    return nullptr;
+  }
+  Node* c = n->Child(part.name);
+  if (c) return c;
+  std::vector<std::string> cands;
+  for (auto& ch : n->children) cands.push_back(ch->decl ? ch->decl->name : ch->name);
+  if (n->prim == Prim::Frame) cands.insert(cands.end(), {"r", "R", "v", "w"});
+  auto& d = diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
+  std::string best = ClosestName(part.name, cands);
+  if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+  return nullptr;
+}
+
+Node* Elaborator::ArrayElement(Node* array, const ast::RefPart& part, const Ctx& ctx) {
+  if (part.subscripts.size() != 1) {
+    diags_.Error(DiagCode::TypeMismatch, part.span,
+                 "'" + array->path + "' is an array of components; index it with one subscript");
+    return nullptr;
+  }
+  long k = 0;
+  end_stack_.push_back(static_cast<int>(array->elems.size()));
+  Value kv = Eval(*part.subscripts[0], ctx);
+  end_stack_.pop_back();
+  if (!StructuralInt(kv, part.subscripts[0]->span, &k, "a subscript")) return nullptr;
+  if (k < 1 || k > static_cast<long>(array->elems.size())) {
+    diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
+                 "index " + std::to_string(k) + " is out of range 1.." + std::to_string(array->elems.size()) +
+                     " of '" + array->path + "'");
+    return nullptr;
+  }
+  return array->elems[static_cast<size_t>(k - 1)].get();
+}
+
+Value Elaborator::VarReference(const ast::Expr& e, size_t pi, Node* var, const Ctx& ctx) {
+  const ast::RefPart& part = e.parts[pi];
+  Value v = GetVar(var, part.span);
+  if (!v.valid) return v;
+  if (pi + 1 != e.parts.size()) {
+    diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + var->path + "' is a variable and has no members");
+    return Value::Invalid();
+  }
+  if (part.subscripts.empty()) return v;
+  return SubscriptValue(v, part, var, ctx);
+}
+
+Value Elaborator::SubscriptValue(const Value& v, const ast::RefPart& part, const Node* var, const Ctx& ctx) {
+  if (part.subscripts.size() > v.shape.size()) {
+    diags_.Error(DiagCode::IndexOutOfRange, part.span,
+                 "'" + var->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
+    return Value::Invalid();
+  }
+  std::vector<std::vector<int>> idx;
+  std::vector<bool> keep;
+  for (size_t d = 0; d < v.shape.size(); ++d) {
+    std::vector<int> list;
+    bool kp = true;
+    if (d < part.subscripts.size() && part.subscripts[d]->kind != ast::ExprKind::Colon) {
+      if (!SubscriptIndices(*part.subscripts[d], v.shape[d], var, ctx, &list, &kp)) return Value::Invalid();
+    } else {
+      for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
+    }
+    idx.push_back(list);
+    keep.push_back(kp);
+  }
+  Value r;
+  r.type = v.type;
+  for (size_t d = 0; d < idx.size(); ++d)
+    if (keep[d]) r.shape.push_back(static_cast<int>(idx[d].size()));
+  // Iterate over the cartesian product.
+  std::vector<size_t> strides(v.shape.size(), 1);
+  for (size_t d = v.shape.size(); d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
+  std::function<void(size_t, size_t)> rec = [&](size_t d, size_t off) {
+    if (d == idx.size()) {
+      r.elements.push_back(v.elements[off]);
+      if (v.type == VType::String) r.strings.push_back(v.strings[off]);
+      return;
+    }
+    for (int k : idx[d]) rec(d + 1, off + static_cast<size_t>(k) * strides[d]);
+  };
+  rec(0, 0);
+  return r;
+}
+
+bool Elaborator::SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx,
+                                  std::vector<int>* list, bool* keep) {
+  if (s.kind == ast::ExprKind::End) {
+    list->push_back(size - 1);
+    *keep = false;
+    return true;
+  }
+  end_stack_.push_back(size);
+  Value sv = Eval(s, ctx);
+  end_stack_.pop_back();
+  if (!sv.valid) return false;
+  std::vector<double> ks = StructuralList(sv, s.span, "a subscript");
+  if (ks.empty()) return false;
+  *keep = !sv.shape.empty();
+  for (double kd : ks) {
+    // Compare as doubles first: casting an out-of-range double is undefined.
+    if (!(kd == std::floor(kd) && kd >= 1 && kd <= size)) {
+      diags_.Error(DiagCode::IndexOutOfRange, s.span,
+                   "index " + ShortNumber(kd) + " is out of range 1.." + std::to_string(size) + " of '" +
+                       var->path + "'");
+      return false;
+    }
+    list->push_back(static_cast<int>(kd) - 1);
+  }
+  return true;
 }
 
 Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {

@@ -181,6 +181,8 @@ void Elaborator::RegisterPrimitive(Node* node, const ast::ClassDef* cls) {
   }
 }
 
+// A class instance: its primitive (if any), its elements collected through extends, one
+// child node each with its merged modifier, then each child expanded.
 void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from) {
   (void)lookup_from;
   if (node->depth > kMaxExtendsDepth) {
@@ -198,28 +200,42 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     d.notes.push_back({cls->name_span, "declared partial here"});
     d.hint = "extend it in a class of your own";
   }
-  // Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
-  // The same for every instance of cls: read once per class.
-  auto [ann, fresh] = primitive_annotation_.try_emplace(cls);
-  if (fresh) {
-    if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
-      for (const auto& a : pm->args) {
-        if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
-        if (a.path[0] == "primitive") ann->second.prim = PrimFromName(a.mod->value->text), ann->second.has_prim = true;
-        if (a.path[0] == "kind") ann->second.kind = &a.mod->value->text;
-      }
-    }
-  }
-  if (ann->second.has_prim) node->prim = ann->second.prim;
-  if (ann->second.kind) node->prim_kind = *ann->second.kind;
+  const ClassPrim& ann = PrimitiveAnnotation(cls);
+  if (ann.has_prim) node->prim = ann.prim;
+  if (ann.kind) node->prim_kind = *ann.kind;
   RegisterPrimitive(node, cls);
 
   std::vector<Collected> elems;
   elems.reserve(cls->elements.size());  // enough unless cls extends another class
   node->equations.reserve(cls->equations.size());
   Collect(cls, node, nullptr, elems, node->equations, 0);
+  CheckOuterModifiers(node, cls, elems);
 
-  // Every outer modifier must name an element.
+  node->children.reserve(elems.size());
+  for (auto& c : elems) node->children.push_back(MakeChild(node, c));
+  for (size_t i = 0; i < elems.size() && i < node->children.size(); ++i) {
+    if (diags_.Full() || too_large_) break;
+    Expand(node, node->children[i].get(), elems[i]);
+  }
+}
+
+// Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
+// The same for every instance of cls: read once per class.
+const Elaborator::ClassPrim& Elaborator::PrimitiveAnnotation(const ast::ClassDef* cls) {
+  auto [ann, fresh] = primitive_annotation_.try_emplace(cls);
+  if (!fresh) return ann->second;
+  if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
+    for (const auto& a : pm->args) {
+      if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
+      if (a.path[0] == "primitive") ann->second.prim = PrimFromName(a.mod->value->text), ann->second.has_prim = true;
+      if (a.path[0] == "kind") ann->second.kind = &a.mod->value->text;
+    }
+  }
+  return ann->second;
+}
+
+// Every outer modifier must name an element, and not a protected one.
+void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems) {
   for (const auto& key : node->mod.order) {
     bool found = false;
     for (const auto& c : elems) {
@@ -237,46 +253,42 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
     if (sm.set_only) continue;  // --set names are checked by BindSetOverrides
     std::vector<std::string> names;
     for (const auto& c : elems) names.push_back(c.comp->name);
-    auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span,
-                           "'" + cls->name + "' has no element '" + key + "'");
+    auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span, "'" + cls->name + "' has no element '" + key + "'");
     std::string best = ClosestName(key, names);
     if (!best.empty()) d.hint = "did you mean '" + best + "'?";
     d.notes.push_back({cls->name_span, "'" + cls->name + "' is declared here"});
   }
+}
 
-  node->children.reserve(elems.size());
-  for (auto& c : elems) {
-    auto child = std::make_unique<Node>();
-    child->parent = node;
-    child->decl = c.comp;
-    child->name = c.comp->name;
-    child->path = JoinPath(node->path, c.comp->name);
-    child->depth = node->depth + 1;
-    Mod outer;
-    auto it = node->mod.sub.find(c.comp->name);
-    if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
-    if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
-      Span at = outer.value ? outer.value->span : outer.span;
-      auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
-      d.notes.push_back({c.comp->span, "declared final here"});
-      outer = Mod{};
-    }
-    MergeInto(outer, std::move(c.ext_mod), child->path);  // Expand reads c's other fields only
-    Mod decl = BuildMod(c.comp->mod.get(), node, nullptr);
-    if (c.is_final) {
-      decl.is_final = true;
-      decl.final_span = c.comp->span;
-      if (decl.value) decl.value->is_final = true;
-    }
-    MergeInto(outer, std::move(decl), child->path);
-    child->mod = std::move(outer);
-    child->is_final_decl = c.is_final;
-    node->children.push_back(std::move(child));
+// The child node of element c, its modifier merged: outer (the instance's) over the
+// extends clause's over the declaration's.
+std::unique_ptr<Node> Elaborator::MakeChild(Node* node, Collected& c) {
+  auto child = std::make_unique<Node>();
+  child->parent = node;
+  child->decl = c.comp;
+  child->name = c.comp->name;
+  child->path = JoinPath(node->path, c.comp->name);
+  child->depth = node->depth + 1;
+  Mod outer;
+  auto it = node->mod.sub.find(c.comp->name);
+  if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
+  if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
+    Span at = outer.value ? outer.value->span : outer.span;
+    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
+    d.notes.push_back({c.comp->span, "declared final here"});
+    outer = Mod{};
   }
-  for (size_t i = 0; i < elems.size() && i < node->children.size(); ++i) {
-    if (diags_.Full() || too_large_) break;
-    Expand(node, node->children[i].get(), elems[i]);
+  MergeInto(outer, std::move(c.ext_mod), child->path);  // Expand reads c's other fields only
+  Mod decl = BuildMod(c.comp->mod.get(), node, nullptr);
+  if (c.is_final) {
+    decl.is_final = true;
+    decl.final_span = c.comp->span;
+    if (decl.value) decl.value->is_final = true;
   }
+  MergeInto(outer, std::move(decl), child->path);
+  child->mod = std::move(outer);
+  child->is_final_decl = c.is_final;
+  return child;
 }
 
 // Evaluates the non-`each` values of an array component's modifier once, checking their
@@ -307,162 +319,195 @@ static Span TopDeclSpan(Node* node, const ast::Component& fallback) {
   return n && n->decl ? n->decl->span : fallback.span;
 }
 
+// The builtin type `name` names (Real, Integer, Boolean, String), in *out; false if none.
+static bool BuiltinTypeNamed(const std::string& name, VType* out) {
+  if (name == "Real") *out = VType::Real;
+  else if (name == "Integer") *out = VType::Integer;
+  else if (name == "Boolean") *out = VType::Boolean;
+  else if (name == "String") *out = VType::String;
+  else return false;
+  return true;
+}
+
+// "A.B.C" -> {"A", "B", "C"}.
+static std::vector<std::string> SplitDotted(const std::string& t) {
+  std::vector<std::string> parts;
+  size_t p = 0;
+  while (true) {
+    size_t q = t.find('.', p);
+    parts.push_back(t.substr(p, q == std::string::npos ? std::string::npos : q - p));
+    if (q == std::string::npos) break;
+    p = q + 1;
+  }
+  return parts;
+}
+
+// One declared component: dropped by its condition, or a variable, a component or an array
+// of components, by its type.
 void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   const ast::Component& comp = *c.comp;
-  Ctx ctx{node, nullptr};
-  if (comp.condition) {
-    double cv = 0;
-    Value v = Eval(*comp.condition, ctx);
-    if (v.valid && v.type != VType::Boolean) {
-      diags_.Error(DiagCode::TypeMismatch, comp.condition->span, "a component condition must be Boolean");
-    } else if (Structural(v, comp.condition->span, &cv, "a component condition")) {
-      child->enabled = cv != 0;
-    }
-    if (!child->enabled) return;
-  }
+  if (comp.condition && !ComponentEnabled(node, child, comp)) return;
   // Dimensions: type dims then declaration dims (Real[3] x[2] is 2x3 in Modelica: the
   // declaration dims come first).
   std::vector<int> dims;
-  auto add_dims = [&](const std::vector<ast::ExprPtr>& ds) {
-    for (const auto& d : ds) {
-      if (d->kind == ast::ExprKind::Colon) {
-        dims.push_back(-1);
-        continue;
-      }
-      long n = 0;
-      if (!StructuralInt(Eval(*d, ctx), d->span, &n, "an array size")) {
-        dims.push_back(0);
-        continue;
-      }
-      if (n < 0 || n > kMaxArraySize) {
-        diags_.Error(DiagCode::ArrayTooLarge, d->span,
-                     "array size " + std::to_string(n) + " is outside 0.." + std::to_string(kMaxArraySize));
-        n = 0;
-      }
-      dims.push_back(static_cast<int>(n));
-    }
-  };
-  add_dims(comp.dims);
-  add_dims(comp.type_dims);
+  AppendDims(comp.dims, node, &dims);
+  AppendDims(comp.type_dims, node, &dims);
+  ComponentType type;
+  if (!ResolveComponentType(node, child, c, &type)) return;
+  if (type.is_builtin) ExpandVariable(child, comp, type.builtin, dims);
+  else ExpandComponent(node, child, c, type, dims);
+}
 
-  // The declared type's name, joined only for a message (a builtin named by a redeclare
-  // replaces it there).
-  std::string redeclared_name;
-  auto tname = [&] { return redeclared_name.empty() ? ast::JoinName(comp.type_name) : redeclared_name; };
-  const ast::ClassDef* tcls = nullptr;
-  VType builtin = VType::Real;
-  bool is_builtin = comp.type_name.size() == 1;
-  if (is_builtin) {
-    const std::string& n = comp.type_name[0];
-    if (n == "Real") builtin = VType::Real;
-    else if (n == "Integer") builtin = VType::Integer;
-    else if (n == "Boolean") builtin = VType::Boolean;
-    else if (n == "String") builtin = VType::String;
-    else is_builtin = false;
+bool Elaborator::ComponentEnabled(Node* node, Node* child, const ast::Component& comp) {
+  double cv = 0;
+  Value v = Eval(*comp.condition, Ctx{node, nullptr});
+  if (v.valid && v.type != VType::Boolean) {
+    diags_.Error(DiagCode::TypeMismatch, comp.condition->span, "a component condition must be Boolean");
+  } else if (Structural(v, comp.condition->span, &cv, "a component condition")) {
+    child->enabled = cv != 0;
   }
+  return child->enabled;
+}
 
-  if (!child->mod.redeclare_type.empty()) {
-    if (!c.replaceable) {
-      auto& d = diags_.Error(DiagCode::NotReplaceable, child->mod.redeclare_span,
-                             "'" + child->path + "' is not replaceable");
-      d.notes.push_back({comp.span, "declared here without 'replaceable'"});
-    } else {
-      std::vector<std::string> parts;
-      std::string t = child->mod.redeclare_type;
-      size_t p = 0;
-      while (true) {
-        size_t q = t.find('.', p);
-        parts.push_back(t.substr(p, q == std::string::npos ? std::string::npos : q - p));
-        if (q == std::string::npos) break;
-        p = q + 1;
-      }
-      const ast::ClassDef* from = child->mod.redeclare_from ? child->mod.redeclare_from : c.owner;
-      if (parts.size() == 1 && (t == "Real" || t == "Integer" || t == "Boolean" || t == "String")) {
-        redeclared_name = t;
-      } else {
-        tcls = FindClass(parts, from);
-        if (!tcls) {
-          diags_.Error(DiagCode::UnknownClass, child->mod.redeclare_span, "unknown class '" + t + "'");
-          return;
-        }
-        is_builtin = false;
-      }
+void Elaborator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std::vector<int>* dims) {
+  const Ctx ctx{node, nullptr};
+  for (const auto& d : ds) {
+    if (d->kind == ast::ExprKind::Colon) {
+      dims->push_back(-1);
+      continue;
     }
+    long n = 0;
+    if (!StructuralInt(Eval(*d, ctx), d->span, &n, "an array size")) {
+      dims->push_back(0);
+      continue;
+    }
+    if (n < 0 || n > kMaxArraySize) {
+      diags_.Error(DiagCode::ArrayTooLarge, d->span,
+                   "array size " + std::to_string(n) + " is outside 0.." + std::to_string(kMaxArraySize));
+      n = 0;
+    }
+    dims->push_back(static_cast<int>(n));
   }
-  if (!is_builtin && !tcls) {
-    // The declared type: the same for every instance of the class declaring comp.
-    auto found = component_type_.find(&comp);
-    if (found != component_type_.end() && found->second.first == c.owner) {
-      tcls = found->second.second;
-    } else {
-      tcls = FindClass(comp.type_name, c.owner);
-      if (tcls) component_type_[&comp] = {c.owner, tcls};
-    }
-    if (!tcls) {
-      auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + tname() + "'");
-      std::vector<std::string> names{"Real", "Integer", "Boolean", "String"};
-      LoadWholeLibrary();  // the hint considers every class
-      for (auto& [k, v] : classes_) names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
-      std::string best = ClosestName(tname(), names);
-      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-      return;
-    }
-  }
-  // A `type` that is a short definition of a builtin (type Angle = Real(unit = "rad")).
-  if (tcls && tcls->kind == ast::ClassKind::Type) {
-    Mod tm;
-    const ast::ClassDef* t = tcls;
-    int guard = 0;
-    while (t && t->is_short && ++guard < kMaxExtendsDepth) {
-      if (t->short_mod) MergeInto(tm, BuildMod(t->short_mod.get(), node, nullptr), child->path);
-      std::string b = ast::JoinName(t->short_base);
-      if (b == "Real" || b == "Integer" || b == "Boolean" || b == "String") {
-        builtin = b == "Real" ? VType::Real : b == "Integer" ? VType::Integer : b == "Boolean" ? VType::Boolean
-                                                                                             : VType::String;
-        is_builtin = true;
-        break;
-      }
-      t = FindClass(t->short_base, t);
-    }
-    if (!is_builtin) {
-      diags_.Error(DiagCode::UnknownClass, comp.type_span,
-                   "type '" + tname() + "' is not a Real/Integer/Boolean/String");
-      return;
-    }
-    MergeInto(child->mod, tm, child->path);
-    tcls = nullptr;
-  }
+}
 
-  if (is_builtin) {
-    child->kind = Node::kVar;
-    child->vtype = builtin;
-    child->variability = comp.variability;
-    child->causality = comp.causality;
-    child->shape.assign(dims.begin(), dims.end());
-    long size = 1;
-    for (int d : dims) size *= (d < 0 ? 1 : d);
-    instances_ += size;
-    if (instances_ > kMaxInstances && !too_large_) {
-      too_large_ = true;
-      diags_.Error(DiagCode::InstanceTooLarge, TopDeclSpan(child, comp),
-                   "the model has more than " + std::to_string(kMaxInstances) + " variables")
-          .hint = "reduce the array sizes";
+bool Elaborator::ResolveComponentType(Node* node, Node* child, const Collected& c, ComponentType* t) {
+  const ast::Component& comp = *c.comp;
+  t->is_builtin = comp.type_name.size() == 1 && BuiltinTypeNamed(comp.type_name[0], &t->builtin);
+  if (!child->mod.redeclare_type.empty() && !ApplyRedeclare(child, c, t)) return false;
+  if (!t->is_builtin && !t->cls) {
+    t->cls = DeclaredClass(comp, c.owner);
+    if (!t->cls) {
+      ReportUnknownType(comp, *t);
+      return false;
     }
-    for (const auto& key : child->mod.order) {
-      if (IsVarAttribute(key) || child->mod.sub[key].set_only) continue;
-      auto& d = diags_.Error(DiagCode::UnknownModifier, child->mod.sub[key].span,
-                             "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
-                                 child->path + "'");
-      std::string best =
-          ClosestName(key, {"start", "fixed", "unit", "min", "max", "displayUnit", "quantity", "nominal"});
-      d.hint = best.empty() ? "attributes are start, fixed, unit, min, max, displayUnit, quantity, nominal"
-                            : "did you mean '" + best + "'?";
-    }
-    return;
   }
-  // A component of class type (or an array of them).
-  if (tcls->kind == ast::ClassKind::Package || tcls->kind == ast::ClassKind::Function) {
-    diags_.Error(DiagCode::TypeMismatch, comp.type_span, "'" + tname() + "' is a package or function, not a model");
+  if (t->cls && t->cls->kind == ast::ClassKind::Type) return ShortTypeToBuiltin(node, child, comp, t);
+  return true;
+}
+
+bool Elaborator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* t) {
+  if (!c.replaceable) {
+    auto& d = diags_.Error(DiagCode::NotReplaceable, child->mod.redeclare_span,
+                           "'" + child->path + "' is not replaceable");
+    d.notes.push_back({c.comp->span, "declared here without 'replaceable'"});
+    return true;
+  }
+  const std::string& name = child->mod.redeclare_type;
+  std::vector<std::string> parts = SplitDotted(name);
+  VType ignored;
+  if (parts.size() == 1 && BuiltinTypeNamed(name, &ignored)) {
+    t->redeclared_name = name;
+    return true;
+  }
+  const ast::ClassDef* from = child->mod.redeclare_from ? child->mod.redeclare_from : c.owner;
+  t->cls = FindClass(parts, from);
+  if (!t->cls) {
+    diags_.Error(DiagCode::UnknownClass, child->mod.redeclare_span, "unknown class '" + name + "'");
+    return false;
+  }
+  t->is_builtin = false;
+  return true;
+}
+
+const ast::ClassDef* Elaborator::DeclaredClass(const ast::Component& comp, const ast::ClassDef* owner) {
+  // The same for every instance of the class declaring comp.
+  auto found = component_type_.find(&comp);
+  if (found != component_type_.end() && found->second.first == owner) return found->second.second;
+  const ast::ClassDef* cls = FindClass(comp.type_name, owner);
+  if (cls) component_type_[&comp] = {owner, cls};
+  return cls;
+}
+
+void Elaborator::ReportUnknownType(const ast::Component& comp, const ComponentType& t) {
+  const std::string name = t.Name(comp);
+  auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + name + "'");
+  std::vector<std::string> names{"Real", "Integer", "Boolean", "String"};
+  LoadWholeLibrary();  // the hint considers every class
+  for (auto& [k, v] : classes_) names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
+  std::string best = ClosestName(name, names);
+  if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+}
+
+// A `type` that is a short definition of a builtin (type Angle = Real(unit = "rad")): its
+// modifiers join the component's.
+bool Elaborator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Component& comp, ComponentType* t) {
+  Mod tm;
+  const ast::ClassDef* cls = t->cls;
+  int guard = 0;
+  while (cls && cls->is_short && ++guard < kMaxExtendsDepth) {
+    if (cls->short_mod) MergeInto(tm, BuildMod(cls->short_mod.get(), node, nullptr), child->path);
+    if (BuiltinTypeNamed(ast::JoinName(cls->short_base), &t->builtin)) {
+      t->is_builtin = true;
+      break;
+    }
+    cls = FindClass(cls->short_base, cls);
+  }
+  if (!t->is_builtin) {
+    diags_.Error(DiagCode::UnknownClass, comp.type_span,
+                 "type '" + t->Name(comp) + "' is not a Real/Integer/Boolean/String");
+    return false;
+  }
+  MergeInto(child->mod, tm, child->path);
+  t->cls = nullptr;
+  return true;
+}
+
+void Elaborator::ExpandVariable(Node* child, const ast::Component& comp, VType builtin, const std::vector<int>& dims) {
+  child->kind = Node::kVar;
+  child->vtype = builtin;
+  child->variability = comp.variability;
+  child->causality = comp.causality;
+  child->shape.assign(dims.begin(), dims.end());
+  long size = 1;
+  for (int d : dims) size *= (d < 0 ? 1 : d);
+  instances_ += size;
+  if (instances_ > kMaxInstances && !too_large_) {
+    too_large_ = true;
+    diags_.Error(DiagCode::InstanceTooLarge, TopDeclSpan(child, comp),
+                 "the model has more than " + std::to_string(kMaxInstances) + " variables")
+        .hint = "reduce the array sizes";
+  }
+  CheckVarAttributes(child, builtin);
+}
+
+void Elaborator::CheckVarAttributes(Node* var, VType builtin) {
+  for (const auto& key : var->mod.order) {
+    if (IsVarAttribute(key) || var->mod.sub[key].set_only) continue;
+    auto& d = diags_.Error(DiagCode::UnknownModifier, var->mod.sub[key].span,
+                           "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
+                               var->path + "'");
+    std::string best = ClosestName(key, {"start", "fixed", "unit", "min", "max", "displayUnit", "quantity", "nominal"});
+    d.hint = best.empty() ? "attributes are start, fixed, unit, min, max, displayUnit, quantity, nominal"
+                          : "did you mean '" + best + "'?";
+  }
+}
+
+// A component of class type (or an array of them).
+void Elaborator::ExpandComponent(Node* node, Node* child, const Collected& c, const ComponentType& t,
+                                 const std::vector<int>& dims) {
+  const ast::Component& comp = *c.comp;
+  if (t.cls->kind == ast::ClassKind::Package || t.cls->kind == ast::ClassKind::Function) {
+    diags_.Error(DiagCode::TypeMismatch, comp.type_span, "'" + t.Name(comp) + "' is a package or function, not a model");
     return;
   }
   if (dims.size() > 1) {
@@ -479,14 +524,14 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   }
   if (dims.empty()) {
     child->kind = Node::kClass;
-    Instantiate(child, tcls, c.owner);
+    Instantiate(child, t.cls, c.owner);
     return;
   }
   child->kind = Node::kArray;
-  child->cls = tcls;
+  child->cls = t.cls;
   int n = dims[0] < 0 ? 0 : dims[0];
   PreEvaluate(*this, child->mod, n, diags_);
-  InstantiateArray(node, child, comp, tcls, c.owner, n);
+  InstantiateArray(node, child, comp, t.cls, c.owner, n);
 }
 
 }  // namespace kanesim::lang::elab

@@ -218,6 +218,11 @@ class Elaborator {
  public:
   Elaborator(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags);
   bool Run();
+  // Run's stages (elaborate.cpp).
+  const ast::ClassDef* PickModel();
+  bool CheckImports(const ast::StoredDefinition& f);
+  void CheckImport(const std::string& q, bool wildcard, Span span);
+  void ReadExperiment(const ast::Modification& ex, const ast::ClassDef* top);
 
   // --- classes (elaborate.cpp) ---
   const ast::ClassDef* FindClass(const std::vector<std::string>& parts, const ast::ClassDef* from) const;
@@ -242,6 +247,18 @@ class Elaborator {
   Value EvalNested(const ast::Expr& e, const Ctx& ctx);
   Value EvalNode(const ast::Expr& e, const Ctx& ctx);
   Value EvalRef(const ast::Expr& e, const Ctx& ctx);
+  // EvalRef's steps (elab_eval.cpp): a reference walked part by part through the tree.
+  void ReportUnknownName(const ast::RefPart& head, const Ctx& ctx);
+  static bool IsFrameMotion(const Node* n, const std::string& name);
+  Value FrameMotion(const ast::Expr& e, size_t pi, const Node* frame, const Ctx& ctx);  // frame.r/R/v/w
+  Value SubscriptFrameMotion(const Value& v, const ast::RefPart& part, const Ctx& ctx);
+  Node* Member(Node* n, const ast::RefPart& part);  // null after a diagnostic
+  Node* ArrayElement(Node* array, const ast::RefPart& part, const Ctx& ctx);
+  Value VarReference(const ast::Expr& e, size_t pi, Node* var, const Ctx& ctx);
+  Value SubscriptValue(const Value& v, const ast::RefPart& part, const Node* var, const Ctx& ctx);
+  // One subscript of dimension `size`: its 0-based indices; *keep when it keeps the dimension.
+  bool SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx, std::vector<int>* list,
+                        bool* keep);
   Value EvalArray(const ast::Expr& e, const Ctx& ctx);
   Value EvalComprehension(const ast::Expr& e, const Ctx& ctx);
   Value EvalMatrix(const ast::Expr& e, const Ctx& ctx);
@@ -258,6 +275,8 @@ class Elaborator {
   Value EvalOperators(const ast::Expr& root, const Ctx& ctx);
   Value UnaryOp(const ast::Expr& e, Value v);
   Value BinaryOp(const ast::Expr& e, const Value& a, const Value& b);
+  Value MatrixProduct(const ast::Expr& e, const Value& a, const Value& b);
+  Value Comparison(const ast::Expr& e, const Value& a, const Value& b);
   Value Elementwise2(const Value& a, const Value& b, flat::Op op, VType rt, Span sp);
   // Work budget (elab_budget.cpp): false once the elaboration has used it up.
   bool ChargeSteps(std::int64_t steps, Span where);
@@ -265,6 +284,23 @@ class Elaborator {
   Value EvalModValue(const ModValue& mv, Span* where);
   // The variable's value, evaluated on first use; valid as long as the instance tree.
   const Value& GetVar(Node* var, Span use_span);
+  // GetVar's stages (elab_lookup.cpp): the value from the binding, checked, then for a
+  // parameter its flat parameters.
+  Value EvaluateVar(Node* var, Span use_span);
+  Value JointStateValue(Node* var);                       // a joint's q or u: state references
+  const ModValue* VarBinding(Node* var);                  // declaration/modifier or equation
+  Value UnboundValue(Node* var, Span use_span);           // zeros, or a missing-value error
+  Value BoundValue(Node* var, const ModValue& binding);   // evaluated, type and size checked
+  bool CheckValueType(Node* var, const ModValue& binding, const Value& v, Span where);
+  void ApplyElementEquations(Node* var, Value& v);        // x[k] = ... over the value
+  Value ParameterValue(Node* var, const ModValue* binding, Span use_span, Value v);
+  struct ParamAttributes {  // a parameter's min, max and unit modifiers
+    std::string unit;
+    double min = -1e300, max = 1e300;
+  };
+  ParamAttributes ReadParamAttributes(Node* var);
+  // Adds one element as a flat parameter (a constant is folded instead); its pool node.
+  ExprId AddParamElement(Node* var, flat::Param&& p, ExprId x, Span value_span);
   // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
@@ -306,6 +342,12 @@ class Elaborator {
   void CollectEquations(Node* node);
   void ProcessEquations(Node* node);
   void ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  // One kind each (elab_equations.cpp).
+  void ProcessConnect(Node* node, const ast::Equation& eq, const Iters* iters);
+  void ProcessFor(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void ProcessIf(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void ProcessEquality(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void BindEquation(Node* v, int elem, const ast::Equation& eq, ModValue mv);  // x = ... or x[k] = ...
   // Resolves a reference to an instance node; for variables with subscripts, *elem gets
   // the flat element index (or -1 for the whole variable).
   Node* ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem);
@@ -317,7 +359,34 @@ class Elaborator {
   };
   void Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
                std::vector<Node::EqSource>& eqs, int depth);
+  // Instantiate's steps (elab_instantiate.cpp).
+  struct ClassPrim;
+  const ClassPrim& PrimitiveAnnotation(const ast::ClassDef* cls);
+  void CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems);
+  std::unique_ptr<Node> MakeChild(Node* node, Collected& c);
   void Expand(Node* node, Node* child, const Collected& c);
+  // Expand's steps (elab_instantiate.cpp).
+  struct ComponentType {  // what a component's declared (or redeclared) type turned out to be
+    const ast::ClassDef* cls = nullptr;  // a class type; null for a builtin
+    VType builtin = VType::Real;
+    bool is_builtin = false;
+    std::string redeclared_name;  // a builtin named by a redeclare
+    // The type's name, for messages.
+    std::string Name(const ast::Component& comp) const {
+      return redeclared_name.empty() ? ast::JoinName(comp.type_name) : redeclared_name;
+    }
+  };
+  bool ComponentEnabled(Node* node, Node* child, const ast::Component& comp);  // its condition
+  void AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std::vector<int>* dims);
+  bool ResolveComponentType(Node* node, Node* child, const Collected& c, ComponentType* t);
+  bool ApplyRedeclare(Node* child, const Collected& c, ComponentType* t);
+  const ast::ClassDef* DeclaredClass(const ast::Component& comp, const ast::ClassDef* owner);
+  void ReportUnknownType(const ast::Component& comp, const ComponentType& t);
+  bool ShortTypeToBuiltin(Node* node, Node* child, const ast::Component& comp, ComponentType* t);
+  void ExpandVariable(Node* child, const ast::Component& comp, VType builtin, const std::vector<int>& dims);
+  void CheckVarAttributes(Node* var, VType builtin);
+  void ExpandComponent(Node* node, Node* child, const Collected& c, const ComponentType& t,
+                       const std::vector<int>& dims);
   Mod SliceMod(const Mod& mod, int index, int count, Span where);
   void RegisterPrimitive(Node* node, const ast::ClassDef* cls);
   // Arrays of components (elab_share.cpp): element 1 instantiated, the others bound
@@ -338,6 +407,9 @@ class Elaborator {
   bool ParseSetOverrides();
   void BindSetOverrides();
   Node* ResolveSetTarget(const SetOverride& so, int* elem);
+  Node* SetMember(const SetOverride& so, size_t i, Node* n);
+  Node* SetArrayElement(const SetOverride& so, size_t i, Node* array);
+  bool SetVarElement(const SetOverride& so, size_t i, const Node* n, int* elem);
   ModValue SetValue(const SetOverride& so);
   Span SetSpan(const SetOverride& so, int begin, int end) const;
 

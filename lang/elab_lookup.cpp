@@ -7,6 +7,60 @@
 
 namespace kanesim::lang::elab {
 
+namespace {
+
+// Number of elements of a shape; a ':' dimension not yet known counts as 0.
+size_t ElementCount(const Dims& shape) {
+  size_t count = 1;
+  for (int d : shape) count *= static_cast<size_t>(d < 0 ? 0 : d);
+  return count;
+}
+
+// "scalar", or "[2, 3]".
+std::string ShapeText(const Dims& shape) {
+  if (shape.empty()) return "scalar";
+  std::string s = "[";
+  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
+
+// An attribute written as a literal (min = 0, unit = "m": nearly all) is read from the
+// syntax; evaluating it would give the same value through a pool node nothing reads.
+bool IsLiteral(const ModValue& mv, ast::ExprKind kind) {
+  return !mv.pre && mv.expr && mv.expr->kind == kind &&
+         (kind != ast::ExprKind::Number || std::isfinite(mv.expr->number));
+}
+
+flat::ParamType ParamTypeOf(VType t) {
+  return t == VType::Real      ? flat::ParamType::Real
+         : t == VType::Integer ? flat::ParamType::Integer
+         : t == VType::Boolean ? flat::ParamType::Boolean
+                               : flat::ParamType::String;
+}
+
+// The flat name of element k (row-major) of `path` of `shape`: "p", or "p[1,2]" (1-based).
+// `idx` is scratch of shape.size() entries.
+std::string ElementName(const std::string& path, const Dims& shape, size_t k, Dims& idx) {
+  std::string name;  // sized once: appending to a copy of the path allocated twice
+  name.reserve(path.size() + 12 * shape.size() + 2);
+  name.append(path);
+  if (shape.empty()) return name;
+  size_t rem = k;
+  for (size_t d = shape.size(); d-- > 0;) {
+    idx[d] = static_cast<int>(rem % static_cast<size_t>(shape[d])) + 1;
+    rem /= static_cast<size_t>(shape[d]);
+  }
+  name += "[";
+  for (size_t d = 0; d < idx.size(); ++d) {
+    if (d) name += ',';
+    name += std::to_string(idx[d]);
+  }
+  name += "]";
+  return name;
+}
+
+}  // namespace
+
 const Value& Elaborator::GetVar(Node* var, Span use_span) {
   if (var->state == EvalState::Done) return var->value;
   if (var->state == EvalState::Evaluating) {
@@ -17,27 +71,37 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
     return var->value;
   }
   var->state = EvalState::Evaluating;
-  auto finish = [&](Value v) -> const Value& {
-    var->value = std::move(v);
-    var->state = EvalState::Done;
-    return var->value;
-  };
+  var->value = EvaluateVar(var, use_span);
+  var->state = EvalState::Done;
+  return var->value;
+}
+
+Value Elaborator::EvaluateVar(Node* var, Span use_span) {
   Node* owner = var->parent;
-  bool is_param = var->variability != ast::Variability::None;
-  size_t count = 1;
-  for (int d : var->shape) count *= static_cast<size_t>(d < 0 ? 0 : d);
-
   // Joint coordinates and speeds are the mechanism's state.
-  if (owner && owner->prim == Prim::Joint && !is_param && (var->name == "q" || var->name == "u")) {
-    Value v;
-    v.shape = var->shape;
-    for (size_t k = 0; k < count; ++k)
-      v.elements.push_back(m_->exprs.State(m_->AddStateRef(
-          {var->name == "q" ? flat::StateKind::JointQ : flat::StateKind::JointU, owner->prim_index,
-           static_cast<int>(k)})));
-    return finish(std::move(v));
-  }
+  if (owner && owner->prim == Prim::Joint && var->variability == ast::Variability::None &&
+      (var->name == "q" || var->name == "u"))
+    return JointStateValue(var);
+  const ModValue* binding = VarBinding(var);
+  Value v = binding ? BoundValue(var, *binding) : UnboundValue(var, use_span);
+  if (!v.valid) return v;
+  ApplyElementEquations(var, v);
+  if (var->variability == ast::Variability::None) return v;
+  return ParameterValue(var, binding, use_span, std::move(v));
+}
 
+Value Elaborator::JointStateValue(Node* var) {
+  Value v;
+  v.shape = var->shape;
+  const size_t count = ElementCount(var->shape);
+  const auto kind = var->name == "q" ? flat::StateKind::JointQ : flat::StateKind::JointU;
+  for (size_t k = 0; k < count; ++k)
+    v.elements.push_back(
+        m_->exprs.State(m_->AddStateRef({kind, var->parent->prim_index, static_cast<int>(k)})));
+  return v;
+}
+
+const ModValue* Elaborator::VarBinding(Node* var) {
   const ModValue* binding = nullptr;
   if (var->eq_binding) binding = &*var->eq_binding;
   if (var->mod.value) {
@@ -48,78 +112,80 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
     }
     binding = &*var->mod.value;
   }
-  Value v;
-  if (!binding) {
-    bool any_elem = !var->eq_elem_binding.empty();
-    if (any_elem && !(owner && owner->prim != Prim::None) && var->eq_elem_binding.size() != count) {
-      for (size_t k = 0; k < count; ++k) {
-        if (var->eq_elem_binding.count(static_cast<int>(k))) continue;
-        auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                               "element " + std::to_string(k + 1) + " of '" + var->path + "' has no equation");
-        d.hint = "give every element an equation, or bind the whole variable";
-        break;
-      }
-      return finish(Value::Invalid());
-    }
-    if ((owner && owner->prim != Prim::None && !is_param) || any_elem) {
-      v.type = var->vtype;
-      v.shape = var->shape;
-      v.elements.assign(count, m_->exprs.Constant(0));
-    } else {
+  return binding;
+}
+
+Value Elaborator::UnboundValue(Node* var, Span use_span) {
+  Node* owner = var->parent;
+  const bool is_param = var->variability != ast::Variability::None;
+  const bool is_primitive_field = owner && owner->prim != Prim::None;
+  const size_t count = ElementCount(var->shape);
+  const bool any_elem = !var->eq_elem_binding.empty();
+  if (any_elem && !is_primitive_field && var->eq_elem_binding.size() != count) {
+    for (size_t k = 0; k < count; ++k) {
+      if (var->eq_elem_binding.count(static_cast<int>(k))) continue;
       auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                             std::string(is_param ? "parameter" : "variable") + " '" + var->path + "' has no value");
-      d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->path + "=..."
-                        : "bind it in its declaration (Real x = ...;) or with an equation 'x = ...;'";
-      if (use_span.valid() && var->decl && use_span.begin != var->decl->name_span.begin)
-        d.notes.push_back({use_span, "used here"});
-      return finish(Value::Invalid());
+                             "element " + std::to_string(k + 1) + " of '" + var->path + "' has no equation");
+      d.hint = "give every element an equation, or bind the whole variable";
+      break;
     }
-  } else {
-    Span where;
-    v = EvalModValue(*binding, &where);
-    if (!v.valid) return finish(std::move(v));
-    DiagCode tcode = binding->from_set ? DiagCode::BadSet : DiagCode::TypeMismatch;
-    bool ok = true;
-    if (var->vtype == VType::String || v.type == VType::String) ok = var->vtype == v.type;
-    else if (var->vtype == VType::Boolean || v.type == VType::Boolean) ok = var->vtype == v.type;
-    else if (var->vtype == VType::Integer && v.type == VType::Real) {
-      // Accept Real values that are whole numbers only from literal folding.
-      ok = false;
-    }
-    if (!ok) {
-      auto& d = diags_.Error(tcode, where,
-                             "'" + var->path + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
-      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-      if (var->vtype == VType::Integer) d.hint = "use a whole number, or integer(...)";
-      return finish(Value::Invalid());
-    }
-    if (v.type == VType::Integer && var->vtype == VType::Real) v.type = VType::Real;
-    // Shape: ':' dims adopt the value's size.
-    bool shape_ok = v.shape.size() == var->shape.size();
-    for (size_t i = 0; shape_ok && i < v.shape.size(); ++i) {
-      if (var->shape[i] < 0) var->shape[i] = v.shape[i];
-      shape_ok = var->shape[i] == v.shape[i];
-    }
-    if (!shape_ok && var->shape.size() > 0 && v.shape.empty() && binding->from_set == false && false) {
-    }
-    if (!shape_ok) {
-      auto& d = diags_.Error(binding->from_set ? DiagCode::BadSet : DiagCode::SizeMismatch, where,
-                             "'" + var->path + "' has size " + [&] {
-                               std::string s = "[";
-                               for (size_t i = 0; i < var->shape.size(); ++i)
-                                 s += (i ? ", " : "") + std::to_string(var->shape[i]);
-                               return var->shape.empty() ? std::string("scalar") : s + "]";
-                             }() + " but its value has size " + [&] {
-                               std::string s = "[";
-                               for (size_t i = 0; i < v.shape.size(); ++i) s += (i ? ", " : "") + std::to_string(v.shape[i]);
-                               return v.shape.empty() ? std::string("scalar") : s + "]";
-                             }());
-      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-      return finish(Value::Invalid());
-    }
-    count = v.elements.size();
+    return Value::Invalid();
   }
-  // Element equations (x[2] = ...).
+  if ((is_primitive_field && !is_param) || any_elem) {
+    Value v;
+    v.type = var->vtype;
+    v.shape = var->shape;
+    v.elements.assign(count, m_->exprs.Constant(0));
+    return v;
+  }
+  auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
+                         std::string(is_param ? "parameter" : "variable") + " '" + var->path + "' has no value");
+  d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->path + "=..."
+                    : "bind it in its declaration (Real x = ...;) or with an equation 'x = ...;'";
+  if (use_span.valid() && var->decl && use_span.begin != var->decl->name_span.begin)
+    d.notes.push_back({use_span, "used here"});
+  return Value::Invalid();
+}
+
+Value Elaborator::BoundValue(Node* var, const ModValue& binding) {
+  Span where;
+  Value v = EvalModValue(binding, &where);
+  if (!v.valid) return v;
+  if (!CheckValueType(var, binding, v, where)) return Value::Invalid();
+  if (v.type == VType::Integer && var->vtype == VType::Real) v.type = VType::Real;
+  // Shape: ':' dims adopt the value's size.
+  bool shape_ok = v.shape.size() == var->shape.size();
+  for (size_t i = 0; shape_ok && i < v.shape.size(); ++i) {
+    if (var->shape[i] < 0) var->shape[i] = v.shape[i];
+    shape_ok = var->shape[i] == v.shape[i];
+  }
+  if (!shape_ok) {
+    auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::SizeMismatch, where,
+                           "'" + var->path + "' has size " + ShapeText(var->shape) + " but its value has size " +
+                               ShapeText(v.shape));
+    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+    return Value::Invalid();
+  }
+  return v;
+}
+
+bool Elaborator::CheckValueType(Node* var, const ModValue& binding, const Value& v, Span where) {
+  bool ok = true;
+  if (var->vtype == VType::String || v.type == VType::String) ok = var->vtype == v.type;
+  else if (var->vtype == VType::Boolean || v.type == VType::Boolean) ok = var->vtype == v.type;
+  else if (var->vtype == VType::Integer && v.type == VType::Real) {
+    // Accept Real values that are whole numbers only from literal folding.
+    ok = false;
+  }
+  if (ok) return true;
+  auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::TypeMismatch, where,
+                         "'" + var->path + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
+  if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+  if (var->vtype == VType::Integer) d.hint = "use a whole number, or integer(...)";
+  return false;
+}
+
+void Elaborator::ApplyElementEquations(Node* var, Value& v) {
   for (const auto& [k, mv] : var->eq_elem_binding) {
     if (k < 0 || static_cast<size_t>(k) >= v.elements.size()) continue;
     Value ev = EvalModValue(mv, nullptr);
@@ -130,30 +196,50 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
     }
     v.elements[static_cast<size_t>(k)] = ev.elements[0];
   }
-  if (!is_param) return finish(std::move(v));
+}
 
+Value Elaborator::ParameterValue(Node* var, const ModValue* binding, Span use_span, Value v) {
   // Parameters and constants: no time, no state.
   for (ExprId x : v.elements) {
     if (x >= 0 && m_->exprs.DependsOnTimeOrState(x)) {
       auto& d = diags_.Error(DiagCode::NotConstantExpr, binding ? binding->span : use_span,
                              "the value of parameter '" + var->path + "' depends on time or on the motion");
       d.hint = "parameters are fixed before the simulation; use a variable (Real x = ...) instead";
-      return finish(Value::Invalid());
+      return Value::Invalid();
     }
   }
-  // Attributes for flat parameters.
-  std::string unit;
-  double vmin = -1e300, vmax = 1e300;
-  // An attribute written as a literal (min = 0, unit = "m": nearly all) is read from the
-  // syntax; evaluating it would give the same value through a pool node nothing reads.
-  auto literal = [](const ModValue& mv, ast::ExprKind kind) {
-    return !mv.pre && mv.expr && mv.expr->kind == kind &&
-           (kind != ast::ExprKind::Number || std::isfinite(mv.expr->number));
-  };
+  const ParamAttributes attrs = ReadParamAttributes(var);
+  const Span value_span = binding ? binding->span : use_span;
+  const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
+  Dims idx;
+  idx.assign(var->shape.size(), 0);
+  for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
+    flat::Param p;
+    p.name = ElementName(var->path, var->shape, k, idx);
+    p.type = ParamTypeOf(var->vtype);
+    p.unit = attrs.unit;
+    p.min = attrs.min;
+    p.max = attrs.max;
+    p.is_constant = var->variability == ast::Variability::Constant;
+    p.user_set = binding && binding->from_set;
+    p.loc = loc;
+    if (var->vtype == VType::String) {
+      p.string_value = v.strings.empty() ? "" : v.strings[k];
+      m_->params.push_back(std::move(p));
+      pvals_.push_back(0.0);
+      continue;
+    }
+    v.elements[k] = AddParamElement(var, std::move(p), v.elements[k], value_span);
+  }
+  return v;
+}
+
+Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
+  ParamAttributes attrs;
   auto attr_num = [&](const char* key, double* out) {
     auto it = var->mod.sub.find(key);
     if (it == var->mod.sub.end() || !it->second.value) return;
-    if (literal(*it->second.value, ast::ExprKind::Number)) {
+    if (IsLiteral(*it->second.value, ast::ExprKind::Number)) {
       *out = it->second.value->expr->number;
       return;
     }
@@ -161,81 +247,39 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
     if (a.valid && a.shape.empty() && a.type != VType::String)
       Structural(a, it->second.value->span, out, key);
   };
-  attr_num("min", &vmin);
-  attr_num("max", &vmax);
+  attr_num("min", &attrs.min);
+  attr_num("max", &attrs.max);
   if (auto it = var->mod.sub.find("unit"); it != var->mod.sub.end() && it->second.value) {
-    if (literal(*it->second.value, ast::ExprKind::String)) {
-      unit = it->second.value->expr->text;
+    if (IsLiteral(*it->second.value, ast::ExprKind::String)) {
+      attrs.unit = it->second.value->expr->text;
     } else {
       Value a = EvalModValue(*it->second.value, nullptr);
-      if (a.valid && a.type == VType::String && !a.strings.empty()) unit = a.strings[0];
+      if (a.valid && a.type == VType::String && !a.strings.empty()) attrs.unit = a.strings[0];
     }
   }
-  Value out = std::move(v);  // element k is read before it is replaced
-  const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
-  Dims idx;
-  idx.assign(var->shape.size(), 0);
-  for (size_t k = 0; k < out.elements.size(); ++k) {
-    std::string name;  // sized once: appending to a copy of the path allocated twice
-    name.reserve(var->path.size() + 12 * var->shape.size() + 2);
-    name.append(var->path);
-    if (!var->shape.empty()) {
-      // Row-major multi-index, 1-based.
-      size_t rem = k;
-      for (size_t d = var->shape.size(); d-- > 0;) {
-        idx[d] = static_cast<int>(rem % static_cast<size_t>(var->shape[d])) + 1;
-        rem /= static_cast<size_t>(var->shape[d]);
-      }
-      name += "[";
-      for (size_t d = 0; d < idx.size(); ++d) {
-        if (d) name += ',';
-        name += std::to_string(idx[d]);
-      }
-      name += "]";
-    }
-    flat::Param p;
-    p.name = std::move(name);
-    p.type = var->vtype == VType::Real      ? flat::ParamType::Real
-             : var->vtype == VType::Integer ? flat::ParamType::Integer
-             : var->vtype == VType::Boolean ? flat::ParamType::Boolean
-                                            : flat::ParamType::String;
-    p.unit = unit;
-    p.min = vmin;
-    p.max = vmax;
-    p.is_constant = var->variability == ast::Variability::Constant;
-    p.user_set = binding && binding->from_set;
-    p.loc = loc;
-    if (var->vtype == VType::String) {
-      p.string_value = out.strings.empty() ? "" : out.strings[k];
-      m_->params.push_back(std::move(p));
-      pvals_.push_back(0.0);
-      continue;
-    }
-    ExprId x = out.elements[k];
-    double val = param_eval_.Eval(x);
-    p.value = val;
-    p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
-    if (!std::isfinite(val)) {
-      auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
-                             "parameter '" + p.name + "' evaluates to " + std::to_string(val));
-      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-    } else if (val < vmin || val > vmax) {
-      auto& d = diags_.Error(DiagCode::BadValue, binding ? binding->span : use_span,
-                             "parameter '" + p.name + "' = " + std::to_string(val) + " is outside its range [" +
-                                 (vmin <= -1e299 ? std::string("-inf") : std::to_string(vmin)) + ", " +
-                                 (vmax >= 1e299 ? std::string("inf") : std::to_string(vmax)) + "]");
-      if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-    }
-    if (p.is_constant) {
-      out.elements[k] = m_->exprs.Constant(val);
-      continue;
-    }
-    m_->params.push_back(std::move(p));
-    pvals_.push_back(val);
-    out.elements[k] = m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
-  }
-  return finish(std::move(out));
+  return attrs;
 }
+
+ExprId Elaborator::AddParamElement(Node* var, flat::Param&& p, ExprId x, Span value_span) {
+  double val = param_eval_.Eval(x);
+  p.value = val;
+  p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
+  if (!std::isfinite(val)) {
+    auto& d = diags_.Error(DiagCode::BadValue, value_span, "parameter '" + p.name + "' evaluates to " + std::to_string(val));
+    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+  } else if (val < p.min || val > p.max) {
+    auto& d = diags_.Error(DiagCode::BadValue, value_span,
+                           "parameter '" + p.name + "' = " + std::to_string(val) + " is outside its range [" +
+                               (p.min <= -1e299 ? std::string("-inf") : std::to_string(p.min)) + ", " +
+                               (p.max >= 1e299 ? std::string("inf") : std::to_string(p.max)) + "]");
+    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+  }
+  if (p.is_constant) return m_->exprs.Constant(val);
+  m_->params.push_back(std::move(p));
+  pvals_.push_back(val);
+  return m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
+}
+
 Node* Elaborator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
   if (elem) *elem = -1;
   if (ref.kind != ast::ExprKind::Ref || ref.parts.empty()) {

@@ -104,7 +104,6 @@ Value Elaborator::UnaryOp(const ast::Expr& e, Value v) {
 }
 
 Value Elaborator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
-  auto& pool = m_->exprs;
   if (!a.valid || !b.valid) return Value::Invalid();
   Tok op = static_cast<Tok>(e.op);
   switch (op) {
@@ -117,38 +116,10 @@ Value Elaborator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
         return Value::Invalid();
       }
       return Elementwise2(a, b, op == Tok::Plus ? Op::Add : Op::Sub, Promote(a.type, b.type), e.span);
-    case Tok::Star: {
+    case Tok::Star:
       if (a.shape.empty() || b.shape.empty())
         return Elementwise2(a, b, Op::Mul, Promote(a.type, b.type), e.span);
-      // Matrix products (Modelica semantics): vector*vector = scalar product.
-      auto dotp = [&](const std::vector<ExprId>& x, const std::vector<ExprId>& y) {
-        ExprId s = pool.Binary(Op::Mul, x[0], y[0]);
-        for (size_t i = 1; i < x.size(); ++i) s = pool.Binary(Op::Add, s, pool.Binary(Op::Mul, x[i], y[i]));
-        return s;
-      };
-      int ar = a.shape.size() == 2 ? a.shape[0] : 1, ac = a.shape.back();
-      int br = b.shape[0], bc = b.shape.size() == 2 ? b.shape[1] : 1;
-      if (a.shape.size() > 2 || b.shape.size() > 2 || ac != br) {
-        diags_.Error(DiagCode::SizeMismatch, e.span,
-                     "cannot multiply sizes " + ShapeStr(a.shape) + " and " + ShapeStr(b.shape));
-        return Value::Invalid();
-      }
-      if (!ChargeSteps(static_cast<std::int64_t>(ar) * bc * ac, e.span)) return Value::Invalid();
-      Value r;
-      r.type = Promote(a.type, b.type);
-      for (int i = 0; i < ar; ++i)
-        for (int j = 0; j < bc; ++j) {
-          std::vector<ExprId> x, y;
-          for (int k = 0; k < ac; ++k) {
-            x.push_back(a.elements[static_cast<size_t>(i * ac + k)]);
-            y.push_back(b.elements[static_cast<size_t>(k * bc + j)]);
-          }
-          r.elements.push_back(dotp(x, y));
-        }
-      if (a.shape.size() == 2) r.shape.push_back(ar);
-      if (b.shape.size() == 2) r.shape.push_back(bc);
-      return r;
-    }
+      return MatrixProduct(e, a, b);
     case Tok::Slash:
       if (!b.shape.empty()) {
         diags_.Error(DiagCode::SizeMismatch, e.span, "division by an array");
@@ -169,24 +140,59 @@ Value Elaborator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
         return Value::Invalid();
       }
       return Elementwise2(a, b, op == Tok::KwAnd ? Op::And : Op::Or, VType::Boolean, e.span);
-    default: {
-      if (!a.shape.empty() || !b.shape.empty()) {
-        diags_.Error(DiagCode::SizeMismatch, e.span, "comparison of arrays");
-        return Value::Invalid();
-      }
-      if (a.type == VType::String && b.type == VType::String) {
-        if (op != Tok::EqEq && op != Tok::Ne) {
-          diags_.Error(DiagCode::TypeMismatch, e.span, "Strings compare only with == and <>");
-          return Value::Invalid();
-        }
-        bool eq = a.strings[0] == b.strings[0];
-        return Const((op == Tok::EqEq) == eq ? 1 : 0, VType::Boolean);
-      }
-      Op fop = op == Tok::Lt ? Op::Lt : op == Tok::Le ? Op::Le : op == Tok::Gt ? Op::Gt
-               : op == Tok::Ge ? Op::Ge : op == Tok::EqEq ? Op::Eq : Op::Ne;
-      return Elementwise2(a, b, fop, VType::Boolean, e.span);
-    }
+    default: return Comparison(e, a, b);
   }
+}
+
+// a * b of arrays (Modelica semantics): matrix products; vector*vector = scalar product.
+Value Elaborator::MatrixProduct(const ast::Expr& e, const Value& a, const Value& b) {
+  auto& pool = m_->exprs;
+  auto dotp = [&](const std::vector<ExprId>& x, const std::vector<ExprId>& y) {
+    ExprId s = pool.Binary(Op::Mul, x[0], y[0]);
+    for (size_t i = 1; i < x.size(); ++i) s = pool.Binary(Op::Add, s, pool.Binary(Op::Mul, x[i], y[i]));
+    return s;
+  };
+  int ar = a.shape.size() == 2 ? a.shape[0] : 1, ac = a.shape.back();
+  int br = b.shape[0], bc = b.shape.size() == 2 ? b.shape[1] : 1;
+  if (a.shape.size() > 2 || b.shape.size() > 2 || ac != br) {
+    diags_.Error(DiagCode::SizeMismatch, e.span, "cannot multiply sizes " + ShapeStr(a.shape) + " and " + ShapeStr(b.shape));
+    return Value::Invalid();
+  }
+  if (!ChargeSteps(static_cast<std::int64_t>(ar) * bc * ac, e.span)) return Value::Invalid();
+  Value r;
+  r.type = Promote(a.type, b.type);
+  for (int i = 0; i < ar; ++i)
+    for (int j = 0; j < bc; ++j) {
+      std::vector<ExprId> x, y;
+      for (int k = 0; k < ac; ++k) {
+        x.push_back(a.elements[static_cast<size_t>(i * ac + k)]);
+        y.push_back(b.elements[static_cast<size_t>(k * bc + j)]);
+      }
+      r.elements.push_back(dotp(x, y));
+    }
+  if (a.shape.size() == 2) r.shape.push_back(ar);
+  if (b.shape.size() == 2) r.shape.push_back(bc);
+  return r;
+}
+
+// a < b, a == b, ...: scalars; Strings with == and <> only.
+Value Elaborator::Comparison(const ast::Expr& e, const Value& a, const Value& b) {
+  Tok op = static_cast<Tok>(e.op);
+  if (!a.shape.empty() || !b.shape.empty()) {
+    diags_.Error(DiagCode::SizeMismatch, e.span, "comparison of arrays");
+    return Value::Invalid();
+  }
+  if (a.type == VType::String && b.type == VType::String) {
+    if (op != Tok::EqEq && op != Tok::Ne) {
+      diags_.Error(DiagCode::TypeMismatch, e.span, "Strings compare only with == and <>");
+      return Value::Invalid();
+    }
+    bool eq = a.strings[0] == b.strings[0];
+    return Const((op == Tok::EqEq) == eq ? 1 : 0, VType::Boolean);
+  }
+  Op fop = op == Tok::Lt ? Op::Lt : op == Tok::Le ? Op::Le : op == Tok::Gt ? Op::Gt
+           : op == Tok::Ge ? Op::Ge : op == Tok::EqEq ? Op::Eq : Op::Ne;
+  return Elementwise2(a, b, fop, VType::Boolean, e.span);
 }
 
 }  // namespace kanesim::lang::elab

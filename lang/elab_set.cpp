@@ -139,88 +139,106 @@ ModValue Elaborator::SetValue(const SetOverride& so) {
 Node* Elaborator::ResolveSetTarget(const SetOverride& so, int* elem) {
   *elem = -1;
   Node* n = root_.get();
-  const std::string& full = so.name;
   for (size_t i = 0; i < so.parts.size(); ++i) {
-    const SetPart& p = so.parts[i];
-    const bool last = i + 1 == so.parts.size();
-    Span at = SetSpan(so, p.begin, p.end);
-    if (n->kind != Node::kClass) {
-      diags_.Error(DiagCode::UnknownName, at,
-                   "--set " + full + ": '" + n->path + "' is a variable and has no member '" + p.name + "'");
-      return nullptr;
-    }
-    Node* next = n->Child(p.name);
-    if (!next) {
-      std::vector<std::string> names;
-      for (const auto& c : n->children) names.push_back(c->name);
-      auto& d = diags_.Error(DiagCode::UnknownName, at,
-                             "--set " + full + ": no such parameter" +
-                                 (n == root_.get() ? "" : " ('" + n->path + "' has no element '" + p.name + "')"));
-      std::string best = ClosestName(p.name, names);
-      if (!best.empty()) d.hint = "did you mean '" + (i == 0 ? best : PartText(so.parts, i - 1) + "." + best) + "'?";
-      return nullptr;
-    }
-    n = next;
+    n = SetMember(so, i, n);
+    if (!n) return nullptr;
     if (n->kind == Node::kArray) {
-      if (p.subs.empty()) {
-        // j.axis = {...}: a modifier of the whole array; check the name on an element.
-        if (!last && !n->elems.empty()) n = n->elems[0].get();
-        continue;
-      }
-      if (p.subs.size() != 1) {
-        diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[1].first, p.sub_spans.back().second),
-                     "--set " + full + ": '" + n->path + "' is an array of components and takes one index");
-        return nullptr;
-      }
-      long k = p.subs[0];
-      if (k < 1 || k > static_cast<long>(n->elems.size())) {
-        diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[0].first, p.sub_spans[0].second),
-                     "--set " + full + ": index " + std::to_string(k) + " is out of range 1.." +
-                         std::to_string(n->elems.size()) + " of '" + n->path + "'")
-            .hint = "indices are 1-based";
-        return nullptr;
-      }
-      n = n->elems[static_cast<size_t>(k - 1)].get();
+      n = SetArrayElement(so, i, n);
+      if (!n) return nullptr;
       continue;
     }
-    if (p.subs.empty()) continue;
-    if (n->kind != Node::kVar) {
-      diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second),
-                   "--set " + full + ": '" + n->path + "' is not an array and takes no index");
-      return nullptr;
-    }
-    if (n->shape.empty()) {
-      diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second),
-                   "--set " + full + ": '" + n->path + "' is a scalar and takes no index");
-      return nullptr;
-    }
-    if (p.subs.size() != n->shape.size()) {
-      diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second),
-                   "--set " + full + ": '" + n->path + "' has " + std::to_string(n->shape.size()) +
-                       " dimension(s) but " + std::to_string(p.subs.size()) + " indices are given");
-      return nullptr;
-    }
-    long flat = 0;
-    for (size_t d = 0; d < p.subs.size(); ++d) {
-      long k = p.subs[d];
-      long size = n->shape[d];
-      if (k < 1 || k > size) {
-        diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[d].first, p.sub_spans[d].second),
-                     "--set " + full + ": index " + std::to_string(k) + " is out of range 1.." + std::to_string(size) +
-                         " of '" + n->path + "'")
-            .hint = "indices are 1-based";
-        return nullptr;
-      }
-      flat = flat * size + (k - 1);
-    }
-    if (!last) {
-      diags_.Error(DiagCode::UnknownName, SetSpan(so, so.parts[i + 1].begin, so.parts[i + 1].end),
-                   "--set " + full + ": '" + n->path + "' is a variable and has no members");
-      return nullptr;
-    }
-    *elem = static_cast<int>(flat);
+    if (so.parts[i].subs.empty()) continue;
+    if (!SetVarElement(so, i, n, elem)) return nullptr;
   }
   return n;
+}
+
+// Part i of the --set name, looked up in n; null after a diagnostic.
+Node* Elaborator::SetMember(const SetOverride& so, size_t i, Node* n) {
+  const SetPart& p = so.parts[i];
+  Span at = SetSpan(so, p.begin, p.end);
+  if (n->kind != Node::kClass) {
+    diags_.Error(DiagCode::UnknownName, at,
+                 "--set " + so.name + ": '" + n->path + "' is a variable and has no member '" + p.name + "'");
+    return nullptr;
+  }
+  Node* next = n->Child(p.name);
+  if (next) return next;
+  std::vector<std::string> names;
+  for (const auto& c : n->children) names.push_back(c->name);
+  auto& d = diags_.Error(DiagCode::UnknownName, at,
+                         "--set " + so.name + ": no such parameter" +
+                             (n == root_.get() ? "" : " ('" + n->path + "' has no element '" + p.name + "')"));
+  std::string best = ClosestName(p.name, names);
+  if (!best.empty()) d.hint = "did you mean '" + (i == 0 ? best : PartText(so.parts, i - 1) + "." + best) + "'?";
+  return nullptr;
+}
+
+// Part i indexing an array of components: the element (the array itself when not
+// indexed); null after a diagnostic.
+Node* Elaborator::SetArrayElement(const SetOverride& so, size_t i, Node* array) {
+  const SetPart& p = so.parts[i];
+  if (p.subs.empty()) {
+    // j.axis = {...}: a modifier of the whole array; check the name on an element.
+    const bool last = i + 1 == so.parts.size();
+    return !last && !array->elems.empty() ? array->elems[0].get() : array;
+  }
+  if (p.subs.size() != 1) {
+    diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[1].first, p.sub_spans.back().second),
+                 "--set " + so.name + ": '" + array->path + "' is an array of components and takes one index");
+    return nullptr;
+  }
+  long k = p.subs[0];
+  if (k < 1 || k > static_cast<long>(array->elems.size())) {
+    diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[0].first, p.sub_spans[0].second),
+                 "--set " + so.name + ": index " + std::to_string(k) + " is out of range 1.." +
+                     std::to_string(array->elems.size()) + " of '" + array->path + "'")
+        .hint = "indices are 1-based";
+    return nullptr;
+  }
+  return array->elems[static_cast<size_t>(k - 1)].get();
+}
+
+// Part i indexing an array variable n: the row-major element in *elem; it must be the
+// name's last part. False after a diagnostic.
+bool Elaborator::SetVarElement(const SetOverride& so, size_t i, const Node* n, int* elem) {
+  const SetPart& p = so.parts[i];
+  const std::string& full = so.name;
+  const Span subs_span = SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second);
+  if (n->kind != Node::kVar) {
+    diags_.Error(DiagCode::BadSet, subs_span, "--set " + full + ": '" + n->path + "' is not an array and takes no index");
+    return false;
+  }
+  if (n->shape.empty()) {
+    diags_.Error(DiagCode::BadSet, subs_span, "--set " + full + ": '" + n->path + "' is a scalar and takes no index");
+    return false;
+  }
+  if (p.subs.size() != n->shape.size()) {
+    diags_.Error(DiagCode::BadSet, subs_span,
+                 "--set " + full + ": '" + n->path + "' has " + std::to_string(n->shape.size()) +
+                     " dimension(s) but " + std::to_string(p.subs.size()) + " indices are given");
+    return false;
+  }
+  long flat = 0;
+  for (size_t d = 0; d < p.subs.size(); ++d) {
+    long k = p.subs[d];
+    long size = n->shape[d];
+    if (k < 1 || k > size) {
+      diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[d].first, p.sub_spans[d].second),
+                   "--set " + full + ": index " + std::to_string(k) + " is out of range 1.." + std::to_string(size) +
+                       " of '" + n->path + "'")
+          .hint = "indices are 1-based";
+      return false;
+    }
+    flat = flat * size + (k - 1);
+  }
+  if (i + 1 != so.parts.size()) {
+    diags_.Error(DiagCode::UnknownName, SetSpan(so, so.parts[i + 1].begin, so.parts[i + 1].end),
+                 "--set " + full + ": '" + n->path + "' is a variable and has no members");
+    return false;
+  }
+  *elem = static_cast<int>(flat);
+  return true;
 }
 
 // After instantiation: every target must be a settable parameter; subscripted ones are

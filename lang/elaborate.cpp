@@ -172,65 +172,12 @@ const ast::ClassDef* Elaborator::FindClass(const std::vector<std::string>& parts
   return first;
 }
 
+// The stages, in order: the model picked, its imports checked, instantiated with the --set
+// overrides bound, equations bound, flat mechanism emitted, experiment read.
 bool Elaborator::Run() {
-  // Pick the model.
-  const ast::ClassDef* top = nullptr;
-  if (!options_.model.empty()) {
-    std::vector<std::string> parts;
-    std::stringstream ss(options_.model);
-    std::string p;
-    while (std::getline(ss, p, '.')) parts.push_back(p);
-    top = FindClass(parts, nullptr);
-    if (!top && !program_.files.empty())
-      for (const auto& c : program_.files[0]->classes)
-        if (c->name == parts[0]) top = FindClass(parts, c.get());
-    if (!top) {
-      auto& d = diags_.Error(DiagCode::NotAModel, Span{}, "no class named '" + options_.model + "'");
-      LoadWholeLibrary();  // the hint considers every class
-      std::vector<std::string> names;
-      for (auto& [k, v] : classes_) names.push_back(k);
-      std::string best = ClosestName(options_.model, names);
-      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-      return false;
-    }
-  } else if (!program_.files.empty()) {
-    for (const auto& c : program_.files[0]->classes)
-      if (c->kind == ast::ClassKind::Model && !c->partial) top = c.get();
-    if (!top) {
-      diags_.Error(DiagCode::NotAModel, Span{0, 0, 0}, "the file declares no (non-partial) model")
-          .hint = "write 'model Name ... end Name;' or choose one with --model";
-      return false;
-    }
-  }
+  const ast::ClassDef* top = PickModel();
   if (!top) return false;
-  // Every import of the user's file must name something.
-  if (!program_.files.empty()) {
-    auto check = [&](const std::string& q, bool wildcard, Span span) {
-      bool ok = LookupClass(q) != nullptr;
-      if (!ok && wildcard && q == "Kanesim") ok = true;
-      if (!ok && wildcard) {
-        LoadWholeLibrary();  // a package's classes may be in any unit
-        for (const auto& [k, v] : classes_) ok = ok || k.rfind(q + ".", 0) == 0;
-      }
-      if (ok) return;
-      LoadWholeLibrary();  // the hint considers every class
-      auto& d = diags_.Error(DiagCode::BadImport, span, "import names nothing: no class or package '" + q + "'");
-      std::vector<std::string> names;
-      for (const auto& [k, v] : classes_) names.push_back(k);
-      std::string best = ClosestName(q, names);
-      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-    };
-    const auto& f = *program_.files[0];
-    for (const auto& imp : f.imports) check(ast::JoinName(imp.name), imp.wildcard, imp.span);
-    std::function<void(const ast::ClassDef&)> walk = [&](const ast::ClassDef& c) {
-      for (const auto& el : c.elements) {
-        if (el.kind == ast::Element::kImport) check(ast::JoinName(el.import->name), el.import->wildcard, el.import->span);
-        if (el.kind == ast::Element::kClass) walk(*el.class_def);
-      }
-    };
-    for (const auto& c : f.classes) walk(*c);
-    if (diags_.HasErrors()) return false;
-  }
+  if (!program_.files.empty() && !CheckImports(*program_.files[0])) return false;
   m_->model_name = qualified_of_.count(top) ? qualified_of_.at(top) : top->name;
   m_->description = top->description;
   for (int f = 0; f < program_.sources.NumFiles(); ++f) m_->source_files.push_back(program_.sources.Name(f));
@@ -255,41 +202,7 @@ bool Elaborator::Run() {
   pvals_.reserve(static_cast<size_t>(instances_));
   Emit(root_.get());
 
-  // Experiment annotation.
-  if (const ast::Modification* ex = FindAnnotation(top, "experiment")) {
-    Ctx ctx{root_.get(), nullptr};
-    for (const auto& a : ex->args) {
-      if (a.path.size() != 1 || !a.mod || !a.mod->value) continue;
-      static const std::vector<std::string> kKnown{"StartTime", "StopTime", "Tolerance", "Interval"};
-      if (std::find(kKnown.begin(), kKnown.end(), a.path[0]) == kKnown.end()) {
-        auto& d = diags_.Warning(DiagCode::UnknownModifier, a.name_span,
-                                 "unknown experiment setting '" + a.path[0] + "' (ignored)");
-        std::string best = ClosestName(a.path[0], kKnown);
-        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-        continue;
-      }
-      double v = 0;
-      if (!Structural(Eval(*a.mod->value, ctx), a.mod->value->span, &v, a.path[0].c_str())) continue;
-      auto& x = m_->experiment;
-      if (a.path[0] == "StartTime") x.start_time = v, x.has_start = true;
-      else if (a.path[0] == "StopTime") x.stop_time = v, x.has_stop = true;
-      else if (a.path[0] == "Tolerance") x.tolerance = v, x.has_tolerance = true;
-      else if (a.path[0] == "Interval") x.interval = v, x.has_interval = true;
-      else {
-        auto& d = diags_.Warning(DiagCode::UnknownModifier, a.name_span,
-                                 "unknown experiment setting '" + a.path[0] + "' (ignored)");
-        std::string best = ClosestName(a.path[0], {"StartTime", "StopTime", "Tolerance", "Interval"});
-        if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-      }
-    }
-    auto& x = m_->experiment;
-    if (x.stop_time <= x.start_time)
-      diags_.Error(DiagCode::BadValue, top->name_span, "experiment StopTime must be after StartTime");
-    if (x.tolerance <= 0 || x.tolerance >= 1)
-      diags_.Error(DiagCode::BadValue, top->name_span, "experiment Tolerance must be in (0, 1)");
-    if (x.has_interval && x.interval <= 0)
-      diags_.Error(DiagCode::BadValue, top->name_span, "experiment Interval must be positive");
-  }
+  if (const ast::Modification* ex = FindAnnotation(top, "experiment")) ReadExperiment(*ex, top);
   if (m_->worlds.size() != 1 && !diags_.HasErrors()) {
     auto& d = diags_.Error(DiagCode::WorldCount, top->name_span,
                            "'" + top->name + "' has " + std::to_string(m_->worlds.size()) +
@@ -297,6 +210,96 @@ bool Elaborator::Run() {
     if (m_->worlds.empty()) d.hint = "add 'World world;' and connect the first joint to world.frame_b";
   }
   return !diags_.HasErrors();
+}
+
+// The model named by --model, else the last non-partial model of the user's file; null
+// after a diagnostic (or with no file).
+const ast::ClassDef* Elaborator::PickModel() {
+  const ast::ClassDef* top = nullptr;
+  if (options_.model.empty()) {
+    if (program_.files.empty()) return nullptr;
+    for (const auto& c : program_.files[0]->classes)
+      if (c->kind == ast::ClassKind::Model && !c->partial) top = c.get();
+    if (!top)
+      diags_.Error(DiagCode::NotAModel, Span{0, 0, 0}, "the file declares no (non-partial) model")
+          .hint = "write 'model Name ... end Name;' or choose one with --model";
+    return top;
+  }
+  std::vector<std::string> parts;
+  std::stringstream ss(options_.model);
+  std::string p;
+  while (std::getline(ss, p, '.')) parts.push_back(p);
+  top = FindClass(parts, nullptr);
+  if (!top && !program_.files.empty())
+    for (const auto& c : program_.files[0]->classes)
+      if (c->name == parts[0]) top = FindClass(parts, c.get());
+  if (top) return top;
+  auto& d = diags_.Error(DiagCode::NotAModel, Span{}, "no class named '" + options_.model + "'");
+  LoadWholeLibrary();  // the hint considers every class
+  std::vector<std::string> names;
+  for (auto& [k, v] : classes_) names.push_back(k);
+  std::string best = ClosestName(options_.model, names);
+  if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+  return nullptr;
+}
+
+// Every import of the user's file must name something.
+bool Elaborator::CheckImports(const ast::StoredDefinition& f) {
+  for (const auto& imp : f.imports) CheckImport(ast::JoinName(imp.name), imp.wildcard, imp.span);
+  std::function<void(const ast::ClassDef&)> walk = [&](const ast::ClassDef& c) {
+    for (const auto& el : c.elements) {
+      if (el.kind == ast::Element::kImport)
+        CheckImport(ast::JoinName(el.import->name), el.import->wildcard, el.import->span);
+      if (el.kind == ast::Element::kClass) walk(*el.class_def);
+    }
+  };
+  for (const auto& c : f.classes) walk(*c);
+  return !diags_.HasErrors();
+}
+
+void Elaborator::CheckImport(const std::string& q, bool wildcard, Span span) {
+  bool ok = LookupClass(q) != nullptr;
+  if (!ok && wildcard && q == "Kanesim") ok = true;
+  if (!ok && wildcard) {
+    LoadWholeLibrary();  // a package's classes may be in any unit
+    for (const auto& [k, v] : classes_) ok = ok || k.rfind(q + ".", 0) == 0;
+  }
+  if (ok) return;
+  LoadWholeLibrary();  // the hint considers every class
+  auto& d = diags_.Error(DiagCode::BadImport, span, "import names nothing: no class or package '" + q + "'");
+  std::vector<std::string> names;
+  for (const auto& [k, v] : classes_) names.push_back(k);
+  std::string best = ClosestName(q, names);
+  if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+}
+
+// The experiment annotation: StartTime, StopTime, Tolerance, Interval.
+void Elaborator::ReadExperiment(const ast::Modification& ex, const ast::ClassDef* top) {
+  static const std::vector<std::string> kKnown{"StartTime", "StopTime", "Tolerance", "Interval"};
+  Ctx ctx{root_.get(), nullptr};
+  auto& x = m_->experiment;
+  for (const auto& a : ex.args) {
+    if (a.path.size() != 1 || !a.mod || !a.mod->value) continue;
+    const std::string& key = a.path[0];
+    if (std::find(kKnown.begin(), kKnown.end(), key) == kKnown.end()) {
+      auto& d = diags_.Warning(DiagCode::UnknownModifier, a.name_span, "unknown experiment setting '" + key + "' (ignored)");
+      std::string best = ClosestName(key, kKnown);
+      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+      continue;
+    }
+    double v = 0;
+    if (!Structural(Eval(*a.mod->value, ctx), a.mod->value->span, &v, key.c_str())) continue;
+    if (key == "StartTime") x.start_time = v, x.has_start = true;
+    else if (key == "StopTime") x.stop_time = v, x.has_stop = true;
+    else if (key == "Tolerance") x.tolerance = v, x.has_tolerance = true;
+    else x.interval = v, x.has_interval = true;
+  }
+  if (x.stop_time <= x.start_time)
+    diags_.Error(DiagCode::BadValue, top->name_span, "experiment StopTime must be after StartTime");
+  if (x.tolerance <= 0 || x.tolerance >= 1)
+    diags_.Error(DiagCode::BadValue, top->name_span, "experiment Tolerance must be in (0, 1)");
+  if (x.has_interval && x.interval <= 0)
+    diags_.Error(DiagCode::BadValue, top->name_span, "experiment Interval must be positive");
 }
 
 }  // namespace elab

@@ -248,193 +248,235 @@ std::int32_t PlainString(const std::string& s, std::int32_t b) {
   return -1;  // never closed
 }
 
+// The lexer's position in one file's text and the tokens so far; one function per token
+// kind below moves `i` past its token.
+struct Cursor {
+  const std::string& s;
+  int file;
+  std::int32_t n;  // s.size()
+  Diagnostics& diags;
+  std::vector<Token>& out;
+  std::int32_t i = 0;
+
+  char At(std::int32_t k) const { return s[static_cast<size_t>(k)]; }
+  bool AtIs(std::int32_t k, unsigned char cls) const { return k < n && Is(At(k), cls); }
+  Span SpanOf(std::int32_t b, std::int32_t e) const { return Span{file, b, e}; }
+  std::string_view View(std::int32_t b, std::int32_t e) const {
+    return std::string_view(s.data() + b, static_cast<size_t>(e - b));
+  }
+  Token& Push(Tok k, std::int32_t b, std::int32_t e) {
+    Token& t = out.emplace_back();
+    t.kind = k;
+    t.span = SpanOf(b, e);
+    return t;
+  }
+};
+
+// '/*' ... '*/', opened at b.
+void SkipBlockComment(Cursor& c, std::int32_t b) {
+  const size_t close = c.s.find("*/", static_cast<size_t>(b + 2));
+  if (close == std::string::npos) {
+    c.diags.Error(DiagCode::UnterminatedComment, c.SpanOf(b, b + 2), "block comment is never closed").hint =
+        "close it with */";
+    c.i = c.n;
+  } else {
+    c.i = static_cast<std::int32_t>(close) + 2;
+  }
+}
+
+// IDENT or a keyword, starting at b.
+void LexWord(Cursor& c, std::int32_t b) {
+  std::int32_t i = b + 1;  // a local: the loop keeps it in a register
+  while (c.AtIs(i, kIdentStart | kDigit)) ++i;
+  c.i = i;
+  const std::string_view word = c.View(b, i);
+  c.Push(KeywordOrIdent(word), b, i).text = word;
+}
+
+// NUMBER := digits [ '.' digits ] [ ('e' | 'E') [ '+' | '-' ] digits ], starting at b.
+void LexNumber(Cursor& c, std::int32_t b) {
+  std::int32_t i = b;  // a local: the loops keep it in a register
+  const std::int32_t n = c.n;
+  bool integer = true;
+  while (c.AtIs(i, kDigit)) ++i;
+  if (i < n && c.At(i) == '.') {
+    integer = false;
+    ++i;
+    while (c.AtIs(i, kDigit)) ++i;
+  }
+  bool bad = false;
+  if (i < n && (c.At(i) == 'e' || c.At(i) == 'E')) {
+    integer = false;
+    ++i;
+    if (i < n && (c.At(i) == '+' || c.At(i) == '-')) ++i;
+    if (!c.AtIs(i, kDigit)) bad = true;
+    while (c.AtIs(i, kDigit)) ++i;
+  }
+  if (c.AtIs(i, kIdentStart)) {
+    bad = true;
+    while (c.AtIs(i, kIdentStart | kDigit)) ++i;
+  }
+  c.i = i;
+  Token& t = c.Push(Tok::Number, b, i);
+  t.text = c.View(b, i);
+  t.is_integer = integer;
+  bool out_of_range = false;
+  t.number = NumberValue(c.s, b, i, integer, &out_of_range);
+  if (bad || out_of_range) {
+    c.diags.Error(DiagCode::BadNumber, t.span, "malformed number '" + std::string(t.text) + "'").hint =
+        "numbers look like 3, 0.5, 1e-3 or 2.5E+4";
+    t.number = 0;
+  }
+}
+
+// The character the escape '\' e stands for.
+char EscapedCharacter(char e) {
+  switch (e) {
+    case 'n': return '\n';
+    case 't': return '\t';
+    default: return e;  // '"', '\\', '\'' and the others stand for themselves
+  }
+}
+
+// The slow path of LexString: escapes decoded, bad characters reported.
+void LexEscapedString(Cursor& c, std::int32_t b) {
+  std::int32_t& i = c.i;
+  const std::int32_t n = c.n;
+  i = b + 1;
+  std::string val;
+  bool closed = false;
+  while (i < n) {
+    char d = c.At(i);
+    if (Is(d, kPlainInString)) {
+      val += d;
+      ++i;
+      continue;
+    }
+    if (d == '"') {
+      closed = true;
+      ++i;
+      break;
+    }
+    std::int32_t skip = 0;
+    const std::int32_t escaped = d == '\\' && i + 1 < n ? StringCharacter(c.s, i + 1, c.file, c.diags, &skip) : -1;
+    if (escaped == 0) {  // a backslash before a bad character, reported
+      i += 1 + skip;
+      continue;
+    }
+    if (escaped == 1) {
+      val += EscapedCharacter(c.At(i + 1));
+      i += 2;
+      continue;
+    }
+    const std::int32_t len = StringCharacter(c.s, i, c.file, c.diags, &skip);
+    if (len == 0) {
+      i += skip;
+      continue;
+    }
+    val.append(c.s, static_cast<size_t>(i), static_cast<size_t>(len));
+    i += len;
+  }
+  if (!closed) {
+    c.diags.Error(DiagCode::UnterminatedString, c.SpanOf(b, b + 1), "string literal is never closed").hint =
+        "add the closing '\"'";
+  }
+  Token& t = c.Push(Tok::String, b, i);
+  t.decoded = std::make_shared<const std::string>(std::move(val));
+  t.text = *t.decoded;
+}
+
+// STRING, opened by the '"' at b.
+void LexString(Cursor& c, std::int32_t b) {
+  const std::int32_t close = PlainString(c.s, b);
+  if (close >= 0) {  // the common case: the literal's text is its value
+    c.i = close + 1;
+    c.Push(Tok::String, b, c.i).text = c.View(b + 1, close);
+    return;
+  }
+  LexEscapedString(c, b);
+}
+
+// An operator or punctuation of one or two characters, or a bad character, at b.
+void LexOperator(Cursor& c, std::int32_t b) {
+  auto next = [&](char d) { return b + 1 < c.n && c.At(b + 1) == d; };
+  Tok k;
+  int len = 1;
+  switch (c.At(b)) {
+    case '(': k = Tok::LParen; break;
+    case ')': k = Tok::RParen; break;
+    case '[': k = Tok::LBracket; break;
+    case ']': k = Tok::RBracket; break;
+    case '{': k = Tok::LBrace; break;
+    case '}': k = Tok::RBrace; break;
+    case ',': k = Tok::Comma; break;
+    case ';': k = Tok::Semicolon; break;
+    case '.': k = Tok::Dot; break;
+    case ':':
+      if (next('=')) { k = Tok::ColonAssign; len = 2; } else { k = Tok::Colon; }
+      break;
+    case '=':
+      if (next('=')) { k = Tok::EqEq; len = 2; } else { k = Tok::Assign; }
+      break;
+    case '+': k = Tok::Plus; break;
+    case '-': k = Tok::Minus; break;
+    case '*': k = Tok::Star; break;
+    case '/': k = Tok::Slash; break;
+    case '^': k = Tok::Caret; break;
+    case '<':
+      if (next('=')) { k = Tok::Le; len = 2; }
+      else if (next('>')) { k = Tok::Ne; len = 2; }
+      else { k = Tok::Lt; }
+      break;
+    case '>':
+      if (next('=')) { k = Tok::Ge; len = 2; } else { k = Tok::Gt; }
+      break;
+    default:
+      c.i = b + ReportBadCharacter(c.s, b, c.file, c.diags);
+      return;
+  }
+  c.Push(k, b, b + len);
+  c.i = b + len;
+}
+
 }  // namespace
 
 std::vector<Token> Lex(int file, const SourceManager& sm, Diagnostics& diags) {
   const std::string& s = sm.Text(file);
   std::vector<Token> out;
-  const std::int32_t n = static_cast<std::int32_t>(s.size());
-  std::int32_t i = 0;
-  auto span = [&](std::int32_t b, std::int32_t e) { return Span{file, b, e}; };
-  auto view = [&](std::int32_t b, std::int32_t e) {
-    return std::string_view(s.data() + b, static_cast<size_t>(e - b));
-  };
-  auto push = [&](Tok k, std::int32_t b, std::int32_t e) -> Token& {
-    Token& t = out.emplace_back();
-    t.kind = k;
-    t.span = span(b, e);
-    return t;
-  };
+  Cursor c{s, file, static_cast<std::int32_t>(s.size()), diags, out};
   if (s.size() > SourceManager::kMaxFileBytes) {
-    diags.Error(DiagCode::FileTooLarge, span(0, 1),
+    diags.Error(DiagCode::FileTooLarge, c.SpanOf(0, 1),
                 "file is " + std::to_string(s.size()) + " bytes; the limit is " +
                     std::to_string(SourceManager::kMaxFileBytes))
         .hint = "split the model into several files";
-    push(Tok::Eof, 0, 0);
+    c.Push(Tok::Eof, 0, 0);
     return out;
   }
-  out.reserve(static_cast<size_t>(n) / 5 + 16);  // about one token per 5-7 bytes of source
-  while (i < n && !diags.Full()) {
-    char c = s[static_cast<size_t>(i)];
-    if (Is(c, kSpace)) {
-      ++i;
-      while (i < n && Is(s[static_cast<size_t>(i)], kSpace)) ++i;
-      continue;
+  out.reserve(static_cast<size_t>(c.n) / 5 + 16);  // about one token per 5-7 bytes of source
+  while (c.i < c.n && !diags.Full()) {
+    const std::int32_t b = c.i;
+    const char ch = c.At(b);
+    const bool slash_next = ch == '/' && b + 1 < c.n;
+    if (Is(ch, kSpace)) {
+      std::int32_t i = b + 1;
+      while (c.AtIs(i, kSpace)) ++i;
+      c.i = i;
+    } else if (slash_next && c.At(b + 1) == '/') {
+      const size_t eol = s.find('\n', static_cast<size_t>(b));
+      c.i = eol == std::string::npos ? c.n : static_cast<std::int32_t>(eol);
+    } else if (slash_next && c.At(b + 1) == '*') {
+      SkipBlockComment(c, b);
+    } else if (Is(ch, kIdentStart)) {
+      LexWord(c, b);
+    } else if (Is(ch, kDigit) || (ch == '.' && c.AtIs(b + 1, kDigit))) {
+      LexNumber(c, b);
+    } else if (ch == '"') {
+      LexString(c, b);
+    } else {
+      LexOperator(c, b);
     }
-    std::int32_t b = i;
-    if (c == '/' && i + 1 < n && s[static_cast<size_t>(i + 1)] == '/') {
-      const size_t eol = s.find('\n', static_cast<size_t>(i));
-      i = eol == std::string::npos ? n : static_cast<std::int32_t>(eol);
-      continue;
-    }
-    if (c == '/' && i + 1 < n && s[static_cast<size_t>(i + 1)] == '*') {
-      const size_t close = s.find("*/", static_cast<size_t>(i + 2));
-      if (close == std::string::npos) {
-        diags.Error(DiagCode::UnterminatedComment, span(b, b + 2), "block comment is never closed")
-            .hint = "close it with */";
-        i = n;
-      } else {
-        i = static_cast<std::int32_t>(close) + 2;
-      }
-      continue;
-    }
-    if (Is(c, kIdentStart)) {
-      ++i;
-      while (i < n && Is(s[static_cast<size_t>(i)], kIdentStart | kDigit)) ++i;
-      const std::string_view word = view(b, i);
-      push(KeywordOrIdent(word), b, i).text = word;
-      continue;
-    }
-    if (Is(c, kDigit) || (c == '.' && i + 1 < n && Is(s[static_cast<size_t>(i + 1)], kDigit))) {
-      bool integer = true;
-      while (i < n && Is(s[static_cast<size_t>(i)], kDigit)) ++i;
-      if (i < n && s[static_cast<size_t>(i)] == '.') {
-        integer = false;
-        ++i;
-        while (i < n && Is(s[static_cast<size_t>(i)], kDigit)) ++i;
-      }
-      bool bad = false;
-      if (i < n && (s[static_cast<size_t>(i)] == 'e' || s[static_cast<size_t>(i)] == 'E')) {
-        integer = false;
-        ++i;
-        if (i < n && (s[static_cast<size_t>(i)] == '+' || s[static_cast<size_t>(i)] == '-')) ++i;
-        if (i >= n || !Is(s[static_cast<size_t>(i)], kDigit)) bad = true;
-        while (i < n && Is(s[static_cast<size_t>(i)], kDigit)) ++i;
-      }
-      if (i < n && Is(s[static_cast<size_t>(i)], kIdentStart)) {
-        bad = true;
-        while (i < n && Is(s[static_cast<size_t>(i)], kIdentStart | kDigit)) ++i;
-      }
-      Token& t = push(Tok::Number, b, i);
-      t.text = view(b, i);
-      t.is_integer = integer;
-      bool out_of_range = false;
-      t.number = NumberValue(s, b, i, integer, &out_of_range);
-      if (bad || out_of_range) {
-        diags.Error(DiagCode::BadNumber, t.span, "malformed number '" + std::string(t.text) + "'").hint =
-            "numbers look like 3, 0.5, 1e-3 or 2.5E+4";
-        t.number = 0;
-      }
-      continue;
-    }
-    if (c == '"') {
-      const std::int32_t close = PlainString(s, b);
-      if (close >= 0) {  // the common case: the literal's text is its value
-        i = close + 1;
-        push(Tok::String, b, i).text = view(b + 1, close);
-        continue;
-      }
-      ++i;
-      std::string val;
-      bool closed = false;
-      while (i < n) {
-        char d = s[static_cast<size_t>(i)];
-        if (Is(d, kPlainInString)) {
-          val += d;
-          ++i;
-          continue;
-        }
-        if (d == '"') {
-          closed = true;
-          ++i;
-          break;
-        }
-        std::int32_t skip = 0;
-        const std::int32_t escaped = d == '\\' && i + 1 < n ? StringCharacter(s, i + 1, file, diags, &skip) : -1;
-        if (escaped == 0) {  // a backslash before a bad character, reported
-          i += 1 + skip;
-          continue;
-        }
-        if (escaped == 1) {
-          char e = s[static_cast<size_t>(i + 1)];
-          switch (e) {
-            case 'n': val += '\n'; break;
-            case 't': val += '\t'; break;
-            case '"': val += '"'; break;
-            case '\\': val += '\\'; break;
-            case '\'': val += '\''; break;
-            default: val += e; break;
-          }
-          i += 2;
-          continue;
-        }
-        const std::int32_t len = StringCharacter(s, i, file, diags, &skip);
-        if (len == 0) {
-          i += skip;
-          continue;
-        }
-        val.append(s, static_cast<size_t>(i), static_cast<size_t>(len));
-        i += len;
-      }
-      if (!closed) {
-        diags.Error(DiagCode::UnterminatedString, span(b, b + 1), "string literal is never closed").hint =
-            "add the closing '\"'";
-      }
-      Token& t = push(Tok::String, b, i);
-      t.decoded = std::make_shared<const std::string>(std::move(val));
-      t.text = *t.decoded;
-      continue;
-    }
-    auto next = [&](char d) { return i + 1 < n && s[static_cast<size_t>(i + 1)] == d; };
-    Tok k;
-    int len = 1;
-    switch (c) {
-      case '(': k = Tok::LParen; break;
-      case ')': k = Tok::RParen; break;
-      case '[': k = Tok::LBracket; break;
-      case ']': k = Tok::RBracket; break;
-      case '{': k = Tok::LBrace; break;
-      case '}': k = Tok::RBrace; break;
-      case ',': k = Tok::Comma; break;
-      case ';': k = Tok::Semicolon; break;
-      case '.': k = Tok::Dot; break;
-      case ':':
-        if (next('=')) { k = Tok::ColonAssign; len = 2; } else { k = Tok::Colon; }
-        break;
-      case '=':
-        if (next('=')) { k = Tok::EqEq; len = 2; } else { k = Tok::Assign; }
-        break;
-      case '+': k = Tok::Plus; break;
-      case '-': k = Tok::Minus; break;
-      case '*': k = Tok::Star; break;
-      case '/': k = Tok::Slash; break;
-      case '^': k = Tok::Caret; break;
-      case '<':
-        if (next('=')) { k = Tok::Le; len = 2; }
-        else if (next('>')) { k = Tok::Ne; len = 2; }
-        else { k = Tok::Lt; }
-        break;
-      case '>':
-        if (next('=')) { k = Tok::Ge; len = 2; } else { k = Tok::Gt; }
-        break;
-      default:
-        i += ReportBadCharacter(s, b, file, diags);
-        continue;
-    }
-    push(k, b, b + len);
-    i += len;
   }
-  push(Tok::Eof, n, n);
+  c.Push(Tok::Eof, c.n, c.n);
   return out;
 }
 

@@ -233,8 +233,6 @@ ExprPtr Parser::ComponentRef() {
 // primary := NUMBER | STRING | false | true | component_reference
 //          | component_reference function_call_args
 //          | '(' expression ')' | '{' array_arguments '}' | '[' matrix ']'
-// function_call_args := '(' [ expression { ',' expression } { ',' IDENT '=' expression }
-//                       | expression for IDENT in expression ] ')'
 ExprPtr Parser::Primary() {
   Span b = Peek().span;
   const Token& t = Peek();
@@ -249,126 +247,142 @@ ExprPtr Parser::Primary() {
     return e;
   }
   switch (t.kind) {
-    case Tok::Number: {
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::Number;
-      e->number = t.number;
-      e->is_integer = t.is_integer;
-      e->span = t.span;
-      Advance();
-      return e;
-    }
-    case Tok::String: {
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::String;
-      e->text = t.text;
-      e->span = t.span;
-      Advance();
-      return e;
-    }
+    case Tok::Number:
+    case Tok::String:
     case Tok::KwTrue:
-    case Tok::KwFalse: {
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::Bool;
-      e->number = t.kind == Tok::KwTrue ? 1 : 0;
-      e->span = t.span;
-      Advance();
-      return e;
-    }
+    case Tok::KwFalse: return Literal();
     case Tok::LParen: {
       const Token& open = Advance();
       ExprPtr inner = Expression();
       ExpectClose(Tok::RParen, open);
       return inner;
     }
-    case Tok::LBrace: {
-      const Token& open = Advance();
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::Array;
-      if (!At(Tok::RBrace)) {
-        ExprPtr first = Expression();
-        if (At(Tok::KwFor)) {
-          Advance();
-          e->kind = ExprKind::Comprehension;
-          e->args.push_back(std::move(first));
-          if (At(Tok::Ident)) {
-            e->text = Advance().text;
-          } else {
-            ErrorExpected("an iterator name", "after 'for'");
-          }
-          Expect(Tok::KwIn, "after the iterator");
-          e->args.push_back(Expression());
-        } else {
-          e->args.push_back(std::move(first));
-          while (Accept(Tok::Comma)) e->args.push_back(Expression());
-        }
-      }
-      ExpectClose(Tok::RBrace, open);
-      e->span = SpanFrom(b);
-      return Finish(std::move(e), b);
-    }
-    case Tok::LBracket: {
-      const Token& open = Advance();
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::Matrix;
-      e->rows.emplace_back();
-      if (!At(Tok::RBracket)) {
-        do {
-          do {
-            e->rows.back().push_back(Expression());
-          } while (Accept(Tok::Comma));
-          if (At(Tok::Semicolon)) e->rows.emplace_back();
-        } while (Accept(Tok::Semicolon));
-      }
-      ExpectClose(Tok::RBracket, open);
-      e->span = SpanFrom(b);
-      return Finish(std::move(e), b);
-    }
-    case Tok::Ident: {
-      ExprPtr ref = ComponentRef();
-      if (!At(Tok::LParen)) return ref;
-      const Token& open = Advance();
-      auto call = std::make_unique<Expr>();
-      call->kind = ExprKind::Call;
-      call->parts = std::move(ref->parts);
-      if (!At(Tok::RParen)) {
-        do {
-          if (At(Tok::Ident) && Peek(1).kind == Tok::Assign) {
-            NamedArg na;
-            na.span = Peek().span;
-            na.name = Advance().text;
-            Advance();
-            na.value = Expression();
-            call->named_args.push_back(std::move(na));
-          } else {
-            ExprPtr a = Expression();
-            if (At(Tok::KwFor)) {
-              // f(expr for i in range): a reduction like sum(...) — represented as a
-              // call whose single argument is a comprehension.
-              Advance();
-              auto comp = std::make_unique<Expr>();
-              comp->kind = ExprKind::Comprehension;
-              comp->span = a->span;
-              comp->args.push_back(std::move(a));
-              if (At(Tok::Ident)) comp->text = Advance().text;
-              else ErrorExpected("an iterator name", "after 'for'");
-              Expect(Tok::KwIn, "after the iterator");
-              comp->args.push_back(Expression());
-              const Span comp_span = comp->span;
-              call->args.push_back(Finish(std::move(comp), comp_span));
-              break;
-            }
-            call->args.push_back(std::move(a));
-          }
-        } while (Accept(Tok::Comma));
-      }
-      ExpectClose(Tok::RParen, open);
-      call->span = SpanFrom(b);
-      return Finish(std::move(call), b);
-    }
-    default:
-      return MissingOperand(b);
+    case Tok::LBrace: return ArrayConstructor();
+    case Tok::LBracket: return MatrixConstructor();
+    case Tok::Ident: return ReferenceOrCall();
+    default: return MissingOperand(b);
   }
+}
+
+// NUMBER | STRING | false | true
+ExprPtr Parser::Literal() {
+  const Token& t = Advance();
+  auto e = std::make_unique<Expr>();
+  e->span = t.span;
+  if (t.kind == Tok::Number) {
+    e->kind = ExprKind::Number;
+    e->number = t.number;
+    e->is_integer = t.is_integer;
+  } else if (t.kind == Tok::String) {
+    e->kind = ExprKind::String;
+    e->text = t.text;
+  } else {
+    e->kind = ExprKind::Bool;
+    e->number = t.kind == Tok::KwTrue ? 1 : 0;
+  }
+  return e;
+}
+
+// '{' array_arguments '}'
+// array_arguments := [ expression { ',' expression } | expression for IDENT in expression ]
+ExprPtr Parser::ArrayConstructor() {
+  Span b = Peek().span;
+  const Token& open = Advance();
+  auto e = std::make_unique<Expr>();
+  e->kind = ExprKind::Array;
+  if (!At(Tok::RBrace)) {
+    ExprPtr first = Expression();
+    if (At(Tok::KwFor)) {
+      Advance();
+      e->kind = ExprKind::Comprehension;
+      e->args.push_back(std::move(first));
+      if (At(Tok::Ident)) {
+        e->text = Advance().text;
+      } else {
+        ErrorExpected("an iterator name", "after 'for'");
+      }
+      Expect(Tok::KwIn, "after the iterator");
+      e->args.push_back(Expression());
+    } else {
+      e->args.push_back(std::move(first));
+      while (Accept(Tok::Comma)) e->args.push_back(Expression());
+    }
+  }
+  ExpectClose(Tok::RBrace, open);
+  e->span = SpanFrom(b);
+  return Finish(std::move(e), b);
+}
+
+// '[' matrix ']'
+// matrix := expression { ',' expression } { ';' expression { ',' expression } }
+ExprPtr Parser::MatrixConstructor() {
+  Span b = Peek().span;
+  const Token& open = Advance();
+  auto e = std::make_unique<Expr>();
+  e->kind = ExprKind::Matrix;
+  e->rows.emplace_back();
+  if (!At(Tok::RBracket)) {
+    do {
+      do {
+        e->rows.back().push_back(Expression());
+      } while (Accept(Tok::Comma));
+      if (At(Tok::Semicolon)) e->rows.emplace_back();
+    } while (Accept(Tok::Semicolon));
+  }
+  ExpectClose(Tok::RBracket, open);
+  e->span = SpanFrom(b);
+  return Finish(std::move(e), b);
+}
+
+// component_reference [ function_call_args ]
+// function_call_args := '(' [ expression { ',' expression } { ',' IDENT '=' expression }
+//                       | expression for IDENT in expression ] ')'
+ExprPtr Parser::ReferenceOrCall() {
+  Span b = Peek().span;
+  ExprPtr ref = ComponentRef();
+  if (!At(Tok::LParen)) return ref;
+  const Token& open = Advance();
+  auto call = std::make_unique<Expr>();
+  call->kind = ExprKind::Call;
+  call->parts = std::move(ref->parts);
+  if (!At(Tok::RParen)) {
+    do {
+      if (At(Tok::Ident) && Peek(1).kind == Tok::Assign) {
+        NamedArg na;
+        na.span = Peek().span;
+        na.name = Advance().text;
+        Advance();
+        na.value = Expression();
+        call->named_args.push_back(std::move(na));
+        continue;
+      }
+      ExprPtr a = Expression();
+      if (At(Tok::KwFor)) {
+        call->args.push_back(Reduction(std::move(a)));
+        break;
+      }
+      call->args.push_back(std::move(a));
+    } while (Accept(Tok::Comma));
+  }
+  ExpectClose(Tok::RParen, open);
+  call->span = SpanFrom(b);
+  return Finish(std::move(call), b);
+}
+
+// f(expr for i in range): a reduction like sum(...) — represented as a call whose single
+// argument is a comprehension. `body` is expr; the next token is `for`.
+ExprPtr Parser::Reduction(ExprPtr body) {
+  Advance();
+  auto comp = std::make_unique<Expr>();
+  comp->kind = ExprKind::Comprehension;
+  comp->span = body->span;
+  comp->args.push_back(std::move(body));
+  if (At(Tok::Ident)) comp->text = Advance().text;
+  else ErrorExpected("an iterator name", "after 'for'");
+  Expect(Tok::KwIn, "after the iterator");
+  comp->args.push_back(Expression());
+  const Span comp_span = comp->span;
+  return Finish(std::move(comp), comp_span);
 }
 
 }  // namespace kanesim::lang::parsing

@@ -191,6 +191,10 @@ class Parser {
   bool ArgumentItem(Argument& a);
   void ComponentClause(ClassDef& c, Element prefix, bool is_protected, Variability var, Causality caus);
   bool EquationItem(std::vector<Equation>& out);
+  bool ConnectClause(Equation& eq);  // each: false when the equation is given up
+  bool ForEquation(Equation& eq);
+  bool IfEquation(Equation& eq);
+  bool Equality(Equation& eq);
   std::unique_ptr<Modification> AnnotationOpt();
   ExprPtr Expression();
   ExprPtr SimpleExpression();
@@ -199,6 +203,11 @@ class Parser {
   ExprPtr Unary();
   ExprPtr Power();
   ExprPtr Primary();
+  ExprPtr Literal();            // NUMBER | STRING | false | true
+  ExprPtr ArrayConstructor();   // '{' ... '}'
+  ExprPtr MatrixConstructor();  // '[' ... ']'
+  ExprPtr ReferenceOrCall();    // a component reference, or a call f(...)
+  ExprPtr Reduction(ExprPtr body);  // f(body for i in range)
   ExprPtr MissingOperand(const Span& b);
   void Subscripts(std::vector<ExprPtr>& out);
   ExprPtr ComponentRef();
