@@ -121,6 +121,19 @@ TEST(SweepCli, ResumeAfterTruncation) {
   EXPECT_EQ(WithoutWallTime(part + "/summary.csv"), WithoutWallTime(full + "/summary.csv"));
 }
 
+// The files a killed sweep left in `dir` (name, size, and the text of small ones) and the
+// end of the tests' stderr log: printed when a check of a killed sweep fails.
+std::string Leftovers(const std::string& dir) {
+  std::string s = "left in " + dir + ":\n";
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    const auto size = e.is_regular_file() ? e.file_size() : 0;
+    s += "  " + e.path().filename().string() + " (" + std::to_string(size) + " bytes)\n";
+    if (size > 0 && size < 4000) s += Slurp(e.path().string()) + "\n";
+  }
+  const std::string log = Slurp(std::string(KANESIM_WORK_DIR) + "/stderr.log");
+  return s + "stderr (last 2000 bytes):\n" + log.substr(log.size() > 2000 ? log.size() - 2000 : 0);
+}
+
 // A real interruption: the sweep is killed (SIGKILL) while running; whatever it left
 // must be complete rows, and --resume must finish it to the uninterrupted result.
 TEST(SweepCli, ResumeAfterKill) {
@@ -129,15 +142,16 @@ TEST(SweepCli, ResumeAfterKill) {
   std::string args = " --grid q0=0.05:0.01:0.44 --metric final:j[2].q --stop-time 2 --no-progress -j1";
   ASSERT_EQ(Sh(kBin + " sweep " + chain + args + " -o " + full), 0);
   Sh("timeout -s KILL 0.4 " + kBin + " sweep " + chain + args + " -o " + part);
+  const std::string left_files = Leftovers(part);
   // Whatever was left (nothing, if killed before the first row) is complete rows only.
   SummaryTable left;
   std::string err;
   if (std::filesystem::exists(part + "/summary.csv")) {
-    ASSERT_TRUE(ReadSummary(part + "/summary.csv", &left, &err)) << err;
+    ASSERT_TRUE(ReadSummary(part + "/summary.csv", &left, &err)) << err << "\n" << left_files;
     for (const auto& [id, line] : left.rows) EXPECT_EQ(SplitCsvLine(line).size(), 15u) << line;
   }
-  ASSERT_EQ(Sh(kBin + " sweep " + chain + args + " --resume -o " + part), 0);
-  EXPECT_EQ(WithoutWallTime(part + "/summary.csv"), WithoutWallTime(full + "/summary.csv"));
+  ASSERT_EQ(Sh(kBin + " sweep " + chain + args + " --resume -o " + part), 0) << left_files << Leftovers(part);
+  EXPECT_EQ(WithoutWallTime(part + "/summary.csv"), WithoutWallTime(full + "/summary.csv")) << left_files;
 }
 
 // A sweep killed after creating its summary and before its settings record is renamed
