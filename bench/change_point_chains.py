@@ -16,13 +16,14 @@ Usage: bench/change_point_chains.py [KANESIM] [--n 2,10,40] [--rtol 1e-8,1e-10,1
        [--integrator dop853,...] [--solver auto] [--repeat 1]
 """
 import argparse
-import csv
 import math
 import os
 import resource
 import subprocess
 import sys
 import tempfile
+
+from change_points import read_rows  # bench/change_points.py, beside this script
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MODEL = os.path.join(ROOT, "tests/stress/models/parallelogram_chain.mech")
@@ -62,13 +63,7 @@ def run(kanesim, n, rtol, integrator, solver, tmp, timeout):
         code, err = None, "timeout"
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    rows = []
-    if os.path.exists(out):
-        with open(out) as f:
-            r = csv.reader(f)
-            next(r, None)
-            rows = [[float(x) for x in row] for row in r if row]
-        os.remove(out)
+    rows = read_rows(out)
     if not rows:
         return code, err, cpu, float("nan"), float("nan"), float("nan")
     t = [r[0] for r in rows]

@@ -35,6 +35,18 @@ RTOLS = ["1e-4", "1e-6", "1e-8", "1e-10", "1e-12"]
 BRANCH_TOL = 1e-3
 
 
+def read_rows(out):
+    """The numeric rows of the CSV `out` (none if the run wrote none); the file is removed."""
+    if not os.path.exists(out):
+        return []
+    with open(out) as f:
+        r = csv.reader(f)
+        next(r, None)
+        rows = [[float(x) for x in row] for row in r if row]
+    os.remove(out)
+    return rows
+
+
 def run(kanesim, a, integrator, solver, rtol, timeout, tmp):
     out = os.path.join(tmp, "p.csv")
     args = [kanesim, "run", MODEL, "--set", "a=%s" % a, "--stop-time", "20", "--interval", "0.01",
@@ -47,13 +59,7 @@ def run(kanesim, a, integrator, solver, rtol, timeout, tmp):
     except subprocess.TimeoutExpired:
         code, err = None, "timeout"
     wall = time.monotonic() - t0
-    rows = []
-    if os.path.exists(out):
-        with open(out) as f:
-            r = csv.reader(f)
-            next(r, None)
-            rows = [[float(x) for x in row] for row in r if row]
-        os.remove(out)
+    rows = read_rows(out)
     off = max((abs(math.remainder(row[2] - row[1], 2 * math.pi)) for row in rows), default=0.0)
     reached = rows[-1][0] if rows else float("nan")
     return code, err.strip(), wall, off, reached

@@ -43,24 +43,22 @@ struct Outcome {
   double branch = 0.0, speed = 0.0, theta_error = 0.0, energy_error = 0.0, last_t = 0.0;
 };
 
-Outcome RunParallelogram(const char* a, rt::SolverPath solver, rt::IntegratorKind integrator, bool bdf, double rtol,
-            bool bridge) {
-  rt::CompileOptions co;
-  co.solver = solver;
-  auto l = LoadModel(kRoot + "/tests/stress/models/parallelogram.mech", {{"a", a}}, co);
+// Runs `model` (with `sets`) for 20 s, rows every 0.01 s, with `so`'s integrator, tolerances
+// and signals: the crank's q and u first, then each other joint's q and u. Measures every
+// row against the crank (the branch: angles equal modulo 2 pi, speeds equal), against the
+// lumped crank `c` (angle), and its energy away from the change points (|sin theta| > 0.2:
+// the rows within ~0.02 s of one carry the equations' own speed error there, up to 9e-6 J
+// on the multiplier form, IDA), in J, or relative to the largest |E| when `relative_energy`.
+Outcome RunAndMeasure(const std::string& model, std::vector<lang::ParamOverride> sets, const rt::CompileOptions& co,
+                      sim::SimOptions so, const lumped_crank::Crank& c, bool relative_energy) {
+  auto l = LoadModel(kRoot + model, std::move(sets), co);
   Outcome o;
   if (!l || !l->prog) {
     ADD_FAILURE() << "the model did not compile";
     return o;
   }
-  sim::SimOptions so;
   so.stop_time = 20.0;
   so.interval = 0.01;
-  so.rtol = so.atol = rtol;
-  so.integrator = integrator;
-  so.cvode_bdf = bdf;
-  so.bridge = bridge;
-  so.signals = {"crank_pivot.q", "crank_pivot.u", "rocker_pivot.q", "rocker_pivot.u"};
   sim::MemorySink sink;
   o.result = sim::Simulate(*l->prog, so, sink);
   if (sink.rows.empty()) return o;
@@ -68,19 +66,36 @@ Outcome RunParallelogram(const char* a, rt::SolverPath solver, rt::IntegratorKin
   for (const auto& r : sink.rows) {
     th.push_back(r[0]);
     w.push_back(r[1]);
-    o.branch = std::max(o.branch, std::fabs(std::remainder(r[2] - r[0], 2 * M_PI)));
-    o.speed = std::max(o.speed, std::fabs(r[3] - r[1]));
+    for (size_t k = 2; k + 1 < r.size(); k += 2) {
+      o.branch = std::max(o.branch, std::fabs(std::remainder(r[k] - r[0], 2 * M_PI)));
+      o.speed = std::max(o.speed, std::fabs(r[k + 1] - r[1]));
+    }
   }
   o.last_t = sink.times.back();
-  const lumped_crank::Crank c = LumpedCrank(std::stod(a));
   o.theta_error = lumped_crank::MaxAngleError(c, sink.times, th, w, 1e-5);
   auto energy = [&c](double q, double u) { return 0.5 * c.J * u * u + c.G * std::sin(q); };
-  // Away from the change points (|sin theta| > 0.2): the rows within ~0.02 s of one carry
-  // the equations' own speed error there (up to 9e-6 J on the multiplier form, IDA).
+  double e_max = 0.0;
   for (size_t i = 0; i < th.size(); ++i)
-    if (std::fabs(std::sin(th[i])) > 0.2)
+    if (std::fabs(std::sin(th[i])) > 0.2) {
       o.energy_error = std::max(o.energy_error, std::fabs(energy(th[i], w[i]) - energy(th[0], w[0])));
+      e_max = std::max(e_max, std::fabs(energy(th[i], w[i])));
+    }
+  if (relative_energy) o.energy_error /= std::max(1e-300, e_max);
   return o;
+}
+
+Outcome RunParallelogram(const char* a, rt::SolverPath solver, rt::IntegratorKind integrator, bool bdf, double rtol,
+                         bool bridge) {
+  rt::CompileOptions co;
+  co.solver = solver;
+  sim::SimOptions so;
+  so.rtol = so.atol = rtol;
+  so.integrator = integrator;
+  so.cvode_bdf = bdf;
+  so.bridge = bridge;
+  so.signals = {"crank_pivot.q", "crank_pivot.u", "rocker_pivot.q", "rocker_pivot.u"};
+  return RunAndMeasure("/tests/stress/models/parallelogram.mech", {{"a", a}}, co, so, LumpedCrank(std::stod(a)),
+                       false);
 }
 
 struct Cell {
@@ -214,15 +229,7 @@ TEST(ChangePointBridge, WithoutTheBridgeTheSameRunsStop) {
 // DOP853); the lumped energy away from the change points, relative to E (270 J for ten
 // loops), 3.4e-7 at 1e-10 (the solver's own error there), 9e-10 ... 2.4e-8 at 1e-12.
 Outcome RunChain(int n, rt::IntegratorKind integrator, double rtol, bool several_loops) {
-  auto l = LoadModel(kRoot + "/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}});
-  Outcome o;
-  if (!l || !l->prog) {
-    ADD_FAILURE() << "the model did not compile";
-    return o;
-  }
   sim::SimOptions so;
-  so.stop_time = 20.0;
-  so.interval = 0.01;
   so.rtol = so.atol = rtol;
   so.integrator = integrator;
   so.bridge_several_loops = several_loops;
@@ -231,32 +238,11 @@ Outcome RunChain(int n, rt::IntegratorKind integrator, double rtol, bool several
     so.signals.push_back("rj[" + std::to_string(i) + "].q");
     so.signals.push_back("rj[" + std::to_string(i) + "].u");
   }
-  sim::MemorySink sink;
-  o.result = sim::Simulate(*l->prog, so, sink);
-  if (sink.rows.empty()) return o;
-  std::vector<double> th, w;
-  for (const auto& r : sink.rows) {
-    th.push_back(r[0]);
-    w.push_back(r[1]);
-    for (size_t k = 2; k + 1 < r.size(); k += 2) {
-      o.branch = std::max(o.branch, std::fabs(std::remainder(r[k] - r[0], 2 * M_PI)));
-      o.speed = std::max(o.speed, std::fabs(r[k + 1] - r[1]));
-    }
-  }
-  o.last_t = sink.times.back();
   const double a = 0.6, m_rod = 0.5, m_coupler = 1.0, g = 9.81;
   const lumped_crank::Crank c{(n + 1) * m_rod * a * a / 3.0 + n * m_coupler * a * a,
                               g * ((n + 1) * m_rod * a / 2.0 + n * m_coupler * a)};
-  o.theta_error = lumped_crank::MaxAngleError(c, sink.times, th, w, 1e-5);
-  auto energy = [&c](double q, double u) { return 0.5 * c.J * u * u + c.G * std::sin(q); };
-  double e_max = 0.0;
-  for (size_t i = 0; i < th.size(); ++i)
-    if (std::fabs(std::sin(th[i])) > 0.2) {
-      o.energy_error = std::max(o.energy_error, std::fabs(energy(th[i], w[i]) - energy(th[0], w[0])));
-      e_max = std::max(e_max, std::fabs(energy(th[i], w[i])));
-    }
-  o.energy_error /= std::max(1e-300, e_max);  // relative, for chains of every length
-  return o;
+  // Relative energy, for chains of every length.
+  return RunAndMeasure("/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}}, {}, so, c, true);
 }
 
 struct ChainCell {
