@@ -8,7 +8,8 @@
 //   KANESIM_FRONTEND_REPEATS=5              (default: 5; 1 above N = 2000)
 //   KANESIM_FRONTEND_NOFORK=1               (in this process: for profilers; RSS is then shared)
 // Output: one row per model: ms for load+elaborate, compile, their sum (first load and
-// best steady load), microseconds per link, peak RSS in MB. Times are the process's CPU
+// best steady load), microseconds per link, peak RSS in MB, and the minor page faults of
+// the first load (fresh memory the process touches for the first time). Times are the process's CPU
 // time (CLOCK_PROCESS_CPUTIME_ID; single-threaded work), steadier than wall time on a
 // shared machine.
 #include <sys/resource.h>
@@ -44,10 +45,18 @@ double CpuSeconds() {
 struct Cost {
   double elaborate = 0;  // load + elaborate, seconds
   double compile = 0;
+  long faults = 0;       // minor page faults during the load
 };
+
+long MinorFaults() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return ru.ru_minflt;
+}
 
 // One load + elaborate + compile of `path` with `sets`; false on an error.
 bool LoadOnce(const std::string& path, const std::vector<lang::ParamOverride>& sets, Cost* cost) {
+  const long f0 = MinorFaults();
   const double t0 = CpuSeconds();
   lang::Program program;
   lang::Diagnostics diags(&program.sources);
@@ -67,6 +76,7 @@ bool LoadOnce(const std::string& path, const std::vector<lang::ParamOverride>& s
   }
   cost->elaborate = t1 - t0;
   cost->compile = t2 - t1;
+  cost->faults = MinorFaults() - f0;
   return true;
 }
 
@@ -84,9 +94,9 @@ int Measure(const std::string& label, const std::string& path, const std::vector
   if (repeats == 0) best = first, best_total = first.elaborate + first.compile;
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
-  std::printf("%-16s %7d %12.3f %10.3f %12.3f %12.3f %10.2f %10.1f\n", label.c_str(), links, 1e3 * best.elaborate,
-              1e3 * best.compile, 1e3 * best_total, 1e3 * (first.elaborate + first.compile), 1e6 * best_total / links,
-              static_cast<double>(ru.ru_maxrss) / 1024.0);
+  std::printf("%-16s %7d %12.3f %10.3f %12.3f %12.3f %10.2f %10.1f %10ld\n", label.c_str(), links,
+              1e3 * best.elaborate, 1e3 * best.compile, 1e3 * best_total, 1e3 * (first.elaborate + first.compile),
+              1e6 * best_total / links, static_cast<double>(ru.ru_maxrss) / 1024.0, first.faults);
   std::fflush(stdout);
   return 0;
 }
@@ -112,8 +122,8 @@ int main(int argc, char** argv) {
   const char* rep = std::getenv("KANESIM_FRONTEND_REPEATS");
   const int repeats = rep ? std::atoi(rep) : 5;
   const std::string root = KANESIM_SOURCE_DIR;
-  std::printf("%-16s %7s %12s %10s %12s %12s %10s %10s\n", "model", "links", "elab_ms", "compile_ms", "total_ms",
-              "first_ms", "us/link", "peak_MB");
+  std::printf("%-16s %7s %12s %10s %12s %12s %10s %10s %10s\n", "model", "links", "elab_ms", "compile_ms", "total_ms",
+              "first_ms", "us/link", "peak_MB", "first_flt");
   InChild("double_pendulum", root + "/examples/double_pendulum.mech", {}, 2, repeats);
   for (int n : sizes)
     InChild("chain", root + "/examples/chain.mech", {{"N", std::to_string(n)}}, n, n > 2000 ? 1 : repeats);

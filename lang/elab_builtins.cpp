@@ -4,6 +4,8 @@
 // (parameters stay symbolic, constants fold). A name not in the table is diagnosed with
 // the closest one from the table as a suggestion.
 #include <string>
+#include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "lang/elab_internal.h"
@@ -326,6 +328,18 @@ const Builtin kBuiltins[] = {
     {"cat", kOwnArity, LowerCat},
 };
 
+// The table's entry named `fn`, or null: a hash map made once per process (a scan of the
+// table compared up to 39 names per call).
+const Builtin* FindBuiltin(std::string_view fn) {
+  static const std::unordered_map<std::string_view, const Builtin*> by_name = [] {
+    std::unordered_map<std::string_view, const Builtin*> m;
+    for (const Builtin& b : kBuiltins) m.emplace(b.name, &b);
+    return m;
+  }();
+  auto it = by_name.find(fn);
+  return it == by_name.end() ? nullptr : it->second;
+}
+
 }  // namespace
 
 Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
@@ -347,11 +361,10 @@ Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
     args.push_back(Eval(*a, ctx));
     if (!args.back().valid) return Value::Invalid();
   }
-  for (const Builtin& b : kBuiltins) {
-    if (fn != b.name) continue;
-    Call call{*this, e, fn, args, ctx, b.op};
-    if (b.arity != kOwnArity && !call.Want(static_cast<size_t>(b.arity))) return Value::Invalid();
-    return b.lower(call);
+  if (const Builtin* b = FindBuiltin(fn)) {
+    Call call{*this, e, fn, args, ctx, b->op};
+    if (b->arity != kOwnArity && !call.Want(static_cast<size_t>(b->arity))) return Value::Invalid();
+    return b->lower(call);
   }
   std::vector<std::string> cands;
   for (const Builtin& b : kBuiltins) cands.push_back(b.name);

@@ -127,7 +127,7 @@ class Emitter {
 
   // Whether a variable has any binding.
   static bool Bound(Node* var) {
-    return var && (var->eq_binding || var->mod.value || !var->eq_elem_binding.empty());
+    return var && (var->eq_binding || var->Modifiers().value || !var->eq_elem_binding.empty());
   }
 
   // Every enabled instance, depth first: each primitive becomes its flat element.
@@ -193,7 +193,7 @@ class Emitter {
       const Value& v = el.GetVar(c, Span{});
       if (v.valid && v.type == VType::String && !v.strings.empty() &&
           !flat::RotationCoordsFromName(v.strings[0], &j.rotation)) {
-        auto& d = diags_.Error(DiagCode::BadValue, c->mod.value ? c->mod.value->span : Span{},
+        auto& d = diags_.Error(DiagCode::BadValue, c->Modifiers().value ? c->Modifiers().value->span : Span{},
                                "unknown coordinates \"" + v.strings[0] + "\" for joint '" + n->path + "'");
         std::string best = ClosestName(v.strings[0], {"quaternion", "cardan_xyz", "euler_zyz"});
         d.hint = "use \"quaternion\", \"cardan_xyz\" or \"euler_zyz\"" +
@@ -258,8 +258,9 @@ class Emitter {
 
   // The `start` (and `fixed`) modifiers of a joint's q or u.
   void StartOf(Node* var, std::vector<ExprId>* out, std::vector<bool>* fixed) {
-    auto it = var->mod.sub.find("start");
-    if (it != var->mod.sub.end() && it->second.value) {
+    const Mod& mods = var->Modifiers();
+    auto it = mods.sub.find("start");
+    if (it != mods.sub.end() && it->second.value) {
       Span where;
       Value v = el.EvalModValue(*it->second.value, &where);
       if (v.valid) {
@@ -279,8 +280,8 @@ class Emitter {
       }
     }
     if (fixed) {
-      auto fit = var->mod.sub.find("fixed");
-      if (fit != var->mod.sub.end() && fit->second.value) {
+      auto fit = mods.sub.find("fixed");
+      if (fit != mods.sub.end() && fit->second.value) {
         Value fv = el.EvalModValue(*fit->second.value, nullptr);
         double x = 0;
         if (fv.valid && fv.shape.empty() && el.Structural(fv, fit->second.value->span, &x, "fixed"))
@@ -308,7 +309,7 @@ class Emitter {
     }
     std::vector<std::pair<int, const ModValue*>> items;
     if (q->eq_binding) items.push_back({-1, &*q->eq_binding});
-    if (q->mod.value) items.push_back({-1, &*q->mod.value});
+    if (q->Modifiers().value) items.push_back({-1, &*q->Modifiers().value});
     for (auto& [k, mv] : q->eq_elem_binding) items.push_back({k, &mv});
     for (auto [k, mv] : items) {
       Span where;

@@ -68,9 +68,12 @@ void Elaborator::ProcessFor(Node* node, const ast::Equation& eq, const std::shar
     return;
   }
   std::vector<double> xs = StructuralList(r, eq.range->span, "a for-loop range");
+  std::shared_ptr<Iters> local;
   for (double x : xs) {
     if (!ChargeSteps(1, eq.range->span)) return;
-    auto local = std::make_shared<Iters>(iters ? *iters : Iters{});
+    // The iterators of the last pass are reused unless an equation of it kept them (a
+    // binding evaluated later reads its own pass's values).
+    if (!local || local.use_count() != 1) local = std::make_shared<Iters>(iters ? *iters : Iters{});
     (*local)[eq.iter] = x;
     for (const auto& b : eq.body) ProcessEquation(node, b, local);
   }

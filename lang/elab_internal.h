@@ -142,6 +142,12 @@ struct Node {
   Node* parent = nullptr;
   const ast::Component* decl = nullptr;  // null for the root and array elements' owner copy
   Mod mod;
+  // A variable of an array element copied from element 1 (lang/elab_share.cpp) whose
+  // modifiers mean the same in every element (literals, or evaluated outside the element)
+  // reads element 1's instead of a copy: `mod` then stays empty. Read modifiers after
+  // instantiation through Modifiers().
+  const Mod* shared_mod = nullptr;
+  const Mod& Modifiers() const { return shared_mod ? *shared_mod : mod; }
   bool enabled = true;
   int depth = 0;
 
@@ -299,8 +305,9 @@ class Elaborator {
     double min = -1e300, max = 1e300;
   };
   ParamAttributes ReadParamAttributes(Node* var);
-  // Adds one element as a flat parameter (a constant is folded instead); its pool node.
-  ExprId AddParamElement(Node* var, flat::Param&& p, ExprId x, Span value_span);
+  // One element as a flat parameter: `p`, the last of m_->params (for a constant, folded
+  // instead, a Param of its own); its value checked and set; its pool node.
+  ExprId AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span);
   // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
@@ -399,6 +406,7 @@ class Elaborator {
   bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index, int count);
   std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
   Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
+  bool SameInEveryElement(const Mod& m, const ShareBinding& b) const;
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
   flat::SourceLoc Loc(Span s) const;
@@ -465,7 +473,9 @@ class Elaborator {
   std::vector<std::unique_ptr<ast::StoredDefinition>> override_defs_;  // parsed --set values
   std::vector<std::unique_ptr<ast::Expr>> synthetic_;  // expressions made by the elaborator
   std::vector<SetOverride> sets_;                      // parsed --set overrides
+  bool has_subscripted_set_ = false;                   // one of sets_ names an element (j[2].mu)
   std::map<std::string, MeshEntry> meshes_;            // "path\nscale" -> the mesh read (elab_mesh.cpp)
+  mutable std::unordered_map<std::uint64_t, flat::SourceLoc> loc_cache_;  // Loc(): (file, offset) -> place
 };
 
 // Element `index` (0-based) of `v`, an array value of `count` elements along its first

@@ -104,13 +104,13 @@ Value Elaborator::JointStateValue(Node* var) {
 const ModValue* Elaborator::VarBinding(Node* var) {
   const ModValue* binding = nullptr;
   if (var->eq_binding) binding = &*var->eq_binding;
-  if (var->mod.value) {
+  if (const Mod& mods = var->Modifiers(); mods.value) {
     if (binding) {
       auto& d = diags_.Error(DiagCode::ConflictingEquation, var->eq_binding->span,
                              "'" + var->path + "' already has a value from its declaration or a modifier");
-      d.notes.push_back({var->mod.value->span, "value given here"});
+      d.notes.push_back({mods.value->span, "value given here"});
     }
-    binding = &*var->mod.value;
+    binding = &*mods.value;
   }
   return binding;
 }
@@ -213,8 +213,11 @@ Value Elaborator::ParameterValue(Node* var, const ModValue* binding, Span use_sp
   const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
   Dims idx;
   idx.assign(var->shape.size(), 0);
+  // A constant is folded (no flat parameter); the others are made in place in the table.
+  const bool folded = var->vtype != VType::String && var->variability == ast::Variability::Constant;
   for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
-    flat::Param p;
+    flat::Param folded_param;
+    flat::Param& p = folded ? folded_param : m_->params.emplace_back();
     p.name = ElementName(var->path, var->shape, k, idx);
     p.type = ParamTypeOf(var->vtype);
     p.unit = attrs.unit;
@@ -225,20 +228,20 @@ Value Elaborator::ParameterValue(Node* var, const ModValue* binding, Span use_sp
     p.loc = loc;
     if (var->vtype == VType::String) {
       p.string_value = v.strings.empty() ? "" : v.strings[k];
-      m_->params.push_back(std::move(p));
       pvals_.push_back(0.0);
       continue;
     }
-    v.elements[k] = AddParamElement(var, std::move(p), v.elements[k], value_span);
+    v.elements[k] = AddParamElement(var, p, v.elements[k], value_span);
   }
   return v;
 }
 
 Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
   ParamAttributes attrs;
+  const Mod& mods = var->Modifiers();
   auto attr_num = [&](const char* key, double* out) {
-    auto it = var->mod.sub.find(key);
-    if (it == var->mod.sub.end() || !it->second.value) return;
+    auto it = mods.sub.find(key);
+    if (it == mods.sub.end() || !it->second.value) return;
     if (IsLiteral(*it->second.value, ast::ExprKind::Number)) {
       *out = it->second.value->expr->number;
       return;
@@ -249,7 +252,7 @@ Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
   };
   attr_num("min", &attrs.min);
   attr_num("max", &attrs.max);
-  if (auto it = var->mod.sub.find("unit"); it != var->mod.sub.end() && it->second.value) {
+  if (auto it = mods.sub.find("unit"); it != mods.sub.end() && it->second.value) {
     if (IsLiteral(*it->second.value, ast::ExprKind::String)) {
       attrs.unit = it->second.value->expr->text;
     } else {
@@ -260,7 +263,7 @@ Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
   return attrs;
 }
 
-ExprId Elaborator::AddParamElement(Node* var, flat::Param&& p, ExprId x, Span value_span) {
+ExprId Elaborator::AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span) {
   double val = param_eval_.Eval(x);
   p.value = val;
   p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
@@ -275,8 +278,7 @@ ExprId Elaborator::AddParamElement(Node* var, flat::Param&& p, ExprId x, Span va
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
   }
   if (p.is_constant) return m_->exprs.Constant(val);
-  m_->params.push_back(std::move(p));
-  pvals_.push_back(val);
+  pvals_.push_back(val);  // p is already the last of m_->params
   return m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
 }
 

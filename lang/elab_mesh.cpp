@@ -82,7 +82,7 @@ Span Elaborator::ValueOrigin(const ast::Expr& arg, const Ctx& ctx) {
   for (int hops = 0; hops < 16 && e->kind == ast::ExprKind::Ref; ++hops) {
     Node* var = ResolveNode(*e, c, nullptr);
     if (!var || var->kind != Node::kVar) break;
-    const ModValue* b = var->mod.value ? &*var->mod.value : var->eq_binding ? &*var->eq_binding : nullptr;
+    const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
     if (!b) break;
     origin = b->span;
     if (!b->expr) break;

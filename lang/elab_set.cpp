@@ -104,6 +104,7 @@ bool Elaborator::ParseSetOverrides() {
     so.value = expr.get();
     synthetic_.push_back(std::move(expr));
     for (const auto& p : so.parts) so.subscripted = so.subscripted || !p.subs.empty();
+    has_subscripted_set_ = has_subscripted_set_ || so.subscripted;
     // Subscripted names (world.g[2], links[3].m) are bound after instantiation, on the
     // instance they name: modifiers cannot address single array elements.
     if (!so.subscripted) {
@@ -264,7 +265,7 @@ void Elaborator::BindSetOverrides() {
       d.notes.push_back({n->decl->name_span, "declared protected here"});
       continue;
     }
-    if (n->is_final_decl || n->mod.is_final) {
+    if (n->is_final_decl || n->Modifiers().is_final) {
       auto& d = diags_.Error(DiagCode::FinalOverride, whole, "--set " + full + ": '" + n->path + "' is final");
       if (n->decl) d.notes.push_back({n->decl->name_span, "declared final here"});
       continue;
@@ -277,7 +278,10 @@ void Elaborator::BindSetOverrides() {
       continue;
     }
     if (elem >= 0) n->eq_elem_binding[elem] = SetValue(so);
-    else n->mod.value = SetValue(so);
+    else {
+      if (n->shared_mod) n->mod = *n->shared_mod, n->shared_mod = nullptr;  // its own copy, to change
+      n->mod.value = SetValue(so);
+    }
   }
 }
 

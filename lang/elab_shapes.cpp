@@ -81,7 +81,7 @@ void Elaborator::EmitShape(Node* n) {
     if (!v.valid || v.type != VType::String || v.strings.size() != 1) return;
     if (v.strings[0].empty() && n->prim_kind == "visual_mesh") return;  // a BodyShape without a file: its inertia box
     Span origin = f->decl ? f->decl->name_span : Span{};
-    const ModValue* b = f->mod.value ? &*f->mod.value : f->eq_binding ? &*f->eq_binding : nullptr;
+    const ModValue* b = f->Modifiers().value ? &*f->Modifiers().value : f->eq_binding ? &*f->eq_binding : nullptr;
     if (b) origin = b->expr ? ValueOrigin(*b->expr, Ctx{b->scope, b->iters.get()}) : b->span;
     s.mesh_file = MeshPath(v.strings[0], origin);
   }
@@ -90,7 +90,7 @@ void Elaborator::EmitShape(Node* n) {
     if (v.valid && v.type == VType::String && v.strings.size() == 1 && !v.strings[0].empty()) {
       s.color = NormalColor(v.strings[0]);
       if (s.color.empty()) {
-        const Span at = c->mod.value ? c->mod.value->span : c->decl ? c->decl->name_span : Span{};
+        const Span at = c->Modifiers().value ? c->Modifiers().value->span : c->decl ? c->decl->name_span : Span{};
         std::vector<std::string> names;
         for (const auto& [name, hex] : kColorNames) names.push_back(name);
         auto& d = diags_.Error(DiagCode::BadValue, at, "'" + v.strings[0] + "' is not a colour");

@@ -115,6 +115,27 @@ class ShareCheck {
   std::vector<const Node*> sorted_;  // the same, sorted (for Inside)
 };
 
+// An expression that reads no name (literals and what is made of them): its value does
+// not depend on the scope it is evaluated in. Iterative, as expressions can be deep.
+bool ReadsNoName(const ast::Expr* e) {
+  if (!e) return false;
+  if (e->kind == ast::ExprKind::Number || e->kind == ast::ExprKind::String || e->kind == ast::ExprKind::Bool)
+    return true;  // the common case, without a stack
+  std::vector<const ast::Expr*> stack{e};
+  while (!stack.empty()) {
+    const ast::Expr* x = stack.back();
+    stack.pop_back();
+    if (x->kind == ast::ExprKind::Ref || x->kind == ast::ExprKind::Comprehension) return false;
+    bool ok = true;
+    ast::ForEachChild(*x, [&](const ast::ExprPtr& c) {
+      if (c) stack.push_back(c.get());
+      else ok = false;
+    });
+    if (!ok) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 // Element 1's instance tree bound to element k: copies of the nodes with element k's names,
@@ -123,6 +144,11 @@ struct Elaborator::ShareBinding {
   const std::vector<SliceValue>* slice;
   std::vector<const Value*> values;
   std::vector<std::pair<const Node*, Node*>> ancestors;  // (element 1's node, element k's)
+  // Per node of element 1's tree in the order CloneInstance visits them: whether its
+  // modifiers are shared (SameInEveryElement: 1 yes, 0 no, -1 not yet known). The same
+  // for every element, so found at the first copy and read at the others.
+  std::vector<signed char>* same_mod;
+  size_t visit = 0;
 };
 
 // Element k's copy of a modifier of element 1's tree: its value rebound to element k (the
@@ -157,6 +183,22 @@ Mod Elaborator::BoundCopy(const Mod& src, ShareBinding& b, bool with_sub) {
   return out;
 }
 
+// Whether a variable's modifiers in element 1 mean the same in element k: no slice value,
+// and every value either reads no name or is evaluated outside element 1 (its scope is not
+// one of the nodes being copied, which are the only ones BoundCopy would map).
+bool Elaborator::SameInEveryElement(const Mod& m, const ShareBinding& b) const {
+  if (m.value) {
+    const ModValue& v = *m.value;
+    if (v.pre) return false;
+    if (!ReadsNoName(v.expr))
+      for (const auto& a : b.ancestors)
+        if (a.first == v.scope) return false;
+  }
+  for (const auto& [k, sm] : m.sub)
+    if (!SameInEveryElement(sm, b)) return false;
+  return true;
+}
+
 std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, const std::string& name,
                                                 ShareBinding& b) {
   auto n = std::make_unique<Node>();
@@ -177,7 +219,20 @@ std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, c
   n->shape = src.shape;
   n->is_final_decl = src.is_final_decl;
   b.ancestors.emplace_back(&src, n.get());
-  n->mod = BoundCopy(src.mod, b, src.kind == Node::kVar);
+  if (src.kind != Node::kVar) {
+    n->mod = BoundCopy(src.mod, b, false);
+  } else {
+    // A variable's modifiers (its value and attributes) are shared with element 1 when they
+    // mean the same there, copied and bound to element k otherwise. Not shared when a
+    // subscripted --set may later change one element's (BindSetOverrides).
+    const Mod& sm = src.Modifiers();
+    if (b.visit >= b.same_mod->size()) b.same_mod->resize(b.visit + 1, -1);
+    signed char& same = (*b.same_mod)[b.visit];
+    if (same < 0) same = !has_subscripted_set_ && SameInEveryElement(sm, b);
+    if (same) n->shared_mod = &sm;
+    else n->mod = BoundCopy(sm, b, true);
+  }
+  ++b.visit;
   if (src.prim != Prim::None) RegisterPrimitive(n.get(), n->cls);
   n->children.reserve(src.children.size());
   for (const auto& c : src.children) n->children.push_back(CloneInstance(*c, n.get(), c->name, b));
@@ -193,6 +248,7 @@ struct Elaborator::ArrayShare {
   const Node* first = nullptr;    // element 1
   long per_element = 0;           // instances_ counted by element 1
   std::vector<SliceValue> slice;  // its values from the array's modifier
+  mutable std::vector<signed char> same_mod;  // ShareBinding::same_mod, filled by the first copy
 };
 
 // Element `index` as a copy of element 1 bound to its slice of the array's modifier; false
@@ -202,7 +258,7 @@ bool Elaborator::ShareElement(const ArrayShare& share, Node* node, Node* array, 
                               int count) {
   if (!share.ok || instances_ + share.per_element > kMaxInstances) return false;
   std::vector<Value> values(share.slice.size());
-  ShareBinding b{&share.slice, {}, {}};
+  ShareBinding b{&share.slice, {}, {}, &share.same_mod};
   for (size_t i = 0; i < share.slice.size(); ++i) {
     if (!SliceAt(array->mod, share.slice[i].keys, index, count, &values[i])) return false;
     b.values.push_back(&values[i]);

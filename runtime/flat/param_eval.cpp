@@ -12,6 +12,9 @@ ParamEvaluator::ParamEvaluator(const ExprPool& pool, const std::vector<double>& 
 // expression's depth). A node is pushed again only while its children are pending.
 double ParamEvaluator::Eval(ExprId id) {
   if (id < 0) return 0.0;
+  const auto uid = static_cast<size_t>(id);
+  if (uid < known_.size() && known_[uid]) return value_[uid];
+  if (pool_[id].op == Op::Const) return pool_[id].value;  // a literal: nothing to walk or keep
   if (known_.size() < pool_.size()) {
     known_.resize(pool_.size(), 0);
     value_.resize(pool_.size(), 0.0);
