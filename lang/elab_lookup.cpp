@@ -1,6 +1,7 @@
 // Lookup: a variable's value, evaluated on first use from its binding (GetVar), and a
 // component reference resolved to the instance node it names (ResolveNode).
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 
 #include "lang/elab_internal.h"
@@ -50,12 +51,13 @@ std::string ElementName(const std::string& path, const Dims& shape, size_t k, Di
     idx[d] = static_cast<int>(rem % static_cast<size_t>(shape[d])) + 1;
     rem /= static_cast<size_t>(shape[d]);
   }
-  name += "[";
+  char buf[16];
+  name += '[';
   for (size_t d = 0; d < idx.size(); ++d) {
     if (d) name += ',';
-    name += std::to_string(idx[d]);
+    name.append(buf, static_cast<size_t>(std::to_chars(buf, buf + sizeof buf, idx[d]).ptr - buf));
   }
-  name += "]";
+  name += ']';
   return name;
 }
 

@@ -1,5 +1,6 @@
 #include "runtime/flat/param_eval.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace kanesim::flat {
@@ -15,9 +16,10 @@ double ParamEvaluator::Eval(ExprId id) {
   const auto uid = static_cast<size_t>(id);
   if (uid < known_.size() && known_[uid]) return value_[uid];
   if (pool_[id].op == Op::Const) return pool_[id].value;  // a literal: nothing to walk or keep
-  if (known_.size() < pool_.size()) {
-    known_.resize(pool_.size(), 0);
-    value_.resize(pool_.size(), 0.0);
+  if (known_.size() < pool_.size()) {  // grown by half at least: the pool grows between calls
+    const size_t n = std::max(pool_.size(), known_.size() + known_.size() / 2);
+    known_.resize(n, 0);
+    value_.resize(n, 0.0);
   }
   stack_.assign(1, id);
   while (!stack_.empty()) {

@@ -125,5 +125,35 @@ TEST(ArrayShare, IndexDependentEquationsAndSetOnOneElement) {
   EXPECT_DOUBLE_EQ(e->P("links[2].body.r_CM[1]"), 0.4);
 }
 
+// If this fails, an element's variable read element 1's modifiers where they depend on the
+// element (a start value and a length from the element's own parameter), or the
+// attributes the elements share (literals: unit, start = 0) were lost in a copy.
+TEST(ArrayShare, ModifiersReadingTheElementAsWrittenOut) {
+  const std::string link =
+      "model Link\n  parameter Real a = 1;\n  parameter Real b(unit = \"m\", min = 0) = 2 * a;\n"
+      "  Frame frame_a, frame_b;\n  Revolute pin(q(start = a / 10), u(start = 0));\n  Rod rod(L = b);\n"
+      "equation\n  connect(frame_a, pin.frame_a);\n  connect(pin.frame_b, rod.frame_a);\n"
+      "  connect(rod.frame_b, frame_b);\nend Link;\n";
+  const std::string parts = "  Link ls[3](a = {1, 2, 3});\n";
+  const std::string written = "  Link ls_1(a = 1);\n  Link ls_2(a = 2);\n  Link ls_3(a = 3);\n";
+  ExpectSame(ArrayChain(link, kJoints, parts, "ls"), Chain(link, kJointsWritten, written, "ls"), "ls");
+  auto e = ElaborateText(ArrayChain(link, kJoints, parts, "ls"));
+  ASSERT_TRUE(e->ok) << e->errors;
+  EXPECT_DOUBLE_EQ(e->P("ls[3].rod.L"), 6.0);
+}
+
+// If this fails, a bound (min) that reads the element's own parameter was taken from
+// element 1: only element 3's value is below its own bound.
+TEST(ArrayShare, BoundReadingTheElementCheckedPerElement) {
+  const std::string part =
+      "model P\n  parameter Real a = 1;\n  parameter Real b(min = a) = 2.5;\n  Frame frame_a, frame_b;\n"
+      "  Rod rod(L = b);\nequation\n  connect(frame_a, rod.frame_a);\n  connect(rod.frame_b, frame_b);\nend P;\n";
+  auto e = ElaborateText(ArrayChain(part, kJoints, "  P ps[3](a = {1, 2, 3});\n", "ps"));
+  EXPECT_FALSE(e->ok);
+  EXPECT_NE(e->errors.find("'ps[3].b' = 2.5"), std::string::npos) << e->errors;
+  EXPECT_EQ(e->errors.find("'ps[2].b'"), std::string::npos) << e->errors;
+  EXPECT_EQ(e->errors.find("'ps[1].b'"), std::string::npos) << e->errors;
+}
+
 }  // namespace
 }  // namespace kanesim::lang::test
