@@ -249,6 +249,7 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
 }
 
 void SetBridgeSeveralLoops(BranchMonitor& m, bool on) { m.several_loops = on; }
+void SetBridgeProjectedEstimate(BranchMonitor& m, bool on) { m.projected_estimate = on; }
 
 void PassageCounts(const BranchMonitor& m, long* checked, long* unchecked) {
   *checked = m.passages_checked;

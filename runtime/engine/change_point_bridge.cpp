@@ -89,6 +89,24 @@ constexpr const char* kEstimateAbove = "the extrapolation's error estimate is ab
 // <= 2.8e-6 J of 270 J (1e-8 relative; a single loop's limit 1e3 allowed 6e-7 J of 22 J).
 constexpr double kBridgeMaxErrorSeveral = 1e4;
 constexpr double kBridgeMoved = 1e-6;    // largest change by the projection (of max(1, |y|))
+// ... on the multiplier form where several loops are near singular at once (a chain of
+// equal-link parallelograms): the estimate is dominated by the same round-off of the speeds
+// the ill-conditioned system determines (chain of two, rtol 1e-12: the rods' speeds, equal
+// on the branch, differ by 1e-8 at the approach's last node; estimate 9.8e3, 98 between the
+// three extrapolations each projected onto the constraints). An estimate above
+// kBridgeMaxError (up to kBridgeMaxRawSeveral) is taken again between the projected
+// extrapolations and limited by kBridgeMaxProjected; the projection may move the state by
+// up to kBridgeMovedSeveral (the other branches are ~rho_b = 3e-3 away). Measured with every
+// limit lifted on the chains of 2 and 10, rtol 1e-10 and 1e-12, every integrator (26 such
+// bridges of 398): raw estimates 1.1e5 ... 3.2e6, projected 15 ... 8.7e4, projection moves
+// up to 3.9e-6, the lumped energy's jump across each <= 1.9e-8 J (7e-11 relative; the
+// other 372 bridges up to 8.9e-9 relative); on the chain of 40 at rtol 1e-12 (DOP853,
+// CVODE, ARKODE, IDA to t = 9.96; 56 such bridges): projected up to 2.9e5 (27 of them
+// 1e5 ... 2.9e5), raw up to 3.9e6, moves up to 4.8e-6, jumps <= 1.8e-7 J (1.6e-10
+// relative) (docs/benchmarks.md "Change points").
+constexpr double kBridgeMaxRawSeveral = 1e7;
+constexpr double kBridgeMaxProjected = 1e6;
+constexpr double kBridgeMovedSeveral = 1e-5;
 
 // Component i at t of the Hermite interpolant through y and y' at the m nodes (tn[k], yn[k],
 // fn[k]) (degree 2m - 1), or without the slope at the first node when skip (degree 2m - 2):
@@ -358,7 +376,18 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   // state (checked after the projection below).
   const bool sparse = p.solver == SolverPath::Sparse;
   const bool needs_several = !sparse && m.bridge_estimate > kBridgeMaxErrorReduced;
-  if (!(m.bridge_estimate <= (sparse ? kBridgeMaxError : m.several_loops ? kBridgeMaxErrorSeveral : kBridgeMaxErrorReduced))) {
+  // On the multiplier form an estimate above kBridgeMaxError is measured again after the
+  // projection (the two comparison extrapolations projected as the bridged state is), where
+  // several loops are near singular at the bridged state.
+  bool needs_projected = sparse && m.several_loops && m.projected_estimate && m.bridge_estimate > kBridgeMaxError &&
+                         m.bridge_estimate <= kBridgeMaxRawSeveral;
+  if (needs_projected) {  // several loops near singular at the approach's last node (else as before: refused)
+    int near_last = 0;
+    needs_projected = RhoAt(p, m, m.nt[L - 1], m.ny[L - 1].data(), &near_last) >= 0.0 && near_last > 1;
+  }
+  m.projected_est = -1.0;
+  if (!(m.bridge_estimate <= (sparse ? kBridgeMaxError : m.several_loops ? kBridgeMaxErrorSeveral : kBridgeMaxErrorReduced)) &&
+      !needs_projected) {
     why = kEstimateAbove;
   } else if (ProjectOntoConstraints(p, ws, tb, y_b) != 0) {
     why = needs_several ? kEstimateAbove : "the bridged state could not be projected";
@@ -368,12 +397,31 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
       moved = std::isnan(d) ? INFINITY : std::max(moved, d);
     }
     rho_b = RhoAt(p, m, tb, y_b, &near_loops);
-    if (needs_several && near_loops < 2)
+    if (needs_projected && near_loops > 1 && moved <= kBridgeMovedSeveral) {
+      std::vector<double> yq(nn), yf(nn);
+      for (size_t i = 0; i < nn; ++i) {
+        yq[i] = HermiteAt(m.h_t, m.h_y, m.h_f, 3, true, i, tb);
+        yf[i] = HermiteAt(ft, fy, ff, 3, false, i, tb);
+      }
+      double pe = INFINITY;
+      if (ProjectOntoConstraints(p, ws, tb, yq.data()) == 0 && ProjectOntoConstraints(p, ws, tb, yf.data()) == 0) {
+        pe = 0.0;
+        for (size_t i = 0; i < nn; ++i) {
+          const double w = atol + rtol * std::fabs(y_b[i]);
+          const double e = std::max(std::fabs(yq[i] - y_b[i]), std::fabs(yf[i] - y_b[i])) / w;
+          pe = std::isnan(e) ? INFINITY : std::max(pe, e);
+        }
+      }
+      m.projected_est = pe;
+    }
+    if ((needs_several || needs_projected) && near_loops < 2)
       why = kEstimateAbove;
-    else if (!(moved <= kBridgeMoved))
+    else if (!(moved <= (needs_projected ? kBridgeMovedSeveral : kBridgeMoved)))
       why = "the projection moved the bridged state too far";
     else if (!(rho_b >= 0.0))
       why = "the bridged state is not valid";
+    else if (needs_projected && !(m.projected_est >= 0.0 && m.projected_est <= kBridgeMaxProjected))
+      why = kEstimateAbove;
     else if (near_loops > 1 && !m.several_loops)
       why = kSeveralLoops;
     else if (rho_b < 0.25 * past)

@@ -123,6 +123,10 @@ void SetEarlyBridge(BranchMonitor& monitor, double rtol, double atol);
 // chain of equal-link parallelograms; on by default). Off: such zones are refused, as before
 // (tests switch it off to show what it does).
 void SetBridgeSeveralLoops(BranchMonitor& monitor, bool on);
+// Whether, there, on the multiplier form an error estimate above the bridge's limit is taken
+// again between the extrapolations projected onto the constraints (on by default; off:
+// refused, as before; tests switch it off).
+void SetBridgeProjectedEstimate(BranchMonitor& monitor, bool on);
 // The change points the solver passed by itself (with SetEarlyBridge on): how many were
 // checked against the bridge's approach, and how many stood unchecked (the approach
 // refused, or several loops near singular at once; docs/constraints.md).
