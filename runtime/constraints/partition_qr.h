@@ -6,8 +6,13 @@
 // and recomputed from the column's remaining rows when the downdate has lost too much.
 //
 // What it adds: A of a chain of loops is block-banded (a speed moves the rows of one or
-// two loops), so a step touches only the columns whose non-zero rows overlap the
-// reflector's, and only those rows (a profile, as rt::SmallQR keeps for A_dep). What it
+// two loops), so a step touches only the columns whose non-zero rows meet the reflector's,
+// and only those rows (each column's set of rows that may be non-zero; a set, not a band:
+// the pivots jump along the chain, and a reflector joins row k to the pivot's rows). The
+// trailing block fills in as the steps go (the chain of 40 at its change points: dense
+// after ~20 of 80 steps), so once a reflector has more than a quarter of the rows left,
+// the remaining steps are Eigen's own calls (makeHouseholderInPlace,
+// applyHouseholderOnTheLeft, norm()) on the dense block, as its computeInPlace makes them. What it
 // skips are exact zeros, and the sums it keeps are added in Eigen's order (its redux and
 // matrix-vector kernels with SSE2 packets of two doubles, partition_qr.cpp), so every
 // number the choice compares is Eigen's to the bit: the same columns, ties (equal links
@@ -17,6 +22,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 namespace kanesim::rt {
@@ -40,11 +46,16 @@ class PartitionQR {
   Eigen::Index NonzeroPivots() const { return nonzero_pivots_; }
 
  private:
-  Eigen::MatrixXd qr_;                 // working copy of A, R above the diagonal, reflectors below
+  void DenseStep(Eigen::Index k);  // step k after the swap, by Eigen's own calls
+  Eigen::MatrixXd qr_;                   // working copy of A, R above the diagonal, reflectors below
   Eigen::VectorXd norm_upd_, norm_dir_;  // Eigen's m_colNormsUpdated / m_colNormsDirect
   std::vector<int> perm_;
-  std::vector<Eigen::Index> lo_, hi_;  // column j non-zero only in rows lo_[j] <= i < hi_[j]
-  std::vector<double> v_;              // reflector of the step times tau
+  // The rows where each column may be non-zero, a bit per row (words_ words per column),
+  // and the current reflector's; the reflector times tau.
+  std::vector<uint64_t> rows_, vrows_;
+  Eigen::Index words_ = 0;
+  std::vector<double> v_;
+  Eigen::VectorXd temp_;  // Eigen's m_temp: the reflector's row workspace
   Eigen::Index steps_ = 0, nonzero_pivots_ = 0;
   double max_pivot_ = 0.0;
 };
