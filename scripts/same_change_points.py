@@ -7,7 +7,8 @@ rtol 1e-8, 1e-10, 1e-12 x every integrator, reduced form). Each cell runs OLD th
 for the CPU times on a noisy machine) and compares the CSV byte for byte, the exit code and
 stderr. Prints one line per cell (same/DIFFERS, exit codes, CPU old/new); exit 1 if any differs.
 
-Usage: scripts/same_change_points.py OLD NEW [--only single|chains] [--n 2,10,40] [--timeout 300]
+Usage: scripts/same_change_points.py OLD NEW [--only single|chains] [--n 2,10,40]
+       [--integrators dop853,...] [--rtol 1e-8,...] [--timeout 300]
 """
 import argparse
 import filecmp
@@ -34,7 +35,7 @@ def run(binary, args, out, timeout):
     return code, err, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def cells(only, ns):
+def cells(only, ns, integrators, rtols):
     if only in ("all", "single"):
         for a in ("0.5", "0.6"):
             for solver in ("dense", "sparse"):
@@ -46,8 +47,8 @@ def cells(only, ns):
                                 "--output", "rocker_pivot.q"])
     if only in ("all", "chains"):
         for n in ns:
-            for integ in INTEGRATORS:
-                for rtol in ("1e-8", "1e-10", "1e-12"):
+            for integ in integrators:
+                for rtol in rtols:
                     args = ["run", CHAIN, "--set", "N=%d" % n, "--stop-time", "20", "--rtol", rtol, "--integrator",
                             integ, "--solver", "auto", "--output", "rj0.q", "--output", "rj0.u"]
                     for i in range(1, n + 1):
@@ -61,12 +62,15 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--only", default="all", choices=["all", "single", "chains"])
     ap.add_argument("--n", default="2,10,40")
+    ap.add_argument("--integrators", default=",".join(INTEGRATORS), help="chains only")
+    ap.add_argument("--rtol", default="1e-8,1e-10,1e-12", help="chains only")
     ap.add_argument("--timeout", type=float, default=300)
     o = ap.parse_args()
     differ = 0
     with tempfile.TemporaryDirectory() as tmp:
         a_out, b_out = os.path.join(tmp, "old.csv"), os.path.join(tmp, "new.csv")
-        for name, args in cells(o.only, [int(x) for x in o.n.split(",")]):
+        for name, args in cells(o.only, [int(x) for x in o.n.split(",")], o.integrators.split(","),
+                               o.rtol.split(",")):
             for f in (a_out, b_out):
                 if os.path.exists(f):
                     os.remove(f)
