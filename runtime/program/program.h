@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/constraints/partition_qr.h"
 #include "runtime/program/compile_options.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/program/partition_qr.h"
 #include "runtime/program/small_qr.h"
 #include "runtime/program/tape.h"
 

@@ -1,4 +1,4 @@
-// rt::PartitionQR (runtime/constraints/partition_qr.h) against Eigen's ColPivHouseholderQR,
+// rt::PartitionQR (runtime/program/partition_qr.h) against Eigen's ColPivHouseholderQR,
 // whose choice it must reproduce (the closed loops' speed partition, docs/constraints.md
 // "Several loops singular at once"): the same pivot columns, the same |R(k, k)|, the same
 // rank and non-zero pivots, on random dense, random banded (a chain's profile), rank-deficient
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/constraints/partition_qr.h"
+#include "runtime/program/partition_qr.h"
 #include "runtime/engine/engine.h"
 #include "runtime/program/program.h"
 #include "tests/constraints/load_util.h"

@@ -1,6 +1,6 @@
 // rt::PartitionQR: Eigen's ColPivHouseholderQR::computeInPlace (Eigen 3.4) step by step, on
-// a profile of the non-zero rows of each column (runtime/constraints/partition_qr.h).
-#include "runtime/constraints/partition_qr.h"
+// a profile of the non-zero rows of each column (runtime/program/partition_qr.h).
+#include "runtime/program/partition_qr.h"
 
 #include <algorithm>
 #include <Eigen/Householder>
