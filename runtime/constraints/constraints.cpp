@@ -444,8 +444,8 @@ int FactorDependent(const Program& p, Workspace& ws) {
     return mx > 0.0 ? mn / mx : 0.0;
   };
   auto choose = [&]() {
-    ws.qr_A->compute(ws.A);
-    const auto& perm = ws.qr_A->colsPermutation().indices();
+    ws.qr_A.Compute(ws.A, rank);  // only the first rank pivots are used
+    const auto& perm = ws.qr_A.Indices();
     for (int k = 0; k < rank; ++k) ws.dep[static_cast<size_t>(k)] = perm[k];
     ws.dep_banded = false;
     if (rank >= kBandedMinRank) BandedOrder(ws, rank);
@@ -650,7 +650,7 @@ void InitConstraintWorkspace(const Program& p, Workspace& ws) {
   ws.du_full = Eigen::VectorXd::Zero(p.nu_all);
   ws.A = Eigen::MatrixXd::Zero(na, p.nu);
   ws.A_dep = Eigen::MatrixXd::Zero(na, rank);
-  ws.qr_A.emplace(na, p.nu);
+  ws.qr_A.Resize(na, p.nu);
   ws.qr_dep.Resize(na, rank);
   ws.dep.assign(static_cast<size_t>(rank), 0);
   ws.ind.assign(static_cast<size_t>(nind), 0);

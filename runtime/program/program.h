@@ -20,6 +20,7 @@
 
 #include "runtime/program/compile_options.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/program/partition_qr.h"
 #include "runtime/program/small_qr.h"
 #include "runtime/program/tape.h"
 
@@ -336,7 +337,7 @@ struct Workspace {
   Eigen::VectorXd cbias;            // acceleration residuals with free udot = 0  (n_c)  filled by SolveConstrained
   Eigen::MatrixXd A;                // constraint Jacobian on the free speeds, active rows  (n_a x nu)  filled by ConstraintJacobian
   Eigen::MatrixXd A_dep;            // columns of A for the dependent speeds  (n_a x rank)  filled by ProjectState
-  std::optional<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>> qr_A;    // partition choice  filled by ProjectState
+  PartitionQR qr_A;                 // partition choice (pivoting QR of A, Eigen's rule on A's profile)  filled by ProjectState
   SmallQR qr_dep;                   // A_dep = Q R  filled by ProjectState
   std::vector<int> dep, ind;        // free speed indices: dependent (rank), independent (nu - rank)  filled by ProjectState
   bool partition_valid = false;     // dep/ind chosen  set by ProjectState
