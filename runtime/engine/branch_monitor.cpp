@@ -115,7 +115,9 @@ int NearestSingularLoop(const Program& p, BranchMonitor& m, double* rho_out, int
     Eigen::Matrix<double, 6, 6> G = Eigen::Matrix<double, 6, 6>::Zero();
     for (int i = 0; i < r; ++i)
       for (int k = 0; k <= i; ++k) G(i, k) = G(k, i) = ws.A.row(idx[i]).dot(ws.A.row(idx[k]));
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(G.topLeftCorner(r, r), Eigen::EigenvaluesOnly);
+    // At most 6 x 6 (one loop's rows): a fixed-capacity matrix, so no allocation per loop per step.
+    using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+    Eigen::SelfAdjointEigenSolver<Small> es(Small(G.topLeftCorner(r, r)), Eigen::EigenvaluesOnly);
     const auto& ev = es.eigenvalues();  // ascending
     if (!(ev[r - 1] > 0.0)) continue;
     if (first)
