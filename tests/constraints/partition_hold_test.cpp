@@ -2,13 +2,15 @@
 // OdeSystem::HoldForJacobian; docs/constraints.md "Singular configurations"; issue 20).
 // Near a change point of a chain of equal-link parallelograms every partition's dependent
 // block is degraded (pivot ratio below 1e-2), so an evaluation re-chooses it by pivoting;
-// IDA's and CVODE-BDF's Jacobians take one evaluation per column around the same state, and
-// columns taken with different partitions differentiate different functions (the partition
-// decides which coordinates the projection corrects). Checked:
+// IDA's Jacobian takes one evaluation per column around the same state, and columns taken
+// with different partitions differentiate different functions (the partition decides which
+// coordinates the projection corrects). IDA holds it there; CVODE-BDF's Jacobian is CVODE's
+// own (held, it stopped on the chain of 40 at rtol 1e-12, docs/benchmarks.md). Checked:
 //  - at a state in the zone, unheld, each perturbed evaluation re-chooses (the zone is real,
 //    so the next check can fail), and held none does, and the held evaluation at the base
 //    state itself is the unheld one bit for bit;
-//  - IDA and CVODE-BDF on the chain (reduced form) at rtol 1e-10 through its change points:
+//  - IDA (held) and CVODE-BDF (not) on the chain (reduced form) at rtol 1e-10 through its
+//    change points:
 //    on the branch to 20 s, within 2e-5 rad of the independent lumped crank
 //    (tests/stress/lumped_crank.h).
 #include <gtest/gtest.h>
@@ -118,7 +120,7 @@ constexpr int kLoops = 2;  // sanitizers: ~30x slower
 constexpr int kLoops = 4;
 #endif
 
-// Measured (N = 4, rtol 1e-10): IDA 2.4e-7 rad, CVODE-BDF 4.8e-6 rad off the lumped crank (main:
+// Measured (N = 4, rtol 1e-10): IDA 2.4e-7 rad, CVODE-BDF 7.7e-6 rad off the lumped crank (main:
 // 5.7e-7, 7.7e-6; the chain of ten on main 7.4e-6, 9.6e-6).
 TEST(PartitionHold, ImplicitSolversPassTheChainsChangePoints) {
   for (bool bdf : {false, true}) {
