@@ -465,7 +465,10 @@ int FactorDependent(const Program& p, Workspace& ws) {
     fresh = true;
   }
   double q = ratio();
-  if (q < kDegraded && !fresh) {
+  // Held (HoldPartition: the perturbed evaluations of a difference-quotient Jacobian),
+  // a degraded partition is kept, so that every column is a derivative of the same
+  // function; only a singular one is re-chosen.
+  if (q < (ws.hold_partition ? kSingular : kDegraded) && !fresh) {
     choose();
     q = ratio();
   }

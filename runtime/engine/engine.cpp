@@ -94,6 +94,8 @@ bool StepProjectionAvailable(const Program& p) { return !p.rows.empty() && p.sol
 
 void SetStepProjection(Workspace& ws, bool on) { ws.step_projection = on; }
 
+void HoldPartition(Workspace& ws, bool on) { ws.hold_partition = on; }
+
 int ProjectOntoConstraints(const Program& p, Workspace& ws, double t, double* y) {
   if (p.rows.empty()) return 0;
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;

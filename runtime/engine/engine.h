@@ -95,6 +95,13 @@ void SetStepProjection(Workspace& ws, bool on);
 // y := its projection onto the position and velocity constraints. 0, or 1 (recoverable:
 // the loop cannot be closed, or a singular configuration; ErrorMessage says which).
 int ProjectOntoConstraints(const Program& program, Workspace& ws, double t, double* y);
+// Closed loops on the reduced path: while held, Derivative keeps the independent-speed
+// partition of the last evaluation even where its dependent block is degraded (it is
+// re-chosen only at a singular one). For the perturbed evaluations of a difference-quotient
+// Jacobian around the last evaluated state: the partition decides which coordinates the
+// projection corrects, so columns taken with different partitions are derivatives of
+// different functions (docs/constraints.md, "Singular configurations").
+void HoldPartition(Workspace& ws, bool on);
 const std::string& ErrorMessage(const Workspace& ws);
 
 // Closed loops through singular configurations (runtime/engine/branch_monitor.cpp; the

@@ -345,6 +345,7 @@ struct Workspace {
   std::vector<int> col_rows;        // per free speed: first and last active row it can move (structural), 2 s and 2 s + 1, for the banded order of the dependent speeds  (2 nu)  filled by InitConstraintWorkspace
   std::vector<int> order_scratch;   // the pivoting order of the dependent speeds, then column extents of the symbolic QR  (3 rank)  filled by FactorDependent
   long partition_changes = 0;       // how often the partition was re-chosen  filled by ProjectState
+  bool hold_partition = false;      // keep dep/ind even where degraded (difference-quotient Jacobians: HoldPartition)  set by HoldPartition
   Eigen::VectorXd active_rhs;       // right side v of SolveDependent: a per-row vector on the active rows  (n_a)  filled by its callers
   Eigen::VectorXd dep_solution;     // x = A_dep^+ v of SolveDependent; x(0:rank) on the dependent speeds  (n_a)  filled by SolveDependent's callers
   Eigen::VectorXd lambda_active;    // constraint multipliers on the active rows, Q [w; 0]  (n_a)  filled by LoopMultipliers

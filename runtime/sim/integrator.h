@@ -71,6 +71,11 @@ class OdeSystem {
     return false;
   }
   virtual void BridgeState(double /*t*/, double* /*y*/) {}
+  // A solver's difference-quotient Jacobian: on before its perturbed evaluations of Rhs
+  // around the state of the last one, off after them. The system may hold there whatever
+  // discrete choices the last evaluation made (closed loops: the speed partition,
+  // rt::HoldPartition), so that every column differentiates the same function.
+  virtual void HoldForJacobian(bool /*on*/) {}
 };
 
 enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };

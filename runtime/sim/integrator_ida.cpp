@@ -190,6 +190,9 @@ class IdaStepper final : public SundialsStepper {
       SUNMatZero(J);
     }
     for (int i = 0; i < n; ++i) y1_[static_cast<size_t>(i)] = y[i];
+    // The last evaluation was at y (IDA's residual at its Newton iterate, rr): its discrete
+    // choices (the loops' speed partition) are held for the perturbed ones.
+    GuardedRhs::JacobianHold hold(rhs_);
     for (const auto& color : colors_) {
       for (int j : color) {
         const auto uj = static_cast<size_t>(j);

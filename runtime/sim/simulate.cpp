@@ -53,6 +53,7 @@ class EngineOde final : public OdeSystem {
   }
   bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
   void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
+  void HoldForJacobian(bool on) override { rt::HoldPartition(ws_, on); }
   int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
 
  private:

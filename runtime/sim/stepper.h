@@ -27,6 +27,17 @@ class GuardedRhs {
   // (kStepCheckFailed).
   bool ChecksSteps() const { return system_.ChecksSteps(); }
   int StepAccepted(double t, const double* y);
+  // The system's HoldForJacobian, on for the life of a JacobianHold.
+  class JacobianHold {
+   public:
+    explicit JacobianHold(GuardedRhs& rhs) : system_(rhs.system_) { system_.HoldForJacobian(true); }
+    ~JacobianHold() { system_.HoldForJacobian(false); }
+    JacobianHold(const JacobianHold&) = delete;
+    JacobianHold& operator=(const JacobianHold&) = delete;
+
+   private:
+    OdeSystem& system_;
+  };
 
   bool failed = false;     // an evaluation failed since the last ClearFailure()
   bool fatal = false;      // an evaluation returned < 0: latched, every later call fails

@@ -147,6 +147,60 @@ TEST(SimStiff, ImplicitMethodsAreAccurateInFewSteps) {
   EXPECT_TRUE(!explicit_run.ok || explicit_run.stats.steps > 3000) << "the test problem is not stiff";
 }
 
+// IDA's difference-quotient Jacobian evaluates f inside HoldForJacobian(true) ... (false)
+// around the state it evaluated last (closed loops hold their speed partition there,
+// rt::HoldPartition): every Jacobian evaluation held and no other, the holds balanced; the
+// other solvers' evaluations are never held.
+class HoldCountingOde final : public OdeSystem {
+ public:
+  int Size() const override { return 2; }
+  int Rhs(double, const double* y, double* ydot) override {
+    ydot[0] = y[1];
+    ydot[1] = -100.0 * y[0] - 0.5 * y[1];
+    (held_ ? held_evals : free_evals)++;
+    if (held_ && !same_as_last(y)) ++held_far;  // a column: one component perturbed
+    if (!held_) last_.assign(y, y + 2);
+    return 0;
+  }
+  void HoldForJacobian(bool on) override {
+    if (on == held_) ++unbalanced;
+    held_ = on;
+    if (on) ++holds;
+  }
+  long held_evals = 0, free_evals = 0, holds = 0, unbalanced = 0, held_far = 0;
+
+ private:
+  bool same_as_last(const double* y) const {
+    int differ = 0;
+    for (int i = 0; i < 2; ++i) differ += y[i] != last_[static_cast<size_t>(i)];
+    return differ <= 1;
+  }
+  bool held_ = false;
+  std::vector<double> last_{0.0, 0.0};
+};
+
+TEST(SimJacobianHold, IdaHoldsExactlyItsDifferenceQuotientEvaluations) {
+  for (Method m : {Method::IDA, Method::CvodeBdf, Method::CvodeAdams, Method::ArkodeErk, Method::Dop853}) {
+    HoldCountingOde ode;
+    IntegratorOptions opt;
+    opt.method = m;
+    opt.rtol = opt.atol = 1e-8;
+    const double y0[2] = {1.0, 0.0};
+    Rows rows;
+    IntegrateResult r = Integrate(ode, y0, OutputGrid{0.0, 2.0, 0.1}, opt, rows.Callback(2));
+    ASSERT_TRUE(r.ok) << MethodName(m) << ": " << r.cause;
+    EXPECT_EQ(ode.unbalanced, 0) << MethodName(m);
+    if (m == Method::IDA) {
+      EXPECT_GT(ode.holds, 0);
+      EXPECT_EQ(ode.holds, r.stats.jac_evals);
+      EXPECT_EQ(ode.held_evals, r.stats.rhs_evals_jac);
+      EXPECT_EQ(ode.held_far, 0);
+    } else {
+      EXPECT_EQ(ode.holds, 0) << MethodName(m);
+    }
+  }
+}
+
 TEST(SimOutputGrid, RowsAreStartPlusMultiplesAndEndExactlyAtStop) {
   OutputGrid g{0.0, 1.0, 0.3};
   ASSERT_EQ(g.Count(), 5);
