@@ -62,7 +62,10 @@ constexpr long kEarlyBridgeSteps = 50;
 // (chain of 40, CVODE, rtol 1e-6: 0.23 -> 2.9 s CPU, 1.3e-3 -> 1.8e-2 rad off the lumped
 // crank with a bridge at the first step; the same as before at 10). Measured on the chain
 // of 40 at rtol 1e-12, reduced form (docs/benchmarks.md "Change points"): DOP853 46 ->
-// 28 s CPU, ARKODE 28 -> 16 s.
+// 28 s CPU, ARKODE 28 -> 16 s. Reduced form only: on the multiplier form it saved little
+// (chain of ten, 1e-12: 2-20 %) and DOP853 on the chain of two at 1e-12 then ended with two
+// output rows 2.4e-4 and 6.3e-3 rad off the lumped crank (t = 16.79, 16.80, just before and
+// after a crossing it passed by itself; the steps themselves on it), exit 0.
 constexpr long kEarlyBridgeStepsSeveral = 10;
 constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
 constexpr double kRankTol = 1e-9;  // sigma / sigma_max below which a row counts as dependent (assembly's)
@@ -215,7 +218,9 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
     m.zone_near = near_loops;
     ++m.zone_steps;
     if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried &&
-        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once ? kEarlyBridgeStepsSeveral : kEarlyBridgeSteps)) {
+        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once && p.solver != SolverPath::Sparse
+                             ? kEarlyBridgeStepsSeveral
+                              : kEarlyBridgeSteps)) {
       // Stalling: a passage takes a few steps. Bridged now, if the bridge can be trusted;
       // the solver's failure below hands it to the integrator (Bridge returns it).
       m.early_tried = true;
