@@ -61,8 +61,8 @@ constexpr long kEarlyBridgeSteps = 50;
 // bridge and the fresh solver after it cost more than the passage and were less accurate
 // (chain of 40, CVODE, rtol 1e-6: 0.23 -> 2.9 s CPU, 1.3e-3 -> 1.8e-2 rad off the lumped
 // crank with a bridge at the first step; the same as before at 10). Measured on the chain
-// of 40 at rtol 1e-12, reduced form (docs/benchmarks.md "Change points"): DOP853 46 ->
-// 28 s CPU, ARKODE 28 -> 16 s. Reduced form only: on the multiplier form it saved little
+// of 40 at rtol 1e-12, reduced form (docs/benchmarks.md "Change points"): DOP853 61 ->
+// 42 s CPU, ARKODE 28 -> 17 s, CVODE-BDF 68 -> 55 s. Reduced form only: on the multiplier form it saved little
 // (chain of ten, 1e-12: 2-20 %) and DOP853 on the chain of two at 1e-12 then ended with two
 // output rows 2.4e-4 and 6.3e-3 rad off the lumped crank (t = 16.79, 16.80, just before and
 // after a crossing it passed by itself; the steps themselves on it), exit 0.
