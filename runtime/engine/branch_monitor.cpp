@@ -52,6 +52,21 @@ constexpr long kMaxZoneSteps = 1000;
 // After this many accepted steps inside one zone (SetEarlyBridge on) the bridge is tried at
 // once rather than after kMaxZoneSteps; refused, the solver goes on as before.
 constexpr long kEarlyBridgeSteps = 50;
+// ... and after this many in a zone where several loops are near singular at once (a chain
+// of equal-link parallelograms; SetBridgeSeveralAtOnce): there every evaluation re-chooses
+// the partition of an ill-conditioned block and a creeping solver's steps are expensive.
+// The bridge's approach starts from the last accepted step before the zone (rho >= 3.5e-2)
+// either way, so a stall gets the same bridge as at the 50th step. Not at the first step:
+// the solvers' own passages (at most 9 steps) are left to them, since at loose tolerances a
+// bridge and the fresh solver after it cost more than the passage and were less accurate
+// (chain of 40, CVODE, rtol 1e-6: 0.23 -> 2.9 s CPU, 1.3e-3 -> 1.8e-2 rad off the lumped
+// crank with a bridge at the first step; the same as before at 10). Measured on the chain
+// of 40 at rtol 1e-12, reduced form (docs/benchmarks.md "Change points"): DOP853 61 ->
+// 42 s CPU, ARKODE 28 -> 17 s, CVODE-BDF 68 -> 55 s. Reduced form only: on the multiplier form it saved little
+// (chain of ten, 1e-12: 2-20 %) and DOP853 on the chain of two at 1e-12 then ended with two
+// output rows 2.4e-4 and 6.3e-3 rad off the lumped crank (t = 16.79, 16.80, just before and
+// after a crossing it passed by itself; the steps themselves on it), exit 0.
+constexpr long kEarlyBridgeStepsSeveral = 10;
 constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
 constexpr double kRankTol = 1e-9;  // sigma / sigma_max below which a row counts as dependent (assembly's)
 }  // namespace
@@ -204,7 +219,10 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
     m.zone_rho = std::min(m.zone_rho, rho);
     m.zone_near = near_loops;
     ++m.zone_steps;
-    if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried && m.zone_steps >= kEarlyBridgeSteps) {
+    if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried &&
+        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once && p.solver != SolverPath::Sparse
+                             ? kEarlyBridgeStepsSeveral
+                              : kEarlyBridgeSteps)) {
       // Stalling: a passage takes a few steps. Bridged now, if the bridge can be trusted;
       // the solver's failure below hands it to the integrator (Bridge returns it).
       m.early_tried = true;
@@ -252,6 +270,7 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
 
 void SetBridgeSeveralLoops(BranchMonitor& m, bool on) { m.several_loops = on; }
 void SetBridgeProjectedEstimate(BranchMonitor& m, bool on) { m.projected_estimate = on; }
+void SetBridgeSeveralAtOnce(BranchMonitor& m, bool on) { m.several_at_once = on; }
 
 void PassageCounts(const BranchMonitor& m, long* checked, long* unchecked) {
   *checked = m.passages_checked;

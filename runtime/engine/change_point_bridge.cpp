@@ -87,7 +87,12 @@ constexpr const char* kEstimateAbove = "the extrapolation's error estimate is ab
 // constraints removes. Measured on the chain of ten at rtol 1e-12 (docs/benchmarks.md
 // "Change points"): estimates 5e2 ... 4.6e3, the lumped energy's jump across each bridge
 // <= 2.8e-6 J of 270 J (1e-8 relative; a single loop's limit 1e3 allowed 6e-7 J of 22 J).
-constexpr double kBridgeMaxErrorSeveral = 1e4;
+// Was 1e4; the chain of 40 (CVODE, 1e-12) stopped on 1.08e4. With the limit lifted, on the
+// chain of 40 at 1e-12 (DOP853, CVODE, CVODE-BDF, ARKODE; 337 bridges, E = 1072 J) the
+// jump grows mildly with the estimate: <= 1.2e-5 J at 1e3 ... 5e3, <= 2.3e-5 J at 5e3 ...
+// 1e4, <= 2.9e-5 J (2.7e-8 of E) at 1e4 ... 1.3e4; the chain of ten with IDA (after 10
+// steps in a zone, below) met 2.73e4: jump 1.25e-6 J (4.6e-9 of E = 270 J).
+constexpr double kBridgeMaxErrorSeveral = 3e4;
 constexpr double kBridgeMoved = 1e-6;    // largest change by the projection (of max(1, |y|))
 // ... on the multiplier form where several loops are near singular at once (a chain of
 // equal-link parallelograms): the estimate is dominated by the same round-off of the speeds
@@ -104,9 +109,9 @@ constexpr double kBridgeMoved = 1e-6;    // largest change by the projection (of
 // CVODE, ARKODE, IDA to t = 9.96; 56 such bridges): projected up to 2.9e5 (27 of them
 // 1e5 ... 2.9e5), raw up to 3.9e6, moves up to 4.8e-6, jumps <= 1.8e-7 J (1.6e-10
 // relative) (docs/benchmarks.md "Change points").
-constexpr double kBridgeMaxRawSeveral = 1e7;
+constexpr double kBridgeMaxRawSeveral = 2e7;
 constexpr double kBridgeMaxProjected = 1e6;
-constexpr double kBridgeMovedSeveral = 1e-5;
+constexpr double kBridgeMovedSeveral = 2e-5;
 
 // Component i at t of the Hermite interpolant through y and y' at the m nodes (tn[k], yn[k],
 // fn[k]) (degree 2m - 1), or without the slope at the first node when skip (degree 2m - 2):

@@ -130,6 +130,9 @@ void SetEarlyBridge(BranchMonitor& monitor, double rtol, double atol);
 // chain of equal-link parallelograms; on by default). Off: such zones are refused, as before
 // (tests switch it off to show what it does).
 void SetBridgeSeveralLoops(BranchMonitor& monitor, bool on);
+// Whether the early bridge over such a zone is tried after 10 accepted steps in it instead of
+// the 50th (on by default; off: as before, tests switch it off).
+void SetBridgeSeveralAtOnce(BranchMonitor& monitor, bool on);
 // Whether, there, on the multiplier form an error estimate above the bridge's limit is taken
 // again between the extrapolations projected onto the constraints (on by default; off:
 // refused, as before; tests switch it off).

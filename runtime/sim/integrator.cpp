@@ -214,8 +214,11 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
       // A singular configuration the solver could not pass: bridged, the output instants
       // in the gap from the bridged motion, then a fresh solver from past it.
       double t_from = 0.0, t_b = 0.0;
-      if (!options.bridge || !system.Bridge(options.rtol, options.atol, &t_from, &t_b, yb.data()) || !(t_b < grid.stop) || tout < t_from)
+      if (!options.bridge || !system.Bridge(options.rtol, options.atol, &t_from, &t_b, yb.data()) || tout < t_from)
         break;
+      // A bridge ending at or past the stop time (a crossing just before it) writes the
+      // last rows itself; no solver follows.
+      const bool to_stop = !(t_b < grid.stop);
       bool row_failed = false;
       for (; k < count && grid.Time(k) <= t_b; ++k) {
         const double tk = grid.Time(k);
@@ -229,6 +232,16 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
       }
       if (row_failed) break;
       rhs.Reset();
+      if (to_stop) {
+        if (rhs.StepAccepted(t_b, yb.data()) != 0) {
+          fail(t_b, rhs.cause);
+          break;
+        }
+        result.ok = true;
+        result.cause.clear();
+        ++result.bridges;
+        break;
+      }
       // The bridged state is an accepted step: checked (the turn against the velocity
       // before the zone).
       if (rhs.StepAccepted(t_b, yb.data()) != 0) {

@@ -40,8 +40,9 @@ class EngineOde final : public OdeSystem {
     return monitor_ && rt::BridgeChangePoint(program_, *monitor_, rtol, atol, t_from, t_b, y_b) == 0;
   }
   void BridgeState(double t, double* y) override { rt::BridgeState(*monitor_, t, y); }
-  void EnableEarlyBridge(double rtol, double atol, bool several_loops, bool projected_estimate) {
+  void EnableEarlyBridge(double rtol, double atol, bool several_loops, bool projected_estimate, bool several_at_once) {
     if (monitor_) {
+      rt::SetBridgeSeveralAtOnce(*monitor_, several_at_once);
       rt::SetEarlyBridge(*monitor_, rtol, atol);
       rt::SetBridgeSeveralLoops(*monitor_, several_loops);
       rt::SetBridgeProjectedEstimate(*monitor_, projected_estimate);
@@ -164,7 +165,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return status;
   };
   EngineOde ode(program, *ws_rhs);
-  if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate);
+  if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
+                                         options.bridge_several_at_once);
   Clock::time_point start = Clock::now();
   IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
   Clock::duration total = Clock::now() - start;
