@@ -2,7 +2,9 @@
 // small public accessors of engine.h.
 #include "runtime/engine/engine.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "runtime/constraints/constraints.h"
 #include "runtime/kane/kane.h"
@@ -95,6 +97,31 @@ bool StepProjectionAvailable(const Program& p) { return !p.rows.empty() && p.sol
 void SetStepProjection(Workspace& ws, bool on) { ws.step_projection = on; }
 
 void HoldPartition(Workspace& ws, bool on) { ws.hold_partition = on; }
+
+bool ProjectedStates(const Program& p, const Workspace& ws, std::vector<int>* states, double* diag) {
+  states->clear();
+  *diag = -kDriftRate;
+  if (p.rows.empty() || p.loop_rank == 0 || p.solver == SolverPath::Sparse || ws.step_projection || !ws.partition_valid)
+    return false;
+  std::vector<char> dep(static_cast<size_t>(p.nu), 0);
+  for (int s : ws.dep) dep[static_cast<size_t>(s)] = 1;
+  std::vector<int> q_free_of(static_cast<size_t>(p.nq_all), -1);
+  for (int i = 0; i < p.nq; ++i) q_free_of[static_cast<size_t>(p.q_free[static_cast<size_t>(i)])] = i;
+  for (const TreeJoint& j : p.joints) {
+    if (j.nq != j.nu || j.nu == 0) continue;
+    bool all = true;
+    for (int k = 0; k < j.nu && all; ++k) {
+      const int f = p.u_free_of[static_cast<size_t>(j.u0 + k)];
+      all = f >= 0 && dep[static_cast<size_t>(f)] != 0 && q_free_of[static_cast<size_t>(j.q0 + k)] >= 0;
+    }
+    if (!all) continue;
+    for (int k = 0; k < j.nq; ++k) states->push_back(q_free_of[static_cast<size_t>(j.q0 + k)]);
+  }
+  for (int s = 0; s < p.nu; ++s)
+    if (dep[static_cast<size_t>(s)]) states->push_back(p.nq + s);
+  std::sort(states->begin(), states->end());
+  return true;
+}
 
 int ProjectOntoConstraints(const Program& p, Workspace& ws, double t, double* y) {
   if (p.rows.empty()) return 0;

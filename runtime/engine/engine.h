@@ -102,6 +102,14 @@ int ProjectOntoConstraints(const Program& program, Workspace& ws, double t, doub
 // projection corrects, so columns taken with different partitions are derivatives of
 // different functions (docs/constraints.md, "Singular configurations").
 void HoldPartition(Workspace& ws, bool on);
+// Closed loops on the reduced path (Derivative with the projection, not the step
+// projection), for a difference-quotient Jacobian taken with the partition held: the
+// state indices that Derivative does not read under the partition of the last evaluation,
+// the dependent speeds (recomputed from the independent ones by the velocity constraints)
+// and the coordinates of joints whose every speed is dependent (Newton-corrected from the
+// independent ones); *diag is df_i/dy_i for each of them (the pull to the manifold, -k_drift),
+// every other entry of their columns zero. False (none) on other paths.
+bool ProjectedStates(const Program& program, const Workspace& ws, std::vector<int>* states, double* diag);
 const std::string& ErrorMessage(const Workspace& ws);
 
 // Closed loops through singular configurations (runtime/engine/branch_monitor.cpp; the

@@ -76,6 +76,10 @@ class OdeSystem {
   // discrete choices the last evaluation made (closed loops: the speed partition,
   // rt::HoldPartition), so that every column differentiates the same function.
   virtual void HoldForJacobian(bool /*on*/) {}
+  // While held: the states the last evaluation's f does not depend on (closed loops on the
+  // reduced form: rt::ProjectedStates), ascending, and df_i/dy_i for each (*diag; every
+  // other entry of their columns is zero), so a Jacobian need not perturb them. False: none.
+  virtual bool ProjectedStates(std::vector<int>* /*states*/, double* /*diag*/) { return false; }
 };
 
 enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };

@@ -9,6 +9,9 @@
 // follows IDA's own DQ rule: max(sqrt(unit round-off) * max(|y_j|, |h y'_j|), 1/w_j),
 // with w the error weights (1/w_j = rtol |y_j| + atol) and the sign of h y'_j. J is factored by dense LU or by KLU on the
 // fixed block pattern (symbolic analysis once, numeric refactorization afterwards).
+// Closed loops on the reduced form: the partition of the evaluation at y is held for the
+// perturbed ones, and the states f does not read under it (OdeSystem::ProjectedStates) are
+// not perturbed: their columns are known (docs/constraints.md, "Singular configurations").
 #include <ida/ida.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
@@ -161,6 +164,7 @@ class IdaStepper final : public SundialsStepper {
     f1_.assign(static_cast<size_t>(n), 0.0);
     y1_.assign(static_cast<size_t>(n), 0.0);
     inc_.assign(static_cast<size_t>(n), 0.0);
+    skip_.assign(static_cast<size_t>(n), 0);
   }
 
   // J = cj I - df/dy by grouped difference quotients; f(t, y) = y' - F(t, y, y').
@@ -193,17 +197,33 @@ class IdaStepper final : public SundialsStepper {
     // The last evaluation was at y (IDA's residual at its Newton iterate, rr): its discrete
     // choices (the loops' speed partition) are held for the perturbed ones.
     GuardedRhs::JacobianHold hold(rhs_);
+    // Columns of the states f does not read under that partition (closed loops on the
+    // reduced form: the dependent speeds and coordinates, recomputed by the projection) are
+    // known without evaluations: -df/dy = -pdiag on the diagonal (the pull to the manifold),
+    // zero elsewhere. Perturbed, they only measured the projection's Newton tolerance (up to
+    // 4e3 against cj 6e4 near a change point of the chain of ten) and cost n - 2 of the n
+    // evaluations on a chain of loops.
+    double pdiag = 0.0;
+    std::fill(skip_.begin(), skip_.end(), 0);
+    if (rhs_.ProjectedStates(&projected_, &pdiag))
+      for (int j : projected_) skip_[static_cast<size_t>(j)] = 1;
     for (const auto& color : colors_) {
+      bool any = false;
       for (int j : color) {
         const auto uj = static_cast<size_t>(j);
+        if (skip_[uj]) continue;
+        any = true;
         double inc = std::max(srur * std::max(std::fabs(y[j]), std::fabs(h * yp[j])), 1.0 / w[j]);
         if (h * yp[j] < 0.0) inc = -inc;
         y1_[uj] = y[j] + inc;
         inc_[uj] = y1_[uj] - y[j];  // the increment actually represented
       }
-      ++jac_rhs_evals_;
-      int status = rhs_(t, y1_.data(), f1_.data());
-      for (int j : color) y1_[static_cast<size_t>(j)] = y[j];
+      int status = 0;
+      if (any) {
+        ++jac_rhs_evals_;
+        status = rhs_(t, y1_.data(), f1_.data());
+        for (int j : color) y1_[static_cast<size_t>(j)] = y[j];
+      }
       if (status != 0) return status;  // > 0: IDA retries with a smaller step
       for (int j : color) {
         const auto uj = static_cast<size_t>(j);
@@ -211,7 +231,7 @@ class IdaStepper final : public SundialsStepper {
         double* col = klu_ ? SUNSparseMatrix_Data(J) + col_start_[uj] : SUNDenseMatrix_Column(J, j);
         for (size_t k = 0; k < m.size(); ++k) {
           const auto i = static_cast<size_t>(m[k]);
-          double v = -(f1_[i] - f0_[i]) / inc_[uj];
+          double v = skip_[uj] ? (m[k] == j ? -pdiag : 0.0) : -(f1_[i] - f0_[i]) / inc_[uj];
           if (m[k] == j) v += cj;
           col[klu_ ? k : i] = v;
         }
@@ -220,6 +240,8 @@ class IdaStepper final : public SundialsStepper {
     return 0;
   }
 
+  std::vector<int> projected_;
+  std::vector<char> skip_;
   N_Vector ewt_ = nullptr;
   bool klu_ = false;
   std::vector<int> group_, pos_;

@@ -55,6 +55,9 @@ class EngineOde final : public OdeSystem {
   bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
   void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
   void HoldForJacobian(bool on) override { rt::HoldPartition(ws_, on); }
+  bool ProjectedStates(std::vector<int>* states, double* diag) override {
+    return rt::ProjectedStates(program_, ws_, states, diag);
+  }
   int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
 
  private:

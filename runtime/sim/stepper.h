@@ -27,6 +27,8 @@ class GuardedRhs {
   // (kStepCheckFailed).
   bool ChecksSteps() const { return system_.ChecksSteps(); }
   int StepAccepted(double t, const double* y);
+  // The system's ProjectedStates (OdeSystem::ProjectedStates), inside a JacobianHold.
+  bool ProjectedStates(std::vector<int>* states, double* diag) { return system_.ProjectedStates(states, diag); }
   // The system's HoldForJacobian, on for the life of a JacobianHold.
   class JacobianHold {
    public:
