@@ -220,7 +220,8 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
     m.zone_near = near_loops;
     ++m.zone_steps;
     if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried &&
-        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once && p.solver != SolverPath::Sparse
+        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once &&
+                                     (p.solver != SolverPath::Sparse || m.several_at_once_multiplier)
                              ? kEarlyBridgeStepsSeveral
                               : kEarlyBridgeSteps)) {
       // Stalling: a passage takes a few steps. Bridged now, if the bridge can be trusted;
@@ -271,6 +272,7 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
 void SetBridgeSeveralLoops(BranchMonitor& m, bool on) { m.several_loops = on; }
 void SetBridgeProjectedEstimate(BranchMonitor& m, bool on) { m.projected_estimate = on; }
 void SetBridgeSeveralAtOnce(BranchMonitor& m, bool on) { m.several_at_once = on; }
+void SetBridgeSeveralAtOnceMultiplier(BranchMonitor& m, bool on) { m.several_at_once_multiplier = on; }
 
 void PassageCounts(const BranchMonitor& m, long* checked, long* unchecked) {
   *checked = m.passages_checked;
