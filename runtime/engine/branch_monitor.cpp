@@ -65,7 +65,9 @@ constexpr long kEarlyBridgeSteps = 50;
 // 42 s CPU, ARKODE 28 -> 17 s, CVODE-BDF 68 -> 55 s. Reduced form only: on the multiplier form it saved little
 // (chain of ten, 1e-12: 2-20 %) and DOP853 on the chain of two at 1e-12 then ended with two
 // output rows 2.4e-4 and 6.3e-3 rad off the lumped crank (t = 16.79, 16.80, just before and
-// after a crossing it passed by itself; the steps themselves on it), exit 0.
+// after a crossing it passed by itself; the steps themselves on it), exit 0 — DOP853's
+// dense output, now checked (runtime/sim/integrator_dop853.cpp kDenseLimit); still off here
+// (SetBridgeSeveralAtOnceMultiplier, tests only) for the small saving.
 constexpr long kEarlyBridgeStepsSeveral = 10;
 constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
 constexpr double kRankTol = 1e-9;  // sigma / sigma_max below which a row counts as dependent (assembly's)
