@@ -65,7 +65,9 @@ constexpr long kEarlyBridgeSteps = 50;
 // 42 s CPU, ARKODE 28 -> 17 s, CVODE-BDF 68 -> 55 s. Reduced form only: on the multiplier form it saved little
 // (chain of ten, 1e-12: 2-20 %) and DOP853 on the chain of two at 1e-12 then ended with two
 // output rows 2.4e-4 and 6.3e-3 rad off the lumped crank (t = 16.79, 16.80, just before and
-// after a crossing it passed by itself; the steps themselves on it), exit 0.
+// after a crossing it passed by itself; the steps themselves on it), exit 0 — DOP853's
+// dense output, now checked (runtime/sim/integrator_dop853.cpp kDenseLimit); still off here
+// (SetBridgeSeveralAtOnceMultiplier, tests only) for the small saving.
 constexpr long kEarlyBridgeStepsSeveral = 10;
 constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
 constexpr double kRankTol = 1e-9;  // sigma / sigma_max below which a row counts as dependent (assembly's)
@@ -220,7 +222,8 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
     m.zone_near = near_loops;
     ++m.zone_steps;
     if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried &&
-        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once && p.solver != SolverPath::Sparse
+        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once &&
+                                     (p.solver != SolverPath::Sparse || m.several_at_once_multiplier)
                              ? kEarlyBridgeStepsSeveral
                               : kEarlyBridgeSteps)) {
       // Stalling: a passage takes a few steps. Bridged now, if the bridge can be trusted;
@@ -271,6 +274,7 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
 void SetBridgeSeveralLoops(BranchMonitor& m, bool on) { m.several_loops = on; }
 void SetBridgeProjectedEstimate(BranchMonitor& m, bool on) { m.projected_estimate = on; }
 void SetBridgeSeveralAtOnce(BranchMonitor& m, bool on) { m.several_at_once = on; }
+void SetBridgeSeveralAtOnceMultiplier(BranchMonitor& m, bool on) { m.several_at_once_multiplier = on; }
 
 void PassageCounts(const BranchMonitor& m, long* checked, long* unchecked) {
   *checked = m.passages_checked;

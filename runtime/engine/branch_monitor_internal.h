@@ -25,6 +25,7 @@ struct BranchMonitor {
   bool projected_estimate = true;  // ... the multiplier form's estimate there taken after the projection (SetBridgeProjectedEstimate)
   double projected_est = -1.0;     // the last approach's projected estimate (-1: not taken)
   bool several_at_once = true;  // ... tried after 10 accepted steps there, not 50 (SetBridgeSeveralAtOnce)
+  bool several_at_once_multiplier = false;  // ... also on the multiplier form (tests only)
   bool several_loops = true;  // the bridge's approach over zones with several loops near singular (SetBridgeSeveralLoops)
   std::vector<int> loop_rank;  // per loop: independent rows at the first check
   Eigen::VectorXd ref_u, cur_u;     // all joint speeds

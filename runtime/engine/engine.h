@@ -141,6 +141,9 @@ void SetBridgeSeveralLoops(BranchMonitor& monitor, bool on);
 // Whether the early bridge over such a zone is tried after 10 accepted steps in it instead of
 // the 50th (on by default; off: as before, tests switch it off).
 void SetBridgeSeveralAtOnce(BranchMonitor& monitor, bool on);
+// ... and on the multiplier form too (off by default; tests only: the trajectory on which
+// DOP853's dense output was seen off the branch, docs/constraints.md "Several loops").
+void SetBridgeSeveralAtOnceMultiplier(BranchMonitor& monitor, bool on);
 // Whether, there, on the multiplier form an error estimate above the bridge's limit is taken
 // again between the extrapolations projected onto the constraints (on by default; off:
 // refused, as before; tests switch it off).

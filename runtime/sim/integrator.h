@@ -107,6 +107,7 @@ struct IntegratorOptions {
   bool project_steps = false;      // DOP853: project accepted steps (OdeSystem::Project)
   std::vector<int> coupling;       // per state: its group (empty: one group, a dense df/dy)
   bool bridge = true;              // restart past a singular configuration (OdeSystem::Bridge)
+  bool dense_check = true;         // DOP853: retake a step whose dense-output stages are not smooth
 };
 
 // Counters from the solver (cumulative over the run).
@@ -117,6 +118,7 @@ struct IntegratorStats {
   long jac_evals = 0;          // Jacobian (re)computations
   long lin_setups = 0;         // linear-solver setups = LU factorizations
   long err_test_fails = 0;     // local error test failures
+  long dense_rejects = 0;      // DOP853: steps whose dense output was rejected (stages not smooth)
   long nonlin_iters = 0;       // Newton or fixed-point iterations
   long nonlin_conv_fails = 0;  // nonlinear convergence failures
   double last_step = 0.0;      // last step size taken

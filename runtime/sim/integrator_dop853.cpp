@@ -33,6 +33,21 @@
 //
 // Failures: f or the projection returning > 0 in a step rejects it and retries with a
 // quarter of h (kMaxRhsFails in a row end the run); < 0 ends it at once.
+//
+// The dense-output stages k_13 .. k_15 are not controlled by the error test (2). Where f is
+// inaccurate at one point of a step (a closed loop's change point: its equations are
+// ill-conditioned within ~1e-3 of it), a stage landing there corrupts the rows interpolated
+// in that step while y1 stays accurate (measured: docs/constraints.md "Several loops singular
+// at once"). So on a step that holds an output instant they are evaluated before the step is
+// accepted and compared with the cubic in c through the step's own stages k_0, k_4, k_8,
+// k_12 (DenseStageDeviation); a deviation larger than the spread of the step's stages
+// (kDenseLimit) rejects the step, before the system has seen it (OdeSystem::StepAccepted),
+// and it is taken again to end on the output instant itself, where no interpolation is
+// needed. (Tried instead: keeping the step and reaching each instant inside it by steps of
+// their own from its start, which keeps the trajectory; at rtol 1e-12 those steps crept
+// towards the change point past the first instant, and undoing the step then, after the
+// branch monitor had taken it as a step before the next zone, left a bridge refused and
+// the run stopped with exit 2.)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -53,6 +68,12 @@ namespace tab = dop853;
 constexpr double kRhsShrink = 0.25;     // h after a recoverable failure of f
 constexpr int kMaxRhsFails = 10;        // recoverable failures of f in a row (as ARKODE's default)
 constexpr double kMaxStepSlack = 1e-9;  // relative: what rounding may add to max_step
+// Largest deviation of a dense-output stage from the cubic through the step's stages, in
+// units of the spread of the step's stages (plus (atol + rtol |y|) / |h|), per component. Measured
+// (DOP853 on the chains of equal-link parallelograms, rtol 1e-4 ... 1e-12, both forms): at
+// most 0.22 on steps whose rows are on the lumped crank; 15.8 and 433 on the two steps seen
+// with rows off it (docs/constraints.md "Several loops singular at once").
+constexpr double kDenseLimit = 1.0;
 
 // Advance's flags (>= 0 success).
 enum Flag : int { kOk = 0, kTooMuchWork = -1, kUnderflow = -2, kRhsRepeated = -3, kRhsFatal = -4 };
@@ -108,7 +129,7 @@ class Dop853Stepper final : public Stepper {
         h_ = kRhsShrink * h_last_;
       }
       if (steps_here++ >= options_.max_steps) return kTooMuchWork;
-      int flag = Step();
+      int flag = Step(tout);
       if (flag != kOk) return flag;
     }
   }
@@ -120,6 +141,7 @@ class Dop853Stepper final : public Stepper {
     st.steps = steps_;
     st.rhs_evals = rhs_evals_;
     st.err_test_fails = err_test_fails_;
+    st.dense_rejects = dense_rejects_;
     st.last_step = h_last_;
     st.last_order = 8;
     return st;
@@ -193,12 +215,14 @@ class Dop853Stepper final : public Stepper {
   }
 
   // One accepted step from t_ (retrying rejected ones), toward stop_ and never past it.
-  int Step() {
+  // A step past `tout` gets its dense-output stages here, checked (kDenseLimit).
+  int Step(double tout) {
     if (fsal_pending_) {
       std::copy(K(tab::kStages), K(tab::kStages) + n_, K(0));
       fsal_pending_ = false;
     }
     bool rejected = false;
+    bool onto_tout = false;  // taken again to end on tout (its dense output rejected)
     for (;;) {
       double h = h_;
       if (options_.max_step > 0.0) h = std::min(h, options_.max_step);
@@ -209,6 +233,10 @@ class Dop853Stepper final : public Stepper {
       if (stop_ - t_ <= std::min(tab::kStretch * h, limit)) {
         h = stop_ - t_;
         last = true;
+      }
+      if (onto_tout && t_ + h >= tout) {
+        h = tout - t_;
+        last = false;
       }
       if (!(h > 16.0 * kEps * std::max(1.0, std::abs(t_)))) return Underflow(h);
 
@@ -227,12 +255,25 @@ class Dop853Stepper final : public Stepper {
           continue;
         }
         // Accepted: projected, then f at the new point, the next step's first stage (k_12 here).
-        const double t_new = last ? stop_ : t_ + h;
+        const double t_new = last ? stop_ : (onto_tout && t_ + h >= tout) ? tout : t_ + h;
         if (project_) status = rhs_.Project(t_new, y_new_.data());
         if (status == 0) status = Eval(t_new, y_new_.data(), K(tab::kStages));
+        bool stages = false;
+        if (status == 0 && options_.dense_check && check_ && t_new > tout) {
+          status = DenseStages(t_, y_.data(), h);
+          if (status == 0 && !(DenseStageDeviation(h) <= kDenseLimit)) {
+            ++dense_rejects_;
+            rejected = true;
+            onto_tout = true;
+            h_ = tout - t_;
+            continue;
+          }
+          stages = status == 0;
+        }
         if (status == 0 && check_) status = rhs_.StepAccepted(t_new, y_new_.data());
         if (status == 0) {
           Accept(t_new, h);
+          stages_ready_ = stages;
           h_ = h * tab::GrowFactor(err, rejected);
           return kOk;
         }
@@ -277,6 +318,7 @@ class Dop853Stepper final : public Stepper {
     ++steps_;
     rhs_fails_ = 0;
     dense_ready_ = false;
+    stages_ready_ = false;
     fsal_pending_ = true;
   }
 
@@ -286,6 +328,7 @@ class Dop853Stepper final : public Stepper {
     t_ = t_old_;
     --steps_;
     dense_ready_ = false;
+    stages_ready_ = false;
     fsal_pending_ = false;  // K(0) still holds f(t_old_, y_old_)
   }
 
@@ -293,10 +336,8 @@ class Dop853Stepper final : public Stepper {
   int PrepareDense() {
     if (dense_ready_) return 0;
     const double h = h_last_;
-    for (int s = tab::kStages + 1; s < tab::kStagesDense; ++s) {
-      StageArgument(s, y_old_.data(), h, stage_y_.data());
-      int status = Eval(t_old_ + tab::C[s] * h, stage_y_.data(), K(s));
-      if (status != 0) return status;
+    if (!stages_ready_) {
+      if (int status = DenseStages(t_old_, y_old_.data(), h); status != 0) return status;
     }
     double* r = r_.data();
     const size_t n = static_cast<size_t>(n_);
@@ -317,6 +358,56 @@ class Dop853Stepper final : public Stepper {
     }
     dense_ready_ = true;
     return 0;
+  }
+
+  // Stages 13..15 of the step of size h from (t0, y0). 0, or f's status.
+  int DenseStages(double t0, const double* y0, double h) {
+    for (int s = tab::kStages + 1; s < tab::kStagesDense; ++s) {
+      StageArgument(s, y0, h, stage_y_.data());
+      int status = Eval(t0 + tab::C[s] * h, stage_y_.data(), K(s));
+      if (status != 0) return status;
+    }
+    return 0;
+  }
+
+  // Largest deviation, over the components, of the dense-output stages k_13 .. k_15 from
+  // the cubic in c through the step's stages k_0 (c = 0), k_4, k_8 and k_12 (c = 1), in
+  // units of the spread of the step's stages k_0 .. k_12 in that component plus (atol + rtol
+  // |y|) / |h| (a deviation that moves y by less than the tolerance over the step). Called
+  // before Accept (y_ the step's start, y_new_ its end). On a step where f is smooth the
+  // cubic is close (measured below 0.22 on the chains of parallelograms); a stage evaluated
+  // where f is wrong stands out by orders of magnitude. Only where the system checks its
+  // steps (closed loops, the branch monitor: OdeSystem::ChecksSteps): elsewhere the stage
+  // arguments' own departures from a constraint manifold make the stages of a long step
+  // far from any cubic while its rows are right (examples/sleigh.mech, a knife edge: 17
+  // steps of 38 rejected, deviations up to 250, the rows unchanged to 1e-13).
+  double DenseStageDeviation(double h) const {
+    const int nodes[4] = {0, 4, 8, tab::kStages};
+    double cn[4];
+    for (int a = 0; a < 4; ++a) cn[a] = nodes[a] == tab::kStages ? 1.0 : tab::C[nodes[a]];
+    double worst = 0.0;
+    for (int i = 0; i < n_; ++i) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (int j = 0; j <= tab::kStages; ++j) {
+        lo = std::min(lo, K(j)[i]);
+        hi = std::max(hi, K(j)[i]);
+      }
+      const size_t iz = static_cast<size_t>(i);
+      const double tol = options_.atol + options_.rtol * std::max(std::abs(y_[iz]), std::abs(y_new_[iz]));
+      const double scale = (hi - lo) + tol / std::abs(h);
+      for (int s = tab::kStages + 1; s < tab::kStagesDense; ++s) {
+        double p = 0.0;
+        for (int a = 0; a < 4; ++a) {
+          double w = 1.0;
+          for (int b = 0; b < 4; ++b)
+            if (b != a) w *= (tab::C[s] - cn[b]) / (cn[a] - cn[b]);
+          p += w * K(nodes[a])[i];
+        }
+        const double d = std::abs(K(s)[i] - p) / scale;
+        if (!(d <= worst)) worst = d;  // a NaN stage counts as the worst
+      }
+    }
+    return worst;
   }
 
   // Eq. (4) at tout in [t_old_, t_].
@@ -366,8 +457,9 @@ class Dop853Stepper final : public Stepper {
   bool check_ = false;           // accepted steps are checked (OdeSystem::StepAccepted)
   bool dense_ready_ = false;     // r_ holds the last step's dense output
   bool fsal_pending_ = false;    // K(tab::kStages) is f(t_, y_), not yet copied into K(0)
+  bool stages_ready_ = false;    // K(13 .. 15) hold the last step's dense-output stages
   int rhs_fails_ = 0;            // recoverable failures of f in a row
-  long steps_ = 0, rhs_evals_ = 0, err_test_fails_ = 0;
+  long steps_ = 0, rhs_evals_ = 0, err_test_fails_ = 0, dense_rejects_ = 0;
   std::string underflow_;        // Explain's text for kUnderflow
   bool underflow_from_rhs_ = false;
 };

@@ -40,9 +40,11 @@ class EngineOde final : public OdeSystem {
     return monitor_ && rt::BridgeChangePoint(program_, *monitor_, rtol, atol, t_from, t_b, y_b) == 0;
   }
   void BridgeState(double t, double* y) override { rt::BridgeState(*monitor_, t, y); }
-  void EnableEarlyBridge(double rtol, double atol, bool several_loops, bool projected_estimate, bool several_at_once) {
+  void EnableEarlyBridge(double rtol, double atol, bool several_loops, bool projected_estimate, bool several_at_once,
+                         bool several_at_once_multiplier) {
     if (monitor_) {
       rt::SetBridgeSeveralAtOnce(*monitor_, several_at_once);
+      rt::SetBridgeSeveralAtOnceMultiplier(*monitor_, several_at_once_multiplier);
       rt::SetEarlyBridge(*monitor_, rtol, atol);
       rt::SetBridgeSeveralLoops(*monitor_, several_loops);
       rt::SetBridgeProjectedEstimate(*monitor_, projected_estimate);
@@ -127,6 +129,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.ida_linear_solver = options.ida_linear_solver;
   iopt.project_steps = options.project_steps;
   iopt.bridge = options.bridge;
+  iopt.dense_check = options.dense_check;
   if (iopt.method == Method::IDA) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
@@ -169,7 +172,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   };
   EngineOde ode(program, *ws_rhs);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
-                                         options.bridge_several_at_once);
+                                         options.bridge_several_at_once, options.bridge_several_at_once_multiplier);
   Clock::time_point start = Clock::now();
   IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
   Clock::duration total = Clock::now() - start;
@@ -218,6 +221,11 @@ std::string FormatStats(const SimStats& s) {
                 i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
   std::string out = buf;
+  if (i.dense_rejects > 0) {  // DOP853 (runtime/sim/integrator_dop853.cpp kDenseLimit; only where there were any)
+    std::snprintf(buf, sizeof buf, "  dense output rejected    %ld (steps taken again onto an output instant)\n",
+                  i.dense_rejects);
+    out.insert(out.find("wall time (s)"), buf);
+  }
   if (s.bridges + s.passages_checked + s.passages_unchecked > 0) {
     // Closed loops through change points (only where there were any).
     std::snprintf(buf, sizeof buf,

@@ -33,6 +33,8 @@ struct SimOptions {
   bool bridge = true;           // step over singular configurations of closed loops (docs/constraints.md)
   bool bridge_several_loops = true;  // ... also where several loops are singular at once (tests only)
   bool bridge_several_at_once = true;  // ... there tried after 10 steps in a zone, not 50 (tests only)
+  bool bridge_several_at_once_multiplier = false;  // ... also on the multiplier form (tests only)
+  bool dense_check = true;  // DOP853: steps whose dense-output stages are not smooth are retaken (tests only)
   bool bridge_projected_estimate = true;  // ... there on the multiplier form, its estimate after projecting (tests only)
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty

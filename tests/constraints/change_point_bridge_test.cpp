@@ -411,3 +411,69 @@ TEST(ChangePointBridge, ChainOfFortyPassesWithCvodeAtRtol1e12) {
 
 }  // namespace
 }  // namespace kanesim::test
+
+namespace kanesim::test {
+namespace {
+
+// DOP853's dense output (runtime/sim/integrator_dop853.cpp, kDenseLimit): its three extra
+// stages are not controlled by the error test, and one of them landing at a change point,
+// where the loop equations are ill-conditioned, corrupts the rows interpolated in that step
+// while the step's end stays accurate. Seen on the chain of two at rtol 1e-12, multiplier
+// form, with the early bridge after 10 steps also on that form (SimOptions::
+// bridge_several_at_once_multiplier): the step [16.7887, 16.8083] passed a crossing by
+// itself, its ends on the branch, its stage at c = 0.2 (t = 16.7926) with accelerations 70
+// and -42 rad/s^2 for rods that turn together at 18; the rows at t = 16.79 and 16.80 were
+// 2.4e-4 and 6.3e-3 rad off the lumped crank (the interpolated rods 2e-3 rad apart; the
+// outputs, projected, are on a branch), exit code 0. Such a
+// step is now taken again to end on the output instant. With the check off the same run
+// still writes those rows (so this fails if the check stops working). And on the default
+// path: the chain of two, reduced form, rtol 1e-8, where seven rows (t = 11.64 ... 11.70)
+// had the crank speed up to 0.16 rad/s off (the lumped energy 1.6 J off of 57 J, 2.8e-2
+// relative; the angle within 2e-6 rad). With the check, another trajectory from t = 11.64
+// on: measured 4.7e-5 rad off the lumped crank at the end (3.9e-6 before; the bound of
+// LoopBranch.* is 3e4 x rtol = 3e-4) and 8.9e-7 relative energy (a later passage).
+Outcome RunChainDense(bool dense_check, double rtol, rt::SolverPath solver, bool early_on_multiplier) {
+  const int n = 2;
+  sim::SimOptions so;
+  so.rtol = so.atol = rtol;
+  so.integrator = rt::IntegratorKind::DOP853;
+  so.bridge_several_at_once_multiplier = early_on_multiplier;
+  so.dense_check = dense_check;
+  so.signals = {"rj0.q", "rj0.u"};
+  for (int i = 1; i <= n; ++i) {
+    so.signals.push_back("rj[" + std::to_string(i) + "].q");
+    so.signals.push_back("rj[" + std::to_string(i) + "].u");
+  }
+  const double a = 0.6, m_rod = 0.5, m_coupler = 1.0, g = 9.81;
+  const lumped_crank::Crank c{(n + 1) * m_rod * a * a / 3.0 + n * m_coupler * a * a,
+                              g * ((n + 1) * m_rod * a / 2.0 + n * m_coupler * a)};
+  rt::CompileOptions co;
+  co.solver = solver;
+  return RunAndMeasure("/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}}, co, so, c, true);
+}
+
+TEST(ChangePointBridge, Dop853DenseOutputAcrossAChangePointIsNotTrusted) {
+  if (kSanitized) GTEST_SKIP() << "0.3 s per run in Release";
+  const Outcome o = RunChainDense(true, 1e-12, rt::SolverPath::Sparse, true);
+  EXPECT_EQ(o.result.status, sim::SimResult::Status::kOk) << o.result.message;
+  EXPECT_NEAR(o.last_t, 20.0, 1e-12);
+  EXPECT_LT(o.branch, 1e-8);
+  EXPECT_LT(o.speed, 1e-6);
+  EXPECT_LT(o.theta_error, 1e-6);
+  EXPECT_GE(o.result.stats.integrator.dense_rejects, 1);
+  const Outcome off = RunChainDense(false, 1e-12, rt::SolverPath::Sparse, true);
+  EXPECT_EQ(off.result.stats.integrator.dense_rejects, 0);
+  EXPECT_GT(off.theta_error, 1e-4);  // the rows the check exists for (the outputs are projected: on a branch)
+
+  // Relative energy, of the rows with |sin theta| > 0.2 (RunAndMeasure).
+  const Outcome o8 = RunChainDense(true, 1e-8, rt::SolverPath::Dense, false);
+  EXPECT_EQ(o8.result.status, sim::SimResult::Status::kOk) << o8.result.message;
+  EXPECT_LT(o8.energy_error, 5e-6);
+  EXPECT_LT(o8.theta_error, 1e-4);
+  EXPECT_GE(o8.result.stats.integrator.dense_rejects, 1);
+  const Outcome off8 = RunChainDense(false, 1e-8, rt::SolverPath::Dense, false);
+  EXPECT_GT(off8.energy_error, 1e-3);
+}
+
+}  // namespace
+}  // namespace kanesim::test
