@@ -344,12 +344,23 @@ TEST(ChangePointBridge, ChainsOnTheMultiplierFormAtRtol1e12) {
 
 // The same cells with the estimate taken before the projection only (as before): each stops
 // with exit code 2 at a change point (the estimate above the multiplier form's limit 1e5),
-// every row before it on the branch.
+// every row before it on the branch. Except ARKODE on the chain of two, which stopped on
+// "the error test failed repeatedly" and now restarts from its projected accepted step
+// (runtime/sim/integrator_arkode.cpp; branch cpcells): on the branch to 20 s, 7.8e-9 rad
+// off the lumped crank, 2 bridges.
 TEST(ChangePointBridge, ChainsOnTheMultiplierFormStopWithoutTheProjectedEstimate) {
   if (kSanitized) GTEST_SKIP() << "the cells of ChainsOnTheMultiplierFormAtRtol1e12";
   for (const ChainCell& c : kMultiplierChainCells) {
     SCOPED_TRACE(ChainName(c) + ", multiplier form");
     const Outcome o = RunChain(c.n, c.integrator, c.rtol, true, rt::SolverPath::Sparse, false);
+    if (c.n == 2 && c.integrator == rt::IntegratorKind::ARKODE) {
+      EXPECT_EQ(o.result.status, sim::SimResult::Status::kOk) << o.result.message;
+      EXPECT_NEAR(o.last_t, 20.0, 1e-12);
+      EXPECT_LT(o.branch, 1e-8);
+      EXPECT_LT(o.theta_error, 5e-6);
+      EXPECT_LT(o.energy_error, 5e-8);
+      continue;
+    }
     EXPECT_EQ(o.result.status, sim::SimResult::Status::kNumericalFailure);
     EXPECT_LT(o.last_t, 19.0);
     EXPECT_LT(o.branch, 1e-8);
