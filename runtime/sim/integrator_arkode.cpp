@@ -9,14 +9,6 @@
 // the first time from the last output instant, later from the last accepted step, which
 // a post-step hook records from then on (only then: with the hook installed ERKStep's
 // dense output loses about a digit). GuardedRhs bounds the retries.
-//
-// With closed loops (steps checked one at a time), a step whose error test fails
-// repeatedly restarts ERKStep once from the last accepted step projected onto the
-// constraints (OdeSystem::Project), with a quarter of the last step: the integrator's
-// state drifts off the manifold in the components the projection inside f overrides (up
-// to 0.5 rad/s on the chain of 40 at rtol 1e-4, steps of 0.1 s), and there f is not smooth
-// (its error test failed down to h = 1.4e-4 at rho 0.83, far from any change point). A
-// second failure before the next accepted step stands.
 #include <arkode/arkode_erkstep.h>
 
 #include <algorithm>
@@ -110,17 +102,11 @@ class ArkodeStepper final : public SundialsStepper {
     return AdvanceCheckedSteps(tout, y, [&](double* tret) {
       int flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
       while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, tret, ARK_ONE_STEP);
-      if (flag == ARK_ERR_FAILURE && !projected_restart_ && !rhs_.fatal) {  // see the header
-        projected_restart_ = true;
-        flag = Restart(tout, tret, ARK_ONE_STEP, /*project=*/true);
-        while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, tret, ARK_ONE_STEP);
-      }
       return flag;
     });
   }
 
   void StepChecked(double t, const double* y) override {
-    projected_restart_ = false;
     t_accepted_ = t;
     std::copy(y, y + y_accepted_.size(), y_accepted_.begin());
   }
@@ -140,7 +126,7 @@ class ArkodeStepper final : public SundialsStepper {
 
   // ERKStep again from the restart point, with a quarter of the last accepted step (of
   // the step it was about to try when none was accepted yet), toward tout.
-  int Restart(double tout, double* tret, int mode = ARK_NORMAL, bool project = false) {
+  int Restart(double tout, double* tret, int mode = ARK_NORMAL) {
     double h = 0.0;
     ERKStepGetLastStep(mem_, &h);
     if (h == 0.0) ERKStepGetCurrentStep(mem_, &h);
@@ -150,7 +136,6 @@ class ArkodeStepper final : public SundialsStepper {
     before_restarts_.err_test_fails = st.err_test_fails;
     double* ys = N_VGetArrayPointer(s_.y);
     std::copy(y_accepted_.begin(), y_accepted_.end(), ys);
-    if (project && rhs_.Project(t_accepted_, ys) != 0) return ARK_ERR_FAILURE;
     if (mode == ARK_NORMAL && !hooked_ && ERKStepSetPostprocessStepFn(mem_, &ArkodeStepper::Accepted) != ARK_SUCCESS)
       return ARK_UNREC_RHSFUNC_ERR;
     hooked_ = hooked_ || mode == ARK_NORMAL;
@@ -163,7 +148,6 @@ class ArkodeStepper final : public SundialsStepper {
   static constexpr double kRhsShrink = 0.25;  // as DOP853 after a failure of f
 
   double stop_ = 0.0;
-  bool projected_restart_ = false;   // restarted from the projected accepted step since it was accepted
   bool hooked_ = false;              // Accepted() is installed (after the first restart)
   double t_accepted_ = 0.0;          // restart point: the last output instant, or once
   std::vector<double> y_accepted_;   // hooked the last accepted step; its state  (n)
