@@ -30,11 +30,6 @@ namespace {
 
 const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
 
-lumped_crank::Crank ChainCrank(int n) {
-  const double a = 0.6, m_rod = 0.5, m_c = 1.0, g = 9.81;
-  return {(n + 1) * m_rod * a * a / 3.0 + n * m_c * a * a, g * ((n + 1) * m_rod * a / 2.0 + n * m_c * a)};
-}
-
 TEST(ProjectedStates, FDoesNotReadThem) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
@@ -104,7 +99,7 @@ TEST(ProjectedStates, IdaJacobiansPerturbOnlyTheIndependentStates) {
     for (size_t k = 2; k < row.size(); ++k) branch = std::max(branch, std::fabs(std::remainder(row[k] - row[0], 2 * M_PI)));
   }
   EXPECT_LT(branch, 1e-8);
-  const double err = lumped_crank::MaxAngleError(ChainCrank(kLoops), sink.times, th, w, 1e-5);
+  const double err = lumped_crank::MaxAngleError(lumped_crank::ParallelogramChain(kLoops), sink.times, th, w, 1e-5);
   EXPECT_LT(err, 2e-5);
   const auto& st = r.stats.integrator;
   const int n = rt::StateSize(*l->prog);

@@ -18,6 +18,13 @@ struct Crank {
   double G = 0.0;  // gravity's moment amplitude: V = G sin(theta)
 };
 
+// tests/stress/models/parallelogram_chain.mech with its default parameters (the model's
+// header): N + 1 rods of mass 0.5 and N couplers of mass 1, every link 0.6 long.
+inline Crank ParallelogramChain(int n) {
+  const double a = 0.6, m_rod = 0.5, m_c = 1.0, g = 9.81;
+  return {(n + 1) * m_rod * a * a / 3.0 + n * m_c * a * a, g * ((n + 1) * m_rod * a / 2.0 + n * m_c * a)};
+}
+
 // Max |theta_i - theta_ref(t_i)| over the rows (t, th, w: time, crank angle and speed),
 // theta_ref integrated from the first row's angle and speed by classical Runge-Kutta with
 // steps of at most h (its own error far below the tests' bounds).
