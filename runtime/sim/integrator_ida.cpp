@@ -77,6 +77,7 @@ class IdaStepper final : public SundialsStepper {
     const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
     klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
            (options.ida_linear_solver == IdaLinearSolver::Auto && n >= kKluMinStates && fill <= kKluMaxFill);
+    dfdy_.assign(klu_ ? static_cast<size_t>(nnz_) : static_cast<size_t>(n) * static_cast<size_t>(n), 0.0);
     if (klu_) {
       s_.A = SUNSparseMatrix(n, n, nnz_, CSC_MAT, s_.ctx);
       s_.ls = s_.A ? SUNLinSol_KLU(s_.y, s_.A, s_.ctx) : nullptr;
@@ -176,6 +177,23 @@ class IdaStepper final : public SundialsStepper {
 
   int FormJacobian(double t, double cj, const double* y, const double* yp, const double* r, SUNMatrix J) {
     const int n = rhs_.Size();
+    long nst = 0, ncf = 0, netf = 0;
+    IDAGetNumSteps(mem_, &nst);
+    IDAGetNumNonlinSolvConvFails(mem_, &ncf);
+    IDAGetNumErrTestFails(mem_, &netf);
+    // IDA forms J at every linear setup (a new cj after a step-size change, a Newton
+    // failure); CVODE keeps df/dy across them. Where df/dy costs many evaluations, do so:
+    // the last df/dy with the new cj, unless a step failed since (Newton or the error test;
+    // CVODE's rule, cvLsSetup) or it is kMaxReuseSteps old.
+    if (reuse_ok_ && ncf == jac_ncf_ && netf == jac_netf_ && nst - jac_nst_ < kMaxReuseSteps) {
+      ++jac_reused_;
+      WriteJacobian(cj, J);
+      return 0;
+    }
+    jac_nst_ = nst;
+    jac_ncf_ = ncf;
+    jac_netf_ = netf;
+    const long evals_before = jac_rhs_evals_;
     double h = 0.0;
     IDAGetCurrentStep(mem_, &h);
     IDAGetErrWeights(mem_, ewt_);
@@ -232,14 +250,49 @@ class IdaStepper final : public SundialsStepper {
         for (size_t k = 0; k < m.size(); ++k) {
           const auto i = static_cast<size_t>(m[k]);
           double v = skip_[uj] ? (m[k] == j ? -pdiag : 0.0) : -(f1_[i] - f0_[i]) / inc_[uj];
+          dfdy_[klu_ ? static_cast<size_t>(col_start_[uj]) + k : uj * static_cast<size_t>(n) + i] = v;
           if (m[k] == j) v += cj;
           col[klu_ ? k : i] = v;
         }
       }
     }
+    reuse_ok_ = jac_rhs_evals_ - evals_before >= kReuseMinEvals;
     return 0;
   }
 
+  // J = cj I + dfdy_ (dfdy_ holds -df/dy in J's layout).
+  void WriteJacobian(double cj, SUNMatrix J) {
+    const int n = rhs_.Size();
+    if (klu_) {
+      sunindextype* ptr = SUNSparseMatrix_IndexPointers(J);
+      sunindextype* idx = SUNSparseMatrix_IndexValues(J);
+      double* data = SUNSparseMatrix_Data(J);
+      for (int j = 0; j <= n; ++j) ptr[j] = col_start_[static_cast<size_t>(j)];
+      for (int j = 0; j < n; ++j) {
+        const auto& m = members_[static_cast<size_t>(group_[static_cast<size_t>(j)])];
+        for (size_t k = 0; k < m.size(); ++k) {
+          const auto e = static_cast<size_t>(col_start_[static_cast<size_t>(j)]) + k;
+          idx[e] = m[k];
+          data[e] = dfdy_[e] + (m[k] == j ? cj : 0.0);
+        }
+      }
+      return;
+    }
+    SUNMatZero(J);
+    for (int j = 0; j < n; ++j) {
+      double* col = SUNDenseMatrix_Column(J, j);
+      const auto& m = members_[static_cast<size_t>(group_[static_cast<size_t>(j)])];
+      for (int i : m) col[i] = dfdy_[static_cast<size_t>(j) * static_cast<size_t>(n) + static_cast<size_t>(i)] + (i == j ? cj : 0.0);
+    }
+  }
+
+  // df/dy reused only where it costs at least kReuseMinEvals evaluations (not on the
+  // reduced form's closed loops, 2 per Jacobian), for fewer than kMaxReuseSteps steps.
+  static constexpr long kReuseMinEvals = 16;
+  static constexpr long kMaxReuseSteps = 20;
+  std::vector<double> dfdy_;
+  bool reuse_ok_ = false;
+  long jac_nst_ = 0, jac_ncf_ = 0, jac_netf_ = 0, jac_reused_ = 0;
   std::vector<int> projected_;
   std::vector<char> skip_;
   N_Vector ewt_ = nullptr;
