@@ -55,6 +55,11 @@ class OdeSystem {
   virtual bool CanProject() const { return false; }
   virtual void EnableStepProjection() {}
   virtual int Project(double /*t*/, double* /*y*/) { return 0; }
+  // y := its projection as Project's, computed aside: nothing that a later Rhs or Project
+  // reads is touched (a measurement of how far a solver's state drifted; ARKODE). Rhs's
+  // status codes; -1 when the system offers none (the engine: closed loops on the reduced
+  // form only).
+  virtual int ProjectAside(double /*t*/, double* /*y*/) { return -1; }
   // A check of each accepted step (closed loops: the branch monitor, engine.h
   // CheckBranch). Solvers call StepAccepted(t, y) after every accepted step when
   // ChecksSteps(): 0 goes on, > 0 asks to take the step again shorter (DOP853; the

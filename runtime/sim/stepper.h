@@ -22,6 +22,8 @@ class GuardedRhs {
   bool CanProject() const { return system_.CanProject(); }
   void EnableStepProjection() { system_.EnableStepProjection(); }
   int Project(double t, double* y);
+  // The system's ProjectAside: a measurement, its failures not recorded.
+  int ProjectAside(double t, double* y) { return system_.ProjectAside(t, y); }
   // The system's check of an accepted step (OdeSystem::StepAccepted), failures recorded
   // as operator()'s; a failed check is always fatal for the SUNDIALS solvers
   // (kStepCheckFailed).
