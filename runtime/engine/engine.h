@@ -165,6 +165,19 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& program, const std:
 int EvalSignals(const Program& program, const SignalPlan& plan, Workspace& ws, double t, const double* y,
                 double* out);
 
+// Output rows near a change point (runtime/engine/output_rows.cpp; docs/constraints.md
+// "Rows near a change point"). Whether the state y at time t is near one (some loop's
+// rho < 1e-2; ws: a workspace of its own, so that the rows' own keeps the projection's
+// state of the rows before it and the rows away from change points stay as they were).
+bool RowNearChangePoint(const Program& program, Workspace& ws, double t, const double* y);
+// How far the projection left in ws (after EvalSignals) moved the free speeds of y, in
+// units of atol + max(rtol, 1e-8) |u| (max over the speeds).
+double SpeedMove(const Program& program, const Workspace& ws, const double* y, double rtol, double atol);
+// EvalSignals with the projection of least kinetic energy through a truncated
+// pseudo-inverse instead of the partition's.
+int EvalSignalsNearChangePoint(const Program& program, const SignalPlan& plan, Workspace& ws, double t,
+                               const double* y, double* out);
+
 // The signals among `names` (reaction and contact-force components) whose value the
 // equations do not determine, in the order given; empty for a mechanism without redundant
 // constraints. Decided at the assembled start (runtime/compile/indeterminate.cpp).

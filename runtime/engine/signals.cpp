@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "runtime/engine/engine.h"
+#include "runtime/engine/output_rows.h"
 #include "runtime/constraints/constraints.h"
 #include "runtime/constraints/contacts.h"
 #include "runtime/constraints/reactions.h"
@@ -270,7 +271,9 @@ std::vector<std::string> IndeterminateSignals(const Program& p, const std::vecto
   return out;
 }
 
-int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out) {
+namespace {
+int EvalSignalsBy(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out,
+                  bool near_change_point) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
   if (plan.velocity || !p.rows.empty()) VelocityKinematics(p, ws);
@@ -279,7 +282,13 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
     ConstraintResiduals(p, ws);
     ws.phi_drift = ws.phi;
   }
-  if (int s = ProjectState(p, ws); s != 0) return s;
+  // Near a change point, the projection of least kinetic energy with a truncated
+  // pseudo-inverse instead (runtime/engine/output_rows.h).
+  if (near_change_point) {
+    if (int s = ProjectRowNearChangePoint(p, ws, plan.dynamics); s != 0) return s;
+  } else if (int s = ProjectState(p, ws); s != 0) {
+    return s;
+  }
   if (plan.dynamics) {
     // The accelerations: the right-hand side's stages, then the body accelerations.
     BiasAccelerations(p, ws);
@@ -390,6 +399,36 @@ int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double 
     out[i] = v;
   }
   return 0;
+}
+}  // namespace
+
+int EvalSignals(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out) {
+  return EvalSignalsBy(p, plan, ws, t, y, out, false);
+}
+
+bool RowNearChangePoint(const Program& p, Workspace& ws, double t, const double* y) {
+  if (p.loops.empty() || p.loop_rank == 0) return false;
+  if (UnpackState(p, ws, t, y) != 0) return false;
+  PositionKinematics(p, ws);
+  return RowNearChangePoint(p, ws);
+}
+
+// Below this rtol the move is measured in units of this one: the integrator's own y is
+// off the manifold by some 1e3 units of rtol 1e-12 anywhere.
+constexpr double kMoveFloor = 1e-8;
+
+double SpeedMove(const Program& p, const Workspace& ws, const double* y, double rtol, double atol) {
+  double m = 0.0;
+  for (int s = 0; s < p.nu; ++s) {
+    const double raw = y[p.nq + s];
+    m = std::max(m, std::abs(ws.u[p.u_free[static_cast<size_t>(s)]] - raw) / (atol + std::max(rtol, kMoveFloor) * std::abs(raw)));
+  }
+  return m;
+}
+
+int EvalSignalsNearChangePoint(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y,
+                               double* out) {
+  return EvalSignalsBy(p, plan, ws, t, y, out, true);
 }
 
 }  // namespace kanesim::rt

@@ -35,6 +35,9 @@ struct SimOptions {
   bool bridge_several_at_once = true;  // ... there tried after 10 steps in a zone, not 50 (tests only)
   bool bridge_several_at_once_multiplier = false;  // ... also on the multiplier form (tests only)
   bool dense_check = true;  // DOP853: steps whose dense-output stages are not smooth are retaken (tests only)
+  // Output rows near a change point whose projection moved the integrator's speeds too far
+  // are projected in the kinetic metric instead (docs/constraints.md; tests only).
+  bool zone_rows = true;
   bool bridge_projected_estimate = true;  // ... there on the multiplier form, its estimate after projecting (tests only)
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty
