@@ -1,6 +1,7 @@
 // The bridge over a near-singular zone of a closed loop, and the check of a change point a
 // solver passed by itself (engine.h BridgeChangePoint, BridgeState; docs/constraints.md
 // "Singular configurations"; issue 20). The monitor that calls them is branch_monitor.cpp.
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -92,7 +93,14 @@ constexpr const char* kEstimateAbove = "the extrapolation's error estimate is ab
 // jump grows mildly with the estimate: <= 1.2e-5 J at 1e3 ... 5e3, <= 2.3e-5 J at 5e3 ...
 // 1e4, <= 2.9e-5 J (2.7e-8 of E) at 1e4 ... 1.3e4; the chain of ten with IDA (after 10
 // steps in a zone, below) met 2.73e4: jump 1.25e-6 J (4.6e-9 of E = 270 J).
-constexpr double kBridgeMaxErrorSeveral = 3e4;
+// Those jumps were the projection's, not the extrapolation's: the partition's solve for
+// the dependent speeds is an oblique projection, ill-conditioned near the crossing (IDA,
+// chain of 40, 1e-12: the raw extrapolation's energy 2e-8 ... 7e-8 J off, the projected
+// state's 5e-6 ... 2.1e-5 J). With the speeds projected in the kinetic metric where
+// several loops are near singular (MetricSpeeds) the jump is the extrapolation's:
+// <= 4e-7 J (4e-10 of E) up to estimates of 7.3e4; was 3e4, at which IDA on that chain
+// stopped (3.53e4 at t = 2.05).
+constexpr double kBridgeMaxErrorSeveral = 1e5;
 constexpr double kBridgeMoved = 1e-6;    // largest change by the projection (of max(1, |y|))
 // ... on the multiplier form where several loops are near singular at once (a chain of
 // equal-link parallelograms): the estimate is dominated by the same round-off of the speeds
@@ -266,6 +274,76 @@ int BridgeByZoneFit(const Program& p, BranchMonitor& m, double rtol, double atol
   return 0;
 }
 
+namespace {
+// The bridged state's speeds projected in the kinetic metric (reduced form): y holds the
+// state ProjectOntoConstraints gave (positions by Newton on the dependent coordinates,
+// dependent speeds solved from the independent ones), raw the extrapolation before it. The
+// speeds become y's plus the tangent-space correction closest to raw in the kinetic
+// metric, u = u_y + beta z with (beta^T M beta) z = beta^T M (u_raw - u_y): the change is
+// M-orthogonal to the motion's tangent space, so it leaves the kinetic energy unchanged to
+// first order, while the partition's own solve (an oblique projection, ill-conditioned
+// near the crossing) moves the energy by the extrapolation's error times 1 / rho
+// (docs/constraints.md "Singular configurations"). Nonzero if the equations fail.
+double Metric(const Program& p, const Workspace& ws, const std::vector<Vec3>& va, const std::vector<Vec3>& wa,
+              const std::vector<Vec3>& vb, const std::vector<Vec3>& wb) {
+  double s = 0.0;
+  for (size_t L = 0; L < p.bodies.size(); ++L) s += p.bodies[L].mass * va[L].dot(vb[L]) + wa[L].dot(ws.I_W[L] * wb[L]);
+  return s;
+}
+
+int MetricSpeeds(const Program& p, BranchMonitor& m, double t, const double* raw, double* y) {
+  Workspace& ws = *m.ws;
+  const int nq = p.nq, nu = p.nu, n = StateSize(p);
+  std::vector<double> f(static_cast<size_t>(n));
+  if (Derivative(p, ws, t, y, f.data()) != 0) return 1;  // beta at y, with its partition
+  const Eigen::MatrixXd beta = ws.beta;
+  const int nind = static_cast<int>(beta.cols());
+  if (nind == 0) return 0;
+  if (UnpackState(p, ws, t, y) != 0) return 1;
+  PositionKinematics(p, ws);
+  const size_t K = p.bodies.size();
+  // Body velocities of free speeds x (prescribed ones and time terms cancel in the differences).
+  auto velocities = [&](const std::vector<double>& x, std::vector<Vec3>* v, std::vector<Vec3>* w) {
+    for (int i = 0; i < nu; ++i) ws.u[p.u_free[static_cast<size_t>(i)]] = x[static_cast<size_t>(i)];
+    VelocityKinematics(p, ws);
+    *v = ws.v_WBcm;
+    *w = ws.w_WB;
+  };
+  std::vector<double> uy(y + nq, y + nq + nu), x(uy);
+  std::vector<Vec3> v0, w0, vd, wd;
+  velocities(uy, &v0, &w0);
+  for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = raw[nq + i];
+  velocities(x, &vd, &wd);
+  for (size_t L = 0; L < K; ++L) {
+    vd[L] -= v0[L];
+    wd[L] -= w0[L];
+  }
+  std::vector<std::vector<Vec3>> vc(static_cast<size_t>(nind)), wc(static_cast<size_t>(nind));
+  for (int c = 0; c < nind; ++c) {
+    for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = uy[static_cast<size_t>(i)] + beta(i, c);
+    velocities(x, &vc[static_cast<size_t>(c)], &wc[static_cast<size_t>(c)]);
+    for (size_t L = 0; L < K; ++L) {
+      vc[static_cast<size_t>(c)][L] -= v0[L];
+      wc[static_cast<size_t>(c)][L] -= w0[L];
+    }
+  }
+  Eigen::MatrixXd Mr(nind, nind);
+  Eigen::VectorXd r(nind);
+  for (int c = 0; c < nind; ++c) {
+    const auto uc = static_cast<size_t>(c);
+    r[c] = Metric(p, ws, vc[uc], wc[uc], vd, wd);
+    for (int d = 0; d < nind; ++d) Mr(c, d) = Metric(p, ws, vc[uc], wc[uc], vc[static_cast<size_t>(d)], wc[static_cast<size_t>(d)]);
+  }
+  Eigen::LLT<Eigen::MatrixXd> llt(Mr);
+  if (llt.info() != Eigen::Success) return 1;
+  const Eigen::VectorXd z = llt.solve(r);
+  for (int i = 0; i < nu; ++i) y[nq + i] += beta.row(i).dot(z);
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(y[i])) return 1;
+  return 0;
+}
+}  // namespace
+
 int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double atol, double* t_from, double* t_b,
                      double* y_b) {
   auto refuse = [&m](const char* why) {
@@ -401,14 +479,15 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   if (!(m.bridge_estimate <= (sparse ? kBridgeMaxError : m.several_loops ? kBridgeMaxErrorSeveral : kBridgeMaxErrorReduced)) &&
       !needs_projected) {
     why = kEstimateAbove;
-  } else if (ProjectOntoConstraints(p, ws, tb, y_b) != 0) {
+  } else if (ProjectOntoConstraints(p, ws, tb, y_b) != 0 ||
+             ((rho_b = RhoAt(p, m, tb, y_b, &near_loops)) >= 0.0 && !sparse && near_loops > 1 &&
+              MetricSpeeds(p, m, tb, raw.data(), y_b) != 0)) {
     why = needs_several ? kEstimateAbove : "the bridged state could not be projected";
   } else {
     for (int i = 0; i < n; ++i) {
       const double d = std::fabs(y_b[i] - raw[static_cast<size_t>(i)]) / std::max(1.0, std::fabs(raw[static_cast<size_t>(i)]));
       moved = std::isnan(d) ? INFINITY : std::max(moved, d);
     }
-    rho_b = RhoAt(p, m, tb, y_b, &near_loops);
     if (needs_projected && near_loops > 1 && moved <= kBridgeMovedSeveral) {
       std::vector<double> yq(nn), yf(nn);
       for (size_t i = 0; i < nn; ++i) {
