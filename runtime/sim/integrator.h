@@ -60,6 +60,10 @@ class OdeSystem {
   // status codes; -1 when the system offers none (the engine: closed loops on the reduced
   // form only).
   virtual int ProjectAside(double /*t*/, double* /*y*/) { return -1; }
+  // The same on the multiplier form's closed loops only (-1 elsewhere): CVODE's drift
+  // measurement (integrator_cvode.cpp), where that form's kinetic-metric projection of
+  // all the speeds carries a drift of y into y*.
+  virtual int ProjectAsideMultiplierForm(double /*t*/, double* /*y*/) { return -1; }
   // A check of each accepted step (closed loops: the branch monitor, engine.h
   // CheckBranch). Solvers call StepAccepted(t, y) after every accepted step when
   // ChecksSteps(): 0 goes on, > 0 asks to take the step again shorter (DOP853; the

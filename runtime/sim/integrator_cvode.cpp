@@ -1,13 +1,31 @@
 // CVODE on y' = f(t, y): Adams-Moulton with fixed-point iteration (non-stiff, no
 // Jacobian), or BDF with Newton iteration on M = I - gamma df/dy, where df/dy is formed
 // by CVODE's difference quotients and M is factored by the dense LU.
+//
+// Closed loops on the multiplier form (checked steps): f is evaluated at y*, the
+// projection of y onto the constraints, plus a relaxation k_drift (y* - y)
+// (runtime/engine/engine.cpp). That form projects all the speeds in the kinetic metric,
+// u* = P(q) u, so off the manifold d(u*)/dt = f + (dP/dt)(u - u*): a drift of y moves the
+// rows' motion. Measured on the equal-link parallelogram (CVODE-BDF, rtol 1e-6): the step
+// across the change point at t = 9.73 left y 4.6 error weights off, the drift then grew
+// x7, x4.5, x3.3, x2.7 ... per step (35-50 1/s, faster than k_drift = 10 1/s pulls it
+// back) while the rows, on the branch, gained energy: 43x by t = 10.2. (The reduced form
+// keeps y's independent coordinates in y* and overrides the dependent ones: a drift there
+// does not feed the rows' motion, and resets near the change points of the chains at rtol
+// 1e-12 made CVODE stall; ARKODE measures its own drift on that form.) As ARKODE does
+// (integrator_arkode.cpp, MeasureDrift), the drift of each accepted step is measured aside
+// and, past kDriftLimit weights and grown over kDriftGrowth steps in a row, CVODE starts
+// again (CVodeReInit) from y* once that step's output instants are written.
 #include <cvode/cvode.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "runtime/sim/stepper.h"
 #include "runtime/sim/sundials_util.h"
@@ -63,16 +81,81 @@ class CvodeStepper final : public SundialsStepper {
       if (!s_.nls || CVodeSetNonlinearSolver(mem_, s_.nls) != CV_SUCCESS)
         return Fail(error, WithDetail("CVODE fixed-point solver setup failed", messages_.last));
     }
+    stop_ = stop;
+    rtol_ = options.rtol;
+    atol_ = options.atol;
     return true;
   }
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
     if (!rhs_.ChecksSteps()) return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
-    return AdvanceCheckedSteps(tout, y, [&](double* t) { return CVode(mem_, tout, s_.y, t, CV_ONE_STEP); });
+    return AdvanceCheckedSteps(tout, y, [&](double* t) {
+      if (drifted_ && !ResetProjected()) return CV_ILL_INPUT;
+      const int flag = CVode(mem_, tout, s_.y, t, CV_ONE_STEP);
+      if (flag >= 0) MeasureDrift(*t);
+      return flag;
+    });
+  }
+
+  // The counters of the CVODE runs before the last reset added (CVodeReInit zeroes them).
+  IntegratorStats Stats() const override {
+    IntegratorStats st = SundialsStepper::Stats();
+    st.steps += before_.steps;
+    st.rhs_evals += before_.rhs_evals;
+    st.rhs_evals_jac += before_.rhs_evals_jac;
+    st.jac_evals += before_.jac_evals;
+    st.lin_setups += before_.lin_setups;
+    st.err_test_fails += before_.err_test_fails;
+    st.nonlin_iters += before_.nonlin_iters;
+    st.nonlin_conv_fails += before_.nonlin_conv_fails;
+    return st;
   }
 
  private:
+  // The accepted step's drift |y*_i - y_i| / (rtol |y_i| + atol) (the error test's
+  // weights), y* = its projection computed aside. Measured on the parallelogram above: at
+  // most 0.24 on the steps before the change point, then 4.6, 33, 146, 475 (reset there).
+  void MeasureDrift(double t) {
+    const double* ys = N_VGetArrayPointer(s_.y);
+    stepped_y_.assign(ys, ys + rhs_.Size());
+    projected_ = stepped_y_;
+    if (rhs_.ProjectAsideMultiplierForm(t, projected_.data()) != 0) return;
+    double drift = 0.0;
+    for (size_t i = 0; i < projected_.size(); ++i)
+      drift = std::max(drift, std::fabs(projected_[i] - ys[i]) / (rtol_ * std::fabs(ys[i]) + atol_));
+    growth_ = drift > last_drift_ ? growth_ + 1 : 0;
+    last_drift_ = drift;
+    drifted_ = drift > kDriftLimit && growth_ >= kDriftGrowth;
+    t_drifted_ = t;
+  }
+
+  // CVODE again from y* of the drifted step (f's own projection; no reset where it
+  // cannot project), order 1, its counters kept in before_.
+  bool ResetProjected() {
+    drifted_ = false;
+    growth_ = 0;
+    last_drift_ = 0.0;
+    double* ys = N_VGetArrayPointer(s_.y);
+    std::copy(stepped_y_.begin(), stepped_y_.end(), ys);
+    if (rhs_.Project(t_drifted_, ys) != 0) return true;
+    before_ = Stats();
+    return CVodeReInit(mem_, t_drifted_, s_.y) == CV_SUCCESS && CVodeSetStopTime(mem_, stop_) == CV_SUCCESS;
+  }
+
+  static constexpr double kDriftLimit = 10.0;  // as ARKODE's: in the error test's weights
+  static constexpr int kDriftGrowth = 4;       // and grown over that many steps in a row
+
+  double stop_ = 0.0;
+  double rtol_ = 0.0, atol_ = 0.0;  // the error test's tolerances (MeasureDrift)
+  bool drifted_ = false;            // the last step drifted: CVODE goes on from its y*
+  double t_drifted_ = 0.0;          // its time
+  double last_drift_ = 0.0;         // the drift of the step before
+  int growth_ = 0;                  // steps in a row whose drift grew
+  std::vector<double> stepped_y_;   // y of the last step  (n)
+  std::vector<double> projected_;   // its projection, aside  (n)
+  IntegratorStats before_;          // counters of the CVODE runs before the last reset
+
   FailureKind Kind(int flag) const override {
     switch (flag) {
       case CV_RHSFUNC_FAIL:

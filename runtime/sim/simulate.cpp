@@ -68,6 +68,11 @@ class EngineOde final : public OdeSystem {
     if (!aside_) aside_ = rt::MakeWorkspace(program_);
     return rt::ProjectOntoConstraints(program_, *aside_, t, y);
   }
+  int ProjectAsideMultiplierForm(double t, double* y) override {
+    if (monitor_ == nullptr || CanProject()) return -1;  // CanProject: the reduced form
+    if (!aside_) aside_ = rt::MakeWorkspace(program_);
+    return rt::ProjectOntoConstraints(program_, *aside_, t, y);
+  }
 
  private:
   const rt::Program& program_;

@@ -24,6 +24,7 @@ class GuardedRhs {
   int Project(double t, double* y);
   // The system's ProjectAside: a measurement, its failures not recorded.
   int ProjectAside(double t, double* y) { return system_.ProjectAside(t, y); }
+  int ProjectAsideMultiplierForm(double t, double* y) { return system_.ProjectAsideMultiplierForm(t, y); }
   // The system's check of an accepted step (OdeSystem::StepAccepted), failures recorded
   // as operator()'s; a failed check is always fatal for the SUNDIALS solvers
   // (kStepCheckFailed).
