@@ -23,8 +23,11 @@ class EngineOde final : public OdeSystem {
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
     from_monitor_ = false;
-    return rt::Derivative(program_, ws_, t, y, ydot);
+    const int s = rt::Derivative(program_, ws_, t, y, ydot);
+    if (fault_ && s == 0) fault_(t, y, ydot);
+    return s;
   }
+  void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
   bool ChecksSteps() const override { return monitor_ != nullptr; }
   int StepAccepted(double t, const double* y) override {
     const int s = rt::CheckBranch(program_, *monitor_, t, y);
@@ -74,6 +77,7 @@ class EngineOde final : public OdeSystem {
   rt::Workspace& ws_;
   std::unique_ptr<rt::BranchMonitor, void (*)(rt::BranchMonitor*)> monitor_{nullptr, [](rt::BranchMonitor*) {}};
   bool from_monitor_ = false;  // the last failure was the branch monitor's
+  std::function<void(double, const double*, double*)> fault_;  // SimOptions::rhs_fault
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
 };
 
@@ -178,6 +182,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return result;
   }
   bool sink_failed = false;
+  EnergyGuard energy(program, options.energy_check, options.rtol);
   Clock::duration output_time{};
   RowCallback row = [&](double t, const double* y, std::string* cause) -> int {
     Clock::time_point t0 = Clock::now();
@@ -204,6 +209,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
+    } else if (energy.Row(t, y, cause) != 0) {
+      status = -1;  // the row is not written: the rows before it are on disk
     } else if (!sink.Row(t, values.data(), values.size())) {
       sink_failed = true;
       *cause = "cannot write the output";
@@ -214,6 +221,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return status;
   };
   EngineOde ode(program, *ws_rhs);
+  if (options.rhs_fault) ode.SetFault(options.rhs_fault);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
                                          options.bridge_several_at_once, options.bridge_several_at_once_multiplier);
   Clock::time_point start = Clock::now();
@@ -225,6 +233,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.rows = ir.rows;
   result.stats.bridges = ir.bridges;
   ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
+  result.stats.energy_guard = energy.Description();
+  result.stats.energy_error = energy.WorstError();
+  result.stats.energy_tolerance = energy.Tolerance();
   result.stats.times.output = Seconds(output_time);
   result.stats.times.integrate = Seconds(total - output_time);
   if (sink_failed || (ir.ok && !end_ok)) {
@@ -278,6 +289,14 @@ std::string FormatStats(const SimStats& s) {
                   "  passed, not checked      %ld\n",
                   s.bridges, s.passages_checked, s.passages_unchecked);
     out += buf;
+  }
+  if (!s.energy_guard.empty()) {
+    out += "energy guard               " + s.energy_guard + "\n";
+    if (s.energy_guard == "on" || s.energy_guard == "report") {
+      std::snprintf(buf, sizeof buf, "  largest relative error   %.3g (of the motion's energy; bound %.3g)\n", s.energy_error,
+                    s.energy_tolerance);
+      out += buf;
+    }
   }
   return out;
 }
