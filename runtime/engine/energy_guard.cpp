@@ -1,5 +1,5 @@
-// NonConservativeCause: which force element keeps a model from conserving T + V.
-#include "runtime/engine/energy_guard.h"
+// NonConservativeCause (engine.h): which force element keeps a model from conserving T + V.
+#include "runtime/engine/engine.h"
 
 #include "runtime/program/program.h"
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "runtime/engine/energy_guard.h"
+#include "runtime/engine/engine.h"
 
 namespace kanesim::sim {
 
@@ -40,25 +40,14 @@ EnergyGuard::EnergyGuard(const rt::Program& program, EnergyCheck mode, double rt
     description_ = "not applied (" + why + " does work)";
     return;
   }
-  plan_ = rt::PlanSignals(program, {"kinetic_energy", "potential_energy"}, nullptr);
-  if (!plan_) {
-    description_ = "not applied (no energy signals)";
-    return;
-  }
-  ws_ = rt::MakeWorkspace(program);
   active_ = true;
   stop_ = mode == EnergyCheck::kOn;
   description_ = stop_ ? "on" : "report";
 }
 
-EnergyGuard::~EnergyGuard() = default;
-
-int EnergyGuard::Row(double t, const double* y, std::string* cause) {
-  if (!active_) return 0;
-  double tv[2];
-  // A row the energy cannot be evaluated at is left to the row's own signals to report.
-  if (rt::EvalSignals(program_, *plan_, *ws_, t, y, tv) != 0 || !std::isfinite(tv[0]) || !std::isfinite(tv[1])) return 0;
-  const double T = tv[0], V = tv[1], E = T + V;
+int EnergyGuard::Row(double t, double T, double V, std::string* cause) {
+  if (!active_ || !std::isfinite(T) || !std::isfinite(V)) return 0;
+  const double E = T + V;
   if (!started_) {
     started_ = true;
     e0_ = E;

@@ -5,8 +5,8 @@
 // missed, an integrator that accepted bad steps), evaluated at the output rows.
 #pragma once
 
-#include <memory>
 #include <string>
+#include <vector>
 
 #include "runtime/engine/engine.h"
 
@@ -27,14 +27,16 @@ double EnergyTolerance(double rtol);
 class EnergyGuard {
  public:
   EnergyGuard(const rt::Program& program, EnergyCheck mode, double rtol);
-  ~EnergyGuard();
   EnergyGuard(const EnergyGuard&) = delete;
   EnergyGuard& operator=(const EnergyGuard&) = delete;
 
   bool Active() const { return active_; }  // a conservative model and the check not off
-  // At an output row (the first one sets E0): 0 to go on; non-zero when the energy left
-  // the bound and the mode is kOn, with the cause in words.
-  int Row(double t, const double* y, std::string* cause);
+  // The signals Row needs, evaluated with the row's own (after the requested ones, in
+  // the same workspace: no second projection, and the written values are unchanged).
+  static std::vector<std::string> Signals() { return {"kinetic_energy", "potential_energy"}; }
+  // At an output row, its kinetic and potential energy (the first row sets E0): 0 to go
+  // on; non-zero when the energy left the bound and the mode is kOn, the cause in words.
+  int Row(double t, double T, double V, std::string* cause);
   double WorstError() const { return worst_; }  // the largest relative error seen (0 before any row)
   double Tolerance() const { return tol_; }
   // What --stats says about the guard: "on", "off", "report", or "not applied (<cause>)".
@@ -45,8 +47,6 @@ class EnergyGuard {
   bool active_ = false, stop_ = false;
   double tol_ = 0.0;
   std::string description_;
-  std::shared_ptr<const rt::SignalPlan> plan_;
-  std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, [](rt::Workspace*) {}};
   bool started_ = false;
   double e0_ = 0.0, v0_ = 0.0;
   double motion_ = 0.0;   // max over the rows of T + |V - V0|

@@ -163,6 +163,15 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   std::string plan_error;
   std::shared_ptr<const rt::SignalPlan> plan = rt::PlanSignals(program, names, &plan_error);
   if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  // The energy guard's T and V ride along after the written signals (not written).
+  EnergyGuard energy(program, options.energy_check, options.rtol);
+  const size_t n_written = names.size();
+  if (energy.Active()) {
+    std::vector<std::string> all = names;
+    for (const std::string& e : EnergyGuard::Signals()) all.push_back(e);
+    plan = rt::PlanSignals(program, all, &plan_error);
+    if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  }
 
   // 3. Integrate. The right-hand side and the outputs use separate workspaces so that
   // evaluating an output never disturbs the solver's state of the engine.
@@ -171,7 +180,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
   std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
   rt::InitialState(program, y0.data());
-  std::vector<double> values(names.size()), zone_values(names.size());
+  std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
   SimResult result;
@@ -182,7 +191,6 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return result;
   }
   bool sink_failed = false;
-  EnergyGuard energy(program, options.energy_check, options.rtol);
   Clock::duration output_time{};
   RowCallback row = [&](double t, const double* y, std::string* cause) -> int {
     Clock::time_point t0 = Clock::now();
@@ -209,9 +217,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
-    } else if (energy.Row(t, y, cause) != 0) {
+    } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
       status = -1;  // the row is not written: the rows before it are on disk
-    } else if (!sink.Row(t, values.data(), values.size())) {
+    } else if (!sink.Row(t, values.data(), n_written)) {
       sink_failed = true;
       *cause = "cannot write the output";
       status = -1;

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/energy_guard.h"
+#include "runtime/engine/engine.h"
 #include "runtime/sim/simulate.h"
 #include "tests/constraints/load_util.h"
 
@@ -223,6 +223,53 @@ TEST(EnergyGuard, ParallelogramBranchSwitchUnderBdfStops) {
   } else {
     EXPECT_LT(rel, EnergyTolerance(1e-6));
     EXPECT_EQ(on.r.status, off.r.status) << on.r.message;
+  }
+}
+
+// A real wrong answer the guard catches on its own: with DOP853's dense-output check off
+// (SimOptions::dense_check, tests only; tests/constraints/change_point_bridge_test.cpp
+// Dop853DenseOutputAcrossAChangePointIsNotTrusted), the chain of two equal-link
+// parallelograms writes rows interpolated across a change point that are off the motion:
+// on the reduced form at rtol 1e-8, seven rows from t = 11.64 with the crank speed up to
+// 0.16 rad/s off (2.8e-2 of the lumped energy); on the multiplier form at rtol 1e-12 (the
+// early bridge on that form too), the rows at t = 16.79 and 16.80, 6.3e-3 rad off. Both ended
+// with exit 0; the guard stops each at its first bad row.
+TEST(EnergyGuard, StopsTheRowsOfAnUncheckedDenseOutput) {
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "0.3 s per run in Release";
+#endif
+  struct Case {
+    rt::SolverPath solver;
+    double rtol, t_from, t_to;
+  };
+  for (const Case& c : {Case{rt::SolverPath::Dense, 1e-8, 11.6, 11.71}, Case{rt::SolverPath::Sparse, 1e-12, 16.78, 16.81}}) {
+    SCOPED_TRACE(c.rtol);
+    rt::CompileOptions co;
+    co.solver = c.solver;
+    auto model = test::LoadModel(kRoot + "/tests/stress/models/parallelogram_chain.mech", {{"N", "2"}}, co);
+    ASSERT_TRUE(model && model->prog);
+    ASSERT_EQ(rt::NonConservativeCause(*model->prog), "");
+    SimOptions o;
+    o.stop_time = 20.0;
+    o.interval = 0.01;
+    o.rtol = o.atol = c.rtol;
+    o.integrator = rt::IntegratorKind::DOP853;
+    o.bridge_several_at_once_multiplier = c.solver == rt::SolverPath::Sparse;
+    o.dense_check = false;
+    o.signals = {"kinetic_energy", "potential_energy"};
+    MemorySink sink;
+    SimResult r = Simulate(*model->prog, o, sink);
+    std::printf("[ guard ] chain of two, dense check off, rtol %.0e: %s at t = %.2f (%s)\n", c.rtol,
+                r.status == SimResult::Status::kOk ? "exit 0" : "exit 2", r.fail_time, r.message.substr(0, 60).c_str());
+    ASSERT_EQ(r.status, SimResult::Status::kNumericalFailure);
+    EXPECT_NE(r.message.find("the total energy of a conservative model"), std::string::npos) << r.message;
+    EXPECT_GE(r.fail_time, c.t_from);
+    EXPECT_LE(r.fail_time, c.t_to);
+    // With the check on (the default), the same runs end correctly and the guard lets them.
+    o.dense_check = true;
+    MemorySink ok_sink;
+    SimResult ok = Simulate(*model->prog, o, ok_sink);
+    EXPECT_EQ(ok.status, SimResult::Status::kOk) << ok.message;
   }
 }
 
