@@ -40,6 +40,7 @@ struct RunArgs {
   std::string linear_solver = "auto";
   std::string projection = "eval";
   std::string reactions = "nan";
+  std::string energy_check = "on";  // --energy-check on|off|report (runtime/sim/energy_guard.h)
   bool stats = false;
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
   bool show_frames = false;  // --show-frames: the joints' frames as small axes in the animation
@@ -109,6 +110,9 @@ int RunCommand(const RunArgs& a) {
     return kExitModelError;
   }
   sim::SimOptions& so = run.sim;
+  so.energy_check = a.energy_check == "off"      ? sim::EnergyCheck::kOff
+                    : a.energy_check == "report" ? sim::EnergyCheck::kReport
+                                                 : sim::EnergyCheck::kOn;
   AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
   if (!animation.Prepare(*model->mech, program, &so.signals)) return kExitModelError;
 
@@ -201,6 +205,10 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("--reactions", a->reactions,
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember(pipeline::ReactionsNames()));
+  run->add_option("--energy-check", a->energy_check,
+                  "Conservative models: stop with exit 2 where the total energy T + V drifts beyond the tolerance's "
+                  "reach (on), never (off), or only measure it for --stats (report)")
+      ->check(CLI::IsMember({"on", "off", "report"}));
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   CLI::Option* animation =
       run->add_option("--animation", a->animation,

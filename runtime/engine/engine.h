@@ -154,6 +154,15 @@ void SetBridgeProjectedEstimate(BranchMonitor& monitor, bool on);
 void PassageCounts(const BranchMonitor& monitor, long* checked, long* unchecked);
 const std::string& BridgeRefused(const BranchMonitor& monitor);
 
+// "" when the model conserves T + V (the kinetic_energy and potential_energy signals; V =
+// gravity + line springs): ideal joints, loops and rolling contacts, gravity, springs of
+// constant stiffness and free length. Otherwise the first element that does or may do work,
+// in words ("the damper 'd1'", "the prescribed motion of joint 'crank'", "the force of joint
+// 'j' (tau)", "the friction of joint 'pin'", "the force 'push'"); one the rule cannot vouch
+// for (a stiffness given by an expression) counts as doing work. The energy guard
+// (runtime/sim/energy_guard.h) checks only conservative models. runtime/engine/energy_guard.cpp
+std::string NonConservativeCause(const Program& program);
+
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",
 // "rod1.frame_b.r[1]", declared outputs by their name. Selection compiles the
 // requested names into a plan so that only what is needed gets computed.

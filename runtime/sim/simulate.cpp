@@ -23,8 +23,11 @@ class EngineOde final : public OdeSystem {
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
     from_monitor_ = false;
-    return rt::Derivative(program_, ws_, t, y, ydot);
+    const int s = rt::Derivative(program_, ws_, t, y, ydot);
+    if (fault_ && s == 0) fault_(t, y, ydot);
+    return s;
   }
+  void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
   bool ChecksSteps() const override { return monitor_ != nullptr; }
   int StepAccepted(double t, const double* y) override {
     const int s = rt::CheckBranch(program_, *monitor_, t, y);
@@ -79,6 +82,7 @@ class EngineOde final : public OdeSystem {
   rt::Workspace& ws_;
   std::unique_ptr<rt::BranchMonitor, void (*)(rt::BranchMonitor*)> monitor_{nullptr, [](rt::BranchMonitor*) {}};
   bool from_monitor_ = false;  // the last failure was the branch monitor's
+  std::function<void(double, const double*, double*)> fault_;  // SimOptions::rhs_fault
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
 };
 
@@ -164,6 +168,15 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   std::string plan_error;
   std::shared_ptr<const rt::SignalPlan> plan = rt::PlanSignals(program, names, &plan_error);
   if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  // The energy guard's T and V ride along after the written signals (not written).
+  EnergyGuard energy(program, options.energy_check, options.rtol);
+  const size_t n_written = names.size();
+  if (energy.Active()) {
+    std::vector<std::string> all = names;
+    for (const std::string& e : EnergyGuard::Signals()) all.push_back(e);
+    plan = rt::PlanSignals(program, all, &plan_error);
+    if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  }
 
   // 3. Integrate. The right-hand side and the outputs use separate workspaces so that
   // evaluating an output never disturbs the solver's state of the engine.
@@ -172,7 +185,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
   std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
   rt::InitialState(program, y0.data());
-  std::vector<double> values(names.size()), zone_values(names.size());
+  std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
   SimResult result;
@@ -209,7 +222,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
-    } else if (!sink.Row(t, values.data(), values.size())) {
+    } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
+      status = -1;  // the row is not written: the rows before it are on disk
+    } else if (!sink.Row(t, values.data(), n_written)) {
       sink_failed = true;
       *cause = "cannot write the output";
       status = -1;
@@ -219,6 +234,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return status;
   };
   EngineOde ode(program, *ws_rhs);
+  if (options.rhs_fault) ode.SetFault(options.rhs_fault);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
                                          options.bridge_several_at_once, options.bridge_several_at_once_multiplier);
   Clock::time_point start = Clock::now();
@@ -230,6 +246,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.rows = ir.rows;
   result.stats.bridges = ir.bridges;
   ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
+  result.stats.energy_guard = energy.Description();
+  result.stats.energy_error = energy.WorstError();
+  result.stats.energy_tolerance = energy.Tolerance();
   result.stats.times.output = Seconds(output_time);
   result.stats.times.integrate = Seconds(total - output_time);
   if (sink_failed || (ir.ok && !end_ok)) {
@@ -283,6 +302,14 @@ std::string FormatStats(const SimStats& s) {
                   "  passed, not checked      %ld\n",
                   s.bridges, s.passages_checked, s.passages_unchecked);
     out += buf;
+  }
+  if (!s.energy_guard.empty()) {
+    out += "energy guard               " + s.energy_guard + "\n";
+    if (s.energy_guard == "on" || s.energy_guard == "report") {
+      std::snprintf(buf, sizeof buf, "  largest relative error   %.3g (of the motion's energy; bound %.3g)\n", s.energy_error,
+                    s.energy_tolerance);
+      out += buf;
+    }
   }
   return out;
 }

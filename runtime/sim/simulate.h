@@ -13,6 +13,7 @@
 
 #include "runtime/engine/engine.h"
 #include "runtime/sim/csv.h"
+#include "runtime/sim/energy_guard.h"
 #include "runtime/sim/integrator.h"
 
 namespace kanesim::sim {
@@ -39,6 +40,12 @@ struct SimOptions {
   // are projected in the kinetic metric instead (docs/constraints.md; tests only).
   bool zone_rows = true;
   bool bridge_projected_estimate = true;  // ... there on the multiplier form, its estimate after projecting (tests only)
+  // Conservative models: stop with exit 2 where T + V leaves the tolerance's reach
+  // (`--energy-check on|off|report`; runtime/sim/energy_guard.h, docs/integrators.md).
+  EnergyCheck energy_check = EnergyCheck::kOn;
+  // Tests only: called after every right-hand side with its t, y and ydot (a fault put in
+  // on purpose, e.g. a push the model does not have, for the energy guard's tests).
+  std::function<void(double t, const double* y, double* ydot)> rhs_fault;
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty
 };
@@ -60,6 +67,10 @@ struct SimStats {
   // Closed loops through change points: bridged, and passed by the solver itself, checked
   // against the bridge's approach or not (docs/constraints.md "Singular configurations").
   long bridges = 0, passages_checked = 0, passages_unchecked = 0;
+  // The energy guard: "on", "off", "report" or "not applied (...)"; on and report, the
+  // largest relative energy error seen and the bound (EnergyGuard).
+  std::string energy_guard;
+  double energy_error = 0.0, energy_tolerance = 0.0;
   PhaseTimes times;
 };
 

@@ -1,0 +1,37 @@
+// NonConservativeCause (engine.h): which force element keeps a model from conserving T + V.
+#include "runtime/engine/engine.h"
+
+#include "runtime/program/program.h"
+
+namespace kanesim::rt {
+
+namespace {
+
+bool Zero(const Scalar& s) { return s.root < 0 && s.value == 0.0; }
+bool Constant(const Scalar& s) { return s.root < 0; }  // folded: no time, no state
+
+std::string JointOfSpeed(const Program& p, int u) {
+  const int j = p.joint_of_speed[static_cast<size_t>(u)];
+  return j >= 0 ? p.joints[static_cast<size_t>(j)].name : "?";
+}
+
+}  // namespace
+
+std::string NonConservativeCause(const Program& p) {
+  if (!p.prescribed_u.empty()) return "the prescribed motion of joint '" + JointOfSpeed(p, p.prescribed_u.front()) + "'";
+  for (const TreeJoint& j : p.joints)
+    if (j.mu != 0.0) return "the friction of joint '" + j.name + "'";
+  if (!p.friction_joints.empty()) return "the friction of joint '" + p.joints[static_cast<size_t>(p.friction_joints.front())].name + "'";
+  for (int u = 0; u < p.nu_all; ++u)
+    if (!Zero(p.joint_tau[static_cast<size_t>(u)])) return "the force of joint '" + JointOfSpeed(p, u) + "' (tau)";
+  for (const LineForceModel& l : p.line_forces) {
+    if (!Zero(l.d)) return "the damper '" + l.name + "'";
+    if (!Constant(l.k) || !Constant(l.s0)) return "the spring '" + l.name + "' (its stiffness or free length is an expression)";
+  }
+  for (const WrenchModel& w : p.wrenches)
+    for (int k = 0; k < 3; ++k)
+      if (!Zero(w.force[k]) || !Zero(w.torque[k])) return "the force '" + w.name + "'";
+  return "";
+}
+
+}  // namespace kanesim::rt
