@@ -87,6 +87,7 @@ pipeline::RunSpec SpecFor(const RunArgs& a) {
   pipeline::ReactionsFromName(a.reactions, &spec.reactions);
   pipeline::LinearSolverFromName(a.linear_solver, &spec.linear_solver);
   spec.project_steps = a.projection == "step";
+  pipeline::EnergyCheckFromName(a.energy_check, &spec.energy_check);
   return spec;
 }
 
@@ -110,9 +111,6 @@ int RunCommand(const RunArgs& a) {
     return kExitModelError;
   }
   sim::SimOptions& so = run.sim;
-  so.energy_check = a.energy_check == "off"      ? sim::EnergyCheck::kOff
-                    : a.energy_check == "report" ? sim::EnergyCheck::kReport
-                                                 : sim::EnergyCheck::kOn;
   AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
   if (!animation.Prepare(*model->mech, program, &so.signals)) return kExitModelError;
 
@@ -205,10 +203,8 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("--reactions", a->reactions,
                   "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember(pipeline::ReactionsNames()));
-  run->add_option("--energy-check", a->energy_check,
-                  "Conservative models: stop with exit 2 where the total energy T + V drifts beyond the tolerance's "
-                  "reach (on), never (off), or only measure it for --stats (report)")
-      ->check(CLI::IsMember({"on", "off", "report"}));
+  run->add_option("--energy-check", a->energy_check, kEnergyCheckHelp)
+      ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   CLI::Option* animation =
       run->add_option("--animation", a->animation,

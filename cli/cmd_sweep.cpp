@@ -56,6 +56,7 @@ struct SweepArgs {
   std::string solver = "auto", integrator = "auto", linear_solver = "auto";
   std::string reactions = "nan";
   std::string projection = "eval";
+  std::string energy_check = "on";  // --energy-check (RunSpec::energy_check)
 };
 
 struct MergeArgs {
@@ -200,6 +201,7 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
   r.Set("solver", a.solver);
   r.Set("linear_solver", a.linear_solver);
   r.Set("projection", a.projection);
+  r.Set("energy_check", a.energy_check);
   r.Set("reactions", a.reactions);
   std::vector<std::string> metrics;
   for (const batch::Metric& m : c.metrics) metrics.push_back(m.Column());
@@ -230,6 +232,7 @@ int SweepCommand(SweepArgs a) {
   pipeline::ReactionsFromName(a.reactions, &spec.reactions);
   pipeline::LinearSolverFromName(a.linear_solver, &spec.linear_solver);
   spec.project_steps = a.projection == "step";
+  pipeline::EnergyCheckFromName(a.energy_check, &spec.energy_check);
   spec.start_time = a.start_time;
   spec.stop_time = a.stop_time;
   spec.interval = a.interval;
@@ -430,6 +433,8 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
                  "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
       ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   sw->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
+  sw->add_option("--energy-check", a->energy_check, kEnergyCheckHelp)
+      ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
   sw->add_option("--reactions", a->reactions,
                  "Statically indeterminate constraint-force components: nan, or their min-norm share")
       ->check(CLI::IsMember(pipeline::ReactionsNames()));

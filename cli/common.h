@@ -45,6 +45,10 @@ std::string StdlibHash();
 std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, const pipeline::RunSpec& spec,
                                                 bool compile = true);
 
+// `--energy-check on|off|report` (run, sweep): RunSpec::energy_check.
+inline constexpr const char* kEnergyCheckHelp =
+    "Conservative models: stop with exit 2 where the total energy T + V drifts beyond the tolerance's "
+    "reach (on), never (off), or only measure it for --stats (report)";
 // `--projection eval|step` (run, sweep): RunSpec::project_steps.
 inline constexpr const char* kProjectionHelp =
     "Closed loops and contacts with --integrator dop853: project onto the constraints at every evaluation "

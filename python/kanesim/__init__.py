@@ -266,19 +266,20 @@ class Model:
         integrator: str = "auto",
         linear_solver: str = "auto",
         projection: str = "eval",
+        energy_check: str = "on",
     ) -> Result:
         """Simulates, like `kanesim run`: None takes the model's experiment annotation
         (atol defaults to rtol); outputs are the --output globs. Raises SimulationError
         (with the rows so far) on a numerical failure, ValueError on bad settings."""
         if set:
             return self.with_set(set).run(stop_time, rtol, atol, interval, outputs, None, start_time, integrator,
-                                          linear_solver, projection)
+                                          linear_solver, projection, energy_check)
         if isinstance(outputs, str):
             outputs = [outputs]
         columns, time, values, stats, failure, warns = _kanesim.run(
             self._compiled, _time(start_time, "start_time"), _time(stop_time, "stop_time"),
             _time(interval, "interval"), _time(rtol, "rtol"), _time(atol, "atol"), list(outputs or []),
-            integrator, linear_solver, projection)
+            integrator, linear_solver, projection, energy_check)
         _warn(warns)
         result = Result(columns, time, values, stats)
         if failure is not None:

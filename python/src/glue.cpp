@@ -116,6 +116,8 @@ bool ResolveRun(const LoadedModel& model, const RunRequest& r, sim::SimOptions* 
   if (r.projection != "eval" && r.projection != "step")
     return Fail(error, "projection '" + r.projection + "': unknown (eval, step)");
   spec.project_steps = r.projection == "step";
+  if (!pipeline::EnergyCheckFromName(r.energy_check, &spec.energy_check))
+    return Fail(error, "energy_check '" + r.energy_check + "': unknown (" + pipeline::JoinNames(pipeline::EnergyCheckNames()) + ")");
   for (auto [name, value] : {std::pair{"start_time", r.start_time}, {"stop_time", r.stop_time}})
     if (!std::isnan(value) && !std::isfinite(value))
       return Fail(error, std::string(name) + " must be finite, got " + sim::FormatShortest(value));

@@ -68,6 +68,7 @@ struct RunRequest {
   std::string integrator = "auto";
   std::string linear_solver = "auto";
   std::string projection = "eval";
+  std::string energy_check = "on";  // --energy-check (docs/integrators.md "The energy guard")
 };
 
 // Run settings resolved against a loaded model: the SimOptions `kanesim run` would use.

@@ -55,6 +55,11 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
   d["rows"] = s.rows;
   d["integrate_seconds"] = s.times.integrate;
   d["output_seconds"] = s.times.output;
+  // The energy guard (docs/integrators.md): "on", "off", "report" or "not applied (...)";
+  // with on and report, the largest relative energy error seen and its bound.
+  d["energy_guard"] = s.energy_guard;
+  d["energy_error"] = s.energy_error;
+  d["energy_tolerance"] = s.energy_tolerance;
   return d;
 }
 
@@ -86,7 +91,7 @@ py::tuple Load(const std::string& path, const std::string& text, bool from_text,
 // usage error.
 py::tuple Run(const LoadedModel& model, double start_time, double stop_time, double interval, double rtol, double atol,
               const std::vector<std::string>& outputs, const std::string& integrator, const std::string& linear_solver,
-              const std::string& projection) {
+              const std::string& projection, const std::string& energy_check) {
   kanesim::py::RunRequest r;
   r.start_time = start_time;
   r.stop_time = stop_time;
@@ -97,6 +102,7 @@ py::tuple Run(const LoadedModel& model, double start_time, double stop_time, dou
   r.integrator = integrator;
   r.linear_solver = linear_solver;
   r.projection = projection;
+  r.energy_check = energy_check;
   kanesim::sim::SimOptions so;
   std::vector<std::string> warnings;
   std::string error;

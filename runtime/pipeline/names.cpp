@@ -39,6 +39,9 @@ constexpr std::array<Named<sim::IdaLinearSolver>, 3> kLinearSolvers{{{"auto", si
                                                                     {"dense", sim::IdaLinearSolver::Dense},
                                                                     {"klu", sim::IdaLinearSolver::Klu}}};
 
+constexpr std::array<Named<sim::EnergyCheck>, 3> kEnergyChecks{
+    {{"on", sim::EnergyCheck::kOn}, {"off", sim::EnergyCheck::kOff}, {"report", sim::EnergyCheck::kReport}}};
+
 template <typename Table, typename T>
 bool Find(const Table& table, std::string_view name, T* out) {
   for (const auto& row : table) {
@@ -67,6 +70,7 @@ bool ReactionsFromName(std::string_view name, rt::IndeterminateReactions* out) {
 bool LinearSolverFromName(std::string_view name, sim::IdaLinearSolver* out) {
   return Find(kLinearSolvers, name, out);
 }
+bool EnergyCheckFromName(std::string_view name, sim::EnergyCheck* out) { return Find(kEnergyChecks, name, out); }
 
 const std::vector<std::string>& SolverNames() {
   static const std::vector<std::string> names = Names(kSolvers);
@@ -82,6 +86,10 @@ const std::vector<std::string>& ReactionsNames() {
 }
 const std::vector<std::string>& LinearSolverNames() {
   static const std::vector<std::string> names = Names(kLinearSolvers);
+  return names;
+}
+const std::vector<std::string>& EnergyCheckNames() {
+  static const std::vector<std::string> names = Names(kEnergyChecks);
   return names;
 }
 

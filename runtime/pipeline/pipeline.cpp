@@ -137,6 +137,7 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
   so.cvode_bdf = spec.integrator == sim::Method::CvodeBdf;
   so.ida_linear_solver = spec.linear_solver;
   so.project_steps = spec.project_steps;
+  so.energy_check = spec.energy_check;
 
   if (!spec.outputs.empty()) {
     std::string error;

@@ -34,6 +34,7 @@
 #include "lang/elaborate.h"
 #include "runtime/engine/engine.h"
 #include "runtime/flat/mechanism.h"
+#include "runtime/sim/energy_guard.h"
 #include "runtime/sim/integrator.h"
 #include "runtime/sim/simulate.h"
 
@@ -67,6 +68,8 @@ struct RunSpec {
   double atol = kUnset;
   sim::IdaLinearSolver linear_solver = sim::IdaLinearSolver::Auto;  // IDA's Newton matrix
   bool project_steps = false;  // --projection step: project once per accepted step (DOP853)
+  // --energy-check: the energy guard of conservative models (docs/integrators.md).
+  sim::EnergyCheck energy_check = sim::EnergyCheck::kOn;
 
   // Outputs: glob patterns over dotted signal names (sim/signal_select.h); empty: the
   // default signals (rt::DefaultSignals: joints' q and u, declared outputs).
@@ -79,15 +82,18 @@ struct RunSpec {
 //   integrator   auto | ida | cvode | cvode-bdf | arkode | dop853   ("cvode" is Adams)
 //   reactions    nan | min-norm
 //   linear solver  auto | dense | klu
+//   energy check   on | off | report
 bool SolverFromName(std::string_view name, rt::SolverPath* out);
 bool IntegratorFromName(std::string_view name, std::optional<sim::Method>* out);
 bool ReactionsFromName(std::string_view name, rt::IndeterminateReactions* out);
 bool LinearSolverFromName(std::string_view name, sim::IdaLinearSolver* out);
+bool EnergyCheckFromName(std::string_view name, sim::EnergyCheck* out);
 // The names above, in the order listed (for CLI11's IsMember and error messages).
 const std::vector<std::string>& SolverNames();
 const std::vector<std::string>& IntegratorNames();
 const std::vector<std::string>& ReactionsNames();
 const std::vector<std::string>& LinearSolverNames();
+const std::vector<std::string>& EnergyCheckNames();
 // The name of a choice: the inverse of the *FromName functions.
 std::string IntegratorName(const std::optional<sim::Method>& integrator);
 // "auto, ida, cvode, ..." for messages.

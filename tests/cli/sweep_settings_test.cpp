@@ -28,6 +28,7 @@ const std::vector<std::pair<std::string, std::string>> kChanges = {
     {"--solver dense", "solver"},
     {"--linear-solver klu", "linear_solver"},
     {"--reactions min-norm", "reactions"},
+    {"--energy-check off", "energy_check"},
     {"--trajectories", "trajectories"},
     {"MODEL", "model_text"},
 };
