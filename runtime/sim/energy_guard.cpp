@@ -28,7 +28,7 @@ constexpr double kRoundoff = 1e-11;
 
 double EnergyTolerance(double rtol) { return std::max(kEnergyC * rtol, kEnergyFloor); }
 
-EnergyGuard::EnergyGuard(const rt::Program& program, EnergyCheck mode, double rtol) : program_(program) {
+EnergyGuard::EnergyGuard(const rt::Program& program, EnergyCheck mode, double rtol) {
   tol_ = EnergyTolerance(rtol);
   if (mode == EnergyCheck::kOff) {
     description_ = "off";

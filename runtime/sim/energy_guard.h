@@ -43,7 +43,6 @@ class EnergyGuard {
   const std::string& Description() const { return description_; }
 
  private:
-  const rt::Program& program_;
   bool active_ = false, stop_ = false;
   double tol_ = 0.0;
   std::string description_;
