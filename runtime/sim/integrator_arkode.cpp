@@ -12,7 +12,7 @@
 //
 // Closed loops on the reduced form (steps checked one at a time): the drift of each
 // accepted step from the constraints is measured aside (MeasureDrift), and when it is past
-// kDriftLimit error weights and still growing ERKStep is reset to the projected state
+// DriftWatch::kLimit error weights and still growing ERKStep is reset to the projected state
 // before its next step (ResetProjected).
 #include <arkode/arkode_erkstep.h>
 
@@ -108,7 +108,7 @@ class ArkodeStepper final : public SundialsStepper {
   // restart point (StepChecked), then the output instant from ERKStep's interpolant.
   int AdvanceChecked(double tout, double* y) {
     return AdvanceCheckedSteps(tout, y, [&](double* tret) {
-      if (drifted_ && !ResetProjected()) return ARK_ILL_INPUT;
+      if (watch_.drifted && !ResetProjected()) return ARK_ILL_INPUT;
       int flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
       while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, tret, ARK_ONE_STEP);
       if (flag >= 0) MeasureDrift(*tret);
@@ -118,7 +118,7 @@ class ArkodeStepper final : public SundialsStepper {
 
   // The accepted step's drift: how far its y is from y*, its projection onto the
   // constraints (the state f is evaluated at), in the error test's weights
-  // |y*_i - y_i| / (rtol |y_i| + atol). Past kDriftLimit, ERKStep goes on from y* after
+  // |y*_i - y_i| / (rtol |y_i| + atol). Past DriftWatch::kLimit, ERKStep goes on from y* after
   // the output instants of this step (ResetProjected). Without it the components the
   // projection overrides drifted at loose tolerances (the relaxation in f pulls them back
   // at k_drift = 10 1/s, about one step there), up to 0.5 rad/s on the chains of
@@ -126,37 +126,23 @@ class ArkodeStepper final : public SundialsStepper {
   // speeds differs took a drifted one as independent (docs/constraints.md, "A drifted
   // state"). A projection that fails (at a singular configuration) leaves y as it is.
   void MeasureDrift(double t) {
-    const double* ys = N_VGetArrayPointer(s_.y);
-    stepped_y_.assign(ys, ys + rhs_.Size());
-    projected_ = stepped_y_;
-    if (rhs_.ProjectAside(t, projected_.data()) != 0) return;
-    double drift = 0.0;
-    for (size_t i = 0; i < projected_.size(); ++i)
-      drift = std::max(drift, std::fabs(projected_[i] - ys[i]) / (rtol_ * std::fabs(ys[i]) + atol_));
-    // Past the limit and grown over kDriftGrowth steps in a row: the relaxation lost hold
-    // (about x2 per step at rtol 1e-4). Near a change point the measured drift jumps about
-    // from step to step (up to 1e3 weights at rtol 1e-12, the projection there being
-    // ill-conditioned), and resetting there cost accuracy (docs/constraints.md): not reset.
-    growth_ = drift > last_drift_ ? growth_ + 1 : 0;
-    last_drift_ = drift;
-    drifted_ = drift > kDriftLimit && growth_ >= kDriftGrowth;
-    t_drifted_ = t;
+    watch_.Measure(t, N_VGetArrayPointer(s_.y), static_cast<size_t>(rhs_.Size()), rtol_, atol_,
+                   [&](double tt, double* y) { return rhs_.ProjectAside(tt, y); });
   }
 
   // ERKStep reset (ERKStepReset) to the projected state of the last step, once that
   // step's output instants are written (they come from its interpolant).
   bool ResetProjected() {
-    drifted_ = false;
-    growth_ = 0;
-    last_drift_ = 0.0;
+    watch_.Clear();
     // y* as f projects it (f's partition of the speeds: the components it keeps are the
     // ones ERKStep integrated without override).
     double* ys = N_VGetArrayPointer(s_.y);
-    std::copy(stepped_y_.begin(), stepped_y_.end(), ys);
-    if (rhs_.Project(t_drifted_, ys) != 0) return true;  // no reset where f cannot project
-    std::copy(ys, ys + stepped_y_.size(), projected_.begin());
-    if (ERKStepReset(mem_, t_drifted_, s_.y) != ARK_SUCCESS || ERKStepSetStopTime(mem_, stop_) != ARK_SUCCESS) return false;
-    StepChecked(t_drifted_, projected_.data());
+    std::copy(watch_.stepped_y.begin(), watch_.stepped_y.end(), ys);
+    if (rhs_.Project(watch_.t_drifted, ys) != 0) return true;  // no reset where f cannot project
+    std::copy(ys, ys + watch_.stepped_y.size(), watch_.projected.begin());
+    if (ERKStepReset(mem_, watch_.t_drifted, s_.y) != ARK_SUCCESS || ERKStepSetStopTime(mem_, stop_) != ARK_SUCCESS)
+      return false;
+    StepChecked(watch_.t_drifted, watch_.projected.data());
     return true;
   }
 
@@ -200,17 +186,10 @@ class ArkodeStepper final : public SundialsStepper {
   }
 
   static constexpr double kRhsShrink = 0.25;  // as DOP853 after a failure of f
-  static constexpr double kDriftLimit = 10.0;  // MeasureDrift: in the error test's weights
-  static constexpr int kDriftGrowth = 4;       // and grown over that many steps in a row
 
   double stop_ = 0.0;
   double rtol_ = 0.0, atol_ = 0.0;   // the error test's tolerances (MeasureDrift)
-  bool drifted_ = false;             // the last step drifted: ERKStep goes on from projected_
-  double t_drifted_ = 0.0;           // its time
-  double last_drift_ = 0.0;          // the drift of the step before (MeasureDrift)
-  int growth_ = 0;                   // steps in a row whose drift grew
-  std::vector<double> stepped_y_;    // y of the last step  (n)
-  std::vector<double> projected_;    // its projection  (n)
+  DriftWatch watch_;                 // MeasureDrift (sundials_util.h)
   bool hooked_ = false;              // Accepted() is installed (after the first restart)
   double t_accepted_ = 0.0;          // restart point: the last output instant, or once
   std::vector<double> y_accepted_;   // hooked the last accepted step; its state  (n)

@@ -14,7 +14,7 @@
 // does not feed the rows' motion, and resets near the change points of the chains at rtol
 // 1e-12 made CVODE stall; ARKODE measures its own drift on that form.) As ARKODE does
 // (integrator_arkode.cpp, MeasureDrift), the drift of each accepted step is measured aside
-// and, past kDriftLimit weights and grown over kDriftGrowth steps in a row, CVODE starts
+// and, past DriftWatch::kLimit weights and grown over DriftWatch::kGrowth steps in a row, CVODE starts
 // again (CVodeReInit) from y* once that step's output instants are written.
 #include <cvode/cvode.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -91,7 +91,7 @@ class CvodeStepper final : public SundialsStepper {
     double tret = 0.0;
     if (!rhs_.ChecksSteps()) return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
     return AdvanceCheckedSteps(tout, y, [&](double* t) {
-      if (drifted_ && !ResetProjected()) return CV_ILL_INPUT;
+      if (watch_.drifted && !ResetProjected()) return CV_ILL_INPUT;
       const int flag = CVode(mem_, tout, s_.y, t, CV_ONE_STEP);
       if (flag >= 0) MeasureDrift(*t);
       return flag;
@@ -117,43 +117,25 @@ class CvodeStepper final : public SundialsStepper {
   // weights), y* = its projection computed aside. Measured on the parallelogram above: at
   // most 0.24 on the steps before the change point, then 4.6, 33, 146, 475 (reset there).
   void MeasureDrift(double t) {
-    const double* ys = N_VGetArrayPointer(s_.y);
-    stepped_y_.assign(ys, ys + rhs_.Size());
-    projected_ = stepped_y_;
-    if (rhs_.ProjectAsideMultiplierForm(t, projected_.data()) != 0) return;
-    double drift = 0.0;
-    for (size_t i = 0; i < projected_.size(); ++i)
-      drift = std::max(drift, std::fabs(projected_[i] - ys[i]) / (rtol_ * std::fabs(ys[i]) + atol_));
-    growth_ = drift > last_drift_ ? growth_ + 1 : 0;
-    last_drift_ = drift;
-    drifted_ = drift > kDriftLimit && growth_ >= kDriftGrowth;
-    t_drifted_ = t;
+    watch_.Measure(t, N_VGetArrayPointer(s_.y), static_cast<size_t>(rhs_.Size()), rtol_, atol_,
+                   [&](double tt, double* y) { return rhs_.ProjectAsideMultiplierForm(tt, y); });
   }
 
   // CVODE again from y* of the drifted step (f's own projection; no reset where it
   // cannot project), order 1, its counters kept in before_.
   bool ResetProjected() {
-    drifted_ = false;
-    growth_ = 0;
-    last_drift_ = 0.0;
+    watch_.Clear();
     double* ys = N_VGetArrayPointer(s_.y);
-    std::copy(stepped_y_.begin(), stepped_y_.end(), ys);
-    if (rhs_.Project(t_drifted_, ys) != 0) return true;
+    std::copy(watch_.stepped_y.begin(), watch_.stepped_y.end(), ys);
+    if (rhs_.Project(watch_.t_drifted, ys) != 0) return true;
     before_ = Stats();
-    return CVodeReInit(mem_, t_drifted_, s_.y) == CV_SUCCESS && CVodeSetStopTime(mem_, stop_) == CV_SUCCESS;
+    return CVodeReInit(mem_, watch_.t_drifted, s_.y) == CV_SUCCESS && CVodeSetStopTime(mem_, stop_) == CV_SUCCESS;
   }
 
-  static constexpr double kDriftLimit = 10.0;  // as ARKODE's: in the error test's weights
-  static constexpr int kDriftGrowth = 4;       // and grown over that many steps in a row
 
   double stop_ = 0.0;
   double rtol_ = 0.0, atol_ = 0.0;  // the error test's tolerances (MeasureDrift)
-  bool drifted_ = false;            // the last step drifted: CVODE goes on from its y*
-  double t_drifted_ = 0.0;          // its time
-  double last_drift_ = 0.0;         // the drift of the step before
-  int growth_ = 0;                  // steps in a row whose drift grew
-  std::vector<double> stepped_y_;   // y of the last step  (n)
-  std::vector<double> projected_;   // its projection, aside  (n)
+  DriftWatch watch_;                // MeasureDrift (sundials_util.h)
   IntegratorStats before_;          // counters of the CVODE runs before the last reset
 
   FailureKind Kind(int flag) const override {

@@ -7,8 +7,11 @@
 #include <sundials/sundials_matrix.h>
 #include <sundials/sundials_nonlinearsolver.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "runtime/sim/stepper.h"
 
@@ -87,6 +90,41 @@ enum class FailureKind {
   kConvergence,      // repeated failures of the nonlinear (corrector or Newton) iteration
   kLinearSolver,     // the Newton matrix could not be set up or solved
   kOther,            // anything else: named by the module's own flag name
+};
+
+// The drift of a solver's accepted steps from the constraints, in the error test's weights
+// |y*_i - y_i| / (rtol |y_i| + atol), y* the step's projection computed aside (ARKODE on the
+// reduced form, CVODE on the multiplier form; docs/constraints.md "A drifted state"). Past
+// kLimit weights and grown over kGrowth steps in a row the relaxation lost hold (about x2
+// per step at rtol 1e-4); near a change point the measured drift jumps about from step to
+// step (the projection there ill-conditioned), and resetting there cost accuracy: not reset.
+struct DriftWatch {
+  static constexpr double kLimit = 10.0;
+  static constexpr int kGrowth = 4;
+  // After an accepted step at t with state ys (n), projected aside by project(t, y) (0: done).
+  template <typename Project>
+  void Measure(double t, const double* ys, size_t n, double rtol, double atol, Project&& project) {
+    stepped_y.assign(ys, ys + n);
+    projected = stepped_y;
+    if (project(t, projected.data()) != 0) return;  // a projection that fails leaves y as it is
+    double drift = 0.0;
+    for (size_t i = 0; i < n; ++i) drift = std::max(drift, std::fabs(projected[i] - ys[i]) / (rtol * std::fabs(ys[i]) + atol));
+    growth = drift > last_drift ? growth + 1 : 0;
+    last_drift = drift;
+    drifted = drift > kLimit && growth >= kGrowth;
+    t_drifted = t;
+  }
+  void Clear() {
+    drifted = false;
+    growth = 0;
+    last_drift = 0.0;
+  }
+  bool drifted = false;          // the last step drifted: the solver goes on from its projection
+  double t_drifted = 0.0;        // its time
+  double last_drift = 0.0;       // the drift of the step before
+  int growth = 0;                // steps in a row whose drift grew
+  std::vector<double> stepped_y;  // y of the last step  (n)
+  std::vector<double> projected;  // its projection  (n)
 };
 
 // One SUNDIALS solver behind the Stepper interface: the context and vectors, the captured
