@@ -92,6 +92,12 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     r.report = "ERROR " + spec_path + "\n    run." + err + "\n";
     return r;
   }
+  if (!pipeline::EnergyCheckFromName(spec.energy_check, &run_spec.energy_check)) {
+    r.outcome = Outcome::kError;
+    r.report = "ERROR " + spec_path + "\n    run.energy_check '" + spec.energy_check + "': unknown (" +
+               pipeline::JoinNames(pipeline::EnergyCheckNames()) + ")\n";
+    return r;
+  }
   run_spec.start_time = spec.start_time;  // NaN when the spec leaves it to the experiment
   run_spec.stop_time = spec.stop_time;
   run_spec.interval = spec.interval;

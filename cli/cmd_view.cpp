@@ -34,6 +34,7 @@ struct ViewArgs {
   std::vector<std::string> patterns;
   std::string solver = "auto";
   std::string integrator = "auto";
+  std::string energy_check = "on";  // --energy-check (RunSpec::energy_check)
   std::string html;      // --html out.html: write the offline page instead of serving
   int port = 0;          // --port: 0 = any free port
   double timeout = 0;    // --timeout: stop serving after this many seconds (0: at Ctrl-C)
@@ -75,6 +76,7 @@ int RunView(const ViewArgs& a) {
   pipeline::RunSpec spec = a.spec;
   pipeline::SolverFromName(a.solver, &spec.solver);
   pipeline::IntegratorFromName(a.integrator, &spec.integrator);
+  pipeline::EnergyCheckFromName(a.energy_check, &spec.energy_check);
   spec.outputs = a.patterns;
   std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
   if (!model) return kExitModelError;
@@ -189,6 +191,8 @@ void AddViewCommand(CLI::App& app, int* exit_code, bool options) {
   cmd->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember(pipeline::SolverNames()));
   cmd->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember(pipeline::IntegratorNames()));
+  cmd->add_option("--energy-check", a->energy_check, kEnergyCheckHelp)
+      ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
   cmd->add_flag("--show-frames", a->show_frames, "Draw every joint's frames as small x/y/z axes");
   cmd->add_option("--html", a->html, "Write one offline page (opens by double-click) instead of serving");
   cmd->add_option("--port", a->port, "Serve on this port of 127.0.0.1 (default: any free port)")

@@ -436,17 +436,19 @@ def _columns(arg, what: str):
 def sweep(model: Model, grid: Optional[Mapping[str, Sequence[float]]] = None,
           samples: Optional[Mapping[str, Sequence[float]]] = None, metrics: Sequence[str] = (), threads: int = 0,
           stop_time: Optional[float] = None, rtol: Optional[float] = None, atol: Optional[float] = None,
-          interval: Optional[float] = None, start_time: Optional[float] = None, integrator: str = "auto") -> Table:
+          interval: Optional[float] = None, start_time: Optional[float] = None, integrator: str = "auto",
+          energy_check: str = "on") -> Table:
     """Runs many scenarios of one model in parallel threads, like `kanesim sweep`:
     grid={"k": [10, 20], "m": [1, 2]} is the Cartesian product (first key slowest);
     samples={"k": [...], "m": [...]} are rows taken together (equal lengths); both combine
     as a product. metrics as --metric ("final:S", "min:S", "max:S", "mean:S", "rms:S",
-    "cross:S=L"). threads=0: all cores. Returns a Table; failed scenarios are rows with
-    status "failed"."""
+    "cross:S=L"). threads=0: all cores. energy_check as run()'s ("on", "off", "report"):
+    with "on" a scenario whose energy leaves the tolerance's reach fails. Returns a Table;
+    failed scenarios are rows with status "failed"."""
     if isinstance(metrics, str):
         metrics = [metrics]
     header, lines, failed = _kanesim.sweep(
         model._compiled, _columns(grid, "grid"), _columns(samples, "samples"), list(metrics), int(threads),
         _time(start_time, "start_time"), _time(stop_time, "stop_time"), _time(interval, "interval"),
-        _time(rtol, "rtol"), _time(atol, "atol"), integrator)
+        _time(rtol, "rtol"), _time(atol, "atol"), integrator, energy_check)
     return Table(header, lines, failed)

@@ -137,7 +137,8 @@ py::tuple Run(const LoadedModel& model, double start_time, double stop_time, dou
 py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::string, std::vector<double>>>& grid,
                 const std::vector<std::pair<std::string, std::vector<double>>>& samples,
                 const std::vector<std::string>& metrics, int threads, double start_time, double stop_time,
-                double interval, double rtol, double atol, const std::string& integrator) {
+                double interval, double rtol, double atol, const std::string& integrator,
+                const std::string& energy_check) {
   kanesim::py::SweepRequest req;
   req.grid = grid;
   req.samples = samples;
@@ -149,6 +150,7 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
   req.run.rtol = rtol;
   req.run.atol = atol;
   req.run.integrator = integrator;
+  req.run.energy_check = energy_check;
   req.interrupted = [] {
     py::gil_scoped_acquire gil;
     return PyErr_CheckSignals() != 0;

@@ -57,6 +57,8 @@ def test_sweep_errors(examples):
         kanesim.sweep(m, samples={"k": [1, 2], "mass": [1]})
     with pytest.raises(ValueError, match="no scenarios"):
         kanesim.sweep(m)
+    with pytest.raises(ValueError, match="energy_check 'sometimes': unknown \\(on, off, report\\)"):
+        kanesim.sweep(m, grid={"k": [1, 2]}, energy_check="sometimes")
 
 
 def test_sweep_failed_scenarios_are_rows(source_dir):

@@ -133,13 +133,13 @@ bool ReadGoldenSpecText(const std::string& path, const std::string& text, Golden
   if (const toml::table* run = root["run"].as_table()) {
     for (const auto& [k, v] : *run) {
       std::string key(k.str());
-      if (key == "integrator" || key == "solver") {
+      if (key == "integrator" || key == "solver" || key == "energy_check") {
         auto s = v.value<std::string>();
         if (!s) {
           *error = Where(path, v) + key + " must be a string";
           return false;
         }
-        (key == "integrator" ? out->integrator : out->solver) = *s;
+        (key == "integrator" ? out->integrator : key == "solver" ? out->solver : out->energy_check) = *s;
         continue;
       }
       double* field = key == "start_time" ? &out->start_time
@@ -152,7 +152,7 @@ bool ReadGoldenSpecText(const std::string& path, const std::string& text, Golden
       if (!field || !d || !std::isfinite(*d)) {
         *error = Where(path, v) + "run." + key +
                  (field ? " must be a finite number" : ": unknown (start_time, stop_time, interval, rtol, atol, integrator, "
-                                                       "solver)");
+                                                       "solver, energy_check)");
         return false;
       }
       if (field != &out->start_time && field != &out->stop_time && !(*d > 0.0)) {
@@ -244,6 +244,8 @@ std::string SettingsText(const GoldenSpec& s) {
   for (const std::string& x : s.sets) t += "set " + x + ";";
   for (double v : {s.start_time, s.stop_time, s.interval, s.rtol, s.atol}) t += sim::FormatNumber(v) + ";";
   t += s.integrator + ";" + s.solver + ";";
+  // Only when not the default, so that the settings lines recorded before the key existed stay valid.
+  if (s.energy_check != "on") t += "energy_check=" + s.energy_check + ";";
   for (const std::string& x : s.signals) t += x + ";";
   return t;
 }

@@ -46,6 +46,7 @@ struct GoldenSpec {
   std::vector<std::string> sets;  // "name=value"
   double start_time = kUnset, stop_time = kUnset, interval = kUnset, rtol = kUnset, atol = kUnset;
   std::string integrator = "auto", solver = "auto";
+  std::string energy_check = "on";   // on | off | report (docs/integrators.md "The energy guard")
   std::vector<std::string> signals;  // globs; empty: the model's default signals
   Tolerance default_tol{"*", 1e-8, 1e-6};
   std::vector<Tolerance> tolerances;  // the last matching pattern wins over the default

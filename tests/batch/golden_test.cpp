@@ -128,6 +128,39 @@ TEST(ReadGoldenSpec, FieldsAndUnknownKeys) {
   EXPECT_NE(err.find("stoptime"), std::string::npos);
 }
 
+// [run] energy_check: read as given; the default leaves the settings text of the specs
+// recorded before the key existed unchanged (their stored `settings` hashes stay valid),
+// any other value changes it (a golden recorded unguarded is not compared to a guarded run).
+TEST(ReadGoldenSpec, EnergyCheckKey) {
+  const std::string dir = ::testing::TempDir();
+  auto read = [&](const std::string& name, const std::string& run_extra, GoldenSpec* s) {
+    {
+      std::ofstream f(dir + "/" + name + ".toml");
+      f << "model = \"m.mech\"\n[run]\nrtol = 1e-9\n" << run_extra;
+    }
+    std::string err;
+    EXPECT_TRUE(ReadGoldenSpec(dir + "/" + name + ".toml", s, &err)) << err;
+  };
+  GoldenSpec plain, on, off, report;
+  read("ec", "", &plain);
+  read("ec", "energy_check = \"on\"\n", &on);
+  read("ec", "energy_check = \"off\"\n", &off);
+  read("ec", "energy_check = \"report\"\n", &report);
+  EXPECT_EQ(plain.energy_check, "on");
+  EXPECT_EQ(off.energy_check, "off");
+  EXPECT_EQ(SettingsText(plain), SettingsText(on));
+  EXPECT_NE(SettingsText(plain), SettingsText(off));
+  EXPECT_NE(SettingsText(off), SettingsText(report));
+  {
+    std::ofstream f(dir + "/ec2.toml");
+    f << "model = \"m.mech\"\n[run]\nenergy_check = 1\n";
+  }
+  GoldenSpec s;
+  std::string err;
+  EXPECT_FALSE(ReadGoldenSpec(dir + "/ec2.toml", &s, &err));
+  EXPECT_NE(err.find("energy_check must be a string"), std::string::npos) << err;
+}
+
 // Wrong if the stored format does not read back exactly (17 digits, provenance).
 TEST(TrajectoryCsv, RoundTrip) {
   Trajectory t = Line(1.0 / 3.0, 0.1, 5);

@@ -166,6 +166,28 @@ TEST(GoldenCorrupt, ImpossibleSpecSettingsAreErrors) {
   }
 }
 
+// [run] energy_check: "on" is the default (the recorded golden still passes with it
+// written out), "off"/"report" are other settings (FAIL until --update), anything else is
+// an ERROR naming the values.
+TEST(GoldenCorrupt, EnergyCheckSetting) {
+  std::string d = Work("golden_energy_check");
+  Record(d);
+  auto with = [&](const std::string& line) {
+    std::string spec = kSpec;
+    spec.insert(spec.find("[run]\n") + 6, line + "\n");
+    Write(d + "/g.toml", spec);
+    return Kanesim("test g.toml", d);
+  };
+  Result on = with("energy_check = \"on\"");
+  EXPECT_EQ(on.rc, 0) << on.out << on.err;
+  Result off = with("energy_check = \"off\"");
+  EXPECT_EQ(off.rc, 3) << off.out << off.err;
+  EXPECT_TRUE(Has(off.out, "run settings changed")) << off.out;
+  Result bad = with("energy_check = \"sometimes\"");
+  EXPECT_EQ(bad.rc, 1) << bad.out << bad.err;
+  EXPECT_TRUE(Has(bad.out, "energy_check 'sometimes'") && Has(bad.out, "on, off, report")) << bad.out;
+}
+
 // A missing golden is the one case that advises --update.
 TEST(GoldenCorrupt, MissingGoldenAdvisesUpdate) {
   std::string d = Work("golden_missing");
