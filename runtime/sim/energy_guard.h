@@ -21,12 +21,13 @@ enum class EnergyCheck {
 // The relative energy error of a row: |E - E0| / S, S = the motion's energy so far, the
 // largest T + |V - V0| over the rows up to this one (so that E0 = 0, or a large V0 from
 // where the origin sits, does not matter). The run stops where it exceeds
-// EnergyTolerance(rtol) (plus a roundoff floor on the sizes of T and V themselves).
-double EnergyTolerance(double rtol);
+// EnergyTolerance(rtol, atol) (plus a roundoff floor on the sizes of T and V themselves):
+// max(3e4 max(rtol, atol), 1e-4); atol only where it is the larger (the states are of order one).
+double EnergyTolerance(double rtol, double atol = 0.0);
 
 class EnergyGuard {
  public:
-  EnergyGuard(const rt::Program& program, EnergyCheck mode, double rtol);
+  EnergyGuard(const rt::Program& program, EnergyCheck mode, double rtol, double atol);
   EnergyGuard(const EnergyGuard&) = delete;
   EnergyGuard& operator=(const EnergyGuard&) = delete;
 

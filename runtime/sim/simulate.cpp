@@ -169,7 +169,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   std::shared_ptr<const rt::SignalPlan> plan = rt::PlanSignals(program, names, &plan_error);
   if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
   // The energy guard's T and V ride along after the written signals (not written).
-  EnergyGuard energy(program, options.energy_check, options.rtol);
+  EnergyGuard energy(program, options.energy_check, options.rtol, options.atol);
   const size_t n_written = names.size();
   if (energy.Active()) {
     std::vector<std::string> all = names;

@@ -226,6 +226,32 @@ TEST(EnergyGuard, ParallelogramBranchSwitchUnderBdfStops) {
   }
 }
 
+// The bound follows what the error test was asked for: with atol above rtol the local error
+// allowed is atol per state, and a run that keeps to it must not be stopped. The double
+// pendulum (states of order one) at rtol 1e-8, atol 1e-3 drifts by more than an rtol-only
+// bound (3e-4 of the motion's energy; measured 3.2e-4 at t = 8.84, where that bound stopped
+// it) and far less than the bound from atol; at atol = rtol the bound is rtol's.
+TEST(EnergyGuard, BoundFollowsALooserAtol) {
+  auto model = test::LoadModel(kRoot + "/examples/double_pendulum.mech");
+  ASSERT_TRUE(model && model->prog);
+  SimOptions o;
+  o.stop_time = 20.0;
+  o.interval = 0.01;
+  o.rtol = 1e-8;
+  o.atol = 1e-3;
+  o.integrator = rt::IntegratorKind::DOP853;
+  o.energy_check = EnergyCheck::kOn;
+  o.signals = {"kinetic_energy", "potential_energy"};
+  MemorySink sink;
+  const SimResult r = Simulate(*model->prog, o, sink);
+  ASSERT_EQ(r.status, SimResult::Status::kOk) << r.message;
+  const double rel = RelativeEnergyError(sink);
+  std::printf("[ guard ] double pendulum, DOP853, rtol 1e-8 atol 1e-3: relative energy error %.3g\n", rel);
+  EXPECT_GT(rel, EnergyTolerance(1e-8));        // an rtol-only bound stops this run
+  EXPECT_LT(rel, 1e-2 * EnergyTolerance(1e-8, 1e-3));
+  EXPECT_EQ(EnergyTolerance(1e-8, 1e-8), EnergyTolerance(1e-8));
+}
+
 // A real wrong answer the guard catches on its own: with DOP853's dense-output check off
 // (SimOptions::dense_check, tests only; tests/constraints/change_point_bridge_test.cpp
 // Dop853DenseOutputAcrossAChangePointIsNotTrusted), the chain of two equal-link
