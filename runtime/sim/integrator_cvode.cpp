@@ -16,6 +16,13 @@
 // (integrator_arkode.cpp, MeasureDrift), the drift of each accepted step is measured aside
 // and, past DriftWatch::kLimit weights and grown over DriftWatch::kGrowth steps in a row, CVODE starts
 // again (CVodeReInit) from y* once that step's output instants are written.
+// That restart stays for Adams only. BDF projects every step instead (ProjectStep, CVODE's
+// projection): the restart fired inside the change-point zones of the chains, where the
+// projection is ill-conditioned (the drift grew to 10-140 weights as rho fell), and each
+// restart at order 1 shrank the step: the chain of ten at rtol 1e-12 restarted 234 times
+// by t = 7.705 and crept until the branch monitor stopped it (exit 2). With the projection
+// it is on the branch to 20 s (4.5e-8 of E), the chain of ten at 1e-10 1.0e-6 -> 3.3e-7 of
+// E, the parallelogram above 1.8e-4 of E -> 1.4e-4 (docs/constraints.md).
 #include <cvode/cvode.h>
 #include <cvode/cvode_proj.h>
 #include <sunlinsol/sunlinsol_dense.h>
