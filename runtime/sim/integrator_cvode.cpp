@@ -16,7 +16,15 @@
 // (integrator_arkode.cpp, MeasureDrift), the drift of each accepted step is measured aside
 // and, past DriftWatch::kLimit weights and grown over DriftWatch::kGrowth steps in a row, CVODE starts
 // again (CVodeReInit) from y* once that step's output instants are written.
+// That restart stays for Adams only. BDF projects every step instead (ProjectStep, CVODE's
+// projection): the restart fired inside the change-point zones of the chains, where the
+// projection is ill-conditioned (the drift grew to 10-140 weights as rho fell), and each
+// restart at order 1 shrank the step: the chain of ten at rtol 1e-12 restarted 234 times
+// by t = 7.705 and crept until the branch monitor stopped it (exit 2). With the projection
+// it is on the branch to 20 s (4.5e-8 of E), the chain of ten at 1e-10 1.0e-6 -> 3.3e-7 of
+// E, the parallelogram above 1.8e-4 of E -> 1.4e-4 (docs/constraints.md).
 #include <cvode/cvode.h>
+#include <cvode/cvode_proj.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
@@ -81,6 +89,12 @@ class CvodeStepper final : public SundialsStepper {
       if (!s_.nls || CVodeSetNonlinearSolver(mem_, s_.nls) != CV_SUCCESS)
         return Fail(error, WithDetail("CVODE fixed-point solver setup failed", messages_.last));
     }
+    // BDF: CVODE's own projection (below), not the restart; Adams: CVODE projects only BDF.
+    // Only on the multiplier form's closed loops (ProjectAsideMultiplierForm is -1 elsewhere).
+    std::vector<double> probe(y0, y0 + n);
+    project_ = bdf && rhs_.ChecksSteps() && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
+    if (project_ && CVodeSetProjFn(mem_, &CvodeStepper::ProjectStep) != CV_SUCCESS)
+      return Fail(error, WithDetail("CVODE projection setup failed", messages_.last));
     stop_ = stop;
     rtol_ = options.rtol;
     atol_ = options.atol;
@@ -93,7 +107,7 @@ class CvodeStepper final : public SundialsStepper {
     return AdvanceCheckedSteps(tout, y, [&](double* t) {
       if (watch_.drifted && !ResetProjected()) return CV_ILL_INPUT;
       const int flag = CVode(mem_, tout, s_.y, t, CV_ONE_STEP);
-      if (flag >= 0) MeasureDrift(*t);
+      if (flag >= 0 && !project_) MeasureDrift(*t);
       return flag;
     });
   }
@@ -133,6 +147,26 @@ class CvodeStepper final : public SundialsStepper {
   }
 
 
+  // CVODE-BDF's projection (CVodeSetProjFn), called on each step whose Newton iteration
+  // converged, before the error test: corr = y* - y, y* the multiplier form's projection
+  // (zero where there is none: the reduced form, or a projection that fails). CVODE adds
+  // corr to y and to the step's correction, so the Nordsieck history moves with it and BDF
+  // keeps its order and step, where CVodeReInit went back to order 1. The error estimate
+  // (err) is left as it is.
+  static int ProjectStep(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype /*eps*/, N_Vector /*err*/,
+                         void* user_data) {
+    auto* self = static_cast<CvodeStepper*>(static_cast<SundialsStepper*>(user_data));
+    const size_t n = static_cast<size_t>(self->rhs_.Size());
+    const double* y = N_VGetArrayPointer(ycur);
+    double* c = N_VGetArrayPointer(corr);
+    self->aside_.assign(y, y + n);
+    const bool projected = self->rhs_.ProjectAsideMultiplierForm(t, self->aside_.data()) == 0;
+    for (size_t i = 0; i < n; ++i) c[i] = projected ? self->aside_[i] - y[i] : 0.0;
+    return 0;
+  }
+
+  bool project_ = false;      // CVODE-BDF on closed loops: ProjectStep, no MeasureDrift
+  std::vector<double> aside_;  // ProjectStep's y*  (n)
   double stop_ = 0.0;
   double rtol_ = 0.0, atol_ = 0.0;  // the error test's tolerances (MeasureDrift)
   DriftWatch watch_;                // MeasureDrift (sundials_util.h)

@@ -8,7 +8,9 @@
 // the drift grew x2-x4 per step, faster than the relaxation k_drift = 10 1/s pulls it back.
 // CVODE now starts again from y* when a step's drift is past 10 weights and has grown over
 // four steps in a row (runtime/sim/integrator_cvode.cpp, MeasureDrift), as ARKODE does;
-// without that reset this test fails (energy error 43).
+// without that reset this test fails (energy error 43). CVODE-BDF now projects every step
+// through CVODE's own projection instead of that reset (integrator_cvode.cpp, ProjectStep;
+// branch bdfmult): 1.4e-4; without either, 43.
 //
 // Checked against the independent lumped crank: on the parallelogram branch the coupler
 // translates, so the mechanism is one crank with J = (m_crank + m_rocker) a^2/3 +
@@ -81,7 +83,8 @@ Rows RunParallelogram(double a, double rtol, rt::SolverPath solver, rt::Integrat
 }
 
 // The cell of the issue. Measured: main 43 (exit 0, the crank at 74 rad/s at t = 10.2);
-// now exit 0 at 20 s, 1.8e-4 (one reset, at t = 9.775). About 0.4 s in Release.
+// then exit 0 at 20 s, 1.8e-4 (one reset, at t = 9.775); with CVODE's projection 1.4e-4.
+// About 0.4 s in Release.
 TEST(ParallelogramEnergy, MultiplierFormCvodeBdfKeepsTheEnergyPastTheChangePoint) {
   const double rtol = 1e-6;
   const Rows o = RunParallelogram(0.6, rtol, rt::SolverPath::Sparse, rt::IntegratorKind::CVODE, /*bdf=*/true);
