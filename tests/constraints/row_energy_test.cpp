@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,30 @@ TEST(RowEnergy, Dop853RowsAcrossAChangePointOfTheParallelogram) {
   EXPECT_GE(on.result.stats.integrator.energy_rejects, 1);
   const Rows off = RunRows(model, {{"a", "0.5"}}, "crank_pivot", c, rt::IntegratorKind::DOP853, 1e-10, 6.6, false);
   EXPECT_GT(off.energy, 1e-5);
+}
+
+}  // namespace
+}  // namespace kanesim::test
+
+namespace kanesim::test {
+namespace {
+
+// ARKODE on the chain of ten, rtol 1e-10, reduced form: one output instant whose
+// interpolated energy is 1541 units of Eq. (5) off the steps around it (the others at most
+// 57), 6.1e-7 of E off the lumped crank (the rest of the run 1.3e-7); integrated again from
+// the step's start by DOP853.
+TEST(RowEnergy, ArkodeRowIntegratedAgain) {
+  const lumped_crank::Crank c = lumped_crank::ParallelogramChain(10);
+  const std::string model = "/tests/stress/models/parallelogram_chain.mech";
+  const Rows on = RunRows(model, {{"N", "10"}}, "rj0", c, rt::IntegratorKind::ARKODE, 1e-10, 20.0, true);
+  const Rows off = RunRows(model, {{"N", "10"}}, "rj0", c, rt::IntegratorKind::ARKODE, 1e-10, 20.0, false);
+  std::printf("[ rows ] ARKODE chain of ten 1e-10: check on %.3g (%ld integrated again, %ld steps), off %.3g (%ld steps)\n",
+              on.energy, on.result.stats.integrator.energy_rejects, on.result.stats.integrator.steps, off.energy,
+              off.result.stats.integrator.steps);
+  EXPECT_EQ(on.result.status, sim::SimResult::Status::kOk) << on.result.message;
+  EXPECT_GE(on.result.stats.integrator.energy_rejects, 1);
+  EXPECT_LT(on.energy, 2.5e-7);  // measured 1.3e-7
+  EXPECT_GT(off.energy, 5e-7);   // the row the check exists for: 6.1e-7
 }
 
 }  // namespace
