@@ -158,6 +158,7 @@ void AddStats(IntegratorStats* to, const IntegratorStats& s) {
   to->lin_setups += s.lin_setups;
   to->err_test_fails += s.err_test_fails;
   to->dense_rejects += s.dense_rejects;
+  to->energy_rejects += s.energy_rejects;
   to->nonlin_iters += s.nonlin_iters;
   to->nonlin_conv_fails += s.nonlin_conv_fails;
 }

@@ -89,6 +89,13 @@ class OdeSystem {
   // reduced form: rt::ProjectedStates), ascending, and df_i/dy_i for each (*diag; every
   // other entry of their columns is zero), so a Jacobian need not perturb them. False: none.
   virtual bool ProjectedStates(std::vector<int>* /*states*/, double* /*diag*/) { return false; }
+  // The kinetic and potential energy of the state y at t as the output rows compute them
+  // (projected), for a system that conserves T + V and whose interpolated output instants
+  // the solvers check against the energies of the steps around them (closed loops:
+  // docs/constraints.md "Rows checked against the energy"). Evaluated aside: nothing a
+  // later Rhs reads is touched. HasEnergy false: never called.
+  virtual bool HasEnergy() const { return false; }
+  virtual int Energy(double /*t*/, const double* /*y*/, double* /*T*/, double* /*V*/) { return -1; }
 };
 
 enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };
@@ -117,6 +124,8 @@ struct IntegratorOptions {
   std::vector<int> coupling;       // per state: its group (empty: one group, a dense df/dy)
   bool bridge = true;              // restart past a singular configuration (OdeSystem::Bridge)
   bool dense_check = true;         // DOP853: retake a step whose dense-output stages are not smooth
+  bool row_energy_check = true;    // check interpolated output instants' T + V (OdeSystem::Energy)
+  bool check_steps = true;         // DOP853: call OdeSystem::StepAccepted (off: recomputing one row)
 };
 
 // Counters from the solver (cumulative over the run).
@@ -128,6 +137,8 @@ struct IntegratorStats {
   long lin_setups = 0;         // linear-solver setups = LU factorizations
   long err_test_fails = 0;     // local error test failures
   long dense_rejects = 0;      // DOP853: steps whose dense output was rejected (stages not smooth)
+  long energy_rejects = 0;     // output instants whose interpolated T + V was off (OdeSystem::Energy):
+                               // DOP853's step taken again onto it, SUNDIALS' instant integrated again
   long nonlin_iters = 0;       // Newton or fixed-point iterations
   long nonlin_conv_fails = 0;  // nonlinear convergence failures
   double last_step = 0.0;      // last step size taken

@@ -74,6 +74,8 @@ constexpr double kMaxStepSlack = 1e-9;  // relative: what rounding may add to ma
 // most 0.22 on steps whose rows are on the lumped crank; 15.8 and 433 on the two steps seen
 // with rows off it (docs/constraints.md "Several loops singular at once").
 constexpr double kDenseLimit = 1.0;
+// Instants checked per step at most (spread over the step when it holds more).
+constexpr long kRowEnergyInstants = 16;
 
 // Advance's flags (>= 0 success).
 enum Flag : int { kOk = 0, kTooMuchWork = -1, kUnderflow = -2, kRhsRepeated = -3, kRhsFatal = -4 };
@@ -97,7 +99,8 @@ class Dop853Stepper final : public Stepper {
   bool Init(const double* y0) {
     project_ = options_.project_steps && rhs_.CanProject();
     if (project_) rhs_.EnableStepProjection();
-    check_ = rhs_.ChecksSteps();
+    check_ = options_.check_steps && rhs_.ChecksSteps();
+    energy_ = options_.row_energy_check && rhs_.HasEnergy();
     std::copy(y0, y0 + n_, y_.begin());
     if (Eval(t_, y_.data(), K(0)) != 0) return false;
     if (options_.initial_step > 0.0) {
@@ -110,6 +113,9 @@ class Dop853Stepper final : public Stepper {
   }
 
   int Advance(double tout, double* y) override {
+    if (last_tout_set_ && tout > last_tout_) interval_ = tout - last_tout_;
+    last_tout_ = tout;
+    last_tout_set_ = true;
     long steps_here = 0;
     for (;;) {
       if (t_ >= tout) {  // the last accepted step [t_old_, t_] holds tout
@@ -142,6 +148,7 @@ class Dop853Stepper final : public Stepper {
     st.rhs_evals = rhs_evals_;
     st.err_test_fails = err_test_fails_;
     st.dense_rejects = dense_rejects_;
+    st.energy_rejects = energy_rejects_;
     st.last_step = h_last_;
     st.last_order = 8;
     return st;
@@ -258,7 +265,7 @@ class Dop853Stepper final : public Stepper {
         const double t_new = last ? stop_ : (onto_tout && t_ + h >= tout) ? tout : t_ + h;
         if (project_) status = rhs_.Project(t_new, y_new_.data());
         if (status == 0) status = Eval(t_new, y_new_.data(), K(tab::kStages));
-        bool stages = false;
+        bool stages = false, formed = false;
         if (status == 0 && options_.dense_check && check_ && t_new > tout) {
           status = DenseStages(t_, y_.data(), h);
           if (status == 0 && !(DenseStageDeviation(h) <= kDenseLimit)) {
@@ -270,10 +277,27 @@ class Dop853Stepper final : public Stepper {
           }
           stages = status == 0;
         }
+        // The output instant's energy against the step's ends (Eq. 5).
+        if (status == 0 && energy_ && t_new > tout) {
+          if (!stages) status = DenseStages(t_, y_.data(), h);
+          stages = status == 0;
+          if (status == 0) {
+            FormDense(y_.data(), y_new_.data(), h);
+            formed = true;
+            if (!(RowEnergyDeviation(t_new, h, tout) <= RowEnergy::kLimit)) {
+              ++energy_rejects_;
+              rejected = true;
+              onto_tout = true;
+              h_ = tout - t_;
+              continue;
+            }
+          }
+        }
         if (status == 0 && check_) status = rhs_.StepAccepted(t_new, y_new_.data());
         if (status == 0) {
           Accept(t_new, h);
           stages_ready_ = stages;
+          dense_ready_ = formed;
           h_ = h * tab::GrowFactor(err, rejected);
           return kOk;
         }
@@ -339,10 +363,17 @@ class Dop853Stepper final : public Stepper {
     if (!stages_ready_) {
       if (int status = DenseStages(t_old_, y_old_.data(), h); status != 0) return status;
     }
+    FormDense(y_old_.data(), y_.data(), h);
+    dense_ready_ = true;
+    return 0;
+  }
+
+  // r0 .. r6 of Eq. (4) for the step of size h from y0 to y1 (stages 0 .. 15 in k_).
+  void FormDense(const double* y0, const double* y1, double h) {
     double* r = r_.data();
     const size_t n = static_cast<size_t>(n_);
     for (size_t i = 0; i < n; ++i) {
-      const double dy = y_[i] - y_old_[i];
+      const double dy = y1[i] - y0[i];
       const double k0 = K(0)[i], k12 = K(tab::kStages)[i];
       r[i] = dy;
       r[n + i] = h * k0 - dy;
@@ -356,8 +387,6 @@ class Dop853Stepper final : public Stepper {
         rm[i] = h * sum;
       }
     }
-    dense_ready_ = true;
-    return 0;
   }
 
   // Stages 13..15 of the step of size h from (t0, y0). 0, or f's status.
@@ -411,8 +440,11 @@ class Dop853Stepper final : public Stepper {
   }
 
   // Eq. (4) at tout in [t_old_, t_].
-  void Interpolate(double tout, double* y) const {
-    const double theta = (tout - t_old_) / h_last_, theta1 = 1.0 - theta;
+  void Interpolate(double tout, double* y) const { InterpolateFrom(t_old_, y_old_.data(), h_last_, tout, y); }
+
+  // Eq. (4) at tout for the step of size h from (t0, y0) whose r0 .. r6 are in r_.
+  void InterpolateFrom(double t0, const double* y0, double h, double tout, double* y) const {
+    const double theta = (tout - t0) / h, theta1 = 1.0 - theta;
     const size_t n = static_cast<size_t>(n_);
     const double* r = r_.data();
     for (size_t i = 0; i < n; ++i) {
@@ -423,8 +455,49 @@ class Dop853Stepper final : public Stepper {
       v = r[2 * n + i] + theta1 * v;
       v = r[n + i] + theta * v;
       v = r[i] + theta1 * v;
-      y[i] = y_old_[i] + theta * v;
+      y[i] = y0[i] + theta * v;
     }
+  }
+
+  // Eq. (5): how far the energy of an output instant interpolated by Eq. (4) in the step
+  // from (t_, y_) to (t_new, y_new_) of size h (r_ formed) is from the straight line between
+  // the energies of the step's ends, in units of their difference plus rtol times the
+  // motion's energy; the largest over the instants in the step: tout and those after it at
+  // the spacing of the last two instants asked for (at most kRowEnergyInstants of them,
+  // spread over the step). The energies of t_ and t_new are kept for the next step. A state
+  // whose energy cannot be evaluated counts as right (the row itself then reports it).
+  double RowEnergyDeviation(double t_new, double h, double tout) {
+    double T0 = 0.0, V0 = 0.0, T1 = 0.0, V1 = 0.0;
+    if (!(energy_known_ && energy_t_ == t_)) {
+      if (rhs_.Energy(t_, y_.data(), &T0, &V0) != 0) return 0.0;
+      row_energy_.Motion(T0, V0);
+    } else {
+      T0 = energy_T_;
+      V0 = energy_V_;
+    }
+    energy_known_ = false;
+    if (rhs_.Energy(t_new, y_new_.data(), &T1, &V1) != 0) return 0.0;
+    row_energy_.Motion(T1, V1);
+    energy_known_ = true;
+    energy_t_ = t_new;
+    energy_T_ = T1;
+    energy_V_ = V1;
+    const double e0 = T0 + V0, e1 = T1 + V1;
+    long count = 1;  // instants in the step: tout + m interval_, m < count
+    if (interval_ > 0.0) count = 1 + static_cast<long>(std::floor((t_new - tout) / interval_));
+    if (count > 1 && tout + static_cast<double>(count - 1) * interval_ >= t_new) --count;
+    const long checked = std::min(count, kRowEnergyInstants);
+    double worst = 0.0;
+    for (long c = 0; c < checked; ++c) {
+      const long m = checked > 1 ? (c * (count - 1)) / (checked - 1) : 0;
+      const double ti = tout + static_cast<double>(m) * interval_;
+      double Tr = 0.0, Vr = 0.0;
+      InterpolateFrom(t_, y_.data(), h, ti, stage_y_.data());
+      if (rhs_.Energy(ti, stage_y_.data(), &Tr, &Vr) != 0) continue;
+      const double d = row_energy_.Deviation(e0, e1, (ti - t_) / h, Tr + Vr, options_.rtol, T1, V1);
+      if (!(d <= worst)) worst = d;
+    }
+    return worst;
   }
 
   int Underflow(double h) {
@@ -455,11 +528,17 @@ class Dop853Stepper final : public Stepper {
   std::vector<double> r_;        // r0 .. r6 of Eq. (4), row m at m n  (7 n)
   bool project_ = false;         // accepted steps are projected (OdeSystem::Project)
   bool check_ = false;           // accepted steps are checked (OdeSystem::StepAccepted)
+  bool energy_ = false;          // output instants checked against the steps' energies (Eq. 5)
+  bool energy_known_ = false;    // energy_T_, energy_V_ are those of the state at energy_t_
+  double energy_t_ = 0.0, energy_T_ = 0.0, energy_V_ = 0.0;
+  RowEnergy row_energy_;          // Eq. (5)'s motion
+  bool last_tout_set_ = false;
+  double last_tout_ = 0.0, interval_ = 0.0;  // the last instant asked for, the spacing of the last two
   bool dense_ready_ = false;     // r_ holds the last step's dense output
   bool fsal_pending_ = false;    // K(tab::kStages) is f(t_, y_), not yet copied into K(0)
   bool stages_ready_ = false;    // K(13 .. 15) hold the last step's dense-output stages
   int rhs_fails_ = 0;            // recoverable failures of f in a row
-  long steps_ = 0, rhs_evals_ = 0, err_test_fails_ = 0, dense_rejects_ = 0;
+  long steps_ = 0, rhs_evals_ = 0, err_test_fails_ = 0, dense_rejects_ = 0, energy_rejects_ = 0;
   std::string underflow_;        // Explain's text for kUnderflow
   bool underflow_from_rhs_ = false;
 };

@@ -17,8 +17,15 @@ double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 // The engine's equations of motion as an ODE: y = [q, u], y' = rt::Derivative.
 class EngineOde final : public OdeSystem {
  public:
-  EngineOde(const rt::Program& program, rt::Workspace& ws) : program_(program), ws_(ws) {
+  EngineOde(const rt::Program& program, rt::Workspace& ws, bool row_energy)
+      : program_(program), ws_(ws) {
     if (rt::BranchMonitorActive(program)) monitor_ = rt::MakeBranchMonitor(program);
+    // Rows checked against the energy: closed loops (where change points are) in a model
+    // that conserves T + V.
+    if (row_energy && monitor_ && rt::NonConservativeCause(program).empty()) {
+      std::string error;
+      energy_plan_ = rt::PlanSignals(program, {"kinetic_energy", "potential_energy"}, &error);
+    }
   }
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
@@ -71,6 +78,15 @@ class EngineOde final : public OdeSystem {
     if (!aside_) aside_ = rt::MakeWorkspace(program_);
     return rt::ProjectOntoConstraints(program_, *aside_, t, y);
   }
+  bool HasEnergy() const override { return energy_plan_ != nullptr; }
+  int Energy(double t, const double* y, double* T, double* V) override {
+    if (!energy_ws_) energy_ws_ = rt::MakeWorkspace(program_);
+    double v[2];
+    const int s = rt::EvalSignals(program_, *energy_plan_, *energy_ws_, t, y, v);
+    *T = v[0];
+    *V = v[1];
+    return s;
+  }
   int ProjectAsideMultiplierForm(double t, double* y) override {
     if (monitor_ == nullptr || CanProject()) return -1;  // CanProject: the reduced form
     if (!aside_) aside_ = rt::MakeWorkspace(program_);
@@ -84,6 +100,8 @@ class EngineOde final : public OdeSystem {
   bool from_monitor_ = false;  // the last failure was the branch monitor's
   std::function<void(double, const double*, double*)> fault_;  // SimOptions::rhs_fault
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
+  std::shared_ptr<const rt::SignalPlan> energy_plan_;  // T and V (null: rows not checked)
+  std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> energy_ws_{nullptr, [](rt::Workspace*) {}};  // Energy's
 };
 
 // An output row whose projection moved the integrator's speeds by more than this many units
@@ -161,6 +179,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.project_steps = options.project_steps;
   iopt.bridge = options.bridge;
   iopt.dense_check = options.dense_check;
+  iopt.row_energy_check = options.row_energy_check;
   if (iopt.method == Method::IDA) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
@@ -233,7 +252,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     output_time += Clock::now() - t0;
     return status;
   };
-  EngineOde ode(program, *ws_rhs);
+  EngineOde ode(program, *ws_rhs, options.row_energy_check);
   if (options.rhs_fault) ode.SetFault(options.rhs_fault);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
                                          options.bridge_several_at_once, options.bridge_several_at_once_multiplier);
@@ -291,6 +310,11 @@ std::string FormatStats(const SimStats& s) {
   if (i.dense_rejects > 0) {  // DOP853 (runtime/sim/integrator_dop853.cpp kDenseLimit; only where there were any)
     std::snprintf(buf, sizeof buf, "  dense output rejected    %ld (steps taken again onto an output instant)\n",
                   i.dense_rejects);
+    out.insert(out.find("wall time (s)"), buf);
+  }
+  if (i.energy_rejects > 0) {  // docs/constraints.md "Rows checked against the energy"
+    std::snprintf(buf, sizeof buf, "  rows' energy off         %ld (interpolated output instants integrated again)\n",
+                  i.energy_rejects);
     out.insert(out.find("wall time (s)"), buf);
   }
   if (s.bridges + s.passages_checked + s.passages_unchecked > 0) {

@@ -36,6 +36,10 @@ struct SimOptions {
   bool bridge_several_at_once = true;  // ... there tried after 10 steps in a zone, not 50 (tests only)
   bool bridge_several_at_once_multiplier = false;  // ... also on the multiplier form (tests only)
   bool dense_check = true;  // DOP853: steps whose dense-output stages are not smooth are retaken (tests only)
+  // Interpolated output rows of a conservative model with closed loops checked against the
+  // energies of the solver's steps around them and recomputed where off (docs/constraints.md
+  // "Rows checked against the energy"; tests only).
+  bool row_energy_check = true;
   // Output rows near a change point whose projection moved the integrator's speeds too far
   // are projected in the kinetic metric instead (docs/constraints.md; tests only).
   bool zone_rows = true;

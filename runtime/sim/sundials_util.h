@@ -159,15 +159,26 @@ class SundialsStepper : public Stepper {
   int AdvanceCheckedSteps(double tout, double* y, OneStep one_step) {
     double tret = 0.0;
     for (;;) {
-      if (stepped_ && CurrentTime() >= tout) return CopyOut(module_.dky(mem_, tout, 0, s_.y), y);
+      if (stepped_ && CurrentTime() >= tout) {
+        const int flag = CopyOut(module_.dky(mem_, tout, 0, s_.y), y);
+        return flag >= 0 && check_rows_ ? CheckRow(tout, y, flag) : flag;
+      }
+      if (!stepped_ && check_rows_) MarkStep(CurrentTime(), N_VGetArrayPointer(s_.y));
       const int flag = one_step(&tret);
       if (flag < 0) return flag;
       stepped_ = true;
       const double* ys = N_VGetArrayPointer(s_.y);
       if (rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
+      if (check_rows_) MarkStep(tret, ys);
       StepChecked(tret, ys);
     }
   }
+  // The end of an accepted step (t, y), the start of the next (RowEnergy).
+  void MarkStep(double t, const double* y);
+  // The output instant y(tout) from the interpolant, checked against the energies of the
+  // last step's ends (RowEnergy); where off, integrated again from the step's start to tout
+  // by DOP853 (no interpolation); still off: kRowEnergyFailed. Else flag.
+  int CheckRow(double tout, double* y, int flag);
   virtual void StepChecked(double /*t*/, const double* /*y*/) {}
   // The module's return flag as one of the shared kinds (kOther for the rest).
   virtual FailureKind Kind(int flag) const = 0;
@@ -184,6 +195,19 @@ class SundialsStepper : public Stepper {
   SundialsMessages messages_;
   void* mem_ = nullptr;  // the module's memory, freed by module_.free
   bool stepped_ = false;  // one step taken in one-step mode (checked steps): an interpolant exists
+  // Rows checked against the energy (CheckRow).
+  struct StepEnd {
+    double t = 0.0;
+    std::vector<double> y;  // (n)
+    bool known = false;     // T, V evaluated
+    double T = 0.0, V = 0.0;
+  };
+  bool check_rows_ = false;       // options.row_energy_check and the system has an energy
+  IntegratorOptions options_;     // as given (for the DOP853 that recomputes a row)
+  StepEnd step_start_, step_end_; // the last accepted step's ends
+  RowEnergy row_energy_;          // Eq. (5)'s motion
+  std::string row_failure_;       // Explain's text for kRowEnergyFailed
+  long rows_recomputed_ = 0;      // output instants integrated again (CheckRow)
 };
 
 // A stepper of type S (constructed from rhs), initialized by its Init; null, with *error,

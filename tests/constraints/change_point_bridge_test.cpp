@@ -466,6 +466,7 @@ Outcome RunChainDense(bool dense_check, double rtol, rt::SolverPath solver, bool
   so.integrator = rt::IntegratorKind::DOP853;
   so.bridge_several_at_once_multiplier = early_on_multiplier;
   so.dense_check = dense_check;
+  so.row_energy_check = dense_check;  // off: the dense-output check's own rows (row_energy_test.cpp)
   // Without the check, the energy guard stops these runs at the rows the check is for
   // (tests/sim/energy_guard_test.cpp); here those rows are the point.
   if (!dense_check) so.energy_check = sim::EnergyCheck::kOff;

@@ -282,6 +282,7 @@ TEST(EnergyGuard, StopsTheRowsOfAnUncheckedDenseOutput) {
     o.integrator = rt::IntegratorKind::DOP853;
     o.bridge_several_at_once_multiplier = c.solver == rt::SolverPath::Sparse;
     o.dense_check = false;
+    o.row_energy_check = false;  // it catches these rows too (docs/constraints.md "Rows checked against the energy")
     o.signals = {"kinetic_energy", "potential_energy"};
     MemorySink sink;
     SimResult r = Simulate(*model->prog, o, sink);
@@ -293,6 +294,7 @@ TEST(EnergyGuard, StopsTheRowsOfAnUncheckedDenseOutput) {
     EXPECT_LE(r.fail_time, c.t_to);
     // With the check on (the default), the same runs end correctly and the guard lets them.
     o.dense_check = true;
+    o.row_energy_check = true;
     MemorySink ok_sink;
     SimResult ok = Simulate(*model->prog, o, ok_sink);
     EXPECT_EQ(ok.status, SimResult::Status::kOk) << ok.message;
