@@ -92,7 +92,15 @@ class IdaStepper final : public SundialsStepper {
       return Fail(error, WithDetail("IDASetJacFn failed", messages_.last));
     ewt_ = N_VNew_Serial(n, s_.ctx);
     if (!ewt_) return Fail(error, "out of memory");
-    if (rhs_.ChecksSteps() && IDASetNonlinConvCoef(mem_, kLoopConvCoef) != IDA_SUCCESS)
+    // Closed loops on the reduced form (the states the projection sets: f's evaluation at y0
+    // above chose the partition).
+    bool reduced_loops = false;
+    if (rhs_.ChecksSteps()) {
+      GuardedRhs::JacobianHold hold(rhs_);
+      double pdiag = 0.0;
+      reduced_loops = rhs_.ProjectedStates(&projected_, &pdiag);
+    }
+    if (reduced_loops && IDASetNonlinConvCoef(mem_, kLoopConvCoef) != IDA_SUCCESS)
       return Fail(error, WithDetail("IDASetNonlinConvCoef failed", messages_.last));
     return true;
   }
@@ -291,7 +299,9 @@ class IdaStepper final : public SundialsStepper {
   }
 
   // The Newton iteration's convergence coefficient (IDA's epsNewt, default 0.33) on closed
-  // loops (a system that checks its steps). Near a change point f carries a noise floor:
+  // loops on the reduced form. Not on the multiplier form: there the chain of 40 at rtol
+  // 1e-10 ended with rows 3.4e-6 of E off the lumped crank's energy with it (main: see
+  // docs/benchmarks.md), and that form's cells did not creep. Near a change point f carries a noise floor:
   // measured on the chain of 40 equal-link parallelograms at rtol 1e-12 (reduced form), just
   // past a bridge (rho = 3e-3), the residual y' - f stopped falling at 2e-5 (absolute, in
   // the dependent speeds' rows) over the Newton iterations, so every correction stayed at
