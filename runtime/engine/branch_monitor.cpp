@@ -94,14 +94,6 @@ const std::string& BranchMonitorError(const BranchMonitor& m) { return m.error; 
 
 namespace {
 
-// <a, b> in the kinetic metric at the workspace's configuration.
-double Metric(const Program& p, const Workspace& ws, const std::vector<Vec3>& va, const std::vector<Vec3>& wa,
-              const std::vector<Vec3>& vb, const std::vector<Vec3>& wb) {
-  double s = 0.0;
-  for (size_t L = 0; L < p.bodies.size(); ++L) s += p.bodies[L].mass * va[L].dot(vb[L]) + wa[L].dot(ws.I_W[L] * wb[L]);
-  return s;
-}
-
 // "The integrator took N steps in the zone without passing the change point", then `tail`.
 std::string StuckMessage(const Program& p, const BranchMonitor& m, double t, const char* tail) {
   char buf[512];

@@ -15,6 +15,15 @@
 
 namespace kanesim::rt {
 
+// <a, b> in the kinetic metric at the workspace's configuration (bodies' mass-centre and
+// angular velocities: <V, V> = 2T); the branch monitor's turn and the bridge's speeds.
+inline double Metric(const Program& p, const Workspace& ws, const std::vector<Vec3>& va, const std::vector<Vec3>& wa,
+                     const std::vector<Vec3>& vb, const std::vector<Vec3>& wb) {
+  double s = 0.0;
+  for (size_t L = 0; L < p.bodies.size(); ++L) s += p.bodies[L].mass * va[L].dot(vb[L]) + wa[L].dot(ws.I_W[L] * wb[L]);
+  return s;
+}
+
 struct BranchMonitor {
   std::unique_ptr<Workspace, void (*)(Workspace*)> ws{nullptr, [](Workspace*) {}};
   bool have_ref = false, in_zone = false;

@@ -284,13 +284,6 @@ namespace {
 // first order, while the partition's own solve (an oblique projection, ill-conditioned
 // near the crossing) moves the energy by the extrapolation's error times 1 / rho
 // (docs/constraints.md "Singular configurations"). Nonzero if the equations fail.
-double Metric(const Program& p, const Workspace& ws, const std::vector<Vec3>& va, const std::vector<Vec3>& wa,
-              const std::vector<Vec3>& vb, const std::vector<Vec3>& wb) {
-  double s = 0.0;
-  for (size_t L = 0; L < p.bodies.size(); ++L) s += p.bodies[L].mass * va[L].dot(vb[L]) + wa[L].dot(ws.I_W[L] * wb[L]);
-  return s;
-}
-
 int MetricSpeeds(const Program& p, BranchMonitor& m, double t, const double* raw, double* y) {
   Workspace& ws = *m.ws;
   const int nq = p.nq, nu = p.nu, n = StateSize(p);
