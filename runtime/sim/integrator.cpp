@@ -159,6 +159,7 @@ void AddStats(IntegratorStats* to, const IntegratorStats& s) {
   to->err_test_fails += s.err_test_fails;
   to->dense_rejects += s.dense_rejects;
   to->energy_rejects += s.energy_rejects;
+  to->energy_reject_rhs += s.energy_reject_rhs;
   to->nonlin_iters += s.nonlin_iters;
   to->nonlin_conv_fails += s.nonlin_conv_fails;
 }

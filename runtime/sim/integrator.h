@@ -139,6 +139,7 @@ struct IntegratorStats {
   long dense_rejects = 0;      // DOP853: steps whose dense output was rejected (stages not smooth)
   long energy_rejects = 0;     // output instants whose interpolated T + V was off (OdeSystem::Energy):
                                // DOP853's step taken again onto it, SUNDIALS' instant integrated again
+  long energy_reject_rhs = 0;  // f evaluations of those SUNDIALS re-integrations (DOP853's are in rhs_evals)
   long nonlin_iters = 0;       // Newton or fixed-point iterations
   long nonlin_conv_fails = 0;  // nonlinear convergence failures
   double last_step = 0.0;      // last step size taken

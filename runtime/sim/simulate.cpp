@@ -313,8 +313,14 @@ std::string FormatStats(const SimStats& s) {
     out.insert(out.find("wall time (s)"), buf);
   }
   if (i.energy_rejects > 0) {  // docs/constraints.md "Rows checked against the energy"
-    std::snprintf(buf, sizeof buf, "  rows' energy off         %ld (interpolated output instants integrated again)\n",
-                  i.energy_rejects);
+    if (i.energy_reject_rhs > 0)
+      std::snprintf(buf, sizeof buf,
+                    "  rows' energy off         %ld (interpolated output instants integrated again, by DOP853: "
+                    "%ld right-hand sides)\n",
+                    i.energy_rejects, i.energy_reject_rhs);
+    else
+      std::snprintf(buf, sizeof buf, "  rows' energy off         %ld (interpolated output instants integrated again)\n",
+                    i.energy_rejects);
     out.insert(out.find("wall time (s)"), buf);
   }
   if (s.bridges + s.passages_checked + s.passages_unchecked > 0) {

@@ -208,6 +208,7 @@ class SundialsStepper : public Stepper {
   RowEnergy row_energy_;          // Eq. (5)'s motion
   std::string row_failure_;       // Explain's text for kRowEnergyFailed
   long rows_recomputed_ = 0;      // output instants integrated again (CheckRow)
+  long reintegration_rhs_ = 0;    // their right-hand sides (capped: CheckRow)
 };
 
 // A stepper of type S (constructed from rhs), initialized by its Init; null, with *error,
