@@ -35,7 +35,7 @@ struct Outcome {
   double worst_t = 0.0;
 };
 
-Outcome Run(bool hold) {
+Outcome RunChain(bool hold) {
   constexpr int kLoops = 10;
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Sparse;
@@ -70,12 +70,12 @@ Outcome Run(bool hold) {
 }
 
 TEST(ZoneRows, Dop853MultiplierChainOfTenRowsOfCreepingStepsComeFromTheBridge) {
-  const Outcome on = Run(true);
+  const Outcome on = RunChain(true);
   ASSERT_EQ(on.status, sim::SimResult::Status::kOk);
   EXPECT_LT(on.energy, 1e-6);  // the bench's bound max(1e3 rtol, 1e-6)
   EXPECT_LT(on.apart, 1e-5);
   // Without the hold: the row t = 1.74 from the creeping steps.
-  const Outcome off = Run(false);
+  const Outcome off = RunChain(false);
   EXPECT_GT(off.energy, 1e-6);
 }
 
