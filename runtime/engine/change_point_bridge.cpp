@@ -669,4 +669,6 @@ void BridgeState(const BranchMonitor& m, double t, double* y) {
   for (size_t i = 0; i < m.h_y[0].size(); ++i) y[i] = HermiteAt(m.h_t + f, m.h_y + f, m.h_f + f, 3 - f, false, i, t);
 }
 
+bool InNearSingularZone(const BranchMonitor& m) { return m.in_zone; }
+
 }  // namespace kanesim::rt

@@ -130,6 +130,8 @@ const std::string& BranchMonitorError(const BranchMonitor& monitor);
 int BridgeChangePoint(const Program& program, BranchMonitor& monitor, double rtol, double atol, double* t_from,
                       double* t_b, double* y_b);
 void BridgeState(const BranchMonitor& monitor, double t, double* y);
+// Whether the last accepted step CheckBranch saw lies inside a near-singular zone (rho < 1e-2).
+bool InNearSingularZone(const BranchMonitor& monitor);
 // With these tolerances, CheckBranch tries the bridge itself after 50 accepted steps inside
 // one near-singular zone (a stall; a passage takes a few) and, when it can be trusted,
 // fails the step so that the integrator's next BridgeChangePoint returns it.

@@ -80,6 +80,11 @@ class OdeSystem {
     return false;
   }
   virtual void BridgeState(double /*t*/, double* /*y*/) {}
+  // Whether the last accepted step lies inside a near-singular zone (closed loops: the
+  // branch monitor's rho < 1e-2). The output rows of such steps are held until the zone is
+  // left (written as they are) or bridged (those in the bridge's interval recomputed from
+  // BridgeState): docs/constraints.md "Rows held through a zone".
+  virtual bool InZone() const { return false; }
   // A solver's difference-quotient Jacobian: on before its perturbed evaluations of Rhs
   // around the state of the last one, off after them. The system may hold there whatever
   // discrete choices the last evaluation made (closed loops: the speed partition,

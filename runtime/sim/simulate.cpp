@@ -50,6 +50,8 @@ class EngineOde final : public OdeSystem {
     return monitor_ && rt::BridgeChangePoint(program_, *monitor_, rtol, atol, t_from, t_b, y_b) == 0;
   }
   void BridgeState(double t, double* y) override { rt::BridgeState(*monitor_, t, y); }
+  bool InZone() const override { return hold_rows_ && monitor_ && rt::InNearSingularZone(*monitor_); }
+  void SetHoldRows(bool on) { hold_rows_ = on; }
   void EnableEarlyBridge(double rtol, double atol, bool several_loops, bool projected_estimate, bool several_at_once,
                          bool several_at_once_multiplier) {
     if (monitor_) {
@@ -98,6 +100,7 @@ class EngineOde final : public OdeSystem {
   rt::Workspace& ws_;
   std::unique_ptr<rt::BranchMonitor, void (*)(rt::BranchMonitor*)> monitor_{nullptr, [](rt::BranchMonitor*) {}};
   bool from_monitor_ = false;  // the last failure was the branch monitor's
+  bool hold_rows_ = true;      // SimOptions::hold_zone_rows
   std::function<void(double, const double*, double*)> fault_;  // SimOptions::rhs_fault
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
   std::shared_ptr<const rt::SignalPlan> energy_plan_;  // T and V (null: rows not checked)
@@ -254,6 +257,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   };
   EngineOde ode(program, *ws_rhs, options.row_energy_check);
   if (options.rhs_fault) ode.SetFault(options.rhs_fault);
+  ode.SetHoldRows(options.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
                                          options.bridge_several_at_once, options.bridge_several_at_once_multiplier);
   Clock::time_point start = Clock::now();

@@ -43,6 +43,10 @@ struct SimOptions {
   // Output rows near a change point whose projection moved the integrator's speeds too far
   // are projected in the kinetic metric instead (docs/constraints.md; tests only).
   bool zone_rows = true;
+  // Output rows of steps inside a near-singular zone held until the zone is passed or bridged,
+  // and recomputed from the bridge when bridged (docs/constraints.md "Rows held through a
+  // zone"; tests only).
+  bool hold_zone_rows = true;
   bool bridge_projected_estimate = true;  // ... there on the multiplier form, its estimate after projecting (tests only)
   // Conservative models: stop with exit 2 where T + V leaves the tolerance's reach
   // (`--energy-check on|off|report`; runtime/sim/energy_guard.h, docs/integrators.md).
