@@ -72,6 +72,7 @@ constexpr double kZoneMaxErrorReduced = 1e2;  // ... on the reduced form
 constexpr double kBridgeStartFits = 7.0;  // the approach starts at the last accepted step with rho >= this x fit_rho
 constexpr double kBridgeMaxStartRho = 0.5;   // ... and at most this (else the solver stopped far from a crossing)
 constexpr double kBridgeFitRho = 5e-3;       // the approach ends at rho <= this: the fit's last node
+static_assert(kBridgeStartFits * kBridgeFitRho - kApproachStartRho < 1e-15 && kApproachStartRho - kBridgeStartFits * kBridgeFitRho < 1e-15);
 constexpr double kBridgeStepsPerFit = 20.0;  // Runge-Kutta steps per fit_rho of rho
 constexpr int kBridgeMaxSteps = 2000;
 constexpr double kBridgeMinFitRho = 1e-3;
@@ -539,6 +540,19 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
       why = "the bridged state is not past the crossing";
   }
   if (why) return refuse(why);
+  // The bridged state (projected) as the approach's last node: the output rows between the
+  // approach's end (rho = fit_rho before the crossing) and tb (rho = kBridgePast past it) are
+  // interpolated between the two (BridgeState), not extrapolated. The raw extrapolation
+  // carries speeds off the constraints in the directions they barely determine near the
+  // crossing (the projection's move above), and a row there kept them: chain of 40,
+  // CVODE-BDF, rtol 1e-10, t = 2.87 (the crossing at 2.8701), rod 0's speed 1.1e-4 rad/s
+  // off the others', the lumped energy 1.9e-5 of E off.
+  std::vector<double> fb(nn);
+  if (Derivative(p, ws, tb, y_b, fb.data()) != 0) return refuse("the equations failed at the bridged state");
+  m.nt.push_back(tb);
+  m.ny.emplace_back(y_b, y_b + n);
+  m.nf.push_back(std::move(fb));
+  m.nrho.push_back(rho_b);
   m.bridged = true;
   m.zone_steps = 0;
   *t_from = m.nt[0];
