@@ -128,18 +128,6 @@ constexpr double kBridgeMaxProjected = 1e6;
 // lumped crank 6.42e-5 rad/s before and 6.44e-5 after). Off with projected_estimate
 // (SimOptions::bridge_projected_estimate), as the rest of this path.
 constexpr double kBridgeMovedSeveral = 2e-5;
-// ... its part in the speeds, on the multiplier form where several loops are near singular
-// at the bridged state (the positions keep kBridgeMovedSeveral): that form projects the
-// speeds in the kinetic metric, so their move is M-orthogonal to the motion's tangent space
-// (its energy second order: a move of 1e-4 |u| is 1e-8 of T), and the extrapolation's error
-// along the motion is the projected estimate's. The move there is the round-off of the speeds
-// the near-singular constraint barely determines. Measured on the chain of 40 (issue 20;
-// docs/constraints.md "Several loops singular at once"), both refused by the common limit
-// 2e-5, the solver then creeping to exit 2: CVODE-BDF at rtol 1e-10, t = 2.0476: speeds
-// moved 2.53e-5 of |u| (2.9e-4 rad/s), positions 5.1e-8, projected estimate 4.3e4, the
-// lumped energy's jump across the bridge 2e-9 of E; CVODE at rtol 1e-12, t = 4.309: 2.2e-5,
-// 1.6e-8, 618, below 1e-10 of E.
-constexpr double kBridgeMovedSpeedsSeveral = 1e-4;
 
 // Component i at t of the Hermite interpolant through y and y' at the m nodes (tn[k], yn[k],
 // fn[k]) (degree 2m - 1), or without the slope at the first node when skip (degree 2m - 2):
@@ -496,17 +484,11 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
               MetricSpeeds(p, m, tb, raw.data(), y_b) != 0)) {
     why = needs_several ? kEstimateAbove : "the bridged state could not be projected";
   } else {
-    double moved_q = 0.0, moved_u = 0.0;
     for (int i = 0; i < n; ++i) {
       const double d = std::fabs(y_b[i] - raw[static_cast<size_t>(i)]) / std::max(1.0, std::fabs(raw[static_cast<size_t>(i)]));
       moved = std::isnan(d) ? INFINITY : std::max(moved, d);
-      double& part = i < p.nq ? moved_q : moved_u;
-      part = std::isnan(d) ? INFINITY : std::max(part, d);
     }
-    const bool split = sparse && m.several_loops && m.projected_estimate && near_loops > 1;
-    const bool moved_several_ok =
-        split ? moved_q <= kBridgeMovedSeveral && moved_u <= kBridgeMovedSpeedsSeveral : moved <= kBridgeMovedSeveral;
-    if (needs_projected && near_loops > 1 && moved_several_ok) {
+    if (needs_projected && near_loops > 1 && moved <= kBridgeMovedSeveral) {
       std::vector<double> yq(nn), yf(nn);
       for (size_t i = 0; i < nn; ++i) {
         yq[i] = HermiteAt(m.h_t, m.h_y, m.h_f, 3, true, i, tb);
@@ -527,7 +509,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
     }
     if ((needs_several || needs_projected) && near_loops < 2)
       why = kEstimateAbove;
-    else if (!(needs_projected || split ? moved_several_ok : moved <= kBridgeMoved))
+    else if (!(moved <= (needs_projected || (sparse && m.several_loops && m.projected_estimate && near_loops > 1) ? kBridgeMovedSeveral : kBridgeMoved)))
       why = "the projection moved the bridged state too far";
     else if (!(rho_b >= 0.0))
       why = "the bridged state is not valid";
@@ -540,19 +522,6 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
       why = "the bridged state is not past the crossing";
   }
   if (why) return refuse(why);
-  // The bridged state (projected) as the approach's last node: the output rows between the
-  // approach's end (rho = fit_rho before the crossing) and tb (rho = kBridgePast past it) are
-  // interpolated between the two (BridgeState), not extrapolated. The raw extrapolation
-  // carries speeds off the constraints in the directions they barely determine near the
-  // crossing (the projection's move above), and a row there kept them: chain of 40,
-  // CVODE-BDF, rtol 1e-10, t = 2.87 (the crossing at 2.8701), rod 0's speed 1.1e-4 rad/s
-  // off the others', the lumped energy 1.9e-5 of E off.
-  std::vector<double> fb(nn);
-  if (Derivative(p, ws, tb, y_b, fb.data()) != 0) return refuse("the equations failed at the bridged state");
-  m.nt.push_back(tb);
-  m.ny.emplace_back(y_b, y_b + n);
-  m.nf.push_back(std::move(fb));
-  m.nrho.push_back(rho_b);
   m.bridged = true;
   m.zone_steps = 0;
   *t_from = m.nt[0];
