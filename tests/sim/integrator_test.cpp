@@ -296,6 +296,60 @@ TEST_P(EveryMethod, PersistentNaNFailsWithCause) {
   EXPECT_LT(r.fail_time, 0.6);
 }
 
+// A row whose T + V is off the energies of the steps around it is integrated again by
+// DOP853 (runtime/sim/sundials_stepper.cpp CheckRow); when that cannot succeed, the work is
+// capped and the run stops at the row with the cause. Here y' = -y, T = y^2 / 2, except that
+// the energy reported at the instant t = 0.5 is off by 1e6, and from then on f chatters
+// (a term of +-1e3 switching every ~3e-9 s), so that DOP853 creeps. Uncapped (the run's
+// 100000 steps between output instants) the re-integration takes 100000 DOP853 steps;
+// capped, 4000 (1.07e5 evaluations of f with the rejected steps').
+TEST(SimIntegrate, RowReintegrationThatCannotSucceedIsCappedAndStops) {
+  class OffRow final : public OdeSystem {
+   public:
+    int Size() const override { return 1; }
+    int Rhs(double t, const double* y, double* yd) override {
+      yd[0] = -y[0];
+      if (creep) {
+        yd[0] += std::sin(1e9 * t) > 0.0 ? 1e3 : -1e3;
+        ++creep_evals;
+      }
+      return 0;
+    }
+    bool ChecksSteps() const override { return true; }  // one step at a time, as with closed loops
+    bool HasEnergy() const override { return true; }
+    int Energy(double t, const double* y, double* T, double* V) override {
+      *T = 0.5 * y[0] * y[0];
+      *V = 0.0;
+      if (std::fabs(t - 0.5) < 1e-14) {
+        *T += 1e6;
+        creep = true;
+      }
+      return 0;
+    }
+    bool creep = false;
+    long creep_evals = 0;
+  };
+  for (Method m : {Method::CvodeAdams, Method::CvodeBdf, Method::IDA, Method::ArkodeErk}) {
+    SCOPED_TRACE(MethodName(m));
+    OffRow ode;
+    const double y0[1] = {1.0};
+    Rows rows;
+    IntegratorOptions opt;
+    opt.method = m;
+    opt.rtol = opt.atol = 1e-10;
+    IntegrateResult r = Integrate(ode, y0, OutputGrid{0.0, 1.0, 0.1}, opt, rows.Callback(1));
+    ASSERT_FALSE(r.ok);
+    EXPECT_NE(r.cause.find("T + V of the output instant t = 0.5"), std::string::npos) << r.cause;
+    EXPECT_GE(r.fail_time, 0.5);  // the solver's time: the end of the step that holds the instant
+    EXPECT_LT(r.fail_time, 0.6);
+    EXPECT_EQ(r.rows, 5);  // 0 ... 0.4 kept
+    EXPECT_TRUE(ode.creep);
+    EXPECT_GT(ode.creep_evals, 1000);
+    EXPECT_LT(ode.creep_evals, 200000);  // measured 1.07e5
+    EXPECT_EQ(r.stats.energy_reject_rhs, ode.creep_evals);
+  }
+}
+
 // A failing row callback (an output that cannot be evaluated) stops the run at its row.
 TEST(SimIntegrate, RowFailureStopsAtThatInstant) {
   LambdaOde ode(1, [](double, const double* y, double* yd) {
