@@ -69,7 +69,14 @@ void RunChainOf40(bool bdf, double rtol, double stop) {
 }
 
 // Main: exit 2 at t = 4.3091 (1001 steps in the zone of cut[18]).
-TEST(ChainBridgeApproach, CvodeAdamsAtRtol1e12PassesTheCrossingAtT4p309) { RunChainOf40(false, 1e-12, 4.35); }
+TEST(ChainBridgeApproach, CvodeAdamsAtRtol1e12PassesTheCrossingAtT4p309) {
+#if defined(__SANITIZE_ADDRESS__)
+  // 5 s in Release, ~30x that under the sanitizers; the approach's code runs there in
+  // ChangePointBridge's cells.
+  GTEST_SKIP() << "5 s in Release";
+#endif
+  RunChainOf40(false, 1e-12, 4.35);
+}
 
 }  // namespace
 }  // namespace kanesim::test
