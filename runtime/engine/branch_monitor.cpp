@@ -246,17 +246,9 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
   }
   if (!near) {
     if (m.pre_t.size() >= kPreZone) {
-      // The oldest kept step stays while it is the only one the bridge's approach can start
-      // from (rho >= kApproachStartRho) and rho has fallen at every step since: at tight
-      // tolerances more than kPreZone steps lie between it and the zone, and an approach from
-      // the first kept step instead (rho 0.011 ... 0.02) had its error estimate 1e5 ... 2e7
-      // (chain of 40, CVODE, rtol 1e-12, multiplier form; 1e3 ... 7e4 from rho >= 0.035).
-      bool keep_first = m.pre_rho[0] >= kApproachStartRho && m.pre_rho[1] < kApproachStartRho && rho <= m.pre_rho.back();
-      for (size_t i = 1; keep_first && i < m.pre_rho.size(); ++i) keep_first = m.pre_rho[i] <= m.pre_rho[i - 1];
-      const long first = keep_first ? 1 : 0;
-      std::rotate(m.pre_t.begin() + first, m.pre_t.begin() + first + 1, m.pre_t.end());
-      std::rotate(m.pre_rho.begin() + first, m.pre_rho.begin() + first + 1, m.pre_rho.end());
-      std::rotate(m.pre_y.begin() + first, m.pre_y.begin() + first + 1, m.pre_y.end());
+      std::rotate(m.pre_t.begin(), m.pre_t.begin() + 1, m.pre_t.end());
+      std::rotate(m.pre_rho.begin(), m.pre_rho.begin() + 1, m.pre_rho.end());
+      std::rotate(m.pre_y.begin(), m.pre_y.begin() + 1, m.pre_y.end());
       m.pre_t.back() = t;
       m.pre_rho.back() = rho;
       m.pre_y.back().assign(y, y + n);

@@ -24,11 +24,6 @@ inline double Metric(const Program& p, const Workspace& ws, const std::vector<Ve
   return s;
 }
 
-// The bridge's approach starts at the last accepted step with rho at least this
-// (change_point_bridge.cpp: kBridgeStartFits x kBridgeFitRho), where the equations are
-// accurate; the monitor keeps that step among the ones before a zone (CheckBranch).
-inline constexpr double kApproachStartRho = 3.5e-2;
-
 struct BranchMonitor {
   std::unique_ptr<Workspace, void (*)(Workspace*)> ws{nullptr, [](Workspace*) {}};
   bool have_ref = false, in_zone = false;

@@ -72,7 +72,6 @@ constexpr double kZoneMaxErrorReduced = 1e2;  // ... on the reduced form
 constexpr double kBridgeStartFits = 7.0;  // the approach starts at the last accepted step with rho >= this x fit_rho
 constexpr double kBridgeMaxStartRho = 0.5;   // ... and at most this (else the solver stopped far from a crossing)
 constexpr double kBridgeFitRho = 5e-3;       // the approach ends at rho <= this: the fit's last node
-static_assert(kBridgeStartFits * kBridgeFitRho - kApproachStartRho < 1e-15 && kApproachStartRho - kBridgeStartFits * kBridgeFitRho < 1e-15);
 constexpr double kBridgeStepsPerFit = 20.0;  // Runge-Kutta steps per fit_rho of rho
 constexpr int kBridgeMaxSteps = 2000;
 constexpr double kBridgeMinFitRho = 1e-3;

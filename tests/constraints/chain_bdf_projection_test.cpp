@@ -1,6 +1,5 @@
-// Chains of equal-link parallelograms on the multiplier form with CVODE (issue 20).
-//
-// CVODE-BDF: the chain of ten at rtol 1e-12 goes on through its change points on the branch
+// The chain of ten equal-link parallelograms on the multiplier form with CVODE-BDF (issue 20)
+// at rtol 1e-12 goes on through its change points on the branch
 // (runtime/sim/integrator_cvode.cpp, ProjectStep). Main restarted CVODE (CVodeReInit, order
 // 1) from the projection y* whenever a step's drift from it grew past 10 error weights;
 // inside the change-point zones, where the projection is ill-conditioned, that happened
@@ -9,16 +8,7 @@
 // passing the change point", loop cut[3]). CVODE-BDF now projects each step through
 // CVODE's own projection (the Nordsieck history corrected with y, no restart).
 //
-// CVODE-Adams: the chain of 40 at rtol 1e-12 is bridged over its change point at t = 4.309
-// (runtime/engine/branch_monitor.cpp, kApproachStartRho). The bridge's approach is meant to start at the last
-// accepted step with rho >= 3.5e-2, but only the last 8 accepted steps before a zone were
-// kept, and at this tolerance they began at rho 0.0134: the approach started there, its fit
-// nodes closer to the crossing where the equations are inaccurate, its error estimate 1.85e7
-// and its projection's move 2.2e-5 (above the limit 2e-5), so main refused the bridge and
-// CVODE crept until the monitor stopped it with exit 2 at t = 4.3091 (1001 steps in the zone
-// of cut[18]). The step with rho >= 3.5e-2 is now kept.
-//
-// Both checked against the independent lumped crank (tests/stress/lumped_crank.h: the whole
+// Checked against the independent lumped crank (tests/stress/lumped_crank.h: the whole
 // chain turns as one crank of lumped inertia): every row's energy (1/2) J w^2 + G sin(theta)
 // within max(1e3 rtol, 1e-6) of the first row's (bench/change_point_chains.py's bound),
 // every rod at rod 0's angle and speed (the branch), and the run to its stop time past the
@@ -81,16 +71,6 @@ void RunChain(int n, bool bdf, double rtol, double stop) {
 // Measured with the projection: 4.5e-8 of E, rods 1.5e-10 rad and 6.4e-7 rad/s apart over
 // 20 s (bench/change_point_chains.py).
 TEST(ChainBdfProjection, ChainOfTenAtRtol1e12PassesTheChangePointOfT7p7OnTheBranch) { RunChain(10, true, 1e-12, 8.0); }
-
-// Main: exit 2 at t = 4.3091 (1001 steps in the zone of cut[18]).
-TEST(ChainBridgeApproach, CvodeAdamsAtRtol1e12PassesTheCrossingAtT4p309) {
-#if defined(__SANITIZE_ADDRESS__)
-  // 5 s in Release, ~30x that under the sanitizers; the approach's code runs there in
-  // ChangePointBridge's cells.
-  GTEST_SKIP() << "5 s in Release";
-#endif
-  RunChain(40, false, 1e-12, 4.35);
-}
 
 }  // namespace
 }  // namespace kanesim::test
