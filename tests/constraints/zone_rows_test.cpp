@@ -40,7 +40,10 @@ Outcome RunChain(bool hold) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Sparse;
   auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(kLoops)}}, co);
-  EXPECT_TRUE(l && l->prog);
+  if (!l || !l->prog) {
+    ADD_FAILURE() << "the model did not compile";
+    return {sim::SimResult::Status::kNumericalFailure};
+  }
   sim::SimOptions so;
   so.stop_time = 1.8;  // the trajectory to t = 1.75 is the 20 s run's
   so.interval = 0.01;
