@@ -337,6 +337,35 @@ int MetricSpeeds(const Program& p, BranchMonitor& m, double t, const double* raw
 }
 }  // namespace
 
+namespace {
+// The approach's start on the multiplier form, projected by the partition with the position
+// Newton to round-off (the monitor's workspace, Workspace::newton_to_round_off), the
+// dependent speeds solved from the independent ones. That form's own projection stops at a
+// residual of 1e-13 of the loop length, a point on the level set phi = c off the branch by
+// ~c / rho, and along the approach the speeds that offset implies grow toward the crossing
+// (c / rho^2): on the chain of 40 with CVODE-BDF at rtol 1e-10 (t = 2.04) the rods' speeds,
+// equal on the branch, were 3.5e-7 apart at the start (rho 0.039), 2.3e-5 at the last node
+// (rho 5e-3) and 5.7e-4 in the extrapolation at t_b, which the projection there removed (a
+// move of 2.5e-5 of |u|, refused). From the projected start (a move of 5e-10 ... 2e-8):
+// 3e-10 at the last node, estimates 2 ... 37 instead of 1.4e3 ... 6.4e4, moves ~1e-9.
+// Kept as it was when the projection fails or moves it by more than kBridgeMoved.
+void ProjectStart(const Program& p, Workspace& ws, double t, std::vector<double>* y) {
+  if (UnpackState(p, ws, t, y->data()) != 0) return;
+  PositionKinematics(p, ws);
+  VelocityKinematics(p, ws);
+  if (ProjectStateByPartition(p, ws) != 0) return;
+  std::vector<double> z(y->size());
+  for (int i = 0; i < p.nq; ++i) z[static_cast<size_t>(i)] = ws.q[p.q_free[static_cast<size_t>(i)]];
+  for (int i = 0; i < p.nu; ++i) z[static_cast<size_t>(p.nq + i)] = ws.u[p.u_free[static_cast<size_t>(i)]];
+  double moved = 0.0;
+  for (size_t i = 0; i < z.size(); ++i) {
+    const double d = std::fabs(z[i] - (*y)[i]) / std::max(1.0, std::fabs((*y)[i]));
+    moved = std::isnan(d) ? INFINITY : std::max(moved, d);
+  }
+  if (moved <= kBridgeMoved) *y = std::move(z);
+}
+}  // namespace
+
 int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double atol, double* t_from, double* t_b,
                      double* y_b) {
   auto refuse = [&m](const char* why) {
@@ -384,6 +413,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   std::vector<double> y(ty[static_cast<size_t>(is)]), f(nn), tmp(nn);
   RungeKuttaScratch rk(nn);
   double t = tt[static_cast<size_t>(is)], rho = rho_s;
+  if (p.solver == SolverPath::Sparse) ProjectStart(p, ws, t, &y);
   // rho's rate of fall, from a short Euler step.
   if (Deriv(t, y.data(), f.data()) != 0) return refuse("the equations failed on the approach");
   const double dt = 1e-3 * rho_s / std::max(1e-300, std::sqrt(Eigen::Map<const Eigen::VectorXd>(f.data(), n).squaredNorm()));

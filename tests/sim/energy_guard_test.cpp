@@ -268,7 +268,12 @@ TEST(EnergyGuard, StopsTheRowsOfAnUncheckedDenseOutput) {
     rt::SolverPath solver;
     double rtol, t_from, t_to;
   };
-  for (const Case& c : {Case{rt::SolverPath::Dense, 1e-8, 11.6, 11.71}, Case{rt::SolverPath::Sparse, 1e-12, 16.78, 16.81}}) {
+  // The multiplier form's case (rtol 1e-12, rows at t = 16.79 and 16.80) is gone since the
+  // bridge's approach starts from the state projected by the partition (runtime/engine/
+  // change_point_bridge.cpp ProjectStart): that run takes another trajectory and ends on the
+  // lumped crank (1.2e-7 rad) with the dense check off; rtol 5e-13, 2e-12, 5e-12, 1e-11,
+  // 3e-11, 1e-10 none either (measured).
+  for (const Case& c : {Case{rt::SolverPath::Dense, 1e-8, 11.6, 11.71}}) {
     SCOPED_TRACE(c.rtol);
     rt::CompileOptions co;
     co.solver = c.solver;
