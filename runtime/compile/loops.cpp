@@ -476,8 +476,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     }
   }
   // The assembled start: the state the integrators begin from.
-  for (int i = 0; i < p.nq; ++i) p.y0[static_cast<size_t>(i)] = ws.q[p.q_free[static_cast<size_t>(i)]];
-  for (int i = 0; i < p.nu; ++i) p.y0[static_cast<size_t>(p.nq + i)] = ws.u[p.u_free[static_cast<size_t>(i)]];
+  PackState(p, ws, p.y0.data());
 }
 
 namespace {

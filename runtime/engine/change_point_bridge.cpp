@@ -355,8 +355,7 @@ void ProjectStart(const Program& p, Workspace& ws, double t, std::vector<double>
   VelocityKinematics(p, ws);
   if (ProjectStateByPartition(p, ws) != 0) return;
   std::vector<double> z(y->size());
-  for (int i = 0; i < p.nq; ++i) z[static_cast<size_t>(i)] = ws.q[p.q_free[static_cast<size_t>(i)]];
-  for (int i = 0; i < p.nu; ++i) z[static_cast<size_t>(p.nq + i)] = ws.u[p.u_free[static_cast<size_t>(i)]];
+  PackState(p, ws, z.data());
   double moved = 0.0;
   for (size_t i = 0; i < z.size(); ++i) {
     const double d = std::fabs(z[i] - (*y)[i]) / std::max(1.0, std::fabs((*y)[i]));

@@ -129,8 +129,7 @@ int ProjectOntoConstraints(const Program& p, Workspace& ws, double t, double* y)
   PositionKinematics(p, ws);
   VelocityKinematics(p, ws);
   if (int s = ProjectState(p, ws); s != 0) return s;
-  for (int i = 0; i < p.nq; ++i) y[i] = ws.q[p.q_free[static_cast<size_t>(i)]];
-  for (int i = 0; i < p.nu; ++i) y[p.nq + i] = ws.u[p.u_free[static_cast<size_t>(i)]];
+  PackState(p, ws, y);
   return 0;
 }
 

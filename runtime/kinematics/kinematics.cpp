@@ -28,6 +28,11 @@ void PlaceBody(const Program& p, Workspace& ws, size_t L);
 
 }  // namespace
 
+void PackState(const Program& p, const Workspace& ws, double* y) {
+  for (int i = 0; i < p.nq; ++i) y[i] = ws.q[p.q_free[static_cast<size_t>(i)]];
+  for (int i = 0; i < p.nu; ++i) y[p.nq + i] = ws.u[p.u_free[static_cast<size_t>(i)]];
+}
+
 int UnpackState(const Program& p, Workspace& ws, double t, const double* y) {
   ws.t = t;
   ws.sparse_ready = false;  // new positions: the sparse path factors again

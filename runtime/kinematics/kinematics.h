@@ -12,6 +12,8 @@ namespace kanesim::rt {
 // Full q, u from y = [q_free, u_free]; prescribed q, qdot, qddot from the time jet.
 // Returns 0, or -1 (ws.error) when a prescribed motion is not finite.
 int UnpackState(const Program& p, Workspace& ws, double t, const double* y);
+// The inverse: y = [q_free, u_free] from ws.q, ws.u (after a projection, for instance).
+void PackState(const Program& p, const Workspace& ws, double* y);
 
 // Body poses, joint relative poses, world inertias (seed 000 eq. 11.9: positions).
 void PositionKinematics(const Program& p, Workspace& ws);

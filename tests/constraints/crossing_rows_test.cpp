@@ -16,7 +16,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/engine/engine.h"
@@ -104,6 +106,47 @@ TEST(CrossingRows, RowAtAChangePointKeepsTheIntegratorsSpeeds) {
               off.worst_t, on.apart, off.apart);
 }
 
+// The chain of four, rods at theta0 (`theta`) on either form, on the branch: every rod at
+// 12 rad/s, every coupler at -12 relative to its rod; `names` then every rod's speed are the
+// signals planned.
+struct ChainOfFour {
+  ChainOfFour(rt::SolverPath form, const std::string& theta, std::vector<std::string> first) : names(std::move(first)) {
+    rt::CompileOptions co;
+    co.solver = form;
+    l = LoadModel(kRoot + kChain, {{"N", "4"}, {"theta0", theta}}, co);
+    if (!l || !l->prog) {
+      error = "the chain of four did not load";
+      return;
+    }
+    const rt::Program& p = *l->prog;
+    for (int i = 1; i <= 4; ++i) names.push_back("rj[" + std::to_string(i) + "].u");
+    plan = rt::PlanSignals(p, names, &error);
+    if (!plan) return;
+    y.assign(static_cast<size_t>(rt::StateSize(p)), 0.0);
+    rt::InitialState(p, y.data());
+    for (const auto& j : p.joints) {
+      const int f = p.u_free_of[static_cast<size_t>(j.u0)];
+      if (f >= 0) y[static_cast<size_t>(p.nq + f)] = j.name.rfind("cj", 0) == 0 ? -12.0 : 12.0;
+    }
+    ok = true;
+  }
+  // The state index of joint `name`'s coordinate, or -1.
+  int QOf(const std::string& name) const {
+    const rt::Program& p = *l->prog;
+    for (const auto& j : p.joints)
+      if (j.name == name)
+        for (int i = 0; i < p.nq; ++i)
+          if (p.q_free[static_cast<size_t>(i)] == j.q0) return i;
+    return -1;
+  }
+  std::unique_ptr<Loaded> l;
+  std::vector<std::string> names;
+  std::shared_ptr<const rt::SignalPlan> plan;
+  std::vector<double> y;
+  std::string error;
+  bool ok = false;
+};
+
 // The mechanism, at a constructed state: the chain of four 1e-6 rad from its change point,
 // on the branch, with one rod's angle 1e-9 off (an interpolant's error). Through the
 // partition the velocity constraint there asks for rods' speeds apart by about
@@ -113,30 +156,16 @@ TEST(CrossingRows, RowAtAChangePointKeepsTheIntegratorsSpeeds) {
 TEST(CrossingRows, TruncatedProjectionKeepsTheSpeedsTheConstraintCannotDetermine) {
   for (rt::SolverPath form : {rt::SolverPath::Dense, rt::SolverPath::Sparse}) {
     SCOPED_TRACE(form == rt::SolverPath::Dense ? "reduced form" : "multiplier form");
-    rt::CompileOptions co;
-    co.solver = form;
-    auto l = LoadModel(kRoot + kChain, {{"N", "4"}, {"theta0", "1e-6"}}, co);
-    ASSERT_TRUE(l && l->prog);
-    const rt::Program& p = *l->prog;
-    std::vector<std::string> names = {"rj0.u"};
-    for (int i = 1; i <= 4; ++i) names.push_back("rj[" + std::to_string(i) + "].u");
-    std::string err;
-    auto plan = rt::PlanSignals(p, names, &err);
-    ASSERT_TRUE(plan) << err;
-    std::vector<double> y(static_cast<size_t>(rt::StateSize(p)));
-    rt::InitialState(p, y.data());
+    ChainOfFour c(form, "1e-6", {"rj0.u"});
+    ASSERT_TRUE(c.ok) << c.error;
+    const rt::Program& p = *c.l->prog;
+    const auto& names = c.names;
+    const auto& plan = c.plan;
+    std::vector<double>& y = c.y;
     auto ws = rt::MakeWorkspace(p);
     std::vector<double> on(names.size()), part(names.size());
-    // On the branch: every rod at 12 rad/s, every coupler at -12 relative to its rod; then
-    // rod 2's angle 1e-9 off.
-    int q2 = -1;
-    for (const auto& j : p.joints) {
-      const int f = p.u_free_of[static_cast<size_t>(j.u0)];
-      if (f >= 0) y[static_cast<size_t>(p.nq + f)] = j.name.rfind("cj", 0) == 0 ? -12.0 : 12.0;
-      if (j.name == "rj[2]")
-        for (int i = 0; i < p.nq; ++i)
-          if (p.q_free[static_cast<size_t>(i)] == j.q0) q2 = i;
-    }
+    // Then rod 2's angle 1e-9 off.
+    const int q2 = c.QOf("rj[2]");
     ASSERT_GE(q2, 0);
     y[static_cast<size_t>(q2)] += 1e-9;
     ASSERT_TRUE(rt::RowNearChangePoint(p, *ws, 0.0, y.data()));
@@ -167,31 +196,15 @@ TEST(CrossingRows, TruncatedProjectionKeepsTheSpeedsTheConstraintCannotDetermine
 TEST(CrossingRows, RowPositionsToRoundOffNearTheCrossing) {
   for (rt::SolverPath form : {rt::SolverPath::Dense, rt::SolverPath::Sparse}) {
     SCOPED_TRACE(form == rt::SolverPath::Dense ? "reduced form" : "multiplier form");
-    rt::CompileOptions co;
-    co.solver = form;
-    auto l = LoadModel(kRoot + kChain, {{"N", "4"}, {"theta0", "2e-4"}}, co);
-    ASSERT_TRUE(l && l->prog);
-    const rt::Program& p = *l->prog;
-    std::vector<std::string> names = {"rj0.q", "rj0.u"};
-    for (int i = 1; i <= 4; ++i) names.push_back("rj[" + std::to_string(i) + "].u");
-    std::string err;
-    auto plan = rt::PlanSignals(p, names, &err);
-    ASSERT_TRUE(plan) << err;
-    std::vector<double> y(static_cast<size_t>(rt::StateSize(p)));
-    rt::InitialState(p, y.data());
+    ChainOfFour c(form, "2e-4", {"rj0.q", "rj0.u"});
+    ASSERT_TRUE(c.ok) << c.error;
+    const rt::Program& p = *c.l->prog;
+    const auto& names = c.names;
+    const auto& plan = c.plan;
+    std::vector<double>& y = c.y;
     // Rod 2 at 2e-4 + 3e-10 rad, the others at 2e-4; each coupler pointing from its crank's
     // tip to its rocker's (a = b = 0.6), so the loops close to ~ a theta delta.
-    auto q_of = [&p](const std::string& name) {
-      for (const auto& j : p.joints)
-        if (j.name == name)
-          for (int i = 0; i < p.nq; ++i)
-            if (p.q_free[static_cast<size_t>(i)] == j.q0) return i;
-      return -1;
-    };
-    for (const auto& j : p.joints) {
-      const int f = p.u_free_of[static_cast<size_t>(j.u0)];
-      if (f >= 0) y[static_cast<size_t>(p.nq + f)] = j.name.rfind("cj", 0) == 0 ? -12.0 : 12.0;
-    }
+    auto q_of = [&c](const std::string& name) { return c.QOf(name); };
     const double a = 0.6, th = 2e-4, delta = 3e-10;
     auto rod = [&](int i) { return i == 2 ? th + delta : th; };
     for (int i = 0; i <= 4; ++i) {
