@@ -7,9 +7,13 @@
 #include <cmath>
 
 namespace kanesim::sim::detail {
+namespace {
+constexpr double kRoundOff = 2.220446049250313e-16;
+}  // namespace
 
-void DqJacobian::Build(int n, const std::vector<int>& coupling) {
+void DqJacobian::Build(int n, const std::vector<int>& coupling, Increment rule) {
   n_ = n;
+  rule_ = rule;
   const auto un = static_cast<size_t>(n);
   group_.assign(un, 0);
   if (coupling.size() == un) group_ = coupling;
@@ -40,7 +44,7 @@ void DqJacobian::SetLayout(bool sparse) {
 int DqJacobian::Form(GuardedRhs& rhs, double t, const double* y, const double* yp, const double* f0, double h,
                      const double* w) {
   const auto un = static_cast<size_t>(n_);
-  const double srur = std::sqrt(2.220446049250313e-16);
+  const double srur = std::sqrt(kRoundOff);
   std::copy(y, y + n_, y1_.begin());
   // The last evaluation was at y: its discrete choices (the loops' speed partition) are
   // held for the perturbed ones.
@@ -51,12 +55,13 @@ int DqJacobian::Form(GuardedRhs& rhs, double t, const double* y, const double* y
   // zero elsewhere. Perturbed, they only measured the projection's Newton tolerance (up to
   // 4e3 against IDA's cj 6e4 near a change point of the chain of ten) and cost n - 2 of
   // the n evaluations on a chain of loops.
+  const bool cvode = rule_ == Increment::kCvode;
   double min_inc = 0.0;
-  if (cvode_rule_) {
+  if (cvode) {
     double fn = 0.0;
     for (int i = 0; i < n_; ++i) fn += (f0[i] * w[i]) * (f0[i] * w[i]);
     fn = std::sqrt(fn / n_);
-    min_inc = fn != 0.0 ? 1000.0 * std::fabs(h) * 2.220446049250313e-16 * n_ * fn : 1.0;
+    min_inc = fn != 0.0 ? 1000.0 * std::fabs(h) * kRoundOff * n_ * fn : 1.0;
   }
   double pdiag = 0.0;
   std::fill(skip_.begin(), skip_.end(), 0);
@@ -69,7 +74,7 @@ int DqJacobian::Form(GuardedRhs& rhs, double t, const double* y, const double* y
       if (skip_[uj]) continue;
       any = true;
       double inc = 0.0;
-      if (cvode_rule_) {
+      if (cvode) {
         inc = std::max(srur * std::fabs(y[j]), min_inc / w[j]);
       } else {
         inc = std::max(srur * std::max(std::fabs(y[j]), std::fabs(h * yp[j])), 1.0 / w[j]);

@@ -18,7 +18,8 @@
 //   not n.
 // - CVODE Adams: variable-order (1-12) Adams-Moulton with fixed-point (functional)
 //   iteration: no Jacobian, no linear solves; for non-stiff scenes.
-// - CVODE BDF: variable-order (1-5) BDF, Newton with dense LU and DQ Jacobian.
+// - CVODE BDF: variable-order (1-5) BDF, Newton with dense LU and DQ Jacobian (IDA's grouped
+//   difference quotients where they cost fewer evaluations: integrator_cvode.cpp).
 // - ARKODE ERK: explicit Runge-Kutta (ERKStep), Fehlberg 8(7) (13 stages, order 8, the
 //   highest-order table in SUNDIALS 6.4.1) by default. Dense output is ARKODE's Hermite
 //   interpolant of degree 5, which costs ~4 extra evaluations of f per output instant

@@ -1,6 +1,8 @@
 // CVODE on y' = f(t, y): Adams-Moulton with fixed-point iteration (non-stiff, no
-// Jacobian), or BDF with Newton iteration on M = I - gamma df/dy, where df/dy is formed
-// by CVODE's difference quotients and M is factored by the dense LU.
+// Jacobian), or BDF with Newton iteration on M = I - gamma df/dy, factored by the dense LU.
+// df/dy comes from difference quotients: ours, grouped (dq_jacobian.h, shared with IDA),
+// where they cost fewer evaluations of f (closed loops on the reduced form, several
+// coupling groups: SetJacobian), CVODE's own (n evaluations) elsewhere.
 //
 // Closed loops on the multiplier form (checked steps): f is evaluated at y*, the
 // projection of y onto the constraints, plus a relaxation k_drift (y* - y)
@@ -30,7 +32,6 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -89,7 +90,6 @@ class CvodeStepper final : public SundialsStepper {
       s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
       if (!s_.ls || CVodeSetLinearSolver(mem_, s_.ls, s_.A) != CV_SUCCESS)
         return Fail(error, WithDetail("CVODE dense linear solver setup failed", messages_.last));
-      if (!SetJacobian(t0, y0, options, error)) return false;
     } else {
       s_.nls = SUNNonlinSol_FixedPoint(s_.y, 0, s_.ctx);
       if (!s_.nls || CVodeSetNonlinearSolver(mem_, s_.nls) != CV_SUCCESS)
@@ -101,6 +101,7 @@ class CvodeStepper final : public SundialsStepper {
     project_ = bdf && rhs_.ChecksSteps() && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
     if (project_ && CVodeSetProjFn(mem_, &CvodeStepper::ProjectStep) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE projection setup failed", messages_.last));
+    if (bdf && !SetJacobian(t0, y0, options, error)) return false;
     stop_ = stop;
     rtol_ = options.rtol;
     atol_ = options.atol;
@@ -178,15 +179,18 @@ class CvodeStepper final : public SundialsStepper {
     return 0;
   }
 
-  // CVODE-BDF's df/dy by our grouped difference quotients (dq_jacobian.h) where KANESIM_CVJAC ...
+  // CVODE-BDF's df/dy by our grouped difference quotients (dq_jacobian.h, CVodeSetJacFn)
+  // where they cost fewer evaluations than CVODE's (n per Jacobian): closed loops on the
+  // reduced form (the known columns: 2 per Jacobian on the chains of parallelograms, 162
+  // states for the chain of 40), or several coupling groups (tests/sim/models/forest.mech,
+  // M = 20, n = 80: 4 per Jacobian). Elsewhere (one group: every open tree, the multiplier
+  // form's loops) CVODE's own, as before. Measured: docs/benchmarks.md, "CVODE-BDF's
+  // Jacobian".
   bool SetJacobian(double t0, const double* y0, const IntegratorOptions& options, std::string* error) {
     const int n = rhs_.Size();
-    bool own = false;
-    const char* env = std::getenv("KANESIM_CVJAC");
-    const std::string mode = env ? env : "loops";
-    if (mode == "all") {
-      own = true;
-    } else if (mode == "loops" && rhs_.ChecksSteps()) {
+    dq_.Build(n, options.coupling, DqJacobian::Increment::kCvode);
+    bool own = dq_.Colours() < n;
+    if (!own && rhs_.ChecksSteps() && !project_) {
       // f at y0 chooses the partition (CVODE's first evaluation is there too).
       std::vector<double> f(static_cast<size_t>(n));
       if (rhs_(t0, y0, f.data()) != 0) return Fail(error, rhs_.cause);
@@ -196,9 +200,7 @@ class CvodeStepper final : public SundialsStepper {
       own = rhs_.ProjectedStates(&projected, &pdiag);
     }
     if (!own) return true;
-    dq_.Build(n, options.coupling);
     dq_.SetLayout(/*sparse=*/false);
-    dq_.cvode_rule_ = std::getenv("KANESIM_CVRULE") != nullptr;
     ewt_ = N_VNew_Serial(n, s_.ctx);
     if (!ewt_) return Fail(error, "out of memory");
     if (CVodeSetJacFn(mem_, &CvodeStepper::Jacobian) != CV_SUCCESS)

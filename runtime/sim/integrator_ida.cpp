@@ -70,7 +70,7 @@ class IdaStepper final : public SundialsStepper {
     if (CaptureMessages() != IDA_SUCCESS || IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS)
       return Fail(error, WithDetail("IDA setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
-    dq_.Build(n, options.coupling);
+    dq_.Build(n, options.coupling, DqJacobian::Increment::kIda);
     nnz_ = dq_.Nonzeros();
     const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
     klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
