@@ -9,7 +9,7 @@
 // Methods and their linear algebra:
 // - IDA: variable-order (1-5) variable-step BDF on the residual F(t, y, y') = y' - f(t, y).
 //   Newton iteration on dF/dy + cj dF/dy' = cj I - df/dy, formed by our own column-
-//   grouped difference quotients (runtime/sim/integrator_ida.cpp) and factored by dense
+//   grouped difference quotients (runtime/sim/dq_jacobian.cpp) and factored by dense
 //   LU or by KLU. The block structure comes from `coupling` (rt::StateCouplingGroups):
 //   d(ydot_i)/d(y_j) = 0 unless i and j share a group. In minimal coordinates a chain is
 //   one group (u' = M(q)^-1 f couples every speed of a subtree), so KLU pays only for
