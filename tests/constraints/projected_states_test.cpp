@@ -123,7 +123,8 @@ TEST(ProjectedStates, IdaJacobiansPerturbOnlyTheIndependentStates) {
 
 // CVODE-BDF's df/dy by the same grouped difference quotients (runtime/sim/dq_jacobian.h):
 // 2 evaluations per Jacobian (the angle and the speed of the independent joint) on the
-// chain of ten, 42 states; CVODE's own dense difference quotients took one per state.
+// chain of ten, 42 states (measured: 424 for 212 Jacobians, 8.1e-6 rad). CVODE's own dense
+// difference quotients (main, b2c5e4c) took one per state: 8022 for 191, 1.4e-5 rad.
 TEST(ProjectedStates, CvodeBdfJacobiansPerturbOnlyTheIndependentStates) {
   ChainJacobians(rt::IntegratorKind::CVODE, true, "CVODE-BDF", kCvodeLoops, 2.0);
 }
