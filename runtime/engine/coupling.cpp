@@ -1,5 +1,5 @@
 // Which entries of the state can influence which derivatives: the block structure of
-// df/dy that IDA's Newton matrix inherits (runtime/sim/integrator_ida.cpp).
+// df/dy that IDA's and CVODE-BDF's Newton matrices inherit (runtime/sim/dq_jacobian.cpp).
 //
 // In minimal coordinates every speed of a subtree hanging from the world is coupled to
 // every other through the subtree's mass matrix, so a group is at least such a subtree

@@ -9,7 +9,7 @@
 // Methods and their linear algebra:
 // - IDA: variable-order (1-5) variable-step BDF on the residual F(t, y, y') = y' - f(t, y).
 //   Newton iteration on dF/dy + cj dF/dy' = cj I - df/dy, formed by our own column-
-//   grouped difference quotients (runtime/sim/integrator_ida.cpp) and factored by dense
+//   grouped difference quotients (runtime/sim/dq_jacobian.cpp) and factored by dense
 //   LU or by KLU. The block structure comes from `coupling` (rt::StateCouplingGroups):
 //   d(ydot_i)/d(y_j) = 0 unless i and j share a group. In minimal coordinates a chain is
 //   one group (u' = M(q)^-1 f couples every speed of a subtree), so KLU pays only for
@@ -18,7 +18,8 @@
 //   not n.
 // - CVODE Adams: variable-order (1-12) Adams-Moulton with fixed-point (functional)
 //   iteration: no Jacobian, no linear solves; for non-stiff scenes.
-// - CVODE BDF: variable-order (1-5) BDF, Newton with dense LU and DQ Jacobian.
+// - CVODE BDF: variable-order (1-5) BDF, Newton with dense LU and DQ Jacobian (IDA's grouped
+//   difference quotients where they cost fewer evaluations: integrator_cvode.cpp).
 // - ARKODE ERK: explicit Runge-Kutta (ERKStep), Fehlberg 8(7) (13 stages, order 8, the
 //   highest-order table in SUNDIALS 6.4.1) by default. Dense output is ARKODE's Hermite
 //   interpolant of degree 5, which costs ~4 extra evaluations of f per output instant

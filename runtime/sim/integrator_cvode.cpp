@@ -1,6 +1,8 @@
 // CVODE on y' = f(t, y): Adams-Moulton with fixed-point iteration (non-stiff, no
-// Jacobian), or BDF with Newton iteration on M = I - gamma df/dy, where df/dy is formed
-// by CVODE's difference quotients and M is factored by the dense LU.
+// Jacobian), or BDF with Newton iteration on M = I - gamma df/dy, factored by the dense LU.
+// df/dy comes from difference quotients: ours, grouped (dq_jacobian.h, shared with IDA),
+// where they cost fewer evaluations of f (closed loops on the reduced form, several
+// coupling groups: SetJacobian), CVODE's own (n evaluations) elsewhere.
 //
 // Closed loops on the multiplier form (checked steps): f is evaluated at y*, the
 // projection of y onto the constraints, plus a relaxation k_drift (y* - y)
@@ -35,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/sim/dq_jacobian.h"
 #include "runtime/sim/stepper.h"
 #include "runtime/sim/sundials_util.h"
 
@@ -69,6 +72,9 @@ constexpr ModuleFunctions kCvode{
 class CvodeStepper final : public SundialsStepper {
  public:
   explicit CvodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs, kCvode) {}
+  ~CvodeStepper() override {
+    if (ewt_) N_VDestroy(ewt_);
+  }
 
   bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
     const int n = rhs_.Size();
@@ -95,6 +101,7 @@ class CvodeStepper final : public SundialsStepper {
     project_ = bdf && rhs_.ChecksSteps() && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
     if (project_ && CVodeSetProjFn(mem_, &CvodeStepper::ProjectStep) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE projection setup failed", messages_.last));
+    if (bdf && !SetJacobian(t0, y0, options, error)) return false;
     stop_ = stop;
     rtol_ = options.rtol;
     atol_ = options.atol;
@@ -112,8 +119,16 @@ class CvodeStepper final : public SundialsStepper {
     });
   }
 
-  // The counters of the CVODE runs before the last reset added (CVodeReInit zeroes them).
+  // The counters of the CVODE runs before the last reset added (CVodeReInit zeroes them),
+  // and our own difference quotients (FormJacobian).
   IntegratorStats Stats() const override {
+    IntegratorStats st = Cumulative();
+    st.rhs_evals_jac += dq_.Evaluations();
+    return st;
+  }
+
+ private:
+  IntegratorStats Cumulative() const {
     IntegratorStats st = SundialsStepper::Stats();
     st.steps += before_.steps;
     st.rhs_evals += before_.rhs_evals;
@@ -126,7 +141,6 @@ class CvodeStepper final : public SundialsStepper {
     return st;
   }
 
- private:
   // The accepted step's drift |y*_i - y_i| / (rtol |y_i| + atol) (the error test's
   // weights), y* = its projection computed aside. Measured on the parallelogram above: at
   // most 0.24 on the steps before the change point, then 4.6, 33, 146, 475 (reset there).
@@ -142,7 +156,7 @@ class CvodeStepper final : public SundialsStepper {
     double* ys = N_VGetArrayPointer(s_.y);
     std::copy(watch_.stepped_y.begin(), watch_.stepped_y.end(), ys);
     if (rhs_.Project(watch_.t_drifted, ys) != 0) return true;
-    before_ = Stats();
+    before_ = Cumulative();
     return CVodeReInit(mem_, watch_.t_drifted, s_.y) == CV_SUCCESS && CVodeSetStopTime(mem_, stop_) == CV_SUCCESS;
   }
 
@@ -165,6 +179,51 @@ class CvodeStepper final : public SundialsStepper {
     return 0;
   }
 
+  // CVODE-BDF's df/dy by our grouped difference quotients (dq_jacobian.h, CVodeSetJacFn)
+  // where they cost fewer evaluations than CVODE's (n per Jacobian): closed loops on the
+  // reduced form (the known columns: 2 per Jacobian on the chains of parallelograms, 162
+  // states for the chain of 40), or several coupling groups (tests/sim/models/forest.mech,
+  // M = 20, n = 80: 4 per Jacobian). Elsewhere (one group: every open tree, the multiplier
+  // form's loops) CVODE's own, as before. Measured: docs/benchmarks.md, "CVODE-BDF's
+  // Jacobian".
+  bool SetJacobian(double t0, const double* y0, const IntegratorOptions& options, std::string* error) {
+    const int n = rhs_.Size();
+    dq_.Build(n, options.coupling, DqJacobian::Increment::kCvode);
+    bool own = dq_.Colours() < n;
+    if (!own && rhs_.ChecksSteps() && !project_) {
+      // f at y0 chooses the partition (CVODE's first evaluation is there too).
+      std::vector<double> f(static_cast<size_t>(n));
+      if (rhs_(t0, y0, f.data()) != 0) return Fail(error, rhs_.cause);
+      GuardedRhs::JacobianHold hold(rhs_);
+      double pdiag = 0.0;
+      std::vector<int> projected;
+      own = rhs_.ProjectedStates(&projected, &pdiag);
+    }
+    if (!own) return true;
+    dq_.SetLayout(/*sparse=*/false);
+    ewt_ = N_VNew_Serial(n, s_.ctx);
+    if (!ewt_) return Fail(error, "out of memory");
+    if (CVodeSetJacFn(mem_, &CvodeStepper::Jacobian) != CV_SUCCESS)
+      return Fail(error, WithDetail("CVodeSetJacFn failed", messages_.last));
+    return true;
+  }
+
+  // df/dy at (t, y), fy = f(t, y) the evaluation CVODE made last (its partition held).
+  static int Jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector, N_Vector,
+                      N_Vector) {
+    auto* self = static_cast<CvodeStepper*>(static_cast<SundialsStepper*>(user_data));
+    double h = 0.0;
+    CVodeGetCurrentStep(self->mem_, &h);
+    CVodeGetErrWeights(self->mem_, self->ewt_);
+    const double* f = N_VGetArrayPointer(fy);
+    const int status = self->dq_.Form(self->rhs_, t, N_VGetArrayPointer(y), f, f, h, N_VGetArrayPointer(self->ewt_));
+    if (status != 0) return status;  // > 0: CVODE retries with a smaller step
+    self->dq_.WriteDfdy(J);
+    return 0;
+  }
+
+  DqJacobian dq_;
+  N_Vector ewt_ = nullptr;
   bool project_ = false;      // CVODE-BDF on closed loops: ProjectStep, no MeasureDrift
   std::vector<double> aside_;  // ProjectStep's y*  (n)
   double stop_ = 0.0;

@@ -2,16 +2,12 @@
 // so that the same solver serves the DAE formulations later).
 //
 // Newton matrix (IDA user guide, "IDALS"):   J = dF/dy + cj dF/dy' = cj I - df/dy,
-// where cj = alpha_0 / h is IDA's BDF coefficient. df/dy comes from difference quotients
-// grouped by the block structure of options.coupling (Curtis-Powell-Reid: columns whose
-// row sets do not overlap are perturbed in one evaluation of f), so a Jacobian costs
-// (size of the largest group) evaluations of f rather than n. The increment per column
-// follows IDA's own DQ rule: max(sqrt(unit round-off) * max(|y_j|, |h y'_j|), 1/w_j),
-// with w the error weights (1/w_j = rtol |y_j| + atol) and the sign of h y'_j. J is factored by dense LU or by KLU on the
-// fixed block pattern (symbolic analysis once, numeric refactorization afterwards).
-// Closed loops on the reduced form: the partition of the evaluation at y is held for the
-// perturbed ones, and the states f does not read under it (OdeSystem::ProjectedStates) are
-// not perturbed: their columns are known (docs/constraints.md, "Singular configurations").
+// where cj = alpha_0 / h is IDA's BDF coefficient. df/dy comes from grouped difference
+// quotients (runtime/sim/dq_jacobian.h, shared with CVODE-BDF: the block structure of
+// options.coupling, IDA's increment rule, the partition held and the known columns of the
+// states f does not read on closed loops on the reduced form). J is factored by dense LU
+// or by KLU on the fixed block pattern (symbolic analysis once, numeric refactorization
+// afterwards).
 #include <ida/ida.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
@@ -24,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/sim/dq_jacobian.h"
 #include "runtime/sim/stepper.h"
 #include "runtime/sim/sundials_util.h"
 
@@ -73,11 +70,13 @@ class IdaStepper final : public SundialsStepper {
     if (CaptureMessages() != IDA_SUCCESS || IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS)
       return Fail(error, WithDetail("IDA setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
-    BuildPattern(options.coupling);
+    dq_.Build(n, options.coupling, DqJacobian::Increment::kIda);
+    nnz_ = dq_.Nonzeros();
     const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
     klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
            (options.ida_linear_solver == IdaLinearSolver::Auto && n >= kKluMinStates && fill <= kKluMaxFill);
-    dfdy_.assign(klu_ ? static_cast<size_t>(nnz_) : static_cast<size_t>(n) * static_cast<size_t>(n), 0.0);
+    dq_.SetLayout(klu_);
+    f0_.assign(static_cast<size_t>(n), 0.0);
     if (klu_) {
       s_.A = SUNSparseMatrix(n, n, nnz_, CSC_MAT, s_.ctx);
       s_.ls = s_.A ? SUNLinSol_KLU(s_.y, s_.A, s_.ctx) : nullptr;
@@ -113,7 +112,7 @@ class IdaStepper final : public SundialsStepper {
 
   IntegratorStats Stats() const override {
     IntegratorStats st = SundialsStepper::Stats();
-    st.rhs_evals_jac += jac_rhs_evals_;  // our own difference quotients (FormJacobian)
+    st.rhs_evals_jac += dq_.Evaluations();  // our own difference quotients (FormJacobian)
     st.linear_solver = klu_ ? "KLU" : "dense LU";
     st.jac_nonzeros = nnz_;
     return st;
@@ -145,39 +144,6 @@ class IdaStepper final : public SundialsStepper {
     return 0;
   }
 
-  // Groups -> members (ascending), each state's position in its group, the colours
-  // (colour k = the k-th member of every group) and the CSC pattern (column j holds the
-  // rows of its group; its entry for row i sits at col_start_[j] + pos_[i]).
-  void BuildPattern(const std::vector<int>& coupling) {
-    const int n = rhs_.Size();
-    group_.assign(static_cast<size_t>(n), 0);
-    if (static_cast<int>(coupling.size()) == n) group_ = coupling;
-    int ngroups = n > 0 ? *std::max_element(group_.begin(), group_.end()) + 1 : 0;
-    members_.assign(static_cast<size_t>(ngroups), {});
-    pos_.assign(static_cast<size_t>(n), 0);
-    for (int i = 0; i < n; ++i) {
-      auto& m = members_[static_cast<size_t>(group_[static_cast<size_t>(i)])];
-      pos_[static_cast<size_t>(i)] = static_cast<int>(m.size());
-      m.push_back(i);
-    }
-    size_t ncolors = 0;
-    for (const auto& m : members_) ncolors = std::max(ncolors, m.size());
-    colors_.assign(ncolors, {});
-    for (const auto& m : members_)
-      for (size_t k = 0; k < m.size(); ++k) colors_[k].push_back(m[k]);
-    col_start_.assign(static_cast<size_t>(n) + 1, 0);
-    for (int j = 0; j < n; ++j)
-      col_start_[static_cast<size_t>(j) + 1] =
-          col_start_[static_cast<size_t>(j)] +
-          static_cast<sunindextype>(members_[static_cast<size_t>(group_[static_cast<size_t>(j)])].size());
-    nnz_ = col_start_.back();
-    f0_.assign(static_cast<size_t>(n), 0.0);
-    f1_.assign(static_cast<size_t>(n), 0.0);
-    y1_.assign(static_cast<size_t>(n), 0.0);
-    inc_.assign(static_cast<size_t>(n), 0.0);
-    skip_.assign(static_cast<size_t>(n), 0);
-  }
-
   // J = cj I - df/dy by grouped difference quotients; f(t, y) = y' - F(t, y, y').
   static int Jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J, void* user_data,
                       N_Vector, N_Vector, N_Vector) {
@@ -199,103 +165,22 @@ class IdaStepper final : public SundialsStepper {
     // and stopped at t = 3.17 (docs/constraints.md).
     if (reuse_ok_ && ncf == jac_ncf_ && netf == jac_netf_ && nst - jac_nst_ < kMaxReuseSteps) {
       ++jac_reused_;
-      WriteJacobian(cj, J);
+      dq_.WriteNewton(cj, J);
       return 0;
     }
     jac_nst_ = nst;
     jac_ncf_ = ncf;
     jac_netf_ = netf;
-    const long evals_before = jac_rhs_evals_;
+    const long evals_before = dq_.Evaluations();
     double h = 0.0;
     IDAGetCurrentStep(mem_, &h);
     IDAGetErrWeights(mem_, ewt_);
-    const double* w = N_VGetArrayPointer(ewt_);
-    const double srur = std::sqrt(2.220446049250313e-16);
     for (int i = 0; i < n; ++i) f0_[static_cast<size_t>(i)] = yp[i] - r[i];
-    if (klu_) {
-      sunindextype* ptr = SUNSparseMatrix_IndexPointers(J);
-      sunindextype* idx = SUNSparseMatrix_IndexValues(J);
-      for (int j = 0; j <= n; ++j) ptr[j] = col_start_[static_cast<size_t>(j)];
-      for (int j = 0; j < n; ++j) {
-        const auto& m = members_[static_cast<size_t>(group_[static_cast<size_t>(j)])];
-        for (size_t k = 0; k < m.size(); ++k) idx[col_start_[static_cast<size_t>(j)] + static_cast<sunindextype>(k)] = m[k];
-      }
-    } else {
-      SUNMatZero(J);
-    }
-    for (int i = 0; i < n; ++i) y1_[static_cast<size_t>(i)] = y[i];
-    // The last evaluation was at y (IDA's residual at its Newton iterate, rr): its discrete
-    // choices (the loops' speed partition) are held for the perturbed ones.
-    GuardedRhs::JacobianHold hold(rhs_);
-    // Columns of the states f does not read under that partition (closed loops on the
-    // reduced form: the dependent speeds and coordinates, recomputed by the projection) are
-    // known without evaluations: -df/dy = -pdiag on the diagonal (the pull to the manifold),
-    // zero elsewhere. Perturbed, they only measured the projection's Newton tolerance (up to
-    // 4e3 against cj 6e4 near a change point of the chain of ten) and cost n - 2 of the n
-    // evaluations on a chain of loops.
-    double pdiag = 0.0;
-    std::fill(skip_.begin(), skip_.end(), 0);
-    if (rhs_.ProjectedStates(&projected_, &pdiag))
-      for (int j : projected_) skip_[static_cast<size_t>(j)] = 1;
-    for (const auto& color : colors_) {
-      bool any = false;
-      for (int j : color) {
-        const auto uj = static_cast<size_t>(j);
-        if (skip_[uj]) continue;
-        any = true;
-        double inc = std::max(srur * std::max(std::fabs(y[j]), std::fabs(h * yp[j])), 1.0 / w[j]);
-        if (h * yp[j] < 0.0) inc = -inc;
-        y1_[uj] = y[j] + inc;
-        inc_[uj] = y1_[uj] - y[j];  // the increment actually represented
-      }
-      int status = 0;
-      if (any) {
-        ++jac_rhs_evals_;
-        status = rhs_(t, y1_.data(), f1_.data());
-        for (int j : color) y1_[static_cast<size_t>(j)] = y[j];
-      }
-      if (status != 0) return status;  // > 0: IDA retries with a smaller step
-      for (int j : color) {
-        const auto uj = static_cast<size_t>(j);
-        const auto& m = members_[static_cast<size_t>(group_[uj])];
-        double* col = klu_ ? SUNSparseMatrix_Data(J) + col_start_[uj] : SUNDenseMatrix_Column(J, j);
-        for (size_t k = 0; k < m.size(); ++k) {
-          const auto i = static_cast<size_t>(m[k]);
-          double v = skip_[uj] ? (m[k] == j ? -pdiag : 0.0) : -(f1_[i] - f0_[i]) / inc_[uj];
-          dfdy_[klu_ ? static_cast<size_t>(col_start_[uj]) + k : uj * static_cast<size_t>(n) + i] = v;
-          if (m[k] == j) v += cj;
-          col[klu_ ? k : i] = v;
-        }
-      }
-    }
-    reuse_ok_ = jac_rhs_evals_ - evals_before >= kReuseMinEvals;
+    const int status = dq_.Form(rhs_, t, y, yp, f0_.data(), h, N_VGetArrayPointer(ewt_));
+    if (status != 0) return status;  // > 0: IDA retries with a smaller step
+    dq_.WriteNewton(cj, J);
+    reuse_ok_ = dq_.Evaluations() - evals_before >= kReuseMinEvals;
     return 0;
-  }
-
-  // J = cj I + dfdy_ (dfdy_ holds -df/dy in J's layout).
-  void WriteJacobian(double cj, SUNMatrix J) {
-    const int n = rhs_.Size();
-    if (klu_) {
-      sunindextype* ptr = SUNSparseMatrix_IndexPointers(J);
-      sunindextype* idx = SUNSparseMatrix_IndexValues(J);
-      double* data = SUNSparseMatrix_Data(J);
-      for (int j = 0; j <= n; ++j) ptr[j] = col_start_[static_cast<size_t>(j)];
-      for (int j = 0; j < n; ++j) {
-        const auto& m = members_[static_cast<size_t>(group_[static_cast<size_t>(j)])];
-        for (size_t k = 0; k < m.size(); ++k) {
-          const auto e = static_cast<size_t>(col_start_[static_cast<size_t>(j)]) + k;
-          idx[e] = m[k];
-          data[e] = dfdy_[e] + (m[k] == j ? cj : 0.0);
-        }
-      }
-      return;
-    }
-    SUNMatZero(J);
-    for (int j = 0; j < n; ++j) {
-      double* col = SUNDenseMatrix_Column(J, j);
-      const auto& m = members_[static_cast<size_t>(group_[static_cast<size_t>(j)])];
-      for (int i : m) col[i] = dfdy_[static_cast<size_t>(j) * static_cast<size_t>(n) + static_cast<size_t>(i)] + (i == j ? cj : 0.0);
-    }
   }
 
   // The Newton iteration's convergence coefficient (IDA's epsNewt, default 0.33) on closed
@@ -316,19 +201,14 @@ class IdaStepper final : public SundialsStepper {
   // reduced form's closed loops, 2 per Jacobian), for fewer than kMaxReuseSteps steps.
   static constexpr long kReuseMinEvals = 16;
   static constexpr long kMaxReuseSteps = 20;
-  std::vector<double> dfdy_;
+  DqJacobian dq_;
   bool reuse_ok_ = false;
   long jac_nst_ = 0, jac_ncf_ = 0, jac_netf_ = 0, jac_reused_ = 0;
   std::vector<int> projected_;
-  std::vector<char> skip_;
   N_Vector ewt_ = nullptr;
   bool klu_ = false;
-  std::vector<int> group_, pos_;
-  std::vector<std::vector<int>> members_, colors_;
-  std::vector<sunindextype> col_start_;
   sunindextype nnz_ = 0;
-  std::vector<double> f0_, f1_, y1_, inc_;
-  long jac_rhs_evals_ = 0;
+  std::vector<double> f0_;  // f(t, y) = y' - F
 };
 
 }  // namespace

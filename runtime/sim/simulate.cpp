@@ -183,7 +183,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.bridge = options.bridge;
   iopt.dense_check = options.dense_check;
   iopt.row_energy_check = options.row_energy_check;
-  if (iopt.method == Method::IDA) iopt.coupling = rt::StateCouplingGroups(program);
+  if (iopt.method == Method::IDA || iopt.method == Method::CvodeBdf) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
