@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/sim/newton_krylov.h"
 #include "runtime/sim/stepper.h"
 #include "runtime/sim/sundials_util.h"
 
@@ -74,22 +75,30 @@ class IdaStepper final : public SundialsStepper {
       return Fail(error, WithDetail("IDA setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
     BuildPattern(options.coupling);
-    const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
-    klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
-           (options.ida_linear_solver == IdaLinearSolver::Auto && n >= kKluMinStates && fill <= kKluMaxFill);
-    dfdy_.assign(klu_ ? static_cast<size_t>(nnz_) : static_cast<size_t>(n) * static_cast<size_t>(n), 0.0);
-    if (klu_) {
-      s_.A = SUNSparseMatrix(n, n, nnz_, CSC_MAT, s_.ctx);
-      s_.ls = s_.A ? SUNLinSol_KLU(s_.y, s_.A, s_.ctx) : nullptr;
+    int maxl = 0;
+    krylov_ = UseKrylov(options, rhs_, &maxl);  // matrix-free: runtime/sim/newton_krylov.h
+    if (krylov_) {
+      s_.ls = MakeKrylovSolver(s_.y, maxl, s_.ctx);
+      if (!s_.ls || IDASetLinearSolver(mem_, s_.ls, nullptr) != IDA_SUCCESS)
+        return Fail(error, WithDetail("IDA Krylov linear solver setup failed", messages_.last));
     } else {
-      s_.A = SUNDenseMatrix(n, n, s_.ctx);
-      s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
+      const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
+      klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
+             (options.ida_linear_solver == IdaLinearSolver::Auto && n >= kKluMinStates && fill <= kKluMaxFill);
+      dfdy_.assign(klu_ ? static_cast<size_t>(nnz_) : static_cast<size_t>(n) * static_cast<size_t>(n), 0.0);
+      if (klu_) {
+        s_.A = SUNSparseMatrix(n, n, nnz_, CSC_MAT, s_.ctx);
+        s_.ls = s_.A ? SUNLinSol_KLU(s_.y, s_.A, s_.ctx) : nullptr;
+      } else {
+        s_.A = SUNDenseMatrix(n, n, s_.ctx);
+        s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
+      }
+      if (!s_.ls || IDASetLinearSolver(mem_, s_.ls, s_.A) != IDA_SUCCESS)
+        return Fail(error, WithDetail(klu_ ? "IDA KLU linear solver setup failed" : "IDA dense linear solver setup failed",
+                                      messages_.last));
+      if (IDASetJacFn(mem_, &IdaStepper::Jacobian) != IDA_SUCCESS)
+        return Fail(error, WithDetail("IDASetJacFn failed", messages_.last));
     }
-    if (!s_.ls || IDASetLinearSolver(mem_, s_.ls, s_.A) != IDA_SUCCESS)
-      return Fail(error, WithDetail(klu_ ? "IDA KLU linear solver setup failed" : "IDA dense linear solver setup failed",
-                                    messages_.last));
-    if (IDASetJacFn(mem_, &IdaStepper::Jacobian) != IDA_SUCCESS)
-      return Fail(error, WithDetail("IDASetJacFn failed", messages_.last));
     ewt_ = N_VNew_Serial(n, s_.ctx);
     if (!ewt_) return Fail(error, "out of memory");
     // Closed loops on the reduced form (the states the projection sets: f's evaluation at y0
@@ -116,6 +125,12 @@ class IdaStepper final : public SundialsStepper {
     st.rhs_evals_jac += jac_rhs_evals_;  // our own difference quotients (FormJacobian)
     st.linear_solver = klu_ ? "KLU" : "dense LU";
     st.jac_nonzeros = nnz_;
+    if (krylov_) {
+      st.linear_solver = kKrylovName;
+      st.jac_nonzeros = 0;
+      IDAGetNumLinIters(mem_, &st.lin_iters);
+      IDAGetNumLinConvFails(mem_, &st.lin_conv_fails);
+    }
     return st;
   }
 
@@ -323,6 +338,7 @@ class IdaStepper final : public SundialsStepper {
   std::vector<char> skip_;
   N_Vector ewt_ = nullptr;
   bool klu_ = false;
+  bool krylov_ = false;  // matrix-free GMRES (UseKrylov)
   std::vector<int> group_, pos_;
   std::vector<std::vector<int>> members_, colors_;
   std::vector<sunindextype> col_start_;
