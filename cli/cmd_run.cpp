@@ -197,7 +197,9 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember(pipeline::IntegratorNames()));
   run->add_option("--linear-solver", a->linear_solver,
-                  "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
+                  "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on closed loops on the "
+                  "multiplier form with few degrees of freedom, else KLU when the block pattern is sparse), dense, klu "
+                  "(IDA) or krylov")
       ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   run->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   run->add_option("--reactions", a->reactions,

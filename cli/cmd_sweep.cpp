@@ -430,7 +430,9 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   sw->add_option("--solver", a->solver, "Solution path")->check(CLI::IsMember(pipeline::SolverNames()));
   sw->add_option("--integrator", a->integrator, "Time integrator")->check(CLI::IsMember(pipeline::IntegratorNames()));
   sw->add_option("--linear-solver", a->linear_solver,
-                 "IDA's Newton matrix: auto (KLU when its block pattern is sparse), dense or klu")
+                 "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on closed loops on the "
+                  "multiplier form with few degrees of freedom, else KLU when the block pattern is sparse), dense, klu "
+                  "(IDA) or krylov")
       ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   sw->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   sw->add_option("--energy-check", a->energy_check, kEnergyCheckHelp)

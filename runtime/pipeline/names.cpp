@@ -35,9 +35,10 @@ const std::array<Named<std::optional<sim::Method>>, 6> kIntegrators{{{"auto", st
 constexpr std::array<Named<rt::IndeterminateReactions>, 2> kReactions{
     {{"nan", rt::IndeterminateReactions::NaN}, {"min-norm", rt::IndeterminateReactions::MinNorm}}};
 
-constexpr std::array<Named<sim::IdaLinearSolver>, 3> kLinearSolvers{{{"auto", sim::IdaLinearSolver::Auto},
+constexpr std::array<Named<sim::IdaLinearSolver>, 4> kLinearSolvers{{{"auto", sim::IdaLinearSolver::Auto},
                                                                     {"dense", sim::IdaLinearSolver::Dense},
-                                                                    {"klu", sim::IdaLinearSolver::Klu}}};
+                                                                    {"klu", sim::IdaLinearSolver::Klu},
+                                                                    {"krylov", sim::IdaLinearSolver::Krylov}}};
 
 constexpr std::array<Named<sim::EnergyCheck>, 3> kEnergyChecks{
     {{"on", sim::EnergyCheck::kOn}, {"off", sim::EnergyCheck::kOff}, {"report", sim::EnergyCheck::kReport}}};

@@ -162,6 +162,8 @@ void AddStats(IntegratorStats* to, const IntegratorStats& s) {
   to->energy_reject_rhs += s.energy_reject_rhs;
   to->nonlin_iters += s.nonlin_iters;
   to->nonlin_conv_fails += s.nonlin_conv_fails;
+  to->lin_iters += s.lin_iters;
+  to->lin_conv_fails += s.lin_conv_fails;
 }
 }  // namespace
 

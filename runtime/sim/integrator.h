@@ -95,6 +95,12 @@ class OdeSystem {
   // reduced form: rt::ProjectedStates), ascending, and df_i/dy_i for each (*diag; every
   // other entry of their columns is zero), so a Jacobian need not perturb them. False: none.
   virtual bool ProjectedStates(std::vector<int>* /*states*/, double* /*diag*/) { return false; }
+  // r >= 0 when df/dy = -c I + (a matrix of rank at most r) for some constant c, else -1:
+  // closed loops on the multiplier form, where f(y) = g(P(y)) + k (P(y) - y) and the
+  // projection P maps onto the state manifold (r = its dimension, 2 dof for nq = nu). The
+  // Newton matrices of the BDF integrators are then identity + rank r, which GMRES solves
+  // in r + 1 products J*v (runtime/sim/newton_krylov.h).
+  virtual int NewtonRank() const { return -1; }
   // The kinetic and potential energy of the state y at t as the output rows compute them
   // (projected), for a system that conserves T + V and whose interpolated output instants
   // the solvers check against the energies of the steps around them (closed loops:
@@ -110,10 +116,12 @@ const char* MethodDescription(Method m);  // one line: order, iteration, linear 
 
 enum class ErkTable { Verner65, Fehlberg87 };
 
-// IDA's linear solver. Auto: KLU when the Jacobian's block pattern fills at most
-// kKluMaxFill of the n x n matrix and n >= kKluMinStates (measured in
-// bench/ida_linear_solver.cpp), dense LU otherwise.
-enum class IdaLinearSolver { Auto, Dense, Klu };
+// The Newton iteration's linear solver of IDA (all four) and CVODE-BDF (Auto, Dense, Krylov;
+// Klu is dense LU there). Auto: matrix-free GMRES (Krylov) where the system's NewtonRank r
+// is small against n (runtime/sim/newton_krylov.cpp); else, for IDA, KLU when the
+// Jacobian's block pattern fills at most kKluMaxFill of the n x n matrix and n >=
+// kKluMinStates (measured in bench/ida_linear_solver.cpp), dense LU otherwise.
+enum class IdaLinearSolver { Auto, Dense, Klu, Krylov };
 inline constexpr double kKluMaxFill = 0.25;
 inline constexpr int kKluMinStates = 20;
 
@@ -148,9 +156,11 @@ struct IntegratorStats {
   long energy_reject_rhs = 0;  // f evaluations of those SUNDIALS re-integrations (DOP853's are in rhs_evals)
   long nonlin_iters = 0;       // Newton or fixed-point iterations
   long nonlin_conv_fails = 0;  // nonlinear convergence failures
+  long lin_iters = 0;          // Krylov iterations (matrix-free Newton; 0 otherwise)
+  long lin_conv_fails = 0;     // ... and their convergence failures
   double last_step = 0.0;      // last step size taken
   int last_order = 0;          // last method order used (0 for ERK)
-  const char* linear_solver = "none";  // "dense LU", "KLU" (IDA, CVODE-BDF), "none"
+  const char* linear_solver = "none";  // "dense LU", "KLU", "GMRES, matrix-free" (IDA, CVODE-BDF), "none"
   long jac_nonzeros = 0;       // structural non-zeros of the Newton matrix (IDA)
 };
 

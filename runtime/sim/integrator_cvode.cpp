@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "runtime/sim/dq_jacobian.h"
+#include "runtime/sim/newton_krylov.h"
 #include "runtime/sim/stepper.h"
 #include "runtime/sim/sundials_util.h"
 
@@ -85,7 +86,12 @@ class CvodeStepper final : public SundialsStepper {
     if (CaptureMessages() != CV_SUCCESS || CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
-    if (bdf) {
+    int maxl = 0;
+    if (bdf && (krylov_ = UseKrylov(options, rhs_, &maxl))) {  // matrix-free: runtime/sim/newton_krylov.h
+      s_.ls = MakeKrylovSolver(s_.y, maxl, s_.ctx);
+      if (!s_.ls || CVodeSetLinearSolver(mem_, s_.ls, nullptr) != CV_SUCCESS)
+        return Fail(error, WithDetail("CVODE Krylov linear solver setup failed", messages_.last));
+    } else if (bdf) {
       s_.A = SUNDenseMatrix(n, n, s_.ctx);
       s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
       if (!s_.ls || CVodeSetLinearSolver(mem_, s_.ls, s_.A) != CV_SUCCESS)
@@ -101,7 +107,7 @@ class CvodeStepper final : public SundialsStepper {
     project_ = bdf && rhs_.ChecksSteps() && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
     if (project_ && CVodeSetProjFn(mem_, &CvodeStepper::ProjectStep) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE projection setup failed", messages_.last));
-    if (bdf && !SetJacobian(t0, y0, options, error)) return false;
+    if (bdf && !krylov_ && !SetJacobian(t0, y0, options, error)) return false;
     stop_ = stop;
     rtol_ = options.rtol;
     atol_ = options.atol;
@@ -138,6 +144,13 @@ class CvodeStepper final : public SundialsStepper {
     st.err_test_fails += before_.err_test_fails;
     st.nonlin_iters += before_.nonlin_iters;
     st.nonlin_conv_fails += before_.nonlin_conv_fails;
+    if (krylov_) {
+      st.linear_solver = kKrylovName;
+      CVodeGetNumLinIters(mem_, &st.lin_iters);
+      CVodeGetNumLinConvFails(mem_, &st.lin_conv_fails);
+      st.lin_iters += before_.lin_iters;
+      st.lin_conv_fails += before_.lin_conv_fails;
+    }
     return st;
   }
 
@@ -225,6 +238,7 @@ class CvodeStepper final : public SundialsStepper {
   DqJacobian dq_;
   N_Vector ewt_ = nullptr;
   bool project_ = false;      // CVODE-BDF on closed loops: ProjectStep, no MeasureDrift
+  bool krylov_ = false;       // matrix-free GMRES (UseKrylov)
   std::vector<double> aside_;  // ProjectStep's y*  (n)
   double stop_ = 0.0;
   double rtol_ = 0.0, atol_ = 0.0;  // the error test's tolerances (MeasureDrift)

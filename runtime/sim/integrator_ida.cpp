@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "runtime/sim/dq_jacobian.h"
+#include "runtime/sim/newton_krylov.h"
 #include "runtime/sim/stepper.h"
 #include "runtime/sim/sundials_util.h"
 
@@ -72,23 +73,31 @@ class IdaStepper final : public SundialsStepper {
     if (!SetCommonOptions(stop, options, error)) return false;
     dq_.Build(n, options.coupling, DqJacobian::Increment::kIda);
     nnz_ = dq_.Nonzeros();
-    const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
-    klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
-           (options.ida_linear_solver == IdaLinearSolver::Auto && n >= kKluMinStates && fill <= kKluMaxFill);
-    dq_.SetLayout(klu_);
     f0_.assign(static_cast<size_t>(n), 0.0);
-    if (klu_) {
-      s_.A = SUNSparseMatrix(n, n, nnz_, CSC_MAT, s_.ctx);
-      s_.ls = s_.A ? SUNLinSol_KLU(s_.y, s_.A, s_.ctx) : nullptr;
+    int maxl = 0;
+    krylov_ = UseKrylov(options, rhs_, &maxl);  // matrix-free: runtime/sim/newton_krylov.h
+    if (krylov_) {
+      s_.ls = MakeKrylovSolver(s_.y, maxl, s_.ctx);
+      if (!s_.ls || IDASetLinearSolver(mem_, s_.ls, nullptr) != IDA_SUCCESS)
+        return Fail(error, WithDetail("IDA Krylov linear solver setup failed", messages_.last));
     } else {
-      s_.A = SUNDenseMatrix(n, n, s_.ctx);
-      s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
+      const double fill = static_cast<double>(nnz_) / (static_cast<double>(n) * n);
+      klu_ = options.ida_linear_solver == IdaLinearSolver::Klu ||
+             (options.ida_linear_solver == IdaLinearSolver::Auto && n >= kKluMinStates && fill <= kKluMaxFill);
+      dq_.SetLayout(klu_);
+      if (klu_) {
+        s_.A = SUNSparseMatrix(n, n, nnz_, CSC_MAT, s_.ctx);
+        s_.ls = s_.A ? SUNLinSol_KLU(s_.y, s_.A, s_.ctx) : nullptr;
+      } else {
+        s_.A = SUNDenseMatrix(n, n, s_.ctx);
+        s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
+      }
+      if (!s_.ls || IDASetLinearSolver(mem_, s_.ls, s_.A) != IDA_SUCCESS)
+        return Fail(error, WithDetail(klu_ ? "IDA KLU linear solver setup failed" : "IDA dense linear solver setup failed",
+                                      messages_.last));
+      if (IDASetJacFn(mem_, &IdaStepper::Jacobian) != IDA_SUCCESS)
+        return Fail(error, WithDetail("IDASetJacFn failed", messages_.last));
     }
-    if (!s_.ls || IDASetLinearSolver(mem_, s_.ls, s_.A) != IDA_SUCCESS)
-      return Fail(error, WithDetail(klu_ ? "IDA KLU linear solver setup failed" : "IDA dense linear solver setup failed",
-                                    messages_.last));
-    if (IDASetJacFn(mem_, &IdaStepper::Jacobian) != IDA_SUCCESS)
-      return Fail(error, WithDetail("IDASetJacFn failed", messages_.last));
     ewt_ = N_VNew_Serial(n, s_.ctx);
     if (!ewt_) return Fail(error, "out of memory");
     // Closed loops on the reduced form (the states the projection sets: f's evaluation at y0
@@ -115,6 +124,12 @@ class IdaStepper final : public SundialsStepper {
     st.rhs_evals_jac += dq_.Evaluations();  // our own difference quotients (FormJacobian)
     st.linear_solver = klu_ ? "KLU" : "dense LU";
     st.jac_nonzeros = nnz_;
+    if (krylov_) {
+      st.linear_solver = kKrylovName;
+      st.jac_nonzeros = 0;
+      IDAGetNumLinIters(mem_, &st.lin_iters);
+      IDAGetNumLinConvFails(mem_, &st.lin_conv_fails);
+    }
     return st;
   }
 
@@ -207,6 +222,7 @@ class IdaStepper final : public SundialsStepper {
   std::vector<int> projected_;
   N_Vector ewt_ = nullptr;
   bool klu_ = false;
+  bool krylov_ = false;  // matrix-free GMRES (UseKrylov)
   sunindextype nnz_ = 0;
   std::vector<double> f0_;  // f(t, y) = y' - F
 };

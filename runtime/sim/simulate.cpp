@@ -20,6 +20,12 @@ class EngineOde final : public OdeSystem {
   EngineOde(const rt::Program& program, rt::Workspace& ws, bool row_energy)
       : program_(program), ws_(ws) {
     if (rt::BranchMonitorActive(program)) monitor_ = rt::MakeBranchMonitor(program);
+    // Closed loops on the multiplier form: P maps onto the state manifold, of dimension
+    // (nq - nu) + 2 dof (OdeSystem::NewtonRank).
+    if (monitor_ && !CanProject()) {
+      const rt::ProgramSummary s = rt::Summarize(program);
+      newton_rank_ = s.nq - s.nu + 2 * s.dof;
+    }
     // Rows checked against the energy: closed loops (where change points are) in a model
     // that conserves T + V.
     if (row_energy && monitor_ && rt::NonConservativeCause(program).empty()) {
@@ -72,6 +78,7 @@ class EngineOde final : public OdeSystem {
   bool ProjectedStates(std::vector<int>* states, double* diag) override {
     return rt::ProjectedStates(program_, ws_, states, diag);
   }
+  int NewtonRank() const override { return newton_rank_; }
   int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
   int ProjectAside(double t, double* y) override {
     // Closed loops on the reduced form only: the multiplier form's projection moves every
@@ -100,6 +107,7 @@ class EngineOde final : public OdeSystem {
   rt::Workspace& ws_;
   std::unique_ptr<rt::BranchMonitor, void (*)(rt::BranchMonitor*)> monitor_{nullptr, [](rt::BranchMonitor*) {}};
   bool from_monitor_ = false;  // the last failure was the branch monitor's
+  int newton_rank_ = -1;       // OdeSystem::NewtonRank
   bool hold_rows_ = true;      // SimOptions::hold_zone_rows
   std::function<void(double, const double*, double*)> fault_;  // SimOptions::rhs_fault
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
@@ -311,6 +319,11 @@ std::string FormatStats(const SimStats& s) {
                 i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
   std::string out = buf;
+  if (i.lin_iters > 0) {  // matrix-free Newton (runtime/sim/newton_krylov.h)
+    std::snprintf(buf, sizeof buf, "  Krylov iterations        %ld (%ld convergence failures)\n", i.lin_iters,
+                  i.lin_conv_fails);
+    out.insert(out.find("wall time (s)"), buf);
+  }
   if (i.dense_rejects > 0) {  // DOP853 (runtime/sim/integrator_dop853.cpp kDenseLimit; only where there were any)
     std::snprintf(buf, sizeof buf, "  dense output rejected    %ld (steps taken again onto an output instant)\n",
                   i.dense_rejects);

@@ -26,7 +26,7 @@ struct SimOptions {
   double atol = 1e-6;
   rt::IntegratorKind integrator = rt::IntegratorKind::Auto;  // Auto: rt::Summarize(program).integrator
   bool cvode_bdf = false;       // CVODE with BDF + Newton instead of Adams + fixed point
-  IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;  // IDA's Newton matrix: dense LU or KLU
+  IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;  // IDA and CVODE-BDF: dense LU, KLU or GMRES
   long max_steps = 100000;      // internal steps allowed between two output instants
   // Closed loops and contacts with DOP853: project once per accepted step instead of at every
   // evaluation (`--projection step`; engine.h SetStepProjection, docs/constraints.md "Drift").

@@ -37,6 +37,7 @@ class GuardedRhs {
   int Energy(double t, const double* y, double* T, double* V) { return system_.Energy(t, y, T, V); }
   // The system's ProjectedStates (OdeSystem::ProjectedStates), inside a JacobianHold.
   bool ProjectedStates(std::vector<int>* states, double* diag) { return system_.ProjectedStates(states, diag); }
+  int NewtonRank() const { return system_.NewtonRank(); }
   // The system's HoldForJacobian, on for the life of a JacobianHold.
   class JacobianHold {
    public:
