@@ -250,10 +250,22 @@ void ContactJacobian(const Program& p, Workspace& ws, const ContactModel& c, con
     ws.psi[i] = ContactJacobianRow(p, ws, p.rows[static_cast<size_t>(i)], p.active_of_row[static_cast<size_t>(i)], cp);
 }
 
+// Zeroes the entries of ws.A the Jacobians write (each free speed's column from the first to
+// the last active row it moves, ws.col_rows of StructuralRows); the others are zero from
+// InitConstraintWorkspace on, and nothing writes them. The chain of 40's A is 80 x 81 with
+// ~4 entries a column: A.setZero() at every Newton iterate was 6 % of the reduced form's
+// instructions (callgrind, DOP853 0.5 s; docs/benchmarks.md, "Cost of one evaluation").
+void ZeroJacobian(const Program& p, Workspace& ws) {
+  for (int s = 0; s < p.nu; ++s) {
+    const int lo = ws.col_rows[2 * static_cast<size_t>(s)], hi = ws.col_rows[2 * static_cast<size_t>(s) + 1];
+    if (hi >= lo) ws.A.col(s).segment(lo, hi - lo + 1).setZero();
+  }
+}
+
 // ConstraintResiduals and ConstraintJacobian at the same positions, as each projection
 // iterate needs both: the frames and contact points are placed once for the two.
 void ResidualsAndJacobian(const Program& p, Workspace& ws) {
-  ws.A.setZero();
+  ZeroJacobian(p, ws);
   for (const LoopClosure& l : p.loops) {
     const LoopFrames f = FramesOf(p, ws, l, true);
     LoopResiduals(p, ws, l, f);
@@ -274,7 +286,7 @@ void ConstraintResiduals(const Program& p, Workspace& ws) {
 }
 
 void ConstraintJacobian(const Program& p, Workspace& ws) {
-  ws.A.setZero();
+  ZeroJacobian(p, ws);
   for (const LoopClosure& l : p.loops) LoopJacobian(p, ws, l, FramesOf(p, ws, l, true));
   for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
 }
@@ -357,19 +369,20 @@ double DependentRatio(const Workspace& ws, int rank) {
 }  // namespace
 
 namespace {
-// Multiply-adds of SmallQR::Compute on ws.dep's columns in their current order, from the
-// structural extents ws.col_rows alone: reflector k spans rows k .. end_k, and touches the
-// later columns whose extents overlap it, widening them (small_qr.h). O(rank^2).
-double SymbolicQRCost(Workspace& ws, int rank) {
+// Multiply-adds of SmallQR::Compute on the columns of the dependent speeds order[0 .. rank) in
+// that order, from the structural extents ws.col_rows alone: reflector k spans rows k .. end_k,
+// and touches the later columns whose extents overlap it, widening them (small_qr.h).
+// O(rank^2). The sum only grows, so it stops once it reaches `cap` (returning at least cap).
+double SymbolicQRCost(Workspace& ws, const int* order, int rank, double cap) {
   int* lo = ws.order_scratch.data() + rank;
   int* hi = lo + rank;
   for (int j = 0; j < rank; ++j) {
-    const auto s = static_cast<size_t>(ws.dep[static_cast<size_t>(j)]);
+    const auto s = static_cast<size_t>(order[j]);
     lo[j] = ws.col_rows[2 * s];
     hi[j] = ws.col_rows[2 * s + 1] + 1;
   }
   double cost = 0.0;
-  for (int k = 0; k < rank; ++k) {
+  for (int k = 0; k < rank && cost < cap; ++k) {
     const int end = std::max(hi[k], k + 1);
     for (int j = k + 1; j < rank; ++j) {
       if (std::max(lo[j], k) >= std::min(hi[j], end)) continue;
@@ -385,12 +398,13 @@ double SymbolicQRCost(Workspace& ws, int rank) {
 // rows are numbered loop by loop), when that makes A_dep's QR at least 1 / kBandedGain
 // times cheaper than in the pivoting order: for a chain of loops A_dep becomes
 // block-banded, and its Householder QR creates no fill outside the band. Insertion sort:
-// stable, and no allocation.
+// stable, and no allocation. The pivoting order's cost is counted only up to the banded
+// one's / kBandedGain, which decides (the chain of 40: 4.5 % of the reduced form's
+// instructions went to the two counts in full, callgrind DOP853 0.5 s).
 void BandedOrder(Workspace& ws, int rank) {
   const auto key = [&](int s) {
     return std::make_pair(ws.col_rows[2 * static_cast<size_t>(s)], ws.col_rows[2 * static_cast<size_t>(s) + 1]);
   };
-  const double pivoting = SymbolicQRCost(ws, rank);
   std::copy(ws.dep.begin(), ws.dep.end(), ws.order_scratch.begin());
   for (int i = 1; i < rank; ++i) {
     const int s = ws.dep[static_cast<size_t>(i)];
@@ -399,7 +413,9 @@ void BandedOrder(Workspace& ws, int rank) {
       ws.dep[static_cast<size_t>(j)] = ws.dep[static_cast<size_t>(j - 1)];
     ws.dep[static_cast<size_t>(j)] = s;
   }
-  ws.dep_banded = SymbolicQRCost(ws, rank) <= kBandedGain * pivoting;
+  const double banded = SymbolicQRCost(ws, ws.dep.data(), rank, INFINITY);
+  const double pivoting = SymbolicQRCost(ws, ws.order_scratch.data(), rank, banded / kBandedGain);
+  ws.dep_banded = banded <= kBandedGain * pivoting;
   if (!ws.dep_banded) std::copy(ws.order_scratch.begin(), ws.order_scratch.begin() + rank, ws.dep.begin());
 }
 
@@ -631,7 +647,7 @@ int FactorConstraintsAsIs(const Program& p, Workspace& ws) {
   if (p.rows.empty()) return 0;
   // A without residuals (nothing here reads them), and without the loops' rates A u + b
   // (only the disks' check reads rates: the contacts' rows).
-  ws.A.setZero();
+  ZeroJacobian(p, ws);
   for (const LoopClosure& l : p.loops) LoopJacobian(p, ws, l, FramesOf(p, ws, l, false), false);
   for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
   if (int s = FactorDependent(p, ws); s != 0) return s;

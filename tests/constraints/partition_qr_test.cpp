@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "runtime/constraints/constraints.h"
+#include "runtime/kinematics/kinematics.h"
 #include "runtime/program/partition_qr.h"
 #include "runtime/engine/engine.h"
 #include "runtime/program/program.h"
@@ -157,6 +159,43 @@ TEST(PartitionQR, PivotsAsEigenOnTheChainOfFortyJacobian) {
         ++compared;
       }
   EXPECT_GE(compared, 40);  // most states compared, not refused
+}
+
+// ConstraintJacobian zeroes only the entries the Jacobians write (constraints.cpp
+// ZeroJacobian), not all of A: on a workspace that has evaluated the chain of 40 at other
+// states before (its A full of old values), A at a new state is bit for bit the one a fresh
+// workspace computes there. Fails if an entry written were left out of the zeroed pattern
+// (it would keep the sum of two states' values).
+TEST(PartitionQR, JacobianOnAUsedWorkspaceAsOnAFreshOne) {
+  auto l = LoadModel(kRoot + "/tests/stress/models/parallelogram_chain.mech", {{"N", "40"}});
+  ASSERT_TRUE(l && l->prog);
+  const rt::Program& p = *l->prog;
+  auto used = rt::MakeWorkspace(p);
+  std::vector<double> y(static_cast<size_t>(rt::StateSize(p))), yd(y.size());
+  const auto set_angle = [&](double th) {
+    rt::InitialState(p, y.data());
+    for (const auto& j : p.joints) {
+      const auto q = static_cast<size_t>(j.q0);
+      if (j.name.rfind("rj", 0) == 0) y[q] = th;
+      if (j.name.rfind("cj", 0) == 0) y[q] = -th;
+    }
+  };
+  for (double th : {-0.5, 0.4, 1.3, 2.2}) {
+    set_angle(th);
+    ASSERT_EQ(rt::Derivative(p, *used, 0.0, y.data(), yd.data()), 0) << th;
+  }
+  ASSERT_GT(used->A.cwiseAbs().sum(), 0.0);
+  set_angle(2.9);
+  auto fresh = rt::MakeWorkspace(p);
+  for (auto* ws : {used.get(), fresh.get()}) {
+    ASSERT_EQ(rt::UnpackState(p, *ws, 0.0, y.data()), 0);
+    rt::PositionKinematics(p, *ws);
+    rt::VelocityKinematics(p, *ws);
+    rt::ConstraintJacobian(p, *ws);
+  }
+  EXPECT_GT(fresh->A.cwiseAbs().maxCoeff(), 0.1);
+  for (Eigen::Index j = 0; j < fresh->A.cols(); ++j)
+    for (Eigen::Index i = 0; i < fresh->A.rows(); ++i) ASSERT_EQ(used->A(i, j), fresh->A(i, j)) << i << "," << j;
 }
 
 }  // namespace
