@@ -49,4 +49,27 @@ inline double MaxAngleError(const Crank& c, const std::vector<double>& t, const 
   return err;
 }
 
+// Rows of the chain of n with the signals [rj0.q, rj0.u, rj[1..n].q, rj[1..n].u]: the max
+// over the rows of the lumped energy's error against the first row's (relative), of how far
+// a rod's angle is off rod 0's (mod 2 pi: on the branch they are equal) and of how far the
+// rods' speeds are apart.
+struct ChainRowErrors {
+  double energy = 0.0, off = 0.0, apart = 0.0;
+};
+inline ChainRowErrors ChainErrors(int n, const std::vector<std::vector<double>>& rows) {
+  const Crank c = ParallelogramChain(n);
+  auto energy = [&c](const std::vector<double>& row) { return 0.5 * c.J * row[1] * row[1] + c.G * std::sin(row[0]); };
+  ChainRowErrors e;
+  if (rows.empty()) return e;
+  const double e0 = energy(rows.front());
+  for (const auto& row : rows) {
+    e.energy = std::max(e.energy, std::fabs(energy(row) - e0) / std::fabs(e0));
+    for (int i = 0; i < n; ++i) {
+      e.off = std::max(e.off, std::fabs(std::remainder(row[2 + static_cast<size_t>(i)] - row[0], 2 * M_PI)));
+      e.apart = std::max(e.apart, std::fabs(row[2 + static_cast<size_t>(n + i)] - row[1]));
+    }
+  }
+  return e;
+}
+
 }  // namespace kanesim::lumped_crank
