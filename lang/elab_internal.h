@@ -287,6 +287,7 @@ class Elaborator {
   Value Elementwise2(const Value& a, const Value& b, flat::Op op, VType rt, Span sp);
   // Work budget (elab_budget.cpp): false once the elaboration has used it up.
   bool ChargeSteps(std::int64_t steps, Span where);
+  bool ChargeNodes(std::int64_t more, Span where);  // false once the pool would pass kMaxExprNodes
   bool Charge(const Value& v, Span where);
   Value EvalModValue(const ModValue& mv, Span* where);
   // The variable's value, evaluated on first use; valid as long as the instance tree.
