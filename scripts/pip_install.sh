@@ -3,7 +3,8 @@
 # isolated build with scikit-build-core and pybind11 >= 2.12 from PyPI, pyproject.toml)
 # into one wheel, reusing the objects of the CMake build in build/ through ccache, and
 # installs that wheel into the virtual environments ctest's python.installed* test:
-#   $BUILD_DIR/pyvenv          sees Debian's packages (--system-site-packages): NumPy 1.x, pytest
+#   $BUILD_DIR/pyvenv          sees Debian's packages (--system-site-packages): NumPy 1.x, pytest;
+#                              pandas from PyPI for that NumPy
 #   $BUILD_DIR/pyvenv-numpy2   sees none: the newest NumPy (2.x), pytest and pandas from PyPI
 # Usage: scripts/pip_install.sh          both venvs (scripts/test.sh runs this)
 #        scripts/pip_install.sh VENV     only VENV, made with --system-site-packages if new
@@ -16,6 +17,7 @@ build_dir=${BUILD_DIR:-build}
 python=/usr/bin/python3
 [ -x "$python" ] || python=python3
 pip_quiet=(--quiet --disable-pip-version-check)
+start=$SECONDS
 
 new_venv() {  # VENV [--system-site-packages]
   [ -x "$1/bin/python" ] || "$python" -m venv "${@:2}" "$1"
@@ -37,7 +39,6 @@ for var in CMAKE_C_COMPILER CMAKE_CXX_COMPILER CMAKE_C_COMPILER_LAUNCHER CMAKE_C
   [ -n "$value" ] && settings+=("--config-settings=cmake.define.$var=$value")
 done
 
-start=$SECONDS
 wheels="$build_dir/wheels"
 rm -rf "$wheels"
 "${venvs[0]}/bin/python" -m pip wheel "${pip_quiet[@]}" --no-deps "${settings[@]}" -w "$wheels" .
@@ -45,12 +46,17 @@ wheel=("$wheels"/kanesim-*.whl)
 echo "pip_install: built ${wheel[0]##*/} in $((SECONDS - start)) s"
 for venv in "${venvs[@]}"; do
   "$venv/bin/python" -m pip install "${pip_quiet[@]}" --force-reinstall --no-deps "${wheel[0]}"
-  # The package's dependency (NumPy), without replacing one the venv already sees.
-  "$venv/bin/python" -m pip install "${pip_quiet[@]}" "${wheel[0]}"
 done
-if [ $# -eq 0 ]; then
-  # The NumPy 2 venv: the newest NumPy, and what the tests need, from PyPI.
+if [ $# -gt 0 ]; then
+  # The package's dependency (NumPy), without replacing one the venv already sees.
+  "$1/bin/python" -m pip install "${pip_quiet[@]}" "${wheel[0]}"
+else
+  # What the tests need from PyPI: in the NumPy 2 venv the newest NumPy, pytest and pandas;
+  # in Debian's a pandas built for its NumPy (held at Debian's version by a constraint).
   "$build_dir/pyvenv-numpy2/bin/python" -m pip install "${pip_quiet[@]}" --upgrade numpy pytest pandas
+  held="$build_dir/pyvenv/numpy-constraint.txt"
+  echo "numpy==$("$build_dir/pyvenv/bin/python" -c 'import numpy; print(numpy.__version__)')" > "$held"
+  "$build_dir/pyvenv/bin/python" -m pip install "${pip_quiet[@]}" -c "$held" pandas
 fi
 for venv in "${venvs[@]}"; do
   echo "pip_install: $venv: kanesim with NumPy $("$venv/bin/python" -c 'import numpy; print(numpy.__version__)')"
