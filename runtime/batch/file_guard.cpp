@@ -140,14 +140,19 @@ bool AtomicFile::Open(const std::string& target, std::string* error) {
     return false;
   }
   target_ = ReplacedFile(target);
+  // A read-only file stays read-only: the rename would replace it where open(2) would not.
+  if (::access(target_.c_str(), F_OK) == 0 && ::access(target_.c_str(), W_OK) != 0) {
+    *error = "cannot write '" + target + "': " + std::strerror(errno);
+    return false;
+  }
   const std::string temp = TempPathFor(target_);
-  struct stat st;
-  const mode_t mode = ::stat(target_.c_str(), &st) == 0 ? (st.st_mode & 07777) : 0666;  // 0666: umask applies
-  int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, mode);
+  int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);  // a new file: the umask applies
   if (fd < 0) {
     *error = "cannot write '" + temp + "': " + std::strerror(errno);
     return false;
   }
+  struct stat st;
+  if (::stat(target_.c_str(), &st) == 0) ::fchmod(fd, st.st_mode & 07777);  // a replaced file keeps its permissions
   temp_ = temp;
   file_ = ::fdopen(fd, "w");
   if (!file_) {
