@@ -388,15 +388,21 @@ bool RunInWorkers(ScenarioRunner& runner, const SweepConfig& config, const std::
                   int nworkers, const RecordRow& record, std::string* error) {
   WorkerPool pool(runner, config, nworkers);
   size_t next = 0;
-  while (true) {
+  auto refill = [&] {
     const bool cancelled = config.cancel && config.cancel->load();
     while (!cancelled && next < pending.size() && pool.HasIdle())
       if (!pool.Start(*pending[next++], error)) return false;
+    return true;
+  };
+  while (true) {
+    if (!refill()) return false;
     WorkerPool::Done done;
     if (!pool.Wait(&done)) {
-      if (cancelled || next >= pending.size()) return true;
+      if ((config.cancel && config.cancel->load()) || next >= pending.size()) return true;
       continue;
     }
+    // The freed worker gets its next scenario before this row's fsync, so it never waits on it.
+    if (!refill()) return false;
     record(done.scenario->id, done.line, done.outcome, done.new_variant);
   }
 }
