@@ -37,6 +37,8 @@ DiagCode MeshDiagCode(geometry::MeshProblemKind k) {
     case K::kModuleMissing:
     case K::kImportFailed:
     case K::kNoTriangles:
+    case K::kNotRegularFile:
+    case K::kDeclaredBeyondFile:
     case K::kNonFinite: return DiagCode::MeshUnreadable;
     case K::kTooLarge: return DiagCode::MeshTooLarge;
     case K::kBadScale: return DiagCode::BadValue;
@@ -60,6 +62,10 @@ const char* MeshHint(geometry::MeshProblemKind k) {
              "modelling tool, or give the mass properties with a Body";
     case K::kZeroVolume: return "is the mesh flat, or is `scale` far too small?";
     case K::kTooLarge: return "decimate the mesh; the limits are in docs/visualization.md";
+    case K::kNotRegularFile: return "name a regular mesh file; a pipe or a device cannot be read as a mesh";
+    case K::kDeclaredBeyondFile:
+      return "the file's header claims more data than the file has: it is truncated or was written wrongly; "
+             "export the mesh again";
     case K::kInsideOut: return "the mass properties are those of the flipped (outward) surface";
     default: return "";
   }
