@@ -1,6 +1,7 @@
 #include "runtime/batch/scenario.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -53,6 +54,13 @@ bool SplitNameValue(const std::string& text, std::string* name, std::string* val
   *name = Trim(text.substr(0, eq));
   *value = text.substr(eq + 1);
   return true;
+}
+
+// A number as FormatBlocks writes it (%.17g, subnormals included: std::from_chars, not the
+// language's syntax, which refuses them).
+bool ParseExact(const std::string& text, double* out) {
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), *out);
+  return ec == std::errc() && end == text.data() + text.size() && std::isfinite(*out);
 }
 
 // Uniform on [0, 1) from the top 53 bits of one 64-bit draw.
@@ -372,7 +380,7 @@ bool ParseBlocks(const std::string& text, std::vector<Block>* out, std::string* 
       if (f.size() != fields) return fail("expected " + std::to_string(fields) + " fields");
       std::vector<double> v(fields, kUnset);
       for (size_t j = 0; j < fields; ++j)
-        if (!f[j].empty() && !ParseNumber(f[j], &v[j])) return fail("'" + f[j] + "' is not a number");
+        if (!f[j].empty() && !ParseExact(f[j], &v[j])) return fail("'" + f[j] + "' is not a number");
       b.rows.emplace_back(v.begin(), v.begin() + static_cast<long>(ncols));
       if (run) b.run.push_back(RunOverride{v[ncols], v[ncols + 1], v[ncols + 2]});
     }
