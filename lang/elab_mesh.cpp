@@ -14,6 +14,7 @@
 // modifier `file = "..."` (followed through parameters that pass it on), or the working
 // directory for a `--set`. The mesh's problems become diagnostics at that place (codes
 // E230-E235, W302-W303; the mapping is MeshDiagCode below).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -106,6 +107,8 @@ const Elaborator::MeshEntry* Elaborator::LoadMeshFor(const std::string& path, do
     geometry::LoadMeshOptions options;
     options.scale = scale;
     geometry::MeshLoadResult r = geometry::LoadMesh(path, options);
+    if (std::find(m_->data_files.begin(), m_->data_files.end(), path) == m_->data_files.end())
+      m_->data_files.push_back(path);
     entry.problems = r.problems;
     if (r.ok()) {
       geometry::MassProperties mp = geometry::ComputeMassProperties(r.mesh, geometry::MassSpec::Density(1.0));
