@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -155,6 +156,34 @@ TEST(SweepIsolation, AHangIsStoppedAtTheTimeLimit) {
   const Rows& ref = Reference();
   for (int id : {0, 1, 3, 6}) EXPECT_EQ(got.Stable(id), ref.Stable(id)) << id;
   EXPECT_NE(r.err.find("3 failed (2 crashed, 1 timed out)"), std::string::npos) << r.err;
+}
+
+// A real long scenario, no fault injected: scenario 1 would simulate 1e5 s. It is stopped at
+// the time limit while writing its trajectory; it leaves no trajectory file and no temporary
+// (its worker died while writing it), and every other trajectory is whole (a crash too).
+TEST(SweepIsolation, ALostScenarioLeavesNoTrajectoryBehind) {
+  const std::string d = Work("traj");
+  std::ofstream(d + "/list.csv") << "k,stop_time\n10,1\n20,1e5\n30,1\n40,1\n50,1\n";
+  Outcome r = Kanesim("KANESIM_TEST_SWEEP_FAULT=segv@3",
+                      "sweep " + kSpring + " --list list.csv --interval 0.1 --output slider.q --no-progress -j2 "
+                      "--scenario-timeout 1.5 -o out",
+                      d);
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_LT(r.seconds, 60.0);
+  const Rows got = Read(d + "/out/summary.csv");
+  EXPECT_EQ(got.Field(1, "status"), "timeout");
+  EXPECT_EQ(got.Field(3, "status"), "crashed");
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(d + "/out/trajectories"))
+    files.push_back(e.path().filename().string());
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files, (std::vector<std::string>{"scenario_0.csv", "scenario_2.csv", "scenario_4.csv"}));
+  for (const std::string& f : files) {
+    std::ifstream in(d + "/out/trajectories/" + f);
+    int rows = -1;
+    for (std::string line; std::getline(in, line);) ++rows;
+    EXPECT_EQ(rows, 11) << f << ": t = 0, 0.1, ..., 1";
+  }
 }
 
 // A scenario that exhausts memory: under --worker-memory it fails with "out of memory"
