@@ -235,6 +235,39 @@ TEST(SweepIsolation, ProcessesAndThreadsWriteTheSameRows) {
   }
 }
 
+// Ctrl-C with a hung scenario and no time limit: the first waits for the running scenarios,
+// the second ends the sweep at once; the finished rows are on disk, no worker outlives the
+// sweep (they would hold its lock), and --resume finishes the sweep.
+TEST(SweepIsolation, ASecondInterruptEndsAHungSweep) {
+  const std::string d = Work("interrupt");
+  std::ofstream(d + "/run.sh") << "cd '" << d << "'\nKANESIM_TEST_SWEEP_FAULT=hang@1 '" << kBin << "' sweep " << kSpring
+                               << kGrid << " -j2 -o out 2>err.txt & pid=$!\n"
+                               << "for i in $(seq 200); do [ $(wc -l < out/summary.csv 2>/dev/null || echo 0) -ge 7 ] "
+                                  "&& break; sleep 0.05; done\n"
+                               << "workers=$(pgrep -P $pid)\n"
+                               << "kill -INT $pid; sleep 1; kill -0 $pid && echo alive > alive.txt\n"
+                               << "kill -INT $pid; wait $pid; echo $? > rc.txt; sleep 0.5\n"
+                               // dead: gone, or a zombie nobody reaps (PID 1 of a container may not)
+                               << "n=0; for w in $workers; do case $(ps -o stat= -p $w) in ''|Z*) ;; *) n=$((n+1));; "
+                                  "esac; done; "
+                               << "echo $n > workers.txt; echo $workers > pids.txt\n";
+  ASSERT_EQ(std::system(("bash '" + d + "/run.sh'").c_str()), 0);
+  auto slurp = [&](const std::string& f) {
+    std::ifstream in(d + "/" + f);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  EXPECT_EQ(slurp("alive.txt"), "alive\n") << "the first ^C waits for the running scenario";
+  EXPECT_NE(slurp("rc.txt"), "0\n");
+  EXPECT_EQ(slurp("workers.txt"), "0\n") << "a worker outlived the sweep";
+  EXPECT_NE(slurp("pids.txt"), "\n") << "the sweep had worker processes";
+  const Rows got = Read(d + "/out/summary.csv");
+  EXPECT_EQ(got.by_id.size(), 6u);  // every scenario but the hung one
+  EXPECT_EQ(got.by_id.count(1), 0u);
+  Outcome r = Kanesim("", "sweep " + kSpring + kGrid + " -j2 --resume -o out", d);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  ExpectOthersUntouched(Read(d + "/out/summary.csv"), -1);
+}
+
 // The options are checked: a negative or non-finite limit, or limits with threads.
 TEST(SweepIsolation, LimitsAreChecked) {
   const std::string d = Work("limits");
