@@ -102,9 +102,10 @@ class CvodeStepper final : public SundialsStepper {
         return Fail(error, WithDetail("CVODE fixed-point solver setup failed", messages_.last));
     }
     // BDF: CVODE's own projection (below), not the restart; Adams: CVODE projects only BDF.
-    // Only on the multiplier form's closed loops (ProjectAsideMultiplierForm is -1 elsewhere).
+    // Only on the multiplier form's closed loops and rolling contacts
+    // (ProjectAsideMultiplierForm is -1 elsewhere).
     std::vector<double> probe(y0, y0 + n);
-    project_ = bdf && rhs_.ChecksSteps() && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
+    project_ = bdf && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
     if (project_ && CVodeSetProjFn(mem_, &CvodeStepper::ProjectStep) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE projection setup failed", messages_.last));
     if (bdf && !krylov_ && !SetJacobian(t0, y0, options, error)) return false;
