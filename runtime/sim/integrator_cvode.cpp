@@ -24,7 +24,8 @@
 // restart at order 1 shrank the step: the chain of ten at rtol 1e-12 restarted 234 times
 // by t = 7.705 and crept until the branch monitor stopped it (exit 2). With the projection
 // it is on the branch to 20 s (4.5e-8 of E), the chain of ten at 1e-10 1.0e-6 -> 3.3e-7 of
-// E, the parallelogram above 1.8e-4 of E -> 1.4e-4 (docs/constraints.md).
+// E, the parallelogram above 1.8e-4 of E -> 1.4e-4 (docs/constraints.md). Rolling contacts
+// on the multiplier form project too, loops or not (the rolling disk's lean grew without it).
 #include <cvode/cvode.h>
 #include <cvode/cvode_proj.h>
 #include <sunlinsol/sunlinsol_dense.h>
