@@ -186,6 +186,34 @@ TEST(SweepIsolation, ALostScenarioLeavesNoTrajectoryBehind) {
   }
 }
 
+// Workers killed from outside with SIGKILL, as the kernel's out-of-memory killer does (it
+// prefers workers to the sweep process): a busy worker's scenario is "crashed" with the
+// signal named, fresh workers take the rest, and the sweep completes. (A worker killed in the
+// instant it is idle is replaced too: writing to its pipe fails with EPIPE, SIGPIPE being
+// ignored by the pool; that window is too short to hit from a test.)
+TEST(SweepIsolation, WorkersKilledFromOutside) {
+  const std::string d = Work("killed");
+  std::ofstream(d + "/run.sh") << "cd '" << d << "'\nKANESIM_TEST_SWEEP_FAULT=hang@1 '" << kBin << "' sweep " << kSpring
+                               << " --set F0=0 --set c=0 --grid k=10:10:200 --metric final:slider.q --stop-time 2 "
+                                  "--no-progress -j2 -o out 2>err.txt & pid=$!\n"
+                               << "for i in $(seq 400); do [ $(wc -l < out/summary.csv 2>/dev/null || echo 0) -ge 4 ] "
+                                  "&& break; sleep 0.02; done\n"
+                               << "for w in $(pgrep -P $pid); do kill -KILL $w; done\n"
+                               << "wait $pid; echo $? > rc.txt\n";
+  ASSERT_EQ(std::system(("bash '" + d + "/run.sh'").c_str()), 0);
+  std::ifstream rc(d + "/rc.txt");
+  int code = -1;
+  rc >> code;
+  EXPECT_EQ(code, 2);
+  const Rows got = Read(d + "/out/summary.csv");
+  ASSERT_EQ(got.by_id.size(), 20u) << "the sweep did not complete";
+  EXPECT_EQ(got.Field(1, "status"), "crashed");
+  EXPECT_NE(got.Field(1, "message").find("killed by signal 9 (SIGKILL"), std::string::npos) << got.Field(1, "message");
+  int ok = 0;
+  for (const auto& [id, row] : got.by_id) ok += got.Field(id, "status") == "ok";
+  EXPECT_GE(ok, 18) << "at most the hung scenario and one that was running are lost";
+}
+
 // A scenario that exhausts memory: under --worker-memory it fails with "out of memory"
 // (std::bad_alloc caught in its worker, which goes on); the sweep process is untouched.
 TEST(SweepIsolation, OutOfMemoryCostsOneRow) {
