@@ -68,7 +68,13 @@ struct MergeArgs {
 };
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void OnSigint(int) { g_interrupted.store(true); }
+// The first ^C stops handing out scenarios and lets the running ones finish; the second
+// ends the sweep at once (a scenario may hang): every row written so far is on disk, the
+// workers die with the sweep process, and --resume continues.
+extern "C" void OnSigint(int) {
+  g_interrupted.store(true);
+  std::signal(SIGINT, SIG_DFL);
+}
 
 bool Fail(const std::string& msg) {
   fmt::print(stderr, "kanesim: error: {}\n", msg);

@@ -404,6 +404,9 @@ bool RunInWorkers(ScenarioRunner& runner, const SweepConfig& config, const std::
     // The freed worker gets its next scenario before this row's fsync, so it never waits on it.
     if (!refill()) return false;
     record(done.scenario->id, done.line, done.outcome, done.new_variant);
+    // A lost worker's half-written trajectory: its process is gone, so the temporary is stale.
+    if (config.trajectories && done.outcome != WorkerPool::Outcome::kOk && done.outcome != WorkerPool::Outcome::kFailed)
+      RemoveStaleTempsIn(config.out_dir + "/trajectories");
   }
 }
 

@@ -130,13 +130,21 @@ void InjectTestFault(const std::string& spec, int id) {
 }
 
 WorkerPool::WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers)
-    : runner_(runner), config_(config), workers_(static_cast<size_t>(std::max(1, workers))) {}
+    : runner_(runner), config_(config), workers_(static_cast<size_t>(std::max(1, workers))) {
+  // A worker killed while idle (the out-of-memory killer prefers workers) has closed its
+  // command pipe: writing to it must fail with EPIPE (Start then forks a fresh worker),
+  // not raise SIGPIPE, which would end the sweep.
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  ::sigaction(SIGPIPE, &ignore, &old_sigpipe_);
+}
 
 WorkerPool::~WorkerPool() {
   for (Worker& w : workers_) {
     if (w.pid > 0 && w.scenario) ::kill(w.pid, SIGKILL);  // only when the sweep stops early
     Close(&w);
   }
+  ::sigaction(SIGPIPE, &old_sigpipe_, nullptr);
 }
 
 bool WorkerPool::HasIdle() const {

@@ -27,6 +27,8 @@
 // calling thread): WorkerPool's owner polls, it never starts threads.
 #pragma once
 
+#include <signal.h>
+
 #include <atomic>
 #include <string>
 #include <vector>
@@ -79,6 +81,7 @@ class WorkerPool {
   ScenarioRunner& runner_;
   const SweepConfig& config_;
   std::vector<Worker> workers_;
+  struct sigaction old_sigpipe_ {};  // restored at the end
 };
 
 // Scenario ids in `spec` ("segv@3,hang@5,oom@7,abort@1,exit@2,throw@4") at which a worker

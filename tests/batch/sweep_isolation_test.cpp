@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -157,6 +158,62 @@ TEST(SweepIsolation, AHangIsStoppedAtTheTimeLimit) {
   EXPECT_NE(r.err.find("3 failed (2 crashed, 1 timed out)"), std::string::npos) << r.err;
 }
 
+// A real long scenario, no fault injected: scenario 1 would simulate 1e5 s. It is stopped at
+// the time limit while writing its trajectory; it leaves no trajectory file and no temporary
+// (its worker died while writing it), and every other trajectory is whole (a crash too).
+TEST(SweepIsolation, ALostScenarioLeavesNoTrajectoryBehind) {
+  const std::string d = Work("traj");
+  std::ofstream(d + "/list.csv") << "k,stop_time\n10,1\n20,1e5\n30,1\n40,1\n50,1\n";
+  Outcome r = Kanesim("KANESIM_TEST_SWEEP_FAULT=segv@3",
+                      "sweep " + kSpring + " --list list.csv --interval 0.1 --output slider.q --no-progress -j2 "
+                      "--scenario-timeout 1.5 -o out",
+                      d);
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_LT(r.seconds, 60.0);
+  const Rows got = Read(d + "/out/summary.csv");
+  EXPECT_EQ(got.Field(1, "status"), "timeout");
+  EXPECT_EQ(got.Field(3, "status"), "crashed");
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(d + "/out/trajectories"))
+    files.push_back(e.path().filename().string());
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files, (std::vector<std::string>{"scenario_0.csv", "scenario_2.csv", "scenario_4.csv"}));
+  for (const std::string& f : files) {
+    std::ifstream in(d + "/out/trajectories/" + f);
+    int rows = -1;
+    for (std::string line; std::getline(in, line);) ++rows;
+    EXPECT_EQ(rows, 11) << f << ": t = 0, 0.1, ..., 1";
+  }
+}
+
+// Workers killed from outside with SIGKILL, as the kernel's out-of-memory killer does (it
+// prefers workers to the sweep process): a busy worker's scenario is "crashed" with the
+// signal named, fresh workers take the rest, and the sweep completes. (A worker killed in the
+// instant it is idle is replaced too: writing to its pipe fails with EPIPE, SIGPIPE being
+// ignored by the pool; that window is too short to hit from a test.)
+TEST(SweepIsolation, WorkersKilledFromOutside) {
+  const std::string d = Work("killed");
+  std::ofstream(d + "/run.sh") << "cd '" << d << "'\nKANESIM_TEST_SWEEP_FAULT=hang@1 '" << kBin << "' sweep " << kSpring
+                               << " --set F0=0 --set c=0 --grid k=10:10:200 --metric final:slider.q --stop-time 2 "
+                                  "--no-progress -j2 -o out 2>err.txt & pid=$!\n"
+                               << "for i in $(seq 400); do [ $(wc -l < out/summary.csv 2>/dev/null || echo 0) -ge 4 ] "
+                                  "&& break; sleep 0.02; done\n"
+                               << "for w in $(pgrep -P $pid); do kill -KILL $w; done\n"
+                               << "wait $pid; echo $? > rc.txt\n";
+  ASSERT_EQ(std::system(("bash '" + d + "/run.sh'").c_str()), 0);
+  std::ifstream rc(d + "/rc.txt");
+  int code = -1;
+  rc >> code;
+  EXPECT_EQ(code, 2);
+  const Rows got = Read(d + "/out/summary.csv");
+  ASSERT_EQ(got.by_id.size(), 20u) << "the sweep did not complete";
+  EXPECT_EQ(got.Field(1, "status"), "crashed");
+  EXPECT_NE(got.Field(1, "message").find("killed by signal 9 (SIGKILL"), std::string::npos) << got.Field(1, "message");
+  int ok = 0;
+  for (const auto& [id, row] : got.by_id) ok += got.Field(id, "status") == "ok";
+  EXPECT_GE(ok, 18) << "at most the hung scenario and one that was running are lost";
+}
+
 // A scenario that exhausts memory: under --worker-memory it fails with "out of memory"
 // (std::bad_alloc caught in its worker, which goes on); the sweep process is untouched.
 TEST(SweepIsolation, OutOfMemoryCostsOneRow) {
@@ -204,6 +261,39 @@ TEST(SweepIsolation, ProcessesAndThreadsWriteTheSameRows) {
     for (const auto& [id, row] : t.by_id) EXPECT_EQ(p.Stable(id), t.Stable(id)) << "-j" << jobs << " scenario " << id;
     EXPECT_NE(r.err.find("worker process"), std::string::npos) << r.err;
   }
+}
+
+// Ctrl-C with a hung scenario and no time limit: the first waits for the running scenarios,
+// the second ends the sweep at once; the finished rows are on disk, no worker outlives the
+// sweep (they would hold its lock), and --resume finishes the sweep.
+TEST(SweepIsolation, ASecondInterruptEndsAHungSweep) {
+  const std::string d = Work("interrupt");
+  std::ofstream(d + "/run.sh") << "cd '" << d << "'\nKANESIM_TEST_SWEEP_FAULT=hang@1 '" << kBin << "' sweep " << kSpring
+                               << kGrid << " -j2 -o out 2>err.txt & pid=$!\n"
+                               << "for i in $(seq 200); do [ $(wc -l < out/summary.csv 2>/dev/null || echo 0) -ge 7 ] "
+                                  "&& break; sleep 0.05; done\n"
+                               << "workers=$(pgrep -P $pid)\n"
+                               << "kill -INT $pid; sleep 1; kill -0 $pid && echo alive > alive.txt\n"
+                               << "kill -INT $pid; wait $pid; echo $? > rc.txt; sleep 0.5\n"
+                               // dead: gone, or a zombie nobody reaps (PID 1 of a container may not)
+                               << "n=0; for w in $workers; do case $(ps -o stat= -p $w) in ''|Z*) ;; *) n=$((n+1));; "
+                                  "esac; done; "
+                               << "echo $n > workers.txt; echo $workers > pids.txt\n";
+  ASSERT_EQ(std::system(("bash '" + d + "/run.sh'").c_str()), 0);
+  auto slurp = [&](const std::string& f) {
+    std::ifstream in(d + "/" + f);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  EXPECT_EQ(slurp("alive.txt"), "alive\n") << "the first ^C waits for the running scenario";
+  EXPECT_NE(slurp("rc.txt"), "0\n");
+  EXPECT_EQ(slurp("workers.txt"), "0\n") << "a worker outlived the sweep";
+  EXPECT_NE(slurp("pids.txt"), "\n") << "the sweep had worker processes";
+  const Rows got = Read(d + "/out/summary.csv");
+  EXPECT_EQ(got.by_id.size(), 6u);  // every scenario but the hung one
+  EXPECT_EQ(got.by_id.count(1), 0u);
+  Outcome r = Kanesim("", "sweep " + kSpring + kGrid + " -j2 --resume -o out", d);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  ExpectOthersUntouched(Read(d + "/out/summary.csv"), -1);
 }
 
 // The options are checked: a negative or non-finite limit, or limits with threads.
