@@ -84,7 +84,7 @@ bool OpenSweepOutput(const SweepConfig& config, const std::string& header, Sweep
         *error = "the input '" + in + "' is in '" + traj_dir + "', where the sweep writes its trajectories";
         return false;
       }
-  if (!out->lock.Acquire(lock_path, "'" + out->summary_path + "'", error)) return false;
+  if (!out->lock.Acquire(lock_path, "'" + out->summary_path + "'", error, /*remove_at_end=*/true)) return false;
   RemoveStaleTemps(out->summary_path);
   RemoveStaleTemps(settings_path);
   RemoveStaleTemps(ScenariosPathFor(out->summary_path));

@@ -223,6 +223,12 @@ TEST(OutputReplace, RunReplacesTheOutputAtTheEnd) {
   ASSERT_EQ(Kanesim("run " + kSpring + " --stop-time 0.1 -o link.csv", d).rc, 0);
   EXPECT_TRUE(std::filesystem::is_symlink(d + "/link.csv"));
   EXPECT_GT(CsvRows(d + "/real.csv"), 5);
+  // Nothing but the outputs is left: no temporary, no lock file.
+  std::vector<std::string> left;
+  for (const auto& e : std::filesystem::directory_iterator(d))
+    if (e.path().filename().string().find(".lock") != std::string::npos || !Temps(e.path().string()).empty())
+      left.push_back(e.path().filename().string());
+  EXPECT_TRUE(left.empty()) << left.front();
 }
 
 }  // namespace
