@@ -3,7 +3,7 @@
 //   kanesim sweep FILE.mech|SWEEP.toml [scenario sources] [--metric M]... [-o DIR] ...
 //   kanesim sweep merge INPUT... [-o OUT.csv]
 // Exit codes: 0 every scenario ok; 1 usage/model error or interrupted; 2 the sweep
-// completed but some scenarios failed (their rows say why).
+// completed but some scenarios failed, crashed or timed out (their rows say why).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
