@@ -332,6 +332,7 @@ int SweepCommand(SweepArgs a) {
   bar.Finish();
   if (!ok) return FailExit(err);
   if (!report.is_root) return kExitOk;
+  for (const std::string& w : report.warnings) fmt::print(stderr, "kanesim: warning: {}\n", w);
   const batch::SweepProgress& p = report.progress;
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   unsigned hw = std::max(1u, std::thread::hardware_concurrency());
