@@ -3,7 +3,7 @@
 //   kanesim sweep FILE.mech|SWEEP.toml [scenario sources] [--metric M]... [-o DIR] ...
 //   kanesim sweep merge INPUT... [-o OUT.csv]
 // Exit codes: 0 every scenario ok; 1 usage/model error or interrupted; 2 the sweep
-// completed but some scenarios failed (their rows say why).
+// completed but some scenarios failed, crashed or timed out (their rows say why).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
@@ -332,6 +332,7 @@ int SweepCommand(SweepArgs a) {
   bar.Finish();
   if (!ok) return FailExit(err);
   if (!report.is_root) return kExitOk;
+  for (const std::string& w : report.warnings) fmt::print(stderr, "kanesim: warning: {}\n", w);
   const batch::SweepProgress& p = report.progress;
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   unsigned hw = std::max(1u, std::thread::hardware_concurrency());

@@ -182,7 +182,10 @@ bool WorkerPool::Spawn(Worker* w, std::string* error) {
     return false;
   }
   std::fflush(nullptr);  // nothing buffered is written twice
-  const pid_t pid = ::fork();
+  // Test hook (tests/batch/sweep_isolation_test.cpp): fork fails as under a process limit.
+  const char* fault = std::getenv("KANESIM_TEST_SWEEP_FAULT");
+  const bool no_fork = fault && std::string(fault).find("nofork") != std::string::npos;
+  const pid_t pid = no_fork ? (errno = EAGAIN, -1) : ::fork();
   if (pid < 0) {
     *error = std::string("cannot start a worker process: ") + std::strerror(errno);
     for (int fd : {command[0], command[1], result[0], result[1]}) ::close(fd);

@@ -86,7 +86,8 @@ class WorkerPool {
 
 // Scenario ids in `spec` ("segv@3,hang@5,oom@7,abort@1,exit@2,throw@4") at which a worker
 // injects that fault: a test hook read from $KANESIM_TEST_SWEEP_FAULT by worker processes
-// only (tests/batch/sweep_isolation_test.cpp). Unknown entries are ignored.
+// (tests/batch/sweep_isolation_test.cpp); "nofork" in it makes the pool's fork fail, as
+// under a process limit. Unknown entries are ignored.
 void InjectTestFault(const std::string& spec, int id);
 
 }  // namespace kanesim::batch

@@ -296,6 +296,19 @@ TEST(SweepIsolation, ASecondInterruptEndsAHungSweep) {
   ExpectOthersUntouched(Read(d + "/out/summary.csv"), -1);
 }
 
+// No worker process can be made (fork fails: a process limit, no memory for the page
+// tables): the sweep runs on threads instead, says so, and writes the same rows.
+TEST(SweepIsolation, WithoutForkTheSweepRunsOnThreads) {
+  const std::string d = Work("nofork");
+  Outcome r = Kanesim("KANESIM_TEST_SWEEP_FAULT=nofork", "sweep " + kSpring + kGrid + " -j2 -o out", d);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("kanesim: warning: cannot start a worker process: Resource temporarily unavailable; the "
+                       "remaining 7 scenarios run on threads"),
+            std::string::npos)
+      << r.err;
+  ExpectOthersUntouched(Read(d + "/out/summary.csv"), -1);
+}
+
 // The options are checked: a negative or non-finite limit, or limits with threads.
 TEST(SweepIsolation, LimitsAreChecked) {
   const std::string d = Work("limits");
