@@ -434,7 +434,9 @@ void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options) {
   cmd->add_option("--input", a->inputs, "An input: JOINT.tau, JOINT.tau[k] or a real parameter (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--output", a->outputs, "An output signal, by its exact name (repeatable)")->allow_extra_args(false);
-  AddNumberOption(cmd, "--step", &a->step, "Base difference step h (default 1e-3; speeds scale it by their size)");
+  AddNumberOption(cmd, "--step", &a->step,
+                  "Base difference step h (default 1e-3; speeds scale it by their size; a step too small to survive "
+                  "rounding is widened, with a note)");
   cmd->add_option("--sweep", a->sweep, "Root locus: NAME=FROM:STEP:TO, one row of eigenvalues per value");
   cmd->add_option("--html", a->html_path,
                   "With --sweep: also write the root locus as an offline HTML page (eigenvalues in the complex plane "
