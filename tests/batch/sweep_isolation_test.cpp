@@ -139,6 +139,31 @@ TEST(SweepIsolation, ACrashCostsOneRow) {
   }
 }
 
+// A real crash, no fault injected: issue 38's structural weld, whose variant lock = 1 made the
+// compiler crash (SIGSEGV in rt::AssembleLoops; fixed separately). Whatever the compiler does
+// with it now, the sweep completes with both rows and lock = 0 is simulated (before: the
+// sweep died with exit 139 and no row).
+TEST(SweepIsolation, ARealCompilerCrashCostsOneRow) {
+  const std::string d = Work("weld");
+  std::ofstream(d + "/weld.mech") << "model M\n  parameter Integer lock = 0;\n  World world(g = {0, -9.81, 0});\n"
+                                     "  Rod rod(L = 1, m = 1);\n  Revolute j1(axis = {0, 0, 1}, q(start = 0.3));\n"
+                                     "  Weld w if lock > 0;\nequation\n  connect(world.frame_b, j1.frame_a);\n"
+                                     "  connect(j1.frame_b, rod.frame_a);\n  if lock > 0 then\n"
+                                     "    connect(rod.frame_a, w.frame_a);\n    connect(w.frame_b, world.frame_b);\n"
+                                     "  end if;\n  annotation(experiment(StopTime = 1, Interval = 0.1));\nend M;\n";
+  for (const std::string jobs : {"1", "2"}) {
+    Outcome r = Kanesim("", "sweep weld.mech --grid lock=0,1,0 --metric final:j1.q --no-progress -j" + jobs + " -o out", d);
+    EXPECT_TRUE(r.rc == 0 || r.rc == 2) << r.rc << "\n" << r.err;
+    const Rows got = Read(d + "/out/summary.csv");
+    ASSERT_EQ(got.by_id.size(), 3u) << r.err;
+    EXPECT_EQ(got.Field(0, "status"), "ok");
+    EXPECT_EQ(got.Field(2, "status"), "ok");
+    EXPECT_EQ(got.Field(0, "final:j1.q"), got.Field(2, "final:j1.q"));
+    const std::string s1 = got.Field(1, "status");
+    EXPECT_TRUE(s1 == "ok" || s1 == "failed" || s1 == "crashed") << s1;
+  }
+}
+
 // Two crashes and a hang in one sweep, on two workers: the hung worker is killed at the
 // time limit, the sweep ends well before the hang would, and the five others are intact.
 TEST(SweepIsolation, AHangIsStoppedAtTheTimeLimit) {
