@@ -132,6 +132,8 @@ class SmallDisk {
 // A full disk: run -o and --animation keep the previous good files, byte for byte, and leave
 // no temporary (before: run -o had truncated the CSV, the animation was torn).
 TEST(OutputReplace, AFullDiskKeepsThePreviousFiles) {
+  // A run killed before its unmount left the small disk mounted: detach it first.
+  ::umount2((std::string(KANESIM_WORK_DIR) + "/replace_full_disk/disk").c_str(), MNT_DETACH);
   const std::string d = Work("replace_full_disk");
   SmallDisk disk(d + "/disk", "192k");
   if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (not root?); RLIMIT_FSIZE test below covers it";
