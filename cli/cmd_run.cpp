@@ -136,7 +136,7 @@ int RunCommand(const RunArgs& a) {
       const std::filesystem::path target(batch::ReplacedFile(a.out_path));
       const std::string lock_path =
           (target.parent_path() / ("." + target.filename().string() + ".lock")).string();
-      if (!out_lock.Acquire(lock_path, "'" + a.out_path + "'", &open_error) ||
+      if (!out_lock.Acquire(lock_path, "'" + a.out_path + "'", &open_error, /*remove_at_end=*/true) ||
           (batch::RemoveStaleTemps(target.string()), !atomic.Open(a.out_path, &open_error))) {
         fmt::print(stderr, "kanesim: error: {}\n", open_error);
         return kExitModelError;

@@ -3,7 +3,7 @@
 //   kanesim sweep FILE.mech|SWEEP.toml [scenario sources] [--metric M]... [-o DIR] ...
 //   kanesim sweep merge INPUT... [-o OUT.csv]
 // Exit codes: 0 every scenario ok; 1 usage/model error or interrupted; 2 the sweep
-// completed but some scenarios failed (their rows say why).
+// completed but some scenarios failed, crashed or timed out (their rows say why).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
@@ -68,7 +68,13 @@ struct MergeArgs {
 };
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void OnSigint(int) { g_interrupted.store(true); }
+// The first ^C stops handing out scenarios and lets the running ones finish; the second
+// ends the sweep at once (a scenario may hang): every row written so far is on disk, the
+// workers die with the sweep process, and --resume continues.
+extern "C" void OnSigint(int) {
+  g_interrupted.store(true);
+  std::signal(SIGINT, SIG_DFL);
+}
 
 bool Fail(const std::string& msg) {
   fmt::print(stderr, "kanesim: error: {}\n", msg);
@@ -326,6 +332,7 @@ int SweepCommand(SweepArgs a) {
   bar.Finish();
   if (!ok) return FailExit(err);
   if (!report.is_root) return kExitOk;
+  for (const std::string& w : report.warnings) fmt::print(stderr, "kanesim: warning: {}\n", w);
   const batch::SweepProgress& p = report.progress;
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   unsigned hw = std::max(1u, std::thread::hardware_concurrency());

@@ -199,24 +199,39 @@ bool WriteFileAtomic(const std::string& path, const std::string& contents, std::
 }
 
 FileLock::~FileLock() {
+  if (!remove_.empty()) ::unlink(remove_.c_str());  // still locked: nobody holds this name meanwhile
   if (fd_ >= 0) ::close(fd_);  // closing the descriptor releases the lock
 }
 
-bool FileLock::Acquire(const std::string& path, const std::string& what, std::string* error) {
-  int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    *error = "cannot open '" + path + "': " + std::strerror(errno);
-    return false;
+bool FileLock::Acquire(const std::string& path, const std::string& what, std::string* error, bool remove_at_end) {
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) {
+      *error = "cannot open '" + path + "': " + std::strerror(errno);
+      return false;
+    }
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int err = errno;
+      ::close(fd);
+      *error = err == EWOULDBLOCK ? "another kanesim process is writing " + what +
+                                        "; wait for it to finish or choose another output"
+                                  : "cannot lock '" + path + "': " + std::strerror(err);
+      return false;
+    }
+    // A lock file removed by its previous holder after we opened it: ours is an orphan
+    // that a third process would not see. Start over with the name's current file.
+    struct stat held, named;
+    if (remove_at_end && (::fstat(fd, &held) != 0 || ::stat(path.c_str(), &named) != 0 ||
+                          held.st_dev != named.st_dev || held.st_ino != named.st_ino)) {
+      ::close(fd);
+      continue;
+    }
+    fd_ = fd;
+    if (remove_at_end) remove_ = path;
+    return true;
   }
-  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-    const int err = errno;
-    ::close(fd);
-    *error = err == EWOULDBLOCK ? "another kanesim process is writing " + what + "; wait for it to finish or choose another output"
-                                : "cannot lock '" + path + "': " + std::strerror(err);
-    return false;
-  }
-  fd_ = fd;
-  return true;
+  *error = "cannot lock '" + path + "': it keeps being replaced";
+  return false;
 }
 
 }  // namespace kanesim::batch

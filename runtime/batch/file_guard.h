@@ -81,12 +81,17 @@ class FileLock {
   FileLock& operator=(const FileLock&) = delete;
   ~FileLock();
   // False when another process holds it: *error names `what`, and that process when known.
-  bool Acquire(const std::string& path, const std::string& what, std::string* error);
+  // `remove_at_end`: `path` is a lock file of its own (not the output), removed when the
+  // lock ends normally (a killed process leaves it, empty and unlocked). Safe against a
+  // second process that opened the file just before: it checks, once it holds the lock,
+  // that the path still names the file it locked, and starts over if not.
+  bool Acquire(const std::string& path, const std::string& what, std::string* error, bool remove_at_end = false);
   // The descriptor (the locked file itself may be the output: run -o).
   int fd() const { return fd_; }
 
  private:
   int fd_ = -1;
+  std::string remove_;  // the lock file to remove at the end, or ""
 };
 
 }  // namespace kanesim::batch

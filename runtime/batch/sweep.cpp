@@ -84,7 +84,7 @@ bool OpenSweepOutput(const SweepConfig& config, const std::string& header, Sweep
         *error = "the input '" + in + "' is in '" + traj_dir + "', where the sweep writes its trajectories";
         return false;
       }
-  if (!out->lock.Acquire(lock_path, "'" + out->summary_path + "'", error)) return false;
+  if (!out->lock.Acquire(lock_path, "'" + out->summary_path + "'", error, /*remove_at_end=*/true)) return false;
   RemoveStaleTemps(out->summary_path);
   RemoveStaleTemps(settings_path);
   RemoveStaleTemps(ScenariosPathFor(out->summary_path));
@@ -383,26 +383,35 @@ void RunOnThreads(ScenarioRunner& runner, const SweepConfig& config, const std::
 }
 
 // Stage 3 in worker processes (worker_pool.h): this process hands out the scenarios in
-// order and records each row as it comes, whatever became of its worker.
+// order and records each row as it comes, whatever became of its worker. False when no
+// worker process can be made at all (fork fails: a process limit, no memory to copy the
+// page tables): *handed says how many scenarios were handed out (and recorded), so that the
+// caller runs the rest another way.
 bool RunInWorkers(ScenarioRunner& runner, const SweepConfig& config, const std::vector<const Scenario*>& pending,
-                  int nworkers, const RecordRow& record, std::string* error) {
+                  int nworkers, const RecordRow& record, size_t* handed, std::string* error) {
   WorkerPool pool(runner, config, nworkers);
   size_t next = 0;
   auto refill = [&] {
     const bool cancelled = config.cancel && config.cancel->load();
-    while (!cancelled && next < pending.size() && pool.HasIdle())
-      if (!pool.Start(*pending[next++], error)) return false;
+    while (!cancelled && next < pending.size() && pool.HasIdle()) {
+      if (!pool.Start(*pending[next], error)) return false;  // retried when a running one ends
+      ++next;
+    }
     return true;
   };
   while (true) {
-    if (!refill()) return false;
+    if (!refill() && pool.Running() == 0) {
+      *handed = next;
+      return false;
+    }
     WorkerPool::Done done;
     if (!pool.Wait(&done)) {
+      *handed = next;
       if ((config.cancel && config.cancel->load()) || next >= pending.size()) return true;
       continue;
     }
     // The freed worker gets its next scenario before this row's fsync, so it never waits on it.
-    if (!refill()) return false;
+    refill();
     record(done.scenario->id, done.line, done.outcome, done.new_variant);
     // A lost worker's half-written trajectory: its process is gone, so the temporary is stale.
     if (config.trajectories && done.outcome != WorkerPool::Outcome::kOk && done.outcome != WorkerPool::Outcome::kFailed)
@@ -462,7 +471,15 @@ bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& bui
     if (config.progress) config.progress(pr);
   };
   if (config.isolation == SweepConfig::Isolation::kProcess) {
-    if (!RunInWorkers(runner, config, pending, static_cast<int>(nworkers), record, error)) return false;
+    size_t handed = 0;
+    std::string why;
+    if (!RunInWorkers(runner, config, pending, static_cast<int>(nworkers), record, &handed, &why)) {
+      // Better a sweep on threads than none: say what protection is lost.
+      report->warnings.push_back(why + "; the remaining " + std::to_string(pending.size() - handed) +
+                                 " scenarios run on threads of this process, where a crash ends the sweep");
+      RunOnThreads(runner, config, std::vector<const Scenario*>(pending.begin() + static_cast<long>(handed), pending.end()),
+                   nworkers, record);
+    }
   } else {
     RunOnThreads(runner, config, pending, nworkers, record);
   }

@@ -82,6 +82,7 @@ struct SweepReport {
                              // thread pool or once per worker process that needed it
   bool interrupted = false;
   bool is_root = true;       // false on MPI worker ranks (they write nothing)
+  std::vector<std::string> warnings;  // e.g. worker processes could not be made (threads ran instead)
 };
 
 // Builds the program of a structural variant: the model elaborated again with these

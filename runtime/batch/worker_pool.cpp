@@ -130,13 +130,21 @@ void InjectTestFault(const std::string& spec, int id) {
 }
 
 WorkerPool::WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers)
-    : runner_(runner), config_(config), workers_(static_cast<size_t>(std::max(1, workers))) {}
+    : runner_(runner), config_(config), workers_(static_cast<size_t>(std::max(1, workers))) {
+  // A worker killed while idle (the out-of-memory killer prefers workers) has closed its
+  // command pipe: writing to it must fail with EPIPE (Start then forks a fresh worker),
+  // not raise SIGPIPE, which would end the sweep.
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  ::sigaction(SIGPIPE, &ignore, &old_sigpipe_);
+}
 
 WorkerPool::~WorkerPool() {
   for (Worker& w : workers_) {
     if (w.pid > 0 && w.scenario) ::kill(w.pid, SIGKILL);  // only when the sweep stops early
     Close(&w);
   }
+  ::sigaction(SIGPIPE, &old_sigpipe_, nullptr);
 }
 
 bool WorkerPool::HasIdle() const {
@@ -174,7 +182,10 @@ bool WorkerPool::Spawn(Worker* w, std::string* error) {
     return false;
   }
   std::fflush(nullptr);  // nothing buffered is written twice
-  const pid_t pid = ::fork();
+  // Test hook (tests/batch/sweep_isolation_test.cpp): fork fails as under a process limit.
+  const char* fault = std::getenv("KANESIM_TEST_SWEEP_FAULT");
+  const bool no_fork = fault && std::string(fault).find("nofork") != std::string::npos;
+  const pid_t pid = no_fork ? (errno = EAGAIN, -1) : ::fork();
   if (pid < 0) {
     *error = std::string("cannot start a worker process: ") + std::strerror(errno);
     for (int fd : {command[0], command[1], result[0], result[1]}) ::close(fd);

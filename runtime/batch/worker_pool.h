@@ -27,6 +27,8 @@
 // calling thread): WorkerPool's owner polls, it never starts threads.
 #pragma once
 
+#include <signal.h>
+
 #include <atomic>
 #include <string>
 #include <vector>
@@ -79,11 +81,13 @@ class WorkerPool {
   ScenarioRunner& runner_;
   const SweepConfig& config_;
   std::vector<Worker> workers_;
+  struct sigaction old_sigpipe_ {};  // restored at the end
 };
 
 // Scenario ids in `spec` ("segv@3,hang@5,oom@7,abort@1,exit@2,throw@4") at which a worker
 // injects that fault: a test hook read from $KANESIM_TEST_SWEEP_FAULT by worker processes
-// only (tests/batch/sweep_isolation_test.cpp). Unknown entries are ignored.
+// (tests/batch/sweep_isolation_test.cpp); "nofork" in it makes the pool's fork fail, as
+// under a process limit. Unknown entries are ignored.
 void InjectTestFault(const std::string& spec, int id);
 
 }  // namespace kanesim::batch

@@ -136,7 +136,9 @@ bool CheckPly(const std::string& path, const std::string& head, uint64_t file_by
 // exactly 84 + 50 n is binary even when its header starts with "solid" (as assimp decides).
 bool CheckStl(const std::string& path, const std::string& head, uint64_t file_bytes, const MeshLimits& limits,
               std::vector<MeshProblem>& problems) {
-  const bool looks_ascii = StartsWith(Lower(head.substr(0, 5)), "solid");
+  // (assimp skips leading white space before "solid")
+  const size_t text_at = std::min(head.find_first_not_of(" \t\r\n"), head.size());
+  const bool looks_ascii = StartsWith(Lower(head.substr(text_at, 5)), "solid");
   if (file_bytes < 84) {
     if (looks_ascii || file_bytes == 0) return true;  // text, or empty (assimp says what is wrong)
     return Problem(problems, MeshProblemKind::kDeclaredBeyondFile,
@@ -159,6 +161,62 @@ bool CheckStl(const std::string& path, const std::string& head, uint64_t file_by
                  fmt::format("mesh file {} is a binary STL declaring {} triangles ({} bytes), but has {} bytes: "
                              "the count is wrong or the file is truncated",
                              path, n, expected, file_bytes));
+}
+
+// OFF: a header line ("OFF", "COFF", "NOFF", ...; the counts may follow on it), the counts
+// "nv nf [ne]", nv vertex lines of at least 3 numbers, nf face lines "k i_1 ... i_k". assimp
+// allocates nf faces before it reads them and aborts the process (an assertion in its
+// triangulation) when fewer follow, so the whole structure is checked here; the file is
+// text, so reading it all costs what assimp's reading does.
+bool CheckOff(const std::string& path, const std::string& text, const MeshLimits& limits,
+              std::vector<MeshProblem>& problems) {
+  std::istringstream in(text);
+  std::string line;
+  const auto next = [&](std::vector<std::string>* words) {
+    words->clear();
+    while (std::getline(in, line)) {
+      if (const size_t hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+      std::istringstream w(line);
+      words->clear();
+      for (std::string word; w >> word;) words->push_back(word);
+      if (!words->empty()) return true;
+    }
+    return false;
+  };
+  std::vector<std::string> header, counts;
+  if (!next(&header)) return true;  // empty: assimp says so
+  counts.assign(header.begin() + 1, header.end());
+  if (counts.empty() && !next(&counts)) counts.clear();
+  uint64_t nv = 0, nf = 0;
+  if (counts.size() < 2 || !ParseCount(counts[0], &nv) || !ParseCount(counts[1], &nf))
+    return Problem(problems, MeshProblemKind::kImportFailed,
+                   fmt::format("mesh file {}: the OFF header has no vertex and face counts", path));
+  if (nv > limits.max_vertices || nf > limits.max_triangles)
+    return Problem(problems, MeshProblemKind::kTooLarge,
+                   fmt::format("mesh file {} declares {} vertices and {} faces in its OFF header; the limits are {} "
+                               "and {}",
+                               path, nv, nf, limits.max_vertices, limits.max_triangles),
+                   std::max(nv, nf));
+  const auto beyond = [&](const std::string& what) {
+    return Problem(problems, MeshProblemKind::kDeclaredBeyondFile,
+                   fmt::format("mesh file {} declares {} vertices and {} faces in its OFF header, but {}", path, nv,
+                               nf, what));
+  };
+  std::vector<std::string> words;
+  for (uint64_t v = 0; v < nv; ++v)
+    if (!next(&words) || words.size() < 3)
+      return beyond(fmt::format("vertex {} is {}", v + 1, words.empty() ? "missing" : "not 3 numbers"));
+  for (uint64_t f = 0; f < nf; ++f) {
+    uint64_t k = 0;
+    if (!next(&words) || !ParseCount(words[0], &k) || words.size() < k + 1)
+      return beyond(fmt::format("face {} is {}", f + 1, words.empty() ? "missing" : "not 'k i_1 ... i_k'"));
+    for (uint64_t i = 1; i <= k; ++i) {
+      uint64_t index = 0;
+      if (!ParseCount(words[i], &index) || index >= nv)
+        return beyond(fmt::format("face {} names vertex '{}', not one of 0 to {}", f + 1, words[i], nv - 1));
+    }
+  }
+  return true;
 }
 
 // The .glb container: a 12-byte header, then chunks (length, type, data); the first is the
@@ -208,6 +266,7 @@ bool CheckDeclaredSizes(const std::string& path, const std::string& head, uint64
   if (ext == ".stl") return CheckStl(path, head, file_bytes, limits, problems);
   if (StartsWith(head, "glTF")) return CheckGlb(path, ReadAll(path), limits, problems);
   if (ext == ".gltf") return CheckGltfDeclaredSizes(path, ReadAll(path), -1, limits, problems);
+  if (ext == ".off") return CheckOff(path, ReadAll(path), limits, problems);
   return true;
 }
 

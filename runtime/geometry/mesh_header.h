@@ -12,9 +12,12 @@
 //   binary STL: 84 + 50 n bytes for n declared triangles, exactly (n ≤ max_triangles);
 //       assimp compares the size in 32 bits, so a count of 2³¹ + n passed its test.
 //   glTF (.gltf JSON, .glb): buffers, buffer views and accessors (mesh_gltf_header.cpp).
+//   OFF: its counts against the limits, and the whole file against them (each vertex line 3
+//       numbers, each face line "k i_1 ... i_k" with indices below nv): assimp allocates by
+//       the face count and aborts the process when fewer faces follow.
 //
-// OBJ, OFF, ASCII STL and the other text formats declare nothing that assimp allocates
-// ahead of the data: their size bounds their content.
+// OBJ, ASCII STL and the other text formats declare nothing that assimp allocates ahead of
+// the data: their size bounds their content.
 #pragma once
 
 #include <cstdint>

@@ -139,6 +139,31 @@ TEST(SweepIsolation, ACrashCostsOneRow) {
   }
 }
 
+// A real crash, no fault injected: issue 38's structural weld, whose variant lock = 1 made the
+// compiler crash (SIGSEGV in rt::AssembleLoops; fixed separately). Whatever the compiler does
+// with it now, the sweep completes with both rows and lock = 0 is simulated (before: the
+// sweep died with exit 139 and no row).
+TEST(SweepIsolation, ARealCompilerCrashCostsOneRow) {
+  const std::string d = Work("weld");
+  std::ofstream(d + "/weld.mech") << "model M\n  parameter Integer lock = 0;\n  World world(g = {0, -9.81, 0});\n"
+                                     "  Rod rod(L = 1, m = 1);\n  Revolute j1(axis = {0, 0, 1}, q(start = 0.3));\n"
+                                     "  Weld w if lock > 0;\nequation\n  connect(world.frame_b, j1.frame_a);\n"
+                                     "  connect(j1.frame_b, rod.frame_a);\n  if lock > 0 then\n"
+                                     "    connect(rod.frame_a, w.frame_a);\n    connect(w.frame_b, world.frame_b);\n"
+                                     "  end if;\n  annotation(experiment(StopTime = 1, Interval = 0.1));\nend M;\n";
+  for (const std::string jobs : {"1", "2"}) {
+    Outcome r = Kanesim("", "sweep weld.mech --grid lock=0,1,0 --metric final:j1.q --no-progress -j" + jobs + " -o out", d);
+    EXPECT_TRUE(r.rc == 0 || r.rc == 2) << r.rc << "\n" << r.err;
+    const Rows got = Read(d + "/out/summary.csv");
+    ASSERT_EQ(got.by_id.size(), 3u) << r.err;
+    EXPECT_EQ(got.Field(0, "status"), "ok");
+    EXPECT_EQ(got.Field(2, "status"), "ok");
+    EXPECT_EQ(got.Field(0, "final:j1.q"), got.Field(2, "final:j1.q"));
+    const std::string s1 = got.Field(1, "status");
+    EXPECT_TRUE(s1 == "ok" || s1 == "failed" || s1 == "crashed") << s1;
+  }
+}
+
 // Two crashes and a hang in one sweep, on two workers: the hung worker is killed at the
 // time limit, the sweep ends well before the hang would, and the five others are intact.
 TEST(SweepIsolation, AHangIsStoppedAtTheTimeLimit) {
@@ -184,6 +209,34 @@ TEST(SweepIsolation, ALostScenarioLeavesNoTrajectoryBehind) {
     for (std::string line; std::getline(in, line);) ++rows;
     EXPECT_EQ(rows, 11) << f << ": t = 0, 0.1, ..., 1";
   }
+}
+
+// Workers killed from outside with SIGKILL, as the kernel's out-of-memory killer does (it
+// prefers workers to the sweep process): a busy worker's scenario is "crashed" with the
+// signal named, fresh workers take the rest, and the sweep completes. (A worker killed in the
+// instant it is idle is replaced too: writing to its pipe fails with EPIPE, SIGPIPE being
+// ignored by the pool; that window is too short to hit from a test.)
+TEST(SweepIsolation, WorkersKilledFromOutside) {
+  const std::string d = Work("killed");
+  std::ofstream(d + "/run.sh") << "cd '" << d << "'\nKANESIM_TEST_SWEEP_FAULT=hang@1 '" << kBin << "' sweep " << kSpring
+                               << " --set F0=0 --set c=0 --grid k=10:10:200 --metric final:slider.q --stop-time 2 "
+                                  "--no-progress -j2 -o out 2>err.txt & pid=$!\n"
+                               << "for i in $(seq 400); do [ $(wc -l < out/summary.csv 2>/dev/null || echo 0) -ge 4 ] "
+                                  "&& break; sleep 0.02; done\n"
+                               << "for w in $(pgrep -P $pid); do kill -KILL $w; done\n"
+                               << "wait $pid; echo $? > rc.txt\n";
+  ASSERT_EQ(std::system(("bash '" + d + "/run.sh'").c_str()), 0);
+  std::ifstream rc(d + "/rc.txt");
+  int code = -1;
+  rc >> code;
+  EXPECT_EQ(code, 2);
+  const Rows got = Read(d + "/out/summary.csv");
+  ASSERT_EQ(got.by_id.size(), 20u) << "the sweep did not complete";
+  EXPECT_EQ(got.Field(1, "status"), "crashed");
+  EXPECT_NE(got.Field(1, "message").find("killed by signal 9 (SIGKILL"), std::string::npos) << got.Field(1, "message");
+  int ok = 0;
+  for (const auto& [id, row] : got.by_id) ok += got.Field(id, "status") == "ok";
+  EXPECT_GE(ok, 18) << "at most the hung scenario and one that was running are lost";
 }
 
 // A scenario that exhausts memory: under --worker-memory it fails with "out of memory"
@@ -233,6 +286,52 @@ TEST(SweepIsolation, ProcessesAndThreadsWriteTheSameRows) {
     for (const auto& [id, row] : t.by_id) EXPECT_EQ(p.Stable(id), t.Stable(id)) << "-j" << jobs << " scenario " << id;
     EXPECT_NE(r.err.find("worker process"), std::string::npos) << r.err;
   }
+}
+
+// Ctrl-C with a hung scenario and no time limit: the first waits for the running scenarios,
+// the second ends the sweep at once; the finished rows are on disk, no worker outlives the
+// sweep (they would hold its lock), and --resume finishes the sweep.
+TEST(SweepIsolation, ASecondInterruptEndsAHungSweep) {
+  const std::string d = Work("interrupt");
+  std::ofstream(d + "/run.sh") << "cd '" << d << "'\nKANESIM_TEST_SWEEP_FAULT=hang@1 '" << kBin << "' sweep " << kSpring
+                               << kGrid << " -j2 -o out 2>err.txt & pid=$!\n"
+                               << "for i in $(seq 200); do [ $(wc -l < out/summary.csv 2>/dev/null || echo 0) -ge 7 ] "
+                                  "&& break; sleep 0.05; done\n"
+                               << "workers=$(pgrep -P $pid)\n"
+                               << "kill -INT $pid; sleep 1; kill -0 $pid && echo alive > alive.txt\n"
+                               << "kill -INT $pid; wait $pid; echo $? > rc.txt; sleep 0.5\n"
+                               // dead: gone, or a zombie nobody reaps (PID 1 of a container may not)
+                               << "n=0; for w in $workers; do case $(ps -o stat= -p $w) in ''|Z*) ;; *) n=$((n+1));; "
+                                  "esac; done; "
+                               << "echo $n > workers.txt; echo $workers > pids.txt\n";
+  ASSERT_EQ(std::system(("bash '" + d + "/run.sh'").c_str()), 0);
+  auto slurp = [&](const std::string& f) {
+    std::ifstream in(d + "/" + f);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  EXPECT_EQ(slurp("alive.txt"), "alive\n") << "the first ^C waits for the running scenario";
+  EXPECT_NE(slurp("rc.txt"), "0\n");
+  EXPECT_EQ(slurp("workers.txt"), "0\n") << "a worker outlived the sweep";
+  EXPECT_NE(slurp("pids.txt"), "\n") << "the sweep had worker processes";
+  const Rows got = Read(d + "/out/summary.csv");
+  EXPECT_EQ(got.by_id.size(), 6u);  // every scenario but the hung one
+  EXPECT_EQ(got.by_id.count(1), 0u);
+  Outcome r = Kanesim("", "sweep " + kSpring + kGrid + " -j2 --resume -o out", d);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  ExpectOthersUntouched(Read(d + "/out/summary.csv"), -1);
+}
+
+// No worker process can be made (fork fails: a process limit, no memory for the page
+// tables): the sweep runs on threads instead, says so, and writes the same rows.
+TEST(SweepIsolation, WithoutForkTheSweepRunsOnThreads) {
+  const std::string d = Work("nofork");
+  Outcome r = Kanesim("KANESIM_TEST_SWEEP_FAULT=nofork", "sweep " + kSpring + kGrid + " -j2 -o out", d);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("kanesim: warning: cannot start a worker process: Resource temporarily unavailable; the "
+                       "remaining 7 scenarios run on threads"),
+            std::string::npos)
+      << r.err;
+  ExpectOthersUntouched(Read(d + "/out/summary.csv"), -1);
 }
 
 // The options are checked: a negative or non-finite limit, or limits with threads.

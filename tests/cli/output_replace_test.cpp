@@ -132,6 +132,8 @@ class SmallDisk {
 // A full disk: run -o and --animation keep the previous good files, byte for byte, and leave
 // no temporary (before: run -o had truncated the CSV, the animation was torn).
 TEST(OutputReplace, AFullDiskKeepsThePreviousFiles) {
+  // A run killed before its unmount left the small disk mounted: detach it first.
+  ::umount2((std::string(KANESIM_WORK_DIR) + "/replace_full_disk/disk").c_str(), MNT_DETACH);
   const std::string d = Work("replace_full_disk");
   SmallDisk disk(d + "/disk", "192k");
   if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (not root?); RLIMIT_FSIZE test below covers it";
@@ -223,6 +225,12 @@ TEST(OutputReplace, RunReplacesTheOutputAtTheEnd) {
   ASSERT_EQ(Kanesim("run " + kSpring + " --stop-time 0.1 -o link.csv", d).rc, 0);
   EXPECT_TRUE(std::filesystem::is_symlink(d + "/link.csv"));
   EXPECT_GT(CsvRows(d + "/real.csv"), 5);
+  // Nothing but the outputs is left: no temporary, no lock file.
+  std::vector<std::string> left;
+  for (const auto& e : std::filesystem::directory_iterator(d))
+    if (e.path().filename().string().find(".lock") != std::string::npos || !Temps(e.path().string()).empty())
+      left.push_back(e.path().filename().string());
+  EXPECT_TRUE(left.empty()) << left.front();
 }
 
 }  // namespace

@@ -230,6 +230,51 @@ TEST(DeclaredSizes, GltfBuffersViewsAndAccessorsMustFit) {
   EXPECT_TRUE(Has(LoadMesh(dir + "/long.glb").problems, MeshProblemKind::kDeclaredBeyondFile));
 }
 
+// OFF: assimp allocates the declared faces before reading them (10⁹: killed for memory) and
+// aborts the process when fewer follow (an assertion in its triangulation: 10 declared, 1
+// held). Counts over the limits, missing faces, a short vertex line and an index out of
+// range are refused; the tetrahedron loads, counts on the header line too (volume 1/6).
+TEST(DeclaredSizes, OffStructureIsCheckedBeforeAssimp) {
+  const std::string dir = testing::TempDir("off");
+  const std::string tet = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  WriteBytes(dir + "/ok.off", "OFF\n# a comment\n4 4 0\n" + tet);
+  WriteBytes(dir + "/inline.off", "OFF 4 4 0\n" + tet);
+  for (const char* name : {"ok.off", "inline.off"}) {
+    const MeshLoadResult r = LoadMesh(dir + "/" + name);
+    ASSERT_TRUE(r.ok()) << name << Describe(r.problems);
+    EXPECT_NEAR(r.report.volume, 1.0 / 6.0, 1e-12) << name;
+  }
+  WriteBytes(dir + "/huge.off", "OFF\n3 1000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_TRUE(Has(LoadMesh(dir + "/huge.off").problems, MeshProblemKind::kTooLarge));
+  const std::pair<const char*, std::string> beyond[] = {
+      {"faces.off", "OFF\n3 10 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {"vertex.off", "OFF\n4 4 0\n0 0 0\n1 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"},
+      {"index.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 9\n3 0 3 2\n3 1 2 3\n"},
+      {"short_face.off", "OFF\n4 4 0\n" + tet.substr(0, tet.size() - 4) + "\n"}};
+  for (const auto& [name, text] : beyond) {
+    WriteBytes(dir + "/" + name, text);
+    const Both b = LoadPromptly(dir + "/" + name);
+    ASSERT_TRUE(b.in_time) << name;
+    EXPECT_TRUE(Has(b.solid.problems, MeshProblemKind::kDeclaredBeyondFile)) << name << Describe(b.solid.problems);
+  }
+}
+
+// An ASCII STL with white space before "solid" is text, not a binary STL with a wrong count:
+// assimp 5.2 does not read it, and says so itself.
+TEST(DeclaredSizes, AsciiStlAfterWhiteSpaceIsNotABinaryCount) {
+  const std::string dir = testing::TempDir("stl_space");
+  testing::WriteAsciiStl(dir + "/box.stl", BoxSolid(Vec3(2, 1, 0.5)));
+  std::string text;
+  {
+    std::ifstream in(dir + "/box.stl");
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  WriteBytes(dir + "/spaced.stl", "\n  " + text);
+  const MeshLoadResult r = LoadMesh(dir + "/spaced.stl");
+  EXPECT_FALSE(Has(r.problems, MeshProblemKind::kDeclaredBeyondFile)) << Describe(r.problems);
+  EXPECT_TRUE(Has(r.problems, MeshProblemKind::kImportFailed)) << Describe(r.problems);
+}
+
 // A FIFO (no writer: open(2) would wait for one forever), a symbolic link to it, and a
 // character device are refused at once, as not regular files.
 TEST(DeclaredSizes, NonRegularFilesAreRefusedWithoutBlocking) {

@@ -62,6 +62,7 @@ constexpr time_t kKeepAlive = 2;      // s an idle kept-alive connection is held
 constexpr size_t kKeepAliveMax = 100; // requests per connection (httplib's default: 5)
 constexpr size_t kMaxThreads = 128;   // connections served at once; more wait for a thread
 constexpr size_t kMaxPayload = 64 * 1024;  // bytes of a request body (only GET is served)
+constexpr int kListenBacklog = 128;        // connections waiting to be accepted
 
 // A thread per connection, up to max_threads; a connection beyond waits in the queue for
 // the first free one. Threads stay until shutdown (at most max_threads of them).
@@ -161,12 +162,19 @@ int Bind(httplib::Server& server, const ServeRequest& request) {
   // httplib's default sets SO_REUSEPORT, which lets a second server bind a port that one
   // already listens on (the kernel then splits the connections between them); SO_REUSEADDR
   // alone refuses that and still allows a restart while old connections linger.
-  server.set_socket_options([](socket_t sock) {
+  auto listen_fd = std::make_shared<socket_t>(INVALID_SOCKET);
+  server.set_socket_options([listen_fd](socket_t sock) {
     int yes = 1;
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+    *listen_fd = sock;
   });
-  if (request.port == 0) return server.bind_to_any_port(request.host);
-  return server.bind_to_port(request.host, request.port) ? request.port : -1;
+  const int port = request.port == 0 ? server.bind_to_any_port(request.host)
+                                     : (server.bind_to_port(request.host, request.port) ? request.port : -1);
+  // Debian's libcpp-httplib listens with a backlog of 5: a burst of connections beyond it
+  // waits a second for the client's SYN to be sent again. A second listen(2) on the bound
+  // socket raises the backlog (Linux).
+  if (port >= 0 && *listen_fd != INVALID_SOCKET) ::listen(*listen_fd, kListenBacklog);
+  return port;
 }
 
 ServeReply Serve(const ServeRequest& request) {
