@@ -124,9 +124,23 @@ std::string Json(const lin::LinearModel& m, const lin::OperatingPoint& op) {
   }
   o += m.modes.empty() ? "],\n" : "\n  ],\n";
   o += "  \"ignorable\": " + Names(m.ignorable) + ",\n";
-  o += fmt::format("  \"accuracy\": {{\"step\": {}, \"A\": {}, \"BCD\": {}, \"unsteady\": {}}}\n", Num(m.h),
-                   Num(m.error_A), Num(m.error_BCD), Num(m.unsteady));
+  std::string widened;
+  for (const lin::WidenedStep& w : m.widened) widened += (widened.empty() ? "" : ", ") + Str(w.name) + ": " + Num(w.used);
+  o += fmt::format("  \"accuracy\": {{\"step\": {}, \"A\": {}, \"BCD\": {}, \"unsteady\": {}, \"widened\": {{{}}}}}\n",
+                   Num(m.h), Num(m.error_A), Num(m.error_BCD), Num(m.unsteady), widened);
   return o + "}\n";
+}
+
+// Says which columns were differenced with a wider step than --step (linearize.cpp, eq. 8):
+// "" when none.
+std::string WidenedNote(const lin::LinearModel& m) {
+  if (m.widened.empty()) return "";
+  std::string cols;
+  for (const lin::WidenedStep& w : m.widened) cols += fmt::format("{}{} {:.2g}", cols.empty() ? "" : ", ", w.name, w.used);
+  return fmt::format("kanesim linearize: note: --step {:g} is too small for {} of the {} column(s): added to the "
+                     "operating point's value it would be lost to rounding; differenced with the smallest step that "
+                     "keeps the change instead ({}); the accuracy printed includes the rounding error\n",
+                     m.h, m.widened.size(), m.states.size() + m.inputs.size(), cols);
 }
 
 // The printed report: states, accuracy, eigenvalues with frequency, damping and the
@@ -142,8 +156,8 @@ void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
   for (int i = 0; i < n; ++i) fmt::print("  x{:<3} {}\n", i + 1, m.states[static_cast<size_t>(i)]);
   if (!m.inputs.empty()) fmt::print("inputs      {}\n", fmt::join(m.inputs, ", "));
   if (!m.outputs.empty()) fmt::print("outputs     {}\n", fmt::join(m.outputs, ", "));
-  fmt::print("accuracy    A to {:.1e} relative (central differences, Richardson over h = {:g}, h/2, h/4)", m.error_A,
-             m.h);
+  fmt::print("accuracy    A to {:.1e} relative (central differences, Richardson over h = {:g}, h/2, h/4{})", m.error_A,
+             m.h, m.widened.empty() ? "" : "; wider where rounding needs it: see the note");
   if (!m.inputs.empty() || !m.outputs.empty()) fmt::print("; B, C, D to {:.1e}", m.error_BCD);
   fmt::print("\n");
   fmt::print("eigenvalues (sorted by modulus)\n");
@@ -269,6 +283,7 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
   o.step = a.step;
   std::vector<std::vector<std::complex<double>>> rows;
   std::vector<double> unsteady, times;
+  std::string widened_note;  // the first value's, said once
   for (double v : values) {
     std::shared_ptr<const rt::Program> p;
     if (lin::Status s = lin::RebindParameter(program, name, v, &p); !s.ok()) return Fail(s);
@@ -281,6 +296,7 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
       s.message = fmt::format("{} = {}: {}", name, v, s.message);
       return Fail(s);
     }
+    if (widened_note.empty()) widened_note = WidenedNote(m);
     std::vector<std::complex<double>> ev;
     for (const lin::Mode& md : m.modes) ev.push_back(md.lambda);
     rows.push_back(ev);
@@ -288,6 +304,7 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
     times.push_back(op.t);
     if (m.unsteady > kUnsteadyLimit && !a.frozen) break;  // nothing after it is computed
   }
+  fmt::print(stderr, "{}", widened_note);
   const size_t n = rows.empty() ? 0 : rows.front().size();
   std::FILE* out = stdout;
   batch::FileLock lock;
@@ -383,6 +400,7 @@ int RunLinearize(const LinearizeArgs& a) {
   if (m.unsteady > kUnsteadyLimit && !a.frozen) return FailUnsteady(op.t, m.unsteady, "");
   Print(m, op);
   std::fflush(stdout);
+  fmt::print(stderr, "{}", WidenedNote(m));
   if (m.unsteady > kUnsteadyLimit)
     fmt::print(stderr, "kanesim linearize: warning (--frozen): {}\n", UnsteadyCause(m.unsteady));
   if (!a.out_path.empty()) {
@@ -416,7 +434,9 @@ void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options) {
   cmd->add_option("--input", a->inputs, "An input: JOINT.tau, JOINT.tau[k] or a real parameter (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--output", a->outputs, "An output signal, by its exact name (repeatable)")->allow_extra_args(false);
-  AddNumberOption(cmd, "--step", &a->step, "Base difference step h (default 1e-3; speeds scale it by their size)");
+  AddNumberOption(cmd, "--step", &a->step,
+                  "Base difference step h (default 1e-3; speeds scale it by their size; a step too small to survive "
+                  "rounding is widened, with a note)");
   cmd->add_option("--sweep", a->sweep, "Root locus: NAME=FROM:STEP:TO, one row of eigenvalues per value");
   cmd->add_option("--html", a->html_path,
                   "With --sweep: also write the root locus as an offline HTML page (eigenvalues in the complex plane "

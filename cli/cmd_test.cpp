@@ -190,6 +190,11 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     if (std::string in = batch::OverwrittenInput(spec.golden_path, {spec_path, spec.model}); !in.empty())
       return error("the stored output '" + spec.golden_path + "' is the input '" + in +
                    "'; give the spec another golden = \"...\"");
+    // A FIFO or a device named as the golden would be replaced by a regular file (issue 38).
+    if (std::string what = batch::NotRegularFile(spec.golden_path); !what.empty())
+      return error("the stored output '" + spec.golden_path + "' is " + what +
+                   ", not a regular file; --update replaces only regular files, so it was left as it is: give "
+                   "the spec another golden = \"...\"");
     for (size_t k = 0; k < fresh.t.size(); ++k)
       for (size_t j = 0; j < fresh.names.size(); ++j)
         if (!std::isfinite(fresh.rows[k][j]))
