@@ -387,6 +387,7 @@ CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std
   ChooseIntegrator(p);
   if (!p.rows.empty()) {
     AssembleLoops(p, &out.errors);
+    if (out.errors.empty()) CheckAnyMassMoves(p, &out.errors);
     if (!out.errors.empty()) return out;
     ChooseLoopSolver(p);
   }

@@ -66,6 +66,9 @@ void FindIndeterminateReactions(Program& p, Workspace& ws);
 // K309 for each tree joint with a free speed whose subtree has no mass and no inertia, in
 // a model without constraints (compile/massless.cpp).
 void CheckMovesMass(const Program& p, std::vector<CompileMessage>* errors);
+// K309 when the assembled mechanism has degrees of freedom but no body has mass or
+// inertia (closed loops of fixed elements only; after AssembleLoops).
+void CheckAnyMassMoves(const Program& p, std::vector<CompileMessage>* errors);
 
 // Ranges of user numbers (compile/ranges.cpp): "" when x is 0 or within [lo, hi], else
 // "<what> <x> <unit> is out of range: ...". Lengths by their largest component.
