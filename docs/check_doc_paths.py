@@ -27,7 +27,7 @@ TOP_FOLDERS = (".ci", "lang", "runtime", "cli", "docs", "tests", "scripts", "exa
                "stdlib", "python", "cmake")
 PATH = re.compile(r"(?<![\w./~$-])((?:%s)/[\w./*<>{},-]*)" % "|".join(re.escape(t) for t in TOP_FOLDERS))
 LINK = re.compile(r"\]\(([^)\s]+)\)")
-OPTION = re.compile(r"^(--?[A-Za-z][\w-]*)")
+OPTION = re.compile(r"^(--[A-Za-z][\w-]*|-[A-Za-z])")  # -j4 is -j
 # Options of other programs the pages name alone in a code span: Chromium's, for the browser
 # tests (docs/visualization.md).
 FOREIGN_OPTIONS = {"--remote-debugging-pipe", "--headless", "--disable-webgl", "--disable-gpu",
