@@ -169,3 +169,36 @@ def test_bad_isolation_options(examples):
                    {"isolation": "thread", "scenario_timeout": 5}):
         with pytest.raises(ValueError):
             kanesim.sweep(m, grid={"k": [10]}, stop_time=0.1, **kwargs)
+
+
+def test_ctrl_c_stops_a_sweep_with_a_hanging_worker(examples):
+    """Ctrl-C during a sweep whose worker hangs (no scenario_timeout): KeyboardInterrupt
+    within a second or so, and the workers are gone (on threads it would wait forever)."""
+    script = f"""
+        import os, sys, time, kanesim
+        m = kanesim.load({str(examples / "spring_mass.mech")!r})
+        print("pid", os.getpid(), flush=True)
+        try:
+            kanesim.sweep(m, grid={{"k": [10, 20, 30]}}, stop_time=0.1, threads=2)
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+    """
+    env = dict(os.environ, KANESIM_TEST_SWEEP_FAULT="hang@0,hang@1")
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    p = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)], env=env, stdout=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().startswith("pid")
+        time.sleep(1.0)  # the workers are hanging by now
+        children = subprocess.run(["pgrep", "-P", str(p.pid)], capture_output=True, text=True).stdout.split()
+        assert len(children) == 2, children
+        t0 = time.monotonic()
+        p.send_signal(2)  # SIGINT
+        out, _ = p.communicate(timeout=30)
+        assert time.monotonic() - t0 < 5
+        assert "interrupted" in out
+        assert p.returncode == 0
+        for pid in children:  # killed and reaped
+            assert not os.path.exists(f"/proc/{pid}") or "zombie" in open(f"/proc/{pid}/status").read().lower()
+    finally:
+        if p.poll() is None:
+            p.kill()
