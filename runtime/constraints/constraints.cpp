@@ -291,6 +291,33 @@ void ConstraintJacobian(const Program& p, Workspace& ws) {
   for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
 }
 
+void LoopJacobianRows(const Program& p, Workspace& ws, int loop) {
+  const LoopClosure& l = p.loops[static_cast<size_t>(loop)];
+  for (int i = l.row0; i < l.row0 + l.nrows; ++i)
+    if (int k = p.active_of_row[static_cast<size_t>(i)]; k >= 0) ws.A.row(k).setZero();
+  LoopJacobian(p, ws, l, FramesOf(p, ws, l, false), false);
+}
+
+double LoopLeverArm(const Program& p, const Workspace& ws, int loop) {
+  const LoopClosure& l = p.loops[static_cast<size_t>(loop)];
+  double st = 0.0, sa = 0.0;
+  int nt = 0, na = 0;
+  for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+    const int k = p.active_of_row[static_cast<size_t>(i)];
+    if (k < 0) continue;
+    const double s = ws.A.row(k).squaredNorm();
+    if (p.rows[static_cast<size_t>(i)].kind == RowKind::Translation) {
+      st += s;
+      ++nt;
+    } else {
+      sa += s;
+      ++na;
+    }
+  }
+  if (nt == 0 || na == 0 || !(st > 0.0) || !(sa > 0.0)) return 1.0;
+  return std::sqrt((st / nt) / (sa / na));
+}
+
 void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::VectorXd* col) {
   const int J = p.joint_of_speed[static_cast<size_t>(s)];
   const auto h = ws.H_W.col(s);
