@@ -614,8 +614,10 @@ void ConstraintRates(const Program& p, Workspace& ws) {
 int CheckLoopsClosed(const Program& p, Workspace& ws) {
   const double r = ws.phi.cwiseAbs().maxCoeff();
   if (r <= kLoose * p.loop_length) return 0;
-  ws.error = "closed loop cannot be closed (position residual " + std::to_string(r) + " at time " +
-             std::to_string(ws.t) + ")";
+  char buf[160];  // %g: a residual of 2e-7 is not "0.000000"
+  std::snprintf(buf, sizeof buf, "closed loop cannot be closed (position residual %.3g m, above %.3g, at time %.9g)", r,
+                kLoose * p.loop_length, ws.t);
+  ws.error = buf;
   return 1;
 }
 
