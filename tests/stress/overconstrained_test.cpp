@@ -64,15 +64,16 @@ const RunResult& BricardReference() {
   return ref;
 }
 
-// The cells: every integrator, both forms, loose to tight (the implicit integrators at the
-// tight end: at rtol 1e-4 ... 1e-8 they lose the Bricard's energy to 1e-2 ... 1e-4 where its
-// joints turn back and the dependent speeds are re-chosen, as on a planar four-bar whose
-// crank rocks; docs/benchmarks.md "Overconstrained linkages").
+// The cells: every integrator, both forms, loose to tight. Not the reduced form with the
+// implicit integrators and ARKODE below 1e-12 (CVODE-BDF: 3.8e-8 = 4e4 x rtol at 1e-12, 4e-6
+// at 1e-10, 3.1 rad at 1e-4): where the Bricard's joints turn back the reduced form
+// re-chooses its dependent speeds and they lose accuracy there, as on a planar four-bar
+// whose crank rocks (docs/benchmarks.md "Overconstrained linkages").
 const Cell kBricardCells[] = {
     {"dop853", "dense", "1e-6"},   {"dop853", "dense", "1e-12"},  {"dop853", "sparse", "1e-8"},
     {"arkode", "sparse", "1e-10"}, {"arkode", "dense", "1e-6"},   {"cvode", "sparse", "1e-12"},
     {"cvode", "dense", "1e-12"},   {"ida", "dense", "1e-12"},     {"ida", "sparse", "1e-8"},
-    {"cvode-bdf", "sparse", "1e-12"}, {"cvode-bdf", "dense", "1e-12"},
+    {"cvode-bdf", "sparse", "1e-12"}, {"cvode-bdf", "sparse", "1e-10"},
 };
 
 TEST(Overconstrained, BricardFollowsTheReducedOneCoordinateModel) {
