@@ -1,11 +1,16 @@
-// Sweep throughput on 1 thread against 2 (issue #5: at least 1.8x on 2 cores).
+// Sweep throughput on 1 thread against 2 (issue #5: at least 1.8x on 2 cores), and the
+// cost of running scenarios in worker processes (issue 38) against threads.
 //
 // The workload: examples/chain.mech (N links, default 10) swept over the start angle q0
 // (numeric: one compiled program, rt::Rebind per scenario) with two metrics, each
 // scenario simulating `stop` seconds. Runs the same sweep with -j1 and -j2 through
 // batch::RunSweep (summary written and fsynced as in `kanesim sweep`), best of
 // `repeats`, and prints scenarios per second and the ratio.
+// Both isolations are measured: threads of one process, and worker processes (the default
+// of `kanesim sweep`); CPU time counts the reaped workers too.
 //   build/bench/sweep_throughput [scenarios=32] [stop=4] [repeats=3] [N=10]
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <ctime>
@@ -33,23 +38,36 @@ std::shared_ptr<const rt::Program> LoadChain(const std::string& path, int n) {
 
 struct Timing {
   double wall = 0.0;  // seconds
-  double cpu = 0.0;   // process CPU seconds, all threads (std::clock)
+  double cpu = 0.0;   // CPU seconds of this process (all threads) and of its reaped workers
 };
 
-Timing SweepSeconds(std::shared_ptr<const rt::Program> program, batch::SweepConfig config, int threads) {
+double CpuSeconds() {
+  double total = 0.0;
+  for (int who : {RUSAGE_SELF, RUSAGE_CHILDREN}) {
+    rusage u{};
+    getrusage(who, &u);
+    total += static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+             1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+  }
+  return total;
+}
+
+Timing SweepSeconds(std::shared_ptr<const rt::Program> program, batch::SweepConfig config, int threads,
+                    batch::SweepConfig::Isolation isolation) {
   config.threads = threads;
+  config.isolation = isolation;
   config.out_dir = (std::filesystem::temp_directory_path() / ("kanesim_bench_j" + std::to_string(threads))).string();
   batch::SweepReport report;
   std::string err;
   auto t0 = std::chrono::steady_clock::now();
-  std::clock_t c0 = std::clock();
+  const double c0 = CpuSeconds();
   if (!batch::RunSweep(program, nullptr, config, &report, &err) || report.progress.failed > 0) {
     std::cerr << "sweep failed: " << err << "\n";
     std::exit(1);
   }
   Timing t;
   t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  t.cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  t.cpu = CpuSeconds() - c0;
   std::filesystem::remove_all(config.out_dir);
   return t;
 }
@@ -82,21 +100,30 @@ int main(int argc, char** argv) {
   config.sim.interval = 0.01;
   config.sim.rtol = config.sim.atol = 1e-8;
 
-  Timing best1{1e300, 0}, best2{1e300, 0};
-  for (int r = 0; r < repeats; ++r) {
-    Timing t1 = SweepSeconds(program, config, 1), t2 = SweepSeconds(program, config, 2);
-    if (t1.wall < best1.wall) best1 = t1;
-    if (t2.wall < best2.wall) best2 = t2;
-  }
+  using Iso = batch::SweepConfig::Isolation;
+  // Interleaved, best of `repeats`: threads -j1, -j2, then processes -j1, -j2.
+  Timing best[2][2] = {{{1e300, 0}, {1e300, 0}}, {{1e300, 0}, {1e300, 0}}};
+  for (int r = 0; r < repeats; ++r)
+    for (int iso = 0; iso < 2; ++iso)
+      for (int j = 0; j < 2; ++j) {
+        Timing t = SweepSeconds(program, config, j + 1, iso == 0 ? Iso::kThread : Iso::kProcess);
+        if (t.wall < best[iso][j].wall) best[iso][j] = t;
+      }
   std::printf("sweep_throughput: chain N=%d, %d scenarios x %.3g s simulated, best of %d, %u hardware threads\n",
               links, scenarios, stop, repeats, std::thread::hardware_concurrency());
-  std::printf("  -j1  %8.3f s wall  %8.3f s CPU  %8.1f scenarios/s\n", best1.wall, best1.cpu, scenarios / best1.wall);
-  std::printf("  -j2  %8.3f s wall  %8.3f s CPU  %8.1f scenarios/s\n", best2.wall, best2.cpu, scenarios / best2.wall);
-  std::printf("  speedup 2 threads / 1 thread: %.2fx (goal >= 1.8x)\n", best1.wall / best2.wall);
-  // CPU / wall of the -j2 run: how many cores it actually got (2.0 = both, the whole
-  // time). Below ~1.9 the machine was shared with other work and the speedup above is
-  // bounded by that, not by the sweep.
-  std::printf("  cores used by -j2 (CPU / wall): %.2f; CPU per scenario -j2 / -j1: %.2f\n", best2.cpu / best2.wall,
-              best2.cpu / best1.cpu);
+  for (int iso = 0; iso < 2; ++iso) {
+    const Timing& b1 = best[iso][0];
+    const Timing& b2 = best[iso][1];
+    const char* what = iso == 0 ? "threads" : "worker processes";
+    std::printf("  %s\n", what);
+    std::printf("    -j1  %8.3f s wall  %8.3f s CPU  %8.1f scenarios/s\n", b1.wall, b1.cpu, scenarios / b1.wall);
+    std::printf("    -j2  %8.3f s wall  %8.3f s CPU  %8.1f scenarios/s\n", b2.wall, b2.cpu, scenarios / b2.wall);
+    std::printf("    speedup 2 / 1: %.2fx (goal >= 1.8x); cores used by -j2 (CPU / wall): %.2f; CPU per scenario "
+                "-j2 / -j1: %.2f\n",
+                b1.wall / b2.wall, b2.cpu / b2.wall, b2.cpu / b1.cpu);
+  }
+  std::printf("  worker processes / threads, wall: -j1 %.3f, -j2 %.3f; CPU: -j1 %.3f, -j2 %.3f\n",
+              best[1][0].wall / best[0][0].wall, best[1][1].wall / best[0][1].wall, best[1][0].cpu / best[0][0].cpu,
+              best[1][1].cpu / best[0][1].cpu);
   return 0;
 }

@@ -6,8 +6,10 @@
 #include <fmt/core.h>
 #include <fmt/ranges.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -124,9 +126,23 @@ std::string Json(const lin::LinearModel& m, const lin::OperatingPoint& op) {
   }
   o += m.modes.empty() ? "],\n" : "\n  ],\n";
   o += "  \"ignorable\": " + Names(m.ignorable) + ",\n";
-  o += fmt::format("  \"accuracy\": {{\"step\": {}, \"A\": {}, \"BCD\": {}, \"unsteady\": {}}}\n", Num(m.h),
-                   Num(m.error_A), Num(m.error_BCD), Num(m.unsteady));
+  std::string widened;
+  for (const lin::WidenedStep& w : m.widened) widened += (widened.empty() ? "" : ", ") + Str(w.name) + ": " + Num(w.used);
+  o += fmt::format("  \"accuracy\": {{\"step\": {}, \"A\": {}, \"BCD\": {}, \"unsteady\": {}, \"widened\": {{{}}}}}\n",
+                   Num(m.h), Num(m.error_A), Num(m.error_BCD), Num(m.unsteady), widened);
   return o + "}\n";
+}
+
+// Says which columns were differenced with a wider step than --step (linearize.cpp, eq. 8):
+// "" when none.
+std::string WidenedNote(const lin::LinearModel& m) {
+  if (m.widened.empty()) return "";
+  std::string cols;
+  for (const lin::WidenedStep& w : m.widened) cols += fmt::format("{}{} {:.2g}", cols.empty() ? "" : ", ", w.name, w.used);
+  return fmt::format("kanesim linearize: note: --step {:g} is too small for {} of the {} column(s): added to the "
+                     "operating point's value it would be lost to rounding; differenced with the smallest step that "
+                     "keeps the change instead ({}); the accuracy printed includes the rounding error\n",
+                     m.h, m.widened.size(), m.states.size() + m.inputs.size(), cols);
 }
 
 // The printed report: states, accuracy, eigenvalues with frequency, damping and the
@@ -142,8 +158,8 @@ void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
   for (int i = 0; i < n; ++i) fmt::print("  x{:<3} {}\n", i + 1, m.states[static_cast<size_t>(i)]);
   if (!m.inputs.empty()) fmt::print("inputs      {}\n", fmt::join(m.inputs, ", "));
   if (!m.outputs.empty()) fmt::print("outputs     {}\n", fmt::join(m.outputs, ", "));
-  fmt::print("accuracy    A to {:.1e} relative (central differences, Richardson over h = {:g}, h/2, h/4)", m.error_A,
-             m.h);
+  fmt::print("accuracy    A to {:.1e} relative (central differences, Richardson over h = {:g}, h/2, h/4{})", m.error_A,
+             m.h, m.widened.empty() ? "" : "; wider where rounding needs it: see the note");
   if (!m.inputs.empty() || !m.outputs.empty()) fmt::print("; B, C, D to {:.1e}", m.error_BCD);
   fmt::print("\n");
   fmt::print("eigenvalues (sorted by modulus)\n");
@@ -168,26 +184,53 @@ void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
                rmax);
 }
 
-bool OpenOutput(const LinearizeArgs& a, batch::FileLock* lock, std::FILE** out) {
-  if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
-    fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing there would destroy it\n", a.out_path, in);
-    return false;
+// The -o file, written as `kanesim run -o` writes its CSV (docs/sweeps.md "Output files of
+// every command"): a regular (or new) file through a temporary beside it, flushed and
+// renamed over it at the end, under a lock file beside it, so a kill, a crash or a full disk
+// leaves the previous file whole; a FIFO or a device (/dev/stdout) is streamed to directly.
+class Output {
+ public:
+  // False (said on stderr) when it cannot be opened. `inputs`: every file the model read.
+  bool Open(const std::string& path, const std::vector<std::string>& inputs) {
+    path_ = path;
+    if (std::string in = batch::OverwrittenInput(path, inputs); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: -o '{}' is the model file '{}'; writing there would destroy it\n", path, in);
+      return false;
+    }
+    std::string error;
+    if (batch::NotRegularFile(path).empty()) {
+      const std::filesystem::path target(batch::ReplacedFile(path));
+      const std::string lock_path = (target.parent_path() / ("." + target.filename().string() + ".lock")).string();
+      if (!lock_.Acquire(lock_path, "'" + path + "'", &error, /*remove_at_end=*/true) ||
+          (batch::RemoveStaleTemps(target.string()), !atomic_.Open(path, &error))) {
+        fmt::print(stderr, "kanesim: error: {}\n", error);
+        return false;
+      }
+      file_ = atomic_.file();
+    } else if (!(file_ = std::fopen(path.c_str(), "w"))) {
+      fmt::print(stderr, "kanesim: error: cannot open '{}' for writing: {}\n", path, std::strerror(errno));
+      return false;
+    }
+    return true;
   }
-  std::string lock_error;
-  std::error_code ec;
-  const auto status = std::filesystem::status(a.out_path, ec);
-  if ((ec || std::filesystem::is_regular_file(status) || !std::filesystem::exists(status)) &&
-      !lock->Acquire(a.out_path, "'" + a.out_path + "'", &lock_error)) {
-    fmt::print(stderr, "kanesim: error: {}\n", lock_error);
-    return false;
+  std::FILE* file() const { return file_; }
+  // Renames the finished file over the target (or closes the stream); false, said, when
+  // it could not be written whole (the previous file is then unchanged).
+  bool Finish() {
+    std::string error;
+    const bool ok = atomic_.file() ? atomic_.Commit(&error) : std::fclose(file_) == 0;
+    file_ = nullptr;
+    if (!ok)
+      fmt::print(stderr, "kanesim: error: cannot write '{}'{}\n", path_, error.empty() ? "" : ": " + error);
+    return ok;
   }
-  *out = std::fopen(a.out_path.c_str(), "w");
-  if (!*out) {
-    fmt::print(stderr, "kanesim: error: cannot open '{}' for writing\n", a.out_path);
-    return false;
-  }
-  return true;
-}
+
+ private:
+  std::string path_;
+  batch::FileLock lock_;
+  batch::AtomicFile atomic_;  // removes its temporary when not committed
+  std::FILE* file_ = nullptr;
+};
 
 int Fail(const lin::Status& s) {
   fmt::print(stderr, "kanesim linearize: {}: {}\n", s.code == 1 ? "error" : "numerical failure", s.message);
@@ -258,7 +301,7 @@ bool ParseSweep(const std::string& text, std::string* name, std::vector<double>*
 }
 
 // Root locus: one row per value, the eigenvalues sorted by modulus (re, im pairs).
-int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
+int RunSweep(const rt::Program& program, const std::vector<std::string>& inputs, const LinearizeArgs& a) {
   std::string name, why;
   std::vector<double> values;
   if (!ParseSweep(a.sweep, &name, &values, &why)) {
@@ -269,6 +312,7 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
   o.step = a.step;
   std::vector<std::vector<std::complex<double>>> rows;
   std::vector<double> unsteady, times;
+  std::string widened_note;  // the first value's, said once
   for (double v : values) {
     std::shared_ptr<const rt::Program> p;
     if (lin::Status s = lin::RebindParameter(program, name, v, &p); !s.ok()) return Fail(s);
@@ -281,6 +325,7 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
       s.message = fmt::format("{} = {}: {}", name, v, s.message);
       return Fail(s);
     }
+    if (widened_note.empty()) widened_note = WidenedNote(m);
     std::vector<std::complex<double>> ev;
     for (const lin::Mode& md : m.modes) ev.push_back(md.lambda);
     rows.push_back(ev);
@@ -288,13 +333,23 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
     times.push_back(op.t);
     if (m.unsteady > kUnsteadyLimit && !a.frozen) break;  // nothing after it is computed
   }
+  fmt::print(stderr, "{}", widened_note);
   const size_t n = rows.empty() ? 0 : rows.front().size();
   std::FILE* out = stdout;
-  batch::FileLock lock;
-  if (!a.out_path.empty() && a.out_path != "-" && !OpenOutput(a, &lock, &out)) return kExitModelError;
-  fmt::print(out, "{}", name);
-  for (size_t k = 0; k < n; ++k) fmt::print(out, ",lambda{}.re,lambda{}.im", k + 1, k + 1);
-  fmt::print(out, ",max_real\n");
+  Output file;
+  if (!a.out_path.empty() && a.out_path != "-") {
+    if (!file.Open(a.out_path, inputs)) return kExitModelError;
+    out = file.file();
+  }
+  // fwrite, not fmt::print(FILE*), which throws when the disk is full: the failure is
+  // said once at the end and the previous file kept.
+  bool write_ok = true;
+  auto put = [&](const std::string& text) {
+    write_ok = std::fwrite(text.data(), 1, text.size(), out) == text.size() && write_ok;
+  };
+  std::string head = name;
+  for (size_t k = 0; k < n; ++k) head += fmt::format(",lambda{}.re,lambda{}.im", k + 1, k + 1);
+  put(head + ",max_real\n");
   bool warned = false;
   int code = kExitOk;
   for (size_t r = 0; r < rows.size(); ++r) {
@@ -304,13 +359,13 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
       rows.resize(r);
       break;
     }
-    fmt::print(out, "{}", Num(values[r]));
+    std::string line = Num(values[r]);
     double rmax = -INFINITY;
     for (const auto& e : rows[r]) {
-      fmt::print(out, ",{},{}", Num(e.real()), Num(e.imag()));
+      line += fmt::format(",{},{}", Num(e.real()), Num(e.imag()));
       rmax = std::max(rmax, e.real());
     }
-    fmt::print(out, ",{}\n", Num(rmax));
+    put(line + fmt::format(",{}\n", Num(rmax)));
     if (unsteady[r] > kUnsteadyLimit && !warned) {
       std::fflush(out);
       fmt::print(stderr, "kanesim linearize: warning (--frozen): at {} = {}: {}\n", name, values[r],
@@ -318,10 +373,13 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
       warned = true;
     }
   }
-  if (out != stdout && std::fclose(out) != 0) {
-    fmt::print(stderr, "kanesim: error: cannot write '{}'\n", a.out_path);
-    return kExitModelError;
+  if (!write_ok) {
+    fmt::print(stderr, "kanesim: error: cannot write '{}': {}{}\n", out == stdout ? "stdout" : a.out_path,
+               std::strerror(errno), out == stdout ? "" : " (the previous file, if any, is unchanged)");
+    return kExitModelError;  // the temporary is removed
   }
+  // The rows before an unsteady point are correct: kept, like run's before a failure.
+  if (out != stdout && !file.Finish()) return kExitModelError;
   if (!a.html_path.empty() && !rows.empty()) {  // the rows kept, as in the table
     viz::LocusData data;
     data.title = fmt::format("Root locus of {}: {} = {}", std::filesystem::path(a.load.path).filename().string(),
@@ -361,6 +419,15 @@ int RunLinearize(const LinearizeArgs& a) {
   const std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
   if (!model) return kExitModelError;
   const rt::Program& program = *model->program;
+  // Now that every file the model read is known: none of them is an output.
+  for (const std::string& out : {a.out_path, a.html_path}) {
+    if (out.empty() || out == "-") continue;
+    if (std::string in = batch::OverwrittenInput(out, model->mech->source_files); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: {} '{}' is the model file '{}'; writing there would destroy it\n",
+                 out == a.out_path ? "-o" : "--html", out, in);
+      return kExitModelError;
+    }
+  }
   if (!(a.step > 0) || a.step > 0.1) {
     fmt::print(stderr, "kanesim: error: --step must be in (0, 0.1]\n");
     return kExitModelError;
@@ -369,7 +436,7 @@ int RunLinearize(const LinearizeArgs& a) {
     fmt::print(stderr, "kanesim: error: --html writes the root locus of --sweep; add --sweep NAME=FROM:STEP:TO\n");
     return kExitModelError;
   }
-  if (!a.sweep.empty()) return RunSweep(program, a);
+  if (!a.sweep.empty()) return RunSweep(program, model->mech->source_files, a);
 
   lin::OperatingPoint op;
   if (lin::Status s = OperatingPointFor(program, a, true, &op); !s.ok()) return Fail(s);
@@ -383,18 +450,18 @@ int RunLinearize(const LinearizeArgs& a) {
   if (m.unsteady > kUnsteadyLimit && !a.frozen) return FailUnsteady(op.t, m.unsteady, "");
   Print(m, op);
   std::fflush(stdout);
+  fmt::print(stderr, "{}", WidenedNote(m));
   if (m.unsteady > kUnsteadyLimit)
     fmt::print(stderr, "kanesim linearize: warning (--frozen): {}\n", UnsteadyCause(m.unsteady));
   if (!a.out_path.empty()) {
-    std::FILE* out = nullptr;
-    batch::FileLock lock;
-    if (!OpenOutput(a, &lock, &out)) return kExitModelError;
+    Output file;
+    if (!file.Open(a.out_path, model->mech->source_files)) return kExitModelError;
     const std::string text = Json(m, op);
-    const bool ok = std::fwrite(text.data(), 1, text.size(), out) == text.size();
-    if (std::fclose(out) != 0 || !ok) {
-      fmt::print(stderr, "kanesim: error: cannot write '{}'\n", a.out_path);
-      return kExitModelError;
+    if (std::fwrite(text.data(), 1, text.size(), file.file()) != text.size()) {
+      fmt::print(stderr, "kanesim: error: cannot write '{}': {}\n", a.out_path, std::strerror(errno));
+      return kExitModelError;  // the temporary is removed; the previous file stays
     }
+    if (!file.Finish()) return kExitModelError;
   }
   return kExitOk;
 }
@@ -416,7 +483,9 @@ void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options) {
   cmd->add_option("--input", a->inputs, "An input: JOINT.tau, JOINT.tau[k] or a real parameter (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--output", a->outputs, "An output signal, by its exact name (repeatable)")->allow_extra_args(false);
-  AddNumberOption(cmd, "--step", &a->step, "Base difference step h (default 1e-3; speeds scale it by their size)");
+  AddNumberOption(cmd, "--step", &a->step,
+                  "Base difference step h (default 1e-3; speeds scale it by their size; a step too small to survive "
+                  "rounding is widened, with a note)");
   cmd->add_option("--sweep", a->sweep, "Root locus: NAME=FROM:STEP:TO, one row of eigenvalues per value");
   cmd->add_option("--html", a->html_path,
                   "With --sweep: also write the root locus as an offline HTML page (eigenvalues in the complex plane "

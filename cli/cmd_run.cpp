@@ -114,29 +114,38 @@ int RunCommand(const RunArgs& a) {
   AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
   if (!animation.Prepare(*model->mech, program, &so.signals)) return kExitModelError;
 
-  // The output: never the model itself, and one writer at a time (locked while written;
-  // only a regular file, not /dev/null or a pipe, which many may share).
+  // The output: never the model itself, and one writer at a time (a lock beside it). A
+  // regular file (or a new one) is written through a temporary beside it and renamed over
+  // it at the end (docs/sweeps.md "Output files"), so a kill,
+  // a crash or a full disk leaves the previous file whole and the rows so far in the
+  // recognizable temporary <out>.tmp.<host>.<pid>; rows computed before a numerical
+  // failure (exit 2) are correct and are kept: renamed like a complete run's. A FIFO or a
+  // device (/dev/null, /dev/stdout) is streamed to directly, unlocked.
   bool to_stdout = a.out_path.empty() || a.out_path == "-";
   batch::FileLock out_lock;
+  batch::AtomicFile atomic;
+  std::FILE* out = stdout;
   if (!to_stdout) {
     if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
       fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing the CSV there would destroy it\n",
                  a.out_path, in);
       return kExitModelError;
     }
-    std::error_code ec;
-    const auto status = std::filesystem::status(a.out_path, ec);
-    std::string lock_error;
-    if ((ec || std::filesystem::is_regular_file(status) || !std::filesystem::exists(status)) &&
-        !out_lock.Acquire(a.out_path, "'" + a.out_path + "'", &lock_error)) {
-      fmt::print(stderr, "kanesim: error: {}\n", lock_error);
+    std::string open_error;
+    if (batch::NotRegularFile(a.out_path).empty()) {
+      const std::filesystem::path target(batch::ReplacedFile(a.out_path));
+      const std::string lock_path =
+          (target.parent_path() / ("." + target.filename().string() + ".lock")).string();
+      if (!out_lock.Acquire(lock_path, "'" + a.out_path + "'", &open_error, /*remove_at_end=*/true) ||
+          (batch::RemoveStaleTemps(target.string()), !atomic.Open(a.out_path, &open_error))) {
+        fmt::print(stderr, "kanesim: error: {}\n", open_error);
+        return kExitModelError;
+      }
+      out = atomic.file();
+    } else if (!(out = std::fopen(a.out_path.c_str(), "w"))) {
+      fmt::print(stderr, "kanesim: error: cannot open '{}' for writing: {}\n", a.out_path, std::strerror(errno));
       return kExitModelError;
     }
-  }
-  std::FILE* out = to_stdout ? stdout : std::fopen(a.out_path.c_str(), "w");
-  if (!out) {
-    fmt::print(stderr, "kanesim: error: cannot open '{}' for writing: {}\n", a.out_path, std::strerror(errno));
-    return kExitModelError;
   }
   bool bar_enabled = isatty(STDERR_FILENO) && !(to_stdout && isatty(STDOUT_FILENO));
   sim::SimResult result;
@@ -146,7 +155,16 @@ int RunCommand(const RunArgs& a) {
     sim::CsvWriter writer(out);
     result = pipeline::Run(*model, run, animation.Wrap(writer));  // stages 5-6
   }
-  bool close_ok = to_stdout ? std::fflush(stdout) == 0 : std::fclose(out) == 0;
+  const bool rows_correct = result.status == sim::SimResult::Status::kOk ||
+                            result.status == sim::SimResult::Status::kNumericalFailure;
+  std::string write_error;
+  bool close_ok = true;
+  if (atomic.file()) {
+    if (rows_correct) close_ok = atomic.Commit(&write_error);
+    else atomic.Abandon();  // a usage or output error: the previous file stays
+  } else {
+    close_ok = to_stdout ? std::fflush(stdout) == 0 : std::fclose(out) == 0;
+  }
   const bool animation_ok = animation.Finish();  // also the rows before a numerical failure
 
   if (a.stats) {
@@ -161,13 +179,18 @@ int RunCommand(const RunArgs& a) {
       return kExitModelError;
     case sim::SimResult::Status::kOutputError:
       fmt::print(stderr, "kanesim: error: {} ({})\n", result.message, to_stdout ? "stdout" : a.out_path);
+      if (!to_stdout && out_lock.fd() >= 0)
+        fmt::print(stderr, "kanesim: note: '{}' was left as it was before this run\n", a.out_path);
       return kExitModelError;
     case sim::SimResult::Status::kNumericalFailure:
       fmt::print(stderr, "kanesim: numerical failure at t = {}: {}\n", result.fail_time, result.message);
+      if (!close_ok) break;
       return kExitNumerical;
   }
   if (!close_ok) {
-    fmt::print(stderr, "kanesim: error: cannot write the output ({})\n", to_stdout ? "stdout" : a.out_path);
+    fmt::print(stderr, "kanesim: error: {}\n",
+               write_error.empty() ? "cannot write the output (" + std::string(to_stdout ? "stdout" : a.out_path) + ")"
+                                   : write_error);
     return kExitModelError;
   }
   if (!animation_ok) return kExitModelError;

@@ -3,7 +3,7 @@
 //   kanesim sweep FILE.mech|SWEEP.toml [scenario sources] [--metric M]... [-o DIR] ...
 //   kanesim sweep merge INPUT... [-o OUT.csv]
 // Exit codes: 0 every scenario ok; 1 usage/model error or interrupted; 2 the sweep
-// completed but some scenarios failed (their rows say why).
+// completed but some scenarios failed, crashed or timed out (their rows say why).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
@@ -52,6 +52,9 @@ struct SweepArgs {
   std::string shard;
   bool mpi = false;
   bool no_progress = false;
+  std::string isolation = "process";  // --isolation (SweepConfig::Isolation)
+  double scenario_timeout = 0.0;      // --scenario-timeout, seconds; 0: none
+  double worker_memory = 0.0;         // --worker-memory, MiB; 0: no limit
   double start_time = kNaN, stop_time = kNaN, interval = kNaN, rtol = kNaN, atol = kNaN;
   std::string solver = "auto", integrator = "auto", linear_solver = "auto";
   std::string reactions = "nan";
@@ -65,7 +68,13 @@ struct MergeArgs {
 };
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void OnSigint(int) { g_interrupted.store(true); }
+// The first ^C stops handing out scenarios and lets the running ones finish; the second
+// ends the sweep at once (a scenario may hang): every row written so far is on disk, the
+// workers die with the sweep process, and --resume continues.
+extern "C" void OnSigint(int) {
+  g_interrupted.store(true);
+  std::signal(SIGINT, SIG_DFL);
+}
 
 bool Fail(const std::string& msg) {
   fmt::print(stderr, "kanesim: error: {}\n", msg);
@@ -157,6 +166,7 @@ bool BuildConfig(SweepArgs& a, batch::SweepConfig* c, std::vector<batch::Block>*
   }
   if (blocks->empty()) return Fail("no scenarios: give --grid, --list, --sample or a sweep.toml");
   if (!batch::CombineBlocks(*blocks, &c->param_names, &c->scenarios, &err)) return Fail(err);
+  c->blocks = *blocks;
   for (const std::string& m : a.metrics) {
     batch::Metric metric;
     if (!batch::ParseMetric(m, &metric, &err)) return Fail(err);
@@ -165,6 +175,16 @@ bool BuildConfig(SweepArgs& a, batch::SweepConfig* c, std::vector<batch::Block>*
   c->out_dir = a.out_dir.empty() ? "sweep-out" : a.out_dir;
   c->trajectories = a.trajectories;
   c->threads = a.threads;
+  c->isolation = a.isolation == "thread" ? batch::SweepConfig::Isolation::kThread : batch::SweepConfig::Isolation::kProcess;
+  // 1e6 s (11 days) and 1e9 MiB (1 PB) bound what an int timeout and an rlimit can hold.
+  if (!(a.scenario_timeout >= 0.0 && a.scenario_timeout <= 1e6))
+    return Fail("--scenario-timeout needs seconds from 0 (none) to 1e6, got " + sim::FormatShortest(a.scenario_timeout));
+  if (!(a.worker_memory >= 0.0 && a.worker_memory <= 1e9))
+    return Fail("--worker-memory needs MiB from 0 (no limit) to 1e9, got " + sim::FormatShortest(a.worker_memory));
+  if (c->isolation == batch::SweepConfig::Isolation::kThread && (a.scenario_timeout > 0.0 || a.worker_memory > 0.0))
+    return Fail("--scenario-timeout and --worker-memory need worker processes (--isolation process)");
+  c->scenario_timeout = a.scenario_timeout;
+  c->worker_memory_mib = a.worker_memory;
   c->resume = a.resume;
   if (!a.shard.empty()) {
     int k = 0, n = 0;
@@ -189,6 +209,21 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
   r.Set("model", a.load.path);
   r.Set("model_text", "fnv1a64:" + batch::Fnv1a64Hex(ReadFileText(a.load.path)));
   r.Set("stdlib", "fnv1a64:" + StdlibHash());
+  // Every other file the model read: its other source files and its data files (meshes;
+  // tables later), one key each, named relative to the model's folder; the rows depend on
+  // their contents as much as on the model's (issue 38: a resume mixed two meshes).
+  const std::filesystem::path model_dir = std::filesystem::absolute(a.load.path).parent_path();
+  std::vector<std::string> inputs;
+  for (const std::string& f : base.mech->source_files)
+    if (!f.empty() && f[0] != '<' && !batch::SameFile(f, a.load.path)) inputs.push_back(f);
+  inputs.insert(inputs.end(), base.mech->data_files.begin(), base.mech->data_files.end());
+  for (const std::string& f : inputs) {
+    std::string text, why;
+    const std::string hash = batch::ReadTextFile(f, batch::kMaxDataBytes, &text, &why)
+                                 ? "fnv1a64:" + batch::Fnv1a64Hex(text)
+                                 : "unreadable";
+    r.Set("input_file:" + std::filesystem::absolute(f).lexically_normal().lexically_relative(model_dir).string(), hash);
+  }
   r.Set("model_name", a.load.model);
   r.Set("set", Join(a.load.sets));
   const sim::OutputGrid grid = sim::ResolveGrid(base, c.sim);
@@ -208,13 +243,7 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
   r.Set("metrics", Join(metrics));
   r.Set("trajectories", c.trajectories ? "true" : "false");
   r.Set("signals", Join(c.trajectory_signals));
-  std::string defs = Join(c.param_names) + "\n";
-  for (const batch::Scenario& sc : c.scenarios) {
-    for (double v : sc.values) defs.append(sim::FormatNumber(v)).append(",");
-    for (double v : {sc.run.stop_time, sc.run.rtol, sc.run.atol}) defs.append(sim::FormatNumber(v)).append(",");
-    defs.append("\n");
-  }
-  r.Set("scenarios", std::to_string(c.scenarios.size()) + " fnv1a64:" + batch::Fnv1a64Hex(defs));
+  r.Set("scenarios", batch::ScenarioDefinitionsDigest(c.param_names, c.scenarios));
   r.Set("shard", std::to_string(c.shard_index + 1) + "/" + std::to_string(c.shard_count));
   return r;
 }
@@ -303,23 +332,76 @@ int SweepCommand(SweepArgs a) {
   bar.Finish();
   if (!ok) return FailExit(err);
   if (!report.is_root) return kExitOk;
+  for (const std::string& w : report.warnings) fmt::print(stderr, "kanesim: warning: {}\n", w);
   const batch::SweepProgress& p = report.progress;
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const int workers = a.threads > 0 ? a.threads : static_cast<int>(hw);
+  const bool processes = config.isolation == batch::SweepConfig::Isolation::kProcess;
+  std::string lost;
+  if (p.crashed > 0) lost += fmt::format("{} crashed", p.crashed);
+  if (p.timed_out > 0) lost += fmt::format("{}{} timed out", lost.empty() ? "" : ", ", p.timed_out);
   fmt::print(stderr,
-             "sweep: {} scenario{} ({} run, {} failed, {} skipped as done) in {:.2f} s {}; {} program{} "
-             "compiled (the base model and one per structural variant); summary: {}\n",
-             p.total, p.total == 1 ? "" : "s", p.done, p.failed, p.skipped, secs,
+             "sweep: {} scenario{} ({} run, {} failed{}, {} skipped as done) in {:.2f} s {}; {} program{} "
+             "compiled (the base model and the structural variants{}); summary: {}\n",
+             p.total, p.total == 1 ? "" : "s", p.done, p.failed, lost.empty() ? "" : " (" + lost + ")", p.skipped, secs,
              a.mpi ? std::string("over MPI ranks")
-                   : fmt::format("on {} thread{}", a.threads > 0 ? a.threads : static_cast<int>(hw),
-                                 (a.threads == 1 || (a.threads <= 0 && hw == 1)) ? "" : "s"),
-             report.variants, report.variants == 1 ? "" : "s", report.summary_path);
+                   : fmt::format("on {} {}", workers,
+                                 processes ? (workers == 1 ? "worker process" : "worker processes")
+                                           : (workers == 1 ? "thread" : "threads")),
+             report.variants, report.variants == 1 ? "" : "s", processes ? ", once per worker that needed one" : "",
+             report.summary_path);
+  if (p.crashed + p.timed_out > 0)
+    fmt::print(stderr,
+               "kanesim: {} scenario{} lost {} worker process (status crashed or timeout in the summary); "
+               "--resume runs them again\n",
+               p.crashed + p.timed_out, p.crashed + p.timed_out == 1 ? "" : "s",
+               p.crashed + p.timed_out == 1 ? "its" : "their");
   if (report.interrupted) {
     fmt::print(stderr, "kanesim: interrupted: {} of {} scenarios done; run again with --resume to finish\n",
                p.done + p.skipped, p.total);
     return kExitModelError;
   }
   return p.failed > 0 ? kExitNumerical : kExitOk;
+}
+
+// The sweep's scenarios rebuilt from the sources recorded beside the first input that has
+// them (summary.scenarios), checked against the settings record's digest; every row of
+// every input must then carry its scenario's parameter values, as `--resume` checks.
+bool CheckRowsAgainstScenarios(const std::vector<std::string>& files, const batch::SettingsRecord& settings,
+                               std::string* sources_text) {
+  std::string source;
+  for (const std::string& f : files)
+    if (std::filesystem::exists(batch::ScenariosPathFor(f))) {
+      source = batch::ScenariosPathFor(f);
+      break;
+    }
+  if (source.empty())
+    return Fail("'" + batch::ScenariosPathFor(files[0]) + "' is missing (a sweep writes its scenario sources " +
+                "beside its summary), so the rows cannot be checked against their scenario ids");
+  std::vector<batch::Block> blocks;
+  std::vector<std::string> names;
+  std::vector<batch::Scenario> scenarios;
+  std::string err;
+  if (!batch::ReadTextFile(source, batch::kMaxDataBytes, sources_text, &err)) return Fail(err);
+  if (!batch::ParseBlocks(*sources_text, &blocks, &err)) return Fail("'" + source + "', " + err);
+  if (!batch::CombineBlocks(blocks, &names, &scenarios, &err)) return Fail("'" + source + "': " + err);
+  const std::string* digest = settings.Find("scenarios");
+  if (!digest || *digest != batch::ScenarioDefinitionsDigest(names, scenarios))
+    return Fail("'" + source + "' does not hold the scenarios its settings record names (edited or from another "
+                "sweep)");
+  for (const std::string& f : files) {
+    batch::SummaryTable t;
+    if (!batch::ReadSummary(f, &t, &err)) return Fail(err);
+    for (const auto& [id, line] : t.rows)
+      if (static_cast<size_t>(id) >= scenarios.size() || !batch::RowMatchesScenario(line, scenarios[static_cast<size_t>(id)]))
+        return Fail("'" + f + "': the row of scenario " + std::to_string(id) +
+                    (static_cast<size_t>(id) >= scenarios.size()
+                         ? " is not a scenario of the sweep (it has " + std::to_string(scenarios.size()) + ")"
+                         : " has other parameter values than scenario " + std::to_string(id) + " of the sweep") +
+                    "; the file was edited or mixed with another sweep's rows");
+  }
+  return true;
 }
 
 int MergeCommand(const MergeArgs& a) {
@@ -366,8 +448,10 @@ int MergeCommand(const MergeArgs& a) {
       return FailExit(msg);
     }
   }
+  std::string sources_text;
+  if (!CheckRowsAgainstScenarios(files, merged_settings, &sources_text)) return kExitModelError;
   merged_settings.Set("shard", "merged from " + std::to_string(files.size()) + " file" + (files.size() == 1 ? "" : "s"));
-  for (const std::string& path : {a.out, batch::SettingsPathFor(a.out)})
+  for (const std::string& path : {a.out, batch::SettingsPathFor(a.out), batch::ScenariosPathFor(a.out)})
     if (std::string in = batch::OverwrittenInput(path, files); !in.empty())
       return FailExit("the merged summary '" + path + "' would overwrite the input '" + in + "'; choose another -o");
   batch::SummaryTable table;
@@ -376,6 +460,7 @@ int MergeCommand(const MergeArgs& a) {
   std::filesystem::path out(a.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   if (!batch::WriteFileAtomic(a.out, batch::FormatSummary(table), &err) ||
+      !batch::WriteFileAtomic(batch::ScenariosPathFor(a.out), sources_text, &err) ||
       !batch::WriteFileAtomic(batch::SettingsPathFor(a.out), batch::FormatSettings(merged_settings), &err))
     return FailExit(err);
   fmt::print(stderr, "merge: {} file{}, {} scenarios -> {}\n", files.size(), files.size() == 1 ? "" : "s",
@@ -422,6 +507,16 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   sw->add_option("--shard", a->shard, "K/N: run the K-th of N disjoint slices (id mod N == K-1)");
   sw->add_flag("--mpi", a->mpi, "Spread scenarios over MPI ranks (mpirun -n R kanesim sweep --mpi ...)");
   sw->add_flag("--no-progress", a->no_progress, "No progress bar");
+  sw->add_option("--isolation", a->isolation,
+                 "process (default): scenarios run in worker processes, so one that crashes, runs out of memory or "
+                 "hangs costs its own row only; thread: on threads of one process (a crash ends the sweep)")
+      ->check(CLI::IsMember({"process", "thread"}));
+  AddNumberOption(sw, "--scenario-timeout", &a->scenario_timeout,
+                  "Seconds of wall time a scenario may take; its worker is then killed and the row says timeout "
+                  "(default 0: no limit)");
+  AddNumberOption(sw, "--worker-memory", &a->worker_memory,
+                  "MiB of memory a worker process may allocate; a scenario that needs more fails with 'out of "
+                  "memory' (default 0: no limit)");
   AddNumberOption(sw, "--start-time", &a->start_time, "Start time (default: experiment StartTime)");
   AddNumberOption(sw, "--stop-time", &a->stop_time, "Stop time (default: experiment StopTime)");
   AddNumberOption(sw, "--interval", &a->interval, "Output interval (default: experiment Interval)");

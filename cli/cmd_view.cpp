@@ -18,6 +18,8 @@
 #include "cli/common.h"
 #include "cli/number_options.h"
 #include "cli/scene.h"
+#include "runtime/batch/file_guard.h"
+#include "runtime/flat/number.h"
 #include "runtime/geometry/primitives.h"
 #include "runtime/pipeline/pipeline.h"
 #include "runtime/sim/signal_select.h"
@@ -40,6 +42,35 @@ struct ViewArgs {
   double timeout = 0;    // --timeout: stop serving after this many seconds (0: at Ctrl-C)
   bool show_frames = false;  // --show-frames: every joint's frames as small axes
 };
+
+// The longest --timeout: a week. A larger number is a mistake (a unit typed wrong), and its
+// double would overflow the server's clock arithmetic.
+constexpr double kMaxTimeout = 7 * 24 * 3600.0;
+
+// --timeout SECONDS: a number in (0, kMaxTimeout], read with the language's number syntax
+// (nan, inf, hex refused); anything else is a usage error (exit 1) that says the range.
+void AddTimeoutOption(CLI::App* cmd, double* target) {
+  cmd->add_option_function<std::string>(
+         "--timeout",
+         [target](const std::string& text) {
+           std::string why;
+           double v = 0;
+           if (!flat::ParseNumber(text, &v, &why)) throw CLI::ValidationError("--timeout", why);
+           if (!(v > 0) || v > kMaxTimeout)
+             throw CLI::ValidationError("--timeout", fmt::format("'{}' is not a number of seconds in (0, {:.0f}] (a "
+                                                                 "week); leave it out to serve until Ctrl-C",
+                                                                 text, kMaxTimeout));
+           *target = v;
+         },
+         "Stop serving after this many seconds, in (0, 604800] (default: at Ctrl-C)")
+      ->type_name("SECONDS");
+}
+
+// The page never goes over one of the model's files (run -o, --animation and linearize
+// refuse the same); "" or the input it would destroy.
+std::string HtmlOverInput(const std::string& html, const std::vector<std::string>& inputs) {
+  return html.empty() ? "" : batch::OverwrittenInput(html, inputs);
+}
 
 // The unit of a signal, from its name's last part (for the plots' axes).
 std::string UnitOf(const std::string& name) {
@@ -72,6 +103,12 @@ void AddContactPlanes(const flat::Mechanism& mech, viz::ViewerScene* scene) {
 }
 
 int RunView(const ViewArgs& a) {
+  // An output is never an input: refused before any work, and again below against every
+  // file the model read (imports).
+  if (std::string in = HtmlOverInput(a.html, {a.load.path}); !in.empty()) {
+    fmt::print(stderr, "kanesim: error: --html '{}' is the model '{}'; writing there would destroy it\n", a.html, in);
+    return kExitModelError;
+  }
   // The pipeline's stages 1-4, as `kanesim run` calls them (runtime/pipeline/pipeline.h).
   pipeline::RunSpec spec = a.spec;
   pipeline::SolverFromName(a.solver, &spec.solver);
@@ -82,6 +119,11 @@ int RunView(const ViewArgs& a) {
   if (!model) return kExitModelError;
   const flat::Mechanism& mech = *model->mech;
   const rt::Program& program = *model->program;
+  if (std::string in = HtmlOverInput(a.html, mech.source_files); !in.empty()) {
+    fmt::print(stderr, "kanesim: error: --html '{}' is the model file '{}'; writing there would destroy it\n", a.html,
+               in);
+    return kExitModelError;
+  }
   pipeline::ResolvedRun run;
   pipeline::RunProblem problem = pipeline::RunProblem::kNone;
   if (std::string why = pipeline::ResolveRun(*model, spec, &run, &problem); !why.empty()) {
@@ -195,10 +237,8 @@ void AddViewCommand(CLI::App& app, int* exit_code, bool options) {
       ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
   cmd->add_flag("--show-frames", a->show_frames, "Draw every joint's frames as small x/y/z axes");
   cmd->add_option("--html", a->html, "Write one offline page (opens by double-click) instead of serving");
-  cmd->add_option("--port", a->port, "Serve on this port of 127.0.0.1 (default: any free port)")
-      ->check(CLI::Range(0, 65535));
-  cmd->add_option("--timeout", a->timeout, "Stop serving after this many seconds (default: at Ctrl-C)")
-      ->check(CLI::NonNegativeNumber);
+  AddIntegerOption(cmd, "--port", &a->port, 0, 65535, "Serve on this port of 127.0.0.1 (default: any free port)");
+  AddTimeoutOption(cmd, &a->timeout);
   cmd->callback([a, exit_code] { *exit_code = RunView(*a); });
 }
 

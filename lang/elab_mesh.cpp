@@ -14,6 +14,7 @@
 // modifier `file = "..."` (followed through parameters that pass it on), or the working
 // directory for a `--set`. The mesh's problems become diagnostics at that place (codes
 // E230-E235, W302-W303; the mapping is MeshDiagCode below).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -36,6 +37,8 @@ DiagCode MeshDiagCode(geometry::MeshProblemKind k) {
     case K::kModuleMissing:
     case K::kImportFailed:
     case K::kNoTriangles:
+    case K::kNotRegularFile:
+    case K::kDeclaredBeyondFile:
     case K::kNonFinite: return DiagCode::MeshUnreadable;
     case K::kTooLarge: return DiagCode::MeshTooLarge;
     case K::kBadScale: return DiagCode::BadValue;
@@ -59,6 +62,10 @@ const char* MeshHint(geometry::MeshProblemKind k) {
              "modelling tool, or give the mass properties with a Body";
     case K::kZeroVolume: return "is the mesh flat, or is `scale` far too small?";
     case K::kTooLarge: return "decimate the mesh; the limits are in docs/visualization.md";
+    case K::kNotRegularFile: return "name a regular mesh file; a pipe or a device cannot be read as a mesh";
+    case K::kDeclaredBeyondFile:
+      return "the file's header claims more data than the file has: it is truncated or was written wrongly; "
+             "export the mesh again";
     case K::kInsideOut: return "the mass properties are those of the flipped (outward) surface";
     default: return "";
   }
@@ -100,6 +107,8 @@ const Elaborator::MeshEntry* Elaborator::LoadMeshFor(const std::string& path, do
     geometry::LoadMeshOptions options;
     options.scale = scale;
     geometry::MeshLoadResult r = geometry::LoadMesh(path, options);
+    if (std::find(m_->data_files.begin(), m_->data_files.end(), path) == m_->data_files.end())
+      m_->data_files.push_back(path);
     entry.problems = r.problems;
     if (r.ok()) {
       geometry::MassProperties mp = geometry::ComputeMassProperties(r.mesh, geometry::MassSpec::Density(1.0));

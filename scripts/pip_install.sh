@@ -1,24 +1,64 @@
 #!/usr/bin/env bash
-# Installs the Python module into a virtual environment with pip, reusing the objects of
-# the CMake build in build/ through ccache (the README's test command runs it after that
-# build; the python.installed test then runs pytest on what pip installed).
-# Usage: scripts/pip_install.sh [VENV]     (default build/pyvenv; BUILD_DIR as scripts/test.sh)
-# The venv sees the system's packages (--system-site-packages: NumPy, pytest and pandas from
-# Debian). pip builds in build-py/ (pyproject.toml); with the compilers and compiler launcher
-# of build/ the command lines are the same, so ccache serves every object build/ compiled.
+# Builds the Python package the way docs/python.md installs it (`pip install .`: pip's
+# isolated build with scikit-build-core and pybind11 >= 2.12 from PyPI, pyproject.toml)
+# into one wheel, reusing the objects of the CMake build in build/ through ccache, and
+# installs that wheel into the virtual environments ctest's python.installed* test:
+#   $BUILD_DIR/pyvenv          sees Debian's packages (--system-site-packages): NumPy 1.x, pytest;
+#                              pandas from PyPI for that NumPy
+#   $BUILD_DIR/pyvenv-numpy2   sees none: the newest NumPy (2.x), pytest and pandas from PyPI
+# Usage: scripts/pip_install.sh          both venvs (scripts/test.sh runs this)
+#        scripts/pip_install.sh VENV     only VENV, made with --system-site-packages if new
+# pip builds in build-py/; with the compilers and compiler launcher of build/ the command
+# lines are the same, so ccache serves every object build/ compiled except the module's
+# two sources, whose include path is pip's temporary build environment.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build}
-venv=${1:-$build_dir/pyvenv}
 python=/usr/bin/python3
 [ -x "$python" ] || python=python3
-[ -x "$venv/bin/python" ] || "$python" -m venv --system-site-packages "$venv"
+pip_quiet=(--quiet --disable-pip-version-check)
+start=$SECONDS
+
+new_venv() {  # VENV [--system-site-packages]
+  [ -x "$1/bin/python" ] || "$python" -m venv "${@:2}" "$1"
+}
+
+if [ $# -gt 0 ]; then
+  venvs=("$1")
+  new_venv "$1" --system-site-packages
+else
+  venvs=("$build_dir/pyvenv" "$build_dir/pyvenv-numpy2")
+  new_venv "$build_dir/pyvenv" --system-site-packages
+  new_venv "$build_dir/pyvenv-numpy2"
+fi
+
 settings=()
 cache_value() { sed -n "s/^$1:[A-Z]*=//p" "$build_dir/CMakeCache.txt" 2>/dev/null | head -1; }
 for var in CMAKE_C_COMPILER CMAKE_CXX_COMPILER CMAKE_C_COMPILER_LAUNCHER CMAKE_CXX_COMPILER_LAUNCHER; do
   value=$(cache_value "$var")
   [ -n "$value" ] && settings+=("--config-settings=cmake.define.$var=$value")
 done
-start=$SECONDS
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check "${settings[@]}" .
-echo "pip_install: kanesim installed into $venv in $((SECONDS - start)) s"
+
+wheels="$build_dir/wheels"
+rm -rf "$wheels"
+"${venvs[0]}/bin/python" -m pip wheel "${pip_quiet[@]}" --no-deps "${settings[@]}" -w "$wheels" .
+wheel=("$wheels"/kanesim-*.whl)
+echo "pip_install: built ${wheel[0]##*/} in $((SECONDS - start)) s"
+for venv in "${venvs[@]}"; do
+  "$venv/bin/python" -m pip install "${pip_quiet[@]}" --force-reinstall --no-deps "${wheel[0]}"
+done
+if [ $# -gt 0 ]; then
+  # The package's dependency (NumPy), without replacing one the venv already sees.
+  "$1/bin/python" -m pip install "${pip_quiet[@]}" "${wheel[0]}"
+else
+  # What the tests need from PyPI: in the NumPy 2 venv the newest NumPy, pytest and pandas;
+  # in Debian's a pandas built for its NumPy (held at Debian's version by a constraint).
+  "$build_dir/pyvenv-numpy2/bin/python" -m pip install "${pip_quiet[@]}" --upgrade numpy pytest pandas
+  held="$build_dir/pyvenv/numpy-constraint.txt"
+  echo "numpy==$("$build_dir/pyvenv/bin/python" -c 'import numpy; print(numpy.__version__)')" > "$held"
+  "$build_dir/pyvenv/bin/python" -m pip install "${pip_quiet[@]}" -c "$held" pandas
+fi
+for venv in "${venvs[@]}"; do
+  echo "pip_install: $venv: kanesim with NumPy $("$venv/bin/python" -c 'import numpy; print(numpy.__version__)')"
+done
+echo "pip_install: done in $((SECONDS - start)) s"

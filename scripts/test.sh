@@ -15,8 +15,9 @@ if command -v ccache >/dev/null 2>&1; then
 fi
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@"
 cmake --build "$build_dir" -j"$jobs"
-# `pip install .` into $build_dir/pyvenv when this build has the Python module (not under
-# the sanitizers); ctest's python.installed runs pytest on the installed package.
+# `pip install .` into $build_dir/pyvenv (Debian's NumPy 1.x) and $build_dir/pyvenv-numpy2
+# (the newest NumPy from PyPI) when this build has the Python module (not under the
+# sanitizers); ctest's python.installed and python.installed_numpy2 run pytest on them.
 if compgen -G "$build_dir/python/kanesim/_kanesim*.so" >/dev/null; then
   BUILD_DIR="$build_dir" scripts/pip_install.sh
 fi

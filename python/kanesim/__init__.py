@@ -24,6 +24,34 @@ import numpy as np
 
 from . import _kanesim
 
+
+def _check_array_layout() -> None:
+    """Refuses to import when the compiled module's arrays would not read back as written.
+
+    pybind11 before 2.12 reads NumPy's dtype struct with NumPy 1's layout; under NumPy 2 a
+    new array then gets stride 0 and every element reads as the first (Result.time all
+    zeros), silently. The module says which pybind11 built it, and makes known arrays the
+    way it makes every result (python/src/module.cpp, LayoutProbe): both are checked here."""
+    built = tuple(getattr(_kanesim, "_pybind11_version", (0, 0, 0)))
+    numpy_major = int(np.__version__.split(".")[0])
+    fix = ("reinstall it with `python3 -m pip install .` (pyproject.toml builds it with pybind11 >= 2.12 from "
+           "PyPI; docs/python.md), or use NumPy 1.x")
+    if numpy_major >= 2 and built[:2] < (2, 12):
+        raise ImportError(f"kanesim: this module was built with pybind11 {'.'.join(map(str, built))}, which predates "
+                          f"NumPy 2: with NumPy {np.__version__} its arrays would hold wrong numbers; {fix}")
+    vector, rows, matrix, complexes = _kanesim._layout_probe()
+    want = np.arange(1.0, 7.0).reshape(2, 3)
+    good = (vector.tolist() == [1.0, 2.0, 3.0] and rows.tolist() == want.tolist() and matrix.tolist() == want.tolist()
+            and complexes.tolist() == [1 + 2j, 3 - 4j]
+            and all(a.flags.c_contiguous and a.flags.owndata for a in (vector, rows, matrix, complexes)))
+    if not good:
+        raise ImportError(f"kanesim: the compiled module's arrays do not read back under NumPy {np.__version__} "
+                          f"(pybind11 {'.'.join(map(str, built))}; strides {vector.strides}, {rows.strides}): "
+                          f"the results would be wrong numbers; {fix}")
+
+
+_check_array_layout()
+
 __all__ = ["load", "loads", "sweep", "Model", "Result", "LinearModel", "Table", "ModelError", "SimulationError", "KanesimWarning"]
 __version__ = "0.1.0"
 

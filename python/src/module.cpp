@@ -10,6 +10,7 @@
 #include <complex>
 #include <cstring>
 #include <functional>
+#include <vector>
 
 #include "python/src/glue.h"
 #include "runtime/sim/integrator.h"
@@ -87,6 +88,49 @@ py::tuple Load(const std::string& path, const std::string& text, bool from_text,
   return py::make_tuple(loaded, py::none());
 }
 
+// Every NumPy array the module returns is made by one of these four, so that the layout
+// probe below (run by the package at import) checks each way an array is made. pybind11
+// computes a new array's strides from NumPy's dtype struct; pybind11 older than 2.12 reads
+// it with NumPy 1's layout, which under NumPy 2 gives stride 0 (every element reads the
+// first): the package refuses to import when the probe disagrees (python/kanesim/__init__.py).
+py::array_t<double> Vector(const std::vector<double>& x) {
+  py::array_t<double> a(static_cast<py::ssize_t>(x.size()));
+  if (!x.empty()) std::memcpy(a.mutable_data(), x.data(), x.size() * sizeof(double));
+  return a;
+}
+
+// `x` row-major, rows x cols.
+py::array_t<double> RowMajor(const std::vector<double>& x, size_t rows, size_t cols) {
+  py::array_t<double> a({static_cast<py::ssize_t>(rows), static_cast<py::ssize_t>(cols)});
+  if (rows > 0 && cols > 0) std::memcpy(a.mutable_data(), x.data(), rows * cols * sizeof(double));
+  return a;
+}
+
+py::array_t<double> Matrix(const Eigen::MatrixXd& m) {
+  py::array_t<double> a({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
+  auto w = a.mutable_unchecked<2>();
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j) w(i, j) = m(i, j);
+  return a;
+}
+
+template <class Complexes>
+py::array_t<std::complex<double>> ComplexVector(const Complexes& x, size_t n) {
+  py::array_t<std::complex<double>> a(static_cast<py::ssize_t>(n));
+  for (size_t k = 0; k < n; ++k) a.mutable_data()[k] = x[k];
+  return a;
+}
+
+// Known values through each maker above, for the package's import-time check:
+// (vector [1, 2, 3], row-major 2 x 3 [[1, 2, 3], [4, 5, 6]], matrix the same from Eigen,
+// complex [1+2j, 3-4j]).
+py::tuple LayoutProbe() {
+  Eigen::MatrixXd m(2, 3);
+  m << 1, 2, 3, 4, 5, 6;
+  const std::vector<std::complex<double>> c = {{1, 2}, {3, -4}};
+  return py::make_tuple(Vector({1, 2, 3}), RowMajor({1, 2, 3, 4, 5, 6}, 2, 3), Matrix(m), ComplexVector(c, c.size()));
+}
+
 // (columns, time, values 2-D, stats, failure or None, warnings); raises ValueError on a
 // usage error.
 py::tuple Run(const LoadedModel& model, double start_time, double stop_time, double interval, double rtol, double atol,
@@ -121,12 +165,8 @@ py::tuple Run(const LoadedModel& model, double start_time, double stop_time, dou
   }
   if (out.interrupted) throw py::error_already_set();
   if (!ok) throw py::value_error(error);
-  const auto n = static_cast<py::ssize_t>(out.time.size());
-  const auto m = static_cast<py::ssize_t>(out.columns.size());
-  py::array_t<double> time(n);
-  if (n > 0) std::memcpy(time.mutable_data(), out.time.data(), out.time.size() * sizeof(double));
-  py::array_t<double> values({n, m});
-  if (n > 0 && m > 0) std::memcpy(values.mutable_data(), out.values.data(), out.values.size() * sizeof(double));
+  py::array_t<double> time = Vector(out.time);
+  py::array_t<double> values = RowMajor(out.values, out.time.size(), out.columns.size());
   py::object failure = py::none();
   if (out.failed) failure = py::make_tuple(out.fail_time, out.message);
   py::dict stats = StatsDict(out.stats);
@@ -165,14 +205,6 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
   if (table.interrupted) throw py::error_already_set();
   if (!ok) throw py::value_error(error);
   return py::make_tuple(table.header, table.lines, table.failed);
-}
-
-py::array_t<double> Matrix(const Eigen::MatrixXd& m) {
-  py::array_t<double> a({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
-  auto w = a.mutable_unchecked<2>();
-  for (Eigen::Index i = 0; i < m.rows(); ++i)
-    for (Eigen::Index j = 0; j < m.cols(); ++j) w(i, j) = m(i, j);
-  return a;
 }
 
 // A dict with the linear model (A, B, C, D, names, eigenvalues, modes, accuracy, the
@@ -226,11 +258,11 @@ py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equili
   d["B"] = Matrix(m.B);
   d["C"] = Matrix(m.C);
   d["D"] = Matrix(m.D);
-  py::array_t<std::complex<double>> eig(static_cast<py::ssize_t>(m.modes.size()));
+  std::vector<std::complex<double>> lambdas;
   py::list modes;
   for (size_t k = 0; k < m.modes.size(); ++k) {
     const kanesim::lin::Mode& md = m.modes[k];
-    eig.mutable_data()[k] = md.lambda;
+    lambdas.push_back(md.lambda);
     py::dict one;
     one["eigenvalue"] = md.lambda;
     one["natural_frequency"] = md.omega_n;
@@ -239,12 +271,10 @@ py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equili
     py::list dom;
     for (const auto& [name, w] : md.dominant) dom.append(py::make_tuple(name, w));
     one["dominant"] = dom;
-    py::array_t<std::complex<double>> shape(static_cast<py::ssize_t>(md.shape.size()));
-    for (Eigen::Index i = 0; i < md.shape.size(); ++i) shape.mutable_data()[i] = md.shape[i];
-    one["shape"] = shape;
+    one["shape"] = ComplexVector(md.shape, static_cast<size_t>(md.shape.size()));
     modes.append(one);
   }
-  d["eigenvalues"] = eig;
+  d["eigenvalues"] = ComplexVector(lambdas, lambdas.size());
   d["modes"] = modes;
   d["ignorable"] = m.ignorable;
   py::dict acc;
@@ -270,4 +300,7 @@ PYBIND11_MODULE(_kanesim, m) {
   m.def("run", &Run);
   m.def("sweep", &Sweep);
   m.def("linearize", &Linearize);
+  m.def("_layout_probe", &LayoutProbe);
+  // The pybind11 this module was compiled with: before 2.12 it does not know NumPy 2.
+  m.attr("_pybind11_version") = py::make_tuple(PYBIND11_VERSION_MAJOR, PYBIND11_VERSION_MINOR, PYBIND11_VERSION_PATCH);
 }

@@ -1,6 +1,7 @@
 #include "runtime/batch/scenario.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -53,6 +54,13 @@ bool SplitNameValue(const std::string& text, std::string* name, std::string* val
   *name = Trim(text.substr(0, eq));
   *value = text.substr(eq + 1);
   return true;
+}
+
+// A number as FormatBlocks writes it (%.17g, subnormals included: std::from_chars, not the
+// language's syntax, which refuses them).
+bool ParseExact(const std::string& text, double* out) {
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), *out);
+  return ec == std::errc() && end == text.data() + text.size() && std::isfinite(*out);
 }
 
 // Uniform on [0, 1) from the top 53 bits of one 64-bit draw.
@@ -322,6 +330,75 @@ bool CombineBlocks(const std::vector<Block>& blocks, std::vector<std::string>* n
     out->push_back(std::move(s));
   }
   return true;
+}
+
+std::string FormatBlocks(const std::vector<Block>& blocks) {
+  auto num = [](double v) { return std::isnan(v) ? std::string() : sim::FormatNumber(v); };
+  std::string out = "# kanesim sweep: the scenario sources of the summary beside this file (sweep merge reads it)\n";
+  for (const Block& b : blocks) {
+    const bool run = !b.run.empty();
+    out += "block " + std::to_string(b.names.size()) + " " + std::to_string(b.rows.size()) + (run ? " 1\n" : " 0\n");
+    for (size_t j = 0; j < b.names.size(); ++j) out.append(j ? "," : "").append(QuoteCsv(b.names[j]));
+    out += "\n";
+    for (size_t i = 0; i < b.rows.size(); ++i) {
+      for (size_t j = 0; j < b.rows[i].size(); ++j) out.append(j ? "," : "").append(num(b.rows[i][j]));
+      if (run)
+        for (double v : {b.run[i].stop_time, b.run[i].rtol, b.run[i].atol}) out.append(",").append(num(v));
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+bool ParseBlocks(const std::string& text, std::vector<Block>* out, std::string* error) {
+  std::istringstream in(text);
+  std::string line;
+  int line_no = 0;
+  auto fail = [&](const std::string& why) {
+    *error = "line " + std::to_string(line_no) + ": " + why;
+    return false;
+  };
+  out->clear();
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    size_t ncols = 0, nrows = 0;
+    int run = 0, used = 0;
+    if (std::sscanf(line.c_str(), "block %zu %zu %d%n", &ncols, &nrows, &run, &used) != 3 ||
+        used != static_cast<int>(line.size()) || nrows > static_cast<size_t>(kMaxScenarios) || ncols > kMaxValues)
+      return fail("expected 'block NCOLS NROWS RUN'");
+    Block b;
+    if (!std::getline(in, line)) return fail("the block has no names");
+    ++line_no;
+    b.names = SplitCsvLine(line);
+    if (b.names.size() != ncols) return fail("expected " + std::to_string(ncols) + " names");
+    const size_t fields = ncols + (run ? 3 : 0);
+    for (size_t i = 0; i < nrows; ++i) {
+      if (!std::getline(in, line)) return fail("the block ends early");
+      ++line_no;
+      std::vector<std::string> f = SplitCsvLine(line);
+      if (f.size() != fields) return fail("expected " + std::to_string(fields) + " fields");
+      std::vector<double> v(fields, kUnset);
+      for (size_t j = 0; j < fields; ++j)
+        if (!f[j].empty() && !ParseExact(f[j], &v[j])) return fail("'" + f[j] + "' is not a number");
+      b.rows.emplace_back(v.begin(), v.begin() + static_cast<long>(ncols));
+      if (run) b.run.push_back(RunOverride{v[ncols], v[ncols + 1], v[ncols + 2]});
+    }
+    out->push_back(std::move(b));
+  }
+  return true;
+}
+
+std::string ScenarioDefinitionsDigest(const std::vector<std::string>& names, const std::vector<Scenario>& scenarios) {
+  std::string defs;
+  for (size_t j = 0; j < names.size(); ++j) defs.append(j ? "; " : "").append(names[j]);
+  defs += "\n";
+  for (const Scenario& sc : scenarios) {
+    for (double v : sc.values) defs.append(sim::FormatNumber(v)).append(",");
+    for (double v : {sc.run.stop_time, sc.run.rtol, sc.run.atol}) defs.append(sim::FormatNumber(v)).append(",");
+    defs.append("\n");
+  }
+  return std::to_string(scenarios.size()) + " fnv1a64:" + Fnv1a64Hex(defs);
 }
 
 }  // namespace kanesim::batch

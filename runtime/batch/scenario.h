@@ -80,6 +80,20 @@ bool ReadListCsvText(const std::string& path, const std::string& text, Block* ou
 bool CombineBlocks(const std::vector<Block>& blocks, std::vector<std::string>* names, std::vector<Scenario>* out,
                    std::string* error);
 
+// The scenario sources written down exactly (values as %.17g, NaN as an empty field), one
+// block after another:
+//   block NCOLS NROWS RUN            RUN: 1 when the rows carry stop_time, rtol, atol
+//   name1,name2                      the block's parameter names (CSV)
+//   v11,v12[,stop_time,rtol,atol]    NROWS rows
+// Written beside a sweep's summary (ScenariosPathFor), so `sweep merge` can rebuild every
+// scenario and check each row's parameter values against its id.
+std::string FormatBlocks(const std::vector<Block>& blocks);
+bool ParseBlocks(const std::string& text, std::vector<Block>* out, std::string* error);
+
+// "N fnv1a64:H", H over the scenario definitions (names, every scenario's values and
+// overrides): the settings record's `scenarios` (settings_record.h).
+std::string ScenarioDefinitionsDigest(const std::vector<std::string>& names, const std::vector<Scenario>& scenarios);
+
 // Inverse of the standard normal CDF (Acklam's rational approximation refined by one
 // Halley step; relative error below 1e-15 on (0, 1)).
 double InverseNormalCdf(double p);

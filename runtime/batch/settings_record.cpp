@@ -39,6 +39,10 @@ std::string SettingsPathFor(const std::string& summary_path) {
   return std::filesystem::path(summary_path).replace_extension(".settings").string();
 }
 
+std::string ScenariosPathFor(const std::string& summary_path) {
+  return std::filesystem::path(summary_path).replace_extension(".scenarios").string();
+}
+
 std::string FormatSettings(const SettingsRecord& record) {
   std::string s =
       "# kanesim sweep settings: what the summary beside this file was made with.\n"

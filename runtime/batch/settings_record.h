@@ -27,6 +27,8 @@ inline constexpr const char* kInformationalKeys[] = {"model", "kanesim_version",
 
 // DIR/summary.csv -> DIR/summary.settings (the extension replaced).
 std::string SettingsPathFor(const std::string& summary_path);
+// DIR/summary.csv -> DIR/summary.scenarios: the scenario sources (scenario.h FormatBlocks).
+std::string ScenariosPathFor(const std::string& summary_path);
 
 std::string FormatSettings(const SettingsRecord& record);
 bool ReadSettings(const std::string& path, SettingsRecord* out, std::string* error);

@@ -50,23 +50,6 @@ std::string WithoutColumn(const std::string& line, int wall) {
 
 }  // namespace
 
-bool WriteFileAtomic(const std::string& path, const std::string& contents, std::string* error) {
-  const std::string tmp = TempPathFor(path);
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    *error = "cannot write '" + tmp + "': " + std::strerror(errno);
-    return false;
-  }
-  bool ok = WriteAll(fd, contents) && ::fsync(fd) == 0;
-  ok = ::close(fd) == 0 && ok;
-  if (!ok || ::rename(tmp.c_str(), path.c_str()) != 0) {
-    *error = "cannot write '" + path + "': " + std::strerror(errno);
-    ::unlink(tmp.c_str());
-    return false;
-  }
-  return true;
-}
-
 bool ReadSummary(const std::string& path, SummaryTable* out, std::string* error) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {

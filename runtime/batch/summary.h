@@ -13,11 +13,10 @@
 #include <string>
 #include <vector>
 
+#include "runtime/batch/file_guard.h"  // WriteFileAtomic
+
 namespace kanesim::batch {
 
-// Writes `contents` to `path` through a temporary (TempPathFor: <path>.tmp.<host>.<pid>)
-// + fsync + rename.
-bool WriteFileAtomic(const std::string& path, const std::string& contents, std::string* error);
 
 struct SummaryTable {
   std::string header;

@@ -12,6 +12,7 @@
 
 #include "runtime/batch/csv_util.h"
 #include "runtime/batch/summary.h"
+#include "runtime/batch/worker_pool.h"
 #include "runtime/flat/mechanism.h"
 #include "runtime/program/program.h"
 
@@ -71,7 +72,7 @@ bool OpenSweepOutput(const SweepConfig& config, const std::string& header, Sweep
   out->summary_path = config.out_dir + "/" + name;
   const std::string settings_path = SettingsPathFor(out->summary_path);
   const std::string lock_path = config.out_dir + "/." + name + ".lock";
-  for (const std::string& path : {out->summary_path, settings_path, lock_path}) {
+  for (const std::string& path : {out->summary_path, settings_path, ScenariosPathFor(out->summary_path), lock_path}) {
     if (std::string in = OverwrittenInput(path, config.inputs); !in.empty()) {
       *error = "the sweep would overwrite its input '" + in + "' (as '" + path + "'); choose another -o";
       return false;
@@ -83,9 +84,10 @@ bool OpenSweepOutput(const SweepConfig& config, const std::string& header, Sweep
         *error = "the input '" + in + "' is in '" + traj_dir + "', where the sweep writes its trajectories";
         return false;
       }
-  if (!out->lock.Acquire(lock_path, "'" + out->summary_path + "'", error)) return false;
+  if (!out->lock.Acquire(lock_path, "'" + out->summary_path + "'", error, /*remove_at_end=*/true)) return false;
   RemoveStaleTemps(out->summary_path);
   RemoveStaleTemps(settings_path);
+  RemoveStaleTemps(ScenariosPathFor(out->summary_path));
   if (config.trajectories) RemoveStaleTempsIn(traj_dir);
   // A summary without one complete row (a sweep killed between creating it and writing
   // its settings record, or before its first scenario finished) has nothing to keep: a
@@ -119,6 +121,9 @@ bool OpenSweepOutput(const SweepConfig& config, const std::string& header, Sweep
   if (!out->summary.Open(out->summary_path, header, resuming, &out->done, error)) return false;
   // After the summary: a sweep killed in between leaves an empty summary beside the old
   // record (or none), which a resume starts over, never old rows beside a new record.
+  if (!config.blocks.empty() &&
+      !WriteFileAtomic(ScenariosPathFor(out->summary_path), FormatBlocks(config.blocks), error))
+    return false;
   if (!config.settings.empty() && !WriteFileAtomic(settings_path, FormatSettings(config.settings), error))
     return false;
   return true;
@@ -180,6 +185,12 @@ bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::stri
   return true;
 }
 
+bool RerunOnResume(const std::string& line, size_t num_params) {
+  const std::vector<std::string> f = SplitCsvLine(line);
+  const size_t status = 1 + num_params + 3;  // id, the parameters, stop_time, rtol, atol
+  return status < f.size() && (f[status] == "crashed" || f[status] == "timeout");
+}
+
 bool RowMatchesScenario(const std::string& line, const Scenario& s) {
   std::vector<std::string> f = SplitCsvLine(line);
   if (f.size() < s.values.size() + 1 || f[0] != std::to_string(s.id)) return false;
@@ -233,11 +244,7 @@ const ScenarioRunner::Variant& ScenarioRunner::GetVariant(
 
 std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
   Clock::time_point t0 = Clock::now();
-  sim::SimOptions so = config_.sim;
-  if (!std::isnan(s.run.stop_time)) so.stop_time = s.run.stop_time;
-  if (!std::isnan(s.run.rtol)) so.rtol = s.run.rtol;
-  if (!std::isnan(s.run.atol)) so.atol = s.run.atol;
-  else if (!std::isnan(s.run.rtol)) so.atol = std::min(so.atol, s.run.rtol);
+  sim::SimOptions so = OptionsFor(s);
 
   std::string message;
   double fail_time = kUnset;
@@ -290,22 +297,15 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
 
     // c. Simulate into the metrics (and the trajectory file).
     so.signals = SignalsFor(*program, config_);
-    std::FILE* traj = nullptr;
-    std::string traj_path, traj_tmp;
-    if (config_.trajectories) {
-      traj_path = config_.out_dir + "/trajectories/scenario_" + std::to_string(s.id) + ".csv";
-      traj_tmp = TempPathFor(traj_path);
-      traj = std::fopen(traj_tmp.c_str(), "w");
-      if (!traj) throw std::runtime_error("cannot write '" + traj_tmp + "'");
-    }
-    sim::CsvWriter writer(traj);
-    MetricSink sink(config_.metrics, traj ? &writer : nullptr);
+    AtomicFile traj;  // the old file stays until the new one is complete
+    std::string io_error;
+    if (config_.trajectories &&
+        !traj.Open(config_.out_dir + "/trajectories/scenario_" + std::to_string(s.id) + ".csv", &io_error))
+      throw std::runtime_error(io_error);
+    sim::CsvWriter writer(traj.file());
+    MetricSink sink(config_.metrics, traj.file() ? &writer : nullptr);
     sim::SimResult r = sim::Simulate(*program, so, sink);
-    if (traj) {
-      bool closed = std::fclose(traj) == 0;
-      if (!closed || std::rename(traj_tmp.c_str(), traj_path.c_str()) != 0)
-        throw std::runtime_error("cannot write '" + traj_path + "'");
-    }
+    if (traj.file() && !traj.Commit(&io_error)) throw std::runtime_error(io_error);
     stats = r.stats;
     simulated = true;
     if (r.status == sim::SimResult::Status::kOk) {
@@ -319,22 +319,107 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
     message = e.what();
   }
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-
+  *failed = !ok;
   // d. The line.
+  return Row(s, so, ok ? "ok" : "failed", message, fail_time, metric_values, simulated ? &stats : nullptr, wall);
+}
+
+sim::SimOptions ScenarioRunner::OptionsFor(const Scenario& s) const {
+  sim::SimOptions so = config_.sim;
+  if (!std::isnan(s.run.stop_time)) so.stop_time = s.run.stop_time;
+  if (!std::isnan(s.run.rtol)) so.rtol = s.run.rtol;
+  if (!std::isnan(s.run.atol)) so.atol = s.run.atol;
+  else if (!std::isnan(s.run.rtol)) so.atol = std::min(so.atol, s.run.rtol);
+  return so;
+}
+
+std::string ScenarioRunner::Row(const Scenario& s, const sim::SimOptions& so, const std::string& status,
+                                const std::string& message, double fail_time, const std::vector<double>& metric_values,
+                                const sim::SimStats* stats, double wall) const {
   std::string line = std::to_string(s.id);
   for (double v : s.values) line.append(",").append(Num(v));
   line.append(",").append(Num(so.stop_time)).append(",").append(Num(so.rtol)).append(",").append(Num(so.atol));
-  line.append(ok ? ",ok," : ",failed,").append(QuoteCsv(message)).append(",").append(Num(fail_time));
-  for (double v : metric_values) line.append(",").append(Num(v));
-  const sim::IntegratorStats& is = stats.integrator;
-  line.append(",").append(simulated ? sim::MethodName(stats.method) : "");
+  line.append(",").append(status).append(",").append(QuoteCsv(message)).append(",").append(Num(fail_time));
+  for (size_t k = 0; k < config_.metrics.size(); ++k)
+    line.append(",").append(Num(k < metric_values.size() ? metric_values[k] : kUnset));
+  const sim::IntegratorStats is = stats ? stats->integrator : sim::IntegratorStats{};
+  line.append(",").append(stats ? sim::MethodName(stats->method) : "");
   for (long c : {is.steps, is.rhs_evals, is.rhs_evals_jac, is.err_test_fails}) line.append(",").append(std::to_string(c));
   char wall_text[32];
   std::snprintf(wall_text, sizeof wall_text, "%.6f", wall);
   line.append(",").append(wall_text);
-  *failed = !ok;
   return line;
 }
+
+std::string ScenarioRunner::LostRow(const Scenario& s, const std::string& status, const std::string& message,
+                                    double wall) const {
+  return Row(s, OptionsFor(s), status, message, kUnset, {}, nullptr, wall);
+}
+
+namespace {
+
+// id, row, outcome, whether a structural variant was compiled for it
+using RecordRow = std::function<void(int id, const std::string& line, WorkerPool::Outcome outcome, bool new_variant)>;
+
+// Stage 3 on threads of this process: each takes the next pending scenario.
+void RunOnThreads(ScenarioRunner& runner, const SweepConfig& config, const std::vector<const Scenario*>& pending,
+                  size_t nthreads, const RecordRow& record) {
+  std::atomic<size_t> next{0};
+  std::mutex record_mutex;
+  auto work = [&] {
+    while (true) {
+      if (config.cancel && config.cancel->load()) return;
+      size_t k = next.fetch_add(1);
+      if (k >= pending.size()) return;
+      bool failed = false;
+      std::string line = runner.Run(*pending[k], &failed);
+      std::lock_guard<std::mutex> lock(record_mutex);
+      record(pending[k]->id, line, failed ? WorkerPool::Outcome::kFailed : WorkerPool::Outcome::kOk, false);
+    }
+  };
+  std::vector<std::jthread> pool;
+  for (size_t i = 1; i < nthreads; ++i) pool.emplace_back(work);
+  work();
+}
+
+// Stage 3 in worker processes (worker_pool.h): this process hands out the scenarios in
+// order and records each row as it comes, whatever became of its worker. False when no
+// worker process can be made at all (fork fails: a process limit, no memory to copy the
+// page tables): *handed says how many scenarios were handed out (and recorded), so that the
+// caller runs the rest another way.
+bool RunInWorkers(ScenarioRunner& runner, const SweepConfig& config, const std::vector<const Scenario*>& pending,
+                  int nworkers, const RecordRow& record, size_t* handed, std::string* error) {
+  WorkerPool pool(runner, config, nworkers);
+  size_t next = 0;
+  auto refill = [&] {
+    const bool cancelled = config.cancel && config.cancel->load();
+    while (!cancelled && next < pending.size() && pool.HasIdle()) {
+      if (!pool.Start(*pending[next], error)) return false;  // retried when a running one ends
+      ++next;
+    }
+    return true;
+  };
+  while (true) {
+    if (!refill() && pool.Running() == 0) {
+      *handed = next;
+      return false;
+    }
+    WorkerPool::Done done;
+    if (!pool.Wait(&done)) {
+      *handed = next;
+      if ((config.cancel && config.cancel->load()) || next >= pending.size()) return true;
+      continue;
+    }
+    // The freed worker gets its next scenario before this row's fsync, so it never waits on it.
+    refill();
+    record(done.scenario->id, done.line, done.outcome, done.new_variant);
+    // A lost worker's half-written trajectory: its process is gone, so the temporary is stale.
+    if (config.trajectories && done.outcome != WorkerPool::Outcome::kOk && done.outcome != WorkerPool::Outcome::kFailed)
+      RemoveStaleTempsIn(config.out_dir + "/trajectories");
+  }
+}
+
+}  // namespace
 
 bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
               SweepReport* report, std::string* error) {
@@ -354,7 +439,7 @@ bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& bui
     if (s.id % config.shard_count != config.shard_index) continue;
     ++pr.total;
     auto it = done.find(s.id);
-    if (it == done.end()) {
+    if (it == done.end() || RerunOnResume(it->second, config.param_names.size())) {
       pending.push_back(&s);
       continue;
     }
@@ -368,36 +453,39 @@ bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& bui
 
   // 3. Workers take the next pending scenario until none is left.
   unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-  size_t nthreads = config.threads > 0 ? static_cast<size_t>(config.threads) : hw;
-  nthreads = std::max<size_t>(1, std::min(nthreads, pending.size()));
-  std::atomic<size_t> next{0};
-  std::mutex progress_mutex;
+  size_t nworkers = config.threads > 0 ? static_cast<size_t>(config.threads) : hw;
+  nworkers = std::max<size_t>(1, std::min(nworkers, pending.size()));
   std::string io_error;
   Clock::time_point start = Clock::now();
-  auto work = [&] {
-    while (true) {
-      if (config.cancel && config.cancel->load()) return;
-      size_t k = next.fetch_add(1);
-      if (k >= pending.size()) return;
-      bool failed = false;
-      std::string line = runner.Run(*pending[k], &failed);
-      std::string err;
-      bool appended = summary.Append(pending[k]->id, line, &err);
-      std::lock_guard<std::mutex> lock(progress_mutex);
-      if (!appended && io_error.empty()) io_error = err;
-      ++pr.done;
-      pr.failed += failed ? 1 : 0;
-      pr.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-      if (config.progress) config.progress(pr);
-    }
+  // One finished row: into the summary and the counts (under the caller's lock, if any).
+  report->variants = 0;
+  auto record = [&](int id, const std::string& line, WorkerPool::Outcome outcome, bool new_variant) {
+    std::string err;
+    if (!summary.Append(id, line, &err) && io_error.empty()) io_error = err;
+    ++pr.done;
+    report->variants += new_variant ? 1 : 0;
+    pr.failed += outcome != WorkerPool::Outcome::kOk ? 1 : 0;
+    pr.crashed += outcome == WorkerPool::Outcome::kCrashed ? 1 : 0;
+    pr.timed_out += outcome == WorkerPool::Outcome::kTimedOut ? 1 : 0;
+    pr.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    if (config.progress) config.progress(pr);
   };
-  {
-    std::vector<std::jthread> pool;
-    for (size_t i = 1; i < nthreads; ++i) pool.emplace_back(work);
-    work();
+  if (config.isolation == SweepConfig::Isolation::kProcess) {
+    size_t handed = 0;
+    std::string why;
+    if (!RunInWorkers(runner, config, pending, static_cast<int>(nworkers), record, &handed, &why)) {
+      // Better a sweep on threads than none: say what protection is lost.
+      report->warnings.push_back(why + "; the remaining " + std::to_string(pending.size() - handed) +
+                                 " scenarios run on threads of this process, where a crash ends the sweep");
+      RunOnThreads(runner, config, std::vector<const Scenario*>(pending.begin() + static_cast<long>(handed), pending.end()),
+                   nworkers, record);
+    }
+  } else {
+    RunOnThreads(runner, config, pending, nworkers, record);
   }
   report->interrupted = config.cancel && config.cancel->load() && pr.done + pr.skipped < pr.total;
-  report->variants = runner.NumVariants();
+  // Threads share one cache of variants; each worker process has its own.
+  report->variants = config.isolation == SweepConfig::Isolation::kProcess ? 1 + report->variants : runner.NumVariants();
   // 4. Sorted, atomically.
   if (!summary.Finish(error)) return false;
   if (!io_error.empty()) {

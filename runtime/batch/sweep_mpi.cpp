@@ -11,13 +11,16 @@
 // The MPI calls are in the module libkanesim_batch_mpi.so (mpi_module.h), loaded here only
 // when an MPI sweep starts: kanesim does not map libmpi at start.
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <filesystem>
 #include <string>
 
 #include "runtime/batch/mpi_module.h"
 #include "runtime/batch/summary.h"
 #include "runtime/batch/sweep.h"
+#include "runtime/batch/worker_pool.h"
 
 namespace kanesim::batch {
 
@@ -51,7 +54,7 @@ bool Manager(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfi
     if (!ok || s.id % config.shard_count != config.shard_index) continue;
     ++pr.total;
     auto it = done.find(s.id);
-    if (it == done.end()) {
+    if (it == done.end() || RerunOnResume(it->second, config.param_names.size())) {
       pending.push_back(s.id);
     } else if (!RowMatchesScenario(it->second, s)) {
       *error = "cannot resume: scenario " + std::to_string(s.id) + " has other parameter values (another sweep?)";
@@ -70,14 +73,16 @@ bool Manager(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfi
     int source = 0, tag = 0;
     mpi.receive_any(&msg, &source, &tag);
     if (tag == kTagResult && msg.size() > 1) {
-      // "F" or "O" (failed / ok), then the line.
-      bool failed = msg[0] == 'F';
+      // 'O' ok, 'F' failed, 'C' crashed, 'T' timed out; then the line.
+      const char kind = msg[0];
       std::string line = msg.substr(1);
       int id = std::atoi(line.c_str());
       std::string err;
       if (!summary.Append(id, line, &err) && io_error.empty()) io_error = err;
       ++pr.done;
-      pr.failed += failed ? 1 : 0;
+      pr.failed += kind != 'O' ? 1 : 0;
+      pr.crashed += kind == 'C' ? 1 : 0;
+      pr.timed_out += kind == 'T' ? 1 : 0;
       pr.elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (config.progress) config.progress(pr);
     }
@@ -97,9 +102,14 @@ bool Manager(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfi
   return true;
 }
 
+// A rank's scenarios run in one worker process of its own (worker_pool.h) unless the
+// sweep runs on threads: a crash costs the scenario, not the rank (which would end the
+// whole MPI job).
 void Worker(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfig& config) {
   std::map<int, const Scenario*> by_id;
   for (const Scenario& s : config.scenarios) by_id[s.id] = &s;
+  std::unique_ptr<WorkerPool> pool;
+  if (config.isolation == SweepConfig::Isolation::kProcess) pool = std::make_unique<WorkerPool>(runner, config, 1);
   const char ready = 'R';
   mpi.send(&ready, 1, 0, kTagReady);
   while (true) {
@@ -107,9 +117,18 @@ void Worker(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfig
     mpi.receive(&work, 0, kTagWork);
     const int id = std::atoi(work.c_str());
     if (id < 0) return;
-    bool failed = false;
-    std::string msg = runner.Run(*by_id.at(id), &failed);
-    msg.insert(msg.begin(), failed ? 'F' : 'O');
+    std::string msg;
+    WorkerPool::Done done;
+    std::string error;
+    if (pool && pool->Start(*by_id.at(id), &error) && pool->Wait(&done)) {
+      const char kinds[] = {'O', 'F', 'C', 'T'};
+      msg = kinds[static_cast<int>(done.outcome)] + done.line;
+    } else {
+      if (pool) std::fprintf(stderr, "kanesim: warning: %s; this rank runs the scenario itself\n", error.c_str());
+      bool failed = false;
+      msg = runner.Run(*by_id.at(id), &failed);
+      msg.insert(msg.begin(), failed ? 'F' : 'O');
+    }
     mpi.send(msg.data(), static_cast<int>(msg.size()), 0, kTagResult);
   }
 }

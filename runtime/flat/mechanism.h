@@ -203,6 +203,10 @@ struct Mechanism {
   std::string model_name;
   std::string description;
   std::vector<std::string> source_files;  // every file read (model and stdlib)
+  // Every data file the elaboration read, in first-read order, once each: meshes (tables
+  // later). What the results depend on beyond the source: a sweep's settings record hashes
+  // them (runtime/batch/settings_record.h).
+  std::vector<std::string> data_files;
 
   ExprPool exprs;
   std::vector<Param> params;      // in dependency order: bindings refer to earlier ones

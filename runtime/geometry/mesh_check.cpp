@@ -22,7 +22,7 @@
 namespace kanesim::geometry {
 namespace {
 
-constexpr std::array<MeshProblemInfo, 14> kMeshProblems{{
+constexpr std::array<MeshProblemInfo, 16> kMeshProblems{{
     {MeshProblemKind::kFileMissing, "mesh-file-missing", Severity::kError, "no mesh file at the path tried"},
     {MeshProblemKind::kFileUnreadable, "mesh-file-unreadable", Severity::kError, "the mesh file cannot be opened"},
     {MeshProblemKind::kModuleMissing, "mesh-support-missing", Severity::kError,
@@ -42,6 +42,10 @@ constexpr std::array<MeshProblemInfo, 14> kMeshProblems{{
     {MeshProblemKind::kInsideOut, "mesh-inside-out", Severity::kWarning, "triangles face inward; flipped"},
     {MeshProblemKind::kZeroVolume, "mesh-zero-volume", Severity::kError,
      "the enclosed volume is zero or too small to trust"},
+    {MeshProblemKind::kNotRegularFile, "mesh-not-regular-file", Severity::kError,
+     "a FIFO, device or socket, not a regular file"},
+    {MeshProblemKind::kDeclaredBeyondFile, "mesh-declared-beyond-file", Severity::kError,
+     "the header declares more data than the file holds"},
 }};
 
 std::string Point(const Vec3& p) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", p.x(), p.y(), p.z()); }

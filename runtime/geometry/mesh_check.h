@@ -31,6 +31,8 @@ enum class MeshProblemKind : uint8_t {
   kInconsistentOrientation,  // edges traversed the same way more often than the other way
   kInsideOut,                // negative enclosed volume: the triangles were flipped (warning)
   kZeroVolume,               // the enclosed volume is zero or below its float uncertainty
+  kNotRegularFile,           // a FIFO, a device or a socket: reading it could block forever or never end
+  kDeclaredBeyondFile,       // the header declares more data than the file holds (mesh_header.h)
 };
 
 struct MeshProblemInfo {

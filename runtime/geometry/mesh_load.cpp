@@ -6,47 +6,97 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
+#include <algorithm>
+#include <string>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "runtime/geometry/assimp_module.h"
+#include "runtime/geometry/mesh_header.h"
 
 namespace kanesim::geometry {
 namespace {
 
-// The checks before assimp sees the file: scale, existence, readability, size.
+// What a path names when it is not a regular file (for the message).
+const char* NonRegularKind(const struct stat& st) {
+  if (S_ISDIR(st.st_mode)) return "a directory";
+  if (S_ISFIFO(st.st_mode)) return "a named pipe (FIFO)";
+  if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) return "a device";
+  if (S_ISSOCK(st.st_mode)) return "a socket";
+  return "not a regular file";
+}
+
+// The file's first bytes (at most kHeaderBytes) through an open descriptor.
+std::string ReadHead(int fd, uint64_t file_bytes) {
+  std::string head(static_cast<size_t>(std::min<uint64_t>(file_bytes, kHeaderBytes)), '\0');
+  size_t got = 0;
+  while (got < head.size()) {
+    const ssize_t n = ::read(fd, head.data() + got, head.size() - got);
+    if (n <= 0) break;
+    got += static_cast<size_t>(n);
+  }
+  head.resize(got);
+  return head;
+}
+
+// The checks before assimp sees the file: scale, existence, a regular file (a FIFO or a
+// device would block the reader forever or never end), readability, size, and the counts
+// its header declares (mesh_header.h: assimp allocates by them).
 bool CheckFile(const std::string& path, const LoadMeshOptions& options, std::vector<MeshProblem>& problems) {
   if (!std::isfinite(options.scale) || !(options.scale > 0)) {
     problems.push_back(MakeProblem(MeshProblemKind::kBadScale,
                                    fmt::format("scale must be finite and positive, not {}", options.scale)));
     return false;
   }
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (!std::filesystem::exists(status)) {
-    problems.push_back(MakeProblem(MeshProblemKind::kFileMissing, fmt::format("mesh file not found: {}", path)));
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT || errno == ENOTDIR) {
+      problems.push_back(MakeProblem(MeshProblemKind::kFileMissing, fmt::format("mesh file not found: {}", path)));
+    } else {
+      problems.push_back(MakeProblem(MeshProblemKind::kFileUnreadable,
+                                     fmt::format("cannot read mesh file {}: {}", path, std::strerror(errno))));
+    }
     return false;
   }
-  if (std::filesystem::is_directory(status)) {
+  if (S_ISDIR(st.st_mode)) {
     problems.push_back(
         MakeProblem(MeshProblemKind::kFileUnreadable, fmt::format("cannot read mesh file {}: it is a directory", path)));
     return false;
   }
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) {
+  if (!S_ISREG(st.st_mode)) {
+    problems.push_back(MakeProblem(MeshProblemKind::kNotRegularFile,
+                                   fmt::format("cannot read mesh file {}: it is {}, not a regular file", path,
+                                               NonRegularKind(st))));
+    return false;
+  }
+  // O_NONBLOCK: should the path have become a FIFO since stat, open does not wait for a writer.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
     problems.push_back(MakeProblem(MeshProblemKind::kFileUnreadable,
                                    fmt::format("cannot read mesh file {}: {}", path, std::strerror(errno))));
     return false;
   }
-  std::fclose(f);
-  const uint64_t bytes = std::filesystem::file_size(path, ec);
-  if (!ec && bytes > options.limits.max_file_bytes) {
+  struct stat opened {};
+  const bool regular = ::fstat(fd, &opened) == 0 && S_ISREG(opened.st_mode);
+  const uint64_t bytes = regular ? static_cast<uint64_t>(opened.st_size) : 0;
+  const std::string head = regular && bytes <= options.limits.max_file_bytes ? ReadHead(fd, bytes) : std::string();
+  ::close(fd);
+  if (!regular) {
+    problems.push_back(MakeProblem(MeshProblemKind::kNotRegularFile,
+                                   fmt::format("cannot read mesh file {}: it is {}, not a regular file", path,
+                                               NonRegularKind(opened))));
+    return false;
+  }
+  if (bytes > options.limits.max_file_bytes) {
     problems.push_back(MakeProblem(MeshProblemKind::kTooLarge,
                                    fmt::format("mesh file {} has {} bytes; the limit is {} bytes", path, bytes,
                                                options.limits.max_file_bytes),
                                    bytes));
     return false;
   }
-  return true;
+  return CheckDeclaredSizes(path, head, bytes, options.limits, problems);
 }
 
 // assimp's reading of the file, or a problem.

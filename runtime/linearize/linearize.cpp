@@ -1,12 +1,26 @@
 // Linearize: eq. (1) of linearize.h by central differences and Richardson extrapolation.
 //
-//   D(h)  = (F(s + h) - F(s - h)) / (2 h) = F'(s) + c2 h^2 + c4 h^4 + ...          (5)
-//   R(h)  = (4 D(h/2) - D(h)) / 3          = F'(s) + O(h^4)                          (6)
-//   error = |R(h/2) - R(h)|                (the achieved accuracy reported)          (7)
+//   D(h)  = (F(s + h+) - F(s - h-)) / (h+ + h-) = F'(s) + c2 h^2 + c4 h^4 + ...     (5)
+//   R(h)  = (4 D(h/2) - D(h)) / 3               = F'(s) + O(h^4)                     (6)
+//   error_ij = |R(h/2) - R(h)|_ij + 6 nu_i / h_j  (the achieved accuracy reported)   (7)
+//   h_j  >= h_min = 2^22 eps max(1, max_k |x_k0|)  (a smaller step is widened to it)  (8)
+//   nu_i  = eps (|F_i(0)| + sum_j |J_ij| max(1, |x_j0|))                             (9)
 //
-// where F stacks the state derivative [xi_I'; u_I'] and the output signals, and s runs
-// along one state or input at a time (Richardson 1911; Dahlquist & Bjorck, Numerical
-// Methods in Scientific Computing I, sec. 3.4).
+// where F stacks the state derivative [xi_I'; u_I'] and the output signals, s runs along
+// one state or input x_j at a time, h+ and h- are the steps actually taken: the
+// perturbed variable's value minus its value at the operating point, as rounded (s + h
+// is not exactly s + h in floating point; Press et al., Numerical Recipes, 3rd ed., sec.
+// 5.7). Rounding: nu_i bounds the rounding noise of F_i, taken as eps times the size of
+// the terms that make it up (J = [A B; C D] the columns found, x_j0 the variable's value
+// at the operating point); each D(h_k) carries up to nu_i / h_k of it, so R(h/2) = (4
+// D(h/4) - D(h/2)) / 3 carries up to (16 + 2) nu_i / (3 h) = 6 nu_i / h. Without that term
+// a step so small that every difference rounds to zero reported "A to 0" (issue 38). The
+// floor (8) keeps the step taken at h/4 within 2^-20 of the step asked, and bounds the
+// rounding term by 6 (n + 1) 2^-22 relative, so every difference keeps about six
+// significant digits of the change. It is one floor for every column, from the largest
+// variable: the noise of F_i comes from all the terms it sums, also when the step is in
+// another, smaller variable (Richardson 1911; Dahlquist & Bjorck, Numerical Methods in
+// Scientific Computing I, secs. 2.3 and 3.4).
 #include "runtime/linearize/linearize.h"
 
 #include <fmt/core.h>
@@ -118,20 +132,40 @@ Status ResolveInputs(rt::Program* prog, const std::vector<std::string>& names, s
   return {};
 }
 
-// Central-difference derivative with Richardson extrapolation, eqs. (5)-(7).
-Status Richardson(const std::function<Status(double, VectorXd*)>& F, double h, VectorXd* d, VectorXd* err) {
+// One evaluation at step s: F, and the step actually taken (eq. 5's h+ or -h-).
+using StepEval = std::function<Status(double s, VectorXd* f, double* taken)>;
+
+// Central-difference derivative with Richardson extrapolation, eqs. (5)-(7) (without the
+// rounding term, added by the caller once nu is known).
+Status Richardson(const StepEval& F, double h, VectorXd* d, VectorXd* err) {
   VectorXd D[3];
   for (int k = 0; k < 3; ++k) {
     const double hk = h / static_cast<double>(1 << k);
     VectorXd fp, fm;
-    if (Status s = F(hk, &fp); !s.ok()) return s;
-    if (Status s = F(-hk, &fm); !s.ok()) return s;
-    D[k] = (fp - fm) / (2 * hk);
+    double tp = 0.0, tm = 0.0;
+    if (Status s = F(hk, &fp, &tp); !s.ok()) return s;
+    if (Status s = F(-hk, &fm, &tm); !s.ok()) return s;
+    if (!(tp - tm > 0))  // (the floor of eq. 8 prevents it)
+      return {2, fmt::format("a difference step of {:g} was lost to rounding", hk)};
+    D[k] = (fp - fm) / (tp - tm);
   }
   const VectorXd R1 = (4 * D[1] - D[0]) / 3, R2 = (4 * D[2] - D[1]) / 3;
   *d = R2;
   *err = (R2 - R1).cwiseAbs();
   return {};
+}
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+// Eq. (8): the smallest step whose differences keep the change, for variables of sizes up
+// to x_max.
+double StepFloor(double x_max) { return std::ldexp(kEps, 22) * std::max(1.0, std::abs(x_max)); }
+
+// The step for a column: h_asked, or the floor (recorded) when smaller.
+double ColumnStep(const std::string& name, double h_asked, double step_floor, std::vector<WidenedStep>* widened) {
+  if (h_asked >= step_floor) return h_asked;
+  widened->push_back({name, h_asked, step_floor});
+  return step_floor;
 }
 
 double MaxAbs(const MatrixXd& m) { return m.size() == 0 ? 0.0 : m.cwiseAbs().maxCoeff(); }
@@ -168,10 +202,12 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   out->h = options.step;
 
   // F(x, program, workspace): [xi_I'; u_I'; outputs] at state deviation x.
-  auto eval = [&](const VectorXd& x, const rt::Program& p, rt::Workspace& w, const rt::SignalPlan* pl,
-                  VectorXd* F) -> Status {
+  // (*y_out: the state built, when asked.)
+  auto eval = [&](const VectorXd& x, const rt::Program& p, rt::Workspace& w, const rt::SignalPlan* pl, VectorXd* F,
+                  VectorXd* y_out = nullptr) -> Status {
     VectorXd y;
     if (Status s = red.StateOf(x.head(nci), x.tail(nui), &y); !s.ok()) return s;
+    if (y_out) *y_out = y;
     VectorXd ydot(y.size());
     if (rt::Derivative(p, w, red.t(), y.data(), ydot.data()) != 0)
       return {2, "the equations of motion fail near the operating point: " + rt::ErrorMessage(w)};
@@ -193,18 +229,43 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   if (Status s = eval(VectorXd::Zero(n), *prog, *ws, plan.get(), &F0); !s.ok()) return s;
   out->x0_rates.assign(F0.data(), F0.data() + n);
 
-  // A and C, one state at a time. Speeds step relative to their size.
+  // A and C, one state at a time. Speeds step relative to their size; a step below the
+  // floor of eq. (8) is widened. x_size, u_size: |x_j0| of eqs. (8)-(9), per state and per
+  // input (a joint force's value at the operating point is 0).
   const double h = options.step;
   out->A.resize(n, n);
   out->C.resize(np, n);
   MatrixXd errAC(n + np, n);
+  std::vector<double> x_size(static_cast<size_t>(n)), step(static_cast<size_t>(n));
+  std::vector<double> u_size(static_cast<size_t>(m), 0.0), u_step(static_cast<size_t>(m), 1.0);
+  auto var_of = [&](int j) {
+    return j >= nci ? red.indep_speeds()[static_cast<size_t>(j - nci)] : red.indep_coords()[static_cast<size_t>(j)];
+  };
+  for (int j = 0; j < n; ++j)
+    x_size[static_cast<size_t>(j)] =
+        j >= nci ? std::abs(red.y0()[static_cast<size_t>(nq + var_of(j))]) : red.CoordMagnitude(var_of(j));
+  for (int k = 0; k < m; ++k) {
+    const Input& in = inputs[static_cast<size_t>(k)];
+    if (!in.is_joint) u_size[static_cast<size_t>(k)] = std::abs(program.param_values[static_cast<size_t>(in.param.index)]);
+  }
+  double x_max = 0.0;
+  for (double v : x_size) x_max = std::max(x_max, v);
+  for (double v : u_size) x_max = std::max(x_max, v);
+  const double step_floor = StepFloor(x_max);
   for (int j = 0; j < n; ++j) {
-    double hj = h;
-    if (j >= nci) hj *= std::max(1.0, std::abs(red.y0()[static_cast<size_t>(nq + red.indep_speeds()[static_cast<size_t>(j - nci)])]));
-    auto F = [&](double s, VectorXd* f) {
-      VectorXd x = VectorXd::Zero(n);
+    const bool speed = j >= nci;
+    const int var = var_of(j);
+    const double u0 = speed ? red.y0()[static_cast<size_t>(nq + var)] : 0.0;
+    const double asked = speed ? h * std::max(1.0, std::abs(u0)) : h;
+    const double hj = ColumnStep(out->states[static_cast<size_t>(j)], asked, step_floor, &out->widened);
+    step[static_cast<size_t>(j)] = hj;
+    auto F = [&](double s, VectorXd* f, double* taken) {
+      VectorXd x = VectorXd::Zero(n), y;
       x[j] = s;
-      return eval(x, *prog, *ws, plan.get(), f);
+      Status st = eval(x, *prog, *ws, plan.get(), f, &y);
+      // The step taken: the variable's value minus its value at the operating point.
+      if (st.ok()) *taken = speed ? y[nq + var] - u0 : red.ChartOf(y)[var];
+      return st;
     };
     VectorXd d, e;
     if (Status s = Richardson(F, hj, &d, &e); !s.ok()) return s;
@@ -219,34 +280,52 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   MatrixXd errBD(n + np, m);
   for (int k = 0; k < m; ++k) {
     const Input& in = inputs[static_cast<size_t>(k)];
-    std::function<Status(double, VectorXd*)> F;
+    StepEval F;
     double hk = h;
     if (in.is_joint) {
-      F = [&](double s, VectorXd* f) {
+      F = [&](double s, VectorXd* f, double* taken) {
         ws->force_regs[static_cast<size_t>(in.joint.reg)] = s;
         Status st = eval(VectorXd::Zero(n), *prog, *ws, plan.get(), f);
         ws->force_regs[static_cast<size_t>(in.joint.reg)] = 0.0;
+        *taken = s;  // the register holds s itself (its value at the operating point is 0)
         return st;
       };
       hk = 1.0;  // u' is affine in a generalized force: any step is exact up to rounding
     } else {
       const double v0 = program.param_values[static_cast<size_t>(in.param.index)];
-      hk = h * std::max(1.0, std::abs(v0));
-      F = [&, v0](double s, VectorXd* f) -> Status {
+      hk = ColumnStep(in.name, h * std::max(1.0, std::abs(v0)), step_floor, &out->widened);
+      F = [&, v0](double s, VectorXd* f, double* taken) -> Status {
         std::shared_ptr<const rt::Program> rebound;
         if (Status st = RebindParameter(program, in.name, v0 + s, &rebound); !st.ok()) return st;
         std::shared_ptr<const rt::SignalPlan> pl;
         if (np > 0) pl = rt::PlanSignals(*rebound, options.outputs, &plan_error);
         auto w = rt::MakeWorkspace(*rebound);
+        *taken = (v0 + s) - v0;
         return eval(VectorXd::Zero(n), *rebound, *w, pl.get(), f);
       };
     }
+    u_step[static_cast<size_t>(k)] = hk;
     VectorXd d, e;
     if (Status s = Richardson(F, hk, &d, &e); !s.ok()) return s;
     out->B.col(k) = d.head(n);
     out->D.col(k) = d.tail(np);
     errBD.col(k) = e;
   }
+
+  // The rounding term of eq. (7): nu_i of eq. (9), then 6 nu_i / h_j added to each column's
+  // Richardson difference.
+  VectorXd nu = F0.cwiseAbs();
+  for (int j = 0; j < n; ++j) {
+    nu.head(n) += out->A.col(j).cwiseAbs() * std::max(1.0, x_size[static_cast<size_t>(j)]);
+    nu.tail(np) += out->C.col(j).cwiseAbs() * std::max(1.0, x_size[static_cast<size_t>(j)]);
+  }
+  for (int k = 0; k < m; ++k) {
+    nu.head(n) += out->B.col(k).cwiseAbs() * u_size[static_cast<size_t>(k)];
+    nu.tail(np) += out->D.col(k).cwiseAbs() * u_size[static_cast<size_t>(k)];
+  }
+  nu *= kEps;
+  for (int j = 0; j < n; ++j) errAC.col(j) += 6.0 * nu / step[static_cast<size_t>(j)];
+  for (int k = 0; k < m; ++k) errBD.col(k) += 6.0 * nu / u_step[static_cast<size_t>(k)];
 
   // Steady? A a moment later along f(0) against A now, compared on three fixed
   // pseudo-random directions v (J v by one central difference each): a change of A shows

@@ -17,8 +17,10 @@
 //   y  output signals (any name of rt::AvailableSignals).
 //
 // Derivatives are central differences with Richardson extrapolation over the steps h,
-// h/2, h/4; the difference of the last two extrapolations is reported as the achieved
-// accuracy. The same code serves the reduced and the multiplier form (both go through
+// h/2, h/4, divided by the steps actually taken (as rounded); the achieved accuracy
+// reported is the difference of the last two extrapolations plus a bound on the rounding
+// error, and a step too small to survive rounding is widened to a floor (linearize.cpp,
+// eqs. 7-9). The same code serves the reduced and the multiplier form (both go through
 // rt::Derivative on consistent states).
 #pragma once
 
@@ -82,14 +84,22 @@ struct Mode {
   Eigen::VectorXcd shape;                                // eigenvector, largest entry 1
 };
 
+// A column whose step was below the rounding floor (linearize.cpp, eq. 8) and was widened.
+struct WidenedStep {
+  std::string name;       // the state or input
+  double requested = 0;   // the step asked for (--step, scaled by the variable's size for a speed or parameter)
+  double used = 0;        // the floor used instead
+};
+
 struct LinearModel {
   std::vector<std::string> states;   // names: "hinge.q", "free.rot[2]", ..., then "hinge.u", ...
   int n_coords = 0;                  // the first n_coords states are coordinates, the rest speeds
   std::vector<std::string> inputs, outputs;
   Eigen::MatrixXd A, B, C, D;        // (n x n), (n x m), (p x n), (p x m)
   double h = 0.0;                    // base step used
-  double error_A = 0.0;              // achieved accuracy: max |A_richardson(h/2) - A_richardson(h)| / max(1, max |A|)
+  double error_A = 0.0;              // achieved accuracy, eq. (9): max (|A_R(h/2) - A_R(h)| + rounding) / max(1, max |A|)
   double error_BCD = 0.0;            // the same for B, C, D together
+  std::vector<WidenedStep> widened;  // columns differenced with a wider step than asked (eq. 8)
   // Filled by ComputeModes:
   std::vector<Mode> modes;           // sorted by |lambda|, then by imaginary part descending
   std::vector<std::string> ignorable;  // coordinates no other state reads; each gives a zero eigenvalue

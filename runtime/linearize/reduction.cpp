@@ -263,6 +263,11 @@ VectorXd Reduction::ChartOf(const VectorXd& y) const {
   return xi;
 }
 
+double Reduction::CoordMagnitude(int i) const {
+  const Coord& c = coords_[static_cast<size_t>(i)];
+  return c.comp < 0 ? std::abs(q0_[c.q]) : 1.0;
+}
+
 void Reduction::ChartRates(const VectorXd& y, const double* qdot, VectorXd* xidot) const {
   xidot->resize(static_cast<int>(coords_.size()));
   const VectorXd xi = ChartOf(y);

@@ -51,6 +51,10 @@ class Reduction {
   void ChartRates(const Eigen::VectorXd& y, const double* qdot_free, Eigen::VectorXd* xidot) const;
   // The chart coordinates (nu) of the configuration in y (xi of eq. 2, by the logarithm).
   Eigen::VectorXd ChartOf(const Eigen::VectorXd& y) const;
+  // The size of what chart coordinate i moves: |q_k0| of a scalar coordinate, 1 for a
+  // quaternion's rotation vector (the components are at most 1). A step in it below about
+  // eps times this is lost when added (linearize.cpp, eq. 8).
+  double CoordMagnitude(int i) const;
 
  private:
   struct Coord {

@@ -11,6 +11,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include "runtime/viz/page_files.h"
 #include "runtime/viz/scene_json.h"
 #include "runtime/viz/viewer.h"
@@ -165,21 +168,35 @@ std::string ExpandPageFile(std::string_view file,
 }
 
 std::string WriteFileReplacing(const std::string& path, const std::string& text) {
-  const std::string temporary = path + ".part";
-  std::FILE* file = std::fopen(temporary.c_str(), "wb");
-  if (file == nullptr) return fmt::format("cannot write {}: {}", path, std::strerror(errno));
-  const bool written = std::fwrite(text.data(), 1, text.size(), file) == text.size();
-  const bool closed = std::fclose(file) == 0;
+  namespace fs = std::filesystem;
   std::error_code ec;
-  if (!written || !closed) {
-    std::string why = fmt::format("cannot write {}: {}", path, std::strerror(errno));
-    std::filesystem::remove(temporary, ec);
-    return why;
+  // The file a symbolic link names is the one replaced; the link stays.
+  const fs::path target = fs::is_symlink(fs::symlink_status(path, ec)) ? fs::weakly_canonical(path, ec) : fs::path(path);
+  const fs::file_status status = fs::status(target, ec);
+  if (fs::exists(status) && !fs::is_regular_file(status))
+    return fmt::format("cannot write {}: it exists and is not a regular file", path);
+  const std::string temporary = target.string() + ".tmp." + std::to_string(::getpid());
+  fs::remove(temporary, ec);  // a leftover of an earlier process with this id
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0) return fmt::format("cannot write {}: {}", path, std::strerror(errno));
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n <= 0) break;
+    done += static_cast<size_t>(n);
   }
-  std::filesystem::rename(temporary, path, ec);
+  const int write_errno = errno;
+  const bool written = done == text.size() && ::fsync(fd) == 0;
+  const bool closed = ::close(fd) == 0;
+  if (!written || !closed) {
+    fs::remove(temporary, ec);
+    return fmt::format("cannot write {}: {} (the previous file, if any, is unchanged)", path,
+                       std::strerror(written ? errno : write_errno));
+  }
+  fs::rename(temporary, target, ec);
   if (ec) {
     std::string why = fmt::format("cannot write {}: {}", path, ec.message());
-    std::filesystem::remove(temporary, ec);
+    fs::remove(temporary, ec);
     return why;
   }
   return "";

@@ -46,8 +46,11 @@ std::string HtmlEscape(std::string_view text);
 std::string ExpandPageFile(std::string_view file,
                            const std::function<bool(std::string_view name, std::string& out)>& fill);
 
-// Writes `text` to `path` through `path`.part and a rename, so a reader never sees half a
-// page; "" or why not.
+// Writes `text` to `path` through a temporary beside it (`path`.tmp.<pid>, created
+// exclusively, flushed to disk) and a rename, so a reader never sees half a page and a
+// failure (a full disk) leaves the previous file whole. A symbolic link is followed (the file
+// it names is replaced); a path that exists but is no regular file (a directory, a FIFO, a
+// device) is refused. "" or why not.
 std::string WriteFileReplacing(const std::string& path, const std::string& text);
 
 // Content-Security-Policy of the page in each mode: nothing outside the file (offline) or the

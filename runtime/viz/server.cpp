@@ -1,5 +1,8 @@
 #include "runtime/viz/server.h"
 
+#include <cmath>
+#include <string>
+
 #include "runtime/viz/http_module.h"
 #include "runtime/viz/page.h"
 #include "runtime/viz/scene_json.h"
@@ -8,6 +11,12 @@ namespace kanesim::viz {
 
 ServeResult ServeViewer(const ViewerScene& scene, const ServeOptions& options) {
   ServeResult result;
+  // A NaN or negative timeout would never be reached: the server would run for ever.
+  if (!std::isfinite(options.timeout_s) || options.timeout_s < 0) {
+    result.error = "the timeout must be a finite number of seconds >= 0 (0: until stopped), not " +
+                   std::to_string(options.timeout_s);
+    return result;
+  }
   EncodedScene encoded = EncodeScene(scene, options.page, &result.error);
   if (!result.error.empty()) return result;
   const std::vector<LibraryFile> libraries = ReadLibraries(options.page.js_root, &result.error);

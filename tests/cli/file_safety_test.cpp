@@ -105,7 +105,7 @@ TEST(FileSafety, ASecondWriterOfTheSameOutputIsRefused) {
   }
   {
     Write(d + "/run.csv", "");
-    HeldLock lock(d + "/run.csv");
+    HeldLock lock(d + "/.run.csv.lock");  // beside the output, which is replaced by a rename (issue 38)
     Result r = Kanesim("run " + kSpring + " --stop-time 0.1 -o run.csv", d);
     EXPECT_EQ(r.rc, 1) << r.err;
     EXPECT_TRUE(Has(r.err, "another kanesim process is writing")) << r.err;

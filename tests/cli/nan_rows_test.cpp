@@ -68,23 +68,30 @@ TEST(NaNRows, EveryRowBeforeATimeNaNIsKeptByEveryIntegratorAndPath) {
       }
 }
 
-// A run killed from outside (SIGKILL: no handler, no flush) leaves whole rows, in order,
+// A run killed from outside (SIGKILL: no handler, no flush) leaves its rows so far in the
+// temporary beside the output (out.csv.tmp.<host>.<pid>: recognizably not a finished output;
+// out.csv itself appears only when a run ends, issue 38), and they are whole rows, in order,
 // plus at most one last row cut short: the writer gathers rows and writes them in one
 // piece per 50 ms (never a row cut by a full stdio buffer), but Linux lets SIGKILL end a
 // write(2) to a file between two pages (measured: 1 file in 40 killed at random ended
 // inside a row; a reader drops a last line without its '\n', as with a sweep's summary).
-// Wrong if a row is missing or cut in the middle of the file.
+// Wrong if a row is missing or cut in the middle of the file, or if out.csv holds a part.
 TEST(NaNRows, AKilledRunLeavesWholeRowsOnly) {
   std::string d = Work("killed");
   for (double after : {0.3, 0.7}) {
-    std::remove((d + "/out.csv").c_str());
+    for (const auto& e : std::filesystem::directory_iterator(d)) std::filesystem::remove(e.path());
     // Killed `after` seconds once its first row is on disk (however slow the machine).
     std::system(("cd '" + d + "' && { '" + Bin() + "' run '" + kSrc +
                  "/examples/chain.mech' --set N=20 --stop-time 1e4 --interval 1e-3 -o out.csv 2>/dev/null & pid=$!; "
-                 "for i in $(seq 600); do [ \"$(wc -l < out.csv 2>/dev/null || echo 0)\" -ge 2 ] && break; sleep 0.05; done; "
-                 "sleep " + std::to_string(after) + "; kill -KILL $pid; wait $pid; }")
+                 "for i in $(seq 600); do [ \"$(cat out.csv.tmp.* 2>/dev/null | wc -l)\" -ge 2 ] && break; sleep 0.05; "
+                 "done; sleep " + std::to_string(after) + "; kill -KILL $pid; wait $pid; }")
                     .c_str());
-    std::string text = Slurp(d + "/out.csv");
+    EXPECT_FALSE(std::filesystem::exists(d + "/out.csv")) << "a killed run left a partial out.csv";
+    std::string temp;
+    for (const auto& e : std::filesystem::directory_iterator(d))
+      if (e.path().filename().string().starts_with("out.csv.tmp.")) temp = e.path().string();
+    ASSERT_FALSE(temp.empty()) << "the rows so far are in the temporary";
+    std::string text = Slurp(temp);
     ASSERT_FALSE(text.empty()) << "killed " << after << " s after its first row";
     text.erase(text.rfind('\n') + 1);  // a last row cut short by the kill
     std::istringstream in(text);

@@ -22,7 +22,7 @@ TEST(MeshProblemTable, RowsInEnumOrderWithUniqueIds) {
     EXPECT_EQ(static_cast<size_t>(table[i].kind), i);
     for (size_t j = 0; j < i; ++j) EXPECT_STRNE(table[i].id, table[j].id);
   }
-  EXPECT_EQ(table.size(), static_cast<size_t>(MeshProblemKind::kZeroVolume) + 1);
+  EXPECT_EQ(table.size(), static_cast<size_t>(MeshProblemKind::kDeclaredBeyondFile) + 1);
 }
 
 // Wrong if a good box reports anything: 18 edges (12 sides + 6 face diagonals), volume 1.

@@ -112,17 +112,21 @@ void WritePly(const std::string& path, const TriMesh& mesh) {
   for (const Tri& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
 }
 
-void WriteGltf(const std::string& path, const TriMesh& mesh, const Vec3& translation) {
-  std::string bin;
+namespace {
+
+// The glTF JSON of `mesh` under a translated node; *bin receives the buffer's bytes (float
+// positions, then uint32 indices) and `buffer_uri` is the buffer's "uri" member (or "").
+std::string GltfJson(const TriMesh& mesh, const Vec3& translation, std::string* bin,
+                     const std::string& buffer_uri) {
   Vec3 lo = mesh.vertices[0], hi = mesh.vertices[0];
   for (const Vec3& v : mesh.vertices) {
-    for (int i = 0; i < 3; ++i) PutFloat(bin, v[i]);
+    for (int i = 0; i < 3; ++i) PutFloat(*bin, v[i]);
     lo = lo.cwiseMin(v);
     hi = hi.cwiseMax(v);
   }
-  const size_t index_offset = bin.size();
+  const size_t index_offset = bin->size();
   for (const Tri& t : mesh.triangles)
-    for (uint32_t v : t) PutU32(bin, v);
+    for (uint32_t v : t) PutU32(*bin, v);
   auto f = [](double x) { return std::to_string(static_cast<float>(x)); };
   std::ostringstream j;
   j << std::setprecision(17);
@@ -130,16 +134,53 @@ void WriteGltf(const std::string& path, const TriMesh& mesh, const Vec3& transla
     << R"("nodes":[{"name":"root","children":[1]},{"name":"part","mesh":0,"translation":[)" << translation.x() << ','
     << translation.y() << ',' << translation.z() << "]}],"
     << R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"mode":4}]}],)"
-    << R"("buffers":[{"byteLength":)" << bin.size() << R"(,"uri":"data:application/octet-stream;base64,)"
-    << Base64(bin) << R"("}],)"
+    << R"("buffers":[{"byteLength":)" << bin->size() << buffer_uri << R"(}],)"
     << R"("bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":)" << index_offset << R"(,"target":34962},)"
-    << R"({"buffer":0,"byteOffset":)" << index_offset << R"(,"byteLength":)" << bin.size() - index_offset
+    << R"({"buffer":0,"byteOffset":)" << index_offset << R"(,"byteLength":)" << bin->size() - index_offset
     << R"(,"target":34963}],)"
     << R"("accessors":[{"bufferView":0,"componentType":5126,"count":)" << mesh.vertices.size()
     << R"(,"type":"VEC3","min":[)" << f(lo.x()) << ',' << f(lo.y()) << ',' << f(lo.z()) << R"(],"max":[)"
     << f(hi.x()) << ',' << f(hi.y()) << ',' << f(hi.z()) << "]},"
     << R"({"bufferView":1,"componentType":5125,"count":)" << 3 * mesh.triangles.size() << R"(,"type":"SCALAR"}]})";
-  Open(path) << j.str();
+  return j.str();
+}
+
+}  // namespace
+
+void WriteGltf(const std::string& path, const TriMesh& mesh, const Vec3& translation) {
+  std::string bin;
+  GltfJson(mesh, translation, &bin, "");
+  const std::string uri = R"(,"uri":"data:application/octet-stream;base64,)" + Base64(bin) + "\"";
+  bin.clear();
+  Open(path) << GltfJson(mesh, translation, &bin, uri);
+}
+
+void WriteGlb(const std::string& path, const TriMesh& mesh, const Vec3& translation) {
+  std::string bin;
+  std::string json = GltfJson(mesh, translation, &bin, "");
+  json.append((4 - json.size() % 4) % 4, ' ');  // chunks are 4-byte aligned
+  bin.append((4 - bin.size() % 4) % 4, '\0');
+  std::string s = "glTF";
+  PutU32(s, 2);
+  PutU32(s, static_cast<uint32_t>(12 + 8 + json.size() + 8 + bin.size()));
+  PutU32(s, static_cast<uint32_t>(json.size()));
+  s += "JSON" + json;
+  PutU32(s, static_cast<uint32_t>(bin.size()));
+  s += std::string("BIN\0", 4) + bin;
+  Open(path, true) << s;
+}
+
+void WriteBinaryPly(const std::string& path, const TriMesh& mesh) {
+  std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(mesh.vertices.size()) +
+                  "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+                  std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const Vec3& v : mesh.vertices)
+    for (int i = 0; i < 3; ++i) PutFloat(s, v[i]);
+  for (const Tri& t : mesh.triangles) {
+    s.push_back(3);
+    for (uint32_t v : t) PutU32(s, v);
+  }
+  Open(path, true) << s;
 }
 
 void WriteText(const std::string& path, const std::string& text) { Open(path) << text; }

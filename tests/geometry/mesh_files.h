@@ -23,6 +23,10 @@ void WritePly(const std::string& path, const TriMesh& mesh);
 // glTF 2.0 (JSON, buffer embedded as a base64 data URI): one mesh on a child node translated
 // by `translation` under a root node, so a reader must apply node transforms.
 void WriteGltf(const std::string& path, const TriMesh& mesh, const Vec3& translation);
+// Binary glTF (.glb): the same document with the buffer as the BIN chunk.
+void WriteGlb(const std::string& path, const TriMesh& mesh, const Vec3& translation);
+// Binary little-endian PLY (float coordinates, uchar count and int indices per face).
+void WriteBinaryPly(const std::string& path, const TriMesh& mesh);
 // Any text.
 void WriteText(const std::string& path, const std::string& text);
 

@@ -19,6 +19,12 @@ world matrices with the display rotation undone).
                                a signal of NaN only, markup in names) opens without errors
   screenshot --page P --up U --png OUT   (e) a PNG of the page, checked for the bodies' and the
                                cursor's colours where they should be
+  nowebgl    --page P --fixture F [--png OUT]   the offline and the served page (up z) in a
+                               chromium with WebGL turned off and in one with no GPU and no
+                               software fallback, and the served page with three.js blocked: no
+                               error box, one line saying why there is no 3-D view, every plot
+                               drawn with the closed-form values at every instant, the slider,
+                               keys, play and a plot click moving the time and the cursors
 Exit 0 when every check passes; 1 with the failures listed.
 """
 import argparse
@@ -421,9 +427,130 @@ def run_screenshot(args):
     print(f"screenshot: {args.png}, {len(png)} bytes")
 
 
+# ---- without WebGL ---------------------------------------------------------------------------
+
+# The signals the page plots at first, in closed form (circling_scene.cpp); they reach the page
+# as float32: 1e-6 is ~10 roundings of values up to 1.5. A plot of the wrong signal, or with
+# instants dropped or shifted, is off by 1e-2 or more.
+SIGNALS = {
+    "orbiter.x": lambda t: R * math.cos(OMEGA * t),
+    "spinner.height": lambda t: 0.9 + 0.2 * math.sin(2 * t),
+    "energy": lambda t: 1 + 0.5 * math.sin(OMEGA * t) ** 2,
+}
+SIGNAL_TOL = 1e-6
+WEBGL_PROBE = ("(() => { const c = () => document.createElement('canvas'); "
+               "return !!(c().getContext('webgl') || c().getContext('webgl2') || c().getContext('experimental-webgl')); })()")
+
+
+def check_plots_drawn(page, where):
+    """Each default plot holds the closed form at every instant and has drawn its line."""
+    plotted = page.evaluate("kanesimViewer.plotted()")
+    check(plotted == list(SIGNALS), f"{where}: plots {plotted}")
+    for name, value in SIGNALS.items():
+        rows = page.evaluate(f"kanesimViewer.plotRows('{name}')") or []
+        if not check(len(rows) == N_TIMES, f"{where}: {name} has {len(rows)} points, not {N_TIMES}"):
+            continue
+        dt = max(abs(t - k * DT) for k, (t, _) in enumerate(rows))
+        dv = max(abs(v - value(k * DT)) if v is not None else math.inf for k, (_, v) in enumerate(rows))
+        check(dt < 1e-12 and dv < SIGNAL_TOL, f"{where}: {name} is off its closed form by {dv:.2e} (times by {dt:.2e})")
+        # Drawn: pixels of the line's colour (#1f5fa8, anti-aliased) on the plot's canvases, at
+        # least one per column of half the plot's width (a 101-point line crosses all of it).
+        blue, width = page.evaluate(
+            f"(() => {{ const area = document.querySelector('.plot[data-signal=\"{name}\"] .plot-graph'); let n = 0; "
+            "for (const c of area.querySelectorAll('canvas')) { const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; "
+            "for (let i = 0; i < d.length; i += 4) if (d[i + 3] > 128 && d[i + 2] > d[i] + 60 && d[i + 2] > d[i + 1] + 30) ++n; } "
+            "return [n, area.getBoundingClientRect().width]; })()")
+        check(blue > width / 2, f"{where}: the {name} plot drew {blue} line pixels over {width} px")
+
+
+def check_without_webgl(page, url, where, reason):
+    """The page without a 3-D view: no error box, the one line, and the plots and time line working."""
+    if not open_page(page, url + "?t=0", where):
+        return
+    box = page.evaluate("(() => { const m = document.getElementById('message'); return m.hidden ? '' : m.textContent; })()")
+    check(box == "", f"{where}: an error box: {box!r}")
+    line = page.evaluate("kanesimViewer.noView3d")
+    check(line.startswith("No 3-D view: ") and reason in line and line.endswith("the plots and the time line work."),
+          f"{where}: the line is {line!r}, expected one naming {reason!r}")
+    shown, height = page.evaluate("(() => { const n = document.getElementById('note'); "
+                                  "return [n.hidden ? '' : n.innerText, n.getBoundingClientRect().height]; })()")
+    lines = page.evaluate("parseFloat(getComputedStyle(document.getElementById('note')).lineHeight) || 18")
+    # One sentence, shown as text; it may wrap once where the 3-D panel is narrower than it.
+    check(shown == line and 0 < height < 2.5 * lines, f"{where}: the note shows {shown!r} in {height} px ({lines} a line)")
+    check(page.evaluate("document.querySelectorAll('#view canvas').length") == 0, f"{where}: a 3-D canvas without WebGL")
+    check(page.evaluate("kanesimViewer.bodyPoses()") is None, f"{where}: body poses without a 3-D view")
+    check_plots_drawn(page, where)
+    cursor_check(page, 0.0, f"{where}, opened at 0", 1e-3)
+    for t in (2.0, 4.35):  # the slider, as a user's input event
+        page.evaluate(f"(() => {{ const s = document.getElementById('slider'); s.value = {t}; "
+                      "s.dispatchEvent(new Event('input', {bubbles: true})); })()")
+        check(page.evaluate("kanesimViewer.time()") == t, f"{where}: slider to {t}: time {page.evaluate('kanesimViewer.time()')}")
+        cursor_check(page, t, f"{where}, slider at {t}", 1e-3)
+    page.key("ArrowRight", "ArrowRight", 39)  # the next written instant
+    check(page.evaluate("kanesimViewer.time()") == 88 / 20, f"{where}: → from 4.35: {page.evaluate('kanesimViewer.time()')}")
+    x, y = page.evaluate("kanesimViewer.plotPoint('energy', 1.5)")
+    page.click(x, y)
+    area_w = page.evaluate("document.querySelector('.plot-graph').getBoundingClientRect().width")
+    t = page.evaluate("kanesimViewer.time()")
+    check(abs(t - 1.5) <= 2 * 5.0 / area_w, f"{where}: a click on the energy plot at t=1.5 went to {t}")
+    cursor_check(page, t, f"{where}, after the plot click", 1e-3)
+    bx, by = page.evaluate("(() => { const r = document.getElementById('play').getBoundingClientRect(); "
+                           "return [r.left + r.width / 2, r.top + r.height / 2]; })()")
+    page.click(bx, by)
+    try:
+        page.wait_for(f"kanesimViewer.time() > {t} + 0.1", 20, f"{where}: the time to advance while playing")
+    except cdp.ProtocolError as e:
+        failures.append(str(e))
+    page.click(bx, by)
+    t1 = page.evaluate("kanesimViewer.time()")
+    wait_frames(page, 5)
+    check(not page.evaluate("kanesimViewer.playing()") and page.evaluate("kanesimViewer.time()") == t1,
+          f"{where}: the pause button did not stop the time")
+    cursor_check(page, t1, f"{where}, after play and pause", 1e-3)
+    check(not page.evaluate("kanesimViewer.errors"), f"{where}: errors {page.evaluate('kanesimViewer.errors')}")
+
+
+def run_nowebgl(args):
+    offline = pathlib.Path(args.page).resolve().as_uri()
+    server = subprocess.Popen([args.fixture, "serve", "z"], stdout=subprocess.PIPE, text=True)
+    try:
+        served = server.stdout.readline().strip()
+        if not check(served.startswith("http://127.0.0.1:"), f"the server printed {served!r}, not its URL"):
+            return
+        # Chromium's reasons (webglcontextcreationerror), as the line shows them.
+        for mode, reason in (("disabled", "disabled by enterprise policy or commandline switch"),
+                             ("no-gpu", "Could not create a WebGL context")):
+            with cdp.Chromium(args.chromium, WIDTH, HEIGHT, webgl=mode) as browser:
+                page = browser.new_page(WIDTH, HEIGHT)
+                page.navigate("about:blank")
+                if not check(not page.evaluate(WEBGL_PROBE), f"{mode}: this chromium has WebGL; the test means nothing"):
+                    continue
+                check_without_webgl(page, offline, f"offline page, WebGL {mode}", f"this browser has no WebGL ({reason})")
+                check_requests(page, [offline, "data:", "blob:"], f"offline page, WebGL {mode}")
+                page = browser.new_page(WIDTH, HEIGHT)
+                check_without_webgl(page, served, f"served page, WebGL {mode}", f"this browser has no WebGL ({reason})")
+                if mode == "no-gpu" and args.png and page.evaluate("kanesimViewer.ready"):
+                    page.evaluate("kanesimViewer.seek(2.1)")
+                    wait_frames(page)
+                    pathlib.Path(args.png).write_bytes(page.screenshot())
+                    print(f"screenshot: {args.png}")
+        # WebGL works but three.js does not load (served, its file blocked): the same degradation.
+        with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+            page = browser.new_page(WIDTH, HEIGHT)
+            page.send("Network.setBlockedURLs", {"urls": ["*/lib/three.min.js"]})
+            check_without_webgl(page, served, "served page, three.js blocked", "three.js did not load (libjs-three)")
+        with urllib.request.urlopen(served + "quit", timeout=10) as reply:
+            check(reply.status == 200, f"GET /quit answered {reply.status}")
+        check(server.wait(timeout=10) == 0, f"the server exited with {server.returncode}")
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait()
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot"])
+    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot", "nowebgl"])
     parser.add_argument("--chromium", default="chromium")
     parser.add_argument("--page")
     parser.add_argument("--fixture")
@@ -433,7 +560,7 @@ def main():
     start = time.monotonic()
     try:
         {"offline": run_offline, "served": run_served, "controls": run_controls, "edge": run_edge,
-         "screenshot": run_screenshot}[args.case](args)
+         "screenshot": run_screenshot, "nowebgl": run_nowebgl}[args.case](args)
     except cdp.ProtocolError as e:
         failures.append(f"browser: {e}")
     for f in failures:

@@ -19,16 +19,26 @@ class ProtocolError(Exception):
 
 
 class Chromium:
-    """A headless chromium with WebGL through SwiftShader (software rendering, no GPU)."""
+    """A headless chromium; webgl chooses how it draws WebGL (WEBGL's keys)."""
 
     FLAGS = [
-        "--headless=new", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox",
+        "--headless=new", "--no-sandbox",
         "--no-first-run", "--no-default-browser-check", "--disable-background-networking",
         "--disable-component-update", "--disable-sync", "--disable-default-apps", "--disable-extensions",
         "--mute-audio", "--hide-scrollbars", "--remote-debugging-pipe",
     ]
+    SWIFTSHADER = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+    WEBGL = {
+        # WebGL in software (SwiftShader): no GPU needed.
+        "swiftshader": SWIFTSHADER,
+        # WebGL turned off (as a setting or an enterprise policy does); everything else as usual.
+        "disabled": SWIFTSHADER + ["--disable-webgl"],
+        # No GPU and no software fallback (a remote desktop without GL): no context can be made.
+        # (--disable-gpu alone is not enough: chromium then falls back to SwiftShader.)
+        "no-gpu": ["--disable-gpu", "--disable-software-rasterizer"],
+    }
 
-    def __init__(self, executable, width=1200, height=700):
+    def __init__(self, executable, width=1200, height=700, webgl="swiftshader"):
         self.profile = tempfile.mkdtemp(prefix="kanesim_chromium_")
         to_browser_r, self._to_browser = os.pipe()
         self._from_browser, from_browser_w = os.pipe()
@@ -40,7 +50,7 @@ class Chromium:
 
         self.stderr = tempfile.TemporaryFile()
         self.process = subprocess.Popen(
-            [executable, *self.FLAGS, f"--user-data-dir={self.profile}", f"--window-size={width},{height}",
+            [executable, *self.FLAGS, *self.WEBGL[webgl], f"--user-data-dir={self.profile}", f"--window-size={width},{height}",
              "about:blank"],
             preexec_fn=child_fds, close_fds=False, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
             stderr=self.stderr)

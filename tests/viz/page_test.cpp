@@ -3,6 +3,10 @@
 // half-written file on failure. What the page shows is tested in a browser (browser_test.py).
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/stat.h>
+
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -67,7 +71,7 @@ TEST(WriteViewerHtml, SelfContained) {
   const std::string html = Read(dir + "/page.html");
   EXPECT_EQ(r.bytes, html.size());
   EXPECT_EQ(r.instants, 11u);
-  EXPECT_FALSE(fs::exists(dir + "/page.html.part"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);  // no temporary left
   EXPECT_EQ(Count(html, "<!--kanesim:"), 0u);
   EXPECT_EQ(Count(html, "<title>T &lt;&amp;&gt;</title>"), 1u);
   EXPECT_EQ(Count(html, std::string("content=\"") + PagePolicy(PageMode::kOffline) + "\""), 1u);
@@ -122,6 +126,40 @@ TEST(WriteViewerHtml, UnwritablePathIsAnError) {
   const PageResult bad = WriteViewerHtml(ViewerScene{}, dir + "/empty.html");
   EXPECT_EQ(bad.error, "no instants to show");
   EXPECT_FALSE(fs::exists(dir + "/empty.html"));
+}
+
+// Wrong if a write that fails half-way (a full disk: here a file-size limit, EFBIG) touched
+// the previous page or left its temporary, or if a special file or a directory at the path
+// were replaced by a page, or a symbolic link by a file (the file it names is the page).
+TEST(WriteFileReplacing, KeepsThePreviousFileAndSpecialFiles) {
+  const std::string dir = TempDir("replacing");
+  const std::string page = dir + "/page.html";
+  ASSERT_EQ(WriteFileReplacing(page, "previous"), "");
+  struct rlimit before {};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &before), 0);
+  struct rlimit small = before;
+  small.rlim_cur = 4096;
+  auto* previous_handler = std::signal(SIGXFSZ, SIG_IGN);  // write() then fails with EFBIG
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  const std::string error = WriteFileReplacing(page, std::string(100000, 'x'));
+  ::setrlimit(RLIMIT_FSIZE, &before);
+  std::signal(SIGXFSZ, previous_handler);
+  EXPECT_NE(error.find("cannot write " + page), std::string::npos) << error;
+  EXPECT_EQ(Read(page), "previous");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+
+  const std::string fifo = dir + "/fifo.html";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(WriteFileReplacing(fifo, "page").find("not a regular file"), std::string::npos);
+  EXPECT_TRUE(fs::is_fifo(fifo));
+  fs::create_directory(dir + "/sub.html");
+  EXPECT_NE(WriteFileReplacing(dir + "/sub.html", "page"), "");
+  EXPECT_TRUE(fs::is_directory(dir + "/sub.html"));
+
+  fs::create_symlink("page.html", dir + "/link.html");
+  ASSERT_EQ(WriteFileReplacing(dir + "/link.html", "through the link"), "");
+  EXPECT_TRUE(fs::is_symlink(dir + "/link.html"));
+  EXPECT_EQ(Read(page), "through the link");
 }
 
 // Wrong if the served page inlined the libraries or pointed anywhere but its own origin.

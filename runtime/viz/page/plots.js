@@ -159,5 +159,14 @@
     return [rect.left + entry.graph.toDomXCoord(t), rect.top + area.y + area.h / 2];
   };
 
+  // For the test hook: the points a plot was given, [[t, value], …] (null for no such plot).
+  Plots.prototype.rows = function (name) {
+    const entry = this.shown.get(name);
+    if (!entry) return null;
+    const out = [];
+    for (let r = 0; r < entry.graph.numRows(); ++r) out.push([entry.graph.getValue(r, 0), entry.graph.getValue(r, 1)]);
+    return out;
+  };
+
   K.Plots = Plots;
 })(window.kanesimPage = window.kanesimPage || {});
