@@ -118,6 +118,13 @@ const std::string& ErrorMessage(const Workspace& ws);
 // the time and the turn) when the motion left its assembly branch near a change point
 // (the velocity turned by a finite angle where the loop's rows nearly lost rank), else 0.
 struct BranchMonitor;
+// How near closed loop `loop` (index into Program::loops) is to a change point at the
+// configuration in ws (ConstraintJacobian done): rho = sigma_rank / sigma_max of its rows
+// of ws.A, rank = its rank at the assembled start (its rows less the redundant ones),
+// translation rows divided by *length so that rho does not depend on the unit of length
+// (*length <= 0: taken here, the RMS lever arm of its rows, and stored). 1 for a loop
+// without rows.
+double LoopSingularRatio(const Program& program, const Workspace& ws, int loop, double* length);
 bool BranchMonitorActive(const Program& program);  // the program has closed loops
 std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& program);
 int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y);
@@ -209,5 +216,10 @@ CompileMessage FrictionIndeterminateWarning(const Program& program);
 // non-zero start value (runtime/compile/loops.cpp): names the constraints, the speeds
 // changed (from -> to) and the largest change.
 CompileMessage StartSpeedsWarning(const Program& program);
+
+// Warnings W316, one per joint whose two frames are on the same rigid body (the world, or
+// bodies a weld or fixed element merged): such a joint cannot move, so the program has
+// neither a speed nor a constraint for it (runtime/compile/loops.cpp LockedJoint).
+std::vector<CompileMessage> LockedJointWarnings(const Program& program);
 
 }  // namespace kanesim::rt
