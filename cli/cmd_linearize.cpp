@@ -6,8 +6,10 @@
 #include <fmt/core.h>
 #include <fmt/ranges.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -182,26 +184,53 @@ void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
                rmax);
 }
 
-bool OpenOutput(const LinearizeArgs& a, batch::FileLock* lock, std::FILE** out) {
-  if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
-    fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing there would destroy it\n", a.out_path, in);
-    return false;
+// The -o file, written as `kanesim run -o` writes its CSV (docs/sweeps.md "Output files of
+// every command"): a regular (or new) file through a temporary beside it, flushed and
+// renamed over it at the end, under a lock file beside it, so a kill, a crash or a full disk
+// leaves the previous file whole; a FIFO or a device (/dev/stdout) is streamed to directly.
+class Output {
+ public:
+  // False (said on stderr) when it cannot be opened. `inputs`: every file the model read.
+  bool Open(const std::string& path, const std::vector<std::string>& inputs) {
+    path_ = path;
+    if (std::string in = batch::OverwrittenInput(path, inputs); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: -o '{}' is the model file '{}'; writing there would destroy it\n", path, in);
+      return false;
+    }
+    std::string error;
+    if (batch::NotRegularFile(path).empty()) {
+      const std::filesystem::path target(batch::ReplacedFile(path));
+      const std::string lock_path = (target.parent_path() / ("." + target.filename().string() + ".lock")).string();
+      if (!lock_.Acquire(lock_path, "'" + path + "'", &error, /*remove_at_end=*/true) ||
+          (batch::RemoveStaleTemps(target.string()), !atomic_.Open(path, &error))) {
+        fmt::print(stderr, "kanesim: error: {}\n", error);
+        return false;
+      }
+      file_ = atomic_.file();
+    } else if (!(file_ = std::fopen(path.c_str(), "w"))) {
+      fmt::print(stderr, "kanesim: error: cannot open '{}' for writing: {}\n", path, std::strerror(errno));
+      return false;
+    }
+    return true;
   }
-  std::string lock_error;
-  std::error_code ec;
-  const auto status = std::filesystem::status(a.out_path, ec);
-  if ((ec || std::filesystem::is_regular_file(status) || !std::filesystem::exists(status)) &&
-      !lock->Acquire(a.out_path, "'" + a.out_path + "'", &lock_error)) {
-    fmt::print(stderr, "kanesim: error: {}\n", lock_error);
-    return false;
+  std::FILE* file() const { return file_; }
+  // Renames the finished file over the target (or closes the stream); false, said, when
+  // it could not be written whole (the previous file is then unchanged).
+  bool Finish() {
+    std::string error;
+    const bool ok = atomic_.file() ? atomic_.Commit(&error) : std::fclose(file_) == 0;
+    file_ = nullptr;
+    if (!ok)
+      fmt::print(stderr, "kanesim: error: cannot write '{}'{}\n", path_, error.empty() ? "" : ": " + error);
+    return ok;
   }
-  *out = std::fopen(a.out_path.c_str(), "w");
-  if (!*out) {
-    fmt::print(stderr, "kanesim: error: cannot open '{}' for writing\n", a.out_path);
-    return false;
-  }
-  return true;
-}
+
+ private:
+  std::string path_;
+  batch::FileLock lock_;
+  batch::AtomicFile atomic_;  // removes its temporary when not committed
+  std::FILE* file_ = nullptr;
+};
 
 int Fail(const lin::Status& s) {
   fmt::print(stderr, "kanesim linearize: {}: {}\n", s.code == 1 ? "error" : "numerical failure", s.message);
@@ -272,7 +301,7 @@ bool ParseSweep(const std::string& text, std::string* name, std::vector<double>*
 }
 
 // Root locus: one row per value, the eigenvalues sorted by modulus (re, im pairs).
-int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
+int RunSweep(const rt::Program& program, const std::vector<std::string>& inputs, const LinearizeArgs& a) {
   std::string name, why;
   std::vector<double> values;
   if (!ParseSweep(a.sweep, &name, &values, &why)) {
@@ -307,11 +336,20 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
   fmt::print(stderr, "{}", widened_note);
   const size_t n = rows.empty() ? 0 : rows.front().size();
   std::FILE* out = stdout;
-  batch::FileLock lock;
-  if (!a.out_path.empty() && a.out_path != "-" && !OpenOutput(a, &lock, &out)) return kExitModelError;
-  fmt::print(out, "{}", name);
-  for (size_t k = 0; k < n; ++k) fmt::print(out, ",lambda{}.re,lambda{}.im", k + 1, k + 1);
-  fmt::print(out, ",max_real\n");
+  Output file;
+  if (!a.out_path.empty() && a.out_path != "-") {
+    if (!file.Open(a.out_path, inputs)) return kExitModelError;
+    out = file.file();
+  }
+  // fwrite, not fmt::print(FILE*), which throws when the disk is full: the failure is
+  // said once at the end and the previous file kept.
+  bool write_ok = true;
+  auto put = [&](const std::string& text) {
+    write_ok = std::fwrite(text.data(), 1, text.size(), out) == text.size() && write_ok;
+  };
+  std::string head = name;
+  for (size_t k = 0; k < n; ++k) head += fmt::format(",lambda{}.re,lambda{}.im", k + 1, k + 1);
+  put(head + ",max_real\n");
   bool warned = false;
   int code = kExitOk;
   for (size_t r = 0; r < rows.size(); ++r) {
@@ -321,13 +359,13 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
       rows.resize(r);
       break;
     }
-    fmt::print(out, "{}", Num(values[r]));
+    std::string line = Num(values[r]);
     double rmax = -INFINITY;
     for (const auto& e : rows[r]) {
-      fmt::print(out, ",{},{}", Num(e.real()), Num(e.imag()));
+      line += fmt::format(",{},{}", Num(e.real()), Num(e.imag()));
       rmax = std::max(rmax, e.real());
     }
-    fmt::print(out, ",{}\n", Num(rmax));
+    put(line + fmt::format(",{}\n", Num(rmax)));
     if (unsteady[r] > kUnsteadyLimit && !warned) {
       std::fflush(out);
       fmt::print(stderr, "kanesim linearize: warning (--frozen): at {} = {}: {}\n", name, values[r],
@@ -335,10 +373,13 @@ int RunSweep(const rt::Program& program, const LinearizeArgs& a) {
       warned = true;
     }
   }
-  if (out != stdout && std::fclose(out) != 0) {
-    fmt::print(stderr, "kanesim: error: cannot write '{}'\n", a.out_path);
-    return kExitModelError;
+  if (!write_ok) {
+    fmt::print(stderr, "kanesim: error: cannot write '{}': {}{}\n", out == stdout ? "stdout" : a.out_path,
+               std::strerror(errno), out == stdout ? "" : " (the previous file, if any, is unchanged)");
+    return kExitModelError;  // the temporary is removed
   }
+  // The rows before an unsteady point are correct: kept, like run's before a failure.
+  if (out != stdout && !file.Finish()) return kExitModelError;
   if (!a.html_path.empty() && !rows.empty()) {  // the rows kept, as in the table
     viz::LocusData data;
     data.title = fmt::format("Root locus of {}: {} = {}", std::filesystem::path(a.load.path).filename().string(),
@@ -378,6 +419,15 @@ int RunLinearize(const LinearizeArgs& a) {
   const std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
   if (!model) return kExitModelError;
   const rt::Program& program = *model->program;
+  // Now that every file the model read is known: none of them is an output.
+  for (const std::string& out : {a.out_path, a.html_path}) {
+    if (out.empty() || out == "-") continue;
+    if (std::string in = batch::OverwrittenInput(out, model->mech->source_files); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: {} '{}' is the model file '{}'; writing there would destroy it\n",
+                 out == a.out_path ? "-o" : "--html", out, in);
+      return kExitModelError;
+    }
+  }
   if (!(a.step > 0) || a.step > 0.1) {
     fmt::print(stderr, "kanesim: error: --step must be in (0, 0.1]\n");
     return kExitModelError;
@@ -386,7 +436,7 @@ int RunLinearize(const LinearizeArgs& a) {
     fmt::print(stderr, "kanesim: error: --html writes the root locus of --sweep; add --sweep NAME=FROM:STEP:TO\n");
     return kExitModelError;
   }
-  if (!a.sweep.empty()) return RunSweep(program, a);
+  if (!a.sweep.empty()) return RunSweep(program, model->mech->source_files, a);
 
   lin::OperatingPoint op;
   if (lin::Status s = OperatingPointFor(program, a, true, &op); !s.ok()) return Fail(s);
@@ -404,15 +454,14 @@ int RunLinearize(const LinearizeArgs& a) {
   if (m.unsteady > kUnsteadyLimit)
     fmt::print(stderr, "kanesim linearize: warning (--frozen): {}\n", UnsteadyCause(m.unsteady));
   if (!a.out_path.empty()) {
-    std::FILE* out = nullptr;
-    batch::FileLock lock;
-    if (!OpenOutput(a, &lock, &out)) return kExitModelError;
+    Output file;
+    if (!file.Open(a.out_path, model->mech->source_files)) return kExitModelError;
     const std::string text = Json(m, op);
-    const bool ok = std::fwrite(text.data(), 1, text.size(), out) == text.size();
-    if (std::fclose(out) != 0 || !ok) {
-      fmt::print(stderr, "kanesim: error: cannot write '{}'\n", a.out_path);
-      return kExitModelError;
+    if (std::fwrite(text.data(), 1, text.size(), file.file()) != text.size()) {
+      fmt::print(stderr, "kanesim: error: cannot write '{}': {}\n", a.out_path, std::strerror(errno));
+      return kExitModelError;  // the temporary is removed; the previous file stays
     }
+    if (!file.Finish()) return kExitModelError;
   }
   return kExitOk;
 }

@@ -1,10 +1,14 @@
 // `kanesim test DIR|SPEC.toml...`: golden-output regression tests (docs/golden_tests.md).
-// For each spec: load and compile the model (one at a time: the front end is not
-// re-entrant), simulate (tests in parallel, -j), compare with the stored output and
-// check the spec's invariants. Prints PASS/FAIL per test in the order given.
-// Exit codes: 0 all pass; 3 a regression (a comparison or invariant failed, or the model
-// no longer loads or runs); 1 a usage error (bad spec, missing golden without --update).
-// --update rewrites the stored outputs and prints what changed.
+// For each spec: load and compile the model, simulate, compare with the stored output and
+// check the spec's invariants. Each test runs whole in a worker process of its own
+// (runtime/batch/worker_pool.h, -j of them at once), so a test that crashes kanesim
+// (a signal, out of memory) or runs past --timeout is reported as CRASH or TIMEOUT and
+// the others still run. When no process can be made, the rest run on threads (the front
+// end, not re-entrant, one at a time). Prints one report per test in the order given.
+// Exit codes: 0 all pass; 3 a regression (a comparison or invariant failed, the model no
+// longer loads or runs, or its test crashed or timed out); 1 a usage error (bad spec,
+// missing golden without --update). --update rewrites the stored outputs and prints what
+// changed.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -27,6 +31,7 @@
 #include "runtime/batch/file_guard.h"
 #include "runtime/batch/golden.h"
 #include "runtime/batch/summary.h"
+#include "runtime/batch/worker_pool.h"
 #include "runtime/sim/csv.h"
 #include "runtime/sim/signal_select.h"
 #include "stdlib/stdlib.h"
@@ -40,14 +45,28 @@ struct TestArgs {
   int threads = 0;
   std::vector<std::string> sets;
   bool verbose = false;
+  double timeout = 0.0;  // seconds of wall time per test; 0: none
 };
 
-enum class Outcome { kPass, kFail, kError, kUpdated };
+// kCrashed: the worker process running the test died or ran past --timeout (a failure).
+enum class Outcome { kPass, kFail, kError, kUpdated, kCrashed };
 
 struct TestResult {
   Outcome outcome = Outcome::kPass;
   std::string report;  // lines printed for this test
 };
+
+// A TestResult through a worker's pipe: the outcome as one letter, then the report.
+constexpr char kOutcomeCodes[] = {'P', 'F', 'E', 'U', 'C'};
+std::string EncodeResult(const TestResult& r) { return kOutcomeCodes[static_cast<int>(r.outcome)] + r.report; }
+TestResult DecodeResult(const std::string& s) {
+  TestResult r;
+  r.outcome = Outcome::kCrashed;
+  for (int k = 0; k < 5; ++k)
+    if (!s.empty() && s[0] == kOutcomeCodes[k]) r.outcome = static_cast<Outcome>(k);
+  r.report = s.empty() ? std::string() : s.substr(1);
+  return r;
+}
 
 
 std::string G(double x) { return fmt::format("{:.3g}", x); }
@@ -273,9 +292,82 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
   return r;
 }
 
+// The tests of one run, for worker processes: each runs RunOne whole in its worker.
+class TestTasks : public batch::PoolTasks {
+ public:
+  TestTasks(const std::vector<std::string>& specs, const TestArgs& args) : specs_(specs), args_(args) {}
+  size_t Count() const override { return specs_.size(); }
+  std::string Run(size_t k, bool* failed, bool*) override {
+    TestResult r = RunOne(specs_[k], args_, load_mutex_);
+    *failed = r.outcome == Outcome::kFail || r.outcome == Outcome::kError;
+    std::fflush(stderr);  // its diagnostics before its report is printed
+    return EncodeResult(r);
+  }
+  // A crash, a timeout, or an exception that escaped the test (out of memory).
+  std::string Lost(size_t k, const std::string& status, const std::string& message, double) const override {
+    TestResult r;
+    r.outcome = Outcome::kCrashed;
+    const std::string label = std::filesystem::path(specs_[k]).stem().string();
+    r.report = (status == "timeout" ? "TIMEOUT " : status == "crashed" ? "CRASH " : "FAIL  ") + label + "\n    " +
+               message + "\n";
+    return EncodeResult(r);
+  }
+  int FaultId(size_t k) const override { return static_cast<int>(k); }
+
+ private:
+  const std::vector<std::string>& specs_;
+  const TestArgs& args_;
+  std::mutex load_mutex_;  // unused in a worker (one test at a time), but RunOne takes it
+};
+
+// Every test in a worker process, at most n at once. False when no process can be made:
+// *handed tests were run (their results are in *results), the rest were not.
+bool RunInWorkers(const std::vector<std::string>& specs, const TestArgs& a, size_t n,
+                  std::vector<TestResult>* results, size_t* handed, std::string* error) {
+  TestTasks tasks(specs, a);
+  batch::PoolLimits limits;
+  limits.timeout = a.timeout;
+  limits.task = "test";
+  limits.timeout_option = "--timeout";
+  batch::ProcessPool pool(tasks, limits, static_cast<int>(n));
+  size_t next = 0;
+  while (true) {
+    bool ok = true;
+    while (ok && next < specs.size() && pool.HasIdle()) {
+      ok = pool.Start(next, error);
+      if (ok) ++next;
+    }
+    batch::ProcessPool::Done done;
+    if (!pool.Wait(&done)) {  // none running
+      *handed = next;
+      return next >= specs.size();
+    }
+    (*results)[done.index] = DecodeResult(done.line);
+  }
+}
+
+// Tests from `first` on, on n threads of this process (fork failed).
+void RunOnThreads(const std::vector<std::string>& specs, const TestArgs& a, size_t n, size_t first,
+                  std::vector<TestResult>* results) {
+  std::mutex load_mutex;
+  std::atomic<size_t> next{first};
+  auto work = [&] {
+    for (size_t k = next.fetch_add(1); k < specs.size(); k = next.fetch_add(1))
+      (*results)[k] = RunOne(specs[k], a, load_mutex);
+  };
+  std::vector<std::jthread> pool;
+  for (size_t i = 1; i < n; ++i) pool.emplace_back(work);
+  work();
+}
+
 int TestCommand(const TestArgs& a) {
   if (a.update && !a.sets.empty()) {
     fmt::print(stderr, "kanesim: error: --update with --set would record perturbed goldens; drop one\n");
+    return kExitModelError;
+  }
+  if (!(a.timeout >= 0.0 && a.timeout <= 1e6)) {  // 1e6 s (11 days): what the pool's int milliseconds hold
+    fmt::print(stderr, "kanesim: error: --timeout needs seconds from 0 (none) to 1e6, got {}\n",
+               sim::FormatShortest(a.timeout));
     return kExitModelError;
   }
   std::vector<std::string> specs;
@@ -295,20 +387,17 @@ int TestCommand(const TestArgs& a) {
     }
   }
   std::vector<TestResult> results(specs.size());
-  std::mutex load_mutex;
-  std::atomic<size_t> next{0};
   unsigned hw = std::max(1u, std::thread::hardware_concurrency());
   size_t n = std::max<size_t>(1, std::min<size_t>(a.threads > 0 ? static_cast<size_t>(a.threads) : hw, specs.size()));
-  auto work = [&] {
-    for (size_t k = next.fetch_add(1); k < specs.size(); k = next.fetch_add(1))
-      results[k] = RunOne(specs[k], a, load_mutex);
-  };
-  {
-    std::vector<std::jthread> pool;
-    for (size_t i = 1; i < n; ++i) pool.emplace_back(work);
-    work();
+  size_t handed = 0;
+  std::string why;
+  if (!RunInWorkers(specs, a, n, &results, &handed, &why)) {
+    // Better tests on threads than none: say what protection is lost.
+    fmt::print(stderr, "kanesim: warning: {}; the remaining {} tests run on threads of this process, where a crash "
+               "ends the run\n", why, specs.size() - handed);
+    RunOnThreads(specs, a, n, handed, &results);
   }
-  int pass = 0, fail = 0, error = 0, updated = 0;
+  int pass = 0, fail = 0, error = 0, updated = 0, crashed = 0;
   for (const TestResult& r : results) {
     fmt::print("{}", r.report);
     switch (r.outcome) {
@@ -316,12 +405,15 @@ int TestCommand(const TestArgs& a) {
       case Outcome::kFail: ++fail; break;
       case Outcome::kError: ++error; break;
       case Outcome::kUpdated: ++updated; break;
+      case Outcome::kCrashed: ++fail, ++crashed; break;
     }
   }
+  const std::string crashes = crashed > 0 ? fmt::format(" ({} crashed or timed out)", crashed) : std::string();
   if (a.update)
-    fmt::print("{} golden{} recorded, {} error{}\n", updated, updated == 1 ? "" : "s", error, error == 1 ? "" : "s");
+    fmt::print("{} golden{} recorded, {}{} error{}\n", updated, updated == 1 ? "" : "s",
+               fail > 0 ? fmt::format("{} failed{}, ", fail, crashes) : std::string(), error, error == 1 ? "" : "s");
   else
-    fmt::print("{} passed, {} failed, {} error{}\n", pass, fail, error, error == 1 ? "" : "s");
+    fmt::print("{} passed, {} failed{}, {} error{}\n", pass, fail, crashes, error, error == 1 ? "" : "s");
   std::fflush(stdout);
   if (fail > 0) return kExitRegression;
   return error > 0 ? kExitModelError : kExitOk;
@@ -339,6 +431,8 @@ void AddTestCommand(CLI::App& app, int* exit_code, bool options) {
   t->add_option("--set", a->sets, "Override a parameter in every test, name=value (what-if checks)")
       ->allow_extra_args(false);
   t->add_flag("-v,--verbose", a->verbose, "Also print invariants that passed");
+  AddNumberOption(t, "--timeout", &a->timeout,
+                  "Seconds of wall time a test may take before its process is killed (TIMEOUT, a failure); 0: none");
   t->callback([a, exit_code] { *exit_code = TestCommand(*a); });
 }
 

@@ -21,6 +21,7 @@
 #include <new>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "runtime/sim/csv.h"
@@ -79,8 +80,11 @@ double AddressSpaceBytes() {
 // A worker's first steps after the fork.
 void PrepareWorkerProcess(double memory_mib) {
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive the sweep (a hung worker would hold its lock)
-  std::signal(SIGINT, SIG_IGN);        // the terminal's ^C reaches the whole group; the sweep decides
-  std::signal(SIGPIPE, SIG_DFL);
+  // The owner's handlers (an interpreter's, which would touch its state) are not the
+  // worker's: a signal does what it does by default.
+  for (int sig = 1; sig < SIGRTMIN; ++sig)
+    if (sig != SIGKILL && sig != SIGSTOP) std::signal(sig, SIG_DFL);
+  std::signal(SIGINT, SIG_IGN);  // the terminal's ^C reaches the whole group; the sweep decides
   if (std::FILE* f = std::fopen("/proc/self/oom_score_adj", "w")) {  // best effort
     std::fputs("1000", f);  // the first the out-of-memory killer chooses: never the sweep process
     std::fclose(f);
@@ -129,8 +133,8 @@ void InjectTestFault(const std::string& spec, int id) {
   }
 }
 
-WorkerPool::WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers)
-    : runner_(runner), config_(config), workers_(static_cast<size_t>(std::max(1, workers))) {
+ProcessPool::ProcessPool(PoolTasks& tasks, PoolLimits limits, int workers)
+    : tasks_(tasks), limits_(std::move(limits)), workers_(static_cast<size_t>(std::max(1, workers))) {
   // A worker killed while idle (the out-of-memory killer prefers workers) has closed its
   // command pipe: writing to it must fail with EPIPE (Start then forks a fresh worker),
   // not raise SIGPIPE, which would end the sweep.
@@ -139,27 +143,27 @@ WorkerPool::WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int wo
   ::sigaction(SIGPIPE, &ignore, &old_sigpipe_);
 }
 
-WorkerPool::~WorkerPool() {
+ProcessPool::~ProcessPool() {
   for (Worker& w : workers_) {
-    if (w.pid > 0 && w.scenario) ::kill(w.pid, SIGKILL);  // only when the sweep stops early
+    if (w.pid > 0 && w.busy) ::kill(w.pid, SIGKILL);  // only when the sweep stops early
     Close(&w);
   }
   ::sigaction(SIGPIPE, &old_sigpipe_, nullptr);
 }
 
-bool WorkerPool::HasIdle() const {
+bool ProcessPool::HasIdle() const {
   for (const Worker& w : workers_)
-    if (!w.scenario) return true;
+    if (!w.busy) return true;
   return false;
 }
 
-int WorkerPool::Running() const {
+int ProcessPool::Running() const {
   int n = 0;
-  for (const Worker& w : workers_) n += w.scenario ? 1 : 0;
+  for (const Worker& w : workers_) n += w.busy ? 1 : 0;
   return n;
 }
 
-void WorkerPool::Close(Worker* w) {
+void ProcessPool::Close(Worker* w) {
   if (w->command_fd >= 0) ::close(w->command_fd);  // an idle worker reads the end and exits
   if (w->result_fd >= 0) ::close(w->result_fd);
   if (w->pid > 0) {
@@ -170,7 +174,7 @@ void WorkerPool::Close(Worker* w) {
   *w = Worker{};
 }
 
-bool WorkerPool::Spawn(Worker* w, std::string* error) {
+bool ProcessPool::Spawn(Worker* w, std::string* error) {
   int command[2], result[2];
   if (::pipe2(command, O_CLOEXEC) != 0) {
     *error = std::string("cannot make a pipe for a worker process: ") + std::strerror(errno);
@@ -209,57 +213,55 @@ bool WorkerPool::Spawn(Worker* w, std::string* error) {
   return true;
 }
 
-void WorkerPool::WorkerMain(int command_fd, int result_fd) {
-  PrepareWorkerProcess(config_.worker_memory_mib);
+void ProcessPool::WorkerMain(int command_fd, int result_fd) {
+  PrepareWorkerProcess(limits_.memory_mib);
   const char* fault = std::getenv("KANESIM_TEST_SWEEP_FAULT");
   while (true) {
     std::int32_t index = -1;
-    if (!ReadAll(command_fd, &index, sizeof index) || index < 0 ||
-        static_cast<size_t>(index) >= config_.scenarios.size())
-      std::_Exit(0);  // the sweep is done with this worker: no destructors of the sweep's state
-    const Scenario& s = config_.scenarios[static_cast<size_t>(index)];
+    if (!ReadAll(command_fd, &index, sizeof index) || index < 0 || static_cast<size_t>(index) >= tasks_.Count())
+      std::_Exit(0);  // the owner is done with this worker: no destructors of the owner's state
+    const auto k = static_cast<size_t>(index);
     const double t0 = Now();
-    bool failed = false;
+    bool failed = false, flag = false;
     std::string line;
-    const int variants_before = runner_.NumVariants();
     try {
-      if (fault) InjectTestFault(fault, s.id);
-      line = runner_.Run(s, &failed);
+      if (fault) InjectTestFault(fault, tasks_.FaultId(k));
+      line = tasks_.Run(k, &failed, &flag);
     } catch (const std::bad_alloc&) {
       failed = true;
-      line = runner_.LostRow(s, "failed",
-                             config_.worker_memory_mib > 0
-                                 ? "out of memory (the worker's limit, --worker-memory, is " +
-                                       sim::FormatNumber(config_.worker_memory_mib) + " MiB)"
-                                 : "out of memory",
-                             Now() - t0);
+      line = tasks_.Lost(k, "failed",
+                         limits_.memory_mib > 0 ? "out of memory (the worker's limit, " + limits_.memory_option +
+                                                      ", is " + sim::FormatNumber(limits_.memory_mib) + " MiB)"
+                                                : "out of memory",
+                         Now() - t0);
     } catch (const std::exception& e) {
       failed = true;
-      line = runner_.LostRow(s, "failed", e.what(), Now() - t0);
+      line = tasks_.Lost(k, "failed", e.what(), Now() - t0);
     }
     std::string message(1, failed ? 'F' : 'O');
-    message += runner_.NumVariants() > variants_before ? 'V' : '-';
+    message += flag ? 'V' : '-';
     message += line;
     const std::uint32_t size = static_cast<std::uint32_t>(message.size());
     if (!WriteAll(result_fd, &size, sizeof size) || !WriteAll(result_fd, message.data(), message.size()))
-      std::_Exit(0);  // the sweep is gone
+      std::_Exit(0);  // the owner is gone
   }
 }
 
-bool WorkerPool::Start(const Scenario& s, std::string* error) {
+bool ProcessPool::Start(size_t task, std::string* error) {
   for (Worker& w : workers_) {
-    if (w.scenario) continue;
+    if (w.busy) continue;
     if (w.pid <= 0 && !Spawn(&w, error)) return false;
-    const std::int32_t index = static_cast<std::int32_t>(&s - config_.scenarios.data());
+    const auto index = static_cast<std::int32_t>(task);
     if (!WriteAll(w.command_fd, &index, sizeof index)) {
-      // The idle worker died (killed from outside): a fresh one takes the scenario.
+      // The idle worker died (killed from outside): a fresh one takes the task.
       Close(&w);
       if (!Spawn(&w, error) || !WriteAll(w.command_fd, &index, sizeof index)) {
-        if (error->empty()) *error = "cannot hand a scenario to a worker process";
+        if (error->empty()) *error = "cannot hand a task to a worker process";
         return false;
       }
     }
-    w.scenario = &s;
+    w.busy = true;
+    w.index = task;
     w.started = Now();
     w.buffer.clear();
     return true;
@@ -268,14 +270,15 @@ bool WorkerPool::Start(const Scenario& s, std::string* error) {
   return false;
 }
 
-void WorkerPool::Lost(Worker* w, Done* out, const std::string& status, const std::string& message, Outcome outcome) {
-  out->scenario = w->scenario;
+void ProcessPool::Lost(Worker* w, Done* out, const std::string& status, const std::string& message, Outcome outcome) {
+  out->index = w->index;
   out->outcome = outcome;
-  out->line = runner_.LostRow(*w->scenario, status, message, Now() - w->started);
-  w->scenario = nullptr;
+  out->flag = false;
+  out->line = tasks_.Lost(w->index, status, message, Now() - w->started);
+  w->busy = false;
 }
 
-bool WorkerPool::Collect(Worker* w, Done* out) {
+bool ProcessPool::Collect(Worker* w, Done* out) {
   char chunk[65536];
   ssize_t n = ::read(w->result_fd, chunk, sizeof chunk);
   if (n < 0 && (errno == EINTR || errno == EAGAIN)) return false;
@@ -287,11 +290,11 @@ bool WorkerPool::Collect(Worker* w, Done* out) {
     if (w->buffer.size() < sizeof size + size) return false;
     const std::string message = w->buffer.substr(sizeof size, size);
     w->buffer.erase(0, sizeof size + size);
-    out->scenario = w->scenario;
+    out->index = w->index;
     out->outcome = !message.empty() && message[0] == 'O' ? Outcome::kOk : Outcome::kFailed;
-    out->new_variant = message.size() > 1 && message[1] == 'V';
+    out->flag = message.size() > 1 && message[1] == 'V';
     out->line = message.size() > 2 ? message.substr(2) : std::string();
-    w->scenario = nullptr;
+    w->busy = false;
     return true;
   }
   // The end of the pipe: the worker is gone. Why: its exit status.
@@ -303,43 +306,79 @@ bool WorkerPool::Collect(Worker* w, Done* out) {
   w->pid = -1;
   std::string why = WIFSIGNALED(status) ? "killed by " + SignalText(WTERMSIG(status))
                                          : "exited with status " + std::to_string(WEXITSTATUS(status));
-  Lost(w, out, "crashed", "the worker process running this scenario was " + why, Outcome::kCrashed);
+  Lost(w, out, "crashed", "the worker process running this " + limits_.task + " was " + why, Outcome::kCrashed);
   Close(w);
   return true;
 }
 
-bool WorkerPool::Wait(Done* out) {
+bool ProcessPool::Wait(Done* out, double max_wait) {
+  const double give_up = max_wait < 0.0 ? HUGE_VAL : Now() + max_wait;
   while (Running() > 0) {
     // Time limits: the nearest deadline bounds the wait.
     const double now = Now();
     double wait = 0.25;  // also how often an interruption is noticed
     for (Worker& w : workers_) {
-      if (!w.scenario || config_.scenario_timeout <= 0.0) continue;
-      const double left = w.started + config_.scenario_timeout - now;
+      if (!w.busy || limits_.timeout <= 0.0) continue;
+      const double left = w.started + limits_.timeout - now;
       if (left <= 0.0) {
         ::kill(w.pid, SIGKILL);
         Lost(&w, out, "timeout",
-             "stopped after " + sim::FormatNumber(config_.scenario_timeout) +
-                 " s of wall time (--scenario-timeout); the worker process was killed",
+             "stopped after " + sim::FormatNumber(limits_.timeout) + " s of wall time (" +
+                 limits_.timeout_option + "); the worker process was killed",
              Outcome::kTimedOut);
         Close(&w);
         return true;
       }
       wait = std::min(wait, left);
     }
+    if (now >= give_up) return false;
+    wait = std::min(wait, give_up - now);
     std::vector<pollfd> fds;
     std::vector<Worker*> who;
     for (Worker& w : workers_)
-      if (w.scenario) {
+      if (w.busy) {
         fds.push_back(pollfd{w.result_fd, POLLIN, 0});
         who.push_back(&w);
       }
-    const int ready = ::poll(fds.data(), fds.size(), static_cast<int>(std::ceil(wait * 1000.0)));
+    const int ready = ::poll(fds.data(), fds.size(), static_cast<int>(std::ceil(std::max(wait, 0.0) * 1000.0)));
     if (ready <= 0) continue;  // a time-out, or a signal (SIGINT): look again
     for (size_t k = 0; k < fds.size(); ++k)
       if (fds[k].revents != 0 && Collect(who[k], out)) return true;
   }
   return false;
+}
+
+WorkerPool::WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers,
+                       const std::string& timeout_option, const std::string& memory_option)
+    : config_(config),
+      tasks_(runner, config),
+      pool_(tasks_, PoolLimits{config.scenario_timeout, config.worker_memory_mib, "scenario", timeout_option, memory_option},
+            workers) {}
+
+std::string WorkerPool::Tasks::Run(size_t index, bool* failed, bool* flag) {
+  const int variants_before = runner_.NumVariants();
+  std::string line = runner_.Run(config_.scenarios[index], failed);
+  *flag = runner_.NumVariants() > variants_before;
+  return line;
+}
+
+std::string WorkerPool::Tasks::Lost(size_t index, const std::string& status, const std::string& message,
+                                    double wall) const {
+  return runner_.LostRow(config_.scenarios[index], status, message, wall);
+}
+
+bool WorkerPool::Start(const Scenario& s, std::string* error) {
+  return pool_.Start(static_cast<size_t>(&s - config_.scenarios.data()), error);
+}
+
+bool WorkerPool::Wait(Done* out, double max_wait) {
+  ProcessPool::Done d;
+  if (!pool_.Wait(&d, max_wait)) return false;
+  out->scenario = &config_.scenarios[d.index];
+  out->line = std::move(d.line);
+  out->outcome = d.outcome;
+  out->new_variant = d.flag;
+  return true;
 }
 
 }  // namespace kanesim::batch

@@ -233,5 +233,84 @@ TEST(OutputReplace, RunReplacesTheOutputAtTheEnd) {
   EXPECT_TRUE(left.empty()) << left.front();
 }
 
+// linearize -o (the JSON model, and the root locus CSV of --sweep) is written like run -o:
+// stopped while writing (RLIMIT_FSIZE: SIGXFSZ in the middle of the file, as a kill) or on a
+// full disk, the previous good file stays byte for byte (before: it was truncated at once
+// and left torn). Outputs of 210-230 kB against a 64 KiB limit / a 192 KiB disk; the good
+// ones are small.
+const std::vector<std::pair<std::string, std::string>> kLinearizeBig = {
+    {"out.json", "linearize " + kSrc + "/examples/chain.mech --set N=30 --equilibrium -o "},
+    {"locus.csv", "linearize " + kSpring + " --sweep k=1:1:2000 -o "}};
+const std::vector<std::string> kLinearizeSmall = {"linearize " + kSrc + "/examples/chain.mech --set N=2 --equilibrium -o ",
+                                                  "linearize " + kSpring + " --sweep k=1:1:5 -o "};
+
+TEST(OutputReplace, LinearizeStoppedWhileWritingKeepsThePreviousFile) {
+  const std::string d = Work("replace_linearize_fsize");
+  for (size_t k = 0; k < kLinearizeBig.size(); ++k) {
+    const auto& [name, big] = kLinearizeBig[k];
+    ASSERT_EQ(Kanesim(kLinearizeSmall[k] + name, d).rc, 0) << name;
+    const std::string good = Slurp(d + "/" + name);
+    ASSERT_GT(good.size(), 100u);
+    ASSERT_LT(good.size(), 32000u);
+    Write(d + "/limited.sh", "cd '" + d + "' && ulimit -f 64 && exec '" + Bin() + "' " + big + name +
+                                 " >/dev/null 2>err.txt");
+    const int rc = std::system(("bash '" + d + "/limited.sh'").c_str());
+    EXPECT_NE(rc, 0) << name << ": the limit was meant to stop it";
+    EXPECT_EQ(Slurp(d + "/" + name), good) << name << ": the previous file was not kept";
+    ASSERT_EQ(Temps(d + "/" + name).size(), 1u) << name << ": the stopped run's partial file";
+    // Unlimited, the same command replaces the file whole and removes the stale temporary.
+    Result r = Kanesim(big + name, d);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_GT(Slurp(d + "/" + name).size(), 200000u) << name;
+    EXPECT_TRUE(Temps(d + "/" + name).empty()) << name;
+  }
+  EXPECT_TRUE(Slurp(d + "/out.json").ends_with("}\n")) << "the JSON is complete";
+  EXPECT_FALSE(std::filesystem::exists(d + "/.out.json.lock")) << "no lock file is left";
+}
+
+TEST(OutputReplace, LinearizeOnAFullDiskKeepsThePreviousFile) {
+  ::umount2((std::string(KANESIM_WORK_DIR) + "/replace_linearize_disk/disk").c_str(), MNT_DETACH);
+  const std::string d = Work("replace_linearize_disk");
+  SmallDisk disk(d + "/disk", "192k");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (not root?); the RLIMIT_FSIZE test covers it";
+  for (size_t k = 0; k < kLinearizeBig.size(); ++k) {
+    const auto& [name, big] = kLinearizeBig[k];
+    ASSERT_EQ(Kanesim(kLinearizeSmall[k] + "disk/" + name, d).rc, 0) << name;
+    const std::string good = Slurp(d + "/disk/" + name);
+    Result r = Kanesim(big + "disk/" + name, d);
+    EXPECT_EQ(r.rc, 1) << name << "\n" << r.err;
+    EXPECT_TRUE(Has(r.err, "No space left on device")) << name << "\n" << r.err;
+    EXPECT_EQ(Slurp(d + "/disk/" + name), good) << name << ": the previous file was not kept";
+    EXPECT_TRUE(Temps(d + "/disk/" + name).empty()) << name;
+  }
+}
+
+// linearize -o onto a directory or a socket: refused, left as it is; onto the model (a hard
+// link to it): refused before any work.
+TEST(OutputReplace, LinearizeRefusesSpecialFilesAndTheModel) {
+  const std::string d = Work("replace_linearize_special");
+  Write(d + "/m.mech", Slurp(kSpring));
+  for (const auto& [name, what] : MakeSpecialFiles(d)) {
+    if (name == "fifo" || name == "chardev") continue;  // streamed into, as run -o does
+    const std::string type = FileType(d + "/" + name);
+    Result r = Kanesim("linearize m.mech -o " + name, d);
+    EXPECT_EQ(r.rc, 1) << name << "\n" << r.err;
+    EXPECT_TRUE(Has(r.err, "cannot open '" + name + "' for writing")) << name << "\n" << r.err;
+    EXPECT_EQ(FileType(d + "/" + name), type) << name << " was replaced";
+  }
+  std::filesystem::create_hard_link(d + "/m.mech", d + "/hard.json");
+  for (const std::string opt : {"-o hard.json", "--sweep k=1:1:3 -o hard.json"}) {
+    Result r = Kanesim("linearize m.mech " + opt, d);
+    EXPECT_EQ(r.rc, 1) << opt << "\n" << r.err;
+    EXPECT_EQ(Slurp(d + "/m.mech"), Slurp(kSpring)) << opt;
+  }
+  // Through a symbolic link: the linked file gets the model, the link stays a link.
+  Write(d + "/real.json", "previous\n");
+  std::filesystem::create_symlink("real.json", d + "/link.json");
+  ASSERT_EQ(Kanesim("linearize m.mech -o link.json", d).rc, 0);
+  EXPECT_TRUE(std::filesystem::is_symlink(d + "/link.json"));
+  EXPECT_TRUE(Slurp(d + "/real.json").starts_with("{")) << Slurp(d + "/real.json");
+}
+
 }  // namespace
 }  // namespace kanesim::clitest
