@@ -1,5 +1,8 @@
 // Front-end cost: load (parse) + elaborate + compile of the N-chain (examples/chain.mech
-// --set N=...) and of the double pendulum, with the peak memory of each size.
+// --set N=...) and of the double pendulum, with the peak memory of each size; and of flat
+// models of n scalar declarations (`parameter Real p17 = 17;`, `output Real y17 = 17;`,
+// n = 10 000, 40 000, 100 000), whose cost per declaration must stay flat (issue 38: it grew
+// as n^2.5 when the elaborator matched every element name against all the others).
 //
 // Each model runs in a child process of its own, so that its peak RSS is its own. In
 // the child, the first load includes parsing the standard library (once per process);
@@ -20,9 +23,11 @@
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -113,6 +118,16 @@ int InChild(const std::string& label, const std::string& path, const std::vector
   return 0;
 }
 
+// A model of n scalar declarations `<decl> Real <name>i = i;` in a temporary file.
+std::string WriteDeclarations(const std::string& decl, const std::string& name, int n) {
+  const std::string path = "/tmp/kanesim_frontend_" + name + std::to_string(n) + "_" + std::to_string(getpid()) + ".mech";
+  std::ofstream o(path);
+  o << "model M\n  World world;\n";
+  for (int i = 0; i < n; ++i) o << "  " << decl << " Real " << name << i << " = " << i << ";\n";
+  o << "end M;\n";
+  return path;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -127,5 +142,11 @@ int main(int argc, char** argv) {
   InChild("double_pendulum", root + "/examples/double_pendulum.mech", {}, 2, repeats);
   for (int n : sizes)
     InChild("chain", root + "/examples/chain.mech", {{"N", std::to_string(n)}}, n, n > 2000 ? 1 : repeats);
+  for (auto [decl, name, label] : {std::tuple{"parameter", "p", "parameters"}, {"output", "y", "outputs"}})
+    for (int n : {10000, 40000, 100000}) {
+      const std::string path = WriteDeclarations(decl, name, n);
+      InChild(label, path, {}, n, repeats);
+      std::remove(path.c_str());
+    }
   return 0;
 }

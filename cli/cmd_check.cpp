@@ -114,6 +114,9 @@ int RunCheck(const CheckArgs& args) {
     std::cout << fmt::format("  warning[{}]: {}\n", flat::DiagCodeString(f.code), f.message);
   if (rt::CompileMessage w = rt::StartSpeedsWarning(program); !w.message.empty())
     std::cout << fmt::format("  warning[{}]: {}\n", flat::DiagCodeString(w.code), w.message);
+  for (const rt::CompileMessage& w : rt::LockedJointWarnings(program))
+    std::cout << fmt::format("  warning[{}]: {} ({}:{}:{})\n", flat::DiagCodeString(w.code), w.message, w.loc.file.str(),
+                             w.loc.line, w.loc.col);
   const std::vector<std::string> indeterminate =
       rt::IndeterminateSignals(program, rt::AvailableSignals(program));
   if (!indeterminate.empty()) {

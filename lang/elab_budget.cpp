@@ -13,7 +13,7 @@ namespace kanesim::lang::elab {
 // Reports the first time the budget runs out, at the place being evaluated; after that
 // every evaluation returns an invalid value at once and every loop stops.
 bool Elaborator::ChargeSteps(std::int64_t steps, Span where) {
-  if (budget_.Spend(steps)) return true;
+  if (budget_.Spend(steps)) return ChargeNodes(0, where);
   if (!budget_reported_) {
     budget_reported_ = true;
     too_large_ = true;
@@ -23,6 +23,29 @@ bool Elaborator::ChargeSteps(std::int64_t steps, Span where) {
     d.hint =
         "nested comprehensions, loops and matrix products multiply their sizes; reduce them (the limit is stated "
         "in docs/language.md)";
+  }
+  return false;
+}
+
+// The expression pool holds every node the elaboration makes (about 33 bytes each, and a
+// vector that doubles: up to three times that while it grows); bounding the nodes bounds
+// the memory, which the steps alone do not (a product of two n x n matrices is n^3 steps
+// but 2 n^3 nodes). `more` nodes about to be made are counted before they are made.
+bool Elaborator::ChargeNodes(std::int64_t more, Span where) {
+  if (static_cast<std::int64_t>(m_->exprs.size()) + more <= kMaxExprNodes) return true;
+  if (!budget_reported_) {
+    budget_reported_ = true;
+    too_large_ = true;
+    budget_.Spend(budget_.Limit() + 1);  // every evaluation stops from here on
+    auto& d = diags_.Error(DiagCode::WorkLimit, where,
+                           "elaborating the model makes more than " + std::to_string(kMaxExprNodes) +
+                               " expression nodes (about " + std::to_string(kMaxExprNodes * 33 / 1000000) +
+                               " MB); the limit was reached while evaluating this");
+    d.hint =
+        "a product of n x n matrices makes 2 n^3 nodes and nested comprehensions multiply their sizes; reduce them "
+        "(the limit is stated in docs/language.md)";
+  } else {
+    budget_.Spend(budget_.Limit() + 1);
   }
   return false;
 }

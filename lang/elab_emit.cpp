@@ -75,7 +75,10 @@ class Emitter {
     if (set_size[static_cast<size_t>(uf.Find(pid))] == 1 && n->prim != Prim::World) {
       auto& d = diags_.Warning(DiagCode::UnconnectedFrame, n->decl ? n->decl->name_span : Span{},
                                "'" + c->path + "' is not connected to anything");
-      d.hint = "connect it, e.g. connect(" + c->path + ", world.frame_b)";
+      // A joint's frame_b goes to the body it moves (to the world it would lock the joint: W316).
+      d.hint = std::string(name) == "frame_b" && n->prim == Prim::Joint
+                   ? "connect it to the body the joint moves, e.g. connect(" + c->path + ", body.frame_a)"
+                   : "connect it, e.g. connect(" + c->path + ", world.frame_b)";
     }
     return canon[static_cast<size_t>(pid)];
   }

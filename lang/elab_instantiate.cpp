@@ -65,7 +65,7 @@ const ast::ClassDef* Elaborator::ResolveShort(const ast::ClassDef* cls, Node* no
 }
 
 void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
-                         std::vector<Node::EqSource>& eqs, int depth) {
+                         CollectedNames& names, std::vector<Node::EqSource>& eqs, int depth) {
   for (const ast::ClassDef* c : extends_stack_) {
     if (c == cls) {
       auto& d = diags_.Error(DiagCode::RecursiveExtends, cls->name_span,
@@ -87,10 +87,10 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
       const ast::ClassDef* base = FindClass(ex.base, cls);
       if (!base) {
         auto& d = diags_.Error(DiagCode::UnknownClass, ex.span, "unknown base class '" + ast::JoinName(ex.base) + "'");
-        std::vector<std::string> names;
+        std::vector<std::string> classes;
         LoadWholeLibrary();  // the hint considers every class
-        for (auto& [k, v] : classes_) names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
-        std::string best = ClosestName(ast::JoinName(ex.base), names);
+        for (auto& [k, v] : classes_) classes.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
+        std::string best = ClosestName(ast::JoinName(ex.base), classes);
         if (!best.empty()) d.hint = "did you mean '" + best + "'?";
         continue;
       }
@@ -101,7 +101,7 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
       // Short class as a base: fold its modifiers in.
       base = ResolveShort(base, node, &effective);
       if (!base) continue;
-      Collect(base, node, &effective, out, eqs, depth + 1);
+      Collect(base, node, &effective, out, names, eqs, depth + 1);
       continue;
     }
     if (el.kind != ast::Element::kComponent) continue;
@@ -116,8 +116,8 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
       if (it != ext_mod->sub.end()) c.ext_mod = it->second;
     }
     bool replaced = false;
-    for (auto& prev : out) {
-      if (prev.comp->name != comp.name) continue;
+    if (auto found = names.find(comp.name); found != names.end()) {
+      Collected& prev = out[found->second];
       if (comp.redeclare) {
         if (!prev.replaceable) {
           auto& d = diags_.Error(DiagCode::NotReplaceable, comp.name_span,
@@ -130,12 +130,12 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
         d.notes.push_back({prev.comp->name_span, "first declared here"});
       }
       replaced = true;
-      break;
     }
     if (!replaced) {
       if (comp.redeclare)
         diags_.Error(DiagCode::NotReplaceable, comp.name_span,
                      "'redeclare " + comp.name + "' replaces nothing: no inherited element has that name");
+      names.emplace(comp.name, out.size());
       out.push_back(std::move(c));
     }
   }
@@ -215,8 +215,10 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
   std::vector<Collected> elems;
   elems.reserve(cls->elements.size());  // enough unless cls extends another class
   node->equations.reserve(cls->equations.size());
-  Collect(cls, node, nullptr, elems, node->equations, 0);
-  CheckOuterModifiers(node, cls, elems);
+  CollectedNames names;
+  names.reserve(elems.capacity());
+  Collect(cls, node, nullptr, elems, names, node->equations, 0);
+  CheckOuterModifiers(node, cls, elems, names);
 
   node->children.reserve(elems.size());
   for (auto& c : elems) node->children.push_back(MakeChild(node, c));
@@ -242,11 +244,12 @@ const Elaborator::ClassPrim& Elaborator::PrimitiveAnnotation(const ast::ClassDef
 }
 
 // Every outer modifier must name an element, and not a protected one.
-void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems) {
+void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems,
+                                     const CollectedNames& names) {
   for (const auto& key : node->mod.order) {
     bool found = false;
-    for (const auto& c : elems) {
-      if (c.comp->name != key) continue;
+    if (auto at = names.find(key); at != names.end()) {
+      const Collected& c = elems[at->second];
       found = true;
       const Mod& pm = node->mod.sub[key];
       if (c.comp->is_protected && !(pm.value && pm.value->from_set)) {
@@ -258,10 +261,10 @@ void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const
     if (found) continue;
     const Mod& sm = node->mod.sub[key];
     if (sm.set_only) continue;  // --set names are checked by BindSetOverrides
-    std::vector<std::string> names;
-    for (const auto& c : elems) names.push_back(c.comp->name);
+    std::vector<std::string> all;
+    for (const auto& c : elems) all.push_back(c.comp->name);
     auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span, "'" + cls->name + "' has no element '" + key + "'");
-    std::string best = ClosestName(key, names);
+    std::string best = ClosestName(key, all);
     if (!best.empty()) d.hint = "did you mean '" + best + "'?";
     d.notes.push_back({cls->name_span, "'" + cls->name + "' is declared here"});
   }

@@ -158,7 +158,8 @@ Value Elaborator::MatrixProduct(const ast::Expr& e, const Value& a, const Value&
     diags_.Error(DiagCode::SizeMismatch, e.span, "cannot multiply sizes " + ShapeStr(a.shape) + " and " + ShapeStr(b.shape));
     return Value::Invalid();
   }
-  if (!ChargeSteps(static_cast<std::int64_t>(ar) * bc * ac, e.span)) return Value::Invalid();
+  const std::int64_t multiply_adds = static_cast<std::int64_t>(ar) * bc * ac;
+  if (!ChargeSteps(multiply_adds, e.span) || !ChargeNodes(2 * multiply_adds, e.span)) return Value::Invalid();
   Value r;
   r.type = Promote(a.type, b.type);
   for (int i = 0; i < ar; ++i)

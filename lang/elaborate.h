@@ -24,6 +24,10 @@ inline constexpr int kMaxExtendsDepth = 64;          // chain of extends / insta
 // Steps of one elaboration: values produced by evaluating expressions, loop iterations,
 // multiply-adds of matrix products (lang/elab_budget.h).
 inline constexpr long kMaxElabWork = 10000000;
+// Expression nodes one elaboration may make (the memory it may take: ~33 bytes each,
+// lang/elab_budget.cpp ChargeNodes); the 10 000-link chain makes 860 000, 123 000 scalar
+// parameters 250 000. At the limit a check peaks near 380 MB.
+inline constexpr long kMaxExprNodes = 5000000;
 // Nested evaluation: sub-expressions inside brackets, calls and if-expressions, plus
 // parameters whose value reads another parameter. Operator chains (a + b + ...) do not
 // count: they are evaluated without recursion, at any length. A thread with a small

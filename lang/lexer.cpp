@@ -1,11 +1,13 @@
 #include "lang/lexer.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
 
 #include "lang/text.h"
+#include "runtime/flat/number.h"
 
 namespace kanesim::lang {
 
@@ -322,9 +324,22 @@ void LexNumber(Cursor& c, std::int32_t b) {
   t.is_integer = integer;
   bool out_of_range = false;
   t.number = NumberValue(c.s, b, i, integer, &out_of_range);
-  if (bad || out_of_range) {
+  if (bad) {
     c.diags.Error(DiagCode::BadNumber, t.span, "malformed number '" + std::string(t.text) + "'").hint =
         "numbers look like 3, 0.5, 1e-3 or 2.5E+4";
+    t.number = 0;
+  } else if (out_of_range) {
+    // Well formed but not a normal double: say which end of the range, in the words the
+    // command line uses for the same text (flat::ParseNumber), so that a number means
+    // the same in a file and in --set.
+    std::string why;
+    double unused = 0.0;
+    flat::ParseNumber(t.text, &unused, &why);
+    const bool tiny = std::abs(t.number) <= 1.0;
+    c.diags.Error(DiagCode::BadNumber, t.span, "number " + why).hint =
+        tiny ? "the smallest normal double is 2.2250738585072014e-308; write 0 for zero, or rescale the units "
+               "(e.g. grams or millimetres) so the value is of ordinary size"
+             : "the largest double is 1.7976931348623157e308; rescale the units so the value is of ordinary size";
     t.number = 0;
   }
 }

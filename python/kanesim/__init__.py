@@ -465,18 +465,24 @@ def sweep(model: Model, grid: Optional[Mapping[str, Sequence[float]]] = None,
           samples: Optional[Mapping[str, Sequence[float]]] = None, metrics: Sequence[str] = (), threads: int = 0,
           stop_time: Optional[float] = None, rtol: Optional[float] = None, atol: Optional[float] = None,
           interval: Optional[float] = None, start_time: Optional[float] = None, integrator: str = "auto",
-          energy_check: str = "on") -> Table:
-    """Runs many scenarios of one model in parallel threads, like `kanesim sweep`:
+          energy_check: str = "on", isolation: str = "process", scenario_timeout: float = 0) -> Table:
+    """Runs many scenarios of one model in parallel, like `kanesim sweep`:
     grid={"k": [10, 20], "m": [1, 2]} is the Cartesian product (first key slowest);
     samples={"k": [...], "m": [...]} are rows taken together (equal lengths); both combine
     as a product. metrics as --metric ("final:S", "min:S", "max:S", "mean:S", "rms:S",
     "cross:S=L"). threads=0: all cores. energy_check as run()'s ("on", "off", "report"):
-    with "on" a scenario whose energy leaves the tolerance's reach fails. Returns a Table;
-    failed scenarios are rows with status "failed"."""
+    with "on" a scenario whose energy leaves the tolerance's reach fails.
+    isolation="process" (default): scenarios run in worker processes forked from this one,
+    so a scenario that crashes costs its own row (status "crashed"), never the interpreter;
+    scenario_timeout=S (seconds, 0: none) stops one that runs longer (status "timeout").
+    isolation="thread": on threads of this process (a crash ends the interpreter).
+    Returns a Table; rows whose status is not "ok" are counted in Table.failed."""
     if isinstance(metrics, str):
         metrics = [metrics]
-    header, lines, failed = _kanesim.sweep(
+    header, lines, failed, warning = _kanesim.sweep(
         model._compiled, _columns(grid, "grid"), _columns(samples, "samples"), list(metrics), int(threads),
         _time(start_time, "start_time"), _time(stop_time, "stop_time"), _time(interval, "interval"),
-        _time(rtol, "rtol"), _time(atol, "atol"), integrator, energy_check)
+        _time(rtol, "rtol"), _time(atol, "atol"), integrator, energy_check, str(isolation), float(scenario_timeout))
+    if warning:
+        _warnings.warn(warning, RuntimeWarning, stacklevel=2)
     return Table(header, lines, failed)

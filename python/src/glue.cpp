@@ -8,13 +8,16 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <mutex>
+#include <pthread.h>
 #include <thread>
 
 #include "lang/diagnostics.h"
 #include "runtime/batch/metrics.h"
 #include "runtime/batch/scenario.h"
 #include "runtime/batch/sweep.h"
+#include "runtime/batch/worker_pool.h"
 #include "runtime/program/program.h"
 #include "runtime/sim/signal_select.h"
 #include "runtime/pipeline/pipeline.h"
@@ -266,6 +269,55 @@ Dict Check(const LoadedModel& model) {
 
 std::vector<std::string> AvailableSignals(const LoadedModel& model) { return model.Signals(); }
 
+namespace {
+
+// Forking from the interpreter's process: the worker runs C++ only (the scenario, and the
+// front end for a structural variant) and leaves with _exit; the calling thread holds no
+// GIL (released by module.cpp). A lock another thread holds at the fork stays locked in the
+// worker forever: the front end's (g_load_mutex, the one way into it here) is taken around
+// every fork (pthread_atfork), so the worker starts with it free.
+void ForkGuards() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    ::pthread_atfork([] { g_load_mutex.lock(); }, [] { g_load_mutex.unlock(); }, [] { g_load_mutex.unlock(); });
+  });
+}
+
+// The sweep's scenarios in worker processes (runtime/batch/worker_pool.h). False when no
+// process could be made: *first is where the threads take over (scenarios before it have
+// their rows); true when every scenario has its row or the sweep was interrupted.
+bool SweepInWorkers(batch::ScenarioRunner& runner, const batch::SweepConfig& config, const SweepRequest& request,
+                    unsigned workers, SweepTable* out, size_t* first, std::string* why) {
+  ForkGuards();
+  batch::WorkerPool pool(runner, config, static_cast<int>(workers), "scenario_timeout");
+  size_t next = 0;
+  while (true) {
+    bool can_start = true;
+    while (can_start && next < config.scenarios.size() && pool.HasIdle()) {
+      can_start = pool.Start(config.scenarios[next], why);
+      if (can_start) ++next;
+    }
+    if (pool.Running() == 0) {
+      *first = next;
+      return next >= config.scenarios.size();
+    }
+    batch::WorkerPool::Done done;
+    const bool ended = pool.Wait(&done, 0.25);  // a quarter second: how often Ctrl-C is noticed
+    if (ended) {
+      out->lines[static_cast<size_t>(done.scenario - config.scenarios.data())] = done.line;
+      out->failed += done.outcome != batch::WorkerPool::Outcome::kOk ? 1 : 0;
+      out->crashed += done.outcome == batch::WorkerPool::Outcome::kCrashed ? 1 : 0;
+      out->timed_out += done.outcome == batch::WorkerPool::Outcome::kTimedOut ? 1 : 0;
+    }
+    if (request.interrupted && request.interrupted()) {
+      out->interrupted = true;
+      return true;  // the pool's end kills the running workers
+    }
+  }
+}
+
+}  // namespace
+
 bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* out, std::string* error) {
   batch::SweepConfig config;
   std::vector<batch::Block> blocks;
@@ -329,7 +381,15 @@ bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* ou
   unsigned threads = request.threads > 0 ? static_cast<unsigned>(request.threads)
                                          : std::max(1u, std::thread::hardware_concurrency());
   threads = std::min<unsigned>(threads, static_cast<unsigned>(std::max<size_t>(1, config.scenarios.size())));
-  std::atomic<size_t> next{0};
+  config.scenario_timeout = request.scenario_timeout;
+  size_t first = 0;  // the first scenario for the threads
+  if (request.processes) {
+    std::string why;
+    if (SweepInWorkers(runner, config, request, threads, out, &first, &why)) return true;  // all done, or interrupted
+    out->warning = why + "; the remaining " + std::to_string(config.scenarios.size() - first) +
+                   " scenarios ran on threads of this process, where a crash ends the interpreter";
+  }
+  std::atomic<size_t> next{first};
   std::atomic<int> failed{0};
   std::atomic<bool> stop{false};
   auto work = [&](bool poll) {
@@ -344,7 +404,7 @@ bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* ou
   for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work, false);
   work(true);
   for (std::thread& t : pool) t.join();
-  out->failed = failed.load();
+  out->failed += failed.load();
   out->interrupted = stop.load();
   return true;
 }

@@ -112,16 +112,25 @@ struct SweepRequest {
   std::vector<std::pair<std::string, std::vector<double>>> samples;  // zipped rows (one block)
   std::vector<std::string> metrics;  // "final:j.q", "cross:x.q=0", ...
   RunRequest run;
-  int threads = 0;  // 0: all cores
-  // Asked by the calling thread between its scenarios whether to stop (Ctrl-C); the
-  // scenarios running then finish, no new one starts, and Sweep sets out->interrupted.
+  int threads = 0;  // 0: all cores (workers or threads)
+  // Scenarios in worker processes forked from this one (runtime/batch/worker_pool.h), so a
+  // scenario that crashes or hangs costs its own row ("crashed", "timeout"), not the
+  // interpreter; or on threads of this process (a crash ends the interpreter).
+  bool processes = true;
+  double scenario_timeout = 0.0;  // seconds of wall time per scenario (processes); 0: none
+  // Asked by the calling thread between its scenarios (with processes: also every 0.25 s)
+  // whether to stop (Ctrl-C); threads finish the scenarios running then, workers are
+  // killed; no new one starts, and Sweep sets out->interrupted.
   std::function<bool()> interrupted;
 };
 struct SweepTable {
   std::string header;              // the summary.csv header of `kanesim sweep`
   std::vector<std::string> lines;  // one per scenario, by id
-  int failed = 0;
+  int failed = 0;   // rows whose status is not "ok", these two included:
+  int crashed = 0;  //   the worker process died running it
+  int timed_out = 0;
   bool interrupted = false;
+  std::string warning;  // e.g. no worker process could be made (the rest ran on threads)
 };
 bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* out, std::string* error);
 

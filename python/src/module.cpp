@@ -178,8 +178,17 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
                 const std::vector<std::pair<std::string, std::vector<double>>>& samples,
                 const std::vector<std::string>& metrics, int threads, double start_time, double stop_time,
                 double interval, double rtol, double atol, const std::string& integrator,
-                const std::string& energy_check) {
+                const std::string& energy_check, const std::string& isolation, double scenario_timeout) {
+  if (isolation != "process" && isolation != "thread")
+    throw py::value_error("isolation must be \"process\" or \"thread\", got \"" + isolation + "\"");
+  // 1e6 s (11 days): what the pool's int milliseconds hold.
+  if (!(scenario_timeout >= 0.0 && scenario_timeout <= 1e6))
+    throw py::value_error("scenario_timeout must be seconds from 0 (none) to 1e6");
+  if (isolation == "thread" && scenario_timeout > 0.0)
+    throw py::value_error("scenario_timeout needs worker processes (isolation=\"process\")");
   kanesim::py::SweepRequest req;
+  req.processes = isolation == "process";
+  req.scenario_timeout = scenario_timeout;
   req.grid = grid;
   req.samples = samples;
   req.metrics = metrics;
@@ -204,7 +213,7 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
   }
   if (table.interrupted) throw py::error_already_set();
   if (!ok) throw py::value_error(error);
-  return py::make_tuple(table.header, table.lines, table.failed);
+  return py::make_tuple(table.header, table.lines, table.failed, table.warning);
 }
 
 // A dict with the linear model (A, B, C, D, names, eigenvalues, modes, accuracy, the

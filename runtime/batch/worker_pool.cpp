@@ -348,10 +348,12 @@ bool ProcessPool::Wait(Done* out, double max_wait) {
   return false;
 }
 
-WorkerPool::WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers)
+WorkerPool::WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers,
+                       const std::string& timeout_option, const std::string& memory_option)
     : config_(config),
       tasks_(runner, config),
-      pool_(tasks_, PoolLimits{config.scenario_timeout, config.worker_memory_mib}, workers) {}
+      pool_(tasks_, PoolLimits{config.scenario_timeout, config.worker_memory_mib, "scenario", timeout_option, memory_option},
+            workers) {}
 
 std::string WorkerPool::Tasks::Run(size_t index, bool* failed, bool* flag) {
   const int variants_before = runner_.NumVariants();

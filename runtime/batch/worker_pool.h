@@ -128,7 +128,9 @@ class WorkerPool {
     bool new_variant = false;  // the worker compiled a structural variant for it
   };
 
-  WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers);
+  // `timeout_option`, `memory_option`: how the caller names SweepConfig's limits, in messages.
+  WorkerPool(ScenarioRunner& runner, const SweepConfig& config, int workers,
+             const std::string& timeout_option = "--scenario-timeout", const std::string& memory_option = "--worker-memory");
 
   bool HasIdle() const { return pool_.HasIdle(); }
   int Running() const { return pool_.Running(); }

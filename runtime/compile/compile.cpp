@@ -4,6 +4,7 @@
 // joints: position constraints, compile/loops.cpp), q/u allocation in tree order, the
 // pattern of the tangent basis (each body's path of speeds), folded numbers, expression
 // tapes, and the choice of solution path and integrator.
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <sstream>
@@ -26,7 +27,13 @@ struct RigidEdge {
   int a, b;
   Vec3 p_ab;
   Mat3 R_ab;
+  std::string what;        // "weld 'w'", "fixed element 'ft'" (for messages)
+  flat::SourceLoc loc;
 };
+
+// Frames that a second rigid path places within this of the first agree (relative to the
+// larger distance from the body's origin, at least 1 m; rotations absolute).
+constexpr double kRigidLoopTol = 1e-9;
 
 class Compiler {
  public:
@@ -65,6 +72,8 @@ class Compiler {
   }
 
   bool Topology(Program& p);
+  void CheckFixedPlacement(const RigidEdge& e);
+  void CheckRigidLoop(const RigidEdge& e, const FramePlace& placed, const FramePlace& again);
   void MassProperties(Program& p);
 
   const flat::Mechanism& m_;
@@ -97,7 +106,8 @@ bool Compiler::Topology(Program& p) {
       continue;
     }
     rigid.push_back({f.frame_a, f.frame_b, Num3(f.r, "fixed translation", f.loc),
-                     NumMat(f.R, true, "fixed rotation", f.loc)});
+                     NumMat(f.R, true, "fixed rotation", f.loc), "fixed element '" + f.name + "'", f.loc});
+    CheckFixedPlacement(rigid.back());
   }
   bool ok = true;
   for (const auto& j : m_.joints) {
@@ -106,7 +116,7 @@ bool Compiler::Topology(Program& p) {
             j.loc, "connect both frames of a joint");
       ok = false;
     } else if (j.type == JointType::Weld) {
-      rigid.push_back({j.frame_a, j.frame_b, Vec3::Zero(), Mat3::Identity()});
+      rigid.push_back({j.frame_a, j.frame_b, Vec3::Zero(), Mat3::Identity(), "weld '" + j.name + "'", j.loc});
     }
   }
   if (!ok) return false;
@@ -226,7 +236,6 @@ bool Compiler::Topology(Program& p) {
       for (int ei : edges_at[static_cast<size_t>(f)]) {
         const RigidEdge& e = rigid[static_cast<size_t>(ei)];
         int other = e.a == f ? e.b : e.a;
-        if (placed[static_cast<size_t>(other)]) continue;  // redundant rigid loop: first path wins
         FramePlace Y;
         Y.body = body;
         if (e.a == f) {
@@ -236,6 +245,10 @@ bool Compiler::Topology(Program& p) {
           Y.R_BF = X.R_BF * e.R_ab.transpose();
           Y.p_BF = X.p_BF - Y.R_BF * e.p_ab;
         }
+        if (placed[static_cast<size_t>(other)]) {  // a rigid loop: both paths must place it alike
+          CheckRigidLoop(e, p.frames[static_cast<size_t>(other)], Y);
+          continue;
+        }
         p.frames[static_cast<size_t>(other)] = Y;
         placed[static_cast<size_t>(other)] = 1;
         fq.push_back(other);
@@ -243,6 +256,42 @@ bool Compiler::Topology(Program& p) {
     }
   }
   return out_->errors.empty();
+}
+
+// A fixed element's placement X_ab = (p_ab, R_ab) must be finite and R_ab a rotation
+// (|R^T R - 1| within kRigidLoopTol entrywise, det R > 0): FixedRotation's R comes from
+// its axis n, and a zero or non-finite n gives NaN; a user's own fixed primitive may give
+// any matrix. Such a frame would otherwise carry NaN or a shear into every body pose.
+void Compiler::CheckFixedPlacement(const RigidEdge& e) {
+  const double off = (e.R_ab.transpose() * e.R_ab - Mat3::Identity()).cwiseAbs().maxCoeff();
+  if (!e.p_ab.allFinite())
+    Error(flat::DiagCode::Degenerate, e.what + ": its translation r is not finite", e.loc);
+  else if (!(off <= kRigidLoopTol) || !(e.R_ab.determinant() > 0.0))
+    Error(flat::DiagCode::Degenerate,
+          e.what + ": its rotation R is not a rotation" + (e.R_ab.allFinite() ? "" : " (not finite: a zero or non-finite axis n?)"),
+          e.loc, "a FixedRotation turns about a non-zero, finite axis n");
+}
+
+// A frame reached again through rigid edge `e` (welds and fixed elements closing a loop
+// among themselves, e.g. a body welded to the world twice): the second path must put it
+// where the first did, else the welds hold the body in two places at once. Reported once
+// per edge, at the edge that closes the loop.
+void Compiler::CheckRigidLoop(const RigidEdge& e, const FramePlace& placed, const FramePlace& again) {
+  const double scale = std::max({1.0, placed.p_BF.norm(), again.p_BF.norm()});
+  const double dp = (placed.p_BF - again.p_BF).norm() / scale;
+  const double dR = (placed.R_BF - again.R_BF).cwiseAbs().maxCoeff();
+  if (dp <= kRigidLoopTol && dR <= kRigidLoopTol) return;
+  for (const CompileMessage& m : out_->errors)
+    if (m.code == flat::DiagCode::CannotAssemble && m.loc.line == e.loc.line && m.loc.col == e.loc.col &&
+        m.loc.file.str() == e.loc.file.str())
+      return;
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << e.what << " closes a rigid loop (welds and fixed elements only) that holds a frame in two places: "
+      << (dp > kRigidLoopTol ? "positions " : "orientations ") << (dp > kRigidLoopTol ? dp * scale : dR) << " apart";
+  Error(flat::DiagCode::CannotAssemble, msg.str(), e.loc,
+        "a body fixed to another (or to the world) twice must be fixed at the same place both times; remove one "
+        "of the welds or fixed elements");
 }
 
 // Merging rigid bodies (Kane & Levinson 1985 §3.6, parallel-axis theorem):
@@ -323,6 +372,7 @@ CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std
   CompileLoops(p, c.cut_joints_, c.folder_, &out.errors);
   CompileContacts(p, c.folder_, &out.errors);
   CompileForcesAndOutputs(p, &out.errors);
+  CheckMovesMass(p, &out.errors);
   if (!out.errors.empty()) return out;
   ChooseSolver(p);
   ChooseIntegrator(p);

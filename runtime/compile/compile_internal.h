@@ -63,6 +63,10 @@ inline constexpr double kRankTol = 1e-9;
 // A^T at the assembled start (ws: positions, velocities and A of that state).
 void FindIndeterminateReactions(Program& p, Workspace& ws);
 
+// K309 for each tree joint with a free speed whose subtree has no mass and no inertia, in
+// a model without constraints (compile/massless.cpp).
+void CheckMovesMass(const Program& p, std::vector<CompileMessage>* errors);
+
 // Gravity, joint forces, line forces, wrenches (force tape) and outputs (output tape).
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);
 

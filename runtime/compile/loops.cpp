@@ -28,6 +28,7 @@
 #include "runtime/compile/compile_internal.h"
 #include "runtime/constraints/constraints.h"
 #include "runtime/kane/kane.h"
+#include "runtime/kinematics/joint_kinematics.h"
 #include "runtime/kinematics/kinematics.h"
 
 namespace kanesim::rt {
@@ -134,7 +135,73 @@ void DescribeStartSpeedChange(Program& p, const Eigen::VectorXd& psi0, const Eig
   p.start_speeds_changed = msg.str();
 }
 
+// A cut joint whose frames a and b are both on one rigid body B (Topology put them in one
+// rigid group: the world, or bodies merged by a weld or a fixed element) can never move.
+// Its rows (1)-(2) of constraints.cpp are constants in B's axes,
+//   phi = d_aB . (p_BFb - p_BFa)   and   phi = d_aB . n_bB - offset,
+// with a zero Jacobian: no speed moves them. When they hold, the joint is locked in a pose
+// it allows and is dropped (warning W316: no speed, no row); else the frames are held in
+// a pose the joint cannot take and the model cannot be assembled (K310).
+constexpr double kLockedTol = 1e-9;  // of the larger frame distance from B's origin (at least 1 m)
+
+std::string BodyWords(const Program& p, int body) {
+  return body < 0 ? "the world" : "body '" + p.bodies[static_cast<size_t>(body)].name + "'";
+}
+
+void LockJoint(Program& p, const flat::Joint& fj, const std::vector<ConstraintRow>& rows,
+               std::vector<CompileMessage>* errors) {
+  const FramePlace& A = p.frames[static_cast<size_t>(fj.frame_a)];
+  const FramePlace& B = p.frames[static_cast<size_t>(fj.frame_b)];
+  const double scale = std::max({1.0, A.p_BF.norm(), B.p_BF.norm()});
+  const ConstraintRow* worst = nullptr;
+  double worst_res = 0.0;
+  for (const ConstraintRow& r : rows) {
+    const double res = r.kind == RowKind::Translation ? std::fabs(r.d_aB.dot(B.p_BF - A.p_BF)) / scale
+                                                      : std::fabs(r.d_aB.dot(r.n_bB) - r.offset);
+    if (!(res <= worst_res)) {  // NaN counts as the worst
+      worst = &r;
+      worst_res = res;
+    }
+  }
+  Program::LockedJoint lj;
+  lj.name = fj.name;
+  lj.loc = fj.loc;
+  lj.body = BodyWords(p, A.body);
+  for (const flat::Joint& w : p.mech->joints)
+    if (w.type == JointType::Weld && w.frame_a >= 0 && p.frames[static_cast<size_t>(w.frame_a)].body == A.body)
+      lj.by.push_back({w.loc, "weld '" + w.name + "' joins its frames to " + lj.body});
+  if (worst != nullptr && !(worst_res <= kLockedTol)) {
+    std::ostringstream msg;
+    msg.precision(6);
+    msg << "joint '" << fj.name << "' cannot move (both its frames are fixed to " << lj.body
+        << ") and its frames are not in a pose it allows: " << worst->what << " off by "
+        << worst_res * (worst->kind == RowKind::Translation ? scale : 1.0);
+    CompileMessage e = Msg(flat::DiagCode::CannotAssemble, msg.str(), fj.loc,
+                           "connect the joint's frame_b to the body it should move; a joint between two frames of "
+                           "one rigid body (joined by welds or fixed elements) holds nothing");
+    e.notes = lj.by;
+    errors->push_back(std::move(e));
+    return;
+  }
+  p.locked_joints.push_back(std::move(lj));
+}
+
 }  // namespace
+
+std::vector<CompileMessage> LockedJointWarnings(const Program& p) {
+  std::vector<CompileMessage> out;
+  for (const Program::LockedJoint& lj : p.locked_joints) {
+    CompileMessage w = Msg(flat::DiagCode::LockedJoint,
+                           "joint '" + lj.name + "' cannot move: both its frames are fixed to " + lj.body +
+                               ", so it adds no degree of freedom",
+                           lj.loc,
+                           "if the joint should move, connect its frame_b to the body it moves and remove the weld "
+                           "that holds it; a joint held on purpose can stay (it is ignored)");
+    w.notes = lj.by;
+    out.push_back(std::move(w));
+  }
+  return out;
+}
 
 CompileMessage StartSpeedsWarning(const Program& p) {
   CompileMessage w;
@@ -182,16 +249,22 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
     c.axis_F = num3(fc.axis, fc.loc);
     c.n_W = num3(fc.plane_normal, fc.loc);
     c.p0_W = num3(fc.plane_point, fc.loc);
-    if (c.n_W.norm() < 1e-12 || (fc.type != flat::ContactType::RollingSphere && c.axis_F.norm() < 1e-12)) {
-      errors->push_back(Msg(flat::DiagCode::BadContact, "contact '" + fc.name + "' has a zero plane normal or axis", fc.loc));
+    // Directions, normalized without overflow (joint_kinematics.h NormalizeScaled).
+    const bool has_axis = fc.type != flat::ContactType::RollingSphere;
+    const bool normal_ok = NormalizeScaled(&c.n_W);
+    const bool axis_ok = NormalizeScaled(&c.axis_F) || !has_axis;  // a sphere's axis is not used
+    if (!normal_ok || !axis_ok) {
+      const Vec3& bad = normal_ok ? c.axis_F : c.n_W;
+      errors->push_back(Msg(flat::DiagCode::BadContact,
+                            "contact '" + fc.name + "': its " + (normal_ok ? "axis " : "plane normal ") +
+                                WhyNoDirection(bad.data(), 3),
+                            fc.loc, "a normal or an axis is a direction: any non-zero finite vector (it is normalized)"));
       continue;
     }
     if (fc.type != flat::ContactType::KnifeEdge && !(c.radius > 0.0)) {
       errors->push_back(Msg(flat::DiagCode::BadContact, "contact '" + fc.name + "' needs a positive radius", fc.loc));
       continue;
     }
-    c.n_W.normalize();
-    if (c.axis_F.norm() > 0.0) c.axis_F.normalize();
     c.t1_W = c.n_W.unitOrthogonal();
     c.t2_W = c.n_W.cross(c.t1_W);
     const int ci = static_cast<int>(p.contacts.size());
@@ -242,16 +315,15 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
     Vec3 n = Vec3::UnitZ(), n2 = Vec3::UnitX();
     if (fj.type != JointType::Spherical && fj.type != JointType::Free) {
       n = num3(fj.axis, fj.loc);
-      if (n.norm() < 1e-12) {
-        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + fj.name + "' has a zero axis", fj.loc));
+      if (!NormalizeScaled(&n)) {
+        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + fj.name + "': its axis " + WhyNoDirection(n.data(), 3),
+                              fj.loc, "an axis is a direction: any non-zero finite vector (it is normalized)"));
         n = Vec3::UnitZ();
       }
-      n.normalize();
     }
     if (fj.type == JointType::Universal) {
       n2 = num3(fj.axis2, fj.loc);
-      if (n2.norm() < 1e-12) n2 = n.unitOrthogonal();
-      n2.normalize();
+      if (!NormalizeScaled(&n2)) n2 = n.unitOrthogonal();
     }
     const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
     const Vec3 X = Vec3::UnitX(), Y = Vec3::UnitY(), Z = Vec3::UnitZ();
@@ -290,8 +362,6 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
       if (f < 0 || p.frames[static_cast<size_t>(f)].body < -1) {
         errors->push_back(Msg(flat::DiagCode::NotConnectedToWorld, "cut joint '" + fj.name + "' is not connected to the mechanism", fj.loc));
         connected = false;
-      } else {
-        EnsurePathSpeeds(p, p.frames[static_cast<size_t>(f)].body);
       }
     for (auto& r : rows) {
       r.loop = loop;
@@ -299,8 +369,14 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
         r.d_aB = p.frames[static_cast<size_t>(l.frame_a)].R_BF * r.d_a;
         r.n_bB = p.frames[static_cast<size_t>(l.frame_b)].R_BF * r.n_b;
       }
-      p.rows.push_back(r);
     }
+    if (connected && p.frames[static_cast<size_t>(l.frame_a)].body == p.frames[static_cast<size_t>(l.frame_b)].body) {
+      LockJoint(p, fj, rows, errors);  // closes no loop through any speed
+      continue;
+    }
+    if (connected)
+      for (int f : {l.frame_a, l.frame_b}) EnsurePathSpeeds(p, p.frames[static_cast<size_t>(f)].body);
+    for (const auto& r : rows) p.rows.push_back(r);
     l.nrows = static_cast<int>(rows.size());
     p.loops.push_back(l);
   }

@@ -70,21 +70,27 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     const flat::Joint& fj = m.joints[static_cast<size_t>(j.flat_index)];
     if (NeedsAxis(j.type)) {
       Vec3 a = num3(fj.axis, "joint axis", fj.loc);
-      if (a.norm() < 1e-12) {
-        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "' has a zero axis", fj.loc));
+      if (!NormalizeScaled(&a)) {
+        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "': its axis " + WhyNoDirection(a.data(), 3),
+                              fj.loc, "an axis is a direction: any non-zero finite vector (it is normalized)"));
         a = Vec3::UnitZ();
       }
-      j.axis = a.normalized();
+      j.axis = a;
     }
     if (j.type == JointType::Universal || j.type == JointType::Planar) {
       Vec3 a2 = num3(fj.axis2, "joint axis2", fj.loc);
       // Planar: e1 is axis2 with its normal component removed (Gram-Schmidt), e2 = n x e1.
       if (j.type == JointType::Planar) a2 -= j.axis * j.axis.dot(a2);
-      if (a2.norm() < 1e-12) {
-        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "' has a zero or degenerate axis2", fj.loc));
+      // Relative to axis2 as given: a Planar axis2 along the normal leaves only round-off.
+      const Vec3 given = num3(fj.axis2, "joint axis2", fj.loc);
+      const double big = given.cwiseAbs().maxCoeff();
+      if (!(a2.cwiseAbs().maxCoeff() > 1e-12 * big) || !NormalizeScaled(&a2)) {
+        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "' has a zero or degenerate axis2 (" +
+                                  (given.allFinite() ? "zero, or along the axis" : "not finite") + ")",
+                              fj.loc));
         a2 = j.axis.unitOrthogonal();
       }
-      j.axis2 = a2.normalized();
+      j.axis2 = a2;
       j.axis3 = j.axis.cross(j.axis2);
     }
     const int parent_frame = j.inverted ? fj.frame_b : fj.frame_a;
@@ -115,13 +121,14 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
     if (quat) {
       double* qq = &q_start_all[static_cast<size_t>(j.q0 + rot0)];
       if (!any_rot_start) qq[0] = 1.0;
-      double n = std::sqrt(qq[0] * qq[0] + qq[1] * qq[1] + qq[2] * qq[2] + qq[3] * qq[3]);
-      if (n == 0.0) {
-        errors->push_back(Msg(flat::DiagCode::Degenerate, "joint '" + j.name + "' starts with a zero quaternion", fj.loc));
-        n = 1.0;
+      if (!NormalizeScaled(qq, 4)) {  // scaled: {1e200, 1e200, 0, 0} is a 90-degree turn, not zeros
+        errors->push_back(Msg(flat::DiagCode::Degenerate,
+                              "joint '" + j.name + "' starts with a quaternion that " + WhyNoDirection(qq, 4), fj.loc,
+                              "the start quaternion {w, x, y, z} is normalized; give any non-zero finite one "
+                              "({1, 0, 0, 0}: no rotation)"));
         qq[0] = 1.0;
+        qq[1] = qq[2] = qq[3] = 0.0;
       }
-      for (int k = 0; k < 4; ++k) qq[k] /= n;
     }
     for (int k = 0; k < j.nu; ++k) {
       flat::ExprId e = static_cast<size_t>(k) < fj.u_start.size() ? fj.u_start[static_cast<size_t>(k)] : kNoExpr;

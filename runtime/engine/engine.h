@@ -217,4 +217,9 @@ CompileMessage FrictionIndeterminateWarning(const Program& program);
 // changed (from -> to) and the largest change.
 CompileMessage StartSpeedsWarning(const Program& program);
 
+// Warnings W316, one per joint whose two frames are on the same rigid body (the world, or
+// bodies a weld or fixed element merged): such a joint cannot move, so the program has
+// neither a speed nor a constraint for it (runtime/compile/loops.cpp LockedJoint).
+std::vector<CompileMessage> LockedJointWarnings(const Program& program);
+
 }  // namespace kanesim::rt

@@ -74,12 +74,14 @@ namespace kanesim::flat {
   X(Degenerate, "K306", "negative mass, zero axis or zero quaternion")                        \
   X(NotSimulated, "K307", "expression reads a quantity that is not simulated")               \
   X(BadMassProperties, "K308", "mass properties no rigid body has")                           \
+  X(MovesNoMass, "K309", "joint moves no mass (its motion has no inertia)")                 \
   X(CannotAssemble, "K310", "closed loop or contact cannot be assembled at the start")         \
   X(BadContact, "K311", "invalid contact")                                                    \
   X(BadFriction, "K312", "friction on a joint that cannot take it")                           \
   X(IndeterminateSignals, "W313", "statically indeterminate constraint-force components")    \
   X(FrictionIndeterminate, "W314", "friction reads an indeterminate normal force")            \
   X(StartSpeedsProjected, "W315", "start speeds changed to satisfy the velocity constraints")  \
+  X(LockedJoint, "W316", "joint cannot move: both its frames are on one rigid body")          \
   X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")
 
 enum class DiagCode {

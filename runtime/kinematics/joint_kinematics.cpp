@@ -1,5 +1,7 @@
 #include "runtime/kinematics/joint_kinematics.h"
 
+#include <algorithm>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -95,6 +97,30 @@ void PrepareJointConstants(TreeJoint* j) {
   j->axis_index = -1;
   for (int k = 0; k < 3; ++k)
     if (n == Vec3::Unit(k)) j->axis_index = k;
+}
+
+bool NormalizeScaled(double* v, int n) {
+  double big = 0.0;
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(v[i])) return false;
+    big = std::max(big, std::fabs(v[i]));
+  }
+  if (big == 0.0) return false;
+  // Scaled by the power of two nearest below the largest component (exact: a vector
+  // whose largest component is in [1, 2), the usual axis, is divided by its norm as is).
+  // scalbn scales each component at once (2^-e itself overflows for a subnormal big).
+  const int e = std::ilogb(big);
+  double sum = 0.0;  // of (v_i 2^-e)^2, in [1, 4n): no overflow, no underflow that matters
+  for (int i = 0; i < n; ++i) sum += std::scalbn(v[i], -e) * std::scalbn(v[i], -e);
+  const double norm = std::sqrt(sum);
+  for (int i = 0; i < n; ++i) v[i] = std::scalbn(v[i], -e) / norm;
+  return true;
+}
+
+std::string WhyNoDirection(const double* v, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(v[i])) return "is not finite";
+  return "is zero";
 }
 
 Mat3 RotationFromCoords(RotationCoords c, const double* q) {

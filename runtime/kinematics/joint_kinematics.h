@@ -16,6 +16,16 @@ namespace kanesim::rt {
 
 using Mat36 = Eigen::Matrix<double, 3, 6>;
 
+// v <- v / |v| for the n numbers at v, without overflow or underflow in |v|: the
+// components are divided by the largest |v_i| first, so that {1e200, 1e200, 0, 0} and
+// {1e-200, 0, 0, 0} normalize like {1, 1, 0, 0} and {1, 0, 0, 0} (the idea of LAPACK's
+// dnrm2). False, and v unchanged, when v has no direction: every component 0, or one
+// not finite. Every user-given axis, direction and start quaternion goes through it.
+bool NormalizeScaled(double* v, int n);
+inline bool NormalizeScaled(Vec3* v) { return NormalizeScaled(v->data(), 3); }
+// What is wrong with a vector NormalizeScaled refused: "is zero" or "is not finite".
+std::string WhyNoDirection(const double* v, int n);
+
 // R = rotation by `angle` about unit `axis` (Rodrigues).
 Mat3 AxisAngle(const Vec3& axis, double angle);
 

@@ -161,6 +161,8 @@ std::string RunWarnings(const Model& model, double rtol, const std::vector<std::
     out += RenderCompileMessage(model, f, lang::Severity::Warning);
   if (rt::CompileMessage w = rt::StartSpeedsWarning(program); !w.message.empty())
     out += RenderCompileMessage(model, w, lang::Severity::Warning);
+  for (const rt::CompileMessage& w : rt::LockedJointWarnings(program))
+    out += RenderCompileMessage(model, w, lang::Severity::Warning);
   if (program.options.indeterminate == rt::IndeterminateReactions::NaN) {
     const std::vector<std::string> which = rt::IndeterminateSignals(program, signals);
     if (!which.empty()) out += RenderCompileMessage(model, rt::IndeterminateWarning(program, which), lang::Severity::Warning);

@@ -249,6 +249,16 @@ struct Program {
   // constraint with the largest start residual.
   std::string start_speeds_changed;
   flat::SourceLoc start_speeds_loc;
+  // Joints that cannot move because both their frames are on one rigid body (the world,
+  // or bodies merged by welds and fixed elements; warning W316, engine.h
+  // LockedJointWarnings): they add neither a speed nor a constraint row.
+  struct LockedJoint {
+    std::string name;
+    flat::SourceLoc loc;
+    std::string body;                                          // "the world" or "body 'rod'"
+    std::vector<std::pair<flat::SourceLoc, std::string>> by;  // the welds that lock it
+  };
+  std::vector<LockedJoint> locked_joints;
 
   std::shared_ptr<const SparsePattern> sparse;            // pattern (sparse path only)
   std::shared_ptr<SparseSymbolic> sparse_symbolic;        // shared across Rebind

@@ -190,6 +190,14 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
   result.rows = 1;
   long count = grid.Count();
   if (count == 1) return result;
+  if (y.empty()) {  // nothing to integrate (0 degrees of freedom): the outputs at every instant
+    for (long k = 1; k < count; ++k, ++result.rows)
+      if (row(grid.Time(k), y.data(), &cause) != 0) {
+        fail(grid.Time(k), cause);
+        break;
+      }
+    return result;
+  }
 
   std::string error;
   std::unique_ptr<detail::Stepper> stepper = detail::MakeStepper(rhs, grid.start, y0, grid.stop, options, &error);

@@ -224,6 +224,8 @@ TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
         if (!friction.message.empty()) pipeline::AddCompileMessage(friction, Severity::Warning, diags);
         rt::CompileMessage start = rt::StartSpeedsWarning(*r.program);
         if (!start.message.empty()) pipeline::AddCompileMessage(start, Severity::Warning, diags);
+        for (const rt::CompileMessage& w : rt::LockedJointWarnings(*r.program))
+          pipeline::AddCompileMessage(w, Severity::Warning, diags);
         std::vector<std::string> which = rt::IndeterminateSignals(*r.program, rt::AvailableSignals(*r.program));
         if (!which.empty())
           pipeline::AddCompileMessage(rt::IndeterminateWarning(*r.program, which), Severity::Warning, diags);

@@ -245,10 +245,18 @@ TEST(Signals, PendulumEnergiesAndPositions) {
 
 TEST(Singular, MasslessLinkIsFatalOnEveryPath) {
   // If this fails, a mass matrix that is singular (a joint that moves nothing with
-  // mass or inertia) yields garbage accelerations instead of a fatal status.
+  // mass or inertia) yields garbage accelerations instead of a fatal status. A joint whose
+  // subtree has no mass at all is K309 at compile time (compile/massless.cpp); a point
+  // mass on the joint's axis (no inertia about it) is singular only at run time.
+  auto massless = test::Pendulum();
+  massless.bodies[0].mass = massless.exprs.Constant(0.0);
+  for (auto& e : massless.bodies[0].inertia) e = massless.exprs.Constant(0.0);
+  auto k309 = rt::Compile(massless, {});
+  ASSERT_EQ(k309.errors.size(), 1u);
+  EXPECT_EQ(k309.errors[0].code, flat::DiagCode::MovesNoMass);
   auto mech = test::Pendulum();
-  mech.bodies[0].mass = mech.exprs.Constant(0.0);
   for (auto& e : mech.bodies[0].inertia) e = mech.exprs.Constant(0.0);
+  for (auto& e : mech.bodies[0].r_cm) e = mech.exprs.Constant(0.0);
   for (auto path : {rt::SolverPath::Dense, rt::SolverPath::Sparse, rt::SolverPath::Recursive}) {
     rt::CompileOptions o;
     o.solver = path;
