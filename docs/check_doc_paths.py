@@ -90,6 +90,8 @@ def anchors(text):
             n = seen.get(base, 0)
             seen[base] = n + 1
             found.add(base if n == 0 else f"{base}-{n}")
+        if not fenced:
+            found.update(re.findall(r"<a (?:id|name)=\"([^\"]+)\"", line))  # explicit anchors
     return found
 
 
@@ -224,6 +226,7 @@ def self_test():
         os.makedirs(os.path.join(root, "cli"))
         open(os.path.join(root, "cli", "main.cpp"), "w").close()
         good = ("# Page\n## A `run` heading\nSee cli/main.cpp, [here](#a-run-heading), `--stats`,\n"
+                "**Bold.** <a id=\"bold\"></a> [there](#bold)\n"
                 "`kanesim run -o x.csv --stats`, cli/main.{cpp}, cli/main, `a[N](...)`, `kanesim sweep merge -o s.csv`, `cmake --build b`,\n"
                 "```sh\nbuild/cli/kanesim run m.mech \\\n  --stats   # a comment --bad\nctest --output-on-failure\n```\n")
         bad = {"cli/gone.cpp": "no such file", "[x](nothere.md)": "no such file",

@@ -541,14 +541,26 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
   p.notes.push_back(dof.str());
   // From here on the redundant rows hold with the others: the reduced path leaves them
   // out (docs/constraints.md "Redundant rows"), unless the minimum-norm multipliers are
-  // needed, which take every row.
+  // needed, which take every row. Only a loop row that is zero at the start (a planar
+  // loop's out-of-plane rows: zero at every configuration of the loop's plane) is left
+  // out; a redundant loop row that is not zero is a combination of the others that changes
+  // along the motion (an overconstrained linkage: Bricard, Bennett, Sarrus), so any fixed
+  // choice of rows to leave out loses rank somewhere on the motion (the orthogonal
+  // Bricard's at the odd joints' angle +-2 pi / 3, where every row stays: rank 4 of 5,
+  // sigma_4 / sigma_1 ~ 0.5) and the loop keeps every row. Contact rows as before.
   const bool min_norm = p.options.indeterminate == IndeterminateReactions::MinNorm || !p.friction_joints.empty();
   if (!min_norm && !p.redundant_rows.empty()) {
+    const double a_max = ws.A.size() ? ws.A.cwiseAbs().maxCoeff() : 0.0;
+    auto left_out = [&](int i) {
+      if (!std::binary_search(p.redundant_rows.begin(), p.redundant_rows.end(), i)) return false;
+      const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+      return row.contact >= 0 || ws.A.row(i).cwiseAbs().maxCoeff() <= kRankTol * a_max;
+    };
     p.active_rows.clear();
     for (size_t i = 0; i < p.rows.size(); ++i) {
-      const bool redundant = std::binary_search(p.redundant_rows.begin(), p.redundant_rows.end(), static_cast<int>(i));
-      p.active_of_row[i] = redundant ? -1 : static_cast<int>(p.active_rows.size());
-      if (!redundant) p.active_rows.push_back(static_cast<int>(i));
+      const bool out = left_out(static_cast<int>(i));
+      p.active_of_row[i] = out ? -1 : static_cast<int>(p.active_rows.size());
+      if (!out) p.active_rows.push_back(static_cast<int>(i));
     }
   }
   // The assembled start: the state the integrators begin from.

@@ -291,6 +291,33 @@ void ConstraintJacobian(const Program& p, Workspace& ws) {
   for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
 }
 
+void LoopJacobianRows(const Program& p, Workspace& ws, int loop) {
+  const LoopClosure& l = p.loops[static_cast<size_t>(loop)];
+  for (int i = l.row0; i < l.row0 + l.nrows; ++i)
+    if (int k = p.active_of_row[static_cast<size_t>(i)]; k >= 0) ws.A.row(k).setZero();
+  LoopJacobian(p, ws, l, FramesOf(p, ws, l, false), false);
+}
+
+double LoopLeverArm(const Program& p, const Workspace& ws, int loop) {
+  const LoopClosure& l = p.loops[static_cast<size_t>(loop)];
+  double st = 0.0, sa = 0.0;
+  int nt = 0, na = 0;
+  for (int i = l.row0; i < l.row0 + l.nrows; ++i) {
+    const int k = p.active_of_row[static_cast<size_t>(i)];
+    if (k < 0) continue;
+    const double s = ws.A.row(k).squaredNorm();
+    if (p.rows[static_cast<size_t>(i)].kind == RowKind::Translation) {
+      st += s;
+      ++nt;
+    } else {
+      sa += s;
+      ++na;
+    }
+  }
+  if (nt == 0 || na == 0 || !(st > 0.0) || !(sa > 0.0)) return 1.0;
+  return std::sqrt((st / nt) / (sa / na));
+}
+
 void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::VectorXd* col) {
   const int J = p.joint_of_speed[static_cast<size_t>(s)];
   const auto h = ws.H_W.col(s);
@@ -587,8 +614,10 @@ void ConstraintRates(const Program& p, Workspace& ws) {
 int CheckLoopsClosed(const Program& p, Workspace& ws) {
   const double r = ws.phi.cwiseAbs().maxCoeff();
   if (r <= kLoose * p.loop_length) return 0;
-  ws.error = "closed loop cannot be closed (position residual " + std::to_string(r) + " at time " +
-             std::to_string(ws.t) + ")";
+  char buf[160];  // %g: a residual of 2e-7 is not "0.000000"
+  std::snprintf(buf, sizeof buf, "closed loop cannot be closed (position residual %.3g m, above %.3g, at time %.9g)", r,
+                kLoose * p.loop_length, ws.t);
+  ws.error = buf;
   return 1;
 }
 

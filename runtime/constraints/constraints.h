@@ -57,6 +57,17 @@ constexpr double kProjectTight = 1e-13;
 constexpr int kProjectMaxNewton = 8;
 // 1 (recoverable, ws.error) when a row of ws.phi is still above the loose limit.
 int CheckLoopsClosed(const Program& p, Workspace& ws);
+
+// Loop `loop`'s active rows of ws.A at the current positions (after PositionKinematics;
+// the other rows untouched), for a choice among them.
+void LoopJacobianRows(const Program& p, Workspace& ws, int loop);
+
+// The length that makes loop `loop`'s translation rows of ws.A (m per unit speed)
+// commensurate with its alignment rows (per radian): the RMS lever arm, sqrt(mean |A_i|^2
+// over its translation rows / mean over its alignment rows); 1 with rows of one kind only,
+// where a common scale does not change which rows are independent or their ratio of
+// singular values. A mechanism scaled by s has s times the lever arm.
+double LoopLeverArm(const Program& p, const Workspace& ws, int loop);
 // q += N(q) ws.du_full, and the position and velocity kinematics of the new positions.
 void StepCoordinates(const Program& p, Workspace& ws);
 // With ws.error: -1 (fatal) when a rolling disk lies flat, 1 (recoverable) when a step went

@@ -70,7 +70,6 @@ constexpr long kEarlyBridgeSteps = 50;
 // (SetBridgeSeveralAtOnceMultiplier, tests only) for the small saving.
 constexpr long kEarlyBridgeStepsSeveral = 10;
 constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
-constexpr double kRankTol = 1e-9;  // sigma / sigma_max below which a row counts as dependent (assembly's)
 }  // namespace
 
 std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& p) {
@@ -106,34 +105,51 @@ std::string StuckMessage(const Program& p, const BranchMonitor& m, double t, con
 }
 }  // namespace
 
+// engine.h.
+double LoopSingularRatio(const Program& p, const Workspace& ws, int loop, double* length) {
+  const LoopClosure& l = p.loops[static_cast<size_t>(loop)];
+  // Its rows of ws.A and its rank at the assembled start: those rows less the ones found
+  // redundant there (compile/loops.cpp keeps a redundant row among the active ones
+  // unless it is zero).
+  int idx[6], r = 0, rank = 0;
+  bool translation[6];
+  for (int i = l.row0; i < l.row0 + l.nrows && r < 6; ++i)
+    if (int k = p.active_of_row[static_cast<size_t>(i)]; k >= 0) {
+      translation[r] = p.rows[static_cast<size_t>(i)].kind == RowKind::Translation;
+      idx[r++] = k;
+      rank += !std::binary_search(p.redundant_rows.begin(), p.redundant_rows.end(), i);
+    }
+  if (rank == 0) return 1.0;
+  if (!(*length > 0.0)) *length = LoopLeverArm(p, ws, loop);
+  // Translation rows (m per unit speed) over the loop's length, alignment rows as they are
+  // (per radian): sigma_min / sigma_max is then the same for the loop built in millimetres
+  // or in metres.
+  double scale[6];
+  for (int i = 0; i < r; ++i) scale[i] = translation[i] ? 1.0 / *length : 1.0;
+  // At most 6 x 6 (one loop's rows): a fixed-capacity matrix, so no allocation per loop per step.
+  Eigen::Matrix<double, 6, 6> G = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int i = 0; i < r; ++i)
+    for (int k = 0; k <= i; ++k) G(i, k) = G(k, i) = scale[i] * scale[k] * ws.A.row(idx[i]).dot(ws.A.row(idx[k]));
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+  Eigen::SelfAdjointEigenSolver<Small> es(Small(G.topLeftCorner(r, r)), Eigen::EigenvaluesOnly);
+  const auto& ev = es.eigenvalues();  // ascending
+  if (!(ev[r - 1] > 0.0)) return 1.0;
+  return std::sqrt(std::max(0.0, ev[r - rank]) / ev[r - 1]);
+}
+
 // branch_monitor_internal.h.
 int NearestSingularLoop(const Program& p, BranchMonitor& m, double* rho_out, int* near_loops) {
   Workspace& ws = *m.ws;
-  // The nearest-singular loop. Its rank at the start counts its independent rows: with
-  // every row kept (`--reactions min-norm`, friction) the redundant ones are among them.
-  const bool first = m.loop_rank.empty();
-  if (first) m.loop_rank.assign(p.loops.size(), 0);
+  // The nearest-singular loop, its length taken at the first check. A loop whose redundant
+  // rows are not zero keeps them among its rows (compile/loops.cpp), and so does every loop
+  // with `--reactions min-norm` or friction: a redundant row (dependent at every
+  // configuration) then never takes the rank below the start's; only a change point does
+  // (docs/constraints.md "Redundant or singular").
+  if (m.loop_length.empty()) m.loop_length.assign(p.loops.size(), 0.0);
   double rho = 1.0;
   int worst = -1;
   for (size_t li = 0; li < p.loops.size(); ++li) {
-    const LoopClosure& l = p.loops[li];
-    int idx[6], r = 0;
-    for (int i = l.row0; i < l.row0 + l.nrows && r < 6; ++i)
-      if (int k = p.active_of_row[static_cast<size_t>(i)]; k >= 0) idx[r++] = k;
-    if (r == 0) continue;
-    Eigen::Matrix<double, 6, 6> G = Eigen::Matrix<double, 6, 6>::Zero();
-    for (int i = 0; i < r; ++i)
-      for (int k = 0; k <= i; ++k) G(i, k) = G(k, i) = ws.A.row(idx[i]).dot(ws.A.row(idx[k]));
-    // At most 6 x 6 (one loop's rows): a fixed-capacity matrix, so no allocation per loop per step.
-    using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
-    Eigen::SelfAdjointEigenSolver<Small> es(Small(G.topLeftCorner(r, r)), Eigen::EigenvaluesOnly);
-    const auto& ev = es.eigenvalues();  // ascending
-    if (!(ev[r - 1] > 0.0)) continue;
-    if (first)
-      for (int i = 0; i < r; ++i) m.loop_rank[li] += ev[i] > kRankTol * kRankTol * ev[r - 1];
-    const int rank = m.loop_rank[li];
-    if (rank == 0) continue;
-    const double lr = std::sqrt(std::max(0.0, ev[r - rank]) / ev[r - 1]);
+    const double lr = LoopSingularRatio(p, ws, static_cast<int>(li), &m.loop_length[li]);
     if (near_loops && lr < kZone) ++*near_loops;
     if (lr < rho) {
       rho = lr;

@@ -36,7 +36,7 @@ struct BranchMonitor {
   bool several_at_once = true;  // ... tried after 10 accepted steps there, not 50 (SetBridgeSeveralAtOnce)
   bool several_at_once_multiplier = false;  // ... also on the multiplier form (tests only)
   bool several_loops = true;  // the bridge's approach over zones with several loops near singular (SetBridgeSeveralLoops)
-  std::vector<int> loop_rank;  // per loop: independent rows at the first check
+  std::vector<double> loop_length;  // per loop: its translation rows' scale, LoopLeverArm at the first check (m)
   Eigen::VectorXd ref_u, cur_u;     // all joint speeds
   std::vector<Vec3> cur_v, cur_w;  // the current step's mass-centre and angular velocities
   std::string error;

@@ -118,6 +118,13 @@ const std::string& ErrorMessage(const Workspace& ws);
 // the time and the turn) when the motion left its assembly branch near a change point
 // (the velocity turned by a finite angle where the loop's rows nearly lost rank), else 0.
 struct BranchMonitor;
+// How near closed loop `loop` (index into Program::loops) is to a change point at the
+// configuration in ws (ConstraintJacobian done): rho = sigma_rank / sigma_max of its rows
+// of ws.A, rank = its rank at the assembled start (its rows less the redundant ones),
+// translation rows divided by *length so that rho does not depend on the unit of length
+// (*length <= 0: taken here, the RMS lever arm of its rows, and stored). 1 for a loop
+// without rows.
+double LoopSingularRatio(const Program& program, const Workspace& ws, int loop, double* length);
 bool BranchMonitorActive(const Program& program);  // the program has closed loops
 std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& program);
 int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y);

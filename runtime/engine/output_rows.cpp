@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "runtime/constraints/constraints.h"
+#include "runtime/engine/engine.h"
 #include "runtime/kane/kane.h"
 #include "runtime/kinematics/kinematics.h"
 
@@ -35,22 +36,6 @@ constexpr int kMaxGaussNewton = 8;
 // energy 2.6e-6 of E off; one more step (3.6e-15): 1.8e-6 apart, 7.5e-8 of E. CVODE-BDF
 // t = 11.66: 2.2e-13, 3.7e-5 apart, 2.4e-6 of E -> 1.5e-8 of E.
 constexpr double kRowRoundOff = 1e-16;
-
-// rho = sigma_min/sigma_max of one loop's rows of ws.A (its rank's smallest).
-double LoopRho(const Program& p, const Workspace& ws, const LoopClosure& l) {
-  int idx[6], r = 0;
-  for (int i = l.row0; i < l.row0 + l.nrows && r < 6; ++i)
-    if (int k = p.active_of_row[static_cast<size_t>(i)]; k >= 0) idx[r++] = k;
-  if (r == 0) return 1.0;
-  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
-  Small G(r, r);
-  for (int i = 0; i < r; ++i)
-    for (int k = 0; k <= i; ++k) G(i, k) = G(k, i) = ws.A.row(idx[i]).dot(ws.A.row(idx[k]));
-  Eigen::SelfAdjointEigenSolver<Small> es(G, Eigen::EigenvaluesOnly);
-  const auto& ev = es.eigenvalues();  // ascending
-  if (!(ev[r - 1] > 0.0)) return 1.0;
-  return std::sqrt(std::max(0.0, ev[0]) / ev[r - 1]);
-}
 
 // The kinetic-energy metric on the free speeds, M = sum_L m_L Jv_L^T Jv_L + Jw_L^T I_L Jw_L,
 // by one velocity pass per free speed (only for the few rows near a change point).
@@ -116,8 +101,8 @@ bool RowNearChangePoint(const Program& p, Workspace& ws) {
   if (p.loops.empty() || p.loop_rank == 0) return false;
   VelocityKinematics(p, ws);
   ConstraintJacobian(p, ws);
-  for (const LoopClosure& l : p.loops)
-    if (LoopRho(p, ws, l) < kRowZone) return true;
+  for (size_t l = 0; l < p.loops.size(); ++l)
+    if (double length = 0.0; LoopSingularRatio(p, ws, static_cast<int>(l), &length) < kRowZone) return true;
   return false;
 }
 

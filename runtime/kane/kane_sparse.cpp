@@ -51,7 +51,18 @@ namespace kanesim::rt {
 struct SparsePattern {
   int n = 0;                          // 12 K + kept constraint rows
   int n_body = 0;                     // 12 K
-  std::vector<int> kept_rows;         // multiplier m -> constraint row (Program::rows)
+  std::vector<int> kept_rows;         // multiplier m -> constraint row (Program::rows) at the assembled start
+  // A loop that keeps a redundant row that is not zero (compile/loops.cpp: an
+  // overconstrained linkage) has more rows than multipliers; which of them the multipliers
+  // take is re-chosen at every factorization (ChooseLoopRows), as any fixed choice loses
+  // rank somewhere on the motion. Its rows all act on the same two bodies, so the
+  // system's pattern is the same whichever it takes.
+  struct RowChoice {
+    int loop = -1;
+    std::vector<int> mults;  // its multipliers
+    std::vector<int> rows;   // its active rows (Program::rows)
+  };
+  std::vector<RowChoice> row_choices;
   std::vector<std::array<int, 2>> row_bodies;  // per multiplier: its bodies (-1: none), as RowBodies
   std::vector<int> Ap, Ai;            // CSC pattern
   std::vector<int> slot;              // entry number (visit order) -> CSC value index
@@ -216,6 +227,16 @@ bool BuildSparse(Program& p, std::string* error) {
     sp->kept_rows.push_back(i);
     sp->row_bodies.push_back(bodies);
   }
+  for (size_t li = 0; li < p.loops.size(); ++li) {
+    SparsePattern::RowChoice rc;
+    rc.loop = static_cast<int>(li);
+    const LoopClosure& l = p.loops[li];
+    for (int i = l.row0; i < l.row0 + l.nrows; ++i)
+      if (p.active_of_row[static_cast<size_t>(i)] >= 0) rc.rows.push_back(i);
+    for (size_t m = 0; m < sp->kept_rows.size(); ++m)
+      if (p.rows[static_cast<size_t>(sp->kept_rows[m])].loop == rc.loop) rc.mults.push_back(static_cast<int>(m));
+    if (!rc.mults.empty() && rc.rows.size() > rc.mults.size()) sp->row_choices.push_back(std::move(rc));
+  }
   sp->n = sp->n_body + static_cast<int>(sp->kept_rows.size());
   sp->children.assign(static_cast<size_t>(K), {});
   sp->nf.assign(static_cast<size_t>(K), 0);
@@ -295,6 +316,7 @@ void InitSparseWorkspace(const Program& p, Workspace& ws) {
   ws.lambda_W.assign(K, Vec6::Zero());
   ws.D_W.assign(K, Mat6::Zero());
   ws.row_J.assign(2 * p.sparse->kept_rows.size(), Vec6::Zero());
+  ws.sparse_rows = p.sparse->kept_rows;
   ws.klu.reset(new SparseNumeric);
   klu_defaults(&ws.klu->common);
   ws.klu->common.btf = 0;  // as the symbolic analysis
@@ -336,9 +358,52 @@ int SolveInPlace(const Program& p, Workspace& ws) {
 
 }  // namespace
 
+namespace {
+
+// Re-chooses the rows of each loop of SparsePattern::row_choices that its multipliers
+// take, at the current positions: the best-conditioned ones by pivoted Cholesky of the
+// loop's rows' Gram matrix G = S A_l A_l^T S (at most 6 x 6; S divides translation rows by
+// the loop's lever arm, LoopLeverArm) — the largest remaining diagonal, then its Schur
+// complement, as many times as the loop has multipliers. The same as column-pivoted QR of
+// (S A_l)^T. The chosen rows, in row order, into ws.sparse_rows.
+void ChooseLoopRows(const Program& p, const SparsePattern& sp, Workspace& ws) {
+  for (const SparsePattern::RowChoice& rc : sp.row_choices) {
+    LoopJacobianRows(p, ws, rc.loop);
+    const double len = LoopLeverArm(p, ws, rc.loop);
+    const int n = static_cast<int>(std::min<size_t>(rc.rows.size(), 6));
+    double scale[6];
+    int k[6];
+    for (int i = 0; i < n; ++i) {
+      const ConstraintRow& row = p.rows[static_cast<size_t>(rc.rows[static_cast<size_t>(i)])];
+      scale[i] = row.kind == RowKind::Translation ? 1.0 / len : 1.0;
+      k[i] = p.active_of_row[static_cast<size_t>(rc.rows[static_cast<size_t>(i)])];
+    }
+    Mat6 G = Mat6::Zero();
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j <= i; ++j) G(i, j) = G(j, i) = scale[i] * scale[j] * ws.A.row(k[i]).dot(ws.A.row(k[j]));
+    bool taken[6] = {false, false, false, false, false, false};
+    for (size_t c = 0; c < rc.mults.size(); ++c) {
+      int best = -1;
+      for (int i = 0; i < n; ++i)
+        if (!taken[i] && (best < 0 || G(i, i) > G(best, best))) best = i;
+      taken[best] = true;
+      const double d = G(best, best);
+      if (!(d > 0.0)) continue;
+      const Vec6 g = G.col(best) / std::sqrt(d);
+      G -= g * g.transpose();
+    }
+    size_t c = 0;
+    for (int i = 0; i < n; ++i)
+      if (taken[i]) ws.sparse_rows[static_cast<size_t>(rc.mults[c++])] = rc.rows[static_cast<size_t>(i)];
+  }
+}
+
+}  // namespace
+
 int FactorSparse(const Program& p, Workspace& ws) {
   const SparsePattern& sp = *p.sparse;
   const size_t K = p.bodies.size();
+  ChooseLoopRows(p, sp, ws);
   // Complement bases (they depend on the positions only).
   for (size_t L = 0; L < K; ++L) {
     const int nf = sp.nf[L];
@@ -350,7 +415,7 @@ int FactorSparse(const Program& p, Workspace& ws) {
   }
   for (size_t m = 0; m < sp.kept_rows.size(); ++m) {
     Vec6 Ja, Jb;
-    RowJacobians(p, ws, sp.kept_rows[m], &Ja, &Jb);
+    RowJacobians(p, ws, ws.sparse_rows[m], &Ja, &Jb);
     // Slot 1 empty (frame b on the world, a contact, or both frames on one body, merged by
     // BuildSparse): slot 0 takes the sum, Jb being zero in the first two cases.
     ws.row_J[2 * m] = sp.row_bodies[m][1] < 0 ? Vec6(Ja + Jb) : Ja;
@@ -393,7 +458,7 @@ int SparseCorrection(const Program& p, Workspace& ws, const Eigen::VectorXd& res
   const SparsePattern& sp = *p.sparse;
   std::fill(ws.x.begin(), ws.x.end(), 0.0);
   for (size_t m = 0; m < sp.kept_rows.size(); ++m)
-    ws.x[static_cast<size_t>(sp.n_body) + m] = -residual[sp.kept_rows[m]];
+    ws.x[static_cast<size_t>(sp.n_body) + m] = -residual[ws.sparse_rows[m]];
   if (int s = SolveInPlace(p, ws); s != 0) return s;
   du_full->setZero();
   for (size_t L = 0; L < p.bodies.size(); ++L) {
@@ -457,7 +522,7 @@ int SolveSparse(const Program& p, Workspace& ws) {
   if (!sp.kept_rows.empty()) {
     ConstraintBias(p, ws);
     for (size_t m = 0; m < sp.kept_rows.size(); ++m) {
-      double v = -ws.cbias[sp.kept_rows[m]];
+      double v = -ws.cbias[ws.sparse_rows[m]];
       for (int k = 0; k < 2; ++k) {
         const int L = sp.row_bodies[m][static_cast<size_t>(k)];
         if (L < 0) continue;
@@ -480,7 +545,7 @@ int SolveSparse(const Program& p, Workspace& ws) {
   if (!sp.kept_rows.empty()) {
     ws.lambda_c.setZero();
     for (size_t m = 0; m < sp.kept_rows.size(); ++m)
-      ws.lambda_c[sp.kept_rows[m]] = ws.x[static_cast<size_t>(sp.n_body) + m];
+      ws.lambda_c[ws.sparse_rows[m]] = ws.x[static_cast<size_t>(sp.n_body) + m];
   }
   return 0;
 }

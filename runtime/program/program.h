@@ -327,6 +327,7 @@ struct Workspace {
   std::vector<Vec6> lambda_W;       // joint reaction wrench on the child at o_L  (K)  filled by SolveSparse
   std::vector<Eigen::Matrix<double, 6, 6>> D_W;  // complement basis per joint (first 6-nf cols)  (K)  filled by FactorSparse
   std::vector<Vec6> row_J;          // per kept constraint row, its two body Jacobians (as RowJacobians)  (2 m)  filled by FactorSparse
+  std::vector<int> sparse_rows;     // multiplier -> constraint row: SparsePattern::kept_rows, a loop's re-chosen among its rows  (m)  filled by FactorSparse
   bool sparse_ready = false;        // the factorization is of the current positions  set by FactorSparse, cleared by UnpackState
   double sparse_rcond = 0.0;        // KLU's pivot-ratio estimate of the last factorization  filled by FactorSparse
   std::unique_ptr<SparseNumeric, SparseNumericDeleter> klu;
