@@ -141,8 +141,10 @@ class Emitter {
       return;
     }
     if (n->kind != Node::kClass) return;
-    // Where the primitive is declared (made only for the kinds that keep it).
-    auto loc = [&] { return el.Loc(n->decl ? n->decl->name_span : Span{}); };
+    // Where the primitive is declared (made only for the kinds that keep it); inside a
+    // library component (a Rod's body and tip) the user's declaration of that component,
+    // so that the compiler's messages point into the user's file.
+    auto loc = [&] { return el.Loc(el.UserSpan(n)); };
     switch (n->prim) {
       case Prim::World: EmitWorld(n, loc()); break;
       case Prim::Body: EmitBody(n, loc()); break;

@@ -10,6 +10,17 @@
 
 namespace kanesim::lang::elab {
 
+Span Elaborator::UserSpan(const Node* n) const {
+  const SourceManager& sm = program_.sources;
+  for (const Node* a = n; a; a = a->parent) {
+    if (!a->decl) continue;
+    const Span s = a->decl->name_span;
+    // Library and pseudo files are named "<stdlib>/Parts.mech", "<--set>".
+    if (s.valid() && s.file < sm.NumFiles() && sm.Name(s.file).rfind('<', 0) != 0) return s;
+  }
+  return n->decl ? n->decl->name_span : Span{};
+}
+
 flat::SourceLoc Elaborator::Loc(Span s) const {
   flat::SourceLoc l;
   const SourceManager& sm = program_.sources;

@@ -286,6 +286,8 @@ class Elaborator {
   Value Comparison(const ast::Expr& e, const Value& a, const Value& b);
   Value Elementwise2(const Value& a, const Value& b, flat::Op op, VType rt, Span sp);
   // Work budget (elab_budget.cpp): false once the elaboration has used it up.
+  // Node n's declaration, or the nearest enclosing one in a user file (not the library).
+  Span UserSpan(const Node* n) const;
   bool ChargeSteps(std::int64_t steps, Span where);
   bool ChargeNodes(std::int64_t more, Span where);  // false once the pool would pass kMaxExprNodes
   bool Charge(const Value& v, Span where);

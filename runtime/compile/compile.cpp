@@ -255,7 +255,9 @@ bool Compiler::Topology(Program& p) {
       }
     }
   }
-  return out_->errors.empty();
+  // Numbers out of range leave the structure sound: the later stages still report theirs.
+  return std::all_of(out_->errors.begin(), out_->errors.end(),
+                     [](const CompileMessage& e) { return e.code == flat::DiagCode::OutOfRange; });
 }
 
 // A fixed element's placement X_ab = (p_ab, R_ab) must be finite and R_ab a rotation
@@ -266,6 +268,8 @@ void Compiler::CheckFixedPlacement(const RigidEdge& e) {
   const double off = (e.R_ab.transpose() * e.R_ab - Mat3::Identity()).cwiseAbs().maxCoeff();
   if (!e.p_ab.allFinite())
     Error(flat::DiagCode::Degenerate, e.what + ": its translation r is not finite", e.loc);
+  else if (std::string why = LengthOutOfRange(e.what + ": its translation", e.p_ab); !why.empty())
+    Error(flat::DiagCode::OutOfRange, why, e.loc, RangeHint());
   else if (!(off <= kRigidLoopTol) || !(e.R_ab.determinant() > 0.0))
     Error(flat::DiagCode::Degenerate,
           e.what + ": its rotation R is not a rotation" + (e.R_ab.allFinite() ? "" : " (not finite: a zero or non-finite axis n?)"),
@@ -328,6 +332,11 @@ void Compiler::MassProperties(Program& p) {
       Error(flat::DiagCode::BadMassProperties, "body '" + b.name + "': " + why, b.loc,
             "a rigid body's central inertia is symmetric, its principal moments are >= 0 and the two smaller "
             "add up to at least the largest (docs/language.md \"Mass properties\")");
+    const std::string of = "body '" + b.name + "': its ";
+    for (const std::string& why : {OutOfRange(of + "mass", mass, kMinMass, kMaxMass, "kg"),
+                                   OutOfRange(of + "inertia", I.cwiseAbs().maxCoeff(), kMinMass, kMaxMass, "kg m^2"),
+                                   LengthOutOfRange(of + "centre-of-mass offset", src.p_FBcm)})
+      if (!why.empty()) Error(flat::DiagCode::OutOfRange, why, b.loc, RangeHint());
     if (F.body < 0) continue;  // mass fixed to ground (or unreached: reported) costs nothing
     const auto L = static_cast<size_t>(F.body);
     if (!named[L]) {
@@ -378,6 +387,7 @@ CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std
   ChooseIntegrator(p);
   if (!p.rows.empty()) {
     AssembleLoops(p, &out.errors);
+    if (out.errors.empty()) CheckAnyMassMoves(p, &out.errors);
     if (!out.errors.empty()) return out;
     ChooseLoopSolver(p);
   }

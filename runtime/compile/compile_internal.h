@@ -66,6 +66,17 @@ void FindIndeterminateReactions(Program& p, Workspace& ws);
 // K309 for each tree joint with a free speed whose subtree has no mass and no inertia, in
 // a model without constraints (compile/massless.cpp).
 void CheckMovesMass(const Program& p, std::vector<CompileMessage>* errors);
+// K309 when the assembled mechanism has degrees of freedom but no body has mass or
+// inertia (closed loops of fixed elements only; after AssembleLoops).
+void CheckAnyMassMoves(const Program& p, std::vector<CompileMessage>* errors);
+
+// Ranges of user numbers (compile/ranges.cpp): "" when x is 0 or within [lo, hi], else
+// "<what> <x> <unit> is out of range: ...". Lengths by their largest component.
+inline constexpr double kMinMass = 1e-100, kMaxMass = 1e100;      // kg, and kg m^2 for inertia entries
+inline constexpr double kMinLength = 1e-50, kMaxLength = 1e50;    // m
+std::string OutOfRange(const std::string& what, double x, double lo, double hi, const char* unit);
+std::string LengthOutOfRange(const std::string& what, const Vec3& r);
+const char* RangeHint();
 
 // Gravity, joint forces, line forces, wrenches (force tape) and outputs (output tape).
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);

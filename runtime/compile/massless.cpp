@@ -5,7 +5,8 @@
 // integrator can take a step. In an open tree that is a modelling mistake (a joint whose
 // frame_b carries nothing), reported here at the joint instead of as a numerical failure
 // at t = 0. With closed loops or contacts the constraints may fix such a speed (a
-// massless coupler), so there only the run can tell.
+// massless coupler), so there only the run can tell — except when no body at all has mass
+// or inertia and the assembled loops leave a degree of freedom (CheckAnyMassMoves).
 #include "runtime/compile/compile_internal.h"
 
 namespace kanesim::rt {
@@ -41,6 +42,21 @@ void CheckMovesMass(const Program& p, std::vector<CompileMessage>* errors) {
                           "attach a body (Body, Rod, Box, ...) to the side of the joint away from the world, or "
                           "prescribe its motion, or remove it"));
   }
+}
+
+void CheckAnyMassMoves(const Program& p, std::vector<CompileMessage>* errors) {
+  if (p.dof <= 0) return;
+  for (const TreeBody& b : p.bodies)
+    if (b.mass != 0.0 || !b.I_BBcm_B.isZero(0.0)) return;
+  for (const TreeJoint& j : p.joints)
+    for (int k = 0; k < j.nu; ++k)
+      if (p.u_free_of[static_cast<size_t>(j.u0 + k)] >= 0) {
+        errors->push_back(Msg(flat::DiagCode::MovesNoMass,
+                              "joint '" + j.name + "' moves no mass: the mechanism has " + std::to_string(p.dof) +
+                                  " degree(s) of freedom but no body with mass or inertia",
+                              j.loc, "attach a body (Body, Rod, Box, ...) to the moving links, or prescribe the motion"));
+        return;
+      }
 }
 
 }  // namespace kanesim::rt

@@ -111,7 +111,10 @@ struct RowEnergy {
   // Eq. (5) for the instant's energy Er at theta between E0 and E1 (T1, V1: the end's).
   double Deviation(double e0, double e1, double theta, double er, double rtol, double T1, double V1) const {
     const double scale = std::abs(e1 - e0) + rtol * motion + 1e-11 * (std::abs(T1) + std::abs(V1));
-    return std::abs(er - (e0 + theta * (e1 - e0))) / scale;
+    const double off = std::abs(er - (e0 + theta * (e1 - e0)));
+    // A mechanism with no energy at all (massless parts held still: T = V = 0 throughout)
+    // has scale 0; its rows are exactly on the line, not 0/0 = NaN (issue 38).
+    return off == 0.0 ? 0.0 : off / scale;
   }
   bool started = false;
   double v_first = 0.0, motion = 0.0;

@@ -217,6 +217,43 @@ TEST(LockedJoint, RigidLoopsOfWelds) {
             1);
 }
 
+// If this fails, a loop of fixed elements closed through two revolutes (no body anywhere)
+// crashes or fails at t = 0 with a singular mass matrix. world -j1- a -b- j2 -world with
+// a and b going out 1 m and back: j1 and j2 coaxial at the origin, a degree of freedom
+// that moves no mass (K309 at j1). With b ending 1 m out, j2's frames must meet at (1, 0, 0):
+// the loop holds j1 at q = 0, 0 degrees of freedom, and it runs; 3 m out it cannot close.
+TEST(LockedJoint, LoopThroughAMasslessChain) {
+  auto loop = [](const char* back, const char* world_end) {
+    return Model(std::string("  World world;\n"
+                             "  Revolute j1(axis = {0, 0, 1});\n"
+                             "  FixedTranslation a(r = {1, 0, 0});\n"
+                             "  FixedTranslation b(r = ") + back + ");\n"
+                 "  FixedTranslation c(r = " + world_end + ");\n"
+                 "  Revolute j2(axis = {0, 0, 1});\n"
+                 "equation\n"
+                 "  connect(world.frame_b, j1.frame_a);\n"
+                 "  connect(j1.frame_b, a.frame_a);\n"
+                 "  connect(a.frame_b, b.frame_a);\n"
+                 "  connect(b.frame_b, j2.frame_a);\n"
+                 "  connect(world.frame_b, c.frame_a);\n"
+                 "  connect(j2.frame_b, c.frame_b);\n");
+  };
+  auto massless = LoadModel(loop("{-1, 0, 0}", "{0, 0, 0}"), {}, {}, true);
+  ASSERT_TRUE(massless);
+  const rt::CompileMessage* e = Find(massless->errors, "K309", "joint 'j1' moves no mass");
+  ASSERT_TRUE(e) << Messages(massless->errors);
+  EXPECT_EQ(e->loc.line, 3);
+
+  auto held = LoadModel(loop("{0, 0, 0}", "{1, 0, 0}"), {}, {}, true);
+  ASSERT_TRUE(held && held->prog) << Messages(held->errors);
+  EXPECT_EQ(SummaryOf(*held).dof, 0);
+  RunsEverywhere(*held->prog, {"j1.q"});
+
+  auto apart = LoadModel(loop("{0, 0, 0}", "{3, 0, 0}"), {}, {}, true);
+  ASSERT_TRUE(apart);
+  EXPECT_TRUE(Find(apart->errors, "K310", "joint 'j2'")) << Messages(apart->errors);
+}
+
 // If this fails, a fixed element whose R is no rotation (a user's own fixed primitive;
 // FixedRotation about a zero axis is E213 already, its R is NaN) shears every pose
 // downstream instead of being K306 at the element.
