@@ -202,3 +202,36 @@ def test_ctrl_c_stops_a_sweep_with_a_hanging_worker(examples):
     finally:
         if p.poll() is None:
             p.kill()
+
+
+def test_two_threads_sweep_at_once(examples, reference):
+    """Two Python threads sweeping in worker processes at once: each pool's workers are forked
+    with copies of the other pool's pipes, which must not keep a pool from ending its idle
+    workers (a hang before they were ended explicitly)."""
+    import threading
+
+    m = kanesim.load(examples / "spring_mass.mech", set={"F0": 0, "c": 0})
+    results, errors = [], []
+
+    def one():
+        try:
+            for _ in range(20):
+                t = kanesim.sweep(m, grid=GRID, metrics=METRICS, stop_time=2, threads=3)
+                results.append([[str(t[c][i]) for c in t.columns] for i in range(len(t))])
+        except Exception as e:  # noqa: BLE001 - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=one, daemon=True) for _ in range(2)]
+    t0 = time.monotonic()
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join(timeout=60)
+    assert not any(th.is_alive() for th in threads), "a sweep hangs"
+    assert not errors, errors
+    assert len(results) == 40
+    for rows in results:
+        got = {"columns": reference["columns"], "rows": rows}
+        for i in range(len(GRID["k"])):
+            assert stable(got, i) == stable(reference, i)
+    assert time.monotonic() - t0 < 60

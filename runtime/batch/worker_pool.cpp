@@ -164,9 +164,14 @@ int ProcessPool::Running() const {
 }
 
 void ProcessPool::Close(Worker* w) {
-  if (w->command_fd >= 0) ::close(w->command_fd);  // an idle worker reads the end and exits
+  if (w->command_fd >= 0) ::close(w->command_fd);
   if (w->result_fd >= 0) ::close(w->result_fd);
   if (w->pid > 0) {
+    // An idle worker would exit at the end of its command pipe, but another pool's workers,
+    // forked meanwhile by another thread (two Python sweeps at once), hold copies of that
+    // pipe: waiting for the end could wait for them, and they for us. An idle worker holds
+    // nothing unfinished (its last result was sent whole), so it is killed.
+    ::kill(w->pid, SIGKILL);
     int status = 0;
     while (::waitpid(w->pid, &status, 0) < 0 && errno == EINTR) {
     }
