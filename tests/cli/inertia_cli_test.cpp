@@ -127,13 +127,14 @@ TEST(Inertia, ParameterChangesAreCheckedToo) {
   EXPECT_TRUE(Has(m.err, "K308") || Has(m.err, "E213")) << m.err;  // a non-finite mass
 }
 
-// Item 9: what the compiler cannot reject, a singular mass matrix (a massless link, a
-// joint that moves nothing), stops every solver path and integrator with exit 2.
+// Item 9: what the compiler cannot reject, a singular mass matrix (a point mass on its
+// joint's axis: no inertia about it), stops every solver path and integrator with exit 2.
+// A link with no mass at all is K309 at compile time (issue 38).
 TEST(Inertia, SingularMassMatrixStopsEveryPath) {
   std::string d = Work("inertia_singular");
   Write(d + "/s.mech",
         "model Massless\n  World world;\n  Revolute j1(axis = {0, 0, 1}, q(start = 0.3));\n  Rod rod(L = 1, m = 1);\n"
-        "  Revolute j2(axis = {0, 0, 1}, q(start = 0.1));\n  Body tip(m = 0, I = zeros(3, 3));\nequation\n"
+        "  Revolute j2(axis = {0, 0, 1}, q(start = 0.1));\n  Body tip(m = 1, I = zeros(3, 3));\nequation\n"
         "  connect(world.frame_b, j1.frame_a);\n  connect(j1.frame_b, rod.frame_a);\n"
         "  connect(rod.frame_b, j2.frame_a);\n  connect(j2.frame_b, tip.frame_a);\n"
         "  annotation(experiment(StopTime = 1, Interval = 0.5));\nend Massless;\n");

@@ -164,12 +164,14 @@ TEST(TreeSolver, PlanarAgreesWithDenseAndSpatial) {
 }
 
 TEST(TreeSolver, PlanarChainWithoutMassIsSingular) {
-  // If this fails, a massless link on the planar recursion gives garbage instead of the
-  // fatal status of the other paths.
+  // If this fails, a link without inertia about its joint on the planar recursion gives
+  // garbage instead of the fatal status of the other paths. (A link with no mass at all is
+  // K309 at compile time: compile/massless.cpp; a point mass on its joint's axis is not.)
   std::mt19937 rng(43);
   auto mech = test::RandomPlanarTree(rng, 4, Eigen::Vector3d::UnitZ());
-  mech.bodies[3].mass = mech.exprs.Constant(0.0);  // b4: a leaf (parents come earlier), nothing welded on
+  // b4: a leaf (parents come earlier), nothing welded on; its joint's origin is its frame's
   for (auto& e : mech.bodies[3].inertia) e = mech.exprs.Constant(0.0);
+  for (auto& e : mech.bodies[3].r_cm) e = mech.exprs.Constant(0.0);
   auto r = CompileWith(mech, rt::SolverPath::Recursive);
   ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
   ASSERT_TRUE(Planar(r));
@@ -204,12 +206,13 @@ TEST(TreeSolver, SolvesLongChainToWorkingPrecision) {
 }
 
 TEST(TreeSolver, SingularMassMatrixIsFatal) {
-  // If this fails, a joint that moves nothing with mass or inertia (a massless leaf)
-  // yields garbage or infinite accelerations instead of a fatal status.
+  // If this fails, a joint that moves nothing with inertia about it (a point mass on its
+  // axis; a massless leaf is K309 at compile time) yields garbage or infinite
+  // accelerations instead of a fatal status.
   std::mt19937 rng(3);
   auto mech = test::Chain(3);
-  mech.bodies[2].mass = mech.exprs.Constant(0.0);
   for (auto& e : mech.bodies[2].inertia) e = mech.exprs.Constant(0.0);
+  for (auto& e : mech.bodies[2].r_cm) e = mech.exprs.Constant(0.0);
   auto r = CompileWith(mech, rt::SolverPath::Recursive);
   ASSERT_TRUE(r.errors.empty());
   auto ws = rt::MakeWorkspace(*r.program);
