@@ -1,7 +1,7 @@
 # `cmake --install build --prefix PREFIX`: the kanesim command, its documentation and the
 # examples, in the GNU layout:
 #   PREFIX/bin/kanesim                       (the standard library is embedded)
-#   PREFIX/share/doc/kanesim/README.md, *.md, images/
+#   PREFIX/share/doc/kanesim/README.md, *.md, images/, benchmarks/, constraints/
 #   PREFIX/share/doc/kanesim/examples/*.mech
 # The Python module is not part of it (component `python`, installed by pip).
 include(GNUInstallDirs)
@@ -22,6 +22,12 @@ install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR
 file(GLOB KANESIM_DOC_PAGES ${PROJECT_SOURCE_DIR}/docs/*.md)
 install(FILES ${KANESIM_DOC_PAGES} DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT docs)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/images DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT docs)
+# The dated history pages the current ones link to (docs/benchmarks/*.md with their plots,
+# docs/constraints/*.md), so that the links of an installed page resolve as in the repository.
+foreach(history benchmarks constraints)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/${history} DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT docs
+          FILES_MATCHING PATTERN "*.md" PATTERN "*.png")
+endforeach()
 file(GLOB KANESIM_EXAMPLE_FILES ${PROJECT_SOURCE_DIR}/examples/*.mech)
 install(FILES ${KANESIM_EXAMPLE_FILES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples COMPONENT examples)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/meshes DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples COMPONENT examples)

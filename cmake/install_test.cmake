@@ -7,8 +7,10 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD} --prefix ${PREFIX} R
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "cmake --install failed (${rc}):\n${out}\n${err}")
 endif()
+# The history pages benchmarks.md and constraints.md link to come along.
 foreach(f ${BINDIR}/kanesim ${DOCDIR}/README.md ${DOCDIR}/language.md ${DOCDIR}/python.md
-          ${DOCDIR}/examples/double_pendulum.mech)
+          ${DOCDIR}/examples/double_pendulum.mech ${DOCDIR}/benchmarks/2026-11-28_change_points_history.md
+          ${DOCDIR}/constraints/singular_configurations.md)
   if(NOT EXISTS ${PREFIX}/${f})
     message(FATAL_ERROR "not installed: ${PREFIX}/${f}")
   endif()
