@@ -18,7 +18,6 @@ every command's options. Options after another program (cmake, ctest, a script) 
 import glob
 import os
 import re
-import subprocess
 import sys
 
 PAGE_LIMIT = 60 * 1024
@@ -39,34 +38,8 @@ FOREIGN_OPTIONS = {"--remote-debugging-pipe", "--headless", "--disable-webgl", "
 # What the binary accepts
 
 
-def parse_help(text):
-    """(options, subcommands) of one CLI11 help page."""
-    options, subcommands, section = set(), [], None
-    for line in text.splitlines():
-        if line and not line.startswith(" "):
-            section = line.rstrip(":")
-            continue
-        m = re.match(r"  (\S+)", line)
-        if m and section == "Options":
-            options.update(n for n in m.group(1).split(",") if n.startswith("-"))
-        elif m and section == "Subcommands":
-            subcommands.append(m.group(1))
-    return options, subcommands
-
-
-def binary_commands(kanesim):
-    """{"": top-level options, "run": its options, "sweep merge": ..., ...}."""
-    def help_of(words):
-        return subprocess.run([kanesim, *words, "--help"], capture_output=True, text=True, check=True).stdout
-
-    top, names = parse_help(help_of([]))
-    commands = {"": top}
-    for name in names:
-        options, subs = parse_help(help_of([name]))
-        commands[name] = options
-        for sub in subs:
-            commands[f"{name} {sub}"] = parse_help(help_of([name, sub]))[0]
-    return commands
+# parse_help and binary_commands: shared with the docs/cli.md check (same folder).
+from check_cli_docs import binary_commands  # noqa: E402
 
 
 # ---------------------------------------------------------------------------------------------

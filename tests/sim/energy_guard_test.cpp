@@ -17,6 +17,7 @@
 #include "runtime/engine/engine.h"
 #include "runtime/sim/simulate.h"
 #include "tests/constraints/load_util.h"
+#include "tests/sim/energy_rows.h"
 
 namespace kanesim::sim {
 namespace {
@@ -48,17 +49,6 @@ GuardedRun Simulate1(const rt::Program& p, double stop, double interval, double 
   return run;
 }
 
-// The largest |E - E0| over the rows, relative to the largest T + |V - V0| (the guard's
-// own measure, computed here from the written energy columns).
-double RelativeEnergyError(const MemorySink& s) {
-  const double e0 = s.rows[0][0] + s.rows[0][1], v0 = s.rows[0][1];
-  double motion = 0.0, worst = 0.0;
-  for (const auto& row : s.rows) {
-    motion = std::max(motion, row[0] + std::abs(row[1] - v0));
-    if (motion > 0.0) worst = std::max(worst, std::abs(row[0] + row[1] - e0) / motion);
-  }
-  return worst;
-}
 
 const Method kMethods[] = {Method::Dop853, Method::CvodeAdams, Method::CvodeBdf, Method::ArkodeErk, Method::IDA};
 

@@ -19,6 +19,7 @@
 #include "runtime/engine/engine.h"
 #include "runtime/sim/simulate.h"
 #include "tests/constraints/load_util.h"
+#include "tests/sim/energy_rows.h"
 
 namespace kanesim::sim {
 namespace {
@@ -52,17 +53,6 @@ RunRows Simulate1(const rt::Program& p, double stop, double rtol, rt::Integrator
   return run;
 }
 
-// max |E - E0| over the rows, relative to the largest T + |V - V0| (the energy guard's
-// measure of the motion; columns 0 and 1 are T and V).
-double RelativeEnergyError(const MemorySink& s) {
-  const double e0 = s.rows[0][0] + s.rows[0][1], v0 = s.rows[0][1];
-  double motion = 0.0, worst = 0.0;
-  for (const auto& row : s.rows) {
-    motion = std::max(motion, row[0] + std::abs(row[1] - v0));
-    if (motion > 0.0) worst = std::max(worst, std::abs(row[0] + row[1] - e0) / motion);
-  }
-  return worst;
-}
 
 // Measured after the fix (5 s): 3.0e-4, 2.6e-5, 1.1e-5, 8.5e-6, 8.5e-7 at rtol 1e-5, 3e-6,
 // 1e-6, 5e-7, 1e-7: at most 30 rtol; the bound leaves 3x.
