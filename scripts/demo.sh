@@ -7,8 +7,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${JOBS:-2}
 scripts/setup.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
-cmake --build build -j"$jobs"
+# The configuration scripts/test.sh uses too (it then compiles only what the demo did not);
+# only the command and the modules it opens (meshes, the viewer's server) are built here.
+scripts/configure.sh build
+cmake --build build -j"$jobs" --target kanesim
 build/cli/kanesim run examples/double_pendulum.mech -o double_pendulum.csv --animation double_pendulum.glb
 build/cli/kanesim view examples/double_pendulum.mech --html double_pendulum.html
 echo "demo: wrote double_pendulum.csv ($(($(wc -l < double_pendulum.csv) - 1)) rows); first rows:"

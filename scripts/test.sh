@@ -8,12 +8,9 @@ cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build}
 scripts/setup.sh  # installs only what is missing (a no-op on a prepared machine)
 jobs=${JOBS:-$(nproc)}
-# ccache when present (scripts/setup.sh installs it): the pip build below reuses the objects.
-launcher=()
-if command -v ccache >/dev/null 2>&1; then
-  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-fi
-cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@"
+# The demo's configuration (scripts/configure.sh): after scripts/demo.sh nothing compiles twice;
+# ccache also lets the pip build below reuse the objects.
+scripts/configure.sh "$build_dir" "$@"
 cmake --build "$build_dir" -j"$jobs"
 # `pip install .` into $build_dir/pyvenv (Debian's NumPy 1.x) and $build_dir/pyvenv-numpy2
 # (the newest NumPy from PyPI) when this build has the Python module (not under the
