@@ -199,8 +199,10 @@ class LinearModel:
     .modes             one dict per eigenvalue: eigenvalue, natural_frequency, frequency_hz,
                        damping_ratio, dominant [(state, weight)], shape (complex array)
     .ignorable         coordinates no other state reads (each gives a zero eigenvalue)
-    .accuracy          {"step", "A", "BCD", "unsteady"}: the achieved accuracy of A and of
-                       B, C, D, and how much A changes along the motion (0 at an equilibrium)
+    .accuracy          {"step", "A", "BCD", "unsteady", "widened"}: the achieved accuracy of A
+                       and of B, C, D, how much A changes along the motion (0 at an
+                       equilibrium), and {column: step used} for the columns whose step was
+                       below the rounding floor and was widened (docs/linearize.md "Accuracy")
     .time              the time of the operating point
     .equilibrium       with equilibrium=True: {"iterations", "relaxation_steps", "residual",
                        "moved": [(coordinate, change)]}; else None
@@ -218,7 +220,7 @@ class LinearModel:
         self.eigenvalues: np.ndarray = data["eigenvalues"]
         self.modes: List[Dict[str, Any]] = list(data["modes"])
         self.ignorable: List[str] = list(data["ignorable"])
-        self.accuracy: Dict[str, float] = dict(data["accuracy"])
+        self.accuracy: Dict[str, Any] = dict(data["accuracy"])
         self.time: float = data["time"]
         self.equilibrium: Optional[Dict[str, Any]] = data["equilibrium"]
         self.seconds: float = data["seconds"]

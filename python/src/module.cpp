@@ -291,6 +291,9 @@ py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equili
   acc["A"] = m.error_A;
   acc["BCD"] = m.error_BCD;
   acc["unsteady"] = m.unsteady;
+  py::dict widened;  // column -> the step used, where --step was below the rounding floor
+  for (const kanesim::lin::WidenedStep& w : m.widened) widened[py::str(w.name)] = w.used;
+  acc["widened"] = widened;
   d["accuracy"] = acc;
   return d;
 }

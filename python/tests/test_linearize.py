@@ -53,7 +53,7 @@ def _assert_same_as_cli(lm, d):
         assert [list(x) for x in mine["dominant"]] == theirs["dominant"]
         np.testing.assert_array_equal(mine["shape"], np.array([complex(re, im) for re, im in theirs["shape"]]))
     assert lm.ignorable == d["ignorable"]
-    for key in ("step", "A", "BCD", "unsteady"):
+    for key in ("step", "A", "BCD", "unsteady", "widened"):
         assert lm.accuracy[key] == d["accuracy"][key], key
 
 
@@ -78,6 +78,18 @@ def test_equals_cli_json(pendulum, pendulum_path, kanesim_exe, tmp_path):
     lm = pendulum.linearize(inputs=["hinge.tau", "l"], outputs=["tip_y"])
     d = _cli_json(kanesim_exe, tmp_path, pendulum_path, "--input", "hinge.tau", "--input", "l", "--output", "tip_y")
     _assert_same_as_cli(lm, d)
+
+
+def test_tiny_step_is_widened_and_said(pendulum, pendulum_path, kanesim_exe, tmp_path):
+    """A step that rounding would swallow is widened, said in accuracy["widened"] (as in the
+    CLI's JSON), and the eigenvalues still have the closed form +-i sqrt(g/l)."""
+    lm = pendulum.linearize(step=1e-16)
+    assert set(lm.accuracy["widened"]) == {"hinge.q", "hinge.u"}
+    assert all(used > 1e-16 for used in lm.accuracy["widened"].values())
+    np.testing.assert_allclose(sorted(lm.eigenvalues.imag), [-math.sqrt(G / L), math.sqrt(G / L)], rtol=1e-5)
+    assert lm.accuracy["A"] <= 1e-5
+    _assert_same_as_cli(lm, _cli_json(kanesim_exe, tmp_path, pendulum_path, "--step", "1e-16"))
+    assert pendulum.linearize().accuracy["widened"] == {}
 
 
 def test_equilibrium_and_set_equal_cli(examples, kanesim_exe, tmp_path):
