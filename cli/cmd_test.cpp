@@ -46,6 +46,7 @@ struct TestArgs {
   std::vector<std::string> sets;
   bool verbose = false;
   double timeout = 0.0;  // seconds of wall time per test; 0: none
+  double worker_memory = 0.0;  // MiB a test's worker process may allocate; 0: no limit
 };
 
 // kCrashed: the worker process running the test died or ran past --timeout (a failure).
@@ -327,6 +328,7 @@ bool RunInWorkers(const std::vector<std::string>& specs, const TestArgs& a, size
   TestTasks tasks(specs, a);
   batch::PoolLimits limits;
   limits.timeout = a.timeout;
+  limits.memory_mib = a.worker_memory;
   limits.task = "test";
   limits.timeout_option = "--timeout";
   batch::ProcessPool pool(tasks, limits, static_cast<int>(n));
@@ -368,6 +370,11 @@ int TestCommand(const TestArgs& a) {
   if (!(a.timeout >= 0.0 && a.timeout <= 1e6)) {  // 1e6 s (11 days): what the pool's int milliseconds hold
     fmt::print(stderr, "kanesim: error: --timeout needs seconds from 0 (none) to 1e6, got {}\n",
                sim::FormatShortest(a.timeout));
+    return kExitModelError;
+  }
+  if (!(a.worker_memory >= 0.0 && a.worker_memory <= 1e9)) {
+    fmt::print(stderr, "kanesim: error: --worker-memory needs MiB from 0 (no limit) to 1e9, got {}\n",
+               sim::FormatShortest(a.worker_memory));
     return kExitModelError;
   }
   std::vector<std::string> specs;
@@ -433,6 +440,9 @@ void AddTestCommand(CLI::App& app, int* exit_code, bool options) {
   t->add_flag("-v,--verbose", a->verbose, "Also print invariants that passed");
   AddNumberOption(t, "--timeout", &a->timeout,
                   "Seconds of wall time a test may take before its process is killed (TIMEOUT, a failure); 0: none");
+  AddNumberOption(t, "--worker-memory", &a->worker_memory,
+                  "MiB of memory a test's worker process may allocate; a test that needs more fails with 'out of "
+                  "memory' (default 0: no limit)");
   t->callback([a, exit_code] { *exit_code = TestCommand(*a); });
 }
 

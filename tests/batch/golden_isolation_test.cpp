@@ -195,6 +195,21 @@ TEST(GoldenIsolation, RealCompilerCrashCostsOnlyItsTest) {
   }
 }
 
+// A test whose run allocates without bound (the injected fault: 64 MiB chunks until an
+// allocation fails) fails alone under --worker-memory, with the limit named, and the others pass;
+// without the option the whole machine's memory would be the limit.
+TEST(GoldenIsolation, WorkerMemoryBoundsATest) {
+  const std::string d = MakeTests("memory");
+  ASSERT_EQ(Kanesim("", "test --update " + kAll, d).rc, 0);
+  Outcome r = Kanesim("KANESIM_TEST_SWEEP_FAULT=oom@1", "test -j2 --worker-memory 300 " + kAll, d);
+  EXPECT_EQ(r.rc, 3) << r.out << r.err;
+  EXPECT_EQ(Block(r.out, "b"), "FAIL  b\n    out of memory (the worker's limit, --worker-memory, is 300 MiB)\n") << r.out;
+  for (const char* n : {"a", "c", "d"}) EXPECT_EQ(Block(r.out, n).substr(0, 7), std::string("PASS  ") + n) << r.out;
+  EXPECT_NE(r.out.find("3 passed, 1 failed"), std::string::npos) << r.out;
+  for (const std::string bad : {"-1", "2e9", "nan"})
+    EXPECT_EQ(Kanesim("", "test --worker-memory " + bad + " a.toml", d).rc, 1) << bad;
+}
+
 TEST(GoldenIsolation, BadTimeoutIsAUsageError) {
   const std::string d = MakeTests("bad");
   for (const std::string bad : {"-1", "1e7", "nan", "inf"}) {
