@@ -309,9 +309,9 @@ bool ProcessPool::Collect(Worker* w, Done* out) {
   while (::waitpid(w->pid, &status, 0) < 0 && errno == EINTR) {
   }
   w->pid = -1;
-  std::string why = WIFSIGNALED(status) ? "killed by " + SignalText(WTERMSIG(status))
+  std::string why = WIFSIGNALED(status) ? "was killed by " + SignalText(WTERMSIG(status))
                                          : "exited with status " + std::to_string(WEXITSTATUS(status));
-  Lost(w, out, "crashed", "the worker process running this " + limits_.task + " was " + why, Outcome::kCrashed);
+  Lost(w, out, "crashed", "the worker process running this " + limits_.task + " " + why, Outcome::kCrashed);
   Close(w);
   return true;
 }

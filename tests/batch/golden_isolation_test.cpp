@@ -15,6 +15,7 @@
 #include <regex>
 #include <string>
 #include <vector>
+#include "tests/batch/child_env.h"
 
 namespace kanesim::batch {
 namespace {
@@ -54,7 +55,7 @@ std::string MakeTests(const std::string& name, bool long_run = false) {
 
 Outcome Kanesim(const std::string& env, const std::string& args, const std::string& dir) {
   const auto t0 = std::chrono::steady_clock::now();
-  const int rc = std::system(("cd '" + dir + "' && env " + env + " timeout 300 '" + kBin + "' " + args + " >'" + dir +
+  const int rc = std::system(("cd '" + dir + "' && env " + batchtest::kChildAsanOptions + env + " timeout 300 '" + kBin + "' " + args + " >'" + dir +
                               "/out.txt' 2>'" + dir + "/err.txt'")
                                  .c_str());
   Outcome r;
@@ -107,7 +108,7 @@ TEST(GoldenIsolation, CrashingTestsCostOnlyThemselves) {
 
   Outcome e = Kanesim("KANESIM_TEST_SWEEP_FAULT=exit@0,throw@2", "test -j1 " + kAll, d);
   EXPECT_EQ(e.rc, 3) << e.out << e.err;
-  EXPECT_NE(Block(e.out, "a").find("CRASH a\n    the worker process running this test was exited with status 3"),
+  EXPECT_NE(Block(e.out, "a").find("CRASH a\n    the worker process running this test exited with status 3"),
             std::string::npos)
       << e.out;
   EXPECT_NE(Block(e.out, "c").find("injected test fault"), std::string::npos) << e.out;

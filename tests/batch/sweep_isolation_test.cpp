@@ -18,6 +18,7 @@
 
 #include "runtime/batch/csv_util.h"
 #include "runtime/batch/summary.h"
+#include "tests/batch/child_env.h"
 
 namespace kanesim::batch {
 namespace {
@@ -43,7 +44,7 @@ struct Outcome {
 // `env kanesim ARGS`, its exit code (-1 when killed by a signal: 139 from a shell) and stderr.
 Outcome Kanesim(const std::string& env, const std::string& args, const std::string& dir) {
   const auto t0 = std::chrono::steady_clock::now();
-  const int rc = std::system(("cd '" + dir + "' && env " + env + " timeout 300 '" + kBin + "' " + args + " 2>'" + dir +
+  const int rc = std::system(("cd '" + dir + "' && env " + batchtest::kChildAsanOptions + env + " timeout 300 '" + kBin + "' " + args + " 2>'" + dir +
                               "/err.txt'")
                                  .c_str());
   Outcome r;
@@ -351,8 +352,11 @@ TEST(SweepIsolation, LimitsAreChecked) {
 TEST(SweepIsolation, MpiRankSurvivesACrash) {
   if (std::system("command -v mpirun >/dev/null 2>&1") != 0) GTEST_SKIP() << "no mpirun";
   const std::string d = Work("mpi");
-  const std::string cmd = "cd '" + d + "' && OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                          "timeout 300 mpirun --oversubscribe -x KANESIM_TEST_SWEEP_FAULT=segv@2 -n 3 '" +
+  // OpenMPI's own allocations are reported as leaks under the sanitizers (as sweep_cli_test's MPI test).
+  const std::string cmd = "cd '" + d + "' && export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
+                          batchtest::kChildAsanOptions +
+                          "&& export ASAN_OPTIONS=\"$ASAN_OPTIONS:detect_leaks=0\" && "
+                          "timeout 300 mpirun --oversubscribe -x ASAN_OPTIONS -x KANESIM_TEST_SWEEP_FAULT=segv@2 -n 3 '" +
                           kBin + "' sweep --mpi " + kSpring + kGrid + " -o out 2>err.txt";
   const int rc = std::system(cmd.c_str());
   std::ifstream in(d + "/err.txt");
