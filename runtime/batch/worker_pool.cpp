@@ -110,8 +110,10 @@ void InjectTestFault(const std::string& spec, int id) {
     if (at == std::string::npos || std::atoi(item.c_str() + at + 1) != id) continue;
     const std::string kind = item.substr(0, at);
     if (kind == "segv") {
-      volatile int* null = nullptr;
-      *null = 1;  // a real invalid access, as a bug would make
+      // A real invalid access, as a bug would make; not the null pointer, which
+      // UndefinedBehaviorSanitizer would report (and end with exit 1) before the signal.
+      volatile int* unmapped = reinterpret_cast<volatile int*>(std::uintptr_t{64});
+      *unmapped = 1;
     } else if (kind == "abort") {
       std::abort();
     } else if (kind == "exit") {
