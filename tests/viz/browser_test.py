@@ -28,6 +28,7 @@ world matrices with the display rotation undone).
 Exit 0 when every check passes; 1 with the failures listed.
 """
 import argparse
+import contextlib
 import math
 import os
 import pathlib
@@ -212,11 +213,29 @@ def run_offline(args):
         check_requests(page, [url, "data:", "blob:"], "offline page")
 
 
-def run_served(args):
-    server = subprocess.Popen([args.fixture, "serve", args.up], stdout=subprocess.PIPE, text=True)
+@contextlib.contextmanager
+def fixture_server(args, up):
+    """The fixture's viewer server: yields its URL (None when it printed none, already
+    reported), and at the end asks it to quit and checks that it exits with 0."""
+    server = subprocess.Popen([args.fixture, "serve", up], stdout=subprocess.PIPE, text=True)
     try:
         url = server.stdout.readline().strip()
         if not check(url.startswith("http://127.0.0.1:"), f"the server printed {url!r}, not its URL"):
+            yield None
+            return
+        yield url
+        with urllib.request.urlopen(url + "quit", timeout=10) as reply:
+            check(reply.status == 200, f"GET /quit answered {reply.status}")
+        check(server.wait(timeout=10) == 0, f"the server exited with {server.returncode}")
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait()
+
+
+def run_served(args):
+    with fixture_server(args, args.up) as url:
+        if url is None:
             return
         with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
             page = browser.new_page(WIDTH, HEIGHT)
@@ -225,13 +244,6 @@ def run_served(args):
             urls = {e["request"]["url"] for e in page.events("Network.requestWillBeSent")}
             check(url + "scene.json" in urls and url + "lib/three.min.js" in urls,
                   f"the served page did not load its scene and libraries from the server: {sorted(urls)}")
-        with urllib.request.urlopen(url + "quit", timeout=10) as reply:
-            check(reply.status == 200, f"GET /quit answered {reply.status}")
-        check(server.wait(timeout=10) == 0, f"the server exited with {server.returncode}")
-    finally:
-        if server.poll() is None:
-            server.kill()
-            server.wait()
 
 
 def cursor_check(page, t, where, tol):
@@ -512,10 +524,8 @@ def check_without_webgl(page, url, where, reason):
 
 def run_nowebgl(args):
     offline = pathlib.Path(args.page).resolve().as_uri()
-    server = subprocess.Popen([args.fixture, "serve", "z"], stdout=subprocess.PIPE, text=True)
-    try:
-        served = server.stdout.readline().strip()
-        if not check(served.startswith("http://127.0.0.1:"), f"the server printed {served!r}, not its URL"):
+    with fixture_server(args, "z") as served:
+        if served is None:
             return
         # Chromium's reasons (webglcontextcreationerror), as the line shows them.
         for mode, reason in (("disabled", "disabled by enterprise policy or commandline switch"),
@@ -539,13 +549,6 @@ def run_nowebgl(args):
             page = browser.new_page(WIDTH, HEIGHT)
             page.send("Network.setBlockedURLs", {"urls": ["*/lib/three.min.js"]})
             check_without_webgl(page, served, "served page, three.js blocked", "three.js did not load (libjs-three)")
-        with urllib.request.urlopen(served + "quit", timeout=10) as reply:
-            check(reply.status == 200, f"GET /quit answered {reply.status}")
-        check(server.wait(timeout=10) == 0, f"the server exited with {server.returncode}")
-    finally:
-        if server.poll() is None:
-            server.kill()
-            server.wait()
 
 
 def main():
