@@ -165,7 +165,11 @@ int RunCommand(const RunArgs& a) {
   } else {
     close_ok = to_stdout ? std::fflush(stdout) == 0 : std::fclose(out) == 0;
   }
-  const bool animation_ok = animation.Finish();  // also the rows before a numerical failure
+  // The animation follows the CSV: written for a complete run and for the rows before a
+  // numerical failure; a usage or output error (say, the CSV's disk is full) leaves the
+  // previous animation as it was, like the previous CSV, rather than replacing it with the
+  // part of the motion computed before the error.
+  const bool animation_ok = rows_correct && close_ok ? animation.Finish() : true;
 
   if (a.stats) {
     result.stats.times.load = model->load_seconds;

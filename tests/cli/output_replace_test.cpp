@@ -155,6 +155,17 @@ TEST(OutputReplace, AFullDiskKeepsThePreviousFiles) {
     EXPECT_EQ(Slurp(d + "/disk/out.glb"), glb) << big << ": the previous animation was not kept";
     EXPECT_TRUE(Temps(d + "/disk/out.csv").empty() && Temps(d + "/disk/out.glb").empty()) << big;
   }
+  // The CSV's disk is full, the animation's is not: the failed run (exit 1) leaves the
+  // previous animation as it was too (before: the part of the motion computed before the CSV
+  // failed replaced it; on the one small disk that happened only when that part fit).
+  ASSERT_EQ(Kanesim("run " + chain + " --set N=2 --stop-time 0.5 --interval 0.01 -o /dev/null --animation roomy.glb", d)
+                .rc,
+            0);
+  const std::string roomy = Slurp(d + "/roomy.glb");
+  Result r = Kanesim("run " + chain + " --set N=3 --stop-time 20 --interval 0.001 -o disk/out.csv --animation roomy.glb", d);
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_EQ(Slurp(d + "/roomy.glb"), roomy) << "a run whose CSV could not be written replaced the animation";
+  EXPECT_TRUE(Temps(d + "/roomy.glb").empty());
   // test --update on the full disk: the golden stays as recorded.
   Write(d + "/g.toml", "model = \"" + kSpring + "\"\ngolden = \"disk/g.csv\"\n[run]\nstop_time = 0.2\n");
   ASSERT_EQ(Kanesim("test g.toml --update", d).rc, 0);
