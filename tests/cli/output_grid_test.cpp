@@ -6,8 +6,8 @@
 #include <cmath>
 #include <vector>
 
-#include "runtime/sim/csv.h"
-#include "runtime/sim/integrator.h"
+#include "sim/csv.h"
+#include "sim/integrator.h"
 #include "cli_util.h"
 
 namespace kanesim::clitest {

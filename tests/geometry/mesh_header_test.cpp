@@ -16,8 +16,8 @@
 #include <thread>
 #include <unistd.h>
 
-#include "runtime/geometry/mesh_load.h"
-#include "runtime/geometry/primitives.h"
+#include "geometry/mesh_load.h"
+#include "geometry/primitives.h"
 #include "mesh_files.h"
 
 namespace kanesim::geometry {
