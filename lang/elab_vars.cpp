@@ -1,10 +1,11 @@
-// Lookup: a variable's value, evaluated on first use from its binding (GetVar), and a
-// component reference resolved to the instance node it names (ResolveNode).
+// Variables' values, evaluated on first use from their bindings (GetVar), a parameter's
+// flat parameters made then, and a component reference resolved to the instance node it
+// names (ResolveNode): the evaluator's reading of the instance tree (lang/elab_eval.h).
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 
 namespace kanesim::lang::elab {
 
@@ -63,7 +64,21 @@ std::string ElementName(const std::string& path, const Dims& shape, size_t k, Di
 
 }  // namespace
 
-const Value& Elaborator::GetVar(Node* var, Span use_span) {
+Value Evaluator::EvalModValue(const ModValue& mv, Span* where) {
+  if (where) *where = mv.span;
+  if (mv.pre) return *mv.pre;
+  if (!mv.expr) return Value::Invalid();
+  Ctx ctx{mv.scope, mv.iters.get()};
+  return Eval(*mv.expr, ctx);
+}
+
+
+void Evaluator::ReserveParams(size_t n) {
+  m_->params.reserve(n);
+  pvals_.reserve(n);
+}
+
+const Value& Evaluator::GetVar(Node* var, Span use_span) {
   if (var->state == EvalState::Done) return var->value;
   if (var->state == EvalState::Evaluating) {
     auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->path + "' is defined in terms of itself");
@@ -78,7 +93,7 @@ const Value& Elaborator::GetVar(Node* var, Span use_span) {
   return var->value;
 }
 
-Value Elaborator::EvaluateVar(Node* var, Span use_span) {
+Value Evaluator::EvaluateVar(Node* var, Span use_span) {
   Node* owner = var->parent;
   // Joint coordinates and speeds are the mechanism's state.
   if (owner && owner->prim == Prim::Joint && var->variability == ast::Variability::None &&
@@ -92,7 +107,7 @@ Value Elaborator::EvaluateVar(Node* var, Span use_span) {
   return ParameterValue(var, binding, use_span, std::move(v));
 }
 
-Value Elaborator::JointStateValue(Node* var) {
+Value Evaluator::JointStateValue(Node* var) {
   Value v;
   v.shape = var->shape;
   const size_t count = ElementCount(var->shape);
@@ -103,7 +118,7 @@ Value Elaborator::JointStateValue(Node* var) {
   return v;
 }
 
-const ModValue* Elaborator::VarBinding(Node* var) {
+const ModValue* Evaluator::VarBinding(Node* var) {
   const ModValue* binding = nullptr;
   if (var->eq_binding) binding = &*var->eq_binding;
   if (const Mod& mods = var->Modifiers(); mods.value) {
@@ -117,7 +132,7 @@ const ModValue* Elaborator::VarBinding(Node* var) {
   return binding;
 }
 
-Value Elaborator::UnboundValue(Node* var, Span use_span) {
+Value Evaluator::UnboundValue(Node* var, Span use_span) {
   Node* owner = var->parent;
   const bool is_param = var->variability != ast::Variability::None;
   const bool is_primitive_field = owner && owner->prim != Prim::None;
@@ -149,7 +164,7 @@ Value Elaborator::UnboundValue(Node* var, Span use_span) {
   return Value::Invalid();
 }
 
-Value Elaborator::BoundValue(Node* var, const ModValue& binding) {
+Value Evaluator::BoundValue(Node* var, const ModValue& binding) {
   Span where;
   Value v = EvalModValue(binding, &where);
   if (!v.valid) return v;
@@ -171,7 +186,7 @@ Value Elaborator::BoundValue(Node* var, const ModValue& binding) {
   return v;
 }
 
-bool Elaborator::CheckValueType(Node* var, const ModValue& binding, const Value& v, Span where) {
+bool Evaluator::CheckValueType(Node* var, const ModValue& binding, const Value& v, Span where) {
   bool ok = true;
   if (var->vtype == VType::String || v.type == VType::String) ok = var->vtype == v.type;
   else if (var->vtype == VType::Boolean || v.type == VType::Boolean) ok = var->vtype == v.type;
@@ -187,7 +202,7 @@ bool Elaborator::CheckValueType(Node* var, const ModValue& binding, const Value&
   return false;
 }
 
-void Elaborator::ApplyElementEquations(Node* var, Value& v) {
+void Evaluator::ApplyElementEquations(Node* var, Value& v) {
   for (const auto& [k, mv] : var->eq_elem_binding) {
     if (k < 0 || static_cast<size_t>(k) >= v.elements.size()) continue;
     Value ev = EvalModValue(mv, nullptr);
@@ -200,7 +215,7 @@ void Elaborator::ApplyElementEquations(Node* var, Value& v) {
   }
 }
 
-Value Elaborator::ParameterValue(Node* var, const ModValue* binding, Span use_span, Value v) {
+Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_span, Value v) {
   // Parameters and constants: no time, no state.
   for (ExprId x : v.elements) {
     if (x >= 0 && m_->exprs.DependsOnTimeOrState(x)) {
@@ -212,7 +227,7 @@ Value Elaborator::ParameterValue(Node* var, const ModValue* binding, Span use_sp
   }
   const ParamAttributes attrs = ReadParamAttributes(var);
   const Span value_span = binding ? binding->span : use_span;
-  const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
+  const flat::SourceLoc loc = places_.Loc(var->decl ? var->decl->name_span : use_span);
   Dims idx;
   idx.assign(var->shape.size(), 0);
   // A constant is folded (no flat parameter); the others are made in place in the table.
@@ -238,7 +253,7 @@ Value Elaborator::ParameterValue(Node* var, const ModValue* binding, Span use_sp
   return v;
 }
 
-Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
+Evaluator::ParamAttributes Evaluator::ReadParamAttributes(Node* var) {
   ParamAttributes attrs;
   const Mod& mods = var->Modifiers();
   auto attr_num = [&](const char* key, double* out) {
@@ -265,7 +280,7 @@ Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
   return attrs;
 }
 
-ExprId Elaborator::AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span) {
+ExprId Evaluator::AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span) {
   double val = param_eval_.Eval(x);
   p.value = val;
   p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
@@ -284,7 +299,7 @@ ExprId Elaborator::AddParamElement(Node* var, flat::Param& p, ExprId x, Span val
   return m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
 }
 
-Node* Elaborator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
+Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
   if (elem) *elem = -1;
   if (ref.kind != ast::ExprKind::Ref || ref.parts.empty()) {
     diags_.Error(DiagCode::BadEquation, ref.span, "expected a component reference");
