@@ -237,7 +237,7 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
     }
     if (found) continue;
     const Mod& sm = node->mod.sub[key];
-    if (sm.set_only) continue;  // --set names are checked by BindSetOverrides
+    if (sm.set_only) continue;  // --set names are checked by SetOverrides::Bind
     std::vector<std::string> all;
     for (const auto& c : elems) all.push_back(c.comp->name);
     auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span, "'" + cls->name + "' has no element '" + key + "'");

@@ -122,7 +122,7 @@ struct Mod {
   std::string redeclare_type;
   const ast::ClassDef* redeclare_from = nullptr;
   Span redeclare_span;
-  bool set_only = false;  // made by --set alone: its names are checked by BindSetOverrides
+  bool set_only = false;  // made by --set alone: its names are checked by SetOverrides::Bind
   bool empty() const { return !value && sub.empty() && redeclare_type.empty(); }
 };
 
@@ -130,7 +130,7 @@ struct Mod {
 // lang/elab_shapes.cpp); it only describes, its Body does the physics.
 enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring, Shape };
 
-// Where GetVar (lang/elab_lookup.cpp) is with a variable: not yet asked for, being
+// Where Evaluator::GetVar (lang/elab_vars.cpp) is with a variable: not yet asked for, being
 // evaluated (asked again now means a cycle), or `value` final.
 enum class EvalState { Unevaluated, Evaluating, Done };
 

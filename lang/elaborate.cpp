@@ -115,7 +115,10 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   tree.root = std::make_unique<elab::Node>();
   elab::SetOverrides sets(diags);
   if (!sets.Parse(options.overrides, program, tree.root.get())) return false;
-  elab::Instantiator(lookup, eval, places, diags, sets.AnySubscripted(), &tree).Run(top);
+  // Kept to the end with its per-class caches: freeing them between the phases fragments
+  // the heap, and repeated loads in one process then peak higher (docs/benchmarks.md).
+  elab::Instantiator instantiator(lookup, eval, places, diags, sets.AnySubscripted(), &tree);
+  instantiator.Run(top);
   sets.Bind();
   if (diags.HasErrors()) return false;
 
