@@ -116,7 +116,8 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   elab::SetOverrides sets(diags);
   if (!sets.Parse(options.overrides, program, tree.root.get())) return false;
   // Kept to the end with its per-class caches: freeing them between the phases fragments
-  // the heap, and repeated loads in one process then peak higher (docs/benchmarks.md).
+  // the heap, and repeated loads in one process then peak higher
+  // (docs/benchmarks/2026-11-28_elaborator_phases.md).
   elab::Instantiator instantiator(lookup, eval, places, diags, sets.AnySubscripted(), &tree);
   instantiator.Run(top);
   sets.Bind();
