@@ -483,6 +483,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   sw->add_option("file", a->file, "The .mech file, or a sweep .toml file");
   sw->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
+  AddUrdfOptions(*sw, &a->load.floating, &a->load.package_paths);
   sw->add_option("--set", a->load.sets, "Fix a parameter for every scenario, name=value (repeatable)")
       ->allow_extra_args(false);
   sw->add_option("--grid", a->grids, "name=a:step:b or name=v1,v2,... (repeatable; Cartesian product)")

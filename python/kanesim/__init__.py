@@ -388,7 +388,8 @@ def _load(args: Dict[str, Any], sets: Dict[str, Any]) -> Model:
 
 def load(path, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = None, solver: str = "auto",
          integrator: str = "auto", reactions: str = "nan") -> Model:
-    """Loads, elaborates and compiles a .mech file. set: parameter values as --set takes
+    """Loads, elaborates and compiles a .mech file, or a URDF robot (robot.urdf, translated as
+    `kanesim import` does with a fixed base: docs/import.md). set: parameter values as --set takes
     them ({"N": 20, "world.g": [0, 0, -9.81], "flag": True}); model: the model to
     elaborate (default: the last in the file). Raises ModelError."""
     args = dict(path=os.fspath(path), text="", from_text=False, model=model,

@@ -85,7 +85,10 @@ bool Load(const LoadRequest& req, LoadedModel* out, ModelErrorInfo* error) {
     std::lock_guard<std::mutex> lock(g_load_mutex);
     const pipeline::Source source = req.from_text ? pipeline::Source::Text(req.path, req.text)
                                                   : pipeline::Source::File(req.path);
-    r = pipeline::LoadModel(source, pipeline::LoadOptions{req.model, req.sets, true}, spec);
+    pipeline::LoadOptions lo;  // a .urdf file is imported with the defaults (docs/import.md)
+    lo.model = req.model;
+    lo.sets = req.sets;
+    r = pipeline::LoadModel(source, lo, spec);
   }
   if (!r.model) {
     error->rendered = r.diagnostics.empty() ? "kanesim: error: the model could not be loaded\n" : r.diagnostics;
