@@ -340,8 +340,9 @@ class Writer {
         fs::path rel = fs::relative(fs::absolute(file, ec), fs::absolute(o_.mesh_base_dir, ec), ec);
         if (!ec && !rel.empty()) file = rel.string();
       }
-      if (v.scale[1] != v.scale[0] || v.scale[2] != v.scale[0])
-        d_.Note(v.line, "mesh scale " + Vec(v.scale) + " is not uniform: drawn at the first (" + Num(v.scale[0]) + ")");
+      if (v.scale[1] != v.scale[0] || v.scale[2] != v.scale[0] || v.scale[0] <= 0)
+        d_.Note(v.line, "mesh scale " + Vec(v.scale) + " is not uniform and positive: drawn at " +
+                            Num(std::fabs(v.scale[0])) + " in every direction, unmirrored");
     }
     if (!v.origin.IsIdentity()) frame = FixedFrame(base + "_origin", v.origin, frame, what + " <origin>");
     // The stdlib's Box and Cylinder run along their frame's x from x = 0; URDF's are centred,
@@ -358,7 +359,8 @@ class Writer {
     } else if (v.shape == Shape::kSphere) {
       Declare("Sphere", base, "radius = " + Num(v.radius) + ", m = 0" + color, what);
     } else {
-      Declare("BodyShape", base, "m = 0, file = " + Quoted(file) + ", scale = " + Num(v.scale[0]) + color, what);
+      Declare("BodyShape", base, "m = 0, file = " + Quoted(file) + ", scale = " + Num(std::fabs(v.scale[0])) + color,
+              what);
     }
     Connect(frame, base + ".frame_a");
   }

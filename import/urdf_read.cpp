@@ -2,6 +2,7 @@
 // importer uses (http://wiki.ros.org/urdf/XML) and locates every mistake at its line.
 #include <tinyxml2.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -148,7 +149,7 @@ class Reader {
       const char* file = Name(m, "filename");
       if (!file) return false;
       v->mesh = file;
-      return Numbers(m, "scale", v->scale.data(), 3, false, true);
+      return Numbers(m, "scale", v->scale.data(), 3, false);  // negative: mirrored
     }
     d_.Error(ImportCode::Missing, g->GetLineNum(), "<geometry",
              "<geometry> needs one of <box>, <cylinder>, <sphere> or <mesh>");
@@ -242,7 +243,9 @@ class Reader {
     ok &= Pose(e, &j->origin);
     if (const XMLElement* a = e->FirstChildElement("axis")) {
       ok &= Numbers(a, "xyz", j->axis.data(), 3, false);
-      if (ok && j->axis == Vec3{0, 0, 0}) {
+      // Fixed and floating joints have no axis; some files give theirs as zero.
+      const bool uses_axis = j->type != JointType::kFixed && j->type != JointType::kFloating;
+      if (ok && uses_axis && j->axis == Vec3{0, 0, 0}) {
         d_.Error(ImportCode::BadNumber, a->GetLineNum(), "xyz=", "<axis xyz=\"0 0 0\"> has no direction",
                  "give the joint axis as a non-zero vector, e.g. xyz=\"0 0 1\"");
         ok = false;
@@ -299,7 +302,7 @@ bool ReadUrdf(std::string_view text, Robot* robot, Diags& diags) {
   }
   tinyxml2::XMLDocument doc(true, tinyxml2::PRESERVE_WHITESPACE);
   if (doc.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
-    diags.Error(ImportCode::BadXml, doc.ErrorLineNum(), "", XmlErrorText(doc.ErrorID()),
+    diags.Error(ImportCode::BadXml, std::max(1, doc.ErrorLineNum()), "", XmlErrorText(doc.ErrorID()),
                 "check the element on this line and the lines just before it");
     return false;
   }

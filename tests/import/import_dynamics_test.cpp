@@ -119,9 +119,8 @@ TEST_P(ImportedRobot, AccelerationsAndLinkPosesMatchPinocchio) {
   std::vector<std::string> names;
   for (std::size_t i = 0; i < links.size(); ++i) {
     for (int k = 1; k <= 3; ++k) names.push_back("p_" + std::to_string(i) + "[" + std::to_string(k) + "]");
-    for (int r = 1; r <= 3; ++r)
-      for (int c = 1; c <= 3; ++c)
-        names.push_back("R_" + std::to_string(i) + "[" + std::to_string(r) + "," + std::to_string(c) + "]");
+    for (int k = 1; k <= 9; ++k)  // a matrix output's columns: its elements row by row
+      names.push_back("R_" + std::to_string(i) + "[" + std::to_string(k) + "]");
   }
   std::string err;
   auto plan = rt::PlanSignals(p, names, &err);

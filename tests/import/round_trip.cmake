@@ -2,10 +2,12 @@
 # `kanesim run R.urdf`, for a fixed-base arm with <dynamics>, a free-flyer quadruped and the
 # hand-written file of every joint type. If this fails, the in-memory translation and the
 # written file differ (a command line option, a path, a number printed differently).
+cmake_policy(SET CMP0007 NEW)
 file(MAKE_DIRECTORY ${WORK})
-foreach(case "every_joint;" "panda;" "solo12;--floating")
-  list(GET case 0 name)
-  list(GET case 1 flag)
+foreach(case "every_joint:" "panda:" "solo12:--floating")
+  string(REPLACE ":" ";" parts "${case}")
+  list(GET parts 0 name)
+  list(GET parts 1 flag)
   set(urdf ${DATA}/${name}.urdf)
   execute_process(COMMAND ${KANESIM} import ${urdf} -o ${WORK}/${name}.mech ${flag} RESULT_VARIABLE rc ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
