@@ -337,8 +337,10 @@ class Writer {
       }
       if (!o_.mesh_base_dir.empty()) {
         std::error_code ec;
-        fs::path rel = fs::relative(fs::absolute(file, ec), fs::absolute(o_.mesh_base_dir, ec), ec);
-        if (!ec && !rel.empty()) file = rel.string();
+        const fs::path abs = fs::absolute(file, ec);
+        fs::path rel = fs::relative(abs, fs::absolute(o_.mesh_base_dir, ec), ec);
+        // Relative to the .mech file's folder, unless that climbs further than the absolute name.
+        if (!ec && !rel.empty()) file = rel.string().size() <= abs.string().size() ? rel.string() : abs.string();
       }
       if (v.scale[1] != v.scale[0] || v.scale[2] != v.scale[0] || v.scale[0] <= 0)
         d_.Note(v.line, "mesh scale " + Vec(v.scale) + " is not uniform and positive: drawn at " +
