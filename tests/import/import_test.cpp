@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <string>
 
 #include "pipeline/pipeline.h"
+#include "runtime/runtime.h"
 
 namespace kanesim {
 namespace {
@@ -190,6 +192,56 @@ TEST(ImportPipeline, LoadsUrdfFilesAndReportsTheirErrors) {
       pipeline::LoadModel(pipeline::Source::Text("x.urdf", "<robot name=\"r\">\n  <link>\n</robot>\n"), {}, {});
   EXPECT_FALSE(bad.model);
   EXPECT_NE(bad.diagnostics.find("x.urdf:2:3: error[U401]"), std::string::npos) << bad.diagnostics;
+}
+
+}  // namespace
+}  // namespace kanesim
+
+namespace kanesim {
+namespace {
+
+// FixedRPY (stdlib/Parts.mech) against three FixedRotations (Rodrigues' formula) about z by
+// yaw, then y by pitch, then x by roll: R = Rz Ry Rx. If this fails, every imported origin
+// with an rpy is turned wrongly.
+TEST(FixedRPY, EqualsRotationsAboutZThenYThenX) {
+  const std::string text =
+      "model T\n"
+      "  World world;\n"
+      "  FixedRPY rpy(r = {0.1, 0.2, 0.3}, rpy = {0.7, -1.1, 2.9});\n"
+      "  FixedRotation yaw(r = {0.1, 0.2, 0.3}, n = {0, 0, 1}, angle = 2.9);\n"
+      "  FixedRotation pitch(n = {0, 1, 0}, angle = -1.1);\n"
+      "  FixedRotation roll(n = {1, 0, 0}, angle = 0.7);\n"
+      "  Revolute j;\n"
+      "  Body b(m = 1, I = identity(3));\n"
+      "  output Real[3, 3] R1 = rpy.frame_b.R;\n"
+      "  output Real[3, 3] R2 = roll.frame_b.R;\n"
+      "  output Real[3] p1 = rpy.frame_b.r;\n"
+      "  output Real[3] p2 = roll.frame_b.r;\n"
+      "equation\n"
+      "  connect(world.frame_b, rpy.frame_a);\n"
+      "  connect(world.frame_b, yaw.frame_a);\n"
+      "  connect(yaw.frame_b, pitch.frame_a);\n"
+      "  connect(pitch.frame_b, roll.frame_a);\n"
+      "  connect(world.frame_b, j.frame_a);\n"
+      "  connect(j.frame_b, b.frame_a);\n"
+      "end T;\n";
+  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::Text("rpy.mech", text), {}, {});
+  ASSERT_TRUE(r.model) << r.diagnostics;
+  const rt::Program& p = *r.model->program;
+  std::vector<std::string> names;
+  for (const char* v : {"R1", "R2"})
+    for (int k = 1; k <= 9; ++k) names.push_back(std::string(v) + "[" + std::to_string(k) + "]");
+  for (const char* v : {"p1", "p2"})
+    for (int k = 1; k <= 3; ++k) names.push_back(std::string(v) + "[" + std::to_string(k) + "]");
+  std::string err;
+  auto plan = rt::PlanSignals(p, names, &err);
+  ASSERT_TRUE(plan) << err;
+  auto ws = rt::MakeWorkspace(p);
+  std::vector<double> y(static_cast<std::size_t>(rt::StateSize(p)), 0.0), out(names.size());
+  ASSERT_EQ(rt::EvalSignals(p, *plan, *ws, 0.0, y.data(), out.data()), 0);
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(out[static_cast<std::size_t>(k)], out[static_cast<std::size_t>(9 + k)], 1e-15) << k;
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(out[static_cast<std::size_t>(18 + k)], out[static_cast<std::size_t>(21 + k)], 1e-15);
+  EXPECT_NEAR(out[6], -std::sin(-1.1), 1e-15);  // R[3,1] = -sin(pitch): not the identity
 }
 
 }  // namespace
