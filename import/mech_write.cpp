@@ -163,10 +163,19 @@ class Writer {
   std::string Where(int line) const { return fs::path(path_).filename().string() + ":" + std::to_string(line); }
 
   // A link: its Body (or Frame when massless) and its visuals; its frame is then known.
+  // A link: its Body (or Frame when massless) and its visuals; its frame is then known. A
+  // link with <visual>s is a BodyShape, drawn by them instead of its inertia box: the mesh
+  // itself when it is the one visual, at the link frame; whether a mesh was found changes no name.
   void LinkComponents(int l, const std::string& frame_from) {
     const Link& link = r_.links[static_cast<std::size_t>(l)];
     std::string renamed;
     const bool massive = link.has_inertial && link.inertial.mass > 0;
+    std::vector<std::string> files(link.visuals.size());
+    for (std::size_t k = 0; k < link.visuals.size(); ++k)
+      if (link.visuals[k].shape == Shape::kMesh) files[k] = MeshFile(link.visuals[k]);
+    const Visual* one = link.visuals.size() == 1 ? &link.visuals[0] : nullptr;
+    const bool merged = massive && one && one->shape == Shape::kMesh && !files[0].empty() &&
+                        one->origin.IsIdentity() && UniformScale(*one);
     if (!massive && frame_from == "world.frame_b") {
       link_frame_[static_cast<std::size_t>(l)] = frame_from;  // the world itself
       decl_ << "  // link '" << link.name << "' (" << Where(link.line) << "): the world frame\n";
@@ -174,9 +183,15 @@ class Writer {
       const std::string name = Unique(link.name, &renamed);
       const Inertial& in = link.inertial;
       decl_ << "  // link '" << link.name << "' (" << Where(link.line) << ")" << renamed << "\n";
-      Declare("Body", name,
-              "m = " + Num(in.mass) + ", r_CM = " + Vec(in.origin.xyz) + ",\n       I = " + Matrix(RotatedInertia(in)),
-              "link '" + link.name + "'");
+      std::string mods =
+          "m = " + Num(in.mass) + ", r_CM = " + Vec(in.origin.xyz) + ",\n       I = " + Matrix(RotatedInertia(in));
+      if (merged)
+        mods += ",\n       file = " + Quoted(files[0]) + ", scale = " + Num(one->scale[0]) +
+                (one->color.empty() ? "" : ", color = " + Quoted(one->color));
+      else if (!link.visuals.empty())
+        mods += ", visual = false";
+      Declare(link.visuals.empty() ? "Body" : "BodyShape", name, mods,
+              "link '" + link.name + "'" + (!merged && !link.visuals.empty() ? ", drawn by its visuals" : ""));
       link_frame_[static_cast<std::size_t>(l)] = name + ".frame_a";
       Connect(frame_from, name + ".frame_a");
     } else {
@@ -187,8 +202,34 @@ class Writer {
       link_frame_[static_cast<std::size_t>(l)] = name;
       Connect(frame_from, name);
     }
-    for (std::size_t v = 0; v < link.visuals.size(); ++v) VisualComponents(link, link.visuals[v], l);
+    if (!merged)
+      for (std::size_t k = 0; k < link.visuals.size(); ++k) VisualComponents(link, link.visuals[k], l, files[k]);
     collisions_ += link.num_collisions;
+  }
+
+  static bool UniformScale(const Visual& v) {
+    return v.scale[0] > 0 && v.scale[1] == v.scale[0] && v.scale[2] == v.scale[0];
+  }
+
+  // The file a mesh visual names, as the .mech file will name it; "" (with a note) when no
+  // search path holds it.
+  std::string MeshFile(const Visual& v) {
+    std::string file = ResolveMesh(v.mesh);
+    if (file.empty()) {
+      ++missing_meshes_;
+      d_.Note(v.line, "mesh '" + v.mesh + "' not found: the visual is left out (the dynamics do not need it)");
+      return "";
+    }
+    if (!UniformScale(v))
+      d_.Note(v.line, "mesh scale " + Vec(v.scale) + " is not uniform and positive: drawn at " +
+                          Num(std::fabs(v.scale[0])) + " in every direction, unmirrored");
+    if (o_.mesh_base_dir.empty()) return file;
+    std::error_code ec;
+    const fs::path abs = fs::absolute(file, ec);
+    fs::path rel = fs::relative(abs, fs::absolute(o_.mesh_base_dir, ec), ec);
+    // Relative to the .mech file's folder, unless that climbs further than the absolute name.
+    if (!ec && !rel.empty()) file = rel.string().size() <= abs.string().size() ? rel.string() : abs.string();
+    return file;
   }
 
   void Root() {
@@ -321,31 +362,15 @@ class Writer {
     return exists(p) ? p.string() : "";
   }
 
-  void VisualComponents(const Link& link, const Visual& v, int l) {
+  void VisualComponents(const Link& link, const Visual& v, int l, const std::string& file) {
     std::string frame = link_frame_[static_cast<std::size_t>(l)];
-    const std::string base = Unique(link.name + "_visual", nullptr);
     const std::string what = "visual of link '" + link.name + "' (" + Where(v.line) + ")";
-    std::string color = v.color.empty() ? "" : ", color = " + Quoted(v.color);
-    std::string file;
-    if (v.shape == Shape::kMesh) {
-      file = ResolveMesh(v.mesh);
-      if (file.empty()) {
-        decl_ << "  // " << what << ": mesh '" << v.mesh << "' not found, left out\n";
-        ++missing_meshes_;
-        d_.Note(v.line, "mesh '" + v.mesh + "' not found: the visual is left out (the dynamics do not need it)");
-        return;
-      }
-      if (!o_.mesh_base_dir.empty()) {
-        std::error_code ec;
-        const fs::path abs = fs::absolute(file, ec);
-        fs::path rel = fs::relative(abs, fs::absolute(o_.mesh_base_dir, ec), ec);
-        // Relative to the .mech file's folder, unless that climbs further than the absolute name.
-        if (!ec && !rel.empty()) file = rel.string().size() <= abs.string().size() ? rel.string() : abs.string();
-      }
-      if (v.scale[1] != v.scale[0] || v.scale[2] != v.scale[0] || v.scale[0] <= 0)
-        d_.Note(v.line, "mesh scale " + Vec(v.scale) + " is not uniform and positive: drawn at " +
-                            Num(std::fabs(v.scale[0])) + " in every direction, unmirrored");
+    if (v.shape == Shape::kMesh && file.empty()) {
+      decl_ << "  // " << what << ": mesh '" << v.mesh << "' not found, left out\n";
+      return;
     }
+    const std::string base = Unique(link.name + "_visual", nullptr);
+    std::string color = v.color.empty() ? "" : ", color = " + Quoted(v.color);
     if (!v.origin.IsIdentity()) frame = FixedFrame(base + "_origin", v.origin, frame, what + " <origin>");
     // The stdlib's Box and Cylinder run along their frame's x from x = 0; URDF's are centred,
     // the cylinder along z.
