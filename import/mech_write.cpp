@@ -32,6 +32,15 @@ std::string Num(double x) {
   return std::string(buf, r.ptr);
 }
 
+// A URDF string as a comment or description shows it: control characters (a newline would end
+// a // comment and make the rest code) as '?', at most 120 characters.
+std::string Shown(const std::string& s) {
+  std::string out = s.size() > 120 ? s.substr(0, 117) + "..." : s;
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return out;
+}
+
 std::string Vec(const Vec3& v) { return "{" + Num(v[0]) + ", " + Num(v[1]) + ", " + Num(v[2]) + "}"; }
 
 std::string Matrix(const Mat3& m) {
@@ -45,7 +54,7 @@ std::string Quoted(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     if (c == '"' || c == '\\') out += '\\';
-    out += c;
+    out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '?' : c;
   }
   return out + "\"";
 }
@@ -122,10 +131,10 @@ class Writer {
     for (int j : r_.order) JointAndChild(j);
     Notes();
     std::ostringstream text;
-    text << "// Imported by `kanesim import` from " << fs::path(path_).filename().string() << " (URDF robot '"
-         << r_.name << "'). docs/import.md says how each element maps.\n";
+    text << "// Imported by `kanesim import` from " << Shown(fs::path(path_).filename().string()) << " (URDF robot '"
+         << Shown(r_.name) << "'). docs/import.md says how each element maps.\n";
     for (const std::string& line : header_) text << "// " << line << "\n";
-    text << "model " << out.model_name << " " << Quoted("URDF robot '" + r_.name + "'") << "\n"
+    text << "model " << out.model_name << " " << Quoted("URDF robot '" + Shown(r_.name) + "'") << "\n"
          << decl_.str() << "equation\n"
          << eq_.str() << "end " << out.model_name << ";\n";
     out.mech = text.str();
@@ -147,7 +156,7 @@ class Writer {
     std::string base = s;
     for (int k = 2; used_.count(s); ++k) s = base + "_" + std::to_string(k);
     used_.insert(s);
-    if (comment && s != urdf) *comment = " (URDF name '" + urdf + "')";
+    if (comment && s != urdf) *comment = " (URDF name '" + Shown(urdf) + "')";
     return s;
   }
 
@@ -160,7 +169,7 @@ class Writer {
 
   void Connect(const std::string& a, const std::string& b) { eq_ << "  connect(" << a << ", " << b << ");\n"; }
 
-  std::string Where(int line) const { return fs::path(path_).filename().string() + ":" + std::to_string(line); }
+  std::string Where(int line) const { return Shown(fs::path(path_).filename().string()) + ":" + std::to_string(line); }
 
   // A link: its Body (or Frame when massless) and its visuals; its frame is then known.
   // A link: its Body (or Frame when massless) and its visuals; its frame is then known. A
@@ -178,11 +187,11 @@ class Writer {
                         one->origin.IsIdentity() && UniformScale(*one);
     if (!massive && frame_from == "world.frame_b") {
       link_frame_[static_cast<std::size_t>(l)] = frame_from;  // the world itself
-      decl_ << "  // link '" << link.name << "' (" << Where(link.line) << "): the world frame\n";
+      decl_ << "  // link '" << Shown(link.name) << "' (" << Where(link.line) << "): the world frame\n";
     } else if (massive) {
       const std::string name = Unique(link.name, &renamed);
       const Inertial& in = link.inertial;
-      decl_ << "  // link '" << link.name << "' (" << Where(link.line) << ")" << renamed << "\n";
+      decl_ << "  // link '" << Shown(link.name) << "' (" << Where(link.line) << ")" << renamed << "\n";
       std::string mods =
           "m = " + Num(in.mass) + ", r_CM = " + Vec(in.origin.xyz) + ",\n       I = " + Matrix(RotatedInertia(in));
       if (merged)
@@ -191,14 +200,14 @@ class Writer {
       else if (!link.visuals.empty())
         mods += ", visual = false";
       Declare(link.visuals.empty() ? "Body" : "BodyShape", name, mods,
-              "link '" + link.name + "'" + (!merged && !link.visuals.empty() ? ", drawn by its visuals" : ""));
+              "link '" + Shown(link.name) + "'" + (!merged && !link.visuals.empty() ? ", drawn by its visuals" : ""));
       link_frame_[static_cast<std::size_t>(l)] = name + ".frame_a";
       Connect(frame_from, name + ".frame_a");
     } else {
       const std::string name = Unique(link.name, &renamed);
-      decl_ << "  // link '" << link.name << "' (" << Where(link.line) << ")" << renamed
+      decl_ << "  // link '" << Shown(link.name) << "' (" << Where(link.line) << ")" << renamed
             << ": massless, a frame of its parent's body\n";
-      Declare("Frame", name, "", "link '" + link.name + "' (no mass)");
+      Declare("Frame", name, "", "link '" + Shown(link.name) + "' (no mass)");
       link_frame_[static_cast<std::size_t>(l)] = name;
       Connect(frame_from, name);
     }
@@ -217,7 +226,7 @@ class Writer {
     std::string file = ResolveMesh(v.mesh);
     if (file.empty()) {
       ++missing_meshes_;
-      d_.Note(v.line, "mesh '" + v.mesh + "' not found: the visual is left out (the dynamics do not need it)");
+      d_.Note(v.line, "mesh '" + Shown(v.mesh) + "' not found: the visual is left out (the dynamics do not need it)");
       return "";
     }
     if (!UniformScale(v))
@@ -269,25 +278,25 @@ class Writer {
     const int child = LinkIndex(j.child);
     if (j.type == JointType::kFixed) {
       const std::string name = Unique(j.name, &renamed);
-      decl_ << "  // joint '" << j.name << "' (" << Where(j.line) << "): fixed" << renamed << "\n";
+      decl_ << "  // joint '" << Shown(j.name) << "' (" << Where(j.line) << "): fixed" << renamed << "\n";
       joint_name_[static_cast<std::size_t>(ji)] = name;
-      LinkComponents(child, FixedFrame(name, j.origin, parent, "joint '" + j.name + "' (fixed)"));
+      LinkComponents(child, FixedFrame(name, j.origin, parent, "joint '" + Shown(j.name) + "' (fixed)"));
       return;
     }
     std::string from = parent;
     const std::string name = Unique(j.name, &renamed);
-    decl_ << "  // joint '" << j.name << "' (" << Where(j.line) << "): " << kTypeNames[static_cast<int>(j.type)]
+    decl_ << "  // joint '" << Shown(j.name) << "' (" << Where(j.line) << "): " << kTypeNames[static_cast<int>(j.type)]
           << renamed << Limits(j) << "\n";
     if (!j.origin.IsIdentity()) from = FixedFrame(Unique(j.name + "_origin", nullptr), j.origin, parent, "joint '" + j.name + "' <origin>");
     joint_name_[static_cast<std::size_t>(ji)] = name;
     switch (j.type) {
       case JointType::kRevolute:
-      case JointType::kContinuous: Declare("Revolute", name, "axis = " + Vec(j.axis), "joint '" + j.name + "'"); break;
-      case JointType::kPrismatic: Declare("Prismatic", name, "axis = " + Vec(j.axis), "joint '" + j.name + "'"); break;
-      case JointType::kFloating: Declare("FreeMotion", name, "", "joint '" + j.name + "'"); break;
+      case JointType::kContinuous: Declare("Revolute", name, "axis = " + Vec(j.axis), "joint '" + Shown(j.name) + "'"); break;
+      case JointType::kPrismatic: Declare("Prismatic", name, "axis = " + Vec(j.axis), "joint '" + Shown(j.name) + "'"); break;
+      case JointType::kFloating: Declare("FreeMotion", name, "", "joint '" + Shown(j.name) + "'"); break;
       case JointType::kPlanar:
         Declare("Planar", name, "n = " + Vec(j.axis) + ", axis_x = " + Vec(Perpendicular(j.axis)),
-                "joint '" + j.name + "' (plane normal to its axis)");
+                "joint '" + Shown(j.name) + "' (plane normal to its axis)");
         break;
       case JointType::kFixed: break;
     }
@@ -298,12 +307,12 @@ class Writer {
   }
 
   void Mimic(const Joint& j, const std::string& name) {
-    const std::string law = "q = " + Num(j.multiplier) + " * q_" + j.mimic_joint + " + " + Num(j.offset);
-    decl_ << "  // <mimic joint=\"" << j.mimic_joint << "\"> (" << law
+    const std::string law = "q = " + Num(j.multiplier) + " * q_" + Shown(j.mimic_joint) + " + " + Num(j.offset);
+    decl_ << "  // <mimic joint=\"" << Shown(j.mimic_joint) << "\"> (" << law
           << "): NOT imposed, kanesim has no coupling of joint coordinates yet; '" << name
           << "' moves on its own\n";
     d_.Warning(ImportCode::MimicDropped, j.line, "<joint",
-               "joint '" + j.name + "' mimics '" + j.mimic_joint + "' (" + law +
+               "joint '" + Shown(j.name) + "' mimics '" + Shown(j.mimic_joint) + "' (" + law +
                    "); kanesim cannot impose that coupling yet, so it is imported as an independent joint",
                "give the follower its motion with an equation, or leave it free (docs/import.md)");
   }
@@ -314,14 +323,14 @@ class Writer {
     if (j.damping == 0 && j.friction == 0) return;
     if (j.type != JointType::kRevolute && j.type != JointType::kContinuous && j.type != JointType::kPrismatic) {
       d_.Note(j.line, "<dynamics> of the " + std::string(j.type == JointType::kPlanar ? "planar" : "floating") +
-                          " joint '" + j.name + "' is not imported (only one-coordinate joints take it)");
+                          " joint '" + Shown(j.name) + "' is not imported (only one-coordinate joints take it)");
       return;
     }
     std::string law;
     if (j.damping != 0) law = Num(j.damping) + " * " + name + ".u";
     if (j.friction != 0)
       law += (law.empty() ? "" : " + ") + Num(j.friction) + " * tanh(" + name + ".u / 0.001)";
-    eq_ << "  " << name << ".tau = -(" << law << ");  // <dynamics damping friction> of joint '" << j.name
+    eq_ << "  " << name << ".tau = -(" << law << ");  // <dynamics damping friction> of joint '" << Shown(j.name)
         << "'\n";
   }
 
@@ -364,9 +373,9 @@ class Writer {
 
   void VisualComponents(const Link& link, const Visual& v, int l, const std::string& file) {
     std::string frame = link_frame_[static_cast<std::size_t>(l)];
-    const std::string what = "visual of link '" + link.name + "' (" + Where(v.line) + ")";
+    const std::string what = "visual of link '" + Shown(link.name) + "' (" + Where(v.line) + ")";
     if (v.shape == Shape::kMesh && file.empty()) {
-      decl_ << "  // " << what << ": mesh '" << v.mesh << "' not found, left out\n";
+      decl_ << "  // " << what << ": mesh '" << Shown(v.mesh) << "' not found, left out\n";
       return;
     }
     const std::string base = Unique(link.name + "_visual", nullptr);

@@ -173,6 +173,19 @@ TEST(ImportText, KeepsNamesAndSaysWhatItDropsOrCannotImpose) {
             std::string::npos);
 }
 
+// URDF names reach comments and description strings: a newline must not end a comment (the
+// rest of the name would become model text), a quote must not end a string.
+TEST(ImportText, NamesCannotInjectModelText) {
+  const std::string urdf = TwoLinks(
+      "  <joint name=\"j&#10;World second;&#10;//\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/></joint>",
+      "  <link name=\"c&quot;d\\\"/>\n  <joint name=\"k\" type=\"fixed\"><parent link=\"b\"/><child link=\"c&quot;d\\\"/></joint>\n");
+  import::Result r = Import(urdf);
+  ASSERT_TRUE(r.ok) << r.diagnostics;
+  pipeline::LoadResult lr = pipeline::LoadModel(pipeline::Source::Text("inject.urdf.mech", r.mech), {}, {});
+  EXPECT_TRUE(lr.model) << lr.diagnostics << "\n" << r.mech;  // one World, and the text parses
+  EXPECT_NE(r.mech.find("(URDF name 'j?World second;?//')"), std::string::npos) << r.mech;
+}
+
 TEST(ImportText, FloatingGivesTheRootAFreeBase) {
   import::Result fixed = Import(ReadText(kData + "/ur5_robot.urdf"));
   import::Result free = Import(ReadText(kData + "/ur5_robot.urdf"), true);
