@@ -17,6 +17,11 @@ Everything is written in kanesim's coordinates (docs/stdlib.md, "Conventions"):
       (Pinocchio's v = (v_local, w_local):  u_lin = R v_local, du_lin/dt = R (a_local + w x v_local))
   planar  q = {x, y, phi}, u = rates (Pinocchio's v is in the moving frame: the same change)
 
+Trajectories (the fixed-base arms UR5 and Panda): from one more random state, q' = v,
+v' = aba(q, v, tau_dyn) integrated by SciPy's DOP853 at rtol = atol = 1e-13 over 1 s, written
+at t = 0, 0.1, ..., 1 (tests/import/data/<robot>_traj.csv: time, JOINT.q..., JOINT.u...); a
+second run at 1e-12 bounds its error (printed).
+
 Output: tests/import/data/<robot>_ref.txt, lines
   robot NAME / urdf FILE / floating 0|1 / states N
   state K
@@ -159,6 +164,33 @@ def write_robot(name, path, floating, rng):
     print(f"{name}: nq {model.nq}, nv {model.nv}, {len(links)} links; aba vs crba+rnea {worst:.1e}; -> {target}")
 
 
+def write_trajectory(name, path, rng):
+    from scipy.integrate import solve_ivp
+    model = pin.buildModelFromUrdf(path)
+    data = model.createData()
+    assert model.nq == model.nv, "trajectories only for joints whose q is their angle"
+    q0, v0, _, _ = random_state(model, rng)
+    n = model.nv
+
+    def f(_t, y):
+        q, v = y[:n], y[n:]
+        tau = -model.damping * v - model.friction * np.tanh(v / 1e-3)
+        return np.concatenate([v, pin.aba(model, data, q, v, tau)])
+
+    times = np.linspace(0.0, 1.0, 11)
+    runs = [solve_ivp(f, (0.0, 1.0), np.concatenate([q0, v0]), method="DOP853", t_eval=times, rtol=tol, atol=tol).y.T
+            for tol in (1e-13, 1e-12)]
+    err = np.max(np.abs(runs[0] - runs[1]))
+    names = [model.names[j] for j in range(1, model.njoints)]
+    header = ",".join(["time"] + [f"{j}.q" for j in names] + [f"{j}.u" for j in names])
+    target = os.path.join(DATA, f"{name}_traj.csv")
+    with open(target, "w") as fh:
+        fh.write(header + "\n")
+        for t, row in zip(times, runs[0]):
+            fh.write(",".join("%.17g" % x for x in [t, *row]) + "\n")
+    print(f"{name}: 1 s trajectory, |1e-13 run - 1e-12 run| {err:.1e}; -> {target}")
+
+
 def main():
     for i, (name, path, floating) in enumerate(robots()):
         rng = np.random.default_rng([SEED, i])  # each robot its own stream: a skipped one changes no other
@@ -166,6 +198,8 @@ def main():
             print(f"{name}: {path} not found, skipped")
             continue
         write_robot(name, path, floating, rng)
+        if name in ("ur5", "panda"):
+            write_trajectory(name, path, rng)
     print("pinocchio", pin.__version__)
 
 
