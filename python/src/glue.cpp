@@ -85,9 +85,11 @@ bool Load(const LoadRequest& req, LoadedModel* out, ModelErrorInfo* error) {
     std::lock_guard<std::mutex> lock(g_load_mutex);
     const pipeline::Source source = req.from_text ? pipeline::Source::Text(req.path, req.text)
                                                   : pipeline::Source::File(req.path);
-    pipeline::LoadOptions lo;  // a .urdf file is imported with the defaults (docs/import.md)
+    pipeline::LoadOptions lo;
     lo.model = req.model;
     lo.sets = req.sets;
+    lo.urdf.floating = req.floating;
+    lo.urdf.package_paths = req.package_paths;
     r = pipeline::LoadModel(source, lo, spec);
   }
   if (!r.model) {

@@ -31,3 +31,14 @@ def test_urdf_error_has_code_and_line(tmp_path):
     with pytest.raises(kanesim.ModelError) as e:
         kanesim.load(bad)
     assert "bad.urdf:3:" in str(e.value) and "error[U408]" in str(e.value)
+
+
+def test_floating_gives_the_root_a_free_base():
+    solo = os.path.join(ROOT, "tests", "import", "data", "solo12.urdf")
+    fixed = kanesim.load(solo)
+    free = kanesim.load(solo, floating=True, package_path=[ROOT])
+    assert "root_joint.q[1]" not in fixed.signals
+    assert "root_joint.q[7]" in free.signals
+    # Released from rest, the free quadruped falls: z'' = -g at the start (no contact).
+    r = free.run(stop_time=0.1, interval=0.1, outputs=["root_joint.q[3]"])
+    assert r["root_joint.q[3]"][-1] == pytest.approx(-9.81 * 0.1**2 / 2, rel=1e-6)
