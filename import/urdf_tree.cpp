@@ -1,5 +1,5 @@
 // The links and joints as one tree (urdf_model.h BuildTree): unique names, known links, one
-// parent joint per link, one root, no cycle. Iterative throughout: a chain of 100 000 links
+// parent joint per link, one root, no cycle; the joints in depth-first order. Iterative throughout: a chain of 100 000 links
 // costs no stack.
 #include <string>
 #include <unordered_map>
@@ -86,19 +86,23 @@ bool BuildTree(Robot* robot, Diags& diags) {
                 "every link but the root must be the child of a joint");
     return false;
   }
-  // Breadth first from the root; a link not reached sits on a cycle (each has one parent).
+  // Depth first from the root, children in file order (a chain reads as one run of text),
+  // with a stack of joints; a link not reached sits on a cycle (each has one parent).
   std::vector<bool> reached(static_cast<std::size_t>(nl), false);
   if (roots.size() == 1) {
     robot->root = roots[0];
-    std::vector<int> queue{roots[0]};
     reached[static_cast<std::size_t>(roots[0])] = true;
-    for (std::size_t head = 0; head < queue.size(); ++head)
-      for (int j : children[static_cast<std::size_t>(queue[head])]) {
-        robot->order.push_back(j);
-        int child = links[robot->joints[static_cast<std::size_t>(j)].child];
-        reached[static_cast<std::size_t>(child)] = true;
-        queue.push_back(child);
-      }
+    const auto& first = children[static_cast<std::size_t>(roots[0])];
+    std::vector<int> stack(first.rbegin(), first.rend());
+    while (!stack.empty()) {
+      const int j = stack.back();
+      stack.pop_back();
+      robot->order.push_back(j);
+      const int child = links[robot->joints[static_cast<std::size_t>(j)].child];
+      reached[static_cast<std::size_t>(child)] = true;
+      const auto& next = children[static_cast<std::size_t>(child)];
+      stack.insert(stack.end(), next.rbegin(), next.rend());
+    }
   }
   for (int l = 0; l < nl; ++l) {
     if (reached[static_cast<std::size_t>(l)]) continue;
