@@ -122,8 +122,8 @@ class Writer {
 
   Result Write() {
     Result out;
-    out.model_name = Unique(r_.name, nullptr);
     used_.insert("world");
+    out.model_name = Unique(r_.name, nullptr);
     link_frame_.assign(r_.links.size(), "");
     joint_name_.assign(r_.joints.size(), "");
     decl_ << "  World world(g = {0, 0, -9.81}) \"URDF: z up, standard gravity\";\n";
