@@ -27,6 +27,11 @@ struct ImportArgs {
 
 int ImportCommand(const ImportArgs& a) {
   std::string text;
+  std::error_code ec;
+  if (const std::uintmax_t size = std::filesystem::file_size(a.path, ec); !ec && size > import::kMaxUrdfBytes) {
+    std::cerr << import::TooLargeMessage(a.path, size);  // not read into memory
+    return kExitModelError;
+  }
   if (!ReadFileInto(a.path, &text)) {
     fmt::print(stderr, "kanesim: error: cannot read '{}'\n", a.path);
     return kExitModelError;

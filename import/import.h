@@ -15,6 +15,8 @@
 //   Write("robot.mech", r.mech);
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -50,6 +52,11 @@ struct Result {
   std::vector<std::pair<std::string, std::string>> link_frames;
   std::vector<std::pair<std::string, std::string>> joints;
 };
+
+// The largest URDF file read (U409 beyond): callers check a file's size before reading it.
+inline constexpr std::size_t kMaxUrdfBytes = std::size_t{64} << 20;
+// "PATH: error[U409]: ..." for a file of `bytes` over kMaxUrdfBytes.
+std::string TooLargeMessage(const std::string& path, std::uintmax_t bytes);
 
 // `path` names the file in diagnostics and locates relative mesh names; `text` is its content.
 Result UrdfToMech(const std::string& path, std::string_view text, const Options& options);

@@ -431,8 +431,8 @@ Result UrdfToMech(const std::string& path, std::string_view text, const Options&
   Diags diags(path, text);
   Robot robot;
   Result result;
-  if (text.size() > static_cast<std::size_t>(64) << 20) {
-    diags.Error(ImportCode::TooLarge, 0, "", "the file is larger than 64 MiB");
+  if (text.size() > kMaxUrdfBytes) {
+    diags.Error(ImportCode::TooLarge, 0, "", "the file is larger than 64 MiB", "a URDF of a robot is a few MB at most");
   } else if (ReadUrdf(text, &robot, diags) && BuildTree(&robot, diags)) {
     result = Writer(robot, options, path, diags).Write();
   }
@@ -443,6 +443,11 @@ Result UrdfToMech(const std::string& path, std::string_view text, const Options&
   if (result.num_errors > 0)
     result.diagnostics += std::to_string(result.num_errors) + " error" + (result.num_errors == 1 ? "" : "s") + "\n";
   return result;
+}
+
+std::string TooLargeMessage(const std::string& path, std::uintmax_t bytes) {
+  return Shown(path) + ": error[U409]: the file is " + std::to_string(bytes) + " bytes, more than the " +
+         std::to_string(kMaxUrdfBytes) + " a URDF may have\n";
 }
 
 bool IsUrdfPath(std::string_view path) {

@@ -55,6 +55,12 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
   // the URDF's folder, which that name shares).
   if (import::IsUrdfPath(source.path)) {
     std::string urdf = source.text;
+    std::error_code ec;
+    if (const std::uintmax_t size = std::filesystem::file_size(source.path, ec);
+        !source.from_text && !ec && size > import::kMaxUrdfBytes) {
+      *text += import::TooLargeMessage(source.path, size);  // not read into memory
+      return false;
+    }
     if (!source.from_text && !ReadWholeFile(source.path, &urdf)) {
       *text += "kanesim: error: cannot read '" + lang::ClipMessage(source.path) + "'\n";
       return false;
