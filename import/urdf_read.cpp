@@ -85,7 +85,9 @@ class Reader {
   bool Pose(const XMLElement* parent, struct Pose* pose) {
     const XMLElement* o = parent->FirstChildElement("origin");
     if (!o) return true;
-    return Numbers(o, "xyz", pose->xyz.data(), 3, false) & Numbers(o, "rpy", pose->rpy.data(), 3, false);
+    bool ok = Numbers(o, "xyz", pose->xyz.data(), 3, false);  // both read: every mistake reported
+    ok &= Numbers(o, "rpy", pose->rpy.data(), 3, false);
+    return ok;
   }
 
   const char* Name(const XMLElement* e, const char* attr = "name") {
@@ -138,7 +140,9 @@ class Reader {
     }
     if (const XMLElement* c = g->FirstChildElement("cylinder")) {
       v->shape = Shape::kCylinder;
-      return Numbers(c, "radius", &v->radius, 1, true, true) & Numbers(c, "length", &v->length, 1, true, true);
+      bool ok = Numbers(c, "radius", &v->radius, 1, true, true);
+      ok &= Numbers(c, "length", &v->length, 1, true, true);
+      return ok;
     }
     if (const XMLElement* s = g->FirstChildElement("sphere")) {
       v->shape = Shape::kSphere;
@@ -239,7 +243,8 @@ class Reader {
     const char* name = Name(e);
     if (name) j->name = name;
     bool ok = name && Type(e, &j->type);
-    ok &= LinkRef(e, "parent", &j->parent) & LinkRef(e, "child", &j->child);
+    ok &= LinkRef(e, "parent", &j->parent);
+    ok &= LinkRef(e, "child", &j->child);
     ok &= Pose(e, &j->origin);
     if (const XMLElement* a = e->FirstChildElement("axis")) {
       ok &= Numbers(a, "xyz", j->axis.data(), 3, false);
@@ -253,17 +258,22 @@ class Reader {
     }
     if (const XMLElement* l = e->FirstChildElement("limit")) {
       j->has_limit = true;
-      ok &= Numbers(l, "lower", &j->lower, 1, false) & Numbers(l, "upper", &j->upper, 1, false) &
-            Numbers(l, "effort", &j->effort, 1, false) & Numbers(l, "velocity", &j->velocity, 1, false);
+      ok &= Numbers(l, "lower", &j->lower, 1, false);
+      ok &= Numbers(l, "upper", &j->upper, 1, false);
+      ok &= Numbers(l, "effort", &j->effort, 1, false);
+      ok &= Numbers(l, "velocity", &j->velocity, 1, false);
     }
-    if (const XMLElement* dyn = e->FirstChildElement("dynamics"))
-      ok &= Numbers(dyn, "damping", &j->damping, 1, false, true) &
-            Numbers(dyn, "friction", &j->friction, 1, false, true);
+    if (const XMLElement* dyn = e->FirstChildElement("dynamics")) {
+      ok &= Numbers(dyn, "damping", &j->damping, 1, false, true);
+      ok &= Numbers(dyn, "friction", &j->friction, 1, false, true);
+    }
     if (const XMLElement* m = e->FirstChildElement("mimic")) {
       j->has_mimic = true;
       const char* leader = Name(m, "joint");
       if (leader) j->mimic_joint = leader;
-      ok &= leader && Numbers(m, "multiplier", &j->multiplier, 1, false) & Numbers(m, "offset", &j->offset, 1, false);
+      ok &= leader != nullptr;
+      ok &= Numbers(m, "multiplier", &j->multiplier, 1, false);
+      ok &= Numbers(m, "offset", &j->offset, 1, false);
     }
     return ok;
   }
