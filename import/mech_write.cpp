@@ -6,6 +6,7 @@
 //   visual -> Box / Cylinder / Sphere / BodyShape LINK_visual (m = 0: looks only)
 // The inertia is rotated here, exactly as URDF defines it: I_L = R_LC I_C R_LCᵀ with R_LC
 // from the <inertial><origin rpy>, the centre of mass at its xyz (docs/import.md).
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -32,12 +33,16 @@ std::string Num(double x) {
   return std::string(buf, r.ptr);
 }
 
-// A URDF string as a comment or description shows it: control characters (a newline would end
-// a // comment and make the rest code) as '?', at most 120 characters.
+// Whether a byte may stand in .mech text as it is: printable ASCII. Control characters (a
+// newline would end a // comment and make the rest code) and bytes of other encodings (the
+// language refuses invalid UTF-8 and text-reordering characters in strings) may not.
+bool PlainByte(char c) { return static_cast<unsigned char>(c) >= 0x20 && static_cast<unsigned char>(c) < 0x7f; }
+
+// A URDF string as a comment or description shows it: other bytes as '?', at most 120 characters.
 std::string Shown(const std::string& s) {
   std::string out = s.size() > 120 ? s.substr(0, 117) + "..." : s;
   for (char& c : out)
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+    if (!PlainByte(c)) c = '?';
   return out;
 }
 
@@ -54,7 +59,7 @@ std::string Quoted(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     if (c == '"' || c == '\\') out += '\\';
-    out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '?' : c;
+    out += PlainByte(c) ? c : '?';
   }
   return out + "\"";
 }
@@ -224,6 +229,11 @@ class Writer {
   // search path holds it.
   std::string MeshFile(const Visual& v) {
     std::string file = ResolveMesh(v.mesh);
+    if (!file.empty() && !std::all_of(file.begin(), file.end(), PlainByte)) {
+      d_.Note(v.line, "mesh '" + Shown(file) + "' has a name of other than printable ASCII characters: left out");
+      ++missing_meshes_;
+      return "";
+    }
     if (file.empty()) {
       ++missing_meshes_;
       d_.Note(v.line, "mesh '" + Shown(v.mesh) + "' not found: the visual is left out (the dynamics do not need it)");
