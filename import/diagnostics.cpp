@@ -87,6 +87,8 @@ void Diags::Warning(ImportCode code, int line, std::string_view needle, const st
   Add("warning", ImportCodeString(code), line, needle, message, hint, &out_);
 }
 
-void Diags::Note(int line, const std::string& message) { Add("note", "", line, "", message, "", &notes_); }
+void Diags::Note(int line, const std::string& message, std::string_view needle) {
+  Add("note", "", line, needle, message, "", &notes_);
+}
 
 }  // namespace kanesim::import

@@ -39,7 +39,7 @@ class Diags {
              const std::string& hint = "");
   void Warning(ImportCode code, int line, std::string_view needle, const std::string& message,
                const std::string& hint = "");
-  void Note(int line, const std::string& message);
+  void Note(int line, const std::string& message, std::string_view needle = "");
   int NumErrors() const { return errors_; }
   const std::string& Rendered() const { return out_; }
   const std::string& Path() const { return path_; }

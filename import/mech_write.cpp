@@ -236,7 +236,8 @@ class Writer {
     }
     if (file.empty()) {
       ++missing_meshes_;
-      d_.Note(v.line, "mesh '" + Shown(v.mesh) + "' not found: the visual is left out (the dynamics do not need it)");
+      d_.Note(v.line, "mesh '" + Shown(v.mesh) + "' not found: the visual is left out (the dynamics do not need it)",
+              "<mesh");
       return "";
     }
     if (!UniformScale(v))
