@@ -12,6 +12,7 @@
 #include "lang/elaborate.h"
 #include "lang/parser.h"
 #include "stdlib/stdlib.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::cli {
 
@@ -93,7 +94,7 @@ int RunCheck(const CheckArgs& args) {
   }
   if (s.integrator == rt::IntegratorKind::IDA) {
     // IDA's Newton matrix: the block pattern and the automatic dense/KLU choice
-    // (docs/integrators.md; the same rule as runtime/sim/integrator_ida.cpp).
+    // (docs/integrators.md; the same rule as sim/integrator_ida.cpp).
     std::vector<int> groups = rt::StateCouplingGroups(program);
     std::vector<long> size;
     for (int g : groups) {

@@ -1,5 +1,5 @@
 // `kanesim linearize FILE`: the linear state-space model about an operating point, its
-// eigenvalues and modes (runtime/linearize, docs/linearize.md); `--sweep` a root locus.
+// eigenvalues and modes (linearize, docs/linearize.md); `--sweep` a root locus.
 #include "cli/cmd_linearize.h"
 
 #include <CLI/CLI.hpp>
@@ -17,12 +17,12 @@
 
 #include "cli/common.h"
 #include "cli/number_options.h"
-#include "runtime/batch/file_guard.h"
-#include "runtime/flat/number.h"
-#include "runtime/linearize/linearize.h"
+#include "batch/file_guard.h"
+#include "flat/number.h"
+#include "linearize/linearize.h"
 #include "runtime/program/program.h"
-#include "runtime/viz/locus_page.h"
-#include "runtime/viz/viewer.h"
+#include "viz/locus_page.h"
+#include "viz/viewer.h"
 
 namespace kanesim::cli {
 

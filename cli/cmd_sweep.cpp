@@ -1,5 +1,5 @@
 // `kanesim sweep`: many scenarios of one model, in parallel, one summary row each
-// (docs/sweeps.md). The model is loaded and compiled here; runtime/batch does the rest.
+// (docs/sweeps.md). The model is loaded and compiled here; batch does the rest.
 //   kanesim sweep FILE.mech|SWEEP.toml [scenario sources] [--metric M]... [-o DIR] ...
 //   kanesim sweep merge INPUT... [-o OUT.csv]
 // Exit codes: 0 every scenario ok; 1 usage/model error or interrupted; 2 the sweep
@@ -22,15 +22,15 @@
 #include "cli/batch_cli.h"
 #include "cli/common.h"
 #include "cli/number_options.h"
-#include "runtime/batch/csv_util.h"
-#include "runtime/batch/file_guard.h"
-#include "runtime/batch/settings_record.h"
-#include "runtime/batch/summary.h"
-#include "runtime/batch/sweep.h"
-#include "runtime/batch/sweep_toml.h"
+#include "batch/csv_util.h"
+#include "batch/file_guard.h"
+#include "batch/settings_record.h"
+#include "batch/summary.h"
+#include "batch/sweep.h"
+#include "batch/sweep_toml.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/csv.h"
-#include "runtime/sim/signal_select.h"
+#include "sim/csv.h"
+#include "sim/signal_select.h"
 
 namespace kanesim::cli {
 namespace {
@@ -201,7 +201,7 @@ std::string Join(const std::vector<std::string>& items) {
   return out;
 }
 
-// What the summary is made with (runtime/batch/settings_record.h): everything that
+// What the summary is made with (batch/settings_record.h): everything that
 // decides a scenario's row, resolved (the experiment's defaults filled in).
 batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig& c, const rt::Program& base) {
   batch::SettingsRecord r;

@@ -7,10 +7,10 @@
 #include <utility>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/flat/mechanism.h"
-#include "runtime/pipeline/pipeline.h"
-#include "runtime/sim/integrator.h"
+#include "runtime/runtime.h"
+#include "flat/mechanism.h"
+#include "pipeline/pipeline.h"
+#include "sim/integrator.h"
 
 namespace CLI {
 class App;
@@ -39,7 +39,7 @@ inline constexpr int kMaxJobs = 1024;
 std::string ReadFileText(const std::string& path);
 std::string StdlibHash();
 
-// Stages 1-3 of the pipeline (runtime/pipeline/pipeline.h) for a command: loads, prints
+// Stages 1-3 of the pipeline (pipeline/pipeline.h) for a command: loads, prints
 // the diagnostics (warnings too) to stderr; null when a stage failed. With compile false,
 // the model stops at the flat mechanism.
 std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, const pipeline::RunSpec& spec,

@@ -1,11 +1,11 @@
-// Loading a model for any subcommand through the pipeline (runtime/pipeline/pipeline.h),
+// Loading a model for any subcommand through the pipeline (pipeline/pipeline.h),
 // with its diagnostics on stderr.
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "cli/common.h"
-#include "runtime/batch/csv_util.h"
+#include "batch/csv_util.h"
 #include "lang/diagnostics.h"
 #include "runtime/program/program.h"
 #include "stdlib/stdlib.h"

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "python/src/glue.h"
-#include "runtime/sim/integrator.h"
+#include "sim/integrator.h"
 
 namespace py = pybind11;
 using kanesim::py::LoadedModel;
