@@ -10,11 +10,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "runtime/runtime.h"
 #include "runtime/program/program.h"
+#include "sim/change_point_bridge.h"
 #include "tests/support/load_util.h"
 
 namespace kanesim::test {
@@ -93,13 +95,13 @@ TEST(BranchMonitor, LetsTheParallelogramThroughForwardAndBack) {
 // Feeds the monitor the exact motion of the lumped crank (theta'' = -(G/J) cos theta; the
 // model's gravity, J and G as in change_point_bridge_test.cpp) through the change point at
 // theta = pi in accepted steps of 1 ms, the speed off by dw once past it; returns the first
-// non-zero CheckBranch (0: none up to pi + 0.05).
-int PassTheChangePoint(const rt::Program& p, rt::BranchMonitor& m, Rig& r, double dw) {
+// non-zero check (0: none up to pi + 0.05).
+int PassTheChangePoint(Rig& r, double dw, const std::function<int(double t, const double* y)>& check) {
   const double a = 0.6, J = (0.5 + 0.8) * a * a / 3.0 + 1.0 * a * a, G = 9.81 * a * ((0.5 + 0.8) / 2.0 + 1.0);
   double th = M_PI - 0.3, w = 11.0, t = 0.0;
   const auto acc = [&](double x) { return -(G / J) * std::cos(x); };
   while (th < M_PI + 0.05) {
-    const int s = rt::CheckBranch(p, m, t, r.Parallelogram(th, w + (th > M_PI ? dw : 0.0)));
+    const int s = check(t, r.Parallelogram(th, w + (th > M_PI ? dw : 0.0)));
     if (s != 0) return s;
     for (int i = 0; i < 100; ++i) {  // classical Runge-Kutta, h = 1e-5 s
       const double h = 1e-5;
@@ -124,18 +126,20 @@ TEST(BranchMonitor, ChecksAPassageTheSolverMadeByItself) {
   Rig r = MakeRig();
   ASSERT_TRUE(r.l && r.l->prog);
   const rt::Program& p = *r.l->prog;
-  auto exact = rt::MakeBranchMonitor(p);
-  rt::SetEarlyBridge(*exact, 1e-12, 1e-12);
-  EXPECT_EQ(PassTheChangePoint(p, *exact, r, 0.0), 0) << rt::BranchMonitorError(*exact);
-  auto off = rt::MakeBranchMonitor(p);
-  rt::SetEarlyBridge(*off, 1e-12, 1e-12);
-  ASSERT_EQ(PassTheChangePoint(p, *off, r, 1e-6), -1);
-  const std::string& e = rt::BranchMonitorError(*off);
+  auto exact = sim::MakeChangePointBridge(p);
+  ASSERT_TRUE(exact);
+  sim::EnableEarlyBridge(*exact, 1e-12, 1e-12);
+  EXPECT_EQ(PassTheChangePoint(r, 0.0, [&](double t, const double* y) { return sim::CheckStep(p, *exact, t, y); }), 0)
+      << sim::BridgeError(*exact);
+  auto off = sim::MakeChangePointBridge(p);
+  sim::EnableEarlyBridge(*off, 1e-12, 1e-12);
+  ASSERT_EQ(PassTheChangePoint(r, 1e-6, [&](double t, const double* y) { return sim::CheckStep(p, *off, t, y); }), -1);
+  const std::string& e = sim::BridgeError(*off);
   EXPECT_NE(e.find("closed loop 'coupler_rocker' at a singular configuration"), std::string::npos) << e;
   EXPECT_NE(e.find("passed the change point"), std::string::npos) << e;
   double t_from = 0.0, t_b = 0.0;
   std::vector<double> yb(r.y.size());
-  ASSERT_EQ(rt::BridgeChangePoint(p, *off, 1e-12, 1e-12, &t_from, &t_b, yb.data()), 0) << rt::BridgeRefused(*off);
+  ASSERT_EQ(sim::BridgeChangePoint(p, *off, 1e-12, 1e-12, &t_from, &t_b, yb.data()), 0) << off->bridge_refused;
   EXPECT_LT(t_from, t_b);
 }
 
