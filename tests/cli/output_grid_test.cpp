@@ -8,7 +8,7 @@
 
 #include "sim/csv.h"
 #include "sim/integrator.h"
-#include "cli_util.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

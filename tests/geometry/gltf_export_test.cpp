@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "geometry/primitives.h"
-#include "mesh_files.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -9,7 +9,7 @@
 #include "geometry/mesh_check.h"
 #include "geometry/mesh_load.h"
 #include "geometry/primitives.h"
-#include "mesh_files.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

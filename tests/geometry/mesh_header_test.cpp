@@ -18,7 +18,7 @@
 
 #include "geometry/mesh_load.h"
 #include "geometry/primitives.h"
-#include "mesh_files.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "geometry/mass_properties.h"
 #include "geometry/primitives.h"
-#include "mesh_files.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

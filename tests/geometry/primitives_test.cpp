@@ -12,7 +12,7 @@
 #include "geometry/mass_properties.h"
 #include "geometry/mesh_check.h"
 #include "geometry/mesh_load.h"
-#include "mesh_files.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -1,4 +1,4 @@
-#include "mesh_files.h"
+#include "tests/support/mesh_files.h"
 
 #include <cstdint>
 #include <cstring>
