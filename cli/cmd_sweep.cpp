@@ -21,6 +21,7 @@
 
 #include "cli/batch_cli.h"
 #include "cli/common.h"
+#include "import/import.h"
 #include "cli/number_options.h"
 #include "batch/csv_util.h"
 #include "batch/file_guard.h"
@@ -214,8 +215,11 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
   // their contents as much as on the model's (issue 38: a resume mixed two meshes).
   const std::filesystem::path model_dir = std::filesystem::absolute(a.load.path).parent_path();
   std::vector<std::string> inputs;
+  // A URDF's model is its translation in memory, named PATH.mech (docs/import.md): no file.
+  const bool urdf = import::IsUrdfPath(a.load.path);
   for (const std::string& f : base.mech->source_files)
-    if (!f.empty() && f[0] != '<' && !batch::SameFile(f, a.load.path)) inputs.push_back(f);
+    if (!f.empty() && f[0] != '<' && !batch::SameFile(f, a.load.path) && !(urdf && f == a.load.path + ".mech"))
+      inputs.push_back(f);
   inputs.insert(inputs.end(), base.mech->data_files.begin(), base.mech->data_files.end());
   for (const std::string& f : inputs) {
     std::string text, why;
@@ -224,6 +228,7 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
                                  : "unreadable";
     r.Set("input_file:" + std::filesystem::absolute(f).lexically_normal().lexically_relative(model_dir).string(), hash);
   }
+  if (urdf) r.Set("urdf_floating", a.load.floating ? "true" : "false");  // --floating changes the model
   r.Set("model_name", a.load.model);
   r.Set("set", Join(a.load.sets));
   const sim::OutputGrid grid = sim::ResolveGrid(base, c.sim);
@@ -483,6 +488,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   sw->add_option("file", a->file, "The .mech file, or a sweep .toml file");
   sw->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
+  AddUrdfOptions(*sw, &a->load.floating, &a->load.package_paths);
   sw->add_option("--set", a->load.sets, "Fix a parameter for every scenario, name=value (repeatable)")
       ->allow_extra_args(false);
   sw->add_option("--grid", a->grids, "name=a:step:b or name=v1,v2,... (repeatable; Cartesian product)")

@@ -19,6 +19,15 @@ std::string ReadFileText(const std::string& path) {
   return ss.str();
 }
 
+bool ReadFileInto(const std::string& path, std::string* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  *out = ss.str();
+  return !in.bad();
+}
+
 std::string StdlibHash() {
   std::string all;
   for (const auto& [name, text] : stdlib::Files()) all.append(name).append("\n").append(text).append("\n");
@@ -31,6 +40,8 @@ std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, cons
   lo.model = options.model;
   lo.sets = options.sets;
   lo.compile = compile;
+  lo.urdf.floating = options.floating;
+  lo.urdf.package_paths = options.package_paths;
   pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(options.path), lo, spec);
   std::cerr << r.diagnostics;
   return std::move(r.model);

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -24,6 +27,16 @@ using Clock = std::chrono::steady_clock;
 
 double Since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// The bytes of a file; false when it cannot be read.
+bool ReadWholeFile(const std::string& path, std::string* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  *out = ss.str();
+  return !in.bad();
+}
+
 // Stages 1-2. False with the diagnostics appended to *text when a stage fails; warnings
 // are appended also on success.
 bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* m, std::string* text) {
@@ -37,6 +50,29 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
       return false;
     }
     eo.overrides.push_back(std::move(o));
+  }
+  // 0. Import: a URDF becomes .mech text, named PATH.mech (its mesh names are relative to
+  // the URDF's folder, which that name shares).
+  if (import::IsUrdfPath(source.path)) {
+    std::string urdf = source.text;
+    std::error_code ec;
+    if (const std::uintmax_t size = std::filesystem::file_size(source.path, ec);
+        !source.from_text && !ec && size > import::kMaxUrdfBytes) {
+      *text += import::TooLargeMessage(source.path, size);  // not read into memory
+      return false;
+    }
+    if (!source.from_text && !ReadWholeFile(source.path, &urdf)) {
+      *text += "kanesim: error: cannot read '" + lang::ClipMessage(source.path) + "'\n";
+      return false;
+    }
+    import::Options io = options.urdf;
+    io.notes = false;
+    io.mesh_base_dir = std::filesystem::path(source.path).parent_path().string();
+    if (io.mesh_base_dir.empty()) io.mesh_base_dir = ".";
+    import::Result r = import::UrdfToMech(source.path, urdf, io);
+    *text += r.diagnostics;
+    if (!r.ok) return false;
+    return ParseAndElaborate(Source::Text(source.path + ".mech", std::move(r.mech)), options, m, text);
   }
   // 1. Parse: the main file and the standard library (parsed once per process).
   bool ok = source.from_text

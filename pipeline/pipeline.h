@@ -3,6 +3,7 @@
 // and Python) goes through these functions; docs/architecture.md draws them.
 //
 //   LoadModel                                                    (pipeline.cpp)
+//     0. import     a URDF file -> .mech text (robot.urdf only)   import::UrdfToMech
 //     1. parse      text -> AST: the main file and the stdlib     lang::LoadProgram
 //     2. elaborate  AST -> flat mechanism, --set values applied    lang::Elaborate
 //     3. compile    flat mechanism -> immutable rt::Program       rt::Compile
@@ -34,6 +35,7 @@
 #include "lang/elaborate.h"
 #include "compiler/compiler.h"
 #include "flat/mechanism.h"
+#include "import/import.h"
 #include "sim/energy_guard.h"
 #include "sim/integrator.h"
 #include "sim/simulate.h"
@@ -122,6 +124,9 @@ struct LoadOptions {
   std::string model;               // class to elaborate; "" = the last model of the main file
   std::vector<std::string> sets;   // "name=value" as given to --set, applied in order
   bool compile = true;             // false: stop after stage 2 (program stays null)
+  // A main file named *.urdf is translated to .mech text first (import/import.h) with these
+  // options; the text is then named PATH.mech in diagnostics (what `kanesim import` writes).
+  import::Options urdf;
 };
 
 // A loaded model. Immutable once loaded; the program may be shared across threads.

@@ -5,6 +5,7 @@ set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config git
       libeigen3-dev libsundials-dev libsuitesparse-dev libassimp-dev
       libcli11-dev libfmt-dev libtomlplusplus-dev libgtest-dev libgmock-dev libbenchmark-dev
+      libtinyxml2-dev             # the URDF importer (import/)
       clang-14 libclang-rt-14-dev libomp-14-dev python3 python3-venv
       openmpi-bin libopenmpi-dev  # OpenMPI: kanesim sweep --mpi (optional at build time)
       libcpp-httplib-dev          # the viewer's HTTP server (viz)

@@ -85,7 +85,12 @@ bool Load(const LoadRequest& req, LoadedModel* out, ModelErrorInfo* error) {
     std::lock_guard<std::mutex> lock(g_load_mutex);
     const pipeline::Source source = req.from_text ? pipeline::Source::Text(req.path, req.text)
                                                   : pipeline::Source::File(req.path);
-    r = pipeline::LoadModel(source, pipeline::LoadOptions{req.model, req.sets, true}, spec);
+    pipeline::LoadOptions lo;
+    lo.model = req.model;
+    lo.sets = req.sets;
+    lo.urdf.floating = req.floating;
+    lo.urdf.package_paths = req.package_paths;
+    r = pipeline::LoadModel(source, lo, spec);
   }
   if (!r.model) {
     error->rendered = r.diagnostics.empty() ? "kanesim: error: the model could not be loaded\n" : r.diagnostics;

@@ -43,6 +43,8 @@ struct LoadRequest {
   std::string solver = "auto";     // auto|dense|sparse|recursive
   std::string integrator = "auto"; // auto|ida|cvode|cvode-bdf|arkode|dop853 (compile-time choice)
   std::string reactions = "nan";   // nan|min-norm
+  bool floating = false;                   // a .urdf file: a free base (docs/import.md)
+  std::vector<std::string> package_paths;  // a .urdf file: where package:// meshes are looked up
 };
 
 struct LoadedModel {

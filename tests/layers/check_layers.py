@@ -22,6 +22,7 @@ USES = {
     "util": [],
     "flat": [],
     "stdlib": [],
+    "import": [],
     "geometry": ["util"],
     "lang": ["flat", "geometry"],
     "runtime": ["flat"],
@@ -29,11 +30,11 @@ USES = {
     "sim": ["runtime"],
     "linearize": ["flat", "runtime", "compiler", "sim"],
     "batch": ["util", "flat", "runtime", "compiler", "sim"],
-    "pipeline": ["flat", "lang", "stdlib", "runtime", "compiler", "sim"],
+    "pipeline": ["flat", "lang", "stdlib", "import", "runtime", "compiler", "sim"],
     "viz": ["util", "geometry"],
-    "cli": ["util", "flat", "geometry", "lang", "stdlib", "runtime", "compiler", "sim", "linearize", "batch",
+    "cli": ["util", "flat", "geometry", "lang", "stdlib", "import", "runtime", "compiler", "sim", "linearize", "batch",
             "pipeline", "viz"],
-    "python": ["flat", "lang", "stdlib", "runtime", "compiler", "sim", "linearize", "batch", "pipeline"],
+    "python": ["flat", "lang", "stdlib", "import", "runtime", "compiler", "sim", "linearize", "batch", "pipeline"],
 }
 # The CMake target of each layer (cli's is the kanesim command, python's the module).
 TARGET = {name: "kanesim_" + name for name in USES}
