@@ -92,6 +92,38 @@ TEST(BranchMonitor, LetsTheParallelogramThroughForwardAndBack) {
         << rt::BranchMonitorError(*m);
 }
 
+// What the bridge over a change point (sim/change_point_bridge.h) reads of the loops through
+// runtime/runtime.h, on exact states of the parallelogram: rho falls linearly toward the
+// change point (a simple crossing: the rows' smallest singular value goes as the angle to
+// it), a state on the constraints is a fixed point of the partition's projection, and the
+// kinetic-metric projection of speeds that differ from the state's by a motion along the
+// branch returns those speeds unchanged. If this fails, the bridge measures the wrong
+// distance to a crossing or moves the states it extrapolates.
+TEST(BranchMonitor, WhatTheBridgeReadsOfTheLoops) {
+  Rig r = MakeRig();
+  ASSERT_TRUE(r.l && r.l->prog);
+  const rt::Program& p = *r.l->prog;
+  auto m = rt::MakeBranchMonitor(p);
+  const double rho1 = rt::SingularRatioAt(p, *m, 0.0, r.Parallelogram(M_PI - 1e-3, 11.0));
+  const double rho2 = rt::SingularRatioAt(p, *m, 0.0, r.Parallelogram(M_PI - 2e-3, 11.0));
+  int near_loops = 0;
+  const double far = rt::SingularRatioAt(p, *m, 0.0, r.Parallelogram(M_PI - 0.3, 11.0), &near_loops);
+  EXPECT_GT(far, 1e-2);
+  EXPECT_EQ(near_loops, 0);
+  EXPECT_LT(rho1, 1e-2);
+  EXPECT_NEAR(rho2 / rho1, 2.0, 1e-2);  // linear to first order in the angle (1e-3 rad)
+  rt::Workspace& ws = rt::MonitorWorkspace(*m);
+  const size_t n = r.y.size();
+  const std::vector<double> y(r.Parallelogram(M_PI - 0.3, 11.0), r.Parallelogram(M_PI - 0.3, 11.0) + n);
+  std::vector<double> z(n);
+  ASSERT_EQ(rt::ProjectByPartition(p, ws, 0.0, y.data(), z.data()), 0);
+  for (size_t i = 0; i < n; ++i) EXPECT_NEAR(z[i], y[i], 1e-12) << i;
+  std::vector<double> raw(y), speeds(y);
+  for (size_t i = static_cast<size_t>(rt::NumQ(p)); i < n; ++i) raw[i] *= 1.01;  // along the branch
+  ASSERT_EQ(rt::ProjectSpeedsInKineticMetric(p, ws, 0.0, raw.data(), speeds.data()), 0);
+  for (size_t i = 0; i < n; ++i) EXPECT_NEAR(speeds[i], raw[i], 1e-9 * (1.0 + std::fabs(raw[i]))) << i;
+}
+
 // Feeds the monitor the exact motion of the lumped crank (theta'' = -(G/J) cos theta; the
 // model's gravity, J and G as in change_point_bridge_test.cpp) through the change point at
 // theta = pi in accepted steps of 1 ms, the speed off by dw once past it; returns the first
