@@ -243,7 +243,8 @@ TEST(TurningPoints, LinkagesWhoseJointsTurnBackKeepTheirEnergy) {
 // ~2e-10 rad of its own limit). No partition there, so nothing in it turns: every joint angle
 // at every row. The linkage rocks some 30 times in 10 s and its phase is sensitive where the
 // joints turn back: the multiplier form, without a partition, is 3e2 (ARKODE) to 3e7
-// (CVODE-BDF) times rtol off at 1e-12, so the bounds are per cell, measured times 5.
+// (CVODE-BDF) times rtol off at 1e-12, and on the reduced form when the partition is re-chosen
+// moves the error by up to 10 times; so the bounds are per cell, the measured times 5.
 TEST(TurningPoints, RockingFourBarFollowsAnIndependentIntegration) {
   static const RunResult ref = ReadCsv("tests/stress/data/fourbar_rocker_ref.csv");
   const char* joints[] = {"crank_pivot.q", "crank_coupler.q", "rocker_pivot.q"};
@@ -252,12 +253,12 @@ TEST(TurningPoints, RockingFourBarFollowsAnIndependentIntegration) {
     double bound;  // rad (measured: see each)
   };
   const Case cases[] = {
-      {{"dop853", "dense", "1e-12"}, 5e-7},     // 1e-7
-      {{"dop853", "dense", "1e-10"}, 2e-6},     // 4.1e-7
-      {{"arkode", "dense", "1e-12"}, 3e-9},     // 5e-10
-      {{"cvode", "dense", "1e-12"}, 1e-6},      // 2e-7
+      {{"dop853", "dense", "1e-12"}, 5e-7},     // 1e-7, 4e-8
+      {{"dop853", "dense", "1e-10"}, 8e-6},     // 4.1e-7, 1.5e-6 (re-checked less often)
+      {{"arkode", "dense", "1e-12"}, 3e-8},     // 5e-10, 5.7e-9 (re-checked less often)
+      {{"cvode", "dense", "1e-12"}, 1.5e-6},    // 2e-7, 2.6e-7
       {{"cvode-bdf", "dense", "1e-12"}, 8e-6},  // 1.6e-6
-      {{"ida", "dense", "1e-12"}, 5e-6},        // 8.9e-7
+      {{"ida", "dense", "1e-12"}, 5e-6},        // 8.9e-7, 9.6e-7
       {{"dop853", "sparse", "1e-12"}, 4e-8},    // 7.8e-9
       {{"arkode", "sparse", "1e-10"}, 4e-8},    // 7.3e-9
       {{"ida", "sparse", "1e-12"}, 1.5e-6},     // 2.7e-7
