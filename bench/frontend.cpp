@@ -33,7 +33,7 @@
 
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
-#include "runtime/engine/engine.h"
+#include "compiler/compiler.h"
 #include "runtime/program/program.h"
 #include "stdlib/stdlib.h"
 

@@ -16,11 +16,11 @@
 #include <fstream>
 #include <numbers>
 
-#include "runtime/geometry/gltf_export.h"
-#include "runtime/geometry/mass_properties.h"
-#include "runtime/geometry/mesh_check.h"
-#include "runtime/geometry/mesh_load.h"
-#include "runtime/geometry/primitives.h"
+#include "geometry/gltf_export.h"
+#include "geometry/mass_properties.h"
+#include "geometry/mesh_check.h"
+#include "geometry/mesh_load.h"
+#include "geometry/primitives.h"
 
 namespace {
 

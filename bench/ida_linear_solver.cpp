@@ -14,9 +14,9 @@
 #include <memory>
 #include <string>
 
-#include "runtime/engine/engine.h"
-#include "runtime/sim/simulate.h"
-#include "tests/model_loader.h"
+#include "compiler/compiler.h"
+#include "sim/simulate.h"
+#include "tests/support/model_loader.h"
 
 namespace {
 

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/sim/csv.h"
-#include "runtime/sim/simulate.h"
-#include "tests/model_loader.h"
+#include "compiler/compiler.h"
+#include "sim/csv.h"
+#include "sim/simulate.h"
+#include "tests/support/model_loader.h"
 
 namespace {
 

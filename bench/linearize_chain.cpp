@@ -1,4 +1,4 @@
-// kanesim linearize (runtime/linearize) on examples/chain.mech with N links (N
+// kanesim linearize (linearize) on examples/chain.mech with N links (N
 // coordinates and N speeds: 2N states), and on the four-bar ladder (loops, the dependent
 // coordinates solved by Newton at every evaluation). Issue 23 asks for a 100-body chain
 // in under 50 ms. Each linearization evaluates the right-hand side 6 times per state
@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/linearize/linearize.h"
-#include "tests/model_loader.h"
+#include "compiler/compiler.h"
+#include "linearize/linearize.h"
+#include "tests/support/model_loader.h"
 
 namespace {
 

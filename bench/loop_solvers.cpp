@@ -3,7 +3,7 @@
 // multiplier form (a multiplier per independent constraint row in the sparse K-vector
 // system, KLU: runtime/kane/kane_sparse.cpp), on bench/models/fourbar_ladder.mech, N four-bar
 // loops stacked between two hanging rails (3 N bodies, 3 N speeds, 2 N independent rows).
-// The crossover sets kSparseLoopMinSpeeds (runtime/compile/compile_internal.h);
+// The crossover sets kSparseLoopMinSpeeds (compiler/compile_internal.h);
 // docs/constraints.md "Reduced or multiplier form" has the numbers. Also the cost of one
 // right-hand side of the examples with constraints (the four-bar against Pinocchio's
 // constraintDynamics: docs/benchmarks.md).
@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/sim/simulate.h"
-#include "tests/model_loader.h"
+#include "compiler/compiler.h"
+#include "sim/simulate.h"
+#include "tests/support/model_loader.h"
 
 namespace {
 

@@ -1,7 +1,7 @@
 // Cost of one right-hand-side evaluation (rt::Derivative) against N for the chain of
 // examples/chain.mech (N thin rods on alternating z/y revolute joints), on the three
 // solution paths (dense, sparse, recursive). The measured crossovers set the automatic
-// choice (ChooseSolver in runtime/compile/forces.cpp); Pinocchio's aba at the same state
+// choice (ChooseSolver in compiler/forces.cpp); Pinocchio's aba at the same state
 // is `bench/pin/pin_driver rhs N REPS` (docs/benchmarks.md runs both side by side).
 // BM_RhsPlanarChain, BM_SolvePlanar, BM_SolveSpatial: the planar chain (every axis z) and
 // the recursion alone on it in its 3x3 planar and 6x6 spatial forms.
@@ -12,11 +12,11 @@
 #include <random>
 #include <vector>
 
-#include "runtime/engine/engine.h"
+#include "compiler/compiler.h"
 #include "runtime/kane/kane_tree.h"
 #include "runtime/program/program.h"
-#include "tests/runtime/builders.h"
-#include "tests/runtime/random_state.h"
+#include "tests/support/builders.h"
+#include "tests/support/random_state.h"
 
 namespace {
 

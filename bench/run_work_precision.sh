@@ -25,8 +25,8 @@ cmake --build "$BUILD_DIR" -j2 --target kanesim kanesim_driver rhs_chain
 CMEEL=$("$PY" -c 'import cmeel, os; print(os.path.join(os.path.dirname(cmeel.__file__), "..", "cmeel.prefix"))' 2>/dev/null ||
         echo "$HERE/.venv/lib/python3.11/site-packages/cmeel.prefix")
 PIN_DRIVER="$BUILD_DIR/bench/pin_driver"
-TABLEAU="$ROOT/runtime/sim/dop853_tableau.h"  # shared with kanesim's own DOP853
-CONTROL="$ROOT/runtime/sim/dop853_control.h"  # its step control, shared too
+TABLEAU="$ROOT/sim/dop853_tableau.h"  # shared with kanesim's own DOP853
+CONTROL="$ROOT/sim/dop853_control.h"  # its step control, shared too
 if [ ! -x "$PIN_DRIVER" ] || [ "$HERE/pin/pin_driver.cpp" -nt "$PIN_DRIVER" ] || [ "$TABLEAU" -nt "$PIN_DRIVER" ] || [ "$CONTROL" -nt "$PIN_DRIVER" ]; then
     echo "building $PIN_DRIVER"
     g++ -std=c++17 -O3 -DNDEBUG -DBOOST_MPL_LIMIT_LIST_SIZE=30 -DBOOST_MPL_LIMIT_VECTOR_SIZE=30 \

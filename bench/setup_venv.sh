@@ -15,7 +15,8 @@ if [ ! -x "$VENV/bin/python" ]; then
     "$PYTHON" -m venv "$VENV"
 fi
 
-# Versions checked with `pip index versions NAME` (Python 3.11). exudyn (the Exudyn
+# Versions checked with `pip index versions NAME` (Python 3.11). example-robot-data (the URDF
+# robots of bench/reference/urdf_robots.py, issue 40) ships data only, no Python module. exudyn (the Exudyn
 # peer of the work-precision benchmark) is 1.13.6. mpmath is 1.3.0,
 # not the newest 1.4.x, because sympy 1.14 requires mpmath<1.4.
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check \
@@ -26,7 +27,8 @@ fi
     matplotlib==3.11.2 \
     pin==4.1.0 \
     mujoco==4.0.0 \
-    exudyn==1.13.6
+    exudyn==1.13.6 \
+    example-robot-data==6.0.0
 
 "$VENV/bin/python" - <<'PY'
 import numpy, scipy, mpmath, sympy, matplotlib, pinocchio, mujoco, exudyn, sys

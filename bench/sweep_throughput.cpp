@@ -21,8 +21,8 @@
 #include <string>
 #include <thread>
 
-#include "runtime/batch/sweep.h"
-#include "runtime/pipeline/pipeline.h"
+#include "batch/sweep.h"
+#include "pipeline/pipeline.h"
 
 namespace {
 

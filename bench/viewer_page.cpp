@@ -1,4 +1,4 @@
-// The viewer page (runtime/viz, docs/benchmarks.md "Viewer page"):
+// The viewer page (viz, docs/benchmarks.md "Viewer page"):
 //   BM_EncodeScene      10 bodies x 1,000 instants and 10 signals: the scene JSON alone
 //   BM_WriteViewerHtml  the same written as the offline page: the JSON, the libraries read from
 //                       /usr/share/javascript (~1 MB), the file written and renamed
@@ -11,9 +11,9 @@
 #include <filesystem>
 #include <string>
 
-#include "runtime/geometry/primitives.h"
-#include "runtime/viz/scene_json.h"
-#include "runtime/viz/viewer.h"
+#include "geometry/primitives.h"
+#include "viz/scene_json.h"
+#include "viz/viewer.h"
 
 namespace {
 

@@ -1,6 +1,6 @@
 // `kanesim run --animation out.glb|out.gltf` (cli/scene.h AnimationRun): the bodies'
 // poses are extra signals of the run, recorded beside the CSV and written after it through
-// runtime/geometry's glTF export (docs/visualization.md, "Animated glTF").
+// geometry's glTF export (docs/visualization.md, "Animated glTF").
 #include <fcntl.h>
 #include <fmt/core.h>
 #include <unistd.h>
@@ -11,7 +11,7 @@
 #include <filesystem>
 
 #include "cli/scene.h"
-#include "runtime/batch/file_guard.h"
+#include "batch/file_guard.h"
 
 namespace kanesim::cli {
 

@@ -1,5 +1,5 @@
 // Helpers shared by `kanesim sweep` and `kanesim test`: run settings named in files into a
-// pipeline::RunSpec (runtime/pipeline/pipeline.h), and a terminal progress line.
+// pipeline::RunSpec (pipeline/pipeline.h), and a terminal progress line.
 #pragma once
 
 #include <unistd.h>
@@ -10,7 +10,7 @@
 #include <fmt/core.h>
 #include <string>
 
-#include "runtime/pipeline/pipeline.h"
+#include "pipeline/pipeline.h"
 
 namespace kanesim::cli {
 

@@ -12,6 +12,7 @@
 #include "lang/elaborate.h"
 #include "lang/parser.h"
 #include "stdlib/stdlib.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::cli {
 
@@ -93,7 +94,7 @@ int RunCheck(const CheckArgs& args) {
   }
   if (s.integrator == rt::IntegratorKind::IDA) {
     // IDA's Newton matrix: the block pattern and the automatic dense/KLU choice
-    // (docs/integrators.md; the same rule as runtime/sim/integrator_ida.cpp).
+    // (docs/integrators.md; the same rule as sim/integrator_ida.cpp).
     std::vector<int> groups = rt::StateCouplingGroups(program);
     std::vector<long> size;
     for (int g : groups) {
@@ -154,6 +155,7 @@ void AddCheckCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", args->load.path, "The .mech file")->required();
   cmd->add_option("--model", args->load.model, "Model to check (default: the last model in the file)");
+  AddUrdfOptions(*cmd, &args->load.floating, &args->load.package_paths);
   cmd->add_option("--set", args->load.sets, "Override a parameter: name=value (repeatable)");
   cmd->add_option("--emit", args->emit, "Print an intermediate form instead: ast or flat")
       ->check(CLI::IsMember({"ast", "flat"}));

@@ -1,5 +1,5 @@
 // `kanesim linearize FILE`: the linear state-space model about an operating point, its
-// eigenvalues and modes (runtime/linearize, docs/linearize.md); `--sweep` a root locus.
+// eigenvalues and modes (linearize, docs/linearize.md); `--sweep` a root locus.
 #include "cli/cmd_linearize.h"
 
 #include <CLI/CLI.hpp>
@@ -17,12 +17,12 @@
 
 #include "cli/common.h"
 #include "cli/number_options.h"
-#include "runtime/batch/file_guard.h"
-#include "runtime/flat/number.h"
-#include "runtime/linearize/linearize.h"
+#include "batch/file_guard.h"
+#include "flat/number.h"
+#include "linearize/linearize.h"
 #include "runtime/program/program.h"
-#include "runtime/viz/locus_page.h"
-#include "runtime/viz/viewer.h"
+#include "viz/locus_page.h"
+#include "viz/viewer.h"
 
 namespace kanesim::cli {
 
@@ -476,6 +476,7 @@ void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options) {
   cmd->add_option("file", a->load.path, "The .mech file")->required();
   cmd->add_option("-o,--out", a->out_path, "Write the model as JSON (with --sweep: the table as CSV)");
   cmd->add_option("--model", a->load.model, "Model to linearize (default: the last one in the file)");
+  AddUrdfOptions(*cmd, &a->load.floating, &a->load.package_paths);
   cmd->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
   a->at_opt = AddNumberOption(cmd, "--at", &a->at, "Linearize about the motion at time T (default: the start values)");
   cmd->add_flag("--equilibrium", a->equilibrium,

@@ -1,5 +1,5 @@
 // `kanesim run file.mech`: load, compile, simulate, write CSV (DESIGN.md "The command
-// line"), through the pipeline (runtime/pipeline/pipeline.h): the options fill one
+// line"), through the pipeline (pipeline/pipeline.h): the options fill one
 // pipeline::RunSpec; times and tolerances not given come from the model's experiment
 // annotation (pipeline::RunSpec says which and the defaults).
 #include <unistd.h>
@@ -20,11 +20,11 @@
 #include "cli/common.h"
 #include "cli/number_options.h"
 #include "cli/scene.h"
-#include "runtime/batch/file_guard.h"
-#include "runtime/engine/engine.h"
-#include "runtime/sim/csv.h"
-#include "runtime/sim/signal_select.h"
-#include "runtime/sim/simulate.h"
+#include "batch/file_guard.h"
+#include "runtime/runtime.h"
+#include "sim/csv.h"
+#include "sim/signal_select.h"
+#include "sim/simulate.h"
 
 namespace kanesim::cli {
 namespace {
@@ -40,7 +40,7 @@ struct RunArgs {
   std::string linear_solver = "auto";
   std::string projection = "eval";
   std::string reactions = "nan";
-  std::string energy_check = "on";  // --energy-check on|off|report (runtime/sim/energy_guard.h)
+  std::string energy_check = "on";  // --energy-check on|off|report (sim/energy_guard.h)
   bool stats = false;
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
   bool show_frames = false;  // --show-frames: the joints' frames as small axes in the animation
@@ -210,6 +210,7 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("file", a->load.path, "The .mech file")->required();
   run->add_option("-o,--out", a->out_path, "Write the CSV to this file (default: stdout)");
   run->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
+  AddUrdfOptions(*run, &a->load.floating, &a->load.package_paths);
   run->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
   AddNumberOption(run, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");
   AddNumberOption(run, "--stop-time", &a->spec.stop_time, "Stop time (default: experiment StopTime)");

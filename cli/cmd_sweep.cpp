@@ -1,5 +1,5 @@
 // `kanesim sweep`: many scenarios of one model, in parallel, one summary row each
-// (docs/sweeps.md). The model is loaded and compiled here; runtime/batch does the rest.
+// (docs/sweeps.md). The model is loaded and compiled here; batch does the rest.
 //   kanesim sweep FILE.mech|SWEEP.toml [scenario sources] [--metric M]... [-o DIR] ...
 //   kanesim sweep merge INPUT... [-o OUT.csv]
 // Exit codes: 0 every scenario ok; 1 usage/model error or interrupted; 2 the sweep
@@ -21,16 +21,17 @@
 
 #include "cli/batch_cli.h"
 #include "cli/common.h"
+#include "import/import.h"
 #include "cli/number_options.h"
-#include "runtime/batch/csv_util.h"
-#include "runtime/batch/file_guard.h"
-#include "runtime/batch/settings_record.h"
-#include "runtime/batch/summary.h"
-#include "runtime/batch/sweep.h"
-#include "runtime/batch/sweep_toml.h"
+#include "batch/csv_util.h"
+#include "batch/file_guard.h"
+#include "batch/settings_record.h"
+#include "batch/summary.h"
+#include "batch/sweep.h"
+#include "batch/sweep_toml.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/csv.h"
-#include "runtime/sim/signal_select.h"
+#include "sim/csv.h"
+#include "sim/signal_select.h"
 
 namespace kanesim::cli {
 namespace {
@@ -201,7 +202,7 @@ std::string Join(const std::vector<std::string>& items) {
   return out;
 }
 
-// What the summary is made with (runtime/batch/settings_record.h): everything that
+// What the summary is made with (batch/settings_record.h): everything that
 // decides a scenario's row, resolved (the experiment's defaults filled in).
 batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig& c, const rt::Program& base) {
   batch::SettingsRecord r;
@@ -214,8 +215,11 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
   // their contents as much as on the model's (issue 38: a resume mixed two meshes).
   const std::filesystem::path model_dir = std::filesystem::absolute(a.load.path).parent_path();
   std::vector<std::string> inputs;
+  // A URDF's model is its translation in memory, named PATH.mech (docs/import.md): no file.
+  const bool urdf = import::IsUrdfPath(a.load.path);
   for (const std::string& f : base.mech->source_files)
-    if (!f.empty() && f[0] != '<' && !batch::SameFile(f, a.load.path)) inputs.push_back(f);
+    if (!f.empty() && f[0] != '<' && !batch::SameFile(f, a.load.path) && !(urdf && f == a.load.path + ".mech"))
+      inputs.push_back(f);
   inputs.insert(inputs.end(), base.mech->data_files.begin(), base.mech->data_files.end());
   for (const std::string& f : inputs) {
     std::string text, why;
@@ -224,6 +228,7 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
                                  : "unreadable";
     r.Set("input_file:" + std::filesystem::absolute(f).lexically_normal().lexically_relative(model_dir).string(), hash);
   }
+  if (urdf) r.Set("urdf_floating", a.load.floating ? "true" : "false");  // --floating changes the model
   r.Set("model_name", a.load.model);
   r.Set("set", Join(a.load.sets));
   const sim::OutputGrid grid = sim::ResolveGrid(base, c.sim);
@@ -483,6 +488,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   sw->add_option("file", a->file, "The .mech file, or a sweep .toml file");
   sw->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
+  AddUrdfOptions(*sw, &a->load.floating, &a->load.package_paths);
   sw->add_option("--set", a->load.sets, "Fix a parameter for every scenario, name=value (repeatable)")
       ->allow_extra_args(false);
   sw->add_option("--grid", a->grids, "name=a:step:b or name=v1,v2,... (repeatable; Cartesian product)")

@@ -1,7 +1,7 @@
 // `kanesim test DIR|SPEC.toml...`: golden-output regression tests (docs/golden_tests.md).
 // For each spec: load and compile the model, simulate, compare with the stored output and
 // check the spec's invariants. Each test runs whole in a worker process of its own
-// (runtime/batch/worker_pool.h, -j of them at once), so a test that crashes kanesim
+// (batch/worker_pool.h, -j of them at once), so a test that crashes kanesim
 // (a signal, out of memory) or runs past --timeout is reported as CRASH or TIMEOUT and
 // the others still run. When no process can be made, the rest run on threads (the front
 // end, not re-entrant, one at a time). Prints one report per test in the order given.
@@ -27,13 +27,13 @@
 #include "cli/batch_cli.h"
 #include "cli/common.h"
 #include "cli/number_options.h"
-#include "runtime/batch/csv_util.h"
-#include "runtime/batch/file_guard.h"
-#include "runtime/batch/golden.h"
-#include "runtime/batch/summary.h"
-#include "runtime/batch/worker_pool.h"
-#include "runtime/sim/csv.h"
-#include "runtime/sim/signal_select.h"
+#include "batch/csv_util.h"
+#include "batch/file_guard.h"
+#include "batch/golden.h"
+#include "batch/summary.h"
+#include "batch/worker_pool.h"
+#include "sim/csv.h"
+#include "sim/signal_select.h"
 #include "stdlib/stdlib.h"
 
 namespace kanesim::cli {

@@ -1,5 +1,5 @@
 // `kanesim view file.mech [run options] [--port N] [--html out.html]`: runs the model and
-// shows the motion in the browser (runtime/viz): the bodies drawn as their shapes beside
+// shows the motion in the browser (viz): the bodies drawn as their shapes beside
 // time plots of the signals, served on 127.0.0.1 or written as one offline page
 // (docs/visualization.md, "kanesim view").
 //
@@ -18,14 +18,14 @@
 #include "cli/common.h"
 #include "cli/number_options.h"
 #include "cli/scene.h"
-#include "runtime/batch/file_guard.h"
-#include "runtime/flat/number.h"
-#include "runtime/geometry/primitives.h"
-#include "runtime/pipeline/pipeline.h"
-#include "runtime/sim/signal_select.h"
-#include "runtime/sim/simulate.h"
-#include "runtime/viz/server.h"
-#include "runtime/viz/viewer.h"
+#include "batch/file_guard.h"
+#include "flat/number.h"
+#include "geometry/primitives.h"
+#include "pipeline/pipeline.h"
+#include "sim/signal_select.h"
+#include "sim/simulate.h"
+#include "viz/server.h"
+#include "viz/viewer.h"
 
 namespace kanesim::cli {
 namespace {
@@ -109,7 +109,7 @@ int RunView(const ViewArgs& a) {
     fmt::print(stderr, "kanesim: error: --html '{}' is the model '{}'; writing there would destroy it\n", a.html, in);
     return kExitModelError;
   }
-  // The pipeline's stages 1-4, as `kanesim run` calls them (runtime/pipeline/pipeline.h).
+  // The pipeline's stages 1-4, as `kanesim run` calls them (pipeline/pipeline.h).
   pipeline::RunSpec spec = a.spec;
   pipeline::SolverFromName(a.solver, &spec.solver);
   pipeline::IntegratorFromName(a.integrator, &spec.integrator);
@@ -219,6 +219,7 @@ void AddViewCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", a->load.path, "The .mech file")->required();
   cmd->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
+  AddUrdfOptions(*cmd, &a->load.floating, &a->load.package_paths);
   cmd->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
   AddNumberOption(cmd, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");
   AddNumberOption(cmd, "--stop-time", &a->spec.stop_time, "Stop time (default: experiment StopTime)");

@@ -7,10 +7,10 @@
 #include <utility>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/flat/mechanism.h"
-#include "runtime/pipeline/pipeline.h"
-#include "runtime/sim/integrator.h"
+#include "runtime/runtime.h"
+#include "flat/mechanism.h"
+#include "pipeline/pipeline.h"
+#include "sim/integrator.h"
 
 namespace CLI {
 class App;
@@ -29,6 +29,8 @@ struct LoadOptions {
   std::string path;                                      // the .mech file
   std::string model;                                     // model to elaborate ("" = last in file)
   std::vector<std::string> sets;                         // "name=value" from --set
+  bool floating = false;                                 // a URDF file: --floating (a free base)
+  std::vector<std::string> package_paths;                // a URDF file: --package-path
 };
 
 // The most threads -j may ask for.
@@ -37,9 +39,10 @@ inline constexpr int kMaxJobs = 1024;
 // A file's bytes ("" when it cannot be read), and the hash of the embedded standard
 // library: what provenance lines and sweep settings records are made of.
 std::string ReadFileText(const std::string& path);
+bool ReadFileInto(const std::string& path, std::string* out);  // false when it cannot be read
 std::string StdlibHash();
 
-// Stages 1-3 of the pipeline (runtime/pipeline/pipeline.h) for a command: loads, prints
+// Stages 1-3 of the pipeline (pipeline/pipeline.h) for a command: loads, prints
 // the diagnostics (warnings too) to stderr; null when a stage failed. With compile false,
 // the model stops at the flat mechanism.
 std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, const pipeline::RunSpec& spec,
@@ -59,5 +62,8 @@ void AddCheckCommand(CLI::App& app, int* exit_code, bool options = true);
 void AddRunCommand(CLI::App& app, int* exit_code, bool options = true);
 void AddSweepCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_sweep.cpp
 void AddTestCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_test.cpp
+void AddImportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_import.cpp
+// --floating and --package-path, for every command that loads a model (a URDF file).
+void AddUrdfOptions(CLI::App& cmd, bool* floating, std::vector<std::string>* package_paths);
 
 }  // namespace kanesim::cli

@@ -1,11 +1,11 @@
-// Loading a model for any subcommand through the pipeline (runtime/pipeline/pipeline.h),
+// Loading a model for any subcommand through the pipeline (pipeline/pipeline.h),
 // with its diagnostics on stderr.
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "cli/common.h"
-#include "runtime/batch/csv_util.h"
+#include "batch/csv_util.h"
 #include "lang/diagnostics.h"
 #include "runtime/program/program.h"
 #include "stdlib/stdlib.h"
@@ -17,6 +17,15 @@ std::string ReadFileText(const std::string& path) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+bool ReadFileInto(const std::string& path, std::string* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  *out = ss.str();
+  return !in.bad();
 }
 
 std::string StdlibHash() {
@@ -31,6 +40,8 @@ std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, cons
   lo.model = options.model;
   lo.sets = options.sets;
   lo.compile = compile;
+  lo.urdf.floating = options.floating;
+  lo.urdf.package_paths = options.package_paths;
   pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(options.path), lo, spec);
   std::cerr << r.diagnostics;
   return std::move(r.model);

@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
   };
   const Command commands[] = {{"check", kanesim::cli::AddCheckCommand},   {"run", kanesim::cli::AddRunCommand},
                               {"sweep", kanesim::cli::AddSweepCommand},   {"test", kanesim::cli::AddTestCommand},
-                              {"linearize", kanesim::cli::AddLinearizeCommand}, {"view", kanesim::cli::AddViewCommand}};
+                              {"linearize", kanesim::cli::AddLinearizeCommand}, {"view", kanesim::cli::AddViewCommand},
+                              {"import", kanesim::cli::AddImportCommand}};
   const char* named = "";
   for (int i = 1; i < argc && !*named; ++i)
     if (argv[i][0] != '-') named = argv[i];

@@ -1,5 +1,5 @@
 // Numeric command-line options read with the language's number syntax
-// (runtime/flat/number.h), so that `--stop-time 0x10`, `inf`, `nan` or `1e400` are refused
+// (flat/number.h), so that `--stop-time 0x10`, `inf`, `nan` or `1e400` are refused
 // with the reason, as they would be in a model (CLI11's own conversion takes all four).
 // A refused value is a usage error: CLI11 prints "--name: <why>" and main exits with 1.
 #pragma once
@@ -7,7 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "runtime/flat/number.h"
+#include "flat/number.h"
 
 namespace kanesim::cli {
 

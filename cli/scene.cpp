@@ -6,8 +6,8 @@
 #include <unordered_set>
 
 #include "cli/scene.h"
-#include "runtime/geometry/mesh_load.h"
-#include "runtime/geometry/primitives.h"
+#include "geometry/mesh_load.h"
+#include "geometry/primitives.h"
 #include "runtime/program/program.h"
 
 namespace kanesim::cli {

@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/flat/mechanism.h"
-#include "runtime/geometry/gltf_export.h"
-#include "runtime/sim/csv.h"
+#include "runtime/runtime.h"
+#include "flat/mechanism.h"
+#include "geometry/gltf_export.h"
+#include "sim/csv.h"
 
 namespace CLI {
 class App;
@@ -68,7 +68,7 @@ class PoseRecorder final : public sim::SignalSink {
 };
 
 // `kanesim run --animation out.glb|out.gltf`: the poses ride along with the CSV's signals
-// and are written through runtime/geometry's glTF export after the run.
+// and are written through geometry's glTF export after the run.
 class AnimationRun {
  public:
   explicit AnimationRun(std::string path, bool show_frames = false)

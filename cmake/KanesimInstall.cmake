@@ -10,7 +10,7 @@ include(GNUInstallDirs)
 # to rewrite (CMake's rewrite fails on the build's "dir:" form of it).
 set_target_properties(kanesim PROPERTIES BUILD_WITH_INSTALL_RPATH ON INSTALL_RPATH_USE_LINK_PATH ON)
 install(TARGETS kanesim RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT cli)
-# The modules kanesim opens with dlopen when a command needs them (runtime/util/dynamic_module.h):
+# The modules kanesim opens with dlopen when a command needs them (util/dynamic_module.h):
 # mesh import and glTF export (assimp), the viewer's HTTP server, MPI sweeps. The installed
 # binary looks for them in PREFIX/<libdir>/kanesim, before the build tree's copies.
 foreach(module kanesim_geometry_assimp kanesim_viz_http kanesim_batch_mpi)

@@ -8,7 +8,7 @@ checked: it names what existed then.
 Usage: check_doc_paths.py ROOT KANESIM     (exit 1, one line per problem: page:line: what)
        check_doc_paths.py --self-test      (the checker finds planted mistakes)
 
-Paths: a word starting with a top-level folder of the repository (`runtime/engine/engine.h`,
+Paths: a word starting with a top-level folder of the repository (`runtime/runtime.h`,
 `tests/viz/`) is resolved from the root; a Markdown link from its page. `<NAME>` and `*` in a
 path are wildcards. Commands and options: in code (`inline` or fenced), the words after
 `kanesim` or `build/cli/kanesim` (or a code span starting with a command name: `run -o`) are
@@ -133,7 +133,7 @@ def check_command(tokens, commands, all_options):
 
 
 def expand_braces(path):
-    """runtime/sim/newton_krylov.{h,cpp} -> both paths."""
+    """sim/newton_krylov.{h,cpp} -> both paths."""
     m = re.search(r"\{([^{}]*)\}", path)
     if not m:
         return [path]

@@ -7,11 +7,11 @@
 #include <vector>
 
 #include "lang/source.h"
-#include "runtime/flat/diagnostic_codes.h"
+#include "flat/diagnostic_codes.h"
 
 namespace kanesim::lang {
 
-// The codes: runtime/flat/diagnostic_codes.h (one table with the compiler's).
+// The codes: flat/diagnostic_codes.h (one table with the compiler's).
 using flat::DiagCode;
 using flat::DiagCodeString;
 using flat::DiagCodeSummary;

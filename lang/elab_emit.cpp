@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "lang/elab_internal.h"
-#include "runtime/flat/union_find.h"
+#include "flat/union_find.h"
 
 namespace kanesim::lang::elab {
 

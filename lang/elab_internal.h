@@ -17,10 +17,10 @@
 #include "lang/library_cache.h"
 #include "lang/elab_small_vec.h"
 #include "lang/elaborate.h"
-#include "runtime/flat/mechanism.h"
-#include "runtime/flat/param_eval.h"
-#include "runtime/geometry/mesh_check.h"
-#include "runtime/geometry/tri_mesh.h"
+#include "flat/mechanism.h"
+#include "flat/param_eval.h"
+#include "geometry/mesh_check.h"
+#include "geometry/tri_mesh.h"
 
 namespace kanesim::lang::elab {
 

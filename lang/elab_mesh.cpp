@@ -1,5 +1,5 @@
 // Mesh functions of the language: the mass properties of the solid a closed triangle mesh
-// encloses, read once per elaboration and file (runtime/geometry; assimp is loaded only
+// encloses, read once per elaboration and file (geometry; assimp is loaded only
 // here, the first time a scene names a mesh). The stdlib's MeshBody is written with them:
 //
 //   meshVolume(file, scale)   V  (m³)                        the enclosed volume
@@ -21,8 +21,8 @@
 #include <fmt/core.h>
 
 #include "lang/elab_internal.h"
-#include "runtime/geometry/mass_properties.h"
-#include "runtime/geometry/mesh_load.h"
+#include "geometry/mass_properties.h"
+#include "geometry/mesh_load.h"
 
 namespace kanesim::lang::elab {
 

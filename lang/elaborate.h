@@ -11,7 +11,7 @@
 
 #include "lang/ast.h"
 #include "lang/diagnostics.h"
-#include "runtime/flat/mechanism.h"
+#include "flat/mechanism.h"
 
 namespace kanesim::lang {
 

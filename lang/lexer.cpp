@@ -7,7 +7,7 @@
 #include <string_view>
 
 #include "lang/text.h"
-#include "runtime/flat/number.h"
+#include "flat/number.h"
 
 namespace kanesim::lang {
 

@@ -5,9 +5,10 @@ set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config git
       libeigen3-dev libsundials-dev libsuitesparse-dev libassimp-dev
       libcli11-dev libfmt-dev libtomlplusplus-dev libgtest-dev libgmock-dev libbenchmark-dev
+      libtinyxml2-dev             # the URDF importer (import/)
       clang-14 libclang-rt-14-dev libomp-14-dev python3 python3-venv
       openmpi-bin libopenmpi-dev  # OpenMPI: kanesim sweep --mpi (optional at build time)
-      libcpp-httplib-dev          # the viewer's HTTP server (runtime/viz)
+      libcpp-httplib-dev          # the viewer's HTTP server (viz)
       libjs-three libjs-dygraphs  # the viewer page's libraries, read at run time
       chromium                    # the viewer's browser tests (headless, tests/viz)
       ccache                      # scripts/test.sh: the pip build reuses build/'s objects

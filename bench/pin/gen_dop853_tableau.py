@@ -1,8 +1,8 @@
-"""Writes runtime/sim/dop853_tableau.h: the Dormand-Prince 8(5,3) coefficients (DOP853) of
+"""Writes sim/dop853_tableau.h: the Dormand-Prince 8(5,3) coefficients (DOP853) of
 Hairer, Norsett & Wanner, "Solving Ordinary Differential Equations I", 2nd ed., Springer
 1993, sec. II.10 (the method; dense output of order 7 as in sec. II.6), as tabulated in
 Hairer's dop853.f and copied by SciPy (scipy/integrate/_ivp/dop853_coefficients.py).
-Only the numbers come from there; the integrators that use them (runtime/sim/
+Only the numbers come from there; the integrators that use them (sim/
 integrator_dop853.cpp, bench/pin/pin_driver.cpp) are written here. One header serves
 both, so kanesim and the Pinocchio peer of the benchmark step with the same table.
 
@@ -30,7 +30,7 @@ out = [
     "// Stages 0..11 make one step: k_s = f(t + C[s] h, y + h sum_j A[s][j] k_j); the 8th-order",
     "// solution is y + h sum_j B[j] k_j. Stage 12 (C = 1, A[12] = B) is f at the new point, the",
     "// next step's stage 0 (FSAL). Stages 13..15 serve only the dense output; D gives its",
-    "// coefficients 3..6 (runtime/sim/integrator_dop853.cpp, Eq. (4)). E5 and E3 are the",
+    "// coefficients 3..6 (sim/integrator_dop853.cpp, Eq. (4)). E5 and E3 are the",
     "// 5th- and 3rd-order error estimators (Eq. (2) there).",
     "#pragma once",
     "",

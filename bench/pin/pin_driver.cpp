@@ -1,7 +1,7 @@
 // Peer for the work-precision benchmark (issue 6): Pinocchio's articulated-body algorithm
 // (pinocchio::aba, compiled C++) driven by a hand-written adaptive Dormand-Prince 8(5,3)
 // (DOP853; Hairer, Norsett & Wanner, Solving ODEs I, sec. II.10; coefficients in
-// runtime/sim/dop853_tableau.h, the table kanesim's own DOP853 uses), and a timer of one
+// sim/dop853_tableau.h, the table kanesim's own DOP853 uses), and a timer of one
 // aba call for the RHS-cost-vs-N table.
 //
 //   pin_driver integrate MODEL N T RTOL ATOL REPS   ->  one line: key=value ...
@@ -35,8 +35,8 @@
 #include <string>
 #include <vector>
 
-#include "runtime/sim/dop853_control.h"
-#include "runtime/sim/dop853_tableau.h"
+#include "sim/dop853_control.h"
+#include "sim/dop853_tableau.h"
 
 namespace {
 
@@ -95,7 +95,7 @@ struct Result {
 // Adaptive DOP853 from 0 to T (the last step clipped onto T). Error norm and step control
 // as in Hairer's dop853.f: err = |h| err5 / sqrt(n (err5^2 + 0.01 err3^2)) with err5, err3
 // the root-sum-squares of the scaled 5th- and 3rd-order estimates, scale atol + rtol max|y|;
-// the new step from runtime/sim/dop853_control.h, the control kanesim's DOP853 uses (Hairer's:
+// the new step from sim/dop853_control.h, the control kanesim's DOP853 uses (Hairer's:
 // 0.9 err^(-1/8) clamped to [1/3, 6], no growth right after a rejection; a step within 1 % of
 // T goes onto it), so that both take the same steps. The FSAL stage is the next step's first.
 template <class F>

@@ -378,7 +378,8 @@ class Model:
 
 def _load(args: Dict[str, Any], sets: Dict[str, Any]) -> Model:
     compiled, error = _kanesim.load(args["path"], args["text"], args["from_text"], args["model"] or "",
-                                    _set_list(sets), args["solver"], args["integrator"], args["reactions"])
+                                    _set_list(sets), args["solver"], args["integrator"], args["reactions"],
+                                    args.get("floating", False), list(args.get("package_path", ())))
     if compiled is None:
         code, file, line, column, rendered = error
         raise ModelError(rendered.rstrip("\n"), code, file, line, column)
@@ -387,13 +388,19 @@ def _load(args: Dict[str, Any], sets: Dict[str, Any]) -> Model:
 
 
 def load(path, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = None, solver: str = "auto",
-         integrator: str = "auto", reactions: str = "nan") -> Model:
-    """Loads, elaborates and compiles a .mech file. set: parameter values as --set takes
+         integrator: str = "auto", reactions: str = "nan", floating: bool = False,
+         package_path: Sequence[str] = ()) -> Model:
+    """Loads, elaborates and compiles a .mech file, or a URDF robot (robot.urdf, translated as
+    `kanesim import` does: docs/import.md; floating and package_path as its --floating and
+    --package-path). set: parameter values as --set takes
     them ({"N": 20, "world.g": [0, 0, -9.81], "flag": True}); model: the model to
     elaborate (default: the last in the file). Raises ModelError."""
+    if isinstance(package_path, (str, os.PathLike)):
+        package_path = [package_path]
     args = dict(path=os.fspath(path), text="", from_text=False, model=model,
                 solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
-                reactions=_choice(reactions, "reactions", _REACTIONS))
+                reactions=_choice(reactions, "reactions", _REACTIONS), floating=bool(floating),
+                package_path=[os.fspath(p) for p in package_path])
     return _load(args, dict(set or {}))
 
 

@@ -1,5 +1,5 @@
 // Loading and running for the Python module (glue.h), through the library pipeline
-// (runtime/pipeline/pipeline.h) as the `kanesim` commands: pipeline::LoadModel loads,
+// (pipeline/pipeline.h) as the `kanesim` commands: pipeline::LoadModel loads,
 // pipeline::ResolveRun resolves a run's settings, sim::Simulate (pipeline::Run's stage
 // 5-6) runs into memory, batch::ScenarioRunner sweeps.
 #include "python/src/glue.h"
@@ -14,13 +14,14 @@
 #include <thread>
 
 #include "lang/diagnostics.h"
-#include "runtime/batch/metrics.h"
-#include "runtime/batch/scenario.h"
-#include "runtime/batch/sweep.h"
-#include "runtime/batch/worker_pool.h"
+#include "batch/metrics.h"
+#include "batch/scenario.h"
+#include "batch/sweep.h"
+#include "batch/worker_pool.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/signal_select.h"
-#include "runtime/pipeline/pipeline.h"
+#include "sim/signal_select.h"
+#include "pipeline/pipeline.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::py {
 namespace {
@@ -84,7 +85,12 @@ bool Load(const LoadRequest& req, LoadedModel* out, ModelErrorInfo* error) {
     std::lock_guard<std::mutex> lock(g_load_mutex);
     const pipeline::Source source = req.from_text ? pipeline::Source::Text(req.path, req.text)
                                                   : pipeline::Source::File(req.path);
-    r = pipeline::LoadModel(source, pipeline::LoadOptions{req.model, req.sets, true}, spec);
+    pipeline::LoadOptions lo;
+    lo.model = req.model;
+    lo.sets = req.sets;
+    lo.urdf.floating = req.floating;
+    lo.urdf.package_paths = req.package_paths;
+    r = pipeline::LoadModel(source, lo, spec);
   }
   if (!r.model) {
     error->rendered = r.diagnostics.empty() ? "kanesim: error: the model could not be loaded\n" : r.diagnostics;
@@ -283,7 +289,7 @@ void ForkGuards() {
   });
 }
 
-// The sweep's scenarios in worker processes (runtime/batch/worker_pool.h). False when no
+// The sweep's scenarios in worker processes (batch/worker_pool.h). False when no
 // process could be made: *first is where the threads take over (scenarios before it have
 // their rows); true when every scenario has its row or the sweep was interrupted.
 bool SweepInWorkers(batch::ScenarioRunner& runner, const batch::SweepConfig& config, const SweepRequest& request,

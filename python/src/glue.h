@@ -2,7 +2,7 @@
 // a model (Load), resolve a run's options and simulate it into memory (Run), summarize it
 // (Check) and sweep it (Sweep). Everything here is plain C++ (no Python types), so that
 // the bindings (module.cpp) stay thin. Loading and run settings go through the library
-// pipeline (runtime/pipeline/pipeline.h), as the command line's.
+// pipeline (pipeline/pipeline.h), as the command line's.
 #pragma once
 
 #include <functional>
@@ -15,11 +15,11 @@
 #include <variant>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/flat/mechanism.h"
-#include "runtime/linearize/linearize.h"
-#include "runtime/pipeline/pipeline.h"
-#include "runtime/sim/simulate.h"
+#include "runtime/runtime.h"
+#include "flat/mechanism.h"
+#include "linearize/linearize.h"
+#include "pipeline/pipeline.h"
+#include "sim/simulate.h"
 
 namespace kanesim::py {
 
@@ -43,6 +43,8 @@ struct LoadRequest {
   std::string solver = "auto";     // auto|dense|sparse|recursive
   std::string integrator = "auto"; // auto|ida|cvode|cvode-bdf|arkode|dop853 (compile-time choice)
   std::string reactions = "nan";   // nan|min-norm
+  bool floating = false;                   // a .urdf file: a free base (docs/import.md)
+  std::vector<std::string> package_paths;  // a .urdf file: where package:// meshes are looked up
 };
 
 struct LoadedModel {
@@ -113,7 +115,7 @@ struct SweepRequest {
   std::vector<std::string> metrics;  // "final:j.q", "cross:x.q=0", ...
   RunRequest run;
   int threads = 0;  // 0: all cores (workers or threads)
-  // Scenarios in worker processes forked from this one (runtime/batch/worker_pool.h), so a
+  // Scenarios in worker processes forked from this one (batch/worker_pool.h), so a
   // scenario that crashes or hangs costs its own row ("crashed", "timeout"), not the
   // interpreter; or on threads of this process (a crash ends the interpreter).
   bool processes = true;
@@ -134,7 +136,7 @@ struct SweepTable {
 };
 bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* out, std::string* error);
 
-// A linear model about an operating point, as `kanesim linearize` (runtime/linearize,
+// A linear model about an operating point, as `kanesim linearize` (linearize,
 // docs/linearize.md): the start values, the motion at `at`, or an equilibrium found from
 // either.
 struct LinearizeRequest {

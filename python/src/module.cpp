@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "python/src/glue.h"
-#include "runtime/sim/integrator.h"
+#include "sim/integrator.h"
 
 namespace py = pybind11;
 using kanesim::py::LoadedModel;
@@ -67,7 +67,7 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
 // (model, warnings) or raises ModelError via the Python side: returns (None, error tuple).
 py::tuple Load(const std::string& path, const std::string& text, bool from_text, const std::string& model,
                const std::vector<std::string>& sets, const std::string& solver, const std::string& integrator,
-               const std::string& reactions) {
+               const std::string& reactions, bool floating, const std::vector<std::string>& package_paths) {
   kanesim::py::LoadRequest req;
   req.path = path;
   req.text = text;
@@ -77,6 +77,8 @@ py::tuple Load(const std::string& path, const std::string& text, bool from_text,
   req.solver = solver;
   req.integrator = integrator;
   req.reactions = reactions;
+  req.floating = floating;
+  req.package_paths = package_paths;
   auto loaded = std::make_shared<LoadedModel>();
   kanesim::py::ModelErrorInfo error;
   bool ok = false;

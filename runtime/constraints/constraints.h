@@ -83,7 +83,7 @@ void RowBodies(const Program& p, int row, int* body_a, int* body_b);
 //   d/dt phi_i (or the velocity row) = Ja . V_a + Jb . V_b.
 void RowJacobians(const Program& p, const Workspace& ws, int row, Vec6* Ja, Vec6* Jb);
 
-// For solvers that project their steps (engine.h SetStepProjection): the constraint
+// For solvers that project their steps (runtime/runtime.h SetStepProjection): the constraint
 // Jacobian A at the positions as they are and its dependent block's factorization, what
 // the reduced equations need, and the rolling disks' check (ws.psi = A u + b of the
 // speeds as they are). Nothing is projected: off the manifold the reduced equations are

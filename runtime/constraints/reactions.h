@@ -20,7 +20,7 @@ void JointReactions(const Program& p, Workspace& ws);
 
 // ws.reaction_W from the multipliers ws.lambda_c alone (the bodies' inertia and applied
 // forces left out): the linear map lambda -> reactions whose null space decides which
-// reaction components are statically indeterminate (runtime/compile/indeterminate.cpp).
+// reaction components are statically indeterminate (compiler/indeterminate.cpp).
 // Needs the positions only.
 void MultiplierReactions(const Program& p, Workspace& ws);
 

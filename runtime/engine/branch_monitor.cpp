@@ -1,4 +1,4 @@
-// Branch monitor for closed loops (engine.h CheckBranch; docs/constraints.md "Singular
+// Branch monitor for closed loops (runtime/runtime.h CheckBranch; docs/constraints.md "Singular
 // configurations"; issue 20). A loop passing a change point (its constraint rows lose
 // rank: a parallelogram four-bar with its links in line) meets other assembly branches.
 // The physical continuation keeps the momentum: the velocity just after the singular
@@ -33,7 +33,7 @@
 
 #include "runtime/constraints/constraints.h"
 #include "runtime/engine/branch_monitor_internal.h"
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/program.h"
 
@@ -66,7 +66,7 @@ constexpr long kEarlyBridgeSteps = 50;
 // (chain of ten, 1e-12: 2-20 %) and DOP853 on the chain of two at 1e-12 then ended with two
 // output rows 2.4e-4 and 6.3e-3 rad off the lumped crank (t = 16.79, 16.80, just before and
 // after a crossing it passed by itself; the steps themselves on it), exit 0 — DOP853's
-// dense output, now checked (runtime/sim/integrator_dop853.cpp kDenseLimit); still off here
+// dense output, now checked (sim/integrator_dop853.cpp kDenseLimit); still off here
 // (SetBridgeSeveralAtOnceMultiplier, tests only) for the small saving.
 constexpr long kEarlyBridgeStepsSeveral = 10;
 constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
@@ -105,7 +105,7 @@ std::string StuckMessage(const Program& p, const BranchMonitor& m, double t, con
 }
 }  // namespace
 
-// engine.h.
+// runtime/runtime.h.
 double LoopSingularRatio(const Program& p, const Workspace& ws, int loop, double* length) {
   const LoopClosure& l = p.loops[static_cast<size_t>(loop)];
   // Its rows of ws.A and its rank at the assembled start: those rows less the ones found

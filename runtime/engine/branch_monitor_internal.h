@@ -1,4 +1,4 @@
-// The branch monitor's state, shared by its two files (engine.h declares the interface):
+// The branch monitor's state, shared by its two files (runtime/runtime.h declares the interface):
 // branch_monitor.cpp checks each accepted step against a turn onto another branch;
 // change_point_bridge.cpp bridges a near-singular zone and checks a passage the solver
 // made by itself (docs/constraints.md "Singular configurations").
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
 
 namespace kanesim::rt {

@@ -1,5 +1,5 @@
 // The bridge over a near-singular zone of a closed loop, and the check of a change point a
-// solver passed by itself (engine.h BridgeChangePoint, BridgeState; docs/constraints.md
+// solver passed by itself (runtime/runtime.h BridgeChangePoint, BridgeState; docs/constraints.md
 // "Singular configurations"; issue 20). The monitor that calls them is branch_monitor.cpp.
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -11,7 +11,7 @@
 
 #include "runtime/constraints/constraints.h"
 #include "runtime/engine/branch_monitor_internal.h"
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/program.h"
 

@@ -1,5 +1,5 @@
 // Which entries of the state can influence which derivatives: the block structure of
-// df/dy that IDA's and CVODE-BDF's Newton matrices inherit (runtime/sim/dq_jacobian.cpp).
+// df/dy that IDA's and CVODE-BDF's Newton matrices inherit (sim/dq_jacobian.cpp).
 //
 // In minimal coordinates every speed of a subtree hanging from the world is coupled to
 // every other through the subtree's mass matrix, so a group is at least such a subtree
@@ -11,8 +11,8 @@
 //   representative of the subtrees it depends on; an instruction joining two operands
 //   merges their subtrees, which can only over-merge (never miss a dependency).
 // Contacts and prescribed motion act between a body and the world and join nothing.
-#include "runtime/engine/engine.h"
-#include "runtime/flat/union_find.h"
+#include "runtime/runtime.h"
+#include "flat/union_find.h"
 #include "runtime/program/program.h"
 
 namespace kanesim::rt {

@@ -1,5 +1,5 @@
-// NonConservativeCause (engine.h): which force element keeps a model from conserving T + V.
-#include "runtime/engine/engine.h"
+// NonConservativeCause (runtime/runtime.h): which force element keeps a model from conserving T + V.
+#include "runtime/runtime.h"
 
 #include "runtime/program/program.h"
 

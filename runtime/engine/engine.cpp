@@ -1,6 +1,6 @@
 // The right-hand side as a list of named stages (MuJoCo's mj_forward shape), and the
-// small public accessors of engine.h.
-#include "runtime/engine/engine.h"
+// small public accessors of runtime/runtime.h.
+#include "runtime/runtime.h"
 
 #include <algorithm>
 #include <cmath>
@@ -18,7 +18,7 @@ namespace {
 // A NaN is recoverable (> 0), not fatal: a stage of a long step may probe past the point
 // where the model turns NaN (sqrt(0.35 - time) evaluated at 0.4), and the solver must
 // then retry shorter, keeping every row before that point; a NaN that persists ends the
-// run there with this cause (runtime/sim/integrator.h, GuardedRhs).
+// run there with this cause (sim/integrator.h, GuardedRhs).
 int NotFinite(const Program& p, Workspace& ws, int free_speed) {
   const int r = p.u_free[static_cast<size_t>(free_speed)];
   const TreeJoint& j = p.joints[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(r)])];

@@ -9,7 +9,7 @@
 #include <cmath>
 
 #include "runtime/constraints/constraints.h"
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/kane/kane.h"
 #include "runtime/kinematics/kinematics.h"
 

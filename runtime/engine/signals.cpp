@@ -2,7 +2,7 @@
 #include <cmath>
 #include <limits>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/engine/output_rows.h"
 #include "runtime/constraints/constraints.h"
 #include "runtime/constraints/contacts.h"

@@ -31,7 +31,7 @@ void BiasAccelerations(const Program& p, Workspace& ws, bool include_free = fals
 // PositionKinematics, VelocityKinematics and BiasAccelerations (free udot = 0) at once,
 // for a tree: the same results in one pass over the bodies. (Closed loops project the
 // speeds between velocities and accelerations, so they call the three one by one, unless
-// the solver projects its steps instead: engine.h SetStepProjection.)
+// the solver projects its steps instead: runtime/runtime.h SetStepProjection.)
 void MotionKinematics(const Program& p, Workspace& ws);
 
 // qdot = N(q) u for every joint (Lesser eqs. 44-47). Returns -1 at gimbal lock.

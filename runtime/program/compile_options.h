@@ -1,5 +1,5 @@
 // What the user chooses for Compile: the solver path, the integrator, and how undetermined
-// reaction components are reported. Kept apart from the engine facade (runtime/engine/engine.h) so
+// reaction components are reported. Kept apart from the engine facade (runtime/runtime.h) so
 // that the Program (runtime/program/program.h), which stores them, sits below the facade.
 #pragma once
 

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "runtime/program/compile_options.h"
-#include "runtime/flat/mechanism.h"
+#include "flat/mechanism.h"
 #include "runtime/program/partition_qr.h"
 #include "runtime/program/small_qr.h"
 #include "runtime/program/tape.h"
@@ -246,12 +246,12 @@ struct Program {
   std::vector<int> friction_indeterminate;  // tree joints whose Coulomb friction reads an indeterminate normal force
   std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/kane/friction.cpp)
   // Start speeds given non-zero that the assembly's velocity projection changed (warning
-  // W315, engine.h StartSpeedsWarning): the message ("" when none) and the place of the
+  // W315, compiler/compiler.h StartSpeedsWarning): the message ("" when none) and the place of the
   // constraint with the largest start residual.
   std::string start_speeds_changed;
   flat::SourceLoc start_speeds_loc;
   // Joints that cannot move because both their frames are on one rigid body (the world,
-  // or bodies merged by welds and fixed elements; warning W316, engine.h
+  // or bodies merged by welds and fixed elements; warning W316, compiler/compiler.h
   // LockedJointWarnings): they add neither a speed nor a constraint row.
   struct LockedJoint {
     std::string name;
@@ -280,7 +280,7 @@ struct SparseNumericDeleter {
 
 struct Workspace {
   double t = 0.0;                   // time of the last evaluation  ()  filled by UnpackState
-  bool step_projection = false;     // the solver projects its steps (engine.h SetStepProjection)
+  bool step_projection = false;     // the solver projects its steps (runtime/runtime.h SetStepProjection)
   bool newton_to_round_off = false;  // position Newton to round-off below a pivot ratio of 0.5 for every block size (the branch monitor's bridge)
   Eigen::VectorXd q, u;             // full coordinates, speeds  (nq_all), (nu_all)  filled by UnpackState
   Eigen::VectorXd udot;             // full accelerations; prescribed ones from the jet (nu_all)  filled by UnpackState/Solve*

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/flat/expr.h"
+#include "flat/expr.h"
 
 namespace kanesim::rt {
 

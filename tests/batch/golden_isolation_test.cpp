@@ -1,5 +1,5 @@
 // One golden test's failure, of any kind, never takes `kanesim test` down (issue 38): each
-// test runs in a worker process (runtime/batch/worker_pool.h), so a test that crashes
+// test runs in a worker process (batch/worker_pool.h), so a test that crashes
 // (SIGSEGV, SIGABRT, an exit) or runs past --timeout is reported as CRASH or TIMEOUT with
 // why, counts as a failure (exit 3), and the other tests still run and report. Faults are
 // injected through the test hook $KANESIM_TEST_SWEEP_FAULT ("segv@1": the test at position 1

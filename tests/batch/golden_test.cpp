@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "runtime/batch/golden.h"
+#include "batch/golden.h"
 
 namespace kanesim::batch {
 namespace {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "runtime/batch/metrics.h"
+#include "batch/metrics.h"
 
 namespace kanesim::batch {
 namespace {

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <fstream>
 
-#include "runtime/batch/scenario.h"
+#include "batch/scenario.h"
 
 namespace kanesim::batch {
 namespace {

@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "runtime/batch/file_guard.h"
-#include "runtime/batch/settings_record.h"
+#include "batch/file_guard.h"
+#include "batch/settings_record.h"
 
 namespace kanesim::batch {
 namespace {

@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "runtime/batch/csv_util.h"
-#include "runtime/batch/summary.h"
+#include "batch/csv_util.h"
+#include "batch/summary.h"
 
 namespace kanesim::batch {
 namespace {

@@ -10,8 +10,8 @@
 #include <fstream>
 #include <numbers>
 
-#include "runtime/batch/csv_util.h"
-#include "runtime/batch/summary.h"
+#include "batch/csv_util.h"
+#include "batch/summary.h"
 
 namespace kanesim::batch {
 namespace {

@@ -1,5 +1,5 @@
 // One scenario's failure, of any kind, never takes a sweep down (issue 38): scenarios run in
-// worker processes (runtime/batch/worker_pool.h), and a worker that crashes (SIGSEGV,
+// worker processes (batch/worker_pool.h), and a worker that crashes (SIGSEGV,
 // SIGABRT, an exit), exhausts its memory, or hangs past --scenario-timeout costs only its
 // own row. Faults are injected in the workers through the test hook
 // $KANESIM_TEST_SWEEP_FAULT ("segv@1": scenario 1 dereferences a null pointer). Every other
@@ -16,8 +16,8 @@
 #include <map>
 #include <vector>
 
-#include "runtime/batch/csv_util.h"
-#include "runtime/batch/summary.h"
+#include "batch/csv_util.h"
+#include "batch/summary.h"
 #include "tests/batch/child_env.h"
 
 namespace kanesim::batch {

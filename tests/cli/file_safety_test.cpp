@@ -9,7 +9,7 @@
 
 #include <vector>
 
-#include "cli_util.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

@@ -11,7 +11,7 @@
 #include <functional>
 #include <vector>
 
-#include "cli_util.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

@@ -1,4 +1,4 @@
-// The one number syntax (runtime/flat/number.h): what flat::ParseNumber accepts from an
+// The one number syntax (flat/number.h): what flat::ParseNumber accepts from an
 // option, a grid value or a list file is exactly what the lexer accepts as a number
 // literal in a model, with the same value. Generator: every string of up to five
 // characters over an alphabet of digits, '.', exponent letters, signs and look-alikes
@@ -13,7 +13,7 @@
 #include "lang/diagnostics.h"
 #include "lang/lexer.h"
 #include "lang/source.h"
-#include "runtime/flat/number.h"
+#include "flat/number.h"
 
 namespace kanesim::clitest {
 namespace {

@@ -1,12 +1,12 @@
 // "Clear messages" of issue 24: every numeric option reads exactly the language's number
-// syntax (runtime/flat/number.h) and says what is wrong with a value (not a number, out
+// syntax (flat/number.h) and says what is wrong with a value (not a number, out
 // of range, not positive), tolerances that are legal but almost surely mistakes draw a
 // warning, and the TOML readers refuse values of the wrong type or range with file:line.
 #include <gtest/gtest.h>
 
 #include <vector>
 
-#include "cli_util.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

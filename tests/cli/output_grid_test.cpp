@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
-#include "runtime/sim/csv.h"
-#include "runtime/sim/integrator.h"
-#include "cli_util.h"
+#include "sim/csv.h"
+#include "sim/integrator.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

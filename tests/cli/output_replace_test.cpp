@@ -1,6 +1,6 @@
 // Issue 38, data loss: every file kanesim replaces (run -o, --animation, test --update, a
 // sweep's summary and records, sweep merge -o) is written through a temporary beside it,
-// flushed and renamed over it (runtime/batch/file_guard.h AtomicFile), so
+// flushed and renamed over it (batch/file_guard.h AtomicFile), so
 //   - a full disk, a file-size limit or a kill leaves the previous file whole (before: run -o
 //     truncated it at once, --animation left a torn file);
 //   - a FIFO, a device, a directory or a socket named as the target is refused, never
@@ -17,7 +17,7 @@
 
 #include <vector>
 
-#include "cli_util.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

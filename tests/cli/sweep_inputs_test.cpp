@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "cli_util.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "cli_util.h"
+#include "tests/support/cli_util.h"
 
 namespace kanesim::clitest {
 namespace {

@@ -1,7 +1,7 @@
 // Acceleration signals (joint `j.a`, body `b.a[k]`, `b.alpha[k]`; runtime/engine/signals.cpp)
 // against closed forms and against a second method.
 //
-// Physical pendulum (tests/runtime/builders.h Pendulum): a thin rod of mass m and length L
+// Physical pendulum (tests/support/builders.h Pendulum): a thin rod of mass m and length L
 // hanging along -y of its frame from a revolute joint about z at the origin; mass centre at
 // r = (L/2)(sin q, -cos q, 0), I_O = m L^2 / 3. Lagrange:
 //   qdd = -(3 g / (2 L)) sin q                                                        (1)
@@ -20,9 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/sim/signal_select.h"
-#include "tests/constraints/load_util.h"
-#include "tests/runtime/builders.h"
+#include "sim/signal_select.h"
+#include "tests/support/load_util.h"
+#include "tests/support/builders.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::test {
 namespace {

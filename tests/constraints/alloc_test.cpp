@@ -8,9 +8,10 @@
 #include <new>
 
 #include "runtime/program/program.h"
-#include "tests/alloc_counter.h"
-#include "tests/constraints/load_util.h"
-#include "tests/runtime/builders.h"
+#include "tests/support/alloc_counter.h"
+#include "tests/support/load_util.h"
+#include "tests/support/builders.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::test {
 namespace {

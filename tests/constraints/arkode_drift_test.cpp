@@ -6,10 +6,10 @@
 // right. An output row (its own workspace) or a stage whose partition of the speeds
 // differs took such a drifted speed as independent: the chain of ten's rows were 36 % off
 // the lumped crank's energy before the run stopped at t = 16.65. ARKODE now resets ERKStep
-// to y* when a step drifted past 10 error weights (runtime/sim/integrator_arkode.cpp,
+// to y* when a step drifted past 10 error weights (sim/integrator_arkode.cpp,
 // MeasureDrift); without that reset this test fails (0.36).
 //
-// Checked against the independent lumped crank (tests/stress/lumped_crank.h: the whole
+// Checked against the independent lumped crank (tests/support/lumped_crank.h: the whole
 // chain is one crank, energy (1/2) J w^2 + G sin(theta)): every row's lumped energy within
 // max(1e3 rtol, 1e-6) of the first row's (bench/change_point_chains.py's bound), the run to
 // 20 s with exit 0, every rod on rod 0's angle and speed (the branch).
@@ -20,9 +20,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

@@ -1,6 +1,6 @@
 // The chain of ten equal-link parallelograms on the multiplier form with CVODE-BDF (issue 20)
 // at rtol 1e-12 goes on through its change points on the branch
-// (runtime/sim/integrator_cvode.cpp, ProjectStep). Main restarted CVODE (CVodeReInit, order
+// (sim/integrator_cvode.cpp, ProjectStep). Main restarted CVODE (CVodeReInit, order
 // 1) from the projection y* whenever a step's drift from it grew past 10 error weights;
 // inside the change-point zones, where the projection is ill-conditioned, that happened
 // 234 times by t = 7.705, each restart shrinking the step, until the branch monitor stopped
@@ -8,7 +8,7 @@
 // passing the change point", loop cut[3]). CVODE-BDF now projects each step through
 // CVODE's own projection (the Nordsieck history corrected with y, no restart).
 //
-// Checked against the independent lumped crank (tests/stress/lumped_crank.h: the whole
+// Checked against the independent lumped crank (tests/support/lumped_crank.h: the whole
 // chain turns as one crank of lumped inertia): every row's energy (1/2) J w^2 + G sin(theta)
 // within max(1e3 rtol, 1e-6) of the first row's (bench/change_point_chains.py's bound),
 // every rod at rod 0's angle and speed (the branch), and the run to its stop time past the
@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

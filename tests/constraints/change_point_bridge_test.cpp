@@ -1,5 +1,5 @@
 // The bridge over change points (runtime/engine/branch_monitor.cpp BridgeChangePoint,
-// runtime/sim/integrator.cpp; docs/constraints.md "Singular configurations"; issue 20). At
+// sim/integrator.cpp; docs/constraints.md "Singular configurations"; issue 20). At
 // tight tolerances every solver stalls short of a change point of the parallelogram
 // four-bar (tests/stress/models/parallelogram.mech), where the loop equations' conditioning
 // degrades; the bridge extrapolates the motion past the crossing and restarts the solver
@@ -25,10 +25,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "runtime/runtime.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {
@@ -434,7 +434,7 @@ TEST(ChangePointBridge, ChainOfFortyPassesWithCvodeAtRtol1e12) {
 // rad/s before it and 6.44e-5 after; the angle error 4.3e-5 rad, the lumped energy within
 // 1.4e-6 of E (1.3e-6 before the bridge; its ripple of ~2e-7 of E hides the jump). To t = 10.2 s.
 // With the dense Newton matrix, as measured: the matrix-free iteration that auto now takes
-// there (runtime/sim/newton_krylov.h) passes every crossing to t = 10.2 without a bridge
+// there (sim/newton_krylov.h) passes every crossing to t = 10.2 without a bridge
 // (angle error 2.55e-5 rad, energy 9.5e-7 of E; tests/constraints/newton_krylov_chain_test.cpp).
 TEST(ChangePointBridge, ChainOfFortyWithIdaOnTheMultiplierFormAtRtol1e8) {
   if (kSanitized || std::getenv("KANESIM_STRESS_SHORT")) GTEST_SKIP() << "8 s in Release";
@@ -459,7 +459,7 @@ TEST(ChangePointBridge, ChainOfFortyWithIdaOnTheMultiplierFormAtRtol1e8) {
 namespace kanesim::test {
 namespace {
 
-// DOP853's dense output (runtime/sim/integrator_dop853.cpp, kDenseLimit): its three extra
+// DOP853's dense output (sim/integrator_dop853.cpp, kDenseLimit): its three extra
 // stages are not controlled by the error test, and one of them landing at a change point,
 // where the loop equations are ill-conditioned, corrupts the rows interpolated in that step
 // while the step's end stays accurate. Seen on the chain of two at rtol 1e-12, multiplier

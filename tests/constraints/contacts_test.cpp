@@ -14,7 +14,7 @@
 #include <cmath>
 
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {

@@ -5,7 +5,7 @@
 // equal to 7e-10, the lumped energy as elsewhere), but the projection through the speed
 // partition solved the dependent speeds through a nearly singular dependent block and
 // wrote the rods' speeds 1e-2 apart and the lumped crank's energy 1.7e-3 of E off (exit 0).
-// Checked against the independent lumped crank (tests/stress/lumped_crank.h), every row:
+// Checked against the independent lumped crank (tests/support/lumped_crank.h), every row:
 //  - the lumped energy (1/2) J w^2 + G sin(theta) within 2e-4 of the first row's (the
 //    other rows: up to 3.4e-5), and every rod's speed within 1e-3 of rod 0's (elsewhere
 //    up to 5e-5: the integrator's own error; on the branch they are equal);
@@ -21,11 +21,11 @@
 #include <utility>
 #include <vector>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

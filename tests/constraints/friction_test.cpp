@@ -14,8 +14,9 @@
 #include <cmath>
 
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
-#include "tests/runtime/builders.h"
+#include "tests/support/load_util.h"
+#include "tests/support/builders.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::test {
 namespace {

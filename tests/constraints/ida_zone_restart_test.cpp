@@ -1,6 +1,6 @@
 // IDA on the chain of 40 equal-link parallelograms at rtol 1e-12, reduced form, through its
 // change points past t = 6 (issue 20; docs/constraints.md "The reduced form at rtol 1e-12",
-// runtime/sim/integrator_ida.cpp kLoopConvCoef, runtime/engine/change_point_bridge.cpp).
+// sim/integrator_ida.cpp kLoopConvCoef, runtime/engine/change_point_bridge.cpp).
 // Two stops on the way, both with the physics regular (every loop singular at once, the
 // chain turning as one crank at ~11 rad/s):
 //  - t = 6.006: after a good bridge the fresh IDA, starting at rho = 3e-3, failed its Newton
@@ -16,7 +16,7 @@
 // the bridge's estimate was held at 3e4 and the run stopped at t = 2.04 (1001 steps in a
 // zone, estimate 3.53e4). With the metric projection the jump is the extrapolation's: the
 // rows up to t = 3 keep the lumped energy to 1e-8.
-// Checked against the independent lumped crank (tests/stress/lumped_crank.h): exit 0, every
+// Checked against the independent lumped crank (tests/support/lumped_crank.h): exit 0, every
 // rod on the parallelogram branch, the crank angle and the lumped energy kept.
 #include <gtest/gtest.h>
 
@@ -26,11 +26,11 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

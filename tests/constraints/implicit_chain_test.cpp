@@ -1,11 +1,11 @@
-// IDA on the multiplier form keeps df/dy across linear setups (runtime/sim/integrator_ida.cpp,
+// IDA on the multiplier form keeps df/dy across linear setups (sim/integrator_ida.cpp,
 // kReuseMinEvals / kMaxReuseSteps; docs/constraints.md "Singular configurations", issue 20).
 // IDA asks for a Newton matrix cj I - df/dy at every linear setup (a new step size, a
 // Newton failure); on the multiplier form f reads every state (the projection in the mass
 // metric), so each fresh df/dy costs one evaluation per state, 2 (2N + 1) for the chain of
 // N loops: 96 % of IDA's evaluations on the chain of 40 at rtol 1e-10. Now the last df/dy is
 // taken with the new cj, as CVODE does, unless a step failed since or it is 20 steps old.
-// Checked against the independent lumped crank (tests/stress/lumped_crank.h), through the
+// Checked against the independent lumped crank (tests/support/lumped_crank.h), through the
 // chain's change points over 20 s:
 //  - multiplier form: on the branch, within 2e-5 rad of the lumped crank, its lumped energy
 //    kept, and fewer evaluations for Jacobians than states x Jacobian setups (on main, where
@@ -20,11 +20,11 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

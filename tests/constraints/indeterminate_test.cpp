@@ -1,4 +1,4 @@
-// Statically indeterminate constraint-force components (runtime/compile/indeterminate.cpp):
+// Statically indeterminate constraint-force components (compiler/indeterminate.cpp):
 // written as NaN, the determinate ones against an independent planar Newton-Euler solve.
 //
 // examples/fourbar.mech is a planar loop built from spatial revolute joints: the cut
@@ -24,7 +24,8 @@
 #include <cmath>
 
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::test {
 namespace {

@@ -1,4 +1,4 @@
-// Closed loops (runtime/constraints/constraints.*, runtime/compile/loops.cpp) against closed forms:
+// Closed loops (runtime/constraints/constraints.*, compiler/loops.cpp) against closed forms:
 //
 // Four-bar (examples/fourbar.mech): crank a from O2 = 0 at angle theta, coupler b,
 // rocker c from O4 = (d, 0). With A = a (cos theta, sin theta), the rocker tip B lies on
@@ -20,10 +20,10 @@
 #include <cstdio>
 
 #include "runtime/constraints/constraints.h"
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {
@@ -164,7 +164,7 @@ TEST(FourBar, StepProjectionKeepsTheLoopClosedOverALongRun) {
   ASSERT_TRUE(l && l->prog);
   for (double tol : {1e-6, 1e-9}) {
     // DOP853 with --projection step: the right-hand side takes the positions as they are,
-    // the stepper projects each accepted step (engine.h SetStepProjection).
+    // the stepper projects each accepted step (runtime/runtime.h SetStepProjection).
     auto s = RunModel(*l->prog, 100.0, 0.1, tol,
                       {"crank_pivot.q", "crank_coupler.q", "rocker_pivot.q", "coupler_rocker.constraint_drift",
                        "kinetic_energy", "potential_energy"},

@@ -13,8 +13,9 @@
 #include <vector>
 
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::test {
 namespace {
@@ -247,7 +248,7 @@ namespace {
 // (docs/constraints.md "Reduced or multiplier form"). Wrong if the ladder leaves the
 // multiplier form or the chain of 40 parallelograms (81 free speeds) takes it; and the
 // reduced form the chain gets must follow its independent one-degree-of-freedom model
-// (tests/stress/lumped_crank.h).
+// (tests/support/lumped_crank.h).
 TEST(AutoForm, BandedChainOfLoopsKeepsTheReducedFormLadderTakesTheMultiplierForm) {
   auto ladder = LoadModel(kRoot + "/bench/models/fourbar_ladder.mech", {{"N", "30"}});
   ASSERT_TRUE(ladder && ladder->prog);

@@ -1,11 +1,11 @@
-// Matrix-free Newton-Krylov (runtime/sim/newton_krylov.h) on the chains of equal-link
+// Matrix-free Newton-Krylov (sim/newton_krylov.h) on the chains of equal-link
 // parallelograms, multiplier form, with IDA and CVODE-BDF (issue 20's cost goal). There
 // df/dy = -k I + (g' + k I) P' with rank(P') = 2 dof = 2, so the Newton matrices are an
 // identity multiple plus rank 2; main formed them by dense difference quotients (n = 162
 // evaluations for the chain of 40) and an LU. Measured over 20 s at rtol 1e-10 (chain of
 // 40): CVODE-BDF 64 s -> 13 s CPU, IDA 87 s -> 12 s (docs/benchmarks.md).
 //
-// Checked against the independent lumped crank (tests/stress/lumped_crank.h: the whole
+// Checked against the independent lumped crank (tests/support/lumped_crank.h: the whole
 // chain turns as one crank of lumped inertia): every row's energy (1/2) J w^2 + G sin(theta)
 // within max(1e3 rtol, 1e-6) of the first row's (bench/change_point_chains.py's bound),
 // every rod at rod 0's angle and speed (the branch), the run to its stop time; and the
@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

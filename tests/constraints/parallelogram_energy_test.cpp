@@ -7,7 +7,7 @@
 // being evaluated at the projection y*, d(y*)/dt = f + (dP/dt)(y - y*) pumped energy while
 // the drift grew x2-x4 per step, faster than the relaxation k_drift = 10 1/s pulls it back.
 // CVODE now starts again from y* when a step's drift is past 10 weights and has grown over
-// four steps in a row (runtime/sim/integrator_cvode.cpp, MeasureDrift), as ARKODE does;
+// four steps in a row (sim/integrator_cvode.cpp, MeasureDrift), as ARKODE does;
 // without that reset this test fails (energy error 43). CVODE-BDF now projects every step
 // through CVODE's own projection instead of that reset (integrator_cvode.cpp, ProjectStep;
 // branch bdfmult): 1.4e-4; without either, 43.
@@ -25,9 +25,9 @@
 #include <cstdio>
 #include <vector>
 
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

@@ -12,7 +12,7 @@
 //  - IDA (held) and CVODE-BDF (not) on the chain (reduced form) at rtol 1e-10 through its
 //    change points:
 //    on the branch to 20 s, within 2e-5 rad of the independent lumped crank
-//    (tests/stress/lumped_crank.h).
+//    (tests/support/lumped_crank.h).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,11 +20,11 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

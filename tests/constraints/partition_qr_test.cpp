@@ -15,9 +15,9 @@
 #include "runtime/constraints/constraints.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/partition_qr.h"
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {

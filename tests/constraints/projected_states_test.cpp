@@ -11,7 +11,7 @@
 //    listed (the independent ones) do change it: the list is exactly what f does not read;
 //  - IDA and CVODE-BDF on the chain (reduced form) at rtol 1e-10 through its change points:
 //    far fewer Jacobian evaluations of f than states per Jacobian, on the branch to 20 s
-//    and within 2e-5 rad of the independent lumped crank (tests/stress/lumped_crank.h).
+//    and within 2e-5 rad of the independent lumped crank (tests/support/lumped_crank.h).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,11 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {
@@ -121,7 +121,7 @@ TEST(ProjectedStates, IdaJacobiansPerturbOnlyTheIndependentStates) {
   ChainJacobians(rt::IntegratorKind::IDA, false, "IDA", kLoops, 0.5 * (2 * (2 * kLoops + 1)));
 }
 
-// CVODE-BDF's df/dy by the same grouped difference quotients (runtime/sim/dq_jacobian.h):
+// CVODE-BDF's df/dy by the same grouped difference quotients (sim/dq_jacobian.h):
 // 2 evaluations per Jacobian (the angle and the speed of the independent joint) on the
 // chain of ten, 42 states (measured: 424 for 212 Jacobians, 8.1e-6 rad). CVODE's own dense
 // difference quotients (main, b2c5e4c) took one per state: 8022 for 191, 1.4e-5 rad.

@@ -1,6 +1,6 @@
 // Constraint forces on request (runtime/constraints/reactions.*) against closed forms.
 //
-// Physical pendulum (tests/runtime/builders.h Pendulum): a thin rod of mass m and length
+// Physical pendulum (tests/support/builders.h Pendulum): a thin rod of mass m and length
 // L hanging along -y of its frame from a revolute joint about z at the origin; mass
 // centre at L/2, I_O = m L^2 / 3, q measured from the downward vertical. Lagrange:
 //   qdd = -(3 g / (2 L)) sin q                                                      (1)
@@ -16,8 +16,9 @@
 #include <cmath>
 
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
-#include "tests/runtime/builders.h"
+#include "tests/support/load_util.h"
+#include "tests/support/builders.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::test {
 namespace {

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "runtime/constraints/constraints.h"
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {

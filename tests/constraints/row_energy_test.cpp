@@ -1,10 +1,10 @@
 // Output rows checked against the energy (docs/constraints.md "Rows checked against the
-// energy"; runtime/sim/stepper.h RowEnergy): in a conservative model an interpolated output
+// energy"; sim/stepper.h RowEnergy): in a conservative model an interpolated output
 // instant whose T + V is far off the energies of the accepted steps around it is not
 // written from the interpolant (DOP853: the step is taken again to end on it; CVODE, IDA,
 // ARKODE: the instant is integrated again from the step's start). Checked against the
 // lumped crank's energy (1/2) J w^2 + G sin(theta) of the equal-link parallelograms
-// (tests/stress/lumped_crank.h), which does not depend on the check: every row within 1e-6
+// (tests/support/lumped_crank.h), which does not depend on the check: every row within 1e-6
 // of E. With the check off (SimOptions::row_energy_check) the same runs write the rows the
 // check exists for, so these cases fail if it stops working.
 #include <gtest/gtest.h>
@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "runtime/runtime.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

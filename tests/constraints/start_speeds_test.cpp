@@ -1,5 +1,5 @@
 // Start speeds that violate the velocity constraints are projected onto them by the
-// assembly (runtime/compile/loops.cpp, minimum-norm correction over the speeds not held)
+// assembly (compiler/loops.cpp, minimum-norm correction over the speeds not held)
 // and warning W315 says so (issue 20). Checked against the projection computed here from
 // the rolling disk's contact kinematics, independently of the compiler's rows.
 #include <gtest/gtest.h>
@@ -11,7 +11,8 @@
 #include <vector>
 
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
+#include "compiler/compiler.h"
 
 namespace kanesim::test {
 namespace {

@@ -1,6 +1,6 @@
 // Output rows of the accepted steps inside a near-singular zone are held until the zone is
 // passed or bridged; bridged, the held rows in the bridge's interval come from the bridged
-// motion (runtime/sim/integrator.cpp Integrate, OdeSystem::InZone; docs/constraints.md
+// motion (sim/integrator.cpp Integrate, OdeSystem::InZone; docs/constraints.md
 // "Rows held through a zone"; issue 20).
 // The case: DOP853 on the chain of ten equal-link parallelograms, multiplier form, rtol
 // 1e-10. Creeping towards the crossing near t = 1.74 its accepted steps have T + V right
@@ -8,7 +8,7 @@
 // the bridge then replaces those steps, but the row t = 1.74, interpolated between two of
 // them, was already written: 1.4e-5 of E off the lumped crank's energy (bound of
 // bench/change_point_chains.py: max(1e3 rtol, 1e-6) = 1e-6).
-// Checked against the independent lumped crank (tests/stress/lumped_crank.h): every row's
+// Checked against the independent lumped crank (tests/support/lumped_crank.h): every row's
 // lumped energy (1/2) J w^2 + G sin(theta) against the first row's, and the rods' speeds equal.
 #include <gtest/gtest.h>
 
@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "runtime/program/program.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
-#include "tests/stress/lumped_crank.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
+#include "tests/support/lumped_crank.h"
 
 namespace kanesim::test {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "runtime/flat/mechanism.h"
+#include "flat/mechanism.h"
 #include "tests/elab/elab_text.h"
 
 namespace kanesim::lang::test {

@@ -19,8 +19,8 @@
 #include <sstream>
 #include <tuple>
 
-#include "runtime/engine/engine.h"
-#include "runtime/flat/param_eval.h"
+#include "compiler/compiler.h"
+#include "flat/param_eval.h"
 #include "runtime/program/program.h"
 #include "runtime/program/tape.h"
 #include "tests/elab/elab_text.h"

@@ -135,7 +135,7 @@ TEST(Concat, LimitsHold) {
 }  // namespace
 }  // namespace kanesim::lang::test
 
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {

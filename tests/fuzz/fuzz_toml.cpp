@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/batch/golden.h"
-#include "runtime/batch/scenario.h"
-#include "runtime/batch/sweep_toml.h"
+#include "batch/golden.h"
+#include "batch/scenario.h"
+#include "batch/sweep_toml.h"
 
 namespace {
 

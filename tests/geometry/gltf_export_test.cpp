@@ -1,13 +1,13 @@
 // ExportAnimation's input checks, naming, orientation and decimation (geometry/gltf_export.h).
 // The written files themselves are parsed back by check_gltf.py and the Khronos validator.
-#include "runtime/geometry/gltf_export.h"
+#include "geometry/gltf_export.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
-#include "runtime/geometry/primitives.h"
-#include "mesh_files.h"
+#include "geometry/primitives.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -1,15 +1,15 @@
 // Mass properties of closed meshes against closed forms (geometry/mass_properties.h).
-#include "runtime/geometry/mass_properties.h"
+#include "geometry/mass_properties.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
-#include "runtime/geometry/mesh_check.h"
-#include "runtime/geometry/mesh_load.h"
-#include "runtime/geometry/primitives.h"
-#include "mesh_files.h"
+#include "geometry/mesh_check.h"
+#include "geometry/mesh_load.h"
+#include "geometry/primitives.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

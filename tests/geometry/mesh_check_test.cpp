@@ -1,10 +1,10 @@
 // CheckSolid on meshes built in memory (geometry/mesh_check.h): the edge counts each defect
 // must produce, independently counted by hand for these small meshes.
-#include "runtime/geometry/mesh_check.h"
+#include "geometry/mesh_check.h"
 
 #include <gtest/gtest.h>
 
-#include "runtime/geometry/primitives.h"
+#include "geometry/primitives.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -16,9 +16,9 @@
 #include <thread>
 #include <unistd.h>
 
-#include "runtime/geometry/mesh_load.h"
-#include "runtime/geometry/primitives.h"
-#include "mesh_files.h"
+#include "geometry/mesh_load.h"
+#include "geometry/primitives.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

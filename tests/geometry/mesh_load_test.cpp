@@ -1,7 +1,7 @@
 // Loading mesh files through assimp (geometry/mesh_load.h): every format the tests can write,
 // and a file for every problem a mesh file can have. The files are written by the tests
 // (mesh_files.h); expected values come from the meshes written, not from assimp.
-#include "runtime/geometry/mesh_load.h"
+#include "geometry/mesh_load.h"
 
 #include <gtest/gtest.h>
 
@@ -9,9 +9,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "runtime/geometry/mass_properties.h"
-#include "runtime/geometry/primitives.h"
-#include "mesh_files.h"
+#include "geometry/mass_properties.h"
+#include "geometry/primitives.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -1,6 +1,6 @@
 // Shapes for drawing (geometry/primitives.h), the drawing form of meshes (ToVisual), and the
 // lazy loading of assimp (geometry/assimp_module.h).
-#include "runtime/geometry/primitives.h"
+#include "geometry/primitives.h"
 
 #include <gtest/gtest.h>
 
@@ -9,10 +9,10 @@
 #include <numbers>
 #include <sstream>
 
-#include "runtime/geometry/mass_properties.h"
-#include "runtime/geometry/mesh_check.h"
-#include "runtime/geometry/mesh_load.h"
-#include "mesh_files.h"
+#include "geometry/mass_properties.h"
+#include "geometry/mesh_check.h"
+#include "geometry/mesh_load.h"
+#include "tests/support/mesh_files.h"
 
 namespace kanesim::geometry {
 namespace {

@@ -14,8 +14,8 @@
 #include <iomanip>
 #include <string>
 
-#include "runtime/geometry/gltf_export.h"
-#include "runtime/geometry/primitives.h"
+#include "geometry/gltf_export.h"
+#include "geometry/primitives.h"
 
 using namespace kanesim::geometry;
 

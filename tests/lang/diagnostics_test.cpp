@@ -11,7 +11,7 @@
 //   // repeat: CHAIN "+1" 100000  (replaces each @CHAIN@ in the text by "+1" 100000 times)
 //   // stage: compile             (also compile, when elaboration succeeds: the compiler's
 //                                 K3xx errors, and its W313/W314/W315 warnings for every signal)
-//   // mesh: part.stl open        (writes a test mesh beside the file, tests/lang/mesh_fixtures.h;
+//   // mesh: part.stl open        (writes a test mesh beside the file, tests/support/mesh_fixtures.h;
 //                                 the file is then loaded from that folder, named by its path)
 //
 // Each expected code must be reported on that line (and column, if given) of the file, with
@@ -32,10 +32,10 @@
 #include "lang/diagnostics.h"
 #include "lang/elaborate.h"
 #include "lang/source.h"
-#include "runtime/engine/engine.h"
-#include "runtime/pipeline/pipeline.h"
+#include "compiler/compiler.h"
+#include "pipeline/pipeline.h"
 #include "stdlib/stdlib.h"
-#include "tests/lang/mesh_fixtures.h"
+#include "tests/support/mesh_fixtures.h"
 
 namespace kanesim::lang {
 namespace {

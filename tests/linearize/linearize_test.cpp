@@ -1,4 +1,4 @@
-// kanesim linearize (runtime/linearize) against closed forms, the nonlinear model, and the
+// kanesim linearize (linearize) against closed forms, the nonlinear model, and the
 // other formulation.
 //
 // Pendulum, point mass m at distance l:           lambda = +-i sqrt(g / l)                (1)
@@ -24,9 +24,9 @@
 #include <cmath>
 #include <complex>
 
-#include "runtime/linearize/linearize.h"
+#include "linearize/linearize.h"
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {

@@ -1,4 +1,4 @@
-// The difference step and the accuracy linearize reports (runtime/linearize/linearize.cpp,
+// The difference step and the accuracy linearize reports (linearize/linearize.cpp,
 // eqs. 5-9), against closed forms at every allowed --step (0, 0.1]:
 //
 // Inverted pendulum (point mass at L above the hinge, q = pi/2 + 2 pi k):
@@ -17,9 +17,9 @@
 #include <limits>
 #include <string>
 
-#include "runtime/linearize/linearize.h"
+#include "linearize/linearize.h"
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {

@@ -1,7 +1,7 @@
-// The pipeline (runtime/pipeline/pipeline.h): what every command and test loads and runs
+// The pipeline (pipeline/pipeline.h): what every command and test loads and runs
 // through. If these fail, `run`, `sweep` and `test` resolve a different run than the
 // model and the options say, or report mistakes without their code and source line.
-#include "runtime/pipeline/pipeline.h"
+#include "pipeline/pipeline.h"
 
 #include <gtest/gtest.h>
 
@@ -11,10 +11,11 @@
 #include <vector>
 
 #include "lang/diagnostics.h"
-#include "runtime/flat/file_name.h"
+#include "flat/file_name.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/csv.h"
+#include "sim/csv.h"
 #include "stdlib/stdlib.h"
+#include "compiler/compiler.h"
 
 namespace kanesim {
 namespace {

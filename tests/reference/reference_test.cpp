@@ -12,7 +12,7 @@
 #include <map>
 #include <sstream>
 
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim {
 namespace {

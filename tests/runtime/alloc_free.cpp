@@ -7,11 +7,11 @@
 #include <new>
 #include <random>
 
-#include "runtime/engine/engine.h"
+#include "compiler/compiler.h"
 #include "runtime/program/program.h"
-#include "tests/alloc_counter.h"
-#include "tests/runtime/builders.h"
-#include "tests/runtime/random_state.h"
+#include "tests/support/alloc_counter.h"
+#include "tests/support/builders.h"
+#include "tests/support/random_state.h"
 
 namespace kanesim {
 namespace {

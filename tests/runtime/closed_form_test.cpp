@@ -7,8 +7,8 @@
 #include <Eigen/Geometry>
 #include <random>
 
-#include "runtime/engine/engine.h"
-#include "tests/runtime/builders.h"
+#include "compiler/compiler.h"
+#include "tests/support/builders.h"
 
 namespace kanesim {
 namespace {

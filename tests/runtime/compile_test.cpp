@@ -5,10 +5,10 @@
 #include <cmath>
 #include <random>
 
-#include "runtime/compile/compile_internal.h"
-#include "runtime/engine/engine.h"
+#include "compiler/compile_internal.h"
+#include "compiler/compiler.h"
 #include "runtime/program/tape.h"
-#include "tests/runtime/builders.h"
+#include "tests/support/builders.h"
 
 namespace kanesim {
 namespace {

@@ -7,12 +7,12 @@
 #include <memory>
 #include <random>
 
-#include "runtime/engine/engine.h"
+#include "compiler/compiler.h"
 #include "runtime/kane/kane_tree.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/program.h"
-#include "tests/runtime/builders.h"
-#include "tests/runtime/random_state.h"
+#include "tests/support/builders.h"
+#include "tests/support/random_state.h"
 
 namespace kanesim {
 namespace {

@@ -6,8 +6,8 @@
 
 #include <random>
 
-#include "runtime/engine/engine.h"
-#include "tests/runtime/builders.h"
+#include "compiler/compiler.h"
+#include "tests/support/builders.h"
 
 namespace kanesim {
 namespace {

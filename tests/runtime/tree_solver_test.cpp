@@ -11,14 +11,14 @@
 #include <new>
 #include <random>
 
-#include "runtime/engine/engine.h"
+#include "compiler/compiler.h"
 #include "runtime/kane/kane.h"
 #include "runtime/kane/kane_tree.h"
 #include "runtime/program/program.h"
-#include "runtime/sim/simulate.h"
-#include "tests/alloc_counter.h"
-#include "tests/runtime/builders.h"
-#include "tests/runtime/random_state.h"
+#include "sim/simulate.h"
+#include "tests/support/alloc_counter.h"
+#include "tests/support/builders.h"
+#include "tests/support/random_state.h"
 
 namespace kanesim {
 namespace {

@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <string>
 
-#include "tests/cli/cli_util.h"
-#include "tests/lang/mesh_fixtures.h"
+#include "tests/support/cli_util.h"
+#include "tests/support/mesh_fixtures.h"
 #include "tests/scene/shapes_model.h"
 
 namespace kanesim {

@@ -12,8 +12,8 @@
 
 #include "lang/elaborate.h"
 #include "stdlib/stdlib.h"
-#include "tests/cli/cli_util.h"
-#include "tests/lang/mesh_fixtures.h"
+#include "tests/support/cli_util.h"
+#include "tests/support/mesh_fixtures.h"
 
 namespace kanesim {
 namespace {

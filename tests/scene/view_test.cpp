@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "tests/cli/cli_util.h"
+#include "tests/support/cli_util.h"
 #include "tests/scene/shapes_model.h"
 
 namespace kanesim {

@@ -9,7 +9,7 @@
 #include <new>
 #include <string>
 
-#include "runtime/sim/integrator.h"
+#include "sim/integrator.h"
 
 namespace {
 std::atomic<long> g_news{0};

@@ -1,6 +1,6 @@
 // CSV output: if these fail, numbers do not round-trip (fewer than 17 digits), the
 // header is wrong, or rows sit in a buffer longer than the flush interval.
-#include "runtime/sim/csv.h"
+#include "sim/csv.h"
 
 #include <gtest/gtest.h>
 

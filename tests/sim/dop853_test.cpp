@@ -1,4 +1,4 @@
-// Our DOP853 (runtime/sim/integrator_dop853.cpp) on closed-form ODEs and on the double
+// Our DOP853 (sim/integrator_dop853.cpp) on closed-form ODEs and on the double
 // pendulum through the public runtime. If these fail, the tableau or its use is wrong
 // (order below 8, dense output below 7), the step control ignores the tolerance, the
 // FSAL / dense-output bookkeeping wastes or skips evaluations of f, the stop time is
@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "runtime/sim/integrator.h"
-#include "tests/constraints/load_util.h"
+#include "sim/integrator.h"
+#include "tests/support/load_util.h"
 
 #include "tests/sim/lambda_ode.h"
 

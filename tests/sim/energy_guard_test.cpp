@@ -1,4 +1,4 @@
-// The energy guard (runtime/sim/energy_guard.h, docs/integrators.md "The energy guard"): a
+// The energy guard (sim/energy_guard.h, docs/integrators.md "The energy guard"): a
 // conservative model whose total energy T + V leaves the tolerance's reach stops with exit
 // 2 (kNumericalFailure), the rows before kept; correct runs never trip it; models with
 // elements that do work are not guarded. The independent fact behind every case: with
@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
+#include "runtime/runtime.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
 #include "tests/sim/energy_rows.h"
 
 namespace kanesim::sim {

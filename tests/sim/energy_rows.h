@@ -5,12 +5,12 @@
 #include <algorithm>
 #include <cmath>
 
-#include "runtime/sim/csv.h"
+#include "sim/csv.h"
 
 namespace kanesim::sim {
 
 // max |E - E0| over the rows, relative to the largest T + |V - V0| so far (the guard's
-// measure of the motion: runtime/sim/energy_guard.cpp); columns 0 and 1 are T and V.
+// measure of the motion: sim/energy_guard.cpp); columns 0 and 1 are T and V.
 inline double RelativeEnergyError(const MemorySink& s) {
   const double e0 = s.rows[0][0] + s.rows[0][1], v0 = s.rows[0][1];
   double motion = 0.0, worst = 0.0;

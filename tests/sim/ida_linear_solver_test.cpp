@@ -15,9 +15,9 @@
 #include <cstdio>
 #include <set>
 
-#include "runtime/engine/engine.h"
+#include "runtime/runtime.h"
 #include "runtime/program/program.h"
-#include "tests/constraints/load_util.h"
+#include "tests/support/load_util.h"
 
 namespace kanesim::test {
 namespace {
@@ -197,7 +197,7 @@ TEST(IdaKlu, AChainKeepsTheDenseSolver) {
   ASSERT_EQ(res.status, sim::SimResult::Status::kOk) << res.message;
   EXPECT_STREQ(res.stats.integrator.linear_solver, "dense LU");
   // One group: every column is its own colour, n evaluations per fresh Jacobian (IDA keeps
-  // df/dy across some linear setups where it costs that many: runtime/sim/integrator_ida.cpp).
+  // df/dy across some linear setups where it costs that many: sim/integrator_ida.cpp).
   EXPECT_GT(res.stats.integrator.rhs_evals_jac, 0);
   EXPECT_EQ(res.stats.integrator.rhs_evals_jac % 60, 0);
   EXPECT_LE(res.stats.integrator.rhs_evals_jac, 60 * res.stats.integrator.jac_evals);

@@ -1,7 +1,7 @@
 // sim::Integrate on closed-form ODEs: if these fail, an integrator is mis-wired (wrong
 // tolerances, wrong residual sign, output instants not from dense output, the last row
 // not exactly at the stop time, or failures lost).
-#include "runtime/sim/integrator.h"
+#include "sim/integrator.h"
 
 #include <gtest/gtest.h>
 
@@ -297,7 +297,7 @@ TEST_P(EveryMethod, PersistentNaNFailsWithCause) {
 }
 
 // A row whose T + V is off the energies of the steps around it is integrated again by
-// DOP853 (runtime/sim/sundials_stepper.cpp CheckRow); when that cannot succeed, the work is
+// DOP853 (sim/sundials_stepper.cpp CheckRow); when that cannot succeed, the work is
 // capped and the run stops at the row with the cause. Here y' = -y, T = y^2 / 2, except that
 // the energy reported at the instant t = 0.5 is off by 1e6, and from then on f chatters
 // (a term of +-1e3 switching every ~3e-9 s), so that DOP853 creeps. Uncapped (the run's

@@ -8,7 +8,7 @@
 #include <string>
 #include <utility>
 
-#include "runtime/sim/integrator.h"
+#include "sim/integrator.h"
 
 namespace kanesim::sim {
 

@@ -1,7 +1,7 @@
 // The multiplier form (--solver sparse) under the integrators that failed on it (issue 38):
 // f is evaluated at y*, the kinetic-metric projection of y onto the constraints, so the
 // components of y off the constraints move with the mechanism's geometry (u* = P(q) u;
-// runtime/sim/integrator_cvode.cpp). Two independent facts are checked:
+// sim/integrator_cvode.cpp). Two independent facts are checked:
 //  - the four-bar (examples/fourbar.mech: ideal joints, gravity) conserves T + V, and it
 //    passes its rocker's limit positions (rocker speed through 0) every crank turn;
 //  - the rolling disk (examples/rolling_disk.mech) starts in steady circular rolling, an
@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/sim/simulate.h"
-#include "tests/constraints/load_util.h"
+#include "runtime/runtime.h"
+#include "sim/simulate.h"
+#include "tests/support/load_util.h"
 #include "tests/sim/energy_rows.h"
 
 namespace kanesim::sim {

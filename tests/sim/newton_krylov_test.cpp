@@ -1,4 +1,4 @@
-// Matrix-free Newton-Krylov (runtime/sim/newton_krylov.h) on a linear ODE whose Jacobian
+// Matrix-free Newton-Krylov (sim/newton_krylov.h) on a linear ODE whose Jacobian
 // has the multiplier form's structure, -k I plus rank r:
 //   y' = -k y + u1 (v1 . y) + u2 (v2 . y),   n = 40, r = 2,
 // u1, v1 supported on the first half of the state, u2, v2 on the second, so that
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/sim/integrator.h"
+#include "sim/integrator.h"
 
 namespace kanesim::sim {
 namespace {

@@ -24,10 +24,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/engine/engine.h"
-#include "runtime/flat/mechanism.h"
-#include "runtime/sim/csv.h"
-#include "runtime/sim/simulate.h"
+#include "compiler/compiler.h"
+#include "flat/mechanism.h"
+#include "sim/csv.h"
+#include "sim/simulate.h"
 
 namespace kanesim::sim {
 namespace {

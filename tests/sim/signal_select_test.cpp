@@ -1,7 +1,7 @@
 // `--output PATTERN` globs: if these fail, users get the wrong columns (brackets taken
 // as character classes, `*` stopping at dots, columns out of order or repeated) or an
 // unhelpful error for a typo.
-#include "runtime/sim/signal_select.h"
+#include "sim/signal_select.h"
 
 #include <gtest/gtest.h>
 

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "lumped_crank.h"
+#include "tests/support/lumped_crank.h"
 #include "run_kanesim.h"
 
 namespace kanesim::stress {

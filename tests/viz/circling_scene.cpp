@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "runtime/geometry/primitives.h"
+#include "geometry/primitives.h"
 
 namespace kanesim::viz::testing {
 namespace {

@@ -14,7 +14,7 @@
 // energy (J) = 1 + 0.5 sin²(ω t); plotted when the page opens: orbiter.x, spinner.height, energy.
 #pragma once
 
-#include "runtime/viz/viewer_scene.h"
+#include "viz/viewer_scene.h"
 
 namespace kanesim::viz::testing {
 

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "runtime/viz/server.h"
+#include "viz/server.h"
 #include "tests/viz/circling_scene.h"
 
 namespace kanesim::viz {

@@ -12,9 +12,9 @@
 #include <regex>
 #include <sstream>
 
-#include "runtime/viz/page.h"
-#include "runtime/viz/scene_json.h"
-#include "runtime/viz/viewer.h"
+#include "viz/page.h"
+#include "viz/scene_json.h"
+#include "viz/viewer.h"
 #include "tests/viz/circling_scene.h"
 
 namespace kanesim::viz {

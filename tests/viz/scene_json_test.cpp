@@ -1,14 +1,14 @@
 // The scene as the page reads it (viz/scene_json.h): base64 against RFC 4648's vectors, JSON
 // escaping, the choice of instants under the size limit, the arrays decoded back (by a decoder
 // written here, not the encoder's) equal to the scene's numbers, and CheckScene's errors.
-#include "runtime/viz/scene_json.h"
+#include "viz/scene_json.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 
-#include "runtime/geometry/primitives.h"
+#include "geometry/primitives.h"
 #include "tests/viz/circling_scene.h"
 
 namespace kanesim::viz {

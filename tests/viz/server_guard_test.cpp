@@ -1,10 +1,10 @@
-// The server's guards (runtime/viz/http/serve.cpp): slow clients cannot starve the others, a
+// The server's guards (viz/http/serve.cpp): slow clients cannot starve the others, a
 // stalled client is let go, only the loopback names are answered (DNS rebinding), ranges are
 // honest, and a timeout that is no positive finite number is refused. Everything talks to
 // 127.0.0.1 only and is bounded in time.
 // (Eigen, through server.h, before httplib.h: the resolver header httplib brings defines
 // `_res`, a name Eigen uses.)
-#include "runtime/viz/server.h"
+#include "viz/server.h"
 
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
@@ -24,7 +24,7 @@
 #include <thread>
 #include <vector>
 
-#include "runtime/viz/scene_json.h"
+#include "viz/scene_json.h"
 #include "tests/viz/circling_scene.h"
 
 namespace kanesim::viz {

@@ -1,6 +1,6 @@
 // ServeViewer (viz/server.h): the routes and nothing else, the URL given to on_ready, and the
 // three ways it stops (GET /quit, the timeout, SIGINT, with the previous handler restored).
-#include "runtime/viz/server.h"
+#include "viz/server.h"
 
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -12,7 +12,7 @@
 #include <sstream>
 #include <thread>
 
-#include "runtime/viz/scene_json.h"
+#include "viz/scene_json.h"
 #include "tests/viz/circling_scene.h"
 
 namespace kanesim::viz {

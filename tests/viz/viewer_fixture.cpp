@@ -12,8 +12,8 @@
 #include <cstring>
 #include <string>
 
-#include "runtime/viz/server.h"
-#include "runtime/viz/viewer.h"
+#include "viz/server.h"
+#include "viz/viewer.h"
 #include "tests/viz/circling_scene.h"
 
 using namespace kanesim::viz;

@@ -1,0 +1,233 @@
+#include "flat/expr.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace kanesim::flat {
+
+int OpArity(Op op) {
+  switch (op) {
+#define KANESIM_X(name, arity, spelling) \
+  case Op::name:                         \
+    return arity;
+    KANESIM_EXPR_OPS(KANESIM_X)
+#undef KANESIM_X
+  }
+  return 0;
+}
+
+const char* OpSpelling(Op op) {
+  switch (op) {
+#define KANESIM_X(name, arity, spelling) \
+  case Op::name:                         \
+    return spelling;
+    KANESIM_EXPR_OPS(KANESIM_X)
+#undef KANESIM_X
+  }
+  return "?";
+}
+
+ExprId ExprPool::Push(const ExprNode& n) {
+  std::uint8_t reads = n.op == Op::Time ? kReadsTime : n.op == Op::State ? kReadsState : 0;
+  for (ExprId c : {n.a, n.b, n.c})
+    if (c >= 0) reads |= reads_[static_cast<size_t>(c)];
+  nodes_.push_back(n);
+  reads_.push_back(reads);
+  return static_cast<ExprId>(nodes_.size() - 1);
+}
+
+ExprId ExprPool::Constant(double v) {
+  ExprNode n;
+  n.op = Op::Const;
+  n.value = v;
+  return Push(n);
+}
+
+ExprId ExprPool::Parameter(std::int32_t index) {
+  ExprNode n;
+  n.op = Op::Param;
+  n.index = index;
+  return Push(n);
+}
+
+ExprId ExprPool::Time() {
+  ExprNode n;
+  n.op = Op::Time;
+  return Push(n);
+}
+
+ExprId ExprPool::State(std::int32_t state_ref_index) {
+  ExprNode n;
+  n.op = Op::State;
+  n.index = state_ref_index;
+  return Push(n);
+}
+
+ExprId ExprPool::Unary(Op op, ExprId a) {
+  if (IsConstant(a)) return Constant(ApplyOp(op, (*this)[a].value, 0.0, 0.0));
+  ExprNode n;
+  n.op = op;
+  n.a = a;
+  return Push(n);
+}
+
+ExprId ExprPool::Binary(Op op, ExprId a, ExprId b) {
+  if (IsConstant(a) && IsConstant(b))
+    return Constant(ApplyOp(op, (*this)[a].value, (*this)[b].value, 0.0));
+  ExprNode n;
+  n.op = op;
+  n.a = a;
+  n.b = b;
+  return Push(n);
+}
+
+ExprId ExprPool::IfElse(ExprId cond, ExprId then_e, ExprId else_e) {
+  if (IsConstant(cond)) return (*this)[cond].value != 0.0 ? then_e : else_e;
+  ExprNode n;
+  n.op = Op::IfElse;
+  n.a = cond;
+  n.b = then_e;
+  n.c = else_e;
+  return Push(n);
+}
+
+bool ExprPool::DependsOnTimeOrState(ExprId id) const {
+  return id >= 0 && (reads_[static_cast<size_t>(id)] & (kReadsTime | kReadsState)) != 0;
+}
+
+bool ExprPool::DependsOnState(ExprId id) const {
+  return id >= 0 && (reads_[static_cast<size_t>(id)] & kReadsState) != 0;
+}
+
+double ApplyOp(Op op, double a, double b, double c) {
+  switch (op) {
+    case Op::Const:
+    case Op::Param:
+    case Op::Time:
+    case Op::State:
+      return a;
+    case Op::Neg: return -a;
+    case Op::Not: return a == 0.0 ? 1.0 : 0.0;
+    case Op::Sin: return std::sin(a);
+    case Op::Cos: return std::cos(a);
+    case Op::Tan: return std::tan(a);
+    case Op::Asin: return std::asin(a);
+    case Op::Acos: return std::acos(a);
+    case Op::Atan: return std::atan(a);
+    case Op::Sinh: return std::sinh(a);
+    case Op::Cosh: return std::cosh(a);
+    case Op::Tanh: return std::tanh(a);
+    case Op::Exp: return std::exp(a);
+    case Op::Log: return std::log(a);
+    case Op::Sqrt: return std::sqrt(a);
+    case Op::Abs: return std::fabs(a);
+    case Op::Sign: return a > 0.0 ? 1.0 : (a < 0.0 ? -1.0 : 0.0);
+    case Op::Floor: return std::floor(a);
+    case Op::Ceil: return std::ceil(a);
+    case Op::Add: return a + b;
+    case Op::Sub: return a - b;
+    case Op::Mul: return a * b;
+    case Op::Div: return a / b;
+    case Op::Pow: return std::pow(a, b);
+    case Op::Lt: return a < b ? 1.0 : 0.0;
+    case Op::Le: return a <= b ? 1.0 : 0.0;
+    case Op::Gt: return a > b ? 1.0 : 0.0;
+    case Op::Ge: return a >= b ? 1.0 : 0.0;
+    case Op::Eq: return a == b ? 1.0 : 0.0;
+    case Op::Ne: return a != b ? 1.0 : 0.0;
+    case Op::And: return (a != 0.0 && b != 0.0) ? 1.0 : 0.0;
+    case Op::Or: return (a != 0.0 || b != 0.0) ? 1.0 : 0.0;
+    case Op::Atan2: return std::atan2(a, b);
+    case Op::Min: return a < b ? a : b;
+    case Op::Max: return a > b ? a : b;
+    // Modelica's mod: a - floor(a/b)*b (result has the sign of b).
+    case Op::Mod: return a - std::floor(a / b) * b;
+    case Op::IfElse: return a != 0.0 ? b : c;
+  }
+  return 0.0;
+}
+
+namespace {
+
+// One pending piece of ExprPool::ToString's output: a node to print or literal text.
+struct PrintItem {
+  ExprId node = kNoExpr;  // kNoExpr: emit `text`
+  const char* text = nullptr;
+  int depth = 0;
+};
+
+// The text of one leaf node.
+std::string LeafText(const ExprNode& n, const std::vector<std::string>* pn, const std::vector<std::string>* sn) {
+  std::ostringstream os;
+  switch (n.op) {
+    case Op::Const: os.precision(17); os << n.value; break;
+    case Op::Param:
+      if (pn && n.index >= 0 && static_cast<size_t>(n.index) < pn->size()) os << (*pn)[static_cast<size_t>(n.index)];
+      else os << "param#" << n.index;
+      break;
+    case Op::Time: os << "time"; break;
+    case Op::State:
+      if (sn && n.index >= 0 && static_cast<size_t>(n.index) < sn->size()) os << (*sn)[static_cast<size_t>(n.index)];
+      else os << "state#" << n.index;
+      break;
+    default: break;
+  }
+  return os.str();
+}
+
+}  // namespace
+
+// Prints with an explicit stack (no recursion over the expression's depth): a node
+// pushes its pieces in reverse order. Deeper than kMaxDepth levels or longer than
+// max_chars, the text ends with "...".
+std::string ExprPool::ToString(ExprId id, const std::vector<std::string>* pn, const std::vector<std::string>* sn,
+                               std::size_t max_chars) const {
+  if (id < 0) return "<none>";
+  constexpr int kMaxDepth = 200;
+  std::string out;
+  std::vector<PrintItem> stack{{id, nullptr, 0}};
+  while (!stack.empty()) {
+    if (out.size() > max_chars) {
+      out += "...";
+      break;
+    }
+    PrintItem it = stack.back();
+    stack.pop_back();
+    if (it.node == kNoExpr) {
+      out += it.text;
+      continue;
+    }
+    if (it.depth > kMaxDepth) {
+      out += "...";
+      continue;
+    }
+    const ExprNode& n = (*this)[it.node];
+    int arity = OpArity(n.op);
+    if (arity == 0) {
+      out += LeafText(n, pn, sn);
+      continue;
+    }
+    // Pieces in reading order; pushed reversed below.
+    std::vector<PrintItem> parts;
+    auto text = [&](const char* t) { parts.push_back({kNoExpr, t, 0}); };
+    auto child = [&](ExprId c) { parts.push_back({c, nullptr, it.depth + 1}); };
+    bool infix = arity == 2 && (n.op <= Op::Or && n.op >= Op::Add);
+    if (n.op == Op::IfElse) {
+      text("(if "), child(n.a), text(" then "), child(n.b), text(" else "), child(n.c), text(")");
+    } else if (n.op == Op::Neg) {
+      text("(-"), child(n.a), text(")");
+    } else if (n.op == Op::Not) {
+      text("(not "), child(n.a), text(")");
+    } else if (infix) {
+      text("("), child(n.a), text(" "), text(OpSpelling(n.op)), text(" "), child(n.b), text(")");
+    } else {
+      text(OpSpelling(n.op)), text("("), child(n.a);
+      if (arity == 2) text(", "), child(n.b);
+      text(")");
+    }
+    stack.insert(stack.end(), parts.rbegin(), parts.rend());
+  }
+  return out;
+}
+
+}  // namespace kanesim::flat

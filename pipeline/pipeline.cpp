@@ -1,0 +1,226 @@
+// The pipeline's stages (pipeline.h): load (parse, elaborate, compile) and run (resolve,
+// integrate, output).
+#include "pipeline/pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include "lang/diagnostics.h"
+#include "lang/set_argument.h"
+#include "lang/text.h"
+#include "runtime/program/program.h"
+#include "sim/signal_select.h"
+#include "stdlib/stdlib.h"
+#include "compiler/compiler.h"
+
+namespace kanesim::pipeline {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The bytes of a file; false when it cannot be read.
+bool ReadWholeFile(const std::string& path, std::string* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  *out = ss.str();
+  return !in.bad();
+}
+
+// Stages 1-2. False with the diagnostics appended to *text when a stage fails; warnings
+// are appended also on success.
+bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* m, std::string* text) {
+  lang::Diagnostics diags(&m->source.sources);
+  lang::ElaborateOptions eo;
+  eo.model = options.model;
+  for (const std::string& s : options.sets) {
+    lang::ParamOverride o;
+    if (!lang::ParseSetArgument(s, &o)) {
+      *text += "kanesim: error[E210]: --set needs name=value, got '" + lang::ClipMessage(s) + "'\n";
+      return false;
+    }
+    eo.overrides.push_back(std::move(o));
+  }
+  // 0. Import: a URDF becomes .mech text, named PATH.mech (its mesh names are relative to
+  // the URDF's folder, which that name shares).
+  if (import::IsUrdfPath(source.path)) {
+    std::string urdf = source.text;
+    std::error_code ec;
+    if (const std::uintmax_t size = std::filesystem::file_size(source.path, ec);
+        !source.from_text && !ec && size > import::kMaxUrdfBytes) {
+      *text += import::TooLargeMessage(source.path, size);  // not read into memory
+      return false;
+    }
+    if (!source.from_text && !ReadWholeFile(source.path, &urdf)) {
+      *text += "kanesim: error: cannot read '" + lang::ClipMessage(source.path) + "'\n";
+      return false;
+    }
+    import::Options io = options.urdf;
+    io.notes = false;
+    io.mesh_base_dir = std::filesystem::path(source.path).parent_path().string();
+    if (io.mesh_base_dir.empty()) io.mesh_base_dir = ".";
+    import::Result r = import::UrdfToMech(source.path, urdf, io);
+    *text += r.diagnostics;
+    if (!r.ok) return false;
+    return ParseAndElaborate(Source::Text(source.path + ".mech", std::move(r.mech)), options, m, text);
+  }
+  // 1. Parse: the main file and the standard library (parsed once per process).
+  bool ok = source.from_text
+                ? lang::LoadProgramFromText(source.path, source.text, stdlib::Files(), &m->source, diags)
+                : lang::LoadProgram(source.path, stdlib::Files(), &m->source, diags);
+  // 2. Elaborate into the flat mechanism.
+  if (ok) {
+    auto mech = std::make_shared<flat::Mechanism>();
+    ok = lang::Elaborate(m->source, eo, mech.get(), diags);
+    m->mech = std::move(mech);
+  }
+  *text += diags.RenderAll();
+  if (!ok && diags.NumErrors() > 0)
+    *text += std::to_string(diags.NumErrors()) + " error" + (diags.NumErrors() == 1 ? "" : "s") + "\n";
+  return ok && !diags.HasErrors();
+}
+
+// Stage 3. The compiler's errors are capped like the language's (Diagnostics::kMaxErrors):
+// a model with thousands of unconnected bodies gives 50 messages and a count.
+bool CompileStage(const RunSpec& spec, Model* m, std::string* text) {
+  rt::CompileResult r = rt::Compile(m->mech, CompileOptionsFor(spec));
+  if (r.errors.empty()) {
+    m->program = std::move(r.program);
+    return true;
+  }
+  lang::Diagnostics diags(&m->source.sources);
+  for (const rt::CompileMessage& e : r.errors) AddCompileMessage(e, lang::Severity::Error, diags);
+  *text += diags.RenderAll();
+  const size_t shown = static_cast<size_t>(lang::Diagnostics::kMaxErrors) - 1;  // the last slot says "too many"
+  if (r.errors.size() > static_cast<size_t>(lang::Diagnostics::kMaxErrors))
+    *text += "kanesim: " + std::to_string(r.errors.size() - shown) + " more errors like these are not shown\n";
+  return false;
+}
+
+// The span of a compiler location in `sm`: one byte at line:col of the file of that name.
+lang::Span SpanOf(const lang::SourceManager& sm, const flat::SourceLoc& loc) {
+  if (loc.file.empty() || loc.line <= 0) return {};
+  for (int f = 0; f < sm.NumFiles(); ++f) {
+    if (sm.Name(f) != loc.file) continue;
+    const std::int32_t at = sm.Offset(f, loc.line, loc.col);
+    return at >= 0 ? lang::Span{f, at, at + 1} : lang::Span{};
+  }
+  return {};
+}
+
+}  // namespace
+
+LoadResult LoadModel(const Source& source, const LoadOptions& options, const RunSpec& spec) {
+  LoadResult result;
+  auto m = std::make_unique<Model>();
+  Clock::time_point t0 = Clock::now();
+  if (!ParseAndElaborate(source, options, m.get(), &result.diagnostics)) return result;
+  m->load_seconds = Since(t0);
+  if (options.compile) {
+    Clock::time_point t1 = Clock::now();
+    if (!CompileStage(spec, m.get(), &result.diagnostics)) return result;
+    m->compile_seconds = Since(t1);
+  }
+  result.model = std::move(m);
+  return result;
+}
+
+void AddCompileMessage(const rt::CompileMessage& e, lang::Severity severity, lang::Diagnostics& diags) {
+  const lang::SourceManager& sm = diags.Sources();
+  lang::Diagnostic& d = severity == lang::Severity::Error ? diags.Error(e.code, SpanOf(sm, e.loc), e.message)
+                                                          : diags.Warning(e.code, SpanOf(sm, e.loc), e.message);
+  for (const auto& [loc, msg] : e.notes) d.notes.push_back({SpanOf(sm, loc), msg});
+  d.hint = e.hint;
+}
+
+std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& e, lang::Severity severity) {
+  lang::Diagnostics diags(&model.source.sources);
+  AddCompileMessage(e, severity, diags);
+  return diags.RenderAll();
+}
+
+std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out, RunProblem* problem) {
+  RunProblem unused;
+  RunProblem& why = problem ? *problem : unused;
+  why = RunProblem::kNone;
+  const flat::Experiment& ex = model.mech->experiment;
+  const rt::Program& program = *model.program;
+
+  for (auto [name, value] : {std::pair{"interval", spec.interval}, {"rtol", spec.rtol}, {"atol", spec.atol}}) {
+    if (!std::isnan(value) && !(value > 0.0 && std::isfinite(value))) {
+      why = RunProblem::kValue;
+      return std::string(name) + " must be a positive number, got " + sim::FormatNumber(value);
+    }
+  }
+  sim::SimOptions& so = out->sim;
+  so = sim::SimOptions{};
+  if (!std::isnan(spec.start_time)) so.start_time = spec.start_time;
+  so.stop_time = !std::isnan(spec.stop_time) ? spec.stop_time : ex.stop_time;
+  if (!std::isnan(spec.interval)) so.interval = spec.interval;
+  else if (ex.has_interval) so.interval = ex.interval;
+  so.rtol = !std::isnan(spec.rtol) ? spec.rtol : ex.tolerance;
+  so.atol = !std::isnan(spec.atol) ? spec.atol : so.rtol;
+  so.integrator = CompileOptionsFor(spec).integrator;
+  so.cvode_bdf = spec.integrator == sim::Method::CvodeBdf;
+  so.ida_linear_solver = spec.linear_solver;
+  so.project_steps = spec.project_steps;
+  so.energy_check = spec.energy_check;
+
+  if (!spec.outputs.empty()) {
+    std::string error;
+    if (!sim::SelectSignals(rt::AvailableSignals(program), spec.outputs, &so.signals, &error)) {
+      why = RunProblem::kSignals;
+      return error;
+    }
+  }
+  out->grid = sim::ResolveGrid(program, so);
+  if (std::string bad = sim::CheckRun(out->grid, so.rtol, so.atol); !bad.empty()) {
+    why = RunProblem::kGrid;
+    return bad;
+  }
+  return "";
+}
+
+std::string RunWarnings(const Model& model, double rtol, const std::vector<std::string>& signals) {
+  std::string out;
+  const rt::Program& program = *model.program;
+  if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.message.empty())
+    out += RenderCompileMessage(model, f, lang::Severity::Warning);
+  if (rt::CompileMessage w = rt::StartSpeedsWarning(program); !w.message.empty())
+    out += RenderCompileMessage(model, w, lang::Severity::Warning);
+  for (const rt::CompileMessage& w : rt::LockedJointWarnings(program))
+    out += RenderCompileMessage(model, w, lang::Severity::Warning);
+  if (program.options.indeterminate == rt::IndeterminateReactions::NaN) {
+    const std::vector<std::string> which = rt::IndeterminateSignals(program, signals);
+    if (!which.empty()) out += RenderCompileMessage(model, rt::IndeterminateWarning(program, which), lang::Severity::Warning);
+  }
+  if (std::string w = sim::ToleranceWarning(rtol); !w.empty()) out += "kanesim: warning: " + w + "\n";
+  return out;
+}
+
+sim::SimResult Run(const Model& model, const ResolvedRun& run, sim::SignalSink& sink) {
+  return sim::Simulate(*model.program, run.sim, sink);
+}
+
+sim::SimResult Run(const Model& model, const RunSpec& spec, sim::SignalSink& sink) {
+  ResolvedRun run;
+  if (std::string why = ResolveRun(model, spec, &run); !why.empty()) {
+    sim::SimResult r;
+    r.status = sim::SimResult::Status::kUsageError;
+    r.message = why;
+    return r;
+  }
+  return Run(model, run, sink);
+}
+
+}  // namespace kanesim::pipeline

@@ -1,0 +1,181 @@
+// The runtime's public face (the layer runtime/, kanesim_runtime): make a Workspace per
+// thread for an immutable Program (compiler/compiler.h makes one), evaluate the equations of
+// motion and the output signals, watch closed loops' branches. The integrators (sim/) see
+// the runtime through this header only; the layers above also read the Program's fields
+// (runtime/program/program.h, the runtime's other public header).
+// kanesim-public: runtime/program/program.h
+//
+// State layout (the integrators' y): y = [q_free (nq), u_free (nu)], the coordinates and
+// speeds of all joints in spanning-tree order, prescribed (rheonomic) coordinates removed.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/program/compile_options.h"
+#include "flat/diagnostic_codes.h"
+#include "flat/mechanism.h"
+
+namespace kanesim::rt {
+
+struct Program;    // immutable once compiled (compiler/compiler.h); share across threads
+struct Workspace;  // mutable scratch for one thread; allocated once per Program
+
+// Facts for `kanesim check` and `--stats`.
+struct ProgramSummary {
+  int num_bodies = 0;          // rigid bodies after merging welded ones (world excluded)
+  int num_joints = 0;          // articulated joints (welds excluded)
+  int nq = 0, nu = 0;          // free coordinates and speeds
+  int dof = 0;                 // degrees of freedom (nu minus independent constraints)
+  int grubler_dof = 0;         // Grübler-style count from joint freedoms
+  SolverPath solver = SolverPath::Dense;
+  IntegratorKind integrator = IntegratorKind::IDA;
+  std::string solver_reason;      // why this path
+  std::string integrator_reason;  // why this integrator
+  std::string equations;          // closed loops on the reduced path: how Kane's equations on beta are formed
+  std::vector<std::string> cut_joints;
+  std::vector<std::string> notes;
+};
+ProgramSummary Summarize(const Program& program);
+
+std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& program);
+
+int StateSize(const Program& program);  // nq + nu
+// Per entry of y = [q_free; u_free], a group number (0, 1, ...): d(ydot_i)/d(y_j) can be
+// non-zero only when i and j are in the same group (runtime/engine/coupling.cpp). One group per
+// set of subtrees joined by forces, loops or force laws; one group in all for a chain.
+std::vector<int> StateCouplingGroups(const Program& program);
+int NumQ(const Program& program);
+int NumU(const Program& program);
+double StartTime(const Program& program);  // from the experiment annotation
+void InitialState(const Program& program, double* y);
+
+// Status codes follow SUNDIALS callbacks: 0 ok, >0 recoverable (retry with a smaller
+// step), <0 fatal. On failure, ErrorMessage(ws) says why (e.g. "singular mass matrix",
+// "gimbal lock in joint 'ball' (Cardan angle q[2] = 1.5707963)", "NaN from expression ...").
+int Derivative(const Program& program, Workspace& ws, double t, const double* y, double* ydot);
+
+// Manifold projection per step (Hairer, Lubich & Wanner, Geometric Numerical Integration,
+// 2nd ed., sec. IV.4; docs/constraints.md "Drift"). By default Derivative projects y onto
+// the constraints at every evaluation (Newton on the dependent coordinates, then the
+// dependent speeds) and adds a pull toward the projection. A one-step solver may instead
+// project each accepted step with ProjectOntoConstraints and switch the workspace to
+// SetStepProjection(ws, true): Derivative then takes positions and speeds as they are (off
+// the manifold: an explicit Runge-Kutta stage's own error is O(h^2)), runs the kinematics
+// in one pass as for a tree, and adds no pull: the reduced equations are a smooth ODE off
+// the manifold as well. Available on the reduced path with constraint rows
+// (StepProjectionAvailable); elsewhere the switch has no effect.
+bool StepProjectionAvailable(const Program& program);
+void SetStepProjection(Workspace& ws, bool on);
+// y := its projection onto the position and velocity constraints. 0, or 1 (recoverable:
+// the loop cannot be closed, or a singular configuration; ErrorMessage says which).
+int ProjectOntoConstraints(const Program& program, Workspace& ws, double t, double* y);
+// Closed loops on the reduced path: while held, Derivative keeps the independent-speed
+// partition of the last evaluation even where its dependent block is degraded (it is
+// re-chosen only at a singular one). For the perturbed evaluations of a difference-quotient
+// Jacobian around the last evaluated state: the partition decides which coordinates the
+// projection corrects, so columns taken with different partitions are derivatives of
+// different functions (docs/constraints.md, "Singular configurations").
+void HoldPartition(Workspace& ws, bool on);
+// Closed loops on the reduced path (Derivative with the projection, not the step
+// projection), for a difference-quotient Jacobian taken with the partition held: the
+// state indices that Derivative does not read under the partition of the last evaluation,
+// the dependent speeds (recomputed from the independent ones by the velocity constraints)
+// and the coordinates of joints whose every speed is dependent (Newton-corrected from the
+// independent ones); *diag is df_i/dy_i for each of them (the pull to the manifold, -k_drift),
+// every other entry of their columns zero. False (none) on other paths.
+bool ProjectedStates(const Program& program, const Workspace& ws, std::vector<int>* states, double* diag);
+const std::string& ErrorMessage(const Workspace& ws);
+
+// Closed loops through singular configurations (runtime/engine/branch_monitor.cpp; the
+// bridge in change_point_bridge.cpp): after each
+// accepted step, CheckBranch(y) returns -1 (fatal; BranchMonitorError says why: the loop,
+// the time and the turn) when the motion left its assembly branch near a change point
+// (the velocity turned by a finite angle where the loop's rows nearly lost rank), else 0.
+struct BranchMonitor;
+// How near closed loop `loop` (index into Program::loops) is to a change point at the
+// configuration in ws (ConstraintJacobian done): rho = sigma_rank / sigma_max of its rows
+// of ws.A, rank = its rank at the assembled start (its rows less the redundant ones),
+// translation rows divided by *length so that rho does not depend on the unit of length
+// (*length <= 0: taken here, the RMS lever arm of its rows, and stored). 1 for a loop
+// without rows.
+double LoopSingularRatio(const Program& program, const Workspace& ws, int loop, double* length);
+bool BranchMonitorActive(const Program& program);  // the program has closed loops
+std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& program);
+int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y);
+const std::string& BranchMonitorError(const BranchMonitor& monitor);
+// After a solver failed inside a near-singular zone (stalled before a change point): a state
+// y_b (StateSize entries) at time t_b just past the crossing, extrapolated from the zone's
+// accepted steps and projected onto the constraints, from which a fresh solver goes on; the
+// bridged motion is BridgeState on [t_from, t_b]. 0, or 1 when no bridge can be trusted
+// (BridgeRefused says why; the failure stands). Once per zone.
+int BridgeChangePoint(const Program& program, BranchMonitor& monitor, double rtol, double atol, double* t_from,
+                      double* t_b, double* y_b);
+void BridgeState(const BranchMonitor& monitor, double t, double* y);
+// Whether the last accepted step CheckBranch saw lies inside a near-singular zone (rho < 1e-2).
+bool InNearSingularZone(const BranchMonitor& monitor);
+// With these tolerances, CheckBranch tries the bridge itself after 50 accepted steps inside
+// one near-singular zone (a stall; a passage takes a few) and, when it can be trusted,
+// fails the step so that the integrator's next BridgeChangePoint returns it.
+void SetEarlyBridge(BranchMonitor& monitor, double rtol, double atol);
+// Whether the bridge steps over zones where several loops are near singular at once (a
+// chain of equal-link parallelograms; on by default). Off: such zones are refused, as before
+// (tests switch it off to show what it does).
+void SetBridgeSeveralLoops(BranchMonitor& monitor, bool on);
+// Whether the early bridge over such a zone is tried after 10 accepted steps in it instead of
+// the 50th (on by default; off: as before, tests switch it off).
+void SetBridgeSeveralAtOnce(BranchMonitor& monitor, bool on);
+// ... and on the multiplier form too (off by default; tests only: the trajectory on which
+// DOP853's dense output was seen off the branch, docs/constraints.md "Several loops").
+void SetBridgeSeveralAtOnceMultiplier(BranchMonitor& monitor, bool on);
+// Whether, there, on the multiplier form an error estimate above the bridge's limit is taken
+// again between the extrapolations projected onto the constraints (on by default; off:
+// refused, as before; tests switch it off).
+void SetBridgeProjectedEstimate(BranchMonitor& monitor, bool on);
+// The change points the solver passed by itself (with SetEarlyBridge on): how many were
+// checked against the bridge's approach, and how many stood unchecked (the approach
+// refused, or several loops near singular at once; docs/constraints.md).
+void PassageCounts(const BranchMonitor& monitor, long* checked, long* unchecked);
+const std::string& BridgeRefused(const BranchMonitor& monitor);
+
+// "" when the model conserves T + V (the kinetic_energy and potential_energy signals; V =
+// gravity + line springs): ideal joints, loops and rolling contacts, gravity, springs of
+// constant stiffness and free length. Otherwise the first element that does or may do work,
+// in words ("the damper 'd1'", "the prescribed motion of joint 'crank'", "the force of joint
+// 'j' (tau)", "the friction of joint 'pin'", "the force 'push'"); one the rule cannot vouch
+// for (a stiffness given by an expression) counts as doing work. The energy guard
+// (sim/energy_guard.h) checks only conservative models. runtime/engine/energy_guard.cpp
+std::string NonConservativeCause(const Program& program);
+
+// Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",
+// "rod1.frame_b.r[1]", declared outputs by their name. Selection compiles the
+// requested names into a plan so that only what is needed gets computed.
+std::vector<std::string> AvailableSignals(const Program& program);
+std::vector<std::string> DefaultSignals(const Program& program);  // joints' q,u + outputs
+struct SignalPlan;
+std::shared_ptr<const SignalPlan> PlanSignals(const Program& program, const std::vector<std::string>& names,
+                                              std::string* error);
+int EvalSignals(const Program& program, const SignalPlan& plan, Workspace& ws, double t, const double* y,
+                double* out);
+
+// Output rows near a change point (runtime/engine/output_rows.cpp; docs/constraints.md
+// "Rows near a change point"). Whether the state y at time t is near one (some loop's
+// rho < 1e-2; ws: a workspace of its own, so that the rows' own keeps the projection's
+// state of the rows before it and the rows away from change points stay as they were).
+bool RowNearChangePoint(const Program& program, Workspace& ws, double t, const double* y);
+// How far the projection left in ws (after EvalSignals) moved the free speeds of y, in
+// units of atol + max(rtol, 1e-8) |u| (max over the speeds).
+double SpeedMove(const Program& program, const Workspace& ws, const double* y, double rtol, double atol);
+// EvalSignals with the projection of least kinetic energy through a truncated
+// pseudo-inverse instead of the partition's.
+int EvalSignalsNearChangePoint(const Program& program, const SignalPlan& plan, Workspace& ws, double t,
+                               const double* y, double* out);
+
+// The signals among `names` (reaction and contact-force components) whose value the
+// equations do not determine, in the order given; empty for a mechanism without redundant
+// constraints. Decided at the assembled start (compiler/indeterminate.cpp).
+std::vector<std::string> IndeterminateSignals(const Program& program, const std::vector<std::string>& names);
+
+}  // namespace kanesim::rt

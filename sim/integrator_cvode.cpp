@@ -1,0 +1,286 @@
+// CVODE on y' = f(t, y): Adams-Moulton with fixed-point iteration (non-stiff, no
+// Jacobian), or BDF with Newton iteration on M = I - gamma df/dy, factored by the dense LU.
+// df/dy comes from difference quotients: ours, grouped (dq_jacobian.h, shared with IDA),
+// where they cost fewer evaluations of f (closed loops on the reduced form, several
+// coupling groups: SetJacobian), CVODE's own (n evaluations) elsewhere.
+//
+// Closed loops on the multiplier form (checked steps): f is evaluated at y*, the
+// projection of y onto the constraints, plus a relaxation k_drift (y* - y)
+// (runtime/engine/engine.cpp). That form projects all the speeds in the kinetic metric,
+// u* = P(q) u, so off the manifold d(u*)/dt = f + (dP/dt)(u - u*): a drift of y moves the
+// rows' motion. Measured on the equal-link parallelogram (CVODE-BDF, rtol 1e-6): the step
+// across the change point at t = 9.73 left y 4.6 error weights off, the drift then grew
+// x7, x4.5, x3.3, x2.7 ... per step (35-50 1/s, faster than k_drift = 10 1/s pulls it
+// back) while the rows, on the branch, gained energy: 43x by t = 10.2. (The reduced form
+// keeps y's independent coordinates in y* and overrides the dependent ones: a drift there
+// does not feed the rows' motion, and resets near the change points of the chains at rtol
+// 1e-12 made CVODE stall; ARKODE measures its own drift on that form.) As ARKODE does
+// (integrator_arkode.cpp, MeasureDrift), the drift of each accepted step is measured aside
+// and, past DriftWatch::kLimit weights and grown over DriftWatch::kGrowth steps in a row, CVODE starts
+// again (CVodeReInit) from y* once that step's output instants are written.
+// That restart stays for Adams only. BDF projects every step instead (ProjectStep, CVODE's
+// projection): the restart fired inside the change-point zones of the chains, where the
+// projection is ill-conditioned (the drift grew to 10-140 weights as rho fell), and each
+// restart at order 1 shrank the step: the chain of ten at rtol 1e-12 restarted 234 times
+// by t = 7.705 and crept until the branch monitor stopped it (exit 2). With the projection
+// it is on the branch to 20 s (4.5e-8 of E), the chain of ten at 1e-10 1.0e-6 -> 3.3e-7 of
+// E, the parallelogram above 1.8e-4 of E -> 1.4e-4 (docs/constraints.md). Rolling contacts
+// on the multiplier form project too, loops or not (the rolling disk's lean grew without it).
+#include <cvode/cvode.h>
+#include <cvode/cvode_proj.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sim/dq_jacobian.h"
+#include "sim/newton_krylov.h"
+#include "sim/stepper.h"
+#include "sim/sundials_util.h"
+
+namespace kanesim::sim::detail {
+namespace {
+
+constexpr ModuleFunctions kCvode{
+    .module = "CVODE",
+    .err_handler = CVodeSetErrHandlerFn,
+    .tolerances = CVodeSStolerances,
+    .user_data = CVodeSetUserData,
+    .stop_time = CVodeSetStopTime,
+    .max_num_steps = CVodeSetMaxNumSteps,
+    .max_step = CVodeSetMaxStep,
+    .init_step = CVodeSetInitStep,
+    .current_time = CVodeGetCurrentTime,
+    .dky = CVodeGetDky,
+    .free = CVodeFree,
+    .flag_name = CVodeGetReturnFlagName,
+    .num_steps = CVodeGetNumSteps,
+    .num_rhs_evals = CVodeGetNumRhsEvals,
+    .num_err_test_fails = CVodeGetNumErrTestFails,
+    .last_step = CVodeGetLastStep,
+    .num_lin_setups = CVodeGetNumLinSolvSetups,
+    .num_nonlin_iters = CVodeGetNumNonlinSolvIters,
+    .num_nonlin_conv_fails = CVodeGetNumNonlinSolvConvFails,
+    .last_order = CVodeGetLastOrder,
+    .num_jac_evals = CVodeGetNumJacEvals,
+    .num_lin_rhs_evals = CVodeGetNumLinRhsEvals
+};
+
+class CvodeStepper final : public SundialsStepper {
+ public:
+  explicit CvodeStepper(GuardedRhs& rhs) : SundialsStepper(rhs, kCvode) {}
+  ~CvodeStepper() override {
+    if (ewt_) N_VDestroy(ewt_);
+  }
+
+  bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
+    const int n = rhs_.Size();
+    const bool bdf = options.method == Method::CvodeBdf;
+    if (!MakeState(y0, /*with_yp=*/false, error)) return false;
+    mem_ = CVodeCreate(bdf ? CV_BDF : CV_ADAMS, s_.ctx);
+    if (!mem_) return Fail(error, "CVodeCreate failed");
+    if (CaptureMessages() != CV_SUCCESS || CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
+      return Fail(error, WithDetail("CVODE setup failed", messages_.last));
+    if (!SetCommonOptions(stop, options, error)) return false;
+    int maxl = 0;
+    if (bdf && (krylov_ = UseKrylov(options, rhs_, &maxl))) {  // matrix-free: sim/newton_krylov.h
+      s_.ls = MakeKrylovSolver(s_.y, maxl, s_.ctx);
+      if (!s_.ls || CVodeSetLinearSolver(mem_, s_.ls, nullptr) != CV_SUCCESS)
+        return Fail(error, WithDetail("CVODE Krylov linear solver setup failed", messages_.last));
+    } else if (bdf) {
+      s_.A = SUNDenseMatrix(n, n, s_.ctx);
+      s_.ls = s_.A ? SUNLinSol_Dense(s_.y, s_.A, s_.ctx) : nullptr;
+      if (!s_.ls || CVodeSetLinearSolver(mem_, s_.ls, s_.A) != CV_SUCCESS)
+        return Fail(error, WithDetail("CVODE dense linear solver setup failed", messages_.last));
+    } else {
+      s_.nls = SUNNonlinSol_FixedPoint(s_.y, 0, s_.ctx);
+      if (!s_.nls || CVodeSetNonlinearSolver(mem_, s_.nls) != CV_SUCCESS)
+        return Fail(error, WithDetail("CVODE fixed-point solver setup failed", messages_.last));
+    }
+    // BDF: CVODE's own projection (below), not the restart; Adams: CVODE projects only BDF.
+    // Only on the multiplier form's closed loops and rolling contacts
+    // (ProjectAsideMultiplierForm is -1 elsewhere).
+    std::vector<double> probe(y0, y0 + n);
+    project_ = bdf && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
+    if (project_ && CVodeSetProjFn(mem_, &CvodeStepper::ProjectStep) != CV_SUCCESS)
+      return Fail(error, WithDetail("CVODE projection setup failed", messages_.last));
+    if (bdf && !krylov_ && !SetJacobian(t0, y0, options, error)) return false;
+    stop_ = stop;
+    rtol_ = options.rtol;
+    atol_ = options.atol;
+    return true;
+  }
+
+  int Advance(double tout, double* y) override {
+    double tret = 0.0;
+    if (!rhs_.ChecksSteps()) return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
+    return AdvanceCheckedSteps(tout, y, [&](double* t) {
+      if (watch_.drifted && !ResetProjected()) return CV_ILL_INPUT;
+      const int flag = CVode(mem_, tout, s_.y, t, CV_ONE_STEP);
+      if (flag >= 0 && !project_) MeasureDrift(*t);
+      return flag;
+    });
+  }
+
+  // The counters of the CVODE runs before the last reset added (CVodeReInit zeroes them),
+  // and our own difference quotients (FormJacobian).
+  IntegratorStats Stats() const override {
+    IntegratorStats st = Cumulative();
+    st.rhs_evals_jac += dq_.Evaluations();
+    return st;
+  }
+
+ private:
+  IntegratorStats Cumulative() const {
+    IntegratorStats st = SundialsStepper::Stats();
+    st.steps += before_.steps;
+    st.rhs_evals += before_.rhs_evals;
+    st.rhs_evals_jac += before_.rhs_evals_jac;
+    st.jac_evals += before_.jac_evals;
+    st.lin_setups += before_.lin_setups;
+    st.err_test_fails += before_.err_test_fails;
+    st.nonlin_iters += before_.nonlin_iters;
+    st.nonlin_conv_fails += before_.nonlin_conv_fails;
+    if (krylov_) {
+      st.linear_solver = kKrylovName;
+      CVodeGetNumLinIters(mem_, &st.lin_iters);
+      CVodeGetNumLinConvFails(mem_, &st.lin_conv_fails);
+      st.lin_iters += before_.lin_iters;
+      st.lin_conv_fails += before_.lin_conv_fails;
+    }
+    return st;
+  }
+
+  // The accepted step's drift |y*_i - y_i| / (rtol |y_i| + atol) (the error test's
+  // weights), y* = its projection computed aside. Measured on the parallelogram above: at
+  // most 0.24 on the steps before the change point, then 4.6, 33, 146, 475 (reset there).
+  void MeasureDrift(double t) {
+    watch_.Measure(t, N_VGetArrayPointer(s_.y), static_cast<size_t>(rhs_.Size()), rtol_, atol_,
+                   [&](double tt, double* y) { return rhs_.ProjectAsideMultiplierForm(tt, y); });
+  }
+
+  // CVODE again from y* of the drifted step (f's own projection; no reset where it
+  // cannot project), order 1, its counters kept in before_.
+  bool ResetProjected() {
+    watch_.Clear();
+    double* ys = N_VGetArrayPointer(s_.y);
+    std::copy(watch_.stepped_y.begin(), watch_.stepped_y.end(), ys);
+    if (rhs_.Project(watch_.t_drifted, ys) != 0) return true;
+    before_ = Cumulative();
+    return CVodeReInit(mem_, watch_.t_drifted, s_.y) == CV_SUCCESS && CVodeSetStopTime(mem_, stop_) == CV_SUCCESS;
+  }
+
+
+  // CVODE-BDF's projection (CVodeSetProjFn), called on each step whose Newton iteration
+  // converged, before the error test: corr = y* - y, y* the multiplier form's projection
+  // (zero where there is none: the reduced form, or a projection that fails). CVODE adds
+  // corr to y and to the step's correction, so the Nordsieck history moves with it and BDF
+  // keeps its order and step, where CVodeReInit went back to order 1. The error estimate
+  // (err) is projected too, as CVODE's projection asks (CVodeSetProjErrEst, on by
+  // default): err <- P(y + err) - P(y), its part along the constraints, the part the
+  // projected step keeps. Left as it was, its part off the constraints (which the
+  // projection removes) held the step down: the rolling disk at rtol 1e-10 took 4540 steps
+  // (now 1056), and its lean was 2-10x farther off at rtol 1e-4 ... 1e-6.
+  static int ProjectStep(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype /*eps*/, N_Vector err,
+                         void* user_data) {
+    auto* self = static_cast<CvodeStepper*>(static_cast<SundialsStepper*>(user_data));
+    const size_t n = static_cast<size_t>(self->rhs_.Size());
+    const double* y = N_VGetArrayPointer(ycur);
+    double* c = N_VGetArrayPointer(corr);
+    self->aside_.assign(y, y + n);
+    const bool projected = self->rhs_.ProjectAsideMultiplierForm(t, self->aside_.data()) == 0;
+    for (size_t i = 0; i < n; ++i) c[i] = projected ? self->aside_[i] - y[i] : 0.0;
+    if (projected && err != nullptr) {  // err <- P(y + err) - P(y): its part along the constraints
+      double* e = N_VGetArrayPointer(err);
+      self->aside_err_.assign(y, y + n);
+      for (size_t i = 0; i < n; ++i) self->aside_err_[i] += e[i];
+      if (self->rhs_.ProjectAsideMultiplierForm(t, self->aside_err_.data()) == 0)
+        for (size_t i = 0; i < n; ++i) e[i] = self->aside_err_[i] - self->aside_[i];
+    }
+    return 0;
+  }
+
+  // CVODE-BDF's df/dy by our grouped difference quotients (dq_jacobian.h, CVodeSetJacFn)
+  // where they cost fewer evaluations than CVODE's (n per Jacobian): closed loops on the
+  // reduced form (the known columns: 2 per Jacobian on the chains of parallelograms, 162
+  // states for the chain of 40), or several coupling groups (tests/sim/models/forest.mech,
+  // M = 20, n = 80: 4 per Jacobian). Elsewhere (one group: every open tree, the multiplier
+  // form's loops) CVODE's own, as before. Measured: docs/benchmarks.md, "CVODE-BDF's
+  // Jacobian".
+  bool SetJacobian(double t0, const double* y0, const IntegratorOptions& options, std::string* error) {
+    const int n = rhs_.Size();
+    dq_.Build(n, options.coupling, DqJacobian::Increment::kCvode);
+    bool own = dq_.Colours() < n;
+    if (!own && rhs_.ChecksSteps() && !project_) {
+      // f at y0 chooses the partition (CVODE's first evaluation is there too).
+      std::vector<double> f(static_cast<size_t>(n));
+      if (rhs_(t0, y0, f.data()) != 0) return Fail(error, rhs_.cause);
+      GuardedRhs::JacobianHold hold(rhs_);
+      double pdiag = 0.0;
+      std::vector<int> projected;
+      own = rhs_.ProjectedStates(&projected, &pdiag);
+    }
+    if (!own) return true;
+    dq_.SetLayout(/*sparse=*/false);
+    ewt_ = N_VNew_Serial(n, s_.ctx);
+    if (!ewt_) return Fail(error, "out of memory");
+    if (CVodeSetJacFn(mem_, &CvodeStepper::Jacobian) != CV_SUCCESS)
+      return Fail(error, WithDetail("CVodeSetJacFn failed", messages_.last));
+    return true;
+  }
+
+  // df/dy at (t, y), fy = f(t, y) the evaluation CVODE made last (its partition held).
+  static int Jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector, N_Vector,
+                      N_Vector) {
+    auto* self = static_cast<CvodeStepper*>(static_cast<SundialsStepper*>(user_data));
+    double h = 0.0;
+    CVodeGetCurrentStep(self->mem_, &h);
+    CVodeGetErrWeights(self->mem_, self->ewt_);
+    const double* f = N_VGetArrayPointer(fy);
+    const int status = self->dq_.Form(self->rhs_, t, N_VGetArrayPointer(y), f, f, h, N_VGetArrayPointer(self->ewt_));
+    if (status != 0) return status;  // > 0: CVODE retries with a smaller step
+    self->dq_.WriteDfdy(J);
+    return 0;
+  }
+
+  DqJacobian dq_;
+  N_Vector ewt_ = nullptr;
+  bool project_ = false;      // CVODE-BDF on closed loops: ProjectStep, no MeasureDrift
+  bool krylov_ = false;       // matrix-free GMRES (UseKrylov)
+  std::vector<double> aside_;      // ProjectStep's y*  (n)
+  std::vector<double> aside_err_;  // ProjectStep's P(y + err)  (n)
+  double stop_ = 0.0;
+  double rtol_ = 0.0, atol_ = 0.0;  // the error test's tolerances (MeasureDrift)
+  DriftWatch watch_;                // MeasureDrift (sundials_util.h)
+  IntegratorStats before_;          // counters of the CVODE runs before the last reset
+
+  FailureKind Kind(int flag) const override {
+    switch (flag) {
+      case CV_RHSFUNC_FAIL:
+      case CV_FIRST_RHSFUNC_ERR:
+      case CV_REPTD_RHSFUNC_ERR:
+      case CV_UNREC_RHSFUNC_ERR: return FailureKind::kRhs;
+      case CV_TOO_MUCH_WORK: return FailureKind::kTooMuchWork;
+      case CV_TOO_MUCH_ACC: return FailureKind::kTooMuchAccuracy;
+      case CV_ERR_FAILURE: return FailureKind::kErrorTest;
+      case CV_CONV_FAILURE: return FailureKind::kConvergence;
+      case CV_LSETUP_FAIL:
+      case CV_LSOLVE_FAIL: return FailureKind::kLinearSolver;
+      default: return FailureKind::kOther;
+    }
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Stepper> MakeCvodeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                          const IntegratorOptions& options, std::string* error) {
+  return MakeSundialsStepper<CvodeStepper>(rhs, t0, y0, stop, options, error);
+}
+
+}  // namespace kanesim::sim::detail

@@ -1,0 +1,11 @@
+// The layer sim/ (kanesim_sim): time integration of a compiled Program, seen through the
+// runtime's public face only (runtime/runtime.h) — DOP853 and SUNDIALS' CVODE, IDA and
+// ARKODE — and the outputs: signal selection, CSV rows, the energy guard. Layers above
+// include this header or the parts it lists.
+#pragma once
+
+#include "sim/csv.h"            // signal rows and the CSV writer
+#include "sim/energy_guard.h"   // stopping a conservative model whose energy drifts
+#include "sim/integrator.h"     // the integrators, generic over the right-hand side
+#include "sim/signal_select.h"  // --output patterns over signal names
+#include "sim/simulate.h"       // one run of a Program from start to stop

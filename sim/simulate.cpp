@@ -1,0 +1,375 @@
+#include "sim/simulate.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace kanesim::sim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+// The engine's equations of motion as an ODE: y = [q, u], y' = rt::Derivative.
+class EngineOde final : public OdeSystem {
+ public:
+  EngineOde(const rt::Program& program, rt::Workspace& ws, bool row_energy)
+      : program_(program), ws_(ws) {
+    if (rt::BranchMonitorActive(program)) monitor_ = rt::MakeBranchMonitor(program);
+    // Closed loops on the multiplier form: P maps onto the state manifold, of dimension
+    // (nq - nu) + 2 dof (OdeSystem::NewtonRank).
+    if (monitor_ && !CanProject()) {
+      const rt::ProgramSummary s = rt::Summarize(program);
+      newton_rank_ = s.nq - s.nu + 2 * s.dof;
+    }
+    // Rows checked against the energy: closed loops (where change points are) in a model
+    // that conserves T + V.
+    if (row_energy && monitor_ && rt::NonConservativeCause(program).empty()) {
+      std::string error;
+      energy_plan_ = rt::PlanSignals(program, {"kinetic_energy", "potential_energy"}, &error);
+    }
+  }
+  int Size() const override { return rt::StateSize(program_); }
+  int Rhs(double t, const double* y, double* ydot) override {
+    from_monitor_ = false;
+    const int s = rt::Derivative(program_, ws_, t, y, ydot);
+    if (fault_ && s == 0) fault_(t, y, ydot);
+    return s;
+  }
+  void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
+  bool ChecksSteps() const override { return monitor_ != nullptr; }
+  int StepAccepted(double t, const double* y) override {
+    const int s = rt::CheckBranch(program_, *monitor_, t, y);
+    from_monitor_ = s != 0;
+    return s;
+  }
+  std::string FailureCause() const override {
+    if (from_monitor_) return rt::BranchMonitorError(*monitor_);
+    const std::string& m = rt::ErrorMessage(ws_);
+    return m.empty() ? "the equations of motion could not be evaluated" : m;
+  }
+  bool Bridge(double rtol, double atol, double* t_from, double* t_b, double* y_b) override {
+    return monitor_ && rt::BridgeChangePoint(program_, *monitor_, rtol, atol, t_from, t_b, y_b) == 0;
+  }
+  void BridgeState(double t, double* y) override { rt::BridgeState(*monitor_, t, y); }
+  bool InZone() const override { return hold_rows_ && monitor_ && rt::InNearSingularZone(*monitor_); }
+  void SetHoldRows(bool on) { hold_rows_ = on; }
+  void EnableEarlyBridge(double rtol, double atol, bool several_loops, bool projected_estimate, bool several_at_once,
+                         bool several_at_once_multiplier) {
+    if (monitor_) {
+      rt::SetBridgeSeveralAtOnce(*monitor_, several_at_once);
+      rt::SetBridgeSeveralAtOnceMultiplier(*monitor_, several_at_once_multiplier);
+      rt::SetEarlyBridge(*monitor_, rtol, atol);
+      rt::SetBridgeSeveralLoops(*monitor_, several_loops);
+      rt::SetBridgeProjectedEstimate(*monitor_, projected_estimate);
+    }
+  }
+  void PassageCounts(long* checked, long* unchecked) const {
+    *checked = *unchecked = 0;
+    if (monitor_) rt::PassageCounts(*monitor_, checked, unchecked);
+  }
+  bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
+  void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
+  void HoldForJacobian(bool on) override { rt::HoldPartition(ws_, on); }
+  bool ProjectedStates(std::vector<int>* states, double* diag) override {
+    return rt::ProjectedStates(program_, ws_, states, diag);
+  }
+  int NewtonRank() const override { return newton_rank_; }
+  int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
+  int ProjectAside(double t, double* y) override {
+    // Closed loops on the reduced form only: the multiplier form's projection moves every
+    // coordinate, and its state was not seen to drift (docs/constraints.md "A drifted state").
+    if (monitor_ == nullptr || !CanProject()) return -1;
+    if (!aside_) aside_ = rt::MakeWorkspace(program_);
+    return rt::ProjectOntoConstraints(program_, *aside_, t, y);
+  }
+  bool HasEnergy() const override { return energy_plan_ != nullptr; }
+  int Energy(double t, const double* y, double* T, double* V) override {
+    if (!energy_ws_) energy_ws_ = rt::MakeWorkspace(program_);
+    double v[2];
+    const int s = rt::EvalSignals(program_, *energy_plan_, *energy_ws_, t, y, v);
+    *T = v[0];
+    *V = v[1];
+    return s;
+  }
+  // Closed loops or rolling contacts on the multiplier form (CanProject: the reduced form).
+  // Contacts without loops have no branch monitor, and CVODE-BDF's projection
+  // (integrator_cvode.cpp ProjectStep) is needed there as much: without it the rolling
+  // disk's lean grew from t = 1.8 at rtol 1e-5 (energy off by 6.1e-2) and the disk fell
+  // flat at 1e-4.
+  int ProjectAsideMultiplierForm(double t, double* y) override {
+    if (CanProject()) return -1;
+    if (multiplier_rows_ < 0) {
+      const rt::ProgramSummary s = rt::Summarize(program_);
+      multiplier_rows_ = s.solver == rt::SolverPath::Sparse && s.dof < s.nu ? 1 : 0;
+    }
+    if (multiplier_rows_ == 0) return -1;
+    if (!aside_) aside_ = rt::MakeWorkspace(program_);
+    return rt::ProjectOntoConstraints(program_, *aside_, t, y);
+  }
+
+ private:
+  const rt::Program& program_;
+  rt::Workspace& ws_;
+  std::unique_ptr<rt::BranchMonitor, void (*)(rt::BranchMonitor*)> monitor_{nullptr, [](rt::BranchMonitor*) {}};
+  bool from_monitor_ = false;  // the last failure was the branch monitor's
+  int newton_rank_ = -1;       // OdeSystem::NewtonRank
+  int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet
+  bool hold_rows_ = true;      // SimOptions::hold_zone_rows
+  std::function<void(double, const double*, double*)> fault_;  // SimOptions::rhs_fault
+  std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
+  std::shared_ptr<const rt::SignalPlan> energy_plan_;  // T and V (null: rows not checked)
+  std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> energy_ws_{nullptr, [](rt::Workspace*) {}};  // Energy's
+};
+
+// An output row whose projection moved the integrator's speeds by more than this many units
+// of the tolerance (rt::SpeedMove) is not trusted near a change point. Measured: 925 on the
+// row of the chain of 40 (CVODE, rtol 1e-6) that the partition's projection spoilt (its
+// rods' speeds 1e-2 apart), 3e6 on one of DOP853's rows of the chain of ten at 1e-12; at
+// most ~4 on the other rows of the first run.
+constexpr double kRowTrust = 100.0;
+// ... and replaced only by a projection that moved them this many times less. Measured:
+// on that row 925 against 3.5e-5 (the integrator's speeds were right); ARKODE on the
+// single parallelogram (a = 0.5, rtol 1e-4) at t = 5.04, 2e-3 rad from a crossing: the
+// integrator's dependent speeds drifted by 0.2 rad/s, both projections move them alike,
+// and the kinetic metric's spreads the correction onto the crank (0.2 rad/s off the
+// motion) where the partition's keeps the crank's integrated speed: 440 against 279.
+constexpr double kRowGain = 10.0;
+
+SimResult UsageError(std::string message) {
+  SimResult r;
+  r.status = SimResult::Status::kUsageError;
+  r.message = std::move(message);
+  return r;
+}
+
+}  // namespace
+
+std::string CheckRun(const OutputGrid& grid, double rtol, double atol) {
+  if (std::string why = grid.Check(); !why.empty()) return why;
+  for (auto [name, tol] : {std::pair{"rtol", rtol}, {"atol", atol}})
+    if (!(tol > 0.0) || !std::isfinite(tol))
+      return std::string("the tolerance ") + name + " (" + FormatShortest(tol) + ") must be a positive finite number";
+  return "";
+}
+
+std::string ToleranceWarning(double rtol) {
+  if (rtol > kMaxSensibleRtol)
+    return "rtol = " + FormatShortest(rtol) + " allows errors larger than " + FormatShortest(100 * kMaxSensibleRtol) +
+           "% of the solution (rtol is relative: 1e-6 asks for about six digits)";
+  if (rtol > 0.0 && rtol < kMinSensibleRtol)
+    return "rtol = " + FormatShortest(rtol) + " is below what double precision delivers (" +
+           FormatShortest(kMinSensibleRtol) + "); the integrator may fail with too much work";
+  return "";
+}
+
+OutputGrid ResolveGrid(const rt::Program& program, const SimOptions& options) {
+  OutputGrid grid;
+  grid.start = std::isnan(options.start_time) ? rt::StartTime(program) : options.start_time;
+  grid.stop = options.stop_time;
+  grid.interval = options.interval > 0.0 ? options.interval : (grid.stop - grid.start) / kDefaultIntervals;
+  return grid;
+}
+
+Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf) {
+  switch (kind) {
+    case rt::IntegratorKind::CVODE: return cvode_bdf ? Method::CvodeBdf : Method::CvodeAdams;
+    case rt::IntegratorKind::ARKODE: return Method::ArkodeErk;
+    case rt::IntegratorKind::DOP853: return Method::Dop853;
+    case rt::IntegratorKind::IDA:
+    case rt::IntegratorKind::Auto: return Method::IDA;
+  }
+  return Method::IDA;
+}
+
+SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink) {
+  // 1. Times, tolerances, integrator.
+  const OutputGrid grid = ResolveGrid(program, options);
+  if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageError(why);
+  rt::IntegratorKind kind = options.integrator;
+  if (kind == rt::IntegratorKind::Auto) kind = rt::Summarize(program).integrator;
+  IntegratorOptions iopt;
+  iopt.method = MethodFor(kind, options.cvode_bdf);
+  iopt.rtol = options.rtol;
+  iopt.atol = options.atol;
+  iopt.max_steps = options.max_steps;
+  iopt.ida_linear_solver = options.ida_linear_solver;
+  iopt.project_steps = options.project_steps;
+  iopt.bridge = options.bridge;
+  iopt.dense_check = options.dense_check;
+  iopt.row_energy_check = options.row_energy_check;
+  if (iopt.method == Method::IDA || iopt.method == Method::CvodeBdf) iopt.coupling = rt::StateCouplingGroups(program);
+
+  // 2. Signals.
+  std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
+  std::string plan_error;
+  std::shared_ptr<const rt::SignalPlan> plan = rt::PlanSignals(program, names, &plan_error);
+  if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  // The energy guard's T and V ride along after the written signals (not written).
+  EnergyGuard energy(program, options.energy_check, options.rtol, options.atol);
+  const size_t n_written = names.size();
+  if (energy.Active()) {
+    std::vector<std::string> all = names;
+    for (const std::string& e : EnergyGuard::Signals()) all.push_back(e);
+    plan = rt::PlanSignals(program, all, &plan_error);
+    if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  }
+
+  // 3. Integrate. The right-hand side and the outputs use separate workspaces so that
+  // evaluating an output never disturbs the solver's state of the engine.
+  auto ws_rhs = rt::MakeWorkspace(program);
+  auto ws_out = rt::MakeWorkspace(program);
+  decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
+  std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
+  rt::InitialState(program, y0.data());
+  std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
+  const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
+
+  SimResult result;
+  result.stats.method = iopt.method;
+  if (!sink.Begin(names)) {
+    result.status = SimResult::Status::kOutputError;
+    result.message = "cannot write the output";
+    return result;
+  }
+  bool sink_failed = false;
+  Clock::duration output_time{};
+  RowCallback row = [&](double t, const double* y, std::string* cause) -> int {
+    Clock::time_point t0 = Clock::now();
+    int status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
+    // A row near a change point whose projection moved the speeds too far: projected in the
+    // kinetic metric instead, in a workspace of its own (docs/constraints.md "Rows near a
+    // change point"); ws_out has gone through the row as before, so the rows after it are
+    // unchanged. (A row the projection failed on, at the singular configuration itself,
+    // still stops the run.)
+    double move = 0.0;
+    if (options.zone_rows && status == 0 && (move = rt::SpeedMove(program, *ws_out, y, options.rtol, options.atol)) > kRowTrust) {
+      if (!ws_zone) ws_zone = rt::MakeWorkspace(program);
+      // On the reduced form taken only where it moved the speeds far less: where the
+      // integrator's own speeds are off the constraints (ARKODE's drift at loose
+      // tolerances), the partition's projection, which keeps the independent speeds the
+      // integrator integrates, stays. The multiplier form's projection is already the
+      // kinetic metric's, without the truncation.
+      if (rt::RowNearChangePoint(program, *ws_zone, t, y) &&
+          rt::EvalSignalsNearChangePoint(program, *plan, *ws_zone, t, y, zone_values.data()) == 0 &&
+          (multiplier_form || rt::SpeedMove(program, *ws_zone, y, options.rtol, options.atol) * kRowGain < move)) {
+        values.swap(zone_values);
+      }
+    }
+    if (status != 0) {
+      const std::string& m = rt::ErrorMessage(*ws_out);
+      *cause = m.empty() ? "an output signal could not be evaluated" : m;
+    } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
+      status = -1;  // the row is not written: the rows before it are on disk
+    } else if (!sink.Row(t, values.data(), n_written)) {
+      sink_failed = true;
+      *cause = "cannot write the output";
+      status = -1;
+    }
+    if (status == 0 && options.progress) options.progress(t);
+    output_time += Clock::now() - t0;
+    return status;
+  };
+  EngineOde ode(program, *ws_rhs, options.row_energy_check);
+  if (options.rhs_fault) ode.SetFault(options.rhs_fault);
+  ode.SetHoldRows(options.hold_zone_rows);
+  if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
+                                         options.bridge_several_at_once, options.bridge_several_at_once_multiplier);
+  Clock::time_point start = Clock::now();
+  IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
+  Clock::duration total = Clock::now() - start;
+  bool end_ok = sink.End();
+
+  result.stats.integrator = ir.stats;
+  result.stats.rows = ir.rows;
+  result.stats.bridges = ir.bridges;
+  ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
+  result.stats.energy_guard = energy.Description();
+  result.stats.energy_error = energy.WorstError();
+  result.stats.energy_tolerance = energy.Tolerance();
+  result.stats.times.output = Seconds(output_time);
+  result.stats.times.integrate = Seconds(total - output_time);
+  if (sink_failed || (ir.ok && !end_ok)) {
+    result.status = SimResult::Status::kOutputError;
+    result.message = "cannot write the output";
+  } else if (!ir.ok) {
+    result.status = SimResult::Status::kNumericalFailure;
+    result.fail_time = ir.fail_time;
+    result.message = ir.cause;
+  }
+  return result;
+}
+
+std::string FormatStats(const SimStats& s) {
+  const IntegratorStats& i = s.integrator;
+  const PhaseTimes& t = s.times;
+  char nnz[64] = "";
+  if (i.jac_nonzeros > 0) std::snprintf(nnz, sizeof nnz, ", %ld structural non-zeros", i.jac_nonzeros);
+  char buf[1536];
+  std::snprintf(buf, sizeof buf,
+                "integrator                 %s\n"
+                "  method                   %s\n"
+                "  steps                    %ld (last step %.3g, last order %d)\n"
+                "  right-hand sides         %ld (+ %ld for difference-quotient Jacobians)\n"
+                "  Jacobian evaluations     %ld\n"
+                "  linear setups            %ld (%s%s)\n"
+                "  error-test failures      %ld\n"
+                "  nonlinear iterations     %ld (%ld convergence failures)\n"
+                "  output rows              %ld\n"
+                "wall time (s)\n"
+                "  load + elaborate         %.6f\n"
+                "  compile                  %.6f\n"
+                "  integrate                %.6f\n"
+                "  output                   %.6f\n"
+                "  total                    %.6f\n",
+                MethodName(s.method), MethodDescription(s.method), i.steps, i.last_step, i.last_order, i.rhs_evals,
+                i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
+                s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
+  std::string out = buf;
+  if (i.lin_iters > 0) {  // matrix-free Newton (sim/newton_krylov.h)
+    std::snprintf(buf, sizeof buf, "  Krylov iterations        %ld (%ld convergence failures)\n", i.lin_iters,
+                  i.lin_conv_fails);
+    out.insert(out.find("wall time (s)"), buf);
+  }
+  if (i.dense_rejects > 0) {  // DOP853 (sim/integrator_dop853.cpp kDenseLimit; only where there were any)
+    std::snprintf(buf, sizeof buf, "  dense output rejected    %ld (steps taken again onto an output instant)\n",
+                  i.dense_rejects);
+    out.insert(out.find("wall time (s)"), buf);
+  }
+  if (i.energy_rejects > 0) {  // docs/constraints.md "Rows checked against the energy"
+    if (i.energy_reject_rhs > 0)
+      std::snprintf(buf, sizeof buf,
+                    "  rows' energy off         %ld (interpolated output instants integrated again, by DOP853: "
+                    "%ld right-hand sides)\n",
+                    i.energy_rejects, i.energy_reject_rhs);
+    else
+      std::snprintf(buf, sizeof buf, "  rows' energy off         %ld (interpolated output instants integrated again)\n",
+                    i.energy_rejects);
+    out.insert(out.find("wall time (s)"), buf);
+  }
+  if (s.bridges + s.passages_checked + s.passages_unchecked > 0) {
+    // Closed loops through change points (only where there were any).
+    std::snprintf(buf, sizeof buf,
+                  "change points\n"
+                  "  bridged                  %ld\n"
+                  "  passed, checked          %ld\n"
+                  "  passed, not checked      %ld\n",
+                  s.bridges, s.passages_checked, s.passages_unchecked);
+    out += buf;
+  }
+  if (!s.energy_guard.empty()) {
+    out += "energy guard               " + s.energy_guard + "\n";
+    if (s.energy_guard == "on" || s.energy_guard == "report") {
+      std::snprintf(buf, sizeof buf, "  largest relative error   %.3g (of the motion's energy; bound %.3g)\n", s.energy_error,
+                    s.energy_tolerance);
+      out += buf;
+    }
+  }
+  return out;
+}
+
+}  // namespace kanesim::sim

@@ -1,0 +1,122 @@
+// Simulate: one run of a compiled program from the start time to the stop time, the
+// selected signals written to a sink at every output instant. The stages, in order:
+//   1. resolve times, tolerances, integrator          (ResolveRun)
+//   2. plan the signals                                (rt::PlanSignals)
+//   3. integrate, evaluating signals at each instant   (sim::Integrate, rt::EvalSignals)
+#pragma once
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "runtime/runtime.h"
+#include "sim/csv.h"
+#include "sim/energy_guard.h"
+#include "sim/integrator.h"
+
+namespace kanesim::sim {
+
+struct SimOptions {
+  double start_time = std::numeric_limits<double>::quiet_NaN();  // NaN: rt::StartTime(program)
+  double stop_time = 1.0;
+  double interval = 0.0;  // output spacing; <= 0: (stop - start) / kDefaultIntervals
+  double rtol = 1e-6;
+  double atol = 1e-6;
+  rt::IntegratorKind integrator = rt::IntegratorKind::Auto;  // Auto: rt::Summarize(program).integrator
+  bool cvode_bdf = false;       // CVODE with BDF + Newton instead of Adams + fixed point
+  IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;  // IDA and CVODE-BDF: dense LU, KLU or GMRES
+  long max_steps = 100000;      // internal steps allowed between two output instants
+  // Closed loops and contacts with DOP853: project once per accepted step instead of at every
+  // evaluation (`--projection step`; runtime/runtime.h SetStepProjection, docs/constraints.md "Drift").
+  bool project_steps = false;
+  bool bridge = true;           // step over singular configurations of closed loops (docs/constraints.md)
+  bool bridge_several_loops = true;  // ... also where several loops are singular at once (tests only)
+  bool bridge_several_at_once = true;  // ... there tried after 10 steps in a zone, not 50 (tests only)
+  bool bridge_several_at_once_multiplier = false;  // ... also on the multiplier form (tests only)
+  bool dense_check = true;  // DOP853: steps whose dense-output stages are not smooth are retaken (tests only)
+  // Interpolated output rows of a conservative model with closed loops checked against the
+  // energies of the solver's steps around them and recomputed where off (docs/constraints.md
+  // "Rows checked against the energy"; tests only).
+  bool row_energy_check = true;
+  // Output rows near a change point whose projection moved the integrator's speeds too far
+  // are projected in the kinetic metric instead (docs/constraints.md; tests only).
+  bool zone_rows = true;
+  // Output rows of steps inside a near-singular zone held until the zone is passed or bridged,
+  // and recomputed from the bridge when bridged (docs/constraints.md "Rows held through a
+  // zone"; tests only).
+  bool hold_zone_rows = true;
+  bool bridge_projected_estimate = true;  // ... there on the multiplier form, its estimate after projecting (tests only)
+  // Conservative models: stop with exit 2 where T + V leaves the tolerance's reach
+  // (`--energy-check on|off|report`; sim/energy_guard.h, docs/integrators.md).
+  EnergyCheck energy_check = EnergyCheck::kOn;
+  // Tests only: called after every right-hand side with its t, y and ydot (a fault put in
+  // on purpose, e.g. a push the model does not have, for the energy guard's tests).
+  std::function<void(double t, const double* y, double* ydot)> rhs_fault;
+  std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
+  std::function<void(double t)> progress;  // after each row; may be empty
+};
+
+inline constexpr int kDefaultIntervals = 500;
+
+// Wall time of each phase in seconds; load and compile are filled by the caller.
+struct PhaseTimes {
+  double load = 0.0;       // parse + elaborate
+  double compile = 0.0;
+  double integrate = 0.0;  // solver and right-hand side, output excluded
+  double output = 0.0;     // signal evaluation and writing
+};
+
+struct SimStats {
+  Method method = Method::IDA;
+  IntegratorStats integrator;
+  long rows = 0;
+  // Closed loops through change points: bridged, and passed by the solver itself, checked
+  // against the bridge's approach or not (docs/constraints.md "Singular configurations").
+  long bridges = 0, passages_checked = 0, passages_unchecked = 0;
+  // The energy guard: "on", "off", "report" or "not applied (...)"; on and report, the
+  // largest relative energy error seen and the bound (EnergyGuard).
+  std::string energy_guard;
+  double energy_error = 0.0, energy_tolerance = 0.0;
+  PhaseTimes times;
+};
+
+struct SimResult {
+  enum class Status {
+    kOk,
+    kUsageError,        // bad options or signal names (exit 1)
+    kOutputError,       // the sink could not write (exit 1)
+    kNumericalFailure,  // exit 2; rows before fail_time were written
+  };
+  Status status = Status::kOk;
+  double fail_time = 0.0;
+  std::string message;  // the usage error, or the cause of the numerical failure
+  SimStats stats;
+};
+
+// The output grid of a run: the start time (the options' or the program's), the stop
+// time, the interval (the options', else (stop - start) / kDefaultIntervals).
+OutputGrid ResolveGrid(const rt::Program& program, const SimOptions& options);
+
+// Why a run with these settings cannot start, in words ("" when it can): the grid's limits
+// (OutputGrid::Check) and positive finite tolerances. Simulate reports it as a usage
+// error; sweeps and golden tests call it before they run anything.
+std::string CheckRun(const OutputGrid& grid, double rtol, double atol);
+
+// A relative tolerance that is legal but almost certainly a mistake: above
+// kMaxSensibleRtol (errors as large as the solution) or below kMinSensibleRtol (beyond
+// double precision). The warning's text, or "".
+inline constexpr double kMaxSensibleRtol = 0.1;
+inline constexpr double kMinSensibleRtol = 1e-14;
+std::string ToleranceWarning(double rtol);
+
+// Maps the engine's integrator choice to a method (Auto -> IDA).
+Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf);
+
+SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink);
+
+// The `--stats` report, one fact per line.
+std::string FormatStats(const SimStats& stats);
+
+}  // namespace kanesim::sim

@@ -1,0 +1,63 @@
+// Helpers of the compile tests: a model's text compiled through the whole front end, its
+// messages by code, and a run into memory with one of the five integrators.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "tests/support/load_util.h"
+#include "compiler/compiler.h"
+
+namespace kanesim::test {
+
+// The five integrators a run can take (DOP853, CVODE Adams, CVODE BDF, ARKODE, IDA).
+struct IntegratorChoice {
+  const char* name;
+  rt::IntegratorKind kind;
+  bool bdf;
+};
+inline const std::vector<IntegratorChoice>& AllIntegrators() {
+  static const std::vector<IntegratorChoice> all = {{"DOP853", rt::IntegratorKind::DOP853, false},
+                                                    {"CVODE", rt::IntegratorKind::CVODE, false},
+                                                    {"CVODE-BDF", rt::IntegratorKind::CVODE, true},
+                                                    {"ARKODE", rt::IntegratorKind::ARKODE, false},
+                                                    {"IDA", rt::IntegratorKind::IDA, false}};
+  return all;
+}
+
+// A run of `p` from 0 to `stop` every `interval` with one integrator; *status its outcome.
+inline sim::MemorySink RunWith(const rt::Program& p, const IntegratorChoice& how, double stop, double interval,
+                               std::vector<std::string> signals, sim::SimResult* result, double tol = 1e-10) {
+  sim::SimOptions o;
+  o.stop_time = stop;
+  o.interval = interval;
+  o.rtol = o.atol = tol;
+  o.integrator = how.kind;
+  o.cvode_bdf = how.bdf;
+  o.signals = std::move(signals);
+  sim::MemorySink sink;
+  *result = sim::Simulate(p, o, sink);
+  return sink;
+}
+
+// "K310: message\n" for every compile message, for failure output.
+inline std::string Messages(const std::vector<rt::CompileMessage>& ms) {
+  std::string s;
+  for (const auto& e : ms) s += std::string(flat::DiagCodeString(e.code)) + ": " + e.message + "\n";
+  return s;
+}
+
+// The first message with `code` whose text has `text`, or null.
+inline const rt::CompileMessage* Find(const std::vector<rt::CompileMessage>& ms, const std::string& code,
+                                      const std::string& text) {
+  for (const auto& e : ms)
+    if (flat::DiagCodeString(e.code) == code && e.message.find(text) != std::string::npos) return &e;
+  return nullptr;
+}
+
+// The summary of a compiled model.
+inline rt::ProgramSummary SummaryOf(const Loaded& l) { return rt::Summarize(*l.prog); }
+
+}  // namespace kanesim::test
