@@ -47,7 +47,7 @@ void Simulate(benchmark::State& state, const std::string& path, std::vector<lang
   o.stop_time = stop;
   o.interval = stop / 10;
   o.rtol = o.atol = 1e-6;
-  o.integrator = rt::IntegratorKind::IDA;
+  o.integrator = rt::Integrator::IDA;
   o.ida_linear_solver = ls;
   sim::SimStats stats;
   for (auto _ : state) {

@@ -58,12 +58,12 @@ int main(int argc, char** argv) {
   o.rtol = o.atol = std::atof(argv[3]);
   const std::string integ = argv[4], solver = argv[5], proj = argv[6];
   const int reps = std::max(1, std::atoi(argv[7]));
-  if (integ == "ida") o.integrator = rt::IntegratorKind::IDA;
-  else if (integ == "cvode" || integ == "cvode-bdf") o.integrator = rt::IntegratorKind::CVODE;
-  else if (integ == "arkode") o.integrator = rt::IntegratorKind::ARKODE;
-  else if (integ == "dop853") o.integrator = rt::IntegratorKind::DOP853;
+  if (integ == "ida") o.integrator = rt::Integrator::IDA;
+  else if (integ == "cvode") o.integrator = rt::Integrator::CvodeAdams;
+  else if (integ == "cvode-bdf") o.integrator = rt::Integrator::CvodeBdf;
+  else if (integ == "arkode") o.integrator = rt::Integrator::ArkodeErk;
+  else if (integ == "dop853") o.integrator = rt::Integrator::Dop853;
   else return Usage();
-  o.cvode_bdf = integ == "cvode-bdf";
   if (proj != "eval" && proj != "step") return Usage();
   o.project_steps = proj == "step";
   rt::CompileOptions co;

@@ -92,7 +92,7 @@ int RunCheck(const CheckArgs& args) {
                  "about half and the same error is reached in 0.4-0.7x the time on the four-bar, but "
                  "the error per tolerance is up to 20x larger (docs/constraints.md)\n";
   }
-  if (s.integrator == rt::IntegratorKind::IDA) {
+  if (s.integrator == rt::Integrator::IDA) {
     // IDA's Newton matrix: the block pattern and the automatic dense/KLU choice
     // (docs/integrators.md; the same rule as sim/integrator_ida.cpp).
     std::vector<int> groups = rt::StateCouplingGroups(program);

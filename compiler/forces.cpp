@@ -167,20 +167,20 @@ void ChooseIntegrator(Program& p) {
     }
   }
 
-  if (p.options.integrator != IntegratorKind::Auto) {
+  if (p.options.integrator != Integrator::Auto) {
     p.integrator = p.options.integrator;
     iw << "forced by --integrator";
   } else if (unknown) {
-    p.integrator = IntegratorKind::IDA;
+    p.integrator = Integrator::IDA;
     iw << "line force '" << stiffest << "' has a stiffness or damping given by an expression (rate unknown): IDA (BDF)";
   } else if (max_rate >= kStiffRate) {
-    p.integrator = IntegratorKind::IDA;
+    p.integrator = Integrator::IDA;
     iw << "line force '" << stiffest << "' has rate max(sqrt(k/m), d/m) = " << max_rate << " 1/s >= " << kStiffRate
        << " 1/s: stiff, IDA (BDF)";
   } else {
     iw << "non-stiff ODE";
     if (max_rate > 0.0) iw << " (fastest force-element rate " << max_rate << " 1/s < " << kStiffRate << " 1/s)";
-    p.integrator = IntegratorKind::DOP853;
+    p.integrator = Integrator::Dop853;
     iw << ": DOP853 (8th-order Runge-Kutta; the fastest at every error level on the tree benchmark and on the "
           "examples with loops, contacts and friction)";
   }

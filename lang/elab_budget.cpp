@@ -6,17 +6,16 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 
 namespace kanesim::lang::elab {
 
 // Reports the first time the budget runs out, at the place being evaluated; after that
 // every evaluation returns an invalid value at once and every loop stops.
-bool Elaborator::ChargeSteps(std::int64_t steps, Span where) {
+bool Evaluator::ChargeSteps(std::int64_t steps, Span where) {
   if (budget_.Spend(steps)) return ChargeNodes(0, where);
   if (!budget_reported_) {
     budget_reported_ = true;
-    too_large_ = true;
     auto& d = diags_.Error(DiagCode::WorkLimit, where,
                            "elaborating the model takes more than " + std::to_string(kMaxElabWork) +
                                " steps; the limit was reached while evaluating this");
@@ -31,11 +30,10 @@ bool Elaborator::ChargeSteps(std::int64_t steps, Span where) {
 // vector that doubles: up to three times that while it grows); bounding the nodes bounds
 // the memory, which the steps alone do not (a product of two n x n matrices is n^3 steps
 // but 2 n^3 nodes). `more` nodes about to be made are counted before they are made.
-bool Elaborator::ChargeNodes(std::int64_t more, Span where) {
+bool Evaluator::ChargeNodes(std::int64_t more, Span where) {
   if (static_cast<std::int64_t>(m_->exprs.size()) + more <= kMaxExprNodes) return true;
   if (!budget_reported_) {
     budget_reported_ = true;
-    too_large_ = true;
     budget_.Spend(budget_.Limit() + 1);  // every evaluation stops from here on
     auto& d = diags_.Error(DiagCode::WorkLimit, where,
                            "elaborating the model makes more than " + std::to_string(kMaxExprNodes) +
@@ -50,7 +48,7 @@ bool Elaborator::ChargeNodes(std::int64_t more, Span where) {
   return false;
 }
 
-bool Elaborator::Charge(const Value& v, Span where) {
+bool Evaluator::Charge(const Value& v, Span where) {
   return ChargeSteps(static_cast<std::int64_t>(v.elements.size()) + 1, where);
 }
 
@@ -91,7 +89,7 @@ bool StackGuard::Exceeded() const {
 // Everything but operator chains recurses through here: sub-expressions (arguments,
 // array elements, subscripts, if-branches) and, through GetVar, the parameters a value
 // reads. The parser bounds the nesting of brackets; this bounds the sum of both.
-Value Elaborator::EvalNested(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalNested(const ast::Expr& e, const Ctx& ctx) {
   if (budget_.Exhausted()) return Value::Invalid();
   if (eval_depth_ >= kMaxEvalDepth || stack_.Exceeded()) {
     if (!depth_reported_) {

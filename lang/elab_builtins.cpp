@@ -8,7 +8,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 
 namespace kanesim::lang::elab {
 
@@ -19,28 +19,30 @@ namespace {
 // One call being lowered, with the checks its lowering shares with others (each reports
 // its diagnostic and returns false).
 struct Call {
-  Elaborator& el;
+  Evaluator& el;
+  Diagnostics& diags;
+  flat::ExprPool& pool;
   const ast::Expr& expr;
   const std::string& fn;
   const std::vector<Value>& args;
-  const Elaborator::Ctx& ctx;
+  const Ctx& ctx;
   Op op;  // the table's operation, for lowerings shared by several functions
 
-  flat::ExprPool& Pool() const { return el.m_->exprs; }
+  flat::ExprPool& Pool() const { return pool; }
   bool Want(size_t n) const {
     if (args.size() == n) return true;
-    el.diags_.Error(DiagCode::BadCall, expr.span,
+    diags.Error(DiagCode::BadCall, expr.span,
                     "'" + fn + "' takes " + std::to_string(n) + " argument(s), got " + std::to_string(args.size()));
     return false;
   }
   bool Numeric(const Value& v) const {
     if (v.type != VType::String) return true;
-    el.diags_.Error(DiagCode::TypeMismatch, expr.span, "'" + fn + "' needs numbers");
+    diags.Error(DiagCode::TypeMismatch, expr.span, "'" + fn + "' needs numbers");
     return false;
   }
   bool Vec3(const Value& v) const {
     if (v.shape == Dims{3} && v.type != VType::String) return true;
-    el.diags_.Error(DiagCode::SizeMismatch, expr.span, "'" + fn + "' needs 3-vectors, got " + ShapeStr(v.shape));
+    diags.Error(DiagCode::SizeMismatch, expr.span, "'" + fn + "' needs 3-vectors, got " + ShapeStr(v.shape));
     return false;
   }
 };
@@ -115,7 +117,7 @@ Value LowerSkew(Call& c) {
 // sum_i a_i b_i into *s, for dot and norm.
 bool InnerProduct(Call& c, const Value& a, const Value& b, ExprId* s) {
   if (a.shape.size() != 1 || a.shape != b.shape || !c.Numeric(a) || !c.Numeric(b)) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'" + c.fn + "' needs vectors of equal length");
+    c.diags.Error(DiagCode::SizeMismatch, c.expr.span, "'" + c.fn + "' needs vectors of equal length");
     return false;
   }
   auto& pool = c.Pool();
@@ -141,7 +143,7 @@ Value LowerOuterProduct(Call& c) {
   const Value& a = c.args[0];
   const Value& b = c.args[1];
   if (a.shape.size() != 1 || b.shape.size() != 1) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'outerProduct' needs vectors");
+    c.diags.Error(DiagCode::SizeMismatch, c.expr.span, "'outerProduct' needs vectors");
     return Value::Invalid();
   }
   Value r;
@@ -155,7 +157,7 @@ Value LowerOuterProduct(Call& c) {
 Value LowerTranspose(Call& c) {
   const Value& a = c.args[0];
   if (a.shape.size() != 2) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'transpose' needs a matrix, got " + ShapeStr(a.shape));
+    c.diags.Error(DiagCode::SizeMismatch, c.expr.span, "'transpose' needs a matrix, got " + ShapeStr(a.shape));
     return Value::Invalid();
   }
   Value r = a;
@@ -175,7 +177,7 @@ Value LowerVector(Call& c) {
 // The n-by-n matrix with `diag` on its diagonal (ones when null), zeros elsewhere.
 Value DiagonalMatrix(Call& c, long n, VType type, const Elements* diag) {
   if (n < 0 || n > kMaxArraySize || n * n > kMaxArraySize) {
-    c.el.diags_.Error(DiagCode::ArrayTooLarge, c.expr.span, "matrix size out of range");
+    c.diags.Error(DiagCode::ArrayTooLarge, c.expr.span, "matrix size out of range");
     return Value::Invalid();
   }
   auto& pool = c.Pool();
@@ -196,7 +198,7 @@ Value LowerIdentity(Call& c) {
 
 Value LowerDiagonal(Call& c) {
   if (c.args[0].shape.size() != 1 || !c.Numeric(c.args[0])) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'diagonal' needs a vector");
+    c.diags.Error(DiagCode::SizeMismatch, c.expr.span, "'diagonal' needs a vector");
     return Value::Invalid();
   }
   return DiagonalMatrix(c, c.args[0].shape[0], c.args[0].type, &c.args[0].elements);
@@ -205,7 +207,7 @@ Value LowerDiagonal(Call& c) {
 // The dimensions given by arguments first, first + 1, ... into r->shape.
 bool Dimensions(Call& c, size_t first, Value* r) {
   if (c.args.size() <= first) {
-    c.el.diags_.Error(DiagCode::BadCall, c.expr.span, "'" + c.fn + "' needs dimensions");
+    c.diags.Error(DiagCode::BadCall, c.expr.span, "'" + c.fn + "' needs dimensions");
     return false;
   }
   long total = 1;
@@ -213,7 +215,7 @@ bool Dimensions(Call& c, size_t first, Value* r) {
     long n = 0;
     if (!c.el.StructuralInt(c.args[i], c.expr.args[i]->span, &n, "a dimension")) return false;
     if (n < 0 || n > kMaxArraySize || (total *= (n == 0 ? 1 : n)) > kMaxArraySize) {
-      c.el.diags_.Error(DiagCode::ArrayTooLarge, c.expr.args[i]->span, "array too large");
+      c.diags.Error(DiagCode::ArrayTooLarge, c.expr.args[i]->span, "array too large");
       return false;
     }
     r->shape.push_back(static_cast<int>(n));
@@ -240,7 +242,7 @@ Value LowerFill(Call& c) {
   if (!Dimensions(c, 1, &r)) return Value::Invalid();
   size_t count = r.Size();
   if (!c.args[0].shape.empty()) {
-    c.el.diags_.Error(DiagCode::SizeMismatch, c.expr.span, "'fill' needs a scalar value");
+    c.diags.Error(DiagCode::SizeMismatch, c.expr.span, "'fill' needs a scalar value");
     return Value::Invalid();
   }
   r.elements.assign(count, c.args[0].elements[0]);
@@ -261,7 +263,7 @@ Value LowerSize(Call& c) {
   long k = 0;
   if (!c.el.StructuralInt(c.args[1], c.expr.args[1]->span, &k, "a dimension index")) return Value::Invalid();
   if (k < 1 || k > static_cast<long>(c.args[0].shape.size())) {
-    c.el.diags_.Error(DiagCode::IndexOutOfRange, c.expr.args[1]->span, "dimension index out of range");
+    c.diags.Error(DiagCode::IndexOutOfRange, c.expr.args[1]->span, "dimension index out of range");
     return Value::Invalid();
   }
   return c.el.Const(c.args[0].shape[static_cast<size_t>(k - 1)], VType::Integer);
@@ -342,7 +344,7 @@ const Builtin* FindBuiltin(std::string_view fn) {
 
 }  // namespace
 
-Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
   // The function's name: most are one part (`sin`), read in place; a qualified one is joined.
   std::string joined;
   if (e.parts.size() > 1) {
@@ -362,7 +364,7 @@ Value Elaborator::EvalCall(const ast::Expr& e, const Ctx& ctx) {
     if (!args.back().valid) return Value::Invalid();
   }
   if (const Builtin* b = FindBuiltin(fn)) {
-    Call call{*this, e, fn, args, ctx, b->op};
+    Call call{*this, diags_, m_->exprs, e, fn, args, ctx, b->op};
     if (b->arity != kOwnArity && !call.Want(static_cast<size_t>(b->arity))) return Value::Invalid();
     return b->lower(call);
   }

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 
 namespace kanesim::lang::elab {
 
@@ -30,9 +30,9 @@ bool Compatible(VType a, VType b) {
 // dimensions (> k) and the same size in every dimension but k; `what` names the
 // construct in messages ("cat(2, ...)"), `spans` locate the parts and `names` name them
 // ("argument 2", "row 1").
-Value Elaborator::Concatenate(size_t k, const std::vector<Value>& parts, const std::vector<Span>& spans,
-                              const std::vector<std::string>& names, Span whole, const std::string& what,
-                              const std::string& hint) {
+Value Evaluator::Concatenate(size_t k, const std::vector<Value>& parts, const std::vector<Span>& spans,
+                             const std::vector<std::string>& names, Span whole, const std::string& what,
+                             const std::string& hint) {
   const Value& first = parts[0];
   size_t total = 0;
   int joined = 0;
@@ -91,7 +91,7 @@ Value Elaborator::Concatenate(size_t k, const std::vector<Value>& parts, const s
 }
 
 // cat(k, A, B, ...): `args` are evaluated already (args[0] is k).
-Value Elaborator::EvalCat(const ast::Expr& e, const std::vector<Value>& args) {
+Value Evaluator::EvalCat(const ast::Expr& e, const std::vector<Value>& args) {
   if (args.size() < 2) {
     diags_.Error(DiagCode::BadCall, e.span, "'cat' needs a dimension and at least one array, got " +
                                                 std::to_string(args.size()) + " argument(s)")
@@ -136,7 +136,7 @@ Value Elaborator::EvalCat(const ast::Expr& e, const std::vector<Value>& args) {
 }
 
 // [a, b; c, d]: ',' joins side by side (cat(2, ...)), ';' stacks the rows (cat(1, ...)).
-Value Elaborator::EvalMatrix(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalMatrix(const ast::Expr& e, const Ctx& ctx) {
   std::vector<std::vector<Value>> rows;
   size_t ndims = 2;
   for (const auto& row : e.rows) {

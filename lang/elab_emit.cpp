@@ -1,40 +1,36 @@
-// Emission: the instance tree's primitives become the flat mechanism, one function per
-// primitive. connect() sets of frames collapse into one frame each (union-find); flange
-// connections turn rotational springs and dampers into generalized forces on joint
-// coordinates.
+// Emit: the instance tree's primitives become the flat mechanism, one function per
+// primitive (lang/elab_emit.h). Flange connections turn rotational springs and dampers into
+// generalized forces on joint coordinates.
 #include <algorithm>
 #include <initializer_list>
 #include <numeric>
 #include <utility>
 
-#include "lang/elab_internal.h"
-#include "flat/union_find.h"
+#include "lang/elab_emit.h"
+
+#include "lang/elab_connect.h"
+#include "lang/elab_eval.h"
+#include "lang/elab_instantiate.h"
 
 namespace kanesim::lang::elab {
 
 using flat::ExprId;
 using flat::Op;
 
-using flat::UnionFind;
-
 namespace {
 
-// One emission: Run lists its stages; the frame sets and the springs the walk finds are
-// kept here between them.
+// One emission: Run lists its stages; the springs the walk finds are kept here between them.
 class Emitter {
  public:
-  explicit Emitter(Elaborator& elaborator)
-      : el(elaborator),
-        pool(elaborator.m_->exprs),
-        diags_(elaborator.diags_),
-        m_(elaborator.m_),
-        uf(elaborator.frame_nodes_.size()) {}
+  Emitter(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
+          Diagnostics& diags, flat::Mechanism* m)
+      : tree_(tree), sets_(sets), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m) {}
 
   void Run(Node* root) {
-    CollapseFrames();
+    m_->joints = std::move(tree_.joints);
     tau_extra.resize(m_->joints.size());
     Walk(root);
-    el.LinkShapes();
+    LinkShapes(m_);
     SpringsOnFlanges();
     Outputs(root);
     EveryParameter(root);
@@ -42,27 +38,6 @@ class Emitter {
   }
 
  private:
-  // Each connect() set of frames becomes one flat frame.
-  void CollapseFrames() {
-    for (auto [a, b] : el.frame_links_) uf.Unite(a, b);
-    canon.assign(el.frame_nodes_.size(), -1);
-    set_size.assign(el.frame_nodes_.size(), 0);
-    for (size_t i = 0; i < el.frame_nodes_.size(); ++i) set_size[static_cast<size_t>(uf.Find(static_cast<int>(i)))]++;
-    for (size_t i = 0; i < el.frame_nodes_.size(); ++i) {
-      int r = uf.Find(static_cast<int>(i));
-      if (canon[static_cast<size_t>(r)] < 0) {
-        canon[static_cast<size_t>(r)] = static_cast<int>(m_->frames.size());
-        flat::Frame f;
-        const Node* first = el.frame_nodes_[static_cast<size_t>(r)];
-        f.name = first->path;
-        f.loc = el.Loc(first->decl ? first->decl->name_span : Span{});
-        m_->frames.push_back(std::move(f));
-      }
-      canon[i] = canon[static_cast<size_t>(r)];
-      m_->frames[static_cast<size_t>(canon[i])].aliases.push_back(el.frame_nodes_[i]->path);
-    }
-  }
-
   // The flat frame of primitive n's Frame `name`; warns when it is connected to nothing.
   int FrameOf(Node* n, const char* name) {
     Node* c = n->Child(name);
@@ -71,8 +46,8 @@ class Emitter {
                    "primitive '" + n->path + "' lacks the Frame '" + name + "'");
       return -1;
     }
-    int pid = c->prim_index;
-    if (set_size[static_cast<size_t>(uf.Find(pid))] == 1 && n->prim != Prim::World) {
+    const size_t pid = static_cast<size_t>(c->prim_index);
+    if (sets_.frame_set_size[pid] == 1 && n->prim != Prim::World) {
       auto& d = diags_.Warning(DiagCode::UnconnectedFrame, n->decl ? n->decl->name_span : Span{},
                                "'" + c->path + "' is not connected to anything");
       // A joint's frame_b goes to the body it moves (to the world it would lock the joint: W316).
@@ -80,7 +55,7 @@ class Emitter {
                    ? "connect it to the body the joint moves, e.g. connect(" + c->path + ", body.frame_a)"
                    : "connect it, e.g. connect(" + c->path + ", world.frame_b)";
     }
-    return canon[static_cast<size_t>(pid)];
+    return sets_.frame[pid];
   }
 
   // Primitive n's variable `name`, which must have `shape`. The value is the variable's
@@ -92,7 +67,7 @@ class Emitter {
                    "primitive '" + n->path + "' lacks '" + name + "'");
       return invalid_;
     }
-    const Value& v = el.GetVar(c, c->decl ? c->decl->name_span : Span{});
+    const Value& v = eval_.GetVar(c, c->decl ? c->decl->name_span : Span{});
     if (v.valid && !std::equal(v.shape.begin(), v.shape.end(), shape.begin(), shape.end())) {
       diags_.Error(DiagCode::SizeMismatch, c->decl ? c->decl->name_span : Span{},
                    "'" + c->path + "' has the wrong size for its primitive");
@@ -122,9 +97,9 @@ class Emitter {
   bool Boolean(Node* n, const char* name, bool dflt) {
     Node* c = n->Child(name);
     if (!c) return dflt;
-    const Value& v = el.GetVar(c, Span{});
+    const Value& v = eval_.GetVar(c, Span{});
     double x = dflt ? 1 : 0;
-    if (v.valid && el.Structural(v, c->decl ? c->decl->name_span : Span{}, &x, name)) return x != 0;
+    if (v.valid && eval_.Structural(v, c->decl ? c->decl->name_span : Span{}, &x, name)) return x != 0;
     return dflt;
   }
 
@@ -144,7 +119,7 @@ class Emitter {
     // Where the primitive is declared (made only for the kinds that keep it); inside a
     // library component (a Rod's body and tip) the user's declaration of that component,
     // so that the compiler's messages point into the user's file.
-    auto loc = [&] { return el.Loc(el.UserSpan(n)); };
+    auto loc = [&] { return places_.Loc(places_.UserSpan(n)); };
     switch (n->prim) {
       case Prim::World: EmitWorld(n, loc()); break;
       case Prim::Body: EmitBody(n, loc()); break;
@@ -154,7 +129,7 @@ class Emitter {
       case Prim::Wrench: EmitWrench(n, loc()); break;
       case Prim::Contact: EmitContact(n, loc()); break;
       case Prim::RotSpring: springs.push_back(n); break;
-      case Prim::Shape: el.EmitShape(n); break;
+      case Prim::Shape: EmitShape(n, eval_, places_, diags_, m_); break;
       default: break;
     }
     for (auto& c : n->children) Walk(c.get());
@@ -195,7 +170,7 @@ class Emitter {
     j.frame_a = FrameOf(n, "frame_a");
     j.frame_b = FrameOf(n, "frame_b");
     if (Node* c = n->Child("coordinates")) {
-      const Value& v = el.GetVar(c, Span{});
+      const Value& v = eval_.GetVar(c, Span{});
       if (v.valid && v.type == VType::String && !v.strings.empty() &&
           !flat::RotationCoordsFromName(v.strings[0], &j.rotation)) {
         auto& d = diags_.Error(DiagCode::BadValue, c->Modifiers().value ? c->Modifiers().value->span : Span{},
@@ -221,9 +196,9 @@ class Emitter {
     // Coulomb friction from the joint's normal force: only when mu is not zero, so a
     // scene without friction pays nothing (mu = 0 vs not is a structural choice).
     if (Node* mu = n->Child("mu"); mu && mu->kind == Node::kVar) {
-      const Value& mv = el.GetVar(mu, Span{});
+      const Value& mv = eval_.GetVar(mu, Span{});
       double muv = 0;
-      if (mv.valid && el.Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
+      if (mv.valid && eval_.Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
         j.friction_mu = mv.elements[0];
         j.friction_v = AsScalar(Field(n, "friction_v", {}));
         j.friction_radius =
@@ -254,7 +229,7 @@ class Emitter {
     StartOf(q, &j.q_start, &j.q_start_fixed);
     StartOf(u, &j.u_start, nullptr);
     if (Bound(tau)) {
-      const Value& tv = el.GetVar(tau, Span{});
+      const Value& tv = eval_.GetVar(tau, Span{});
       if (tv.valid)
         for (size_t k = 0; k < j.tau.size() && k < tv.elements.size(); ++k) j.tau[k] = tv.elements[k];
     }
@@ -267,7 +242,7 @@ class Emitter {
     auto it = mods.sub.find("start");
     if (it != mods.sub.end() && it->second.value) {
       Span where;
-      Value v = el.EvalModValue(*it->second.value, &where);
+      Value v = eval_.EvalModValue(*it->second.value, &where);
       if (v.valid) {
         if (v.shape.empty() && out->size() == 1) {
           (*out)[0] = v.elements[0];
@@ -287,9 +262,9 @@ class Emitter {
     if (fixed) {
       auto fit = mods.sub.find("fixed");
       if (fit != mods.sub.end() && fit->second.value) {
-        Value fv = el.EvalModValue(*fit->second.value, nullptr);
+        Value fv = eval_.EvalModValue(*fit->second.value, nullptr);
         double x = 0;
-        if (fv.valid && fv.shape.empty() && el.Structural(fv, fit->second.value->span, &x, "fixed"))
+        if (fv.valid && fv.shape.empty() && eval_.Structural(fv, fit->second.value->span, &x, "fixed"))
           fixed->assign(fixed->size(), x != 0);
       }
     }
@@ -318,7 +293,7 @@ class Emitter {
     for (auto& [k, mv] : q->eq_elem_binding) items.push_back({k, &mv});
     for (auto [k, mv] : items) {
       Span where;
-      Value v = el.EvalModValue(*mv, &where);
+      Value v = eval_.EvalModValue(*mv, &where);
       if (!v.valid) continue;
       bool ok = k >= 0    ? v.shape.empty()
                 : nq == 1 ? v.shape.empty()
@@ -381,8 +356,6 @@ class Emitter {
   // Springs and dampers on flanges act on the coordinates of the joints whose drive
   // flanges they are connected to.
   void SpringsOnFlanges() {
-    UnionFind fu(el.flange_nodes_.size());
-    for (auto [a, b] : el.flange_links_) fu.Unite(a, b);
     for (Node* s : springs) {
       struct End {
         int joint = -1;  // -1 = ground (a support flange, or nothing)
@@ -393,11 +366,11 @@ class Emitter {
           diags_.Error(DiagCode::BadPrimitive, s->cls ? s->cls->name_span : Span{}, "spring lacks flange");
           return false;
         }
-        int root_id = fu.Find(f->prim_index);
+        const int set = sets_.flange_set[static_cast<size_t>(f->prim_index)];
         int found = 0;
-        for (size_t i = 0; i < el.flange_nodes_.size(); ++i) {
-          if (fu.Find(static_cast<int>(i)) != root_id) continue;
-          Node* g = el.flange_nodes_[i];
+        for (size_t i = 0; i < tree_.flanges.size(); ++i) {
+          if (sets_.flange_set[i] != set) continue;
+          Node* g = tree_.flanges[i];
           if (!g->parent || g->parent->prim != Prim::Joint) continue;
           if (g->name == "drive") {
             if (found++ == 0) out->joint = g->parent->prim_index;
@@ -456,7 +429,7 @@ class Emitter {
   void Outputs(Node* root) {
     for (auto& c : root->children) {
       if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
-      const Value& v = el.GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
+      const Value& v = eval_.GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
       if (!v.valid) continue;
       if (v.type == VType::String) {
         diags_.Error(DiagCode::TypeMismatch, c->decl->name_span, "outputs must be numbers");
@@ -466,7 +439,7 @@ class Emitter {
         flat::Output o;
         o.name = c->path + (v.elements.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
         o.expr = v.elements[k];
-        o.loc = el.Loc(c->decl->name_span);
+        o.loc = places_.Loc(c->decl->name_span);
         m_->outputs.push_back(std::move(o));
       }
     }
@@ -478,7 +451,7 @@ class Emitter {
     if (n->kind == Node::kVar) {
       bool in_primitive = n->parent && n->parent->prim != Prim::None;
       if (n->variability == ast::Variability::Parameter || !in_primitive)
-        el.GetVar(n, n->decl ? n->decl->name_span : Span{});
+        eval_.GetVar(n, n->decl ? n->decl->name_span : Span{});
       return;
     }
     for (auto& e : n->elems) EveryParameter(e.get());
@@ -489,17 +462,18 @@ class Emitter {
   void RetargetFrameStates() {
     for (auto& r : m_->state_refs) {
       if (r.kind == flat::StateKind::JointQ || r.kind == flat::StateKind::JointU) continue;
-      if (r.target >= 0 && static_cast<size_t>(r.target) < canon.size()) r.target = canon[static_cast<size_t>(r.target)];
+      if (r.target >= 0 && static_cast<size_t>(r.target) < sets_.frame.size())
+        r.target = sets_.frame[static_cast<size_t>(r.target)];
     }
   }
 
-  Elaborator& el;
+  InstanceTree& tree_;
+  const Connections& sets_;
+  Evaluator& eval_;
+  const SourcePlaces& places_;
   flat::ExprPool& pool;
   Diagnostics& diags_;
   flat::Mechanism* m_;
-  UnionFind uf;                                // connect() sets of provisional frame ids
-  std::vector<int> canon;                      // provisional frame id -> flat frame id
-  std::vector<int> set_size;                   // per set root: the number of frames in the set
   std::vector<Node*> springs;                  // rotational springs and dampers found by Walk
   std::vector<std::vector<ExprId>> tau_extra;  // per joint: generalized forces of springs on flanges
   const Value invalid_ = Value::Invalid();     // what Field returns for a missing or ill-sized field
@@ -507,6 +481,42 @@ class Emitter {
 
 }  // namespace
 
-void Elaborator::Emit(Node* root) { Emitter(*this).Run(root); }
+void Emit(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
+          Diagnostics& diags, flat::Mechanism* m) {
+  Node* root = tree.root.get();
+  Emitter(tree, sets, eval, places, diags, m).Run(root);
+}
+
+// The experiment annotation: StartTime, StopTime, Tolerance, Interval.
+void EmitExperiment(const ast::Modification& ex, const ast::ClassDef* top, Node* root, Evaluator& eval,
+                    Diagnostics& diags, flat::Mechanism* m) {
+  static const std::vector<std::string> kKnown{"StartTime", "StopTime", "Tolerance", "Interval"};
+  Ctx ctx{root, nullptr};
+  auto& x = m->experiment;
+  for (const auto& a : ex.args) {
+    if (a.path.size() != 1 || !a.mod || !a.mod->value) continue;
+    const std::string& key = a.path[0];
+    if (std::find(kKnown.begin(), kKnown.end(), key) == kKnown.end()) {
+      auto& d =
+          diags.Warning(DiagCode::UnknownModifier, a.name_span, "unknown experiment setting '" + key + "' (ignored)");
+      std::string best = ClosestName(key, kKnown);
+      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+      continue;
+    }
+    double v = 0;
+    if (!eval.Structural(eval.Eval(*a.mod->value, ctx), a.mod->value->span, &v, key.c_str())) continue;
+    if (key == "StartTime") x.start_time = v, x.has_start = true;
+    else if (key == "StopTime") x.stop_time = v, x.has_stop = true;
+    else if (key == "Tolerance") x.tolerance = v, x.has_tolerance = true;
+    else x.interval = v, x.has_interval = true;
+  }
+  if (x.stop_time <= x.start_time)
+    diags.Error(DiagCode::BadValue, top->name_span, "experiment StopTime must be after StartTime");
+  if (x.tolerance <= 0 || x.tolerance >= 1)
+    diags.Error(DiagCode::BadValue, top->name_span, "experiment Tolerance must be in (0, 1)");
+  if (x.has_interval && x.interval <= 0)
+    diags.Error(DiagCode::BadValue, top->name_span, "experiment Interval must be positive");
+}
+
 
 }  // namespace kanesim::lang::elab

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <functional>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 #include "lang/lexer.h"
 
 namespace kanesim::lang::elab {
@@ -29,14 +29,17 @@ size_t Value::Size() const {
   return n;
 }
 
-Value Elaborator::Const(double x, VType t) {
+Evaluator::Evaluator(flat::Mechanism* m, const SourcePlaces& places, Diagnostics& diags)
+    : m_(m), places_(places), diags_(diags) {}
+
+Value Evaluator::Const(double x, VType t) {
   Value v;
   v.type = t;
   v.elements.push_back(m_->exprs.Constant(x));
   return v;
 }
 
-Value Elaborator::Scalar(ExprId e, VType t) {
+Value Evaluator::Scalar(ExprId e, VType t) {
   Value v;
   v.type = t;
   v.elements.push_back(e);
@@ -45,7 +48,7 @@ Value Elaborator::Scalar(ExprId e, VType t) {
 
 // Marks every parameter that `id` reads as structural. Nodes already walked are marked
 // in structural_seen_ and never walked again, so all calls together cost O(pool size).
-void Elaborator::MarkStructural(ExprId id) {
+void Evaluator::MarkStructural(ExprId id) {
   const auto& pool = m_->exprs;
   if (structural_seen_.size() < pool.size()) structural_seen_.resize(pool.size(), 0);
   std::vector<ExprId>& stack = structural_stack_;  // scratch, empty between calls
@@ -62,7 +65,7 @@ void Elaborator::MarkStructural(ExprId id) {
   }
 }
 
-bool Elaborator::Structural(const Value& v, Span span, double* out, const char* what) {
+bool Evaluator::Structural(const Value& v, Span span, double* out, const char* what) {
   if (!v.valid) return false;
   if (v.type == VType::String || v.Size() != 1 || !v.shape.empty()) {
     diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be a scalar number");
@@ -93,7 +96,7 @@ std::string ShortNumber(double x) {
 }
 }  // namespace
 
-bool Elaborator::StructuralInt(const Value& v, Span span, long* out, const char* what) {
+bool Evaluator::StructuralInt(const Value& v, Span span, long* out, const char* what) {
   double x = 0;
   if (!Structural(v, span, &x, what)) return false;
   if (std::fabs(x) > 9e15 || x != std::floor(x)) {
@@ -104,7 +107,7 @@ bool Elaborator::StructuralInt(const Value& v, Span span, long* out, const char*
   return true;
 }
 
-std::vector<double> Elaborator::StructuralList(const Value& v, Span span, const char* what) {
+std::vector<double> Evaluator::StructuralList(const Value& v, Span span, const char* what) {
   std::vector<double> out;
   if (!v.valid) return out;
   if (v.type == VType::String) {
@@ -124,12 +127,12 @@ std::vector<double> Elaborator::StructuralList(const Value& v, Span span, const 
 // Operator chains (a + b + ... , - - x) are evaluated with an explicit stack by
 // EvalOperators (lang/elab_operators.cpp); every other kind recurses through EvalNested,
 // whose depth the parser's nesting limit and kMaxEvalDepth bound.
-Value Elaborator::Eval(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::Eval(const ast::Expr& e, const Ctx& ctx) {
   if (e.kind == ast::ExprKind::Unary || e.kind == ast::ExprKind::Binary) return EvalOperators(e, ctx);
   return EvalNested(e, ctx);
 }
 
-Value Elaborator::EvalNode(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalNode(const ast::Expr& e, const Ctx& ctx) {
   switch (e.kind) {
     case ast::ExprKind::Number: return Const(e.number, e.is_integer ? VType::Integer : VType::Real);
     case ast::ExprKind::Bool: return Const(e.number, VType::Boolean);
@@ -159,7 +162,7 @@ Value Elaborator::EvalNode(const ast::Expr& e, const Ctx& ctx) {
   return Value::Invalid();
 }
 
-Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
   const ast::RefPart& head = e.parts[0];
   const bool bare = e.parts.size() == 1 && head.subscripts.empty();
   // Loop iterators shadow everything.
@@ -207,7 +210,7 @@ Value Elaborator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
   return Value::Invalid();
 }
 
-void Elaborator::ReportUnknownName(const ast::RefPart& head, const Ctx& ctx) {
+void Evaluator::ReportUnknownName(const ast::RefPart& head, const Ctx& ctx) {
   std::vector<std::string> cands{"time", "pi"};
   if (ctx.scope)
     for (auto& c : ctx.scope->children) cands.push_back(c->decl ? c->decl->name : c->name);
@@ -220,12 +223,12 @@ void Elaborator::ReportUnknownName(const ast::RefPart& head, const Ctx& ctx) {
 
 // Frame connectors expose their motion: r (position), R (orientation), v (velocity),
 // w (angular velocity), all resolved in the world.
-bool Elaborator::IsFrameMotion(const Node* n, const std::string& name) {
+bool Evaluator::IsFrameMotion(const Node* n, const std::string& name) {
   return n->kind == Node::kClass && n->prim == Prim::Frame &&
          (name == "r" || name == "R" || name == "v" || name == "w");
 }
 
-Value Elaborator::FrameMotion(const ast::Expr& e, size_t pi, const Node* frame, const Ctx& ctx) {
+Value Evaluator::FrameMotion(const ast::Expr& e, size_t pi, const Node* frame, const Ctx& ctx) {
   const ast::RefPart& part = e.parts[pi];
   Value v;
   flat::StateKind kind = part.name == "r"   ? flat::StateKind::FramePosition
@@ -244,7 +247,7 @@ Value Elaborator::FrameMotion(const ast::Expr& e, size_t pi, const Node* frame, 
   return SubscriptFrameMotion(v, part, ctx);
 }
 
-Value Elaborator::SubscriptFrameMotion(const Value& v, const ast::RefPart& part, const Ctx& ctx) {
+Value Evaluator::SubscriptFrameMotion(const Value& v, const ast::RefPart& part, const Ctx& ctx) {
   std::vector<std::vector<int>> idx;
   std::vector<bool> keep;
   for (size_t d = 0; d < part.subscripts.size() && d < v.shape.size(); ++d) {
@@ -288,7 +291,7 @@ Value Elaborator::SubscriptFrameMotion(const Value& v, const ast::RefPart& part,
   return out;
 }
 
-Node* Elaborator::Member(Node* n, const ast::RefPart& part) {
+Node* Evaluator::Member(Node* n, const ast::RefPart& part) {
   if (n->kind != Node::kClass) {
     diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
     return nullptr;
@@ -304,7 +307,7 @@ Node* Elaborator::Member(Node* n, const ast::RefPart& part) {
   return nullptr;
 }
 
-Node* Elaborator::ArrayElement(Node* array, const ast::RefPart& part, const Ctx& ctx) {
+Node* Evaluator::ArrayElement(Node* array, const ast::RefPart& part, const Ctx& ctx) {
   if (part.subscripts.size() != 1) {
     diags_.Error(DiagCode::TypeMismatch, part.span,
                  "'" + array->path + "' is an array of components; index it with one subscript");
@@ -324,7 +327,7 @@ Node* Elaborator::ArrayElement(Node* array, const ast::RefPart& part, const Ctx&
   return array->elems[static_cast<size_t>(k - 1)].get();
 }
 
-Value Elaborator::VarReference(const ast::Expr& e, size_t pi, Node* var, const Ctx& ctx) {
+Value Evaluator::VarReference(const ast::Expr& e, size_t pi, Node* var, const Ctx& ctx) {
   const ast::RefPart& part = e.parts[pi];
   Value v = GetVar(var, part.span);
   if (!v.valid) return v;
@@ -336,7 +339,7 @@ Value Elaborator::VarReference(const ast::Expr& e, size_t pi, Node* var, const C
   return SubscriptValue(v, part, var, ctx);
 }
 
-Value Elaborator::SubscriptValue(const Value& v, const ast::RefPart& part, const Node* var, const Ctx& ctx) {
+Value Evaluator::SubscriptValue(const Value& v, const ast::RefPart& part, const Node* var, const Ctx& ctx) {
   if (part.subscripts.size() > v.shape.size()) {
     diags_.Error(DiagCode::IndexOutOfRange, part.span,
                  "'" + var->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
@@ -374,8 +377,8 @@ Value Elaborator::SubscriptValue(const Value& v, const ast::RefPart& part, const
   return r;
 }
 
-bool Elaborator::SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx,
-                                  std::vector<int>* list, bool* keep) {
+bool Evaluator::SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx,
+                                 std::vector<int>* list, bool* keep) {
   if (s.kind == ast::ExprKind::End) {
     list->push_back(size - 1);
     *keep = false;
@@ -401,7 +404,7 @@ bool Elaborator::SubscriptIndices(const ast::Expr& s, int size, const Node* var,
   return true;
 }
 
-Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
   Value r;
   r.type = VType::Integer;
   bool first = true;
@@ -441,7 +444,7 @@ Value Elaborator::EvalArray(const ast::Expr& e, const Ctx& ctx) {
   return r;
 }
 
-Value Elaborator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
   Value range = Eval(*e.args[1], ctx);
   if (!range.valid) return Value::Invalid();
   if (range.Size() > static_cast<size_t>(kMaxArraySize)) {
@@ -486,7 +489,7 @@ Value Elaborator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
 
 // EvalMatrix ([a, b; c, d]) is in elab_concat.cpp, with cat().
 
-Value Elaborator::EvalRange(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalRange(const ast::Expr& e, const Ctx& ctx) {
   auto& pool = m_->exprs;
   std::vector<double> xs;
   double a = 0, b = 0, step = 1;
@@ -519,7 +522,7 @@ Value Elaborator::EvalRange(const ast::Expr& e, const Ctx& ctx) {
   return r;
 }
 
-Value Elaborator::EvalIf(const ast::Expr& e, const Ctx& ctx) {
+Value Evaluator::EvalIf(const ast::Expr& e, const Ctx& ctx) {
   auto& pool = m_->exprs;
   // Evaluate from the last else backwards, building IfElse nodes.
   Value acc = Eval(*e.args.back(), ctx);

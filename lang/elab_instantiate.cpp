@@ -1,82 +1,50 @@
-// Instantiation: classes become a tree of instance nodes. Extends copies the base's
-// elements and equations; arrays of components get one node per element, each with its
-// slice of the modifier (lang/elab_modifiers.cpp); conditional components are dropped
-// when false.
+// Instantiate: classes become a tree of instance nodes (lang/elab_instantiate.h).
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_instantiate.h"
+
+#include "lang/elab_eval.h"
+#include "lang/elab_lookup.h"
+#include "lang/elab_modifiers.h"
 
 namespace kanesim::lang::elab {
 
-Span Elaborator::UserSpan(const Node* n) const {
-  const SourceManager& sm = program_.sources;
-  for (const Node* a = n; a; a = a->parent) {
-    if (!a->decl) continue;
-    const Span s = a->decl->name_span;
-    // Library and pseudo files are named "<stdlib>/Parts.mech", "<--set>".
-    if (s.valid() && s.file < sm.NumFiles() && sm.Name(s.file).rfind('<', 0) != 0) return s;
-  }
-  return n->decl ? n->decl->name_span : Span{};
-}
+Instantiator::Instantiator(const ClassLookup& lookup, Evaluator& eval, const SourcePlaces& places,
+                           Diagnostics& diags, bool subscripted_sets, InstanceTree* tree)
+    : lookup_(lookup),
+      eval_(eval),
+      places_(places),
+      diags_(diags),
+      subscripted_sets_(subscripted_sets),
+      tree_(*tree) {}
 
-flat::SourceLoc Elaborator::Loc(Span s) const {
-  flat::SourceLoc l;
-  const SourceManager& sm = program_.sources;
-  if (!s.valid() || s.file >= sm.NumFiles()) return l;
-  // Every element of an array asks for the same declarations' places: found once (the
-  // line search and the file name's interning cost ~200 instructions a call).
-  const std::uint64_t key = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(s.file)) << 32) |
-                            static_cast<std::uint32_t>(s.begin);
-  auto [it, fresh] = loc_cache_.try_emplace(key);
-  if (!fresh) return it->second;
-  LineCol lc = sm.Locate(s.file, s.begin);
-  l.file = sm.Name(s.file);
-  l.line = lc.line;
-  l.col = lc.col;
-  it->second = l;
-  return l;
-}
-// Breadth-first over the class and its bases (each visited once, so cyclic extends
-// cannot loop; the cycle itself is reported by Collect).
-const ast::Modification* Elaborator::FindAnnotation(const ast::ClassDef* cls, const std::string& key) const {
-  std::vector<const ast::ClassDef*> queue{cls};
-  for (size_t i = 0; i < queue.size() && i < 256; ++i) {
-    const ast::ClassDef* c = queue[i];
-    if (c->annotation)
-      for (const auto& a : c->annotation->args)
-        if (a.path.size() == 1 && a.path[0] == key) return a.mod.get();
-    auto push = [&](const ast::ClassDef* b) {
-      if (b && std::find(queue.begin(), queue.end(), b) == queue.end()) queue.push_back(b);
-    };
-    for (const auto& el : c->elements)
-      if (el.kind == ast::Element::kExtends) push(FindClass(el.extends->base, c));
-    if (c->is_short) push(FindClass(c->short_base, c));
-  }
-  return nullptr;
-}
+void Instantiator::Run(const ast::ClassDef* top) { Instantiate(tree_.root.get(), top); }
 
-const ast::ClassDef* Elaborator::ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod) {
+bool Instantiator::TooLarge() const { return too_large_ || eval_.OverBudget(); }
+
+const ast::ClassDef* Instantiator::ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod) {
   int guard = 0;
   while (cls && cls->is_short) {
     if (++guard > kMaxExtendsDepth) {
       diags_.Error(DiagCode::RecursiveExtends, cls->name_span, "short class definitions form a cycle");
       return nullptr;
     }
-    const ast::ClassDef* base = FindClass(cls->short_base, cls);
+    const ast::ClassDef* base = lookup_.FindClass(cls->short_base, cls);
     if (!base) {
       diags_.Error(DiagCode::UnknownClass, cls->span, "unknown class '" + ast::JoinName(cls->short_base) + "'");
       return nullptr;
     }
-    if (cls->short_mod) MergeInto(*mod, BuildMod(cls->short_mod.get(), node, nullptr), node ? node->path : cls->name);
+    if (cls->short_mod)
+      MergeMods(*mod, BuildMod(cls->short_mod.get(), node, nullptr, diags_), node ? node->path : cls->name, diags_);
     cls = base;
   }
   return cls;
 }
 
-void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
-                         CollectedNames& names, std::vector<Node::EqSource>& eqs, int depth) {
+void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
+                           CollectedNames& names, std::vector<Node::EqSource>& eqs, int depth) {
   for (const ast::ClassDef* c : extends_stack_) {
     if (c == cls) {
       auto& d = diags_.Error(DiagCode::RecursiveExtends, cls->name_span,
@@ -95,20 +63,20 @@ void Elaborator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mo
     if (diags_.Full()) break;
     if (el.kind == ast::Element::kExtends) {
       const ast::Extends& ex = *el.extends;
-      const ast::ClassDef* base = FindClass(ex.base, cls);
+      const ast::ClassDef* base = lookup_.FindClass(ex.base, cls);
       if (!base) {
         auto& d = diags_.Error(DiagCode::UnknownClass, ex.span, "unknown base class '" + ast::JoinName(ex.base) + "'");
         std::vector<std::string> classes;
-        LoadWholeLibrary();  // the hint considers every class
-        for (auto& [k, v] : classes_) classes.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
+        for (const std::string& k : lookup_.AllNames())  // the hint considers every class
+          classes.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
         std::string best = ClosestName(ast::JoinName(ex.base), classes);
         if (!best.empty()) d.hint = "did you mean '" + best + "'?";
         continue;
       }
-      Mod em = BuildMod(ex.mod.get(), node, nullptr);
+      Mod em = BuildMod(ex.mod.get(), node, nullptr, diags_);
       Mod effective;
       if (ext_mod) effective = *ext_mod;
-      MergeInto(effective, std::move(em), ast::JoinName(ex.base));
+      MergeMods(effective, std::move(em), ast::JoinName(ex.base), diags_);
       // Short class as a base: fold its modifiers in.
       base = ResolveShort(base, node, &effective);
       if (!base) continue;
@@ -179,30 +147,28 @@ static Prim PrimFromName(const std::string& s) {
 }
 
 // Gives a frame, flange or joint its id (in the order of instantiation) and a joint its
-// entry in the mechanism.
-void Elaborator::RegisterPrimitive(Node* node, const ast::ClassDef* cls) {
+// flat entry (completed by Emit).
+void Instantiator::RegisterPrimitive(Node* node, const ast::ClassDef* cls) {
   if (node->prim == Prim::Frame) {
-    node->prim_index = static_cast<int>(frame_nodes_.size());
-    frame_nodes_.push_back(node);
+    node->prim_index = static_cast<int>(tree_.frames.size());
+    tree_.frames.push_back(node);
   } else if (node->prim == Prim::Flange) {
-    node->prim_index = static_cast<int>(flange_nodes_.size());
-    flange_nodes_.push_back(node);
+    node->prim_index = static_cast<int>(tree_.flanges.size());
+    tree_.flanges.push_back(node);
   } else if (node->prim == Prim::Joint) {
-    node->prim_index = static_cast<int>(joint_nodes_.size());
-    joint_nodes_.push_back(node);
+    node->prim_index = static_cast<int>(tree_.joints.size());
     flat::Joint j;
     j.name = node->path;
     if (!flat::JointTypeFromName(node->prim_kind, &j.type))
       diags_.Error(DiagCode::BadPrimitive, cls->name_span, "unknown joint kind '" + node->prim_kind + "'");
-    j.loc = Loc(node->decl ? node->decl->name_span : cls->name_span);
-    m_->joints.push_back(std::move(j));
+    j.loc = places_.Loc(node->decl ? node->decl->name_span : cls->name_span);
+    tree_.joints.push_back(std::move(j));
   }
 }
 
 // A class instance: its primitive (if any), its elements collected through extends, one
 // child node each with its merged modifier, then each child expanded.
-void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::ClassDef* lookup_from) {
-  (void)lookup_from;
+void Instantiator::Instantiate(Node* node, const ast::ClassDef* cls) {
   if (node->depth > kMaxExtendsDepth) {
     diags_.Error(DiagCode::RecursiveExtends, node->decl ? node->decl->span : cls->name_span,
                  "components nested deeper than " + std::to_string(kMaxExtendsDepth) +
@@ -234,17 +200,17 @@ void Elaborator::Instantiate(Node* node, const ast::ClassDef* cls, const ast::Cl
   node->children.reserve(elems.size());
   for (auto& c : elems) node->children.push_back(MakeChild(node, c));
   for (size_t i = 0; i < elems.size() && i < node->children.size(); ++i) {
-    if (diags_.Full() || too_large_) break;
+    if (diags_.Full() || TooLarge()) break;
     Expand(node, node->children[i].get(), elems[i]);
   }
 }
 
 // Primitive? annotation(__kanesim(primitive = "joint", kind = "revolute"))
 // The same for every instance of cls: read once per class.
-const Elaborator::ClassPrim& Elaborator::PrimitiveAnnotation(const ast::ClassDef* cls) {
+const Instantiator::ClassPrim& Instantiator::PrimitiveAnnotation(const ast::ClassDef* cls) {
   auto [ann, fresh] = primitive_annotation_.try_emplace(cls);
   if (!fresh) return ann->second;
-  if (const ast::Modification* pm = FindAnnotation(cls, "__kanesim")) {
+  if (const ast::Modification* pm = lookup_.FindAnnotation(cls, "__kanesim")) {
     for (const auto& a : pm->args) {
       if (a.path.size() != 1 || !a.mod || !a.mod->value || a.mod->value->kind != ast::ExprKind::String) continue;
       if (a.path[0] == "primitive") ann->second.prim = PrimFromName(a.mod->value->text), ann->second.has_prim = true;
@@ -255,8 +221,8 @@ const Elaborator::ClassPrim& Elaborator::PrimitiveAnnotation(const ast::ClassDef
 }
 
 // Every outer modifier must name an element, and not a protected one.
-void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems,
-                                     const CollectedNames& names) {
+void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems,
+                                       const CollectedNames& names) {
   for (const auto& key : node->mod.order) {
     bool found = false;
     if (auto at = names.find(key); at != names.end()) {
@@ -271,7 +237,7 @@ void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const
     }
     if (found) continue;
     const Mod& sm = node->mod.sub[key];
-    if (sm.set_only) continue;  // --set names are checked by BindSetOverrides
+    if (sm.set_only) continue;  // --set names are checked by SetOverrides::Bind
     std::vector<std::string> all;
     for (const auto& c : elems) all.push_back(c.comp->name);
     auto& d = diags_.Error(DiagCode::UnknownModifier, sm.span, "'" + cls->name + "' has no element '" + key + "'");
@@ -283,7 +249,7 @@ void Elaborator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const
 
 // The child node of element c, its modifier merged: outer (the instance's) over the
 // extends clause's over the declaration's.
-std::unique_ptr<Node> Elaborator::MakeChild(Node* node, Collected& c) {
+std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
   auto child = std::make_unique<Node>();
   child->parent = node;
   child->decl = c.comp;
@@ -299,40 +265,19 @@ std::unique_ptr<Node> Elaborator::MakeChild(Node* node, Collected& c) {
     d.notes.push_back({c.comp->span, "declared final here"});
     outer = Mod{};
   }
-  MergeInto(outer, std::move(c.ext_mod), child->path);  // Expand reads c's other fields only
-  Mod decl = BuildMod(c.comp->mod.get(), node, nullptr);
+  MergeMods(outer, std::move(c.ext_mod), child->path, diags_);  // Expand reads c's other fields only
+  Mod decl = BuildMod(c.comp->mod.get(), node, nullptr, diags_);
   if (c.is_final) {
     decl.is_final = true;
     decl.final_span = c.comp->span;
     if (decl.value) decl.value->is_final = true;
   }
-  MergeInto(outer, std::move(decl), child->path);
+  MergeMods(outer, std::move(decl), child->path, diags_);
   child->mod = std::move(outer);
   child->is_final_decl = c.is_final;
   return child;
 }
 
-// Evaluates the non-`each` values of an array component's modifier once, checking their
-// leading size, so that slicing per element neither re-evaluates nor repeats errors.
-static void PreEvaluate(Elaborator& el, Mod& mod, int count, Diagnostics& diags) {
-  if (mod.each) return;
-  if (mod.value && !mod.value->pre) {
-    Value v = el.EvalModValue(*mod.value, nullptr);
-    if (!v.valid) {
-      mod.value.reset();
-    } else if (v.shape.empty() || v.shape[0] != count) {
-      auto& d = diags.Error(DiagCode::SizeMismatch, mod.value->span,
-                            "modifier of an array of " + std::to_string(count) + " components needs " +
-                                std::to_string(count) + " values");
-      d.hint = mod.value->from_set ? "set one element (--set name[k].x=...), or give " + std::to_string(count) + " values"
-                                   : "write 'each' before the name to give every element the same value";
-      mod.value.reset();
-    } else {
-      mod.value->pre = std::move(v);
-    }
-  }
-  for (auto& [k, sm] : mod.sub) PreEvaluate(el, sm, count, diags);
-}
 // The declaration in the model being elaborated that (transitively) holds `node`.
 static Span TopDeclSpan(Node* node, const ast::Component& fallback) {
   Node* n = node;
@@ -365,7 +310,7 @@ static std::vector<std::string> SplitDotted(const std::string& t) {
 
 // One declared component: dropped by its condition, or a variable, a component or an array
 // of components, by its type.
-void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
+void Instantiator::Expand(Node* node, Node* child, const Collected& c) {
   const ast::Component& comp = *c.comp;
   if (comp.condition && !ComponentEnabled(node, child, comp)) return;
   // Dimensions: type dims then declaration dims (Real[3] x[2] is 2x3 in Modelica: the
@@ -379,18 +324,18 @@ void Elaborator::Expand(Node* node, Node* child, const Collected& c) {
   else ExpandComponent(node, child, c, type, dims);
 }
 
-bool Elaborator::ComponentEnabled(Node* node, Node* child, const ast::Component& comp) {
+bool Instantiator::ComponentEnabled(Node* node, Node* child, const ast::Component& comp) {
   double cv = 0;
-  Value v = Eval(*comp.condition, Ctx{node, nullptr});
+  Value v = eval_.Eval(*comp.condition, Ctx{node, nullptr});
   if (v.valid && v.type != VType::Boolean) {
     diags_.Error(DiagCode::TypeMismatch, comp.condition->span, "a component condition must be Boolean");
-  } else if (Structural(v, comp.condition->span, &cv, "a component condition")) {
+  } else if (eval_.Structural(v, comp.condition->span, &cv, "a component condition")) {
     child->enabled = cv != 0;
   }
   return child->enabled;
 }
 
-void Elaborator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std::vector<int>* dims) {
+void Instantiator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std::vector<int>* dims) {
   const Ctx ctx{node, nullptr};
   for (const auto& d : ds) {
     if (d->kind == ast::ExprKind::Colon) {
@@ -398,7 +343,7 @@ void Elaborator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std
       continue;
     }
     long n = 0;
-    if (!StructuralInt(Eval(*d, ctx), d->span, &n, "an array size")) {
+    if (!eval_.StructuralInt(eval_.Eval(*d, ctx), d->span, &n, "an array size")) {
       dims->push_back(0);
       continue;
     }
@@ -411,7 +356,7 @@ void Elaborator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std
   }
 }
 
-bool Elaborator::ResolveComponentType(Node* node, Node* child, const Collected& c, ComponentType* t) {
+bool Instantiator::ResolveComponentType(Node* node, Node* child, const Collected& c, ComponentType* t) {
   const ast::Component& comp = *c.comp;
   t->is_builtin = comp.type_name.size() == 1 && BuiltinTypeNamed(comp.type_name[0], &t->builtin);
   if (!child->mod.redeclare_type.empty() && !ApplyRedeclare(child, c, t)) return false;
@@ -426,7 +371,7 @@ bool Elaborator::ResolveComponentType(Node* node, Node* child, const Collected& 
   return true;
 }
 
-bool Elaborator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* t) {
+bool Instantiator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* t) {
   if (!c.replaceable) {
     auto& d = diags_.Error(DiagCode::NotReplaceable, child->mod.redeclare_span,
                            "'" + child->path + "' is not replaceable");
@@ -441,7 +386,7 @@ bool Elaborator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* 
     return true;
   }
   const ast::ClassDef* from = child->mod.redeclare_from ? child->mod.redeclare_from : c.owner;
-  t->cls = FindClass(parts, from);
+  t->cls = lookup_.FindClass(parts, from);
   if (!t->cls) {
     diags_.Error(DiagCode::UnknownClass, child->mod.redeclare_span, "unknown class '" + name + "'");
     return false;
@@ -450,50 +395,52 @@ bool Elaborator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* 
   return true;
 }
 
-const ast::ClassDef* Elaborator::DeclaredClass(const ast::Component& comp, const ast::ClassDef* owner) {
+const ast::ClassDef* Instantiator::DeclaredClass(const ast::Component& comp, const ast::ClassDef* owner) {
   // The same for every instance of the class declaring comp.
   auto found = component_type_.find(&comp);
   if (found != component_type_.end() && found->second.first == owner) return found->second.second;
-  const ast::ClassDef* cls = FindClass(comp.type_name, owner);
+  const ast::ClassDef* cls = lookup_.FindClass(comp.type_name, owner);
   if (cls) component_type_[&comp] = {owner, cls};
   return cls;
 }
 
-void Elaborator::ReportUnknownType(const ast::Component& comp, const ComponentType& t) {
+void Instantiator::ReportUnknownType(const ast::Component& comp, const ComponentType& t) {
   const std::string name = t.Name(comp);
   auto& d = diags_.Error(DiagCode::UnknownClass, comp.type_span, "unknown class '" + name + "'");
   std::vector<std::string> names{"Real", "Integer", "Boolean", "String"};
-  LoadWholeLibrary();  // the hint considers every class
-  for (auto& [k, v] : classes_) names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
+  for (const std::string& k : lookup_.AllNames())  // the hint considers every class
+    names.push_back(k.rfind("Kanesim.", 0) == 0 ? k.substr(8) : k);
   std::string best = ClosestName(name, names);
   if (!best.empty()) d.hint = "did you mean '" + best + "'?";
 }
 
 // A `type` that is a short definition of a builtin (type Angle = Real(unit = "rad")): its
 // modifiers join the component's.
-bool Elaborator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Component& comp, ComponentType* t) {
+bool Instantiator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Component& comp, ComponentType* t) {
   Mod tm;
   const ast::ClassDef* cls = t->cls;
   int guard = 0;
   while (cls && cls->is_short && ++guard < kMaxExtendsDepth) {
-    if (cls->short_mod) MergeInto(tm, BuildMod(cls->short_mod.get(), node, nullptr), child->path);
+    if (cls->short_mod)
+      MergeMods(tm, BuildMod(cls->short_mod.get(), node, nullptr, diags_), child->path, diags_);
     if (BuiltinTypeNamed(ast::JoinName(cls->short_base), &t->builtin)) {
       t->is_builtin = true;
       break;
     }
-    cls = FindClass(cls->short_base, cls);
+    cls = lookup_.FindClass(cls->short_base, cls);
   }
   if (!t->is_builtin) {
     diags_.Error(DiagCode::UnknownClass, comp.type_span,
                  "type '" + t->Name(comp) + "' is not a Real/Integer/Boolean/String");
     return false;
   }
-  MergeInto(child->mod, tm, child->path);
+  MergeMods(child->mod, tm, child->path, diags_);
   t->cls = nullptr;
   return true;
 }
 
-void Elaborator::ExpandVariable(Node* child, const ast::Component& comp, VType builtin, const std::vector<int>& dims) {
+void Instantiator::ExpandVariable(Node* child, const ast::Component& comp, VType builtin,
+                                  const std::vector<int>& dims) {
   child->kind = Node::kVar;
   child->vtype = builtin;
   child->variability = comp.variability;
@@ -501,8 +448,8 @@ void Elaborator::ExpandVariable(Node* child, const ast::Component& comp, VType b
   child->shape.assign(dims.begin(), dims.end());
   long size = 1;
   for (int d : dims) size *= (d < 0 ? 1 : d);
-  instances_ += size;
-  if (instances_ > kMaxInstances && !too_large_) {
+  tree_.instances += size;
+  if (tree_.instances > kMaxInstances && !TooLarge()) {
     too_large_ = true;
     diags_.Error(DiagCode::InstanceTooLarge, TopDeclSpan(child, comp),
                  "the model has more than " + std::to_string(kMaxInstances) + " variables")
@@ -511,7 +458,7 @@ void Elaborator::ExpandVariable(Node* child, const ast::Component& comp, VType b
   CheckVarAttributes(child, builtin);
 }
 
-void Elaborator::CheckVarAttributes(Node* var, VType builtin) {
+void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
   for (const auto& key : var->mod.order) {
     if (IsVarAttribute(key) || var->mod.sub[key].set_only) continue;
     auto& d = diags_.Error(DiagCode::UnknownModifier, var->mod.sub[key].span,
@@ -524,8 +471,8 @@ void Elaborator::CheckVarAttributes(Node* var, VType builtin) {
 }
 
 // A component of class type (or an array of them).
-void Elaborator::ExpandComponent(Node* node, Node* child, const Collected& c, const ComponentType& t,
-                                 const std::vector<int>& dims) {
+void Instantiator::ExpandComponent(Node* node, Node* child, const Collected& c, const ComponentType& t,
+                                   const std::vector<int>& dims) {
   const ast::Component& comp = *c.comp;
   if (t.cls->kind == ast::ClassKind::Package || t.cls->kind == ast::ClassKind::Function) {
     diags_.Error(DiagCode::TypeMismatch, comp.type_span, "'" + t.Name(comp) + "' is a package or function, not a model");
@@ -535,8 +482,8 @@ void Elaborator::ExpandComponent(Node* node, Node* child, const Collected& c, co
     diags_.Error(DiagCode::SizeMismatch, comp.span, "arrays of components have one dimension");
     return;
   }
-  instances_ += dims.empty() ? 1 : dims[0];
-  if (instances_ > kMaxInstances && !too_large_) {
+  tree_.instances += dims.empty() ? 1 : dims[0];
+  if (tree_.instances > kMaxInstances && !TooLarge()) {
     too_large_ = true;
     diags_.Error(DiagCode::InstanceTooLarge, TopDeclSpan(child, comp),
                  "the model has more than " + std::to_string(kMaxInstances) + " components")
@@ -545,14 +492,14 @@ void Elaborator::ExpandComponent(Node* node, Node* child, const Collected& c, co
   }
   if (dims.empty()) {
     child->kind = Node::kClass;
-    Instantiate(child, t.cls, c.owner);
+    Instantiate(child, t.cls);
     return;
   }
   child->kind = Node::kArray;
   child->cls = t.cls;
   int n = dims[0] < 0 ? 0 : dims[0];
-  PreEvaluate(*this, child->mod, n, diags_);
-  InstantiateArray(node, child, comp, t.cls, c.owner, n);
+  PreEvaluateMod(child->mod, n, eval_, diags_);
+  InstantiateArray(node, child, comp, t.cls, n);
 }
 
 }  // namespace kanesim::lang::elab

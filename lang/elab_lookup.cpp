@@ -1,362 +1,214 @@
-// Lookup: a variable's value, evaluated on first use from its binding (GetVar), and a
-// component reference resolved to the instance node it names (ResolveNode).
-#include <algorithm>
-#include <charconv>
-#include <cmath>
+// Lookup: the class registry, class names resolved from a scope, annotations through
+// extends, the model picked and the user's imports checked (lang/elab_lookup.h).
+#include "lang/elab_lookup.h"
 
-#include "lang/elab_internal.h"
+#include <algorithm>
+#include <functional>
+#include <sstream>
+
+#include "lang/library_cache.h"
 
 namespace kanesim::lang::elab {
 
-namespace {
-
-// Number of elements of a shape; a ':' dimension not yet known counts as 0.
-size_t ElementCount(const Dims& shape) {
-  size_t count = 1;
-  for (int d : shape) count *= static_cast<size_t>(d < 0 ? 0 : d);
-  return count;
+ClassLookup::ClassLookup(const Program& program, Diagnostics& diags)
+    : program_(program), diags_(diags), library_(program.library.get()) {
+  for (const auto& f : program.files)
+    for (const auto& c : f->classes) Register(c.get(), ast::JoinName(f->within), f.get());
+  if (library_) unit_loaded_.assign(static_cast<size_t>(library_->NumUnits()), 0);
 }
 
-// "scalar", or "[2, 3]".
-std::string ShapeText(const Dims& shape) {
-  if (shape.empty()) return "scalar";
-  std::string s = "[";
-  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
+void ClassLookup::Register(const ast::ClassDef* c, const std::string& prefix, const ast::StoredDefinition* file) const {
+  std::string q = prefix.empty() ? c->name : prefix + "." + c->name;
+  if (!classes_.count(q)) classes_[q] = {c, file, q};
+  file_of_[c] = file;
+  qualified_of_[c] = q;
+  for (const auto& el : c->elements)
+    if (el.kind == ast::Element::kClass) Register(el.class_def.get(), q, file);
 }
 
-// An attribute written as a literal (min = 0, unit = "m": nearly all) is read from the
-// syntax; evaluating it would give the same value through a pool node nothing reads.
-bool IsLiteral(const ModValue& mv, ast::ExprKind kind) {
-  return !mv.pre && mv.expr && mv.expr->kind == kind &&
-         (kind != ast::ExprKind::Number || std::isfinite(mv.expr->number));
+void ClassLookup::LoadUnit(int u) const {
+  if (unit_loaded_[static_cast<size_t>(u)]) return;
+  unit_loaded_[static_cast<size_t>(u)] = 1;
+  const ast::StoredDefinition* f = library_->Unit(u).get();
+  for (const Diagnostic& d : library_->UnitDiagnostics(u))  // none for the embedded library
+    (d.severity == Severity::Error ? diags_.Error(d.code, d.span, d.message) : diags_.Warning(d.code, d.span, d.message)) = d;
+  for (const auto& c : f->classes) Register(c.get(), ast::JoinName(f->within), f);
 }
 
-flat::ParamType ParamTypeOf(VType t) {
-  return t == VType::Real      ? flat::ParamType::Real
-         : t == VType::Integer ? flat::ParamType::Integer
-         : t == VType::Boolean ? flat::ParamType::Boolean
-                               : flat::ParamType::String;
-}
-
-// The flat name of element k (row-major) of `path` of `shape`: "p", or "p[1,2]" (1-based).
-// `idx` is scratch of shape.size() entries.
-std::string ElementName(const std::string& path, const Dims& shape, size_t k, Dims& idx) {
-  std::string name;  // sized once: appending to a copy of the path allocated twice
-  name.reserve(path.size() + 12 * shape.size() + 2);
-  name.append(path);
-  if (shape.empty()) return name;
-  size_t rem = k;
-  for (size_t d = shape.size(); d-- > 0;) {
-    idx[d] = static_cast<int>(rem % static_cast<size_t>(shape[d])) + 1;
-    rem /= static_cast<size_t>(shape[d]);
-  }
-  char buf[16];
-  name += '[';
-  for (size_t d = 0; d < idx.size(); ++d) {
-    if (d) name += ',';
-    name.append(buf, static_cast<size_t>(std::to_chars(buf, buf + sizeof buf, idx[d]).ptr - buf));
-  }
-  name += ']';
-  return name;
-}
-
-}  // namespace
-
-const Value& Elaborator::GetVar(Node* var, Span use_span) {
-  if (var->state == EvalState::Done) return var->value;
-  if (var->state == EvalState::Evaluating) {
-    auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->path + "' is defined in terms of itself");
-    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-    var->state = EvalState::Done;
-    var->value = Value::Invalid();
-    return var->value;
-  }
-  var->state = EvalState::Evaluating;
-  var->value = EvaluateVar(var, use_span);
-  var->state = EvalState::Done;
-  return var->value;
-}
-
-Value Elaborator::EvaluateVar(Node* var, Span use_span) {
-  Node* owner = var->parent;
-  // Joint coordinates and speeds are the mechanism's state.
-  if (owner && owner->prim == Prim::Joint && var->variability == ast::Variability::None &&
-      (var->name == "q" || var->name == "u"))
-    return JointStateValue(var);
-  const ModValue* binding = VarBinding(var);
-  Value v = binding ? BoundValue(var, *binding) : UnboundValue(var, use_span);
-  if (!v.valid) return v;
-  ApplyElementEquations(var, v);
-  if (var->variability == ast::Variability::None) return v;
-  return ParameterValue(var, binding, use_span, std::move(v));
-}
-
-Value Elaborator::JointStateValue(Node* var) {
-  Value v;
-  v.shape = var->shape;
-  const size_t count = ElementCount(var->shape);
-  const auto kind = var->name == "q" ? flat::StateKind::JointQ : flat::StateKind::JointU;
-  for (size_t k = 0; k < count; ++k)
-    v.elements.push_back(
-        m_->exprs.State(m_->AddStateRef({kind, var->parent->prim_index, static_cast<int>(k)})));
-  return v;
-}
-
-const ModValue* Elaborator::VarBinding(Node* var) {
-  const ModValue* binding = nullptr;
-  if (var->eq_binding) binding = &*var->eq_binding;
-  if (const Mod& mods = var->Modifiers(); mods.value) {
-    if (binding) {
-      auto& d = diags_.Error(DiagCode::ConflictingEquation, var->eq_binding->span,
-                             "'" + var->path + "' already has a value from its declaration or a modifier");
-      d.notes.push_back({mods.value->span, "value given here"});
+// The library's unit that declares `q` or a class that encloses it, registered; true if
+// one was newly registered. The registry then answers `q` exactly as if the whole library
+// had been registered at the start: the main file's classes come first either way, and
+// the library declares each top-level name once.
+bool ClassLookup::LoadLibraryClass(const std::string& q) const {
+  if (!library_) return false;
+  for (std::string_view name(q);;) {
+    int u = library_->FindUnit(name);
+    if (u >= 0 && !unit_loaded_[static_cast<size_t>(u)]) {
+      LoadUnit(u);
+      return true;
     }
-    binding = &*mods.value;
-  }
-  return binding;
-}
-
-Value Elaborator::UnboundValue(Node* var, Span use_span) {
-  Node* owner = var->parent;
-  const bool is_param = var->variability != ast::Variability::None;
-  const bool is_primitive_field = owner && owner->prim != Prim::None;
-  const size_t count = ElementCount(var->shape);
-  const bool any_elem = !var->eq_elem_binding.empty();
-  if (any_elem && !is_primitive_field && var->eq_elem_binding.size() != count) {
-    for (size_t k = 0; k < count; ++k) {
-      if (var->eq_elem_binding.count(static_cast<int>(k))) continue;
-      auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                             "element " + std::to_string(k + 1) + " of '" + var->path + "' has no equation");
-      d.hint = "give every element an equation, or bind the whole variable";
-      break;
-    }
-    return Value::Invalid();
-  }
-  if ((is_primitive_field && !is_param) || any_elem) {
-    Value v;
-    v.type = var->vtype;
-    v.shape = var->shape;
-    v.elements.assign(count, m_->exprs.Constant(0));
-    return v;
-  }
-  auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                         std::string(is_param ? "parameter" : "variable") + " '" + var->path + "' has no value");
-  d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->path + "=..."
-                    : "bind it in its declaration (Real x = ...;) or with an equation 'x = ...;'";
-  if (use_span.valid() && var->decl && use_span.begin != var->decl->name_span.begin)
-    d.notes.push_back({use_span, "used here"});
-  return Value::Invalid();
-}
-
-Value Elaborator::BoundValue(Node* var, const ModValue& binding) {
-  Span where;
-  Value v = EvalModValue(binding, &where);
-  if (!v.valid) return v;
-  if (!CheckValueType(var, binding, v, where)) return Value::Invalid();
-  if (v.type == VType::Integer && var->vtype == VType::Real) v.type = VType::Real;
-  // Shape: ':' dims adopt the value's size.
-  bool shape_ok = v.shape.size() == var->shape.size();
-  for (size_t i = 0; shape_ok && i < v.shape.size(); ++i) {
-    if (var->shape[i] < 0) var->shape[i] = v.shape[i];
-    shape_ok = var->shape[i] == v.shape[i];
-  }
-  if (!shape_ok) {
-    auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::SizeMismatch, where,
-                           "'" + var->path + "' has size " + ShapeText(var->shape) + " but its value has size " +
-                               ShapeText(v.shape));
-    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-    return Value::Invalid();
-  }
-  return v;
-}
-
-bool Elaborator::CheckValueType(Node* var, const ModValue& binding, const Value& v, Span where) {
-  bool ok = true;
-  if (var->vtype == VType::String || v.type == VType::String) ok = var->vtype == v.type;
-  else if (var->vtype == VType::Boolean || v.type == VType::Boolean) ok = var->vtype == v.type;
-  else if (var->vtype == VType::Integer && v.type == VType::Real) {
-    // Accept Real values that are whole numbers only from literal folding.
-    ok = false;
-  }
-  if (ok) return true;
-  auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::TypeMismatch, where,
-                         "'" + var->path + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
-  if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-  if (var->vtype == VType::Integer) d.hint = "use a whole number, or integer(...)";
-  return false;
-}
-
-void Elaborator::ApplyElementEquations(Node* var, Value& v) {
-  for (const auto& [k, mv] : var->eq_elem_binding) {
-    if (k < 0 || static_cast<size_t>(k) >= v.elements.size()) continue;
-    Value ev = EvalModValue(mv, nullptr);
-    if (!ev.valid) continue;
-    if (!ev.shape.empty()) {
-      diags_.Error(DiagCode::SizeMismatch, mv.span, "an element equation needs a scalar value");
-      continue;
-    }
-    v.elements[static_cast<size_t>(k)] = ev.elements[0];
+    size_t dot = name.rfind('.');
+    if (dot == std::string_view::npos) return false;
+    name = name.substr(0, dot);
   }
 }
 
-Value Elaborator::ParameterValue(Node* var, const ModValue* binding, Span use_span, Value v) {
-  // Parameters and constants: no time, no state.
-  for (ExprId x : v.elements) {
-    if (x >= 0 && m_->exprs.DependsOnTimeOrState(x)) {
-      auto& d = diags_.Error(DiagCode::NotConstantExpr, binding ? binding->span : use_span,
-                             "the value of parameter '" + var->path + "' depends on time or on the motion");
-      d.hint = "parameters are fixed before the simulation; use a variable (Real x = ...) instead";
-      return Value::Invalid();
-    }
-  }
-  const ParamAttributes attrs = ReadParamAttributes(var);
-  const Span value_span = binding ? binding->span : use_span;
-  const flat::SourceLoc loc = Loc(var->decl ? var->decl->name_span : use_span);
-  Dims idx;
-  idx.assign(var->shape.size(), 0);
-  // A constant is folded (no flat parameter); the others are made in place in the table.
-  const bool folded = var->vtype != VType::String && var->variability == ast::Variability::Constant;
-  for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
-    flat::Param folded_param;
-    flat::Param& p = folded ? folded_param : m_->params.emplace_back();
-    p.name = ElementName(var->path, var->shape, k, idx);
-    p.type = ParamTypeOf(var->vtype);
-    p.unit = attrs.unit;
-    p.min = attrs.min;
-    p.max = attrs.max;
-    p.is_constant = var->variability == ast::Variability::Constant;
-    p.user_set = binding && binding->from_set;
-    p.loc = loc;
-    if (var->vtype == VType::String) {
-      p.string_value = v.strings.empty() ? "" : v.strings[k];
-      pvals_.push_back(0.0);
-      continue;
-    }
-    v.elements[k] = AddParamElement(var, p, v.elements[k], value_span);
-  }
-  return v;
+void ClassLookup::LoadWholeLibrary() const {
+  if (library_)
+    for (int u = 0; u < library_->NumUnits(); ++u) LoadUnit(u);
 }
 
-Elaborator::ParamAttributes Elaborator::ReadParamAttributes(Node* var) {
-  ParamAttributes attrs;
-  const Mod& mods = var->Modifiers();
-  auto attr_num = [&](const char* key, double* out) {
-    auto it = mods.sub.find(key);
-    if (it == mods.sub.end() || !it->second.value) return;
-    if (IsLiteral(*it->second.value, ast::ExprKind::Number)) {
-      *out = it->second.value->expr->number;
-      return;
-    }
-    Value a = EvalModValue(*it->second.value, nullptr);
-    if (a.valid && a.shape.empty() && a.type != VType::String)
-      Structural(a, it->second.value->span, out, key);
-  };
-  attr_num("min", &attrs.min);
-  attr_num("max", &attrs.max);
-  if (auto it = mods.sub.find("unit"); it != mods.sub.end() && it->second.value) {
-    if (IsLiteral(*it->second.value, ast::ExprKind::String)) {
-      attrs.unit = it->second.value->expr->text;
-    } else {
-      Value a = EvalModValue(*it->second.value, nullptr);
-      if (a.valid && a.type == VType::String && !a.strings.empty()) attrs.unit = a.strings[0];
-    }
-  }
-  return attrs;
+const ClassInfo* ClassLookup::LookupClass(const std::string& q) const {
+  auto it = classes_.find(q);
+  if (it == classes_.end() && LoadLibraryClass(q)) it = classes_.find(q);
+  return it == classes_.end() ? nullptr : &it->second;
 }
 
-ExprId Elaborator::AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span) {
-  double val = param_eval_.Eval(x);
-  p.value = val;
-  p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
-  if (!std::isfinite(val)) {
-    auto& d = diags_.Error(DiagCode::BadValue, value_span, "parameter '" + p.name + "' evaluates to " + std::to_string(val));
-    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-  } else if (val < p.min || val > p.max) {
-    auto& d = diags_.Error(DiagCode::BadValue, value_span,
-                           "parameter '" + p.name + "' = " + std::to_string(val) + " is outside its range [" +
-                               (p.min <= -1e299 ? std::string("-inf") : std::to_string(p.min)) + ", " +
-                               (p.max >= 1e299 ? std::string("inf") : std::to_string(p.max)) + "]");
-    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
-  }
-  if (p.is_constant) return m_->exprs.Constant(val);
-  pvals_.push_back(val);  // p is already the last of m_->params
-  return m_->exprs.Parameter(static_cast<int>(m_->params.size() - 1));
+const ast::StoredDefinition* ClassLookup::FileOf(const ast::ClassDef* c) const {
+  auto it = file_of_.find(c);
+  return it == file_of_.end() ? nullptr : it->second;
 }
 
-Node* Elaborator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
-  if (elem) *elem = -1;
-  if (ref.kind != ast::ExprKind::Ref || ref.parts.empty()) {
-    diags_.Error(DiagCode::BadEquation, ref.span, "expected a component reference");
+const ast::ClassDef* ClassLookup::FindClass(const std::vector<std::string>& parts, const ast::ClassDef* from) const {
+  if (parts.empty()) return nullptr;
+  auto nested = [&](const ast::ClassDef* c, const std::string& n) -> const ast::ClassDef* {
+    for (const auto& el : c->elements)
+      if (el.kind == ast::Element::kClass && el.class_def->name == n) return el.class_def.get();
     return nullptr;
-  }
-  Node* n = nullptr;
-  for (size_t pi = 0; pi < ref.parts.size(); ++pi) {
-    const ast::RefPart& part = ref.parts[pi];
-    if (pi > 0 && n->kind == Node::kArray) {
-      auto& d = diags_.Error(DiagCode::TypeMismatch, ref.parts[pi - 1].span,
-                             "'" + n->path + "' is an array of components; index it before '." + part.name + "'");
-      d.hint = "write " + ref.parts[pi - 1].name + "[i]." + part.name + " inside a for-loop";
-      return nullptr;
-    }
-    Node* next = pi == 0 ? (ctx.scope ? ctx.scope->Child(part.name) : nullptr)
-                         : (n->kind == Node::kClass ? n->Child(part.name) : nullptr);
-    if (!next) {
-      std::vector<std::string> cands;
-      Node* where = pi == 0 ? ctx.scope : n;
-      if (where)
-        for (auto& c : where->children) cands.push_back(c->name);
-      auto& d = diags_.Error(DiagCode::UnknownName, part.span,
-                             pi == 0 ? "unknown name '" + part.name + "'"
-                                     : "'" + n->path + "' has no member '" + part.name + "'");
-      std::string best = ClosestName(part.name, cands);
-      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
-      return nullptr;
-    }
-    n = next;
-    if (!n->enabled) return n;  // callers skip disabled components
-    if (!part.subscripts.empty()) {
-      if (n->kind == Node::kArray) {
-        if (part.subscripts.size() != 1) {
-          diags_.Error(DiagCode::TypeMismatch, part.span, "arrays of components take one subscript");
-          return nullptr;
-        }
-        long k = 0;
-        if (!StructuralInt(Eval(*part.subscripts[0], ctx), part.subscripts[0]->span, &k, "a subscript")) return nullptr;
-        if (k < 1 || k > static_cast<long>(n->elems.size())) {
-          diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
-                       "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
-                           " of '" + n->path + "'");
-          return nullptr;
-        }
-        n = n->elems[static_cast<size_t>(k - 1)].get();
-      } else if (n->kind == Node::kVar && pi + 1 == ref.parts.size()) {
-        size_t flatk = 0, stride = 1;
-        if (part.subscripts.size() != n->shape.size()) {
-          diags_.Error(DiagCode::IndexOutOfRange, part.span, "'" + n->path + "' needs " +
-                                                                std::to_string(n->shape.size()) + " subscript(s)");
-          return nullptr;
-        }
-        for (size_t d = part.subscripts.size(); d-- > 0;) {
-          long k = 0;
-          if (!StructuralInt(Eval(*part.subscripts[d], ctx), part.subscripts[d]->span, &k, "a subscript"))
-            return nullptr;
-          if (k < 1 || k > n->shape[d]) {
-            diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[d]->span,
-                         "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->shape[d]));
-            return nullptr;
-          }
-          flatk += static_cast<size_t>(k - 1) * stride;
-          stride *= static_cast<size_t>(n->shape[d]);
-        }
-        if (elem) *elem = static_cast<int>(flatk);
-      } else {
-        diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
-        return nullptr;
+  };
+  auto by_qualified = [&](const std::string& q) -> const ast::ClassDef* {
+    const ClassInfo* info = LookupClass(q);
+    return info ? info->cls : nullptr;
+  };
+  auto via_imports = [&](const std::vector<ast::Import>& imports) -> const ast::ClassDef* {
+    for (const auto& imp : imports) {
+      std::string q = ast::JoinName(imp.name);
+      if (imp.wildcard) {
+        if (auto* c = by_qualified(q + "." + parts[0])) return c;
+      } else if (!imp.alias.empty()) {
+        if (imp.alias == parts[0]) return by_qualified(q);
+      } else if (!imp.name.empty() && imp.name.back() == parts[0]) {
+        return by_qualified(q);
       }
     }
+    return nullptr;
+  };
+  const ast::ClassDef* first = nullptr;
+  for (const ast::ClassDef* s = from; s && !first; s = s->parent) {
+    if (s->name == parts[0] && s->parent == nullptr) first = s;
+    if (!first) first = nested(s, parts[0]);
+    if (!first) {
+      std::vector<ast::Import> imports;
+      for (const auto& el : s->elements)
+        if (el.kind == ast::Element::kImport) {
+          ast::Import copy;
+          copy.name = el.import->name;
+          copy.alias = el.import->alias;
+          copy.wildcard = el.import->wildcard;
+          imports.push_back(std::move(copy));
+        }
+      first = via_imports(imports);
+    }
   }
-  return n;
+  const ast::StoredDefinition* file = from ? FileOf(from) : nullptr;
+  if (!first && file) first = via_imports(file->imports);
+  if (!first && file && !file->within.empty()) first = by_qualified(ast::JoinName(file->within) + "." + parts[0]);
+  if (!first) first = by_qualified(parts[0]);
+  if (!first) first = by_qualified("Kanesim." + parts[0]);  // the standard library is always visible
+  for (size_t i = 1; first && i < parts.size(); ++i) first = nested(first, parts[i]);
+  if (!first && parts.size() > 1) first = by_qualified(ast::JoinName(parts));
+  return first;
+}
+
+// Breadth-first over the class and its bases (each visited once, so cyclic extends
+// cannot loop; the cycle itself is reported by Collect).
+const ast::Modification* ClassLookup::FindAnnotation(const ast::ClassDef* cls, const std::string& key) const {
+  std::vector<const ast::ClassDef*> queue{cls};
+  for (size_t i = 0; i < queue.size() && i < 256; ++i) {
+    const ast::ClassDef* c = queue[i];
+    if (c->annotation)
+      for (const auto& a : c->annotation->args)
+        if (a.path.size() == 1 && a.path[0] == key) return a.mod.get();
+    auto push = [&](const ast::ClassDef* b) {
+      if (b && std::find(queue.begin(), queue.end(), b) == queue.end()) queue.push_back(b);
+    };
+    for (const auto& el : c->elements)
+      if (el.kind == ast::Element::kExtends) push(FindClass(el.extends->base, c));
+    if (c->is_short) push(FindClass(c->short_base, c));
+  }
+  return nullptr;
+}
+
+const ast::ClassDef* ClassLookup::PickModel(const std::string& model) {
+  const ast::ClassDef* top = nullptr;
+  if (model.empty()) {
+    if (program_.files.empty()) return nullptr;
+    for (const auto& c : program_.files[0]->classes)
+      if (c->kind == ast::ClassKind::Model && !c->partial) top = c.get();
+    if (!top)
+      diags_.Error(DiagCode::NotAModel, Span{0, 0, 0}, "the file declares no (non-partial) model")
+          .hint = "write 'model Name ... end Name;' or choose one with --model";
+    return top;
+  }
+  std::vector<std::string> parts;
+  std::stringstream ss(model);
+  std::string p;
+  while (std::getline(ss, p, '.')) parts.push_back(p);
+  top = FindClass(parts, nullptr);
+  if (!top && !program_.files.empty())
+    for (const auto& c : program_.files[0]->classes)
+      if (c->name == parts[0]) top = FindClass(parts, c.get());
+  if (top) return top;
+  auto& d = diags_.Error(DiagCode::NotAModel, Span{}, "no class named '" + model + "'");
+  LoadWholeLibrary();  // the hint considers every class
+  std::vector<std::string> names;
+  for (auto& [k, v] : classes_) names.push_back(k);
+  std::string best = ClosestName(model, names);
+  if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+  return nullptr;
+}
+
+bool ClassLookup::CheckImports(const ast::StoredDefinition& f) {
+  for (const auto& imp : f.imports) CheckImport(ast::JoinName(imp.name), imp.wildcard, imp.span);
+  std::function<void(const ast::ClassDef&)> walk = [&](const ast::ClassDef& c) {
+    for (const auto& el : c.elements) {
+      if (el.kind == ast::Element::kImport)
+        CheckImport(ast::JoinName(el.import->name), el.import->wildcard, el.import->span);
+      if (el.kind == ast::Element::kClass) walk(*el.class_def);
+    }
+  };
+  for (const auto& c : f.classes) walk(*c);
+  return !diags_.HasErrors();
+}
+
+void ClassLookup::CheckImport(const std::string& q, bool wildcard, Span span) {
+  bool ok = LookupClass(q) != nullptr;
+  if (!ok && wildcard && q == "Kanesim") ok = true;
+  if (!ok && wildcard) {
+    LoadWholeLibrary();  // a package's classes may be in any unit
+    for (const auto& [k, v] : classes_) ok = ok || k.rfind(q + ".", 0) == 0;
+  }
+  if (ok) return;
+  LoadWholeLibrary();  // the hint considers every class
+  auto& d = diags_.Error(DiagCode::BadImport, span, "import names nothing: no class or package '" + q + "'");
+  std::vector<std::string> names;
+  for (const auto& [k, v] : classes_) names.push_back(k);
+  std::string best = ClosestName(q, names);
+  if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+}
+
+
+std::vector<std::string> ClassLookup::AllNames() const {
+  LoadWholeLibrary();
+  std::vector<std::string> names;
+  names.reserve(classes_.size());
+  for (const auto& [k, v] : classes_) names.push_back(k);
+  return names;
+}
+
+std::string ClassLookup::QualifiedName(const ast::ClassDef* c) const {
+  auto it = qualified_of_.find(c);
+  return it == qualified_of_.end() ? c->name : it->second;
 }
 
 }  // namespace kanesim::lang::elab

@@ -20,7 +20,7 @@
 
 #include <fmt/core.h>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 #include "geometry/mass_properties.h"
 #include "geometry/mesh_load.h"
 
@@ -73,16 +73,16 @@ const char* MeshHint(geometry::MeshProblemKind k) {
 
 }  // namespace
 
-std::string Elaborator::MeshPath(const std::string& file, Span origin) const {
+std::string Evaluator::MeshPath(const std::string& file, Span origin) const {
   namespace fs = std::filesystem;
   fs::path p(file);
-  if (p.is_absolute() || !origin.valid() || origin.file >= program_.sources.NumFiles()) return file;
-  const std::string& from = program_.sources.Name(origin.file);
+  if (p.is_absolute() || !origin.valid() || origin.file >= places_.Sources().NumFiles()) return file;
+  const std::string& from = places_.Sources().Name(origin.file);
   if (from.empty() || from[0] == '<') return file;  // the standard library, a --set: the working directory
   return (fs::path(from).parent_path() / p).lexically_normal().string();
 }
 
-Span Elaborator::ValueOrigin(const ast::Expr& arg, const Ctx& ctx) {
+Span Evaluator::ValueOrigin(const ast::Expr& arg, const Ctx& ctx) {
   Span origin = arg.span;
   const ast::Expr* e = &arg;
   Ctx c = ctx;
@@ -99,7 +99,7 @@ Span Elaborator::ValueOrigin(const ast::Expr& arg, const Ctx& ctx) {
   return origin;
 }
 
-const Elaborator::MeshEntry* Elaborator::LoadMeshFor(const std::string& path, double scale, Span where) {
+const Evaluator::MeshEntry* Evaluator::LoadMeshFor(const std::string& path, double scale, Span where) {
   const std::string key = fmt::format("{}\n{:a}", path, scale);
   auto it = meshes_.find(key);
   if (it == meshes_.end()) {
@@ -133,8 +133,8 @@ const Elaborator::MeshEntry* Elaborator::LoadMeshFor(const std::string& path, do
   return entry.ok ? &entry : nullptr;
 }
 
-Value Elaborator::EvalMeshCall(const std::string& fn, const ast::Expr& e, const std::vector<Value>& args,
-                               const Ctx& ctx) {
+Value Evaluator::EvalMeshCall(const std::string& fn, const ast::Expr& e, const std::vector<Value>& args,
+                              const Ctx& ctx) {
   auto& pool = m_->exprs;
   if (args.size() != 2) {
     diags_.Error(DiagCode::BadCall, e.span,

@@ -1,13 +1,13 @@
-// Modifiers: built from the syntax with the scope and loop iterators they are evaluated
-// in, merged with the outer one winning (Modelica 3.5 §7.2; `final` elements refuse outer
-// modification), and sliced per element for arrays of components unless `each` is given.
+// Modifiers: built, merged (outer wins), sliced per array element (lang/elab_modifiers.h).
 #include <optional>
 #include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_modifiers.h"
+
+#include "lang/elab_eval.h"
 
 namespace kanesim::lang::elab {
 
@@ -15,7 +15,8 @@ bool IsVarAttribute(const std::string& n) {
   return n == "start" || n == "fixed" || n == "unit" || n == "min" || n == "max" || n == "displayUnit" ||
          n == "quantity" || n == "nominal" || n == "stateSelect";
 }
-Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters) {
+Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters,
+             Diagnostics& diags) {
   Mod out;
   if (!m) return out;
   out.span = m->span;
@@ -41,7 +42,7 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
         target = &next;
         continue;
       }
-      Mod built = BuildMod(a.mod.get(), scope, iters);
+      Mod built = BuildMod(a.mod.get(), scope, iters, diags);
       built.span = a.name_span;
       built.each = a.each;
       if (a.is_final) {
@@ -55,7 +56,7 @@ Mod Elaborator::BuildMod(const ast::Modification* m, Node* scope, const std::sha
         built.redeclare_span = a.span;
       }
       if (next.value || !next.sub.empty()) {
-        auto& d = diags_.Error(DiagCode::Duplicate, a.name_span, "'" + ast::JoinName(a.path) + "' is modified twice");
+        auto& d = diags.Error(DiagCode::Duplicate, a.name_span, "'" + ast::JoinName(a.path) + "' is modified twice");
         d.notes.push_back({next.span, "first modified here"});
       }
       next = std::move(built);
@@ -86,7 +87,7 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
     return s;
   };
   const bool inner_empty = inner.empty();  // before anything moves out of inner
-  // --set on a final parameter is reported once by Elaborator::Run.
+  // --set on a final parameter is reported once by SetOverrides::Bind.
   if (outer.value && outer.value->from_set && inner.is_final) {
     outer.value.reset();
   }
@@ -129,16 +130,14 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
 
 }  // namespace
 
-// outer wins over inner; `what` names the element for messages.
-void Elaborator::MergeInto(Mod& outer, const Mod& inner, const std::string& what) {
+void MergeMods(Mod& outer, const Mod& inner, const std::string& what, Diagnostics& diags) {
   MergeKeys keys;
-  MergeModsImpl(diags_, outer, inner, what, keys);
+  MergeModsImpl(diags, outer, inner, what, keys);
 }
 
-// The same, giving up `inner`: its values move into `outer` instead of being copied.
-void Elaborator::MergeInto(Mod& outer, Mod&& inner, const std::string& what) {
+void MergeMods(Mod& outer, Mod&& inner, const std::string& what, Diagnostics& diags) {
   MergeKeys keys;
-  MergeModsImpl(diags_, outer, std::move(inner), what, keys);
+  MergeModsImpl(diags, outer, std::move(inner), what, keys);
 }
 
 Value ElementOf(const Value& v, int index, int count) {
@@ -156,7 +155,7 @@ Value ElementOf(const Value& v, int index, int count) {
 // Element `index` of an array component's modifier. Copies everything but the values,
 // and of a value only the slice: copying the whole array value for every element would
 // cost O(count^2) time and memory.
-Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
+Mod SliceMod(const Mod& mod, int index, int count, Evaluator& eval, Diagnostics& diags) {
   if (mod.each) return mod;  // `each` applies the whole modifier to every element
   Mod out;
   out.order = mod.order;
@@ -170,12 +169,12 @@ Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
   out.set_only = mod.set_only;
   if (mod.value) {
     std::optional<Value> evaluated;
-    if (!mod.value->pre) evaluated = EvalModValue(*mod.value, nullptr);
+    if (!mod.value->pre) evaluated = eval.EvalModValue(*mod.value, nullptr);
     const Value& v = mod.value->pre ? *mod.value->pre : *evaluated;
     if (v.valid && (v.shape.empty() || v.shape[0] != count)) {
-      auto& d = diags_.Error(DiagCode::SizeMismatch, mod.value->span,
-                             "modifier of an array of " + std::to_string(count) + " components needs " +
-                                 std::to_string(count) + " values");
+      auto& d = diags.Error(DiagCode::SizeMismatch, mod.value->span,
+                            "modifier of an array of " + std::to_string(count) + " components needs " +
+                                std::to_string(count) + " values");
       d.hint = "write 'each' before the name to give every element the same value";
     } else if (v.valid) {
       ModValue mv;
@@ -189,15 +188,27 @@ Mod Elaborator::SliceMod(const Mod& mod, int index, int count, Span where) {
       out.value = std::move(mv);
     }
   }
-  for (const auto& [k, sm] : mod.sub) out.sub[k] = SliceMod(sm, index, count, where);
+  for (const auto& [k, sm] : mod.sub) out.sub[k] = SliceMod(sm, index, count, eval, diags);
   return out;
 }
-Value Elaborator::EvalModValue(const ModValue& mv, Span* where) {
-  if (where) *where = mv.span;
-  if (mv.pre) return *mv.pre;
-  if (!mv.expr) return Value::Invalid();
-  Ctx ctx{mv.scope, mv.iters.get()};
-  return Eval(*mv.expr, ctx);
+void PreEvaluateMod(Mod& mod, int count, Evaluator& eval, Diagnostics& diags) {
+  if (mod.each) return;
+  if (mod.value && !mod.value->pre) {
+    Value v = eval.EvalModValue(*mod.value, nullptr);
+    if (!v.valid) {
+      mod.value.reset();
+    } else if (v.shape.empty() || v.shape[0] != count) {
+      auto& d = diags.Error(DiagCode::SizeMismatch, mod.value->span,
+                            "modifier of an array of " + std::to_string(count) + " components needs " +
+                                std::to_string(count) + " values");
+      d.hint = mod.value->from_set ? "set one element (--set name[k].x=...), or give " + std::to_string(count) + " values"
+                                   : "write 'each' before the name to give every element the same value";
+      mod.value.reset();
+    } else {
+      mod.value->pre = std::move(v);
+    }
+  }
+  for (auto& [k, sm] : mod.sub) PreEvaluateMod(sm, count, eval, diags);
 }
 
 }  // namespace kanesim::lang::elab

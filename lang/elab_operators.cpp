@@ -1,7 +1,7 @@
 // Operators of the elaborator: unary and binary operators on Values, and the explicit-
 // stack evaluation of operator chains. A left-deep sum `1 + 1 + ... + 1` of any length
 // (or a chain of unary signs) is one loop here, not one native stack frame per term.
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 #include "lang/lexer.h"
 
 namespace kanesim::lang::elab {
@@ -20,8 +20,8 @@ bool IsOperator(const ast::Expr& e) { return e.kind == ast::ExprKind::Unary || e
 // is visited twice (first to push its operands, then to combine their values); operands
 // that are not operators are evaluated by EvalNested. Operands are evaluated left to
 // right, as a recursive evaluator would, so diagnostics come in source order.
-Value Elaborator::EvalOperators(const ast::Expr& root, const Ctx& ctx) {
-  // The stacks are the Elaborator's, shared with the evaluations this one nests (an
+Value Evaluator::EvalOperators(const ast::Expr& root, const Ctx& ctx) {
+  // The stacks are the Evaluator's, shared with the evaluations this one nests (an
   // operand may hold an operator chain of its own): this call owns what lies above the
   // sizes they had on entry, and leaves them at those sizes.
   std::vector<OpItem>& work = op_work_;
@@ -59,7 +59,7 @@ Value Elaborator::EvalOperators(const ast::Expr& root, const Ctx& ctx) {
   return result;
 }
 
-Value Elaborator::Elementwise2(const Value& a, const Value& b, Op op, VType rt, Span sp) {
+Value Evaluator::Elementwise2(const Value& a, const Value& b, Op op, VType rt, Span sp) {
   auto& pool = m_->exprs;
   if (!a.valid || !b.valid) return Value::Invalid();
   if (a.type == VType::String || b.type == VType::String) {
@@ -86,7 +86,7 @@ Value Elaborator::Elementwise2(const Value& a, const Value& b, Op op, VType rt, 
   return r;
 }
 
-Value Elaborator::UnaryOp(const ast::Expr& e, Value v) {
+Value Evaluator::UnaryOp(const ast::Expr& e, Value v) {
   auto& pool = m_->exprs;
   if (!v.valid) return Value::Invalid();
   Tok op = static_cast<Tok>(e.op);
@@ -103,7 +103,7 @@ Value Elaborator::UnaryOp(const ast::Expr& e, Value v) {
   return v;
 }
 
-Value Elaborator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
+Value Evaluator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
   if (!a.valid || !b.valid) return Value::Invalid();
   Tok op = static_cast<Tok>(e.op);
   switch (op) {
@@ -145,7 +145,7 @@ Value Elaborator::BinaryOp(const ast::Expr& e, const Value& a, const Value& b) {
 }
 
 // a * b of arrays (Modelica semantics): matrix products; vector*vector = scalar product.
-Value Elaborator::MatrixProduct(const ast::Expr& e, const Value& a, const Value& b) {
+Value Evaluator::MatrixProduct(const ast::Expr& e, const Value& a, const Value& b) {
   auto& pool = m_->exprs;
   auto dotp = [&](const std::vector<ExprId>& x, const std::vector<ExprId>& y) {
     ExprId s = pool.Binary(Op::Mul, x[0], y[0]);
@@ -177,7 +177,7 @@ Value Elaborator::MatrixProduct(const ast::Expr& e, const Value& a, const Value&
 }
 
 // a < b, a == b, ...: scalars; Strings with == and <> only.
-Value Elaborator::Comparison(const ast::Expr& e, const Value& a, const Value& b) {
+Value Evaluator::Comparison(const ast::Expr& e, const Value& a, const Value& b) {
   Tok op = static_cast<Tok>(e.op);
   if (!a.shape.empty() || !b.shape.empty()) {
     diags_.Error(DiagCode::SizeMismatch, e.span, "comparison of arrays");

@@ -1,13 +1,11 @@
-// --set overrides: the name is parsed (dotted parts, 1-based integer subscripts), the
-// value is parsed as a .mech expression and becomes the outermost modifier; after
-// instantiation the target is checked (it exists, indices are in range, it is a
-// parameter that may be set) and subscripted names are bound on the instance they name.
-// Mistakes in the name are reported in "<--set>", a pseudo-file holding `name=value`, with
-// a caret under the offending part.
+// --set overrides: parsed before instantiation, checked and bound after it
+// (lang/elab_set.h).
+#include "lang/elab_set.h"
+
+#include <algorithm>
 #include <cctype>
 #include <sstream>
 
-#include "lang/elab_internal.h"
 #include "lang/parser.h"
 
 namespace kanesim::lang::elab {
@@ -73,28 +71,29 @@ bool ParseSetName(const std::string& s, std::vector<SetPart>* parts, size_t* bad
 
 }  // namespace
 
-Span Elaborator::SetSpan(const SetOverride& so, int begin, int end) const {
+Span SetOverrides::At(const SetOverride& so, int begin, int end) {
   return Span{so.file, begin, std::max(end, begin + 1)};
 }
 
 // Before instantiation: parse every --set; names without subscripts become the
 // outermost modifiers (they win over everything but final).
-bool Elaborator::ParseSetOverrides() {
-  for (const auto& ov : options_.overrides) {
+bool SetOverrides::Parse(const std::vector<ParamOverride>& overrides, const Program& program, Node* root) {
+  root_ = root;
+  for (const auto& ov : overrides) {
     SetOverride so;
     so.name = ov.name;
-    so.file = program_.sources.Add("<--set>", ov.name + "=" + ov.value);
+    so.file = program.sources.Add("<--set>", ov.name + "=" + ov.value);
     size_t bad = 0;
     std::string why;
     if (!ParseSetName(ov.name, &so.parts, &bad, &why)) {
-      auto& d = diags_.Error(DiagCode::BadSet, SetSpan(so, static_cast<int>(bad), static_cast<int>(bad) + 1),
+      auto& d = diags_.Error(DiagCode::BadSet, At(so, static_cast<int>(bad), static_cast<int>(bad) + 1),
                              "--set " + ov.name + ": " + why);
       d.hint = "write a dotted parameter name with 1-based indices: N=5, rod.L=0.3, world.g[2]=-1.6, I[1,2]=0";
       continue;
     }
-    int value_file = program_.sources.Add("<--set " + ov.name + ">", ov.value);
+    int value_file = program.sources.Add("<--set " + ov.name + ">", ov.value);
     int before = diags_.NumErrors();
-    auto expr = ParseExpression(value_file, program_.sources, diags_);
+    auto expr = ParseExpression(value_file, program.sources, diags_);
     if (diags_.NumErrors() > before) {
       diags_.Error(DiagCode::BadSet, Span{value_file, 0, static_cast<int32_t>(ov.value.size())},
                    "cannot parse the value of --set " + ov.name + "=" + ov.value)
@@ -102,13 +101,13 @@ bool Elaborator::ParseSetOverrides() {
       continue;
     }
     so.value = expr.get();
-    synthetic_.push_back(std::move(expr));
+    values_.push_back(std::move(expr));
     for (const auto& p : so.parts) so.subscripted = so.subscripted || !p.subs.empty();
-    has_subscripted_set_ = has_subscripted_set_ || so.subscripted;
+    any_subscripted_ = any_subscripted_ || so.subscripted;
     // Subscripted names (world.g[2], links[3].m) are bound after instantiation, on the
     // instance they name: modifiers cannot address single array elements.
     if (!so.subscripted) {
-      Mod* target = &root_->mod;
+      Mod* target = &root->mod;
       for (const auto& p : so.parts) {
         if (!target->sub.count(p.name)) {
           target->order.push_back(p.name);
@@ -117,17 +116,17 @@ bool Elaborator::ParseSetOverrides() {
         target = &target->sub[p.name];
         target->span = so.value->span;
       }
-      target->value = SetValue(so);
+      target->value = Binding(so);
     }
     sets_.push_back(std::move(so));
   }
   return !diags_.HasErrors();
 }
 
-ModValue Elaborator::SetValue(const SetOverride& so) {
+ModValue SetOverrides::Binding(const SetOverride& so) const {
   ModValue mv;
   mv.expr = so.value;
-  mv.scope = root_.get();
+  mv.scope = root_;
   mv.span = so.value->span;
   mv.from_set = true;
   return mv;
@@ -137,27 +136,27 @@ ModValue Elaborator::SetValue(const SetOverride& so) {
 // unknown part, an index out of range, an index on something that is not an array, or
 // the wrong number of indices. *elem receives the row-major element of an indexed
 // variable (-1: the whole variable).
-Node* Elaborator::ResolveSetTarget(const SetOverride& so, int* elem) {
+Node* SetOverrides::ResolveTarget(const SetOverride& so, int* elem) {
   *elem = -1;
-  Node* n = root_.get();
+  Node* n = root_;
   for (size_t i = 0; i < so.parts.size(); ++i) {
-    n = SetMember(so, i, n);
+    n = Member(so, i, n);
     if (!n) return nullptr;
     if (n->kind == Node::kArray) {
-      n = SetArrayElement(so, i, n);
+      n = ArrayElement(so, i, n);
       if (!n) return nullptr;
       continue;
     }
     if (so.parts[i].subs.empty()) continue;
-    if (!SetVarElement(so, i, n, elem)) return nullptr;
+    if (!VarElement(so, i, n, elem)) return nullptr;
   }
   return n;
 }
 
 // Part i of the --set name, looked up in n; null after a diagnostic.
-Node* Elaborator::SetMember(const SetOverride& so, size_t i, Node* n) {
+Node* SetOverrides::Member(const SetOverride& so, size_t i, Node* n) {
   const SetPart& p = so.parts[i];
-  Span at = SetSpan(so, p.begin, p.end);
+  Span at = At(so, p.begin, p.end);
   if (n->kind != Node::kClass) {
     diags_.Error(DiagCode::UnknownName, at,
                  "--set " + so.name + ": '" + n->path + "' is a variable and has no member '" + p.name + "'");
@@ -169,7 +168,7 @@ Node* Elaborator::SetMember(const SetOverride& so, size_t i, Node* n) {
   for (const auto& c : n->children) names.push_back(c->name);
   auto& d = diags_.Error(DiagCode::UnknownName, at,
                          "--set " + so.name + ": no such parameter" +
-                             (n == root_.get() ? "" : " ('" + n->path + "' has no element '" + p.name + "')"));
+                             (n == root_ ? "" : " ('" + n->path + "' has no element '" + p.name + "')"));
   std::string best = ClosestName(p.name, names);
   if (!best.empty()) d.hint = "did you mean '" + (i == 0 ? best : PartText(so.parts, i - 1) + "." + best) + "'?";
   return nullptr;
@@ -177,7 +176,7 @@ Node* Elaborator::SetMember(const SetOverride& so, size_t i, Node* n) {
 
 // Part i indexing an array of components: the element (the array itself when not
 // indexed); null after a diagnostic.
-Node* Elaborator::SetArrayElement(const SetOverride& so, size_t i, Node* array) {
+Node* SetOverrides::ArrayElement(const SetOverride& so, size_t i, Node* array) {
   const SetPart& p = so.parts[i];
   if (p.subs.empty()) {
     // j.axis = {...}: a modifier of the whole array; check the name on an element.
@@ -185,13 +184,13 @@ Node* Elaborator::SetArrayElement(const SetOverride& so, size_t i, Node* array) 
     return !last && !array->elems.empty() ? array->elems[0].get() : array;
   }
   if (p.subs.size() != 1) {
-    diags_.Error(DiagCode::BadSet, SetSpan(so, p.sub_spans[1].first, p.sub_spans.back().second),
+    diags_.Error(DiagCode::BadSet, At(so, p.sub_spans[1].first, p.sub_spans.back().second),
                  "--set " + so.name + ": '" + array->path + "' is an array of components and takes one index");
     return nullptr;
   }
   long k = p.subs[0];
   if (k < 1 || k > static_cast<long>(array->elems.size())) {
-    diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[0].first, p.sub_spans[0].second),
+    diags_.Error(DiagCode::IndexOutOfRange, At(so, p.sub_spans[0].first, p.sub_spans[0].second),
                  "--set " + so.name + ": index " + std::to_string(k) + " is out of range 1.." +
                      std::to_string(array->elems.size()) + " of '" + array->path + "'")
         .hint = "indices are 1-based";
@@ -202,10 +201,10 @@ Node* Elaborator::SetArrayElement(const SetOverride& so, size_t i, Node* array) 
 
 // Part i indexing an array variable n: the row-major element in *elem; it must be the
 // name's last part. False after a diagnostic.
-bool Elaborator::SetVarElement(const SetOverride& so, size_t i, const Node* n, int* elem) {
+bool SetOverrides::VarElement(const SetOverride& so, size_t i, const Node* n, int* elem) {
   const SetPart& p = so.parts[i];
   const std::string& full = so.name;
-  const Span subs_span = SetSpan(so, p.sub_spans[0].first, p.sub_spans.back().second);
+  const Span subs_span = At(so, p.sub_spans[0].first, p.sub_spans.back().second);
   if (n->kind != Node::kVar) {
     diags_.Error(DiagCode::BadSet, subs_span, "--set " + full + ": '" + n->path + "' is not an array and takes no index");
     return false;
@@ -225,7 +224,7 @@ bool Elaborator::SetVarElement(const SetOverride& so, size_t i, const Node* n, i
     long k = p.subs[d];
     long size = n->shape[d];
     if (k < 1 || k > size) {
-      diags_.Error(DiagCode::IndexOutOfRange, SetSpan(so, p.sub_spans[d].first, p.sub_spans[d].second),
+      diags_.Error(DiagCode::IndexOutOfRange, At(so, p.sub_spans[d].first, p.sub_spans[d].second),
                    "--set " + full + ": index " + std::to_string(k) + " is out of range 1.." + std::to_string(size) +
                        " of '" + n->path + "'")
           .hint = "indices are 1-based";
@@ -234,7 +233,7 @@ bool Elaborator::SetVarElement(const SetOverride& so, size_t i, const Node* n, i
     flat = flat * size + (k - 1);
   }
   if (i + 1 != so.parts.size()) {
-    diags_.Error(DiagCode::UnknownName, SetSpan(so, so.parts[i + 1].begin, so.parts[i + 1].end),
+    diags_.Error(DiagCode::UnknownName, At(so, so.parts[i + 1].begin, so.parts[i + 1].end),
                  "--set " + full + ": '" + n->path + "' is a variable and has no members");
     return false;
   }
@@ -244,14 +243,14 @@ bool Elaborator::SetVarElement(const SetOverride& so, size_t i, const Node* n, i
 
 // After instantiation: every target must be a settable parameter; subscripted ones are
 // bound here, as element equations of the parameter or as its whole value.
-void Elaborator::BindSetOverrides() {
+void SetOverrides::Bind() {
   for (const SetOverride& so : sets_) {
     if (diags_.Full()) return;
     const std::string& full = so.name;
-    Span whole = SetSpan(so, 0, so.parts.back().sub_spans.empty() ? so.parts.back().end
+    Span whole = At(so, 0, so.parts.back().sub_spans.empty() ? so.parts.back().end
                                                                      : so.parts.back().sub_spans.back().second + 1);
     int elem = -1;
-    Node* n = ResolveSetTarget(so, &elem);
+    Node* n = ResolveTarget(so, &elem);
     if (!n) continue;
     if (n->kind != Node::kVar || n->variability != ast::Variability::Parameter) {
       auto& d = diags_.Error(DiagCode::NotParameter, whole,
@@ -277,10 +276,10 @@ void Elaborator::BindSetOverrides() {
           .hint = "set the parameter it depends on instead";
       continue;
     }
-    if (elem >= 0) n->eq_elem_binding[elem] = SetValue(so);
+    if (elem >= 0) n->eq_elem_binding[elem] = Binding(so);
     else {
       if (n->shared_mod) n->mod = *n->shared_mod, n->shared_mod = nullptr;  // its own copy, to change
-      n->mod.value = SetValue(so);
+      n->mod.value = Binding(so);
     }
   }
 }

@@ -1,10 +1,12 @@
 // Shapes: what a stdlib part looks like, recorded for drawing (flat::Shape). A class
 // annotated __kanesim(primitive = "shape", kind = K) names its sizes by parameters (the
 // table below) and contains a Body named `body` that carries its mass properties.
+#include "lang/elab_emit.h"
+
 #include <cctype>
 #include <map>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_eval.h"
 
 namespace kanesim::lang::elab {
 
@@ -50,50 +52,51 @@ std::string NormalColor(const std::string& c) {
 
 }  // namespace
 
-void Elaborator::EmitShape(Node* n) {
+void EmitShape(Node* n, Evaluator& eval, const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m) {
   const ShapeRow* row = nullptr;
   for (const ShapeRow& r : kShapeRows)
     if (n->prim_kind == r.kind) row = &r;
   if (!row) {
-    diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{}, "unknown shape kind '" + n->prim_kind + "'");
+    diags.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
+                "unknown shape kind '" + n->prim_kind + "'");
     return;
   }
   flat::Shape s;
   s.name = n->path;
   s.kind = row->shape;
-  s.loc = Loc(n->decl ? n->decl->name_span : Span{});
+  s.loc = places.Loc(n->decl ? n->decl->name_span : Span{});
   for (int i = 0; i < 3; ++i) {
     if (!row->size[i]) continue;
     Node* c = n->Child(row->size[i]);
     if (!c || c->kind != Node::kVar) {
-      diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
+      diags.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
                    "shape '" + n->path + "' lacks '" + row->size[i] + "'");
       return;
     }
-    Value v = GetVar(c, c->decl ? c->decl->name_span : Span{});
+    Value v = eval.GetVar(c, c->decl ? c->decl->name_span : Span{});
     if (!v.valid || v.type == VType::String || v.elements.size() != 1) return;
     s.size[static_cast<size_t>(i)] = v.elements[0];
   }
   if (s.kind == flat::ShapeKind::Mesh) {
     Node* f = n->Child("file");
     if (!f || f->kind != Node::kVar) return;
-    Value v = GetVar(f, Span{});
+    Value v = eval.GetVar(f, Span{});
     if (!v.valid || v.type != VType::String || v.strings.size() != 1) return;
     if (v.strings[0].empty() && n->prim_kind == "visual_mesh") return;  // a BodyShape without a file: its inertia box
     Span origin = f->decl ? f->decl->name_span : Span{};
     const ModValue* b = f->Modifiers().value ? &*f->Modifiers().value : f->eq_binding ? &*f->eq_binding : nullptr;
-    if (b) origin = b->expr ? ValueOrigin(*b->expr, Ctx{b->scope, b->iters.get()}) : b->span;
-    s.mesh_file = MeshPath(v.strings[0], origin);
+    if (b) origin = b->expr ? eval.ValueOrigin(*b->expr, Ctx{b->scope, b->iters.get()}) : b->span;
+    s.mesh_file = eval.MeshPath(v.strings[0], origin);
   }
   if (Node* c = n->Child("color"); c && c->kind == Node::kVar) {
-    Value v = GetVar(c, Span{});
+    Value v = eval.GetVar(c, Span{});
     if (v.valid && v.type == VType::String && v.strings.size() == 1 && !v.strings[0].empty()) {
       s.color = NormalColor(v.strings[0]);
       if (s.color.empty()) {
         const Span at = c->Modifiers().value ? c->Modifiers().value->span : c->decl ? c->decl->name_span : Span{};
         std::vector<std::string> names;
         for (const auto& [name, hex] : kColorNames) names.push_back(name);
-        auto& d = diags_.Error(DiagCode::BadValue, at, "'" + v.strings[0] + "' is not a colour");
+        auto& d = diags.Error(DiagCode::BadValue, at, "'" + v.strings[0] + "' is not a colour");
         const std::string best = ClosestName(v.strings[0], names);
         d.hint = "write \"#rrggbb\" or one of red, green, blue, yellow, orange, purple, cyan, grey, steel, black, "
                  "white" + (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)");
@@ -101,19 +104,20 @@ void Elaborator::EmitShape(Node* n) {
     }
   }
   if (Node* vis = n->Child("visual"); vis && vis->kind == Node::kVar) {
-    Value v = GetVar(vis, Span{});
+    Value v = eval.GetVar(vis, Span{});
     double x = 1;
-    if (v.valid && v.type == VType::Boolean && Structural(v, vis->decl ? vis->decl->name_span : Span{}, &x, "visual"))
+    if (v.valid && v.type == VType::Boolean &&
+        eval.Structural(v, vis->decl ? vis->decl->name_span : Span{}, &x, "visual"))
       s.visual = x != 0;
   }
-  m_->shapes.push_back(std::move(s));
+  m->shapes.push_back(std::move(s));
 }
 
-void Elaborator::LinkShapes() {
-  if (m_->shapes.empty()) return;
+void LinkShapes(flat::Mechanism* m) {
+  if (m->shapes.empty()) return;
   std::map<std::string, int> body_of;
-  for (size_t i = 0; i < m_->bodies.size(); ++i) body_of[m_->bodies[i].name] = static_cast<int>(i);
-  for (flat::Shape& s : m_->shapes) {
+  for (size_t i = 0; i < m->bodies.size(); ++i) body_of[m->bodies[i].name] = static_cast<int>(i);
+  for (flat::Shape& s : m->shapes) {
     auto it = body_of.find(s.name + ".body");
     if (it != body_of.end()) s.body = it->second;
   }

@@ -20,7 +20,9 @@
 #include <utility>
 #include <vector>
 
-#include "lang/elab_internal.h"
+#include "lang/elab_instantiate.h"
+
+#include "lang/elab_modifiers.h"
 
 namespace kanesim::lang::elab {
 
@@ -140,7 +142,7 @@ bool ReadsNoName(const ast::Expr* e) {
 
 // Element 1's instance tree bound to element k: copies of the nodes with element k's names,
 // scopes and slice values; `slice` and `values` are aligned (element k's value of each).
-struct Elaborator::ShareBinding {
+struct Instantiator::ShareBinding {
   const std::vector<SliceValue>* slice;
   std::vector<const Value*> values;
   std::vector<std::pair<const Node*, Node*>> ancestors;  // (element 1's node, element k's)
@@ -157,7 +159,7 @@ struct Elaborator::ShareBinding {
 // nowhere after instantiation: the order the keys were written in (for messages about
 // them), and a class or array node's sub-modifiers (moved into its elements, or sliced
 // for an array's elements).
-Mod Elaborator::BoundCopy(const Mod& src, ShareBinding& b, bool with_sub) {
+Mod Instantiator::BoundCopy(const Mod& src, ShareBinding& b, bool with_sub) {
   Mod out;
   if (src.value) {
     out.value = *src.value;
@@ -186,7 +188,7 @@ Mod Elaborator::BoundCopy(const Mod& src, ShareBinding& b, bool with_sub) {
 // Whether a variable's modifiers in element 1 mean the same in element k: no slice value,
 // and every value either reads no name or is evaluated outside element 1 (its scope is not
 // one of the nodes being copied, which are the only ones BoundCopy would map).
-bool Elaborator::SameInEveryElement(const Mod& m, const ShareBinding& b) const {
+bool Instantiator::SameInEveryElement(const Mod& m, const ShareBinding& b) const {
   if (m.value) {
     const ModValue& v = *m.value;
     if (v.pre) return false;
@@ -199,8 +201,8 @@ bool Elaborator::SameInEveryElement(const Mod& m, const ShareBinding& b) const {
   return true;
 }
 
-std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, const std::string& name,
-                                                ShareBinding& b) {
+std::unique_ptr<Node> Instantiator::CloneInstance(const Node& src, Node* parent, const std::string& name,
+                                                  ShareBinding& b) {
   auto n = std::make_unique<Node>();
   n->kind = src.kind;
   n->name = name;
@@ -224,11 +226,11 @@ std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, c
   } else {
     // A variable's modifiers (its value and attributes) are shared with element 1 when they
     // mean the same there, copied and bound to element k otherwise. Not shared when a
-    // subscripted --set may later change one element's (BindSetOverrides).
+    // subscripted --set may later change one element's (SetOverrides::Bind).
     const Mod& sm = src.Modifiers();
     if (b.visit >= b.same_mod->size()) b.same_mod->resize(b.visit + 1, -1);
     signed char& same = (*b.same_mod)[b.visit];
-    if (same < 0) same = !has_subscripted_set_ && SameInEveryElement(sm, b);
+    if (same < 0) same = !subscripted_sets_ && SameInEveryElement(sm, b);
     if (same) n->shared_mod = &sm;
     else n->mod = BoundCopy(sm, b, true);
   }
@@ -243,10 +245,10 @@ std::unique_ptr<Node> Elaborator::CloneInstance(const Node& src, Node* parent, c
 }
 
 // What element 1 of an array taught: whether elements 2..n may be copies of it.
-struct Elaborator::ArrayShare {
+struct Instantiator::ArrayShare {
   bool ok = false;
   const Node* first = nullptr;    // element 1
-  long per_element = 0;           // instances_ counted by element 1
+  long per_element = 0;           // tree_.instances counted by element 1
   std::vector<SliceValue> slice;  // its values from the array's modifier
   mutable std::vector<signed char> same_mod;  // ShareBinding::same_mod, filled by the first copy
 };
@@ -254,39 +256,38 @@ struct Elaborator::ArrayShare {
 // Element `index` as a copy of element 1 bound to its slice of the array's modifier; false
 // (nothing done) when its slice lacks a value element 1 had, or the copy would pass the
 // instance limit.
-bool Elaborator::ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index,
-                              int count) {
-  if (!share.ok || instances_ + share.per_element > kMaxInstances) return false;
+bool Instantiator::ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index,
+                                int count) {
+  if (!share.ok || tree_.instances + share.per_element > kMaxInstances) return false;
   std::vector<Value> values(share.slice.size());
   ShareBinding b{&share.slice, {}, {}, &share.same_mod};
   for (size_t i = 0; i < share.slice.size(); ++i) {
     if (!SliceAt(array->mod, share.slice[i].keys, index, count, &values[i])) return false;
     b.values.push_back(&values[i]);
   }
-  instances_ += share.per_element;
+  tree_.instances += share.per_element;
   array->elems.push_back(CloneInstance(*share.first, node, name, b));
   return true;
 }
 
 // Element 1: instantiated, and whether the others may share it (the checks at the top).
-void Elaborator::InstantiateFirst(Node* el, const ast::ClassDef* tcls, const ast::ClassDef* owner,
-                                  ArrayShare* share) {
+void Instantiator::InstantiateFirst(Node* el, const ast::ClassDef* tcls, ArrayShare* share) {
   std::vector<std::string> keys;
   bool from_set = false;
   FindSliceValues(el->mod, keys, &share->slice, &from_set);  // before Instantiate moves them
   const size_t diags_before = diags_.All().size();
-  const long instances_before = instances_;
-  Instantiate(el, tcls, owner);
+  const long instances_before = tree_.instances;
+  Instantiate(el, tcls);
   share->first = el;
-  share->per_element = instances_ - instances_before;
+  share->per_element = tree_.instances - instances_before;
   share->ok = !from_set && diags_.All().size() == diags_before && !diags_.HasErrors() &&
               ShareCheck(share->slice).Run(el);
 }
 
-void Elaborator::InstantiateArray(Node* node, Node* array, const ast::Component& comp, const ast::ClassDef* tcls,
-                                  const ast::ClassDef* owner, int n) {
+void Instantiator::InstantiateArray(Node* node, Node* array, const ast::Component& comp, const ast::ClassDef* tcls,
+                                    int n) {
   ArrayShare share;
-  for (int i = 0; i < n && !diags_.Full() && !too_large_; ++i) {
+  for (int i = 0; i < n && !diags_.Full() && !TooLarge(); ++i) {
     const std::string index = std::to_string(i + 1);
     std::string name;
     name.reserve(comp.name.size() + index.size() + 2);
@@ -298,12 +299,12 @@ void Elaborator::InstantiateArray(Node* node, Node* array, const ast::Component&
     el->path = JoinPath(node->path, name);
     el->name = std::move(name);
     el->depth = array->depth;
-    el->mod = SliceMod(array->mod, i, n, comp.span);
+    el->mod = SliceMod(array->mod, i, n, eval_, diags_);
     el->kind = Node::kClass;
     Node* raw = el.get();
     array->elems.push_back(std::move(el));
-    if (i == 0 && n > 1) InstantiateFirst(raw, tcls, owner, &share);
-    else Instantiate(raw, tcls, owner);
+    if (i == 0 && n > 1) InstantiateFirst(raw, tcls, &share);
+    else Instantiate(raw, tcls);
   }
 }
 

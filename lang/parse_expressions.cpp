@@ -1,5 +1,6 @@
-// Expressions, by operator precedence from `if` down to primaries (each function carries
-// its grammar rule). The Parser class is in lang/parser_internal.h.
+// Expressions: `if`, ranges, operators by one precedence table (Parser::Rule), primaries
+// (each function carries its grammar rule). The Parser class is in lang/parser_internal.h.
+#include <array>
 #include <utility>
 
 #include "lang/parser_internal.h"
@@ -32,117 +33,127 @@ ExprPtr Parser::Expression() {
   return SimpleExpression();
 }
 
-// simple_expression := logical_expression [ ':' logical_expression [ ':' logical_expression ] ]
+// simple_expression := operators [ ':' operators [ ':' operators ] ]
 ExprPtr Parser::SimpleExpression() {
   Span b = Peek().span;
-  ExprPtr first = Logical(0);
+  ExprPtr first = Operators(Prec::Or);
   if (!At(Tok::Colon)) return first;
   auto r = std::make_unique<Expr>();
   r->kind = ExprKind::Range;
   r->args.push_back(std::move(first));
   Advance();
-  r->args.push_back(Logical(0));
-  if (Accept(Tok::Colon)) r->args.push_back(Logical(0));
+  r->args.push_back(Operators(Prec::Or));
+  if (Accept(Tok::Colon)) r->args.push_back(Operators(Prec::Or));
   r->span = SpanFrom(b);
   return Finish(std::move(r), b);
 }
 
-// Operator precedence, lowest first (Modelica 3.5 §3.2):
-//   or; and; not; relational; additive (+ -); multiplicative (* /); unary +-; ^
-// logical_expression := logical_term { or logical_term }
-// logical_term := logical_factor { and logical_factor }
-// logical_factor := [not] relation
-// relation := arithmetic_expression [ rel_op arithmetic_expression ]
-ExprPtr Parser::Logical(int level) {
-  Span b = Peek().span;
-  if (level == 0 || level == 1) {
-    Tok op = level == 0 ? Tok::KwOr : Tok::KwAnd;
-    ExprPtr lhs = Logical(level + 1);
-    while (At(op)) {
-      Span op_span = Advance().span;
-      ExprPtr rhs = Logical(level + 1);
-      lhs = MakeBinary(op, std::move(lhs), std::move(rhs), b, op_span);
-    }
-    return lhs;
-  }
-  if (level == 2) {
-    if (At(Tok::KwNot)) {
-      DepthGuard guard(this);
-      if (!guard.ok) return ErrorExpr(b);
-      Advance();
-      auto e = std::make_unique<Expr>();
-      e->kind = ExprKind::Unary;
-      e->op = static_cast<int>(Tok::KwNot);
-      e->args.push_back(Logical(2));
-      e->span = SpanFrom(b);
-      return Finish(std::move(e), b);
-    }
-    return Logical(3);
-  }
-  // relation
-  ExprPtr lhs = Arithmetic(0);
-  Tok k = Peek().kind;
-  if (k == Tok::Lt || k == Tok::Le || k == Tok::Gt || k == Tok::Ge || k == Tok::EqEq || k == Tok::Ne) {
-    Span op_span = Advance().span;
-    ExprPtr rhs = Arithmetic(0);
-    return MakeBinary(k, std::move(lhs), std::move(rhs), b, op_span);
-  }
-  return lhs;
+// The operator table (Modelica 3.5 §3.2), one row per token kind, as clox's rules[].
+// Precedence, lowest first: or; and; not; relational (non-associative: a < b < c is not
+// an expression); + - and a leading sign; * /; ^ (non-associative). A leading sign applies
+// to the whole first term (-a*b = -(a*b), -a^2 = -(a^2)) and may begin only an
+// arithmetic expression (a + -b is an error; a ^ -2 is accepted).
+const Parser::OpRule& Parser::Rule(Tok t) {
+  static constexpr size_t kNumTokens = 0
+#define KANESIM_X(e, s) +1
+      KANESIM_TOKENS(KANESIM_X)
+#undef KANESIM_X
+      ;
+  static const std::array<OpRule, kNumTokens> kRules = [] {
+    std::array<OpRule, kNumTokens> r{};
+    auto row = [&r](Tok k) -> OpRule& { return r[static_cast<size_t>(k)]; };
+    // Columns: prefix handler, it may begin an operand of (at most) this precedence, its
+    // operand's precedence; infix handler, precedence, associativity.
+    row(Tok::KwOr) = {nullptr, Prec::None, Prec::None, &Parser::InfixBinary, Prec::Or, Assoc::Left};
+    row(Tok::KwAnd) = {nullptr, Prec::None, Prec::None, &Parser::InfixBinary, Prec::And, Assoc::Left};
+    row(Tok::KwNot) = {&Parser::PrefixNot, Prec::Not, Prec::Not, nullptr, Prec::None, Assoc::Left};
+    for (Tok k : {Tok::Lt, Tok::Le, Tok::Gt, Tok::Ge, Tok::EqEq, Tok::Ne})
+      row(k) = {nullptr, Prec::None, Prec::None, &Parser::InfixBinary, Prec::Relation, Assoc::None};
+    for (Tok k : {Tok::Plus, Tok::Minus})
+      row(k) = {&Parser::PrefixSign, Prec::Additive, Prec::Multiplicative, &Parser::InfixBinary, Prec::Additive,
+                Assoc::Left};
+    for (Tok k : {Tok::Star, Tok::Slash})
+      row(k) = {nullptr, Prec::None, Prec::None, &Parser::InfixBinary, Prec::Multiplicative, Assoc::Left};
+    row(Tok::Caret) = {nullptr, Prec::None, Prec::None, &Parser::InfixPower, Prec::Power, Assoc::None};
+    return r;
+  }();
+  return kRules[static_cast<size_t>(t)];
 }
 
-// arithmetic_expression := [add_op] term { add_op term }
-// term := factor { mul_op factor }
-ExprPtr Parser::Arithmetic(int level) {
-  Span b = Peek().span;
-  if (level == 0) {
-    ExprPtr lhs = Unary();
-    while (At(Tok::Plus) || At(Tok::Minus)) {
-      const Token& op = Advance();
-      ExprPtr rhs = Arithmetic(1);
-      lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
-    }
-    return lhs;
+// operators := [prefix_op] operand { infix_op operand }, driven by the table: an infix
+// operator joins while its precedence is at least `min` (its right operand is parsed at
+// the next higher one, so chains associate to the left) and at most `max`, which the last
+// operator lowers (a non-associative one to below itself; a prefix one to below its
+// operand), so that exactly the sentences of the grammar's levels are accepted:
+//   logical_expression := logical_term { or logical_term }
+//   logical_term := logical_factor { and logical_factor }
+//   logical_factor := [not] relation
+//   relation := arithmetic_expression [ rel_op arithmetic_expression ]
+//   arithmetic_expression := [add_op] term { add_op term }
+//   term := factor { mul_op factor };  factor := primary [ '^' primary ]
+// Chains are a loop, not one native frame per operator; the recursion is bounded by the
+// number of levels (prefix `not`, which may repeat, takes a DepthGuard).
+ExprPtr Parser::Operators(Prec min) {
+  const Span b = Peek().span;
+  const OpRule* rule = &Rule(Peek().kind);
+  ExprPtr lhs;
+  Prec max = Prec::Power;
+  if (rule->prefix && min <= rule->prefix_prec) {
+    lhs = (this->*rule->prefix)(b, rule->operand);
+    max = Below(rule->operand);
+  } else {
+    lhs = Primary();
   }
-  ExprPtr lhs = Power();
-  while (At(Tok::Star) || At(Tok::Slash)) {
+  while (true) {
+    rule = &Rule(Peek().kind);
+    if (!rule->infix || rule->prec < min || rule->prec > max) return lhs;
     const Token& op = Advance();
-    ExprPtr rhs = Power();
-    lhs = MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
+    lhs = (this->*rule->infix)(std::move(lhs), b, op, Above(rule->prec));
+    max = rule->assoc == Assoc::Left ? rule->prec : Below(rule->prec);
   }
-  return lhs;
 }
 
-// Leading unary +/- applies to the whole first term: -a*b = -(a*b), -a^2 = -(a^2).
-ExprPtr Parser::Unary() {
-  Span b = Peek().span;
-  if (At(Tok::Minus) || At(Tok::Plus)) {
-    Tok op = Advance().kind;
-    DepthGuard guard(this);
-    if (!guard.ok) return ErrorExpr(b);
-    auto e = std::make_unique<Expr>();
-    e->kind = ExprKind::Unary;
-    e->op = static_cast<int>(op);
-    e->args.push_back(Arithmetic(1));
-    e->span = SpanFrom(b);
-    return Finish(std::move(e), b);
-  }
-  return Arithmetic(1);
-}
-
-// factor := primary [ '^' primary ]   (Modelica: no chaining without parentheses; we
-// accept a^b^c as a^(b^c)? No: reported as an error, like Modelica.)
-ExprPtr Parser::Power() {
-  Span b = Peek().span;
-  ExprPtr base = Primary();
-  if (!At(Tok::Caret)) return base;
+// not logical_factor
+ExprPtr Parser::PrefixNot(const Span& b, Prec operand) {
+  DepthGuard guard(this);
+  if (!guard.ok) return ErrorExpr(b);
   Advance();
+  auto e = std::make_unique<Expr>();
+  e->kind = ExprKind::Unary;
+  e->op = static_cast<int>(Tok::KwNot);
+  e->args.push_back(Operators(operand));
+  e->span = SpanFrom(b);
+  return Finish(std::move(e), b);
+}
+
+// add_op term: a leading sign.
+ExprPtr Parser::PrefixSign(const Span& b, Prec operand) {
+  Tok op = Advance().kind;
+  DepthGuard guard(this);
+  if (!guard.ok) return ErrorExpr(b);
+  auto e = std::make_unique<Expr>();
+  e->kind = ExprKind::Unary;
+  e->op = static_cast<int>(op);
+  e->args.push_back(Operators(operand));
+  e->span = SpanFrom(b);
+  return Finish(std::move(e), b);
+}
+
+// lhs op rhs, for every binary operator but '^'; the operator is consumed.
+ExprPtr Parser::InfixBinary(ExprPtr lhs, const Span& b, const Token& op, Prec rhs_min) {
+  ExprPtr rhs = Operators(rhs_min);
+  return MakeBinary(op.kind, std::move(lhs), std::move(rhs), b, op.span);
+}
+
+// factor := primary '^' primary (Modelica: no chaining without parentheses, reported; a
+// signed exponent a ^ -2 is accepted without them). `base` is the primary.
+ExprPtr Parser::InfixPower(ExprPtr base, const Span& b, const Token&, Prec) {
   auto e = std::make_unique<Expr>();
   e->kind = ExprKind::Binary;
   e->op = static_cast<int>(Tok::Caret);
   e->args.reserve(2);
   e->args.push_back(std::move(base));
   if (At(Tok::Minus) || At(Tok::Plus)) {
-    // a ^ -2 : Modelica requires parentheses; accept and note via hint-free parse.
     Span ub = Peek().span;
     Tok op = Advance().kind;
     auto u = std::make_unique<Expr>();

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -198,10 +199,25 @@ class Parser {
   std::unique_ptr<Modification> AnnotationOpt();
   ExprPtr Expression();
   ExprPtr SimpleExpression();
-  ExprPtr Logical(int level);
-  ExprPtr Arithmetic(int level);
-  ExprPtr Unary();
-  ExprPtr Power();
+  // Operator expressions (lang/parse_expressions.cpp): one loop over the table Rule.
+  enum class Prec : std::uint8_t { None, Or, And, Not, Relation, Additive, Multiplicative, Power };
+  enum class Assoc : std::uint8_t { Left, None };
+  static Prec Above(Prec p) { return static_cast<Prec>(static_cast<int>(p) + 1); }
+  static Prec Below(Prec p) { return static_cast<Prec>(static_cast<int>(p) - 1); }
+  struct OpRule {
+    ExprPtr (Parser::*prefix)(const Span& begin, Prec operand);  // null: not a prefix operator
+    Prec prefix_prec;  // a prefix operator may begin an operand parsed at this precedence or lower
+    Prec operand;      // the precedence its operand is parsed at
+    ExprPtr (Parser::*infix)(ExprPtr lhs, const Span& begin, const Token& op, Prec rhs_min);  // null: not infix
+    Prec prec;         // the infix operator's precedence
+    Assoc assoc;
+  };
+  static const OpRule& Rule(Tok t);
+  ExprPtr Operators(Prec min);
+  ExprPtr PrefixNot(const Span& b, Prec operand);
+  ExprPtr PrefixSign(const Span& b, Prec operand);
+  ExprPtr InfixBinary(ExprPtr lhs, const Span& b, const Token& op, Prec rhs_min);
+  ExprPtr InfixPower(ExprPtr base, const Span& b, const Token& op, Prec rhs_min);
   ExprPtr Primary();
   ExprPtr Literal();            // NUMBER | STRING | false | true
   ExprPtr ArrayConstructor();   // '{' ... '}'

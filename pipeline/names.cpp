@@ -24,13 +24,13 @@ constexpr std::array<Named<rt::SolverPath>, 4> kSolvers{{{"auto", rt::SolverPath
                                                         {"sparse", rt::SolverPath::Sparse},
                                                         {"recursive", rt::SolverPath::Recursive}}};
 
-// nullopt: the compiler's choice. "cvode" is CVODE with Adams and fixed-point iteration.
-const std::array<Named<std::optional<sim::Method>>, 6> kIntegrators{{{"auto", std::nullopt},
-                                                                    {"ida", sim::Method::IDA},
-                                                                    {"cvode", sim::Method::CvodeAdams},
-                                                                    {"cvode-bdf", sim::Method::CvodeBdf},
-                                                                    {"arkode", sim::Method::ArkodeErk},
-                                                                    {"dop853", sim::Method::Dop853}}};
+// "auto": the compiler's choice. "cvode" is CVODE with Adams and fixed-point iteration.
+constexpr std::array<Named<rt::Integrator>, 6> kIntegrators{{{"auto", rt::Integrator::Auto},
+                                                            {"ida", rt::Integrator::IDA},
+                                                            {"cvode", rt::Integrator::CvodeAdams},
+                                                            {"cvode-bdf", rt::Integrator::CvodeBdf},
+                                                            {"arkode", rt::Integrator::ArkodeErk},
+                                                            {"dop853", rt::Integrator::Dop853}}};
 
 constexpr std::array<Named<rt::IndeterminateReactions>, 2> kReactions{
     {{"nan", rt::IndeterminateReactions::NaN}, {"min-norm", rt::IndeterminateReactions::MinNorm}}};
@@ -64,7 +64,7 @@ std::vector<std::string> Names(const Table& table) {
 }  // namespace
 
 bool SolverFromName(std::string_view name, rt::SolverPath* out) { return Find(kSolvers, name, out); }
-bool IntegratorFromName(std::string_view name, std::optional<sim::Method>* out) {
+bool IntegratorFromName(std::string_view name, rt::Integrator* out) {
   return Find(kIntegrators, name, out);
 }
 bool ReactionsFromName(std::string_view name, rt::IndeterminateReactions* out) { return Find(kReactions, name, out); }
@@ -94,7 +94,7 @@ const std::vector<std::string>& EnergyCheckNames() {
   return names;
 }
 
-std::string IntegratorName(const std::optional<sim::Method>& integrator) {
+std::string IntegratorOptionName(rt::Integrator integrator) {
   for (const auto& row : kIntegrators)
     if (row.value == integrator) return row.name;
   return "auto";
@@ -110,15 +110,7 @@ rt::CompileOptions CompileOptionsFor(const RunSpec& spec) {
   rt::CompileOptions o;
   o.solver = spec.solver;
   o.indeterminate = spec.reactions;
-  if (spec.integrator) {
-    switch (*spec.integrator) {
-      case sim::Method::IDA: o.integrator = rt::IntegratorKind::IDA; break;
-      case sim::Method::CvodeAdams:
-      case sim::Method::CvodeBdf: o.integrator = rt::IntegratorKind::CVODE; break;
-      case sim::Method::ArkodeErk: o.integrator = rt::IntegratorKind::ARKODE; break;
-      case sim::Method::Dop853: o.integrator = rt::IntegratorKind::DOP853; break;
-    }
-  }
+  o.integrator = spec.integrator;
   return o;
 }
 
@@ -132,13 +124,14 @@ const char* SolverName(rt::SolverPath s) {
   return "?";
 }
 
-const char* IntegratorName(rt::IntegratorKind k) {
+const char* IntegratorName(rt::Integrator k) {
   switch (k) {
-    case rt::IntegratorKind::Auto: return "auto";
-    case rt::IntegratorKind::IDA: return "IDA";
-    case rt::IntegratorKind::CVODE: return "CVODE";
-    case rt::IntegratorKind::ARKODE: return "ARKODE";
-    case rt::IntegratorKind::DOP853: return "DOP853";
+    case rt::Integrator::Auto: return "auto";
+    case rt::Integrator::IDA: return "IDA";
+    case rt::Integrator::CvodeAdams:
+    case rt::Integrator::CvodeBdf: return "CVODE";  // Adams or BDF: the run's --stats says which
+    case rt::Integrator::ArkodeErk: return "ARKODE";
+    case rt::Integrator::Dop853: return "DOP853";
   }
   return "?";
 }

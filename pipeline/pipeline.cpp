@@ -170,8 +170,7 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
   else if (ex.has_interval) so.interval = ex.interval;
   so.rtol = !std::isnan(spec.rtol) ? spec.rtol : ex.tolerance;
   so.atol = !std::isnan(spec.atol) ? spec.atol : so.rtol;
-  so.integrator = CompileOptionsFor(spec).integrator;
-  so.cvode_bdf = spec.integrator == sim::Method::CvodeBdf;
+  so.integrator = spec.integrator;
   so.ida_linear_solver = spec.linear_solver;
   so.project_steps = spec.project_steps;
   so.energy_check = spec.energy_check;

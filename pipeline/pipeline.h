@@ -58,8 +58,8 @@ inline constexpr double kUnset = std::numeric_limits<double>::quiet_NaN();
 struct RunSpec {
   // Compiled into the program (read by LoadModel, stage 3).
   rt::SolverPath solver = rt::SolverPath::Auto;  // Kane's equations: dense, sparse, recursive
-  // The time integrator; nullopt: the compiler's choice (rt::Summarize(program).integrator).
-  std::optional<sim::Method> integrator;
+  // The time integrator; Auto: the compiler's choice (rt::Summarize(program).integrator).
+  rt::Integrator integrator = rt::Integrator::Auto;
   rt::IndeterminateReactions reactions = rt::IndeterminateReactions::NaN;
 
   // Times and tolerances (stage 4); given values must be positive and finite (times: finite).
@@ -86,7 +86,7 @@ struct RunSpec {
 //   linear solver  auto | dense | klu
 //   energy check   on | off | report
 bool SolverFromName(std::string_view name, rt::SolverPath* out);
-bool IntegratorFromName(std::string_view name, std::optional<sim::Method>* out);
+bool IntegratorFromName(std::string_view name, rt::Integrator* out);
 bool ReactionsFromName(std::string_view name, rt::IndeterminateReactions* out);
 bool LinearSolverFromName(std::string_view name, sim::IdaLinearSolver* out);
 bool EnergyCheckFromName(std::string_view name, sim::EnergyCheck* out);
@@ -97,12 +97,12 @@ const std::vector<std::string>& ReactionsNames();
 const std::vector<std::string>& LinearSolverNames();
 const std::vector<std::string>& EnergyCheckNames();
 // The name of a choice: the inverse of the *FromName functions.
-std::string IntegratorName(const std::optional<sim::Method>& integrator);
+std::string IntegratorOptionName(rt::Integrator integrator);
 // "auto, ida, cvode, ..." for messages.
 std::string JoinNames(const std::vector<std::string>& names);
 // The compiler's choices as `kanesim check` prints them ("dense", "IDA", ...).
 const char* SolverName(rt::SolverPath solver);
-const char* IntegratorName(rt::IntegratorKind integrator);
+const char* IntegratorName(rt::Integrator integrator);
 
 // What rt::Compile takes from the spec (the solver path, the integrator kind, reactions).
 rt::CompileOptions CompileOptionsFor(const RunSpec& spec);

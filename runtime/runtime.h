@@ -31,7 +31,7 @@ struct ProgramSummary {
   int dof = 0;                 // degrees of freedom (nu minus independent constraints)
   int grubler_dof = 0;         // Grübler-style count from joint freedoms
   SolverPath solver = SolverPath::Dense;
-  IntegratorKind integrator = IntegratorKind::IDA;
+  Integrator integrator = Integrator::IDA;
   std::string solver_reason;      // why this path
   std::string integrator_reason;  // why this integrator
   std::string equations;          // closed loops on the reduced path: how Kane's equations on beta are formed
@@ -89,11 +89,13 @@ void HoldPartition(Workspace& ws, bool on);
 bool ProjectedStates(const Program& program, const Workspace& ws, std::vector<int>* states, double* diag);
 const std::string& ErrorMessage(const Workspace& ws);
 
-// Closed loops through singular configurations (runtime/engine/branch_monitor.cpp; the
-// bridge in change_point_bridge.cpp): after each
-// accepted step, CheckBranch(y) returns -1 (fatal; BranchMonitorError says why: the loop,
-// the time and the turn) when the motion left its assembly branch near a change point
-// (the velocity turned by a finite angle where the loop's rows nearly lost rank), else 0.
+// Closed loops through singular configurations (runtime/engine/branch_monitor.cpp;
+// docs/constraints.md "Singular configurations"). After each accepted step, CheckBranch(y)
+// returns -1 (fatal; BranchMonitorError says why: the loop, the time and the turn) when the
+// motion left its assembly branch near a change point (the velocity turned by a finite angle
+// where the loop's rows nearly lost rank), else 0 and, in *step, what it measured. The bridge
+// over a change point, which integrates, is the integrators' (sim/change_point_bridge.h); it
+// reads the loops through the functions below.
 struct BranchMonitor;
 // How near closed loop `loop` (index into Program::loops) is to a change point at the
 // configuration in ws (ConstraintJacobian done): rho = sigma_rank / sigma_max of its rows
@@ -104,41 +106,40 @@ struct BranchMonitor;
 double LoopSingularRatio(const Program& program, const Workspace& ws, int loop, double* length);
 bool BranchMonitorActive(const Program& program);  // the program has closed loops
 std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& program);
-int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y);
+// What CheckBranch measured at an accepted step (filled when it returns 0).
+struct BranchStep {
+  bool valid = false;    // y was a valid state (else nothing was measured: Derivative reports it)
+  double rho = 1.0;      // sigma_min / sigma_max of the nearest-singular loop's rows
+  int near_loops = 0;    // loops near singular (rho < 1e-2)
+  bool near = false;     // rho < 1e-2: the step lies inside a near-singular zone
+  int zone_loop = -1;    // inside a zone: its loop (the nearest-singular one at its first step),
+  double zone_t = 0.0;   // ... the time of its first step
+  double zone_rho = 1.0;  // ... and its smallest rho so far
+};
+int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y,
+                BranchStep* step = nullptr);
 const std::string& BranchMonitorError(const BranchMonitor& monitor);
-// After a solver failed inside a near-singular zone (stalled before a change point): a state
-// y_b (StateSize entries) at time t_b just past the crossing, extrapolated from the zone's
-// accepted steps and projected onto the constraints, from which a fresh solver goes on; the
-// bridged motion is BridgeState on [t_from, t_b]. 0, or 1 when no bridge can be trusted
-// (BridgeRefused says why; the failure stands). Once per zone.
-int BridgeChangePoint(const Program& program, BranchMonitor& monitor, double rtol, double atol, double* t_from,
-                      double* t_b, double* y_b);
-void BridgeState(const BranchMonitor& monitor, double t, double* y);
-// Whether the last accepted step CheckBranch saw lies inside a near-singular zone (rho < 1e-2).
-bool InNearSingularZone(const BranchMonitor& monitor);
-// With these tolerances, CheckBranch tries the bridge itself after 50 accepted steps inside
-// one near-singular zone (a stall; a passage takes a few) and, when it can be trusted,
-// fails the step so that the integrator's next BridgeChangePoint returns it.
-void SetEarlyBridge(BranchMonitor& monitor, double rtol, double atol);
-// Whether the bridge steps over zones where several loops are near singular at once (a
-// chain of equal-link parallelograms; on by default). Off: such zones are refused, as before
-// (tests switch it off to show what it does).
-void SetBridgeSeveralLoops(BranchMonitor& monitor, bool on);
-// Whether the early bridge over such a zone is tried after 10 accepted steps in it instead of
-// the 50th (on by default; off: as before, tests switch it off).
-void SetBridgeSeveralAtOnce(BranchMonitor& monitor, bool on);
-// ... and on the multiplier form too (off by default; tests only: the trajectory on which
-// DOP853's dense output was seen off the branch, docs/constraints.md "Several loops").
-void SetBridgeSeveralAtOnceMultiplier(BranchMonitor& monitor, bool on);
-// Whether, there, on the multiplier form an error estimate above the bridge's limit is taken
-// again between the extrapolations projected onto the constraints (on by default; off:
-// refused, as before; tests switch it off).
-void SetBridgeProjectedEstimate(BranchMonitor& monitor, bool on);
-// The change points the solver passed by itself (with SetEarlyBridge on): how many were
-// checked against the bridge's approach, and how many stood unchecked (the approach
-// refused, or several loops near singular at once; docs/constraints.md).
-void PassageCounts(const BranchMonitor& monitor, long* checked, long* unchecked);
-const std::string& BridgeRefused(const BranchMonitor& monitor);
+// The monitor's own workspace, its position Newton taken to round-off (Workspace
+// newton_to_round_off): the bridge evaluates the equations close to a change point on it.
+Workspace& MonitorWorkspace(BranchMonitor& monitor);
+// rho of the nearest-singular loop at (t, y) on the monitor's workspace (the lengths of its
+// first check), and the count of loops near singular when near_loops is given; -1 when y is
+// not a valid state.
+double SingularRatioAt(const Program& program, BranchMonitor& monitor, double t, const double* y,
+                       int* near_loops = nullptr);
+// The name of closed loop `loop` (its cut joint).
+const std::string& LoopName(const Program& program, int loop);
+// y projected by the partition, positions by Newton (on ws, so to round-off on the
+// monitor's), the dependent speeds solved from the independent ones, into *z (StateSize).
+// Nonzero (z untouched) when y is not valid or the projection fails.
+int ProjectByPartition(const Program& program, Workspace& ws, double t, const double* y, double* z);
+// The reduced form's speeds of y (a state ProjectOntoConstraints gave) replaced by y's plus the
+// tangent-space correction closest to raw's in the kinetic metric, u = u_y + beta z with
+// (beta^T M beta) z = beta^T M (u_raw - u_y): the change leaves the kinetic energy unchanged to
+// first order, where the partition's own solve (an oblique projection, ill-conditioned near
+// a change point) moves it by raw's error over rho (docs/constraints.md "Singular
+// configurations"). Nonzero if the equations fail.
+int ProjectSpeedsInKineticMetric(const Program& program, Workspace& ws, double t, const double* raw, double* y);
 
 // "" when the model conserves T + V (the kinetic_energy and potential_energy signals; V =
 // gravity + line springs): ideal joints, loops and rolling contacts, gravity, springs of

@@ -14,24 +14,26 @@
 
 namespace kanesim::sim {
 
-const char* MethodName(Method m) {
+const char* MethodName(rt::Integrator m) {
   switch (m) {
-    case Method::IDA: return "IDA";
-    case Method::CvodeAdams: return "CVODE-Adams";
-    case Method::CvodeBdf: return "CVODE-BDF";
-    case Method::ArkodeErk: return "ARKODE-ERK";
-    case Method::Dop853: return "DOP853";
+    case rt::Integrator::IDA: return "IDA";
+    case rt::Integrator::CvodeAdams: return "CVODE-Adams";
+    case rt::Integrator::CvodeBdf: return "CVODE-BDF";
+    case rt::Integrator::ArkodeErk: return "ARKODE-ERK";
+    case rt::Integrator::Dop853: return "DOP853";
+    case rt::Integrator::Auto: return "auto";
   }
   return "?";
 }
 
-const char* MethodDescription(Method m) {
+const char* MethodDescription(rt::Integrator m) {
   switch (m) {
-    case Method::IDA: return "IDA: variable-order BDF (1-5), Newton, dense LU or KLU, grouped difference-quotient Jacobian";
-    case Method::CvodeAdams: return "CVODE: variable-order Adams-Moulton (1-12), fixed-point iteration";
-    case Method::CvodeBdf: return "CVODE: variable-order BDF (1-5), Newton, dense LU, difference-quotient Jacobian";
-    case Method::ArkodeErk: return "ARKODE ERKStep: explicit Runge-Kutta, Hermite dense output";
-    case Method::Dop853: return "DOP853: explicit Runge-Kutta 8(5,3) of Dormand-Prince, dense output of order 7";
+    case rt::Integrator::IDA: return "IDA: variable-order BDF (1-5), Newton, dense LU or KLU, grouped difference-quotient Jacobian";
+    case rt::Integrator::CvodeAdams: return "CVODE: variable-order Adams-Moulton (1-12), fixed-point iteration";
+    case rt::Integrator::CvodeBdf: return "CVODE: variable-order BDF (1-5), Newton, dense LU, difference-quotient Jacobian";
+    case rt::Integrator::ArkodeErk: return "ARKODE ERKStep: explicit Runge-Kutta, Hermite dense output";
+    case rt::Integrator::Dop853: return "DOP853: explicit Runge-Kutta 8(5,3) of Dormand-Prince, dense output of order 7";
+    case rt::Integrator::Auto: return "the compiler's choice";
   }
   return "?";
 }
@@ -136,11 +138,12 @@ void CaptureSundialsMessage(int /*error_code*/, const char* /*module*/, const ch
 static std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                             const IntegratorOptions& options, std::string* error) {
   switch (options.method) {
-    case Method::IDA: return MakeIdaStepper(rhs, t0, y0, stop, options, error);
-    case Method::CvodeAdams:
-    case Method::CvodeBdf: return MakeCvodeStepper(rhs, t0, y0, stop, options, error);
-    case Method::ArkodeErk: return MakeArkodeStepper(rhs, t0, y0, stop, options, error);
-    case Method::Dop853: return MakeDop853Stepper(rhs, t0, y0, stop, options, error);
+    case rt::Integrator::Auto:
+    case rt::Integrator::IDA: return MakeIdaStepper(rhs, t0, y0, stop, options, error);
+    case rt::Integrator::CvodeAdams:
+    case rt::Integrator::CvodeBdf: return MakeCvodeStepper(rhs, t0, y0, stop, options, error);
+    case rt::Integrator::ArkodeErk: return MakeArkodeStepper(rhs, t0, y0, stop, options, error);
+    case rt::Integrator::Dop853: return MakeDop853Stepper(rhs, t0, y0, stop, options, error);
   }
   *error = "unknown integration method";
   return nullptr;

@@ -36,6 +36,8 @@
 #include <string>
 #include <vector>
 
+#include "runtime/program/compile_options.h"  // rt::Integrator: the one integrator enum
+
 namespace kanesim::sim {
 
 // The right-hand side. Status codes follow SUNDIALS callbacks: 0 ok, >0 recoverable
@@ -65,8 +67,8 @@ class OdeSystem {
   // measurement (integrator_cvode.cpp), where that form's kinetic-metric projection of
   // all the speeds carries a drift of y into y*.
   virtual int ProjectAsideMultiplierForm(double /*t*/, double* /*y*/) { return -1; }
-  // A check of each accepted step (closed loops: the branch monitor, runtime/runtime.h
-  // CheckBranch). Solvers call StepAccepted(t, y) after every accepted step when
+  // A check of each accepted step (closed loops: the branch monitor and the bridge,
+  // sim/change_point_bridge.h CheckStep). Solvers call StepAccepted(t, y) after every accepted step when
   // ChecksSteps(): 0 goes on, > 0 asks to take the step again shorter (DOP853; the
   // SUNDIALS solvers, which cannot take back an accepted step, stop as for < 0), < 0 stops
   // the run with FailureCause().
@@ -110,9 +112,10 @@ class OdeSystem {
   virtual int Energy(double /*t*/, const double* /*y*/, double* /*T*/, double* /*V*/) { return -1; }
 };
 
-enum class Method { IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };
-const char* MethodName(Method m);         // "IDA", "CVODE-Adams", ...
-const char* MethodDescription(Method m);  // one line: order, iteration, linear solver
+// The methods above are rt::Integrator's (runtime/program/compile_options.h); Auto, the
+// compiler's choice, is resolved before integrating (Simulate), and Integrate takes it as IDA.
+const char* MethodName(rt::Integrator m);         // "IDA", "CVODE-Adams", ...
+const char* MethodDescription(rt::Integrator m);  // one line: order, iteration, linear solver
 
 enum class ErkTable { Verner65, Fehlberg87 };
 
@@ -126,7 +129,7 @@ inline constexpr double kKluMaxFill = 0.25;
 inline constexpr int kKluMinStates = 20;
 
 struct IntegratorOptions {
-  Method method = Method::IDA;
+  rt::Integrator method = rt::Integrator::IDA;
   double rtol = 1e-6;
   double atol = 1e-6;              // scalar absolute tolerance on every state
   long max_steps = 100000;         // internal steps allowed between two output instants

@@ -80,7 +80,7 @@ class CvodeStepper final : public SundialsStepper {
 
   bool Init(double t0, const double* y0, double stop, const IntegratorOptions& options, std::string* error) {
     const int n = rhs_.Size();
-    const bool bdf = options.method == Method::CvodeBdf;
+    const bool bdf = options.method == rt::Integrator::CvodeBdf;
     if (!MakeState(y0, /*with_yp=*/false, error)) return false;
     mem_ = CVodeCreate(bdf ? CV_BDF : CV_ADAMS, s_.ctx);
     if (!mem_) return Fail(error, "CVodeCreate failed");

@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "sim/change_point_bridge.h"
+#include "sim/test_hooks.h"
+
 namespace kanesim::sim {
 namespace {
 
@@ -19,16 +22,16 @@ class EngineOde final : public OdeSystem {
  public:
   EngineOde(const rt::Program& program, rt::Workspace& ws, bool row_energy)
       : program_(program), ws_(ws) {
-    if (rt::BranchMonitorActive(program)) monitor_ = rt::MakeBranchMonitor(program);
+    bridge_ = MakeChangePointBridge(program);
     // Closed loops on the multiplier form: P maps onto the state manifold, of dimension
     // (nq - nu) + 2 dof (OdeSystem::NewtonRank).
-    if (monitor_ && !CanProject()) {
+    if (bridge_ && !CanProject()) {
       const rt::ProgramSummary s = rt::Summarize(program);
       newton_rank_ = s.nq - s.nu + 2 * s.dof;
     }
     // Rows checked against the energy: closed loops (where change points are) in a model
     // that conserves T + V.
-    if (row_energy && monitor_ && rt::NonConservativeCause(program).empty()) {
+    if (row_energy && bridge_ && rt::NonConservativeCause(program).empty()) {
       std::string error;
       energy_plan_ = rt::PlanSignals(program, {"kinetic_energy", "potential_energy"}, &error);
     }
@@ -41,36 +44,32 @@ class EngineOde final : public OdeSystem {
     return s;
   }
   void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
-  bool ChecksSteps() const override { return monitor_ != nullptr; }
+  bool ChecksSteps() const override { return bridge_ != nullptr; }
   int StepAccepted(double t, const double* y) override {
-    const int s = rt::CheckBranch(program_, *monitor_, t, y);
+    const int s = CheckStep(program_, *bridge_, t, y);
     from_monitor_ = s != 0;
     return s;
   }
   std::string FailureCause() const override {
-    if (from_monitor_) return rt::BranchMonitorError(*monitor_);
+    if (from_monitor_) return BridgeError(*bridge_);
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }
   bool Bridge(double rtol, double atol, double* t_from, double* t_b, double* y_b) override {
-    return monitor_ && rt::BridgeChangePoint(program_, *monitor_, rtol, atol, t_from, t_b, y_b) == 0;
+    return bridge_ && BridgeChangePoint(program_, *bridge_, rtol, atol, t_from, t_b, y_b) == 0;
   }
-  void BridgeState(double t, double* y) override { rt::BridgeState(*monitor_, t, y); }
-  bool InZone() const override { return hold_rows_ && monitor_ && rt::InNearSingularZone(*monitor_); }
+  void BridgeState(double t, double* y) override { BridgedState(*bridge_, t, y); }
+  bool InZone() const override { return hold_rows_ && bridge_ && bridge_->in_zone; }
   void SetHoldRows(bool on) { hold_rows_ = on; }
-  void EnableEarlyBridge(double rtol, double atol, bool several_loops, bool projected_estimate, bool several_at_once,
-                         bool several_at_once_multiplier) {
-    if (monitor_) {
-      rt::SetBridgeSeveralAtOnce(*monitor_, several_at_once);
-      rt::SetBridgeSeveralAtOnceMultiplier(*monitor_, several_at_once_multiplier);
-      rt::SetEarlyBridge(*monitor_, rtol, atol);
-      rt::SetBridgeSeveralLoops(*monitor_, several_loops);
-      rt::SetBridgeProjectedEstimate(*monitor_, projected_estimate);
+  void EnableEarlyBridge(double rtol, double atol, const BridgeSwitches& switches) {
+    if (bridge_) {
+      bridge_->switches = switches;
+      sim::EnableEarlyBridge(*bridge_, rtol, atol);
     }
   }
   void PassageCounts(long* checked, long* unchecked) const {
-    *checked = *unchecked = 0;
-    if (monitor_) rt::PassageCounts(*monitor_, checked, unchecked);
+    *checked = bridge_ ? bridge_->passages_checked : 0;
+    *unchecked = bridge_ ? bridge_->passages_unchecked : 0;
   }
   bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
   void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
@@ -83,7 +82,7 @@ class EngineOde final : public OdeSystem {
   int ProjectAside(double t, double* y) override {
     // Closed loops on the reduced form only: the multiplier form's projection moves every
     // coordinate, and its state was not seen to drift (docs/constraints.md "A drifted state").
-    if (monitor_ == nullptr || !CanProject()) return -1;
+    if (bridge_ == nullptr || !CanProject()) return -1;
     if (!aside_) aside_ = rt::MakeWorkspace(program_);
     return rt::ProjectOntoConstraints(program_, *aside_, t, y);
   }
@@ -115,12 +114,12 @@ class EngineOde final : public OdeSystem {
  private:
   const rt::Program& program_;
   rt::Workspace& ws_;
-  std::unique_ptr<rt::BranchMonitor, void (*)(rt::BranchMonitor*)> monitor_{nullptr, [](rt::BranchMonitor*) {}};
-  bool from_monitor_ = false;  // the last failure was the branch monitor's
+  std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
+  bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank
   int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet
-  bool hold_rows_ = true;      // SimOptions::hold_zone_rows
-  std::function<void(double, const double*, double*)> fault_;  // SimOptions::rhs_fault
+  bool hold_rows_ = true;      // TestHooks::hold_zone_rows
+  std::function<void(double, const double*, double*)> fault_;  // TestHooks::rhs_fault
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
   std::shared_ptr<const rt::SignalPlan> energy_plan_;  // T and V (null: rows not checked)
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> energy_ws_{nullptr, [](rt::Workspace*) {}};  // Energy's
@@ -175,34 +174,26 @@ OutputGrid ResolveGrid(const rt::Program& program, const SimOptions& options) {
   return grid;
 }
 
-Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf) {
-  switch (kind) {
-    case rt::IntegratorKind::CVODE: return cvode_bdf ? Method::CvodeBdf : Method::CvodeAdams;
-    case rt::IntegratorKind::ARKODE: return Method::ArkodeErk;
-    case rt::IntegratorKind::DOP853: return Method::Dop853;
-    case rt::IntegratorKind::IDA:
-    case rt::IntegratorKind::Auto: return Method::IDA;
-  }
-  return Method::IDA;
+SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink) {
+  return Simulate(program, options, sink, TestHooks{});
 }
 
-SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink) {
+SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink, const TestHooks& hooks) {
   // 1. Times, tolerances, integrator.
   const OutputGrid grid = ResolveGrid(program, options);
   if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageError(why);
-  rt::IntegratorKind kind = options.integrator;
-  if (kind == rt::IntegratorKind::Auto) kind = rt::Summarize(program).integrator;
   IntegratorOptions iopt;
-  iopt.method = MethodFor(kind, options.cvode_bdf);
+  iopt.method = options.integrator;
+  if (iopt.method == rt::Integrator::Auto) iopt.method = rt::Summarize(program).integrator;
   iopt.rtol = options.rtol;
   iopt.atol = options.atol;
   iopt.max_steps = options.max_steps;
   iopt.ida_linear_solver = options.ida_linear_solver;
   iopt.project_steps = options.project_steps;
-  iopt.bridge = options.bridge;
-  iopt.dense_check = options.dense_check;
-  iopt.row_energy_check = options.row_energy_check;
-  if (iopt.method == Method::IDA || iopt.method == Method::CvodeBdf) iopt.coupling = rt::StateCouplingGroups(program);
+  iopt.bridge = hooks.bridge;
+  iopt.dense_check = hooks.dense_check;
+  iopt.row_energy_check = hooks.row_energy_check;
+  if (iopt.method == rt::Integrator::IDA || iopt.method == rt::Integrator::CvodeBdf) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
@@ -247,7 +238,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     // unchanged. (A row the projection failed on, at the singular configuration itself,
     // still stops the run.)
     double move = 0.0;
-    if (options.zone_rows && status == 0 && (move = rt::SpeedMove(program, *ws_out, y, options.rtol, options.atol)) > kRowTrust) {
+    if (hooks.zone_rows && status == 0 && (move = rt::SpeedMove(program, *ws_out, y, options.rtol, options.atol)) > kRowTrust) {
       if (!ws_zone) ws_zone = rt::MakeWorkspace(program);
       // On the reduced form taken only where it moved the speeds far less: where the
       // integrator's own speeds are off the constraints (ARKODE's drift at loose
@@ -274,11 +265,10 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     output_time += Clock::now() - t0;
     return status;
   };
-  EngineOde ode(program, *ws_rhs, options.row_energy_check);
-  if (options.rhs_fault) ode.SetFault(options.rhs_fault);
-  ode.SetHoldRows(options.hold_zone_rows);
-  if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, options.bridge_several_loops, options.bridge_projected_estimate,
-                                         options.bridge_several_at_once, options.bridge_several_at_once_multiplier);
+  EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
+  if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
+  ode.SetHoldRows(hooks.hold_zone_rows);
+  if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
   Clock::time_point start = Clock::now();
   IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
   Clock::duration total = Clock::now() - start;

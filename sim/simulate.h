@@ -24,36 +24,15 @@ struct SimOptions {
   double interval = 0.0;  // output spacing; <= 0: (stop - start) / kDefaultIntervals
   double rtol = 1e-6;
   double atol = 1e-6;
-  rt::IntegratorKind integrator = rt::IntegratorKind::Auto;  // Auto: rt::Summarize(program).integrator
-  bool cvode_bdf = false;       // CVODE with BDF + Newton instead of Adams + fixed point
+  rt::Integrator integrator = rt::Integrator::Auto;  // Auto: rt::Summarize(program).integrator
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;  // IDA and CVODE-BDF: dense LU, KLU or GMRES
   long max_steps = 100000;      // internal steps allowed between two output instants
   // Closed loops and contacts with DOP853: project once per accepted step instead of at every
   // evaluation (`--projection step`; runtime/runtime.h SetStepProjection, docs/constraints.md "Drift").
   bool project_steps = false;
-  bool bridge = true;           // step over singular configurations of closed loops (docs/constraints.md)
-  bool bridge_several_loops = true;  // ... also where several loops are singular at once (tests only)
-  bool bridge_several_at_once = true;  // ... there tried after 10 steps in a zone, not 50 (tests only)
-  bool bridge_several_at_once_multiplier = false;  // ... also on the multiplier form (tests only)
-  bool dense_check = true;  // DOP853: steps whose dense-output stages are not smooth are retaken (tests only)
-  // Interpolated output rows of a conservative model with closed loops checked against the
-  // energies of the solver's steps around them and recomputed where off (docs/constraints.md
-  // "Rows checked against the energy"; tests only).
-  bool row_energy_check = true;
-  // Output rows near a change point whose projection moved the integrator's speeds too far
-  // are projected in the kinetic metric instead (docs/constraints.md; tests only).
-  bool zone_rows = true;
-  // Output rows of steps inside a near-singular zone held until the zone is passed or bridged,
-  // and recomputed from the bridge when bridged (docs/constraints.md "Rows held through a
-  // zone"; tests only).
-  bool hold_zone_rows = true;
-  bool bridge_projected_estimate = true;  // ... there on the multiplier form, its estimate after projecting (tests only)
   // Conservative models: stop with exit 2 where T + V leaves the tolerance's reach
   // (`--energy-check on|off|report`; sim/energy_guard.h, docs/integrators.md).
   EnergyCheck energy_check = EnergyCheck::kOn;
-  // Tests only: called after every right-hand side with its t, y and ydot (a fault put in
-  // on purpose, e.g. a push the model does not have, for the energy guard's tests).
-  std::function<void(double t, const double* y, double* ydot)> rhs_fault;
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
   std::function<void(double t)> progress;  // after each row; may be empty
 };
@@ -69,7 +48,7 @@ struct PhaseTimes {
 };
 
 struct SimStats {
-  Method method = Method::IDA;
+  rt::Integrator method = rt::Integrator::IDA;
   IntegratorStats integrator;
   long rows = 0;
   // Closed loops through change points: bridged, and passed by the solver itself, checked
@@ -111,9 +90,7 @@ inline constexpr double kMaxSensibleRtol = 0.1;
 inline constexpr double kMinSensibleRtol = 1e-14;
 std::string ToleranceWarning(double rtol);
 
-// Maps the engine's integrator choice to a method (Auto -> IDA).
-Method MethodFor(rt::IntegratorKind kind, bool cvode_bdf);
-
+// (Tests switch parts of a run off through sim/test_hooks.h's overload.)
 SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink);
 
 // The `--stats` report, one fact per line.

@@ -73,7 +73,7 @@ int SundialsStepper::CheckRow(double tout, double* y, int flag) {
   // Integrated again from the step's start onto tout, by DOP853 without the step checks.
   ++rows_recomputed_;
   IntegratorOptions o = options_;
-  o.method = Method::Dop853;
+  o.method = rt::Integrator::Dop853;
   o.dense_check = false;
   o.row_energy_check = false;
   o.check_steps = false;

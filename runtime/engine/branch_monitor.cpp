@@ -43,33 +43,6 @@ namespace {
 constexpr double kZone = 1e-2;
 constexpr double kTurn = 0.05;  // rad
 constexpr double kSlow = 1e-3;  // of the reference's speed (kinetic-metric norm)
-// Accepted steps inside one near-singular zone after which the run stops: a passage
-// takes a few (measured: at most 9 on the equal-link parallelogram, every integrator,
-// rtol 1e-4 ... 1e-10);
-// a solver creeping towards the singular configuration in ever smaller steps would
-// otherwise run into its step limit per output instant, minutes later.
-constexpr long kMaxZoneSteps = 1000;
-// After this many accepted steps inside one zone (SetEarlyBridge on) the bridge is tried at
-// once rather than after kMaxZoneSteps; refused, the solver goes on as before.
-constexpr long kEarlyBridgeSteps = 50;
-// ... and after this many in a zone where several loops are near singular at once (a chain
-// of equal-link parallelograms; SetBridgeSeveralAtOnce): there every evaluation re-chooses
-// the partition of an ill-conditioned block and a creeping solver's steps are expensive.
-// The bridge's approach starts from the last accepted step before the zone (rho >= 3.5e-2)
-// either way, so a stall gets the same bridge as at the 50th step. Not at the first step:
-// the solvers' own passages (at most 9 steps) are left to them, since at loose tolerances a
-// bridge and the fresh solver after it cost more than the passage and were less accurate
-// (chain of 40, CVODE, rtol 1e-6: 0.23 -> 2.9 s CPU, 1.3e-3 -> 1.8e-2 rad off the lumped
-// crank with a bridge at the first step; the same as before at 10). Measured on the chain
-// of 40 at rtol 1e-12, reduced form (docs/benchmarks.md "Change points"): DOP853 61 ->
-// 42 s CPU, ARKODE 28 -> 17 s, CVODE-BDF 68 -> 55 s. Reduced form only: on the multiplier form it saved little
-// (chain of ten, 1e-12: 2-20 %) and DOP853 on the chain of two at 1e-12 then ended with two
-// output rows 2.4e-4 and 6.3e-3 rad off the lumped crank (t = 16.79, 16.80, just before and
-// after a crossing it passed by itself; the steps themselves on it), exit 0 — DOP853's
-// dense output, now checked (sim/integrator_dop853.cpp kDenseLimit); still off here
-// (SetBridgeSeveralAtOnceMultiplier, tests only) for the small saving.
-constexpr long kEarlyBridgeStepsSeveral = 10;
-constexpr size_t kPreZone = 8;  // accepted steps before a zone kept for a bridge's fit
 }  // namespace
 
 std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const Program& p) {
@@ -90,20 +63,6 @@ std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const
 bool BranchMonitorActive(const Program& p) { return !p.loops.empty(); }
 
 const std::string& BranchMonitorError(const BranchMonitor& m) { return m.error; }
-
-namespace {
-
-// "The integrator took N steps in the zone without passing the change point", then `tail`.
-std::string StuckMessage(const Program& p, const BranchMonitor& m, double t, const char* tail) {
-  char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "closed loop '%s' at a singular configuration at time %.9g: the integrator took %ld steps since "
-                "time %.9g without passing the change point (the constraint rows within %.2g of losing rank, "
-                "sigma_min/sigma_max)%s",
-                p.loops[static_cast<size_t>(m.zone_loop)].name.c_str(), t, m.zone_steps, m.zone_t, m.zone_rho, tail);
-  return buf;
-}
-}  // namespace
 
 // runtime/runtime.h.
 double LoopSingularRatio(const Program& p, const Workspace& ws, int loop, double* length) {
@@ -160,7 +119,7 @@ int NearestSingularLoop(const Program& p, BranchMonitor& m, double* rho_out, int
   return worst;
 }
 
-int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
+int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y, BranchStep* step) {
   if (p.loops.empty()) return 0;
   Workspace& ws = *m.ws;
   if (int s = UnpackState(p, ws, t, y); s != 0) return 0;  // Derivative reports these
@@ -171,7 +130,6 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
   int near_loops = 0;
   const int worst = NearestSingularLoop(p, m, &rho, &near_loops);
   const bool near = rho < kZone;
-  const bool was_in_zone = m.in_zone, was_bridged = m.bridged;
   if (m.have_ref && (near || m.in_zone)) {
     // The reference's joint speeds at the current configuration: the two velocities in
     // the kinetic metric of the same configuration.
@@ -203,101 +161,32 @@ int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y) {
       }
     }
   }
-  const size_t n = static_cast<size_t>(StateSize(p));
   if (near) {
     if (!m.in_zone) {
       m.in_zone = true;
       m.zone_t = t;
       m.zone_loop = worst;
       m.zone_rho = rho;
-      m.zone_steps = 0;
-      m.bridged = false;
-      m.early_tried = false;
-      m.passage_checked = t <= m.last_tb;  // the bridged state
-      m.trace_t.clear();
-      m.trace_rho.clear();
-      m.trace_y.clear();
-      m.trace_t = m.pre_t;
-      m.trace_rho = m.pre_rho;
-      m.trace_y = m.pre_y;
-    }
-    if (m.trace_t.size() < static_cast<size_t>(kMaxZoneSteps) + kPreZone + 1) {
-      m.trace_t.push_back(t);
-      m.trace_rho.push_back(rho);
-      m.trace_y.emplace_back(y, y + n);
     }
     m.zone_rho = std::min(m.zone_rho, rho);
-    m.zone_near = near_loops;
-    ++m.zone_steps;
-    if (m.early_rtol > 0.0 && !m.bridged && !m.early_tried &&
-        m.zone_steps >= (near_loops > 1 && m.several_loops && m.several_at_once &&
-                                     (p.solver != SolverPath::Sparse || m.several_at_once_multiplier)
-                             ? kEarlyBridgeStepsSeveral
-                              : kEarlyBridgeSteps)) {
-      // Stalling: a passage takes a few steps. Bridged now, if the bridge can be trusted;
-      // the solver's failure below hands it to the integrator (Bridge returns it).
-      m.early_tried = true;
-      m.pend_y.assign(n, 0.0);
-      if (BridgeChangePoint(p, m, m.early_rtol, m.early_atol, &m.pend_from, &m.pend_tb, m.pend_y.data()) == 0) {
-        m.pending = true;
-        m.error = StuckMessage(p, m, t, ", and the bridge over it could not be used here");
-        return -1;
-      }
-      // Refused: the solver goes on (the stop at kMaxZoneSteps tries the bridge once more).
-    }
-    if (m.zone_steps > kMaxZoneSteps) {
-      // The hint names the other form (the chain of 40 at rtol 1e-12 passes on the reduced form
-      // with every integrator where the multiplier form stalls with CVODE).
-      m.error = StuckMessage(p, m, t,
-                             p.solver == SolverPath::Sparse
-                                 ? "; near it the loop equations are too ill-conditioned for this tolerance (try a "
-                                   "looser --rtol, or --solver dense)"
-                                 : "; near it the loop equations are too ill-conditioned for this tolerance (try a "
-                                   "looser --rtol, or --solver sparse)");
-      return -1;
-    }
   } else {
     m.in_zone = false;
-    m.bridged = false;
-  }
-  if (!near) {
-    if (m.pre_t.size() >= kPreZone) {
-      std::rotate(m.pre_t.begin(), m.pre_t.begin() + 1, m.pre_t.end());
-      std::rotate(m.pre_rho.begin(), m.pre_rho.begin() + 1, m.pre_rho.end());
-      std::rotate(m.pre_y.begin(), m.pre_y.begin() + 1, m.pre_y.end());
-      m.pre_t.back() = t;
-      m.pre_rho.back() = rho;
-      m.pre_y.back().assign(y, y + n);
-    } else {
-      m.pre_t.push_back(t);
-      m.pre_rho.push_back(rho);
-      m.pre_y.emplace_back(y, y + n);
-    }
   }
   if (!near || !m.have_ref) {
     m.ref_u = ws.u;
     m.ref_t = t;
     m.have_ref = true;
   }
-  if ((near || was_in_zone) && !was_bridged && !m.passage_checked && m.early_rtol > 0.0)
-    return CheckPassage(p, m, t, y, near);
+  if (step) {
+    step->valid = true;
+    step->rho = rho;
+    step->near_loops = near_loops;
+    step->near = near;
+    step->zone_loop = m.zone_loop;
+    step->zone_t = m.zone_t;
+    step->zone_rho = m.zone_rho;
+  }
   return 0;
 }
-
-void SetBridgeSeveralLoops(BranchMonitor& m, bool on) { m.several_loops = on; }
-void SetBridgeProjectedEstimate(BranchMonitor& m, bool on) { m.projected_estimate = on; }
-void SetBridgeSeveralAtOnce(BranchMonitor& m, bool on) { m.several_at_once = on; }
-void SetBridgeSeveralAtOnceMultiplier(BranchMonitor& m, bool on) { m.several_at_once_multiplier = on; }
-
-void PassageCounts(const BranchMonitor& m, long* checked, long* unchecked) {
-  *checked = m.passages_checked;
-  *unchecked = m.passages_unchecked;
-}
-
-void SetEarlyBridge(BranchMonitor& m, double rtol, double atol) {
-  m.early_rtol = rtol;
-  m.early_atol = atol;
-}
-const std::string& BridgeRefused(const BranchMonitor& m) { return m.bridge_refused; }
 
 }  // namespace kanesim::rt

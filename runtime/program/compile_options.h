@@ -6,7 +6,10 @@
 namespace kanesim::rt {
 
 enum class SolverPath { Auto, Dense, Sparse, Recursive };
-enum class IntegratorKind { Auto, IDA, CVODE, ARKODE, DOP853 };
+// The time integrators (sim/integrator.h describes each; `--integrator auto|ida|cvode|
+// cvode-bdf|arkode|dop853`), the one enum for them in every layer. Auto: the compiler's
+// choice, IDA for stiff force elements, else DOP853 (Summarize says which and why).
+enum class Integrator { Auto, IDA, CvodeAdams, CvodeBdf, ArkodeErk, Dop853 };
 
 // What reaction and contact-force signals report for a component the equations leave
 // undetermined (redundant constraints make it statically indeterminate,
@@ -16,7 +19,7 @@ enum class IndeterminateReactions { NaN, MinNorm };
 
 struct CompileOptions {
   SolverPath solver = SolverPath::Auto;
-  IntegratorKind integrator = IntegratorKind::Auto;
+  Integrator integrator = Integrator::Auto;
   IndeterminateReactions indeterminate = IndeterminateReactions::NaN;
 };
 

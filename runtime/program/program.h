@@ -219,7 +219,7 @@ struct Program {
   std::vector<BodySignalSource> body_signals;
 
   SolverPath solver = SolverPath::Dense;
-  IntegratorKind integrator = IntegratorKind::CVODE;
+  Integrator integrator = Integrator::CvodeAdams;
   std::string solver_reason, integrator_reason;
   std::vector<std::string> notes;
   int grubler_dof = 0;

@@ -15,15 +15,14 @@ namespace kanesim::test {
 // The five integrators a run can take (DOP853, CVODE Adams, CVODE BDF, ARKODE, IDA).
 struct IntegratorChoice {
   const char* name;
-  rt::IntegratorKind kind;
-  bool bdf;
+  rt::Integrator kind;
 };
 inline const std::vector<IntegratorChoice>& AllIntegrators() {
-  static const std::vector<IntegratorChoice> all = {{"DOP853", rt::IntegratorKind::DOP853, false},
-                                                    {"CVODE", rt::IntegratorKind::CVODE, false},
-                                                    {"CVODE-BDF", rt::IntegratorKind::CVODE, true},
-                                                    {"ARKODE", rt::IntegratorKind::ARKODE, false},
-                                                    {"IDA", rt::IntegratorKind::IDA, false}};
+  static const std::vector<IntegratorChoice> all = {{"DOP853", rt::Integrator::Dop853},
+                                                    {"CVODE", rt::Integrator::CvodeAdams},
+                                                    {"CVODE-BDF", rt::Integrator::CvodeBdf},
+                                                    {"ARKODE", rt::Integrator::ArkodeErk},
+                                                    {"IDA", rt::Integrator::IDA}};
   return all;
 }
 
@@ -35,7 +34,6 @@ inline sim::MemorySink RunWith(const rt::Program& p, const IntegratorChoice& how
   o.interval = interval;
   o.rtol = o.atol = tol;
   o.integrator = how.kind;
-  o.cvode_bdf = how.bdf;
   o.signals = std::move(signals);
   sim::MemorySink sink;
   *result = sim::Simulate(p, o, sink);

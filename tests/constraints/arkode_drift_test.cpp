@@ -50,7 +50,7 @@ Rows RunArkode(int n, double rtol, rt::SolverPath solver) {
   so.stop_time = 20.0;
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
-  so.integrator = rt::IntegratorKind::ARKODE;
+  so.integrator = rt::Integrator::ArkodeErk;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= n; ++i) {
     so.signals.push_back("rj[" + std::to_string(i) + "].q");

@@ -10,11 +10,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "runtime/runtime.h"
 #include "runtime/program/program.h"
+#include "sim/change_point_bridge.h"
 #include "tests/support/load_util.h"
 
 namespace kanesim::test {
@@ -90,16 +92,48 @@ TEST(BranchMonitor, LetsTheParallelogramThroughForwardAndBack) {
         << rt::BranchMonitorError(*m);
 }
 
+// What the bridge over a change point (sim/change_point_bridge.h) reads of the loops through
+// runtime/runtime.h, on exact states of the parallelogram: rho falls linearly toward the
+// change point (a simple crossing: the rows' smallest singular value goes as the angle to
+// it), a state on the constraints is a fixed point of the partition's projection, and the
+// kinetic-metric projection of speeds that differ from the state's by a motion along the
+// branch returns those speeds unchanged. If this fails, the bridge measures the wrong
+// distance to a crossing or moves the states it extrapolates.
+TEST(BranchMonitor, WhatTheBridgeReadsOfTheLoops) {
+  Rig r = MakeRig();
+  ASSERT_TRUE(r.l && r.l->prog);
+  const rt::Program& p = *r.l->prog;
+  auto m = rt::MakeBranchMonitor(p);
+  const double rho1 = rt::SingularRatioAt(p, *m, 0.0, r.Parallelogram(M_PI - 1e-3, 11.0));
+  const double rho2 = rt::SingularRatioAt(p, *m, 0.0, r.Parallelogram(M_PI - 2e-3, 11.0));
+  int near_loops = 0;
+  const double far = rt::SingularRatioAt(p, *m, 0.0, r.Parallelogram(M_PI - 0.3, 11.0), &near_loops);
+  EXPECT_GT(far, 1e-2);
+  EXPECT_EQ(near_loops, 0);
+  EXPECT_LT(rho1, 1e-2);
+  EXPECT_NEAR(rho2 / rho1, 2.0, 1e-2);  // linear to first order in the angle (1e-3 rad)
+  rt::Workspace& ws = rt::MonitorWorkspace(*m);
+  const size_t n = r.y.size();
+  const std::vector<double> y(r.Parallelogram(M_PI - 0.3, 11.0), r.Parallelogram(M_PI - 0.3, 11.0) + n);
+  std::vector<double> z(n);
+  ASSERT_EQ(rt::ProjectByPartition(p, ws, 0.0, y.data(), z.data()), 0);
+  for (size_t i = 0; i < n; ++i) EXPECT_NEAR(z[i], y[i], 1e-12) << i;
+  std::vector<double> raw(y), speeds(y);
+  for (size_t i = static_cast<size_t>(rt::NumQ(p)); i < n; ++i) raw[i] *= 1.01;  // along the branch
+  ASSERT_EQ(rt::ProjectSpeedsInKineticMetric(p, ws, 0.0, raw.data(), speeds.data()), 0);
+  for (size_t i = 0; i < n; ++i) EXPECT_NEAR(speeds[i], raw[i], 1e-9 * (1.0 + std::fabs(raw[i]))) << i;
+}
+
 // Feeds the monitor the exact motion of the lumped crank (theta'' = -(G/J) cos theta; the
 // model's gravity, J and G as in change_point_bridge_test.cpp) through the change point at
 // theta = pi in accepted steps of 1 ms, the speed off by dw once past it; returns the first
-// non-zero CheckBranch (0: none up to pi + 0.05).
-int PassTheChangePoint(const rt::Program& p, rt::BranchMonitor& m, Rig& r, double dw) {
+// non-zero check (0: none up to pi + 0.05).
+int PassTheChangePoint(Rig& r, double dw, const std::function<int(double t, const double* y)>& check) {
   const double a = 0.6, J = (0.5 + 0.8) * a * a / 3.0 + 1.0 * a * a, G = 9.81 * a * ((0.5 + 0.8) / 2.0 + 1.0);
   double th = M_PI - 0.3, w = 11.0, t = 0.0;
   const auto acc = [&](double x) { return -(G / J) * std::cos(x); };
   while (th < M_PI + 0.05) {
-    const int s = rt::CheckBranch(p, m, t, r.Parallelogram(th, w + (th > M_PI ? dw : 0.0)));
+    const int s = check(t, r.Parallelogram(th, w + (th > M_PI ? dw : 0.0)));
     if (s != 0) return s;
     for (int i = 0; i < 100; ++i) {  // classical Runge-Kutta, h = 1e-5 s
       const double h = 1e-5;
@@ -124,18 +158,20 @@ TEST(BranchMonitor, ChecksAPassageTheSolverMadeByItself) {
   Rig r = MakeRig();
   ASSERT_TRUE(r.l && r.l->prog);
   const rt::Program& p = *r.l->prog;
-  auto exact = rt::MakeBranchMonitor(p);
-  rt::SetEarlyBridge(*exact, 1e-12, 1e-12);
-  EXPECT_EQ(PassTheChangePoint(p, *exact, r, 0.0), 0) << rt::BranchMonitorError(*exact);
-  auto off = rt::MakeBranchMonitor(p);
-  rt::SetEarlyBridge(*off, 1e-12, 1e-12);
-  ASSERT_EQ(PassTheChangePoint(p, *off, r, 1e-6), -1);
-  const std::string& e = rt::BranchMonitorError(*off);
+  auto exact = sim::MakeChangePointBridge(p);
+  ASSERT_TRUE(exact);
+  sim::EnableEarlyBridge(*exact, 1e-12, 1e-12);
+  EXPECT_EQ(PassTheChangePoint(r, 0.0, [&](double t, const double* y) { return sim::CheckStep(p, *exact, t, y); }), 0)
+      << sim::BridgeError(*exact);
+  auto off = sim::MakeChangePointBridge(p);
+  sim::EnableEarlyBridge(*off, 1e-12, 1e-12);
+  ASSERT_EQ(PassTheChangePoint(r, 1e-6, [&](double t, const double* y) { return sim::CheckStep(p, *off, t, y); }), -1);
+  const std::string& e = sim::BridgeError(*off);
   EXPECT_NE(e.find("closed loop 'coupler_rocker' at a singular configuration"), std::string::npos) << e;
   EXPECT_NE(e.find("passed the change point"), std::string::npos) << e;
   double t_from = 0.0, t_b = 0.0;
   std::vector<double> yb(r.y.size());
-  ASSERT_EQ(rt::BridgeChangePoint(p, *off, 1e-12, 1e-12, &t_from, &t_b, yb.data()), 0) << rt::BridgeRefused(*off);
+  ASSERT_EQ(sim::BridgeChangePoint(p, *off, 1e-12, 1e-12, &t_from, &t_b, yb.data()), 0) << off->bridge_refused;
   EXPECT_LT(t_from, t_b);
 }
 

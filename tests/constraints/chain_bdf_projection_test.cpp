@@ -37,8 +37,7 @@ void RunChain(int n, bool bdf, double rtol, double stop) {
   so.stop_time = stop;
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
-  so.integrator = rt::IntegratorKind::CVODE;
-  so.cvode_bdf = bdf;
+  so.integrator = bdf ? rt::Integrator::CvodeBdf : rt::Integrator::CvodeAdams;
   // The dense Newton matrix these were measured with (auto takes the matrix-free iteration
   // on the chain of 40's multiplier form: tests/constraints/newton_krylov_chain_test.cpp),
   // so that the t = 2.04 crossing below still exercises the bridge's projected start.
@@ -67,7 +66,7 @@ void RunChain(int n, bool bdf, double rtol, double stop) {
 // 20 s (bench/change_point_chains.py).
 TEST(ChainBdfProjection, ChainOfTenAtRtol1e12PassesTheChangePointOfT7p7OnTheBranch) { RunChain(10, true, 1e-12, 8.0); }
 
-// The chain of 40 with CVODE-BDF at rtol 1e-10 (runtime/engine/change_point_bridge.cpp,
+// The chain of 40 with CVODE-BDF at rtol 1e-10 (sim/change_point_bridge.cpp,
 // ProjectStart): main refused the bridge at t = 2.04 (the projection moved the bridged
 // state by 2.53e-5 of |u|, limit 2e-5: the rods' speeds 5.7e-4 apart in the extrapolation)
 // and stopped with exit 2 at t = 2.047 by the turn check. With the approach started from

@@ -1,4 +1,4 @@
-// The bridge over change points (runtime/engine/branch_monitor.cpp BridgeChangePoint,
+// The bridge over change points (sim/change_point_bridge.cpp BridgeChangePoint,
 // sim/integrator.cpp; docs/constraints.md "Singular configurations"; issue 20). At
 // tight tolerances every solver stalls short of a change point of the parallelogram
 // four-bar (tests/stress/models/parallelogram.mech), where the loop equations' conditioning
@@ -14,7 +14,7 @@
 //  - the speed across each bridge, through the lumped model's energy E = (1/2) J w^2 +
 //    G sin(theta) (no friction: conserved): a bridge with a wrong crank speed dw changes E
 //    by J w dw at once, while the angle error it causes grows only over the rest of the run;
-//  - with the bridge switched off (SimOptions::bridge) the same runs stop with exit code 2,
+//  - with the bridge switched off (TestHooks::bridge) the same runs stop with exit code 2,
 //    so these cases fail if the bridge stops working.
 #include <gtest/gtest.h>
 
@@ -27,6 +27,7 @@
 
 #include "runtime/runtime.h"
 #include "sim/simulate.h"
+#include "sim/test_hooks.h"
 #include "tests/support/load_util.h"
 #include "tests/support/lumped_crank.h"
 
@@ -51,7 +52,8 @@ struct Outcome {
 // the rows within ~0.02 s of one carry the equations' own speed error there, up to 9e-6 J
 // on the multiplier form, IDA), in J, or relative to the largest |E| when `relative_energy`.
 Outcome RunAndMeasure(const std::string& model, std::vector<lang::ParamOverride> sets, const rt::CompileOptions& co,
-                      sim::SimOptions so, const lumped_crank::Crank& c, bool relative_energy, double stop = 20.0) {
+                      sim::SimOptions so, const sim::TestHooks& hooks, const lumped_crank::Crank& c, bool relative_energy,
+                      double stop = 20.0) {
   auto l = LoadModel(kRoot + model, std::move(sets), co);
   Outcome o;
   if (!l || !l->prog) {
@@ -61,7 +63,7 @@ Outcome RunAndMeasure(const std::string& model, std::vector<lang::ParamOverride>
   so.stop_time = stop;
   so.interval = 0.01;
   sim::MemorySink sink;
-  o.result = sim::Simulate(*l->prog, so, sink);
+  o.result = sim::Simulate(*l->prog, so, sink, hooks);
   if (sink.rows.empty()) return o;
   std::vector<double> th, w;
   for (const auto& r : sink.rows) {
@@ -85,38 +87,36 @@ Outcome RunAndMeasure(const std::string& model, std::vector<lang::ParamOverride>
   return o;
 }
 
-Outcome RunParallelogram(const char* a, rt::SolverPath solver, rt::IntegratorKind integrator, bool bdf, double rtol,
-                         bool bridge) {
+Outcome RunParallelogram(const char* a, rt::SolverPath solver, rt::Integrator integrator, double rtol, bool bridge) {
   rt::CompileOptions co;
   co.solver = solver;
   sim::SimOptions so;
   so.rtol = so.atol = rtol;
   so.integrator = integrator;
-  so.cvode_bdf = bdf;
-  so.bridge = bridge;
+  sim::TestHooks hooks;
+  hooks.bridge = bridge;
   so.signals = {"crank_pivot.q", "crank_pivot.u", "rocker_pivot.q", "rocker_pivot.u"};
-  return RunAndMeasure("/tests/stress/models/parallelogram.mech", {{"a", a}}, co, so, LumpedCrank(std::stod(a)),
+  return RunAndMeasure("/tests/stress/models/parallelogram.mech", {{"a", a}}, co, so, hooks, LumpedCrank(std::stod(a)),
                        false);
 }
 
 struct Cell {
   const char* name;
-  rt::IntegratorKind integrator;
-  bool bdf;
+  rt::Integrator integrator;
   rt::SolverPath solver;
 };
 
 const Cell kCells[] = {
-    {"DOP853 reduced", rt::IntegratorKind::DOP853, false, rt::SolverPath::Dense},
-    {"CVODE reduced", rt::IntegratorKind::CVODE, false, rt::SolverPath::Dense},
-    {"CVODE-BDF reduced", rt::IntegratorKind::CVODE, true, rt::SolverPath::Dense},
-    {"IDA reduced", rt::IntegratorKind::IDA, false, rt::SolverPath::Dense},
-    {"ARKODE reduced", rt::IntegratorKind::ARKODE, false, rt::SolverPath::Dense},
-    {"DOP853 multiplier", rt::IntegratorKind::DOP853, false, rt::SolverPath::Sparse},
-    {"CVODE multiplier", rt::IntegratorKind::CVODE, false, rt::SolverPath::Sparse},
-    {"CVODE-BDF multiplier", rt::IntegratorKind::CVODE, true, rt::SolverPath::Sparse},
-    {"IDA multiplier", rt::IntegratorKind::IDA, false, rt::SolverPath::Sparse},
-    {"ARKODE multiplier", rt::IntegratorKind::ARKODE, false, rt::SolverPath::Sparse},
+    {"DOP853 reduced", rt::Integrator::Dop853, rt::SolverPath::Dense},
+    {"CVODE reduced", rt::Integrator::CvodeAdams, rt::SolverPath::Dense},
+    {"CVODE-BDF reduced", rt::Integrator::CvodeBdf, rt::SolverPath::Dense},
+    {"IDA reduced", rt::Integrator::IDA, rt::SolverPath::Dense},
+    {"ARKODE reduced", rt::Integrator::ArkodeErk, rt::SolverPath::Dense},
+    {"DOP853 multiplier", rt::Integrator::Dop853, rt::SolverPath::Sparse},
+    {"CVODE multiplier", rt::Integrator::CvodeAdams, rt::SolverPath::Sparse},
+    {"CVODE-BDF multiplier", rt::Integrator::CvodeBdf, rt::SolverPath::Sparse},
+    {"IDA multiplier", rt::Integrator::IDA, rt::SolverPath::Sparse},
+    {"ARKODE multiplier", rt::Integrator::ArkodeErk, rt::SolverPath::Sparse},
 };
 
 // Every row on the branch, the crank within max(3e4 rtol, 1e-4) rad of the lumped crank
@@ -156,7 +156,7 @@ TEST(ChangePointBridge, EqualLinksEveryIntegratorBothFormsAtRtol1e10) {
   for (const Cell& c : kCells) {
     if (kSanitized && c.solver == rt::SolverPath::Sparse) continue;
     SCOPED_TRACE(c.name);
-    ExpectOnTheBranch(RunParallelogram("0.6", c.solver, c.integrator, c.bdf, 1e-10, true), 1e-10);
+    ExpectOnTheBranch(RunParallelogram("0.6", c.solver, c.integrator, 1e-10, true), 1e-10);
   }
 }
 
@@ -165,7 +165,7 @@ TEST(ChangePointBridge, EqualLinksEveryIntegratorBothFormsAtRtol1e10) {
 // multiplier at a = 0.5 stopped: the zone's accepted steps did not fit).
 bool Required(const Cell& c, const char* a) {
   return c.solver == rt::SolverPath::Sparse ||
-         (c.integrator == rt::IntegratorKind::DOP853 && std::string(a) == "0.6");
+         (c.integrator == rt::Integrator::Dop853 && std::string(a) == "0.6");
 }
 
 // rtol 1e-12, both forms, a = 0.5 and 0.6, every integrator: on the branch with accurate
@@ -178,16 +178,16 @@ TEST(ChangePointBridge, AtRtol1e12EveryIntegratorBothForms) {
     for (const Cell& c : kCells) {
       if (kSanitized && std::string(a) == "0.5") continue;
       SCOPED_TRACE(std::string(c.name) + " a = " + a);
-      ExpectOnTheBranch(RunParallelogram(a, c.solver, c.integrator, c.bdf, 1e-12, true), 1e-12);
+      ExpectOnTheBranch(RunParallelogram(a, c.solver, c.integrator, 1e-12, true), 1e-12);
     }
 }
 
 // A stall is bridged after 50 accepted steps inside the zone, not after the 1000 of the
-// stuck stop (rt::SetEarlyBridge): DOP853 on the multiplier form at rtol 1e-12 took 23 026
+// stuck stop (sim::EnableEarlyBridge): DOP853 on the multiplier form at rtol 1e-12 took 23 026
 // steps over the 20 s with the bridge tried only at the stop (~37 crossings, most stalling
 // for 1000 steps), 2086 with it tried at 50.
 TEST(ChangePointBridge, AStallIsBridgedEarly) {
-  const Outcome o = RunParallelogram("0.6", rt::SolverPath::Sparse, rt::IntegratorKind::DOP853, false, 1e-12, true);
+  const Outcome o = RunParallelogram("0.6", rt::SolverPath::Sparse, rt::Integrator::Dop853, 1e-12, true);
   ExpectOnTheBranch(o, 1e-12);
   EXPECT_LT(o.result.stats.integrator.steps, 5000);
   EXPECT_GT(o.result.stats.integrator.steps, 500);
@@ -197,7 +197,7 @@ TEST(ChangePointBridge, AStallIsBridgedEarly) {
 // by itself are checked against the bridge's approach (ARKODE at a = 0.5 on the reduced form
 // at rtol 1e-12 passed one 3.6e-5 rad off before the check), none stands unchecked.
 TEST(ChangePointBridge, PassagesOfOneLoopAreCheckedAndCounted) {
-  const Outcome o = RunParallelogram("0.5", rt::SolverPath::Dense, rt::IntegratorKind::ARKODE, false, 1e-12, true);
+  const Outcome o = RunParallelogram("0.5", rt::SolverPath::Dense, rt::Integrator::ArkodeErk, 1e-12, true);
   ExpectOnTheBranch(o, 1e-12);
   EXPECT_GT(o.result.stats.passages_checked, 10);
   EXPECT_EQ(o.result.stats.passages_unchecked, 0);
@@ -213,7 +213,7 @@ TEST(ChangePointBridge, WithoutTheBridgeTheSameRunsStop) {
     for (const Cell& c : kCells) {
       if (!Required(c, a)) continue;
       SCOPED_TRACE(std::string(c.name) + " a = " + a);
-      const Outcome o = RunParallelogram(a, c.solver, c.integrator, c.bdf, 1e-12, false);
+      const Outcome o = RunParallelogram(a, c.solver, c.integrator, 1e-12, false);
       EXPECT_EQ(o.result.status, sim::SimResult::Status::kNumericalFailure);
       EXPECT_LT(o.last_t, 19.0);
       EXPECT_LT(o.branch, 1e-8);
@@ -222,24 +222,25 @@ TEST(ChangePointBridge, WithoutTheBridgeTheSameRunsStop) {
 
 // Chains of N equal-link parallelograms (tests/stress/models/parallelogram_chain.mech): every
 // loop of the chain is singular at the same instant, so the bridge steps over zones where
-// several loops are near singular at once (SimOptions::bridge_several_loops). Independent
+// several loops are near singular at once (TestHooks::bridge_switches.several_loops). Independent
 // reference: the lumped crank of the model's header, N + 1 rods (0.5 kg) and N couplers
 // (1 kg), all 0.6 m long: J = (N + 1) m_rod a^2 / 3 + N m_coupler a^2, G = g ((N + 1)
 // m_rod a / 2 + N m_coupler a). Measured on the branch (docs/benchmarks.md "Change points"):
 // angle error at rtol 1e-10 up to 2.8e-5 rad, at 1e-12 up to 2.1e-6 rad (chain of ten,
 // DOP853); the lumped energy away from the change points, relative to E (270 J for ten
 // loops), 3.4e-7 at 1e-10 (the solver's own error there), 9e-10 ... 2.4e-8 at 1e-12.
-Outcome RunChain(int n, rt::IntegratorKind integrator, double rtol, bool several_loops,
+Outcome RunChain(int n, rt::Integrator integrator, double rtol, bool several_loops,
                  rt::SolverPath solver = rt::SolverPath::Auto, bool projected_estimate = true,
                  bool several_at_once = true, double stop = 20.0,
                  sim::IdaLinearSolver linear_solver = sim::IdaLinearSolver::Auto) {
   sim::SimOptions so;
   so.ida_linear_solver = linear_solver;
-  so.bridge_several_at_once = several_at_once;
+  sim::TestHooks hooks;
+  hooks.bridge_switches.several_at_once = several_at_once;
   so.rtol = so.atol = rtol;
   so.integrator = integrator;
-  so.bridge_several_loops = several_loops;
-  so.bridge_projected_estimate = projected_estimate;
+  hooks.bridge_switches.several_loops = several_loops;
+  hooks.bridge_switches.projected_estimate = projected_estimate;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= n; ++i) {
     so.signals.push_back("rj[" + std::to_string(i) + "].q");
@@ -251,13 +252,13 @@ Outcome RunChain(int n, rt::IntegratorKind integrator, double rtol, bool several
   rt::CompileOptions co;
   co.solver = solver;
   // Relative energy, for chains of every length.
-  return RunAndMeasure("/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}}, co, so, c, true,
+  return RunAndMeasure("/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}}, co, so, hooks, c, true,
                        stop);
 }
 
 struct ChainCell {
   int n;
-  rt::IntegratorKind integrator;
+  rt::Integrator integrator;
   const char* name;
   double rtol;
 };
@@ -266,10 +267,10 @@ struct ChainCell {
 // of two at rtol 1e-12 with every integrator, the chain of ten at 1e-10 and 1e-12 with DOP853
 // and CVODE (IDA costs 3-10 s there; it and ARKODE are measured in docs/benchmarks.md).
 const ChainCell kChainCells[] = {
-    {2, rt::IntegratorKind::DOP853, "DOP853", 1e-12}, {2, rt::IntegratorKind::CVODE, "CVODE", 1e-12},
-    {2, rt::IntegratorKind::IDA, "IDA", 1e-12},       {2, rt::IntegratorKind::ARKODE, "ARKODE", 1e-12},
-    {10, rt::IntegratorKind::DOP853, "DOP853", 1e-10}, {10, rt::IntegratorKind::CVODE, "CVODE", 1e-10},
-    {10, rt::IntegratorKind::DOP853, "DOP853", 1e-12}, {10, rt::IntegratorKind::CVODE, "CVODE", 1e-12},
+    {2, rt::Integrator::Dop853, "DOP853", 1e-12}, {2, rt::Integrator::CvodeAdams, "CVODE", 1e-12},
+    {2, rt::Integrator::IDA, "IDA", 1e-12},       {2, rt::Integrator::ArkodeErk, "ARKODE", 1e-12},
+    {10, rt::Integrator::Dop853, "DOP853", 1e-10}, {10, rt::Integrator::CvodeAdams, "CVODE", 1e-10},
+    {10, rt::Integrator::Dop853, "DOP853", 1e-12}, {10, rt::Integrator::CvodeAdams, "CVODE", 1e-12},
 };
 
 std::string ChainName(const ChainCell& c) {
@@ -328,9 +329,9 @@ TEST(ChangePointBridge, ChainsStopWithoutBridgingSeveralLoops) {
 // before this change: that close to the crossing the speeds along the vanishing direction
 // are ill-determined (the row's angles agree to 1e-9), hence 1e-3 for the speeds here.
 const ChainCell kMultiplierChainCells[] = {
-    {2, rt::IntegratorKind::ARKODE, "ARKODE", 1e-12},
-    {10, rt::IntegratorKind::CVODE, "CVODE", 1e-12},
-    {10, rt::IntegratorKind::ARKODE, "ARKODE", 1e-12},
+    {2, rt::Integrator::ArkodeErk, "ARKODE", 1e-12},
+    {10, rt::Integrator::CvodeAdams, "CVODE", 1e-12},
+    {10, rt::Integrator::ArkodeErk, "ARKODE", 1e-12},
 };
 
 TEST(ChangePointBridge, ChainsOnTheMultiplierFormAtRtol1e12) {
@@ -371,16 +372,16 @@ TEST(ChangePointBridge, ChainsOnTheMultiplierFormPassWithoutTheProjectedEstimate
   }
 }
 
-// Zones of several loops are bridged after 10 accepted steps in them (SimOptions::
-// bridge_several_at_once), not after 50 steps of the solvers creeping there (a passage takes
+// Zones of several loops are bridged after 10 accepted steps in them (TestHooks::
+// bridge_switches.several_at_once), not after 50 steps of the solvers creeping there (a passage takes
 // at most 9): the same bridges, fewer steps. The chain of ten at rtol 1e-12 on the reduced
 // form (measured: DOP853 3591 -> 2290 steps, ARKODE 7211 -> 5286, the angle error 2.1e-6
 // and 1.2e-6 rad both ways; the chain of 40: DOP853 61 -> 42 s CPU, docs/benchmarks.md
 // "Change points"): as accurate as before, and fewer steps than with it switched off.
 TEST(ChangePointBridge, ChainsAreBridgedAfterTenStepsInAZone) {
   if (kSanitized) GTEST_SKIP() << "3 s per cell in Release";
-  for (const ChainCell& c : {ChainCell{10, rt::IntegratorKind::DOP853, "DOP853", 1e-12},
-                             ChainCell{10, rt::IntegratorKind::ARKODE, "ARKODE", 1e-12}}) {
+  for (const ChainCell& c : {ChainCell{10, rt::Integrator::Dop853, "DOP853", 1e-12},
+                             ChainCell{10, rt::Integrator::ArkodeErk, "ARKODE", 1e-12}}) {
     SCOPED_TRACE(ChainName(c));
     const Outcome o = RunChain(c.n, c.integrator, c.rtol, true, rt::SolverPath::Dense);
     EXPECT_EQ(o.result.status, sim::SimResult::Status::kOk) << o.result.message;
@@ -400,7 +401,7 @@ TEST(ChangePointBridge, ChainsAreBridgedAfterTenStepsInAZone) {
 // exit code 0 with the rows on the branch and on the lumped crank (before: exit code 2 at
 // t = 0.3524, the bridge refused for ending past the stop).
 TEST(ChangePointBridge, ABridgePastTheStopTimeEndsTheRun) {
-  const Outcome o = RunChain(2, rt::IntegratorKind::DOP853, 1e-12, true, rt::SolverPath::Dense, true, true, 0.3525);
+  const Outcome o = RunChain(2, rt::Integrator::Dop853, 1e-12, true, rt::SolverPath::Dense, true, true, 0.3525);
   EXPECT_EQ(o.result.status, sim::SimResult::Status::kOk) << o.result.message;
   EXPECT_NEAR(o.last_t, 0.3525, 1e-12);
   EXPECT_EQ(o.result.stats.bridges, 1);
@@ -416,7 +417,7 @@ TEST(ChangePointBridge, ABridgePastTheStopTimeEndsTheRun) {
 // To t = 4.6 s.
 TEST(ChangePointBridge, ChainOfFortyPassesWithCvodeAtRtol1e12) {
   if (kSanitized || std::getenv("KANESIM_STRESS_SHORT")) GTEST_SKIP() << "2 s in Release";
-  const Outcome o = RunChain(40, rt::IntegratorKind::CVODE, 1e-12, true, rt::SolverPath::Dense, true, true, 4.6);
+  const Outcome o = RunChain(40, rt::Integrator::CvodeAdams, 1e-12, true, rt::SolverPath::Dense, true, true, 4.6);
   EXPECT_EQ(o.result.status, sim::SimResult::Status::kOk) << o.result.message;
   EXPECT_NEAR(o.last_t, 4.6, 1e-12);
   EXPECT_LT(o.branch, 1e-8);
@@ -438,7 +439,7 @@ TEST(ChangePointBridge, ChainOfFortyPassesWithCvodeAtRtol1e12) {
 // (angle error 2.55e-5 rad, energy 9.5e-7 of E; tests/constraints/newton_krylov_chain_test.cpp).
 TEST(ChangePointBridge, ChainOfFortyWithIdaOnTheMultiplierFormAtRtol1e8) {
   if (kSanitized || std::getenv("KANESIM_STRESS_SHORT")) GTEST_SKIP() << "8 s in Release";
-  const Outcome o = RunChain(40, rt::IntegratorKind::IDA, 1e-8, true, rt::SolverPath::Sparse, true, true, 10.2,
+  const Outcome o = RunChain(40, rt::Integrator::IDA, 1e-8, true, rt::SolverPath::Sparse, true, true, 10.2,
                              sim::IdaLinearSolver::Dense);
   EXPECT_EQ(o.result.status, sim::SimResult::Status::kOk) << o.result.message;
   EXPECT_NEAR(o.last_t, 10.2, 1e-12);
@@ -463,8 +464,8 @@ namespace {
 // stages are not controlled by the error test, and one of them landing at a change point,
 // where the loop equations are ill-conditioned, corrupts the rows interpolated in that step
 // while the step's end stays accurate. Seen on the chain of two at rtol 1e-12, multiplier
-// form, with the early bridge after 10 steps also on that form (SimOptions::
-// bridge_several_at_once_multiplier): the step [16.7887, 16.8083] passed a crossing by
+// form, with the early bridge after 10 steps also on that form (TestHooks::
+// bridge_switches.several_at_once_multiplier): the step [16.7887, 16.8083] passed a crossing by
 // itself, its ends on the branch, its stage at c = 0.2 (t = 16.7926) with accelerations 70
 // and -42 rad/s^2 for rods that turn together at 18; the rows at t = 16.79 and 16.80 were
 // 2.4e-4 and 6.3e-3 rad off the lumped crank (the interpolated rods 2e-3 rad apart; the
@@ -480,10 +481,11 @@ Outcome RunChainDense(bool dense_check, double rtol, rt::SolverPath solver, bool
   const int n = 2;
   sim::SimOptions so;
   so.rtol = so.atol = rtol;
-  so.integrator = rt::IntegratorKind::DOP853;
-  so.bridge_several_at_once_multiplier = early_on_multiplier;
-  so.dense_check = dense_check;
-  so.row_energy_check = dense_check;  // off: the dense-output check's own rows (row_energy_test.cpp)
+  so.integrator = rt::Integrator::Dop853;
+  sim::TestHooks hooks;
+  hooks.bridge_switches.several_at_once_multiplier = early_on_multiplier;
+  hooks.dense_check = dense_check;
+  hooks.row_energy_check = dense_check;  // off: the dense-output check's own rows (row_energy_test.cpp)
   // Without the check, the energy guard stops these runs at the rows the check is for
   // (tests/sim/energy_guard_test.cpp); here those rows are the point.
   if (!dense_check) so.energy_check = sim::EnergyCheck::kOff;
@@ -497,7 +499,7 @@ Outcome RunChainDense(bool dense_check, double rtol, rt::SolverPath solver, bool
                               g * ((n + 1) * m_rod * a / 2.0 + n * m_coupler * a)};
   rt::CompileOptions co;
   co.solver = solver;
-  return RunAndMeasure("/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}}, co, so, c, true);
+  return RunAndMeasure("/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}}, co, so, hooks, c, true);
 }
 
 TEST(ChangePointBridge, Dop853DenseOutputAcrossAChangePointIsNotTrusted) {

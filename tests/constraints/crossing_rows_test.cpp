@@ -9,7 +9,7 @@
 //  - the lumped energy (1/2) J w^2 + G sin(theta) within 2e-4 of the first row's (the
 //    other rows: up to 3.4e-5), and every rod's speed within 1e-3 of rod 0's (elsewhere
 //    up to 5e-5: the integrator's own error; on the branch they are equal);
-//  - with the row check off (SimOptions::zone_rows, tests only) the spoilt row is back, so
+//  - with the row check off (TestHooks::zone_rows) the spoilt row is back, so
 //    the test can fail, and every other row is the same to the bit;
 //  - the projection itself at a constructed state 1e-6 rad from the change point (below).
 #include <gtest/gtest.h>
@@ -24,6 +24,7 @@
 #include "runtime/runtime.h"
 #include "runtime/program/program.h"
 #include "sim/simulate.h"
+#include "sim/test_hooks.h"
 #include "tests/support/load_util.h"
 #include "tests/support/lumped_crank.h"
 
@@ -59,11 +60,12 @@ Rows RunChain(bool zone_rows) {
   so.stop_time = kStop;
   so.interval = 0.01;
   so.rtol = so.atol = 1e-6;
-  so.integrator = rt::IntegratorKind::CVODE;
-  so.zone_rows = zone_rows;
+  so.integrator = rt::Integrator::CvodeAdams;
+  sim::TestHooks hooks;
+  hooks.zone_rows = zone_rows;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].u");
-  o.result = sim::Simulate(*l->prog, so, o.sink);
+  o.result = sim::Simulate(*l->prog, so, o.sink, hooks);
   if (o.sink.rows.empty()) return o;
   const lumped_crank::Crank c = lumped_crank::ParallelogramChain(kLoops);
   auto energy = [&c](const std::vector<double>& r) { return 0.5 * c.J * r[1] * r[1] + c.G * std::sin(r[0]); };

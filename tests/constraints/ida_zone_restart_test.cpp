@@ -1,6 +1,6 @@
 // IDA on the chain of 40 equal-link parallelograms at rtol 1e-12, reduced form, through its
 // change points past t = 6 (issue 20; docs/constraints.md "The reduced form at rtol 1e-12",
-// sim/integrator_ida.cpp kLoopConvCoef, runtime/engine/change_point_bridge.cpp).
+// sim/integrator_ida.cpp kLoopConvCoef, sim/change_point_bridge.cpp).
 // Two stops on the way, both with the physics regular (every loop singular at once, the
 // chain turning as one crank at ~11 rad/s):
 //  - t = 6.006: after a good bridge the fresh IDA, starting at rho = 3e-3, failed its Newton
@@ -9,7 +9,7 @@
 //  - t = 13.61: the bridge's approach was refused on a raw estimate of 1.33e5, above the
 //    reduced form's several-loop limit 1e5; projected as the bridged state is, 354.
 // Before both, a third (the bridge over zones of several loops, reduced form: the bridged
-// speeds projected in the kinetic metric, runtime/engine/change_point_bridge.cpp
+// speeds projected in the kinetic metric, sim/change_point_bridge.cpp
 // MetricSpeeds): the partition's own solve for the dependent speeds is an oblique projection,
 // ill-conditioned near the crossing; it moved the lumped energy across a bridge by up to
 // 2.1e-5 J where the extrapolation itself was within 7e-8 J, so the several-loop limit of
@@ -51,7 +51,7 @@ TEST(IdaZoneRestart, ReducedChainOfFortyAtRtol1e12PastItsStopsAtSixAndThirteen) 
   so.stop_time = kStop;
   so.interval = 0.01;
   so.rtol = so.atol = 1e-12;
-  so.integrator = rt::IntegratorKind::IDA;
+  so.integrator = rt::Integrator::IDA;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
   sim::MemorySink sink;

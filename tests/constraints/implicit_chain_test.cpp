@@ -54,7 +54,7 @@ ChainRun RunChain(rt::SolverPath solver, double rtol) {
   so.stop_time = 20.0;
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
-  so.integrator = rt::IntegratorKind::IDA;
+  so.integrator = rt::Integrator::IDA;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
   sim::MemorySink sink;

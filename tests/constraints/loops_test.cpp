@@ -137,7 +137,7 @@ TEST(FourBar, ResidualsStayAtToleranceOverALongRun) {
   // manifold by more than its tolerance, or the outputs are not projected.
   auto l = LoadModel(kRoot + "/examples/fourbar.mech");
   ASSERT_TRUE(l && l->prog);
-  for (auto integ : {rt::IntegratorKind::CVODE, rt::IntegratorKind::IDA}) {
+  for (auto integ : {rt::Integrator::CvodeAdams, rt::Integrator::IDA}) {
     auto s = RunModel(*l->prog, 100.0, 0.1, 1e-8,
                  {"coupler_rocker.constraint_residual", "coupler_rocker.constraint_residual_velocity",
                   "coupler_rocker.constraint_drift"},
@@ -168,7 +168,7 @@ TEST(FourBar, StepProjectionKeepsTheLoopClosedOverALongRun) {
     auto s = RunModel(*l->prog, 100.0, 0.1, tol,
                       {"crank_pivot.q", "crank_coupler.q", "rocker_pivot.q", "coupler_rocker.constraint_drift",
                        "kinetic_energy", "potential_energy"},
-                      rt::IntegratorKind::DOP853, /*project_steps=*/true);
+                      rt::Integrator::Dop853, /*project_steps=*/true);
     const double E0 = s.rows[0][4] + s.rows[0][5];
     double kin = 0.0, drift = 0.0, de = 0.0;
     for (const auto& r : s.rows) {

@@ -30,7 +30,7 @@ struct Outcome {
   double evals_per_step = 0.0;  // (rhs_evals + rhs_evals_jac) / steps
 };
 
-Outcome RunChain(int n, sim::Method method, sim::IdaLinearSolver ls, double rtol, double stop) {
+Outcome RunChain(int n, rt::Integrator method, sim::IdaLinearSolver ls, double rtol, double stop) {
   Outcome o;
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Sparse;  // the multiplier form
@@ -41,8 +41,7 @@ Outcome RunChain(int n, sim::Method method, sim::IdaLinearSolver ls, double rtol
   so.stop_time = stop;
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
-  so.integrator = method == sim::Method::IDA ? rt::IntegratorKind::IDA : rt::IntegratorKind::CVODE;
-  so.cvode_bdf = method == sim::Method::CvodeBdf;
+  so.integrator = method;
   so.ida_linear_solver = ls;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= n; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
@@ -69,10 +68,10 @@ Outcome RunChain(int n, sim::Method method, sim::IdaLinearSolver ls, double rtol
   return o;
 }
 
-class BdfChain : public ::testing::TestWithParam<sim::Method> {};
-INSTANTIATE_TEST_SUITE_P(Chain, BdfChain, ::testing::Values(sim::Method::IDA, sim::Method::CvodeBdf),
-                         [](const ::testing::TestParamInfo<sim::Method>& p) {
-                           return p.param == sim::Method::IDA ? std::string("IDA") : std::string("CVODE_BDF");
+class BdfChain : public ::testing::TestWithParam<rt::Integrator> {};
+INSTANTIATE_TEST_SUITE_P(Chain, BdfChain, ::testing::Values(rt::Integrator::IDA, rt::Integrator::CvodeBdf),
+                         [](const ::testing::TestParamInfo<rt::Integrator>& p) {
+                           return p.param == rt::Integrator::IDA ? std::string("IDA") : std::string("CVODE_BDF");
                          });
 
 // The chain of 40 (n = 162) to t = 2.1, five change points, rtol 1e-8: auto goes

@@ -48,7 +48,7 @@ struct Rows {
   double speeds = 0.0;  // max |rocker speed - crank speed|
 };
 
-Rows RunParallelogram(double a, double rtol, rt::SolverPath solver, rt::IntegratorKind integrator, bool bdf) {
+Rows RunParallelogram(double a, double rtol, rt::SolverPath solver, rt::Integrator integrator) {
   rt::CompileOptions co;
   co.solver = solver;
   char a_text[32];
@@ -64,7 +64,6 @@ Rows RunParallelogram(double a, double rtol, rt::SolverPath solver, rt::Integrat
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
   so.integrator = integrator;
-  so.cvode_bdf = bdf;
   so.signals = {"crank_pivot.q", "crank_pivot.u", "rocker_pivot.q", "rocker_pivot.u"};
   sim::MemorySink sink;
   o.result = sim::Simulate(*l->prog, so, sink);
@@ -87,7 +86,7 @@ Rows RunParallelogram(double a, double rtol, rt::SolverPath solver, rt::Integrat
 // About 0.4 s in Release.
 TEST(ParallelogramEnergy, MultiplierFormCvodeBdfKeepsTheEnergyPastTheChangePoint) {
   const double rtol = 1e-6;
-  const Rows o = RunParallelogram(0.6, rtol, rt::SolverPath::Sparse, rt::IntegratorKind::CVODE, /*bdf=*/true);
+  const Rows o = RunParallelogram(0.6, rtol, rt::SolverPath::Sparse, rt::Integrator::CvodeBdf);
   const bool stopped = o.result.status != sim::SimResult::Status::kOk;
   if (stopped) {
     // An honest stop is allowed, never a silent wrong answer: exit 2 (numerical failure).

@@ -89,8 +89,7 @@ ChainRun RunChain(int n, bool bdf, double rtol) {
   so.stop_time = 20.0;
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
-  so.integrator = bdf ? rt::IntegratorKind::CVODE : rt::IntegratorKind::IDA;
-  so.cvode_bdf = bdf;
+  so.integrator = bdf ? rt::Integrator::CvodeBdf : rt::Integrator::IDA;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= n; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
   sim::MemorySink sink;

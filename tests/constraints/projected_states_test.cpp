@@ -77,9 +77,9 @@ constexpr int kCvodeLoops = 10;
 #endif
 
 // The chain of `loops` on the reduced form at rtol 1e-10 through its change points with
-// `integrator` (cvode_bdf: CVODE's BDF): on the branch to 20 s, within 2e-5 rad of the lumped crank, and its
+// `integrator`: on the branch to 20 s, within 2e-5 rad of the lumped crank, and its
 // Jacobians' evaluations of f, which are checked against the number of states.
-void ChainJacobians(rt::IntegratorKind integrator, bool cvode_bdf, const char* name, int loops, double max_evals_per_jacobian) {
+void ChainJacobians(rt::Integrator integrator, const char* name, int loops, double max_evals_per_jacobian) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
   auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(loops)}}, co);
@@ -89,7 +89,6 @@ void ChainJacobians(rt::IntegratorKind integrator, bool cvode_bdf, const char* n
   so.interval = 0.01;
   so.rtol = so.atol = 1e-10;
   so.integrator = integrator;
-  so.cvode_bdf = cvode_bdf;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= loops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
   sim::MemorySink sink;
@@ -118,7 +117,7 @@ void ChainJacobians(rt::IntegratorKind integrator, bool cvode_bdf, const char* n
 
 // Without the projected states every Jacobian takes n evaluations (one group).
 TEST(ProjectedStates, IdaJacobiansPerturbOnlyTheIndependentStates) {
-  ChainJacobians(rt::IntegratorKind::IDA, false, "IDA", kLoops, 0.5 * (2 * (2 * kLoops + 1)));
+  ChainJacobians(rt::Integrator::IDA, "IDA", kLoops, 0.5 * (2 * (2 * kLoops + 1)));
 }
 
 // CVODE-BDF's df/dy by the same grouped difference quotients (sim/dq_jacobian.h):
@@ -126,7 +125,7 @@ TEST(ProjectedStates, IdaJacobiansPerturbOnlyTheIndependentStates) {
 // chain of ten, 42 states (measured: 424 for 212 Jacobians, 8.1e-6 rad). CVODE's own dense
 // difference quotients (main, b2c5e4c) took one per state: 8022 for 191, 1.4e-5 rad.
 TEST(ProjectedStates, CvodeBdfJacobiansPerturbOnlyTheIndependentStates) {
-  ChainJacobians(rt::IntegratorKind::CVODE, true, "CVODE-BDF", kCvodeLoops, 2.0);
+  ChainJacobians(rt::Integrator::CvodeBdf, "CVODE-BDF", kCvodeLoops, 2.0);
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 // ARKODE: the instant is integrated again from the step's start). Checked against the
 // lumped crank's energy (1/2) J w^2 + G sin(theta) of the equal-link parallelograms
 // (tests/support/lumped_crank.h), which does not depend on the check: every row within 1e-6
-// of E. With the check off (SimOptions::row_energy_check) the same runs write the rows the
+// of E. With the check off (TestHooks::row_energy_check) the same runs write the rows the
 // check exists for, so these cases fail if it stops working.
 #include <gtest/gtest.h>
 
@@ -17,6 +17,7 @@
 
 #include "runtime/runtime.h"
 #include "sim/simulate.h"
+#include "sim/test_hooks.h"
 #include "tests/support/load_util.h"
 #include "tests/support/lumped_crank.h"
 
@@ -33,7 +34,7 @@ struct Rows {
 // reduced form (`solver`), the signals q and u of `crank` first; the lumped energy of crank
 // `c` in every row.
 Rows RunRows(const std::string& model, std::vector<lang::ParamOverride> sets, const std::string& crank,
-         const lumped_crank::Crank& c, rt::IntegratorKind integrator, double rtol, double stop, bool check,
+         const lumped_crank::Crank& c, rt::Integrator integrator, double rtol, double stop, bool check,
          rt::SolverPath solver = rt::SolverPath::Dense) {
   rt::CompileOptions co;
   co.solver = solver;
@@ -49,12 +50,13 @@ Rows RunRows(const std::string& model, std::vector<lang::ParamOverride> sets, co
   so.stop_time = stop;
   so.interval = 0.01;
   so.signals = {crank + ".q", crank + ".u"};
-  so.row_energy_check = check;
+  sim::TestHooks hooks;
+  hooks.row_energy_check = check;
   // The energy guard's bound (1e-4 of E) is far above these rows' errors; off, so that a
   // run without the check writes them all.
   so.energy_check = sim::EnergyCheck::kOff;
   sim::MemorySink sink;
-  r.result = sim::Simulate(*l->prog, so, sink);
+  r.result = sim::Simulate(*l->prog, so, sink, hooks);
   if (sink.rows.empty()) return r;
   auto energy = [&c](const std::vector<double>& row) { return 0.5 * c.J * row[1] * row[1] + c.G * std::sin(row[0]); };
   const double e0 = energy(sink.rows.front());
@@ -72,12 +74,12 @@ Rows RunRows(const std::string& model, std::vector<lang::ParamOverride> sets, co
 TEST(RowEnergy, Dop853RowsAcrossAChangePointOfTheChainOfTen) {
   const lumped_crank::Crank c = lumped_crank::ParallelogramChain(10);
   const std::string model = "/tests/stress/models/parallelogram_chain.mech";
-  const Rows on = RunRows(model, {{"N", "10"}}, "rj0", c, rt::IntegratorKind::DOP853, 1e-12, 0.7, true);
+  const Rows on = RunRows(model, {{"N", "10"}}, "rj0", c, rt::Integrator::Dop853, 1e-12, 0.7, true);
   EXPECT_EQ(on.result.status, sim::SimResult::Status::kOk) << on.result.message;
   EXPECT_NEAR(on.last_t, 0.7, 1e-12);
   EXPECT_LT(on.energy, 1e-6);
   EXPECT_GE(on.result.stats.integrator.energy_rejects, 1);
-  const Rows off = RunRows(model, {{"N", "10"}}, "rj0", c, rt::IntegratorKind::DOP853, 1e-12, 0.7, false);
+  const Rows off = RunRows(model, {{"N", "10"}}, "rj0", c, rt::Integrator::Dop853, 1e-12, 0.7, false);
   EXPECT_EQ(off.result.stats.integrator.energy_rejects, 0);
   EXPECT_GT(off.energy, 1e-6);  // the rows the check exists for
 }
@@ -90,11 +92,11 @@ TEST(RowEnergy, Dop853RowsAcrossAChangePointOfTheParallelogram) {
   const double a = 0.5, m1 = 0.5, m2 = 0.8, m3 = 1.0, g = 9.81;
   const lumped_crank::Crank c{(m1 + m2) * a * a / 3.0 + m3 * a * a, g * a * ((m1 + m2) / 2.0 + m3)};
   const std::string model = "/tests/stress/models/parallelogram.mech";
-  const Rows on = RunRows(model, {{"a", "0.5"}}, "crank_pivot", c, rt::IntegratorKind::DOP853, 1e-10, 6.6, true);
+  const Rows on = RunRows(model, {{"a", "0.5"}}, "crank_pivot", c, rt::Integrator::Dop853, 1e-10, 6.6, true);
   EXPECT_EQ(on.result.status, sim::SimResult::Status::kOk) << on.result.message;
   EXPECT_LT(on.energy, 1e-6);
   EXPECT_GE(on.result.stats.integrator.energy_rejects, 1);
-  const Rows off = RunRows(model, {{"a", "0.5"}}, "crank_pivot", c, rt::IntegratorKind::DOP853, 1e-10, 6.6, false);
+  const Rows off = RunRows(model, {{"a", "0.5"}}, "crank_pivot", c, rt::Integrator::Dop853, 1e-10, 6.6, false);
   EXPECT_GT(off.energy, 1e-5);
 }
 
@@ -111,8 +113,8 @@ namespace {
 TEST(RowEnergy, ArkodeRowIntegratedAgain) {
   const lumped_crank::Crank c = lumped_crank::ParallelogramChain(10);
   const std::string model = "/tests/stress/models/parallelogram_chain.mech";
-  const Rows on = RunRows(model, {{"N", "10"}}, "rj0", c, rt::IntegratorKind::ARKODE, 1e-10, 20.0, true);
-  const Rows off = RunRows(model, {{"N", "10"}}, "rj0", c, rt::IntegratorKind::ARKODE, 1e-10, 20.0, false);
+  const Rows on = RunRows(model, {{"N", "10"}}, "rj0", c, rt::Integrator::ArkodeErk, 1e-10, 20.0, true);
+  const Rows off = RunRows(model, {{"N", "10"}}, "rj0", c, rt::Integrator::ArkodeErk, 1e-10, 20.0, false);
   std::printf("[ rows ] ARKODE chain of ten 1e-10: check on %.3g (%ld integrated again, %ld steps), off %.3g (%ld steps)\n",
               on.energy, on.result.stats.integrator.energy_rejects, on.result.stats.integrator.steps, off.energy,
               off.result.stats.integrator.steps);

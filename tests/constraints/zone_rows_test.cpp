@@ -20,6 +20,7 @@
 
 #include "runtime/program/program.h"
 #include "sim/simulate.h"
+#include "sim/test_hooks.h"
 #include "tests/support/load_util.h"
 #include "tests/support/lumped_crank.h"
 
@@ -48,12 +49,13 @@ Outcome RunChain(bool hold) {
   so.stop_time = 1.8;  // the trajectory to t = 1.75 is the 20 s run's
   so.interval = 0.01;
   so.rtol = so.atol = 1e-10;
-  so.integrator = rt::IntegratorKind::DOP853;
-  so.hold_zone_rows = hold;
+  so.integrator = rt::Integrator::Dop853;
+  sim::TestHooks hooks;
+  hooks.hold_zone_rows = hold;
   so.signals = {"rj0.q", "rj0.u"};
   for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].u");
   sim::MemorySink sink;
-  const sim::SimResult r = sim::Simulate(*l->prog, so, sink);
+  const sim::SimResult r = sim::Simulate(*l->prog, so, sink, hooks);
   Outcome o{r.status};
   const lumped_crank::Crank c = lumped_crank::ParallelogramChain(kLoops);
   const auto& r0 = sink.rows.at(0);

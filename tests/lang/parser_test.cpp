@@ -319,6 +319,28 @@ TEST(ParserExpression, LogicalAndRelational) {
   EXPECT_EQ(ExprOf("a < b and c > d"), "((a < b) and (c > d))");
 }
 
+// The precedence table's non-associative rows and its prefix operators accept exactly the
+// grammar's sentences: a relation or a power does not chain, not even across a lower
+// operator (a naive precedence loop would read `a and b < c < d` as ((a and (b < c)) < d)),
+// and a sign begins only an arithmetic expression.
+TEST(ParserExpression, OperatorTableAcceptsOnlyTheGrammar) {
+  auto first_error = [](const std::string& expr) {
+    auto r = ParseText("model M\n  parameter Real x = " + expr + ";\nend M;\n");
+    return r->diags.All().empty() ? std::string("<none>") : r->diags.All()[0].message;
+  };
+  EXPECT_EQ(first_error("a < b < c"), "expected ';' after declaration, found '<'");
+  EXPECT_EQ(first_error("a and b < c < d"), "expected ';' after declaration, found '<'");
+  EXPECT_EQ(first_error("not a < b < c"), "expected ';' after declaration, found '<'");
+  EXPECT_EQ(first_error("-a < b == c"), "expected ';' after declaration, found '=='");
+  EXPECT_EQ(first_error("a ^ b ^ c"), "'^' does not chain");
+  EXPECT_EQ(first_error("a + -b"), "expected an expression, found '-'");
+  EXPECT_EQ(first_error("a < not b"), "expected an expression, found 'not'");
+  EXPECT_EQ(ExprOf("a < -b"), "(a < (-b))");
+  EXPECT_EQ(ExprOf("a and not b or c"), "((a and (not b)) or c)");
+  EXPECT_EQ(ExprOf("-a * b ^ c + d < e / f and g"), "((((-(a * (b ^ c))) + d) < (e / f)) and g)");
+  EXPECT_EQ(ExprOf("a - b * c - d"), "((a - (b * c)) - d)");
+}
+
 TEST(ParserExpression, IfExpressions) {
   EXPECT_EQ(ExprOf("if a then 1 else 2"), "(if a then 1 else 2)");
   EXPECT_EQ(ExprOf("if a then 1 elseif b then 2 else 3"), "(if a then 1 elseif b then 2 else 3)");

@@ -91,11 +91,11 @@ TEST(Reference, DoublePendulumAgainstLagrange40Digits) {
   Table ref = ReadCsv(kRoot + "/tests/data/double_pendulum_ref.csv");
   std::vector<std::string> cols{"shoulder.q", "elbow.q", "shoulder.u", "elbow.u"};
   struct Case {
-    rt::IntegratorKind kind;
+    rt::Integrator kind;
     double bound;
   };
-  for (Case c : {Case{rt::IntegratorKind::ARKODE, 5e-8}, Case{rt::IntegratorKind::CVODE, 1e-7},
-                 Case{rt::IntegratorKind::IDA, 1e-7}}) {
+  for (Case c : {Case{rt::Integrator::ArkodeErk, 5e-8}, Case{rt::Integrator::CvodeAdams, 1e-7},
+                 Case{rt::Integrator::IDA, 1e-7}}) {
     auto s = RunModel(*l->prog, 3.0, 0.1, 1e-12, cols, c.kind);
     double err = MaxError(s, ref, cols, 3.0);
     EXPECT_LT(err, c.bound) << "integrator " << static_cast<int>(c.kind);
@@ -116,7 +116,7 @@ void CheckChain(int n) {
     co.solver = std::string(path) == "dense" ? rt::SolverPath::Dense : rt::SolverPath::Sparse;
     auto l = LoadModel(kRoot + "/examples/chain.mech", {{"N", std::to_string(n)}}, co);
     ASSERT_TRUE(l && l->prog);
-    auto s = RunModel(*l->prog, 3.0, 0.05, 1e-12, cols, rt::IntegratorKind::ARKODE);
+    auto s = RunModel(*l->prog, 3.0, 0.05, 1e-12, cols, rt::Integrator::ArkodeErk);
     double err = MaxError(s, ref, cols, 3.0);
     EXPECT_LT(err, 1e-8) << "N = " << n << ", " << path;
   }
@@ -196,7 +196,7 @@ end Incline;
     auto l = LoadText(model, {{"mu", std::to_string(mu)}});
     ASSERT_TRUE(l);
     // Sticking makes the regularized law stiff (rate mu N / (m v) ~ 3e3 1/s): BDF.
-    auto s = RunModel(*l->prog, 1.0, 0.5, 1e-10, {"slide.q", "slide.u"}, rt::IntegratorKind::IDA);
+    auto s = RunModel(*l->prog, 1.0, 0.5, 1e-10, {"slide.q", "slide.u"}, rt::Integrator::IDA);
     ASSERT_EQ(s.rows.size(), 3u);
     const double a = 9.81 * (std::sin(0.5) - mu * std::cos(0.5));
     if (a > 0) {

@@ -98,7 +98,7 @@ TEST(Compile, SummaryCountsAndChoices) {
   EXPECT_EQ(s.dof, 5);
   EXPECT_EQ(s.grubler_dof, 5);
   EXPECT_EQ(s.solver, rt::SolverPath::Recursive);
-  EXPECT_EQ(s.integrator, rt::IntegratorKind::DOP853);  // smooth and non-stiff
+  EXPECT_EQ(s.integrator, rt::Integrator::Dop853);  // smooth and non-stiff
   EXPECT_FALSE(s.solver_reason.empty());
   EXPECT_FALSE(s.integrator_reason.empty());
 
@@ -118,15 +118,15 @@ TEST(Compile, SummaryCountsAndChoices) {
   m.line_forces.push_back(lf);
   auto st = rt::Compile(m, {});
   ASSERT_TRUE(st.program);
-  EXPECT_EQ(rt::Summarize(*st.program).integrator, rt::IntegratorKind::IDA);
+  EXPECT_EQ(rt::Summarize(*st.program).integrator, rt::Integrator::IDA);
   EXPECT_NE(rt::Summarize(*st.program).integrator_reason.find("stiff"), std::string::npos);
 
   rt::CompileOptions o;
   o.solver = rt::SolverPath::Sparse;
-  o.integrator = rt::IntegratorKind::ARKODE;
+  o.integrator = rt::Integrator::ArkodeErk;
   auto forced = rt::Compile(test::Chain(3), o);
   EXPECT_EQ(rt::Summarize(*forced.program).solver, rt::SolverPath::Sparse);
-  EXPECT_EQ(rt::Summarize(*forced.program).integrator, rt::IntegratorKind::ARKODE);
+  EXPECT_EQ(rt::Summarize(*forced.program).integrator, rt::Integrator::ArkodeErk);
 }
 
 TEST(Compile, InitialStateFromStartValues) {

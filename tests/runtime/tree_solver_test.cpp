@@ -230,7 +230,7 @@ TEST(TreeSolver, ChainConservesEnergy) {
   opt.stop_time = 2.0;
   opt.interval = 0.01;
   opt.rtol = opt.atol = 1e-10;
-  opt.integrator = rt::IntegratorKind::CVODE;
+  opt.integrator = rt::Integrator::CvodeAdams;
   opt.signals = {"kinetic_energy", "potential_energy"};
   sim::MemorySink sink;
   sim::SimResult res = sim::Simulate(*r.program, opt, sink);

@@ -51,7 +51,7 @@ class Oscillator final : public OdeSystem {
 };
 
 TEST(SimAlloc, NoAllocationBetweenOutputRows) {
-  for (Method m : {Method::IDA, Method::CvodeAdams, Method::CvodeBdf, Method::ArkodeErk, Method::Dop853}) {
+  for (rt::Integrator m : {rt::Integrator::IDA, rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf, rt::Integrator::ArkodeErk, rt::Integrator::Dop853}) {
     Oscillator ode;
     const double y0[2] = {1.0, 0.0};
     long at_row2 = -1, at_last = -1;

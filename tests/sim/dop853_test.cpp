@@ -45,7 +45,7 @@ struct OscRun {
 OscRun RunOscillator(double stop, double interval, IntegratorOptions opt) {
   LambdaOde ode = Oscillator();
   const double y0[2] = {1.0, 0.0};
-  opt.method = Method::Dop853;
+  opt.method = rt::Integrator::Dop853;
   OscRun run;
   RowCallback cb = [&run](double t, const double* y, std::string*) {
     run.end_err = OscillatorError(t, y);
@@ -113,7 +113,7 @@ TEST(SimDop853, ExponentialDecayMatchesClosedForm) {
   });
   const double y0[3] = {1.0, 1.0, 1.0};
   IntegratorOptions opt;
-  opt.method = Method::Dop853;
+  opt.method = rt::Integrator::Dop853;
   opt.rtol = 1e-9;
   opt.atol = 1e-14;
   double worst = 0.0;
@@ -182,7 +182,7 @@ TEST(SimDop853, NeverStepsPastStopAndHonoursMaxStep) {
   LambdaOde ode = Oscillator();
   const double y0[2] = {1.0, 0.0};
   IntegratorOptions opt;
-  opt.method = Method::Dop853;
+  opt.method = rt::Integrator::Dop853;
   opt.rtol = opt.atol = 1e-6;
   std::vector<double> times;
   RowCallback cb = [&](double t, const double*, std::string*) {
@@ -222,7 +222,7 @@ TEST(SimDop853, FatalRhsFailureStopsAtItsTime) {
   });
   const double y0[1] = {0.0};
   IntegratorOptions opt;
-  opt.method = Method::Dop853;
+  opt.method = rt::Integrator::Dop853;
   IntegrateResult r = Integrate(ode, y0, OutputGrid{0.0, 1.0, 0.01}, opt, [](double, const double*, std::string*) {
     return 0;
   });
@@ -247,7 +247,7 @@ TEST(SimDop853, RecoverableRhsFailureShrinksTheStepAndGoesOn) {
   });
   const double y0[2] = {1.0, 0.0};
   IntegratorOptions opt;
-  opt.method = Method::Dop853;
+  opt.method = rt::Integrator::Dop853;
   opt.rtol = opt.atol = 1e-9;
   double err = 0.0;
   IntegrateResult r = Integrate(ode, y0, OutputGrid{0.0, 3.0, 0.1}, opt, [&](double t, const double* y, std::string*) {
@@ -268,7 +268,7 @@ TEST(SimDop853, PersistentRecoverableFailureEndsTheRunNearItsTime) {
   });
   const double y0[1] = {0.0};
   IntegratorOptions opt;
-  opt.method = Method::Dop853;
+  opt.method = rt::Integrator::Dop853;
   IntegrateResult r = Integrate(ode, y0, OutputGrid{0.0, 1.0, 0.25}, opt, [](double, const double*, std::string*) {
     return 0;
   });
@@ -287,7 +287,7 @@ TEST(SimDop853, UnresolvableJumpIsAStepSizeUnderflow) {
   });
   const double y0[1] = {0.0};
   IntegratorOptions opt;
-  opt.method = Method::Dop853;
+  opt.method = rt::Integrator::Dop853;
   opt.rtol = opt.atol = 1e-10;
   IntegrateResult r = Integrate(ode, y0, OutputGrid{0.0, 1.0, 0.25}, opt, [](double, const double*, std::string*) {
     return 0;
@@ -309,7 +309,7 @@ TEST(SimDop853, DoublePendulumKeepsEnergyAndMatchesCvode) {
   constexpr double kRtol = 1e-8;
   sim::MemorySink s = test::RunModel(p, 10.0, 0.01, kRtol, {"shoulder.q", "elbow.q", "kinetic_energy",
                                                              "potential_energy"},
-                                     rt::IntegratorKind::DOP853);
+                                     rt::Integrator::Dop853);
   ASSERT_EQ(s.times.size(), 1001u);
   const double e0 = s.rows[0][2] + s.rows[0][3];
   double drift = 0.0, ke_max = 0.0;
@@ -322,8 +322,8 @@ TEST(SimDop853, DoublePendulumKeepsEnergyAndMatchesCvode) {
   constexpr double kDriftPerRtol = 20;
   EXPECT_LT(drift / ke_max, kDriftPerRtol * kRtol);
 
-  sim::MemorySink a = test::RunModel(p, 2.0, 0.5, kRtol, {"shoulder.q", "elbow.q"}, rt::IntegratorKind::DOP853);
-  sim::MemorySink b = test::RunModel(p, 2.0, 0.5, 1e-12, {"shoulder.q", "elbow.q"}, rt::IntegratorKind::CVODE);
+  sim::MemorySink a = test::RunModel(p, 2.0, 0.5, kRtol, {"shoulder.q", "elbow.q"}, rt::Integrator::Dop853);
+  sim::MemorySink b = test::RunModel(p, 2.0, 0.5, 1e-12, {"shoulder.q", "elbow.q"}, rt::Integrator::CvodeAdams);
   ASSERT_EQ(a.rows.size(), b.rows.size());
   double diff = 0.0;
   for (size_t k = 0; k < a.rows.size(); ++k)

@@ -3,7 +3,7 @@
 // 2 (kNumericalFailure), the rows before kept; correct runs never trip it; models with
 // elements that do work are not guarded. The independent fact behind every case: with
 // ideal joints, loops and contacts, gravity and constant springs, T + V is constant along
-// the exact motion; a push the model does not have (SimOptions::rhs_fault) changes it by
+// the exact motion; a push the model does not have (TestHooks::rhs_fault) changes it by
 // the push's work, which the guard must see, and a correct integration keeps it to a small
 // multiple of the tolerance, which the guard must let through.
 #include <gtest/gtest.h>
@@ -16,6 +16,7 @@
 
 #include "runtime/runtime.h"
 #include "sim/simulate.h"
+#include "sim/test_hooks.h"
 #include "tests/support/load_util.h"
 #include "tests/sim/energy_rows.h"
 
@@ -29,28 +30,25 @@ struct GuardedRun {
   MemorySink sink;
 };
 
-GuardedRun Simulate1(const rt::Program& p, double stop, double interval, double rtol, Method method, EnergyCheck check,
+GuardedRun Simulate1(const rt::Program& p, double stop, double interval, double rtol, rt::Integrator method, EnergyCheck check,
               std::function<void(double, const double*, double*)> fault = {},
               std::vector<std::string> signals = {"kinetic_energy", "potential_energy"}) {
   SimOptions o;
   o.stop_time = stop;
   o.interval = interval;
   o.rtol = o.atol = rtol;
-  o.integrator = method == Method::Dop853      ? rt::IntegratorKind::DOP853
-                 : method == Method::IDA       ? rt::IntegratorKind::IDA
-                 : method == Method::ArkodeErk ? rt::IntegratorKind::ARKODE
-                                               : rt::IntegratorKind::CVODE;
-  o.cvode_bdf = method == Method::CvodeBdf;
+  o.integrator = method;
   o.energy_check = check;
-  o.rhs_fault = std::move(fault);
+  TestHooks hooks;
+  hooks.rhs_fault = std::move(fault);
   o.signals = std::move(signals);
   GuardedRun run;
-  run.r = Simulate(p, o, run.sink);
+  run.r = Simulate(p, o, run.sink, hooks);
   return run;
 }
 
 
-const Method kMethods[] = {Method::Dop853, Method::CvodeAdams, Method::CvodeBdf, Method::ArkodeErk, Method::IDA};
+const rt::Integrator kMethods[] = {rt::Integrator::Dop853, rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf, rt::Integrator::ArkodeErk, rt::Integrator::IDA};
 
 // (b) A push the model does not have: from t = 1 the shoulder's angular acceleration gets
 // 2 rad/s^2 more (a torque of some 2 N m doing work on a pendulum of ~10 J). The guard must
@@ -66,7 +64,7 @@ TEST(EnergyGuard, PushTheModelDoesNotHaveStopsEveryIntegrator) {
   auto push = [nq](double t, const double*, double* ydot) {
     if (t > 1.0) ydot[nq] += 2.0;
   };
-  for (Method m : kMethods) {
+  for (rt::Integrator m : kMethods) {
     SCOPED_TRACE(MethodName(m));
     GuardedRun on = Simulate1(p, 5.0, 0.01, 1e-6, m, EnergyCheck::kOn, push);
     ASSERT_EQ(on.r.status, SimResult::Status::kNumericalFailure) << on.r.message;
@@ -99,7 +97,7 @@ void ExpectNoTrip(const char* file, double rtol, double stop) {
   auto model = test::LoadModel(kRoot + file);
   ASSERT_TRUE(model && model->prog);
   ASSERT_EQ(rt::NonConservativeCause(*model->prog), "");
-  for (Method m : kMethods) {
+  for (rt::Integrator m : kMethods) {
     SCOPED_TRACE(std::string(file) + " " + MethodName(m) + " rtol " + std::to_string(rtol));
     GuardedRun run = Simulate1(*model->prog, stop, 0.01, rtol, m, EnergyCheck::kOn);
     ASSERT_EQ(run.r.status, SimResult::Status::kOk) << run.r.message;
@@ -148,7 +146,7 @@ TEST(EnergyGuard, ModelsThatDoWorkAreNotGuarded) {
   auto model = test::LoadModel(kRoot + "/examples/spring_mass.mech");
   ASSERT_TRUE(model && model->prog);
   const int nq = rt::NumQ(*model->prog);
-  GuardedRun run = Simulate1(*model->prog, 2.0, 0.01, 1e-6, Method::CvodeAdams, EnergyCheck::kOn,
+  GuardedRun run = Simulate1(*model->prog, 2.0, 0.01, 1e-6, rt::Integrator::CvodeAdams, EnergyCheck::kOn,
                       [nq](double t, const double*, double* ydot) {
                         if (t > 0.5) ydot[nq] += 50.0;
                       });
@@ -174,7 +172,7 @@ TEST(EnergyGuard, ReportMeasuresWithoutStopping) {
   auto model = test::LoadModel(kRoot + "/examples/double_pendulum.mech");
   ASSERT_TRUE(model && model->prog);
   const int nq = rt::NumQ(*model->prog);
-  GuardedRun run = Simulate1(*model->prog, 3.0, 0.01, 1e-6, Method::Dop853, EnergyCheck::kReport,
+  GuardedRun run = Simulate1(*model->prog, 3.0, 0.01, 1e-6, rt::Integrator::Dop853, EnergyCheck::kReport,
                       [nq](double t, const double*, double* ydot) {
                         if (t > 1.0) ydot[nq] += 2.0;
                       });
@@ -198,8 +196,8 @@ TEST(EnergyGuard, ParallelogramBranchSwitchUnderBdfStops) {
                                }());
   ASSERT_TRUE(model && model->prog);
   ASSERT_EQ(rt::NonConservativeCause(*model->prog), "");
-  GuardedRun off = Simulate1(*model->prog, 20.0, 0.01, 1e-6, Method::CvodeBdf, EnergyCheck::kOff);
-  GuardedRun on = Simulate1(*model->prog, 20.0, 0.01, 1e-6, Method::CvodeBdf, EnergyCheck::kOn);
+  GuardedRun off = Simulate1(*model->prog, 20.0, 0.01, 1e-6, rt::Integrator::CvodeBdf, EnergyCheck::kOff);
+  GuardedRun on = Simulate1(*model->prog, 20.0, 0.01, 1e-6, rt::Integrator::CvodeBdf, EnergyCheck::kOn);
   ASSERT_FALSE(off.sink.rows.empty());
   const double rel = RelativeEnergyError(off.sink);
   std::printf("[ guard ] parallelogram a = 0.6, CVODE-BDF, 1e-6, unguarded: exit %s, relative energy error %.3g\n",
@@ -229,7 +227,7 @@ TEST(EnergyGuard, BoundFollowsALooserAtol) {
   o.interval = 0.01;
   o.rtol = 1e-8;
   o.atol = 1e-3;
-  o.integrator = rt::IntegratorKind::DOP853;
+  o.integrator = rt::Integrator::Dop853;
   o.energy_check = EnergyCheck::kOn;
   o.signals = {"kinetic_energy", "potential_energy"};
   MemorySink sink;
@@ -243,7 +241,7 @@ TEST(EnergyGuard, BoundFollowsALooserAtol) {
 }
 
 // A real wrong answer the guard catches on its own: with DOP853's dense-output check off
-// (SimOptions::dense_check, tests only; tests/constraints/change_point_bridge_test.cpp
+// (TestHooks::dense_check; tests/constraints/change_point_bridge_test.cpp
 // Dop853DenseOutputAcrossAChangePointIsNotTrusted), the chain of two equal-link
 // parallelograms writes rows interpolated across a change point that are off the motion:
 // on the reduced form at rtol 1e-8, seven rows from t = 11.64 with the crank speed up to
@@ -274,13 +272,14 @@ TEST(EnergyGuard, StopsTheRowsOfAnUncheckedDenseOutput) {
     o.stop_time = 20.0;
     o.interval = 0.01;
     o.rtol = o.atol = c.rtol;
-    o.integrator = rt::IntegratorKind::DOP853;
-    o.bridge_several_at_once_multiplier = c.solver == rt::SolverPath::Sparse;
-    o.dense_check = false;
-    o.row_energy_check = false;  // it catches these rows too (docs/constraints.md "Rows checked against the energy")
+    o.integrator = rt::Integrator::Dop853;
+    TestHooks hooks;
+    hooks.bridge_switches.several_at_once_multiplier = c.solver == rt::SolverPath::Sparse;
+    hooks.dense_check = false;
+    hooks.row_energy_check = false;  // it catches these rows too (docs/constraints.md "Rows checked against the energy")
     o.signals = {"kinetic_energy", "potential_energy"};
     MemorySink sink;
-    SimResult r = Simulate(*model->prog, o, sink);
+    SimResult r = Simulate(*model->prog, o, sink, hooks);
     std::printf("[ guard ] chain of two, dense check off, rtol %.0e: %s at t = %.2f (%s)\n", c.rtol,
                 r.status == SimResult::Status::kOk ? "exit 0" : "exit 2", r.fail_time, r.message.substr(0, 60).c_str());
     ASSERT_EQ(r.status, SimResult::Status::kNumericalFailure);
@@ -288,10 +287,10 @@ TEST(EnergyGuard, StopsTheRowsOfAnUncheckedDenseOutput) {
     EXPECT_GE(r.fail_time, c.t_from);
     EXPECT_LE(r.fail_time, c.t_to);
     // With the check on (the default), the same runs end correctly and the guard lets them.
-    o.dense_check = true;
-    o.row_energy_check = true;
+    hooks.dense_check = true;
+    hooks.row_energy_check = true;
     MemorySink ok_sink;
-    SimResult ok = Simulate(*model->prog, o, ok_sink);
+    SimResult ok = Simulate(*model->prog, o, ok_sink, hooks);
     EXPECT_EQ(ok.status, SimResult::Status::kOk) << ok.message;
   }
 }

@@ -134,13 +134,12 @@ struct ForestRun {
   sim::SimStats stats;
 };
 
-ForestRun RunForest(const rt::Program& p, sim::IdaLinearSolver ls, rt::IntegratorKind kind, double tol, bool bdf = false) {
+ForestRun RunForest(const rt::Program& p, sim::IdaLinearSolver ls, rt::Integrator kind, double tol) {
   sim::SimOptions o;
   o.stop_time = 0.5;
   o.interval = 0.01;
   o.rtol = o.atol = tol;
   o.integrator = kind;
-  o.cvode_bdf = bdf;
   o.ida_linear_solver = ls;
   ForestRun r;
   sim::SimResult res = sim::Simulate(p, o, r.sink);
@@ -160,13 +159,13 @@ double MaxDiff(const sim::MemorySink& a, const sim::MemorySink& b) {
 TEST(IdaKlu, AgreesWithDenseLuAndWithATightReference) {
   auto l = Forest(20, false, false);
   ASSERT_TRUE(l && l->prog);
-  ASSERT_EQ(rt::Summarize(*l->prog).integrator, rt::IntegratorKind::IDA);  // the stiff springs
+  ASSERT_EQ(rt::Summarize(*l->prog).integrator, rt::Integrator::IDA);  // the stiff springs
   const double tol = 1e-6;
-  ForestRun automatic = RunForest(*l->prog, sim::IdaLinearSolver::Auto, rt::IntegratorKind::Auto, tol);
-  ForestRun dense = RunForest(*l->prog, sim::IdaLinearSolver::Dense, rt::IntegratorKind::IDA, tol);
-  ForestRun klu = RunForest(*l->prog, sim::IdaLinearSolver::Klu, rt::IntegratorKind::IDA, tol);
+  ForestRun automatic = RunForest(*l->prog, sim::IdaLinearSolver::Auto, rt::Integrator::Auto, tol);
+  ForestRun dense = RunForest(*l->prog, sim::IdaLinearSolver::Dense, rt::Integrator::IDA, tol);
+  ForestRun klu = RunForest(*l->prog, sim::IdaLinearSolver::Klu, rt::Integrator::IDA, tol);
   // An independent reference: CVODE's BDF with its own dense difference-quotient Jacobian.
-  ForestRun ref = RunForest(*l->prog, sim::IdaLinearSolver::Auto, rt::IntegratorKind::CVODE, 1e-11, true);
+  ForestRun ref = RunForest(*l->prog, sim::IdaLinearSolver::Auto, rt::Integrator::CvodeBdf, 1e-11);
 
   // 80 states in 20 blocks of 4: 5 % fill, so the automatic choice is KLU.
   EXPECT_STREQ(automatic.stats.integrator.linear_solver, "KLU");
@@ -191,7 +190,7 @@ TEST(IdaKlu, AChainKeepsTheDenseSolver) {
   sim::SimOptions o;
   o.stop_time = 0.05;
   o.rtol = o.atol = 1e-6;
-  o.integrator = rt::IntegratorKind::IDA;
+  o.integrator = rt::Integrator::IDA;
   sim::MemorySink sink;
   sim::SimResult res = sim::Simulate(*l->prog, o, sink);
   ASSERT_EQ(res.status, sim::SimResult::Status::kOk) << res.message;

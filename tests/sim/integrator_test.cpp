@@ -28,12 +28,12 @@ struct Rows {
   }
 };
 
-class EveryMethod : public ::testing::TestWithParam<Method> {};
+class EveryMethod : public ::testing::TestWithParam<rt::Integrator> {};
 
 INSTANTIATE_TEST_SUITE_P(Sim, EveryMethod,
-                         ::testing::Values(Method::IDA, Method::CvodeAdams, Method::CvodeBdf, Method::ArkodeErk,
-                                           Method::Dop853),
-                         [](const ::testing::TestParamInfo<Method>& param_info) {
+                         ::testing::Values(rt::Integrator::IDA, rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf, rt::Integrator::ArkodeErk,
+                                           rt::Integrator::Dop853),
+                         [](const ::testing::TestParamInfo<rt::Integrator>& param_info) {
                            std::string s = MethodName(param_info.param);
                            for (char& c : s)
                              if (c == '-') c = '_';
@@ -110,7 +110,7 @@ LambdaOde StiffOde() {
   });
 }
 
-IntegrateResult RunStiff(Method m, double* max_err) {
+IntegrateResult RunStiff(rt::Integrator m, double* max_err) {
   LambdaOde ode = StiffOde();
   const double y0[2] = {2.0, 0.0};
   Rows rows;
@@ -128,7 +128,7 @@ IntegrateResult RunStiff(Method m, double* max_err) {
 }
 
 TEST(SimStiff, ImplicitMethodsAreAccurateInFewSteps) {
-  for (Method m : {Method::IDA, Method::CvodeBdf}) {
+  for (rt::Integrator m : {rt::Integrator::IDA, rt::Integrator::CvodeBdf}) {
     double err = 0.0;
     IntegrateResult r = RunStiff(m, &err);
     ASSERT_TRUE(r.ok) << MethodName(m) << ": " << r.cause;
@@ -141,7 +141,7 @@ TEST(SimStiff, ImplicitMethodsAreAccurateInFewSteps) {
     EXPECT_GT(r.stats.lin_setups, 0) << MethodName(m);
   }
   double err = 0.0;
-  IntegrateResult explicit_run = RunStiff(Method::ArkodeErk, &err);
+  IntegrateResult explicit_run = RunStiff(rt::Integrator::ArkodeErk, &err);
   // The explicit method either fails (error-test failures at the stability limit) or
   // crawls: otherwise the problem is not stiff and the test proves nothing.
   EXPECT_TRUE(!explicit_run.ok || explicit_run.stats.steps > 3000) << "the test problem is not stiff";
@@ -180,7 +180,7 @@ class HoldCountingOde final : public OdeSystem {
 };
 
 TEST(SimJacobianHold, IdaHoldsExactlyItsDifferenceQuotientEvaluations) {
-  for (Method m : {Method::IDA, Method::CvodeBdf, Method::CvodeAdams, Method::ArkodeErk, Method::Dop853}) {
+  for (rt::Integrator m : {rt::Integrator::IDA, rt::Integrator::CvodeBdf, rt::Integrator::CvodeAdams, rt::Integrator::ArkodeErk, rt::Integrator::Dop853}) {
     HoldCountingOde ode;
     IntegratorOptions opt;
     opt.method = m;
@@ -190,7 +190,7 @@ TEST(SimJacobianHold, IdaHoldsExactlyItsDifferenceQuotientEvaluations) {
     IntegrateResult r = Integrate(ode, y0, OutputGrid{0.0, 2.0, 0.1}, opt, rows.Callback(2));
     ASSERT_TRUE(r.ok) << MethodName(m) << ": " << r.cause;
     EXPECT_EQ(ode.unbalanced, 0) << MethodName(m);
-    if (m == Method::IDA) {
+    if (m == rt::Integrator::IDA) {
       EXPECT_GT(ode.holds, 0);
       EXPECT_EQ(ode.holds, r.stats.jac_evals);
       EXPECT_EQ(ode.held_evals, r.stats.rhs_evals_jac);
@@ -329,7 +329,7 @@ TEST(SimIntegrate, RowReintegrationThatCannotSucceedIsCappedAndStops) {
     bool creep = false;
     long creep_evals = 0;
   };
-  for (Method m : {Method::CvodeAdams, Method::CvodeBdf, Method::IDA, Method::ArkodeErk}) {
+  for (rt::Integrator m : {rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf, rt::Integrator::IDA, rt::Integrator::ArkodeErk}) {
     SCOPED_TRACE(MethodName(m));
     OffRow ode;
     const double y0[1] = {1.0};

@@ -38,7 +38,7 @@ struct RunRows {
 };
 
 // atol = rtol / 100, as the accuracy grid (accuracy_check2.py) ran them.
-RunRows Simulate1(const rt::Program& p, double stop, double rtol, rt::IntegratorKind kind, bool bdf,
+RunRows Simulate1(const rt::Program& p, double stop, double rtol, rt::Integrator kind,
               std::vector<std::string> signals) {
   SimOptions o;
   o.stop_time = stop;
@@ -46,7 +46,6 @@ RunRows Simulate1(const rt::Program& p, double stop, double rtol, rt::Integrator
   o.rtol = rtol;
   o.atol = rtol * 1e-2;
   o.integrator = kind;
-  o.cvode_bdf = bdf;
   o.signals = std::move(signals);
   RunRows run;
   run.r = Simulate(p, o, run.sink);
@@ -63,7 +62,7 @@ TEST(MultiplierForm, ArkodeFourBarPassesTheRockerLimitPositions) {
   ASSERT_TRUE(model && model->prog);
   for (double rtol : {1e-5, 3e-6, 1e-6, 5e-7, 1e-7}) {
     SCOPED_TRACE("rtol " + std::to_string(rtol));
-    RunRows run = Simulate1(*model->prog, 5.0, rtol, rt::IntegratorKind::ARKODE, false,
+    RunRows run = Simulate1(*model->prog, 5.0, rtol, rt::Integrator::ArkodeErk,
                         {"kinetic_energy", "potential_energy", "rocker_pivot.u"});
     ASSERT_EQ(run.r.status, SimResult::Status::kOk) << run.r.message;
     ASSERT_EQ(run.sink.rows.size(), 501u);
@@ -90,7 +89,7 @@ TEST(MultiplierForm, CvodeBdfKeepsTheRollingDiskSteady) {
   const double theta = 0.2;  // the model's lean parameter
   for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7, 1e-8}) {
     SCOPED_TRACE("rtol " + std::to_string(rtol));
-    RunRows run = Simulate1(*model->prog, 5.0, rtol, rt::IntegratorKind::CVODE, true,
+    RunRows run = Simulate1(*model->prog, 5.0, rtol, rt::Integrator::CvodeBdf,
                         {"kinetic_energy", "potential_energy", "lean"});
     ASSERT_EQ(run.r.status, SimResult::Status::kOk) << run.r.message;
     ASSERT_EQ(run.sink.rows.size(), 501u);

@@ -68,7 +68,7 @@ struct Solved {
   std::vector<std::vector<double>> rows;
 };
 
-Solved Solve(Method m, int rank, IdaLinearSolver ls) {
+Solved Solve(rt::Integrator m, int rank, IdaLinearSolver ls) {
   LowRankOde ode(rank);
   std::vector<double> y0(kN);
   for (int i = 0; i < kN; ++i) y0[static_cast<size_t>(i)] = 1.0 + 0.5 * std::cos(0.37 * i);
@@ -92,10 +92,10 @@ Solved Solve(Method m, int rank, IdaLinearSolver ls) {
   return run;
 }
 
-class BdfMethods : public ::testing::TestWithParam<Method> {};
-INSTANTIATE_TEST_SUITE_P(Sim, BdfMethods, ::testing::Values(Method::IDA, Method::CvodeBdf),
-                         [](const ::testing::TestParamInfo<Method>& p) {
-                           return p.param == Method::IDA ? std::string("IDA") : std::string("CVODE_BDF");
+class BdfMethods : public ::testing::TestWithParam<rt::Integrator> {};
+INSTANTIATE_TEST_SUITE_P(Sim, BdfMethods, ::testing::Values(rt::Integrator::IDA, rt::Integrator::CvodeBdf),
+                         [](const ::testing::TestParamInfo<rt::Integrator>& p) {
+                           return p.param == rt::Integrator::IDA ? std::string("IDA") : std::string("CVODE_BDF");
                          });
 
 // Stated rank 1 ((1 + 1) 20 <= n = 40: the system's true rank is 2, the statement only

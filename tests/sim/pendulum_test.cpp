@@ -137,7 +137,7 @@ std::vector<double> ZeroCrossingsOfU(const MemorySink& s) {
   return out;
 }
 
-MemorySink RunPendulum(rt::IntegratorKind kind, bool bdf, double rtol, double stop, double interval) {
+MemorySink RunPendulum(rt::Integrator kind, double rtol, double stop, double interval) {
   flat::Mechanism m = Pendulum(kAmplitude);
   auto program = CompilePendulum(m);
   MemorySink sink;
@@ -147,7 +147,6 @@ MemorySink RunPendulum(rt::IntegratorKind kind, bool bdf, double rtol, double st
   opt.interval = interval;
   opt.rtol = opt.atol = rtol;
   opt.integrator = kind;
-  opt.cvode_bdf = bdf;
   opt.signals = {"rev.q", "rev.u"};
   SimResult r = Simulate(*program, opt, sink);
   EXPECT_EQ(r.status, SimResult::Status::kOk) << r.message;
@@ -155,21 +154,20 @@ MemorySink RunPendulum(rt::IntegratorKind kind, bool bdf, double rtol, double st
 }
 
 struct Case {
-  rt::IntegratorKind kind;
-  bool bdf;
+  rt::Integrator kind;
   const char* name;
 };
-const Case kCases[] = {{rt::IntegratorKind::IDA, false, "IDA"},
-                       {rt::IntegratorKind::CVODE, false, "CVODE-Adams"},
-                       {rt::IntegratorKind::CVODE, true, "CVODE-BDF"},
-                       {rt::IntegratorKind::ARKODE, false, "ARKODE-ERK"},
-                       {rt::IntegratorKind::DOP853, false, "DOP853"}};
+const Case kCases[] = {{rt::Integrator::IDA, "IDA"},
+                       {rt::Integrator::CvodeAdams, "CVODE-Adams"},
+                       {rt::Integrator::CvodeBdf, "CVODE-BDF"},
+                       {rt::Integrator::ArkodeErk, "ARKODE-ERK"},
+                       {rt::Integrator::Dop853, "DOP853"}};
 
 // Period of a large-amplitude swing (1.5 rad) against the elliptic-integral formula.
 TEST(SimPendulum, LargeAmplitudePeriodMatchesEllipticIntegral) {
   const double T = ExactPeriod(kAmplitude);
   for (const Case& c : kCases) {
-    MemorySink s = RunPendulum(c.kind, c.bdf, 1e-12, 3.2 * T, 1e-3);
+    MemorySink s = RunPendulum(c.kind, 1e-12, 3.2 * T, 1e-3);
     ASSERT_FALSE(s.times.empty()) << c.name;
     std::vector<double> zc = ZeroCrossingsOfU(s);
     ASSERT_EQ(zc.size(), 6u) << c.name;  // u = 0 at k T / 2, k = 1..6 (t = 0 excluded)
@@ -199,7 +197,7 @@ TEST(SimPendulum, EnergyDriftOver100PeriodsIsBoundedByRtolPerPeriod) {
   constexpr double kBdfPerPeriod = 50;         // numerical damping of BDF, 2-3x margin
   constexpr double kNonDampingPerPeriod = 5;   // Adams, explicit RK
   for (const Case& c : kCases) {
-    MemorySink s = RunPendulum(c.kind, c.bdf, kRtol, kPeriods * T, T / 50);
+    MemorySink s = RunPendulum(c.kind, kRtol, kPeriods * T, T / 50);
     ASSERT_FALSE(s.times.empty()) << c.name;
     EXPECT_EQ(s.times.back(), kPeriods * T);
     size_t iq = Column(s, "rev.q"), iu = Column(s, "rev.u");
@@ -207,7 +205,7 @@ TEST(SimPendulum, EnergyDriftOver100PeriodsIsBoundedByRtolPerPeriod) {
     for (const auto& row : s.rows) drift = std::max(drift, std::abs(Energy(row[iq], row[iu]) - e0) / scale);
     std::printf("[ pendulum ] %-12s rtol %.0e  energy drift over 100 periods %.2e (= %.1f rtol)\n", c.name, kRtol,
                 drift, drift / kRtol);
-    bool damping = c.kind == rt::IntegratorKind::IDA || c.bdf;
+    bool damping = c.kind == rt::Integrator::IDA || c.kind == rt::Integrator::CvodeBdf;
     double per_period = damping ? kBdfPerPeriod : kNonDampingPerPeriod;
     EXPECT_LT(drift, per_period * kPeriods * kRtol) << c.name;
   }
@@ -227,7 +225,7 @@ TEST(SimPendulum, AutomaticChoiceKeepsEnergyOver100PeriodsWithinASmallMultipleOf
   // The choice depends on the model only (not on the horizon or the tolerance).
   rt::CompileResult cr = rt::Compile(m, rt::CompileOptions{});
   ASSERT_TRUE(cr.program);
-  EXPECT_EQ(rt::Summarize(*cr.program).integrator, rt::IntegratorKind::DOP853) << rt::Summarize(*cr.program).integrator_reason;
+  EXPECT_EQ(rt::Summarize(*cr.program).integrator, rt::Integrator::Dop853) << rt::Summarize(*cr.program).integrator_reason;
 
   SimOptions opt;
   opt.stop_time = 100 * T;
@@ -240,7 +238,7 @@ TEST(SimPendulum, AutomaticChoiceKeepsEnergyOver100PeriodsWithinASmallMultipleOf
   double e0 = Energy(s.rows[0][0], s.rows[0][1]), drift = 0;
   for (const auto& row : s.rows) drift = std::max(drift, std::abs(Energy(row[0], row[1]) - e0) / scale);
   std::printf("[ pendulum ] automatic (%s) energy drift over 100 periods %.2e (= %.1f rtol)\n",
-              rt::Summarize(*cr.program).integrator == rt::IntegratorKind::DOP853 ? "DOP853" : "other", drift,
+              rt::Summarize(*cr.program).integrator == rt::Integrator::Dop853 ? "DOP853" : "other", drift,
               drift / kRtol);
   EXPECT_LT(drift, kMultiple * kRtol);
 }

@@ -38,7 +38,7 @@ inline std::unique_ptr<Loaded> LoadModel(const std::string& path_or_text, std::v
 
 inline sim::MemorySink RunModel(const rt::Program& p, double stop, double interval, double tol,
                            std::vector<std::string> signals,
-                           rt::IntegratorKind integrator = rt::IntegratorKind::Auto, bool project_steps = false) {
+                           rt::Integrator integrator = rt::Integrator::Auto, bool project_steps = false) {
   sim::SimOptions o;
   o.project_steps = project_steps;
   o.stop_time = stop;

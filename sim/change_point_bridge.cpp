@@ -1,21 +1,21 @@
 // The bridge over a near-singular zone of a closed loop, and the check of a change point a
-// solver passed by itself (runtime/runtime.h BridgeChangePoint, BridgeState; docs/constraints.md
-// "Singular configurations"; issue 20). The monitor that calls them is branch_monitor.cpp.
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
+// solver passed by itself (sim/change_point_bridge.h BridgeChangePoint, BridgedState;
+// docs/constraints.md "Singular configurations"; issue 20). CheckStep
+// (change_point_steps.cpp) calls them after the accepted steps.
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include "runtime/constraints/constraints.h"
-#include "runtime/engine/branch_monitor_internal.h"
 #include "runtime/runtime.h"
-#include "runtime/kinematics/kinematics.h"
-#include "runtime/program/program.h"
+#include "sim/change_point_bridge.h"
 
-namespace kanesim::rt {
+namespace kanesim::sim {
+
+using rt::Program;
+using rt::Workspace;
 
 namespace {
 struct RungeKuttaScratch {
@@ -29,11 +29,11 @@ int RungeKuttaStep(const Program& p, Workspace& ws, double t, double h, const do
                    RungeKuttaScratch& s) {
   const size_t n = s.tmp.size();
   for (size_t i = 0; i < n; ++i) s.tmp[i] = y[i] + 0.5 * h * f[i];
-  if (Derivative(p, ws, t + 0.5 * h, s.tmp.data(), s.k2.data()) != 0) return 1;
+  if (rt::Derivative(p, ws, t + 0.5 * h, s.tmp.data(), s.k2.data()) != 0) return 1;
   for (size_t i = 0; i < n; ++i) s.tmp[i] = y[i] + 0.5 * h * s.k2[i];
-  if (Derivative(p, ws, t + 0.5 * h, s.tmp.data(), s.k3.data()) != 0) return 1;
+  if (rt::Derivative(p, ws, t + 0.5 * h, s.tmp.data(), s.k3.data()) != 0) return 1;
   for (size_t i = 0; i < n; ++i) s.tmp[i] = y[i] + h * s.k3[i];
-  if (Derivative(p, ws, t + h, s.tmp.data(), s.k4.data()) != 0) return 1;
+  if (rt::Derivative(p, ws, t + h, s.tmp.data(), s.k4.data()) != 0) return 1;
   for (size_t i = 0; i < n; ++i) y[i] += h / 6.0 * (f[i] + 2.0 * s.k2[i] + 2.0 * s.k3[i] + s.k4[i]);
   return 0;
 }
@@ -125,7 +125,7 @@ constexpr double kBridgeMaxProjected = 1e6;
 // (IDA on the chain of 40 at rtol 1e-8, t = 9.96: estimate 1.1e3, move 1.4e-5, refused by
 // kBridgeMoved, the run stopped by the turn check; bridged, the speed error against the
 // lumped crank 6.42e-5 rad/s before and 6.44e-5 after). Off with projected_estimate
-// (SimOptions::bridge_projected_estimate), as the rest of this path.
+// (TestHooks::bridge_switches.projected_estimate), as the rest of this path.
 constexpr double kBridgeMovedSeveral = 2e-5;
 
 // Component i at t of the Hermite interpolant through y and y' at the m nodes (tn[k], yn[k],
@@ -153,25 +153,18 @@ double HermiteAt(const double* tn, const std::vector<double>* yn, const std::vec
 
 namespace {
 // rho of the nearest-singular loop at (t, y); -1 when the state is not valid.
-double RhoAt(const Program& p, BranchMonitor& m, double t, const double* y, int* near_loops = nullptr) {
-  Workspace& ws = *m.ws;
-  if (UnpackState(p, ws, t, y) != 0) return -1.0;
-  PositionKinematics(p, ws);
-  VelocityKinematics(p, ws);
-  ConstraintJacobian(p, ws);
-  double rho = 1.0;
-  NearestSingularLoop(p, m, &rho, near_loops);
-  return rho;
+double RhoAt(const Program& p, ChangePointBridge& m, double t, const double* y, int* near_loops = nullptr) {
+  return rt::SingularRatioAt(p, *m.monitor, t, y, near_loops);
 }
 }  // namespace
 
-int BridgeByZoneFit(const Program& p, BranchMonitor& m, double rtol, double atol, double* t_from, double* t_b,
-                     double* y_b) {
+int BridgeByZoneFit(const Program& p, ChangePointBridge& m, double rtol, double atol, double* t_from, double* t_b,
+                    double* y_b) {
   auto refuse = [&m](const char* why) {
     m.bridge_refused = why;
     return 1;
   };
-  if (p.loops.empty() || !m.in_zone) return refuse("not in a near-singular zone");
+  if (!m.in_zone) return refuse("not in a near-singular zone");
   const size_t N = m.trace_t.size();
   if (N < 2) return refuse("too few accepted steps in the zone");
   double rho_min = 1.0;
@@ -199,13 +192,13 @@ int BridgeByZoneFit(const Program& p, BranchMonitor& m, double rtol, double atol
   while (i0 > 0 && m.trace_rho[static_cast<size_t>(i0)] < 3.0 * rho1) --i0;
   if (i0 < 0 || !(m.trace_rho[static_cast<size_t>(i0)] > rho1)) return refuse("no accepted step for the error estimate");
   Workspace& ws = *m.ws;
-  const int n = StateSize(p);
+  const int n = rt::StateSize(p);
   const long idx[3] = {i0, i1, i2};
   for (int k = 0; k < 3; ++k) {
     m.h_t[k] = m.trace_t[static_cast<size_t>(idx[k])];
     m.h_y[k] = m.trace_y[static_cast<size_t>(idx[k])];
     m.h_f[k].assign(static_cast<size_t>(n), 0.0);
-    if (Derivative(p, ws, m.h_t[k], m.h_y[k].data(), m.h_f[k].data()) != 0)
+    if (rt::Derivative(p, ws, m.h_t[k], m.h_y[k].data(), m.h_f[k].data()) != 0)
       return refuse("the equations failed at the fit points");
   }
   // Two tries: the quintic through t0, t1, t2, then the cubic through t1, t2 (each with its
@@ -223,12 +216,12 @@ int BridgeByZoneFit(const Program& p, BranchMonitor& m, double rtol, double atol
     }
     m.bridge_estimate = est;
     m.h_first = first;
-    if (!(est <= (p.solver == SolverPath::Sparse ? kZoneMaxError : kZoneMaxErrorReduced))) {
+    if (!(est <= (m.sparse ? kZoneMaxError : kZoneMaxErrorReduced))) {
       why = kEstimateAbove;
       continue;
     }
     std::vector<double> raw(y_b, y_b + n);
-    if (ProjectOntoConstraints(p, ws, tb, y_b) != 0) {
+    if (rt::ProjectOntoConstraints(p, ws, tb, y_b) != 0) {
       why = "the bridged state could not be projected";
       continue;
     }
@@ -241,15 +234,11 @@ int BridgeByZoneFit(const Program& p, BranchMonitor& m, double rtol, double atol
       why = "the projection moved the bridged state too far";
       continue;
     }
-    if (UnpackState(p, ws, tb, y_b) != 0) {
+    int near_loops = 0;
+    if ((rho_b = RhoAt(p, m, tb, y_b, &near_loops)) < 0.0) {
       why = "the bridged state is not valid";
       continue;
     }
-    PositionKinematics(p, ws);
-    VelocityKinematics(p, ws);
-    ConstraintJacobian(p, ws);
-    int near_loops = 0;
-    NearestSingularLoop(p, m, &rho_b, &near_loops);
     if (near_loops > 1) {
       // Never for several loops: this fit's first version (limit 1e5 on both forms) bridged
       // a chain of two equal-link parallelograms onto the branch but 1.7e-4 rad off the
@@ -275,65 +264,13 @@ int BridgeByZoneFit(const Program& p, BranchMonitor& m, double rtol, double atol
 }
 
 namespace {
-// The bridged state's speeds projected in the kinetic metric (reduced form): y holds the
-// state ProjectOntoConstraints gave (positions by Newton on the dependent coordinates,
-// dependent speeds solved from the independent ones), raw the extrapolation before it. The
-// speeds become y's plus the tangent-space correction closest to raw in the kinetic
-// metric, u = u_y + beta z with (beta^T M beta) z = beta^T M (u_raw - u_y): the change is
-// M-orthogonal to the motion's tangent space, so it leaves the kinetic energy unchanged to
-// first order, while the partition's own solve (an oblique projection, ill-conditioned
-// near the crossing) moves the energy by the extrapolation's error times 1 / rho
-// (docs/constraints.md "Singular configurations"). Nonzero if the equations fail.
-int MetricSpeeds(const Program& p, BranchMonitor& m, double t, const double* raw, double* y) {
-  Workspace& ws = *m.ws;
-  const int nq = p.nq, nu = p.nu, n = StateSize(p);
-  std::vector<double> f(static_cast<size_t>(n));
-  if (Derivative(p, ws, t, y, f.data()) != 0) return 1;  // beta at y, with its partition
-  const Eigen::MatrixXd beta = ws.beta;
-  const int nind = static_cast<int>(beta.cols());
-  if (nind == 0) return 0;
-  if (UnpackState(p, ws, t, y) != 0) return 1;
-  PositionKinematics(p, ws);
-  const size_t K = p.bodies.size();
-  // Body velocities of free speeds x (prescribed ones and time terms cancel in the differences).
-  auto velocities = [&](const std::vector<double>& x, std::vector<Vec3>* v, std::vector<Vec3>* w) {
-    for (int i = 0; i < nu; ++i) ws.u[p.u_free[static_cast<size_t>(i)]] = x[static_cast<size_t>(i)];
-    VelocityKinematics(p, ws);
-    *v = ws.v_WBcm;
-    *w = ws.w_WB;
-  };
-  std::vector<double> uy(y + nq, y + nq + nu), x(uy);
-  std::vector<Vec3> v0, w0, vd, wd;
-  velocities(uy, &v0, &w0);
-  for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = raw[nq + i];
-  velocities(x, &vd, &wd);
-  for (size_t L = 0; L < K; ++L) {
-    vd[L] -= v0[L];
-    wd[L] -= w0[L];
-  }
-  std::vector<std::vector<Vec3>> vc(static_cast<size_t>(nind)), wc(static_cast<size_t>(nind));
-  for (int c = 0; c < nind; ++c) {
-    for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = uy[static_cast<size_t>(i)] + beta(i, c);
-    velocities(x, &vc[static_cast<size_t>(c)], &wc[static_cast<size_t>(c)]);
-    for (size_t L = 0; L < K; ++L) {
-      vc[static_cast<size_t>(c)][L] -= v0[L];
-      wc[static_cast<size_t>(c)][L] -= w0[L];
-    }
-  }
-  Eigen::MatrixXd Mr(nind, nind);
-  Eigen::VectorXd r(nind);
-  for (int c = 0; c < nind; ++c) {
-    const auto uc = static_cast<size_t>(c);
-    r[c] = Metric(p, ws, vc[uc], wc[uc], vd, wd);
-    for (int d = 0; d < nind; ++d) Mr(c, d) = Metric(p, ws, vc[uc], wc[uc], vc[static_cast<size_t>(d)], wc[static_cast<size_t>(d)]);
-  }
-  Eigen::LLT<Eigen::MatrixXd> llt(Mr);
-  if (llt.info() != Eigen::Success) return 1;
-  const Eigen::VectorXd z = llt.solve(r);
-  for (int i = 0; i < nu; ++i) y[nq + i] += beta.row(i).dot(z);
-  for (int i = 0; i < n; ++i)
-    if (!std::isfinite(y[i])) return 1;
-  return 0;
+// The bridged state's speeds projected in the kinetic metric (reduced form; raw: the
+// extrapolation before ProjectOntoConstraints gave y), where several loops are near
+// singular: the partition's own solve for the dependent speeds, an oblique projection
+// ill-conditioned near the crossing, moves the energy by the extrapolation's error over
+// rho. Nonzero if the equations fail.
+int MetricSpeeds(const Program& p, ChangePointBridge& m, double t, const double* raw, double* y) {
+  return rt::ProjectSpeedsInKineticMetric(p, *m.ws, t, raw, y);
 }
 }  // namespace
 
@@ -350,12 +287,8 @@ namespace {
 // 3e-10 at the last node, estimates 2 ... 37 instead of 1.4e3 ... 6.4e4, moves ~1e-9.
 // Kept as it was when the projection fails or moves it by more than kBridgeMoved.
 void ProjectStart(const Program& p, Workspace& ws, double t, std::vector<double>* y) {
-  if (UnpackState(p, ws, t, y->data()) != 0) return;
-  PositionKinematics(p, ws);
-  VelocityKinematics(p, ws);
-  if (ProjectStateByPartition(p, ws) != 0) return;
   std::vector<double> z(y->size());
-  PackState(p, ws, z.data());
+  if (rt::ProjectByPartition(p, ws, t, y->data(), z.data()) != 0) return;
   double moved = 0.0;
   for (size_t i = 0; i < z.size(); ++i) {
     const double d = std::fabs(z[i] - (*y)[i]) / std::max(1.0, std::fabs((*y)[i]));
@@ -365,18 +298,17 @@ void ProjectStart(const Program& p, Workspace& ws, double t, std::vector<double>
 }
 }  // namespace
 
-int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double atol, double* t_from, double* t_b,
+int BridgeByApproach(const Program& p, ChangePointBridge& m, double rtol, double atol, double* t_from, double* t_b,
                      double* y_b) {
   auto refuse = [&m](const char* why) {
     m.bridge_refused = why;
     return 1;
   };
-  if (p.loops.empty()) return refuse("no closed loops");
   if (m.bridged && m.in_zone) return refuse("this zone was bridged once already");
   // With several_loops off: refused below at the bridged state when more than one loop is
   // near singular there, and before the approach is integrated when the zone's latest
   // accepted step already has several.
-  if (!m.several_loops && m.in_zone && m.zone_near > 1) return refuse(kSeveralLoops);
+  if (!m.switches.several_loops && m.in_zone && m.zone_near > 1) return refuse(kSeveralLoops);
   // The accepted steps: the zone's (with the few before it), or, when the solver failed
   // before entering a zone, the last few.
   const std::vector<double>& tt = m.in_zone ? m.trace_t : m.pre_t;
@@ -402,8 +334,8 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   // (rho falls by about fit_rho / kBridgeStepsPerFit per step): nodes (t, y, y') of
   // accurate equations, dense enough for the extrapolation's fit.
   Workspace& ws = *m.ws;
-  auto Deriv = [&](double tt_, double* yy, double* ff) { return Derivative(p, ws, tt_, yy, ff); };
-  const int n = StateSize(p);
+  auto Deriv = [&](double tt_, double* yy, double* ff) { return rt::Derivative(p, ws, tt_, yy, ff); };
+  const int n = rt::StateSize(p);
   const size_t nn = static_cast<size_t>(n);
   m.nt.clear();
   m.ny.clear();
@@ -412,7 +344,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   std::vector<double> y(ty[static_cast<size_t>(is)]), f(nn), tmp(nn);
   RungeKuttaScratch rk(nn);
   double t = tt[static_cast<size_t>(is)], rho = rho_s;
-  if (p.solver == SolverPath::Sparse) ProjectStart(p, ws, t, &y);
+  if (m.sparse) ProjectStart(p, ws, t, &y);
   // rho's rate of fall, from a short Euler step.
   if (Deriv(t, y.data(), f.data()) != 0) return refuse("the equations failed on the approach");
   const double dt = 1e-3 * rho_s / std::max(1e-300, std::sqrt(Eigen::Map<const Eigen::VectorXd>(f.data(), n).squaredNorm()));
@@ -486,7 +418,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   // On the reduced form an estimate between kBridgeMaxErrorReduced and
   // kBridgeMaxErrorSeveral passes only where several loops are near singular at the bridged
   // state (checked after the projection below).
-  const bool sparse = p.solver == SolverPath::Sparse;
+  const bool sparse = m.sparse;
   const bool needs_several = !sparse && m.bridge_estimate > kBridgeMaxErrorReduced;
   // On the multiplier form an estimate above kBridgeMaxError is measured again after the
   // projection (the two comparison extrapolations projected as the bridged state is), where
@@ -496,7 +428,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
   // kBridgeMaxErrorSeveral. Measured on the chain of 40 with IDA at rtol 1e-12 (t = 13.61):
   // raw 1.33e5, projected 354, the projection's move 1.4e-7; the run then ends on the branch,
   // 5.2e-7 rad off the lumped crank, its energy within 2.5e-7 of E (docs/constraints.md).
-  bool needs_projected = m.several_loops && m.projected_estimate &&
+  bool needs_projected = m.switches.several_loops && m.switches.projected_estimate &&
                          m.bridge_estimate > (sparse ? kBridgeMaxError : kBridgeMaxErrorSeveral) &&
                          m.bridge_estimate <= kBridgeMaxRawSeveral;
   if (needs_projected) {  // several loops near singular at the approach's last node (else as before: refused)
@@ -504,10 +436,10 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
     needs_projected = RhoAt(p, m, m.nt[L - 1], m.ny[L - 1].data(), &near_last) >= 0.0 && near_last > 1;
   }
   m.projected_est = -1.0;
-  if (!(m.bridge_estimate <= (sparse ? kBridgeMaxError : m.several_loops ? kBridgeMaxErrorSeveral : kBridgeMaxErrorReduced)) &&
+  if (!(m.bridge_estimate <= (sparse ? kBridgeMaxError : m.switches.several_loops ? kBridgeMaxErrorSeveral : kBridgeMaxErrorReduced)) &&
       !needs_projected) {
     why = kEstimateAbove;
-  } else if (ProjectOntoConstraints(p, ws, tb, y_b) != 0 ||
+  } else if (rt::ProjectOntoConstraints(p, ws, tb, y_b) != 0 ||
              ((rho_b = RhoAt(p, m, tb, y_b, &near_loops)) >= 0.0 && !sparse && near_loops > 1 &&
               MetricSpeeds(p, m, tb, raw.data(), y_b) != 0)) {
     why = needs_several ? kEstimateAbove : "the bridged state could not be projected";
@@ -524,7 +456,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
       }
       double pe = INFINITY;
       std::vector<double> rq(yq), rf(yf);
-      if (ProjectOntoConstraints(p, ws, tb, yq.data()) == 0 && ProjectOntoConstraints(p, ws, tb, yf.data()) == 0 &&
+      if (rt::ProjectOntoConstraints(p, ws, tb, yq.data()) == 0 && rt::ProjectOntoConstraints(p, ws, tb, yf.data()) == 0 &&
           (sparse || (MetricSpeeds(p, m, tb, rq.data(), yq.data()) == 0 && MetricSpeeds(p, m, tb, rf.data(), yf.data()) == 0))) {
         pe = 0.0;
         for (size_t i = 0; i < nn; ++i) {
@@ -537,14 +469,14 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
     }
     if ((needs_several || needs_projected) && near_loops < 2)
       why = kEstimateAbove;
-    else if (!(moved <= (needs_projected || (sparse && m.several_loops && m.projected_estimate && near_loops > 1) ? kBridgeMovedSeveral : kBridgeMoved)))
+    else if (!(moved <= (needs_projected || (sparse && m.switches.several_loops && m.switches.projected_estimate && near_loops > 1) ? kBridgeMovedSeveral : kBridgeMoved)))
       why = "the projection moved the bridged state too far";
     else if (!(rho_b >= 0.0))
       why = "the bridged state is not valid";
     else if (needs_projected &&
              !(m.projected_est >= 0.0 && m.projected_est <= (sparse ? kBridgeMaxProjected : kBridgeMaxErrorSeveral)))
       why = kEstimateAbove;
-    else if (near_loops > 1 && !m.several_loops)
+    else if (near_loops > 1 && !m.switches.several_loops)
       why = kSeveralLoops;
     else if (rho_b < 0.25 * past)
       why = "the bridged state is not past the crossing";
@@ -566,7 +498,7 @@ int BridgeByApproach(const Program& p, BranchMonitor& m, double rtol, double ato
 // within the bridge's limit (in units of atol + rtol |y|) it stands, else the bridge
 // replaces it (the step fails, the integrator restarts from the bridge), and when no bridge
 // can be computed the passage stands unchecked (docs/constraints.md).
-int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, bool near) {
+int CheckPassage(const Program& p, ChangePointBridge& m, double t, const double* y, bool near) {
   // The steps before the current one (inside the zone it is the trace's last).
   const size_t N = m.trace_t.size() - (near ? 1 : 0);
   if (N < 2 || !(m.in_zone || !near)) return 0;
@@ -596,7 +528,7 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
   }
   const bool in_zone = m.in_zone;
   m.in_zone = true;
-  const size_t n = static_cast<size_t>(StateSize(p));
+  const size_t n = static_cast<size_t>(rt::StateSize(p));
   double from = 0.0, tb = 0.0;
   std::vector<double> yb(n), yr(n);
   const int s = BridgeByApproach(p, m, m.early_rtol, m.early_atol, &from, &tb, yb.data());
@@ -625,7 +557,7 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
     yr = yb;
     double tt = tb;
     for (long i = 0; i < steps; ++i) {
-      if (Derivative(p, ws, tt, yr.data(), f.data()) != 0 || RungeKuttaStep(p, ws, tt, h, f.data(), yr.data(), rk) != 0) {
+      if (rt::Derivative(p, ws, tt, yr.data(), f.data()) != 0 || RungeKuttaStep(p, ws, tt, h, f.data(), yr.data(), rk) != 0) {
         ++m.passages_unchecked;
         return 0;
       }
@@ -637,7 +569,7 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
     const double e = std::fabs(y[i] - yr[i]) / (m.early_atol + m.early_rtol * std::fabs(y[i]));
     d = std::isnan(e) ? INFINITY : std::max(d, e);
   }
-  const double limit = p.solver == SolverPath::Sparse ? kBridgeMaxError : kBridgeMaxErrorReduced;
+  const double limit = m.sparse ? kBridgeMaxError : kBridgeMaxErrorReduced;
   ++m.passages_checked;
   if (d <= limit) return 0;
   // Replaced by the bridge.
@@ -654,13 +586,13 @@ int CheckPassage(const Program& p, BranchMonitor& m, double t, const double* y, 
   std::snprintf(buf, sizeof buf,
                 "closed loop '%s' at a singular configuration at time %.9g: the integrator passed the change point "
                 "with an error of %.3g tolerance units against the bridge over it, and the bridge could not be used",
-                p.loops[static_cast<size_t>(std::max(0, m.zone_loop))].name.c_str(), t, d);
+                rt::LoopName(p, std::max(0, m.zone_loop)).c_str(), t, d);
   m.error = buf;
   return -1;
 }
-int BridgeChangePoint(const Program& p, BranchMonitor& m, double rtol, double atol, double* t_from, double* t_b,
+int BridgeChangePoint(const Program& p, ChangePointBridge& m, double rtol, double atol, double* t_from, double* t_b,
                       double* y_b) {
-  if (m.pending) {  // computed by CheckBranch
+  if (m.pending) {  // computed by CheckStep
     m.pending = false;
     m.last_tb = m.pend_tb;
     *t_from = m.pend_from;
@@ -668,7 +600,7 @@ int BridgeChangePoint(const Program& p, BranchMonitor& m, double rtol, double at
     std::copy(m.pend_y.begin(), m.pend_y.end(), y_b);
     return 0;
   }
-  if (!p.loops.empty() && m.in_zone && m.bridged) {
+  if (m.in_zone && m.bridged) {
     m.bridge_refused = "this zone was bridged once already";
     return 1;
   }
@@ -685,7 +617,7 @@ int BridgeChangePoint(const Program& p, BranchMonitor& m, double rtol, double at
   return 1;
 }
 
-void BridgeState(const BranchMonitor& m, double t, double* y) {
+void BridgedState(const ChangePointBridge& m, double t, double* y) {
   const size_t L = m.nt.size();
   if (L >= 2 && t <= m.nt[L - 1]) {
     // On the approach: the cubic Hermite between its two nodes around t.
@@ -698,6 +630,4 @@ void BridgeState(const BranchMonitor& m, double t, double* y) {
   for (size_t i = 0; i < m.h_y[0].size(); ++i) y[i] = HermiteAt(m.h_t + f, m.h_y + f, m.h_f + f, 3 - f, false, i, t);
 }
 
-bool InNearSingularZone(const BranchMonitor& m) { return m.in_zone; }
-
-}  // namespace kanesim::rt
+}  // namespace kanesim::sim

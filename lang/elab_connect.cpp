@@ -1,12 +1,39 @@
-// Equations of the instance tree: connect() pairs frames and flanges, `x = expr` binds a
-// variable (or one element), for- and if-equations are unrolled at elaboration time.
+// Connect: the equations bound and unrolled, connect() pairs found, and their sets made
+// identities (lang/elab_connect.h).
+#include "lang/elab_connect.h"
+
 #include <memory>
 
-#include "lang/elab_internal.h"
+#include "flat/union_find.h"
+#include "lang/elab_eval.h"
+#include "lang/elab_instantiate.h"
 
 namespace kanesim::lang::elab {
 
-void Elaborator::ProcessEquations(Node* node) {
+namespace {
+
+// The equations' walk over the instance tree.
+class EquationWalker {
+ public:
+  EquationWalker(Evaluator& eval, Diagnostics& diags) : eval_(eval), diags_(diags) {}
+  void ProcessEquations(Node* node);
+  Links& Result() { return links_; }
+
+ private:
+  void ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  // One kind each.
+  void ProcessConnect(Node* node, const ast::Equation& eq, const Iters* iters);
+  void ProcessFor(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void ProcessIf(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void ProcessEquality(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters);
+  void BindEquation(Node* v, int elem, const ast::Equation& eq, ModValue mv);  // x = ... or x[k] = ...
+
+  Evaluator& eval_;
+  Diagnostics& diags_;
+  Links links_;
+};
+
+void EquationWalker::ProcessEquations(Node* node) {
   if (!node->enabled) return;
   if (node->kind == Node::kArray) {
     for (auto& e : node->elems) ProcessEquations(e.get());
@@ -18,7 +45,7 @@ void Elaborator::ProcessEquations(Node* node) {
 }
 
 // One equation of `node` (for- and if-equations: their bodies, recursively).
-void Elaborator::ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
+void EquationWalker::ProcessEquation(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
   if (diags_.Full()) return;
   switch (eq.kind) {
     case ast::EqKind::Connect: return ProcessConnect(node, eq, iters.get());
@@ -28,15 +55,15 @@ void Elaborator::ProcessEquation(Node* node, const ast::Equation& eq, const std:
   }
 }
 
-static bool IsConnector(const Node* n) {
+bool IsConnector(const Node* n) {
   return n->kind == Node::kClass && (n->prim == Prim::Frame || n->prim == Prim::Flange);
 }
 
 // connect(a, b): a frame or flange link; arrays of connectors element by element.
-void Elaborator::ProcessConnect(Node* node, const ast::Equation& eq, const Iters* iters) {
+void EquationWalker::ProcessConnect(Node* node, const ast::Equation& eq, const Iters* iters) {
   Ctx ctx{node, iters};
-  Node* a = ResolveNode(*eq.lhs, ctx, nullptr);
-  Node* b = ResolveNode(*eq.rhs, ctx, nullptr);
+  Node* a = eval_.ResolveNode(*eq.lhs, ctx, nullptr);
+  Node* b = eval_.ResolveNode(*eq.rhs, ctx, nullptr);
   if (!a || !b) return;
   if (!a->enabled || !b->enabled) return;  // a conditional component that is absent
   if (a->kind == Node::kArray && b->kind == Node::kArray && a->elems.size() == b->elems.size()) {
@@ -44,7 +71,7 @@ void Elaborator::ProcessConnect(Node* node, const ast::Equation& eq, const Iters
       Node* x = a->elems[i].get();
       Node* y = b->elems[i].get();
       if (IsConnector(x) && IsConnector(y) && x->prim == y->prim)
-        (x->prim == Prim::Frame ? frame_links_ : flange_links_).push_back({x->prim_index, y->prim_index});
+        (x->prim == Prim::Frame ? links_.frames : links_.flanges).push_back({x->prim_index, y->prim_index});
     }
     return;
   }
@@ -56,21 +83,21 @@ void Elaborator::ProcessConnect(Node* node, const ast::Equation& eq, const Iters
     d.hint = "connect frames (frame_a, frame_b of bodies and joints) or flanges (drive, support)";
     return;
   }
-  (a->prim == Prim::Frame ? frame_links_ : flange_links_).push_back({a->prim_index, b->prim_index});
+  (a->prim == Prim::Frame ? links_.frames : links_.flanges).push_back({a->prim_index, b->prim_index});
 }
 
 // for i in range loop ... end for: the body once per value of the iterator.
-void Elaborator::ProcessFor(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
-  Value r = Eval(*eq.range, Ctx{node, iters.get()});
+void EquationWalker::ProcessFor(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
+  Value r = eval_.Eval(*eq.range, Ctx{node, iters.get()});
   if (!r.valid) return;
   if (r.Size() > static_cast<size_t>(kMaxArraySize)) {
     diags_.Error(DiagCode::ArrayTooLarge, eq.range->span, "for-loop range too large");
     return;
   }
-  std::vector<double> xs = StructuralList(r, eq.range->span, "a for-loop range");
+  std::vector<double> xs = eval_.StructuralList(r, eq.range->span, "a for-loop range");
   std::shared_ptr<Iters> local;
   for (double x : xs) {
-    if (!ChargeSteps(1, eq.range->span)) return;
+    if (!eval_.ChargeSteps(1, eq.range->span)) return;
     // The iterators of the last pass are reused unless an equation of it kept them (a
     // binding evaluated later reads its own pass's values).
     if (!local || local.use_count() != 1) local = std::make_shared<Iters>(iters ? *iters : Iters{});
@@ -80,18 +107,18 @@ void Elaborator::ProcessFor(Node* node, const ast::Equation& eq, const std::shar
 }
 
 // if c1 then ... elseif c2 then ... else ... end if: the first branch whose condition holds.
-void Elaborator::ProcessIf(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
+void EquationWalker::ProcessIf(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
   Ctx ctx{node, iters.get()};
   for (size_t i = 0; i < eq.branches.size(); ++i) {
     if (i < eq.conditions.size()) {
       double cv = 0;
-      Value c = Eval(*eq.conditions[i], ctx);
+      Value c = eval_.Eval(*eq.conditions[i], ctx);
       if (!c.valid) return;
       if (c.type != VType::Boolean) {
         diags_.Error(DiagCode::TypeMismatch, eq.conditions[i]->span, "an if-equation condition must be Boolean");
         return;
       }
-      if (!Structural(c, eq.conditions[i]->span, &cv, "an if-equation condition")) return;
+      if (!eval_.Structural(c, eq.conditions[i]->span, &cv, "an if-equation condition")) return;
       if (cv == 0) continue;
     }
     for (const auto& b : eq.branches[i]) ProcessEquation(node, b, iters);
@@ -100,14 +127,14 @@ void Elaborator::ProcessIf(Node* node, const ast::Equation& eq, const std::share
 }
 
 // variable = expression: the variable's binding (or one element's).
-void Elaborator::ProcessEquality(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
+void EquationWalker::ProcessEquality(Node* node, const ast::Equation& eq, const std::shared_ptr<const Iters>& iters) {
   if (eq.lhs->kind != ast::ExprKind::Ref) {
     diags_.Error(DiagCode::BadEquation, eq.lhs->span, "equations must have the form 'variable = expression'")
         .hint = "write the variable being defined on the left, e.g. 'j.tau = -k * j.q;'";
     return;
   }
   int elem = -1;
-  Node* v = ResolveNode(*eq.lhs, Ctx{node, iters.get()}, &elem);
+  Node* v = eval_.ResolveNode(*eq.lhs, Ctx{node, iters.get()}, &elem);
   if (!v || !v->enabled) return;
   if (v->kind != Node::kVar) {
     diags_.Error(DiagCode::BadEquation, eq.lhs->span, "'" + v->path + "' is a component, not a variable");
@@ -127,7 +154,7 @@ void Elaborator::ProcessEquality(Node* node, const ast::Equation& eq, const std:
   BindEquation(v, elem, eq, std::move(mv));
 }
 
-void Elaborator::BindEquation(Node* v, int elem, const ast::Equation& eq, ModValue mv) {
+void EquationWalker::BindEquation(Node* v, int elem, const ast::Equation& eq, ModValue mv) {
   if (elem >= 0) {
     auto it = v->eq_elem_binding.find(elem);
     if (it != v->eq_elem_binding.end()) {
@@ -145,6 +172,45 @@ void Elaborator::BindEquation(Node* v, int elem, const ast::Equation& eq, ModVal
     return;
   }
   v->eq_binding = std::move(mv);
+}
+
+}  // namespace
+
+Links BindEquations(Node* root, Evaluator& eval, Diagnostics& diags) {
+  EquationWalker walker(eval, diags);
+  walker.ProcessEquations(root);
+  return std::move(walker.Result());
+}
+
+// Each connect() set of frames becomes one flat frame, in the order of the frames' ids.
+Connections Connect(const InstanceTree& tree, const Links& links, const SourcePlaces& places, flat::Mechanism* m) {
+  const size_t n = tree.frames.size();
+  flat::UnionFind uf(n);
+  for (auto [a, b] : links.frames) uf.Unite(a, b);
+  Connections out;
+  out.frame.assign(n, -1);
+  std::vector<int> set_size(n, 0);  // per set root
+  for (size_t i = 0; i < n; ++i) set_size[static_cast<size_t>(uf.Find(static_cast<int>(i)))]++;
+  for (size_t i = 0; i < n; ++i) {
+    const size_t r = static_cast<size_t>(uf.Find(static_cast<int>(i)));
+    if (out.frame[r] < 0) {
+      out.frame[r] = static_cast<int>(m->frames.size());
+      flat::Frame f;
+      const Node* first = tree.frames[r];
+      f.name = first->path;
+      f.loc = places.Loc(first->decl ? first->decl->name_span : Span{});
+      m->frames.push_back(std::move(f));
+    }
+    out.frame[i] = out.frame[r];
+    m->frames[static_cast<size_t>(out.frame[i])].aliases.push_back(tree.frames[i]->path);
+  }
+  out.frame_set_size.resize(n);
+  for (size_t i = 0; i < n; ++i) out.frame_set_size[i] = set_size[static_cast<size_t>(uf.Find(static_cast<int>(i)))];
+  flat::UnionFind fu(tree.flanges.size());
+  for (auto [a, b] : links.flanges) fu.Unite(a, b);
+  out.flange_set.resize(tree.flanges.size());
+  for (size_t i = 0; i < tree.flanges.size(); ++i) out.flange_set[i] = fu.Find(static_cast<int>(i));
+  return out;
 }
 
 }  // namespace kanesim::lang::elab

@@ -1,0 +1,160 @@
+// Evaluate, the elaborator's phase that gives expressions their values: AST expressions
+// become Values, arrays of scalar expressions in the mechanism's pool (parameters stay
+// symbolic Param nodes so that a sweep can change them without elaborating again;
+// constants fold). It is asked on demand by the other phases (array sizes and conditions
+// while instantiating, for-ranges and subscripts while connecting, primitives' fields
+// while emitting), and evaluates a variable once, on first use, from its binding (GetVar),
+// making a parameter's flat parameters then. Its files: lang/elab_eval.cpp (expressions
+// and references), elab_vars.cpp (variables and instance references), elab_operators.cpp,
+// elab_builtins.cpp, elab_concat.cpp, elab_mesh.cpp and elab_budget.cpp (the bounds).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lang/elab_budget.h"
+#include "lang/elab_internal.h"
+#include "flat/param_eval.h"
+#include "geometry/mesh_check.h"
+#include "geometry/tri_mesh.h"
+
+namespace kanesim::lang::elab {
+
+class Evaluator {
+ public:
+  // Writes the pool, the parameters, state references and data files of `m`.
+  Evaluator(flat::Mechanism* m, const SourcePlaces& places, Diagnostics& diags);
+
+  // --- what the other phases ask ---
+  Value Eval(const ast::Expr& e, const Ctx& ctx);
+  // A modifier's or equation's value; *where (if given) gets the span it was written at.
+  Value EvalModValue(const ModValue& mv, Span* where);
+  // The variable's value, evaluated on first use; valid as long as the instance tree.
+  const Value& GetVar(Node* var, Span use_span);
+  // Resolves a reference to an instance node; for variables with subscripts, *elem gets
+  // the flat element index (or -1 for the whole variable). Null after a diagnostic.
+  Node* ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem);
+  // Evaluates to a number at elaboration time (array sizes, conditions, for ranges,
+  // subscripts); marks the parameters it reads as structural.
+  bool Structural(const Value& v, Span span, double* out, const char* what);
+  bool StructuralInt(const Value& v, Span span, long* out, const char* what);
+  std::vector<double> StructuralList(const Value& v, Span span, const char* what);
+  // Work budget (elab_budget.cpp): false once the elaboration has used it up.
+  bool ChargeSteps(std::int64_t steps, Span where);
+  // Whether the work budget ran out (reported once): the other phases stop then.
+  bool OverBudget() const { return budget_reported_; }
+  // Room for `n` parameters, made once instead of by doubling (each step moving every Param).
+  void ReserveParams(size_t n);
+  // `file` resolved against the directory of the source file `origin` is in.
+  std::string MeshPath(const std::string& file, Span origin) const;
+  // Where an argument's value was written: follows references to the binding they take
+  // their value from (a MeshBody's `file` to the user's `file = "..."`).
+  Span ValueOrigin(const ast::Expr& arg, const Ctx& ctx);
+
+  // --- for the lowerings of built-in functions (elab_builtins.cpp, elab_concat.cpp) ---
+  Value Const(double x, VType t = VType::Real);
+  Value Scalar(ExprId e, VType t = VType::Real);
+  Value Elementwise2(const Value& a, const Value& b, flat::Op op, VType rt, Span sp);
+  Value EvalCat(const ast::Expr& e, const std::vector<Value>& args);
+  // meshVolume / meshCentre / meshInertia(file, scale).
+  Value EvalMeshCall(const std::string& fn, const ast::Expr& e, const std::vector<Value>& args, const Ctx& ctx);
+
+ private:
+  // One kind each (elab_eval.cpp); EvalNested bounds their recursion (elab_budget.cpp).
+  Value EvalNested(const ast::Expr& e, const Ctx& ctx);
+  Value EvalNode(const ast::Expr& e, const Ctx& ctx);
+  Value EvalRef(const ast::Expr& e, const Ctx& ctx);
+  // EvalRef's steps (elab_eval.cpp): a reference walked part by part through the tree.
+  void ReportUnknownName(const ast::RefPart& head, const Ctx& ctx);
+  static bool IsFrameMotion(const Node* n, const std::string& name);
+  Value FrameMotion(const ast::Expr& e, size_t pi, const Node* frame, const Ctx& ctx);  // frame.r/R/v/w
+  Value SubscriptFrameMotion(const Value& v, const ast::RefPart& part, const Ctx& ctx);
+  Node* Member(Node* n, const ast::RefPart& part);  // null after a diagnostic
+  Node* ArrayElement(Node* array, const ast::RefPart& part, const Ctx& ctx);
+  Value VarReference(const ast::Expr& e, size_t pi, Node* var, const Ctx& ctx);
+  Value SubscriptValue(const Value& v, const ast::RefPart& part, const Node* var, const Ctx& ctx);
+  // One subscript of dimension `size`: its 0-based indices; *keep when it keeps the dimension.
+  bool SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx, std::vector<int>* list,
+                        bool* keep);
+  Value EvalArray(const ast::Expr& e, const Ctx& ctx);
+  Value EvalComprehension(const ast::Expr& e, const Ctx& ctx);
+  Value EvalMatrix(const ast::Expr& e, const Ctx& ctx);
+  Value EvalRange(const ast::Expr& e, const Ctx& ctx);
+  Value EvalIf(const ast::Expr& e, const Ctx& ctx);
+  // Built-in functions (elab_builtins.cpp): one table {name, arity, lowering}.
+  Value EvalCall(const ast::Expr& e, const Ctx& ctx);
+  // Concatenation (elab_concat.cpp): cat(k, ...), and EvalMatrix above.
+  Value Concatenate(size_t k, const std::vector<Value>& parts, const std::vector<Span>& spans,
+                    const std::vector<std::string>& names, Span whole, const std::string& what,
+                    const std::string& hint);
+  // Operators (elab_operators.cpp): chains of them with an explicit stack.
+  Value EvalOperators(const ast::Expr& root, const Ctx& ctx);
+  Value UnaryOp(const ast::Expr& e, Value v);
+  Value BinaryOp(const ast::Expr& e, const Value& a, const Value& b);
+  Value MatrixProduct(const ast::Expr& e, const Value& a, const Value& b);
+  Value Comparison(const ast::Expr& e, const Value& a, const Value& b);
+  // Work budget (elab_budget.cpp).
+  bool ChargeNodes(std::int64_t more, Span where);  // false once the pool would pass kMaxExprNodes
+  bool Charge(const Value& v, Span where);
+  // GetVar's stages (elab_vars.cpp): the value from the binding, checked, then for a
+  // parameter its flat parameters.
+  Value EvaluateVar(Node* var, Span use_span);
+  Value JointStateValue(Node* var);                       // a joint's q or u: state references
+  const ModValue* VarBinding(Node* var);                  // declaration/modifier or equation
+  Value UnboundValue(Node* var, Span use_span);           // zeros, or a missing-value error
+  Value BoundValue(Node* var, const ModValue& binding);   // evaluated, type and size checked
+  bool CheckValueType(Node* var, const ModValue& binding, const Value& v, Span where);
+  void ApplyElementEquations(Node* var, Value& v);        // x[k] = ... over the value
+  Value ParameterValue(Node* var, const ModValue* binding, Span use_span, Value v);
+  struct ParamAttributes {  // a parameter's min, max and unit modifiers
+    std::string unit;
+    double min = -1e300, max = 1e300;
+  };
+  ParamAttributes ReadParamAttributes(Node* var);
+  // One element as a flat parameter: `p`, the last of m_->params (for a constant, folded
+  // instead, a Param of its own); its value checked and set; its pool node.
+  ExprId AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span);
+  void MarkStructural(ExprId id);
+
+  // --- meshes (elab_mesh.cpp) ---
+  // One mesh file read at one scale: its mass properties at unit density, or its problems.
+  struct MeshEntry {
+    bool ok = false;
+    std::uint64_t triangles = 0;
+    double volume = 0;                                      // V  (m³)
+    geometry::Vec3 centre = geometry::Vec3::Zero();          // p_MBcm  (m)
+    geometry::Mat3 unit_inertia = geometry::Mat3::Zero();    // I_Bcm_M at density 1  (m⁵)
+    std::vector<geometry::MeshProblem> problems;
+    std::set<std::pair<int, int>> reported;                 // (file, offset) of places told of the problems
+  };
+  // Reads (once) and reports its problems at `where` (once per place); null when unusable.
+  const MeshEntry* LoadMeshFor(const std::string& path, double scale, Span where);
+
+  flat::Mechanism* m_;
+  const SourcePlaces& places_;
+  Diagnostics& diags_;
+  std::vector<double> pvals_;  // values of m_->params, index-aligned
+  flat::ParamEvaluator param_eval_{m_->exprs, pvals_};  // memoized values of pool nodes
+  std::vector<std::uint8_t> structural_seen_;  // per pool node: walked by MarkStructural
+  std::vector<ExprId> structural_stack_;        // MarkStructural's scratch
+  WorkBudget budget_{kMaxElabWork};
+  bool budget_reported_ = false;
+  int eval_depth_ = 0;  // EvalNested frames on the native stack
+  StackGuard stack_;    // made with the Evaluator: the base of its evaluation
+  bool depth_reported_ = false;
+  std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
+  // EvalOperators' explicit stacks (lang/elab_operators.cpp), kept between calls.
+  struct OpItem {
+    const ast::Expr* e;
+    bool combine;  // operands already evaluated: their values are on top of op_values_
+  };
+  std::vector<OpItem> op_work_;
+  std::vector<Value> op_values_;
+  std::map<std::string, MeshEntry> meshes_;  // "path\nscale" -> the mesh read (elab_mesh.cpp)
+};
+
+}  // namespace kanesim::lang::elab

@@ -1,0 +1,65 @@
+// Lookup, the elaborator's first phase: names resolved in the class tree. The registry
+// of classes by qualified name (the program's files, and the embedded library's units
+// registered when a lookup first names them), Modelica's lookup of a class name from a
+// scope (nested classes, imports, `within`, the library), annotations through extends,
+// the model to elaborate and the user's imports.
+#pragma once
+
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "lang/elab_internal.h"
+
+namespace kanesim::lang::elab {
+
+struct ClassInfo {
+  const ast::ClassDef* cls;
+  const ast::StoredDefinition* file;
+  std::string qualified;
+};
+
+class ClassLookup {
+ public:
+  // Registers the program's files; `diags` receives a library unit's own diagnostics.
+  ClassLookup(const Program& program, Diagnostics& diags);
+
+  // The class `parts` names, looked up from class `from` (null: from the top level).
+  const ast::ClassDef* FindClass(const std::vector<std::string>& parts, const ast::ClassDef* from) const;
+  // The registry's entry for a qualified name; null when no class has it. Whatever part
+  // of the library is registered, the answer is the one a registry of the whole library
+  // would give.
+  const ClassInfo* LookupClass(const std::string& q) const;
+  // Every class's qualified name (the whole library registered first), for hints.
+  std::vector<std::string> AllNames() const;
+  // The qualified name of a registered class (its own name when not registered).
+  std::string QualifiedName(const ast::ClassDef* c) const;
+  // The modification `key` of cls's annotation, or of its bases' (breadth first).
+  const ast::Modification* FindAnnotation(const ast::ClassDef* cls, const std::string& key) const;
+
+  // The model named by `model`, else the last non-partial model of the user's file; null
+  // after a diagnostic (or with no file).
+  const ast::ClassDef* PickModel(const std::string& model);
+  // Every import of the user's file must name something; false after a diagnostic.
+  bool CheckImports(const ast::StoredDefinition& f);
+
+ private:
+  const ast::StoredDefinition* FileOf(const ast::ClassDef* c) const;
+  void LoadWholeLibrary() const;
+  void Register(const ast::ClassDef* c, const std::string& prefix, const ast::StoredDefinition* file) const;
+  bool LoadLibraryClass(const std::string& q) const;
+  void LoadUnit(int u) const;
+  void CheckImport(const std::string& q, bool wildcard, Span span);
+
+  const Program& program_;
+  Diagnostics& diags_;
+  const Library* library_;  // null when the library is in program_.files
+  // mutable: a lookup (const) registers the library's classes it is the first to name.
+  mutable std::vector<char> unit_loaded_;  // per library unit
+  mutable std::map<std::string, ClassInfo> classes_;  // qualified name -> class
+  mutable std::unordered_map<const ast::ClassDef*, const ast::StoredDefinition*> file_of_;
+  mutable std::unordered_map<const ast::ClassDef*, std::string> qualified_of_;
+};
+
+}  // namespace kanesim::lang::elab

@@ -1,0 +1,30 @@
+// Modifiers, the phase that turns modifications into modification environments (Modelica
+// 3.5 §7.2): built from the syntax with the scope and loop iterators they are evaluated
+// in, merged with the outer one winning (`final` refuses outer modification), and sliced
+// per element for arrays of components unless `each` is given. Mistakes are reported to
+// `diags`; slicing evaluates array values through the evaluator.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "lang/elab_internal.h"
+
+namespace kanesim::lang::elab {
+
+class Evaluator;
+
+// The modification `m` (null: none) written in `scope` under `iters`.
+Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters,
+             Diagnostics& diags);
+// `inner` merged into `outer`, outer winning; `what` names the element for messages. The
+// second form gives up `inner`: its values move instead of being copied.
+void MergeMods(Mod& outer, const Mod& inner, const std::string& what, Diagnostics& diags);
+void MergeMods(Mod& outer, Mod&& inner, const std::string& what, Diagnostics& diags);
+// Element `index` (0-based) of an array of `count` components' modifier.
+Mod SliceMod(const Mod& mod, int index, int count, Evaluator& eval, Diagnostics& diags);
+// Evaluates the non-`each` values of an array component's modifier once, checking their
+// leading size, so that slicing per element neither re-evaluates nor repeats errors.
+void PreEvaluateMod(Mod& mod, int count, Evaluator& eval, Diagnostics& diags);
+
+}  // namespace kanesim::lang::elab
