@@ -82,41 +82,14 @@ constexpr double kBridgeMaxErrorReduced = 1e3;  // ... on the reduced form (docs
 constexpr const char* kSeveralLoops = "more than one loop is near a singular configuration";
 constexpr const char* kEstimateAbove = "the extrapolation's error estimate is above the tolerance";
 // ... on the reduced form where several loops are near singular at once (a chain of
-// equal-link parallelograms): there the estimate is dominated by the round-off of the
-// speeds the ill-conditioned block determines (components that are equal on the branch
-// differ by up to 1e-9 at the approach's nodes), which the projection onto the velocity
-// constraints removes. Measured on the chain of ten at rtol 1e-12 (docs/benchmarks.md
-// "Change points"): estimates 5e2 ... 4.6e3, the lumped energy's jump across each bridge
-// <= 2.8e-6 J of 270 J (1e-8 relative; a single loop's limit 1e3 allowed 6e-7 J of 22 J).
-// Was 1e4; the chain of 40 (CVODE, 1e-12) stopped on 1.08e4. With the limit lifted, on the
-// chain of 40 at 1e-12 (DOP853, CVODE, CVODE-BDF, ARKODE; 337 bridges, E = 1072 J) the
-// jump grows mildly with the estimate: <= 1.2e-5 J at 1e3 ... 5e3, <= 2.3e-5 J at 5e3 ...
-// 1e4, <= 2.9e-5 J (2.7e-8 of E) at 1e4 ... 1.3e4; the chain of ten with IDA (after 10
-// steps in a zone, below) met 2.73e4: jump 1.25e-6 J (4.6e-9 of E = 270 J).
-// Those jumps were the projection's, not the extrapolation's: the partition's solve for
-// the dependent speeds is an oblique projection, ill-conditioned near the crossing (IDA,
-// chain of 40, 1e-12: the raw extrapolation's energy 2e-8 ... 7e-8 J off, the projected
-// state's 5e-6 ... 2.1e-5 J). With the speeds projected in the kinetic metric where
-// several loops are near singular (MetricSpeeds) the jump is the extrapolation's:
-// <= 4e-7 J (4e-10 of E) up to estimates of 7.3e4; was 3e4, at which IDA on that chain
-// stopped (3.53e4 at t = 2.05).
+// equal-link parallelograms): there the estimate is dominated by round-off of the speeds
+// the ill-conditioned block determines, which the projection removes (measurements: docs/constraints/2026-11-28_tuning_measurements.md).
 constexpr double kBridgeMaxErrorSeveral = 1e5;
 constexpr double kBridgeMoved = 1e-6;    // largest change by the projection (of max(1, |y|))
-// ... on the multiplier form where several loops are near singular at once (a chain of
-// equal-link parallelograms): the estimate is dominated by the same round-off of the speeds
-// the ill-conditioned system determines (chain of two, rtol 1e-12: the rods' speeds, equal
-// on the branch, differ by 1e-8 at the approach's last node; estimate 9.8e3, 98 between the
-// three extrapolations each projected onto the constraints). An estimate above
-// kBridgeMaxError (up to kBridgeMaxRawSeveral) is taken again between the projected
-// extrapolations and limited by kBridgeMaxProjected; the projection may move the state by
-// up to kBridgeMovedSeveral (the other branches are ~rho_b = 3e-3 away). Measured with every
-// limit lifted on the chains of 2 and 10, rtol 1e-10 and 1e-12, every integrator (26 such
-// bridges of 398): raw estimates 1.1e5 ... 3.2e6, projected 15 ... 8.7e4, projection moves
-// up to 3.9e-6, the lumped energy's jump across each <= 1.9e-8 J (7e-11 relative; the
-// other 372 bridges up to 8.9e-9 relative); on the chain of 40 at rtol 1e-12 (DOP853,
-// CVODE, ARKODE, IDA to t = 9.96; 56 such bridges): projected up to 2.9e5 (27 of them
-// 1e5 ... 2.9e5), raw up to 3.9e6, moves up to 4.8e-6, jumps <= 1.8e-7 J (1.6e-10
-// relative) (docs/benchmarks.md "Change points").
+// ... on the multiplier form where several loops are near singular at once: an estimate
+// above kBridgeMaxError (up to kBridgeMaxRawSeveral) is taken again between the projected
+// extrapolations and limited by kBridgeMaxProjected; the projection may move the state by up
+// to kBridgeMovedSeveral (the other branches are ~rho_b away; measurements: docs/constraints/2026-11-28_tuning_measurements.md).
 constexpr double kBridgeMaxRawSeveral = 2e7;
 constexpr double kBridgeMaxProjected = 1e6;
 // kBridgeMovedSeveral also holds wherever several loops are near singular at the bridged
@@ -420,14 +393,9 @@ int BridgeByApproach(const Program& p, ChangePointBridge& m, double rtol, double
   // state (checked after the projection below).
   const bool sparse = m.sparse;
   const bool needs_several = !sparse && m.bridge_estimate > kBridgeMaxErrorReduced;
-  // On the multiplier form an estimate above kBridgeMaxError is measured again after the
-  // projection (the two comparison extrapolations projected as the bridged state is), where
-  // several loops are near singular at the bridged state; on the reduced form an estimate
-  // above kBridgeMaxErrorSeveral likewise, the comparisons' speeds projected in the kinetic
-  // metric as the bridged state's (MetricSpeeds), the result limited by
-  // kBridgeMaxErrorSeveral. Measured on the chain of 40 with IDA at rtol 1e-12 (t = 13.61):
-  // raw 1.33e5, projected 354, the projection's move 1.4e-7; the run then ends on the branch,
-  // 5.2e-7 rad off the lumped crank, its energy within 2.5e-7 of E (docs/constraints.md).
+  // An estimate above the form's limit is measured again after the projection, where several
+  // loops are near singular at the bridged state (the comparisons projected as the bridged
+  // state is; on the reduced form in the kinetic metric), limited by kBridgeMaxErrorSeveral.
   bool needs_projected = m.switches.several_loops && m.switches.projected_estimate &&
                          m.bridge_estimate > (sparse ? kBridgeMaxError : kBridgeMaxErrorSeveral) &&
                          m.bridge_estimate <= kBridgeMaxRawSeveral;

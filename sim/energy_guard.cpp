@@ -10,15 +10,8 @@ namespace kanesim::sim {
 
 namespace {
 
-// The bound on the relative energy error: max(kEnergyC * rtol, kEnergyFloor). Measured
-// (docs/integrators.md "The energy guard", the table): the largest relative error over the
-// examples and stress models the guard applies to, five integrators, rtol 1e-3 .. 1e-12,
-// their default stop times and 100 s: 1.2e-3 at rtol 1e-6 (CVODE-BDF; bound 0.03), 1.6e-5
-// at 1e-8 (bound 3e-4; and 2.0e-4 from DOP853's rows near the chain's change points, off
-// the motion), 2.7e-5 at 1e-10 (DOP853 through change points; bound 1e-4), 2.2e-8 at
-// 1e-12. BDF's share grows as rtol falls (80 rtol at 1e-3, 1600 rtol at 1e-8). From rtol
-// 3e-5 up the bound is above the motion's energy itself and stops nothing: correct runs
-// there drift by up to half of it over 100 s (0.54 at 1e-3).
+// The bound on the relative energy error: max(kEnergyC * rtol, kEnergyFloor), above the
+// largest error of correct runs (docs/integrators.md "The energy guard" has the table).
 constexpr double kEnergyC = 3e4;
 constexpr double kEnergyFloor = 1e-4;
 // T and V are sums of terms as large as |T| + |V|; their roundoff is below this share of it.

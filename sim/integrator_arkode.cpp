@@ -150,14 +150,8 @@ class ArkodeStepper final : public SundialsStepper {
   // The error test failed repeatedly (ARK_ERR_FAILURE) on a step of closed loops: ERKStep
   // again from the projection y* of the last accepted step (ERKStepReset), once per
   // accepted step; false (the failure stands) when it was tried there already or f cannot
-  // project. On the multiplier form the components of y off the constraints follow the
-  // loop's geometry through f's projection, u* = P(q) u (integrator_cvode.cpp); near a
-  // limit position of the four-bar (rocker speed through 0, its error weight then atol's)
-  // their error estimate stayed at 2.8 weights however short the step (4.99e-8 against
-  // 1.8e-8 at h = 2e-5, t = 1.1597, rtol 1e-6): ERKStep gave up there at rtol 1e-6,
-  // 5e-7 and (rtol 1e-6) atol 1e-9, and from y* it steps on. Projecting every accepted step
-  // instead also passed, but each reset restarts ERKStep's step and interpolant: the
-  // energy error grew 5e-6 -> 1.2e-4 at rtol 1e-6 (8.5e-7 -> 7.3e-5 at 1e-7).
+  // project. Near a limit position the off-constraint components' error estimate does not
+  // shrink with the step; projecting every step instead costs accuracy (measurements: docs/constraints/2026-11-28_tuning_measurements.md).
   bool ResetAfterErrorTest() {
     if (reset_at_ == t_accepted_) return false;
     reset_at_ = t_accepted_;

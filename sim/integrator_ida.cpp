@@ -199,18 +199,9 @@ class IdaStepper final : public SundialsStepper {
   }
 
   // The Newton iteration's convergence coefficient (IDA's epsNewt, default 0.33) on closed
-  // loops on the reduced form. Not on the multiplier form: there the chain of 40 at rtol
-  // 1e-10 ended with rows 3.4e-6 of E off the lumped crank's energy with it (main: see
-  // docs/benchmarks.md), and that form's cells did not creep. Near a change point f carries a noise floor:
-  // measured on the chain of 40 equal-link parallelograms at rtol 1e-12 (reduced form), just
-  // past a bridge (rho = 3e-3), the residual y' - f stopped falling at 2e-5 (absolute, in
-  // the dependent speeds' rows) over the Newton iterations, so every correction stayed at
-  // 0.03 ... 0.4 error weights at h = 3e-8 ... 1.3e-7, the rate test failed and IDA
-  // cut the step to a quarter each time (order 1): 441 convergence failures in the fresh solver's 1000
-  // steps, the monitor's stop at t = 6.006 (1001 steps in the zone). With 1.0 the same
-  // restart takes ~90 steps to h = 3.6e-4, and the run goes on (docs/constraints.md,
-  // "The reduced form at rtol 1e-12"). Set before the first step: IDA copies it at its
-  // initial setup only.
+  // loops on the reduced form: near a change point f has a noise floor that the default rate
+  // test mistakes for divergence, cutting the step again and again (measurements: docs/constraints/2026-11-28_tuning_measurements.md).
+  // Set before the first step: IDA copies it at its initial setup only.
   static constexpr double kLoopConvCoef = 1.0;
   // df/dy reused only where it costs at least kReuseMinEvals evaluations (not on the
   // reduced form's closed loops, 2 per Jacobian), for fewer than kMaxReuseSteps steps.

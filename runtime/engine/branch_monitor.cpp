@@ -50,12 +50,8 @@ std::unique_ptr<BranchMonitor, void (*)(BranchMonitor*)> MakeBranchMonitor(const
   if (p.loops.empty()) return m;
   m->ws = MakeWorkspace(p);
   // The bridge's approach and the passage check evaluate the equations close to a change
-  // point, where the reduced form's accelerations are off by ~c / rho^3 for the residual c
-  // the position Newton leaves: on this workspace it goes to round-off below a pivot ratio
-  // of 0.5 for blocks of every size, not only for one loop's (the solver's own evaluations
-  // keep theirs: constraints.cpp kToRoundOffMaxRank). Measured on the chain of ten
-  // equal-link parallelograms at rtol 1e-12, the approach's error estimate at the first
-  // stall: 2.7e3 -> 1.1e3 tolerance units (docs/benchmarks.md "Change points").
+  // point, where the accelerations are off by ~c / rho^3 for a Newton residual c: on this
+  // workspace Newton goes to round-off (measurements: docs/constraints/2026-11-28_tuning_measurements.md).
   m->ws->newton_to_round_off = true;
   return m;
 }

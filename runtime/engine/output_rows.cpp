@@ -27,14 +27,8 @@ constexpr double kRowZone = 1e-2;
 constexpr double kTruncate = 1e-5;
 constexpr int kMaxGaussNewton = 8;
 // The positions' Gauss-Newton goes on below kProjectTight (1e-13 of the loops' length) to this
-// round-off. Near a crossing a residual c of the positions is an angle delta between the
-// rods (per loop phi ~ a^2 delta (delta - 2 theta) at a distance theta from the crossing, so
-// delta ~ c / (2 a^2 theta)), and the velocity constraint there then asks for their speeds
-// apart by ~ omega delta / theta. Measured on the chain of 40 (multiplier form, rtol 1e-12),
-// rows in a bridge's gap (extrapolated): DOP853 t = 5.44 (theta = 2e-4), residual 2.3e-12
-// below kProjectTight (2.4e-12), no step taken: the rods' speeds 3.8e-5 apart, the lumped
-// energy 2.6e-6 of E off; one more step (3.6e-15): 1.8e-6 apart, 7.5e-8 of E. CVODE-BDF
-// t = 11.66: 2.2e-13, 3.7e-5 apart, 2.4e-6 of E -> 1.5e-8 of E.
+// round-off: near a crossing a residual c of the positions makes the rods' speeds differ by
+// ~ omega c / (2 a^2 theta^2), visible in the energy (measurements: docs/constraints/2026-11-28_tuning_measurements.md).
 constexpr double kRowRoundOff = 1e-16;
 
 // The kinetic-energy metric on the free speeds, M = sum_L m_L Jv_L^T Jv_L + Jw_L^T I_L Jw_L,
