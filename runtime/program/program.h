@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/QR>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -357,6 +358,7 @@ struct Workspace {
   std::vector<int> order_scratch;   // the pivoting order of the dependent speeds, then column extents of the symbolic QR  (3 rank)  filled by FactorDependent
   long partition_changes = 0;       // how often the partition was re-chosen  filled by ProjectState
   bool hold_partition = false;      // keep dep/ind even where degraded (difference-quotient Jacobians: HoldPartition)  set by HoldPartition
+  double turn_checked = INFINITY;   // the kept block's pivot ratio when pivoting last found no block twice as good (a turning-point check; INFINITY: none since the partition was chosen or recovered)  set by FactorDependent
   Eigen::VectorXd active_rhs;       // right side v of SolveDependent: a per-row vector on the active rows  (n_a)  filled by its callers
   Eigen::VectorXd dep_solution;     // x = A_dep^+ v of SolveDependent; x(0:rank) on the dependent speeds  (n_a)  filled by SolveDependent's callers
   Eigen::VectorXd lambda_active;    // constraint multipliers on the active rows, Q [w; 0]  (n_a)  filled by LoopMultipliers
