@@ -38,9 +38,8 @@ std::vector<std::string> StateNames(const flat::Mechanism& m) {
 // A joint's end stops (stdlib q_min, q_max, restitution) into the tree joint; the joint joins
 // p->stop_joints when it has one. Only a free Revolute or Prismatic joint takes them.
 template <class Num>
-void EndStops(const flat::Joint& fj, TreeJoint* j, Program* p, Num& num, std::vector<CompileMessage>* errors) {
+void CompileEndStops(const flat::Joint& fj, TreeJoint* j, Program* p, Num& num, std::vector<CompileMessage>* errors) {
   if (fj.q_min == kNoExpr && fj.q_max == kNoExpr) return;
-  const std::string none;
   j->q_min = num(fj.q_min, -INFINITY, "lower end stop of ", j->name, "", fj.loc);
   j->q_max = num(fj.q_max, INFINITY, "upper end stop of ", j->name, "", fj.loc);
   j->restitution = num(fj.restitution, 0.0, "restitution of ", j->name, "", fj.loc);
@@ -179,7 +178,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
         p.friction_joints.push_back(j.child);
     }
 
-    EndStops(fj, &j, &p, num, errors);
+    CompileEndStops(fj, &j, &p, num, errors);
 
     // Prescribed (rheonomic) coordinates: q_k(time), speed and acceleration from jets.
     for (int k = 0; k < j.nq && static_cast<size_t>(k) < fj.prescribed.size(); ++k) {

@@ -463,6 +463,9 @@ class Emitter {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kVar) {
       bool in_primitive = n->parent && n->parent->prim != Prim::None;
+      // A primitive's parameter without a value is optional (a joint's q_min: no stop); the
+      // primitive reports it where it needs one.
+      if (in_primitive && n->variability == ast::Variability::Parameter && !Bound(n)) return;
       if (n->variability == ast::Variability::Parameter || !in_primitive)
         eval_.GetVar(n, n->decl ? n->decl->name_span : Span{});
       return;

@@ -5,8 +5,10 @@
 // joint's acceleration is held at zero by its stop's reaction the same way.
 #include "sim/end_stops.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace kanesim::sim {
 

@@ -68,7 +68,7 @@ class ArkodeStepper final : public SundialsStepper {
         ERKStepSetInterpolantDegree(mem_, ARK_INTERP_MAX_DEGREE) != ARK_SUCCESS)
       return Fail(error, WithDetail("ARKODE setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
-    if (!InitRoots([&](int n) { return ERKStepRootInit(mem_, n, &SundialsStepper::Roots); },
+    if (!InitRoots([&](int count) { return ERKStepRootInit(mem_, count, &SundialsStepper::Roots); },
                    [&](int* d) { return ERKStepSetRootDirection(mem_, d) | ERKStepSetNoInactiveRootWarn(mem_); }, error))
       return false;
     stop_ = stop;

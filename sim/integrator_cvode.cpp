@@ -87,7 +87,7 @@ class CvodeStepper final : public SundialsStepper {
     if (CaptureMessages() != CV_SUCCESS || CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
-    if (!InitRoots([&](int n) { return CVodeRootInit(mem_, n, &SundialsStepper::Roots); },
+    if (!InitRoots([&](int count) { return CVodeRootInit(mem_, count, &SundialsStepper::Roots); },
                    [&](int* d) { return CVodeSetRootDirection(mem_, d) | CVodeSetNoInactiveRootWarn(mem_); }, error))
       return false;
     int maxl = 0;

@@ -71,7 +71,7 @@ class IdaStepper final : public SundialsStepper {
     if (CaptureMessages() != IDA_SUCCESS || IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS)
       return Fail(error, WithDetail("IDA setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
-    if (!InitRoots([&](int n) { return IDARootInit(mem_, n, &SundialsStepper::RootsIda); },
+    if (!InitRoots([&](int count) { return IDARootInit(mem_, count, &SundialsStepper::RootsIda); },
                    [&](int* d) { return IDASetRootDirection(mem_, d) | IDASetNoInactiveRootWarn(mem_); }, error))
       return false;
     dq_.Build(n, options.coupling, DqJacobian::Increment::kIda);
