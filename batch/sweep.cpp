@@ -24,6 +24,20 @@ using Clock = std::chrono::steady_clock;
 
 std::string Num(double x) { return std::isnan(x) ? std::string() : sim::FormatNumber(x); }
 
+// `j.q.start` / `j.u.start` of a joint j: a start value, not a parameter. A sweep over it
+// elaborates the model again with --set (as a structural value), so that the start is
+// exactly the one written in the file would be (same assembly of closed loops).
+bool IsStartName(const flat::Mechanism& mech, const std::string& name) {
+  for (const char* tail : {".q.start", ".u.start"}) {
+    const size_t n = std::char_traits<char>::length(tail);
+    if (name.size() <= n || name.compare(name.size() - n, n, tail) != 0) continue;
+    const std::string joint = name.substr(0, name.size() - n);
+    for (const flat::Joint& j : mech.joints)
+      if (j.name == joint) return true;
+  }
+  return false;
+}
+
 // Parameter values of `mech` with `overrides` (index -> value) applied: the same order
 // and rule as flat::EvaluateParams, so that parameters bound to an overridden one follow
 // it (a rod's inertia follows its mass).
@@ -134,6 +148,7 @@ bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::stri
   const flat::Mechanism& mech = *base.mech;
   for (const std::string& name : config.param_names) {
     int i = mech.FindParam(name);
+    if (i < 0 && IsStartName(mech, name)) continue;
     if (i < 0) {
       *error = "the model has no parameter '" + name + "' (kanesim check lists them)";
       return false;
@@ -261,7 +276,12 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
       const double v = s.values[j];
       if (std::isnan(v)) continue;
       const std::string& name = config_.param_names[j];
-      const auto i = static_cast<size_t>(base_mech.FindParam(name));
+      const int found = base_mech.FindParam(name);
+      if (found < 0) {  // a start value (IsStartName): always elaborated again
+        structural.emplace_back(name, v);
+        continue;
+      }
+      const auto i = static_cast<size_t>(found);
       if (base_mech.params[i].structural) {
         if (v != base_values_[i]) structural.emplace_back(name, v);
       } else {

@@ -47,7 +47,9 @@ class Emitter {
       return -1;
     }
     const size_t pid = static_cast<size_t>(c->prim_index);
-    if (sets_.frame_set_size[pid] == 1 && n->prim != Prim::World) {
+    // A fixed frame's frame_b may end the chain: a named leaf frame (a robot's tool0).
+    const bool leaf_ok = n->prim == Prim::World || (n->prim == Prim::Fixed && std::string(name) == "frame_b");
+    if (sets_.frame_set_size[pid] == 1 && !leaf_ok) {
       auto& d = diags_.Warning(DiagCode::UnconnectedFrame, n->decl ? n->decl->name_span : Span{},
                                "'" + c->path + "' is not connected to anything");
       // A joint's frame_b goes to the body it moves (to the world it would lock the joint: W316).

@@ -71,6 +71,11 @@ bool ParseSetName(const std::string& s, std::vector<SetPart>* parts, size_t* bad
 
 }  // namespace
 
+// Part i is `start`, unindexed and last: the start attribute of the variable before it.
+bool SetOverrides::IsStartPart(const SetOverride& so, size_t i) {
+  return i > 0 && i + 1 == so.parts.size() && so.parts[i].name == "start" && so.parts[i].subs.empty();
+}
+
 Span SetOverrides::At(const SetOverride& so, int begin, int end) {
   return Span{so.file, begin, std::max(end, begin + 1)};
 }
@@ -135,11 +140,17 @@ ModValue SetOverrides::Binding(const SetOverride& so) const {
 // The instance a parsed --set name denotes, with a diagnostic when there is none: an
 // unknown part, an index out of range, an index on something that is not an array, or
 // the wrong number of indices. *elem receives the row-major element of an indexed
-// variable (-1: the whole variable).
-Node* SetOverrides::ResolveTarget(const SetOverride& so, int* elem) {
+// variable (-1: the whole variable). A last part `start` after a variable (j.q.start)
+// names that attribute: *start is set and the variable is returned.
+Node* SetOverrides::ResolveTarget(const SetOverride& so, int* elem, bool* start) {
   *elem = -1;
+  *start = false;
   Node* n = root_;
   for (size_t i = 0; i < so.parts.size(); ++i) {
+    if (n->kind == Node::kVar && *elem < 0 && IsStartPart(so, i)) {
+      *start = true;
+      return n;
+    }
     n = Member(so, i, n);
     if (!n) return nullptr;
     if (n->kind == Node::kArray) {
@@ -250,8 +261,13 @@ void SetOverrides::Bind() {
     Span whole = At(so, 0, so.parts.back().sub_spans.empty() ? so.parts.back().end
                                                                      : so.parts.back().sub_spans.back().second + 1);
     int elem = -1;
-    Node* n = ResolveTarget(so, &elem);
+    bool start = false;
+    Node* n = ResolveTarget(so, &elem, &start);
     if (!n) continue;
+    if (start) {
+      BindStart(so, n, whole);
+      continue;
+    }
     if (n->kind != Node::kVar || n->variability != ast::Variability::Parameter) {
       auto& d = diags_.Error(DiagCode::NotParameter, whole,
                              "--set " + full + ": '" + n->path + "' is not a parameter" +
@@ -282,6 +298,30 @@ void SetOverrides::Bind() {
       n->mod.value = Binding(so);
     }
   }
+}
+
+// j.q.start=0.3: the start value of a (non-parameter) variable, as if written as a
+// modifier in the file; unsubscripted names were bound as modifiers by Parse.
+void SetOverrides::BindStart(const SetOverride& so, Node* var, Span whole) {
+  if (var->variability == ast::Variability::Parameter || var->variability == ast::Variability::Constant) {
+    auto& d = diags_.Error(DiagCode::NotParameter, whole,
+                           "--set " + so.name + ": '" + var->path + "' is a " +
+                               (var->variability == ast::Variability::Constant ? "constant" : "parameter") +
+                               "; set its value, not its start");
+    d.hint = "--set " + var->path + "=VALUE";
+    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+    return;
+  }
+  if (var->decl && var->decl->is_protected) {
+    auto& d = diags_.Error(DiagCode::NotParameter, whole, "--set " + so.name + ": '" + var->path + "' is protected");
+    d.notes.push_back({var->decl->name_span, "declared protected here"});
+    return;
+  }
+  if (!so.subscripted) return;
+  if (var->shared_mod) var->mod = *var->shared_mod, var->shared_mod = nullptr;  // its own copy, to change
+  Mod& m = var->mod.sub["start"];
+  m.value = Binding(so);
+  m.span = so.value->span;
 }
 
 }  // namespace kanesim::lang::elab

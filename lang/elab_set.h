@@ -45,7 +45,9 @@ class SetOverrides {
   bool AnySubscripted() const { return any_subscripted_; }
 
  private:
-  Node* ResolveTarget(const SetOverride& so, int* elem);
+  Node* ResolveTarget(const SetOverride& so, int* elem, bool* start);
+  static bool IsStartPart(const SetOverride& so, size_t i);
+  void BindStart(const SetOverride& so, Node* var, Span whole);
   Node* Member(const SetOverride& so, size_t i, Node* n);
   Node* ArrayElement(const SetOverride& so, size_t i, Node* array);
   bool VarElement(const SetOverride& so, size_t i, const Node* n, int* elem);

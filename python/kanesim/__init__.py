@@ -387,33 +387,49 @@ def _load(args: Dict[str, Any], sets: Dict[str, Any]) -> Model:
     return Model(compiled, args, sets)
 
 
+def _with_starts(set, start) -> dict:
+    """set= plus start= ({"j.q": 0.3} is --set j.q.start=0.3): one dict of --set values."""
+    out = dict(set or {})
+    if start is None:
+        return out
+    if not isinstance(start, Mapping):
+        raise TypeError("start= takes a dict of variable name -> start value")
+    for name, v in start.items():
+        if not isinstance(name, str) or not name or "=" in name:
+            raise ValueError(f"start: {name!r} is not a variable name")
+        out[name + ".start"] = v
+    return out
+
+
 def load(path, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = None, solver: str = "auto",
          integrator: str = "auto", reactions: str = "nan", floating: bool = False,
-         package_path: Sequence[str] = ()) -> Model:
+         package_path: Sequence[str] = (), start: Optional[Mapping[str, Any]] = None) -> Model:
     """Loads, elaborates and compiles a .mech file, or a URDF robot (robot.urdf, translated as
     `kanesim import` does: docs/import.md; floating and package_path as its --floating and
     --package-path). set: parameter values as --set takes
-    them ({"N": 20, "world.g": [0, 0, -9.81], "flag": True}); model: the model to
-    elaborate (default: the last in the file). Raises ModelError."""
+    them ({"N": 20, "world.g": [0, 0, -9.81], "flag": True, "j.q.start": 0.3}); start:
+    start values of joint coordinates and speeds ({"j.q": 0.3, "free.u": [...]}, the same
+    as set={"j.q.start": 0.3}); model: the model to elaborate (default: the last in the
+    file). Raises ModelError."""
     if isinstance(package_path, (str, os.PathLike)):
         package_path = [package_path]
     args = dict(path=os.fspath(path), text="", from_text=False, model=model,
                 solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
                 reactions=_choice(reactions, "reactions", _REACTIONS), floating=bool(floating),
                 package_path=[os.fspath(p) for p in package_path])
-    return _load(args, dict(set or {}))
+    return _load(args, _with_starts(set, start))
 
 
 def loads(text: str, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = None,
           name: str = "<string>.mech", solver: str = "auto", integrator: str = "auto",
-          reactions: str = "nan") -> Model:
+          reactions: str = "nan", start: Optional[Mapping[str, Any]] = None) -> Model:
     """Like load(), from the model's text; diagnostics name it `name`."""
     if not isinstance(text, str):
         raise TypeError("loads() takes the model's text as a str")
     args = dict(path=name, text=text, from_text=True, model=model,
                 solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
                 reactions=_choice(reactions, "reactions", _REACTIONS))
-    return _load(args, dict(set or {}))
+    return _load(args, _with_starts(set, start))
 
 
 class Table:

@@ -135,3 +135,26 @@ def test_energy_check_report_measures_what_the_rows_show(examples):
     assert damped.stats["energy_guard"].startswith("not applied")
     with pytest.raises(ValueError, match="energy_check 'sometimes': unknown \\(on, off, report\\)"):
         m.run(stop_time=1, energy_check="sometimes")
+
+
+def test_start_values_from_outside_equal_the_edited_file(examples, tmp_path):
+    # set={"j.q.start": x} and start={"j.q": x} run exactly what the file edited to start=x
+    # runs (before: E201); a closed loop's start (fourbar) is assembled the same way.
+    text = (examples / "double_pendulum.mech").read_text()
+    edited = text.replace("Revolute shoulder(axis = {0, 0, 1}, q(start = pi / 2), u(start = 0))",
+                          "Revolute shoulder(axis = {0, 0, 1}, q(start = 0.3), u(start = -0.7))")
+    assert edited != text
+    want = kanesim.loads(edited).run(stop_time=1)
+    a = kanesim.load(examples / "double_pendulum.mech", set={"shoulder.q.start": 0.3, "shoulder.u.start": -0.7})
+    b = kanesim.load(examples / "double_pendulum.mech", start={"shoulder.q": 0.3, "shoulder.u": -0.7})
+    for m in (a, b):
+        assert same_bits(m.run(stop_time=1).values, want.values)
+    four = (examples / "fourbar.mech").read_text()
+    four_edited = four.replace("q(start = 1.6)", "q(start = 1.5)")
+    assert four_edited != four
+    want4 = kanesim.loads(four_edited).run(stop_time=0.5)
+    got4 = kanesim.load(examples / "fourbar.mech", start={"rocker_pivot.q": 1.5}).run(stop_time=0.5)
+    assert same_bits(got4.values, want4.values)
+    with pytest.raises(kanesim.ModelError) as e:
+        kanesim.load(examples / "double_pendulum.mech", start={"shoulder.qq": 1})
+    assert e.value.code == "E201"

@@ -1,4 +1,5 @@
 // Output signals: names, plans (only what a selection needs is computed), evaluation.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -26,7 +27,10 @@ enum class SignalKind : std::uint8_t {
   BodyAccel,        // mass-centre acceleration in W
   BodyAngAccel,     // angular acceleration in W
   BodyRotation,     // R_WF of the body's frame, k = 3 i + j
-  FramePosition,    // a = flat frame, k
+  FramePosition,    // a = flat frame, k: its origin in W
+  FrameRotation,    // a = flat frame, k = 3 i + j of R_WF
+  FrameVelocity,    // a = flat frame, k: its origin's velocity in W
+  FrameAngVel,      // a = flat frame, k: its angular velocity in W
   Drive,            // a = full u index of a prescribed coordinate: force that drives it
   Reaction,         // a = flat joint, k = 0..2 force, 3..5 torque on frame_b's side, frame_b axes
   ConstraintPower,  // power of all ideal constraint forces (0 on admissible motions)
@@ -54,6 +58,43 @@ struct SignalPlan {
 namespace {
 
 std::string Idx(int k) { return Index1(k); }
+
+std::string Idx2(int k) { return "[" + std::to_string(k / 3 + 1) + "," + std::to_string(k % 3 + 1) + "]"; }
+
+// The names a frame's R, v and w are listed under: its canonical name and the names the
+// model itself declares for it (a `Frame tool0`, a connector `off.frame_b` of a component
+// of the model: at most one dot), not the stdlib's inner connectors (rod1.tip.frame_b).
+std::vector<std::string> FrameSignalNames(const flat::Frame& f) {
+  std::vector<std::string> names{f.name};
+  for (const std::string& a : f.aliases)
+    if (a != f.name && std::count(a.begin(), a.end(), '.') <= 1) names.push_back(a);
+  return names;
+}
+
+// "<frame>.r[k]", ".v[k]", ".w[k]" or ".R[i,j]" of any name of a frame: the item, or false.
+bool FrameSignalByAlias(const Program& p, const std::string& n, SignalItem* out) {
+  const size_t dot = n.rfind('.');
+  if (dot == std::string::npos || dot == 0) return false;
+  const std::string tail = n.substr(dot + 1);
+  SignalItem it{SignalKind::FramePosition, -1, 0};
+  auto digit = [](char c) { return c >= '1' && c <= '3'; };
+  if (tail.size() == 4 && tail[1] == '[' && digit(tail[2]) && tail[3] == ']' &&
+      (tail[0] == 'r' || tail[0] == 'v' || tail[0] == 'w')) {
+    it.kind = tail[0] == 'r' ? SignalKind::FramePosition : tail[0] == 'v' ? SignalKind::FrameVelocity : SignalKind::FrameAngVel;
+    it.k = tail[2] - '1';
+  } else if (tail.size() == 6 && tail[0] == 'R' && tail[1] == '[' && digit(tail[2]) && tail[3] == ',' && digit(tail[4]) &&
+             tail[5] == ']') {
+    it.kind = SignalKind::FrameRotation;
+    it.k = 3 * (tail[2] - '1') + (tail[4] - '1');
+  } else {
+    return false;
+  }
+  const int f = p.mech->FindFrame(n.substr(0, dot));
+  if (f < 0 || p.frames[static_cast<size_t>(f)].body < -1) return false;
+  it.a = f;
+  *out = it;
+  return true;
+}
 
 // Every signal with its name, in the order AvailableSignals lists them.
 std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
@@ -102,14 +143,26 @@ std::vector<std::pair<std::string, SignalItem>> AllSignals(const Program& p) {
     for (int k = 0; k < 3; ++k) s.push_back({b.name + ".w" + Idx(k), {SignalKind::BodyAngVel, a, k}});
     for (int k = 0; k < 3; ++k) s.push_back({b.name + ".a" + Idx(k), {SignalKind::BodyAccel, a, k}});
     for (int k = 0; k < 3; ++k) s.push_back({b.name + ".alpha" + Idx(k), {SignalKind::BodyAngAccel, a, k}});
-    for (int k = 0; k < 9; ++k)
-      s.push_back({b.name + ".R[" + std::to_string(k / 3 + 1) + "," + std::to_string(k % 3 + 1) + "]",
-                   {SignalKind::BodyRotation, a, k}});
+    for (int k = 0; k < 9; ++k) s.push_back({b.name + ".R" + Idx2(k), {SignalKind::BodyRotation, a, k}});
   }
   for (size_t f = 0; f < p.frames.size(); ++f) {
     if (p.frames[f].body < -1) continue;
     for (int k = 0; k < 3; ++k)
       s.push_back({p.mech->frames[f].name + ".r" + Idx(k), {SignalKind::FramePosition, static_cast<int>(f), k}});
+  }
+  // Frames as signals (issue 40), after the older ones so that their order is kept.
+  for (size_t f = 0; f < p.frames.size(); ++f) {
+    if (p.frames[f].body < -1) continue;
+    const int a = static_cast<int>(f);
+    const std::vector<std::string> names = FrameSignalNames(p.mech->frames[f]);
+    for (size_t i = 0; i < names.size(); ++i) {
+      const std::string& n = names[i];
+      if (i > 0)
+        for (int k = 0; k < 3; ++k) s.push_back({n + ".r" + Idx(k), {SignalKind::FramePosition, a, k}});
+      for (int k = 0; k < 9; ++k) s.push_back({n + ".R" + Idx2(k), {SignalKind::FrameRotation, a, k}});
+      for (int k = 0; k < 3; ++k) s.push_back({n + ".v" + Idx(k), {SignalKind::FrameVelocity, a, k}});
+      for (int k = 0; k < 3; ++k) s.push_back({n + ".w" + Idx(k), {SignalKind::FrameAngVel, a, k}});
+    }
   }
   return s;
 }
@@ -183,18 +236,7 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
         break;
       }
     SignalItem alias{SignalKind::FramePosition, -1, 0};
-    if (!found) {
-      // Frame positions by any alias: "<alias>.r[k]".
-      const size_t dot = n.rfind(".r[");
-      if (dot != std::string::npos && n.size() == dot + 5 && n[dot + 4] == ']' && n[dot + 3] >= '1' && n[dot + 3] <= '3') {
-        const int f = p.mech->FindFrame(n.substr(0, dot));
-        if (f >= 0 && p.frames[static_cast<size_t>(f)].body >= -1) {
-          alias.a = f;
-          alias.k = n[dot + 3] - '1';
-          found = &alias;
-        }
-      }
-    }
+    if (!found && FrameSignalByAlias(p, n, &alias)) found = &alias;  // any name of a frame
     if (!found) {
       if (error) *error = "unknown signal '" + n + "'";
       return nullptr;
@@ -206,7 +248,9 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vecto
       case SignalKind::Output: plan->outputs = plan->velocity = true; break;
       case SignalKind::KineticEnergy:
       case SignalKind::BodyVelocity:
-      case SignalKind::BodyAngVel: plan->velocity = true; break;
+      case SignalKind::BodyAngVel:
+      case SignalKind::FrameVelocity:
+      case SignalKind::FrameAngVel: plan->velocity = true; break;
       case SignalKind::PotentialEnergy:
         if (!p.force_tape.roots.empty()) plan->forces = plan->velocity = true;
         break;
@@ -388,11 +432,19 @@ int EvalSignalsBy(const Program& p, const SignalPlan& plan, Workspace& ws, doubl
         v = l.nrows > 0 ? r.segment(l.row0, l.nrows).cwiseAbs().maxCoeff() : 0.0;
         break;
       }
-      case SignalKind::FramePosition: {
+      case SignalKind::FramePosition:
+      case SignalKind::FrameRotation: {
         Vec3 pos;
         Mat3 R;
         FramePose(p, ws, it.a, &pos, &R);
-        v = pos[it.k];
+        v = it.kind == SignalKind::FramePosition ? pos[it.k] : R(it.k / 3, it.k % 3);
+        break;
+      }
+      case SignalKind::FrameVelocity:
+      case SignalKind::FrameAngVel: {
+        Vec3 vel, w;
+        FrameMotion(p, ws, it.a, &vel, &w);
+        v = it.kind == SignalKind::FrameVelocity ? vel[it.k] : w[it.k];
         break;
       }
     }
