@@ -305,6 +305,10 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
   };
   for (int fi : cut_flat) {
     const flat::Joint& fj = m.joints[static_cast<size_t>(fi)];
+    if (fj.q_min != kNoExpr || fj.q_max != kNoExpr)  // a cut joint has no coordinate to stop
+      errors->push_back(Msg(flat::DiagCode::BadStop,
+                            "joint '" + fj.name + "' closes a loop (it is a cut joint) and cannot have end stops", fj.loc,
+                            "put the stop on another joint of the loop, or mark another joint `cut = true`"));
     LoopClosure l;
     l.name = fj.name;
     l.loc = fj.loc;

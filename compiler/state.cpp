@@ -35,6 +35,31 @@ std::vector<std::string> StateNames(const flat::Mechanism& m) {
   return n;
 }
 
+// A joint's end stops (stdlib q_min, q_max, restitution) into the tree joint; the joint joins
+// p->stop_joints when it has one. Only a free Revolute or Prismatic joint takes them.
+template <class Num>
+void CompileEndStops(const flat::Joint& fj, TreeJoint* j, Program* p, Num& num, std::vector<CompileMessage>* errors) {
+  if (fj.q_min == kNoExpr && fj.q_max == kNoExpr) return;
+  j->q_min = num(fj.q_min, -INFINITY, "lower end stop of ", j->name, "", fj.loc);
+  j->q_max = num(fj.q_max, INFINITY, "upper end stop of ", j->name, "", fj.loc);
+  j->restitution = num(fj.restitution, 0.0, "restitution of ", j->name, "", fj.loc);
+  const bool prescribed = !fj.prescribed.empty() && fj.prescribed[0] != kNoExpr;
+  std::string why;
+  if (j->type != JointType::Prismatic && j->type != JointType::Revolute)
+    why = "end stops need a revolute or prismatic joint";
+  else if (prescribed)
+    why = "a prescribed joint cannot have end stops";
+  else if (std::isnan(j->q_min) || std::isnan(j->q_max) || !(j->q_min < j->q_max))
+    why = "q_min must be less than q_max";
+  else if (!(j->restitution >= 0.0 && j->restitution <= 1.0))
+    why = "restitution must be in [0, 1]";
+  if (!why.empty()) {
+    errors->push_back(Msg(flat::DiagCode::BadStop, "joint '" + j->name + "': " + why, fj.loc));
+    return;
+  }
+  p->stop_joints.push_back(j->child);
+}
+
 }  // namespace
 
 void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {
@@ -152,6 +177,8 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       else if (j.mu > 0.0)
         p.friction_joints.push_back(j.child);
     }
+
+    CompileEndStops(fj, &j, &p, num, errors);
 
     // Prescribed (rheonomic) coordinates: q_k(time), speed and acceleration from jets.
     for (int k = 0; k < j.nq && static_cast<size_t>(k) < fj.prescribed.size(); ++k) {

@@ -83,6 +83,7 @@ namespace kanesim::flat {
   X(StartSpeedsProjected, "W315", "start speeds changed to satisfy the velocity constraints")  \
   X(LockedJoint, "W316", "joint cannot move: both its frames are on one rigid body")          \
   X(OutOfRange, "K317", "mass, inertia or length out of the range the equations can use")  \
+  X(BadStop, "K318", "end stop on a joint that cannot take it, or out of order")            \
   X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")
 
 enum class DiagCode {

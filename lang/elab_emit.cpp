@@ -105,6 +105,18 @@ class Emitter {
     return dflt;
   }
 
+  // A one-coordinate joint's end stops: `q_min` / `q_max` when bound (unbound: no stop, so a
+  // joint without stops carries nothing), `restitution` with them.
+  void EndStops(Node* n, flat::Joint* j) {
+    Node* lo = n->Child("q_min");
+    Node* hi = n->Child("q_max");
+    const bool has_lo = lo && lo->kind == Node::kVar && Bound(lo);
+    const bool has_hi = hi && hi->kind == Node::kVar && Bound(hi);
+    if (has_lo) j->q_min = AsScalar(Field(n, "q_min", {}));
+    if (has_hi) j->q_max = AsScalar(Field(n, "q_max", {}));
+    if ((has_lo || has_hi) && n->Child("restitution")) j->restitution = AsScalar(Field(n, "restitution", {}));
+  }
+
   // Whether a variable has any binding.
   static bool Bound(Node* var) {
     return var && (var->eq_binding || var->Modifiers().value || !var->eq_elem_binding.empty());
@@ -207,6 +219,7 @@ class Emitter {
             n->Child("friction_radius") ? AsScalar(Field(n, "friction_radius", {})) : pool.Constant(1.0);
       }
     }
+    EndStops(n, &j);
     int nq = j.nq(), nu = j.nu();
     j.q_start.assign(static_cast<size_t>(nq), flat::kNoExpr);
     j.u_start.assign(static_cast<size_t>(nu), flat::kNoExpr);
@@ -452,6 +465,9 @@ class Emitter {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kVar) {
       bool in_primitive = n->parent && n->parent->prim != Prim::None;
+      // A primitive's parameter without a value is optional (a joint's q_min: no stop); the
+      // primitive reports it where it needs one.
+      if (in_primitive && n->variability == ast::Variability::Parameter && !Bound(n)) return;
       if (n->variability == ast::Variability::Parameter || !in_primitive)
         eval_.GetVar(n, n->decl ? n->decl->name_span : Span{});
       return;

@@ -150,6 +150,24 @@ int ProjectSpeedsInKineticMetric(const Program& program, Workspace& ws, double t
 // (sim/energy_guard.h) checks only conservative models. runtime/engine/energy_guard.cpp
 std::string NonConservativeCause(const Program& program);
 
+// End stops (stdlib q_min / q_max on Revolute and Prismatic joints; docs/integrators.md
+// "End stops"): one entry per stop joint, in tree order; empty when the program has none (then
+// no event machinery runs). runtime/engine/end_stops.cpp
+struct EndStop {
+  std::string joint;  // the joint's name
+  int q = -1;         // its coordinate's index in y = [q_free; u_free]
+  int u = -1;         // its speed's index among the free speeds (y[NumQ + u])
+  double q_min = 0.0, q_max = 0.0;  // -inf / +inf: no stop on that side
+  double restitution = 0.0;
+};
+std::vector<EndStop> EndStops(const Program& program);
+// The speeds' response to a unit generalized impulse on free speed k at the state (t, y):
+// x = M(q)^-1 e_k (nu entries), from the mass matrix of Kane's equations. An impulse lambda
+// there changes the speeds by lambda x (M du = e_k lambda). 0, or Derivative's status codes;
+// -1 on a program with constraint rows (closed loops, contacts), where the impulse would also
+// need their rows (ErrorMessage says so).
+int InverseMassColumn(const Program& program, Workspace& ws, double t, const double* y, int k, double* x);
+
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",
 // "rod1.frame_b.r[1]", declared outputs by their name. Selection compiles the
 // requested names into a plan so that only what is needed gets computed.

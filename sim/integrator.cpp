@@ -241,6 +241,40 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
     double tout = grid.Time(k);
     rhs.ClearFailure();
     int flag = stepper->Advance(tout, y.data());
+    if (flag == detail::kEventReached) {
+      // The rows at the event's left and right limits (the same time twice), the jump
+      // between them, and a fresh solver from the right limit.
+      const double te = stepper->event_time;
+      if (!write_held(INFINITY)) break;
+      if (row(te, y.data(), &cause) != 0) {
+        fail(te, cause);
+        break;
+      }
+      ++result.rows;
+      if (system.Event(te, y.data(), stepper->event_index) != 0) {
+        fail(te, system.FailureCause());
+        break;
+      }
+      ++result.events;
+      if (row(te, y.data(), &cause) != 0) {
+        fail(te, cause);
+        break;
+      }
+      ++result.rows;
+      AddStats(&done, stepper->Stats());
+      stepper.reset();
+      if (te < grid.stop) {
+        rhs.Reset();
+        stepper = detail::MakeStepper(rhs, te, y.data(), grid.stop, options, &error);
+        if (!stepper) {
+          fail(rhs.failed ? rhs.fail_time : te, rhs.failed ? rhs.cause : error);
+          result.stats = done;
+          return result;
+        }
+      }
+      if (te < tout) --k;  // the same instant from the fresh solver (at it: the right limit was its row)
+      continue;
+    }
     if (flag < 0) {
       detail::StepFailure why = stepper->Explain(flag);
       if (rhs.fatal || (why.from_rhs && rhs.failed)) {
@@ -320,7 +354,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
     ++result.rows;
   }
   if (!held_t.empty()) write_held(INFINITY);
-  result.stats = stepper->Stats();
+  result.stats = stepper ? stepper->Stats() : IntegratorStats{};
   AddStats(&result.stats, done);
   return result;
 }

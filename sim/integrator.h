@@ -108,6 +108,15 @@ class OdeSystem {
   // the solvers check against the energies of the steps around them (closed loops:
   // docs/constraints.md "Rows checked against the energy"). Evaluated aside: nothing a
   // later Rhs reads is touched. HasEnergy false: never called.
+  // Events (end stops; docs/integrators.md "End stops"): NumEvents() functions g_i(t, y), each
+  // positive while nothing happens; an event is a g_i crossing zero downwards, which every
+  // solver locates (SUNDIALS' root finding; DOP853 on its dense output) and stops at. Integrate
+  // then writes the row at the event's left limit, lets Event(t, y, i) jump y (an impact, a
+  // stop taken or left; Rhs's status codes), writes the right limit and goes on with a fresh
+  // solver. NumEvents() == 0: none of this runs.
+  virtual int NumEvents() const { return 0; }
+  virtual int EventFunctions(double /*t*/, const double* /*y*/, double* /*g*/) { return 0; }
+  virtual int Event(double /*t*/, double* /*y*/, int /*i*/) { return 0; }
   virtual bool HasEnergy() const { return false; }
   virtual int Energy(double /*t*/, const double* /*y*/, double* /*T*/, double* /*V*/) { return -1; }
 };
@@ -201,6 +210,7 @@ struct IntegrateResult {
   std::string cause;       // why, for "numerical failure at t = ...: <cause>"
   long rows = 0;           // rows handed to the callback
   long bridges = 0;        // singular configurations stepped over (OdeSystem::Bridge)
+  long events = 0;         // events handled (OdeSystem::Event), each with two rows
   IntegratorStats stats;
 };
 

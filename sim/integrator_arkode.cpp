@@ -68,6 +68,9 @@ class ArkodeStepper final : public SundialsStepper {
         ERKStepSetInterpolantDegree(mem_, ARK_INTERP_MAX_DEGREE) != ARK_SUCCESS)
       return Fail(error, WithDetail("ARKODE setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
+    if (!InitRoots([&](int count) { return ERKStepRootInit(mem_, count, &SundialsStepper::Roots); },
+                   [&](int* d) { return ERKStepSetRootDirection(mem_, d) | ERKStepSetNoInactiveRootWarn(mem_); }, error))
+      return false;
     stop_ = stop;
     rtol_ = options.rtol;
     atol_ = options.atol;
@@ -83,9 +86,10 @@ class ArkodeStepper final : public SundialsStepper {
     while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret);
     if (flag >= 0 && !hooked_) {  // the restart point until the hook keeps accepted steps
       const double* ys = N_VGetArrayPointer(s_.y);
-      t_accepted_ = tout;
+      t_accepted_ = tret;
       std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());
     }
+    if (flag == ARK_ROOT_RETURN) return EventReached(tret, y, [&](int* f) { ERKStepGetRootInfo(mem_, f); });
     return CopyOut(flag, y);
   }
 

@@ -87,6 +87,9 @@ class CvodeStepper final : public SundialsStepper {
     if (CaptureMessages() != CV_SUCCESS || CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
+    if (!InitRoots([&](int count) { return CVodeRootInit(mem_, count, &SundialsStepper::Roots); },
+                   [&](int* d) { return CVodeSetRootDirection(mem_, d) | CVodeSetNoInactiveRootWarn(mem_); }, error))
+      return false;
     int maxl = 0;
     if (bdf && (krylov_ = UseKrylov(options, rhs_, &maxl))) {  // matrix-free: sim/newton_krylov.h
       s_.ls = MakeKrylovSolver(s_.y, maxl, s_.ctx);
@@ -118,7 +121,11 @@ class CvodeStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    if (!rhs_.ChecksSteps()) return CopyOut(CVode(mem_, tout, s_.y, &tret, CV_NORMAL), y);
+    if (!rhs_.ChecksSteps()) {
+      const int flag = CVode(mem_, tout, s_.y, &tret, CV_NORMAL);
+      if (flag == CV_ROOT_RETURN) return EventReached(tret, y, [&](int* f) { CVodeGetRootInfo(mem_, f); });
+      return CopyOut(flag, y);
+    }
     return AdvanceCheckedSteps(tout, y, [&](double* t) {
       if (watch_.drifted && !ResetProjected()) return CV_ILL_INPUT;
       const int flag = CVode(mem_, tout, s_.y, t, CV_ONE_STEP);

@@ -106,6 +106,11 @@ class Dop853Stepper final : public Stepper {
     energy_ = options_.row_energy_check && rhs_.HasEnergy();
     std::copy(y0, y0 + n_, y_.begin());
     if (Eval(t_, y_.data(), K(0)) != 0) return false;
+    if (const int ne = rhs_.NumEvents(); ne > 0) {
+      g_old_.resize(static_cast<size_t>(ne));
+      g_new_.resize(static_cast<size_t>(ne));
+      if (rhs_.EventFunctions(t_, y_.data(), g_old_.data()) != 0) return false;
+    }
     if (options_.initial_step > 0.0) {
       h_ = options_.initial_step;
     } else if (!InitialStep(&h_)) {
@@ -121,6 +126,12 @@ class Dop853Stepper final : public Stepper {
     last_tout_set_ = true;
     long steps_here = 0;
     for (;;) {
+      if (event_pending_ && event_t_ <= tout) {  // an event before the instant: stop there
+        Interpolate(event_t_, y);
+        event_time = event_t_;
+        event_index = event_i_;
+        return kEventReached;
+      }
       if (t_ >= tout) {  // the last accepted step [t_old_, t_] holds tout
         if (tout == t_) {
           std::copy(y_.begin(), y_.end(), y);
@@ -140,6 +151,7 @@ class Dop853Stepper final : public Stepper {
       if (steps_here++ >= options_.max_steps) return kTooMuchWork;
       int flag = Step(tout);
       if (flag != kOk) return flag;
+      if (!g_old_.empty() && (flag = LocateEvent()) != kOk) return flag;
     }
   }
 
@@ -349,8 +361,59 @@ class Dop853Stepper final : public Stepper {
     fsal_pending_ = true;
   }
 
+  // Events (OdeSystem::NumEvents) in the last accepted step: each function that went from
+  // positive at its start to <= 0 at its end, its crossing located on the dense output by
+  // the Illinois variant of regula falsi to a few units of round-off in t; the earliest one
+  // is pending (Advance stops there). The time kept is the bracket's right end, where g <= 0.
+  int LocateEvent() {
+    if (rhs_.EventFunctions(t_, y_.data(), g_new_.data()) != 0) return kRhsFatal;
+    event_pending_ = false;
+    for (size_t i = 0; i < g_new_.size(); ++i) {
+      if (!(g_old_[i] > 0.0 && g_new_[i] <= 0.0)) continue;
+      if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
+      const double root = Crossing(static_cast<int>(i), g_old_[i], g_new_[i]);
+      if (std::isnan(root)) return kRhsFatal;
+      if (!event_pending_ || root < event_t_) {
+        event_pending_ = true;
+        event_t_ = root;
+        event_i_ = static_cast<int>(i);
+      }
+    }
+    g_prev_ = g_old_;
+    g_old_.swap(g_new_);
+    return kOk;
+  }
+
+  // Event function i's zero in [t_old_, t_] (ga > 0 >= gb there); NaN when it cannot be evaluated.
+  double Crossing(int i, double ga, double gb) {
+    double a = t_old_, b = t_;
+    int side = 0;  // which end was kept last time (Illinois: halve that end's value)
+    std::vector<double>& y = event_y_;
+    y.resize(static_cast<size_t>(n_));
+    std::vector<double> g(g_new_.size());
+    for (int it = 0; it < 200 && b - a > 4.0 * kEps * std::max(std::abs(a), std::abs(b)); ++it) {
+      double t = b - gb * (b - a) / (gb - ga);
+      if (!(t > a && t < b)) t = 0.5 * (a + b);
+      Interpolate(t, y.data());
+      if (rhs_.EventFunctions(t, y.data(), g.data()) != 0) return NAN;
+      const double gt = g[static_cast<size_t>(i)];
+      if (gt > 0.0) {
+        a = t, ga = gt;
+        if (side == -1) gb *= 0.5;
+        side = -1;
+      } else {
+        b = t, gb = gt;
+        if (side == 1) ga *= 0.5;
+        side = 1;
+      }
+    }
+    return b;
+  }
+
   // Returns to the start of the last step after f failed in its dense-output stages.
   void Undo() {
+    event_pending_ = false;
+    if (!g_prev_.empty()) g_old_ = g_prev_;  // the event functions at the retaken step's start
     y_.swap(y_old_);
     t_ = t_old_;
     --steps_;
@@ -542,6 +605,12 @@ class Dop853Stepper final : public Stepper {
   bool stages_ready_ = false;    // K(13 .. 15) hold the last step's dense-output stages
   int rhs_fails_ = 0;            // recoverable failures of f in a row
   long steps_ = 0, rhs_evals_ = 0, err_test_fails_ = 0, dense_rejects_ = 0, energy_rejects_ = 0;
+  std::vector<double> g_old_, g_new_;  // event functions at the last accepted step's end, and scratch
+  std::vector<double> g_prev_;   // ... at its start
+  std::vector<double> event_y_;  // Crossing's interpolated states  (n)
+  bool event_pending_ = false;   // an event function crossed zero at event_t_ in the last step
+  double event_t_ = 0.0;
+  int event_i_ = -1;
   std::string underflow_;        // Explain's text for kUnderflow
   bool underflow_from_rhs_ = false;
 };

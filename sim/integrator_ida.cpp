@@ -71,6 +71,9 @@ class IdaStepper final : public SundialsStepper {
     if (CaptureMessages() != IDA_SUCCESS || IDAInit(mem_, &IdaStepper::Residual, t0, s_.y, s_.yp) != IDA_SUCCESS)
       return Fail(error, WithDetail("IDA setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
+    if (!InitRoots([&](int count) { return IDARootInit(mem_, count, &SundialsStepper::RootsIda); },
+                   [&](int* d) { return IDASetRootDirection(mem_, d) | IDASetNoInactiveRootWarn(mem_); }, error))
+      return false;
     dq_.Build(n, options.coupling, DqJacobian::Increment::kIda);
     nnz_ = dq_.Nonzeros();
     f0_.assign(static_cast<size_t>(n), 0.0);
@@ -115,7 +118,11 @@ class IdaStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    if (!rhs_.ChecksSteps()) return CopyOut(IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL), y);
+    if (!rhs_.ChecksSteps()) {
+      const int flag = IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL);
+      if (flag == IDA_ROOT_RETURN) return EventReached(tret, y, [&](int* f) { IDAGetRootInfo(mem_, f); });
+      return CopyOut(flag, y);
+    }
     return AdvanceCheckedSteps(tout, y, [&](double* t) { return IDASolve(mem_, tout, t, s_.y, s_.yp, IDA_ONE_STEP); });
   }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "sim/change_point_bridge.h"
+#include "sim/end_stops.h"
 #include "sim/test_hooks.h"
 
 namespace kanesim::sim {
@@ -39,10 +40,16 @@ class EngineOde final : public OdeSystem {
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
     from_monitor_ = false;
-    const int s = rt::Derivative(program_, ws_, t, y, ydot);
+    int s = rt::Derivative(program_, ws_, t, y, ydot);
+    if (stops_ && s == 0) s = stops_->Hold(ws_, t, y, ydot);
     if (fault_ && s == 0) fault_(t, y, ydot);
     return s;
   }
+  // End stops (sim/end_stops.h): their events; none without stops.
+  void SetStops(EndStopEvents* stops) { stops_ = stops; }
+  int NumEvents() const override { return stops_ ? stops_->Count() : 0; }
+  int EventFunctions(double t, const double* y, double* g) override { return stops_->Functions(ws_, t, y, g); }
+  int Event(double t, double* y, int i) override { return stops_->Event(ws_, t, y, i); }
   void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
   bool ChecksSteps() const override { return bridge_ != nullptr; }
   int StepAccepted(double t, const double* y) override {
@@ -115,6 +122,7 @@ class EngineOde final : public OdeSystem {
   const rt::Program& program_;
   rt::Workspace& ws_;
   std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
+  EndStopEvents* stops_ = nullptr;             // end stops (null: none)
   bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank
   int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet
@@ -217,6 +225,16 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
   std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
   rt::InitialState(program, y0.data());
+  // End stops: events in every integrator (sim/end_stops.h); a start on a stop is its first event.
+  EndStopEvents stops(program, options.rtol, options.atol);
+  if (stops.Active()) {
+    if (std::string why = stops.CheckStart(y0.data()); !why.empty()) return UsageError(why);
+    std::vector<double> x(static_cast<size_t>(rt::NumU(program)));
+    const double t0 = grid.start;
+    if (rt::InverseMassColumn(program, *ws_rhs, t0, y0.data(), 0, x.data()) != 0 ||
+        stops.Start(*ws_rhs, t0, y0.data()) != 0)
+      return UsageError("end stops: " + rt::ErrorMessage(*ws_rhs));
+  }
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
@@ -266,6 +284,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return status;
   };
   EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
+  if (stops.Active()) ode.SetStops(&stops);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
@@ -277,6 +296,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.integrator = ir.stats;
   result.stats.rows = ir.rows;
   result.stats.bridges = ir.bridges;
+  result.stats.events = stops.Log();
   ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
   result.stats.energy_guard = energy.Description();
   result.stats.energy_error = energy.WorstError();
@@ -356,6 +376,14 @@ std::string FormatStats(const SimStats& s) {
     if (s.energy_guard == "on" || s.energy_guard == "report") {
       std::snprintf(buf, sizeof buf, "  largest relative error   %.3g (of the motion's energy; bound %.3g)\n", s.energy_error,
                     s.energy_tolerance);
+      out += buf;
+    }
+  }
+  if (!s.events.empty()) {  // end stops (only where there were events): time, element, kind
+    std::snprintf(buf, sizeof buf, "events                     %zu\n", s.events.size());
+    out += buf;
+    for (const EventRecord& e : s.events) {
+      std::snprintf(buf, sizeof buf, "  t = %-22.17g %s: %s\n", e.time, e.element.c_str(), e.kind.c_str());
       out += buf;
     }
   }

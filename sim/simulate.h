@@ -47,6 +47,13 @@ struct PhaseTimes {
   double output = 0.0;     // signal evaluation and writing
 };
 
+// One event of a run (end stops): its time, the element ("j1") and what happened ("impact at
+// q_min", "rests on q_max", "leaves q_min").
+struct EventRecord {
+  double time = 0.0;
+  std::string element, kind;
+};
+
 struct SimStats {
   rt::Integrator method = rt::Integrator::IDA;
   IntegratorStats integrator;
@@ -58,6 +65,7 @@ struct SimStats {
   // largest relative energy error seen and the bound (EnergyGuard).
   std::string energy_guard;
   double energy_error = 0.0, energy_tolerance = 0.0;
+  std::vector<EventRecord> events;  // in time order (--stats prints them)
   PhaseTimes times;
 };
 

@@ -33,6 +33,8 @@ class GuardedRhs {
   bool ChecksSteps() const { return system_.ChecksSteps(); }
   int StepAccepted(double t, const double* y);
   // The system's energy of a state (OdeSystem::HasEnergy, Energy), for checking rows.
+  int NumEvents() const { return system_.NumEvents(); }
+  int EventFunctions(double t, const double* y, double* g) { return system_.EventFunctions(t, y, g); }
   bool HasEnergy() const { return system_.HasEnergy(); }
   int Energy(double t, const double* y, double* T, double* V) { return system_.Energy(t, y, T, V); }
   // The system's ProjectedStates (OdeSystem::ProjectedStates), inside a JacobianHold.
@@ -126,12 +128,18 @@ struct StepFailure {
   std::string cause;      // the solver's reason otherwise
 };
 
+// Advance's flag when an event function crossed zero before tout (OdeSystem::NumEvents): y
+// is the state at Stepper::event_time, where function event_index crossed.
+inline constexpr int kEventReached = 1000;
+
 class Stepper {
  public:
   virtual ~Stepper() = default;
   // Integrates to tout (NORMAL mode, interpolated) and writes y(tout) into y. Returns
-  // the solver's flag: >= 0 success, < 0 failure (then Explain(flag)).
+  // the solver's flag: >= 0 success, < 0 failure (then Explain(flag)); kEventReached.
   virtual int Advance(double tout, double* y) = 0;
+  double event_time = 0.0;  // kEventReached: where, and which event function
+  int event_index = -1;
   virtual double CurrentTime() const = 0;
   virtual IntegratorStats Stats() const = 0;
   virtual StepFailure Explain(int flag) const = 0;

@@ -153,6 +153,15 @@ StepFailure SundialsStepper::Explain(int flag) const {
   return {false, WithDetail(what, d)};
 }
 
+int SundialsStepper::Roots(double t, N_Vector y, double* g, void* user_data) {
+  auto* self = static_cast<SundialsStepper*>(user_data);
+  return self->rhs_.EventFunctions(t, N_VGetArrayPointer(y), g);
+}
+
+int SundialsStepper::RootsIda(double t, N_Vector y, N_Vector /*yp*/, double* g, void* user_data) {
+  return Roots(t, y, g, user_data);
+}
+
 int SundialsStepper::Rhs(double t, N_Vector y, N_Vector ydot, void* user_data) {
   auto* self = static_cast<SundialsStepper*>(user_data);
   return self->rhs_(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));

@@ -151,6 +151,32 @@ class SundialsStepper : public Stepper {
   bool SetCommonOptions(double stop, const IntegratorOptions& options, std::string* error);
   // y := s_.y when flag >= 0 (a successful return of the module's solve); returns flag.
   int CopyOut(int flag, double* y) const;
+  // Events (OdeSystem::NumEvents): the module's root finding on every event function, each
+  // crossing downwards only. init(n) is its RootInit, direction(dirs) its SetRootDirection;
+  // nothing when the system has none. False, with *error.
+  template <class Init, class Direction>
+  bool InitRoots(Init init, Direction direction, std::string* error) {
+    const int n = rhs_.NumEvents();
+    if (n == 0) return true;
+    std::vector<int> down(static_cast<size_t>(n), -1);
+    if (init(n) != 0 || direction(down.data()) != 0)
+      return Fail(error, WithDetail(std::string(module_.module) + ": root finding setup failed", messages_.last));
+    return true;
+  }
+  // After the module's root return at tret: y, event_time and event_index (the first function
+  // that crossed, from info(found), its GetRootInfo); kEventReached.
+  template <class Info>
+  int EventReached(double tret, double* y, Info info) {
+    std::vector<int> found(static_cast<size_t>(rhs_.NumEvents()), 0);
+    info(found.data());
+    event_index = static_cast<int>(std::find_if(found.begin(), found.end(), [](int f) { return f != 0; }) - found.begin());
+    event_time = tret;
+    CopyOut(0, y);
+    return kEventReached;
+  }
+  // The event functions for CVODE and ARKODE (user data: this), and for IDA.
+  static int Roots(double t, N_Vector y, double* g, void* user_data);
+  static int RootsIda(double t, N_Vector y, N_Vector yp, double* g, void* user_data);
   // One step at a time, each checked (OdeSystem::StepAccepted), then the output instant
   // from the module's interpolant, as in its NORMAL mode. one_step(&tret) takes one step
   // toward tout into s_.y (the module's ONE_STEP mode) and returns its flag; StepChecked

@@ -44,6 +44,16 @@ namespace {
 // singular (a loop at a dead point: the Jacobian lost rank).
 constexpr double kDegraded = 1e-2;
 constexpr double kSingular = 1e-10;
+// A turning point (docs/constraints.md "Turning points"): an independent speed passes zero
+// and the kept block degrades while the loop's rows stay well conditioned; its projection
+// amplifies the integrator's drift by 1 / ratio. Below kTurning a block of one loop's size
+// (kToRoundOffMaxRank) is re-chosen by pivoting when that gains kTurnGain.
+constexpr double kTurning = 0.2;
+constexpr double kTurnGain = 2.0;
+// ... checked again only once the block's ratio has fallen by kTurnRecheck since a check that
+// found nothing better: at a change point pivoting finds the kept block at every evaluation in
+// the band, and the pivoting QR there cost the single parallelogram 10-19 % of its instructions.
+constexpr double kTurnRecheck = 0.5;
 // From this many dependent speeds on, the order they are factored in is chosen by the fill
 // of A_dep's QR (BandedOrder): a chain of loops has a block-banded A_dep, whose QR stays
 // banded in the order of the rows the speeds move but fills in the pivoting order
@@ -471,6 +481,21 @@ void StructuralRows(const Program& p, Workspace& ws) {
     ws.col_rows[2 * static_cast<size_t>(s) + 1] = hi;
   }
 }
+
+// Factors ws.A by column pivoting (ws.qr_A, its first rank pivots) and says whether that
+// choice's block is at least kTurnGain times better conditioned than the kept one's (pivot
+// ratio q): the loop's rows are well conditioned where its kept block is not, a turning
+// point. At a change point the rows lose rank as a whole and pivoting picks the kept block
+// again (the same ratio).
+bool PivotingIsBetter(Workspace& ws, int rank, double q) {
+  ws.qr_A.Compute(ws.A, rank);
+  double mn = INFINITY, mx = 0.0;
+  for (int k = 0; k < rank; ++k) {
+    mn = std::min(mn, ws.qr_A.DiagAbs(k));
+    mx = std::max(mx, ws.qr_A.DiagAbs(k));
+  }
+  return mx > 0.0 && mn >= kTurnGain * q * mx;
+}
 }  // namespace
 
 int FactorDependent(const Program& p, Workspace& ws) {
@@ -486,8 +511,7 @@ int FactorDependent(const Program& p, Workspace& ws) {
     }
     return mx > 0.0 ? mn / mx : 0.0;
   };
-  auto choose = [&]() {
-    ws.qr_A.Compute(ws.A, rank);  // only the first rank pivots are used
+  auto adopt = [&]() {
     const auto& perm = ws.qr_A.Indices();
     for (int k = 0; k < rank; ++k) ws.dep[static_cast<size_t>(k)] = perm[k];
     ws.dep_banded = false;
@@ -500,7 +524,12 @@ int FactorDependent(const Program& p, Workspace& ws) {
       if (!d) ws.ind[static_cast<size_t>(n++)] = s;
     }
     ws.partition_valid = true;
+    ws.turn_checked = INFINITY;
     ++ws.partition_changes;
+  };
+  auto choose = [&]() {
+    ws.qr_A.Compute(ws.A, rank);  // only the first rank pivots are used
+    adopt();
   };
   bool fresh = false;
   if (!ws.partition_valid) {
@@ -514,7 +543,16 @@ int FactorDependent(const Program& p, Workspace& ws) {
   if (q < (ws.hold_partition ? kSingular : kDegraded) && !fresh) {
     choose();
     q = ratio();
+  } else if (q < kTurning && !fresh && !ws.hold_partition && rank <= kToRoundOffMaxRank &&
+             q < kTurnRecheck * ws.turn_checked) {
+    if (PivotingIsBetter(ws, rank, q)) {
+      adopt();
+      q = ratio();
+    } else {
+      ws.turn_checked = q;
+    }
   }
+  if (q >= kTurning) ws.turn_checked = INFINITY;
   if (q < kSingular) {
     char buf[48];
     std::snprintf(buf, sizeof buf, "%.2g", q);

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/QR>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -75,6 +76,10 @@ struct TreeJoint {
   double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/kane/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
+  // End stops (Revolute, Prismatic): q in [q_min, q_max]; -inf / +inf: none on that side.
+  double q_min = -std::numeric_limits<double>::infinity();
+  double q_max = std::numeric_limits<double>::infinity();
+  double restitution = 0.0;    // Newton's coefficient at an impact on a stop, 0..1
   std::string name;
   flat::SourceLoc loc;
   int flat_index = -1;
@@ -244,6 +249,7 @@ struct Program {
   std::vector<std::uint8_t> contact_indeterminate;   // per contact, bit k: 0 normal, 1 longitudinal, 2 lateral force
   std::vector<int> friction_indeterminate;  // tree joints whose Coulomb friction reads an indeterminate normal force
   std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/kane/friction.cpp)
+  std::vector<int> stop_joints;         // tree joints with an end stop (q_min or q_max); empty: no events
   // Start speeds given non-zero that the assembly's velocity projection changed (warning
   // W315, compiler/compiler.h StartSpeedsWarning): the message ("" when none) and the place of the
   // constraint with the largest start residual.
@@ -357,6 +363,7 @@ struct Workspace {
   std::vector<int> order_scratch;   // the pivoting order of the dependent speeds, then column extents of the symbolic QR  (3 rank)  filled by FactorDependent
   long partition_changes = 0;       // how often the partition was re-chosen  filled by ProjectState
   bool hold_partition = false;      // keep dep/ind even where degraded (difference-quotient Jacobians: HoldPartition)  set by HoldPartition
+  double turn_checked = INFINITY;   // the kept block's pivot ratio when pivoting last found no block twice as good (a turning-point check; INFINITY: none since the partition was chosen or recovered)  set by FactorDependent
   Eigen::VectorXd active_rhs;       // right side v of SolveDependent: a per-row vector on the active rows  (n_a)  filled by its callers
   Eigen::VectorXd dep_solution;     // x = A_dep^+ v of SolveDependent; x(0:rank) on the dependent speeds  (n_a)  filled by SolveDependent's callers
   Eigen::VectorXd lambda_active;    // constraint multipliers on the active rows, Q [w; 0]  (n_a)  filled by LoopMultipliers

@@ -13,6 +13,8 @@
 //  - the Bennett 4R (bennett.mech) against Bennett's closed form (1914),
 //    tan(th1/2) tan(th2/2) = sin((beta + alpha)/2) / sin((beta - alpha)/2), th3 = -th1;
 //  - the Sarrus linkage (sarrus.mech): the plate moves on a straight line without turning.
+// And one-loop linkages whose joints turn back (TurningPoints, at the end): the Bricard and a
+// non-Grashof four-bar, by energy and the four-bar against an independent integration.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -64,16 +66,16 @@ const RunResult& BricardReference() {
   return ref;
 }
 
-// The cells: every integrator, both forms, loose to tight. Not the reduced form with the
-// implicit integrators and ARKODE below 1e-12 (CVODE-BDF: 3.8e-8 = 4e4 x rtol at 1e-12, 4e-6
-// at 1e-10, 3.1 rad at 1e-4): where the Bricard's joints turn back the reduced form
-// re-chooses its dependent speeds and they lose accuracy there, as on a planar four-bar
-// whose crank rocks (docs/benchmarks.md "Overconstrained linkages").
+// The cells: every integrator, both forms, loose to tight. The reduced form's implicit
+// integrators and ARKODE were 1.3 to 2.6 times the bound at 1e-10 and 1e-12 (ARKODE 1e-12:
+// 7.9e-8) while the partition was kept through the joints' turning points; since (TurningPoints
+// below) 1.6 (CVODE-BDF 1e-12: 1.9e-8) to 700 times below it.
 const Cell kBricardCells[] = {
     {"dop853", "dense", "1e-6"},   {"dop853", "dense", "1e-12"},  {"dop853", "sparse", "1e-8"},
     {"arkode", "sparse", "1e-10"}, {"arkode", "dense", "1e-6"},   {"cvode", "sparse", "1e-12"},
     {"cvode", "dense", "1e-12"},   {"ida", "dense", "1e-12"},     {"ida", "sparse", "1e-8"},
-    {"cvode-bdf", "sparse", "1e-12"}, {"cvode-bdf", "sparse", "1e-10"},
+    {"cvode-bdf", "sparse", "1e-12"}, {"cvode-bdf", "sparse", "1e-10"}, {"arkode", "dense", "1e-12"},
+    {"arkode", "dense", "1e-10"},  {"cvode-bdf", "dense", "1e-12"}, {"ida", "dense", "1e-10"},
 };
 
 TEST(Overconstrained, BricardFollowsTheReducedOneCoordinateModel) {
@@ -198,34 +200,31 @@ TEST(Overconstrained, SarrusPlateMovesOnAStraightLine) {
 }
 
 // A one-loop linkage whose joints all turn back: the reduced form's independent speed passes
-// a turning point, where the kept partition's block degrades while a better one exists.
-// Kept down to a pivot ratio of 1e-2 (constraints.cpp kDegraded), the implicit integrators'
-// drift is amplified up to 100 by the projection: the Bricard stopped (IDA at rtol 1e-4: "closed loop cannot be
-// closed"; IDA and CVODE-BDF at 1e-6: the energy guard), and a planar four-bar whose crank
-// rocks (non-Grashof: s + l = 0.45 + 0.7 > p + q = 0.55 + 0.5) loses 76 % of its energy with
-// DOP853 at 1e-4 and 6 % with CVODE-BDF at 1e-6, exit 0; IDA stops at 1e-4 (t = 0.43).
-// TODO(#38): re-choosing blocks of one loop's size below a pivot ratio of 0.1 instead of
-// 1e-2 passes this (measured: the energy errors in the comments below) and LoopBranch, but
-// fails four tuned change-point tests (change_point_bridge_test.cpp: the 1e-12 cells, the
-// bridge past the stop time, DOP853's dense output; row_energy_test.cpp) and costs the
-// chain of 40 35-60 % if applied to every block; disabled until the partition rule tells a
-// turning point (rows well conditioned) from a change point (docs/benchmarks.md
-// "Overconstrained linkages").
-TEST(TurningPoints, DISABLED_LinkagesWhoseJointsTurnBackKeepTheirEnergy) {
+// a turning point, where the kept partition's block degrades while the loop's rows stay well
+// conditioned and a better block exists. Kept down to a pivot ratio of 1e-2, the projection
+// amplified the implicit integrators' drift up to 100 times: the Bricard stopped (IDA at rtol
+// 1e-4: "closed loop cannot be closed"; IDA and CVODE-BDF at 1e-6: the energy guard), and a
+// planar four-bar whose links all rock (non-Grashof: s + l = 0.45 + 0.7 > p + q = 0.55 + 0.5)
+// lost 76 % of its energy with DOP853 at 1e-4 and 6 % with CVODE-BDF at 1e-6, exit 0; IDA
+// stopped at 1e-4 (t = 0.43). Now a block of one loop's size is re-chosen below a pivot ratio
+// of 0.2 where pivoting finds one twice as good (constraints.cpp kTurning; docs/constraints.md
+// "Turning points").
+const std::vector<std::string> kRocker = {"a=0.55", "b=0.5", "c=0.45", "d=0.7", "theta0=1.2", "omega0=8"};
+
+TEST(TurningPoints, LinkagesWhoseJointsTurnBackKeepTheirEnergy) {
   struct Case {
     const char* model;
     std::vector<std::string> sets;
     Cell cell;
-    double bound;  // relative energy error over 10 s (measured after the change: see each)
+    double bound;  // relative energy error over 10 s (measured: see each)
   };
-  const std::vector<std::string> rocker = {"a=0.55", "b=0.5", "c=0.45", "d=0.7", "theta0=1.2", "omega0=8"};
   const Case cases[] = {
-      {"tests/stress/models/bricard.mech", {}, {"ida", "dense", "1e-4"}, 0.05},        // 0.014
-      {"tests/stress/models/bricard.mech", {}, {"ida", "dense", "1e-6"}, 3e-3},        // 3e-4
-      {"tests/stress/models/bricard.mech", {}, {"cvode-bdf", "dense", "1e-6"}, 3e-3},  // 4e-4
-      {"examples/fourbar.mech", rocker, {"dop853", "dense", "1e-4"}, 0.1},             // 0.019
-      {"examples/fourbar.mech", rocker, {"ida", "dense", "1e-4"}, 0.1},                // 0.022
-      {"examples/fourbar.mech", rocker, {"cvode-bdf", "dense", "1e-6"}, 0.01},         // 1.6e-3
+      {"tests/stress/models/bricard.mech", {}, {"ida", "dense", "1e-4"}, 0.03},        // 9.2e-3
+      {"tests/stress/models/bricard.mech", {}, {"ida", "dense", "1e-6"}, 1e-3},        // 1.3e-4
+      {"tests/stress/models/bricard.mech", {}, {"cvode-bdf", "dense", "1e-6"}, 2e-3},  // 4e-4
+      {"examples/fourbar.mech", kRocker, {"dop853", "dense", "1e-4"}, 0.03},            // 6.4e-3
+      {"examples/fourbar.mech", kRocker, {"ida", "dense", "1e-4"}, 0.07},               // 0.023
+      {"examples/fourbar.mech", kRocker, {"cvode-bdf", "dense", "1e-6"}, 5e-3},         // 1.3e-3
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(std::string(c.model) + " " + c.cell.integrator + " rtol " + c.cell.rtol);
@@ -235,6 +234,49 @@ TEST(TurningPoints, DISABLED_LinkagesWhoseJointsTurnBackKeepTheirEnergy) {
     ExpectToTheEnd(r);
     if (r.exit_code != 0) continue;
     EXPECT_LT(EnergyError(r), c.bound);
+  }
+}
+
+// The same rocking four-bar against an independent integration of its own: Lagrange's
+// equations with multipliers in the absolute link angles, classical Runge-Kutta in NumPy
+// (bench/reference/fourbar_rocker.py; tests/stress/data/fourbar_rocker_ref.csv, within
+// ~2e-10 rad of its own limit). No partition there, so nothing in it turns: every joint angle
+// at every row. The linkage rocks some 30 times in 10 s and its phase is sensitive where the
+// joints turn back: the multiplier form, without a partition, is 3e2 (ARKODE) to 3e7
+// (CVODE-BDF) times rtol off at 1e-12, and on the reduced form when the partition is re-chosen
+// moves the error by up to 10 times; so the bounds are per cell, the measured times 5.
+TEST(TurningPoints, RockingFourBarFollowsAnIndependentIntegration) {
+  static const RunResult ref = ReadCsv("tests/stress/data/fourbar_rocker_ref.csv");
+  const char* joints[] = {"crank_pivot.q", "crank_coupler.q", "rocker_pivot.q"};
+  struct Case {
+    Cell cell;
+    double bound;  // rad (measured: see each)
+  };
+  const Case cases[] = {
+      {{"dop853", "dense", "1e-12"}, 5e-7},     // 1e-7, 4e-8
+      {{"dop853", "dense", "1e-10"}, 8e-6},     // 4.1e-7, 1.5e-6 (re-checked less often)
+      {{"arkode", "dense", "1e-12"}, 3e-8},     // 5e-10, 5.7e-9 (re-checked less often)
+      {{"cvode", "dense", "1e-12"}, 1.5e-6},    // 2e-7, 2.6e-7
+      {{"cvode-bdf", "dense", "1e-12"}, 8e-6},  // 1.6e-6
+      {{"ida", "dense", "1e-12"}, 5e-6},        // 8.9e-7, 9.6e-7
+      {{"dop853", "sparse", "1e-12"}, 4e-8},    // 7.8e-9
+      {{"arkode", "sparse", "1e-10"}, 4e-8},    // 7.3e-9
+      {{"ida", "sparse", "1e-12"}, 1.5e-6},     // 2.7e-7
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::string(c.cell.integrator) + " " + c.cell.solver + " rtol " + c.cell.rtol);
+    std::vector<std::string> args = Args(c.cell, {joints[0], joints[1], joints[2]});
+    for (const std::string& s : kRocker) args.insert(args.end(), {"--set", s});
+    const RunResult r = RunKanesim("examples/fourbar.mech", args);
+    ExpectToTheEnd(r);
+    if (r.exit_code != 0) continue;
+    double err = 0.0;
+    for (const char* j : joints) {
+      const auto x = r.Column(j), x_ref = ref.Column(j);
+      ASSERT_EQ(x.size(), x_ref.size());
+      for (size_t i = 0; i < x.size(); ++i) err = std::max(err, std::fabs(std::remainder(x[i] - x_ref[i], 2 * M_PI)));
+    }
+    EXPECT_LT(err, c.bound);
   }
 }
 
