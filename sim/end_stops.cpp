@@ -131,6 +131,26 @@ int EndStopEvents::Hold(rt::Workspace& ws, double t, const double* y, double* yd
   return 0;
 }
 
+std::string EndStopEvents::CheckRow(double t, const double* y) const {
+  for (const Side& s : sides_) {
+    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+    const double q = y[st.q], lim = Limit(s);
+    const double past = s.upper ? q - lim : lim - q;
+    // Root finding leaves the state within the tolerance of the stop; a row farther past it
+    // went through the stop.
+    if (past > kPastRows * (atol_ + rtol_ * std::max(1.0, std::fabs(lim)))) {
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "joint '%s' is past its stop %s = %.9g by %.3g at time %.9g: an impact was missed "
+                    "(accumulating impacts, a Zeno sequence, or two crossings within one step are not "
+                    "handled yet)",
+                    st.joint.c_str(), SideName(s.upper).c_str(), lim, past, t);
+      return buf;
+    }
+  }
+  return "";
+}
+
 int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g) {
   bool any = false;
   for (const Side& s : sides_) any = any || s.resting;

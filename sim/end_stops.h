@@ -19,6 +19,10 @@ class EndStopEvents {
   int Count() const { return static_cast<int>(sides_.size()); }
   // Why the start state cannot run ("" when it can): a joint past its stop.
   std::string CheckStart(const double* y0) const;
+  // Why an output row cannot be trusted ("" when it can): a joint past its stop by more than
+  // the tolerance's reach, which an event missed (accumulating impacts, a graze inside one
+  // step). The run then stops (exit 2) rather than write a motion through the stop.
+  std::string CheckRow(double t, const double* y) const;
   // The start on a stop: a joint at its limit moving into it, or at rest pressed onto it,
   // handled as an event at t0 (no rows).
   int Start(rt::Workspace& ws, double t0, double* y0);
@@ -34,6 +38,8 @@ class EndStopEvents {
 
   // A rebound speed at most this many times (atol + rtol |speed before|) ends in rest.
   static constexpr double kRestSpeeds = 100.0;
+  // An output row past a stop by more than this many (atol + rtol max(1, |limit|)) stops the run.
+  static constexpr double kPastRows = 10.0;
 
  private:
   struct Side {

@@ -269,9 +269,13 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
         values.swap(zone_values);
       }
     }
+    std::string past_stop;
     if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
+    } else if (stops.Active() && !(past_stop = stops.CheckRow(t, y)).empty()) {
+      *cause = past_stop;
+      status = -1;  // the row is not written: the rows before it are on disk
     } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
       status = -1;  // the row is not written: the rows before it are on disk
     } else if (!sink.Row(t, values.data(), n_written)) {
