@@ -13,7 +13,7 @@ bool Informational(const std::string& key) {
   return false;
 }
 
-std::string Trim(const std::string& s) {
+std::string TrimSpaces(const std::string& s) {
   const size_t b = s.find_first_not_of(' '), e = s.find_last_not_of(' ');
   return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
 }
@@ -69,7 +69,7 @@ bool ReadSettings(const std::string& path, SettingsRecord* out, std::string* err
       *error = path + ":" + std::to_string(n) + ": expected 'key = value'";
       return false;
     }
-    out->Set(Trim(line.substr(0, eq)), Trim(line.substr(eq + 3)));
+    out->Set(TrimSpaces(line.substr(0, eq)), TrimSpaces(line.substr(eq + 3)));
   }
   return true;
 }

@@ -146,8 +146,8 @@ bool RunSweep(std::shared_ptr<const rt::Program> base, const VariantBuilder& bui
               SweepReport* report, std::string* error);
 
 // The same over MPI ranks (rank 0 hands out scenario ids on request and writes the
-// summary; the others simulate). Without MPI at build time: false with a message.
-bool MpiAvailable();
+// summary; the others simulate). False with a message when the MPI module cannot be loaded
+// (a build without MPI has none).
 bool RunSweepMpi(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
                  SweepReport* report, std::string* error);
 

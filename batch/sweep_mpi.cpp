@@ -24,18 +24,6 @@
 
 namespace kanesim::batch {
 
-#ifndef KANESIM_MPI
-
-bool MpiAvailable() { return false; }
-
-bool RunSweepMpi(std::shared_ptr<const rt::Program>, const VariantBuilder&, const SweepConfig&, SweepReport*,
-                 std::string* error) {
-  *error = "this kanesim was built without MPI (install libopenmpi-dev and configure with -DKANESIM_MPI=ON)";
-  return false;
-}
-
-#else
-
 namespace {
 
 constexpr int kTagReady = 1, kTagWork = 2, kTagResult = 3;
@@ -135,12 +123,13 @@ void Worker(const mpi::ModuleApi& mpi, ScenarioRunner& runner, const SweepConfig
 
 }  // namespace
 
-bool MpiAvailable() { return true; }
-
 bool RunSweepMpi(std::shared_ptr<const rt::Program> base, const VariantBuilder& build, const SweepConfig& config,
                  SweepReport* report, std::string* error) {
   const mpi::ModuleApi* module = mpi::Module(error);
-  if (!module) return false;
+  if (!module) {
+    if (error) *error += " (the module is built when CMake finds MPI: install libopenmpi-dev, configure again)";
+    return false;
+  }
   const mpi::ModuleApi& mpi = *module;
   int rank = 0, size = 1;
   mpi.init(&rank, &size);
@@ -162,7 +151,5 @@ bool RunSweepMpi(std::shared_ptr<const rt::Program> base, const VariantBuilder& 
   mpi.finalize();
   return ok;
 }
-
-#endif
 
 }  // namespace kanesim::batch

@@ -6,11 +6,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build}
-scripts/setup.sh  # installs only what is missing (a no-op on a prepared machine)
+scripts/setup.sh test  # installs only what is missing (a no-op on a prepared machine)
 jobs=${JOBS:-$(nproc)}
 # The demo's configuration (scripts/configure.sh): after scripts/demo.sh nothing compiles twice;
 # ccache also lets the pip build below reuse the objects.
-scripts/configure.sh "$build_dir" "$@"
+scripts/configure.sh test "$build_dir" "$@"
 cmake --build "$build_dir" -j"$jobs"
 # `pip install .` into $build_dir/pyvenv (Debian's NumPy 1.x) and $build_dir/pyvenv-numpy2
 # (the newest NumPy from PyPI) when this build has the Python module (not under the

@@ -7,7 +7,7 @@ try:
     import numpy  # noqa: F401
     import pytest
 except ImportError as e:
-    print(f"python.pytest skipped: {e} (scripts/setup.sh installs python3-pytest and python3-numpy)")
+    print(f"python.pytest skipped: {e} (scripts/setup.sh test installs python3-pytest and python3-numpy)")
     sys.exit(77)
 
 # python.installed*: the package pip installed into that venv, not a copy from the tree.

@@ -83,7 +83,7 @@ constexpr double kToRoundOff = 0.5;
 // chain of ten at rtol 1e-9 its accuracy, 1.4e-4 rad off the lumped crank).
 constexpr int kToRoundOffMaxRank = 6;
 // A rolling disk lies flat when the sine of its axis' angle to the plane normal, |m| of
-// contacts.cpp eq. 2, falls below kFlatDisk (0.57 degrees: a thin disk's face reaches
+// contacts.cpp eq. 2, falls below kFlatSine (0.57 degrees: a thin disk's face reaches
 // the plane, and the lowest rim point P is undefined at 0). A step that passes through
 // flat is caught as well: P jumps to the opposite side of the rim, and the integrator's
 // speeds give the new P a normal velocity of the order of |v_C| + r |w| (kJumped of it)
@@ -91,7 +91,7 @@ constexpr int kToRoundOffMaxRank = 6;
 // out, a large normal velocity is the integrator's own drift off the velocity
 // constraint at a loose tolerance (ARKODE at rtol 1e-3 on a disk wobbling between 2 and
 // 19 degrees of lean reached 10 % of it), not a jump, and the step goes on as usual.
-constexpr double kFlatDisk = 1e-2;
+constexpr double kFlatSine = 1e-2;
 constexpr double kJumped = 0.1;
 constexpr double kNearFlat = 0.5;
 
@@ -163,16 +163,16 @@ int CheckDisksUpright(const Program& p, Workspace& ws) {
     const double sin_flat = (c.n_W - c.n_W.dot(cp.e_W) * cp.e_W).norm();
     const Vec3 v_C = cp.vPm - cp.w.cross(cp.P - cp.C);
     const double jump = std::fabs(ws.psi[c.row0]) / (v_C.norm() + c.radius * cp.w.norm() + 1e-6);
-    if (sin_flat >= kFlatDisk && (jump <= kJumped || sin_flat >= kNearFlat)) continue;
+    if (sin_flat >= kFlatSine && (jump <= kJumped || sin_flat >= kNearFlat)) continue;
     char buf[96];
     std::snprintf(buf, sizeof buf, "%.3g degrees", std::asin(std::min(1.0, sin_flat)) * 180.0 / M_PI);
-    ws.error = "rolling disk '" + c.name + "' " + (sin_flat < kFlatDisk ? "lies flat on its plane" : "passed through flat") +
+    ws.error = "rolling disk '" + c.name + "' " + (sin_flat < kFlatSine ? "lies flat on its plane" : "passed through flat") +
                " at time " + std::to_string(ws.t) + " (its axis " + buf +
                " from the plane normal): the lowest rim point is undefined there and the disk's face reaches the "
                "plane; the rolling contact ends (a fall, not modelled)";
     // Flat is the end of the model (fatal: retrying creeps towards it in ever smaller
     // steps); a jump may be a rejected trial step, so the integrator retries it smaller.
-    return sin_flat < kFlatDisk ? -1 : 1;
+    return sin_flat < kFlatSine ? -1 : 1;
   }
   return 0;
 }

@@ -24,15 +24,6 @@ namespace kanesim::rt {
 
 namespace {
 
-// A pivot of the factor below this fraction of the largest diagonal entry of M means
-// the mass matrix is singular to working precision (e.g. a massless, inertia-free link).
-constexpr double kSingularPivot = 1e-13;
-
-int Singular(Workspace& ws) {
-  ws.error = "singular mass matrix (a body without mass or inertia moved by a joint?)";
-  return -1;
-}
-
 // Spatial inertia about a point o, in blocks, of a body or subtree with mass m, first
 // moment h = m (c - o) and rotational inertia J about o (world axes), mapping the twist
 // [v_o; w] to the wrench [f; n_o]:
@@ -152,7 +143,7 @@ int SolveDense(const Program& p, Workspace& ws) {
   AssembleDense(p, ws);
 
   const double scale = ws.M.diagonal().cwiseAbs().maxCoeff();
-  if (!(scale > 0.0)) return Singular(ws);
+  if (!(scale > 0.0)) return SingularMassMatrix(ws);
   ws.llt->compute(ws.M);  // reads the lower triangle
   bool ok = ws.llt->info() == Eigen::Success;
   if (ok) {
@@ -166,9 +157,9 @@ int SolveDense(const Program& p, Workspace& ws) {
     // badly scaled one.
     ws.M.triangularView<Eigen::StrictlyUpper>() = ws.M.transpose().triangularView<Eigen::StrictlyUpper>();
     ws.ldlt->compute(ws.M);
-    if (ws.ldlt->info() != Eigen::Success) return Singular(ws);
+    if (ws.ldlt->info() != Eigen::Success) return SingularMassMatrix(ws);
     const auto D = ws.ldlt->vectorD();
-    if (D.minCoeff() <= kSingularPivot * scale) return Singular(ws);
+    if (D.minCoeff() <= kSingularPivot * scale) return SingularMassMatrix(ws);
     ws.ldlt->solveInPlace(ws.f);
   }
   for (int i = 0; i < p.nu; ++i) ws.udot[p.u_free[static_cast<size_t>(i)]] = ws.f[i];

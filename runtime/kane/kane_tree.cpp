@@ -42,9 +42,8 @@ namespace kanesim::rt {
 
 namespace {
 
-// A squared pivot of a D_L below this fraction of the largest diagonal entry of the D_L
-// means a singular mass matrix (kane_dense.cpp uses the same bound for Cholesky).
-constexpr double kSingularPivot = 1e-13;
+// kSingularPivot (kane_tree.h) bounds a squared pivot of a D_L against the largest
+// diagonal entry of the D_L.
 // PlanarLayout: two joint axes count as parallel when |a x b| <= kPlanarAxisTol |a| |b|
 // (axes written parallel are so exactly or to rounding); the out-of-plane terms the planar
 // recursion leaves out are of this relative size.
@@ -334,11 +333,6 @@ void SubstituteJoint(const TreeLayout::JointBlock& J, const double* U, const dou
   }
 }
 
-int Singular(Workspace& ws) {
-  ws.error = "singular mass matrix (a body without mass or inertia moved by a joint?)";
-  return -1;
-}
-
 // A planar tree (TreeLayout::planar): every joint `angular`; every root joint's axis
 // (world) parallel to the first root's; every other joint's axis in its parent body's
 // frame (axis_P) parallel to the parent joint's own axis there (joints[P].axis: a revolute
@@ -436,6 +430,11 @@ void InitTreeWorkspace(const Program& p, Workspace& ws) {
   if (p.tree->planar) ws.tree_plane.assign(K, std::array<double, 12>{});
 }
 
+int SingularMassMatrix(Workspace& ws) {
+  ws.error = "singular mass matrix (a body without mass or inertia moved by a joint?)";
+  return -1;
+}
+
 int SolveTree(const Program& p, Workspace& ws) {
   return p.tree->planar ? SolveTreePlanar(p, ws) : SolveTreeSpatial(p, ws);
 }
@@ -463,10 +462,10 @@ int SolveTreeSpatial(const Program& p, Workspace& ws) {
     double* u = ws.tree_u.data() + J.f0;
     if (J.angular) {
       if (!EliminateAngular(ws.H_W.col(J.cols[0]).tail<3>(), ws.Q[J.cols[0]], U, Dinv, u, &X, &piv))
-        return Singular(ws);
+        return SingularMassMatrix(ws);
     } else if (J.nf > 0) {
       Store(X, &Ia, &pa);
-      if (!EliminateJoint(ws, J, U, Dinv, u, &Ia, &pa, &piv)) return Singular(ws);
+      if (!EliminateJoint(ws, J, U, Dinv, u, &Ia, &pa, &piv)) return SingularMassMatrix(ws);
       X = Load(Ia, pa);
     }
     const int P = T.parent[uL];
@@ -490,7 +489,7 @@ int SolveTreeSpatial(const Program& p, Workspace& ws) {
       U[5] += r0 * U[1] - r1 * U[0];
     }
   }
-  if (!(piv.min_pivot_sq > kSingularPivot * piv.max_diag)) return Singular(ws);
+  if (!(piv.min_pivot_sq > kSingularPivot * piv.max_diag)) return SingularMassMatrix(ws);
   // Forward pass, root to leaves: (5), (1). A revolute joint's child takes A_P from the
   // previous step in registers when P = L - 1 (a chain); everything else goes through
   // tree_A, which every step writes.
@@ -619,7 +618,7 @@ int SolveTreePlanar(const Program& p, Workspace& ws) {
     const double d = s * U3;
     const double u = ws.Q[col] - s * X.p3;
     piv.max_diag = std::max(piv.max_diag, d);
-    if (!(d > 0.0)) return Singular(ws);
+    if (!(d > 0.0)) return SingularMassMatrix(ws);
     piv.min_pivot_sq = std::min(piv.min_pivot_sq, d);
     const double dinv = 1.0 / d;
     ws.tree_Dinv[J.d0] = dinv;
@@ -656,7 +655,7 @@ int SolveTreePlanar(const Program& p, Workspace& ws) {
     U[0] = U1, U[1] = U2, U[2] = U3 + x * U2 - y * U1;  // X_LP^T U, as in SolveTreeSpatial
     U[4] = x, U[5] = y;
   }
-  if (!(piv.min_pivot_sq > kSingularPivot * piv.max_diag)) return Singular(ws);
+  if (!(piv.min_pivot_sq > kSingularPivot * piv.max_diag)) return SingularMassMatrix(ws);
   // Forward pass, root to leaves: (5), then (1) in the plane; a chain's A_P in registers.
   double c1 = 0, c2 = 0, c3 = 0;  // A of the previous step
   for (int L = 0; L < K; ++L) {

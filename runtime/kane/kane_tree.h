@@ -36,6 +36,13 @@ struct TreeLayout {
   std::vector<double> plane_Inn;   // K: n . I n of body L (central inertia), = axis^T I_BBcm_B axis
 };
 
+// A pivot of the mass matrix's factor (the tree's D_L, the dense Cholesky) below this
+// fraction of its largest diagonal entry means M is singular to working precision (e.g. a
+// massless, inertia-free link moved by a joint).
+inline constexpr double kSingularPivot = 1e-13;
+// Sets ws.error for a singular mass matrix; returns the solvers' -1.
+int SingularMassMatrix(Workspace& ws);
+
 // Compile time: the layout (Program::tree) for p.solver == SolverPath::Recursive.
 void BuildTree(Program& p);
 // Workspace creation: the per-body and per-joint arrays of the recursion.
