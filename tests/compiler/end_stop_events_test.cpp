@@ -121,6 +121,22 @@ TEST(EndStopEvents, RestsOnTheStopUntilTheReactionWouldPull) {
   }
 }
 
+// Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7) whose first joint stops at q_min.
+std::string DoublePendulum(double q_min, double e) {
+  return "model D\n"
+         "  World world(g = {0, -9.81, 0});\n"
+         "  Revolute j1(axis = {0, 0, 1}, q_min = " + Num(q_min) + ", restitution = " + Num(e) + ");\n"
+         "  Revolute j2(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));\n"
+         "  Rod rod1(L = 1, m = 1);\n"
+         "  Rod rod2(L = 0.8, m = 0.7);\n"
+         "equation\n"
+         "  connect(world.frame_b, j1.frame_a);\n"
+         "  connect(j1.frame_b, rod1.frame_a);\n"
+         "  connect(rod1.frame_b, j2.frame_a);\n"
+         "  connect(j2.frame_b, rod2.frame_a);\n"
+         "end D;\n";
+}
+
 // Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7); j1 hits q_min. Kane's impulsive form
 // M du = e1 lambda: du1 = -(1 + e) u1, and the second row (the angular momentum of rod 2
 // about joint 2) gives du2 = -(M21 / M22) du1, with q2 the relative angle:
@@ -133,19 +149,7 @@ TEST(EndStopEvents, RestsOnTheStopUntilTheReactionWouldPull) {
 TEST(EndStopEvents, DoublePendulumImpulseThroughTheMassMatrix) {
   const double L1 = 1, m1 = 1, L2 = 0.8, m2 = 0.7, q_min = -0.6;
   for (double e : {1.0, 0.0, 0.4}) {
-    const std::string text =
-        "model D\n"
-        "  World world(g = {0, -9.81, 0});\n"
-        "  Revolute j1(axis = {0, 0, 1}, q_min = " + Num(q_min) + ", restitution = " + Num(e) + ");\n"
-        "  Revolute j2(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));\n"
-        "  Rod rod1(L = 1, m = 1);\n"
-        "  Rod rod2(L = 0.8, m = 0.7);\n"
-        "equation\n"
-        "  connect(world.frame_b, j1.frame_a);\n"
-        "  connect(j1.frame_b, rod1.frame_a);\n"
-        "  connect(rod1.frame_b, j2.frame_a);\n"
-        "  connect(j2.frame_b, rod2.frame_a);\n"
-        "end D;\n";
+    const std::string text = DoublePendulum(q_min, e);
     auto l = LoadModel(text, {}, {}, true);
     ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
     for (const IntegratorChoice& how : AllIntegrators()) {
@@ -186,19 +190,7 @@ TEST(EndStopEvents, DoublePendulumImpulseThroughTheMassMatrix) {
 // wrong answer) instead of stopping (exit 2) at the first row past it, the rows before kept.
 TEST(EndStopEvents, AMissedImpactStopsTheRunInsteadOfPassingTheStop) {
   const double q_min = -0.6;
-  const std::string text =
-      "model D\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Revolute j1(axis = {0, 0, 1}, q_min = " + Num(q_min) + ", restitution = 0.4);\n"
-      "  Revolute j2(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));\n"
-      "  Rod rod1(L = 1, m = 1);\n"
-      "  Rod rod2(L = 0.8, m = 0.7);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, rod1.frame_a);\n"
-      "  connect(rod1.frame_b, j2.frame_a);\n"
-      "  connect(j2.frame_b, rod2.frame_a);\n"
-      "end D;\n";
+  const std::string text = DoublePendulum(q_min, 0.4);
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   int stopped = 0;
