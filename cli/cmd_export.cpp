@@ -52,7 +52,7 @@ void AddExportCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<ExportArgs>();
   cmd->add_option("file", a->load.path, "The .mech file")->required();
   cmd->add_option("-m,--model", a->load.model, "The model to export (default: the last in the file)");
-  cmd->add_option("--set", a->load.sets, "name=value: a parameter's value, fixed into the FMU's start values")
+  cmd->add_option("--set", a->load.sets, "name=value: a parameter's value at export: a structural one is fixed with it, another starts there")
       ->allow_extra_args(false);
   cmd->add_option("--fmi", a->fmi, "The FMI version")->check(CLI::IsMember({2, 3}))->required();
   cmd->add_option("--kind", a->kind, "The interfaces: cs (Co-Simulation), me (Model Exchange) or both")

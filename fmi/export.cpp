@@ -53,6 +53,7 @@ class Zip {
   bool ok() const { return zf_ != nullptr; }
   bool Add(const std::string& name, const std::string& data) {
     zip_fileinfo info{};
+    info.tmz_date.tm_mday = 1;  // 1980-01-01: a fixed date, so the same export gives the same bytes
     info.external_fa = 0644u << 16;
     if (zipOpenNewFileInZip64(zf_, name.c_str(), &info, nullptr, 0, nullptr, 0, nullptr, Z_DEFLATED,
                               Z_DEFAULT_COMPRESSION, data.size() > 0xffffffffu) != ZIP_OK)
@@ -116,7 +117,11 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
     if (!entry.is_regular_file() || !ReadFile(entry.path(), &data)) continue;
     ok = ok && zip.Add("binaries/linux64/" + (name == "kanesim_fmu.so" ? id + ".so" : name), data);
   }
-  if (!zip.Close() || !ok) return "cannot write " + options.output;
+  if (!zip.Close() || !ok) {
+    std::error_code ec;
+    fs::remove(options.output, ec);  // no half-written FMU left behind
+    return "cannot write " + options.output;
+  }
   return "";
 }
 

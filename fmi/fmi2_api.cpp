@@ -30,9 +30,13 @@ struct Component {
 };
 
 fmi2Status Log(Component* c, fmi2Status status, const std::string& message) {
-  if (c->callbacks.logger && (status >= fmi2Warning || c->logging))
-    c->callbacks.logger(c->callbacks.componentEnvironment, c->name.c_str(), status,
-                        status >= fmi2Error ? "logStatusError" : "logAll", "%s", message.c_str());
+  if (!c->callbacks.logger || (status < fmi2Warning && !c->logging)) return status;
+  // The message is the format itself, its '%' doubled: a master that prints the format
+  // without formatting it (some do) shows the text too.
+  std::string format;
+  for (char ch : message) format += ch == '%' ? "%%" : std::string(1, ch);
+  c->callbacks.logger(c->callbacks.componentEnvironment, c->name.c_str(), status,
+                      status >= fmi2Error ? "logStatusError" : "logAll", format.c_str());
   return status;
 }
 
