@@ -1,4 +1,4 @@
-// `kanesim export model.mech --fmi 2 [--kind cs|me|both] [-o model.fmu]`: the model as a
+// `kanesim export model.mech --fmi 2|3 [--kind cs|me|both] [-o model.fmu]`: the model as a
 // Functional Mock-up Unit (fmi/fmi.h; docs/fmi.md).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -47,7 +47,7 @@ int ExportCommand(const ExportArgs& a) {
 }  // namespace
 
 void AddExportCommand(CLI::App& app, int* exit_code, bool options) {
-  CLI::App* cmd = app.add_subcommand("export", "Export a model as an FMU (FMI 2.0, Model Exchange and Co-Simulation)");
+  CLI::App* cmd = app.add_subcommand("export", "Export a model as an FMU (FMI 2.0 or 3.0; Model Exchange and Co-Simulation)");
   if (!options) return;
   auto a = std::make_shared<ExportArgs>();
   cmd->add_option("file", a->load.path, "The .mech file")->required();

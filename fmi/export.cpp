@@ -1,4 +1,4 @@
-// `kanesim export --fmi 2`: the FMU file, zipped with Debian's minizip.
+// `kanesim export --fmi 2|3`: the FMU file, zipped with Debian's minizip.
 #include <zip.h>
 
 #include <cstdio>
@@ -93,7 +93,7 @@ std::string FmuBinariesDir(std::string* error) {
 }
 
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options) {
-  if (options.version != 2) return "FMI " + std::to_string(options.version) + " export is not available yet (FMI 2 is)";
+  if (options.version != 2 && options.version != 3) return "FMI " + std::to_string(options.version) + " does not exist";
   std::string error;
   const std::string bin = options.binaries_dir.empty() ? FmuBinariesDir(&error) : options.binaries_dir;
   if (bin.empty()) return error;
@@ -102,12 +102,15 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
   settings.model = options.model.empty() ? model.mech->model_name : options.model;
   settings.sets = options.sets;
   settings.integrator = options.integrator;
-  settings.guid = Guid(model_text + "\n" + FormatSettings(settings));
+  settings.guid = Guid(model_text + "\n" + FormatSettings(settings) + std::to_string(options.version));
   const std::string id = Identifier(model.mech->model_name);
 
   Zip zip(options.output);
   if (!zip.ok()) return "cannot write " + options.output;
-  bool ok = zip.Add("modelDescription.xml", ModelDescription(model, options, settings.guid)) &&
+  const std::string description = options.version == 3 ? ModelDescription3(model, options, settings.guid)
+                                                       : ModelDescription(model, options, settings.guid);
+  const std::string platform = options.version == 3 ? "binaries/x86_64-linux/" : "binaries/linux64/";
+  bool ok = zip.Add("modelDescription.xml", description) &&
             zip.Add("resources/model.mech", model_text) && zip.Add("resources/settings.txt", FormatSettings(settings));
   // The model's library under the FMU's name, and beside it the shared libraries it needs
   // that are not the system's (its RPATH is $ORIGIN).
@@ -115,7 +118,7 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
     std::string data;
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || !ReadFile(entry.path(), &data)) continue;
-    ok = ok && zip.Add("binaries/linux64/" + (name == "kanesim_fmu.so" ? id + ".so" : name), data);
+    ok = ok && zip.Add(platform + (name == "kanesim_fmu.so" ? id + ".so" : name), data);
   }
   if (!zip.Close() || !ok) {
     std::error_code ec;

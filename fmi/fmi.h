@@ -1,4 +1,4 @@
-// The layer fmi/ (kanesim_fmi): a model as a Functional Mock-up Unit (FMI 2.0; docs/fmi.md).
+// The layer fmi/ (kanesim_fmi): a model as a Functional Mock-up Unit (FMI 2.0 and 3.0; docs/fmi.md).
 // `kanesim export` calls ExportFmu; the FMU's own library (kanesim_fmu, built from this
 // folder's fmi2_api.cpp and instance.cpp) loads the model text the FMU carries and runs it.
 #pragma once
@@ -12,7 +12,7 @@
 namespace kanesim::fmi {
 
 struct ExportOptions {
-  int version = 2;                // FMI 2.0 (3: not yet)
+  int version = 2;                // FMI 2.0 or 3.0
   bool model_exchange = true;     // the interfaces in the FMU
   bool co_simulation = true;
   std::string output;             // the .fmu file
@@ -24,10 +24,12 @@ struct ExportOptions {
   std::string binaries_dir;
 };
 
-// The modelDescription.xml of `model` (loaded and compiled with the options' sets).
+// The modelDescription.xml of `model` (loaded and compiled with the options' sets), FMI 2.0
+// and 3.0 (`token`: the instantiationToken).
 std::string ModelDescription(const pipeline::Model& model, const ExportOptions& options, const std::string& guid);
+std::string ModelDescription3(const pipeline::Model& model, const ExportOptions& options, const std::string& token);
 
-// Writes the FMU: modelDescription.xml, binaries/linux64/<id>.so with the libraries it
+// Writes the FMU: modelDescription.xml, binaries/<platform>/<id>.so with the libraries it
 // needs, resources/model.mech (`model_text`, the main file) and resources/settings.txt.
 // "" or why not.
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options);

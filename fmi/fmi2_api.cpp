@@ -4,92 +4,36 @@
 // NaN, a step backwards or a numerical failure returns fmi2Error with the reason through
 // the master's logger; no exception crosses the C boundary.
 #include <cmath>
-#include <exception>
 #include <memory>
-#include <new>
 #include <string>
 
 #include "fmi/fmi2_abi.h"
 #include "fmi/fmu_common.h"
-#include "fmi/instance.h"
+#include "fmi/component.h"
 
 #define FMI2_EXPORT extern "C" __attribute__((visibility("default")))
 
-namespace kanesim::fmi {
+namespace kf = kanesim::fmi;
+using kf::Component;
+using kf::Mode;
+
 namespace {
 
-enum class Mode { kInstantiated, kInitialization, kEvent, kContinuous, kStep, kTerminated, kError };
-
-struct Component {
-  std::string name;
-  fmi2Type type = fmi2ModelExchange;
-  fmi2CallbackFunctions callbacks{};
-  bool logging = false;
-  Mode mode = Mode::kInstantiated;
-  Instance instance;
-};
-
-fmi2Status Log(Component* c, fmi2Status status, const std::string& message) {
-  if (!c->callbacks.logger || (status < fmi2Warning && !c->logging)) return status;
-  // The message is the format itself, its '%' doubled: a master that prints the format
-  // without formatting it (some do) shows the text too.
-  std::string format;
-  for (char ch : message) format += ch == '%' ? "%%" : std::string(1, ch);
-  c->callbacks.logger(c->callbacks.componentEnvironment, c->name.c_str(), status,
-                      status >= fmi2Error ? "logStatusError" : "logAll", format.c_str());
-  return status;
-}
-
-// "" or the error as an fmi2Error through the logger.
-fmi2Status Result(Component* c, const std::string& error) { return error.empty() ? fmi2OK : Log(c, fmi2Error, error); }
-
-const char* ModeName(Mode m) {
-  static const char* const kNames[] = {"instantiated", "initialization mode", "event mode", "continuous-time mode",
-                                       "step mode", "terminated", "error"};
-  return kNames[int(m)];
-}
-
-// Runs f when the component is in one of `modes`, else an error naming the call.
+// kf::Guarded with FMI 2's status type.
 template <class F>
-fmi2Status Guarded(fmi2Component component, const char* call, std::initializer_list<Mode> modes, F f) {
-  auto* c = static_cast<Component*>(component);
-  if (!c) return fmi2Error;
-  bool allowed = false;
-  for (Mode m : modes) allowed = allowed || m == c->mode;
-  if (!allowed) return Log(c, fmi2Error, std::string(call) + " is not allowed in " + ModeName(c->mode));
-  try {
-    return f(c);
-  } catch (const std::bad_alloc&) {
-    return Log(c, fmi2Error, std::string(call) + ": out of memory");
-  } catch (const std::exception& e) {
-    return Log(c, fmi2Error, std::string(call) + ": " + e.what());
-  }
+fmi2Status Fmi2Guarded(fmi2Component c, const char* call, std::initializer_list<Mode> modes, F f) {
+  return static_cast<fmi2Status>(kf::Guarded(c, call, modes, f));
 }
-
-constexpr std::initializer_list<Mode> kAfterInstantiate = {Mode::kInstantiated, Mode::kInitialization, Mode::kEvent,
-                                                          Mode::kContinuous, Mode::kStep, Mode::kTerminated};
-constexpr std::initializer_list<Mode> kRunning = {Mode::kInitialization, Mode::kEvent, Mode::kContinuous,
-                                                 Mode::kStep, Mode::kTerminated, Mode::kError};
-constexpr std::initializer_list<Mode> kSetup = {Mode::kInstantiated, Mode::kInitialization};
-constexpr std::initializer_list<Mode> kMe = {Mode::kEvent, Mode::kContinuous};
 
 }  // namespace
-}  // namespace kanesim::fmi
-
-using kanesim::fmi::Component;
-using kanesim::fmi::Guarded;
-using kanesim::fmi::Log;
-using kanesim::fmi::Mode;
-using kanesim::fmi::Result;
-namespace kf = kanesim::fmi;
 
 FMI2_EXPORT const char* fmi2GetTypesPlatform() { return "default"; }
 FMI2_EXPORT const char* fmi2GetVersion() { return "2.0"; }
 
 FMI2_EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t, const fmi2String[]) {
-  return Guarded(c, "fmi2SetDebugLogging", kf::kAfterInstantiate, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2SetDebugLogging", kf::kAfterInstantiate, [&](Component* x) {
     x->logging = on;
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
@@ -98,18 +42,27 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
   if (!callbacks || !name || !guid) return nullptr;
   auto c = std::make_unique<Component>();
   c->name = name;
-  c->type = type;
-  c->callbacks = *callbacks;
+  c->co_simulation = type == fmi2CoSimulation;
   c->logging = logging;
+  if (fmi2CallbackLogger logger = callbacks->logger) {
+    fmi2ComponentEnvironment env = callbacks->componentEnvironment;
+    c->logger = [logger, env, instance = c.get()](kf::Status status, const char* category, const std::string& message) {
+      // The message is the format itself, its '%' doubled: a master that prints the format
+      // without formatting it (some do) shows the text too.
+      std::string format;
+      for (char ch : message) format += ch == '%' ? "%%" : std::string(1, ch);
+      logger(env, instance->name.c_str(), static_cast<fmi2Status>(status), category, format.c_str());
+    };
+  }
   try {
     std::string dir, error = kf::ResourceDirectory(resources ? resources : "", &dir);
     if (error.empty()) error = c->instance.Load(dir, guid);
     if (!error.empty()) {
-      Log(c.get(), fmi2Error, "fmi2Instantiate: " + error);
+      c->Log(kf::kError, "fmi2Instantiate: " + error);
       return nullptr;
     }
   } catch (const std::exception& e) {
-    Log(c.get(), fmi2Error, std::string("fmi2Instantiate: ") + e.what());
+    c->Log(kf::kError, std::string("fmi2Instantiate: ") + e.what());
     return nullptr;
   }
   return c.release();
@@ -119,234 +72,234 @@ FMI2_EXPORT void fmi2FreeInstance(fmi2Component c) { delete static_cast<Componen
 
 FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolerance_defined, fmi2Real tolerance,
                                            fmi2Real start, fmi2Boolean, fmi2Real) {
-  return Guarded(c, "fmi2SetupExperiment", {Mode::kInstantiated}, [&](Component* x) {
-    if (tolerance_defined && !(tolerance > 0 && tolerance < 1)) return Log(x, fmi2Error, "the tolerance must be in (0, 1)");
-    if (!std::isfinite(start)) return Log(x, fmi2Error, "the start time must be finite");
+  return Fmi2Guarded(c, "fmi2SetupExperiment", {Mode::kInstantiated}, [&](Component* x) {
+    if (tolerance_defined && !(tolerance > 0 && tolerance < 1)) return x->Log(kf::kError, "the tolerance must be in (0, 1)");
+    if (!std::isfinite(start)) return x->Log(kf::kError, "the start time must be finite");
     if (tolerance_defined) x->instance.SetTolerance(tolerance);
     x->instance.SetStartTime(start);
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-  return Guarded(c, "fmi2EnterInitializationMode", {Mode::kInstantiated}, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2EnterInitializationMode", {Mode::kInstantiated}, [&](Component* x) {
     x->mode = Mode::kInitialization;
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-  return Guarded(c, "fmi2ExitInitializationMode", {Mode::kInitialization}, [&](Component* x) {
-    if (fmi2Status s = Result(x, x->instance.Initialize()); s != fmi2OK) return s;
-    x->mode = x->type == fmi2CoSimulation ? Mode::kStep : Mode::kEvent;
-    return fmi2OK;
+  return Fmi2Guarded(c, "fmi2ExitInitializationMode", {Mode::kInitialization}, [&](Component* x) {
+    if (kf::Status s = x->Result(x->instance.Initialize()); s != kf::kOK) return s;
+    x->mode = x->co_simulation ? Mode::kStep : Mode::kEvent;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2Terminate(fmi2Component c) {
-  return Guarded(c, "fmi2Terminate", {Mode::kEvent, Mode::kContinuous, Mode::kStep, Mode::kError}, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2Terminate", {Mode::kEvent, Mode::kContinuous, Mode::kStep, Mode::kError}, [&](Component* x) {
     x->mode = Mode::kTerminated;
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2Reset(fmi2Component c) {
-  return Guarded(c, "fmi2Reset", {Mode::kInstantiated, Mode::kInitialization, Mode::kEvent, Mode::kContinuous,
+  return Fmi2Guarded(c, "fmi2Reset", {Mode::kInstantiated, Mode::kInitialization, Mode::kEvent, Mode::kContinuous,
                                   Mode::kStep, Mode::kTerminated, Mode::kError},
                  [&](Component* x) {
                    x->mode = Mode::kInstantiated;
-                   return Result(x, x->instance.Reset());
+                   return x->Result(x->instance.Reset());
                  });
 }
 
 // ---- values ----
 
 FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
-  return Guarded(c, "fmi2GetReal", kf::kRunning, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2GetReal", kf::kRunning, [&](Component* x) {
     for (size_t i = 0; i < n; ++i)
-      if (fmi2Status s = Result(x, x->instance.GetReal(vr[i], &value[i])); s != fmi2OK) return s;
-    return fmi2OK;
+      if (kf::Status s = x->Result(x->instance.GetReal(vr[i], &value[i])); s != kf::kOK) return s;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer value[]) {
-  return Guarded(c, "fmi2GetInteger", kf::kRunning, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2GetInteger", kf::kRunning, [&](Component* x) {
     for (size_t i = 0; i < n; ++i)
-      if (fmi2Status s = Result(x, x->instance.GetInteger(vr[i], &value[i])); s != fmi2OK) return s;
-    return fmi2OK;
+      if (kf::Status s = x->Result(x->instance.GetInteger(vr[i], &value[i])); s != kf::kOK) return s;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean value[]) {
-  return Guarded(c, "fmi2GetBoolean", kf::kRunning, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2GetBoolean", kf::kRunning, [&](Component* x) {
     for (size_t i = 0; i < n; ++i)
-      if (fmi2Status s = Result(x, x->instance.GetBoolean(vr[i], &value[i])); s != fmi2OK) return s;
-    return fmi2OK;
+      if (kf::Status s = x->Result(x->instance.GetBoolean(vr[i], &value[i])); s != kf::kOK) return s;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference[], size_t n, fmi2String[]) {
-  return Guarded(c, "fmi2GetString", kf::kRunning,
-                 [&](Component* x) { return n == 0 ? fmi2OK : Log(x, fmi2Error, "this FMU has no String variables"); });
+  return Fmi2Guarded(c, "fmi2GetString", kf::kRunning,
+                 [&](Component* x) { return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no String variables"); });
 }
 
 FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[]) {
-  return Guarded(c, "fmi2SetReal", kf::kAfterInstantiate, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2SetReal", kf::kAfterInstantiate, [&](Component* x) {
     for (size_t i = 0; i < n; ++i)
-      if (fmi2Status s = Result(x, x->instance.SetReal(vr[i], value[i])); s != fmi2OK) return s;
-    return fmi2OK;
+      if (kf::Status s = x->Result(x->instance.SetReal(vr[i], value[i])); s != kf::kOK) return s;
+    return kf::kOK;
   });
 }
 
 // Integer and Boolean variables are the parameters fixed at export: none can be set.
 FMI2_EXPORT fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference[], size_t n, const fmi2Integer[]) {
-  return Guarded(c, "fmi2SetInteger", kf::kAfterInstantiate, [&](Component* x) {
-    return n == 0 ? fmi2OK : Log(x, fmi2Error, "the Integer variables are fixed at export (structural)");
+  return Fmi2Guarded(c, "fmi2SetInteger", kf::kAfterInstantiate, [&](Component* x) {
+    return n == 0 ? kf::kOK : x->Log(kf::kError, "the Integer variables are fixed at export (structural)");
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference[], size_t n, const fmi2Boolean[]) {
-  return Guarded(c, "fmi2SetBoolean", kf::kAfterInstantiate, [&](Component* x) {
-    return n == 0 ? fmi2OK : Log(x, fmi2Error, "the Boolean variables are fixed at export (structural)");
+  return Fmi2Guarded(c, "fmi2SetBoolean", kf::kAfterInstantiate, [&](Component* x) {
+    return n == 0 ? kf::kOK : x->Log(kf::kError, "the Boolean variables are fixed at export (structural)");
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t n, const fmi2String[]) {
-  return Guarded(c, "fmi2SetString", kf::kAfterInstantiate,
-                 [&](Component* x) { return n == 0 ? fmi2OK : Log(x, fmi2Error, "this FMU has no String variables"); });
+  return Fmi2Guarded(c, "fmi2SetString", kf::kAfterInstantiate,
+                 [&](Component* x) { return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no String variables"); });
 }
 
 // ---- the FMU state ----
 
 FMI2_EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state) {
-  return Guarded(c, "fmi2GetFMUstate", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state) return Log(x, fmi2Error, "fmi2GetFMUstate: no place for the state");
+  return Fmi2Guarded(c, "fmi2GetFMUstate", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state) return x->Log(kf::kError, "fmi2GetFMUstate: no place for the state");
     auto* s = static_cast<kf::Instance::Snapshot*>(*state);
     if (s)
       *s = x->instance.Save();
     else
       *state = new kf::Instance::Snapshot(x->instance.Save());
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
-  return Guarded(c, "fmi2SetFMUstate", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state) return Log(x, fmi2Error, "fmi2SetFMUstate: no state");
-    return Result(x, x->instance.Restore(*static_cast<kf::Instance::Snapshot*>(state)));
+  return Fmi2Guarded(c, "fmi2SetFMUstate", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state) return x->Log(kf::kError, "fmi2SetFMUstate: no state");
+    return x->Result(x->instance.Restore(*static_cast<kf::Instance::Snapshot*>(state)));
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state) {
-  return Guarded(c, "fmi2FreeFMUstate", kf::kAfterInstantiate, [&](Component*) {
+  return Fmi2Guarded(c, "fmi2FreeFMUstate", kf::kAfterInstantiate, [&](Component*) {
     if (state) {
       delete static_cast<kf::Instance::Snapshot*>(*state);
       *state = nullptr;
     }
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t* size) {
-  return Guarded(c, "fmi2SerializedFMUstateSize", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state || !size) return Log(x, fmi2Error, "fmi2SerializedFMUstateSize: no state");
+  return Fmi2Guarded(c, "fmi2SerializedFMUstateSize", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state || !size) return x->Log(kf::kError, "fmi2SerializedFMUstateSize: no state");
     *size = kf::Instance::Serialize(*static_cast<kf::Instance::Snapshot*>(state)).size();
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
-  return Guarded(c, "fmi2SerializeFMUstate", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state || !bytes) return Log(x, fmi2Error, "fmi2SerializeFMUstate: no state");
+  return Fmi2Guarded(c, "fmi2SerializeFMUstate", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state || !bytes) return x->Log(kf::kError, "fmi2SerializeFMUstate: no state");
     std::vector<char> data = kf::Instance::Serialize(*static_cast<kf::Instance::Snapshot*>(state));
-    if (data.size() != size) return Log(x, fmi2Error, "fmi2SerializeFMUstate: the buffer has the wrong size");
+    if (data.size() != size) return x->Log(kf::kError, "fmi2SerializeFMUstate: the buffer has the wrong size");
     std::copy(data.begin(), data.end(), bytes);
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size,
                                                fmi2FMUstate* state) {
-  return Guarded(c, "fmi2DeSerializeFMUstate", kf::kAfterInstantiate, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2DeSerializeFMUstate", kf::kAfterInstantiate, [&](Component* x) {
     kf::Instance::Snapshot s;
     if (!bytes || !state || !kf::Instance::Deserialize(bytes, size, &s))
-      return Log(x, fmi2Error, "fmi2DeSerializeFMUstate: not a serialized state of a kanesim FMU");
+      return x->Log(kf::kError, "fmi2DeSerializeFMUstate: not a serialized state of a kanesim FMU");
     delete static_cast<kf::Instance::Snapshot*>(*state);
     *state = new kf::Instance::Snapshot(std::move(s));
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t,
                                                     const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
-  return Guarded(c, "fmi2GetDirectionalDerivative", kf::kRunning, [&](Component* x) {
-    return Log(x, fmi2Error, "this FMU does not provide directional derivatives");
+  return Fmi2Guarded(c, "fmi2GetDirectionalDerivative", kf::kRunning, [&](Component* x) {
+    return x->Log(kf::kError, "this FMU does not provide directional derivatives");
   });
 }
 
 // ---- Model Exchange ----
 
 FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c) {
-  return Guarded(c, "fmi2EnterEventMode", kf::kMe, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2EnterEventMode", kf::kModelExchange, [&](Component* x) {
     x->mode = Mode::kEvent;
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* info) {
-  return Guarded(c, "fmi2NewDiscreteStates", {Mode::kEvent}, [&](Component* x) {
-    if (!info) return Log(x, fmi2Error, "fmi2NewDiscreteStates: no event info");
+  return Fmi2Guarded(c, "fmi2NewDiscreteStates", {Mode::kEvent}, [&](Component* x) {
+    if (!info) return x->Log(kf::kError, "fmi2NewDiscreteStates: no event info");
     *info = fmi2EventInfo{0, 0, 0, 0, 0, 0.0};
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-  return Guarded(c, "fmi2EnterContinuousTimeMode", {Mode::kEvent}, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2EnterContinuousTimeMode", {Mode::kEvent}, [&](Component* x) {
     x->mode = Mode::kContinuous;
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean, fmi2Boolean* enter_event,
                                                    fmi2Boolean* terminate) {
-  return Guarded(c, "fmi2CompletedIntegratorStep", {Mode::kContinuous}, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2CompletedIntegratorStep", {Mode::kContinuous}, [&](Component* x) {
     if (enter_event) *enter_event = 0;
     if (terminate) *terminate = 0;
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2SetTime(fmi2Component c, fmi2Real t) {
-  return Guarded(c, "fmi2SetTime", kf::kMe, [&](Component* x) { return Result(x, x->instance.SetTime(t)); });
+  return Fmi2Guarded(c, "fmi2SetTime", kf::kModelExchange, [&](Component* x) { return x->Result(x->instance.SetTime(t)); });
 }
 
 FMI2_EXPORT fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n) {
-  return Guarded(c, "fmi2SetContinuousStates", kf::kMe,
-                 [&](Component* m) { return Result(m, x ? m->instance.SetStates(x, n) : "no states given"); });
+  return Fmi2Guarded(c, "fmi2SetContinuousStates", kf::kModelExchange,
+                 [&](Component* m) { return m->Result(x ? m->instance.SetStates(x, n) : "no states given"); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t n) {
-  return Guarded(c, "fmi2GetDerivatives", {Mode::kInitialization, Mode::kEvent, Mode::kContinuous, Mode::kTerminated},
-                 [&](Component* m) { return Result(m, dx ? m->instance.GetDerivatives(dx, n) : "no place given"); });
+  return Fmi2Guarded(c, "fmi2GetDerivatives", {Mode::kInitialization, Mode::kEvent, Mode::kContinuous, Mode::kTerminated},
+                 [&](Component* m) { return m->Result(dx ? m->instance.GetDerivatives(dx, n) : "no place given"); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real[], size_t n) {
-  return Guarded(c, "fmi2GetEventIndicators", kf::kRunning, [&](Component* x) {
-    return n == 0 ? fmi2OK : Log(x, fmi2Error, "this FMU has no event indicators");
+  return Fmi2Guarded(c, "fmi2GetEventIndicators", kf::kRunning, [&](Component* x) {
+    return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no event indicators");
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
-  return Guarded(c, "fmi2GetContinuousStates", kf::kAfterInstantiate,
-                 [&](Component* m) { return Result(m, x ? m->instance.GetStates(x, n) : "no place given"); });
+  return Fmi2Guarded(c, "fmi2GetContinuousStates", kf::kAfterInstantiate,
+                 [&](Component* m) { return m->Result(x ? m->instance.GetStates(x, n) : "no place given"); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
-  return Guarded(c, "fmi2GetNominalsOfContinuousStates", kf::kAfterInstantiate, [&](Component* m) {
-    if (int(n) != m->instance.NumStates() || !x) return Log(m, fmi2Error, "wrong number of states");
+  return Fmi2Guarded(c, "fmi2GetNominalsOfContinuousStates", kf::kAfterInstantiate, [&](Component* m) {
+    if (int(n) != m->instance.NumStates() || !x) return m->Log(kf::kError, "wrong number of states");
     for (size_t i = 0; i < n; ++i) x[i] = 1.0;  // angles, lengths and their rates: of order one
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
@@ -354,60 +307,60 @@ FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Re
 
 FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t n,
                                                    const fmi2Integer[], const fmi2Real[]) {
-  return Guarded(c, "fmi2SetRealInputDerivatives", kf::kAfterInstantiate, [&](Component* x) {
-    return n == 0 ? fmi2OK : Log(x, fmi2Error, "this FMU does not interpolate inputs");
+  return Fmi2Guarded(c, "fmi2SetRealInputDerivatives", kf::kAfterInstantiate, [&](Component* x) {
+    return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU does not interpolate inputs");
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t n,
                                                     const fmi2Integer[], fmi2Real[]) {
-  return Guarded(c, "fmi2GetRealOutputDerivatives", kf::kRunning, [&](Component* x) {
-    return n == 0 ? fmi2OK : Log(x, fmi2Error, "this FMU does not provide output derivatives");
+  return Fmi2Guarded(c, "fmi2GetRealOutputDerivatives", kf::kRunning, [&](Component* x) {
+    return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU does not provide output derivatives");
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean) {
-  return Guarded(c, "fmi2DoStep", {Mode::kStep}, [&](Component* x) {
+  return Fmi2Guarded(c, "fmi2DoStep", {Mode::kStep}, [&](Component* x) {
     const std::string error = x->instance.DoStep(t, h);
-    if (error.empty()) return fmi2OK;
+    if (error.empty()) return kf::kOK;
     // A failed step leaves the state where it was; the master may retry from a saved state.
-    return Log(x, fmi2Error, "fmi2DoStep: " + error);
+    return x->Log(kf::kError, "fmi2DoStep: " + error);
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c) {
-  return Guarded(c, "fmi2CancelStep", {Mode::kStep},
-                 [&](Component* x) { return Log(x, fmi2Error, "fmi2CancelStep: steps are never asynchronous here"); });
+  return Fmi2Guarded(c, "fmi2CancelStep", {Mode::kStep},
+                 [&](Component* x) { return x->Log(kf::kError, "fmi2CancelStep: steps are never asynchronous here"); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) {
-  return Guarded(c, "fmi2GetStatus", kf::kRunning, [&](Component* x) {
-    return Log(x, fmi2Discard, "fmi2GetStatus: steps are never asynchronous here");
+  return Fmi2Guarded(c, "fmi2GetStatus", kf::kRunning, [&](Component* x) {
+    return x->Log(kf::kDiscard, "fmi2GetStatus: steps are never asynchronous here");
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real* value) {
-  return Guarded(c, "fmi2GetRealStatus", kf::kRunning, [&](Component* x) {
-    if (kind != fmi2LastSuccessfulTime || !value) return Log(x, fmi2Discard, "fmi2GetRealStatus: only the last successful time");
+  return Fmi2Guarded(c, "fmi2GetRealStatus", kf::kRunning, [&](Component* x) {
+    if (kind != fmi2LastSuccessfulTime || !value) return x->Log(kf::kDiscard, "fmi2GetRealStatus: only the last successful time");
     *value = x->instance.Time();
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integer*) {
-  return Guarded(c, "fmi2GetIntegerStatus", kf::kRunning,
-                 [&](Component* x) { return Log(x, fmi2Discard, "fmi2GetIntegerStatus: no such status"); });
+  return Fmi2Guarded(c, "fmi2GetIntegerStatus", kf::kRunning,
+                 [&](Component* x) { return x->Log(kf::kDiscard, "fmi2GetIntegerStatus: no such status"); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value) {
-  return Guarded(c, "fmi2GetBooleanStatus", kf::kRunning, [&](Component* x) {
-    if (kind != fmi2Terminated || !value) return Log(x, fmi2Discard, "fmi2GetBooleanStatus: only terminated");
+  return Fmi2Guarded(c, "fmi2GetBooleanStatus", kf::kRunning, [&](Component* x) {
+    if (kind != fmi2Terminated || !value) return x->Log(kf::kDiscard, "fmi2GetBooleanStatus: only terminated");
     *value = 0;
-    return fmi2OK;
+    return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind, fmi2String*) {
-  return Guarded(c, "fmi2GetStringStatus", kf::kRunning,
-                 [&](Component* x) { return Log(x, fmi2Discard, "fmi2GetStringStatus: no such status"); });
+  return Fmi2Guarded(c, "fmi2GetStringStatus", kf::kRunning,
+                 [&](Component* x) { return x->Log(kf::kDiscard, "fmi2GetStringStatus: no such status"); });
 }

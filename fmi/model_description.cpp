@@ -74,6 +74,49 @@ void Unknowns(std::ostringstream& x, const char* tag, const std::vector<Variable
   if (!body.empty()) x << "    <" << tag << ">\n" << body << "    </" << tag << ">\n";
 }
 
+void UnknownsV3(std::ostringstream& x, const char* tag, const std::vector<Variable>& vars,
+                std::initializer_list<VarKind> kinds) {
+  for (size_t k = 0; k < vars.size(); ++k)
+    if (std::find(kinds.begin(), kinds.end(), vars[k].kind) != kinds.end())
+      x << "    <" << tag << " valueReference=\"" << k << "\"/>\n";
+}
+
+// UnitDefinitions (every unit a variable has) and DefaultExperiment, the same in FMI 2 and 3.
+void UnitsAndExperiment(std::ostringstream& x, const std::vector<Variable>& vars, const flat::Experiment& e) {
+  std::set<std::string> units;
+  for (const Variable& v : vars)
+    if (!v.unit.empty()) units.insert(v.unit);
+  if (!units.empty()) {
+    x << "  <UnitDefinitions>\n";
+    for (const std::string& u : units) x << "    <Unit name=\"" << Escape(u) << "\"/>\n";
+    x << "  </UnitDefinitions>\n";
+  }
+  const double interval = e.interval > 0 ? e.interval : (e.stop_time - e.start_time) / sim::kDefaultIntervals;
+  x << "  <DefaultExperiment startTime=\"" << Number(e.start_time) << "\" stopTime=\"" << Number(e.stop_time)
+    << "\" tolerance=\"" << Number(e.tolerance) << "\" stepSize=\"" << Number(interval) << "\"/>\n";
+}
+
+// One variable of FMI 3.0 (section 2.4.7): the type is the element.
+std::string VariableV3(const Variable& v, size_t vr, const std::vector<Variable>& vars) {
+  const Attributes a = AttributesOf(v.kind);
+  const char* tag = v.type == VarType::Integer ? "Int32" : v.type == VarType::Boolean ? "Boolean" : "Float64";
+  std::string e = std::string("    <") + tag + " name=\"" + Escape(v.name) + "\" valueReference=\"" +
+                  std::to_string(vr) + "\" causality=\"" + a.causality + "\" variability=\"" + a.variability +
+                  "\" initial=\"" + a.initial + "\"";
+  if (!v.description.empty()) e += " description=\"" + Escape(v.description) + "\"";
+  if (a.has_start)
+    e += " start=\"" +
+         (v.type == VarType::Boolean ? std::string(v.start != 0 ? "true" : "false")
+          : v.type == VarType::Integer ? std::to_string(long(v.start))
+                                       : Number(v.start)) +
+         "\"";
+  if (!v.unit.empty()) e += " unit=\"" + Escape(v.unit) + "\"";
+  if (v.kind == VarKind::Derivative)
+    for (size_t k = 0; k < vars.size(); ++k)
+      if (vars[k].kind == VarKind::State && vars[k].index == v.index) e += " derivative=\"" + std::to_string(k) + "\"";
+  return e + "/>\n";
+}
+
 }  // namespace
 
 std::string ModelDescription(const pipeline::Model& model, const ExportOptions& options, const std::string& guid) {
@@ -91,18 +134,7 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   if (options.co_simulation)
     x << "  <CoSimulation modelIdentifier=\"" << id << "\" canHandleVariableCommunicationStepSize=\"true\"" << caps
       << "/>\n";
-  std::set<std::string> units;
-  for (const Variable& v : vars)
-    if (!v.unit.empty()) units.insert(v.unit);
-  if (!units.empty()) {
-    x << "  <UnitDefinitions>\n";
-    for (const std::string& u : units) x << "    <Unit name=\"" << Escape(u) << "\"/>\n";
-    x << "  </UnitDefinitions>\n";
-  }
-  const flat::Experiment& e = mech.experiment;
-  const double interval = e.interval > 0 ? e.interval : (e.stop_time - e.start_time) / sim::kDefaultIntervals;
-  x << "  <DefaultExperiment startTime=\"" << Number(e.start_time) << "\" stopTime=\"" << Number(e.stop_time)
-    << "\" tolerance=\"" << Number(e.tolerance) << "\" stepSize=\"" << Number(interval) << "\"/>\n";
+  UnitsAndExperiment(x, vars, mech.experiment);
   x << "  <ModelVariables>\n";
   for (size_t k = 0; k < vars.size(); ++k) {
     const Variable& v = vars[k];
@@ -116,6 +148,35 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   Unknowns(x, "Outputs", vars, {VarKind::Output});
   Unknowns(x, "Derivatives", vars, {VarKind::Derivative});
   Unknowns(x, "InitialUnknowns", vars, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter});
+  x << "  </ModelStructure>\n</fmiModelDescription>\n";
+  return x.str();
+}
+
+// FMI 3.0: the same variables (value reference = order), then the independent variable
+// `time`, which FMI 3 requires to be listed.
+std::string ModelDescription3(const pipeline::Model& model, const ExportOptions& options, const std::string& token) {
+  const flat::Mechanism& mech = *model.mech;
+  const std::vector<Variable> vars = ListVariables(model);
+  const std::string id = Identifier(mech.model_name);
+  const std::string caps = " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"";
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << Escape(mech.model_name) << "\" instantiationToken=\""
+    << token << "\" description=\"" << Escape(mech.description) << "\" generationTool=\"kanesim " << KANESIM_VERSION
+    << "\" variableNamingConvention=\"flat\">\n";
+  if (options.model_exchange) x << "  <ModelExchange modelIdentifier=\"" << id << "\"" << caps << "/>\n";
+  if (options.co_simulation)
+    x << "  <CoSimulation modelIdentifier=\"" << id << "\" canHandleVariableCommunicationStepSize=\"true\""
+      << " hasEventMode=\"false\"" << caps << "/>\n";
+  UnitsAndExperiment(x, vars, mech.experiment);
+  x << "  <ModelVariables>\n";
+  for (size_t k = 0; k < vars.size(); ++k) x << VariableV3(vars[k], k, vars);
+  x << "    <Float64 name=\"time\" valueReference=\"" << vars.size()
+    << "\" causality=\"independent\" variability=\"continuous\"/>\n";
+  x << "  </ModelVariables>\n  <ModelStructure>\n";
+  UnknownsV3(x, "Output", vars, {VarKind::Output});
+  UnknownsV3(x, "ContinuousStateDerivative", vars, {VarKind::Derivative});
+  UnknownsV3(x, "InitialUnknown", vars, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter});
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();
 }

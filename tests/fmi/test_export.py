@@ -23,11 +23,11 @@ def run_csv(path, *args):
     return np.genfromtxt(io.StringIO(out), delimiter=",", names=True, deletechars="")
 
 
-@pytest.mark.parametrize("kind", ["cs", "me", "both"])
-@pytest.mark.parametrize("model", [DDP, DOUBLE])
-def test_fmpy_validates_the_fmu(export, model, kind):
+@pytest.mark.parametrize("fmi,kind,model", [(2, "cs", DDP), (2, "me", DDP), (2, "both", DOUBLE),
+                                             (3, "cs", DDP), (3, "me", DDP), (3, "both", DOUBLE)])
+def test_fmpy_validates_the_fmu(export, fmi, kind, model):
     # A problem here: a modelDescription.xml FMPy (and so most masters) would reject.
-    assert validate_fmu(export(model, kind=kind)) == []
+    assert validate_fmu(export(model, fmi=fmi, kind=kind)) == []
 
 
 def test_the_description_lists_states_derivatives_outputs_parameters_and_units(export):
@@ -57,12 +57,13 @@ def test_the_fmu_loads_nothing_from_outside_it_but_the_c_and_cxx_runtime(export,
         assert system or path.startswith(str(lib.parent)), line
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("fmi_type", ["CoSimulation", "ModelExchange"])
-def test_fmpy_simulation_equals_kanesim_run(export, fmi_type):
+def test_fmpy_simulation_equals_kanesim_run(export, fmi, fmi_type):
     # DDP: a prescribed base, damping, regularized friction, outputs. rtol 1e-9 both sides;
     # the two runs differ by the integrators' errors only (measured: ~1e-7 CS, ~1e-6 ME).
     ref = run_csv(DDP, "--stop-time", "3", "--rtol", "1e-9")
-    r = simulate_fmu(export(DDP), fmi_type=fmi_type, stop_time=3, output_interval=0.02, relative_tolerance=1e-9,
+    r = simulate_fmu(export(DDP, fmi=fmi), fmi_type=fmi_type, stop_time=3, output_interval=0.02, relative_tolerance=1e-9,
                      output=["hinge.q", "hinge.u", "tip_height", "energy_like"])
     assert len(r) == len(ref) and np.allclose(r["time"], ref["time"], atol=1e-12)
     for name in ["hinge.q", "hinge.u", "tip_height", "energy_like"]:
@@ -76,6 +77,15 @@ def test_parameters_set_by_the_master_equal_set_on_the_command_line(export):
                      relative_tolerance=1e-9, start_values={"L": 0.5, "d": 0.2}, output=["hinge.q", "tip_height"])
     for name in ["hinge.q", "tip_height"]:
         assert np.max(np.abs(r[name] - ref[name])) < 2e-5, name
+
+
+def test_fmi3_lists_time_as_the_independent_variable_and_derivatives_by_value_reference(export):
+    md = read_model_description(export(DDP, fmi=3))
+    v = {x.name: x for x in md.modelVariables}
+    assert md.fmiVersion == "3.0" and v["time"].causality == "independent"
+    assert v["der(hinge.q)"].derivative is v["hinge.q"]
+    with zipfile.ZipFile(export(DDP, fmi=3)) as z:
+        assert "binaries/x86_64-linux/DampedDrivenPendulum.so" in z.namelist()
 
 
 def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):

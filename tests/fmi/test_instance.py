@@ -189,3 +189,38 @@ def test_a_numerical_failure_in_do_step_is_an_error_with_its_cause(export, write
     assert any("NaN" in msg or "nan" in msg for msg in m.messages), m.messages
     s.terminate()
     s.freeInstance()
+
+
+def test_fmi3_state_continues_bit_for_bit_and_a_step_backwards_is_an_error(export, tmp_path):
+    from fmpy.fmi3 import FMU3Slave
+
+    fmu = export(DDP, fmi=3, kind="cs")
+    d = extract(fmu, unzipdir=str(tmp_path / "u3"))
+    md = read_model_description(d)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    messages = []
+    s = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier)
+    s.instantiate(logMessage=lambda env, status, category, message: messages.append(message.decode()))
+    s.enterInitializationMode(tolerance=1e-8, startTime=0.0)
+    s.exitInitializationMode()
+    names = [vr["hinge.q"], vr["hinge.u"], vr["tip_height"], vr["time"]]
+
+    def run(t0, n):
+        out = []
+        for k in range(n):
+            s.doStep(t0 + k * 0.01, 0.01)
+            out.append(s.getFloat64(names))
+        return np.array(out)
+
+    run(0.0, 30)
+    state = s.getFMUState()
+    first = run(0.3, 30)
+    s.setFMUState(state)
+    assert np.array_equal(run(0.3, 30), first)
+    assert first[-1][3] == pytest.approx(0.6)
+    s.freeFMUState(state)
+    with pytest.raises(Exception):
+        s.doStep(0.3, 0.01)
+    assert any("the FMU is at t = 0.6" in m for m in messages), messages
+    s.terminate()
+    s.freeInstance()
