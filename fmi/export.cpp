@@ -13,6 +13,9 @@
 #ifndef KANESIM_FMU_BUILD_DIR
 #define KANESIM_FMU_BUILD_DIR ""
 #endif
+#ifndef KANESIM_INSTALLED_FMU_DIR
+#define KANESIM_INSTALLED_FMU_DIR "../lib/kanesim/fmu"
+#endif
 
 namespace kanesim::fmi {
 namespace {
@@ -80,7 +83,7 @@ std::string FmuBinariesDir(std::string* error) {
   } else {
     std::error_code ec;
     const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec) tried.push_back(exe.parent_path() / ".." / "lib" / "kanesim" / "fmu");
+    if (!ec) tried.push_back(exe.parent_path() / KANESIM_INSTALLED_FMU_DIR);
     if (*KANESIM_FMU_BUILD_DIR) tried.push_back(KANESIM_FMU_BUILD_DIR);
   }
   std::string list;

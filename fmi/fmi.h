@@ -34,7 +34,7 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
 // "" or why not.
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options);
 
-// Where the FMU's library is: $KANESIM_FMU_DIR, <exe>/../lib/kanesim/fmu (installed), or
+// Where the FMU's library is: $KANESIM_FMU_DIR, <exe>/../<libdir>/kanesim/fmu (installed), or
 // the build tree's folder; "" and *error when none holds kanesim_fmu.so.
 std::string FmuBinariesDir(std::string* error);
 

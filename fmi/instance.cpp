@@ -280,6 +280,7 @@ std::vector<char> Instance::Serialize(const Snapshot& s) {
   std::vector<char> out(6 + sizeof(double) * (3 + s.y.size() + s.params.size()) + s.state_set.size());
   char* p = out.data();
   auto put = [&](const void* src, size_t bytes) {
+    if (bytes == 0) return;  // an empty vector's data() may be null: no memcpy from it
     std::memcpy(p, src, bytes);
     p += bytes;
   };
@@ -299,7 +300,7 @@ bool Instance::Deserialize(const char* data, size_t size, Snapshot* s) {
   const char* end = data + size;
   auto get = [&](void* dst, size_t bytes) {
     if (size_t(end - p) < bytes) return false;
-    std::memcpy(dst, p, bytes);
+    if (bytes > 0) std::memcpy(dst, p, bytes);
     p += bytes;
     return true;
   };
