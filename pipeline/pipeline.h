@@ -38,6 +38,7 @@
 #include "import/import.h"
 #include "sim/energy_guard.h"
 #include "sim/integrator.h"
+#include "sim/sensitivity.h"
 #include "sim/simulate.h"
 
 namespace kanesim::pipeline {
@@ -76,6 +77,9 @@ struct RunSpec {
   // Outputs: glob patterns over dotted signal names (sim/signal_select.h); empty: the
   // default signals (rt::DefaultSignals: joints' q and u, declared outputs).
   std::vector<std::string> outputs;
+  // --sensitivity: real, non-structural parameters (start values too, e.g. "j.q.start")
+  // whose derivatives d(y)/d(p) are written beside every output (sim/sensitivity.h).
+  std::vector<std::string> sensitivity;
 };
 
 // The one place option names meet the enums (run, sweep, test, check, sweep and golden
@@ -162,6 +166,7 @@ std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& m
 struct ResolvedRun {
   sim::SimOptions sim;    // what sim::Simulate takes; sim.signals empty: the default signals
   sim::OutputGrid grid;   // start, stop, interval of the output rows
+  std::vector<std::string> sensitivity;  // RunSpec::sensitivity, checked against the model
 };
 
 // What ResolveRun found wrong, so each command can classify it.
@@ -170,6 +175,7 @@ enum class RunProblem {
   kValue,    // a given interval or tolerance is not a positive finite number
   kSignals,  // an output pattern matches no signal
   kGrid,     // the output grid cannot be run (sim::CheckRun: stop before start, too many rows)
+  kSensitivity,  // a --sensitivity name is not a real, non-structural parameter
 };
 
 // Stage 4: fills *out from the spec and the model's experiment; returns "" or why the run
