@@ -7,7 +7,7 @@
 // Each model runs in a child process of its own, so that its peak RSS is its own. In
 // the child, the first load includes parsing the standard library (once per process);
 // the steady cost is the best of `repeats` further loads.
-//   build/bench/frontend [N ...]            (default: 10 100 1000 10000)
+//   build/bench/frontend [N ...] [MODEL.mech ...]   (default: 10 100 1000 10000)
 //   KANESIM_FRONTEND_REPEATS=5              (default: 5; 1 above N = 2000)
 //   KANESIM_FRONTEND_NOFORK=1               (in this process: for profilers; RSS is then shared)
 // Output: one row per model: ms for load+elaborate, compile, their sum (first load and
