@@ -97,6 +97,12 @@ std::string FmuBinariesDir(std::string* error) {
 
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options) {
   if (options.version != 2 && options.version != 3) return "FMI " + std::to_string(options.version) + " does not exist";
+  // End stops are events (impacts, resting): the FMU has no event indicators yet, and a
+  // master integrating through a stop would be silently wrong. Refused, with the joints.
+  std::string stops;
+  for (const rt::EndStop& stop : rt::EndStops(*model.program)) stops += (stops.empty() ? "'" : ", '") + stop.joint + "'";
+  if (!stops.empty())
+    return "the end stops of " + stops + " are events, which an exported FMU does not have yet (docs/fmi.md)";
   std::string error;
   const std::string bin = options.binaries_dir.empty() ? FmuBinariesDir(&error) : options.binaries_dir;
   if (bin.empty()) return error;

@@ -88,6 +88,25 @@ def test_fmi3_lists_time_as_the_independent_variable_and_derivatives_by_value_re
         assert "binaries/x86_64-linux/DampedDrivenPendulum.so" in z.namelist()
 
 
+STOPPED = """
+model Stopped "A pendulum that hits an end stop"
+  World world;
+  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3), q_min = -0.5, q_max = 0.5);
+  Rod rod(L = 1, m = 1);
+equation
+  connect(world.frame_b, hinge.frame_a);
+  connect(hinge.frame_b, rod.frame_a);
+end Stopped;
+"""
+
+
+def test_end_stops_are_refused_not_integrated_through(write_model, tmp_path):
+    # Without event indicators a master would integrate through the stop: a wrong motion.
+    r = kanesim("export", write_model("stopped.mech", STOPPED), "--fmi", "2", "-o", str(tmp_path / "s.fmu"),
+                check=False)
+    assert r.returncode == 1 and "end stops of 'hinge'" in r.stderr and not (tmp_path / "s.fmu").exists()
+
+
 def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
     r = kanesim("export", DDP, "--fmi", "4", "-o", str(tmp_path / "x.fmu"), check=False)
     assert r.returncode == 1
