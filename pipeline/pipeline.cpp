@@ -229,28 +229,36 @@ std::string RunWarnings(const Model& model, double rtol, const std::vector<std::
   return out;
 }
 
-sim::SimResult Run(const Model& model, const ResolvedRun& run, sim::SignalSink& sink) {
-  if (run.sensitivity.empty()) return sim::Simulate(*model.program, run.sim, sink);
-  // The model at p +/- delta for each parameter: the same structure, rebound.
+std::string SensitivityParams(const Model& model, const std::vector<std::string>& names,
+                              std::vector<sim::SensitivityParam>* out) {
   const flat::Mechanism& mech = *model.mech;
-  std::vector<sim::SensitivityParam> params;
-  for (const std::string& name : run.sensitivity) {
+  out->clear();
+  for (const std::string& name : names) {
+    if (std::string bad = CheckSensitivityParam(mech, name); !bad.empty()) return bad;
     const size_t i = static_cast<size_t>(mech.FindParam(name));
     const double p = flat::EvaluateParams(mech)[i];
     sim::SensitivityParam sp{name, sim::SensitivityStep(p), nullptr, nullptr};
     for (int sign : {1, -1}) {
       rt::CompileResult r = rt::Rebind(*model.program, flat::EvaluateParams(mech, {{i, p + sign * sp.delta}}));
-      if (!r.program) {
-        sim::SimResult bad;
-        bad.status = sim::SimResult::Status::kUsageError;
-        bad.message = "--sensitivity " + name + ": the model does not compile at " + name + " = " +
-                      sim::FormatShortest(p + sign * sp.delta) +
-                      (r.errors.empty() ? std::string() : " (" + r.errors.front().message + ")");
-        return bad;
-      }
+      if (!r.program)
+        return "--sensitivity " + name + ": the model does not compile at " + name + " = " +
+               sim::FormatShortest(p + sign * sp.delta) +
+               (r.errors.empty() ? std::string() : " (" + r.errors.front().message + ")");
       (sign > 0 ? sp.plus : sp.minus) = r.program;
     }
-    params.push_back(std::move(sp));
+    out->push_back(std::move(sp));
+  }
+  return "";
+}
+
+sim::SimResult Run(const Model& model, const ResolvedRun& run, sim::SignalSink& sink) {
+  if (run.sensitivity.empty()) return sim::Simulate(*model.program, run.sim, sink);
+  std::vector<sim::SensitivityParam> params;
+  if (std::string why = SensitivityParams(model, run.sensitivity, &params); !why.empty()) {
+    sim::SimResult bad;
+    bad.status = sim::SimResult::Status::kUsageError;
+    bad.message = why;
+    return bad;
   }
   return sim::SimulateSensitivities(*model.program, params, run.sim, sink);
 }

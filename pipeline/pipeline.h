@@ -190,6 +190,11 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
 // tolerance that is almost certainly a mistake. "" when there is nothing to say.
 std::string RunWarnings(const Model& model, double rtol, const std::vector<std::string>& signals);
 
+// The model at p +/- delta for each of `names` (--sensitivity: Real, non-structural, not
+// constant), rebound from model's program: "" or why not.
+std::string SensitivityParams(const Model& model, const std::vector<std::string>& names,
+                              std::vector<sim::SensitivityParam>* out);
+
 // Stages 5-6 with resolved options.
 sim::SimResult Run(const Model& model, const ResolvedRun& run, sim::SignalSink& sink);
 // Stages 4-6: a ResolveRun problem is returned as Status::kUsageError with its reason.
