@@ -225,15 +225,13 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
   std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
   rt::InitialState(program, y0.data());
-  // End stops: events in every integrator (sim/end_stops.h); a start on a stop is its first event.
+  // End stops and plane contacts: events in every integrator (sim/end_stops.h); a start on
+  // a closed contact is its first event.
   EndStopEvents stops(program, options.rtol, options.atol);
   if (stops.Active()) {
-    if (std::string why = stops.CheckStart(y0.data()); !why.empty()) return UsageError(why);
-    std::vector<double> x(static_cast<size_t>(rt::NumU(program)));
     const double t0 = grid.start;
-    if (rt::InverseMassColumn(program, *ws_rhs, t0, y0.data(), 0, x.data()) != 0 ||
-        stops.Start(*ws_rhs, t0, y0.data()) != 0)
-      return UsageError("end stops: " + rt::ErrorMessage(*ws_rhs));
+    if (std::string why = stops.CheckStart(*ws_rhs, t0, y0.data()); !why.empty()) return UsageError(why);
+    if (stops.Start(*ws_rhs, t0, y0.data()) != 0) return UsageError("contacts at the start: " + rt::ErrorMessage(*ws_rhs));
   }
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
@@ -273,7 +271,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
-    } else if (stops.Active() && !(past_stop = stops.CheckRow(t, y)).empty()) {
+    } else if (stops.Active() && !(past_stop = stops.CheckRow(*ws_out, t, y)).empty()) {
       *cause = past_stop;
       status = -1;  // the row is not written: the rows before it are on disk
     } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
