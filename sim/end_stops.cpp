@@ -303,7 +303,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     std::snprintf(buf, sizeof buf, " (the bounces accumulate at t = %.17g)", t_inf);
     kind += buf;
   }
-  log_.push_back({t, Element(side), kind});
+  if (v != 0.0) log_.push_back({t, Element(side), kind});  // (at rest on it at the start: no impact)
   if (!rest) return 0;
   // At rest on the contact: held while it pushes; pulled away, it leaves at once.
   side.resting = true;

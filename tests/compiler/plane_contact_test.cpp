@@ -1,7 +1,8 @@
 // Plane contacts and accumulating impacts (issue 41): the bouncing ball against its closed
 // form (impact times, rebound heights, the accumulation point), a free body's impact against
 // the impulse laws (energy, Newton's law, momentum along the normal only), and a pendulum
-// chattering on its stop against the exact (elliptic-integral) series of its flights.
+// chattering on its stop against the exact (elliptic-integral) series of its flights, and a
+// rolling contact whose normal force would turn tensile.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -106,6 +107,35 @@ TEST(PlaneContact, BallBouncesToRestAtTheClosedFormTimes) {
           EXPECT_NEAR(s.rows[i][1], 0.0, 1e-9) << how.name << " t = " << s.times[i];
         }
       }
+    }
+  }
+}
+
+// A ball (m = 2) resting on the plane, pulled up by a force 4 t: the plane's reaction
+// m g - 4 t pushes until t_l = m g / 4, then the ball lifts off and rises by
+// y = (2/3)(t - t_l)^3 / m (from y'' = (4 t - m g) / m = 4 (t - t_l) / m).
+// If this fails, a resting contact is not held by a compressive reaction (it sinks or
+// drifts), or it does not leave when the reaction would turn tensile (it keeps pulling).
+TEST(PlaneContact, RestsUntilTheReactionWouldPullThenLiftsOff) {
+  const double m = 2, t_l = m * kG / 4;
+  std::string text = Ball(0.0, 0.0);
+  text.replace(text.find("equation\n"), 9,
+               "  WorldForce pull(force = {0, 4 * time, 0});\nequation\n  connect(lift.frame_b, pull.frame_b);\n");
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 6.0, 0.1, {"lift.q", "lift.u"}, &r, kTol);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_EQ(r.stats.events.size(), 2u) << how.name;
+    EXPECT_EQ(r.stats.events[0].kind, "rests on the plane") << how.name;
+    EXPECT_EQ(r.stats.events[0].time, 0.0) << how.name;
+    EXPECT_EQ(r.stats.events[1].kind, "leaves the plane") << how.name;
+    EXPECT_NEAR(r.stats.events[1].time, t_l, 1e-9) << how.name;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      const double t = s.times[i];
+      const double y = t < t_l ? 0.0 : (2.0 / 3.0) * std::pow(t - t_l, 3) / m;
+      EXPECT_NEAR(s.rows[i][0], y, 1e-8) << how.name << " t = " << t;
     }
   }
 }
@@ -228,6 +258,42 @@ TEST(PlaneContact, ChatteringJointRestsAtTheAccumulationPoint) {
       if (s.times[i] > t_inf) {
         EXPECT_EQ(s.rows[i][1], 0.0) << how.name << " t = " << s.times[i];
       }
+    }
+  }
+}
+
+// A sphere (m = 1) rolling on the plane y = 0, pulled up by a force 2 t: the plane's normal
+// force m g - 2 t turns tensile at t = m g / 2, which a rolling contact (a bilateral
+// constraint) would exert. If this fails, the run keeps pulling the sphere onto the plane
+// (exit 0), or it stops elsewhere than where the normal force crosses zero, or without the
+// rows before.
+TEST(RollingContact, ATensileNormalForceStopsTheRun) {
+  const double t_pull = kG / 2;
+  const std::string text =
+      "model Lift\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));\n"
+      "  Sphere ball(radius = 0.1, m = 1);\n"
+      "  RollingSphere contact(radius = 0.1, n = {0, 1, 0});\n"
+      "  WorldForce pull(force = {0, 2 * time, 0});\n"
+      "equation\n"
+      "  connect(world.frame_b, free.frame_a);\n"
+      "  connect(free.frame_b, ball.frame_a);\n"
+      "  connect(free.frame_b, contact.frame_a);\n"
+      "  connect(free.frame_b, pull.frame_b);\n"
+      "end Lift;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 6.0, 0.1, {"contact.normal_force"}, &r, 1e-9);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kNumericalFailure) << how.name << ": " << r.message;
+    EXPECT_TRUE(Has(r.message, "contact 'contact': its normal force turns tensile")) << r.message;
+    EXPECT_NEAR(r.fail_time, t_pull, 1e-7) << how.name;
+    ASSERT_GE(s.rows.size(), 49u) << how.name << ": the rows before it are kept";
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      EXPECT_LE(s.times[i], r.fail_time) << how.name;
+      EXPECT_NEAR(s.rows[i][0], kG - 2 * s.times[i], 1e-6) << how.name << " t = " << s.times[i];
     }
   }
 }
