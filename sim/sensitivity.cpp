@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "sim/end_stops.h"
+#include "sim/lift_off.h"
 
 namespace kanesim::sim {
 namespace {
@@ -77,7 +78,18 @@ class SensitivityOde final : public OdeSystem {
     return 0;
   }
 
+  // Rolling contacts: a normal force turning tensile stops the run, as in Simulate
+  // (sim/lift_off.h); the guard reads y, the first n entries of z.
+  void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
+  int NumEvents() const override { return lift_ ? lift_->Count() : 0; }
+  int EventFunctions(double t, const double* z, double* g) override { return lift_->Functions(t, z, g); }
+  int Event(double t, double* z, int i) override {
+    event_cause_ = lift_->Cause(t, z, i);
+    return -1;
+  }
+
   std::string FailureCause() const override {
+    if (!event_cause_.empty()) return event_cause_;
     const std::string& m = failed_ ? rt::ErrorMessage(*failed_) : std::string();
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }
@@ -98,6 +110,8 @@ class SensitivityOde final : public OdeSystem {
   std::vector<Perturbation>& perturbations_;
   std::vector<double> yp_, fp_, fm_;
   const rt::Workspace* failed_ = nullptr;  // the workspace of the evaluation that failed
+  LiftOffGuard* lift_ = nullptr;
+  std::string event_cause_;
 };
 
 SimResult Usage(std::string message) {
@@ -120,7 +134,7 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   const OutputGrid grid = ResolveGrid(program, options);
   if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return Usage(why);
   if (EndStopEvents(program, options.rtol, options.atol).Active())
-    return Usage("--sensitivity: the model has end stops (q_min/q_max); sensitivities across impacts are not "
+    return Usage("--sensitivity: the model has end stops or plane contacts; sensitivities across impacts are not "
                  "implemented (docs/integrators.md \"Parameter sensitivities\")");
   IntegratorOptions iopt;
   iopt.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(program).integrator : options.integrator;
@@ -209,6 +223,17 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   };
 
   SensitivityOde ode(program, perturbations);
+  LiftOffGuard lift(program);
+  if (lift.Active()) {
+    if (std::string why = lift.Cause(grid.start, z0.data(), -1); !why.empty()) {
+      result.status = SimResult::Status::kNumericalFailure;
+      result.fail_time = grid.start;
+      result.message = why;
+      sink.End();
+      return result;
+    }
+    ode.SetLiftOff(&lift);
+  }
   const Clock::time_point start = Clock::now();
   IntegrateResult ir = Integrate(ode, z0.data(), grid, iopt, on_row);
   const Clock::duration total = Clock::now() - start;
