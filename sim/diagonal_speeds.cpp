@@ -97,7 +97,7 @@ std::string DescribeConstruction(const rt::Program& p, const std::vector<int>& o
   for (int i = 0; i < n; ++i) {
     out += "  w[" + std::to_string(i + 1) + "] = " + names[static_cast<size_t>(order[static_cast<size_t>(i)])];
     for (int j = i + 1; j < n; ++j)
-      if (at(j, i)) out += " + L" + std::to_string(j + 1) + std::to_string(i + 1) + " " + names[static_cast<size_t>(order[static_cast<size_t>(j)])];
+      if (at(j, i)) out += " + L[" + std::to_string(j + 1) + "," + std::to_string(i + 1) + "] " + names[static_cast<size_t>(order[static_cast<size_t>(j)])];
     out += "\n";
   }
   return out;
@@ -108,7 +108,10 @@ DiagonalFactor::DiagonalFactor(std::vector<int> order)
       d_(Eigen::VectorXd::Zero(n_)), tmp_(n_) {}
 
 int DiagonalFactor::Factor(const double* M) {
-  auto A = [&](int a, int b) { return M[static_cast<size_t>(order_[static_cast<size_t>(b)]) * n_ + order_[static_cast<size_t>(a)]]; };
+  const auto n = static_cast<size_t>(n_);
+  auto A = [&](int a, int b) {
+    return M[static_cast<size_t>(order_[static_cast<size_t>(b)]) * n + static_cast<size_t>(order_[static_cast<size_t>(a)])];
+  };
   double scale = 0.0;
   for (int a = 0; a < n_; ++a) scale = std::max(scale, std::abs(A(a, a)));
   for (int j = 0; j < n_; ++j) {
@@ -145,7 +148,7 @@ void DiagonalFactor::WToSpeeds(const double* w, double* u) const {
 DiagonalOde::DiagonalOde(const rt::Program& program, OdeSystem& inner, std::vector<int> order)
     : program_(program), inner_(inner), ws_(rt::MakeWorkspace(program)), nq_(rt::NumQ(program)),
       n_(rt::NumU(program)), factor_(std::move(order)), M_(n_, n_), Mp_(n_, n_), Mdot_(n_, n_), X_(n_, n_),
-      y_(static_cast<size_t>(nq_ + n_)), ydot_(y_.size()), yh_(y_.size()), a_(n_) {}
+      y_(static_cast<size_t>(nq_ + n_)), ydot_(y_.size()), yh_(y_.size()) {}
 
 int DiagonalOde::MassAt(double t, const double* y, Eigen::MatrixXd* M) {
   own_error_.clear();

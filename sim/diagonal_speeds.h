@@ -101,7 +101,6 @@ class DiagonalOde final : public OdeSystem {
   DiagonalFactor factor_;
   Eigen::MatrixXd M_, Mp_, Mdot_, X_;  // n x n scratch
   std::vector<double> y_, ydot_, yh_;  // [q; u] scratch
-  Eigen::VectorXd a_;
   std::string own_error_;
 };
 

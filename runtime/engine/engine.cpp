@@ -142,7 +142,8 @@ int MassMatrix(const Program& p, Workspace& ws, double t, const double* y, doubl
   PositionKinematics(p, ws);
   VelocityKinematics(p, ws);
   Eigen::Map<Eigen::MatrixXd> out(M, p.nu, p.nu);
-  ws.M_full.resize(p.nu, p.nu);  // no allocation after the first call (same size)
+  // Zeroed once: AssembleMass writes only the entries of joints on one path to the root.
+  if (ws.M_full.rows() != p.nu) ws.M_full.setZero(p.nu, p.nu);
   AssembleMass(p, ws, &ws.M_full);
   out = ws.M_full.selfadjointView<Eigen::Lower>();
   return 0;
