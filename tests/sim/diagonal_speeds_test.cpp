@@ -43,6 +43,23 @@ equation
   connect(b.frame_b, r4.frame_a);
 end Tree;)";
 
+// A prescribed (rheonomic) joint between two free ones: M depends on time, and Mdot on dM/dt.
+const char* kDriven = R"(model Driven
+  World world(g = {0, -9.81, 0});
+  Revolute j1(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));
+  Rod r1(L = 0.7, m = 1.2);
+  Revolute p(axis = {1, 0, 0});
+  Revolute j2(axis = {0, 0, 1}, q(start = -0.4), u(start = 0.1));
+  Rod r2(L = 0.5, m = 0.8);
+equation
+  connect(world.frame_b, j1.frame_a);
+  connect(j1.frame_b, r1.frame_a);
+  connect(r1.frame_b, p.frame_a);
+  connect(p.frame_b, j2.frame_a);
+  connect(j2.frame_b, r2.frame_a);
+  p.q = 0.8 * sin(3 * time);
+end Driven;)";
+
 // Round-off of an n <= 8 factorization of a matrix with entries O(1): far below 1e-12.
 constexpr double kFactorTol = 1e-12;
 
@@ -188,6 +205,7 @@ TEST(DiagonalSpeeds, MotionEqualsTheJointSpeeds) {
       {kRoot + "/examples/chain.mech", false, {{"N", "5"}}, {}},
       {kRoot + "/examples/chain.mech", false, {{"N", "5"}}, {"j[5]", "j[2]"}},
       {kTree, true, {}, {}},
+      {kDriven, true, {}, {}},
       {kLesser, false, {}, {"hinge"}},
   };
   for (const Case& c : cases) {
