@@ -68,7 +68,8 @@ std::vector<int> SpeedOrder(const rt::Program& p, const std::vector<std::string>
 std::string DiagonalSpeedsRefusal(const rt::Program& p) {
   if (!p.rows.empty())
     return "--speeds diagonal: closed loops and rolling contacts are not supported yet (the constrained basis; TODO(#44))";
-  if (!rt::EndStops(p).empty()) return "--speeds diagonal: end stops are not supported (their impacts act on the joint speeds)";
+  if (!rt::EndStops(p).empty() || !rt::PlaneContacts(p).empty())
+    return "--speeds diagonal: end stops and plane contacts are not supported (their impacts act on the joint speeds)";
   if (p.nu == 0) return "--speeds diagonal: the model has no free speeds";
   return "";
 }

@@ -20,7 +20,7 @@
 // Mdot = dM/dt along the motion is taken by central differences of M(t +- h, q +- h qdot)
 // with one Richardson step (error O(h^4) + eps/h, about 1e-12 relative).
 //
-// Trees (no loop closures, no rolling contacts) and no end stops: the others are refused
+// Trees (no loop closures, no rolling contacts), no end stops or plane contacts: the others are refused
 // (TODO(#44): the constrained basis beta^T M beta).
 #pragma once
 
