@@ -227,9 +227,9 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember(pipeline::IntegratorNames()));
   run->add_option("--linear-solver", a->linear_solver,
-                  "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on closed loops on the "
-                  "multiplier form with few degrees of freedom, else KLU when the block pattern is sparse), dense, klu "
-                  "(IDA) or krylov")
+                  "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on the multiplier "
+                  "form: CVODE-BDF always, IDA with few degrees of freedom; else KLU when the block pattern is sparse), "
+                  "dense, klu (IDA) or krylov")
       ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   run->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   run->add_option("--reactions", a->reactions,
@@ -245,6 +245,11 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
                       "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");
   run->add_flag("--show-frames", a->show_frames, "With --animation: draw every joint's frames as small x/y/z axes")
       ->needs(animation);
+  run->add_option("--sensitivity", a->spec.sensitivity,
+                  "Also write d(y)/d(p) for every output y and each of these Real parameters (comma-separated; start "
+                  "values too, e.g. j.q.start)")
+      ->delimiter(',')
+      ->excludes(animation);
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }
 

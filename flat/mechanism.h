@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -244,9 +245,11 @@ struct Mechanism {
   std::string StateRefName(const StateRef& r) const;  // "j.q[1]", "rod.frame_b.r[2]"
 };
 
-// Evaluates all parameter bindings in order (values of leaves are kept) and returns the
-// values; `overrides` (index -> value) replace leaves or bindings.
+// Evaluates all parameter bindings in order (values of leaves and of --set values are kept)
+// and returns the values; `overrides` (index -> value) replace leaves or bindings, and the
+// bindings after them see the new values (a sweep's scenario, a sensitivity's step).
 std::vector<double> EvaluateParams(const Mechanism& m);
+std::vector<double> EvaluateParams(const Mechanism& m, const std::map<size_t, double>& overrides);
 
 // Evaluates an expression that depends only on parameters.
 double EvalParamExpr(const Mechanism& m, const std::vector<double>& param_values, ExprId id);

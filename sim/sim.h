@@ -9,4 +9,5 @@
 #include "sim/energy_guard.h"   // stopping a conservative model whose energy drifts
 #include "sim/integrator.h"     // the integrators, generic over the right-hand side
 #include "sim/signal_select.h"  // --output patterns over signal names
+#include "sim/sensitivity.h"    // a run with d(y)/d(p) by the variational equations
 #include "sim/simulate.h"       // one run of a Program from start to stop
