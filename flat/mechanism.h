@@ -131,6 +131,10 @@ struct Joint {
   // N = the joint's reaction force across its axis. kNoExpr: no friction. Set from the
   // stdlib joints' `mu`, `friction_v`, `friction_radius` when mu is not zero.
   ExprId friction_mu = kNoExpr, friction_radius = kNoExpr, friction_v = kNoExpr;
+  // Exact Coulomb stick-slip instead (stdlib `friction_exact`, `mu_s`; sim/stick_slip.h):
+  // -mu N sign(u) sliding, stuck while the force needed stays within mu_s N.
+  bool friction_exact = false;
+  ExprId friction_mu_s = kNoExpr;
   // End stops of a Revolute or Prismatic joint (stdlib `q_min`, `q_max`, `restitution`):
   // kNoExpr = no stop on that side (the stdlib parameter left unbound); restitution is
   // set only when a stop is.

@@ -217,6 +217,8 @@ class Emitter {
         j.friction_v = AsScalar(Field(n, "friction_v", {}));
         j.friction_radius =
             n->Child("friction_radius") ? AsScalar(Field(n, "friction_radius", {})) : pool.Constant(1.0);
+        j.friction_exact = Boolean(n, "friction_exact", false);
+        if (j.friction_exact && n->Child("mu_s")) j.friction_mu_s = AsScalar(Field(n, "mu_s", {}));
       }
     }
     EndStops(n, &j);

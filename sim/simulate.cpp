@@ -11,6 +11,7 @@
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
 #include "sim/lift_off.h"
+#include "sim/stick_slip.h"
 #include "sim/test_hooks.h"
 
 namespace kanesim::sim {
@@ -42,7 +43,7 @@ class EngineOde final : public OdeSystem {
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
     from_monitor_ = false;
-    int s = rt::Derivative(program_, ws_, t, y, ydot);
+    int s = stick_ ? stick_->Rhs(ws_, t, y, ydot) : rt::Derivative(program_, ws_, t, y, ydot);
     if (stops_ && s == 0) s = stops_->Hold(ws_, t, y, ydot);
     if (fault_ && s == 0) fault_(t, y, ydot);
     return s;
@@ -51,11 +52,17 @@ class EngineOde final : public OdeSystem {
   // (sim/lift_off.h; the compiler never lets both in one model): their events; none without.
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
   void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
-  int NumEvents() const override { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
+  // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
+  void SetStickSlip(StickSlipEvents* stick) { stick_ = stick; }
+  int NumEvents() const override {
+    return stops_ ? stops_->Count() : lift_ ? lift_->Count() : stick_ ? stick_->Count() : 0;
+  }
   int EventFunctions(double t, const double* y, double* g) override {
+    if (stick_) return stick_->Functions(ws_, t, y, g);
     return stops_ ? stops_->Functions(ws_, t, y, g) : lift_->Functions(t, y, g);
   }
   int Event(double t, double* y, int i) override {
+    if (stick_) return stick_->Event(ws_, t, y, i);
     if (stops_) return stops_->Event(ws_, t, y, i);
     event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
     return -1;
@@ -135,6 +142,7 @@ class EngineOde final : public OdeSystem {
   std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
   EndStopEvents* stops_ = nullptr;             // end stops and plane contacts (null: none)
   LiftOffGuard* lift_ = nullptr;               // rolling contacts' normal forces (null: none)
+  StickSlipEvents* stick_ = nullptr;           // exact stick-slip friction (null: none)
   std::string event_cause_;                    // why an event stopped the run ("" : none did)
   bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank
@@ -270,6 +278,10 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       return r;
     }
   }
+  // Exact stick-slip friction: the start decides sliding or stuck (sim/stick_slip.h).
+  StickSlipEvents stick(program);
+  if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
+    return UsageError("friction at the start: " + rt::ErrorMessage(*ws_rhs));
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
@@ -286,6 +298,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   std::vector<double> y_row(y0.size()), row_values(n_written + n_diag);
   RowCallback row = [&](double t, const double* y_in, std::string* cause) -> int {
     Clock::time_point t0 = Clock::now();
+    if (stick.Active()) stick.Sync(*ws_out);  // the outputs see the friction laws of the run
     const double* y = y_in;
     int status = 0;
     bool converted = true;  // z = [q; w] -> y = [q; u] (diagonal speeds)
@@ -345,6 +358,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
   if (stops.Active()) ode.SetStops(&stops);
   if (lift.Active()) ode.SetLiftOff(&lift);
+  if (stick.Active()) ode.SetStickSlip(&stick);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
@@ -365,6 +379,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.rows = ir.rows;
   result.stats.bridges = ir.bridges;
   result.stats.events = stops.Log();
+  result.stats.events.insert(result.stats.events.end(), stick.Log().begin(), stick.Log().end());
   ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
   result.stats.energy_guard = energy.Description();
   result.stats.energy_error = energy.WorstError();

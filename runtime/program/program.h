@@ -76,6 +76,8 @@ struct TreeJoint {
   double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/kane/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
+  double mu_s = 0.0;           // static coefficient (friction_exact)
+  bool friction_exact = false; // exact stick-slip as events (sim/stick_slip.h), not tanh
   // End stops (Revolute, Prismatic): q in [q_min, q_max]; -inf / +inf: none on that side.
   double q_min = -std::numeric_limits<double>::infinity();
   double q_max = std::numeric_limits<double>::infinity();
@@ -399,6 +401,11 @@ struct Workspace {
   std::vector<double> friction_tau; // friction force per friction joint, last converged  (nfric)  filled by SolveWithFriction
   std::vector<double> friction_Q0;  // the joint's applied force without friction  (nfric)  filled by SolveWithFriction
   long friction_iterations = 0;     // fixed-point iterations so far  filled by SolveWithFriction
+  // The law per friction joint (SetFrictionMode): 0 tanh(u / v), +1 / -1 sliding that way,
+  // 2 the force friction_fixed (stuck)  (nfric)  set by sim/stick_slip.cpp
+  std::vector<int> friction_mode;
+  std::vector<double> friction_fixed;  // mode 2's force  (nfric)
+  std::vector<double> friction_N;      // normal force N of the last solve  (nfric)  filled by SolveWithFriction
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
 };
