@@ -9,6 +9,7 @@
 
 #include "sim/end_stops.h"
 #include "sim/lift_off.h"
+#include "sim/stick_slip.h"
 
 namespace kanesim::sim {
 namespace {
@@ -136,6 +137,12 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   if (EndStopEvents(program, options.rtol, options.atol).Active())
     return Usage("--sensitivity: the model has end stops or plane contacts; sensitivities across impacts are not "
                  "implemented (docs/integrators.md \"Parameter sensitivities\")");
+  if (StickSlipEvents(program).Active())
+    return Usage("--sensitivity: the model has exact stick-slip friction (friction_exact); sensitivities across "
+                 "its stick and slip events are not implemented");
+  if (options.speeds == Speeds::kDiagonal)
+    return Usage("--sensitivity with --speeds diagonal: not implemented (the sensitivities are of the joint speeds' "
+                 "equations; run without --speeds diagonal)");
   IntegratorOptions iopt;
   iopt.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(program).integrator : options.integrator;
   iopt.rtol = options.rtol;
