@@ -49,6 +49,21 @@ int StateSize(const Program& program);  // nq + nu
 std::vector<int> StateCouplingGroups(const Program& program);
 int NumQ(const Program& program);
 int NumU(const Program& program);
+
+// The model's inputs (top-level `input Real u;`, flat::Mechanism::inputs; docs/language.md
+// "Inputs"): values given at run time, read by force laws, prescribed motions and outputs.
+// Every workspace that evaluates the model holds them: either constants (SetInputValues; 0
+// until set) or a source evaluated at each t (a table, sim/input_table.h).
+class InputSource {
+ public:
+  virtual ~InputSource() = default;
+  // u (NumInputs) and du/dt at t; 0, or -1 with *error (a time outside a table).
+  virtual int Values(double t, double* u, double* du_dt, std::string* error) const = 0;
+};
+int NumInputs(const Program& program);
+const std::string& InputName(const Program& program, int i);  // "u", "f[2]"
+void SetInputSource(Workspace& ws, const InputSource* source);  // not owned; null: constants
+void SetInputValues(Workspace& ws, const double* u);             // constants, rates 0; drops the source
 double StartTime(const Program& program);  // from the experiment annotation
 void InitialState(const Program& program, double* y);
 

@@ -35,6 +35,15 @@ class EndStopEvents {
   // resting joint leaves its stop. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
+  // Per side, whether its joint rests on it (the stepping core's state, sim/simulator.h).
+  std::vector<char> Resting() const {
+    std::vector<char> r;
+    for (const Side& s : sides_) r.push_back(s.resting ? 1 : 0);
+    return r;
+  }
+  void SetResting(const std::vector<char>& r) {
+    for (size_t i = 0; i < sides_.size() && i < r.size(); ++i) sides_[i].resting = r[i] != 0;
+  }
 
   // A rebound speed at most this many times (atol + rtol |speed before|) ends in rest.
   static constexpr double kRestSpeeds = 100.0;

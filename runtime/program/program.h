@@ -283,6 +283,8 @@ struct SparseNumericDeleter {
   void operator()(SparseNumeric* s) const { DestroySparseNumeric(s); }
 };
 
+class InputSource;  // runtime/runtime.h
+
 struct Workspace {
   double t = 0.0;                   // time of the last evaluation  ()  filled by UnpackState
   bool step_projection = false;     // the solver projects its steps (runtime/runtime.h SetStepProjection)
@@ -386,6 +388,9 @@ struct Workspace {
   long friction_iterations = 0;     // fixed-point iterations so far  filled by SolveWithFriction
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
+  std::vector<double> inputs;       // the model's inputs at t  (mech.inputs)  filled by UnpackState (input_source) or SetInputValues
+  std::vector<double> input_rates;  // their time derivatives, for prescribed motions' jets  (mech.inputs)  filled likewise
+  const InputSource* input_source = nullptr;  // inputs as functions of time; null: the constants in `inputs`
 };
 
 }  // namespace kanesim::rt
