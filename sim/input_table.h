@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/program/program.h"  // rt::InputSource
 #include "runtime/runtime.h"
 
 namespace kanesim::sim {

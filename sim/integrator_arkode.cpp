@@ -96,10 +96,10 @@ class ArkodeStepper final : public SundialsStepper {
 
   // ERKStepReset keeps the step size and evaluates f(t, y) again with the new inputs (the
   // next step's first stage would otherwise be the last step's f).
+  // At the last step's end: its stop time, where s_.y is (the caller sets the next stop).
   int InputsChanged() override {
-    double t = 0.0;
-    ERKStepGetCurrentTime(mem_, &t);
-    if (ERKStepReset(mem_, t, s_.y) != ARK_SUCCESS || ERKStepSetStopTime(mem_, stop_) != ARK_SUCCESS) return -1;
+    const double t = stop_;
+    if (ERKStepReset(mem_, t, s_.y) != ARK_SUCCESS) return -1;
     t_accepted_ = t;
     const double* ys = N_VGetArrayPointer(s_.y);
     std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());

@@ -202,6 +202,7 @@ StepResult Simulator::AdvanceTo(double t) {
       AddStats(&m.done, m.stepper->Stats());
       m.stepper.reset();
       t_ = te;
+      m.next_step = 0.0;  // a fresh solver after the jump estimates its own first step
       if (te >= t) return {};
       m.rhs->Reset();
       m.stepper = detail::MakeStepper(*m.rhs, te, y_.data(), t, m.iopt, &error);

@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "runtime/kinematics/joint_kinematics.h"
-#include "runtime/runtime.h"
 
 namespace kanesim::rt {
 

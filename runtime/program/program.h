@@ -283,7 +283,14 @@ struct SparseNumericDeleter {
   void operator()(SparseNumeric* s) const { DestroySparseNumeric(s); }
 };
 
-class InputSource;  // runtime/runtime.h
+// The model's inputs as functions of time (runtime/runtime.h "inputs"): a table
+// (sim/input_table.h), or constants that a caller changes between steps.
+class InputSource {
+ public:
+  virtual ~InputSource() = default;
+  // u (NumInputs) and du/dt at t; 0, or -1 with *error (a time outside a table).
+  virtual int Values(double t, double* u, double* du_dt, std::string* error) const = 0;
+};
 
 struct Workspace {
   double t = 0.0;                   // time of the last evaluation  ()  filled by UnpackState

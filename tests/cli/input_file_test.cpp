@@ -116,5 +116,33 @@ TEST(InputFile, OutOfRangeAndUnconnectedAreErrors) {
   EXPECT_TRUE(Has(n.err, "other.csv:1:6: 'torque' is not an input of the model (its inputs: tau)")) << n.err;
 }
 
+
+// If this fails, a sweep's --resume or a golden test does not see an edited input table: the
+// rows would mix (or pass against) two different drives of the model.
+TEST(InputFile, SweepsAndGoldenTestsRecordTheTable) {
+  const std::string d = Work("input_file_hash");
+  Write(d + "/m.mech", Pendulum("  parameter Real gain = 1;\n  input Real tau;\n", "gain * tau"));
+  Write(d + "/u.csv", "time,tau\n0,0\n3,1\n");
+  const std::string sweep = "sweep m.mech --input-file u.csv --grid gain=1,2 --metric final:j.q --no-progress -o out";
+  Result first = Kanesim(sweep, d);
+  ASSERT_EQ(first.rc, 0) << first.err;
+  Result same = Kanesim(sweep + " --resume", d);
+  EXPECT_EQ(same.rc, 0) << same.err;
+  Write(d + "/u.csv", "time,tau\n0,0\n3,2\n");
+  Result edited = Kanesim(sweep + " --resume", d);
+  EXPECT_EQ(edited.rc, 1) << edited.err;
+  EXPECT_TRUE(Has(edited.err, "cannot resume") && Has(edited.err, "u.csv")) << edited.err;
+
+  Write(d + "/g.toml", "model = \"m.mech\"\ninput_files = [\"u.csv\"]\n[run]\nstop_time = 1\n");
+  Result update = Kanesim("test g.toml --update", d);
+  ASSERT_EQ(update.rc, 0) << update.err << update.out;
+  Result pass = Kanesim("test g.toml", d);
+  EXPECT_EQ(pass.rc, 0) << pass.err << pass.out;
+  Write(d + "/u.csv", "time,tau\n0,0\n3,5\n");
+  Result changed = Kanesim("test g.toml", d);
+  EXPECT_NE(changed.rc, 0) << changed.out;
+  EXPECT_TRUE(Has(changed.out + changed.err, "settings")) << changed.out << changed.err;
+}
+
 }  // namespace
 }  // namespace kanesim::clitest

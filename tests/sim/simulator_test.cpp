@@ -89,7 +89,9 @@ TEST(Simulator, MillisecondStepsEqualAWholeRun) {
     EXPECT_NEAR(out[1], whole.rows.back()[1], 1e-7) << MethodName(m);
     // One integration across the steps, not one per step: a restart per step would cost at
     // least one step per millisecond, and DOP853's f evaluations here are ~12 per step.
-    if (m == rt::Integrator::Dop853) EXPECT_LE(s->Stats().rhs_evals, 2000 * 13 + 100);
+    if (m == rt::Integrator::Dop853) {
+      EXPECT_LE(s->Stats().rhs_evals, 2000 * 13 + 100);
+    }
   }
 }
 
