@@ -45,6 +45,9 @@ class PySimulator {
   }
 
   void AdvanceTo(double t, const py::handle& inputs) {
+    if (!(t >= sim_->Time()) || !std::isfinite(t))  // a caller's mistake, not a numerical failure
+      throw py::value_error("cannot advance to t = " + std::to_string(t) + ": the simulator is at t = " +
+                            std::to_string(sim_->Time()) + " and does not step backwards");
     SetInputs(inputs);
     kanesim::sim::StepResult r;
     {
