@@ -99,7 +99,8 @@ def test_errors():
     with pytest.raises(kanesim.SimulationError):
         failing.advance_to(1.0)  # refused until reset
     failing.reset()
-    failing.advance_to(0.2)
+    assert failing.time == 0.0
+    failing.advance_to(0.2, inputs={"tau": 0.5})
 
 
 def test_the_gil_is_released_while_stepping():
