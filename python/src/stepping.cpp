@@ -41,6 +41,7 @@ class PySimulator {
       if (it == index_.end()) throw py::key_error("'" + name + "' is not an input of the model" + Known());
       std::string error;
       if (!sim_->SetInput(it->second, py::cast<double>(item.second), &error)) throw py::value_error(error);
+      fresh_ = false;  // an output may read an input
     }
   }
 
@@ -54,6 +55,7 @@ class PySimulator {
       py::gil_scoped_release release;
       const auto start = std::chrono::steady_clock::now();
       r = sim_->AdvanceTo(t);
+      fresh_ = false;
       advance_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     if (!r.ok) throw StepFailed{r.fail_time, r.cause};
@@ -64,10 +66,17 @@ class PySimulator {
   }
 
   py::array_t<double> Outputs() {
-    std::string error;
-    if (!sim_->Outputs(outputs_.data(), &error)) throw StepFailed{sim_->Time(), error};
+    Evaluate();
     return py::array_t<double>(static_cast<py::ssize_t>(outputs_.size()), outputs_.data());
   }
+  // The outputs at the current time, evaluated once until the next step or change.
+  void Evaluate() {
+    if (fresh_) return;
+    std::string error;
+    if (!sim_->Outputs(outputs_.data(), &error)) throw StepFailed{sim_->Time(), error};
+    fresh_ = true;
+  }
+  void Changed() { fresh_ = false; }
   double Get(const std::string& name) {
     const auto it = output_index_.find(name);
     if (it == output_index_.end()) {
@@ -75,8 +84,7 @@ class PySimulator {
       if (in != index_.end()) return sim_->Inputs()[static_cast<size_t>(in->second)];
       throw py::key_error("'" + name + "' is not an output or input of this simulator");
     }
-    std::string error;
-    if (!sim_->Outputs(outputs_.data(), &error)) throw StepFailed{sim_->Time(), error};
+    Evaluate();
     return outputs_[it->second];
   }
 
@@ -104,6 +112,7 @@ class PySimulator {
     s.resting.assign(r.begin(), r.end());
     std::string error;
     if (!sim_->SetState(s, &error)) throw py::value_error(error);
+    fresh_ = false;
   }
 
   kanesim::sim::Simulator& sim() { return *sim_; }
@@ -120,6 +129,7 @@ class PySimulator {
   std::unordered_map<std::string, int> index_;
   std::unordered_map<std::string, size_t> output_index_;
   std::vector<double> outputs_;
+  bool fresh_ = false;             // outputs_ holds the outputs at the current time and inputs
   double advance_seconds_ = 0.0;  // wall time inside Simulator::AdvanceTo (stats()["advance_seconds"])
 };
 
@@ -178,7 +188,10 @@ void BindSimulator(py::module_& m) {
       .def("get", &PySimulator::Get)
       .def("get_state", &PySimulator::GetState)
       .def("set_state", &PySimulator::SetState)
-      .def("reset", [](PySimulator& s) { s.sim().Reset(); })
+      .def("reset", [](PySimulator& s) {
+        s.sim().Reset();
+        s.Changed();
+      })
       .def("stats", [](PySimulator& s) {
         const kanesim::sim::IntegratorStats st = s.sim().Stats();
         py::dict d;
