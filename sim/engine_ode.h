@@ -10,6 +10,7 @@
 #include "runtime/runtime.h"
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
+#include "sim/lift_off.h"
 #include "sim/integrator.h"
 
 namespace kanesim::sim::detail {
@@ -50,11 +51,19 @@ class EngineOde final : public OdeSystem {
     if (aside_) rt::SetInputSource(*aside_, inputs);
     if (energy_ws_) rt::SetInputSource(*energy_ws_, inputs);
   }
-  // End stops (sim/end_stops.h): their events; none without stops.
+  // End stops and plane contacts (sim/end_stops.h), or rolling contacts' normal forces
+  // (sim/lift_off.h; the compiler never lets both in one model): their events; none without.
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
-  int NumEvents() const override { return stops_ ? stops_->Count() : 0; }
-  int EventFunctions(double t, const double* y, double* g) override { return stops_->Functions(ws_, t, y, g); }
-  int Event(double t, double* y, int i) override { return stops_->Event(ws_, t, y, i); }
+  void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
+  int NumEvents() const override { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
+  int EventFunctions(double t, const double* y, double* g) override {
+    return stops_ ? stops_->Functions(ws_, t, y, g) : lift_->Functions(t, y, g);
+  }
+  int Event(double t, double* y, int i) override {
+    if (stops_) return stops_->Event(ws_, t, y, i);
+    event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
+    return -1;
+  }
   void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
   bool ChecksSteps() const override { return bridge_ != nullptr; }
   int StepAccepted(double t, const double* y) override {
@@ -63,6 +72,7 @@ class EngineOde final : public OdeSystem {
     return s;
   }
   std::string FailureCause() const override {
+    if (!event_cause_.empty()) return event_cause_;
     if (from_monitor_) return BridgeError(*bridge_);
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
@@ -134,7 +144,9 @@ class EngineOde final : public OdeSystem {
   const rt::InputSource* inputs_ = nullptr;  // SetInputs
   rt::Workspace& ws_;
   std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
-  EndStopEvents* stops_ = nullptr;             // end stops (null: none)
+  EndStopEvents* stops_ = nullptr;             // end stops and plane contacts (null: none)
+  LiftOffGuard* lift_ = nullptr;               // rolling contacts' normal forces (null: none)
+  std::string event_cause_;                    // why an event stopped the run ("" : none did)
   bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank
   int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet

@@ -10,6 +10,7 @@
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
 #include "sim/engine_ode.h"
+#include "sim/lift_off.h"
 #include "sim/test_hooks.h"
 
 namespace kanesim::sim {
@@ -116,15 +117,24 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
   std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
   rt::InitialState(program, y0.data());
-  // End stops: events in every integrator (sim/end_stops.h); a start on a stop is its first event.
+  // End stops and plane contacts: events in every integrator (sim/end_stops.h); a start on
+  // a closed contact is its first event.
   EndStopEvents stops(program, options.rtol, options.atol);
   if (stops.Active()) {
-    if (std::string why = stops.CheckStart(y0.data()); !why.empty()) return UsageError(why);
-    std::vector<double> x(static_cast<size_t>(rt::NumU(program)));
     const double t0 = grid.start;
-    if (rt::InverseMassColumn(program, *ws_rhs, t0, y0.data(), 0, x.data()) != 0 ||
-        stops.Start(*ws_rhs, t0, y0.data()) != 0)
-      return UsageError("end stops: " + rt::ErrorMessage(*ws_rhs));
+    if (std::string why = stops.CheckStart(*ws_rhs, t0, y0.data()); !why.empty()) return UsageError(why);
+    if (stops.Start(*ws_rhs, t0, y0.data()) != 0) return UsageError("contacts at the start: " + rt::ErrorMessage(*ws_rhs));
+  }
+  // Rolling contacts: a normal force turning tensile stops the run (sim/lift_off.h).
+  LiftOffGuard lift(program);
+  if (lift.Active()) {
+    if (std::string why = lift.Cause(grid.start, y0.data(), -1); !why.empty()) {
+      SimResult r;
+      r.status = SimResult::Status::kNumericalFailure;
+      r.fail_time = grid.start;
+      r.message = why;
+      return r;
+    }
   }
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
@@ -167,7 +177,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
-    } else if (stops.Active() && !(past_stop = stops.CheckRow(t, y)).empty()) {
+    } else if (stops.Active() && !(past_stop = stops.CheckRow(*ws_out, t, y)).empty()) {
       *cause = past_stop;
       status = -1;  // the row is not written: the rows before it are on disk
     } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
@@ -184,6 +194,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
   ode.SetInputs(options.inputs);
   if (stops.Active()) ode.SetStops(&stops);
+  if (lift.Active()) ode.SetLiftOff(&lift);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);

@@ -24,7 +24,7 @@ struct Simulator::Impl {
   std::shared_ptr<const rt::SignalPlan> plan;  // the outputs
   double t0 = 0.0;
   std::vector<double> y0;                   // the start (after a start on an end stop)
-  std::vector<char> resting0;               // ... and its resting sides
+  std::vector<double> resting0;             // ... and its resting sides
   ConstantInputs inputs;                    // what every workspace reads
   WorkspacePtr ws_rhs, ws_out;
   std::unique_ptr<EndStopEvents> stops;     // null without end stops
@@ -89,12 +89,12 @@ std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> pr
   rt::InitialState(p, impl->y0.data());
   auto stops = std::make_unique<EndStopEvents>(p, options.rtol, options.atol);
   if (stops->Active()) {
-    if (std::string why = stops->CheckStart(impl->y0.data()); !why.empty()) {
+    auto ws = rt::MakeWorkspace(p);
+    rt::SetInputSource(*ws, &impl->inputs);
+    if (std::string why = stops->CheckStart(*ws, impl->t0, impl->y0.data()); !why.empty()) {
       *error = why;
       return nullptr;
     }
-    auto ws = rt::MakeWorkspace(p);
-    rt::SetInputSource(*ws, &impl->inputs);
     if (stops->Start(*ws, impl->t0, impl->y0.data()) != 0) {
       *error = "end stops: " + rt::ErrorMessage(*ws);
       return nullptr;

@@ -17,8 +17,8 @@
 // them their order, which grows again within a few steps.)
 //
 // Not done while stepping: bridges over closed loops' singular configurations (a step that
-// meets one fails), the output rows' energy checks (there are no rows). End-stop events are
-// handled as in a run.
+// meets one fails), the output rows' energy checks (there are no rows), rolling contacts'
+// lift-off check. End stops' and plane contacts' events are handled as in a run.
 #pragma once
 
 #include <limits>
@@ -56,7 +56,7 @@ struct SimulatorState {
   std::vector<double> y;       // [q_free, u_free]  (rt::StateSize)
   std::vector<double> inputs;  // (rt::NumInputs)
   double next_step = 0.0;      // the step size the solver tries next (0: its own estimate)
-  std::vector<char> resting;   // end stops: per side, the joint rests on it
+  std::vector<double> resting;  // end stops and plane contacts: EndStopEvents::Resting
 };
 
 class Simulator {

@@ -99,7 +99,7 @@ class PySimulator {
     const kanesim::sim::SimulatorState s = sim_->GetState();
     return py::make_tuple(s.t, py::array_t<double>(static_cast<py::ssize_t>(s.y.size()), s.y.data()),
                           py::array_t<double>(static_cast<py::ssize_t>(s.inputs.size()), s.inputs.data()), s.next_step,
-                          py::bytes(std::string(s.resting.begin(), s.resting.end())));
+                          py::array_t<double>(static_cast<py::ssize_t>(s.resting.size()), s.resting.data()));
   }
   void SetState(const py::tuple& t) {
     if (t.size() != 5) throw py::value_error("not a state from get_state()");
@@ -108,8 +108,7 @@ class PySimulator {
     s.y = py::cast<std::vector<double>>(t[1]);
     s.inputs = py::cast<std::vector<double>>(t[2]);
     s.next_step = py::cast<double>(t[3]);
-    const std::string r = py::cast<std::string>(t[4]);
-    s.resting.assign(r.begin(), r.end());
+    s.resting = py::cast<std::vector<double>>(t[4]);
     std::string error;
     if (!sim_->SetState(s, &error)) throw py::value_error(error);
     fresh_ = false;
