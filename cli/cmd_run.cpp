@@ -41,6 +41,7 @@ struct RunArgs {
   std::string projection = "eval";
   std::string reactions = "nan";
   std::string energy_check = "on";  // --energy-check on|off|report (sim/energy_guard.h)
+  std::string speeds;               // --speeds joint|diagonal ("": the model's annotation)
   bool stats = false;
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
   bool show_frames = false;  // --show-frames: the joints' frames as small axes in the animation
@@ -88,6 +89,7 @@ pipeline::RunSpec SpecFor(const RunArgs& a) {
   pipeline::LinearSolverFromName(a.linear_solver, &spec.linear_solver);
   spec.project_steps = a.projection == "step";
   pipeline::EnergyCheckFromName(a.energy_check, &spec.energy_check);
+  if (!a.speeds.empty()) spec.speeds = a.speeds == "diagonal" ? sim::Speeds::kDiagonal : sim::Speeds::kJoint;
   return spec;
 }
 
@@ -244,6 +246,8 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
       ->check(CLI::IsMember(pipeline::ReactionsNames()));
   run->add_option("--energy-check", a->energy_check, kEnergyCheckHelp)
       ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
+  run->add_option("--speeds", a->speeds, kSpeedsHelp)->check(CLI::IsMember({"joint", "diagonal"}));
+  run->add_option("--speed-order", a->spec.speed_order, kSpeedOrderHelp)->delimiter(',')->allow_extra_args(false);
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   CLI::Option* animation =
       run->add_option("--animation", a->animation,

@@ -66,6 +66,13 @@ bool LoadInputTables(const flat::Mechanism& mech, const std::vector<std::string>
                      sim::InputTable* table);
 // --input-file (run, sweep, test).
 void AddInputFileOption(CLI::App& cmd, std::vector<std::string>* files);
+// `--speeds joint|diagonal` and `--speed-order` (run, check): RunSpec::speeds.
+inline constexpr const char* kSpeedsHelp =
+    "Generalized speeds to integrate in: joint (the joints' own), or diagonal (Lesser's: Gram-Schmidt of the "
+    "partial velocities in the kinetic metric, w = L^T u with M = L D L^T; adds columns w[i], d[i], T_w[i])";
+inline constexpr const char* kSpeedOrderHelp =
+    "With --speeds diagonal: joints whose speeds are orthogonalized first, in this order (comma-separated); "
+    "the others follow root to leaf";
 
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code, bool options = true);

@@ -212,6 +212,10 @@ struct Input {
 struct Experiment {
   double start_time = 0.0, stop_time = 1.0, tolerance = 1e-6, interval = 0.0;
   bool has_start = false, has_stop = false, has_tolerance = false, has_interval = false;
+  // annotation(speeds(kind = "diagonal", order = {"j1", ...})): Lesser's diagonal speeds
+  // (sim/diagonal_speeds.h) unless `--speeds` says otherwise; order: joint names.
+  bool diagonal_speeds = false;
+  std::vector<std::string> speed_order;
 };
 
 struct Mechanism {

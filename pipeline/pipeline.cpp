@@ -175,6 +175,8 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
   so.ida_linear_solver = spec.linear_solver;
   so.project_steps = spec.project_steps;
   so.energy_check = spec.energy_check;
+  so.speeds = spec.speeds.value_or(ex.diagonal_speeds ? sim::Speeds::kDiagonal : sim::Speeds::kJoint);
+  so.speed_order = !spec.speed_order.empty() ? spec.speed_order : ex.speed_order;
 
   if (!spec.outputs.empty()) {
     std::string error;

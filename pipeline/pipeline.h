@@ -72,6 +72,10 @@ struct RunSpec {
   bool project_steps = false;  // --projection step: project once per accepted step (DOP853)
   // --energy-check: the energy guard of conservative models (docs/integrators.md).
   sim::EnergyCheck energy_check = sim::EnergyCheck::kOn;
+  // --speeds joint|diagonal [--speed-order j1,j2]: Lesser's diagonal speeds
+  // (sim/diagonal_speeds.h). Not given: the model's annotation(speeds(kind =, order =)).
+  std::optional<sim::Speeds> speeds;
+  std::vector<std::string> speed_order;
 
   // Outputs: glob patterns over dotted signal names (sim/signal_select.h); empty: the
   // default signals (rt::DefaultSignals: joints' q and u, declared outputs).

@@ -13,6 +13,7 @@
 
 #include "runtime/runtime.h"
 #include "sim/csv.h"
+#include "sim/diagonal_speeds.h"
 #include "sim/energy_guard.h"
 #include "sim/integrator.h"
 
@@ -37,6 +38,11 @@ struct SimOptions {
   // The model's inputs (rt::NumInputs > 0): a table (sim/input_table.h) or any source; not
   // owned. A model with inputs and no source is a usage error naming them.
   const rt::InputSource* inputs = nullptr;
+  // `--speeds diagonal`: integrate in Lesser's speeds w = L^T u (sim/diagonal_speeds.h); the
+  // rows add w[i], d[i] and T_w[i] = 1/2 d_i w_i^2. speed_order: joints whose speeds come first
+  // (`--speed-order`), the rest root to leaf.
+  Speeds speeds = Speeds::kJoint;
+  std::vector<std::string> speed_order;
   std::function<void(double t)> progress;  // after each row; may be empty
 };
 
