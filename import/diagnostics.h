@@ -17,12 +17,12 @@ namespace kanesim::import {
   X(Missing, "U403", "missing element or attribute")                                   \
   X(BadNumber, "U404", "number malformed, not finite or out of range")                 \
   X(DuplicateName, "U405", "duplicate link or joint name")                             \
-  X(UnknownLink, "U406", "joint names a link that does not exist")                     \
+  X(UnknownLink, "U406", "joint names a link or joint that does not exist")                     \
   X(NotATree, "U407", "links and joints do not form one tree")                         \
   X(BadJointType, "U408", "unknown joint type")                                        \
   X(TooLarge, "U409", "file over a size limit")                                        \
   X(Entities, "U410", "DTD entity declarations are not read")                          \
-  X(MimicDropped, "W421", "mimic joint imported as an independent joint")
+  X(BadMimic, "U411", "mimic between joints that cannot be coupled")
 
 enum class ImportCode {
 #define KANESIM_X(e, code, summary) e,

@@ -116,7 +116,7 @@ const std::set<std::string>& Reserved() {
       "when", "while", "within", "pi", "time", "der", "Real", "Integer", "Boolean", "String", "Kanesim",
       // the standard library's classes the model names
       "World", "Body", "Frame", "FixedRPY", "FixedTranslation", "Revolute", "Prismatic", "Planar", "FreeMotion",
-      "Box", "Cylinder", "Sphere", "BodyShape"};
+      "Box", "Cylinder", "Sphere", "BodyShape", "JointCoupling"};
   return kReserved;
 }
 
@@ -134,6 +134,7 @@ class Writer {
     decl_ << "  World world(g = {0, 0, -9.81}) \"URDF: z up, standard gravity\";\n";
     Root();
     for (int j : r_.order) JointAndChild(j);
+    if (o_.mimic) Mimics();
     Notes();
     std::ostringstream text;
     text << "// Imported by `kanesim import` from " << Shown(fs::path(path_).filename().string()) << " (URDF robot '"
@@ -312,20 +313,31 @@ class Writer {
       case JointType::kFixed: break;
     }
     Connect(from, name + ".frame_a");
-    if (j.has_mimic) Mimic(j, name);
     Dynamics(j, name);
     LinkComponents(child, name + ".frame_b");
   }
 
-  void Mimic(const Joint& j, const std::string& name) {
-    const std::string law = "q = " + Num(j.multiplier) + " * q_" + Shown(j.mimic_joint) + " + " + Num(j.offset);
-    decl_ << "  // <mimic joint=\"" << Shown(j.mimic_joint) << "\"> (" << law
-          << "): NOT imposed, kanesim has no coupling of joint coordinates yet; '" << name
-          << "' moves on its own\n";
-    d_.Warning(ImportCode::MimicDropped, j.line, "<joint",
-               "joint '" + Shown(j.name) + "' mimics '" + Shown(j.mimic_joint) + "' (" + law +
-                   "); kanesim cannot impose that coupling yet, so it is imported as an independent joint",
-               "give the follower its motion with an equation, or leave it free (docs/import.md)");
+  // <mimic joint multiplier offset> as an exact coupling, q = multiplier q_leader + offset
+  // (stdlib JointCoupling): written once every joint has its name (the leader may come later
+  // in the tree's order).
+  void Mimics() {
+    bool any = false;
+    for (std::size_t ji = 0; ji < r_.joints.size(); ++ji) {
+      const Joint& j = r_.joints[ji];
+      if (!j.has_mimic) continue;
+      const int li = j.mimic_leader;
+      const std::string& follower = joint_name_[ji];
+      const std::string& leader = joint_name_[static_cast<std::size_t>(li)];
+      const std::string name = Unique(j.name + "_mimic", nullptr);
+      if (!any) eq_ << "  // <mimic> joints: kept exactly (JointCoupling; the follower's coordinate is dependent)\n";
+      any = true;
+      decl_ << "  // <mimic joint=\"" << Shown(j.mimic_joint) << "\"> of joint '" << Shown(j.name) << "' (" << Where(j.line)
+            << "): " << follower << ".q = " << Num(j.multiplier) << " * " << leader << ".q + " << Num(j.offset) << "\n";
+      Declare("JointCoupling", name, "ratio = " + Num(j.multiplier) + ", offset = " + Num(j.offset),
+              "joint '" + Shown(j.name) + "' mimics '" + Shown(j.mimic_joint) + "'");
+      Connect(leader + ".drive", name + ".flange_a");
+      Connect(follower + ".drive", name + ".flange_b");
+    }
   }
 
   // <dynamics damping friction> as the joint's force law: viscous damping and Coulomb friction

@@ -28,6 +28,34 @@ std::unordered_map<std::string, int> IndexNames(const std::vector<T>& items, con
   return index;
 }
 
+bool OneCoordinate(JointType t) {
+  return t == JointType::kRevolute || t == JointType::kContinuous || t == JointType::kPrismatic;
+}
+
+// Each <mimic joint> names another joint, and both have one coordinate (a coupling q = m q_l
+// + c of JointCoupling); Joint::mimic_leader is set.
+void CheckMimics(Robot* robot, const std::unordered_map<std::string, int>& joints, Diags& diags) {
+  for (Joint& j : robot->joints) {
+    if (!j.has_mimic) continue;
+    auto it = joints.find(j.mimic_joint);
+    if (it == joints.end()) {
+      diags.Error(ImportCode::UnknownLink, j.line, "<mimic",
+                  "joint '" + j.name + "' mimics joint '" + j.mimic_joint + "', which the file does not define",
+                  "correct the name in <mimic joint=\"...\"/>");
+      continue;
+    }
+    const Joint& leader = robot->joints[static_cast<std::size_t>(it->second)];
+    if (&leader == &j || !OneCoordinate(j.type) || !OneCoordinate(leader.type)) {
+      diags.Error(ImportCode::BadMimic, j.line, "<mimic",
+                  "joint '" + j.name + "' cannot mimic '" + leader.name + "'" +
+                      (&leader == &j ? ": itself" : ": a mimic couples two revolute, continuous or prismatic joints"),
+                  "remove the <mimic> element, or name a one-coordinate joint");
+      continue;
+    }
+    j.mimic_leader = it->second;
+  }
+}
+
 }  // namespace
 
 bool BuildTree(Robot* robot, Diags& diags) {
@@ -36,7 +64,8 @@ bool BuildTree(Robot* robot, Diags& diags) {
     return false;
   }
   auto links = IndexNames(robot->links, "link", "<link", diags);
-  IndexNames(robot->joints, "joint", "<joint", diags);
+  const auto joints = IndexNames(robot->joints, "joint", "<joint", diags);
+  CheckMimics(robot, joints, diags);
   const int nl = static_cast<int>(robot->links.size());
   robot->parent_joint.assign(static_cast<std::size_t>(nl), -1);
   std::vector<std::vector<int>> children(static_cast<std::size_t>(nl));  // joints out of each link
