@@ -22,7 +22,8 @@ namespace kanesim::import {
   X(BadJointType, "U408", "unknown joint type")                                        \
   X(TooLarge, "U409", "file over a size limit")                                        \
   X(Entities, "U410", "DTD entity declarations are not read")                          \
-  X(BadMimic, "U411", "mimic between joints that cannot be coupled")
+  X(ReaderMissing, "U411", "the URDF reader library cannot be loaded")                 \
+  X(BadMimic, "U412", "mimic between joints that cannot be coupled")
 
 enum class ImportCode {
 #define KANESIM_X(e, code, summary) e,

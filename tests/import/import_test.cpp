@@ -110,7 +110,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "U406", "bad.urdf:4:70"},
         Hostile{"mimic of itself",
                 TwoLinks("  <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><mimic joint=\"j\"/></joint>"),
-                "U411", "bad.urdf:4:70"},
+                "U412", "bad.urdf:4:70"},
         Hostile{"entity expansion",
                 "<?xml version=\"1.0\"?>\n<!DOCTYPE robot [\n  <!ENTITY a \"aaaaaaaaaa\">\n  <!ENTITY b \"&a;&a;&a;&a;&a;&a;&a;&a;\">\n]>\n"
                 "<robot name=\"&b;\"><link name=\"x\"/></robot>\n",
