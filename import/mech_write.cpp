@@ -15,6 +15,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "import/diagnostics.h"
 #include "import/import.h"
 #include "import/urdf_model.h"
 
@@ -451,25 +452,28 @@ class Writer {
 }  // namespace
 
 Result UrdfToMech(const std::string& path, std::string_view text, const Options& options) {
-  Diags diags(path, text);
+  Diags diags;
   Robot robot;
   Result result;
   if (text.size() > kMaxUrdfBytes) {
-    diags.Error(ImportCode::TooLarge, 0, "", "the file is larger than 64 MiB", "a URDF of a robot is a few MB at most");
+    diags.Error(DiagCode::UrdfTooLarge, 0, "", "the file is larger than 64 MiB", "a URDF of a robot is a few MB at most");
   } else if (ReadUrdf(text, &robot, diags) && BuildTree(&robot, diags)) {
     result = Writer(robot, options, path, diags).Write();
   }
   result.num_errors = diags.NumErrors();
   result.ok = result.num_errors == 0 && result.ok;
   if (!result.ok) result.mech.clear();
-  result.diagnostics = diags.Rendered() + (options.notes ? diags.Notes() : "");
+  // A refused oversized file is named, not shown (its one message is about the whole file).
+  const RenderedMessages rendered = RenderMessages(diags, path, text.size() > kMaxUrdfBytes ? std::string_view() : text);
+  result.diagnostics = rendered.errors + (options.notes ? rendered.notes : "");
   if (result.num_errors > 0)
     result.diagnostics += std::to_string(result.num_errors) + " error" + (result.num_errors == 1 ? "" : "s") + "\n";
   return result;
 }
 
 std::string TooLargeMessage(const std::string& path, std::uintmax_t bytes) {
-  return Shown(path) + ": error[U409]: the file is " + std::to_string(bytes) + " bytes, more than the " +
+  return Shown(path) + ": error[" + flat::DiagCodeString(DiagCode::UrdfTooLarge) + "]: the file is " +
+         std::to_string(bytes) + " bytes, more than the " +
          std::to_string(kMaxUrdfBytes) + " a URDF may have\n";
 }
 
