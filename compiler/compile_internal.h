@@ -51,6 +51,10 @@ void CompileCouplings(Program& p, TapeBuilder& folder, std::vector<CompileMessag
 // follower's start is held (`fixed = true`) or prescribed; then the assembly's Newton
 // moves the leader (and the loops' joints) instead.
 void StartOnCouplings(const Program& p, Workspace& ws);
+// PlaneContact -> Program::plane_contacts (events, no rows). Also refuses, at the element,
+// the combinations the events cannot handle yet: plane contacts or end stops together with
+// constraint rows (closed loops, rolling contacts) or Coulomb friction.
+void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 
 // Assembly at the start time: Newton to a consistent q and u (coordinates marked fixed
 // held), the rank of the constraint Jacobian, DOF, redundant constraints; y0 updated.
