@@ -282,6 +282,9 @@ std::string DumpFlat(const Mechanism& m) {
        << " at " << F(c.frame)
        << " radius=" << E(c.radius) << " normal=" << V(c.plane_normal) << "\n";
   }
+  for (const auto& c : m.couplings)
+    os << "coupling " << c.name << " " << m.joints[static_cast<size_t>(c.follower)].name << ".q = " << E(c.ratio)
+       << " * " << m.joints[static_cast<size_t>(c.leader)].name << ".q + " << E(c.offset) << "\n";
   for (const auto& o : m.outputs) os << "output " << o.name << " = " << E(o.expr) << "\n";
   const auto& x = m.experiment;
   os << "experiment start=" << x.start_time << " stop=" << x.stop_time << " tol=" << x.tolerance
