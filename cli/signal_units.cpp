@@ -3,6 +3,8 @@
 
 #include <cstdlib>
 
+#include "lang/lang.h"
+
 namespace kanesim::cli {
 
 namespace {
@@ -13,36 +15,18 @@ int Index(const std::string& field) {
   return b == std::string::npos ? 0 : std::atoi(field.c_str() + b + 1) - 1;
 }
 
-// Coordinate k of joint j: its q is an angle ("rad"), a length ("m") or a quaternion
-// component ("1").
-const char* CoordinateKind(const flat::Joint& j, int k, bool speed) {
-  using T = flat::JointType;
-  const bool quaternion = j.rotation == flat::RotationCoords::Quaternion;
-  switch (j.type) {
-    case T::Revolute:
-    case T::Universal: return "rad";
-    case T::Prismatic: return "m";
-    case T::Cylindrical: return k == 0 ? "m" : "rad";
-    case T::Planar: return k < 2 ? "m" : "rad";
-    case T::Spherical: return speed || !quaternion ? "rad" : "1";
-    case T::Free: return k < 3 ? "m" : speed || !quaternion ? "rad" : "1";
-    case T::Weld: return "";
-  }
-  return "";
-}
-
 std::string JointSignalUnit(const flat::Joint& j, const std::string& field) {
   const int k = Index(field);
   const std::string base = field.substr(0, field.find('['));
   if (base == "reaction_force") return "N";
   if (base == "reaction_torque") return "N.m";
-  const bool speed = base != "q";
-  const std::string c = CoordinateKind(j, k, speed);
-  if (c.empty() || c == "1") return base == "q" ? c : "";
+  const bool quaternion = j.rotation == flat::RotationCoords::Quaternion;
+  const std::string c = lang::JointCoordinateUnit(flat::JointTypeName(j.type), quaternion, k, false);
   if (base == "q") return c;
-  if (base == "u") return c + "/s";
-  if (base == "a") return c + "/s2";
-  if (base == "drive") return c == "m" ? "N" : "N.m";
+  const std::string speed = lang::JointCoordinateUnit(flat::JointTypeName(j.type), quaternion, k, true);
+  if (base == "u") return speed;
+  if (base == "a") return speed.empty() ? "" : speed + "2";
+  if (base == "drive") return speed == "m/s" ? "N" : speed == "rad/s" ? "N.m" : "";
   return "";
 }
 

@@ -61,6 +61,8 @@ class UnitChecker {
  public:
   UnitChecker(Diagnostics& diags) : diags_(diags) {}
   void Walk(Node* root);
+  // The units a spring on flanges takes from the joint its flanges act on.
+  void SpringUnits(const InstanceTree& tree, const Links& links);
   // A variable's unit: declared, or inferred (from its binding or from its uses).
   UVal VarUnit(const Node* var);
 
@@ -79,6 +81,10 @@ class UnitChecker {
 
   void CheckVar(Node* var);
   void CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation);
+  // A joint's q or u without one unit: element k of a start array, or an element equation,
+  // against the coordinate's unit.
+  void CheckCoordinates(Node* var);
+  void CheckElement(Node* var, const ast::Expr& e, const ModValue& mv, int k, const char* what);
   const Declared* DeclaredUnit(const Node* var);
   UVal Expr(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -100,6 +106,7 @@ class UnitChecker {
   Diagnostics& diags_;
   std::unordered_map<const ast::Expr*, Declared> declared_;  // unit string literal -> parsed
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
+  std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
   int depth_ = 0;
 };
 
@@ -135,6 +142,70 @@ void UnitChecker::CheckVar(Node* var) {
   }
   if (var->eq_binding) CheckBinding(var, *var->eq_binding, "", true);
   for (const auto& [k, mv] : var->eq_elem_binding) CheckBinding(var, mv, "", !mv.from_set);
+  if (var->parent && var->parent->prim == Prim::Joint && (var->name == "q" || var->name == "u") &&
+      !var->shape.empty() && !DeclaredUnit(var))
+    CheckCoordinates(var);
+}
+
+void UnitChecker::CheckCoordinates(Node* var) {
+  if (auto it = var->Modifiers().sub.find("start"); it != var->Modifiers().sub.end() && it->second.value) {
+    const ModValue& mv = *it->second.value;
+    if (mv.expr && mv.expr->kind == ast::ExprKind::Array)
+      for (size_t k = 0; k < mv.expr->args.size(); ++k) CheckElement(var, *mv.expr->args[k], mv, static_cast<int>(k), "start");
+  }
+  for (const auto& [k, mv] : var->eq_elem_binding)
+    if (mv.expr) CheckElement(var, *mv.expr, mv, k, "");
+}
+
+void UnitChecker::CheckElement(Node* var, const ast::Expr& e, const ModValue& mv, int k, const char* what) {
+  const Node* joint = var->parent;
+  const bool quaternion = joint->prim_kind == "free" ? var->shape[0] == 7 : var->shape[0] == 4;
+  const std::string text = JointCoordinateUnit(joint->prim_kind, quaternion, k, var->name == "u");
+  Unit want;
+  std::string error;
+  if (text.empty() || !ParseUnit(text, &want, &error)) return;
+  const UVal got = Expr(e, mv.scope, mv.iters.get());
+  if (got.kind != UVal::Known || got.unit.Agrees(want)) return;
+  const std::string name = "'" + var->path + "[" + std::to_string(k + 1) + "]'";
+  auto& d = diags_.Error(DiagCode::UnitMismatch, e.span,
+                         (*what ? std::string("the start value of ") + name : "the equation of " + name) + " has unit " +
+                             Shown(got) + ", not \"" + text + "\"");
+  NoteOrigin(d, got);
+  d.hint = "coordinate " + std::to_string(k + 1) + " of a " + joint->prim_kind + " joint's " + var->name + " is in \"" +
+           text + "\"";
+}
+
+// A spring or damper on flanges (Prim::RotSpring) connected to a joint's drive or support:
+// its stiffness, damping and unstretched coordinate in the joint's units.
+void UnitChecker::SpringUnits(const InstanceTree& tree, const Links& links) {
+  auto joint_of = [&](int flange) -> const Node* {
+    if (flange < 0 || static_cast<size_t>(flange) >= tree.flanges.size()) return nullptr;
+    const Node* p = tree.flanges[static_cast<size_t>(flange)]->parent;
+    return p && p->prim == Prim::Joint ? p : nullptr;
+  };
+  auto spring_of = [&](int flange) -> const Node* {
+    if (flange < 0 || static_cast<size_t>(flange) >= tree.flanges.size()) return nullptr;
+    const Node* p = tree.flanges[static_cast<size_t>(flange)]->parent;
+    return p && p->prim == Prim::RotSpring ? p : nullptr;
+  };
+  for (const auto& [a, b] : links.flanges) {
+    const Node* spring = spring_of(a) ? spring_of(a) : spring_of(b);
+    const Node* joint = joint_of(a) ? joint_of(a) : joint_of(b);
+    if (!spring || !joint) continue;
+    const std::string q = JointCoordinateUnit(joint->prim_kind, false, 0, false);
+    if (q.empty() || joint->prim_kind == "cylindrical" || joint->prim_kind == "planar" || joint->prim_kind == "free")
+      continue;  // several coordinates: no one unit
+    const char* force = q == "m" ? "N" : "N.m";
+    for (const auto& [field, text] : {std::pair<const char*, std::string>{"c", std::string(force) + "/" + q},
+                                      {"d", std::string(force) + ".s/" + q}, {"phi_rel0", q}}) {
+      const Node* v = spring->Child(field);
+      if (!v || v->kind != Node::kVar || DeclaredUnit(v)) continue;
+      Declared& slot = implied_[v];
+      slot.text = text;
+      std::string error;
+      slot.ok = ParseUnit(text, &slot.unit, &error);
+    }
+  }
 }
 
 void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation) {
@@ -191,7 +262,10 @@ const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
 }
 
 UVal UnitChecker::VarUnit(const Node* var) {
-  if (const Declared* d = DeclaredUnit(var)) {
+  const Declared* d = DeclaredUnit(var);
+  if (!d && !implied_.empty())
+    if (auto it = implied_.find(var); it != implied_.end() && it->second.ok) d = &it->second;
+  if (d) {
     UVal v = UVal::Of(d->unit);
     v.origin = var;
     v.text = &d->text;
@@ -499,8 +573,10 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
 
 }  // namespace
 
-void CheckUnits(Node* root, Diagnostics& diags, flat::Mechanism* m) {
+void CheckUnits(const InstanceTree& tree, const Links& links, Diagnostics& diags, flat::Mechanism* m) {
+  Node* root = tree.root.get();
   UnitChecker checker(diags);
+  checker.SpringUnits(tree, links);
   checker.Walk(root);
   // Outputs' units (for --units-in-header): the top-level model's output variables, named
   // by path, array elements "path[k]" (lang/elab_emit.cpp).

@@ -7,6 +7,8 @@
 //   - a variable's unit is its `unit` attribute; without one it is inferred from its binding
 //     when that has a unit, else from the first sum, comparison or equation side that gives
 //     it one (a second, different one is an error, E238); else it is unknown and unchecked;
+//   - a spring on flanges (TorsionSpring...) takes its c, d, phi_rel0 units from the joint
+//     it is connected to; a joint's q and u (Free, Planar...) have one unit per element;
 //   - `time` is in s; a frame's r in m, v in m/s, w in rad/s, R dimensionless;
 //   - a number is dimensionless in a product, quotient or power, and takes the unit of what
 //     it is added to, compared with or bound to (`x + 1`, `q(start = 0.3)`);
@@ -18,12 +20,15 @@
 // unit strings that do not parse are E236.
 #pragma once
 
-#include "lang/elab_internal.h"
+#include "lang/elab_connect.h"
+#include "lang/elab_instantiate.h"
 
 namespace kanesim::lang::elab {
 
 // Checks every binding in the tree; writes each output's unit (declared or inferred) to
-// m->outputs[i].unit by name. Reports into diags.
-void CheckUnits(Node* root, Diagnostics& diags, flat::Mechanism* m);
+// m->outputs[i].unit by name. Reports into diags. `links` gives a spring on flanges the
+// units of the joint it acts on (N.m/rad on a revolute, N/m on a prismatic); a joint's
+// q and u arrays are checked element by element (lang/units.h, JointCoordinateUnit).
+void CheckUnits(const InstanceTree& tree, const Links& links, Diagnostics& diags, flat::Mechanism* m);
 
 }  // namespace kanesim::lang::elab

@@ -132,7 +132,7 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   elab::Emit(tree, connections, eval, places, diags, out);
   // Units are checked on the bound equations once the model is otherwise sound (a unit
   // message on top of a missing name would repeat it).
-  if (!diags.HasErrors()) elab::CheckUnits(tree.root.get(), diags, out);
+  if (options.check_units && !diags.HasErrors()) elab::CheckUnits(tree, links, diags, out);
   if (const ast::Modification* ex = lookup.FindAnnotation(top, "experiment"))
     elab::EmitExperiment(*ex, top, tree.root.get(), eval, diags, out);
   if (out->worlds.size() != 1 && !diags.HasErrors()) {

@@ -246,6 +246,18 @@ std::string Unit::ToString() const {
   return s;
 }
 
+std::string JointCoordinateUnit(std::string_view kind, bool quaternion, int k, bool speed) {
+  std::string q;
+  if (kind == "revolute" || kind == "universal") q = "rad";
+  else if (kind == "prismatic") q = "m";
+  else if (kind == "cylindrical") q = k == 0 ? "m" : "rad";
+  else if (kind == "planar") q = k < 2 ? "m" : "rad";
+  else if (kind == "spherical") q = speed || !quaternion ? "rad" : "1";
+  else if (kind == "free") q = k < 3 ? "m" : speed || !quaternion ? "rad" : "1";
+  if (!speed || q.empty()) return q;
+  return q + "/s";
+}
+
 bool ParseUnit(std::string_view text, Unit* out, std::string* error) {
   if (text.empty()) {
     *error = "empty unit";

@@ -41,6 +41,11 @@ struct Unit {
   std::string ToString() const;
 };
 
+// The unit of coordinate k of a joint of kind `kind` ("revolute", "free"...; flat/mechanism.h):
+// "rad", "m", or "1" for a quaternion's component; its speed's unit with `speed` ("rad/s",
+// "m/s"). "" for a kind without coordinates. One table for the unit check and the CSV header.
+std::string JointCoordinateUnit(std::string_view kind, bool quaternion, int k, bool speed);
+
 // Parses `text` into *out. False with *error (what was expected, and where) when the text is
 // not a unit expression. An empty text is not a unit: callers treat "" as "no unit".
 bool ParseUnit(std::string_view text, Unit* out, std::string* error);

@@ -56,7 +56,7 @@ TEST(UnitParser, ReadsModelicaUnitStrings) {
   Unit u;
   std::string error;
   ASSERT_TRUE(ParseUnit("N.m/rad", &u, &error)) << error;
-  EXPECT_EQ(u.ToString(), "kg.m2/(s2.rad)");
+  EXPECT_EQ(u.ToString(), "m2.kg/(s2.rad)");
   ASSERT_TRUE(ParseUnit("kN/mm", &u, &error));
   EXPECT_DOUBLE_EQ(u.scale, 1e6);
   ASSERT_TRUE(ParseUnit("deg", &u, &error));
@@ -164,6 +164,20 @@ INSTANTIATE_TEST_SUITE_P(
              "  Spring s(c = k);\nequation\n  connect(world.frame_b, p.frame_a);\n  connect(p.frame_b, b.frame_a);\n"
              "  connect(world.frame_b, s.frame_a);\n  connect(p.frame_b, s.frame_b);\nend M;\n",
              "m.mech:6:16: error[E237]: 's.c' has unit \"N/m\" but its value has unit \"N/mm\""},
+        // A spring on a joint's flanges is in the joint's units: N.m/rad on a revolute.
+        Rule{"FlangeSpring",
+             Pendulum("  parameter Real k(unit = \"N.m/rad\") = 1;", "Rod rod(L = 1);\n  TorsionSpring s(c = k);",
+                      "  connect(s.flange_a, j.support);\n  connect(s.flange_b, j.drive);"),
+             Pendulum("  parameter Real k(unit = \"N/m\") = 1;", "Rod rod(L = 1);\n  TorsionSpring s(c = k);",
+                      "  connect(s.flange_a, j.support);\n  connect(s.flange_b, j.drive);"),
+             "m.mech:6:23: error[E237]: 's.c' has unit \"N.m/rad\" but its value has unit \"N/m\""},
+        // A free joint's start speeds: three in m/s, then three in rad/s.
+        Rule{"JointCoordinates",
+             Pendulum("  parameter Real v(unit = \"m/s\") = 1;",
+                      "Rod rod(L = 1);\n  FreeMotion f(u(start = {v, 0, 0, 0, 0, 0}));"),
+             Pendulum("  parameter Real v(unit = \"m/s\") = 1;",
+                      "Rod rod(L = 1);\n  FreeMotion f(u(start = {0, 0, 0, v, 0, 0}));"),
+             "m.mech:6:36: error[E237]: the start value of 'f.u[4]' has unit \"m/s\", not \"rad/s\""},
         // A variable without a unit takes one from its first use; a second, different use is
         // reported, not guessed.
         Rule{"Inference",
