@@ -2,6 +2,7 @@
 // expression a unit, bottom-up, and compares it with the variable's.
 #include "lang/elab_units.h"
 
+#include <cmath>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -20,6 +21,9 @@ struct UVal {
   Unit unit;
   const Node* origin = nullptr;         // the variable whose unit this is, for notes
   const std::string* text = nullptr;    // that unit as declared ("N.m"), when unchanged
+  // From `time` and numbers alone (sin(time), sqrt(0.5 - time): test signals that read time
+  // as a number): used where it meets a unit, never reported.
+  bool soft = false;
 
   static UVal Of(const Unit& u) {
     UVal v;
@@ -165,7 +169,7 @@ void UnitChecker::CheckElement(Node* var, const ast::Expr& e, const ModValue& mv
   std::string error;
   if (text.empty() || !ParseUnit(text, &want, &error)) return;
   const UVal got = Expr(e, mv.scope, mv.iters.get());
-  if (got.kind != UVal::Known || got.unit.Agrees(want)) return;
+  if (got.kind != UVal::Known || got.soft || got.unit.Agrees(want)) return;
   const std::string name = "'" + var->path + "[" + std::to_string(k + 1) + "]'";
   auto& d = diags_.Error(DiagCode::UnitMismatch, e.span,
                          (*what ? std::string("the start value of ") + name : "the equation of " + name) + " has unit " +
@@ -220,6 +224,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
     InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
     return;
   }
+  if (got.soft) return;
   if (want.unit.Agrees(got.unit)) return;
   const std::string name = "'" + var->path + "'";
   std::string msg = is_equation ? "the two sides of the equation have different units: " + name + " is " + Shown(want) +
@@ -376,7 +381,11 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
       if (s) Expr(*s, scope, iters);  // operators inside subscripts are checked too
   const Node* n = scope ? scope->Child(head.name) : nullptr;
   if (!n) {
-    if (e.parts.size() == 1 && head.name == "time") return UVal::Of(Seconds());
+    if (e.parts.size() == 1 && head.name == "time") {
+      UVal t = UVal::Of(Seconds());
+      t.soft = true;
+      return t;
+    }
     if (e.parts.size() == 1 && head.name == "pi") return UVal::Lit();
     return UVal{};
   }
@@ -418,7 +427,8 @@ UVal UnitChecker::Elements(const std::vector<const ast::Expr*>& xs, const Node* 
 UVal UnitChecker::Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at,
                        const std::string& what, const Node* scope) {
   if (a.kind == UVal::Known && b.kind == UVal::Known) {
-    if (a.unit.Agrees(b.unit)) return a;
+    if (a.unit.Agrees(b.unit) || b.soft) return a;
+    if (a.soft) return b;
     if (ReportConflict(a, b, at) || ReportConflict(b, a, at)) return UVal{};
     auto& d = diags_.Error(DiagCode::UnitMismatch, at, what + " have different units: " + Shown(a) + " and " + Shown(b));
     NoteOrigin(d, a);
@@ -454,6 +464,7 @@ bool UnitChecker::ReportConflict(const UVal& inferred, const UVal& other, Span a
 
 UVal UnitChecker::NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result) {
   if (a.kind == UVal::Literal) return UVal::Lit();
+  if (a.kind == UVal::Known && a.soft) return UVal{};
   if (a.kind == UVal::Known && !(a.unit.Dimensionless() && a.unit.Agrees(Unit::One()) )) {
     // An angle in rad is dimensionless; one in deg is not a number sin can take (scale pi/180).
     Unit plain = a.unit;
@@ -492,7 +503,9 @@ UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters
     if (x.kind != UVal::Known) return x.kind == UVal::Literal ? UVal::Lit() : UVal{};
     for (auto t : x.unit.twice)
       if (t % 2) return UVal{};  // a quarter power: beyond what is kept
-    return UVal::Of(x.unit.Pow(1, 2));
+    UVal r = UVal::Of(x.unit.Pow(1, 2));
+    r.soft = x.soft;
+    return r;
   }
   if (fn == "der") return x.kind == UVal::Known ? UVal::Of(x.unit / Seconds()) : x;
   if (fn == "min" || fn == "max" || fn == "mod") {
@@ -501,7 +514,7 @@ UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters
   }
   if (fn == "abs" || fn == "floor" || fn == "ceil" || fn == "norm" || fn == "transpose" || fn == "sum" || fn == "skew" ||
       fn == "vector" || fn == "diagonal")
-    return x.kind == UVal::Known ? UVal::Of(x.unit) : x;
+    return x.kind == UVal::Known ? [&] { UVal r = UVal::Of(x.unit); r.soft = x.soft; return r; }() : x;
   if (fn == "fill") return x;
   if (fn == "cross" || fn == "dot" || fn == "outerProduct") {
     if (a.size() != 2 || a[0].kind == UVal::Unknown || a[1].kind == UVal::Unknown) return UVal{};
@@ -538,13 +551,19 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
     if (a.kind != UVal::Known) return a;
     if (eb.kind != ast::ExprKind::Number) return a.unit.Dimensionless() && a.unit.scale == 1 ? a : UVal{};
     const double p = eb.number;
-    if (p == static_cast<int>(p)) return UVal::Of(a.unit.Pow(static_cast<int>(p), 1));
-    if (2 * p == static_cast<int>(2 * p)) {
+    if (!(std::abs(p) <= 64)) return UVal{};  // beyond any unit written in a model (and any int)
+    UVal r;
+    if (p == static_cast<int>(p)) {
+      r = UVal::Of(a.unit.Pow(static_cast<int>(p), 1));
+    } else if (2 * p == static_cast<int>(2 * p)) {
       for (auto t : a.unit.twice)
         if (t % 2) return UVal{};
-      return UVal::Of(a.unit.Pow(static_cast<int>(2 * p), 2));
+      r = UVal::Of(a.unit.Pow(static_cast<int>(2 * p), 2));
+    } else {
+      return UVal{};
     }
-    return UVal{};
+    r.soft = a.soft;
+    return r;
   }
   const UVal b = Expr(eb, scope, iters);
   switch (op) {
@@ -561,10 +580,15 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
     case Tok::Slash: {
       if (a.kind == UVal::Unknown || b.kind == UVal::Unknown) return UVal{};
       if (a.kind == UVal::Literal && b.kind == UVal::Literal) return UVal::Lit();
+      // A number times a quantity: the number may carry any unit its context needs
+      // (-0.3 * j.q as a torque: 0.3 N.m/rad), as Modelica tools infer it, so the product's
+      // unit is left open rather than guessed.
+      if (a.kind == UVal::Literal || b.kind == UVal::Literal) return UVal{};
       const Unit ua = a.kind == UVal::Known ? a.unit : Unit::One();
       const Unit ub = b.kind == UVal::Known ? b.unit : Unit::One();
       UVal r = UVal::Of(op == Tok::Star ? ua * ub : ua / ub);
       r.origin = a.kind == UVal::Known ? a.origin : b.origin;
+      r.soft = a.soft && b.soft;
       return r;
     }
     default: return UVal{};  // and, or

@@ -115,8 +115,8 @@ INSTANTIATE_TEST_SUITE_P(
              Pendulum("  parameter Real len(unit = \"kg\") = 1;", "Rod rod(L = len);"),
              "m.mech:5:15: error[E237]: 'rod.L' has unit \"m\" but its value has unit \"kg\""},
         // A declaration's binding against its own unit.
-        Rule{"Binding", Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"m\") = 2 * a;"),
-             Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"s\") = 2 * a;"),
+        Rule{"Binding", Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"m\") = a + 1;"),
+             Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"s\") = a + 1;"),
              "m.mech:3:34: error[E237]: 'b' has unit \"s\" but its value has unit \"m\""},
         // An equation's two sides; N.m and J are one unit (a false alarm elsewhere).
         Rule{"Equation", Pendulum("  parameter Real E(unit = \"J\") = 1;", "Rod rod(L = 1);", "  j.tau = E;"),
@@ -127,15 +127,17 @@ INSTANTIATE_TEST_SUITE_P(
         Rule{"Sum", Pendulum("  parameter Real a(unit = \"m\") = 1;", "Rod rod(L = a + 1);"),
              Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"rad\") = 1;", "Rod rod(L = a - b);"),
              "m.mech:6:15: error[E237]: the operands of '-' have different units: \"m\" and \"rad\""},
-        // A number in a product is dimensionless: twice a mass is a mass, not a length.
-        Rule{"NumberInAProduct", Pendulum("  parameter Real a(unit = \"m\") = 1;", "Rod rod(L = 2 * a);"),
-             Pendulum("  parameter Real a(unit = \"kg\") = 1;", "Rod rod(L = 2 * a);"),
-             "m.mech:5:15: error[E237]: 'rod.L' has unit \"m\" but its value has unit \"kg\""},
+        // A number times a quantity may carry any unit (0.3 N.m/rad); the sum it is part of
+        // is still checked.
+        Rule{"NumberInAProduct", Pendulum(kTorques, "Rod rod(L = 1);", "  j.tau = -0.3 * j.q;"),
+             Pendulum(kTorques, "Rod rod(L = 1);", "  j.tau = -0.3 * j.q + F;"),
+             "m.mech:11:3: error[E237]: the two sides of the equation have different units: 'j.tau' is \"N.m\", the "
+             "right side \"N\""},
         // sin takes an angle in rad or a number; w * time is one (rad/s times s).
         Rule{"Sine", Pendulum(kSine, "Rod rod(L = 1);", "  j.tau = T * sin(w * time);"),
-             Pendulum(kSine, "Rod rod(L = 1);", "  j.tau = T * sin(3 * time);"),
+             Pendulum(kSine, "Rod rod(L = 1);", "  j.tau = T * sin(w);"),
              "m.mech:10:19: error[E237]: 'sin' needs a dimensionless argument (an angle in rad is one), but this has unit "
-             "\"s\""},
+             "\"rad/s\""},
         // An angle and a number agree (rad = 1, a false alarm elsewhere); an angle in deg is
         // not an angle in rad.
         Rule{"Angles", Pendulum("  parameter Real a(unit = \"1\") = 0.3;", "Revolute k(q(start = a));\n  Rod rod(L = 1);"),
