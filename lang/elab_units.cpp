@@ -94,10 +94,11 @@ class UnitChecker {
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
-  UVal Elements(const std::vector<const ast::Expr*>& xs, const Node* scope, const Iters* iters);
+  // Elements of an array: all in one unit, else unknown (arrays of mixed units are allowed).
+  void Element(const ast::Expr& x, const Node* scope, const Iters* iters, UVal* acc, bool* mixed);
   // a and b must agree (sums, comparisons, branches); the result's unit. `what` names the
   // place for the message.
-  UVal Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at, const std::string& what,
+  UVal Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at, const char* what,
             const Node* scope);
   UVal NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result);
   // An undeclared scalar variable read bare in `e` takes unit u from this use.
@@ -134,7 +135,7 @@ void UnitChecker::Walk(Node* root) {
 // elements' equations, and its start, min and max attributes.
 void UnitChecker::CheckVar(Node* var) {
   if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
-  VarUnit(var);  // parses a declared unit (E236) even when nothing is bound
+  DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
   // An array element's modifiers shared with element 1 (lang/elab_share.cpp) mean the same
   // there: checked once, on element 1.
   if (!var->shared_mod) {
@@ -214,12 +215,11 @@ void UnitChecker::SpringUnits(const InstanceTree& tree, const Links& links) {
 
 void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation) {
   if (!mv.expr || diags_.Full()) return;
-  const UVal want = VarUnit(var);
+  const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
+  const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
+  if (want.kind != UVal::Known && own && var->shape.empty()) return;
   const UVal got = Expr(*mv.expr, mv.scope, mv.iters.get());
-  if (want.kind != UVal::Known) {
-    if (got.kind == UVal::Known && !is_equation) return;  // inferred from this binding by VarUnit
-    return;
-  }
+  if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
     InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
     return;
@@ -333,16 +333,18 @@ UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters
     case ast::ExprKind::Unary:
     case ast::ExprKind::Binary: r = Operator(e, scope, iters); break;
     case ast::ExprKind::Array: {
-      std::vector<const ast::Expr*> xs;
-      for (const auto& a : e.args) xs.push_back(a.get());
-      r = Elements(xs, scope, iters);
+      UVal acc = UVal::Lit();
+      bool mixed = false;
+      for (const auto& a : e.args) Element(*a, scope, iters, &acc, &mixed);
+      r = mixed ? UVal{} : acc;
       break;
     }
     case ast::ExprKind::Matrix: {
-      std::vector<const ast::Expr*> xs;
+      UVal acc = UVal::Lit();
+      bool mixed = false;
       for (const auto& row : e.rows)
-        for (const auto& x : row) xs.push_back(x.get());
-      r = Elements(xs, scope, iters);
+        for (const auto& x : row) Element(*x, scope, iters, &acc, &mixed);
+      r = mixed ? UVal{} : acc;
       break;
     }
     case ast::ExprKind::Comprehension:
@@ -411,26 +413,21 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
   return UVal{};
 }
 
-UVal UnitChecker::Elements(const std::vector<const ast::Expr*>& xs, const Node* scope, const Iters* iters) {
-  UVal acc = UVal::Lit();
-  bool mixed = false;
-  for (const ast::Expr* x : xs) {
-    UVal v = Expr(*x, scope, iters);
-    if (v.kind == UVal::Unknown) mixed = true;
-    if (v.kind != UVal::Known) continue;
-    if (acc.kind != UVal::Known) acc = v;
-    else if (!acc.unit.Agrees(v.unit)) mixed = true;  // an array of several units: allowed, unchecked
-  }
-  return mixed ? UVal{} : acc;
+void UnitChecker::Element(const ast::Expr& x, const Node* scope, const Iters* iters, UVal* acc, bool* mixed) {
+  const UVal v = Expr(x, scope, iters);
+  if (v.kind == UVal::Unknown) *mixed = true;
+  if (v.kind != UVal::Known) return;
+  if (acc->kind != UVal::Known) *acc = v;
+  else if (!acc->unit.Agrees(v.unit)) *mixed = true;  // an array of several units: allowed, unchecked
 }
 
 UVal UnitChecker::Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at,
-                       const std::string& what, const Node* scope) {
+                       const char* what, const Node* scope) {
   if (a.kind == UVal::Known && b.kind == UVal::Known) {
     if (a.unit.Agrees(b.unit) || b.soft) return a;
     if (a.soft) return b;
     if (ReportConflict(a, b, at) || ReportConflict(b, a, at)) return UVal{};
-    auto& d = diags_.Error(DiagCode::UnitMismatch, at, what + " have different units: " + Shown(a) + " and " + Shown(b));
+    auto& d = diags_.Error(DiagCode::UnitMismatch, at, std::string(what) + " have different units: " + Shown(a) + " and " + Shown(b));
     NoteOrigin(d, a);
     NoteOrigin(d, b);
     d.hint = a.unit.SameDimension(b.unit) ? "same dimension, different scale: convert one of them"
@@ -483,7 +480,7 @@ UVal UnitChecker::NeedDimensionless(const UVal& a, const ast::Expr& arg, const s
 
 UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters) {
   const std::string& fn = e.parts.empty() ? std::string() : e.parts.back().name;
-  std::vector<UVal> a;
+  SmallVec<UVal, 4> a;
   for (const auto& x : e.args) a.push_back(Expr(*x, scope, iters));
   for (const auto& na : e.named_args)
     if (na.value) Expr(*na.value, scope, iters);
@@ -509,7 +506,7 @@ UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters
   }
   if (fn == "der") return x.kind == UVal::Known ? UVal::Of(x.unit / Seconds()) : x;
   if (fn == "min" || fn == "max" || fn == "mod") {
-    if (a.size() == 2) return Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, "the arguments of '" + fn + "'", scope);
+    if (a.size() == 2) return Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, fn == "min" ? "the arguments of 'min'" : fn == "max" ? "the arguments of 'max'" : "the arguments of 'mod'", scope);
     return x;
   }
   if (fn == "abs" || fn == "floor" || fn == "ceil" || fn == "norm" || fn == "transpose" || fn == "sum" || fn == "skew" ||
@@ -528,10 +525,16 @@ UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters
   if (fn == "meshVolume") return UVal::Of(Metres(3));
   if (fn == "meshCentre") return UVal::Of(Metres(1));
   if (fn == "meshInertia") return UVal::Of(Metres(5));
-  if (fn == "cat") {
-    std::vector<const ast::Expr*> xs;
-    for (size_t i = 1; i < e.args.size(); ++i) xs.push_back(e.args[i].get());
-    return Elements(xs, scope, iters);
+  if (fn == "cat") {  // the arguments were checked above; their units joined here
+    UVal acc = UVal::Lit();
+    bool mixed = false;
+    for (size_t i = 1; i < a.size(); ++i) {
+      if (a[i].kind == UVal::Unknown) mixed = true;
+      if (a[i].kind != UVal::Known) continue;
+      if (acc.kind != UVal::Known) acc = a[i];
+      else if (!acc.unit.Agrees(a[i].unit)) mixed = true;
+    }
+    return mixed ? UVal{} : acc;
   }
   return UVal{};
 }
@@ -569,7 +572,7 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
   switch (op) {
     case Tok::Plus:
     case Tok::Minus:
-      return Same(a, &ea, b, &eb, e.span, std::string("the operands of '") + (op == Tok::Plus ? "+" : "-") + "'", scope);
+      return Same(a, &ea, b, &eb, e.span, op == Tok::Plus ? "the operands of '+'" : "the operands of '-'", scope);
     case Tok::Lt:
     case Tok::Le:
     case Tok::Gt:
