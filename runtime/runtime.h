@@ -89,6 +89,13 @@ void HoldPartition(Workspace& ws, bool on);
 bool ProjectedStates(const Program& program, const Workspace& ws, std::vector<int>* states, double* diag);
 const std::string& ErrorMessage(const Workspace& ws);
 
+// The mass matrix M(q, t) of Kane's equations M udot = f on the free speeds (Lesser eqs.
+// 22-25; runtime/kane/kane_dense.cpp eq. 4) at the coordinates of y = [q_free; u_free] (its
+// speeds are not read), whatever the solver path: symmetric, column-major into M (nu x nu).
+// For trees; -1 on a program with constraint rows (ErrorMessage says so). Lesser's diagonal
+// speeds (sim/diagonal_speeds.h) factor it.
+int MassMatrix(const Program& program, Workspace& ws, double t, const double* y, double* M);
+
 // Closed loops through singular configurations (runtime/engine/branch_monitor.cpp;
 // docs/constraints.md "Singular configurations"). After each accepted step, CheckBranch(y)
 // returns -1 (fatal; BranchMonitorError says why: the loop, the time and the turn) when the

@@ -1,5 +1,6 @@
 #include "sim/simulate.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -230,6 +231,19 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
   }
 
+  // Diagonal speeds: the checks, the order and their columns (written after the signals).
+  std::vector<int> speed_order;
+  if (options.speeds == Speeds::kDiagonal) {
+    if (std::string why = DiagonalSpeedsRefusal(program); !why.empty()) return UsageError(why);
+    std::string error;
+    speed_order = SpeedOrder(program, options.speed_order, &error);
+    if (speed_order.empty()) return UsageError(error);
+  }
+  const size_t n_diag = 3 * speed_order.size();
+  std::vector<std::string> header = names;
+  for (const char* prefix : {"w[", "d[", "T_w["})
+    for (size_t i = 1; i <= speed_order.size(); ++i) header.push_back(prefix + std::to_string(i) + "]");
+
   // 3. Integrate. The right-hand side and the outputs use separate workspaces so that
   // evaluating an output never disturbs the solver's state of the engine.
   auto ws_rhs = rt::MakeWorkspace(program);
@@ -261,16 +275,26 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
 
   SimResult result;
   result.stats.method = iopt.method;
-  if (!sink.Begin(names)) {
+  if (!sink.Begin(header)) {
     result.status = SimResult::Status::kOutputError;
     result.message = "cannot write the output";
     return result;
   }
   bool sink_failed = false;
   Clock::duration output_time{};
-  RowCallback row = [&](double t, const double* y, std::string* cause) -> int {
+  std::unique_ptr<DiagonalOde> diagonal;  // --speeds diagonal: the integrator's state is [q; w]
+  std::vector<double> y_row(y0.size()), row_values(n_written + n_diag);
+  RowCallback row = [&](double t, const double* y_in, std::string* cause) -> int {
     Clock::time_point t0 = Clock::now();
-    int status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
+    const double* y = y_in;
+    int status = 0;
+    bool converted = true;  // z = [q; w] -> y = [q; u] (diagonal speeds)
+    if (diagonal) {
+      status = diagonal->ToSpeeds(t, y_in, y_row.data());
+      converted = status == 0;
+      y = y_row.data();
+    }
+    if (status == 0) status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
     // A row near a change point whose projection moved the speeds too far: projected in the
     // kinetic metric instead, in a workspace of its own (docs/constraints.md "Rows near a
     // change point"); ws_out has gone through the row as before, so the rows after it are
@@ -291,7 +315,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       }
     }
     std::string past_stop;
-    if (status != 0) {
+    if (!converted) {
+      *cause = diagonal->FailureCause();
+    } else if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
     } else if (stops.Active() && !(past_stop = stops.CheckRow(*ws_out, t, y)).empty()) {
@@ -299,6 +325,14 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       status = -1;  // the row is not written: the rows before it are on disk
     } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
       status = -1;  // the row is not written: the rows before it are on disk
+    } else if (diagonal) {
+      std::copy(values.begin(), values.begin() + static_cast<long>(n_written), row_values.begin());
+      diagonal->Columns(y_in, row_values.data() + n_written);
+      if (!sink.Row(t, row_values.data(), n_written + n_diag)) {
+        sink_failed = true;
+        *cause = "cannot write the output";
+        status = -1;
+      }
     } else if (!sink.Row(t, values.data(), n_written)) {
       sink_failed = true;
       *cause = "cannot write the output";
@@ -314,8 +348,16 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
+  OdeSystem* system = &ode;
+  if (!speed_order.empty()) {
+    diagonal = std::make_unique<DiagonalOde>(program, ode, speed_order);
+    std::vector<double> z0(y0.size());
+    if (diagonal->ToW(grid.start, y0.data(), z0.data()) != 0) return UsageError("--speeds diagonal: " + diagonal->FailureCause());
+    y0.swap(z0);
+    system = diagonal.get();
+  }
   Clock::time_point start = Clock::now();
-  IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
+  IntegrateResult ir = Integrate(*system, y0.data(), grid, iopt, row);
   Clock::duration total = Clock::now() - start;
   bool end_ok = sink.End();
 

@@ -337,7 +337,8 @@ struct Workspace {
   // they are never copied).
   std::optional<Eigen::LLT<Eigen::MatrixXd>> llt;    // Cholesky of M  filled by SolveDense
   std::optional<Eigen::LDLT<Eigen::MatrixXd>> ldlt;  // fallback  filled by SolveDense
-  std::vector<Mat6> Ic;             // composite spatial inertia of the subtree about o_L  (K)  filled by SolveDense
+  std::vector<Mat6> Ic;             // composite spatial inertia of the subtree about o_L  (K)  filled by SolveDense, MassMatrix
+  Eigen::MatrixXd M_full;           // mass matrix on any path, lower triangle  (nu x nu)  filled by MassMatrix
   std::vector<Vec6> Wc;             // composite wrench of the subtree about o_L  (K)  filled by SolveDense
 
   // Sparse path.
