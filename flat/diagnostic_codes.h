@@ -62,6 +62,10 @@ namespace kanesim::flat {
   X(MeshNotClosed, "E233", "mesh surface not closed")                                         \
   X(MeshOrientation, "E234", "mesh triangles inconsistently oriented")                        \
   X(MeshZeroVolume, "E235", "mesh encloses no volume")                                        \
+  /* units of measure (lang/elab_units.cpp) */                                                \
+  X(BadUnit, "E236", "unit string not understood")                                            \
+  X(UnitMismatch, "E237", "units do not agree")                                               \
+  X(UnitConflict, "E238", "a variable without a unit is used in two different units")         \
   X(UnconnectedFrame, "W301", "frame connector is not connected")                            \
   X(MeshInsideOut, "W302", "mesh triangles face inward (flipped)")                            \
   X(MeshDegenerate, "W303", "mesh has degenerate or non-manifold parts")                      \

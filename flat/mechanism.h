@@ -214,6 +214,7 @@ struct Shape {
 struct Output {
   std::string name;
   ExprId expr = kNoExpr;
+  std::string unit;  // declared or inferred by the unit check (lang/elab_units.h); "" unknown
   SourceLoc loc;
 };
 
