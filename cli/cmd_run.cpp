@@ -20,6 +20,7 @@
 #include "cli/common.h"
 #include "cli/number_options.h"
 #include "cli/scene.h"
+#include "cli/signal_units.h"
 #include "batch/file_guard.h"
 #include "runtime/runtime.h"
 #include "sim/csv.h"
@@ -43,6 +44,7 @@ struct RunArgs {
   std::string energy_check = "on";  // --energy-check on|off|report (sim/energy_guard.h)
   std::string speeds;               // --speeds joint|diagonal ("": the model's annotation)
   bool stats = false;
+  bool units_in_header = false;  // --units-in-header (cli/signal_units.h)
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
   bool show_frames = false;  // --show-frames: the joints' frames as small axes in the animation
 };
@@ -162,7 +164,9 @@ int RunCommand(const RunArgs& a) {
   {
     ProgressBar bar(run.grid.start, run.grid.stop, bar_enabled);
     so.progress = [&bar](double t) { bar.Update(t); };
-    sim::CsvWriter writer(out);
+    sim::CsvWriter csv(out);
+    UnitsInHeader with_units(*model->mech, csv);
+    sim::SignalSink& writer = a.units_in_header ? static_cast<sim::SignalSink&>(with_units) : csv;
     result = pipeline::Run(*model, run, animation.Wrap(writer));  // stages 5-6
   }
   const bool rows_correct = result.status == sim::SimResult::Status::kOk ||
@@ -236,9 +240,9 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember(pipeline::IntegratorNames()));
   run->add_option("--linear-solver", a->linear_solver,
-                  "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on closed loops on the "
-                  "multiplier form with few degrees of freedom, else KLU when the block pattern is sparse), dense, klu "
-                  "(IDA) or krylov")
+                  "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on the multiplier "
+                  "form: CVODE-BDF always, IDA with few degrees of freedom; else KLU when the block pattern is sparse), "
+                  "dense, klu (IDA) or krylov")
       ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   run->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   run->add_option("--reactions", a->reactions,
@@ -248,12 +252,18 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
       ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
   run->add_option("--speeds", a->speeds, kSpeedsHelp)->check(CLI::IsMember({"joint", "diagonal"}));
   run->add_option("--speed-order", a->spec.speed_order, kSpeedOrderHelp)->delimiter(',')->allow_extra_args(false);
+  run->add_flag("--units-in-header", a->units_in_header, "Write each column's unit into the CSV header: 'hinge.q [rad]'");
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   CLI::Option* animation =
       run->add_option("--animation", a->animation,
                       "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");
   run->add_flag("--show-frames", a->show_frames, "With --animation: draw every joint's frames as small x/y/z axes")
       ->needs(animation);
+  run->add_option("--sensitivity", a->spec.sensitivity,
+                  "Also write d(y)/d(p) for every output y and each of these Real parameters (comma-separated; start "
+                  "values too, e.g. j.q.start)")
+      ->delimiter(',')
+      ->excludes(animation);
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }
 

@@ -81,6 +81,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options = true);  // cm
 void AddTestCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_test.cpp
 void AddExportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_export.cpp
 void AddImportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_import.cpp
+void AddUnitsCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_units.cpp
 // --floating and --package-path, for every command that loads a model (a URDF file).
 void AddUrdfOptions(CLI::App& cmd, bool* floating, std::vector<std::string>* package_paths);
 

@@ -174,12 +174,17 @@ double EvalParamExpr(const Mechanism& m, const std::vector<double>& pv, ExprId i
 }
 
 // One evaluator for all parameters: a node shared by several bindings is evaluated once.
-std::vector<double> EvaluateParams(const Mechanism& m) {
+std::vector<double> EvaluateParams(const Mechanism& m) { return EvaluateParams(m, {}); }
+
+std::vector<double> EvaluateParams(const Mechanism& m, const std::map<size_t, double>& overrides) {
   std::vector<double> pv(m.params.size(), 0.0);
   ParamEvaluator eval(m.exprs, pv);
   for (size_t i = 0; i < m.params.size(); ++i) {
     const Param& p = m.params[i];
-    pv[i] = (p.binding == kNoExpr || p.user_set) ? p.value : eval.Eval(p.binding);
+    if (auto it = overrides.find(i); it != overrides.end())
+      pv[i] = it->second;
+    else
+      pv[i] = (p.binding == kNoExpr || p.user_set) ? p.value : eval.Eval(p.binding);
   }
   return pv;
 }
@@ -279,6 +284,9 @@ std::string DumpFlat(const Mechanism& m) {
        << " radius=" << E(c.radius) << " normal=" << V(c.plane_normal) << "\n";
   }
   for (const auto& in : m.inputs) os << "input " << in.name << "\n";
+  for (const auto& c : m.couplings)
+    os << "coupling " << c.name << " " << m.joints[static_cast<size_t>(c.follower)].name << ".q = " << E(c.ratio)
+       << " * " << m.joints[static_cast<size_t>(c.leader)].name << ".q + " << E(c.offset) << "\n";
   for (const auto& o : m.outputs) os << "output " << o.name << " = " << E(o.expr) << "\n";
   const auto& x = m.experiment;
   os << "experiment start=" << x.start_time << " stop=" << x.stop_time << " tol=" << x.tolerance

@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -130,6 +131,10 @@ struct Joint {
   // N = the joint's reaction force across its axis. kNoExpr: no friction. Set from the
   // stdlib joints' `mu`, `friction_v`, `friction_radius` when mu is not zero.
   ExprId friction_mu = kNoExpr, friction_radius = kNoExpr, friction_v = kNoExpr;
+  // Exact Coulomb stick-slip instead (stdlib `friction_exact`, `mu_s`; sim/stick_slip.h):
+  // -mu N sign(u) sliding, stuck while the force needed stays within mu_s N.
+  bool friction_exact = false;
+  ExprId friction_mu_s = kNoExpr;
   // End stops of a Revolute or Prismatic joint (stdlib `q_min`, `q_max`, `restitution`):
   // kNoExpr = no stop on that side (the stdlib parameter left unbound); restitution is
   // set only when a stop is.
@@ -176,6 +181,16 @@ struct Contact {
   SourceLoc loc;
 };
 
+// An exact holonomic coupling of two one-coordinate joints (stdlib JointCoupling; a gear
+// pair, a URDF <mimic>): q_follower = ratio q_leader + offset, kept as a constraint row
+// (runtime/constraints/constraints.cpp eq. 11), the follower's speed a dependent one.
+struct JointCoupling {
+  std::string name;
+  std::int32_t leader = -1, follower = -1;  // indices into joints (Revolute or Prismatic)
+  ExprId ratio = kNoExpr, offset = kNoExpr;
+  SourceLoc loc;
+};
+
 // How a body looks (the stdlib shapes, annotated __kanesim(primitive = "shape", kind = ...);
 // lang/elab_shapes.cpp): for drawing (`kanesim view`, `run --animation`) and for `kanesim
 // check`'s report of mesh bodies. It carries no physics: its Body does.
@@ -199,6 +214,7 @@ struct Shape {
 struct Output {
   std::string name;
   ExprId expr = kNoExpr;
+  std::string unit;  // declared or inferred by the unit check (lang/elab_units.h); "" unknown
   SourceLoc loc;
 };
 
@@ -239,6 +255,7 @@ struct Mechanism {
   std::vector<LineForce> line_forces;
   std::vector<Wrench> wrenches;
   std::vector<Contact> contacts;
+  std::vector<JointCoupling> couplings;
   std::vector<Output> outputs;
   std::vector<Input> inputs;      // in declaration order
   std::vector<Shape> shapes;      // drawing only; empty for a model of bare Bodies
@@ -252,9 +269,11 @@ struct Mechanism {
   std::string StateRefName(const StateRef& r) const;  // "j.q[1]", "rod.frame_b.r[2]"
 };
 
-// Evaluates all parameter bindings in order (values of leaves are kept) and returns the
-// values; `overrides` (index -> value) replace leaves or bindings.
+// Evaluates all parameter bindings in order (values of leaves and of --set values are kept)
+// and returns the values; `overrides` (index -> value) replace leaves or bindings, and the
+// bindings after them see the new values (a sweep's scenario, a sensitivity's step).
 std::vector<double> EvaluateParams(const Mechanism& m);
+std::vector<double> EvaluateParams(const Mechanism& m, const std::map<size_t, double>& overrides);
 
 // Evaluates an expression that depends only on parameters.
 double EvalParamExpr(const Mechanism& m, const std::vector<double>& param_values, ExprId id);

@@ -189,6 +189,22 @@ int InverseMassColumn(const Program& program, Workspace& ws, double t, const dou
 // runtime/engine/plane_contacts.cpp
 int InverseMassTimes(const Program& program, Workspace& ws, double t, const double* y, const double* F, double* x);
 
+// Coulomb friction joints (stdlib `mu` on Revolute and Prismatic), in the order of the
+// workspace's laws; runtime/engine/friction_modes.cpp.
+struct FrictionJoint {
+  std::string joint;
+  int q = -1, u = -1;           // indices in y = [q_free; u_free] (u: among the free speeds)
+  double mu = 0.0, mu_s = 0.0;  // kinetic and static coefficients
+  double radius = 1.0;          // Revolute: pin radius (friction torque = radius x force)
+  bool exact = false;           // stdlib friction_exact: stick-slip as events (sim/stick_slip.h)
+};
+std::vector<FrictionJoint> FrictionJoints(const Program& program);
+// Friction joint i's law in ws: 0 -mu r N tanh(u / v) (the default), +1 / -1 sliding that way
+// (-mu r N sign), 2 the force tau (stuck, held by it).
+void SetFrictionMode(Workspace& ws, int i, int mode, double tau);
+// Friction joint i's normal force N in the last evaluation of ws.
+double FrictionNormal(const Workspace& ws, int i);
+
 // Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
 // when the program has none. runtime/engine/plane_contacts.cpp
 struct PlaneContact {

@@ -70,6 +70,8 @@ std::string DiagonalSpeedsRefusal(const rt::Program& p) {
     return "--speeds diagonal: closed loops and rolling contacts are not supported yet (the constrained basis; TODO(#44))";
   if (!rt::EndStops(p).empty() || !rt::PlaneContacts(p).empty())
     return "--speeds diagonal: end stops and plane contacts are not supported (their impacts act on the joint speeds)";
+  for (const rt::FrictionJoint& f : rt::FrictionJoints(p))
+    if (f.exact) return "--speeds diagonal: exact stick-slip friction is not supported (it holds a joint speed)";
   if (p.nu == 0) return "--speeds diagonal: the model has no free speeds";
   return "";
 }

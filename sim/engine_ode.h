@@ -11,6 +11,7 @@
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
 #include "sim/lift_off.h"
+#include "sim/stick_slip.h"
 #include "sim/integrator.h"
 
 namespace kanesim::sim::detail {
@@ -37,7 +38,7 @@ class EngineOde final : public OdeSystem {
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
     from_monitor_ = false;
-    int s = rt::Derivative(program_, ws_, t, y, ydot);
+    int s = stick_ ? stick_->Rhs(ws_, t, y, ydot) : rt::Derivative(program_, ws_, t, y, ydot);
     if (stops_ && s == 0) s = stops_->Hold(ws_, t, y, ydot);
     if (fault_ && s == 0) fault_(t, y, ydot);
     return s;
@@ -55,11 +56,17 @@ class EngineOde final : public OdeSystem {
   // (sim/lift_off.h; the compiler never lets both in one model): their events; none without.
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
   void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
-  int NumEvents() const override { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
+  // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
+  void SetStickSlip(StickSlipEvents* stick) { stick_ = stick; }
+  int NumEvents() const override {
+    return stops_ ? stops_->Count() : lift_ ? lift_->Count() : stick_ ? stick_->Count() : 0;
+  }
   int EventFunctions(double t, const double* y, double* g) override {
+    if (stick_) return stick_->Functions(ws_, t, y, g);
     return stops_ ? stops_->Functions(ws_, t, y, g) : lift_->Functions(t, y, g);
   }
   int Event(double t, double* y, int i) override {
+    if (stick_) return stick_->Event(ws_, t, y, i);
     if (stops_) return stops_->Event(ws_, t, y, i);
     event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
     return -1;
@@ -146,6 +153,7 @@ class EngineOde final : public OdeSystem {
   std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
   EndStopEvents* stops_ = nullptr;             // end stops and plane contacts (null: none)
   LiftOffGuard* lift_ = nullptr;               // rolling contacts' normal forces (null: none)
+  StickSlipEvents* stick_ = nullptr;           // exact stick-slip friction (null: none)
   std::string event_cause_;                    // why an event stopped the run ("" : none did)
   bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank

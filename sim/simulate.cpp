@@ -12,6 +12,7 @@
 #include "sim/end_stops.h"
 #include "sim/engine_ode.h"
 #include "sim/lift_off.h"
+#include "sim/stick_slip.h"
 #include "sim/test_hooks.h"
 
 namespace kanesim::sim {
@@ -150,6 +151,10 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       return r;
     }
   }
+  // Exact stick-slip friction: the start decides sliding or stuck (sim/stick_slip.h).
+  StickSlipEvents stick(program);
+  if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
+    return UsageError("friction at the start: " + rt::ErrorMessage(*ws_rhs));
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
@@ -166,6 +171,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   std::vector<double> y_row(y0.size()), row_values(n_written + n_diag);
   RowCallback row = [&](double t, const double* y_in, std::string* cause) -> int {
     Clock::time_point t0 = Clock::now();
+    if (stick.Active()) stick.Sync(*ws_out);  // the outputs see the friction laws of the run
     const double* y = y_in;
     int status = 0;
     bool converted = true;  // z = [q; w] -> y = [q; u] (diagonal speeds)
@@ -229,6 +235,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   ode.SetInputs(options.inputs);
   if (stops.Active()) ode.SetStops(&stops);
   if (lift.Active()) ode.SetLiftOff(&lift);
+  if (stick.Active()) ode.SetStickSlip(&stick);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
@@ -249,6 +256,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.rows = ir.rows;
   result.stats.bridges = ir.bridges;
   result.stats.events = stops.Log();
+  result.stats.events.insert(result.stats.events.end(), stick.Log().begin(), stick.Log().end());
   ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
   result.stats.energy_guard = energy.Description();
   result.stats.energy_error = energy.WorstError();

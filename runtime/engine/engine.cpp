@@ -189,6 +189,9 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
   InitConstraintWorkspace(p, ws);
   ws.friction_tau.assign(p.friction_joints.size(), 0.0);
   ws.friction_Q0.assign(p.friction_joints.size(), 0.0);
+  ws.friction_mode.assign(p.friction_joints.size(), 0);
+  ws.friction_fixed.assign(p.friction_joints.size(), 0.0);
+  ws.friction_N.assign(p.friction_joints.size(), 0.0);
   ws.error.reserve(256);
   // Warm-up at the initial state: the sparse path's first KLU factorization allocates,
   // so it happens here and Derivative only refactors (an error here is reported by the

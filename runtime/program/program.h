@@ -76,6 +76,8 @@ struct TreeJoint {
   double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/kane/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
+  double mu_s = 0.0;           // static coefficient (friction_exact)
+  bool friction_exact = false; // exact stick-slip as events (sim/stick_slip.h), not tanh
   // End stops (Revolute, Prismatic): q in [q_min, q_max]; -inf / +inf: none on that side.
   double q_min = -std::numeric_limits<double>::infinity();
   double q_max = std::numeric_limits<double>::infinity();
@@ -136,10 +138,12 @@ struct BodySignalSource {
 //   ContactNormal   d = n (plane normal); also a position constraint n . (P - p0) = 0
 //   ContactTangent  d = t1 or t2 (fixed in W): velocity only, never a position constraint
 //   ContactLateral  d = n x e_W (knife edge, e the blade): velocity only
-enum class RowKind : std::uint8_t { Translation, Alignment, ContactNormal, ContactTangent, ContactLateral };
+// Joint couplings (holonomic, on coordinates): phi = q_f - ratio q_l - offset.
+enum class RowKind : std::uint8_t { Translation, Alignment, ContactNormal, ContactTangent, ContactLateral, Coupling };
 struct ConstraintRow {
-  int loop = -1;                // index into Program::loops (-1 for a contact row)
-  int contact = -1;             // index into Program::contacts (-1 for a loop row)
+  int loop = -1;                // index into Program::loops (-1 for a contact or coupling row)
+  int contact = -1;             // index into Program::contacts (-1 for a loop or coupling row)
+  int coupling = -1;            // index into Program::couplings (-1 for a loop or contact row)
   RowKind kind = RowKind::Translation;
   Vec3 d_a = Vec3::UnitX();     // Translation: d; Alignment: e (fixed in frame a, in a's axes)
   Vec3 n_b = Vec3::UnitZ();     // Alignment: n (fixed in frame b, in b's axes)
@@ -172,6 +176,16 @@ struct ContactModel {
   Vec3 p0_W = Vec3::Zero();    // a point of the plane, world
   Vec3 t1_W = Vec3::UnitX(), t2_W = Vec3::UnitZ();  // tangent basis of the plane, t1 x t2 = n
   int row0 = 0, nrows = 0;
+};
+
+// An exact coupling of two one-coordinate joints (flat::JointCoupling): the row
+// phi = q_f - ratio q_l - offset (runtime/constraints/constraints.cpp eq. 11).
+struct CouplingModel {
+  std::string name;
+  flat::SourceLoc loc;
+  int leader = -1, follower = -1;  // tree joints (Revolute or Prismatic, q index == u index)
+  double ratio = 1.0, offset = 0.0;
+  int row = -1;                    // its row in Program::rows
 };
 
 // Unilateral contact of a frame's origin O with the fixed plane n . x = d (flat::Contact of
@@ -244,7 +258,8 @@ struct Program {
   // Closed loops (runtime/constraints/constraints.h). Empty for trees.
   std::vector<LoopClosure> loops;       // one per cut joint
   std::vector<ContactModel> contacts;   // rolling contacts and knife edges
-  std::vector<ConstraintRow> rows;      // n_c constraints: loops' rows, then contacts' rows
+  std::vector<CouplingModel> couplings; // joint couplings, one row each
+  std::vector<ConstraintRow> rows;      // n_c constraints: loops' rows, then contacts', then couplings'
   int loop_rank = 0;                    // rank of the constraint Jacobian (free speeds) at the assembled start
   double loop_length = 1.0;             // length scale of the position tolerance (m)
   int dof = 0;                          // nu - loop_rank
@@ -408,6 +423,11 @@ struct Workspace {
   std::vector<double> friction_tau; // friction force per friction joint, last converged  (nfric)  filled by SolveWithFriction
   std::vector<double> friction_Q0;  // the joint's applied force without friction  (nfric)  filled by SolveWithFriction
   long friction_iterations = 0;     // fixed-point iterations so far  filled by SolveWithFriction
+  // The law per friction joint (SetFrictionMode): 0 tanh(u / v), +1 / -1 sliding that way,
+  // 2 the force friction_fixed (stuck)  (nfric)  set by sim/stick_slip.cpp
+  std::vector<int> friction_mode;
+  std::vector<double> friction_fixed;  // mode 2's force  (nfric)
+  std::vector<double> friction_N;      // normal force N of the last solve  (nfric)  filled by SolveWithFriction
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
   std::vector<double> inputs;       // the model's inputs at t  (mech.inputs)  filled by UnpackState (input_source) or SetInputValues
