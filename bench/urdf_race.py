@@ -6,7 +6,8 @@ side by side, medians of fresh processes (docs/benchmarks.md, "URDF robots: the 
 1. The race file of each robot (bench/results/race/ROBOT.urdf), read by both tools: the
    example-robot-data URDF without <visual>/<collision> (MuJoCo would compile the collision
    meshes; kanesim ignores them), <limit> widened to +-1e6 (kanesim's importer does not model
-   stops, MuJoCo would), without <mimic> (MuJoCo makes it soft, kanesim exact);
+   stops, MuJoCo would), without <mimic> (MuJoCo makes it soft, kanesim exact), <dynamics
+   friction> 0 (kanesim: tanh(u/1e-3), stiff on Talos; MuJoCo: frictionloss, a soft constraint);
    Solo12 and Talos get a `floating` root_joint from a `world` link. <dynamics> damping kept.
 2. One random start (bench/reference/urdf_robots.py's random_state, fixed seed), the reference
    q(1 s) from SciPy's DOP853 on Pinocchio's aba at 1e-13 (spread to a 1e-12 run printed).
@@ -62,6 +63,9 @@ def race_urdf(name, src, floating):
         elif el.tag == "joint":
             for c in [c for c in el if c.tag in ("mimic", "safety_controller", "calibration")]:
                 el.remove(c)
+            for c in el.findall("dynamics"):  # tanh(u/1e-3) in kanesim, a soft constraint in MuJoCo
+                if c.get("friction") is not None:
+                    c.set("friction", "0")
             for c in el.findall("limit"):  # a range nothing reaches: no stop in either tool
                 c.set("lower", "-1e6")
                 c.set("upper", "1e6")
@@ -73,6 +77,8 @@ def race_urdf(name, src, floating):
         ET.SubElement(j, "parent", link="world")
         ET.SubElement(j, "child", link=root)
     os.makedirs(OUT, exist_ok=True)
+    with open(os.path.join(OUT, ".gitignore"), "w") as f:
+        f.write("*\n")  # generated files, never committed
     path = os.path.join(OUT, name + ".urdf")
     tree.write(path)
     return path
