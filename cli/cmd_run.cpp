@@ -111,6 +111,12 @@ int RunCommand(const RunArgs& a) {
     return kExitModelError;
   }
   sim::SimOptions& so = run.sim;
+  // The model's inputs: --input-file tables; an input without a value is an error at its declaration.
+  std::vector<std::string> input_names;
+  for (int i = 0; i < rt::NumInputs(program); ++i) input_names.push_back(rt::InputName(program, i));
+  sim::InputTable inputs(input_names);
+  if (!LoadInputTables(*model->mech, a.load.input_files, run.grid.start, run.grid.stop, &inputs)) return kExitModelError;
+  if (!input_names.empty()) so.inputs = &inputs;
   AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
   if (!animation.Prepare(*model->mech, program, &so.signals)) return kExitModelError;
 
@@ -126,7 +132,9 @@ int RunCommand(const RunArgs& a) {
   batch::AtomicFile atomic;
   std::FILE* out = stdout;
   if (!to_stdout) {
-    if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
+    std::vector<std::string> protected_files{a.load.path};
+    protected_files.insert(protected_files.end(), a.load.input_files.begin(), a.load.input_files.end());
+    if (std::string in = batch::OverwrittenInput(a.out_path, protected_files); !in.empty()) {
       fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing the CSV there would destroy it\n",
                  a.out_path, in);
       return kExitModelError;
@@ -211,7 +219,8 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("-o,--out", a->out_path, "Write the CSV to this file (default: stdout)");
   run->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
   AddUrdfOptions(*run, &a->load.floating, &a->load.package_paths);
-  run->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
+  run->add_option("--set", a->load.sets, "Set a parameter or an input, name=value (repeatable)")->allow_extra_args(false);
+  AddInputFileOption(*run, &a->load.input_files);
   AddNumberOption(run, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");
   AddNumberOption(run, "--stop-time", &a->spec.stop_time, "Stop time (default: experiment StopTime)");
   AddNumberOption(run, "--interval", &a->spec.interval,

@@ -10,6 +10,7 @@
 #include "runtime/runtime.h"
 #include "flat/mechanism.h"
 #include "pipeline/pipeline.h"
+#include "sim/input_table.h"
 #include "sim/integrator.h"
 
 namespace CLI {
@@ -31,6 +32,7 @@ struct LoadOptions {
   std::vector<std::string> sets;                         // "name=value" from --set
   bool floating = false;                                 // a URDF file: --floating (a free base)
   std::vector<std::string> package_paths;                // a URDF file: --package-path
+  std::vector<std::string> input_files;                  // --input-file: tables of the model's inputs
 };
 
 // The most threads -j may ask for.
@@ -56,6 +58,14 @@ inline constexpr const char* kEnergyCheckHelp =
 inline constexpr const char* kProjectionHelp =
     "Closed loops and contacts with --integrator dop853: project onto the constraints at every evaluation "
     "(eval) or once per accepted step (step: cheaper evaluations, a larger error at the same tolerance)";
+
+// The model's inputs (docs/cli.md "Input tables"): every --input-file read into *table, each
+// input given by one, the tables covering [start, stop]. False after printing the error to
+// stderr; an input without a value is named at its declaration (file:line:col).
+bool LoadInputTables(const flat::Mechanism& mech, const std::vector<std::string>& files, double start, double stop,
+                     sim::InputTable* table);
+// --input-file (run, sweep, test).
+void AddInputFileOption(CLI::App& cmd, std::vector<std::string>* files);
 
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code, bool options = true);

@@ -202,6 +202,13 @@ struct Output {
   SourceLoc loc;
 };
 
+// A top-level `input Real u;` (one per element of an array input, "u[2]"): a value given at
+// run time (--input-file, the stepping API), read by Op::Input nodes.
+struct Input {
+  std::string name;
+  SourceLoc loc;  // the declaration
+};
+
 struct Experiment {
   double start_time = 0.0, stop_time = 1.0, tolerance = 1e-6, interval = 0.0;
   bool has_start = false, has_stop = false, has_tolerance = false, has_interval = false;
@@ -229,6 +236,7 @@ struct Mechanism {
   std::vector<Wrench> wrenches;
   std::vector<Contact> contacts;
   std::vector<Output> outputs;
+  std::vector<Input> inputs;      // in declaration order
   std::vector<Shape> shapes;      // drawing only; empty for a model of bare Bodies
   Experiment experiment;
 

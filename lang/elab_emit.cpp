@@ -29,6 +29,7 @@ class Emitter {
   void Run(Node* root) {
     m_->joints = std::move(tree_.joints);
     tau_extra.resize(m_->joints.size());
+    Inputs(root);
     Walk(root);
     LinkShapes(m_);
     SpringsOnFlanges();
@@ -447,6 +448,14 @@ class Emitter {
         slot = slot == flat::kNoExpr ? t : pool.Binary(Op::Add, slot, t);
       }
     }
+  }
+
+  // Inputs of the top-level model, made here so that Mechanism::inputs is in declaration
+  // order, whatever order the equations read them in (Evaluator::InputValue).
+  void Inputs(Node* root) {
+    for (auto& c : root->children)
+      if (c->enabled && c->kind == Node::kVar && c->causality == ast::Causality::Input)
+        eval_.GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
   }
 
   // Outputs of the top-level model.

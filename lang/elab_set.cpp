@@ -268,7 +268,10 @@ void SetOverrides::Bind() {
       BindStart(so, n, whole);
       continue;
     }
-    if (n->kind != Node::kVar || n->variability != ast::Variability::Parameter) {
+    // A top-level input may be set as a parameter is: it then has that value for the run.
+    const bool model_input = n->kind == Node::kVar && n->causality == ast::Causality::Input &&
+                             n->variability == ast::Variability::None && n->parent && !n->parent->parent;
+    if (!model_input && (n->kind != Node::kVar || n->variability != ast::Variability::Parameter)) {
       auto& d = diags_.Error(DiagCode::NotParameter, whole,
                              "--set " + full + ": '" + n->path + "' is not a parameter" +
                                  (n->variability == ast::Variability::Constant ? " (it is a constant)" : ""));

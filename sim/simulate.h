@@ -34,6 +34,9 @@ struct SimOptions {
   // (`--energy-check on|off|report`; sim/energy_guard.h, docs/integrators.md).
   EnergyCheck energy_check = EnergyCheck::kOn;
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
+  // The model's inputs (rt::NumInputs > 0): a table (sim/input_table.h) or any source; not
+  // owned. A model with inputs and no source is a usage error naming them.
+  const rt::InputSource* inputs = nullptr;
   std::function<void(double t)> progress;  // after each row; may be empty
 };
 

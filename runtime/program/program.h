@@ -297,6 +297,15 @@ struct SparseNumericDeleter {
   void operator()(SparseNumeric* s) const { DestroySparseNumeric(s); }
 };
 
+// The model's inputs as functions of time (runtime/runtime.h "inputs"): a table
+// (sim/input_table.h), or constants that a caller changes between steps.
+class InputSource {
+ public:
+  virtual ~InputSource() = default;
+  // u (NumInputs) and du/dt at t; 0, or -1 with *error (a time outside a table).
+  virtual int Values(double t, double* u, double* du_dt, std::string* error) const = 0;
+};
+
 struct Workspace {
   double t = 0.0;                   // time of the last evaluation  ()  filled by UnpackState
   bool step_projection = false;     // the solver projects its steps (runtime/runtime.h SetStepProjection)
@@ -400,6 +409,9 @@ struct Workspace {
   long friction_iterations = 0;     // fixed-point iterations so far  filled by SolveWithFriction
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
+  std::vector<double> inputs;       // the model's inputs at t  (mech.inputs)  filled by UnpackState (input_source) or SetInputValues
+  std::vector<double> input_rates;  // their time derivatives, for prescribed motions' jets  (mech.inputs)  filled likewise
+  const InputSource* input_source = nullptr;  // inputs as functions of time; null: the constants in `inputs`
 };
 
 }  // namespace kanesim::rt
