@@ -315,11 +315,11 @@ std::string Instance::Restore(const Snapshot& s) {
   return "";
 }
 
-// Layout: "KSFMU2", t, n, y[n], m, params[m], k, inputs[k], next_step, r, state_set[n],
-// resting[r] (doubles and bytes, native order; the counts as doubles).
+// Layout: "KSFMU2", t, n, y[n], m, params[m], k, inputs[k], next_step, r, resting[r],
+// state_set[n] (doubles, then bytes, native order; the counts as doubles).
 std::vector<char> Instance::Serialize(const Snapshot& s) {
-  std::vector<char> out(6 + sizeof(double) * (6 + s.y.size() + s.params.size() + s.inputs.size()) +
-                        s.state_set.size() + s.resting.size());
+  std::vector<char> out(6 + sizeof(double) * (6 + s.y.size() + s.params.size() + s.inputs.size() + s.resting.size()) +
+                        s.state_set.size());
   char* p = out.data();
   auto put = [&](const void* src, size_t bytes) {
     if (bytes == 0) return;  // an empty vector's data() may be null: no memcpy from it
@@ -338,8 +338,8 @@ std::vector<char> Instance::Serialize(const Snapshot& s) {
   put(s.inputs.data(), sizeof(double) * s.inputs.size());
   put(&s.next_step, sizeof(double));
   put(&r, sizeof(double));
+  put(s.resting.data(), sizeof(double) * s.resting.size());
   put(s.state_set.data(), s.state_set.size());
-  put(s.resting.data(), s.resting.size());
   return out;
 }
 
@@ -366,13 +366,11 @@ bool Instance::Deserialize(const char* data, size_t size, Snapshot* s) {
     return get(v->data(), sizeof(double) * c);
   };
   char magic[6];
-  size_t r = 0;
   if (!get(magic, 6) || std::memcmp(magic, "KSFMU2", 6) != 0 || !get(&s->t, sizeof(double)) || !doubles(&s->y) ||
-      !doubles(&s->params) || !doubles(&s->inputs) || !get(&s->next_step, sizeof(double)) || !count(&r))
+      !doubles(&s->params) || !doubles(&s->inputs) || !get(&s->next_step, sizeof(double)) || !doubles(&s->resting))
     return false;
   s->state_set.resize(s->y.size());
-  s->resting.resize(r);
-  return get(s->state_set.data(), s->state_set.size()) && get(s->resting.data(), r) && p == end;
+  return get(s->state_set.data(), s->state_set.size()) && p == end;
 }
 
 }  // namespace kanesim::fmi

@@ -64,7 +64,7 @@ class Instance {
     std::vector<double> y, params, inputs;
     std::vector<char> state_set;
     double next_step = 0.0;
-    std::vector<char> resting;
+    std::vector<double> resting;  // sim::SimulatorState::resting
   };
   Snapshot Save();
   std::string Restore(const Snapshot& s);
