@@ -23,8 +23,8 @@ namespace {
 class Emitter {
  public:
   Emitter(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
-          Diagnostics& diags, flat::Mechanism* m)
-      : tree_(tree), sets_(sets), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m) {}
+          Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor)
+      : tree_(tree), sets_(sets), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m), visitor_(visitor) {}
 
   void Run(Node* root) {
     m_->joints = std::move(tree_.joints);
@@ -506,10 +506,12 @@ class Emitter {
     }
   }
 
-  // Every parameter, even unused ones, for `kanesim check` and sweeps.
+  // Every parameter, even unused ones, for `kanesim check` and sweeps; every variable shown
+  // to the visitor.
   void EveryParameter(Node* n) {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kVar) {
+      if (visitor_) visitor_->Visit(n);
       bool in_primitive = n->parent && n->parent->prim != Prim::None;
       // A primitive's parameter without a value is optional (a joint's q_min: no stop); the
       // primitive reports it where it needs one.
@@ -538,6 +540,7 @@ class Emitter {
   flat::ExprPool& pool;
   Diagnostics& diags_;
   flat::Mechanism* m_;
+  VarVisitor* visitor_;
   std::vector<Node*> springs;                  // rotational springs and dampers found by Walk
   std::vector<Node*> couplings;                // joint couplings found by Walk
   std::vector<std::vector<ExprId>> tau_extra;  // per joint: generalized forces of springs on flanges
@@ -547,9 +550,9 @@ class Emitter {
 }  // namespace
 
 void Emit(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
-          Diagnostics& diags, flat::Mechanism* m) {
+          Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor) {
   Node* root = tree.root.get();
-  Emitter(tree, sets, eval, places, diags, m).Run(root);
+  Emitter(tree, sets, eval, places, diags, m, visitor).Run(root);
 }
 
 // The experiment annotation: StartTime, StopTime, Tolerance, Interval.

@@ -1,5 +1,5 @@
-// CheckUnits (lang/elab_units.h): a walk over the instance tree that gives each binding's
-// expression a unit, bottom-up, and compares it with the variable's.
+// The unit check (lang/elab_units.h): shown each variable by the emitter's walk, it gives
+// each binding's expression a unit, bottom-up, and compares it with the variable's.
 #include "lang/elab_units.h"
 
 #include <cmath>
@@ -61,10 +61,14 @@ Unit Radians() {
   return u;
 }
 
+}  // namespace
+
 class UnitChecker {
  public:
-  UnitChecker(Diagnostics& diags) : diags_(diags) {}
-  void Walk(Node* root);
+  explicit UnitChecker(Diagnostics& diags) : diags_(diags) {}
+  // Every value given to `var`: its binding (declaration, modifier, --set or equation), its
+  // elements' equations, and its start, min and max attributes.
+  void CheckVar(Node* var);
   // The units a spring on flanges takes from the joint its flanges act on.
   void SpringUnits(const InstanceTree& tree, const Links& links);
   // A variable's unit: declared, or inferred (from its binding or from its uses).
@@ -83,13 +87,13 @@ class UnitChecker {
     Span where;               // that use
   };
 
-  void CheckVar(Node* var);
   void CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation);
   // A joint's q or u without one unit: element k of a start array, or an element equation,
   // against the coordinate's unit.
   void CheckCoordinates(Node* var);
   void CheckElement(Node* var, const ast::Expr& e, const ModValue& mv, int k, const char* what);
   const Declared* DeclaredUnit(const Node* var);
+  const Declared* FindDeclaredUnit(const Node* var);
   UVal Expr(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -113,26 +117,10 @@ class UnitChecker {
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
   int depth_ = 0;
+  const Node* last_var_ = nullptr;  // DeclaredUnit's last answer
+  const Declared* last_declared_ = nullptr;
 };
 
-void UnitChecker::Walk(Node* root) {
-  std::vector<Node*> stack{root};
-  while (!stack.empty() && !diags_.Full()) {
-    Node* n = stack.back();
-    stack.pop_back();
-    if (!n->enabled) continue;
-    if (n->kind == Node::kArray) {
-      for (auto it = n->elems.rbegin(); it != n->elems.rend(); ++it) stack.push_back(it->get());
-    } else if (n->kind == Node::kVar) {
-      CheckVar(n);
-    } else {
-      for (auto it = n->children.rbegin(); it != n->children.rend(); ++it) stack.push_back(it->get());
-    }
-  }
-}
-
-// Every value given to `var`: its binding (declaration, modifier, --set or equation), its
-// elements' equations, and its start, min and max attributes.
 void UnitChecker::CheckVar(Node* var) {
   if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
   DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
@@ -249,7 +237,16 @@ void UnitChecker::NoteOrigin(Diagnostic& d, const UVal& v) {
 }
 
 const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
+  // Asked several times in a row for the variable being checked.
+  if (var == last_var_) return last_declared_;
+  last_var_ = var;
+  last_declared_ = FindDeclaredUnit(var);
+  return last_declared_;
+}
+
+const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
   const Mod& mods = var->Modifiers();
+  if (mods.sub.empty()) return nullptr;
   auto it = mods.sub.find("unit");
   if (it == mods.sub.end() || !it->second.value || !it->second.value->expr) return nullptr;
   const ast::Expr* e = it->second.value->expr;
@@ -276,12 +273,11 @@ UVal UnitChecker::VarUnit(const Node* var) {
     v.text = &d->text;
     return v;
   }
-  auto [it, fresh] = inferred_.try_emplace(var);
-  if (!fresh) return it->second.busy ? UVal{} : it->second.val;
+  if (auto it = inferred_.find(var); it != inferred_.end()) return it->second.busy ? UVal{} : it->second.val;
   // Inferred from the binding, once: an output's unit from its expression.
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
   if (!b || !b->expr || !var->shape.empty()) return UVal{};
-  it->second.busy = true;
+  inferred_[var].busy = true;
   UVal v = Expr(*b->expr, b->scope, b->iters.get());
   Inferred& slot = inferred_[var];  // the map may have grown
   slot.busy = false;
@@ -598,19 +594,33 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
   }
 }
 
-}  // namespace
+UnitCheck::UnitCheck(const InstanceTree& tree, const Links& links, const SourceManager* sources)
+    : found_(sources), checker_(std::make_unique<UnitChecker>(found_)) {
+  checker_->SpringUnits(tree, links);
+}
 
-void CheckUnits(const InstanceTree& tree, const Links& links, Diagnostics& diags, flat::Mechanism* m) {
-  Node* root = tree.root.get();
-  UnitChecker checker(diags);
-  checker.SpringUnits(tree, links);
-  checker.Walk(root);
+UnitCheck::~UnitCheck() = default;
+
+void UnitCheck::Visit(Node* var) {
+  if (!found_.Full()) checker_->CheckVar(var);
+}
+
+void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mechanism* m) {
+  if (diags.HasErrors()) return;
+  // The messages, in the order found (the cap's message P105 becomes diags' own).
+  for (const Diagnostic& d : found_.All()) {
+    Diagnostic& copy = d.severity == Severity::Error ? diags.Error(d.code, d.span, d.message)
+                                                     : diags.Warning(d.code, d.span, d.message);
+    copy.notes = d.notes;
+    copy.hint = d.hint;
+  }
   // Outputs' units (for --units-in-header): the top-level model's output variables, named
   // by path, array elements "path[k]" (lang/elab_emit.cpp).
+  const Node* root = tree.root.get();
   size_t i = 0;
   for (const auto& c : root->children) {
     if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
-    const UVal u = checker.VarUnit(c.get());
+    const UVal u = checker_->VarUnit(c.get());
     auto named = [&](const std::string& n) {
       return n == c->path || (n.size() > c->path.size() && n.compare(0, c->path.size(), c->path) == 0 &&
                               n[c->path.size()] == '[');
