@@ -124,13 +124,15 @@ class Emitter {
     return var && (var->eq_binding || var->Modifiers().value || !var->eq_elem_binding.empty());
   }
 
-  // Every enabled instance, depth first: each primitive becomes its flat element.
+  // Every enabled instance, depth first: each primitive becomes its flat element, each
+  // variable is shown to the visitor (after its primitive, whose fields were just evaluated).
   void Walk(Node* n) {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kArray) {
       for (auto& e : n->elems) Walk(e.get());
       return;
     }
+    if (n->kind == Node::kVar && visitor_) visitor_->Visit(n);
     if (n->kind != Node::kClass) return;
     // Where the primitive is declared (made only for the kinds that keep it); inside a
     // library component (a Rod's body and tip) the user's declaration of that component,
@@ -506,12 +508,10 @@ class Emitter {
     }
   }
 
-  // Every parameter, even unused ones, for `kanesim check` and sweeps; every variable shown
-  // to the visitor.
+  // Every parameter, even unused ones, for `kanesim check` and sweeps.
   void EveryParameter(Node* n) {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kVar) {
-      if (visitor_) visitor_->Visit(n);
       bool in_primitive = n->parent && n->parent->prim != Prim::None;
       // A primitive's parameter without a value is optional (a joint's q_min: no stop); the
       // primitive reports it where it needs one.

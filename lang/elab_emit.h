@@ -12,7 +12,7 @@ class Evaluator;
 struct Connections;
 struct InstanceTree;
 
-// Shown every enabled variable, depth first, by Emit's walk over all of them (the unit
+// Shown every enabled variable, depth first, by Emit's walk over the tree (the unit
 // check, lang/elab_units.h, rides on it instead of walking the tree again).
 class VarVisitor {
  public:

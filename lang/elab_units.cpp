@@ -41,6 +41,13 @@ struct UVal {
 // A unit in quotes as the user wrote it, or in SI form when computed.
 std::string Shown(const UVal& v) { return "\"" + (v.text ? *v.text : v.unit.ToString()) + "\""; }
 
+// A number, or minus one (`= 0`, `min = -1`): its unit is what it is bound to.
+bool IsNumber(const ast::Expr& e) {
+  if (e.kind == ast::ExprKind::Number) return true;
+  return e.kind == ast::ExprKind::Unary && static_cast<Tok>(e.op) == Tok::Minus && e.args.size() == 1 &&
+         e.args[0]->kind == ast::ExprKind::Number;
+}
+
 // Expressions nested deeper than this are left unchecked instead of recursed into (the
 // parser allows 100,000 levels; the native stack does not).
 constexpr int kMaxCheckDepth = 200;
@@ -202,7 +209,8 @@ void UnitChecker::SpringUnits(const InstanceTree& tree, const Links& links) {
 }
 
 void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation) {
-  if (!mv.expr || diags_.Full()) return;
+  // A number takes the unit it is given (min = 0): nothing to check, nothing to infer.
+  if (!mv.expr || diags_.Full() || IsNumber(*mv.expr)) return;
   const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
   const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
   if (want.kind != UVal::Known && own && var->shape.empty()) return;
@@ -276,7 +284,7 @@ UVal UnitChecker::VarUnit(const Node* var) {
   if (auto it = inferred_.find(var); it != inferred_.end()) return it->second.busy ? UVal{} : it->second.val;
   // Inferred from the binding, once: an output's unit from its expression.
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
-  if (!b || !b->expr || !var->shape.empty()) return UVal{};
+  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr)) return UVal{};
   inferred_[var].busy = true;
   UVal v = Expr(*b->expr, b->scope, b->iters.get());
   Inferred& slot = inferred_[var];  // the map may have grown
