@@ -102,6 +102,9 @@ class UnitChecker {
   const Declared* DeclaredUnit(const Node* var);
   const Declared* FindDeclaredUnit(const Node* var);
   UVal Expr(const ast::Expr& e, const Node* scope, const Iters* iters);
+  // The unit of e, the value of binding mv: a declaration's, a modifier's or an attribute's
+  // (`binding`), or an equation's right side.
+  UVal Bound(const ast::Expr& e, const ModValue& mv, bool binding);
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -124,6 +127,7 @@ class UnitChecker {
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
   int depth_ = 0;
+  bool factors_ = false;            // in a binding: a number in a product is a plain factor
   const Node* last_var_ = nullptr;  // DeclaredUnit's last answer
   const Declared* last_declared_ = nullptr;
 };
@@ -164,7 +168,7 @@ void UnitChecker::CheckElement(Node* var, const ast::Expr& e, const ModValue& mv
   Unit want;
   std::string error;
   if (text.empty() || !ParseUnit(text, &want, &error)) return;
-  const UVal got = Expr(e, mv.scope, mv.iters.get());
+  const UVal got = Bound(e, mv, *what != 0);
   if (got.kind != UVal::Known || got.soft || got.unit.Agrees(want)) return;
   const std::string name = "'" + var->path + "[" + std::to_string(k + 1) + "]'";
   auto& d = diags_.Error(DiagCode::UnitMismatch, e.span,
@@ -214,7 +218,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
   const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
   if (want.kind != UVal::Known && own && var->shape.empty()) return;
-  const UVal got = Expr(*mv.expr, mv.scope, mv.iters.get());
+  const UVal got = Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
     InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
@@ -286,7 +290,7 @@ UVal UnitChecker::VarUnit(const Node* var) {
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
   if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr)) return UVal{};
   inferred_[var].busy = true;
-  UVal v = Expr(*b->expr, b->scope, b->iters.get());
+  UVal v = Bound(*b->expr, *b, var->Modifiers().value && b == &*var->Modifiers().value);
   Inferred& slot = inferred_[var];  // the map may have grown
   slot.busy = false;
   if (v.kind == UVal::Known) {
@@ -324,6 +328,14 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   slot.val.text = nullptr;
   slot.from_use = true;
   slot.where = at;
+}
+
+UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
+  const bool outer = factors_;
+  factors_ = binding;
+  const UVal v = Expr(e, mv.scope, mv.iters.get());
+  factors_ = outer;
+  return v;
 }
 
 UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters) {
@@ -587,10 +599,22 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
     case Tok::Slash: {
       if (a.kind == UVal::Unknown || b.kind == UVal::Unknown) return UVal{};
       if (a.kind == UVal::Literal && b.kind == UVal::Literal) return UVal::Lit();
-      // A number times a quantity: the number may carry any unit its context needs
-      // (-0.3 * j.q as a torque: 0.3 N.m/rad), as Modelica tools infer it, so the product's
-      // unit is left open rather than guessed.
-      if (a.kind == UVal::Literal || b.kind == UVal::Literal) return UVal{};
+      // A number beside a quantity: in a binding or modifier a plain factor, unit "1"
+      // (Modelica's unit inference: an operand of empty unit next to one of non-empty unit
+      // is inferred as "1"), so L = 2 * mass is a mass. In an equation it may carry the
+      // unit its context needs (a force law's coefficient, -0.3 * j.u as a torque, as
+      // imported URDF dynamics write it), so that product is left open.
+      if (a.kind == UVal::Literal || b.kind == UVal::Literal) {
+        if (!factors_) return UVal{};
+        const UVal& q = a.kind == UVal::Known ? a : b;
+        const bool inverted = op == Tok::Slash && a.kind == UVal::Literal;  // 2 / t
+        UVal r = q;
+        if (inverted) {
+          r.unit = Unit::One() / q.unit;
+          r.text = nullptr;
+        }
+        return r;
+      }
       const Unit ua = a.kind == UVal::Known ? a.unit : Unit::One();
       const Unit ub = b.kind == UVal::Known ? b.unit : Unit::One();
       UVal r = UVal::Of(op == Tok::Star ? ua * ub : ua / ub);

@@ -11,8 +11,10 @@
 //     it is connected to; a joint's q and u (Free, Planar...) have one unit per element;
 //   - `time` is in s; a frame's r in m, v in m/s, w in rad/s, R dimensionless;
 //   - a number takes the unit of what it is added to, compared with or bound to (`x + 1`,
-//     `q(start = 0.3)`); a number times a quantity may carry any unit (-0.3 * j.q as a
-//     torque), so that product is left unchecked; numbers alone are dimensionless;
+//     `q(start = 0.3)`); in a binding or modifier a number times or over a quantity is a
+//     plain factor, unit 1 (L = 2 * mass is a mass); in an equation it may carry any unit
+//     (-0.3 * j.u as a torque), so that product is left unchecked; numbers alone are
+//     dimensionless;
 //   - `time` and numbers alone (sin(time)) are not reported where they meet a unit;
 //   - the radian counts as 1 in comparisons ("rad/s" agrees with "1/s"), the degree does not
 //     (pi/180); N.m and J agree (same dimension and scale);

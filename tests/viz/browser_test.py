@@ -558,9 +558,10 @@ def run_nowebgl(args):
 
 # units_plot.mech's signals and the units of what they measure (the physics, not the model's
 # text): the prismatic joint's displacement and speed, the hinge's angle and rate, a force, a
-# height, the energies; `scaled` (2 times a rate) has no unit the check can know.
+# height, the energies, twice a rate; `scaled` (a parameter of no unit times a rate) has no
+# unit the check can know.
 UNITS_PLOT = {"slider.q": "m", "slider.u": "m/s", "hinge.q": "rad", "hinge.u": "rad/s", "spring_force": "N",
-              "tip_height": "m", "scaled": "", "kinetic_energy": "J", "potential_energy": "J"}
+              "tip_height": "m", "doubled": "rad/s", "scaled": "", "kinetic_energy": "J", "potential_energy": "J"}
 
 
 def run_units(args):
