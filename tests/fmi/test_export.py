@@ -129,7 +129,8 @@ def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
 # whose unit is inferred (m).
 UNITS = """
 model Units
-  parameter Real k(unit = "N.m/rad") = 2;
+  parameter Real k(unit = "N/m") = 2;
+  parameter Real c(unit = "N.m/rad") = 0.5;
   parameter Real gap(unit = "mm") = 5;
   World world;
   Spherical ball;
@@ -158,7 +159,7 @@ def test_units_and_their_definitions_come_from_the_unit_check(export, write_mode
     assert unit["ball.q[1]"] == "1" and unit["der(ball.q[1])"] == "1/s"
     assert unit["ball.u[2]"] == "rad/s" and unit["der(ball.u[2])"] == "rad/s2"
     assert unit["slide.q"] == "m" and unit["der(slide.u)"] == "m/s2"
-    assert unit["k"] == "N.m/rad" and unit["gap"] == "mm" and unit["height"] == "m"
+    assert unit["c"] == "N.m/rad" and unit["gap"] == "mm" and unit["height"] == "m"
     base = {u.name: u.baseUnit for u in md.unitDefinitions}
     exps = lambda b: {a: int(getattr(b, a)) for a in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
                       if getattr(b, a) not in (None, 0, "0")}
