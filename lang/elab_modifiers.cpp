@@ -1,4 +1,5 @@
 // Modifiers: built, merged (outer wins), sliced per array element (lang/elab_modifiers.h).
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -51,9 +52,7 @@ Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<cons
         if (built.value) built.value->is_final = true;
       }
       if (a.redeclare) {
-        built.redeclare_type = a.redeclare_type;
-        built.redeclare_from = scope && scope->cls ? scope->cls : nullptr;
-        built.redeclare_span = a.span;
+        built.redeclare = Mod::Redeclare{a.redeclare_type, scope && scope->cls ? scope->cls : nullptr, a.span};
       }
       if (next.value || !next.sub.empty()) {
         auto& d = diags.Error(DiagCode::Duplicate, a.name_span, "'" + ast::JoinName(a.path) + "' is modified twice");
@@ -91,7 +90,7 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
   if (outer.value && outer.value->from_set && inner.is_final) {
     outer.value.reset();
   }
-  if (inner.is_final && (outer.value || !outer.sub.empty() || !outer.redeclare_type.empty())) {
+  if (inner.is_final && (outer.value || !outer.sub.empty() || outer.Redeclared())) {
     Span at = outer.value ? outer.value->span : outer.span;
     auto& d = diags.Error(DiagCode::FinalOverride, at, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.final_span.valid() ? inner.final_span : inner.span, "declared final here"});
@@ -108,11 +107,7 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
     outer.is_final = true;
     outer.final_span = inner.final_span;
   }
-  if (outer.redeclare_type.empty() && !inner.redeclare_type.empty()) {
-    outer.redeclare_type = take(inner.redeclare_type);
-    outer.redeclare_from = inner.redeclare_from;
-    outer.redeclare_span = inner.redeclare_span;
-  }
+  if (!outer.Redeclared() && inner.Redeclared()) outer.redeclare = take(inner.redeclare);
   if (!outer.span.valid()) outer.span = inner.span;
   outer.each = outer.each || inner.each;
   if (!inner_empty && !inner.set_only) outer.set_only = false;
@@ -128,14 +123,56 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
   }
 }
 
+// A modifier as default-constructed: merging it changes nothing, and merging into it
+// gives the inner one.
+bool Pristine(const Mod& m) {
+  return !m.value && m.sub.empty() && m.order.empty() && !m.each && !m.is_final && !m.final_span.valid() &&
+         !m.span.valid() && !m.redeclare && !m.set_only;
+}
+
+// Whether every level of m lists each of its sub-modifiers once in `order` (as BuildMod
+// and MergeMods make them), so that moving m whole equals merging it key by key.
+bool OrderMatchesSubs(const Mod& m) {
+  if (m.order.size() != m.sub.size()) return false;
+  SmallVec<const Mod*, 16> listed;  // each key of `order` found in `sub`, and none twice
+  for (const std::string& k : m.order) {
+    auto it = m.sub.find(k);
+    if (it == m.sub.end()) return false;
+    listed.push_back(&it->second);
+  }
+  std::sort(listed.begin(), listed.end());
+  if (std::adjacent_find(listed.begin(), listed.end()) != listed.end()) return false;
+  for (const auto& [k, sm] : m.sub)
+    if (!OrderMatchesSubs(sm)) return false;
+  return true;
+}
+
+// What MergeModsImpl leaves in a pristine outer modifier besides the inner one's fields:
+// set_only cleared, final_span and the redeclare fields only where they apply.
+void NormalizeMerged(Mod& m) {
+  m.set_only = false;
+  if (!m.is_final) m.final_span = Span{};
+  if (!m.Redeclared()) m.redeclare.reset();
+  for (auto& [k, sm] : m.sub) NormalizeMerged(sm);
+}
+
 }  // namespace
 
 void MergeMods(Mod& outer, const Mod& inner, const std::string& what, Diagnostics& diags) {
+  if (Pristine(inner)) return;
   MergeKeys keys;
   MergeModsImpl(diags, outer, inner, what, keys);
 }
 
+// Merging into a pristine modifier (an element without outer modifiers, the common case)
+// moves the inner tree instead of rebuilding it node by node: no diagnostic can arise.
 void MergeMods(Mod& outer, Mod&& inner, const std::string& what, Diagnostics& diags) {
+  if (Pristine(inner)) return;
+  if (Pristine(outer) && OrderMatchesSubs(inner)) {
+    outer = std::move(inner);
+    NormalizeMerged(outer);
+    return;
+  }
   MergeKeys keys;
   MergeModsImpl(diags, outer, std::move(inner), what, keys);
 }
@@ -163,9 +200,7 @@ Mod SliceMod(const Mod& mod, int index, int count, Evaluator& eval, Diagnostics&
   out.is_final = mod.is_final;
   out.final_span = mod.final_span;
   out.span = mod.span;
-  out.redeclare_type = mod.redeclare_type;
-  out.redeclare_from = mod.redeclare_from;
-  out.redeclare_span = mod.redeclare_span;
+  out.redeclare = mod.redeclare;
   out.set_only = mod.set_only;
   if (mod.value) {
     std::optional<Value> evaluated;
