@@ -5,6 +5,7 @@
 // lang/elaborate.cpp include these headers.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <optional>
@@ -175,6 +176,7 @@ struct Node {
   enum Kind { kClass, kVar, kArray } kind = kClass;
   bool enabled = true;
   bool is_final_decl = false;  // kVar
+  mutable std::uint16_t scans = 0;  // Child()'s scans of a class above kScanChildren elements
   int depth = 0;
   std::string name;  // "links[2]" for array elements
   std::string path;  // "robot.links[2]"
@@ -216,11 +218,16 @@ struct Node {
   std::vector<std::unique_ptr<Node>> elems;
 
   static constexpr size_t kScanChildren = 16;
+  static constexpr size_t kScanBudget = 256;  // names a larger class's scans compare before it gets an index
   Node* Child(const std::string& n) const {
-    // Most classes have a handful of elements: a scan beats hashing. Large ones (a model
-    // with many declared components) get an index, so that lookups stay O(1).
-    if (children.size() <= kScanChildren) {
-      for (size_t i = children.size(); i-- > 0;)
+    // Most classes have a handful of elements: a scan beats hashing. A larger one gets an
+    // index once its scans would have compared kScanBudget names: at once for a model of
+    // many declarations (lookups stay O(1)), never for an instance looked up a few times
+    // (each element of an array of links, whose index cost more than its lookups).
+    const size_t count = children.size();
+    if (count <= kScanChildren || (!by_name && count * (scans + 1u) <= kScanBudget)) {
+      if (count > kScanChildren) ++scans;
+      for (size_t i = count; i-- > 0;)
         if (children[i]->name == n) return children[i].get();
       return nullptr;
     }
