@@ -185,7 +185,7 @@ void AddCheckCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", args->load.path, "The .mech file")->required();
   cmd->add_option("--model", args->load.model, "Model to check (default: the last model in the file)");
-  AddUrdfOptions(*cmd, &args->load.floating, &args->load.package_paths);
+  AddUrdfOptions(*cmd, &args->load.floating, &args->load.stops, &args->load.package_paths);
   cmd->add_option("--set", args->load.sets, "Override a parameter: name=value (repeatable)");
   cmd->add_option("--emit", args->emit, "Print an intermediate form instead: ast or flat")
       ->check(CLI::IsMember({"ast", "flat"}));

@@ -1,4 +1,4 @@
-// `kanesim import robot.urdf [-o robot.mech] [--floating] [--package-path DIR]...`: the URDF
+// `kanesim import robot.urdf [-o robot.mech] [--floating] [--limits stops|ignore] [--package-path DIR]...`: the URDF
 // as a readable .mech file (import/import.h; docs/import.md). The same translation runs in
 // memory when a command is given a .urdf file (pipeline/), so `run robot.urdf` and `run`
 // of the file written here give the same rows.
@@ -22,6 +22,7 @@ struct ImportArgs {
   std::string path;
   std::string out_path;
   bool floating = false;
+  bool stops = true;
   std::vector<std::string> package_paths;
 };
 
@@ -38,6 +39,7 @@ int ImportCommand(const ImportArgs& a) {
   }
   import::Options o;
   o.floating = a.floating;
+  o.stops = a.stops;
   o.package_paths = a.package_paths;
   const bool to_stdout = a.out_path.empty() || a.out_path == "-";
   // Mesh names are written relative to the .mech file's folder, as MeshBody reads them.
@@ -65,8 +67,12 @@ int ImportCommand(const ImportArgs& a) {
 
 }  // namespace
 
-void AddUrdfOptions(CLI::App& cmd, bool* floating, std::vector<std::string>* package_paths) {
+void AddUrdfOptions(CLI::App& cmd, bool* floating, bool* stops, std::vector<std::string>* package_paths) {
   cmd.add_flag("--floating", *floating, "A URDF file: give the root link a free base (FreeMotion) instead of fixing it");
+  cmd.add_option_function<std::string>(
+         "--limits", [stops](const std::string& v) { *stops = v == "stops"; },
+         "A URDF file: joint <limit>s as end stops (stops, the default) or recorded only (ignore, as Pinocchio)")
+      ->check(CLI::IsMember({"stops", "ignore"}));
   cmd.add_option("--package-path", *package_paths,
                  "A URDF file: a folder where package:// mesh names are looked up (repeatable; then ROS_PACKAGE_PATH)")
       ->allow_extra_args(false);
@@ -78,7 +84,7 @@ void AddImportCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<ImportArgs>();
   cmd->add_option("file", a->path, "The URDF file")->required();
   cmd->add_option("-o,--out", a->out_path, "Write the model to FILE (default: stdout)");
-  AddUrdfOptions(*cmd, &a->floating, &a->package_paths);
+  AddUrdfOptions(*cmd, &a->floating, &a->stops, &a->package_paths);
   cmd->callback([a, exit_code]() { *exit_code = ImportCommand(*a); });
 }
 

@@ -616,7 +616,7 @@ void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options) {
   cmd->add_option("file", a->load.path, "The .mech file")->required();
   cmd->add_option("-o,--out", a->out_path, "Write the model as JSON (with --sweep: the table as CSV)");
   cmd->add_option("--model", a->load.model, "Model to linearize (default: the last one in the file)");
-  AddUrdfOptions(*cmd, &a->load.floating, &a->load.package_paths);
+  AddUrdfOptions(*cmd, &a->load.floating, &a->load.stops, &a->load.package_paths);
   cmd->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
   a->at_opt = AddNumberOption(cmd, "--at", &a->at, "Linearize about the motion at time T (default: the start values)");
   cmd->add_flag("--equilibrium", a->equilibrium,

@@ -224,7 +224,7 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("file", a->load.path, "The .mech file")->required();
   run->add_option("-o,--out", a->out_path, "Write the CSV to this file (default: stdout)");
   run->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
-  AddUrdfOptions(*run, &a->load.floating, &a->load.package_paths);
+  AddUrdfOptions(*run, &a->load.floating, &a->load.stops, &a->load.package_paths);
   run->add_option("--set", a->load.sets, "Set a parameter or an input, name=value (repeatable)")->allow_extra_args(false);
   AddInputFileOption(*run, &a->load.input_files);
   AddNumberOption(run, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");

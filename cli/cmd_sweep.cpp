@@ -230,6 +230,7 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
     r.Set("input_file:" + std::filesystem::absolute(f).lexically_normal().lexically_relative(model_dir).string(), hash);
   }
   if (urdf) r.Set("urdf_floating", a.load.floating ? "true" : "false");  // --floating changes the model
+  if (urdf) r.Set("urdf_limits", a.load.stops ? "stops" : "ignore");      // and so does --limits
   r.Set("model_name", a.load.model);
   r.Set("set", Join(a.load.sets));
   const sim::OutputGrid grid = sim::ResolveGrid(base, c.sim);
@@ -497,7 +498,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   sw->add_option("file", a->file, "The .mech file, or a sweep .toml file");
   sw->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
-  AddUrdfOptions(*sw, &a->load.floating, &a->load.package_paths);
+  AddUrdfOptions(*sw, &a->load.floating, &a->load.stops, &a->load.package_paths);
   AddInputFileOption(*sw, &a->load.input_files);
   sw->add_option("--set", a->load.sets, "Fix a parameter for every scenario, name=value (repeatable)")
       ->allow_extra_args(false);

@@ -212,7 +212,7 @@ void AddViewCommand(CLI::App& app, int* exit_code, bool options) {
   if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", a->load.path, "The .mech file")->required();
   cmd->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
-  AddUrdfOptions(*cmd, &a->load.floating, &a->load.package_paths);
+  AddUrdfOptions(*cmd, &a->load.floating, &a->load.stops, &a->load.package_paths);
   cmd->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
   AddNumberOption(cmd, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");
   AddNumberOption(cmd, "--stop-time", &a->spec.stop_time, "Stop time (default: experiment StopTime)");

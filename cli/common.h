@@ -31,6 +31,7 @@ struct LoadOptions {
   std::string model;                                     // model to elaborate ("" = last in file)
   std::vector<std::string> sets;                         // "name=value" from --set
   bool floating = false;                                 // a URDF file: --floating (a free base)
+  bool stops = true;                                     // a URDF file: --limits stops|ignore
   std::vector<std::string> package_paths;                // a URDF file: --package-path
   std::vector<std::string> input_files;                  // --input-file: tables of the model's inputs
 };
@@ -82,7 +83,7 @@ void AddTestCommand(CLI::App& app, int* exit_code, bool options = true);   // cm
 void AddExportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_export.cpp
 void AddImportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_import.cpp
 void AddUnitsCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_units.cpp
-// --floating and --package-path, for every command that loads a model (a URDF file).
-void AddUrdfOptions(CLI::App& cmd, bool* floating, std::vector<std::string>* package_paths);
+// --floating, --limits and --package-path, for every command that loads a model (a URDF file).
+void AddUrdfOptions(CLI::App& cmd, bool* floating, bool* stops, std::vector<std::string>* package_paths);
 
 }  // namespace kanesim::cli

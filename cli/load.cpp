@@ -41,6 +41,7 @@ std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, cons
   lo.sets = options.sets;
   lo.compile = compile;
   lo.urdf.floating = options.floating;
+  lo.urdf.stops = options.stops;
   lo.urdf.package_paths = options.package_paths;
   pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(options.path), lo, spec);
   std::cerr << r.diagnostics;

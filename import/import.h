@@ -29,6 +29,10 @@ struct Options {
   // <mimic> joints as exact couplings (JointCoupling); false imports the follower as an
   // independent joint, as Pinocchio's default reading does (its references in tests/import).
   bool mimic = true;
+  // <limit lower upper> of revolute and prismatic joints as end stops (q_min, q_max,
+  // restitution 0); false (--limits ignore) records them in comments only, as Pinocchio's
+  // dynamics ignore them.
+  bool stops = true;
   // Where `package://NAME/...` mesh names are looked up, in order: each DIR as DIR/NAME/...
   // (and DIR/... when DIR's own name is NAME); ROS_PACKAGE_PATH's folders follow these.
   std::vector<std::string> package_paths;

@@ -133,6 +133,9 @@ class Writer {
     link_frame_.assign(r_.links.size(), "");
     joint_name_.assign(r_.joints.size(), "");
     decl_ << "  World world(g = {0, 0, -9.81}) \"URDF: z up, standard gravity\";\n";
+    // The compiler takes no end stops in a mechanism with joint couplings (K318): a robot
+    // whose <mimic>s are kept gets its limits as comments only.
+    for (const Joint& j : r_.joints) coupled_ = coupled_ || (o_.mimic && j.has_mimic);
     Root();
     for (int j : r_.order) JointAndChild(j);
     if (o_.mimic) Mimics();
@@ -276,11 +279,40 @@ class Writer {
     return name + ".frame_b";
   }
 
+  // Whether the joint's <limit> becomes end stops: a revolute or prismatic joint's proper
+  // range, unless --limits ignore or the model's couplings forbid stops.
+  bool Stops(const Joint& j) const {
+    return j.has_limit && (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) && o_.stops &&
+           !coupled_ && j.lower < j.upper;
+  }
+
+  // The <limit> in the joint's comment, and what became of it (counted for the notes).
   std::string Limits(const Joint& j) {
     if (!j.has_limit) return "";
-    if (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) ++limits_;
+    std::string fate = "recorded";
+    if (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) {
+      if (Stops(j)) fate = "the end stops q_min, q_max", ++stops_;
+      else if (!o_.stops) fate = "recorded: --limits ignore", ++limits_;
+      else if (coupled_) fate = "recorded: no end stops with <mimic> couplings", ++limits_;
+      else fate = "recorded: lower >= upper is no range", ++empty_ranges_;
+    }
     return "; limit lower " + Num(j.lower) + " upper " + Num(j.upper) + " effort " + Num(j.effort) + " velocity " +
-           Num(j.velocity) + " (recorded: joint stops are not modelled yet)";
+           Num(j.velocity) + " (" + fate + ")";
+  }
+
+  // The joint's end stops as modifiers; a start of q = 0 outside them moves onto the nearer
+  // limit (the simulator refuses a start past a stop), with a note.
+  std::string StopModifiers(const Joint& j) {
+    if (!Stops(j)) return "";
+    std::string mods = ", q_min = " + Num(j.lower) + ", q_max = " + Num(j.upper);
+    if (0 < j.lower || 0 > j.upper) {
+      const double start = 0 < j.lower ? j.lower : j.upper;
+      mods += ", q(start = " + Num(start) + ")";
+      d_.Note(j.line, "joint '" + Shown(j.name) + "': q = 0 is outside its <limit> [" + Num(j.lower) + ", " +
+                          Num(j.upper) + "]: it starts at " + Num(start) + ", on the nearer stop",
+              "<limit");
+    }
+    return mods;
   }
 
   void JointAndChild(int ji) {
@@ -291,7 +323,8 @@ class Writer {
     const int child = LinkIndex(j.child);
     if (j.type == JointType::kFixed) {
       const std::string name = Unique(j.name, &renamed);
-      decl_ << "  // joint '" << Shown(j.name) << "' (" << Where(j.line) << "): fixed" << renamed << "\n";
+      decl_ << "  // joint '" << Shown(j.name) << "' (" << Where(j.line) << "): fixed" << renamed << IgnoredMimic(j)
+            << "\n";
       joint_name_[static_cast<std::size_t>(ji)] = name;
       LinkComponents(child, FixedFrame(name, j.origin, parent, "joint '" + Shown(j.name) + "' (fixed)"));
       return;
@@ -299,13 +332,17 @@ class Writer {
     std::string from = parent;
     const std::string name = Unique(j.name, &renamed);
     decl_ << "  // joint '" << Shown(j.name) << "' (" << Where(j.line) << "): " << kTypeNames[static_cast<int>(j.type)]
-          << renamed << Limits(j) << "\n";
+          << renamed << Limits(j) << IgnoredMimic(j) << "\n";
     if (!j.origin.IsIdentity()) from = FixedFrame(Unique(j.name + "_origin", nullptr), j.origin, parent, "joint '" + j.name + "' <origin>");
     joint_name_[static_cast<std::size_t>(ji)] = name;
     switch (j.type) {
       case JointType::kRevolute:
-      case JointType::kContinuous: Declare("Revolute", name, "axis = " + Vec(j.axis), "joint '" + Shown(j.name) + "'"); break;
-      case JointType::kPrismatic: Declare("Prismatic", name, "axis = " + Vec(j.axis), "joint '" + Shown(j.name) + "'"); break;
+      case JointType::kContinuous:
+        Declare("Revolute", name, "axis = " + Vec(j.axis) + StopModifiers(j), "joint '" + Shown(j.name) + "'");
+        break;
+      case JointType::kPrismatic:
+        Declare("Prismatic", name, "axis = " + Vec(j.axis) + StopModifiers(j), "joint '" + Shown(j.name) + "'");
+        break;
       case JointType::kFloating: Declare("FreeMotion", name, "", "joint '" + Shown(j.name) + "'"); break;
       case JointType::kPlanar:
         Declare("Planar", name, "n = " + Vec(j.axis) + ", axis_x = " + Vec(Perpendicular(j.axis)),
@@ -316,6 +353,12 @@ class Writer {
     Connect(from, name + ".frame_a");
     Dynamics(j, name);
     LinkComponents(child, name + ".frame_b");
+  }
+
+  std::string IgnoredMimic(const Joint& j) {
+    if (!j.mimic_ignored) return "";
+    ++mimics_ignored_;
+    return "; <mimic joint=\"" + Shown(j.mimic_joint) + "\"> ignored (a fixed joint has no coordinate to couple)";
   }
 
   // <mimic joint multiplier offset> as an exact coupling, q = multiplier q_leader + offset
@@ -430,8 +473,20 @@ class Writer {
       header_.push_back(std::to_string(collisions_) + " <collision> elements ignored (no contacts are computed from them)");
       d_.Note(0, header_.back());
     }
+    if (stops_ > 0) header_.push_back(std::to_string(stops_) + " joint <limit>s as end stops (q_min, q_max; restitution 0)");
     if (limits_ > 0) {
-      header_.push_back(std::to_string(limits_) + " joint <limit>s recorded in comments (joint stops are not modelled yet)");
+      header_.push_back(std::to_string(limits_) + " joint <limit>s recorded in comments, not end stops (" +
+                        (o_.stops ? "the compiler takes no end stops with the <mimic> couplings, K318" : "--limits ignore") +
+                        ")");
+      d_.Note(0, header_.back());
+    }
+    if (empty_ranges_ > 0) {
+      header_.push_back(std::to_string(empty_ranges_) + " joint <limit>s with lower >= upper recorded in comments (no range to stop at)");
+      d_.Note(0, header_.back());
+    }
+    if (mimics_ignored_ > 0) {
+      header_.push_back(std::to_string(mimics_ignored_) +
+                        " <mimic> elements on or of fixed joints ignored (a fixed joint has no coordinate to couple)");
       d_.Note(0, header_.back());
     }
     if (missing_meshes_ > 0)
@@ -446,7 +501,8 @@ class Writer {
   std::set<std::string> used_;
   std::vector<std::string> link_frame_, joint_name_, header_;
   std::unordered_map<std::string, int> link_index_;
-  int collisions_ = 0, missing_meshes_ = 0, limits_ = 0;
+  int collisions_ = 0, missing_meshes_ = 0, limits_ = 0, stops_ = 0, empty_ranges_ = 0, mimics_ignored_ = 0;
+  bool coupled_ = false;  // the model has JointCouplings (kept <mimic>s)
 };
 
 }  // namespace

@@ -62,6 +62,9 @@ struct Joint {
   std::string mimic_joint;
   double multiplier = 1, offset = 0;
   int mimic_leader = -1;  // index into joints (urdf_tree.cpp)
+  // A <mimic> on a fixed joint or naming one: nothing to couple, ignored with a note (as
+  // Pinocchio and MuJoCo do; example-robot-data's Talos has twelve); has_mimic is then false.
+  bool mimic_ignored = false;
   int line = 0;
 };
 

@@ -33,7 +33,7 @@ bool OneCoordinate(JointType t) {
 }
 
 // Each <mimic joint> names another joint, and both have one coordinate (a coupling q = m q_l
-// + c of JointCoupling); Joint::mimic_leader is set.
+// + c of JointCoupling); Joint::mimic_leader is set. One on or of a fixed joint is ignored.
 void CheckMimics(Robot* robot, const std::unordered_map<std::string, int>& joints, Diags& diags) {
   for (Joint& j : robot->joints) {
     if (!j.has_mimic) continue;
@@ -45,6 +45,11 @@ void CheckMimics(Robot* robot, const std::unordered_map<std::string, int>& joint
       continue;
     }
     const Joint& leader = robot->joints[static_cast<std::size_t>(it->second)];
+    if (&leader != &j && (j.type == JointType::kFixed || leader.type == JointType::kFixed)) {
+      j.has_mimic = false;  // a fixed joint has no coordinate to couple: the writer notes it
+      j.mimic_ignored = true;
+      continue;
+    }
     if (&leader == &j || !OneCoordinate(j.type) || !OneCoordinate(leader.type)) {
       diags.Error(DiagCode::UrdfBadMimic, j.line, "<mimic",
                   "joint '" + j.name + "' cannot mimic '" + leader.name + "'" +

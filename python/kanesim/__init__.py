@@ -485,7 +485,8 @@ def _step_error(e) -> SimulationError:
 def _load(args: Dict[str, Any], sets: Dict[str, Any]) -> Model:
     compiled, error = _kanesim.load(args["path"], args["text"], args["from_text"], args["model"] or "",
                                     _set_list(sets), args["solver"], args["integrator"], args["reactions"],
-                                    args.get("floating", False), list(args.get("package_path", ())))
+                                    args.get("floating", False), list(args.get("package_path", ())),
+                                    args.get("limits", "stops") == "stops")
     if compiled is None:
         code, file, line, column, rendered = error
         raise ModelError(rendered.rstrip("\n"), code, file, line, column)
@@ -509,10 +510,11 @@ def _with_starts(set, start) -> dict:
 
 def load(path, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = None, solver: str = "auto",
          integrator: str = "auto", reactions: str = "nan", floating: bool = False,
-         package_path: Sequence[str] = (), start: Optional[Mapping[str, Any]] = None) -> Model:
+         package_path: Sequence[str] = (), start: Optional[Mapping[str, Any]] = None,
+         limits: str = "stops") -> Model:
     """Loads, elaborates and compiles a .mech file, or a URDF robot (robot.urdf, translated as
-    `kanesim import` does: docs/import.md; floating and package_path as its --floating and
-    --package-path). set: parameter values as --set takes
+    `kanesim import` does: docs/import.md; floating, limits ("stops" or "ignore") and
+    package_path as its --floating, --limits and --package-path). set: parameter values as --set takes
     them ({"N": 20, "world.g": [0, 0, -9.81], "flag": True, "j.q.start": 0.3}); start:
     start values of joint coordinates and speeds ({"j.q": 0.3, "free.u": [...]}, the same
     as set={"j.q.start": 0.3}); model: the model to elaborate (default: the last in the
@@ -522,6 +524,7 @@ def load(path, set: Optional[Mapping[str, Any]] = None, model: Optional[str] = N
     args = dict(path=os.fspath(path), text="", from_text=False, model=model,
                 solver=_choice(solver, "solver", _SOLVERS), integrator=_choice(integrator, "integrator", _INTEGRATORS),
                 reactions=_choice(reactions, "reactions", _REACTIONS), floating=bool(floating),
+                limits=_choice(limits, "limits", ("stops", "ignore")),
                 package_path=[os.fspath(p) for p in package_path])
     return _load(args, _with_starts(set, start))
 

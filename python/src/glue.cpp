@@ -89,6 +89,7 @@ bool Load(const LoadRequest& req, LoadedModel* out, ModelErrorInfo* error) {
     lo.model = req.model;
     lo.sets = req.sets;
     lo.urdf.floating = req.floating;
+    lo.urdf.stops = req.stops;
     lo.urdf.package_paths = req.package_paths;
     r = pipeline::LoadModel(source, lo, spec);
   }

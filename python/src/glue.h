@@ -44,6 +44,7 @@ struct LoadRequest {
   std::string integrator = "auto"; // auto|ida|cvode|cvode-bdf|arkode|dop853 (compile-time choice)
   std::string reactions = "nan";   // nan|min-norm
   bool floating = false;                   // a .urdf file: a free base (docs/import.md)
+  bool stops = true;                       // a .urdf file: <limit>s as end stops (limits="stops")
   std::vector<std::string> package_paths;  // a .urdf file: where package:// meshes are looked up
 };
 

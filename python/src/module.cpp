@@ -81,7 +81,8 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
 // (model, warnings) or raises ModelError via the Python side: returns (None, error tuple).
 py::tuple Load(const std::string& path, const std::string& text, bool from_text, const std::string& model,
                const std::vector<std::string>& sets, const std::string& solver, const std::string& integrator,
-               const std::string& reactions, bool floating, const std::vector<std::string>& package_paths) {
+               const std::string& reactions, bool floating, const std::vector<std::string>& package_paths,
+               bool stops) {
   kanesim::py::LoadRequest req;
   req.path = path;
   req.text = text;
@@ -92,6 +93,7 @@ py::tuple Load(const std::string& path, const std::string& text, bool from_text,
   req.integrator = integrator;
   req.reactions = reactions;
   req.floating = floating;
+  req.stops = stops;
   req.package_paths = package_paths;
   auto loaded = std::make_shared<LoadedModel>();
   kanesim::py::ModelErrorInfo error;

@@ -42,3 +42,20 @@ def test_floating_gives_the_root_a_free_base():
     # Released from rest, the free quadruped falls: z'' = -g at the start (no contact).
     r = free.run(stop_time=0.1, interval=0.1, outputs=["root_joint.q[3]"])
     assert r["root_joint.q[3]"][-1] == pytest.approx(-9.81 * 0.1**2 / 2, rel=1e-6)
+
+
+def test_limits_are_end_stops_unless_ignored(tmp_path):
+    # A slider falling from q = 0 rests on its lower limit -0.5 (reached at sqrt(2 h / g));
+    # limits="ignore" (as Pinocchio reads the file) lets it fall freely: q(1) = -g / 2.
+    urdf = tmp_path / "slider.urdf"
+    urdf.write_text(
+        '<robot name="s">\n  <link name="base"/>\n'
+        '  <link name="m"><inertial><mass value="2"/><inertia ixx="1" iyy="1" izz="1"/></inertial></link>\n'
+        '  <joint name="j" type="prismatic"><parent link="base"/><child link="m"/><axis xyz="0 0 1"/>'
+        '<limit lower="-0.5" upper="1" effort="1" velocity="1"/></joint>\n</robot>\n')
+    stopped = kanesim.load(urdf).run(stop_time=1, interval=0.01, outputs=["j.q"])
+    assert min(stopped["j.q"]) == -0.5 and stopped["j.q"][-1] == -0.5
+    free = kanesim.load(urdf, limits="ignore").run(stop_time=1, interval=0.01, outputs=["j.q"])
+    assert free["j.q"][-1] == pytest.approx(-9.81 / 2, rel=1e-6)
+    with pytest.raises(ValueError):
+        kanesim.load(urdf, limits="soft")
