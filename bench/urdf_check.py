@@ -15,7 +15,8 @@ For each robot (UR5, Panda, Solo12 and Talos with free-flyer bases, example-robo
     set to 0 (see without_friction; damping kept), every other file as it is.
 States, coordinate conventions and the <dynamics> force law are those of
 bench/reference/urdf_robots.py (imported from there). Panda's <mimic> is taken out of the file
-both tools read, as Pinocchio ignores it (mimic joints: tests/import/mimic_test.cpp).
+both tools read, as Pinocchio ignores it (mimic joints: tests/import/mimic_test.cpp), and kanesim
+runs with `--limits ignore` (Pinocchio's dynamics have no end stops).
 
     sh bench/setup_venv.sh
     bench/.venv/bin/python bench/urdf_check.py [--states 20] [--kanesim build/cli/kanesim] [--robots ur5,talos]
@@ -82,7 +83,7 @@ def without_friction(path, tmp):
 def link_signals(kanesim, urdf, floating, tmp):
     """URDF link name -> kanesim frame signal prefix, from the model `kanesim import` writes."""
     mech = os.path.join(tmp, "robot.mech")
-    subprocess.run([kanesim, "import", urdf, "-o", mech] + (["--floating"] if floating else []), check=True,
+    subprocess.run([kanesim, "import", urdf, "-o", mech, "--limits", "ignore"] + (["--floating"] if floating else []), check=True,
                    stderr=subprocess.DEVNULL)
     text = open(mech).read()
     links = {m.group(1): None for m in re.finditer(r"// link '([^']+)' \(.*\): the world frame", text)}
@@ -98,7 +99,7 @@ def fmt_value(v):
 def run_kanesim(kanesim, urdf, floating, kq, ku, stop, interval, tol, outputs):
     """Rows of `kanesim run` from the state (kq, ku), as {column: np.array}."""
     cmd = [kanesim, "run", urdf, "--stop-time", repr(stop), "--interval", repr(interval), "--rtol", repr(tol),
-           "--atol", repr(tol), "--energy-check", "off"] + (["--floating"] if floating else [])
+           "--atol", repr(tol), "--energy-check", "off", "--limits", "ignore"] + (["--floating"] if floating else [])
     for name in kq:
         cmd += ["--set", f"{name}.q.start={fmt_value(kq[name])}", "--set", f"{name}.u.start={fmt_value(ku[name])}"]
     for o in outputs:
