@@ -382,6 +382,7 @@ CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std
   CompileLoops(p, c.cut_joints_, c.folder_, &out.errors);
   CompileContacts(p, c.folder_, &out.errors);
   CompileForcesAndOutputs(p, &out.errors);
+  CompileWhens(p, &out.errors);
   CheckMovesMass(p, &out.errors);
   if (!out.errors.empty()) return out;
   ChooseSolver(p);

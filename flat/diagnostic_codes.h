@@ -84,7 +84,8 @@ namespace kanesim::flat {
   X(LockedJoint, "W316", "joint cannot move: both its frames are on one rigid body")          \
   X(OutOfRange, "K317", "mass, inertia or length out of the range the equations can use")  \
   X(BadStop, "K318", "end stop on a joint that cannot take it, or out of order")            \
-  X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")
+  X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")    \
+  X(BadReinit, "K321", "reinit of a quantity the mechanism cannot jump")
 
 enum class DiagCode {
 #define KANESIM_X(e, code, summary) e,

@@ -272,6 +272,14 @@ std::string DumpFlat(const Mechanism& m) {
        << " at " << F(c.frame)
        << " radius=" << E(c.radius) << " normal=" << V(c.plane_normal) << "\n";
   for (const auto& o : m.outputs) os << "output " << o.name << " = " << E(o.expr) << "\n";
+  for (const auto& w : m.whens) {
+    os << "when";
+    for (ExprId h : w.indicators) os << " [" << E(h) << " > 0]";
+    os << "\n";
+    for (const auto& r : w.reinits)
+      os << "  reinit " << m.StateRefName(m.state_refs[static_cast<size_t>(r.state_ref)]) << " := " << E(r.value) << "\n";
+    if (w.terminate) os << "  terminate \"" << w.message << "\"\n";
+  }
   const auto& x = m.experiment;
   os << "experiment start=" << x.start_time << " stop=" << x.stop_time << " tol=" << x.tolerance
      << " interval=" << x.interval << "\n";

@@ -22,9 +22,9 @@ namespace {
 // One emission: Run lists its stages; the springs the walk finds are kept here between them.
 class Emitter {
  public:
-  Emitter(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
-          Diagnostics& diags, flat::Mechanism* m)
-      : tree_(tree), sets_(sets), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m) {}
+  Emitter(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m)
+      : tree_(tree), sets_(sets), whens_(whens), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m) {}
 
   void Run(Node* root) {
     m_->joints = std::move(tree_.joints);
@@ -33,6 +33,7 @@ class Emitter {
     LinkShapes(m_);
     SpringsOnFlanges();
     Outputs(root);
+    EmitWhens(whens_, eval_, places_, diags_, m_);
     EveryParameter(root);
     RetargetFrameStates();
   }
@@ -487,6 +488,7 @@ class Emitter {
 
   InstanceTree& tree_;
   const Connections& sets_;
+  const std::vector<PendingWhen>& whens_;
   Evaluator& eval_;
   const SourcePlaces& places_;
   flat::ExprPool& pool;
@@ -499,10 +501,10 @@ class Emitter {
 
 }  // namespace
 
-void Emit(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
-          Diagnostics& diags, flat::Mechanism* m) {
+void Emit(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m) {
   Node* root = tree.root.get();
-  Emitter(tree, sets, eval, places, diags, m).Run(root);
+  Emitter(tree, sets, whens, eval, places, diags, m).Run(root);
 }
 
 // The experiment annotation: StartTime, StopTime, Tolerance, Interval.

@@ -128,7 +128,7 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   // Every parameter is one element of a scalar variable, all counted in tree.instances.
   eval.ReserveParams(static_cast<size_t>(tree.instances));
   const elab::Connections connections = elab::Connect(tree, links, places, out);
-  elab::Emit(tree, connections, eval, places, diags, out);
+  elab::Emit(tree, connections, links.whens, eval, places, diags, out);
   if (const ast::Modification* ex = lookup.FindAnnotation(top, "experiment"))
     elab::EmitExperiment(*ex, top, tree.root.get(), eval, diags, out);
   if (out->worlds.size() != 1 && !diags.HasErrors()) {

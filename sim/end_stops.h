@@ -35,6 +35,13 @@ class EndStopEvents {
   // resting joint leaves its stop. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
+  // The free speeds of the joints resting on their stops (held at zero).
+  std::vector<int> RestingSpeeds() const {
+    std::vector<int> out;
+    for (const Side& s : sides_)
+      if (s.resting) out.push_back(stops_[static_cast<size_t>(s.stop)].u);
+    return out;
+  }
 
   // A rebound speed at most this many times (atol + rtol |speed before|) ends in rest.
   static constexpr double kRestSpeeds = 100.0;

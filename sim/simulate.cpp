@@ -9,6 +9,7 @@
 
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
+#include "sim/when_events.h"
 #include "sim/test_hooks.h"
 
 namespace kanesim::sim {
@@ -45,11 +46,42 @@ class EngineOde final : public OdeSystem {
     if (fault_ && s == 0) fault_(t, y, ydot);
     return s;
   }
-  // End stops (sim/end_stops.h): their events; none without stops.
+  // Events: the end stops' (sim/end_stops.h), then the when clauses' (sim/when_events.h);
+  // none without either.
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
-  int NumEvents() const override { return stops_ ? stops_->Count() : 0; }
-  int EventFunctions(double t, const double* y, double* g) override { return stops_->Functions(ws_, t, y, g); }
-  int Event(double t, double* y, int i) override { return stops_->Event(ws_, t, y, i); }
+  void SetWhens(WhenEvents* whens) {
+    whens_ = whens;
+    state_names_ = rt::StateNames(program_);
+  }
+  int NumStops() const { return stops_ ? stops_->Count() : 0; }
+  int NumEvents() const override { return NumStops() + (whens_ ? whens_->Count() : 0); }
+  int EventFunctions(double t, const double* y, double* g) override {
+    if (stops_)
+      if (int s = stops_->Functions(ws_, t, y, g); s != 0) return s;
+    return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
+  }
+  int Event(double t, double* y, int i) override {
+    std::vector<double> before(y, y + Size());
+    const size_t logged = stops_ ? stops_->Log().size() : 0;
+    int s = 0;
+    if (i < NumStops()) {
+      s = stops_->Event(ws_, t, y, i);
+      events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+    } else {
+      s = whens_->Event(ws_, t, y, i - NumStops(), stops_ ? stops_->RestingSpeeds() : std::vector<int>{});
+      events_.push_back(whens_->Last());
+    }
+    if (s == 0 && !events_.empty() && !state_names_.empty())  // the jump, on the event's first record
+      for (size_t k = 0; k < before.size(); ++k)
+        if (y[k] != before[k]) events_[events_.size() - 1].changes.push_back({state_names_[k], before[k], y[k]});
+    return s;
+  }
+  bool Terminated(std::string* why) const override {
+    if (!whens_ || !whens_->Terminated()) return false;
+    *why = whens_->Message();
+    return true;
+  }
+  const std::vector<EventRecord>& Events() const { return events_; }
   void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
   bool ChecksSteps() const override { return bridge_ != nullptr; }
   int StepAccepted(double t, const double* y) override {
@@ -123,6 +155,9 @@ class EngineOde final : public OdeSystem {
   rt::Workspace& ws_;
   std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
   EndStopEvents* stops_ = nullptr;             // end stops (null: none)
+  WhenEvents* whens_ = nullptr;                // when clauses (null: none)
+  std::vector<std::string> state_names_;       // y's entries (rt::StateNames), for the events' changes
+  std::vector<EventRecord> events_;            // every event, in time order
   bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank
   int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet
@@ -289,6 +324,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   };
   EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
   if (stops.Active()) ode.SetStops(&stops);
+  WhenEvents whens(program);
+  if (whens.Active()) ode.SetWhens(&whens);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
@@ -300,7 +337,10 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.integrator = ir.stats;
   result.stats.rows = ir.rows;
   result.stats.bridges = ir.bridges;
-  result.stats.events = stops.Log();
+  result.stats.events = ode.Events();
+  result.stats.terminated = ir.terminated;
+  result.stats.terminate_time = ir.terminate_time;
+  result.stats.terminate_message = ir.terminate_message;
   ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
   result.stats.energy_guard = energy.Description();
   result.stats.energy_error = energy.WorstError();
@@ -383,13 +423,35 @@ std::string FormatStats(const SimStats& s) {
       out += buf;
     }
   }
-  if (!s.events.empty()) {  // end stops (only where there were events): time, element, kind
+  if (!s.events.empty()) {  // end stops and when clauses (only where there were events): time, element, kind
     std::snprintf(buf, sizeof buf, "events                     %zu\n", s.events.size());
     out += buf;
     for (const EventRecord& e : s.events) {
       std::snprintf(buf, sizeof buf, "  t = %-22.17g %s: %s\n", e.time, e.element.c_str(), e.kind.c_str());
       out += buf;
     }
+  }
+  if (s.terminated) out += "terminated                 at t = " + FormatShortest(s.terminate_time) + ": " + s.terminate_message + "\n";
+  return out;
+}
+
+namespace {
+// A CSV field: quoted when it holds a comma, a quote or a line break.
+std::string CsvField(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+}  // namespace
+
+std::string FormatEventsCsv(const std::vector<EventRecord>& events) {
+  std::string out = "time,element,kind,signal,before,after\n";
+  for (const EventRecord& e : events) {
+    const std::string head = FormatShortest(e.time) + "," + CsvField(e.element) + "," + CsvField(e.kind) + ",";
+    if (e.changes.empty()) out += head + ",,\n";
+    for (const EventChange& c : e.changes)
+      out += head + CsvField(c.name) + "," + FormatShortest(c.before) + "," + FormatShortest(c.after) + "\n";
   }
   return out;
 }
