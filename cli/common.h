@@ -62,6 +62,7 @@ void AddCheckCommand(CLI::App& app, int* exit_code, bool options = true);
 void AddRunCommand(CLI::App& app, int* exit_code, bool options = true);
 void AddSweepCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_sweep.cpp
 void AddTestCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_test.cpp
+void AddExportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_export.cpp
 void AddImportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_import.cpp
 // --floating and --package-path, for every command that loads a model (a URDF file).
 void AddUrdfOptions(CLI::App& cmd, bool* floating, std::vector<std::string>* package_paths);

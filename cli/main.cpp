@@ -25,7 +25,8 @@ int main(int argc, char** argv) {
   const Command commands[] = {{"check", kanesim::cli::AddCheckCommand},   {"run", kanesim::cli::AddRunCommand},
                               {"sweep", kanesim::cli::AddSweepCommand},   {"test", kanesim::cli::AddTestCommand},
                               {"linearize", kanesim::cli::AddLinearizeCommand}, {"view", kanesim::cli::AddViewCommand},
-                              {"import", kanesim::cli::AddImportCommand}};
+                              {"import", kanesim::cli::AddImportCommand},
+                              {"export", kanesim::cli::AddExportCommand}};
   const char* named = "";
   for (int i = 1; i < argc && !*named; ++i)
     if (argv[i][0] != '-') named = argv[i];

@@ -48,5 +48,16 @@ execute_process(COMMAND ${PREFIX}/${BINDIR}/kanesim run ${PREFIX}/${DOCDIR}/exam
 if(NOT rc EQUAL 0 OR NOT EXISTS ${work}/meshes.glb)
   message(FATAL_ERROR "the installed kanesim failed on the mesh example (${rc}):\n${err}")
 endif()
+# The FMU's library beside the modules: the installed kanesim exports an FMU that carries it.
+if(NOT EXISTS ${PREFIX}/${MODULEDIR}/fmu/kanesim_fmu.so)
+  message(FATAL_ERROR "the FMU library was not installed in ${PREFIX}/${MODULEDIR}/fmu")
+endif()
+execute_process(COMMAND ${PREFIX}/${BINDIR}/kanesim export ${PREFIX}/${DOCDIR}/examples/double_pendulum.mech
+                        --fmi 2 -o dp.fmu
+                WORKING_DIRECTORY ${work} RESULT_VARIABLE rc ERROR_VARIABLE err)
+file(SIZE ${work}/dp.fmu fmu_size)
+if(NOT rc EQUAL 0 OR fmu_size LESS 100000)
+  message(FATAL_ERROR "the installed kanesim did not export an FMU with its library (${rc}):\n${err}")
+endif()
 message(STATUS "installed into ${PREFIX}; the installed kanesim ran examples/double_pendulum.mech and "
                "examples/slider_crank_meshes.mech (--animation) with the installed mesh module")

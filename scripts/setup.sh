@@ -13,6 +13,7 @@ build_pkgs=(g++ cmake ninja-build pkg-config ccache
             libeigen3-dev libsuitesparse-dev libassimp-dev
             libcli11-dev libfmt-dev libtomlplusplus-dev
             libtinyxml2-dev             # the URDF importer (import/)
+            libminizip-dev              # zipping FMUs (kanesim export, fmi/)
             libcpp-httplib-dev          # the viewer's HTTP server (viz/)
             libjs-three libjs-dygraphs) # the viewer page's libraries, read at run time
 test_pkgs=(build-essential git python3 python3-venv

@@ -90,8 +90,13 @@ class CvodeStepper final : public SundialsStepper {
     if (!InitRoots([&](int count) { return CVodeRootInit(mem_, count, &SundialsStepper::Roots); },
                    [&](int* d) { return CVodeSetRootDirection(mem_, d) | CVodeSetNoInactiveRootWarn(mem_); }, error))
       return false;
+    // BDF: CVODE's own projection (below), not the restart; Adams: CVODE projects only BDF.
+    // Only on the multiplier form's closed loops and rolling contacts
+    // (ProjectAsideMultiplierForm is -1 elsewhere).
+    std::vector<double> probe(y0, y0 + n);
+    project_ = bdf && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
     int maxl = 0;
-    if (bdf && (krylov_ = UseKrylov(options, rhs_, &maxl))) {  // matrix-free: sim/newton_krylov.h
+    if (bdf && (krylov_ = UseKrylov(options, rhs_, &maxl, project_))) {  // matrix-free: sim/newton_krylov.h
       s_.ls = MakeKrylovSolver(s_.y, maxl, s_.ctx);
       if (!s_.ls || CVodeSetLinearSolver(mem_, s_.ls, nullptr) != CV_SUCCESS)
         return Fail(error, WithDetail("CVODE Krylov linear solver setup failed", messages_.last));
@@ -105,11 +110,6 @@ class CvodeStepper final : public SundialsStepper {
       if (!s_.nls || CVodeSetNonlinearSolver(mem_, s_.nls) != CV_SUCCESS)
         return Fail(error, WithDetail("CVODE fixed-point solver setup failed", messages_.last));
     }
-    // BDF: CVODE's own projection (below), not the restart; Adams: CVODE projects only BDF.
-    // Only on the multiplier form's closed loops and rolling contacts
-    // (ProjectAsideMultiplierForm is -1 elsewhere).
-    std::vector<double> probe(y0, y0 + n);
-    project_ = bdf && rhs_.ProjectAsideMultiplierForm(t0, probe.data()) == 0;
     if (project_ && CVodeSetProjFn(mem_, &CvodeStepper::ProjectStep) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE projection setup failed", messages_.last));
     if (bdf && !krylov_ && !SetJacobian(t0, y0, options, error)) return false;

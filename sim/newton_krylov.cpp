@@ -21,13 +21,13 @@ constexpr int kKrylovMinRatio = 20;
 constexpr int kKrylovMargin = 3;
 }  // namespace
 
-bool UseKrylov(const IntegratorOptions& options, GuardedRhs& rhs, int* maxl) {
+bool UseKrylov(const IntegratorOptions& options, GuardedRhs& rhs, int* maxl, bool projected_bdf) {
   const int n = rhs.Size();
   const int r = rhs.NewtonRank();
   *maxl = std::clamp(r >= 0 ? r + 1 + kKrylovMargin : 5, 1, std::max(n, 1));
   switch (options.ida_linear_solver) {
     case IdaLinearSolver::Krylov: return true;
-    case IdaLinearSolver::Auto: return r >= 0 && (r + 1) * kKrylovMinRatio <= n;
+    case IdaLinearSolver::Auto: return projected_bdf || (r >= 0 && (r + 1) * kKrylovMinRatio <= n);
     default: return false;
   }
 }

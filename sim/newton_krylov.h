@@ -23,8 +23,12 @@ namespace kanesim::sim::detail {
 
 // Whether the Newton iteration goes matrix-free: options.ida_linear_solver Krylov, or Auto
 // where the system's Newton rank r (GuardedRhs::NewtonRank) is known and r + 1 is at most
-// n / kKrylovMinRatio. *maxl: the Krylov dimension (r + 1 plus a margin, at most n).
-bool UseKrylov(const IntegratorOptions& options, GuardedRhs& rhs, int* maxl);
+// n / kKrylovMinRatio, or where `projected_bdf` (CVODE-BDF projecting every step on the
+// multiplier form: closed loops or rolling contacts; there CVODE's dense difference-quotient
+// Newton matrix fails to converge at loose tolerances and the run drifts off the motion,
+// docs/integrators.md "Newton-Krylov"). *maxl: the Krylov dimension (r + 1 plus a margin,
+// at most n).
+bool UseKrylov(const IntegratorOptions& options, GuardedRhs& rhs, int* maxl, bool projected_bdf = false);
 
 // SPGMR without preconditioner on vectors like y (null when it cannot be made).
 SUNLinearSolver MakeKrylovSolver(N_Vector y, int maxl, SUNContext ctx);

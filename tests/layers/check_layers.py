@@ -32,8 +32,9 @@ USES = {
     "batch": ["util", "flat", "runtime", "compiler", "sim"],
     "pipeline": ["flat", "lang", "stdlib", "import", "runtime", "compiler", "sim"],
     "viz": ["util", "geometry"],
+    "fmi": ["flat", "runtime", "compiler", "sim", "pipeline"],
     "cli": ["util", "flat", "geometry", "lang", "stdlib", "import", "runtime", "compiler", "sim", "linearize", "batch",
-            "pipeline", "viz"],
+            "pipeline", "viz", "fmi"],
     "python": ["flat", "lang", "stdlib", "import", "runtime", "compiler", "sim", "linearize", "batch", "pipeline"],
 }
 # The CMake target of each layer (cli's is the kanesim command, python's the module).

@@ -1,0 +1,74 @@
+// What the C functions of FMI 2.0 and 3.0 share: one instance of the FMU as the master sees
+// it (its mode in the standard's state machine, its logger), and the guard every function
+// runs through: the call must be allowed in the current mode, and no exception crosses the
+// C boundary.
+#pragma once
+
+#include <exception>
+#include <functional>
+#include <initializer_list>
+#include <new>
+#include <string>
+
+#include "fmi/instance.h"
+
+namespace kanesim::fmi {
+
+// fmi2Status and fmi3Status have these values (fmi2Pending aside).
+enum Status { kOK = 0, kWarning = 1, kDiscard = 2, kError = 3, kFatal = 4 };
+
+// The modes of FMI 2.0.4 (sections 3.2.3, 4.2.4) and 3.0 (section 3.2), merged.
+enum class Mode { kInstantiated, kInitialization, kEvent, kContinuous, kStep, kTerminated, kError };
+
+inline const char* ModeName(Mode m) {
+  static const char* const kNames[] = {"instantiated", "initialization mode", "event mode", "continuous-time mode",
+                                       "step mode", "terminated", "error"};
+  return kNames[int(m)];
+}
+
+struct Component {
+  std::string name;
+  bool co_simulation = false;
+  bool logging = false;
+  Mode mode = Mode::kInstantiated;
+  Instance instance;
+  std::function<void(Status, const char* category, const std::string&)> logger;  // to the master
+
+  Status Log(Status status, const std::string& message) {
+    if (logger && (status >= kWarning || logging)) logger(status, status >= kError ? "logStatusError" : "logAll", message);
+    return status;
+  }
+  // "" or the error through the logger.
+  Status Result(const std::string& error) { return error.empty() ? kOK : Log(kError, error); }
+};
+
+// Runs f(component) when the component is in one of `modes`, else an error naming the call.
+template <class F>
+Status Guarded(void* component, const char* call, std::initializer_list<Mode> modes, F f) {
+  auto* c = static_cast<Component*>(component);
+  if (!c) return kError;
+  bool allowed = false;
+  for (Mode m : modes) allowed = allowed || m == c->mode;
+  if (!allowed) return c->Log(kError, std::string(call) + " is not allowed in " + ModeName(c->mode));
+  try {
+    return f(c);
+  } catch (const std::bad_alloc&) {
+    return c->Log(kError, std::string(call) + ": out of memory");
+  } catch (const std::exception& e) {
+    return c->Log(kError, std::string(call) + ": " + e.what());
+  }
+}
+
+inline constexpr std::initializer_list<Mode> kAfterInstantiate = {
+    Mode::kInstantiated, Mode::kInitialization, Mode::kEvent, Mode::kContinuous, Mode::kStep, Mode::kTerminated};
+inline constexpr std::initializer_list<Mode> kRunning = {Mode::kInitialization, Mode::kEvent, Mode::kContinuous,
+                                                        Mode::kStep, Mode::kTerminated, Mode::kError};
+inline constexpr std::initializer_list<Mode> kAnyMode = {Mode::kInstantiated, Mode::kInitialization, Mode::kEvent,
+                                                        Mode::kContinuous, Mode::kStep, Mode::kTerminated,
+                                                        Mode::kError};
+inline constexpr std::initializer_list<Mode> kModelExchange = {Mode::kEvent, Mode::kContinuous};
+
+// A Save()d instance, as the master holds it (fmi2FMUstate, fmi3FMUState).
+using Snapshot = Instance::Snapshot;
+
+}  // namespace kanesim::fmi

@@ -1,0 +1,21 @@
+# Copies beside LIBRARY every shared library it needs that is not the C or C++ runtime
+# (libc, libm, libstdc++, libgcc_s, the loader), as `ldd` resolves them: an FMU carries
+# what it loads (FMI 2.0.4 section 2.3: binaries/<platform>/).
+execute_process(COMMAND ldd ${LIBRARY} OUTPUT_VARIABLE needed RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "ldd ${LIBRARY} failed")
+endif()
+get_filename_component(dir ${LIBRARY} DIRECTORY)
+string(REPLACE "\n" ";" lines "${needed}")
+foreach(line IN LISTS lines)
+  if(line MATCHES "^[ \t]*([^ ]+) => ([^ ]+) ")
+    set(name ${CMAKE_MATCH_1})
+    set(path ${CMAKE_MATCH_2})
+    if(path STREQUAL "not" )
+      message(FATAL_ERROR "${LIBRARY} needs ${name}, which is not found")
+    endif()
+    if(NOT name MATCHES "^(libc|libm|libstdc\\+\\+|libgcc_s|libpthread|libdl|librt|ld-linux.*)\\.so" AND NOT path MATCHES "^${dir}/")
+      file(COPY_FILE ${path} ${dir}/${name} ONLY_IF_DIFFERENT)
+    endif()
+  endif()
+endforeach()

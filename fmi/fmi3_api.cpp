@@ -1,0 +1,445 @@
+// The FMI 3.0 functions of an exported FMU (Model Exchange and Co-Simulation; no Scheduled
+// Execution), over the same instance as FMI 2.0's (fmi/instance.h) and the same guard
+// (fmi/component.h): a call in the wrong mode, a NaN, a step backwards or a numerical
+// failure returns fmi3Error with the reason through the master's logger.
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fmi/component.h"
+#include "fmi/fmi3_abi.h"
+#include "fmi/fmu_common.h"
+
+#define FMI3_EXPORT extern "C" __attribute__((visibility("default")))
+
+namespace kf = kanesim::fmi;
+using kf::Component;
+using kf::Mode;
+
+namespace {
+
+template <class F>
+fmi3Status Fmi3Guarded(fmi3Instance c, const char* call, std::initializer_list<Mode> modes, F f) {
+  return static_cast<fmi3Status>(kf::Guarded(c, call, modes, f));
+}
+
+// The independent variable `time` follows the model's variables (modelDescription.xml).
+bool IsTime(const Component* c, fmi3ValueReference vr) { return vr == c->instance.Variables().size(); }
+
+fmi3Instance Instantiate(fmi3String name, fmi3String token, fmi3String resources, bool co_simulation, fmi3Boolean logging,
+                         fmi3InstanceEnvironment env, fmi3LogMessageCallback log) {
+  if (!name || !token) return nullptr;
+  auto c = std::make_unique<Component>();
+  c->name = name;
+  c->co_simulation = co_simulation;
+  c->logging = logging;
+  if (log)
+    c->logger = [log, env](kf::Status status, const char* category, const std::string& message) {
+      log(env, static_cast<fmi3Status>(status), category, message.c_str());
+    };
+  const char* call = co_simulation ? "fmi3InstantiateCoSimulation: " : "fmi3InstantiateModelExchange: ";
+  try {
+    // FMI 3 gives a path (with a trailing separator); accept a file URI too.
+    std::string dir = resources ? resources : "", error;
+    if (dir.rfind("file:", 0) == 0) error = kf::ResourceDirectory(resources, &dir);
+    while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+    if (error.empty() && dir.empty()) error = "no resource path";
+    if (error.empty()) error = c->instance.Load(dir, token);
+    if (!error.empty()) {
+      c->Log(kf::kError, call + error);
+      return nullptr;
+    }
+  } catch (const std::exception& e) {
+    c->Log(kf::kError, call + std::string(e.what()));
+    return nullptr;
+  }
+  return c.release();
+}
+
+}  // namespace
+
+FMI3_EXPORT const char* fmi3GetVersion() { return "3.0"; }
+
+FMI3_EXPORT fmi3Status fmi3SetDebugLogging(fmi3Instance c, fmi3Boolean on, size_t, const fmi3String[]) {
+  return Fmi3Guarded(c, "fmi3SetDebugLogging", kf::kAnyMode, [&](Component* x) {
+    x->logging = on;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3String token, fmi3String resources,
+                                                      fmi3Boolean, fmi3Boolean logging, fmi3InstanceEnvironment env,
+                                                      fmi3LogMessageCallback log) {
+  return Instantiate(name, token, resources, false, logging, env, log);
+}
+
+FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources,
+                                                     fmi3Boolean, fmi3Boolean logging, fmi3Boolean event_mode_used,
+                                                     fmi3Boolean, const fmi3ValueReference[], size_t,
+                                                     fmi3InstanceEnvironment env, fmi3LogMessageCallback log,
+                                                     fmi3IntermediateUpdateCallback) {
+  if (event_mode_used) {
+    if (log) log(env, fmi3Error, "logStatusError", "this FMU has no event mode in Co-Simulation (hasEventMode=false)");
+    return nullptr;
+  }
+  return Instantiate(name, token, resources, true, logging, env, log);
+}
+
+FMI3_EXPORT fmi3Instance fmi3InstantiateScheduledExecution(fmi3String, fmi3String, fmi3String, fmi3Boolean,
+                                                           fmi3Boolean, fmi3InstanceEnvironment env,
+                                                           fmi3LogMessageCallback log, fmi3ClockUpdateCallback,
+                                                           fmi3LockPreemptionCallback, fmi3UnlockPreemptionCallback) {
+  if (log) log(env, fmi3Error, "logStatusError", "this FMU has no Scheduled Execution interface");
+  return nullptr;
+}
+
+FMI3_EXPORT void fmi3FreeInstance(fmi3Instance c) { delete static_cast<Component*>(c); }
+
+FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean tolerance_defined, fmi3Float64 tolerance,
+                                                   fmi3Float64 start, fmi3Boolean, fmi3Float64) {
+  return Fmi3Guarded(c, "fmi3EnterInitializationMode", {Mode::kInstantiated}, [&](Component* x) {
+    if (tolerance_defined && !(tolerance > 0 && tolerance < 1)) return x->Log(kf::kError, "the tolerance must be in (0, 1)");
+    if (!std::isfinite(start)) return x->Log(kf::kError, "the start time must be finite");
+    if (tolerance_defined) x->instance.SetTolerance(tolerance);
+    x->instance.SetStartTime(start);
+    x->mode = Mode::kInitialization;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
+  return Fmi3Guarded(c, "fmi3ExitInitializationMode", {Mode::kInitialization}, [&](Component* x) {
+    if (kf::Status s = x->Result(x->instance.Initialize()); s != kf::kOK) return s;
+    x->mode = x->co_simulation ? Mode::kStep : Mode::kEvent;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3EnterEventMode(fmi3Instance c) {
+  return Fmi3Guarded(c, "fmi3EnterEventMode", kf::kModelExchange, [&](Component* x) {
+    x->mode = Mode::kEvent;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3Terminate(fmi3Instance c) {
+  return Fmi3Guarded(c, "fmi3Terminate", {Mode::kEvent, Mode::kContinuous, Mode::kStep, Mode::kError},
+                     [&](Component* x) {
+                       x->mode = Mode::kTerminated;
+                       return kf::kOK;
+                     });
+}
+
+FMI3_EXPORT fmi3Status fmi3Reset(fmi3Instance c) {
+  return Fmi3Guarded(c, "fmi3Reset", kf::kAnyMode, [&](Component* x) {
+    x->mode = Mode::kInstantiated;
+    return x->Result(x->instance.Reset());
+  });
+}
+
+// ---- values: Float64 (states, derivatives, outputs, parameters, time), Int32, Boolean ----
+
+FMI3_EXPORT fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t n, fmi3Float64 v[],
+                                      size_t nv) {
+  return Fmi3Guarded(c, "fmi3GetFloat64", kf::kAfterInstantiate, [&](Component* x) {
+    if (nv != n) return x->Log(kf::kError, "fmi3GetFloat64: this FMU has scalar variables only");
+    for (size_t i = 0; i < n; ++i) {
+      if (IsTime(x, vr[i])) {
+        v[i] = x->instance.Time();
+        continue;
+      }
+      if (kf::Status s = x->Result(x->instance.GetReal(vr[i], &v[i])); s != kf::kOK) return s;
+    }
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t n, const fmi3Float64 v[],
+                                      size_t nv) {
+  return Fmi3Guarded(c, "fmi3SetFloat64", kf::kAfterInstantiate, [&](Component* x) {
+    if (nv != n) return x->Log(kf::kError, "fmi3SetFloat64: this FMU has scalar variables only");
+    for (size_t i = 0; i < n; ++i)
+      if (kf::Status s = x->Result(IsTime(x, vr[i]) ? "'time' cannot be set" : x->instance.SetReal(vr[i], v[i]));
+          s != kf::kOK)
+        return s;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetInt32(fmi3Instance c, const fmi3ValueReference vr[], size_t n, fmi3Int32 v[], size_t nv) {
+  return Fmi3Guarded(c, "fmi3GetInt32", kf::kAfterInstantiate, [&](Component* x) {
+    if (nv != n) return x->Log(kf::kError, "fmi3GetInt32: this FMU has scalar variables only");
+    for (size_t i = 0; i < n; ++i) {
+      int value = 0;
+      if (kf::Status s = x->Result(x->instance.GetInteger(vr[i], &value)); s != kf::kOK) return s;
+      v[i] = value;
+    }
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetBoolean(fmi3Instance c, const fmi3ValueReference vr[], size_t n, fmi3Boolean v[],
+                                      size_t nv) {
+  return Fmi3Guarded(c, "fmi3GetBoolean", kf::kAfterInstantiate, [&](Component* x) {
+    if (nv != n) return x->Log(kf::kError, "fmi3GetBoolean: this FMU has scalar variables only");
+    for (size_t i = 0; i < n; ++i) {
+      int value = 0;
+      if (kf::Status s = x->Result(x->instance.GetBoolean(vr[i], &value)); s != kf::kOK) return s;
+      v[i] = value != 0;
+    }
+    return kf::kOK;
+  });
+}
+
+// Types this FMU has no variables of, and setting the fixed Int32 and Boolean ones: an
+// error for any value reference (none is of that type, or it is fixed at export).
+#define KANESIM_FMI3_NO_VARIABLES(Name, Type, Const)                                                          \
+  FMI3_EXPORT fmi3Status Name(fmi3Instance c, const fmi3ValueReference[], size_t n, Const Type[], size_t) {  \
+    return Fmi3Guarded(c, #Name, kf::kAfterInstantiate, [&](Component* x) {                                  \
+      return n == 0 ? kf::kOK : x->Log(kf::kError, #Name ": no variable of this FMU can be read or set so"); \
+    });                                                                                                      \
+  }
+#define KANESIM_FMI3_NONE(Type) \
+  KANESIM_FMI3_NO_VARIABLES(fmi3Get##Type, fmi3##Type, ) KANESIM_FMI3_NO_VARIABLES(fmi3Set##Type, fmi3##Type, const)
+KANESIM_FMI3_NONE(Float32)
+KANESIM_FMI3_NONE(Int8)
+KANESIM_FMI3_NONE(UInt8)
+KANESIM_FMI3_NONE(Int16)
+KANESIM_FMI3_NONE(UInt16)
+KANESIM_FMI3_NONE(UInt32)
+KANESIM_FMI3_NONE(Int64)
+KANESIM_FMI3_NONE(UInt64)
+KANESIM_FMI3_NONE(String)
+KANESIM_FMI3_NO_VARIABLES(fmi3SetInt32, fmi3Int32, const)
+KANESIM_FMI3_NO_VARIABLES(fmi3SetBoolean, fmi3Boolean, const)
+
+FMI3_EXPORT fmi3Status fmi3GetBinary(fmi3Instance c, const fmi3ValueReference[], size_t n, size_t[], fmi3Binary[],
+                                     size_t) {
+  return Fmi3Guarded(c, "fmi3GetBinary", kf::kAfterInstantiate,
+                     [&](Component* x) { return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no Binary variables"); });
+}
+
+FMI3_EXPORT fmi3Status fmi3SetBinary(fmi3Instance c, const fmi3ValueReference[], size_t n, const size_t[],
+                                     const fmi3Binary[], size_t) {
+  return Fmi3Guarded(c, "fmi3SetBinary", kf::kAfterInstantiate,
+                     [&](Component* x) { return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no Binary variables"); });
+}
+
+// ---- the FMU state ----
+
+FMI3_EXPORT fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState* state) {
+  return Fmi3Guarded(c, "fmi3GetFMUState", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state) return x->Log(kf::kError, "fmi3GetFMUState: no place for the state");
+    if (auto* s = static_cast<kf::Snapshot*>(*state))
+      *s = x->instance.Save();
+    else
+      *state = new kf::Snapshot(x->instance.Save());
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState state) {
+  return Fmi3Guarded(c, "fmi3SetFMUState", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state) return x->Log(kf::kError, "fmi3SetFMUState: no state");
+    return x->Result(x->instance.Restore(*static_cast<kf::Snapshot*>(state)));
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState* state) {
+  return Fmi3Guarded(c, "fmi3FreeFMUState", kf::kAnyMode, [&](Component*) {
+    if (state) {
+      delete static_cast<kf::Snapshot*>(*state);
+      *state = nullptr;
+    }
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState state, size_t* size) {
+  return Fmi3Guarded(c, "fmi3SerializedFMUStateSize", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state || !size) return x->Log(kf::kError, "fmi3SerializedFMUStateSize: no state");
+    *size = kf::Instance::Serialize(*static_cast<kf::Snapshot*>(state)).size();
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState state, fmi3Byte bytes[], size_t size) {
+  return Fmi3Guarded(c, "fmi3SerializeFMUState", kf::kAfterInstantiate, [&](Component* x) {
+    if (!state || !bytes) return x->Log(kf::kError, "fmi3SerializeFMUState: no state");
+    const std::vector<char> data = kf::Instance::Serialize(*static_cast<kf::Snapshot*>(state));
+    if (data.size() != size) return x->Log(kf::kError, "fmi3SerializeFMUState: the buffer has the wrong size");
+    std::copy(data.begin(), data.end(), bytes);
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte bytes[], size_t size,
+                                               fmi3FMUState* state) {
+  return Fmi3Guarded(c, "fmi3DeserializeFMUState", kf::kAfterInstantiate, [&](Component* x) {
+    kf::Snapshot s;
+    if (!bytes || !state || !kf::Instance::Deserialize(reinterpret_cast<const char*>(bytes), size, &s))
+      return x->Log(kf::kError, "fmi3DeserializeFMUState: not a serialized state of a kanesim FMU");
+    delete static_cast<kf::Snapshot*>(*state);
+    *state = new kf::Snapshot(std::move(s));
+    return kf::kOK;
+  });
+}
+
+// ---- what this FMU does not provide (its modelDescription.xml says so) ----
+
+// An error naming the call: for features the model description does not declare.
+#define KANESIM_FMI3_NOT_PROVIDED(Name, Params, what)                                             \
+  FMI3_EXPORT fmi3Status Name Params {                                                          \
+    return Fmi3Guarded(c, #Name, kf::kAnyMode, [&](Component* x) { return x->Log(kf::kError, #Name ": " what); }); \
+  }
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetNumberOfVariableDependencies, (fmi3Instance c, fmi3ValueReference, size_t*),
+                          "the dependencies are in modelDescription.xml")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetVariableDependencies,
+                          (fmi3Instance c, fmi3ValueReference, size_t[], fmi3ValueReference[], size_t[],
+                           fmi3DependencyKind[], size_t),
+                          "the dependencies are in modelDescription.xml")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetDirectionalDerivative,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3ValueReference[], size_t,
+                           const fmi3Float64[], size_t, fmi3Float64[], size_t),
+                          "this FMU does not provide directional derivatives")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetAdjointDerivative,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3ValueReference[], size_t,
+                           const fmi3Float64[], size_t, fmi3Float64[], size_t),
+                          "this FMU does not provide adjoint derivatives")
+KANESIM_FMI3_NOT_PROVIDED(fmi3EnterConfigurationMode, (fmi3Instance c), "this FMU has no structural parameters to configure")
+KANESIM_FMI3_NOT_PROVIDED(fmi3ExitConfigurationMode, (fmi3Instance c), "this FMU has no structural parameters to configure")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetClock, (fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Clock[]), "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3SetClock, (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Clock[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetIntervalDecimal,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Float64[], fmi3IntervalQualifier[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetIntervalFraction,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, fmi3UInt64[], fmi3UInt64[],
+                           fmi3IntervalQualifier[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetShiftDecimal, (fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Float64[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetShiftFraction,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, fmi3UInt64[], fmi3UInt64[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3SetIntervalDecimal, (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Float64[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3SetIntervalFraction,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3UInt64[], const fmi3UInt64[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3SetShiftDecimal, (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Float64[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3SetShiftFraction,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3UInt64[], const fmi3UInt64[]),
+                          "this FMU has no clocks")
+KANESIM_FMI3_NOT_PROVIDED(fmi3ActivateModelPartition, (fmi3Instance c, fmi3ValueReference, fmi3Float64),
+                          "this FMU has no Scheduled Execution interface")
+KANESIM_FMI3_NOT_PROVIDED(fmi3GetOutputDerivatives,
+                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Int32[], fmi3Float64[], size_t),
+                          "this FMU does not provide output derivatives")
+
+// ---- events: none (no event indicators, no discrete states) ----
+
+FMI3_EXPORT fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance c) {
+  return Fmi3Guarded(c, "fmi3EvaluateDiscreteStates", kf::kRunning, [&](Component*) { return kf::kOK; });
+}
+
+FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean* update_needed, fmi3Boolean* terminate,
+                                                fmi3Boolean* nominals_changed, fmi3Boolean* values_changed,
+                                                fmi3Boolean* next_time_defined, fmi3Float64* next_time) {
+  return Fmi3Guarded(c, "fmi3UpdateDiscreteStates", {Mode::kEvent}, [&](Component*) {
+    for (fmi3Boolean* b : {update_needed, terminate, nominals_changed, values_changed, next_time_defined})
+      if (b) *b = false;
+    if (next_time) *next_time = 0.0;
+    return kf::kOK;
+  });
+}
+
+// ---- Model Exchange ----
+
+FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) {
+  return Fmi3Guarded(c, "fmi3EnterContinuousTimeMode", {Mode::kEvent}, [&](Component* x) {
+    x->mode = Mode::kContinuous;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean, fmi3Boolean* enter_event,
+                                                   fmi3Boolean* terminate) {
+  return Fmi3Guarded(c, "fmi3CompletedIntegratorStep", {Mode::kContinuous}, [&](Component*) {
+    if (enter_event) *enter_event = false;
+    if (terminate) *terminate = false;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 t) {
+  return Fmi3Guarded(c, "fmi3SetTime", kf::kModelExchange, [&](Component* x) { return x->Result(x->instance.SetTime(t)); });
+}
+
+FMI3_EXPORT fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t n) {
+  return Fmi3Guarded(c, "fmi3SetContinuousStates", kf::kModelExchange,
+                     [&](Component* m) { return m->Result(x ? m->instance.SetStates(x, n) : "no states given"); });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], size_t n) {
+  return Fmi3Guarded(c, "fmi3GetContinuousStateDerivatives",
+                     {Mode::kInitialization, Mode::kEvent, Mode::kContinuous, Mode::kTerminated},
+                     [&](Component* m) { return m->Result(dx ? m->instance.GetDerivatives(dx, n) : "no place given"); });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64[], size_t n) {
+  return Fmi3Guarded(c, "fmi3GetEventIndicators", kf::kRunning, [&](Component* x) {
+    return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no event indicators");
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
+  return Fmi3Guarded(c, "fmi3GetContinuousStates", kf::kAfterInstantiate,
+                     [&](Component* m) { return m->Result(x ? m->instance.GetStates(x, n) : "no place given"); });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
+  return Fmi3Guarded(c, "fmi3GetNominalsOfContinuousStates", kf::kAfterInstantiate, [&](Component* m) {
+    if (int(n) != m->instance.NumStates() || !x) return m->Log(kf::kError, "wrong number of states");
+    for (size_t i = 0; i < n; ++i) x[i] = 1.0;  // angles, lengths and their rates: of order one
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t* n) {
+  return Fmi3Guarded(c, "fmi3GetNumberOfEventIndicators", kf::kAfterInstantiate, [&](Component* x) {
+    if (!n) return x->Log(kf::kError, "no place given");
+    *n = 0;
+    return kf::kOK;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t* n) {
+  return Fmi3Guarded(c, "fmi3GetNumberOfContinuousStates", kf::kAfterInstantiate, [&](Component* x) {
+    if (!n) return x->Log(kf::kError, "no place given");
+    *n = size_t(x->instance.NumStates());
+    return kf::kOK;
+  });
+}
+
+// ---- Co-Simulation ----
+
+FMI3_EXPORT fmi3Status fmi3EnterStepMode(fmi3Instance c) {
+  return Fmi3Guarded(c, "fmi3EnterStepMode", {Mode::kStep}, [&](Component*) { return kf::kOK; });
+}
+
+FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, fmi3Boolean,
+                                  fmi3Boolean* event_needed, fmi3Boolean* terminate, fmi3Boolean* early_return,
+                                  fmi3Float64* last_time) {
+  return Fmi3Guarded(c, "fmi3DoStep", {Mode::kStep}, [&](Component* x) {
+    const std::string error = x->instance.DoStep(t, h);
+    for (fmi3Boolean* b : {event_needed, terminate, early_return})
+      if (b) *b = false;
+    if (last_time) *last_time = x->instance.Time();
+    // A failed step leaves the state where it was; the master may retry from a saved state.
+    return error.empty() ? kf::kOK : x->Log(kf::kError, "fmi3DoStep: " + error);
+  });
+}

@@ -1,0 +1,92 @@
+// One instance of an exported FMU (docs/fmi.md), independent of the FMI version: the model
+// loaded from the FMU's resources, its parameters, its state y = [q_free; u_free] and time,
+// the derivatives (Model Exchange), one communication step (Co-Simulation). The C functions
+// of the standard (fmi2_api.cpp) check the calling sequence and call these; every function
+// here returns "" or why it failed, and never throws for a user's mistake.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fmi/variables.h"
+#include "pipeline/pipeline.h"
+
+namespace kanesim::fmi {
+
+// The settings `kanesim export` writes into resources/ beside the model text.
+struct FmuSettings {
+  std::string model;               // the class exported
+  std::vector<std::string> sets;   // --set values given at export
+  std::string guid;                // what modelDescription.xml says
+  std::string integrator;          // Co-Simulation's integrator ("" = the compiler's choice)
+  double rtol = 0.0;               // 0: the experiment's tolerance
+};
+std::string FormatSettings(const FmuSettings& settings);
+bool ParseSettings(const std::string& text, FmuSettings* out, std::string* error);
+
+class Instance {
+ public:
+  // Loads resources_dir/model.mech with resources_dir/settings.txt (its GUID must be `guid`).
+  std::string Load(const std::string& resources_dir, const std::string& guid);
+
+  const std::vector<Variable>& Variables() const { return vars_; }
+  int NumStates() const { return n_; }
+  double Time() const { return t_; }
+
+  // Before initialization ends: a tunable parameter or a state's start value.
+  std::string SetReal(unsigned vr, double value);
+  std::string GetReal(unsigned vr, double* value);
+  std::string GetInteger(unsigned vr, int* value) const;
+  std::string GetBoolean(unsigned vr, int* value) const;
+  void SetTolerance(double rtol) { rtol_ = rtol; }
+  void SetStartTime(double t) { t_ = t; }
+  // Ends initialization: compiles the parameters set (Rebind), starts from the states'
+  // start values (the model's own initial state where the master set none).
+  std::string Initialize();
+
+  // Model Exchange.
+  std::string SetTime(double t);
+  std::string SetStates(const double* x, size_t n);
+  std::string GetStates(double* x, size_t n) const;
+  std::string GetDerivatives(double* dx, size_t n);
+
+  // Co-Simulation: integrates from the current time to t + h with kanesim's integrator.
+  std::string DoStep(double t, double h);
+
+  // The FMU state: everything that decides the continuation.
+  struct Snapshot {
+    double t = 0.0;
+    std::vector<double> y, params;
+    std::vector<char> state_set;
+  };
+  Snapshot Save() const { return {t_, y_, params_, state_set_}; }
+  std::string Restore(const Snapshot& s);
+  static std::vector<char> Serialize(const Snapshot& s);
+  static bool Deserialize(const char* data, size_t size, Snapshot* s);
+
+  // Back to the state after Load (the parameters' and states' export values).
+  std::string Reset();
+
+ private:
+  std::string Rebind();            // program_ for params_
+  std::string Evaluate();          // derivatives and outputs at (t_, y_), when stale
+  std::string CheckVr(unsigned vr) const;
+
+  std::unique_ptr<pipeline::Model> model_;   // as loaded: the export's program
+  std::shared_ptr<const rt::Program> program_;  // with the current parameter values
+  std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, nullptr};
+  std::shared_ptr<const rt::SignalPlan> outputs_plan_;
+  std::vector<Variable> vars_;
+  FmuSettings settings_;
+  int n_ = 0;                      // states
+  double t_ = 0.0, rtol_ = 0.0;
+  std::vector<double> y_, ydot_, out_;
+  std::vector<double> params_;     // every mech param's value (leaves as set)
+  std::vector<char> state_set_;    // the master set this state's start value
+  bool params_changed_ = false;
+  bool initialized_ = false;
+  bool stale_ = true;              // ydot_ and out_ not yet for (t_, y_)
+};
+
+}  // namespace kanesim::fmi

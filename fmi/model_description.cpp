@@ -1,0 +1,184 @@
+#include <algorithm>
+#include <set>
+#include <sstream>
+
+#include "fmi/fmi.h"
+
+#ifndef KANESIM_VERSION
+#define KANESIM_VERSION "unknown"
+#endif
+
+namespace kanesim::fmi {
+namespace {
+
+std::string Escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string Number(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+// causality, variability, initial of each kind (FMI 2.0.4, table in section 2.2.7).
+struct Attributes {
+  const char *causality, *variability, *initial;
+  bool has_start;
+};
+Attributes AttributesOf(VarKind kind) {
+  switch (kind) {
+    case VarKind::State: return {"local", "continuous", "exact", true};
+    case VarKind::Derivative: return {"local", "continuous", "calculated", false};
+    case VarKind::Output: return {"output", "continuous", "calculated", false};
+    case VarKind::Parameter: return {"parameter", "fixed", "exact", true};
+    case VarKind::CalculatedParameter: return {"calculatedParameter", "fixed", "calculated", false};
+    case VarKind::Fixed: return {"local", "constant", "exact", true};
+  }
+  return {"local", "continuous", "calculated", false};
+}
+
+std::string TypeElement(const Variable& v, const Attributes& a, const std::vector<Variable>& vars) {
+  const char* tag = v.type == VarType::Integer ? "Integer" : v.type == VarType::Boolean ? "Boolean" : "Real";
+  std::string e = std::string("<") + tag;
+  if (a.has_start) {
+    e += " start=\"";
+    e += v.type == VarType::Boolean ? (v.start != 0 ? "true" : "false")
+         : v.type == VarType::Integer ? std::to_string(long(v.start))
+                                      : Number(v.start);
+    e += "\"";
+  }
+  if (!v.unit.empty()) e += " unit=\"" + Escape(v.unit) + "\"";
+  if (v.kind == VarKind::Derivative)
+    for (size_t k = 0; k < vars.size(); ++k)
+      if (vars[k].kind == VarKind::State && vars[k].index == v.index) e += " derivative=\"" + std::to_string(k + 1) + "\"";
+  return e + "/>";
+}
+
+void Unknowns(std::ostringstream& x, const char* tag, const std::vector<Variable>& vars, std::initializer_list<VarKind> kinds) {
+  std::string body;
+  for (size_t k = 0; k < vars.size(); ++k)
+    if (std::find(kinds.begin(), kinds.end(), vars[k].kind) != kinds.end())
+      body += "      <Unknown index=\"" + std::to_string(k + 1) + "\"/>\n";
+  if (!body.empty()) x << "    <" << tag << ">\n" << body << "    </" << tag << ">\n";
+}
+
+void UnknownsV3(std::ostringstream& x, const char* tag, const std::vector<Variable>& vars,
+                std::initializer_list<VarKind> kinds) {
+  for (size_t k = 0; k < vars.size(); ++k)
+    if (std::find(kinds.begin(), kinds.end(), vars[k].kind) != kinds.end())
+      x << "    <" << tag << " valueReference=\"" << k << "\"/>\n";
+}
+
+// UnitDefinitions (every unit a variable has) and DefaultExperiment, the same in FMI 2 and 3.
+void UnitsAndExperiment(std::ostringstream& x, const std::vector<Variable>& vars, const flat::Experiment& e) {
+  std::set<std::string> units;
+  for (const Variable& v : vars)
+    if (!v.unit.empty()) units.insert(v.unit);
+  if (!units.empty()) {
+    x << "  <UnitDefinitions>\n";
+    for (const std::string& u : units) x << "    <Unit name=\"" << Escape(u) << "\"/>\n";
+    x << "  </UnitDefinitions>\n";
+  }
+  const double interval = e.interval > 0 ? e.interval : (e.stop_time - e.start_time) / sim::kDefaultIntervals;
+  x << "  <DefaultExperiment startTime=\"" << Number(e.start_time) << "\" stopTime=\"" << Number(e.stop_time)
+    << "\" tolerance=\"" << Number(e.tolerance) << "\" stepSize=\"" << Number(interval) << "\"/>\n";
+}
+
+// One variable of FMI 3.0 (section 2.4.7): the type is the element.
+std::string VariableV3(const Variable& v, size_t vr, const std::vector<Variable>& vars) {
+  const Attributes a = AttributesOf(v.kind);
+  const char* tag = v.type == VarType::Integer ? "Int32" : v.type == VarType::Boolean ? "Boolean" : "Float64";
+  std::string e = std::string("    <") + tag + " name=\"" + Escape(v.name) + "\" valueReference=\"" +
+                  std::to_string(vr) + "\" causality=\"" + a.causality + "\" variability=\"" + a.variability +
+                  "\" initial=\"" + a.initial + "\"";
+  if (!v.description.empty()) e += " description=\"" + Escape(v.description) + "\"";
+  if (a.has_start)
+    e += " start=\"" +
+         (v.type == VarType::Boolean ? std::string(v.start != 0 ? "true" : "false")
+          : v.type == VarType::Integer ? std::to_string(long(v.start))
+                                       : Number(v.start)) +
+         "\"";
+  if (!v.unit.empty()) e += " unit=\"" + Escape(v.unit) + "\"";
+  if (v.kind == VarKind::Derivative)
+    for (size_t k = 0; k < vars.size(); ++k)
+      if (vars[k].kind == VarKind::State && vars[k].index == v.index) e += " derivative=\"" + std::to_string(k) + "\"";
+  return e + "/>\n";
+}
+
+}  // namespace
+
+std::string ModelDescription(const pipeline::Model& model, const ExportOptions& options, const std::string& guid) {
+  const flat::Mechanism& mech = *model.mech;
+  const std::vector<Variable> vars = ListVariables(model);
+  const std::string id = Identifier(mech.model_name);
+  const std::string caps =
+      " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" canNotUseMemoryManagementFunctions=\"true\"";
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << Escape(mech.model_name) << "\" guid=\"" << guid
+    << "\" description=\"" << Escape(mech.description) << "\" generationTool=\"kanesim " << KANESIM_VERSION
+    << "\" variableNamingConvention=\"flat\" numberOfEventIndicators=\"0\">\n";
+  if (options.model_exchange) x << "  <ModelExchange modelIdentifier=\"" << id << "\"" << caps << "/>\n";
+  if (options.co_simulation)
+    x << "  <CoSimulation modelIdentifier=\"" << id << "\" canHandleVariableCommunicationStepSize=\"true\"" << caps
+      << "/>\n";
+  UnitsAndExperiment(x, vars, mech.experiment);
+  x << "  <ModelVariables>\n";
+  for (size_t k = 0; k < vars.size(); ++k) {
+    const Variable& v = vars[k];
+    const Attributes a = AttributesOf(v.kind);
+    x << "    <!-- index " << k + 1 << " -->\n    <ScalarVariable name=\"" << Escape(v.name) << "\" valueReference=\"" << k
+      << "\" causality=\"" << a.causality << "\" variability=\"" << a.variability << "\" initial=\"" << a.initial << "\"";
+    if (!v.description.empty()) x << " description=\"" << Escape(v.description) << "\"";
+    x << ">\n      " << TypeElement(v, a, vars) << "\n    </ScalarVariable>\n";
+  }
+  x << "  </ModelVariables>\n  <ModelStructure>\n";
+  Unknowns(x, "Outputs", vars, {VarKind::Output});
+  Unknowns(x, "Derivatives", vars, {VarKind::Derivative});
+  Unknowns(x, "InitialUnknowns", vars, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter});
+  x << "  </ModelStructure>\n</fmiModelDescription>\n";
+  return x.str();
+}
+
+// FMI 3.0: the same variables (value reference = order), then the independent variable
+// `time`, which FMI 3 requires to be listed.
+std::string ModelDescription3(const pipeline::Model& model, const ExportOptions& options, const std::string& token) {
+  const flat::Mechanism& mech = *model.mech;
+  const std::vector<Variable> vars = ListVariables(model);
+  const std::string id = Identifier(mech.model_name);
+  const std::string caps = " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"";
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << Escape(mech.model_name) << "\" instantiationToken=\""
+    << token << "\" description=\"" << Escape(mech.description) << "\" generationTool=\"kanesim " << KANESIM_VERSION
+    << "\" variableNamingConvention=\"flat\">\n";
+  if (options.model_exchange) x << "  <ModelExchange modelIdentifier=\"" << id << "\"" << caps << "/>\n";
+  if (options.co_simulation)
+    x << "  <CoSimulation modelIdentifier=\"" << id << "\" canHandleVariableCommunicationStepSize=\"true\""
+      << " hasEventMode=\"false\"" << caps << "/>\n";
+  UnitsAndExperiment(x, vars, mech.experiment);
+  x << "  <ModelVariables>\n";
+  for (size_t k = 0; k < vars.size(); ++k) x << VariableV3(vars[k], k, vars);
+  x << "    <Float64 name=\"time\" valueReference=\"" << vars.size()
+    << "\" causality=\"independent\" variability=\"continuous\"/>\n";
+  x << "  </ModelVariables>\n  <ModelStructure>\n";
+  UnknownsV3(x, "Output", vars, {VarKind::Output});
+  UnknownsV3(x, "ContinuousStateDerivative", vars, {VarKind::Derivative});
+  UnknownsV3(x, "InitialUnknown", vars, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter});
+  x << "  </ModelStructure>\n</fmiModelDescription>\n";
+  return x.str();
+}
+
+}  // namespace kanesim::fmi

@@ -1,0 +1,93 @@
+#include "fmi/variables.h"
+
+#include <cctype>
+
+#include "runtime/program/program.h"
+
+namespace kanesim::fmi {
+namespace {
+
+// "[k]" (1-based) after a joint's signal when it has several coordinates, as the signals do.
+std::string Suffix(int k, int n) { return n > 1 ? "[" + std::to_string(k + 1) + "]" : ""; }
+
+// A coordinate's unit where the joint type fixes it (one-axis joints only); der: the rate's.
+std::string CoordinateUnit(flat::JointType type, int order) {
+  static const char* const kRevolute[] = {"rad", "rad/s", "rad/s2"};
+  static const char* const kPrismatic[] = {"m", "m/s", "m/s2"};
+  if (type == flat::JointType::Revolute) return kRevolute[order];
+  if (type == flat::JointType::Prismatic) return kPrismatic[order];
+  return "";
+}
+
+struct StateInfo {
+  std::string name, unit, der_unit;
+};
+
+std::vector<StateInfo> States(const rt::Program& p) {
+  std::vector<StateInfo> out(p.nq + p.nu);
+  for (const rt::TreeJoint& j : p.joints) {
+    for (int k = 0; k < j.nq; ++k)
+      for (int i = 0; i < p.nq; ++i)
+        if (p.q_free[i] == j.q0 + k)
+          out[i] = {j.name + ".q" + Suffix(k, j.nq), CoordinateUnit(j.type, 0), CoordinateUnit(j.type, 1)};
+    for (int k = 0; k < j.nu; ++k)
+      for (int i = 0; i < p.nu; ++i)
+        if (p.u_free[i] == j.u0 + k)
+          out[p.nq + i] = {j.name + ".u" + Suffix(k, j.nu), CoordinateUnit(j.type, 1), CoordinateUnit(j.type, 2)};
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> StateNames(const rt::Program& program) {
+  std::vector<std::string> names;
+  for (const StateInfo& s : States(program)) names.push_back(s.name);
+  return names;
+}
+
+std::vector<Variable> ListVariables(const pipeline::Model& model) {
+  const rt::Program& p = *model.program;
+  const flat::Mechanism& mech = *model.mech;
+  std::vector<Variable> vars;
+  const std::vector<StateInfo> states = States(p);
+  std::vector<double> y0(states.size());
+  rt::InitialState(p, y0.data());
+  for (size_t i = 0; i < states.size(); ++i)
+    vars.push_back({states[i].name, VarKind::State, VarType::Real, int(i), y0[i], states[i].unit, ""});
+  for (size_t i = 0; i < states.size(); ++i)
+    vars.push_back({"der(" + states[i].name + ")", VarKind::Derivative, VarType::Real, int(i), 0.0,
+                    states[i].der_unit, ""});
+  for (size_t i = 0; i < mech.outputs.size(); ++i)
+    vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, "", ""});
+  // Parameters: three passes so that each group is contiguous.
+  for (int pass = 0; pass < 3; ++pass)
+    for (size_t i = 0; i < mech.params.size(); ++i) {
+      const flat::Param& q = mech.params[i];
+      if (q.type == flat::ParamType::String) continue;  // not a number: nothing to show
+      const bool fixed = q.structural || q.is_constant || q.type != flat::ParamType::Real;
+      const bool bound = q.binding != flat::kNoExpr && !q.user_set;
+      const VarKind kind = fixed ? VarKind::Fixed : bound ? VarKind::CalculatedParameter : VarKind::Parameter;
+      if ((pass == 0 && kind != VarKind::Parameter) || (pass == 1 && kind != VarKind::CalculatedParameter) ||
+          (pass == 2 && kind != VarKind::Fixed))
+        continue;
+      const VarType type = q.type == flat::ParamType::Integer   ? VarType::Integer
+                           : q.type == flat::ParamType::Boolean ? VarType::Boolean
+                                                                : VarType::Real;
+      std::string why = q.structural    ? "structural: fixed at export"
+                        : q.is_constant ? "constant"
+                        : fixed         ? "fixed at export"
+                                        : "";
+      vars.push_back({q.name, kind, type, int(i), p.param_values[i], q.unit, why});
+    }
+  return vars;
+}
+
+std::string Identifier(const std::string& model_name) {
+  std::string id;
+  for (char c : model_name) id += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  if (id.empty() || std::isdigit(static_cast<unsigned char>(id[0]))) id = "m_" + id;
+  return id;
+}
+
+}  // namespace kanesim::fmi

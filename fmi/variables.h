@@ -1,0 +1,42 @@
+// The variables an exported FMU shows its master (docs/fmi.md): one table, computed from the
+// loaded model, that both `kanesim export` (modelDescription.xml) and the FMU's own library
+// (the value references at run time) read, so the two cannot disagree.
+//
+// Order, which is the value reference (vr = index in the table):
+//   the continuous states y = [q_free; u_free] (rt::InitialState's layout), named by their
+//   joint signals ("arm.q", "ball.q[2]"); their derivatives "der(arm.q)"; the declared
+//   outputs; then the parameters: tunable ones (Real leaves, not structural, not constant),
+//   calculated ones (bound to an expression of others), and the fixed ones (structural,
+//   constant, Integer or Boolean), which keep the value they had at export.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pipeline/pipeline.h"
+
+namespace kanesim::fmi {
+
+enum class VarKind { State, Derivative, Output, Parameter, CalculatedParameter, Fixed };
+enum class VarType { Real, Integer, Boolean };
+
+struct Variable {
+  std::string name;
+  VarKind kind = VarKind::State;
+  VarType type = VarType::Real;
+  int index = 0;        // State, Derivative: y index; Output: declared output; else mech.params index
+  double start = 0.0;   // States, Parameter, Fixed: the value at export
+  std::string unit;     // "" when the model gives none
+  std::string description;
+};
+
+// The table for a loaded, compiled model (model.program set).
+std::vector<Variable> ListVariables(const pipeline::Model& model);
+
+// The names of the continuous states, y index order.
+std::vector<std::string> StateNames(const rt::Program& program);
+
+// A model name as a C identifier (the FMU's modelIdentifier and binary's name).
+std::string Identifier(const std::string& model_name);
+
+}  // namespace kanesim::fmi

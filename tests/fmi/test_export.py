@@ -1,0 +1,114 @@
+"""kanesim export --fmi 2, checked by the real client (FMPy): the FMU validates, and FMPy's
+own simulation of it (Co-Simulation: kanesim's integrator in doStep; Model Exchange: FMPy's
+CVODE on the exposed states and derivatives) equals `kanesim run` of the same model."""
+import io
+import os
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+from conftest import EXAMPLES, kanesim
+
+DDP = os.path.join(EXAMPLES, "damped_driven_pendulum.mech")
+DOUBLE = os.path.join(EXAMPLES, "double_pendulum.mech")
+
+
+def run_csv(path, *args):
+    out = kanesim("run", path, *args).stdout
+    return np.genfromtxt(io.StringIO(out), delimiter=",", names=True, deletechars="")
+
+
+@pytest.mark.parametrize("fmi,kind,model", [(2, "cs", DDP), (2, "me", DDP), (2, "both", DOUBLE),
+                                             (3, "cs", DDP), (3, "me", DDP), (3, "both", DOUBLE)])
+def test_fmpy_validates_the_fmu(export, fmi, kind, model):
+    # A problem here: a modelDescription.xml FMPy (and so most masters) would reject.
+    assert validate_fmu(export(model, fmi=fmi, kind=kind)) == []
+
+
+def test_the_description_lists_states_derivatives_outputs_parameters_and_units(export):
+    md = read_model_description(export(DDP))
+    v = {x.name: x for x in md.modelVariables}
+    assert float(v["hinge.q"].start) == pytest.approx(-np.pi / 2 + 0.3) and v["hinge.q"].unit == "rad"
+    assert v["der(hinge.u)"].derivative is v["hinge.u"] and v["der(hinge.u)"].unit == "rad/s2"
+    assert [o.variable.name for o in md.outputs] == ["tip_height", "energy_like"]
+    assert v["L"].causality == "parameter" and v["L"].unit == "m" and float(v["L"].start) == 0.8
+    # withDamper gates a component: structural, so fixed at export and listed as a constant.
+    assert v["withDamper"].variability == "constant" and v["withDamper"].type == "Boolean"
+    assert md.modelExchange and md.coSimulation and md.modelExchange.modelIdentifier == "DampedDrivenPendulum"
+
+
+def test_the_fmu_loads_nothing_from_outside_it_but_the_c_and_cxx_runtime(export, tmp_path):
+    # A library found outside the FMU would make it work only on machines like this one.
+    with zipfile.ZipFile(export(DDP)) as z:
+        z.extractall(tmp_path)
+    lib = tmp_path / "binaries" / "linux64" / "DampedDrivenPendulum.so"
+    dynamic = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True, check=True).stdout
+    assert "Library rpath: [$ORIGIN]" in dynamic
+    for line in subprocess.run(["ldd", str(lib)], capture_output=True, text=True, check=True).stdout.splitlines():
+        if "=>" not in line:
+            continue
+        name, path = line.split("=>")[0].strip(), line.split("=>")[1].split()[0]
+        system = name.split(".so")[0] in ("libc", "libm", "libstdc++", "libgcc_s", "libpthread", "libdl")
+        assert system or path.startswith(str(lib.parent)), line
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("fmi_type", ["CoSimulation", "ModelExchange"])
+def test_fmpy_simulation_equals_kanesim_run(export, fmi, fmi_type):
+    # DDP: a prescribed base, damping, regularized friction, outputs. rtol 1e-9 both sides;
+    # the two runs differ by the integrators' errors only (measured: ~1e-7 CS, ~1e-6 ME).
+    ref = run_csv(DDP, "--stop-time", "3", "--rtol", "1e-9")
+    r = simulate_fmu(export(DDP, fmi=fmi), fmi_type=fmi_type, stop_time=3, output_interval=0.02, relative_tolerance=1e-9,
+                     output=["hinge.q", "hinge.u", "tip_height", "energy_like"])
+    assert len(r) == len(ref) and np.allclose(r["time"], ref["time"], atol=1e-12)
+    for name in ["hinge.q", "hinge.u", "tip_height", "energy_like"]:
+        assert np.max(np.abs(r[name] - ref[name])) < 2e-5, name
+
+
+def test_parameters_set_by_the_master_equal_set_on_the_command_line(export):
+    # A tunable parameter set through the FMU must change the model as --set does.
+    ref = run_csv(DDP, "--stop-time", "2", "--rtol", "1e-9", "--set", "L=0.5", "--set", "d=0.2")
+    r = simulate_fmu(export(DDP), fmi_type="CoSimulation", stop_time=2, output_interval=0.02,
+                     relative_tolerance=1e-9, start_values={"L": 0.5, "d": 0.2}, output=["hinge.q", "tip_height"])
+    for name in ["hinge.q", "tip_height"]:
+        assert np.max(np.abs(r[name] - ref[name])) < 2e-5, name
+
+
+def test_fmi3_lists_time_as_the_independent_variable_and_derivatives_by_value_reference(export):
+    md = read_model_description(export(DDP, fmi=3))
+    v = {x.name: x for x in md.modelVariables}
+    assert md.fmiVersion == "3.0" and v["time"].causality == "independent"
+    assert v["der(hinge.q)"].derivative is v["hinge.q"]
+    with zipfile.ZipFile(export(DDP, fmi=3)) as z:
+        assert "binaries/x86_64-linux/DampedDrivenPendulum.so" in z.namelist()
+
+
+STOPPED = """
+model Stopped "A pendulum that hits an end stop"
+  World world;
+  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3), q_min = -0.5, q_max = 0.5);
+  Rod rod(L = 1, m = 1);
+equation
+  connect(world.frame_b, hinge.frame_a);
+  connect(hinge.frame_b, rod.frame_a);
+end Stopped;
+"""
+
+
+def test_end_stops_are_refused_not_integrated_through(write_model, tmp_path):
+    # Without event indicators a master would integrate through the stop: a wrong motion.
+    r = kanesim("export", write_model("stopped.mech", STOPPED), "--fmi", "2", "-o", str(tmp_path / "s.fmu"),
+                check=False)
+    assert r.returncode == 1 and "end stops of 'hinge'" in r.stderr and not (tmp_path / "s.fmu").exists()
+
+
+def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
+    r = kanesim("export", DDP, "--fmi", "4", "-o", str(tmp_path / "x.fmu"), check=False)
+    assert r.returncode == 1
+    r = kanesim("export", str(tmp_path / "missing.mech"), "--fmi", "2", "-o", str(tmp_path / "x.fmu"), check=False)
+    assert r.returncode == 1 and not (tmp_path / "x.fmu").exists()
