@@ -9,6 +9,7 @@
 
 #include "fmi/fmi.h"
 #include "fmi/instance.h"
+#include "runtime/program/program.h"  // Program::whens
 
 #ifndef KANESIM_FMU_BUILD_DIR
 #define KANESIM_FMU_BUILD_DIR ""
@@ -103,6 +104,8 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
   for (const rt::EndStop& stop : rt::EndStops(*model.program)) stops += (stops.empty() ? "'" : ", '") + stop.joint + "'";
   if (!stops.empty())
     return "the end stops of " + stops + " are events, which an exported FMU does not have yet (docs/fmi.md)";
+  if (!model.program->whens.empty())  // the same for when clauses (docs/events.md)
+    return "the " + model.program->whens.front().name + " clause is an event, which an exported FMU does not have yet (docs/fmi.md)";
   std::string error;
   const std::string bin = options.binaries_dir.empty() ? FmuBinariesDir(&error) : options.binaries_dir;
   if (bin.empty()) return error;
