@@ -7,7 +7,7 @@
 // Each model runs in a child process of its own, so that its peak RSS is its own. In
 // the child, the first load includes parsing the standard library (once per process);
 // the steady cost is the best of `repeats` further loads.
-//   build/bench/frontend [N ...]            (default: 10 100 1000 10000)
+//   build/bench/frontend [N ...] [MODEL.mech ...]   (default: 10 100 1000 10000)
 //   KANESIM_FRONTEND_REPEATS=5              (default: 5; 1 above N = 2000)
 //   KANESIM_FRONTEND_NOFORK=1               (in this process: for profilers; RSS is then shared)
 // Output: one row per model: ms for load+elaborate, compile, their sum (first load and
@@ -68,7 +68,7 @@ bool LoadOnce(const std::string& path, const std::vector<lang::ParamOverride>& s
   lang::ElaborateOptions eo;
   eo.overrides = sets;
   auto mech = std::make_shared<flat::Mechanism>();  // shared with the program, as pipeline::LoadModel does
-  if (!lang::LoadProgram(path, stdlib::Files(), &program, diags) || !lang::Elaborate(program, eo, mech.get(), diags)) {
+  if (!lang::LoadProgram(path, stdlib::Files(), &program, diags, stdlib::Image()) || !lang::Elaborate(program, eo, mech.get(), diags)) {
     std::cerr << diags.RenderAll().substr(0, 4000);
     return false;
   }
@@ -132,13 +132,22 @@ std::string WriteDeclarations(const std::string& decl, const std::string& name, 
 
 int main(int argc, char** argv) {
   std::vector<int> sizes;
-  for (int i = 1; i < argc; ++i) sizes.push_back(std::atoi(argv[i]));
-  if (sizes.empty()) sizes = {10, 100, 1000, 10000};
+  std::vector<std::string> files;  // arguments ending in .mech: those models only, one row each
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.size() > 5 && a.compare(a.size() - 5, 5, ".mech") == 0)
+      files.push_back(a);
+    else
+      sizes.push_back(std::atoi(argv[i]));
+  }
+  if (sizes.empty() && files.empty()) sizes = {10, 100, 1000, 10000};
   const char* rep = std::getenv("KANESIM_FRONTEND_REPEATS");
   const int repeats = rep ? std::atoi(rep) : 5;
   const std::string root = KANESIM_SOURCE_DIR;
   std::printf("%-16s %7s %12s %10s %12s %12s %10s %10s %10s\n", "model", "links", "elab_ms", "compile_ms", "total_ms",
               "first_ms", "us/link", "peak_MB", "first_flt");
+  for (const std::string& f : files) InChild(f.substr(f.find_last_of('/') + 1), f, {}, 1, repeats);
+  if (!files.empty()) return 0;
   InChild("double_pendulum", root + "/examples/double_pendulum.mech", {}, 2, repeats);
   for (int n : sizes)
     InChild("chain", root + "/examples/chain.mech", {{"N", std::to_string(n)}}, n, n > 2000 ? 1 : repeats);

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Front end of imported URDF robots in a fresh process (issue 40; docs/benchmarks.md "URDF
+"""Front end of imported URDF robots in a fresh process (issue 40; docs/benchmarks/2026-11-28_front_end_issue40.md "URDF
 robots"): for each robot, N runs of `kanesim run ROBOT.urdf --stats` over one output step,
 each a new process, alternating with the same model already imported (`kanesim import` ->
 ROBOT.mech); the medians of the phases `--stats` reports (load + elaborate includes the URDF

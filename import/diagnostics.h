@@ -22,6 +22,7 @@ namespace kanesim::import {
   X(BadJointType, "U408", "unknown joint type")                                        \
   X(TooLarge, "U409", "file over a size limit")                                        \
   X(Entities, "U410", "DTD entity declarations are not read")                          \
+  X(ReaderMissing, "U411", "the URDF reader library cannot be loaded")                 \
   X(MimicDropped, "W421", "mimic joint imported as an independent joint")
 
 enum class ImportCode {

@@ -24,9 +24,9 @@ static bool ParseInto(Program* program, int file, Diagnostics& diags) {
 // copied. Its classes are parsed on demand, once per process (lang/library_cache.h); that
 // needs the main file to be file 0 so that their file ids match (otherwise the library is
 // parsed here, whole).
-static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
-                      Diagnostics& diags) {
-  program->library = program->sources.NumFiles() == 1 ? SharedLibrary(stdlib_files) : nullptr;
+static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& stdlib_files, std::string_view image,
+                      Program* program, Diagnostics& diags) {
+  program->library = program->sources.NumFiles() == 1 ? SharedLibrary(stdlib_files, image) : nullptr;
   if (program->library) {
     for (const auto& src : program->library->Sources()) program->sources.AddShared(src);
     return;
@@ -36,18 +36,18 @@ static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& st
 
 bool LoadProgramFromText(const std::string& name, const std::string& text,
                          const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
-                         Diagnostics& diags) {
+                         Diagnostics& diags, std::string_view stdlib_image) {
   int f = program->sources.Add(name, text);
   ParseInto(program, f, diags);
-  AddStdlib(stdlib_files, program, diags);
+  AddStdlib(stdlib_files, stdlib_image, program, diags);
   return !diags.HasErrors();
 }
 
 bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
-                 Program* program, Diagnostics& diags) {
+                 Program* program, Diagnostics& diags, std::string_view stdlib_image) {
   std::string text, message;
   switch (ReadSourceFile(path, &text, &message)) {
-    case ReadStatus::Ok: return LoadProgramFromText(path, text, stdlib_files, program, diags);
+    case ReadStatus::Ok: return LoadProgramFromText(path, text, stdlib_files, program, diags, stdlib_image);
     case ReadStatus::TooLarge:
       diags.Error(DiagCode::FileTooLarge, Span{}, message).hint = "split the model into several files";
       return false;

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "lang/ast.h"
@@ -57,13 +58,14 @@ struct Program {
 };
 
 // Loads and parses the main file and the standard library; diagnostics into `diags`.
-// `stdlib_files` are (display name, contents) pairs; they are parsed once per process.
+// `stdlib_files` are (display name, contents) pairs; they are parsed once per process, or read
+// from `stdlib_image` (their units parsed at build time, Library::Image(); stdlib::Image()).
 bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
-                 Program* program, Diagnostics& diags);
+                 Program* program, Diagnostics& diags, std::string_view stdlib_image = {});
 // Same, with the main file's text given (tests, fuzzer).
 bool LoadProgramFromText(const std::string& name, const std::string& text,
                          const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
-                         Diagnostics& diags);
+                         Diagnostics& diags, std::string_view stdlib_image = {});
 
 bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags);
 

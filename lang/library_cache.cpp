@@ -1,8 +1,10 @@
 #include "lang/library_cache.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cstring>
 
+#include "lang/ast_image.h"
 #include "lang/diagnostics.h"
 #include "lang/parser.h"
 
@@ -112,10 +114,48 @@ std::shared_ptr<const ast::StoredDefinition> ParseAs(int file, const std::string
   return def;
 }
 
+// FNV-1a over 8-byte words: the key that ties an image to the files it was made from.
+std::uint64_t HashFiles(const std::vector<std::pair<std::string, std::string>>& files) {
+  std::uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](std::uint64_t w) { h = (h ^ w) * 1099511628211ull; };
+  for (const auto& [name, text] : files)
+    for (const std::string* s : {&name, &text}) {
+      mix(s->size());
+      size_t i = 0;
+      for (; i + 8 <= s->size(); i += 8) {
+        std::uint64_t w;
+        std::memcpy(&w, s->data() + i, 8);
+        mix(w);
+      }
+      for (; i < s->size(); ++i) mix(static_cast<unsigned char>((*s)[i]));
+    }
+  return h;
+}
+
+// The image's head: magic, the files' hash, then the unit table, the class index and the
+// units' definitions (ast_image.h), all 32-bit integers but the hash.
+constexpr std::int32_t kImageMagic = 0x4B4C4942;  // "KLIB"
+
+void PutInt(std::string* out, std::int64_t v) {
+  const auto x = static_cast<std::int32_t>(v);
+  out->append(reinterpret_cast<const char*>(&x), sizeof x);
+}
+
+bool GetInt(std::string_view in, std::size_t* pos, std::int64_t* v) {
+  std::int32_t x = 0;
+  if (in.size() - *pos < sizeof x) return false;
+  std::memcpy(&x, in.data() + *pos, sizeof x);
+  *pos += sizeof x;
+  *v = x;
+  return true;
+}
+
 }  // namespace
 
-Library::Library(const std::vector<std::pair<std::string, std::string>>& files) {
+Library::Library(const std::vector<std::pair<std::string, std::string>>& files, std::string_view image) {
   for (const auto& [name, text] : files) sources_.push_back(MakeSourceFile(name, text));
+  hash_ = HashFiles(files);
+  if (!image.empty() && ReadImage(image)) return;
   for (size_t f = 0; f < sources_.size(); ++f) {
     const SourceFile& src = *sources_[f];
     std::int32_t header_end = 0;
@@ -145,8 +185,88 @@ Library::Library(const std::vector<std::pair<std::string, std::string>>& files) 
   }
 }
 
+bool Library::ReadImage(std::string_view image) {
+  std::size_t pos = 0;
+  std::int64_t magic = 0, n_units = 0, n_names = 0, defs_size = 0;
+  std::uint64_t hash = 0;
+  if (!GetInt(image, &pos, &magic) || magic != kImageMagic || image.size() - pos < sizeof hash) return false;
+  std::memcpy(&hash, image.data() + pos, sizeof hash);
+  pos += sizeof hash;
+  if (hash != hash_ || !GetInt(image, &pos, &n_units) || !GetInt(image, &pos, &n_names) ||
+      !GetInt(image, &pos, &defs_size) || n_units < 0 || n_names < 0 || defs_size < 0)
+    return false;
+  std::vector<std::unique_ptr<UnitSlot>> units;
+  for (std::int64_t u = 0; u < n_units; ++u) {
+    auto slot = std::make_unique<UnitSlot>();
+    std::int64_t f = 0, header_end = 0, begin = 0, end = 0, at = 0;
+    if (!GetInt(image, &pos, &f) || !GetInt(image, &pos, &header_end) || !GetInt(image, &pos, &begin) ||
+        !GetInt(image, &pos, &end) || !GetInt(image, &pos, &at) || f < 0 ||
+        f >= static_cast<std::int64_t>(sources_.size()) || at < 0 || at >= defs_size)
+      return false;
+    slot->file = static_cast<int>(f);
+    slot->header_end = static_cast<std::int32_t>(header_end);
+    slot->begin = static_cast<std::int32_t>(begin);
+    slot->end = static_cast<std::int32_t>(end);
+    slot->image_at = at;
+    units.push_back(std::move(slot));
+  }
+  std::unordered_map<std::string, int> index;
+  for (std::int64_t i = 0; i < n_names; ++i) {
+    std::int64_t len = 0, unit = 0;
+    if (!GetInt(image, &pos, &len) || len < 0 || static_cast<std::uint64_t>(len) > image.size() - pos) return false;
+    std::string name(image.data() + pos, static_cast<size_t>(len));
+    pos += static_cast<size_t>(len);
+    if (!GetInt(image, &pos, &unit) || unit < 0 || unit >= n_units) return false;
+    index.emplace(std::move(name), static_cast<int>(unit));
+  }
+  if (static_cast<std::uint64_t>(defs_size) != image.size() - pos) return false;
+  for (auto& slot : units) slot->image_at += static_cast<std::int64_t>(pos);
+  units_ = std::move(units);
+  index_ = std::move(index);
+  image_ = image;
+  return true;
+}
+
+std::string Library::Image() const {
+  std::string defs, table, names;
+  for (size_t u = 0; u < units_.size(); ++u) {
+    const UnitSlot& slot = *units_[u];
+    ParseUnit(slot);
+    if (!slot.def || !slot.diags.empty()) return "";
+    PutInt(&table, slot.file);
+    PutInt(&table, slot.header_end);
+    PutInt(&table, slot.begin);
+    PutInt(&table, slot.end);
+    PutInt(&table, static_cast<std::int64_t>(defs.size()));
+    if (!ast::WriteDefinition(*slot.def, &defs)) return "";
+  }
+  // Sorted, so that the image is the same bytes whatever the hash map's order.
+  std::vector<std::pair<std::string, int>> sorted(index_.begin(), index_.end());
+  std::sort(sorted.begin(), sorted.end());
+  for (const auto& [name, unit] : sorted) {
+    PutInt(&names, static_cast<std::int64_t>(name.size()));
+    names += name;
+    PutInt(&names, unit);
+  }
+  std::string out;
+  PutInt(&out, kImageMagic);
+  out.append(reinterpret_cast<const char*>(&hash_), sizeof hash_);
+  PutInt(&out, static_cast<std::int64_t>(units_.size()));
+  PutInt(&out, static_cast<std::int64_t>(sorted.size()));
+  PutInt(&out, static_cast<std::int64_t>(defs.size()));
+  return out + table + names + defs;
+}
+
 void Library::ParseUnit(const UnitSlot& slot) const {
   std::call_once(slot.once, [&] {
+    if (slot.image_at >= 0) {
+      std::size_t pos = static_cast<std::size_t>(slot.image_at);
+      slot.def = ast::ReadDefinition(image_, &pos);
+      if (slot.def) {
+        parsed_.fetch_add(1);
+        return;
+      }
+    }
     const SourceFile& src = *sources_[static_cast<size_t>(slot.file)];
     std::string text;
     if (slot.begin == 0 && slot.end == static_cast<std::int32_t>(src.text.size())) {
@@ -183,7 +303,8 @@ const std::vector<Diagnostic>& Library::UnitDiagnostics(int u) const {
   return slot.diags;
 }
 
-std::shared_ptr<const Library> SharedLibrary(const std::vector<std::pair<std::string, std::string>>& files) {
+std::shared_ptr<const Library> SharedLibrary(const std::vector<std::pair<std::string, std::string>>& files,
+                                             std::string_view image) {
   // Never destroyed: threads may still hold it at exit, and freeing its trees then is
   // work for nothing (the pointer stays reachable, so leak checkers do not count it).
   static std::mutex* const mutex = new std::mutex;
@@ -192,7 +313,7 @@ std::shared_ptr<const Library> SharedLibrary(const std::vector<std::pair<std::st
   if (files.empty()) return nullptr;  // no library (`kanesim check --emit ast`): nothing to share
   std::lock_guard<std::mutex> lock(*mutex);
   if (*cached && (&files == cached_files || files == *cached_files)) return *cached;
-  *cached = std::make_shared<const Library>(files);
+  *cached = std::make_shared<const Library>(files, image);
   *cached_files = files;
   return *cached;
 }

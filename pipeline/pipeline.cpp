@@ -74,10 +74,11 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
     if (!r.ok) return false;
     return ParseAndElaborate(Source::Text(source.path + ".mech", std::move(r.mech)), options, m, text);
   }
-  // 1. Parse: the main file and the standard library (parsed once per process).
+  // 1. Parse the main file; the standard library's classes are read from its image (parsed
+  // at build time), each once per process, when elaboration first names them.
   bool ok = source.from_text
-                ? lang::LoadProgramFromText(source.path, source.text, stdlib::Files(), &m->source, diags)
-                : lang::LoadProgram(source.path, stdlib::Files(), &m->source, diags);
+                ? lang::LoadProgramFromText(source.path, source.text, stdlib::Files(), &m->source, diags, stdlib::Image())
+                : lang::LoadProgram(source.path, stdlib::Files(), &m->source, diags, stdlib::Image());
   // 2. Elaborate into the flat mechanism.
   if (ok) {
     auto mech = std::make_shared<flat::Mechanism>();

@@ -12,6 +12,11 @@ const std::vector<std::pair<std::string, std::string>>& Files() {
   return files;
 }
 
+extern const unsigned char kImage[];  // stdlib_image.cpp, written at build time
+extern const std::size_t kImageSize;
+
+std::string_view Image() { return {reinterpret_cast<const char*>(kImage), kImageSize}; }
+
 const char* SourceDir() { return KANESIM_STDLIB_SOURCE_DIR; }
 
 }  // namespace kanesim::stdlib

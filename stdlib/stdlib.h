@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -18,6 +19,10 @@ extern const EmbeddedFile kEmbeddedFiles[];  // ends with {nullptr, nullptr, 0}
 // The files, as (display path, contents). Display paths look like "<stdlib>/Joints.mech".
 // Built on first use and kept for the process (every load reads them).
 const std::vector<std::pair<std::string, std::string>>& Files();
+
+// The image of the library's classes parsed at build time (lang::Library's constructor reads
+// it; lang/library_cache.h), or empty (a fuzzing build): static, for the life of the process.
+std::string_view Image();
 
 // The source directory recorded at build time (for provenance hashes and docs checks).
 const char* SourceDir();

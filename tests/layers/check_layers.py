@@ -22,7 +22,7 @@ USES = {
     "util": [],
     "flat": [],
     "stdlib": [],
-    "import": [],
+    "import": ["util"],
     "geometry": ["util"],
     "lang": ["flat", "geometry"],
     "runtime": ["flat"],
