@@ -85,7 +85,7 @@ namespace kanesim::flat {
   X(OutOfRange, "K317", "mass, inertia or length out of the range the equations can use")  \
   X(BadStop, "K318", "end stop on a joint that cannot take it, or out of order")            \
   X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")    \
-  X(BadReinit, "K321", "reinit of a quantity the mechanism cannot jump")
+  X(BadReinit, "K321", "when clause or reinit the mechanism cannot take")
 
 enum class DiagCode {
 #define KANESIM_X(e, code, summary) e,

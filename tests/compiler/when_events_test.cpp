@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
@@ -186,6 +188,21 @@ TEST(WhenEvents, ChangeFiresBothWays) {
     EXPECT_NEAR(r.stats.events[1].time, 0.5, 1e-12) << how.name;
     EXPECT_NEAR(r.stats.events[2].time, 0.8, 1e-12) << how.name;
   }
+}
+
+// If this fails, a when clause in a closed loop compiles, where the SUNDIALS solvers' checked
+// steps would pass its events unseen (K321 instead).
+TEST(WhenEvents, ClosedLoopsAreRefusedWithK321) {
+  std::ifstream in(kRoot + "/examples/fourbar.mech");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  std::string text = buf.str();
+  ASSERT_NE(text.find("  annotation(experiment"), std::string::npos);
+  text.replace(text.find("  annotation(experiment"), 0, "  when time > 1 then\n    terminate(\"x\");\n  end when;\n");
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l);
+  EXPECT_FALSE(l->prog);
+  EXPECT_NE(Find(l->errors, "K321", "closed loops or contacts"), nullptr) << Messages(l->errors);
 }
 
 }  // namespace
