@@ -49,6 +49,11 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
 // Rolling contacts -> Program::contacts and their rows (runtime/constraints/contacts.h).
 void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 
+// PlaneContact -> Program::plane_contacts (events, no rows). Also refuses, at the element,
+// the combinations the events cannot handle yet: plane contacts or end stops together with
+// constraint rows (closed loops, rolling contacts) or Coulomb friction.
+void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
+
 // Assembly at the start time: Newton to a consistent q and u (coordinates marked fixed
 // held), the rank of the constraint Jacobian, DOF, redundant constraints; y0 updated.
 void AssembleLoops(Program& p, std::vector<CompileMessage>* errors);

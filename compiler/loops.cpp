@@ -230,6 +230,7 @@ void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage
     return Vec3(num(e[0], 0.0, loc), num(e[1], 0.0, loc), num(e[2], 0.0, loc));
   };
   for (const flat::Contact& fc : m.contacts) {
+    if (fc.type == flat::ContactType::Plane) continue;  // unilateral: CompilePlaneContacts
     ContactModel c;
     c.name = fc.name;
     c.loc = fc.loc;

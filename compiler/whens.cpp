@@ -23,6 +23,9 @@ std::string ReinitRefusal(const Program& p, const flat::StateRef& ref, int* stat
                    "(not supported yet)"
                  : "the mechanism has closed loops or contacts, whose position constraints a jump of a coordinate "
                    "would break";
+  if (!p.plane_contacts.empty())
+    return "the mechanism has plane contacts, whose gaps and resting rows a jump would also have to keep (not "
+           "supported yet)";
   const TreeJoint& j = p.joints[static_cast<size_t>(tj)];
   if (speed) {
     if (!p.friction_joints.empty())

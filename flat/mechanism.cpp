@@ -264,13 +264,19 @@ std::string DumpFlat(const Mechanism& m) {
   for (const auto& w : m.wrenches)
     os << "wrench " << w.name << " at " << F(w.frame) << (w.resolve_in_world ? " (world)" : " (frame)")
        << " f=" << V(w.force) << " t=" << V(w.torque) << "\n";
-  for (const auto& c : m.contacts)
+  for (const auto& c : m.contacts) {
+    if (c.type == ContactType::Plane) {
+      os << "contact " << c.name << " plane at " << F(c.frame) << " normal=" << V(c.plane_normal)
+         << " d=" << E(c.offset) << " e=" << E(c.restitution) << "\n";
+      continue;
+    }
     os << "contact " << c.name << " "
        << (c.type == ContactType::RollingDisk     ? "rolling_disk"
            : c.type == ContactType::RollingSphere ? "rolling_sphere"
                                                   : "knife_edge")
        << " at " << F(c.frame)
        << " radius=" << E(c.radius) << " normal=" << V(c.plane_normal) << "\n";
+  }
   for (const auto& o : m.outputs) os << "output " << o.name << " = " << E(o.expr) << "\n";
   for (const auto& w : m.whens) {
     os << "when";

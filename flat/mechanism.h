@@ -158,9 +158,11 @@ struct Wrench {
   SourceLoc loc;
 };
 
-enum class ContactType : std::uint8_t { RollingDisk, RollingSphere, KnifeEdge };
+// Plane: unilateral contact of the frame's origin with the plane n . x = d (stdlib PlaneContact;
+// events, not constraint rows: sim/end_stops.h). The others are velocity constraints.
+enum class ContactType : std::uint8_t { RollingDisk, RollingSphere, KnifeEdge, Plane };
 
-// Velocity constraint against a fixed plane (simulated by the constraints issue #4).
+// Contact against a fixed plane (simulated by the constraints issue #4; Plane by issue 41).
 struct Contact {
   std::string name;
   ContactType type = ContactType::RollingDisk;
@@ -169,6 +171,8 @@ struct Contact {
   ExprId radius = kNoExpr;
   Vec3E plane_point{};      // resolved in world
   Vec3E plane_normal{};     // resolved in world
+  ExprId offset = kNoExpr;       // Plane: d of the plane n . x = d (n normalized by the compiler)
+  ExprId restitution = kNoExpr;  // Plane: Newton's coefficient at an impact, 0..1
   SourceLoc loc;
 };
 

@@ -106,6 +106,10 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
     return "the end stops of " + stops + " are events, which an exported FMU does not have yet (docs/fmi.md)";
   if (!model.program->whens.empty())  // the same for when clauses (docs/events.md)
     return "the " + model.program->whens.front().name + " clause is an event, which an exported FMU does not have yet (docs/fmi.md)";
+  std::string planes;  // plane contacts likewise (impacts, resting, lift-off)
+  for (const rt::PlaneContact& c : rt::PlaneContacts(*model.program)) planes += (planes.empty() ? "'" : ", '") + c.name + "'";
+  if (!planes.empty())
+    return "the plane contacts " + planes + " are events, which an exported FMU does not have yet (docs/fmi.md)";
   std::string error;
   const std::string bin = options.binaries_dir.empty() ? FmuBinariesDir(&error) : options.binaries_dir;
   if (bin.empty()) return error;

@@ -359,8 +359,17 @@ class Emitter {
     if (n->prim_kind == "rolling_disk") c.type = flat::ContactType::RollingDisk;
     else if (n->prim_kind == "rolling_sphere") c.type = flat::ContactType::RollingSphere;
     else if (n->prim_kind == "knife_edge") c.type = flat::ContactType::KnifeEdge;
+    else if (n->prim_kind == "plane") c.type = flat::ContactType::Plane;
     else diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{}, "unknown contact kind");
     c.frame = FrameOf(n, "frame_a");
+    if (c.type == flat::ContactType::Plane) {  // unilateral: n . x = d, an impact law
+      c.plane_normal = AsVec3(Field(n, "n", {3}));
+      c.offset = AsScalar(Field(n, "d", {}));
+      c.restitution = AsScalar(Field(n, "restitution", {}));
+      c.loc = loc;
+      m_->contacts.push_back(std::move(c));
+      return;
+    }
     c.axis = AsVec3(Field(n, "axis", {3}));
     c.radius = c.type == flat::ContactType::KnifeEdge ? pool.Constant(0) : AsScalar(Field(n, "radius", {}));
     c.plane_normal = AsVec3(Field(n, "n", {3}));

@@ -167,6 +167,21 @@ std::vector<EndStop> EndStops(const Program& program);
 // -1 on a program with constraint rows (closed loops, contacts), where the impulse would also
 // need their rows (ErrorMessage says so).
 int InverseMassColumn(const Program& program, Workspace& ws, double t, const double* y, int k, double* x);
+// The same for any generalized impulse F on the free speeds (nu entries): x = M(q)^-1 F.
+// runtime/engine/plane_contacts.cpp
+int InverseMassTimes(const Program& program, Workspace& ws, double t, const double* y, const double* F, double* x);
+
+// Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
+// when the program has none. runtime/engine/plane_contacts.cpp
+struct PlaneContact {
+  std::string name;
+  double restitution = 0.0;
+};
+std::vector<PlaneContact> PlaneContacts(const Program& program);
+// Contact i at (t, y): its gap g = n . p_WO - d (>= 0 on the free side), its row J (nu
+// entries: dg/dt = J u) and its bias c (d2g/dt2 = J udot + c). 0, or UnpackState's codes.
+int PlaneContactRow(const Program& program, Workspace& ws, double t, const double* y, int i, double* gap, double* J,
+                    double* bias);
 
 // When clauses (Program::whens; docs/events.md): the event tape evaluated at (t, y), its
 // roots' values then in ws.event_regs[program.event_tape.roots[i]]. 0, or Derivative's

@@ -1,8 +1,14 @@
-// End stops as events (sim/end_stops.h). An impact on joint k's stop changes the speeds by
-// du = M^-1 e_k lambda (Kane's impulsive form M du = J^T lambda with the stop's row J = e_k^T),
-// lambda chosen so that the joint's speed after is -e times its speed before (Newton); the
-// joints resting on their stops keep zero speed through it (their rows join J). Resting, a
-// joint's acceleration is held at zero by its stop's reaction the same way.
+// Unilateral contacts as events (sim/end_stops.h). Each side is a gap g >= 0 with a row J
+// (dg/dt = J u): an end stop's J = +-e_k^T (q - q_min, q_max - q), a plane contact's from
+// runtime/engine/plane_contacts.cpp. An impact on side i changes the speeds by
+//   du = M^-1 J^T lambda                  (Kane's impulsive form)                     (1)
+// lambda chosen so that J_i u after = -e J_i u before (Newton); the sides resting keep their
+// gap rates at zero through it (their rows join J). Resting, a side's gap acceleration is
+// held at zero by its reaction lambda > 0 the same way. Bounces that would rise less than
+// kZenoHeights of the tolerance, under a gap acceleration a < 0, accumulate: their flights
+// 2 v / |a|, 2 e v / |a|, ... sum to
+//   t_inf - t = 2 v / (|a| (1 - e))       (v the rebound speed e |J u|)               (2)
+// and the side rests from the impact on, its rest logged at t_inf (a time event).
 #include "sim/end_stops.h"
 
 #include "sim/impulse.h"  // SolveSmall
@@ -21,32 +27,60 @@ std::string SideName(bool upper) { return upper ? "q_max" : "q_min"; }
 }  // namespace
 
 EndStopEvents::EndStopEvents(const rt::Program& program, double rtol, double atol)
-    : program_(program), stops_(rt::EndStops(program)), rtol_(rtol), atol_(atol) {
+    : program_(program), stops_(rt::EndStops(program)), planes_(rt::PlaneContacts(program)), rtol_(rtol), atol_(atol) {
   nq_ = rt::NumQ(program);
   nu_ = rt::NumU(program);
   for (size_t s = 0; s < stops_.size(); ++s) {
-    if (std::isfinite(stops_[s].q_min)) sides_.push_back({static_cast<int>(s), false, false});
-    if (std::isfinite(stops_[s].q_max)) sides_.push_back({static_cast<int>(s), true, false});
+    if (std::isfinite(stops_[s].q_min)) sides_.push_back({static_cast<int>(s), -1, false, false, 0.0});
+    if (std::isfinite(stops_[s].q_max)) sides_.push_back({static_cast<int>(s), -1, true, false, 0.0});
   }
+  for (size_t c = 0; c < planes_.size(); ++c) sides_.push_back({-1, static_cast<int>(c), false, false, 0.0});
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   a_.resize(static_cast<size_t>(nu_));
+  J_.resize(static_cast<size_t>(nu_));
 }
 
-double EndStopEvents::Limit(const Side& s) const {
+int EndStopEvents::Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c) {
+  if (s.plane >= 0) return rt::PlaneContactRow(program_, ws, t, y, s.plane, gap, J, c);
   const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
-  return s.upper ? st.q_max : st.q_min;
+  const double q = y[st.q];
+  *gap = s.upper ? st.q_max - q : q - st.q_min;
+  std::fill(J, J + nu_, 0.0);
+  J[st.u] = s.upper ? -1.0 : 1.0;
+  *c = 0.0;
+  return 0;
 }
 
-std::string EndStopEvents::CheckStart(const double* y0) const {
+double EndStopEvents::Restitution(const Side& s) const {
+  return s.plane >= 0 ? planes_[static_cast<size_t>(s.plane)].restitution : stops_[static_cast<size_t>(s.stop)].restitution;
+}
+
+double EndStopEvents::Scale(const Side& s) const {
+  if (s.plane >= 0) return 1.0;
+  const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+  return std::max(1.0, std::fabs(s.upper ? st.q_max : st.q_min));
+}
+
+std::string EndStopEvents::Element(const Side& s) const {
+  return s.plane >= 0 ? planes_[static_cast<size_t>(s.plane)].name : stops_[static_cast<size_t>(s.stop)].joint;
+}
+
+std::string EndStopEvents::Where(const Side& s) const { return s.plane >= 0 ? "the plane" : SideName(s.upper); }
+
+std::string EndStopEvents::CheckStart(rt::Workspace& ws, double t0, const double* y0) {
   for (const Side& s : sides_) {
-    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
-    const double q = y0[st.q], lim = Limit(s);
-    if (s.upper ? q > lim : q < lim) {
-      char buf[300];
-      std::snprintf(buf, sizeof buf, "joint '%s' starts at q = %.17g, past its stop %s = %.17g", st.joint.c_str(), q,
-                    SideName(s.upper).c_str(), lim);
-      return buf;
+    double gap = 0.0, c = 0.0;
+    if (Row(ws, t0, y0, s, &gap, J_.data(), &c) != 0) return "the start state cannot be evaluated: " + rt::ErrorMessage(ws);
+    if (!(gap < 0.0)) continue;
+    char buf[300];
+    if (s.plane >= 0) {
+      std::snprintf(buf, sizeof buf, "contact '%s' starts %.17g below its plane", Element(s).c_str(), -gap);
+    } else {
+      const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+      std::snprintf(buf, sizeof buf, "joint '%s' starts at q = %.17g, past its stop %s = %.17g", st.joint.c_str(),
+                    y0[st.q], SideName(s.upper).c_str(), s.upper ? st.q_max : st.q_min);
     }
+    return buf;
   }
   return {};
 }
@@ -55,11 +89,28 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
                            const std::vector<double>& targets, double* du, std::vector<double>* c) {
   const size_t m = rows.size(), nu = static_cast<size_t>(nu_);
   x_.resize(m * nu);
-  for (size_t j = 0; j < m; ++j)
-    if (int s = rt::InverseMassColumn(program_, ws, t, y, rows[j], x_.data() + j * nu); s != 0) return s;
+  std::vector<double> J(m * nu);
+  for (size_t j = 0; j < m; ++j) {
+    const Side& s = sides_[static_cast<size_t>(rows[j])];
+    double gap = 0.0, bias = 0.0;
+    if (int r = Row(ws, t, y, s, &gap, J.data() + j * nu, &bias); r != 0) return r;
+    double* x = x_.data() + j * nu;
+    if (s.plane >= 0) {
+      if (int r = rt::InverseMassTimes(program_, ws, t, y, J.data() + j * nu, x); r != 0) return r;
+    } else {  // J = +-e_k: a column of M^-1, its sign flipped exactly
+      const int k = stops_[static_cast<size_t>(s.stop)].u;
+      if (int r = rt::InverseMassColumn(program_, ws, t, y, k, x); r != 0) return r;
+      if (s.upper)
+        for (size_t i = 0; i < nu; ++i) x[i] = -x[i];
+    }
+  }
   std::vector<double> A(m * m);
   for (size_t r = 0; r < m; ++r)
-    for (size_t j = 0; j < m; ++j) A[r * m + j] = x_[j * nu + static_cast<size_t>(rows[r])];
+    for (size_t j = 0; j < m; ++j) {
+      double a = 0.0;
+      for (size_t i = 0; i < nu; ++i) a += J[r * nu + i] * x_[j * nu + i];
+      A[r * m + j] = a;
+    }
   if (!SolveSmall(A, targets, c)) return -1;
   for (size_t i = 0; i < nu; ++i) {
     double d = 0.0;
@@ -73,18 +124,29 @@ int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::
                              double* a_held) {
   lambda->assign(sides_.size(), 0.0);
   std::vector<int> rows;
-  std::vector<size_t> which;
-  for (size_t i = 0; i < sides_.size(); ++i)
-    if (sides_[i].resting) rows.push_back(stops_[static_cast<size_t>(sides_[i].stop)].u), which.push_back(i);
+  std::vector<double> bias;
+  for (size_t i = 0; i < sides_.size(); ++i) {
+    if (!sides_[i].resting) continue;
+    rows.push_back(static_cast<int>(i));
+    double gap = 0.0, c = 0.0;
+    if (int s = Row(ws, t, y, sides_[i], &gap, J_.data(), &c); s != 0) return s;
+    bias.push_back(c);
+  }
   if (int s = rt::Derivative(program_, ws, t, y, ydot_.data()); s != 0) return s;
   const double* a = ydot_.data() + nq_;
   std::vector<double> targets(rows.size()), c;
-  for (size_t j = 0; j < rows.size(); ++j) targets[j] = -a[rows[j]];
   std::vector<double> da(static_cast<size_t>(nu_), 0.0);
   if (!rows.empty()) {
-    std::copy(a, a + nu_, a_.begin());  // Impulse's Derivative calls overwrite ydot_
+    std::copy(a, a + nu_, a_.begin());  // Row's and Impulse's calls overwrite ydot_ and J_
+    for (size_t j = 0; j < rows.size(); ++j) {
+      double gap = 0.0, cj = 0.0;
+      if (int s = Row(ws, t, y, sides_[static_cast<size_t>(rows[j])], &gap, J_.data(), &cj); s != 0) return s;
+      double Ja = 0.0;
+      for (int k = 0; k < nu_; ++k) Ja += J_[static_cast<size_t>(k)] * a_[static_cast<size_t>(k)];
+      targets[j] = -(Ja + bias[j]);
+    }
     if (int s = Impulse(ws, t, y, rows, targets, da.data(), &c); s != 0) return s;
-    for (size_t j = 0; j < rows.size(); ++j) (*lambda)[which[j]] = c[j];
+    for (size_t j = 0; j < rows.size(); ++j) (*lambda)[static_cast<size_t>(rows[j])] = c[j];
     a = a_.data();
   }
   if (a_held)
@@ -99,28 +161,34 @@ int EndStopEvents::Hold(rt::Workspace& ws, double t, const double* y, double* yd
   std::vector<double> lambda;
   if (int s = Reactions(ws, t, y, &lambda, ydot + nq_); s != 0) return s;
   for (const Side& s : sides_) {
-    if (!s.resting) continue;
-    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+    if (!s.resting || s.stop < 0) continue;
+    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];  // held exactly
     ydot[st.q] = 0.0;
     ydot[nq_ + st.u] = 0.0;
   }
   return 0;
 }
 
-std::string EndStopEvents::CheckRow(double t, const double* y) const {
+std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y) {
   for (const Side& s : sides_) {
-    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
-    const double q = y[st.q], lim = Limit(s);
-    const double past = s.upper ? q - lim : lim - q;
-    // Root finding leaves the state within the tolerance of the stop; a row farther past it
-    // went through the stop.
-    if (past > kPastRows * (atol_ + rtol_ * std::max(1.0, std::fabs(lim)))) {
+    double gap = 0.0, c = 0.0;
+    if (Row(ws, t, y, s, &gap, J_.data(), &c) != 0) return "the row cannot be evaluated: " + rt::ErrorMessage(ws);
+    // Root finding leaves the state within the tolerance of the contact; a row farther past
+    // it went through it.
+    if (-gap > kPastRows * (atol_ + rtol_ * Scale(s))) {
       char buf[400];
-      std::snprintf(buf, sizeof buf,
-                    "joint '%s' is past its stop %s = %.9g by %.3g at time %.9g: an impact was missed "
-                    "(accumulating impacts, a Zeno sequence, or two crossings within one step are not "
-                    "handled yet)",
-                    st.joint.c_str(), SideName(s.upper).c_str(), lim, past, t);
+      if (s.plane >= 0)
+        std::snprintf(buf, sizeof buf,
+                      "contact '%s' is %.3g below its plane at time %.9g: an impact was missed (two crossings "
+                      "within one step are not handled)",
+                      Element(s).c_str(), -gap, t);
+      else
+        std::snprintf(buf, sizeof buf,
+                      "joint '%s' is past its stop %s = %.9g by %.3g at time %.9g: an impact was missed (two "
+                      "crossings within one step are not handled)",
+                      Element(s).c_str(), Where(s).c_str(),
+                      s.upper ? stops_[static_cast<size_t>(s.stop)].q_max : stops_[static_cast<size_t>(s.stop)].q_min,
+                      -gap, t);
       return buf;
     }
   }
@@ -135,8 +203,14 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
     if (int s = Reactions(ws, t, y, &lambda, nullptr); s != 0) return s;
   for (size_t i = 0; i < sides_.size(); ++i) {
     const Side& s = sides_[i];
-    const double q = y[stops_[static_cast<size_t>(s.stop)].q];
-    g[i] = s.resting ? Reaction(s, lambda[i]) : (s.upper ? Limit(s) - q : q - Limit(s));
+    if (s.accumulates_at > 0.0) {
+      g[i] = s.accumulates_at - t;
+    } else if (s.resting) {
+      g[i] = lambda[i];
+    } else {
+      double c = 0.0;
+      if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
+    }
   }
   return 0;
 }
@@ -144,52 +218,105 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
 int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   if (i < 0 || i >= Count()) return 0;
   Side& side = sides_[static_cast<size_t>(i)];
-  const rt::EndStop& st = stops_[static_cast<size_t>(side.stop)];
-  const std::string where = SideName(side.upper);
-  if (side.resting) {  // the reaction would pull: the joint leaves its stop
-    side.resting = false;
-    log_.push_back({t, st.joint, "leaves " + where});
+  if (side.accumulates_at > 0.0) {  // the accumulation point of its bounces: at rest from now
+    side.accumulates_at = 0.0;
+    log_.push_back({t, Element(side), "rests on " + Where(side) + " (accumulation point of the bounces)"});
     return 0;
   }
-  y[st.q] = Limit(side);  // the root is located to round-off in t; the joint stands on the stop
+  if (side.resting) {  // the reaction would pull: the contact leaves
+    side.resting = false;
+    log_.push_back({t, Element(side), "leaves " + Where(side)});
+    return 0;
+  }
+  double gap = 0.0, c = 0.0;
+  if (int s = Row(ws, t, y, side, &gap, J_.data(), &c); s != 0) return s;
+  double v = 0.0;
+  for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+  return Impact(ws, t, y, i, v);
+}
+
+int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double v) {
+  Side& side = sides_[static_cast<size_t>(i)];
+  const rt::EndStop* st = side.stop >= 0 ? &stops_[static_cast<size_t>(side.stop)] : nullptr;
+  if (st) y[st->q] = side.upper ? st->q_max : st->q_min;  // located to round-off in t: on the stop
   double* u = y + nq_;
-  const double v = u[st.u];
-  const bool into = side.upper ? v > 0.0 : v < 0.0;
-  const double e = st.restitution;
-  const bool rest = !into || e * std::abs(v) <= kRestSpeeds * (atol_ + rtol_ * std::abs(v));
-  // The joint's speed change, the resting joints' held at zero.
-  std::vector<int> rows = {st.u};
+  const double before = st ? u[st->u] : v;  // logged: the joint's speed, or the normal speed
+  const double e = Restitution(side);
+  bool rest = !(v < 0.0) || e * std::abs(v) <= kRestSpeeds * (atol_ + rtol_ * std::abs(v));
+  // Accumulating bounces (2): the gap's free acceleration, the other resting sides held.
+  double t_inf = 0.0;
+  if (!rest && e < 1.0) {
+    double a = 0.0;
+    if (int s = GapAcceleration(ws, t, y, i, &a); s != 0) return s;
+    const double rebound = e * std::abs(v);
+    if (a < 0.0 && rebound * rebound / (2.0 * -a) <= kZenoHeights * (atol_ + rtol_ * Scale(side))) {
+      t_inf = t + 2.0 * rebound / (-a * (1.0 - e));
+      rest = true;
+    }
+  }
+  // The side's gap rate change, the resting sides' held at zero.
+  std::vector<int> rows = {i};
   std::vector<double> targets = {rest ? -v : -(1.0 + e) * v};
-  for (const Side& s : sides_)
-    if (s.resting) rows.push_back(stops_[static_cast<size_t>(s.stop)].u), targets.push_back(0.0);
+  for (size_t k = 0; k < sides_.size(); ++k)
+    if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
   std::vector<double> du(static_cast<size_t>(nu_)), c;
   if (int s = Impulse(ws, t, y, rows, targets, du.data(), &c); s != 0) return s;
   for (int k = 0; k < nu_; ++k) u[k] += du[static_cast<size_t>(k)];
-  u[st.u] = rest ? 0.0 : -e * v;  // exactly Newton's law (du's round-off aside)
+  if (st) u[st->u] = rest ? 0.0 : -e * before;  // exactly Newton's law (du's round-off aside)
   for (const Side& s : sides_)
-    if (s.resting) u[stops_[static_cast<size_t>(s.stop)].u] = 0.0;
-  char buf[120];
-  std::snprintf(buf, sizeof buf, "impact at %s, speed %.17g -> %.17g", where.c_str(), v, u[st.u]);
-  log_.push_back({t, st.joint, buf});
+    if (s.resting && s.stop >= 0) u[stops_[static_cast<size_t>(s.stop)].u] = 0.0;
+  double after = st ? u[st->u] : 0.0;
+  if (!st) {
+    double gap = 0.0, cc = 0.0;
+    if (int s = Row(ws, t, y, side, &gap, J_.data(), &cc); s != 0) return s;
+    for (int k = 0; k < nu_; ++k) after += J_[static_cast<size_t>(k)] * u[k];
+  }
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "impact at %s, speed %.17g -> %.17g", Where(side).c_str(), before, after);
+  std::string kind = buf;
+  if (t_inf > 0.0) {
+    std::snprintf(buf, sizeof buf, " (the bounces accumulate at t = %.17g)", t_inf);
+    kind += buf;
+  }
+  if (v != 0.0) log_.push_back({t, Element(side), kind});  // (at rest on it at the start: no impact)
   if (!rest) return 0;
-  // At rest on the stop: held while the stop pushes; pulled away, it leaves at once.
+  // At rest on the contact: held while it pushes; pulled away, it leaves at once.
   side.resting = true;
   std::vector<double> lambda;
   if (int s = Reactions(ws, t, y, &lambda, nullptr); s != 0) return s;
-  if (Reaction(side, lambda[static_cast<size_t>(i)]) > 0.0)
-    log_.push_back({t, st.joint, "rests on " + where});
-  else
+  if (!(lambda[static_cast<size_t>(i)] > 0.0)) {
     side.resting = false;
+  } else if (t_inf > t) {
+    side.accumulates_at = t_inf;  // its rest is logged there (Functions: a time event)
+  } else {
+    log_.push_back({t, Element(side), "rests on " + Where(side)});
+  }
+  return 0;
+}
+
+int EndStopEvents::GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a) {
+  const bool was = sides_[static_cast<size_t>(i)].resting;
+  sides_[static_cast<size_t>(i)].resting = false;
+  std::vector<double> lambda, a_held(static_cast<size_t>(nu_));
+  int s = Reactions(ws, t, y, &lambda, a_held.data());
+  sides_[static_cast<size_t>(i)].resting = was;
+  if (s != 0) return s;
+  double gap = 0.0, c = 0.0;
+  if (int r = Row(ws, t, y, sides_[static_cast<size_t>(i)], &gap, J_.data(), &c); r != 0) return r;
+  *a = c;
+  for (int k = 0; k < nu_; ++k) *a += J_[static_cast<size_t>(k)] * a_held[static_cast<size_t>(k)];
   return 0;
 }
 
 int EndStopEvents::Start(rt::Workspace& ws, double t0, double* y0) {
   for (int i = 0; i < Count(); ++i) {
     const Side& s = sides_[static_cast<size_t>(i)];
-    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
-    const double v = y0[nq_ + st.u];
-    if (y0[st.q] == Limit(s) && (s.upper ? v >= 0.0 : v <= 0.0))
-      if (int r = Event(ws, t0, y0, i); r != 0) return r;
+    double gap = 0.0, c = 0.0;
+    if (int r = Row(ws, t0, y0, s, &gap, J_.data(), &c); r != 0) return r;
+    double v = 0.0;
+    for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y0[nq_ + k];
+    if (gap == 0.0 && v <= 0.0)
+      if (int r = Impact(ws, t0, y0, i, v); r != 0) return r;
   }
   return 0;
 }

@@ -1,6 +1,10 @@
-// End stops as events (docs/integrators.md "End stops"): the stop's gap as an event function,
-// the impact as a jump of the speeds by a generalized impulse through the mass matrix, and a
-// joint resting on its stop held there by the stop's reaction until that reaction would pull.
+// Unilateral contacts as events (docs/integrators.md "End stops"; docs/stdlib.md
+// "PlaneContact"): end stops (q_min / q_max of Revolute and Prismatic) and plane contacts, each
+// a gap g >= 0 with a row J (dg/dt = J u). A gap closing is an event; the impact is a jump of
+// the speeds by a generalized impulse through the mass matrix (Kane's impulsive form
+// M du = J^T lambda, Newton's restitution); a contact at rest is held by its reaction (one
+// more row) until that reaction would pull; bounces that accumulate (Zeno) pass to rest at
+// their accumulation time.
 #pragma once
 
 #include <string>
@@ -17,29 +21,30 @@ class EndStopEvents {
   EndStopEvents(const rt::Program& program, double rtol, double atol);
   bool Active() const { return !sides_.empty(); }
   int Count() const { return static_cast<int>(sides_.size()); }
-  // Why the start state cannot run ("" when it can): a joint past its stop.
-  std::string CheckStart(const double* y0) const;
-  // Why an output row cannot be trusted ("" when it can): a joint past its stop by more than
-  // the tolerance's reach, which an event missed (accumulating impacts, a graze inside one
-  // step). The run then stops (exit 2) rather than write a motion through the stop.
-  std::string CheckRow(double t, const double* y) const;
-  // The start on a stop: a joint at its limit moving into it, or at rest pressed onto it,
-  // handled as an event at t0 (no rows).
+  // Why the start state cannot run ("" when it can): a joint past its stop, a point below its plane.
+  std::string CheckStart(rt::Workspace& ws, double t0, const double* y0);
+  // Why an output row cannot be trusted ("" when it can): a gap negative by more than the
+  // tolerance's reach, which an event missed (a graze inside one step). The run then stops
+  // (exit 2) rather than write a motion through the stop or the plane.
+  std::string CheckRow(rt::Workspace& ws, double t, const double* y);
+  // The start on a contact: a gap closed and closing, or at rest pressed shut, handled as an
+  // event at t0 (no rows).
   int Start(rt::Workspace& ws, double t0, double* y0);
-  // ydot (from rt::Derivative at (t, y)) with the resting joints held: their accelerations
-  // made zero by their stops' reactions. 0, or Derivative's status codes.
+  // ydot (from rt::Derivative at (t, y)) with the resting contacts held: their gaps'
+  // accelerations made zero by their reactions. 0, or Derivative's status codes.
   int Hold(rt::Workspace& ws, double t, const double* y, double* ydot);
-  // g_i: a free side's gap (q - q_min, q_max - q), a resting one's reaction (pushing: > 0).
+  // g_i: a free side's gap, a resting one's reaction (pushing: > 0), an accumulating one's
+  // time left to its accumulation point.
   int Functions(rt::Workspace& ws, double t, const double* y, double* g);
-  // Event function i crossed zero at (t, y): an impact (or the joint comes to rest), or a
-  // resting joint leaves its stop. y jumps in place.
+  // Event function i crossed zero at (t, y): an impact (or the contact comes to rest), a
+  // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
   // The free speeds of the joints resting on their stops (held at zero).
   std::vector<int> RestingSpeeds() const {
     std::vector<int> out;
     for (const Side& s : sides_)
-      if (s.resting) out.push_back(stops_[static_cast<size_t>(s.stop)].u);
+      if (s.resting && s.stop >= 0) out.push_back(stops_[static_cast<size_t>(s.stop)].u);
     return out;
   }
 
@@ -47,29 +52,45 @@ class EndStopEvents {
   static constexpr double kRestSpeeds = 100.0;
   // An output row past a stop by more than this many (atol + rtol max(1, |limit|)) stops the run.
   static constexpr double kPastRows = 10.0;
+  // Bounces accumulate (Zeno) when the next flight's height v^2 / (2 |a|) (rebound speed v,
+  // the gap's free acceleration a towards the contact) is at most this many (atol + rtol
+  // max(1, |limit|)): lower flights are not resolved by the root finding.
+  static constexpr double kZenoHeights = 100.0;
 
  private:
   struct Side {
-    int stop = 0;
-    bool upper = false;  // q_max (else q_min)
+    int stop = -1;       // end stop (index into stops_), or -1
+    int plane = -1;      // plane contact (index into planes_), or -1
+    bool upper = false;  // a stop's q_max (else q_min)
     bool resting = false;
+    double accumulates_at = 0.0;  // resting through accumulated bounces until then (0: not)
   };
-  double Limit(const Side& s) const;
-  // Speeds' jump du = X c with (X c)_k = target for the speeds `rows` (X = M^-1 columns):
-  // the impulse that sets those joints' speed changes. 0, or Derivative's codes.
+  // Side i's gap, row J (nu) and bias c (d2g/dt2 = J udot + c) at (t, y).
+  int Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c);
+  double Restitution(const Side& s) const;
+  double Scale(const Side& s) const;  // the gap's length scale for the tolerances
+  std::string Element(const Side& s) const;
+  std::string Where(const Side& s) const;  // "q_min", "q_max", "the plane"
+  // Speeds' jump du = X c with J_r du = target_r for the sides `rows` (X = M^-1 J^T columns).
+  // 0, or Derivative's codes.
   int Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
               const std::vector<double>& targets, double* du, std::vector<double>* c);
   // Resting sides' reactions at (t, y) (in the order of sides_, 0 where not resting) and
   // the held accelerations (nu, may be null).
   int Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda, double* a_held);
-  double Reaction(const Side& s, double lambda) const { return s.upper ? -lambda : lambda; }
+  // The impact of side i at (t, y) with gap rate v < 0 (the bounce, a rest, or the
+  // accumulation of the bounces); y jumps in place.
+  int Impact(rt::Workspace& ws, double t, double* y, int i, double v);
+  // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
+  int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
 
   const rt::Program& program_;
   std::vector<rt::EndStop> stops_;
+  std::vector<rt::PlaneContact> planes_;
   std::vector<Side> sides_;
   int nq_ = 0, nu_ = 0;
   double rtol_ = 0.0, atol_ = 0.0;
-  std::vector<double> ydot_, x_, a_;  // scratch
+  std::vector<double> ydot_, x_, a_, J_;  // scratch
   std::vector<EventRecord> log_;
 };
 

@@ -369,9 +369,16 @@ class Dop853Stepper final : public Stepper {
     if (rhs_.EventFunctions(t_, y_.data(), g_new_.data()) != 0) return kRhsFatal;
     event_pending_ = false;
     for (size_t i = 0; i < g_new_.size(); ++i) {
-      if (!(g_old_[i] > 0.0 && g_new_[i] <= 0.0)) continue;
+      double a = t_old_, ga = g_old_[i];
+      if (ga == 0.0 && g_new_[i] < 0.0) {  // from zero (a restart on a contact): did it rise first?
+        if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
+        const int rose = RiseFromZero(static_cast<int>(i), &a, &ga);
+        if (rose < 0) return kRhsFatal;
+        if (rose == 0) continue;
+      }
+      if (!(ga > 0.0 && g_new_[i] <= 0.0)) continue;
       if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-      const double root = Crossing(static_cast<int>(i), g_old_[i], g_new_[i]);
+      const double root = Crossing(static_cast<int>(i), a, ga, g_new_[i]);
       if (std::isnan(root)) return kRhsFatal;
       if (!event_pending_ || root < event_t_) {
         event_pending_ = true;
@@ -384,9 +391,33 @@ class Dop853Stepper final : public Stepper {
     return kOk;
   }
 
-  // Event function i's zero in [t_old_, t_] (ga > 0 >= gb there); NaN when it cannot be evaluated.
-  double Crossing(int i, double ga, double gb) {
-    double a = t_old_, b = t_;
+  // Event function i, zero at the step's start and negative at its end, sampled on the dense
+  // output at h/2, h/4, ... h/2^kSamples: a step longer than a flight from a contact (a short
+  // rebound) rises and falls back inside it, however short the flight. 1 with *a, *ga a
+  // positive sample, 0 when none is, -1 on failure.
+  int RiseFromZero(int i, double* a, double* ga) {
+    constexpr int kSamples = 48;
+    std::vector<double>& y = event_y_;
+    y.resize(static_cast<size_t>(n_));
+    std::vector<double> g(g_new_.size());
+    double f = 1.0;
+    for (int k = 1; k <= kSamples; ++k) {
+      f *= 0.5;
+      const double t = t_old_ + (t_ - t_old_) * f;
+      if (!(t > t_old_)) break;
+      Interpolate(t, y.data());
+      if (rhs_.EventFunctions(t, y.data(), g.data()) != 0) return -1;
+      if (g[static_cast<size_t>(i)] > 0.0) {
+        *a = t, *ga = g[static_cast<size_t>(i)];
+        return 1;
+      }
+    }
+    return 0;
+  }
+
+  // Event function i's zero in [a, t_] (ga > 0 >= gb there); NaN when it cannot be evaluated.
+  double Crossing(int i, double a, double ga, double gb) {
+    double b = t_;
     int side = 0;  // which end was kept last time (Illinois: halve that end's value)
     std::vector<double>& y = event_y_;
     y.resize(static_cast<size_t>(n_));

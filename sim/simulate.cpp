@@ -9,6 +9,7 @@
 
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
+#include "sim/lift_off.h"
 #include "sim/when_events.h"
 #include "sim/test_hooks.h"
 
@@ -46,21 +47,27 @@ class EngineOde final : public OdeSystem {
     if (fault_ && s == 0) fault_(t, y, ydot);
     return s;
   }
-  // Events: the end stops' (sim/end_stops.h), then the when clauses' (sim/when_events.h);
-  // none without either.
+  // Events: the end stops' and plane contacts' (sim/end_stops.h) or the rolling contacts'
+  // normal forces (sim/lift_off.h; the compiler never lets both in one model), then the when
+  // clauses' (sim/when_events.h); none without any.
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
+  void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
   void SetWhens(WhenEvents* whens) {
     whens_ = whens;
     state_names_ = rt::StateNames(program_);
   }
-  int NumStops() const { return stops_ ? stops_->Count() : 0; }
+  int NumStops() const { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
   int NumEvents() const override { return NumStops() + (whens_ ? whens_->Count() : 0); }
   int EventFunctions(double t, const double* y, double* g) override {
-    if (stops_)
-      if (int s = stops_->Functions(ws_, t, y, g); s != 0) return s;
+    if (stops_ || lift_)
+      if (int s = stops_ ? stops_->Functions(ws_, t, y, g) : lift_->Functions(t, y, g); s != 0) return s;
     return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
   }
   int Event(double t, double* y, int i) override {
+    if (i < NumStops() && !stops_) {
+      event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
+      return -1;
+    }
     std::vector<double> before(y, y + Size());
     const size_t logged = stops_ ? stops_->Log().size() : 0;
     int s = 0;
@@ -90,6 +97,7 @@ class EngineOde final : public OdeSystem {
     return s;
   }
   std::string FailureCause() const override {
+    if (!event_cause_.empty()) return event_cause_;
     if (from_monitor_) return BridgeError(*bridge_);
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
@@ -154,7 +162,9 @@ class EngineOde final : public OdeSystem {
   const rt::Program& program_;
   rt::Workspace& ws_;
   std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
-  EndStopEvents* stops_ = nullptr;             // end stops (null: none)
+  EndStopEvents* stops_ = nullptr;             // end stops and plane contacts (null: none)
+  LiftOffGuard* lift_ = nullptr;               // rolling contacts' normal forces (null: none)
+  std::string event_cause_;                    // why an event stopped the run ("" : none did)
   WhenEvents* whens_ = nullptr;                // when clauses (null: none)
   std::vector<std::string> state_names_;       // y's entries (rt::StateNames), for the events' changes
   std::vector<EventRecord> events_;            // every event, in time order
@@ -260,15 +270,24 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
   std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
   rt::InitialState(program, y0.data());
-  // End stops: events in every integrator (sim/end_stops.h); a start on a stop is its first event.
+  // End stops and plane contacts: events in every integrator (sim/end_stops.h); a start on
+  // a closed contact is its first event.
   EndStopEvents stops(program, options.rtol, options.atol);
   if (stops.Active()) {
-    if (std::string why = stops.CheckStart(y0.data()); !why.empty()) return UsageError(why);
-    std::vector<double> x(static_cast<size_t>(rt::NumU(program)));
     const double t0 = grid.start;
-    if (rt::InverseMassColumn(program, *ws_rhs, t0, y0.data(), 0, x.data()) != 0 ||
-        stops.Start(*ws_rhs, t0, y0.data()) != 0)
-      return UsageError("end stops: " + rt::ErrorMessage(*ws_rhs));
+    if (std::string why = stops.CheckStart(*ws_rhs, t0, y0.data()); !why.empty()) return UsageError(why);
+    if (stops.Start(*ws_rhs, t0, y0.data()) != 0) return UsageError("contacts at the start: " + rt::ErrorMessage(*ws_rhs));
+  }
+  // Rolling contacts: a normal force turning tensile stops the run (sim/lift_off.h).
+  LiftOffGuard lift(program);
+  if (lift.Active()) {
+    if (std::string why = lift.Cause(grid.start, y0.data(), -1); !why.empty()) {
+      SimResult r;
+      r.status = SimResult::Status::kNumericalFailure;
+      r.fail_time = grid.start;
+      r.message = why;
+      return r;
+    }
   }
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
@@ -308,7 +327,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
-    } else if (stops.Active() && !(past_stop = stops.CheckRow(t, y)).empty()) {
+    } else if (stops.Active() && !(past_stop = stops.CheckRow(*ws_out, t, y)).empty()) {
       *cause = past_stop;
       status = -1;  // the row is not written: the rows before it are on disk
     } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
@@ -324,6 +343,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   };
   EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
   if (stops.Active()) ode.SetStops(&stops);
+  if (lift.Active()) ode.SetLiftOff(&lift);
   WhenEvents whens(program);
   if (whens.Active()) ode.SetWhens(&whens);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);

@@ -62,7 +62,10 @@ ContactPoint ContactAt(const Program& p, const Workspace& ws, const ContactModel
       cp.vPg = v_C - c.radius * gdot;
       break;
     }
-    case ContactType::KnifeEdge: cp.P = cp.C; break;  // (3)
+    case ContactType::KnifeEdge:
+    case ContactType::Plane:  // never a ContactModel (Program::plane_contacts)
+      cp.P = cp.C;
+      break;  // (3)
   }
   cp.vPm = v_C + cp.w.cross(cp.P - cp.C);  // (4)
   if (c.type == ContactType::KnifeEdge) cp.vPg = cp.vPm;
@@ -129,6 +132,7 @@ void ContactDirections(const ContactModel& c, const ContactPoint& cp, Vec3* lon,
     case ContactType::RollingDisk: l = n.cross(cp.e_W); break;  // rolling direction
     case ContactType::RollingSphere: l = cp.vPg - n * n.dot(cp.vPg); break;
     case ContactType::KnifeEdge: l = cp.e_W - n * n.dot(cp.e_W); break;
+    case ContactType::Plane: break;  // never a ContactModel
   }
   *lon = l.norm() > 1e-12 ? Vec3(l.normalized()) : c.t1_W;
   *lat = n.cross(*lon);

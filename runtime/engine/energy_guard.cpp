@@ -23,6 +23,8 @@ std::string NonConservativeCause(const Program& p) {
     if (p.joints[static_cast<size_t>(s)].restitution < 1.0) return "the end stop of joint '" + p.joints[static_cast<size_t>(s)].name + "'";
   for (const WhenModel& w : p.whens)  // a reinit sets the state to what the model says
     if (!w.reinits.empty()) return "the reinit in " + w.name;
+  for (const PlaneContactModel& c : p.plane_contacts)  // likewise
+    if (c.restitution < 1.0) return "the plane contact '" + c.name + "'";
   for (const TreeJoint& j : p.joints)
     if (j.mu != 0.0) return "the friction of joint '" + j.name + "'";
   if (!p.friction_joints.empty()) return "the friction of joint '" + p.joints[static_cast<size_t>(p.friction_joints.front())].name + "'";

@@ -174,6 +174,19 @@ struct ContactModel {
   int row0 = 0, nrows = 0;
 };
 
+// Unilateral contact of a frame's origin O with the fixed plane n . x = d (flat::Contact of
+// type Plane, stdlib PlaneContact): gap g = n . p_WO - d >= 0. Not a constraint row: the
+// integrators' events handle it (sim/end_stops.h; runtime/engine/plane_contacts.cpp).
+struct PlaneContactModel {
+  std::string name;
+  flat::SourceLoc loc;
+  int frame = -1;              // flat frame whose origin touches the plane
+  int body = -1;               // tree body of that frame (path_speeds filled)
+  Vec3 n_W = Vec3::UnitY();    // unit normal, world; the free side is n . x > d
+  double d = 0.0;              // plane offset (m)
+  double restitution = 0.0;    // Newton's coefficient, 0..1
+};
+
 // The sparse K-vector system: unknowns and equations per body L in blocks of 12:
 // x = [a_cm (3), alpha (3), udot_free_j (nf), s_j (6 - nf)], rows = [kinematic (6), Newton-Euler (6)].
 struct SparsePattern;  // defined in kane_sparse.cpp
@@ -268,6 +281,7 @@ struct Program {
   std::vector<int> friction_indeterminate;  // tree joints whose Coulomb friction reads an indeterminate normal force
   std::vector<int> friction_joints;     // tree joints with Coulomb friction (runtime/kane/friction.cpp)
   std::vector<int> stop_joints;         // tree joints with an end stop (q_min or q_max); empty: no events
+  std::vector<PlaneContactModel> plane_contacts;  // stdlib PlaneContact; empty: no events
   // Start speeds given non-zero that the assembly's velocity projection changed (warning
   // W315, compiler/compiler.h StartSpeedsWarning): the message ("" when none) and the place of the
   // constraint with the largest start residual.

@@ -1,0 +1,89 @@
+// Plane contacts (runtime/runtime.h PlaneContacts, PlaneContactRow, InverseMassTimes): what the
+// integrators' events (sim/end_stops.cpp) read of a unilateral contact of a frame's origin O
+// with the plane n . x = d. For the speeds u of the tree (seed 000 eq. 11.16, contacts.cpp (4)):
+//   g     = n . p_WO - d                                                              (1)
+//   dg/dt = J u,      J_s = n . (H^v_s + H^w_s x (p_WO - p_WJs))   (J_s: the joint of speed s)   (2)
+//   d2g/dt2 = J udot + c,  c = n . (a_o + alpha x r + w x (v_O - v_o)) with free udot = 0,
+//             r = p_WO - p_WB (o: the origin of O's body B)                           (3)
+#include <algorithm>
+#include <cmath>
+
+#include "runtime/kane/kane.h"
+#include "runtime/kinematics/kinematics.h"
+#include "runtime/program/program.h"
+#include "runtime/runtime.h"
+
+namespace kanesim::rt {
+
+std::vector<PlaneContact> PlaneContacts(const Program& p) {
+  std::vector<PlaneContact> out;
+  for (const PlaneContactModel& c : p.plane_contacts) out.push_back({c.name, c.restitution});
+  return out;
+}
+
+int PlaneContactRow(const Program& p, Workspace& ws, double t, const double* y, int i, double* gap, double* J,
+                    double* bias) {
+  const PlaneContactModel& c = p.plane_contacts[static_cast<size_t>(i)];
+  if (int s = UnpackState(p, ws, t, y); s != 0) return s;
+  MotionKinematics(p, ws);  // a tree (CompilePlaneContacts refuses constraint rows)
+  Vec3 p_WO, v_WO, w_WB;
+  Mat3 R_WO;
+  FramePose(p, ws, c.frame, &p_WO, &R_WO);
+  FrameMotion(p, ws, c.frame, &v_WO, &w_WB);
+  const Vec3& n = c.n_W;
+  *gap = n.dot(p_WO) - c.d;  // (1)
+  std::fill(J, J + p.nu, 0.0);
+  for (int s : p.bodies[static_cast<size_t>(c.body)].path_speeds) {
+    const auto h = ws.H_W.col(s);
+    const Vec3 o = ws.p_WB[static_cast<size_t>(p.joint_of_speed[static_cast<size_t>(s)])];
+    const int f = p.u_free_of[static_cast<size_t>(s)];
+    if (f >= 0) J[f] += n.dot(h.head<3>() + h.tail<3>().cross(p_WO - o));  // (2)
+  }
+  const auto B = static_cast<size_t>(c.body);
+  const Vec3 r = p_WO - ws.p_WB[B];
+  *bias = n.dot(ws.a_bias_o[B] + ws.alpha_bias[B].cross(r) + ws.w_WB[B].cross(v_WO - ws.v_WBo[B]));  // (3)
+  return 0;
+}
+
+// Kane's equations are affine in the applied generalized forces: udot(Q + s F) - udot(Q)
+// = s M^-1 F exactly. The second pass takes s so large that the difference is not lost
+// in the rounding of udot(Q) (relative error ~ 1e-3 eps).
+int InverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F, double* x) {
+  if (!p.rows.empty() || !p.friction_joints.empty()) {
+    ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction is not supported yet"
+                              : "an impulse in a mechanism with closed loops or contacts is not supported yet";
+    return -1;
+  }
+  double f_max = 0.0;
+  for (int i = 0; i < p.nu; ++i) f_max = std::max(f_max, std::abs(F[i]));
+  if (!(f_max > 0.0) || !std::isfinite(f_max)) {
+    std::fill(x, x + p.nu, 0.0);
+    return f_max == 0.0 ? 0 : -1;
+  }
+  std::vector<double> ydot(static_cast<size_t>(p.nq + p.nu));
+  if (int s = Derivative(p, ws, t, y, ydot.data()); s != 0) return s;
+  const double* a0 = ydot.data() + p.nq;
+  double a_max = 0.0;
+  for (int i = 0; i < p.nu; ++i) a_max = std::max(a_max, std::abs(a0[i]));
+  double scale = 1.0;  // of the unit force F / f_max
+  for (int pass = 0; pass < 2; ++pass) {
+    if (int s = AppliedForces(p, ws); s != 0) return s;
+    for (int i = 0; i < p.nu; ++i) ws.Q[p.u_free[static_cast<size_t>(i)]] += scale * F[i] / f_max;
+    if (int s = SolveAccelerations(p, ws); s != 0) return s;
+    double xF = 0.0, x_max = 0.0;
+    for (int i = 0; i < p.nu; ++i) {
+      x[i] = (ws.udot[p.u_free[static_cast<size_t>(i)]] - a0[i]) / scale;
+      xF += x[i] * F[i] / f_max;
+      x_max = std::max(x_max, std::abs(x[i]));
+    }
+    if (!(xF > 0.0)) {  // M is positive definite: F^T M^-1 F > 0
+      ws.error = "the mass matrix is singular for an impulse";
+      return -1;
+    }
+    scale = std::max(1.0, 1e3 * a_max / x_max);
+  }
+  for (int i = 0; i < p.nu; ++i) x[i] *= f_max;
+  return 0;
+}
+
+}  // namespace kanesim::rt

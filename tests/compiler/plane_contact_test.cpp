@@ -1,0 +1,302 @@
+// Plane contacts and accumulating impacts (issue 41): the bouncing ball against its closed
+// form (impact times, rebound heights, the accumulation point), a free body's impact against
+// the impulse laws (energy, Newton's law, momentum along the normal only), and a pendulum
+// chattering on its stop against the exact (elliptic-integral) series of its flights, and a
+// rolling contact whose normal force would turn tensile.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "tests/compiler/compile_test_util.h"
+
+namespace kanesim::test {
+namespace {
+
+constexpr double kG = 9.81;
+// Event times located by root finding at rtol = atol = kTol: to this (relative).
+constexpr double kTol = 1e-11;
+constexpr double kEventTol = 1e-10;
+
+// The integrators whose motion of a point under constant acceleration is exact to round-off
+// (explicit Runge-Kutta, and IDA); CVODE's (Adams and BDF) is about atol off.
+bool Exact(const IntegratorChoice& how) {
+  return how.kind != rt::Integrator::CvodeAdams && how.kind != rt::Integrator::CvodeBdf;
+}
+
+std::string Num(double x) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", x);
+  return b;
+}
+
+// A point mass on a vertical prismatic joint, dropped from h onto the plane y = 0.
+std::string Ball(double h, double e) {
+  return "model Ball\n"
+         "  World world(g = {0, -9.81, 0});\n"
+         "  Prismatic lift(axis = {0, 1, 0}, q(start = " + Num(h) + "));\n"
+         "  Body ball(m = 2);\n"
+         "  PlaneContact floor(n = {0, 1, 0}, d = 0, restitution = " + Num(e) + ");\n"
+         "equation\n"
+         "  connect(world.frame_b, lift.frame_a);\n"
+         "  connect(lift.frame_b, ball.frame_a);\n"
+         "  connect(lift.frame_b, floor.frame_a);\n"
+         "end Ball;\n";
+}
+
+// The pairs of rows at one time (an event's left and right limits): index of the left row.
+std::vector<size_t> EventRows(const sim::MemorySink& s) {
+  std::vector<size_t> at;
+  for (size_t i = 0; i + 1 < s.times.size(); ++i)
+    if (s.times[i] == s.times[i + 1]) at.push_back(i);
+  return at;
+}
+
+bool Has(const std::string& s, const char* part) { return s.find(part) != std::string::npos; }
+
+// Ball dropped from h with restitution e: t_1 = sqrt(2 h / g), t_{k+1} - t_k = 2 e^k t_1,
+// rebound speed e^k sqrt(2 g h) (height e^{2k} h), accumulation at t_inf = t_1 (1 + e) / (1 - e).
+// If this fails, an impact is not where the closed form puts it, Newton's law is not applied
+// along the plane's normal, the bounces do not pass to rest at their accumulation point (a
+// step-size underflow, an endless sequence or a rest at the wrong time), the integrators
+// disagree, or a row is below the plane.
+TEST(PlaneContact, BallBouncesToRestAtTheClosedFormTimes) {
+  const double h = 1.0;
+  const double t1 = std::sqrt(2 * h / kG), v1 = std::sqrt(2 * kG * h);
+  for (double e : {0.5, 0.8}) {
+    const double t_inf = t1 * (1 + e) / (1 - e);
+    auto l = LoadModel(Ball(h, e), {}, {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      sim::SimResult r;
+      sim::MemorySink s = RunWith(*l->prog, how, t_inf + 0.5, 0.05, {"lift.q", "lift.u"}, &r, kTol);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+      const auto& ev = r.stats.events;
+      ASSERT_GE(ev.size(), 6u) << how.name;
+      const std::vector<size_t> at = EventRows(s);
+      ASSERT_EQ(at.size(), ev.size()) << how.name;
+      double tk = t1, time_err = 0.0;
+      for (size_t k = 0; k + 1 < ev.size(); ++k) {  // impacts; the last event is the rest
+        EXPECT_EQ(ev[k].element, "floor");
+        EXPECT_TRUE(Has(ev[k].kind, "impact at the plane")) << ev[k].kind;
+        // A crossing at speed v is located to the gap's error over v: exact for the explicit
+        // methods and IDA on the parabola; CVODE's located states are about atol off in the
+        // gap (measured: 3e-12 at atol 1e-11), which the slow late bounces magnify.
+        // Each impact time carries the errors of those before it.
+        const double vk = std::pow(e, k) * v1;
+        time_err += Exact(how) ? 0.0 : 10 * kTol / vk;
+        EXPECT_NEAR(ev[k].time, tk, kEventTol * tk + time_err) << how.name << " e = " << e << " impact " << k + 1;
+        const double after = s.rows[at[k] + 1][1], before = s.rows[at[k]][1];
+        EXPECT_NEAR(before, -vk, 1e-9 * v1 + kG * time_err) << how.name << " impact " << k + 1;
+        if (k + 2 < ev.size()) {
+          EXPECT_NEAR(after, -e * before, 1e-12 * v1) << how.name;  // height e^{2(k+1)} h
+        } else {  // the last impact ends the bounces: they accumulate
+          EXPECT_TRUE(Has(ev[k].kind, "accumulate")) << ev[k].kind;
+          EXPECT_NEAR(after, 0.0, 1e-12 * v1) << how.name;
+        }
+        tk += 2 * std::pow(e, k + 1) * t1;
+      }
+      EXPECT_TRUE(Has(ev.back().kind, "rests on the plane (accumulation point")) << ev.back().kind;
+      // (2) of sim/end_stops.cpp from the last bounce's speed, off by g time_err there.
+      EXPECT_NEAR(ev.back().time, t_inf, Exact(how) ? kEventTol * t_inf : 1e-5 * t_inf) << how.name << " e = " << e;
+      for (size_t i = 0; i < s.rows.size(); ++i) {
+        EXPECT_GE(s.rows[i][0], -1e-10) << how.name << ": row " << i << " below the plane";
+        if (s.times[i] > t_inf) {
+          EXPECT_NEAR(s.rows[i][0], 0.0, 1e-9) << how.name << " t = " << s.times[i];
+          EXPECT_NEAR(s.rows[i][1], 0.0, 1e-9) << how.name << " t = " << s.times[i];
+        }
+      }
+    }
+  }
+}
+
+// A ball (m = 2) resting on the plane, pulled up by a force 4 t: the plane's reaction
+// m g - 4 t pushes until t_l = m g / 4, then the ball lifts off and rises by
+// y = (2/3)(t - t_l)^3 / m (from y'' = (4 t - m g) / m = 4 (t - t_l) / m).
+// If this fails, a resting contact is not held by a compressive reaction (it sinks or
+// drifts), or it does not leave when the reaction would turn tensile (it keeps pulling).
+TEST(PlaneContact, RestsUntilTheReactionWouldPullThenLiftsOff) {
+  const double m = 2, t_l = m * kG / 4;
+  std::string text = Ball(0.0, 0.0);
+  text.replace(text.find("equation\n"), 9,
+               "  WorldForce pull(force = {0, 4 * time, 0});\nequation\n  connect(lift.frame_b, pull.frame_b);\n");
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 6.0, 0.1, {"lift.q", "lift.u"}, &r, kTol);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_EQ(r.stats.events.size(), 2u) << how.name;
+    EXPECT_EQ(r.stats.events[0].kind, "rests on the plane") << how.name;
+    EXPECT_EQ(r.stats.events[0].time, 0.0) << how.name;
+    EXPECT_EQ(r.stats.events[1].kind, "leaves the plane") << how.name;
+    EXPECT_NEAR(r.stats.events[1].time, t_l, 1e-9) << how.name;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      const double t = s.times[i];
+      const double y = t < t_l ? 0.0 : (2.0 / 3.0) * std::pow(t - t_l, 3) / m;
+      EXPECT_NEAR(s.rows[i][0], y, 1e-8) << how.name << " t = " << t;
+    }
+  }
+}
+
+// A spinning free body whose contact point is off its mass centre hits a tilted plane. The
+// plane pushes along its normal only, at the contact point. If this fails, the impulse is
+// not M du = J^T lambda with J the contact's normal row: the normal speed after is not -e
+// times before, the momentum changes across the normal, or an elastic impact changes the
+// kinetic energy.
+TEST(PlaneContact, FreeBodyImpulseAlongTheNormal) {
+  const double nx = 0.3, ny = 1.0, nn = std::hypot(nx, ny);
+  for (double e : {1.0, 0.6}) {
+    const std::string text =
+        "model F\n"
+        "  World world(g = {0, -9.81, 0});\n"
+        "  FreeMotion free(q(start = {0, 1, 0, 1, 0, 0, 0}), u(start = {0.4, 0, 0.1, 0.5, -1, 2}));\n"
+        "  Body body(m = 2, I = diagonal({0.1, 0.2, 0.3}));\n"
+        "  FixedTranslation arm(r = {0.2, -0.3, 0.05});\n"
+        "  PlaneContact tip(n = {" + Num(nx) + ", " + Num(ny) + ", 0}, d = -0.2, restitution = " + Num(e) + ");\n"
+        "equation\n"
+        "  connect(world.frame_b, free.frame_a);\n"
+        "  connect(free.frame_b, body.frame_a);\n"
+        "  connect(free.frame_b, arm.frame_a);\n"
+        "  connect(arm.frame_b, tip.frame_a);\n"
+        "end F;\n";
+    auto l = LoadModel(text, {}, {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      sim::SimResult r;
+      sim::MemorySink s = RunWith(*l->prog, how, 1.0, 0.1,
+                                  {"free.u[1]", "free.u[2]", "free.u[3]", "arm.frame_b.v[1]", "arm.frame_b.v[2]",
+                                   "arm.frame_b.v[3]", "kinetic_energy", "arm.frame_b.r[1]", "arm.frame_b.r[2]"},
+                                  &r, 1e-11);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+      const std::vector<size_t> at = EventRows(s);
+      ASSERT_GE(at.size(), 1u) << how.name;
+      for (size_t i : at) {
+        const std::vector<double>& a = s.rows[i];
+        const std::vector<double>& b = s.rows[i + 1];
+        const double vn_a = (nx * a[3] + ny * a[4]) / nn, vn_b = (nx * b[3] + ny * b[4]) / nn;
+        EXPECT_LT(vn_a, 0.0) << how.name;
+        EXPECT_NEAR(vn_b, -e * vn_a, 1e-10) << how.name << " t = " << s.times[i];
+        // m dv_cm parallel to n: its component across n (in the x-y plane) and along z vanish.
+        EXPECT_NEAR(-ny * (b[0] - a[0]) + nx * (b[1] - a[1]), 0.0, 1e-10) << how.name;
+        EXPECT_NEAR(b[2] - a[2], 0.0, 1e-10) << how.name;
+        if (e == 1.0) {
+          EXPECT_NEAR(b[6], a[6], 1e-10 * a[6]) << how.name << ": elastic";
+        }
+        EXPECT_LE(b[6], a[6] * (1 + 1e-12)) << how.name;
+      }
+      for (size_t i = 0; i < s.rows.size(); ++i)
+        EXPECT_GE((nx * s.rows[i][7] + ny * s.rows[i][8]) / nn + 0.2, -1e-9) << how.name << " row " << i;
+    }
+  }
+}
+
+// A uniform rod (L = 1, m = 1) on a revolute about z under gravity -y, phi = q + pi/2 from
+// hanging down: phi'' = -w^2 sin(phi). Released at rest at phi0 it falls onto its stop at
+// phi_s (0 < phi_s < phi0) with gravity pressing it there, and chatters to rest. Time from
+// rest at phi_a down to phi (both in (0, pi)): (K(k) - F(asin(sin(phi/2) / k), k)) / w,
+// k = sin(phi_a / 2).
+const double kW = std::sqrt(1.5 * kG);
+double FallTime(double phi_a, double phi) {
+  const double k = std::sin(phi_a / 2);
+  return (std::comp_ellint_1(k) - std::ellint_1(k, std::asin(std::sin(phi / 2) / k))) / kW;
+}
+
+// The impacts at phi_s have speeds e^j v1 (energy is kept in flight); after impact j the rod
+// rises to phi_j with cos(phi_j) = cos(phi_s) - (e^j v1)^2 / (2 w^2) and falls back:
+// t_inf = t1 + sum_j 2 FallTime(phi_j, phi_s). If this fails, a joint chattering on its stop
+// does not pass to rest at its accumulation point (a step-size underflow, a row past the
+// stop or a rest at the wrong time).
+TEST(PlaneContact, ChatteringJointRestsAtTheAccumulationPoint) {
+  const double halfpi = std::acos(0.0), phi0 = 1.0, phis = 0.5, e = 0.6;
+  const double t1 = FallTime(phi0, phis);
+  const double v1 = std::sqrt(2 * kW * kW * (std::cos(phis) - std::cos(phi0)));
+  double t_inf = t1;
+  for (int j = 1; j < 200; ++j) {
+    const double v = std::pow(e, j) * v1;
+    // The flight up to phi_j and back; below 1e-5 rad/s (phi_j - phi_s ~ 1e-11) under the
+    // constant acceleration w^2 sin(phi_s) (relative error ~ 1e-5 of a term < 1e-5 s), where
+    // the elliptic form loses its digits.
+    double term = 2 * v / (kW * kW * std::sin(phis));
+    if (v > 1e-5) {
+      const double c = std::cos(phis) - v * v / (2 * kW * kW);
+      term = 2 * FallTime(2 * std::asin(std::sqrt((1 - c) / 2)), phis);
+    }
+    t_inf += term;
+    if (term < 1e-18) break;
+  }
+  const double q_min = phis - halfpi;
+  const std::string text =
+      "model P\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  Revolute j1(axis = {0, 0, 1}, q(start = " + Num(phi0 - halfpi) + "), q_min = " + Num(q_min) +
+      ", restitution = " + Num(e) + ");\n"
+      "  Rod rod(L = 1, m = 1);\n"
+      "equation\n"
+      "  connect(world.frame_b, j1.frame_a);\n"
+      "  connect(j1.frame_b, rod.frame_a);\n"
+      "end P;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, t_inf + 0.3, 0.02, {"j1.q", "j1.u"}, &r, kTol);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_GE(r.stats.events.size(), 4u) << how.name;
+    EXPECT_NEAR(r.stats.events[0].time, t1, 1e-9) << how.name;
+    const sim::EventRecord& rest = r.stats.events.back();
+    EXPECT_EQ(rest.kind, "rests on q_min (accumulation point of the bounces)") << how.name;
+    // DOP853 to 1e-10. The others locate the slow last rebounds (v ~ 2e-4 rad/s) to about
+    // atol / v, which (2) of sim/end_stops.cpp carries into t_inf (measured: 1.5e-9 ARKODE,
+    // 8.9e-9 IDA, 5.5e-7 CVODE, 2.1e-6 CVODE-BDF); resting at the last impact instead would
+    // be 1.2e-4 early.
+    const double tol_inf = how.kind == rt::Integrator::Dop853 ? kEventTol * t_inf : 1e-5;
+    EXPECT_NEAR(rest.time, t_inf, tol_inf) << how.name;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      EXPECT_GE(s.rows[i][0], q_min - 10 * (kTol + kTol * std::abs(q_min))) << how.name << " row " << i;
+      if (s.times[i] > t_inf) {
+        EXPECT_EQ(s.rows[i][1], 0.0) << how.name << " t = " << s.times[i];
+      }
+    }
+  }
+}
+
+// A sphere (m = 1) rolling on the plane y = 0, pulled up by a force 2 t: the plane's normal
+// force m g - 2 t turns tensile at t = m g / 2, which a rolling contact (a bilateral
+// constraint) would exert. If this fails, the run keeps pulling the sphere onto the plane
+// (exit 0), or it stops elsewhere than where the normal force crosses zero, or without the
+// rows before.
+TEST(RollingContact, ATensileNormalForceStopsTheRun) {
+  const double t_pull = kG / 2;
+  const std::string text =
+      "model Lift\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));\n"
+      "  Sphere ball(radius = 0.1, m = 1);\n"
+      "  RollingSphere contact(radius = 0.1, n = {0, 1, 0});\n"
+      "  WorldForce pull(force = {0, 2 * time, 0});\n"
+      "equation\n"
+      "  connect(world.frame_b, free.frame_a);\n"
+      "  connect(free.frame_b, ball.frame_a);\n"
+      "  connect(free.frame_b, contact.frame_a);\n"
+      "  connect(free.frame_b, pull.frame_b);\n"
+      "end Lift;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 6.0, 0.1, {"contact.normal_force"}, &r, 1e-9);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kNumericalFailure) << how.name << ": " << r.message;
+    EXPECT_TRUE(Has(r.message, "contact 'contact': its normal force turns tensile")) << r.message;
+    EXPECT_NEAR(r.fail_time, t_pull, 1e-7) << how.name;
+    ASSERT_GE(s.rows.size(), 49u) << how.name << ": the rows before it are kept";
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      EXPECT_LE(s.times[i], r.fail_time) << how.name;
+      EXPECT_NEAR(s.rows[i][0], kG - 2 * s.times[i], 1e-6) << how.name << " t = " << s.times[i];
+    }
+  }
+}
+
+}  // namespace
+}  // namespace kanesim::test
