@@ -349,6 +349,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
+  const size_t logged_at_start = stops.Log().size();  // a start on a contact (EndStopEvents::Start)
   Clock::time_point start = Clock::now();
   IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
   Clock::duration total = Clock::now() - start;
@@ -357,7 +358,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.integrator = ir.stats;
   result.stats.rows = ir.rows;
   result.stats.bridges = ir.bridges;
-  result.stats.events = ode.Events();
+  result.stats.events.assign(stops.Log().begin(), stops.Log().begin() + static_cast<long>(logged_at_start));
+  result.stats.events.insert(result.stats.events.end(), ode.Events().begin(), ode.Events().end());
   result.stats.terminated = ir.terminated;
   result.stats.terminate_time = ir.terminate_time;
   result.stats.terminate_message = ir.terminate_message;
