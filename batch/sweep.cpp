@@ -38,22 +38,6 @@ bool IsStartName(const flat::Mechanism& mech, const std::string& name) {
   return false;
 }
 
-// Parameter values of `mech` with `overrides` (index -> value) applied: the same order
-// and rule as flat::EvaluateParams, so that parameters bound to an overridden one follow
-// it (a rod's inertia follows its mass).
-std::vector<double> ParamValues(const flat::Mechanism& mech, const std::map<size_t, double>& overrides) {
-  std::vector<double> pv(mech.params.size(), 0.0);
-  for (size_t i = 0; i < mech.params.size(); ++i) {
-    const flat::Param& p = mech.params[i];
-    auto it = overrides.find(i);
-    if (it != overrides.end())
-      pv[i] = it->second;
-    else
-      pv[i] = (p.binding == flat::kNoExpr || p.user_set) ? p.value : flat::EvalParamExpr(mech, pv, p.binding);
-  }
-  return pv;
-}
-
 std::vector<std::string> SignalsFor(const rt::Program& program, const SweepConfig& c) {
   std::vector<std::string> names;
   for (const Metric& m : c.metrics)
@@ -307,7 +291,7 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
                                    Num(p.max) + "]");
         overrides[static_cast<size_t>(i)] = v;
       }
-      rt::CompileResult rebound = rt::Rebind(*program, ParamValues(mech, overrides));
+      rt::CompileResult rebound = rt::Rebind(*program, flat::EvaluateParams(mech, overrides));
       if (!rebound.program) {
         std::string msg = "the model does not compile with these parameter values";
         for (const rt::CompileMessage& e : rebound.errors) msg += std::string("; ") + flat::DiagCodeString(e.code) + ": " + e.message;

@@ -13,6 +13,7 @@
 #include "lang/parser.h"
 #include "stdlib/stdlib.h"
 #include "compiler/compiler.h"
+#include "sim/diagonal_speeds.h"
 
 namespace kanesim::cli {
 
@@ -22,6 +23,8 @@ struct CheckArgs {
   LoadOptions load;
   std::string emit;
   std::string solver = "auto";
+  std::string speeds;                          // --speeds diagonal: print Lesser's construction ("": the model's)
+  std::vector<std::string> speed_order;        // --speed-order
 };
 
 
@@ -110,6 +113,20 @@ int RunCheck(const CheckArgs& args) {
                              klu ? "KLU" : "dense LU", n, size.size(), fill, klu ? "so" : "not", sim::kKluMinStates,
                              sim::kKluMaxFill);
   }
+  if (args.speeds == "diagonal" || (args.speeds.empty() && mech.experiment.diagonal_speeds)) {
+    if (std::string why = sim::DiagonalSpeedsRefusal(program); !why.empty()) {
+      fmt::print(stderr, "kanesim: error: {}\n", why);
+      return kExitModelError;
+    }
+    std::string error;
+    std::vector<int> order =
+        sim::SpeedOrder(program, args.speed_order.empty() ? mech.experiment.speed_order : args.speed_order, &error);
+    if (order.empty()) {
+      fmt::print(stderr, "kanesim: error: {}\n", error);
+      return kExitModelError;
+    }
+    std::cout << "  " << sim::DescribeConstruction(program, order);
+  }
   for (const auto& n : s.notes) std::cout << "  note: " << n << "\n";
   if (rt::CompileMessage f = rt::FrictionIndeterminateWarning(program); !f.message.empty())
     std::cout << fmt::format("  warning[{}]: {}\n", flat::DiagCodeString(f.code), f.message);
@@ -161,6 +178,8 @@ void AddCheckCommand(CLI::App& app, int* exit_code, bool options) {
       ->check(CLI::IsMember({"ast", "flat"}));
   cmd->add_option("--solver", args->solver, "Solution path to report: auto, dense, sparse or recursive")
       ->check(CLI::IsMember(pipeline::SolverNames()));
+  cmd->add_option("--speeds", args->speeds, kSpeedsHelp)->check(CLI::IsMember({"joint", "diagonal"}));
+  cmd->add_option("--speed-order", args->speed_order, kSpeedOrderHelp)->delimiter(',')->allow_extra_args(false);
   cmd->callback([args, exit_code]() { *exit_code = RunCheck(*args); });
 }
 

@@ -42,6 +42,7 @@ struct RunArgs {
   std::string projection = "eval";
   std::string reactions = "nan";
   std::string energy_check = "on";  // --energy-check on|off|report (sim/energy_guard.h)
+  std::string speeds;               // --speeds joint|diagonal ("": the model's annotation)
   bool stats = false;
   std::string events_path;  // --events FILE.csv
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
@@ -90,6 +91,7 @@ pipeline::RunSpec SpecFor(const RunArgs& a) {
   pipeline::LinearSolverFromName(a.linear_solver, &spec.linear_solver);
   spec.project_steps = a.projection == "step";
   pipeline::EnergyCheckFromName(a.energy_check, &spec.energy_check);
+  if (!a.speeds.empty()) spec.speeds = a.speeds == "diagonal" ? sim::Speeds::kDiagonal : sim::Speeds::kJoint;
   return spec;
 }
 
@@ -250,9 +252,9 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("--integrator", a->integrator, "Time integrator")
       ->check(CLI::IsMember(pipeline::IntegratorNames()));
   run->add_option("--linear-solver", a->linear_solver,
-                  "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on closed loops on the "
-                  "multiplier form with few degrees of freedom, else KLU when the block pattern is sparse), dense, klu "
-                  "(IDA) or krylov")
+                  "The Newton iteration's linear solver (IDA, CVODE-BDF): auto (matrix-free GMRES on the multiplier "
+                  "form: CVODE-BDF always, IDA with few degrees of freedom; else KLU when the block pattern is sparse), "
+                  "dense, klu (IDA) or krylov")
       ->check(CLI::IsMember(pipeline::LinearSolverNames()));
   run->add_option("--projection", a->projection, kProjectionHelp)->check(CLI::IsMember({"eval", "step"}));
   run->add_option("--reactions", a->reactions,
@@ -260,6 +262,8 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
       ->check(CLI::IsMember(pipeline::ReactionsNames()));
   run->add_option("--energy-check", a->energy_check, kEnergyCheckHelp)
       ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
+  run->add_option("--speeds", a->speeds, kSpeedsHelp)->check(CLI::IsMember({"joint", "diagonal"}));
+  run->add_option("--speed-order", a->spec.speed_order, kSpeedOrderHelp)->delimiter(',')->allow_extra_args(false);
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   run->add_option("--events", a->events_path,
                   "Write the events (end stops, when clauses) to this CSV file: time, element, kind, and each "
@@ -269,6 +273,11 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
                       "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");
   run->add_flag("--show-frames", a->show_frames, "With --animation: draw every joint's frames as small x/y/z axes")
       ->needs(animation);
+  run->add_option("--sensitivity", a->spec.sensitivity,
+                  "Also write d(y)/d(p) for every output y and each of these Real parameters (comma-separated; start "
+                  "values too, e.g. j.q.start)")
+      ->delimiter(',')
+      ->excludes(animation);
   run->callback([a, exit_code] { *exit_code = RunCommand(*a); });
 }
 

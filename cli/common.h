@@ -57,6 +57,14 @@ inline constexpr const char* kProjectionHelp =
     "Closed loops and contacts with --integrator dop853: project onto the constraints at every evaluation "
     "(eval) or once per accepted step (step: cheaper evaluations, a larger error at the same tolerance)";
 
+// `--speeds joint|diagonal` and `--speed-order` (run, check): RunSpec::speeds.
+inline constexpr const char* kSpeedsHelp =
+    "Generalized speeds to integrate in: joint (the joints' own), or diagonal (Lesser's: Gram-Schmidt of the "
+    "partial velocities in the kinetic metric, w = L^T u with M = L D L^T; adds columns w[i], d[i], T_w[i])";
+inline constexpr const char* kSpeedOrderHelp =
+    "With --speeds diagonal: joints whose speeds are orthogonalized first, in this order (comma-separated); "
+    "the others follow root to leaf";
+
 // Registers subcommands; each returns through `*exit_code` after it ran.
 void AddCheckCommand(CLI::App& app, int* exit_code, bool options = true);
 void AddRunCommand(CLI::App& app, int* exit_code, bool options = true);

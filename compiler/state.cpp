@@ -166,9 +166,11 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       j.mu = num(fj.friction_mu, 0.0, "friction coefficient of ", j.name, "", fj.loc);
       j.mu_radius = num(fj.friction_radius, 1.0, "friction radius of ", j.name, "", fj.loc);
       j.mu_v = num(fj.friction_v, 1e-3, "friction speed scale of ", j.name, "", fj.loc);
+      j.friction_exact = fj.friction_exact;
+      j.mu_s = fj.friction_exact ? num(fj.friction_mu_s, j.mu, "static friction coefficient of ", j.name, "", fj.loc) : j.mu;
       const bool prescribed = !fj.prescribed.empty() && fj.prescribed[0] != kNoExpr;
       if ((j.type != JointType::Prismatic && j.type != JointType::Revolute) || prescribed || j.mu < 0.0 ||
-          !(j.mu_v > 0.0))
+          !(j.mu_v > 0.0) || !(j.mu_s >= 0.0))
         errors->push_back(Msg(flat::DiagCode::BadFriction,
                               "joint '" + j.name +
                                   "': Coulomb friction needs a free prismatic or revolute joint, mu >= 0 and a "

@@ -173,12 +173,17 @@ double EvalParamExpr(const Mechanism& m, const std::vector<double>& pv, ExprId i
 }
 
 // One evaluator for all parameters: a node shared by several bindings is evaluated once.
-std::vector<double> EvaluateParams(const Mechanism& m) {
+std::vector<double> EvaluateParams(const Mechanism& m) { return EvaluateParams(m, {}); }
+
+std::vector<double> EvaluateParams(const Mechanism& m, const std::map<size_t, double>& overrides) {
   std::vector<double> pv(m.params.size(), 0.0);
   ParamEvaluator eval(m.exprs, pv);
   for (size_t i = 0; i < m.params.size(); ++i) {
     const Param& p = m.params[i];
-    pv[i] = (p.binding == kNoExpr || p.user_set) ? p.value : eval.Eval(p.binding);
+    if (auto it = overrides.find(i); it != overrides.end())
+      pv[i] = it->second;
+    else
+      pv[i] = (p.binding == kNoExpr || p.user_set) ? p.value : eval.Eval(p.binding);
   }
   return pv;
 }

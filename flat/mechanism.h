@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -130,6 +131,10 @@ struct Joint {
   // N = the joint's reaction force across its axis. kNoExpr: no friction. Set from the
   // stdlib joints' `mu`, `friction_v`, `friction_radius` when mu is not zero.
   ExprId friction_mu = kNoExpr, friction_radius = kNoExpr, friction_v = kNoExpr;
+  // Exact Coulomb stick-slip instead (stdlib `friction_exact`, `mu_s`; sim/stick_slip.h):
+  // -mu N sign(u) sliding, stuck while the force needed stays within mu_s N.
+  bool friction_exact = false;
+  ExprId friction_mu_s = kNoExpr;
   // End stops of a Revolute or Prismatic joint (stdlib `q_min`, `q_max`, `restitution`):
   // kNoExpr = no stop on that side (the stdlib parameter left unbound); restitution is
   // set only when a stop is.
@@ -223,6 +228,10 @@ struct WhenClause {
 struct Experiment {
   double start_time = 0.0, stop_time = 1.0, tolerance = 1e-6, interval = 0.0;
   bool has_start = false, has_stop = false, has_tolerance = false, has_interval = false;
+  // annotation(speeds(kind = "diagonal", order = {"j1", ...})): Lesser's diagonal speeds
+  // (sim/diagonal_speeds.h) unless `--speeds` says otherwise; order: joint names.
+  bool diagonal_speeds = false;
+  std::vector<std::string> speed_order;
 };
 
 struct Mechanism {
@@ -259,9 +268,11 @@ struct Mechanism {
   std::string StateRefName(const StateRef& r) const;  // "j.q[1]", "rod.frame_b.r[2]"
 };
 
-// Evaluates all parameter bindings in order (values of leaves are kept) and returns the
-// values; `overrides` (index -> value) replace leaves or bindings.
+// Evaluates all parameter bindings in order (values of leaves and of --set values are kept)
+// and returns the values; `overrides` (index -> value) replace leaves or bindings, and the
+// bindings after them see the new values (a sweep's scenario, a sensitivity's step).
 std::vector<double> EvaluateParams(const Mechanism& m);
+std::vector<double> EvaluateParams(const Mechanism& m, const std::map<size_t, double>& overrides);
 
 // Evaluates an expression that depends only on parameters.
 double EvalParamExpr(const Mechanism& m, const std::vector<double>& param_values, ExprId id);

@@ -106,6 +106,11 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
     return "the end stops of " + stops + " are events, which an exported FMU does not have yet (docs/fmi.md)";
   if (!model.program->whens.empty())  // the same for when clauses (docs/events.md)
     return "the " + model.program->whens.front().name + " clause is an event, which an exported FMU does not have yet (docs/fmi.md)";
+  std::string exact;  // exact stick-slip friction likewise (sticking, slipping)
+  for (const rt::FrictionJoint& f : rt::FrictionJoints(*model.program))
+    if (f.exact) exact += (exact.empty() ? "'" : ", '") + f.joint + "'";
+  if (!exact.empty())
+    return "the exact stick-slip friction of " + exact + " is events, which an exported FMU does not have yet (docs/fmi.md)";
   std::string planes;  // plane contacts likewise (impacts, resting, lift-off)
   for (const rt::PlaneContact& c : rt::PlaneContacts(*model.program)) planes += (planes.empty() ? "'" : ", '") + c.name + "'";
   if (!planes.empty())

@@ -218,6 +218,8 @@ class Emitter {
         j.friction_v = AsScalar(Field(n, "friction_v", {}));
         j.friction_radius =
             n->Child("friction_radius") ? AsScalar(Field(n, "friction_radius", {})) : pool.Constant(1.0);
+        j.friction_exact = Boolean(n, "friction_exact", false);
+        if (j.friction_exact && n->Child("mu_s")) j.friction_mu_s = AsScalar(Field(n, "mu_s", {}));
       }
     }
     EndStops(n, &j);
@@ -547,5 +549,39 @@ void EmitExperiment(const ast::Modification& ex, const ast::ClassDef* top, Node*
     diags.Error(DiagCode::BadValue, top->name_span, "experiment Interval must be positive");
 }
 
+void EmitSpeeds(const ast::Modification& sp, Diagnostics& diags, flat::Mechanism* m) {
+  static const std::vector<std::string> kKnown{"kind", "order"};
+  auto& x = m->experiment;
+  for (const auto& a : sp.args) {
+    if (a.path.size() != 1 || !a.mod || !a.mod->value) continue;
+    const std::string& key = a.path[0];
+    const ast::Expr& v = *a.mod->value;
+    if (key == "kind") {
+      if (v.kind != ast::ExprKind::String || (v.text != "joint" && v.text != "diagonal")) {
+        diags.Error(DiagCode::BadValue, v.span, "speeds kind must be \"joint\" or \"diagonal\"");
+        continue;
+      }
+      x.diagonal_speeds = v.text == "diagonal";
+    } else if (key == "order") {
+      x.speed_order.clear();
+      const bool array = v.kind == ast::ExprKind::Array;
+      for (size_t i = 0; array && i < v.args.size(); ++i) {
+        const ast::Expr& e = *v.args[i];
+        const bool known = e.kind == ast::ExprKind::String &&
+                           std::any_of(m->joints.begin(), m->joints.end(), [&](const flat::Joint& j) { return j.name == e.text; });
+        if (!known) {
+          diags.Error(DiagCode::BadValue, e.span, "speeds order: " + (e.kind == ast::ExprKind::String ? "no joint named '" + e.text + "'" : std::string("a joint's name in quotes")));
+          continue;
+        }
+        x.speed_order.push_back(e.text);
+      }
+      if (!array) diags.Error(DiagCode::BadValue, v.span, "speeds order must be an array of joint names: {\"j1\", \"j2\"}");
+    } else {
+      auto& d = diags.Warning(DiagCode::UnknownModifier, a.name_span, "unknown speeds setting '" + key + "' (ignored)");
+      std::string best = ClosestName(key, kKnown);
+      if (!best.empty()) d.hint = "did you mean '" + best + "'?";
+    }
+  }
+}
 
 }  // namespace kanesim::lang::elab

@@ -29,6 +29,9 @@ void EmitWhens(const std::vector<PendingWhen>& whens, Evaluator& eval, const Sou
 // Interval), evaluated in the root's scope, into m->experiment.
 void EmitExperiment(const ast::Modification& ex, const ast::ClassDef* top, Node* root, Evaluator& eval,
                     Diagnostics& diags, flat::Mechanism* m);
+// The speeds annotation `sp` of the model: kind = "joint" | "diagonal", order = {"joint", ...}
+// (string literals; the joints must exist), into m->experiment. After Emit (the joints).
+void EmitSpeeds(const ast::Modification& sp, Diagnostics& diags, flat::Mechanism* m);
 
 // A shape primitive recorded for drawing (elab_shapes.cpp); and, once the bodies are
 // emitted, every shape linked to its body.

@@ -131,6 +131,7 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   elab::Emit(tree, connections, links.whens, eval, places, diags, out);
   if (const ast::Modification* ex = lookup.FindAnnotation(top, "experiment"))
     elab::EmitExperiment(*ex, top, tree.root.get(), eval, diags, out);
+  if (const ast::Modification* sp = lookup.FindAnnotation(top, "speeds")) elab::EmitSpeeds(*sp, diags, out);
   if (out->worlds.size() != 1 && !diags.HasErrors()) {
     auto& d = diags.Error(DiagCode::WorldCount, top->name_span,
                           "'" + top->name + "' has " + std::to_string(out->worlds.size()) +

@@ -150,6 +150,19 @@ std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& e
   return diags.RenderAll();
 }
 
+namespace {
+// Why `name` cannot be a --sensitivity parameter ("" when it can).
+std::string CheckSensitivityParam(const flat::Mechanism& mech, const std::string& name) {
+  const int i = mech.FindParam(name);
+  if (i < 0) return "--sensitivity " + name + ": no parameter of that name (`kanesim check --emit flat` lists them)";
+  const flat::Param& p = mech.params[static_cast<size_t>(i)];
+  if (p.type != flat::ParamType::Real) return "--sensitivity " + name + ": not a Real parameter";
+  if (p.structural) return "--sensitivity " + name + ": a structural parameter (it shapes the model, no derivative)";
+  if (p.is_constant) return "--sensitivity " + name + ": a constant";
+  return "";
+}
+}  // namespace
+
 std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out, RunProblem* problem) {
   RunProblem unused;
   RunProblem& why = problem ? *problem : unused;
@@ -175,6 +188,8 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
   so.ida_linear_solver = spec.linear_solver;
   so.project_steps = spec.project_steps;
   so.energy_check = spec.energy_check;
+  so.speeds = spec.speeds.value_or(ex.diagonal_speeds ? sim::Speeds::kDiagonal : sim::Speeds::kJoint);
+  so.speed_order = !spec.speed_order.empty() ? spec.speed_order : ex.speed_order;
 
   if (!spec.outputs.empty()) {
     std::string error;
@@ -182,6 +197,14 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
       why = RunProblem::kSignals;
       return error;
     }
+  }
+  out->sensitivity.clear();
+  for (const std::string& name : spec.sensitivity) {
+    if (std::string bad = CheckSensitivityParam(*model.mech, name); !bad.empty()) {
+      why = RunProblem::kSensitivity;
+      return bad;
+    }
+    out->sensitivity.push_back(name);
   }
   out->grid = sim::ResolveGrid(program, so);
   if (std::string bad = sim::CheckRun(out->grid, so.rtol, so.atol); !bad.empty()) {
@@ -208,8 +231,38 @@ std::string RunWarnings(const Model& model, double rtol, const std::vector<std::
   return out;
 }
 
+std::string SensitivityParams(const Model& model, const std::vector<std::string>& names,
+                              std::vector<sim::SensitivityParam>* out) {
+  const flat::Mechanism& mech = *model.mech;
+  out->clear();
+  for (const std::string& name : names) {
+    if (std::string bad = CheckSensitivityParam(mech, name); !bad.empty()) return bad;
+    const size_t i = static_cast<size_t>(mech.FindParam(name));
+    const double p = flat::EvaluateParams(mech)[i];
+    sim::SensitivityParam sp{name, sim::SensitivityStep(p), nullptr, nullptr};
+    for (int sign : {1, -1}) {
+      rt::CompileResult r = rt::Rebind(*model.program, flat::EvaluateParams(mech, {{i, p + sign * sp.delta}}));
+      if (!r.program)
+        return "--sensitivity " + name + ": the model does not compile at " + name + " = " +
+               sim::FormatShortest(p + sign * sp.delta) +
+               (r.errors.empty() ? std::string() : " (" + r.errors.front().message + ")");
+      (sign > 0 ? sp.plus : sp.minus) = r.program;
+    }
+    out->push_back(std::move(sp));
+  }
+  return "";
+}
+
 sim::SimResult Run(const Model& model, const ResolvedRun& run, sim::SignalSink& sink) {
-  return sim::Simulate(*model.program, run.sim, sink);
+  if (run.sensitivity.empty()) return sim::Simulate(*model.program, run.sim, sink);
+  std::vector<sim::SensitivityParam> params;
+  if (std::string why = SensitivityParams(model, run.sensitivity, &params); !why.empty()) {
+    sim::SimResult bad;
+    bad.status = sim::SimResult::Status::kUsageError;
+    bad.message = why;
+    return bad;
+  }
+  return sim::SimulateSensitivities(*model.program, params, run.sim, sink);
 }
 
 sim::SimResult Run(const Model& model, const RunSpec& spec, sim::SignalSink& sink) {

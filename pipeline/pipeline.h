@@ -38,6 +38,7 @@
 #include "import/import.h"
 #include "sim/energy_guard.h"
 #include "sim/integrator.h"
+#include "sim/sensitivity.h"
 #include "sim/simulate.h"
 
 namespace kanesim::pipeline {
@@ -72,10 +73,17 @@ struct RunSpec {
   bool project_steps = false;  // --projection step: project once per accepted step (DOP853)
   // --energy-check: the energy guard of conservative models (docs/integrators.md).
   sim::EnergyCheck energy_check = sim::EnergyCheck::kOn;
+  // --speeds joint|diagonal [--speed-order j1,j2]: Lesser's diagonal speeds
+  // (sim/diagonal_speeds.h). Not given: the model's annotation(speeds(kind =, order =)).
+  std::optional<sim::Speeds> speeds;
+  std::vector<std::string> speed_order;
 
   // Outputs: glob patterns over dotted signal names (sim/signal_select.h); empty: the
   // default signals (rt::DefaultSignals: joints' q and u, declared outputs).
   std::vector<std::string> outputs;
+  // --sensitivity: real, non-structural parameters (start values too, e.g. "j.q.start")
+  // whose derivatives d(y)/d(p) are written beside every output (sim/sensitivity.h).
+  std::vector<std::string> sensitivity;
 };
 
 // The one place option names meet the enums (run, sweep, test, check, sweep and golden
@@ -162,6 +170,7 @@ std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& m
 struct ResolvedRun {
   sim::SimOptions sim;    // what sim::Simulate takes; sim.signals empty: the default signals
   sim::OutputGrid grid;   // start, stop, interval of the output rows
+  std::vector<std::string> sensitivity;  // RunSpec::sensitivity, checked against the model
 };
 
 // What ResolveRun found wrong, so each command can classify it.
@@ -170,6 +179,7 @@ enum class RunProblem {
   kValue,    // a given interval or tolerance is not a positive finite number
   kSignals,  // an output pattern matches no signal
   kGrid,     // the output grid cannot be run (sim::CheckRun: stop before start, too many rows)
+  kSensitivity,  // a --sensitivity name is not a real, non-structural parameter
 };
 
 // Stage 4: fills *out from the spec and the model's experiment; returns "" or why the run
@@ -183,6 +193,11 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
 // (indeterminate reaction components among the signals), and a relative
 // tolerance that is almost certainly a mistake. "" when there is nothing to say.
 std::string RunWarnings(const Model& model, double rtol, const std::vector<std::string>& signals);
+
+// The model at p +/- delta for each of `names` (--sensitivity: Real, non-structural, not
+// constant), rebound from model's program: "" or why not.
+std::string SensitivityParams(const Model& model, const std::vector<std::string>& names,
+                              std::vector<sim::SensitivityParam>* out);
 
 // Stages 5-6 with resolved options.
 sim::SimResult Run(const Model& model, const ResolvedRun& run, sim::SignalSink& sink);

@@ -89,6 +89,13 @@ void HoldPartition(Workspace& ws, bool on);
 bool ProjectedStates(const Program& program, const Workspace& ws, std::vector<int>* states, double* diag);
 const std::string& ErrorMessage(const Workspace& ws);
 
+// The mass matrix M(q, t) of Kane's equations M udot = f on the free speeds (Lesser eqs.
+// 22-25; runtime/kane/kane_dense.cpp eq. 4) at the coordinates of y = [q_free; u_free] (its
+// speeds are not read), whatever the solver path: symmetric, column-major into M (nu x nu).
+// For trees; -1 on a program with constraint rows (ErrorMessage says so). Lesser's diagonal
+// speeds (sim/diagonal_speeds.h) factor it.
+int MassMatrix(const Program& program, Workspace& ws, double t, const double* y, double* M);
+
 // Closed loops through singular configurations (runtime/engine/branch_monitor.cpp;
 // docs/constraints.md "Singular configurations"). After each accepted step, CheckBranch(y)
 // returns -1 (fatal; BranchMonitorError says why: the loop, the time and the turn) when the
@@ -170,6 +177,22 @@ int InverseMassColumn(const Program& program, Workspace& ws, double t, const dou
 // The same for any generalized impulse F on the free speeds (nu entries): x = M(q)^-1 F.
 // runtime/engine/plane_contacts.cpp
 int InverseMassTimes(const Program& program, Workspace& ws, double t, const double* y, const double* F, double* x);
+
+// Coulomb friction joints (stdlib `mu` on Revolute and Prismatic), in the order of the
+// workspace's laws; runtime/engine/friction_modes.cpp.
+struct FrictionJoint {
+  std::string joint;
+  int q = -1, u = -1;           // indices in y = [q_free; u_free] (u: among the free speeds)
+  double mu = 0.0, mu_s = 0.0;  // kinetic and static coefficients
+  double radius = 1.0;          // Revolute: pin radius (friction torque = radius x force)
+  bool exact = false;           // stdlib friction_exact: stick-slip as events (sim/stick_slip.h)
+};
+std::vector<FrictionJoint> FrictionJoints(const Program& program);
+// Friction joint i's law in ws: 0 -mu r N tanh(u / v) (the default), +1 / -1 sliding that way
+// (-mu r N sign), 2 the force tau (stuck, held by it).
+void SetFrictionMode(Workspace& ws, int i, int mode, double tau);
+// Friction joint i's normal force N in the last evaluation of ws.
+double FrictionNormal(const Workspace& ws, int i);
 
 // Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
 // when the program has none. runtime/engine/plane_contacts.cpp

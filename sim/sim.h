@@ -5,7 +5,9 @@
 #pragma once
 
 #include "sim/csv.h"            // signal rows and the CSV writer
+#include "sim/diagonal_speeds.h"  // Lesser's diagonal generalized speeds (--speeds diagonal)
 #include "sim/energy_guard.h"   // stopping a conservative model whose energy drifts
 #include "sim/integrator.h"     // the integrators, generic over the right-hand side
 #include "sim/signal_select.h"  // --output patterns over signal names
+#include "sim/sensitivity.h"    // a run with d(y)/d(p) by the variational equations
 #include "sim/simulate.h"       // one run of a Program from start to stop

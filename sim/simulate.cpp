@@ -1,5 +1,6 @@
 #include "sim/simulate.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
 #include "sim/lift_off.h"
+#include "sim/stick_slip.h"
 #include "sim/when_events.h"
 #include "sim/test_hooks.h"
 
@@ -42,7 +44,7 @@ class EngineOde final : public OdeSystem {
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
     from_monitor_ = false;
-    int s = rt::Derivative(program_, ws_, t, y, ydot);
+    int s = stick_ ? stick_->Rhs(ws_, t, y, ydot) : rt::Derivative(program_, ws_, t, y, ydot);
     if (stops_ && s == 0) s = stops_->Hold(ws_, t, y, ydot);
     if (fault_ && s == 0) fault_(t, y, ydot);
     return s;
@@ -52,18 +54,29 @@ class EngineOde final : public OdeSystem {
   // clauses' (sim/when_events.h); none without any.
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
   void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
+  // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
+  void SetStickSlip(StickSlipEvents* stick) { stick_ = stick; }
   void SetWhens(WhenEvents* whens) {
     whens_ = whens;
     state_names_ = rt::StateNames(program_);
   }
-  int NumStops() const { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
+  // The first events: stick-slip's, the stops' and plane contacts', or lift-off's (never two
+  // in one model); then the when clauses'.
+  int NumStops() const {
+    return stops_ ? stops_->Count() : lift_ ? lift_->Count() : stick_ ? stick_->Count() : 0;
+  }
   int NumEvents() const override { return NumStops() + (whens_ ? whens_->Count() : 0); }
   int EventFunctions(double t, const double* y, double* g) override {
-    if (stops_ || lift_)
-      if (int s = stops_ ? stops_->Functions(ws_, t, y, g) : lift_->Functions(t, y, g); s != 0) return s;
+    if (NumStops() > 0) {
+      const int s = stick_ ? stick_->Functions(ws_, t, y, g)
+                    : stops_ ? stops_->Functions(ws_, t, y, g)
+                             : lift_->Functions(t, y, g);
+      if (s != 0) return s;
+    }
     return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
   }
   int Event(double t, double* y, int i) override {
+    if (i < NumStops() && stick_) return stick_->Event(ws_, t, y, i);  // logged by stick_ (Simulate)
     if (i < NumStops() && !stops_) {
       event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
       return -1;
@@ -164,6 +177,7 @@ class EngineOde final : public OdeSystem {
   std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
   EndStopEvents* stops_ = nullptr;             // end stops and plane contacts (null: none)
   LiftOffGuard* lift_ = nullptr;               // rolling contacts' normal forces (null: none)
+  StickSlipEvents* stick_ = nullptr;           // exact stick-slip friction (null: none)
   std::string event_cause_;                    // why an event stopped the run ("" : none did)
   WhenEvents* whens_ = nullptr;                // when clauses (null: none)
   std::vector<std::string> state_names_;       // y's entries (rt::StateNames), for the events' changes
@@ -263,6 +277,19 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
   }
 
+  // Diagonal speeds: the checks, the order and their columns (written after the signals).
+  std::vector<int> speed_order;
+  if (options.speeds == Speeds::kDiagonal) {
+    if (std::string why = DiagonalSpeedsRefusal(program); !why.empty()) return UsageError(why);
+    std::string error;
+    speed_order = SpeedOrder(program, options.speed_order, &error);
+    if (speed_order.empty()) return UsageError(error);
+  }
+  const size_t n_diag = 3 * speed_order.size();
+  std::vector<std::string> header = names;
+  for (const char* prefix : {"w[", "d[", "T_w["})
+    for (size_t i = 1; i <= speed_order.size(); ++i) header.push_back(prefix + std::to_string(i) + "]");
+
   // 3. Integrate. The right-hand side and the outputs use separate workspaces so that
   // evaluating an output never disturbs the solver's state of the engine.
   auto ws_rhs = rt::MakeWorkspace(program);
@@ -289,21 +316,36 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       return r;
     }
   }
+  // Exact stick-slip friction: the start decides sliding or stuck (sim/stick_slip.h).
+  StickSlipEvents stick(program);
+  if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
+    return UsageError("friction at the start: " + rt::ErrorMessage(*ws_rhs));
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
   SimResult result;
   result.stats.method = iopt.method;
-  if (!sink.Begin(names)) {
+  if (!sink.Begin(header)) {
     result.status = SimResult::Status::kOutputError;
     result.message = "cannot write the output";
     return result;
   }
   bool sink_failed = false;
   Clock::duration output_time{};
-  RowCallback row = [&](double t, const double* y, std::string* cause) -> int {
+  std::unique_ptr<DiagonalOde> diagonal;  // --speeds diagonal: the integrator's state is [q; w]
+  std::vector<double> y_row(y0.size()), row_values(n_written + n_diag);
+  RowCallback row = [&](double t, const double* y_in, std::string* cause) -> int {
     Clock::time_point t0 = Clock::now();
-    int status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
+    if (stick.Active()) stick.Sync(*ws_out);  // the outputs see the friction laws of the run
+    const double* y = y_in;
+    int status = 0;
+    bool converted = true;  // z = [q; w] -> y = [q; u] (diagonal speeds)
+    if (diagonal) {
+      status = diagonal->ToSpeeds(t, y_in, y_row.data());
+      converted = status == 0;
+      y = y_row.data();
+    }
+    if (status == 0) status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
     // A row near a change point whose projection moved the speeds too far: projected in the
     // kinetic metric instead, in a workspace of its own (docs/constraints.md "Rows near a
     // change point"); ws_out has gone through the row as before, so the rows after it are
@@ -324,7 +366,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       }
     }
     std::string past_stop;
-    if (status != 0) {
+    if (!converted) {
+      *cause = diagonal->FailureCause();
+    } else if (status != 0) {
       const std::string& m = rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
     } else if (stops.Active() && !(past_stop = stops.CheckRow(*ws_out, t, y)).empty()) {
@@ -332,6 +376,14 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       status = -1;  // the row is not written: the rows before it are on disk
     } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {
       status = -1;  // the row is not written: the rows before it are on disk
+    } else if (diagonal) {
+      std::copy(values.begin(), values.begin() + static_cast<long>(n_written), row_values.begin());
+      diagonal->Columns(y_in, row_values.data() + n_written);
+      if (!sink.Row(t, row_values.data(), n_written + n_diag)) {
+        sink_failed = true;
+        *cause = "cannot write the output";
+        status = -1;
+      }
     } else if (!sink.Row(t, values.data(), n_written)) {
       sink_failed = true;
       *cause = "cannot write the output";
@@ -344,14 +396,24 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
   if (stops.Active()) ode.SetStops(&stops);
   if (lift.Active()) ode.SetLiftOff(&lift);
+  if (stick.Active()) ode.SetStickSlip(&stick);
   WhenEvents whens(program);
   if (whens.Active()) ode.SetWhens(&whens);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
   const size_t logged_at_start = stops.Log().size();  // a start on a contact (EndStopEvents::Start)
+  OdeSystem* system = &ode;
+  if (!speed_order.empty()) {
+    if (whens.Active()) return UsageError("--speeds diagonal does not handle when clauses yet (docs/events.md)");
+    diagonal = std::make_unique<DiagonalOde>(program, ode, speed_order);
+    std::vector<double> z0(y0.size());
+    if (diagonal->ToW(grid.start, y0.data(), z0.data()) != 0) return UsageError("--speeds diagonal: " + diagonal->FailureCause());
+    y0.swap(z0);
+    system = diagonal.get();
+  }
   Clock::time_point start = Clock::now();
-  IntegrateResult ir = Integrate(ode, y0.data(), grid, iopt, row);
+  IntegrateResult ir = Integrate(*system, y0.data(), grid, iopt, row);
   Clock::duration total = Clock::now() - start;
   bool end_ok = sink.End();
 
@@ -360,6 +422,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.bridges = ir.bridges;
   result.stats.events.assign(stops.Log().begin(), stops.Log().begin() + static_cast<long>(logged_at_start));
   result.stats.events.insert(result.stats.events.end(), ode.Events().begin(), ode.Events().end());
+  result.stats.events.insert(result.stats.events.end(), stick.Log().begin(), stick.Log().end());
   result.stats.terminated = ir.terminated;
   result.stats.terminate_time = ir.terminate_time;
   result.stats.terminate_message = ir.terminate_message;

@@ -14,6 +14,7 @@
 
 #include "runtime/runtime.h"
 #include "sim/csv.h"
+#include "sim/diagonal_speeds.h"
 #include "sim/energy_guard.h"
 #include "sim/integrator.h"
 
@@ -35,6 +36,11 @@ struct SimOptions {
   // (`--energy-check on|off|report`; sim/energy_guard.h, docs/integrators.md).
   EnergyCheck energy_check = EnergyCheck::kOn;
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
+  // `--speeds diagonal`: integrate in Lesser's speeds w = L^T u (sim/diagonal_speeds.h); the
+  // rows add w[i], d[i] and T_w[i] = 1/2 d_i w_i^2. speed_order: joints whose speeds come first
+  // (`--speed-order`), the rest root to leaf.
+  Speeds speeds = Speeds::kJoint;
+  std::vector<std::string> speed_order;
   std::function<void(double t)> progress;  // after each row; may be empty
 };
 

@@ -179,6 +179,10 @@ class Result:
     def keys(self) -> List[str]:
         return ["time"] + self.columns
 
+    def sensitivity(self, signal: str, param: str) -> np.ndarray:
+        """d(signal)/d(param) at every row, from a run with sensitivity=[..., param, ...]."""
+        return self[f"d({signal})/d({param})"]
+
     def to_pandas(self):
         """A pandas DataFrame with a `time` column first (needs pandas)."""
         import pandas as pd
@@ -302,19 +306,24 @@ class Model:
         linear_solver: str = "auto",
         projection: str = "eval",
         energy_check: str = "on",
+        sensitivity: Optional[Sequence[str]] = None,
     ) -> Result:
         """Simulates, like `kanesim run`: None takes the model's experiment annotation
-        (atol defaults to rtol); outputs are the --output globs. Raises SimulationError
-        (with the rows so far) on a numerical failure, ValueError on bad settings."""
+        (atol defaults to rtol); outputs are the --output globs; sensitivity: Real parameters
+        p whose derivatives d(y)/d(p) ride along (Result.sensitivity(y, p), like
+        `--sensitivity`). Raises SimulationError (with the rows so far) on a numerical
+        failure, ValueError on bad settings."""
         if set:
             return self.with_set(set).run(stop_time, rtol, atol, interval, outputs, None, start_time, integrator,
-                                          linear_solver, projection, energy_check)
+                                          linear_solver, projection, energy_check, sensitivity)
         if isinstance(outputs, str):
             outputs = [outputs]
+        if isinstance(sensitivity, str):
+            sensitivity = [sensitivity]
         columns, time, values, stats, failure, warns = _kanesim.run(
             self._compiled, _time(start_time, "start_time"), _time(stop_time, "stop_time"),
             _time(interval, "interval"), _time(rtol, "rtol"), _time(atol, "atol"), list(outputs or []),
-            integrator, linear_solver, projection, energy_check)
+            integrator, linear_solver, projection, energy_check, list(sensitivity or []))
         _warn(warns)
         result = Result(columns, time, values, stats)
         if failure is not None:

@@ -183,14 +183,19 @@ class BufferSink final : public sim::SignalSink {
 }  // namespace
 
 bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutput* out, std::string* error,
-              const std::function<bool()>& interrupted) {
+              const std::function<bool()>& interrupted, const std::vector<std::string>& sensitivity) {
+  std::vector<sim::SensitivityParam> params;
+  if (!sensitivity.empty())
+    if (std::string why = pipeline::SensitivityParams(*model.model, sensitivity, &params); !why.empty())
+      return Fail(error, "sensitivity" + why.substr(why.find(' ')));
   const sim::OutputGrid grid = sim::ResolveGrid(*model.program, options);
   const long rows = grid.Count();
   out->time.reserve(static_cast<size_t>(rows));
   if (!options.signals.empty()) out->values.reserve(static_cast<size_t>(rows) * options.signals.size());
   BufferSink sink(out, interrupted);
   const auto t0 = std::chrono::steady_clock::now();
-  const sim::SimResult result = sim::Simulate(*model.program, options, sink);
+  const sim::SimResult result = params.empty() ? sim::Simulate(*model.program, options, sink)
+                                               : sim::SimulateSensitivities(*model.program, params, options, sink);
   out->simulate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out->stats = result.stats;
   if (out->interrupted) return true;

@@ -71,6 +71,7 @@ struct RunRequest {
   std::string linear_solver = "auto";
   std::string projection = "eval";
   std::string energy_check = "on";  // --energy-check (docs/integrators.md "The energy guard")
+  std::vector<std::string> sensitivity;  // --sensitivity: d(y)/d(p) columns (sim/sensitivity.h)
 };
 
 // Run settings resolved against a loaded model: the SimOptions `kanesim run` would use.
@@ -95,8 +96,9 @@ struct RunOutput {
 // returns true with out->failed set. `interrupted`, when given, is asked at an output row at
 // most every 0.1 s whether to stop (the bindings check Python's signals there); a stop
 // returns true with out->interrupted set.
+// `sensitivity`: parameters whose d(y)/d(p) columns follow the signals' (RunRequest).
 bool Simulate(const LoadedModel& model, const sim::SimOptions& options, RunOutput* out, std::string* error,
-              const std::function<bool()>& interrupted = {});
+              const std::function<bool()>& interrupted = {}, const std::vector<std::string>& sensitivity = {});
 
 // The facts of `kanesim check`, as (key, value) trees for a Python dict.
 struct Value;

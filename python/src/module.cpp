@@ -151,7 +151,8 @@ py::tuple LayoutProbe() {
 // usage error.
 py::tuple Run(const LoadedModel& model, double start_time, double stop_time, double interval, double rtol, double atol,
               const std::vector<std::string>& outputs, const std::string& integrator, const std::string& linear_solver,
-              const std::string& projection, const std::string& energy_check) {
+              const std::string& projection, const std::string& energy_check,
+              const std::vector<std::string>& sensitivity) {
   kanesim::py::RunRequest r;
   r.start_time = start_time;
   r.stop_time = stop_time;
@@ -177,7 +178,7 @@ py::tuple Run(const LoadedModel& model, double start_time, double stop_time, dou
   };
   {
     py::gil_scoped_release release;
-    ok = kanesim::py::Simulate(model, so, &out, &error, interrupted);
+    ok = kanesim::py::Simulate(model, so, &out, &error, interrupted, sensitivity);
   }
   if (out.interrupted) throw py::error_already_set();
   if (!ok) throw py::value_error(error);

@@ -133,6 +133,22 @@ int ProjectOntoConstraints(const Program& p, Workspace& ws, double t, double* y)
   return 0;
 }
 
+int MassMatrix(const Program& p, Workspace& ws, double t, const double* y, double* M) {
+  if (!p.rows.empty()) {
+    ws.error = "the mass matrix of the free speeds is available for trees only (closed loops and contacts: TODO(#44))";
+    return -1;
+  }
+  if (int s = UnpackState(p, ws, t, y); s != 0) return s;
+  PositionKinematics(p, ws);
+  VelocityKinematics(p, ws);
+  Eigen::Map<Eigen::MatrixXd> out(M, p.nu, p.nu);
+  // Zeroed once: AssembleMass writes only the entries of joints on one path to the root.
+  if (ws.M_full.rows() != p.nu) ws.M_full.setZero(p.nu, p.nu);
+  AssembleMass(p, ws, &ws.M_full);
+  out = ws.M_full.selfadjointView<Eigen::Lower>();
+  return 0;
+}
+
 const std::string& ErrorMessage(const Workspace& ws) { return ws.error; }
 
 std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p) {
@@ -157,12 +173,12 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
   ws.jet_regs.assign(3 * p.prescribed_tape.init.size(), 0.0);
   for (size_t i = 0; i < p.prescribed_tape.init.size(); ++i) ws.jet_regs[3 * i] = p.prescribed_tape.init[i];
   ws.Q = Eigen::VectorXd::Zero(p.nu_all);
+  ws.Ic.assign(K, Mat6::Zero());  // every path: MassMatrix uses them
   if (p.solver == SolverPath::Dense) {
     ws.M = Eigen::MatrixXd::Zero(p.nu, p.nu);
     ws.f = Eigen::VectorXd::Zero(p.nu);
     ws.llt.emplace(p.nu);
     ws.ldlt.emplace(p.nu);
-    ws.Ic.assign(K, Mat6::Zero());
     ws.Wc.assign(K, Vec6::Zero());
   } else if (p.solver == SolverPath::Recursive) {
     InitTreeWorkspace(p, ws);
@@ -172,6 +188,9 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
   InitConstraintWorkspace(p, ws);
   ws.friction_tau.assign(p.friction_joints.size(), 0.0);
   ws.friction_Q0.assign(p.friction_joints.size(), 0.0);
+  ws.friction_mode.assign(p.friction_joints.size(), 0);
+  ws.friction_fixed.assign(p.friction_joints.size(), 0.0);
+  ws.friction_N.assign(p.friction_joints.size(), 0.0);
   ws.error.reserve(256);
   // Warm-up at the initial state: the sparse path's first KLU factorization allocates,
   // so it happens here and Derivative only refactors (an error here is reported by the

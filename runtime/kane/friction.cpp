@@ -48,7 +48,12 @@ int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program
       const Vec3 F = ws.reaction_W[L].head<3>();
       const double N = (F - F.dot(a) * a).norm();  // (1)
       const double r = j.type == flat::JointType::Revolute ? j.mu_radius : 1.0;
-      const double tau = -j.mu * r * N * std::tanh(ws.u[j.u0] / j.mu_v);  // (2)
+      // (2), or exact stick-slip's law (sim/stick_slip.cpp): sliding by a sign, or stuck.
+      const int mode = ws.friction_mode[i];
+      const double tau = mode == 0   ? -j.mu * r * N * std::tanh(ws.u[j.u0] / j.mu_v)
+                         : mode == 2 ? ws.friction_fixed[i]
+                                     : -j.mu * r * N * mode;
+      ws.friction_N[i] = N;
       change = std::max(change, std::fabs(tau - ws.friction_tau[i]) / (1.0 + std::fabs(tau)));
       ws.friction_tau[i] = tau;
       ws.Q[j.u0] = ws.friction_Q0[i] + tau;

@@ -21,6 +21,9 @@ double ForceValue(const Program& p, const Workspace& ws, const Scalar& s);
 int SolveDense(const Program& p, Workspace& ws);
 // Its first half: ws.M (lower triangle) and ws.f, eqs. (4) and (5) of kane_dense.cpp.
 void AssembleDense(const Program& p, Workspace& ws);
+// Its mass part alone: the composite inertias ws.Ic and the lower triangle of *M (nu x nu),
+// eq. (4) of kane_dense.cpp, after PositionKinematics and VelocityKinematics.
+void AssembleMass(const Program& p, Workspace& ws, Eigen::MatrixXd* M);
 // Body L's bracketed wrench at its mass centre, eq. (2) of kane_dense.cpp with the free
 // udot = 0: [F_L - m_L a_bias_L;  T_L - I_L alpha_bias_L - w_L x I_L w_L].
 Vec6 BiasBracket(const Program& p, const Workspace& ws, int L);

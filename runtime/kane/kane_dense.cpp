@@ -91,27 +91,21 @@ Vec6 BiasBracket(const Program& p, const Workspace& ws, int L) {
   return W;
 }
 
-void AssembleDense(const Program& p, Workspace& ws) {
+// Each body's spatial inertia about its origin, the composites Ic (leaves to root:
+// children follow parents), then (4): each free speed s pushes its wrench Ic h_s up to the
+// root. Writes the lower triangle of *M.
+void AssembleMass(const Program& p, Workspace& ws, Eigen::MatrixXd* M) {
   const int K = static_cast<int>(p.bodies.size());
-  // Each body's own inertia and bracketed wrench about its origin (set: no zeroing
-  // between calls), then the composites, leaves to root (children follow parents).
   for (int L = 0; L < K; ++L) {
     const auto uL = static_cast<size_t>(L);
-    const TreeBody& b = p.bodies[uL];
-    const Vec3& o = ws.p_WB[uL];
-    const Vec3& c = ws.p_WBcm[uL];
-    SetSpatialInertia(&ws.Ic[uL], b.mass, c, ws.I_W[uL], o);
-    ws.Wc[uL] = MoveWrench(BiasBracket(p, ws, L), c, o);
+    SetSpatialInertia(&ws.Ic[uL], p.bodies[uL].mass, ws.p_WBcm[uL], ws.I_W[uL], ws.p_WB[uL]);
   }
   for (int L = K - 1; L >= 0; --L) {
-    const auto uL = static_cast<size_t>(L);
-    const int P = p.joints[uL].parent;
+    const int P = p.joints[static_cast<size_t>(L)].parent;
     if (P < 0) continue;
-    const auto uP = static_cast<size_t>(P);
+    const auto uL = static_cast<size_t>(L), uP = static_cast<size_t>(P);
     AddMovedInertia(&ws.Ic[uP], ws.Ic[uL], ws.p_WB[uL], ws.p_WB[uP]);
-    ws.Wc[uP] += MoveWrench(ws.Wc[uL], ws.p_WB[uL], ws.p_WB[uP]);
   }
-  // (4) and (5): each free speed s pushes its wrench Ic h_s up to the root.
   for (int L = 0; L < K; ++L) {
     const auto uL = static_cast<size_t>(L);
     const TreeJoint& j = p.joints[uL];
@@ -119,11 +113,10 @@ void AssembleDense(const Program& p, Workspace& ws) {
       const int s = j.u0 + k;
       const int fs = p.u_free_of[static_cast<size_t>(s)];
       if (fs < 0) continue;
-      ws.f[fs] = ws.H_W.col(s).dot(ws.Wc[uL]) + ws.Q[s];  // (5)
       Vec6 F = ws.Ic[uL] * ws.H_W.col(s);
       for (int k2 = 0; k2 <= k; ++k2) {
         const int f2 = p.u_free_of[static_cast<size_t>(j.u0 + k2)];
-        if (f2 >= 0) ws.M(fs, f2) = ws.H_W.col(j.u0 + k2).dot(F);
+        if (f2 >= 0) (*M)(fs, f2) = ws.H_W.col(j.u0 + k2).dot(F);
       }
       for (int B = L, A = j.parent; A >= 0; B = A, A = p.joints[static_cast<size_t>(A)].parent) {
         const auto uA = static_cast<size_t>(A);
@@ -131,9 +124,33 @@ void AssembleDense(const Program& p, Workspace& ws) {
         const TreeJoint& ja = p.joints[uA];
         for (int r = ja.u0; r < ja.u0 + ja.nu; ++r) {
           const int fr = p.u_free_of[static_cast<size_t>(r)];
-          if (fr >= 0) ws.M(fs, fr) = ws.H_W.col(r).dot(F);  // lower triangle: fr < fs
+          if (fr >= 0) (*M)(fs, fr) = ws.H_W.col(r).dot(F);  // lower triangle: fr < fs
         }
       }
+    }
+  }
+}
+
+void AssembleDense(const Program& p, Workspace& ws) {
+  AssembleMass(p, ws, &ws.M);
+  // Each body's bracketed wrench about its origin (set: no zeroing between calls), the
+  // subtree sums, then (5).
+  const int K = static_cast<int>(p.bodies.size());
+  for (int L = 0; L < K; ++L) {
+    const auto uL = static_cast<size_t>(L);
+    ws.Wc[uL] = MoveWrench(BiasBracket(p, ws, L), ws.p_WBcm[uL], ws.p_WB[uL]);
+  }
+  for (int L = K - 1; L >= 0; --L) {
+    const int P = p.joints[static_cast<size_t>(L)].parent;
+    if (P < 0) continue;
+    const auto uL = static_cast<size_t>(L), uP = static_cast<size_t>(P);
+    ws.Wc[uP] += MoveWrench(ws.Wc[uL], ws.p_WB[uL], ws.p_WB[uP]);
+  }
+  for (int L = 0; L < K; ++L) {
+    const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+    for (int s = j.u0; s < j.u0 + j.nu; ++s) {
+      const int fs = p.u_free_of[static_cast<size_t>(s)];
+      if (fs >= 0) ws.f[fs] = ws.H_W.col(s).dot(ws.Wc[static_cast<size_t>(L)]) + ws.Q[s];  // (5)
     }
   }
 }

@@ -76,6 +76,8 @@ struct TreeJoint {
   double mu = 0.0;             // Coulomb friction coefficient (0: none), runtime/kane/friction.cpp
   double mu_radius = 1.0;      // Revolute: pin radius (friction torque = radius x force)
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
+  double mu_s = 0.0;           // static coefficient (friction_exact)
+  bool friction_exact = false; // exact stick-slip as events (sim/stick_slip.h), not tanh
   // End stops (Revolute, Prismatic): q in [q_min, q_max]; -inf / +inf: none on that side.
   double q_min = -std::numeric_limits<double>::infinity();
   double q_max = std::numeric_limits<double>::infinity();
@@ -356,7 +358,8 @@ struct Workspace {
   // they are never copied).
   std::optional<Eigen::LLT<Eigen::MatrixXd>> llt;    // Cholesky of M  filled by SolveDense
   std::optional<Eigen::LDLT<Eigen::MatrixXd>> ldlt;  // fallback  filled by SolveDense
-  std::vector<Mat6> Ic;             // composite spatial inertia of the subtree about o_L  (K)  filled by SolveDense
+  std::vector<Mat6> Ic;             // composite spatial inertia of the subtree about o_L  (K)  filled by SolveDense, MassMatrix
+  Eigen::MatrixXd M_full;           // mass matrix on any path, lower triangle  (nu x nu)  filled by MassMatrix
   std::vector<Vec6> Wc;             // composite wrench of the subtree about o_L  (K)  filled by SolveDense
 
   // Sparse path.
@@ -417,6 +420,11 @@ struct Workspace {
   std::vector<double> friction_tau; // friction force per friction joint, last converged  (nfric)  filled by SolveWithFriction
   std::vector<double> friction_Q0;  // the joint's applied force without friction  (nfric)  filled by SolveWithFriction
   long friction_iterations = 0;     // fixed-point iterations so far  filled by SolveWithFriction
+  // The law per friction joint (SetFrictionMode): 0 tanh(u / v), +1 / -1 sliding that way,
+  // 2 the force friction_fixed (stuck)  (nfric)  set by sim/stick_slip.cpp
+  std::vector<int> friction_mode;
+  std::vector<double> friction_fixed;  // mode 2's force  (nfric)
+  std::vector<double> friction_N;      // normal force N of the last solve  (nfric)  filled by SolveWithFriction
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
 };

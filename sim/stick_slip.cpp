@@ -1,0 +1,142 @@
+// Exact Coulomb friction on joints as events (sim/stick_slip.h). With the stuck joints' set
+// S fixed, the accelerations are affine in their friction forces tau_S (Kane's equations
+// with those forces as applied forces), so
+//   a_S(tau) = a_S(tau_0) + X (tau - tau_0),  X_jk = d a_j / d tau_k                     (1)
+// and one Newton step from the last forces solves a_S = 0; X by differences with steps so
+// large that the difference is not lost in the rounding of a (as rt::InverseMassColumn).
+#include "sim/stick_slip.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace kanesim::sim {
+
+namespace {
+
+// A x = b for the small dense A (m x m, row-major): Gaussian elimination with partial
+// pivoting. False when A is singular.
+bool SolveDense(std::vector<double> A, std::vector<double> b, std::vector<double>* x) {
+  const size_t m = b.size();
+  for (size_t k = 0; k < m; ++k) {
+    size_t p = k;
+    for (size_t r = k + 1; r < m; ++r)
+      if (std::abs(A[r * m + k]) > std::abs(A[p * m + k])) p = r;
+    if (!(A[p * m + k] != 0.0)) return false;
+    for (size_t j = 0; j < m; ++j) std::swap(A[k * m + j], A[p * m + j]);
+    std::swap(b[k], b[p]);
+    for (size_t r = k + 1; r < m; ++r) {
+      const double f = A[r * m + k] / A[k * m + k];
+      for (size_t j = k; j < m; ++j) A[r * m + j] -= f * A[k * m + j];
+      b[r] -= f * b[k];
+    }
+  }
+  x->assign(m, 0.0);
+  for (size_t k = m; k-- > 0;) {
+    double s = b[k];
+    for (size_t j = k + 1; j < m; ++j) s -= A[k * m + j] * (*x)[j];
+    (*x)[k] = s / A[k * m + k];
+  }
+  return true;
+}
+
+}  // namespace
+
+StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program) {
+  nq_ = rt::NumQ(program);
+  nu_ = rt::NumU(program);
+  const std::vector<rt::FrictionJoint> all = rt::FrictionJoints(program);
+  for (size_t i = 0; i < all.size(); ++i)
+    if (all[i].exact) joints_.push_back({all[i], static_cast<int>(i), 0, 0.0});
+  ydot_.resize(static_cast<size_t>(nq_ + nu_));
+}
+
+void StickSlipEvents::Apply(rt::Workspace& ws) const {
+  for (const Joint& j : joints_) rt::SetFrictionMode(ws, j.index, j.mode == 0 ? 2 : j.mode, j.tau);
+}
+
+void StickSlipEvents::Sync(rt::Workspace& ws) const { Apply(ws); }
+
+int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double* ydot) {
+  std::vector<Joint*> stuck;
+  for (Joint& j : joints_)
+    if (j.mode == 0) stuck.push_back(&j);
+  Apply(ws);
+  double* out = ydot ? ydot : ydot_.data();
+  if (int s = rt::Derivative(program_, ws, t, y, out); s != 0) return s;
+  if (stuck.empty()) return 0;
+  const size_t m = stuck.size();
+  std::vector<double> a0(m), X(m * m), a(static_cast<size_t>(nq_ + nu_));
+  double a_max = 0.0;
+  for (size_t r = 0; r < m; ++r) a0[r] = out[nq_ + stuck[r]->f.u], a_max = std::max(a_max, std::abs(a0[r]));
+  for (size_t k = 0; k < m; ++k) {  // (1): column k of X
+    const double tau0 = stuck[k]->tau, step = 1e3 * (1.0 + std::abs(tau0) + a_max);
+    rt::SetFrictionMode(ws, stuck[k]->index, 2, tau0 + step);
+    if (int s = rt::Derivative(program_, ws, t, y, a.data()); s != 0) return s;
+    rt::SetFrictionMode(ws, stuck[k]->index, 2, tau0);
+    for (size_t r = 0; r < m; ++r) X[r * m + k] = (a[static_cast<size_t>(nq_ + stuck[r]->f.u)] - a0[r]) / step;
+  }
+  std::vector<double> rhs(m), dtau;
+  for (size_t r = 0; r < m; ++r) rhs[r] = -a0[r];
+  if (!SolveDense(X, rhs, &dtau)) return -1;
+  for (size_t k = 0; k < m; ++k) stuck[k]->tau += dtau[k];
+  Apply(ws);
+  if (int s = rt::Derivative(program_, ws, t, y, out); s != 0) return s;
+  for (const Joint* j : stuck) {  // held exactly
+    out[j->f.q] = 0.0;
+    out[nq_ + j->f.u] = 0.0;
+  }
+  return 0;
+}
+
+int StickSlipEvents::Rhs(rt::Workspace& ws, double t, const double* y, double* ydot) { return Solve(ws, t, y, ydot); }
+
+int StickSlipEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g) {
+  if (int s = Solve(ws, t, y, nullptr); s != 0) return s;
+  for (size_t i = 0; i < joints_.size(); ++i) {
+    const Joint& j = joints_[i];
+    if (j.mode != 0) {
+      g[i] = j.mode * y[nq_ + j.f.u];
+    } else {
+      const double N = rt::FrictionNormal(ws, j.index);
+      g[i] = j.f.mu_s * j.f.radius * N - std::abs(j.tau);
+    }
+  }
+  return 0;
+}
+
+int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
+  y[nq_ + j.f.u] = 0.0;
+  const int was = j.mode;
+  j.mode = 0;
+  if (int s = Solve(ws, t, y, nullptr); s != 0) return s;
+  const double N = rt::FrictionNormal(ws, j.index), bound = j.f.mu_s * j.f.radius * N;
+  char buf[200];
+  if (std::abs(j.tau) <= bound) {
+    std::snprintf(buf, sizeof buf, "sticks (friction %.17g within %.17g)", j.tau, bound);
+  } else {
+    j.mode = j.tau > 0.0 ? -1 : 1;  // it slides where the force it needed pulls it
+    std::snprintf(buf, sizeof buf, "%s %s (friction needed %.17g, at most %.17g)",
+                  was == 0 ? "slips," : "reverses, slides", j.mode > 0 ? "forwards" : "backwards", j.tau, bound);
+  }
+  log_.push_back({t, j.f.joint, buf});
+  return 0;
+}
+
+int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
+  if (i < 0 || i >= Count()) return 0;
+  return Decide(ws, t, y, joints_[static_cast<size_t>(i)]);
+}
+
+int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
+  for (Joint& j : joints_) {
+    const double u = y0[nq_ + j.f.u];
+    j.mode = u > 0.0 ? 1 : u < 0.0 ? -1 : 0;
+  }
+  for (Joint& j : joints_)
+    if (j.mode == 0)
+      if (int s = Decide(ws, t0, y0, j); s != 0) return s;
+  return 0;
+}
+
+}  // namespace kanesim::sim

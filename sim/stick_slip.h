@@ -1,0 +1,56 @@
+// Exact Coulomb friction on joints as events (stdlib `friction_exact = true`; docs/stdlib.md
+// "Revolute"): a joint slides with the friction force -mu r N sign(u) (no regularization
+// speed), and where its speed reaches zero it sticks: its speed held at zero by a friction
+// force tau (one more row) as long as |tau| <= mu_s r N; when the needed force would pass
+// that bound it slides again, in the direction the force pulls it. Each joint's switch is an
+// event function: s u while sliding in direction s, mu_s r N - |tau| while stuck.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "runtime/runtime.h"
+#include "sim/simulate.h"
+
+namespace kanesim::sim {
+
+class StickSlipEvents {
+ public:
+  explicit StickSlipEvents(const rt::Program& program);
+  bool Active() const { return !joints_.empty(); }
+  int Count() const { return static_cast<int>(joints_.size()); }
+  // The start: a joint moving slides that way; at rest it sticks or slides (the stick test).
+  int Start(rt::Workspace& ws, double t0, double* y0);
+  // ydot at (t, y) with every exact joint's law applied: sliding ones by their sign, stuck
+  // ones held (their friction forces solved so that their accelerations vanish). Replaces
+  // Derivative's ydot. 0, or Derivative's codes.
+  int Rhs(rt::Workspace& ws, double t, const double* y, double* ydot);
+  int Functions(rt::Workspace& ws, double t, const double* y, double* g);
+  // Joint i stopped (sliding) or its needed force reached mu_s r N (stuck); y jumps in place.
+  int Event(rt::Workspace& ws, double t, double* y, int i);
+  // The friction laws of the run into another workspace (the output rows').
+  void Sync(rt::Workspace& ws) const;
+  const std::vector<EventRecord>& Log() const { return log_; }
+
+ private:
+  struct Joint {
+    rt::FrictionJoint f;
+    int index = 0;     // among the program's friction joints (rt::FrictionJoints)
+    int mode = 0;      // +1 / -1 sliding that way, 0 stuck
+    double tau = 0.0;  // stuck: the friction force holding it (last solved)
+  };
+  // The stuck joints' friction forces at (t, y) (Newton on their accelerations, which are
+  // affine in them), the modes applied to ws; ydot (may be null) the held motion.
+  int Solve(rt::Workspace& ws, double t, const double* y, double* ydot);
+  void Apply(rt::Workspace& ws) const;
+  // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
+  int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
+
+  const rt::Program& program_;
+  std::vector<Joint> joints_;
+  int nq_ = 0, nu_ = 0;
+  std::vector<double> ydot_;  // scratch
+  std::vector<EventRecord> log_;
+};
+
+}  // namespace kanesim::sim
