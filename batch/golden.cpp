@@ -108,7 +108,8 @@ bool ReadGoldenSpecText(const std::string& path, const std::string& text, Golden
   *out = GoldenSpec{};
   out->spec_path = path;
   out->name = std::filesystem::path(path).stem().string();
-  static const char* kKnown[] = {"model", "model_name", "golden", "set", "run", "signals", "tolerance", "invariant"};
+  static const char* kKnown[] = {"model", "model_name", "golden", "set", "run", "signals", "tolerance", "invariant",
+                                 "input_files"};
   for (const auto& [key, node] : root) {
     bool known = false;
     for (const char* k : kKnown) known = known || key.str() == k;
@@ -129,6 +130,21 @@ bool ReadGoldenSpecText(const std::string& path, const std::string& text, Golden
   out->golden_path = Resolve(path, golden);
   if (const toml::node* set = root.get("set")) {
     if (!ReadSetTable(path, *set, &out->sets, error)) return false;
+  }
+  if (const toml::node* files = root.get("input_files")) {  // the model's input tables (--input-file)
+    const toml::array* a = files->as_array();
+    if (!a) {
+      *error = Where(path, *files) + "input_files must be an array of file names";
+      return false;
+    }
+    for (const toml::node& x : *a) {
+      auto s = x.value<std::string>();
+      if (!s) {
+        *error = Where(path, x) + "input_files must be strings";
+        return false;
+      }
+      out->input_files.push_back(Resolve(path, *s));
+    }
   }
   if (const toml::table* run = root["run"].as_table()) {
     for (const auto& [k, v] : *run) {
@@ -247,6 +263,12 @@ std::string SettingsText(const GoldenSpec& s) {
   // Only when not the default, so that the settings lines recorded before the key existed stay valid.
   if (s.energy_check != "on") t += "energy_check=" + s.energy_check + ";";
   for (const std::string& x : s.signals) t += x + ";";
+  // The input tables by content (absent before the key existed: older settings lines stay valid).
+  for (const std::string& f : s.input_files) {
+    std::string text, why;
+    const std::string hash = ReadTextFile(f, kMaxDataBytes, &text, &why) ? "fnv1a64:" + Fnv1a64Hex(text) : "unreadable";
+    t += "input_file=" + std::filesystem::path(f).filename().string() + " " + hash + ";";
+  }
   return t;
 }
 

@@ -44,6 +44,7 @@ struct GoldenSpec {
   std::string model;        // resolved path of the .mech file
   std::string model_name;
   std::vector<std::string> sets;  // "name=value"
+  std::vector<std::string> input_files;  // the model's input tables (resolved), as --input-file
   double start_time = kUnset, stop_time = kUnset, interval = kUnset, rtol = kUnset, atol = kUnset;
   std::string integrator = "auto", solver = "auto";
   std::string energy_check = "on";   // on | off | report (docs/integrators.md "The energy guard")

@@ -80,8 +80,8 @@ int RunCheck(const CheckArgs& args) {
     for (const auto& c : s.cut_joints) std::cout << " " << c;
     std::cout << "\n";
   }
-  std::cout << fmt::format("  constraints {} contact(s), {} line force(s), {} applied wrench(es)\n",
-                           mech.contacts.size(), mech.line_forces.size(), mech.wrenches.size());
+  std::cout << fmt::format("  constraints {} contact(s), {} joint coupling(s), {} line force(s), {} applied wrench(es)\n",
+                           mech.contacts.size(), mech.couplings.size(), mech.line_forces.size(), mech.wrenches.size());
   std::cout << fmt::format("  solver      {} — {}\n", pipeline::SolverName(s.solver), s.solver_reason);
   std::cout << fmt::format("  integrator  {} — {}\n", pipeline::IntegratorName(s.integrator), s.integrator_reason);
   if (!s.equations.empty()) std::cout << "  equations   " << s.equations << "\n";

@@ -21,6 +21,7 @@
 #include "cli/common.h"
 #include "cli/number_options.h"
 #include "cli/scene.h"
+#include "cli/signal_units.h"
 #include "batch/file_guard.h"
 #include "runtime/runtime.h"
 #include "sim/csv.h"
@@ -45,6 +46,7 @@ struct RunArgs {
   std::string speeds;               // --speeds joint|diagonal ("": the model's annotation)
   bool stats = false;
   std::string events_path;  // --events FILE.csv
+  bool units_in_header = false;  // --units-in-header (cli/signal_units.h)
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
   bool show_frames = false;  // --show-frames: the joints' frames as small axes in the animation
 };
@@ -115,6 +117,12 @@ int RunCommand(const RunArgs& a) {
     return kExitModelError;
   }
   sim::SimOptions& so = run.sim;
+  // The model's inputs: --input-file tables; an input without a value is an error at its declaration.
+  std::vector<std::string> input_names;
+  for (int i = 0; i < rt::NumInputs(program); ++i) input_names.push_back(rt::InputName(program, i));
+  sim::InputTable inputs(input_names);
+  if (!LoadInputTables(*model->mech, a.load.input_files, run.grid.start, run.grid.stop, &inputs)) return kExitModelError;
+  if (!input_names.empty()) so.inputs = &inputs;
   AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
   if (!animation.Prepare(*model->mech, program, &so.signals)) return kExitModelError;
 
@@ -141,7 +149,9 @@ int RunCommand(const RunArgs& a) {
     }
   }
   if (!to_stdout) {
-    if (std::string in = batch::OverwrittenInput(a.out_path, {a.load.path}); !in.empty()) {
+    std::vector<std::string> protected_files{a.load.path};
+    protected_files.insert(protected_files.end(), a.load.input_files.begin(), a.load.input_files.end());
+    if (std::string in = batch::OverwrittenInput(a.out_path, protected_files); !in.empty()) {
       fmt::print(stderr, "kanesim: error: -o '{}' is the model '{}'; writing the CSV there would destroy it\n",
                  a.out_path, in);
       return kExitModelError;
@@ -167,7 +177,9 @@ int RunCommand(const RunArgs& a) {
   {
     ProgressBar bar(run.grid.start, run.grid.stop, bar_enabled);
     so.progress = [&bar](double t) { bar.Update(t); };
-    sim::CsvWriter writer(out);
+    sim::CsvWriter csv(out);
+    UnitsInHeader with_units(*model->mech, csv);
+    sim::SignalSink& writer = a.units_in_header ? static_cast<sim::SignalSink&>(with_units) : csv;
     result = pipeline::Run(*model, run, animation.Wrap(writer));  // stages 5-6
   }
   const bool rows_correct = result.status == sim::SimResult::Status::kOk ||
@@ -238,7 +250,8 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("-o,--out", a->out_path, "Write the CSV to this file (default: stdout)");
   run->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
   AddUrdfOptions(*run, &a->load.floating, &a->load.package_paths);
-  run->add_option("--set", a->load.sets, "Set a parameter, name=value (repeatable)")->allow_extra_args(false);
+  run->add_option("--set", a->load.sets, "Set a parameter or an input, name=value (repeatable)")->allow_extra_args(false);
+  AddInputFileOption(*run, &a->load.input_files);
   AddNumberOption(run, "--start-time", &a->spec.start_time, "Start time (default: experiment StartTime)");
   AddNumberOption(run, "--stop-time", &a->spec.stop_time, "Stop time (default: experiment StopTime)");
   AddNumberOption(run, "--interval", &a->spec.interval,
@@ -264,6 +277,7 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
       ->check(CLI::IsMember(pipeline::EnergyCheckNames()));
   run->add_option("--speeds", a->speeds, kSpeedsHelp)->check(CLI::IsMember({"joint", "diagonal"}));
   run->add_option("--speed-order", a->spec.speed_order, kSpeedOrderHelp)->delimiter(',')->allow_extra_args(false);
+  run->add_flag("--units-in-header", a->units_in_header, "Write each column's unit into the CSV header: 'hinge.q [rad]'");
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
   run->add_option("--events", a->events_path,
                   "Write the events (end stops, when clauses) to this CSV file: time, element, kind, and each "

@@ -221,6 +221,7 @@ batch::SettingsRecord SweepSettings(const SweepArgs& a, const batch::SweepConfig
     if (!f.empty() && f[0] != '<' && !batch::SameFile(f, a.load.path) && !(urdf && f == a.load.path + ".mech"))
       inputs.push_back(f);
   inputs.insert(inputs.end(), base.mech->data_files.begin(), base.mech->data_files.end());
+  inputs.insert(inputs.end(), a.load.input_files.begin(), a.load.input_files.end());  // --input-file tables
   for (const std::string& f : inputs) {
     std::string text, why;
     const std::string hash = batch::ReadTextFile(f, batch::kMaxDataBytes, &text, &why)
@@ -286,6 +287,13 @@ int SweepCommand(SweepArgs a) {
       !why.empty() && problem != pipeline::RunProblem::kGrid)
     return FailExit(why);
   config.sim = run.sim;
+  // The model's inputs (--input-file): one table, read only, shared by every scenario.
+  std::vector<std::string> input_names;
+  for (int i = 0; i < rt::NumInputs(*base); ++i) input_names.push_back(rt::InputName(*base, i));
+  sim::InputTable input_table(input_names);
+  if (!LoadInputTables(*base->mech, a.load.input_files, run.grid.start, run.grid.stop, &input_table))
+    return kExitModelError;
+  if (!input_names.empty()) config.sim.inputs = &input_table;
   if (!a.patterns.empty()) {
     config.trajectory_signals = run.sim.signals;
     config.trajectories = true;
@@ -295,6 +303,7 @@ int SweepCommand(SweepArgs a) {
   config.inputs = {a.load.path};
   if (a.file != a.load.path) config.inputs.push_back(a.file);
   if (!a.list.empty()) config.inputs.push_back(a.list);
+  config.inputs.insert(config.inputs.end(), a.load.input_files.begin(), a.load.input_files.end());
   std::vector<std::string> used = config.trajectory_signals;
   for (const batch::Metric& m : config.metrics) used.push_back(m.signal);
   std::cerr << pipeline::RunWarnings(*model, config.sim.rtol, used);
@@ -489,6 +498,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options) {
   sw->add_option("file", a->file, "The .mech file, or a sweep .toml file");
   sw->add_option("--model", a->load.model, "Model to simulate (default: the last one in the file)");
   AddUrdfOptions(*sw, &a->load.floating, &a->load.package_paths);
+  AddInputFileOption(*sw, &a->load.input_files);
   sw->add_option("--set", a->load.sets, "Fix a parameter for every scenario, name=value (repeatable)")
       ->allow_extra_args(false);
   sw->add_option("--grid", a->grids, "name=a:step:b or name=v1,v2,... (repeatable; Cartesian product)")

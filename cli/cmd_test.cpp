@@ -144,6 +144,7 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     lo.path = spec.model;
     lo.model = spec.model_name;
     lo.sets = spec.sets;
+    lo.input_files = spec.input_files;
     lo.sets.insert(lo.sets.end(), args.sets.begin(), args.sets.end());
     if (!std::filesystem::exists(spec.model)) {
       r.outcome = Outcome::kError;
@@ -168,6 +169,12 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
     for (const std::string& n : batch::InvariantSignals(inv, available))
       if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
   run.sim.signals = names;
+  std::vector<std::string> input_names;
+  for (int i = 0; i < rt::NumInputs(program); ++i) input_names.push_back(rt::InputName(program, i));
+  sim::InputTable input_table(input_names);
+  if (!LoadInputTables(*model->mech, spec.input_files, run.grid.start, run.grid.stop, &input_table))
+    return error(spec_path + ": the model's inputs (above)");
+  if (!input_names.empty()) run.sim.inputs = &input_table;
   const sim::OutputGrid& grid = run.grid;
   const sim::SimOptions& so = run.sim;
   if (grid.Count() > batch::kMaxGoldenRows)

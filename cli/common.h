@@ -10,6 +10,7 @@
 #include "runtime/runtime.h"
 #include "flat/mechanism.h"
 #include "pipeline/pipeline.h"
+#include "sim/input_table.h"
 #include "sim/integrator.h"
 
 namespace CLI {
@@ -31,6 +32,7 @@ struct LoadOptions {
   std::vector<std::string> sets;                         // "name=value" from --set
   bool floating = false;                                 // a URDF file: --floating (a free base)
   std::vector<std::string> package_paths;                // a URDF file: --package-path
+  std::vector<std::string> input_files;                  // --input-file: tables of the model's inputs
 };
 
 // The most threads -j may ask for.
@@ -57,6 +59,13 @@ inline constexpr const char* kProjectionHelp =
     "Closed loops and contacts with --integrator dop853: project onto the constraints at every evaluation "
     "(eval) or once per accepted step (step: cheaper evaluations, a larger error at the same tolerance)";
 
+// The model's inputs (docs/cli.md "Input tables"): every --input-file read into *table, each
+// input given by one, the tables covering [start, stop]. False after printing the error to
+// stderr; an input without a value is named at its declaration (file:line:col).
+bool LoadInputTables(const flat::Mechanism& mech, const std::vector<std::string>& files, double start, double stop,
+                     sim::InputTable* table);
+// --input-file (run, sweep, test).
+void AddInputFileOption(CLI::App& cmd, std::vector<std::string>* files);
 // `--speeds joint|diagonal` and `--speed-order` (run, check): RunSpec::speeds.
 inline constexpr const char* kSpeedsHelp =
     "Generalized speeds to integrate in: joint (the joints' own), or diagonal (Lesser's: Gram-Schmidt of the "
@@ -72,6 +81,7 @@ void AddSweepCommand(CLI::App& app, int* exit_code, bool options = true);  // cm
 void AddTestCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_test.cpp
 void AddExportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_export.cpp
 void AddImportCommand(CLI::App& app, int* exit_code, bool options = true);  // cmd_import.cpp
+void AddUnitsCommand(CLI::App& app, int* exit_code, bool options = true);   // cmd_units.cpp
 // --floating and --package-path, for every command that loads a model (a URDF file).
 void AddUrdfOptions(CLI::App& cmd, bool* floating, std::vector<std::string>* package_paths);
 

@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
                               {"sweep", kanesim::cli::AddSweepCommand},   {"test", kanesim::cli::AddTestCommand},
                               {"linearize", kanesim::cli::AddLinearizeCommand}, {"view", kanesim::cli::AddViewCommand},
                               {"import", kanesim::cli::AddImportCommand},
-                              {"export", kanesim::cli::AddExportCommand}};
+                              {"export", kanesim::cli::AddExportCommand},
+                              {"units", kanesim::cli::AddUnitsCommand}};
   const char* named = "";
   for (int i = 1; i < argc && !*named; ++i)
     if (argv[i][0] != '-') named = argv[i];

@@ -381,6 +381,7 @@ CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std
   CompileJointsAndState(p, c.folder_, &out.errors);
   CompileLoops(p, c.cut_joints_, c.folder_, &out.errors);
   CompileContacts(p, c.folder_, &out.errors);
+  CompileCouplings(p, c.folder_, &out.errors);
   CompilePlaneContacts(p, c.folder_, &out.errors);
   CompileForcesAndOutputs(p, &out.errors);
   CompileWhens(p, &out.errors);

@@ -49,6 +49,12 @@ void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& fol
 // Rolling contacts -> Program::contacts and their rows (runtime/constraints/contacts.h).
 void CompileContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 
+// Joint couplings -> Program::couplings and their rows (compiler/couplings.cpp).
+void CompileCouplings(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
+// Before assembly: each follower's start (q and u) from its leader's, by eq. 11, unless the
+// follower's start is held (`fixed = true`) or prescribed; then the assembly's Newton
+// moves the leader (and the loops' joints) instead.
+void StartOnCouplings(const Program& p, Workspace& ws);
 // PlaneContact -> Program::plane_contacts (events, no rows). Also refuses, at the element,
 // the combinations the events cannot handle yet: plane contacts or end stops together with
 // constraint rows (closed loops, rolling contacts) or Coulomb friction.

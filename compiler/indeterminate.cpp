@@ -115,6 +115,7 @@ CompileMessage IndeterminateWarning(const Program& p, const std::vector<std::str
   std::vector<int> owners;  // loop index, or -1 - contact index
   for (int r : p.redundant_rows) {
     const ConstraintRow& row = p.rows[static_cast<size_t>(r)];
+    if (row.coupling >= 0) continue;  // a coupling's force is a joint force, no reaction signal
     const int owner = row.contact >= 0 ? -1 - row.contact : row.loop;
     if (std::find(owners.begin(), owners.end(), owner) == owners.end()) owners.push_back(owner);
   }
@@ -122,7 +123,7 @@ CompileMessage IndeterminateWarning(const Program& p, const std::vector<std::str
     std::string rows;
     for (int r : p.redundant_rows) {
       const ConstraintRow& row = p.rows[static_cast<size_t>(r)];
-      if ((row.contact >= 0 ? -1 - row.contact : row.loop) == owner) rows += (rows.empty() ? "" : ", ") + row.what;
+      if (row.coupling < 0 && (row.contact >= 0 ? -1 - row.contact : row.loop) == owner) rows += (rows.empty() ? "" : ", ") + row.what;
     }
     const bool contact = owner < 0;
     const std::string& name = contact ? p.contacts[static_cast<size_t>(-1 - owner)].name : p.loops[static_cast<size_t>(owner)].name;

@@ -63,12 +63,19 @@ ConstraintRow Align(const Vec3& e, const Vec3& n, double offset, const std::stri
   return r;
 }
 
-// Who owns a row, for messages: the cut joint or the contact.
+// Who owns a row, for messages: the cut joint, the contact or the coupling.
 const std::string& RowOwner(const Program& p, const ConstraintRow& row) {
+  if (row.coupling >= 0) return p.couplings[static_cast<size_t>(row.coupling)].name;
   return row.contact >= 0 ? p.contacts[static_cast<size_t>(row.contact)].name : p.loops[static_cast<size_t>(row.loop)].name;
 }
 const flat::SourceLoc& RowLoc(const Program& p, const ConstraintRow& row) {
+  if (row.coupling >= 0) return p.couplings[static_cast<size_t>(row.coupling)].loc;
   return row.contact >= 0 ? p.contacts[static_cast<size_t>(row.contact)].loc : p.loops[static_cast<size_t>(row.loop)].loc;
+}
+// "contact 'disk'", "coupling 'mimic'", "the loop closed by 'rocker'".
+std::string RowOwnerWords(const Program& p, const ConstraintRow& row) {
+  const char* kind = row.coupling >= 0 ? "coupling '" : row.contact >= 0 ? "contact '" : "the loop closed by '";
+  return kind + RowOwner(p, row) + "'";
 }
 
 // Warning W315 (compiler/compiler.h StartSpeedsWarning): the start speeds u0 violated the velocity
@@ -112,7 +119,7 @@ void DescribeStartSpeedChange(Program& p, const Eigen::VectorXd& psi0, const Eig
     const double res = std::fabs(psi0[r]);
     if (!(res > tol)) continue;
     const ConstraintRow& row = p.rows[static_cast<size_t>(r)];
-    const std::string who = (row.contact >= 0 ? "contact '" : "the loop closed by '") + RowOwner(p, row) + "'";
+    const std::string who = RowOwnerWords(p, row);
     auto it = std::find_if(owners.begin(), owners.end(), [&](const Owner& o) { return o.who == who; });
     if (it == owners.end())
       owners.push_back({res, who, RowLoc(p, row)});
@@ -404,6 +411,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     errors->push_back(Msg(flat::DiagCode::CannotAssemble, "prescribed motion not finite at the start time", RowLoc(p, p.rows[0])));
     return;
   }
+  StartOnCouplings(p, ws);
   PositionKinematics(p, ws);
   VelocityKinematics(p, ws);
   double len = 1.0;
@@ -469,6 +477,8 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     std::ostringstream msg;
     if (row.contact >= 0)
       msg << "contact '" << RowOwner(p, row) << "' cannot be assembled on its plane: ";
+    else if (row.coupling >= 0)
+      msg << "coupling '" << RowOwner(p, row) << "' cannot be satisfied: ";
     else
       msg << "joint '" << RowOwner(p, row) << "' closes a kinematic loop that cannot be assembled: ";
     msg << row.what << " residual " << r << " after " << it << " Newton iterations";
@@ -541,6 +551,15 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     if (!redundant.empty()) note += "; redundant (already enforced by the joints): " + redundant;
     p.notes.push_back(note);
   }
+  for (const CouplingModel& c : p.couplings) {
+    std::ostringstream note;
+    note.precision(17);
+    note << "coupling '" << c.name << "' (" << LocText(c.loc) << "): " << p.joints[static_cast<size_t>(c.follower)].name
+         << ".q = " << c.ratio << " * " << p.joints[static_cast<size_t>(c.leader)].name << ".q + " << c.offset
+         << " (1 constraint)";
+    if (std::binary_search(p.redundant_rows.begin(), p.redundant_rows.end(), c.row)) note << "; redundant";
+    p.notes.push_back(note.str());
+  }
   std::ostringstream dof;
   dof << "degrees of freedom " << p.dof << " = " << p.nu << " free speeds - rank " << p.loop_rank
       << " of the " << nc << "-row constraint Jacobian at the assembled start";
@@ -560,7 +579,7 @@ void AssembleLoops(Program& p, std::vector<CompileMessage>* errors) {
     auto left_out = [&](int i) {
       if (!std::binary_search(p.redundant_rows.begin(), p.redundant_rows.end(), i)) return false;
       const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
-      return row.contact >= 0 || ws.A.row(i).cwiseAbs().maxCoeff() <= kRankTol * a_max;
+      return row.contact >= 0 || row.coupling >= 0 || ws.A.row(i).cwiseAbs().maxCoeff() <= kRankTol * a_max;
     };
     p.active_rows.clear();
     for (size_t i = 0; i < p.rows.size(); ++i) {
@@ -597,12 +616,15 @@ bool DependentBlockBanded(const Program& p) {
 // right-hand side; docs/benchmarks.md "Change points").
 void ChooseLoopSolver(Program& p) {
   const std::string counts = std::to_string(p.loops.size()) + " closed loop(s), " + std::to_string(p.contacts.size()) +
-                             " contact(s), " + std::to_string(p.nu) + " free speeds";
+                             " contact(s), " + (p.couplings.empty() ? "" : std::to_string(p.couplings.size()) + " joint coupling(s), ") +
+                             std::to_string(p.nu) + " free speeds";
   const std::string reduced = ": reduced form: Kane's equations on the constrained basis (Lesser eq. 51)";
   const std::string sparse = ": sparse K-vector system with a multiplier per independent constraint row, KLU";
   // The multipliers of the sparse path are one particular solution where constraints are
   // redundant; the minimum-norm share and friction that reads it need the reduced path.
   std::string blocked;
+  if (!p.couplings.empty())  // a coupling row reads four bodies' twists (constraints.cpp RowJacobians)
+    blocked = "the multiplier form does not take joint couplings";
   if (!p.redundant_rows.empty() && p.options.indeterminate == IndeterminateReactions::MinNorm)
     blocked = "--reactions min-norm needs the reduced path";
   if (!p.redundant_rows.empty() && !p.friction_joints.empty())

@@ -15,6 +15,7 @@ namespace {
 std::string EventsRefused(const Program& p) {
   if (!p.loops.empty()) return "closed loops";
   if (!p.contacts.empty()) return "rolling contacts";
+  if (!p.couplings.empty()) return "joint couplings";
   if (!p.friction_joints.empty()) return "Coulomb friction on joints";
   return "";
 }

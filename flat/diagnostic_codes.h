@@ -1,5 +1,6 @@
 // The one table of diagnostic codes, for the language (L, P, E, W30x: lang/diagnostics.h
-// reports them) and the compiler (K3xx, W31x: rt::CompileMessage). It lives in the flat
+// reports them), the compiler (K3xx, W31x: rt::CompileMessage) and the URDF importer (U4xx:
+// import/diagnostics.h). It lives in the flat
 // layer, the contract both sides include, so that the compiler names its codes without
 // seeing the language; both are rendered by lang::Diagnostics::Render.
 #pragma once
@@ -61,6 +62,10 @@ namespace kanesim::flat {
   X(MeshNotClosed, "E233", "mesh surface not closed")                                         \
   X(MeshOrientation, "E234", "mesh triangles inconsistently oriented")                        \
   X(MeshZeroVolume, "E235", "mesh encloses no volume")                                        \
+  /* units of measure (lang/elab_units.cpp) */                                                \
+  X(BadUnit, "E236", "unit string not understood")                                            \
+  X(UnitMismatch, "E237", "units do not agree")                                               \
+  X(UnitConflict, "E238", "a variable without a unit is used in two different units")         \
   X(UnconnectedFrame, "W301", "frame connector is not connected")                            \
   X(MeshInsideOut, "W302", "mesh triangles face inward (flipped)")                            \
   X(MeshDegenerate, "W303", "mesh has degenerate or non-manifold parts")                      \
@@ -84,8 +89,22 @@ namespace kanesim::flat {
   X(LockedJoint, "W316", "joint cannot move: both its frames are on one rigid body")          \
   X(OutOfRange, "K317", "mass, inertia or length out of the range the equations can use")  \
   X(BadStop, "K318", "end stop on a joint that cannot take it, or out of order")            \
-  X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")    \
-  X(BadReinit, "K321", "when clause or reinit the mechanism cannot take")
+  X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")         \
+  X(BadCoupling, "K319", "joint coupling on joints that cannot take it")                            \
+  X(BadReinit, "K321", "when clause or reinit the mechanism cannot take")                         \
+  /* URDF import (import/): a robot file that cannot be translated (docs/import.md) */       \
+  X(UrdfBadXml, "U401", "malformed XML")                                                      \
+  X(UrdfNotUrdf, "U402", "not a URDF robot")                                                  \
+  X(UrdfMissing, "U403", "missing element or attribute")                                      \
+  X(UrdfBadNumber, "U404", "number malformed, not finite or out of range")                    \
+  X(UrdfDuplicateName, "U405", "duplicate link or joint name")                                \
+  X(UrdfUnknownLink, "U406", "joint names a link or joint that does not exist")               \
+  X(UrdfNotATree, "U407", "links and joints do not form one tree")                            \
+  X(UrdfBadJointType, "U408", "unknown joint type")                                           \
+  X(UrdfTooLarge, "U409", "file over a size limit")                                           \
+  X(UrdfEntities, "U410", "DTD entity declarations are not read")                             \
+  X(UrdfReaderMissing, "U411", "internal: the URDF reader library cannot be loaded (an installation, not a model)") \
+  X(UrdfBadMimic, "U412", "mimic between joints that cannot be coupled")
 
 enum class DiagCode {
 #define KANESIM_X(e, code, summary) e,

@@ -28,7 +28,7 @@ const char* OpSpelling(Op op) {
 }
 
 ExprId ExprPool::Push(const ExprNode& n) {
-  std::uint8_t reads = n.op == Op::Time ? kReadsTime : n.op == Op::State ? kReadsState : 0;
+  std::uint8_t reads = (n.op == Op::Time || n.op == Op::Input) ? kReadsTime : n.op == Op::State ? kReadsState : 0;
   for (ExprId c : {n.a, n.b, n.c})
     if (c >= 0) reads |= reads_[static_cast<size_t>(c)];
   nodes_.push_back(n);
@@ -60,6 +60,13 @@ ExprId ExprPool::State(std::int32_t state_ref_index) {
   ExprNode n;
   n.op = Op::State;
   n.index = state_ref_index;
+  return Push(n);
+}
+
+ExprId ExprPool::Input(std::int32_t input_index) {
+  ExprNode n;
+  n.op = Op::Input;
+  n.index = input_index;
   return Push(n);
 }
 
@@ -105,6 +112,7 @@ double ApplyOp(Op op, double a, double b, double c) {
     case Op::Param:
     case Op::Time:
     case Op::State:
+    case Op::Input:
       return a;
     case Op::Neg: return -a;
     case Op::Not: return a == 0.0 ? 1.0 : 0.0;
@@ -166,6 +174,7 @@ std::string LeafText(const ExprNode& n, const std::vector<std::string>* pn, cons
       else os << "param#" << n.index;
       break;
     case Op::Time: os << "time"; break;
+    case Op::Input: os << "input#" << n.index; break;
     case Op::State:
       if (sn && n.index >= 0 && static_cast<size_t>(n.index) < sn->size()) os << (*sn)[static_cast<size_t>(n.index)];
       else os << "state#" << n.index;

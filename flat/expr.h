@@ -23,6 +23,7 @@ inline constexpr ExprId kNoExpr = -1;
   X(Param, 0, "param")   /* index = parameter index                          */      \
   X(Time, 0, "time")                                                                  \
   X(State, 0, "state")   /* index = StateRef index into Mechanism::state_refs */     \
+  X(Input, 0, "input")   /* index = input index into Mechanism::inputs           */     \
   X(Neg, 1, "-")                                                                      \
   X(Not, 1, "not")                                                                    \
   X(Sin, 1, "sin")                                                                    \
@@ -102,6 +103,9 @@ class ExprPool {
   ExprId Parameter(std::int32_t index);
   ExprId Time();
   ExprId State(std::int32_t state_ref_index);
+  // A model input (Mechanism::inputs): a function of time given at run time, so it counts as
+  // reading time (DependsOnTimeOrState) but not the state.
+  ExprId Input(std::int32_t input_index);
   ExprId Unary(Op op, ExprId a);
   ExprId Binary(Op op, ExprId a, ExprId b);
   ExprId IfElse(ExprId cond, ExprId then_e, ExprId else_e);

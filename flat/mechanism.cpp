@@ -163,7 +163,8 @@ double EvalParamExpr(const Mechanism& m, const std::vector<double>& pv, ExprId i
                                                                       : std::nan("");
         break;
       case Op::Time:
-      case Op::State: r = std::nan(""); break;
+      case Op::State:
+      case Op::Input: r = std::nan(""); break;
       default:
         r = ApplyOp(n.op, n.a >= 0 ? val[n.a] : 0.0, n.b >= 0 ? val[n.b] : 0.0, n.c >= 0 ? val[n.c] : 0.0);
     }
@@ -282,6 +283,10 @@ std::string DumpFlat(const Mechanism& m) {
        << " at " << F(c.frame)
        << " radius=" << E(c.radius) << " normal=" << V(c.plane_normal) << "\n";
   }
+  for (const auto& in : m.inputs) os << "input " << in.name << "\n";
+  for (const auto& c : m.couplings)
+    os << "coupling " << c.name << " " << m.joints[static_cast<size_t>(c.follower)].name << ".q = " << E(c.ratio)
+       << " * " << m.joints[static_cast<size_t>(c.leader)].name << ".q + " << E(c.offset) << "\n";
   for (const auto& o : m.outputs) os << "output " << o.name << " = " << E(o.expr) << "\n";
   for (const auto& w : m.whens) {
     os << "when";

@@ -181,6 +181,16 @@ struct Contact {
   SourceLoc loc;
 };
 
+// An exact holonomic coupling of two one-coordinate joints (stdlib JointCoupling; a gear
+// pair, a URDF <mimic>): q_follower = ratio q_leader + offset, kept as a constraint row
+// (runtime/constraints/constraints.cpp eq. 11), the follower's speed a dependent one.
+struct JointCoupling {
+  std::string name;
+  std::int32_t leader = -1, follower = -1;  // indices into joints (Revolute or Prismatic)
+  ExprId ratio = kNoExpr, offset = kNoExpr;
+  SourceLoc loc;
+};
+
 // How a body looks (the stdlib shapes, annotated __kanesim(primitive = "shape", kind = ...);
 // lang/elab_shapes.cpp): for drawing (`kanesim view`, `run --animation`) and for `kanesim
 // check`'s report of mesh bodies. It carries no physics: its Body does.
@@ -204,6 +214,7 @@ struct Shape {
 struct Output {
   std::string name;
   ExprId expr = kNoExpr;
+  std::string unit;  // declared or inferred by the unit check (lang/elab_units.h); "" unknown
   SourceLoc loc;
 };
 
@@ -223,6 +234,13 @@ struct WhenClause {
   bool terminate = false;          // terminate("message"): the run ends at the event
   std::string message;
   SourceLoc loc;                   // the `when` keyword
+};
+
+// A top-level `input Real u;` (one per element of an array input, "u[2]"): a value given at
+// run time (--input-file, the stepping API), read by Op::Input nodes.
+struct Input {
+  std::string name;
+  SourceLoc loc;  // the declaration
 };
 
 struct Experiment {
@@ -255,7 +273,9 @@ struct Mechanism {
   std::vector<LineForce> line_forces;
   std::vector<Wrench> wrenches;
   std::vector<Contact> contacts;
+  std::vector<JointCoupling> couplings;
   std::vector<Output> outputs;
+  std::vector<Input> inputs;      // in declaration order
   std::vector<Shape> shapes;      // drawing only; empty for a model of bare Bodies
   std::vector<WhenClause> whens;  // empty: no when clauses (no event machinery)
   Experiment experiment;

@@ -46,7 +46,8 @@ double ParamEvaluator::Eval(ExprId id) {
                                                                            : std::nan("");
         break;
       case Op::Time:
-      case Op::State: r = std::nan(""); break;
+      case Op::State:
+      case Op::Input: r = std::nan(""); break;
       default: {
         const double a = n.a >= 0 ? value_[static_cast<size_t>(n.a)] : 0.0;
         const double b = n.b >= 0 ? value_[static_cast<size_t>(n.b)] : 0.0;

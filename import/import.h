@@ -26,6 +26,9 @@ namespace kanesim::import {
 
 struct Options {
   bool floating = false;  // a free base: FreeMotion between the world and the root link
+  // <mimic> joints as exact couplings (JointCoupling); false imports the follower as an
+  // independent joint, as Pinocchio's default reading does (its references in tests/import).
+  bool mimic = true;
   // Where `package://NAME/...` mesh names are looked up, in order: each DIR as DIR/NAME/...
   // (and DIR/... when DIR's own name is NAME); ROS_PACKAGE_PATH's folders follow these.
   std::vector<std::string> package_paths;
@@ -34,7 +37,7 @@ struct Options {
   // them); "" writes them as found (absolute when the search path was).
   std::string mesh_base_dir;
   // Whether the notes (collisions ignored, limits recorded, meshes not found) go into
-  // Result::diagnostics; warnings (what changes the dynamics: mimic joints) always do.
+  // Result::diagnostics; errors always do.
   bool notes = true;
 };
 
@@ -42,8 +45,8 @@ struct Result {
   bool ok = false;           // false: errors in `diagnostics`, `mech` empty
   std::string mech;          // the model's .mech text (one model; it names the stdlib's classes)
   std::string model_name;    // the model's name in `mech` (the robot's, sanitized)
-  // Rendered: "file:line:col: error[U401]: ...", the URDF line with a caret, a hint; warnings
-  // ("warning[W421]") and notes ("note: ...") in the same form.
+  // Rendered: "file:line:col: error[U401]: ...", the URDF line with a caret, a hint; notes
+  // ("note: ...") in the same form.
   std::string diagnostics;
   int num_errors = 0;
   // Each URDF link and joint by its URDF name, with what stands for it in `mech`: a link's

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "import/diagnostics.h"
 #include "import/import.h"
 #include "import/urdf_model.h"
 
@@ -116,7 +117,7 @@ const std::set<std::string>& Reserved() {
       "when", "while", "within", "pi", "time", "der", "Real", "Integer", "Boolean", "String", "Kanesim",
       // the standard library's classes the model names
       "World", "Body", "Frame", "FixedRPY", "FixedTranslation", "Revolute", "Prismatic", "Planar", "FreeMotion",
-      "Box", "Cylinder", "Sphere", "BodyShape"};
+      "Box", "Cylinder", "Sphere", "BodyShape", "JointCoupling"};
   return kReserved;
 }
 
@@ -134,6 +135,7 @@ class Writer {
     decl_ << "  World world(g = {0, 0, -9.81}) \"URDF: z up, standard gravity\";\n";
     Root();
     for (int j : r_.order) JointAndChild(j);
+    if (o_.mimic) Mimics();
     Notes();
     std::ostringstream text;
     text << "// Imported by `kanesim import` from " << Shown(fs::path(path_).filename().string()) << " (URDF robot '"
@@ -312,20 +314,31 @@ class Writer {
       case JointType::kFixed: break;
     }
     Connect(from, name + ".frame_a");
-    if (j.has_mimic) Mimic(j, name);
     Dynamics(j, name);
     LinkComponents(child, name + ".frame_b");
   }
 
-  void Mimic(const Joint& j, const std::string& name) {
-    const std::string law = "q = " + Num(j.multiplier) + " * q_" + Shown(j.mimic_joint) + " + " + Num(j.offset);
-    decl_ << "  // <mimic joint=\"" << Shown(j.mimic_joint) << "\"> (" << law
-          << "): NOT imposed, kanesim has no coupling of joint coordinates yet; '" << name
-          << "' moves on its own\n";
-    d_.Warning(ImportCode::MimicDropped, j.line, "<joint",
-               "joint '" + Shown(j.name) + "' mimics '" + Shown(j.mimic_joint) + "' (" + law +
-                   "); kanesim cannot impose that coupling yet, so it is imported as an independent joint",
-               "give the follower its motion with an equation, or leave it free (docs/import.md)");
+  // <mimic joint multiplier offset> as an exact coupling, q = multiplier q_leader + offset
+  // (stdlib JointCoupling): written once every joint has its name (the leader may come later
+  // in the tree's order).
+  void Mimics() {
+    bool any = false;
+    for (std::size_t ji = 0; ji < r_.joints.size(); ++ji) {
+      const Joint& j = r_.joints[ji];
+      if (!j.has_mimic) continue;
+      const int li = j.mimic_leader;
+      const std::string& follower = joint_name_[ji];
+      const std::string& leader = joint_name_[static_cast<std::size_t>(li)];
+      const std::string name = Unique(j.name + "_mimic", nullptr);
+      if (!any) eq_ << "  // <mimic> joints: kept exactly (JointCoupling; the follower's coordinate is dependent)\n";
+      any = true;
+      decl_ << "  // <mimic joint=\"" << Shown(j.mimic_joint) << "\"> of joint '" << Shown(j.name) << "' (" << Where(j.line)
+            << "): " << follower << ".q = " << Num(j.multiplier) << " * " << leader << ".q + " << Num(j.offset) << "\n";
+      Declare("JointCoupling", name, "ratio = " + Num(j.multiplier) + ", offset = " + Num(j.offset),
+              "joint '" + Shown(j.name) + "' mimics '" + Shown(j.mimic_joint) + "'");
+      Connect(leader + ".drive", name + ".flange_a");
+      Connect(follower + ".drive", name + ".flange_b");
+    }
   }
 
   // <dynamics damping friction> as the joint's force law: viscous damping and Coulomb friction
@@ -439,25 +452,28 @@ class Writer {
 }  // namespace
 
 Result UrdfToMech(const std::string& path, std::string_view text, const Options& options) {
-  Diags diags(path, text);
+  Diags diags;
   Robot robot;
   Result result;
   if (text.size() > kMaxUrdfBytes) {
-    diags.Error(ImportCode::TooLarge, 0, "", "the file is larger than 64 MiB", "a URDF of a robot is a few MB at most");
+    diags.Error(DiagCode::UrdfTooLarge, 0, "", "the file is larger than 64 MiB", "a URDF of a robot is a few MB at most");
   } else if (ReadUrdf(text, &robot, diags) && BuildTree(&robot, diags)) {
     result = Writer(robot, options, path, diags).Write();
   }
   result.num_errors = diags.NumErrors();
   result.ok = result.num_errors == 0 && result.ok;
   if (!result.ok) result.mech.clear();
-  result.diagnostics = diags.Rendered() + (options.notes ? diags.Notes() : "");
+  // A refused oversized file is named, not shown (its one message is about the whole file).
+  const RenderedMessages rendered = RenderMessages(diags, path, text.size() > kMaxUrdfBytes ? std::string_view() : text);
+  result.diagnostics = rendered.errors + (options.notes ? rendered.notes : "");
   if (result.num_errors > 0)
     result.diagnostics += std::to_string(result.num_errors) + " error" + (result.num_errors == 1 ? "" : "s") + "\n";
   return result;
 }
 
 std::string TooLargeMessage(const std::string& path, std::uintmax_t bytes) {
-  return Shown(path) + ": error[U409]: the file is " + std::to_string(bytes) + " bytes, more than the " +
+  return Shown(path) + ": error[" + flat::DiagCodeString(DiagCode::UrdfTooLarge) + "]: the file is " +
+         std::to_string(bytes) + " bytes, more than the " +
          std::to_string(kMaxUrdfBytes) + " a URDF may have\n";
 }
 

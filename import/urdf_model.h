@@ -61,6 +61,7 @@ struct Joint {
   bool has_mimic = false;
   std::string mimic_joint;
   double multiplier = 1, offset = 0;
+  int mimic_leader = -1;  // index into joints (urdf_tree.cpp)
   int line = 0;
 };
 

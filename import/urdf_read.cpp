@@ -68,7 +68,7 @@ class Reader {
       double x = 0;
       if (count >= n || !ParseNumber(s.substr(i, j - i), &x)) return BadNumber(e, attr, v, n);
       if (!std::isfinite(x) || std::fabs(x) > kMaxMagnitude || (non_negative && x < 0)) {
-        d_.Error(ImportCode::BadNumber, e->GetLineNum(), std::string(attr) + "=",
+        d_.Error(DiagCode::UrdfBadNumber, e->GetLineNum(), std::string(attr) + "=",
                  std::string("<") + e->Name() + "> " + attr + "=\"" + Clip(v) + "\": " +
                      (non_negative && x < 0 ? "a negative value" : "not a finite number of at most 1e9 in magnitude"),
                  non_negative && x < 0 ? "masses, lengths and radii are not negative"
@@ -100,7 +100,7 @@ class Reader {
   }
 
   void MissingAttr(const XMLElement* e, const char* attr) {
-    d_.Error(ImportCode::Missing, e->GetLineNum(), std::string("<") + e->Name(),
+    d_.Error(DiagCode::UrdfMissing, e->GetLineNum(), std::string("<") + e->Name(),
              std::string("<") + e->Name() + "> needs a non-empty attribute '" + attr + "'");
   }
 
@@ -110,7 +110,7 @@ class Reader {
   }
 
   bool BadNumber(const XMLElement* e, const char* attr, const char* v, int n) {
-    d_.Error(ImportCode::BadNumber, e->GetLineNum(), std::string(attr) + "=",
+    d_.Error(DiagCode::UrdfBadNumber, e->GetLineNum(), std::string(attr) + "=",
              std::string("<") + e->Name() + "> " + attr + "=\"" + Clip(v) + "\" is not " +
                  (n == 1 ? "a number" : std::to_string(n) + " numbers separated by blanks"),
              n == 3 ? "for example " + std::string(attr) + "=\"0 0 0.1\"" : "");
@@ -121,7 +121,7 @@ class Reader {
     bool ok = Pose(e, &in->origin);
     const XMLElement* m = e->FirstChildElement("mass");
     if (!m) {
-      d_.Error(ImportCode::Missing, e->GetLineNum(), "<inertial", "<inertial> needs a <mass value=...>");
+      d_.Error(DiagCode::UrdfMissing, e->GetLineNum(), "<inertial", "<inertial> needs a <mass value=...>");
       return false;
     }
     ok &= Numbers(m, "value", &in->mass, 1, true, true);
@@ -155,7 +155,7 @@ class Reader {
       v->mesh = file;
       return Numbers(m, "scale", v->scale.data(), 3, false);  // negative: mirrored
     }
-    d_.Error(ImportCode::Missing, g->GetLineNum(), "<geometry",
+    d_.Error(DiagCode::UrdfMissing, g->GetLineNum(), "<geometry",
              "<geometry> needs one of <box>, <cylinder>, <sphere> or <mesh>");
     return false;
   }
@@ -177,7 +177,7 @@ class Reader {
     bool ok = Pose(e, &v->origin);
     const XMLElement* g = e->FirstChildElement("geometry");
     if (!g) {
-      d_.Error(ImportCode::Missing, e->GetLineNum(), "<visual", "<visual> needs a <geometry>");
+      d_.Error(DiagCode::UrdfMissing, e->GetLineNum(), "<visual", "<visual> needs a <geometry>");
       return false;
     }
     ok &= Geometry(g, v);
@@ -217,7 +217,7 @@ class Reader {
     if (!v) return false;
     auto it = kTypes.find(v);
     if (it == kTypes.end()) {
-      d_.Error(ImportCode::BadJointType, e->GetLineNum(), "type=",
+      d_.Error(DiagCode::UrdfBadJointType, e->GetLineNum(), "type=",
                std::string("joint type '") + Clip(v) + "' is not a URDF joint type",
                "revolute, continuous, prismatic, fixed, floating or planar");
       return false;
@@ -229,7 +229,7 @@ class Reader {
   bool LinkRef(const XMLElement* e, const char* tag, std::string* out) {
     const XMLElement* c = e->FirstChildElement(tag);
     if (!c) {
-      d_.Error(ImportCode::Missing, e->GetLineNum(), "<joint",
+      d_.Error(DiagCode::UrdfMissing, e->GetLineNum(), "<joint",
                std::string("<joint> needs a <") + tag + " link=\"...\"/>");
       return false;
     }
@@ -251,7 +251,7 @@ class Reader {
       // Fixed and floating joints have no axis; some files give theirs as zero.
       const bool uses_axis = j->type != JointType::kFixed && j->type != JointType::kFloating;
       if (ok && uses_axis && j->axis == Vec3{0, 0, 0}) {
-        d_.Error(ImportCode::BadNumber, a->GetLineNum(), "xyz=", "<axis xyz=\"0 0 0\"> has no direction",
+        d_.Error(DiagCode::UrdfBadNumber, a->GetLineNum(), "xyz=", "<axis xyz=\"0 0 0\"> has no direction",
                  "give the joint axis as a non-zero vector, e.g. xyz=\"0 0 1\"");
         ok = false;
       }
@@ -306,19 +306,19 @@ bool ReadUrdf(std::string_view text, Robot* robot, Diags& diags) {
   // tinyxml2 expands no declared entity; a file that declares some expects it to (the
   // "billion laughs" is one), so it is refused rather than read differently.
   if (int line = EntityLine(text)) {
-    diags.Error(ImportCode::Entities, line, "<!ENTITY", "the file declares XML entities, which are not expanded",
+    diags.Error(DiagCode::UrdfEntities, line, "<!ENTITY", "the file declares XML entities, which are not expanded",
                 "write the values out; URDF files need no DTD");
     return false;
   }
   tinyxml2::XMLDocument doc(true, tinyxml2::PRESERVE_WHITESPACE);
   if (doc.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
-    diags.Error(ImportCode::BadXml, std::max(1, doc.ErrorLineNum()), "", XmlErrorText(doc.ErrorID()),
+    diags.Error(DiagCode::UrdfBadXml, std::max(1, doc.ErrorLineNum()), "", XmlErrorText(doc.ErrorID()),
                 "check the element on this line and the lines just before it");
     return false;
   }
   const XMLElement* root = doc.RootElement();
   if (!root || std::string_view(root->Name()) != "robot") {
-    diags.Error(ImportCode::NotUrdf, root ? root->GetLineNum() : 1, root ? "<" : "",
+    diags.Error(DiagCode::UrdfNotUrdf, root ? root->GetLineNum() : 1, root ? "<" : "",
                 std::string("the root element is <") + (root ? root->Name() : "") + ">, not <robot>",
                 "a URDF file holds one <robot name=\"...\"> element (a xacro file must be expanded first)");
     return false;
@@ -333,7 +333,7 @@ bool ReadUrdf(std::string_view text, Robot* robot, Diags& diags) {
     std::string_view tag = e->Name();
     if (tag != "link" && tag != "joint") continue;
     if (++count > kMaxElements) {
-      diags.Error(ImportCode::TooLarge, e->GetLineNum(), "<",
+      diags.Error(DiagCode::UrdfTooLarge, e->GetLineNum(), "<",
                   "more than " + std::to_string(kMaxElements) + " links and joints", "split the robot or check the file");
       return false;
     }

@@ -20,7 +20,7 @@ std::unordered_map<std::string, int> IndexNames(const std::vector<T>& items, con
   for (int i = 0; i < static_cast<int>(items.size()); ++i) {
     auto [it, added] = index.emplace(items[i].name, i);
     if (!added)
-      diags.Error(ImportCode::DuplicateName, items[i].line, tag,
+      diags.Error(DiagCode::UrdfDuplicateName, items[i].line, tag,
                   std::string("a second ") + what + " named '" + items[i].name + "'; the first is at line " +
                       std::to_string(items[it->second].line),
                   std::string("every ") + what + " needs a name of its own");
@@ -28,15 +28,44 @@ std::unordered_map<std::string, int> IndexNames(const std::vector<T>& items, con
   return index;
 }
 
+bool OneCoordinate(JointType t) {
+  return t == JointType::kRevolute || t == JointType::kContinuous || t == JointType::kPrismatic;
+}
+
+// Each <mimic joint> names another joint, and both have one coordinate (a coupling q = m q_l
+// + c of JointCoupling); Joint::mimic_leader is set.
+void CheckMimics(Robot* robot, const std::unordered_map<std::string, int>& joints, Diags& diags) {
+  for (Joint& j : robot->joints) {
+    if (!j.has_mimic) continue;
+    auto it = joints.find(j.mimic_joint);
+    if (it == joints.end()) {
+      diags.Error(DiagCode::UrdfUnknownLink, j.line, "<mimic",
+                  "joint '" + j.name + "' mimics joint '" + j.mimic_joint + "', which the file does not define",
+                  "correct the name in <mimic joint=\"...\"/>");
+      continue;
+    }
+    const Joint& leader = robot->joints[static_cast<std::size_t>(it->second)];
+    if (&leader == &j || !OneCoordinate(j.type) || !OneCoordinate(leader.type)) {
+      diags.Error(DiagCode::UrdfBadMimic, j.line, "<mimic",
+                  "joint '" + j.name + "' cannot mimic '" + leader.name + "'" +
+                      (&leader == &j ? ": itself" : ": a mimic couples two revolute, continuous or prismatic joints"),
+                  "remove the <mimic> element, or name a one-coordinate joint");
+      continue;
+    }
+    j.mimic_leader = it->second;
+  }
+}
+
 }  // namespace
 
 bool BuildTree(Robot* robot, Diags& diags) {
   if (robot->links.empty()) {
-    diags.Error(ImportCode::NotUrdf, robot->line, "<robot", "the robot has no <link>");
+    diags.Error(DiagCode::UrdfNotUrdf, robot->line, "<robot", "the robot has no <link>");
     return false;
   }
   auto links = IndexNames(robot->links, "link", "<link", diags);
-  IndexNames(robot->joints, "joint", "<joint", diags);
+  const auto joints = IndexNames(robot->joints, "joint", "<joint", diags);
+  CheckMimics(robot, joints, diags);
   const int nl = static_cast<int>(robot->links.size());
   robot->parent_joint.assign(static_cast<std::size_t>(nl), -1);
   std::vector<std::vector<int>> children(static_cast<std::size_t>(nl));  // joints out of each link
@@ -47,20 +76,20 @@ bool BuildTree(Robot* robot, Diags& diags) {
     for (auto [it, ref, tag] : {std::tuple{p, &joint.parent, "<parent"}, std::tuple{c, &joint.child, "<child"}}) {
       if (it != links.end()) continue;
       known = false;
-      diags.Error(ImportCode::UnknownLink, joint.line, "<joint",
+      diags.Error(DiagCode::UrdfUnknownLink, joint.line, "<joint",
                   "joint '" + joint.name + "' names link '" + *ref + "', which the file does not define",
                   std::string("add <link name=\"") + *ref + "\"/> or correct the " + (tag + 1) + " link's name");
     }
     if (!known) continue;
     if (p->second == c->second) {
-      diags.Error(ImportCode::NotATree, joint.line, "<joint",
+      diags.Error(DiagCode::UrdfNotATree, joint.line, "<joint",
                   "joint '" + joint.name + "' joins link '" + joint.parent + "' to itself");
       continue;
     }
     int& pj = robot->parent_joint[static_cast<std::size_t>(c->second)];
     if (pj >= 0) {
       const Joint& first = robot->joints[static_cast<std::size_t>(pj)];
-      diags.Error(ImportCode::NotATree, joint.line, "<joint",
+      diags.Error(DiagCode::UrdfNotATree, joint.line, "<joint",
                   "link '" + joint.child + "' is the child of two joints: '" + first.name + "'" + At(first.line) +
                       " and '" + joint.name + "'",
                   "a URDF is a tree: close a loop in the .mech file with a joint marked cut = true");
@@ -81,7 +110,7 @@ bool BuildTree(Robot* robot, Diags& diags) {
                At(robot->links[static_cast<std::size_t>(roots[i])].line);
     if (roots.size() > 5) names += " and " + std::to_string(roots.size() - 5) + " more";
     const Link& second = robot->links[static_cast<std::size_t>(roots[1])];
-    diags.Error(ImportCode::NotATree, second.line, "<link",
+    diags.Error(DiagCode::UrdfNotATree, second.line, "<link",
                 std::to_string(roots.size()) + " links have no parent joint: " + names,
                 "every link but the root must be the child of a joint");
     return false;
@@ -107,7 +136,7 @@ bool BuildTree(Robot* robot, Diags& diags) {
   for (int l = 0; l < nl; ++l) {
     if (reached[static_cast<std::size_t>(l)]) continue;
     const Joint& j = robot->joints[static_cast<std::size_t>(robot->parent_joint[static_cast<std::size_t>(l)])];
-    diags.Error(ImportCode::NotATree, j.line, "<joint",
+    diags.Error(DiagCode::UrdfNotATree, j.line, "<joint",
                 "the joints form a cycle through link '" + robot->links[static_cast<std::size_t>(l)].name +
                     "' (joint '" + j.name + "'): no link of it descends from a root",
                 "a URDF is a tree: close a loop in the .mech file with a joint marked cut = true");

@@ -19,7 +19,7 @@ bool ReadUrdf(std::string_view text, Robot* robot, Diags& diags) {
        false},
       xml::kAbiVersion);
   if (!loaded.api) {
-    diags.Error(ImportCode::ReaderMissing, 0, "", loaded.error,
+    diags.Error(DiagCode::UrdfReaderMissing, 0, "", loaded.error,
                 "reinstall kanesim, or set KANESIM_IMPORT_XML_MODULE to the library's path");
     return false;
   }

@@ -18,7 +18,7 @@
 
 namespace kanesim::import::xml {
 
-inline constexpr int kAbiVersion = 1;
+inline constexpr int kAbiVersion = 2;  // 2: Diags records messages (import/diagnostics.h)
 
 struct ModuleApi {
   int abi_version;

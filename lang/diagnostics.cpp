@@ -39,7 +39,7 @@ Diagnostic& Diagnostics::Warning(DiagCode code, Span span, std::string message) 
 }
 
 std::string RenderSnippet(const SourceManager& sm, Span span) {
-  if (!span.valid() || span.file >= sm.NumFiles()) return "";
+  if (!span.valid() || span.file >= sm.NumFiles() || span.begin < 0) return "";
   LineCol lc = sm.Locate(span.file, span.begin);
   const std::size_t begin = static_cast<std::size_t>(lc.col - 1);
   const std::size_t end = begin + static_cast<std::size_t>(std::max(1, span.end - span.begin));
@@ -51,8 +51,13 @@ std::string RenderSnippet(const SourceManager& sm, Span span) {
 
 static std::string Where(const SourceManager& sm, Span span) {
   if (!span.valid() || span.file >= sm.NumFiles()) return "kanesim";
+  if (span.begin < 0) return ClipMessage(sm.Name(span.file));  // the file as a whole
   LineCol lc = sm.Locate(span.file, span.begin);
   return ClipMessage(sm.Name(span.file)) + ":" + std::to_string(lc.line) + ":" + std::to_string(lc.col);
+}
+
+std::string RenderNote(const SourceManager& sm, Span span, const std::string& message) {
+  return Where(sm, span) + ": note: " + ClipMessage(message) + "\n" + RenderSnippet(sm, span);
 }
 
 std::string Diagnostics::Render(const Diagnostic& d) const {

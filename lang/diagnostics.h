@@ -70,6 +70,10 @@ class Diagnostics {
 // line (used for compiler messages too).
 std::string RenderSnippet(const SourceManager& sm, Span span);
 
+// A note of its own, not attached to a diagnostic: "file:line:col: note: message" and the
+// snippet (the URDF importer's notes on what it leaves out).
+std::string RenderNote(const SourceManager& sm, Span span, const std::string& message);
+
 // Closest candidate by edit distance, for "did you mean 'axis'?" hints; "" if none close.
 std::string ClosestName(const std::string& name, const std::vector<std::string>& candidates);
 

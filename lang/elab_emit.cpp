@@ -29,9 +29,11 @@ class Emitter {
   void Run(Node* root) {
     m_->joints = std::move(tree_.joints);
     tau_extra.resize(m_->joints.size());
+    Inputs(root);
     Walk(root);
     LinkShapes(m_);
     SpringsOnFlanges();
+    CouplingsOnFlanges();
     Outputs(root);
     EmitWhens(whens_, eval_, places_, diags_, m_);
     EveryParameter(root);
@@ -144,6 +146,7 @@ class Emitter {
       case Prim::Wrench: EmitWrench(n, loc()); break;
       case Prim::Contact: EmitContact(n, loc()); break;
       case Prim::RotSpring: springs.push_back(n); break;
+      case Prim::Coupling: couplings.push_back(n); break;
       case Prim::Shape: EmitShape(n, eval_, places_, diags_, m_); break;
       default: break;
     }
@@ -382,34 +385,37 @@ class Emitter {
 
   // Springs and dampers on flanges act on the coordinates of the joints whose drive
   // flanges they are connected to.
+  // The joint whose drive flange `s`'s flange `name` is connected to, into *joint (-1: the
+  // ground, a support flange, or nothing); false with an error.
+  bool DriveJoint(Node* s, const char* name, int* joint) {
+    *joint = -1;
+    Node* f = s->Child(name);
+    if (!f || f->prim != Prim::Flange) {
+      diags_.Error(DiagCode::BadPrimitive, s->cls ? s->cls->name_span : Span{}, "'" + s->path + "' lacks the flange '" + name + "'");
+      return false;
+    }
+    const int set = sets_.flange_set[static_cast<size_t>(f->prim_index)];
+    int found = 0;
+    for (size_t i = 0; i < tree_.flanges.size(); ++i) {
+      if (sets_.flange_set[i] != set) continue;
+      Node* g = tree_.flanges[i];
+      if (!g->parent || g->parent->prim != Prim::Joint) continue;
+      if (g->name == "drive" && found++ == 0) *joint = g->parent->prim_index;
+    }
+    if (found > 1) {
+      diags_.Error(DiagCode::BadConnect, s->decl ? s->decl->name_span : Span{},
+                   "'" + f->path + "' is connected to the drive flanges of more than one joint");
+      return false;
+    }
+    return true;
+  }
+
   void SpringsOnFlanges() {
     for (Node* s : springs) {
       struct End {
         int joint = -1;  // -1 = ground (a support flange, or nothing)
       };
-      auto end_of = [&](const char* name, End* out) {
-        Node* f = s->Child(name);
-        if (!f || f->prim != Prim::Flange) {
-          diags_.Error(DiagCode::BadPrimitive, s->cls ? s->cls->name_span : Span{}, "spring lacks flange");
-          return false;
-        }
-        const int set = sets_.flange_set[static_cast<size_t>(f->prim_index)];
-        int found = 0;
-        for (size_t i = 0; i < tree_.flanges.size(); ++i) {
-          if (sets_.flange_set[i] != set) continue;
-          Node* g = tree_.flanges[i];
-          if (!g->parent || g->parent->prim != Prim::Joint) continue;
-          if (g->name == "drive") {
-            if (found++ == 0) out->joint = g->parent->prim_index;
-          }
-        }
-        if (found > 1) {
-          diags_.Error(DiagCode::BadConnect, s->decl ? s->decl->name_span : Span{},
-                       "'" + f->path + "' is connected to the drive flanges of more than one joint");
-          return false;
-        }
-        return true;
-      };
+      auto end_of = [&](const char* name, End* out) { return DriveJoint(s, name, &out->joint); };
       End a, b;
       if (!end_of("flange_a", &a) || !end_of("flange_b", &b)) continue;
       if (a.joint < 0 && b.joint < 0) {
@@ -449,6 +455,35 @@ class Emitter {
         auto& slot = m_->joints[j].tau[0];
         slot = slot == flat::kNoExpr ? t : pool.Binary(Op::Add, slot, t);
       }
+    }
+  }
+
+  // Inputs of the top-level model, made here so that Mechanism::inputs is in declaration
+  // order, whatever order the equations read them in (Evaluator::InputValue).
+  void Inputs(Node* root) {
+    for (auto& c : root->children)
+      if (c->enabled && c->kind == Node::kVar && c->causality == ast::Causality::Input)
+        eval_.GetVar(c.get(), c->decl ? c->decl->name_span : Span{});
+  }
+
+  // Joint couplings: flange_a on the leader's drive, flange_b on the follower's, both
+  // joints with one coordinate (the compiler checks their kinds: K319).
+  void CouplingsOnFlanges() {
+    for (Node* s : couplings) {
+      flat::JointCoupling c;
+      if (!DriveJoint(s, "flange_a", &c.leader) || !DriveJoint(s, "flange_b", &c.follower)) continue;
+      const Span at = s->decl ? s->decl->name_span : Span{};
+      if (c.leader < 0 || c.follower < 0 || c.leader == c.follower) {
+        auto& d = diags_.Error(DiagCode::BadConnect, at,
+                               "'" + s->path + "' must join the drive flanges of two different joints");
+        d.hint = "connect(leader.drive, " + s->path + ".flange_a); connect(follower.drive, " + s->path + ".flange_b);";
+        continue;
+      }
+      c.name = s->path;
+      c.ratio = AsScalar(Field(s, "ratio", {}));
+      c.offset = AsScalar(Field(s, "offset", {}));
+      c.loc = places_.Loc(places_.UserSpan(s));
+      m_->couplings.push_back(std::move(c));
     }
   }
 
@@ -506,6 +541,7 @@ class Emitter {
   Diagnostics& diags_;
   flat::Mechanism* m_;
   std::vector<Node*> springs;                  // rotational springs and dampers found by Walk
+  std::vector<Node*> couplings;                // joint couplings found by Walk
   std::vector<std::vector<ExprId>> tau_extra;  // per joint: generalized forces of springs on flanges
   const Value invalid_ = Value::Invalid();     // what Field returns for a missing or ill-sized field
 };

@@ -107,7 +107,9 @@ class Evaluator {
   // GetVar's stages (elab_vars.cpp): the value from the binding, checked, then for a
   // parameter its flat parameters.
   Value EvaluateVar(Node* var, Span use_span);
-  Value JointStateValue(Node* var);                       // a joint's q or u: state references
+  Value JointStateValue(Node* var);
+  // A top-level `input` without a value: one flat::Input per element (Op::Input nodes).
+  Value InputValue(Node* var, Span use_span);                       // a joint's q or u: state references
   const ModValue* VarBinding(Node* var);                  // declaration/modifier or equation
   Value UnboundValue(Node* var, Span use_span);           // zeros, or a missing-value error
   Value BoundValue(Node* var, const ModValue& binding);   // evaluated, type and size checked

@@ -142,6 +142,7 @@ static Prim PrimFromName(const std::string& s) {
   if (s == "wrench") return Prim::Wrench;
   if (s == "contact") return Prim::Contact;
   if (s == "rotspring") return Prim::RotSpring;
+  if (s == "coupling") return Prim::Coupling;
   if (s == "shape") return Prim::Shape;
   return Prim::None;
 }

@@ -128,7 +128,7 @@ struct Mod {
 
 // Shape: a stdlib part drawn as what it is (kind "rod", "box", "cylinder", "sphere", "mesh";
 // lang/elab_shapes.cpp); it only describes, its Body does the physics.
-enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring, Shape };
+enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring, Coupling, Shape };
 
 // Where Evaluator::GetVar (lang/elab_vars.cpp) is with a variable: not yet asked for, being
 // evaluated (asked again now means a cycle), or `value` final.

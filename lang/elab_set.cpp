@@ -6,6 +6,7 @@
 #include <cctype>
 #include <sstream>
 
+#include "lang/lexer.h"
 #include "lang/parser.h"
 
 namespace kanesim::lang::elab {
@@ -96,7 +97,9 @@ bool SetOverrides::Parse(const std::vector<ParamOverride>& overrides, const Prog
       d.hint = "write a dotted parameter name with 1-based indices: N=5, rod.L=0.3, world.g[2]=-1.6, I[1,2]=0";
       continue;
     }
-    int value_file = program.sources.Add("<--set " + ov.name + ">", ov.value);
+    std::string value_text = ov.value;
+    if (!SplitUnit(ov, program, &so, &value_text)) continue;
+    int value_file = program.sources.Add("<--set " + ov.name + ">", value_text);
     int before = diags_.NumErrors();
     auto expr = ParseExpression(value_file, program.sources, diags_);
     if (diags_.NumErrors() > before) {
@@ -104,6 +107,20 @@ bool SetOverrides::Parse(const std::vector<ParamOverride>& overrides, const Prog
                    "cannot parse the value of --set " + ov.name + "=" + ov.value)
           .hint = "values are .mech expressions: 2.5, {0, -9.81, 0}, true, \"text\"";
       continue;
+    }
+    if (so.has_unit) {  // (value) * factor, the factor set by Bind
+      auto product = std::make_unique<ast::Expr>();
+      product->kind = ast::ExprKind::Binary;
+      product->op = static_cast<int>(Tok::Star);
+      product->span = expr->span;
+      auto factor = std::make_unique<ast::Expr>();
+      factor->number = 1;
+      factor->span = expr->span;
+      so.factor = factor.get();
+      product->depth = expr->depth + 1;
+      product->args.push_back(std::move(expr));
+      product->args.push_back(std::move(factor));
+      expr = std::move(product);
     }
     so.value = expr.get();
     values_.push_back(std::move(expr));
@@ -264,11 +281,15 @@ void SetOverrides::Bind() {
     bool start = false;
     Node* n = ResolveTarget(so, &elem, &start);
     if (!n) continue;
+    if (so.has_unit && !ConvertUnit(so, n)) continue;
     if (start) {
       BindStart(so, n, whole);
       continue;
     }
-    if (n->kind != Node::kVar || n->variability != ast::Variability::Parameter) {
+    // A top-level input may be set as a parameter is: it then has that value for the run.
+    const bool model_input = n->kind == Node::kVar && n->causality == ast::Causality::Input &&
+                             n->variability == ast::Variability::None && n->parent && !n->parent->parent;
+    if (!model_input && (n->kind != Node::kVar || n->variability != ast::Variability::Parameter)) {
       auto& d = diags_.Error(DiagCode::NotParameter, whole,
                              "--set " + full + ": '" + n->path + "' is not a parameter" +
                                  (n->variability == ast::Variability::Constant ? " (it is a constant)" : ""));
@@ -322,6 +343,53 @@ void SetOverrides::BindStart(const SetOverride& so, Node* var, Span whole) {
   Mod& m = var->mod.sub["start"];
   m.value = Binding(so);
   m.span = so.value->span;
+}
+
+// `VALUE[UNIT]`: the last bracket holds a unit (not an index: "2" and "k" are no units).
+bool SetOverrides::SplitUnit(const ParamOverride& ov, const Program& program, SetOverride* so, std::string* value) {
+  const std::string& v = ov.value;
+  const size_t open = v.rfind('[');
+  if (v.empty() || v.back() != ']' || open == std::string::npos || open == 0) return true;
+  const std::string text = v.substr(open + 1, v.size() - open - 2);
+  std::string error;
+  if (!ParseUnit(text, &so->unit, &error)) return true;  // an index, or a matrix: the value as written
+  so->has_unit = true;
+  const int file = program.sources.Add("<--set " + ov.name + " unit>", text);
+  so->unit_span = Span{file, 0, static_cast<std::int32_t>(std::max<size_t>(text.size(), 1))};
+  *value = v.substr(0, open);
+  return true;
+}
+
+// The factor from the written unit to the target's declared one (same dimension).
+bool SetOverrides::ConvertUnit(const SetOverride& so, Node* var) {
+  const Mod& mods = var->Modifiers();
+  auto it = mods.sub.find("unit");
+  const ast::Expr* ue = it != mods.sub.end() && it->second.value ? it->second.value->expr : nullptr;
+  Unit declared;
+  std::string error;
+  if (var->kind != Node::kVar || !ue || ue->kind != ast::ExprKind::String || !ParseUnit(ue->text, &declared, &error)) {
+    auto& d = diags_.Error(DiagCode::UnitMismatch, so.unit_span,
+                           "--set " + so.name + ": '" + var->path + "' declares no unit to convert to");
+    d.hint = "give the value in the unit the model uses, without [..]";
+    if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
+    return false;
+  }
+  if (!declared.SameDimension(so.unit)) {
+    auto& d = diags_.Error(DiagCode::UnitMismatch, so.unit_span,
+                           "--set " + so.name + ": '" + var->path + "' has unit \"" + ue->text +
+                               "\", which \"" + diags_.Sources().Text(so.unit_span.file) + "\" cannot be converted to");
+    d.notes.push_back({ue->span, "unit declared here"});
+    d.hint = "SI form: \"" + declared.ToString() + "\" against \"" + so.unit.ToString() + "\"";
+    return false;
+  }
+  if (var->state == EvalState::Done && declared.scale != so.unit.scale) {
+    diags_.Error(DiagCode::BadSet, so.unit_span,
+                 "--set " + so.name + ": '" + var->path + "' sizes the model and was fixed before its unit was converted")
+        .hint = "give the value in \"" + ue->text + "\"";
+    return false;
+  }
+  so.factor->number = so.unit.scale / declared.scale;
+  return true;
 }
 
 }  // namespace kanesim::lang::elab

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "lang/elab_internal.h"
+#include "lang/units.h"
 
 namespace kanesim::lang::elab {
 
@@ -31,6 +32,12 @@ struct SetOverride {
   const ast::Expr* value = nullptr;
   int file = -1;
   bool subscripted = false;
+  // A value written with its unit, 5[N/mm]: the unit, and the factor node of the value
+  // `(5) * factor`, set by Bind to convert into the target's declared unit.
+  bool has_unit = false;
+  Unit unit;
+  Span unit_span;
+  ast::Expr* factor = nullptr;
 };
 
 class SetOverrides {
@@ -52,6 +59,10 @@ class SetOverrides {
   Node* ArrayElement(const SetOverride& so, size_t i, Node* array);
   bool VarElement(const SetOverride& so, size_t i, const Node* n, int* elem);
   ModValue Binding(const SetOverride& so) const;
+  // 5[N/mm]: splits the unit off `value` (false after a diagnostic); ConvertUnit (in Bind)
+  // sets the factor to the target's declared unit.
+  bool SplitUnit(const ParamOverride& ov, const Program& program, SetOverride* so, std::string* value);
+  bool ConvertUnit(const SetOverride& so, Node* var);
   static Span At(const SetOverride& so, int begin, int end);
 
   Diagnostics& diags_;

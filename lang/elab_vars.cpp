@@ -100,6 +100,10 @@ Value Evaluator::EvaluateVar(Node* var, Span use_span) {
       (var->name == "q" || var->name == "u"))
     return JointStateValue(var);
   const ModValue* binding = VarBinding(var);
+  // A top-level input without a value (none in the file, none from --set) is the model's.
+  if (!binding && var->causality == ast::Causality::Input && owner && !owner->parent &&
+      var->variability == ast::Variability::None && var->eq_elem_binding.empty())
+    return InputValue(var, use_span);
   Value v = binding ? BoundValue(var, *binding) : UnboundValue(var, use_span);
   if (!v.valid) return v;
   ApplyElementEquations(var, v);
@@ -115,6 +119,33 @@ Value Evaluator::JointStateValue(Node* var) {
   for (size_t k = 0; k < count; ++k)
     v.elements.push_back(
         m_->exprs.State(m_->AddStateRef({kind, var->parent->prim_index, static_cast<int>(k)})));
+  return v;
+}
+
+Value Evaluator::InputValue(Node* var, Span use_span) {
+  const Span at = var->decl ? var->decl->name_span : use_span;
+  if (var->vtype != VType::Real) {
+    diags_.Error(DiagCode::TypeMismatch, at, "input '" + var->path + "' is " + VTypeName(var->vtype) + "; inputs are Real")
+        .hint = "declare it 'input Real " + var->name + ";'";
+    return Value::Invalid();
+  }
+  for (long d : var->shape)
+    if (d < 0) {
+      diags_.Error(DiagCode::SizeMismatch, at, "input '" + var->path + "' needs a fixed size")
+          .hint = "give its size, as in 'input Real f[3];'";
+      return Value::Invalid();
+    }
+  Value v;
+  v.type = VType::Real;
+  v.shape = var->shape;
+  const size_t count = ElementCount(var->shape);
+  Dims idx;
+  idx.assign(var->shape.size(), 0);
+  const flat::SourceLoc loc = places_.Loc(at);
+  for (size_t k = 0; k < count; ++k) {
+    m_->inputs.push_back({ElementName(var->path, var->shape, k, idx), loc});
+    v.elements.push_back(m_->exprs.Input(static_cast<int>(m_->inputs.size() - 1)));
+  }
   return v;
 }
 

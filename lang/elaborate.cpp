@@ -9,6 +9,7 @@
 #include "lang/elab_instantiate.h"
 #include "lang/elab_lookup.h"
 #include "lang/elab_set.h"
+#include "lang/elab_units.h"
 #include "lang/library_cache.h"
 #include "lang/parser.h"
 
@@ -129,6 +130,9 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   eval.ReserveParams(static_cast<size_t>(tree.instances));
   const elab::Connections connections = elab::Connect(tree, links, places, out);
   elab::Emit(tree, connections, links.whens, eval, places, diags, out);
+  // Units are checked on the bound equations once the model is otherwise sound (a unit
+  // message on top of a missing name would repeat it).
+  if (options.check_units && !diags.HasErrors()) elab::CheckUnits(tree, links, diags, out);
   if (const ast::Modification* ex = lookup.FindAnnotation(top, "experiment"))
     elab::EmitExperiment(*ex, top, tree.root.get(), eval, diags, out);
   if (const ast::Modification* sp = lookup.FindAnnotation(top, "speeds")) elab::EmitSpeeds(*sp, diags, out);

@@ -43,6 +43,9 @@ struct ParamOverride {
 struct ElaborateOptions {
   std::string model;  // qualified class name; "" = the last model of the main file
   std::vector<ParamOverride> overrides;
+  // The unit check (lang/elab_units.h) always runs; bench/units_cost.cpp turns it off to
+  // measure its cost side by side. Nothing else does.
+  bool check_units = true;
 };
 
 // Parsed program: the user's file(s) plus the standard library.

@@ -10,3 +10,4 @@
 #include "lang/parser.h"        // .mech text -> syntax tree
 #include "lang/set_argument.h"  // a --set NAME=VALUE argument as typed
 #include "lang/text.h"          // source text as characters, made safe to print
+#include "lang/units.h"         // unit strings ("N.m/rad") as SI exponents and a scale

@@ -12,7 +12,7 @@ namespace kanesim::lang {
 
 struct Span {
   std::int32_t file = -1;  // index into SourceManager; -1 = no location
-  std::int32_t begin = 0;  // byte offsets [begin, end)
+  std::int32_t begin = 0;  // byte offsets [begin, end); begin -1: the file as a whole (no line)
   std::int32_t end = 0;
   bool valid() const { return file >= 0; }
 };

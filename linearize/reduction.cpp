@@ -44,17 +44,20 @@ rt::Mat3 RightJacobianInverse(const Vec3& v) {
   return rt::Mat3::Identity() + 0.5 * K + c * K * K;
 }
 
-// "loop 'cut'" or "contact 'c'", and where it is declared.
+// "loop 'cut'", "contact 'c'" or "coupling 'm'", and where it is declared.
 std::string RowOwner(const rt::Program& p, const rt::ConstraintRow& row) {
+  if (row.coupling >= 0) return "coupling '" + p.couplings[static_cast<size_t>(row.coupling)].name + "'";
   return row.loop >= 0 ? "loop '" + p.loops[static_cast<size_t>(row.loop)].name + "'"
                        : "contact '" + p.contacts[static_cast<size_t>(row.contact)].name + "'";
 }
 flat::SourceLoc RowLoc(const rt::Program& p, const rt::ConstraintRow& row) {
+  if (row.coupling >= 0) return p.couplings[static_cast<size_t>(row.coupling)].loc;
   return row.loop >= 0 ? p.loops[static_cast<size_t>(row.loop)].loc : p.contacts[static_cast<size_t>(row.contact)].loc;
 }
 
 bool Holonomic(rt::RowKind k) {
-  return k == rt::RowKind::Translation || k == rt::RowKind::Alignment || k == rt::RowKind::ContactNormal;
+  return k == rt::RowKind::Translation || k == rt::RowKind::Alignment || k == rt::RowKind::ContactNormal ||
+         k == rt::RowKind::Coupling;
 }
 
 }  // namespace

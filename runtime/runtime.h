@@ -22,6 +22,7 @@ namespace kanesim::rt {
 
 struct Program;    // immutable once compiled (compiler/compiler.h); share across threads
 struct Workspace;  // mutable scratch for one thread; allocated once per Program
+class InputSource;  // the model's inputs as functions of time (runtime/program/program.h)
 
 // Facts for `kanesim check` and `--stats`.
 struct ProgramSummary {
@@ -49,6 +50,16 @@ int StateSize(const Program& program);  // nq + nu
 std::vector<int> StateCouplingGroups(const Program& program);
 int NumQ(const Program& program);
 int NumU(const Program& program);
+
+// The model's inputs (top-level `input Real u;`, flat::Mechanism::inputs; docs/language.md
+// "Inputs"): values given at run time, read by force laws, prescribed motions and outputs.
+// Every workspace that evaluates the model holds them: either constants (SetInputValues; 0
+// until set) or a source evaluated at each t (rt::InputSource, runtime/program/program.h:
+// a table, sim/input_table.h).
+int NumInputs(const Program& program);
+const std::string& InputName(const Program& program, int i);  // "u", "f[2]"
+void SetInputSource(Workspace& ws, const InputSource* source);  // not owned; null: constants
+void SetInputValues(Workspace& ws, const double* u);             // constants, rates 0; drops the source
 double StartTime(const Program& program);  // from the experiment annotation
 void InitialState(const Program& program, double* y);
 

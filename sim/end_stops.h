@@ -47,6 +47,22 @@ class EndStopEvents {
       if (s.resting && s.stop >= 0) out.push_back(stops_[static_cast<size_t>(s.stop)].u);
     return out;
   }
+  // Per side, whether its joint rests on it (the stepping core's state, sim/simulator.h).
+  // Per side: 1 when it rests, and where accumulated bounces end (2 numbers a side).
+  std::vector<double> Resting() const {
+    std::vector<double> r;
+    for (const Side& s : sides_) {
+      r.push_back(s.resting ? 1.0 : 0.0);
+      r.push_back(s.accumulates_at);
+    }
+    return r;
+  }
+  void SetResting(const std::vector<double>& r) {
+    for (size_t i = 0; i < sides_.size() && 2 * i + 1 < r.size(); ++i) {
+      sides_[i].resting = r[2 * i] != 0.0;
+      sides_[i].accumulates_at = r[2 * i + 1];
+    }
+  }
 
   // A rebound speed at most this many times (atol + rtol |speed before|) ends in rest.
   static constexpr double kRestSpeeds = 100.0;

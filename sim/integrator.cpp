@@ -135,7 +135,7 @@ void CaptureSundialsMessage(int /*error_code*/, const char* /*module*/, const ch
   messages->last = std::string(function ? function : "SUNDIALS") + ": " + (msg ? msg : "");
 }
 
-static std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                             const IntegratorOptions& options, std::string* error) {
   switch (options.method) {
     case rt::Integrator::Auto:

@@ -50,7 +50,8 @@ constexpr ModuleFunctions kArkode{
     .num_nonlin_conv_fails = nullptr,
     .last_order = nullptr,
     .num_jac_evals = nullptr,
-    .num_lin_rhs_evals = nullptr
+    .num_lin_rhs_evals = nullptr,
+    .current_step = ERKStepGetCurrentStep
 };
 
 class ArkodeStepper final : public SundialsStepper {
@@ -91,6 +92,18 @@ class ArkodeStepper final : public SundialsStepper {
     }
     if (flag == ARK_ROOT_RETURN) return EventReached(tret, y, [&](int* f) { ERKStepGetRootInfo(mem_, f); });
     return CopyOut(flag, y);
+  }
+
+  // ERKStepReset keeps the step size and evaluates f(t, y) again with the new inputs (the
+  // next step's first stage would otherwise be the last step's f).
+  // At the last step's end: its stop time, where s_.y is (the caller sets the next stop).
+  int InputsChanged() override {
+    const double t = stop_;
+    if (ERKStepReset(mem_, t, s_.y) != ARK_SUCCESS) return -1;
+    t_accepted_ = t;
+    const double* ys = N_VGetArrayPointer(s_.y);
+    std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());
+    return 0;
   }
 
   IntegratorStats Stats() const override {
@@ -208,6 +221,7 @@ class ArkodeStepper final : public SundialsStepper {
   static constexpr double kRhsShrink = 0.25;  // as DOP853 after a failure of f
 
   double stop_ = 0.0;
+  void StopMoved(double t) override { stop_ = t; }
   double rtol_ = 0.0, atol_ = 0.0;   // the error test's tolerances (MeasureDrift)
   DriftWatch watch_;                 // MeasureDrift (sundials_util.h)
   bool hooked_ = false;              // Accepted() is installed (after the first restart)

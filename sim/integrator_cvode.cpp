@@ -68,7 +68,8 @@ constexpr ModuleFunctions kCvode{
     .num_nonlin_conv_fails = CVodeGetNumNonlinSolvConvFails,
     .last_order = CVodeGetLastOrder,
     .num_jac_evals = CVodeGetNumJacEvals,
-    .num_lin_rhs_evals = CVodeGetNumLinRhsEvals
+    .num_lin_rhs_evals = CVodeGetNumLinRhsEvals,
+    .current_step = CVodeGetCurrentStep
 };
 
 class CvodeStepper final : public SundialsStepper {
@@ -262,6 +263,7 @@ class CvodeStepper final : public SundialsStepper {
   std::vector<double> aside_;      // ProjectStep's y*  (n)
   std::vector<double> aside_err_;  // ProjectStep's P(y + err)  (n)
   double stop_ = 0.0;
+  void StopMoved(double t) override { stop_ = t; }
   double rtol_ = 0.0, atol_ = 0.0;  // the error test's tolerances (MeasureDrift)
   DriftWatch watch_;                // MeasureDrift (sundials_util.h)
   IntegratorStats before_;          // counters of the CVODE runs before the last reset

@@ -156,6 +156,14 @@ class Dop853Stepper final : public Stepper {
   }
 
   double CurrentTime() const override { return t_; }
+  void SetStopTime(double t) override { stop_ = t; }
+  double NextStep() const override { return h_; }
+  // f(t_, y_) again with the new inputs: the next step's first stage (Eq. 1).
+  int InputsChanged() override {
+    fsal_pending_ = false;
+    stages_ready_ = dense_ready_ = false;
+    return Eval(t_, y_.data(), K(0)) != 0 ? -1 : 0;
+  }
 
   IntegratorStats Stats() const override {
     IntegratorStats st;
@@ -612,7 +620,7 @@ class Dop853Stepper final : public Stepper {
   GuardedRhs& rhs_;
   const int n_;
   const IntegratorOptions options_;
-  const double stop_;
+  double stop_;
   double t_;                     // time of y_
   double t_old_ = 0.0;           // start of the last accepted step
   double h_ = 0.0;               // size of the next step to try

@@ -50,7 +50,8 @@ constexpr ModuleFunctions kIda{
     .num_nonlin_conv_fails = IDAGetNumNonlinSolvConvFails,
     .last_order = IDAGetLastOrder,
     .num_jac_evals = IDAGetNumJacEvals,
-    .num_lin_rhs_evals = IDAGetNumLinResEvals
+    .num_lin_rhs_evals = IDAGetNumLinResEvals,
+    .current_step = IDAGetCurrentStep
 };
 
 class IdaStepper final : public SundialsStepper {

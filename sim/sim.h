@@ -9,5 +9,7 @@
 #include "sim/energy_guard.h"   // stopping a conservative model whose energy drifts
 #include "sim/integrator.h"     // the integrators, generic over the right-hand side
 #include "sim/signal_select.h"  // --output patterns over signal names
+#include "sim/input_table.h"    // the model's inputs: tables (--input-file) and constants
 #include "sim/sensitivity.h"    // a run with d(y)/d(p) by the variational equations
 #include "sim/simulate.h"       // one run of a Program from start to stop
+#include "sim/simulator.h"      // the stepping core: a Program advanced step by step

@@ -10,187 +10,19 @@
 
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
+#include "sim/when_events.h"
+#include "sim/engine_ode.h"
 #include "sim/lift_off.h"
 #include "sim/stick_slip.h"
-#include "sim/when_events.h"
 #include "sim/test_hooks.h"
 
 namespace kanesim::sim {
 namespace {
 
+using detail::EngineOde;
 using Clock = std::chrono::steady_clock;
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
-// The engine's equations of motion as an ODE: y = [q, u], y' = rt::Derivative.
-class EngineOde final : public OdeSystem {
- public:
-  EngineOde(const rt::Program& program, rt::Workspace& ws, bool row_energy)
-      : program_(program), ws_(ws) {
-    bridge_ = MakeChangePointBridge(program);
-    // Closed loops on the multiplier form: P maps onto the state manifold, of dimension
-    // (nq - nu) + 2 dof (OdeSystem::NewtonRank).
-    if (bridge_ && !CanProject()) {
-      const rt::ProgramSummary s = rt::Summarize(program);
-      newton_rank_ = s.nq - s.nu + 2 * s.dof;
-    }
-    // Rows checked against the energy: closed loops (where change points are) in a model
-    // that conserves T + V.
-    if (row_energy && bridge_ && rt::NonConservativeCause(program).empty()) {
-      std::string error;
-      energy_plan_ = rt::PlanSignals(program, {"kinetic_energy", "potential_energy"}, &error);
-    }
-  }
-  int Size() const override { return rt::StateSize(program_); }
-  int Rhs(double t, const double* y, double* ydot) override {
-    from_monitor_ = false;
-    int s = stick_ ? stick_->Rhs(ws_, t, y, ydot) : rt::Derivative(program_, ws_, t, y, ydot);
-    if (stops_ && s == 0) s = stops_->Hold(ws_, t, y, ydot);
-    if (fault_ && s == 0) fault_(t, y, ydot);
-    return s;
-  }
-  // Events: the end stops' and plane contacts' (sim/end_stops.h) or the rolling contacts'
-  // normal forces (sim/lift_off.h; the compiler never lets both in one model), then the when
-  // clauses' (sim/when_events.h); none without any.
-  void SetStops(EndStopEvents* stops) { stops_ = stops; }
-  void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
-  // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
-  void SetStickSlip(StickSlipEvents* stick) { stick_ = stick; }
-  void SetWhens(WhenEvents* whens) {
-    whens_ = whens;
-    state_names_ = rt::StateNames(program_);
-  }
-  // The first events: stick-slip's, the stops' and plane contacts', or lift-off's (never two
-  // in one model); then the when clauses'.
-  int NumStops() const {
-    return stops_ ? stops_->Count() : lift_ ? lift_->Count() : stick_ ? stick_->Count() : 0;
-  }
-  int NumEvents() const override { return NumStops() + (whens_ ? whens_->Count() : 0); }
-  int EventFunctions(double t, const double* y, double* g) override {
-    if (NumStops() > 0) {
-      const int s = stick_ ? stick_->Functions(ws_, t, y, g)
-                    : stops_ ? stops_->Functions(ws_, t, y, g)
-                             : lift_->Functions(t, y, g);
-      if (s != 0) return s;
-    }
-    return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
-  }
-  int Event(double t, double* y, int i) override {
-    if (i < NumStops() && stick_) return stick_->Event(ws_, t, y, i);  // logged by stick_ (Simulate)
-    if (i < NumStops() && !stops_) {
-      event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
-      return -1;
-    }
-    std::vector<double> before(y, y + Size());
-    const size_t logged = stops_ ? stops_->Log().size() : 0;
-    int s = 0;
-    if (i < NumStops()) {
-      s = stops_->Event(ws_, t, y, i);
-      events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
-    } else {
-      s = whens_->Event(ws_, t, y, i - NumStops(), stops_ ? stops_->RestingSpeeds() : std::vector<int>{});
-      events_.push_back(whens_->Last());
-    }
-    if (s == 0 && !events_.empty() && !state_names_.empty())  // the jump, on the event's first record
-      for (size_t k = 0; k < before.size(); ++k)
-        if (y[k] != before[k]) events_[events_.size() - 1].changes.push_back({state_names_[k], before[k], y[k]});
-    return s;
-  }
-  bool Terminated(std::string* why) const override {
-    if (!whens_ || !whens_->Terminated()) return false;
-    *why = whens_->Message();
-    return true;
-  }
-  const std::vector<EventRecord>& Events() const { return events_; }
-  void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
-  bool ChecksSteps() const override { return bridge_ != nullptr; }
-  int StepAccepted(double t, const double* y) override {
-    const int s = CheckStep(program_, *bridge_, t, y);
-    from_monitor_ = s != 0;
-    return s;
-  }
-  std::string FailureCause() const override {
-    if (!event_cause_.empty()) return event_cause_;
-    if (from_monitor_) return BridgeError(*bridge_);
-    const std::string& m = rt::ErrorMessage(ws_);
-    return m.empty() ? "the equations of motion could not be evaluated" : m;
-  }
-  bool Bridge(double rtol, double atol, double* t_from, double* t_b, double* y_b) override {
-    return bridge_ && BridgeChangePoint(program_, *bridge_, rtol, atol, t_from, t_b, y_b) == 0;
-  }
-  void BridgeState(double t, double* y) override { BridgedState(*bridge_, t, y); }
-  bool InZone() const override { return hold_rows_ && bridge_ && bridge_->in_zone; }
-  void SetHoldRows(bool on) { hold_rows_ = on; }
-  void EnableEarlyBridge(double rtol, double atol, const BridgeSwitches& switches) {
-    if (bridge_) {
-      bridge_->switches = switches;
-      sim::EnableEarlyBridge(*bridge_, rtol, atol);
-    }
-  }
-  void PassageCounts(long* checked, long* unchecked) const {
-    *checked = bridge_ ? bridge_->passages_checked : 0;
-    *unchecked = bridge_ ? bridge_->passages_unchecked : 0;
-  }
-  bool CanProject() const override { return rt::StepProjectionAvailable(program_); }
-  void EnableStepProjection() override { rt::SetStepProjection(ws_, true); }
-  void HoldForJacobian(bool on) override { rt::HoldPartition(ws_, on); }
-  bool ProjectedStates(std::vector<int>* states, double* diag) override {
-    return rt::ProjectedStates(program_, ws_, states, diag);
-  }
-  int NewtonRank() const override { return newton_rank_; }
-  int Project(double t, double* y) override { return rt::ProjectOntoConstraints(program_, ws_, t, y); }
-  int ProjectAside(double t, double* y) override {
-    // Closed loops on the reduced form only: the multiplier form's projection moves every
-    // coordinate, and its state was not seen to drift (docs/constraints.md "A drifted state").
-    if (bridge_ == nullptr || !CanProject()) return -1;
-    if (!aside_) aside_ = rt::MakeWorkspace(program_);
-    return rt::ProjectOntoConstraints(program_, *aside_, t, y);
-  }
-  bool HasEnergy() const override { return energy_plan_ != nullptr; }
-  int Energy(double t, const double* y, double* T, double* V) override {
-    if (!energy_ws_) energy_ws_ = rt::MakeWorkspace(program_);
-    double v[2];
-    const int s = rt::EvalSignals(program_, *energy_plan_, *energy_ws_, t, y, v);
-    *T = v[0];
-    *V = v[1];
-    return s;
-  }
-  // Closed loops or rolling contacts on the multiplier form (CanProject: the reduced form).
-  // Contacts without loops have no branch monitor, and CVODE-BDF's projection
-  // (integrator_cvode.cpp ProjectStep) is needed there as much: without it the rolling
-  // disk's lean grew from t = 1.8 at rtol 1e-5 (energy off by 6.1e-2) and the disk fell
-  // flat at 1e-4.
-  int ProjectAsideMultiplierForm(double t, double* y) override {
-    if (CanProject()) return -1;
-    if (multiplier_rows_ < 0) {
-      const rt::ProgramSummary s = rt::Summarize(program_);
-      multiplier_rows_ = s.solver == rt::SolverPath::Sparse && s.dof < s.nu ? 1 : 0;
-    }
-    if (multiplier_rows_ == 0) return -1;
-    if (!aside_) aside_ = rt::MakeWorkspace(program_);
-    return rt::ProjectOntoConstraints(program_, *aside_, t, y);
-  }
-
- private:
-  const rt::Program& program_;
-  rt::Workspace& ws_;
-  std::unique_ptr<ChangePointBridge> bridge_;  // closed loops: the branch monitor and the bridge
-  EndStopEvents* stops_ = nullptr;             // end stops and plane contacts (null: none)
-  LiftOffGuard* lift_ = nullptr;               // rolling contacts' normal forces (null: none)
-  StickSlipEvents* stick_ = nullptr;           // exact stick-slip friction (null: none)
-  std::string event_cause_;                    // why an event stopped the run ("" : none did)
-  WhenEvents* whens_ = nullptr;                // when clauses (null: none)
-  std::vector<std::string> state_names_;       // y's entries (rt::StateNames), for the events' changes
-  std::vector<EventRecord> events_;            // every event, in time order
-  bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
-  int newton_rank_ = -1;       // OdeSystem::NewtonRank
-  int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet
-  bool hold_rows_ = true;      // TestHooks::hold_zone_rows
-  std::function<void(double, const double*, double*)> fault_;  // TestHooks::rhs_fault
-  std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> aside_{nullptr, [](rt::Workspace*) {}};  // ProjectAside's
-  std::shared_ptr<const rt::SignalPlan> energy_plan_;  // T and V (null: rows not checked)
-  std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> energy_ws_{nullptr, [](rt::Workspace*) {}};  // Energy's
-};
 
 // An output row whose projection moved the integrator's speeds by more than this many units
 // of the tolerance (rt::SpeedMove) is not trusted near a change point. Measured: 925 on the
@@ -292,8 +124,12 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
 
   // 3. Integrate. The right-hand side and the outputs use separate workspaces so that
   // evaluating an output never disturbs the solver's state of the engine.
+  if (rt::NumInputs(program) > 0 && !options.inputs)
+    return UsageError("input '" + rt::InputName(program, 0) + "' has no value (give it with --input-file or --set)");
   auto ws_rhs = rt::MakeWorkspace(program);
   auto ws_out = rt::MakeWorkspace(program);
+  rt::SetInputSource(*ws_rhs, options.inputs);
+  rt::SetInputSource(*ws_out, options.inputs);
   decltype(rt::MakeWorkspace(program)) ws_zone(nullptr, nullptr);  // made at the first row that needs it
   std::vector<double> y0(static_cast<size_t>(rt::StateSize(program)));
   rt::InitialState(program, y0.data());
@@ -353,7 +189,10 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     // still stops the run.)
     double move = 0.0;
     if (hooks.zone_rows && status == 0 && (move = rt::SpeedMove(program, *ws_out, y, options.rtol, options.atol)) > kRowTrust) {
-      if (!ws_zone) ws_zone = rt::MakeWorkspace(program);
+      if (!ws_zone) {
+        ws_zone = rt::MakeWorkspace(program);
+        rt::SetInputSource(*ws_zone, options.inputs);
+      }
       // On the reduced form taken only where it moved the speeds far less: where the
       // integrator's own speeds are off the constraints (ARKODE's drift at loose
       // tolerances), the partition's projection, which keeps the independent speeds the
@@ -394,10 +233,11 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     return status;
   };
   EngineOde ode(program, *ws_rhs, hooks.row_energy_check);
+  ode.SetInputs(options.inputs);
   if (stops.Active()) ode.SetStops(&stops);
   if (lift.Active()) ode.SetLiftOff(&lift);
   if (stick.Active()) ode.SetStickSlip(&stick);
-  WhenEvents whens(program);
+  WhenEvents whens(program);  // when clauses (sim/when_events.h)
   if (whens.Active()) ode.SetWhens(&whens);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);

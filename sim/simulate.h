@@ -36,6 +36,9 @@ struct SimOptions {
   // (`--energy-check on|off|report`; sim/energy_guard.h, docs/integrators.md).
   EnergyCheck energy_check = EnergyCheck::kOn;
   std::vector<std::string> signals;  // exact names; empty: rt::DefaultSignals(program)
+  // The model's inputs (rt::NumInputs > 0): a table (sim/input_table.h) or any source; not
+  // owned. A model with inputs and no source is a usage error naming them.
+  const rt::InputSource* inputs = nullptr;
   // `--speeds diagonal`: integrate in Lesser's speeds w = L^T u (sim/diagonal_speeds.h); the
   // rows add w[i], d[i] and T_w[i] = 1/2 d_i w_i^2. speed_order: joints whose speeds come first
   // (`--speed-order`), the rest root to leaf.

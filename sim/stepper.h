@@ -141,6 +141,12 @@ class Stepper {
   double event_time = 0.0;  // kEventReached: where, and which event function
   int event_index = -1;
   virtual double CurrentTime() const = 0;
+  // The stepping core (sim/simulator.h): integrate no further than t from now on (the solver's
+  // stop time), the step size it would try next, and the inputs changed at CurrentTime() (a
+  // solver that keeps f(t, y) from the last step evaluates it again).
+  virtual void SetStopTime(double t) = 0;
+  virtual double NextStep() const = 0;
+  virtual int InputsChanged() { return 0; }
   virtual IntegratorStats Stats() const = 0;
   virtual StepFailure Explain(int flag) const = 0;
 };
@@ -156,6 +162,10 @@ std::unique_ptr<Stepper> MakeArkodeStepper(GuardedRhs& rhs, double t0, const dou
 // Our own DOP853 (sim/integrator_dop853.cpp): null when f fails at t0.
 std::unique_ptr<Stepper> MakeDop853Stepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                            const IntegratorOptions& options, std::string* error);
+
+// The stepper of options.method (Auto: IDA).
+std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
+                                     const IntegratorOptions& options, std::string* error);
 
 // SUNDIALS error handler target: keeps the last message instead of printing it.
 struct SundialsMessages {

@@ -78,6 +78,7 @@ struct ModuleFunctions {
   int (*last_order)(void* mem, int* order);
   int (*num_jac_evals)(void* mem, long* n);
   int (*num_lin_rhs_evals)(void* mem, long* n);  // of f for difference-quotient Jacobians
+  int (*current_step)(void* mem, double* h);     // the step size to try next
 };
 
 // Why an integrator module gave up, in the terms shared by CVODE, ARKODE and IDA; each
@@ -137,6 +138,15 @@ class SundialsStepper : public Stepper {
   }
 
   double CurrentTime() const override;
+  void SetStopTime(double t) override {
+    module_.stop_time(mem_, t);
+    StopMoved(t);
+  }
+  double NextStep() const override {
+    double h = 0.0;
+    module_.current_step(mem_, &h);
+    return h;
+  }
   // The counters every module has, and an implicit method's when it has them.
   IntegratorStats Stats() const override;
   StepFailure Explain(int flag) const override;
@@ -206,6 +216,7 @@ class SundialsStepper : public Stepper {
   // by DOP853 (no interpolation); still off: kRowEnergyFailed. Else flag.
   int CheckRow(double tout, double* y, int flag);
   virtual void StepChecked(double /*t*/, const double* /*y*/) {}
+  virtual void StopMoved(double /*t*/) {}  // SetStopTime: a module that restarts keeps it
   // The module's return flag as one of the shared kinds (kOther for the rest).
   virtual FailureKind Kind(int flag) const = 0;
   static bool Fail(std::string* error, const std::string& what) {

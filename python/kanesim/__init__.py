@@ -52,7 +52,7 @@ def _check_array_layout() -> None:
 
 _check_array_layout()
 
-__all__ = ["load", "loads", "sweep", "Model", "Result", "LinearModel", "Table", "ModelError", "SimulationError", "KanesimWarning"]
+__all__ = ["load", "loads", "sweep", "Model", "Result", "LinearModel", "Table", "Simulator", "ModelError", "SimulationError", "KanesimWarning"]
 __version__ = "0.1.0"
 
 _NAN = float("nan")
@@ -331,6 +331,22 @@ class Model:
             raise SimulationError(f"numerical failure at t = {t!r}: {cause}", t, cause, result)
         return result
 
+    def simulator(
+        self,
+        rtol: Optional[float] = None,
+        atol: Optional[float] = None,
+        integrator: str = "auto",
+        outputs: Optional[Sequence[str]] = None,
+        start_time: Optional[float] = None,
+    ) -> "Simulator":
+        """A simulator that the caller steps (a controller in Python): the model's inputs set
+        between steps, one integration carried across them (docs/python.md "Stepping")."""
+        if isinstance(outputs, str):
+            outputs = [outputs]
+        core = _kanesim.simulator(self._compiled, _time(start_time, "start_time"), _time(rtol, "rtol"),
+                                  _time(atol, "atol"), list(outputs or []), integrator)
+        return Simulator(core)
+
     def linearize(
         self,
         at: Optional[float] = None,
@@ -388,6 +404,87 @@ class Model:
 
     def __repr__(self) -> str:
         return f"<kanesim.Model {self.path!r}>"
+
+
+class Simulator:
+    """The model stepped by its caller (Model.simulator()). step(dt, inputs={...}) and
+    advance_to(t, inputs={...}) set the inputs, then integrate (the GIL released);
+    .outputs (NumPy, in .output_names order) and sim[name] read the signals at .time;
+    get_state() / set_state(s) continue bit for bit; reset() goes back to the start. A
+    numerical failure raises SimulationError (.result is None); the simulator then refuses to
+    step until reset() or set_state()."""
+
+    def __init__(self, core):
+        self._core = core
+
+    def step(self, dt: float, inputs: Optional[Mapping[str, float]] = None) -> None:
+        try:
+            self._core.step(dt, inputs)
+        except _kanesim._StepFailed as e:
+            raise _step_error(e) from None
+
+    def advance_to(self, t: float, inputs: Optional[Mapping[str, float]] = None) -> None:
+        try:
+            self._core.advance_to(t, inputs)
+        except _kanesim._StepFailed as e:
+            raise _step_error(e) from None
+
+    def set_inputs(self, inputs: Mapping[str, float]) -> None:
+        self._core.set_inputs(inputs)
+
+    @property
+    def time(self) -> float:
+        return self._core.time
+
+    @property
+    def outputs(self) -> np.ndarray:
+        return self._core.outputs
+
+    @property
+    def output_names(self) -> List[str]:
+        return self._core.output_names
+
+    @property
+    def inputs(self) -> Dict[str, float]:
+        return self._core.inputs
+
+    @property
+    def input_names(self) -> List[str]:
+        return self._core.input_names
+
+    @property
+    def state(self) -> np.ndarray:
+        """The integrator's state y = [q, u] (free coordinates and speeds) at .time."""
+        return self._core.state
+
+    @property
+    def method(self) -> str:
+        return self._core.method
+
+    def stats(self) -> Dict[str, Any]:
+        return self._core.stats()
+
+    def __getitem__(self, name: str) -> float:
+        return self._core.get(name)
+
+    def get_state(self):
+        """The state at .time (a tuple of plain values: it pickles); restarts the solver there,
+        as set_state does, so that both continue alike."""
+        return self._core.get_state()
+
+    def set_state(self, state) -> None:
+        self._core.set_state(state)
+
+    def reset(self) -> None:
+        self._core.reset()
+
+    def __repr__(self) -> str:
+        return f"<kanesim.Simulator t={self.time!r} {self.method} inputs={self.input_names}>"
+
+
+def _step_error(e) -> SimulationError:
+    t, cause = e.args
+    return SimulationError(f"numerical failure at t = {t!r}: {cause}", t, cause, None)
 
 
 def _load(args: Dict[str, Any], sets: Dict[str, Any]) -> Model:

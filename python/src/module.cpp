@@ -317,6 +317,8 @@ py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equili
 
 }  // namespace
 
+void BindSimulator(py::module_& m);  // python/src/stepping.cpp
+
 PYBIND11_MODULE(_kanesim, m) {
   m.doc() = "kanesim's compiled core; use the kanesim package";
   py::class_<LoadedModel, std::shared_ptr<LoadedModel>>(m, "CompiledModel")
@@ -329,6 +331,7 @@ PYBIND11_MODULE(_kanesim, m) {
   m.def("run", &Run);
   m.def("sweep", &Sweep);
   m.def("linearize", &Linearize);
+  BindSimulator(m);
   m.def("_layout_probe", &LayoutProbe);
   // The pybind11 this module was compiled with: before 2.12 it does not know NumPy 2.
   m.attr("_pybind11_version") = py::make_tuple(PYBIND11_VERSION_MAJOR, PYBIND11_VERSION_MINOR, PYBIND11_VERSION_PATCH);

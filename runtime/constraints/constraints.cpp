@@ -24,6 +24,14 @@
 //   (beta^T M beta) z = beta^T (f - M udot_p)        (Kane's equations on beta)         (10)
 // The partition is kept while its block stays well conditioned (min/max |R_ii| above
 // kDegraded) and re-chosen by pivoting when it degrades.
+//
+// A joint coupling (Program::couplings) joins the coordinates of two Revolute or Prismatic
+// joints, leader l and follower f, whose speeds are their coordinates' rates
+// (flat/mechanism.h), with a ratio r and an offset c:
+//   phi = q_f - r q_l - c                                                              (11)
+//   phid = u_f - r u_l        (A: 1 at u_f, -r at u_l when free; b: the prescribed)      (12)
+//   c_bias = udot_f - r udot_l over the prescribed ones (free udot = 0)                  (13)
+// The rows are exact and linear in q: Newton's step (7) lands on them in one iteration.
 #include "runtime/constraints/constraints.h"
 
 #include <algorithm>
@@ -145,12 +153,38 @@ Vec3 RowDirection(const ConstraintRow& row, const FrameState& a, const FrameStat
   return b.Dir(row.n_bB).cross(a.Dir(row.d_aB));
 }
 
+// A coupled joint's full speed (== its coordinate's place in u) and its free column, -1
+// when prescribed.
+int CoupledSpeed(const Program& p, int joint) { return p.joints[static_cast<size_t>(joint)].u0; }
+int CoupledColumn(const Program& p, int joint) { return p.u_free_of[static_cast<size_t>(CoupledSpeed(p, joint))]; }
+
+// (11) for every coupling, into ws.phi.
+void CouplingResiduals(const Program& p, Workspace& ws) {
+  for (const CouplingModel& c : p.couplings) {
+    const int qf = p.joints[static_cast<size_t>(c.follower)].q0, ql = p.joints[static_cast<size_t>(c.leader)].q0;
+    ws.phi[c.row] = ws.q[qf] - c.ratio * ws.q[ql] - c.offset;
+  }
+}
+
+// (12): the active rows' entries of ws.A (their columns are zeroed by ZeroJacobian, the
+// rows' bodies being the coupled joints' own: RowBodies) and, with `rates`, ws.psi.
+void CouplingJacobian(const Program& p, Workspace& ws, bool rates) {
+  for (const CouplingModel& c : p.couplings) {
+    if (rates) ws.psi[c.row] = ws.u[CoupledSpeed(p, c.follower)] - c.ratio * ws.u[CoupledSpeed(p, c.leader)];
+    const int k = p.active_of_row[static_cast<size_t>(c.row)];
+    if (k < 0) continue;
+    if (const int col = CoupledColumn(p, c.follower); col >= 0) ws.A(k, col) = 1.0;
+    if (const int col = CoupledColumn(p, c.leader); col >= 0) ws.A(k, col) = -c.ratio;
+  }
+}
+
 }  // namespace
 
 std::string LoopOwners(const Program& p) {
   std::string names;
   for (const LoopClosure& l : p.loops) names += (names.empty() ? "'" : ", '") + l.name + "'";
   for (const ContactModel& c : p.contacts) names += (names.empty() ? "contact '" : ", contact '") + c.name + "'";
+  for (const CouplingModel& c : p.couplings) names += (names.empty() ? "coupling '" : ", coupling '") + c.name + "'";
   return names;
 }
 
@@ -286,6 +320,8 @@ void ResidualsAndJacobian(const Program& p, Workspace& ws) {
     ContactResiduals(p, ws, c, cp);
     ContactJacobian(p, ws, c, cp);
   }
+  CouplingResiduals(p, ws);
+  CouplingJacobian(p, ws, true);
 }
 
 }  // namespace
@@ -293,12 +329,14 @@ void ResidualsAndJacobian(const Program& p, Workspace& ws) {
 void ConstraintResiduals(const Program& p, Workspace& ws) {
   for (const LoopClosure& l : p.loops) LoopResiduals(p, ws, l, FramesOf(p, ws, l, false));
   for (const ContactModel& c : p.contacts) ContactResiduals(p, ws, c, ContactAt(p, ws, c));
+  CouplingResiduals(p, ws);
 }
 
 void ConstraintJacobian(const Program& p, Workspace& ws) {
   ZeroJacobian(p, ws);
   for (const LoopClosure& l : p.loops) LoopJacobian(p, ws, l, FramesOf(p, ws, l, true));
   for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
+  CouplingJacobian(p, ws, true);
 }
 
 void LoopJacobianRows(const Program& p, Workspace& ws, int loop) {
@@ -342,6 +380,12 @@ void ConstraintColumn(const Program& p, const Workspace& ws, int s, Eigen::Vecto
     const ConstraintRow& row = p.rows[ii];
     if (row.contact >= 0) {
       (*col)[static_cast<Eigen::Index>(ii)] = ContactColumn(p, ws, row, s);
+      continue;
+    }
+    if (row.coupling >= 0) {  // (12)
+      const CouplingModel& c = p.couplings[static_cast<size_t>(row.coupling)];
+      (*col)[static_cast<Eigen::Index>(ii)] =
+          (s == CoupledSpeed(p, c.follower) ? 1.0 : 0.0) - (s == CoupledSpeed(p, c.leader) ? c.ratio : 0.0);
       continue;
     }
     const LoopClosure& l = p.loops[static_cast<size_t>(row.loop)];
@@ -391,6 +435,9 @@ void ConstraintBias(const Program& p, Workspace& ws) {
     const ContactPoint cp = ContactAt(p, ws, c);
     for (int i = c.row0; i < c.row0 + c.nrows; ++i) ws.cbias[i] = ContactBias(p, ws, p.rows[static_cast<size_t>(i)], cp);
   }
+  auto prescribed_udot = [&](int joint) { return CoupledColumn(p, joint) < 0 ? ws.udot[CoupledSpeed(p, joint)] : 0.0; };
+  for (const CouplingModel& c : p.couplings)
+    ws.cbias[c.row] = prescribed_udot(c.follower) - c.ratio * prescribed_udot(c.leader);  // (13)
 }
 
 namespace {
@@ -595,6 +642,11 @@ void ApplyCoordinateStep(const Program& p, Workspace& ws, const Eigen::VectorXd&
 
 void RowBodies(const Program& p, int i, int* body_a, int* body_b) {
   const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+  if (row.coupling >= 0) {  // the bodies the coupled joints move (joint L moves body L)
+    *body_a = p.couplings[static_cast<size_t>(row.coupling)].leader;
+    *body_b = p.couplings[static_cast<size_t>(row.coupling)].follower;
+    return;
+  }
   if (row.contact >= 0) {
     *body_a = p.contacts[static_cast<size_t>(row.contact)].body;
     *body_b = -1;
@@ -609,10 +661,13 @@ void RowBodies(const Program& p, int i, int* body_a, int* body_b) {
 //   translation  J_b = [d; (p_b - c_B) x d],   J_a = -[d; (p_b - c_A) x d]
 //   alignment    J_b = [0; k],                 J_a = -[0; k]
 //   contact      J   = [d; (P - c) x d]
+// A coupling row reads four bodies' twists and has none: the sparse path does not take
+// couplings (compiler/loops.cpp ChooseLoopSolver), and its rows stay zero here.
 void RowJacobians(const Program& p, const Workspace& ws, int i, Vec6* Ja, Vec6* Jb) {
   Ja->setZero();
   Jb->setZero();
   const ConstraintRow& row = p.rows[static_cast<size_t>(i)];
+  if (row.coupling >= 0) return;
   if (row.contact >= 0) {
     const ContactModel& c = p.contacts[static_cast<size_t>(row.contact)];
     if (c.body < 0) return;
@@ -647,6 +702,8 @@ void ConstraintRates(const Program& p, Workspace& ws) {
     for (int i = c.row0; i < c.row0 + c.nrows; ++i)
       ws.psi[i] = ContactRowDirection(c, p.rows[static_cast<size_t>(i)], cp, nullptr).dot(cp.vPm);
   }
+  for (const CouplingModel& c : p.couplings)
+    ws.psi[c.row] = ws.u[CoupledSpeed(p, c.follower)] - c.ratio * ws.u[CoupledSpeed(p, c.leader)];  // (12)
 }
 
 int CheckLoopsClosed(const Program& p, Workspace& ws) {
@@ -717,6 +774,7 @@ int FactorConstraintsAsIs(const Program& p, Workspace& ws) {
   ZeroJacobian(p, ws);
   for (const LoopClosure& l : p.loops) LoopJacobian(p, ws, l, FramesOf(p, ws, l, false), false);
   for (const ContactModel& c : p.contacts) ContactJacobian(p, ws, c, ContactAt(p, ws, c));
+  CouplingJacobian(p, ws, false);
   if (int s = FactorDependent(p, ws); s != 0) return s;
   return CheckDisksUpright(p, ws);
 }

@@ -14,6 +14,10 @@
 // lambda_i delta phi_i, constraints.cpp eqs. 1-2):
 //   translation row:  force lambda_i d on B, -lambda_i d on A, both at p_b           (3)
 //   alignment row:    torque lambda_i k on B, -lambda_i k on A,  k = n x e             (4)
+// A coupling row (constraints.cpp eq. 11) is a generalized force lambda on the follower's
+// speed and -ratio lambda on the leader's: on each coupled joint's child body a torque
+// (Revolute) or force (Prismatic) tau h along its axis at o_L, h the joint's twist
+// generator, and the opposite on its parent                                          (4a)
 // Tree joints: Newton-Euler of the subtree below joint L (Lesser eqs. 26-29 summed):
 //   lambda_L = sum_{B in subtree(L)} X_{B->o_L} ( [m_B a_B - F_B;
 //              I_B alpha_B + w_B x I_B w_B - T_B] - loop wrenches on B )           (5)
@@ -83,9 +87,29 @@ void LoopMultipliers(const Program& p, Workspace& ws) {
 
 namespace {
 
-// (5), the multipliers' part: the loop forces on both bodies of every cut joint and the
-// planes' forces on the contacts' bodies, subtracted from the bodies' own terms.
+// (4a): generalized force tau on tree joint L's speed, as wrenches on its child (+) and
+// parent (-) at o_L, subtracted from their terms of (5).
+void SubtractJointForce(const Program& p, Workspace& ws, int L, double tau) {
+  const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+  const auto h = ws.H_W.col(j.u0);
+  Vec6 w = Vec6::Zero();
+  if (j.type == flat::JointType::Prismatic)
+    w.head<3>() = tau * h.head<3>();
+  else
+    w.tail<3>() = tau * h.tail<3>();
+  ws.reaction_W[static_cast<size_t>(L)] -= w;
+  if (j.parent >= 0) ws.reaction_W[static_cast<size_t>(j.parent)] += MoveWrench(w, ws.p_WB[static_cast<size_t>(L)], ws.p_WB[static_cast<size_t>(j.parent)]);
+}
+
+// (5), the multipliers' part: the loop forces on both bodies of every cut joint, the
+// planes' forces on the contacts' bodies and the couplings' joint forces, subtracted from
+// the bodies' own terms.
 void SubtractMultiplierWrenches(const Program& p, Workspace& ws) {
+  for (const CouplingModel& c : p.couplings) {
+    const double lam = ws.lambda_c[c.row];
+    SubtractJointForce(p, ws, c.follower, lam);
+    SubtractJointForce(p, ws, c.leader, -c.ratio * lam);
+  }
   for (const LoopClosure& l : p.loops) {
     const Vec6 wb = CutWrenchOnB(p, ws, l);
     Vec3 pb;

@@ -5,7 +5,7 @@
 // every other through the subtree's mass matrix, so a group is at least such a subtree
 // (all its free q and u). Groups merge when something acts across them:
 // - a spring, damper or line force between frames of two subtrees;
-// - a closed loop whose cut joint joins two subtrees;
+// - a closed loop whose cut joint joins two subtrees, a joint coupling across two;
 // - a force law (joint force, line-force parameter, frame wrench) whose expression reads
 //   the state of another subtree than the one it acts on. Each tape register carries one
 //   representative of the subtrees it depends on; an instruction joining two operands
@@ -54,6 +54,7 @@ std::vector<int> StateCouplingGroups(const Program& p) {
 
   for (const LineForceModel& l : p.line_forces) Join(uf, body_of_frame(l.frame_a), body_of_frame(l.frame_b));
   for (const LoopClosure& l : p.loops) Join(uf, body_of_frame(l.frame_a), body_of_frame(l.frame_b));
+  for (const CouplingModel& c : p.couplings) Join(uf, c.leader, c.follower);  // joint L moves body L
 
   // Force laws: the subtrees each tape root depends on join the body it acts on.
   const Tape& tape = p.force_tape;

@@ -167,6 +167,8 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
     v->assign(K, Vec3::Zero());
   ws.H_W = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, p.nu_all);
   ws.state_values.assign(p.mech->state_refs.size(), 0.0);
+  ws.inputs.assign(p.mech->inputs.size(), 0.0);
+  ws.input_rates.assign(p.mech->inputs.size(), 0.0);
   ws.force_regs = p.force_tape.init;
   ws.output_regs = p.output_tape.init;
   ws.event_regs = p.event_tape.init;
@@ -206,6 +208,14 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
 int StateSize(const Program& p) { return p.nq + p.nu; }
 int NumQ(const Program& p) { return p.nq; }
 int NumU(const Program& p) { return p.nu; }
+int NumInputs(const Program& p) { return static_cast<int>(p.mech->inputs.size()); }
+const std::string& InputName(const Program& p, int i) { return p.mech->inputs[static_cast<size_t>(i)].name; }
+void SetInputSource(Workspace& ws, const InputSource* source) { ws.input_source = source; }
+void SetInputValues(Workspace& ws, const double* u) {
+  ws.input_source = nullptr;
+  std::copy(u, u + ws.inputs.size(), ws.inputs.begin());
+  std::fill(ws.input_rates.begin(), ws.input_rates.end(), 0.0);
+}
 double StartTime(const Program& p) { return p.mech->experiment.start_time; }
 
 void InitialState(const Program& p, double* y) {

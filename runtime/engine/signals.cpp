@@ -350,6 +350,7 @@ int EvalSignalsBy(const Program& p, const SignalPlan& plan, Workspace& ws, doubl
     const Tape& tape = p.output_tape;
     double* r = ws.output_regs.data();
     if (tape.time_reg >= 0) r[tape.time_reg] = t;
+    for (const auto& [in, reg] : tape.input_regs) r[reg] = ws.inputs[static_cast<size_t>(in)];
     EvalStateRefs(p, ws, p.state_refs_outputs);
     for (const auto& [ref, reg] : tape.state_regs) r[reg] = ws.state_values[static_cast<size_t>(ref)];
     tape.Eval(r);

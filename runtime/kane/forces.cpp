@@ -31,6 +31,7 @@ int EvalForceTape(const Program& p, Workspace& ws) {
   if (tape.roots.empty()) return 0;
   double* r = ws.force_regs.data();
   if (tape.time_reg >= 0) r[tape.time_reg] = ws.t;
+  for (const auto& [in, reg] : tape.input_regs) r[reg] = ws.inputs[static_cast<size_t>(in)];
   if (!p.state_refs_forces.empty()) {
     EvalStateRefs(p, ws, p.state_refs_forces);
     for (const auto& [ref, reg] : tape.state_regs) r[reg] = ws.state_values[static_cast<size_t>(ref)];

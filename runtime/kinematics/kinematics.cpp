@@ -35,6 +35,9 @@ void PackState(const Program& p, const Workspace& ws, double* y) {
 
 int UnpackState(const Program& p, Workspace& ws, double t, const double* y) {
   ws.t = t;
+  // The inputs at t (a table's time outside its rows is fatal: the caller checked the span).
+  if (ws.input_source && ws.input_source->Values(t, ws.inputs.data(), ws.input_rates.data(), &ws.error) != 0)
+    return -1;
   ws.sparse_ready = false;  // new positions: the sparse path factors again
   for (int i = 0; i < p.nq; ++i) ws.q[p.q_free[static_cast<size_t>(i)]] = y[i];
   for (int i = 0; i < p.nu; ++i) ws.u[p.u_free[static_cast<size_t>(i)]] = y[p.nq + i];
@@ -46,6 +49,12 @@ int UnpackState(const Program& p, Workspace& ws, double t, const double* y) {
     r[3 * tape.time_reg] = t;
     r[3 * tape.time_reg + 1] = 1.0;
     r[3 * tape.time_reg + 2] = 0.0;
+  }
+  // An input's jet: its value and rate (a table's slope; 0 when held), no curvature.
+  for (const auto& [in, reg] : tape.input_regs) {
+    r[3 * reg] = ws.inputs[static_cast<size_t>(in)];
+    r[3 * reg + 1] = ws.input_rates[static_cast<size_t>(in)];
+    r[3 * reg + 2] = 0.0;
   }
   tape.EvalJet(r);
   for (size_t i = 0; i < p.q_prescribed.size(); ++i) {

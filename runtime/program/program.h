@@ -138,10 +138,12 @@ struct BodySignalSource {
 //   ContactNormal   d = n (plane normal); also a position constraint n . (P - p0) = 0
 //   ContactTangent  d = t1 or t2 (fixed in W): velocity only, never a position constraint
 //   ContactLateral  d = n x e_W (knife edge, e the blade): velocity only
-enum class RowKind : std::uint8_t { Translation, Alignment, ContactNormal, ContactTangent, ContactLateral };
+// Joint couplings (holonomic, on coordinates): phi = q_f - ratio q_l - offset.
+enum class RowKind : std::uint8_t { Translation, Alignment, ContactNormal, ContactTangent, ContactLateral, Coupling };
 struct ConstraintRow {
-  int loop = -1;                // index into Program::loops (-1 for a contact row)
-  int contact = -1;             // index into Program::contacts (-1 for a loop row)
+  int loop = -1;                // index into Program::loops (-1 for a contact or coupling row)
+  int contact = -1;             // index into Program::contacts (-1 for a loop or coupling row)
+  int coupling = -1;            // index into Program::couplings (-1 for a loop or contact row)
   RowKind kind = RowKind::Translation;
   Vec3 d_a = Vec3::UnitX();     // Translation: d; Alignment: e (fixed in frame a, in a's axes)
   Vec3 n_b = Vec3::UnitZ();     // Alignment: n (fixed in frame b, in b's axes)
@@ -174,6 +176,16 @@ struct ContactModel {
   Vec3 p0_W = Vec3::Zero();    // a point of the plane, world
   Vec3 t1_W = Vec3::UnitX(), t2_W = Vec3::UnitZ();  // tangent basis of the plane, t1 x t2 = n
   int row0 = 0, nrows = 0;
+};
+
+// An exact coupling of two one-coordinate joints (flat::JointCoupling): the row
+// phi = q_f - ratio q_l - offset (runtime/constraints/constraints.cpp eq. 11).
+struct CouplingModel {
+  std::string name;
+  flat::SourceLoc loc;
+  int leader = -1, follower = -1;  // tree joints (Revolute or Prismatic, q index == u index)
+  double ratio = 1.0, offset = 0.0;
+  int row = -1;                    // its row in Program::rows
 };
 
 // Unilateral contact of a frame's origin O with the fixed plane n . x = d (flat::Contact of
@@ -264,7 +276,8 @@ struct Program {
   // Closed loops (runtime/constraints/constraints.h). Empty for trees.
   std::vector<LoopClosure> loops;       // one per cut joint
   std::vector<ContactModel> contacts;   // rolling contacts and knife edges
-  std::vector<ConstraintRow> rows;      // n_c constraints: loops' rows, then contacts' rows
+  std::vector<CouplingModel> couplings; // joint couplings, one row each
+  std::vector<ConstraintRow> rows;      // n_c constraints: loops' rows, then contacts', then couplings'
   int loop_rank = 0;                    // rank of the constraint Jacobian (free speeds) at the assembled start
   double loop_length = 1.0;             // length scale of the position tolerance (m)
   int dof = 0;                          // nu - loop_rank
@@ -315,6 +328,15 @@ struct SparseNumeric;  // KLU numeric factorization, one per workspace
 void DestroySparseNumeric(SparseNumeric* s);
 struct SparseNumericDeleter {
   void operator()(SparseNumeric* s) const { DestroySparseNumeric(s); }
+};
+
+// The model's inputs as functions of time (runtime/runtime.h "inputs"): a table
+// (sim/input_table.h), or constants that a caller changes between steps.
+class InputSource {
+ public:
+  virtual ~InputSource() = default;
+  // u (NumInputs) and du/dt at t; 0, or -1 with *error (a time outside a table).
+  virtual int Values(double t, double* u, double* du_dt, std::string* error) const = 0;
 };
 
 struct Workspace {
@@ -427,6 +449,9 @@ struct Workspace {
   std::vector<double> friction_N;      // normal force N of the last solve  (nfric)  filled by SolveWithFriction
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
+  std::vector<double> inputs;       // the model's inputs at t  (mech.inputs)  filled by UnpackState (input_source) or SetInputValues
+  std::vector<double> input_rates;  // their time derivatives, for prescribed motions' jets  (mech.inputs)  filled likewise
+  const InputSource* input_source = nullptr;  // inputs as functions of time; null: the constants in `inputs`
 };
 
 }  // namespace kanesim::rt

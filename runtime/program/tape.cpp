@@ -48,7 +48,8 @@ bool TapeBuilder::Fold(ExprId id, double* value) {
                          : std::nan("");
         break;
       case Op::Time:
-      case Op::State: const_[ue] = 0; break;
+      case Op::State:
+      case Op::Input: const_[ue] = 0; break;
       default: {
         bool all = true;
         double v[3] = {0.0, 0.0, 0.0};
@@ -98,6 +99,19 @@ int TapeBuilder::RegisterOf(ExprId id) {
         tape_.init.push_back(0.0);
       }
       reg_[ue] = tape_.time_reg;
+      stack.pop_back();
+      continue;
+    }
+    if (n.op == Op::Input) {
+      int r = -1;
+      for (const auto& [in, reg] : tape_.input_regs)
+        if (in == n.index) r = reg;
+      if (r < 0) {
+        r = static_cast<int>(tape_.init.size());
+        tape_.init.push_back(0.0);
+        tape_.input_regs.emplace_back(n.index, r);
+      }
+      reg_[ue] = r;
       stack.pop_back();
       continue;
     }

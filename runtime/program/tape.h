@@ -26,6 +26,7 @@ struct Tape {
   std::vector<double> init;                  // register image with folded constants
   int time_reg = -1;                         // -1 when no expression reads time
   std::vector<std::pair<int, int>> state_regs;  // (mech state ref index, register)
+  std::vector<std::pair<int, int>> input_regs;  // (mech input index, register): loaded like time
   std::vector<int> roots;                    // result register per root
   std::vector<std::string> labels;           // what each root is, for error messages
   std::vector<std::string> texts;            // each root's expression, for error messages

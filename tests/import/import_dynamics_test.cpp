@@ -21,6 +21,7 @@
 #include "runtime/program/program.h"
 #include "runtime/runtime.h"
 #include "sim/csv.h"
+#include "tests/support/csv_table.h"
 
 namespace kanesim {
 namespace {
@@ -99,6 +100,7 @@ TEST_P(ImportedRobot, AccelerationsAndLinkPosesMatchPinocchio) {
   import::Options o;
   o.floating = ref.floating;
   o.use_ros_package_path = false;
+  o.mimic = false;  // Pinocchio's reading (urdf_robots.py) leaves mimic joints independent
   import::Result imp = import::UrdfToMech(urdf, ReadText(urdf), o);
   ASSERT_TRUE(imp.ok) << imp.diagnostics;
   // Every link's frame as declared outputs: position and orientation in the world.
@@ -173,30 +175,6 @@ INSTANTIATE_TEST_SUITE_P(ExampleRobotData, ImportedRobot,
 namespace kanesim {
 namespace {
 
-// Rows of a run by column name.
-class Rows final : public sim::SignalSink {
- public:
-  bool Begin(const std::vector<std::string>& names) override {
-    names_ = names;
-    return true;
-  }
-  bool Row(double t, const double* v, size_t n) override {
-    times.push_back(t);
-    rows.emplace_back(v, v + n);
-    return true;
-  }
-  int Column(const std::string& name) const {
-    for (std::size_t i = 0; i < names_.size(); ++i)
-      if (names_[i] == name) return static_cast<int>(i);
-    return -1;
-  }
-  std::vector<double> times;
-  std::vector<std::vector<double>> rows;
-
- private:
-  std::vector<std::string> names_;
-};
-
 // One second of motion of a fixed-base arm (with its <dynamics> damping) from a random state
 // against SciPy's DOP853 on Pinocchio's aba at rtol = atol = 1e-13 (urdf_robots.py; its run at
 // 1e-12 differs by 7.6e-12 for UR5 and 4.6e-8 for Panda, whose light fingers make it stiffer).
@@ -207,26 +185,14 @@ class ImportedTrajectory : public ::testing::TestWithParam<std::pair<const char*
 TEST_P(ImportedTrajectory, FollowsPinocchioAndScipyOverOneSecond) {
   const auto [robot, tol] = GetParam();
   const std::string urdf = kData + "/" + (std::string(robot) == "ur5" ? "ur5_robot" : robot) + ".urdf";
-  std::ifstream in(kData + "/" + robot + "_traj.csv");
-  std::string header, line;
-  std::getline(in, header);
-  std::vector<std::string> cols;
-  for (std::size_t a = 0, b; a <= header.size(); a = b + 1) {
-    b = header.find(',', a);
-    if (b == std::string::npos) b = header.size();
-    cols.push_back(header.substr(a, b - a));
-  }
-  std::vector<std::vector<double>> ref;
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::istringstream ls(line);
-    for (std::string f; std::getline(ls, f, ',');) row.push_back(std::stod(f));
-    ref.push_back(row);
-  }
+  const test::CsvTable table = test::ReadCsvTable(kData + "/" + robot + "_traj.csv");
+  const std::vector<std::string>& cols = table.names;
+  const std::vector<std::vector<double>>& ref = table.rows;
   ASSERT_EQ(ref.size(), 11u);
 
   import::Options o;
   o.use_ros_package_path = false;
+  o.mimic = false;  // as Pinocchio reads the file: Panda's second finger moves on its own
   import::Result imp = import::UrdfToMech(urdf, ReadText(urdf), o);
   ASSERT_TRUE(imp.ok) << imp.diagnostics;
   // The start state as start values of each joint (the URDF names are identifiers here).
@@ -249,15 +215,15 @@ TEST_P(ImportedTrajectory, FollowsPinocchioAndScipyOverOneSecond) {
   spec.energy_check = sim::EnergyCheck::kOff;
   pipeline::LoadResult lr = pipeline::LoadModel(pipeline::Source::Text(urdf + ".mech", mech), {}, spec);
   ASSERT_TRUE(lr.model) << lr.diagnostics;
-  Rows rows;
+  sim::MemorySink rows;
   sim::SimResult res = pipeline::Run(*lr.model, spec, rows);
   ASSERT_EQ(res.status, sim::SimResult::Status::kOk) << res.message;
   ASSERT_EQ(rows.rows.size(), ref.size());
   double worst = 0;
   for (std::size_t r = 0; r < ref.size(); ++r)
     for (std::size_t c = 1; c < cols.size(); ++c) {
-      const int k = rows.Column(cols[c]);
-      ASSERT_GE(k, 0) << cols[c];
+      const auto k = std::find(rows.names.begin(), rows.names.end(), cols[c]) - rows.names.begin();
+      ASSERT_LT(k, static_cast<long>(rows.names.size())) << cols[c];
       worst = std::max(worst, std::fabs(rows.rows[r][static_cast<std::size_t>(k)] - ref[r][c]));
     }
   EXPECT_LE(worst, tol) << robot;

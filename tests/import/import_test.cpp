@@ -105,6 +105,12 @@ INSTANTIATE_TEST_SUITE_P(
         Hostile{"duplicate joint", TwoLinks(kJoint, "  <link name=\"c\"/>\n  <joint name=\"j\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint>\n"),
                 "U405", "bad.urdf:6:3"},
         Hostile{"nameless link", "<robot name=\"r\">\n  <link/>\n</robot>\n", "U403", "bad.urdf:2:3"},
+        Hostile{"mimic of an unknown joint",
+                TwoLinks("  <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><mimic joint=\"x\"/></joint>"),
+                "U406", "bad.urdf:4:70"},
+        Hostile{"mimic of itself",
+                TwoLinks("  <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><mimic joint=\"j\"/></joint>"),
+                "U412", "bad.urdf:4:70"},
         Hostile{"entity expansion",
                 "<?xml version=\"1.0\"?>\n<!DOCTYPE robot [\n  <!ENTITY a \"aaaaaaaaaa\">\n  <!ENTITY b \"&a;&a;&a;&a;&a;&a;&a;&a;\">\n]>\n"
                 "<robot name=\"&b;\"><link name=\"x\"/></robot>\n",
@@ -157,11 +163,11 @@ TEST(ImportText, KeepsNamesAndSaysWhatItDropsOrCannotImpose) {
             std::string::npos);
   EXPECT_NE(r.mech.find("FixedRPY weld(r = {0.35, 0, 0.02}, rpy = {0.1, 0.2, 0.3})"), std::string::npos);
   EXPECT_NE(r.mech.find("Frame tool_tip"), std::string::npos);
-  // The mimic joint: a warning at its line and a comment in the file.
-  EXPECT_NE(r.diagnostics.find("bad.urdf:64:3: warning[W421]: joint 'follow' mimics 'slide' (q = -1 * q_slide + 0.01)"),
-            std::string::npos)
-      << r.diagnostics;
-  EXPECT_NE(r.mech.find("NOT imposed"), std::string::npos);
+  // The mimic joint: an exact coupling, no warning.
+  EXPECT_NE(r.mech.find("JointCoupling follow_mimic(ratio = -1, offset = 0.01)"), std::string::npos) << r.mech;
+  EXPECT_NE(r.mech.find("// <mimic joint=\"slide\"> of joint 'follow' (bad.urdf:64): follow.q = -1 * slide.q + 0.01"),
+            std::string::npos);
+  EXPECT_EQ(r.diagnostics.find("warning"), std::string::npos) << r.diagnostics;
   // <dynamics>, limits, collisions and the missing mesh.
   EXPECT_NE(r.mech.find("slide.tau = -(0.2 * slide.u + 0.1 * tanh(slide.u / 0.001));"), std::string::npos);
   EXPECT_NE(r.mech.find("limit lower 0 upper 0.2 effort 100 velocity 1 (recorded"), std::string::npos);
@@ -200,8 +206,7 @@ TEST(ImportText, FloatingGivesTheRootAFreeBase) {
 TEST(ImportPipeline, LoadsUrdfFilesAndReportsTheirErrors) {
   pipeline::LoadResult ok = pipeline::LoadModel(pipeline::Source::File(kData + "/every_joint.urdf"), {}, {});
   ASSERT_TRUE(ok.model) << ok.diagnostics;
-  EXPECT_NE(ok.diagnostics.find("warning[W421]"), std::string::npos);  // warnings reach every command
-  EXPECT_EQ(ok.diagnostics.find("note:"), std::string::npos);           // notes only from `import`
+  EXPECT_EQ(ok.diagnostics.find("note:"), std::string::npos);  // notes only from `import`
   pipeline::LoadResult bad =
       pipeline::LoadModel(pipeline::Source::Text("x.urdf", "<robot name=\"r\">\n  <link>\n</robot>\n"), {}, {});
   EXPECT_FALSE(bad.model);

@@ -1,5 +1,5 @@
 // Data-driven diagnostic tests: one file per diagnostic code in tests/lang/diagnostics/,
-// named <CODE>_<short>.mech, with the expected diagnostics written inline where they must
+// named <CODE>_<short>.mech (.urdf for the URDF importer's U4xx, comments as <!-- -->), with the expected diagnostics written inline where they must
 // point (see tests/README.md):
 //
 //   Revolute j(axs = {0, 0, 1});  // expect: E203 "did you mean 'axis'"
@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -33,6 +34,7 @@
 #include "lang/elaborate.h"
 #include "lang/source.h"
 #include "compiler/compiler.h"
+#include "import/import.h"
 #include "pipeline/pipeline.h"
 #include "stdlib/stdlib.h"
 #include "tests/support/mesh_fixtures.h"
@@ -63,7 +65,8 @@ struct DiagFile {
 std::vector<fs::path> DiagnosticFiles() {
   std::vector<fs::path> out;
   for (const auto& e : fs::directory_iterator(KANESIM_DIAGNOSTICS_DIR))
-    if (e.is_regular_file() && e.path().extension() == ".mech") out.push_back(e.path());
+    if (e.is_regular_file() && (e.path().extension() == ".mech" || e.path().extension() == ".urdf"))
+      out.push_back(e.path());
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -142,8 +145,11 @@ DiagFile LoadDiagFile(const fs::path& path) {
   std::vector<std::string> repeats;
   for (int n = 1; std::getline(lines, line); ++n) {
     size_t slashes = line.find("//");
+    const size_t xml = line.find("<!--");  // a URDF file's comment reads as a // comment
+    if (xml != std::string::npos && xml < slashes) slashes = xml;
     if (slashes == std::string::npos) continue;
     std::string comment = line.substr(slashes);
+    if (comment.rfind("<!--", 0) == 0) comment = "//" + comment.substr(4, comment.find("-->") - 4);
     ParseExpectations(comment, n, &f.expects);
     if (std::string set = Directive(comment, "set:"); !set.empty()) {
       size_t eq = set.find('=');
@@ -196,11 +202,48 @@ std::string Check(DiagFile& f, const Diagnostics& diags, int main_file) {
   return failures;
 }
 
+// A URDF file (the importer's U4xx codes): translated as `kanesim check robot.urdf` does,
+// its rendered diagnostics matched by their heads "NAME:LINE:COL: error[CODE]: ...".
+std::string CheckUrdf(DiagFile& f) {
+  import::Options o;
+  o.notes = false;
+  o.use_ros_package_path = false;
+  const import::Result r = import::UrdfToMech(f.name, f.text, o);
+  std::vector<std::string> blocks;
+  std::istringstream in(r.diagnostics);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(f.name + ":", 0) == 0 || blocks.empty()) blocks.emplace_back();
+    blocks.back() += line + "\n";
+  }
+  std::string failures;
+  for (const std::string& b : blocks) {
+    int line = 0, col = 0;
+    char severity[16] = {0}, code[8] = {0};
+    if (std::sscanf(b.c_str() + f.name.size(), ":%d:%d: %15[a-z][%7[A-Z0-9]]", &line, &col, severity, code) != 4) continue;
+    bool matched = false;
+    for (Expectation& e : f.expects) {
+      if (e.matched || e.code != code || (e.line != 0 && e.line != line) || (e.col != 0 && e.col != col)) continue;
+      if (!e.text.empty() && b.find(e.text) == std::string::npos) continue;
+      e.matched = matched = true;
+      break;
+    }
+    if (!matched && std::string(severity) == "error") failures += "unexpected diagnostic:\n" + b;
+  }
+  for (const Expectation& e : f.expects)
+    if (!e.matched) failures += "missing: " + Describe(e) + "\n";
+  if (!failures.empty()) failures += "all diagnostics:\n" + r.diagnostics;
+  return failures;
+}
+
 class DiagnosticFileTest : public ::testing::TestWithParam<fs::path> {};
 
 TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
   DiagFile f = LoadDiagFile(GetParam());
   ASSERT_FALSE(f.expects.empty()) << f.name << " has no '// expect:' comment";
+  if (GetParam().extension() == ".urdf") {
+    EXPECT_EQ(CheckUrdf(f), "") << f.name;
+    return;
+  }
   const auto stdlib = kanesim::stdlib::Files();
   Program program;
   Diagnostics diags(&program.sources);
@@ -264,7 +307,7 @@ TEST(DiagnosticFiles, EveryCodeOfTheTableHasAFile) {
   for (const std::string& code : codes) {
     bool found = std::any_of(files.begin(), files.end(),
                              [&](const fs::path& p) { return p.filename().string().rfind(code + "_", 0) == 0; });
-    EXPECT_TRUE(found) << "no tests/lang/diagnostics/" << code << "_<short>.mech";
+    EXPECT_TRUE(found) << "no tests/lang/diagnostics/" << code << "_<short>.mech (.urdf for U4xx)";
   }
   for (const fs::path& p : files) {
     DiagFile f = LoadDiagFile(p);

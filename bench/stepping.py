@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""Stepping from Python (docs/benchmarks.md "Stepping from Python"; issue 42's targets).
+
+1. The overhead of one sim.step over the integration it does: the wall time of a loop of
+   steps in Python minus the time spent inside the C++ Simulator::AdvanceTo
+   (sim.stats()["advance_seconds"]): the call, the inputs dict, the GIL release, the reads
+   of the outputs the controller uses. Target <= 5 us.
+2. A PD-controlled two-link arm stepped at 1 kHz for 10 s from Python against the same PD
+   law written in the .mech and integrated whole (one advance_to). Target <= 2x.
+
+Usage: PYTHONPATH=build/python python3 bench/stepping.py [--integrator dop853] [--rtol 1e-6]
+"""
+import argparse
+import time
+
+import kanesim
+
+ARM = """
+model Arm
+  {decls}
+  World world(g = {{0, -9.81, 0}});
+  Revolute shoulder(axis = {{0, 0, 1}}, q(start = -1.2), u(start = 0));
+  Rod upper(L = 0.6, m = 2);
+  Revolute elbow(axis = {{0, 0, 1}}, q(start = 0.4), u(start = 0));
+  Rod fore(L = 0.5, m = 1);
+equation
+  connect(world.frame_b, shoulder.frame_a);
+  connect(shoulder.frame_b, upper.frame_a);
+  connect(upper.frame_b, elbow.frame_a);
+  connect(elbow.frame_b, fore.frame_a);
+  shoulder.tau = {tau1};
+  elbow.tau = {tau2};
+end Arm;
+"""
+REF1, REF2 = 0.3, -0.5
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--integrator", default="dop853")
+    ap.add_argument("--rtol", type=float, default=1e-6)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--kp", type=float, default=60.0)
+    ap.add_argument("--kd", type=float, default=8.0)
+    a = ap.parse_args()
+    KP, KD = a.kp, a.kd
+    law1 = f"{KP} * ({REF1} - shoulder.q) - {KD} * shoulder.u"
+    law2 = f"{KP} * ({REF2} - elbow.q) - {KD} * elbow.u"
+    in_mech = kanesim.loads(ARM.format(decls="", tau1=law1, tau2=law2))
+    plant = kanesim.loads(ARM.format(decls="input Real t1; input Real t2;", tau1="t1", tau2="t2"))
+    outs = ["shoulder.q", "shoulder.u", "elbow.q", "elbow.u"]
+    whole, stepped, overhead, bare = [], [], [], []
+    for _ in range(a.repeat):
+        # 1. One step's own cost: a loop of steps with an inputs dict, nothing read.
+        b = plant.simulator(rtol=a.rtol, integrator=a.integrator, outputs=outs)
+        fixed = {"t1": 1.0, "t2": -0.5}
+        t0 = time.perf_counter()
+        for k in range(10000):
+            b.step(1e-3, fixed)
+        bare.append((time.perf_counter() - t0 - b.stats()["advance_seconds"]) / 10000)
+        s = in_mech.simulator(rtol=a.rtol, integrator=a.integrator, outputs=outs)
+        t0 = time.perf_counter()
+        s.advance_to(10.0)
+        whole.append(time.perf_counter() - t0)
+        p = plant.simulator(rtol=a.rtol, integrator=a.integrator, outputs=outs)
+        t0 = time.perf_counter()
+        for k in range(1, 10001):
+            q1, u1, q2, u2 = p.outputs
+            p.advance_to(k * 1e-3, {"t1": KP * (REF1 - q1) - KD * u1, "t2": KP * (REF2 - q2) - KD * u2})
+        dt = time.perf_counter() - t0
+        stepped.append(dt)
+        overhead.append((dt - p.stats()["advance_seconds"]) / 10000)
+        diff = max(abs(x - y) for x, y in zip(p.outputs, s.outputs))
+    print(f"integrator {a.integrator}, rtol {a.rtol}, kp {KP}, kd {KD}")
+    print(f"one step's overhead over its integration (inputs dict, nothing read): {min(bare) * 1e6:6.2f} us")
+    print(f"PD in the .mech, whole run of 10 s:   {min(whole) * 1e3:8.2f} ms")
+    print(f"PD from Python at 1 kHz, 10 s:        {min(stepped) * 1e3:8.2f} ms  ({min(stepped) / min(whole):.2f}x)")
+    print(f"overhead per controller step (outputs read, law, step): {min(overhead) * 1e6:6.2f} us")
+    print(f"final state apart by {diff:.2e} (the sampled law against the continuous one)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,623 @@
+// CheckUnits (lang/elab_units.h): a walk over the instance tree that gives each binding's
+// expression a unit, bottom-up, and compares it with the variable's.
+#include "lang/elab_units.h"
+
+#include <cmath>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "lang/lexer.h"
+#include "lang/units.h"
+
+namespace kanesim::lang::elab {
+
+namespace {
+
+// What is known of an expression's unit. Literal: built from numbers alone (dimensionless
+// in products, adapting in sums); Unknown: reads a variable of no known unit (unchecked).
+struct UVal {
+  enum Kind : std::uint8_t { Unknown, Literal, Known } kind = Unknown;
+  Unit unit;
+  const Node* origin = nullptr;         // the variable whose unit this is, for notes
+  const std::string* text = nullptr;    // that unit as declared ("N.m"), when unchanged
+  // From `time` and numbers alone (sin(time), sqrt(0.5 - time): test signals that read time
+  // as a number): used where it meets a unit, never reported.
+  bool soft = false;
+
+  static UVal Of(const Unit& u) {
+    UVal v;
+    v.kind = Known;
+    v.unit = u;
+    return v;
+  }
+  static UVal Lit() {
+    UVal v;
+    v.kind = Literal;
+    return v;
+  }
+};
+
+// A unit in quotes as the user wrote it, or in SI form when computed.
+std::string Shown(const UVal& v) { return "\"" + (v.text ? *v.text : v.unit.ToString()) + "\""; }
+
+// Expressions nested deeper than this are left unchecked instead of recursed into (the
+// parser allows 100,000 levels; the native stack does not).
+constexpr int kMaxCheckDepth = 200;
+
+Unit Seconds() {
+  Unit s;
+  s.twice[2] = 2;
+  return s;
+}
+Unit Metres(int power) {
+  Unit u;
+  u.twice[0] = static_cast<std::int16_t>(2 * power);
+  return u;
+}
+Unit Radians() {
+  Unit u;
+  u.twice[Unit::kRad] = 2;
+  return u;
+}
+
+class UnitChecker {
+ public:
+  UnitChecker(Diagnostics& diags) : diags_(diags) {}
+  void Walk(Node* root);
+  // The units a spring on flanges takes from the joint its flanges act on.
+  void SpringUnits(const InstanceTree& tree, const Links& links);
+  // A variable's unit: declared, or inferred (from its binding or from its uses).
+  UVal VarUnit(const Node* var);
+
+ private:
+  struct Declared {
+    bool ok = false;
+    Unit unit;
+    std::string text;
+  };
+  struct Inferred {
+    UVal val;
+    bool busy = false;        // being inferred from its binding (a cycle reads it as unknown)
+    bool from_use = false;    // inferred from a use, not its binding
+    Span where;               // that use
+  };
+
+  void CheckVar(Node* var);
+  void CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation);
+  // A joint's q or u without one unit: element k of a start array, or an element equation,
+  // against the coordinate's unit.
+  void CheckCoordinates(Node* var);
+  void CheckElement(Node* var, const ast::Expr& e, const ModValue& mv, int k, const char* what);
+  const Declared* DeclaredUnit(const Node* var);
+  UVal Expr(const ast::Expr& e, const Node* scope, const Iters* iters);
+  UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
+  UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
+  UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
+  // Elements of an array: all in one unit, else unknown (arrays of mixed units are allowed).
+  void Element(const ast::Expr& x, const Node* scope, const Iters* iters, UVal* acc, bool* mixed);
+  // a and b must agree (sums, comparisons, branches); the result's unit. `what` names the
+  // place for the message.
+  UVal Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at, const char* what,
+            const Node* scope);
+  UVal NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result);
+  // An undeclared scalar variable read bare in `e` takes unit u from this use.
+  void InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at);
+  void NoteOrigin(Diagnostic& d, const UVal& v);
+  // `inferred` is the unit an undeclared variable took from an earlier use, and `other`
+  // disagrees: E238 (true) instead of a plain mismatch.
+  bool ReportConflict(const UVal& inferred, const UVal& other, Span at);
+
+  Diagnostics& diags_;
+  std::unordered_map<const ast::Expr*, Declared> declared_;  // unit string literal -> parsed
+  std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
+  std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
+  int depth_ = 0;
+};
+
+void UnitChecker::Walk(Node* root) {
+  std::vector<Node*> stack{root};
+  while (!stack.empty() && !diags_.Full()) {
+    Node* n = stack.back();
+    stack.pop_back();
+    if (!n->enabled) continue;
+    if (n->kind == Node::kArray) {
+      for (auto it = n->elems.rbegin(); it != n->elems.rend(); ++it) stack.push_back(it->get());
+    } else if (n->kind == Node::kVar) {
+      CheckVar(n);
+    } else {
+      for (auto it = n->children.rbegin(); it != n->children.rend(); ++it) stack.push_back(it->get());
+    }
+  }
+}
+
+// Every value given to `var`: its binding (declaration, modifier, --set or equation), its
+// elements' equations, and its start, min and max attributes.
+void UnitChecker::CheckVar(Node* var) {
+  if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
+  DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
+  // An array element's modifiers shared with element 1 (lang/elab_share.cpp) mean the same
+  // there: checked once, on element 1.
+  if (!var->shared_mod) {
+    const Mod& mods = var->mod;
+    if (mods.value) CheckBinding(var, *mods.value, "the value of", false);
+    for (const char* attr : {"start", "min", "max"})
+      if (auto it = mods.sub.find(attr); it != mods.sub.end() && it->second.value)
+        CheckBinding(var, *it->second.value, attr, false);
+  }
+  if (var->eq_binding) CheckBinding(var, *var->eq_binding, "", true);
+  for (const auto& [k, mv] : var->eq_elem_binding) CheckBinding(var, mv, "", !mv.from_set);
+  if (var->parent && var->parent->prim == Prim::Joint && (var->name == "q" || var->name == "u") &&
+      !var->shape.empty() && !DeclaredUnit(var))
+    CheckCoordinates(var);
+}
+
+void UnitChecker::CheckCoordinates(Node* var) {
+  if (auto it = var->Modifiers().sub.find("start"); it != var->Modifiers().sub.end() && it->second.value) {
+    const ModValue& mv = *it->second.value;
+    if (mv.expr && mv.expr->kind == ast::ExprKind::Array)
+      for (size_t k = 0; k < mv.expr->args.size(); ++k) CheckElement(var, *mv.expr->args[k], mv, static_cast<int>(k), "start");
+  }
+  for (const auto& [k, mv] : var->eq_elem_binding)
+    if (mv.expr) CheckElement(var, *mv.expr, mv, k, "");
+}
+
+void UnitChecker::CheckElement(Node* var, const ast::Expr& e, const ModValue& mv, int k, const char* what) {
+  const Node* joint = var->parent;
+  const bool quaternion = joint->prim_kind == "free" ? var->shape[0] == 7 : var->shape[0] == 4;
+  const std::string text = JointCoordinateUnit(joint->prim_kind, quaternion, k, var->name == "u");
+  Unit want;
+  std::string error;
+  if (text.empty() || !ParseUnit(text, &want, &error)) return;
+  const UVal got = Expr(e, mv.scope, mv.iters.get());
+  if (got.kind != UVal::Known || got.soft || got.unit.Agrees(want)) return;
+  const std::string name = "'" + var->path + "[" + std::to_string(k + 1) + "]'";
+  auto& d = diags_.Error(DiagCode::UnitMismatch, e.span,
+                         (*what ? std::string("the start value of ") + name : "the equation of " + name) + " has unit " +
+                             Shown(got) + ", not \"" + text + "\"");
+  NoteOrigin(d, got);
+  d.hint = "coordinate " + std::to_string(k + 1) + " of a " + joint->prim_kind + " joint's " + var->name + " is in \"" +
+           text + "\"";
+}
+
+// A spring or damper on flanges (Prim::RotSpring) connected to a joint's drive or support:
+// its stiffness, damping and unstretched coordinate in the joint's units.
+void UnitChecker::SpringUnits(const InstanceTree& tree, const Links& links) {
+  auto joint_of = [&](int flange) -> const Node* {
+    if (flange < 0 || static_cast<size_t>(flange) >= tree.flanges.size()) return nullptr;
+    const Node* p = tree.flanges[static_cast<size_t>(flange)]->parent;
+    return p && p->prim == Prim::Joint ? p : nullptr;
+  };
+  auto spring_of = [&](int flange) -> const Node* {
+    if (flange < 0 || static_cast<size_t>(flange) >= tree.flanges.size()) return nullptr;
+    const Node* p = tree.flanges[static_cast<size_t>(flange)]->parent;
+    return p && p->prim == Prim::RotSpring ? p : nullptr;
+  };
+  for (const auto& [a, b] : links.flanges) {
+    const Node* spring = spring_of(a) ? spring_of(a) : spring_of(b);
+    const Node* joint = joint_of(a) ? joint_of(a) : joint_of(b);
+    if (!spring || !joint) continue;
+    const std::string q = JointCoordinateUnit(joint->prim_kind, false, 0, false);
+    if (q.empty() || joint->prim_kind == "cylindrical" || joint->prim_kind == "planar" || joint->prim_kind == "free")
+      continue;  // several coordinates: no one unit
+    const char* force = q == "m" ? "N" : "N.m";
+    for (const auto& [field, text] : {std::pair<const char*, std::string>{"c", std::string(force) + "/" + q},
+                                      {"d", std::string(force) + ".s/" + q}, {"phi_rel0", q}}) {
+      const Node* v = spring->Child(field);
+      if (!v || v->kind != Node::kVar || DeclaredUnit(v)) continue;
+      Declared& slot = implied_[v];
+      slot.text = text;
+      std::string error;
+      slot.ok = ParseUnit(text, &slot.unit, &error);
+    }
+  }
+}
+
+void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation) {
+  if (!mv.expr || diags_.Full()) return;
+  const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
+  const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
+  if (want.kind != UVal::Known && own && var->shape.empty()) return;
+  const UVal got = Expr(*mv.expr, mv.scope, mv.iters.get());
+  if (want.kind != UVal::Known) return;
+  if (got.kind != UVal::Known) {
+    InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
+    return;
+  }
+  if (got.soft) return;
+  if (want.unit.Agrees(got.unit)) return;
+  const std::string name = "'" + var->path + "'";
+  std::string msg = is_equation ? "the two sides of the equation have different units: " + name + " is " + Shown(want) +
+                                      ", the right side " + Shown(got)
+                    : std::string(what) == "the value of"
+                        ? name + " has unit " + Shown(want) + " but its value has unit " + Shown(got)
+                        : "the " + std::string(what) + " value of " + name + " has unit " + Shown(got) +
+                              ", not " + Shown(want);
+  auto& d = diags_.Error(DiagCode::UnitMismatch, is_equation ? mv.span : mv.expr->span, msg);
+  if (var->decl) d.notes.push_back({var->decl->name_span, name + " is declared with unit " + Shown(want) + " here"});
+  NoteOrigin(d, got);
+  d.hint = want.unit.SameDimension(got.unit)
+               ? "same dimension, different scale: convert the value to " + Shown(want)
+               : "the value must be in " + Shown(want) + (got.origin ? "; check the unit of '" + got.origin->path + "'" : "");
+}
+
+void UnitChecker::NoteOrigin(Diagnostic& d, const UVal& v) {
+  if (!v.origin || !v.origin->decl) return;
+  auto it = inferred_.find(v.origin);
+  const std::string how = it != inferred_.end() ? " (inferred)" : "";
+  d.notes.push_back({v.origin->decl->name_span, "'" + v.origin->path + "' has unit " + Shown(VarUnit(v.origin)) + how});
+}
+
+const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
+  const Mod& mods = var->Modifiers();
+  auto it = mods.sub.find("unit");
+  if (it == mods.sub.end() || !it->second.value || !it->second.value->expr) return nullptr;
+  const ast::Expr* e = it->second.value->expr;
+  if (e->kind != ast::ExprKind::String || e->text.empty()) return nullptr;
+  auto [slot, fresh] = declared_.try_emplace(e);
+  if (fresh) {
+    std::string error;
+    slot->second.ok = ParseUnit(e->text, &slot->second.unit, &error);
+    slot->second.text = e->text;
+    if (!slot->second.ok)
+      diags_.Error(DiagCode::BadUnit, e->span, "\"" + e->text + "\" is not a unit: " + error)
+          .hint = "Modelica unit syntax: \"N.m/rad\", \"kg.m2\", \"m/s2\", \"1\"; prefixes m, k, M, u, n, G...";
+  }
+  return slot->second.ok ? &slot->second : nullptr;
+}
+
+UVal UnitChecker::VarUnit(const Node* var) {
+  const Declared* d = DeclaredUnit(var);
+  if (!d && !implied_.empty())
+    if (auto it = implied_.find(var); it != implied_.end() && it->second.ok) d = &it->second;
+  if (d) {
+    UVal v = UVal::Of(d->unit);
+    v.origin = var;
+    v.text = &d->text;
+    return v;
+  }
+  auto [it, fresh] = inferred_.try_emplace(var);
+  if (!fresh) return it->second.busy ? UVal{} : it->second.val;
+  // Inferred from the binding, once: an output's unit from its expression.
+  const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
+  if (!b || !b->expr || !var->shape.empty()) return UVal{};
+  it->second.busy = true;
+  UVal v = Expr(*b->expr, b->scope, b->iters.get());
+  Inferred& slot = inferred_[var];  // the map may have grown
+  slot.busy = false;
+  if (v.kind == UVal::Known) {
+    v.origin = var;
+    slot.val = v;
+  }
+  return slot.val;
+}
+
+void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at) {
+  if (!e || e->kind != ast::ExprKind::Ref || u.kind != UVal::Known || !scope) return;
+  const Node* n = scope;
+  for (const auto& p : e->parts) {
+    if (n->kind != Node::kClass) return;
+    n = n->Child(p.name);
+    if (!n) return;
+    if (n->kind == Node::kArray) {
+      if (n->elems.empty()) return;
+      n = n->elems[0].get();
+    }
+  }
+  if (n->kind != Node::kVar || !n->shape.empty() || DeclaredUnit(n)) return;
+  Inferred& slot = inferred_[n];
+  if (slot.val.kind == UVal::Known) {
+    if (!slot.from_use || slot.val.unit.Agrees(u.unit)) return;
+    auto& d = diags_.Error(DiagCode::UnitConflict, at,
+                           "'" + n->path + "' has no unit and is used here as " + Shown(u) + ", but earlier as " +
+                               Shown(slot.val));
+    d.notes.push_back({slot.where, "used as " + Shown(slot.val) + " here"});
+    d.hint = "declare its unit: " + n->name + "(unit = \"...\")";
+    return;
+  }
+  slot.val = u;
+  slot.val.origin = n;
+  slot.val.text = nullptr;
+  slot.from_use = true;
+  slot.where = at;
+}
+
+UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters) {
+  if (depth_ >= kMaxCheckDepth) return UVal{};
+  ++depth_;
+  UVal r;
+  switch (e.kind) {
+    case ast::ExprKind::Number: r = UVal::Lit(); break;
+    case ast::ExprKind::Ref: r = Ref(e, scope, iters); break;
+    case ast::ExprKind::Call: r = Call(e, scope, iters); break;
+    case ast::ExprKind::Unary:
+    case ast::ExprKind::Binary: r = Operator(e, scope, iters); break;
+    case ast::ExprKind::Array: {
+      UVal acc = UVal::Lit();
+      bool mixed = false;
+      for (const auto& a : e.args) Element(*a, scope, iters, &acc, &mixed);
+      r = mixed ? UVal{} : acc;
+      break;
+    }
+    case ast::ExprKind::Matrix: {
+      UVal acc = UVal::Lit();
+      bool mixed = false;
+      for (const auto& row : e.rows)
+        for (const auto& x : row) Element(*x, scope, iters, &acc, &mixed);
+      r = mixed ? UVal{} : acc;
+      break;
+    }
+    case ast::ExprKind::Comprehension:
+      r = e.args.empty() ? UVal{} : Expr(*e.args[0], scope, nullptr);
+      if (r.kind == UVal::Unknown && !e.args.empty() && e.args[0]->kind == ast::ExprKind::Ref &&
+          e.args[0]->parts.size() == 1 && e.args[0]->parts[0].name == e.text)
+        r = UVal::Lit();
+      break;
+    case ast::ExprKind::Range: r = UVal::Lit(); break;
+    case ast::ExprKind::If: {
+      UVal acc;
+      const ast::Expr* acc_e = nullptr;
+      for (size_t i = 0; i < e.args.size(); ++i) {
+        const bool branch = i % 2 == 1 || i + 1 == e.args.size();
+        UVal v = Expr(*e.args[i], scope, iters);
+        if (!branch) continue;
+        acc = acc_e ? Same(acc, acc_e, v, e.args[i].get(), e.args[i]->span, "the branches of the if-expression", scope) : v;
+        acc_e = e.args[i].get();
+      }
+      r = acc;
+      break;
+    }
+    default: break;  // strings, Booleans, ':' and 'end' have no unit
+  }
+  --depth_;
+  return r;
+}
+
+// A reference walked through the instance tree without evaluating subscripts: every
+// element of an array has the unit of the array.
+UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters) {
+  const ast::RefPart& head = e.parts[0];
+  if (e.parts.size() == 1 && head.subscripts.empty() && iters && iters->count(head.name)) return UVal::Lit();
+  for (const auto& p : e.parts)
+    for (const auto& s : p.subscripts)
+      if (s) Expr(*s, scope, iters);  // operators inside subscripts are checked too
+  const Node* n = scope ? scope->Child(head.name) : nullptr;
+  if (!n) {
+    if (e.parts.size() == 1 && head.name == "time") {
+      UVal t = UVal::Of(Seconds());
+      t.soft = true;
+      return t;
+    }
+    if (e.parts.size() == 1 && head.name == "pi") return UVal::Lit();
+    return UVal{};
+  }
+  for (size_t i = 0; i < e.parts.size(); ++i) {
+    if (i > 0) {
+      const std::string& name = e.parts[i].name;
+      if (n->kind == Node::kClass && n->prim == Prim::Frame) {
+        if (name == "r") return UVal::Of(Metres(1));
+        if (name == "v") return UVal::Of(Metres(1) / Seconds());
+        if (name == "w") return UVal::Of(Radians() / Seconds());
+        if (name == "R") return UVal::Lit();
+      }
+      if (n->kind != Node::kClass) return UVal{};
+      n = n->Child(name);
+      if (!n) return UVal{};
+    }
+    if (n->kind == Node::kArray) {
+      if (n->elems.empty()) return UVal{};
+      n = n->elems[0].get();
+    }
+    if (n->kind == Node::kVar) return VarUnit(n);
+  }
+  return UVal{};
+}
+
+void UnitChecker::Element(const ast::Expr& x, const Node* scope, const Iters* iters, UVal* acc, bool* mixed) {
+  const UVal v = Expr(x, scope, iters);
+  if (v.kind == UVal::Unknown) *mixed = true;
+  if (v.kind != UVal::Known) return;
+  if (acc->kind != UVal::Known) *acc = v;
+  else if (!acc->unit.Agrees(v.unit)) *mixed = true;  // an array of several units: allowed, unchecked
+}
+
+UVal UnitChecker::Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at,
+                       const char* what, const Node* scope) {
+  if (a.kind == UVal::Known && b.kind == UVal::Known) {
+    if (a.unit.Agrees(b.unit) || b.soft) return a;
+    if (a.soft) return b;
+    if (ReportConflict(a, b, at) || ReportConflict(b, a, at)) return UVal{};
+    auto& d = diags_.Error(DiagCode::UnitMismatch, at, std::string(what) + " have different units: " + Shown(a) + " and " + Shown(b));
+    NoteOrigin(d, a);
+    NoteOrigin(d, b);
+    d.hint = a.unit.SameDimension(b.unit) ? "same dimension, different scale: convert one of them"
+                                          : "both sides must be in one unit; check the operands' declarations";
+    return UVal{};
+  }
+  if (a.kind == UVal::Known) {
+    InferFromUse(eb, a, scope, at);
+    return a;
+  }
+  if (b.kind == UVal::Known) {
+    InferFromUse(ea, b, scope, at);
+    return b;
+  }
+  return a.kind == UVal::Literal && b.kind == UVal::Literal ? UVal::Lit() : UVal{};
+}
+
+bool UnitChecker::ReportConflict(const UVal& inferred, const UVal& other, Span at) {
+  if (!inferred.origin) return false;
+  auto it = inferred_.find(inferred.origin);
+  if (it == inferred_.end() || !it->second.from_use || !it->second.val.unit.Agrees(inferred.unit)) return false;
+  const Node* n = inferred.origin;
+  auto& d = diags_.Error(DiagCode::UnitConflict, at,
+                         "'" + n->path + "' has no unit and is used here as " + Shown(other) + ", but earlier as " +
+                             Shown(inferred));
+  d.notes.push_back({it->second.where, "used as " + Shown(inferred) + " here"});
+  NoteOrigin(d, other);
+  d.hint = "declare its unit: " + n->name + "(unit = \"...\")";
+  return true;
+}
+
+UVal UnitChecker::NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result) {
+  if (a.kind == UVal::Literal) return UVal::Lit();
+  if (a.kind == UVal::Known && a.soft) return UVal{};
+  if (a.kind == UVal::Known && !(a.unit.Dimensionless() && a.unit.Agrees(Unit::One()) )) {
+    // An angle in rad is dimensionless; one in deg is not a number sin can take (scale pi/180).
+    Unit plain = a.unit;
+    plain.twice[Unit::kRad] = 0;
+    if (!(plain.Dimensionless() && a.unit.scale == 1)) {
+      auto& d = diags_.Error(DiagCode::UnitMismatch, arg.span,
+                             "'" + fn + "' needs a dimensionless argument (an angle in rad is one), but this has unit " +
+                                 Shown(a));
+      NoteOrigin(d, a);
+      d.hint = a.unit.Dimensionless() ? "convert the angle to rad" : "divide by a quantity in " + Shown(a) + " first";
+      return UVal{};  // reported once, not again where the result is used
+    }
+  }
+  return result;
+}
+
+UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters) {
+  const std::string& fn = e.parts.empty() ? std::string() : e.parts.back().name;
+  SmallVec<UVal, 4> a;
+  for (const auto& x : e.args) a.push_back(Expr(*x, scope, iters));
+  for (const auto& na : e.named_args)
+    if (na.value) Expr(*na.value, scope, iters);
+  auto arg = [&](size_t i) { return i < a.size() ? a[i] : UVal{}; };
+  const UVal x = arg(0);
+  const UVal one = UVal::Of(Unit::One());
+  if (fn == "sin" || fn == "cos" || fn == "tan" || fn == "exp" || fn == "log" || fn == "sinh" || fn == "cosh" ||
+      fn == "tanh")
+    return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, one);
+  if (fn == "asin" || fn == "acos" || fn == "atan")
+    return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, UVal::Of(Radians()));
+  if (fn == "atan2") {
+    if (a.size() == 2) Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, "the two arguments of 'atan2'", scope);
+    return UVal::Of(Radians());
+  }
+  if (fn == "sqrt") {
+    if (x.kind != UVal::Known) return x.kind == UVal::Literal ? UVal::Lit() : UVal{};
+    for (auto t : x.unit.twice)
+      if (t % 2) return UVal{};  // a quarter power: beyond what is kept
+    UVal r = UVal::Of(x.unit.Pow(1, 2));
+    r.soft = x.soft;
+    return r;
+  }
+  if (fn == "der") return x.kind == UVal::Known ? UVal::Of(x.unit / Seconds()) : x;
+  if (fn == "min" || fn == "max" || fn == "mod") {
+    if (a.size() == 2) return Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, fn == "min" ? "the arguments of 'min'" : fn == "max" ? "the arguments of 'max'" : "the arguments of 'mod'", scope);
+    return x;
+  }
+  if (fn == "abs" || fn == "floor" || fn == "ceil" || fn == "norm" || fn == "transpose" || fn == "sum" || fn == "skew" ||
+      fn == "vector" || fn == "diagonal")
+    return x.kind == UVal::Known ? [&] { UVal r = UVal::Of(x.unit); r.soft = x.soft; return r; }() : x;
+  if (fn == "fill") return x;
+  if (fn == "cross" || fn == "dot" || fn == "outerProduct") {
+    if (a.size() != 2 || a[0].kind == UVal::Unknown || a[1].kind == UVal::Unknown) return UVal{};
+    if (a[0].kind == UVal::Literal && a[1].kind == UVal::Literal) return UVal::Lit();
+    const Unit ua = a[0].kind == UVal::Known ? a[0].unit : Unit::One();
+    const Unit ub = a[1].kind == UVal::Known ? a[1].unit : Unit::One();
+    return UVal::Of(ua * ub);
+  }
+  if (fn == "sign" || fn == "identity" || fn == "zeros" || fn == "ones" || fn == "size" || fn == "integer")
+    return UVal::Lit();
+  if (fn == "meshVolume") return UVal::Of(Metres(3));
+  if (fn == "meshCentre") return UVal::Of(Metres(1));
+  if (fn == "meshInertia") return UVal::Of(Metres(5));
+  if (fn == "cat") {  // the arguments were checked above; their units joined here
+    UVal acc = UVal::Lit();
+    bool mixed = false;
+    for (size_t i = 1; i < a.size(); ++i) {
+      if (a[i].kind == UVal::Unknown) mixed = true;
+      if (a[i].kind != UVal::Known) continue;
+      if (acc.kind != UVal::Known) acc = a[i];
+      else if (!acc.unit.Agrees(a[i].unit)) mixed = true;
+    }
+    return mixed ? UVal{} : acc;
+  }
+  return UVal{};
+}
+
+UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* iters) {
+  const Tok op = static_cast<Tok>(e.op);
+  if (e.kind == ast::ExprKind::Unary) {
+    UVal v = e.args.empty() ? UVal{} : Expr(*e.args[0], scope, iters);
+    return op == Tok::KwNot ? UVal{} : v;
+  }
+  if (e.args.size() != 2) return UVal{};
+  const ast::Expr& ea = *e.args[0];
+  const ast::Expr& eb = *e.args[1];
+  const UVal a = Expr(ea, scope, iters);
+  if (op == Tok::Caret) {
+    Expr(eb, scope, iters);
+    if (a.kind != UVal::Known) return a;
+    if (eb.kind != ast::ExprKind::Number) return a.unit.Dimensionless() && a.unit.scale == 1 ? a : UVal{};
+    const double p = eb.number;
+    if (!(std::abs(p) <= 64)) return UVal{};  // beyond any unit written in a model (and any int)
+    UVal r;
+    if (p == static_cast<int>(p)) {
+      r = UVal::Of(a.unit.Pow(static_cast<int>(p), 1));
+    } else if (2 * p == static_cast<int>(2 * p)) {
+      for (auto t : a.unit.twice)
+        if (t % 2) return UVal{};
+      r = UVal::Of(a.unit.Pow(static_cast<int>(2 * p), 2));
+    } else {
+      return UVal{};
+    }
+    r.soft = a.soft;
+    return r;
+  }
+  const UVal b = Expr(eb, scope, iters);
+  switch (op) {
+    case Tok::Plus:
+    case Tok::Minus:
+      return Same(a, &ea, b, &eb, e.span, op == Tok::Plus ? "the operands of '+'" : "the operands of '-'", scope);
+    case Tok::Lt:
+    case Tok::Le:
+    case Tok::Gt:
+    case Tok::Ge:
+    case Tok::EqEq:
+    case Tok::Ne: Same(a, &ea, b, &eb, e.span, "the compared values", scope); return UVal{};
+    case Tok::Star:
+    case Tok::Slash: {
+      if (a.kind == UVal::Unknown || b.kind == UVal::Unknown) return UVal{};
+      if (a.kind == UVal::Literal && b.kind == UVal::Literal) return UVal::Lit();
+      // A number times a quantity: the number may carry any unit its context needs
+      // (-0.3 * j.q as a torque: 0.3 N.m/rad), as Modelica tools infer it, so the product's
+      // unit is left open rather than guessed.
+      if (a.kind == UVal::Literal || b.kind == UVal::Literal) return UVal{};
+      const Unit ua = a.kind == UVal::Known ? a.unit : Unit::One();
+      const Unit ub = b.kind == UVal::Known ? b.unit : Unit::One();
+      UVal r = UVal::Of(op == Tok::Star ? ua * ub : ua / ub);
+      r.origin = a.kind == UVal::Known ? a.origin : b.origin;
+      r.soft = a.soft && b.soft;
+      return r;
+    }
+    default: return UVal{};  // and, or
+  }
+}
+
+}  // namespace
+
+void CheckUnits(const InstanceTree& tree, const Links& links, Diagnostics& diags, flat::Mechanism* m) {
+  Node* root = tree.root.get();
+  UnitChecker checker(diags);
+  checker.SpringUnits(tree, links);
+  checker.Walk(root);
+  // Outputs' units (for --units-in-header): the top-level model's output variables, named
+  // by path, array elements "path[k]" (lang/elab_emit.cpp).
+  size_t i = 0;
+  for (const auto& c : root->children) {
+    if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
+    const UVal u = checker.VarUnit(c.get());
+    auto named = [&](const std::string& n) {
+      return n == c->path || (n.size() > c->path.size() && n.compare(0, c->path.size(), c->path) == 0 &&
+                              n[c->path.size()] == '[');
+    };
+    for (; i < m->outputs.size() && named(m->outputs[i].name); ++i)
+      if (u.kind == UVal::Known) m->outputs[i].unit = u.text ? *u.text : u.unit.ToString();
+  }
+}
+
+}  // namespace kanesim::lang::elab

@@ -1,0 +1,291 @@
+#include "sim/simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sim/end_stops.h"
+#include "sim/engine_ode.h"
+#include "sim/input_table.h"
+#include "sim/simulate.h"
+#include "sim/stepper.h"
+
+namespace kanesim::sim {
+
+using WorkspacePtr = std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)>;
+
+struct Simulator::Impl {
+  Impl(std::shared_ptr<const rt::Program> p, int n_inputs)
+      : program(std::move(p)), inputs(n_inputs), ws_rhs(nullptr, nullptr), ws_out(nullptr, nullptr) {}
+  std::shared_ptr<const rt::Program> program;
+  IntegratorOptions iopt;                   // the solver's options (initial_step: next_step)
+  std::shared_ptr<const rt::SignalPlan> plan;  // the outputs
+  double t0 = 0.0;
+  std::vector<double> y0;                   // the start (after a start on an end stop)
+  std::vector<double> resting0;             // ... and its resting sides
+  ConstantInputs inputs;                    // what every workspace reads
+  WorkspacePtr ws_rhs, ws_out;
+  std::unique_ptr<EndStopEvents> stops;     // null without end stops
+  std::unique_ptr<detail::EngineOde> ode;
+  std::unique_ptr<detail::GuardedRhs> rhs;
+  std::unique_ptr<detail::Stepper> stepper;  // null until the next step (a restart)
+  double next_step = 0.0;                    // the restarted solver's first step (0: its estimate)
+  bool inputs_changed = false;               // since the stepper's last step
+  bool failed = false;
+  StepResult failure;
+  IntegratorStats done;                      // of the solvers before this one
+};
+
+namespace {
+void AddStats(IntegratorStats* to, const IntegratorStats& s) {
+  to->steps += s.steps;
+  to->rhs_evals += s.rhs_evals;
+  to->rhs_evals_jac += s.rhs_evals_jac;
+  to->jac_evals += s.jac_evals;
+  to->lin_setups += s.lin_setups;
+  to->err_test_fails += s.err_test_fails;
+  to->nonlin_iters += s.nonlin_iters;
+  to->nonlin_conv_fails += s.nonlin_conv_fails;
+  to->last_step = s.last_step;
+  to->last_order = s.last_order;
+}
+}  // namespace
+
+std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> program, const SimulatorOptions& options,
+                                           std::string* error) {
+  const rt::Program& p = *program;
+  for (auto [name, tol] : {std::pair{"rtol", options.rtol}, {"atol", options.atol}})
+    if (!(tol > 0.0) || !std::isfinite(tol)) {
+      *error = std::string("the tolerance ") + name + " (" + FormatShortest(tol) + ") must be a positive finite number";
+      return nullptr;
+    }
+  auto impl = std::make_unique<Impl>(program, rt::NumInputs(p));
+  IntegratorOptions& io = impl->iopt;
+  io.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(p).integrator : options.integrator;
+  io.rtol = options.rtol;
+  io.atol = options.atol;
+  io.max_steps = options.max_steps;
+  io.ida_linear_solver = options.ida_linear_solver;
+  io.project_steps = options.project_steps;
+  io.bridge = false;            // no bridges while stepping (sim/simulator.h)
+  io.row_energy_check = false;  // no rows
+  if (io.method == rt::Integrator::IDA || io.method == rt::Integrator::CvodeBdf) io.coupling = rt::StateCouplingGroups(p);
+
+  std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(p) : options.signals;
+  std::string plan_error;
+  impl->plan = rt::PlanSignals(p, names, &plan_error);
+  if (!impl->plan) {
+    *error = plan_error.empty() ? "cannot compute the requested outputs" : plan_error;
+    return nullptr;
+  }
+  impl->t0 = std::isnan(options.start_time) ? rt::StartTime(p) : options.start_time;
+  if (!std::isfinite(impl->t0)) {
+    *error = "the start time (" + FormatShortest(impl->t0) + ") is not a finite number";
+    return nullptr;
+  }
+  impl->y0.assign(static_cast<size_t>(rt::StateSize(p)), 0.0);
+  rt::InitialState(p, impl->y0.data());
+  auto stops = std::make_unique<EndStopEvents>(p, options.rtol, options.atol);
+  if (stops->Active()) {
+    auto ws = rt::MakeWorkspace(p);
+    rt::SetInputSource(*ws, &impl->inputs);
+    if (std::string why = stops->CheckStart(*ws, impl->t0, impl->y0.data()); !why.empty()) {
+      *error = why;
+      return nullptr;
+    }
+    if (stops->Start(*ws, impl->t0, impl->y0.data()) != 0) {
+      *error = "end stops: " + rt::ErrorMessage(*ws);
+      return nullptr;
+    }
+    impl->resting0 = stops->Resting();
+    impl->stops = std::move(stops);
+  }
+  std::unique_ptr<Simulator> s(new Simulator(std::move(impl)));
+  s->output_names_ = std::move(names);
+  for (int i = 0; i < rt::NumInputs(p); ++i) s->input_names_.push_back(rt::InputName(p, i));
+  s->Reset();
+  return s;
+}
+
+Simulator::Simulator(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Simulator::~Simulator() = default;
+
+int Simulator::InputIndex(const std::string& name) const {
+  for (size_t i = 0; i < input_names_.size(); ++i)
+    if (input_names_[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+bool Simulator::SetInput(int i, double value, std::string* error) {
+  if (i < 0 || static_cast<size_t>(i) >= input_names_.size()) {
+    *error = "no input number " + std::to_string(i);
+    return false;
+  }
+  if (!std::isfinite(value)) {
+    *error = "input '" + input_names_[static_cast<size_t>(i)] + "': " + FormatShortest(value) + " is not a finite number";
+    return false;
+  }
+  double& v = impl_->inputs.values[static_cast<size_t>(i)];
+  if (v != value) impl_->inputs_changed = true;
+  v = value;
+  return true;
+}
+
+const std::vector<double>& Simulator::Inputs() const { return impl_->inputs.values; }
+
+// Fresh workspaces, system and solver state from (t_, y_): what GetState and SetState share,
+// so that their continuations are the same bit for bit.
+void Simulator::Restart(double next_step) {
+  Impl& m = *impl_;
+  if (m.stepper) AddStats(&m.done, m.stepper->Stats());
+  m.stepper.reset();
+  m.rhs.reset();
+  m.ode.reset();
+  m.ws_rhs = rt::MakeWorkspace(*m.program);
+  m.ws_out = rt::MakeWorkspace(*m.program);
+  rt::SetInputSource(*m.ws_out, &m.inputs);
+  m.ode = std::make_unique<detail::EngineOde>(*m.program, *m.ws_rhs, /*row_energy=*/false);
+  m.ode->SetInputs(&m.inputs);
+  if (m.stops) m.ode->SetStops(m.stops.get());
+  m.rhs = std::make_unique<detail::GuardedRhs>(*m.ode);
+  m.next_step = next_step;
+  m.inputs_changed = false;
+}
+
+StepResult Simulator::Fail(double t, std::string cause) {
+  impl_->failed = true;
+  impl_->failure = {false, t, std::move(cause)};
+  return impl_->failure;
+}
+
+StepResult Simulator::Step(double dt) {
+  if (!(dt >= 0.0) || !std::isfinite(dt))
+    return {false, t_, "the step (" + FormatShortest(dt) + ") must be a finite number >= 0"};
+  return AdvanceTo(t_ + dt);
+}
+
+StepResult Simulator::AdvanceTo(double t) {
+  Impl& m = *impl_;
+  if (m.failed)
+    return {false, m.failure.fail_time,
+            "the simulator failed at t = " + FormatShortest(m.failure.fail_time) + " (" + m.failure.cause +
+                "); reset() or set_state() first"};
+  if (!(t >= t_) || !std::isfinite(t))
+    return {false, t_, "cannot advance to t = " + FormatShortest(t) + ": the simulator is at t = " + FormatShortest(t_) +
+                           " and does not step backwards"};
+  if (t == t_) return {};
+  if (y_.empty()) {  // nothing to integrate (0 degrees of freedom)
+    t_ = t;
+    return {};
+  }
+  std::string error;
+  if (!m.stepper) {
+    IntegratorOptions io = m.iopt;
+    io.initial_step = m.next_step > 0.0 ? std::min(m.next_step, t - t_) : 0.0;
+    m.rhs->Reset();
+    m.stepper = detail::MakeStepper(*m.rhs, t_, y_.data(), t, io, &error);
+    if (!m.stepper) return Fail(m.rhs->failed ? m.rhs->fail_time : t_, m.rhs->failed ? m.rhs->cause : error);
+  } else {
+    if (m.inputs_changed && m.stepper->InputsChanged() != 0)
+      return Fail(t_, m.rhs->failed ? m.rhs->cause : "the solver could not take the new inputs");
+    m.stepper->SetStopTime(t);
+  }
+  m.inputs_changed = false;
+  for (;;) {
+    m.rhs->ClearFailure();
+    const int flag = m.stepper->Advance(t, y_.data());
+    if (flag == detail::kEventReached) {  // the jump, then a fresh solver from the right limit
+      const double te = m.stepper->event_time;
+      if (m.ode->Event(te, y_.data(), m.stepper->event_index) != 0) return Fail(te, m.ode->FailureCause());
+      AddStats(&m.done, m.stepper->Stats());
+      m.stepper.reset();
+      t_ = te;
+      m.next_step = 0.0;  // a fresh solver after the jump estimates its own first step
+      if (te >= t) return {};
+      m.rhs->Reset();
+      m.stepper = detail::MakeStepper(*m.rhs, te, y_.data(), t, m.iopt, &error);
+      if (!m.stepper) return Fail(m.rhs->failed ? m.rhs->fail_time : te, m.rhs->failed ? m.rhs->cause : error);
+      continue;
+    }
+    if (flag < 0) {
+      const detail::StepFailure why = m.stepper->Explain(flag);
+      if (m.rhs->fatal || (why.from_rhs && m.rhs->failed)) return Fail(m.rhs->fail_time, m.rhs->cause);
+      std::string text = why.cause;
+      if (m.rhs->failed) text += " (the right-hand side last failed with: " + m.rhs->cause + ")";
+      return Fail(m.stepper->CurrentTime(), text);
+    }
+    t_ = t;
+    return {};
+  }
+}
+
+bool Simulator::Outputs(double* values, std::string* error) {
+  Impl& m = *impl_;
+  if (rt::EvalSignals(*m.program, *m.plan, *m.ws_out, t_, y_.data(), values) != 0) {
+    *error = rt::ErrorMessage(*m.ws_out);
+    if (error->empty()) *error = "an output signal could not be evaluated";
+    return false;
+  }
+  return true;
+}
+
+SimulatorState Simulator::GetState() {
+  Impl& m = *impl_;
+  SimulatorState s;
+  s.t = t_;
+  s.y = y_;
+  s.inputs = m.inputs.values;
+  s.next_step = m.stepper ? m.stepper->NextStep() : m.next_step;
+  if (m.stops) s.resting = m.stops->Resting();
+  if (!m.failed) Restart(s.next_step);
+  return s;
+}
+
+bool Simulator::SetState(const SimulatorState& s, std::string* error) {
+  Impl& m = *impl_;
+  if (s.y.size() != y_.size() || s.inputs.size() != m.inputs.values.size() ||
+      (m.stops && s.resting.size() != m.stops->Resting().size())) {
+    *error = "the state is not one of this model's (its sizes differ)";
+    return false;
+  }
+  if (!std::isfinite(s.t) || !(s.next_step >= 0.0)) {
+    *error = "the state's time or step is not a finite number";
+    return false;
+  }
+  for (double v : s.y)
+    if (!std::isfinite(v)) {
+      *error = "the state holds a number that is not finite";
+      return false;
+    }
+  t_ = s.t;
+  y_ = s.y;
+  m.inputs.values = s.inputs;
+  if (m.stops) m.stops->SetResting(s.resting);
+  m.failed = false;
+  Restart(s.next_step);
+  return true;
+}
+
+void Simulator::Reset() {
+  Impl& m = *impl_;
+  t_ = m.t0;
+  y_ = m.y0;
+  std::fill(m.inputs.values.begin(), m.inputs.values.end(), 0.0);
+  if (m.stops) m.stops->SetResting(m.resting0);
+  m.failed = false;
+  m.stepper.reset();
+  Restart(0.0);
+  m.done = IntegratorStats{};
+}
+
+rt::Integrator Simulator::Method() const { return impl_->iopt.method; }
+
+IntegratorStats Simulator::Stats() const {
+  IntegratorStats s = impl_->done;
+  if (impl_->stepper) AddStats(&s, impl_->stepper->Stats());
+  return s;
+}
+
+}  // namespace kanesim::sim
