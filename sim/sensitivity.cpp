@@ -9,6 +9,7 @@
 
 #include "sim/end_stops.h"
 #include "sim/lift_off.h"
+#include "sim/stick_slip.h"
 
 namespace kanesim::sim {
 namespace {
@@ -43,7 +44,7 @@ struct Perturbation {
 // The augmented system z = [y, s_1, ..., s_m].
 class SensitivityOde final : public OdeSystem {
  public:
-  SensitivityOde(const rt::Program& program, std::vector<Perturbation>& perturbations)
+  SensitivityOde(const rt::Program& program, std::vector<Perturbation>& perturbations, const rt::InputSource* inputs)
       : program_(program),
         n_(rt::StateSize(program)),
         ws_(rt::MakeWorkspace(program)),
@@ -51,7 +52,10 @@ class SensitivityOde final : public OdeSystem {
         perturbations_(perturbations),
         yp_(static_cast<size_t>(n_)),
         fp_(static_cast<size_t>(n_)),
-        fm_(static_cast<size_t>(n_)) {}
+        fm_(static_cast<size_t>(n_)) {
+    rt::SetInputSource(*ws_, inputs);
+    rt::SetInputSource(*aside_, inputs);
+  }
 
   int Size() const override { return n_ * (1 + static_cast<int>(perturbations_.size())); }
 
@@ -136,6 +140,12 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   if (EndStopEvents(program, options.rtol, options.atol).Active())
     return Usage("--sensitivity: the model has end stops or plane contacts; sensitivities across impacts are not "
                  "implemented (docs/integrators.md \"Parameter sensitivities\")");
+  if (StickSlipEvents(program).Active())
+    return Usage("--sensitivity: the model has exact stick-slip friction (friction_exact); sensitivities across "
+                 "its stick and slip events are not implemented");
+  if (options.speeds == Speeds::kDiagonal)
+    return Usage("--sensitivity with --speeds diagonal: not implemented (the sensitivities are of the joint speeds' "
+                 "equations; run without --speeds diagonal)");
   IntegratorOptions iopt;
   iopt.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(program).integrator : options.integrator;
   iopt.rtol = options.rtol;
@@ -148,6 +158,8 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   std::string plan_error;
   std::shared_ptr<const rt::SignalPlan> plan = rt::PlanSignals(program, names, &plan_error);
   if (!plan) return Usage(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  if (rt::NumInputs(program) > 0 && !options.inputs)
+    return Usage("input '" + rt::InputName(program, 0) + "' has no value (give it with --input-file or --set)");
   std::vector<Perturbation> perturbations;
   for (const SensitivityParam& p : params) {
     if (!p.plus || !p.minus || !(p.delta > 0.0)) return Usage("--sensitivity: no perturbed model for '" + p.name + "'");
@@ -155,6 +167,8 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
                    rt::MakeWorkspace(*p.minus), rt::PlanSignals(*p.plus, names, &plan_error),
                    rt::PlanSignals(*p.minus, names, &plan_error)};
     if (!q.plus_plan || !q.minus_plan) return Usage("--sensitivity: the outputs cannot be computed for '" + p.name + "'");
+    for (rt::Workspace* ws : {q.plus_rhs.get(), q.minus_rhs.get(), q.plus_out.get(), q.minus_out.get()})
+      rt::SetInputSource(*ws, options.inputs);
     perturbations.push_back(std::move(q));
   }
 
@@ -185,6 +199,8 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   const size_t ns = names.size();
   auto ws_out = rt::MakeWorkspace(program);
   auto ws_dir = rt::MakeWorkspace(program);
+  rt::SetInputSource(*ws_out, options.inputs);
+  rt::SetInputSource(*ws_dir, options.inputs);
   std::vector<double> row(columns.size()), gp(ns), gm(ns), yp(static_cast<size_t>(n));
   bool sink_failed = false;
   Clock::duration output_time{};
@@ -222,7 +238,7 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
     return status;
   };
 
-  SensitivityOde ode(program, perturbations);
+  SensitivityOde ode(program, perturbations, options.inputs);
   LiftOffGuard lift(program);
   if (lift.Active()) {
     if (std::string why = lift.Cause(grid.start, z0.data(), -1); !why.empty()) {

@@ -18,11 +18,14 @@ namespace {
 constexpr double kInterval = 0.1;
 
 // A pendulum whose hinge torque is `tau` (NaN past some time or state).
+// `tau` is dimensionless: k (N.m) carries the torque's unit and ts (s) makes times
+// dimensionless, so that the model passes the unit check (docs/language.md "Units").
 std::string Model(const std::string& tau) {
-  return "model NaNPendulum\n  parameter Real c = 0.35;\n  World world;\n"
+  return "model NaNPendulum\n  parameter Real c(unit = \"s\") = 0.35;\n"
+         "  parameter Real k(unit = \"N.m\") = 1;\n  parameter Real ts(unit = \"s\") = 1;\n  World world;\n"
          "  Revolute hinge(axis = {0, 0, 1}, q(start = 0));\n  Rod rod(L = 1, m = 1);\nequation\n"
          "  connect(world.frame_b, hinge.frame_a);\n  connect(hinge.frame_b, rod.frame_a);\n"
-         "  hinge.tau = " + tau + ";\n  annotation(experiment(StopTime = 1, Interval = 0.1));\nend NaNPendulum;\n";
+         "  hinge.tau = k * (" + tau + ");\n  annotation(experiment(StopTime = 1, Interval = 0.1));\nend NaNPendulum;\n";
 }
 
 // The time in "numerical failure at t = <time>:".
@@ -51,7 +54,7 @@ void ExpectRowsBefore(const std::vector<double>& t, double fail, const std::stri
 
 TEST(NaNRows, EveryRowBeforeATimeNaNIsKeptByEveryIntegratorAndPath) {
   std::string d = Work("nan_time");
-  Write(d + "/m.mech", Model("sqrt(c - time)"));
+  Write(d + "/m.mech", Model("sqrt((c - time) / ts)"));
   for (double c : {0.35, 0.55, 0.72})
     for (std::string integrator : {"auto", "dop853", "cvode", "cvode-bdf", "arkode", "ida"})
       for (std::string solver : {"dense", "sparse", "recursive"}) {
@@ -123,7 +126,7 @@ TEST(NaNRows, EveryRowBeforeAStateNaNIsKept) {
 // row before that time.
 TEST(NaNRows, SweepTrajectoriesKeepTheRowsBeforeTheFailure) {
   std::string d = Work("nan_sweep");
-  Write(d + "/m.mech", Model("sqrt(c - time)"));
+  Write(d + "/m.mech", Model("sqrt((c - time) / ts)"));
   Result r = Kanesim("sweep m.mech --grid c=0.35,0.55,2 --metric final:hinge.q --trajectories --no-progress -o out", d);
   ASSERT_EQ(r.rc, 2) << r.err;
   for (int id : {0, 1}) {
