@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "sim/sensitivity.h"
 #include "tests/compiler/compile_test_util.h"
 
 namespace kanesim::test {
@@ -203,6 +204,21 @@ TEST(WhenEvents, ClosedLoopsAreRefusedWithK321) {
   ASSERT_TRUE(l);
   EXPECT_FALSE(l->prog);
   EXPECT_NE(Find(l->errors, "K321", "closed loops or contacts"), nullptr) << Messages(l->errors);
+}
+
+// If this fails, --sensitivity runs a model with when clauses without their events (its
+// derivatives would be those of a motion that never fires) instead of refusing it.
+TEST(WhenEvents, SensitivitiesRefuseWhenClauses) {
+  auto l = LoadModel(Ball(1.0, "  when p.q < 0 then\n    reinit(p.u, -pre(p.u));\n  end when;\n"), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  sim::SimOptions o;
+  o.stop_time = 1.0;
+  o.interval = 0.1;
+  sim::MemorySink sink;
+  const sim::SimResult r = sim::SimulateSensitivities(*l->prog, {}, o, sink);
+  EXPECT_EQ(r.status, sim::SimResult::Status::kUsageError);
+  EXPECT_NE(r.message.find("when clauses"), std::string::npos) << r.message;
+  EXPECT_TRUE(sink.rows.empty());
 }
 
 }  // namespace
