@@ -135,8 +135,11 @@ int RunCheck(const CheckArgs& args) {
   for (const rt::CompileMessage& w : rt::LockedJointWarnings(program))
     std::cout << fmt::format("  warning[{}]: {} ({}:{}:{})\n", flat::DiagCodeString(w.code), w.message, w.loc.file.str(),
                              w.loc.line, w.loc.col);
+  // Only redundant constraints leave signals indeterminate: without them, listing every
+  // signal's name (a fifth of a robot's `check`) is skipped.
   const std::vector<std::string> indeterminate =
-      rt::IndeterminateSignals(program, rt::AvailableSignals(program));
+      program.redundant_rows.empty() ? std::vector<std::string>{}
+                                     : rt::IndeterminateSignals(program, rt::AvailableSignals(program));
   if (!indeterminate.empty()) {
     std::cout << fmt::format("  indeterminate constraint-force components ({}; `kanesim run` writes them as nan, "
                              "`--reactions min-norm` as the minimum-norm share):\n",

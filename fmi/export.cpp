@@ -98,15 +98,17 @@ std::string FmuBinariesDir(std::string* error) {
 
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options) {
   if (options.version != 2 && options.version != 3) return "FMI " + std::to_string(options.version) + " does not exist";
-  // End stops are events (impacts, resting): the FMU has no event indicators yet, and a
-  // master integrating through a stop would be silently wrong. Refused, with the joints.
+  // End stops are events (impacts, resting): Co-Simulation's stepping core handles them as a
+  // run does, but Model Exchange has no event indicators yet, and a master integrating
+  // through a stop would be silently wrong. Refused there, with the joints.
   std::string stops;
   for (const rt::EndStop& stop : rt::EndStops(*model.program)) stops += (stops.empty() ? "'" : ", '") + stop.joint + "'";
-  if (!stops.empty())
-    return "the end stops of " + stops + " are events, which an exported FMU does not have yet (docs/fmi.md)";
-  if (!model.program->whens.empty())  // the same for when clauses (docs/events.md)
+  if (!stops.empty() && options.model_exchange)
+    return "the end stops of " + stops +
+           " are events, which Model Exchange does not have yet: export with --kind cs (docs/fmi.md)";
+  if (!model.program->whens.empty())  // neither kind: the stepping core does not fire them yet (docs/events.md)
     return "the " + model.program->whens.front().name + " clause is an event, which an exported FMU does not have yet (docs/fmi.md)";
-  std::string exact;  // exact stick-slip friction likewise (sticking, slipping)
+  std::string exact;  // exact stick-slip friction: its events are not in the stepping core
   for (const rt::FrictionJoint& f : rt::FrictionJoints(*model.program))
     if (f.exact) exact += (exact.empty() ? "'" : ", '") + f.joint + "'";
   if (!exact.empty())

@@ -11,19 +11,6 @@
 namespace kanesim::fmi {
 namespace {
 
-// The right-hand side kanesim's integrators see inside a communication step.
-class ModelOde final : public sim::OdeSystem {
- public:
-  ModelOde(const rt::Program& program, rt::Workspace& ws) : program_(program), ws_(ws) {}
-  int Size() const override { return rt::StateSize(program_); }
-  int Rhs(double t, const double* y, double* ydot) override { return rt::Derivative(program_, ws_, t, y, ydot); }
-  std::string FailureCause() const override { return rt::ErrorMessage(ws_); }
-
- private:
-  const rt::Program& program_;
-  rt::Workspace& ws_;
-};
-
 std::string Number(double v) {
   std::ostringstream s;
   s.precision(17);
@@ -72,6 +59,7 @@ std::string Instance::Load(const std::string& dir, const std::string& guid) {
   pipeline::RunSpec spec;
   if (!settings_.integrator.empty() && !pipeline::IntegratorFromName(settings_.integrator, &spec.integrator))
     return "unknown integrator '" + settings_.integrator + "'";
+  integrator_ = spec.integrator;
   pipeline::LoadOptions load;
   load.model = settings_.model;
   load.sets = settings_.sets;
@@ -90,6 +78,8 @@ std::string Instance::Reset() {
   rt::InitialState(*program_, y_.data());
   ydot_.assign(n_, 0.0);
   state_set_.assign(n_, 0);
+  inputs_.assign(rt::NumInputs(*program_), 0.0);
+  stepper_.reset();
   t_ = rt::StartTime(*program_);
   rtol_ = settings_.rtol > 0 ? settings_.rtol : model_->mech->experiment.tolerance;
   params_changed_ = false;
@@ -116,6 +106,7 @@ std::string Instance::Rebind() {
     params_ = program_->param_values;
     params_changed_ = false;
   }
+  stepper_.reset();
   ws_ = rt::MakeWorkspace(*program_);
   std::string error;
   outputs_plan_ = nullptr;
@@ -138,6 +129,11 @@ std::string Instance::SetReal(unsigned vr, double value) {
   if (std::string e = CheckVr(vr); !e.empty()) return e;
   const Variable& v = vars_[vr];
   if (!std::isfinite(value)) return "'" + v.name + "' cannot be set to " + Number(value);
+  if (v.kind == VarKind::Input) {
+    inputs_[v.index] = value;
+    stale_ = true;
+    return "";
+  }
   if (initialized_) return "'" + v.name + "' can be set only before initialization ends";
   if (v.kind == VarKind::Parameter) {
     params_[v.index] = value;
@@ -159,6 +155,7 @@ std::string Instance::GetReal(unsigned vr, double* value) {
   if (v.type != VarType::Real) return "'" + v.name + "' is not a Real";
   switch (v.kind) {
     case VarKind::State: *value = y_[v.index]; return "";
+    case VarKind::Input: *value = inputs_[v.index]; return "";
     case VarKind::Derivative:
     case VarKind::Output:
       if (std::string e = Evaluate(); !e.empty()) return e;
@@ -208,6 +205,7 @@ std::string Instance::SetStates(const double* x, size_t n) {
   for (size_t i = 0; i < n; ++i)
     if (!std::isfinite(x[i])) return "state '" + vars_[i].name + "' cannot be " + Number(x[i]);
   std::copy(x, x + n, y_.begin());
+  stepper_.reset();
   stale_ = true;
   return "";
 }
@@ -227,6 +225,7 @@ std::string Instance::GetDerivatives(double* dx, size_t n) {
 
 std::string Instance::Evaluate() {
   if (!stale_) return "";
+  if (!inputs_.empty()) rt::SetInputValues(*ws_, inputs_.data());
   if (n_ > 0 && rt::Derivative(*program_, *ws_, t_, y_.data(), ydot_.data()) != 0)
     return "at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
   if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y_.data(), out_.data()) != 0)
@@ -235,36 +234,65 @@ std::string Instance::Evaluate() {
   return "";
 }
 
+std::string Instance::StartStepper() {
+  sim::SimulatorOptions options;
+  options.start_time = t_;
+  options.rtol = options.atol = rtol_;
+  options.integrator = integrator_;
+  std::string error;
+  stepper_ = sim::Simulator::Make(program_, options, &error);
+  if (!stepper_) return error;
+  sim::SimulatorState state = stepper_->GetState();
+  state.t = t_;
+  state.y = y_;
+  state.inputs = inputs_;
+  if (!stepper_->SetState(state, &error)) {
+    stepper_.reset();
+    return error;
+  }
+  return "";
+}
+
 std::string Instance::DoStep(double t, double h) {
   if (!std::isfinite(t) || !std::isfinite(h) || h <= 0)
     return "a step needs a finite time and a positive size (got t = " + Number(t) + ", h = " + Number(h) + ")";
   if (std::abs(t - t_) > 1e-9 * std::max(1.0, std::abs(t_)))
     return "the step starts at t = " + Number(t) + " but the FMU is at t = " + Number(t_);
-  if (n_ > 0) {
-    ModelOde ode(*program_, *ws_);
-    sim::IntegratorOptions options;
-    options.method = rt::Summarize(*program_).integrator;
-    options.rtol = options.atol = rtol_;
-    options.coupling = rt::StateCouplingGroups(*program_);
-    std::vector<double> y_end = y_;
-    auto row = [&](double time, const double* y, std::string*) {
-      if (time > t_) std::copy(y, y + n_, y_end.begin());
-      return 0;
-    };
-    sim::IntegrateResult r = sim::Integrate(ode, y_.data(), sim::OutputGrid{t_, t_ + h, h}, options, row);
-    if (!r.ok) return "numerical failure at t = " + Number(r.fail_time) + ": " + r.cause;
-    y_ = y_end;
+  if (!stepper_)
+    if (std::string e = StartStepper(); !e.empty()) return e;
+  std::string error;
+  for (size_t i = 0; i < inputs_.size(); ++i)
+    if (!stepper_->SetInput(int(i), inputs_[i], &error)) return error;
+  const sim::StepResult r = stepper_->AdvanceTo(t_ + h);
+  if (!r.ok) {
+    stepper_.reset();  // the next step starts afresh from where this one started
+    return "numerical failure at t = " + Number(r.fail_time) + ": " + r.cause;
   }
-  t_ += h;
+  y_ = stepper_->State();
+  t_ = stepper_->Time();
   stale_ = true;
   return Evaluate();
 }
 
+Instance::Snapshot Instance::Save() {
+  Snapshot s{t_, y_, params_, inputs_, state_set_, 0.0, {}};
+  if (stepper_) {
+    // GetState restarts the solver there; SetState (Restore) restarts it the same way.
+    const sim::SimulatorState state = stepper_->GetState();
+    s.next_step = state.next_step;
+    s.resting = state.resting;
+  }
+  return s;
+}
+
 std::string Instance::Restore(const Snapshot& s) {
-  if (int(s.y.size()) != n_ || s.params.size() != params_.size()) return "the FMU state is not this model's";
+  if (int(s.y.size()) != n_ || s.params.size() != params_.size() || s.inputs.size() != inputs_.size() ||
+      s.state_set.size() != y_.size())
+    return "the FMU state is not this model's";
   const bool rebind = s.params != params_;
   t_ = s.t;
   y_ = s.y;
+  inputs_ = s.inputs;
   state_set_ = s.state_set;
   if (rebind) {
     params_ = s.params;
@@ -272,25 +300,45 @@ std::string Instance::Restore(const Snapshot& s) {
     if (std::string e = Rebind(); !e.empty()) return e;
   }
   stale_ = true;
+  if (!stepper_ && !s.resting.empty())
+    if (std::string e = StartStepper(); !e.empty()) return e;
+  if (stepper_) {
+    std::string error;
+    sim::SimulatorState state = stepper_->GetState();
+    state.t = t_;
+    state.y = y_;
+    state.inputs = inputs_;
+    state.next_step = s.next_step;
+    if (!s.resting.empty()) state.resting = s.resting;
+    if (!stepper_->SetState(state, &error)) return error;
+  }
   return "";
 }
 
-// Layout: "KSFMU1", t, n, y[n], m, params[m], state_set[n] (doubles and bytes, native order).
+// Layout: "KSFMU2", t, n, y[n], m, params[m], k, inputs[k], next_step, r, resting[r],
+// state_set[n] (doubles, then bytes, native order; the counts as doubles).
 std::vector<char> Instance::Serialize(const Snapshot& s) {
-  std::vector<char> out(6 + sizeof(double) * (3 + s.y.size() + s.params.size()) + s.state_set.size());
+  std::vector<char> out(6 + sizeof(double) * (6 + s.y.size() + s.params.size() + s.inputs.size() + s.resting.size()) +
+                        s.state_set.size());
   char* p = out.data();
   auto put = [&](const void* src, size_t bytes) {
     if (bytes == 0) return;  // an empty vector's data() may be null: no memcpy from it
     std::memcpy(p, src, bytes);
     p += bytes;
   };
-  put("KSFMU1", 6);
-  const double n = double(s.y.size()), m = double(s.params.size());
+  put("KSFMU2", 6);
+  const double n = double(s.y.size()), m = double(s.params.size()), k = double(s.inputs.size()),
+               r = double(s.resting.size());
   put(&s.t, sizeof(double));
   put(&n, sizeof(double));
   put(s.y.data(), sizeof(double) * s.y.size());
   put(&m, sizeof(double));
   put(s.params.data(), sizeof(double) * s.params.size());
+  put(&k, sizeof(double));
+  put(s.inputs.data(), sizeof(double) * s.inputs.size());
+  put(&s.next_step, sizeof(double));
+  put(&r, sizeof(double));
+  put(s.resting.data(), sizeof(double) * s.resting.size());
   put(s.state_set.data(), s.state_set.size());
   return out;
 }
@@ -304,17 +352,25 @@ bool Instance::Deserialize(const char* data, size_t size, Snapshot* s) {
     p += bytes;
     return true;
   };
+  // A count is read as a double and must be a whole number below 1e7 (no huge allocation).
+  auto count = [&](size_t* out) {
+    double c = 0;
+    if (!get(&c, sizeof(double)) || !(c >= 0 && c < 1e7) || c != std::floor(c)) return false;
+    *out = size_t(c);
+    return true;
+  };
+  auto doubles = [&](std::vector<double>* v) {
+    size_t c = 0;
+    if (!count(&c)) return false;
+    v->resize(c);
+    return get(v->data(), sizeof(double) * c);
+  };
   char magic[6];
-  double n = 0, m = 0;
-  if (!get(magic, 6) || std::memcmp(magic, "KSFMU1", 6) != 0 || !get(&s->t, sizeof(double)) || !get(&n, sizeof(double)))
+  if (!get(magic, 6) || std::memcmp(magic, "KSFMU2", 6) != 0 || !get(&s->t, sizeof(double)) || !doubles(&s->y) ||
+      !doubles(&s->params) || !doubles(&s->inputs) || !get(&s->next_step, sizeof(double)) || !doubles(&s->resting))
     return false;
-  if (!(n >= 0 && n < 1e7)) return false;
-  s->y.resize(size_t(n));
-  if (!get(s->y.data(), sizeof(double) * s->y.size()) || !get(&m, sizeof(double)) || !(m >= 0 && m < 1e7)) return false;
-  s->params.resize(size_t(m));
-  s->state_set.resize(size_t(n));
-  return get(s->params.data(), sizeof(double) * s->params.size()) && get(s->state_set.data(), s->state_set.size()) &&
-         p == end;
+  s->state_set.resize(s->y.size());
+  return get(s->state_set.data(), s->state_set.size()) && p == end;
 }
 
 }  // namespace kanesim::fmi

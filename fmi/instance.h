@@ -11,6 +11,7 @@
 
 #include "fmi/variables.h"
 #include "pipeline/pipeline.h"
+#include "sim/sim.h"
 
 namespace kanesim::fmi {
 
@@ -34,7 +35,7 @@ class Instance {
   int NumStates() const { return n_; }
   double Time() const { return t_; }
 
-  // Before initialization ends: a tunable parameter or a state's start value.
+  // Before initialization ends: a tunable parameter or a state's start value; any time: an input.
   std::string SetReal(unsigned vr, double value);
   std::string GetReal(unsigned vr, double* value);
   std::string GetInteger(unsigned vr, int* value) const;
@@ -51,16 +52,21 @@ class Instance {
   std::string GetStates(double* x, size_t n) const;
   std::string GetDerivatives(double* dx, size_t n);
 
-  // Co-Simulation: integrates from the current time to t + h with kanesim's integrator.
+  // Co-Simulation: integrates from the current time to t + h with kanesim's stepping core
+  // (sim::Simulator: one integrator across the steps, its history carried), the inputs held
+  // at their values over the step.
   std::string DoStep(double t, double h);
 
-  // The FMU state: everything that decides the continuation.
+  // The FMU state: everything that decides the continuation (the stepping core's step
+  // size and end-stop sides too, once Co-Simulation has stepped).
   struct Snapshot {
     double t = 0.0;
-    std::vector<double> y, params;
+    std::vector<double> y, params, inputs;
     std::vector<char> state_set;
+    double next_step = 0.0;
+    std::vector<double> resting;  // sim::SimulatorState::resting
   };
-  Snapshot Save() const { return {t_, y_, params_, state_set_}; }
+  Snapshot Save();
   std::string Restore(const Snapshot& s);
   static std::vector<char> Serialize(const Snapshot& s);
   static bool Deserialize(const char* data, size_t size, Snapshot* s);
@@ -73,7 +79,10 @@ class Instance {
   std::string Evaluate();          // derivatives and outputs at (t_, y_), when stale
   std::string CheckVr(unsigned vr) const;
 
+  std::string StartStepper();      // stepper_ at (t_, y_, inputs_)
+
   std::unique_ptr<pipeline::Model> model_;   // as loaded: the export's program
+  std::unique_ptr<sim::Simulator> stepper_;  // Co-Simulation, from its first step; null after a change
   std::shared_ptr<const rt::Program> program_;  // with the current parameter values
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, nullptr};
   std::shared_ptr<const rt::SignalPlan> outputs_plan_;
@@ -83,6 +92,8 @@ class Instance {
   double t_ = 0.0, rtol_ = 0.0;
   std::vector<double> y_, ydot_, out_;
   std::vector<double> params_;     // every mech param's value (leaves as set)
+  std::vector<double> inputs_;     // the model's inputs (rt::NumInputs), 0 until set
+  rt::Integrator integrator_ = rt::Integrator::Auto;  // Co-Simulation's (settings.txt)
   std::vector<char> state_set_;    // the master set this state's start value
   bool params_changed_ = false;
   bool initialized_ = false;

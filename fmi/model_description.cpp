@@ -41,6 +41,7 @@ Attributes AttributesOf(VarKind kind) {
   switch (kind) {
     case VarKind::State: return {"local", "continuous", "exact", true};
     case VarKind::Derivative: return {"local", "continuous", "calculated", false};
+    case VarKind::Input: return {"input", "continuous", "", true};  // an input has no initial
     case VarKind::Output: return {"output", "continuous", "calculated", false};
     case VarKind::Parameter: return {"parameter", "fixed", "exact", true};
     case VarKind::CalculatedParameter: return {"calculatedParameter", "fixed", "calculated", false};
@@ -101,8 +102,8 @@ std::string VariableV3(const Variable& v, size_t vr, const std::vector<Variable>
   const Attributes a = AttributesOf(v.kind);
   const char* tag = v.type == VarType::Integer ? "Int32" : v.type == VarType::Boolean ? "Boolean" : "Float64";
   std::string e = std::string("    <") + tag + " name=\"" + Escape(v.name) + "\" valueReference=\"" +
-                  std::to_string(vr) + "\" causality=\"" + a.causality + "\" variability=\"" + a.variability +
-                  "\" initial=\"" + a.initial + "\"";
+                  std::to_string(vr) + "\" causality=\"" + a.causality + "\" variability=\"" + a.variability + "\"";
+  if (*a.initial) e += std::string(" initial=\"") + a.initial + "\"";
   if (!v.description.empty()) e += " description=\"" + Escape(v.description) + "\"";
   if (a.has_start)
     e += " start=\"" +
@@ -140,7 +141,8 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
     const Variable& v = vars[k];
     const Attributes a = AttributesOf(v.kind);
     x << "    <!-- index " << k + 1 << " -->\n    <ScalarVariable name=\"" << Escape(v.name) << "\" valueReference=\"" << k
-      << "\" causality=\"" << a.causality << "\" variability=\"" << a.variability << "\" initial=\"" << a.initial << "\"";
+      << "\" causality=\"" << a.causality << "\" variability=\"" << a.variability << "\"";
+    if (*a.initial) x << " initial=\"" << a.initial << "\"";
     if (!v.description.empty()) x << " description=\"" << Escape(v.description) << "\"";
     x << ">\n      " << TypeElement(v, a, vars) << "\n    </ScalarVariable>\n";
   }

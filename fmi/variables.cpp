@@ -58,6 +58,8 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
   for (size_t i = 0; i < states.size(); ++i)
     vars.push_back({"der(" + states[i].name + ")", VarKind::Derivative, VarType::Real, int(i), 0.0,
                     states[i].der_unit, ""});
+  for (int i = 0; i < rt::NumInputs(p); ++i)
+    vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, "", ""});
   for (size_t i = 0; i < mech.outputs.size(); ++i)
     vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, "", ""});
   // Parameters: three passes so that each group is contiguous.

@@ -4,8 +4,8 @@
 //
 // Order, which is the value reference (vr = index in the table):
 //   the continuous states y = [q_free; u_free] (rt::InitialState's layout), named by their
-//   joint signals ("arm.q", "ball.q[2]"); their derivatives "der(arm.q)"; the declared
-//   outputs; then the parameters: tunable ones (Real leaves, not structural, not constant),
+//   joint signals ("arm.q", "ball.q[2]"); their derivatives "der(arm.q)"; the model's
+//   inputs (`input Real tau;`, start 0); the declared outputs; then the parameters: tunable ones (Real leaves, not structural, not constant),
 //   calculated ones (bound to an expression of others), and the fixed ones (structural,
 //   constant, Integer or Boolean), which keep the value they had at export.
 #pragma once
@@ -17,14 +17,14 @@
 
 namespace kanesim::fmi {
 
-enum class VarKind { State, Derivative, Output, Parameter, CalculatedParameter, Fixed };
+enum class VarKind { State, Derivative, Input, Output, Parameter, CalculatedParameter, Fixed };
 enum class VarType { Real, Integer, Boolean };
 
 struct Variable {
   std::string name;
   VarKind kind = VarKind::State;
   VarType type = VarType::Real;
-  int index = 0;        // State, Derivative: y index; Output: declared output; else mech.params index
+  int index = 0;        // State, Derivative: y index; Input: rt input; Output: declared output; else param
   double start = 0.0;   // States, Parameter, Fixed: the value at export
   std::string unit;     // "" when the model gives none
   std::string description;

@@ -1,4 +1,5 @@
 // Modifiers: built, merged (outer wins), sliced per array element (lang/elab_modifiers.h).
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -128,14 +129,59 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
   }
 }
 
+// A modifier as default-constructed: merging it changes nothing, and merging into it
+// gives the inner one.
+bool Pristine(const Mod& m) {
+  return !m.value && m.sub.empty() && m.order.empty() && !m.each && !m.is_final && !m.final_span.valid() &&
+         !m.span.valid() && m.redeclare_type.empty() && !m.redeclare_from && !m.redeclare_span.valid() && !m.set_only;
+}
+
+// Whether every level of m lists each of its sub-modifiers once in `order` (as BuildMod
+// and MergeMods make them), so that moving m whole equals merging it key by key.
+bool OrderMatchesSubs(const Mod& m) {
+  if (m.order.size() != m.sub.size()) return false;
+  SmallVec<const Mod*, 16> listed;  // each key of `order` found in `sub`, and none twice
+  for (const std::string& k : m.order) {
+    auto it = m.sub.find(k);
+    if (it == m.sub.end()) return false;
+    listed.push_back(&it->second);
+  }
+  std::sort(listed.begin(), listed.end());
+  if (std::adjacent_find(listed.begin(), listed.end()) != listed.end()) return false;
+  for (const auto& [k, sm] : m.sub)
+    if (!OrderMatchesSubs(sm)) return false;
+  return true;
+}
+
+// What MergeModsImpl leaves in a pristine outer modifier besides the inner one's fields:
+// set_only cleared, final_span and the redeclare fields only where they apply.
+void NormalizeMerged(Mod& m) {
+  m.set_only = false;
+  if (!m.is_final) m.final_span = Span{};
+  if (m.redeclare_type.empty()) {
+    m.redeclare_from = nullptr;
+    m.redeclare_span = Span{};
+  }
+  for (auto& [k, sm] : m.sub) NormalizeMerged(sm);
+}
+
 }  // namespace
 
 void MergeMods(Mod& outer, const Mod& inner, const std::string& what, Diagnostics& diags) {
+  if (Pristine(inner)) return;
   MergeKeys keys;
   MergeModsImpl(diags, outer, inner, what, keys);
 }
 
+// Merging into a pristine modifier (an element without outer modifiers, the common case)
+// moves the inner tree instead of rebuilding it node by node: no diagnostic can arise.
 void MergeMods(Mod& outer, Mod&& inner, const std::string& what, Diagnostics& diags) {
+  if (Pristine(inner)) return;
+  if (Pristine(outer) && OrderMatchesSubs(inner)) {
+    outer = std::move(inner);
+    NormalizeMerged(outer);
+    return;
+  }
   MergeKeys keys;
   MergeModsImpl(diags, outer, std::move(inner), what, keys);
 }

@@ -100,11 +100,21 @@ end Stopped;
 """
 
 
-def test_end_stops_are_refused_not_integrated_through(write_model, tmp_path):
-    # Without event indicators a master would integrate through the stop: a wrong motion.
-    r = kanesim("export", write_model("stopped.mech", STOPPED), "--fmi", "2", "-o", str(tmp_path / "s.fmu"),
-                check=False)
+def test_end_stops_are_refused_for_model_exchange_and_handled_in_co_simulation(export, write_model, tmp_path):
+    # Without event indicators an ME master would integrate through the stop: a wrong motion.
+    model = write_model("stopped.mech", STOPPED)
+    r = kanesim("export", model, "--fmi", "2", "-o", str(tmp_path / "s.fmu"), check=False)
     assert r.returncode == 1 and "end stops of 'hinge'" in r.stderr and not (tmp_path / "s.fmu").exists()
+    # Co-Simulation steps with the run's event handling: the impacts as `kanesim run` has them.
+    ref = run_csv(model, "--stop-time", "2", "--rtol", "1e-9")
+    res = simulate_fmu(export(model, kind="cs"), stop_time=2, output_interval=0.002, relative_tolerance=1e-9,
+                       output=["hinge.q", "hinge.u"])
+    assert np.min(res["hinge.q"]) > -0.5 - 1e-6 and np.max(res["hinge.q"]) < 0.5 + 1e-6
+    # The run's rows on its grid (every 4 ms; the two rows of each impact left out) against
+    # the FMU's rows at the same instants.
+    k = np.round(ref["time"] / 0.002).astype(int)
+    on_grid = np.abs(k * 0.002 - ref["time"]) < 1e-12
+    assert np.max(np.abs(res["hinge.q"][k[on_grid]] - ref["hinge.q"][on_grid])) < 1e-4
 
 
 def test_when_clauses_are_refused_not_integrated_through(write_model, tmp_path):
