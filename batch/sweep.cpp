@@ -7,6 +7,7 @@
 #include <exception>
 #include <stdexcept>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <thread>
 
@@ -16,6 +17,7 @@
 #include "flat/mechanism.h"
 #include "runtime/program/program.h"
 #include "compiler/compiler.h"
+#include "sim/sensitivity.h"
 
 namespace kanesim::batch {
 namespace {
@@ -38,10 +40,52 @@ bool IsStartName(const flat::Mechanism& mech, const std::string& name) {
   return false;
 }
 
+// The signal a metric reads: y of a sensitivity "d(y)/d(p)", else its own.
+std::string MetricSignal(const Metric& m) {
+  std::string y, p;
+  return sim::SplitSensitivityColumn(m.signal, &y, &p) ? y : m.signal;
+}
+
+// The parameters of the metrics' sensitivities, in first-use order.
+std::vector<std::string> SensitivityNames(const SweepConfig& c) {
+  std::vector<std::string> names;
+  std::string y, p;
+  for (const Metric& m : c.metrics)
+    if (sim::SplitSensitivityColumn(m.signal, &y, &p) && std::find(names.begin(), names.end(), p) == names.end())
+      names.push_back(p);
+  return names;
+}
+
+// The scenario's program at p +/- delta for each sensitivity of the metrics (parameters only;
+// `overrides` are the scenario's numeric values, so that bound parameters follow).
+std::vector<sim::SensitivityParam> SensitivityPrograms(const rt::Program& program, std::map<size_t, double> overrides,
+                                                       const SweepConfig& c) {
+  std::vector<sim::SensitivityParam> out;
+  const flat::Mechanism& mech = *program.mech;
+  for (const std::string& name : SensitivityNames(c)) {
+    const int found = mech.FindParam(name);
+    if (found < 0) throw std::runtime_error("the sensitivity's parameter '" + name + "' does not exist in this variant");
+    const auto i = static_cast<size_t>(found);
+    const double p = program.param_values[i];
+    sim::SensitivityParam sp;
+    sp.name = name;
+    sp.delta = sim::SensitivityStep(p);
+    for (int sign : {1, -1}) {
+      overrides[i] = p + sign * sp.delta;
+      rt::CompileResult r = rt::Rebind(program, flat::EvaluateParams(mech, overrides));
+      if (!r.program) throw std::runtime_error("the model does not compile at " + name + " = " + Num(overrides[i]));
+      (sign > 0 ? sp.plus : sp.minus) = r.program;
+    }
+    overrides[i] = p;
+    out.push_back(std::move(sp));
+  }
+  return out;
+}
+
 std::vector<std::string> SignalsFor(const rt::Program& program, const SweepConfig& c) {
   std::vector<std::string> names;
   for (const Metric& m : c.metrics)
-    if (std::find(names.begin(), names.end(), m.signal) == names.end()) names.push_back(m.signal);
+    if (std::find(names.begin(), names.end(), MetricSignal(m)) == names.end()) names.push_back(MetricSignal(m));
   if (c.trajectories) {
     std::vector<std::string> t = c.trajectory_signals.empty() ? rt::DefaultSignals(program) : c.trajectory_signals;
     for (const std::string& n : t)
@@ -149,8 +193,19 @@ bool ValidateSweep(const rt::Program& base, const SweepConfig& config, std::stri
   }
   std::vector<std::string> available = rt::AvailableSignals(base);
   for (const Metric& m : config.metrics) {
-    if (std::find(available.begin(), available.end(), m.signal) == available.end()) {
-      *error = "metric '" + m.Column() + "': the model has no signal '" + m.signal + "'";
+    if (std::find(available.begin(), available.end(), MetricSignal(m)) == available.end()) {
+      *error = "metric '" + m.Column() + "': the model has no signal '" + MetricSignal(m) + "'";
+      return false;
+    }
+  }
+  // Sensitivities (d(y)/d(p)): of Real parameters that are neither structural nor swept
+  // structurally (docs/sweeps.md "Metrics").
+  for (const std::string& name : SensitivityNames(config)) {
+    const int i = mech.FindParam(name);
+    const flat::Param* p = i < 0 ? nullptr : &mech.params[static_cast<size_t>(i)];
+    if (!p || p->type != flat::ParamType::Real || p->structural || p->is_constant) {
+      *error = "a sensitivity metric d(..)/d(" + name + "): '" + name +
+               "' is not a Real, non-structural parameter (start values: `kanesim run --sensitivity`)";
       return false;
     }
   }
@@ -275,11 +330,12 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
     const Variant& variant = GetVariant(structural);
     if (!variant.program) throw std::runtime_error(variant.error);
     std::shared_ptr<const rt::Program> program = variant.program;
+    std::map<size_t, double> overrides;  // the numeric values, by parameter index
 
     // b. Numeric values: rebind (type checks first: a sweep must not truncate silently).
     if (!numeric.empty()) {
       const flat::Mechanism& mech = *program->mech;
-      std::map<size_t, double> overrides;
+      overrides.clear();
       for (const auto& [name, v] : numeric) {
         int i = mech.FindParam(name);
         if (i < 0) throw std::runtime_error("parameter '" + name + "' does not exist in this structural variant");
@@ -309,7 +365,8 @@ std::string ScenarioRunner::Run(const Scenario& s, bool* failed) {
       throw std::runtime_error(io_error);
     sim::CsvWriter writer(traj.file());
     MetricSink sink(config_.metrics, traj.file() ? &writer : nullptr);
-    sim::SimResult r = sim::Simulate(*program, so, sink);
+    const std::vector<sim::SensitivityParam> sens = SensitivityPrograms(*program, overrides, config_);
+    sim::SimResult r = sens.empty() ? sim::Simulate(*program, so, sink) : sim::SimulateSensitivities(*program, sens, so, sink);
     if (traj.file() && !traj.Commit(&io_error)) throw std::runtime_error(io_error);
     stats = r.stats;
     simulated = true;

@@ -151,8 +151,73 @@ std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& e
 }
 
 namespace {
+// A start value as a --sensitivity name: "j.q.start" / "j.u.start" (a joint with one coordinate
+// or speed) or "j.q[k].start" (k from 1), of a joint whose coordinates are states.
+struct StartValue {
+  int joint = -1;  // flat joint index
+  bool speed = false;
+  int k = 0;       // from 0
+  int state = -1;  // its index in y = [q_free; u_free] (-1: prescribed)
+};
+
+// True when `name` has a start value's form; then *why is "" (and *out filled) or why not.
+bool ParseStartValue(const Model& model, const std::string& name, StartValue* out, std::string* why) {
+  const std::string tail = ".start";
+  if (name.size() <= tail.size() || name.compare(name.size() - tail.size(), tail.size(), tail) != 0) return false;
+  std::string var = name.substr(0, name.size() - tail.size());
+  int k = -1;
+  if (!var.empty() && var.back() == ']') {
+    const size_t open = var.rfind('[');
+    if (open == std::string::npos) return false;
+    const std::string digits = var.substr(open + 1, var.size() - open - 2);
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 6) return false;
+    k = std::stoi(digits) - 1;
+    var.resize(open);
+  }
+  if (var.size() < 3 || var[var.size() - 2] != '.' || (var.back() != 'q' && var.back() != 'u')) return false;
+  out->speed = var.back() == 'u';
+  const std::string joint = var.substr(0, var.size() - 2);
+  const flat::Mechanism& mech = *model.mech;
+  const rt::Program& program = *model.program;
+  out->joint = mech.FindJoint(joint);
+  *why = "";
+  const int tree = out->joint < 0 ? -1 : program.joint_of_flat[static_cast<size_t>(out->joint)];
+  if (tree < 0) {
+    *why = "--sensitivity " + name + ": " +
+           (out->joint < 0 ? "no joint '" + joint + "'" : "joint '" + joint + "' has no coordinates of its own (a cut joint or a weld)");
+    return true;
+  }
+  const rt::TreeJoint& tj = program.joints[static_cast<size_t>(tree)];
+  const int n = out->speed ? tj.nu : tj.nq;
+  const std::string has = "--sensitivity " + name + ": joint '" + joint + "' has " + std::to_string(n) +
+                          (out->speed ? " speed" : " coordinate") + (n == 1 ? "" : "s");
+  if (k < 0 && n != 1) {
+    *why = has + "; name one: " + var + "[1].start";
+    return true;
+  }
+  out->k = k < 0 ? 0 : k;
+  if (out->k >= n) {
+    *why = has;
+    return true;
+  }
+  if (!out->speed && (tj.type == flat::JointType::Spherical || tj.type == flat::JointType::Free) &&
+      tj.rotation == flat::RotationCoords::Quaternion && out->k >= (tj.type == flat::JointType::Free ? 3 : 0)) {
+    *why = "--sensitivity " + name + ": a quaternion's start is normalized, so its entries have no derivative of their own";
+    return true;
+  }
+  const int full = (out->speed ? tj.u0 : tj.q0) + out->k;
+  const std::vector<int>& free = out->speed ? program.u_free : program.q_free;
+  for (size_t i = 0; i < free.size(); ++i)
+    if (free[i] == full) out->state = static_cast<int>(i) + (out->speed ? program.nq : 0);
+  return true;
+}
+
 // Why `name` cannot be a --sensitivity parameter ("" when it can).
-std::string CheckSensitivityParam(const flat::Mechanism& mech, const std::string& name) {
+std::string CheckSensitivityParam(const Model& model, const std::string& name) {
+  StartValue sv;
+  std::string why;
+  if (ParseStartValue(model, name, &sv, &why)) return why;
+  const flat::Mechanism& mech = *model.mech;
   const int i = mech.FindParam(name);
   if (i < 0) return "--sensitivity " + name + ": no parameter of that name (`kanesim check --emit flat` lists them)";
   const flat::Param& p = mech.params[static_cast<size_t>(i)];
@@ -160,6 +225,19 @@ std::string CheckSensitivityParam(const flat::Mechanism& mech, const std::string
   if (p.structural) return "--sensitivity " + name + ": a structural parameter (it shapes the model, no derivative)";
   if (p.is_constant) return "--sensitivity " + name + ": a constant";
   return "";
+}
+
+// The model with a start value moved by d: its expression plus d, compiled again (so that a
+// closed loop is assembled from it as from a start written in the file).
+rt::CompileResult ShiftStart(const Model& model, const StartValue& sv, double d) {
+  flat::Mechanism mech = *model.mech;
+  flat::Joint& j = mech.joints[static_cast<size_t>(sv.joint)];
+  std::vector<flat::ExprId>& starts = sv.speed ? j.u_start : j.q_start;
+  if (starts.size() <= static_cast<size_t>(sv.k)) starts.resize(static_cast<size_t>(sv.k) + 1, flat::kNoExpr);
+  flat::ExprId& e = starts[static_cast<size_t>(sv.k)];
+  const flat::ExprId shift = mech.exprs.Constant(d);
+  e = e == flat::kNoExpr ? shift : mech.exprs.Binary(flat::Op::Add, e, shift);
+  return rt::Compile(std::make_shared<const flat::Mechanism>(std::move(mech)), model.program->options);
 }
 }  // namespace
 
@@ -200,7 +278,7 @@ std::string ResolveRun(const Model& model, const RunSpec& spec, ResolvedRun* out
   }
   out->sensitivity.clear();
   for (const std::string& name : spec.sensitivity) {
-    if (std::string bad = CheckSensitivityParam(*model.mech, name); !bad.empty()) {
+    if (std::string bad = CheckSensitivityParam(model, name); !bad.empty()) {
       why = RunProblem::kSensitivity;
       return bad;
     }
@@ -236,17 +314,42 @@ std::string SensitivityParams(const Model& model, const std::vector<std::string>
   const flat::Mechanism& mech = *model.mech;
   out->clear();
   for (const std::string& name : names) {
-    if (std::string bad = CheckSensitivityParam(mech, name); !bad.empty()) return bad;
+    if (std::string bad = CheckSensitivityParam(model, name); !bad.empty()) return bad;
+    StartValue sv;
+    std::string why;
+    if (ParseStartValue(model, name, &sv, &why)) {
+      // A start value: only the start moves (df/dp = 0); the step is scaled to at least 1
+      // (angles, lengths and speeds of order one).
+      std::vector<double> y0(static_cast<size_t>(rt::StateSize(*model.program)));
+      rt::InitialState(*model.program, y0.data());
+      const double x = sv.state >= 0 ? y0[static_cast<size_t>(sv.state)] : 0.0;
+      sim::SensitivityParam sp;
+      sp.name = name;
+      sp.delta = sim::SensitivityStep(std::max(std::fabs(x), 1.0));
+      sp.start_value = true;
+      // At +/- delta and +/- 2 delta (the second pair for the error estimate).
+      for (int step : {1, -1, 2, -2}) {
+        rt::CompileResult r = ShiftStart(model, sv, step * sp.delta);
+        if (!r.program)
+          return "--sensitivity " + name + ": the model does not assemble with that start moved by " +
+                 sim::FormatShortest(step * sp.delta) + (r.errors.empty() ? std::string() : " (" + r.errors.front().message + ")");
+        (step == 1 ? sp.plus : step == -1 ? sp.minus : step == 2 ? sp.plus2 : sp.minus2) = r.program;
+      }
+      out->push_back(std::move(sp));
+      continue;
+    }
     const size_t i = static_cast<size_t>(mech.FindParam(name));
     const double p = flat::EvaluateParams(mech)[i];
-    sim::SensitivityParam sp{name, sim::SensitivityStep(p), nullptr, nullptr};
-    for (int sign : {1, -1}) {
-      rt::CompileResult r = rt::Rebind(*model.program, flat::EvaluateParams(mech, {{i, p + sign * sp.delta}}));
+    sim::SensitivityParam sp;
+    sp.name = name;
+    sp.delta = sim::SensitivityStep(p);
+    for (int step : {1, -1, 2, -2}) {
+      rt::CompileResult r = rt::Rebind(*model.program, flat::EvaluateParams(mech, {{i, p + step * sp.delta}}));
       if (!r.program)
         return "--sensitivity " + name + ": the model does not compile at " + name + " = " +
-               sim::FormatShortest(p + sign * sp.delta) +
+               sim::FormatShortest(p + step * sp.delta) +
                (r.errors.empty() ? std::string() : " (" + r.errors.front().message + ")");
-      (sign > 0 ? sp.plus : sp.minus) = r.program;
+      (step == 1 ? sp.plus : step == -1 ? sp.minus : step == 2 ? sp.plus2 : sp.minus2) = r.program;
     }
     out->push_back(std::move(sp));
   }

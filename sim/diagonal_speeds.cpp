@@ -27,6 +27,32 @@ bool OnPath(const rt::Program& p, int a, int b) {
   return false;
 }
 
+// Constraint rows: the independent speeds of the partition at the start, in the order; every
+// w_i may hold every later one (beta couples them all).
+std::string DescribeConstrained(const rt::Program& p, const std::vector<int>& order, const std::vector<std::string>& names) {
+  ConstrainedBasis basis(p);
+  std::vector<double> y(static_cast<size_t>(rt::StateSize(p)));
+  rt::InitialState(p, y.data());
+  std::string error;
+  if (basis.Init(rt::StartTime(p), y.data(), &error) != 0) return "diagonal speeds: not available (" + error + ")\n";
+  const std::vector<int>& ind = basis.Independent();
+  std::vector<int> sorted;
+  for (int s : order)
+    if (std::find(ind.begin(), ind.end(), s) != ind.end()) sorted.push_back(s);
+  std::string out =
+      "diagonal speeds (Lesser 1992 eqs. 81-92) on the constrained basis: u = beta u_I, beta^T M beta = L D L^T, "
+      "w = L^T u_I over the independent speeds ";
+  for (size_t a = 0; a < sorted.size(); ++a) out += (a ? ", " : "") + names[static_cast<size_t>(sorted[a])];
+  out += " (the partition at the start)\n";
+  for (size_t i = 0; i < sorted.size(); ++i) {
+    out += "  w[" + std::to_string(i + 1) + "] = " + names[static_cast<size_t>(sorted[i])];
+    for (size_t j = i + 1; j < sorted.size(); ++j)
+      out += " + L[" + std::to_string(j + 1) + "," + std::to_string(i + 1) + "] " + names[static_cast<size_t>(sorted[j])];
+    out += "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::string> FreeSpeedNames(const rt::Program& p) {
@@ -66,8 +92,12 @@ std::vector<int> SpeedOrder(const rt::Program& p, const std::vector<std::string>
 }
 
 std::string DiagonalSpeedsRefusal(const rt::Program& p) {
-  if (!p.rows.empty())
-    return "--speeds diagonal: closed loops and rolling contacts are not supported yet (the constrained basis; TODO(#44))";
+  if (!p.rows.empty() && p.solver == rt::SolverPath::Sparse)
+    return "--speeds diagonal: closed loops on the multiplier form (--solver sparse) have no independent speeds; "
+           "use --solver dense";
+  if (!p.rows.empty() && !p.q_prescribed.empty())
+    return "--speeds diagonal: closed loops or rolling contacts with prescribed motion are not supported (the "
+           "kinetic energy is not a quadratic form in the independent speeds)";
   if (!rt::EndStops(p).empty() || !rt::PlaneContacts(p).empty())
     return "--speeds diagonal: end stops and plane contacts are not supported (their impacts act on the joint speeds)";
   for (const rt::FrictionJoint& f : rt::FrictionJoints(p))
@@ -76,9 +106,12 @@ std::string DiagonalSpeedsRefusal(const rt::Program& p) {
   return "";
 }
 
+int DiagonalSpeedCount(const rt::Program& p) { return p.rows.empty() ? p.nu : p.nu - p.loop_rank; }
+
 std::string DescribeConstruction(const rt::Program& p, const std::vector<int>& order) {
-  const int n = static_cast<int>(order.size());
   const std::vector<std::string> names = FreeSpeedNames(p);
+  if (!p.rows.empty()) return DescribeConstrained(p, order, names);
+  const int n = static_cast<int>(order.size());
   std::string out = "diagonal speeds (Lesser 1992 eqs. 81-92): w = L^T u, M = L D L^T in the order ";
   for (int a = 0; a < n; ++a) out += (a ? ", " : "") + names[static_cast<size_t>(order[static_cast<size_t>(a)])];
   out += "\n";
@@ -104,6 +137,94 @@ std::string DescribeConstruction(const rt::Program& p, const std::vector<int>& o
     out += "\n";
   }
   return out;
+}
+
+ConstrainedBasis::ConstrainedBasis(const rt::Program& program)
+    : program_(program), ws_(rt::MakeWorkspace(program)), out_ws_(rt::MakeWorkspace(program)),
+      yy_(static_cast<size_t>(rt::StateSize(program))), zz_(yy_.size()) {
+  std::string error;
+  energy_ = rt::PlanSignals(program, {"kinetic_energy"}, &error);
+}
+
+int ConstrainedBasis::Init(double t, const double* y, std::string* error) {
+  std::vector<double> f(yy_.size());
+  std::vector<int> states;
+  double diag = 0.0;
+  if (!energy_) {
+    *error = "the kinetic energy cannot be evaluated";
+    return -1;
+  }
+  if (rt::Derivative(program_, *ws_, t, y, f.data()) != 0) {
+    *error = rt::ErrorMessage(*ws_);
+    return -1;
+  }
+  if (!rt::ProjectedStates(program_, *ws_, &states, &diag)) {
+    *error = "the constraints have no partition into dependent and independent speeds here";
+    return -1;
+  }
+  rt::HoldPartition(*ws_, true);
+  std::vector<char> dependent(static_cast<size_t>(program_.nu), 0);
+  for (int s : states)
+    if (s >= program_.nq) dependent[static_cast<size_t>(s - program_.nq)] = 1;
+  independent_.clear();
+  for (int i = 0; i < program_.nu; ++i)
+    if (!dependent[static_cast<size_t>(i)]) independent_.push_back(i);
+  if (independent_.empty()) {
+    *error = "the constraints leave no free speed";
+    return -1;
+  }
+  x_.assign(independent_.size(), 0.0);
+  return 0;
+}
+
+int ConstrainedBasis::Complete(double t, const double* y, const double* u_independent, double* out) {
+  const int nq = program_.nq;
+  std::copy(y, y + nq, yy_.begin());
+  std::fill(yy_.begin() + nq, yy_.end(), 0.0);
+  for (size_t i = 0; i < independent_.size(); ++i) yy_[static_cast<size_t>(nq + independent_[i])] = u_independent[i];
+  if (rt::ProjectByPartition(program_, *ws_, t, yy_.data(), out) != 0) {
+    error_ = rt::ErrorMessage(*ws_);
+    if (error_.empty()) error_ = "the state cannot be projected onto the constraints";
+    return 1;
+  }
+  // The held partition is re-chosen only at a singular configuration; then u_I are no longer
+  // the independent speeds and w would change its meaning: stop there.
+  for (size_t i = 0; i < independent_.size(); ++i)
+    if (out[nq + independent_[i]] != u_independent[i]) {
+      error_ = "the independent speeds changed at a singular configuration of the constraints (diagonal speeds "
+               "keep those of the start)";
+      return -1;
+    }
+  return 0;
+}
+
+double ConstrainedBasis::Energy(double t, const double* y, const double* u_independent, int* status) {
+  double T = 0.0;
+  if ((*status = Complete(t, y, u_independent, zz_.data())) != 0) return 0.0;
+  if ((*status = rt::EvalSignals(program_, *energy_, *out_ws_, t, zz_.data(), &T)) != 0) error_ = rt::ErrorMessage(*out_ws_);
+  return T;
+}
+
+int ConstrainedBasis::ReducedMass(double t, const double* y, double* M) {
+  const size_t m = independent_.size();
+  std::vector<double> Ti(m);
+  int status = 0;
+  for (size_t i = 0; i < m; ++i) {
+    x_[i] = 1.0;
+    Ti[i] = Energy(t, y, x_.data(), &status);
+    x_[i] = 0.0;
+    if (status != 0) return status;
+    M[i * m + i] = 2.0 * Ti[i];
+  }
+  for (size_t i = 0; i < m; ++i)
+    for (size_t j = i + 1; j < m; ++j) {
+      x_[i] = x_[j] = 1.0;
+      const double Tij = Energy(t, y, x_.data(), &status);
+      x_[i] = x_[j] = 0.0;
+      if (status != 0) return status;
+      M[j * m + i] = M[i * m + j] = Tij - Ti[i] - Ti[j];
+    }
+  return 0;
 }
 
 DiagonalFactor::DiagonalFactor(std::vector<int> order)
@@ -149,17 +270,82 @@ void DiagonalFactor::WToSpeeds(const double* w, double* u) const {
 }
 
 DiagonalOde::DiagonalOde(const rt::Program& program, OdeSystem& inner, std::vector<int> order)
-    : program_(program), inner_(inner), ws_(rt::MakeWorkspace(program)), nq_(rt::NumQ(program)),
-      n_(rt::NumU(program)), factor_(std::move(order)), M_(n_, n_), Mp_(n_, n_), Mdot_(n_, n_), X_(n_, n_),
-      y_(static_cast<size_t>(nq_ + n_)), ydot_(y_.size()), yh_(y_.size()) {}
+    : program_(program), inner_(inner), ws_(rt::MakeWorkspace(program)),
+      basis_(program.rows.empty() ? nullptr : std::make_unique<ConstrainedBasis>(program)), order_all_(order),
+      nq_(rt::NumQ(program)), n_(rt::NumU(program)), factor_(std::move(order)), M_(n_, n_), Mp_(n_, n_),
+      Mdot_(n_, n_), X_(n_, n_), y_(static_cast<size_t>(rt::StateSize(program))), ydot_(y_.size()), yh_(y_.size()),
+      ui_(static_cast<size_t>(n_)), uidot_(static_cast<size_t>(n_)) {}
+
+int DiagonalOde::Init(double t, const double* y) {
+  if (!basis_) return 0;
+  if (basis_->Init(t, y, &own_error_) != 0) return -1;
+  // The order restricted to the independent speeds, as positions among them.
+  const std::vector<int>& ind = basis_->Independent();
+  std::vector<int> order;
+  for (int s : order_all_) {
+    auto it = std::find(ind.begin(), ind.end(), s);
+    if (it != ind.end()) order.push_back(static_cast<int>(it - ind.begin()));
+  }
+  n_ = static_cast<int>(ind.size());
+  if (n_ != DiagonalSpeedCount(program_)) {
+    own_error_ = "the partition at the start has " + std::to_string(n_) + " independent speeds, not " +
+                 std::to_string(DiagonalSpeedCount(program_));
+    return -1;
+  }
+  factor_ = DiagonalFactor(std::move(order));
+  for (Eigen::MatrixXd* A : {&M_, &Mp_, &Mdot_, &X_}) A->resize(n_, n_);
+  ui_.resize(static_cast<size_t>(n_));
+  uidot_.resize(static_cast<size_t>(n_));
+  return 0;
+}
 
 int DiagonalOde::MassAt(double t, const double* y, Eigen::MatrixXd* M) {
   own_error_.clear();
+  if (basis_) {
+    if (int s = basis_->ReducedMass(t, y, M->data()); s != 0) {
+      own_error_ = basis_->Error();
+      return s;
+    }
+    return 0;
+  }
   if (int s = rt::MassMatrix(program_, *ws_, t, y, M->data()); s != 0) {
     own_error_ = rt::ErrorMessage(*ws_);
     return s;
   }
   return 0;
+}
+
+// y = [q; u] of z = [q; w] after FactorAt: u = L^-T w, completed by beta with constraint rows.
+int DiagonalOde::Speeds(double t, const double* z, double* y) {
+  if (!basis_) {
+    std::copy(z, z + nq_, y);
+    factor_.WToSpeeds(z + nq_, y + nq_);
+    return 0;
+  }
+  factor_.WToSpeeds(z + nq_, ui_.data());
+  if (int s = basis_->Complete(t, z, ui_.data(), y); s != 0) {
+    own_error_ = basis_->Error();
+    return s;
+  }
+  return 0;
+}
+
+int DiagonalOde::EventFunctions(double t, const double* z, double* g) {
+  if (int s = ToSpeeds(t, z, y_.data()); s != 0) return s;
+  return inner_.EventFunctions(t, y_.data(), g);
+}
+
+int DiagonalOde::Event(double t, double* z, int i) {
+  if (int s = ToSpeeds(t, z, y_.data()); s != 0) return s;
+  const int s = inner_.Event(t, y_.data(), i);
+  if (s < 0) return s;
+  std::vector<double> y(y_);
+  return ToW(t, y.data(), z) != 0 ? -1 : s;
+}
+
+int DiagonalOde::StepAccepted(double t, const double* z) {
+  if (int s = ToSpeeds(t, z, y_.data()); s != 0) return s;
+  return inner_.StepAccepted(t, y_.data());
 }
 
 int DiagonalOde::FactorAt(double t, const double* y) {
@@ -179,7 +365,7 @@ int DiagonalOde::MassRate(double t, const double* y, const double* ydot) {
   for (int level = 0; level < 2; ++level) {
     const double hl = level == 0 ? h : 0.5 * h;
     for (int sign = -1; sign <= 1; sign += 2) {
-      std::copy(y, y + nq_ + n_, yh_.begin());
+      std::copy(y, y + yh_.size(), yh_.begin());
       for (int i = 0; i < nq_; ++i) yh_[static_cast<size_t>(i)] += sign * hl * ydot[i];
       if (int s = MassAt(t + sign * hl, yh_.data(), &Mp_); s != 0) return s;
       const double c = (level == 0 ? -1.0 / 3.0 : 4.0 / 3.0) * sign / (2.0 * hl);
@@ -191,9 +377,8 @@ int DiagonalOde::MassRate(double t, const double* y, const double* ydot) {
 }
 
 int DiagonalOde::Rhs(double t, const double* z, double* zdot) {
-  std::copy(z, z + nq_, y_.begin());
   if (int s = FactorAt(t, z); s != 0) return s;
-  factor_.WToSpeeds(z + nq_, y_.data() + nq_);
+  if (int s = Speeds(t, z, y_.data()); s != 0) return s;
   if (int s = inner_.Rhs(t, y_.data(), ydot_.data()); s != 0) return s;
   if (int s = MassRate(t, y_.data(), ydot_.data()); s != 0) return s;
   // X = L^-1 Mdot L^-T in the order (eq. 2), through X1 = L^-1 Mdot: X = L^-1 X1^T.
@@ -204,8 +389,14 @@ int DiagonalOde::Rhs(double t, const double* z, double* zdot) {
   L.solveInPlace(X_);
   X_.transposeInPlace();
   L.solveInPlace(X_);
-  // wdot = L^T udot + D^-1 strictupper(X) w.
-  factor_.SpeedsToW(ydot_.data() + nq_, zdot + nq_);
+  // wdot = L^T udot + D^-1 strictupper(X) w (udot: the independent speeds' with constraint rows).
+  const double* udot = ydot_.data() + nq_;
+  if (basis_) {
+    const std::vector<int>& ind = basis_->Independent();
+    for (int i = 0; i < n_; ++i) uidot_[static_cast<size_t>(i)] = udot[ind[static_cast<size_t>(i)]];
+    udot = uidot_.data();
+  }
+  factor_.SpeedsToW(udot, zdot + nq_);
   const double* w = z + nq_;
   const Eigen::VectorXd& d = factor_.d();
   for (int i = 0; i < n_; ++i) {
@@ -219,15 +410,19 @@ int DiagonalOde::Rhs(double t, const double* z, double* zdot) {
 
 int DiagonalOde::ToSpeeds(double t, const double* z, double* y) {
   if (int s = FactorAt(t, z); s != 0) return s;
-  std::copy(z, z + nq_, y);
-  factor_.WToSpeeds(z + nq_, y + nq_);
-  return 0;
+  return Speeds(t, z, y);
 }
 
 int DiagonalOde::ToW(double t, const double* y, double* z) {
   if (int s = FactorAt(t, y); s != 0) return s;
   std::copy(y, y + nq_, z);
-  factor_.SpeedsToW(y + nq_, z + nq_);
+  const double* u = y + nq_;
+  if (basis_) {
+    const std::vector<int>& ind = basis_->Independent();
+    for (int i = 0; i < n_; ++i) ui_[static_cast<size_t>(i)] = u[ind[static_cast<size_t>(i)]];
+    u = ui_.data();
+  }
+  factor_.SpeedsToW(u, z + nq_);
   return 0;
 }
 

@@ -72,8 +72,9 @@ class SensitivityOde final : public OdeSystem {
         if (int st = Along(t, z, s, e, *aside_, program_); st != 0) return st;
         for (int i = 0; i < n_; ++i) sdot[i] = (fp_[i] - fm_[i]) / (2.0 * e);
       }
-      // df/dp_k between the programs at p_k +/- delta.
+      // df/dp_k between the programs at p_k +/- delta (0 for a start value).
       Perturbation& p = perturbations_[k];
+      if (p.param->start_value) continue;
       failed_ = p.plus_rhs.get();
       if (int st = rt::Derivative(*p.param->plus, *p.plus_rhs, t, z, fp_.data()); st != 0) return st;
       failed_ = p.minus_rhs.get();
@@ -119,12 +120,91 @@ class SensitivityOde final : public OdeSystem {
   std::string event_cause_;
 };
 
-SimResult Usage(std::string message) {
-  SimResult r;
-  r.status = SimResult::Status::kUsageError;
-  r.message = std::move(message);
-  return r;
-}
+// Rows at which DifferenceErrors measures, about (it costs 8 evaluations per parameter and row).
+constexpr long kEstimateRows = 64;
+
+// The estimated errors of the difference quotients, measured at the output rows: a quotient
+// D(h) = f' + c h^2 against D(2h) (their difference is 3 c h^2, so |D(h) - D(2h)| / 3 is D(h)'s
+// truncation error), plus the round-off eps |f| / h of the evaluations. Own workspaces: the
+// solver's evaluations never see these.
+class DifferenceErrors {
+ public:
+  DifferenceErrors(const rt::Program& program, const std::vector<SensitivityParam>& params, const rt::InputSource* inputs)
+      : program_(program), params_(params), n_(rt::StateSize(program)), ws_(rt::MakeWorkspace(program)) {
+    rt::SetInputSource(*ws_, inputs);
+    for (const SensitivityParam& p : params) {
+      errors_.push_back(SensitivityErrors{p.name});
+      std::vector<Workspace> w;
+      if (!p.start_value && p.plus2 && p.minus2)
+        for (const rt::Program* q : {p.plus.get(), p.minus.get(), p.plus2.get(), p.minus2.get()}) {
+          w.push_back(rt::MakeWorkspace(*q));
+          rt::SetInputSource(*w.back(), inputs);
+        }
+      param_ws_.push_back(std::move(w));
+    }
+    for (std::vector<double>* v : {&a_, &b_, &c_, &d_, &y_}) v->resize(static_cast<size_t>(n_));
+  }
+
+  // dy0/dp from the starts at +/- delta against those at +/- 2 delta.
+  void Start() {
+    for (size_t k = 0; k < params_.size(); ++k) {
+      const SensitivityParam& p = params_[k];
+      if (!p.plus2 || !p.minus2) continue;
+      rt::InitialState(*p.plus, a_.data());
+      rt::InitialState(*p.minus, b_.data());
+      rt::InitialState(*p.plus2, c_.data());
+      rt::InitialState(*p.minus2, d_.data());
+      Record(p.delta, &errors_[k].start_error, &errors_[k].start_scale);
+    }
+  }
+
+  // Both quotients of every parameter at the row (t, z = [y, s_1, ...]); 0 or a status.
+  int Row(double t, const double* z) {
+    for (size_t k = 0; k < params_.size(); ++k) {
+      const SensitivityParam& p = params_[k];
+      const double* s = z + n_ * (k + 1);
+      if (const double e = DirectionStep(z, s, n_); e > 0.0) {
+        const double steps[4] = {e, -e, 2 * e, -2 * e};
+        std::vector<double>* outs[4] = {&a_, &b_, &c_, &d_};
+        for (int j = 0; j < 4; ++j) {
+          for (int i = 0; i < n_; ++i) y_[i] = z[i] + steps[j] * s[i];
+          if (int st = rt::Derivative(program_, *ws_, t, y_.data(), outs[j]->data()); st != 0) return st;
+        }
+        Record(e, &errors_[k].dfdy_error, &errors_[k].dfdy_scale);
+      }
+      std::vector<Workspace>& w = param_ws_[k];
+      if (w.empty()) continue;
+      const rt::Program* programs[4] = {p.plus.get(), p.minus.get(), p.plus2.get(), p.minus2.get()};
+      std::vector<double>* outs[4] = {&a_, &b_, &c_, &d_};
+      for (int j = 0; j < 4; ++j)
+        if (int st = rt::Derivative(*programs[j], *w[static_cast<size_t>(j)], t, z, outs[j]->data()); st != 0) return st;
+      Record(p.delta, &errors_[k].dfdp_error, &errors_[k].dfdp_scale);
+    }
+    return 0;
+  }
+
+  const std::vector<SensitivityErrors>& Errors() const { return errors_; }
+
+ private:
+  // a, b at +/- h and c, d at +/- 2h into the largest error and value so far.
+  void Record(double h, double* error, double* scale) {
+    const double eps = std::numeric_limits<double>::epsilon();
+    for (int i = 0; i < n_; ++i) {
+      const double d1 = (a_[i] - b_[i]) / (2 * h), d2 = (c_[i] - d_[i]) / (4 * h);
+      const double round_off = eps * std::max(std::fabs(a_[i]), std::fabs(b_[i])) / h;
+      *error = std::max(*error, std::fabs(d1 - d2) / 3 + round_off);
+      *scale = std::max(*scale, std::fabs(d1));
+    }
+  }
+
+  const rt::Program& program_;
+  const std::vector<SensitivityParam>& params_;
+  const int n_;
+  Workspace ws_;
+  std::vector<std::vector<Workspace>> param_ws_;
+  std::vector<SensitivityErrors> errors_;
+  std::vector<double> a_, b_, c_, d_, y_;
+};
 
 }  // namespace
 
@@ -132,23 +212,33 @@ std::string SensitivityColumn(const std::string& signal, const std::string& para
   return "d(" + signal + ")/d(" + param + ")";
 }
 
+bool SplitSensitivityColumn(const std::string& column, std::string* signal, std::string* param) {
+  const size_t mid = column.rfind(")/d(");
+  if (column.size() < 9 || column.compare(0, 2, "d(") != 0 || column.back() != ')' || mid == std::string::npos ||
+      mid < 3 || mid + 5 >= column.size())
+    return false;
+  *signal = column.substr(2, mid - 2);
+  *param = column.substr(mid + 4, column.size() - mid - 5);
+  return true;
+}
+
 double SensitivityStep(double p) { return kCbrtEps * std::max(std::fabs(p), 1e-3); }
 
 SimResult SimulateSensitivities(const rt::Program& program, const std::vector<SensitivityParam>& params,
                                 const SimOptions& options, SignalSink& sink) {
   const OutputGrid grid = ResolveGrid(program, options);
-  if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return Usage(why);
+  if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageResult(why);
   if (EndStopEvents(program, options.rtol, options.atol).Active())
-    return Usage("--sensitivity: the model has end stops or plane contacts; sensitivities across impacts are not "
+    return UsageResult("--sensitivity: the model has end stops or plane contacts; sensitivities across impacts are not "
                  "implemented (docs/integrators.md \"Parameter sensitivities\")");
   if (StickSlipEvents(program).Active())
-    return Usage("--sensitivity: the model has exact stick-slip friction (friction_exact); sensitivities across "
+    return UsageResult("--sensitivity: the model has exact stick-slip friction (friction_exact); sensitivities across "
                  "its stick and slip events are not implemented");
   if (WhenEvents(program).Active())
     return Usage("--sensitivity: the model has when clauses; sensitivities across their events are not "
                  "implemented (docs/events.md)");
   if (options.speeds == Speeds::kDiagonal)
-    return Usage("--sensitivity with --speeds diagonal: not implemented (the sensitivities are of the joint speeds' "
+    return UsageResult("--sensitivity with --speeds diagonal: not implemented (the sensitivities are of the joint speeds' "
                  "equations; run without --speeds diagonal)");
   IntegratorOptions iopt;
   iopt.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(program).integrator : options.integrator;
@@ -161,16 +251,20 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   const std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
   std::string plan_error;
   std::shared_ptr<const rt::SignalPlan> plan = rt::PlanSignals(program, names, &plan_error);
-  if (!plan) return Usage(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  if (!plan) return UsageResult(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
   if (rt::NumInputs(program) > 0 && !options.inputs)
-    return Usage("input '" + rt::InputName(program, 0) + "' has no value (give it with --input-file or --set)");
+    return UsageResult("input '" + rt::InputName(program, 0) + "' has no value (give it with --input-file or --set)");
   std::vector<Perturbation> perturbations;
   for (const SensitivityParam& p : params) {
-    if (!p.plus || !p.minus || !(p.delta > 0.0)) return Usage("--sensitivity: no perturbed model for '" + p.name + "'");
+    if (!p.plus || !p.minus || !(p.delta > 0.0)) return UsageResult("--sensitivity: no perturbed model for '" + p.name + "'");
+    if (p.start_value) {
+      perturbations.push_back(Perturbation{&p, {nullptr, nullptr}, {nullptr, nullptr}, {nullptr, nullptr}, {nullptr, nullptr}, {}, {}});
+      continue;
+    }
     Perturbation q{&p, rt::MakeWorkspace(*p.plus), rt::MakeWorkspace(*p.minus), rt::MakeWorkspace(*p.plus),
                    rt::MakeWorkspace(*p.minus), rt::PlanSignals(*p.plus, names, &plan_error),
                    rt::PlanSignals(*p.minus, names, &plan_error)};
-    if (!q.plus_plan || !q.minus_plan) return Usage("--sensitivity: the outputs cannot be computed for '" + p.name + "'");
+    if (!q.plus_plan || !q.minus_plan) return UsageResult("--sensitivity: the outputs cannot be computed for '" + p.name + "'");
     for (rt::Workspace* ws : {q.plus_rhs.get(), q.minus_rhs.get(), q.plus_out.get(), q.minus_out.get()})
       rt::SetInputSource(*ws, options.inputs);
     perturbations.push_back(std::move(q));
@@ -208,6 +302,10 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   std::vector<double> row(columns.size()), gp(ns), gm(ns), yp(static_cast<size_t>(n));
   bool sink_failed = false;
   Clock::duration output_time{};
+  DifferenceErrors errors(program, params, options.inputs);
+  errors.Start();
+  const long estimate_stride = std::max(1L, std::lround((grid.stop - grid.start) / grid.interval) / kEstimateRows);
+  long row_index = 0;
   RowCallback on_row = [&](double t, const double* z, std::string* cause) -> int {
     const Clock::time_point t0 = Clock::now();
     auto fail = [&](const rt::Workspace& ws) {
@@ -216,6 +314,11 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
       return -1;
     };
     if (rt::EvalSignals(program, *plan, *ws_out, t, z, row.data()) != 0) return fail(*ws_out);
+    // The estimate at about kEstimateRows rows (8 evaluations per parameter each).
+    if (row_index++ % estimate_stride == 0 && errors.Row(t, z) != 0) {
+      *cause = "the sensitivities' error estimate could not evaluate the equations";
+      return -1;
+    }
     for (size_t k = 0; k < m; ++k) {
       const double* s = z + n * (k + 1);
       std::vector<double> d(ns, 0.0);
@@ -227,6 +330,10 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
         for (size_t j = 0; j < ns; ++j) d[j] = (gp[j] - gm[j]) / (2.0 * e);
       }
       Perturbation& p = perturbations[k];
+      if (p.param->start_value) {
+        for (size_t j = 0; j < ns; ++j) row[ns + j * m + k] = d[j];
+        continue;
+      }
       if (rt::EvalSignals(*p.param->plus, *p.plus_plan, *p.plus_out, t, z, gp.data()) != 0) return fail(*p.plus_out);
       if (rt::EvalSignals(*p.param->minus, *p.minus_plan, *p.minus_out, t, z, gm.data()) != 0) return fail(*p.minus_out);
       for (size_t j = 0; j < ns; ++j) row[ns + j * m + k] = d[j] + (gp[j] - gm[j]) / (2.0 * p.param->delta);
@@ -258,18 +365,9 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   IntegrateResult ir = Integrate(ode, z0.data(), grid, iopt, on_row);
   const Clock::duration total = Clock::now() - start;
   const bool end_ok = sink.End();
-  result.stats.integrator = ir.stats;
-  result.stats.rows = ir.rows;
-  result.stats.times.output = std::chrono::duration<double>(output_time).count();
-  result.stats.times.integrate = std::chrono::duration<double>(total - output_time).count();
-  if (sink_failed || (ir.ok && !end_ok)) {
-    result.status = SimResult::Status::kOutputError;
-    result.message = "cannot write the output";
-  } else if (!ir.ok) {
-    result.status = SimResult::Status::kNumericalFailure;
-    result.fail_time = ir.fail_time;
-    result.message = ir.cause;
-  }
+  FinishRun(ir, sink_failed, end_ok, std::chrono::duration<double>(total - output_time).count(),
+            std::chrono::duration<double>(output_time).count(), &result);
+  result.stats.sensitivity = errors.Errors();
   return result;
 }
 

@@ -22,15 +22,24 @@
 
 namespace kanesim::sim {
 
-// One parameter: the program with it at value +/- delta, every other value the same.
+// One parameter: the program with it at value +/- delta, every other value the same. A start
+// value (start_value: "j.q.start") moves only the start, s_k(t0) = dy0/dp_k, and df/dp_k = 0:
+// its programs are read for their assembled start only.
+// plus2 / minus2 (at +/- 2 delta, may be null) give the differences' error estimates
+// (SimStats::sensitivity, `--stats`).
 struct SensitivityParam {
   std::string name;
   double delta = 0.0;
   std::shared_ptr<const rt::Program> plus, minus;
+  bool start_value = false;
+  std::shared_ptr<const rt::Program> plus2, minus2;
 };
 
 // The column name of dy/dp: "d(y)/d(p)".
 std::string SensitivityColumn(const std::string& signal, const std::string& param);
+
+// The inverse: "d(y)/d(p)" -> y, p; false for any other name.
+bool SplitSensitivityColumn(const std::string& column, std::string* signal, std::string* param);
 
 // The parameter step for a value p: cbrt(eps) max(|p|, 1e-3) (the central difference's
 // truncation and round-off errors balanced for a derivative of order one).

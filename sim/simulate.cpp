@@ -38,14 +38,31 @@ constexpr double kRowTrust = 100.0;
 // motion) where the partition's keeps the crank's integrated speed: 440 against 279.
 constexpr double kRowGain = 10.0;
 
-SimResult UsageError(std::string message) {
+}  // namespace
+
+SimResult UsageResult(std::string message) {
   SimResult r;
   r.status = SimResult::Status::kUsageError;
   r.message = std::move(message);
   return r;
 }
 
-}  // namespace
+void FinishRun(const IntegrateResult& ir, bool sink_failed, bool end_ok, double integrate_seconds,
+               double output_seconds, SimResult* result) {
+  result->stats.integrator = ir.stats;
+  result->stats.rows = ir.rows;
+  result->stats.bridges = ir.bridges;
+  result->stats.times.output = output_seconds;
+  result->stats.times.integrate = integrate_seconds;
+  if (sink_failed || (ir.ok && !end_ok)) {
+    result->status = SimResult::Status::kOutputError;
+    result->message = "cannot write the output";
+  } else if (!ir.ok) {
+    result->status = SimResult::Status::kNumericalFailure;
+    result->fail_time = ir.fail_time;
+    result->message = ir.cause;
+  }
+}
 
 std::string CheckRun(const OutputGrid& grid, double rtol, double atol) {
   if (std::string why = grid.Check(); !why.empty()) return why;
@@ -80,7 +97,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
 SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink, const TestHooks& hooks) {
   // 1. Times, tolerances, integrator.
   const OutputGrid grid = ResolveGrid(program, options);
-  if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageError(why);
+  if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageResult(why);
   IntegratorOptions iopt;
   iopt.method = options.integrator;
   if (iopt.method == rt::Integrator::Auto) iopt.method = rt::Summarize(program).integrator;
@@ -98,7 +115,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
   std::string plan_error;
   std::shared_ptr<const rt::SignalPlan> plan = rt::PlanSignals(program, names, &plan_error);
-  if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+  if (!plan) return UsageResult(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
   // The energy guard's T and V ride along after the written signals (not written).
   EnergyGuard energy(program, options.energy_check, options.rtol, options.atol);
   const size_t n_written = names.size();
@@ -106,26 +123,27 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     std::vector<std::string> all = names;
     for (const std::string& e : EnergyGuard::Signals()) all.push_back(e);
     plan = rt::PlanSignals(program, all, &plan_error);
-    if (!plan) return UsageError(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
+    if (!plan) return UsageResult(plan_error.empty() ? "cannot compute the requested outputs" : plan_error);
   }
 
   // Diagonal speeds: the checks, the order and their columns (written after the signals).
   std::vector<int> speed_order;
   if (options.speeds == Speeds::kDiagonal) {
-    if (std::string why = DiagonalSpeedsRefusal(program); !why.empty()) return UsageError(why);
+    if (std::string why = DiagonalSpeedsRefusal(program); !why.empty()) return UsageResult(why);
     std::string error;
     speed_order = SpeedOrder(program, options.speed_order, &error);
-    if (speed_order.empty()) return UsageError(error);
+    if (speed_order.empty()) return UsageResult(error);
   }
-  const size_t n_diag = 3 * speed_order.size();
+  const size_t n_w = speed_order.empty() ? 0 : static_cast<size_t>(DiagonalSpeedCount(program));
+  const size_t n_diag = 3 * n_w;
   std::vector<std::string> header = names;
   for (const char* prefix : {"w[", "d[", "T_w["})
-    for (size_t i = 1; i <= speed_order.size(); ++i) header.push_back(prefix + std::to_string(i) + "]");
+    for (size_t i = 1; i <= n_w; ++i) header.push_back(prefix + std::to_string(i) + "]");
 
   // 3. Integrate. The right-hand side and the outputs use separate workspaces so that
   // evaluating an output never disturbs the solver's state of the engine.
   if (rt::NumInputs(program) > 0 && !options.inputs)
-    return UsageError("input '" + rt::InputName(program, 0) + "' has no value (give it with --input-file or --set)");
+    return UsageResult("input '" + rt::InputName(program, 0) + "' has no value (give it with --input-file or --set)");
   auto ws_rhs = rt::MakeWorkspace(program);
   auto ws_out = rt::MakeWorkspace(program);
   rt::SetInputSource(*ws_rhs, options.inputs);
@@ -138,8 +156,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   EndStopEvents stops(program, options.rtol, options.atol);
   if (stops.Active()) {
     const double t0 = grid.start;
-    if (std::string why = stops.CheckStart(*ws_rhs, t0, y0.data()); !why.empty()) return UsageError(why);
-    if (stops.Start(*ws_rhs, t0, y0.data()) != 0) return UsageError("contacts at the start: " + rt::ErrorMessage(*ws_rhs));
+    if (std::string why = stops.CheckStart(*ws_rhs, t0, y0.data()); !why.empty()) return UsageResult(why);
+    if (stops.Start(*ws_rhs, t0, y0.data()) != 0) return UsageResult("contacts at the start: " + rt::ErrorMessage(*ws_rhs));
   }
   // Rolling contacts: a normal force turning tensile stops the run (sim/lift_off.h).
   LiftOffGuard lift(program);
@@ -155,7 +173,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   // Exact stick-slip friction: the start decides sliding or stuck (sim/stick_slip.h).
   StickSlipEvents stick(program);
   if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
-    return UsageError("friction at the start: " + rt::ErrorMessage(*ws_rhs));
+    return UsageResult("friction at the start: " + rt::ErrorMessage(*ws_rhs));
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
@@ -245,10 +263,11 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   const size_t logged_at_start = stops.Log().size();  // a start on a contact (EndStopEvents::Start)
   OdeSystem* system = &ode;
   if (!speed_order.empty()) {
-    if (whens.Active()) return UsageError("--speeds diagonal does not handle when clauses yet (docs/events.md)");
+    if (whens.Active()) return UsageResult("--speeds diagonal does not handle when clauses yet (docs/events.md)");
     diagonal = std::make_unique<DiagonalOde>(program, ode, speed_order);
-    std::vector<double> z0(y0.size());
-    if (diagonal->ToW(grid.start, y0.data(), z0.data()) != 0) return UsageError("--speeds diagonal: " + diagonal->FailureCause());
+    if (diagonal->Init(grid.start, y0.data()) != 0) return UsageResult("--speeds diagonal: " + diagonal->FailureCause());
+    std::vector<double> z0(static_cast<size_t>(diagonal->Size()));
+    if (diagonal->ToW(grid.start, y0.data(), z0.data()) != 0) return UsageResult("--speeds diagonal: " + diagonal->FailureCause());
     y0.swap(z0);
     system = diagonal.get();
   }
@@ -257,9 +276,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   Clock::duration total = Clock::now() - start;
   bool end_ok = sink.End();
 
-  result.stats.integrator = ir.stats;
-  result.stats.rows = ir.rows;
-  result.stats.bridges = ir.bridges;
+  FinishRun(ir, sink_failed, end_ok, Seconds(total - output_time), Seconds(output_time), &result);
   result.stats.events.assign(stops.Log().begin(), stops.Log().begin() + static_cast<long>(logged_at_start));
   result.stats.events.insert(result.stats.events.end(), ode.Events().begin(), ode.Events().end());
   result.stats.events.insert(result.stats.events.end(), stick.Log().begin(), stick.Log().end());
@@ -270,16 +287,6 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   result.stats.energy_guard = energy.Description();
   result.stats.energy_error = energy.WorstError();
   result.stats.energy_tolerance = energy.Tolerance();
-  result.stats.times.output = Seconds(output_time);
-  result.stats.times.integrate = Seconds(total - output_time);
-  if (sink_failed || (ir.ok && !end_ok)) {
-    result.status = SimResult::Status::kOutputError;
-    result.message = "cannot write the output";
-  } else if (!ir.ok) {
-    result.status = SimResult::Status::kNumericalFailure;
-    result.fail_time = ir.fail_time;
-    result.message = ir.cause;
-  }
   return result;
 }
 
@@ -345,6 +352,15 @@ std::string FormatStats(const SimStats& s) {
     if (s.energy_guard == "on" || s.energy_guard == "report") {
       std::snprintf(buf, sizeof buf, "  largest relative error   %.3g (of the motion's energy; bound %.3g)\n", s.energy_error,
                     s.energy_tolerance);
+      out += buf;
+    }
+  }
+  if (!s.sensitivity.empty()) {  // --sensitivity: the differences' estimated errors (docs/integrators.md)
+    out += "sensitivity differences    estimated error (largest over the rows) / largest value\n";
+    for (const SensitivityErrors& e : s.sensitivity) {
+      std::snprintf(buf, sizeof buf, "  %-24s df/dp %.2g / %.2g, (df/dy) s %.2g / %.2g, start %.2g / %.2g\n",
+                    e.param.c_str(), e.dfdp_error, e.dfdp_scale, e.dfdy_error, e.dfdy_scale, e.start_error,
+                    e.start_scale);
       out += buf;
     }
   }

@@ -74,6 +74,15 @@ struct EventRecord {
   std::vector<EventChange> changes;
 };
 
+// --sensitivity: the estimated error of one parameter's difference quotients (sim/sensitivity.h),
+// the largest over the output rows, each beside the largest size of what it estimates.
+struct SensitivityErrors {
+  std::string param;
+  double dfdp_error = 0.0, dfdp_scale = 0.0;    // df/dp between the programs at p +/- delta
+  double dfdy_error = 0.0, dfdy_scale = 0.0;    // (df/dy) s along s
+  double start_error = 0.0, start_scale = 0.0;  // dy0/dp from the starts at p +/- delta
+};
+
 struct SimStats {
   rt::Integrator method = rt::Integrator::IDA;
   IntegratorStats integrator;
@@ -90,6 +99,7 @@ struct SimStats {
   bool terminated = false;
   double terminate_time = 0.0;
   std::string terminate_message;
+  std::vector<SensitivityErrors> sensitivity;  // --sensitivity: one per parameter
   PhaseTimes times;
 };
 
@@ -121,6 +131,13 @@ std::string CheckRun(const OutputGrid& grid, double rtol, double atol);
 inline constexpr double kMaxSensibleRtol = 0.1;
 inline constexpr double kMinSensibleRtol = 1e-14;
 std::string ToleranceWarning(double rtol);
+
+// For the run drivers (Simulate, SimulateSensitivities): a usage error's result, and the end
+// of a run: the integrator's counts and phase times into result->stats, and the status from
+// how the integration and the sink ended (rows before a failure stay written).
+SimResult UsageResult(std::string message);
+void FinishRun(const IntegrateResult& ir, bool sink_failed, bool end_ok, double integrate_seconds,
+               double output_seconds, SimResult* result);
 
 // (Tests switch parts of a run off through sim/test_hooks.h's overload.)
 SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink);
