@@ -235,7 +235,7 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
     return UsageResult("--sensitivity: the model has exact stick-slip friction (friction_exact); sensitivities across "
                  "its stick and slip events are not implemented");
   if (WhenEvents(program).Active())
-    return Usage("--sensitivity: the model has when clauses; sensitivities across their events are not "
+    return UsageResult("--sensitivity: the model has when clauses; sensitivities across their events are not "
                  "implemented (docs/events.md)");
   if (options.speeds == Speeds::kDiagonal)
     return UsageResult("--sensitivity with --speeds diagonal: not implemented (the sensitivities are of the joint speeds' "
