@@ -11,7 +11,7 @@ above `--version`'s median: the front end without the process start.
 A model argument may carry options after a colon, comma-separated
 (examples/chain.mech:--set,N=100). Prints medians and, in brackets, the 10th percentile (on
 a shared machine the fast runs are the cost without interference), and each binary's
-median over the first's.
+median over the first's; "pf" is the median of the minor page faults per process.
 """
 import os
 import statistics
@@ -20,17 +20,23 @@ import sys
 import time
 
 
-def cpu_of(cmd):
-    """(wall, user + system CPU) seconds of one child process."""
+FAULTS = {}  # (binary, label) -> minor page faults of each run
+
+
+def cpu_of(cmd, key=None):
+    """(wall, user + system CPU) seconds of one child process; its minor page faults go to
+    FAULTS[key] (fresh memory the process touches: each costs 1.5-4 us on this VM)."""
     t0 = time.perf_counter()
     p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     _, _, ru = os.wait4(p.pid, 0)
+    if key is not None:
+        FAULTS.setdefault(key, []).append(ru.ru_minflt)
     return time.perf_counter() - t0, ru.ru_utime + ru.ru_stime
 
 
-def front_end(binary, model, opts):
+def front_end(binary, model, opts, label):
     """CPU seconds of one `kanesim check MODEL` process."""
-    return cpu_of([binary, "check", model, *opts])[1]
+    return cpu_of([binary, "check", model, *opts], (binary, label))[1]
 
 
 def summary(xs):
@@ -51,9 +57,9 @@ def main():
             rows[(label, b)] = []
     for _ in range(n):
         for b in bins:  # alternated, so that a change of the machine's load hits every binary
-            rows[("--version (CPU)", b)].append(cpu_of([b, "--version"])[1])
+            rows[("--version (CPU)", b)].append(cpu_of([b, "--version"], (b, "--version (CPU)"))[1])
             for label, path, opts in models:
-                rows[(label, b)].append(front_end(b, path, opts))
+                rows[(label, b)].append(front_end(b, path, opts, label))
     labels = ["--version (CPU)"] + [m[0] for m in models]
     start = {b: summary(rows[("--version (CPU)", b)])[0] for b in bins}
     print("| what | " + " | ".join(f"`{os.path.basename(b)}` ms: median (p10) [above start]" for b in bins) +
@@ -62,7 +68,9 @@ def main():
     for label in labels:
         cells = [summary(rows[(label, b)]) for b in bins]
         above = ["" if label == labels[0] else f" [{1e3 * (cells[i][0] - start[b]):.3f}]" for i, b in enumerate(bins)]
-        line = f"| {label} | " + " | ".join(f"{1e3 * m:.3f} ({1e3 * p:.3f}){a}" for (m, p), a in zip(cells, above))
+        faults = [f" {statistics.median(FAULTS[(b, label)]):.0f} pf" for b in bins]
+        line = f"| {label} | " + " | ".join(f"{1e3 * m:.3f} ({1e3 * p:.3f}){a}{f}" for (m, p), a, f in
+                                           zip(cells, above, faults))
         if len(bins) > 1:
             line += " | " + ", ".join(f"{cells[i][0] / cells[0][0]:.2f}" for i in range(1, len(bins)))
         print(line + " |")

@@ -1,10 +1,10 @@
 // The unit check's cost (issue 43: at most 5 % of load + elaborate): each model loaded and
 // elaborated `repeats` times with the check and as many without it (ElaborateOptions::
 // check_units), alternating, in one process after a first load that parses the standard
-// library; the best CPU time of each, and their ratio.
+// library; the median and the best CPU time of each, and the ratio of the medians.
 //   build/bench/units_cost MODEL.mech [NAME=VALUE ...]   (e.g. examples/chain.mech N=1000)
 //   KANESIM_UNITS_REPEATS=21                             (default 21)
-// Output: `with ms, without ms, +percent`. docs/benchmarks/2026-11-29_units.md has results.
+// Output: medians `with ms, without ms, +percent`, then the best times. docs/benchmarks/2026-11-29_units.md has results.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -58,12 +58,18 @@ int main(int argc, char** argv) {
   const char* env = std::getenv("KANESIM_UNITS_REPEATS");
   const int repeats = env ? std::max(1, std::atoi(env)) : 21;
   if (LoadAndElaborate(argv[1], sets, true) < 0) return 1;  // parses the library once
-  double with = 1e300, without = 1e300;
+  std::vector<double> with, without;
   for (int r = 0; r < repeats; ++r) {
-    with = std::min(with, LoadAndElaborate(argv[1], sets, true));
-    without = std::min(without, LoadAndElaborate(argv[1], sets, false));
+    with.push_back(LoadAndElaborate(argv[1], sets, true));
+    without.push_back(LoadAndElaborate(argv[1], sets, false));
   }
-  std::printf("%s: with the unit check %.3f ms, without %.3f ms, %+.2f %%\n", argv[1], 1e3 * with, 1e3 * without,
-              100 * (with / without - 1));
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  const double mw = median(with), mo = median(without);
+  std::printf("%s: median with the unit check %.3f ms, without %.3f ms, %+.2f %% (best %.3f, %.3f ms)\n", argv[1],
+              1e3 * mw, 1e3 * mo, 100 * (mw / mo - 1), 1e3 * *std::min_element(with.begin(), with.end()),
+              1e3 * *std::min_element(without.begin(), without.end()));
   return 0;
 }

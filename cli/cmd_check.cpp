@@ -5,6 +5,7 @@
 
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "cli/common.h"
 #include "cli/scene.h"
@@ -33,6 +34,14 @@ int GrublerCount(const flat::Mechanism& m, int bodies) {
   int dof = 6 * bodies;
   for (const auto& j : m.joints) dof -= 6 - j.nu();
   return dof;
+}
+
+// The process ends after the summary and its memory goes with it: freeing the model piece
+// by piece (a fourteenth of a robot's `check`) is skipped. It stays reachable from a static,
+// so leak checkers do not count it.
+void LeaveToExit(std::unique_ptr<pipeline::Model> model) {
+  static auto* kept = new std::vector<std::unique_ptr<pipeline::Model>>();
+  kept->push_back(std::move(model));
 }
 
 int RunCheck(const CheckArgs& args) {
@@ -164,6 +173,7 @@ int RunCheck(const CheckArgs& args) {
   std::cout << fmt::format("  outputs     {}\n", mech.outputs.size());
   for (const auto& o : mech.outputs) std::cout << "    " << o.name << "\n";
   (void)GrublerCount;
+  LeaveToExit(std::move(model));
   return kExitOk;
 }
 

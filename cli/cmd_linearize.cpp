@@ -6,19 +6,23 @@
 #include <fmt/core.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli/common.h"
 #include "cli/number_options.h"
 #include "batch/file_guard.h"
 #include "flat/number.h"
+#include "lang/set_argument.h"
 #include "linearize/linearize.h"
 #include "runtime/program/program.h"
 #include "viz/locus_page.h"
@@ -240,15 +244,123 @@ int Fail(const lin::Status& s) {
   return s.code == 1 ? kExitModelError : kExitNumerical;
 }
 
+// The model's inputs (docs/linearize.md "Inputs"): --input-file tables, and --set
+// constants, which here keep the input an input (a column of B and D) at that value, where
+// `run` makes it a constant of the model.
+class ModelInputs final : public rt::InputSource {
+ public:
+  explicit ModelInputs(const std::vector<std::string>& names)
+      : table(names), constant(names.size(), 0.0), is_constant(names.size(), 0) {}
+  int Values(double t, double* u, double* du_dt, std::string* error) const override {
+    if (const int s = table.Values(t, u, du_dt, error); s != 0) return s;
+    for (size_t k = 0; k < constant.size(); ++k)
+      if (is_constant[k]) u[k] = constant[k], du_dt[k] = 0.0;
+    return 0;
+  }
+  // The values at time t (the operating point's), "" or why not.
+  std::string At(double t, std::vector<double>* u) const {
+    std::vector<double> rates(constant.size());
+    u->assign(constant.size(), 0.0);
+    std::string error;
+    return Values(t, u->data(), rates.data(), &error) == 0 ? "" : error;
+  }
+  sim::InputTable table;
+  std::vector<double> constant;
+  std::vector<char> is_constant;
+};
+
+// The --set values of load->sets that name one of the model's inputs (a scalar, or one
+// element: "tau=0.5", "f[2]=1"), removed from load->sets: NAME is such an input when the
+// model loaded without that set lists it (`mech`, loaded with every set, has it as a
+// constant). False after saying why (a value that is not a number).
+bool SplitInputSets(LoadOptions* load, const pipeline::RunSpec& spec, const flat::Mechanism& mech,
+                    std::vector<std::pair<std::string, double>>* out) {
+  std::vector<std::string> keep;
+  for (size_t i = 0; i < load->sets.size(); ++i) {
+    lang::ParamOverride set;
+    if (!lang::ParseSetArgument(load->sets[i], &set) || mech.FindParam(set.name) >= 0) {
+      keep.push_back(load->sets[i]);
+      continue;
+    }
+    pipeline::LoadOptions lo;
+    lo.model = load->model;
+    lo.compile = false;
+    lo.urdf.floating = load->floating;
+    lo.urdf.package_paths = load->package_paths;
+    for (size_t j = 0; j < load->sets.size(); ++j)
+      if (j != i) lo.sets.push_back(load->sets[j]);
+    const pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(load->path), lo, spec);
+    bool input = false, array = false;
+    for (const flat::Input& in : r.model ? r.model->mech->inputs : std::vector<flat::Input>{}) {
+      input = input || in.name == set.name;
+      array = array || in.name.rfind(set.name + "[", 0) == 0;
+    }
+    if (array && !input) {
+      fmt::print(stderr, "kanesim: error: --set {}: linearize takes an array input's elements one by one ({}[1]=...)\n",
+                 set.name, set.name);
+      return false;
+    }
+    if (!input) {
+      keep.push_back(load->sets[i]);
+      continue;
+    }
+    double v = 0.0;
+    std::string why;
+    if (!flat::ParseNumber(set.value, &v, &why)) {
+      fmt::print(stderr, "kanesim: error: --set {}: an input's value for linearize is a number: {}\n", set.name, why);
+      return false;
+    }
+    out->emplace_back(set.name, v);
+  }
+  load->sets = keep;
+  return true;
+}
+
+// The model's inputs from --input-file and the --set values found by SplitInputSets, each
+// input given one way, the tables covering [t0, t1]: false after saying why (E239 for an
+// input that nothing gives, at its declaration).
+bool GatherInputs(const pipeline::Model& model, const std::vector<std::string>& files,
+                  const std::vector<std::pair<std::string, double>>& sets, double t0, double t1, ModelInputs* mi) {
+  for (const std::string& f : files) {
+    std::string error;
+    if (!mi->table.Read(f, &error)) {
+      fmt::print(stderr, "kanesim: error: {}\n", error);
+      return false;
+    }
+  }
+  const rt::Program& p = *model.program;
+  for (const auto& [name, value] : sets)
+    for (int k = 0; k < rt::NumInputs(p); ++k)
+      if (rt::InputName(p, k) == name) mi->constant[static_cast<size_t>(k)] = value, mi->is_constant[static_cast<size_t>(k)] = 1;
+  std::vector<std::string> missing;
+  for (const std::string& name : mi->table.Missing()) {
+    bool set = false;
+    for (const auto& kv : sets) set = set || kv.first == name;
+    if (!set) missing.push_back(name);
+  }
+  if (const std::string e = pipeline::RenderUnconnectedInputs(model, missing); !e.empty()) {
+    std::cerr << e;
+    return false;
+  }
+  if (std::string why = mi->table.CheckSpan(t0, t1); !why.empty()) {
+    fmt::print(stderr, "kanesim: error: {}\n", why);
+    return false;
+  }
+  return true;
+}
+
 // The operating point per the options: start values, the motion at --at, or an
-// equilibrium found from the start values (reported).
-lin::Status OperatingPointFor(const rt::Program& p, const LinearizeArgs& a, bool report, lin::OperatingPoint* op) {
+// equilibrium found from the start values (reported); *u: the model's inputs there.
+lin::Status OperatingPointFor(const rt::Program& p, const LinearizeArgs& a, const ModelInputs& mi, bool report,
+                              lin::OperatingPoint* op, std::vector<double>* u) {
+  const rt::InputSource* source = rt::NumInputs(p) > 0 ? &mi : nullptr;
   if (a.equilibrium) {
     lin::EquilibriumResult eq;
     lin::OperatingPoint start = lin::StartPoint(p);
     if (a.at_opt->count() > 0)
-      if (lin::Status s = lin::PointAtTime(p, a.at, &start); !s.ok()) return s;
-    if (lin::Status s = lin::FindEquilibrium(p, start, &eq); !s.ok()) return s;
+      if (lin::Status s = lin::PointAtTime(p, a.at, &start, source); !s.ok()) return s;
+    if (std::string why = mi.At(start.t, u); !why.empty()) return {1, why};
+    if (lin::Status s = lin::FindEquilibrium(p, start, &eq, *u); !s.ok()) return s;
     *op = eq.point;
     if (report) {
       fmt::print("equilibrium found in {} Newton iteration(s){}, residual {:.2e} (largest acceleration)\n",
@@ -263,8 +375,10 @@ lin::Status OperatingPointFor(const rt::Program& p, const LinearizeArgs& a, bool
     }
     return {};
   }
-  if (a.at_opt->count() > 0) return lin::PointAtTime(p, a.at, op);
   *op = lin::StartPoint(p);
+  if (a.at_opt->count() > 0)
+    if (lin::Status s = lin::PointAtTime(p, a.at, op, source); !s.ok()) return s;
+  if (std::string why = mi.At(op->t, u); !why.empty()) return {1, why};
   return {};
 }
 
@@ -301,7 +415,8 @@ bool ParseSweep(const std::string& text, std::string* name, std::vector<double>*
 }
 
 // Root locus: one row per value, the eigenvalues sorted by modulus (re, im pairs).
-int RunSweep(const rt::Program& program, const std::vector<std::string>& inputs, const LinearizeArgs& a) {
+int RunSweep(const rt::Program& program, const std::vector<std::string>& inputs, const ModelInputs& mi,
+             const LinearizeArgs& a) {
   std::string name, why;
   std::vector<double> values;
   if (!ParseSweep(a.sweep, &name, &values, &why)) {
@@ -318,7 +433,7 @@ int RunSweep(const rt::Program& program, const std::vector<std::string>& inputs,
     if (lin::Status s = lin::RebindParameter(program, name, v, &p); !s.ok()) return Fail(s);
     lin::OperatingPoint op;
     lin::LinearModel m;
-    lin::Status s = OperatingPointFor(*p, a, false, &op);
+    lin::Status s = OperatingPointFor(*p, a, mi, false, &op, &o.input_values);
     if (s.ok()) s = lin::Linearize(*p, op, o, &m);
     if (s.ok()) lin::ComputeModes(&m);
     if (!s.ok()) {
@@ -416,13 +531,38 @@ int RunLinearize(const LinearizeArgs& a) {
   if (a.solver == "dense") spec.solver = rt::SolverPath::Dense;
   if (a.solver == "sparse") spec.solver = rt::SolverPath::Sparse;
   if (a.solver == "recursive") spec.solver = rt::SolverPath::Recursive;
-  const std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
+  std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
   if (!model) return kExitModelError;
+  // --set of a model input: loaded again with the input kept (its warnings said once above).
+  LoadOptions load = a.load;
+  std::vector<std::pair<std::string, double>> input_sets;
+  if (!SplitInputSets(&load, spec, *model->mech, &input_sets)) return kExitModelError;
+  if (!input_sets.empty()) {
+    pipeline::LoadOptions lo;
+    lo.model = load.model;
+    lo.sets = load.sets;
+    lo.urdf.floating = load.floating;
+    lo.urdf.package_paths = load.package_paths;
+    pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(load.path), lo, spec);
+    if (!r.model) {
+      std::cerr << r.diagnostics;
+      return kExitModelError;
+    }
+    model = std::move(r.model);
+  }
   const rt::Program& program = *model->program;
-  // Now that every file the model read is known: none of them is an output.
+  std::vector<std::string> input_names;
+  for (int k = 0; k < rt::NumInputs(program); ++k) input_names.push_back(rt::InputName(program, k));
+  ModelInputs mi(input_names);
+  const double t0 = rt::StartTime(program);
+  if (!GatherInputs(*model, a.load.input_files, input_sets, t0, a.at_opt->count() > 0 ? std::max(t0, a.at) : t0, &mi))
+    return kExitModelError;
+  // Now that every file the model read is known: none of them (nor an input table) is an output.
+  std::vector<std::string> read_files = model->mech->source_files;
+  read_files.insert(read_files.end(), a.load.input_files.begin(), a.load.input_files.end());
   for (const std::string& out : {a.out_path, a.html_path}) {
     if (out.empty() || out == "-") continue;
-    if (std::string in = batch::OverwrittenInput(out, model->mech->source_files); !in.empty()) {
+    if (std::string in = batch::OverwrittenInput(out, read_files); !in.empty()) {
       fmt::print(stderr, "kanesim: error: {} '{}' is the model file '{}'; writing there would destroy it\n",
                  out == a.out_path ? "-o" : "--html", out, in);
       return kExitModelError;
@@ -436,11 +576,11 @@ int RunLinearize(const LinearizeArgs& a) {
     fmt::print(stderr, "kanesim: error: --html writes the root locus of --sweep; add --sweep NAME=FROM:STEP:TO\n");
     return kExitModelError;
   }
-  if (!a.sweep.empty()) return RunSweep(program, model->mech->source_files, a);
+  if (!a.sweep.empty()) return RunSweep(program, read_files, mi, a);
 
   lin::OperatingPoint op;
-  if (lin::Status s = OperatingPointFor(program, a, true, &op); !s.ok()) return Fail(s);
   lin::LinearizeOptions o;
+  if (lin::Status s = OperatingPointFor(program, a, mi, true, &op, &o.input_values); !s.ok()) return Fail(s);
   o.step = a.step;
   o.inputs = a.inputs;
   o.outputs = a.outputs;
@@ -455,7 +595,7 @@ int RunLinearize(const LinearizeArgs& a) {
     fmt::print(stderr, "kanesim linearize: warning (--frozen): {}\n", UnsteadyCause(m.unsteady));
   if (!a.out_path.empty()) {
     Output file;
-    if (!file.Open(a.out_path, model->mech->source_files)) return kExitModelError;
+    if (!file.Open(a.out_path, read_files)) return kExitModelError;
     const std::string text = Json(m, op);
     if (std::fwrite(text.data(), 1, text.size(), file.file()) != text.size()) {
       fmt::print(stderr, "kanesim: error: cannot write '{}': {}\n", a.out_path, std::strerror(errno));
@@ -481,8 +621,10 @@ void AddLinearizeCommand(CLI::App& app, int* exit_code, bool options) {
   a->at_opt = AddNumberOption(cmd, "--at", &a->at, "Linearize about the motion at time T (default: the start values)");
   cmd->add_flag("--equilibrium", a->equilibrium,
                 "Find a static equilibrium from the start values (or from --at) and linearize about it");
-  cmd->add_option("--input", a->inputs, "An input: JOINT.tau, JOINT.tau[k] or a real parameter (repeatable)")
+  cmd->add_option("--input", a->inputs,
+                  "An input besides the model's own: JOINT.tau, JOINT.tau[k] or a real parameter (repeatable)")
       ->allow_extra_args(false);
+  AddInputFileOption(*cmd, &a->load.input_files);
   cmd->add_option("--output", a->outputs, "An output signal, by its exact name (repeatable)")->allow_extra_args(false);
   AddNumberOption(cmd, "--step", &a->step,
                   "Base difference step h (default 1e-3; speeds scale it by their size; a step too small to survive "

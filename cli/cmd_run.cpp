@@ -121,7 +121,7 @@ int RunCommand(const RunArgs& a) {
   std::vector<std::string> input_names;
   for (int i = 0; i < rt::NumInputs(program); ++i) input_names.push_back(rt::InputName(program, i));
   sim::InputTable inputs(input_names);
-  if (!LoadInputTables(*model->mech, a.load.input_files, run.grid.start, run.grid.stop, &inputs)) return kExitModelError;
+  if (!LoadInputTables(*model, a.load.input_files, run.grid.start, run.grid.stop, &inputs)) return kExitModelError;
   if (!input_names.empty()) so.inputs = &inputs;
   AnimationRun animation(a.animation, a.show_frames);  // the bodies' poses ride along with the CSV's signals
   if (!animation.Prepare(*model->mech, program, &so.signals)) return kExitModelError;

@@ -291,7 +291,7 @@ int SweepCommand(SweepArgs a) {
   std::vector<std::string> input_names;
   for (int i = 0; i < rt::NumInputs(*base); ++i) input_names.push_back(rt::InputName(*base, i));
   sim::InputTable input_table(input_names);
-  if (!LoadInputTables(*base->mech, a.load.input_files, run.grid.start, run.grid.stop, &input_table))
+  if (!LoadInputTables(*model, a.load.input_files, run.grid.start, run.grid.stop, &input_table))
     return kExitModelError;
   if (!input_names.empty()) config.sim.inputs = &input_table;
   if (!a.patterns.empty()) {

@@ -172,7 +172,7 @@ TestResult RunOne(const std::string& spec_path, const TestArgs& args, std::mutex
   std::vector<std::string> input_names;
   for (int i = 0; i < rt::NumInputs(program); ++i) input_names.push_back(rt::InputName(program, i));
   sim::InputTable input_table(input_names);
-  if (!LoadInputTables(*model->mech, spec.input_files, run.grid.start, run.grid.stop, &input_table))
+  if (!LoadInputTables(*model, spec.input_files, run.grid.start, run.grid.stop, &input_table))
     return error(spec_path + ": the model's inputs (above)");
   if (!input_names.empty()) run.sim.inputs = &input_table;
   const sim::OutputGrid& grid = run.grid;

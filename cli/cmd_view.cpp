@@ -18,6 +18,7 @@
 #include "cli/common.h"
 #include "cli/number_options.h"
 #include "cli/scene.h"
+#include "cli/signal_units.h"
 #include "batch/file_guard.h"
 #include "flat/number.h"
 #include "geometry/primitives.h"
@@ -70,14 +71,6 @@ void AddTimeoutOption(CLI::App* cmd, double* target) {
 // refuse the same); "" or the input it would destroy.
 std::string HtmlOverInput(const std::string& html, const std::vector<std::string>& inputs) {
   return html.empty() ? "" : batch::OverwrittenInput(html, inputs);
-}
-
-// The unit of a signal, from its name's last part (for the plots' axes).
-std::string UnitOf(const std::string& name) {
-  if (name == "kinetic_energy" || name == "potential_energy") return "J";
-  if (name.find("reaction_force") != std::string::npos || name.find("_force") != std::string::npos) return "N";
-  if (name.find("reaction_torque") != std::string::npos) return "N.m";
-  return "";
 }
 
 // Ground grids under the rolling contacts' planes (one per distinct plane).
@@ -178,7 +171,7 @@ int RunView(const ViewArgs& a) {
   for (size_t i = 0; i < n_shown; ++i) {
     viz::ViewerSignal s;
     s.name = recorder.shown_names()[i];
-    s.unit = UnitOf(s.name);
+    s.unit = SignalUnit(mech, s.name);  // the CSV header's units (--units-in-header)
     s.values.resize(n_times);
     for (size_t k = 0; k < n_times; ++k) s.values[k] = recorder.shown_values()[k * n_shown + i];
     scene.signals.push_back(std::move(s));

@@ -62,7 +62,7 @@ inline constexpr const char* kProjectionHelp =
 // The model's inputs (docs/cli.md "Input tables"): every --input-file read into *table, each
 // input given by one, the tables covering [start, stop]. False after printing the error to
 // stderr; an input without a value is named at its declaration (file:line:col).
-bool LoadInputTables(const flat::Mechanism& mech, const std::vector<std::string>& files, double start, double stop,
+bool LoadInputTables(const pipeline::Model& model, const std::vector<std::string>& files, double start, double stop,
                      sim::InputTable* table);
 // --input-file (run, sweep, test).
 void AddInputFileOption(CLI::App& cmd, std::vector<std::string>* files);

@@ -2,6 +2,8 @@
 // input left without a value.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
+
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -9,7 +11,7 @@
 
 namespace kanesim::cli {
 
-bool LoadInputTables(const flat::Mechanism& mech, const std::vector<std::string>& files, double start, double stop,
+bool LoadInputTables(const pipeline::Model& model, const std::vector<std::string>& files, double start, double stop,
                      sim::InputTable* table) {
   for (const std::string& f : files) {
     std::string error;
@@ -18,19 +20,10 @@ bool LoadInputTables(const flat::Mechanism& mech, const std::vector<std::string>
       return false;
     }
   }
-  bool ok = true;
-  for (const std::string& name : table->Missing()) {
-    for (const flat::Input& in : mech.inputs) {
-      if (in.name != name) continue;
-      fmt::print(stderr,
-                 "{}:{}:{}: error: input '{}' is not connected: nothing gives its value\n"
-                 "  hint: give it a column of an --input-file table, or a constant with --set {}=...\n",
-                 in.loc.file.str(), in.loc.line, in.loc.col, name, name.substr(0, name.find('[')));
-      ok = false;
-      break;
-    }
+  if (const std::string e = pipeline::RenderUnconnectedInputs(model, table->Missing()); !e.empty()) {
+    std::cerr << e;  // E239 at each declaration
+    return false;
   }
-  if (!ok) return false;
   if (std::string why = table->CheckSpan(start, stop); !why.empty()) {
     fmt::print(stderr, "kanesim: error: {}\n", why);
     return false;

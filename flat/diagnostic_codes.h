@@ -66,6 +66,7 @@ namespace kanesim::flat {
   X(BadUnit, "E236", "unit string not understood")                                            \
   X(UnitMismatch, "E237", "units do not agree")                                               \
   X(UnitConflict, "E238", "a variable without a unit is used in two different units")         \
+  X(UnconnectedInput, "E239", "input is not connected: nothing gives its value")              \
   X(UnconnectedFrame, "W301", "frame connector is not connected")                            \
   X(MeshInsideOut, "W302", "mesh triangles face inward (flipped)")                            \
   X(MeshDegenerate, "W303", "mesh has degenerate or non-manifold parts")                      \

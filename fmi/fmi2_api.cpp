@@ -230,10 +230,11 @@ FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b
   });
 }
 
-FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t,
-                                                    const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
+FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference unknowns[],
+                                                    size_t n_unknowns, const fmi2ValueReference knowns[],
+                                                    size_t n_knowns, const fmi2Real seed[], fmi2Real out[]) {
   return Fmi2Guarded(c, "fmi2GetDirectionalDerivative", kf::kRunning, [&](Component* x) {
-    return x->Log(kf::kError, "this FMU does not provide directional derivatives");
+    return x->Result(x->instance.DirectionalDerivative(unknowns, n_unknowns, knowns, n_knowns, seed, out));
   });
 }
 

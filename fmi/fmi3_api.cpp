@@ -299,10 +299,18 @@ KANESIM_FMI3_NOT_PROVIDED(fmi3GetVariableDependencies,
                           (fmi3Instance c, fmi3ValueReference, size_t[], fmi3ValueReference[], size_t[],
                            fmi3DependencyKind[], size_t),
                           "the dependencies are in modelDescription.xml")
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetDirectionalDerivative,
-                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3ValueReference[], size_t,
-                           const fmi3Float64[], size_t, fmi3Float64[], size_t),
-                          "this FMU does not provide directional derivatives")
+// Scalar variables only: one seed per known, one sensitivity per unknown.
+FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
+                                                    size_t n_unknowns, const fmi3ValueReference knowns[],
+                                                    size_t n_knowns, const fmi3Float64 seed[], size_t n_seed,
+                                                    fmi3Float64 sensitivity[], size_t n_sensitivity) {
+  return Fmi3Guarded(c, "fmi3GetDirectionalDerivative", kf::kRunning, [&](Component* x) {
+    if (n_seed != n_knowns || n_sensitivity != n_unknowns)
+      return x->Log(kf::kError, "fmi3GetDirectionalDerivative: one seed per known and one sensitivity per unknown "
+                                "(the variables are scalars)");
+    return x->Result(x->instance.DirectionalDerivative(unknowns, n_unknowns, knowns, n_knowns, seed, sensitivity));
+  });
+}
 KANESIM_FMI3_NOT_PROVIDED(fmi3GetAdjointDerivative,
                           (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3ValueReference[], size_t,
                            const fmi3Float64[], size_t, fmi3Float64[], size_t),

@@ -1,10 +1,13 @@
 #include "fmi/instance.h"
 
+#include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 
+#include "linearize/linearize.h"
 #include "runtime/program/program.h"
 #include "sim/sim.h"
 
@@ -231,6 +234,59 @@ std::string Instance::Evaluate() {
   if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y_.data(), out_.data()) != 0)
     return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
   stale_ = false;
+  return "";
+}
+
+std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns,
+                                            size_t n_knowns, const double* seed, double* out) {
+  if ((n_unknowns > 0 && (!unknowns || !out)) || (n_knowns > 0 && (!knowns || !seed))) return "no place given";
+  std::vector<double> dy(y_.size(), 0.0), du(inputs_.size(), 0.0);
+  double scale = 1.0, seed_max = 0.0;  // the largest value moved, the largest seed
+  for (size_t k = 0; k < n_knowns; ++k) {
+    if (std::string e = CheckVr(knowns[k]); !e.empty()) return e;
+    const Variable& v = vars_[knowns[k]];
+    if (!std::isfinite(seed[k])) return "the seed of '" + v.name + "' cannot be " + Number(seed[k]);
+    if (v.kind != VarKind::State && v.kind != VarKind::Input)
+      return "'" + v.name + "' is not a state or an input: no derivative with respect to it";
+    (v.kind == VarKind::State ? dy : du)[v.index] += seed[k];
+    if (seed[k] != 0) {
+      scale = std::max(scale, std::abs(v.kind == VarKind::State ? y_[v.index] : inputs_[v.index]));
+      seed_max = std::max(seed_max, std::abs(seed[k]));
+    }
+  }
+  for (size_t k = 0; k < n_unknowns; ++k) {
+    if (std::string e = CheckVr(unknowns[k]); !e.empty()) return e;
+    const VarKind kind = vars_[unknowns[k]].kind;
+    if (kind != VarKind::Derivative && kind != VarKind::Output)
+      return "'" + vars_[unknowns[k]].name + "' is not a derivative or an output";
+  }
+  if (seed_max == 0) {  // no direction: the derivative is 0
+    std::fill(out, out + n_unknowns, 0.0);
+    return "";
+  }
+  // F(s) = [y'; outputs] at (y + s dy, u + s du), s stepping 1e-3 of the largest value moved.
+  std::vector<double> y(y_.size()), u(inputs_.size()), ydot(y_.size()), o(out_.size());
+  const lin::StepEval F = [&](double s, Eigen::VectorXd* f, double* taken) -> lin::Status {
+    for (size_t i = 0; i < y.size(); ++i) y[i] = y_[i] + s * dy[i];
+    for (size_t i = 0; i < u.size(); ++i) u[i] = inputs_[i] + s * du[i];
+    if (!u.empty()) rt::SetInputValues(*ws_, u.data());
+    if (n_ > 0 && rt::Derivative(*program_, *ws_, t_, y.data(), ydot.data()) != 0) return {2, rt::ErrorMessage(*ws_)};
+    if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), o.data()) != 0)
+      return {2, "the outputs: " + rt::ErrorMessage(*ws_)};
+    f->resize(Eigen::Index(ydot.size() + o.size()));
+    for (size_t i = 0; i < ydot.size(); ++i) (*f)[Eigen::Index(i)] = ydot[i];
+    for (size_t i = 0; i < o.size(); ++i) (*f)[Eigen::Index(ydot.size() + i)] = o[i];
+    *taken = s;
+    return {};
+  };
+  Eigen::VectorXd d, err;
+  const lin::Status st = lin::Richardson(F, 1e-3 * scale / seed_max, &d, &err);
+  stale_ = true;  // the workspace was left at a perturbed point
+  if (!st.ok()) return "the directional derivative at t = " + Number(t_) + ": " + st.message;
+  for (size_t k = 0; k < n_unknowns; ++k) {
+    const Variable& v = vars_[unknowns[k]];
+    out[k] = d[Eigen::Index(v.kind == VarKind::Derivative ? v.index : int(y_.size()) + v.index)];
+  }
   return "";
 }
 

@@ -52,6 +52,12 @@ class Instance {
   std::string GetStates(double* x, size_t n) const;
   std::string GetDerivatives(double* dx, size_t n);
 
+  // d(unknowns)/d(knowns) along `seed` at (t, y, inputs): the unknowns derivatives or
+  // outputs, the knowns states or inputs; central differences along the seed with
+  // Richardson extrapolation, as `kanesim linearize` takes A and B (lin::Richardson).
+  std::string DirectionalDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns,
+                                    size_t n_knowns, const double* seed, double* out);
+
   // Co-Simulation: integrates from the current time to t + h with kanesim's stepping core
   // (sim::Simulator: one integrator across the steps, its history carried), the inputs held
   // at their values over the step.

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "fmi/fmi.h"
+#include "lang/lang.h"
 
 #ifndef KANESIM_VERSION
 #define KANESIM_VERSION "unknown"
@@ -82,6 +83,24 @@ void UnknownsV3(std::ostringstream& x, const char* tag, const std::vector<Variab
       x << "    <" << tag << " valueReference=\"" << k << "\"/>\n";
 }
 
+// One unit of UnitDefinitions: its SI base-unit exponents and factor as the unit check reads
+// the string (lang/units.h); without BaseUnit when it has none FMI can write (a half exponent).
+std::string UnitElement(const std::string& name) {
+  std::string e = "    <Unit name=\"" + Escape(name) + "\"";
+  lang::Unit u;
+  std::string error;
+  if (!lang::ParseUnit(name, &u, &error)) return e + "/>\n";
+  static constexpr const char* kAttr[lang::Unit::kBase] = {"m", "kg", "s", "A", "K", "mol", "cd", "rad"};
+  std::string base;
+  for (int i = 0; i < lang::Unit::kBase; ++i) {
+    const int t = u.twice[size_t(i)];
+    if (t % 2) return e + "/>\n";
+    if (t) base += std::string(" ") + kAttr[i] + "=\"" + std::to_string(t / 2) + "\"";
+  }
+  if (u.scale != 1) base += " factor=\"" + Number(u.scale) + "\"";
+  return e + ">\n      <BaseUnit" + base + "/>\n    </Unit>\n";
+}
+
 // UnitDefinitions (every unit a variable has) and DefaultExperiment, the same in FMI 2 and 3.
 void UnitsAndExperiment(std::ostringstream& x, const std::vector<Variable>& vars, const flat::Experiment& e) {
   std::set<std::string> units;
@@ -89,7 +108,7 @@ void UnitsAndExperiment(std::ostringstream& x, const std::vector<Variable>& vars
     if (!v.unit.empty()) units.insert(v.unit);
   if (!units.empty()) {
     x << "  <UnitDefinitions>\n";
-    for (const std::string& u : units) x << "    <Unit name=\"" << Escape(u) << "\"/>\n";
+    for (const std::string& u : units) x << UnitElement(u);
     x << "  </UnitDefinitions>\n";
   }
   const double interval = e.interval > 0 ? e.interval : (e.stop_time - e.start_time) / sim::kDefaultIntervals;
@@ -125,7 +144,8 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   const std::vector<Variable> vars = ListVariables(model);
   const std::string id = Identifier(mech.model_name);
   const std::string caps =
-      " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" canNotUseMemoryManagementFunctions=\"true\"";
+      " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" canNotUseMemoryManagementFunctions=\"true\""
+      " providesDirectionalDerivative=\"true\"";
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
     << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << Escape(mech.model_name) << "\" guid=\"" << guid
@@ -160,7 +180,8 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   const flat::Mechanism& mech = *model.mech;
   const std::vector<Variable> vars = ListVariables(model);
   const std::string id = Identifier(mech.model_name);
-  const std::string caps = " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"";
+  const std::string caps =
+      " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\"";
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
     << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << Escape(mech.model_name) << "\" instantiationToken=\""

@@ -2,6 +2,7 @@
 
 #include <cctype>
 
+#include "lang/lang.h"
 #include "runtime/program/program.h"
 
 namespace kanesim::fmi {
@@ -10,13 +11,20 @@ namespace {
 // "[k]" (1-based) after a joint's signal when it has several coordinates, as the signals do.
 std::string Suffix(int k, int n) { return n > 1 ? "[" + std::to_string(k + 1) + "]" : ""; }
 
-// A coordinate's unit where the joint type fixes it (one-axis joints only); der: the rate's.
-std::string CoordinateUnit(flat::JointType type, int order) {
-  static const char* const kRevolute[] = {"rad", "rad/s", "rad/s2"};
-  static const char* const kPrismatic[] = {"m", "m/s", "m/s2"};
-  if (type == flat::JointType::Revolute) return kRevolute[order];
-  if (type == flat::JointType::Prismatic) return kPrismatic[order];
-  return "";
+// Coordinate or speed k of joint j in the units the unit check gives it (lang/units.h:
+// "rad", "m", "1" for a quaternion's component; "rad/s", "m/s").
+std::string JointUnit(const rt::TreeJoint& j, int k, bool speed) {
+  const bool quaternion = j.rotation == flat::RotationCoords::Quaternion && j.nq == j.nu + 1;
+  return lang::JointCoordinateUnit(flat::JointTypeName(j.type), quaternion, k, speed);
+}
+
+// The unit of a rate of a quantity in `unit` ("rad" -> "rad/s"); "" when it has none.
+std::string PerSecond(const std::string& unit) {
+  lang::Unit u, s;
+  std::string error;
+  if (unit.empty() || !lang::ParseUnit(unit, &u, &error) || !lang::ParseUnit("s", &s, &error)) return "";
+  const lang::Unit rate = u / s;
+  return rate.scale == 1 ? rate.ToString() : "";
 }
 
 struct StateInfo {
@@ -28,12 +36,16 @@ std::vector<StateInfo> States(const rt::Program& p) {
   for (const rt::TreeJoint& j : p.joints) {
     for (int k = 0; k < j.nq; ++k)
       for (int i = 0; i < p.nq; ++i)
-        if (p.q_free[i] == j.q0 + k)
-          out[i] = {j.name + ".q" + Suffix(k, j.nq), CoordinateUnit(j.type, 0), CoordinateUnit(j.type, 1)};
+        if (p.q_free[i] == j.q0 + k) {
+          const std::string unit = JointUnit(j, k, false);
+          out[i] = {j.name + ".q" + Suffix(k, j.nq), unit, PerSecond(unit)};
+        }
     for (int k = 0; k < j.nu; ++k)
       for (int i = 0; i < p.nu; ++i)
-        if (p.u_free[i] == j.u0 + k)
-          out[p.nq + i] = {j.name + ".u" + Suffix(k, j.nu), CoordinateUnit(j.type, 1), CoordinateUnit(j.type, 2)};
+        if (p.u_free[i] == j.u0 + k) {
+          const std::string unit = JointUnit(j, k, true);
+          out[p.nq + i] = {j.name + ".u" + Suffix(k, j.nu), unit, PerSecond(unit)};
+        }
   }
   return out;
 }
@@ -61,7 +73,7 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
   for (int i = 0; i < rt::NumInputs(p); ++i)
     vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, "", ""});
   for (size_t i = 0; i < mech.outputs.size(); ++i)
-    vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, "", ""});
+    vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, mech.outputs[i].unit, ""});
   // Parameters: three passes so that each group is contiguous.
   for (int pass = 0; pass < 3; ++pass)
     for (size_t i = 0; i < mech.params.size(); ++i) {

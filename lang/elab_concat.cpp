@@ -24,6 +24,34 @@ bool Compatible(VType a, VType b) {
   return kind(a) == kind(b);
 }
 
+// [a, b; c, d] of scalars of one kind, every row as long (a 3 x 3 inertia, a rotation):
+// the matrix directly, which is what the general joins below give it, without their
+// messages made ready for errors that cannot occur. False for anything else.
+bool ScalarGrid(const std::vector<std::vector<Value>>& rows, Value* out) {
+  if (rows.empty() || rows[0].empty()) return false;
+  const size_t cols = rows[0].size();
+  if (rows.size() * cols > static_cast<size_t>(kMaxArraySize)) return false;
+  const VType first = rows[0][0].type;
+  VType type = first;
+  for (const auto& row : rows) {
+    if (row.size() != cols) return false;
+    for (const Value& v : row) {
+      if (!v.shape.empty() || v.elements.size() != 1 || !Compatible(first, v.type)) return false;
+      if (v.type == VType::String && v.strings.empty()) return false;
+      if (type != VType::String && type != VType::Boolean) type = Promote(type, v.type);
+    }
+  }
+  out->type = type;
+  out->shape = {static_cast<int>(rows.size()), static_cast<int>(cols)};
+  out->elements.reserve(rows.size() * cols);
+  for (const auto& row : rows)
+    for (const Value& v : row) {
+      out->elements.push_back(v.elements[0]);
+      if (type == VType::String) out->strings.push_back(v.strings[0]);
+    }
+  return true;
+}
+
 }  // namespace
 
 // Joins `parts` along dimension `k` (0-based). Every part has the same number of
@@ -148,6 +176,7 @@ Value Evaluator::EvalMatrix(const ast::Expr& e, const Ctx& ctx) {
       rows.back().push_back(std::move(v));
     }
   }
+  if (Value grid; ScalarGrid(rows, &grid)) return grid;
   // Promote to ndims dimensions: trailing dimensions of size 1.
   for (auto& row : rows)
     for (auto& v : row) v.shape.resize(ndims, 1);

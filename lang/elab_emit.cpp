@@ -23,8 +23,9 @@ namespace {
 class Emitter {
  public:
   Emitter(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
-          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m)
-      : tree_(tree), sets_(sets), whens_(whens), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m) {}
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor)
+      : tree_(tree), sets_(sets), whens_(whens), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m),
+        visitor_(visitor) {}
 
   void Run(Node* root) {
     m_->joints = std::move(tree_.joints);
@@ -125,13 +126,15 @@ class Emitter {
     return var && (var->eq_binding || var->Modifiers().value || !var->eq_elem_binding.empty());
   }
 
-  // Every enabled instance, depth first: each primitive becomes its flat element.
+  // Every enabled instance, depth first: each primitive becomes its flat element, each
+  // variable is shown to the visitor (after its primitive, whose fields were just evaluated).
   void Walk(Node* n) {
     if (!n->enabled || diags_.Full()) return;
     if (n->kind == Node::kArray) {
       for (auto& e : n->elems) Walk(e.get());
       return;
     }
+    if (n->kind == Node::kVar && visitor_) visitor_->Visit(n);
     if (n->kind != Node::kClass) return;
     // Where the primitive is declared (made only for the kinds that keep it); inside a
     // library component (a Rod's body and tip) the user's declaration of that component,
@@ -540,6 +543,7 @@ class Emitter {
   flat::ExprPool& pool;
   Diagnostics& diags_;
   flat::Mechanism* m_;
+  VarVisitor* visitor_;
   std::vector<Node*> springs;                  // rotational springs and dampers found by Walk
   std::vector<Node*> couplings;                // joint couplings found by Walk
   std::vector<std::vector<ExprId>> tau_extra;  // per joint: generalized forces of springs on flanges
@@ -549,9 +553,9 @@ class Emitter {
 }  // namespace
 
 void Emit(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
-          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m) {
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor) {
   Node* root = tree.root.get();
-  Emitter(tree, sets, whens, eval, places, diags, m).Run(root);
+  Emitter(tree, sets, whens, eval, places, diags, m, visitor).Run(root);
 }
 
 // The experiment annotation: StartTime, StopTime, Tolerance, Interval.

@@ -15,10 +15,20 @@ struct Connections;
 struct PendingWhen;
 struct InstanceTree;
 
+// Shown every enabled variable, depth first, by Emit's walk over the tree (the unit
+// check, lang/elab_units.h, rides on it instead of walking the tree again).
+class VarVisitor {
+ public:
+  virtual void Visit(Node* var) = 0;
+
+ protected:
+  ~VarVisitor() = default;
+};
+
 // Writes m's bodies, joints (moved from the tree and completed), fixed frames, forces,
 // contacts, shapes and outputs; frame state references retargeted to the flat frames.
 void Emit(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
-          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m);
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor = nullptr);
 
 // The when clauses (lang/elab_when.cpp): conditions as indicators, reinit targets and values,
 // terminate's message, into m->whens.

@@ -360,7 +360,7 @@ void Instantiator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, s
 bool Instantiator::ResolveComponentType(Node* node, Node* child, const Collected& c, ComponentType* t) {
   const ast::Component& comp = *c.comp;
   t->is_builtin = comp.type_name.size() == 1 && BuiltinTypeNamed(comp.type_name[0], &t->builtin);
-  if (!child->mod.redeclare_type.empty() && !ApplyRedeclare(child, c, t)) return false;
+  if (child->mod.Redeclared() && !ApplyRedeclare(child, c, t)) return false;
   if (!t->is_builtin && !t->cls) {
     t->cls = DeclaredClass(comp, c.owner);
     if (!t->cls) {
@@ -374,22 +374,22 @@ bool Instantiator::ResolveComponentType(Node* node, Node* child, const Collected
 
 bool Instantiator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* t) {
   if (!c.replaceable) {
-    auto& d = diags_.Error(DiagCode::NotReplaceable, child->mod.redeclare_span,
+    auto& d = diags_.Error(DiagCode::NotReplaceable, child->mod.redeclare->span,
                            "'" + child->path + "' is not replaceable");
     d.notes.push_back({c.comp->span, "declared here without 'replaceable'"});
     return true;
   }
-  const std::string& name = child->mod.redeclare_type;
+  const std::string& name = child->mod.redeclare->type;
   std::vector<std::string> parts = SplitDotted(name);
   VType ignored;
   if (parts.size() == 1 && BuiltinTypeNamed(name, &ignored)) {
     t->redeclared_name = name;
     return true;
   }
-  const ast::ClassDef* from = child->mod.redeclare_from ? child->mod.redeclare_from : c.owner;
+  const ast::ClassDef* from = child->mod.redeclare->from ? child->mod.redeclare->from : c.owner;
   t->cls = lookup_.FindClass(parts, from);
   if (!t->cls) {
-    diags_.Error(DiagCode::UnknownClass, child->mod.redeclare_span, "unknown class '" + name + "'");
+    diags_.Error(DiagCode::UnknownClass, child->mod.redeclare->span, "unknown class '" + name + "'");
     return false;
   }
   t->is_builtin = false;

@@ -49,10 +49,10 @@ using Elements = SmallVec<ExprId, 9>;
 // A value: a (possibly empty-shaped = scalar) array of scalar expressions.
 struct Value {
   VType type = VType::Real;
+  bool valid = true;               // false after an error (suppresses cascades)
   Dims shape;                     // empty = scalar
   Elements elements;               // the elements' expressions in the pool, row-major (up to 3x3 inline)
   std::vector<std::string> strings;  // a String value's elements, row-major (elements too holds one id each)
-  bool valid = true;               // false after an error (suppresses cascades)
   size_t Size() const;
   static Value Invalid() {
     Value v;
@@ -95,6 +95,38 @@ class Boxed {
   std::unique_ptr<T> p_;
 };
 
+// A std::map that is one pointer wide while empty (what Boxed is to std::optional):
+// nearly every variable has no per-element equation, and the instance tree's size is
+// the front end's memory, so its fresh pages, in a short process.
+template <class K, class V>
+class LazyMap {
+  using Map = std::map<K, V>;
+
+ public:
+  using iterator = typename Map::iterator;
+  using const_iterator = typename Map::const_iterator;
+  iterator begin() { return m_ ? m_->begin() : Empty().begin(); }
+  iterator end() { return m_ ? m_->end() : Empty().end(); }
+  const_iterator begin() const { return m_ ? m_->cbegin() : Empty().cbegin(); }
+  const_iterator end() const { return m_ ? m_->cend() : Empty().cend(); }
+  iterator find(const K& k) { return m_ ? m_->find(k) : Empty().end(); }
+  const_iterator find(const K& k) const { return m_ ? m_->find(k) : Empty().cend(); }
+  size_t size() const { return m_ ? m_->size() : 0; }
+  bool empty() const { return !m_ || m_->empty(); }
+  size_t count(const K& k) const { return m_ ? m_->count(k) : 0; }
+  V& operator[](const K& k) {
+    if (!m_) m_ = std::make_unique<Map>();
+    return (*m_)[k];
+  }
+
+ private:
+  static Map& Empty() {  // never written: its begin() == end() stand for an empty map's
+    static Map empty;
+    return empty;
+  }
+  std::unique_ptr<Map> m_;
+};
+
 struct Node;
 
 // One binding written somewhere in the source: an expression, where to evaluate it, and
@@ -118,12 +150,16 @@ struct Mod {
   bool is_final = false;
   Span final_span;                   // where `final` was written
   Span span;                         // where this modifier was written (name span)
-  // redeclare: the new type, looked up from `redeclare_from`.
-  std::string redeclare_type;
-  const ast::ClassDef* redeclare_from = nullptr;
-  Span redeclare_span;
+  // redeclare: the new type, looked up from `from` (boxed: rarely written).
+  struct Redeclare {
+    std::string type;
+    const ast::ClassDef* from = nullptr;
+    Span span;
+  };
+  Boxed<Redeclare> redeclare;
+  bool Redeclared() const { return redeclare && !redeclare->type.empty(); }
   bool set_only = false;  // made by --set alone: its names are checked by SetOverrides::Bind
-  bool empty() const { return !value && sub.empty() && redeclare_type.empty(); }
+  bool empty() const { return !value && sub.empty() && !Redeclared(); }
 };
 
 // Shape: a stdlib part drawn as what it is (kind "rod", "box", "cylinder", "sphere", "mesh";
@@ -135,7 +171,11 @@ enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wre
 enum class EvalState { Unevaluated, Evaluating, Done };
 
 struct Node {
+  // The small fields first, together: a model has thousands of nodes (no padding between them).
   enum Kind { kClass, kVar, kArray } kind = kClass;
+  bool enabled = true;
+  bool is_final_decl = false;  // kVar
+  int depth = 0;
   std::string name;  // "links[2]" for array elements
   std::string path;  // "robot.links[2]"
   Node* parent = nullptr;
@@ -147,8 +187,6 @@ struct Node {
   // instantiation through Modifiers().
   const Mod* shared_mod = nullptr;
   const Mod& Modifiers() const { return shared_mod ? *shared_mod : mod; }
-  bool enabled = true;
-  int depth = 0;
 
   // kClass
   const ast::ClassDef* cls = nullptr;
@@ -161,19 +199,18 @@ struct Node {
   };
   std::vector<EqSource> equations;
   Prim prim = Prim::None;
-  std::string prim_kind;  // annotation's second key value ("revolute", "rolling_disk"...)
   int prim_index = -1;    // frame id / joint id / flange id
+  std::string prim_kind;  // annotation's second key value ("revolute", "rolling_disk"...)
 
   // kVar
   VType vtype = VType::Real;
   ast::Variability variability = ast::Variability::None;
   ast::Causality causality = ast::Causality::None;
-  Dims shape;
   EvalState state = EvalState::Unevaluated;  // GetVar's progress on `value`
+  Dims shape;
   Value value;
   Boxed<ModValue> eq_binding;                    // from an equation `x = expr`
-  std::map<int, ModValue> eq_elem_binding;       // from `x[k] = expr`
-  bool is_final_decl = false;
+  LazyMap<int, ModValue> eq_elem_binding;        // from `x[k] = expr`
 
   // kArray
   std::vector<std::unique_ptr<Node>> elems;

@@ -52,9 +52,7 @@ Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<cons
         if (built.value) built.value->is_final = true;
       }
       if (a.redeclare) {
-        built.redeclare_type = a.redeclare_type;
-        built.redeclare_from = scope && scope->cls ? scope->cls : nullptr;
-        built.redeclare_span = a.span;
+        built.redeclare = Mod::Redeclare{a.redeclare_type, scope && scope->cls ? scope->cls : nullptr, a.span};
       }
       if (next.value || !next.sub.empty()) {
         auto& d = diags.Error(DiagCode::Duplicate, a.name_span, "'" + ast::JoinName(a.path) + "' is modified twice");
@@ -92,7 +90,7 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
   if (outer.value && outer.value->from_set && inner.is_final) {
     outer.value.reset();
   }
-  if (inner.is_final && (outer.value || !outer.sub.empty() || !outer.redeclare_type.empty())) {
+  if (inner.is_final && (outer.value || !outer.sub.empty() || outer.Redeclared())) {
     Span at = outer.value ? outer.value->span : outer.span;
     auto& d = diags.Error(DiagCode::FinalOverride, at, "'" + name() + "' is final and cannot be modified");
     d.notes.push_back({inner.final_span.valid() ? inner.final_span : inner.span, "declared final here"});
@@ -109,11 +107,7 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
     outer.is_final = true;
     outer.final_span = inner.final_span;
   }
-  if (outer.redeclare_type.empty() && !inner.redeclare_type.empty()) {
-    outer.redeclare_type = take(inner.redeclare_type);
-    outer.redeclare_from = inner.redeclare_from;
-    outer.redeclare_span = inner.redeclare_span;
-  }
+  if (!outer.Redeclared() && inner.Redeclared()) outer.redeclare = take(inner.redeclare);
   if (!outer.span.valid()) outer.span = inner.span;
   outer.each = outer.each || inner.each;
   if (!inner_empty && !inner.set_only) outer.set_only = false;
@@ -133,7 +127,7 @@ void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::
 // gives the inner one.
 bool Pristine(const Mod& m) {
   return !m.value && m.sub.empty() && m.order.empty() && !m.each && !m.is_final && !m.final_span.valid() &&
-         !m.span.valid() && m.redeclare_type.empty() && !m.redeclare_from && !m.redeclare_span.valid() && !m.set_only;
+         !m.span.valid() && !m.redeclare && !m.set_only;
 }
 
 // Whether every level of m lists each of its sub-modifiers once in `order` (as BuildMod
@@ -158,10 +152,7 @@ bool OrderMatchesSubs(const Mod& m) {
 void NormalizeMerged(Mod& m) {
   m.set_only = false;
   if (!m.is_final) m.final_span = Span{};
-  if (m.redeclare_type.empty()) {
-    m.redeclare_from = nullptr;
-    m.redeclare_span = Span{};
-  }
+  if (!m.Redeclared()) m.redeclare.reset();
   for (auto& [k, sm] : m.sub) NormalizeMerged(sm);
 }
 
@@ -209,9 +200,7 @@ Mod SliceMod(const Mod& mod, int index, int count, Evaluator& eval, Diagnostics&
   out.is_final = mod.is_final;
   out.final_span = mod.final_span;
   out.span = mod.span;
-  out.redeclare_type = mod.redeclare_type;
-  out.redeclare_from = mod.redeclare_from;
-  out.redeclare_span = mod.redeclare_span;
+  out.redeclare = mod.redeclare;
   out.set_only = mod.set_only;
   if (mod.value) {
     std::optional<Value> evaluated;

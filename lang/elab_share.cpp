@@ -176,9 +176,7 @@ Mod Instantiator::BoundCopy(const Mod& src, ShareBinding& b, bool with_sub) {
   out.is_final = src.is_final;
   out.final_span = src.final_span;
   out.span = src.span;
-  out.redeclare_type = src.redeclare_type;
-  out.redeclare_from = src.redeclare_from;
-  out.redeclare_span = src.redeclare_span;
+  out.redeclare = src.redeclare;
   out.set_only = src.set_only;
   if (with_sub)
     for (const auto& [k, sm] : src.sub) out.sub.emplace_hint(out.sub.end(), k, BoundCopy(sm, b, true));

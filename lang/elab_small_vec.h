@@ -62,19 +62,20 @@ class SmallVec {
 
   void reserve(std::size_t n) {
     if (n <= cap_) return;
+    if (n > UINT32_MAX) throw std::bad_alloc();  // sizes are 32-bit (the elaborator caps arrays far below)
     T* p = static_cast<T*>(std::malloc(n * sizeof(T)));
     if (!p) throw std::bad_alloc();
     if (size_) std::memcpy(p, data_, size_ * sizeof(T));
     if (data_ != inline_) std::free(data_);
     data_ = p;
-    cap_ = n;
+    cap_ = static_cast<std::uint32_t>(n);
   }
   void clear() { size_ = 0; }
   void pop_back() { --size_; }
   void push_back(const T& x) {
     if (size_ == cap_) {
       const T copy = x;  // x may live in this vector
-      reserve(cap_ * 2);
+      reserve(std::size_t{cap_} * 2);
       data_[size_++] = copy;
       return;
     }
@@ -83,7 +84,7 @@ class SmallVec {
   void resize(std::size_t n, const T& x = T()) {
     reserve(n);
     for (std::size_t i = size_; i < n; ++i) data_[i] = x;
-    size_ = n;
+    size_ = static_cast<std::uint32_t>(n);
   }
   void assign(std::size_t n, const T& x) {
     const T copy = x;
@@ -100,7 +101,7 @@ class SmallVec {
     }
     std::size_t i = 0;
     for (It it = first; it != last; ++it) data_[i++] = *it;
-    size_ = n;
+    size_ = static_cast<std::uint32_t>(n);
   }
   // Appends [first, last) at `pos`, which must be end() (the only use).
   template <class It>
@@ -113,14 +114,14 @@ class SmallVec {
       if (!tmp) throw std::bad_alloc();
       std::size_t i = 0;
       for (It it = first; it != last; ++it) tmp[i++] = *it;
-      reserve(std::max(size_ + n, cap_ * 2));
+      reserve(std::max(size_ + n, std::size_t{cap_} * 2));
       std::memcpy(data_ + size_, tmp, n * sizeof(T));
       std::free(tmp);
     } else {
       std::size_t i = size_;
       for (It it = first; it != last; ++it) data_[i++] = *it;
     }
-    size_ += n;
+    size_ += static_cast<std::uint32_t>(n);
   }
 
   friend bool operator==(const SmallVec& a, const SmallVec& b) {
@@ -152,9 +153,11 @@ class SmallVec {
     o.size_ = 0;
   }
 
+  // 32-bit size and capacity: a scalar, 3-vector or 3x3 matrix value stays within a few
+  // words (values are copied by the hundred per link).
   T* data_ = inline_;
-  std::size_t size_ = 0;
-  std::size_t cap_ = N;
+  std::uint32_t size_ = 0;
+  std::uint32_t cap_ = N;
   T inline_[N];
 };
 

@@ -1,5 +1,5 @@
-// CheckUnits (lang/elab_units.h): a walk over the instance tree that gives each binding's
-// expression a unit, bottom-up, and compares it with the variable's.
+// The unit check (lang/elab_units.h): shown each variable by the emitter's walk, it gives
+// each binding's expression a unit, bottom-up, and compares it with the variable's.
 #include "lang/elab_units.h"
 
 #include <cmath>
@@ -41,6 +41,13 @@ struct UVal {
 // A unit in quotes as the user wrote it, or in SI form when computed.
 std::string Shown(const UVal& v) { return "\"" + (v.text ? *v.text : v.unit.ToString()) + "\""; }
 
+// A number, or minus one (`= 0`, `min = -1`): its unit is what it is bound to.
+bool IsNumber(const ast::Expr& e) {
+  if (e.kind == ast::ExprKind::Number) return true;
+  return e.kind == ast::ExprKind::Unary && static_cast<Tok>(e.op) == Tok::Minus && e.args.size() == 1 &&
+         e.args[0]->kind == ast::ExprKind::Number;
+}
+
 // Expressions nested deeper than this are left unchecked instead of recursed into (the
 // parser allows 100,000 levels; the native stack does not).
 constexpr int kMaxCheckDepth = 200;
@@ -61,10 +68,14 @@ Unit Radians() {
   return u;
 }
 
+}  // namespace
+
 class UnitChecker {
  public:
-  UnitChecker(Diagnostics& diags) : diags_(diags) {}
-  void Walk(Node* root);
+  explicit UnitChecker(Diagnostics& diags) : diags_(diags) {}
+  // Every value given to `var`: its binding (declaration, modifier, --set or equation), its
+  // elements' equations, and its start, min and max attributes.
+  void CheckVar(Node* var);
   // The units a spring on flanges takes from the joint its flanges act on.
   void SpringUnits(const InstanceTree& tree, const Links& links);
   // A variable's unit: declared, or inferred (from its binding or from its uses).
@@ -83,14 +94,17 @@ class UnitChecker {
     Span where;               // that use
   };
 
-  void CheckVar(Node* var);
   void CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation);
   // A joint's q or u without one unit: element k of a start array, or an element equation,
   // against the coordinate's unit.
   void CheckCoordinates(Node* var);
   void CheckElement(Node* var, const ast::Expr& e, const ModValue& mv, int k, const char* what);
   const Declared* DeclaredUnit(const Node* var);
+  const Declared* FindDeclaredUnit(const Node* var);
   UVal Expr(const ast::Expr& e, const Node* scope, const Iters* iters);
+  // The unit of e, the value of binding mv: a declaration's, a modifier's or an attribute's
+  // (`binding`), or an equation's right side.
+  UVal Bound(const ast::Expr& e, const ModValue& mv, bool binding);
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -113,26 +127,11 @@ class UnitChecker {
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
   int depth_ = 0;
+  bool factors_ = false;            // in a binding: a number in a product is a plain factor
+  const Node* last_var_ = nullptr;  // DeclaredUnit's last answer
+  const Declared* last_declared_ = nullptr;
 };
 
-void UnitChecker::Walk(Node* root) {
-  std::vector<Node*> stack{root};
-  while (!stack.empty() && !diags_.Full()) {
-    Node* n = stack.back();
-    stack.pop_back();
-    if (!n->enabled) continue;
-    if (n->kind == Node::kArray) {
-      for (auto it = n->elems.rbegin(); it != n->elems.rend(); ++it) stack.push_back(it->get());
-    } else if (n->kind == Node::kVar) {
-      CheckVar(n);
-    } else {
-      for (auto it = n->children.rbegin(); it != n->children.rend(); ++it) stack.push_back(it->get());
-    }
-  }
-}
-
-// Every value given to `var`: its binding (declaration, modifier, --set or equation), its
-// elements' equations, and its start, min and max attributes.
 void UnitChecker::CheckVar(Node* var) {
   if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
   DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
@@ -169,7 +168,7 @@ void UnitChecker::CheckElement(Node* var, const ast::Expr& e, const ModValue& mv
   Unit want;
   std::string error;
   if (text.empty() || !ParseUnit(text, &want, &error)) return;
-  const UVal got = Expr(e, mv.scope, mv.iters.get());
+  const UVal got = Bound(e, mv, *what != 0);
   if (got.kind != UVal::Known || got.soft || got.unit.Agrees(want)) return;
   const std::string name = "'" + var->path + "[" + std::to_string(k + 1) + "]'";
   auto& d = diags_.Error(DiagCode::UnitMismatch, e.span,
@@ -214,11 +213,12 @@ void UnitChecker::SpringUnits(const InstanceTree& tree, const Links& links) {
 }
 
 void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation) {
-  if (!mv.expr || diags_.Full()) return;
+  // A number takes the unit it is given (min = 0): nothing to check, nothing to infer.
+  if (!mv.expr || diags_.Full() || IsNumber(*mv.expr)) return;
   const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
   const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
   if (want.kind != UVal::Known && own && var->shape.empty()) return;
-  const UVal got = Expr(*mv.expr, mv.scope, mv.iters.get());
+  const UVal got = Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
     InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
@@ -249,7 +249,16 @@ void UnitChecker::NoteOrigin(Diagnostic& d, const UVal& v) {
 }
 
 const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
+  // Asked several times in a row for the variable being checked.
+  if (var == last_var_) return last_declared_;
+  last_var_ = var;
+  last_declared_ = FindDeclaredUnit(var);
+  return last_declared_;
+}
+
+const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
   const Mod& mods = var->Modifiers();
+  if (mods.sub.empty()) return nullptr;
   auto it = mods.sub.find("unit");
   if (it == mods.sub.end() || !it->second.value || !it->second.value->expr) return nullptr;
   const ast::Expr* e = it->second.value->expr;
@@ -276,13 +285,12 @@ UVal UnitChecker::VarUnit(const Node* var) {
     v.text = &d->text;
     return v;
   }
-  auto [it, fresh] = inferred_.try_emplace(var);
-  if (!fresh) return it->second.busy ? UVal{} : it->second.val;
+  if (auto it = inferred_.find(var); it != inferred_.end()) return it->second.busy ? UVal{} : it->second.val;
   // Inferred from the binding, once: an output's unit from its expression.
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
-  if (!b || !b->expr || !var->shape.empty()) return UVal{};
-  it->second.busy = true;
-  UVal v = Expr(*b->expr, b->scope, b->iters.get());
+  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr)) return UVal{};
+  inferred_[var].busy = true;
+  UVal v = Bound(*b->expr, *b, var->Modifiers().value && b == &*var->Modifiers().value);
   Inferred& slot = inferred_[var];  // the map may have grown
   slot.busy = false;
   if (v.kind == UVal::Known) {
@@ -320,6 +328,14 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   slot.val.text = nullptr;
   slot.from_use = true;
   slot.where = at;
+}
+
+UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
+  const bool outer = factors_;
+  factors_ = binding;
+  const UVal v = Expr(e, mv.scope, mv.iters.get());
+  factors_ = outer;
+  return v;
 }
 
 UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters) {
@@ -583,10 +599,22 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
     case Tok::Slash: {
       if (a.kind == UVal::Unknown || b.kind == UVal::Unknown) return UVal{};
       if (a.kind == UVal::Literal && b.kind == UVal::Literal) return UVal::Lit();
-      // A number times a quantity: the number may carry any unit its context needs
-      // (-0.3 * j.q as a torque: 0.3 N.m/rad), as Modelica tools infer it, so the product's
-      // unit is left open rather than guessed.
-      if (a.kind == UVal::Literal || b.kind == UVal::Literal) return UVal{};
+      // A number beside a quantity: in a binding or modifier a plain factor, unit "1"
+      // (Modelica's unit inference: an operand of empty unit next to one of non-empty unit
+      // is inferred as "1"), so L = 2 * mass is a mass. In an equation it may carry the
+      // unit its context needs (a force law's coefficient, -0.3 * j.u as a torque, as
+      // imported URDF dynamics write it), so that product is left open.
+      if (a.kind == UVal::Literal || b.kind == UVal::Literal) {
+        if (!factors_) return UVal{};
+        const UVal& q = a.kind == UVal::Known ? a : b;
+        const bool inverted = op == Tok::Slash && a.kind == UVal::Literal;  // 2 / t
+        UVal r = q;
+        if (inverted) {
+          r.unit = Unit::One() / q.unit;
+          r.text = nullptr;
+        }
+        return r;
+      }
       const Unit ua = a.kind == UVal::Known ? a.unit : Unit::One();
       const Unit ub = b.kind == UVal::Known ? b.unit : Unit::One();
       UVal r = UVal::Of(op == Tok::Star ? ua * ub : ua / ub);
@@ -598,19 +626,33 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
   }
 }
 
-}  // namespace
+UnitCheck::UnitCheck(const InstanceTree& tree, const Links& links, const SourceManager* sources)
+    : found_(sources), checker_(std::make_unique<UnitChecker>(found_)) {
+  checker_->SpringUnits(tree, links);
+}
 
-void CheckUnits(const InstanceTree& tree, const Links& links, Diagnostics& diags, flat::Mechanism* m) {
-  Node* root = tree.root.get();
-  UnitChecker checker(diags);
-  checker.SpringUnits(tree, links);
-  checker.Walk(root);
+UnitCheck::~UnitCheck() = default;
+
+void UnitCheck::Visit(Node* var) {
+  if (!found_.Full()) checker_->CheckVar(var);
+}
+
+void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mechanism* m) {
+  if (diags.HasErrors()) return;
+  // The messages, in the order found (the cap's message P105 becomes diags' own).
+  for (const Diagnostic& d : found_.All()) {
+    Diagnostic& copy = d.severity == Severity::Error ? diags.Error(d.code, d.span, d.message)
+                                                     : diags.Warning(d.code, d.span, d.message);
+    copy.notes = d.notes;
+    copy.hint = d.hint;
+  }
   // Outputs' units (for --units-in-header): the top-level model's output variables, named
   // by path, array elements "path[k]" (lang/elab_emit.cpp).
+  const Node* root = tree.root.get();
   size_t i = 0;
   for (const auto& c : root->children) {
     if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
-    const UVal u = checker.VarUnit(c.get());
+    const UVal u = checker_->VarUnit(c.get());
     auto named = [&](const std::string& n) {
       return n == c->path || (n.size() > c->path.size() && n.compare(0, c->path.size(), c->path) == 0 &&
                               n[c->path.size()] == '[');

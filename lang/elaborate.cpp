@@ -2,6 +2,7 @@
 #include "lang/elaborate.h"
 
 #include <memory>
+#include <optional>
 
 #include "lang/elab_connect.h"
 #include "lang/elab_emit.h"
@@ -129,10 +130,11 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   // Every parameter is one element of a scalar variable, all counted in tree.instances.
   eval.ReserveParams(static_cast<size_t>(tree.instances));
   const elab::Connections connections = elab::Connect(tree, links, places, out);
-  elab::Emit(tree, connections, links.whens, eval, places, diags, out);
-  // Units are checked on the bound equations once the model is otherwise sound (a unit
-  // message on top of a missing name would repeat it).
-  if (options.check_units && !diags.HasErrors()) elab::CheckUnits(tree, links, diags, out);
+  // Units are checked on the emitter's walk, and reported once the model is otherwise sound.
+  std::optional<elab::UnitCheck> units;
+  if (options.check_units) units.emplace(tree, links, &program.sources);
+  elab::Emit(tree, connections, links.whens, eval, places, diags, out, units ? &*units : nullptr);
+  if (units) units->Finish(tree, diags, out);
   if (const ast::Modification* ex = lookup.FindAnnotation(top, "experiment"))
     elab::EmitExperiment(*ex, top, tree.root.get(), eval, diags, out);
   if (const ast::Modification* sp = lookup.FindAnnotation(top, "speeds")) elab::EmitSpeeds(*sp, diags, out);

@@ -44,11 +44,13 @@ Status Residual(const rt::Program& p, rt::Workspace& ws, Reduction& red, const V
 // climbs, grown by 10% while it descends). It settles near a minimum of the potential,
 // where Newton then converges. Only for as many speeds as coordinates (no rolling rows).
 // The chart is rebuilt every 20 steps. *steps counts them.
-Status Relax(const rt::Program& p, rt::Workspace& ws, double until, OperatingPoint* op, long* steps) {
+Status Relax(const rt::Program& p, rt::Workspace& ws, const std::vector<double>& inputs, double until,
+             OperatingPoint* op, long* steps) {
   VectorXd v;
   double dt = 1e-3;
   for (int block = 0; block < 2000; ++block) {
     Reduction red;
+    red.SetInputs(inputs);
     if (Status s = red.Init(p, *op, true); !s.ok()) return s;
     const int n = static_cast<int>(red.indep_coords().size());
     if (n != static_cast<int>(red.indep_speeds().size())) return {2, "rolling rows: no relaxation"};
@@ -77,12 +79,15 @@ Status Relax(const rt::Program& p, rt::Workspace& ws, double until, OperatingPoi
 
 }  // namespace
 
-Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, EquilibriumResult* out) {
+Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, EquilibriumResult* out,
+                       const std::vector<double>& inputs) {
   *out = EquilibriumResult{};
   OperatingPoint op = start;
   for (int i = 0; i < p.nu; ++i) op.y[static_cast<size_t>(p.nq + i)] = 0.0;
   auto ws = rt::MakeWorkspace(p);
+  if (!inputs.empty()) rt::SetInputValues(*ws, inputs.data());
   Reduction first;
+  first.SetInputs(inputs);
   if (Status s = first.Init(p, op, true); !s.ok()) return s;
   op.y = first.y0();
 
@@ -94,6 +99,7 @@ Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, Equili
   bool relaxed = false;
   for (;; ++it) {
     Reduction red;
+    red.SetInputs(inputs);
     if (Status s = red.Init(p, op, true); !s.ok()) return s;
     const int n = static_cast<int>(red.indep_coords().size());
     if (Status s = Residual(p, *ws, red, VectorXd::Zero(n), &r, &y); !s.ok()) return s;
@@ -135,7 +141,7 @@ Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, Equili
       relaxed = true;
       long steps = 0;
       OperatingPoint moved_op = op;
-      if (Relax(p, *ws, 1e-3 * std::max({g, rn, 1e-2}), &moved_op, &steps).ok()) {
+      if (Relax(p, *ws, inputs, 1e-3 * std::max({g, rn, 1e-2}), &moved_op, &steps).ok()) {
         op = moved_op;
         out->relaxation_steps = steps;
         continue;

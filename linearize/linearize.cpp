@@ -132,11 +132,23 @@ Status ResolveInputs(rt::Program* prog, const std::vector<std::string>& names, s
   return {};
 }
 
-// One evaluation at step s: F, and the step actually taken (eq. 5's h+ or -h-).
-using StepEval = std::function<Status(double s, VectorXd* f, double* taken)>;
+constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-// Central-difference derivative with Richardson extrapolation, eqs. (5)-(7) (without the
-// rounding term, added by the caller once nu is known).
+// Eq. (8): the smallest step whose differences keep the change, for variables of sizes up
+// to x_max.
+double StepFloor(double x_max) { return std::ldexp(kEps, 22) * std::max(1.0, std::abs(x_max)); }
+
+// The step for a column: h_asked, or the floor (recorded) when smaller.
+double ColumnStep(const std::string& name, double h_asked, double step_floor, std::vector<WidenedStep>* widened) {
+  if (h_asked >= step_floor) return h_asked;
+  widened->push_back({name, h_asked, step_floor});
+  return step_floor;
+}
+
+double MaxAbs(const MatrixXd& m) { return m.size() == 0 ? 0.0 : m.cwiseAbs().maxCoeff(); }
+
+}  // namespace
+
 Status Richardson(const StepEval& F, double h, VectorXd* d, VectorXd* err) {
   VectorXd D[3];
   for (int k = 0; k < 3; ++k) {
@@ -155,33 +167,31 @@ Status Richardson(const StepEval& F, double h, VectorXd* d, VectorXd* err) {
   return {};
 }
 
-constexpr double kEps = std::numeric_limits<double>::epsilon();
-
-// Eq. (8): the smallest step whose differences keep the change, for variables of sizes up
-// to x_max.
-double StepFloor(double x_max) { return std::ldexp(kEps, 22) * std::max(1.0, std::abs(x_max)); }
-
-// The step for a column: h_asked, or the floor (recorded) when smaller.
-double ColumnStep(const std::string& name, double h_asked, double step_floor, std::vector<WidenedStep>* widened) {
-  if (h_asked >= step_floor) return h_asked;
-  widened->push_back({name, h_asked, step_floor});
-  return step_floor;
-}
-
-double MaxAbs(const MatrixXd& m) { return m.size() == 0 ? 0.0 : m.cwiseAbs().maxCoeff(); }
-
-}  // namespace
-
 Status Linearize(const rt::Program& program, const OperatingPoint& op, const LinearizeOptions& options,
                  LinearModel* out) {
   *out = LinearModel{};
+  // The model's own inputs: held at their values, each a column of B and D before the others.
+  const int m_in = rt::NumInputs(program);
+  const std::vector<double>& w0 = options.input_values;
+  if (static_cast<int>(w0.size()) != m_in)
+    return {1, m_in > static_cast<int>(w0.size())
+                   ? fmt::format("input '{}' has no value (give it with --set or --input-file)",
+                                 rt::InputName(program, static_cast<int>(w0.size())))
+                   : "more input values than the model has inputs"};
+  std::vector<std::string> other_inputs;  // --input names that are not the model's inputs (those are columns already)
+  for (const std::string& name : options.inputs) {
+    bool own = false;
+    for (int k = 0; k < m_in; ++k) own = own || rt::InputName(program, k) == name;
+    if (!own) other_inputs.push_back(name);
+  }
   Reduction red;
+  red.SetInputs(w0);
   if (Status s = red.Init(program, op, false); !s.ok()) return s;
 
   // The program the evaluations run on: a copy when joint forces are inputs.
   auto prog = std::make_shared<rt::Program>(program);
   std::vector<Input> inputs;
-  if (Status s = ResolveInputs(prog.get(), options.inputs, &inputs); !s.ok()) return s;
+  if (Status s = ResolveInputs(prog.get(), other_inputs, &inputs); !s.ok()) return s;
   std::string plan_error;
   std::shared_ptr<const rt::SignalPlan> plan;
   if (!options.outputs.empty()) {
@@ -189,14 +199,16 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
     if (!plan) return {1, "output: " + plan_error};
   }
   auto ws = rt::MakeWorkspace(*prog);
+  if (m_in > 0) rt::SetInputValues(*ws, w0.data());
 
   const int nci = static_cast<int>(red.indep_coords().size());
   const int nui = static_cast<int>(red.indep_speeds().size());
-  const int n = nci + nui, m = static_cast<int>(inputs.size()), np = static_cast<int>(options.outputs.size());
+  const int n = nci + nui, m = m_in + static_cast<int>(inputs.size()), np = static_cast<int>(options.outputs.size());
   const int nq = program.nq;
   for (int i : red.indep_coords()) out->states.push_back(red.coord_name(i));
   for (int i : red.indep_speeds()) out->states.push_back(red.speed_name(i));
   out->n_coords = nci;
+  for (int k = 0; k < m_in; ++k) out->inputs.push_back(rt::InputName(program, k));
   for (const Input& in : inputs) out->inputs.push_back(in.name);
   out->outputs = options.outputs;
   out->h = options.step;
@@ -245,7 +257,11 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
     x_size[static_cast<size_t>(j)] =
         j >= nci ? std::abs(red.y0()[static_cast<size_t>(nq + var_of(j))]) : red.CoordMagnitude(var_of(j));
   for (int k = 0; k < m; ++k) {
-    const Input& in = inputs[static_cast<size_t>(k)];
+    if (k < m_in) {
+      u_size[static_cast<size_t>(k)] = std::abs(w0[static_cast<size_t>(k)]);
+      continue;
+    }
+    const Input& in = inputs[static_cast<size_t>(k - m_in)];
     if (!in.is_joint) u_size[static_cast<size_t>(k)] = std::abs(program.param_values[static_cast<size_t>(in.param.index)]);
   }
   double x_max = 0.0;
@@ -279,27 +295,40 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   out->D.resize(np, m);
   MatrixXd errBD(n + np, m);
   for (int k = 0; k < m; ++k) {
-    const Input& in = inputs[static_cast<size_t>(k)];
     StepEval F;
     double hk = h;
-    if (in.is_joint) {
-      F = [&](double s, VectorXd* f, double* taken) {
-        ws->force_regs[static_cast<size_t>(in.joint.reg)] = s;
+    const Input* in = k < m_in ? nullptr : &inputs[static_cast<size_t>(k - m_in)];
+    if (!in) {  // a model input: moved on the workspace, the others held
+      const double v0 = w0[static_cast<size_t>(k)];
+      hk = ColumnStep(out->inputs[static_cast<size_t>(k)], h * std::max(1.0, std::abs(v0)), step_floor, &out->widened);
+      F = [&, k, v0](double s, VectorXd* f, double* taken) {
+        std::vector<double> u = w0;
+        u[static_cast<size_t>(k)] = v0 + s;
+        rt::SetInputValues(*ws, u.data());
         Status st = eval(VectorXd::Zero(n), *prog, *ws, plan.get(), f);
-        ws->force_regs[static_cast<size_t>(in.joint.reg)] = 0.0;
+        rt::SetInputValues(*ws, w0.data());
+        *taken = u[static_cast<size_t>(k)] - v0;
+        return st;
+      };
+    } else if (in->is_joint) {
+      F = [&, in](double s, VectorXd* f, double* taken) {
+        ws->force_regs[static_cast<size_t>(in->joint.reg)] = s;
+        Status st = eval(VectorXd::Zero(n), *prog, *ws, plan.get(), f);
+        ws->force_regs[static_cast<size_t>(in->joint.reg)] = 0.0;
         *taken = s;  // the register holds s itself (its value at the operating point is 0)
         return st;
       };
       hk = 1.0;  // u' is affine in a generalized force: any step is exact up to rounding
     } else {
-      const double v0 = program.param_values[static_cast<size_t>(in.param.index)];
-      hk = ColumnStep(in.name, h * std::max(1.0, std::abs(v0)), step_floor, &out->widened);
-      F = [&, v0](double s, VectorXd* f, double* taken) -> Status {
+      const double v0 = program.param_values[static_cast<size_t>(in->param.index)];
+      hk = ColumnStep(in->name, h * std::max(1.0, std::abs(v0)), step_floor, &out->widened);
+      F = [&, in, v0](double s, VectorXd* f, double* taken) -> Status {
         std::shared_ptr<const rt::Program> rebound;
-        if (Status st = RebindParameter(program, in.name, v0 + s, &rebound); !st.ok()) return st;
+        if (Status st = RebindParameter(program, in->name, v0 + s, &rebound); !st.ok()) return st;
         std::shared_ptr<const rt::SignalPlan> pl;
         if (np > 0) pl = rt::PlanSignals(*rebound, options.outputs, &plan_error);
         auto w = rt::MakeWorkspace(*rebound);
+        if (m_in > 0) rt::SetInputValues(*w, w0.data());
         *taken = (v0 + s) - v0;
         return eval(VectorXd::Zero(n), *rebound, *w, pl.get(), f);
       };

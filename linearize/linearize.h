@@ -12,8 +12,9 @@
 //      (the dependent ones follow by Newton on phi(q) = 0), velocity constraints A u + b =
 //      0 (loops and rolling rows) remove speeds: a rolling system keeps more coordinates
 //      than speeds.
-//   w  inputs: generalized forces added to a joint's speeds ("hinge.tau", "free.tau[4]")
-//      or real parameters ("k", "world.g[2]"; parameters bound to it follow).
+//   w  inputs: the model's own inputs (`input Real u;`, at their values at the operating
+//      point), then generalized forces added to a joint's speeds ("hinge.tau",
+//      "free.tau[4]") or real parameters ("k", "world.g[2]"; parameters bound to it follow).
 //   y  output signals (any name of rt::AvailableSignals).
 //
 // Derivatives are central differences with Richardson extrapolation over the steps h,
@@ -26,6 +27,7 @@
 
 #include <Eigen/Core>
 #include <complex>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -51,6 +53,9 @@ struct Status {
 
 struct LinearizeOptions {
   double step = 1e-3;                // base step h, times the scale of each variable (1 for coordinates)
+  // The model's inputs at the operating point (rt::InputName order; one value each when the
+  // model has inputs): held at these values, and each is a column of B and D.
+  std::vector<double> input_values;
   std::vector<std::string> inputs;   // joint force "J.tau" / "J.tau[k]", or a real parameter name
   std::vector<std::string> outputs;  // signal names
 };
@@ -66,8 +71,9 @@ struct OperatingPoint {
 OperatingPoint StartPoint(const rt::Program& program);
 
 // The state of the motion from the start values at time t (integrated with rtol 1e-10,
-// then projected onto the constraints). Status 2 when the run fails before t.
-Status PointAtTime(const rt::Program& program, double t, OperatingPoint* out);
+// then projected onto the constraints), the model's inputs from `inputs` (needed when it
+// has some). Status 2 when the run fails before t.
+Status PointAtTime(const rt::Program& program, double t, OperatingPoint* out, const rt::InputSource* inputs = nullptr);
 
 // `program` with real parameter `name` set to `value` (parameters bound to it follow).
 // Status 1 for an unknown, structural or constant parameter, or a value Rebind refuses.
@@ -118,6 +124,15 @@ struct LinearModel {
 Status Linearize(const rt::Program& program, const OperatingPoint& op, const LinearizeOptions& options,
                  LinearModel* out);
 
+// One evaluation at step s: F(s), and the step actually taken (eq. 5's h+ or -h-: the
+// perturbed variable's value minus its value at s = 0, as rounded).
+using StepEval = std::function<Status(double s, Eigen::VectorXd* f, double* taken)>;
+
+// dF/ds at s = 0: central differences over the steps h, h/2, h/4 with Richardson
+// extrapolation (linearize.cpp, eqs. 5-7); *err = |R(h/2) - R(h)|, without the rounding
+// term. The columns of A, B, C, D, and the FMU's directional derivatives (fmi/instance.h).
+Status Richardson(const StepEval& F, double h, Eigen::VectorXd* d, Eigen::VectorXd* err);
+
 // Eigenvalues and modes of model->A (fills model->modes and model->ignorable).
 void ComputeModes(LinearModel* model);
 
@@ -133,6 +148,8 @@ struct EquilibriumResult {
 // 0 with every free speed zero (a pseudo-inverse step: directions without stiffness
 // stay where they are); when Newton stalls, a relaxation toward a potential minimum, then
 // Newton again. Status 2 when no equilibrium is found.
-Status FindEquilibrium(const rt::Program& program, const OperatingPoint& start, EquilibriumResult* out);
+// `input_values`: the model's inputs, held (LinearizeOptions::input_values).
+Status FindEquilibrium(const rt::Program& program, const OperatingPoint& start, EquilibriumResult* out,
+                       const std::vector<double>& input_values = {});
 
 }  // namespace kanesim::lin

@@ -18,7 +18,7 @@ OperatingPoint StartPoint(const rt::Program& program) {
   return op;
 }
 
-Status PointAtTime(const rt::Program& p, double t, OperatingPoint* out) {
+Status PointAtTime(const rt::Program& p, double t, OperatingPoint* out, const rt::InputSource* inputs) {
   *out = StartPoint(p);
   if (t == out->t) return {};
   if (!(t > out->t)) return {1, fmt::format("--at {}: before the start time {}", t, out->t)};
@@ -39,6 +39,7 @@ Status PointAtTime(const rt::Program& p, double t, OperatingPoint* out) {
   so.interval = t - out->t;
   so.rtol = so.atol = 1e-10;
   so.signals = names;
+  so.inputs = inputs;
   sim::MemorySink sink;
   const sim::SimResult r = sim::Simulate(p, so, sink);
   if (r.status != sim::SimResult::Status::kOk || sink.rows.empty())
@@ -46,6 +47,7 @@ Status PointAtTime(const rt::Program& p, double t, OperatingPoint* out) {
   out->t = sink.times.back();
   out->y = sink.rows.back();
   auto ws = rt::MakeWorkspace(p);
+  rt::SetInputSource(*ws, inputs);
   if (rt::ProjectOntoConstraints(p, *ws, out->t, out->y.data()) != 0)
     return {2, fmt::format("the state at t = {} cannot be projected onto the constraints: {}", t,
                            rt::ErrorMessage(*ws))};

@@ -65,6 +65,7 @@ bool Holonomic(rt::RowKind k) {
 Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_speeds) {
   p_ = &p;
   ws_ = rt::MakeWorkspace(p);
+  if (!inputs_.empty()) rt::SetInputValues(*ws_, inputs_.data());
   t_ = op.t;
   y0_ = op.y;
   const int nq = p.nq, nu = p.nu;

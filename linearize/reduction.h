@@ -35,6 +35,9 @@ class Reduction {
   // of op are solved for (an equilibrium search sets every speed to zero first);
   // otherwise op must satisfy the velocity constraints (status 1 if not).
   Status Init(const rt::Program& p, const OperatingPoint& op, bool fix_speeds);
+  // The model's inputs (rt::InputName order) the configuration is evaluated with (a
+  // prescribed motion may read them); before Init. Empty: none.
+  void SetInputs(const std::vector<double>& u) { inputs_ = u; }
 
   int nu() const { return p_->nu; }
   const std::vector<int>& indep_coords() const { return iq_; }  // chart indices
@@ -68,6 +71,7 @@ class Reduction {
 
   const rt::Program* p_ = nullptr;
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, nullptr};
+  std::vector<double> inputs_;  // SetInputs
   double t_ = 0.0;
   std::vector<double> y0_;
   Eigen::VectorXd q0_, u0_;                 // free coordinates and speeds of the operating point

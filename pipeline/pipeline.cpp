@@ -150,6 +150,25 @@ std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& e
   return diags.RenderAll();
 }
 
+void AddUnconnectedInputs(const flat::Mechanism& mech, const std::vector<std::string>& missing, lang::Diagnostics& diags) {
+  for (const std::string& name : missing)
+    for (const flat::Input& in : mech.inputs) {
+      if (in.name != name) continue;
+      diags.Error(flat::DiagCode::UnconnectedInput, SpanOf(diags.Sources(), in.loc),
+                  "input '" + name + "' is not connected: nothing gives its value")
+          .hint = "give it a column of an --input-file table, or a constant with --set " + name.substr(0, name.find('[')) +
+                  "=...";
+      break;
+    }
+}
+
+std::string RenderUnconnectedInputs(const Model& model, const std::vector<std::string>& missing) {
+  if (missing.empty()) return "";
+  lang::Diagnostics diags(&model.source.sources);
+  AddUnconnectedInputs(*model.mech, missing, diags);
+  return diags.RenderAll();
+}
+
 namespace {
 // A start value as a --sensitivity name: "j.q.start" / "j.u.start" (a joint with one coordinate
 // or speed) or "j.q[k].start" (k from 1), of a joint whose coordinates are states.

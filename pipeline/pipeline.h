@@ -163,6 +163,12 @@ void AddCompileMessage(const rt::CompileMessage& message, lang::Severity severit
 // The same, rendered alone with the source lines of `model`'s files.
 std::string RenderCompileMessage(const Model& model, const rt::CompileMessage& message, lang::Severity severity);
 
+// E239 at the declaration of each of the model's inputs named in `missing` (rt::InputName:
+// "tau", "f[2]"): nothing gives its value (no --input-file column, no --set).
+void AddUnconnectedInputs(const flat::Mechanism& mech, const std::vector<std::string>& missing, lang::Diagnostics& diags);
+// The same, rendered with the source lines of `model`'s files ("" when `missing` is empty).
+std::string RenderUnconnectedInputs(const Model& model, const std::vector<std::string>& missing);
+
 // ---------------------------------------------------------------------------------------
 // Stages 4-6: run it.
 // ---------------------------------------------------------------------------------------

@@ -75,6 +75,20 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
   }
   d["events"] = events;
   d["terminated"] = s.terminated ? py::object(py::make_tuple(s.terminate_time, s.terminate_message)) : py::none();
+  // run(sensitivity=...): per parameter, in its order, the differences' estimated error and
+  // the largest value of each quotient, as `--stats` prints them (docs/integrators.md).
+  py::dict sens;
+  for (const kanesim::sim::SensitivityErrors& e : s.sensitivity) {
+    py::dict x;
+    x["dfdp_error"] = e.dfdp_error;
+    x["dfdp_scale"] = e.dfdp_scale;
+    x["dfdy_error"] = e.dfdy_error;
+    x["dfdy_scale"] = e.dfdy_scale;
+    x["start_error"] = e.start_error;
+    x["start_scale"] = e.start_scale;
+    sens[py::str(e.param)] = x;
+  }
+  d["sensitivity"] = sens;
   return d;
 }
 

@@ -109,7 +109,7 @@ TEST(InputFile, OutOfRangeAndUnconnectedAreErrors) {
   EXPECT_TRUE(Has(r.err, "short.csv covers 0 to 2, not the run's 0 to 3")) << r.err;
   Result u = Kanesim("run m.mech -o out.csv", d);
   EXPECT_EQ(u.rc, 1) << u.err;
-  EXPECT_TRUE(Has(u.err, "m.mech:2:14: error: input 'tau' is not connected")) << u.err;
+  EXPECT_TRUE(Has(u.err, "m.mech:2:14: error[E239]: input 'tau' is not connected")) << u.err;
   Write(d + "/other.csv", "time,torque\n0,0\n3,1\n");
   Result n = Kanesim("run m.mech --input-file other.csv -o out.csv", d);
   EXPECT_EQ(n.rc, 1) << n.err;

@@ -119,6 +119,38 @@ TEST(Concat, MismatchesAreDiagnostics) {
   }
 }
 
+// A grid of scalars [a, b; c, d] is built directly (ScalarGrid); this pins what the general
+// joins give it. If this fails, a grid of Integers is not Integer, a Real among them does not
+// make it Real, Booleans or Strings lose their kind or order, or a grid that is not one (a
+// ragged row, a vector among scalars, mixed kinds) skips the general rules and their messages.
+TEST(Concat, ScalarGridsAsTheJoinsDefineThem) {
+  ExpectMatrix("  parameter Integer K[2, 3] = [1, 2, 3; 4, 5, 6];", "K", 2, 3, {1, 2, 3, 4, 5, 6});
+  ExpectMatrix("  parameter Integer K[1, 1] = [7];", "K", 1, 1, {7});
+  ExpectMatrix("  parameter Real M[2, 2] = [1, 2.5; 3, 4];", "M", 2, 2, {1, 2.5, 3, 4});
+  ExpectMatrix("  parameter Boolean B[2, 2] = [true, false; false, true];", "B", 2, 2, {1, 0, 0, 1});
+  auto s = ElaborateText(ModelWith("  parameter String S[2, 2] = [\"a\", \"b\"; \"c\", \"d\"];"));
+  ASSERT_TRUE(s->ok) << s->errors;
+  const char* want[] = {"a", "b", "c", "d"};
+  for (int k = 0; k < 4; ++k) {
+    const int i = s->mech.FindParam("S[" + std::to_string(k / 2 + 1) + "," + std::to_string(k % 2 + 1) + "]");
+    ASSERT_GE(i, 0);
+    EXPECT_EQ(s->mech.params[static_cast<size_t>(i)].string_value, want[k]);
+  }
+  auto real_in_integer = ElaborateText(ModelWith("  parameter Integer K[1, 2] = [1, 2.5];"));
+  EXPECT_FALSE(real_in_integer->ok);
+  const Bad cases[] = {
+      {"parameter Real M[2, 2] = [1, true; 3, 4];", "E204", "row 1 of [...]: block 2 is Boolean but block 1 is Integer"},
+      {"parameter Real M[2, 2] = [1, 2; true, false];", "E204", "[...]: row 2 is Boolean but row 1 is Integer"},
+      {"parameter Real M[2, 2] = [1, 2; 3];", "E205", "[...]: row 2 is [1, 1] but row 1 is [1, 2]"},
+      {"parameter Real M[2, 2] = [1, {2, 3}; 4, 5];", "E205", "row 1 of [...]: block 2 is [2, 1] but block 1 is [1, 1]"},
+  };
+  for (const Bad& c : cases) {
+    auto e = ElaborateText(ModelWith(std::string("  ") + c.decl));
+    EXPECT_TRUE(e->HasCode(c.code)) << c.decl << "\n" << e->errors;
+    EXPECT_NE(e->errors.find(c.text), std::string::npos) << c.decl << "\n" << e->errors;
+  }
+}
+
 // If this fails, a concatenation can exceed the element limit or escape the work budget.
 TEST(Concat, LimitsHold) {
   // 60 000 + 60 000 elements: over the 100 000-element limit.

@@ -119,6 +119,21 @@ TEST_F(FmuLibrary, HostileCallsAndANumericalFailureAreErrorsNotCrashes) {
   EXPECT_EQ(do_step(c, 0.0, 0.25, 1), fmi2Error);  // backwards
   EXPECT_EQ(do_step(c, 0.25, -1.0, 1), fmi2Error);
   EXPECT_EQ(do_step(c, 0.25, nan, 1), fmi2Error);
+  // Directional derivatives: a NaN seed, a known that is no state or input, an unknown that
+  // is no derivative or output, a value reference past the end, no place for the result.
+  using Directional = fmi2Status (*)(fmi2Component, const fmi2ValueReference[], size_t, const fmi2ValueReference[],
+                                     size_t, const fmi2Real[], fmi2Real[]);
+  auto directional = Fn<Directional>("fmi2GetDirectionalDerivative");
+  const fmi2ValueReference der_u = 3, q = 0, param = 5, far = 1000000;
+  double seed = 1.0, out = 0.0;
+  EXPECT_EQ(directional(c, &der_u, 1, &q, 1, &nan, &out), fmi2Error);
+  EXPECT_EQ(directional(c, &der_u, 1, &param, 1, &seed, &out), fmi2Error);
+  EXPECT_EQ(directional(c, &q, 1, &q, 1, &seed, &out), fmi2Error);
+  EXPECT_EQ(directional(c, &der_u, 1, &far, 1, &seed, &out), fmi2Error);
+  EXPECT_EQ(directional(c, &der_u, 1, &q, 1, nullptr, &out), fmi2Error);
+  EXPECT_EQ(directional(c, &der_u, 1, &q, 1, &seed, nullptr), fmi2Error);
+  EXPECT_EQ(directional(c, &der_u, 1, &q, 1, &seed, &out), fmi2OK);
+  EXPECT_TRUE(std::isfinite(out) && out != 0.0) << out;  // gravity's torque changes with q
   g_messages.clear();
   EXPECT_EQ(do_step(c, 0.25, 0.5, 1), fmi2Error);  // the torque is NaN past t = 0.5
   EXPECT_TRUE(Logged("numerical failure at t = ")) << (g_messages.empty() ? "" : g_messages.back());

@@ -130,3 +130,47 @@ def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
     assert r.returncode == 1
     r = kanesim("export", str(tmp_path / "missing.mech"), "--fmi", "2", "-o", str(tmp_path / "x.fmu"), check=False)
     assert r.returncode == 1 and not (tmp_path / "x.fmu").exists()
+
+
+# Units of every kind of variable, from the model's unit check: a spherical joint's quaternion
+# ("1") and rates, a prismatic joint, parameters in N.m/rad and mm (a factor), an output
+# whose unit is inferred (m).
+UNITS = """
+model Units
+  parameter Real k(unit = "N/m") = 2;
+  parameter Real c(unit = "N.m/rad") = 0.5;
+  parameter Real gap(unit = "mm") = 5;
+  World world;
+  Spherical ball;
+  Rod rod(L = 1, m = 1);
+  Body hub(m = 0.1, I = diagonal({0.01, 0.01, 0.01}));
+  Prismatic slide(axis = {1, 0, 0});
+  Body b(m = 1);
+  output Real height = rod.frame_b.r[2];
+equation
+  connect(world.frame_b, ball.frame_a);
+  connect(ball.frame_b, rod.frame_a);
+  connect(ball.frame_b, hub.frame_a);
+  connect(world.frame_b, slide.frame_a);
+  connect(slide.frame_b, b.frame_a);
+  slide.tau = -k * slide.q;
+end Units;
+"""
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_units_and_their_definitions_come_from_the_unit_check(export, write_model, fmi):
+    fmu = export(write_model("units.mech", UNITS), fmi=fmi)
+    assert validate_fmu(fmu) == []
+    md = read_model_description(fmu)
+    unit = {x.name: x.unit for x in md.modelVariables}
+    assert unit["ball.q[1]"] == "1" and unit["der(ball.q[1])"] == "1/s"
+    assert unit["ball.u[2]"] == "rad/s" and unit["der(ball.u[2])"] == "rad/s2"
+    assert unit["slide.q"] == "m" and unit["der(slide.u)"] == "m/s2"
+    assert unit["c"] == "N.m/rad" and unit["gap"] == "mm" and unit["height"] == "m"
+    base = {u.name: u.baseUnit for u in md.unitDefinitions}
+    exps = lambda b: {a: int(getattr(b, a)) for a in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+                      if getattr(b, a) not in (None, 0, "0")}
+    assert exps(base["N.m/rad"]) == {"kg": 1, "m": 2, "s": -2, "rad": -1}
+    assert exps(base["mm"]) == {"m": 1} and float(base["mm"].factor) == pytest.approx(1e-3)
+    assert exps(base["rad/s2"]) == {"rad": 1, "s": -2} and exps(base["1"]) == {}

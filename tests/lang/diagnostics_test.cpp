@@ -11,6 +11,8 @@
 //   // repeat: CHAIN "+1" 100000  (replaces each @CHAIN@ in the text by "+1" 100000 times)
 //   // stage: compile             (also compile, when elaboration succeeds: the compiler's
 //                                 K3xx errors, and its W313/W314/W315 warnings for every signal)
+//   // stage: inputs              (also check that every input is given, as a run without
+//                                 --input-file or --set does: E239)
 //   // mesh: part.stl open        (writes a test mesh beside the file, tests/support/mesh_fixtures.h;
 //                                 the file is then loaded from that folder, named by its path)
 //
@@ -59,6 +61,7 @@ struct DiagFile {
   std::vector<std::pair<std::string, std::string>> overrides;
   std::string model;
   bool compile = false;
+  bool inputs = false;  // stage: inputs
   std::vector<std::pair<std::string, std::string>> meshes;  // (file name, kind) to write first
 };
 
@@ -159,6 +162,7 @@ DiagFile LoadDiagFile(const fs::path& path) {
     if (std::string pad = Directive(comment, "pad-to-bytes:"); !pad.empty()) pad_to = std::stoul(pad);
     if (std::string rep = Directive(comment, "repeat:"); !rep.empty()) repeats.push_back(rep);
     if (Directive(comment, "stage:") == "compile") f.compile = true;
+    if (Directive(comment, "stage:") == "inputs") f.inputs = true;
     if (std::string mesh = Directive(comment, "mesh:"); !mesh.empty()) {
       size_t sp = mesh.find(' ');
       f.meshes.emplace_back(Trim(mesh.substr(0, sp)), sp == std::string::npos ? "" : Trim(mesh.substr(sp)));
@@ -258,7 +262,13 @@ TEST_P(DiagnosticFileTest, ReportsExactlyTheExpectedDiagnostics) {
     options.model = f.model;
     for (const auto& [name, value] : f.overrides) options.overrides.push_back({name, value});
     flat::Mechanism mechanism;
-    if (Elaborate(program, options, &mechanism, diags) && !diags.HasErrors() && f.compile) {
+    const bool elaborated = Elaborate(program, options, &mechanism, diags) && !diags.HasErrors();
+    if (elaborated && f.inputs) {
+      std::vector<std::string> all;  // a run given no input: every one is missing
+      for (const flat::Input& in : mechanism.inputs) all.push_back(in.name);
+      pipeline::AddUnconnectedInputs(mechanism, all, diags);
+    }
+    if (elaborated && f.compile) {
       // The compiler's messages through the pipeline's conversion, as `kanesim` reports them.
       rt::CompileResult r = rt::Compile(mechanism, {});
       for (const rt::CompileMessage& e : r.errors) pipeline::AddCompileMessage(e, Severity::Error, diags);

@@ -127,12 +127,22 @@ INSTANTIATE_TEST_SUITE_P(
         Rule{"Sum", Pendulum("  parameter Real a(unit = \"m\") = 1;", "Rod rod(L = a + 1);"),
              Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"rad\") = 1;", "Rod rod(L = a - b);"),
              "m.mech:6:15: error[E237]: the operands of '-' have different units: \"m\" and \"rad\""},
-        // A number times a quantity may carry any unit (0.3 N.m/rad); the sum it is part of
-        // is still checked.
-        Rule{"NumberInAProduct", Pendulum(kTorques, "Rod rod(L = 1);", "  j.tau = -0.3 * j.q;"),
+        // In an equation a number times a quantity may carry any unit (0.3 N.m/rad); the sum
+        // it is part of is still checked.
+        Rule{"NumberInAnEquation", Pendulum(kTorques, "Rod rod(L = 1);", "  j.tau = -0.3 * j.q;"),
              Pendulum(kTorques, "Rod rod(L = 1);", "  j.tau = -0.3 * j.q + F;"),
              "m.mech:11:3: error[E237]: the two sides of the equation have different units: 'j.tau' is \"N.m\", the "
              "right side \"N\""},
+        // In a binding or modifier a number beside a quantity is a plain factor (Modelica's
+        // rule): twice a length is a length, twice a mass is not one.
+        Rule{"NumberInABinding", Pendulum("  parameter Real len(unit = \"m\") = 1;", "Rod rod(L = 2 * len);"),
+             Pendulum("  parameter Real mass(unit = \"kg\") = 1;", "Rod rod(L = 2 * mass);"),
+             "m.mech:5:15: error[E237]: 'rod.L' has unit \"m\" but its value has unit \"kg\""},
+        // A number over a quantity: its inverse (2 / T is a rate, not a time).
+        Rule{"NumberOverAQuantity",
+             Pendulum("  parameter Real T(unit = \"s\") = 1;\n  parameter Real w(unit = \"rad/s\") = 2 / T;"),
+             Pendulum("  parameter Real T(unit = \"s\") = 1;\n  parameter Real w(unit = \"s\") = 2 / T;"),
+             "m.mech:3:34: error[E237]: 'w' has unit \"s\" but its value has unit \"1/s\""},
         // sin takes an angle in rad or a number; w * time is one (rad/s times s).
         Rule{"Sine", Pendulum(kSine, "Rod rod(L = 1);", "  j.tau = T * sin(w * time);"),
              Pendulum(kSine, "Rod rod(L = 1);", "  j.tau = T * sin(w);"),

@@ -32,7 +32,7 @@ USES = {
     "batch": ["util", "flat", "runtime", "compiler", "sim"],
     "pipeline": ["flat", "lang", "stdlib", "import", "runtime", "compiler", "sim"],
     "viz": ["util", "geometry"],
-    "fmi": ["flat", "runtime", "compiler", "sim", "pipeline"],
+    "fmi": ["flat", "lang", "runtime", "compiler", "sim", "linearize", "pipeline"],
     "cli": ["util", "flat", "geometry", "lang", "stdlib", "import", "runtime", "compiler", "sim", "linearize", "batch",
             "pipeline", "viz", "fmi"],
     "python": ["flat", "lang", "stdlib", "import", "runtime", "compiler", "sim", "linearize", "batch", "pipeline"],

@@ -25,6 +25,11 @@ world matrices with the display rotation undone).
                                error box, one line saying why there is no 3-D view, every plot
                                drawn with the closed-form values at every instant, the slider,
                                keys, play and a plot click moving the time and the cursors
+  units      --page P          the page of `kanesim view tests/viz/units_plot.mech --html`:
+                               every signal's name in the picker and its plot's title carries
+                               the unit its quantity has (metres and radians of the joints,
+                               the declared and the inferred outputs, joules), and none where
+                               the unit is unknown
 Exit 0 when every check passes; 1 with the failures listed.
 """
 import argparse
@@ -551,9 +556,38 @@ def run_nowebgl(args):
             check_without_webgl(page, served, "served page, three.js blocked", "three.js did not load (libjs-three)")
 
 
+# units_plot.mech's signals and the units of what they measure (the physics, not the model's
+# text): the prismatic joint's displacement and speed, the hinge's angle and rate, a force, a
+# height, the energies, twice a rate; `scaled` (a parameter of no unit times a rate) has no
+# unit the check can know.
+UNITS_PLOT = {"slider.q": "m", "slider.u": "m/s", "hinge.q": "rad", "hinge.u": "rad/s", "spring_force": "N",
+              "tip_height": "m", "doubled": "rad/s", "scaled": "", "kinetic_energy": "J", "potential_energy": "J"}
+
+
+def run_units(args):
+    url = pathlib.Path(args.page).resolve().as_uri()
+    with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+        page = browser.new_page(WIDTH, HEIGHT)
+        if not open_page(page, url, "units page"):
+            return
+        labels = page.evaluate("Array.from(document.querySelectorAll('#signal-list label')).map((l) => "
+                               "[l.querySelector('input').dataset.signal, l.textContent.trim()])")
+        labels = dict(labels or [])
+        for name, unit in UNITS_PLOT.items():
+            want = name + (f" [{unit}]" if unit else "")
+            check(labels.get(name) == want, f"picker: {name} reads {labels.get(name)!r}, not {want!r}")
+            # Plotted (a click on its box when it is not yet): the plot's title carries the unit.
+            page.evaluate(f"(() => {{ const b = document.querySelector('#signal-list input[data-signal=\"{name}\"]'); "
+                          "if (b && !b.checked) b.click(); })()")
+            title = page.evaluate(f"(() => {{ const t = document.querySelector('.plot[data-signal=\"{name}\"] .plot-title'); "
+                                  "return t ? t.textContent : null; })()")
+            check(title == want, f"plot: {name}'s title reads {title!r}, not {want!r}")
+        check_requests(page, [url, "data:", "blob:"], "units page")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot", "nowebgl"])
+    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot", "nowebgl", "units"])
     parser.add_argument("--chromium", default="chromium")
     parser.add_argument("--page")
     parser.add_argument("--fixture")
@@ -563,7 +597,7 @@ def main():
     start = time.monotonic()
     try:
         {"offline": run_offline, "served": run_served, "controls": run_controls, "edge": run_edge,
-         "screenshot": run_screenshot, "nowebgl": run_nowebgl}[args.case](args)
+         "screenshot": run_screenshot, "nowebgl": run_nowebgl, "units": run_units}[args.case](args)
     except cdp.ProtocolError as e:
         failures.append(f"browser: {e}")
     for f in failures:

@@ -1,0 +1,129 @@
+"""Directional derivatives of an exported FMU (fmi2GetDirectionalDerivative,
+fmi3GetDirectionalDerivative) through FMPy: the Jacobian of the derivatives and an output
+with respect to the states and an input equals central differences of fmi*GetDerivatives /
+the output, is linear in the seed, and equals the A, B, C and D of `kanesim linearize` at
+the same point."""
+import json
+from ctypes import POINTER, c_double
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Model
+from fmpy.fmi3 import FMU3Model
+
+from conftest import kanesim
+
+# A double pendulum moving (velocity terms in A), driven by an input torque at its base.
+DOUBLE = """
+model Double "A double pendulum with an input torque"
+  input Real tau;
+  World world;
+  Revolute j1(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.8));
+  Rod rod1(L = 1, m = 1);
+  Revolute j2(axis = {0, 0, 1}, q(start = 0.5), u(start = -0.4));
+  Rod rod2(L = 0.7, m = 0.6);
+  output Real tip = rod2.frame_b.r[2];
+equation
+  connect(world.frame_b, j1.frame_a);
+  connect(j1.frame_b, rod1.frame_a);
+  connect(rod1.frame_b, j2.frame_a);
+  connect(j2.frame_b, rod2.frame_a);
+  j1.tau = tau;
+end Double;
+"""
+TAU = 0.7
+
+
+def me_instance(fmu, tmp_path, fmi):
+    d = extract(fmu, unzipdir=str(tmp_path / f"fmu{fmi}"))
+    md = read_model_description(d)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    if fmi == 2:
+        m = FMU2Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier)
+        m.instantiate()
+        m.setupExperiment(startTime=0.0)
+        m.enterInitializationMode()
+        m.setReal([vr["tau"]], [TAU])
+        m.exitInitializationMode()
+        m.enterContinuousTimeMode()
+        set_input = lambda v: m.setReal([vr["tau"]], [v])
+        get_out = lambda: m.getReal([vr["tip"]])[0]
+    else:
+        m = FMU3Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier)
+        m.instantiate()
+        m.enterInitializationMode(startTime=0.0)
+        m.setFloat64([vr["tau"]], [TAU])
+        m.exitInitializationMode()
+        m.enterContinuousTimeMode()
+        set_input = lambda v: m.setFloat64([vr["tau"]], [v])
+        get_out = lambda: m.getFloat64([vr["tip"]])[0]
+    states = [v.name for v in md.modelVariables if v.name in ("j1.q", "j2.q", "j1.u", "j2.u")]
+    return m, md, vr, states, set_input, get_out
+
+
+def jacobian(m, vr, states):
+    """[der(states); tip] by (states, tau), one directional derivative per column."""
+    unknowns = [vr[f"der({s})"] for s in states] + [vr["tip"]]
+    cols = [m.getDirectionalDerivative(unknowns, [vr[k]], [1.0]) for k in states + ["tau"]]
+    return np.array(cols).T
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_directional_derivatives_equal_differences_of_get_derivatives(export, write_model, tmp_path, fmi):
+    model = write_model("double.mech", DOUBLE)
+    m, md, vr, states, set_input, get_out = me_instance(export(model, fmi=fmi, kind="me"), tmp_path, fmi)
+    n = len(states)
+    J = jacobian(m, vr, states)
+    ptr = lambda a: a.ctypes.data_as(POINTER(c_double))
+    x0 = np.zeros(n)
+    m.getContinuousStates(ptr(x0), n)
+    get_der = m.getDerivatives if fmi == 2 else m.getContinuousStateDerivatives
+
+    def f(x, tau):
+        x = np.ascontiguousarray(x, dtype=float)
+        m.setContinuousStates(ptr(x), n)
+        set_input(tau)
+        der = np.zeros(n)
+        get_der(ptr(der), n)
+        return np.append(der, get_out())
+
+    h = 1e-5  # central differences: error ~ h^2 |f'''| ~ 1e-10
+    fd = np.zeros_like(J)
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = h
+        fd[:, j] = (f(x0 + e, TAU) - f(x0 - e, TAU)) / (2 * h)
+    fd[:, n] = (f(x0, TAU + h) - f(x0, TAU - h)) / (2 * h)
+    assert np.max(np.abs(J - fd)) < 1e-7 * max(1.0, np.max(np.abs(J))), (J, fd)
+    assert abs(J[n - 1, n]) > 0.1  # the torque accelerates the base joint: a real column
+
+    # Linear in the seed: a combined direction is the same combination of the columns.
+    f(x0, TAU)
+    seed = [0.3, -1.2, 0.5, 2.0, -0.7]
+    unknowns = [vr[f"der({s})"] for s in states] + [vr["tip"]]
+    combined = m.getDirectionalDerivative(unknowns, [vr[k] for k in states + ["tau"]], seed)
+    assert np.max(np.abs(np.array(combined) - J @ np.array(seed))) < 1e-8 * max(1.0, np.max(np.abs(J)))
+    m.terminate()
+    m.freeInstance()
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_directional_derivatives_equal_linearize(export, write_model, tmp_path, fmi):
+    model = write_model("double.mech", DOUBLE)
+    m, md, vr, states, _, _ = me_instance(export(model, fmi=fmi, kind="me"), tmp_path, fmi)
+    J = jacobian(m, vr, states)
+    m.terminate()
+    m.freeInstance()
+    out = tmp_path / "lin.json"
+    kanesim("linearize", model, "--set", f"tau={TAU}", "--frozen", "--output", "tip", "-o", str(out))
+    lin = json.loads(out.read_text())
+    assert lin["inputs"] == ["tau"]
+    order = [states.index(s) for s in lin["states"]]  # linearize's states in the FMU's order
+    n = len(states)
+    A = np.array(lin["A"])
+    assert np.max(np.abs(J[:n, :n][np.ix_(order, order)] - A)) < 1e-8 * max(1.0, np.max(np.abs(A)))
+    # The input's column is B's; tip's row is C and D.
+    assert np.max(np.abs(J[:n, n][order] - np.array(lin["B"])[:, 0])) < 1e-8
+    assert np.max(np.abs(J[n, :n][order] - np.array(lin["C"])[0])) < 1e-8
+    assert abs(J[n, n] - lin["D"][0][0]) < 1e-8
