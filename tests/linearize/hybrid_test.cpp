@@ -24,7 +24,7 @@ std::string Rods(const std::string& j1_modifiers, double q1) {
   return "model D\n"
          "  World world(g = {0, -9.81, 0});\n"
          "  Revolute j1(axis = {0, 0, 1}, q(start = " + std::to_string(q1) + ")" + j1_modifiers + ");\n"
-         "  Revolute j2(axis = {0, 0, 1}, q(start = -pi / 2 - " + std::to_string(q1) + "));\n"
+         "  Revolute j2(axis = {0, 0, 1}, q(start = -pi / 2 - (" + std::to_string(q1) + ")));\n"
          "  Rod rod1(L = 1, m = 1);\n"
          "  Rod rod2(L = 0.8, m = 0.7);\n"
          "equation\n"
