@@ -69,11 +69,13 @@ class EngineOde final : public OdeSystem {
   int NumStops() const {
     return stops_ ? stops_->Count() : lift_ ? lift_->Count() : stick_ ? stick_->Count() : 0;
   }
-  int NumEvents() const override { return NumStops() + (whens_ ? whens_->Count() : 0); }
+  // Then the stops' and plane contacts' graze guards (OdeSystem::Paired): minus each gap's rate.
+  int NumEvents() const override { return FirstGuard() + (stops_ ? stops_->Count() : 0); }
+  int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
   int EventFunctions(double t, const double* y, double* g) override {
     if (NumStops() > 0) {
       const int s = stick_ ? stick_->Functions(ws_, t, y, g)
-                    : stops_ ? stops_->Functions(ws_, t, y, g)
+                    : stops_ ? stops_->Functions(ws_, t, y, g, g + FirstGuard())
                              : lift_->Functions(t, y, g);
       if (s != 0) return s;
     }
@@ -177,6 +179,7 @@ class EngineOde final : public OdeSystem {
   }
 
  private:
+  int FirstGuard() const { return NumStops() + (whens_ ? whens_->Count() : 0); }
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> Fresh() const {
     auto ws = rt::MakeWorkspace(program_);
     rt::SetInputSource(*ws, inputs_);

@@ -117,6 +117,12 @@ class OdeSystem {
   virtual int NumEvents() const { return 0; }
   virtual int EventFunctions(double /*t*/, const double* /*y*/, double* /*g*/) { return 0; }
   virtual int Event(double /*t*/, double* /*y*/, int /*i*/) { return 0; }
+  // Graze guards (docs/integrators.md "End stops"): event function i >= 0 may only mark where
+  // another one, Paired(i), has a minimum (minus a gap's rate). At its crossing the solvers
+  // look at that other function there: positive, nothing happens and the run goes on (no
+  // rows); not, it dipped below zero and back inside one step, and its crossing before the
+  // minimum is the event. -1: an event of its own.
+  virtual int Paired(int /*i*/) const { return -1; }
   // After an Event: true when it ends the run there (a when clause's terminate), *why its
   // message. Integrate then writes the right limit's row and stops, successfully.
   virtual bool Terminated(std::string* /*why*/) const { return false; }

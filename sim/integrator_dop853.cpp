@@ -386,12 +386,19 @@ class Dop853Stepper final : public Stepper {
       }
       if (!(ga > 0.0 && g_new_[i] <= 0.0)) continue;
       if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-      const double root = Crossing(static_cast<int>(i), a, ga, g_new_[i]);
+      double root = Crossing(static_cast<int>(i), a, ga, t_, g_new_[i]);
       if (std::isnan(root)) return kRhsFatal;
+      int which = static_cast<int>(i);
+      if (const int p = rhs_.Paired(which); p >= 0) {  // a graze guard: did function p dip below zero?
+        const int dip = Dip(p, &root);
+        if (dip < 0) return kRhsFatal;
+        if (dip == 0) continue;
+        which = p;
+      }
       if (!event_pending_ || root < event_t_) {
         event_pending_ = true;
         event_t_ = root;
-        event_i_ = static_cast<int>(i);
+        event_i_ = which;
       }
     }
     g_prev_ = g_old_;
@@ -423,9 +430,24 @@ class Dop853Stepper final : public Stepper {
     return 0;
   }
 
-  // Event function i's zero in [a, t_] (ga > 0 >= gb there); NaN when it cannot be evaluated.
-  double Crossing(int i, double a, double ga, double gb) {
-    double b = t_;
+  // Function p at *t (a minimum, located by its graze guard): 0 when positive there (no event);
+  // 1 when not, *t then its crossing in [t_old_, *t]; -1 on failure.
+  int Dip(int p, double* t) {
+    std::vector<double>& y = event_y_;
+    y.resize(static_cast<size_t>(n_));
+    std::vector<double> g(g_new_.size());
+    Interpolate(*t, y.data());
+    if (rhs_.EventFunctions(*t, y.data(), g.data()) != 0) return -1;
+    const double gp = g[static_cast<size_t>(p)], g0 = g_old_[static_cast<size_t>(p)];
+    if (gp > 0.0 || !(g0 > 0.0)) return 0;  // (from zero: RiseFromZero's case)
+    const double root = Crossing(p, t_old_, g0, *t, gp);
+    if (std::isnan(root)) return -1;
+    *t = root;
+    return 1;
+  }
+
+  // Event function i's zero in [a, b] (ga > 0 >= gb there); NaN when it cannot be evaluated.
+  double Crossing(int i, double a, double ga, double b, double gb) {
     int side = 0;  // which end was kept last time (Illinois: halve that end's value)
     std::vector<double>& y = event_y_;
     y.resize(static_cast<size_t>(n_));

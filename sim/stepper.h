@@ -35,6 +35,7 @@ class GuardedRhs {
   // The system's energy of a state (OdeSystem::HasEnergy, Energy), for checking rows.
   int NumEvents() const { return system_.NumEvents(); }
   int EventFunctions(double t, const double* y, double* g) { return system_.EventFunctions(t, y, g); }
+  int Paired(int i) const { return system_.Paired(i); }
   bool HasEnergy() const { return system_.HasEnergy(); }
   int Energy(double t, const double* y, double* T, double* V) { return system_.Energy(t, y, T, V); }
   // The system's ProjectedStates (OdeSystem::ProjectedStates), inside a JacobianHold.

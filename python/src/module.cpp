@@ -319,6 +319,7 @@ py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equili
   d["eigenvalues"] = ComplexVector(lambdas, lambdas.size());
   d["modes"] = modes;
   d["ignorable"] = m.ignorable;
+  d["held"] = m.held;
   py::dict acc;
   acc["step"] = m.h;
   acc["A"] = m.error_A;
