@@ -81,6 +81,10 @@ constexpr double kDenseLimit = 1.0;
 // docs/constraints.md "Rows checked against the energy" are caught with 3.
 constexpr long kRowEnergyInstants = 3;
 
+// A stiff run is handed over only when DOP853 would still need more than this many steps at
+// its current size to the stop time: the switch costs a few hundred f (Jacobians, BDF from
+// order 1). examples/sleigh.mech settles at its stability limit 5 steps before the end.
+constexpr double kSwitchMinSteps = 100;
 // Advance's flags (>= 0 success).
 enum Flag : int { kOk = 0, kTooMuchWork = -1, kUnderflow = -2, kRhsRepeated = -3, kRhsFatal = -4 };
 
@@ -162,7 +166,7 @@ class Dop853Stepper final : public Stepper {
       }
       // Stiff, under the automatic choice: handed back at the last accepted step, for the
       // driver to go on with an implicit method from there (no row between is lost).
-      if (options_.switch_when_stiff && stiffness_.Stiff()) {
+      if (options_.switch_when_stiff && stiffness_.Stiff() && stop_ - t_ > kSwitchMinSteps * h_) {
         std::copy(y_.begin(), y_.end(), y);
         event_time = t_;
         return kStiffReached;
