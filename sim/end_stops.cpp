@@ -11,6 +11,8 @@
 // and the side rests from the impact on, its rest logged at t_inf (a time event).
 #include "sim/end_stops.h"
 
+#include "sim/impulse.h"  // SolveSmall
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,33 +21,6 @@
 namespace kanesim::sim {
 
 namespace {
-
-// A c = b for the small dense A (m x m, row-major), Gaussian elimination with partial
-// pivoting. False when A is singular.
-bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double>* c) {
-  const size_t m = b.size();
-  for (size_t k = 0; k < m; ++k) {
-    size_t p = k;
-    for (size_t r = k + 1; r < m; ++r)
-      if (std::abs(A[r * m + k]) > std::abs(A[p * m + k])) p = r;
-    if (!(A[p * m + k] != 0.0)) return false;
-    for (size_t j = 0; j < m; ++j) std::swap(A[k * m + j], A[p * m + j]);
-    std::swap(b[k], b[p]);
-    for (size_t r = k + 1; r < m; ++r) {
-      const double f = A[r * m + k] / A[k * m + k];
-      for (size_t j = k; j < m; ++j) A[r * m + j] -= f * A[k * m + j];
-      b[r] -= f * b[k];
-    }
-  }
-  c->assign(m, 0.0);
-  for (size_t k = m; k-- > 0;) {
-    double s = b[k];
-    for (size_t j = k + 1; j < m; ++j) s -= A[k * m + j] * (*c)[j];
-    (*c)[k] = s / A[k * m + k];
-  }
-  return true;
-}
-
 
 std::string SideName(bool upper) { return upper ? "q_max" : "q_min"; }
 

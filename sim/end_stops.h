@@ -40,6 +40,13 @@ class EndStopEvents {
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
+  // The free speeds of the joints resting on their stops (held at zero).
+  std::vector<int> RestingSpeeds() const {
+    std::vector<int> out;
+    for (const Side& s : sides_)
+      if (s.resting && s.stop >= 0) out.push_back(stops_[static_cast<size_t>(s.stop)].u);
+    return out;
+  }
   // Per side, whether its joint rests on it (the stepping core's state, sim/simulator.h).
   // Per side: 1 when it rests, and where accumulated bounces end (2 numbers a side).
   std::vector<double> Resting() const {

@@ -287,6 +287,11 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
         break;
       }
       ++result.rows;
+      if (system.Terminated(&result.terminate_message)) {
+        result.terminated = true;
+        result.terminate_time = te;
+        break;
+      }
       AddStats(&done, stepper->Stats());
       stepper.reset();
       if (te < grid.stop) {

@@ -118,6 +118,9 @@ class OdeSystem {
   virtual int NumEvents() const { return 0; }
   virtual int EventFunctions(double /*t*/, const double* /*y*/, double* /*g*/) { return 0; }
   virtual int Event(double /*t*/, double* /*y*/, int /*i*/) { return 0; }
+  // After an Event: true when it ends the run there (a when clause's terminate), *why its
+  // message. Integrate then writes the right limit's row and stops, successfully.
+  virtual bool Terminated(std::string* /*why*/) const { return false; }
   virtual bool HasEnergy() const { return false; }
   virtual int Energy(double /*t*/, const double* /*y*/, double* /*T*/, double* /*V*/) { return -1; }
 };
@@ -216,6 +219,9 @@ struct IntegrateResult {
   long rows = 0;           // rows handed to the callback
   long bridges = 0;        // singular configurations stepped over (OdeSystem::Bridge)
   long events = 0;         // events handled (OdeSystem::Event), each with two rows
+  bool terminated = false; // an event ended the run (OdeSystem::Terminated) at terminate_time
+  double terminate_time = 0.0;
+  std::string terminate_message;
   IntegratorStats stats;
 };
 
