@@ -32,6 +32,7 @@
 //   once per step that holds output instants (not per instant).
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -161,6 +162,7 @@ struct IntegratorOptions {
   bool dense_check = true;         // DOP853: retake a step whose dense-output stages are not smooth
   bool row_energy_check = true;    // check interpolated output instants' T + V (OdeSystem::Energy)
   bool check_steps = true;         // DOP853: call OdeSystem::StepAccepted (off: recomputing one row)
+  bool switch_when_stiff = false;  // DOP853 under the automatic choice: go on with CVODE-BDF when stiff
 };
 
 // Counters from the solver (cumulative over the run).
@@ -183,6 +185,9 @@ struct IntegratorStats {
   int last_order = 0;          // last method order used (0 for ERK)
   const char* linear_solver = "none";  // "dense LU", "KLU", "GMRES, matrix-free" (IDA, CVODE-BDF), "none"
   long jac_nonzeros = 0;       // structural non-zeros of the Newton matrix (IDA)
+  double stiff_time = NAN;     // DOP853: where it found the problem stiff (NaN: never)
+  double stiff_h_lambda = 0.0; // ... its last estimate of h |lambda| there
+  bool switched = false;       // ... and the run went on with CVODE-BDF from there
 };
 
 // Output instants: t_k = start + k * interval for k = 0 .. n-1 (computed as start + k / N

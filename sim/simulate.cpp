@@ -100,7 +100,11 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageResult(why);
   IntegratorOptions iopt;
   iopt.method = options.integrator;
-  if (iopt.method == rt::Integrator::Auto) iopt.method = rt::Summarize(program).integrator;
+  if (iopt.method == rt::Integrator::Auto) {
+    iopt.method = rt::Summarize(program).integrator;
+    // docs/integrators.md "The automatic choice": a DOP853 that finds the problem stiff hands over.
+    iopt.switch_when_stiff = iopt.method == rt::Integrator::Dop853;
+  }
   iopt.rtol = options.rtol;
   iopt.atol = options.atol;
   iopt.max_steps = options.max_steps;
@@ -109,7 +113,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.bridge = hooks.bridge;
   iopt.dense_check = hooks.dense_check;
   iopt.row_energy_check = hooks.row_energy_check;
-  if (iopt.method == rt::Integrator::IDA || iopt.method == rt::Integrator::CvodeBdf) iopt.coupling = rt::StateCouplingGroups(program);
+  if (iopt.method == rt::Integrator::IDA || iopt.method == rt::Integrator::CvodeBdf || iopt.switch_when_stiff) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
@@ -316,6 +320,11 @@ std::string FormatStats(const SimStats& s) {
                 i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
   std::string out = buf;
+  if (!std::isnan(i.stiff_time)) {  // DOP853's stiffness detection (sim/dop853_stiffness.h)
+    std::snprintf(buf, sizeof buf, "  %s at t = %.6g (stiff: h|lambda| %.3g, near the stability boundary 6.1)\n",
+                  i.switched ? "switched to CVODE-BDF" : "found stiff (not switched)", i.stiff_time, i.stiff_h_lambda);
+    out.insert(out.find("  steps "), buf);
+  }
   if (i.lin_iters > 0) {  // matrix-free Newton (sim/newton_krylov.h)
     std::snprintf(buf, sizeof buf, "  Krylov iterations        %ld (%ld convergence failures)\n", i.lin_iters,
                   i.lin_conv_fails);

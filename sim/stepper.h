@@ -132,6 +132,9 @@ struct StepFailure {
 // Advance's flag when an event function crossed zero before tout (OdeSystem::NumEvents): y
 // is the state at Stepper::event_time, where function event_index crossed.
 inline constexpr int kEventReached = 1000;
+// ... and when DOP853 found the problem stiff (IntegratorOptions::switch_when_stiff): y is
+// the state of its last accepted step, at Stepper::event_time (before tout).
+inline constexpr int kStiffReached = 1001;
 
 class Stepper {
  public:
