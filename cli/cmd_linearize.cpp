@@ -130,6 +130,7 @@ std::string Json(const lin::LinearModel& m, const lin::OperatingPoint& op) {
   }
   o += m.modes.empty() ? "],\n" : "\n  ],\n";
   o += "  \"ignorable\": " + Names(m.ignorable) + ",\n";
+  o += "  \"held\": " + Names(m.held) + ",\n";
   std::string widened;
   for (const lin::WidenedStep& w : m.widened) widened += (widened.empty() ? "" : ", ") + Str(w.name) + ": " + Num(w.used);
   o += fmt::format("  \"accuracy\": {{\"step\": {}, \"A\": {}, \"BCD\": {}, \"unsteady\": {}, \"widened\": {{{}}}}}\n",
@@ -180,6 +181,8 @@ void Print(const lin::LinearModel& m, const lin::OperatingPoint& op) {
   }
   if (!m.ignorable.empty())
     fmt::print("ignorable   {} (zero eigenvalues: no other state reads them)\n", fmt::join(m.ignorable, ", "));
+  if (!m.held.empty())
+    fmt::print("held        {} (constraint rows at the operating point: not states)\n", fmt::join(m.held, ", "));
   double rmax = -INFINITY;
   for (const lin::Mode& md : m.modes) rmax = std::max(rmax, md.lambda.real());
   if (!m.modes.empty())

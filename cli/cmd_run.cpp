@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <fmt/core.h>
 #include <limits>
 #include <memory>
@@ -44,6 +45,7 @@ struct RunArgs {
   std::string energy_check = "on";  // --energy-check on|off|report (sim/energy_guard.h)
   std::string speeds;               // --speeds joint|diagonal ("": the model's annotation)
   bool stats = false;
+  std::string events_path;  // --events FILE.csv
   bool units_in_header = false;  // --units-in-header (cli/signal_units.h)
   std::string animation;  // --animation out.glb|out.gltf ("" = none; cli/animation.cpp)
   bool show_frames = false;  // --show-frames: the joints' frames as small axes in the animation
@@ -135,6 +137,17 @@ int RunCommand(const RunArgs& a) {
   batch::FileLock out_lock;
   batch::AtomicFile atomic;
   std::FILE* out = stdout;
+  if (!a.events_path.empty()) {
+    if (std::string in = batch::OverwrittenInput(a.events_path, {a.load.path}); !in.empty()) {
+      fmt::print(stderr, "kanesim: error: --events '{}' is the model '{}'; writing there would destroy it\n",
+                 a.events_path, in);
+      return kExitModelError;
+    }
+    if (!to_stdout && !batch::OverwrittenInput(a.events_path, {a.out_path}).empty()) {
+      fmt::print(stderr, "kanesim: error: --events '{}' is the output -o\n", a.events_path);
+      return kExitModelError;
+    }
+  }
   if (!to_stdout) {
     std::vector<std::string> protected_files{a.load.path};
     protected_files.insert(protected_files.end(), a.load.input_files.begin(), a.load.input_files.end());
@@ -185,6 +198,18 @@ int RunCommand(const RunArgs& a) {
   // part of the motion computed before the error.
   const bool animation_ok = rows_correct && close_ok ? animation.Finish() : true;
 
+  // The events (end stops, when clauses) as CSV, for a complete run and the rows before a
+  // numerical failure alike.
+  if (!a.events_path.empty() && rows_correct) {
+    std::ofstream ev(a.events_path, std::ios::binary | std::ios::trunc);
+    if (!(ev << sim::FormatEventsCsv(result.stats.events)) || !(ev.close(), ev)) {
+      fmt::print(stderr, "kanesim: error: cannot write the events to '{}'\n", a.events_path);
+      return kExitModelError;
+    }
+  }
+  if (result.stats.terminated)
+    fmt::print(stderr, "kanesim: terminated at t = {}: {}\n", sim::FormatShortest(result.stats.terminate_time),
+               result.stats.terminate_message);
   if (a.stats) {
     result.stats.times.load = model->load_seconds;
     result.stats.times.compile = model->compile_seconds;
@@ -254,6 +279,9 @@ void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   run->add_option("--speed-order", a->spec.speed_order, kSpeedOrderHelp)->delimiter(',')->allow_extra_args(false);
   run->add_flag("--units-in-header", a->units_in_header, "Write each column's unit into the CSV header: 'hinge.q [rad]'");
   run->add_flag("--stats", a->stats, "Print solver statistics and wall time per phase to stderr");
+  run->add_option("--events", a->events_path,
+                  "Write the events (end stops, when clauses) to this CSV file: time, element, kind, and each "
+                  "changed state entry before and after");
   CLI::Option* animation =
       run->add_option("--animation", a->animation,
                       "Also write the motion as an animated glTF 2.0 file: out.glb, or out.gltf (with out.bin)");

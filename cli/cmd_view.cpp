@@ -176,6 +176,7 @@ int RunView(const ViewArgs& a) {
     for (size_t k = 0; k < n_times; ++k) s.values[k] = recorder.shown_values()[k * n_shown + i];
     scene.signals.push_back(std::move(s));
   }
+  for (const sim::EventRecord& e : result.stats.events) scene.events.push_back({e.time, e.element, e.kind});
   const int done = failed ? kExitNumerical : kExitOk;
 
   if (!a.html.empty()) {

@@ -384,6 +384,7 @@ CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std
   CompileCouplings(p, c.folder_, &out.errors);
   CompilePlaneContacts(p, c.folder_, &out.errors);
   CompileForcesAndOutputs(p, &out.errors);
+  CompileWhens(p, &out.errors);
   CheckMovesMass(p, &out.errors);
   if (!out.errors.empty()) return out;
   ChooseSolver(p);

@@ -38,6 +38,10 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
 // Fills bodies[body].path_speeds (a body that a loop frame or a contact sits on).
 void EnsurePathSpeeds(Program& p, int body);
 
+// When clauses -> Program::whens and the event tape (compiler/whens.cpp); K321 for a reinit
+// the mechanism cannot take. After the loops, contacts and forces.
+void CompileWhens(Program& p, std::vector<CompileMessage>* errors);
+
 // Cut joints (flat indices) -> Program::loops and ::rows (their constrained directions).
 void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,
                   std::vector<CompileMessage>* errors);

@@ -92,6 +92,7 @@ namespace kanesim::flat {
   X(BadStop, "K318", "end stop on a joint that cannot take it, or out of order")            \
   X(SparseAnalysis, "K320", "internal: the sparse solver's structural analysis failed")         \
   X(BadCoupling, "K319", "joint coupling on joints that cannot take it")                            \
+  X(BadReinit, "K321", "when clause or reinit the mechanism cannot take")                         \
   /* URDF import (import/): a robot file that cannot be translated (docs/import.md) */       \
   X(UrdfBadXml, "U401", "malformed XML")                                                      \
   X(UrdfNotUrdf, "U402", "not a URDF robot")                                                  \

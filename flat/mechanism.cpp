@@ -288,6 +288,14 @@ std::string DumpFlat(const Mechanism& m) {
     os << "coupling " << c.name << " " << m.joints[static_cast<size_t>(c.follower)].name << ".q = " << E(c.ratio)
        << " * " << m.joints[static_cast<size_t>(c.leader)].name << ".q + " << E(c.offset) << "\n";
   for (const auto& o : m.outputs) os << "output " << o.name << " = " << E(o.expr) << "\n";
+  for (const auto& w : m.whens) {
+    os << "when";
+    for (ExprId h : w.indicators) os << " [" << E(h) << " > 0]";
+    os << "\n";
+    for (const auto& r : w.reinits)
+      os << "  reinit " << m.StateRefName(m.state_refs[static_cast<size_t>(r.state_ref)]) << " := " << E(r.value) << "\n";
+    if (w.terminate) os << "  terminate \"" << w.message << "\"\n";
+  }
   const auto& x = m.experiment;
   os << "experiment start=" << x.start_time << " stop=" << x.stop_time << " tol=" << x.tolerance
      << " interval=" << x.interval << "\n";

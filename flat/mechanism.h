@@ -218,6 +218,24 @@ struct Output {
   SourceLoc loc;
 };
 
+// A `when` clause (docs/events.md): it fires where one of its conditions becomes true.
+// Each condition is written as an indicator h over time and state that is positive exactly
+// where the condition holds (a > b: a - b; a < b: b - a; and: min; or: max; not: -h), so
+// the clause fires where an h crosses zero upwards; change(c) adds -h as well.
+struct Reinit {
+  std::int32_t state_ref = -1;  // what is set: a joint's q[k] or u[k] (index into state_refs)
+  ExprId value = kNoExpr;       // the new value, evaluated at the event's left limit
+  SourceLoc loc;
+};
+
+struct WhenClause {
+  std::vector<ExprId> indicators;  // one per upward crossing that fires the clause
+  std::vector<Reinit> reinits;     // in the order written
+  bool terminate = false;          // terminate("message"): the run ends at the event
+  std::string message;
+  SourceLoc loc;                   // the `when` keyword
+};
+
 // A top-level `input Real u;` (one per element of an array input, "u[2]"): a value given at
 // run time (--input-file, the stepping API), read by Op::Input nodes.
 struct Input {
@@ -259,6 +277,7 @@ struct Mechanism {
   std::vector<Output> outputs;
   std::vector<Input> inputs;      // in declaration order
   std::vector<Shape> shapes;      // drawing only; empty for a model of bare Bodies
+  std::vector<WhenClause> whens;  // empty: no when clauses (no event machinery)
   Experiment experiment;
 
   // Index of the state reference, adding it once.

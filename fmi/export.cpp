@@ -9,6 +9,7 @@
 
 #include "fmi/fmi.h"
 #include "fmi/instance.h"
+#include "runtime/program/program.h"  // Program::whens
 
 #ifndef KANESIM_FMU_BUILD_DIR
 #define KANESIM_FMU_BUILD_DIR ""
@@ -105,6 +106,8 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
   if (!stops.empty() && options.model_exchange)
     return "the end stops of " + stops +
            " are events, which Model Exchange does not have yet: export with --kind cs (docs/fmi.md)";
+  if (!model.program->whens.empty())  // neither kind: the stepping core does not fire them yet (docs/events.md)
+    return "the " + model.program->whens.front().name + " clause is an event, which an exported FMU does not have yet (docs/fmi.md)";
   std::string exact;  // exact stick-slip friction: its events are not in the stepping core
   for (const rt::FrictionJoint& f : rt::FrictionJoints(*model.program))
     if (f.exact) exact += (exact.empty() ? "'" : ", '") + f.joint + "'";

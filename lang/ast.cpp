@@ -260,6 +260,14 @@ static void DumpEquations(const std::vector<Equation>& eqs, std::ostringstream& 
         }
         os << ind << "end if;\n";
         break;
+      case EqKind::When:
+        os << ind << "when " << DumpExpr(*eq.conditions[0]) << " then\n";
+        DumpEquations(eq.body, os, ind + "  ");
+        os << ind << "end when;\n";
+        break;
+      case EqKind::Call:
+        os << ind << DumpExpr(*eq.lhs) << ";\n";
+        break;
     }
   }
 }

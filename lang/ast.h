@@ -137,14 +137,15 @@ struct Import {
   Span span;
 };
 
-enum class EqKind { Equality, Connect, For, If };
+// When: conditions[0] the condition, body its statements (Call: reinit(...), terminate(...)).
+enum class EqKind { Equality, Connect, For, If, When, Call };
 
 struct Equation {
   EqKind kind = EqKind::Equality;
-  ExprPtr lhs, rhs;                  // Equality; Connect: lhs/rhs are Refs
+  ExprPtr lhs, rhs;                  // Equality; Connect: lhs/rhs are Refs; Call: lhs the call
   std::string iter;                  // For
   ExprPtr range;                     // For
-  std::vector<Equation> body;        // For body
+  std::vector<Equation> body;        // For, When body
   std::vector<ExprPtr> conditions;   // If: one per branch
   std::vector<std::vector<Equation>> branches;  // If: conditions.size() or +1 for else
   Span span;

@@ -287,6 +287,23 @@ struct Builtin {
   Op op = Op::Const;  // for lowerings shared by several functions
 };
 
+// pre(x): x's value at an event's left limit. Every signal a when clause may read is
+// continuous between events, and the clause's expressions are evaluated at that limit, so
+// pre(x) is x there (docs/events.md); elsewhere it is refused.
+Value LowerPre(Call& c) {
+  if (c.el.InWhen()) return c.args[0];
+  c.diags.Error(DiagCode::BadCall, c.expr.span, "'pre' is read only inside a when clause")
+      .hint = "kanesim has no discrete variables: outside a when clause pre(x) would be x";
+  return Value::Invalid();
+}
+
+// edge(b), change(b): only as a when clause's condition (lang/elab_when.cpp reads them there).
+Value LowerEdge(Call& c) {
+  c.diags.Error(DiagCode::BadCall, c.expr.span, "'" + c.fn + "' is only a when clause's condition")
+      .hint = "write 'when " + c.fn + "(b) then', or 'when {" + c.fn + "(b), ...} then'";
+  return Value::Invalid();
+}
+
 // The order is the order of suggestions among equally close names.
 const Builtin kBuiltins[] = {
     {"sin", 1, LowerUnary, Op::Sin},
@@ -328,6 +345,9 @@ const Builtin kBuiltins[] = {
     {"meshCentre", kOwnArity, LowerMesh},
     {"meshInertia", kOwnArity, LowerMesh},
     {"cat", kOwnArity, LowerCat},
+    {"pre", 1, LowerPre},
+    {"edge", 1, LowerEdge},
+    {"change", 1, LowerEdge},
 };
 
 // The table's entry named `fn`, or null: a hash map made once per process (a scan of the

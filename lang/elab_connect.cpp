@@ -52,6 +52,10 @@ void EquationWalker::ProcessEquation(Node* node, const ast::Equation& eq, const 
     case ast::EqKind::For: return ProcessFor(node, eq, iters);
     case ast::EqKind::If: return ProcessIf(node, eq, iters);
     case ast::EqKind::Equality: return ProcessEquality(node, eq, iters);
+    case ast::EqKind::When: links_.whens.push_back({node, &eq, iters}); return;
+    case ast::EqKind::Call:  // the parser makes these only inside a when clause
+      diags_.Error(DiagCode::BadEquation, eq.span, "a call statement outside a when clause");
+      return;
   }
 }
 

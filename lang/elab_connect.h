@@ -5,6 +5,7 @@
 // each connect() set of frames becomes one flat frame, each set of flanges one group.
 #pragma once
 
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -15,10 +16,20 @@ namespace kanesim::lang::elab {
 class Evaluator;
 struct InstanceTree;
 
-// connect() pairs, by provisional frame ids and flange ids (Node::prim_index).
+// A when clause found by the walk, evaluated by Emit (lang/elab_when.cpp) once the joints
+// are known: its instance and the for-loop iterators around it.
+struct PendingWhen {
+  Node* scope = nullptr;
+  const ast::Equation* eq = nullptr;
+  std::shared_ptr<const Iters> iters;
+};
+
+// connect() pairs, by provisional frame ids and flange ids (Node::prim_index), and the
+// when clauses.
 struct Links {
   std::vector<std::pair<int, int>> frames;
   std::vector<std::pair<int, int>> flanges;
+  std::vector<PendingWhen> whens;
 };
 
 // The connect() sets.

@@ -22,9 +22,10 @@ namespace {
 // One emission: Run lists its stages; the springs the walk finds are kept here between them.
 class Emitter {
  public:
-  Emitter(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
-          Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor)
-      : tree_(tree), sets_(sets), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m), visitor_(visitor) {}
+  Emitter(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor)
+      : tree_(tree), sets_(sets), whens_(whens), eval_(eval), places_(places), pool(m->exprs), diags_(diags), m_(m),
+        visitor_(visitor) {}
 
   void Run(Node* root) {
     m_->joints = std::move(tree_.joints);
@@ -35,6 +36,7 @@ class Emitter {
     SpringsOnFlanges();
     CouplingsOnFlanges();
     Outputs(root);
+    EmitWhens(whens_, eval_, places_, diags_, m_);
     EveryParameter(root);
     RetargetFrameStates();
   }
@@ -535,6 +537,7 @@ class Emitter {
 
   InstanceTree& tree_;
   const Connections& sets_;
+  const std::vector<PendingWhen>& whens_;
   Evaluator& eval_;
   const SourcePlaces& places_;
   flat::ExprPool& pool;
@@ -549,10 +552,10 @@ class Emitter {
 
 }  // namespace
 
-void Emit(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
-          Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor) {
+void Emit(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor) {
   Node* root = tree.root.get();
-  Emitter(tree, sets, eval, places, diags, m, visitor).Run(root);
+  Emitter(tree, sets, whens, eval, places, diags, m, visitor).Run(root);
 }
 
 // The experiment annotation: StartTime, StopTime, Tolerance, Interval.

@@ -4,12 +4,15 @@
 // Primitives' fields are asked of the evaluator.
 #pragma once
 
+#include <vector>
+
 #include "lang/elab_internal.h"
 
 namespace kanesim::lang::elab {
 
 class Evaluator;
 struct Connections;
+struct PendingWhen;
 struct InstanceTree;
 
 // Shown every enabled variable, depth first, by Emit's walk over the tree (the unit
@@ -24,8 +27,13 @@ class VarVisitor {
 
 // Writes m's bodies, joints (moved from the tree and completed), fixed frames, forces,
 // contacts, shapes and outputs; frame state references retargeted to the flat frames.
-void Emit(InstanceTree& tree, const Connections& sets, Evaluator& eval, const SourcePlaces& places,
-          Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor = nullptr);
+void Emit(InstanceTree& tree, const Connections& sets, const std::vector<PendingWhen>& whens, Evaluator& eval,
+          const SourcePlaces& places, Diagnostics& diags, flat::Mechanism* m, VarVisitor* visitor = nullptr);
+
+// The when clauses (lang/elab_when.cpp): conditions as indicators, reinit targets and values,
+// terminate's message, into m->whens.
+void EmitWhens(const std::vector<PendingWhen>& whens, Evaluator& eval, const SourcePlaces& places,
+               Diagnostics& diags, flat::Mechanism* m);
 
 // The experiment annotation `ex` of model `top` (StartTime, StopTime, Tolerance,
 // Interval), evaluated in the root's scope, into m->experiment.

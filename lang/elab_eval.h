@@ -55,6 +55,10 @@ class Evaluator {
   // their value from (a MeshBody's `file` to the user's `file = "..."`).
   Span ValueOrigin(const ast::Expr& arg, const Ctx& ctx);
 
+  // Inside a when clause (lang/elab_when.cpp): pre(x) is read there only.
+  void SetInWhen(bool on) { in_when_ = on; }
+  bool InWhen() const { return in_when_; }
+
   // --- for the lowerings of built-in functions (elab_builtins.cpp, elab_concat.cpp) ---
   Value Const(double x, VType t = VType::Real);
   Value Scalar(ExprId e, VType t = VType::Real);
@@ -145,6 +149,7 @@ class Evaluator {
   std::vector<ExprId> structural_stack_;        // MarkStructural's scratch
   WorkBudget budget_{kMaxElabWork};
   bool budget_reported_ = false;
+  bool in_when_ = false;  // SetInWhen
   int eval_depth_ = 0;  // EvalNested frames on the native stack
   StackGuard stack_;    // made with the Evaluator: the base of its evaluation
   bool depth_reported_ = false;

@@ -133,7 +133,7 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   // Units are checked on the emitter's walk, and reported once the model is otherwise sound.
   std::optional<elab::UnitCheck> units;
   if (options.check_units) units.emplace(tree, links, &program.sources);
-  elab::Emit(tree, connections, eval, places, diags, out, units ? &*units : nullptr);
+  elab::Emit(tree, connections, links.whens, eval, places, diags, out, units ? &*units : nullptr);
   if (units) units->Finish(tree, diags, out);
   if (const ast::Modification* ex = lookup.FindAnnotation(top, "experiment"))
     elab::EmitExperiment(*ex, top, tree.root.get(), eval, diags, out);

@@ -7,7 +7,7 @@
 namespace kanesim::lang::parsing {
 
 // equation := ( simple_expression '=' expression | connect_clause | for_equation
-//             | if_equation ) comment
+//             | if_equation | when_equation ) comment
 bool Parser::EquationItem(std::vector<Equation>& out) {
   DepthGuard guard(this);
   if (!guard.ok) return SkipRest(), false;
@@ -16,6 +16,7 @@ bool Parser::EquationItem(std::vector<Equation>& out) {
   bool ok = At(Tok::KwConnect) ? ConnectClause(eq)
             : At(Tok::KwFor)   ? ForEquation(eq)
             : At(Tok::KwIf)    ? IfEquation(eq)
+            : At(Tok::KwWhen)  ? WhenEquation(eq)
                                : Equality(eq);
   if (!ok) return false;
   StringComment();
@@ -91,6 +92,55 @@ bool Parser::IfEquation(Equation& eq) {
   }
   Expect(Tok::KwEnd, "to close 'if'");
   Expect(Tok::KwIf, "after 'end'");
+  return true;
+}
+
+// when_equation := when expression then { when_statement ';' } end when
+// (Modelica's elsewhen is not read: a second when clause says the same for conditions that
+// do not become true at one instant.)
+bool Parser::WhenEquation(Equation& eq) {
+  Advance();
+  eq.kind = EqKind::When;
+  eq.conditions.push_back(Expression());
+  if (!Expect(Tok::KwThen, "after the when condition")) return false;
+  while (!At(Tok::KwEnd) && !At(Tok::Eof) && !diags_.Full()) {
+    if (At(Tok::Ident) && Peek().text == "elsewhen") {
+      diags_.Error(DiagCode::ExpectedToken, Peek().span, "'elsewhen' is not supported").hint =
+          "write a second 'when' clause";
+      return false;
+    }
+    size_t before = pos_;
+    Equation st;
+    Span b = Peek().span;
+    if (!WhenStatement(st)) {
+      Recover();
+    } else {
+      st.span = SpanFrom(b);
+      eq.body.push_back(std::move(st));
+      Expect(Tok::Semicolon, "after the statement");
+    }
+    if (pos_ == before) Advance();
+  }
+  Expect(Tok::KwEnd, "to close 'when'");
+  Expect(Tok::KwWhen, "after 'end'");
+  return true;
+}
+
+// when_statement := reinit '(' component_reference ',' expression ')'
+//                 | terminate '(' string ')' | simple_expression '=' expression
+// (the last is parsed so that the elaborator can say why it is refused)
+bool Parser::WhenStatement(Equation& eq) {
+  ExprPtr e = SimpleExpression();
+  if (!e) return false;
+  if (At(Tok::Assign) || At(Tok::ColonAssign)) {
+    eq.kind = EqKind::Equality;
+    eq.lhs = std::move(e);
+    Advance();
+    eq.rhs = Expression();
+    return true;
+  }
+  eq.kind = EqKind::Call;
+  eq.lhs = std::move(e);
   return true;
 }
 

@@ -195,6 +195,8 @@ class Parser {
   bool ConnectClause(Equation& eq);  // each: false when the equation is given up
   bool ForEquation(Equation& eq);
   bool IfEquation(Equation& eq);
+  bool WhenEquation(Equation& eq);
+  bool WhenStatement(Equation& eq);
   bool Equality(Equation& eq);
   std::unique_ptr<Modification> AnnotationOpt();
   ExprPtr Expression();

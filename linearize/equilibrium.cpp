@@ -14,6 +14,7 @@
 #include <cmath>
 
 #include "linearize/linearize.h"
+#include "linearize/hybrid.h"
 #include "linearize/reduction.h"
 #include "runtime/program/program.h"
 
@@ -82,6 +83,11 @@ Status Relax(const rt::Program& p, rt::Workspace& ws, const std::vector<double>&
 Status FindEquilibrium(const rt::Program& p, const OperatingPoint& start, EquilibriumResult* out,
                        const std::vector<double>& inputs) {
   *out = EquilibriumResult{};
+  if (Hybrid::Present(p))  // a rest on a stop or a stuck joint is no root of the free accelerations
+    return {1,
+            "--equilibrium: the model has end stops, plane contacts or exact friction (friction_exact), whose rests "
+            "the search does not handle",
+            "linearize at start values that rest (on a stop, stuck), or at a time of the motion (--at T)"};
   OperatingPoint op = start;
   for (int i = 0; i < p.nu; ++i) op.y[static_cast<size_t>(p.nq + i)] = 0.0;
   auto ws = rt::MakeWorkspace(p);

@@ -32,6 +32,7 @@
 #include <limits>
 #include <memory>
 
+#include "linearize/hybrid.h"
 #include "linearize/reduction.h"
 #include "runtime/program/program.h"
 
@@ -184,9 +185,14 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
     for (int k = 0; k < m_in; ++k) own = own || rt::InputName(program, k) == name;
     if (!own) other_inputs.push_back(name);
   }
+  // End stops, plane contacts and exact friction: the rows that hold at op join the
+  // constraints, sliding joints keep their direction (hybrid.h).
+  Hybrid hybrid;
+  if (Status s = hybrid.Init(program, op, w0); !s.ok()) return s;
+  out->held = hybrid.held_names();
   Reduction red;
   red.SetInputs(w0);
-  if (Status s = red.Init(program, op, false); !s.ok()) return s;
+  if (Status s = red.Init(program, op, false, hybrid.held()); !s.ok()) return s;
 
   // The program the evaluations run on: a copy when joint forces are inputs.
   auto prog = std::make_shared<rt::Program>(program);
@@ -200,6 +206,8 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   }
   auto ws = rt::MakeWorkspace(*prog);
   if (m_in > 0) rt::SetInputValues(*ws, w0.data());
+  Hybrid hp;  // the same laws on the program with the input registers
+  if (Status s = hp.Init(*prog, op, w0); !s.ok()) return s;
 
   const int nci = static_cast<int>(red.indep_coords().size());
   const int nui = static_cast<int>(red.indep_speeds().size());
@@ -215,13 +223,13 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
 
   // F(x, program, workspace): [xi_I'; u_I'; outputs] at state deviation x.
   // (*y_out: the state built, when asked.)
-  auto eval = [&](const VectorXd& x, const rt::Program& p, rt::Workspace& w, const rt::SignalPlan* pl, VectorXd* F,
-                  VectorXd* y_out = nullptr) -> Status {
+  auto eval = [&](const VectorXd& x, const rt::Program& p, rt::Workspace& w, Hybrid& hb, const rt::SignalPlan* pl,
+                  VectorXd* F, VectorXd* y_out = nullptr) -> Status {
     VectorXd y;
     if (Status s = red.StateOf(x.head(nci), x.tail(nui), &y); !s.ok()) return s;
     if (y_out) *y_out = y;
     VectorXd ydot(y.size());
-    if (rt::Derivative(p, w, red.t(), y.data(), ydot.data()) != 0)
+    if (hb.Derivative(w, red.t(), y.data(), ydot.data()) != 0)
       return {2, "the equations of motion fail near the operating point: " + rt::ErrorMessage(w)};
     VectorXd xidot;
     red.ChartRates(y, ydot.data(), &xidot);
@@ -238,7 +246,7 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
   };
 
   VectorXd F0;
-  if (Status s = eval(VectorXd::Zero(n), *prog, *ws, plan.get(), &F0); !s.ok()) return s;
+  if (Status s = eval(VectorXd::Zero(n), *prog, *ws, hp, plan.get(), &F0); !s.ok()) return s;
   out->x0_rates.assign(F0.data(), F0.data() + n);
 
   // A and C, one state at a time. Speeds step relative to their size; a step below the
@@ -278,7 +286,7 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
     auto F = [&](double s, VectorXd* f, double* taken) {
       VectorXd x = VectorXd::Zero(n), y;
       x[j] = s;
-      Status st = eval(x, *prog, *ws, plan.get(), f, &y);
+      Status st = eval(x, *prog, *ws, hp, plan.get(), f, &y);
       // The step taken: the variable's value minus its value at the operating point.
       if (st.ok()) *taken = speed ? y[nq + var] - u0 : red.ChartOf(y)[var];
       return st;
@@ -305,7 +313,7 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
         std::vector<double> u = w0;
         u[static_cast<size_t>(k)] = v0 + s;
         rt::SetInputValues(*ws, u.data());
-        Status st = eval(VectorXd::Zero(n), *prog, *ws, plan.get(), f);
+        Status st = eval(VectorXd::Zero(n), *prog, *ws, hp, plan.get(), f);
         rt::SetInputValues(*ws, w0.data());
         *taken = u[static_cast<size_t>(k)] - v0;
         return st;
@@ -313,7 +321,7 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
     } else if (in->is_joint) {
       F = [&, in](double s, VectorXd* f, double* taken) {
         ws->force_regs[static_cast<size_t>(in->joint.reg)] = s;
-        Status st = eval(VectorXd::Zero(n), *prog, *ws, plan.get(), f);
+        Status st = eval(VectorXd::Zero(n), *prog, *ws, hp, plan.get(), f);
         ws->force_regs[static_cast<size_t>(in->joint.reg)] = 0.0;
         *taken = s;  // the register holds s itself (its value at the operating point is 0)
         return st;
@@ -330,7 +338,12 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
         auto w = rt::MakeWorkspace(*rebound);
         if (m_in > 0) rt::SetInputValues(*w, w0.data());
         *taken = (v0 + s) - v0;
-        return eval(VectorXd::Zero(n), *rebound, *w, pl.get(), f);
+        Hybrid hr;
+        if (Status st = hr.Init(*rebound, op, w0); !st.ok() || hr.held_names() != hybrid.held_names())
+          return Status{2, fmt::format("input '{}': a step of it changes which stops, contacts or joints hold at the "
+                                       "operating point",
+                                       in->name)};
+        return eval(VectorXd::Zero(n), *rebound, *w, hr, pl.get(), f);
       };
     }
     u_step[static_cast<size_t>(k)] = hk;
@@ -378,8 +391,8 @@ Status Linearize(const rt::Program& program, const OperatingPoint& op, const Lin
         for (int at = 0; at < 2; ++at) {
           const VectorXd xc = at == 0 ? VectorXd::Zero(n) : x1;
           VectorXd fp, fm;
-          Status sp = eval(xc + hv * v, *prog, *ws, nullptr, &fp);
-          Status sm = sp.ok() ? eval(xc - hv * v, *prog, *ws, nullptr, &fm) : sp;
+          Status sp = eval(xc + hv * v, *prog, *ws, hp, nullptr, &fp);
+          Status sm = sp.ok() ? eval(xc - hv * v, *prog, *ws, hp, nullptr, &fm) : sp;
           if (!sm.ok()) return std::numeric_limits<double>::infinity();
           jv[at] = (fp - fm).head(n) / (2 * hv);
         }

@@ -109,6 +109,9 @@ struct LinearModel {
   // Filled by ComputeModes:
   std::vector<Mode> modes;           // sorted by |lambda|, then by imaginary part descending
   std::vector<std::string> ignorable;  // coordinates no other state reads; each gives a zero eigenvalue
+  // Rows the operating point adds (hybrid.h): "j1 on q_min", "floor on the plane", "j2 stuck";
+  // their coordinates and speeds are not states.
+  std::vector<std::string> held;
   std::vector<double> x0_rates;      // f(0): zero at an equilibrium; steady rates of ignorable coordinates
   // Whether the operating point is an equilibrium or a steady motion: A at x = tau f(0)
   // (the motion a moment later, tau so that it moves 0.05) against A at 0, on three fixed

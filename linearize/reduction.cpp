@@ -6,6 +6,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "runtime/constraints/constraints.h"
 #include "runtime/kinematics/kinematics.h"
@@ -62,8 +64,9 @@ bool Holonomic(rt::RowKind k) {
 
 }  // namespace
 
-Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_speeds) {
+Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_speeds, std::vector<HeldRow> held) {
   p_ = &p;
+  held_ = std::move(held);
   ws_ = rt::MakeWorkspace(p);
   if (!inputs_.empty()) rt::SetInputValues(*ws_, inputs_.data());
   t_ = op.t;
@@ -103,8 +106,8 @@ Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_
   hol_rows_.clear();
   for (size_t r = 0; r < p.rows.size(); ++r)
     if (Holonomic(p.rows[r].kind)) hol_rows_.push_back(static_cast<int>(r));
-  const int nh = static_cast<int>(hol_rows_.size());
-  const int nc = static_cast<int>(p.rows.size());
+  const int nh = static_cast<int>(hol_rows_.size() + held_.size());
+  const int nc = static_cast<int>(p.rows.size() + held_.size());
 
   // The operating point must close every loop.
   VectorXd phi0;
@@ -112,7 +115,9 @@ Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_
   if (nh > 0) {
     Eigen::Index worst = 0;
     const double err = phi0.cwiseAbs().maxCoeff(&worst);
-    if (err > 1e-7 * length_) {
+    if (err > 1e-7 * length_ && worst >= static_cast<Eigen::Index>(hol_rows_.size())) {
+      return {1, fmt::format("the operating point is {:.3g} off a contact that holds there", err)};
+    } else if (err > 1e-7 * length_) {
       const rt::ConstraintRow& row = p.rows[static_cast<size_t>(hol_rows_[static_cast<size_t>(worst)])];
       return {1,
               fmt::format("the operating point violates the position constraint {} ({}) by {:.3g}", RowOwner(p, row),
@@ -222,6 +227,9 @@ Status Reduction::Init(const rt::Program& p, const OperatingPoint& op, bool fix_
       u0_ = u;
       for (int i = 0; i < nu; ++i) y0_[static_cast<size_t>(nq + i)] = u0_[i];
     } else if (Eigen::Index worst = 0; psi0.cwiseAbs().maxCoeff(&worst) > 1e-7 * vscale) {
+      if (worst >= static_cast<Eigen::Index>(p.rows.size()))
+        return {1, fmt::format("the operating point moves off a contact that holds there (speed {:.3g})",
+                               std::abs(psi0[worst]))};
       const rt::ConstraintRow& row = p.rows[static_cast<size_t>(worst)];
       return {1,
               fmt::format("the operating point violates the velocity constraint {} ({}) by {:.3g}", RowOwner(p, row),
@@ -290,14 +298,26 @@ void Reduction::ChartRates(const VectorXd& y, const double* qdot, VectorXd* xido
 
 Status Reduction::Phi(const VectorXd& qf, VectorXd* phi) {
   const rt::Program& p = *p_;
-  phi->resize(static_cast<int>(hol_rows_.size()));
-  if (hol_rows_.empty()) return {};
+  const int nh = static_cast<int>(hol_rows_.size());
+  phi->resize(nh + static_cast<int>(held_.size()));
+  if (phi->size() == 0) return {};
   VectorXd y(p.nq + p.nu);
   y << qf, u0_;
-  if (rt::UnpackState(p, *ws_, t_, y.data()) != 0) return {2, ws_->error};
-  rt::PositionKinematics(p, *ws_);
-  rt::ConstraintResiduals(p, *ws_);
-  for (size_t k = 0; k < hol_rows_.size(); ++k) (*phi)[static_cast<int>(k)] = ws_->phi[hol_rows_[k]];
+  if (nh > 0) {
+    if (rt::UnpackState(p, *ws_, t_, y.data()) != 0) return {2, ws_->error};
+    rt::PositionKinematics(p, *ws_);
+    rt::ConstraintResiduals(p, *ws_);
+    for (int k = 0; k < nh; ++k) (*phi)[k] = ws_->phi[hol_rows_[static_cast<size_t>(k)]];
+  }
+  for (size_t k = 0; k < held_.size(); ++k) {  // a held coordinate's change, a plane contact's gap
+    const HeldRow& h = held_[k];
+    double gap = 0.0, bias = 0.0;
+    std::vector<double> J(static_cast<size_t>(p.nu));
+    if (h.plane >= 0 && rt::PlaneContactRow(p, *ws_, t_, y.data(), h.plane, &gap, J.data(), &bias) != 0)
+      return {2, ws_->error};
+    const int q = coords_[static_cast<size_t>(std::max(h.speed, 0))].q;
+    (*phi)[nh + static_cast<int>(k)] = h.plane >= 0 ? gap : qf[q] - q0_[q];
+  }
   return {};
 }
 
@@ -309,7 +329,20 @@ Status Reduction::Psi(const VectorXd& qf, const VectorXd& uf, VectorXd* psi) {
   rt::PositionKinematics(p, *ws_);
   rt::VelocityKinematics(p, *ws_);
   rt::ConstraintRates(p, *ws_);
-  *psi = ws_->psi;
+  const int nc = static_cast<int>(p.rows.size());
+  psi->resize(nc + static_cast<int>(held_.size()));
+  psi->head(nc) = ws_->psi.head(nc);
+  for (size_t k = 0; k < held_.size(); ++k) {  // a held speed, a plane contact's normal speed
+    const HeldRow& h = held_[k];
+    double rate = h.plane >= 0 ? 0.0 : uf[h.speed];
+    if (h.plane >= 0) {
+      double gap = 0.0, bias = 0.0;
+      VectorXd J(p.nu);
+      if (rt::PlaneContactRow(p, *ws_, t_, y.data(), h.plane, &gap, J.data(), &bias) != 0) return {2, ws_->error};
+      rate = J.dot(uf);
+    }
+    (*psi)[nc + static_cast<int>(k)] = rate;
+  }
   return {};
 }
 

@@ -29,12 +29,21 @@
 
 namespace kanesim::lin {
 
+// A constraint row the operating point adds (docs/linearize.md "End stops, contacts and
+// friction"): a free speed held at zero with its coordinate fixed (a joint resting on its
+// stop, a stuck joint), or a plane contact at rest (its gap and normal speed held at zero).
+struct HeldRow {
+  int speed = -1;  // free speed index, or -1
+  int plane = -1;  // plane contact index (rt::PlaneContacts), or -1
+};
+
 class Reduction {
  public:
   // Builds the chart and the partition at `op`. With `fix_speeds`, the dependent speeds
   // of op are solved for (an equilibrium search sets every speed to zero first);
-  // otherwise op must satisfy the velocity constraints (status 1 if not).
-  Status Init(const rt::Program& p, const OperatingPoint& op, bool fix_speeds);
+  // otherwise op must satisfy the velocity constraints (status 1 if not). `held`: rows
+  // that hold at op besides the program's, holonomic like a loop's.
+  Status Init(const rt::Program& p, const OperatingPoint& op, bool fix_speeds, std::vector<HeldRow> held = {});
   // The model's inputs (rt::InputName order) the configuration is evaluated with (a
   // prescribed motion may read them); before Init. Empty: none.
   void SetInputs(const std::vector<double>& u) { inputs_ = u; }
@@ -78,6 +87,7 @@ class Reduction {
   std::vector<Coord> coords_;               // per chart coordinate (nu)
   std::vector<std::string> coord_names_, speed_names_;  // per chart coordinate / free speed
   std::vector<int> hol_rows_;               // rows with a position form
+  std::vector<HeldRow> held_;               // rows the operating point adds (after the program's)
   std::vector<int> iq_, dq_, iu_, du_;      // independent / dependent chart coordinates and speeds
   Eigen::HouseholderQR<Eigen::MatrixXd> qr_phi_dep_;  // Phi(:, D_q)
   Eigen::HouseholderQR<Eigen::MatrixXd> qr_a_dep_;    // A(:, D_u)

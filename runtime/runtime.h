@@ -217,6 +217,14 @@ std::vector<PlaneContact> PlaneContacts(const Program& program);
 int PlaneContactRow(const Program& program, Workspace& ws, double t, const double* y, int i, double* gap, double* J,
                     double* bias);
 
+// When clauses (Program::whens; docs/events.md): the event tape evaluated at (t, y), its
+// roots' values then in ws.event_regs[program.event_tape.roots[i]]. 0, or Derivative's
+// status codes. runtime/engine/whens.cpp
+int EvalEventTape(const Program& program, Workspace& ws, double t, const double* y);
+double EventRoot(const Program& program, const Workspace& ws, int root);
+// The names of y's entries: "j.q", "j.q[2]", ..., then "j.u", ...
+std::vector<std::string> StateNames(const Program& program);
+
 // Output signals. Names are dotted: "shoulder.q", "ball.q[2]", "kinetic_energy",
 // "rod1.frame_b.r[1]", declared outputs by their name. Selection compiles the
 // requested names into a plan so that only what is needed gets computed.

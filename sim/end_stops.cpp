@@ -11,6 +11,8 @@
 // and the side rests from the impact on, its rest logged at t_inf (a time event).
 #include "sim/end_stops.h"
 
+#include "sim/impulse.h"  // SolveSmall
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,33 +21,6 @@
 namespace kanesim::sim {
 
 namespace {
-
-// A c = b for the small dense A (m x m, row-major), Gaussian elimination with partial
-// pivoting. False when A is singular.
-bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double>* c) {
-  const size_t m = b.size();
-  for (size_t k = 0; k < m; ++k) {
-    size_t p = k;
-    for (size_t r = k + 1; r < m; ++r)
-      if (std::abs(A[r * m + k]) > std::abs(A[p * m + k])) p = r;
-    if (!(A[p * m + k] != 0.0)) return false;
-    for (size_t j = 0; j < m; ++j) std::swap(A[k * m + j], A[p * m + j]);
-    std::swap(b[k], b[p]);
-    for (size_t r = k + 1; r < m; ++r) {
-      const double f = A[r * m + k] / A[k * m + k];
-      for (size_t j = k; j < m; ++j) A[r * m + j] -= f * A[k * m + j];
-      b[r] -= f * b[k];
-    }
-  }
-  c->assign(m, 0.0);
-  for (size_t k = m; k-- > 0;) {
-    double s = b[k];
-    for (size_t j = k + 1; j < m; ++j) s -= A[k * m + j] * (*c)[j];
-    (*c)[k] = s / A[k * m + k];
-  }
-  return true;
-}
-
 
 std::string SideName(bool upper) { return upper ? "q_max" : "q_min"; }
 
@@ -220,7 +195,7 @@ std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y
   return "";
 }
 
-int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g) {
+int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g, double* guards) {
   bool any = false;
   for (const Side& s : sides_) any = any || s.resting;
   std::vector<double> lambda;
@@ -228,6 +203,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
     if (int s = Reactions(ws, t, y, &lambda, nullptr); s != 0) return s;
   for (size_t i = 0; i < sides_.size(); ++i) {
     const Side& s = sides_[i];
+    if (guards) guards[i] = 1.0;
     if (s.accumulates_at > 0.0) {
       g[i] = s.accumulates_at - t;
     } else if (s.resting) {
@@ -235,6 +211,11 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
     } else {
       double c = 0.0;
       if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
+      if (guards) {
+        double v = 0.0;
+        for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+        guards[i] = -v;
+      }
     }
   }
   return 0;
@@ -395,6 +376,55 @@ int EndStopEvents::GapAcceleration(rt::Workspace& ws, double t, const double* y,
   *a = c;
   for (int k = 0; k < nu_; ++k) *a += J_[static_cast<size_t>(k)] * a_held[static_cast<size_t>(k)];
   return 0;
+}
+
+std::string EndStopEvents::SettleAt(rt::Workspace& ws, double t, const double* y, double tol, bool* bad) {
+  *bad = false;
+  for (Side& s : sides_) {
+    s.accumulates_at = 0.0;
+    double gap = 0.0, c = 0.0;
+    if (Row(ws, t, y, s, &gap, J_.data(), &c) != 0) return "the operating point cannot be evaluated: " + rt::ErrorMessage(ws);
+    double v = 0.0;
+    for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+    char buf[300];
+    if (gap < -tol * Scale(s)) {
+      *bad = true;
+      std::snprintf(buf, sizeof buf, "%s is past %s by %.3g", Who(s).c_str(), Where(s).c_str(), -gap);
+      return buf;
+    }
+    s.resting = std::abs(gap) <= tol * Scale(s);
+    if (s.resting && std::abs(v) > tol) {
+      std::snprintf(buf, sizeof buf, "%s is on %s and %s it (speed %.3g): an impact or a lift-off, no smooth state",
+                    Who(s).c_str(), Where(s).c_str(), v < 0.0 ? "moving into" : "leaving", v);
+      return buf;
+    }
+  }
+  std::vector<double> lambda;
+  if (Reactions(ws, t, y, &lambda, nullptr) != 0) return "the operating point cannot be evaluated: " + rt::ErrorMessage(ws);
+  for (size_t i = 0; i < sides_.size(); ++i)
+    if (sides_[i].resting && !(lambda[i] > 0.0)) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf,
+                    "%s is on %s at rest, but the reaction that would hold it pulls (%.3g): it leaves at once, no "
+                    "smooth state",
+                    Who(sides_[i]).c_str(), Where(sides_[i]).c_str(), lambda[i]);
+      return buf;
+    }
+  return "";
+}
+
+std::vector<std::pair<int, int>> EndStopEvents::HeldRows() const {
+  std::vector<std::pair<int, int>> rows;
+  for (const Side& s : sides_)
+    if (s.resting) rows.emplace_back(s.stop >= 0 ? stops_[static_cast<size_t>(s.stop)].u : -1, s.plane);
+  return rows;
+}
+
+std::vector<std::string> EndStopEvents::HeldNames() const {
+  std::vector<std::string> names;
+  for (const Side& s : sides_)
+    if (s.resting) names.push_back(Element(s) + " on " + Where(s));
+  return names;
 }
 
 int EndStopEvents::Start(rt::Workspace& ws, double t0, double* y0) {

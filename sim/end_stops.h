@@ -8,6 +8,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/runtime.h"
@@ -34,12 +35,29 @@ class EndStopEvents {
   // accelerations made zero by their reactions. 0, or Derivative's status codes.
   int Hold(rt::Workspace& ws, double t, const double* y, double* ydot);
   // g_i: a free side's gap, a resting one's reaction (pushing: > 0), an accumulating one's
-  // time left to its accumulation point.
-  int Functions(rt::Workspace& ws, double t, const double* y, double* g);
+  // time left to its accumulation point. guards (may be null): a free side's graze guard,
+  // minus its gap's rate (crossing zero downwards where the gap has a minimum); 1 for the others.
+  int Functions(rt::Workspace& ws, double t, const double* y, double* g, double* guards = nullptr);
   // Event function i crossed zero at (t, y): an impact (or the contact comes to rest), a
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
+  // The free speeds of the joints resting on their stops (held at zero).
+  std::vector<int> RestingSpeeds() const {
+    std::vector<int> out;
+    for (const Side& s : sides_)
+      if (s.resting && s.stop >= 0) out.push_back(stops_[static_cast<size_t>(s.stop)].u);
+    return out;
+  }
+  // linearize's operating point (docs/linearize.md "End stops, contacts and friction"): the
+  // sides closed at (t, y) (gap within tol of its scale) rest from now and are held; "" when
+  // that is a smooth state, else why not: a side past its stop (*bad set), closed and moving
+  // (an impact or a lift-off instant), or held by a reaction that would pull.
+  std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol, bool* bad);
+  // The resting sides' rows: (the joint's free speed, -1) for a stop, (-1, index) for a plane
+  // contact; their elements ("j1 on q_min").
+  std::vector<std::pair<int, int>> HeldRows() const;
+  std::vector<std::string> HeldNames() const;
   // Per side, whether its joint rests on it (the stepping core's state, sim/simulator.h).
   // Per side: 1 when it rests, and where accumulated bounces end (2 numbers a side).
   std::vector<double> Resting() const {
@@ -79,6 +97,7 @@ class EndStopEvents {
   double Restitution(const Side& s) const;
   double Scale(const Side& s) const;  // the gap's length scale for the tolerances
   std::string Element(const Side& s) const;
+  std::string Who(const Side& s) const { return (s.plane >= 0 ? "contact '" : "joint '") + Element(s) + "'"; }
   std::string Where(const Side& s) const;  // "q_min", "q_max", "the plane"
   // Speeds' jump du = X c with J_r du = target_r for the sides `rows` (X = M^-1 J^T columns).
   // 0, or Derivative's codes.

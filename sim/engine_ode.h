@@ -12,6 +12,7 @@
 #include "sim/end_stops.h"
 #include "sim/lift_off.h"
 #include "sim/stick_slip.h"
+#include "sim/when_events.h"
 #include "sim/integrator.h"
 
 namespace kanesim::sim::detail {
@@ -58,19 +59,56 @@ class EngineOde final : public OdeSystem {
   void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
   // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
   void SetStickSlip(StickSlipEvents* stick) { stick_ = stick; }
-  int NumEvents() const override {
+  // When clauses (sim/when_events.h): their events after those above.
+  void SetWhens(WhenEvents* whens) {
+    whens_ = whens;
+    state_names_ = rt::StateNames(program_);
+  }
+  // The first events: stick-slip's, the stops' and plane contacts', or lift-off's (never two
+  // in one model); then the when clauses'.
+  int NumStops() const {
     return stops_ ? stops_->Count() : lift_ ? lift_->Count() : stick_ ? stick_->Count() : 0;
   }
+  // Then the stops' and plane contacts' graze guards (OdeSystem::Paired): minus each gap's rate.
+  int NumEvents() const override { return FirstGuard() + (stops_ ? stops_->Count() : 0); }
+  int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
   int EventFunctions(double t, const double* y, double* g) override {
-    if (stick_) return stick_->Functions(ws_, t, y, g);
-    return stops_ ? stops_->Functions(ws_, t, y, g) : lift_->Functions(t, y, g);
+    if (NumStops() > 0) {
+      const int s = stick_ ? stick_->Functions(ws_, t, y, g)
+                    : stops_ ? stops_->Functions(ws_, t, y, g, g + FirstGuard())
+                             : lift_->Functions(t, y, g);
+      if (s != 0) return s;
+    }
+    return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
   }
   int Event(double t, double* y, int i) override {
-    if (stick_) return stick_->Event(ws_, t, y, i);
-    if (stops_) return stops_->Event(ws_, t, y, i);
-    event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
-    return -1;
+    if (i < NumStops() && stick_) return stick_->Event(ws_, t, y, i);  // logged by stick_
+    if (i < NumStops() && !stops_) {
+      event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
+      return -1;
+    }
+    std::vector<double> before(y, y + Size());
+    const size_t logged = stops_ ? stops_->Log().size() : 0;
+    int s = 0;
+    if (i < NumStops()) {
+      s = stops_->Event(ws_, t, y, i);
+      events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+    } else {
+      s = whens_->Event(ws_, t, y, i - NumStops(), stops_ ? stops_->RestingSpeeds() : std::vector<int>{});
+      events_.push_back(whens_->Last());
+    }
+    if (s == 0 && !events_.empty() && !state_names_.empty())  // the jump, on the event's first record
+      for (size_t k = 0; k < before.size(); ++k)
+        if (y[k] != before[k]) events_[events_.size() - 1].changes.push_back({state_names_[k], before[k], y[k]});
+    return s;
   }
+  bool Terminated(std::string* why) const override {
+    if (!whens_ || !whens_->Terminated()) return false;
+    *why = whens_->Message();
+    return true;
+  }
+  // The stops' and when clauses' events of the run, in time order, with their jumps.
+  const std::vector<EventRecord>& Events() const { return events_; }
   void SetFault(std::function<void(double, const double*, double*)> f) { fault_ = std::move(f); }
   bool ChecksSteps() const override { return bridge_ != nullptr; }
   int StepAccepted(double t, const double* y) override {
@@ -141,6 +179,7 @@ class EngineOde final : public OdeSystem {
   }
 
  private:
+  int FirstGuard() const { return NumStops() + (whens_ ? whens_->Count() : 0); }
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> Fresh() const {
     auto ws = rt::MakeWorkspace(program_);
     rt::SetInputSource(*ws, inputs_);
@@ -155,6 +194,9 @@ class EngineOde final : public OdeSystem {
   LiftOffGuard* lift_ = nullptr;               // rolling contacts' normal forces (null: none)
   StickSlipEvents* stick_ = nullptr;           // exact stick-slip friction (null: none)
   std::string event_cause_;                    // why an event stopped the run ("" : none did)
+  WhenEvents* whens_ = nullptr;                // when clauses (null: none)
+  std::vector<std::string> state_names_;       // y's entries (rt::StateNames), for the events' changes
+  std::vector<EventRecord> events_;            // stops' and when clauses' events, in time order
   bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank
   int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet

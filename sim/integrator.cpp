@@ -167,11 +167,17 @@ void AddStats(IntegratorStats* to, const IntegratorStats& s) {
   to->nonlin_conv_fails += s.nonlin_conv_fails;
   to->lin_iters += s.lin_iters;
   to->lin_conv_fails += s.lin_conv_fails;
+  if (std::isnan(to->stiff_time) && !std::isnan(s.stiff_time)) {
+    to->stiff_time = s.stiff_time;
+    to->stiff_h_lambda = s.stiff_h_lambda;
+  }
+  to->switched = to->switched || s.switched;
 }
 }  // namespace
 
 IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid& grid,
-                          const IntegratorOptions& options, const RowCallback& row) {
+                          const IntegratorOptions& given, const RowCallback& row) {
+  IntegratorOptions options = given;  // the method changes when a stiff DOP853 hands over
   IntegrateResult result;
   auto fail = [&result](double t, std::string cause) {
     result.ok = false;
@@ -241,6 +247,26 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
     double tout = grid.Time(k);
     rhs.ClearFailure();
     int flag = stepper->Advance(tout, y.data());
+    if (flag == detail::kStiffReached) {
+      // DOP853 found the problem stiff: CVODE-BDF from its last accepted step, the
+      // instant again from there (the rows before came from DOP853, none repeated).
+      const double ts = stepper->event_time;
+      AddStats(&done, stepper->Stats());
+      done.switched = true;
+      stepper.reset();
+      options.method = rt::Integrator::CvodeBdf;
+      options.switch_when_stiff = false;
+      rhs.Reset();
+      stepper = detail::MakeStepper(rhs, ts, y.data(), grid.stop, options, &error);
+      if (!stepper) {
+        write_held(INFINITY);
+        fail(rhs.failed ? rhs.fail_time : ts, rhs.failed ? rhs.cause : error);
+        result.stats = done;
+        return result;
+      }
+      --k;
+      continue;
+    }
     if (flag == detail::kEventReached) {
       // The rows at the event's left and right limits (the same time twice), the jump
       // between them, and a fresh solver from the right limit.
@@ -261,6 +287,11 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
         break;
       }
       ++result.rows;
+      if (system.Terminated(&result.terminate_message)) {
+        result.terminated = true;
+        result.terminate_time = te;
+        break;
+      }
       AddStats(&done, stepper->Stats());
       stepper.reset();
       if (te < grid.stop) {

@@ -32,6 +32,7 @@
 //   once per step that holds output instants (not per instant).
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -117,6 +118,15 @@ class OdeSystem {
   virtual int NumEvents() const { return 0; }
   virtual int EventFunctions(double /*t*/, const double* /*y*/, double* /*g*/) { return 0; }
   virtual int Event(double /*t*/, double* /*y*/, int /*i*/) { return 0; }
+  // Graze guards (docs/integrators.md "End stops"): event function i >= 0 may only mark where
+  // another one, Paired(i), has a minimum (minus a gap's rate). At its crossing the solvers
+  // look at that other function there: positive, nothing happens and the run goes on (no
+  // rows); not, it dipped below zero and back inside one step, and its crossing before the
+  // minimum is the event. -1: an event of its own.
+  virtual int Paired(int /*i*/) const { return -1; }
+  // After an Event: true when it ends the run there (a when clause's terminate), *why its
+  // message. Integrate then writes the right limit's row and stops, successfully.
+  virtual bool Terminated(std::string* /*why*/) const { return false; }
   virtual bool HasEnergy() const { return false; }
   virtual int Energy(double /*t*/, const double* /*y*/, double* /*T*/, double* /*V*/) { return -1; }
 };
@@ -152,6 +162,7 @@ struct IntegratorOptions {
   bool dense_check = true;         // DOP853: retake a step whose dense-output stages are not smooth
   bool row_energy_check = true;    // check interpolated output instants' T + V (OdeSystem::Energy)
   bool check_steps = true;         // DOP853: call OdeSystem::StepAccepted (off: recomputing one row)
+  bool switch_when_stiff = false;  // DOP853 under the automatic choice: go on with CVODE-BDF when stiff
 };
 
 // Counters from the solver (cumulative over the run).
@@ -174,6 +185,9 @@ struct IntegratorStats {
   int last_order = 0;          // last method order used (0 for ERK)
   const char* linear_solver = "none";  // "dense LU", "KLU", "GMRES, matrix-free" (IDA, CVODE-BDF), "none"
   long jac_nonzeros = 0;       // structural non-zeros of the Newton matrix (IDA)
+  double stiff_time = NAN;     // DOP853: where it found the problem stiff (NaN: never)
+  double stiff_h_lambda = 0.0; // ... its last estimate of h |lambda| there
+  bool switched = false;       // ... and the run went on with CVODE-BDF from there
 };
 
 // Output instants: t_k = start + k * interval for k = 0 .. n-1 (computed as start + k / N
@@ -211,6 +225,9 @@ struct IntegrateResult {
   long rows = 0;           // rows handed to the callback
   long bridges = 0;        // singular configurations stepped over (OdeSystem::Bridge)
   long events = 0;         // events handled (OdeSystem::Event), each with two rows
+  bool terminated = false; // an event ended the run (OdeSystem::Terminated) at terminate_time
+  double terminate_time = 0.0;
+  std::string terminate_message;
   IntegratorStats stats;
 };
 

@@ -83,15 +83,17 @@ class ArkodeStepper final : public SundialsStepper {
   int Advance(double tout, double* y) override {
     double tret = 0.0;
     if (rhs_.ChecksSteps()) return AdvanceChecked(tout, y);
-    int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL);
-    while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret);
-    if (flag >= 0 && !hooked_) {  // the restart point until the hook keeps accepted steps
-      const double* ys = N_VGetArrayPointer(s_.y);
-      t_accepted_ = tret;
-      std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());
+    for (;;) {  // (a graze guard that found no dip: on)
+      int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL);
+      while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret);
+      if (flag >= 0 && !hooked_) {  // the restart point until the hook keeps accepted steps
+        const double* ys = N_VGetArrayPointer(s_.y);
+        t_accepted_ = tret;
+        std::copy(ys, ys + y_accepted_.size(), y_accepted_.begin());
+      }
+      if (flag != ARK_ROOT_RETURN) return CopyOut(flag, y);
+      if (int r = EventReached(tret, y, [&](int* f) { ERKStepGetRootInfo(mem_, f); }); r != kNoEvent) return r;
     }
-    if (flag == ARK_ROOT_RETURN) return EventReached(tret, y, [&](int* f) { ERKStepGetRootInfo(mem_, f); });
-    return CopyOut(flag, y);
   }
 
   // ERKStepReset keeps the step size and evaluates f(t, y) again with the new inputs (the

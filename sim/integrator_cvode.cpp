@@ -123,9 +123,11 @@ class CvodeStepper final : public SundialsStepper {
   int Advance(double tout, double* y) override {
     double tret = 0.0;
     if (!rhs_.ChecksSteps()) {
-      const int flag = CVode(mem_, tout, s_.y, &tret, CV_NORMAL);
-      if (flag == CV_ROOT_RETURN) return EventReached(tret, y, [&](int* f) { CVodeGetRootInfo(mem_, f); });
-      return CopyOut(flag, y);
+      for (;;) {  // (a graze guard that found no dip: on)
+        const int flag = CVode(mem_, tout, s_.y, &tret, CV_NORMAL);
+        if (flag != CV_ROOT_RETURN) return CopyOut(flag, y);
+        if (int r = EventReached(tret, y, [&](int* f) { CVodeGetRootInfo(mem_, f); }); r != kNoEvent) return r;
+      }
     }
     return AdvanceCheckedSteps(tout, y, [&](double* t) {
       if (watch_.drifted && !ResetProjected()) return CV_ILL_INPUT;

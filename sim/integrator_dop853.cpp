@@ -56,6 +56,7 @@
 #include <vector>
 
 #include "sim/dop853_control.h"
+#include "sim/dop853_stiffness.h"
 #include "sim/dop853_tableau.h"
 #include "sim/stepper.h"
 
@@ -80,8 +81,23 @@ constexpr double kDenseLimit = 1.0;
 // docs/constraints.md "Rows checked against the energy" are caught with 3.
 constexpr long kRowEnergyInstants = 3;
 
+// A stiff run is handed over only when DOP853 would still need more than this many steps at
+// its current size to the stop time: the switch costs a few hundred f (Jacobians, BDF from
+// order 1). examples/sleigh.mech settles at its stability limit 5 steps before the end.
+constexpr double kSwitchMinSteps = 100;
 // Advance's flags (>= 0 success).
 enum Flag : int { kOk = 0, kTooMuchWork = -1, kUnderflow = -2, kRhsRepeated = -3, kRhsFatal = -4 };
+
+// |h| |k_12 - k_11| / |y1 - Y_11| (sim/dop853_stiffness.h) of the step of size h just formed:
+// stage 11's argument in y11, the new point's in y1, both at t + h.
+double StiffnessEstimate(int n, const double* k11, const double* k12, const double* y11, const double* y1, double h) {
+  double num = 0.0, den = 0.0;
+  for (int i = 0; i < n; ++i) {
+    num += (k12[i] - k11[i]) * (k12[i] - k11[i]);
+    den += (y1[i] - y11[i]) * (y1[i] - y11[i]);
+  }
+  return den > 0.0 ? std::abs(h) * std::sqrt(num / den) : NAN;
+}
 
 class Dop853Stepper final : public Stepper {
  public:
@@ -148,6 +164,13 @@ class Dop853Stepper final : public Stepper {
         if (++rhs_fails_ >= kMaxRhsFails) return kRhsRepeated;
         h_ = kRhsShrink * h_last_;
       }
+      // Stiff, under the automatic choice: handed back at the last accepted step, for the
+      // driver to go on with an implicit method from there (no row between is lost).
+      if (options_.switch_when_stiff && stiffness_.Stiff() && stop_ - t_ > kSwitchMinSteps * h_) {
+        std::copy(y_.begin(), y_.end(), y);
+        event_time = t_;
+        return kStiffReached;
+      }
       if (steps_here++ >= options_.max_steps) return kTooMuchWork;
       int flag = Step(tout);
       if (flag != kOk) return flag;
@@ -174,6 +197,10 @@ class Dop853Stepper final : public Stepper {
     st.energy_rejects = energy_rejects_;
     st.last_step = h_last_;
     st.last_order = 8;
+    if (stiffness_.Stiff()) {
+      st.stiff_time = stiff_time_;
+      st.stiff_h_lambda = stiffness_.LastHLambda();
+    }
     return st;
   }
 
@@ -288,6 +315,7 @@ class Dop853Stepper final : public Stepper {
         const double t_new = last ? stop_ : (onto_tout && t_ + h >= tout) ? tout : t_ + h;
         if (project_) status = rhs_.Project(t_new, y_new_.data());
         if (status == 0) status = Eval(t_new, y_new_.data(), K(tab::kStages));
+        const double h_lambda = status == 0 ? StiffnessEstimate(n_, K(tab::kStages - 1), K(tab::kStages), stage_y_.data(), y_new_.data(), h) : NAN;
         bool stages = false, formed = false;
         if (status == 0 && options_.dense_check && check_ && t_new > tout) {
           status = DenseStages(t_, y_.data(), h);
@@ -319,6 +347,9 @@ class Dop853Stepper final : public Stepper {
         if (status == 0 && check_) status = rhs_.StepAccepted(t_new, y_new_.data());
         if (status == 0) {
           Accept(t_new, h);
+          const bool was_stiff = stiffness_.Stiff();
+          stiffness_.Accepted(h_lambda);
+          if (!was_stiff && stiffness_.Stiff()) stiff_time_ = t_new;
           stages_ready_ = stages;
           dense_ready_ = formed;
           h_ = h * tab::GrowFactor(err, rejected);
@@ -386,12 +417,19 @@ class Dop853Stepper final : public Stepper {
       }
       if (!(ga > 0.0 && g_new_[i] <= 0.0)) continue;
       if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-      const double root = Crossing(static_cast<int>(i), a, ga, g_new_[i]);
+      double root = Crossing(static_cast<int>(i), a, ga, t_, g_new_[i]);
       if (std::isnan(root)) return kRhsFatal;
+      int which = static_cast<int>(i);
+      if (const int p = rhs_.Paired(which); p >= 0) {  // a graze guard: did function p dip below zero?
+        const int dip = Dip(p, &root);
+        if (dip < 0) return kRhsFatal;
+        if (dip == 0) continue;
+        which = p;
+      }
       if (!event_pending_ || root < event_t_) {
         event_pending_ = true;
         event_t_ = root;
-        event_i_ = static_cast<int>(i);
+        event_i_ = which;
       }
     }
     g_prev_ = g_old_;
@@ -423,9 +461,24 @@ class Dop853Stepper final : public Stepper {
     return 0;
   }
 
-  // Event function i's zero in [a, t_] (ga > 0 >= gb there); NaN when it cannot be evaluated.
-  double Crossing(int i, double a, double ga, double gb) {
-    double b = t_;
+  // Function p at *t (a minimum, located by its graze guard): 0 when positive there (no event);
+  // 1 when not, *t then its crossing in [t_old_, *t]; -1 on failure.
+  int Dip(int p, double* t) {
+    std::vector<double>& y = event_y_;
+    y.resize(static_cast<size_t>(n_));
+    std::vector<double> g(g_new_.size());
+    Interpolate(*t, y.data());
+    if (rhs_.EventFunctions(*t, y.data(), g.data()) != 0) return -1;
+    const double gp = g[static_cast<size_t>(p)], g0 = g_old_[static_cast<size_t>(p)];
+    if (gp > 0.0 || !(g0 > 0.0)) return 0;  // (from zero: RiseFromZero's case)
+    const double root = Crossing(p, t_old_, g0, *t, gp);
+    if (std::isnan(root)) return -1;
+    *t = root;
+    return 1;
+  }
+
+  // Event function i's zero in [a, b] (ga > 0 >= gb there); NaN when it cannot be evaluated.
+  double Crossing(int i, double a, double ga, double b, double gb) {
     int side = 0;  // which end was kept last time (Illinois: halve that end's value)
     std::vector<double>& y = event_y_;
     y.resize(static_cast<size_t>(n_));
@@ -650,6 +703,8 @@ class Dop853Stepper final : public Stepper {
   bool event_pending_ = false;   // an event function crossed zero at event_t_ in the last step
   double event_t_ = 0.0;
   int event_i_ = -1;
+  dop853::StiffnessDetector stiffness_;  // sim/dop853_stiffness.h
+  double stiff_time_ = NAN;      // where it first found the problem stiff
   std::string underflow_;        // Explain's text for kUnderflow
   bool underflow_from_rhs_ = false;
 };

@@ -120,9 +120,11 @@ class IdaStepper final : public SundialsStepper {
   int Advance(double tout, double* y) override {
     double tret = 0.0;
     if (!rhs_.ChecksSteps()) {
-      const int flag = IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL);
-      if (flag == IDA_ROOT_RETURN) return EventReached(tret, y, [&](int* f) { IDAGetRootInfo(mem_, f); });
-      return CopyOut(flag, y);
+      for (;;) {  // (a graze guard that found no dip: on)
+        const int flag = IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL);
+        if (flag != IDA_ROOT_RETURN) return CopyOut(flag, y);
+        if (int r = EventReached(tret, y, [&](int* f) { IDAGetRootInfo(mem_, f); }); r != kNoEvent) return r;
+      }
     }
     return AdvanceCheckedSteps(tout, y, [&](double* t) { return IDASolve(mem_, tout, t, s_.y, s_.yp, IDA_ONE_STEP); });
   }

@@ -10,6 +10,7 @@
 #include "sim/end_stops.h"
 #include "sim/lift_off.h"
 #include "sim/stick_slip.h"
+#include "sim/when_events.h"
 
 namespace kanesim::sim {
 namespace {
@@ -233,6 +234,9 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
   if (StickSlipEvents(program).Active())
     return UsageResult("--sensitivity: the model has exact stick-slip friction (friction_exact); sensitivities across "
                  "its stick and slip events are not implemented");
+  if (WhenEvents(program).Active())
+    return UsageResult("--sensitivity: the model has when clauses; sensitivities across their events are not "
+                 "implemented (docs/events.md)");
   if (options.speeds == Speeds::kDiagonal)
     return UsageResult("--sensitivity with --speeds diagonal: not implemented (the sensitivities are of the joint speeds' "
                  "equations; run without --speeds diagonal)");

@@ -10,6 +10,7 @@
 
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
+#include "sim/when_events.h"
 #include "sim/engine_ode.h"
 #include "sim/lift_off.h"
 #include "sim/stick_slip.h"
@@ -99,7 +100,11 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageResult(why);
   IntegratorOptions iopt;
   iopt.method = options.integrator;
-  if (iopt.method == rt::Integrator::Auto) iopt.method = rt::Summarize(program).integrator;
+  if (iopt.method == rt::Integrator::Auto) {
+    iopt.method = rt::Summarize(program).integrator;
+    // docs/integrators.md "The automatic choice": a DOP853 that finds the problem stiff hands over.
+    iopt.switch_when_stiff = iopt.method == rt::Integrator::Dop853;
+  }
   iopt.rtol = options.rtol;
   iopt.atol = options.atol;
   iopt.max_steps = options.max_steps;
@@ -108,7 +113,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.bridge = hooks.bridge;
   iopt.dense_check = hooks.dense_check;
   iopt.row_energy_check = hooks.row_energy_check;
-  if (iopt.method == rt::Integrator::IDA || iopt.method == rt::Integrator::CvodeBdf) iopt.coupling = rt::StateCouplingGroups(program);
+  if (iopt.method == rt::Integrator::IDA || iopt.method == rt::Integrator::CvodeBdf || iopt.switch_when_stiff) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
@@ -254,11 +259,15 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (stops.Active()) ode.SetStops(&stops);
   if (lift.Active()) ode.SetLiftOff(&lift);
   if (stick.Active()) ode.SetStickSlip(&stick);
+  WhenEvents whens(program);  // when clauses (sim/when_events.h)
+  if (whens.Active()) ode.SetWhens(&whens);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
+  const size_t logged_at_start = stops.Log().size();  // a start on a contact (EndStopEvents::Start)
   OdeSystem* system = &ode;
   if (!speed_order.empty()) {
+    if (whens.Active()) return UsageResult("--speeds diagonal does not handle when clauses yet (docs/events.md)");
     diagonal = std::make_unique<DiagonalOde>(program, ode, speed_order);
     if (diagonal->Init(grid.start, y0.data()) != 0) return UsageResult("--speeds diagonal: " + diagonal->FailureCause());
     std::vector<double> z0(static_cast<size_t>(diagonal->Size()));
@@ -272,8 +281,12 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   bool end_ok = sink.End();
 
   FinishRun(ir, sink_failed, end_ok, Seconds(total - output_time), Seconds(output_time), &result);
-  result.stats.events = stops.Log();
+  result.stats.events.assign(stops.Log().begin(), stops.Log().begin() + static_cast<long>(logged_at_start));
+  result.stats.events.insert(result.stats.events.end(), ode.Events().begin(), ode.Events().end());
   result.stats.events.insert(result.stats.events.end(), stick.Log().begin(), stick.Log().end());
+  result.stats.terminated = ir.terminated;
+  result.stats.terminate_time = ir.terminate_time;
+  result.stats.terminate_message = ir.terminate_message;
   ode.PassageCounts(&result.stats.passages_checked, &result.stats.passages_unchecked);
   result.stats.energy_guard = energy.Description();
   result.stats.energy_error = energy.WorstError();
@@ -307,6 +320,11 @@ std::string FormatStats(const SimStats& s) {
                 i.rhs_evals_jac, i.jac_evals, i.lin_setups, i.linear_solver, nnz, i.err_test_fails, i.nonlin_iters, i.nonlin_conv_fails,
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
   std::string out = buf;
+  if (!std::isnan(i.stiff_time)) {  // DOP853's stiffness detection (sim/dop853_stiffness.h)
+    std::snprintf(buf, sizeof buf, "  %s at t = %.6g (stiff: h|lambda| %.3g, near the stability boundary 6.1)\n",
+                  i.switched ? "switched to CVODE-BDF" : "found stiff (not switched)", i.stiff_time, i.stiff_h_lambda);
+    out.insert(out.find("  steps "), buf);
+  }
   if (i.lin_iters > 0) {  // matrix-free Newton (sim/newton_krylov.h)
     std::snprintf(buf, sizeof buf, "  Krylov iterations        %ld (%ld convergence failures)\n", i.lin_iters,
                   i.lin_conv_fails);
@@ -355,13 +373,35 @@ std::string FormatStats(const SimStats& s) {
       out += buf;
     }
   }
-  if (!s.events.empty()) {  // end stops (only where there were events): time, element, kind
+  if (!s.events.empty()) {  // end stops and when clauses (only where there were events): time, element, kind
     std::snprintf(buf, sizeof buf, "events                     %zu\n", s.events.size());
     out += buf;
     for (const EventRecord& e : s.events) {
       std::snprintf(buf, sizeof buf, "  t = %-22.17g %s: %s\n", e.time, e.element.c_str(), e.kind.c_str());
       out += buf;
     }
+  }
+  if (s.terminated) out += "terminated                 at t = " + FormatShortest(s.terminate_time) + ": " + s.terminate_message + "\n";
+  return out;
+}
+
+namespace {
+// A CSV field: quoted when it holds a comma, a quote or a line break.
+std::string CsvField(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+}  // namespace
+
+std::string FormatEventsCsv(const std::vector<EventRecord>& events) {
+  std::string out = "time,element,kind,signal,before,after\n";
+  for (const EventRecord& e : events) {
+    const std::string head = FormatShortest(e.time) + "," + CsvField(e.element) + "," + CsvField(e.kind) + ",";
+    if (e.changes.empty()) out += head + ",,\n";
+    for (const EventChange& c : e.changes)
+      out += head + CsvField(c.name) + "," + FormatShortest(c.before) + "," + FormatShortest(c.after) + "\n";
   }
   return out;
 }

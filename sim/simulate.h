@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/runtime.h"
@@ -56,11 +57,21 @@ struct PhaseTimes {
   double output = 0.0;     // signal evaluation and writing
 };
 
-// One event of a run (end stops): its time, the element ("j1") and what happened ("impact at
-// q_min", "rests on q_max", "leaves q_min").
+// A state entry an event changed: its name ("j.u"), its values at the left and right limits.
+struct EventChange {
+  std::string name;
+  double before = 0.0, after = 0.0;
+};
+
+// One event of a run: its time, the element ("j1", "when (ball.mech:12)") and what happened
+// ("impact at q_min", "rests on q_max", "leaves q_min", "fires", "terminate: why"), with the
+// state entries it changed (on the event's first record).
 struct EventRecord {
+  EventRecord() = default;
+  EventRecord(double t, std::string e, std::string k) : time(t), element(std::move(e)), kind(std::move(k)) {}
   double time = 0.0;
   std::string element, kind;
+  std::vector<EventChange> changes;
 };
 
 // --sensitivity: the estimated error of one parameter's difference quotients (sim/sensitivity.h),
@@ -83,7 +94,11 @@ struct SimStats {
   // largest relative energy error seen and the bound (EnergyGuard).
   std::string energy_guard;
   double energy_error = 0.0, energy_tolerance = 0.0;
-  std::vector<EventRecord> events;  // in time order (--stats prints them)
+  std::vector<EventRecord> events;  // in time order (--stats prints them, --events writes them)
+  // terminate("why") in a when clause ended the run at terminate_time (rows up to it kept).
+  bool terminated = false;
+  double terminate_time = 0.0;
+  std::string terminate_message;
   std::vector<SensitivityErrors> sensitivity;  // --sensitivity: one per parameter
   PhaseTimes times;
 };
@@ -129,5 +144,10 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
 
 // The `--stats` report, one fact per line.
 std::string FormatStats(const SimStats& stats);
+
+// The events as CSV (`--events FILE.csv`; docs/cli.md): a header, then one row per state
+// entry an event changed (time,element,kind,signal,before,after), or one row with the last
+// three empty for an event that changed none.
+std::string FormatEventsCsv(const std::vector<EventRecord>& events);
 
 }  // namespace kanesim::sim

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "runtime/program/program.h"  // Program::whens
 #include "sim/end_stops.h"
 #include "sim/engine_ode.h"
 #include "sim/input_table.h"
@@ -61,6 +62,10 @@ std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> pr
       *error = std::string("the tolerance ") + name + " (" + FormatShortest(tol) + ") must be a positive finite number";
       return nullptr;
     }
+  if (!p.whens.empty()) {  // their events and terminate are Simulate's only, for now
+    *error = "the stepping core does not handle when clauses yet (" + p.whens.front().name + "; docs/events.md)";
+    return nullptr;
+  }
   auto impl = std::make_unique<Impl>(program, rt::NumInputs(p));
   IntegratorOptions& io = impl->iopt;
   io.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(p).integrator : options.integrator;

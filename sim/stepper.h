@@ -35,6 +35,7 @@ class GuardedRhs {
   // The system's energy of a state (OdeSystem::HasEnergy, Energy), for checking rows.
   int NumEvents() const { return system_.NumEvents(); }
   int EventFunctions(double t, const double* y, double* g) { return system_.EventFunctions(t, y, g); }
+  int Paired(int i) const { return system_.Paired(i); }
   bool HasEnergy() const { return system_.HasEnergy(); }
   int Energy(double t, const double* y, double* T, double* V) { return system_.Energy(t, y, T, V); }
   // The system's ProjectedStates (OdeSystem::ProjectedStates), inside a JacobianHold.
@@ -131,6 +132,9 @@ struct StepFailure {
 // Advance's flag when an event function crossed zero before tout (OdeSystem::NumEvents): y
 // is the state at Stepper::event_time, where function event_index crossed.
 inline constexpr int kEventReached = 1000;
+// ... and when DOP853 found the problem stiff (IntegratorOptions::switch_when_stiff): y is
+// the state of its last accepted step, at Stepper::event_time (before tout).
+inline constexpr int kStiffReached = 1001;
 
 class Stepper {
  public:

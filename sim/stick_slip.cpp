@@ -6,41 +6,13 @@
 // large that the difference is not lost in the rounding of a (as rt::InverseMassColumn).
 #include "sim/stick_slip.h"
 
+#include "sim/impulse.h"  // SolveSmall
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 namespace kanesim::sim {
-
-namespace {
-
-// A x = b for the small dense A (m x m, row-major): Gaussian elimination with partial
-// pivoting. False when A is singular.
-bool SolveDense(std::vector<double> A, std::vector<double> b, std::vector<double>* x) {
-  const size_t m = b.size();
-  for (size_t k = 0; k < m; ++k) {
-    size_t p = k;
-    for (size_t r = k + 1; r < m; ++r)
-      if (std::abs(A[r * m + k]) > std::abs(A[p * m + k])) p = r;
-    if (!(A[p * m + k] != 0.0)) return false;
-    for (size_t j = 0; j < m; ++j) std::swap(A[k * m + j], A[p * m + j]);
-    std::swap(b[k], b[p]);
-    for (size_t r = k + 1; r < m; ++r) {
-      const double f = A[r * m + k] / A[k * m + k];
-      for (size_t j = k; j < m; ++j) A[r * m + j] -= f * A[k * m + j];
-      b[r] -= f * b[k];
-    }
-  }
-  x->assign(m, 0.0);
-  for (size_t k = m; k-- > 0;) {
-    double s = b[k];
-    for (size_t j = k + 1; j < m; ++j) s -= A[k * m + j] * (*x)[j];
-    (*x)[k] = s / A[k * m + k];
-  }
-  return true;
-}
-
-}  // namespace
 
 StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program) {
   nq_ = rt::NumQ(program);
@@ -78,7 +50,7 @@ int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double*
   }
   std::vector<double> rhs(m), dtau;
   for (size_t r = 0; r < m; ++r) rhs[r] = -a0[r];
-  if (!SolveDense(X, rhs, &dtau)) return -1;
+  if (!SolveSmall(X, rhs, &dtau)) return -1;
   for (size_t k = 0; k < m; ++k) stuck[k]->tau += dtau[k];
   Apply(ws);
   if (int s = rt::Derivative(program_, ws, t, y, out); s != 0) return s;
@@ -126,6 +98,35 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
 int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   if (i < 0 || i >= Count()) return 0;
   return Decide(ws, t, y, joints_[static_cast<size_t>(i)]);
+}
+
+std::string StickSlipEvents::SettleAt(rt::Workspace& ws, double t, const double* y, double tol) {
+  std::vector<double> at(y, y + nq_ + nu_);
+  for (Joint& j : joints_) {
+    const double u = at[static_cast<size_t>(nq_ + j.f.u)];
+    j.mode = u > tol ? 1 : u < -tol ? -1 : 0;
+    j.tau = 0.0;
+  }
+  for (Joint& j : joints_)
+    if (j.mode == 0) {
+      if (Decide(ws, t, at.data(), j) != 0) return "the operating point cannot be evaluated: " + rt::ErrorMessage(ws);
+      if (j.mode != 0) return "joint '" + j.f.joint + "' is at rest but " + log_.back().kind + ": it slips at once, no smooth state";
+    }
+  return "";
+}
+
+std::vector<int> StickSlipEvents::StuckSpeeds() const {
+  std::vector<int> out;
+  for (const Joint& j : joints_)
+    if (j.mode == 0) out.push_back(j.f.u);
+  return out;
+}
+
+std::vector<std::string> StickSlipEvents::StuckNames() const {
+  std::vector<std::string> out;
+  for (const Joint& j : joints_)
+    if (j.mode == 0) out.push_back(j.f.joint + " stuck");
+  return out;
 }
 
 int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {

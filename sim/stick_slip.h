@@ -31,6 +31,13 @@ class StickSlipEvents {
   // The friction laws of the run into another workspace (the output rows').
   void Sync(rt::Workspace& ws) const;
   const std::vector<EventRecord>& Log() const { return log_; }
+  // linearize's operating point (docs/linearize.md): a joint moving (|u| > tol) slides that
+  // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
+  // friction passes mu_s r N slips at once: no smooth state).
+  std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol);
+  // The stuck joints' free speeds and names.
+  std::vector<int> StuckSpeeds() const;
+  std::vector<std::string> StuckNames() const;
 
  private:
   struct Joint {

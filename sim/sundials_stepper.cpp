@@ -4,6 +4,8 @@
 #include <cstdlib>
 #include <string>
 #include <utility>
+#include <vector>
+#include <algorithm>
 
 #include "sim/sundials_util.h"
 
@@ -102,6 +104,50 @@ int SundialsStepper::CheckRow(double tout, double* y, int flag) {
                 tout, d, d2);
   row_failure_ = buf;
   return kRowEnergyFailed;
+}
+
+int SundialsStepper::Graze(int p, double tret, double* y) {
+  const int n = rhs_.Size();
+  std::vector<double> g(static_cast<size_t>(rhs_.NumEvents()));
+  if (rhs_.EventFunctions(tret, y, g.data()) != 0 || g[static_cast<size_t>(p)] > 0.0) return kNoEvent;
+  double b = tret, gb = g[static_cast<size_t>(p)], tn = tret, h = 0.0;
+  module_.current_time(mem_, &tn);
+  module_.last_step(mem_, &h);
+  N_Vector v = N_VClone(s_.y);
+  if (!v) return kEventReached;  // (at the minimum: the best there is)
+  std::vector<double> ya(static_cast<size_t>(n));
+  auto eval = [&](double t, double* gt) {  // p on the interpolant at t (into ya)
+    if (module_.dky(mem_, t, 0, v) != 0) return false;
+    std::copy(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + n, ya.begin());
+    if (rhs_.EventFunctions(t, ya.data(), g.data()) != 0) return false;
+    *gt = g[static_cast<size_t>(p)];
+    return true;
+  };
+  double a = std::min(tn - std::abs(h), tret), ga = 0.0;
+  if (eval(a, &ga) && ga > 0.0) {
+    int side = 0;  // Illinois, as DOP853's Crossing
+    for (int it = 0; it < 200 && b - a > 4e-16 * std::max(std::abs(a), std::abs(b)); ++it) {
+      double t = b - gb * (b - a) / (gb - ga), gt = 0.0;
+      if (!(t > a && t < b)) t = 0.5 * (a + b);
+      if (!eval(t, &gt)) break;
+      if (gt > 0.0) {
+        a = t, ga = gt;
+        if (side == -1) gb *= 0.5;
+        side = -1;
+      } else {
+        b = t, gb = gt;
+        if (side == 1) ga *= 0.5;
+        side = 1;
+      }
+    }
+    if (b < tret && module_.dky(mem_, b, 0, v) == 0) {
+      std::copy(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + n, y);
+      event_time = b;
+    }
+  }
+  N_VDestroy(v);
+  event_index = p;
+  return kEventReached;
 }
 
 int SundialsStepper::CopyOut(int flag, double* y) const {

@@ -182,8 +182,14 @@ class SundialsStepper : public Stepper {
     event_index = static_cast<int>(std::find_if(found.begin(), found.end(), [](int f) { return f != 0; }) - found.begin());
     event_time = tret;
     CopyOut(0, y);
+    if (const int p = rhs_.Paired(event_index); p >= 0) return Graze(p, tret, y);
     return kEventReached;
   }
+  // A graze guard crossed at tret (y there; OdeSystem::Paired): kNoEvent when function p is
+  // positive there (the module goes on), else kEventReached at p's crossing before tret,
+  // located on the last step's interpolant.
+  int Graze(int p, double tret, double* y);
+  static constexpr int kNoEvent = kEventReached + 1;
   // The event functions for CVODE and ARKODE (user data: this), and for IDA.
   static int Roots(double t, N_Vector y, double* g, void* user_data);
   static int RootsIda(double t, N_Vector y, N_Vector yp, double* g, void* user_data);

@@ -110,6 +110,15 @@ std::string SignalsJson(const ViewerScene& scene, const std::vector<size_t>& ins
   return out + "]";
 }
 
+std::string EventsJson(const ViewerScene& scene) {
+  std::string out = "[";
+  for (const ViewerEvent& e : scene.events) {
+    if (out.size() > 1) out += ',';
+    out += fmt::format(R"({{"t":{:.17g},"element":{},"kind":{}}})", e.time, JsonString(e.element), JsonString(e.kind));
+  }
+  return out + "]";
+}
+
 uint64_t VertexCount(const ViewerScene& scene) {
   uint64_t n = 0;
   for (const ViewerBody& b : scene.bodies) n += b.mesh.vertices.size();
@@ -197,9 +206,10 @@ EncodedScene EncodeScene(const ViewerScene& scene, const PageOptions& options, s
   result.instants = instants.size();
   result.json = fmt::format(
       R"({{"format":"kanesim-viewer","version":1,"title":{},"up":[{},{},{}],"n_times":{},"stride":{},)"
-      R"("times":"{}","bodies":{},"decorations":{},"poses":"{}","signals":{}}})",
+      R"("times":"{}","bodies":{},"decorations":{},"poses":"{}","signals":{},"events":{}}})",
       JsonString(scene.title), up.x(), up.y(), up.z(), instants.size(), result.stride, EncodeArray(std::move(times)),
-      BodiesJson(scene), DecorationsJson(scene), PosesBase64(scene, instants), SignalsJson(scene, instants));
+      BodiesJson(scene), DecorationsJson(scene), PosesBase64(scene, instants), SignalsJson(scene, instants),
+      EventsJson(scene));
   return result;
 }
 

@@ -8,7 +8,8 @@
 //     "bodies": [{"name", "label", "rgba": [r, g, b, a], "mesh": MESH}]          (n_bodies)
 //     "decorations": [{"name", "body": index or -1, "rgba", "mesh": MESH}]
 //     "poses": F32[N · n_bodies · 7]   per instant, per body: p_WB (x, y, z), q_WB (w, x, y, z)
-//     "signals": [{"name", "unit", "plot": bool, "values": F32[N]}] }
+//     "signals": [{"name", "unit", "plot": bool, "values": F32[N]}],
+//     "events": [{"t": seconds, "element", "kind"}] }   (the run's events, in time order)
 //   MESH = {"vertices": n, "positions": F32[3n], "normals": F32[3n], "index_bytes": 2 or 4,
 //           "indices": U16 or U32[3 · n_triangles]}  (U16 when n <= 65535)
 // where F32[k] etc. is a base64 string of k little-endian numbers. Strings are JSON-escaped

@@ -95,6 +95,8 @@ std::string CheckScene(const ViewerScene& scene) {
   std::string error = CheckBodies(scene);
   if (error.empty()) error = CheckMotion(scene);
   if (error.empty()) error = CheckSignals(scene);
+  for (const ViewerEvent& e : scene.events)
+    if (error.empty() && !std::isfinite(e.time)) error = fmt::format("event '{}' at a time that is not finite", e.element);
   return error;
 }
 

@@ -45,6 +45,14 @@ struct ViewerSignal {
   bool plot = false;           // plotted when the page opens (none set: the first three are)
 };
 
+// A discrete event of the run (an impact, a stop taken or left, a when clause firing; the
+// `--events` log): the page marks its time on the time line and in the plots.
+struct ViewerEvent {
+  double time = 0.0;     // seconds, finite
+  std::string element;   // "j1", "floor", "when (ball.mech:9)"
+  std::string kind;      // "impact at q_min, speed -1 -> 0.8", "rests on the plane", "fires"
+};
+
 struct ViewerScene {
   std::string title = "kanesim";  // the page's title (e.g. the model's name)
   Vec3 up_W = Vec3::UnitY();      // the world's up direction (−g), resolved in W; finite, non-zero
@@ -57,6 +65,7 @@ struct ViewerScene {
   // (rotations).
   geometry::PoseSequence poses;
   std::vector<ViewerSignal> signals;
+  std::vector<ViewerEvent> events;  // in time order
 };
 
 // Why a scene cannot be shown (empty when it can): sizes that do not match, names empty or

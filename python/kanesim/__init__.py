@@ -148,12 +148,17 @@ def _warn(messages: Iterable[str]) -> None:
 
 class Result:
     """The rows of a run: .time (1-D), .values (rows x columns), .columns (signal names),
-    r["name"] (one column, 1-D), .stats (integrator statistics)."""
+    r["name"] (one column, 1-D), .stats (integrator statistics), .events (end stops and when
+    clauses: dicts with time, element, kind and changes {name: (before, after)}; an event's
+    two rows, its left and right limits, share its time), .terminated ((time, message) when a
+    when clause's terminate ended the run, else None)."""
 
     def __init__(self, columns: List[str], time: np.ndarray, values: np.ndarray, stats: Dict[str, Any]):
         self.columns = list(columns)
         self.time = time
         self.values = values
+        self.events = stats.pop("events", [])
+        self.terminated = stats.pop("terminated", None)
         self.stats = stats
         self._index = {c: i for i, c in enumerate(self.columns)}
 

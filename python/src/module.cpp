@@ -61,6 +61,20 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
   d["energy_guard"] = s.energy_guard;
   d["energy_error"] = s.energy_error;
   d["energy_tolerance"] = s.energy_tolerance;
+  // The events (end stops, when clauses; docs/events.md), which kanesim.Result moves to .events:
+  // each {time, element, kind, changes: {name: (before, after)}}; and terminate's (time, message).
+  py::list events;
+  for (const kanesim::sim::EventRecord& e : s.events) {
+    py::dict ev, changes;
+    ev["time"] = e.time;
+    ev["element"] = e.element;
+    ev["kind"] = e.kind;
+    for (const kanesim::sim::EventChange& c : e.changes) changes[py::str(c.name)] = py::make_tuple(c.before, c.after);
+    ev["changes"] = changes;
+    events.append(ev);
+  }
+  d["events"] = events;
+  d["terminated"] = s.terminated ? py::object(py::make_tuple(s.terminate_time, s.terminate_message)) : py::none();
   // run(sensitivity=...): per parameter, in its order, the differences' estimated error and
   // the largest value of each quotient, as `--stats` prints them (docs/integrators.md).
   py::dict sens;
@@ -305,6 +319,7 @@ py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equili
   d["eigenvalues"] = ComplexVector(lambdas, lambdas.size());
   d["modes"] = modes;
   d["ignorable"] = m.ignorable;
+  d["held"] = m.held;
   py::dict acc;
   acc["step"] = m.h;
   acc["A"] = m.error_A;

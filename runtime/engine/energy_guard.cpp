@@ -21,6 +21,8 @@ std::string NonConservativeCause(const Program& p) {
   if (!p.prescribed_u.empty()) return "the prescribed motion of joint '" + JointOfSpeed(p, p.prescribed_u.front()) + "'";
   for (int s : p.stop_joints)  // an impact with restitution e < 1 takes kinetic energy
     if (p.joints[static_cast<size_t>(s)].restitution < 1.0) return "the end stop of joint '" + p.joints[static_cast<size_t>(s)].name + "'";
+  for (const WhenModel& w : p.whens)  // a reinit sets the state to what the model says
+    if (!w.reinits.empty()) return "the reinit in " + w.name;
   for (const PlaneContactModel& c : p.plane_contacts)  // likewise
     if (c.restitution < 1.0) return "the plane contact '" + c.name + "'";
   for (const TreeJoint& j : p.joints)

@@ -171,6 +171,7 @@ std::unique_ptr<Workspace, void (*)(Workspace*)> MakeWorkspace(const Program& p)
   ws.input_rates.assign(p.mech->inputs.size(), 0.0);
   ws.force_regs = p.force_tape.init;
   ws.output_regs = p.output_tape.init;
+  ws.event_regs = p.event_tape.init;
   ws.jet_regs.assign(3 * p.prescribed_tape.init.size(), 0.0);
   for (size_t i = 0; i < p.prescribed_tape.init.size(); ++i) ws.jet_regs[3 * i] = p.prescribed_tape.init[i];
   ws.Q = Eigen::VectorXd::Zero(p.nu_all);

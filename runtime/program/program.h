@@ -216,6 +216,21 @@ inline std::string Index1(int k) {
   return s;
 }
 
+// A when clause (flat::WhenClause; compiler/whens.cpp, docs/events.md).
+struct WhenReinit {
+  int state = -1;      // its index in y = [q_free; u_free]
+  bool speed = false;  // a free speed (set through the mass matrix), else a coordinate
+  int root = -1;       // its value: a root of Program::event_tape
+  std::string name;    // "j.u", "ball.q[3]"
+};
+struct WhenModel {
+  std::vector<int> indicators;  // roots of Program::event_tape; it fires where one crosses zero upwards
+  std::vector<WhenReinit> reinits;
+  bool terminate = false;
+  std::string message;  // terminate's
+  std::string name;     // for the events log: "when (file.mech:12)"
+};
+
 struct Program {
   std::shared_ptr<const flat::Mechanism> mech;  // kept for Rebind and names
   std::vector<double> param_values;
@@ -247,6 +262,9 @@ struct Program {
   Tape output_tape;                    // declared outputs (roots aligned with mech->outputs)
   std::vector<int> state_refs_forces;  // mech state refs the force tape reads
   std::vector<int> state_refs_outputs; // mech state refs the output tape reads
+  std::vector<WhenModel> whens;        // when clauses; empty: none (no event machinery for them)
+  Tape event_tape;                     // their indicators and reinit values
+  std::vector<int> state_refs_events;  // mech state refs the event tape reads
   std::vector<BodySignalSource> body_signals;
 
   SolverPath solver = SolverPath::Dense;
@@ -348,6 +366,7 @@ struct Workspace {
   std::vector<double> state_values;  // mech state refs in use  (mech.state_refs)  filled by EvalStateRefs
   std::vector<double> force_regs;    // force tape registers  filled by EvalForceTape
   std::vector<double> output_regs;   // output tape registers  filled by EvalSignals
+  std::vector<double> event_regs;    // event tape registers  filled by EvalEventTape
   std::vector<double> jet_regs;      // prescribed tape jets (3 per register)  filled by UnpackState
 
   std::vector<Vec3> F_W;            // applied force at the mass centre  (K)  filled by AppliedForces

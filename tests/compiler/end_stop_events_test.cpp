@@ -92,6 +92,43 @@ TEST(EndStopEvents, PendulumImpactsAtTheEllipticIntegralTimes) {
   }
 }
 
+// A pendulum from its bottom with amplitude phi_m = 0.8 towards a stop at phi_s = phi_m - d:
+// for d > 0 it reaches the stop at t = F(psi, k) / w (sin(phi_s / 2) = k sin(psi), k =
+// sin(phi_m / 2)) at the speed -sqrt(2 w^2 (cos(phi_s) - cos(phi_m))), slow for small d: the
+// gap dips below zero and back inside one solver step (a graze). For d = 0 it touches the
+// stop at zero speed every period: no impulse, the energy kept. If this fails, a near-graze
+// impact is missed (the motion passes through the stop between two steps' ends, as before the
+// graze guards), located off the closed form, or a touch chatters or costs energy.
+TEST(EndStopEvents, GrazesAreNeitherMissedNorChattering) {
+  const double phi_m = 0.8, k = std::sin(phi_m / 2), u0 = -2 * kW * k;
+  for (double d : {1e-3, 1e-6, 0.0}) {
+    const double phi_s = phi_m - d, q_min = -kHalfPi - phi_s;
+    const double t_hit = std::ellint_1(k, std::asin(std::sin(phi_s / 2) / k)) / kW;
+    const double v_hit = -std::sqrt(2 * kW * kW * (std::cos(phi_s) - std::cos(phi_m)));
+    auto l = LoadModel(Pendulum(-kHalfPi, ", u(start = " + Num(u0) + "), q_min = " + Num(q_min) + ", restitution = 0.5"),
+                       {}, {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      sim::SimResult r;
+      sim::MemorySink s = RunWith(*l->prog, how, 6.0, 0.05, {"j1.q", "j1.u", "kinetic_energy", "potential_energy"}, &r, 1e-10);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << " d " << d << ": " << r.message;
+      const std::vector<size_t> at = EventRows(s);
+      for (size_t i = 0; i < s.rows.size(); ++i)
+        ASSERT_GE(s.rows[i][0], q_min - 1e-9) << how.name << " d " << d << ": row " << i << " passed the stop";
+      if (d > 0.0) {
+        ASSERT_GE(at.size(), 1u) << how.name << " d " << d << ": the impact was missed";
+        EXPECT_NEAR(s.times[at[0]], t_hit, d > 1e-5 ? 1e-8 : 1e-6) << how.name << " d " << d;
+        EXPECT_NEAR(s.rows[at[0]][1], v_hit, (d > 1e-5 ? 1e-6 : 1e-3) * std::abs(v_hit)) << how.name << " d " << d;
+        EXPECT_NEAR(s.rows[at[0] + 1][1], -0.5 * s.rows[at[0]][1], 1e-12) << how.name;
+      } else {
+        EXPECT_LE(at.size(), 4u) << how.name << ": touches at T/4 + n T (T = 1.703 s) chatter";
+        const double e0 = s.rows.front()[2] + s.rows.front()[3], e1 = s.rows.back()[2] + s.rows.back()[3];
+        EXPECT_NEAR(e1, e0, 1e-7 * std::abs(e0)) << how.name << ": a touch took energy";
+      }
+    }
+  }
+}
+
 // If this fails, a plastic impact does not leave the joint resting on its stop (q at the
 // limit, u = 0 exactly) while the stop pushes, or it does not leave when the reaction would
 // pull: the torque tau = 2 t balances gravity's on the rod held at phi_s when

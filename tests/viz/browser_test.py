@@ -30,6 +30,10 @@ world matrices with the display rotation undone).
                                the unit its quantity has (metres and radians of the joints,
                                the declared and the inferred outputs, joules), and none where
                                the unit is unknown
+  events     --page P --csv C  a page from `kanesim view` of a model with events: one tick per
+                               event time of the `--events` CSV C of the same run, in order,
+                               where the time line puts that time, titled with the element
+                               and kind; a click on a tick seeks there
 Exit 0 when every check passes; 1 with the failures listed.
 """
 import argparse
@@ -585,19 +589,56 @@ def run_units(args):
         check_requests(page, [url, "data:", "blob:"], "units page")
 
 
+def run_events(args):
+    import csv
+    with open(args.csv, newline="") as f:
+        rows = list(csv.DictReader(f))
+    times = sorted({float(r["time"]) for r in rows})
+    check(len(times) >= 3, f"events: the log {args.csv} has {len(times)} event times (the model should bounce)")
+    url = pathlib.Path(args.page).resolve().as_uri() + "?play=0"
+    with cdp.Chromium(args.chromium, WIDTH, HEIGHT) as browser:
+        page = browser.new_page(WIDTH, HEIGHT)
+        if not open_page(page, url, "events"):
+            return
+        marks = page.evaluate("kanesimViewer.eventMarks()")
+        got = [m["t"] for m in marks]
+        check(got == times, f"events: the time line marks {got}, the events log has {times}")
+        t0, t1 = page.evaluate("kanesimViewer.seek(-1e9)"), page.evaluate("kanesimViewer.seek(1e9)")
+        left, right, top, bottom = page.evaluate(
+            "(() => { const r = document.getElementById('slider').getBoundingClientRect();"
+            " return [r.left, r.right, r.top, r.bottom]; })()")
+        for m in marks:
+            # The strip is the slider's track: its box less 8 px a side (the thumb's half width).
+            x = left + 8 + (m["t"] - t0) / (t1 - t0) * (right - left - 16)
+            check(abs(m["x"] - x) <= 1.5, f"events: the tick of t={m['t']} is at x={m['x']:.1f}, the track puts it at {x:.1f}")
+            check(top - 6 <= m["y"] <= bottom, f"events: the tick of t={m['t']} is at y={m['y']}, not on the slider")
+        for r in rows:
+            title = next((m["title"] for m in marks if m["t"] == float(r["time"])), "")
+            check(r["element"] in title and r["kind"] in title,
+                  f"events: the tick of t={r['time']} says {title!r}, not {r['element']}: {r['kind']}")
+        for m in marks[:3]:
+            page.click(m["x"], m["y"])
+            wait_frames(page)
+            check(page.evaluate("kanesimViewer.time()") == m["t"],
+                  f"events: a click on the tick of t={m['t']} went to {page.evaluate('kanesimViewer.time()')}")
+            check(not page.evaluate("kanesimViewer.playing()"), "events: a click on a tick should pause")
+        check_requests(page, [url.split("?")[0], "data:", "blob:"], "events page")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot", "nowebgl", "units"])
+    parser.add_argument("case", choices=["offline", "served", "controls", "edge", "screenshot", "nowebgl", "units", "events"])
     parser.add_argument("--chromium", default="chromium")
     parser.add_argument("--page")
     parser.add_argument("--fixture")
     parser.add_argument("--up", choices=["z", "y"], default="z")
     parser.add_argument("--png")
+    parser.add_argument("--csv")
     args = parser.parse_args()
     start = time.monotonic()
     try:
         {"offline": run_offline, "served": run_served, "controls": run_controls, "edge": run_edge,
-         "screenshot": run_screenshot, "nowebgl": run_nowebgl, "units": run_units}[args.case](args)
+         "screenshot": run_screenshot, "nowebgl": run_nowebgl, "units": run_units, "events": run_events}[args.case](args)
     except cdp.ProtocolError as e:
         failures.append(f"browser: {e}")
     for f in failures:

@@ -37,9 +37,11 @@
     return rows;
   }
 
-  // signals: [{name, unit, plot, values (base64)}]; times: Float64Array; onSeek(t).
-  function Plots(signals, times, onSeek) {
+  // signals: [{name, unit, plot, values (base64)}]; times: Float64Array; onSeek(t); eventTimes:
+  // the run's events, a thin orange line each in every plot.
+  function Plots(signals, times, onSeek, eventTimes) {
     this.times = times;
+    this.eventTimes = eventTimes || [];
     this.onSeek = onSeek;
     this.t = times[0];
     this.signals = signals.map((s) => ({ name: s.name, unit: s.unit, plot: s.plot, values: K.f32(s.values) }));
@@ -114,6 +116,20 @@
         this.onSeek(entry.graph.toDataXCoord(xy[0]));
       },
       drawCallback: () => this.placeCursor(entry),
+      underlayCallback: (ctx, area, g) => {
+        ctx.save();
+        ctx.strokeStyle = 'rgba(204, 102, 0, 0.6)';
+        ctx.lineWidth = 1;
+        this.eventTimes.forEach((t) => {
+          const x = g.toDomXCoord(t);
+          if (x < area.x || x > area.x + area.w) return;
+          ctx.beginPath();
+          ctx.moveTo(Math.round(x) + 0.5, area.y);
+          ctx.lineTo(Math.round(x) + 0.5, area.y + area.h);
+          ctx.stroke();
+        });
+        ctx.restore();
+      },
     });
     this.placeCursor(entry);
   };

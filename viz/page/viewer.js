@@ -9,7 +9,8 @@
 // Test hook window.kanesimViewer (docs/visualization.md, "The browser test"): ready, errors,
 // noView3d ('' or the line shown when there is no 3-D view), time(), clock(), seek(t), play(), pause(), playing(),
 // bodyPositions(), bodyPoses(), screenPosition(name), screenPoint([x, y, z]), pixel(x, y), hoverText(),
-// cursorTimes(), plotPoint(name, t), plotted(), plotRows(name). Positions and rotations are read back from the
+// cursorTimes(), plotPoint(name, t), plotted(), plotRows(name), events() (the scene's), eventMarks()
+// (the time line's ticks: t, title, page x and y). Positions and rotations are read back from the
 // rendered objects' world matrices with the display rotation undone, i.e. in the simulation's world frame W;
 // without a 3-D view they are null.
 (function (K) {
@@ -52,7 +53,9 @@
     this.speed = 1;
     this.last = null;
     this.view = document.getElementById('view');
-    this.plots = new K.Plots(data.signals, this.times, (t) => { this.pause(); this.seek(t); });
+    this.events = (data.events || []).filter((e) => Number.isFinite(e.t));
+    this.plots = new K.Plots(data.signals, this.times, (t) => { this.pause(); this.seek(t); },
+      this.events.map((e) => e.t));
     this.setUpControls(data);
   }
 
@@ -76,6 +79,7 @@
     axes.disabled = !this.view3d;  // nothing to show them in
     axes.addEventListener('change', () => { if (this.view3d) this.view3d.showAxes(axes.checked); });
     this.clock = byId('clock');
+    this.markEvents(byId('event-marks'));
     document.addEventListener('keydown', (e) => {
       if (e.target instanceof HTMLInputElement && e.target.type !== 'range' && e.target.type !== 'checkbox') return;
       if (e.key === ' ') { e.preventDefault(); this.playing ? this.pause() : this.play(); }
@@ -84,6 +88,26 @@
     });
     new ResizeObserver(() => this.resize()).observe(this.view);
     this.resize();
+  };
+
+  // A tick on the time line per event (its time, element and kind as the tooltip); a click
+  // seeks there. Several events at one instant share the tick.
+  Viewer.prototype.markEvents = function (strip) {
+    const span = this.t1 - this.t0;
+    const byTime = new Map();
+    this.events.forEach((e) => {
+      const line = 't = ' + e.t + ' s: ' + e.element + ': ' + e.kind;
+      byTime.set(e.t, byTime.has(e.t) ? byTime.get(e.t) + '\n' + line : line);
+    });
+    byTime.forEach((title, t) => {
+      const mark = document.createElement('span');
+      mark.className = 'event-mark';
+      mark.dataset.t = String(t);
+      mark.title = title;
+      mark.style.left = (span > 0 ? (100 * (t - this.t0)) / span : 0) + '%';
+      mark.addEventListener('click', () => { this.pause(); this.seek(t); });
+      strip.appendChild(mark);
+    });
   };
 
   Viewer.prototype.resize = function () {
@@ -169,6 +193,11 @@
     hook.plotPoint = (name, t) => this.plots.pagePoint(name, t);
     hook.plotted = () => Array.from(this.plots.shown.keys());
     hook.plotRows = (name) => this.plots.rows(name);
+    hook.events = () => this.events.map((e) => ({ t: e.t, element: e.element, kind: e.kind }));
+    hook.eventMarks = () => Array.from(document.querySelectorAll('#event-marks .event-mark')).map((m) => {
+      const r = m.getBoundingClientRect();
+      return { t: parseFloat(m.dataset.t), title: m.title, x: r.left + r.width / 2, y: r.top + r.height / 2 };
+    });
   };
 
   // The one line in the view's panel saying why there is no 3-D view (not an error: the rest

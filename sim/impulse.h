@@ -1,0 +1,23 @@
+// A jump of the speeds by a generalized impulse through the mass matrix (Kane's impulsive
+// form M du = J^T lambda with J the rows of chosen speeds): the jump that sets those speeds'
+// changes to given targets, every other speed following (docs/events.md).
+#pragma once
+
+#include <vector>
+
+#include "runtime/runtime.h"
+
+namespace kanesim::sim {
+
+// du (nu entries) = X c with X = [M^-1 e_r for r in rows] and c from (X c)_rows = targets:
+// the speeds `rows` (free-speed indices) change by `targets`, the others by the impulse's
+// response. 0, Derivative's status codes, or -1 when the rows' block of M^-1 is singular
+// (ErrorMessage(ws) then says why where the runtime did).
+// A c = b for the small dense A (m x m, row-major), Gaussian elimination with partial
+// pivoting. False when A is singular.
+bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double>* c);
+
+int SpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+              const std::vector<double>& targets, double* du);
+
+}  // namespace kanesim::sim

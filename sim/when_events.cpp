@@ -1,0 +1,60 @@
+// When clauses as events (sim/when_events.h). A reinit of speed k is the jump
+// du = M^-1 J^T lambda, J the rows of the reinit'ed speeds (and of the joints resting on their
+// stops), lambda such that those speeds take their new values (the resting ones stay 0): the
+// generalized impulse acts on the reinit'ed joints only, so every other joint's generalized
+// momentum p_j = (M u)_j is unchanged across the jump.
+#include "sim/when_events.h"
+
+#include <cstdio>
+
+#include "runtime/program/program.h"  // Program::whens
+#include "sim/impulse.h"
+
+namespace kanesim::sim {
+
+WhenEvents::WhenEvents(const rt::Program& program) : program_(program) {
+  nq_ = rt::NumQ(program);
+  nu_ = rt::NumU(program);
+  for (size_t c = 0; c < program.whens.size(); ++c)
+    for (int root : program.whens[c].indicators) {
+      clause_of_.push_back(static_cast<int>(c));
+      root_of_.push_back(root);
+    }
+}
+
+int WhenEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g) {
+  if (int s = rt::EvalEventTape(program_, ws, t, y); s != 0) return s;
+  for (size_t i = 0; i < root_of_.size(); ++i) g[i] = -rt::EventRoot(program_, ws, root_of_[i]);
+  return 0;
+}
+
+int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const std::vector<int>& held) {
+  if (i < 0 || i >= Count()) return 0;
+  const rt::WhenModel& w = program_.whens[static_cast<size_t>(clause_of_[static_cast<size_t>(i)])];
+  last_ = EventRecord(t, w.name, w.terminate ? "terminate: " + w.message : "fires");
+  if (int s = rt::EvalEventTape(program_, ws, t, y); s != 0) return s;
+  std::vector<double> value;
+  for (const rt::WhenReinit& r : w.reinits) value.push_back(rt::EventRoot(program_, ws, r.root));
+  for (size_t k = 0; k < w.reinits.size(); ++k)
+    if (!w.reinits[k].speed) y[w.reinits[k].state] = value[k];
+  std::vector<int> rows;
+  std::vector<double> targets;
+  for (size_t k = 0; k < w.reinits.size(); ++k)
+    if (w.reinits[k].speed) rows.push_back(w.reinits[k].state - nq_), targets.push_back(value[k] - y[w.reinits[k].state]);
+  if (!rows.empty()) {
+    for (int h : held) rows.push_back(h), targets.push_back(0.0);
+    std::vector<double> du(static_cast<size_t>(nu_));
+    if (int s = SpeedJump(program_, ws, t, y, rows, targets, du.data()); s != 0) return s;
+    for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
+    for (size_t k = 0; k < w.reinits.size(); ++k)  // exactly the values written (du's round-off aside)
+      if (w.reinits[k].speed) y[w.reinits[k].state] = value[k];
+    for (int h : held) y[nq_ + h] = 0.0;
+  }
+  if (w.terminate) {
+    terminated_ = true;
+    message_ = w.message;
+  }
+  return 0;
+}
+
+}  // namespace kanesim::sim

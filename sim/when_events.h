@@ -1,0 +1,41 @@
+// When clauses as events (docs/events.md): each condition's indicator h (positive where the
+// condition holds) gives the event function g = -h, so a clause fires where g crosses zero
+// downwards like an end stop's gap; the clause then sets its coordinates, jumps its speeds by
+// an impulse through the mass matrix (sim/impulse.h) and may end the run.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "runtime/runtime.h"
+#include "sim/simulate.h"
+
+namespace kanesim::sim {
+
+class WhenEvents {
+ public:
+  explicit WhenEvents(const rt::Program& program);
+  bool Active() const { return !clause_of_.empty(); }
+  int Count() const { return static_cast<int>(clause_of_.size()); }
+  // g_i = -h_i for every indicator of every clause, in order. 0, or Derivative's codes.
+  int Functions(rt::Workspace& ws, double t, const double* y, double* g);
+  // Indicator i crossed at (t, y): its clause's reinits, every value taken at the left limit;
+  // coordinates set, then the speeds by one impulse that also keeps `held` (free speeds
+  // held at zero: joints resting on their stops) at zero. y jumps in place.
+  int Event(rt::Workspace& ws, double t, double* y, int i, const std::vector<int>& held);
+  // terminate(...) fired: the run ends at the event (its message).
+  bool Terminated() const { return terminated_; }
+  const std::string& Message() const { return message_; }
+  // The record of the last Event (element, kind).
+  const EventRecord& Last() const { return last_; }
+
+ private:
+  const rt::Program& program_;
+  std::vector<int> clause_of_, root_of_;  // per indicator: its clause, its tape root
+  int nq_ = 0, nu_ = 0;
+  bool terminated_ = false;
+  std::string message_;
+  EventRecord last_;
+};
+
+}  // namespace kanesim::sim

@@ -1,0 +1,225 @@
+// When clauses (issue 41): event times located by every integrator's root finding against
+// closed forms (a bouncing ball's impact times, the pendulum's elliptic-integral swing), the
+// reinit of one speed of a double pendulum against the momentum balance of the other joint,
+// terminate, and a condition that only touches zero (a graze).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "sim/sensitivity.h"
+#include "tests/compiler/compile_test_util.h"
+
+namespace kanesim::test {
+namespace {
+
+constexpr double kG = 9.81;
+const double kHalfPi = std::acos(0.0);
+const double kW = std::sqrt(1.5 * kG);  // the rod pendulum's w^2 = 3 g / (2 L), L = 1
+
+std::string Num(double x) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", x);
+  return b;
+}
+
+// The pairs of rows at one time (an event's left and right limits): index of the left row.
+std::vector<size_t> EventRows(const sim::MemorySink& s) {
+  std::vector<size_t> at;
+  for (size_t i = 0; i + 1 < s.times.size(); ++i)
+    if (s.times[i] == s.times[i + 1]) at.push_back(i);
+  return at;
+}
+
+// A point mass on a vertical slider dropped from h; `body` the when clauses.
+std::string Ball(double h, const std::string& body) {
+  return "model Ball\n"
+         "  World world(g = {0, -9.81, 0});\n"
+         "  Prismatic p(axis = {0, 1, 0}, q(start = " + Num(h) + "));\n"
+         "  Body b(m = 1, I = diagonal({1, 1, 1}));\n"
+         "equation\n"
+         "  connect(world.frame_b, p.frame_a);\n"
+         "  connect(p.frame_b, b.frame_a);\n" + body +
+         "end Ball;\n";
+}
+
+// If this fails, a when clause does not fire where its condition becomes true (the impact
+// times of a ball bouncing with reinit(u, -e pre(u)): t1 = sqrt(2h/g), t_{k+1} - t_k = 2 e^k t1),
+// the firing depends on the integrator or the output grid, or reinit does not set the speed.
+TEST(WhenEvents, BouncingBallFiresAtTheClosedFormTimes) {
+  const double h = 1.0, e = 0.8, t1 = std::sqrt(2 * h / kG);
+  const double times[3] = {t1, t1 + 2 * e * t1, t1 + 2 * e * t1 + 2 * e * e * t1};
+  auto l = LoadModel(Ball(h, "  when p.q < 0 then\n    reinit(p.u, -0.8 * pre(p.u));\n  end when;\n"), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (double interval : {0.1, 0.07}) {
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      sim::SimResult r;
+      sim::MemorySink s = RunWith(*l->prog, how, 2.0, interval, {"p.q", "p.u"}, &r, 1e-12);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+      const std::vector<size_t> at = EventRows(s);
+      ASSERT_EQ(at.size(), 3u) << how.name;
+      ASSERT_EQ(r.stats.events.size(), 3u) << how.name;
+      for (size_t k = 0; k < 3; ++k) {
+        EXPECT_NEAR(s.times[at[k]], times[k], 1e-9) << how.name << " interval " << interval << " impact " << k;
+        EXPECT_EQ(s.rows[at[k] + 1][1], -0.8 * s.rows[at[k]][1]) << how.name;
+        EXPECT_EQ(r.stats.events[k].time, s.times[at[k]]);
+        ASSERT_EQ(r.stats.events[k].changes.size(), 1u);
+        EXPECT_EQ(r.stats.events[k].changes[0].name, "p.u");
+      }
+    }
+  }
+}
+
+// If this fails, a condition on a coordinate does not fire where the exact (elliptic-integral)
+// motion reaches it, in some integrator. The rod pendulum released at rest at phi0 (from
+// hanging down) reaches phi = -0.5 at t = (K(k) + F(psi, k)) / w, k = sin(phi0/2),
+// sin(psi) = sin(0.25) / k; reinit(u, 0) stops it there, and it swings back.
+TEST(WhenEvents, PendulumFiresAtTheEllipticIntegralTime) {
+  const double phi0 = 1.0, phis = -0.5, k = std::sin(phi0 / 2);
+  const double t1 = (std::comp_ellint_1(k) + std::ellint_1(k, std::asin(std::sin(0.25) / k))) / kW;
+  const std::string text =
+      "model P\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  Revolute j1(axis = {0, 0, 1}, q(start = " + Num(phi0 - kHalfPi) + "));\n"
+      "  Rod rod(L = 1, m = 1);\n"
+      "equation\n"
+      "  connect(world.frame_b, j1.frame_a);\n"
+      "  connect(j1.frame_b, rod.frame_a);\n"
+      "  when j1.q + pi / 2 < " + Num(phis) + " then\n    reinit(j1.u, 0);\n  end when;\n"
+      "end P;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 1.5, 0.1, {"j1.q", "j1.u"}, &r, 1e-12);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    const std::vector<size_t> at = EventRows(s);
+    ASSERT_EQ(at.size(), 1u) << how.name << ": at rest at -0.5 it swings back and does not cross again";
+    EXPECT_NEAR(s.times[at[0]], t1, 1e-9) << how.name;
+    EXPECT_EQ(s.rows[at[0] + 1][1], 0.0) << how.name;
+  }
+}
+
+// Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7), q2 the relative angle. reinit(j1.u, 0) is the
+// impulse e1 lambda on joint 1 alone, so joint 2's generalized momentum
+//   p2 = dT/du2 = m2 (L2^2/3 + L1 L2 cos(q2)/2) u1 + m2 L2^2/3 u2
+// (rod 2's angular momentum about joint 2) is the same before and after:
+//   u2+ = u2- + (1 + 3 L1 cos(q2) / (2 L2)) (u1- - u1+).
+// If this fails, the other speed is left stale or does not follow through the mass matrix, or
+// a coordinate moves at a speed jump.
+TEST(WhenEvents, ReinitOfOneSpeedKeepsTheOtherJointsMomentum) {
+  const double L1 = 1, L2 = 0.8;
+  const std::string text =
+      "model D\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  Revolute j1(axis = {0, 0, 1}, q(start = -0.3), u(start = 1.2));\n"
+      "  Revolute j2(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));\n"
+      "  Rod rod1(L = 1, m = 1);\n"
+      "  Rod rod2(L = 0.8, m = 0.7);\n"
+      "equation\n"
+      "  connect(world.frame_b, j1.frame_a);\n"
+      "  connect(j1.frame_b, rod1.frame_a);\n"
+      "  connect(rod1.frame_b, j2.frame_a);\n"
+      "  connect(j2.frame_b, rod2.frame_a);\n"
+      "  when time > 0.35 then\n    reinit(j1.u, 0);\n  end when;\n"
+      "end D;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 0.6, 0.1, {"j1.q", "j1.u", "j2.q", "j2.u"}, &r, 1e-11);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    const std::vector<size_t> at = EventRows(s);
+    ASSERT_EQ(at.size(), 1u) << how.name;
+    const std::vector<double>& a = s.rows[at[0]];
+    const std::vector<double>& b = s.rows[at[0] + 1];
+    EXPECT_NEAR(s.times[at[0]], 0.35, 1e-12) << how.name;
+    EXPECT_EQ(b[0], a[0]);
+    EXPECT_EQ(b[2], a[2]);
+    EXPECT_EQ(b[1], 0.0);
+    const double u2 = a[3] + (1 + 3 * L1 * std::cos(a[2]) / (2 * L2)) * (a[1] - b[1]);
+    EXPECT_NEAR(b[3], u2, 1e-10 * (std::abs(a[1]) + std::abs(a[3]))) << how.name;
+    EXPECT_GT(std::abs(b[3] - a[3]), 0.5) << how.name << ": the jump is large, so a stale u2 fails";
+  }
+}
+
+// If this fails, terminate does not end the run at the event (rows past it written, a failure
+// status, or the event time off the closed form t1 = sqrt(2h/g)).
+TEST(WhenEvents, TerminateEndsTheRunAtTheEventTime) {
+  const double h = 2.0, t1 = std::sqrt(2 * h / kG);
+  auto l = LoadModel(Ball(h, "  when p.q < 0 then\n    terminate(\"ground\");\n  end when;\n"), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 3.0, 0.1, {"p.q"}, &r, 1e-12);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    EXPECT_TRUE(r.stats.terminated) << how.name;
+    EXPECT_EQ(r.stats.terminate_message, "ground");
+    EXPECT_NEAR(r.stats.terminate_time, t1, 1e-9) << how.name;
+    EXPECT_EQ(s.times.back(), r.stats.terminate_time) << how.name;
+    EXPECT_EQ(s.times.size(), static_cast<size_t>(std::floor(t1 / 0.1)) + 3) << how.name << ": the rows up to t1, then its two";
+  }
+}
+
+// The vector form and change(): change(b) fires where b becomes true and where it becomes
+// false. A uniform motion x = t crosses 0.25 once up; `change(x > 0.25 and x < 0.5)` fires at
+// 0.25 and 0.5. If this fails, change() or and/or/not indicators are wrong.
+TEST(WhenEvents, ChangeFiresBothWays) {
+  const std::string text =
+      "model C\n"
+      "  World world;\n"
+      "  Prismatic p(axis = {1, 0, 0}, u(start = 1));\n"
+      "  Body b(m = 1, I = diagonal({1, 1, 1}));\n"
+      "equation\n"
+      "  connect(world.frame_b, p.frame_a);\n"
+      "  connect(p.frame_b, b.frame_a);\n"
+      "  when {change(p.q > 0.25 and not p.q >= 0.5), time > 0.8} then\n    reinit(p.u, 1);\n  end when;\n"
+      "end C;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    RunWith(*l->prog, how, 1.0, 0.1, {"p.q"}, &r, 1e-12);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_EQ(r.stats.events.size(), 3u) << how.name;
+    EXPECT_NEAR(r.stats.events[0].time, 0.25, 1e-12) << how.name;
+    EXPECT_NEAR(r.stats.events[1].time, 0.5, 1e-12) << how.name;
+    EXPECT_NEAR(r.stats.events[2].time, 0.8, 1e-12) << how.name;
+  }
+}
+
+// If this fails, a when clause in a closed loop compiles, where the SUNDIALS solvers' checked
+// steps would pass its events unseen (K321 instead).
+TEST(WhenEvents, ClosedLoopsAreRefusedWithK321) {
+  std::ifstream in(kRoot + "/examples/fourbar.mech");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  std::string text = buf.str();
+  ASSERT_NE(text.find("  annotation(experiment"), std::string::npos);
+  text.replace(text.find("  annotation(experiment"), 0, "  when time > 1 then\n    terminate(\"x\");\n  end when;\n");
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l);
+  EXPECT_FALSE(l->prog);
+  EXPECT_NE(Find(l->errors, "K321", "closed loops or contacts"), nullptr) << Messages(l->errors);
+}
+
+// If this fails, --sensitivity runs a model with when clauses without their events (its
+// derivatives would be those of a motion that never fires) instead of refusing it.
+TEST(WhenEvents, SensitivitiesRefuseWhenClauses) {
+  auto l = LoadModel(Ball(1.0, "  when p.q < 0 then\n    reinit(p.u, -pre(p.u));\n  end when;\n"), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  sim::SimOptions o;
+  o.stop_time = 1.0;
+  o.interval = 0.1;
+  sim::MemorySink sink;
+  const sim::SimResult r = sim::SimulateSensitivities(*l->prog, {}, o, sink);
+  EXPECT_EQ(r.status, sim::SimResult::Status::kUsageError);
+  EXPECT_NE(r.message.find("when clauses"), std::string::npos) << r.message;
+  EXPECT_TRUE(sink.rows.empty());
+}
+
+}  // namespace
+}  // namespace kanesim::test

@@ -1,0 +1,139 @@
+// linearize at hybrid operating points (issue 41; linearize/hybrid.h): a joint resting on
+// its stop, a joint stuck by exact Coulomb friction and a body resting on a plane are
+// constraint rows (their coordinates and speeds leave the states); impacts, contacts about
+// to leave and joints about to slip are refused.
+//
+// Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7), the first held (on its stop or stuck): the
+// second swings about a fixed pin, A = [[0, 1], [-3 g / (2 L2), 0]] about hanging.      (1)
+// A mass m on a spring k along x, resting on the floor y = 0: A = [[0, 1], [-k / m, 0]]. (2)
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "linearize/linearize.h"
+#include "tests/support/load_util.h"
+
+namespace kanesim::test {
+namespace {
+
+constexpr double kG = 9.81;
+const std::string kStopModel = kRoot + "/tests/linearize/models/stop_double_pendulum.mech";
+
+std::string Rods(const std::string& j1_modifiers, double q1) {
+  return "model D\n"
+         "  World world(g = {0, -9.81, 0});\n"
+         "  Revolute j1(axis = {0, 0, 1}, q(start = " + std::to_string(q1) + ")" + j1_modifiers + ");\n"
+         "  Revolute j2(axis = {0, 0, 1}, q(start = -pi / 2 - (" + std::to_string(q1) + ")));\n"
+         "  Rod rod1(L = 1, m = 1);\n"
+         "  Rod rod2(L = 0.8, m = 0.7);\n"
+         "equation\n"
+         "  connect(world.frame_b, j1.frame_a);\n"
+         "  connect(j1.frame_b, rod1.frame_a);\n"
+         "  connect(rod1.frame_b, j2.frame_a);\n"
+         "  connect(j2.frame_b, rod2.frame_a);\n"
+         "end D;\n";
+}
+
+// Eq. (1) for a model whose j1 is held at the operating point (named `held`).
+void ExpectSecondRodAlone(const rt::Program& p, const std::string& held) {
+  lin::LinearModel m;
+  const lin::Status s = lin::Linearize(p, lin::StartPoint(p), {}, &m);
+  ASSERT_TRUE(s.ok()) << s.message;
+  ASSERT_EQ(m.states, (std::vector<std::string>{"j2.q", "j2.u"}));
+  ASSERT_EQ(m.held, std::vector<std::string>{held});
+  const double w2 = 1.5 * kG / 0.8;
+  EXPECT_NEAR(m.A(0, 0), 0.0, 1e-9);
+  EXPECT_NEAR(m.A(0, 1), 1.0, 1e-9);
+  EXPECT_NEAR(m.A(1, 0), -w2, 1e-7 * w2);
+  EXPECT_NEAR(m.A(1, 1), 0.0, 1e-9);
+  EXPECT_LT(m.unsteady, 1e-6);  // an equilibrium of the held system
+}
+
+// If this fails, a joint resting on its stop is linearized as free (4 states, a motion that
+// falls through the stop) instead of as a constraint row.
+TEST(LinearizeHybrid, DoublePendulumOnItsStopIsTheSecondRodAlone) {
+  auto l = LoadModel(kStopModel);
+  ASSERT_TRUE(l && l->prog);
+  ExpectSecondRodAlone(*l->prog, "j1 on q_min");
+}
+
+// If this fails, a joint stuck by exact Coulomb friction is linearized with the regularized
+// law (a stiff damping of j1 instead of no j1 at all). Holding torque ~ 11 N m, at most
+// mu_s r N = 0.5 * 2 * 16.7 N m.
+TEST(LinearizeHybrid, StuckCoulombJointRemovesItsDegreeOfFreedom) {
+  auto l = LoadModel(Rods(", mu = 0.5, friction_radius = 2, friction_exact = true", -0.3), {}, {}, true);
+  ASSERT_TRUE(l && l->prog);
+  ExpectSecondRodAlone(*l->prog, "j1 stuck");
+}
+
+// If this fails, a point that slips at once (the needed friction above mu_s r N) is
+// linearized with some law instead of refused.
+TEST(LinearizeHybrid, JointAboutToSlipIsRefused) {
+  auto l = LoadModel(Rods(", mu = 0.5, friction_radius = 0.1, friction_exact = true", -0.3), {}, {}, true);
+  ASSERT_TRUE(l && l->prog);
+  lin::LinearModel m;
+  const lin::Status s = lin::Linearize(*l->prog, lin::StartPoint(*l->prog), {}, &m);
+  EXPECT_EQ(s.code, 2);
+  EXPECT_NE(s.message.find("joint 'j1' is at rest but slips"), std::string::npos) << s.message;
+}
+
+// If this fails, an impact instant, a rest whose reaction pulls, or a point past the stop
+// gets a linear model.
+TEST(LinearizeHybrid, ImpactsPullsAndPointsPastAStopAreRefused) {
+  auto moving = LoadModel(kStopModel, {{"u1", "-1"}});
+  ASSERT_TRUE(moving && moving->prog);
+  lin::LinearModel m;
+  lin::Status s = lin::Linearize(*moving->prog, lin::StartPoint(*moving->prog), {}, &m);
+  EXPECT_EQ(s.code, 2);
+  EXPECT_NE(s.message.find("joint 'j1' is on q_min and moving into it"), std::string::npos) << s.message;
+  // q_max = 0 above the horizontal rod: gravity pulls it away.
+  auto pulled = LoadModel(Rods(", q_max = 0", 0.0), {}, {}, true);
+  ASSERT_TRUE(pulled && pulled->prog);
+  s = lin::Linearize(*pulled->prog, lin::StartPoint(*pulled->prog), {}, &m);
+  EXPECT_EQ(s.code, 2);
+  EXPECT_NE(s.message.find("joint 'j1' is on q_max at rest, but the reaction that would hold it pulls"),
+            std::string::npos)
+      << s.message;
+  auto l = LoadModel(kStopModel);
+  ASSERT_TRUE(l && l->prog);
+  lin::OperatingPoint op = lin::StartPoint(*l->prog);
+  op.y[0] = -0.01;  // j1.q
+  s = lin::Linearize(*l->prog, op, {}, &m);
+  EXPECT_EQ(s.code, 1);
+  EXPECT_NE(s.message.find("joint 'j1' is past q_min"), std::string::npos) << s.message;
+  lin::EquilibriumResult eq;
+  EXPECT_EQ(lin::FindEquilibrium(*l->prog, lin::StartPoint(*l->prog), &eq).code, 1);
+}
+
+// Eq. (2). If this fails, a body resting on a plane contact is linearized as free (it falls:
+// not an equilibrium) instead of with the contact's row.
+TEST(LinearizeHybrid, MassOnAFloorIsTheSpringAlong) {
+  const std::string text =
+      "model Floor\n"
+      "  parameter Real k(unit = \"N/m\") = 8;\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  Prismatic px(axis = {1, 0, 0});\n"
+      "  Prismatic py(axis = {0, 1, 0}, q(start = 0));\n"
+      "  Body b(m = 2);\n"
+      "  PlaneContact floor(n = {0, 1, 0}, d = 0);\n"
+      "equation\n"
+      "  connect(world.frame_b, px.frame_a);\n"
+      "  connect(px.frame_b, py.frame_a);\n"
+      "  connect(py.frame_b, b.frame_a);\n"
+      "  connect(py.frame_b, floor.frame_a);\n"
+      "  px.tau = -k * px.q;\n"
+      "end Floor;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog);
+  lin::LinearModel m;
+  const lin::Status s = lin::Linearize(*l->prog, lin::StartPoint(*l->prog), {}, &m);
+  ASSERT_TRUE(s.ok()) << s.message;
+  ASSERT_EQ(m.states, (std::vector<std::string>{"px.q", "px.u"}));
+  EXPECT_EQ(m.held, std::vector<std::string>{"floor on the plane"});
+  EXPECT_NEAR(m.A(1, 0), -4.0, 1e-8);
+  EXPECT_NEAR(m.A(1, 1), 0.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace kanesim::test
