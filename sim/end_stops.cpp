@@ -229,19 +229,19 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
     log_.push_back({t, Element(side), "rests on " + Where(side) + " (accumulation point of the bounces)"});
     return 0;
   }
-  if (side.resting) {  // the reaction would pull: the contact leaves
+  if (side.resting) {  // the reaction would pull: the contact leaves (and others may follow)
+    const std::vector<char> before = RestingSet();
     side.resting = false;
-    log_.push_back({t, Element(side), "leaves " + Where(side)});
-    return 0;
+    return Settle(ws, t, y, before);
   }
   double gap = 0.0, c = 0.0;
   if (int s = Row(ws, t, y, side, &gap, J_.data(), &c); s != 0) return s;
   double v = 0.0;
   for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
-  return Impact(ws, t, y, i, v);
+  return Impact(ws, t, y, i, v, true);
 }
 
-int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double v) {
+int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double v, bool settle) {
   Side& side = sides_[static_cast<size_t>(i)];
   const rt::EndStop* st = side.stop >= 0 ? &stops_[static_cast<size_t>(side.stop)] : nullptr;
   if (st) y[st->q] = side.upper ? st->q_max : st->q_min;  // located to round-off in t: on the stop
@@ -285,17 +285,81 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     kind += buf;
   }
   if (v != 0.0) log_.push_back({t, Element(side), kind});  // (at rest on it at the start: no impact)
-  if (!rest) return 0;
-  // At rest on the contact: held while it pushes; pulled away, it leaves at once.
-  side.resting = true;
-  std::vector<double> lambda;
-  if (int s = Reactions(ws, t, y, &lambda, nullptr); s != 0) return s;
-  if (!(lambda[static_cast<size_t>(i)] > 0.0)) {
-    side.resting = false;
-  } else if (t_inf > t) {
-    side.accumulates_at = t_inf;  // its rest is logged there (Functions: a time event)
-  } else {
-    log_.push_back({t, Element(side), "rests on " + Where(side)});
+  // At rest on the contact: held while it pushes; the impulse may also have made other
+  // resting sides pull, or brought sides on their contact to rest.
+  const std::vector<char> was = RestingSet();
+  if (rest) {
+    side.resting = true;
+    if (t_inf > t) side.accumulates_at = t_inf;  // its rest is logged there (Functions: a time event)
+  }
+  return settle ? Settle(ws, t, y, was) : 0;
+}
+
+std::vector<char> EndStopEvents::RestingSet() const {
+  std::vector<char> r(sides_.size());
+  for (size_t i = 0; i < sides_.size(); ++i) r[i] = sides_[i].resting ? 1 : 0;
+  return r;
+}
+
+int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before) {
+  const int n = Count();
+  std::vector<double> lambda, a_held(static_cast<size_t>(nu_));
+  for (int it = 0; it < 16 * n + 16; ++it) {  // pivots and impacts; the LCP (M positive definite) has one solution
+    if (int s = Reactions(ws, t, y, &lambda, a_held.data()); s != 0) return s;
+    int leave = -1;
+    for (int i = 0; i < n; ++i)
+      if (sides_[static_cast<size_t>(i)].resting && !(lambda[static_cast<size_t>(i)] > 0.0) &&
+          (leave < 0 || lambda[static_cast<size_t>(i)] < lambda[static_cast<size_t>(leave)]))
+        leave = i;
+    if (leave >= 0) {
+      sides_[static_cast<size_t>(leave)].resting = false;
+      sides_[static_cast<size_t>(leave)].accumulates_at = 0.0;
+      continue;
+    }
+    int join = -1, strike = -1;
+    double a_join = 0.0, v_join = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const Side& s = sides_[static_cast<size_t>(i)];
+      if (s.resting) continue;
+      double gap = 0.0, c = 0.0;
+      if (int r = Row(ws, t, y, s, &gap, J_.data(), &c); r != 0) return r;
+      double v = 0.0, a = c;
+      for (int k = 0; k < nu_; ++k) {
+        v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+        a += J_[static_cast<size_t>(k)] * a_held[static_cast<size_t>(k)];
+      }
+      if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(s)))) continue;
+      if (v < -kRestSpeeds * atol_) {  // closing on its contact already: an impact now (a root
+        strike = i, v_join = v;        // from g = 0 would be missed by the root finding)
+        break;
+      }
+      if (std::abs(v) <= kRestSpeeds * atol_ && a < 0.0 && (join < 0 || a < a_join)) join = i, a_join = a, v_join = v;
+    }
+    if (strike >= 0) {
+      if (int r = Impact(ws, t, y, strike, v_join, false); r != 0) return r;
+      continue;
+    }
+    if (join < 0) break;
+    Side& s = sides_[static_cast<size_t>(join)];
+    std::vector<int> rows = {join};
+    std::vector<double> targets = {-v_join}, c;
+    for (int k = 0; k < n; ++k)
+      if (sides_[static_cast<size_t>(k)].resting) rows.push_back(k), targets.push_back(0.0);
+    std::vector<double> du(static_cast<size_t>(nu_));
+    if (int r = Impulse(ws, t, y, rows, targets, du.data(), &c); r != 0) return r;
+    for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
+    if (s.stop >= 0) {
+      const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+      y[st.q] = s.upper ? st.q_max : st.q_min;
+    }
+    for (const Side& r : sides_)
+      if ((r.resting || &r == &s) && r.stop >= 0) y[nq_ + stops_[static_cast<size_t>(r.stop)].u] = 0.0;
+    s.resting = true;
+  }
+  for (int i = 0; i < n; ++i) {
+    const Side& s = sides_[static_cast<size_t>(i)];
+    if (s.resting && !before[static_cast<size_t>(i)] && !(s.accumulates_at > 0.0)) log_.push_back({t, Element(s), "rests on " + Where(s)});
+    if (!s.resting && before[static_cast<size_t>(i)]) log_.push_back({t, Element(s), "leaves " + Where(s)});
   }
   return 0;
 }
@@ -366,12 +430,13 @@ std::vector<std::string> EndStopEvents::HeldNames() const {
 int EndStopEvents::Start(rt::Workspace& ws, double t0, double* y0) {
   for (int i = 0; i < Count(); ++i) {
     const Side& s = sides_[static_cast<size_t>(i)];
+    if (s.resting) continue;  // brought to rest by an earlier side's Settle
     double gap = 0.0, c = 0.0;
     if (int r = Row(ws, t0, y0, s, &gap, J_.data(), &c); r != 0) return r;
     double v = 0.0;
     for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y0[nq_ + k];
     if (gap == 0.0 && v <= 0.0)
-      if (int r = Impact(ws, t0, y0, i, v); r != 0) return r;
+      if (int r = Impact(ws, t0, y0, i, v, true); r != 0) return r;
   }
   return 0;
 }

@@ -107,8 +107,14 @@ class EndStopEvents {
   // the held accelerations (nu, may be null).
   int Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda, double* a_held);
   // The impact of side i at (t, y) with gap rate v < 0 (the bounce, a rest, or the
-  // accumulation of the bounces); y jumps in place.
-  int Impact(rt::Workspace& ws, double t, double* y, int i, double v);
+  // accumulation of the bounces); y jumps in place. `settle`: then Settle the resting set.
+  int Impact(rt::Workspace& ws, double t, double* y, int i, double v, bool settle);
+  // The resting set made consistent at (t, y) (a complementarity problem, solved by
+  // principal pivoting): resting sides pull (lambda <= 0) -> they leave; sides on their
+  // contact at rest (gap, gap rate within the tolerances) whose gap would close -> they rest
+  // (their gap rate zeroed by an impulse, the others held). Logs the changes since `before`.
+  int Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before);
+  std::vector<char> RestingSet() const;
   // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
 

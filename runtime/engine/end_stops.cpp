@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Dense>
+
 #include "runtime/kane/kane.h"
 #include "runtime/program/program.h"
 #include "runtime/runtime.h"
@@ -26,33 +28,27 @@ std::vector<EndStop> EndStops(const Program& p) {
   return out;
 }
 
-// Kane's equations are affine in the applied generalized forces: udot(Q + s e_k) - udot(Q)
-// = s M^-1 e_k exactly. The second pass takes s so large that the difference is not lost
-// in the rounding of udot(Q) (relative error ~ 1e-3 eps).
+// A column of M^-1 from the assembled mass matrix (Cholesky). A difference of two
+// accelerations (applied unit force vs none) lost the column to rounding where the
+// accelerations were large, as at an integrator's trial stage far from the solution.
 int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
   if (!p.rows.empty() || !p.friction_joints.empty()) {
     ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction is not supported yet"
                               : "an impulse in a mechanism with closed loops or contacts is not supported yet";
     return -1;
   }
-  std::vector<double> ydot(static_cast<size_t>(p.nq + p.nu));
-  if (int s = Derivative(p, ws, t, y, ydot.data()); s != 0) return s;
-  const double* a0 = ydot.data() + p.nq;
-  double a_max = 0.0;
-  for (int i = 0; i < p.nu; ++i) a_max = std::max(a_max, std::abs(a0[i]));
-  const int full = p.u_free[static_cast<size_t>(k)];
-  double scale = 1.0;
-  for (int pass = 0; pass < 2; ++pass) {
-    if (int s = AppliedForces(p, ws); s != 0) return s;
-    ws.Q[full] += scale;
-    if (int s = SolveAccelerations(p, ws); s != 0) return s;
-    for (int i = 0; i < p.nu; ++i) x[i] = (ws.udot[p.u_free[static_cast<size_t>(i)]] - a0[i]) / scale;
-    if (!(x[k] > 0.0)) {  // M is positive definite: (M^-1)_kk > 0
-      ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k);
-      return -1;
-    }
-    scale = std::max(1.0, 1e3 * a_max / x[k]);
+  Eigen::MatrixXd M(p.nu, p.nu);
+  if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
+  const Eigen::LLT<Eigen::MatrixXd> llt(M);
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(p.nu);
+  e[k] = 1.0;
+  Eigen::VectorXd col = Eigen::VectorXd::Zero(p.nu);
+  if (llt.info() == Eigen::Success) col = llt.solve(e);
+  if (!(col[k] > 0.0) || !col.allFinite()) {  // M is positive definite: (M^-1)_kk > 0
+    ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k) + " at time " + std::to_string(t);
+    return 1;  // recoverable: a trial stage may probe a state far from the solution
   }
+  std::copy(col.data(), col.data() + p.nu, x);
   return 0;
 }
 
