@@ -51,6 +51,11 @@ bool IsNumber(const ast::Expr& e) {
 // Expressions nested deeper than this are left unchecked instead of recursed into (the
 // parser allows 100,000 levels; the native stack does not).
 constexpr int kMaxCheckDepth = 200;
+// Undeclared variables whose unit is inferred from a binding that names another such
+// variable, nested deeper than this, are left unchecked: each step costs several native
+// frames (VarUnit, Bound, Expr, Operator, Ref), and a 1 MiB thread stack must hold the
+// chain under AddressSanitizer too (Bounds.NestedEvaluationOnASmallThreadStack).
+constexpr int kMaxInferChain = 24;
 
 Unit Seconds() {
   Unit s;
@@ -127,6 +132,7 @@ class UnitChecker {
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
   int depth_ = 0;
+  int chain_ = 0;                   // VarUnit's inference nesting (kMaxInferChain)
   bool factors_ = false;            // in a binding: a number in a product is a plain factor
   const Node* last_var_ = nullptr;  // DeclaredUnit's last answer
   const Declared* last_declared_ = nullptr;
@@ -288,9 +294,11 @@ UVal UnitChecker::VarUnit(const Node* var) {
   if (auto it = inferred_.find(var); it != inferred_.end()) return it->second.busy ? UVal{} : it->second.val;
   // Inferred from the binding, once: an output's unit from its expression.
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
-  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr)) return UVal{};
+  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr) || chain_ >= kMaxInferChain) return UVal{};
   inferred_[var].busy = true;
+  ++chain_;
   UVal v = Bound(*b->expr, *b, var->Modifiers().value && b == &*var->Modifiers().value);
+  --chain_;
   Inferred& slot = inferred_[var];  // the map may have grown
   slot.busy = false;
   if (v.kind == UVal::Known) {
