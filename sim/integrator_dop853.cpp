@@ -58,6 +58,7 @@
 #include "sim/dop853_control.h"
 #include "sim/dop853_stiffness.h"
 #include "sim/dop853_tableau.h"
+#include "sim/illinois.h"
 #include "sim/stepper.h"
 
 namespace kanesim::sim::detail {
@@ -479,27 +480,18 @@ class Dop853Stepper final : public Stepper {
 
   // Event function i's zero in [a, b] (ga > 0 >= gb there); NaN when it cannot be evaluated.
   double Crossing(int i, double a, double ga, double b, double gb) {
-    int side = 0;  // which end was kept last time (Illinois: halve that end's value)
     std::vector<double>& y = event_y_;
     y.resize(static_cast<size_t>(n_));
     std::vector<double> g(g_new_.size());
-    for (int it = 0; it < 200 && b - a > 4.0 * kEps * std::max(std::abs(a), std::abs(b)); ++it) {
-      double t = b - gb * (b - a) / (gb - ga);
-      if (!(t > a && t < b)) t = 0.5 * (a + b);
+    auto eval = [&](double t, double* gt) {
       Interpolate(t, y.data());
-      if (rhs_.EventFunctions(t, y.data(), g.data()) != 0) return NAN;
-      const double gt = g[static_cast<size_t>(i)];
-      if (gt > 0.0) {
-        a = t, ga = gt;
-        if (side == -1) gb *= 0.5;
-        side = -1;
-      } else {
-        b = t, gb = gt;
-        if (side == 1) ga *= 0.5;
-        side = 1;
-      }
-    }
-    return b;
+      if (rhs_.EventFunctions(t, y.data(), g.data()) != 0) return false;
+      *gt = g[static_cast<size_t>(i)];
+      return true;
+    };
+    bool failed = false;
+    const double root = IllinoisRoot(a, ga, b, gb, 4.0 * kEps, eval, &failed);
+    return failed ? NAN : root;
   }
 
   // Returns to the start of the last step after f failed in its dense-output stages.

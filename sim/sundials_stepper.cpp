@@ -7,6 +7,7 @@
 #include <vector>
 #include <algorithm>
 
+#include "sim/illinois.h"
 #include "sim/sundials_util.h"
 
 namespace kanesim::sim::detail {
@@ -125,21 +126,8 @@ int SundialsStepper::Graze(int p, double tret, double* y) {
   };
   double a = std::min(tn - std::abs(h), tret), ga = 0.0;
   if (eval(a, &ga) && ga > 0.0) {
-    int side = 0;  // Illinois, as DOP853's Crossing
-    for (int it = 0; it < 200 && b - a > 4e-16 * std::max(std::abs(a), std::abs(b)); ++it) {
-      double t = b - gb * (b - a) / (gb - ga), gt = 0.0;
-      if (!(t > a && t < b)) t = 0.5 * (a + b);
-      if (!eval(t, &gt)) break;
-      if (gt > 0.0) {
-        a = t, ga = gt;
-        if (side == -1) gb *= 0.5;
-        side = -1;
-      } else {
-        b = t, gb = gt;
-        if (side == 1) ga *= 0.5;
-        side = 1;
-      }
-    }
+    bool failed = false;
+    b = IllinoisRoot(a, ga, b, gb, 4e-16, eval, &failed);  // a failed evaluation keeps the bracket so far
     if (b < tret && module_.dky(mem_, b, 0, v) == 0) {
       std::copy(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + n, y);
       event_time = b;
