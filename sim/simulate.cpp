@@ -203,6 +203,11 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       converted = status == 0;
       y = y_row.data();
     }
+    if (status == 0 && stops.AnyResting()) {  // exactly on their stops (an interpolant's round-off aside)
+      if (y != y_row.data()) std::copy(y, y + y_row.size(), y_row.begin());
+      stops.SnapResting(y_row.data());
+      y = y_row.data();
+    }
     if (status == 0) status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
     // A row near a change point whose projection moved the speeds too far: projected in the
     // kinetic metric instead, in a workspace of its own (docs/constraints.md "Rows near a
