@@ -178,6 +178,10 @@ struct Node {
   bool is_final_decl = false;  // kVar
   mutable std::uint16_t scans = 0;  // Child()'s scans of a class above kScanChildren elements
   int depth = 0;
+  // kVar: the unit check's answer for its declared unit (lang/elab_units.cpp), looked up
+  // once per variable instead of once per use: -1 not yet, -2 none, else the checker's slot.
+  // In the padding before `name`: the node does not grow.
+  mutable std::int32_t unit_slot = -1;
   std::string name;  // "links[2]" for array elements
   std::string path;  // "robot.links[2]"
   Node* parent = nullptr;

@@ -3,7 +3,9 @@
 #include "lang/elab_units.h"
 
 #include <cmath>
+#include <cstring>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -17,10 +19,10 @@ namespace {
 // What is known of an expression's unit. Literal: built from numbers alone (dimensionless
 // in products, adapting in sums); Unknown: reads a variable of no known unit (unchecked).
 struct UVal {
-  enum Kind : std::uint8_t { Unknown, Literal, Known } kind = Unknown;
   Unit unit;
   const Node* origin = nullptr;         // the variable whose unit this is, for notes
   const std::string* text = nullptr;    // that unit as declared ("N.m"), when unchanged
+  enum Kind : std::uint8_t { Unknown, Literal, Known } kind = Unknown;
   // From `time` and numbers alone (sin(time), sqrt(0.5 - time): test signals that read time
   // as a number): used where it meets a unit, never reported.
   bool soft = false;
@@ -40,6 +42,53 @@ struct UVal {
 
 // A unit in quotes as the user wrote it, or in SI form when computed.
 std::string Shown(const UVal& v) { return "\"" + (v.text ? *v.text : v.unit.ToString()) + "\""; }
+
+// s == lit, the literal's length known at compile time (no strlen, an inlined compare).
+template <size_t N>
+bool Is(const std::string& s, const char (&lit)[N]) {
+  return s.size() == N - 1 && std::memcmp(s.data(), lit, N - 1) == 0;
+}
+
+// The functions the check knows, by what they do to units.
+enum class Fn : std::uint8_t {
+  Other,          // unknown unit
+  Dimensionless,  // sin, exp...: a dimensionless argument, result 1
+  Inverse,        // asin, acos, atan: a dimensionless argument, result rad
+  Atan2, Sqrt, Der,
+  Pair,           // min, max, mod: two arguments in one unit
+  Keep,           // abs, norm, sum...: the argument's unit
+  Fill,
+  Product,        // cross, dot, outerProduct
+  Plain,          // sign, identity, zeros...: numbers
+  MeshVolume, MeshCentre, MeshInertia, Cat,
+};
+
+Fn FnOf(const std::string& name) {
+  struct Entry {
+    std::string_view name;
+    Fn fn;
+  };
+  static constexpr Entry kFns[] = {
+      {"sin", Fn::Dimensionless}, {"cos", Fn::Dimensionless}, {"tan", Fn::Dimensionless},
+      {"exp", Fn::Dimensionless}, {"log", Fn::Dimensionless}, {"sinh", Fn::Dimensionless},
+      {"cosh", Fn::Dimensionless}, {"tanh", Fn::Dimensionless}, {"asin", Fn::Inverse},
+      {"acos", Fn::Inverse},      {"atan", Fn::Inverse},      {"atan2", Fn::Atan2},
+      {"sqrt", Fn::Sqrt},         {"der", Fn::Der},           {"min", Fn::Pair},
+      {"max", Fn::Pair},          {"mod", Fn::Pair},          {"abs", Fn::Keep},
+      {"floor", Fn::Keep},        {"ceil", Fn::Keep},         {"norm", Fn::Keep},
+      {"transpose", Fn::Keep},    {"sum", Fn::Keep},          {"skew", Fn::Keep},
+      {"vector", Fn::Keep},       {"diagonal", Fn::Keep},     {"fill", Fn::Fill},
+      {"cross", Fn::Product},     {"dot", Fn::Product},       {"outerProduct", Fn::Product},
+      {"sign", Fn::Plain},        {"identity", Fn::Plain},    {"zeros", Fn::Plain},
+      {"ones", Fn::Plain},        {"size", Fn::Plain},        {"integer", Fn::Plain},
+      {"meshVolume", Fn::MeshVolume}, {"meshCentre", Fn::MeshCentre}, {"meshInertia", Fn::MeshInertia},
+      {"cat", Fn::Cat},
+  };
+  const std::string_view n = name;
+  for (const Entry& f : kFns)
+    if (f.name.size() == n.size() && f.name == n) return f.fn;
+  return Fn::Other;
+}
 
 // A number, or minus one (`= 0`, `min = -1`): its unit is what it is bound to.
 bool IsNumber(const ast::Expr& e) {
@@ -89,6 +138,7 @@ class UnitChecker {
  private:
   struct Declared {
     bool ok = false;
+    int index = -1;  // in table_ (Node::unit_slot)
     Unit unit;
     std::string text;
   };
@@ -107,9 +157,11 @@ class UnitChecker {
   const Declared* DeclaredUnit(const Node* var);
   const Declared* FindDeclaredUnit(const Node* var);
   UVal Expr(const ast::Expr& e, const Node* scope, const Iters* iters);
+  UVal Composite(const ast::Expr& e, const Node* scope, const Iters* iters);  // Expr of a non-leaf
   // The unit of e, the value of binding mv: a declaration's, a modifier's or an attribute's
   // (`binding`), or an equation's right side.
   UVal Bound(const ast::Expr& e, const ModValue& mv, bool binding);
+  UVal BoundSlice(const ModValue& mv, bool binding);  // Bound of a slice: once per array
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -129,26 +181,41 @@ class UnitChecker {
 
   Diagnostics& diags_;
   std::unordered_map<const ast::Expr*, Declared> declared_;  // unit string literal -> parsed
+  std::vector<const Declared*> table_;                        // declared_'s parsed units, by index
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
+  struct Slice {
+    UVal val;
+    const Node* scope = nullptr;
+    const Iters* iters = nullptr;
+    bool binding = false;
+    bool valid = false;
+  };
+  std::unordered_map<const ast::Expr*, Slice> slices_;  // BoundSlice's answers
+  long impure_ = 0;  // counts reads of inferred units (BoundSlice keeps no answer that made one)
   int depth_ = 0;
   int chain_ = 0;                   // VarUnit's inference nesting (kMaxInferChain)
   bool factors_ = false;            // in a binding: a number in a product is a plain factor
-  const Node* last_var_ = nullptr;  // DeclaredUnit's last answer
-  const Declared* last_declared_ = nullptr;
 };
 
 void UnitChecker::CheckVar(Node* var) {
   if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
-  DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
   // An array element's modifiers shared with element 1 (lang/elab_share.cpp) mean the same
-  // there: checked once, on element 1.
+  // there: checked once, on element 1, which was shown first (and parsed their unit).
   if (!var->shared_mod) {
+    DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
     const Mod& mods = var->mod;
+    const ModValue* attrs[3] = {};  // start, min, max: one pass over the few attributes
+    for (const auto& [key, sub] : mods.sub) {
+      if (!sub.value) continue;
+      if (Is(key, "start")) attrs[0] = &*sub.value;
+      else if (Is(key, "min")) attrs[1] = &*sub.value;
+      else if (Is(key, "max")) attrs[2] = &*sub.value;
+    }
     if (mods.value) CheckBinding(var, *mods.value, "the value of", false);
-    for (const char* attr : {"start", "min", "max"})
-      if (auto it = mods.sub.find(attr); it != mods.sub.end() && it->second.value)
-        CheckBinding(var, *it->second.value, attr, false);
+    if (attrs[0]) CheckBinding(var, *attrs[0], "start", false);
+    if (attrs[1]) CheckBinding(var, *attrs[1], "min", false);
+    if (attrs[2]) CheckBinding(var, *attrs[2], "max", false);
   }
   if (var->eq_binding) CheckBinding(var, *var->eq_binding, "", true);
   for (const auto& [k, mv] : var->eq_elem_binding) CheckBinding(var, mv, "", !mv.from_set);
@@ -224,7 +291,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
   const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
   if (want.kind != UVal::Known && own && var->shape.empty()) return;
-  const UVal got = Bound(*mv.expr, mv, !is_equation);
+  const UVal got = mv.pre ? BoundSlice(mv, !is_equation) : Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
     InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
@@ -255,22 +322,31 @@ void UnitChecker::NoteOrigin(Diagnostic& d, const UVal& v) {
 }
 
 const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
-  // Asked several times in a row for the variable being checked.
-  if (var == last_var_) return last_declared_;
-  last_var_ = var;
-  last_declared_ = FindDeclaredUnit(var);
-  return last_declared_;
+  // Kept on the node: a variable is read by every binding that names it.
+  if (var->unit_slot >= 0) return table_[static_cast<size_t>(var->unit_slot)];
+  if (var->unit_slot == -2) return nullptr;
+  const Declared* d = FindDeclaredUnit(var);
+  var->unit_slot = d ? d->index : -2;
+  return d;
 }
 
 const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
   const Mod& mods = var->Modifiers();
   if (mods.sub.empty()) return nullptr;
-  auto it = mods.sub.find("unit");
-  if (it == mods.sub.end() || !it->second.value || !it->second.value->expr) return nullptr;
-  const ast::Expr* e = it->second.value->expr;
+  // "unit" sorts after every other attribute's name: when there, it is nearly always last.
+  const Mod* unit = nullptr;
+  if (const auto& last = *mods.sub.rbegin(); Is(last.first, "unit")) {
+    unit = &last.second;
+  } else if (std::string_view(last.first) > std::string_view("unit")) {
+    if (auto it = mods.sub.find(std::string_view("unit")); it != mods.sub.end()) unit = &it->second;
+  }
+  if (!unit || !unit->value || !unit->value->expr) return nullptr;
+  const ast::Expr* e = unit->value->expr;
   if (e->kind != ast::ExprKind::String || e->text.empty()) return nullptr;
   auto [slot, fresh] = declared_.try_emplace(e);
   if (fresh) {
+    slot->second.index = static_cast<int>(table_.size());
+    table_.push_back(&slot->second);
     std::string error;
     slot->second.ok = ParseUnit(e->text, &slot->second.unit, &error);
     slot->second.text = e->text;
@@ -291,6 +367,7 @@ UVal UnitChecker::VarUnit(const Node* var) {
     v.text = &d->text;
     return v;
   }
+  ++impure_;
   if (auto it = inferred_.find(var); it != inferred_.end()) return it->second.busy ? UVal{} : it->second.val;
   // Inferred from the binding, once: an output's unit from its expression.
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
@@ -321,6 +398,7 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
     }
   }
   if (n->kind != Node::kVar || !n->shape.empty() || DeclaredUnit(n)) return;
+  ++impure_;
   Inferred& slot = inferred_[n];
   if (slot.val.kind == UVal::Known) {
     if (!slot.from_use || slot.val.unit.Agrees(u.unit)) return;
@@ -338,6 +416,19 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   slot.where = at;
 }
 
+// A slice of an array's modifier (`Revolute j[N](axis = {...})`) is the whole array's
+// expression in every element, read in the same scope: its unit is found once and reused
+// while it read only declared units and reported nothing (inferred ones may change later).
+UVal UnitChecker::BoundSlice(const ModValue& mv, bool binding) {
+  Slice& memo = slices_[mv.expr];
+  if (memo.valid && memo.scope == mv.scope && memo.iters == mv.iters.get() && memo.binding == binding) return memo.val;
+  const long impure = impure_;
+  const size_t reported = diags_.All().size();
+  const UVal v = Bound(*mv.expr, mv, binding);
+  memo = Slice{v, mv.scope, mv.iters.get(), binding, impure_ == impure && diags_.All().size() == reported};
+  return v;
+}
+
 UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
   const bool outer = factors_;
   factors_ = binding;
@@ -348,36 +439,39 @@ UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
 
 UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters) {
   if (depth_ >= kMaxCheckDepth) return UVal{};
+  if (e.kind == ast::ExprKind::Number || e.kind == ast::ExprKind::Range) return UVal::Lit();
   ++depth_;
-  UVal r;
+  UVal r = Composite(e, scope, iters);
+  --depth_;
+  return r;
+}
+
+UVal UnitChecker::Composite(const ast::Expr& e, const Node* scope, const Iters* iters) {
   switch (e.kind) {
-    case ast::ExprKind::Number: r = UVal::Lit(); break;
-    case ast::ExprKind::Ref: r = Ref(e, scope, iters); break;
-    case ast::ExprKind::Call: r = Call(e, scope, iters); break;
+    case ast::ExprKind::Ref: return Ref(e, scope, iters);
+    case ast::ExprKind::Call: return Call(e, scope, iters);
     case ast::ExprKind::Unary:
-    case ast::ExprKind::Binary: r = Operator(e, scope, iters); break;
+    case ast::ExprKind::Binary: return Operator(e, scope, iters);
     case ast::ExprKind::Array: {
       UVal acc = UVal::Lit();
       bool mixed = false;
       for (const auto& a : e.args) Element(*a, scope, iters, &acc, &mixed);
-      r = mixed ? UVal{} : acc;
-      break;
+      return mixed ? UVal{} : acc;
     }
     case ast::ExprKind::Matrix: {
       UVal acc = UVal::Lit();
       bool mixed = false;
       for (const auto& row : e.rows)
         for (const auto& x : row) Element(*x, scope, iters, &acc, &mixed);
-      r = mixed ? UVal{} : acc;
-      break;
+      return mixed ? UVal{} : acc;
     }
-    case ast::ExprKind::Comprehension:
-      r = e.args.empty() ? UVal{} : Expr(*e.args[0], scope, nullptr);
+    case ast::ExprKind::Comprehension: {
+      UVal r = e.args.empty() ? UVal{} : Expr(*e.args[0], scope, nullptr);
       if (r.kind == UVal::Unknown && !e.args.empty() && e.args[0]->kind == ast::ExprKind::Ref &&
           e.args[0]->parts.size() == 1 && e.args[0]->parts[0].name == e.text)
         r = UVal::Lit();
-      break;
-    case ast::ExprKind::Range: r = UVal::Lit(); break;
+      return r;
+    }
     case ast::ExprKind::If: {
       UVal acc;
       const ast::Expr* acc_e = nullptr;
@@ -388,13 +482,10 @@ UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters
         acc = acc_e ? Same(acc, acc_e, v, e.args[i].get(), e.args[i]->span, "the branches of the if-expression", scope) : v;
         acc_e = e.args[i].get();
       }
-      r = acc;
-      break;
+      return acc;
     }
-    default: break;  // strings, Booleans, ':' and 'end' have no unit
+    default: return UVal{};  // strings, Booleans, ':' and 'end' have no unit
   }
-  --depth_;
-  return r;
 }
 
 // A reference walked through the instance tree without evaluating subscripts: every
@@ -438,6 +529,7 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
 }
 
 void UnitChecker::Element(const ast::Expr& x, const Node* scope, const Iters* iters, UVal* acc, bool* mixed) {
+  if (x.kind == ast::ExprKind::Number && depth_ < kMaxCheckDepth) return;  // a literal joins any unit
   const UVal v = Expr(x, scope, iters);
   if (v.kind == UVal::Unknown) *mixed = true;
   if (v.kind != UVal::Known) return;
@@ -503,62 +595,64 @@ UVal UnitChecker::NeedDimensionless(const UVal& a, const ast::Expr& arg, const s
 }
 
 UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters) {
-  const std::string& fn = e.parts.empty() ? std::string() : e.parts.back().name;
+  static const std::string kNone;
+  const std::string& fn = e.parts.empty() ? kNone : e.parts.back().name;
   SmallVec<UVal, 4> a;
   for (const auto& x : e.args) a.push_back(Expr(*x, scope, iters));
   for (const auto& na : e.named_args)
     if (na.value) Expr(*na.value, scope, iters);
-  auto arg = [&](size_t i) { return i < a.size() ? a[i] : UVal{}; };
-  const UVal x = arg(0);
-  const UVal one = UVal::Of(Unit::One());
-  if (fn == "sin" || fn == "cos" || fn == "tan" || fn == "exp" || fn == "log" || fn == "sinh" || fn == "cosh" ||
-      fn == "tanh")
-    return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, one);
-  if (fn == "asin" || fn == "acos" || fn == "atan")
-    return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, UVal::Of(Radians()));
-  if (fn == "atan2") {
-    if (a.size() == 2) Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, "the two arguments of 'atan2'", scope);
-    return UVal::Of(Radians());
-  }
-  if (fn == "sqrt") {
-    if (x.kind != UVal::Known) return x.kind == UVal::Literal ? UVal::Lit() : UVal{};
-    for (auto t : x.unit.twice)
-      if (t % 2) return UVal{};  // a quarter power: beyond what is kept
-    UVal r = UVal::Of(x.unit.Pow(1, 2));
-    r.soft = x.soft;
-    return r;
-  }
-  if (fn == "der") return x.kind == UVal::Known ? UVal::Of(x.unit / Seconds()) : x;
-  if (fn == "min" || fn == "max" || fn == "mod") {
-    if (a.size() == 2) return Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, fn == "min" ? "the arguments of 'min'" : fn == "max" ? "the arguments of 'max'" : "the arguments of 'mod'", scope);
-    return x;
-  }
-  if (fn == "abs" || fn == "floor" || fn == "ceil" || fn == "norm" || fn == "transpose" || fn == "sum" || fn == "skew" ||
-      fn == "vector" || fn == "diagonal")
-    return x.kind == UVal::Known ? [&] { UVal r = UVal::Of(x.unit); r.soft = x.soft; return r; }() : x;
-  if (fn == "fill") return x;
-  if (fn == "cross" || fn == "dot" || fn == "outerProduct") {
-    if (a.size() != 2 || a[0].kind == UVal::Unknown || a[1].kind == UVal::Unknown) return UVal{};
-    if (a[0].kind == UVal::Literal && a[1].kind == UVal::Literal) return UVal::Lit();
-    const Unit ua = a[0].kind == UVal::Known ? a[0].unit : Unit::One();
-    const Unit ub = a[1].kind == UVal::Known ? a[1].unit : Unit::One();
-    return UVal::Of(ua * ub);
-  }
-  if (fn == "sign" || fn == "identity" || fn == "zeros" || fn == "ones" || fn == "size" || fn == "integer")
-    return UVal::Lit();
-  if (fn == "meshVolume") return UVal::Of(Metres(3));
-  if (fn == "meshCentre") return UVal::Of(Metres(1));
-  if (fn == "meshInertia") return UVal::Of(Metres(5));
-  if (fn == "cat") {  // the arguments were checked above; their units joined here
-    UVal acc = UVal::Lit();
-    bool mixed = false;
-    for (size_t i = 1; i < a.size(); ++i) {
-      if (a[i].kind == UVal::Unknown) mixed = true;
-      if (a[i].kind != UVal::Known) continue;
-      if (acc.kind != UVal::Known) acc = a[i];
-      else if (!acc.unit.Agrees(a[i].unit)) mixed = true;
+  const UVal x = a.empty() ? UVal{} : a[0];
+  switch (FnOf(fn)) {
+    case Fn::Dimensionless: return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, UVal::Of(Unit::One()));
+    case Fn::Inverse: return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, UVal::Of(Radians()));
+    case Fn::Atan2:
+      if (a.size() == 2) Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, "the two arguments of 'atan2'", scope);
+      return UVal::Of(Radians());
+    case Fn::Sqrt: {
+      if (x.kind != UVal::Known) return x.kind == UVal::Literal ? UVal::Lit() : UVal{};
+      for (auto t : x.unit.twice)
+        if (t % 2) return UVal{};  // a quarter power: beyond what is kept
+      UVal r = UVal::Of(x.unit.Pow(1, 2));
+      r.soft = x.soft;
+      return r;
     }
-    return mixed ? UVal{} : acc;
+    case Fn::Der: return x.kind == UVal::Known ? UVal::Of(x.unit / Seconds()) : x;
+    case Fn::Pair:
+      if (a.size() == 2)
+        return Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span,
+                    Is(fn, "min") ? "the arguments of 'min'" : Is(fn, "max") ? "the arguments of 'max'" : "the arguments of 'mod'",
+                    scope);
+      return x;
+    case Fn::Keep: {
+      if (x.kind != UVal::Known) return x;
+      UVal r = UVal::Of(x.unit);
+      r.soft = x.soft;
+      return r;
+    }
+    case Fn::Fill: return x;
+    case Fn::Product: {
+      if (a.size() != 2 || a[0].kind == UVal::Unknown || a[1].kind == UVal::Unknown) return UVal{};
+      if (a[0].kind == UVal::Literal && a[1].kind == UVal::Literal) return UVal::Lit();
+      const Unit ua = a[0].kind == UVal::Known ? a[0].unit : Unit::One();
+      const Unit ub = a[1].kind == UVal::Known ? a[1].unit : Unit::One();
+      return UVal::Of(ua * ub);
+    }
+    case Fn::Plain: return UVal::Lit();
+    case Fn::MeshVolume: return UVal::Of(Metres(3));
+    case Fn::MeshCentre: return UVal::Of(Metres(1));
+    case Fn::MeshInertia: return UVal::Of(Metres(5));
+    case Fn::Cat: {  // the arguments were checked above; their units joined here
+      UVal acc = UVal::Lit();
+      bool mixed = false;
+      for (size_t i = 1; i < a.size(); ++i) {
+        if (a[i].kind == UVal::Unknown) mixed = true;
+        if (a[i].kind != UVal::Known) continue;
+        if (acc.kind != UVal::Known) acc = a[i];
+        else if (!acc.unit.Agrees(a[i].unit)) mixed = true;
+      }
+      return mixed ? UVal{} : acc;
+    }
+    case Fn::Other: break;
   }
   return UVal{};
 }
