@@ -2,7 +2,9 @@
 // each binding's expression a unit, bottom-up, and compares it with the variable's.
 #include "lang/elab_units.h"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <string>
 #include <string_view>
@@ -106,6 +108,12 @@ constexpr int kMaxCheckDepth = 200;
 // chain under AddressSanitizer too (Bounds.NestedEvaluationOnASmallThreadStack).
 constexpr int kMaxInferChain = 24;
 
+// Node::unit_slot of a variable without a declared unit: its inference's progress.
+constexpr int kNoUnit = -2;            // nothing tried yet
+constexpr int kInferred = -3;          // it has an entry in UnitChecker::inferred_
+constexpr int kInferredNothing = -4;   // its binding gave no unit, and no use gave one yet
+constexpr int kInferring = -5;         // its binding is being read (a cycle reads no unit)
+
 Unit Seconds() {
   Unit s;
   s.twice[2] = 2;
@@ -161,7 +169,9 @@ class UnitChecker {
   // The unit of e, the value of binding mv: a declaration's, a modifier's or an attribute's
   // (`binding`), or an equation's right side.
   UVal Bound(const ast::Expr& e, const ModValue& mv, bool binding);
-  UVal BoundSlice(const ModValue& mv, bool binding);  // Bound of a slice: once per array
+  // Bound of a binding read alike by several variables (`where`: see CheckBinding); *hit
+  // when an earlier answer was reused.
+  UVal BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, bool* hit);
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -182,17 +192,22 @@ class UnitChecker {
   Diagnostics& diags_;
   std::unordered_map<const ast::Expr*, Declared> declared_;  // unit string literal -> parsed
   std::vector<const Declared*> table_;                        // declared_'s parsed units, by index
+  std::array<std::pair<const ast::Expr*, const Declared*>, 64> recent_{};  // FindDeclaredUnit's
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
-  struct Slice {
+  struct Reuse {
     UVal val;
-    const Node* scope = nullptr;
     const Iters* iters = nullptr;
     bool binding = false;
     bool valid = false;
   };
-  std::unordered_map<const ast::Expr*, Slice> slices_;  // BoundSlice's answers
-  long impure_ = 0;  // counts reads of inferred units (BoundSlice keeps no answer that made one)
+  struct ReuseHash {
+    size_t operator()(const std::pair<const ast::Expr*, std::intptr_t>& k) const {
+      return std::hash<const void*>()(k.first) * 31 + std::hash<std::intptr_t>()(k.second);
+    }
+  };
+  std::unordered_map<std::pair<const ast::Expr*, std::intptr_t>, Reuse, ReuseHash> reused_;  // BoundOnce's
+  long impure_ = 0;  // reads of inferred or implied units (BoundOnce keeps no answer that made one)
   int depth_ = 0;
   int chain_ = 0;                   // VarUnit's inference nesting (kMaxInferChain)
   bool factors_ = false;            // in a binding: a number in a product is a plain factor
@@ -291,7 +306,13 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
   const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
   if (want.kind != UVal::Known && own && var->shape.empty()) return;
-  const UVal got = mv.pre ? BoundSlice(mv, !is_equation) : Bound(*mv.expr, mv, !is_equation);
+  // Where the answer may be reused: the scope of a slice, or the copy id (negative).
+  const std::intptr_t where = mv.pre ? reinterpret_cast<std::intptr_t>(mv.scope)
+                              : mv.scope && mv.scope->kind == Node::kClass && mv.scope->unit_slot >= 0
+                                  ? -1 - static_cast<std::intptr_t>(mv.scope->unit_slot)
+                                  : 0;
+  bool reused = false;
+  UVal got = where ? BoundOnce(mv, !is_equation, where, &reused) : Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
     InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
@@ -299,6 +320,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   }
   if (got.soft) return;
   if (want.unit.Agrees(got.unit)) return;
+  if (reused && where < 0) got = Bound(*mv.expr, mv, !is_equation);  // the notes name this copy's declarations
   const std::string name = "'" + var->path + "'";
   std::string msg = is_equation ? "the two sides of the equation have different units: " + name + " is " + Shown(want) +
                                       ", the right side " + Shown(got)
@@ -324,9 +346,9 @@ void UnitChecker::NoteOrigin(Diagnostic& d, const UVal& v) {
 const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
   // Kept on the node: a variable is read by every binding that names it.
   if (var->unit_slot >= 0) return table_[static_cast<size_t>(var->unit_slot)];
-  if (var->unit_slot == -2) return nullptr;
+  if (var->unit_slot <= kNoUnit) return nullptr;
   const Declared* d = FindDeclaredUnit(var);
-  var->unit_slot = d ? d->index : -2;
+  var->unit_slot = d ? d->index : kNoUnit;
   return d;
 }
 
@@ -342,6 +364,9 @@ const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
   }
   if (!unit || !unit->value || !unit->value->expr) return nullptr;
   const ast::Expr* e = unit->value->expr;
+  // A direct-mapped cache in front of declared_: a model has a few dozen unit strings.
+  auto& recent = recent_[(reinterpret_cast<std::uintptr_t>(e) >> 4) % recent_.size()];
+  if (recent.first == e) return recent.second;
   if (e->kind != ast::ExprKind::String || e->text.empty()) return nullptr;
   auto [slot, fresh] = declared_.try_emplace(e);
   if (fresh) {
@@ -354,13 +379,17 @@ const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
       diags_.Error(DiagCode::BadUnit, e->span, "\"" + e->text + "\" is not a unit: " + error)
           .hint = "Modelica unit syntax: \"N.m/rad\", \"kg.m2\", \"m/s2\", \"1\"; prefixes m, k, M, u, n, G...";
   }
-  return slot->second.ok ? &slot->second : nullptr;
+  recent = {e, slot->second.ok ? &slot->second : nullptr};
+  return recent.second;
 }
 
 UVal UnitChecker::VarUnit(const Node* var) {
   const Declared* d = DeclaredUnit(var);
   if (!d && !implied_.empty())
-    if (auto it = implied_.find(var); it != implied_.end() && it->second.ok) d = &it->second;
+    if (auto it = implied_.find(var); it != implied_.end() && it->second.ok) {
+      d = &it->second;
+      ++impure_;  // from the joint the spring acts on: may differ between array elements
+    }
   if (d) {
     UVal v = UVal::Of(d->unit);
     v.origin = var;
@@ -368,21 +397,37 @@ UVal UnitChecker::VarUnit(const Node* var) {
     return v;
   }
   ++impure_;
-  if (auto it = inferred_.find(var); it != inferred_.end()) return it->second.busy ? UVal{} : it->second.val;
+  const int state = var->unit_slot;
+  if (state == kInferredNothing || state == kInferring) return UVal{};
+  if (state == kInferred) {
+    const Inferred& slot = inferred_.find(var)->second;
+    return slot.busy ? UVal{} : slot.val;
+  }
   // Inferred from the binding, once: an output's unit from its expression.
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
-  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr) || chain_ >= kMaxInferChain) return UVal{};
-  inferred_[var].busy = true;
+  if (chain_ >= kMaxInferChain) return UVal{};  // tried again where the chain is shorter
+  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr)) {
+    var->unit_slot = kInferredNothing;
+    return UVal{};
+  }
+  var->unit_slot = kInferring;
   ++chain_;
   UVal v = Bound(*b->expr, *b, var->Modifiers().value && b == &*var->Modifiers().value);
   --chain_;
-  Inferred& slot = inferred_[var];  // the map may have grown
-  slot.busy = false;
-  if (v.kind == UVal::Known) {
-    v.origin = var;
-    slot.val = v;
+  if (v.kind == UVal::Known) v.origin = var;
+  if (var->unit_slot == kInferred) {  // a use inside its own binding gave it a unit meanwhile
+    Inferred& slot = inferred_[var];
+    slot.busy = false;
+    if (v.kind == UVal::Known) slot.val = v;
+    return slot.val;
   }
-  return slot.val;
+  if (v.kind != UVal::Known) {
+    var->unit_slot = kInferredNothing;  // no entry in inferred_: most undeclared variables
+    return UVal{};
+  }
+  inferred_[var].val = v;
+  var->unit_slot = kInferred;
+  return v;
 }
 
 void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at) {
@@ -400,6 +445,8 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   if (n->kind != Node::kVar || !n->shape.empty() || DeclaredUnit(n)) return;
   ++impure_;
   Inferred& slot = inferred_[n];
+  if (n->unit_slot == kInferring) slot.busy = true;
+  n->unit_slot = kInferred;
   if (slot.val.kind == UVal::Known) {
     if (!slot.from_use || slot.val.unit.Agrees(u.unit)) return;
     auto& d = diags_.Error(DiagCode::UnitConflict, at,
@@ -416,16 +463,19 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   slot.where = at;
 }
 
-// A slice of an array's modifier (`Revolute j[N](axis = {...})`) is the whole array's
-// expression in every element, read in the same scope: its unit is found once and reused
-// while it read only declared units and reported nothing (inferred ones may change later).
-UVal UnitChecker::BoundSlice(const ModValue& mv, bool binding) {
-  Slice& memo = slices_[mv.expr];
-  if (memo.valid && memo.scope == mv.scope && memo.iters == mv.iters.get() && memo.binding == binding) return memo.val;
+// A binding's unit found once for several variables: a slice of an array's modifier
+// (`Revolute j[N](axis = {...})`) is the whole array's expression, read in the same scope by
+// every element; a binding read inside an array element copied from element 1 reads names
+// of the same declared units in every copy (Node::unit_slot). Reused while it read only
+// declared units and reported nothing (inferred units may change, implied ones differ).
+UVal UnitChecker::BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, bool* hit) {
+  Reuse& r = reused_[{mv.expr, where}];
+  *hit = r.valid && r.iters == mv.iters.get() && r.binding == binding;
+  if (*hit) return r.val;
   const long impure = impure_;
   const size_t reported = diags_.All().size();
   const UVal v = Bound(*mv.expr, mv, binding);
-  memo = Slice{v, mv.scope, mv.iters.get(), binding, impure_ == impure && diags_.All().size() == reported};
+  r = Reuse{v, mv.iters.get(), binding, impure_ == impure && diags_.All().size() == reported};
   return v;
 }
 
@@ -440,10 +490,13 @@ UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
 UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters) {
   if (depth_ >= kMaxCheckDepth) return UVal{};
   if (e.kind == ast::ExprKind::Number || e.kind == ast::ExprKind::Range) return UVal::Lit();
-  ++depth_;
-  UVal r = Composite(e, scope, iters);
-  --depth_;
-  return r;
+  // Counts this level while the answer is made in place (no copy of it on the way out).
+  struct Level {
+    int& depth;
+    explicit Level(int& d) : depth(++d) {}
+    ~Level() { --depth; }
+  } level(depth_);
+  return Composite(e, scope, iters);
 }
 
 UVal UnitChecker::Composite(const ast::Expr& e, const Node* scope, const Iters* iters) {
@@ -728,18 +781,40 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
   }
 }
 
+// Variables are checked in batches: between two, the emitter's walk runs without the
+// check's code in the instruction cache, and the batch's nodes are still in the data cache.
+#ifndef KANESIM_UNITS_BATCH
+#define KANESIM_UNITS_BATCH 64
+#endif
+constexpr size_t kBatch = KANESIM_UNITS_BATCH;
+
 UnitCheck::UnitCheck(const InstanceTree& tree, const Links& links, const SourceManager* sources)
     : found_(sources), checker_(std::make_unique<UnitChecker>(found_)) {
   checker_->SpringUnits(tree, links);
+  pending_.reserve(kBatch);
 }
 
 UnitCheck::~UnitCheck() = default;
 
 void UnitCheck::Visit(Node* var) {
-  if (!found_.Full()) checker_->CheckVar(var);
+  if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
+  // An array element's variable whose modifiers are element 1's has only its equations
+  // left to check (UnitChecker::CheckVar); most have none.
+  if (var->shared_mod && !var->eq_binding && var->eq_elem_binding.empty() &&
+      !(var->parent && var->parent->prim == Prim::Joint))
+    return;
+  pending_.push_back(var);
+  if (pending_.size() >= kBatch) Flush();
+}
+
+void UnitCheck::Flush() {
+  for (Node* var : pending_)
+    if (!found_.Full()) checker_->CheckVar(var);
+  pending_.clear();
 }
 
 void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mechanism* m) {
+  Flush();
   if (diags.HasErrors()) return;
   // The messages, in the order found (the cap's message P105 becomes diags' own).
   for (const Diagnostic& d : found_.All()) {
