@@ -108,6 +108,10 @@ constexpr int kMaxCheckDepth = 200;
 // chain under AddressSanitizer too (Bounds.NestedEvaluationOnASmallThreadStack).
 constexpr int kMaxInferChain = 24;
 
+// Values checked per batch (UnitChecker::Flush): enough that the check's code is loaded once
+// for many variables, few enough that their nodes are still in the data cache.
+constexpr size_t kBatch = 64;
+
 // Node::unit_slot of a variable without a declared unit: its inference's progress.
 constexpr int kNoUnit = -2;            // nothing tried yet
 constexpr int kInferred = -3;          // it has an entry in UnitChecker::inferred_
@@ -136,8 +140,11 @@ class UnitChecker {
  public:
   explicit UnitChecker(Diagnostics& diags) : diags_(diags) {}
   // Every value given to `var`: its binding (declaration, modifier, --set or equation), its
-  // elements' equations, and its start, min and max attributes.
-  void CheckVar(Node* var);
+  // elements' equations, and its start, min and max attributes. Its declared unit is read
+  // at once; the values are checked in batches (Flush), in the order shown: between two
+  // batches the emitter's walk runs without the check's code in the instruction cache.
+  void Show(Node* var);
+  void Flush();
   // The units a spring on flanges takes from the joint its flanges act on.
   void SpringUnits(const InstanceTree& tree, const Links& links);
   // A variable's unit: declared, or inferred (from its binding or from its uses).
@@ -158,6 +165,7 @@ class UnitChecker {
   };
 
   void CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation);
+  void Pend(Node* var, const ModValue* mv, const char* what, bool is_equation);  // a value for the batch
   // A joint's q or u without one unit: element k of a start array, or an element equation,
   // against the coordinate's unit.
   void CheckCoordinates(Node* var);
@@ -208,13 +216,21 @@ class UnitChecker {
   };
   std::unordered_map<std::pair<const ast::Expr*, std::intptr_t>, Reuse, ReuseHash> reused_;  // BoundOnce's
   long impure_ = 0;  // reads of inferred or implied units (BoundOnce keeps no answer that made one)
+  struct Pending {
+    Node* var;
+    const ModValue* mv;  // null: the joint coordinates of var (CheckCoordinates)
+    const char* what;
+    bool is_equation;
+  };
+  std::vector<Pending> pending_;  // values shown and not yet checked
+  bool flushing_ = false;
   int depth_ = 0;
   int chain_ = 0;                   // VarUnit's inference nesting (kMaxInferChain)
   bool factors_ = false;            // in a binding: a number in a product is a plain factor
 };
 
-void UnitChecker::CheckVar(Node* var) {
-  if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
+void UnitChecker::Show(Node* var) {
+  if ((var->vtype != VType::Real && var->vtype != VType::Integer) || diags_.Full()) return;
   // An array element's modifiers shared with element 1 (lang/elab_share.cpp) mean the same
   // there: checked once, on element 1, which was shown first (and parsed their unit).
   if (!var->shared_mod) {
@@ -227,16 +243,33 @@ void UnitChecker::CheckVar(Node* var) {
       else if (Is(key, "min")) attrs[1] = &*sub.value;
       else if (Is(key, "max")) attrs[2] = &*sub.value;
     }
-    if (mods.value) CheckBinding(var, *mods.value, "the value of", false);
-    if (attrs[0]) CheckBinding(var, *attrs[0], "start", false);
-    if (attrs[1]) CheckBinding(var, *attrs[1], "min", false);
-    if (attrs[2]) CheckBinding(var, *attrs[2], "max", false);
+    if (mods.value) Pend(var, &*mods.value, "the value of", false);
+    if (attrs[0]) Pend(var, attrs[0], "start", false);
+    if (attrs[1]) Pend(var, attrs[1], "min", false);
+    if (attrs[2]) Pend(var, attrs[2], "max", false);
   }
-  if (var->eq_binding) CheckBinding(var, *var->eq_binding, "", true);
-  for (const auto& [k, mv] : var->eq_elem_binding) CheckBinding(var, mv, "", !mv.from_set);
-  if (var->parent && var->parent->prim == Prim::Joint && (var->name == "q" || var->name == "u") &&
-      !var->shape.empty() && !DeclaredUnit(var))
-    CheckCoordinates(var);
+  if (var->eq_binding) Pend(var, &*var->eq_binding, "", true);
+  for (const auto& [k, mv] : var->eq_elem_binding) Pend(var, &mv, "", !mv.from_set);
+  if (var->parent && var->parent->prim == Prim::Joint && (Is(var->name, "q") || Is(var->name, "u")) &&
+      !var->shape.empty())
+    pending_.push_back({var, nullptr, nullptr, false});  // its coordinates, unless it declares one unit
+  if (pending_.size() >= kBatch) Flush();
+}
+
+void UnitChecker::Pend(Node* var, const ModValue* mv, const char* what, bool is_equation) {
+  // A number takes the unit it is given (min = 0): nothing to check, nothing to infer.
+  if (mv->expr && !IsNumber(*mv->expr)) pending_.push_back({var, mv, what, is_equation});
+}
+
+void UnitChecker::Flush() {
+  if (flushing_) return;
+  flushing_ = true;
+  for (const Pending& p : pending_) {
+    if (p.mv) CheckBinding(p.var, *p.mv, p.what, p.is_equation);
+    else if (!diags_.Full() && !DeclaredUnit(p.var)) CheckCoordinates(p.var);
+  }
+  pending_.clear();
+  flushing_ = false;
 }
 
 void UnitChecker::CheckCoordinates(Node* var) {
@@ -368,6 +401,9 @@ const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
   auto& recent = recent_[(reinterpret_cast<std::uintptr_t>(e) >> 4) % recent_.size()];
   if (recent.first == e) return recent.second;
   if (e->kind != ast::ExprKind::String || e->text.empty()) return nullptr;
+  // A unit string not seen yet may be reported (E236): the values shown before are checked
+  // first, so that the messages come in the order of the walk.
+  if (!flushing_ && !pending_.empty() && !declared_.count(e)) Flush();
   auto [slot, fresh] = declared_.try_emplace(e);
   if (fresh) {
     slot->second.index = static_cast<int>(table_.size());
@@ -781,40 +817,17 @@ UVal UnitChecker::Operator(const ast::Expr& e, const Node* scope, const Iters* i
   }
 }
 
-// Variables are checked in batches: between two, the emitter's walk runs without the
-// check's code in the instruction cache, and the batch's nodes are still in the data cache.
-#ifndef KANESIM_UNITS_BATCH
-#define KANESIM_UNITS_BATCH 64
-#endif
-constexpr size_t kBatch = KANESIM_UNITS_BATCH;
-
 UnitCheck::UnitCheck(const InstanceTree& tree, const Links& links, const SourceManager* sources)
     : found_(sources), checker_(std::make_unique<UnitChecker>(found_)) {
   checker_->SpringUnits(tree, links);
-  pending_.reserve(kBatch);
 }
 
 UnitCheck::~UnitCheck() = default;
 
-void UnitCheck::Visit(Node* var) {
-  if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
-  // An array element's variable whose modifiers are element 1's has only its equations
-  // left to check (UnitChecker::CheckVar); most have none.
-  if (var->shared_mod && !var->eq_binding && var->eq_elem_binding.empty() &&
-      !(var->parent && var->parent->prim == Prim::Joint))
-    return;
-  pending_.push_back(var);
-  if (pending_.size() >= kBatch) Flush();
-}
-
-void UnitCheck::Flush() {
-  for (Node* var : pending_)
-    if (!found_.Full()) checker_->CheckVar(var);
-  pending_.clear();
-}
+void UnitCheck::Visit(Node* var) { checker_->Show(var); }
 
 void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mechanism* m) {
-  Flush();
+  checker_->Flush();
   if (diags.HasErrors()) return;
   // The messages, in the order found (the cap's message P105 becomes diags' own).
   for (const Diagnostic& d : found_.All()) {

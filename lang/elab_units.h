@@ -25,7 +25,6 @@
 #pragma once
 
 #include <memory>
-#include <vector>
 
 #include "lang/elab_connect.h"
 #include "lang/elab_emit.h"
@@ -53,11 +52,8 @@ class UnitCheck final : public VarVisitor {
   void Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mechanism* m);
 
  private:
-  void Flush();  // checks the pending variables, in the order shown
-
   Diagnostics found_;
   std::unique_ptr<UnitChecker> checker_;
-  std::vector<Node*> pending_;
 };
 
 }  // namespace kanesim::lang::elab

@@ -271,6 +271,28 @@ TEST(UnitCheck, EachArrayElementIsCheckedWithItsOwnNames) {
   EXPECT_EQ(spring_errors.find("cells[2]"), std::string::npos) << spring_errors;
 }
 
+// The check reads declared units as the emitter shows each variable and the values in
+// batches (lang/elab_units.cpp, UnitChecker::Flush): the messages still come in the order
+// of the declarations, a unit string's own error (E236) where it is first read.
+TEST(UnitCheck, MessagesComeInTheOrderOfTheDeclarations) {
+  const std::string errors =
+      Check("model M\n  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"s\") = a;\n"
+            "  parameter Real c(unit = \"furlong\") = 1;\n  parameter Real d(unit = \"kg\") = a + e;\n"
+            "  parameter Real e(unit = \"parsec\") = 2;\n  parameter Real f(unit = \"kg\") = a;\n"
+            "  World world;\nend M;\n")
+          .errors;
+  std::string firsts;
+  for (size_t at = errors.find("m.mech:"); at != std::string::npos; at = errors.find("\nm.mech:", at + 1)) {
+    const size_t b = errors[at] == '\n' ? at + 1 : at;
+    const std::string line = errors.substr(b, errors.find('\n', b) - b);
+    if (line.find(": error[") != std::string::npos) firsts += line.substr(0, line.find(']') + 1) + "\n";
+  }
+  EXPECT_EQ(firsts,
+            "m.mech:3:34: error[E237]\nm.mech:4:27: error[E236]\nm.mech:6:27: error[E236]\nm.mech:5:35: error[E237]\n"
+            "m.mech:7:35: error[E237]\n")
+      << errors;
+}
+
 // Every example with one declared unit changed (to another dimension, or for a plain symbol
 // to another scale: m -> mm) is refused with a unit error.
 TEST(UnitCheck, EveryExampleWithOneUnitChangedIsCaught) {
