@@ -618,7 +618,8 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
 }
 
 void UnitChecker::Element(const ast::Expr& x, const Node* scope, const Iters* iters, UVal* acc, bool* mixed) {
-  if (x.kind == ast::ExprKind::Number && depth_ < kMaxCheckDepth) return;  // a literal joins any unit
+  // A literal (-0.5 too) joins any unit: no need to go down (where Expr would reach it).
+  if (x.kind == ast::ExprKind::Number ? depth_ < kMaxCheckDepth : IsNumber(x) && depth_ + 1 < kMaxCheckDepth) return;
   const UVal v = Expr(x, scope, iters);
   if (v.kind == UVal::Unknown) *mixed = true;
   if (v.kind != UVal::Known) return;
