@@ -584,7 +584,7 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
   if (e.parts.size() == 1 && head.subscripts.empty() && iters && iters->count(head.name)) return UVal::Lit();
   for (const auto& p : e.parts)
     for (const auto& s : p.subscripts)
-      if (s) Expr(*s, scope, iters);  // operators inside subscripts are checked too
+      if (s && s->kind != ast::ExprKind::Number) Expr(*s, scope, iters);  // operators inside subscripts are checked too
   const Node* n = scope ? scope->Child(head.name) : nullptr;
   if (!n) {
     if (e.parts.size() == 1 && head.name == "time") {
