@@ -8,7 +8,8 @@
 //                                     it: for an instruction count (valgrind --tool=callgrind
 //                                     --toggle-collect='*LoadAndElaborate*'), per load = the
 //                                     count / (repeats + 1)
-// Output: medians `with ms, without ms, +percent`, then the best times. docs/benchmarks/2026-11-29_units.md has results.
+// Output: medians `with ms, without ms, +percent`, then the best times. Results:
+// docs/benchmarks/2026-11-29_units.md, docs/benchmarks/2026-11-29_units_cost.md.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
