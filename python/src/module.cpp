@@ -53,6 +53,10 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
   d["nonlin_conv_fails"] = s.integrator.nonlin_conv_fails;
   d["last_step"] = s.integrator.last_step;
   d["linear_solver"] = s.integrator.linear_solver;
+  // DOP853's stiffness detection (docs/integrators.md "The automatic choice"): where it found
+  // the problem stiff (NaN: never) and whether the run went on with CVODE-BDF from there.
+  d["stiff_time"] = s.integrator.stiff_time;
+  d["switched"] = s.integrator.switched;
   d["rows"] = s.rows;
   d["integrate_seconds"] = s.times.integrate;
   d["output_seconds"] = s.times.output;
