@@ -167,3 +167,38 @@ def test_when_clauses_reinit_and_terminate_through_fmpy_model_exchange(export, w
     assert np.max(np.abs(got - fires)) < 1e-7 and np.max(np.abs(got - closed)) < 1e-7
     assert r["p.u"][-1] == pytest.approx(ref["p.u"][-1], abs=1e-6)
 
+
+
+SLIDER = """
+model Slider "A block on a spring, exact Coulomb friction: slides back, then sticks"
+  World world(g = {0, -9.81, 0});
+  Prismatic slide(axis = {1, 0, 0}, q(start = 1), mu = 0.3, mu_s = 0.5, friction_exact = true);
+  Body box(m = 1);
+equation
+  connect(world.frame_b, slide.frame_a);
+  connect(slide.frame_b, box.frame_a);
+  slide.tau = -10 * slide.q;
+  annotation(experiment(StopTime = 1.5, Interval = 0.01, Tolerance = 1e-10));
+end Slider;
+"""
+
+
+def test_exact_friction_slides_then_sticks_through_fmpy_model_exchange(export, write_model):
+    # Sliding back from x0 = 1: x = c + (x0 - c) cos(w t), c = mu m g / k, w = sqrt(k / m),
+    # until the speed reaches zero at pi / w, x = 2 c - x0, where the spring's pull k |x|
+    # (4.11 N) is within mu_s m g (4.91 N): stuck there for good. The FMU's derivatives must
+    # follow the mode (sliding, then held); the regularized law would creep on.
+    path = write_model("slider.mech", SLIDER)
+    fmu = export(path, fmi=2, kind="me")
+    assert validate_fmu(fmu) == []
+    ref, events = run(path)
+    r = me(fmu, 1.5, ["slide.q", "slide.u"])
+    c, w = 0.3 * G / 10, math.sqrt(10.0)
+    t_stick = math.pi / w
+    assert [e["kind"].split(" ")[0] for e in events] == ["slips,", "sticks"]
+    assert float(events[1]["time"]) == pytest.approx(t_stick, abs=1e-8)
+    t, x = r["time"], r["slide.q"]
+    sliding = t < t_stick - 1e-6
+    assert np.max(np.abs(x[sliding] - (c + (1 - c) * np.cos(w * t[sliding])))) < 1e-7
+    stuck = t > t_stick + 1e-6
+    assert np.max(np.abs(x[stuck] - (2 * c - 1))) < 1e-7 and np.max(np.abs(r["slide.u"][stuck])) < 1e-9
