@@ -202,3 +202,33 @@ def test_exact_friction_slides_then_sticks_through_fmpy_model_exchange(export, w
     assert np.max(np.abs(x[sliding] - (c + (1 - c) * np.cos(w * t[sliding])))) < 1e-7
     stuck = t > t_stick + 1e-6
     assert np.max(np.abs(x[stuck] - (2 * c - 1))) < 1e-7 and np.max(np.abs(r["slide.u"][stuck])) < 1e-9
+
+
+LIFT = """
+model Lift "A sphere rolling on a plane, pulled up by a force growing with time"
+  World world(g = {0, -9.81, 0});
+  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));
+  Sphere ball(radius = 0.1, m = 1);
+  RollingSphere contact(radius = 0.1, n = {0, 1, 0});
+  WorldForce pull(force = {0, 2 * time, 0});
+equation
+  connect(world.frame_b, free.frame_a);
+  connect(free.frame_b, ball.frame_a);
+  connect(free.frame_b, contact.frame_a);
+  connect(free.frame_b, pull.frame_b);
+  annotation(experiment(StopTime = 6, Interval = 0.1, Tolerance = 1e-9));
+end Lift;
+"""
+
+
+def test_a_rolling_contact_that_would_pull_is_an_error_where_the_run_stops(export, write_model):
+    # The normal force m g - 2 t crosses zero at t = g / 2: `kanesim run` stops there (exit 2);
+    # the FMU's event update returns fmi2Error with the same cause and time, not a motion
+    # held to the plane by a pull.
+    fmu = export(write_model("lift.mech", LIFT), fmi=2, kind="me")
+    messages = []
+    with pytest.raises(Exception, match="fmi2NewDiscreteStates failed"):
+        simulate_fmu(fmu, fmi_type="ModelExchange", stop_time=6, relative_tolerance=1e-9,
+                     logger=lambda c, name, status, category, message: messages.append(message.decode()))
+    assert len(messages) == 1 and "its normal force turns tensile" in messages[0]
+    assert float(messages[0].split("at t = ")[1].split(":")[0]) == pytest.approx(G / 2, abs=1e-7)
