@@ -153,6 +153,11 @@ INSTANTIATE_TEST_SUITE_P(
         Rule{"Angles", Pendulum("  parameter Real a(unit = \"1\") = 0.3;", "Revolute k(q(start = a));\n  Rod rod(L = 1);"),
              Pendulum("  parameter Real a(unit = \"deg\") = 30;", "Revolute k(q(start = a));\n  Rod rod(L = 1);"),
              "m.mech:5:24: error[E237]: the start value of 'k.q' has unit \"deg\", not \"rad\""},
+        // An angle's rate (a joint's u, its q's derivative: rad/s) is a frequency (1/s), a
+        // false alarm elsewhere for der(phi); the angle itself is not one.
+        Rule{"AngleRate", Pendulum("  output Real rate(unit = \"1/s\") = j.u;"),
+             Pendulum("  output Real rate(unit = \"1/s\") = j.q;"),
+             "m.mech:2:36: error[E237]: 'rate' has unit \"1/s\" but its value has unit \"rad\""},
         // sqrt halves exponents.
         Rule{"Sqrt", Pendulum("  parameter Real area(unit = \"m2\") = 1;", "Rod rod(L = sqrt(area));"),
              Pendulum("  parameter Real area(unit = \"m3\") = 1;", "Rod rod(L = sqrt(area));"),
