@@ -173,7 +173,6 @@ class UnitChecker {
   const Declared* DeclaredUnit(const Node* var);
   const Declared* FindDeclaredUnit(const Node* var);
   UVal Expr(const ast::Expr& e, const Node* scope, const Iters* iters);
-  UVal Composite(const ast::Expr& e, const Node* scope, const Iters* iters);  // Expr of a non-leaf
   // The unit of e, the value of binding mv: a declaration's, a modifier's or an attribute's
   // (`binding`), or an equation's right side.
   UVal Bound(const ast::Expr& e, const ModValue& mv, bool binding);
@@ -532,10 +531,6 @@ UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters
     explicit Level(int& d) : depth(++d) {}
     ~Level() { --depth; }
   } level(depth_);
-  return Composite(e, scope, iters);
-}
-
-UVal UnitChecker::Composite(const ast::Expr& e, const Node* scope, const Iters* iters) {
   switch (e.kind) {
     case ast::ExprKind::Ref: return Ref(e, scope, iters);
     case ast::ExprKind::Call: return Call(e, scope, iters);
