@@ -15,12 +15,12 @@ namespace kanesim::test {
 // end <model>;
 struct PendulumText {
   std::string model = "P";
-  std::string decls;                // lines before the world ("  input Real tau;\n")
+  std::string decls{};              // lines before the world ("  input Real tau;\n")
   std::string joint = "Revolute";   // the joint's class
   std::string name = "j1";          // ... and its name
   std::string axis = "{0, 0, 1}";
-  std::string mods;                 // after the axis: ", q(start = 0.5), u(start = 0)"
-  std::string equations;            // lines after the two connects
+  std::string mods{};               // after the axis: ", q(start = 0.5), u(start = 0)"
+  std::string equations{};          // lines after the two connects
   std::string Text() const {
     return "model " + model + "\n" + decls + "  World world(g = {0, -9.81, 0});\n  " + joint + " " + name +
            "(axis = " + axis + mods + ");\n  Rod rod(L = 1, m = 1);\nequation\n  connect(world.frame_b, " + name +
