@@ -240,7 +240,8 @@ struct WhenClause {
 // run time (--input-file, the stepping API), read by Op::Input nodes.
 struct Input {
   std::string name;
-  SourceLoc loc;  // the declaration
+  SourceLoc loc;     // the declaration
+  std::string unit;  // its unit attribute (input Real tau(unit = "N.m")); "" when none
 };
 
 struct Experiment {

@@ -42,6 +42,11 @@ class EndStopEvents {
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
+  // What function i watches: "joint 'hinge' at q_min", "contact 'foot' at the plane".
+  std::string Describe(int i) const {
+    const Side& s = sides_[static_cast<size_t>(i)];
+    return Who(s) + " at " + Where(s);
+  }
   // The free speeds of the joints resting on their stops (held at zero).
   std::vector<int> RestingSpeeds() const {
     std::vector<int> out;

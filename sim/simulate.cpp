@@ -169,6 +169,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   }
   // Rolling contacts: a normal force turning tensile stops the run (sim/lift_off.h).
   LiftOffGuard lift(program);
+  lift.SetInputs(options.inputs);
   if (lift.Active()) {
     if (std::string why = lift.Cause(grid.start, y0.data(), -1); !why.empty()) {
       SimResult r;

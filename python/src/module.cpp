@@ -257,12 +257,14 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
 // operating point, the equilibrium search) and, on failure, "failure": (code, message,
 // hint, file, line, column).
 py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equilibrium,
-                   const std::vector<std::string>& inputs, const std::vector<std::string>& outputs, double step) {
+                   const std::vector<std::string>& inputs, const std::vector<std::string>& outputs, double step,
+                   const std::vector<std::pair<std::string, double>>& input_values) {
   kanesim::py::LinearizeRequest r;
   r.has_at = has_at;
   r.at = at;
   r.equilibrium = equilibrium;
   r.inputs = inputs;
+  r.input_values = input_values;
   r.outputs = outputs;
   r.step = step;
   kanesim::py::LinearizeOutput out;
