@@ -21,18 +21,7 @@ constexpr double kStiffRate = 1e3;
 
 void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
-  // Parameter and state names for the text of force and output expressions, made on
-  // first use (a mechanism whose forces all fold to numbers needs none).
-  std::vector<std::string> pn, sn;
-  bool named = false;
-  auto text = [&](flat::ExprId id) {
-    if (!named) {
-      for (const auto& x : m.params) pn.push_back(x.name);
-      for (const auto& r : m.state_refs) sn.push_back(m.StateRefName(r));
-      named = true;
-    }
-    return m.exprs.ToString(id, &pn, &sn);
-  };
+  auto text = [&](flat::ExprId id) { return m.ExprText(id); };  // of a force or output
   TapeBuilder forces(m.exprs, p.param_values);
   auto scalar = [&](flat::ExprId id, const std::string& label) {
     Scalar s;

@@ -21,20 +21,6 @@ bool ScalarCoordinates(JointType t) {
 
 bool NeedsAxis(JointType t) { return t != JointType::Spherical && t != JointType::Free && t != JointType::Weld; }
 
-std::vector<std::string> ParamNames(const flat::Mechanism& m) {
-  std::vector<std::string> n;
-  n.reserve(m.params.size());
-  for (const auto& p : m.params) n.push_back(p.name);
-  return n;
-}
-
-std::vector<std::string> StateNames(const flat::Mechanism& m) {
-  std::vector<std::string> n;
-  n.reserve(m.state_refs.size());
-  for (const auto& r : m.state_refs) n.push_back(m.StateRefName(r));
-  return n;
-}
-
 // A joint's end stops (stdlib q_min, q_max, restitution) into the tree joint; the joint joins
 // p->stop_joints when it has one. Only a free Revolute or Prismatic joint takes them.
 template <class Num>
@@ -64,13 +50,7 @@ void CompileEndStops(const flat::Joint& fj, TreeJoint* j, Program* p, Num& num, 
 
 void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
-  // Parameter and state names for the text of prescribed motions, made on first use.
-  std::vector<std::string> pn, sn;
-  bool named = false;
-  auto text = [&](flat::ExprId id) {
-    if (!named) pn = ParamNames(m), sn = StateNames(m), named = true;
-    return m.exprs.ToString(id, &pn, &sn);
-  };
+  auto text = [&](flat::ExprId id) { return m.ExprText(id); };  // of a prescribed motion
   // The value of a parameter expression; its name for the message is what + of + ".q"
   // (built only for the message).
   auto num = [&](flat::ExprId id, double dflt, const char* what, const std::string& of, const char* suffix,

@@ -49,9 +49,6 @@ std::string ReinitRefusal(const Program& p, const flat::StateRef& ref, int* stat
 void CompileWhens(Program& p, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
   if (m.whens.empty()) return;
-  std::vector<std::string> pn, sn;
-  for (const auto& x : m.params) pn.push_back(x.name);
-  for (const auto& r : m.state_refs) sn.push_back(m.StateRefName(r));
   TapeBuilder tape(m.exprs, p.param_values);
   for (const flat::WhenClause& w : m.whens) {
     WhenModel out;
@@ -64,7 +61,7 @@ void CompileWhens(Program& p, std::vector<CompileMessage>* errors) {
                             "a when clause in a mechanism with closed loops or contacts is not supported yet", w.loc));
       continue;
     }
-    for (flat::ExprId h : w.indicators) out.indicators.push_back(tape.AddRoot(h, out.name, m.exprs.ToString(h, &pn, &sn)));
+    for (flat::ExprId h : w.indicators) out.indicators.push_back(tape.AddRoot(h, out.name, m.ExprText(h)));
     for (const flat::Reinit& r : w.reinits) {
       const flat::StateRef& ref = m.state_refs[static_cast<size_t>(r.state_ref)];
       WhenReinit x;
@@ -74,7 +71,7 @@ void CompileWhens(Program& p, std::vector<CompileMessage>* errors) {
         errors->push_back(Msg(flat::DiagCode::BadReinit, "cannot reinit '" + x.name + "': " + why, r.loc));
         continue;
       }
-      x.root = tape.AddRoot(r.value, "reinit of " + x.name, m.exprs.ToString(r.value, &pn, &sn));
+      x.root = tape.AddRoot(r.value, "reinit of " + x.name, m.ExprText(r.value));
       out.reinits.push_back(std::move(x));
     }
     out.terminate = w.terminate;

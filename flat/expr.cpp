@@ -1,7 +1,7 @@
 #include "flat/expr.h"
 
 #include <cmath>
-#include <sstream>
+#include <cstdio>
 
 namespace kanesim::flat {
 
@@ -164,24 +164,43 @@ struct PrintItem {
   int depth = 0;
 };
 
-// The text of one leaf node.
-std::string LeafText(const ExprNode& n, const std::vector<std::string>* pn, const std::vector<std::string>* sn) {
-  std::ostringstream os;
+// Names from two tables (ToString's vector form); an index outside a table has none.
+class TableNames : public ExprNames {
+ public:
+  TableNames(const std::vector<std::string>* pn, const std::vector<std::string>* sn) : pn_(pn), sn_(sn) {}
+  bool Param(int i, std::string* out) const override { return Lookup(pn_, i, out); }
+  bool State(int i, std::string* out) const override { return Lookup(sn_, i, out); }
+
+ private:
+  static bool Lookup(const std::vector<std::string>* t, int i, std::string* out) {
+    if (!t || i < 0 || static_cast<size_t>(i) >= t->size()) return false;
+    out->append((*t)[static_cast<size_t>(i)]);
+    return true;
+  }
+  const std::vector<std::string>* pn_;
+  const std::vector<std::string>* sn_;
+};
+
+// Appends the text of one leaf node: a constant as "%.17g" (what a stream of precision 17
+// prints), a parameter or state by its name or as "param#3".
+void AppendLeaf(const ExprNode& n, const ExprNames& names, std::string* out) {
   switch (n.op) {
-    case Op::Const: os.precision(17); os << n.value; break;
-    case Op::Param:
-      if (pn && n.index >= 0 && static_cast<size_t>(n.index) < pn->size()) os << (*pn)[static_cast<size_t>(n.index)];
-      else os << "param#" << n.index;
+    case Op::Const: {
+      char buf[40];
+      int len = std::snprintf(buf, sizeof buf, "%.17g", n.value);
+      out->append(buf, static_cast<size_t>(len));
       break;
-    case Op::Time: os << "time"; break;
-    case Op::Input: os << "input#" << n.index; break;
+    }
+    case Op::Param:
+      if (!names.Param(n.index, out)) out->append("param#").append(std::to_string(n.index));
+      break;
+    case Op::Time: out->append("time"); break;
+    case Op::Input: out->append("input#").append(std::to_string(n.index)); break;
     case Op::State:
-      if (sn && n.index >= 0 && static_cast<size_t>(n.index) < sn->size()) os << (*sn)[static_cast<size_t>(n.index)];
-      else os << "state#" << n.index;
+      if (!names.State(n.index, out)) out->append("state#").append(std::to_string(n.index));
       break;
     default: break;
   }
-  return os.str();
 }
 
 }  // namespace
@@ -191,6 +210,10 @@ std::string LeafText(const ExprNode& n, const std::vector<std::string>* pn, cons
 // max_chars, the text ends with "...".
 std::string ExprPool::ToString(ExprId id, const std::vector<std::string>* pn, const std::vector<std::string>* sn,
                                std::size_t max_chars) const {
+  return ToString(id, TableNames(pn, sn), max_chars);
+}
+
+std::string ExprPool::ToString(ExprId id, const ExprNames& names, std::size_t max_chars) const {
   if (id < 0) return "<none>";
   constexpr int kMaxDepth = 200;
   std::string out;
@@ -213,7 +236,7 @@ std::string ExprPool::ToString(ExprId id, const std::vector<std::string>* pn, co
     const ExprNode& n = (*this)[it.node];
     int arity = OpArity(n.op);
     if (arity == 0) {
-      out += LeafText(n, pn, sn);
+      AppendLeaf(n, names, &out);
       continue;
     }
     // Pieces in reading order; pushed reversed below.

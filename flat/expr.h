@@ -16,6 +16,15 @@ namespace kanesim::flat {
 using ExprId = std::int32_t;
 inline constexpr ExprId kNoExpr = -1;
 
+// Names of parameters and state references for ExprPool::ToString, made on demand:
+// each appends the name of leaf `index` to *out and returns false when it has none.
+class ExprNames {
+ public:
+  virtual ~ExprNames() = default;
+  virtual bool Param(int index, std::string* out) const = 0;
+  virtual bool State(int index, std::string* out) const = 0;
+};
+
 // The one table of operators. X(name, arity, spelling); spelling is what the user
 // writes for functions (and what diagnostics print).
 #define KANESIM_EXPR_OPS(X)                                                           \
@@ -130,6 +139,9 @@ class ExprPool {
   std::string ToString(ExprId id, const std::vector<std::string>* param_names = nullptr,
                        const std::vector<std::string>* state_names = nullptr,
                        std::size_t max_chars = kToStringChars) const;
+  // The same text, with each leaf's name asked of `names` as it is printed (the compiler
+  // prints a few expressions of a model of thousands of parameters: no table of names).
+  std::string ToString(ExprId id, const ExprNames& names, std::size_t max_chars = kToStringChars) const;
 
  private:
   enum : std::uint8_t { kReadsTime = 1, kReadsState = 2 };

@@ -195,6 +195,31 @@ static std::string LocStr(const SourceLoc& l) {
   return os.str();
 }
 
+namespace {
+
+// The mechanism's names for ExprPool::ToString, looked up as each leaf is printed.
+class MechanismNames : public ExprNames {
+ public:
+  explicit MechanismNames(const Mechanism& m) : m_(m) {}
+  bool Param(int i, std::string* out) const override {
+    if (i < 0 || static_cast<size_t>(i) >= m_.params.size()) return false;
+    out->append(m_.params[static_cast<size_t>(i)].name);
+    return true;
+  }
+  bool State(int i, std::string* out) const override {
+    if (i < 0 || static_cast<size_t>(i) >= m_.state_refs.size()) return false;
+    out->append(m_.StateRefName(m_.state_refs[static_cast<size_t>(i)]));
+    return true;
+  }
+
+ private:
+  const Mechanism& m_;
+};
+
+}  // namespace
+
+std::string Mechanism::ExprText(ExprId id) const { return exprs.ToString(id, MechanismNames(*this)); }
+
 std::string DumpFlat(const Mechanism& m) {
   std::vector<std::string> pn, sn;
   for (const auto& p : m.params) pn.push_back(p.name);

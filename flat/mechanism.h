@@ -240,7 +240,8 @@ struct WhenClause {
 // run time (--input-file, the stepping API), read by Op::Input nodes.
 struct Input {
   std::string name;
-  SourceLoc loc;  // the declaration
+  SourceLoc loc;     // the declaration
+  std::string unit;  // its unit attribute (input Real tau(unit = "N.m")); "" when none
 };
 
 struct Experiment {
@@ -286,6 +287,8 @@ struct Mechanism {
   int FindJoint(const std::string& name) const;
   int FindParam(const std::string& name) const;
   std::string StateRefName(const StateRef& r) const;  // "j.q[1]", "rod.frame_b.r[2]"
+  // An expression's text (ExprPool::ToString) with parameters and states by name.
+  std::string ExprText(ExprId id) const;
 };
 
 // Evaluates all parameter bindings in order (values of leaves and of --set values are kept)

@@ -75,6 +75,17 @@ class Zip {
   zipFile zf_;
 };
 
+// Why the stepping core cannot run the program ("" when it can): its events that are not
+// end stops or plane contacts (sim/simulator.h).
+std::string CoSimulationRefusal(const rt::Program& program) {
+  if (!program.whens.empty()) return "the " + program.whens.front().name + " clause is an event";
+  std::string exact;
+  for (const rt::FrictionJoint& f : rt::FrictionJoints(program))
+    if (f.exact) exact += (exact.empty() ? "'" : ", '") + f.joint + "'";
+  if (!exact.empty()) return "the exact stick-slip friction of " + exact + " is events";
+  return "";
+}
+
 }  // namespace
 
 std::string FmuBinariesDir(std::string* error) {
@@ -98,25 +109,13 @@ std::string FmuBinariesDir(std::string* error) {
 
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options) {
   if (options.version != 2 && options.version != 3) return "FMI " + std::to_string(options.version) + " does not exist";
-  // End stops are events (impacts, resting): Co-Simulation's stepping core handles them as a
-  // run does, but Model Exchange has no event indicators yet, and a master integrating
-  // through a stop would be silently wrong. Refused there, with the joints.
-  std::string stops;
-  for (const rt::EndStop& stop : rt::EndStops(*model.program)) stops += (stops.empty() ? "'" : ", '") + stop.joint + "'";
-  if (!stops.empty() && options.model_exchange)
-    return "the end stops of " + stops +
-           " are events, which Model Exchange does not have yet: export with --kind cs (docs/fmi.md)";
-  if (!model.program->whens.empty())  // neither kind: the stepping core does not fire them yet (docs/events.md)
-    return "the " + model.program->whens.front().name + " clause is an event, which an exported FMU does not have yet (docs/fmi.md)";
-  std::string exact;  // exact stick-slip friction: its events are not in the stepping core
-  for (const rt::FrictionJoint& f : rt::FrictionJoints(*model.program))
-    if (f.exact) exact += (exact.empty() ? "'" : ", '") + f.joint + "'";
-  if (!exact.empty())
-    return "the exact stick-slip friction of " + exact + " is events, which an exported FMU does not have yet (docs/fmi.md)";
-  std::string planes;  // plane contacts likewise (impacts, resting, lift-off)
-  for (const rt::PlaneContact& c : rt::PlaneContacts(*model.program)) planes += (planes.empty() ? "'" : ", '") + c.name + "'";
-  if (!planes.empty())
-    return "the plane contacts " + planes + " are events, which an exported FMU does not have yet (docs/fmi.md)";
+  // Model Exchange exposes every event source as event indicators (sim::HybridOde);
+  // Co-Simulation's stepping core (sim::Simulator) handles end stops and plane contacts only so far.
+  if (options.co_simulation) {
+    const std::string why = CoSimulationRefusal(*model.program);
+    if (!why.empty())
+      return why + ", which Co-Simulation does not have yet: export with --kind me (docs/fmi.md)";
+  }
   std::string error;
   const std::string bin = options.binaries_dir.empty() ? FmuBinariesDir(&error) : options.binaries_dir;
   if (bin.empty()) return error;

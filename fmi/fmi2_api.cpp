@@ -43,6 +43,7 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
   auto c = std::make_unique<Component>();
   c->name = name;
   c->co_simulation = type == fmi2CoSimulation;
+  c->instance.SetModelExchange(!c->co_simulation);
   c->logging = logging;
   if (fmi2CallbackLogger logger = callbacks->logger) {
     fmi2ComponentEnvironment env = callbacks->componentEnvironment;
@@ -251,6 +252,13 @@ FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* inf
   return Fmi2Guarded(c, "fmi2NewDiscreteStates", {Mode::kEvent}, [&](Component* x) {
     if (!info) return x->Log(kf::kError, "fmi2NewDiscreteStates: no event info");
     *info = fmi2EventInfo{0, 0, 0, 0, 0, 0.0};
+    bool changed = false, terminate = false;
+    std::string message;
+    if (const std::string e = x->instance.UpdateDiscreteStates(&changed, &terminate, &message); !e.empty())
+      return x->Log(kf::kError, "fmi2NewDiscreteStates: " + e);
+    info->valuesOfContinuousStatesChanged = changed;
+    info->terminateSimulation = terminate;
+    if (terminate) x->Log(kf::kOK, "terminate at t = " + std::to_string(x->instance.Time()) + ": " + message);
     return kf::kOK;
   });
 }
@@ -285,9 +293,10 @@ FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t
                  [&](Component* m) { return m->Result(dx ? m->instance.GetDerivatives(dx, n) : "no place given"); });
 }
 
-FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real[], size_t n) {
+FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t n) {
   return Fmi2Guarded(c, "fmi2GetEventIndicators", kf::kRunning, [&](Component* x) {
-    return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no event indicators");
+    if (n > 0 && !z) return x->Log(kf::kError, "fmi2GetEventIndicators: no place given");
+    return x->Result(x->instance.GetIndicators(z, n));
   });
 }
 

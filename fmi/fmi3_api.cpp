@@ -33,6 +33,7 @@ fmi3Instance Instantiate(fmi3String name, fmi3String token, fmi3String resources
   auto c = std::make_unique<Component>();
   c->name = name;
   c->co_simulation = co_simulation;
+  c->instance.SetModelExchange(!co_simulation);
   c->logging = logging;
   if (log)
     c->logger = [log, env](kf::Status status, const char* category, const std::string& message) {
@@ -348,7 +349,7 @@ KANESIM_FMI3_NOT_PROVIDED(fmi3GetOutputDerivatives,
                           (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Int32[], fmi3Float64[], size_t),
                           "this FMU does not provide output derivatives")
 
-// ---- events: none (no event indicators, no discrete states) ----
+// ---- events: the event indicators' (Model Exchange; no discrete states, no clocks) ----
 
 FMI3_EXPORT fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance c) {
   return Fmi3Guarded(c, "fmi3EvaluateDiscreteStates", kf::kRunning, [&](Component*) { return kf::kOK; });
@@ -357,10 +358,17 @@ FMI3_EXPORT fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance c) {
 FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean* update_needed, fmi3Boolean* terminate,
                                                 fmi3Boolean* nominals_changed, fmi3Boolean* values_changed,
                                                 fmi3Boolean* next_time_defined, fmi3Float64* next_time) {
-  return Fmi3Guarded(c, "fmi3UpdateDiscreteStates", {Mode::kEvent}, [&](Component*) {
+  return Fmi3Guarded(c, "fmi3UpdateDiscreteStates", {Mode::kEvent}, [&](Component* x) {
     for (fmi3Boolean* b : {update_needed, terminate, nominals_changed, values_changed, next_time_defined})
       if (b) *b = false;
     if (next_time) *next_time = 0.0;
+    bool changed = false, stop = false;
+    std::string message;
+    if (const std::string e = x->instance.UpdateDiscreteStates(&changed, &stop, &message); !e.empty())
+      return x->Log(kf::kError, "fmi3UpdateDiscreteStates: " + e);
+    if (values_changed) *values_changed = changed;
+    if (terminate) *terminate = stop;
+    if (stop) x->Log(kf::kOK, "terminate at t = " + std::to_string(x->instance.Time()) + ": " + message);
     return kf::kOK;
   });
 }
@@ -398,9 +406,10 @@ FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Flo
                      [&](Component* m) { return m->Result(dx ? m->instance.GetDerivatives(dx, n) : "no place given"); });
 }
 
-FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64[], size_t n) {
+FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t n) {
   return Fmi3Guarded(c, "fmi3GetEventIndicators", kf::kRunning, [&](Component* x) {
-    return n == 0 ? kf::kOK : x->Log(kf::kError, "this FMU has no event indicators");
+    if (n > 0 && !z) return x->Log(kf::kError, "fmi3GetEventIndicators: no place given");
+    return x->Result(x->instance.GetIndicators(z, n));
   });
 }
 
@@ -420,7 +429,7 @@ FMI3_EXPORT fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Flo
 FMI3_EXPORT fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t* n) {
   return Fmi3Guarded(c, "fmi3GetNumberOfEventIndicators", kf::kAfterInstantiate, [&](Component* x) {
     if (!n) return x->Log(kf::kError, "no place given");
-    *n = 0;
+    *n = size_t(x->instance.NumIndicators());
     return kf::kOK;
   });
 }

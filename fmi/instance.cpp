@@ -111,6 +111,8 @@ std::string Instance::Rebind() {
   }
   stepper_.reset();
   ws_ = rt::MakeWorkspace(*program_);
+  hybrid_ = std::make_unique<sim::HybridOde>(program_, rtol_, rtol_);
+  z_ref_.assign(size_t(hybrid_->NumIndicators()), 0.0);
   std::string error;
   outputs_plan_ = nullptr;
   std::vector<std::string> names;
@@ -158,6 +160,12 @@ std::string Instance::GetReal(unsigned vr, double* value) {
   if (v.type != VarType::Real) return "'" + v.name + "' is not a Real";
   switch (v.kind) {
     case VarKind::State: *value = y_[v.index]; return "";
+    case VarKind::Indicator: {
+      std::vector<double> z;
+      if (std::string e = Indicators(&z); !e.empty()) return e;
+      *value = z[size_t(v.index)];
+      return "";
+    }
     case VarKind::Input: *value = inputs_[v.index]; return "";
     case VarKind::Derivative:
     case VarKind::Output:
@@ -191,9 +199,62 @@ std::string Instance::Initialize() {
     for (int i = 0; i < n_; ++i)
       if (!state_set_[i]) y_[i] = y0[i];
   }
+  // The events' tolerances are the experiment's (fmi2SetupExperiment may have set them).
+  hybrid_ = std::make_unique<sim::HybridOde>(program_, rtol_, rtol_);
+  hybrid_->SetInputs(inputs_);
+  if (model_exchange_) {  // a start on a contact is its first event, as in a run
+    if (std::string e = hybrid_->Start(t_, y_.data()); !e.empty()) return e;
+    if (std::string e = Indicators(&z_ref_); !e.empty()) return e;
+  }
   initialized_ = true;
   stale_ = true;
   return Evaluate();
+}
+
+std::string Instance::Indicators(std::vector<double>* z) {
+  z->assign(z_ref_.size(), 0.0);
+  if (z->empty()) return "";
+  hybrid_->SetInputs(inputs_);
+  if (hybrid_->Indicators(t_, y_.data(), z->data()) != 0)
+    return "the event indicators at t = " + Number(t_) + ": " + hybrid_->FailureCause();
+  return "";
+}
+
+std::string Instance::GetIndicators(double* z, size_t n) {
+  if (n != z_ref_.size())
+    return "expected " + std::to_string(z_ref_.size()) + " event indicators, got " + std::to_string(n);
+  std::vector<double> now;
+  if (std::string e = Indicators(&now); !e.empty()) return e;
+  std::copy(now.begin(), now.end(), z);
+  // A value the master saw positive is the far side of a later crossing: an upward
+  // crossing it did not stop at (or an event update it skipped) does not hide that one.
+  for (size_t i = 0; i < now.size(); ++i)
+    if (now[i] > 0.0) z_ref_[i] = now[i];
+  return "";
+}
+
+// The run fires an event where a function crosses zero downwards and handles that one
+// only, the solver restarting after it (sim/integrator.h): the same here, the other side of
+// the crossing being the values after the last update or, since, seen positive by the master.
+std::string Instance::UpdateDiscreteStates(bool* states_changed, bool* terminate, std::string* message) {
+  *states_changed = *terminate = false;
+  std::vector<double> now;
+  if (std::string e = Indicators(&now); !e.empty()) return e;
+  size_t i = 0;
+  while (i < now.size() && !(z_ref_[i] > 0.0 && now[i] <= 0.0)) ++i;
+  if (i < now.size()) {
+    const std::vector<double> before = y_;
+    if (hybrid_->Event(t_, y_.data(), int(i)) != 0) {
+      y_ = before;
+      return "at t = " + Number(t_) + ": " + hybrid_->FailureCause();
+    }
+    *states_changed = y_ != before;
+    *terminate = hybrid_->Terminated(message);
+    stale_ = true;
+    if (std::string e = Indicators(&now); !e.empty()) return e;
+  }
+  z_ref_ = now;
+  return "";
 }
 
 std::string Instance::SetTime(double t) {
@@ -229,8 +290,9 @@ std::string Instance::GetDerivatives(double* dx, size_t n) {
 std::string Instance::Evaluate() {
   if (!stale_) return "";
   if (!inputs_.empty()) rt::SetInputValues(*ws_, inputs_.data());
-  if (n_ > 0 && rt::Derivative(*program_, *ws_, t_, y_.data(), ydot_.data()) != 0)
-    return "at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  hybrid_->SetInputs(inputs_);
+  if (n_ > 0 && hybrid_->Derivatives(t_, y_.data(), ydot_.data()) != 0)
+    return "at t = " + Number(t_) + ": " + hybrid_->FailureCause();
   if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y_.data(), out_.data()) != 0)
     return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
   stale_ = false;
@@ -270,7 +332,8 @@ std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_u
     for (size_t i = 0; i < y.size(); ++i) y[i] = y_[i] + s * dy[i];
     for (size_t i = 0; i < u.size(); ++i) u[i] = inputs_[i] + s * du[i];
     if (!u.empty()) rt::SetInputValues(*ws_, u.data());
-    if (n_ > 0 && rt::Derivative(*program_, *ws_, t_, y.data(), ydot.data()) != 0) return {2, rt::ErrorMessage(*ws_)};
+    hybrid_->SetInputs(u);
+    if (n_ > 0 && hybrid_->Derivatives(t_, y.data(), ydot.data()) != 0) return {2, hybrid_->FailureCause()};
     if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), o.data()) != 0)
       return {2, "the outputs: " + rt::ErrorMessage(*ws_)};
     f->resize(Eigen::Index(ydot.size() + o.size()));
@@ -331,7 +394,7 @@ std::string Instance::DoStep(double t, double h) {
 }
 
 Instance::Snapshot Instance::Save() {
-  Snapshot s{t_, y_, params_, inputs_, state_set_, 0.0, {}};
+  Snapshot s{t_, y_, params_, inputs_, state_set_, 0.0, {}, hybrid_->Modes(), z_ref_};
   if (stepper_) {
     // GetState restarts the solver there; SetState (Restore) restarts it the same way.
     const sim::SimulatorState state = stepper_->GetState();
@@ -355,6 +418,8 @@ std::string Instance::Restore(const Snapshot& s) {
     params_changed_ = true;
     if (std::string e = Rebind(); !e.empty()) return e;
   }
+  if (!hybrid_->SetModes(s.modes) || s.z_ref.size() != z_ref_.size()) return "the FMU state is not this model's";
+  z_ref_ = s.z_ref;
   stale_ = true;
   if (!stepper_ && !s.resting.empty())
     if (std::string e = StartStepper(); !e.empty()) return e;
@@ -371,10 +436,13 @@ std::string Instance::Restore(const Snapshot& s) {
   return "";
 }
 
-// Layout: "KSFMU2", t, n, y[n], m, params[m], k, inputs[k], next_step, r, resting[r],
-// state_set[n] (doubles, then bytes, native order; the counts as doubles).
+// Layout: "KSFMU3", t, n, y[n], m, params[m], k, inputs[k], next_step, r, resting[r],
+// e, modes[e], z, z_ref[z], state_set[n] (doubles, then bytes, native order; the counts as
+// doubles).
 std::vector<char> Instance::Serialize(const Snapshot& s) {
-  std::vector<char> out(6 + sizeof(double) * (6 + s.y.size() + s.params.size() + s.inputs.size() + s.resting.size()) +
+  std::vector<char> out(6 +
+                        sizeof(double) * (8 + s.y.size() + s.params.size() + s.inputs.size() + s.resting.size() +
+                                          s.modes.size() + s.z_ref.size()) +
                         s.state_set.size());
   char* p = out.data();
   auto put = [&](const void* src, size_t bytes) {
@@ -382,7 +450,7 @@ std::vector<char> Instance::Serialize(const Snapshot& s) {
     std::memcpy(p, src, bytes);
     p += bytes;
   };
-  put("KSFMU2", 6);
+  put("KSFMU3", 6);
   const double n = double(s.y.size()), m = double(s.params.size()), k = double(s.inputs.size()),
                r = double(s.resting.size());
   put(&s.t, sizeof(double));
@@ -395,6 +463,11 @@ std::vector<char> Instance::Serialize(const Snapshot& s) {
   put(&s.next_step, sizeof(double));
   put(&r, sizeof(double));
   put(s.resting.data(), sizeof(double) * s.resting.size());
+  const double e = double(s.modes.size()), z = double(s.z_ref.size());
+  put(&e, sizeof(double));
+  put(s.modes.data(), sizeof(double) * s.modes.size());
+  put(&z, sizeof(double));
+  put(s.z_ref.data(), sizeof(double) * s.z_ref.size());
   put(s.state_set.data(), s.state_set.size());
   return out;
 }
@@ -422,8 +495,9 @@ bool Instance::Deserialize(const char* data, size_t size, Snapshot* s) {
     return get(v->data(), sizeof(double) * c);
   };
   char magic[6];
-  if (!get(magic, 6) || std::memcmp(magic, "KSFMU2", 6) != 0 || !get(&s->t, sizeof(double)) || !doubles(&s->y) ||
-      !doubles(&s->params) || !doubles(&s->inputs) || !get(&s->next_step, sizeof(double)) || !doubles(&s->resting))
+  if (!get(magic, 6) || std::memcmp(magic, "KSFMU3", 6) != 0 || !get(&s->t, sizeof(double)) || !doubles(&s->y) ||
+      !doubles(&s->params) || !doubles(&s->inputs) || !get(&s->next_step, sizeof(double)) || !doubles(&s->resting) ||
+      !doubles(&s->modes) || !doubles(&s->z_ref))
     return false;
   s->state_set.resize(s->y.size());
   return get(s->state_set.data(), s->state_set.size()) && p == end;

@@ -28,6 +28,9 @@ bool ParseSettings(const std::string& text, FmuSettings* out, std::string* error
 
 class Instance {
  public:
+  // Model Exchange (else Co-Simulation): the start's events at initialization, the event
+  // indicators watched. Before Load.
+  void SetModelExchange(bool on) { model_exchange_ = on; }
   // Loads resources_dir/model.mech with resources_dir/settings.txt (its GUID must be `guid`).
   std::string Load(const std::string& resources_dir, const std::string& guid);
 
@@ -51,6 +54,13 @@ class Instance {
   std::string SetStates(const double* x, size_t n);
   std::string GetStates(double* x, size_t n) const;
   std::string GetDerivatives(double* dx, size_t n);
+  // The event indicators (sim::HybridOde's functions) at (t, y), and the event mode's
+  // update: the first indicator that crossed zero downwards since the last update (or
+  // initialization; or positive in a GetIndicators since) has the run's handling (y may
+  // jump: *states_changed); a terminate sets *terminate and *message.
+  int NumIndicators() const { return int(z_ref_.size()); }
+  std::string GetIndicators(double* z, size_t n);
+  std::string UpdateDiscreteStates(bool* states_changed, bool* terminate, std::string* message);
 
   // d(unknowns)/d(knowns) along `seed` at (t, y, inputs): the unknowns derivatives or
   // outputs, the knowns states or inputs; central differences along the seed with
@@ -71,6 +81,7 @@ class Instance {
     std::vector<char> state_set;
     double next_step = 0.0;
     std::vector<double> resting;  // sim::SimulatorState::resting
+    std::vector<double> modes, z_ref;  // Model Exchange: sim::HybridOde::Modes, z_ref_
   };
   Snapshot Save();
   std::string Restore(const Snapshot& s);
@@ -86,9 +97,11 @@ class Instance {
   std::string CheckVr(unsigned vr) const;
 
   std::string StartStepper();      // stepper_ at (t_, y_, inputs_)
+  std::string Indicators(std::vector<double>* z);  // at (t_, y_, inputs_)
 
   std::unique_ptr<pipeline::Model> model_;   // as loaded: the export's program
   std::unique_ptr<sim::Simulator> stepper_;  // Co-Simulation, from its first step; null after a change
+  std::unique_ptr<sim::HybridOde> hybrid_;   // the derivatives in the current mode, the events (Rebind)
   std::shared_ptr<const rt::Program> program_;  // with the current parameter values
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, nullptr};
   std::shared_ptr<const rt::SignalPlan> outputs_plan_;
@@ -101,6 +114,8 @@ class Instance {
   std::vector<double> inputs_;     // the model's inputs (rt::NumInputs), 0 until set
   rt::Integrator integrator_ = rt::Integrator::Auto;  // Co-Simulation's (settings.txt)
   std::vector<char> state_set_;    // the master set this state's start value
+  std::vector<double> z_ref_;      // the indicators after the last event update, or seen positive since
+  bool model_exchange_ = false;
   bool params_changed_ = false;
   bool initialized_ = false;
   bool stale_ = true;              // ydot_ and out_ not yet for (t_, y_)

@@ -47,6 +47,7 @@ Attributes AttributesOf(VarKind kind) {
     case VarKind::Parameter: return {"parameter", "fixed", "exact", true};
     case VarKind::CalculatedParameter: return {"calculatedParameter", "fixed", "calculated", false};
     case VarKind::Fixed: return {"local", "constant", "exact", true};
+    case VarKind::Indicator: return {"local", "continuous", "calculated", false};
   }
   return {"local", "continuous", "calculated", false};
 }
@@ -150,7 +151,8 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
     << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << Escape(mech.model_name) << "\" guid=\"" << guid
     << "\" description=\"" << Escape(mech.description) << "\" generationTool=\"kanesim " << KANESIM_VERSION
-    << "\" variableNamingConvention=\"flat\" numberOfEventIndicators=\"0\">\n";
+    << "\" variableNamingConvention=\"flat\" numberOfEventIndicators=\""
+    << std::count_if(vars.begin(), vars.end(), [](const Variable& v) { return v.kind == VarKind::Indicator; }) << "\">\n";
   if (options.model_exchange) x << "  <ModelExchange modelIdentifier=\"" << id << "\"" << caps << "/>\n";
   if (options.co_simulation)
     x << "  <CoSimulation modelIdentifier=\"" << id << "\" canHandleVariableCommunicationStepSize=\"true\"" << caps
@@ -200,6 +202,7 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   UnknownsV3(x, "Output", vars, {VarKind::Output});
   UnknownsV3(x, "ContinuousStateDerivative", vars, {VarKind::Derivative});
   UnknownsV3(x, "InitialUnknown", vars, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter});
+  UnknownsV3(x, "EventIndicator", vars, {VarKind::Indicator});
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();
 }

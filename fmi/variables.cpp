@@ -4,6 +4,7 @@
 
 #include "lang/lang.h"
 #include "runtime/program/program.h"
+#include "sim/hybrid_ode.h"
 
 namespace kanesim::fmi {
 namespace {
@@ -71,7 +72,7 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
     vars.push_back({"der(" + states[i].name + ")", VarKind::Derivative, VarType::Real, int(i), 0.0,
                     states[i].der_unit, ""});
   for (int i = 0; i < rt::NumInputs(p); ++i)
-    vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, "", ""});
+    vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, mech.inputs[size_t(i)].unit, ""});
   for (size_t i = 0; i < mech.outputs.size(); ++i)
     vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, mech.outputs[i].unit, ""});
   // Parameters: three passes so that each group is contiguous.
@@ -94,6 +95,10 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
                                         : "";
       vars.push_back({q.name, kind, type, int(i), p.param_values[i], q.unit, why});
     }
+  const std::vector<std::string> events = sim::HybridOde(model.program, 1e-6, 1e-6).IndicatorNames();
+  for (size_t i = 0; i < events.size(); ++i)
+    vars.push_back({"eventIndicator[" + std::to_string(i + 1) + "]", VarKind::Indicator, VarType::Real, int(i), 0.0, "",
+                    events[i] + " (an event where it crosses zero downwards)"});
   return vars;
 }
 

@@ -7,7 +7,9 @@
 //   joint signals ("arm.q", "ball.q[2]"); their derivatives "der(arm.q)"; the model's
 //   inputs (`input Real tau;`, start 0); the declared outputs; then the parameters: tunable ones (Real leaves, not structural, not constant),
 //   calculated ones (bound to an expression of others), and the fixed ones (structural,
-//   constant, Integer or Boolean), which keep the value they had at export.
+//   constant, Integer or Boolean), which keep the value they had at export; last the event
+//   indicators "eventIndicator[k]" (sim::HybridOde's, Model Exchange's; FMI 3 names them in
+//   ModelStructure).
 #pragma once
 
 #include <string>
@@ -17,14 +19,15 @@
 
 namespace kanesim::fmi {
 
-enum class VarKind { State, Derivative, Input, Output, Parameter, CalculatedParameter, Fixed };
+enum class VarKind { State, Derivative, Input, Output, Parameter, CalculatedParameter, Fixed, Indicator };
 enum class VarType { Real, Integer, Boolean };
 
 struct Variable {
   std::string name;
   VarKind kind = VarKind::State;
   VarType type = VarType::Real;
-  int index = 0;        // State, Derivative: y index; Input: rt input; Output: declared output; else param
+  int index = 0;        // State, Derivative: y index; Input: rt input; Output: declared output;
+                        // Indicator: event function; else param
   double start = 0.0;   // States, Parameter, Fixed: the value at export
   std::string unit;     // "" when the model gives none
   std::string description;

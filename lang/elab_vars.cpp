@@ -142,8 +142,9 @@ Value Evaluator::InputValue(Node* var, Span use_span) {
   Dims idx;
   idx.assign(var->shape.size(), 0);
   const flat::SourceLoc loc = places_.Loc(at);
+  const std::string unit = ReadParamAttributes(var).unit;  // the unit check reads it from the declaration too
   for (size_t k = 0; k < count; ++k) {
-    m_->inputs.push_back({ElementName(var->path, var->shape, k, idx), loc});
+    m_->inputs.push_back({ElementName(var->path, var->shape, k, idx), loc, unit});
     v.elements.push_back(m_->exprs.Input(static_cast<int>(m_->inputs.size() - 1)));
   }
   return v;

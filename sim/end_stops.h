@@ -57,6 +57,11 @@ class EndStopEvents {
         y[nq_ + st.u] = 0.0;
       }
   }
+  // What function i watches: "joint 'hinge' at q_min", "contact 'foot' at the plane".
+  std::string Describe(int i) const {
+    const Side& s = sides_[static_cast<size_t>(i)];
+    return Who(s) + " at " + Where(s);
+  }
   // The free speeds of the joints resting on their stops (held at zero).
   std::vector<int> RestingSpeeds() const {
     std::vector<int> out;

@@ -52,6 +52,7 @@ class EngineOde final : public OdeSystem {
     if (bridge_ && bridge_->ws) rt::SetInputSource(*bridge_->ws, inputs);
     if (aside_) rt::SetInputSource(*aside_, inputs);
     if (energy_ws_) rt::SetInputSource(*energy_ws_, inputs);
+    if (lift_) lift_->SetInputs(inputs);
   }
   // End stops and plane contacts (sim/end_stops.h), or rolling contacts' normal forces
   // (sim/lift_off.h; the compiler never lets both in one model): their events; none without.
@@ -59,7 +60,10 @@ class EngineOde final : public OdeSystem {
     stops_ = stops;
     state_names_ = rt::StateNames(program_);
   }
-  void SetLiftOff(LiftOffGuard* lift) { lift_ = lift; }
+  void SetLiftOff(LiftOffGuard* lift) {
+    lift_ = lift;
+    if (lift_ && inputs_) lift_->SetInputs(inputs_);
+  }
   // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
   void SetStickSlip(StickSlipEvents* stick) {
     stick_ = stick;

@@ -149,10 +149,6 @@ std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const double* y
   return nullptr;
 }
 
-}  // namespace detail
-
-namespace {
-// Counters of a solver before a bridge, added to the next one's.
 void AddStats(IntegratorStats* to, const IntegratorStats& s) {
   to->steps += s.steps;
   to->rhs_evals += s.rhs_evals;
@@ -173,7 +169,21 @@ void AddStats(IntegratorStats* to, const IntegratorStats& s) {
   }
   to->switched = to->switched || s.switched;
 }
-}  // namespace
+
+std::unique_ptr<Stepper> HandOverStiff(GuardedRhs& rhs, const Stepper& stiff, const double* y, double stop,
+                                       IntegratorOptions* options, IntegratorStats* done, std::string* error) {
+  const double ts = stiff.event_time;
+  AddStats(done, stiff.Stats());
+  done->switched = true;
+  options->method = rt::Integrator::CvodeBdf;
+  options->switch_when_stiff = false;
+  rhs.Reset();
+  return MakeStepper(rhs, ts, y, stop, *options, error);
+}
+
+}  // namespace detail
+
+using detail::AddStats;
 
 IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid& grid,
                           const IntegratorOptions& given, const RowCallback& row) {
@@ -251,13 +261,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
       // DOP853 found the problem stiff: CVODE-BDF from its last accepted step, the
       // instant again from there (the rows before came from DOP853, none repeated).
       const double ts = stepper->event_time;
-      AddStats(&done, stepper->Stats());
-      done.switched = true;
-      stepper.reset();
-      options.method = rt::Integrator::CvodeBdf;
-      options.switch_when_stiff = false;
-      rhs.Reset();
-      stepper = detail::MakeStepper(rhs, ts, y.data(), grid.stop, options, &error);
+      stepper = detail::HandOverStiff(rhs, *stepper, y.data(), grid.stop, &options, &done, &error);
       if (!stepper) {
         write_held(INFINITY);
         fail(rhs.failed ? rhs.fail_time : ts, rhs.failed ? rhs.cause : error);

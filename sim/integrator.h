@@ -163,6 +163,8 @@ struct IntegratorOptions {
   bool row_energy_check = true;    // check interpolated output instants' T + V (OdeSystem::Energy)
   bool check_steps = true;         // DOP853: call OdeSystem::StepAccepted (off: recomputing one row)
   bool switch_when_stiff = false;  // DOP853 under the automatic choice: go on with CVODE-BDF when stiff
+  double run_end = -INFINITY;      // ... where the whole run ends when later than the solver's stop time
+                                   // (the stepping core, whose stop is each step's end: +inf, unknown)
 };
 
 // Counters from the solver (cumulative over the run).

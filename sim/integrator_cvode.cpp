@@ -148,21 +148,14 @@ class CvodeStepper final : public SundialsStepper {
  private:
   IntegratorStats Cumulative() const {
     IntegratorStats st = SundialsStepper::Stats();
-    st.steps += before_.steps;
-    st.rhs_evals += before_.rhs_evals;
-    st.rhs_evals_jac += before_.rhs_evals_jac;
-    st.jac_evals += before_.jac_evals;
-    st.lin_setups += before_.lin_setups;
-    st.err_test_fails += before_.err_test_fails;
-    st.nonlin_iters += before_.nonlin_iters;
-    st.nonlin_conv_fails += before_.nonlin_conv_fails;
     if (krylov_) {
       st.linear_solver = kKrylovName;
       CVodeGetNumLinIters(mem_, &st.lin_iters);
       CVodeGetNumLinConvFails(mem_, &st.lin_conv_fails);
-      st.lin_iters += before_.lin_iters;
-      st.lin_conv_fails += before_.lin_conv_fails;
+    } else if (s_.A) {
+      st.linear_solver = "dense LU";
     }
+    AddStats(&st, before_);
     return st;
   }
 

@@ -167,7 +167,7 @@ class Dop853Stepper final : public Stepper {
       }
       // Stiff, under the automatic choice: handed back at the last accepted step, for the
       // driver to go on with an implicit method from there (no row between is lost).
-      if (options_.switch_when_stiff && stiffness_.Stiff() && stop_ - t_ > kSwitchMinSteps * h_) {
+      if (options_.switch_when_stiff && stiffness_.Stiff() && std::max(stop_, options_.run_end) - t_ > kSwitchMinSteps * h_) {
         std::copy(y_.begin(), y_.end(), y);
         event_time = t_;
         return kStiffReached;

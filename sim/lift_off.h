@@ -18,6 +18,11 @@ class LiftOffGuard {
   explicit LiftOffGuard(const rt::Program& program);
   bool Active() const { return !names_.empty(); }
   int Count() const { return static_cast<int>(names_.size()); }
+  const std::vector<std::string>& Names() const { return names_; }  // the guarded contacts
+  // The model's inputs as the guard's own workspace sees them (not owned; null: constants 0).
+  void SetInputs(const rt::InputSource* inputs) {
+    if (ws_) rt::SetInputSource(*ws_, inputs);
+  }
   // g_i: contact i's normal force (the plane pushing: > 0). 0, or EvalSignals' codes.
   int Functions(double t, const double* y, double* g);
   // Why the run cannot go on at (t, y) ("" when it can): a contact whose normal force is

@@ -241,7 +241,8 @@ SimResult SimulateSensitivities(const rt::Program& program, const std::vector<Se
     return UsageResult("--sensitivity with --speeds diagonal: not implemented (the sensitivities are of the joint speeds' "
                  "equations; run without --speeds diagonal)");
   IntegratorOptions iopt;
-  iopt.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(program).integrator : options.integrator;
+  ResolveMethod(program, options.integrator, &iopt);
+  iopt.coupling.clear();  // y's groups; s_k' reads all of y: the augmented state's df/dz is dense
   iopt.rtol = options.rtol;
   iopt.atol = options.atol;
   iopt.max_steps = options.max_steps;

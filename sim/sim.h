@@ -13,6 +13,7 @@
 #include "sim/sensitivity.h"    // a run with d(y)/d(p) by the variational equations
 #include "sim/simulate.h"       // one run of a Program from start to stop
 #include "sim/simulator.h"      // the stepping core: a Program advanced step by step
+#include "sim/hybrid_ode.h"     // the equations with their events, for an outside integrator
 
 // The hybrid laws, for linearize's operating points (linearize/hybrid.h):
 // kanesim-public: sim/end_stops.h

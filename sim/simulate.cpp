@@ -90,6 +90,16 @@ OutputGrid ResolveGrid(const rt::Program& program, const SimOptions& options) {
   return grid;
 }
 
+void ResolveMethod(const rt::Program& program, rt::Integrator requested, IntegratorOptions* io) {
+  io->method = requested;
+  if (requested == rt::Integrator::Auto) {
+    io->method = rt::Summarize(program).integrator;
+    io->switch_when_stiff = io->method == rt::Integrator::Dop853;
+  }
+  if (io->method == rt::Integrator::IDA || io->method == rt::Integrator::CvodeBdf || io->switch_when_stiff)
+    io->coupling = rt::StateCouplingGroups(program);
+}
+
 SimResult Simulate(const rt::Program& program, const SimOptions& options, SignalSink& sink) {
   return Simulate(program, options, sink, TestHooks{});
 }
@@ -99,12 +109,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   const OutputGrid grid = ResolveGrid(program, options);
   if (std::string why = CheckRun(grid, options.rtol, options.atol); !why.empty()) return UsageResult(why);
   IntegratorOptions iopt;
-  iopt.method = options.integrator;
-  if (iopt.method == rt::Integrator::Auto) {
-    iopt.method = rt::Summarize(program).integrator;
-    // docs/integrators.md "The automatic choice": a DOP853 that finds the problem stiff hands over.
-    iopt.switch_when_stiff = iopt.method == rt::Integrator::Dop853;
-  }
+  ResolveMethod(program, options.integrator, &iopt);
   iopt.rtol = options.rtol;
   iopt.atol = options.atol;
   iopt.max_steps = options.max_steps;
@@ -113,7 +118,6 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   iopt.bridge = hooks.bridge;
   iopt.dense_check = hooks.dense_check;
   iopt.row_energy_check = hooks.row_energy_check;
-  if (iopt.method == rt::Integrator::IDA || iopt.method == rt::Integrator::CvodeBdf || iopt.switch_when_stiff) iopt.coupling = rt::StateCouplingGroups(program);
 
   // 2. Signals.
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(program) : options.signals;
@@ -167,6 +171,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   }
   // Rolling contacts: a normal force turning tensile stops the run (sim/lift_off.h).
   LiftOffGuard lift(program);
+  lift.SetInputs(options.inputs);
   if (lift.Active()) {
     if (std::string why = lift.Cause(grid.start, y0.data(), -1); !why.empty()) {
       SimResult r;
@@ -331,9 +336,17 @@ std::string FormatStats(const SimStats& s) {
                 s.rows, t.load, t.compile, t.integrate, t.output, t.load + t.compile + t.integrate + t.output);
   std::string out = buf;
   if (!std::isnan(i.stiff_time)) {  // DOP853's stiffness detection (sim/dop853_stiffness.h)
-    std::snprintf(buf, sizeof buf, "  %s at t = %.6g (stiff: h|lambda| %.3g, near the stability boundary 6.1)\n",
-                  i.switched ? "switched to CVODE-BDF" : "found stiff (not switched)", i.stiff_time, i.stiff_h_lambda);
-    out.insert(out.find("  steps "), buf);
+    char at[32];
+    std::snprintf(at, sizeof at, "%.6g", i.stiff_time);
+    std::snprintf(buf, sizeof buf, "  stiffness                found at t = %s: h|lambda| %.3g, past DOP853's stability boundary 6.1%s\n",
+                  at, i.stiff_h_lambda, i.switched ? "" : " (not switched: DOP853 was chosen explicitly)");
+    std::string lines = buf;
+    if (i.switched) {  // what ran: DOP853 to the hand-over, CVODE-BDF from there
+      const std::string head = std::string("integrator                 ") + MethodName(s.method);
+      out.replace(0, head.size(), head + " \u2192 " + MethodName(rt::Integrator::CvodeBdf) + " at t = " + at + ", stiffness detected");
+      lines = std::string("  then                     ") + MethodDescription(rt::Integrator::CvodeBdf) + "\n" + lines;
+    }
+    out.insert(out.find("  steps "), lines);
   }
   if (i.lin_iters > 0) {  // matrix-free Newton (sim/newton_krylov.h)
     std::snprintf(buf, sizeof buf, "  Krylov iterations        %ld (%ld convergence failures)\n", i.lin_iters,

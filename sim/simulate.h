@@ -140,6 +140,12 @@ inline constexpr double kMaxSensibleRtol = 0.1;
 inline constexpr double kMinSensibleRtol = 1e-14;
 std::string ToleranceWarning(double rtol);
 
+// The integrator of a run, a sensitivity run and the stepping core, set in *io: the
+// requested method, Auto resolved to the compiler's choice (rt::Summarize), a DOP853 chosen
+// so handing over to CVODE-BDF when it finds the problem stiff (docs/integrators.md "The
+// automatic choice"), and the coupling groups of the implicit methods it may run.
+void ResolveMethod(const rt::Program& program, rt::Integrator requested, IntegratorOptions* io);
+
 // For the run drivers (Simulate, SimulateSensitivities): a usage error's result, and the end
 // of a run: the integrator's counts and phase times into result->stats, and the status from
 // how the integration and the sink ended (rows before a failure stay written).

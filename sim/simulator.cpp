@@ -21,7 +21,9 @@ struct Simulator::Impl {
   Impl(std::shared_ptr<const rt::Program> p, int n_inputs)
       : program(std::move(p)), inputs(n_inputs), ws_rhs(nullptr, nullptr), ws_out(nullptr, nullptr) {}
   std::shared_ptr<const rt::Program> program;
-  IntegratorOptions iopt;                   // the solver's options (initial_step: next_step)
+  IntegratorOptions iopt;                   // the solver's options (initial_step: next_step; CVODE-BDF
+                                            // after a stiff hand-over)
+  IntegratorOptions iopt_start;             // ... as made: Reset goes back to them
   std::shared_ptr<const rt::SignalPlan> plan;  // the outputs
   double t0 = 0.0;
   std::vector<double> y0;                   // the start (after a start on an end stop)
@@ -37,22 +39,18 @@ struct Simulator::Impl {
   bool failed = false;
   StepResult failure;
   IntegratorStats done;                      // of the solvers before this one
+
+  // The solver that ends (a restart, an event): its counters into done, its last step and
+  // order kept there for Stats() until the next one steps.
+  void Retire() {
+    const IntegratorStats s = stepper->Stats();
+    detail::AddStats(&done, s);
+    done.last_step = s.last_step;
+    done.last_order = s.last_order;
+    stepper.reset();
+  }
 };
 
-namespace {
-void AddStats(IntegratorStats* to, const IntegratorStats& s) {
-  to->steps += s.steps;
-  to->rhs_evals += s.rhs_evals;
-  to->rhs_evals_jac += s.rhs_evals_jac;
-  to->jac_evals += s.jac_evals;
-  to->lin_setups += s.lin_setups;
-  to->err_test_fails += s.err_test_fails;
-  to->nonlin_iters += s.nonlin_iters;
-  to->nonlin_conv_fails += s.nonlin_conv_fails;
-  to->last_step = s.last_step;
-  to->last_order = s.last_order;
-}
-}  // namespace
 
 std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> program, const SimulatorOptions& options,
                                            std::string* error) {
@@ -68,7 +66,8 @@ std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> pr
   }
   auto impl = std::make_unique<Impl>(program, rt::NumInputs(p));
   IntegratorOptions& io = impl->iopt;
-  io.method = options.integrator == rt::Integrator::Auto ? rt::Summarize(p).integrator : options.integrator;
+  ResolveMethod(p, options.integrator, &io);
+  io.run_end = INFINITY;  // the caller's end is unknown: a stiff DOP853 hands over whenever found
   io.rtol = options.rtol;
   io.atol = options.atol;
   io.max_steps = options.max_steps;
@@ -76,7 +75,7 @@ std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> pr
   io.project_steps = options.project_steps;
   io.bridge = false;            // no bridges while stepping (sim/simulator.h)
   io.row_energy_check = false;  // no rows
-  if (io.method == rt::Integrator::IDA || io.method == rt::Integrator::CvodeBdf) io.coupling = rt::StateCouplingGroups(p);
+  impl->iopt_start = io;
 
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(p) : options.signals;
   std::string plan_error;
@@ -144,8 +143,7 @@ const std::vector<double>& Simulator::Inputs() const { return impl_->inputs.valu
 // so that their continuations are the same bit for bit.
 void Simulator::Restart(double next_step) {
   Impl& m = *impl_;
-  if (m.stepper) AddStats(&m.done, m.stepper->Stats());
-  m.stepper.reset();
+  if (m.stepper) m.Retire();
   m.rhs.reset();
   m.ode.reset();
   m.ws_rhs = rt::MakeWorkspace(*m.program);
@@ -201,11 +199,16 @@ StepResult Simulator::AdvanceTo(double t) {
   for (;;) {
     m.rhs->ClearFailure();
     const int flag = m.stepper->Advance(t, y_.data());
+    if (flag == detail::kStiffReached) {  // as in a run: CVODE-BDF from DOP853's last accepted step
+      t_ = m.stepper->event_time;
+      m.stepper = detail::HandOverStiff(*m.rhs, *m.stepper, y_.data(), t, &m.iopt, &m.done, &error);
+      if (!m.stepper) return Fail(m.rhs->failed ? m.rhs->fail_time : t_, m.rhs->failed ? m.rhs->cause : error);
+      continue;
+    }
     if (flag == detail::kEventReached) {  // the jump, then a fresh solver from the right limit
       const double te = m.stepper->event_time;
       if (m.ode->Event(te, y_.data(), m.stepper->event_index) != 0) return Fail(te, m.ode->FailureCause());
-      AddStats(&m.done, m.stepper->Stats());
-      m.stepper.reset();
+      m.Retire();
       t_ = te;
       m.next_step = 0.0;  // a fresh solver after the jump estimates its own first step
       if (te >= t) return {};
@@ -281,6 +284,7 @@ void Simulator::Reset() {
   if (m.stops) m.stops->SetResting(m.resting0);
   m.failed = false;
   m.stepper.reset();
+  m.iopt = m.iopt_start;  // DOP853 again after a hand-over
   Restart(0.0);
   m.done = IntegratorStats{};
 }
@@ -288,8 +292,9 @@ void Simulator::Reset() {
 rt::Integrator Simulator::Method() const { return impl_->iopt.method; }
 
 IntegratorStats Simulator::Stats() const {
-  IntegratorStats s = impl_->done;
-  if (impl_->stepper) AddStats(&s, impl_->stepper->Stats());
+  if (!impl_->stepper) return impl_->done;
+  IntegratorStats s = impl_->stepper->Stats();
+  detail::AddStats(&s, impl_->done);
   return s;
 }
 

@@ -10,6 +10,8 @@
 //   - CVODE (Adams, BDF), IDA: the multistep history is kept across an input change; the
 //     corrector evaluates f with the new inputs and the error test shortens the step where
 //     the jump matters.
+// Under the automatic choice a DOP853 that finds the problem stiff hands over to CVODE-BDF as
+// in a run (detail::HandOverStiff), whatever the caller's step; CVODE-BDF stays until Reset.
 // GetState / SetState: the state is (t, y, the inputs, the step size to try next, which end
 // stops the joints rest on). GetState restarts the solver at that instant from those, and
 // SetState restarts it the same way, so the continuation after either is the same bit for
@@ -90,7 +92,7 @@ class Simulator {
   // Back to the start: the initial state, inputs 0, a fresh solver.
   void Reset();
 
-  rt::Integrator Method() const;
+  rt::Integrator Method() const;  // the one running: CVODE-BDF after a stiff hand-over
   IntegratorStats Stats() const;  // summed over the solvers since the last Reset
 
  private:

@@ -171,6 +171,19 @@ std::unique_ptr<Stepper> MakeDop853Stepper(GuardedRhs& rhs, double t0, const dou
 std::unique_ptr<Stepper> MakeStepper(GuardedRhs& rhs, double t0, const double* y0, double stop,
                                      const IntegratorOptions& options, std::string* error);
 
+// The counters of a solver that ended (at a bridge, an event, a hand-over) added to *to,
+// those of the solvers before it; the per-solver fields (last step, order, linear solver)
+// are left to the caller's choice of solver.
+void AddStats(IntegratorStats* to, const IntegratorStats& s);
+
+// DOP853 found the problem stiff (its Advance returned kStiffReached; y holds its state at
+// stepper->event_time): its counters go into *done, marked switched, *options become
+// CVODE-BDF's (for every later restart) and a CVODE-BDF stepper goes on from there
+// (docs/integrators.md "The automatic choice"). Integrate and the stepping core both hand
+// over through this. Null with *error as MakeStepper.
+std::unique_ptr<Stepper> HandOverStiff(GuardedRhs& rhs, const Stepper& stiff, const double* y, double stop,
+                                       IntegratorOptions* options, IntegratorStats* done, std::string* error);
+
 // SUNDIALS error handler target: keeps the last message instead of printing it.
 struct SundialsMessages {
   std::string last;  // "<function>: <message>"

@@ -35,6 +35,24 @@ class StickSlipEvents {
   // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
   // friction passes mu_s r N slips at once: no smooth state).
   std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol);
+  // Per joint its mode (+1, -1 sliding that way, 0 stuck) and holding force, two numbers a
+  // joint: what a saved state needs (sim/hybrid_ode.h).
+  std::vector<double> Modes() const {
+    std::vector<double> m;
+    for (const Joint& j : joints_) m.insert(m.end(), {static_cast<double>(j.mode), j.tau});
+    return m;
+  }
+  void SetModes(const std::vector<double>& m) {
+    for (size_t i = 0; i < joints_.size() && 2 * i + 1 < m.size(); ++i) {
+      joints_[i].mode = static_cast<int>(m[2 * i]);
+      joints_[i].tau = m[2 * i + 1];
+    }
+  }
+  std::vector<std::string> JointNames() const {
+    std::vector<std::string> names;
+    for (const Joint& j : joints_) names.push_back(j.f.joint);
+    return names;
+  }
   // The stuck joints' free speeds and names.
   std::vector<int> StuckSpeeds() const;
   std::vector<std::string> StuckNames() const;

@@ -18,7 +18,7 @@ import os
 import threading
 import warnings as _warnings
 from collections import OrderedDict
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
@@ -351,7 +351,7 @@ class Model:
         self,
         at: Optional[float] = None,
         equilibrium: bool = False,
-        inputs: Optional[Sequence[str]] = None,
+        inputs: Optional[Union[Sequence[str], Mapping[str, Optional[float]]]] = None,
         outputs: Optional[Sequence[str]] = None,
         set: Optional[Mapping[str, Any]] = None,
         step: float = 1e-3,
@@ -359,8 +359,10 @@ class Model:
     ) -> LinearModel:
         """The linear model about an operating point, like `kanesim linearize`: the start
         values, the motion at time `at`, or (equilibrium=True) a static equilibrium found
-        from either. inputs: "JOINT.tau", "JOINT.tau[k]" or real parameters; outputs:
-        signal names. Raises ModelError for bad input (an unknown input or output, an
+        from either. inputs: "JOINT.tau", "JOINT.tau[k]" or real parameters, columns of B
+        and D; as a mapping it also gives the model's own inputs (`input Real u;`) their
+        values at the operating point, {"u": 0.5} (each is then a column too, as `kanesim
+        linearize --set u=0.5`), the other names mapped to None; outputs: signal names. Raises ModelError for bad input (an unknown input or output, an
         operating point off the constraints), SimulationError for a numerical failure
         (singular configuration, no equilibrium, or an operating point that is neither an
         equilibrium nor a steady motion in these coordinates), ValueError for a bad step or
@@ -372,10 +374,14 @@ class Model:
             inputs = [inputs]
         if isinstance(outputs, str):
             outputs = [outputs]
+        values = []  # the model's inputs' values (name, value)
+        if isinstance(inputs, Mapping):
+            values = [(str(k), float(v)) for k, v in inputs.items() if v is not None]
+            inputs = [str(k) for k, v in inputs.items() if v is None]
         at_value = _time(at, "at")
         data = _kanesim.linearize(self._compiled, at is not None, 0.0 if at is None else at_value, bool(equilibrium),
                                   [str(x) for x in inputs or []], [str(x) for x in outputs or []],
-                                  float(step))
+                                  float(step), values)
         failure = data["failure"]
         if failure is not None:
             code, message, hint, file, line, column = failure

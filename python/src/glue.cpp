@@ -19,6 +19,7 @@
 #include "batch/sweep.h"
 #include "batch/worker_pool.h"
 #include "runtime/program/program.h"
+#include "sim/sim.h"  // ConstantInputs
 #include "sim/signal_select.h"
 #include "pipeline/pipeline.h"
 #include "compiler/compiler.h"
@@ -421,24 +422,52 @@ bool Sweep(const LoadedModel& model, const SweepRequest& request, SweepTable* ou
   return true;
 }
 
+namespace {
+// The model's inputs' values from `given` (name, value) into *values (rt::InputName order):
+// status 1 for a name that is not one of them and for one left without a value (at its
+// declaration, as the CLI's E239).
+lin::Status HeldInputs(const rt::Program& p, const std::vector<std::pair<std::string, double>>& given,
+                       std::vector<double>* values) {
+  std::vector<char> set(values->size(), 0);
+  for (const auto& [name, v] : given) {
+    int k = 0;
+    while (k < rt::NumInputs(p) && rt::InputName(p, k) != name) ++k;
+    if (k == rt::NumInputs(p))
+      return {1, "'" + name + "' is not one of the model's inputs (input Real ...;)",
+              "a joint force or a parameter as a column of B: inputs=[...] or inputs={name: None}"};
+    if (!std::isfinite(v)) return {1, "input '" + name + "': " + sim::FormatShortest(v) + " is not a finite number"};
+    (*values)[size_t(k)] = v;
+    set[size_t(k)] = 1;
+  }
+  for (int k = 0; k < rt::NumInputs(p); ++k)
+    if (!set[size_t(k)])
+      return {1, "input '" + rt::InputName(p, k) + "' has no value",
+              "give its value at the operating point: inputs={'" + rt::InputName(p, k) + "': value}",
+              p.mech->inputs[size_t(k)].loc};
+  return {};
+}
+}  // namespace
+
 bool Linearize(const LoadedModel& model, const LinearizeRequest& r, LinearizeOutput* out, std::string* error) {
   if (!(r.step > 0.0) || r.step > 0.1) return Fail(error, "step must be in (0, 0.1], got " + sim::FormatShortest(r.step));
   if (r.has_at && !std::isfinite(r.at)) return Fail(error, "at must be finite, got " + sim::FormatShortest(r.at));
   const auto t0 = std::chrono::steady_clock::now();
   const rt::Program& program = *model.program;
+  sim::ConstantInputs held(rt::NumInputs(program));
+  lin::Status s = HeldInputs(program, r.input_values, &held.values);
   // The operating point as `kanesim linearize` takes it (cli/cmd_linearize.cpp).
   lin::OperatingPoint op = lin::StartPoint(program);
-  lin::Status s;
-  if (r.has_at) s = lin::PointAtTime(program, r.at, &op);
+  if (s.ok() && r.has_at) s = lin::PointAtTime(program, r.at, &op, held.values.empty() ? nullptr : &held);
   if (s.ok() && r.equilibrium) {
     out->has_equilibrium = true;
-    s = lin::FindEquilibrium(program, op, &out->equilibrium);
+    s = lin::FindEquilibrium(program, op, &out->equilibrium, held.values);
     if (s.ok()) op = out->equilibrium.point;
   }
   out->point = op;
   if (s.ok()) {
     lin::LinearizeOptions o;
     o.step = r.step;
+    o.input_values = held.values;
     o.inputs = r.inputs;
     o.outputs = r.outputs;
     s = lin::Linearize(program, op, o, &out->model);

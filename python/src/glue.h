@@ -147,6 +147,9 @@ struct LinearizeRequest {
   double at = 0.0;
   bool equilibrium = false;
   std::vector<std::string> inputs, outputs;
+  // The model's own inputs (`input Real u;`) at the operating point, by name: held there,
+  // each a column of B and D (as `kanesim linearize --set u=...`); every one needs a value.
+  std::vector<std::pair<std::string, double>> input_values;
   double step = 1e-3;
 };
 struct LinearizeOutput {

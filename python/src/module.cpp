@@ -53,6 +53,10 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
   d["nonlin_conv_fails"] = s.integrator.nonlin_conv_fails;
   d["last_step"] = s.integrator.last_step;
   d["linear_solver"] = s.integrator.linear_solver;
+  // DOP853's stiffness detection (docs/integrators.md "The automatic choice"): where it found
+  // the problem stiff (NaN: never) and whether the run went on with CVODE-BDF from there.
+  d["stiff_time"] = s.integrator.stiff_time;
+  d["switched"] = s.integrator.switched;
   d["rows"] = s.rows;
   d["integrate_seconds"] = s.times.integrate;
   d["output_seconds"] = s.times.output;
@@ -253,12 +257,14 @@ py::tuple Sweep(const LoadedModel& model, const std::vector<std::pair<std::strin
 // operating point, the equilibrium search) and, on failure, "failure": (code, message,
 // hint, file, line, column).
 py::dict Linearize(const LoadedModel& model, bool has_at, double at, bool equilibrium,
-                   const std::vector<std::string>& inputs, const std::vector<std::string>& outputs, double step) {
+                   const std::vector<std::string>& inputs, const std::vector<std::string>& outputs, double step,
+                   const std::vector<std::pair<std::string, double>>& input_values) {
   kanesim::py::LinearizeRequest r;
   r.has_at = has_at;
   r.at = at;
   r.equilibrium = equilibrium;
   r.inputs = inputs;
+  r.input_values = input_values;
   r.outputs = outputs;
   r.step = step;
   kanesim::py::LinearizeOutput out;

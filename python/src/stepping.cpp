@@ -197,6 +197,8 @@ void BindSimulator(py::module_& m) {
         d["steps"] = st.steps;
         d["rhs_evals"] = st.rhs_evals;
         d["err_test_fails"] = st.err_test_fails;
+        d["stiff_time"] = st.stiff_time;  // DOP853 found the problem stiff there (NaN: never)
+        d["switched"] = st.switched;      // ... and went on with CVODE-BDF (the automatic choice)
         d["advance_seconds"] = s.advance_seconds();
         return d;
       });

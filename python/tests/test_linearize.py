@@ -4,6 +4,7 @@ import json
 import math
 import subprocess
 import threading
+import warnings
 
 import numpy as np
 import pytest
@@ -171,3 +172,53 @@ def test_threads_give_the_same_model(examples):
     for r in results[1:]:
         np.testing.assert_array_equal(r.A, results[0].A)
         np.testing.assert_array_equal(r.eigenvalues, results[0].eigenvalues)
+
+
+DRIVEN = """
+model Driven
+  input Real tau;
+  World world(g = {0, -9.81, 0});
+  Revolute j(axis = {0, 0, 1}, q(start = -1.2));
+  Rod rod(L = 0.8, m = 1.5);
+  output Real twice = 2 * tau;
+equation
+  connect(world.frame_b, j.frame_a);
+  connect(j.frame_b, rod.frame_a);
+  j.tau = tau;
+end Driven;
+"""
+
+
+def test_model_inputs_take_their_operating_values(kanesim_exe, tmp_path):
+    # A rod held by the input torque tau0: the equilibrium cos q* = 2 tau0 / (m g L) and
+    # A, B, D there (closed form); bit for bit `kanesim linearize --set tau=2`. With tau
+    # read as 0 the rod would hang at q* = -pi/2 (another A).
+    path = tmp_path / "driven.mech"
+    path.write_text(DRIVEN)
+    model = kanesim.load(path)
+    lm = model.linearize(equilibrium=True, inputs={"tau": 2.0}, outputs=["twice"])
+    m, length, g, tau0 = 1.5, 0.8, 9.81, 2.0
+    inertia = m * length**2 / 3
+    q = -math.acos(2 * tau0 / (m * g * length))
+    assert lm.inputs == ["tau"]
+    np.testing.assert_allclose(lm.A, [[0, 1], [m * g * length / 2 * math.sin(q) / inertia, 0]], rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(lm.B, [[0], [1 / inertia]], rtol=1e-7)
+    np.testing.assert_allclose(lm.D, [[2]], rtol=1e-7)
+    _assert_same_as_cli(lm, _cli_json(kanesim_exe, tmp_path, path, "--equilibrium", "--set", "tau=2",
+                                      "--output", "twice"))
+    # At a time, the motion to it under the held input, as --at with --set.
+    with warnings.catch_warnings():  # a moving rod: the frozen instant's warning
+        warnings.simplefilter("ignore")
+        lm = model.linearize(at=0.3, inputs={"tau": 2.0, "j.tau": None}, frozen=True)
+    d = _cli_json(kanesim_exe, tmp_path, path, "--at", "0.3", "--set", "tau=2", "--input", "j.tau", "--frozen")
+    _assert_same_as_cli(lm, d)
+
+
+def test_a_model_input_without_a_value_or_an_unknown_one_is_a_model_error(tmp_path):
+    path = tmp_path / "driven.mech"
+    path.write_text(DRIVEN)
+    model = kanesim.load(path)
+    with pytest.raises(kanesim.ModelError, match="input 'tau' has no value"):
+        model.linearize(equilibrium=True)
+    with pytest.raises(kanesim.ModelError, match="'nosuch' is not one of the model's inputs"):
+        model.linearize(equilibrium=True, inputs={"tau": 1.0, "nosuch": 2.0})

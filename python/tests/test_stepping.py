@@ -130,3 +130,33 @@ def test_the_gil_is_released_while_stepping():
         stop.set()
         t.join()
     assert during > 1000
+
+
+def test_a_stiff_model_stepped_under_auto_hands_over_as_run_does(source_dir):
+    """A light link held by stiff joint friction (tests/sim/models/stiff_friction.mech): DOP853
+    finds it stiff at t ~ 0.4 and, under the automatic choice, the simulator goes on with
+    CVODE-BDF as run() does, in a small fraction of DOP853's evaluations, its steps equal to
+    run()'s rows to the tolerance's reach; reset() starts over with DOP853."""
+    model = kanesim.load(str(source_dir / "tests" / "sim" / "models" / "stiff_friction.mech"))
+    r = model.run(stop_time=1, interval=0.01, rtol=1e-8, atol=1e-8, outputs=["hinge.q"])
+    assert r.stats["switched"] and r.stats["method"] == "DOP853"
+
+    def stepped(integrator):
+        sim = model.simulator(rtol=1e-8, atol=1e-8, integrator=integrator, outputs=["hinge.q"])
+        assert sim.method == "DOP853"
+        q = []
+        for k in range(1, 101):
+            sim.advance_to(0.01 * k)
+            q.append(sim["hinge.q"])
+        return sim, np.array(q)
+
+    sim, q = stepped("auto")
+    dop, _ = stepped("dop853")
+    st = sim.stats()
+    assert st["switched"] and sim.method == "CVODE-BDF"
+    assert st["stiff_time"] == pytest.approx(r.stats["stiff_time"], abs=0.01)
+    assert not dop.stats()["switched"] and dop.stats()["stiff_time"] > 0  # explicit: noted only
+    assert st["rhs_evals"] < 0.1 * dop.stats()["rhs_evals"]
+    assert np.abs(q - r["hinge.q"][1:]).max() < 1e-5
+    sim.reset()
+    assert sim.method == "DOP853" and not sim.stats()["switched"]

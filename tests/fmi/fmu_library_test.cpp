@@ -174,4 +174,62 @@ TEST_F(FmuLibrary, AnyBytesGivenAsASerializedStateAreRefusedOrRestored) {
   Fn<void (*)(fmi2Component)>("fmi2FreeInstance")(c);
 }
 
+// A rod swinging without gravity onto its end stop q_max = 0.5 at speed 1, restitution 0.5.
+const char* const kStopped = R"(
+model S
+  World world(g = {0, 0, 0});
+  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3), u(start = 1), q_max = 0.5, restitution = 0.5);
+  Rod rod(L = 1, m = 1);
+equation
+  connect(world.frame_b, hinge.frame_a);
+  connect(hinge.frame_b, rod.frame_a);
+end S;
+)";
+
+TEST_F(FmuLibrary, ModelExchangeEventIndicatorsAndTheImpactInEventMode) {
+  // The master's part done by hand: Euler steps past the crossing of the indicator (the
+  // gap q_max - q), then event mode, where the impact reverses the speed to -e u. Hostile
+  // arguments on the way are errors; under ASan nothing reads out of bounds.
+  std::ofstream(dir_ / "resources" / "model.mech") << kStopped;
+  kanesim::fmi::FmuSettings settings;
+  settings.model = "S";
+  settings.guid = "{test}";
+  std::ofstream(dir_ / "resources" / "settings.txt") << kanesim::fmi::FormatSettings(settings);
+  fmi2Component c = Instantiate(fmi2ModelExchange);
+  ASSERT_NE(c, nullptr);
+  using Array = fmi2Status (*)(fmi2Component, fmi2Real[], size_t);
+  using SetArray = fmi2Status (*)(fmi2Component, const fmi2Real[], size_t);
+  auto indicators = Fn<Array>("fmi2GetEventIndicators");
+  auto states = Fn<Array>("fmi2GetContinuousStates");
+  auto set_states = Fn<SetArray>("fmi2SetContinuousStates");
+  auto new_states = Fn<fmi2Status (*)(fmi2Component, fmi2EventInfo*)>("fmi2NewDiscreteStates");
+  EXPECT_EQ(Fn<Simple>("fmi2EnterInitializationMode")(c), fmi2OK);
+  EXPECT_EQ(Fn<Simple>("fmi2ExitInitializationMode")(c), fmi2OK);
+  double z[2] = {0, 0}, y[2] = {0, 0};
+  EXPECT_EQ(indicators(c, nullptr, 1), fmi2Error);
+  EXPECT_EQ(indicators(c, z, 2), fmi2Error);  // one indicator
+  EXPECT_EQ(new_states(c, nullptr), fmi2Error);
+  ASSERT_EQ(indicators(c, z, 1), fmi2OK);
+  EXPECT_NEAR(z[0], 0.2, 1e-12);
+  fmi2EventInfo info{};
+  ASSERT_EQ(new_states(c, &info), fmi2OK);  // the initial event update: nothing happens
+  EXPECT_EQ(info.valuesOfContinuousStatesChanged, 0);
+  ASSERT_EQ(Fn<Simple>("fmi2EnterContinuousTimeMode")(c), fmi2OK);
+  ASSERT_EQ(states(c, y, 2), fmi2OK);
+  y[0] = 0.5 + 1e-9;  // just past the stop, still at speed 1
+  ASSERT_EQ(set_states(c, y, 2), fmi2OK);
+  ASSERT_EQ(indicators(c, z, 1), fmi2OK);
+  EXPECT_LT(z[0], 0.0);
+  EXPECT_EQ(new_states(c, &info), fmi2Error);  // only in event mode
+  ASSERT_EQ(Fn<Simple>("fmi2EnterEventMode")(c), fmi2OK);
+  ASSERT_EQ(new_states(c, &info), fmi2OK);
+  EXPECT_EQ(info.valuesOfContinuousStatesChanged, 1);
+  ASSERT_EQ(states(c, y, 2), fmi2OK);
+  EXPECT_NEAR(y[1], -0.5, 1e-12);  // u after = -e u before
+  ASSERT_EQ(new_states(c, &info), fmi2OK);  // a second update at the same instant: no second impact
+  EXPECT_EQ(info.valuesOfContinuousStatesChanged, 0);
+  EXPECT_EQ(Fn<Simple>("fmi2Terminate")(c), fmi2OK);
+  Fn<void (*)(fmi2Component)>("fmi2FreeInstance")(c);
+}
+
 }  // namespace

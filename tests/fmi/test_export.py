@@ -100,11 +100,9 @@ end Stopped;
 """
 
 
-def test_end_stops_are_refused_for_model_exchange_and_handled_in_co_simulation(export, write_model, tmp_path):
-    # Without event indicators an ME master would integrate through the stop: a wrong motion.
+def test_end_stops_are_handled_in_co_simulation(export, write_model, tmp_path):
+    # (Model Exchange: test_events.py.)
     model = write_model("stopped.mech", STOPPED)
-    r = kanesim("export", model, "--fmi", "2", "-o", str(tmp_path / "s.fmu"), check=False)
-    assert r.returncode == 1 and "end stops of 'hinge'" in r.stderr and not (tmp_path / "s.fmu").exists()
     # Co-Simulation steps with the run's event handling: the impacts as `kanesim run` has them.
     ref = run_csv(model, "--stop-time", "2", "--rtol", "1e-9")
     res = simulate_fmu(export(model, kind="cs"), stop_time=2, output_interval=0.002, relative_tolerance=1e-9,
@@ -117,12 +115,14 @@ def test_end_stops_are_refused_for_model_exchange_and_handled_in_co_simulation(e
     assert np.max(np.abs(res["hinge.q"][k[on_grid]] - ref["hinge.q"][on_grid])) < 1e-4
 
 
-def test_when_clauses_are_refused_not_integrated_through(write_model, tmp_path):
-    # A when clause is an event too: refused like an end stop.
+def test_when_clauses_are_refused_for_co_simulation_not_integrated_through(write_model, tmp_path):
+    # The stepping core does not fire when clauses yet: refused where Co-Simulation is asked
+    # for (the default --kind both), with the way out (Model Exchange: test_events.py).
     text = STOPPED.replace(", q_min = -0.5, q_max = 0.5", "").replace(
         "end Stopped;", "  when hinge.q < 0 then\n    reinit(hinge.u, 0);\n  end when;\nend Stopped;")
     r = kanesim("export", write_model("when.mech", text), "--fmi", "2", "-o", str(tmp_path / "w.fmu"), check=False)
     assert r.returncode == 1 and "when (when.mech:9) clause is an event" in r.stderr and not (tmp_path / "w.fmu").exists()
+    assert "--kind me" in r.stderr
 
 
 def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
@@ -134,9 +134,10 @@ def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
 
 # Units of every kind of variable, from the model's unit check: a spherical joint's quaternion
 # ("1") and rates, a prismatic joint, parameters in N.m/rad and mm (a factor), an output
-# whose unit is inferred (m).
+# whose unit is inferred (m), an input's unit attribute (N).
 UNITS = """
 model Units
+  input Real push(unit = "N");
   parameter Real k(unit = "N/m") = 2;
   parameter Real c(unit = "N.m/rad") = 0.5;
   parameter Real gap(unit = "mm") = 5;
@@ -153,7 +154,7 @@ equation
   connect(ball.frame_b, hub.frame_a);
   connect(world.frame_b, slide.frame_a);
   connect(slide.frame_b, b.frame_a);
-  slide.tau = -k * slide.q;
+  slide.tau = -k * slide.q + push;
 end Units;
 """
 
@@ -167,10 +168,18 @@ def test_units_and_their_definitions_come_from_the_unit_check(export, write_mode
     assert unit["ball.q[1]"] == "1" and unit["der(ball.q[1])"] == "1/s"
     assert unit["ball.u[2]"] == "rad/s" and unit["der(ball.u[2])"] == "rad/s2"
     assert unit["slide.q"] == "m" and unit["der(slide.u)"] == "m/s2"
-    assert unit["c"] == "N.m/rad" and unit["gap"] == "mm" and unit["height"] == "m"
+    assert unit["c"] == "N.m/rad" and unit["gap"] == "mm" and unit["height"] == "m" and unit["push"] == "N"
     base = {u.name: u.baseUnit for u in md.unitDefinitions}
     exps = lambda b: {a: int(getattr(b, a)) for a in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
                       if getattr(b, a) not in (None, 0, "0")}
     assert exps(base["N.m/rad"]) == {"kg": 1, "m": 2, "s": -2, "rad": -1}
     assert exps(base["mm"]) == {"m": 1} and float(base["mm"].factor) == pytest.approx(1e-3)
     assert exps(base["rad/s2"]) == {"rad": 1, "s": -2} and exps(base["1"]) == {}
+    assert exps(base["N"]) == {"kg": 1, "m": 1, "s": -2}
+
+
+def test_an_input_in_the_wrong_unit_is_refused_by_the_unit_check(write_model, tmp_path):
+    # The unit check reads an input's declared unit as any variable's: N.m added to a force.
+    path = write_model("units.mech", UNITS.replace('push(unit = "N")', 'push(unit = "N.m")'))
+    r = kanesim("export", path, "--fmi", "2", "-o", str(tmp_path / "u.fmu"), check=False)
+    assert r.returncode == 1 and "units.mech:" in r.stderr and "N.m" in r.stderr, r.stderr

@@ -4,9 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iterator>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "lang_test_util.h"
 
@@ -143,6 +146,40 @@ TEST(Lexer, IntegersAreToldApartFromReals) {
     EXPECT_EQ(r->tokens[0].is_integer, c.integer) << c.text;
     EXPECT_EQ(r->tokens[0].text, c.text);
     EXPECT_FALSE(r->diags.HasErrors()) << c.text;
+  }
+}
+
+// Every number literal's value is the double strtod gives, bit for bit: the lexer's fast
+// path for short decimals (digits divided or multiplied by an exact power of ten) must round
+// as strtod does. Literals at its edges (15 and 16 significant digits, powers of ten of 22
+// and 23, leading and trailing zeros) and random ones of up to 20 digits and exponents.
+TEST(Lexer, NumberValuesAreStrtodsBitForBit) {
+  std::vector<std::string> lits{"0.1", "0.3", "1.7976931348623157e308", "2.2250738585072014e-308", "9007199254740993",
+                                "123456789012345", "1234567890123456", "0.000000000000000000001",
+                                "0.0000000000000000000001", "1e22", "1e23", "1e-22", "1e-23", "4.35e-22",
+                                "999999999999999e22", "999999999999999e-22", "0000000000000000001.5", "1.500000000000000000",
+                                "3.", ".5", "1.e2", "0e5", "0.0", "7e+0", "12.5E-3"};
+  std::mt19937 rng(40);
+  std::uniform_int_distribution<int> digit(0, 9), count(1, 20), exp(-30, 30), choice(0, 3);
+  for (int k = 0; k < 20000; ++k) {
+    std::string s;
+    const int n = count(rng), point = choice(rng) == 0 ? -1 : std::uniform_int_distribution<int>(0, n)(rng);
+    for (int i = 0; i < n; ++i) {
+      if (i == point) s += '.';
+      s += static_cast<char>('0' + digit(rng));
+    }
+    if (point == n) s += ".0";
+    if (choice(rng) != 0) s += "e" + std::to_string(exp(rng));
+    lits.push_back(s);
+  }
+  std::string text;
+  for (const std::string& l : lits) text += l + " ";
+  auto r = LexText(text);
+  ASSERT_FALSE(r->diags.HasErrors());
+  ASSERT_EQ(r->tokens.size(), lits.size() + 1);
+  for (size_t i = 0; i < lits.size(); ++i) {
+    const double want = std::strtod(lits[i].c_str(), nullptr), got = r->tokens[i].number;
+    EXPECT_EQ(std::memcmp(&want, &got, sizeof want), 0) << lits[i] << ": " << got << " != " << want;
   }
 }
 

@@ -1,0 +1,119 @@
+// The equations with their events for an outside integrator (sim/hybrid_ode.h): the run's
+// EngineOde with the event sources Simulate gives it, and its start.
+#include "sim/hybrid_ode.h"
+
+#include "runtime/program/program.h"  // Program::whens
+#include "sim/engine_ode.h"
+#include "sim/input_table.h"
+
+namespace kanesim::sim {
+
+using WorkspacePtr = std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)>;
+
+struct HybridOde::Impl {
+  Impl(std::shared_ptr<const rt::Program> p, double rtol, double atol)
+      : program(std::move(p)),
+        inputs(rt::NumInputs(*program)),
+        ws(rt::MakeWorkspace(*program)),
+        stops(*program, rtol, atol),
+        lift(*program),
+        stick(*program),
+        whens(std::make_unique<WhenEvents>(*program)),
+        ode(*program, *ws, /*row_energy=*/false) {
+    rt::SetInputSource(*ws, &inputs);
+    ode.SetInputs(&inputs);
+    if (stops.Active()) ode.SetStops(&stops);
+    if (lift.Active()) ode.SetLiftOff(&lift);
+    if (stick.Active()) ode.SetStickSlip(&stick);
+    if (whens->Active()) ode.SetWhens(whens.get());
+    g.resize(static_cast<size_t>(ode.NumEvents()));
+  }
+  std::shared_ptr<const rt::Program> program;
+  ConstantInputs inputs;  // what every workspace reads
+  WorkspacePtr ws;        // the right-hand side's and the events'
+  EndStopEvents stops;    // end stops and plane contacts
+  LiftOffGuard lift;      // rolling contacts' normal forces
+  StickSlipEvents stick;  // exact stick-slip friction
+  std::unique_ptr<WhenEvents> whens;  // remade by SetModes (a terminate is final in it)
+  detail::EngineOde ode;
+  std::vector<double> g;  // every event function, the graze guards too (scratch)
+};
+
+HybridOde::HybridOde(std::shared_ptr<const rt::Program> program, double rtol, double atol)
+    : impl_(std::make_unique<Impl>(std::move(program), rtol, atol)) {}
+HybridOde::~HybridOde() = default;
+
+// The graze guards (EngineOde::Paired) stay inside: they serve a solver that can look back
+// on its last step, which a master's integrator does not offer.
+int HybridOde::NumIndicators() const { return impl_->ode.NumStops() + impl_->whens->Count(); }
+
+std::vector<std::string> HybridOde::IndicatorNames() const {
+  const Impl& m = *impl_;
+  std::vector<std::string> names;
+  if (m.stick.Active()) {
+    for (const std::string& j : m.stick.JointNames()) names.push_back("exact friction of joint '" + j + "'");
+  } else if (m.stops.Active()) {
+    for (int i = 0; i < m.stops.Count(); ++i) names.push_back(m.stops.Describe(i));
+  } else if (m.lift.Active()) {
+    for (const std::string& c : m.lift.Names()) names.push_back("normal force of contact '" + c + "'");
+  }
+  for (const rt::WhenModel& w : m.program->whens)
+    for (size_t k = 0; k < w.indicators.size(); ++k) names.push_back("condition of " + w.name);
+  return names;
+}
+
+void HybridOde::SetInputs(const std::vector<double>& values) {
+  for (size_t i = 0; i < values.size() && i < impl_->inputs.values.size(); ++i) impl_->inputs.values[i] = values[i];
+}
+
+std::string HybridOde::Start(double t0, double* y0) {
+  Impl& m = *impl_;
+  if (m.stops.Active()) {
+    if (std::string why = m.stops.CheckStart(*m.ws, t0, y0); !why.empty()) return why;
+    if (m.stops.Start(*m.ws, t0, y0) != 0) return "contacts at the start: " + rt::ErrorMessage(*m.ws);
+  }
+  if (m.lift.Active())
+    if (std::string why = m.lift.Cause(t0, y0, -1); !why.empty()) return why;
+  if (m.stick.Active() && m.stick.Start(*m.ws, t0, y0) != 0) return "friction at the start: " + rt::ErrorMessage(*m.ws);
+  return "";
+}
+
+int HybridOde::Derivatives(double t, const double* y, double* ydot) { return impl_->ode.Rhs(t, y, ydot); }
+
+int HybridOde::Indicators(double t, const double* y, double* z) {
+  Impl& m = *impl_;
+  if (m.g.empty()) return 0;
+  const int s = m.ode.EventFunctions(t, y, m.g.data());
+  if (s != 0) return s;
+  std::copy(m.g.begin(), m.g.begin() + NumIndicators(), z);
+  return 0;
+}
+
+int HybridOde::Event(double t, double* y, int i) {
+  if (i < 0 || i >= NumIndicators()) return 0;
+  return impl_->ode.Event(t, y, i);
+}
+
+bool HybridOde::Terminated(std::string* why) const { return impl_->ode.Terminated(why); }
+
+std::string HybridOde::FailureCause() const { return impl_->ode.FailureCause(); }
+
+std::vector<double> HybridOde::Modes() const {
+  std::vector<double> modes = impl_->stops.Resting();
+  const std::vector<double> stick = impl_->stick.Modes();
+  modes.insert(modes.end(), stick.begin(), stick.end());
+  return modes;
+}
+
+bool HybridOde::SetModes(const std::vector<double>& modes) {
+  Impl& m = *impl_;
+  const size_t n_stops = m.stops.Resting().size();
+  if (modes.size() != n_stops + m.stick.Modes().size()) return false;
+  m.stops.SetResting(std::vector<double>(modes.begin(), modes.begin() + static_cast<long>(n_stops)));
+  m.stick.SetModes(std::vector<double>(modes.begin() + static_cast<long>(n_stops), modes.end()));
+  m.whens = std::make_unique<WhenEvents>(*m.program);  // no terminate fired in the restored state
+  if (m.whens->Active()) m.ode.SetWhens(m.whens.get());
+  return true;
+}
+
+}  // namespace kanesim::sim

@@ -1,0 +1,250 @@
+"""Model Exchange with events: the FMU's event indicators are the run's event functions
+(end stops, plane contacts, when clauses, exact friction), and its event mode applies the
+run's handling, so FMPy's own CVODE, which locates the indicators' crossings, reproduces
+`kanesim run`: the same event times and states, and both equal the closed forms."""
+import csv
+import io
+import math
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+from conftest import kanesim
+
+G = 9.81
+
+BALL = """
+model BouncingBall "A ball dropped from 1 m onto a floor, restitution 0.6"
+  World world(g = {0, -9.81, 0});
+  Prismatic lift(axis = {0, 1, 0}, q(start = 1));
+  Body ball(m = 1);
+  PlaneContact floor(n = {0, 1, 0}, d = 0, restitution = 0.6);
+equation
+  connect(world.frame_b, lift.frame_a);
+  connect(lift.frame_b, ball.frame_a);
+  connect(lift.frame_b, floor.frame_a);
+  annotation(experiment(StopTime = 2.5, Interval = 0.01, Tolerance = 1e-10));
+end BouncingBall;
+"""
+
+WHEN_BALL = """
+model WhenBall "A ball bouncing by a when clause with restitution e, stopped after 2 s"
+  parameter Real e = 0.8;
+  World world(g = {0, -9.81, 0});
+  Prismatic p(axis = {0, 1, 0}, q(start = 1));
+  Body b(m = 1, I = diagonal({1, 1, 1}));
+equation
+  connect(world.frame_b, p.frame_a);
+  connect(p.frame_b, b.frame_a);
+  when p.q < 0 then
+    reinit(p.u, -e * pre(p.u));
+  end when;
+  when time > 2 then
+    terminate("two seconds");
+  end when;
+  annotation(experiment(StopTime = 3, Interval = 0.01, Tolerance = 1e-10));
+end WhenBall;
+"""
+
+STOPPED = """
+model Stopped "A pendulum bouncing on its end stop until it rests there"
+  World world;
+  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3), q_min = -0.5, q_max = 0.5, restitution = 0.5);
+  Rod rod(L = 1, m = 1);
+equation
+  connect(world.frame_b, hinge.frame_a);
+  connect(hinge.frame_b, rod.frame_a);
+  annotation(experiment(StopTime = 2, Interval = 0.01, Tolerance = 1e-10));
+end Stopped;
+"""
+
+
+def run(path, *args):
+    """`kanesim run` rows and its events CSV (time, element, kind)."""
+    ev = path + ".events.csv"
+    out = kanesim("run", path, "--events", ev, *args).stdout
+    rows = np.genfromtxt(io.StringIO(out), delimiter=",", names=True, deletechars="")
+    with open(ev) as f:
+        events = [r for r in csv.DictReader(f)]
+    return rows, events
+
+
+def me(fmu, stop, names, rtol=1e-10):
+    """FMPy's Model Exchange simulation (its CVODE, root finding on the event indicators), a
+    row at each side of every event."""
+    return simulate_fmu(fmu, fmi_type="ModelExchange", stop_time=stop, output_interval=0.01, relative_tolerance=rtol,
+                        record_events=True, output=names)
+
+
+def on_grid(r, name, interval=0.01):
+    """{k: value} at the rows at t = k interval that are no event's (one row at that time)."""
+    t = r["time"]
+    out = {}
+    for k in range(len(t)):
+        single = (k == 0 or t[k] != t[k - 1]) and (k + 1 == len(t) or t[k + 1] != t[k])
+        if single and abs(t[k] / interval - round(t[k] / interval)) < 1e-9:
+            out[round(t[k] / interval)] = r[name][k]
+    return out
+
+
+def jumps(r, speed):
+    """The times where the FMU's speed jumped (an event's left and right rows)."""
+    t, u = r["time"], r[speed]
+    return np.array([t[k] for k in range(1, len(t)) if t[k] == t[k - 1] and u[k] != u[k - 1]])
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_bouncing_ball_through_fmpy_model_exchange_equals_run_and_the_closed_form(export, write_model, fmi):
+    # Without event indicators FMPy's integrator would let the ball fall through the floor;
+    # with indicators but without the run's handling the impacts or the rest would differ.
+    path = write_model("ball.mech", BALL)
+    fmu = export(path, fmi=fmi, kind="me")
+    assert validate_fmu(fmu) == []
+    md = read_model_description(fmu)
+    assert md.numberOfEventIndicators == 1
+    ref, events = run(path)
+    r = me(fmu, 2.5, ["lift.q", "lift.u"])
+    assert np.min(r["lift.q"]) > -1e-7  # never through the floor
+    # The impacts: t_1 = sqrt(2 h / g), then flights 2 e^k t_1 (closed form), as the run has them.
+    impacts = [float(e["time"]) for e in events if e["kind"].startswith("impact")]
+    got = jumps(r, "lift.u")
+    assert len(got) == len(impacts) >= 8
+    t1 = math.sqrt(2 / G)
+    closed = t1 + np.concatenate([[0], np.cumsum([2 * 0.6 ** k * t1 for k in range(1, len(got))])])
+    # Each flight's error carries into the next rebound speed and grows by 1 / e per bounce
+    # (measured: 4e-11 at the first impact, 1.1e-6 at the 17th, just before they accumulate).
+    assert np.max(np.abs(got[:8] - impacts[:8])) < 1e-8 and np.max(np.abs(got - impacts)) < 1e-5
+    assert np.max(np.abs(got[:8] - closed[:8])) < 1e-8
+    # At rest from the accumulation point t_1 (1 + e) / (1 - e) on: held on the floor.
+    rest = t1 * 1.6 / 0.4
+    after = r["time"] > rest + 0.01
+    assert np.max(np.abs(r["lift.q"][after])) < 1e-7 and np.max(np.abs(r["lift.u"][after])) < 1e-7
+    # The rows on the output grid equal the run's.
+    fmu_q, run_q = on_grid(r, "lift.q"), on_grid(ref, "lift.q")
+    common = sorted(set(fmu_q) & set(run_q))
+    assert len(common) > 200 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_pendulum_on_end_stops_through_fmpy_model_exchange_equals_run(export, write_model, fmi):
+    path = write_model("stopped.mech", STOPPED)
+    fmu = export(path, fmi=fmi, kind="me")
+    assert validate_fmu(fmu) == []
+    assert read_model_description(fmu).numberOfEventIndicators == 2  # q_min, q_max
+    ref, events = run(path)
+    r = me(fmu, 2, ["hinge.q", "hinge.u"])
+    assert np.min(r["hinge.q"]) > -0.5 - 1e-7 and np.max(r["hinge.q"]) < 0.5 + 1e-7
+    impacts = [float(e["time"]) for e in events if e["kind"].startswith("impact")]
+    got = jumps(r, "hinge.u")
+    # (The error grows by 1 / e per bounce, as the ball's: 1.3e-10 at the first, 9e-7 at the 13th.)
+    assert len(got) == len(impacts) >= 10
+    assert np.max(np.abs(got[:6] - impacts[:6])) < 1e-8 and np.max(np.abs(got - impacts)) < 1e-5
+    # Then at rest on q_min, held there by its reaction (gravity pulls it on), as in the run.
+    after = r["time"] > impacts[-1] + 0.01
+    assert np.max(np.abs(r["hinge.q"][after] + 0.5)) < 1e-7 and np.max(np.abs(r["hinge.u"][after])) < 1e-7
+    fmu_q, run_q = on_grid(r, "hinge.q"), on_grid(ref, "hinge.q")
+    common = sorted(set(fmu_q) & set(run_q))
+    assert len(common) > 150 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_when_clauses_reinit_and_terminate_through_fmpy_model_exchange(export, write_model, fmi):
+    # reinit(p.u, -e pre(p.u)) at p.q = 0, terminate at t = 2: the run's events, the closed
+    # form's impact times t_1 (1 + 2 e + ... + 2 e^(k-1)), and the simulation ends at 2.
+    path = write_model("when.mech", WHEN_BALL)
+    fmu = export(path, fmi=fmi, kind="me")
+    assert validate_fmu(fmu) == []
+    ref, events = run(path)
+    r = me(fmu, 3, ["p.q", "p.u"])
+    assert r["time"][-1] == pytest.approx(2.0, abs=1e-9) and ref["time"][-1] == pytest.approx(2.0, abs=1e-9)
+    got = jumps(r, "p.u")
+    fires = [float(e["time"]) for e in events if e["kind"] == "fires"]
+    t1 = math.sqrt(2 / G)
+    closed = t1 + np.concatenate([[0], np.cumsum([2 * 0.8 ** k * t1 for k in range(1, len(got))])])
+    assert len(got) == len(fires) >= 3
+    assert np.max(np.abs(got - fires)) < 1e-7 and np.max(np.abs(got - closed)) < 1e-7
+    assert r["p.u"][-1] == pytest.approx(ref["p.u"][-1], abs=1e-6)
+
+
+
+SLIDER = """
+model Slider "A block on a spring, exact Coulomb friction: slides back, then sticks"
+  World world(g = {0, -9.81, 0});
+  Prismatic slide(axis = {1, 0, 0}, q(start = 1), mu = 0.3, mu_s = 0.5, friction_exact = true);
+  Body box(m = 1);
+equation
+  connect(world.frame_b, slide.frame_a);
+  connect(slide.frame_b, box.frame_a);
+  slide.tau = -10 * slide.q;
+  annotation(experiment(StopTime = 1.5, Interval = 0.01, Tolerance = 1e-10));
+end Slider;
+"""
+
+
+def test_exact_friction_slides_then_sticks_through_fmpy_model_exchange(export, write_model):
+    # Sliding back from x0 = 1: x = c + (x0 - c) cos(w t), c = mu m g / k, w = sqrt(k / m),
+    # until the speed reaches zero at pi / w, x = 2 c - x0, where the spring's pull k |x|
+    # (4.11 N) is within mu_s m g (4.91 N): stuck there for good. The FMU's derivatives must
+    # follow the mode (sliding, then held); the regularized law would creep on.
+    path = write_model("slider.mech", SLIDER)
+    fmu = export(path, fmi=2, kind="me")
+    assert validate_fmu(fmu) == []
+    ref, events = run(path)
+    r = me(fmu, 1.5, ["slide.q", "slide.u"])
+    c, w = 0.3 * G / 10, math.sqrt(10.0)
+    t_stick = math.pi / w
+    assert [e["kind"].split(" ")[0] for e in events] == ["slips,", "sticks"]
+    assert float(events[1]["time"]) == pytest.approx(t_stick, abs=1e-8)
+    t, x = r["time"], r["slide.q"]
+    sliding = t < t_stick - 1e-6
+    assert np.max(np.abs(x[sliding] - (c + (1 - c) * np.cos(w * t[sliding])))) < 1e-7
+    stuck = t > t_stick + 1e-6
+    assert np.max(np.abs(x[stuck] - (2 * c - 1))) < 1e-7 and np.max(np.abs(r["slide.u"][stuck])) < 1e-9
+
+
+LIFT = """
+model Lift "A sphere rolling on a plane, pulled up by a force growing with time"
+  World world(g = {0, -9.81, 0});
+  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));
+  Sphere ball(radius = 0.1, m = 1);
+  RollingSphere contact(radius = 0.1, n = {0, 1, 0});
+  WorldForce pull(force = {0, 2 * time, 0});
+equation
+  connect(world.frame_b, free.frame_a);
+  connect(free.frame_b, ball.frame_a);
+  connect(free.frame_b, contact.frame_a);
+  connect(free.frame_b, pull.frame_b);
+  annotation(experiment(StopTime = 6, Interval = 0.1, Tolerance = 1e-9));
+end Lift;
+"""
+
+
+def test_a_rolling_contact_that_would_pull_is_an_error_where_the_run_stops(export, write_model):
+    # The normal force m g - 2 t crosses zero at t = g / 2: `kanesim run` stops there (exit 2);
+    # the FMU's event update returns fmi2Error with the same cause and time, not a motion
+    # held to the plane by a pull.
+    fmu = export(write_model("lift.mech", LIFT), fmi=2, kind="me")
+    messages = []
+    with pytest.raises(Exception, match="fmi2NewDiscreteStates failed"):
+        simulate_fmu(fmu, fmi_type="ModelExchange", stop_time=6, relative_tolerance=1e-9,
+                     logger=lambda c, name, status, category, message: messages.append(message.decode()))
+    assert len(messages) == 1 and "its normal force turns tensile" in messages[0]
+    assert float(messages[0].split("at t = ")[1].split(":")[0]) == pytest.approx(G / 2, abs=1e-7)
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_bouncing_ball_in_co_simulation_equals_run(export, write_model, fmi):
+    # Co-Simulation's stepping core handles plane contacts as a run does: the impacts inside
+    # doStep, the accumulation, the rest; the rows at the communication points are the run's.
+    path = write_model("ball.mech", BALL)
+    ref, _ = run(path)
+    r = simulate_fmu(export(path, fmi=fmi, kind="cs"), fmi_type="CoSimulation", stop_time=2.5, output_interval=0.01,
+                     relative_tolerance=1e-10, output=["lift.q", "lift.u"])
+    assert np.min(r["lift.q"]) > -1e-7
+    fmu_q, run_q = on_grid(r, "lift.q"), on_grid(ref, "lift.q")
+    common = sorted(set(fmu_q) & set(run_q))
+    assert len(common) > 200 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+    after = r["time"] > 1.9  # at rest from the accumulation point 1.806 on
+    assert np.max(np.abs(r["lift.q"][after])) < 1e-7 and np.max(np.abs(r["lift.u"][after])) < 1e-7
