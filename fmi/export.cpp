@@ -76,16 +76,13 @@ class Zip {
 };
 
 // Why the stepping core cannot run the program ("" when it can): its events that are not
-// end stops.
+// end stops or plane contacts (sim/simulator.h).
 std::string CoSimulationRefusal(const rt::Program& program) {
   if (!program.whens.empty()) return "the " + program.whens.front().name + " clause is an event";
   std::string exact;
   for (const rt::FrictionJoint& f : rt::FrictionJoints(program))
     if (f.exact) exact += (exact.empty() ? "'" : ", '") + f.joint + "'";
   if (!exact.empty()) return "the exact stick-slip friction of " + exact + " is events";
-  std::string planes;
-  for (const rt::PlaneContact& c : rt::PlaneContacts(program)) planes += (planes.empty() ? "'" : ", '") + c.name + "'";
-  if (!planes.empty()) return "the plane contacts " + planes + " are events";
   return "";
 }
 
@@ -113,7 +110,7 @@ std::string FmuBinariesDir(std::string* error) {
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options) {
   if (options.version != 2 && options.version != 3) return "FMI " + std::to_string(options.version) + " does not exist";
   // Model Exchange exposes every event source as event indicators (sim::HybridOde);
-  // Co-Simulation's stepping core (sim::Simulator) handles end stops only so far.
+  // Co-Simulation's stepping core (sim::Simulator) handles end stops and plane contacts only so far.
   if (options.co_simulation) {
     const std::string why = CoSimulationRefusal(*model.program);
     if (!why.empty())

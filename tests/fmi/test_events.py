@@ -232,3 +232,19 @@ def test_a_rolling_contact_that_would_pull_is_an_error_where_the_run_stops(expor
                      logger=lambda c, name, status, category, message: messages.append(message.decode()))
     assert len(messages) == 1 and "its normal force turns tensile" in messages[0]
     assert float(messages[0].split("at t = ")[1].split(":")[0]) == pytest.approx(G / 2, abs=1e-7)
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_bouncing_ball_in_co_simulation_equals_run(export, write_model, fmi):
+    # Co-Simulation's stepping core handles plane contacts as a run does: the impacts inside
+    # doStep, the accumulation, the rest; the rows at the communication points are the run's.
+    path = write_model("ball.mech", BALL)
+    ref, _ = run(path)
+    r = simulate_fmu(export(path, fmi=fmi, kind="cs"), fmi_type="CoSimulation", stop_time=2.5, output_interval=0.01,
+                     relative_tolerance=1e-10, output=["lift.q", "lift.u"])
+    assert np.min(r["lift.q"]) > -1e-7
+    fmu_q, run_q = on_grid(r, "lift.q"), on_grid(ref, "lift.q")
+    common = sorted(set(fmu_q) & set(run_q))
+    assert len(common) > 200 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+    after = r["time"] > 1.9  # at rest from the accumulation point 1.806 on
+    assert np.max(np.abs(r["lift.q"][after])) < 1e-7 and np.max(np.abs(r["lift.u"][after])) < 1e-7
