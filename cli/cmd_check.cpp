@@ -56,9 +56,7 @@ int RunCheck(const CheckArgs& args) {
   }
   pipeline::RunSpec spec;
   pipeline::SolverFromName(args.solver, &spec.solver);
-  LoadOptions load = args.load;
-  load.one_shot = true;  // one model per process
-  std::unique_ptr<pipeline::Model> model = LoadAndCompile(load, spec, args.emit != "flat");
+  std::unique_ptr<pipeline::Model> model = LoadAndCompile(args.load, spec, args.emit != "flat");
   if (!model) return kExitModelError;
   const flat::Mechanism& mech = *model->mech;
   if (args.emit == "flat") {

@@ -100,9 +100,7 @@ pipeline::RunSpec SpecFor(const RunArgs& a) {
 int RunCommand(const RunArgs& a) {
   // Stages 1-3: parse, elaborate, compile.
   const pipeline::RunSpec spec = SpecFor(a);
-  LoadOptions load = a.load;
-  load.one_shot = true;  // one model per process
-  std::unique_ptr<pipeline::Model> model = LoadAndCompile(load, spec);
+  std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
   if (!model) return kExitModelError;
   const rt::Program& program = *model->program;
   if (spec.solver != rt::SolverPath::Auto && rt::Summarize(program).solver != spec.solver)

@@ -34,7 +34,6 @@ struct LoadOptions {
   bool stops = true;                                     // a URDF file: --limits stops|ignore
   std::vector<std::string> package_paths;                // a URDF file: --package-path
   std::vector<std::string> input_files;                  // --input-file: tables of the model's inputs
-  bool one_shot = false;  // the command loads this one model and ends (check, run): pipeline::LoadOptions::one_shot
 };
 
 // The most threads -j may ask for.

@@ -40,7 +40,6 @@ std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, cons
   lo.model = options.model;
   lo.sets = options.sets;
   lo.compile = compile;
-  lo.one_shot = options.one_shot;
   lo.urdf.floating = options.floating;
   lo.urdf.stops = options.stops;
   lo.urdf.package_paths = options.package_paths;

@@ -345,40 +345,49 @@ Value Evaluator::SubscriptValue(const Value& v, const ast::RefPart& part, const 
                  "'" + var->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
     return Value::Invalid();
   }
-  std::vector<std::vector<int>> idx;
-  std::vector<bool> keep;
-  for (size_t d = 0; d < v.shape.size(); ++d) {
-    std::vector<int> list;
-    bool kp = true;
-    if (d < part.subscripts.size() && part.subscripts[d]->kind != ast::ExprKind::Colon) {
-      if (!SubscriptIndices(*part.subscripts[d], v.shape[d], var, ctx, &list, &kp)) return Value::Invalid();
-    } else {
-      for (int k = 0; k < v.shape[d]; ++k) list.push_back(k);
-    }
-    idx.push_back(list);
-    keep.push_back(kp);
-  }
+  // Each dimension's 0-based indices, one list after another in `all` (dimension d's from
+  // first[d] to first[d + 1]): no heap allocation for the usual x[i] and R[i, j].
+  const size_t dims = v.shape.size();
+  SubscriptList all;
+  SmallVec<std::uint32_t, 4> first;
   Value r;
   r.type = v.type;
-  for (size_t d = 0; d < idx.size(); ++d)
-    if (keep[d]) r.shape.push_back(static_cast<int>(idx[d].size()));
-  // Iterate over the cartesian product.
-  std::vector<size_t> strides(v.shape.size(), 1);
-  for (size_t d = v.shape.size(); d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
-  std::function<void(size_t, size_t)> rec = [&](size_t d, size_t off) {
-    if (d == idx.size()) {
-      r.elements.push_back(v.elements[off]);
-      if (v.type == VType::String) r.strings.push_back(v.strings[off]);
-      return;
+  for (size_t d = 0; d < dims; ++d) {
+    first.push_back(static_cast<std::uint32_t>(all.size()));
+    bool kp = true;
+    if (d < part.subscripts.size() && part.subscripts[d]->kind != ast::ExprKind::Colon) {
+      if (!SubscriptIndices(*part.subscripts[d], v.shape[d], var, ctx, &all, &kp)) return Value::Invalid();
+    } else {
+      for (int k = 0; k < v.shape[d]; ++k) all.push_back(k);
     }
-    for (int k : idx[d]) rec(d + 1, off + static_cast<size_t>(k) * strides[d]);
-  };
-  rec(0, 0);
+    if (kp) r.shape.push_back(static_cast<int>(all.size() - first[d]));
+  }
+  first.push_back(static_cast<std::uint32_t>(all.size()));
+  for (size_t d = 0; d < dims; ++d)
+    if (first[d] == first[d + 1]) return r;  // nothing selected
+  SmallVec<size_t, 4> strides;
+  strides.assign(dims, 1);
+  for (size_t d = dims; d-- > 1;) strides[d - 1] = strides[d] * static_cast<size_t>(v.shape[d]);
+  // The cartesian product of the lists, the last dimension fastest (row-major).
+  SmallVec<std::uint32_t, 4> at;
+  at.assign(dims, 0);
+  while (true) {
+    size_t off = 0;
+    for (size_t d = 0; d < dims; ++d) off += static_cast<size_t>(all[first[d] + at[d]]) * strides[d];
+    r.elements.push_back(v.elements[off]);
+    if (v.type == VType::String) r.strings.push_back(v.strings[off]);
+    size_t d = dims;
+    for (; d > 0; --d) {
+      if (++at[d - 1] < first[d] - first[d - 1]) break;
+      at[d - 1] = 0;
+    }
+    if (d == 0) break;
+  }
   return r;
 }
 
-bool Evaluator::SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx,
-                                 std::vector<int>* list, bool* keep) {
+bool Evaluator::SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx, SubscriptList* list,
+                                 bool* keep) {
   if (s.kind == ast::ExprKind::End) {
     list->push_back(size - 1);
     *keep = false;

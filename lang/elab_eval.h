@@ -81,8 +81,10 @@ class Evaluator {
   Node* ArrayElement(Node* array, const ast::RefPart& part, const Ctx& ctx);
   Value VarReference(const ast::Expr& e, size_t pi, Node* var, const Ctx& ctx);
   Value SubscriptValue(const Value& v, const ast::RefPart& part, const Node* var, const Ctx& ctx);
-  // One subscript of dimension `size`: its 0-based indices; *keep when it keeps the dimension.
-  bool SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx, std::vector<int>* list,
+  // One subscript of dimension `size`: its 0-based indices appended to *list; *keep when it
+  // keeps the dimension.
+  using SubscriptList = SmallVec<int, 16>;
+  bool SubscriptIndices(const ast::Expr& s, int size, const Node* var, const Ctx& ctx, SubscriptList* list,
                         bool* keep);
   Value EvalArray(const ast::Expr& e, const Ctx& ctx);
   Value EvalComprehension(const ast::Expr& e, const Ctx& ctx);

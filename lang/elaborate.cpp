@@ -2,9 +2,7 @@
 #include "lang/elaborate.h"
 
 #include <memory>
-#include <mutex>
 #include <optional>
-#include <vector>
 
 #include "lang/elab_connect.h"
 #include "lang/elab_emit.h"
@@ -97,71 +95,49 @@ flat::SourceLoc SourcePlaces::Loc(Span s) const {
 
 }  // namespace elab
 
-namespace {
-
-// What elaboration builds for itself and drops at its end: the class registry, the
-// instance tree, the phases' tables and caches (kept to the end: freeing them between the
-// phases fragments the heap, and repeated loads in one process then peak higher;
-// docs/benchmarks/2026-11-28_elaborator_phases.md).
-struct Scratch {
-  Scratch(const Program& program, flat::Mechanism* out, Diagnostics& diags)
-      : lookup(program, diags), places(program.sources), eval(out, places, diags), sets(diags) {}
-  elab::ClassLookup lookup;
-  elab::SourcePlaces places;
-  elab::Evaluator eval;
-  elab::InstanceTree tree;
-  elab::SetOverrides sets;
-  std::optional<elab::Instantiator> instantiator;
-  std::optional<elab::Links> links;
-  std::optional<elab::Connections> connections;
-  std::optional<elab::UnitCheck> units;
-};
-
-// A one-shot process ends soon after its one elaboration: the scratch, freed node by node
-// otherwise (a fourteenth of a robot's load), stays reachable from a static so that leak
-// checkers do not count it.
-void LeaveToExit(std::unique_ptr<Scratch> s) {
-  static std::mutex mutex;
-  static auto* kept = new std::vector<std::unique_ptr<Scratch>>();
-  std::lock_guard<std::mutex> lock(mutex);
-  kept->push_back(std::move(s));
-}
-
 // The phases, in order (each declared in its header, lang/elab_*.h): lookup picks the
 // model and checks the imports; --set overrides become the root's modifiers; instantiate
 // builds the instance tree, asking evaluate for sizes and conditions; the subscripted
 // --set values are bound; connect binds the equations and turns connect() into frame
 // identities; emit writes the flat mechanism, evaluating what it reads.
-bool RunPhases(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags,
-               Scratch& s) {
-  const ast::ClassDef* top = s.lookup.PickModel(options.model);
+bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags) {
+  *out = flat::Mechanism{};
+  if (diags.HasErrors()) return false;
+  elab::ClassLookup lookup(program, diags);
+  const ast::ClassDef* top = lookup.PickModel(options.model);
   if (!top) return false;
-  if (!program.files.empty() && !s.lookup.CheckImports(*program.files[0])) return false;
-  out->model_name = s.lookup.QualifiedName(top);
+  if (!program.files.empty() && !lookup.CheckImports(*program.files[0])) return false;
+  out->model_name = lookup.QualifiedName(top);
   out->description = top->description;
   for (int f = 0; f < program.sources.NumFiles(); ++f) out->source_files.push_back(program.sources.Name(f));
 
-  elab::InstanceTree& tree = s.tree;
+  elab::SourcePlaces places(program.sources);
+  elab::Evaluator eval(out, places, diags);
+  elab::InstanceTree tree;
   tree.root = std::make_unique<elab::Node>();
-  if (!s.sets.Parse(options.overrides, program, tree.root.get())) return false;
-  s.instantiator.emplace(s.lookup, s.eval, s.places, diags, s.sets.AnySubscripted(), &tree);
-  s.instantiator->Run(top);
-  s.sets.Bind();
+  elab::SetOverrides sets(diags);
+  if (!sets.Parse(options.overrides, program, tree.root.get())) return false;
+  // Kept to the end with its per-class caches: freeing them between the phases fragments
+  // the heap, and repeated loads in one process then peak higher
+  // (docs/benchmarks/2026-11-28_elaborator_phases.md).
+  elab::Instantiator instantiator(lookup, eval, places, diags, sets.AnySubscripted(), &tree);
+  instantiator.Run(top);
+  sets.Bind();
   if (diags.HasErrors()) return false;
 
-  const elab::Links& links = s.links.emplace(elab::BindEquations(tree.root.get(), s.eval, diags));
+  const elab::Links links = elab::BindEquations(tree.root.get(), eval, diags);
   if (diags.HasErrors()) return false;
   // Every parameter is one element of a scalar variable, all counted in tree.instances.
-  s.eval.ReserveParams(static_cast<size_t>(tree.instances));
-  const elab::Connections& connections = s.connections.emplace(elab::Connect(tree, links, s.places, out));
+  eval.ReserveParams(static_cast<size_t>(tree.instances));
+  const elab::Connections connections = elab::Connect(tree, links, places, out);
   // Units are checked on the emitter's walk, and reported once the model is otherwise sound.
-  if (options.check_units) s.units.emplace(tree, links, &program.sources);
-  elab::UnitCheck* units = s.units ? &*s.units : nullptr;
-  elab::Emit(tree, connections, links.whens, s.eval, s.places, diags, out, units);
+  std::optional<elab::UnitCheck> units;
+  if (options.check_units) units.emplace(tree, links, &program.sources);
+  elab::Emit(tree, connections, links.whens, eval, places, diags, out, units ? &*units : nullptr);
   if (units) units->Finish(tree, diags, out);
-  if (const ast::Modification* ex = s.lookup.FindAnnotation(top, "experiment"))
-    elab::EmitExperiment(*ex, top, tree.root.get(), s.eval, diags, out);
-  if (const ast::Modification* sp = s.lookup.FindAnnotation(top, "speeds")) elab::EmitSpeeds(*sp, diags, out);
+  if (const ast::Modification* ex = lookup.FindAnnotation(top, "experiment"))
+    elab::EmitExperiment(*ex, top, tree.root.get(), eval, diags, out);
+  if (const ast::Modification* sp = lookup.FindAnnotation(top, "speeds")) elab::EmitSpeeds(*sp, diags, out);
   if (out->worlds.size() != 1 && !diags.HasErrors()) {
     auto& d = diags.Error(DiagCode::WorldCount, top->name_span,
                           "'" + top->name + "' has " + std::to_string(out->worlds.size()) +
@@ -169,17 +145,6 @@ bool RunPhases(const Program& program, const ElaborateOptions& options, flat::Me
     if (out->worlds.empty()) d.hint = "add 'World world;' and connect the first joint to world.frame_b";
   }
   return !diags.HasErrors();
-}
-
-}  // namespace
-
-bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Mechanism* out, Diagnostics& diags) {
-  *out = flat::Mechanism{};
-  if (diags.HasErrors()) return false;
-  auto scratch = std::make_unique<Scratch>(program, out, diags);
-  const bool ok = RunPhases(program, options, out, diags, *scratch);
-  if (options.leave_scratch_to_exit) LeaveToExit(std::move(scratch));
-  return ok;
 }
 
 std::vector<std::string> StdlibModels(const Program& program) {

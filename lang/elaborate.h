@@ -46,10 +46,6 @@ struct ElaborateOptions {
   // The unit check (lang/elab_units.h) always runs; bench/units_cost.cpp turns it off to
   // measure its cost side by side. Nothing else does.
   bool check_units = true;
-  // The process ends soon after (the CLI's check and run): elaboration's own tables are
-  // left to its exit instead of freed piece by piece. Off for anything that elaborates
-  // again (sweeps, Python, tests).
-  bool leave_scratch_to_exit = false;
 };
 
 // Parsed program: the user's file(s) plus the standard library.

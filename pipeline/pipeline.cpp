@@ -43,7 +43,6 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
   lang::Diagnostics diags(&m->source.sources);
   lang::ElaborateOptions eo;
   eo.model = options.model;
-  eo.leave_scratch_to_exit = options.one_shot;
   for (const std::string& s : options.sets) {
     lang::ParamOverride o;
     if (!lang::ParseSetArgument(s, &o)) {

@@ -132,7 +132,6 @@ struct LoadOptions {
   std::string model;               // class to elaborate; "" = the last model of the main file
   std::vector<std::string> sets;   // "name=value" as given to --set, applied in order
   bool compile = true;             // false: stop after stage 2 (program stays null)
-  bool one_shot = false;           // the process ends after this model: lang::ElaborateOptions::leave_scratch_to_exit
   // A main file named *.urdf is translated to .mech text first (import/import.h) with these
   // options; the text is then named PATH.mech in diagnostics (what `kanesim import` writes).
   import::Options urdf;

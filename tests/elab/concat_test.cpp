@@ -35,6 +35,18 @@ void ExpectVector(const std::string& decls, const std::string& name, const std::
   EXPECT_TRUE(std::isnan(e->P(name + "[" + std::to_string(want.size() + 1) + "]")));
 }
 
+// Subscripts select the cartesian product of each dimension's indices, row-major, a scalar
+// index dropping its dimension (Modelica 3.5 section 10.5); X[i, j, k] = 100 i + 10 j + k
+// gives every selected element's value by hand.
+TEST(Concat, SubscriptsSelectTheProductOfEachDimensionsIndices) {
+  const std::string X = "  parameter Real X[3, 3, 3] = {{{100 * i + 10 * j + k for k in 1:3} for j in 1:3} for i in 1:3};\n";
+  // Y[a, b] = X[{3, 1}[a], b, 3]; Z[a, b] = X[2, a, {1, 3}[b]]
+  ExpectMatrix(X + "  parameter Real Y[2, 3] = X[{3, 1}, :, end];", "Y", 2, 3, {313, 323, 333, 113, 123, 133});
+  ExpectMatrix(X + "  parameter Real Z[3, 2] = X[2, :, {1, 3}];", "Z", 3, 2, {211, 213, 221, 223, 231, 233});
+  ExpectVector(X + "  parameter Real v[3] = X[:, 2, 1];", "v", {121, 221, 321});
+  ExpectVector(X + "  parameter Real s[1] = {X[1, 2, 3]};", "s", {123});
+}
+
 // If this fails, cat joins along the wrong dimension or interleaves the blocks wrongly.
 TEST(Concat, CatAlongEachDimension) {
   ExpectVector("  parameter Real v[5] = cat(1, {1, 2}, {3}, {4, 5});", "v", {1, 2, 3, 4, 5});
