@@ -63,20 +63,6 @@ double Num(const std::string& s, bool* ok) {
   return v;
 }
 
-// A string-valued key: absent, or a string (never silently another type).
-bool OptionalString(const std::string& path, const toml::table& t, const char* key, std::string* out,
-                    std::string* error) {
-  const toml::node* n = t.get(key);
-  if (!n) return true;
-  auto s = n->value<std::string>();
-  if (!s) {
-    *error = Where(path, *n) + key + " must be a string";
-    return false;
-  }
-  *out = *s;
-  return true;
-}
-
 const Tolerance& ToleranceFor(const GoldenSpec& spec, const std::string& name) {
   const Tolerance* t = &spec.default_tol;
   for (const Tolerance& x : spec.tolerances)
@@ -98,29 +84,17 @@ bool ReadGoldenSpec(const std::string& path, GoldenSpec* out, std::string* error
 
 bool ReadGoldenSpecText(const std::string& path, const std::string& text, GoldenSpec* out, std::string* error) {
   toml::table root;
-  try {
-    root = toml::parse(text, path);
-  } catch (const toml::parse_error& e) {
-    *error = path + ":" + std::to_string(e.source().begin.line) + ":" + std::to_string(e.source().begin.column) +
-             ": " + std::string(e.description());
-    return false;
-  }
+  if (!ParseTomlText(path, text, &root, error)) return false;
   *out = GoldenSpec{};
   out->spec_path = path;
   out->name = std::filesystem::path(path).stem().string();
-  static const char* kKnown[] = {"model", "model_name", "golden", "set", "run", "signals", "tolerance", "invariant",
-                                 "input_files"};
-  for (const auto& [key, node] : root) {
-    bool known = false;
-    for (const char* k : kKnown) known = known || key.str() == k;
-    if (!known) {
-      *error = Where(path, node) + "unknown key '" + std::string(key.str()) + "'";
-      return false;
-    }
-  }
+  if (!OnlyKnownKeys(path, root,
+                     {"model", "model_name", "golden", "set", "run", "signals", "tolerance", "invariant", "input_files"},
+                     error))
+    return false;
   std::string model, golden = out->name + ".csv";
-  if (!OptionalString(path, root, "model", &model, error) || !OptionalString(path, root, "golden", &golden, error) ||
-      !OptionalString(path, root, "model_name", &out->model_name, error))
+  auto string = [&](const char* key, std::string* field) { return OptionalTomlString(path, root, key, field, error); };
+  if (!string("model", &model) || !string("golden", &golden) || !string("model_name", &out->model_name))
     return false;
   if (model.empty()) {
     *error = path + ": the spec needs model = \"path/to/file.mech\"";
@@ -131,21 +105,9 @@ bool ReadGoldenSpecText(const std::string& path, const std::string& text, Golden
   if (const toml::node* set = root.get("set")) {
     if (!ReadSetTable(path, *set, &out->sets, error)) return false;
   }
-  if (const toml::node* files = root.get("input_files")) {  // the model's input tables (--input-file)
-    const toml::array* a = files->as_array();
-    if (!a) {
-      *error = Where(path, *files) + "input_files must be an array of file names";
-      return false;
-    }
-    for (const toml::node& x : *a) {
-      auto s = x.value<std::string>();
-      if (!s) {
-        *error = Where(path, x) + "input_files must be strings";
-        return false;
-      }
-      out->input_files.push_back(Resolve(path, *s));
-    }
-  }
+  std::vector<std::string> input_files;  // the model's input tables (--input-file)
+  if (!OptionalTomlStrings(path, root, "input_files", "file names", &input_files, error)) return false;
+  for (const std::string& f : input_files) out->input_files.push_back(Resolve(path, f));
   if (const toml::table* run = root["run"].as_table()) {
     for (const auto& [k, v] : *run) {
       std::string key(k.str());
@@ -186,21 +148,7 @@ bool ReadGoldenSpecText(const std::string& path, const std::string& text, Golden
     *error = Where(path, *root.get("run")) + "run must be a table ([run])";
     return false;
   }
-  if (const toml::node* sig = root.get("signals")) {
-    const toml::array* a = sig->as_array();
-    if (!a) {
-      *error = Where(path, *sig) + "signals must be an array of names or globs";
-      return false;
-    }
-    for (const toml::node& x : *a) {
-      auto s = x.value<std::string>();
-      if (!s) {
-        *error = Where(path, x) + "signals must be strings";
-        return false;
-      }
-      out->signals.push_back(*s);
-    }
-  }
+  if (!OptionalTomlStrings(path, root, "signals", "names or globs", &out->signals, error)) return false;
   for (const char* key : {"tolerance", "invariant"}) {
     const toml::node* n = root.get(key);
     if (n && !(key == std::string("tolerance") ? n->is_table() : n->is_array_of_tables())) {

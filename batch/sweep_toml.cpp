@@ -64,19 +64,7 @@ bool Number(const std::string& path, const toml::table& t, const char* key, doub
   return true;
 }
 
-// Keys of one type: absent, or that type (never silently ignored).
-bool String(const std::string& path, const toml::table& t, const char* key, std::string* out, std::string* error) {
-  const toml::node* n = t.get(key);
-  if (!n) return true;
-  auto s = n->value<std::string>();
-  if (!s) {
-    *error = Where(path, *n) + key + " must be a string";
-    return false;
-  }
-  *out = *s;
-  return true;
-}
-
+// Keys of one type: absent, or that type (never silently ignored); strings: OptionalTomlString.
 bool Bool(const std::string& path, const toml::table& t, const char* key, bool* out, std::string* error) {
   const toml::node* n = t.get(key);
   if (!n) return true;
@@ -86,26 +74,6 @@ bool Bool(const std::string& path, const toml::table& t, const char* key, bool* 
     return false;
   }
   *out = *b;
-  return true;
-}
-
-bool Strings(const std::string& path, const toml::table& t, const char* key, std::vector<std::string>* out,
-             std::string* error) {
-  const toml::node* n = t.get(key);
-  if (!n) return true;
-  const toml::array* a = n->as_array();
-  if (!a) {
-    *error = Where(path, *n) + key + " must be an array of strings";
-    return false;
-  }
-  for (const toml::node& x : *a) {
-    auto s = x.value<std::string>();
-    if (!s) {
-      *error = Where(path, x) + key + " must be an array of strings";
-      return false;
-    }
-    out->push_back(*s);
-  }
   return true;
 }
 
@@ -145,34 +113,23 @@ bool ReadSweepToml(const std::string& path, SweepFileSpec* out, std::string* err
 
 bool ReadSweepTomlText(const std::string& path, const std::string& text, SweepFileSpec* out, std::string* error) {
   toml::table root;
-  try {
-    root = toml::parse(text, path);
-  } catch (const toml::parse_error& e) {
-    *error = path + ":" + std::to_string(e.source().begin.line) + ":" + std::to_string(e.source().begin.column) +
-             ": " + std::string(e.description());
-    return false;
-  }
+  if (!ParseTomlText(path, text, &root, error)) return false;
   *out = SweepFileSpec{};
-  static const char* kKnown[] = {"model", "model_name", "set", "metrics", "start_time", "stop_time", "interval",
-                                 "rtol", "atol", "integrator", "solver", "output", "trajectories", "signals",
-                                 "list", "grid", "sample", "scenario"};
-  for (const auto& [key, node] : root) {
-    bool known = false;
-    for (const char* k : kKnown) known = known || key.str() == k;
-    if (!known) {
-      *error = Where(path, node) + "unknown key '" + std::string(key.str()) + "'";
-      return false;
-    }
-  }
+  if (!OnlyKnownKeys(path, root,
+                     {"model", "model_name", "set", "metrics", "start_time", "stop_time", "interval", "rtol", "atol",
+                      "integrator", "solver", "output", "trajectories", "signals", "list", "grid", "sample", "scenario"},
+                     error))
+    return false;
   std::string model, output, list;
-  if (!String(path, root, "model", &model, error) || !String(path, root, "model_name", &out->model_name, error) ||
-      !String(path, root, "integrator", &out->integrator, error) || !String(path, root, "solver", &out->solver, error) ||
-      !String(path, root, "output", &output, error) || !String(path, root, "list", &list, error) ||
+  auto string = [&](const char* key, std::string* field) { return OptionalTomlString(path, root, key, field, error); };
+  if (!string("model", &model) || !string("model_name", &out->model_name) || !string("integrator", &out->integrator) ||
+      !string("solver", &out->solver) || !string("output", &output) || !string("list", &list) ||
       !Bool(path, root, "trajectories", &out->trajectories, error))
     return false;
   if (!model.empty()) out->model = Resolve(path, model);
   if (!output.empty()) out->output_dir = Resolve(path, output);
-  if (!Strings(path, root, "metrics", &out->metrics, error) || !Strings(path, root, "signals", &out->signals, error))
+  if (!OptionalTomlStrings(path, root, "metrics", "strings", &out->metrics, error) ||
+      !OptionalTomlStrings(path, root, "signals", "strings", &out->signals, error))
     return false;
   for (auto [key, field] : {std::pair{"start_time", &out->start_time}, {"stop_time", &out->stop_time},
                             {"interval", &out->interval}, {"rtol", &out->rtol}, {"atol", &out->atol}})

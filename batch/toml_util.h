@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <toml++/toml.h>
 #include <vector>
@@ -22,6 +23,68 @@ inline std::string ResolveRelative(const std::string& base_file, const std::stri
 // "file:line: " prefix for messages about a TOML node.
 inline std::string TomlWhere(const std::string& path, const toml::node& n) {
   return path + ":" + std::to_string(n.source().begin.line) + ": ";
+}
+
+// `text` parsed as TOML into *root; a syntax error as "path:line:column: what".
+inline bool ParseTomlText(const std::string& path, const std::string& text, toml::table* root, std::string* error) {
+  try {
+    *root = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    *error = path + ":" + std::to_string(e.source().begin.line) + ":" + std::to_string(e.source().begin.column) +
+             ": " + std::string(e.description());
+    return false;
+  }
+  return true;
+}
+
+// Every top-level key of `root` one of `known` (a misspelt key is an error, never ignored).
+inline bool OnlyKnownKeys(const std::string& path, const toml::table& root, std::initializer_list<const char*> known,
+                          std::string* error) {
+  for (const auto& [key, node] : root) {
+    bool found = false;
+    for (const char* k : known) found = found || key.str() == k;
+    if (!found) {
+      *error = TomlWhere(path, node) + "unknown key '" + std::string(key.str()) + "'";
+      return false;
+    }
+  }
+  return true;
+}
+
+// A string-valued key: absent (*out untouched), or a string (never silently another type).
+inline bool OptionalTomlString(const std::string& path, const toml::table& t, const char* key, std::string* out,
+                               std::string* error) {
+  const toml::node* n = t.get(key);
+  if (!n) return true;
+  auto s = n->value<std::string>();
+  if (!s) {
+    *error = TomlWhere(path, *n) + key + " must be a string";
+    return false;
+  }
+  *out = *s;
+  return true;
+}
+
+// An array of strings under `key`: absent (nothing appended), or each element a string,
+// appended to *out; anything else is "<key> must be an array of <what>" at its node.
+inline bool OptionalTomlStrings(const std::string& path, const toml::table& t, const char* key, const char* what,
+                                std::vector<std::string>* out, std::string* error) {
+  const toml::node* n = t.get(key);
+  if (!n) return true;
+  const toml::array* a = n->as_array();
+  if (!a) {
+    *error = TomlWhere(path, *n) + key + " must be an array of " + what;
+    return false;
+  }
+  for (const toml::node& x : *a) {
+    auto s = x.value<std::string>();
+    if (!s) {
+      *error = TomlWhere(path, x) + key + " must be an array of " + what;
+      return false;
+    }
+    out->push_back(*s);
+  }
+  return true;
 }
 
 // `set = { name = value, ... }` (sweep and golden files) as "name=value" strings for

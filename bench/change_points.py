@@ -47,22 +47,29 @@ def read_rows(out):
     return rows
 
 
-def run(kanesim, a, integrator, solver, rtol, timeout, tmp):
+def run_parallelogram(kanesim, a, integrator, solver, rtol, timeout, tmp, outputs):
+    """20 s of the parallelogram (`--set a=A`), rows every 0.01 s of `outputs`: the exit code (None
+    on a timeout), stderr, the wall time and the rows (shared by bench/change_point_energy.py)."""
     out = os.path.join(tmp, "p.csv")
     args = [kanesim, "run", MODEL, "--set", "a=%s" % a, "--stop-time", "20", "--interval", "0.01",
-            "--rtol", rtol, "--integrator", integrator, "--solver", solver,
-            "--output", "crank_pivot.q", "--output", "rocker_pivot.q", "-o", out]
+            "--rtol", rtol, "--integrator", integrator, "--solver", solver]
+    for name in outputs:
+        args += ["--output", name]
     t0 = time.monotonic()
     try:
-        p = subprocess.run(args, capture_output=True, text=True, timeout=timeout)
+        p = subprocess.run(args + ["-o", out], capture_output=True, text=True, timeout=timeout)
         code, err = p.returncode, p.stderr
     except subprocess.TimeoutExpired:
         code, err = None, "timeout"
-    wall = time.monotonic() - t0
-    rows = read_rows(out)
+    return code, err.strip(), time.monotonic() - t0, read_rows(out)
+
+
+def run(kanesim, a, integrator, solver, rtol, timeout, tmp):
+    code, err, wall, rows = run_parallelogram(kanesim, a, integrator, solver, rtol, timeout, tmp,
+                                              ["crank_pivot.q", "rocker_pivot.q"])
     off = max((abs(math.remainder(row[2] - row[1], 2 * math.pi)) for row in rows), default=0.0)
     reached = rows[-1][0] if rows else float("nan")
-    return code, err.strip(), wall, off, reached
+    return code, err, wall, off, reached
 
 
 def outcome(code, err, off, reached):
@@ -89,7 +96,8 @@ def outcome(code, err, off, reached):
     return "exit %d: %s" % (code, err[-80:])
 
 
-def main():
+def grid_options():
+    """The command line of this script and bench/change_point_energy.py."""
     ap = argparse.ArgumentParser()
     ap.add_argument("kanesim", nargs="?", default=os.path.join(ROOT, "build/cli/kanesim"))
     ap.add_argument("--a", default="0.5,0.6")
@@ -97,23 +105,35 @@ def main():
     ap.add_argument("--integrators", default=",".join(INTEGRATORS))
     ap.add_argument("--rtols", default=",".join(RTOLS))
     ap.add_argument("--forms", default="reduced,multiplier")
-    o = ap.parse_args()
+    return ap.parse_args()
+
+
+def print_grid(o, tmp, heading, cell):
+    """One table per a and form: a row per integrator, a column per rtol, each cell
+    cell(a, integrator, solver, rtol, tmp) (a string); heading follows "20 s" in the title."""
     forms = [f for f in FORMS if f[0] in o.forms.split(",")]
     rtols = o.rtols.split(",")
+    for a in o.a.split(","):
+        for form, solver in forms:
+            print("\n### a = %s, %s form (--solver %s), 20 s%s\n" % (a, form, solver, heading))
+            print("| integrator | " + " | ".join(rtols) + " |")
+            print("|---|" + "---|" * len(rtols))
+            for integrator in o.integrators.split(","):
+                cells = [cell(a, integrator, solver, rtol, tmp) for rtol in rtols]
+                print("| %s | %s |" % (integrator, " | ".join(cells)), flush=True)
+
+
+def main():
+    o = grid_options()
+
+    def cell(a, integrator, solver, rtol, tmp):
+        code, err, wall, off, reached = run(o.kanesim, a, integrator, solver, rtol, o.timeout, tmp)
+        if code not in (0, 2):
+            print("  [%s %s %s] %s" % (integrator, solver, rtol, err[-200:]), file=sys.stderr)
+        return "%s, %.2f s" % (outcome(code, err, off, reached), wall)
+
     with tempfile.TemporaryDirectory() as tmp:
-        for a in o.a.split(","):
-            for form, solver in forms:
-                print("\n### a = %s, %s form (--solver %s), 20 s\n" % (a, form, solver))
-                print("| integrator | " + " | ".join(rtols) + " |")
-                print("|---|" + "---|" * len(rtols))
-                for integrator in o.integrators.split(","):
-                    cells = []
-                    for rtol in rtols:
-                        code, err, wall, off, reached = run(o.kanesim, a, integrator, solver, rtol, o.timeout, tmp)
-                        cells.append("%s, %.2f s" % (outcome(code, err, off, reached), wall))
-                        if code not in (0, 2):
-                            print("  [%s %s %s] %s" % (integrator, solver, rtol, err[-200:]), file=sys.stderr)
-                    print("| %s | %s |" % (integrator, " | ".join(cells)), flush=True)
+        print_grid(o, tmp, "", cell)
 
 
 if __name__ == "__main__":

@@ -4,7 +4,12 @@
 // library; the median and the best CPU time of each, and the ratio of the medians.
 //   build/bench/units_cost MODEL.mech [NAME=VALUE ...]   (e.g. examples/chain.mech N=1000)
 //   KANESIM_UNITS_REPEATS=21                             (default 21)
-// Output: medians `with ms, without ms, +percent`, then the best times. docs/benchmarks/2026-11-29_units.md has results.
+//   KANESIM_UNITS_ONLY=with|without   every load (the first too) with the check, or without
+//                                     it: for an instruction count (valgrind --tool=callgrind
+//                                     --toggle-collect='*LoadAndElaborate*'), per load = the
+//                                     count / (repeats + 1)
+// Output: medians `with ms, without ms, +percent`, then the best times. Results:
+// docs/benchmarks/2026-11-29_units.md, docs/benchmarks/2026-11-29_units_cost.md.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -57,6 +62,19 @@ int main(int argc, char** argv) {
   }
   const char* env = std::getenv("KANESIM_UNITS_REPEATS");
   const int repeats = env ? std::max(1, std::atoi(env)) : 21;
+  const char* only = std::getenv("KANESIM_UNITS_ONLY");
+  if (only) {
+    const bool check = std::string(only) == "with";
+    double total = 0;
+    for (int r = 0; r <= repeats; ++r) {
+      const double t = LoadAndElaborate(argv[1], sets, check);
+      if (t < 0) return 1;
+      total += t;
+    }
+    std::printf("%s: %d loads %s the unit check, mean %.3f ms\n", argv[1], repeats + 1, check ? "with" : "without",
+                1e3 * total / (repeats + 1));
+    return 0;
+  }
   if (LoadAndElaborate(argv[1], sets, true) < 0) return 1;  // parses the library once
   std::vector<double> with, without;
   for (int r = 0; r < repeats; ++r) {

@@ -53,16 +53,49 @@ def robot_files():
             ("solo12", os.path.join(data, "solo12.urdf"), True), ("talos", talos, True)]
 
 
+def robot_options(description, **defaults):
+    """The command line of this script and bench/urdf_race.py: --kanesim, --robots and, per
+    script, integer options with their defaults (states=20, reps=21)."""
+    ap = argparse.ArgumentParser(description=description.split("\n\n")[0])
+    for name, value in defaults.items():
+        ap.add_argument("--" + name, type=int, default=value)
+    ap.add_argument("--kanesim", default=os.path.join(ROOT, "build", "cli", "kanesim"))
+    ap.add_argument("--robots", default="ur5,panda,solo12,talos")
+    return ap.parse_args()
+
+
+def installed_robots(wanted, missing):
+    """(index, name, path, floating) of robot_files() named in `wanted` (comma-separated), the index
+    counting every robot (the seeds use it); `missing` formats the line printed for one not installed."""
+    for i, (name, path, floating) in enumerate(robot_files()):
+        if name not in wanted.split(","):
+            continue
+        if path is None or not os.path.exists(path):
+            print(missing.format(name=name))
+            continue
+        yield i, name, path, floating
+
+
+def pin_model(urdf, floating):
+    return pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(urdf)
+
+
+def edited_copy(path, tmp, prefix, pattern, replacement):
+    """path itself when re.sub(pattern, replacement) leaves its text as it is, else the edited
+    copy tmp/<prefix><name>."""
+    text = open(path).read()
+    edited = re.sub(pattern, replacement, text)
+    if edited == text:
+        return path
+    out = os.path.join(tmp, prefix + os.path.basename(path))
+    with open(out, "w") as f:
+        f.write(edited)
+    return out
+
+
 def without_mimic(path, tmp):
     """The URDF as both tools read it here: <mimic .../> removed (Pinocchio's default reading)."""
-    text = open(path).read()
-    stripped = re.sub(r"<mimic\b[^>]*/>", "", text)
-    if stripped == text:
-        return path
-    out = os.path.join(tmp, os.path.basename(path))
-    with open(out, "w") as f:
-        f.write(stripped)
-    return out
+    return edited_copy(path, tmp, "", r"<mimic\b[^>]*/>", "")
 
 
 def without_friction(path, tmp):
@@ -70,14 +103,7 @@ def without_friction(path, tmp):
     constant friction is imported as tanh(u / 1e-3), which makes Talos (friction 1 N m on every
     joint) too stiff for an explicit reference at 1e-13 (kanesim's DOP853 gives up after 100 000
     steps at 0.7 s at rtol 1e-6)."""
-    text = open(path).read()
-    stripped = re.sub(r'(<dynamics\b[^>]*\bfriction=")[^"]*(")', r"\g<1>0\g<2>", text)
-    if stripped == text:
-        return path
-    out = os.path.join(tmp, "nofriction_" + os.path.basename(path))
-    with open(out, "w") as f:
-        f.write(stripped)
-    return out
+    return edited_copy(path, tmp, "nofriction_", r'(<dynamics\b[^>]*\bfriction=")[^"]*(")', r"\g<1>0\g<2>")
 
 
 def link_signals(kanesim, urdf, floating, tmp):
@@ -96,20 +122,32 @@ def fmt_value(v):
     return "%.17g" % v[0] if len(v) == 1 else "{" + ",".join("%.17g" % x for x in v) + "}"
 
 
+def start_args(kq, ku):
+    """`--set J.q.start=... --set J.u.start=...` for every joint of the state (kq, ku)."""
+    args = []
+    for name in kq:
+        args += ["--set", f"{name}.q.start={fmt_value(kq[name])}", "--set", f"{name}.u.start={fmt_value(ku[name])}"]
+    return args
+
+
+def read_columns(csv_text):
+    """The rows of `kanesim run`'s CSV as {column: np.array}."""
+    rows = list(csv.reader(io.StringIO(csv_text)))
+    head, body = rows[0], np.array([[float(x) for x in r] for r in rows[1:]])
+    return {h: body[:, i] for i, h in enumerate(head)}
+
+
 def run_kanesim(kanesim, urdf, floating, kq, ku, stop, interval, tol, outputs):
     """Rows of `kanesim run` from the state (kq, ku), as {column: np.array}."""
     cmd = [kanesim, "run", urdf, "--stop-time", repr(stop), "--interval", repr(interval), "--rtol", repr(tol),
            "--atol", repr(tol), "--energy-check", "off", "--limits", "ignore"] + (["--floating"] if floating else [])
-    for name in kq:
-        cmd += ["--set", f"{name}.q.start={fmt_value(kq[name])}", "--set", f"{name}.u.start={fmt_value(ku[name])}"]
+    cmd += start_args(kq, ku)
     for o in outputs:
         cmd += ["--output", o]
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit(f"kanesim failed ({p.returncode}):\n{p.stderr[-3000:]}")
-    rows = list(csv.reader(io.StringIO(p.stdout)))
-    head, body = rows[0], np.array([[float(x) for x in r] for r in rows[1:]])
-    return {h: body[:, i] for i, h in enumerate(head)}
+    return read_columns(p.stdout)
 
 
 def joint_columns(name, n, kind):
@@ -220,30 +258,20 @@ def check_trajectory(kanesim, urdf, floating, model, rng):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--states", type=int, default=20)
-    ap.add_argument("--kanesim", default=os.path.join(ROOT, "build", "cli", "kanesim"))
-    ap.add_argument("--robots", default="ur5,panda,solo12,talos")
-    args = ap.parse_args()
-    wanted = args.robots.split(",")
+    args = robot_options(__doc__, states=20)
     failed = False
     print("| robot | nq / nv | states | accelerations: max rel. diff | links compared | poses: max diff "
           "| 1 s: max abs(q diff) | max abs(u diff) | reference 1e-13 vs 1e-12 |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for i, (name, path, floating) in enumerate(robot_files()):
-        if name not in wanted:
-            continue
-        if path is None or not os.path.exists(path):
-            print(f"| {name} | not installed (sh bench/setup_venv.sh) |")
-            continue
+    for i, name, path, floating in installed_robots(args.robots, "| {name} | not installed (sh bench/setup_venv.sh) |"):
         with tempfile.TemporaryDirectory(prefix="kanesim-urdf-check-") as tmp:
             urdf = without_mimic(path, tmp)
-            model = pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(urdf)
+            model = pin_model(urdf, floating)
             rng = np.random.default_rng([4040, i])
             wa, wp, nlinks, missing = check_states(args.kanesim, name, urdf, floating, model, rng, args.states, tmp)
             smooth = without_friction(urdf, tmp)
             if smooth != urdf:
-                model = pin.buildModelFromUrdf(smooth, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(smooth)
+                model = pin_model(smooth, floating)
             tq, tu, spread = check_trajectory(args.kanesim, smooth, floating, model, rng)
         bad = wa > ACCEL_TOL or wp > POSE_TOL or max(tq, tu) > 1e-9 + 10 * spread or missing
         failed |= bool(bad)

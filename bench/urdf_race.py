@@ -22,7 +22,6 @@ side by side, medians of fresh processes (docs/benchmarks.md, "URDF robots: the 
 
     bench/.venv/bin/python bench/urdf_race.py [--reps 21] [--kanesim build/cli/kanesim] [--robots ur5,talos]
 """
-import argparse
 import glob
 import json
 import os
@@ -38,7 +37,6 @@ import numpy as np
 import pinocchio as pin
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
 OUT = os.path.join(HERE, "results", "race")
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "reference"))
@@ -93,7 +91,7 @@ def reference(name, urdf, original, floating, index):
         if c["urdf_mtime"] == os.path.getmtime(urdf):
             return model, c
     rng = np.random.default_rng([4041, index])  # drawn within the original file's joint limits
-    drawn = pin.buildModelFromUrdf(original, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(original)
+    drawn = uc.pin_model(original, floating)
     assert list(drawn.names) == list(model.names)
     q0, v0, kq, ku = ur.random_state(drawn, rng)
     times = np.array([0.0, 1.0])
@@ -113,9 +111,7 @@ def reference(name, urdf, original, floating, index):
 def kanesim_cmd(kanesim, urdf, c, rtol, stats=False):
     cmd = [kanesim, "run", urdf, "--stop-time", "1", "--interval", "1", "--rtol", repr(rtol), "--atol", repr(rtol),
            "--limits", "ignore"]  # the widened limits: no stop machinery (MuJoCo's are never reached either)
-    for j in c["kq"]:
-        cmd += ["--set", f"{j}.q.start={uc.fmt_value(c['kq'][j])}", "--set", f"{j}.u.start={uc.fmt_value(c['ku'][j])}"]
-    return cmd + (["--stats"] if stats else [])
+    return cmd + uc.start_args(c["kq"], c["ku"]) + (["--stats"] if stats else [])
 
 
 def error_of(got, c):
@@ -127,10 +123,8 @@ def kanesim_error(kanesim, urdf, c, rtol):
     p = subprocess.run(kanesim_cmd(kanesim, urdf, c, rtol), capture_output=True, text=True)
     if p.returncode != 0:
         return float("inf")
-    lines = p.stdout.strip().splitlines()
-    head = [h.strip('"') for h in lines[0].split(",")]
-    last = dict(zip(head, map(float, lines[-1].split(","))))
-    got = {j: [last[col] for col in uc.joint_columns(j, len(c["q_ref"][j]), "q")] for j in c["q_ref"]}
+    cols = uc.read_columns(p.stdout)
+    got = {j: [cols[col][-1] for col in uc.joint_columns(j, len(c["q_ref"][j]), "q")] for j in c["q_ref"]}
     return error_of(got, c)
 
 
@@ -207,19 +201,10 @@ def kanesim_phases(stderr):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--reps", type=int, default=21)
-    ap.add_argument("--kanesim", default=os.path.join(ROOT, "build", "cli", "kanesim"))
-    ap.add_argument("--robots", default="ur5,panda,solo12,talos")
-    args = ap.parse_args()
+    args = uc.robot_options(__doc__, reps=21)
     driver = build_driver()
     rows = []
-    for i, (name, path, floating) in enumerate(uc.robot_files()):
-        if name not in args.robots.split(","):
-            continue
-        if path is None or not os.path.exists(path):
-            print(f"{name}: not installed (sh bench/setup_venv.sh)")
-            continue
+    for i, name, path, floating in uc.installed_robots(args.robots, "{name}: not installed (sh bench/setup_venv.sh)"):
         urdf = race_urdf(name, path, floating)
         os.makedirs(os.path.join(OUT, "original"), exist_ok=True)
         model, c = reference(name, urdf, uc.without_mimic(path, os.path.join(OUT, "original")), floating, i)

@@ -28,6 +28,7 @@ struct InstanceTree {
   std::vector<Node*> flanges;       // flange id -> its Flange node
   std::vector<flat::Joint> joints;  // joint id -> the joint as far as instantiation knows it (name, type, place)
   long instances = 0;               // scalar variables' elements + components
+  int copies = 0;                   // ids given to class nodes of array elements copied from element 1
 };
 
 class Instantiator {

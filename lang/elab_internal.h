@@ -178,6 +178,13 @@ struct Node {
   bool is_final_decl = false;  // kVar
   mutable std::uint16_t scans = 0;  // Child()'s scans of a class above kScanChildren elements
   int depth = 0;
+  // For the unit check (lang/elab_units.cpp), in the padding before `name` (the node does
+  // not grow). kVar: its declared unit, looked up once per variable instead of once per
+  // use: -1 not yet, >= 0 the checker's slot, below -1 none (and how far its inference got).
+  // kClass: in an array element copied from element 1 (lang/elab_share.cpp), the id every
+  // copy of the same node of element 1 has, else -1: a binding read there has one unit in
+  // all the copies.
+  mutable std::int32_t unit_slot = -1;
   std::string name;  // "links[2]" for array elements
   std::string path;  // "robot.links[2]"
   Node* parent = nullptr;

@@ -150,6 +150,9 @@ struct Instantiator::ShareBinding {
   // modifiers are shared (SameInEveryElement: 1 yes, 0 no, -1 not yet known). The same
   // for every element, so found at the first copy and read at the others.
   std::vector<signed char>* same_mod;
+  // Per node of element 1's tree, the same way: the id its class nodes' copies share
+  // (Node::unit_slot), so that the unit check reads a binding once for all the copies.
+  std::vector<int>* copy_ids;
   size_t visit = 0;
 };
 
@@ -221,6 +224,12 @@ std::unique_ptr<Node> Instantiator::CloneInstance(const Node& src, Node* parent,
   b.ancestors.emplace_back(&src, n.get());
   if (src.kind != Node::kVar) {
     n->mod = BoundCopy(src.mod, b, false);
+    if (src.kind == Node::kClass) {
+      if (b.visit >= b.copy_ids->size()) b.copy_ids->resize(b.visit + 1, -1);
+      int& id = (*b.copy_ids)[b.visit];
+      if (id < 0) id = tree_.copies++;
+      n->unit_slot = id;
+    }
   } else {
     // A variable's modifiers (its value and attributes) are shared with element 1 when they
     // mean the same there, copied and bound to element k otherwise. Not shared when a
@@ -249,6 +258,7 @@ struct Instantiator::ArrayShare {
   long per_element = 0;           // tree_.instances counted by element 1
   std::vector<SliceValue> slice;  // its values from the array's modifier
   mutable std::vector<signed char> same_mod;  // ShareBinding::same_mod, filled by the first copy
+  mutable std::vector<int> copy_ids;          // ShareBinding::copy_ids, the same way
 };
 
 // Element `index` as a copy of element 1 bound to its slice of the array's modifier; false
@@ -258,7 +268,7 @@ bool Instantiator::ShareElement(const ArrayShare& share, Node* node, Node* array
                                 int count) {
   if (!share.ok || tree_.instances + share.per_element > kMaxInstances) return false;
   std::vector<Value> values(share.slice.size());
-  ShareBinding b{&share.slice, {}, {}, &share.same_mod};
+  ShareBinding b{&share.slice, {}, {}, &share.same_mod, &share.copy_ids};
   for (size_t i = 0; i < share.slice.size(); ++i) {
     if (!SliceAt(array->mod, share.slice[i].keys, index, count, &values[i])) return false;
     b.values.push_back(&values[i]);

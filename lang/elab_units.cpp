@@ -2,8 +2,12 @@
 // each binding's expression a unit, bottom-up, and compares it with the variable's.
 #include "lang/elab_units.h"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -17,10 +21,10 @@ namespace {
 // What is known of an expression's unit. Literal: built from numbers alone (dimensionless
 // in products, adapting in sums); Unknown: reads a variable of no known unit (unchecked).
 struct UVal {
-  enum Kind : std::uint8_t { Unknown, Literal, Known } kind = Unknown;
   Unit unit;
   const Node* origin = nullptr;         // the variable whose unit this is, for notes
   const std::string* text = nullptr;    // that unit as declared ("N.m"), when unchanged
+  enum Kind : std::uint8_t { Unknown, Literal, Known } kind = Unknown;
   // From `time` and numbers alone (sin(time), sqrt(0.5 - time): test signals that read time
   // as a number): used where it meets a unit, never reported.
   bool soft = false;
@@ -41,6 +45,53 @@ struct UVal {
 // A unit in quotes as the user wrote it, or in SI form when computed.
 std::string Shown(const UVal& v) { return "\"" + (v.text ? *v.text : v.unit.ToString()) + "\""; }
 
+// s == lit, the literal's length known at compile time (no strlen, an inlined compare).
+template <size_t N>
+bool Is(const std::string& s, const char (&lit)[N]) {
+  return s.size() == N - 1 && std::memcmp(s.data(), lit, N - 1) == 0;
+}
+
+// The functions the check knows, by what they do to units.
+enum class Fn : std::uint8_t {
+  Other,          // unknown unit
+  Dimensionless,  // sin, exp...: a dimensionless argument, result 1
+  Inverse,        // asin, acos, atan: a dimensionless argument, result rad
+  Atan2, Sqrt, Der,
+  Pair,           // min, max, mod: two arguments in one unit
+  Keep,           // abs, norm, sum...: the argument's unit
+  Fill,
+  Product,        // cross, dot, outerProduct
+  Plain,          // sign, identity, zeros...: numbers
+  MeshVolume, MeshCentre, MeshInertia, Cat,
+};
+
+Fn FnOf(const std::string& name) {
+  struct Entry {
+    std::string_view name;
+    Fn fn;
+  };
+  static constexpr Entry kFns[] = {
+      {"sin", Fn::Dimensionless}, {"cos", Fn::Dimensionless}, {"tan", Fn::Dimensionless},
+      {"exp", Fn::Dimensionless}, {"log", Fn::Dimensionless}, {"sinh", Fn::Dimensionless},
+      {"cosh", Fn::Dimensionless}, {"tanh", Fn::Dimensionless}, {"asin", Fn::Inverse},
+      {"acos", Fn::Inverse},      {"atan", Fn::Inverse},      {"atan2", Fn::Atan2},
+      {"sqrt", Fn::Sqrt},         {"der", Fn::Der},           {"min", Fn::Pair},
+      {"max", Fn::Pair},          {"mod", Fn::Pair},          {"abs", Fn::Keep},
+      {"floor", Fn::Keep},        {"ceil", Fn::Keep},         {"norm", Fn::Keep},
+      {"transpose", Fn::Keep},    {"sum", Fn::Keep},          {"skew", Fn::Keep},
+      {"vector", Fn::Keep},       {"diagonal", Fn::Keep},     {"fill", Fn::Fill},
+      {"cross", Fn::Product},     {"dot", Fn::Product},       {"outerProduct", Fn::Product},
+      {"sign", Fn::Plain},        {"identity", Fn::Plain},    {"zeros", Fn::Plain},
+      {"ones", Fn::Plain},        {"size", Fn::Plain},        {"integer", Fn::Plain},
+      {"meshVolume", Fn::MeshVolume}, {"meshCentre", Fn::MeshCentre}, {"meshInertia", Fn::MeshInertia},
+      {"cat", Fn::Cat},
+  };
+  const std::string_view n = name;
+  for (const Entry& f : kFns)
+    if (f.name.size() == n.size() && f.name == n) return f.fn;
+  return Fn::Other;
+}
+
 // A number, or minus one (`= 0`, `min = -1`): its unit is what it is bound to.
 bool IsNumber(const ast::Expr& e) {
   if (e.kind == ast::ExprKind::Number) return true;
@@ -56,6 +107,16 @@ constexpr int kMaxCheckDepth = 200;
 // frames (VarUnit, Bound, Expr, Operator, Ref), and a 1 MiB thread stack must hold the
 // chain under AddressSanitizer too (Bounds.NestedEvaluationOnASmallThreadStack).
 constexpr int kMaxInferChain = 24;
+
+// Values checked per batch (UnitChecker::Flush): enough that the check's code is loaded once
+// for many variables, few enough that their nodes are still in the data cache.
+constexpr size_t kBatch = 64;
+
+// Node::unit_slot of a variable without a declared unit: its inference's progress.
+constexpr int kNoUnit = -2;            // nothing tried yet
+constexpr int kInferred = -3;          // it has an entry in UnitChecker::inferred_
+constexpr int kInferredNothing = -4;   // its binding gave no unit, and no use gave one yet
+constexpr int kInferring = -5;         // its binding is being read (a cycle reads no unit)
 
 Unit Seconds() {
   Unit s;
@@ -79,8 +140,11 @@ class UnitChecker {
  public:
   explicit UnitChecker(Diagnostics& diags) : diags_(diags) {}
   // Every value given to `var`: its binding (declaration, modifier, --set or equation), its
-  // elements' equations, and its start, min and max attributes.
-  void CheckVar(Node* var);
+  // elements' equations, and its start, min and max attributes. Its declared unit is read
+  // at once; the values are checked in batches (Flush), in the order shown: between two
+  // batches the emitter's walk runs without the check's code in the instruction cache.
+  void Show(Node* var);
+  void Flush();
   // The units a spring on flanges takes from the joint its flanges act on.
   void SpringUnits(const InstanceTree& tree, const Links& links);
   // A variable's unit: declared, or inferred (from its binding or from its uses).
@@ -89,6 +153,7 @@ class UnitChecker {
  private:
   struct Declared {
     bool ok = false;
+    int index = -1;  // in table_ (Node::unit_slot)
     Unit unit;
     std::string text;
   };
@@ -100,6 +165,7 @@ class UnitChecker {
   };
 
   void CheckBinding(Node* var, const ModValue& mv, const char* what, bool is_equation);
+  void Pend(Node* var, const ModValue* mv, const char* what, bool is_equation);  // a value for the batch
   // A joint's q or u without one unit: element k of a start array, or an element equation,
   // against the coordinate's unit.
   void CheckCoordinates(Node* var);
@@ -110,6 +176,9 @@ class UnitChecker {
   // The unit of e, the value of binding mv: a declaration's, a modifier's or an attribute's
   // (`binding`), or an equation's right side.
   UVal Bound(const ast::Expr& e, const ModValue& mv, bool binding);
+  // Bound of a binding read alike by several variables (`where`: see CheckBinding); *hit
+  // when an earlier answer was reused.
+  UVal BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, bool* hit);
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -129,32 +198,77 @@ class UnitChecker {
 
   Diagnostics& diags_;
   std::unordered_map<const ast::Expr*, Declared> declared_;  // unit string literal -> parsed
+  std::vector<const Declared*> table_;                        // declared_'s parsed units, by index
+  std::array<std::pair<const ast::Expr*, const Declared*>, 64> recent_{};  // FindDeclaredUnit's
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
+  struct Reuse {
+    UVal val;
+    const Iters* iters = nullptr;
+    bool binding = false;
+    bool valid = false;
+  };
+  struct ReuseHash {
+    size_t operator()(const std::pair<const ast::Expr*, std::intptr_t>& k) const {
+      return std::hash<const void*>()(k.first) * 31 + std::hash<std::intptr_t>()(k.second);
+    }
+  };
+  std::unordered_map<std::pair<const ast::Expr*, std::intptr_t>, Reuse, ReuseHash> reused_;  // BoundOnce's
+  long impure_ = 0;  // reads of inferred or implied units (BoundOnce keeps no answer that made one)
+  struct Pending {
+    Node* var;
+    const ModValue* mv;  // null: the joint coordinates of var (CheckCoordinates)
+    const char* what;
+    bool is_equation;
+  };
+  std::vector<Pending> pending_;  // values shown and not yet checked
+  bool flushing_ = false;
   int depth_ = 0;
   int chain_ = 0;                   // VarUnit's inference nesting (kMaxInferChain)
   bool factors_ = false;            // in a binding: a number in a product is a plain factor
-  const Node* last_var_ = nullptr;  // DeclaredUnit's last answer
-  const Declared* last_declared_ = nullptr;
 };
 
-void UnitChecker::CheckVar(Node* var) {
-  if (var->vtype != VType::Real && var->vtype != VType::Integer) return;
-  DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
+void UnitChecker::Show(Node* var) {
+  if ((var->vtype != VType::Real && var->vtype != VType::Integer) || diags_.Full()) return;
   // An array element's modifiers shared with element 1 (lang/elab_share.cpp) mean the same
-  // there: checked once, on element 1.
+  // there: checked once, on element 1, which was shown first (and parsed their unit).
   if (!var->shared_mod) {
+    DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
     const Mod& mods = var->mod;
-    if (mods.value) CheckBinding(var, *mods.value, "the value of", false);
-    for (const char* attr : {"start", "min", "max"})
-      if (auto it = mods.sub.find(attr); it != mods.sub.end() && it->second.value)
-        CheckBinding(var, *it->second.value, attr, false);
+    const ModValue* attrs[3] = {};  // start, min, max: one pass over the few attributes
+    for (const auto& [key, sub] : mods.sub) {
+      if (!sub.value) continue;
+      if (Is(key, "start")) attrs[0] = &*sub.value;
+      else if (Is(key, "min")) attrs[1] = &*sub.value;
+      else if (Is(key, "max")) attrs[2] = &*sub.value;
+    }
+    if (mods.value) Pend(var, &*mods.value, "the value of", false);
+    if (attrs[0]) Pend(var, attrs[0], "start", false);
+    if (attrs[1]) Pend(var, attrs[1], "min", false);
+    if (attrs[2]) Pend(var, attrs[2], "max", false);
   }
-  if (var->eq_binding) CheckBinding(var, *var->eq_binding, "", true);
-  for (const auto& [k, mv] : var->eq_elem_binding) CheckBinding(var, mv, "", !mv.from_set);
-  if (var->parent && var->parent->prim == Prim::Joint && (var->name == "q" || var->name == "u") &&
-      !var->shape.empty() && !DeclaredUnit(var))
-    CheckCoordinates(var);
+  if (var->eq_binding) Pend(var, &*var->eq_binding, "", true);
+  for (const auto& [k, mv] : var->eq_elem_binding) Pend(var, &mv, "", !mv.from_set);
+  if (var->parent && var->parent->prim == Prim::Joint && (Is(var->name, "q") || Is(var->name, "u")) &&
+      !var->shape.empty())
+    pending_.push_back({var, nullptr, nullptr, false});  // its coordinates, unless it declares one unit
+  if (pending_.size() >= kBatch) Flush();
+}
+
+void UnitChecker::Pend(Node* var, const ModValue* mv, const char* what, bool is_equation) {
+  // A number takes the unit it is given (min = 0): nothing to check, nothing to infer.
+  if (mv->expr && !IsNumber(*mv->expr)) pending_.push_back({var, mv, what, is_equation});
+}
+
+void UnitChecker::Flush() {
+  if (flushing_) return;
+  flushing_ = true;
+  for (const Pending& p : pending_) {
+    if (p.mv) CheckBinding(p.var, *p.mv, p.what, p.is_equation);
+    else if (!diags_.Full() && !DeclaredUnit(p.var)) CheckCoordinates(p.var);
+  }
+  pending_.clear();
+  flushing_ = false;
 }
 
 void UnitChecker::CheckCoordinates(Node* var) {
@@ -224,7 +338,13 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   const UVal want = VarUnit(var);  // an undeclared scalar: its binding checked inside, once
   const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
   if (want.kind != UVal::Known && own && var->shape.empty()) return;
-  const UVal got = Bound(*mv.expr, mv, !is_equation);
+  // Where the answer may be reused: the scope of a slice, or the copy id (negative).
+  const std::intptr_t where = mv.pre ? reinterpret_cast<std::intptr_t>(mv.scope)
+                              : mv.scope && mv.scope->kind == Node::kClass && mv.scope->unit_slot >= 0
+                                  ? -1 - static_cast<std::intptr_t>(mv.scope->unit_slot)
+                                  : 0;
+  bool reused = false;
+  UVal got = where ? BoundOnce(mv, !is_equation, where, &reused) : Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
     InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
@@ -232,6 +352,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   }
   if (got.soft) return;
   if (want.unit.Agrees(got.unit)) return;
+  if (reused && where < 0) got = Bound(*mv.expr, mv, !is_equation);  // the notes name this copy's declarations
   const std::string name = "'" + var->path + "'";
   std::string msg = is_equation ? "the two sides of the equation have different units: " + name + " is " + Shown(want) +
                                       ", the right side " + Shown(got)
@@ -255,22 +376,37 @@ void UnitChecker::NoteOrigin(Diagnostic& d, const UVal& v) {
 }
 
 const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
-  // Asked several times in a row for the variable being checked.
-  if (var == last_var_) return last_declared_;
-  last_var_ = var;
-  last_declared_ = FindDeclaredUnit(var);
-  return last_declared_;
+  // Kept on the node: a variable is read by every binding that names it.
+  if (var->unit_slot >= 0) return table_[static_cast<size_t>(var->unit_slot)];
+  if (var->unit_slot <= kNoUnit) return nullptr;
+  const Declared* d = FindDeclaredUnit(var);
+  var->unit_slot = d ? d->index : kNoUnit;
+  return d;
 }
 
 const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
   const Mod& mods = var->Modifiers();
   if (mods.sub.empty()) return nullptr;
-  auto it = mods.sub.find("unit");
-  if (it == mods.sub.end() || !it->second.value || !it->second.value->expr) return nullptr;
-  const ast::Expr* e = it->second.value->expr;
+  // "unit" sorts after every other attribute's name: when there, it is nearly always last.
+  const Mod* unit = nullptr;
+  if (const auto& last = *mods.sub.rbegin(); Is(last.first, "unit")) {
+    unit = &last.second;
+  } else if (std::string_view(last.first) > std::string_view("unit")) {
+    if (auto it = mods.sub.find(std::string_view("unit")); it != mods.sub.end()) unit = &it->second;
+  }
+  if (!unit || !unit->value || !unit->value->expr) return nullptr;
+  const ast::Expr* e = unit->value->expr;
+  // A direct-mapped cache in front of declared_: a model has a few dozen unit strings.
+  auto& recent = recent_[(reinterpret_cast<std::uintptr_t>(e) >> 4) % recent_.size()];
+  if (recent.first == e) return recent.second;
   if (e->kind != ast::ExprKind::String || e->text.empty()) return nullptr;
+  // A unit string not seen yet may be reported (E236): the values shown before are checked
+  // first, so that the messages come in the order of the walk.
+  if (!flushing_ && !pending_.empty() && !declared_.count(e)) Flush();
   auto [slot, fresh] = declared_.try_emplace(e);
   if (fresh) {
+    slot->second.index = static_cast<int>(table_.size());
+    table_.push_back(&slot->second);
     std::string error;
     slot->second.ok = ParseUnit(e->text, &slot->second.unit, &error);
     slot->second.text = e->text;
@@ -278,34 +414,55 @@ const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
       diags_.Error(DiagCode::BadUnit, e->span, "\"" + e->text + "\" is not a unit: " + error)
           .hint = "Modelica unit syntax: \"N.m/rad\", \"kg.m2\", \"m/s2\", \"1\"; prefixes m, k, M, u, n, G...";
   }
-  return slot->second.ok ? &slot->second : nullptr;
+  recent = {e, slot->second.ok ? &slot->second : nullptr};
+  return recent.second;
 }
 
 UVal UnitChecker::VarUnit(const Node* var) {
   const Declared* d = DeclaredUnit(var);
   if (!d && !implied_.empty())
-    if (auto it = implied_.find(var); it != implied_.end() && it->second.ok) d = &it->second;
+    if (auto it = implied_.find(var); it != implied_.end() && it->second.ok) {
+      d = &it->second;
+      ++impure_;  // from the joint the spring acts on: may differ between array elements
+    }
   if (d) {
     UVal v = UVal::Of(d->unit);
     v.origin = var;
     v.text = &d->text;
     return v;
   }
-  if (auto it = inferred_.find(var); it != inferred_.end()) return it->second.busy ? UVal{} : it->second.val;
+  ++impure_;
+  const int state = var->unit_slot;
+  if (state == kInferredNothing || state == kInferring) return UVal{};
+  if (state == kInferred) {
+    const Inferred& slot = inferred_.find(var)->second;
+    return slot.busy ? UVal{} : slot.val;
+  }
   // Inferred from the binding, once: an output's unit from its expression.
   const ModValue* b = var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr;
-  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr) || chain_ >= kMaxInferChain) return UVal{};
-  inferred_[var].busy = true;
+  if (chain_ >= kMaxInferChain) return UVal{};  // tried again where the chain is shorter
+  if (!b || !b->expr || !var->shape.empty() || IsNumber(*b->expr)) {
+    var->unit_slot = kInferredNothing;
+    return UVal{};
+  }
+  var->unit_slot = kInferring;
   ++chain_;
   UVal v = Bound(*b->expr, *b, var->Modifiers().value && b == &*var->Modifiers().value);
   --chain_;
-  Inferred& slot = inferred_[var];  // the map may have grown
-  slot.busy = false;
-  if (v.kind == UVal::Known) {
-    v.origin = var;
-    slot.val = v;
+  if (v.kind == UVal::Known) v.origin = var;
+  if (var->unit_slot == kInferred) {  // a use inside its own binding gave it a unit meanwhile
+    Inferred& slot = inferred_[var];
+    slot.busy = false;
+    if (v.kind == UVal::Known) slot.val = v;
+    return slot.val;
   }
-  return slot.val;
+  if (v.kind != UVal::Known) {
+    var->unit_slot = kInferredNothing;  // no entry in inferred_: most undeclared variables
+    return UVal{};
+  }
+  inferred_[var].val = v;
+  var->unit_slot = kInferred;
+  return v;
 }
 
 void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at) {
@@ -321,7 +478,10 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
     }
   }
   if (n->kind != Node::kVar || !n->shape.empty() || DeclaredUnit(n)) return;
+  ++impure_;
   Inferred& slot = inferred_[n];
+  if (n->unit_slot == kInferring) slot.busy = true;
+  n->unit_slot = kInferred;
   if (slot.val.kind == UVal::Known) {
     if (!slot.from_use || slot.val.unit.Agrees(u.unit)) return;
     auto& d = diags_.Error(DiagCode::UnitConflict, at,
@@ -338,6 +498,22 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   slot.where = at;
 }
 
+// A binding's unit found once for several variables: a slice of an array's modifier
+// (`Revolute j[N](axis = {...})`) is the whole array's expression, read in the same scope by
+// every element; a binding read inside an array element copied from element 1 reads names
+// of the same declared units in every copy (Node::unit_slot). Reused while it read only
+// declared units and reported nothing (inferred units may change, implied ones differ).
+UVal UnitChecker::BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, bool* hit) {
+  Reuse& r = reused_[{mv.expr, where}];
+  *hit = r.valid && r.iters == mv.iters.get() && r.binding == binding;
+  if (*hit) return r.val;
+  const long impure = impure_;
+  const size_t reported = diags_.All().size();
+  const UVal v = Bound(*mv.expr, mv, binding);
+  r = Reuse{v, mv.iters.get(), binding, impure_ == impure && diags_.All().size() == reported};
+  return v;
+}
+
 UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
   const bool outer = factors_;
   factors_ = binding;
@@ -348,36 +524,38 @@ UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
 
 UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters) {
   if (depth_ >= kMaxCheckDepth) return UVal{};
-  ++depth_;
-  UVal r;
+  if (e.kind == ast::ExprKind::Number || e.kind == ast::ExprKind::Range) return UVal::Lit();
+  // Counts this level while the answer is made in place (no copy of it on the way out).
+  struct Level {
+    int& depth;
+    explicit Level(int& d) : depth(++d) {}
+    ~Level() { --depth; }
+  } level(depth_);
   switch (e.kind) {
-    case ast::ExprKind::Number: r = UVal::Lit(); break;
-    case ast::ExprKind::Ref: r = Ref(e, scope, iters); break;
-    case ast::ExprKind::Call: r = Call(e, scope, iters); break;
+    case ast::ExprKind::Ref: return Ref(e, scope, iters);
+    case ast::ExprKind::Call: return Call(e, scope, iters);
     case ast::ExprKind::Unary:
-    case ast::ExprKind::Binary: r = Operator(e, scope, iters); break;
+    case ast::ExprKind::Binary: return Operator(e, scope, iters);
     case ast::ExprKind::Array: {
       UVal acc = UVal::Lit();
       bool mixed = false;
       for (const auto& a : e.args) Element(*a, scope, iters, &acc, &mixed);
-      r = mixed ? UVal{} : acc;
-      break;
+      return mixed ? UVal{} : acc;
     }
     case ast::ExprKind::Matrix: {
       UVal acc = UVal::Lit();
       bool mixed = false;
       for (const auto& row : e.rows)
         for (const auto& x : row) Element(*x, scope, iters, &acc, &mixed);
-      r = mixed ? UVal{} : acc;
-      break;
+      return mixed ? UVal{} : acc;
     }
-    case ast::ExprKind::Comprehension:
-      r = e.args.empty() ? UVal{} : Expr(*e.args[0], scope, nullptr);
+    case ast::ExprKind::Comprehension: {
+      UVal r = e.args.empty() ? UVal{} : Expr(*e.args[0], scope, nullptr);
       if (r.kind == UVal::Unknown && !e.args.empty() && e.args[0]->kind == ast::ExprKind::Ref &&
           e.args[0]->parts.size() == 1 && e.args[0]->parts[0].name == e.text)
         r = UVal::Lit();
-      break;
-    case ast::ExprKind::Range: r = UVal::Lit(); break;
+      return r;
+    }
     case ast::ExprKind::If: {
       UVal acc;
       const ast::Expr* acc_e = nullptr;
@@ -388,13 +566,10 @@ UVal UnitChecker::Expr(const ast::Expr& e, const Node* scope, const Iters* iters
         acc = acc_e ? Same(acc, acc_e, v, e.args[i].get(), e.args[i]->span, "the branches of the if-expression", scope) : v;
         acc_e = e.args[i].get();
       }
-      r = acc;
-      break;
+      return acc;
     }
-    default: break;  // strings, Booleans, ':' and 'end' have no unit
+    default: return UVal{};  // strings, Booleans, ':' and 'end' have no unit
   }
-  --depth_;
-  return r;
 }
 
 // A reference walked through the instance tree without evaluating subscripts: every
@@ -404,7 +579,7 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
   if (e.parts.size() == 1 && head.subscripts.empty() && iters && iters->count(head.name)) return UVal::Lit();
   for (const auto& p : e.parts)
     for (const auto& s : p.subscripts)
-      if (s) Expr(*s, scope, iters);  // operators inside subscripts are checked too
+      if (s && s->kind != ast::ExprKind::Number) Expr(*s, scope, iters);  // operators inside subscripts are checked too
   const Node* n = scope ? scope->Child(head.name) : nullptr;
   if (!n) {
     if (e.parts.size() == 1 && head.name == "time") {
@@ -438,6 +613,8 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
 }
 
 void UnitChecker::Element(const ast::Expr& x, const Node* scope, const Iters* iters, UVal* acc, bool* mixed) {
+  // A literal (-0.5 too) joins any unit: no need to go down (where Expr would reach it).
+  if (x.kind == ast::ExprKind::Number ? depth_ < kMaxCheckDepth : IsNumber(x) && depth_ + 1 < kMaxCheckDepth) return;
   const UVal v = Expr(x, scope, iters);
   if (v.kind == UVal::Unknown) *mixed = true;
   if (v.kind != UVal::Known) return;
@@ -503,62 +680,64 @@ UVal UnitChecker::NeedDimensionless(const UVal& a, const ast::Expr& arg, const s
 }
 
 UVal UnitChecker::Call(const ast::Expr& e, const Node* scope, const Iters* iters) {
-  const std::string& fn = e.parts.empty() ? std::string() : e.parts.back().name;
+  static const std::string kNone;
+  const std::string& fn = e.parts.empty() ? kNone : e.parts.back().name;
   SmallVec<UVal, 4> a;
   for (const auto& x : e.args) a.push_back(Expr(*x, scope, iters));
   for (const auto& na : e.named_args)
     if (na.value) Expr(*na.value, scope, iters);
-  auto arg = [&](size_t i) { return i < a.size() ? a[i] : UVal{}; };
-  const UVal x = arg(0);
-  const UVal one = UVal::Of(Unit::One());
-  if (fn == "sin" || fn == "cos" || fn == "tan" || fn == "exp" || fn == "log" || fn == "sinh" || fn == "cosh" ||
-      fn == "tanh")
-    return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, one);
-  if (fn == "asin" || fn == "acos" || fn == "atan")
-    return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, UVal::Of(Radians()));
-  if (fn == "atan2") {
-    if (a.size() == 2) Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, "the two arguments of 'atan2'", scope);
-    return UVal::Of(Radians());
-  }
-  if (fn == "sqrt") {
-    if (x.kind != UVal::Known) return x.kind == UVal::Literal ? UVal::Lit() : UVal{};
-    for (auto t : x.unit.twice)
-      if (t % 2) return UVal{};  // a quarter power: beyond what is kept
-    UVal r = UVal::Of(x.unit.Pow(1, 2));
-    r.soft = x.soft;
-    return r;
-  }
-  if (fn == "der") return x.kind == UVal::Known ? UVal::Of(x.unit / Seconds()) : x;
-  if (fn == "min" || fn == "max" || fn == "mod") {
-    if (a.size() == 2) return Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, fn == "min" ? "the arguments of 'min'" : fn == "max" ? "the arguments of 'max'" : "the arguments of 'mod'", scope);
-    return x;
-  }
-  if (fn == "abs" || fn == "floor" || fn == "ceil" || fn == "norm" || fn == "transpose" || fn == "sum" || fn == "skew" ||
-      fn == "vector" || fn == "diagonal")
-    return x.kind == UVal::Known ? [&] { UVal r = UVal::Of(x.unit); r.soft = x.soft; return r; }() : x;
-  if (fn == "fill") return x;
-  if (fn == "cross" || fn == "dot" || fn == "outerProduct") {
-    if (a.size() != 2 || a[0].kind == UVal::Unknown || a[1].kind == UVal::Unknown) return UVal{};
-    if (a[0].kind == UVal::Literal && a[1].kind == UVal::Literal) return UVal::Lit();
-    const Unit ua = a[0].kind == UVal::Known ? a[0].unit : Unit::One();
-    const Unit ub = a[1].kind == UVal::Known ? a[1].unit : Unit::One();
-    return UVal::Of(ua * ub);
-  }
-  if (fn == "sign" || fn == "identity" || fn == "zeros" || fn == "ones" || fn == "size" || fn == "integer")
-    return UVal::Lit();
-  if (fn == "meshVolume") return UVal::Of(Metres(3));
-  if (fn == "meshCentre") return UVal::Of(Metres(1));
-  if (fn == "meshInertia") return UVal::Of(Metres(5));
-  if (fn == "cat") {  // the arguments were checked above; their units joined here
-    UVal acc = UVal::Lit();
-    bool mixed = false;
-    for (size_t i = 1; i < a.size(); ++i) {
-      if (a[i].kind == UVal::Unknown) mixed = true;
-      if (a[i].kind != UVal::Known) continue;
-      if (acc.kind != UVal::Known) acc = a[i];
-      else if (!acc.unit.Agrees(a[i].unit)) mixed = true;
+  const UVal x = a.empty() ? UVal{} : a[0];
+  switch (FnOf(fn)) {
+    case Fn::Dimensionless: return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, UVal::Of(Unit::One()));
+    case Fn::Inverse: return a.empty() ? UVal{} : NeedDimensionless(x, *e.args[0], fn, UVal::Of(Radians()));
+    case Fn::Atan2:
+      if (a.size() == 2) Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span, "the two arguments of 'atan2'", scope);
+      return UVal::Of(Radians());
+    case Fn::Sqrt: {
+      if (x.kind != UVal::Known) return x.kind == UVal::Literal ? UVal::Lit() : UVal{};
+      for (auto t : x.unit.twice)
+        if (t % 2) return UVal{};  // a quarter power: beyond what is kept
+      UVal r = UVal::Of(x.unit.Pow(1, 2));
+      r.soft = x.soft;
+      return r;
     }
-    return mixed ? UVal{} : acc;
+    case Fn::Der: return x.kind == UVal::Known ? UVal::Of(x.unit / Seconds()) : x;
+    case Fn::Pair:
+      if (a.size() == 2)
+        return Same(a[0], e.args[0].get(), a[1], e.args[1].get(), e.span,
+                    Is(fn, "min") ? "the arguments of 'min'" : Is(fn, "max") ? "the arguments of 'max'" : "the arguments of 'mod'",
+                    scope);
+      return x;
+    case Fn::Keep: {
+      if (x.kind != UVal::Known) return x;
+      UVal r = UVal::Of(x.unit);
+      r.soft = x.soft;
+      return r;
+    }
+    case Fn::Fill: return x;
+    case Fn::Product: {
+      if (a.size() != 2 || a[0].kind == UVal::Unknown || a[1].kind == UVal::Unknown) return UVal{};
+      if (a[0].kind == UVal::Literal && a[1].kind == UVal::Literal) return UVal::Lit();
+      const Unit ua = a[0].kind == UVal::Known ? a[0].unit : Unit::One();
+      const Unit ub = a[1].kind == UVal::Known ? a[1].unit : Unit::One();
+      return UVal::Of(ua * ub);
+    }
+    case Fn::Plain: return UVal::Lit();
+    case Fn::MeshVolume: return UVal::Of(Metres(3));
+    case Fn::MeshCentre: return UVal::Of(Metres(1));
+    case Fn::MeshInertia: return UVal::Of(Metres(5));
+    case Fn::Cat: {  // the arguments were checked above; their units joined here
+      UVal acc = UVal::Lit();
+      bool mixed = false;
+      for (size_t i = 1; i < a.size(); ++i) {
+        if (a[i].kind == UVal::Unknown) mixed = true;
+        if (a[i].kind != UVal::Known) continue;
+        if (acc.kind != UVal::Known) acc = a[i];
+        else if (!acc.unit.Agrees(a[i].unit)) mixed = true;
+      }
+      return mixed ? UVal{} : acc;
+    }
+    case Fn::Other: break;
   }
   return UVal{};
 }
@@ -641,11 +820,10 @@ UnitCheck::UnitCheck(const InstanceTree& tree, const Links& links, const SourceM
 
 UnitCheck::~UnitCheck() = default;
 
-void UnitCheck::Visit(Node* var) {
-  if (!found_.Full()) checker_->CheckVar(var);
-}
+void UnitCheck::Visit(Node* var) { checker_->Show(var); }
 
 void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mechanism* m) {
+  checker_->Flush();
   if (diags.HasErrors()) return;
   // The messages, in the order found (the cap's message P105 becomes diags' own).
   for (const Diagnostic& d : found_.All()) {

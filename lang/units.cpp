@@ -201,10 +201,10 @@ Unit Unit::operator/(const Unit& o) const {
 Unit Unit::Pow(int num, int den) const {
   Unit r;
   for (int i = 0; i < kBase; ++i) {
-    const int t = twice[static_cast<size_t>(i)] * num / den;
+    const int t = den == 1 ? twice[static_cast<size_t>(i)] * num : twice[static_cast<size_t>(i)] * num / den;
     r.twice[static_cast<size_t>(i)] = static_cast<std::int16_t>(t);
   }
-  r.scale = std::pow(scale, static_cast<double>(num) / den);
+  r.scale = scale == 1 ? 1 : std::pow(scale, static_cast<double>(num) / den);  // pow(1, x) is 1
   return r;
 }
 
@@ -215,7 +215,9 @@ bool Unit::SameDimension(const Unit& o) const {
 }
 
 bool Unit::Agrees(const Unit& o) const {
-  return SameDimension(o) && std::abs(scale - o.scale) <= 1e-9 * std::max(std::abs(scale), std::abs(o.scale));
+  if (!SameDimension(o)) return false;
+  if (scale == o.scale && std::isfinite(scale)) return true;  // equal scales, the common case
+  return std::abs(scale - o.scale) <= 1e-9 * std::max(std::abs(scale), std::abs(o.scale));
 }
 
 bool Unit::Dimensionless() const { return SameDimension(Unit::One()); }

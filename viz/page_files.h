@@ -1,4 +1,4 @@
-// The viewer page's own files (viz/page/), embedded at build time by embed_page.cmake.
+// The viewer page's own files (viz/page/), embedded at build time by cmake/embed_files.cmake.
 #pragma once
 
 #include <cstddef>

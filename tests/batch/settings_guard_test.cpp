@@ -9,6 +9,7 @@
 
 #include "batch/file_guard.h"
 #include "batch/settings_record.h"
+#include "tests/support/dead_pid.h"
 
 namespace kanesim::batch {
 namespace {
@@ -66,14 +67,6 @@ TEST(FileGuard, SameFileByInode) {
   EXPECT_EQ(OverwrittenInput(d + "/new", {d + "/b", d + "/a"}), "");
 }
 
-long DeadPid() {
-  pid_t p = ::fork();
-  if (p == 0) ::_exit(0);
-  int status = 0;
-  ::waitpid(p, &status, 0);
-  return p;
-}
-
 // Wrong if a temporary of a process that still runs is removed, or a stale one of
 // ours is kept, or a file that only looks similar is touched.
 TEST(FileGuard, StaleTemporariesOnly) {
@@ -81,7 +74,7 @@ TEST(FileGuard, StaleTemporariesOnly) {
   const std::string target = d + "/g.csv";
   const std::string mine = TempPathFor(target);
   const std::string host = mine.substr(target.size() + 5, mine.rfind('.') - target.size() - 5);
-  const std::string dead = std::to_string(DeadPid());
+  const std::string dead = std::to_string(test::DeadPid());
   for (const std::string& f : {mine, target + ".tmp." + dead, target + ".tmp." + host + "." + dead,
                                target + ".tmp.elsewhere." + dead, target + ".tmpx." + dead, d + "/h.csv.tmp." + dead})
     std::ofstream(f) << "x";

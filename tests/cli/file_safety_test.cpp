@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tests/support/cli_util.h"
+#include "tests/support/dead_pid.h"
 
 namespace kanesim::clitest {
 namespace {
@@ -133,15 +134,6 @@ TEST(FileSafety, TwoConcurrentSweepsDoNotLoseRows) {
   EXPECT_EQ(CsvRows(d + "/out/summary.csv"), a == 0 ? 60 : 50);
 }
 
-// A pid that ran and ended (so no process has it now).
-long DeadPid() {
-  pid_t p = ::fork();
-  if (p == 0) ::_exit(0);
-  int status = 0;
-  ::waitpid(p, &status, 0);
-  return p;
-}
-
 std::string Host() {
   char buf[256] = {};
   ::gethostname(buf, sizeof buf - 1);
@@ -154,7 +146,7 @@ std::string Host() {
 TEST(FileSafety, StaleTemporariesAreRemovedLiveOnesKept) {
   std::string d = Work("safety_temps");
   Write(d + "/g.toml", "model = \"" + kSpring + "\"\n[run]\nstop_time = 0.1\n");
-  const std::string dead = std::to_string(DeadPid()), live = std::to_string(::getpid());
+  const std::string dead = std::to_string(test::DeadPid()), live = std::to_string(::getpid());
   const std::vector<std::string> stale = {"g.csv.tmp." + dead, "g.csv.tmp." + Host() + "." + dead};
   const std::vector<std::string> kept = {"g.csv.tmp." + live, "g.csv.tmp.otherhost." + dead, "g.csv.tmpfile"};
   for (const auto& f : stale) Write(d + "/" + f, "x");

@@ -10,6 +10,7 @@
 
 #include "runtime/kinematics/joint_kinematics.h"
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 #include "compiler/compiler.h"
 
 namespace kanesim::test {
@@ -103,15 +104,8 @@ TEST(StartQuaternion, ZeroIsK306) {
 
 // A pendulum about `axis` (a rod along x, gravity along -y): j.q at t = 1.
 double PendulumAngle(const std::string& axis) {
-  auto l = LoadModel("model M\n"
-                     "  World world(g = {0, -9.81, 0});\n"
-                     "  Revolute j(axis = " + axis + ", q(start = 0.3));\n"
-                     "  Rod rod(L = 1, m = 1);\n"
-                     "equation\n"
-                     "  connect(world.frame_b, j.frame_a);\n"
-                     "  connect(j.frame_b, rod.frame_a);\n"
-                     "end M;\n",
-                     {}, {}, true);
+  auto l = LoadModel(PendulumText{.model = "M", .name = "j", .axis = axis, .mods = ", q(start = 0.3)"}.Text(), {}, {},
+                     true);
   EXPECT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   if (!l || !l->prog) return NAN;
   sim::SimResult r;

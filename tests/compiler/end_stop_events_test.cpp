@@ -9,6 +9,7 @@
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -27,14 +28,7 @@ std::string Num(double x) {
 const double kW = std::sqrt(1.5 * kG);
 
 std::string Pendulum(double q0, const std::string& stop, const std::string& extra_eq = "") {
-  return "model P\n"
-         "  World world(g = {0, -9.81, 0});\n"
-         "  Revolute j1(axis = {0, 0, 1}, q(start = " + Num(q0) + ")" + stop + ");\n"
-         "  Rod rod(L = 1, m = 1);\n"
-         "equation\n"
-         "  connect(world.frame_b, j1.frame_a);\n"
-         "  connect(j1.frame_b, rod.frame_a);\n" + extra_eq +
-         "end P;\n";
+  return PendulumText{.mods = ", q(start = " + Num(q0) + ")" + stop, .equations = extra_eq}.Text();
 }
 
 // Time for the pendulum released at rest at phi0 > 0 to swing down through 0 to phi < 0
@@ -160,18 +154,7 @@ TEST(EndStopEvents, RestsOnTheStopUntilTheReactionWouldPull) {
 
 // Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7) whose first joint stops at q_min.
 std::string DoublePendulum(double q_min, double e) {
-  return "model D\n"
-         "  World world(g = {0, -9.81, 0});\n"
-         "  Revolute j1(axis = {0, 0, 1}, q_min = " + Num(q_min) + ", restitution = " + Num(e) + ");\n"
-         "  Revolute j2(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));\n"
-         "  Rod rod1(L = 1, m = 1);\n"
-         "  Rod rod2(L = 0.8, m = 0.7);\n"
-         "equation\n"
-         "  connect(world.frame_b, j1.frame_a);\n"
-         "  connect(j1.frame_b, rod1.frame_a);\n"
-         "  connect(rod1.frame_b, j2.frame_a);\n"
-         "  connect(j2.frame_b, rod2.frame_a);\n"
-         "end D;\n";
+  return TwoRodText(", q_min = " + Num(q_min) + ", restitution = " + Num(e), ", q(start = 0.3), u(start = 0.5)");
 }
 
 // Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7); j1 hits q_min. Kane's impulsive form

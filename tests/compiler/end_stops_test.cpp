@@ -8,20 +8,14 @@
 
 #include "runtime/program/program.h"
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
 
 // A pendulum on joint j1 (Revolute or Prismatic) with `mods` added to its modifiers.
 std::string Pendulum(const std::string& joint, const std::string& mods) {
-  return "model M\n"
-         "  World world(g = {0, -9.81, 0});\n"
-         "  " + joint + " j1(axis = {0, 0, 1}" + mods + ");\n"
-         "  Rod rod(L = 1, m = 1);\n"
-         "equation\n"
-         "  connect(world.frame_b, j1.frame_a);\n"
-         "  connect(j1.frame_b, rod.frame_a);\n"
-         "end M;\n";
+  return PendulumText{.model = "M", .joint = joint, .mods = mods}.Text();
 }
 
 const rt::TreeJoint& OnlyJoint(const rt::Program& p) {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -228,15 +229,8 @@ TEST(PlaneContact, ChatteringJointRestsAtTheAccumulationPoint) {
   }
   const double q_min = phis - halfpi;
   const std::string text =
-      "model P\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Revolute j1(axis = {0, 0, 1}, q(start = " + Num(phi0 - halfpi) + "), q_min = " + Num(q_min) +
-      ", restitution = " + Num(e) + ");\n"
-      "  Rod rod(L = 1, m = 1);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, rod.frame_a);\n"
-      "end P;\n";
+      PendulumText{.mods = ", q(start = " + Num(phi0 - halfpi) + "), q_min = " + Num(q_min) + ", restitution = " + Num(e)}
+          .Text();
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   for (const IntegratorChoice& how : AllIntegrators()) {

@@ -12,6 +12,7 @@
 
 #include "sim/sensitivity.h"
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -81,15 +82,9 @@ TEST(WhenEvents, PendulumFiresAtTheEllipticIntegralTime) {
   const double phi0 = 1.0, phis = -0.5, k = std::sin(phi0 / 2);
   const double t1 = (std::comp_ellint_1(k) + std::ellint_1(k, std::asin(std::sin(0.25) / k))) / kW;
   const std::string text =
-      "model P\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Revolute j1(axis = {0, 0, 1}, q(start = " + Num(phi0 - kHalfPi) + "));\n"
-      "  Rod rod(L = 1, m = 1);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, rod.frame_a);\n"
-      "  when j1.q + pi / 2 < " + Num(phis) + " then\n    reinit(j1.u, 0);\n  end when;\n"
-      "end P;\n";
+      PendulumText{.mods = ", q(start = " + Num(phi0 - kHalfPi) + ")",
+                   .equations = "  when j1.q + pi / 2 < " + Num(phis) + " then\n    reinit(j1.u, 0);\n  end when;\n"}
+          .Text();
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   for (const IntegratorChoice& how : AllIntegrators()) {
@@ -112,20 +107,8 @@ TEST(WhenEvents, PendulumFiresAtTheEllipticIntegralTime) {
 // a coordinate moves at a speed jump.
 TEST(WhenEvents, ReinitOfOneSpeedKeepsTheOtherJointsMomentum) {
   const double L1 = 1, L2 = 0.8;
-  const std::string text =
-      "model D\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Revolute j1(axis = {0, 0, 1}, q(start = -0.3), u(start = 1.2));\n"
-      "  Revolute j2(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));\n"
-      "  Rod rod1(L = 1, m = 1);\n"
-      "  Rod rod2(L = 0.8, m = 0.7);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, rod1.frame_a);\n"
-      "  connect(rod1.frame_b, j2.frame_a);\n"
-      "  connect(j2.frame_b, rod2.frame_a);\n"
-      "  when time > 0.35 then\n    reinit(j1.u, 0);\n  end when;\n"
-      "end D;\n";
+  const std::string text = TwoRodText(", q(start = -0.3), u(start = 1.2)", ", q(start = 0.3), u(start = 0.5)",
+                                      "  when time > 0.35 then\n    reinit(j1.u, 0);\n  end when;\n");
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   for (const IntegratorChoice& how : AllIntegrators()) {

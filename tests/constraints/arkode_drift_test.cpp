@@ -27,8 +27,6 @@
 namespace kanesim::test {
 namespace {
 
-const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
-
 struct Rows {
   sim::SimResult result;
   double last_t = 0.0;
@@ -40,7 +38,7 @@ struct Rows {
 Rows RunArkode(int n, double rtol, rt::SolverPath solver) {
   rt::CompileOptions co;
   co.solver = solver;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(n)}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(n)}}, co);
   Rows o;
   if (!l || !l->prog) {
     ADD_FAILURE() << "the model did not compile";
@@ -51,11 +49,7 @@ Rows RunArkode(int n, double rtol, rt::SolverPath solver) {
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
   so.integrator = rt::Integrator::ArkodeErk;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= n; ++i) {
-    so.signals.push_back("rj[" + std::to_string(i) + "].q");
-    so.signals.push_back("rj[" + std::to_string(i) + "].u");
-  }
+  so.signals = lumped_crank::ChainSignals(n, {"q", "u"}, /*per_rod=*/true);
   sim::MemorySink sink;
   o.result = sim::Simulate(*l->prog, so, sink);
   if (sink.rows.empty()) return o;

@@ -42,9 +42,7 @@ void RunChain(int n, bool bdf, double rtol, double stop) {
   // on the chain of 40's multiplier form: tests/constraints/newton_krylov_chain_test.cpp),
   // so that the t = 2.04 crossing below still exercises the bridge's projected start.
   so.ida_linear_solver = sim::IdaLinearSolver::Dense;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= n; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
-  for (int i = 1; i <= n; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].u");
+  so.signals = lumped_crank::ChainSignals(n, {"q", "u"});
   sim::MemorySink sink;
   const sim::SimResult r = sim::Simulate(*l->prog, so, sink);
   ASSERT_FALSE(sink.rows.empty());

@@ -241,14 +241,8 @@ Outcome RunChain(int n, rt::Integrator integrator, double rtol, bool several_loo
   so.integrator = integrator;
   hooks.bridge_switches.several_loops = several_loops;
   hooks.bridge_switches.projected_estimate = projected_estimate;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= n; ++i) {
-    so.signals.push_back("rj[" + std::to_string(i) + "].q");
-    so.signals.push_back("rj[" + std::to_string(i) + "].u");
-  }
-  const double a = 0.6, m_rod = 0.5, m_coupler = 1.0, g = 9.81;
-  const lumped_crank::Crank c{(n + 1) * m_rod * a * a / 3.0 + n * m_coupler * a * a,
-                              g * ((n + 1) * m_rod * a / 2.0 + n * m_coupler * a)};
+  so.signals = lumped_crank::ChainSignals(n, {"q", "u"}, /*per_rod=*/true);
+  const lumped_crank::Crank c = lumped_crank::ParallelogramChain(n);
   rt::CompileOptions co;
   co.solver = solver;
   // Relative energy, for chains of every length.
@@ -489,14 +483,8 @@ Outcome RunChainDense(bool dense_check, double rtol, rt::SolverPath solver, bool
   // Without the check, the energy guard stops these runs at the rows the check is for
   // (tests/sim/energy_guard_test.cpp); here those rows are the point.
   if (!dense_check) so.energy_check = sim::EnergyCheck::kOff;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= n; ++i) {
-    so.signals.push_back("rj[" + std::to_string(i) + "].q");
-    so.signals.push_back("rj[" + std::to_string(i) + "].u");
-  }
-  const double a = 0.6, m_rod = 0.5, m_coupler = 1.0, g = 9.81;
-  const lumped_crank::Crank c{(n + 1) * m_rod * a * a / 3.0 + n * m_coupler * a * a,
-                              g * ((n + 1) * m_rod * a / 2.0 + n * m_coupler * a)};
+  so.signals = lumped_crank::ChainSignals(n, {"q", "u"}, /*per_rod=*/true);
+  const lumped_crank::Crank c = lumped_crank::ParallelogramChain(n);
   rt::CompileOptions co;
   co.solver = solver;
   return RunAndMeasure("/tests/stress/models/parallelogram_chain.mech", {{"N", std::to_string(n)}}, co, so, hooks, c, true);

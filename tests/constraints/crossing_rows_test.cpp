@@ -31,7 +31,6 @@
 namespace kanesim::test {
 namespace {
 
-const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
 constexpr int kLoops = 40;
 
 #if defined(__SANITIZE_ADDRESS__) || defined(KANESIM_STRESS_SHORT)
@@ -50,7 +49,7 @@ struct Rows {
 Rows RunChain(bool zone_rows) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(kLoops)}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(kLoops)}}, co);
   Rows o;
   if (!l || !l->prog) {
     ADD_FAILURE() << "the model did not compile";
@@ -63,8 +62,7 @@ Rows RunChain(bool zone_rows) {
   so.integrator = rt::Integrator::CvodeAdams;
   sim::TestHooks hooks;
   hooks.zone_rows = zone_rows;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].u");
+  so.signals = lumped_crank::ChainSignals(kLoops, {"u"});
   o.result = sim::Simulate(*l->prog, so, o.sink, hooks);
   if (o.sink.rows.empty()) return o;
   const lumped_crank::Crank c = lumped_crank::ParallelogramChain(kLoops);
@@ -115,7 +113,7 @@ struct ChainOfFour {
   ChainOfFour(rt::SolverPath form, const std::string& theta, std::vector<std::string> first) : names(std::move(first)) {
     rt::CompileOptions co;
     co.solver = form;
-    l = LoadModel(kRoot + kChain, {{"N", "4"}, {"theta0", theta}}, co);
+    l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", "4"}, {"theta0", theta}}, co);
     if (!l || !l->prog) {
       error = "the chain of four did not load";
       return;

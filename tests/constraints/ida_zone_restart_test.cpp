@@ -35,8 +35,6 @@
 namespace kanesim::test {
 namespace {
 
-const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
-
 TEST(IdaZoneRestart, ReducedChainOfFortyAtRtol1e12PastItsStopsAtSixAndThirteen) {
 #if defined(__SANITIZE_ADDRESS__) || defined(KANESIM_STRESS_SHORT)
   GTEST_SKIP() << "about 20 s in Release";
@@ -45,15 +43,14 @@ TEST(IdaZoneRestart, ReducedChainOfFortyAtRtol1e12PastItsStopsAtSixAndThirteen) 
   constexpr double kStop = 13.7;  // main stopped at t = 6.006; with the restart alone, 13.61
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(kLoops)}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(kLoops)}}, co);
   ASSERT_TRUE(l && l->prog);
   sim::SimOptions so;
   so.stop_time = kStop;
   so.interval = 0.01;
   so.rtol = so.atol = 1e-12;
   so.integrator = rt::Integrator::IDA;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
+  so.signals = lumped_crank::ChainSignals(kLoops, {"q"});
   sim::MemorySink sink;
   const sim::SimResult r = sim::Simulate(*l->prog, so, sink);
   ASSERT_FALSE(sink.rows.empty());

@@ -29,8 +29,6 @@
 namespace kanesim::test {
 namespace {
 
-const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
-
 #if defined(__SANITIZE_ADDRESS__) || defined(KANESIM_STRESS_SHORT)
 constexpr int kLoops = 4;  // sanitizers: ~30x slower; 18 states, still above the reuse threshold
 #else
@@ -47,7 +45,7 @@ ChainRun RunChain(rt::SolverPath solver, double rtol) {
   ChainRun out;
   rt::CompileOptions co;
   co.solver = solver;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(kLoops)}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(kLoops)}}, co);
   EXPECT_TRUE(l && l->prog);
   if (!l || !l->prog) return out;
   sim::SimOptions so;
@@ -55,8 +53,7 @@ ChainRun RunChain(rt::SolverPath solver, double rtol) {
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
   so.integrator = rt::Integrator::IDA;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
+  so.signals = lumped_crank::ChainSignals(kLoops, {"q"});
   sim::MemorySink sink;
   out.r = sim::Simulate(*l->prog, so, sink);
   out.states = rt::StateSize(*l->prog);

@@ -43,9 +43,7 @@ Outcome RunChain(int n, rt::Integrator method, sim::IdaLinearSolver ls, double r
   so.rtol = so.atol = rtol;
   so.integrator = method;
   so.ida_linear_solver = ls;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= n; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
-  for (int i = 1; i <= n; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].u");
+  so.signals = lumped_crank::ChainSignals(n, {"q", "u"});
   sim::MemorySink sink;
   o.r = sim::Simulate(*l->prog, so, sink);
   EXPECT_FALSE(sink.rows.empty());

@@ -29,13 +29,11 @@
 namespace kanesim::test {
 namespace {
 
-const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
-
 TEST(PartitionHold, PerturbedEvaluationsKeepThePartitionWhenHeld) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
   // Rod angle 2e-3 rad from the collinear change point: every loop near singular.
-  auto l = LoadModel(kRoot + kChain, {{"N", "4"}, {"theta0", "0.002"}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", "4"}, {"theta0", "0.002"}}, co);
   ASSERT_TRUE(l && l->prog);
   const rt::Program& p = *l->prog;
   auto ws = rt::MakeWorkspace(p);
@@ -79,7 +77,7 @@ struct ChainRun {
 ChainRun RunChain(int n, bool bdf, double rtol) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(n)}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(n)}}, co);
   ChainRun o;
   if (!l || !l->prog) {
     ADD_FAILURE() << "the model did not compile";
@@ -90,8 +88,7 @@ ChainRun RunChain(int n, bool bdf, double rtol) {
   so.interval = 0.01;
   so.rtol = so.atol = rtol;
   so.integrator = bdf ? rt::Integrator::CvodeBdf : rt::Integrator::IDA;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= n; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
+  so.signals = lumped_crank::ChainSignals(n, {"q"});
   sim::MemorySink sink;
   o.result = sim::Simulate(*l->prog, so, sink);
   if (sink.rows.empty()) return o;

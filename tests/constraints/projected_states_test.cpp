@@ -28,13 +28,11 @@
 namespace kanesim::test {
 namespace {
 
-const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
-
 TEST(ProjectedStates, FDoesNotReadThem) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
   const int loops = 4;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(loops)}, {"theta0", "0.7"}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(loops)}, {"theta0", "0.7"}}, co);
   ASSERT_TRUE(l && l->prog);
   const rt::Program& p = *l->prog;
   auto ws = rt::MakeWorkspace(p);
@@ -82,15 +80,14 @@ constexpr int kCvodeLoops = 10;
 void ChainJacobians(rt::Integrator integrator, const char* name, int loops, double max_evals_per_jacobian) {
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Dense;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(loops)}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(loops)}}, co);
   ASSERT_TRUE(l && l->prog);
   sim::SimOptions so;
   so.stop_time = 20.0;
   so.interval = 0.01;
   so.rtol = so.atol = 1e-10;
   so.integrator = integrator;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= loops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].q");
+  so.signals = lumped_crank::ChainSignals(loops, {"q"});
   sim::MemorySink sink;
   const sim::SimResult r = sim::Simulate(*l->prog, so, sink);
   EXPECT_EQ(r.status, sim::SimResult::Status::kOk) << r.message;

@@ -27,8 +27,6 @@
 namespace kanesim::test {
 namespace {
 
-const char* const kChain = "/tests/stress/models/parallelogram_chain.mech";
-
 struct Outcome {
   sim::SimResult::Status status;
   double energy = 0.0;  // max over the rows, relative to E
@@ -40,7 +38,7 @@ Outcome RunChain(bool hold) {
   constexpr int kLoops = 10;
   rt::CompileOptions co;
   co.solver = rt::SolverPath::Sparse;
-  auto l = LoadModel(kRoot + kChain, {{"N", std::to_string(kLoops)}}, co);
+  auto l = LoadModel(kRoot + lumped_crank::kChainPath, {{"N", std::to_string(kLoops)}}, co);
   if (!l || !l->prog) {
     ADD_FAILURE() << "the model did not compile";
     return {sim::SimResult::Status::kNumericalFailure};
@@ -52,8 +50,7 @@ Outcome RunChain(bool hold) {
   so.integrator = rt::Integrator::Dop853;
   sim::TestHooks hooks;
   hooks.hold_zone_rows = hold;
-  so.signals = {"rj0.q", "rj0.u"};
-  for (int i = 1; i <= kLoops; ++i) so.signals.push_back("rj[" + std::to_string(i) + "].u");
+  so.signals = lumped_crank::ChainSignals(kLoops, {"u"});
   sim::MemorySink sink;
   const sim::SimResult r = sim::Simulate(*l->prog, so, sink, hooks);
   Outcome o{r.status};

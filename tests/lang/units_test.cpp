@@ -153,6 +153,11 @@ INSTANTIATE_TEST_SUITE_P(
         Rule{"Angles", Pendulum("  parameter Real a(unit = \"1\") = 0.3;", "Revolute k(q(start = a));\n  Rod rod(L = 1);"),
              Pendulum("  parameter Real a(unit = \"deg\") = 30;", "Revolute k(q(start = a));\n  Rod rod(L = 1);"),
              "m.mech:5:24: error[E237]: the start value of 'k.q' has unit \"deg\", not \"rad\""},
+        // An angle's rate (a joint's u, its q's derivative: rad/s) is a frequency (1/s), a
+        // false alarm elsewhere for der(phi); the angle itself is not one.
+        Rule{"AngleRate", Pendulum("  output Real rate(unit = \"1/s\") = j.u;"),
+             Pendulum("  output Real rate(unit = \"1/s\") = j.q;"),
+             "m.mech:2:36: error[E237]: 'rate' has unit \"1/s\" but its value has unit \"rad\""},
         // sqrt halves exponents.
         Rule{"Sqrt", Pendulum("  parameter Real area(unit = \"m2\") = 1;", "Rod rod(L = sqrt(area));"),
              Pendulum("  parameter Real area(unit = \"m3\") = 1;", "Rod rod(L = sqrt(area));"),
@@ -235,6 +240,62 @@ TEST(UnitCheck, SetValuesWithAUnitAreConverted) {
   EXPECT_EQ(FirstLine(c.errors),
             "<--set k unit>:1:1: error[E237]: --set k: 'k' has unit \"N/m\", which \"kg\" cannot be converted to")
       << c.errors;
+}
+
+// Elements 2..n of an array are copies of element 1 and the check reads a binding once for
+// all of them (lang/elab_units.cpp, BoundOnce): each element's mistake must still be reported,
+// with notes naming that element's declarations, and a unit that differs between elements
+// (a spring's stiffness takes the unit of the joint it acts on) must be read in each.
+TEST(UnitCheck, EachArrayElementIsCheckedWithItsOwnNames) {
+  const std::string cells =
+      "model P\n  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"s\") = a;\nend P;\n"
+      "model M\n  P p[3];\n  World world;\nend M;\n";
+  const std::string errors = Check(cells).errors;
+  for (const char* k : {"1", "2", "3"}) {
+    const std::string e = std::string("p[") + k + "]";
+    EXPECT_NE(errors.find("m.mech:3:34: error[E237]: '" + e + ".b' has unit \"s\" but its value has unit \"m\""),
+              std::string::npos) << errors;
+    EXPECT_NE(errors.find("m.mech:2:18: note: '" + e + ".a' has unit \"m\""), std::string::npos) << errors;
+    EXPECT_NE(errors.find("hint: the value must be in \"s\"; check the unit of '" + e + ".a'"), std::string::npos)
+        << errors;
+  }
+  const std::string springs =
+      "model Cell\n  TorsionSpring s(c = 10);\n  parameter Real check(unit = \"N.m/rad\") = s.c;\nend Cell;\n"
+      "model M\n  World world;\n  Revolute r1(axis = {0, 0, 1});\n  Revolute r2(axis = {0, 1, 0});\n"
+      "  Prismatic p(axis = {1, 0, 0});\n  Body b1(m = 1, I = identity(3));\n  Body b2(m = 1, I = identity(3));\n"
+      "  Body b3(m = 1, I = identity(3));\n  Cell cells[3];\nequation\n  connect(world.frame_b, r1.frame_a);\n"
+      "  connect(r1.frame_b, b1.frame_a);\n  connect(b1.frame_a, r2.frame_a);\n  connect(r2.frame_b, b2.frame_a);\n"
+      "  connect(b2.frame_a, p.frame_a);\n  connect(p.frame_b, b3.frame_a);\n"
+      "  connect(cells[1].s.flange_b, r1.drive);\n  connect(cells[2].s.flange_b, r2.drive);\n"
+      "  connect(cells[3].s.flange_b, p.drive);\nend M;\n";
+  const std::string spring_errors = Check(springs).errors;
+  EXPECT_EQ(FirstLine(spring_errors),
+            "m.mech:3:44: error[E237]: 'cells[3].check' has unit \"N.m/rad\" but its value has unit \"N/m\"")
+      << spring_errors;
+  EXPECT_EQ(spring_errors.find("cells[1]"), std::string::npos) << spring_errors;
+  EXPECT_EQ(spring_errors.find("cells[2]"), std::string::npos) << spring_errors;
+}
+
+// The check reads declared units as the emitter shows each variable and the values in
+// batches (lang/elab_units.cpp, UnitChecker::Flush): the messages still come in the order
+// of the declarations, a unit string's own error (E236) where it is first read.
+TEST(UnitCheck, MessagesComeInTheOrderOfTheDeclarations) {
+  const std::string errors =
+      Check("model M\n  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"s\") = a;\n"
+            "  parameter Real c(unit = \"furlong\") = 1;\n  parameter Real d(unit = \"kg\") = a + e;\n"
+            "  parameter Real e(unit = \"parsec\") = 2;\n  parameter Real f(unit = \"kg\") = a;\n"
+            "  World world;\nend M;\n")
+          .errors;
+  std::string firsts;
+  for (size_t at = errors.find("m.mech:"); at != std::string::npos; at = errors.find("\nm.mech:", at + 1)) {
+    const size_t b = errors[at] == '\n' ? at + 1 : at;
+    const std::string line = errors.substr(b, errors.find('\n', b) - b);
+    if (line.find(": error[") != std::string::npos) firsts += line.substr(0, line.find(']') + 1) + "\n";
+  }
+  EXPECT_EQ(firsts,
+            "m.mech:3:34: error[E237]\nm.mech:4:27: error[E236]\nm.mech:6:27: error[E236]\nm.mech:5:35: error[E237]\n"
+            "m.mech:7:35: error[E237]\n")
+      << errors;
 }
 
 // Every example with one declared unit changed (to another dimension, or for a plain symbol

@@ -13,6 +13,7 @@
 
 #include "linearize/linearize.h"
 #include "tests/support/load_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -21,18 +22,8 @@ constexpr double kG = 9.81;
 const std::string kStopModel = kRoot + "/tests/linearize/models/stop_double_pendulum.mech";
 
 std::string Rods(const std::string& j1_modifiers, double q1) {
-  return "model D\n"
-         "  World world(g = {0, -9.81, 0});\n"
-         "  Revolute j1(axis = {0, 0, 1}, q(start = " + std::to_string(q1) + ")" + j1_modifiers + ");\n"
-         "  Revolute j2(axis = {0, 0, 1}, q(start = -pi / 2 - (" + std::to_string(q1) + ")));\n"
-         "  Rod rod1(L = 1, m = 1);\n"
-         "  Rod rod2(L = 0.8, m = 0.7);\n"
-         "equation\n"
-         "  connect(world.frame_b, j1.frame_a);\n"
-         "  connect(j1.frame_b, rod1.frame_a);\n"
-         "  connect(rod1.frame_b, j2.frame_a);\n"
-         "  connect(j2.frame_b, rod2.frame_a);\n"
-         "end D;\n";
+  const std::string q = std::to_string(q1);
+  return TwoRodText(", q(start = " + q + ")" + j1_modifiers, ", q(start = -pi / 2 - (" + q + "))");
 }
 
 // Eq. (1) for a model whose j1 is held at the operating point (named `held`).

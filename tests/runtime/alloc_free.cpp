@@ -10,6 +10,7 @@
 #include "compiler/compiler.h"
 #include "runtime/program/program.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/support/alloc_free_check.h"
 #include "tests/support/builders.h"
 #include "tests/support/random_state.h"
 
@@ -28,41 +29,19 @@ flat::Mechanism BusyScene(std::mt19937& rng) {
   return m;
 }
 
-void ExpectNoAllocation(const flat::Mechanism& m, rt::SolverPath path, std::mt19937& rng) {
-  rt::CompileOptions o;
-  o.solver = path;
-  auto r = rt::Compile(m, o);
-  ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
-  const rt::Program& p = *r.program;
-  auto ws = rt::MakeWorkspace(p);
-  auto plan = rt::PlanSignals(p, rt::AvailableSignals(p), nullptr);
-  ASSERT_TRUE(plan);
-  std::vector<Eigen::VectorXd> ys;
-  for (int i = 0; i < 20; ++i) ys.push_back(test::RandomState(p, rng));
-  Eigen::VectorXd ydot(rt::StateSize(p));
-  std::vector<double> out(rt::AvailableSignals(p).size());
-  const long before = g_allocations.load();
-  for (int i = 0; i < 20; ++i) {
-    ASSERT_EQ(rt::Derivative(p, *ws, 0.05 * i, ys[static_cast<size_t>(i)].data(), ydot.data()), 0);
-    ASSERT_EQ(rt::EvalSignals(p, *plan, *ws, 0.05 * i, ys[static_cast<size_t>(i)].data(), out.data()), 0);
-  }
-  const long after = g_allocations.load();
-  EXPECT_EQ(after - before, 0) << "allocations in Derivative/EvalSignals";
-}
-
 TEST(AllocFree, DenseDerivativeAllocatesNothing) {
   // If this fails, the dense right-hand side (or signal evaluation) allocates memory.
   std::mt19937 rng(1);
-  ExpectNoAllocation(BusyScene(rng), rt::SolverPath::Dense, rng);
-  ExpectNoAllocation(test::Chain(30), rt::SolverPath::Dense, rng);
+  test::ExpectNoAllocation(BusyScene(rng), rt::SolverPath::Dense, rng);
+  test::ExpectNoAllocation(test::Chain(30), rt::SolverPath::Dense, rng);
 }
 
 TEST(AllocFree, SparseDerivativeAllocatesNothing) {
   // If this fails, the sparse right-hand side allocates (e.g. KLU factors afresh
   // instead of refactoring, or a temporary escapes to the heap).
   std::mt19937 rng(2);
-  ExpectNoAllocation(BusyScene(rng), rt::SolverPath::Sparse, rng);
-  ExpectNoAllocation(test::Chain(80), rt::SolverPath::Sparse, rng);
+  test::ExpectNoAllocation(BusyScene(rng), rt::SolverPath::Sparse, rng);
+  test::ExpectNoAllocation(test::Chain(80), rt::SolverPath::Sparse, rng);
 }
 
 TEST(AllocFree, CounterSeesAllocations) {

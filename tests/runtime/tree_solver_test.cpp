@@ -17,6 +17,7 @@
 #include "runtime/program/program.h"
 #include "sim/simulate.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/support/alloc_free_check.h"
 #include "tests/support/builders.h"
 #include "tests/support/random_state.h"
 
@@ -251,23 +252,7 @@ TEST(TreeSolver, DerivativeAllocatesNothing) {
   // a dynamic-size temporary in the recursion, or a workspace array resized per call.
   std::mt19937 rng(2);
   for (const flat::Mechanism& m : {DrivenTree(rng, true), test::Chain(50), test::RandomPlanarTree(rng, 20, kTiltedNormal)}) {
-    auto r = CompileWith(m, rt::SolverPath::Recursive);
-    ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
-    const rt::Program& p = *r.program;
-    auto ws = rt::MakeWorkspace(p);
-    auto plan = rt::PlanSignals(p, rt::AvailableSignals(p), nullptr);
-    ASSERT_TRUE(plan);
-    std::vector<Eigen::VectorXd> ys;
-    for (int i = 0; i < 20; ++i) ys.push_back(test::RandomState(p, rng));
-    Eigen::VectorXd ydot(rt::StateSize(p));
-    std::vector<double> out(rt::AvailableSignals(p).size());
-    const long before = g_allocations.load();
-    for (int i = 0; i < 20; ++i) {
-      ASSERT_EQ(rt::Derivative(p, *ws, 0.05 * i, ys[static_cast<size_t>(i)].data(), ydot.data()), 0)
-          << rt::ErrorMessage(*ws);
-      ASSERT_EQ(rt::EvalSignals(p, *plan, *ws, 0.05 * i, ys[static_cast<size_t>(i)].data(), out.data()), 0);
-    }
-    EXPECT_EQ(g_allocations.load() - before, 0) << "allocations in Derivative/EvalSignals";
+    test::ExpectNoAllocation(m, rt::SolverPath::Recursive, rng);
   }
 }
 

@@ -13,21 +13,16 @@
 #include "sim/input_table.h"
 #include "sim/simulator.h"
 #include "tests/support/load_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::sim {
 namespace {
 
 // A rod on a revolute joint; `torque` is the joint's force law.
 std::string Pendulum(const std::string& decls, const std::string& torque) {
-  return "model P\n" + decls +
-         "  World world(g = {0, -9.81, 0});\n"
-         "  Revolute j(axis = {0, 0, 1}, q(start = 0.5), u(start = 0));\n"
-         "  Rod rod(L = 1, m = 1);\n"
-         "equation\n"
-         "  connect(world.frame_b, j.frame_a);\n"
-         "  connect(j.frame_b, rod.frame_a);\n"
-         "  j.tau = " + torque + ";\n"
-         "end P;\n";
+  return test::PendulumText{.decls = decls, .name = "j", .mods = ", q(start = 0.5), u(start = 0)",
+                            .equations = "  j.tau = " + torque + ";\n"}
+      .Text();
 }
 
 std::shared_ptr<const rt::Program> Load(const std::string& text) {

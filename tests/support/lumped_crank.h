@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace kanesim::lumped_crank {
@@ -47,6 +48,25 @@ inline double MaxAngleError(const Crank& c, const std::vector<double>& t, const 
     err = std::max(err, std::fabs(th[i] - x));
   }
   return err;
+}
+
+// The chain's file, below the source root (`N` loops, parameter `theta0` the start angle).
+inline const char* const kChainPath = "/tests/stress/models/parallelogram_chain.mech";
+
+// Signals of the chain of n: rj0.q, rj0.u, then rj[1..n].<part> for each of `parts` in turn
+// ({"q", "u"}: every q, then every u); per_rod: each rod's parts together (rj[1].q, rj[1].u,
+// rj[2].q, ...).
+inline std::vector<std::string> ChainSignals(int n, const std::vector<std::string>& parts, bool per_rod = false) {
+  std::vector<std::string> s = {"rj0.q", "rj0.u"};
+  auto rod = [](int i, const std::string& part) { return "rj[" + std::to_string(i) + "]." + part; };
+  if (per_rod) {
+    for (int i = 1; i <= n; ++i)
+      for (const std::string& part : parts) s.push_back(rod(i, part));
+  } else {
+    for (const std::string& part : parts)
+      for (int i = 1; i <= n; ++i) s.push_back(rod(i, part));
+  }
+  return s;
 }
 
 // Rows of the chain of n with the signals [rj0.q, rj0.u, rj[1..n].q, rj[1..n].u]: the max
