@@ -1,6 +1,8 @@
 #include "lang/lexer.h"
 
 #include <cerrno>
+#include <cfloat>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -213,60 +215,18 @@ constexpr CharClasses kClasses;  // built at compile time: usable from any stati
 
 bool Is(char c, unsigned char cls) { return (kClasses.of[static_cast<unsigned char>(c)] & cls) != 0; }
 
-// A decimal s[b, e) of at most 15 significant digits whose power of ten is within 22 of
-// zero: digits and power are exact doubles, so one multiplication or division rounds
-// correctly, to what strtod gives (Clinger's fast path). False for any other text.
-bool ExactDecimal(const std::string& s, std::int32_t b, std::int32_t e, double* out) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                                      1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  double digits = 0;
-  int count = 0, power = 0;
-  std::int32_t i = b;
-  bool point = false;
-  for (; i < e; ++i) {
-    const char ch = s[static_cast<size_t>(i)];
-    if (ch == '.' && !point) {
-      point = true;
-      continue;
-    }
-    if (ch < '0' || ch > '9') break;
-    if (count > 0 || ch != '0') ++count;  // leading zeros are not significant
-    if (count > 15) return false;
-    digits = 10 * digits + (ch - '0');
-    if (point) --power;
-  }
-  if (i < e) {  // an exponent: [eE][+-]digits (checked by the caller)
-    if (s[static_cast<size_t>(i)] != 'e' && s[static_cast<size_t>(i)] != 'E') return false;
-    ++i;
-    const bool negative = i < e && s[static_cast<size_t>(i)] == '-';
-    if (i < e && (s[static_cast<size_t>(i)] == '-' || s[static_cast<size_t>(i)] == '+')) ++i;
-    if (e - i > 3 || i == e) return false;
-    int x = 0;
-    for (; i < e; ++i) {
-      const char ch = s[static_cast<size_t>(i)];
-      if (ch < '0' || ch > '9') return false;
-      x = 10 * x + (ch - '0');
-    }
-    power += negative ? -x : x;
-  }
-  if (power < -22 || power > 22) return false;
-  *out = power < 0 ? digits / kPow10[-power] : digits * kPow10[power];
-  return true;
-}
-
 // The value of a number literal s[b, e) (its text is already checked by the caller).
-double NumberValue(const std::string& s, std::int32_t b, std::int32_t e, bool integer, bool* out_of_range) {
-  const auto len = static_cast<size_t>(e - b);
+double NumberValue(const std::string& s, std::int32_t b, std::int32_t e, bool* out_of_range) {
   *out_of_range = false;
-  if (integer && len <= 15) {  // exact in a double: no rounding to get wrong
-    double v = 0;
-    for (size_t k = 0; k < len; ++k) v = 10 * v + (s[static_cast<size_t>(b) + k] - '0');
-    return v;
-  }
-  if (double v = 0; ExactDecimal(s, b, e, &v)) return v;
-  const std::string text = s.substr(static_cast<size_t>(b), len);
+  // std::from_chars rounds correctly (the value strtod gives) without copying the text or
+  // consulting the locale. Overflow, underflow and subnormals go to strtod below, whose
+  // ERANGE decides what is out of range, as flat::ParseNumber decides it for --set.
+  double v = 0;
+  const auto r = std::from_chars(s.data() + b, s.data() + e, v);
+  if (r.ec == std::errc() && r.ptr == s.data() + e && (v == 0 || std::abs(v) >= DBL_MIN)) return v;
+  const std::string text = s.substr(static_cast<size_t>(b), static_cast<size_t>(e - b));
   errno = 0;
-  const double v = std::strtod(text.c_str(), nullptr);
+  v = std::strtod(text.c_str(), nullptr);
   *out_of_range = errno == ERANGE;
   return v;
 }
@@ -365,7 +325,7 @@ void LexNumber(Cursor& c, std::int32_t b) {
   t.text = c.View(b, i);
   t.is_integer = integer;
   bool out_of_range = false;
-  t.number = NumberValue(c.s, b, i, integer, &out_of_range);
+  t.number = NumberValue(c.s, b, i, &out_of_range);
   if (bad) {
     c.diags.Error(DiagCode::BadNumber, t.span, "malformed number '" + std::string(t.text) + "'").hint =
         "numbers look like 3, 0.5, 1e-3 or 2.5E+4";

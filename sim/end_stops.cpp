@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 namespace kanesim::sim {
@@ -89,7 +90,8 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
                            const std::vector<double>& targets, double* du, std::vector<double>* c) {
   const size_t m = rows.size(), nu = static_cast<size_t>(nu_);
   x_.resize(m * nu);
-  std::vector<double> J(m * nu);
+  Jrows_.resize(m * nu);
+  std::vector<double>& J = Jrows_;
   for (size_t j = 0; j < m; ++j) {
     const Side& s = sides_[static_cast<size_t>(rows[j])];
     double gap = 0.0, bias = 0.0;
@@ -121,8 +123,9 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
 }
 
 int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda,
-                             double* a_held) {
+                             double* a_held, std::vector<double>* noise) {
   lambda->assign(sides_.size(), 0.0);
+  if (noise) noise->assign(sides_.size(), 0.0);
   std::vector<int> rows;
   std::vector<double> bias;
   for (size_t i = 0; i < sides_.size(); ++i) {
@@ -147,10 +150,38 @@ int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::
     }
     if (int s = Impulse(ws, t, y, rows, targets, da.data(), &c); s != 0) return s;
     for (size_t j = 0; j < rows.size(); ++j) (*lambda)[static_cast<size_t>(rows[j])] = c[j];
+    if (noise)
+      if (int s = ReactionNoise(ws, t, y, rows, bias, noise); s != 0) return s;
     a = a_.data();
   }
   if (a_held)
     for (int i = 0; i < nu_; ++i) a_held[i] = a[i] + da[static_cast<size_t>(i)];
+  return 0;
+}
+
+// lambda_j = -(A^-1 (J a + c))_j with a = M^-1 f and A = J M^-1 J^T. Each product sums terms
+// far larger than its result where the reaction is nearly zero (in free fall: the M g terms
+// cancel), terms known to round-off and, from a state known to the run's tolerance, to about
+// rtol: so lambda_j is known to (kLeaveRoundoffs eps + rtol) (|X^T| |M| |a| + |J| |a| +
+// |c|)_j / A_jj (X = M^-1 J^T), the scale below which its sign says nothing.
+int EndStopEvents::ReactionNoise(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                                 const std::vector<double>& bias, std::vector<double>* noise) {
+  const size_t nu = static_cast<size_t>(nu_);
+  M_.resize(nu * nu);
+  if (int s = rt::MassMatrix(program_, ws, t, y, M_.data()); s != 0) return s;
+  std::vector<double> Ma(nu, 0.0);  // |M| |a|
+  for (size_t j = 0; j < nu; ++j)
+    for (size_t i = 0; i < nu; ++i) Ma[i] += std::abs(M_[j * nu + i] * a_[j]);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const double* x = x_.data() + r * nu;
+    const double* J = Jrows_.data() + r * nu;
+    double A = 0.0, terms = std::abs(bias[r]);
+    for (size_t i = 0; i < nu; ++i) {
+      A += J[i] * x[i];
+      terms += std::abs(x[i]) * Ma[i] + std::abs(J[i] * a_[i]);
+    }
+    (*noise)[static_cast<size_t>(rows[r])] = (kLeaveRoundoffs * std::numeric_limits<double>::epsilon() + rtol_) * terms / A;
+  }
   return 0;
 }
 
@@ -198,16 +229,16 @@ std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y
 int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g, double* guards) {
   bool any = false;
   for (const Side& s : sides_) any = any || s.resting;
-  std::vector<double> lambda;
+  std::vector<double> lambda, noise;
   if (any)
-    if (int s = Reactions(ws, t, y, &lambda, nullptr); s != 0) return s;
+    if (int s = Reactions(ws, t, y, &lambda, nullptr, &noise); s != 0) return s;
   for (size_t i = 0; i < sides_.size(); ++i) {
     const Side& s = sides_[i];
     if (guards) guards[i] = 1.0;
     if (s.accumulates_at > 0.0) {
       g[i] = s.accumulates_at - t;
     } else if (s.resting) {
-      g[i] = lambda[i];
+      g[i] = lambda[i] + noise[i];  // leaves where the reaction pulls beyond its round-off
     } else {
       double c = 0.0;
       if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
@@ -284,7 +315,9 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     std::snprintf(buf, sizeof buf, " (the bounces accumulate at t = %.17g)", t_inf);
     kind += buf;
   }
-  if (v != 0.0) log_.push_back({t, Element(side), kind});  // (at rest on it at the start: no impact)
+  // Closing slower than the tolerance's reach (a touch at rest, at the start or after a drift
+  // of round-off): no impact, only the rest or the leave that Settle logs.
+  if (std::abs(v) > kRestSpeeds * atol_) log_.push_back({t, Element(side), kind});
   // At rest on the contact: held while it pushes; the impulse may also have made other
   // resting sides pull, or brought sides on their contact to rest.
   const std::vector<char> was = RestingSet();
@@ -303,12 +336,12 @@ std::vector<char> EndStopEvents::RestingSet() const {
 
 int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before) {
   const int n = Count();
-  std::vector<double> lambda, a_held(static_cast<size_t>(nu_));
+  std::vector<double> lambda, noise, a_held(static_cast<size_t>(nu_));
   for (int it = 0; it < 16 * n + 16; ++it) {  // pivots and impacts; the LCP (M positive definite) has one solution
-    if (int s = Reactions(ws, t, y, &lambda, a_held.data()); s != 0) return s;
-    int leave = -1;
+    if (int s = Reactions(ws, t, y, &lambda, a_held.data(), &noise); s != 0) return s;
+    int leave = -1;  // the side pulled hardest beyond its round-off
     for (int i = 0; i < n; ++i)
-      if (sides_[static_cast<size_t>(i)].resting && !(lambda[static_cast<size_t>(i)] > 0.0) &&
+      if (sides_[static_cast<size_t>(i)].resting && lambda[static_cast<size_t>(i)] + noise[static_cast<size_t>(i)] < 0.0 &&
           (leave < 0 || lambda[static_cast<size_t>(i)] < lambda[static_cast<size_t>(leave)]))
         leave = i;
     if (leave >= 0) {

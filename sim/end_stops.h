@@ -42,6 +42,21 @@ class EndStopEvents {
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
+  bool AnyResting() const {
+    for (const Side& s : sides_)
+      if (s.resting && s.stop >= 0) return true;
+    return false;
+  }
+  // An output row's state: the joints resting on their stops exactly there, at speed 0 (the
+  // integrator holds them so; its interpolant between steps may miss by an ulp).
+  void SnapResting(double* y) const {
+    for (const Side& s : sides_)
+      if (s.resting && s.stop >= 0) {
+        const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+        y[st.q] = s.upper ? st.q_max : st.q_min;
+        y[nq_ + st.u] = 0.0;
+      }
+  }
   // What function i watches: "joint 'hinge' at q_min", "contact 'foot' at the plane".
   std::string Describe(int i) const {
     const Side& s = sides_[static_cast<size_t>(i)];
@@ -88,6 +103,11 @@ class EndStopEvents {
   // the gap's free acceleration a towards the contact) is at most this many (atol + rtol
   // max(1, |limit|)): lower flights are not resolved by the root finding.
   static constexpr double kZenoHeights = 100.0;
+  // A resting side leaves where its reaction pulls by more than this many round-offs (plus
+  // rtol) of the terms it is computed from (ReactionNoise): a reaction that is zero in exact
+  // arithmetic (a floating robot in free fall on its stops) has a sign set by round-off and
+  // the state's error, and leaving on it made the joint leave and strike again every step.
+  static constexpr double kLeaveRoundoffs = 100.0;
 
  private:
   struct Side {
@@ -110,7 +130,12 @@ class EndStopEvents {
               const std::vector<double>& targets, double* du, std::vector<double>* c);
   // Resting sides' reactions at (t, y) (in the order of sides_, 0 where not resting) and
   // the held accelerations (nu, may be null).
-  int Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda, double* a_held);
+  int Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda, double* a_held,
+                std::vector<double>* noise = nullptr);
+  // *noise: per resting side (rows, their biases), the round-off scale of its reaction; uses
+  // Impulse's last columns (x_, Jrows_) and the accelerations in a_.
+  int ReactionNoise(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                    const std::vector<double>& bias, std::vector<double>* noise);
   // The impact of side i at (t, y) with gap rate v < 0 (the bounce, a rest, or the
   // accumulation of the bounces); y jumps in place. `settle`: then Settle the resting set.
   int Impact(rt::Workspace& ws, double t, double* y, int i, double v, bool settle);
@@ -129,7 +154,7 @@ class EndStopEvents {
   std::vector<Side> sides_;
   int nq_ = 0, nu_ = 0;
   double rtol_ = 0.0, atol_ = 0.0;
-  std::vector<double> ydot_, x_, a_, J_;  // scratch
+  std::vector<double> ydot_, x_, a_, J_, Jrows_, M_;  // scratch
   std::vector<EventRecord> log_;
 };
 

@@ -56,13 +56,19 @@ class EngineOde final : public OdeSystem {
   }
   // End stops and plane contacts (sim/end_stops.h), or rolling contacts' normal forces
   // (sim/lift_off.h; the compiler never lets both in one model): their events; none without.
-  void SetStops(EndStopEvents* stops) { stops_ = stops; }
+  void SetStops(EndStopEvents* stops) {
+    stops_ = stops;
+    state_names_ = rt::StateNames(program_);
+  }
   void SetLiftOff(LiftOffGuard* lift) {
     lift_ = lift;
     if (lift_ && inputs_) lift_->SetInputs(inputs_);
   }
   // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
-  void SetStickSlip(StickSlipEvents* stick) { stick_ = stick; }
+  void SetStickSlip(StickSlipEvents* stick) {
+    stick_ = stick;
+    state_names_ = rt::StateNames(program_);
+  }
   // When clauses (sim/when_events.h): their events after those above.
   void SetWhens(WhenEvents* whens) {
     whens_ = whens;
@@ -86,24 +92,23 @@ class EngineOde final : public OdeSystem {
     return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
   }
   int Event(double t, double* y, int i) override {
-    if (i < NumStops() && stick_) return stick_->Event(ws_, t, y, i);  // logged by stick_
-    if (i < NumStops() && !stops_) {
+    if (i < NumStops() && !stops_ && !stick_) {
       event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
       return -1;
     }
     std::vector<double> before(y, y + Size());
-    const size_t logged = stops_ ? stops_->Log().size() : 0;
+    const size_t first = events_.size();
     int s = 0;
     if (i < NumStops()) {
-      s = stops_->Event(ws_, t, y, i);
-      events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+      const std::vector<EventRecord>& log = stick_ ? stick_->Log() : stops_->Log();
+      const size_t logged = log.size();
+      s = stick_ ? stick_->Event(ws_, t, y, i) : stops_->Event(ws_, t, y, i);
+      events_.insert(events_.end(), log.begin() + static_cast<long>(logged), log.end());
     } else {
       s = whens_->Event(ws_, t, y, i - NumStops(), stops_ ? stops_->RestingSpeeds() : std::vector<int>{});
       events_.push_back(whens_->Last());
     }
-    if (s == 0 && !events_.empty() && !state_names_.empty())  // the jump, on the event's first record
-      for (size_t k = 0; k < before.size(); ++k)
-        if (y[k] != before[k]) events_[events_.size() - 1].changes.push_back({state_names_[k], before[k], y[k]});
+    if (s == 0 && first < events_.size()) AddChanges(state_names_, before.data(), y, &events_[first], &events_.back());
     return s;
   }
   bool Terminated(std::string* why) const override {
@@ -200,7 +205,7 @@ class EngineOde final : public OdeSystem {
   std::string event_cause_;                    // why an event stopped the run ("" : none did)
   WhenEvents* whens_ = nullptr;                // when clauses (null: none)
   std::vector<std::string> state_names_;       // y's entries (rt::StateNames), for the events' changes
-  std::vector<EventRecord> events_;            // stops' and when clauses' events, in time order
+  std::vector<EventRecord> events_;            // stops', friction's and when clauses' events, in time order
   bool from_monitor_ = false;  // the last failure was the bridge's or the branch monitor's
   int newton_rank_ = -1;       // OdeSystem::NewtonRank
   int multiplier_rows_ = -1;   // the multiplier form with constraint rows: 1, 0; -1 not known yet

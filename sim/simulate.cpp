@@ -162,7 +162,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   // End stops and plane contacts: events in every integrator (sim/end_stops.h); a start on
   // a closed contact is its first event.
   EndStopEvents stops(program, options.rtol, options.atol);
+  std::vector<double> y_given;  // the state before the start's events, for their changes
   if (stops.Active()) {
+    y_given = y0;
     const double t0 = grid.start;
     if (std::string why = stops.CheckStart(*ws_rhs, t0, y0.data()); !why.empty()) return UsageResult(why);
     if (stops.Start(*ws_rhs, t0, y0.data()) != 0) return UsageResult("contacts at the start: " + rt::ErrorMessage(*ws_rhs));
@@ -181,6 +183,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   }
   // Exact stick-slip friction: the start decides sliding or stuck (sim/stick_slip.h).
   StickSlipEvents stick(program);
+  if (stick.Active() && y_given.empty()) y_given = y0;
   if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
     return UsageResult("friction at the start: " + rt::ErrorMessage(*ws_rhs));
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
@@ -206,6 +209,11 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (diagonal) {
       status = diagonal->ToSpeeds(t, y_in, y_row.data());
       converted = status == 0;
+      y = y_row.data();
+    }
+    if (status == 0 && stops.AnyResting()) {  // exactly on their stops (an interpolant's round-off aside)
+      if (y != y_row.data()) std::copy(y, y + y_row.size(), y_row.begin());
+      stops.SnapResting(y_row.data());
       y = y_row.data();
     }
     if (status == 0) status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
@@ -269,7 +277,10 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);
   if (iopt.bridge) ode.EnableEarlyBridge(iopt.rtol, iopt.atol, hooks.bridge_switches);
-  const size_t logged_at_start = stops.Log().size();  // a start on a contact (EndStopEvents::Start)
+  // The start's events (on a contact: EndStopEvents::Start; stuck or sliding: StickSlipEvents::Start).
+  std::vector<EventRecord> at_start(stops.Log().begin(), stops.Log().end());
+  at_start.insert(at_start.end(), stick.Log().begin(), stick.Log().end());
+  if (!at_start.empty()) AddChanges(rt::StateNames(program), y_given.data(), y0.data(), &at_start.front(), &at_start.back());
   OdeSystem* system = &ode;
   if (!speed_order.empty()) {
     if (whens.Active()) return UsageResult("--speeds diagonal does not handle when clauses yet (docs/events.md)");
@@ -286,9 +297,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   bool end_ok = sink.End();
 
   FinishRun(ir, sink_failed, end_ok, Seconds(total - output_time), Seconds(output_time), &result);
-  result.stats.events.assign(stops.Log().begin(), stops.Log().begin() + static_cast<long>(logged_at_start));
+  result.stats.events = std::move(at_start);
   result.stats.events.insert(result.stats.events.end(), ode.Events().begin(), ode.Events().end());
-  result.stats.events.insert(result.stats.events.end(), stick.Log().begin(), stick.Log().end());
   result.stats.terminated = ir.terminated;
   result.stats.terminate_time = ir.terminate_time;
   result.stats.terminate_message = ir.terminate_message;
@@ -409,6 +419,20 @@ std::string CsvField(const std::string& s) {
   return q + "\"";
 }
 }  // namespace
+
+void AddChanges(const std::vector<std::string>& names, const double* before, const double* y, EventRecord* first,
+                EventRecord* last) {
+  for (size_t k = 0; k < names.size(); ++k)
+    if (y[k] != before[k]) first->changes.push_back({names[k], before[k], y[k]});
+  for (EventRecord* r = first; r <= last; ++r) {
+    if (!r->changes.empty()) continue;
+    const auto it = std::find(names.begin(), names.end(), r->element + ".u");
+    if (it != names.end()) {
+      const size_t k = static_cast<size_t>(it - names.begin());
+      r->changes.push_back({*it, before[k], y[k]});
+    }
+  }
+}
 
 std::string FormatEventsCsv(const std::vector<EventRecord>& events) {
   std::string out = "time,element,kind,signal,before,after\n";

@@ -63,6 +63,14 @@ struct EventChange {
   double before = 0.0, after = 0.0;
 };
 
+struct EventRecord;
+// The records of one event (*first .. *last, the state before it and after): the entries of y
+// that differ from before (names: rt::StateNames) on the first record; a record left without
+// changes (a rest, a leave, a later record of the event) carries its joint's speed entry
+// ("j.u") before and after, where its element is a joint.
+void AddChanges(const std::vector<std::string>& names, const double* before, const double* y, EventRecord* first,
+                EventRecord* last);
+
 // One event of a run: its time, the element ("j1", "when (ball.mech:12)") and what happened
 // ("impact at q_min", "rests on q_max", "leaves q_min", "fires", "terminate: why"), with the
 // state entries it changed (on the event's first record).

@@ -1,0 +1,118 @@
+// `kanesim run --events FILE.csv` (docs/events.md "Outputs"): every end-stop row carries the
+// state entries its event changed, and a rest or a leave its joint's speed, against the
+// impulse's closed form (Kane's impulsive form on a double pendulum). Before, stops' rows had
+// their signal, before and after columns empty (the state names were read for when clauses only).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/support/cli_util.h"
+
+namespace kanesim::clitest {
+namespace {
+
+struct EventRow {
+  double time = 0.0;
+  std::string element, kind, signal, before, after;
+};
+
+// Fields of one CSV line (quoted fields may hold commas).
+std::vector<std::string> Fields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"') quoted = !quoted;
+    else if (c == ',' && !quoted) out.emplace_back();
+    else out.back() += c;
+  }
+  return out;
+}
+
+std::vector<EventRow> ReadEvents(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "time,element,kind,signal,before,after");
+  std::vector<EventRow> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f = Fields(line);
+    if (f.size() != 6) {
+      ADD_FAILURE() << "bad row: " << line;
+      continue;
+    }
+    rows.push_back({std::stod(f[0]), f[1], f[2], f[3], f[4], f[5]});
+  }
+  return rows;
+}
+
+// Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7), j1 stopping at q_min = -0.6: plastic, it rests
+// there until the swinging second rod pulls it off (t = 0.347).
+std::string DoublePendulum(double e) {
+  std::ostringstream s;
+  s << "model D\n  World world(g = {0, -9.81, 0});\n"
+    << "  Revolute j1(axis = {0, 0, 1}, q_min = -0.6, restitution = " << e << ");\n"
+    << "  Revolute j2(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.5));\n"
+    << "  Rod rod1(L = 1, m = 1);\n  Rod rod2(L = 0.8, m = 0.7);\nequation\n"
+    << "  connect(world.frame_b, j1.frame_a);\n  connect(j1.frame_b, rod1.frame_a);\n"
+    << "  connect(rod1.frame_b, j2.frame_a);\n  connect(j2.frame_b, rod2.frame_a);\n"
+    << "  annotation(experiment(StopTime = 0.6, Interval = 0.01, Tolerance = 1e-10));\nend D;\n";
+  return s.str();
+}
+
+// If this fails, an impact's rows do not list the speeds it changed with their values (j1's
+// speed reversed by Newton's law, j2's following through the mass matrix: du2 = -(M12 / M22)
+// du1, M12 = m2 (L2^2/3 + L1 L2 cos(q2)/2), M22 = m2 L2^2/3), or a rest or a leave has no
+// speed entry.
+TEST(EventsCsv, EndStopRowsCarryTheSpeedsTheyChanged) {
+  const std::string d = Work("events_csv");
+  const double L1 = 1, L2 = 0.8, m2 = 0.7;
+  for (double e : {0.5, 0.0}) {
+    Write(d + "/d.mech", DoublePendulum(e));
+    Result r = Kanesim("run d.mech --output j2.q -o rows.csv --events ev.csv", d);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    const std::vector<EventRow> ev = ReadEvents(d + "/ev.csv");
+    ASSERT_GE(ev.size(), 2u);
+    std::map<std::string, const EventRow*> first;  // of the first impact: signal -> row
+    for (const EventRow& row : ev) {
+      EXPECT_FALSE(row.signal.empty()) << row.time << " " << row.element << " " << row.kind << ": no signal";
+      if (row.time == ev[0].time && row.kind == ev[0].kind) first[row.signal] = &row;
+    }
+    ASSERT_EQ(ev[0].kind.rfind("impact at q_min", 0), 0u) << ev[0].kind;
+    ASSERT_TRUE(first.count("j1.u") && first.count("j2.u"));
+    const double u1 = std::stod(first["j1.u"]->before), u1p = std::stod(first["j1.u"]->after);
+    const double u2 = std::stod(first["j2.u"]->before), u2p = std::stod(first["j2.u"]->after);
+    EXPECT_EQ(u1p, -e * u1);
+    // j2.q at the impact: the row at its time in the output (its left limit).
+    std::ifstream rows(d + "/rows.csv");
+    std::string line;
+    double q2 = NAN;
+    std::getline(rows, line);
+    while (std::getline(rows, line))
+      if (std::stod(Fields(line)[0]) == ev[0].time) q2 = std::stod(Fields(line)[1]);
+    ASSERT_FALSE(std::isnan(q2));
+    const double M12 = m2 * (L2 * L2 / 3 + L1 * L2 * std::cos(q2) / 2), M22 = m2 * L2 * L2 / 3;
+    EXPECT_NEAR(u2p - u2, -M12 / M22 * (u1p - u1), 1e-9 * (std::abs(u1) + std::abs(u2)));
+    if (e == 0.0) {  // rests on the stop (j1.u -> 0), then leaves it (0 -> 0)
+      bool rests = false, leaves = false;
+      for (const EventRow& row : ev) {
+        if (row.kind == "rests on q_min" && row.signal == "j1.u") rests = std::stod(row.after) == 0.0;
+        if (row.kind == "leaves q_min") {
+          leaves = true;
+          EXPECT_EQ(row.signal, "j1.u");
+          EXPECT_EQ(row.before, "0");
+          EXPECT_EQ(row.after, "0");
+        }
+      }
+      EXPECT_TRUE(rests);
+      EXPECT_TRUE(leaves);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace kanesim::clitest
