@@ -55,10 +55,10 @@ def robot_files():
 
 def robot_options(description, **defaults):
     """The command line of this script and bench/urdf_race.py: --kanesim, --robots and, per
-    script, integer options with their defaults (states=20, reps=21)."""
+    script, options with their defaults and types (states=20, reps=21, integrator="auto")."""
     ap = argparse.ArgumentParser(description=description.split("\n\n")[0])
     for name, value in defaults.items():
-        ap.add_argument("--" + name, type=int, default=value)
+        ap.add_argument("--" + name, type=type(value), default=value)
     ap.add_argument("--kanesim", default=os.path.join(ROOT, "build", "cli", "kanesim"))
     ap.add_argument("--robots", default="ur5,panda,solo12,talos")
     return ap.parse_args()

@@ -21,6 +21,7 @@ side by side, medians of fresh processes (docs/benchmarks.md, "URDF robots: the 
    qpos). Medians of the process wall time and CPU time, and of the phases each reports.
 
     bench/.venv/bin/python bench/urdf_race.py [--reps 21] [--kanesim build/cli/kanesim] [--robots ur5,talos]
+        [--integrator auto|dop853|...]  (kanesim's --integrator; auto: DOP853, handing a stiff run to CVODE-BDF)
 """
 import glob
 import json
@@ -108,9 +109,9 @@ def reference(name, urdf, original, floating, index):
     return model, c
 
 
-def kanesim_cmd(kanesim, urdf, c, rtol, stats=False):
+def kanesim_cmd(kanesim, urdf, c, rtol, stats=False, integrator="auto"):
     cmd = [kanesim, "run", urdf, "--stop-time", "1", "--interval", "1", "--rtol", repr(rtol), "--atol", repr(rtol),
-           "--limits", "ignore"]  # the widened limits: no stop machinery (MuJoCo's are never reached either)
+           "--integrator", integrator, "--limits", "ignore"]  # the widened limits: no stop machinery (MuJoCo's are never reached either)
     return cmd + uc.start_args(c["kq"], c["ku"]) + (["--stats"] if stats else [])
 
 
@@ -119,8 +120,8 @@ def error_of(got, c):
     return max(abs(a - b) for j in c["q_ref"] for a, b in zip(got[j], c["q_ref"][j]))
 
 
-def kanesim_error(kanesim, urdf, c, rtol):
-    p = subprocess.run(kanesim_cmd(kanesim, urdf, c, rtol), capture_output=True, text=True)
+def kanesim_error(kanesim, urdf, c, rtol, integrator):
+    p = subprocess.run(kanesim_cmd(kanesim, urdf, c, rtol, integrator=integrator), capture_output=True, text=True)
     if p.returncode != 0:
         return float("inf")
     cols = uc.read_columns(p.stdout)
@@ -201,7 +202,7 @@ def kanesim_phases(stderr):
 
 
 def main():
-    args = uc.robot_options(__doc__, reps=21)
+    args = uc.robot_options(__doc__, reps=21, integrator="auto")
     driver = build_driver()
     rows = []
     for i, name, path, floating in uc.installed_robots(args.robots, "{name}: not installed (sh bench/setup_venv.sh)"):
@@ -210,7 +211,7 @@ def main():
         model, c = reference(name, urdf, uc.without_mimic(path, os.path.join(OUT, "original")), floating, i)
         ks = []
         for r in RTOLS:
-            ks.append((r, kanesim_error(args.kanesim, urdf, c, r)))
+            ks.append((r, kanesim_error(args.kanesim, urdf, c, r, args.integrator)))
             if ks[-1][1] < TARGET / 100:
                 break
         m, layout = mujoco_layout(urdf)
@@ -226,7 +227,7 @@ def main():
               f"{kpick}; MuJoCo RK4 {mpick}", flush=True)
         if not kpick or not mpick:
             continue
-        kc = kanesim_cmd(args.kanesim, urdf, c, kpick[0], stats=True)
+        kc = kanesim_cmd(args.kanesim, urdf, c, kpick[0], stats=True, integrator=args.integrator)
         mc = [driver, urdf, str(mpick[0]), state]
         timed(mc)  # warm the file cache once, untimed
         kt, mt = [], []
@@ -262,9 +263,9 @@ def main():
               f"| {ms_(r['m_compile'])}, {ms_(r['m_simulate'])} |")
     v = subprocess.run([args.kanesim, "--version"], capture_output=True, text=True).stdout.strip()
     import mujoco
-    print(f"\n{args.reps} fresh processes each, alternated; load average {os.getloadavg()[0]:.1f}; {v}; "
+    print(f"\nkanesim --integrator {args.integrator}; {args.reps} fresh processes each, alternated; load average {os.getloadavg()[0]:.1f}; {v}; "
           f"MuJoCo {mujoco.__version__}; Pinocchio {pin.__version__}")
-    with open(os.path.join(OUT, "race.json"), "w") as f:
+    with open(os.path.join(OUT, f"race_{args.integrator}.json"), "w") as f:
         json.dump(rows, f, indent=1)
 
 

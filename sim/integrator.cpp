@@ -166,6 +166,7 @@ void AddStats(IntegratorStats* to, const IntegratorStats& s) {
   if (std::isnan(to->stiff_time) && !std::isnan(s.stiff_time)) {
     to->stiff_time = s.stiff_time;
     to->stiff_h_lambda = s.stiff_h_lambda;
+    to->switch_allowed = s.switch_allowed;
   }
   to->switched = to->switched || s.switched;
 }

@@ -190,6 +190,7 @@ struct IntegratorStats {
   double stiff_time = NAN;     // DOP853: where it found the problem stiff (NaN: never)
   double stiff_h_lambda = 0.0; // ... its last estimate of h |lambda| there
   bool switched = false;       // ... and the run went on with CVODE-BDF from there
+  bool switch_allowed = false; // ... under the automatic choice (not switched: too few steps were left)
 };
 
 // Output instants: t_k = start + k * interval for k = 0 .. n-1 (computed as start + k / N

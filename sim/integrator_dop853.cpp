@@ -201,6 +201,7 @@ class Dop853Stepper final : public Stepper {
     if (stiffness_.Stiff()) {
       st.stiff_time = stiff_time_;
       st.stiff_h_lambda = stiffness_.LastHLambda();
+      st.switch_allowed = options_.switch_when_stiff;
     }
     return st;
   }

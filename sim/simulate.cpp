@@ -340,7 +340,9 @@ std::string FormatStats(const SimStats& s) {
     char at[32];
     std::snprintf(at, sizeof at, "%.6g", i.stiff_time);
     std::snprintf(buf, sizeof buf, "  stiffness                found at t = %s: h|lambda| %.3g, past DOP853's stability boundary 6.1%s\n",
-                  at, i.stiff_h_lambda, i.switched ? "" : " (not switched: DOP853 was chosen explicitly)");
+                  at, i.stiff_h_lambda, i.switched         ? ""
+                  : i.switch_allowed ? " (not switched: fewer than 100 of its steps were left)"
+                                     : " (not switched: DOP853 was chosen explicitly)");
     std::string lines = buf;
     if (i.switched) {  // what ran: DOP853 to the hand-over, CVODE-BDF from there
       const std::string head = std::string("integrator                 ") + MethodName(s.method);

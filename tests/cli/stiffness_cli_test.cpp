@@ -44,6 +44,17 @@ TEST(StiffnessCli, StatsNameTheMethodsThatRan) {
   EXPECT_FALSE(Has(e.err, "CVODE")) << e.err;
 }
 
+// Under auto, stiffness found with fewer than 100 DOP853 steps to the stop: DOP853 finishes
+// (not worth a hand-over), and the report says why, not that DOP853 was chosen explicitly.
+TEST(StiffnessCli, StatsSayWhyAutoDidNotSwitch) {
+  const std::string d = Work("stiff_late");
+  Result a = Kanesim("run " + kModel + " --rtol 1e-8 --atol 1e-8 --stop-time 0.4 --stats -o out.csv", d);
+  ASSERT_EQ(a.rc, 0) << a.err;
+  EXPECT_TRUE(Has(a.err, "integrator                 DOP853\n")) << a.err;
+  EXPECT_TRUE(Has(a.err, "(not switched: fewer than 100 of its steps were left)")) << a.err;
+  EXPECT_FALSE(Has(a.err, "chosen explicitly")) << a.err;
+}
+
 // `--sensitivity` under auto: handed over (the report says so) at a small fraction of
 // DOP853's evaluations, and every column, the derivatives too, equal to DOP853's own run
 // (which never switches) to the tolerance's reach.

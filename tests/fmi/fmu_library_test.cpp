@@ -228,6 +228,22 @@ TEST_F(FmuLibrary, ModelExchangeEventIndicatorsAndTheImpactInEventMode) {
   EXPECT_NEAR(y[1], -0.5, 1e-12);  // u after = -e u before
   ASSERT_EQ(new_states(c, &info), fmi2OK);  // a second update at the same instant: no second impact
   EXPECT_EQ(info.valuesOfContinuousStatesChanged, 0);
+  // The FMU state after the impact restores it: states, and no impact again at the next update.
+  auto get = Fn<fmi2Status (*)(fmi2Component, fmi2FMUstate*)>("fmi2GetFMUstate");
+  auto set = Fn<fmi2Status (*)(fmi2Component, fmi2FMUstate)>("fmi2SetFMUstate");
+  auto release = Fn<fmi2Status (*)(fmi2Component, fmi2FMUstate*)>("fmi2FreeFMUstate");
+  fmi2FMUstate saved = nullptr;
+  ASSERT_EQ(get(c, &saved), fmi2OK);
+  const double other[2] = {0.1, 3.0};
+  ASSERT_EQ(set_states(c, other, 2), fmi2OK);
+  ASSERT_EQ(set(c, saved), fmi2OK);
+  double back[2] = {0, 0};
+  ASSERT_EQ(states(c, back, 2), fmi2OK);
+  EXPECT_EQ(back[0], y[0]);
+  EXPECT_EQ(back[1], y[1]);
+  ASSERT_EQ(new_states(c, &info), fmi2OK);
+  EXPECT_EQ(info.valuesOfContinuousStatesChanged, 0);
+  EXPECT_EQ(release(c, &saved), fmi2OK);
   EXPECT_EQ(Fn<Simple>("fmi2Terminate")(c), fmi2OK);
   Fn<void (*)(fmi2Component)>("fmi2FreeInstance")(c);
 }
