@@ -113,13 +113,28 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
       for (size_t i = 0; i < nu; ++i) a += J[r * nu + i] * x_[j * nu + i];
       A[r * m + j] = a;
     }
-  if (!SolveSmall(A, targets, c)) return -1;
+  if (!SolveSmall(A, targets, c)) {
+    error_ = SingularRows(rows);
+    return -1;
+  }
+  error_.clear();
   for (size_t i = 0; i < nu; ++i) {
     double d = 0.0;
     for (size_t j = 0; j < m; ++j) d += x_[j * nu + i] * (*c)[j];
     du[i] = d;
   }
   return 0;
+}
+
+std::string EndStopEvents::SingularRows(const std::vector<int>& rows) const {
+  std::string who;
+  for (size_t j = 0; j < rows.size(); ++j) {
+    const Side& s = sides_[static_cast<size_t>(rows[j])];
+    who += (j == 0 ? "" : j + 1 == rows.size() ? " and " : ", ") + Who(s) + " at " + Where(s);
+  }
+  return who +
+         " are held together, but their rows are dependent (J M^-1 J^T is singular: they constrain the same "
+         "motion), so the impulse or reaction that holds them is not unique; remove one of them";
 }
 
 int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda,

@@ -42,6 +42,8 @@ class EndStopEvents {
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   const std::vector<EventRecord>& Log() const { return log_; }
+  // Why the last impulse or reaction had no solution ("" after one that had).
+  const std::string& Error() const { return error_; }
   bool AnyResting() const {
     for (const Side& s : sides_)
       if (s.resting && s.stop >= 0) return true;
@@ -120,6 +122,7 @@ class EndStopEvents {
   // Side i's gap, row J (nu) and bias c (d2g/dt2 = J udot + c) at (t, y).
   int Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c);
   double Restitution(const Side& s) const;
+  std::string SingularRows(const std::vector<int>& rows) const;  // error_ of a singular impulse
   double Scale(const Side& s) const;  // the gap's length scale for the tolerances
   std::string Element(const Side& s) const;
   std::string Who(const Side& s) const { return (s.plane >= 0 ? "contact '" : "joint '") + Element(s) + "'"; }
@@ -156,6 +159,7 @@ class EndStopEvents {
   double rtol_ = 0.0, atol_ = 0.0;
   std::vector<double> ydot_, x_, a_, J_, Jrows_, M_;  // scratch
   std::vector<EventRecord> log_;
+  std::string error_;
 };
 
 }  // namespace kanesim::sim

@@ -128,6 +128,8 @@ class EngineOde final : public OdeSystem {
   std::string FailureCause() const override {
     if (!event_cause_.empty()) return event_cause_;
     if (from_monitor_) return BridgeError(*bridge_);
+    if (stops_ && !stops_->Error().empty()) return stops_->Error();  // an impulse or reaction without solution
+    if (whens_ && !whens_->Error().empty()) return whens_->Error();
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }

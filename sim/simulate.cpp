@@ -167,7 +167,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     y_given = y0;
     const double t0 = grid.start;
     if (std::string why = stops.CheckStart(*ws_rhs, t0, y0.data()); !why.empty()) return UsageResult(why);
-    if (stops.Start(*ws_rhs, t0, y0.data()) != 0) return UsageResult("contacts at the start: " + rt::ErrorMessage(*ws_rhs));
+    if (stops.Start(*ws_rhs, t0, y0.data()) != 0)
+      return UsageResult("contacts at the start: " + (stops.Error().empty() ? rt::ErrorMessage(*ws_rhs) : stops.Error()));
   }
   // Rolling contacts: a normal force turning tensile stops the run (sim/lift_off.h).
   LiftOffGuard lift(program);

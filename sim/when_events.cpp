@@ -28,6 +28,22 @@ int WhenEvents::Functions(rt::Workspace& ws, double t, const double* y, double* 
   return 0;
 }
 
+// A jump whose rows' block of M^-1 is singular: a speed both set and held (a reinit of a
+// joint resting on its end stop), or set twice.
+std::string WhenEvents::SingularJump(const std::string& clause, const std::vector<int>& rows,
+                                     size_t held) const {
+  const std::vector<std::string> names = rt::StateNames(program_);
+  std::string which;
+  for (size_t j = 0; j < rows.size(); ++j)
+    for (size_t k = 0; k < j; ++k)
+      if (rows[j] == rows[k] && which.empty()) which = names[static_cast<size_t>(nq_ + rows[j])];
+  std::string why = which.empty() ? "the speeds it sets" : "'" + which + "'";
+  return clause + ": the reinit's speed jump has no unique solution: " + why +
+         (held > 0 ? " is set while held at zero by a joint resting on its end stop (a reinit of a resting joint's "
+                     "speed is not handled yet)"
+                   : " is set twice");
+}
+
 int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const std::vector<int>& held) {
   if (i < 0 || i >= Count()) return 0;
   const rt::WhenModel& w = program_.whens[static_cast<size_t>(clause_of_[static_cast<size_t>(i)])];
@@ -44,7 +60,10 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const std::
   if (!rows.empty()) {
     for (int h : held) rows.push_back(h), targets.push_back(0.0);
     std::vector<double> du(static_cast<size_t>(nu_));
-    if (int s = SpeedJump(program_, ws, t, y, rows, targets, du.data()); s != 0) return s;
+    if (int s = SpeedJump(program_, ws, t, y, rows, targets, du.data()); s != 0) {
+      if (s == -1) error_ = SingularJump(w.name, rows, held.size());
+      return s;
+    }
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
     for (size_t k = 0; k < w.reinits.size(); ++k)  // exactly the values written (du's round-off aside)
       if (w.reinits[k].speed) y[w.reinits[k].state] = value[k];

@@ -28,13 +28,16 @@ class WhenEvents {
   const std::string& Message() const { return message_; }
   // The record of the last Event (element, kind).
   const EventRecord& Last() const { return last_; }
+  // Why the last Event's speed jump had no solution ("" when it had).
+  const std::string& Error() const { return error_; }
 
  private:
+  std::string SingularJump(const std::string& clause, const std::vector<int>& rows, size_t held) const;
   const rt::Program& program_;
   std::vector<int> clause_of_, root_of_;  // per indicator: its clause, its tape root
   int nq_ = 0, nu_ = 0;
   bool terminated_ = false;
-  std::string message_;
+  std::string message_, error_;
   EventRecord last_;
 };
 
