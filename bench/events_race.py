@@ -12,6 +12,12 @@ Problems (models in bench/models/, MJCF written here):
   coulomb   coulomb_oscillator.mech: 1 kg on k = 4 pi^2 N/m, Coulomb force F = 0.00245 k,
             released at 1 m, 110 s: turning points at n/2 s with amplitude 1 - 2nF/k, sticks for
             good at the 204th (t = 102 s, x = 0.0004 m); ~100 cycles.
+  chain     stop_chain.mech: 5 uniform rods (1 kg, 0.5 m) on hinges, released horizontal; the 4
+            joints between links stop at +-0.4 rad, e = 0.5, 1.5 s: 15 impacts. No closed form:
+            the reference is kanesim's DOP853 at rtol = atol = 1e-12, checked by DOP853 at 1e-14
+            and CVODE-BDF at 1e-12 (the same 15 impacts within 6e-13 s and 7e-11 s; the script
+            prints both). An impact is matched by joint, side and count (the 3rd impact of j[2] on
+            q_max with the 3rd): a missed impact shifts the later ones of its joint and side.
 Error of a run: the largest abs(t_sim - t_exact) over the events both have (the first 8 impacts
 of the ball and the stop, every turning point of the oscillator) and the rest/stick time
 (kanesim only: MuJoCo's soft contact has none), in seconds. kanesim: its events log
@@ -26,7 +32,7 @@ first rebound is e times its impact speed (0.26 at h = 1e-3, 0.25 at 1e-4; a lin
 spring-damper's would be 0.2155); friction solref (2h, 1); solimp 0.99/0.99 so the constraint
 follows that reference.
 
-    bench/.venv/bin/python bench/events_race.py [--kanesim build/cli/kanesim] [--problems ball,stop,coulomb]
+    bench/.venv/bin/python bench/events_race.py [--kanesim build/cli/kanesim] [--problems ball,stop,coulomb,chain]
 """
 import argparse
 import functools
@@ -90,15 +96,17 @@ def coulomb_exact():
 
 # ---------------------------------------------------------------- kanesim
 
-def kanesim_run(kanesim, model, stop, rtol, sets=()):
+def kanesim_run(kanesim, model, stop, rtol, sets=(), integrator=None):
     cmd = [kanesim, "run", os.path.join(MODELS, model), "--stop-time", str(stop), "--interval", str(stop),
            "--rtol", repr(rtol), "--atol", repr(rtol), "--stats"]
+    if integrator:
+        cmd += ["--integrator", integrator]
     for s in sets:
         cmd += ["--set", s]
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         return None
-    events = [(float(m.group(1)), m.group(2)) for m in re.finditer(r"^\s+t = (\S+)\s+\S+: (.*)$", p.stderr, re.M)]
+    events = [(float(m.group(1)), m.group(2)) for m in re.finditer(r"^\s+t = (\S+)\s+(\S+: .*)$", p.stderr, re.M)]
     integ = float(re.search(r"^\s+integrate\s+(\S+)", p.stderr, re.M).group(1))
     rhs = int(re.search(r"^\s+right-hand sides\s+(\d+)", p.stderr, re.M).group(1))
     return events, integ, rhs, p.stdout
@@ -230,21 +238,131 @@ def mujoco_errors(problem, ev):
     return first, every, n
 
 
+# ---------------------------------------------------------------- the chain (reference: kanesim at 1e-12)
+
+CHAIN_N, CHAIN_BEND, CHAIN_STOP = 5, 0.4, 1.5
+
+
+def chain_impacts(events):
+    """{(joint, side): [t, ...]} of a kanesim events log."""
+    out = {}
+    for t, what in events:
+        m = re.match(r"(\S+): impact at (q_min|q_max)", what)
+        if m:
+            out.setdefault((m.group(1), m.group(2)), []).append(t)
+    return out
+
+
+def ordered(impacts):
+    """[(t, key, k)]: every impact in time order, k its count on that joint and side."""
+    return sorted((t, key, k) for key, ts in impacts.items() for k, t in enumerate(ts))
+
+
+@functools.lru_cache(maxsize=None)
+def chain_reference(kanesim):
+    """The impacts of DOP853 at 1e-12, and the largest difference from each check run's."""
+    ref = ordered(chain_impacts(kanesim_run(kanesim, "stop_chain.mech", CHAIN_STOP, 1e-12, integrator="dop853")[0]))
+    checks = []
+    for integ, r in (("dop853", 1e-14), ("cvode-bdf", 1e-12)):
+        _, every, n = chain_errors(ref, chain_impacts(kanesim_run(kanesim, "stop_chain.mech", CHAIN_STOP, r,
+                                                                  integrator=integ)[0]))
+        assert n == len(ref), f"{integ} at {r} lists other impacts than the reference"
+        checks.append((integ, r, every))
+    return ref, checks
+
+
+def chain_errors(ref, impacts):
+    """Largest |t - t_ref| over the first FIRST and over all reference impacts the run has."""
+    errs = [abs(impacts[key][k] - t) if len(impacts.get(key, ())) > k else None for t, key, k in ref]
+    got = [x for x in errs if x is not None]
+    first = [x for x in errs[:FIRST] if x is not None]
+    return (max(first) if first else float("nan")), (max(got) if got else float("nan")), len(got)
+
+
+def chain_mjcf(h):
+    z = calibrated_zeta(h)
+    ref, imp = f'"{10 * h / z!r} {z!r}"', '"0.99 0.99 0.001"'
+    inertial = f'<inertial pos="0.25 0 0" mass="1" diaginertia="1e-12 {1 / 48!r} {1 / 48!r}"/>'
+    body = f'<body name="l1"><joint name="root" type="hinge" axis="0 0 1"/>{inertial}'
+    for i in range(1, CHAIN_N):
+        body += (f'<body name="l{i + 1}" pos="0.5 0 0"><joint name="j{i}" type="hinge" axis="0 0 1" '
+                 f'limited="true" range="{-CHAIN_BEND!r} {CHAIN_BEND!r}" solreflimit={ref} solimplimit={imp}/>'
+                 f'{inertial}')
+    body += "</body>" * CHAIN_N
+    return (f'<mujoco><compiler angle="radian"/><option timestep="{h!r}" gravity="0 -{G} 0"/>'
+            f'<worldbody>{body}</worldbody></mujoco>')
+
+
+def mujoco_chain_run(h):
+    """MuJoCo's impacts: the steps where a joint enters its range's end (interpolated linearly)."""
+    import mujoco
+    from mujoco import rollout
+    m = mujoco.MjModel.from_xml_string(chain_mjcf(h))
+    d = mujoco.MjData(m)
+    n = int(round(CHAIN_STOP / h))
+    times = []
+    for _ in range(3):
+        mujoco.mj_resetData(m, d)
+        t0 = time.perf_counter()
+        mujoco.mj_step(m, d, n)
+        times.append(time.perf_counter() - t0)
+    mujoco.mj_resetData(m, d)
+    x0 = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    mujoco.mj_getState(m, d, x0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    st, _ = rollout.rollout(m, d, x0[None, :], nstep=n)
+    q = st[0, :, 2:1 + CHAIN_N]  # FULLPHYSICS: time, then qpos (root first)
+    t = (np.arange(len(q)) + 1) * h
+    impacts = {}
+    for i in range(1, CHAIN_N):
+        for side, gap in (("q_min", q[:, i - 1] + CHAIN_BEND), ("q_max", CHAIN_BEND - q[:, i - 1])):
+            cross = np.nonzero((gap[:-1] > 0) & (gap[1:] <= 0))[0]
+            if len(cross):
+                impacts[(f"j[{i}]", side)] = [t[c] + h * gap[c] / (gap[c] - gap[c + 1]) for c in cross]
+    return impacts, statistics.median(times), n
+
+
+def chain_rows(kanesim):
+    ref, checks = chain_reference(kanesim)
+    k = len(ref)
+    for r in RTOLS[:-1]:
+        runs = [kanesim_run(kanesim, "stop_chain.mech", CHAIN_STOP, r) for _ in range(3)]
+        if runs[0] is None:
+            print(f"| chain | kanesim exact | rtol {r:.0e} | failed |")
+            continue
+        first, every, n = chain_errors(ref, chain_impacts(runs[0][0]))
+        extra = sum(1 for _, what in runs[0][0] if "impact" in what) - n
+        integ = statistics.median(x[1] for x in runs)
+        print(f"| chain | kanesim exact | rtol {r:.0e} | {n}/{k}" + (f" (+{extra})" if extra else "")
+              + f" | {first:.1e} | {every:.1e} | — | {1000 * integ:.3f} | {runs[0][2]} |", flush=True)
+    for integ, r, every in checks:  # the reference's own error
+        print(f"| chain | reference check: kanesim {integ} | rtol {r:.0e} | {k}/{k} | | {every:.1e} | — | | |",
+              flush=True)
+    for h in (1e-3, 1e-4, 1e-5):
+        impacts, secs, n = mujoco_chain_run(h)
+        first, every, nm = chain_errors(ref, impacts)
+        extra = sum(len(v) for v in impacts.values()) - nm
+        print(f"| chain | MuJoCo Euler, soft | h {h:.0e} | {nm}/{k}" + (f" (+{extra})" if extra else "")
+              + f" | {first:.1e} | {every:.1e} | — | {1000 * secs:.3f} | {n} steps |", flush=True)
+
+
 # ---------------------------------------------------------------- table
 
 PROBLEMS = {"ball": ("bounce_ball.mech", 2.0), "stop": ("stop_pendulum.mech", 3.0),
-            "coulomb": ("coulomb_oscillator.mech", 110.0)}
+            "coulomb": ("coulomb_oscillator.mech", 110.0), "chain": ("stop_chain.mech", CHAIN_STOP)}
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--kanesim", default=os.path.join(ROOT, "build", "cli", "kanesim"))
-    ap.add_argument("--problems", default="ball,stop,coulomb")
+    ap.add_argument("--problems", default="ball,stop,coulomb,chain")
     args = ap.parse_args()
     print("| problem | tool | setting | events matched | error, first 8 (s) | error, all matched (s) "
           "| rest/stick time error (s) | time (ms) | RHS evaluations |")
     print("|---|---|---|---|---|---|---|---|---|")
     for problem in args.problems.split(","):
+        if problem == "chain":
+            chain_rows(args.kanesim)
+            continue
         model, stop = PROBLEMS[problem]
         variants = [("kanesim exact", [])]
         if problem == "coulomb":
