@@ -2,6 +2,7 @@
 #pragma once
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -37,9 +38,13 @@ struct Result {
   std::string out, err;
 };
 
-// `kanesim ARGS` (a shell command line after the binary), run in `dir`.
+// `kanesim ARGS` (a shell command line after the binary), run in `dir`. The captured streams
+// go to files named by this process and call: tests run in parallel and many share the
+// default folder (a shared ".stdout" once gave one test another test's output).
 inline Result Kanesim(const std::string& args, const std::string& dir = KANESIM_WORK_DIR) {
-  const std::string out = dir + "/.stdout", err = dir + "/.stderr";
+  static int calls = 0;
+  const std::string tag = std::to_string(::getpid()) + "." + std::to_string(++calls);
+  const std::string out = dir + "/.stdout." + tag, err = dir + "/.stderr." + tag;
   // A time limit, so that a binary without the fixes fails instead of hanging.
   int rc = std::system(("cd '" + dir + "' && timeout 120 '" + Bin() + "' " + args + " >'" + out + "' 2>'" + err + "'")
                            .c_str());
@@ -47,6 +52,8 @@ inline Result Kanesim(const std::string& args, const std::string& dir = KANESIM_
   r.rc = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
   r.out = Slurp(out);
   r.err = Slurp(err);
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
   return r;
 }
 
