@@ -210,7 +210,8 @@ def test_listed_dependencies_cover_the_numeric_ones_and_kinematic_rows_are_exact
         # der(q): the kinematic differential equations, listed exactly; qdot = u with factor 1.
         listed = declared(md, unknown)
         assert listed == numeric[unknown.variable.name], unknown.variable.name
-        for v, kind in zip(unknown.dependencies, unknown.dependenciesKind):
+        kinds = unknown.dependenciesKind or ["dependent"] * len(unknown.dependencies)  # none: all dependent
+        for v, kind in zip(unknown.dependencies, kinds):
             if kind == "constant":
                 assert J[k, knowns.index(v)] == pytest.approx(1.0, abs=1e-9)
     probe.close()
