@@ -104,19 +104,23 @@ size_t AllKnowns(const Structure& s, bool initial) {
   return n + (s.version == 3 ? 1 : 0);
 }
 
-// ` dependencies="..." dependenciesKind="..."`, or nothing where the unknown depends on every
-// known without structure (the standard's meaning of no list; it keeps a large model's
-// description small).
+// ` dependencies="..."` with ` dependenciesKind="..."` where some known enters with a
+// constant factor (without it every one is "dependent", the standard's default), or nothing
+// where the unknown depends on every known (the standard's meaning of no list; FMI 3's time
+// counted in, a spurious dependency): a large model's description stays small.
 std::string DependencyAttributes(const Structure& s, size_t v, bool initial) {
   const Knowns k = KnownsOf(s, v, initial);
   const bool structured = std::any_of(k.begin(), k.end(), [](const auto& e) { return e.second; });
-  if (k.size() == AllKnowns(s, initial) && !structured) return "";
+  const size_t time_ref = s.vars.size();
+  const size_t without_time =
+      size_t(std::count_if(k.begin(), k.end(), [&](const auto& e) { return s.version == 2 || e.first != time_ref; }));
+  if (without_time == AllKnowns(s, initial) - (s.version == 3 ? 1 : 0) && !structured) return "";
   std::string deps, kinds;
   for (const auto& [ref, constant] : k) {
     deps += (deps.empty() ? "" : " ") + std::to_string(ref);
     kinds += (kinds.empty() ? "" : " ") + std::string(constant ? "constant" : "dependent");
   }
-  return " dependencies=\"" + deps + "\" dependenciesKind=\"" + kinds + "\"";
+  return " dependencies=\"" + deps + "\"" + (structured ? " dependenciesKind=\"" + kinds + "\"" : "");
 }
 
 void Unknowns(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
