@@ -66,6 +66,9 @@ struct Document::Builder {
     Element& e = b->doc->elements_.emplace_back();
     e.name_ = name;
     e.line_ = b->StartLine();
+    std::size_t n = 0;
+    while (attributes[2 * n]) ++n;
+    e.attributes_.reserve(n);
     for (const XML_Char** a = attributes; a[0]; a += 2) e.attributes_.emplace_back(a[0], a[1]);
     if (b->open.empty()) {
       b->doc->root_ = &e;
