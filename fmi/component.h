@@ -29,6 +29,7 @@ inline const char* ModeName(Mode m) {
 struct Component {
   std::string name;
   bool co_simulation = false;
+  bool early_return_allowed = false;  // FMI 3.0 Co-Simulation: fmi3DoStep may return early
   bool logging = false;
   Mode mode = Mode::kInstantiated;
   Instance instance;

@@ -331,7 +331,12 @@ FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2V
 
 FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean) {
   return Fmi2Guarded(c, "fmi2DoStep", {Mode::kStep}, [&](Component* x) {
-    const std::string error = x->instance.DoStep(t, h);
+    std::string why;
+    const std::string error = x->instance.DoStep(t, h, &why);
+    // terminate(...) in a when clause: fmi2Discard, fmi2Terminated true, the last successful
+    // time the event's (FMI 2.0.4 section 4.2.3).
+    if (error.empty() && x->instance.Terminated())
+      return x->Log(kf::kDiscard, "terminate at t = " + std::to_string(x->instance.Time()) + ": " + why);
     if (error.empty()) return kf::kOK;
     // A failed step leaves the state where it was; the master may retry from a saved state.
     return x->Log(kf::kError, "fmi2DoStep: " + error);
@@ -365,7 +370,7 @@ FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKin
 FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value) {
   return Fmi2Guarded(c, "fmi2GetBooleanStatus", kf::kRunning, [&](Component* x) {
     if (kind != fmi2Terminated || !value) return x->Log(kf::kDiscard, "fmi2GetBooleanStatus: only terminated");
-    *value = 0;
+    *value = x->instance.Terminated();
     return kf::kOK;
   });
 }

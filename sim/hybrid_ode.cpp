@@ -39,6 +39,7 @@ struct HybridOde::Impl {
   std::unique_ptr<WhenEvents> whens;  // remade by SetModes (a terminate is final in it)
   detail::EngineOde ode;
   std::vector<double> g;  // every event function, the graze guards too (scratch)
+  std::vector<EventRecord> start_events;  // Start's, with their jumps
 };
 
 HybridOde::HybridOde(std::shared_ptr<const rt::Program> program, double rtol, double atol)
@@ -69,6 +70,18 @@ void HybridOde::SetInputs(const std::vector<double>& values) {
 }
 
 std::string HybridOde::Start(double t0, double* y0) {
+  Impl& m = *impl_;
+  const std::vector<double> given(y0, y0 + rt::StateSize(*m.program));
+  if (std::string why = StartModes(t0, y0); !why.empty()) return why;
+  // The start's events with what they changed, as a run logs them (sim/simulate.cpp).
+  m.start_events.assign(m.stops.Log().begin(), m.stops.Log().end());
+  m.start_events.insert(m.start_events.end(), m.stick.Log().begin(), m.stick.Log().end());
+  if (!m.start_events.empty())
+    AddChanges(rt::StateNames(*m.program), given.data(), y0, &m.start_events.front(), &m.start_events.back());
+  return "";
+}
+
+std::string HybridOde::StartModes(double t0, double* y0) {
   Impl& m = *impl_;
   if (m.stops.Active()) {
     if (std::string why = m.stops.CheckStart(*m.ws, t0, y0); !why.empty()) return why;
@@ -125,6 +138,17 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   m.whens = std::make_unique<WhenEvents>(*m.program);  // no terminate fired in the restored state
   if (m.whens->Active()) m.ode.SetWhens(m.whens.get());
   return true;
+}
+
+OdeSystem& HybridOde::System() { return impl_->ode; }
+
+std::vector<EventRecord> HybridOde::StartEvents() const { return impl_->start_events; }
+
+const std::vector<EventRecord>& HybridOde::Events() const { return impl_->ode.Events(); }
+
+void HybridOde::ForOutputs(rt::Workspace& ws, double* y) const {
+  if (impl_->stick.Active()) impl_->stick.Sync(ws);
+  if (impl_->stops.AnyResting()) impl_->stops.SnapResting(y);
 }
 
 }  // namespace kanesim::sim
