@@ -26,7 +26,9 @@ class HybridOde {
   HybridOde& operator=(const HybridOde&) = delete;
 
   // The event functions' number and, per function, what it watches ("joint 'hinge' at
-  // q_min", "when clause when (m.mech:9)").
+  // q_min", "condition of when (m.mech:9)", last "graze guard of joint 'hinge' at q_min":
+  // minus the gap's rate, crossing at the gap's minimum; Event there is the gap's impact
+  // where the gap is not positive, else nothing).
   int NumIndicators() const;
   std::vector<std::string> IndicatorNames() const;
 
