@@ -5,13 +5,14 @@ run's handling, so FMPy's own CVODE, which locates the indicators' crossings, re
 import csv
 import io
 import math
+import os
 
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import kanesim
+from conftest import SOURCE, kanesim
 
 G = 9.81
 
@@ -29,24 +30,9 @@ equation
 end BouncingBall;
 """
 
-WHEN_BALL = """
-model WhenBall "A ball bouncing by a when clause with restitution e, stopped after 2 s"
-  parameter Real e = 0.8;
-  World world(g = {0, -9.81, 0});
-  Prismatic p(axis = {0, 1, 0}, q(start = 1));
-  Body b(m = 1, I = diagonal({1, 1, 1}));
-equation
-  connect(world.frame_b, p.frame_a);
-  connect(p.frame_b, b.frame_a);
-  when p.q < 0 then
-    reinit(p.u, -e * pre(p.u));
-  end when;
-  when time > 2 then
-    terminate("two seconds");
-  end when;
-  annotation(experiment(StopTime = 3, Interval = 0.01, Tolerance = 1e-10));
-end WhenBall;
-"""
+# The ball of docs/events.md (reinit(p.u, -e pre(p.u)), e = 0.8, terminate at 2 s), shared
+# with python/tests/test_events.py.
+WHEN_BALL = os.path.join(SOURCE, "tests", "data", "when_ball.mech")
 
 STOPPED = """
 model Stopped "A pendulum bouncing on its end stop until it rests there"
@@ -159,7 +145,8 @@ def test_a_pendulum_on_end_stops_through_fmpy_model_exchange_equals_run(export, 
 def test_when_clauses_reinit_and_terminate_through_fmpy_model_exchange(export, write_model, fmi):
     # reinit(p.u, -e pre(p.u)) at p.q = 0, terminate at t = 2: the run's events, the closed
     # form's impact times t_1 (1 + 2 e + ... + 2 e^(k-1)), and the simulation ends at 2.
-    path = write_model("when.mech", WHEN_BALL)
+    with open(WHEN_BALL) as f:
+        path = write_model("when.mech", f.read())  # run() writes its events CSV beside it
     fmu = export(path, fmi=fmi, kind="me")
     assert validate_fmu(fmu) == []
     ref, events = run(path)
