@@ -144,5 +144,47 @@ TEST(EventsCsv, SingularImpulsesNameTheirCause) {
   EXPECT_TRUE(Has(r.err, "contact 'c1'") && Has(r.err, "contact 'c2'") && Has(r.err, "dependent")) << r.err;
 }
 
+// `--stats` lists the run's events (issue 41: "an events log (time, element, kind) in
+// --stats"): the same records, in the same order, as the --events file (whose rows repeat a
+// record once per state entry it changed). If this fails, one of the two logs misses,
+// reorders or misnames an event (the double pendulum's impact, rest and leave).
+TEST(EventsCsv, StatsListTheSameEventsAsTheFile) {
+  const std::string d = Work("events_stats");
+  Write(d + "/d.mech", DoublePendulum(0.0));
+  Result r = Kanesim("run d.mech -o rows.csv --events ev.csv --stats", d);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  std::vector<std::string> file;  // "time|element|kind", one per record
+  for (const EventRow& row : ReadEvents(d + "/ev.csv")) {
+    std::ostringstream key;
+    key.precision(17);
+    key << row.time << "|" << row.element << "|" << row.kind;
+    if (file.empty() || file.back() != key.str()) file.push_back(key.str());
+  }
+  const std::string all = r.out + r.err;
+  const size_t head = all.find("\nevents ");
+  ASSERT_NE(head, std::string::npos) << all;
+  std::istringstream lines(all.substr(all.find('\n', head + 1) + 1));
+  std::vector<std::string> stats;
+  std::string line;
+  while (std::getline(lines, line) && line.rfind("  t = ", 0) == 0) {
+    std::istringstream in(line.substr(6));
+    double t = 0.0;
+    std::string rest;
+    in >> t >> std::ws;
+    std::getline(in, rest);
+    const size_t colon = rest.find(": ");
+    std::ostringstream key;
+    key.precision(17);
+    key << t << "|" << rest.substr(0, colon) << "|" << rest.substr(colon + 2);
+    stats.push_back(key.str());
+  }
+  std::string word;
+  size_t count = 0;
+  std::istringstream(all.substr(head + 1)) >> word >> count;
+  EXPECT_EQ(count, stats.size()) << "the count line";
+  EXPECT_GE(stats.size(), 3u);
+  EXPECT_EQ(stats, file);
+}
+
 }  // namespace
 }  // namespace kanesim::clitest

@@ -174,6 +174,26 @@ TEST(WhenEvents, ChangeFiresBothWays) {
   }
 }
 
+// edge(b) is b: a clause on edge(p.q > 0.25) fires where p.q first exceeds 0.25, once (a
+// uniform motion x = t), as the clause on the relation itself. If this fails, edge() is
+// refused, fires elsewhere, or fires where b becomes false too.
+TEST(WhenEvents, EdgeFiresWhereItsConditionBecomesTrue) {
+  const std::string text =
+      "model E\n  World world;\n  Prismatic p(axis = {1, 0, 0}, u(start = 1));\n"
+      "  Body b(m = 1, I = diagonal({1, 1, 1}));\nequation\n"
+      "  connect(world.frame_b, p.frame_a);\n  connect(p.frame_b, b.frame_a);\n"
+      "  when edge(p.q > 0.25 and p.q < 0.5) then\n    reinit(p.u, 1);\n  end when;\nend E;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    RunWith(*l->prog, how, 1.0, 0.1, {"p.q"}, &r, 1e-12);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_EQ(r.stats.events.size(), 1u) << how.name;
+    EXPECT_NEAR(r.stats.events[0].time, 0.25, 1e-12) << how.name;
+  }
+}
+
 // If this fails, a when clause in a closed loop compiles, where the SUNDIALS solvers' checked
 // steps would pass its events unseen (K321 instead).
 TEST(WhenEvents, ClosedLoopsAreRefusedWithK321) {
