@@ -1,6 +1,7 @@
 """Events in the Python result (docs/events.md): r.events against the closed form of a
 bouncing ball (impact times t1 = sqrt(2h/g), t_{k+1} - t_k = 2 e^k t1) and against the command
-line's --events file, and terminate's (time, message) in r.terminated."""
+line's --events file, and terminate's (time, message) in r.terminated; the stepping core
+(model.simulator()) through a pendulum's impacts on its end stops."""
 import csv
 import math
 import subprocess
@@ -41,3 +42,28 @@ def test_events_and_terminate_in_the_result(kanesim_exe, tmp_path, ball):
     assert [x["kind"] for x in rows] == [ev["kind"] for ev in r.events]
     assert [float(x["after"]) for x in rows[:3]] == [ev["changes"]["p.u"][1] for ev in bounces]
     assert rows[-1]["signal"] == "" and rows[-1]["kind"] == "terminate: two seconds"
+
+
+def test_the_stepping_core_takes_end_stops_as_a_run_does(source_dir):
+    # model.simulator() advanced over the output grid: its impacts and rest on the stops are
+    # the run's, so the states at the grid times equal the run's rows there (to the
+    # tolerance's reach) and never pass a stop. If this fails, the stepping core loses the
+    # stops (a motion through them) or handles them differently from a run.
+    model = kanesim.load(source_dir / "tests" / "data" / "stopped_pendulum.mech")
+    r = model.run()
+    t, q = r.time, r["hinge.q"]
+    assert sum(1 for ev in r.events if ev["kind"].startswith("impact")) >= 10
+    grid = {}
+    for k in range(len(t)):  # rows of the grid, not an event's two
+        if (k == 0 or t[k] != t[k - 1]) and (k + 1 == len(t) or t[k + 1] != t[k]):
+            grid[round(t[k] / 0.01)] = q[k]
+    s = model.simulator()
+    worst = 0.0
+    for k in range(1, 201):
+        s.advance_to(0.01 * k)
+        qk = s.state[0]
+        assert -0.5 - 1e-9 <= qk <= 0.5 + 1e-9
+        if k in grid:
+            worst = max(worst, abs(qk - grid[k]))
+    assert worst < 1e-8
+    assert s.state[0] == -0.5 and s.state[1] == 0.0  # at rest on q_min at the end, held there
