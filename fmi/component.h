@@ -31,6 +31,7 @@ inline const char* ModeName(Mode m) {
 struct Component {
   std::string name;
   bool co_simulation = false;
+  bool early_return_allowed = false;  // FMI 3.0 Co-Simulation: fmi3DoStep may return early
   bool logging = false;
   Mode mode = Mode::kInstantiated;
   Instance instance;
@@ -122,7 +123,8 @@ Status Nominals(Component* x, double nominals[], size_t n);
 // unknown then.
 Status VariableDependencies(Component* x, const std::string& call, unsigned vr, std::vector<ListedKnown>* out);
 
-// Co-Simulation: one communication step; a failed one leaves the state where it was.
+// Co-Simulation: one communication step; a failed one leaves the state where it was; kDiscard
+// when a terminate(...) ended it at its event (Instance::Terminated).
 Status DoStep(Component* x, const std::string& call, double t, double h);
 
 }  // namespace kanesim::fmi
