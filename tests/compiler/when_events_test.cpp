@@ -98,6 +98,27 @@ TEST(WhenEvents, PendulumFiresAtTheEllipticIntegralTime) {
   }
 }
 
+// A condition on a frame's position: the rod's tip x = sin(phi) passes sin(-0.5) where phi
+// passes -0.5, at the same elliptic-integral time as above. If this fails, conditions on
+// frame signals (docs/events.md "Relations of any signal") fire elsewhere or not at all.
+TEST(WhenEvents, ConditionOnAFrameSignalFiresAtTheEllipticIntegralTime) {
+  const double phi0 = 1.0, k = std::sin(phi0 / 2);
+  const double t1 = (std::comp_ellint_1(k) + std::ellint_1(k, std::asin(std::sin(0.25) / k))) / kW;
+  const std::string text =
+      PendulumText{.mods = ", q(start = " + Num(phi0 - kHalfPi) + ")",
+                   .equations = "  when rod.frame_b.r[1] < sin(-0.5) then\n    reinit(j1.u, 0);\n  end when;\n"}
+          .Text();
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    RunWith(*l->prog, how, 1.0, 0.1, {"j1.q"}, &r, 1e-12);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_GE(r.stats.events.size(), 1u) << how.name;
+    EXPECT_NEAR(r.stats.events[0].time, t1, 1e-9) << how.name;
+  }
+}
+
 // Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7), q2 the relative angle. reinit(j1.u, 0) is the
 // impulse e1 lambda on joint 1 alone, so joint 2's generalized momentum
 //   p2 = dT/du2 = m2 (L2^2/3 + L1 L2 cos(q2)/2) u1 + m2 L2^2/3 u2
