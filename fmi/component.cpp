@@ -140,9 +140,15 @@ Status Nominals(Component* x, double nominals[], size_t n) {
 }
 
 Status DoStep(Component* x, const std::string& call, double t, double h) {
-  const std::string error = x->instance.DoStep(t, h);
+  std::string why;
+  const std::string error = x->instance.DoStep(t, h, &why);
   // A failed step leaves the state where it was; the master may retry from a saved state.
-  return error.empty() ? kOK : x->Log(kError, call + ": " + error);
+  if (!error.empty()) return x->Log(kError, call + ": " + error);
+  // terminate(...) in a when clause ended the step at its event: fmi2Discard with
+  // fmi2Terminated true (FMI 2.0.4, 4.2.3); fmi3DoStep turns it into terminateSimulation.
+  if (x->instance.Terminated())
+    return x->Log(kDiscard, call + ": terminate at t = " + std::to_string(x->instance.Time()) + ": " + why);
+  return kOK;
 }
 
 }  // namespace kanesim::fmi

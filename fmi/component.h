@@ -30,6 +30,7 @@ inline const char* ModeName(Mode m) {
 struct Component {
   std::string name;
   bool co_simulation = false;
+  bool early_return_allowed = false;  // FMI 3.0 Co-Simulation: fmi3DoStep may return early
   bool logging = false;
   Mode mode = Mode::kInstantiated;
   Instance instance;
@@ -116,7 +117,8 @@ Status UpdateDiscrete(Component* x, const std::string& call, bool* changed, bool
 Status GetIndicators(Component* x, const std::string& call, double z[], size_t n);
 Status Nominals(Component* x, double nominals[], size_t n);
 
-// Co-Simulation: one communication step; a failed one leaves the state where it was.
+// Co-Simulation: one communication step; a failed one leaves the state where it was; kDiscard
+// when a terminate(...) ended it at its event (Instance::Terminated).
 Status DoStep(Component* x, const std::string& call, double t, double h);
 
 }  // namespace kanesim::fmi

@@ -61,14 +61,16 @@ FMI3_EXPORT fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3Strin
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources,
                                                      fmi3Boolean, fmi3Boolean logging, fmi3Boolean event_mode_used,
-                                                     fmi3Boolean, const fmi3ValueReference[], size_t,
+                                                     fmi3Boolean early_return_allowed, const fmi3ValueReference[], size_t,
                                                      fmi3InstanceEnvironment env, fmi3LogMessageCallback log,
                                                      fmi3IntermediateUpdateCallback) {
   if (event_mode_used) {
     if (log) log(env, fmi3Error, "logStatusError", "this FMU has no event mode in Co-Simulation (hasEventMode=false)");
     return nullptr;
   }
-  return Instantiate(name, token, resources, true, logging, env, log);
+  fmi3Instance c = Instantiate(name, token, resources, true, logging, env, log);
+  if (c) static_cast<Component*>(c)->early_return_allowed = early_return_allowed;
+  return c;
 }
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateScheduledExecution(fmi3String, fmi3String, fmi3String, fmi3Boolean,
@@ -365,10 +367,17 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, 
                                   fmi3Boolean* event_needed, fmi3Boolean* terminate, fmi3Boolean* early_return,
                                   fmi3Float64* last_time) {
   return Fmi3Guarded(c, "fmi3DoStep", {Mode::kStep}, [&](Component* x) {
-    const kf::Status s = kf::DoStep(x, "fmi3DoStep", t, h);
+    kf::Status s = kf::DoStep(x, "fmi3DoStep", t, h);
     for (fmi3Boolean* b : {event_needed, terminate, early_return})
       if (b) *b = false;
     if (last_time) *last_time = x->instance.Time();
+    // terminate(...) in a when clause: terminateSimulation, lastSuccessfulTime the event's,
+    // earlyReturn only where the master allowed it (FMI 3.0 section 4.2.1).
+    if (s == kf::kDiscard && x->instance.Terminated()) {
+      if (terminate) *terminate = true;
+      if (early_return) *early_return = x->early_return_allowed && x->instance.Time() < t + h;
+      s = kf::kOK;
+    }
     return s;
   });
 }
