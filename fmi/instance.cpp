@@ -74,6 +74,12 @@ std::string Instance::Load(const std::string& dir, const std::string& guid) {
   return Reset();
 }
 
+const StructureLists& Instance::Structure(int version) {
+  if (!structure_ || structure_->version != version)
+    structure_ = std::make_unique<StructureLists>(StructureLists{vars_, ModelDependencies(*model_->program, vars_), version});
+  return *structure_;
+}
+
 std::string Instance::Reset() {
   program_ = model_->program;
   params_ = program_->param_values;
