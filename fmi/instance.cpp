@@ -296,8 +296,12 @@ std::string Instance::Evaluate() {
   hybrid_->SetInputs(inputs_);
   if (n_ > 0 && hybrid_->Derivatives(t_, y_.data(), ydot_.data()) != 0)
     return "at t = " + Number(t_) + ": " + hybrid_->FailureCause();
-  if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y_.data(), out_.data()) != 0)
-    return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  if (outputs_plan_) {
+    std::vector<double> y = y_;
+    hybrid_->ForOutputs(*ws_, y.data());  // the mode's friction laws, resting joints on their stops: a run's rows
+    if (rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), out_.data()) != 0)
+      return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  }
   stale_ = false;
   return "";
 }
@@ -389,6 +393,7 @@ std::string Instance::DoStep(double t, double h, std::string* terminate_message)
   }
   y_ = stepper_->State();
   t_ = stepper_->Time();
+  hybrid_->SetModes(stepper_->Modes());  // the outputs see the step's modes (Evaluate)
   stale_ = true;
   if (r.terminated) *terminate_message = r.cause;
   return Evaluate();
