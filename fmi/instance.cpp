@@ -99,13 +99,7 @@ std::string Instance::Reset() {
 std::string Instance::Rebind() {
   if (params_changed_) {
     // Calculated parameters follow the tunable ones they are bound to (as sweeps do).
-    const flat::Mechanism& mech = *model_->mech;
-    std::vector<double> pv(params_.size());
-    for (size_t i = 0; i < pv.size(); ++i) {
-      const flat::Param& p = mech.params[i];
-      pv[i] = (p.binding == flat::kNoExpr || p.user_set) ? params_[i] : flat::EvalParamExpr(mech, pv, p.binding);
-    }
-    rt::CompileResult r = rt::Rebind(*model_->program, pv);
+    rt::CompileResult r = rt::Rebind(*model_->program, BoundValues(*model_->mech, params_));
     if (!r.program) {
       std::string msg = "the model does not compile with these parameter values";
       for (const rt::CompileMessage& e : r.errors) msg += "; " + e.message;
@@ -152,6 +146,9 @@ std::string Instance::SetReal(unsigned vr, double value) {
     return "";
   }
   if (v.kind == VarKind::State) {
+    if (!v.start_params.empty())  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
+      return "'" + v.name + "' starts where its parameters put it (initial=\"calculated\"): set those, as `" +
+             vars_[size_t(v.start_params[0])].name + "`";
     y_[v.index] = value;
     state_set_[v.index] = 1;
     stale_ = true;
