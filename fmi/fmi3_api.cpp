@@ -219,12 +219,38 @@ FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte by
   FMI3_EXPORT fmi3Status Name Params {                                                          \
     return Fmi3Guarded(c, #Name, kf::kAnyMode, [&](Component* x) { return x->Log(kf::kError, #Name ": " what); }); \
   }
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetNumberOfVariableDependencies, (fmi3Instance c, fmi3ValueReference, size_t*),
-                          "the dependencies are in modelDescription.xml")
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetVariableDependencies,
-                          (fmi3Instance c, fmi3ValueReference, size_t[], fmi3ValueReference[], size_t[],
-                           fmi3DependencyKind[], size_t),
-                          "the dependencies are in modelDescription.xml")
+// ModelStructure's lists (kf::VariableDependencies); the variables are scalars: element index 0.
+FMI3_EXPORT fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance c, fmi3ValueReference vr, size_t* n) {
+  return Fmi3Guarded(c, "fmi3GetNumberOfVariableDependencies", kf::kAnyMode, [&](Component* x) {
+    if (!n) return x->Log(kf::kError, "fmi3GetNumberOfVariableDependencies: no place given");
+    std::vector<kf::ListedKnown> known;
+    const kf::Status s = kf::VariableDependencies(x, "fmi3GetNumberOfVariableDependencies", vr, &known);
+    if (s == kf::kOK) *n = known.size();
+    return s;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueReference dependent,
+                                                   size_t element_of_dependent[], fmi3ValueReference independents[],
+                                                   size_t element_of_independents[], fmi3DependencyKind kinds[],
+                                                   size_t n) {
+  return Fmi3Guarded(c, "fmi3GetVariableDependencies", kf::kAnyMode, [&](Component* x) {
+    std::vector<kf::ListedKnown> known;
+    if (kf::Status s = kf::VariableDependencies(x, "fmi3GetVariableDependencies", dependent, &known); s != kf::kOK)
+      return s;
+    if (n != known.size())
+      return x->Log(kf::kError, "fmi3GetVariableDependencies: '" + x->instance.Variables()[dependent].name + "' has " +
+                                    std::to_string(known.size()) + " dependencies, not " + std::to_string(n));
+    if (n > 0 && (!element_of_dependent || !independents || !element_of_independents || !kinds))
+      return x->Log(kf::kError, "fmi3GetVariableDependencies: no place given");
+    for (size_t i = 0; i < n; ++i) {
+      element_of_dependent[i] = element_of_independents[i] = 0;  // the whole (scalar) variable
+      independents[i] = fmi3ValueReference(known[i].vr);
+      kinds[i] = known[i].constant ? fmi3Constant : fmi3Dependent;
+    }
+    return kf::kOK;
+  });
+}
 // Scalar variables only: one seed per known, one sensitivity per unknown.
 FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                                     size_t n_unknowns, const fmi3ValueReference knowns[],

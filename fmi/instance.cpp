@@ -74,6 +74,12 @@ std::string Instance::Load(const std::string& dir, const std::string& guid) {
   return Reset();
 }
 
+const StructureLists& Instance::Structure(int version) {
+  if (!structure_ || structure_->version != version)
+    structure_ = std::make_unique<StructureLists>(StructureLists{vars_, ModelDependencies(*model_->program, vars_), version});
+  return *structure_;
+}
+
 std::string Instance::Reset() {
   program_ = model_->program;
   params_ = program_->param_values;
@@ -93,13 +99,7 @@ std::string Instance::Reset() {
 std::string Instance::Rebind() {
   if (params_changed_) {
     // Calculated parameters follow the tunable ones they are bound to (as sweeps do).
-    const flat::Mechanism& mech = *model_->mech;
-    std::vector<double> pv(params_.size());
-    for (size_t i = 0; i < pv.size(); ++i) {
-      const flat::Param& p = mech.params[i];
-      pv[i] = (p.binding == flat::kNoExpr || p.user_set) ? params_[i] : flat::EvalParamExpr(mech, pv, p.binding);
-    }
-    rt::CompileResult r = rt::Rebind(*model_->program, pv);
+    rt::CompileResult r = rt::Rebind(*model_->program, BoundValues(*model_->mech, params_));
     if (!r.program) {
       std::string msg = "the model does not compile with these parameter values";
       for (const rt::CompileMessage& e : r.errors) msg += "; " + e.message;
@@ -146,6 +146,9 @@ std::string Instance::SetReal(unsigned vr, double value) {
     return "";
   }
   if (v.kind == VarKind::State) {
+    if (!v.start_params.empty())  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
+      return "'" + v.name + "' starts where its parameters put it (initial=\"calculated\"): set those, as `" +
+             vars_[size_t(v.start_params[0])].name + "`";
     y_[v.index] = value;
     state_set_[v.index] = 1;
     stale_ = true;
@@ -293,8 +296,12 @@ std::string Instance::Evaluate() {
   hybrid_->SetInputs(inputs_);
   if (n_ > 0 && hybrid_->Derivatives(t_, y_.data(), ydot_.data()) != 0)
     return "at t = " + Number(t_) + ": " + hybrid_->FailureCause();
-  if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y_.data(), out_.data()) != 0)
-    return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  if (outputs_plan_) {
+    std::vector<double> y = y_;
+    hybrid_->ForOutputs(*ws_, y.data());  // the mode's friction laws, resting joints on their stops: a run's rows
+    if (rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), out_.data()) != 0)
+      return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  }
   stale_ = false;
   return "";
 }
@@ -386,6 +393,7 @@ std::string Instance::DoStep(double t, double h, std::string* terminate_message)
   }
   y_ = stepper_->State();
   t_ = stepper_->Time();
+  hybrid_->SetModes(stepper_->Modes());  // the outputs see the step's modes (Evaluate)
   stale_ = true;
   if (r.terminated) *terminate_message = r.cause;
   return Evaluate();

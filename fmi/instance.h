@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fmi/dependencies.h"
 #include "fmi/variables.h"
 #include "pipeline/pipeline.h"
 #include "sim/sim.h"
@@ -35,6 +36,8 @@ class Instance {
   std::string Load(const std::string& resources_dir, const std::string& guid);
 
   const std::vector<Variable>& Variables() const { return vars_; }
+  // ModelStructure's lists in FMI `version` (what modelDescription.xml says), made at the first call.
+  const StructureLists& Structure(int version);
   int NumStates() const { return n_; }
   double Time() const { return t_; }
 
@@ -109,6 +112,7 @@ class Instance {
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, nullptr};
   std::shared_ptr<const rt::SignalPlan> outputs_plan_;
   std::vector<Variable> vars_;
+  std::unique_ptr<StructureLists> structure_;
   FmuSettings settings_;
   int n_ = 0;                      // states
   double t_ = 0.0, rtol_ = 0.0;

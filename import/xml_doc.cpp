@@ -4,6 +4,7 @@
 #include <expat.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <memory>
 
@@ -31,16 +32,31 @@ const Element* Element::NextSiblingElement(const char* name) const {
 struct Document::Builder {
   Document* doc;
   XML_Parser parser;
+  std::string_view text;
   std::vector<Element*> open;  // the elements whose end tag is still to come, outermost first
   bool failed = false;
+  std::size_t counted = 0;  // newlines of text[0, counted) are in `line`
+  int line = 1;
 
   int Line() const { return static_cast<int>(XML_GetCurrentLineNumber(parser)); }
 
-  void Fail(std::string text) {
+  // The line of the current event's first byte ('\n' counted on from the last element's, as
+  // the diagnostics' renderer counts lines): cheaper than expat's own count, which walks the
+  // text character by character (0.3M of Talos's 4.0M instructions of parsing).
+  int StartLine() {
+    const auto at = static_cast<std::size_t>(XML_GetCurrentByteIndex(parser));
+    if (at < counted || at > text.size()) return Line();
+    line += static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(counted),
+                                        text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+    counted = at;
+    return line;
+  }
+
+  void Fail(std::string words) {
     if (failed) return;
     failed = true;
     doc->error_line_ = Line();
-    doc->error_text_ = std::move(text);
+    doc->error_text_ = std::move(words);
     XML_StopParser(parser, XML_FALSE);
   }
 
@@ -49,7 +65,10 @@ struct Document::Builder {
     if (static_cast<int>(b->open.size()) >= kMaxDepth) return b->Fail("elements are nested too deep");
     Element& e = b->doc->elements_.emplace_back();
     e.name_ = name;
-    e.line_ = b->Line();
+    e.line_ = b->StartLine();
+    std::size_t n = 0;
+    while (attributes[2 * n]) ++n;
+    e.attributes_.reserve(n);
     for (const XML_Char** a = attributes; a[0]; a += 2) e.attributes_.emplace_back(a[0], a[1]);
     if (b->open.empty()) {
       b->doc->root_ = &e;
@@ -99,7 +118,7 @@ bool Document::Parse(std::string_view text) {
     error_text_ = "out of memory";
     return false;
   }
-  Builder b{this, parser.get(), {}, false};
+  Builder b{this, parser.get(), text, {}, false, 0, 1};
   XML_SetUserData(parser.get(), &b);
   XML_SetElementHandler(parser.get(), &Builder::Start, &Builder::End);
   XML_SetEntityDeclHandler(parser.get(), &Builder::EntityDecl);

@@ -78,12 +78,14 @@ def flights(t1, e, n):
     return t1 + np.concatenate([[0], np.cumsum([2 * e ** k * t1 for k in range(1, n)])])
 
 
-@pytest.mark.parametrize("dt", [0.01, 0.37])
-def test_a_bouncing_ball_stepped_has_the_runs_impacts_and_the_closed_form(dt):
-    # The impacts are located inside the steps (dt = 0.37 holds several), not at their ends.
+@pytest.mark.parametrize("integrator,dt", [("dop853", 0.01), ("dop853", 0.37), ("cvode", 0.01), ("ida", 0.01),
+                                           ("arkode", 0.01)])
+def test_a_bouncing_ball_stepped_has_the_runs_impacts_and_the_closed_form(integrator, dt):
+    # The impacts are located inside the steps (dt = 0.37 holds several), not at their ends,
+    # by each integrator's own event location (DOP853's dense output, SUNDIALS' root finding).
     m = kanesim.loads(PLANE_BALL, name="ball.mech")
-    run = m.run(rtol=1e-10, integrator="dop853")
-    sim = m.simulator(rtol=1e-10, integrator="dop853", outputs=["lift.q", "lift.u"])
+    run = m.run(rtol=1e-10, integrator=integrator)
+    sim = m.simulator(rtol=1e-10, integrator=integrator, outputs=["lift.q", "lift.u"])
     rows = step_to(sim, 2.5, dt)
     got, want = times(sim.events, "impact"), times(run.events, "impact")
     assert len(got) == len(want) >= 8
@@ -129,14 +131,17 @@ def test_exact_friction_stepped_slides_then_sticks_as_the_run():
     # good at pi / w, x = 2 c - x0 (the spring's 4.11 N within mu_s m g = 4.91 N). A stepping
     # core with the regularized law would creep on instead.
     m = kanesim.loads(SLIDER, name="slider.mech")
-    run = m.run(rtol=1e-10, outputs=["slide.q", "slide.u"])
-    sim = m.simulator(rtol=1e-10, outputs=["slide.q", "slide.u"])
+    run = m.run(rtol=1e-10, outputs=["slide.q", "slide.u", "slide.a"])
+    sim = m.simulator(rtol=1e-10, outputs=["slide.q", "slide.u", "slide.a"])
     rows = step_to(sim, 1.5, 0.01)
     c, w = 0.3 * G / 10, math.sqrt(10.0)
     t = rows[:, 0]
     sliding, stuck = t < math.pi / w - 1e-6, t > math.pi / w + 1e-6
     assert np.max(np.abs(rows[sliding, 1] - (c + (1 - c) * np.cos(w * t[sliding])))) < 1e-8
     assert np.max(np.abs(rows[stuck, 1] - (2 * c - 1))) < 1e-9 and np.max(np.abs(rows[stuck, 2])) < 1e-12
+    # The outputs see the mode as the run's rows do: a = -k x / m + mu g sliding back, 0 stuck.
+    assert np.max(np.abs(rows[sliding, 3] - (-10 * rows[sliding, 1] + 0.3 * G))) < 1e-9
+    assert np.max(np.abs(rows[stuck, 3])) < 1e-9
     assert [e["kind"].split(" ")[0] for e in sim.events] == [e["kind"].split(" ")[0] for e in run.events]
     assert sim.events[-1]["time"] == pytest.approx(run.events[-1]["time"], abs=1e-9)
     assert sim.events[-1]["time"] == pytest.approx(math.pi / w, abs=1e-8)
