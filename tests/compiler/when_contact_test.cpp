@@ -19,12 +19,6 @@ namespace {
 
 constexpr double kG = 9.81;
 
-std::string Num(double x) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
-
 // A point mass (m = 2) at rest on the floor y = 0 (restitution 1/2); `when` the clause.
 std::string Ball(const std::string& when) {
   return "model Ball\n  World world(g = {0, -9.81, 0});\n  Prismatic lift(axis = {0, 1, 0});\n"
