@@ -362,6 +362,22 @@ std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_u
 
 // The stepping core from (t_, y_, inputs_): a start on a contact or with exact friction is
 // its first event, as a run starts (docs/fmi.md "Co-Simulation").
+std::string Instance::AdjointDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns,
+                                        size_t n_knowns, const double* seed, double* out) {
+  if ((n_unknowns > 0 && (!unknowns || !seed)) || (n_knowns > 0 && (!knowns || !out))) return "no place given";
+  for (size_t i = 0; i < n_unknowns; ++i)
+    if (!std::isfinite(seed[i])) return "a seed cannot be " + Number(seed[i]);
+  std::vector<double> column(n_unknowns);
+  const double one = 1.0;
+  for (size_t k = 0; k < n_knowns; ++k) {
+    if (std::string e = DirectionalDerivative(unknowns, n_unknowns, &knowns[k], 1, &one, column.data()); !e.empty())
+      return e;
+    out[k] = 0.0;
+    for (size_t i = 0; i < n_unknowns; ++i) out[k] += seed[i] * column[i];
+  }
+  return "";
+}
+
 std::string Instance::StartStepper() {
   sim::SimulatorOptions options;
   options.start_time = t_;

@@ -218,6 +218,7 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   const std::string id = Identifier(mech.model_name);
   const std::string caps =
       " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\""
+      " providesAdjointDerivatives=\"true\""
       " providesPerElementDependencies=\"true\"";  // fmi3GetVariableDependencies: every variable is a scalar
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
