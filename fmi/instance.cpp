@@ -146,9 +146,11 @@ std::string Instance::SetReal(unsigned vr, double value) {
     return "";
   }
   if (v.kind == VarKind::State) {
-    if (!v.start_params.empty())  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
-      return "'" + v.name + "' starts where its parameters put it (initial=\"calculated\"): set those, as `" +
-             vars_[size_t(v.start_params[0])].name + "`";
+    if (v.start_calculated)  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
+      return "'" + v.name + "' starts where " +
+             (v.start_params.empty() ? std::string("the assembly of the model's constraints puts it")
+                                     : "its parameters put it (set those, as `" + vars_[size_t(v.start_params[0])].name + "`)") +
+             ": initial=\"calculated\"";
     y_[v.index] = value;
     state_set_[v.index] = 1;
     stale_ = true;
