@@ -5,6 +5,7 @@
 // momentum p_j = (M u)_j is unchanged across the jump.
 #include "sim/when_events.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "runtime/program/program.h"  // Program::whens
@@ -56,6 +57,12 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
   for (const rt::WhenReinit& r : w.reinits) value.push_back(rt::EventRoot(program_, ws, r.root));
   for (size_t k = 0; k < w.reinits.size(); ++k)
     if (!w.reinits[k].speed) y[w.reinits[k].state] = value[k];
+  // Closed loops, rolling contacts: the jump keeps A u = 0, so the state is first put on the
+  // constraints (else the integrator's drift off them, ~tolerance, would stay in the right limit).
+  if (!program_.rows.empty() && !w.reinits.empty()) {
+    std::vector<double> z(static_cast<size_t>(nq_ + nu_));
+    if (rt::ProjectByPartition(program_, ws, t, y, z.data()) == 0) std::copy(z.begin(), z.end(), y);
+  }
   std::vector<int> rows;
   std::vector<double> targets;
   for (size_t k = 0; k < w.reinits.size(); ++k)
@@ -64,7 +71,7 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
     std::vector<double> du(static_cast<size_t>(nu_));
     const int s = solve ? solve(rows, targets, du.data()) : SpeedJump(program_, ws, t, y, rows, targets, du.data());
     if (s != 0) {
-      if (s == -1) error_ = SingularJump(w.name);
+      if (s == -1) error_ = program_.rows.empty() ? SingularJump(w.name) : w.name + ": " + rt::ErrorMessage(ws);
       return s;
     }
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
