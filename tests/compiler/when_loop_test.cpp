@@ -3,7 +3,8 @@
 // has one degree of freedom, so the other speeds after the jump follow from the loop's
 // velocity equations alone (closed form below), and the kinetic energy, quadratic in that
 // one speed, scales by (u+ / u-)^2. A speed the loop fixes (the rocker at its extreme, where
-// crank and coupler align) cannot be set: exit 2 naming the clause.
+// crank and coupler align) cannot be set: exit 2 naming the clause. A rolling sphere's rows
+// take the same jump.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -144,6 +145,31 @@ TEST(WhenLoop, ASpeedTheLoopFixesIsRefusedAtTheEvent) {
     EXPECT_EQ(r.status, sim::SimResult::Status::kNumericalFailure) << how.name << ": " << r.message;
     EXPECT_NE(r.message.find("when ("), std::string::npos) << how.name << ": " << r.message;
     EXPECT_NE(r.message.find("fix 'rocker_pivot.u'"), std::string::npos) << how.name << ": " << r.message;
+  }
+}
+
+// If this fails, reinit of a sphere's speed down an incline (RollingSphere, rows on the
+// contact point's velocity) left it off the plane or slipping: after it the centre moves
+// along the plane, v_y = v_x tan(alpha), and rolls, w_z = -v_x / (r cos alpha).
+TEST(WhenLoop, RollingSphereReinitKeepsItRolling) {
+  std::ifstream in(kRoot + "/examples/sphere_incline.mech");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  std::string text = buf.str();
+  const size_t at = text.find("  annotation(experiment");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at, "  when time > 0.5 then\n    reinit(free.u[1], 0.5);\n  end when;\n");
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  const double alpha = 0.3, r = 0.1;
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult res;
+    RunWith(*l->prog, how, 0.7, 0.1, {"free.u[1]"}, &res, 1e-10);
+    ASSERT_EQ(res.status, sim::SimResult::Status::kOk) << how.name << ": " << res.message;
+    ASSERT_EQ(res.stats.events.size(), 1u) << how.name;
+    EXPECT_EQ(StateSpeed(res, "free.u[1]", true), 0.5) << how.name;
+    EXPECT_NEAR(StateSpeed(res, "free.u[2]", true), 0.5 * std::tan(alpha), 1e-12) << how.name;
+    EXPECT_NEAR(StateSpeed(res, "free.u[6]", true), -0.5 / (r * std::cos(alpha)), 1e-11) << how.name;
   }
 }
 
