@@ -147,7 +147,18 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
 
 int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   if (i < 0 || i >= Count()) return 0;
-  return Decide(ws, t, y, joints_[static_cast<size_t>(i)]);
+  Joint& j = joints_[static_cast<size_t>(i)];
+  if (j.mode != 0) return Decide(ws, t, y, j);
+  // A stuck joint's force needed reached its bound and grows past it: it slips. (Deciding
+  // again here found it within the bound by the root's last bits and kept it stuck, with
+  // its event function then negative for good.)
+  if (int s = Solve(ws, t, y, nullptr); s != 0) return s;
+  j.mode = j.tau > 0.0 ? -1 : 1;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "slips, %s (friction needed %.17g, at most %.17g)", j.mode > 0 ? "forwards" : "backwards",
+                j.tau, StaticBound(ws, j));
+  log_.push_back({t, j.f.joint, buf});
+  return 0;
 }
 
 std::string StickSlipEvents::SettleAt(rt::Workspace& ws, double t, const double* y, double tol) {

@@ -3,7 +3,8 @@
 // the static bound and slides with (T - F) / J above it; a pendulum whose swings lose
 // F times their path and that rests at the angle and time the energy balance gives; a
 // double pendulum whose stuck joint's holding torque is Lagrange's and that slips where that
-// torque reaches the static bound.
+// torque reaches the static bound; a block driven against an end stop through its friction
+// (impacts, the rebound's friction reversed, rest, then leaving and sticking).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -260,6 +261,75 @@ TEST(ConstantFriction, StuckJointOfADoublePendulumHoldsLagrangesTorqueAndSlipsAt
     ASSERT_LT(row, s.rows.size());
     EXPECT_NEAR(s.rows[row][0], q1_slip, 1e-8) << how.name;
     for (size_t i = 0; i <= row; ++i) EXPECT_EQ(s.rows[i][1], q2) << how.name << " t = " << s.times[i];
+  }
+}
+
+
+// A block (m = 2) on a rail with friction_force F = 1 (static 1.5) and a stop at q_max = 1
+// (e = 0.5). Pushed by P = 5 from rest at 0 it reaches the stop at t1 = 1 (a_down = (P - F)/m
+// = 2, speed v1 = 2); each rebound (speed e v) flies back against P and friction together
+// (a_up = (P + F)/m = 3: the friction reversed with the speed) for e v / a_up, slips forwards
+// again at its apex and returns with a_down: impact k + 1 after e v_k (1/a_up + 1/sqrt(a_up
+// a_down)) at speed v_{k+1} = e v_k sqrt(a_down / a_up), and rests at their accumulation.
+// Then, started at rest on the stop and pushed by P = 3 - 2t, it leaves the stop where P = 0
+// (t = 1.5), stays stuck while |P| <= 1.5 and slips back at t = 2.25, with q'' = (P + F)/m.
+// If this fails, an impact does not pass through the friction, the rebound's friction keeps
+// the old direction, or the stop and the friction hold the block at the wrong times.
+TEST(ConstantFriction, BlockAgainstAnEndStopBouncesRestsLeavesAndSlips) {
+  auto model = [](const std::string& start, const std::string& push) {
+    return "model B\n"
+           "  World world(g = {0, -9.81, 0});\n"
+           "  Prismatic s(axis = {1, 0, 0}, q(start = " + start + "), q_max = 1, restitution = 0.5, friction_force = 1, "
+           "friction_force_s = 1.5, friction_exact = true);\n"
+           "  Body box(m = 2);\n"
+           "equation\n"
+           "  connect(world.frame_b, s.frame_a);\n"
+           "  connect(s.frame_b, box.frame_a);\n"
+           "  s.tau = " + push + ";\n"
+           "end B;\n";
+  };
+  auto l = LoadModel(model("0", "5"), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  const double e = 0.5, a_up = 3, a_down = 2;
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 3.0, 0.1, {"s.q", "s.u"}, &r, 1e-11);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    std::vector<double> impacts;
+    for (const auto& ev : r.stats.events)
+      if (ev.kind.find("impact") == 0) impacts.push_back(ev.time);
+    ASSERT_GE(impacts.size(), 3u) << how.name;
+    double t_k = 1, v_k = 2;
+    for (size_t k = 0; k < 3; ++k) {
+      EXPECT_NEAR(impacts[k], t_k, 1e-8) << how.name << " k = " << k;
+      t_k += e * v_k * (1 / a_up + 1 / std::sqrt(a_up * a_down));
+      v_k *= e * std::sqrt(a_down / a_up);
+    }
+    for (const auto& row : s.rows) EXPECT_LE(row[0], 1.0 + 1e-9) << how.name;
+    EXPECT_EQ(s.rows.back()[0], 1.0) << how.name;  // at rest on the stop from t = 2.253
+    EXPECT_EQ(s.rows.back()[1], 0.0) << how.name;
+  }
+  auto leave = LoadModel(model("1", "3 - 2 * time"), {}, {}, true);
+  ASSERT_TRUE(leave && leave->prog) << (leave ? Messages(leave->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*leave->prog, how, 3.0, 0.125, {"s.q"}, &r, 1e-11);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    std::string log;
+    double t_leave = -1, t_slip = -1;
+    for (const auto& ev : r.stats.events) {
+      log += std::to_string(ev.time) + " " + ev.kind + "\n";
+      if (ev.kind.find("leaves") == 0) t_leave = ev.time;
+      if (ev.kind.find("slips, backwards") == 0) t_slip = ev.time;
+    }
+    EXPECT_NEAR(t_leave, 1.5, 1e-6) << how.name << "\n" << log;  // (the reaction's zero, to its round-off)
+    EXPECT_NEAR(t_slip, 2.25, 1e-9) << how.name << "\n" << log;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      const double t = s.times[i], d = t - 2.25;
+      // q'' = (P + F) / m = 2 - t = -0.25 - d from rest at d = 0: q = 1 - 0.125 d^2 - d^3 / 6.
+      const double q = t <= 2.25 ? 1.0 : 1.0 - 0.125 * d * d - d * d * d / 6;
+      EXPECT_NEAR(s.rows[i][0], q, 1e-9) << how.name << " t = " << t;
+    }
   }
 }
 
