@@ -7,6 +7,7 @@
 #include <exception>
 #include <functional>
 #include <initializer_list>
+#include <memory>
 #include <new>
 #include <string>
 
@@ -29,6 +30,7 @@ inline const char* ModeName(Mode m) {
 struct Component {
   std::string name;
   bool co_simulation = false;
+  bool early_return_allowed = false;  // FMI 3.0 Co-Simulation: fmi3DoStep may return early
   bool logging = false;
   Mode mode = Mode::kInstantiated;
   Instance instance;
@@ -70,5 +72,53 @@ inline constexpr std::initializer_list<Mode> kModelExchange = {Mode::kEvent, Mod
 
 // A Save()d instance, as the master holds it (fmi2FMUstate, fmi3FMUState).
 using Snapshot = Instance::Snapshot;
+
+// ---- The bodies of the calls FMI 2.0 and 3.0 both have (fmi/component.cpp), run inside
+// Guarded; `call` names the C function in messages ("fmi2GetFMUstate"). ----
+
+// A component for the master's `name`; Model Exchange unless `co_simulation`.
+std::unique_ptr<Component> NewComponent(const char* name, bool co_simulation, bool logging);
+// Loads the model into c from the folder find_dir gives ("" or why not): the component
+// for the master, or nullptr with "call: why" through c's logger.
+Component* LoadComponent(std::unique_ptr<Component> c, const std::string& call,
+                         const std::function<std::string(std::string* dir)>& find_dir, const char* token);
+
+// fmi2SetupExperiment / fmi3EnterInitializationMode: the tolerance and start time.
+Status StartExperiment(Component* x, bool tolerance_defined, double tolerance, double start);
+Status ExitInitialization(Component* x);
+Status EnterMode(Component* x, Mode mode);
+Status ResetComponent(Component* x);
+
+// Reals by value reference; `time` (the value reference after the variables) when with_time.
+Status GetReals(Component* x, const unsigned vr[], size_t n, double v[], bool with_time);
+Status SetReals(Component* x, const unsigned vr[], size_t n, const double v[], bool with_time);
+// Integers or Booleans by value reference (Instance::GetInteger, Instance::GetBoolean).
+template <class T>
+Status GetInts(Component* x, std::string (Instance::*get)(unsigned, int*) const, const unsigned vr[], size_t n, T v[]) {
+  for (size_t i = 0; i < n; ++i) {
+    int value = 0;
+    if (Status s = x->Result((x->instance.*get)(vr[i], &value)); s != kOK) return s;
+    v[i] = static_cast<T>(value);
+  }
+  return kOK;
+}
+
+// The FMU state (a Snapshot behind the master's pointer).
+Status GetState(Component* x, const std::string& call, void** state);
+Status SetState(Component* x, const std::string& call, void* state);
+void FreeState(void** state);
+Status StateSize(Component* x, const std::string& call, void* state, size_t* size);
+Status SerializeState(Component* x, const std::string& call, void* state, char bytes[], size_t size);
+Status DeserializeState(Component* x, const std::string& call, const char bytes[], size_t size, void** state);
+
+// Model Exchange: the event update (*changed: the states jumped; *terminate), the event
+// indicators, the nominals of the states.
+Status UpdateDiscrete(Component* x, const std::string& call, bool* changed, bool* terminate);
+Status GetIndicators(Component* x, const std::string& call, double z[], size_t n);
+Status Nominals(Component* x, double nominals[], size_t n);
+
+// Co-Simulation: one communication step; a failed one leaves the state where it was; kDiscard
+// when a terminate(...) ended it at its event (Instance::Terminated).
+Status DoStep(Component* x, const std::string& call, double t, double h);
 
 }  // namespace kanesim::fmi

@@ -3,7 +3,6 @@
 // sections 3.2.3 and 4.2.4), then calls the instance (fmi/instance.h). A wrong call, a
 // NaN, a step backwards or a numerical failure returns fmi2Error with the reason through
 // the master's logger; no exception crosses the C boundary.
-#include <cmath>
 #include <memory>
 #include <string>
 
@@ -40,11 +39,7 @@ FMI2_EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size
 FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, fmi2String resources,
                                           const fmi2CallbackFunctions* callbacks, fmi2Boolean, fmi2Boolean logging) {
   if (!callbacks || !name || !guid) return nullptr;
-  auto c = std::make_unique<Component>();
-  c->name = name;
-  c->co_simulation = type == fmi2CoSimulation;
-  c->instance.SetModelExchange(!c->co_simulation);
-  c->logging = logging;
+  std::unique_ptr<Component> c = kf::NewComponent(name, type == fmi2CoSimulation, logging);
   if (fmi2CallbackLogger logger = callbacks->logger) {
     fmi2ComponentEnvironment env = callbacks->componentEnvironment;
     c->logger = [logger, env, instance = c.get()](kf::Status status, const char* category, const std::string& message) {
@@ -55,88 +50,51 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
       logger(env, instance->name.c_str(), static_cast<fmi2Status>(status), category, format.c_str());
     };
   }
-  try {
-    std::string dir, error = kf::ResourceDirectory(resources ? resources : "", &dir);
-    if (error.empty()) error = c->instance.Load(dir, guid);
-    if (!error.empty()) {
-      c->Log(kf::kError, "fmi2Instantiate: " + error);
-      return nullptr;
-    }
-  } catch (const std::exception& e) {
-    c->Log(kf::kError, std::string("fmi2Instantiate: ") + e.what());
-    return nullptr;
-  }
-  return c.release();
+  const std::string uri = resources ? resources : "";
+  return kf::LoadComponent(
+      std::move(c), "fmi2Instantiate", [&](std::string* dir) { return kf::ResourceDirectory(uri, dir); }, guid);
 }
 
 FMI2_EXPORT void fmi2FreeInstance(fmi2Component c) { delete static_cast<Component*>(c); }
 
 FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolerance_defined, fmi2Real tolerance,
                                            fmi2Real start, fmi2Boolean, fmi2Real) {
-  return Fmi2Guarded(c, "fmi2SetupExperiment", {Mode::kInstantiated}, [&](Component* x) {
-    if (tolerance_defined && !(tolerance > 0 && tolerance < 1)) return x->Log(kf::kError, "the tolerance must be in (0, 1)");
-    if (!std::isfinite(start)) return x->Log(kf::kError, "the start time must be finite");
-    if (tolerance_defined) x->instance.SetTolerance(tolerance);
-    x->instance.SetStartTime(start);
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2SetupExperiment", {Mode::kInstantiated},
+                     [&](Component* x) { return kf::StartExperiment(x, tolerance_defined, tolerance, start); });
 }
 
 FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-  return Fmi2Guarded(c, "fmi2EnterInitializationMode", {Mode::kInstantiated}, [&](Component* x) {
-    x->mode = Mode::kInitialization;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2EnterInitializationMode", {Mode::kInstantiated},
+                     [&](Component* x) { return kf::EnterMode(x, Mode::kInitialization); });
 }
 
 FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-  return Fmi2Guarded(c, "fmi2ExitInitializationMode", {Mode::kInitialization}, [&](Component* x) {
-    if (kf::Status s = x->Result(x->instance.Initialize()); s != kf::kOK) return s;
-    x->mode = x->co_simulation ? Mode::kStep : Mode::kEvent;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2ExitInitializationMode", {Mode::kInitialization}, kf::ExitInitialization);
 }
 
 FMI2_EXPORT fmi2Status fmi2Terminate(fmi2Component c) {
-  return Fmi2Guarded(c, "fmi2Terminate", {Mode::kEvent, Mode::kContinuous, Mode::kStep, Mode::kError}, [&](Component* x) {
-    x->mode = Mode::kTerminated;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2Terminate", {Mode::kEvent, Mode::kContinuous, Mode::kStep, Mode::kError},
+                     [&](Component* x) { return kf::EnterMode(x, Mode::kTerminated); });
 }
 
 FMI2_EXPORT fmi2Status fmi2Reset(fmi2Component c) {
-  return Fmi2Guarded(c, "fmi2Reset", {Mode::kInstantiated, Mode::kInitialization, Mode::kEvent, Mode::kContinuous,
-                                  Mode::kStep, Mode::kTerminated, Mode::kError},
-                 [&](Component* x) {
-                   x->mode = Mode::kInstantiated;
-                   return x->Result(x->instance.Reset());
-                 });
+  return Fmi2Guarded(c, "fmi2Reset", kf::kAnyMode, kf::ResetComponent);
 }
 
 // ---- values ----
 
 FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
-  return Fmi2Guarded(c, "fmi2GetReal", kf::kRunning, [&](Component* x) {
-    for (size_t i = 0; i < n; ++i)
-      if (kf::Status s = x->Result(x->instance.GetReal(vr[i], &value[i])); s != kf::kOK) return s;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2GetReal", kf::kRunning, [&](Component* x) { return kf::GetReals(x, vr, n, value, false); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer value[]) {
-  return Fmi2Guarded(c, "fmi2GetInteger", kf::kRunning, [&](Component* x) {
-    for (size_t i = 0; i < n; ++i)
-      if (kf::Status s = x->Result(x->instance.GetInteger(vr[i], &value[i])); s != kf::kOK) return s;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2GetInteger", kf::kRunning,
+                     [&](Component* x) { return kf::GetInts(x, &kf::Instance::GetInteger, vr, n, value); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean value[]) {
-  return Fmi2Guarded(c, "fmi2GetBoolean", kf::kRunning, [&](Component* x) {
-    for (size_t i = 0; i < n; ++i)
-      if (kf::Status s = x->Result(x->instance.GetBoolean(vr[i], &value[i])); s != kf::kOK) return s;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2GetBoolean", kf::kRunning,
+                     [&](Component* x) { return kf::GetInts(x, &kf::Instance::GetBoolean, vr, n, value); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference[], size_t n, fmi2String[]) {
@@ -145,11 +103,8 @@ FMI2_EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference[]
 }
 
 FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[]) {
-  return Fmi2Guarded(c, "fmi2SetReal", kf::kAfterInstantiate, [&](Component* x) {
-    for (size_t i = 0; i < n; ++i)
-      if (kf::Status s = x->Result(x->instance.SetReal(vr[i], value[i])); s != kf::kOK) return s;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2SetReal", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::SetReals(x, vr, n, value, false); });
 }
 
 // Integer and Boolean variables are the parameters fixed at export: none can be set.
@@ -173,62 +128,36 @@ FMI2_EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[]
 // ---- the FMU state ----
 
 FMI2_EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state) {
-  return Fmi2Guarded(c, "fmi2GetFMUstate", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state) return x->Log(kf::kError, "fmi2GetFMUstate: no place for the state");
-    auto* s = static_cast<kf::Instance::Snapshot*>(*state);
-    if (s)
-      *s = x->instance.Save();
-    else
-      *state = new kf::Instance::Snapshot(x->instance.Save());
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2GetFMUstate", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::GetState(x, "fmi2GetFMUstate", state); });
 }
 
 FMI2_EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
-  return Fmi2Guarded(c, "fmi2SetFMUstate", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state) return x->Log(kf::kError, "fmi2SetFMUstate: no state");
-    return x->Result(x->instance.Restore(*static_cast<kf::Instance::Snapshot*>(state)));
-  });
+  return Fmi2Guarded(c, "fmi2SetFMUstate", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::SetState(x, "fmi2SetFMUstate", state); });
 }
 
 FMI2_EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state) {
   return Fmi2Guarded(c, "fmi2FreeFMUstate", kf::kAfterInstantiate, [&](Component*) {
-    if (state) {
-      delete static_cast<kf::Instance::Snapshot*>(*state);
-      *state = nullptr;
-    }
+    kf::FreeState(state);
     return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t* size) {
-  return Fmi2Guarded(c, "fmi2SerializedFMUstateSize", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state || !size) return x->Log(kf::kError, "fmi2SerializedFMUstateSize: no state");
-    *size = kf::Instance::Serialize(*static_cast<kf::Instance::Snapshot*>(state)).size();
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2SerializedFMUstateSize", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::StateSize(x, "fmi2SerializedFMUstateSize", state, size); });
 }
 
 FMI2_EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
-  return Fmi2Guarded(c, "fmi2SerializeFMUstate", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state || !bytes) return x->Log(kf::kError, "fmi2SerializeFMUstate: no state");
-    std::vector<char> data = kf::Instance::Serialize(*static_cast<kf::Instance::Snapshot*>(state));
-    if (data.size() != size) return x->Log(kf::kError, "fmi2SerializeFMUstate: the buffer has the wrong size");
-    std::copy(data.begin(), data.end(), bytes);
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2SerializeFMUstate", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::SerializeState(x, "fmi2SerializeFMUstate", state, bytes, size); });
 }
 
 FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size,
                                                fmi2FMUstate* state) {
-  return Fmi2Guarded(c, "fmi2DeSerializeFMUstate", kf::kAfterInstantiate, [&](Component* x) {
-    kf::Instance::Snapshot s;
-    if (!bytes || !state || !kf::Instance::Deserialize(bytes, size, &s))
-      return x->Log(kf::kError, "fmi2DeSerializeFMUstate: not a serialized state of a kanesim FMU");
-    delete static_cast<kf::Instance::Snapshot*>(*state);
-    *state = new kf::Instance::Snapshot(std::move(s));
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2DeSerializeFMUstate", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::DeserializeState(x, "fmi2DeSerializeFMUstate", bytes, size, state); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference unknowns[],
@@ -242,10 +171,7 @@ FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2V
 // ---- Model Exchange ----
 
 FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c) {
-  return Fmi2Guarded(c, "fmi2EnterEventMode", kf::kModelExchange, [&](Component* x) {
-    x->mode = Mode::kEvent;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2EnterEventMode", kf::kModelExchange, [&](Component* x) { return kf::EnterMode(x, Mode::kEvent); });
 }
 
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* info) {
@@ -253,21 +179,16 @@ FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* inf
     if (!info) return x->Log(kf::kError, "fmi2NewDiscreteStates: no event info");
     *info = fmi2EventInfo{0, 0, 0, 0, 0, 0.0};
     bool changed = false, terminate = false;
-    std::string message;
-    if (const std::string e = x->instance.UpdateDiscreteStates(&changed, &terminate, &message); !e.empty())
-      return x->Log(kf::kError, "fmi2NewDiscreteStates: " + e);
+    if (kf::Status s = kf::UpdateDiscrete(x, "fmi2NewDiscreteStates", &changed, &terminate); s != kf::kOK) return s;
     info->valuesOfContinuousStatesChanged = changed;
     info->terminateSimulation = terminate;
-    if (terminate) x->Log(kf::kOK, "terminate at t = " + std::to_string(x->instance.Time()) + ": " + message);
     return kf::kOK;
   });
 }
 
 FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-  return Fmi2Guarded(c, "fmi2EnterContinuousTimeMode", {Mode::kEvent}, [&](Component* x) {
-    x->mode = Mode::kContinuous;
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2EnterContinuousTimeMode", {Mode::kEvent},
+                     [&](Component* x) { return kf::EnterMode(x, Mode::kContinuous); });
 }
 
 FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean, fmi2Boolean* enter_event,
@@ -294,10 +215,8 @@ FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t
 }
 
 FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t n) {
-  return Fmi2Guarded(c, "fmi2GetEventIndicators", kf::kRunning, [&](Component* x) {
-    if (n > 0 && !z) return x->Log(kf::kError, "fmi2GetEventIndicators: no place given");
-    return x->Result(x->instance.GetIndicators(z, n));
-  });
+  return Fmi2Guarded(c, "fmi2GetEventIndicators", kf::kRunning,
+                     [&](Component* x) { return kf::GetIndicators(x, "fmi2GetEventIndicators", z, n); });
 }
 
 FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
@@ -306,11 +225,8 @@ FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], si
 }
 
 FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
-  return Fmi2Guarded(c, "fmi2GetNominalsOfContinuousStates", kf::kAfterInstantiate, [&](Component* m) {
-    if (int(n) != m->instance.NumStates() || !x) return m->Log(kf::kError, "wrong number of states");
-    for (size_t i = 0; i < n; ++i) x[i] = 1.0;  // angles, lengths and their rates: of order one
-    return kf::kOK;
-  });
+  return Fmi2Guarded(c, "fmi2GetNominalsOfContinuousStates", kf::kAfterInstantiate,
+                     [&](Component* m) { return kf::Nominals(m, x, n); });
 }
 
 // ---- Co-Simulation ----
@@ -330,12 +246,7 @@ FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2V
 }
 
 FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean) {
-  return Fmi2Guarded(c, "fmi2DoStep", {Mode::kStep}, [&](Component* x) {
-    const std::string error = x->instance.DoStep(t, h);
-    if (error.empty()) return kf::kOK;
-    // A failed step leaves the state where it was; the master may retry from a saved state.
-    return x->Log(kf::kError, "fmi2DoStep: " + error);
-  });
+  return Fmi2Guarded(c, "fmi2DoStep", {Mode::kStep}, [&](Component* x) { return kf::DoStep(x, "fmi2DoStep", t, h); });
 }
 
 FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c) {
@@ -365,7 +276,7 @@ FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKin
 FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value) {
   return Fmi2Guarded(c, "fmi2GetBooleanStatus", kf::kRunning, [&](Component* x) {
     if (kind != fmi2Terminated || !value) return x->Log(kf::kDiscard, "fmi2GetBooleanStatus: only terminated");
-    *value = 0;
+    *value = x->instance.Terminated();
     return kf::kOK;
   });
 }

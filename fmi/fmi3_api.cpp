@@ -2,10 +2,8 @@
 // Execution), over the same instance as FMI 2.0's (fmi/instance.h) and the same guard
 // (fmi/component.h): a call in the wrong mode, a NaN, a step backwards or a numerical
 // failure returns fmi3Error with the reason through the master's logger.
-#include <cmath>
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "fmi/component.h"
 #include "fmi/fmi3_abi.h"
@@ -24,38 +22,24 @@ fmi3Status Fmi3Guarded(fmi3Instance c, const char* call, std::initializer_list<M
   return static_cast<fmi3Status>(kf::Guarded(c, call, modes, f));
 }
 
-// The independent variable `time` follows the model's variables (modelDescription.xml).
-bool IsTime(const Component* c, fmi3ValueReference vr) { return vr == c->instance.Variables().size(); }
-
 fmi3Instance Instantiate(fmi3String name, fmi3String token, fmi3String resources, bool co_simulation, fmi3Boolean logging,
                          fmi3InstanceEnvironment env, fmi3LogMessageCallback log) {
   if (!name || !token) return nullptr;
-  auto c = std::make_unique<Component>();
-  c->name = name;
-  c->co_simulation = co_simulation;
-  c->instance.SetModelExchange(!co_simulation);
-  c->logging = logging;
+  std::unique_ptr<Component> c = kf::NewComponent(name, co_simulation, logging);
   if (log)
     c->logger = [log, env](kf::Status status, const char* category, const std::string& message) {
       log(env, static_cast<fmi3Status>(status), category, message.c_str());
     };
-  const char* call = co_simulation ? "fmi3InstantiateCoSimulation: " : "fmi3InstantiateModelExchange: ";
-  try {
-    // FMI 3 gives a path (with a trailing separator); accept a file URI too.
-    std::string dir = resources ? resources : "", error;
-    if (dir.rfind("file:", 0) == 0) error = kf::ResourceDirectory(resources, &dir);
-    while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
-    if (error.empty() && dir.empty()) error = "no resource path";
-    if (error.empty()) error = c->instance.Load(dir, token);
-    if (!error.empty()) {
-      c->Log(kf::kError, call + error);
-      return nullptr;
-    }
-  } catch (const std::exception& e) {
-    c->Log(kf::kError, call + std::string(e.what()));
-    return nullptr;
-  }
-  return c.release();
+  // FMI 3 gives a path (with a trailing separator); accept a file URI too.
+  const auto find_dir = [resources](std::string* dir) {
+    *dir = resources ? resources : "";
+    std::string error;
+    if (dir->rfind("file:", 0) == 0) error = kf::ResourceDirectory(resources, dir);
+    while (dir->size() > 1 && dir->back() == '/') dir->pop_back();
+    return error.empty() && dir->empty() ? std::string("no resource path") : error;
+  };
+  return kf::LoadComponent(std::move(c), co_simulation ? "fmi3InstantiateCoSimulation" : "fmi3InstantiateModelExchange",
+                           find_dir, token);
 }
 
 }  // namespace
@@ -77,14 +61,16 @@ FMI3_EXPORT fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3Strin
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources,
                                                      fmi3Boolean, fmi3Boolean logging, fmi3Boolean event_mode_used,
-                                                     fmi3Boolean, const fmi3ValueReference[], size_t,
+                                                     fmi3Boolean early_return_allowed, const fmi3ValueReference[], size_t,
                                                      fmi3InstanceEnvironment env, fmi3LogMessageCallback log,
                                                      fmi3IntermediateUpdateCallback) {
   if (event_mode_used) {
     if (log) log(env, fmi3Error, "logStatusError", "this FMU has no event mode in Co-Simulation (hasEventMode=false)");
     return nullptr;
   }
-  return Instantiate(name, token, resources, true, logging, env, log);
+  fmi3Instance c = Instantiate(name, token, resources, true, logging, env, log);
+  if (c) static_cast<Component*>(c)->early_return_allowed = early_return_allowed;
+  return c;
 }
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateScheduledExecution(fmi3String, fmi3String, fmi3String, fmi3Boolean,
@@ -100,43 +86,26 @@ FMI3_EXPORT void fmi3FreeInstance(fmi3Instance c) { delete static_cast<Component
 FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean tolerance_defined, fmi3Float64 tolerance,
                                                    fmi3Float64 start, fmi3Boolean, fmi3Float64) {
   return Fmi3Guarded(c, "fmi3EnterInitializationMode", {Mode::kInstantiated}, [&](Component* x) {
-    if (tolerance_defined && !(tolerance > 0 && tolerance < 1)) return x->Log(kf::kError, "the tolerance must be in (0, 1)");
-    if (!std::isfinite(start)) return x->Log(kf::kError, "the start time must be finite");
-    if (tolerance_defined) x->instance.SetTolerance(tolerance);
-    x->instance.SetStartTime(start);
-    x->mode = Mode::kInitialization;
-    return kf::kOK;
+    if (kf::Status s = kf::StartExperiment(x, tolerance_defined, tolerance, start); s != kf::kOK) return s;
+    return kf::EnterMode(x, Mode::kInitialization);
   });
 }
 
 FMI3_EXPORT fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
-  return Fmi3Guarded(c, "fmi3ExitInitializationMode", {Mode::kInitialization}, [&](Component* x) {
-    if (kf::Status s = x->Result(x->instance.Initialize()); s != kf::kOK) return s;
-    x->mode = x->co_simulation ? Mode::kStep : Mode::kEvent;
-    return kf::kOK;
-  });
+  return Fmi3Guarded(c, "fmi3ExitInitializationMode", {Mode::kInitialization}, kf::ExitInitialization);
 }
 
 FMI3_EXPORT fmi3Status fmi3EnterEventMode(fmi3Instance c) {
-  return Fmi3Guarded(c, "fmi3EnterEventMode", kf::kModelExchange, [&](Component* x) {
-    x->mode = Mode::kEvent;
-    return kf::kOK;
-  });
+  return Fmi3Guarded(c, "fmi3EnterEventMode", kf::kModelExchange, [&](Component* x) { return kf::EnterMode(x, Mode::kEvent); });
 }
 
 FMI3_EXPORT fmi3Status fmi3Terminate(fmi3Instance c) {
   return Fmi3Guarded(c, "fmi3Terminate", {Mode::kEvent, Mode::kContinuous, Mode::kStep, Mode::kError},
-                     [&](Component* x) {
-                       x->mode = Mode::kTerminated;
-                       return kf::kOK;
-                     });
+                     [&](Component* x) { return kf::EnterMode(x, Mode::kTerminated); });
 }
 
 FMI3_EXPORT fmi3Status fmi3Reset(fmi3Instance c) {
-  return Fmi3Guarded(c, "fmi3Reset", kf::kAnyMode, [&](Component* x) {
-    x->mode = Mode::kInstantiated;
-    return x->Result(x->instance.Reset());
-  });
+  return Fmi3Guarded(c, "fmi3Reset", kf::kAnyMode, kf::ResetComponent);
 }
 
 // ---- values: Float64 (states, derivatives, outputs, parameters, time), Int32, Boolean ----
@@ -145,14 +114,7 @@ FMI3_EXPORT fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference v
                                       size_t nv) {
   return Fmi3Guarded(c, "fmi3GetFloat64", kf::kAfterInstantiate, [&](Component* x) {
     if (nv != n) return x->Log(kf::kError, "fmi3GetFloat64: this FMU has scalar variables only");
-    for (size_t i = 0; i < n; ++i) {
-      if (IsTime(x, vr[i])) {
-        v[i] = x->instance.Time();
-        continue;
-      }
-      if (kf::Status s = x->Result(x->instance.GetReal(vr[i], &v[i])); s != kf::kOK) return s;
-    }
-    return kf::kOK;
+    return kf::GetReals(x, vr, n, v, true);
   });
 }
 
@@ -160,23 +122,14 @@ FMI3_EXPORT fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference v
                                       size_t nv) {
   return Fmi3Guarded(c, "fmi3SetFloat64", kf::kAfterInstantiate, [&](Component* x) {
     if (nv != n) return x->Log(kf::kError, "fmi3SetFloat64: this FMU has scalar variables only");
-    for (size_t i = 0; i < n; ++i)
-      if (kf::Status s = x->Result(IsTime(x, vr[i]) ? "'time' cannot be set" : x->instance.SetReal(vr[i], v[i]));
-          s != kf::kOK)
-        return s;
-    return kf::kOK;
+    return kf::SetReals(x, vr, n, v, true);
   });
 }
 
 FMI3_EXPORT fmi3Status fmi3GetInt32(fmi3Instance c, const fmi3ValueReference vr[], size_t n, fmi3Int32 v[], size_t nv) {
   return Fmi3Guarded(c, "fmi3GetInt32", kf::kAfterInstantiate, [&](Component* x) {
     if (nv != n) return x->Log(kf::kError, "fmi3GetInt32: this FMU has scalar variables only");
-    for (size_t i = 0; i < n; ++i) {
-      int value = 0;
-      if (kf::Status s = x->Result(x->instance.GetInteger(vr[i], &value)); s != kf::kOK) return s;
-      v[i] = value;
-    }
-    return kf::kOK;
+    return kf::GetInts(x, &kf::Instance::GetInteger, vr, n, v);
   });
 }
 
@@ -184,12 +137,7 @@ FMI3_EXPORT fmi3Status fmi3GetBoolean(fmi3Instance c, const fmi3ValueReference v
                                       size_t nv) {
   return Fmi3Guarded(c, "fmi3GetBoolean", kf::kAfterInstantiate, [&](Component* x) {
     if (nv != n) return x->Log(kf::kError, "fmi3GetBoolean: this FMU has scalar variables only");
-    for (size_t i = 0; i < n; ++i) {
-      int value = 0;
-      if (kf::Status s = x->Result(x->instance.GetBoolean(vr[i], &value)); s != kf::kOK) return s;
-      v[i] = value != 0;
-    }
-    return kf::kOK;
+    return kf::GetInts(x, &kf::Instance::GetBoolean, vr, n, v);
   });
 }
 
@@ -230,60 +178,37 @@ FMI3_EXPORT fmi3Status fmi3SetBinary(fmi3Instance c, const fmi3ValueReference[],
 // ---- the FMU state ----
 
 FMI3_EXPORT fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState* state) {
-  return Fmi3Guarded(c, "fmi3GetFMUState", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state) return x->Log(kf::kError, "fmi3GetFMUState: no place for the state");
-    if (auto* s = static_cast<kf::Snapshot*>(*state))
-      *s = x->instance.Save();
-    else
-      *state = new kf::Snapshot(x->instance.Save());
-    return kf::kOK;
-  });
+  return Fmi3Guarded(c, "fmi3GetFMUState", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::GetState(x, "fmi3GetFMUState", state); });
 }
 
 FMI3_EXPORT fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState state) {
-  return Fmi3Guarded(c, "fmi3SetFMUState", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state) return x->Log(kf::kError, "fmi3SetFMUState: no state");
-    return x->Result(x->instance.Restore(*static_cast<kf::Snapshot*>(state)));
-  });
+  return Fmi3Guarded(c, "fmi3SetFMUState", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::SetState(x, "fmi3SetFMUState", state); });
 }
 
 FMI3_EXPORT fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState* state) {
   return Fmi3Guarded(c, "fmi3FreeFMUState", kf::kAnyMode, [&](Component*) {
-    if (state) {
-      delete static_cast<kf::Snapshot*>(*state);
-      *state = nullptr;
-    }
+    kf::FreeState(state);
     return kf::kOK;
   });
 }
 
 FMI3_EXPORT fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState state, size_t* size) {
-  return Fmi3Guarded(c, "fmi3SerializedFMUStateSize", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state || !size) return x->Log(kf::kError, "fmi3SerializedFMUStateSize: no state");
-    *size = kf::Instance::Serialize(*static_cast<kf::Snapshot*>(state)).size();
-    return kf::kOK;
-  });
+  return Fmi3Guarded(c, "fmi3SerializedFMUStateSize", kf::kAfterInstantiate,
+                     [&](Component* x) { return kf::StateSize(x, "fmi3SerializedFMUStateSize", state, size); });
 }
 
 FMI3_EXPORT fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState state, fmi3Byte bytes[], size_t size) {
   return Fmi3Guarded(c, "fmi3SerializeFMUState", kf::kAfterInstantiate, [&](Component* x) {
-    if (!state || !bytes) return x->Log(kf::kError, "fmi3SerializeFMUState: no state");
-    const std::vector<char> data = kf::Instance::Serialize(*static_cast<kf::Snapshot*>(state));
-    if (data.size() != size) return x->Log(kf::kError, "fmi3SerializeFMUState: the buffer has the wrong size");
-    std::copy(data.begin(), data.end(), bytes);
-    return kf::kOK;
+    return kf::SerializeState(x, "fmi3SerializeFMUState", state, reinterpret_cast<char*>(bytes), size);
   });
 }
 
 FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte bytes[], size_t size,
                                                fmi3FMUState* state) {
   return Fmi3Guarded(c, "fmi3DeserializeFMUState", kf::kAfterInstantiate, [&](Component* x) {
-    kf::Snapshot s;
-    if (!bytes || !state || !kf::Instance::Deserialize(reinterpret_cast<const char*>(bytes), size, &s))
-      return x->Log(kf::kError, "fmi3DeserializeFMUState: not a serialized state of a kanesim FMU");
-    delete static_cast<kf::Snapshot*>(*state);
-    *state = new kf::Snapshot(std::move(s));
-    return kf::kOK;
+    return kf::DeserializeState(x, "fmi3DeserializeFMUState", reinterpret_cast<const char*>(bytes), size, state);
   });
 }
 
@@ -363,12 +288,9 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean* upd
       if (b) *b = false;
     if (next_time) *next_time = 0.0;
     bool changed = false, stop = false;
-    std::string message;
-    if (const std::string e = x->instance.UpdateDiscreteStates(&changed, &stop, &message); !e.empty())
-      return x->Log(kf::kError, "fmi3UpdateDiscreteStates: " + e);
+    if (kf::Status s = kf::UpdateDiscrete(x, "fmi3UpdateDiscreteStates", &changed, &stop); s != kf::kOK) return s;
     if (values_changed) *values_changed = changed;
     if (terminate) *terminate = stop;
-    if (stop) x->Log(kf::kOK, "terminate at t = " + std::to_string(x->instance.Time()) + ": " + message);
     return kf::kOK;
   });
 }
@@ -376,10 +298,8 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean* upd
 // ---- Model Exchange ----
 
 FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) {
-  return Fmi3Guarded(c, "fmi3EnterContinuousTimeMode", {Mode::kEvent}, [&](Component* x) {
-    x->mode = Mode::kContinuous;
-    return kf::kOK;
-  });
+  return Fmi3Guarded(c, "fmi3EnterContinuousTimeMode", {Mode::kEvent},
+                     [&](Component* x) { return kf::EnterMode(x, Mode::kContinuous); });
 }
 
 FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean, fmi3Boolean* enter_event,
@@ -407,10 +327,8 @@ FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Flo
 }
 
 FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t n) {
-  return Fmi3Guarded(c, "fmi3GetEventIndicators", kf::kRunning, [&](Component* x) {
-    if (n > 0 && !z) return x->Log(kf::kError, "fmi3GetEventIndicators: no place given");
-    return x->Result(x->instance.GetIndicators(z, n));
-  });
+  return Fmi3Guarded(c, "fmi3GetEventIndicators", kf::kRunning,
+                     [&](Component* x) { return kf::GetIndicators(x, "fmi3GetEventIndicators", z, n); });
 }
 
 FMI3_EXPORT fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
@@ -419,11 +337,8 @@ FMI3_EXPORT fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], 
 }
 
 FMI3_EXPORT fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
-  return Fmi3Guarded(c, "fmi3GetNominalsOfContinuousStates", kf::kAfterInstantiate, [&](Component* m) {
-    if (int(n) != m->instance.NumStates() || !x) return m->Log(kf::kError, "wrong number of states");
-    for (size_t i = 0; i < n; ++i) x[i] = 1.0;  // angles, lengths and their rates: of order one
-    return kf::kOK;
-  });
+  return Fmi3Guarded(c, "fmi3GetNominalsOfContinuousStates", kf::kAfterInstantiate,
+                     [&](Component* m) { return kf::Nominals(m, x, n); });
 }
 
 FMI3_EXPORT fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t* n) {
@@ -452,11 +367,17 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, 
                                   fmi3Boolean* event_needed, fmi3Boolean* terminate, fmi3Boolean* early_return,
                                   fmi3Float64* last_time) {
   return Fmi3Guarded(c, "fmi3DoStep", {Mode::kStep}, [&](Component* x) {
-    const std::string error = x->instance.DoStep(t, h);
+    kf::Status s = kf::DoStep(x, "fmi3DoStep", t, h);
     for (fmi3Boolean* b : {event_needed, terminate, early_return})
       if (b) *b = false;
     if (last_time) *last_time = x->instance.Time();
-    // A failed step leaves the state where it was; the master may retry from a saved state.
-    return error.empty() ? kf::kOK : x->Log(kf::kError, "fmi3DoStep: " + error);
+    // terminate(...) in a when clause: terminateSimulation, lastSuccessfulTime the event's,
+    // earlyReturn only where the master allowed it (FMI 3.0 section 4.2.1).
+    if (s == kf::kDiscard && x->instance.Terminated()) {
+      if (terminate) *terminate = true;
+      if (early_return) *early_return = x->early_return_allowed && x->instance.Time() < t + h;
+      s = kf::kOK;
+    }
+    return s;
   });
 }

@@ -353,33 +353,30 @@ std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_u
   return "";
 }
 
+// The stepping core from (t_, y_, inputs_): a start on a contact or with exact friction is
+// its first event, as a run starts (docs/fmi.md "Co-Simulation").
 std::string Instance::StartStepper() {
   sim::SimulatorOptions options;
   options.start_time = t_;
   options.rtol = options.atol = rtol_;
   options.integrator = integrator_;
+  options.initial_state = y_;
+  options.initial_inputs = inputs_;
   std::string error;
   stepper_ = sim::Simulator::Make(program_, options, &error);
-  if (!stepper_) return error;
-  sim::SimulatorState state = stepper_->GetState();
-  state.t = t_;
-  state.y = y_;
-  state.inputs = inputs_;
-  if (!stepper_->SetState(state, &error)) {
-    stepper_.reset();
-    return error;
-  }
-  return "";
+  return stepper_ ? "" : error;
 }
 
-std::string Instance::DoStep(double t, double h) {
+std::string Instance::DoStep(double t, double h, std::string* terminate_message) {
   if (!std::isfinite(t) || !std::isfinite(h) || h <= 0)
     return "a step needs a finite time and a positive size (got t = " + Number(t) + ", h = " + Number(h) + ")";
   if (std::abs(t - t_) > 1e-9 * std::max(1.0, std::abs(t_)))
     return "the step starts at t = " + Number(t) + " but the FMU is at t = " + Number(t_);
+  std::string error;
+  if (stepper_ && stepper_->Terminated(&error))
+    return "the model terminated at t = " + Number(t_) + " (" + error + "); the master ends with fmi2Terminate / fmi3Terminate";
   if (!stepper_)
     if (std::string e = StartStepper(); !e.empty()) return e;
-  std::string error;
   for (size_t i = 0; i < inputs_.size(); ++i)
     if (!stepper_->SetInput(int(i), inputs_[i], &error)) return error;
   const sim::StepResult r = stepper_->AdvanceTo(t_ + h);
@@ -390,7 +387,13 @@ std::string Instance::DoStep(double t, double h) {
   y_ = stepper_->State();
   t_ = stepper_->Time();
   stale_ = true;
+  if (r.terminated) *terminate_message = r.cause;
   return Evaluate();
+}
+
+bool Instance::Terminated() const {
+  std::string why;
+  return stepper_ && stepper_->Terminated(&why);
 }
 
 Instance::Snapshot Instance::Save() {
@@ -399,7 +402,7 @@ Instance::Snapshot Instance::Save() {
     // GetState restarts the solver there; SetState (Restore) restarts it the same way.
     const sim::SimulatorState state = stepper_->GetState();
     s.next_step = state.next_step;
-    s.resting = state.resting;
+    s.resting = state.modes;
   }
   return s;
 }
@@ -430,7 +433,8 @@ std::string Instance::Restore(const Snapshot& s) {
     state.y = y_;
     state.inputs = inputs_;
     state.next_step = s.next_step;
-    if (!s.resting.empty()) state.resting = s.resting;
+    if (!s.resting.empty()) state.modes = s.resting;
+    state.terminated = false;  // a state saved after a terminate steps on (the master's choice)
     if (!stepper_->SetState(state, &error)) return error;
   }
   return "";

@@ -69,9 +69,12 @@ class Instance {
                                     size_t n_knowns, const double* seed, double* out);
 
   // Co-Simulation: integrates from the current time to t + h with kanesim's stepping core
-  // (sim::Simulator: one integrator across the steps, its history carried), the inputs held
-  // at their values over the step.
-  std::string DoStep(double t, double h);
+  // (sim::Simulator: one integrator across the steps, its history carried, the run's events
+  // inside the step), the inputs held at their values over the step. A terminate(...) in a
+  // when clause ends the step at its event: Time() is there, *terminate_message set, and
+  // Terminated() holds until Reset or Restore.
+  std::string DoStep(double t, double h, std::string* terminate_message);
+  bool Terminated() const;
 
   // The FMU state: everything that decides the continuation (the stepping core's step
   // size and end-stop sides too, once Co-Simulation has stepped).
@@ -80,7 +83,7 @@ class Instance {
     std::vector<double> y, params, inputs;
     std::vector<char> state_set;
     double next_step = 0.0;
-    std::vector<double> resting;  // sim::SimulatorState::resting
+    std::vector<double> resting;  // sim::SimulatorState::modes (resting stops, stuck joints)
     std::vector<double> modes, z_ref;  // Model Exchange: sim::HybridOde::Modes, z_ref_
   };
   Snapshot Save();

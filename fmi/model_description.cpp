@@ -2,6 +2,7 @@
 #include <set>
 #include <sstream>
 
+#include "fmi/dependencies.h"
 #include "fmi/fmi.h"
 #include "lang/lang.h"
 
@@ -69,19 +70,74 @@ std::string TypeElement(const Variable& v, const Attributes& a, const std::vecto
   return e + "/>";
 }
 
-void Unknowns(std::ostringstream& x, const char* tag, const std::vector<Variable>& vars, std::initializer_list<VarKind> kinds) {
+// The knowns of the unknown vars[v] in one section of ModelStructure, as (FMI 2: 1-based
+// index, FMI 3: value reference; "constant" factor) ascending. Runtime: what it reads
+// (ModelDependencies), in FMI 3 with time and the tunable parameters, which FMI 3 counts
+// among the knowns. Initialization: the start state the FMU starts from may be computed from
+// any parameter, so every tunable parameter is listed; only "dependent" there.
+struct Structure {
+  const std::vector<Variable>& vars;
+  std::vector<UnknownDependencies> deps;
+  int version;
+};
+using Knowns = std::vector<std::pair<size_t, bool>>;
+Knowns KnownsOf(const Structure& s, size_t v, bool initial) {
+  const UnknownDependencies& d = s.deps[v];
+  const size_t base = s.version == 2 ? 1 : 0;
+  Knowns out;
+  for (const Dependency& k : d.knowns) out.emplace_back(size_t(k.var) + base, k.constant && !initial);
+  if (initial || (s.version == 3 && d.parameters))
+    for (size_t p = 0; p < s.vars.size(); ++p)
+      if (s.vars[p].kind == VarKind::Parameter) out.emplace_back(p + base, false);
+  if (s.version == 3 && d.time) out.emplace_back(s.vars.size(), false);  // `time`, listed last
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// How many knowns a section has: states, inputs; in FMI 3 and at initialization the tunable
+// parameters; in FMI 3 time. A list of them all is what no list means.
+size_t AllKnowns(const Structure& s, bool initial) {
+  size_t n = 0;
+  for (const Variable& v : s.vars)
+    n += v.kind == VarKind::State || v.kind == VarKind::Input ||
+         (v.kind == VarKind::Parameter && (initial || s.version == 3));
+  return n + (s.version == 3 ? 1 : 0);
+}
+
+// ` dependencies="..."` with ` dependenciesKind="..."` where some known enters with a
+// constant factor (without it every one is "dependent", the standard's default), or nothing
+// where the unknown depends on every known (the standard's meaning of no list; FMI 3's time
+// counted in, a spurious dependency): a large model's description stays small.
+std::string DependencyAttributes(const Structure& s, size_t v, bool initial) {
+  const Knowns k = KnownsOf(s, v, initial);
+  const bool structured = std::any_of(k.begin(), k.end(), [](const auto& e) { return e.second; });
+  const size_t time_ref = s.vars.size();
+  const size_t without_time =
+      size_t(std::count_if(k.begin(), k.end(), [&](const auto& e) { return s.version == 2 || e.first != time_ref; }));
+  if (without_time == AllKnowns(s, initial) - (s.version == 3 ? 1 : 0) && !structured) return "";
+  std::string deps, kinds;
+  for (const auto& [ref, constant] : k) {
+    deps += (deps.empty() ? "" : " ") + std::to_string(ref);
+    kinds += (kinds.empty() ? "" : " ") + std::string(constant ? "constant" : "dependent");
+  }
+  return " dependencies=\"" + deps + "\"" + (structured ? " dependenciesKind=\"" + kinds + "\"" : "");
+}
+
+void Unknowns(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
+              bool initial) {
   std::string body;
-  for (size_t k = 0; k < vars.size(); ++k)
-    if (std::find(kinds.begin(), kinds.end(), vars[k].kind) != kinds.end())
-      body += "      <Unknown index=\"" + std::to_string(k + 1) + "\"/>\n";
+  for (size_t k = 0; k < s.vars.size(); ++k)
+    if (std::find(kinds.begin(), kinds.end(), s.vars[k].kind) != kinds.end())
+      body += "      <Unknown index=\"" + std::to_string(k + 1) + "\"" + DependencyAttributes(s, k, initial) + "/>\n";
   if (!body.empty()) x << "    <" << tag << ">\n" << body << "    </" << tag << ">\n";
 }
 
-void UnknownsV3(std::ostringstream& x, const char* tag, const std::vector<Variable>& vars,
-                std::initializer_list<VarKind> kinds) {
-  for (size_t k = 0; k < vars.size(); ++k)
-    if (std::find(kinds.begin(), kinds.end(), vars[k].kind) != kinds.end())
-      x << "    <" << tag << " valueReference=\"" << k << "\"/>\n";
+void UnknownsV3(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
+                bool initial, bool with_dependencies = true) {
+  for (size_t k = 0; k < s.vars.size(); ++k)
+    if (std::find(kinds.begin(), kinds.end(), s.vars[k].kind) != kinds.end())
+      x << "    <" << tag << " valueReference=\"" << k << "\""
+        << (with_dependencies ? DependencyAttributes(s, k, initial) : "") << "/>\n";
 }
 
 // One unit of UnitDefinitions: its SI base-unit exponents and factor as the unit check reads
@@ -169,9 +225,10 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
     x << ">\n      " << TypeElement(v, a, vars) << "\n    </ScalarVariable>\n";
   }
   x << "  </ModelVariables>\n  <ModelStructure>\n";
-  Unknowns(x, "Outputs", vars, {VarKind::Output});
-  Unknowns(x, "Derivatives", vars, {VarKind::Derivative});
-  Unknowns(x, "InitialUnknowns", vars, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter});
+  const Structure s{vars, ModelDependencies(*model.program, vars), 2};
+  Unknowns(x, "Outputs", s, {VarKind::Output}, false);
+  Unknowns(x, "Derivatives", s, {VarKind::Derivative}, false);
+  Unknowns(x, "InitialUnknowns", s, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter}, true);
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();
 }
@@ -199,10 +256,11 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   x << "    <Float64 name=\"time\" valueReference=\"" << vars.size()
     << "\" causality=\"independent\" variability=\"continuous\"/>\n";
   x << "  </ModelVariables>\n  <ModelStructure>\n";
-  UnknownsV3(x, "Output", vars, {VarKind::Output});
-  UnknownsV3(x, "ContinuousStateDerivative", vars, {VarKind::Derivative});
-  UnknownsV3(x, "InitialUnknown", vars, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter});
-  UnknownsV3(x, "EventIndicator", vars, {VarKind::Indicator});
+  const Structure s{vars, ModelDependencies(*model.program, vars), 3};
+  UnknownsV3(x, "Output", s, {VarKind::Output}, false);
+  UnknownsV3(x, "ContinuousStateDerivative", s, {VarKind::Derivative}, false);
+  UnknownsV3(x, "InitialUnknown", s, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter}, true);
+  UnknownsV3(x, "EventIndicator", s, {VarKind::Indicator}, false, false);
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();
 }

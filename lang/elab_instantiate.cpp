@@ -257,8 +257,15 @@ std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
   child->name = c.comp->name;
   child->path = JoinPath(node->path, c.comp->name);
   child->depth = node->depth + 1;
-  Mod outer;
   auto it = node->mod.sub.find(c.comp->name);
+  if (it == node->mod.sub.end() && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final && !c.ext_mod.each) {
+    if (const Mod* shared = DeclarationMod(node, *c.comp)) {
+      child->shared_mod = shared;
+      child->mod_from_decl = true;
+      return child;
+    }
+  }
+  Mod outer;
   if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
   if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
     Span at = outer.value ? outer.value->span : outer.span;
@@ -279,13 +286,6 @@ std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
   return child;
 }
 
-// The declaration in the model being elaborated that (transitively) holds `node`.
-static Span TopDeclSpan(Node* node, const ast::Component& fallback) {
-  Node* n = node;
-  while (n && n->parent && n->parent->parent) n = n->parent;
-  return n && n->decl ? n->decl->span : fallback.span;
-}
-
 // The builtin type `name` names (Real, Integer, Boolean, String), in *out; false if none.
 static bool BuiltinTypeNamed(const std::string& name, VType* out) {
   if (name == "Real") *out = VType::Real;
@@ -294,6 +294,67 @@ static bool BuiltinTypeNamed(const std::string& name, VType* out) {
   else if (name == "String") *out = VType::String;
   else return false;
   return true;
+}
+
+namespace {
+
+// A literal (1, -2.5, "m", true, {0, 0, 1}): its value is the same in every instance, and
+// evaluating it reads no scope.
+bool IsPlainLiteral(const ast::Expr* e) {
+  if (!e) return false;
+  switch (e->kind) {
+    case ast::ExprKind::Number:
+    case ast::ExprKind::String:
+    case ast::ExprKind::Bool:
+      return true;
+    case ast::ExprKind::Unary:
+      return e->args.size() == 1 && e->args[0] && e->args[0]->kind == ast::ExprKind::Number;
+    case ast::ExprKind::Array:
+      for (const auto& a : e->args)
+        if (!a || (a->kind != ast::ExprKind::Number && !IsPlainLiteral(a.get()))) return false;
+      return e->named_args.empty() && e->parts.empty();
+    default:
+      return false;
+  }
+}
+
+// A builtin variable's declaration whose modifier is literals only: a value and attributes
+// (`parameter Real mu(min = 0) = 0`), each named once, none final, each or redeclared.
+bool LiteralDeclaration(const ast::Component& comp) {
+  VType ignored;
+  if (comp.type_name.size() != 1 || !BuiltinTypeNamed(comp.type_name[0], &ignored) || !comp.mod) return false;
+  const ast::Modification& m = *comp.mod;
+  if (m.value && !IsPlainLiteral(m.value.get())) return false;
+  for (size_t i = 0; i < m.args.size(); ++i) {
+    const ast::Argument& a = m.args[i];
+    if (a.each || a.is_final || a.redeclare || a.path.size() != 1 || !a.mod || !a.mod->args.empty() ||
+        a.mod->has_args || !IsPlainLiteral(a.mod->value.get()))
+      return false;
+    for (size_t j = 0; j < i; ++j)
+      if (m.args[j].path[0] == a.path[0]) return false;  // modified twice: reported per instance
+  }
+  return true;
+}
+
+}  // namespace
+
+// A variable declared with literals only and not modified from outside has the same
+// modifier in every instance: built once per declaration and shared (a model of a hundred
+// joints builds each joint parameter's a hundred times otherwise). Null: not such a one.
+const Mod* Instantiator::DeclarationMod(Node* node, const ast::Component& comp) {
+  auto [slot, fresh] = decl_mods_.try_emplace(&comp, nullptr);
+  if (!fresh) return slot->second;
+  if (!LiteralDeclaration(comp)) return nullptr;
+  // Evaluating a literal reads no scope; the first instance's is kept for messages.
+  slot->second = &tree_.decl_mods.emplace_back(BuildMod(comp.mod.get(), node, nullptr, diags_));
+  return slot->second;
+}
+
+// The declaration in the model being elaborated that (transitively) holds `node`.
+static Span TopDeclSpan(Node* node, const ast::Component& fallback) {
+  Node* n = node;
+  while (n && n->parent && n->parent->parent) n = n->parent;
+  return n && n->decl ? n->decl->span : fallback.span;
 }
 
 // "A.B.C" -> {"A", "B", "C"}.
@@ -460,9 +521,11 @@ void Instantiator::ExpandVariable(Node* child, const ast::Component& comp, VType
 }
 
 void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
-  for (const auto& key : var->mod.order) {
-    if (IsVarAttribute(key) || var->mod.sub[key].set_only) continue;
-    auto& d = diags_.Error(DiagCode::UnknownModifier, var->mod.sub[key].span,
+  const Mod& mods = var->Modifiers();
+  for (const auto& key : mods.order) {
+    const Mod& sub = mods.sub.find(key)->second;
+    if (IsVarAttribute(key) || sub.set_only) continue;
+    auto& d = diags_.Error(DiagCode::UnknownModifier, sub.span,
                            "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
                                var->path + "'");
     std::string best = ClosestName(key, {"start", "fixed", "unit", "min", "max", "displayUnit", "quantity", "nominal"});

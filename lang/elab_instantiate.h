@@ -7,6 +7,7 @@
 // in the order of instantiation. Files: lang/elab_instantiate.cpp, elab_share.cpp.
 #pragma once
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -29,6 +30,7 @@ struct InstanceTree {
   std::vector<flat::Joint> joints;  // joint id -> the joint as far as instantiation knows it (name, type, place)
   long instances = 0;               // scalar variables' elements + components
   int copies = 0;                   // ids given to class nodes of array elements copied from element 1
+  std::deque<Mod> decl_mods;        // modifiers shared by every instance of a declaration (Node::mod_from_decl)
 };
 
 class Instantiator {
@@ -74,6 +76,7 @@ class Instantiator {
                            const CollectedNames& names);
   const ClassPrim& PrimitiveAnnotation(const ast::ClassDef* cls);
   std::unique_ptr<Node> MakeChild(Node* node, Collected& c);
+  const Mod* DeclarationMod(Node* node, const ast::Component& comp);
   void Expand(Node* node, Node* child, const Collected& c);
   // Expand's steps.
   bool ComponentEnabled(Node* node, Node* child, const ast::Component& comp);  // its condition
@@ -113,6 +116,8 @@ class Instantiator {
   std::unordered_map<const ast::ClassDef*, ClassPrim> primitive_annotation_;
   // A component's declared type, with the class it was looked up from.
   std::unordered_map<const ast::Component*, std::pair<const ast::ClassDef*, const ast::ClassDef*>> component_type_;
+  // DeclarationMod's: per declaration, its shared modifier (null: not shareable).
+  std::unordered_map<const ast::Component*, const Mod*> decl_mods_;
 };
 
 }  // namespace kanesim::lang::elab

@@ -173,9 +173,12 @@ enum class EvalState { Unevaluated, Evaluating, Done };
 
 struct Node {
   // The small fields first, together: a model has thousands of nodes (no padding between them).
-  enum Kind { kClass, kVar, kArray } kind = kClass;
+  enum Kind : std::uint8_t { kClass, kVar, kArray } kind = kClass;
   bool enabled = true;
   bool is_final_decl = false;  // kVar
+  // kVar: shared_mod is its declaration's modifier, shared by every instance not modified
+  // from outside (Instantiator::DeclarationMod), read as its own (not an array element's copy).
+  bool mod_from_decl = false;
   mutable std::uint16_t scans = 0;  // Child()'s scans of a class above kScanChildren elements
   int depth = 0;
   // For the unit check (lang/elab_units.cpp), in the padding before `name` (the node does

@@ -232,9 +232,9 @@ void UnitChecker::Show(Node* var) {
   if ((var->vtype != VType::Real && var->vtype != VType::Integer) || diags_.Full()) return;
   // An array element's modifiers shared with element 1 (lang/elab_share.cpp) mean the same
   // there: checked once, on element 1, which was shown first (and parsed their unit).
-  if (!var->shared_mod) {
+  if (!var->shared_mod || var->mod_from_decl) {
     DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
-    const Mod& mods = var->mod;
+    const Mod& mods = var->Modifiers();
     const ModValue* attrs[3] = {};  // start, min, max: one pass over the few attributes
     for (const auto& [key, sub] : mods.sub) {
       if (!sub.value) continue;

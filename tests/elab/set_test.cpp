@@ -156,5 +156,32 @@ TEST(Set, StartValuesActAsIfWritten) {
   }
 }
 
+// Every instance of a declaration made of literals (Revolute's `mu(min = 0) = 0`, q's
+// `start = 0`) reads one modifier built once (Instantiator::DeclarationMod). If this fails,
+// a --set of one instance's parameter or start value reached the others through it, or
+// an instance lost the declaration's value or bounds.
+TEST(Set, OneInstanceOfASharedDeclarationChangesAlone) {
+  const std::string model = ModelWith("  Revolute j1, j2, j3;");
+  auto e = ElaborateText(model, {{"j1.mu", "0.3"}, {"j2.q.start", "0.7"}});
+  ASSERT_TRUE(e->ok) << e->errors;
+  EXPECT_DOUBLE_EQ(e->P("j1.mu"), 0.3);
+  EXPECT_DOUBLE_EQ(e->P("j1.mu_s"), 0.3);  // bound to mu in the declaration
+  EXPECT_DOUBLE_EQ(e->P("j2.mu"), 0);
+  EXPECT_DOUBLE_EQ(e->P("j3.mu_s"), 0);
+  EXPECT_DOUBLE_EQ(e->P("j3.friction_v"), 1e-3);
+  ASSERT_EQ(e->mech.joints.size(), 3u);
+  const double starts[3] = {0, 0.7, 0};
+  for (size_t i = 0; i < 3; ++i) {
+    const flat::ExprId q0 = e->mech.joints[i].q_start[0];
+    const double got = q0 == flat::kNoExpr ? 0 : flat::EvalParamExpr(e->mech, e->values, q0);
+    EXPECT_DOUBLE_EQ(got, starts[i]) << e->mech.joints[i].name;
+  }
+  // The declaration's bound (restitution max = 1) holds for the instance set, not for the others.
+  auto bad = ElaborateText(model, {{"j3.restitution", "2"}});
+  EXPECT_FALSE(bad->ok);
+  EXPECT_NE(bad->errors.find("'j3.restitution' = 2.000000 is outside its range"), std::string::npos) << bad->errors;
+  EXPECT_EQ(bad->errors.find("'j1.restitution'"), std::string::npos) << bad->errors;
+}
+
 }  // namespace
 }  // namespace kanesim::lang::test
