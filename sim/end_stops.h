@@ -42,6 +42,12 @@ class EndStopEvents {
   // Event function i crossed zero at (t, y): an impact (or the contact comes to rest), a
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
+  // After the forces outside the stops changed at (t, y) (a joint's exact friction slipped or
+  // stuck): the resting set made consistent as after an event (a joint slipping into the stop
+  // it sits on rests there; a resting side now pulled leaves). y jumps in place.
+  int Resettle(rt::Workspace& ws, double t, double* y) { return Settle(ws, t, y, RestingSet()); }
+  // A speed this small after an event is a rest (kRestSpeeds (atol)).
+  double RestSpeed() const { return kRestSpeeds * atol_; }
   // A when clause's jump at (t, y) (sim/when_events.h, docs/events.md "Statements"): the
   // joints whose coordinate or speed it sets (`states`, indices into y) leave their rest;
   // `jump(held)` moves y with the other resting joints' speeds (held) kept at zero; then the

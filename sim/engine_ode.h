@@ -106,13 +106,20 @@ class EngineOde final : public OdeSystem {
       events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
       if (stick_ && s == 0) {  // an impulse sets stuck joints moving; a rest takes its joint
         const size_t logged_stick = stick_->Log().size();
-        s = stick_->Refresh(ws_, t, y);
+        s = stick_->Refresh(ws_, t, y, before.data(), stops_->RestSpeed());
         events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged_stick), stick_->Log().end());
       }
     } else if (i < NumStops()) {
-      const size_t logged = stick_->Log().size();
+      const size_t logged = stick_->Log().size(), logged_stops = stops_ ? stops_->Log().size() : 0;
       s = stick_->Event(ws_, t, y, i - FirstStick());
+      if (stops_ && s == 0) {  // a slip into the stop the joint sits on rests there; a pulled stop leaves
+        const std::vector<double> settled(y, y + Size());
+        s = stops_->Resettle(ws_, t, y);
+        if (s == 0) s = stick_->Refresh(ws_, t, y, settled.data(), stops_->RestSpeed());
+      }
       events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged), stick_->Log().end());
+      if (stops_)
+        events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged_stops), stops_->Log().end());
     } else {
       const int w = i - NumStops();
       if (!stops_) {

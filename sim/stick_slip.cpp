@@ -142,6 +142,7 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
                   was == 0 ? "slips," : "reverses, slides", j.mode > 0 ? "forwards" : "backwards", j.tau, bound);
   }
   log_.push_back({t, j.f.joint, buf});
+  Apply(ws);  // the decided law, for what reads ws next (the stops' Resettle)
   return 0;
 }
 
@@ -158,6 +159,7 @@ int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   std::snprintf(buf, sizeof buf, "slips, %s (friction needed %.17g, at most %.17g)", j.mode > 0 ? "forwards" : "backwards",
                 j.tau, StaticBound(ws, j));
   log_.push_back({t, j.f.joint, buf});
+  Apply(ws);
   return 0;
 }
 
@@ -206,13 +208,17 @@ int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
   return 0;
 }
 
-int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y) {
+int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const double* y_before, double v_rest) {
   const std::vector<int> resting = RestingSpeeds();
   std::vector<Joint*> stopped;
   for (Joint& j : joints_) {
-    const double u = y[nq_ + j.f.u];
+    double& u = y[nq_ + j.f.u];
     if (HeldByStop(j, resting)) {
       j.mode = 0, j.tau = 0.0;
+    } else if (u == y_before[nq_ + j.f.u]) {
+      continue;  // (a joint that has just slipped from rest keeps sliding)
+    } else if (j.mode == 0 && std::abs(u) <= v_rest) {
+      u = 0.0;  // a rest's impulse on another joint: no real slip
     } else if (u != 0.0) {
       j.mode = u > 0.0 ? 1 : -1;  // a finite friction does not resist an impulse
     } else if (j.mode != 0) {

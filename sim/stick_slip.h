@@ -26,9 +26,11 @@ class StickSlipEvents {
   // forces and the stops' reactions are solved together; a joint resting on its stop is held
   // by the stop alone (its friction 0, not a second row on the same speed).
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
-  // After an impact or a rest on a stop at (t, y): a joint the impulse set moving slides that
-  // way, one now resting on its stop is the stop's, one stopped by it decides (stick or slip).
-  int Refresh(rt::Workspace& ws, double t, double* y);
+  // After an impact or a rest on a stop took y_before to y at t: a joint the impulse set moving
+  // faster than v_rest slides that way (a stuck one slower stays stuck, its speed zeroed), one
+  // now resting on its stop is the stop's, one stopped by it decides (stick or slip); a joint
+  // whose speed the event left alone keeps its law.
+  int Refresh(rt::Workspace& ws, double t, double* y, const double* y_before, double v_rest);
   int Count() const { return static_cast<int>(joints_.size()); }
   // The start: a joint moving slides that way; at rest it sticks or slides (the stick test).
   int Start(rt::Workspace& ws, double t0, double* y0);

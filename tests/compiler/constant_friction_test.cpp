@@ -273,8 +273,11 @@ TEST(ConstantFriction, StuckJointOfADoublePendulumHoldsLagrangesTorqueAndSlipsAt
 // a_down)) at speed v_{k+1} = e v_k sqrt(a_down / a_up), and rests at their accumulation.
 // Then, started at rest on the stop and pushed by P = 3 - 2t, it leaves the stop where P = 0
 // (t = 1.5), stays stuck while |P| <= 1.5 and slips back at t = 2.25, with q'' = (P + F)/m.
+// Pulled off the stop by P = -1 + 2t instead, friction holds it on the stop's position until
+// P = 1.5 (t = 1.25), where it slips into the stop and rests there for good.
 // If this fails, an impact does not pass through the friction, the rebound's friction keeps
-// the old direction, or the stop and the friction hold the block at the wrong times.
+// the old direction, the stop and the friction hold the block at the wrong times, or a slip
+// into the stop goes through it (exit 2: an impact missed).
 TEST(ConstantFriction, BlockAgainstAnEndStopBouncesRestsLeavesAndSlips) {
   auto model = [](const std::string& start, const std::string& push) {
     return "model B\n"
@@ -330,6 +333,21 @@ TEST(ConstantFriction, BlockAgainstAnEndStopBouncesRestsLeavesAndSlips) {
       const double q = t <= 2.25 ? 1.0 : 1.0 - 0.125 * d * d - d * d * d / 6;
       EXPECT_NEAR(s.rows[i][0], q, 1e-9) << how.name << " t = " << t;
     }
+  }
+  auto into = LoadModel(model("1", "-1 + 2 * time"), {}, {}, true);
+  ASSERT_TRUE(into && into->prog) << (into ? Messages(into->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*into->prog, how, 2.0, 0.125, {"s.q"}, &r, 1e-11);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    std::string log;
+    for (const auto& ev : r.stats.events) log += std::to_string(ev.time) + " " + ev.element + ": " + ev.kind + "\n";
+    ASSERT_EQ(r.stats.events.size(), 3u) << how.name << "\n" << log;
+    EXPECT_EQ(r.stats.events[0].kind.find("sticks"), 0u) << log;
+    EXPECT_EQ(r.stats.events[1].kind.find("slips, forwards"), 0u) << log;
+    EXPECT_NEAR(r.stats.events[1].time, 1.25, 1e-9) << log;
+    EXPECT_EQ(r.stats.events[2].kind, "rests on q_max") << log;
+    for (const auto& row : s.rows) EXPECT_EQ(row[0], 1.0) << how.name;
   }
 }
 
