@@ -113,9 +113,14 @@ class EngineOde final : public OdeSystem {
       const size_t logged = stick_->Log().size(), logged_stops = stops_ ? stops_->Log().size() : 0;
       s = stick_->Event(ws_, t, y, i - FirstStick());
       if (stops_ && s == 0) {  // a slip into the stop the joint sits on rests there; a pulled stop leaves
-        const std::vector<double> settled(y, y + Size());
-        s = stops_->Resettle(ws_, t, y);
-        if (s == 0) s = stick_->Refresh(ws_, t, y, settled.data(), stops_->RestSpeed());
+        const std::vector<char> was = stops_->RestingSet();
+        const int k = i - FirstStick();
+        if (stick_->ModeOf(k) != 0) s = stops_->RestOn(ws_, t, y, stick_->SpeedOf(k), stick_->ModeOf(k));
+        for (int pass = 0; pass < 2 && s == 0; ++pass) {  // the stop's joint freed of its friction, then settled
+          const std::vector<double> settled(y, y + Size());
+          if (pass == 1) s = stops_->Resettle(ws_, t, y, was);
+          if (s == 0) s = stick_->Refresh(ws_, t, y, settled.data(), stops_->RestSpeed());
+        }
       }
       events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged), stick_->Log().end());
       if (stops_)

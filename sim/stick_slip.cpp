@@ -227,6 +227,7 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
   }
   for (Joint* j : stopped)
     if (int s = Decide(ws, t, y, *j); s != 0) return s;
+  Apply(ws);
   return 0;
 }
 
