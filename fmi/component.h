@@ -10,6 +10,7 @@
 #include <memory>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "fmi/instance.h"
 
@@ -116,6 +117,11 @@ Status DeserializeState(Component* x, const std::string& call, const char bytes[
 Status UpdateDiscrete(Component* x, const std::string& call, bool* changed, bool* terminate);
 Status GetIndicators(Component* x, const std::string& call, double z[], size_t n);
 Status Nominals(Component* x, double nominals[], size_t n);
+
+// FMI 3's variable dependencies (section 2.2.10): vr's ModelStructure list, the initial one
+// before initialization ends, the runtime one after; an error for a variable that is no
+// unknown then.
+Status VariableDependencies(Component* x, const std::string& call, unsigned vr, std::vector<ListedKnown>* out);
 
 // Co-Simulation: one communication step; a failed one leaves the state where it was; kDiscard
 // when a terminate(...) ended it at its event (Instance::Terminated).

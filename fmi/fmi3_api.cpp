@@ -219,12 +219,38 @@ FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte by
   FMI3_EXPORT fmi3Status Name Params {                                                          \
     return Fmi3Guarded(c, #Name, kf::kAnyMode, [&](Component* x) { return x->Log(kf::kError, #Name ": " what); }); \
   }
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetNumberOfVariableDependencies, (fmi3Instance c, fmi3ValueReference, size_t*),
-                          "the dependencies are in modelDescription.xml")
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetVariableDependencies,
-                          (fmi3Instance c, fmi3ValueReference, size_t[], fmi3ValueReference[], size_t[],
-                           fmi3DependencyKind[], size_t),
-                          "the dependencies are in modelDescription.xml")
+// ModelStructure's lists (kf::VariableDependencies); the variables are scalars: element index 0.
+FMI3_EXPORT fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance c, fmi3ValueReference vr, size_t* n) {
+  return Fmi3Guarded(c, "fmi3GetNumberOfVariableDependencies", kf::kAnyMode, [&](Component* x) {
+    if (!n) return x->Log(kf::kError, "fmi3GetNumberOfVariableDependencies: no place given");
+    std::vector<kf::ListedKnown> known;
+    const kf::Status s = kf::VariableDependencies(x, "fmi3GetNumberOfVariableDependencies", vr, &known);
+    if (s == kf::kOK) *n = known.size();
+    return s;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueReference dependent,
+                                                   size_t element_of_dependent[], fmi3ValueReference independents[],
+                                                   size_t element_of_independents[], fmi3DependencyKind kinds[],
+                                                   size_t n) {
+  return Fmi3Guarded(c, "fmi3GetVariableDependencies", kf::kAnyMode, [&](Component* x) {
+    std::vector<kf::ListedKnown> known;
+    if (kf::Status s = kf::VariableDependencies(x, "fmi3GetVariableDependencies", dependent, &known); s != kf::kOK)
+      return s;
+    if (n != known.size())
+      return x->Log(kf::kError, "fmi3GetVariableDependencies: '" + x->instance.Variables()[dependent].name + "' has " +
+                                    std::to_string(known.size()) + " dependencies, not " + std::to_string(n));
+    if (n > 0 && (!element_of_dependent || !independents || !element_of_independents || !kinds))
+      return x->Log(kf::kError, "fmi3GetVariableDependencies: no place given");
+    for (size_t i = 0; i < n; ++i) {
+      element_of_dependent[i] = element_of_independents[i] = 0;  // the whole (scalar) variable
+      independents[i] = fmi3ValueReference(known[i].vr);
+      kinds[i] = known[i].constant ? fmi3Constant : fmi3Dependent;
+    }
+    return kf::kOK;
+  });
+}
 // Scalar variables only: one seed per known, one sensitivity per unknown.
 FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                                     size_t n_unknowns, const fmi3ValueReference knowns[],
@@ -237,10 +263,18 @@ FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3Va
     return x->Result(x->instance.DirectionalDerivative(unknowns, n_unknowns, knowns, n_knowns, seed, sensitivity));
   });
 }
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetAdjointDerivative,
-                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3ValueReference[], size_t,
-                           const fmi3Float64[], size_t, fmi3Float64[], size_t),
-                          "this FMU does not provide adjoint derivatives")
+// Scalar variables only: one seed per unknown, one sensitivity per known.
+FMI3_EXPORT fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[], size_t n_unknowns,
+                                                const fmi3ValueReference knowns[], size_t n_knowns,
+                                                const fmi3Float64 seed[], size_t n_seed, fmi3Float64 sensitivity[],
+                                                size_t n_sensitivity) {
+  return Fmi3Guarded(c, "fmi3GetAdjointDerivative", kf::kRunning, [&](Component* x) {
+    if (n_seed != n_unknowns || n_sensitivity != n_knowns)
+      return x->Log(kf::kError, "fmi3GetAdjointDerivative: one seed per unknown and one sensitivity per known "
+                                "(the variables are scalars)");
+    return x->Result(x->instance.AdjointDerivative(unknowns, n_unknowns, knowns, n_knowns, seed, sensitivity));
+  });
+}
 KANESIM_FMI3_NOT_PROVIDED(fmi3EnterConfigurationMode, (fmi3Instance c), "this FMU has no structural parameters to configure")
 KANESIM_FMI3_NOT_PROVIDED(fmi3ExitConfigurationMode, (fmi3Instance c), "this FMU has no structural parameters to configure")
 KANESIM_FMI3_NOT_PROVIDED(fmi3GetClock, (fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Clock[]), "this FMU has no clocks")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "linearize/linearize.h"
@@ -28,6 +29,8 @@ std::string FormatSettings(const FmuSettings& s) {
   for (const std::string& set : s.sets) text += "set " + set + "\n";
   if (!s.integrator.empty()) text += "integrator " + s.integrator + "\n";
   if (s.rtol > 0) text += "rtol " + Number(s.rtol) + "\n";
+  if (!s.main.empty()) text += "main " + s.main + "\n";
+  for (const auto& [entry, path] : s.files) text += "file " + entry + " " + path + "\n";
   return text;
 }
 
@@ -43,6 +46,9 @@ bool ParseSettings(const std::string& text, FmuSettings* out, std::string* error
     else if (key == "set") out->sets.push_back(value);
     else if (key == "integrator") out->integrator = value;
     else if (key == "rtol") out->rtol = std::strtod(value.c_str(), nullptr);
+    else if (key == "main") out->main = value;
+    else if (key == "file" && value.find(' ') != std::string::npos)
+      out->files.emplace_back(value.substr(0, value.find(' ')), value.substr(value.find(' ') + 1));
     else {
       *error = "settings.txt: unknown key '" + key + "'";
       return false;
@@ -66,12 +72,30 @@ std::string Instance::Load(const std::string& dir, const std::string& guid) {
   pipeline::LoadOptions load;
   load.model = settings_.model;
   load.sets = settings_.sets;
-  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(dir + "/model.mech"), load, spec);
+  // The model's data files from resources/ only, under the names the model gives them
+  // (resolved against the main file's name at export, which the text is loaded under).
+  std::map<std::string, std::string> files;
+  for (const auto& [entry, path] : settings_.files) files[path] = dir + "/" + entry;
+  load.data_files = &files;
+  pipeline::Source source = pipeline::Source::File(dir + "/model.mech");
+  if (!settings_.main.empty()) {
+    std::ifstream m(dir + "/model.mech", std::ios::binary);
+    std::stringstream model_text;
+    model_text << m.rdbuf();
+    source = pipeline::Source::Text(settings_.main, model_text.str());
+  }
+  pipeline::LoadResult r = pipeline::LoadModel(source, load, spec);
   if (!r.model) return "the model does not load:\n" + r.diagnostics;
   model_ = std::move(r.model);
   vars_ = ListVariables(*model_);
   n_ = rt::StateSize(*model_->program);
   return Reset();
+}
+
+const StructureLists& Instance::Structure(int version) {
+  if (!structure_ || structure_->version != version)
+    structure_ = std::make_unique<StructureLists>(StructureLists{vars_, ModelDependencies(*model_->program, vars_), version});
+  return *structure_;
 }
 
 std::string Instance::Reset() {
@@ -93,13 +117,7 @@ std::string Instance::Reset() {
 std::string Instance::Rebind() {
   if (params_changed_) {
     // Calculated parameters follow the tunable ones they are bound to (as sweeps do).
-    const flat::Mechanism& mech = *model_->mech;
-    std::vector<double> pv(params_.size());
-    for (size_t i = 0; i < pv.size(); ++i) {
-      const flat::Param& p = mech.params[i];
-      pv[i] = (p.binding == flat::kNoExpr || p.user_set) ? params_[i] : flat::EvalParamExpr(mech, pv, p.binding);
-    }
-    rt::CompileResult r = rt::Rebind(*model_->program, pv);
+    rt::CompileResult r = rt::Rebind(*model_->program, BoundValues(*model_->mech, params_));
     if (!r.program) {
       std::string msg = "the model does not compile with these parameter values";
       for (const rt::CompileMessage& e : r.errors) msg += "; " + e.message;
@@ -146,6 +164,11 @@ std::string Instance::SetReal(unsigned vr, double value) {
     return "";
   }
   if (v.kind == VarKind::State) {
+    if (v.start_calculated)  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
+      return "'" + v.name + "' starts where " +
+             (v.start_params.empty() ? std::string("the assembly of the model's constraints puts it")
+                                     : "its parameters put it (set those, as `" + vars_[size_t(v.start_params[0])].name + "`)") +
+             ": initial=\"calculated\"";
     y_[v.index] = value;
     state_set_[v.index] = 1;
     stale_ = true;
@@ -293,8 +316,12 @@ std::string Instance::Evaluate() {
   hybrid_->SetInputs(inputs_);
   if (n_ > 0 && hybrid_->Derivatives(t_, y_.data(), ydot_.data()) != 0)
     return "at t = " + Number(t_) + ": " + hybrid_->FailureCause();
-  if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y_.data(), out_.data()) != 0)
-    return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  if (outputs_plan_) {
+    std::vector<double> y = y_;
+    hybrid_->ForOutputs(*ws_, y.data());  // the mode's friction laws, resting joints on their stops: a run's rows
+    if (rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), out_.data()) != 0)
+      return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  }
   stale_ = false;
   return "";
 }
@@ -355,6 +382,22 @@ std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_u
 
 // The stepping core from (t_, y_, inputs_): a start on a contact or with exact friction is
 // its first event, as a run starts (docs/fmi.md "Co-Simulation").
+std::string Instance::AdjointDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns,
+                                        size_t n_knowns, const double* seed, double* out) {
+  if ((n_unknowns > 0 && (!unknowns || !seed)) || (n_knowns > 0 && (!knowns || !out))) return "no place given";
+  for (size_t i = 0; i < n_unknowns; ++i)
+    if (!std::isfinite(seed[i])) return "a seed cannot be " + Number(seed[i]);
+  std::vector<double> column(n_unknowns);
+  const double one = 1.0;
+  for (size_t k = 0; k < n_knowns; ++k) {
+    if (std::string e = DirectionalDerivative(unknowns, n_unknowns, &knowns[k], 1, &one, column.data()); !e.empty())
+      return e;
+    out[k] = 0.0;
+    for (size_t i = 0; i < n_unknowns; ++i) out[k] += seed[i] * column[i];
+  }
+  return "";
+}
+
 std::string Instance::StartStepper() {
   sim::SimulatorOptions options;
   options.start_time = t_;
@@ -386,6 +429,7 @@ std::string Instance::DoStep(double t, double h, std::string* terminate_message)
   }
   y_ = stepper_->State();
   t_ = stepper_->Time();
+  hybrid_->SetModes(stepper_->Modes());  // the outputs see the step's modes (Evaluate)
   stale_ = true;
   if (r.terminated) *terminate_message = r.cause;
   return Evaluate();

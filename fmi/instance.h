@@ -7,8 +7,10 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "fmi/dependencies.h"
 #include "fmi/variables.h"
 #include "pipeline/pipeline.h"
 #include "sim/sim.h"
@@ -22,6 +24,11 @@ struct FmuSettings {
   std::string guid;                // what modelDescription.xml says
   std::string integrator;          // Co-Simulation's integrator ("" = the compiler's choice)
   double rtol = 0.0;               // 0: the experiment's tolerance
+  // The data files (meshes) the model reads, carried in resources/: each as (its entry under
+  // resources/, the path the model names, resolved as at export against `main`, the main
+  // file's name then). The FMU reads these and no other file.
+  std::string main;
+  std::vector<std::pair<std::string, std::string>> files;
 };
 std::string FormatSettings(const FmuSettings& settings);
 bool ParseSettings(const std::string& text, FmuSettings* out, std::string* error);
@@ -35,6 +42,8 @@ class Instance {
   std::string Load(const std::string& resources_dir, const std::string& guid);
 
   const std::vector<Variable>& Variables() const { return vars_; }
+  // ModelStructure's lists in FMI `version` (what modelDescription.xml says), made at the first call.
+  const StructureLists& Structure(int version);
   int NumStates() const { return n_; }
   double Time() const { return t_; }
 
@@ -67,6 +76,11 @@ class Instance {
   // Richardson extrapolation, as `kanesim linearize` takes A and B (lin::Richardson).
   std::string DirectionalDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns,
                                     size_t n_knowns, const double* seed, double* out);
+
+  // The adjoint: out[k] = sum_i seed[i] d(unknowns[i]) / d(knowns[k]), one directional
+  // derivative per known (FMI 3's fmi3GetAdjointDerivative).
+  std::string AdjointDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns, size_t n_knowns,
+                                const double* seed, double* out);
 
   // Co-Simulation: integrates from the current time to t + h with kanesim's stepping core
   // (sim::Simulator: one integrator across the steps, its history carried, the run's events
@@ -109,6 +123,7 @@ class Instance {
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, nullptr};
   std::shared_ptr<const rt::SignalPlan> outputs_plan_;
   std::vector<Variable> vars_;
+  std::unique_ptr<StructureLists> structure_;
   FmuSettings settings_;
   int n_ = 0;                      // states
   double t_ = 0.0, rtol_ = 0.0;

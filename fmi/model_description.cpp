@@ -52,6 +52,12 @@ Attributes AttributesOf(VarKind kind) {
   }
   return {"local", "continuous", "calculated", false};
 }
+// A state's start computed from parameters: "calculated", without start (FMI 2.0.4 section
+// 2.2.7, FMI 3.0 section 2.4.7.4); an initial unknown.
+Attributes AttributesOf(const Variable& v) {
+  if (v.kind == VarKind::State && v.start_calculated) return {"local", "continuous", "calculated", false};
+  return AttributesOf(v.kind);
+}
 
 std::string TypeElement(const Variable& v, const Attributes& a, const std::vector<Variable>& vars) {
   const char* tag = v.type == VarType::Integer ? "Integer" : v.type == VarType::Boolean ? "Boolean" : "Real";
@@ -70,64 +76,35 @@ std::string TypeElement(const Variable& v, const Attributes& a, const std::vecto
   return e + "/>";
 }
 
-// The knowns of the unknown vars[v] in one section of ModelStructure, as (FMI 2: 1-based
-// index, FMI 3: value reference; "constant" factor) ascending. Runtime: what it reads
-// (ModelDependencies), in FMI 3 with time and the tunable parameters, which FMI 3 counts
-// among the knowns. Initialization: the start state the FMU starts from may be computed from
-// any parameter, so every tunable parameter is listed; only "dependent" there.
-struct Structure {
-  const std::vector<Variable>& vars;
-  std::vector<UnknownDependencies> deps;
-  int version;
-};
-using Knowns = std::vector<std::pair<size_t, bool>>;
-Knowns KnownsOf(const Structure& s, size_t v, bool initial) {
-  const UnknownDependencies& d = s.deps[v];
-  const size_t base = s.version == 2 ? 1 : 0;
-  Knowns out;
-  for (const Dependency& k : d.knowns) out.emplace_back(size_t(k.var) + base, k.constant && !initial);
-  if (initial || (s.version == 3 && d.parameters))
-    for (size_t p = 0; p < s.vars.size(); ++p)
-      if (s.vars[p].kind == VarKind::Parameter) out.emplace_back(p + base, false);
-  if (s.version == 3 && d.time) out.emplace_back(s.vars.size(), false);  // `time`, listed last
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
-// How many knowns a section has: states, inputs; in FMI 3 and at initialization the tunable
-// parameters; in FMI 3 time. A list of them all is what no list means.
-size_t AllKnowns(const Structure& s, bool initial) {
-  size_t n = 0;
-  for (const Variable& v : s.vars)
-    n += v.kind == VarKind::State || v.kind == VarKind::Input ||
-         (v.kind == VarKind::Parameter && (initial || s.version == 3));
-  return n + (s.version == 3 ? 1 : 0);
-}
-
-// ` dependencies="..."` with ` dependenciesKind="..."` where some known enters with a
-// constant factor (without it every one is "dependent", the standard's default), or nothing
-// where the unknown depends on every known (the standard's meaning of no list; FMI 3's time
-// counted in, a spurious dependency): a large model's description stays small.
+// ` dependencies="..."` (FMI 2: 1-based indices, FMI 3: value references; ListedKnowns)
+// with ` dependenciesKind="..."` where some known enters with a constant factor (without it
+// every one is "dependent", the standard's default), or nothing where the list names every
+// known (ListOmitted): a large model's description stays small.
+using Structure = StructureLists;
 std::string DependencyAttributes(const Structure& s, size_t v, bool initial) {
-  const Knowns k = KnownsOf(s, v, initial);
-  const bool structured = std::any_of(k.begin(), k.end(), [](const auto& e) { return e.second; });
-  const size_t time_ref = s.vars.size();
-  const size_t without_time =
-      size_t(std::count_if(k.begin(), k.end(), [&](const auto& e) { return s.version == 2 || e.first != time_ref; }));
-  if (without_time == AllKnowns(s, initial) - (s.version == 3 ? 1 : 0) && !structured) return "";
+  if (ListOmitted(s, v, initial)) return "";
+  const std::vector<ListedKnown> k = ListedKnowns(s, v, initial);
+  const bool structured = std::any_of(k.begin(), k.end(), [](const ListedKnown& e) { return e.constant; });
+  const size_t base = s.version == 2 ? 1 : 0;
   std::string deps, kinds;
-  for (const auto& [ref, constant] : k) {
-    deps += (deps.empty() ? "" : " ") + std::to_string(ref);
-    kinds += (kinds.empty() ? "" : " ") + std::string(constant ? "constant" : "dependent");
+  for (const ListedKnown& e : k) {
+    deps += (deps.empty() ? "" : " ") + std::to_string(e.vr + base);
+    kinds += (kinds.empty() ? "" : " ") + std::string(e.constant ? "constant" : "dependent");
   }
   return " dependencies=\"" + deps + "\"" + (structured ? " dependenciesKind=\"" + kinds + "\"" : "");
+}
+
+// The unknowns of one section, in variable order: those of `kinds`; the initial ones
+// (InitialUnknown) when `initial`.
+bool InSection(const Variable& v, std::initializer_list<VarKind> kinds, bool initial) {
+  return initial ? InitialUnknown(v) : std::find(kinds.begin(), kinds.end(), v.kind) != kinds.end();
 }
 
 void Unknowns(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
               bool initial) {
   std::string body;
   for (size_t k = 0; k < s.vars.size(); ++k)
-    if (std::find(kinds.begin(), kinds.end(), s.vars[k].kind) != kinds.end())
+    if (InSection(s.vars[k], kinds, initial))
       body += "      <Unknown index=\"" + std::to_string(k + 1) + "\"" + DependencyAttributes(s, k, initial) + "/>\n";
   if (!body.empty()) x << "    <" << tag << ">\n" << body << "    </" << tag << ">\n";
 }
@@ -135,7 +112,7 @@ void Unknowns(std::ostringstream& x, const char* tag, const Structure& s, std::i
 void UnknownsV3(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
                 bool initial, bool with_dependencies = true) {
   for (size_t k = 0; k < s.vars.size(); ++k)
-    if (std::find(kinds.begin(), kinds.end(), s.vars[k].kind) != kinds.end())
+    if (InSection(s.vars[k], kinds, initial))
       x << "    <" << tag << " valueReference=\"" << k << "\""
         << (with_dependencies ? DependencyAttributes(s, k, initial) : "") << "/>\n";
 }
@@ -175,7 +152,7 @@ void UnitsAndExperiment(std::ostringstream& x, const std::vector<Variable>& vars
 
 // One variable of FMI 3.0 (section 2.4.7): the type is the element.
 std::string VariableV3(const Variable& v, size_t vr, const std::vector<Variable>& vars) {
-  const Attributes a = AttributesOf(v.kind);
+  const Attributes a = AttributesOf(v);
   const char* tag = v.type == VarType::Integer ? "Int32" : v.type == VarType::Boolean ? "Boolean" : "Float64";
   std::string e = std::string("    <") + tag + " name=\"" + Escape(v.name) + "\" valueReference=\"" +
                   std::to_string(vr) + "\" causality=\"" + a.causality + "\" variability=\"" + a.variability + "\"";
@@ -217,7 +194,7 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   x << "  <ModelVariables>\n";
   for (size_t k = 0; k < vars.size(); ++k) {
     const Variable& v = vars[k];
-    const Attributes a = AttributesOf(v.kind);
+    const Attributes a = AttributesOf(v);
     x << "    <!-- index " << k + 1 << " -->\n    <ScalarVariable name=\"" << Escape(v.name) << "\" valueReference=\"" << k
       << "\" causality=\"" << a.causality << "\" variability=\"" << a.variability << "\"";
     if (*a.initial) x << " initial=\"" << a.initial << "\"";
@@ -228,7 +205,7 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   const Structure s{vars, ModelDependencies(*model.program, vars), 2};
   Unknowns(x, "Outputs", s, {VarKind::Output}, false);
   Unknowns(x, "Derivatives", s, {VarKind::Derivative}, false);
-  Unknowns(x, "InitialUnknowns", s, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter}, true);
+  Unknowns(x, "InitialUnknowns", s, {}, true);
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();
 }
@@ -240,7 +217,9 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   const std::vector<Variable> vars = ListVariables(model);
   const std::string id = Identifier(mech.model_name);
   const std::string caps =
-      " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\"";
+      " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\""
+      " providesAdjointDerivatives=\"true\""
+      " providesPerElementDependencies=\"true\"";  // fmi3GetVariableDependencies: every variable is a scalar
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
     << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << Escape(mech.model_name) << "\" instantiationToken=\""
@@ -259,7 +238,7 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   const Structure s{vars, ModelDependencies(*model.program, vars), 3};
   UnknownsV3(x, "Output", s, {VarKind::Output}, false);
   UnknownsV3(x, "ContinuousStateDerivative", s, {VarKind::Derivative}, false);
-  UnknownsV3(x, "InitialUnknown", s, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter}, true);
+  UnknownsV3(x, "InitialUnknown", s, {}, true);
   UnknownsV3(x, "EventIndicator", s, {VarKind::Indicator}, false, false);
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();

@@ -324,6 +324,8 @@ void Simulator::Reset() {
   m.done = IntegratorStats{};
 }
 
+std::vector<double> Simulator::Modes() const { return impl_->hybrid->Modes(); }
+
 bool Simulator::Terminated(std::string* why) const {
   if (impl_->terminated) *why = impl_->terminate_message;
   return impl_->terminated;

@@ -108,6 +108,7 @@ class Simulator {
   // SimStats::events); SetState keeps those up to its time. A terminate: its message.
   const std::vector<EventRecord>& Events() const { return events_; }
   bool Terminated(std::string* why) const;
+  std::vector<double> Modes() const;  // HybridOde::Modes now (GetState without its restart)
 
   rt::Integrator Method() const;  // the one running: CVODE-BDF after a stiff hand-over
   IntegratorStats Stats() const;  // summed over the solvers since the last Reset

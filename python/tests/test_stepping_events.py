@@ -11,51 +11,15 @@ import numpy as np
 import pytest
 
 import kanesim
+from conftest import SOURCE_DIR
 
 G = 9.81
 
-PLANE_BALL = """model PlaneBall
-  World world(g = {0, -9.81, 0});
-  Prismatic lift(axis = {0, 1, 0}, q(start = 1));
-  Body ball(m = 1);
-  PlaneContact floor(n = {0, 1, 0}, d = 0, restitution = 0.6);
-equation
-  connect(world.frame_b, lift.frame_a);
-  connect(lift.frame_b, ball.frame_a);
-  connect(lift.frame_b, floor.frame_a);
-  annotation(experiment(StopTime = 2.5, Interval = 0.01, Tolerance = 1e-10));
-end PlaneBall;
-"""
-
-WHEN_BALL = """model WhenBall
-  parameter Real e = 0.8;
-  World world(g = {0, -9.81, 0});
-  Prismatic p(axis = {0, 1, 0}, q(start = 1));
-  Body b(m = 1, I = diagonal({1, 1, 1}));
-equation
-  connect(world.frame_b, p.frame_a);
-  connect(p.frame_b, b.frame_a);
-  when p.q < 0 then
-    reinit(p.u, -e * pre(p.u));
-  end when;
-  when time > 2 then
-    terminate("two seconds");
-  end when;
-  annotation(experiment(StopTime = 3, Interval = 0.01, Tolerance = 1e-10));
-end WhenBall;
-"""
-
-SLIDER = """model Slider
-  World world(g = {0, -9.81, 0});
-  Prismatic slide(axis = {1, 0, 0}, q(start = 1), mu = 0.3, mu_s = 0.5, friction_exact = true);
-  Body box(m = 1);
-equation
-  connect(world.frame_b, slide.frame_a);
-  connect(slide.frame_b, box.frame_a);
-  slide.tau = -10 * slide.q;
-  annotation(experiment(StopTime = 1.5, Interval = 0.01, Tolerance = 1e-10));
-end Slider;
-"""
+# The models the FMU tests (tests/fmi/test_events.py) read too: one .mech each in tests/data.
+DATA = SOURCE_DIR / "tests" / "data"
+PLANE_BALL = (DATA / "plane_ball.mech").read_text()
+WHEN_BALL = (DATA / "when_ball.mech").read_text()
+SLIDER = (DATA / "coulomb_slider.mech").read_text()
 
 
 def step_to(sim, stop, dt):
@@ -78,12 +42,14 @@ def flights(t1, e, n):
     return t1 + np.concatenate([[0], np.cumsum([2 * e ** k * t1 for k in range(1, n)])])
 
 
-@pytest.mark.parametrize("dt", [0.01, 0.37])
-def test_a_bouncing_ball_stepped_has_the_runs_impacts_and_the_closed_form(dt):
-    # The impacts are located inside the steps (dt = 0.37 holds several), not at their ends.
+@pytest.mark.parametrize("integrator,dt", [("dop853", 0.01), ("dop853", 0.37), ("cvode", 0.01), ("ida", 0.01),
+                                           ("arkode", 0.01)])
+def test_a_bouncing_ball_stepped_has_the_runs_impacts_and_the_closed_form(integrator, dt):
+    # The impacts are located inside the steps (dt = 0.37 holds several), not at their ends,
+    # by each integrator's own event location (DOP853's dense output, SUNDIALS' root finding).
     m = kanesim.loads(PLANE_BALL, name="ball.mech")
-    run = m.run(rtol=1e-10, integrator="dop853")
-    sim = m.simulator(rtol=1e-10, integrator="dop853", outputs=["lift.q", "lift.u"])
+    run = m.run(rtol=1e-10, integrator=integrator)
+    sim = m.simulator(rtol=1e-10, integrator=integrator, outputs=["lift.q", "lift.u"])
     rows = step_to(sim, 2.5, dt)
     got, want = times(sim.events, "impact"), times(run.events, "impact")
     assert len(got) == len(want) >= 8
@@ -98,7 +64,7 @@ def test_a_bouncing_ball_stepped_has_the_runs_impacts_and_the_closed_form(dt):
 
 def test_a_when_ball_stepped_equals_the_run_and_terminates_there():
     m = kanesim.loads(WHEN_BALL, name="when.mech")
-    run = m.run(rtol=1e-10, integrator="dop853", outputs=["p.q", "p.u"])
+    run = m.run(rtol=1e-10, interval=0.01, integrator="dop853", outputs=["p.q", "p.u"])  # the steps' grid
     sim = m.simulator(rtol=1e-10, integrator="dop853", outputs=["p.q", "p.u"])
     rows = step_to(sim, 3.0, 0.01)
     fires = times(sim.events, "fires")
@@ -129,14 +95,17 @@ def test_exact_friction_stepped_slides_then_sticks_as_the_run():
     # good at pi / w, x = 2 c - x0 (the spring's 4.11 N within mu_s m g = 4.91 N). A stepping
     # core with the regularized law would creep on instead.
     m = kanesim.loads(SLIDER, name="slider.mech")
-    run = m.run(rtol=1e-10, outputs=["slide.q", "slide.u"])
-    sim = m.simulator(rtol=1e-10, outputs=["slide.q", "slide.u"])
+    run = m.run(rtol=1e-10, outputs=["slide.q", "slide.u", "slide.a"])
+    sim = m.simulator(rtol=1e-10, outputs=["slide.q", "slide.u", "slide.a"])
     rows = step_to(sim, 1.5, 0.01)
     c, w = 0.3 * G / 10, math.sqrt(10.0)
     t = rows[:, 0]
     sliding, stuck = t < math.pi / w - 1e-6, t > math.pi / w + 1e-6
     assert np.max(np.abs(rows[sliding, 1] - (c + (1 - c) * np.cos(w * t[sliding])))) < 1e-8
     assert np.max(np.abs(rows[stuck, 1] - (2 * c - 1))) < 1e-9 and np.max(np.abs(rows[stuck, 2])) < 1e-12
+    # The outputs see the mode as the run's rows do: a = -k x / m + mu g sliding back, 0 stuck.
+    assert np.max(np.abs(rows[sliding, 3] - (-10 * rows[sliding, 1] + 0.3 * G))) < 1e-9
+    assert np.max(np.abs(rows[stuck, 3])) < 1e-9
     assert [e["kind"].split(" ")[0] for e in sim.events] == [e["kind"].split(" ")[0] for e in run.events]
     assert sim.events[-1]["time"] == pytest.approx(run.events[-1]["time"], abs=1e-9)
     assert sim.events[-1]["time"] == pytest.approx(math.pi / w, abs=1e-8)
@@ -168,19 +137,7 @@ def test_a_state_saved_before_an_event_or_in_a_mode_continues_bit_for_bit(model,
 def test_a_rolling_contact_that_would_pull_fails_the_step_where_the_run_stops():
     # The normal force m g - 2 t turns tensile at t = g / 2: the run stops there (exit 2), and so
     # does the step that crosses it, instead of holding the sphere to the plane by a pull.
-    m = kanesim.loads("""model Lift
-  World world(g = {0, -9.81, 0});
-  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));
-  Sphere ball(radius = 0.1, m = 1);
-  RollingSphere contact(radius = 0.1, n = {0, 1, 0});
-  WorldForce pull(force = {0, 2 * time, 0});
-equation
-  connect(world.frame_b, free.frame_a);
-  connect(free.frame_b, ball.frame_a);
-  connect(free.frame_b, contact.frame_a);
-  connect(free.frame_b, pull.frame_b);
-end Lift;
-""")
+    m = kanesim.loads((DATA / "lift_sphere.mech").read_text())
     sim = m.simulator(rtol=1e-9)
     with pytest.raises(kanesim.SimulationError, match="normal force turns tensile") as e:
         step_to(sim, 6.0, 0.5)

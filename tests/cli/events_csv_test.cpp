@@ -186,5 +186,29 @@ TEST(EventsCsv, StatsListTheSameEventsAsTheFile) {
   EXPECT_EQ(stats, file);
 }
 
+// `kanesim run` of a rod resting on its stop that a when clause flings off it (docs/events.md
+// "A joint resting on its end stop"; tests/data/resting_reinit.mech): exit 0, the clause fires
+// and the joint leaves q_max at t = 1 (j1.u 0 -> -2), then strikes it again at the free
+// pendulum's return time (closed form in tests/compiler/when_rest_test.cpp) at speed 2.
+// Before, the run stopped there (exit 2, "not handled yet").
+TEST(EventsCsv, AReinitFlingsAJointOffItsStop) {
+  const std::string d = Work("resting_reinit");
+  Result r = Kanesim("run " + kSrc + "/tests/data/resting_reinit.mech -o rows.csv --events ev.csv", d);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::vector<EventRow> ev = ReadEvents(d + "/ev.csv");
+  ASSERT_GE(ev.size(), 4u);
+  EXPECT_EQ(ev[0].kind, "rests on q_max");  // the start
+  EXPECT_NEAR(ev[1].time, 1.0, 1e-12);
+  EXPECT_EQ(ev[1].kind, "fires");
+  EXPECT_EQ(ev[2].kind, "leaves q_max");
+  EXPECT_EQ(ev[2].signal + " " + ev[2].before + " " + ev[2].after, "j1.u 0 -2");
+  const EventRow* hit = nullptr;  // the impact's row of j1.u (one of q may come first)
+  for (const EventRow& row : ev)
+    if (!hit && row.kind.rfind("impact at q_max", 0) == 0 && row.signal == "j1.u") hit = &row;
+  ASSERT_NE(hit, nullptr);
+  EXPECT_NEAR(std::stod(hit->before), 2.0, 1e-8);  // the energy kept in flight
+  EXPECT_NEAR(std::stod(hit->after), -1.0, 1e-8);  // restitution 1/2
+}
+
 }  // namespace
 }  // namespace kanesim::clitest

@@ -11,7 +11,7 @@ import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from test_events import G, SLIDER, WHEN_BALL, on_grid, run
+from test_events import G, LIFT, SLIDER, WHEN_BALL, on_grid, run
 
 with open(WHEN_BALL) as f:  # the model's text (test_events.py names its file)
     WHEN_TEXT = f.read().replace("Interval = 0.1, Tolerance = 1e-12", "Interval = 0.01, Tolerance = 1e-10")
@@ -86,3 +86,52 @@ def test_exact_friction_in_co_simulation_slides_then_sticks_as_run(export, write
     stuck = r["time"] > math.pi / w + 1e-6
     assert np.max(np.abs(r["slide.q"][stuck] - (2 * c - 1))) < 1e-9
     assert np.max(np.abs(r["slide.u"][stuck])) < 1e-12
+
+
+def test_a_saved_state_in_co_simulation_continues_across_the_stick_bit_for_bit(export, write_model, tmp_path):
+    # Saved while sliding (before the stick at pi / w = 0.993) and while stuck: the FMU state
+    # holds the friction's mode and holding force, so the continuation, from the state and from
+    # its serialized bytes, is the same bit for bit.
+    from fmpy.fmi2 import FMU2Slave
+
+    fmu = export(write_model("slider.mech", SLIDER), fmi=2, kind="cs")
+    d = extract(fmu, unzipdir=str(tmp_path / "u2"))
+    md = read_model_description(d)
+    vr = [v.valueReference for v in md.modelVariables if v.name in ("slide.q", "slide.u")]
+    s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier)
+    s.instantiate()
+    s.setupExperiment(tolerance=1e-10, startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+
+    def steps(k0, n):
+        out = []
+        for k in range(k0, k0 + n):
+            s.doStep(k * 0.01, 0.01)
+            out.append(s.getReal(vr))
+        return np.array(out)
+
+    steps(0, 90)
+    for k0 in (90, 120):
+        state = s.getFMUstate()
+        first = steps(k0, 30)
+        s.setFMUstate(state)
+        assert np.array_equal(steps(k0, 30), first)
+        s.setFMUstate(s.deSerializeFMUstate(s.serializeFMUstate(state)))
+        assert np.array_equal(steps(k0, 30), first)
+        s.freeFMUstate(state)
+    assert abs(first[-1][1]) < 1e-12  # stuck
+    s.terminate()
+    s.freeInstance()
+
+
+def test_a_rolling_contact_that_would_pull_fails_the_co_simulation_step(export, write_model):
+    # As the run stops at t = g / 2 (exit 2): fmi2DoStep returns fmi2Error with the cause.
+    fmu = export(write_model("lift.mech", LIFT), fmi=2, kind="cs")
+    messages = []
+    with pytest.raises(Exception, match="fmi2DoStep failed"):
+        simulate_fmu(fmu, fmi_type="CoSimulation", stop_time=6, output_interval=0.1, relative_tolerance=1e-9,
+                     logger=lambda c, name, status, category, message: messages.append(message.decode()))
+    assert any("its normal force turns tensile" in m for m in messages), messages
+    failed = [m for m in messages if "numerical failure at t = " in m][0]
+    assert float(failed.split("at t = ")[1].split(":")[0]) == pytest.approx(G / 2, abs=1e-7)
