@@ -93,7 +93,7 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
                         : q.is_constant ? "constant"
                         : fixed         ? "fixed at export"
                                         : "";
-      vars.push_back({q.name, kind, type, int(i), p.param_values[i], q.unit, why});
+      vars.push_back({std::string(mech.ParamName(i)), kind, type, int(i), p.param_values[i], q.unit, why});
     }
   const std::vector<std::string> events = sim::HybridOde(model.program, 1e-6, 1e-6).IndicatorNames();
   for (size_t i = 0; i < events.size(); ++i)
