@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -268,7 +269,8 @@ bool ReadTrajectoryCsvText(const std::string& path, const std::string& text, Tra
     double t = Num(f[0], &ok);
     for (size_t j = 0; ok && j < row.size(); ++j) row[j] = Num(f[j + 1], &ok);
     if (!ok) return fail(line_no, "a field is not a finite number");
-    if (!out->t.empty() && !(t > out->t.back())) return fail(line_no, "the times do not increase");
+    // An event's time stands twice (its left and right limits, docs/events.md).
+    if (!out->t.empty() && !(t >= out->t.back())) return fail(line_no, "the times do not increase");
     out->t.push_back(t);
     out->rows.push_back(std::move(row));
   }
@@ -329,6 +331,29 @@ double Interpolate(const Trajectory& tr, int j, double t) {
   return (1.0 - w) * tr.rows[lo][c] + w * tr.rows[hi][c];
 }
 
+namespace {
+
+// The run's row for golden row k when k is one of an event's two rows (its time twice: the
+// left limit, then the right): the same side of the run's event nearest in time between the
+// golden's neighbouring instants, so an event a round-off apart is compared across the same
+// jump; -1 for other rows, or when the run has no event there (then it is interpolated).
+long EventRow(const Trajectory& golden, size_t k, const Trajectory& run) {
+  const std::vector<double>& t = golden.t;
+  const bool right = k > 0 && t[k - 1] == t[k];
+  if (!right && !(k + 1 < t.size() && t[k + 1] == t[k])) return -1;
+  const size_t left_row = right ? k - 1 : k;
+  const double lo = left_row > 0 ? t[left_row - 1] : -INFINITY;
+  const double hi = left_row + 2 < t.size() ? t[left_row + 2] : INFINITY;
+  long best = -1;
+  for (size_t i = static_cast<size_t>(std::upper_bound(run.t.begin(), run.t.end(), lo) - run.t.begin());
+       i + 1 < run.t.size() && run.t[i] < hi; ++i)
+    if (run.t[i + 1] == run.t[i] && (best < 0 || std::abs(run.t[i] - t[k]) < std::abs(run.t[static_cast<size_t>(best)] - t[k])))
+      best = static_cast<long>(i);
+  return best < 0 ? -1 : best + (right ? 1 : 0);
+}
+
+}  // namespace
+
 CompareResult Compare(const GoldenSpec& spec, const Trajectory& golden, const Trajectory& actual) {
   CompareResult r;
   for (const std::string& n : actual.names)
@@ -357,7 +382,8 @@ CompareResult Compare(const GoldenSpec& spec, const Trajectory& golden, const Tr
     for (size_t k = 0; k < golden.t.size(); ++k) {
       const double t = golden.t[k];
       const double gv = golden.rows[k][g];
-      const double av = Interpolate(actual, a, t);
+      const long e = EventRow(golden, k, actual);
+      const double av = e >= 0 ? actual.rows[static_cast<size_t>(e)][static_cast<size_t>(a)] : Interpolate(actual, a, t);
       const double dev = std::abs(av - gv);
       const double allowed = tol.abs + tol.rel * std::abs(gv);
       const double ratio = std::isnan(dev) ? std::numeric_limits<double>::infinity() : dev / allowed;

@@ -70,8 +70,9 @@ struct Trajectory {
 
 // Reads a stored output; false with the reason when it is unreadable or corrupt: a last
 // line cut off, no rows, a field that is not a finite number (a golden holds finite
-// values only), times that do not increase, or a row count or checksum that differs from
-// the `rows` and `data` provenance lines written with it.
+// values only), times that decrease (an event's time stands twice: its left and right
+// limits), or a row count or checksum that differs from the `rows` and `data` provenance
+// lines written with it.
 bool ReadTrajectoryCsv(const std::string& path, Trajectory* out, std::string* error);
 bool ReadTrajectoryCsvText(const std::string& path, const std::string& text, Trajectory* out, std::string* error);
 // Provenance lines (with `rows` = the row count and `data` = fnv1a64 of the row lines
@@ -101,6 +102,8 @@ struct CompareResult {
   std::vector<std::string> problems;     // missing signals, shorter run, ...
 };
 
+// Each golden row against the run interpolated at its time; an event's two rows against the
+// same sides of the run's event nearest in time (docs/golden_tests.md "Events").
 CompareResult Compare(const GoldenSpec& spec, const Trajectory& golden, const Trajectory& actual);
 
 struct InvariantResult {

@@ -22,6 +22,8 @@ side by side, medians of fresh processes (docs/benchmarks.md, "URDF robots: the 
 
     bench/.venv/bin/python bench/urdf_race.py [--reps 21] [--kanesim build/cli/kanesim] [--robots ur5,talos]
         [--integrator auto|dop853|...]  (kanesim's --integrator; auto: DOP853, handing a stiff run to CVODE-BDF)
+        [--baseline OTHER/kanesim]      (a second kanesim, e.g. main's, timed in the same rotation at the
+                                         same setting; its rows must equal the first one's)
 """
 import glob
 import json
@@ -202,7 +204,7 @@ def kanesim_phases(stderr):
 
 
 def main():
-    args = uc.robot_options(__doc__, reps=21, integrator="auto")
+    args = uc.robot_options(__doc__, reps=21, integrator="auto", baseline="")
     driver = build_driver()
     rows = []
     for i, name, path, floating in uc.installed_robots(args.robots, "{name}: not installed (sh bench/setup_venv.sh)"):
@@ -229,13 +231,21 @@ def main():
             continue
         kc = kanesim_cmd(args.kanesim, urdf, c, kpick[0], stats=True, integrator=args.integrator)
         mc = [driver, urdf, str(mpick[0]), state]
+        bc = [args.baseline] + kc[1:] if args.baseline else None
         timed(mc)  # warm the file cache once, untimed
-        kt, mt = [], []
-        for rep in range(args.reps):  # alternated, first one then the other
-            for which in ((0, 1) if rep % 2 == 0 else (1, 0)):
+        if bc and timed(bc)[2] != timed(kc)[2]:
+            sys.exit(f"{name}: the baseline's rows differ from {args.kanesim}'s")
+        kt, mt, bt = [], [], []
+        order = (0, 1, 2) if bc else (0, 1)
+        for rep in range(args.reps):  # rotated: each one first, second, ... in turn
+            k = rep % len(order)
+            for which in order[k:] + order[:k]:
                 if which == 0:
                     w, cpu, _, err = timed(kc)
                     kt.append((w, cpu, kanesim_phases(err)))
+                elif which == 2:
+                    w, cpu, _, err = timed(bc)
+                    bt.append((w, cpu))
                 else:
                     w, cpu, _, err = timed(mc)
                     ph = dict(zip(err.split()[0::2], map(float, err.split()[1::2])))
@@ -249,6 +259,8 @@ def main():
                "k_integrate": med([t[2].get("integrate", float("nan")) for t in kt]),
                "m_compile": med([t[2]["compile"] for t in mt]), "m_simulate": med([t[2]["simulate"] for t in mt]),
                "spread": c["spread"], "k_sweep": ks, "m_sweep": ms}
+        if bt:
+            row.update({"b_wall": med([t[0] for t in bt]), "b_cpu": med([t[1] for t in bt])})
         rows.append(row)
         print(json.dumps({k: v for k, v in row.items() if not k.endswith("sweep")}), flush=True)
     ms_ = lambda s: f"{1000 * s:.2f}"
@@ -263,6 +275,14 @@ def main():
               f"| {ms_(r['m_compile'])}, {ms_(r['m_simulate'])} |")
     v = subprocess.run([args.kanesim, "--version"], capture_output=True, text=True).stdout.strip()
     import mujoco
+    if args.baseline:
+        print(f"\nBaseline {args.baseline} (same setting, same rows), in the same rotation:\n")
+        print("| robot | baseline wall / CPU (ms) | kanesim wall / CPU (ms) | MuJoCo wall / CPU (ms) | CPU ratio baseline / MuJoCo "
+              "| CPU ratio kanesim / MuJoCo |")
+        print("|---|---|---|---|---|---|")
+        for r in rows:
+            print(f"| {r['robot']} | {ms_(r['b_wall'])} / {ms_(r['b_cpu'])} | {ms_(r['k_wall'])} / {ms_(r['k_cpu'])} "
+                  f"| {ms_(r['m_wall'])} / {ms_(r['m_cpu'])} | {r['b_cpu'] / r['m_cpu']:.2f} | {r['k_cpu'] / r['m_cpu']:.2f} |")
     print(f"\nkanesim --integrator {args.integrator}; {args.reps} fresh processes each, alternated; load average {os.getloadavg()[0]:.1f}; {v}; "
           f"MuJoCo {mujoco.__version__}; Pinocchio {pin.__version__}")
     with open(os.path.join(OUT, f"race_{args.integrator}.json"), "w") as f:

@@ -36,14 +36,6 @@ int GrublerCount(const flat::Mechanism& m, int bodies) {
   return dof;
 }
 
-// The process ends after the summary and its memory goes with it: freeing the model piece
-// by piece (a fourteenth of a robot's `check`) is skipped. It stays reachable from a static,
-// so leak checkers do not count it.
-void LeaveToExit(std::unique_ptr<pipeline::Model> model) {
-  static auto* kept = new std::vector<std::unique_ptr<pipeline::Model>>();
-  kept->push_back(std::move(model));
-}
-
 int RunCheck(const CheckArgs& args) {
   if (args.emit == "ast") {
     lang::Program program;

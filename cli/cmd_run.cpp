@@ -100,8 +100,11 @@ pipeline::RunSpec SpecFor(const RunArgs& a) {
 int RunCommand(const RunArgs& a) {
   // Stages 1-3: parse, elaborate, compile.
   const pipeline::RunSpec spec = SpecFor(a);
-  std::unique_ptr<pipeline::Model> model = LoadAndCompile(a.load, spec);
-  if (!model) return kExitModelError;
+  std::unique_ptr<pipeline::Model> loaded = LoadAndCompile(a.load, spec);
+  if (!loaded) return kExitModelError;
+  // Every output below is flushed and closed (errors checked) before a return; the model
+  // is freed by the process's exit.
+  const pipeline::Model* model = &LeaveToExit(std::move(loaded));
   const rt::Program& program = *model->program;
   if (spec.solver != rt::SolverPath::Auto && rt::Summarize(program).solver != spec.solver)
     fmt::print(stderr, "kanesim: note: solver {}\n", rt::Summarize(program).solver_reason);

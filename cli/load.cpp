@@ -3,6 +3,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 #include "cli/common.h"
 #include "batch/csv_util.h"
@@ -32,6 +33,12 @@ std::string StdlibHash() {
   std::string all;
   for (const auto& [name, text] : stdlib::Files()) all.append(name).append("\n").append(text).append("\n");
   return batch::Fnv1a64Hex(all);
+}
+
+const pipeline::Model& LeaveToExit(std::unique_ptr<pipeline::Model> model) {
+  static auto* kept = new std::vector<std::unique_ptr<pipeline::Model>>();
+  kept->push_back(std::move(model));
+  return *kept->back();
 }
 
 std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, const pipeline::RunSpec& spec,

@@ -11,9 +11,9 @@ include(GNUInstallDirs)
 set_target_properties(kanesim PROPERTIES BUILD_WITH_INSTALL_RPATH ON INSTALL_RPATH_USE_LINK_PATH ON)
 install(TARGETS kanesim RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT cli)
 # The modules kanesim opens with dlopen when a command needs them (util/dynamic_module.h):
-# mesh import and glTF export (assimp), the viewer's HTTP server, MPI sweeps, the URDF reader. The installed
+# mesh import and glTF export (assimp), the viewer's HTTP server, MPI sweeps. The installed
 # binary looks for them in PREFIX/<libdir>/kanesim, before the build tree's copies.
-foreach(module kanesim_geometry_assimp kanesim_viz_http kanesim_batch_mpi kanesim_import_xml_module)
+foreach(module kanesim_geometry_assimp kanesim_viz_http kanesim_batch_mpi)
   if(TARGET ${module})
     install(TARGETS ${module} LIBRARY DESTINATION ${KANESIM_MODULE_INSTALL_DIR} COMPONENT cli)
   endif()

@@ -139,10 +139,32 @@ Status Nominals(Component* x, double nominals[], size_t n) {
   return kOK;
 }
 
+Status VariableDependencies(Component* x, const std::string& call, unsigned vr, std::vector<ListedKnown>* out) {
+  const std::vector<Variable>& vars = x->instance.Variables();
+  if (vr >= vars.size()) return x->Log(kError, call + ": value reference " + std::to_string(vr) + " is not a variable");
+  const bool initial = x->mode == Mode::kInstantiated || x->mode == Mode::kInitialization;
+  const VarKind kind = vars[vr].kind;
+  const bool unknown = kind == VarKind::Derivative || kind == VarKind::Output ||
+                       (initial ? kind == VarKind::CalculatedParameter : kind == VarKind::Indicator);
+  if (!unknown)
+    return x->Log(kError, call + ": '" + vars[vr].name + "' is not an unknown " +
+                              (initial ? "at initialization" : "after initialization") + " (ModelStructure)");
+  const StructureLists& s = x->instance.Structure(3);
+  // An event indicator's element has no list: it depends on every known.
+  *out = kind == VarKind::Indicator || ListOmitted(s, vr, initial) ? AllKnowns(s, initial) : ListedKnowns(s, vr, initial);
+  return kOK;
+}
+
 Status DoStep(Component* x, const std::string& call, double t, double h) {
-  const std::string error = x->instance.DoStep(t, h);
+  std::string why;
+  const std::string error = x->instance.DoStep(t, h, &why);
   // A failed step leaves the state where it was; the master may retry from a saved state.
-  return error.empty() ? kOK : x->Log(kError, call + ": " + error);
+  if (!error.empty()) return x->Log(kError, call + ": " + error);
+  // terminate(...) in a when clause ended the step at its event: fmi2Discard with
+  // fmi2Terminated true (FMI 2.0.4, 4.2.3); fmi3DoStep turns it into terminateSimulation.
+  if (x->instance.Terminated())
+    return x->Log(kDiscard, call + ": terminate at t = " + std::to_string(x->instance.Time()) + ": " + why);
+  return kOK;
 }
 
 }  // namespace kanesim::fmi

@@ -10,6 +10,7 @@
 #include <memory>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "fmi/instance.h"
 
@@ -30,6 +31,7 @@ inline const char* ModeName(Mode m) {
 struct Component {
   std::string name;
   bool co_simulation = false;
+  bool early_return_allowed = false;  // FMI 3.0 Co-Simulation: fmi3DoStep may return early
   bool logging = false;
   Mode mode = Mode::kInstantiated;
   Instance instance;
@@ -116,7 +118,13 @@ Status UpdateDiscrete(Component* x, const std::string& call, bool* changed, bool
 Status GetIndicators(Component* x, const std::string& call, double z[], size_t n);
 Status Nominals(Component* x, double nominals[], size_t n);
 
-// Co-Simulation: one communication step; a failed one leaves the state where it was.
+// FMI 3's variable dependencies (section 2.2.10): vr's ModelStructure list, the initial one
+// before initialization ends, the runtime one after; an error for a variable that is no
+// unknown then.
+Status VariableDependencies(Component* x, const std::string& call, unsigned vr, std::vector<ListedKnown>* out);
+
+// Co-Simulation: one communication step; a failed one leaves the state where it was; kDiscard
+// when a terminate(...) ended it at its event (Instance::Terminated).
 Status DoStep(Component* x, const std::string& call, double t, double h);
 
 }  // namespace kanesim::fmi

@@ -308,3 +308,43 @@ std::vector<UnknownDependencies> ModelDependencies(const rt::Program& p, const s
 }
 
 }  // namespace kanesim::fmi
+
+namespace kanesim::fmi {
+
+std::vector<ListedKnown> ListedKnowns(const StructureLists& s, size_t v, bool initial) {
+  const UnknownDependencies& d = s.deps[v];
+  std::vector<ListedKnown> out;
+  for (const Dependency& k : d.knowns) out.push_back({size_t(k.var), k.constant && !initial});
+  if (initial || (s.version == 3 && d.parameters))
+    for (size_t p = 0; p < s.vars.size(); ++p)
+      if (s.vars[p].kind == VarKind::Parameter) out.push_back({p, false});
+  if (s.version == 3 && d.time) out.push_back({s.vars.size(), false});  // `time`, listed last
+  std::sort(out.begin(), out.end(), [](const ListedKnown& a, const ListedKnown& b) { return a.vr < b.vr; });
+  return out;
+}
+
+// Runtime: states, inputs, FMI 3's parameters; initialization: inputs and every variable with
+// initial="exact" (the constants' too, FMI 3.0 section 2.4.8); FMI 3's time in both.
+std::vector<ListedKnown> AllKnowns(const StructureLists& s, bool initial) {
+  std::vector<ListedKnown> out;
+  for (size_t k = 0; k < s.vars.size(); ++k) {
+    const VarKind kind = s.vars[k].kind;
+    if (kind == VarKind::State || kind == VarKind::Input || (kind == VarKind::Parameter && (initial || s.version == 3)) ||
+        (kind == VarKind::Fixed && initial))
+      out.push_back({k, false});
+  }
+  if (s.version == 3) out.push_back({s.vars.size(), false});
+  return out;
+}
+
+bool ListOmitted(const StructureLists& s, size_t v, bool initial) {
+  const std::vector<ListedKnown> k = ListedKnowns(s, v, initial);
+  if (std::any_of(k.begin(), k.end(), [](const ListedKnown& e) { return e.constant; })) return false;
+  const size_t time_vr = s.vars.size();
+  const auto without_time = [&](const std::vector<ListedKnown>& l) {
+    return size_t(std::count_if(l.begin(), l.end(), [&](const ListedKnown& e) { return s.version == 2 || e.vr != time_vr; }));
+  };
+  return without_time(k) == without_time(AllKnowns(s, initial));
+}
+
+}  // namespace kanesim::fmi

@@ -20,6 +20,7 @@
 // Prescribed motions q(t) read time and whatever inputs their expressions read.
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "fmi/variables.h"
@@ -41,5 +42,29 @@ struct UnknownDependencies {
 // Per variable of `vars` (ListVariables of `p`'s model); filled for derivatives and outputs,
 // empty for the other kinds.
 std::vector<UnknownDependencies> ModelDependencies(const rt::Program& p, const std::vector<Variable>& vars);
+
+// One known of a ModelStructure list: its value reference (vars.size() is FMI 3's `time`)
+// and whether it enters with a constant factor (dependenciesKind "constant").
+struct ListedKnown {
+  size_t vr = 0;
+  bool constant = false;
+};
+
+// The knowns of the unknown vars[v] as ModelStructure lists them (`kanesim export` writes
+// them, fmi3GetVariableDependencies returns them: one source), ascending by value reference.
+// Runtime (initial = false): what it reads, in FMI 3 with time and the tunable parameters,
+// which FMI 3 counts among the knowns. Initialization: every tunable parameter besides (the
+// start state may be computed from any); only "dependent" there.
+struct StructureLists {
+  const std::vector<Variable>& vars;
+  std::vector<UnknownDependencies> deps;  // ModelDependencies
+  int version = 2;                        // 2 or 3
+};
+std::vector<ListedKnown> ListedKnowns(const StructureLists& s, size_t v, bool initial);
+// Every known of a section (the standard's meaning of an unknown without a list).
+std::vector<ListedKnown> AllKnowns(const StructureLists& s, bool initial);
+// Whether the description leaves out v's list: it would name every known (FMI 3's time, a
+// spurious dependency then, aside) without a constant factor; then v depends on AllKnowns.
+bool ListOmitted(const StructureLists& s, size_t v, bool initial);
 
 }  // namespace kanesim::fmi

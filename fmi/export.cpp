@@ -9,7 +9,6 @@
 
 #include "fmi/fmi.h"
 #include "fmi/instance.h"
-#include "runtime/program/program.h"  // Program::whens
 
 #ifndef KANESIM_FMU_BUILD_DIR
 #define KANESIM_FMU_BUILD_DIR ""
@@ -75,17 +74,6 @@ class Zip {
   zipFile zf_;
 };
 
-// Why the stepping core cannot run the program ("" when it can): its events that are not
-// end stops or plane contacts (sim/simulator.h).
-std::string CoSimulationRefusal(const rt::Program& program) {
-  if (!program.whens.empty()) return "the " + program.whens.front().name + " clause is an event";
-  std::string exact;
-  for (const rt::FrictionJoint& f : rt::FrictionJoints(program))
-    if (f.exact) exact += (exact.empty() ? "'" : ", '") + f.joint + "'";
-  if (!exact.empty()) return "the exact stick-slip friction of " + exact + " is events";
-  return "";
-}
-
 }  // namespace
 
 std::string FmuBinariesDir(std::string* error) {
@@ -109,13 +97,6 @@ std::string FmuBinariesDir(std::string* error) {
 
 std::string ExportFmu(const pipeline::Model& model, const std::string& model_text, const ExportOptions& options) {
   if (options.version != 2 && options.version != 3) return "FMI " + std::to_string(options.version) + " does not exist";
-  // Model Exchange exposes every event source as event indicators (sim::HybridOde);
-  // Co-Simulation's stepping core (sim::Simulator) handles end stops and plane contacts only so far.
-  if (options.co_simulation) {
-    const std::string why = CoSimulationRefusal(*model.program);
-    if (!why.empty())
-      return why + ", which Co-Simulation does not have yet: export with --kind me (docs/fmi.md)";
-  }
   std::string error;
   const std::string bin = options.binaries_dir.empty() ? FmuBinariesDir(&error) : options.binaries_dir;
   if (bin.empty()) return error;

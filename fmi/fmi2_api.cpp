@@ -276,7 +276,7 @@ FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKin
 FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value) {
   return Fmi2Guarded(c, "fmi2GetBooleanStatus", kf::kRunning, [&](Component* x) {
     if (kind != fmi2Terminated || !value) return x->Log(kf::kDiscard, "fmi2GetBooleanStatus: only terminated");
-    *value = 0;
+    *value = x->instance.Terminated();
     return kf::kOK;
   });
 }

@@ -61,14 +61,16 @@ FMI3_EXPORT fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3Strin
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources,
                                                      fmi3Boolean, fmi3Boolean logging, fmi3Boolean event_mode_used,
-                                                     fmi3Boolean, const fmi3ValueReference[], size_t,
+                                                     fmi3Boolean early_return_allowed, const fmi3ValueReference[], size_t,
                                                      fmi3InstanceEnvironment env, fmi3LogMessageCallback log,
                                                      fmi3IntermediateUpdateCallback) {
   if (event_mode_used) {
     if (log) log(env, fmi3Error, "logStatusError", "this FMU has no event mode in Co-Simulation (hasEventMode=false)");
     return nullptr;
   }
-  return Instantiate(name, token, resources, true, logging, env, log);
+  fmi3Instance c = Instantiate(name, token, resources, true, logging, env, log);
+  if (c) static_cast<Component*>(c)->early_return_allowed = early_return_allowed;
+  return c;
 }
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateScheduledExecution(fmi3String, fmi3String, fmi3String, fmi3Boolean,
@@ -217,12 +219,38 @@ FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte by
   FMI3_EXPORT fmi3Status Name Params {                                                          \
     return Fmi3Guarded(c, #Name, kf::kAnyMode, [&](Component* x) { return x->Log(kf::kError, #Name ": " what); }); \
   }
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetNumberOfVariableDependencies, (fmi3Instance c, fmi3ValueReference, size_t*),
-                          "the dependencies are in modelDescription.xml")
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetVariableDependencies,
-                          (fmi3Instance c, fmi3ValueReference, size_t[], fmi3ValueReference[], size_t[],
-                           fmi3DependencyKind[], size_t),
-                          "the dependencies are in modelDescription.xml")
+// ModelStructure's lists (kf::VariableDependencies); the variables are scalars: element index 0.
+FMI3_EXPORT fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance c, fmi3ValueReference vr, size_t* n) {
+  return Fmi3Guarded(c, "fmi3GetNumberOfVariableDependencies", kf::kAnyMode, [&](Component* x) {
+    if (!n) return x->Log(kf::kError, "fmi3GetNumberOfVariableDependencies: no place given");
+    std::vector<kf::ListedKnown> known;
+    const kf::Status s = kf::VariableDependencies(x, "fmi3GetNumberOfVariableDependencies", vr, &known);
+    if (s == kf::kOK) *n = known.size();
+    return s;
+  });
+}
+
+FMI3_EXPORT fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueReference dependent,
+                                                   size_t element_of_dependent[], fmi3ValueReference independents[],
+                                                   size_t element_of_independents[], fmi3DependencyKind kinds[],
+                                                   size_t n) {
+  return Fmi3Guarded(c, "fmi3GetVariableDependencies", kf::kAnyMode, [&](Component* x) {
+    std::vector<kf::ListedKnown> known;
+    if (kf::Status s = kf::VariableDependencies(x, "fmi3GetVariableDependencies", dependent, &known); s != kf::kOK)
+      return s;
+    if (n != known.size())
+      return x->Log(kf::kError, "fmi3GetVariableDependencies: '" + x->instance.Variables()[dependent].name + "' has " +
+                                    std::to_string(known.size()) + " dependencies, not " + std::to_string(n));
+    if (n > 0 && (!element_of_dependent || !independents || !element_of_independents || !kinds))
+      return x->Log(kf::kError, "fmi3GetVariableDependencies: no place given");
+    for (size_t i = 0; i < n; ++i) {
+      element_of_dependent[i] = element_of_independents[i] = 0;  // the whole (scalar) variable
+      independents[i] = fmi3ValueReference(known[i].vr);
+      kinds[i] = known[i].constant ? fmi3Constant : fmi3Dependent;
+    }
+    return kf::kOK;
+  });
+}
 // Scalar variables only: one seed per known, one sensitivity per unknown.
 FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                                     size_t n_unknowns, const fmi3ValueReference knowns[],
@@ -365,10 +393,17 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, 
                                   fmi3Boolean* event_needed, fmi3Boolean* terminate, fmi3Boolean* early_return,
                                   fmi3Float64* last_time) {
   return Fmi3Guarded(c, "fmi3DoStep", {Mode::kStep}, [&](Component* x) {
-    const kf::Status s = kf::DoStep(x, "fmi3DoStep", t, h);
+    kf::Status s = kf::DoStep(x, "fmi3DoStep", t, h);
     for (fmi3Boolean* b : {event_needed, terminate, early_return})
       if (b) *b = false;
     if (last_time) *last_time = x->instance.Time();
+    // terminate(...) in a when clause: terminateSimulation, lastSuccessfulTime the event's,
+    // earlyReturn only where the master allowed it (FMI 3.0 section 4.2.1).
+    if (s == kf::kDiscard && x->instance.Terminated()) {
+      if (terminate) *terminate = true;
+      if (early_return) *early_return = x->early_return_allowed && x->instance.Time() < t + h;
+      s = kf::kOK;
+    }
     return s;
   });
 }

@@ -74,6 +74,12 @@ std::string Instance::Load(const std::string& dir, const std::string& guid) {
   return Reset();
 }
 
+const StructureLists& Instance::Structure(int version) {
+  if (!structure_ || structure_->version != version)
+    structure_ = std::make_unique<StructureLists>(StructureLists{vars_, ModelDependencies(*model_->program, vars_), version});
+  return *structure_;
+}
+
 std::string Instance::Reset() {
   program_ = model_->program;
   params_ = program_->param_values;
@@ -293,8 +299,12 @@ std::string Instance::Evaluate() {
   hybrid_->SetInputs(inputs_);
   if (n_ > 0 && hybrid_->Derivatives(t_, y_.data(), ydot_.data()) != 0)
     return "at t = " + Number(t_) + ": " + hybrid_->FailureCause();
-  if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y_.data(), out_.data()) != 0)
-    return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  if (outputs_plan_) {
+    std::vector<double> y = y_;
+    hybrid_->ForOutputs(*ws_, y.data());  // the mode's friction laws, resting joints on their stops: a run's rows
+    if (rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), out_.data()) != 0)
+      return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
+  }
   stale_ = false;
   return "";
 }
@@ -353,33 +363,30 @@ std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_u
   return "";
 }
 
+// The stepping core from (t_, y_, inputs_): a start on a contact or with exact friction is
+// its first event, as a run starts (docs/fmi.md "Co-Simulation").
 std::string Instance::StartStepper() {
   sim::SimulatorOptions options;
   options.start_time = t_;
   options.rtol = options.atol = rtol_;
   options.integrator = integrator_;
+  options.initial_state = y_;
+  options.initial_inputs = inputs_;
   std::string error;
   stepper_ = sim::Simulator::Make(program_, options, &error);
-  if (!stepper_) return error;
-  sim::SimulatorState state = stepper_->GetState();
-  state.t = t_;
-  state.y = y_;
-  state.inputs = inputs_;
-  if (!stepper_->SetState(state, &error)) {
-    stepper_.reset();
-    return error;
-  }
-  return "";
+  return stepper_ ? "" : error;
 }
 
-std::string Instance::DoStep(double t, double h) {
+std::string Instance::DoStep(double t, double h, std::string* terminate_message) {
   if (!std::isfinite(t) || !std::isfinite(h) || h <= 0)
     return "a step needs a finite time and a positive size (got t = " + Number(t) + ", h = " + Number(h) + ")";
   if (std::abs(t - t_) > 1e-9 * std::max(1.0, std::abs(t_)))
     return "the step starts at t = " + Number(t) + " but the FMU is at t = " + Number(t_);
+  std::string error;
+  if (stepper_ && stepper_->Terminated(&error))
+    return "the model terminated at t = " + Number(t_) + " (" + error + "); the master ends with fmi2Terminate / fmi3Terminate";
   if (!stepper_)
     if (std::string e = StartStepper(); !e.empty()) return e;
-  std::string error;
   for (size_t i = 0; i < inputs_.size(); ++i)
     if (!stepper_->SetInput(int(i), inputs_[i], &error)) return error;
   const sim::StepResult r = stepper_->AdvanceTo(t_ + h);
@@ -389,8 +396,15 @@ std::string Instance::DoStep(double t, double h) {
   }
   y_ = stepper_->State();
   t_ = stepper_->Time();
+  hybrid_->SetModes(stepper_->Modes());  // the outputs see the step's modes (Evaluate)
   stale_ = true;
+  if (r.terminated) *terminate_message = r.cause;
   return Evaluate();
+}
+
+bool Instance::Terminated() const {
+  std::string why;
+  return stepper_ && stepper_->Terminated(&why);
 }
 
 Instance::Snapshot Instance::Save() {
@@ -399,7 +413,7 @@ Instance::Snapshot Instance::Save() {
     // GetState restarts the solver there; SetState (Restore) restarts it the same way.
     const sim::SimulatorState state = stepper_->GetState();
     s.next_step = state.next_step;
-    s.resting = state.resting;
+    s.resting = state.modes;
   }
   return s;
 }
@@ -430,7 +444,8 @@ std::string Instance::Restore(const Snapshot& s) {
     state.y = y_;
     state.inputs = inputs_;
     state.next_step = s.next_step;
-    if (!s.resting.empty()) state.resting = s.resting;
+    if (!s.resting.empty()) state.modes = s.resting;
+    state.terminated = false;  // a state saved after a terminate steps on (the master's choice)
     if (!stepper_->SetState(state, &error)) return error;
   }
   return "";

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fmi/dependencies.h"
 #include "fmi/variables.h"
 #include "pipeline/pipeline.h"
 #include "sim/sim.h"
@@ -35,6 +36,8 @@ class Instance {
   std::string Load(const std::string& resources_dir, const std::string& guid);
 
   const std::vector<Variable>& Variables() const { return vars_; }
+  // ModelStructure's lists in FMI `version` (what modelDescription.xml says), made at the first call.
+  const StructureLists& Structure(int version);
   int NumStates() const { return n_; }
   double Time() const { return t_; }
 
@@ -69,9 +72,12 @@ class Instance {
                                     size_t n_knowns, const double* seed, double* out);
 
   // Co-Simulation: integrates from the current time to t + h with kanesim's stepping core
-  // (sim::Simulator: one integrator across the steps, its history carried), the inputs held
-  // at their values over the step.
-  std::string DoStep(double t, double h);
+  // (sim::Simulator: one integrator across the steps, its history carried, the run's events
+  // inside the step), the inputs held at their values over the step. A terminate(...) in a
+  // when clause ends the step at its event: Time() is there, *terminate_message set, and
+  // Terminated() holds until Reset or Restore.
+  std::string DoStep(double t, double h, std::string* terminate_message);
+  bool Terminated() const;
 
   // The FMU state: everything that decides the continuation (the stepping core's step
   // size and end-stop sides too, once Co-Simulation has stepped).
@@ -80,7 +86,7 @@ class Instance {
     std::vector<double> y, params, inputs;
     std::vector<char> state_set;
     double next_step = 0.0;
-    std::vector<double> resting;  // sim::SimulatorState::resting
+    std::vector<double> resting;  // sim::SimulatorState::modes (resting stops, stuck joints)
     std::vector<double> modes, z_ref;  // Model Exchange: sim::HybridOde::Modes, z_ref_
   };
   Snapshot Save();
@@ -106,6 +112,7 @@ class Instance {
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> ws_{nullptr, nullptr};
   std::shared_ptr<const rt::SignalPlan> outputs_plan_;
   std::vector<Variable> vars_;
+  std::unique_ptr<StructureLists> structure_;
   FmuSettings settings_;
   int n_ = 0;                      // states
   double t_ = 0.0, rtol_ = 0.0;

@@ -70,53 +70,22 @@ std::string TypeElement(const Variable& v, const Attributes& a, const std::vecto
   return e + "/>";
 }
 
-// The knowns of the unknown vars[v] in one section of ModelStructure, as (FMI 2: 1-based
-// index, FMI 3: value reference; "constant" factor) ascending. Runtime: what it reads
-// (ModelDependencies), in FMI 3 with time and the tunable parameters, which FMI 3 counts
-// among the knowns. Initialization: the start state the FMU starts from may be computed from
-// any parameter, so every tunable parameter is listed; only "dependent" there.
-struct Structure {
-  const std::vector<Variable>& vars;
-  std::vector<UnknownDependencies> deps;
-  int version;
-};
-using Knowns = std::vector<std::pair<size_t, bool>>;
-Knowns KnownsOf(const Structure& s, size_t v, bool initial) {
-  const UnknownDependencies& d = s.deps[v];
-  const size_t base = s.version == 2 ? 1 : 0;
-  Knowns out;
-  for (const Dependency& k : d.knowns) out.emplace_back(size_t(k.var) + base, k.constant && !initial);
-  if (initial || (s.version == 3 && d.parameters))
-    for (size_t p = 0; p < s.vars.size(); ++p)
-      if (s.vars[p].kind == VarKind::Parameter) out.emplace_back(p + base, false);
-  if (s.version == 3 && d.time) out.emplace_back(s.vars.size(), false);  // `time`, listed last
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
-// How many knowns a section has: states, inputs; in FMI 3 and at initialization the tunable
-// parameters; in FMI 3 time. A list of them all is what no list means.
-size_t AllKnowns(const Structure& s, bool initial) {
-  size_t n = 0;
-  for (const Variable& v : s.vars)
-    n += v.kind == VarKind::State || v.kind == VarKind::Input ||
-         (v.kind == VarKind::Parameter && (initial || s.version == 3));
-  return n + (s.version == 3 ? 1 : 0);
-}
-
-// ` dependencies="..." dependenciesKind="..."`, or nothing where the unknown depends on every
-// known without structure (the standard's meaning of no list; it keeps a large model's
-// description small).
+// ` dependencies="..."` (FMI 2: 1-based indices, FMI 3: value references; ListedKnowns)
+// with ` dependenciesKind="..."` where some known enters with a constant factor (without it
+// every one is "dependent", the standard's default), or nothing where the list names every
+// known (ListOmitted): a large model's description stays small.
+using Structure = StructureLists;
 std::string DependencyAttributes(const Structure& s, size_t v, bool initial) {
-  const Knowns k = KnownsOf(s, v, initial);
-  const bool structured = std::any_of(k.begin(), k.end(), [](const auto& e) { return e.second; });
-  if (k.size() == AllKnowns(s, initial) && !structured) return "";
+  if (ListOmitted(s, v, initial)) return "";
+  const std::vector<ListedKnown> k = ListedKnowns(s, v, initial);
+  const bool structured = std::any_of(k.begin(), k.end(), [](const ListedKnown& e) { return e.constant; });
+  const size_t base = s.version == 2 ? 1 : 0;
   std::string deps, kinds;
-  for (const auto& [ref, constant] : k) {
-    deps += (deps.empty() ? "" : " ") + std::to_string(ref);
-    kinds += (kinds.empty() ? "" : " ") + std::string(constant ? "constant" : "dependent");
+  for (const ListedKnown& e : k) {
+    deps += (deps.empty() ? "" : " ") + std::to_string(e.vr + base);
+    kinds += (kinds.empty() ? "" : " ") + std::string(e.constant ? "constant" : "dependent");
   }
-  return " dependencies=\"" + deps + "\" dependenciesKind=\"" + kinds + "\"";
+  return " dependencies=\"" + deps + "\"" + (structured ? " dependenciesKind=\"" + kinds + "\"" : "");
 }
 
 void Unknowns(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
@@ -236,7 +205,8 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   const std::vector<Variable> vars = ListVariables(model);
   const std::string id = Identifier(mech.model_name);
   const std::string caps =
-      " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\"";
+      " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\""
+      " providesPerElementDependencies=\"true\"";  // fmi3GetVariableDependencies: every variable is a scalar
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
     << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << Escape(mech.model_name) << "\" instantiationToken=\""

@@ -1,8 +1,8 @@
-// Located messages about a URDF file, recorded while it is read (urdf_read.cpp, also inside
-// the reader module: import/xml_module.h) and rendered afterwards by the language's renderer
-// (lang/diagnostics.h) with the codes of the one table (flat/diagnostic_codes.h, U4xx):
+// Located messages about a URDF file, recorded while it is read (urdf_read.cpp) and rendered
+// afterwards by the language's renderer (lang/diagnostics.h) with the codes of the one table
+// (flat/diagnostic_codes.h, U4xx):
 // "file:line:col: error[U403]: message", the line with a caret under the element or
-// attribute, a hint. tinyxml2 gives lines; the column is where the named element or
+// attribute, a hint. expat gives lines; the column is where the named element or
 // attribute (the needle) starts on that line. Internal to import/.
 #pragma once
 

@@ -1,7 +1,7 @@
 // The layer import/ (kanesim_import): robots described in URDF become readable `.mech` text
 // (docs/import.md). `kanesim import` writes the text; `kanesim run robot.urdf` and
 // `kanesim.load("robot.urdf")` load the same text in memory (pipeline/). The XML is read by
-// tinyxml2; nothing else of kanesim is used, so the layer sits beside the language.
+// expat (import/xml_doc.h); nothing else of kanesim is used, so the layer sits beside the language.
 //
 //   UrdfToMech     robot.urdf text -> the model's .mech text, notes and located errors
 //

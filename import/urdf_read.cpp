@@ -1,7 +1,5 @@
-// URDF XML -> Robot (urdf_model.h). tinyxml2 parses; this file reads the elements the
-// importer uses (http://wiki.ros.org/urdf/XML) and locates every mistake at its line.
-#include <tinyxml2.h>
-
+// URDF XML -> Robot (urdf_model.h). expat parses (import/xml_doc.h); this file reads the
+// elements the importer uses (http://wiki.ros.org/urdf/XML) and locates every mistake at its line.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -9,29 +7,13 @@
 #include <string>
 
 #include "import/urdf_model.h"
+#include "import/xml_doc.h"
 
 namespace kanesim::import {
 
 namespace {
 
-using tinyxml2::XMLElement;
-
-// What a tinyxml2 error means, in words.
-std::string XmlErrorText(tinyxml2::XMLError e) {
-  switch (e) {
-    case tinyxml2::XML_ERROR_PARSING_ELEMENT: return "an element is malformed or not closed";
-    case tinyxml2::XML_ERROR_PARSING_ATTRIBUTE: return "an attribute is malformed (name=\"value\")";
-    case tinyxml2::XML_ERROR_PARSING_TEXT: return "text cannot be read here";
-    case tinyxml2::XML_ERROR_PARSING_CDATA: return "a CDATA section is not closed";
-    case tinyxml2::XML_ERROR_PARSING_COMMENT: return "a comment is not closed";
-    case tinyxml2::XML_ERROR_PARSING_DECLARATION: return "the XML declaration is malformed";
-    case tinyxml2::XML_ERROR_PARSING_UNKNOWN: return "a <! ...> declaration is malformed";
-    case tinyxml2::XML_ERROR_EMPTY_DOCUMENT: return "the file holds no XML element";
-    case tinyxml2::XML_ERROR_MISMATCHED_ELEMENT: return "a closing tag does not match the element it closes";
-    case tinyxml2::XML_ELEMENT_DEPTH_EXCEEDED: return "elements are nested too deep";
-    default: return std::string("the XML cannot be parsed (") + tinyxml2::XMLDocument::ErrorIDToName(e) + ")";
-  }
-}
+using XMLElement = xml::Element;
 
 class Reader {
  public:
@@ -303,20 +285,22 @@ int EntityLine(std::string_view text) {
 }  // namespace
 
 bool ReadUrdf(std::string_view text, Robot* robot, Diags& diags) {
-  // tinyxml2 expands no declared entity; a file that declares some expects it to (the
-  // "billion laughs" is one), so it is refused rather than read differently.
-  if (int line = EntityLine(text)) {
-    diags.Error(DiagCode::UrdfEntities, line, "<!ENTITY", "the file declares XML entities, which are not expanded",
-                "write the values out; URDF files need no DTD");
+  // A file that declares entities expects them expanded (the "billion laughs" is one), so it
+  // is refused rather than read differently; the parser refuses any the text search misses.
+  xml::Document doc;
+  const int entity_line = EntityLine(text);
+  const bool parsed = !entity_line && doc.Parse(text);
+  if (entity_line || doc.DeclaresEntities()) {
+    diags.Error(DiagCode::UrdfEntities, entity_line ? entity_line : std::max(1, doc.ErrorLine()), "<!ENTITY",
+                "the file declares XML entities, which are not expanded", "write the values out; URDF files need no DTD");
     return false;
   }
-  tinyxml2::XMLDocument doc(true, tinyxml2::PRESERVE_WHITESPACE);
-  if (doc.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
-    diags.Error(DiagCode::UrdfBadXml, std::max(1, doc.ErrorLineNum()), "", XmlErrorText(doc.ErrorID()),
+  if (!parsed) {
+    diags.Error(DiagCode::UrdfBadXml, std::max(1, doc.ErrorLine()), doc.ErrorNeedle(), doc.ErrorText(),
                 "check the element on this line and the lines just before it");
     return false;
   }
-  const XMLElement* root = doc.RootElement();
+  const XMLElement* root = doc.Root();
   if (!root || std::string_view(root->Name()) != "robot") {
     diags.Error(DiagCode::UrdfNotUrdf, root ? root->GetLineNum() : 1, root ? "<" : "",
                 std::string("the root element is <") + (root ? root->Name() : "") + ">, not <robot>",

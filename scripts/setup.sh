@@ -12,7 +12,7 @@ case "$set_name" in build | test | ci) ;; *) echo "usage: scripts/setup.sh [buil
 build_pkgs=(g++ cmake ninja-build pkg-config ccache
             libeigen3-dev libsuitesparse-dev libassimp-dev
             libcli11-dev libfmt-dev libtomlplusplus-dev
-            libtinyxml2-dev             # the URDF importer (import/)
+            libexpat1-dev               # the URDF importer's XML parser, static (import/)
             libminizip-dev              # zipping FMUs (kanesim export, fmi/)
             libcpp-httplib-dev          # the viewer's HTTP server (viz/)
             libjs-three libjs-dygraphs) # the viewer page's libraries, read at run time

@@ -287,6 +287,30 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   return Impact(ws, t, y, i, v, true);
 }
 
+int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::string& clause,
+                        const std::vector<int>& states, const std::function<int(const std::vector<int>&)>& jump) {
+  const std::vector<char> before = RestingSet();
+  for (Side& s : sides_) {
+    if (!s.resting || s.stop < 0) continue;
+    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+    if (std::find_if(states.begin(), states.end(), [&](int k) { return k == st.q || k == nq_ + st.u; }) != states.end())
+      s.resting = false, s.accumulates_at = 0.0;  // the reinit decides where it is and how it moves
+  }
+  if (int s = jump(RestingSpeeds()); s != 0) return s;
+  for (const Side& s : sides_) {  // set past its stop: no impact law says what follows
+    double gap = 0.0, c = 0.0;
+    if (int r = Row(ws, t, y, s, &gap, J_.data(), &c); r != 0) return r;
+    if (-gap > kPastRows * (atol_ + rtol_ * Scale(s))) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf, "%s sets %s past %s by %.3g (a reinit may put a joint on its stop, not beyond)",
+                    clause.c_str(), Who(s).c_str(), Where(s).c_str(), -gap);
+      error_ = buf;
+      return -1;
+    }
+  }
+  return Settle(ws, t, y, before);
+}
+
 int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double v, bool settle) {
   Side& side = sides_[static_cast<size_t>(i)];
   const rt::EndStop* st = side.stop >= 0 ? &stops_[static_cast<size_t>(side.stop)] : nullptr;

@@ -7,6 +7,7 @@
 // their accumulation time.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,6 +42,14 @@ class EndStopEvents {
   // Event function i crossed zero at (t, y): an impact (or the contact comes to rest), a
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
+  // A when clause's jump at (t, y) (sim/when_events.h, docs/events.md "Statements"): the
+  // joints whose coordinate or speed it sets (`states`, indices into y) leave their rest;
+  // `jump(held)` moves y with the other resting joints' speeds (held) kept at zero; then the
+  // resting set is made consistent (Settle): a released joint moving into its stop strikes it
+  // (its restitution), one set at rest on its stop rests again, a side the jump made pull leaves.
+  // `clause` names the clause in the error of a jump that sets a joint past its stop.
+  int Jump(rt::Workspace& ws, double t, double* y, const std::string& clause, const std::vector<int>& states,
+           const std::function<int(const std::vector<int>&)>& jump);
   const std::vector<EventRecord>& Log() const { return log_; }
   // Why the last impulse or reaction had no solution ("" after one that had).
   const std::string& Error() const { return error_; }

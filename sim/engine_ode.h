@@ -105,8 +105,19 @@ class EngineOde final : public OdeSystem {
       s = stick_ ? stick_->Event(ws_, t, y, i) : stops_->Event(ws_, t, y, i);
       events_.insert(events_.end(), log.begin() + static_cast<long>(logged), log.end());
     } else {
-      s = whens_->Event(ws_, t, y, i - NumStops(), stops_ ? stops_->RestingSpeeds() : std::vector<int>{});
-      events_.push_back(whens_->Last());
+      const int w = i - NumStops();
+      if (!stops_) {
+        s = whens_->Event(ws_, t, y, w, {});
+        events_.push_back(whens_->Last());
+      } else {  // the joints it sets leave their stops' rest, which the jump may restore (EndStopEvents::Jump)
+        const size_t logged = stops_->Log().size();
+        s = stops_->Jump(ws_, t, y, whens_->Name(w), whens_->States(w), [&](const std::vector<int>& held) {
+          const int r = whens_->Event(ws_, t, y, w, held);
+          events_.push_back(whens_->Last());
+          return r;
+        });
+        events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+      }
     }
     if (s == 0 && first < events_.size()) AddChanges(state_names_, before.data(), y, &events_[first], &events_.back());
     return s;

@@ -39,15 +39,18 @@ struct HybridOde::Impl {
   std::unique_ptr<WhenEvents> whens;  // remade by SetModes (a terminate is final in it)
   detail::EngineOde ode;
   std::vector<double> g;  // every event function, the graze guards too (scratch)
+  std::vector<EventRecord> start_events;  // Start's, with their jumps
 };
 
 HybridOde::HybridOde(std::shared_ptr<const rt::Program> program, double rtol, double atol)
     : impl_(std::make_unique<Impl>(std::move(program), rtol, atol)) {}
 HybridOde::~HybridOde() = default;
 
-// The graze guards (EngineOde::Paired) stay inside: they serve a solver that can look back
-// on its last step, which a master's integrator does not offer.
-int HybridOde::NumIndicators() const { return impl_->ode.NumStops() + impl_->whens->Count(); }
+// Every event function, the graze guards last (EngineOde::Paired: minus an end stop's or
+// plane contact's gap rate, crossing where the gap has a minimum). A master whose root
+// finding brackets the guard's crossing also brackets a gap that dipped below zero and back
+// inside its step, which the gap's signs at the step's ends do not show.
+int HybridOde::NumIndicators() const { return impl_->ode.NumEvents(); }
 
 std::vector<std::string> HybridOde::IndicatorNames() const {
   const Impl& m = *impl_;
@@ -61,6 +64,8 @@ std::vector<std::string> HybridOde::IndicatorNames() const {
   }
   for (const rt::WhenModel& w : m.program->whens)
     for (size_t k = 0; k < w.indicators.size(); ++k) names.push_back("condition of " + w.name);
+  if (m.stops.Active())
+    for (int i = 0; i < m.stops.Count(); ++i) names.push_back("graze guard of " + m.stops.Describe(i));
   return names;
 }
 
@@ -69,6 +74,18 @@ void HybridOde::SetInputs(const std::vector<double>& values) {
 }
 
 std::string HybridOde::Start(double t0, double* y0) {
+  Impl& m = *impl_;
+  const std::vector<double> given(y0, y0 + rt::StateSize(*m.program));
+  if (std::string why = StartModes(t0, y0); !why.empty()) return why;
+  // The start's events with what they changed, as a run logs them (sim/simulate.cpp).
+  m.start_events.assign(m.stops.Log().begin(), m.stops.Log().end());
+  m.start_events.insert(m.start_events.end(), m.stick.Log().begin(), m.stick.Log().end());
+  if (!m.start_events.empty())
+    AddChanges(rt::StateNames(*m.program), given.data(), y0, &m.start_events.front(), &m.start_events.back());
+  return "";
+}
+
+std::string HybridOde::StartModes(double t0, double* y0) {
   Impl& m = *impl_;
   if (m.stops.Active()) {
     if (std::string why = m.stops.CheckStart(*m.ws, t0, y0); !why.empty()) return why;
@@ -87,13 +104,22 @@ int HybridOde::Indicators(double t, const double* y, double* z) {
   if (m.g.empty()) return 0;
   const int s = m.ode.EventFunctions(t, y, m.g.data());
   if (s != 0) return s;
-  std::copy(m.g.begin(), m.g.begin() + NumIndicators(), z);
+  std::copy(m.g.begin(), m.g.end(), z);
   return 0;
 }
 
 int HybridOde::Event(double t, double* y, int i) {
+  Impl& m = *impl_;
   if (i < 0 || i >= NumIndicators()) return 0;
-  return impl_->ode.Event(t, y, i);
+  if (const int p = m.ode.Paired(i); p >= 0) {
+    // A graze guard: the gap's minimum. Above the contact nothing happens; at or below it the
+    // gap's own event (an impact), where the run's solvers also place it when they cannot
+    // bracket the gap's crossing before the minimum.
+    if (const int s = m.ode.EventFunctions(t, y, m.g.data()); s != 0) return s;
+    if (m.g[static_cast<size_t>(p)] > 0.0) return 0;
+    i = p;
+  }
+  return m.ode.Event(t, y, i);
 }
 
 bool HybridOde::Terminated(std::string* why) const { return impl_->ode.Terminated(why); }
@@ -125,6 +151,17 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   m.whens = std::make_unique<WhenEvents>(*m.program);  // no terminate fired in the restored state
   if (m.whens->Active()) m.ode.SetWhens(m.whens.get());
   return true;
+}
+
+OdeSystem& HybridOde::System() { return impl_->ode; }
+
+std::vector<EventRecord> HybridOde::StartEvents() const { return impl_->start_events; }
+
+const std::vector<EventRecord>& HybridOde::Events() const { return impl_->ode.Events(); }
+
+void HybridOde::ForOutputs(rt::Workspace& ws, double* y) const {
+  if (impl_->stick.Active()) impl_->stick.Sync(ws);
+  if (impl_->stops.AnyResting()) impl_->stops.SnapResting(y);
 }
 
 }  // namespace kanesim::sim

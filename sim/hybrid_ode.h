@@ -1,9 +1,10 @@
-// The model's equations of motion with its events, for an integrator outside kanesim: an
-// FMU's Model Exchange master (docs/fmi.md "Events"). The same right-hand side, event
-// functions and event handling a run uses (sim/engine_ode.h over sim/end_stops.h,
-// sim/stick_slip.h, sim/lift_off.h, sim/when_events.h), with the integrator left out: the
-// master integrates y' = Derivatives(t, y), watches Indicators(t, y) (an event is one of
-// them crossing zero downwards, as in a run) and calls Event at the crossing.
+// The model's equations of motion with its events, for an integrator outside kanesim (an
+// FMU's Model Exchange master, docs/fmi.md "Events") and for the stepping core
+// (sim/simulator.h, through System()). The same right-hand side, event functions and event
+// handling a run uses (sim/engine_ode.h over sim/end_stops.h, sim/stick_slip.h,
+// sim/lift_off.h, sim/when_events.h), with the integrator left out: the master integrates
+// y' = Derivatives(t, y), watches Indicators(t, y) (an event is one of them crossing zero
+// downwards, as in a run) and calls Event at the crossing.
 #pragma once
 
 #include <memory>
@@ -11,6 +12,8 @@
 #include <vector>
 
 #include "runtime/runtime.h"
+#include "sim/integrator.h"
+#include "sim/simulate.h"
 
 namespace kanesim::sim {
 
@@ -23,7 +26,9 @@ class HybridOde {
   HybridOde& operator=(const HybridOde&) = delete;
 
   // The event functions' number and, per function, what it watches ("joint 'hinge' at
-  // q_min", "when clause when (m.mech:9)").
+  // q_min", "condition of when (m.mech:9)", last "graze guard of joint 'hinge' at q_min":
+  // minus the gap's rate, crossing at the gap's minimum; Event there is the gap's impact
+  // where the gap is not positive, else nothing).
   int NumIndicators() const;
   std::vector<std::string> IndicatorNames() const;
 
@@ -52,7 +57,18 @@ class HybridOde {
   std::vector<double> Modes() const;
   bool SetModes(const std::vector<double>& modes);
 
+  // For kanesim's own solvers (sim::Simulator): the system with every event function (the
+  // indicators, then the graze guards, OdeSystem::Paired) and the handling above.
+  OdeSystem& System();
+  // The events handled: the start's, then every Event's, in time order, with their jumps.
+  std::vector<EventRecord> StartEvents() const;
+  const std::vector<EventRecord>& Events() const;
+  // What an output row sees at (t, y), as the run's rows: the mode's friction laws in ws, the
+  // joints resting on their stops exactly there (y may move by the interpolant's round-off).
+  void ForOutputs(rt::Workspace& ws, double* y) const;
+
  private:
+  std::string StartModes(double t0, double* y0);  // Start without its log
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -4,13 +4,15 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "runtime/program/program.h"  // Program::contacts
+
 namespace kanesim::sim {
 
 LiftOffGuard::LiftOffGuard(const rt::Program& program) : program_(program) {
+  // Each contact's normal force by name (not every signal named to find them: a start's cost).
   std::vector<std::string> forces;
   const std::string suffix = ".normal_force";
-  for (const std::string& s : rt::AvailableSignals(program))
-    if (s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0) forces.push_back(s);
+  for (const auto& c : program.contacts) forces.push_back(c.name + suffix);
   if (forces.empty()) return;
   // A normal force the equations do not determine (a row redundant with a joint) says
   // nothing about pulling: not guarded.

@@ -6,9 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "runtime/program/program.h"  // Program::whens
-#include "sim/end_stops.h"
-#include "sim/engine_ode.h"
+#include "sim/hybrid_ode.h"
 #include "sim/input_table.h"
 #include "sim/simulate.h"
 #include "sim/stepper.h"
@@ -19,25 +17,30 @@ using WorkspacePtr = std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)>;
 
 struct Simulator::Impl {
   Impl(std::shared_ptr<const rt::Program> p, int n_inputs)
-      : program(std::move(p)), inputs(n_inputs), ws_rhs(nullptr, nullptr), ws_out(nullptr, nullptr) {}
+      : program(std::move(p)), inputs(n_inputs), ws_out(nullptr, nullptr) {}
   std::shared_ptr<const rt::Program> program;
   IntegratorOptions iopt;                   // the solver's options (initial_step: next_step; CVODE-BDF
                                             // after a stiff hand-over)
   IntegratorOptions iopt_start;             // ... as made: Reset goes back to them
   std::shared_ptr<const rt::SignalPlan> plan;  // the outputs
+  double rtol = 0.0, atol = 0.0;            // the events' (HybridOde)
   double t0 = 0.0;
-  std::vector<double> y0;                   // the start (after a start on an end stop)
-  std::vector<double> resting0;             // ... and its resting sides
-  ConstantInputs inputs;                    // what every workspace reads
-  WorkspacePtr ws_rhs, ws_out;
-  std::unique_ptr<EndStopEvents> stops;     // null without end stops
-  std::unique_ptr<detail::EngineOde> ode;
+  std::vector<double> y0;                   // the start (after its events: a start on a contact)
+  std::vector<double> inputs0;              // ... its inputs
+  std::vector<double> modes0;               // ... and its modes
+  std::vector<EventRecord> events0;         // ... and events
+  ConstantInputs inputs;                    // what the outputs' workspace reads
+  WorkspacePtr ws_out;
+  std::vector<double> y_out;                // an output row's state (scratch)
+  std::unique_ptr<HybridOde> hybrid;        // the right-hand side and every event (the run's)
   std::unique_ptr<detail::GuardedRhs> rhs;
   std::unique_ptr<detail::Stepper> stepper;  // null until the next step (a restart)
   double next_step = 0.0;                    // the restarted solver's first step (0: its estimate)
   bool inputs_changed = false;               // since the stepper's last step
   bool failed = false;
   StepResult failure;
+  bool terminated = false;                   // a terminate fired (its message)
+  std::string terminate_message;
   IntegratorStats done;                      // of the solvers before this one
 
   // The solver that ends (a restart, an event): its counters into done, its last step and
@@ -49,8 +52,16 @@ struct Simulator::Impl {
     done.last_order = s.last_order;
     stepper.reset();
   }
+  StepResult Refusal(double t_now) const {
+    if (failed)
+      return {false, failure.fail_time,
+              "the simulator failed at t = " + FormatShortest(failure.fail_time) + " (" + failure.cause +
+                  "); reset() or set_state() first"};
+    return {false, t_now,
+            "the model terminated at t = " + FormatShortest(t_now) + " (" + terminate_message +
+                "); reset() or set_state() first"};
+  }
 };
-
 
 std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> program, const SimulatorOptions& options,
                                            std::string* error) {
@@ -60,10 +71,6 @@ std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> pr
       *error = std::string("the tolerance ") + name + " (" + FormatShortest(tol) + ") must be a positive finite number";
       return nullptr;
     }
-  if (!p.whens.empty()) {  // their events and terminate are Simulate's only, for now
-    *error = "the stepping core does not handle when clauses yet (" + p.whens.front().name + "; docs/events.md)";
-    return nullptr;
-  }
   auto impl = std::make_unique<Impl>(program, rt::NumInputs(p));
   IntegratorOptions& io = impl->iopt;
   ResolveMethod(p, options.integrator, &io);
@@ -76,6 +83,8 @@ std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> pr
   io.bridge = false;            // no bridges while stepping (sim/simulator.h)
   io.row_energy_check = false;  // no rows
   impl->iopt_start = io;
+  impl->rtol = options.rtol;
+  impl->atol = options.atol;
 
   std::vector<std::string> names = options.signals.empty() ? rt::DefaultSignals(p) : options.signals;
   std::string plan_error;
@@ -89,23 +98,27 @@ std::unique_ptr<Simulator> Simulator::Make(std::shared_ptr<const rt::Program> pr
     *error = "the start time (" + FormatShortest(impl->t0) + ") is not a finite number";
     return nullptr;
   }
-  impl->y0.assign(static_cast<size_t>(rt::StateSize(p)), 0.0);
-  rt::InitialState(p, impl->y0.data());
-  auto stops = std::make_unique<EndStopEvents>(p, options.rtol, options.atol);
-  if (stops->Active()) {
-    auto ws = rt::MakeWorkspace(p);
-    rt::SetInputSource(*ws, &impl->inputs);
-    if (std::string why = stops->CheckStart(*ws, impl->t0, impl->y0.data()); !why.empty()) {
-      *error = why;
-      return nullptr;
-    }
-    if (stops->Start(*ws, impl->t0, impl->y0.data()) != 0) {
-      *error = "end stops: " + rt::ErrorMessage(*ws);
-      return nullptr;
-    }
-    impl->resting0 = stops->Resting();
-    impl->stops = std::move(stops);
+  const size_t n = static_cast<size_t>(rt::StateSize(p));
+  impl->y0.assign(n, 0.0);
+  if (options.initial_state.empty()) {
+    rt::InitialState(p, impl->y0.data());
+  } else if (options.initial_state.size() == n) {
+    impl->y0 = options.initial_state;
+  } else {
+    *error = "the initial state has " + std::to_string(options.initial_state.size()) + " entries, not " + std::to_string(n);
+    return nullptr;
   }
+  impl->inputs0.assign(impl->inputs.values.size(), 0.0);
+  if (options.initial_inputs.size() == impl->inputs0.size()) impl->inputs0 = options.initial_inputs;
+  // The start's events (a start on a contact, friction stuck or sliding), as a run starts.
+  HybridOde start(program, options.rtol, options.atol);
+  start.SetInputs(impl->inputs0);
+  if (std::string why = start.Start(impl->t0, impl->y0.data()); !why.empty()) {
+    *error = why;
+    return nullptr;
+  }
+  impl->modes0 = start.Modes();
+  impl->events0 = start.StartEvents();
   std::unique_ptr<Simulator> s(new Simulator(std::move(impl)));
   s->output_names_ = std::move(names);
   for (int i = 0; i < rt::NumInputs(p); ++i) s->input_names_.push_back(rt::InputName(p, i));
@@ -139,20 +152,18 @@ bool Simulator::SetInput(int i, double value, std::string* error) {
 
 const std::vector<double>& Simulator::Inputs() const { return impl_->inputs.values; }
 
-// Fresh workspaces, system and solver state from (t_, y_): what GetState and SetState share,
-// so that their continuations are the same bit for bit.
-void Simulator::Restart(double next_step) {
+// Fresh workspaces, system and solver state from (t_, y_) in these modes: what GetState and
+// SetState share, so that their continuations are the same bit for bit.
+void Simulator::Restart(double next_step, const std::vector<double>& modes) {
   Impl& m = *impl_;
   if (m.stepper) m.Retire();
   m.rhs.reset();
-  m.ode.reset();
-  m.ws_rhs = rt::MakeWorkspace(*m.program);
   m.ws_out = rt::MakeWorkspace(*m.program);
   rt::SetInputSource(*m.ws_out, &m.inputs);
-  m.ode = std::make_unique<detail::EngineOde>(*m.program, *m.ws_rhs, /*row_energy=*/false);
-  m.ode->SetInputs(&m.inputs);
-  if (m.stops) m.ode->SetStops(m.stops.get());
-  m.rhs = std::make_unique<detail::GuardedRhs>(*m.ode);
+  m.hybrid = std::make_unique<HybridOde>(m.program, m.rtol, m.atol);
+  m.hybrid->SetInputs(m.inputs.values);
+  m.hybrid->SetModes(modes);  // checked by SetState, made by HybridOde
+  m.rhs = std::make_unique<detail::GuardedRhs>(m.hybrid->System());
   m.next_step = next_step;
   m.inputs_changed = false;
 }
@@ -171,10 +182,7 @@ StepResult Simulator::Step(double dt) {
 
 StepResult Simulator::AdvanceTo(double t) {
   Impl& m = *impl_;
-  if (m.failed)
-    return {false, m.failure.fail_time,
-            "the simulator failed at t = " + FormatShortest(m.failure.fail_time) + " (" + m.failure.cause +
-                "); reset() or set_state() first"};
+  if (m.failed || m.terminated) return m.Refusal(t_);
   if (!(t >= t_) || !std::isfinite(t))
     return {false, t_, "cannot advance to t = " + FormatShortest(t) + ": the simulator is at t = " + FormatShortest(t_) +
                            " and does not step backwards"};
@@ -184,6 +192,7 @@ StepResult Simulator::AdvanceTo(double t) {
     return {};
   }
   std::string error;
+  if (m.inputs_changed) m.hybrid->SetInputs(m.inputs.values);
   if (!m.stepper) {
     IntegratorOptions io = m.iopt;
     io.initial_step = m.next_step > 0.0 ? std::min(m.next_step, t - t_) : 0.0;
@@ -205,12 +214,22 @@ StepResult Simulator::AdvanceTo(double t) {
       if (!m.stepper) return Fail(m.rhs->failed ? m.rhs->fail_time : t_, m.rhs->failed ? m.rhs->cause : error);
       continue;
     }
-    if (flag == detail::kEventReached) {  // the jump, then a fresh solver from the right limit
+    if (flag == detail::kEventReached) {  // the run's jump, then a fresh solver from the right limit
       const double te = m.stepper->event_time;
-      if (m.ode->Event(te, y_.data(), m.stepper->event_index) != 0) return Fail(te, m.ode->FailureCause());
+      const size_t logged = m.hybrid->Events().size();
+      if (m.hybrid->System().Event(te, y_.data(), m.stepper->event_index) != 0)
+        return Fail(te, m.hybrid->FailureCause());
+      events_.insert(events_.end(), m.hybrid->Events().begin() + static_cast<long>(logged), m.hybrid->Events().end());
       m.Retire();
       t_ = te;
       m.next_step = 0.0;  // a fresh solver after the jump estimates its own first step
+      if (m.hybrid->Terminated(&m.terminate_message)) {
+        m.terminated = true;
+        StepResult r;
+        r.terminated = true;
+        r.cause = m.terminate_message;
+        return r;
+      }
       if (te >= t) return {};
       m.rhs->Reset();
       m.stepper = detail::MakeStepper(*m.rhs, te, y_.data(), t, m.iopt, &error);
@@ -231,7 +250,9 @@ StepResult Simulator::AdvanceTo(double t) {
 
 bool Simulator::Outputs(double* values, std::string* error) {
   Impl& m = *impl_;
-  if (rt::EvalSignals(*m.program, *m.plan, *m.ws_out, t_, y_.data(), values) != 0) {
+  m.y_out = y_;
+  m.hybrid->ForOutputs(*m.ws_out, m.y_out.data());  // as the run's rows see the modes
+  if (rt::EvalSignals(*m.program, *m.plan, *m.ws_out, t_, m.y_out.data(), values) != 0) {
     *error = rt::ErrorMessage(*m.ws_out);
     if (error->empty()) *error = "an output signal could not be evaluated";
     return false;
@@ -246,15 +267,16 @@ SimulatorState Simulator::GetState() {
   s.y = y_;
   s.inputs = m.inputs.values;
   s.next_step = m.stepper ? m.stepper->NextStep() : m.next_step;
-  if (m.stops) s.resting = m.stops->Resting();
-  if (!m.failed) Restart(s.next_step);
+  s.modes = m.hybrid->Modes();
+  s.terminated = m.terminated;
+  s.terminate_message = m.terminate_message;
+  if (!m.failed) Restart(s.next_step, s.modes);
   return s;
 }
 
 bool Simulator::SetState(const SimulatorState& s, std::string* error) {
   Impl& m = *impl_;
-  if (s.y.size() != y_.size() || s.inputs.size() != m.inputs.values.size() ||
-      (m.stops && s.resting.size() != m.stops->Resting().size())) {
+  if (s.y.size() != y_.size() || s.inputs.size() != m.inputs.values.size()) {
     *error = "the state is not one of this model's (its sizes differ)";
     return false;
   }
@@ -267,12 +289,23 @@ bool Simulator::SetState(const SimulatorState& s, std::string* error) {
       *error = "the state holds a number that is not finite";
       return false;
     }
+  for (double v : s.inputs)
+    if (!std::isfinite(v)) {
+      *error = "the state holds an input that is not finite";
+      return false;
+    }
+  if (!m.hybrid->SetModes(s.modes)) {  // checked before anything is set; Restart makes it anew
+    *error = "the state's modes are not this model's (resting stops, stuck joints)";
+    return false;
+  }
   t_ = s.t;
   y_ = s.y;
   m.inputs.values = s.inputs;
-  if (m.stops) m.stops->SetResting(s.resting);
   m.failed = false;
-  Restart(s.next_step);
+  m.terminated = s.terminated;
+  m.terminate_message = s.terminate_message;
+  while (!events_.empty() && events_.back().time > s.t) events_.pop_back();  // the log up to its time
+  Restart(s.next_step, s.modes);
   return true;
 }
 
@@ -280,13 +313,22 @@ void Simulator::Reset() {
   Impl& m = *impl_;
   t_ = m.t0;
   y_ = m.y0;
-  std::fill(m.inputs.values.begin(), m.inputs.values.end(), 0.0);
-  if (m.stops) m.stops->SetResting(m.resting0);
+  m.inputs.values = m.inputs0;
   m.failed = false;
+  m.terminated = false;
+  m.terminate_message.clear();
+  events_ = m.events0;
   m.stepper.reset();
   m.iopt = m.iopt_start;  // DOP853 again after a hand-over
-  Restart(0.0);
+  Restart(0.0, m.modes0);
   m.done = IntegratorStats{};
+}
+
+std::vector<double> Simulator::Modes() const { return impl_->hybrid->Modes(); }
+
+bool Simulator::Terminated(std::string* why) const {
+  if (impl_->terminated) *why = impl_->terminate_message;
+  return impl_->terminated;
 }
 
 rt::Integrator Simulator::Method() const { return impl_->iopt.method; }

@@ -12,15 +12,19 @@
 //     the jump matters.
 // Under the automatic choice a DOP853 that finds the problem stiff hands over to CVODE-BDF as
 // in a run (detail::HandOverStiff), whatever the caller's step; CVODE-BDF stays until Reset.
-// GetState / SetState: the state is (t, y, the inputs, the step size to try next, which end
-// stops the joints rest on). GetState restarts the solver at that instant from those, and
-// SetState restarts it the same way, so the continuation after either is the same bit for
-// bit. (CVODE's and IDA's history cannot be set through their public API; the restart costs
-// them their order, which grows again within a few steps.)
+// Events: the run's own (sim/hybrid_ode.h: end stops and plane contacts with their graze
+// guards and Zeno accumulation, exact stick-slip friction, rolling contacts' lift-off, when
+// clauses with reinit and terminate), located by the solver inside a step, the jump, then a
+// fresh solver from the right limit, as in a run; a terminate ends the step there.
+// GetState / SetState: the state is (t, y, the inputs, the step size to try next, the modes:
+// resting stops, accumulating bounces, stuck joints and their forces; a terminate). GetState
+// restarts the solver at that instant from those, and SetState restarts it the same way, so
+// the continuation after either is the same bit for bit. (CVODE's and IDA's history cannot
+// be set through their public API; the restart costs them their order, which grows again
+// within a few steps.)
 //
 // Not done while stepping: bridges over closed loops' singular configurations (a step that
-// meets one fails), the output rows' energy checks (there are no rows), rolling contacts'
-// lift-off check. End stops' and plane contacts' events are handled as in a run.
+// meets one fails), the output rows' energy checks (there are no rows).
 #pragma once
 
 #include <limits>
@@ -30,6 +34,7 @@
 
 #include "runtime/runtime.h"
 #include "sim/integrator.h"
+#include "sim/simulate.h"
 
 namespace kanesim::sim {
 
@@ -42,14 +47,19 @@ struct SimulatorOptions {
   long max_steps = 100000;  // internal steps allowed in one step of the caller
   bool project_steps = false;
   std::vector<std::string> signals;  // the outputs; empty: rt::DefaultSignals(program)
+  std::vector<double> initial_state;  // y0 (rt::StateSize); empty: rt::InitialState(program)
+  std::vector<double> initial_inputs;  // the inputs at the start (rt::NumInputs); empty: 0
 };
 
 // What a step did: ok, or where and why the integration failed. A failed simulator refuses
-// to step until Reset or SetState.
+// to step until Reset or SetState. terminated: a when clause's terminate("why") fired at
+// Time() (before the step's end; cause is its message); the simulator refuses to step on
+// until Reset or SetState.
 struct StepResult {
   bool ok = true;
   double fail_time = 0.0;
   std::string cause;
+  bool terminated = false;
 };
 
 // Everything a continuation needs (GetState / SetState). Values only: copy it, store it.
@@ -58,13 +68,15 @@ struct SimulatorState {
   std::vector<double> y;       // [q_free, u_free]  (rt::StateSize)
   std::vector<double> inputs;  // (rt::NumInputs)
   double next_step = 0.0;      // the step size the solver tries next (0: its own estimate)
-  std::vector<double> resting;  // end stops and plane contacts: EndStopEvents::Resting
+  std::vector<double> modes;   // HybridOde::Modes (resting stops, stuck joints)
+  bool terminated = false;     // a terminate fired (then its message)
+  std::string terminate_message;
 };
 
 class Simulator {
  public:
-  // Null with *error when the options cannot run (tolerances, signal names, a start on an
-  // end stop).
+  // Null with *error when the options cannot run (tolerances, signal names, a start past an
+  // end stop or pulling on a rolling contact).
   static std::unique_ptr<Simulator> Make(std::shared_ptr<const rt::Program> program,
                                          const SimulatorOptions& options, std::string* error);
   ~Simulator();
@@ -89,8 +101,14 @@ class Simulator {
 
   SimulatorState GetState();
   bool SetState(const SimulatorState& state, std::string* error);
-  // Back to the start: the initial state, inputs 0, a fresh solver.
+  // Back to the start: the initial state and inputs (0 unless given), a fresh solver.
   void Reset();
+
+  // The events since the start (its own first), in time order, with their jumps (as a run's
+  // SimStats::events); SetState keeps those up to its time. A terminate: its message.
+  const std::vector<EventRecord>& Events() const { return events_; }
+  bool Terminated(std::string* why) const;
+  std::vector<double> Modes() const;  // HybridOde::Modes now (GetState without its restart)
 
   rt::Integrator Method() const;  // the one running: CVODE-BDF after a stiff hand-over
   IntegratorStats Stats() const;  // summed over the solvers since the last Reset
@@ -98,13 +116,14 @@ class Simulator {
  private:
   struct Impl;
   explicit Simulator(std::unique_ptr<Impl> impl);
-  void Restart(double next_step);
+  void Restart(double next_step, const std::vector<double>& modes);
   StepResult Fail(double t, std::string cause);
 
   std::unique_ptr<Impl> impl_;
   std::vector<std::string> input_names_, output_names_;
   double t_ = 0.0;
   std::vector<double> y_;
+  std::vector<EventRecord> events_;
 };
 
 }  // namespace kanesim::sim

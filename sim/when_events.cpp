@@ -28,20 +28,28 @@ int WhenEvents::Functions(rt::Workspace& ws, double t, const double* y, double* 
   return 0;
 }
 
-// A jump whose rows' block of M^-1 is singular: a speed both set and held (a reinit of a
-// joint resting on its end stop), or set twice.
-std::string WhenEvents::SingularJump(const std::string& clause, const std::vector<int>& rows,
-                                     size_t held) const {
+// A jump whose rows' block of M^-1 is singular: a speed set twice, or set and held (a resting
+// joint the stops did not release: EndStopEvents::Jump releases every joint a clause sets).
+std::string WhenEvents::SingularJump(const std::string& clause, const std::vector<int>& rows) const {
   const std::vector<std::string> names = rt::StateNames(program_);
   std::string which;
   for (size_t j = 0; j < rows.size(); ++j)
     for (size_t k = 0; k < j; ++k)
       if (rows[j] == rows[k] && which.empty()) which = names[static_cast<size_t>(nq_ + rows[j])];
-  std::string why = which.empty() ? "the speeds it sets" : "'" + which + "'";
-  return clause + ": the reinit's speed jump has no unique solution: " + why +
-         (held > 0 ? " is set while held at zero by a joint resting on its end stop (a reinit of a resting joint's "
-                     "speed is not handled yet)"
-                   : " is set twice");
+  return clause + ": the reinit's speed jump has no unique solution: " +
+         (which.empty() ? "the speeds it sets are dependent" : "'" + which + "' is constrained twice");
+}
+
+const std::string& WhenEvents::Name(int i) const {
+  return program_.whens[static_cast<size_t>(clause_of_[static_cast<size_t>(i)])].name;
+}
+
+std::vector<int> WhenEvents::States(int i) const {
+  std::vector<int> out;
+  if (i < 0 || i >= Count()) return out;
+  for (const rt::WhenReinit& r : program_.whens[static_cast<size_t>(clause_of_[static_cast<size_t>(i)])].reinits)
+    out.push_back(r.state);
+  return out;
 }
 
 int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const std::vector<int>& held) {
@@ -61,7 +69,7 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const std::
     for (int h : held) rows.push_back(h), targets.push_back(0.0);
     std::vector<double> du(static_cast<size_t>(nu_));
     if (int s = SpeedJump(program_, ws, t, y, rows, targets, du.data()); s != 0) {
-      if (s == -1) error_ = SingularJump(w.name, rows, held.size());
+      if (s == -1) error_ = SingularJump(w.name, rows);
       return s;
     }
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];

@@ -23,6 +23,10 @@ class WhenEvents {
   // coordinates set, then the speeds by one impulse that also keeps `held` (free speeds
   // held at zero: joints resting on their stops) at zero. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i, const std::vector<int>& held);
+  // The entries of y that indicator i's clause sets (coordinates and speeds).
+  std::vector<int> States(int i) const;
+  // Indicator i's clause: "when (file.mech:12)".
+  const std::string& Name(int i) const;
   // terminate(...) fired: the run ends at the event (its message).
   bool Terminated() const { return terminated_; }
   const std::string& Message() const { return message_; }
@@ -32,7 +36,7 @@ class WhenEvents {
   const std::string& Error() const { return error_; }
 
  private:
-  std::string SingularJump(const std::string& clause, const std::vector<int>& rows, size_t held) const;
+  std::string SingularJump(const std::string& clause, const std::vector<int>& rows) const;
   const rt::Program& program_;
   std::vector<int> clause_of_, root_of_;  // per indicator: its clause, its tape root
   int nq_ = 0, nu_ = 0;

@@ -416,9 +416,11 @@ class Simulator:
     """The model stepped by its caller (Model.simulator()). step(dt, inputs={...}) and
     advance_to(t, inputs={...}) set the inputs, then integrate (the GIL released);
     .outputs (NumPy, in .output_names order) and sim[name] read the signals at .time;
-    get_state() / set_state(s) continue bit for bit; reset() goes back to the start. A
-    numerical failure raises SimulationError (.result is None); the simulator then refuses to
-    step until reset() or set_state()."""
+    get_state() / set_state(s) continue bit for bit; reset() goes back to the start. The
+    run's events happen inside the steps (.events, as Result.events); a terminate(...) ends
+    the step at its event (.terminated == (time, message)). A numerical failure raises
+    SimulationError (.result is None); the simulator then refuses to step until reset() or
+    set_state(), as after a terminate."""
 
     def __init__(self, core):
         self._core = core
@@ -467,6 +469,16 @@ class Simulator:
     def method(self) -> str:
         return self._core.method
 
+    @property
+    def events(self) -> List[Dict[str, Any]]:
+        """The events since the start, as Result.events (set_state keeps those up to its time)."""
+        return self._core.events
+
+    @property
+    def terminated(self):
+        """(time, message) once a terminate(...) fired, else None."""
+        return self._core.terminated
+
     def stats(self) -> Dict[str, Any]:
         return self._core.stats()
 
@@ -490,6 +502,8 @@ class Simulator:
 
 def _step_error(e) -> SimulationError:
     t, cause = e.args
+    if cause.startswith("the model terminated"):  # a step after terminate(...): no failure
+        return SimulationError(cause, t, cause, None)
     return SimulationError(f"numerical failure at t = {t!r}: {cause}", t, cause, None)
 
 

@@ -18,6 +18,8 @@
 namespace py = pybind11;
 using kanesim::py::LoadedModel;
 
+py::list EventsToPython(const std::vector<kanesim::sim::EventRecord>& events);  // python/src/stepping.cpp
+
 namespace {
 
 py::object ToPython(const kanesim::py::Value& value) {
@@ -67,17 +69,7 @@ py::dict StatsDict(const kanesim::sim::SimStats& s) {
   d["energy_tolerance"] = s.energy_tolerance;
   // The events (end stops, when clauses; docs/events.md), which kanesim.Result moves to .events:
   // each {time, element, kind, changes: {name: (before, after)}}; and terminate's (time, message).
-  py::list events;
-  for (const kanesim::sim::EventRecord& e : s.events) {
-    py::dict ev, changes;
-    ev["time"] = e.time;
-    ev["element"] = e.element;
-    ev["kind"] = e.kind;
-    for (const kanesim::sim::EventChange& c : e.changes) changes[py::str(c.name)] = py::make_tuple(c.before, c.after);
-    ev["changes"] = changes;
-    events.append(ev);
-  }
-  d["events"] = events;
+  d["events"] = EventsToPython(s.events);
   d["terminated"] = s.terminated ? py::object(py::make_tuple(s.terminate_time, s.terminate_message)) : py::none();
   // run(sensitivity=...): per parameter, in its order, the differences' estimated error and
   // the largest value of each quotient, as `--stats` prints them (docs/integrators.md).

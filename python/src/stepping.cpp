@@ -94,24 +94,34 @@ class PySimulator {
     return d;
   }
 
-  // (t, y, inputs, next step, resting): plain values, so that it pickles.
+  // (t, y, inputs, next step, modes, terminate message or None): plain values, so that it
+  // pickles. The modes: the contacts' resting sides, the stuck joints and their forces.
   py::tuple GetState() {
     const kanesim::sim::SimulatorState s = sim_->GetState();
     return py::make_tuple(s.t, py::array_t<double>(static_cast<py::ssize_t>(s.y.size()), s.y.data()),
                           py::array_t<double>(static_cast<py::ssize_t>(s.inputs.size()), s.inputs.data()), s.next_step,
-                          py::array_t<double>(static_cast<py::ssize_t>(s.resting.size()), s.resting.data()));
+                          py::array_t<double>(static_cast<py::ssize_t>(s.modes.size()), s.modes.data()),
+                          s.terminated ? py::object(py::str(s.terminate_message)) : py::object(py::none()));
   }
   void SetState(const py::tuple& t) {
-    if (t.size() != 5) throw py::value_error("not a state from get_state()");
+    if (t.size() != 6) throw py::value_error("not a state from get_state()");
     kanesim::sim::SimulatorState s;
     s.t = py::cast<double>(t[0]);
     s.y = py::cast<std::vector<double>>(t[1]);
     s.inputs = py::cast<std::vector<double>>(t[2]);
     s.next_step = py::cast<double>(t[3]);
-    s.resting = py::cast<std::vector<double>>(t[4]);
+    s.modes = py::cast<std::vector<double>>(t[4]);
+    s.terminated = !t[5].is_none();
+    if (s.terminated) s.terminate_message = py::cast<std::string>(t[5]);
     std::string error;
     if (!sim_->SetState(s, &error)) throw py::value_error(error);
     fresh_ = false;
+  }
+
+  py::object Terminated() const {
+    std::string why;
+    if (!sim_->Terminated(&why)) return py::none();
+    return py::make_tuple(sim_->Time(), why);
   }
 
   kanesim::sim::Simulator& sim() { return *sim_; }
@@ -160,6 +170,22 @@ std::unique_ptr<PySimulator> MakeSimulator(std::shared_ptr<kanesim::py::LoadedMo
 
 }  // namespace
 
+// A run's or a simulator's events as Python dicts: {time, element, kind, changes: {name:
+// (before, after)}} (docs/events.md "Outputs").
+py::list EventsToPython(const std::vector<kanesim::sim::EventRecord>& events) {
+  py::list out;
+  for (const kanesim::sim::EventRecord& e : events) {
+    py::dict ev, changes;
+    ev["time"] = e.time;
+    ev["element"] = e.element;
+    ev["kind"] = e.kind;
+    for (const kanesim::sim::EventChange& c : e.changes) changes[py::str(c.name)] = py::make_tuple(c.before, c.after);
+    ev["changes"] = changes;
+    out.append(ev);
+  }
+  return out;
+}
+
 void BindSimulator(py::module_& m) {
   static py::exception<StepFailed> step_failed(m, "_StepFailed", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr p) {
@@ -184,6 +210,8 @@ void BindSimulator(py::module_& m) {
         return py::array_t<double>(static_cast<py::ssize_t>(y.size()), y.data());
       })
       .def_property_readonly("method", [](PySimulator& s) { return kanesim::sim::MethodName(s.sim().Method()); })
+      .def_property_readonly("events", [](PySimulator& s) { return EventsToPython(s.sim().Events()); })
+      .def_property_readonly("terminated", &PySimulator::Terminated)
       .def("get", &PySimulator::Get)
       .def("get_state", &PySimulator::GetState)
       .def("set_state", &PySimulator::SetState)

@@ -174,27 +174,11 @@ def test_threads_give_the_same_model(examples):
         np.testing.assert_array_equal(r.eigenvalues, results[0].eigenvalues)
 
 
-DRIVEN = """
-model Driven
-  input Real tau;
-  World world(g = {0, -9.81, 0});
-  Revolute j(axis = {0, 0, 1}, q(start = -1.2));
-  Rod rod(L = 0.8, m = 1.5);
-  output Real twice = 2 * tau;
-equation
-  connect(world.frame_b, j.frame_a);
-  connect(j.frame_b, rod.frame_a);
-  j.tau = tau;
-end Driven;
-"""
-
-
-def test_model_inputs_take_their_operating_values(kanesim_exe, tmp_path):
+def test_model_inputs_take_their_operating_values(kanesim_exe, tmp_path, source_dir):
     # A rod held by the input torque tau0: the equilibrium cos q* = 2 tau0 / (m g L) and
     # A, B, D there (closed form); bit for bit `kanesim linearize --set tau=2`. With tau
     # read as 0 the rod would hang at q* = -pi/2 (another A).
-    path = tmp_path / "driven.mech"
-    path.write_text(DRIVEN)
+    path = source_dir / "tests" / "data" / "driven_pendulum.mech"  # shared with tests/linearize/model_inputs_test.py
     model = kanesim.load(path)
     lm = model.linearize(equilibrium=True, inputs={"tau": 2.0}, outputs=["twice"])
     m, length, g, tau0 = 1.5, 0.8, 9.81, 2.0
@@ -214,10 +198,8 @@ def test_model_inputs_take_their_operating_values(kanesim_exe, tmp_path):
     _assert_same_as_cli(lm, d)
 
 
-def test_a_model_input_without_a_value_or_an_unknown_one_is_a_model_error(tmp_path):
-    path = tmp_path / "driven.mech"
-    path.write_text(DRIVEN)
-    model = kanesim.load(path)
+def test_a_model_input_without_a_value_or_an_unknown_one_is_a_model_error(source_dir):
+    model = kanesim.load(source_dir / "tests" / "data" / "driven_pendulum.mech")
     with pytest.raises(kanesim.ModelError, match="input 'tau' has no value"):
         model.linearize(equilibrium=True)
     with pytest.raises(kanesim.ModelError, match="'nosuch' is not one of the model's inputs"):

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string_view>
 
 #include "runtime/runtime.h"
 #include "runtime/engine/output_rows.h"
@@ -216,25 +217,76 @@ std::vector<std::string> AvailableSignals(const Program& p) {
   return names;
 }
 
+// AllSignals' JointQ, JointU and Output entries, in its order, without naming the rest.
 std::vector<std::string> DefaultSignals(const Program& p) {
   std::vector<std::string> names;
-  for (auto& [n, item] : AllSignals(p))
-    if (item.kind == SignalKind::JointQ || item.kind == SignalKind::JointU || item.kind == SignalKind::Output)
-      names.push_back(n);
+  for (const TreeJoint& j : p.joints) {
+    for (int k = 0; k < j.nq; ++k) names.push_back(j.name + ".q" + (j.nq > 1 ? Idx(k) : ""));
+    for (int k = 0; k < j.nu; ++k) names.push_back(j.name + ".u" + (j.nu > 1 ? Idx(k) : ""));
+  }
+  for (const auto& o : p.mech->outputs) names.push_back(o.name);
   return names;
 }
 
+namespace {
+
+// "[k]" with 1 <= k <= n: k - 1, or -1.
+int BracketIndex(std::string_view s, int n) {
+  if (s.size() < 3 || s.front() != '[' || s.back() != ']') return -1;
+  int k = 0;
+  for (const char c : s.substr(1, s.size() - 2)) {
+    if (c < '0' || c > '9' || k > n) return -1;
+    k = 10 * k + (c - '0');
+  }
+  return k >= 1 && k <= n ? k - 1 : -1;
+}
+
+// The item AllSignals would find first for n, for the names a run plans on every start
+// (a joint's q or u, an output, the energies) without naming every signal: false if n is
+// another kind. Undotted names in AllSignals' order: constraint_power, the outputs, the
+// energies. The suffix ".q", ".q[k]", ".u", ".u[k]" after the last dot is no other
+// kind's before the outputs, so the first joint of that name is the first match.
+bool QuickSignal(const Program& p, std::string_view n, SignalItem* out) {
+  const size_t dot = n.rfind('.');
+  if (dot == std::string_view::npos) {
+    if (n == "constraint_power") return false;
+    const auto& outs = p.mech->outputs;
+    for (size_t i = 0; i < outs.size(); ++i)
+      if (outs[i].name == n) {
+        *out = {SignalKind::Output, static_cast<int>(i), 0};
+        return true;
+      }
+    if (n != "kinetic_energy" && n != "potential_energy") return false;
+    *out = {n == "kinetic_energy" ? SignalKind::KineticEnergy : SignalKind::PotentialEnergy, 0, 0};
+    return true;
+  }
+  if (dot + 1 >= n.size()) return false;
+  const std::string_view joint = n.substr(0, dot), tail = n.substr(dot + 1);
+  const char c = tail.front();
+  if (c != 'q' && c != 'u') return false;
+  for (const TreeJoint& j : p.joints) {
+    if (j.name != joint) continue;
+    const int count = c == 'q' ? j.nq : j.nu;
+    const int k = tail.size() == 1 ? (count == 1 ? 0 : -1) : (count > 1 ? BracketIndex(tail.substr(1), count) : -1);
+    if (k < 0) return false;
+    *out = {c == 'q' ? SignalKind::JointQ : SignalKind::JointU, (c == 'q' ? j.q0 : j.u0) + k, 0};
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 std::shared_ptr<const SignalPlan> PlanSignals(const Program& p, const std::vector<std::string>& names,
                                               std::string* error) {
-  const auto all = AllSignals(p);
+  std::vector<std::pair<std::string, SignalItem>> all;  // named only when a name needs it
   auto plan = std::make_shared<SignalPlan>();
   for (const std::string& n : names) {
-    const SignalItem* found = nullptr;
-    for (const auto& [name, item] : all)
-      if (name == n) {
-        found = &item;
-        break;
-      }
+    SignalItem quick{SignalKind::JointQ, 0, 0};
+    const SignalItem* found = QuickSignal(p, n, &quick) ? &quick : nullptr;
+    if (!found && all.empty()) all = AllSignals(p);
+    for (size_t i = 0; !found && i < all.size(); ++i)
+      if (all[i].first == n) found = &all[i].second;
     SignalItem alias{SignalKind::FramePosition, -1, 0};
     if (!found && FrameSignalByAlias(p, n, &alias)) found = &alias;  // any name of a frame
     if (!found) {

@@ -98,6 +98,27 @@ TEST(WhenEvents, PendulumFiresAtTheEllipticIntegralTime) {
   }
 }
 
+// A condition on a frame's position: the rod's tip x = sin(phi) passes sin(-0.5) where phi
+// passes -0.5, at the same elliptic-integral time as above. If this fails, conditions on
+// frame signals (docs/events.md "Relations of any signal") fire elsewhere or not at all.
+TEST(WhenEvents, ConditionOnAFrameSignalFiresAtTheEllipticIntegralTime) {
+  const double phi0 = 1.0, k = std::sin(phi0 / 2);
+  const double t1 = (std::comp_ellint_1(k) + std::ellint_1(k, std::asin(std::sin(0.25) / k))) / kW;
+  const std::string text =
+      PendulumText{.mods = ", q(start = " + Num(phi0 - kHalfPi) + ")",
+                   .equations = "  when rod.frame_b.r[1] < sin(-0.5) then\n    reinit(j1.u, 0);\n  end when;\n"}
+          .Text();
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    RunWith(*l->prog, how, 1.0, 0.1, {"j1.q"}, &r, 1e-12);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_GE(r.stats.events.size(), 1u) << how.name;
+    EXPECT_NEAR(r.stats.events[0].time, t1, 1e-9) << how.name;
+  }
+}
+
 // Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7), q2 the relative angle. reinit(j1.u, 0) is the
 // impulse e1 lambda on joint 1 alone, so joint 2's generalized momentum
 //   p2 = dT/du2 = m2 (L2^2/3 + L1 L2 cos(q2)/2) u1 + m2 L2^2/3 u2
@@ -171,6 +192,26 @@ TEST(WhenEvents, ChangeFiresBothWays) {
     EXPECT_NEAR(r.stats.events[0].time, 0.25, 1e-12) << how.name;
     EXPECT_NEAR(r.stats.events[1].time, 0.5, 1e-12) << how.name;
     EXPECT_NEAR(r.stats.events[2].time, 0.8, 1e-12) << how.name;
+  }
+}
+
+// edge(b) is b: a clause on edge(p.q > 0.25) fires where p.q first exceeds 0.25, once (a
+// uniform motion x = t), as the clause on the relation itself. If this fails, edge() is
+// refused, fires elsewhere, or fires where b becomes false too.
+TEST(WhenEvents, EdgeFiresWhereItsConditionBecomesTrue) {
+  const std::string text =
+      "model E\n  World world;\n  Prismatic p(axis = {1, 0, 0}, u(start = 1));\n"
+      "  Body b(m = 1, I = diagonal({1, 1, 1}));\nequation\n"
+      "  connect(world.frame_b, p.frame_a);\n  connect(p.frame_b, b.frame_a);\n"
+      "  when edge(p.q > 0.25 and p.q < 0.5) then\n    reinit(p.u, 1);\n  end when;\nend E;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    RunWith(*l->prog, how, 1.0, 0.1, {"p.q"}, &r, 1e-12);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_EQ(r.stats.events.size(), 1u) << how.name;
+    EXPECT_NEAR(r.stats.events[0].time, 0.25, 1e-12) << how.name;
   }
 }
 

@@ -205,12 +205,13 @@ TEST_F(FmuLibrary, ModelExchangeEventIndicatorsAndTheImpactInEventMode) {
   auto new_states = Fn<fmi2Status (*)(fmi2Component, fmi2EventInfo*)>("fmi2NewDiscreteStates");
   EXPECT_EQ(Fn<Simple>("fmi2EnterInitializationMode")(c), fmi2OK);
   EXPECT_EQ(Fn<Simple>("fmi2ExitInitializationMode")(c), fmi2OK);
-  double z[2] = {0, 0}, y[2] = {0, 0};
-  EXPECT_EQ(indicators(c, nullptr, 1), fmi2Error);
-  EXPECT_EQ(indicators(c, z, 2), fmi2Error);  // one indicator
+  double z[3] = {0, 0, 0}, y[2] = {0, 0};
+  EXPECT_EQ(indicators(c, nullptr, 2), fmi2Error);
+  EXPECT_EQ(indicators(c, z, 3), fmi2Error);  // two indicators: the gap, its graze guard
   EXPECT_EQ(new_states(c, nullptr), fmi2Error);
-  ASSERT_EQ(indicators(c, z, 1), fmi2OK);
+  ASSERT_EQ(indicators(c, z, 2), fmi2OK);
   EXPECT_NEAR(z[0], 0.2, 1e-12);
+  EXPECT_NEAR(z[1], 1.0, 1e-12);  // minus the gap's rate: closing at 1 rad/s
   fmi2EventInfo info{};
   ASSERT_EQ(new_states(c, &info), fmi2OK);  // the initial event update: nothing happens
   EXPECT_EQ(info.valuesOfContinuousStatesChanged, 0);
@@ -218,7 +219,7 @@ TEST_F(FmuLibrary, ModelExchangeEventIndicatorsAndTheImpactInEventMode) {
   ASSERT_EQ(states(c, y, 2), fmi2OK);
   y[0] = 0.5 + 1e-9;  // just past the stop, still at speed 1
   ASSERT_EQ(set_states(c, y, 2), fmi2OK);
-  ASSERT_EQ(indicators(c, z, 1), fmi2OK);
+  ASSERT_EQ(indicators(c, z, 2), fmi2OK);
   EXPECT_LT(z[0], 0.0);
   EXPECT_EQ(new_states(c, &info), fmi2Error);  // only in event mode
   ASSERT_EQ(Fn<Simple>("fmi2EnterEventMode")(c), fmi2OK);

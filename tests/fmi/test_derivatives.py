@@ -4,6 +4,8 @@ with respect to the states and an input equals central differences of fmi*GetDer
 the output, is linear in the seed, and equals the A, B, C and D of `kanesim linearize` at
 the same point."""
 import json
+import os
+import xml.etree.ElementTree as ET
 from ctypes import POINTER, c_double
 
 import numpy as np
@@ -12,7 +14,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model
 
-from conftest import kanesim
+from conftest import EXAMPLES, kanesim
 
 # A double pendulum moving (velocity terms in A), driven by an input torque at its base.
 DOUBLE = """
@@ -127,3 +129,55 @@ def test_directional_derivatives_equal_linearize(export, write_model, tmp_path, 
     assert np.max(np.abs(J[:n, n][order] - np.array(lin["B"])[:, 0])) < 1e-8
     assert np.max(np.abs(J[n, :n][order] - np.array(lin["C"])[0])) < 1e-8
     assert abs(J[n, n] - lin["D"][0][0]) < 1e-8
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("name", ["double_pendulum.mech", "fourbar.mech"])
+def test_directional_derivatives_of_a_tree_and_a_closed_loop_equal_central_differences(export, tmp_path, fmi, name):
+    # The examples as exported (a tree; a four-bar whose derivative projects onto its loop):
+    # every column d der(y) / d y_j against central differences of fmi*GetDerivatives.
+    fmu = export(os.path.join(EXAMPLES, name), fmi=fmi, kind="both")
+    d = extract(fmu, unzipdir=str(tmp_path / f"ex{fmi}"))
+    md = read_model_description(d)
+    me = md.modelExchange
+    caps = ET.parse(os.path.join(d, "modelDescription.xml")).getroot().find("ModelExchange").attrib
+    assert caps["providesDirectionalDerivative" if fmi == 2 else "providesDirectionalDerivatives"] == "true"
+    assert caps.get("providesAdjointDerivatives", "false") == "false"  # fmi3GetAdjointDerivative is refused
+    Model = FMU2Model if fmi == 2 else FMU3Model
+    m = Model(guid=md.guid, unzipDirectory=d, modelIdentifier=me.modelIdentifier)
+    m.instantiate()
+    if fmi == 2:
+        m.setupExperiment(startTime=0.0)
+        m.enterInitializationMode()
+    else:
+        m.enterInitializationMode(startTime=0.0)
+    m.exitInitializationMode()
+    m.enterContinuousTimeMode()
+    ptr = lambda a: a.ctypes.data_as(POINTER(c_double))
+    n = len(md.derivatives)
+    x0 = np.zeros(n)
+    m.getContinuousStates(ptr(x0), n)
+    get_der = m.getDerivatives if fmi == 2 else m.getContinuousStateDerivatives
+
+    def f(x):
+        x = np.ascontiguousarray(x, dtype=float)
+        m.setContinuousStates(ptr(x), n)
+        der = np.zeros(n)
+        get_der(ptr(der), n)
+        return der
+
+    states = [u.variable.derivative.valueReference for u in md.derivatives]
+    ders = [u.variable.valueReference for u in md.derivatives]
+    h = 1e-5
+    fd = np.zeros((n, n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = h * max(1.0, abs(x0[j]))
+        fd[:, j] = (f(x0 + e) - f(x0 - e)) / (2 * e[j])
+    f(x0)
+    J = np.array([m.getDirectionalDerivative(ders, [states[j]], [1.0]) for j in range(n)]).T
+    scale = max(1.0, np.max(np.abs(J)))
+    assert np.max(np.abs(J - fd)) < 1e-6 * scale, (J, fd)
+    assert np.count_nonzero(np.abs(J) > 1e-3 * scale) > n  # more than der(q) = u: real columns
+    m.terminate()
+    m.freeInstance()

@@ -5,13 +5,14 @@ run's handling, so FMPy's own CVODE, which locates the indicators' crossings, re
 import csv
 import io
 import math
+import os
 
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import kanesim
+from conftest import SOURCE, kanesim
 
 G = 9.81
 
@@ -29,36 +30,13 @@ equation
 end BouncingBall;
 """
 
-WHEN_BALL = """
-model WhenBall "A ball bouncing by a when clause with restitution e, stopped after 2 s"
-  parameter Real e = 0.8;
-  World world(g = {0, -9.81, 0});
-  Prismatic p(axis = {0, 1, 0}, q(start = 1));
-  Body b(m = 1, I = diagonal({1, 1, 1}));
-equation
-  connect(world.frame_b, p.frame_a);
-  connect(p.frame_b, b.frame_a);
-  when p.q < 0 then
-    reinit(p.u, -e * pre(p.u));
-  end when;
-  when time > 2 then
-    terminate("two seconds");
-  end when;
-  annotation(experiment(StopTime = 3, Interval = 0.01, Tolerance = 1e-10));
-end WhenBall;
-"""
+# The ball of docs/events.md (reinit(p.u, -e pre(p.u)), e = 0.8, terminate at 2 s), shared
+# with python/tests/test_events.py.
+WHEN_BALL = os.path.join(SOURCE, "tests", "data", "when_ball.mech")
 
-STOPPED = """
-model Stopped "A pendulum bouncing on its end stop until it rests there"
-  World world;
-  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3), q_min = -0.5, q_max = 0.5, restitution = 0.5);
-  Rod rod(L = 1, m = 1);
-equation
-  connect(world.frame_b, hinge.frame_a);
-  connect(hinge.frame_b, rod.frame_a);
-  annotation(experiment(StopTime = 2, Interval = 0.01, Tolerance = 1e-10));
-end Stopped;
-"""
+# A pendulum bouncing on its end stop (e = 0.5) until it rests on q_min, shared with
+# python/tests/test_events.py.
+STOPPED = os.path.join(SOURCE, "tests", "data", "stopped_pendulum.mech")
 
 
 def run(path, *args):
@@ -109,7 +87,7 @@ def test_a_bouncing_ball_through_fmpy_model_exchange_equals_run_and_the_closed_f
     fmu = export(path, fmi=fmi, kind="me")
     assert validate_fmu(fmu) == []
     md = read_model_description(fmu)
-    assert md.numberOfEventIndicators == 1
+    assert md.numberOfEventIndicators == 2  # the gap and its graze guard
     ref, events = run(path)
     r = me(fmu, 2.5, ["lift.q", "lift.u"])
     assert np.min(r["lift.q"]) > -1e-7  # never through the floor
@@ -135,10 +113,11 @@ def test_a_bouncing_ball_through_fmpy_model_exchange_equals_run_and_the_closed_f
 
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_a_pendulum_on_end_stops_through_fmpy_model_exchange_equals_run(export, write_model, fmi):
-    path = write_model("stopped.mech", STOPPED)
+    with open(STOPPED) as f:
+        path = write_model("stopped.mech", f.read())  # run() writes its events CSV beside it
     fmu = export(path, fmi=fmi, kind="me")
     assert validate_fmu(fmu) == []
-    assert read_model_description(fmu).numberOfEventIndicators == 2  # q_min, q_max
+    assert read_model_description(fmu).numberOfEventIndicators == 4  # q_min, q_max, their graze guards
     ref, events = run(path)
     r = me(fmu, 2, ["hinge.q", "hinge.u"])
     assert np.min(r["hinge.q"]) > -0.5 - 1e-7 and np.max(r["hinge.q"]) < 0.5 + 1e-7
@@ -159,7 +138,8 @@ def test_a_pendulum_on_end_stops_through_fmpy_model_exchange_equals_run(export, 
 def test_when_clauses_reinit_and_terminate_through_fmpy_model_exchange(export, write_model, fmi):
     # reinit(p.u, -e pre(p.u)) at p.q = 0, terminate at t = 2: the run's events, the closed
     # form's impact times t_1 (1 + 2 e + ... + 2 e^(k-1)), and the simulation ends at 2.
-    path = write_model("when.mech", WHEN_BALL)
+    with open(WHEN_BALL) as f:
+        path = write_model("when.mech", f.read())  # run() writes its events CSV beside it
     fmu = export(path, fmi=fmi, kind="me")
     assert validate_fmu(fmu) == []
     ref, events = run(path)
@@ -173,6 +153,32 @@ def test_when_clauses_reinit_and_terminate_through_fmpy_model_exchange(export, w
     assert np.max(np.abs(got - fires)) < 1e-7 and np.max(np.abs(got - closed)) < 1e-7
     assert r["p.u"][-1] == pytest.approx(ref["p.u"][-1], abs=1e-6)
 
+
+
+RESTING = os.path.join(SOURCE, "tests", "data", "resting_reinit.mech")
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_reinit_that_flings_a_resting_joint_off_its_stop_through_fmpy_model_exchange(export, write_model, fmi):
+    # The rod rests on q_max = -2 until a when clause sets its speed to -2 at t = 1: the FMU's
+    # event update releases it as the run does (docs/events.md), so it swings free and strikes
+    # the stop again at the run's time, at speed 2 (energy kept), bouncing back at -1.
+    with open(RESTING) as f:
+        path = write_model("resting.mech", f.read())  # run() writes its events CSV beside it
+    fmu = export(path, fmi=fmi, kind="me")
+    ref, events = run(path)
+    r = me(fmu, 2, ["j1.q", "j1.u"])
+    t, q, u = r["time"], r["j1.q"], r["j1.u"]
+    assert np.max(q) < -2 + 1e-7
+    assert np.all(q[t < 1 - 1e-9] == -2) and np.all(u[t < 1 - 1e-9] == 0)  # held on the stop
+    got = jumps(r, "j1.u")
+    impacts = impact_times(events)
+    assert len(got) >= 2 and abs(got[0] - 1) < 1e-9 and abs(got[1] - impacts[0]) < 1e-7
+    k = int(np.nonzero(t == got[1])[0][0])
+    assert u[k] == pytest.approx(2, abs=1e-6) and u[k + 1] == pytest.approx(-1, abs=1e-6)
+    fmu_q, run_q = on_grid(r, "j1.q"), on_grid(ref, "j1.q")
+    common = sorted(set(fmu_q) & set(run_q))
+    assert len(common) > 150 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
 
 
 SLIDER = """

@@ -126,16 +126,6 @@ def test_end_stops_are_handled_in_co_simulation(export, write_model, tmp_path):
     assert np.max(np.abs(res["hinge.q"][k[on_grid]] - ref["hinge.q"][on_grid])) < 1e-4
 
 
-def test_when_clauses_are_refused_for_co_simulation_not_integrated_through(write_model, tmp_path):
-    # The stepping core does not fire when clauses yet: refused where Co-Simulation is asked
-    # for (the default --kind both), with the way out (Model Exchange: test_events.py).
-    text = STOPPED.replace(", q_min = -0.5, q_max = 0.5", "").replace(
-        "end Stopped;", "  when hinge.q < 0 then\n    reinit(hinge.u, 0);\n  end when;\nend Stopped;")
-    r = kanesim("export", write_model("when.mech", text), "--fmi", "2", "-o", str(tmp_path / "w.fmu"), check=False)
-    assert r.returncode == 1 and "when (when.mech:9) clause is an event" in r.stderr and not (tmp_path / "w.fmu").exists()
-    assert "--kind me" in r.stderr
-
-
 def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
     r = kanesim("export", DDP, "--fmi", "4", "-o", str(tmp_path / "x.fmu"), check=False)
     assert r.returncode == 1

@@ -24,7 +24,7 @@ USES = {
     "stdlib": [],
     "geometry": ["util"],
     "lang": ["flat", "geometry"],
-    "import": ["util", "flat", "lang"],
+    "import": ["flat", "lang"],
     "runtime": ["flat"],
     "compiler": ["flat", "runtime"],
     "sim": ["runtime"],

@@ -19,25 +19,14 @@ import os
 import subprocess
 import sys
 
-M, L, G, TAU0 = 1.5, 0.8, 9.81, 2.0
-MODEL = f"""
-model Driven
-  input Real tau;
-  World world(g = {{0, -{G}, 0}});
-  Revolute j(axis = {{0, 0, 1}}, q(start = -1.2));
-  Rod rod(L = {L}, m = {M});
-  output Real twice = 2 * tau;
-equation
-  connect(world.frame_b, j.frame_a);
-  connect(j.frame_b, rod.frame_a);
-  j.tau = tau;
-end Driven;
-"""
+M, L, G, TAU0 = 1.5, 0.8, 9.81, 2.0  # the rod and gravity of MODEL
+# The driven rod, shared with python/tests/test_linearize.py.
+MODEL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "driven_pendulum.mech")
 
 
 def linearize(exe, work, name, *args):
     out = os.path.join(work, name + ".json")
-    r = subprocess.run([exe, "linearize", os.path.join(work, "driven.mech"), "--equilibrium", "--output", "twice",
+    r = subprocess.run([exe, "linearize", MODEL, "--equilibrium", "--output", "twice",
                         "-o", out, *args], capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"{name}: exit {r.returncode}\n{r.stderr}")
@@ -63,8 +52,6 @@ def check(name, lin, failures):
 def main():
     exe, work = sys.argv[1], sys.argv[2]
     os.makedirs(work, exist_ok=True)
-    with open(os.path.join(work, "driven.mech"), "w") as f:
-        f.write(MODEL)
     with open(os.path.join(work, "tau.csv"), "w") as f:
         f.write(f"time,tau\n0,{TAU0}\n5,{TAU0}\n")
     failures = []
@@ -73,8 +60,8 @@ def main():
     # Named again with --input: the same single column.
     check("--input tau", linearize(exe, work, "named", "--set", f"tau={TAU0}", "--input", "tau"), failures)
     # Nothing gives it: E239 at the declaration, exit 1.
-    r = subprocess.run([exe, "linearize", os.path.join(work, "driven.mech")], capture_output=True, text=True)
-    if r.returncode != 1 or "driven.mech:3:14: error[E239]: input 'tau' is not connected" not in r.stderr:
+    r = subprocess.run([exe, "linearize", MODEL], capture_output=True, text=True)
+    if r.returncode != 1 or "driven_pendulum.mech:2:14: error[E239]: input 'tau' is not connected" not in r.stderr:
         failures.append(f"no value: exit {r.returncode}, stderr {r.stderr!r}")
     if failures:
         sys.exit("\n".join(failures))

@@ -44,6 +44,24 @@ TEST(AllocFree, SparseDerivativeAllocatesNothing) {
   test::ExpectNoAllocation(test::Chain(80), rt::SolverPath::Sparse, rng);
 }
 
+TEST(AllocFree, PlanningARunsSignalsNamesOnlyThem) {
+  // If this fails, a run's start names every signal of the model (hundreds per body: frames,
+  // reactions, rotations) to plan the few it writes: the default signals, their plan and the
+  // energy guard's plan must cost allocations in proportion to the names asked for.
+  std::mt19937 rng(3);
+  auto r = rt::Compile(test::RandomTree(rng, {40, true, true, true}), {});
+  ASSERT_TRUE(r.errors.empty()) << r.errors[0].message;
+  const rt::Program& p = *r.program;
+  const long before = g_allocations.load();
+  const auto names = rt::DefaultSignals(p);
+  auto plan = rt::PlanSignals(p, names, nullptr);
+  auto energy = rt::PlanSignals(p, {"kinetic_energy", "potential_energy"}, nullptr);
+  const long used = g_allocations.load() - before;
+  ASSERT_TRUE(plan && energy);
+  EXPECT_LE(used, static_cast<long>(2 * names.size()) + 24)
+      << names.size() << " names asked for, " << rt::AvailableSignals(p).size() << " signals in all";
+}
+
 TEST(AllocFree, CounterSeesAllocations) {
   // If this fails, the counter is not wired and the two tests above prove nothing.
   const long before = g_allocations.load();

@@ -2,6 +2,7 @@
 // solver and integrator with reasons), prescribed-coordinate bookkeeping, jets.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -148,6 +149,53 @@ TEST(Compile, InitialStateFromStartValues) {
   const auto names = rt::DefaultSignals(*s.program);
   EXPECT_EQ(names.front(), "ball.q[1]");
   EXPECT_EQ(names.back(), "ball.u[3]");
+}
+
+TEST(Signals, NamesResolveToTheFirstSignalOfThatName) {
+  // If this fails, planning a joint's q or u, an output or an energy by name (the quick path
+  // a run's start takes without naming every signal) finds another signal than the first of
+  // that name in AvailableSignals: each state name must read its own entry of y, an output
+  // named "kinetic_energy" shadows the energy, a joint's "b1.q" shadows an output of that name.
+  std::mt19937 rng(11);
+  auto mech = test::RandomTree(rng, {14, true, true, true});  // j1 revolute, j2 prismatic
+  int j1 = 0;
+  while (mech.joints[static_cast<size_t>(j1)].name != "j1") ++j1;
+  const int ref = mech.AddStateRef({flat::StateKind::JointQ, j1, 0});
+  flat::Output twice, seven;
+  twice.name = "kinetic_energy";
+  twice.expr = mech.exprs.Binary(Op::Mul, mech.exprs.Constant(2.0), mech.exprs.State(ref));
+  seven.name = "j2.q";
+  seven.expr = mech.exprs.Constant(7.0);
+  mech.outputs = {twice, seven};
+  auto r = rt::Compile(mech, {});
+  ASSERT_TRUE(r.errors.empty()) << Dump(r);
+  const rt::Program& p = *r.program;
+  std::vector<double> y(static_cast<size_t>(rt::StateSize(p)));
+  for (size_t i = 0; i < y.size(); ++i) y[i] = 0.1 + 0.01 * static_cast<double>(i);
+  rt::InitialState(p, y.data());  // unit quaternions where the state has them
+  for (size_t i = 0; i < y.size(); ++i) y[i] += 1e-3 * static_cast<double>(i);
+  auto ws = rt::MakeWorkspace(p);
+  auto read = [&](const std::string& name) {
+    std::string err;
+    auto plan = rt::PlanSignals(p, {name}, &err);
+    EXPECT_TRUE(plan) << name << ": " << err;
+    double v = 0.0;
+    if (plan) {
+      EXPECT_EQ(rt::EvalSignals(p, *plan, *ws, 0.0, y.data(), &v), 0) << name;
+    }
+    return v;
+  };
+  const auto state = rt::StateNames(p);
+  for (size_t i = 0; i < state.size(); ++i) EXPECT_EQ(read(state[i]), y[i]) << state[i];
+  EXPECT_EQ(read("kinetic_energy"), 2.0 * read("j1.q"));
+  EXPECT_NE(read("j2.q"), 7.0);
+  auto sorted = [](std::vector<std::string> v) { std::sort(v.begin(), v.end()); return v; };
+  std::vector<std::string> expected = state;
+  expected.insert(expected.end(), {twice.name, seven.name});
+  EXPECT_EQ(sorted(rt::DefaultSignals(p)), sorted(expected));
+  std::string err;
+  EXPECT_FALSE(rt::PlanSignals(p, {"j2.q[1]"}, &err));  // one coordinate: no index
+  EXPECT_FALSE(rt::PlanSignals(p, {"b99.q"}, &err));
 }
 
 TEST(Tape, JetsMatchAnalyticDerivatives) {
