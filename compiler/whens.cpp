@@ -1,7 +1,8 @@
 // When clauses (flat::WhenClause -> Program::whens; docs/events.md): the indicators and reinit
 // values into the event tape, and what a reinit may set. A speed is set by an impulse through
-// the mass matrix (sim/when_events.cpp), which needs a tree without Coulomb friction; a
-// coordinate is set as it is, which needs a tree and a coordinate that is not a quaternion's.
+// the mass matrix (sim/when_events.cpp; resting stops and plane contacts held by
+// sim/end_stops.cpp), which needs a tree without Coulomb friction; a coordinate is set as it
+// is, which needs a tree and a coordinate that is not a quaternion's.
 #include <algorithm>
 #include <string>
 
@@ -23,9 +24,6 @@ std::string ReinitRefusal(const Program& p, const flat::StateRef& ref, int* stat
                    "(not supported yet)"
                  : "the mechanism has closed loops or contacts, whose position constraints a jump of a coordinate "
                    "would break";
-  if (!p.plane_contacts.empty())
-    return "the mechanism has plane contacts, whose gaps and resting rows a jump would also have to keep (not "
-           "supported yet)";
   const TreeJoint& j = p.joints[static_cast<size_t>(tj)];
   if (speed) {
     if (!p.friction_joints.empty())

@@ -144,8 +144,8 @@ Status VariableDependencies(Component* x, const std::string& call, unsigned vr, 
   if (vr >= vars.size()) return x->Log(kError, call + ": value reference " + std::to_string(vr) + " is not a variable");
   const bool initial = x->mode == Mode::kInstantiated || x->mode == Mode::kInitialization;
   const VarKind kind = vars[vr].kind;
-  const bool unknown = kind == VarKind::Derivative || kind == VarKind::Output ||
-                       (initial ? kind == VarKind::CalculatedParameter : kind == VarKind::Indicator);
+  const bool unknown = initial ? InitialUnknown(vars[vr])
+                               : kind == VarKind::Derivative || kind == VarKind::Output || kind == VarKind::Indicator;
   if (!unknown)
     return x->Log(kError, call + ": '" + vars[vr].name + "' is not an unknown " +
                               (initial ? "at initialization" : "after initialization") + " (ModelStructure)");

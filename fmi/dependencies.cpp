@@ -312,9 +312,16 @@ std::vector<UnknownDependencies> ModelDependencies(const rt::Program& p, const s
 namespace kanesim::fmi {
 
 std::vector<ListedKnown> ListedKnowns(const StructureLists& s, size_t v, bool initial) {
-  const UnknownDependencies& d = s.deps[v];
   std::vector<ListedKnown> out;
-  for (const Dependency& k : d.knowns) out.push_back({size_t(k.var), k.constant && !initial});
+  if (s.vars[v].kind == VarKind::State) {  // a calculated start: the parameters it is computed from
+    for (int p : s.vars[v].start_params) out.push_back({size_t(p), false});
+    return out;
+  }
+  const UnknownDependencies& d = s.deps[v];
+  // At initialization a state whose start is calculated is no known: its parameters (every
+  // tunable one is listed there) stand for it.
+  for (const Dependency& k : d.knowns)
+    if (!initial || s.vars[size_t(k.var)].start_params.empty()) out.push_back({size_t(k.var), k.constant && !initial});
   if (initial || (s.version == 3 && d.parameters))
     for (size_t p = 0; p < s.vars.size(); ++p)
       if (s.vars[p].kind == VarKind::Parameter) out.push_back({p, false});
@@ -324,12 +331,14 @@ std::vector<ListedKnown> ListedKnowns(const StructureLists& s, size_t v, bool in
 }
 
 // Runtime: states, inputs, FMI 3's parameters; initialization: inputs and every variable with
-// initial="exact" (the constants' too, FMI 3.0 section 2.4.8); FMI 3's time in both.
+// initial="exact" (the constants' and the states' whose start is not calculated, FMI 3.0
+// section 2.4.8); FMI 3's time in both.
 std::vector<ListedKnown> AllKnowns(const StructureLists& s, bool initial) {
   std::vector<ListedKnown> out;
   for (size_t k = 0; k < s.vars.size(); ++k) {
     const VarKind kind = s.vars[k].kind;
-    if (kind == VarKind::State || kind == VarKind::Input || (kind == VarKind::Parameter && (initial || s.version == 3)) ||
+    const bool exact_state = kind == VarKind::State && (!initial || s.vars[k].start_params.empty());
+    if (exact_state || kind == VarKind::Input || (kind == VarKind::Parameter && (initial || s.version == 3)) ||
         (kind == VarKind::Fixed && initial))
       out.push_back({k, false});
   }

@@ -263,10 +263,18 @@ FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3Va
     return x->Result(x->instance.DirectionalDerivative(unknowns, n_unknowns, knowns, n_knowns, seed, sensitivity));
   });
 }
-KANESIM_FMI3_NOT_PROVIDED(fmi3GetAdjointDerivative,
-                          (fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3ValueReference[], size_t,
-                           const fmi3Float64[], size_t, fmi3Float64[], size_t),
-                          "this FMU does not provide adjoint derivatives")
+// Scalar variables only: one seed per unknown, one sensitivity per known.
+FMI3_EXPORT fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[], size_t n_unknowns,
+                                                const fmi3ValueReference knowns[], size_t n_knowns,
+                                                const fmi3Float64 seed[], size_t n_seed, fmi3Float64 sensitivity[],
+                                                size_t n_sensitivity) {
+  return Fmi3Guarded(c, "fmi3GetAdjointDerivative", kf::kRunning, [&](Component* x) {
+    if (n_seed != n_unknowns || n_sensitivity != n_knowns)
+      return x->Log(kf::kError, "fmi3GetAdjointDerivative: one seed per unknown and one sensitivity per known "
+                                "(the variables are scalars)");
+    return x->Result(x->instance.AdjointDerivative(unknowns, n_unknowns, knowns, n_knowns, seed, sensitivity));
+  });
+}
 KANESIM_FMI3_NOT_PROVIDED(fmi3EnterConfigurationMode, (fmi3Instance c), "this FMU has no structural parameters to configure")
 KANESIM_FMI3_NOT_PROVIDED(fmi3ExitConfigurationMode, (fmi3Instance c), "this FMU has no structural parameters to configure")
 KANESIM_FMI3_NOT_PROVIDED(fmi3GetClock, (fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Clock[]), "this FMU has no clocks")

@@ -99,13 +99,7 @@ std::string Instance::Reset() {
 std::string Instance::Rebind() {
   if (params_changed_) {
     // Calculated parameters follow the tunable ones they are bound to (as sweeps do).
-    const flat::Mechanism& mech = *model_->mech;
-    std::vector<double> pv(params_.size());
-    for (size_t i = 0; i < pv.size(); ++i) {
-      const flat::Param& p = mech.params[i];
-      pv[i] = (p.binding == flat::kNoExpr || p.user_set) ? params_[i] : flat::EvalParamExpr(mech, pv, p.binding);
-    }
-    rt::CompileResult r = rt::Rebind(*model_->program, pv);
+    rt::CompileResult r = rt::Rebind(*model_->program, BoundValues(*model_->mech, params_));
     if (!r.program) {
       std::string msg = "the model does not compile with these parameter values";
       for (const rt::CompileMessage& e : r.errors) msg += "; " + e.message;
@@ -152,6 +146,9 @@ std::string Instance::SetReal(unsigned vr, double value) {
     return "";
   }
   if (v.kind == VarKind::State) {
+    if (!v.start_params.empty())  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
+      return "'" + v.name + "' starts where its parameters put it (initial=\"calculated\"): set those, as `" +
+             vars_[size_t(v.start_params[0])].name + "`";
     y_[v.index] = value;
     state_set_[v.index] = 1;
     stale_ = true;
@@ -365,6 +362,22 @@ std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_u
 
 // The stepping core from (t_, y_, inputs_): a start on a contact or with exact friction is
 // its first event, as a run starts (docs/fmi.md "Co-Simulation").
+std::string Instance::AdjointDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns,
+                                        size_t n_knowns, const double* seed, double* out) {
+  if ((n_unknowns > 0 && (!unknowns || !seed)) || (n_knowns > 0 && (!knowns || !out))) return "no place given";
+  for (size_t i = 0; i < n_unknowns; ++i)
+    if (!std::isfinite(seed[i])) return "a seed cannot be " + Number(seed[i]);
+  std::vector<double> column(n_unknowns);
+  const double one = 1.0;
+  for (size_t k = 0; k < n_knowns; ++k) {
+    if (std::string e = DirectionalDerivative(unknowns, n_unknowns, &knowns[k], 1, &one, column.data()); !e.empty())
+      return e;
+    out[k] = 0.0;
+    for (size_t i = 0; i < n_unknowns; ++i) out[k] += seed[i] * column[i];
+  }
+  return "";
+}
+
 std::string Instance::StartStepper() {
   sim::SimulatorOptions options;
   options.start_time = t_;

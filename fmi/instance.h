@@ -71,6 +71,11 @@ class Instance {
   std::string DirectionalDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns,
                                     size_t n_knowns, const double* seed, double* out);
 
+  // The adjoint: out[k] = sum_i seed[i] d(unknowns[i]) / d(knowns[k]), one directional
+  // derivative per known (FMI 3's fmi3GetAdjointDerivative).
+  std::string AdjointDerivative(const unsigned* unknowns, size_t n_unknowns, const unsigned* knowns, size_t n_knowns,
+                                const double* seed, double* out);
+
   // Co-Simulation: integrates from the current time to t + h with kanesim's stepping core
   // (sim::Simulator: one integrator across the steps, its history carried, the run's events
   // inside the step), the inputs held at their values over the step. A terminate(...) in a

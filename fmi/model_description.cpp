@@ -52,6 +52,12 @@ Attributes AttributesOf(VarKind kind) {
   }
   return {"local", "continuous", "calculated", false};
 }
+// A state's start computed from parameters: "calculated", without start (FMI 2.0.4 section
+// 2.2.7, FMI 3.0 section 2.4.7.4); an initial unknown.
+Attributes AttributesOf(const Variable& v) {
+  if (v.kind == VarKind::State && !v.start_params.empty()) return {"local", "continuous", "calculated", false};
+  return AttributesOf(v.kind);
+}
 
 std::string TypeElement(const Variable& v, const Attributes& a, const std::vector<Variable>& vars) {
   const char* tag = v.type == VarType::Integer ? "Integer" : v.type == VarType::Boolean ? "Boolean" : "Real";
@@ -88,11 +94,17 @@ std::string DependencyAttributes(const Structure& s, size_t v, bool initial) {
   return " dependencies=\"" + deps + "\"" + (structured ? " dependenciesKind=\"" + kinds + "\"" : "");
 }
 
+// The unknowns of one section, in variable order: those of `kinds`; the initial ones
+// (InitialUnknown) when `initial`.
+bool InSection(const Variable& v, std::initializer_list<VarKind> kinds, bool initial) {
+  return initial ? InitialUnknown(v) : std::find(kinds.begin(), kinds.end(), v.kind) != kinds.end();
+}
+
 void Unknowns(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
               bool initial) {
   std::string body;
   for (size_t k = 0; k < s.vars.size(); ++k)
-    if (std::find(kinds.begin(), kinds.end(), s.vars[k].kind) != kinds.end())
+    if (InSection(s.vars[k], kinds, initial))
       body += "      <Unknown index=\"" + std::to_string(k + 1) + "\"" + DependencyAttributes(s, k, initial) + "/>\n";
   if (!body.empty()) x << "    <" << tag << ">\n" << body << "    </" << tag << ">\n";
 }
@@ -100,7 +112,7 @@ void Unknowns(std::ostringstream& x, const char* tag, const Structure& s, std::i
 void UnknownsV3(std::ostringstream& x, const char* tag, const Structure& s, std::initializer_list<VarKind> kinds,
                 bool initial, bool with_dependencies = true) {
   for (size_t k = 0; k < s.vars.size(); ++k)
-    if (std::find(kinds.begin(), kinds.end(), s.vars[k].kind) != kinds.end())
+    if (InSection(s.vars[k], kinds, initial))
       x << "    <" << tag << " valueReference=\"" << k << "\""
         << (with_dependencies ? DependencyAttributes(s, k, initial) : "") << "/>\n";
 }
@@ -140,7 +152,7 @@ void UnitsAndExperiment(std::ostringstream& x, const std::vector<Variable>& vars
 
 // One variable of FMI 3.0 (section 2.4.7): the type is the element.
 std::string VariableV3(const Variable& v, size_t vr, const std::vector<Variable>& vars) {
-  const Attributes a = AttributesOf(v.kind);
+  const Attributes a = AttributesOf(v);
   const char* tag = v.type == VarType::Integer ? "Int32" : v.type == VarType::Boolean ? "Boolean" : "Float64";
   std::string e = std::string("    <") + tag + " name=\"" + Escape(v.name) + "\" valueReference=\"" +
                   std::to_string(vr) + "\" causality=\"" + a.causality + "\" variability=\"" + a.variability + "\"";
@@ -182,7 +194,7 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   x << "  <ModelVariables>\n";
   for (size_t k = 0; k < vars.size(); ++k) {
     const Variable& v = vars[k];
-    const Attributes a = AttributesOf(v.kind);
+    const Attributes a = AttributesOf(v);
     x << "    <!-- index " << k + 1 << " -->\n    <ScalarVariable name=\"" << Escape(v.name) << "\" valueReference=\"" << k
       << "\" causality=\"" << a.causality << "\" variability=\"" << a.variability << "\"";
     if (*a.initial) x << " initial=\"" << a.initial << "\"";
@@ -193,7 +205,7 @@ std::string ModelDescription(const pipeline::Model& model, const ExportOptions& 
   const Structure s{vars, ModelDependencies(*model.program, vars), 2};
   Unknowns(x, "Outputs", s, {VarKind::Output}, false);
   Unknowns(x, "Derivatives", s, {VarKind::Derivative}, false);
-  Unknowns(x, "InitialUnknowns", s, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter}, true);
+  Unknowns(x, "InitialUnknowns", s, {}, true);
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();
 }
@@ -206,6 +218,7 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   const std::string id = Identifier(mech.model_name);
   const std::string caps =
       " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\""
+      " providesAdjointDerivatives=\"true\""
       " providesPerElementDependencies=\"true\"";  // fmi3GetVariableDependencies: every variable is a scalar
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
@@ -225,7 +238,7 @@ std::string ModelDescription3(const pipeline::Model& model, const ExportOptions&
   const Structure s{vars, ModelDependencies(*model.program, vars), 3};
   UnknownsV3(x, "Output", s, {VarKind::Output}, false);
   UnknownsV3(x, "ContinuousStateDerivative", s, {VarKind::Derivative}, false);
-  UnknownsV3(x, "InitialUnknown", s, {VarKind::Derivative, VarKind::Output, VarKind::CalculatedParameter}, true);
+  UnknownsV3(x, "InitialUnknown", s, {}, true);
   UnknownsV3(x, "EventIndicator", s, {VarKind::Indicator}, false, false);
   x << "  </ModelStructure>\n</fmiModelDescription>\n";
   return x.str();

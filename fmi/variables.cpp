@@ -1,6 +1,8 @@
 #include "fmi/variables.h"
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 
 #include "lang/lang.h"
 #include "runtime/program/program.h"
@@ -51,7 +53,57 @@ std::vector<StateInfo> States(const rt::Program& p) {
   return out;
 }
 
+// Variable::start_params of vars' states: each tunable parameter moved (1e-4 relative) and the
+// program rebound, as the FMU rebinds for the master's values; a start that moves depends on
+// it. One compile per tunable parameter, at export and at instantiation.
+void FindStartParameters(const pipeline::Model& model, std::vector<Variable>* vars) {
+  const rt::Program& p = *model.program;
+  std::vector<Variable*> states;
+  for (Variable& v : *vars)
+    if (v.kind == VarKind::State) states.push_back(&v);
+  if (states.empty()) return;
+  const auto starts = [&](double dp, int param, std::vector<double>* y0) {
+    std::vector<double> pv = p.param_values;
+    pv[size_t(param)] += dp;
+    rt::CompileResult r = rt::Rebind(p, BoundValues(*model.mech, pv));
+    if (!r.program) return false;
+    y0->assign(states.size(), 0.0);
+    rt::InitialState(*r.program, y0->data());
+    return true;
+  };
+  for (size_t k = 0; k < vars->size(); ++k) {
+    const Variable& param = (*vars)[k];
+    if (param.kind != VarKind::Parameter) continue;
+    const double dp = 1e-4 * std::max(1.0, std::abs(param.start));
+    std::vector<double> y1;
+    if (!starts(dp, param.index, &y1) && !starts(-dp, param.index, &y1)) {
+      // Not movable alone (an entry of a rotation matrix or of an inertia, which must stay
+      // orthonormal or symmetric): with constraints, the assembly may follow it.
+      if (!p.rows.empty())
+        for (Variable* v : states) v->start_params.push_back(int(k));
+      continue;
+    }
+    for (size_t i = 0; i < states.size(); ++i)
+      if (std::abs(y1[i] - states[i]->start) > 1e-12 * (1.0 + std::abs(states[i]->start)))
+        states[i]->start_params.push_back(int(k));
+  }
+}
+
 }  // namespace
+
+bool InitialUnknown(const Variable& v) {
+  return v.kind == VarKind::Derivative || v.kind == VarKind::Output || v.kind == VarKind::CalculatedParameter ||
+         (v.kind == VarKind::State && !v.start_params.empty());
+}
+
+std::vector<double> BoundValues(const flat::Mechanism& mech, const std::vector<double>& params) {
+  std::vector<double> pv(params.size());
+  for (size_t i = 0; i < pv.size(); ++i) {
+    const flat::Param& p = mech.params[i];
+    pv[i] = (p.binding == flat::kNoExpr || p.user_set) ? params[i] : flat::EvalParamExpr(mech, pv, p.binding);
+  }
+  return pv;
+}
 
 std::vector<std::string> StateNames(const rt::Program& program) {
   std::vector<std::string> names;
@@ -67,14 +119,14 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
   std::vector<double> y0(states.size());
   rt::InitialState(p, y0.data());
   for (size_t i = 0; i < states.size(); ++i)
-    vars.push_back({states[i].name, VarKind::State, VarType::Real, int(i), y0[i], states[i].unit, ""});
+    vars.push_back({states[i].name, VarKind::State, VarType::Real, int(i), y0[i], states[i].unit, "", {}});
   for (size_t i = 0; i < states.size(); ++i)
     vars.push_back({"der(" + states[i].name + ")", VarKind::Derivative, VarType::Real, int(i), 0.0,
-                    states[i].der_unit, ""});
+                    states[i].der_unit, "", {}});
   for (int i = 0; i < rt::NumInputs(p); ++i)
-    vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, mech.inputs[size_t(i)].unit, ""});
+    vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, mech.inputs[size_t(i)].unit, "", {}});
   for (size_t i = 0; i < mech.outputs.size(); ++i)
-    vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, mech.outputs[i].unit, ""});
+    vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, mech.outputs[i].unit, "", {}});
   // Parameters: three passes so that each group is contiguous.
   for (int pass = 0; pass < 3; ++pass)
     for (size_t i = 0; i < mech.params.size(); ++i) {
@@ -93,12 +145,13 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
                         : q.is_constant ? "constant"
                         : fixed         ? "fixed at export"
                                         : "";
-      vars.push_back({std::string(mech.ParamName(i)), kind, type, int(i), p.param_values[i], q.unit, why});
+      vars.push_back({std::string(mech.ParamName(i)), kind, type, int(i), p.param_values[i], q.unit, why, {}});
     }
+  FindStartParameters(model, &vars);
   const std::vector<std::string> events = sim::HybridOde(model.program, 1e-6, 1e-6).IndicatorNames();
   for (size_t i = 0; i < events.size(); ++i)
     vars.push_back({"eventIndicator[" + std::to_string(i + 1) + "]", VarKind::Indicator, VarType::Real, int(i), 0.0, "",
-                    events[i] + " (an event where it crosses zero downwards)"});
+                    events[i] + " (an event where it crosses zero downwards)", {}});
   return vars;
 }
 

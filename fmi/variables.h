@@ -31,10 +31,22 @@ struct Variable {
   double start = 0.0;   // States, Parameter, Fixed: the value at export
   std::string unit;     // "" when the model gives none
   std::string description;
+  // State: the tunable parameters (table indices) its start is computed from (a start
+  // expression, a rotation's normalization, a closed loop's assembly): initial="calculated",
+  // an initial unknown. None: initial="exact", the start the description gives.
+  std::vector<int> start_params;
 };
+
+// The variable is an initial unknown of ModelStructure: a derivative, an output, a
+// calculated parameter, a state whose start is calculated.
+bool InitialUnknown(const Variable& v);
 
 // The table for a loaded, compiled model (model.program set).
 std::vector<Variable> ListVariables(const pipeline::Model& model);
+
+// The parameter values a program is rebound with: `params` (one per mech param), those bound
+// to others (calculated parameters the master did not set) evaluated from them.
+std::vector<double> BoundValues(const flat::Mechanism& mech, const std::vector<double>& params);
 
 // The names of the continuous states, y index order.
 std::vector<std::string> StateNames(const rt::Program& program);

@@ -288,27 +288,99 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
 }
 
 int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::string& clause,
-                        const std::vector<int>& states, const std::function<int(const std::vector<int>&)>& jump) {
+                        const std::vector<int>& states, const std::function<int()>& jump) {
   const std::vector<char> before = RestingSet();
+  const bool coordinate = std::any_of(states.begin(), states.end(), [&](int k) { return k < nq_; });
   for (Side& s : sides_) {
-    if (!s.resting || s.stop < 0) continue;
-    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
-    if (std::find_if(states.begin(), states.end(), [&](int k) { return k == st.q || k == nq_ + st.u; }) != states.end())
-      s.resting = false, s.accumulates_at = 0.0;  // the reinit decides where it is and how it moves
+    if (!s.resting) continue;
+    bool set = false;  // the reinit decides where it is and how it moves
+    if (s.stop >= 0) {
+      const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+      set = std::any_of(states.begin(), states.end(), [&](int k) { return k == st.q || k == nq_ + st.u; });
+    } else if (coordinate) {
+      set = true;  // its gap moves with the coordinates
+    } else {  // only speeds the clause sets in the contact's row
+      double gap = 0.0, c = 0.0;
+      if (int r = Row(ws, t, y, s, &gap, J_.data(), &c); r != 0) return r;
+      set = true;
+      for (int k = 0; k < nu_; ++k)
+        if (J_[static_cast<size_t>(k)] != 0.0 && std::find(states.begin(), states.end(), nq_ + k) == states.end())
+          set = false;
+    }
+    if (set) s.resting = false, s.accumulates_at = 0.0;
   }
-  if (int s = jump(RestingSpeeds()); s != 0) return s;
+  if (int s = jump(); s != 0) return s;
+  for (const Side& s : sides_)  // exactly at rest (the impulse's round-off aside)
+    if (s.resting && s.stop >= 0) y[nq_ + stops_[static_cast<size_t>(s.stop)].u] = 0.0;
   for (const Side& s : sides_) {  // set past its stop: no impact law says what follows
     double gap = 0.0, c = 0.0;
     if (int r = Row(ws, t, y, s, &gap, J_.data(), &c); r != 0) return r;
     if (-gap > kPastRows * (atol_ + rtol_ * Scale(s))) {
       char buf[300];
-      std::snprintf(buf, sizeof buf, "%s sets %s past %s by %.3g (a reinit may put a joint on its stop, not beyond)",
+      std::snprintf(buf, sizeof buf,
+                    "%s sets %s past %s by %.3g (a reinit may put it on its stop or plane, not beyond)",
                     clause.c_str(), Who(s).c_str(), Where(s).c_str(), -gap);
       error_ = buf;
       return -1;
     }
   }
   return Settle(ws, t, y, before);
+}
+
+int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
+                            const std::vector<double>& targets, double* du) {
+  const size_t n = speeds.size(), nu = static_cast<size_t>(nu_);
+  std::vector<int> held;
+  for (size_t i = 0; i < sides_.size(); ++i)
+    if (sides_[i].resting) held.push_back(static_cast<int>(i));
+  for (;;) {
+    const size_t m = n + held.size();
+    std::vector<double> X(m * nu), J(m * nu, 0.0), A(m * m), b(targets), c;
+    for (size_t j = 0; j < n; ++j) {
+      J[j * nu + static_cast<size_t>(speeds[j])] = 1.0;
+      if (int r = rt::InverseMassColumn(program_, ws, t, y, speeds[j], X.data() + j * nu); r != 0) return r;
+    }
+    for (size_t h = 0; h < held.size(); ++h) {
+      double gap = 0.0, bias = 0.0;
+      if (int r = Row(ws, t, y, sides_[static_cast<size_t>(held[h])], &gap, J.data() + (n + h) * nu, &bias); r != 0)
+        return r;
+      if (int r = rt::InverseMassTimes(program_, ws, t, y, J.data() + (n + h) * nu, X.data() + (n + h) * nu); r != 0)
+        return r;
+      b.push_back(0.0);
+    }
+    for (size_t r = 0; r < m; ++r)
+      for (size_t j = 0; j < m; ++j) {
+        double a = 0.0;
+        for (size_t i = 0; i < nu; ++i) a += J[r * nu + i] * X[j * nu + i];
+        A[r * m + j] = a;
+      }
+    if (!SolveSmall(A, b, &c)) {
+      std::vector<int> rows(held);
+      error_ = SingularRows(rows) + " (with the speeds a when clause sets)";
+      return -1;
+    }
+    // A held contact whose impulse would pull leaves (the most pulling first): it is not
+    // held, and the jump is solved again without it.
+    double scale = 0.0;
+    for (double v : c) scale = std::max(scale, std::abs(v));
+    size_t pull = m;
+    for (size_t h = 0; h < held.size(); ++h)
+      if (c[n + h] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale &&
+          (pull == m || c[n + h] < c[pull]))
+        pull = n + h;
+    if (pull < m) {
+      sides_[static_cast<size_t>(held[pull - n])].resting = false;
+      sides_[static_cast<size_t>(held[pull - n])].accumulates_at = 0.0;
+      held.erase(held.begin() + static_cast<long>(pull - n));
+      continue;
+    }
+    for (size_t i = 0; i < nu; ++i) {
+      double d = 0.0;
+      for (size_t j = 0; j < m; ++j) d += X[j * nu + i] * c[j];
+      du[i] = d;
+    }
+    return 0;
+  }
 }
 
 int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double v, bool settle) {

@@ -43,13 +43,21 @@ class EndStopEvents {
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
   // A when clause's jump at (t, y) (sim/when_events.h, docs/events.md "Statements"): the
-  // joints whose coordinate or speed it sets (`states`, indices into y) leave their rest;
-  // `jump(held)` moves y with the other resting joints' speeds (held) kept at zero; then the
-  // resting set is made consistent (Settle): a released joint moving into its stop strikes it
-  // (its restitution), one set at rest on its stop rests again, a side the jump made pull leaves.
-  // `clause` names the clause in the error of a jump that sets a joint past its stop.
+  // contacts whose motion it sets leave their rest (a stop whose joint's coordinate or speed
+  // is in `states`, indices into y; a plane contact whose row has only speeds it sets, or
+  // every plane contact when it sets a coordinate); `jump()` moves y (its speeds through
+  // HeldJump); then the resting set is made consistent (Settle): a released contact moving
+  // into its stop or plane strikes it (its restitution), one set at rest there rests again, a
+  // side the jump made pull leaves. `clause` names the clause in the error of a jump that
+  // sets a contact past its stop or plane.
   int Jump(rt::Workspace& ws, double t, double* y, const std::string& clause, const std::vector<int>& states,
-           const std::function<int(const std::vector<int>&)>& jump);
+           const std::function<int()>& jump);
+  // A when clause's speed jump du at (t, y): the free speeds `speeds` change by `targets`, the
+  // resting contacts' gap rates held at zero by impulses that push; one whose impulse would
+  // pull leaves its rest (the Settle after the jump logs it). 0, Derivative's codes, or -1
+  // (Error(): the rows are dependent).
+  int HeldJump(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
+               const std::vector<double>& targets, double* du);
   const std::vector<EventRecord>& Log() const { return log_; }
   // Why the last impulse or reaction had no solution ("" after one that had).
   const std::string& Error() const { return error_; }

@@ -109,9 +109,12 @@ class EngineOde final : public OdeSystem {
       if (!stops_) {
         s = whens_->Event(ws_, t, y, w, {});
         events_.push_back(whens_->Last());
-      } else {  // the joints it sets leave their stops' rest, which the jump may restore (EndStopEvents::Jump)
+      } else {  // the contacts it sets leave their rest, the others held (EndStopEvents::Jump, HeldJump)
         const size_t logged = stops_->Log().size();
-        s = stops_->Jump(ws_, t, y, whens_->Name(w), whens_->States(w), [&](const std::vector<int>& held) {
+        auto held = [&](const std::vector<int>& rows, const std::vector<double>& targets, double* du) {
+          return stops_->HeldJump(ws_, t, y, rows, targets, du);
+        };
+        s = stops_->Jump(ws_, t, y, whens_->Name(w), whens_->States(w), [&]() {
           const int r = whens_->Event(ws_, t, y, w, held);
           events_.push_back(whens_->Last());
           return r;

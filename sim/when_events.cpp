@@ -1,6 +1,6 @@
 // When clauses as events (sim/when_events.h). A reinit of speed k is the jump
-// du = M^-1 J^T lambda, J the rows of the reinit'ed speeds (and of the joints resting on their
-// stops), lambda such that those speeds take their new values (the resting ones stay 0): the
+// du = M^-1 J^T lambda, J the rows of the reinit'ed speeds (and of the resting contacts, held
+// by EndStopEvents::HeldJump), lambda such that those speeds take their new values: the
 // generalized impulse acts on the reinit'ed joints only, so every other joint's generalized
 // momentum p_j = (M u)_j is unchanged across the jump.
 #include "sim/when_events.h"
@@ -28,16 +28,11 @@ int WhenEvents::Functions(rt::Workspace& ws, double t, const double* y, double* 
   return 0;
 }
 
-// A jump whose rows' block of M^-1 is singular: a speed set twice, or set and held (a resting
-// joint the stops did not release: EndStopEvents::Jump releases every joint a clause sets).
-std::string WhenEvents::SingularJump(const std::string& clause, const std::vector<int>& rows) const {
-  const std::vector<std::string> names = rt::StateNames(program_);
-  std::string which;
-  for (size_t j = 0; j < rows.size(); ++j)
-    for (size_t k = 0; k < j; ++k)
-      if (rows[j] == rows[k] && which.empty()) which = names[static_cast<size_t>(nq_ + rows[j])];
-  return clause + ": the reinit's speed jump has no unique solution: " +
-         (which.empty() ? "the speeds it sets are dependent" : "'" + which + "' is constrained twice");
+// A jump whose rows' block of M^-1 is singular: the speeds set and the contacts held have
+// dependent rows (a speed is set once per clause: E226).
+std::string WhenEvents::SingularJump(const std::string& clause) const {
+  return clause + ": the reinit's speed jump has no unique solution: the speeds it sets and the contacts held at "
+                  "rest constrain the same motion";
 }
 
 const std::string& WhenEvents::Name(int i) const {
@@ -52,7 +47,7 @@ std::vector<int> WhenEvents::States(int i) const {
   return out;
 }
 
-int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const std::vector<int>& held) {
+int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpSolver& solve) {
   if (i < 0 || i >= Count()) return 0;
   const rt::WhenModel& w = program_.whens[static_cast<size_t>(clause_of_[static_cast<size_t>(i)])];
   last_ = EventRecord(t, w.name, w.terminate ? "terminate: " + w.message : "fires");
@@ -66,16 +61,15 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const std::
   for (size_t k = 0; k < w.reinits.size(); ++k)
     if (w.reinits[k].speed) rows.push_back(w.reinits[k].state - nq_), targets.push_back(value[k] - y[w.reinits[k].state]);
   if (!rows.empty()) {
-    for (int h : held) rows.push_back(h), targets.push_back(0.0);
     std::vector<double> du(static_cast<size_t>(nu_));
-    if (int s = SpeedJump(program_, ws, t, y, rows, targets, du.data()); s != 0) {
-      if (s == -1) error_ = SingularJump(w.name, rows);
+    const int s = solve ? solve(rows, targets, du.data()) : SpeedJump(program_, ws, t, y, rows, targets, du.data());
+    if (s != 0) {
+      if (s == -1) error_ = SingularJump(w.name);
       return s;
     }
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
     for (size_t k = 0; k < w.reinits.size(); ++k)  // exactly the values written (du's round-off aside)
       if (w.reinits[k].speed) y[w.reinits[k].state] = value[k];
-    for (int h : held) y[nq_ + h] = 0.0;
   }
   if (w.terminate) {
     terminated_ = true;

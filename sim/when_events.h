@@ -4,6 +4,7 @@
 // an impulse through the mass matrix (sim/impulse.h) and may end the run.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -19,10 +20,14 @@ class WhenEvents {
   int Count() const { return static_cast<int>(clause_of_.size()); }
   // g_i = -h_i for every indicator of every clause, in order. 0, or Derivative's codes.
   int Functions(rt::Workspace& ws, double t, const double* y, double* g);
+  // The speeds' jump du (nu entries) that changes the free speeds `rows` by `targets`:
+  // 0, Derivative's codes, or -1 when it has no unique solution.
+  using JumpSolver = std::function<int(const std::vector<int>& rows, const std::vector<double>& targets, double* du)>;
   // Indicator i crossed at (t, y): its clause's reinits, every value taken at the left limit;
-  // coordinates set, then the speeds by one impulse that also keeps `held` (free speeds
-  // held at zero: joints resting on their stops) at zero. y jumps in place.
-  int Event(rt::Workspace& ws, double t, double* y, int i, const std::vector<int>& held);
+  // coordinates set, then the speeds by one impulse: `solve` (null: SpeedJump, the impulse
+  // on those speeds alone; EndStopEvents::HeldJump also holds the resting contacts). y jumps
+  // in place.
+  int Event(rt::Workspace& ws, double t, double* y, int i, const JumpSolver& solve = nullptr);
   // The entries of y that indicator i's clause sets (coordinates and speeds).
   std::vector<int> States(int i) const;
   // Indicator i's clause: "when (file.mech:12)".
@@ -36,7 +41,7 @@ class WhenEvents {
   const std::string& Error() const { return error_; }
 
  private:
-  std::string SingularJump(const std::string& clause, const std::vector<int>& rows) const;
+  std::string SingularJump(const std::string& clause) const;
   const rt::Program& program_;
   std::vector<int> clause_of_, root_of_;  // per indicator: its clause, its tape root
   int nq_ = 0, nu_ = 0;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,13 @@ inline sim::MemorySink RunWith(const rt::Program& p, const IntegratorChoice& how
   sim::MemorySink sink;
   *result = sim::Simulate(p, o, sink);
   return sink;
+}
+
+// x in a model text, every digit kept (%.17g).
+inline std::string Num(double x) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", x);
+  return b;
 }
 
 // "K310: message\n" for every compile message, for failure output.

@@ -17,12 +17,6 @@ namespace {
 constexpr double kG = 9.81;
 const double kHalfPi = std::acos(0.0);
 
-std::string Num(double x) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
-
 // A uniform rod (L = 1, m = 1) on a revolute about z under gravity -y: with phi = q + pi/2
 // the angle from hanging down, phi'' = -w^2 sin(phi), w^2 = 3 g / (2 L).
 const double kW = std::sqrt(1.5 * kG);

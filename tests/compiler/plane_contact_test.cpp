@@ -26,12 +26,6 @@ bool Exact(const IntegratorChoice& how) {
   return how.kind != rt::Integrator::CvodeAdams && how.kind != rt::Integrator::CvodeBdf;
 }
 
-std::string Num(double x) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
-
 // A point mass on a vertical prismatic joint, dropped from h onto the plane y = 0.
 std::string Ball(double h, double e) {
   return "model Ball\n"

@@ -15,12 +15,6 @@ namespace {
 
 constexpr double kG = 9.81;
 
-std::string Num(double x) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
-
 // A block (m = 2) on a horizontal prismatic joint, spring k = 20 to x = 0, friction mu = 0.1
 // against the normal force N = m g: F = mu m g. Released at rest at x0 = 1 it slides while
 // k |x| > F_s: each half-cycle is pi / w long (w^2 = k / m, about the shifted centre +-F/k) and

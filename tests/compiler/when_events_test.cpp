@@ -21,12 +21,6 @@ constexpr double kG = 9.81;
 const double kHalfPi = std::acos(0.0);
 const double kW = std::sqrt(1.5 * kG);  // the rod pendulum's w^2 = 3 g / (2 L), L = 1
 
-std::string Num(double x) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
-
 // The pairs of rows at one time (an event's left and right limits): index of the left row.
 std::vector<size_t> EventRows(const sim::MemorySink& s) {
   std::vector<size_t> at;

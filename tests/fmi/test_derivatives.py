@@ -142,7 +142,7 @@ def test_directional_derivatives_of_a_tree_and_a_closed_loop_equal_central_diffe
     me = md.modelExchange
     caps = ET.parse(os.path.join(d, "modelDescription.xml")).getroot().find("ModelExchange").attrib
     assert caps["providesDirectionalDerivative" if fmi == 2 else "providesDirectionalDerivatives"] == "true"
-    assert caps.get("providesAdjointDerivatives", "false") == "false"  # fmi3GetAdjointDerivative is refused
+    assert fmi == 2 or caps["providesAdjointDerivatives"] == "true"
     Model = FMU2Model if fmi == 2 else FMU3Model
     m = Model(guid=md.guid, unzipDirectory=d, modelIdentifier=me.modelIdentifier)
     m.instantiate()
@@ -179,5 +179,22 @@ def test_directional_derivatives_of_a_tree_and_a_closed_loop_equal_central_diffe
     scale = max(1.0, np.max(np.abs(J)))
     assert np.max(np.abs(J - fd)) < 1e-6 * scale, (J, fd)
     assert np.count_nonzero(np.abs(J) > 1e-3 * scale) > n  # more than der(q) = u: real columns
+    m.terminate()
+    m.freeInstance()
+
+
+def test_fmi3_adjoint_derivatives_are_the_transposed_jacobian(export, write_model, tmp_path):
+    # fmi3GetAdjointDerivative (providesAdjointDerivatives="true"): v^T J for the unknowns'
+    # seeds v, J the directional derivatives' (checked against differences above).
+    model = write_model("double.mech", DOUBLE)
+    m, md, vr, states, _, _ = me_instance(export(model, fmi=3, kind="me"), tmp_path, 3)
+    J = jacobian(m, vr, states)
+    unknowns = [vr[f"der({s})"] for s in states] + [vr["tip"]]
+    knowns = [vr[k] for k in states + ["tau"]]
+    for v in (np.array([0.3, -1.2, 0.5, 2.0, -0.7]), np.eye(5)[4]):
+        adj = m.getAdjointDerivative(unknowns, knowns, list(v), nSensitivity=len(knowns))
+        assert np.max(np.abs(np.array(adj) - v @ J)) < 1e-9 * max(1.0, np.max(np.abs(J)))
+    with pytest.raises(Exception):  # one seed per unknown
+        m.getAdjointDerivative(unknowns, knowns, [1.0], nSensitivity=len(knowns))
     m.terminate()
     m.freeInstance()

@@ -69,10 +69,19 @@ def check_api_equals_description(fmu, tmp_path):
                 vr = u.variable.valueReference
                 assert answered(m, vr) == described(md, u, initial), (phase, u.variable.name)
                 checked += 1
-    # A state is a known after initialization, no unknown: an error, not a list.
+    # A state is a known after initialization, no unknown; buffers of the wrong size or none;
+    # an unknown value reference: errors, not a list (nor a crash).
     state = md.derivatives[0].variable.derivative.valueReference
-    with pytest.raises(Exception):
-        m.fmi3GetNumberOfVariableDependencies(m.component, fmi3ValueReference(state), byref(c_size_t()))
+    der = fmi3ValueReference(md.derivatives[0].variable.valueReference)
+    k = len(answered(m, der.value))
+    bufs = lambda n: ((c_size_t * n)(), (fmi3ValueReference * n)(), (c_size_t * n)(), (fmi3DependencyKind * n)())
+    for call in (lambda: m.fmi3GetNumberOfVariableDependencies(m.component, fmi3ValueReference(state), byref(c_size_t())),
+                 lambda: m.fmi3GetNumberOfVariableDependencies(m.component, fmi3ValueReference(10**6), byref(c_size_t())),
+                 lambda: m.fmi3GetNumberOfVariableDependencies(m.component, der, None),
+                 lambda: m.fmi3GetVariableDependencies(m.component, der, *bufs(k + 1), c_size_t(k + 1)),
+                 lambda: m.fmi3GetVariableDependencies(m.component, der, None, None, None, None, c_size_t(k))):
+        with pytest.raises(Exception):
+            call()
     m.terminate()
     m.freeInstance()
     return checked
