@@ -347,7 +347,8 @@ long EventRow(const Trajectory& golden, size_t k, const Trajectory& run) {
   long best = -1;
   for (size_t i = static_cast<size_t>(std::upper_bound(run.t.begin(), run.t.end(), lo) - run.t.begin());
        i + 1 < run.t.size() && run.t[i] < hi; ++i)
-    if (run.t[i + 1] == run.t[i] && (best < 0 || std::abs(run.t[i] - t[k]) < std::abs(run.t[static_cast<size_t>(best)] - t[k])))
+    if (run.t[i + 1] == run.t[i] &&
+        (best < 0 || std::abs(run.t[i] - t[k]) < std::abs(run.t[static_cast<size_t>(best)] - t[k])))
       best = static_cast<long>(i);
   return best < 0 ? -1 : best + (right ? 1 : 0);
 }

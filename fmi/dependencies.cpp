@@ -321,7 +321,7 @@ std::vector<ListedKnown> ListedKnowns(const StructureLists& s, size_t v, bool in
   // At initialization a state whose start is calculated is no known: its parameters (every
   // tunable one is listed there) stand for it.
   for (const Dependency& k : d.knowns)
-    if (!initial || s.vars[size_t(k.var)].start_params.empty()) out.push_back({size_t(k.var), k.constant && !initial});
+    if (!initial || !s.vars[size_t(k.var)].start_calculated) out.push_back({size_t(k.var), k.constant && !initial});
   if (initial || (s.version == 3 && d.parameters))
     for (size_t p = 0; p < s.vars.size(); ++p)
       if (s.vars[p].kind == VarKind::Parameter) out.push_back({p, false});
@@ -337,7 +337,7 @@ std::vector<ListedKnown> AllKnowns(const StructureLists& s, bool initial) {
   std::vector<ListedKnown> out;
   for (size_t k = 0; k < s.vars.size(); ++k) {
     const VarKind kind = s.vars[k].kind;
-    const bool exact_state = kind == VarKind::State && (!initial || s.vars[k].start_params.empty());
+    const bool exact_state = kind == VarKind::State && (!initial || !s.vars[k].start_calculated);
     if (exact_state || kind == VarKind::Input || (kind == VarKind::Parameter && (initial || s.version == 3)) ||
         (kind == VarKind::Fixed && initial))
       out.push_back({k, false});

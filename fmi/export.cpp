@@ -1,6 +1,7 @@
 // `kanesim export --fmi 2|3`: the FMU file, zipped with Debian's minizip.
 #include <zip.h>
 
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -74,6 +75,24 @@ class Zip {
   zipFile zf_;
 };
 
+// The data files the model read (its meshes) go into resources/files/ (an FMU carries what
+// it reads): their entries and names into *settings, their bytes into *contents.
+std::string CarryDataFiles(const flat::Mechanism& mech, FmuSettings* settings, std::vector<std::string>* contents) {
+  if (mech.data_files.empty()) return "";
+  settings->main = mech.source_files.front();
+  for (const std::string& path : mech.data_files) {
+    if (path.find('\n') != std::string::npos || settings->main.find('\n') != std::string::npos)
+      return "cannot export a file name with a line break: " + path;
+    std::string entry = fs::path(path).filename().string();
+    for (char& c : entry)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-' && c != '_') c = '_';
+    settings->files.emplace_back("files/" + std::to_string(settings->files.size() + 1) + "-" + entry, path);
+    contents->emplace_back();
+    if (!ReadFile(path, &contents->back())) return "cannot read " + path + ", a file the model reads";
+  }
+  return "";
+}
+
 }  // namespace
 
 std::string FmuBinariesDir(std::string* error) {
@@ -105,7 +124,11 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
   settings.model = options.model.empty() ? model.mech->model_name : options.model;
   settings.sets = options.sets;
   settings.integrator = options.integrator;
-  settings.guid = Guid(model_text + "\n" + FormatSettings(settings) + std::to_string(options.version));
+  std::vector<std::string> contents;
+  if (std::string e = CarryDataFiles(*model.mech, &settings, &contents); !e.empty()) return e;
+  std::string hashed = model_text + "\n" + FormatSettings(settings) + std::to_string(options.version);
+  for (const std::string& c : contents) hashed += c;
+  settings.guid = Guid(hashed);
   const std::string id = Identifier(model.mech->model_name);
 
   Zip zip(options.output);
@@ -115,6 +138,7 @@ std::string ExportFmu(const pipeline::Model& model, const std::string& model_tex
   const std::string platform = options.version == 3 ? "binaries/x86_64-linux/" : "binaries/linux64/";
   bool ok = zip.Add("modelDescription.xml", description) &&
             zip.Add("resources/model.mech", model_text) && zip.Add("resources/settings.txt", FormatSettings(settings));
+  for (size_t i = 0; i < contents.size(); ++i) ok = ok && zip.Add("resources/" + settings.files[i].first, contents[i]);
   // The model's library under the FMU's name, and beside it the shared libraries it needs
   // that are not the system's (its RPATH is $ORIGIN).
   for (const fs::directory_entry& entry : fs::directory_iterator(bin)) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "linearize/linearize.h"
@@ -28,6 +29,8 @@ std::string FormatSettings(const FmuSettings& s) {
   for (const std::string& set : s.sets) text += "set " + set + "\n";
   if (!s.integrator.empty()) text += "integrator " + s.integrator + "\n";
   if (s.rtol > 0) text += "rtol " + Number(s.rtol) + "\n";
+  if (!s.main.empty()) text += "main " + s.main + "\n";
+  for (const auto& [entry, path] : s.files) text += "file " + entry + " " + path + "\n";
   return text;
 }
 
@@ -43,6 +46,9 @@ bool ParseSettings(const std::string& text, FmuSettings* out, std::string* error
     else if (key == "set") out->sets.push_back(value);
     else if (key == "integrator") out->integrator = value;
     else if (key == "rtol") out->rtol = std::strtod(value.c_str(), nullptr);
+    else if (key == "main") out->main = value;
+    else if (key == "file" && value.find(' ') != std::string::npos)
+      out->files.emplace_back(value.substr(0, value.find(' ')), value.substr(value.find(' ') + 1));
     else {
       *error = "settings.txt: unknown key '" + key + "'";
       return false;
@@ -66,7 +72,19 @@ std::string Instance::Load(const std::string& dir, const std::string& guid) {
   pipeline::LoadOptions load;
   load.model = settings_.model;
   load.sets = settings_.sets;
-  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(dir + "/model.mech"), load, spec);
+  // The model's data files from resources/ only, under the names the model gives them
+  // (resolved against the main file's name at export, which the text is loaded under).
+  std::map<std::string, std::string> files;
+  for (const auto& [entry, path] : settings_.files) files[path] = dir + "/" + entry;
+  load.data_files = &files;
+  pipeline::Source source = pipeline::Source::File(dir + "/model.mech");
+  if (!settings_.main.empty()) {
+    std::ifstream m(dir + "/model.mech", std::ios::binary);
+    std::stringstream model_text;
+    model_text << m.rdbuf();
+    source = pipeline::Source::Text(settings_.main, model_text.str());
+  }
+  pipeline::LoadResult r = pipeline::LoadModel(source, load, spec);
   if (!r.model) return "the model does not load:\n" + r.diagnostics;
   model_ = std::move(r.model);
   vars_ = ListVariables(*model_);
@@ -146,9 +164,11 @@ std::string Instance::SetReal(unsigned vr, double value) {
     return "";
   }
   if (v.kind == VarKind::State) {
-    if (!v.start_params.empty())  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
-      return "'" + v.name + "' starts where its parameters put it (initial=\"calculated\"): set those, as `" +
-             vars_[size_t(v.start_params[0])].name + "`";
+    if (v.start_calculated)  // FMI 2.0.4 table 2.2.7, FMI 3.0 section 2.4.7.4: initial="calculated"
+      return "'" + v.name + "' starts where " +
+             (v.start_params.empty() ? std::string("the assembly of the model's constraints puts it")
+                                     : "its parameters put it (set those, as `" + vars_[size_t(v.start_params[0])].name + "`)") +
+             ": initial=\"calculated\"";
     y_[v.index] = value;
     state_set_[v.index] = 1;
     stale_ = true;

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fmi/dependencies.h"
@@ -23,6 +24,11 @@ struct FmuSettings {
   std::string guid;                // what modelDescription.xml says
   std::string integrator;          // Co-Simulation's integrator ("" = the compiler's choice)
   double rtol = 0.0;               // 0: the experiment's tolerance
+  // The data files (meshes) the model reads, carried in resources/: each as (its entry under
+  // resources/, the path the model names, resolved as at export against `main`, the main
+  // file's name then). The FMU reads these and no other file.
+  std::string main;
+  std::vector<std::pair<std::string, std::string>> files;
 };
 std::string FormatSettings(const FmuSettings& settings);
 bool ParseSettings(const std::string& text, FmuSettings* out, std::string* error);

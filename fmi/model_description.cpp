@@ -55,7 +55,7 @@ Attributes AttributesOf(VarKind kind) {
 // A state's start computed from parameters: "calculated", without start (FMI 2.0.4 section
 // 2.2.7, FMI 3.0 section 2.4.7.4); an initial unknown.
 Attributes AttributesOf(const Variable& v) {
-  if (v.kind == VarKind::State && !v.start_params.empty()) return {"local", "continuous", "calculated", false};
+  if (v.kind == VarKind::State && v.start_calculated) return {"local", "continuous", "calculated", false};
   return AttributesOf(v.kind);
 }
 

@@ -87,13 +87,16 @@ void FindStartParameters(const pipeline::Model& model, std::vector<Variable>* va
       if (std::abs(y1[i] - states[i]->start) > 1e-12 * (1.0 + std::abs(states[i]->start)))
         states[i]->start_params.push_back(int(k));
   }
+  // With constraints the assembly computes the start from all of them together: a value the
+  // master set for one state would not be assembled with the others.
+  for (Variable* v : states) v->start_calculated = !p.rows.empty() || !v->start_params.empty();
 }
 
 }  // namespace
 
 bool InitialUnknown(const Variable& v) {
   return v.kind == VarKind::Derivative || v.kind == VarKind::Output || v.kind == VarKind::CalculatedParameter ||
-         (v.kind == VarKind::State && !v.start_params.empty());
+         (v.kind == VarKind::State && v.start_calculated);
 }
 
 std::vector<double> BoundValues(const flat::Mechanism& mech, const std::vector<double>& params) {
@@ -119,14 +122,14 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
   std::vector<double> y0(states.size());
   rt::InitialState(p, y0.data());
   for (size_t i = 0; i < states.size(); ++i)
-    vars.push_back({states[i].name, VarKind::State, VarType::Real, int(i), y0[i], states[i].unit, "", {}});
+    vars.push_back({states[i].name, VarKind::State, VarType::Real, int(i), y0[i], states[i].unit, "", false, {}});
   for (size_t i = 0; i < states.size(); ++i)
     vars.push_back({"der(" + states[i].name + ")", VarKind::Derivative, VarType::Real, int(i), 0.0,
-                    states[i].der_unit, "", {}});
+                    states[i].der_unit, "", false, {}});
   for (int i = 0; i < rt::NumInputs(p); ++i)
-    vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, mech.inputs[size_t(i)].unit, "", {}});
+    vars.push_back({rt::InputName(p, i), VarKind::Input, VarType::Real, i, 0.0, mech.inputs[size_t(i)].unit, "", false, {}});
   for (size_t i = 0; i < mech.outputs.size(); ++i)
-    vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, mech.outputs[i].unit, "", {}});
+    vars.push_back({mech.outputs[i].name, VarKind::Output, VarType::Real, int(i), 0.0, mech.outputs[i].unit, "", false, {}});
   // Parameters: three passes so that each group is contiguous.
   for (int pass = 0; pass < 3; ++pass)
     for (size_t i = 0; i < mech.params.size(); ++i) {
@@ -145,13 +148,13 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
                         : q.is_constant ? "constant"
                         : fixed         ? "fixed at export"
                                         : "";
-      vars.push_back({std::string(mech.ParamName(i)), kind, type, int(i), p.param_values[i], q.unit, why, {}});
+      vars.push_back({std::string(mech.ParamName(i)), kind, type, int(i), p.param_values[i], q.unit, why, false, {}});
     }
   FindStartParameters(model, &vars);
   const std::vector<std::string> events = sim::HybridOde(model.program, 1e-6, 1e-6).IndicatorNames();
   for (size_t i = 0; i < events.size(); ++i)
     vars.push_back({"eventIndicator[" + std::to_string(i + 1) + "]", VarKind::Indicator, VarType::Real, int(i), 0.0, "",
-                    events[i] + " (an event where it crosses zero downwards)", {}});
+                    events[i] + " (an event where it crosses zero downwards)", false, {}});
   return vars;
 }
 

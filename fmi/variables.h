@@ -31,9 +31,12 @@ struct Variable {
   double start = 0.0;   // States, Parameter, Fixed: the value at export
   std::string unit;     // "" when the model gives none
   std::string description;
-  // State: the tunable parameters (table indices) its start is computed from (a start
-  // expression, a rotation's normalization, a closed loop's assembly): initial="calculated",
-  // an initial unknown. None: initial="exact", the start the description gives.
+  // State: its start is computed at initialization (initial="calculated", an initial
+  // unknown): from the tunable parameters (table indices) start_params (a start expression,
+  // a rotation's normalization, a closed loop's assembly), or by the assembly of a model
+  // with constraints, which owns every start there. Else initial="exact", the start the
+  // description gives or the master's.
+  bool start_calculated = false;
   std::vector<int> start_params;
 };
 

@@ -51,6 +51,8 @@ class Evaluator {
   void ReserveParams(size_t n);
   // `file` resolved against the directory of the source file `origin` is in.
   std::string MeshPath(const std::string& file, Span origin) const;
+  // Where data files are read from instead (ElaborateOptions::data_files); null: as named.
+  void ReadDataFrom(const std::map<std::string, std::string>* files) { data_from_ = files; }
   // Where an argument's value was written: follows references to the binding they take
   // their value from (a MeshBody's `file` to the user's `file = "..."`).
   Span ValueOrigin(const ast::Expr& arg, const Ctx& ctx);
@@ -163,7 +165,8 @@ class Evaluator {
   };
   std::vector<OpItem> op_work_;
   std::vector<Value> op_values_;
-  std::map<std::string, MeshEntry> meshes_;  // "path\nscale" -> the mesh read (elab_mesh.cpp)
+  std::map<std::string, MeshEntry> meshes_;
+  const std::map<std::string, std::string>* data_from_ = nullptr;  // "path\nscale" -> the mesh read (elab_mesh.cpp)
 };
 
 }  // namespace kanesim::lang::elab

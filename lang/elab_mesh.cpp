@@ -106,7 +106,14 @@ const Evaluator::MeshEntry* Evaluator::LoadMeshFor(const std::string& path, doub
     MeshEntry entry;
     geometry::LoadMeshOptions options;
     options.scale = scale;
-    geometry::MeshLoadResult r = geometry::LoadMesh(path, options);
+    const auto given = data_from_ ? data_from_->find(path) : std::map<std::string, std::string>::const_iterator{};
+    geometry::MeshLoadResult r;
+    if (!data_from_ || given != data_from_->end()) {
+      r = geometry::LoadMesh(data_from_ ? given->second : path, options);
+    } else {
+      r.problems.push_back(geometry::MakeProblem(geometry::MeshProblemKind::kFileMissing,
+                                                 "mesh file not among the files given with the model: " + path));
+    }
     if (std::find(m_->data_files.begin(), m_->data_files.end(), path) == m_->data_files.end())
       m_->data_files.push_back(path);
     entry.problems = r.problems;

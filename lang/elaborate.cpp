@@ -113,6 +113,7 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
 
   elab::SourcePlaces places(program.sources);
   elab::Evaluator eval(out, places, diags);
+  eval.ReadDataFrom(options.data_files);
   elab::InstanceTree tree;
   tree.root = std::make_unique<elab::Node>();
   elab::SetOverrides sets(diags);

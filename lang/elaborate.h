@@ -5,6 +5,7 @@
 // type-checked), checks types and array sizes, and resolves connect() into frames.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -46,6 +47,10 @@ struct ElaborateOptions {
   // The unit check (lang/elab_units.h) always runs; bench/units_cost.cpp turns it off to
   // measure its cost side by side. Nothing else does.
   bool check_units = true;
+  // The data files (meshes) read from elsewhere: the path the model names (resolved, as
+  // flat::Mechanism::data_files lists it) -> the file to read. When given, a file it does
+  // not list is an error (an FMU reads only what it carries). Null: read the paths named.
+  const std::map<std::string, std::string>* data_files = nullptr;
 };
 
 // Parsed program: the user's file(s) plus the standard library.

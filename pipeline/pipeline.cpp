@@ -43,6 +43,7 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
   lang::Diagnostics diags(&m->source.sources);
   lang::ElaborateOptions eo;
   eo.model = options.model;
+  eo.data_files = options.data_files;
   for (const std::string& s : options.sets) {
     lang::ParamOverride o;
     if (!lang::ParseSetArgument(s, &o)) {

@@ -26,6 +26,7 @@
 #pragma once
 
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -135,6 +136,9 @@ struct LoadOptions {
   // A main file named *.urdf is translated to .mech text first (import/import.h) with these
   // options; the text is then named PATH.mech in diagnostics (what `kanesim import` writes).
   import::Options urdf;
+  // The data files (meshes) read from elsewhere (lang::ElaborateOptions::data_files): an
+  // FMU's resources. Null: as the model names them.
+  const std::map<std::string, std::string>* data_files = nullptr;
 };
 
 // A loaded model. Immutable once loaded; the program may be shared across threads.

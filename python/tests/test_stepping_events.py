@@ -11,51 +11,15 @@ import numpy as np
 import pytest
 
 import kanesim
+from conftest import SOURCE_DIR
 
 G = 9.81
 
-PLANE_BALL = """model PlaneBall
-  World world(g = {0, -9.81, 0});
-  Prismatic lift(axis = {0, 1, 0}, q(start = 1));
-  Body ball(m = 1);
-  PlaneContact floor(n = {0, 1, 0}, d = 0, restitution = 0.6);
-equation
-  connect(world.frame_b, lift.frame_a);
-  connect(lift.frame_b, ball.frame_a);
-  connect(lift.frame_b, floor.frame_a);
-  annotation(experiment(StopTime = 2.5, Interval = 0.01, Tolerance = 1e-10));
-end PlaneBall;
-"""
-
-WHEN_BALL = """model WhenBall
-  parameter Real e = 0.8;
-  World world(g = {0, -9.81, 0});
-  Prismatic p(axis = {0, 1, 0}, q(start = 1));
-  Body b(m = 1, I = diagonal({1, 1, 1}));
-equation
-  connect(world.frame_b, p.frame_a);
-  connect(p.frame_b, b.frame_a);
-  when p.q < 0 then
-    reinit(p.u, -e * pre(p.u));
-  end when;
-  when time > 2 then
-    terminate("two seconds");
-  end when;
-  annotation(experiment(StopTime = 3, Interval = 0.01, Tolerance = 1e-10));
-end WhenBall;
-"""
-
-SLIDER = """model Slider
-  World world(g = {0, -9.81, 0});
-  Prismatic slide(axis = {1, 0, 0}, q(start = 1), mu = 0.3, mu_s = 0.5, friction_exact = true);
-  Body box(m = 1);
-equation
-  connect(world.frame_b, slide.frame_a);
-  connect(slide.frame_b, box.frame_a);
-  slide.tau = -10 * slide.q;
-  annotation(experiment(StopTime = 1.5, Interval = 0.01, Tolerance = 1e-10));
-end Slider;
-"""
+# The models the FMU tests (tests/fmi/test_events.py) read too: one .mech each in tests/data.
+DATA = SOURCE_DIR / "tests" / "data"
+PLANE_BALL = (DATA / "plane_ball.mech").read_text()
+WHEN_BALL = (DATA / "when_ball.mech").read_text()
+SLIDER = (DATA / "coulomb_slider.mech").read_text()
 
 
 def step_to(sim, stop, dt):
@@ -100,7 +64,7 @@ def test_a_bouncing_ball_stepped_has_the_runs_impacts_and_the_closed_form(integr
 
 def test_a_when_ball_stepped_equals_the_run_and_terminates_there():
     m = kanesim.loads(WHEN_BALL, name="when.mech")
-    run = m.run(rtol=1e-10, integrator="dop853", outputs=["p.q", "p.u"])
+    run = m.run(rtol=1e-10, interval=0.01, integrator="dop853", outputs=["p.q", "p.u"])  # the steps' grid
     sim = m.simulator(rtol=1e-10, integrator="dop853", outputs=["p.q", "p.u"])
     rows = step_to(sim, 3.0, 0.01)
     fires = times(sim.events, "fires")
@@ -173,19 +137,7 @@ def test_a_state_saved_before_an_event_or_in_a_mode_continues_bit_for_bit(model,
 def test_a_rolling_contact_that_would_pull_fails_the_step_where_the_run_stops():
     # The normal force m g - 2 t turns tensile at t = g / 2: the run stops there (exit 2), and so
     # does the step that crosses it, instead of holding the sphere to the plane by a pull.
-    m = kanesim.loads("""model Lift
-  World world(g = {0, -9.81, 0});
-  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));
-  Sphere ball(radius = 0.1, m = 1);
-  RollingSphere contact(radius = 0.1, n = {0, 1, 0});
-  WorldForce pull(force = {0, 2 * time, 0});
-equation
-  connect(world.frame_b, free.frame_a);
-  connect(free.frame_b, ball.frame_a);
-  connect(free.frame_b, contact.frame_a);
-  connect(free.frame_b, pull.frame_b);
-end Lift;
-""")
+    m = kanesim.loads((DATA / "lift_sphere.mech").read_text())
     sim = m.simulator(rtol=1e-9)
     with pytest.raises(kanesim.SimulationError, match="normal force turns tensile") as e:
         step_to(sim, 6.0, 0.5)

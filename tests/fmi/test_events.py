@@ -16,19 +16,14 @@ from conftest import SOURCE, kanesim
 
 G = 9.81
 
-BALL = """
-model BouncingBall "A ball dropped from 1 m onto a floor, restitution 0.6"
-  World world(g = {0, -9.81, 0});
-  Prismatic lift(axis = {0, 1, 0}, q(start = 1));
-  Body ball(m = 1);
-  PlaneContact floor(n = {0, 1, 0}, d = 0, restitution = 0.6);
-equation
-  connect(world.frame_b, lift.frame_a);
-  connect(lift.frame_b, ball.frame_a);
-  connect(lift.frame_b, floor.frame_a);
-  annotation(experiment(StopTime = 2.5, Interval = 0.01, Tolerance = 1e-10));
-end BouncingBall;
-"""
+
+def _text(name):
+    """A model of tests/data/ (shared with python/tests/test_stepping_events.py), as text."""
+    with open(os.path.join(SOURCE, "tests", "data", name)) as f:
+        return f.read()
+
+
+BALL = _text("plane_ball.mech")
 
 # The ball of docs/events.md (reinit(p.u, -e pre(p.u)), e = 0.8, terminate at 2 s), shared
 # with python/tests/test_events.py.
@@ -181,18 +176,7 @@ def test_a_reinit_that_flings_a_resting_joint_off_its_stop_through_fmpy_model_ex
     assert len(common) > 150 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
 
 
-SLIDER = """
-model Slider "A block on a spring, exact Coulomb friction: slides back, then sticks"
-  World world(g = {0, -9.81, 0});
-  Prismatic slide(axis = {1, 0, 0}, q(start = 1), mu = 0.3, mu_s = 0.5, friction_exact = true);
-  Body box(m = 1);
-equation
-  connect(world.frame_b, slide.frame_a);
-  connect(slide.frame_b, box.frame_a);
-  slide.tau = -10 * slide.q;
-  annotation(experiment(StopTime = 1.5, Interval = 0.01, Tolerance = 1e-10));
-end Slider;
-"""
+SLIDER = _text("coulomb_slider.mech")
 
 
 def test_exact_friction_slides_then_sticks_through_fmpy_model_exchange(export, write_model):
@@ -216,21 +200,7 @@ def test_exact_friction_slides_then_sticks_through_fmpy_model_exchange(export, w
     assert np.max(np.abs(x[stuck] - (2 * c - 1))) < 1e-7 and np.max(np.abs(r["slide.u"][stuck])) < 1e-9
 
 
-LIFT = """
-model Lift "A sphere rolling on a plane, pulled up by a force growing with time"
-  World world(g = {0, -9.81, 0});
-  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));
-  Sphere ball(radius = 0.1, m = 1);
-  RollingSphere contact(radius = 0.1, n = {0, 1, 0});
-  WorldForce pull(force = {0, 2 * time, 0});
-equation
-  connect(world.frame_b, free.frame_a);
-  connect(free.frame_b, ball.frame_a);
-  connect(free.frame_b, contact.frame_a);
-  connect(free.frame_b, pull.frame_b);
-  annotation(experiment(StopTime = 6, Interval = 0.1, Tolerance = 1e-9));
-end Lift;
-"""
+LIFT = _text("lift_sphere.mech")
 
 
 def test_a_rolling_contact_that_would_pull_is_an_error_where_the_run_stops(export, write_model):

@@ -123,3 +123,19 @@ def test_every_declared_start_matches_what_the_fmu_does(export, tmp_path, name):
     moving = check_declarations_match_behaviour(master)
     assert bool(moving) == (name != "double_pendulum.mech")
     master.close()
+
+
+def test_every_start_of_a_closed_loop_is_calculated_by_its_assembly(export, write_model, tmp_path):
+    # The four-bar with its crank's start a literal held by `fixed = true`: the assembly still
+    # computes every start together, so none is the master's to set (it would not be assembled
+    # with the others).
+    with open(os.path.join(EXAMPLES, "fourbar.mech")) as f:
+        text = f.read().replace("q(start = theta0, fixed = true), u(start = omega0)",
+                                "q(start = 0.3, fixed = true), u(start = 6)")
+    master = Master(export(write_model("fourbar_literal.mech", text), fmi=3, kind="me"), tmp_path, 3)
+    assert {s.initial for s in master.states} == {"calculated"}
+    assert not initial_lists(master.md)["crank_pivot.q"] & {"a", "b", "c", "d"}  # held: the lengths do not move it
+    assert master.start({})["crank_pivot.q"] == 0.3
+    with pytest.raises(Exception):
+        master.start({"crank_pivot.q": 0.5})
+    master.close()
