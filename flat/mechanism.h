@@ -139,6 +139,10 @@ struct Joint {
   // -mu N sign(u) sliding, stuck while the force needed stays within mu_s N.
   bool friction_exact = false;
   ExprId friction_mu_s = kNoExpr;
+  // A constant Coulomb friction torque (Revolute) or force (Prismatic) added to mu N r
+  // (stdlib `friction_torque` / `friction_force`, static `..._s`; URDF <dynamics friction>):
+  // kNoExpr = none. Its sliding and static bounds add to mu r N's and mu_s r N's.
+  ExprId friction_c = kNoExpr, friction_c_s = kNoExpr;
   // End stops of a Revolute or Prismatic joint (stdlib `q_min`, `q_max`, `restitution`):
   // kNoExpr = no stop on that side (the stdlib parameter left unbound); restitution is
   // set only when a stop is.

@@ -32,8 +32,8 @@ std::vector<EndStop> EndStops(const Program& p) {
 // accelerations (applied unit force vs none) lost the column to rounding where the
 // accelerations were large, as at an integrator's trial stage far from the solution.
 int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
-  if (!p.rows.empty() || !p.friction_joints.empty()) {
-    ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction is not supported yet"
+  if (!p.rows.empty() || FrictionReadsNormalForce(p)) {
+    ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction mu N is not supported yet"
                               : "an impulse in a mechanism with closed loops or contacts is not supported yet";
     return -1;
   }
