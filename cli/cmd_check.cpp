@@ -155,10 +155,11 @@ int RunCheck(const CheckArgs& args) {
   size_t own = 0;
   for (const auto& p : mech.params) own += p.loc.file == args.load.path;
   std::cout << fmt::format("  parameters  {} in the model ({} in all)\n", own, mech.params.size());
-  for (const auto& p : mech.params) {
+  for (size_t i = 0; i < mech.params.size(); ++i) {
+    const flat::Param& p = mech.params[i];
     if (p.loc.file != args.load.path) continue;
     std::string value = p.type == flat::ParamType::String ? "\"" + p.string_value + "\"" : fmt::format("{:.10g}", p.value);
-    std::cout << fmt::format("    {:<28} = {:<14}{}{}\n", p.name, value, p.unit.empty() ? "" : " [" + p.unit + "]",
+    std::cout << fmt::format("    {:<28} = {:<14}{}{}\n", mech.ParamName(i), value, p.unit.empty() ? "" : " [" + p.unit + "]",
                              p.structural ? "  (structural)" : "");
   }
   PrintMeshBodies(mech, std::cout);

@@ -94,6 +94,7 @@ void FindIndeterminateReactions(Program& p, Workspace& ws) {
   // of the normal force, which is one admissible distribution, not a determined one.
   for (int L : p.friction_joints) {
     const TreeJoint& j = p.joints[static_cast<size_t>(L)];
+    if (j.mu == 0.0) continue;  // constant friction only: it reads no normal force
     const std::uint8_t bits = p.reaction_indeterminate[static_cast<size_t>(j.flat_index)];
     for (int k = 0; k < 3; ++k)
       if (((bits >> k) & 1u) != 0 && std::fabs(j.axis[k]) < 1.0 - 1e-12) {

@@ -1,7 +1,8 @@
 // Compile stage: plane contacts (stdlib PlaneContact). A unilateral contact is not a
 // constraint row: the integrators' events handle it (sim/end_stops.h), impacts through the
 // mass matrix of the tree. So it, like an end stop, needs a mechanism whose impulse response
-// is M^-1 alone: no constraint rows and no Coulomb friction (docs/stdlib.md "PlaneContact").
+// is M^-1 alone: no constraint rows and no Coulomb friction that reads a normal force (a
+// constant friction, friction_torque / friction_force, is allowed; docs/stdlib.md "PlaneContact").
 #include <cmath>
 
 #include "compiler/compile_internal.h"
@@ -16,7 +17,9 @@ std::string EventsRefused(const Program& p) {
   if (!p.loops.empty()) return "closed loops";
   if (!p.contacts.empty()) return "rolling contacts";
   if (!p.couplings.empty()) return "joint couplings";
-  if (!p.friction_joints.empty()) return "Coulomb friction on joints";
+  // A constant friction is a bounded force: no impulse, no term in the reactions. mu N is not.
+  for (int b : p.friction_joints)
+    if (p.joints[static_cast<size_t>(b)].mu != 0.0) return "Coulomb friction proportional to the normal force (mu) on joints";
   return "";
 }
 

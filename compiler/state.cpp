@@ -148,15 +148,18 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
       j.mu_v = num(fj.friction_v, 1e-3, "friction speed scale of ", j.name, "", fj.loc);
       j.friction_exact = fj.friction_exact;
       j.mu_s = fj.friction_exact ? num(fj.friction_mu_s, j.mu, "static friction coefficient of ", j.name, "", fj.loc) : j.mu;
+      j.friction_c = num(fj.friction_c, 0.0, "constant friction of ", j.name, "", fj.loc);
+      j.friction_c_s = fj.friction_exact ? num(fj.friction_c_s, j.friction_c, "static constant friction of ", j.name, "", fj.loc)
+                                         : j.friction_c;
       const bool prescribed = !fj.prescribed.empty() && fj.prescribed[0] != kNoExpr;
-      if ((j.type != JointType::Prismatic && j.type != JointType::Revolute) || prescribed || j.mu < 0.0 ||
-          !(j.mu_v > 0.0) || !(j.mu_s >= 0.0))
+      if ((j.type != JointType::Prismatic && j.type != JointType::Revolute) || prescribed || !(j.mu >= 0.0) ||
+          !(j.mu_v > 0.0) || !(j.mu_s >= 0.0) || !(j.friction_c >= 0.0) || !(j.friction_c_s >= 0.0))
         errors->push_back(Msg(flat::DiagCode::BadFriction,
                               "joint '" + j.name +
-                                  "': Coulomb friction needs a free prismatic or revolute joint, mu >= 0 and a "
-                                  "positive speed scale",
+                                  "': Coulomb friction needs a free prismatic or revolute joint, mu >= 0, a constant "
+                                  "friction >= 0 and a positive speed scale",
                               fj.loc));
-      else if (j.mu > 0.0)
+      else if (j.mu > 0.0 || j.friction_c > 0.0)
         p.friction_joints.push_back(j.child);
     }
 

@@ -100,10 +100,14 @@ int Mechanism::FindJoint(const std::string& name) const {
   return -1;
 }
 
-int Mechanism::FindParam(const std::string& name) const {
+int Mechanism::FindParam(std::string_view name) const {
   for (size_t i = 0; i < params.size(); ++i)
-    if (params[i].name == name) return static_cast<int>(i);
+    if (ParamName(i) == name) return static_cast<int>(i);
   return -1;
+}
+
+Param& Mechanism::AddParam(std::string_view name) {
+  return AddParamWith([&](std::string& out) { out.append(name); });
 }
 
 std::string Mechanism::StateRefName(const StateRef& r) const {
@@ -203,7 +207,7 @@ class MechanismNames : public ExprNames {
   explicit MechanismNames(const Mechanism& m) : m_(m) {}
   bool Param(int i, std::string* out) const override {
     if (i < 0 || static_cast<size_t>(i) >= m_.params.size()) return false;
-    out->append(m_.params[static_cast<size_t>(i)].name);
+    out->append(m_.ParamName(static_cast<size_t>(i)));
     return true;
   }
   bool State(int i, std::string* out) const override {
@@ -222,7 +226,7 @@ std::string Mechanism::ExprText(ExprId id) const { return exprs.ToString(id, Mec
 
 std::string DumpFlat(const Mechanism& m) {
   std::vector<std::string> pn, sn;
-  for (const auto& p : m.params) pn.push_back(p.name);
+  for (size_t i = 0; i < m.params.size(); ++i) pn.emplace_back(m.ParamName(i));
   for (const auto& s : m.state_refs) sn.push_back(m.StateRefName(s));
   auto E = [&](ExprId e) { return m.exprs.ToString(e, &pn, &sn); };
   // Appends instead of "{" + std::string&&: GCC 12 -O3 reports a false -Wrestrict there.
@@ -238,8 +242,9 @@ std::string DumpFlat(const Mechanism& m) {
   std::ostringstream os;
   os << "flat mechanism " << m.model_name << "\n";
   os << "parameters (" << m.params.size() << "):\n";
-  for (const auto& p : m.params) {
-    os << "  " << (p.is_constant ? "constant " : "") << (p.structural ? "structural " : "") << p.name
+  for (size_t i = 0; i < m.params.size(); ++i) {
+    const Param& p = m.params[i];
+    os << "  " << (p.is_constant ? "constant " : "") << (p.structural ? "structural " : "") << pn[i]
        << " = ";
     if (p.type == ParamType::String)
       os << '"' << p.string_value << '"';

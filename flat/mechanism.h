@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "flat/expr.h"
@@ -67,7 +68,10 @@ bool RotationCoordsFromName(const std::string& s, RotationCoords* out);
 enum class ParamType : std::uint8_t { Real, Integer, Boolean, String };
 
 struct Param {
-  std::string name;          // dotted, scalarized: "links[2].L", "world.g[2]"
+  // Its name (dotted, scalarized: "links[2].L", "world.g[2]") is Mechanism::ParamName(i):
+  // one text of all the names (a model has thousands of parameters; a string each cost an
+  // allocation and a page in ten of the front end's).
+  std::uint32_t name_at = 0, name_size = 0;
   ParamType type = ParamType::Real;
   double value = 0.0;        // evaluated value (Integer/Boolean as 0/1/n)
   std::string string_value;  // String parameters only
@@ -135,6 +139,10 @@ struct Joint {
   // -mu N sign(u) sliding, stuck while the force needed stays within mu_s N.
   bool friction_exact = false;
   ExprId friction_mu_s = kNoExpr;
+  // A constant Coulomb friction torque (Revolute) or force (Prismatic) added to mu N r
+  // (stdlib `friction_torque` / `friction_force`, static `..._s`; URDF <dynamics friction>):
+  // kNoExpr = none. Its sliding and static bounds add to mu r N's and mu_s r N's.
+  ExprId friction_c = kNoExpr, friction_c_s = kNoExpr;
   // End stops of a Revolute or Prismatic joint (stdlib `q_min`, `q_max`, `restitution`):
   // kNoExpr = no stop on that side (the stdlib parameter left unbound); restitution is
   // set only when a stop is.
@@ -264,6 +272,7 @@ struct Mechanism {
 
   ExprPool exprs;
   std::vector<Param> params;      // in dependency order: bindings refer to earlier ones
+  std::string param_names;        // the parameters' names, one after another (ParamName)
   std::vector<StateRef> state_refs;
 
   std::vector<Frame> frames;
@@ -285,7 +294,23 @@ struct Mechanism {
   std::int32_t AddStateRef(const StateRef& r);
   int FindFrame(const std::string& name) const;  // by any alias; -1 if none
   int FindJoint(const std::string& name) const;
-  int FindParam(const std::string& name) const;
+  int FindParam(std::string_view name) const;
+  // Parameter i's name, a view of param_names: valid until the next AddParam.
+  std::string_view ParamName(size_t i) const {
+    const Param& p = params[i];
+    return std::string_view(param_names).substr(p.name_at, p.name_size);
+  }
+  // A new last parameter named `name`.
+  Param& AddParam(std::string_view name);
+  // A new last parameter whose name is written by write(std::string&) at the end of param_names.
+  template <class Write>
+  Param& AddParamWith(Write&& write) {
+    Param& p = params.emplace_back();
+    p.name_at = static_cast<std::uint32_t>(param_names.size());
+    write(param_names);
+    p.name_size = static_cast<std::uint32_t>(param_names.size() - p.name_at);
+    return p;
+  }
   std::string StateRefName(const StateRef& r) const;  // "j.q[1]", "rod.frame_b.r[2]"
   // An expression's text (ExprPool::ToString) with parameters and states by name.
   std::string ExprText(ExprId id) const;

@@ -148,7 +148,7 @@ std::vector<Variable> ListVariables(const pipeline::Model& model) {
                         : q.is_constant ? "constant"
                         : fixed         ? "fixed at export"
                                         : "";
-      vars.push_back({q.name, kind, type, int(i), p.param_values[i], q.unit, why, false, {}});
+      vars.push_back({std::string(mech.ParamName(i)), kind, type, int(i), p.param_values[i], q.unit, why, false, {}});
     }
   FindStartParameters(model, &vars);
   const std::vector<std::string> events = sim::HybridOde(model.program, 1e-6, 1e-6).IndicatorNames();

@@ -338,10 +338,12 @@ class Writer {
     switch (j.type) {
       case JointType::kRevolute:
       case JointType::kContinuous:
-        Declare("Revolute", name, "axis = " + Vec(j.axis) + StopModifiers(j), "joint '" + Shown(j.name) + "'");
+        Declare("Revolute", name, "axis = " + Vec(j.axis) + StopModifiers(j) + FrictionModifiers(j),
+                "joint '" + Shown(j.name) + "'");
         break;
       case JointType::kPrismatic:
-        Declare("Prismatic", name, "axis = " + Vec(j.axis) + StopModifiers(j), "joint '" + Shown(j.name) + "'");
+        Declare("Prismatic", name, "axis = " + Vec(j.axis) + StopModifiers(j) + FrictionModifiers(j),
+                "joint '" + Shown(j.name) + "'");
         break;
       case JointType::kFloating: Declare("FreeMotion", name, "", "joint '" + Shown(j.name) + "'"); break;
       case JointType::kPlanar:
@@ -384,8 +386,19 @@ class Writer {
     }
   }
 
-  // <dynamics damping friction> as the joint's force law: viscous damping and Coulomb friction
-  // regularized as the standard library's joints do (tanh(u / 1e-3)).
+  // <dynamics friction> (a constant torque or force) as the joint's exact Coulomb friction
+  // (stick-slip as events, docs/stdlib.md "Revolute"); with <mimic> couplings (constraint rows,
+  // where exact friction is refused) regularized instead: Dynamics writes it as a force law.
+  bool ExactFriction(const Joint& j) const { return j.friction != 0 && !coupled_; }
+  std::string FrictionModifiers(const Joint& j) const {
+    if (!ExactFriction(j)) return "";
+    return std::string(j.type == JointType::kPrismatic ? ", friction_force = " : ", friction_torque = ") +
+           Num(j.friction) + ", friction_exact = true";
+  }
+
+  // <dynamics damping friction> as the joint's force law: viscous damping, and Coulomb
+  // friction that is not exact (FrictionModifiers) regularized as the standard library's
+  // joints do (tanh(u / 1e-3)).
   void Dynamics(const Joint& j, const std::string& name) {
     if (j.damping == 0 && j.friction == 0) return;
     if (j.type != JointType::kRevolute && j.type != JointType::kContinuous && j.type != JointType::kPrismatic) {
@@ -395,8 +408,9 @@ class Writer {
     }
     std::string law;
     if (j.damping != 0) law = Num(j.damping) + " * " + name + ".u";
-    if (j.friction != 0)
+    if (j.friction != 0 && !ExactFriction(j))
       law += (law.empty() ? "" : " + ") + Num(j.friction) + " * tanh(" + name + ".u / 0.001)";
+    if (law.empty()) return;
     eq_ << "  " << name << ".tau = -(" << law << ");  // <dynamics damping friction> of joint '" << Shown(j.name)
         << "'\n";
   }

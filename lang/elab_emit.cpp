@@ -100,6 +100,18 @@ class Emitter {
   ExprId AsScalar(const Value& v) { return v.valid && v.elements.size() == 1 ? v.elements[0] : pool.Constant(0); }
 
   // Primitive n's Boolean `name`, evaluated now; `dflt` when absent.
+  // Parameter `name` of n when it is a structural value other than zero (*e its expression);
+  // false when absent, zero or not structural (that is reported).
+  bool NonZeroStructural(Node* n, const char* name, ExprId* e) {
+    Node* v = n->Child(name);
+    if (!v || v->kind != Node::kVar) return false;
+    const Value& val = eval_.GetVar(v, Span{});
+    double x = 0;
+    if (!val.valid || !eval_.Structural(val, v->decl ? v->decl->name_span : Span{}, &x, name) || x == 0) return false;
+    *e = val.elements[0];
+    return true;
+  }
+
   bool Boolean(Node* n, const char* name, bool dflt) {
     Node* c = n->Child(name);
     if (!c) return dflt;
@@ -214,19 +226,23 @@ class Emitter {
     j.axis = ax1 ? AsVec3(Field(n, ax1, {3})) : AsVec3(Value::Invalid());
     j.axis2 = ax2 ? AsVec3(Field(n, ax2, {3})) : AsVec3(Value::Invalid());
     j.cut = Boolean(n, "cut", false);
-    // Coulomb friction from the joint's normal force: only when mu is not zero, so a
-    // scene without friction pays nothing (mu = 0 vs not is a structural choice).
-    if (Node* mu = n->Child("mu"); mu && mu->kind == Node::kVar) {
-      const Value& mv = eval_.GetVar(mu, Span{});
-      double muv = 0;
-      if (mv.valid && eval_.Structural(mv, mu->decl ? mu->decl->name_span : Span{}, &muv, "mu") && muv != 0) {
-        j.friction_mu = mv.elements[0];
-        j.friction_v = AsScalar(Field(n, "friction_v", {}));
-        j.friction_radius =
-            n->Child("friction_radius") ? AsScalar(Field(n, "friction_radius", {})) : pool.Constant(1.0);
-        j.friction_exact = Boolean(n, "friction_exact", false);
-        if (j.friction_exact && n->Child("mu_s")) j.friction_mu_s = AsScalar(Field(n, "mu_s", {}));
-      }
+    // Coulomb friction from the joint's normal force (mu) and a constant one (friction_torque
+    // or friction_force): only when one is not zero, so a scene without friction pays nothing
+    // (zero vs not is a structural choice).
+    ExprId mu_e = flat::kNoExpr, c_e = flat::kNoExpr;
+    const char* c_name = j.type == flat::JointType::Revolute ? "friction_torque" : "friction_force";
+    const bool has_mu = NonZeroStructural(n, "mu", &mu_e);
+    const bool has_c = NonZeroStructural(n, c_name, &c_e);
+    if (has_mu || has_c) {
+      j.friction_mu = has_mu ? mu_e : pool.Constant(0.0);
+      j.friction_c = c_e;
+      j.friction_v = AsScalar(Field(n, "friction_v", {}));
+      j.friction_radius =
+          n->Child("friction_radius") ? AsScalar(Field(n, "friction_radius", {})) : pool.Constant(1.0);
+      j.friction_exact = Boolean(n, "friction_exact", false);
+      if (j.friction_exact && n->Child("mu_s")) j.friction_mu_s = AsScalar(Field(n, "mu_s", {}));
+      const std::string c_s = std::string(c_name) + "_s";
+      if (j.friction_exact && has_c && n->Child(c_s.c_str())) j.friction_c_s = AsScalar(Field(n, c_s.c_str(), {}));
     }
     EndStops(n, &j);
     int nq = j.nq(), nu = j.nu();

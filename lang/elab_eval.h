@@ -127,7 +127,7 @@ class Evaluator {
   ParamAttributes ReadParamAttributes(Node* var);
   // One element as a flat parameter: `p`, the last of m_->params (for a constant, folded
   // instead, a Param of its own); its value checked and set; its pool node.
-  ExprId AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span);
+  ExprId AddParamElement(Node* var, flat::Param& p, std::string_view name, ExprId x, Span value_span);
   void MarkStructural(ExprId id);
 
   // --- meshes (elab_mesh.cpp) ---

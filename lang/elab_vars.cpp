@@ -40,13 +40,11 @@ flat::ParamType ParamTypeOf(VType t) {
                                : flat::ParamType::String;
 }
 
-// The flat name of element k (row-major) of `path` of `shape`: "p", or "p[1,2]" (1-based).
-// `idx` is scratch of shape.size() entries.
-std::string ElementName(const std::string& path, const Dims& shape, size_t k, Dims& idx) {
-  std::string name;  // sized once: appending to a copy of the path allocated twice
-  name.reserve(path.size() + 12 * shape.size() + 2);
+// The flat name of element k (row-major) of `path` of `shape`, "p" or "p[1,2]" (1-based),
+// appended to `name`. `idx` is scratch of shape.size() entries.
+void AppendElementName(std::string& name, const std::string& path, const Dims& shape, size_t k, Dims& idx) {
   name.append(path);
-  if (shape.empty()) return name;
+  if (shape.empty()) return;
   size_t rem = k;
   for (size_t d = shape.size(); d-- > 0;) {
     idx[d] = static_cast<int>(rem % static_cast<size_t>(shape[d])) + 1;
@@ -59,6 +57,12 @@ std::string ElementName(const std::string& path, const Dims& shape, size_t k, Di
     name.append(buf, static_cast<size_t>(std::to_chars(buf, buf + sizeof buf, idx[d]).ptr - buf));
   }
   name += ']';
+}
+
+std::string ElementName(const std::string& path, const Dims& shape, size_t k, Dims& idx) {
+  std::string name;
+  name.reserve(path.size() + 12 * shape.size() + 2);
+  AppendElementName(name, path, shape, k, idx);
   return name;
 }
 
@@ -75,6 +79,7 @@ Value Evaluator::EvalModValue(const ModValue& mv, Span* where) {
 
 void Evaluator::ReserveParams(size_t n) {
   m_->params.reserve(n);
+  m_->param_names.reserve(n * 24);  // about a name's length in the library's parts
   pvals_.reserve(n);
 }
 
@@ -264,10 +269,12 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
   idx.assign(var->shape.size(), 0);
   // A constant is folded (no flat parameter); the others are made in place in the table.
   const bool folded = var->vtype != VType::String && var->variability == ast::Variability::Constant;
+  std::string folded_name;
   for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
     flat::Param folded_param;
-    flat::Param& p = folded ? folded_param : m_->params.emplace_back();
-    p.name = ElementName(var->path, var->shape, k, idx);
+    auto write_name = [&](std::string& out) { AppendElementName(out, var->path, var->shape, k, idx); };
+    if (folded) folded_name.clear(), write_name(folded_name);
+    flat::Param& p = folded ? folded_param : m_->AddParamWith(write_name);
     p.type = ParamTypeOf(var->vtype);
     p.unit = attrs.unit;
     p.min = attrs.min;
@@ -280,7 +287,8 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
       pvals_.push_back(0.0);
       continue;
     }
-    v.elements[k] = AddParamElement(var, p, v.elements[k], value_span);
+    const std::string_view name = folded ? std::string_view(folded_name) : m_->ParamName(m_->params.size() - 1);
+    v.elements[k] = AddParamElement(var, p, name, v.elements[k], value_span);
   }
   return v;
 }
@@ -312,16 +320,16 @@ Evaluator::ParamAttributes Evaluator::ReadParamAttributes(Node* var) {
   return attrs;
 }
 
-ExprId Evaluator::AddParamElement(Node* var, flat::Param& p, ExprId x, Span value_span) {
+ExprId Evaluator::AddParamElement(Node* var, flat::Param& p, std::string_view name, ExprId x, Span value_span) {
   double val = param_eval_.Eval(x);
   p.value = val;
   p.binding = m_->exprs.IsConstant(x) ? flat::kNoExpr : x;
   if (!std::isfinite(val)) {
-    auto& d = diags_.Error(DiagCode::BadValue, value_span, "parameter '" + p.name + "' evaluates to " + std::to_string(val));
+    auto& d = diags_.Error(DiagCode::BadValue, value_span, "parameter '" + std::string(name) + "' evaluates to " + std::to_string(val));
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
   } else if (val < p.min || val > p.max) {
     auto& d = diags_.Error(DiagCode::BadValue, value_span,
-                           "parameter '" + p.name + "' = " + std::to_string(val) + " is outside its range [" +
+                           "parameter '" + std::string(name) + "' = " + std::to_string(val) + " is outside its range [" +
                                (p.min <= -1e299 ? std::string("-inf") : std::to_string(p.min)) + ", " +
                                (p.max >= 1e299 ? std::string("inf") : std::to_string(p.max)) + "]");
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});

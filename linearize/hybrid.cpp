@@ -30,6 +30,7 @@ Status Hybrid::Init(const rt::Program& p, const OperatingPoint& op, const std::v
   }
   stick_ = std::make_unique<sim::StickSlipEvents>(p);
   if (stick_->Active()) {
+    stick_->SetStops(stops_.get());  // a joint resting on its stop is held by the stop's row alone
     if (std::string why = stick_->SettleAt(*ws, op.t, op.y.data(), kTol); !why.empty()) return {2, why};
     for (int u : stick_->StuckSpeeds()) held_.push_back({u, -1});
     for (const std::string& n : stick_->StuckNames()) names_.push_back(n);
@@ -40,8 +41,8 @@ Status Hybrid::Init(const rt::Program& p, const OperatingPoint& op, const std::v
 }
 
 int Hybrid::Derivative(rt::Workspace& ws, double t, const double* y, double* ydot) {
-  int s = stick_ ? stick_->Rhs(ws, t, y, ydot) : rt::Derivative(*p_, ws, t, y, ydot);
-  if (s == 0 && stops_) s = stops_->Hold(ws, t, y, ydot);
+  int s = stick_ ? stick_->Rhs(ws, t, y, ydot) : rt::Derivative(*p_, ws, t, y, ydot);  // stick_: stops held
+  if (s == 0 && stops_ && !stick_) s = stops_->Hold(ws, t, y, ydot);
   return s;
 }
 

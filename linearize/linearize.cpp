@@ -119,7 +119,7 @@ Status ResolveInputs(rt::Program* prog, const std::vector<std::string>& names, s
     const auto& params = prog->mech->params;
     int found = -1;
     for (size_t i = 0; i < params.size(); ++i)
-      if (params[i].name == name) found = static_cast<int>(i);
+      if (prog->mech->ParamName(i) == name) found = static_cast<int>(i);
     if (found < 0)
       return {1, fmt::format("input '{}' is neither a joint's generalized force (JOINT.tau, JOINT.tau[k]) nor a "
                              "parameter of the model",

@@ -59,7 +59,7 @@ Status RebindParameter(const rt::Program& program, const std::string& name, doub
   const flat::Mechanism& mech = *program.mech;
   int index = -1;
   for (size_t i = 0; i < mech.params.size(); ++i)
-    if (mech.params[i].name == name) index = static_cast<int>(i);
+    if (mech.ParamName(i) == name) index = static_cast<int>(i);
   if (index < 0) return {1, fmt::format("'{}' is not a parameter of the model", name)};
   const flat::Param& pp = mech.params[static_cast<size_t>(index)];
   if (pp.type != flat::ParamType::Real || pp.structural || pp.is_constant)

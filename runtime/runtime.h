@@ -202,6 +202,7 @@ struct FrictionJoint {
   double mu = 0.0, mu_s = 0.0;  // kinetic and static coefficients
   double radius = 1.0;          // Revolute: pin radius (friction torque = radius x force)
   bool exact = false;           // stdlib friction_exact: stick-slip as events (sim/stick_slip.h)
+  double c = 0.0, c_s = 0.0;    // constant friction, sliding and static (added to mu r N, mu_s r N)
 };
 std::vector<FrictionJoint> FrictionJoints(const Program& program);
 // Friction joint i's law in ws: 0 -mu r N tanh(u / v) (the default), +1 / -1 sliding that way

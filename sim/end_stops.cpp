@@ -439,6 +439,20 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   return settle ? Settle(ws, t, y, was) : 0;
 }
 
+int EndStopEvents::RestOn(rt::Workspace& ws, double t, double* y, int u, int dir) {
+  for (Side& s : sides_) {
+    if (s.stop < 0 || s.resting || stops_[static_cast<size_t>(s.stop)].u != u || s.upper != (dir > 0)) continue;
+    double gap = 0.0, c = 0.0;
+    if (int r = Row(ws, t, y, s, &gap, J_.data(), &c); r != 0) return r;
+    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(s)))) continue;
+    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+    y[st.q] = s.upper ? st.q_max : st.q_min;
+    y[nq_ + st.u] = 0.0;
+    s.resting = true;
+  }
+  return 0;
+}
+
 std::vector<char> EndStopEvents::RestingSet() const {
   std::vector<char> r(sides_.size());
   for (size_t i = 0; i < sides_.size(); ++i) r[i] = sides_[i].resting ? 1 : 0;

@@ -42,6 +42,20 @@ class EndStopEvents {
   // Event function i crossed zero at (t, y): an impact (or the contact comes to rest), a
   // resting contact leaves, or accumulated bounces end. y jumps in place.
   int Event(rt::Workspace& ws, double t, double* y, int i);
+  // After the forces outside the stops changed at (t, y) (a joint's exact friction slipped or
+  // stuck): the resting set made consistent as after an event (a joint slipping into the stop
+  // it sits on rests there; a resting side now pulled leaves). y jumps in place.
+  // `before`: the resting set to log the changes against (RestingSet() before the change).
+  int Resettle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before) { return Settle(ws, t, y, before); }
+  // The joint of free speed u started to slide in direction dir (+1 / -1) from rest: on the
+  // stop it slides into (its gap within the tolerance) it rests at once (Resettle then).
+  // (Where its static and sliding friction are equal it slips with zero acceleration, whose
+  // sign Settle's test would leave to round-off; the gap, from exactly 0, would then close
+  // without a crossing for the root finding.)
+  int RestOn(rt::Workspace& ws, double t, double* y, int u, int dir);
+  std::vector<char> RestingSet() const;
+  // A speed this small after an event is a rest (kRestSpeeds (atol)).
+  double RestSpeed() const { return kRestSpeeds * atol_; }
   // A when clause's jump at (t, y) (sim/when_events.h, docs/events.md "Statements"): the
   // contacts whose motion it sets leave their rest (a stop whose joint's coordinate or speed
   // is in `states`, indices into y; a plane contact whose row has only speeds it sets, or
@@ -164,7 +178,6 @@ class EndStopEvents {
   // contact at rest (gap, gap rate within the tolerances) whose gap would close -> they rest
   // (their gap rate zeroed by an impulse, the others held). Logs the changes since `before`.
   int Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before);
-  std::vector<char> RestingSet() const;
   // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
 

@@ -39,8 +39,9 @@ class EngineOde final : public OdeSystem {
   int Size() const override { return rt::StateSize(program_); }
   int Rhs(double t, const double* y, double* ydot) override {
     from_monitor_ = false;
+    // Exact friction's evaluations hold the resting stops themselves (StickSlipEvents::SetStops).
     int s = stick_ ? stick_->Rhs(ws_, t, y, ydot) : rt::Derivative(program_, ws_, t, y, ydot);
-    if (stops_ && s == 0) s = stops_->Hold(ws_, t, y, ydot);
+    if (stops_ && !stick_ && s == 0) s = stops_->Hold(ws_, t, y, ydot);
     if (fault_ && s == 0) fault_(t, y, ydot);
     return s;
   }
@@ -58,6 +59,7 @@ class EngineOde final : public OdeSystem {
   // (sim/lift_off.h; the compiler never lets both in one model): their events; none without.
   void SetStops(EndStopEvents* stops) {
     stops_ = stops;
+    if (stick_) stick_->SetStops(stops_);
     state_names_ = rt::StateNames(program_);
   }
   void SetLiftOff(LiftOffGuard* lift) {
@@ -67,6 +69,7 @@ class EngineOde final : public OdeSystem {
   // Exact stick-slip friction (sim/stick_slip.h): its laws in the right-hand side, its events.
   void SetStickSlip(StickSlipEvents* stick) {
     stick_ = stick;
+    if (stick_) stick_->SetStops(stops_);
     state_names_ = rt::StateNames(program_);
   }
   // When clauses (sim/when_events.h): their events after those above.
@@ -74,36 +77,54 @@ class EngineOde final : public OdeSystem {
     whens_ = whens;
     state_names_ = rt::StateNames(program_);
   }
-  // The first events: stick-slip's, the stops' and plane contacts', or lift-off's (never two
-  // in one model); then the when clauses'.
-  int NumStops() const {
-    return stops_ ? stops_->Count() : lift_ ? lift_->Count() : stick_ ? stick_->Count() : 0;
-  }
+  // The first events: the stops' and plane contacts' or lift-off's (never both in one model),
+  // then stick-slip's (with stops: constant friction only); then the when clauses'.
+  int NumStops() const { return FirstStick() + (stick_ ? stick_->Count() : 0); }
   // Then the stops' and plane contacts' graze guards (OdeSystem::Paired): minus each gap's rate.
   int NumEvents() const override { return FirstGuard() + (stops_ ? stops_->Count() : 0); }
   int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
   int EventFunctions(double t, const double* y, double* g) override {
-    if (NumStops() > 0) {
-      const int s = stick_ ? stick_->Functions(ws_, t, y, g)
-                    : stops_ ? stops_->Functions(ws_, t, y, g, g + FirstGuard())
-                             : lift_->Functions(t, y, g);
+    if (stick_)  // first: it solves the stuck joints' forces the stops' reactions read
+      if (const int s = stick_->Functions(ws_, t, y, g + FirstStick()); s != 0) return s;
+    if (FirstStick() > 0) {
+      const int s = stops_ ? stops_->Functions(ws_, t, y, g, g + FirstGuard()) : lift_->Functions(t, y, g);
       if (s != 0) return s;
     }
     return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
   }
   int Event(double t, double* y, int i) override {
-    if (i < NumStops() && !stops_ && !stick_) {
+    if (i < FirstStick() && !stops_) {
       event_cause_ = lift_->Cause(t, y, i);  // a rolling contact would pull: the run stops
       return -1;
     }
     std::vector<double> before(y, y + Size());
     const size_t first = events_.size();
     int s = 0;
-    if (i < NumStops()) {
-      const std::vector<EventRecord>& log = stick_ ? stick_->Log() : stops_->Log();
-      const size_t logged = log.size();
-      s = stick_ ? stick_->Event(ws_, t, y, i) : stops_->Event(ws_, t, y, i);
-      events_.insert(events_.end(), log.begin() + static_cast<long>(logged), log.end());
+    if (i < FirstStick()) {
+      const size_t logged = stops_->Log().size();
+      s = stops_->Event(ws_, t, y, i);
+      events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+      if (stick_ && s == 0) {  // an impulse sets stuck joints moving; a rest takes its joint
+        const size_t logged_stick = stick_->Log().size();
+        s = stick_->Refresh(ws_, t, y, before.data(), stops_->RestSpeed());
+        events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged_stick), stick_->Log().end());
+      }
+    } else if (i < NumStops()) {
+      const size_t logged = stick_->Log().size(), logged_stops = stops_ ? stops_->Log().size() : 0;
+      s = stick_->Event(ws_, t, y, i - FirstStick());
+      if (stops_ && s == 0) {  // a slip into the stop the joint sits on rests there; a pulled stop leaves
+        const std::vector<char> was = stops_->RestingSet();
+        const int k = i - FirstStick();
+        if (stick_->ModeOf(k) != 0) s = stops_->RestOn(ws_, t, y, stick_->SpeedOf(k), stick_->ModeOf(k));
+        for (int pass = 0; pass < 2 && s == 0; ++pass) {  // the stop's joint freed of its friction, then settled
+          const std::vector<double> settled(y, y + Size());
+          if (pass == 1) s = stops_->Resettle(ws_, t, y, was);
+          if (s == 0) s = stick_->Refresh(ws_, t, y, settled.data(), stops_->RestSpeed());
+        }
+      }
+      events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged), stick_->Log().end());
+      if (stops_)
+        events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged_stops), stops_->Log().end());
     } else {
       const int w = i - NumStops();
       if (!stops_) {
@@ -206,6 +227,7 @@ class EngineOde final : public OdeSystem {
 
  private:
   int FirstGuard() const { return NumStops() + (whens_ ? whens_->Count() : 0); }
+  int FirstStick() const { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> Fresh() const {
     auto ws = rt::MakeWorkspace(program_);
     rt::SetInputSource(*ws, inputs_);

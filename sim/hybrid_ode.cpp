@@ -55,13 +55,13 @@ int HybridOde::NumIndicators() const { return impl_->ode.NumEvents(); }
 std::vector<std::string> HybridOde::IndicatorNames() const {
   const Impl& m = *impl_;
   std::vector<std::string> names;
-  if (m.stick.Active()) {
-    for (const std::string& j : m.stick.JointNames()) names.push_back("exact friction of joint '" + j + "'");
-  } else if (m.stops.Active()) {
+  if (m.stops.Active()) {
     for (int i = 0; i < m.stops.Count(); ++i) names.push_back(m.stops.Describe(i));
   } else if (m.lift.Active()) {
     for (const std::string& c : m.lift.Names()) names.push_back("normal force of contact '" + c + "'");
   }
+  if (m.stick.Active())  // after the stops (sim/engine_ode.h NumStops)
+    for (const std::string& j : m.stick.JointNames()) names.push_back("exact friction of joint '" + j + "'");
   for (const rt::WhenModel& w : m.program->whens)
     for (size_t k = 0; k < w.indicators.size(); ++k) names.push_back("condition of " + w.name);
   if (m.stops.Active())

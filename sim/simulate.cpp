@@ -184,6 +184,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   }
   // Exact stick-slip friction: the start decides sliding or stuck (sim/stick_slip.h).
   StickSlipEvents stick(program);
+  if (stick.Active() && stops.Active()) stick.SetStops(&stops);  // a joint resting on its stop is the stop's
   if (stick.Active() && y_given.empty()) y_given = y0;
   if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
     return UsageResult("friction at the start: " + rt::ErrorMessage(*ws_rhs));

@@ -1,9 +1,10 @@
 // Exact Coulomb friction on joints as events (stdlib `friction_exact = true`; docs/stdlib.md
-// "Revolute"): a joint slides with the friction force -mu r N sign(u) (no regularization
-// speed), and where its speed reaches zero it sticks: its speed held at zero by a friction
-// force tau (one more row) as long as |tau| <= mu_s r N; when the needed force would pass
-// that bound it slides again, in the direction the force pulls it. Each joint's switch is an
-// event function: s u while sliding in direction s, mu_s r N - |tau| while stuck.
+// "Revolute"): a joint slides with the friction force -(mu r N + C) sign(u) (no
+// regularization speed; C the constant friction, friction_torque / friction_force), and where
+// its speed reaches zero it sticks: its speed held at zero by a friction force tau (one more
+// row) as long as |tau| <= mu_s r N + C_s; when the needed force would pass that bound it
+// slides again, in the direction the force pulls it. Each joint's switch is an event
+// function: s u while sliding in direction s, mu_s r N + C_s - |tau| while stuck.
 #pragma once
 
 #include <string>
@@ -14,10 +15,22 @@
 
 namespace kanesim::sim {
 
+class EndStopEvents;
+
 class StickSlipEvents {
  public:
   explicit StickSlipEvents(const rt::Program& program);
   bool Active() const { return !joints_.empty(); }
+  // End stops in the same model (constant friction only; compiler/plane_contacts.cpp): every
+  // evaluation holds their resting sides too (EndStopEvents::Hold), so the stuck joints'
+  // forces and the stops' reactions are solved together; a joint resting on its stop is held
+  // by the stop alone (its friction 0, not a second row on the same speed).
+  void SetStops(EndStopEvents* stops) { stops_ = stops; }
+  // After an impact or a rest on a stop took y_before to y at t: a joint the impulse set moving
+  // faster than v_rest slides that way (a stuck one slower stays stuck, its speed zeroed), one
+  // now resting on its stop is the stop's, one stopped by it decides (stick or slip); a joint
+  // whose speed the event left alone keeps its law.
+  int Refresh(rt::Workspace& ws, double t, double* y, const double* y_before, double v_rest);
   int Count() const { return static_cast<int>(joints_.size()); }
   // The start: a joint moving slides that way; at rest it sticks or slides (the stick test).
   int Start(rt::Workspace& ws, double t0, double* y0);
@@ -31,6 +44,9 @@ class StickSlipEvents {
   // The friction laws of the run into another workspace (the output rows').
   void Sync(rt::Workspace& ws) const;
   const std::vector<EventRecord>& Log() const { return log_; }
+  // Joint i's free speed and its mode (+1 / -1 sliding that way, 0 stuck).
+  int SpeedOf(int i) const { return joints_[static_cast<size_t>(i)].f.u; }
+  int ModeOf(int i) const { return joints_[static_cast<size_t>(i)].mode; }
   // linearize's operating point (docs/linearize.md): a joint moving (|u| > tol) slides that
   // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
   // friction passes mu_s r N slips at once: no smooth state).
@@ -68,13 +84,24 @@ class StickSlipEvents {
   // affine in them), the modes applied to ws; ydot (may be null) the held motion.
   int Solve(rt::Workspace& ws, double t, const double* y, double* ydot);
   void Apply(rt::Workspace& ws) const;
+  // The stuck joint's bound mu_s r N + C_s, N from ws's last evaluation.
+  double StaticBound(const rt::Workspace& ws, const Joint& j) const;
+  // X of (1) in stick_slip.cpp at (t, y) for the stuck joints, a0 their accelerations (ydot).
+  int MakeX(rt::Workspace& ws, double t, const double* y, const std::vector<Joint*>& stuck, const double* a0);
+  // rt::Derivative with the stops' resting sides held.
+  int Eval(rt::Workspace& ws, double t, const double* y, double* ydot);
+  bool HeldByStop(const Joint& j, const std::vector<int>& resting) const;
+  std::vector<int> RestingSpeeds() const;
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
   int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
 
   const rt::Program& program_;
+  EndStopEvents* stops_ = nullptr;  // SetStops (null: none)
   std::vector<Joint> joints_;
   int nq_ = 0, nu_ = 0;
-  std::vector<double> ydot_;  // scratch
+  std::vector<double> ydot_, col_;  // scratch (col_: MakeX's evaluations)
+  std::vector<double> x_;     // X of the stuck set x_ids_ (friction joint indices), m x m row-major
+  std::vector<int> x_ids_;
   std::vector<EventRecord> log_;
 };
 

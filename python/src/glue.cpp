@@ -262,7 +262,8 @@ Dict Check(const LoadedModel& model) {
   d.emplace_back("experiment", V(std::move(ex)));
   // The model's own parameters (declared in its file), as `kanesim check` lists them.
   Dict params;
-  for (const auto& p : mech.params) {
+  for (size_t i = 0; i < mech.params.size(); ++i) {
+    const flat::Param& p = mech.params[i];
     if (p.loc.file != model.request.path) continue;
     Dict one;
     if (p.type == flat::ParamType::String) one.emplace_back("value", V(p.string_value));
@@ -271,7 +272,7 @@ Dict Check(const LoadedModel& model) {
     else one.emplace_back("value", V(p.value));
     one.emplace_back("unit", V(p.unit));
     one.emplace_back("structural", V(p.structural));
-    params.emplace_back(p.name, V(std::move(one)));
+    params.emplace_back(std::string(mech.ParamName(i)), V(std::move(one)));
   }
   d.emplace_back("parameters", V(std::move(params)));
   List outputs;

@@ -67,8 +67,8 @@ static int ConstrainedColumn(const Program& p, Workspace& ws, double t, const do
 // accelerations (applied unit force vs none) lost the column to rounding where the
 // accelerations were large, as at an integrator's trial stage far from the solution.
 int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
-  if (!p.friction_joints.empty()) {
-    ws.error = "an impulse in a mechanism with Coulomb friction is not supported yet";
+  if (FrictionReadsNormalForce(p)) {
+    ws.error = "an impulse in a mechanism with Coulomb friction mu N is not supported yet";
     return -1;
   }
   if (!p.rows.empty()) return ConstrainedColumn(p, ws, t, y, k, x);

@@ -19,6 +19,8 @@ std::vector<FrictionJoint> FrictionJoints(const Program& p) {
     f.mu_s = j.mu_s;
     f.radius = j.type == flat::JointType::Revolute ? j.mu_radius : 1.0;
     f.exact = j.friction_exact;
+    f.c = j.friction_c;
+    f.c_s = j.friction_c_s;
     out.push_back(f);
   }
   return out;

@@ -49,8 +49,8 @@ int PlaneContactRow(const Program& p, Workspace& ws, double t, const double* y, 
 // = s M^-1 F exactly. The second pass takes s so large that the difference is not lost
 // in the rounding of udot(Q) (relative error ~ 1e-3 eps).
 int InverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F, double* x) {
-  if (!p.rows.empty() || !p.friction_joints.empty()) {
-    ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction is not supported yet"
+  if (!p.rows.empty() || FrictionReadsNormalForce(p)) {
+    ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction mu N is not supported yet"
                               : "an impulse in a mechanism with closed loops or contacts is not supported yet";
     return -1;
   }

@@ -5,7 +5,8 @@
 // For tree joint j with unit axis a (world), reaction force F_j on its child
 // (runtime/constraints/reactions.cpp eq. 5) and speed u_j:
 //   N_j = | F_j - (F_j . a) a |                       (normal force across the axis)   (1)
-//   Q_f,j = -mu_j r_j N_j tanh(u_j / v_j)              (r_j = pin radius; 1 if prismatic) (2)
+//   Q_f,j = -(mu_j r_j N_j + C_j) tanh(u_j / v_j)      (r_j = pin radius; 1 if prismatic) (2)
+// with C_j the joint's constant friction (stdlib friction_torque / friction_force),
 // regularized over the speed scale v_j (a bare sign() chatters where u_j crosses 0).
 // N depends on the accelerations and the accelerations on Q_f, so both projections are
 // solved together by the fixed-point iteration
@@ -14,6 +15,7 @@
 // the accelerations are then solved once more with the converged Q_f. It converges when
 // mu times the sensitivity of N to the joint's own force is below 1 (every case but
 // self-locking wedges; a failure is reported, recoverable: the integrator retries).
+// When every friction joint has mu = 0, Q_f does not depend on N: one solve, no reactions.
 #include <cmath>
 
 #include "runtime/kane/kane.h"
@@ -27,12 +29,39 @@ constexpr double kTol = 1e-12;
 constexpr int kMaxIterations = 60;
 }  // namespace
 
+namespace {
+// Eq. (2) for friction joint i (or exact stick-slip's law, sim/stick_slip.cpp: sliding by a
+// sign, or stuck: the force that holds it) with normal force N.
+double FrictionForce(const TreeJoint& j, const Workspace& ws, size_t i, double N) {
+  const double r = j.type == flat::JointType::Revolute ? j.mu_radius : 1.0;
+  const double slide = j.mu * r * N + j.friction_c;
+  const int mode = ws.friction_mode[i];
+  return mode == 0 ? -slide * std::tanh(ws.u[j.u0] / j.mu_v) : mode == 2 ? ws.friction_fixed[i] : -slide * mode;
+}
+}  // namespace
+
+bool FrictionReadsNormalForce(const Program& p) {
+  for (int b : p.friction_joints)
+    if (p.joints[static_cast<size_t>(b)].mu != 0.0) return true;
+  return false;
+}
+
 int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program&, Workspace&)) {
   const size_t nf = p.friction_joints.size();
+  const bool reads_N = FrictionReadsNormalForce(p);
   for (size_t i = 0; i < nf; ++i) {
-    const int s = p.joints[static_cast<size_t>(p.friction_joints[i])].u0;
-    ws.friction_Q0[i] = ws.Q[s];
-    ws.Q[s] = ws.friction_Q0[i] + ws.friction_tau[i];
+    const TreeJoint& j = p.joints[static_cast<size_t>(p.friction_joints[i])];
+    ws.friction_Q0[i] = ws.Q[j.u0];
+    ws.Q[j.u0] = ws.friction_Q0[i] + ws.friction_tau[i];
+  }
+  if (!reads_N) {  // constant friction only: Q_f known without the accelerations
+    for (size_t i = 0; i < nf; ++i) {
+      const TreeJoint& j = p.joints[static_cast<size_t>(p.friction_joints[i])];
+      ws.friction_N[i] = 0.0;
+      ws.friction_tau[i] = FrictionForce(j, ws, i, 0.0);
+      ws.Q[j.u0] = ws.friction_Q0[i] + ws.friction_tau[i];
+    }
+    return path(p, ws);
   }
   for (int it = 0; it < kMaxIterations; ++it) {
     if (int st = path(p, ws); st != 0) return st;
@@ -47,12 +76,7 @@ int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program
       const Vec3 a = ws.R_WB[L] * j.axis;  // the axis is fixed in both joint frames
       const Vec3 F = ws.reaction_W[L].head<3>();
       const double N = (F - F.dot(a) * a).norm();  // (1)
-      const double r = j.type == flat::JointType::Revolute ? j.mu_radius : 1.0;
-      // (2), or exact stick-slip's law (sim/stick_slip.cpp): sliding by a sign, or stuck.
-      const int mode = ws.friction_mode[i];
-      const double tau = mode == 0   ? -j.mu * r * N * std::tanh(ws.u[j.u0] / j.mu_v)
-                         : mode == 2 ? ws.friction_fixed[i]
-                                     : -j.mu * r * N * mode;
+      const double tau = FrictionForce(j, ws, i, N);  // (2)
       ws.friction_N[i] = N;
       change = std::max(change, std::fabs(tau - ws.friction_tau[i]) / (1.0 + std::fabs(tau)));
       ws.friction_tau[i] = tau;

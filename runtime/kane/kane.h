@@ -70,6 +70,9 @@ int SolveAccelerations(const Program& p, Workspace& ws);
 // Coulomb friction depending on joint normal forces (runtime/kane/friction.cpp): iterates
 // `path` (the scene's solve) with the friction forces in ws.Q until they agree.
 int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program&, Workspace&));
+// Whether a friction joint's force reads its normal force (mu != 0): then an impulse or a
+// reaction is not M^-1 alone. A constant friction (friction_torque) does not.
+bool FrictionReadsNormalForce(const Program& p);
 
 // Compile time: the fixed pattern and the KLU symbolic analysis (reused when
 // `p.sparse_symbolic` is already set by Rebind).

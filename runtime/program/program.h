@@ -78,6 +78,8 @@ struct TreeJoint {
   double mu_v = 1e-3;          // regularization speed scale of tanh(u / mu_v)
   double mu_s = 0.0;           // static coefficient (friction_exact)
   bool friction_exact = false; // exact stick-slip as events (sim/stick_slip.h), not tanh
+  double friction_c = 0.0;     // constant Coulomb friction (N m or N), added to mu r N
+  double friction_c_s = 0.0;   // its static value (friction_exact), added to mu_s r N
   // End stops (Revolute, Prismatic): q in [q_min, q_max]; -inf / +inf: none on that side.
   double q_min = -std::numeric_limits<double>::infinity();
   double q_max = std::numeric_limits<double>::infinity();

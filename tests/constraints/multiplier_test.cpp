@@ -149,7 +149,7 @@ TEST(MultiplierForm, RebindKeepsTheSparsePattern) {
   ASSERT_TRUE(l && l->prog && l->prog->sparse_symbolic);
   std::vector<double> values = l->prog->param_values;
   for (size_t i = 0; i < l->mech.params.size(); ++i)
-    if (l->mech.params[i].name == "swing") values[i] = 0.5;
+    if (l->mech.ParamName(i) == "swing") values[i] = 0.5;
   rt::CompileResult r = rt::Rebind(*l->prog, values);
   ASSERT_TRUE(r.program);
   EXPECT_EQ(r.program->sparse_symbolic, l->prog->sparse_symbolic);

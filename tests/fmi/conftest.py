@@ -1,12 +1,29 @@
 """Fixtures of the FMU tests: the kanesim command of this build, and FMUs it exported."""
 import os
 import subprocess
+from ctypes import byref
 
 import pytest
+from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+from fmpy.logging import addLoggerProxy
 
 SOURCE = os.environ.get("KANESIM_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
 EXE = os.environ.get("KANESIM_EXE", os.path.join(SOURCE, "build", "cli", "kanesim"))
 EXAMPLES = os.path.join(SOURCE, "examples")
+
+
+# FMPy's FMI 2 logger proxy (fmpy/logging) keeps ONE Python logger for the whole process:
+# simulate_fmu(logger=...) and a master's own proxied callbacks replace it, and once that
+# callback is freed, every later FMU that logs through FMPy's default callbacks crashes
+# the process. After each test, the default printer is put back (and kept alive here).
+_DEFAULT_LOGGER = fmi2CallbackFunctions()
+_DEFAULT_LOGGER.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+
+
+@pytest.fixture(autouse=True)
+def restore_fmpy_logger():
+    yield
+    addLoggerProxy(byref(_DEFAULT_LOGGER))
 
 
 def kanesim(*args, check=True):

@@ -222,8 +222,7 @@ TEST(UnitCheck, AnOutputTakesTheUnitOfItsExpression) {
 }
 
 double ParamValue(const flat::Mechanism& m, const std::string& name) {
-  for (const auto& p : m.params)
-    if (p.name == name) return p.value;
+  if (const int i = m.FindParam(name); i >= 0) return m.params[static_cast<size_t>(i)].value;
   ADD_FAILURE() << "no parameter " << name;
   return 0;
 }

@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -239,6 +242,44 @@ TEST(FlatFileName, EqualNamesShareOneEntry) {
   EXPECT_EQ(l1.file.str(), kRoot + "/examples/chain.mech");
   EXPECT_EQ(&l1.file.str(), &l2.file.str());
   EXPECT_GT(l1.line, 0);
+}
+
+// LoadOptions::data_files (what an FMU gives): the meshes a model names are read from where
+// the map says, under the names the model gives them, and a name the map lacks is an error
+// even where the file exists.
+TEST(Pipeline, DataFilesAreReadWhereTheMapSaysAndOnlyThere) {
+  std::ifstream f(kRoot + "/examples/slider_crank_meshes.mech");
+  std::stringstream text;
+  text << f.rdbuf();
+  const pipeline::Source away = pipeline::Source::Text("/nonexistent/sc.mech", text.str());
+  pipeline::LoadResult none = pipeline::LoadModel(away, {}, {});
+  ASSERT_FALSE(none.model);  // the paths the model names do not exist
+  EXPECT_NE(none.diagnostics.find("mesh file not found: /nonexistent/meshes/crank.stl"), std::string::npos);
+
+  std::map<std::string, std::string> files;
+  for (const char* part : {"crank", "rod", "slider"})
+    files[std::string("/nonexistent/meshes/") + part + ".stl"] = kRoot + "/examples/meshes/" + part + ".stl";
+  pipeline::LoadOptions o;
+  o.data_files = &files;
+  pipeline::LoadResult mapped = pipeline::LoadModel(away, o, {});
+  ASSERT_TRUE(mapped.model) << mapped.diagnostics;
+  pipeline::LoadResult direct =
+      pipeline::LoadModel(pipeline::Source::File(kRoot + "/examples/slider_crank_meshes.mech"), {}, {});
+  ASSERT_TRUE(direct.model) << direct.diagnostics;
+  EXPECT_EQ(mapped.model->program->param_values, direct.model->program->param_values);  // the same masses
+  EXPECT_EQ(mapped.model->mech->data_files.front(), "/nonexistent/meshes/crank.stl");
+
+  files.erase("/nonexistent/meshes/rod.stl");
+  pipeline::LoadResult lacking = pipeline::LoadModel(away, o, {});
+  ASSERT_FALSE(lacking.model);
+  EXPECT_NE(lacking.diagnostics.find("not among the files given with the model: /nonexistent/meshes/rod.stl"),
+            std::string::npos);
+  // Not read from the named path even where it exists: the example's own folder.
+  const pipeline::Source here = pipeline::Source::Text(kRoot + "/examples/sc.mech", text.str());
+  std::map<std::string, std::string> empty;
+  o.data_files = &empty;
+  EXPECT_FALSE(pipeline::LoadModel(here, o, {}).model);
+  EXPECT_TRUE(pipeline::LoadModel(here, {}, {}).model);
 }
 
 }  // namespace

@@ -93,10 +93,7 @@ struct MechBuilder {
     return m.joints.back();
   }
   int Param(const std::string& name, double value) {
-    flat::Param p;
-    p.name = name;
-    p.value = value;
-    m.params.push_back(p);
+    m.AddParam(name).value = value;
     return static_cast<int>(m.params.size() - 1);
   }
 };
