@@ -33,7 +33,7 @@ int WhenEvents::Functions(rt::Workspace& ws, double t, const double* y, double* 
 // dependent rows (a speed is set once per clause: E226).
 std::string WhenEvents::SingularJump(const std::string& clause) const {
   return clause + ": the reinit's speed jump has no unique solution: the speeds it sets and the contacts held at "
-                  "rest constrain the same motion";
+                  "rest (or the closed loops' rows) constrain the same motion";
 }
 
 const std::string& WhenEvents::Name(int i) const {
@@ -69,9 +69,12 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
     if (w.reinits[k].speed) rows.push_back(w.reinits[k].state - nq_), targets.push_back(value[k] - y[w.reinits[k].state]);
   if (!rows.empty()) {
     std::vector<double> du(static_cast<size_t>(nu_));
+    const std::string said = rt::ErrorMessage(ws);  // a new message: a column's reason (a dead point)
     const int s = solve ? solve(rows, targets, du.data()) : SpeedJump(program_, ws, t, y, rows, targets, du.data());
     if (s != 0) {
-      if (s == -1) error_ = program_.rows.empty() ? SingularJump(w.name) : w.name + ": " + rt::ErrorMessage(ws);
+      if (s == -1)
+        error_ = rt::ErrorMessage(ws) != said && !rt::ErrorMessage(ws).empty() ? w.name + ": " + rt::ErrorMessage(ws)
+                                                                               : SingularJump(w.name);
       return s;
     }
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];

@@ -148,6 +148,20 @@ TEST(WhenLoop, ASpeedTheLoopFixesIsRefusedAtTheEvent) {
   }
 }
 
+// If this fails, a clause setting two speeds of the one-degree-of-freedom four-bar (crank
+// and rocker: the loop ties them) ran with some jump instead of stopping, naming the clause.
+TEST(WhenLoop, TwoSpeedsTheLoopTiesAreRefusedAtTheEvent) {
+  auto l = LoadModel(
+      FourBar("  when time > 0.3 then\n    reinit(crank_pivot.u, 2);\n    reinit(rocker_pivot.u, 1);\n  end when;\n"),
+      {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  sim::SimResult r;
+  RunWith(*l->prog, AllIntegrators()[0], 0.5, 0.1, kSignals, &r, 1e-11);
+  EXPECT_EQ(r.status, sim::SimResult::Status::kNumericalFailure) << r.message;
+  EXPECT_NE(r.message.find("when ("), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("no unique solution"), std::string::npos) << r.message;
+}
+
 // If this fails, reinit of a sphere's speed down an incline (RollingSphere, rows on the
 // contact point's velocity) left it off the plane or slipping: after it the centre moves
 // along the plane, v_y = v_x tan(alpha), and rolls, w_z = -v_x / (r cos alpha).
