@@ -1,8 +1,9 @@
 // When clauses (flat::WhenClause -> Program::whens; docs/events.md): the indicators and reinit
 // values into the event tape, and what a reinit may set. A speed is set by an impulse through
 // the mass matrix (sim/when_events.cpp; resting stops and plane contacts held by
-// sim/end_stops.cpp), which needs a tree without Coulomb friction; a coordinate is set as it
-// is, which needs a tree and a coordinate that is not a quaternion's.
+// sim/end_stops.cpp; closed loops' and rolling contacts' rows by their reactions,
+// rt::InverseMassColumn), which needs a mechanism without Coulomb friction; a coordinate is
+// set as it is, which needs a tree and a coordinate that is not a quaternion's.
 #include <algorithm>
 #include <string>
 
@@ -19,11 +20,9 @@ std::string ReinitRefusal(const Program& p, const flat::StateRef& ref, int* stat
                      ? p.joint_of_flat[static_cast<size_t>(ref.target)]
                      : -1;
   if (tj < 0) return "the joint does not move (a weld, or a cut joint of a closed loop)";
-  if (!p.rows.empty())
-    return speed ? "the mechanism has closed loops or contacts, whose constraints a speed jump would also have to keep "
-                   "(not supported yet)"
-                 : "the mechanism has closed loops or contacts, whose position constraints a jump of a coordinate "
-                   "would break";
+  if (!p.rows.empty() && !speed)
+    return "the mechanism has closed loops or rolling contacts, whose position constraints a jump of a coordinate "
+           "would break (reinit a speed: the others follow through the rows)";
   const TreeJoint& j = p.joints[static_cast<size_t>(tj)];
   if (speed) {
     if (!p.friction_joints.empty())
@@ -52,13 +51,6 @@ void CompileWhens(Program& p, std::vector<CompileMessage>* errors) {
     WhenModel out;
     const std::string& file = w.loc.file.str();
     out.name = "when (" + file.substr(file.find_last_of('/') + 1) + ":" + std::to_string(w.loc.line) + ")";
-    // Closed loops and contacts check every solver step (the branch monitor), and the SUNDIALS
-    // solvers' one-step mode there does not stop at roots yet: refused rather than missed.
-    if (!p.rows.empty()) {
-      errors->push_back(Msg(flat::DiagCode::BadReinit,
-                            "a when clause in a mechanism with closed loops or contacts is not supported yet", w.loc));
-      continue;
-    }
     for (flat::ExprId h : w.indicators) out.indicators.push_back(tape.AddRoot(h, out.name, m.ExprText(h)));
     for (const flat::Reinit& r : w.reinits) {
       const flat::StateRef& ref = m.state_refs[static_cast<size_t>(r.state_ref)];

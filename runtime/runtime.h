@@ -137,6 +137,9 @@ struct BranchStep {
 int CheckBranch(const Program& program, BranchMonitor& monitor, double t, const double* y,
                 BranchStep* step = nullptr);
 const std::string& BranchMonitorError(const BranchMonitor& monitor);
+// A jump of the speeds (a when clause's reinit): the next check takes its velocity as the
+// reference, not the one before the jump (which may point anywhere else).
+void ForgetBranchReference(BranchMonitor& monitor);
 // The monitor's own workspace, its position Newton taken to round-off (Workspace
 // newton_to_round_off): the bridge evaluates the equations close to a change point on it.
 Workspace& MonitorWorkspace(BranchMonitor& monitor);
@@ -181,9 +184,11 @@ struct EndStop {
 std::vector<EndStop> EndStops(const Program& program);
 // The speeds' response to a unit generalized impulse on free speed k at the state (t, y):
 // x = M(q)^-1 e_k (nu entries), from the mass matrix of Kane's equations. An impulse lambda
-// there changes the speeds by lambda x (M du = e_k lambda). 0, or Derivative's status codes;
-// -1 on a program with constraint rows (closed loops, contacts), where the impulse would also
-// need their rows (ErrorMessage says so).
+// there changes the speeds by lambda x (M du = e_k lambda). With constraint rows A (closed
+// loops, rolling contacts) their impulsive reactions join it, M du = A^T mu + e_k lambda with
+// A du = 0: x is the column of the constrained inverse mass beta (beta^T M beta)^-1 beta^T.
+// 0, or Derivative's status codes; -1 (ErrorMessage says why) with Coulomb friction, on the
+// multiplier form (--solver sparse), or where the rows fix speed k (a dead point).
 int InverseMassColumn(const Program& program, Workspace& ws, double t, const double* y, int k, double* x);
 // The same for any generalized impulse F on the free speeds (nu entries): x = M(q)^-1 F.
 // runtime/engine/plane_contacts.cpp

@@ -143,6 +143,7 @@ class EngineOde final : public OdeSystem {
         events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
       }
     }
+    if (s == 0 && i >= NumStops() && bridge_ && bridge_->monitor) rt::ForgetBranchReference(*bridge_->monitor);
     if (s == 0 && first < events_.size()) AddChanges(state_names_, before.data(), y, &events_[first], &events_.back());
     return s;
   }

@@ -131,9 +131,9 @@ class ArkodeStepper final : public SundialsStepper {
       int flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
       while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, tret, ARK_ONE_STEP);
       if (flag == ARK_ERR_FAILURE && ResetAfterErrorTest()) flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
-      if (flag >= 0) MeasureDrift(*tret);
+      if (flag >= 0 && flag != ARK_ROOT_RETURN) MeasureDrift(*tret);
       return flag;
-    });
+    }, [&](int* f) { ERKStepGetRootInfo(mem_, f); });
   }
 
   // The accepted step's drift: how far its y is from y*, its projection onto the

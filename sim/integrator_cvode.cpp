@@ -132,9 +132,9 @@ class CvodeStepper final : public SundialsStepper {
     return AdvanceCheckedSteps(tout, y, [&](double* t) {
       if (watch_.drifted && !ResetProjected()) return CV_ILL_INPUT;
       const int flag = CVode(mem_, tout, s_.y, t, CV_ONE_STEP);
-      if (flag >= 0 && !project_) MeasureDrift(*t);
+      if (flag >= 0 && flag != CV_ROOT_RETURN && !project_) MeasureDrift(*t);
       return flag;
-    });
+    }, [&](int* f) { CVodeGetRootInfo(mem_, f); });
   }
 
   // The counters of the CVODE runs before the last reset added (CVodeReInit zeroes them),

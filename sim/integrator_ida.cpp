@@ -126,7 +126,9 @@ class IdaStepper final : public SundialsStepper {
         if (int r = EventReached(tret, y, [&](int* f) { IDAGetRootInfo(mem_, f); }); r != kNoEvent) return r;
       }
     }
-    return AdvanceCheckedSteps(tout, y, [&](double* t) { return IDASolve(mem_, tout, t, s_.y, s_.yp, IDA_ONE_STEP); });
+    return AdvanceCheckedSteps(
+        tout, y, [&](double* t) { return IDASolve(mem_, tout, t, s_.y, s_.yp, IDA_ONE_STEP); },
+        [&](int* f) { IDAGetRootInfo(mem_, f); });
   }
 
   IntegratorStats Stats() const override {

@@ -197,10 +197,18 @@ class SundialsStepper : public Stepper {
   // from the module's interpolant, as in its NORMAL mode. one_step(&tret) takes one step
   // toward tout into s_.y (the module's ONE_STEP mode) and returns its flag; StepChecked
   // sees each step that passed the check.
-  template <class OneStep>
-  int AdvanceCheckedSteps(double tout, double* y, OneStep one_step) {
+  // info(found) reads the module's root info after a root return (flag kRootReturn): an
+  // event past tout waits for the call whose tout reaches it (the step's interpolant gives
+  // the rows before it).
+  template <class OneStep, class Info>
+  int AdvanceCheckedSteps(double tout, double* y, OneStep one_step, Info info) {
     double tret = 0.0;
     for (;;) {
+      if (pending_event_ && event_time <= tout) {
+        pending_event_ = false;
+        std::copy(pending_y_.begin(), pending_y_.end(), y);
+        return kEventReached;
+      }
       if (stepped_ && CurrentTime() >= tout) {
         const int flag = CopyOut(module_.dky(mem_, tout, 0, s_.y), y);
         return flag >= 0 && check_rows_ ? CheckRow(tout, y, flag) : flag;
@@ -209,6 +217,14 @@ class SundialsStepper : public Stepper {
       const int flag = one_step(&tret);
       if (flag < 0) return flag;
       stepped_ = true;
+      if (flag == kRootReturn) {  // s_.y at the root inside the step; the step's end is checked next call
+        if (const int r = EventReached(tret, y, info); r != kNoEvent) {
+          if (event_time <= tout) return r;
+          pending_event_ = true;
+          pending_y_.assign(y, y + rhs_.Size());
+        }
+        continue;
+      }
       const double* ys = N_VGetArrayPointer(s_.y);
       if (rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
       if (check_rows_) MarkStep(tret, ys);
@@ -238,6 +254,10 @@ class SundialsStepper : public Stepper {
   SundialsMessages messages_;
   void* mem_ = nullptr;  // the module's memory, freed by module_.free
   bool stepped_ = false;  // one step taken in one-step mode (checked steps): an interpolant exists
+  // CV_ROOT_RETURN, ARK_ROOT_RETURN, IDA_ROOT_RETURN (all 2).
+  static constexpr int kRootReturn = 2;
+  bool pending_event_ = false;  // a root found past tout: y there (event_time, event_index set)
+  std::vector<double> pending_y_;
   // Rows checked against the energy (CheckRow).
   struct StepEnd {
     double t = 0.0;

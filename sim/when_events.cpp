@@ -5,6 +5,7 @@
 // momentum p_j = (M u)_j is unchanged across the jump.
 #include "sim/when_events.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "runtime/program/program.h"  // Program::whens
@@ -32,7 +33,7 @@ int WhenEvents::Functions(rt::Workspace& ws, double t, const double* y, double* 
 // dependent rows (a speed is set once per clause: E226).
 std::string WhenEvents::SingularJump(const std::string& clause) const {
   return clause + ": the reinit's speed jump has no unique solution: the speeds it sets and the contacts held at "
-                  "rest constrain the same motion";
+                  "rest (or the closed loops' rows) constrain the same motion";
 }
 
 const std::string& WhenEvents::Name(int i) const {
@@ -56,15 +57,24 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
   for (const rt::WhenReinit& r : w.reinits) value.push_back(rt::EventRoot(program_, ws, r.root));
   for (size_t k = 0; k < w.reinits.size(); ++k)
     if (!w.reinits[k].speed) y[w.reinits[k].state] = value[k];
+  // Closed loops, rolling contacts: the jump keeps A u = 0, so the state is first put on the
+  // constraints (else the integrator's drift off them, ~tolerance, would stay in the right limit).
+  if (!program_.rows.empty() && !w.reinits.empty()) {
+    std::vector<double> z(static_cast<size_t>(nq_ + nu_));
+    if (rt::ProjectByPartition(program_, ws, t, y, z.data()) == 0) std::copy(z.begin(), z.end(), y);
+  }
   std::vector<int> rows;
   std::vector<double> targets;
   for (size_t k = 0; k < w.reinits.size(); ++k)
     if (w.reinits[k].speed) rows.push_back(w.reinits[k].state - nq_), targets.push_back(value[k] - y[w.reinits[k].state]);
   if (!rows.empty()) {
     std::vector<double> du(static_cast<size_t>(nu_));
+    const std::string said = rt::ErrorMessage(ws);  // a new message: a column's reason (a dead point)
     const int s = solve ? solve(rows, targets, du.data()) : SpeedJump(program_, ws, t, y, rows, targets, du.data());
     if (s != 0) {
-      if (s == -1) error_ = SingularJump(w.name);
+      if (s == -1)
+        error_ = rt::ErrorMessage(ws) != said && !rt::ErrorMessage(ws).empty() ? w.name + ": " + rt::ErrorMessage(ws)
+                                                                               : SingularJump(w.name);
       return s;
     }
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];

@@ -115,6 +115,8 @@ int NearestSingularLoop(const Program& p, BranchMonitor& m, double* rho_out, int
   return worst;
 }
 
+void ForgetBranchReference(BranchMonitor& m) { m.have_ref = false; }
+
 int CheckBranch(const Program& p, BranchMonitor& m, double t, const double* y, BranchStep* step) {
   if (p.loops.empty()) return 0;
   Workspace& ws = *m.ws;

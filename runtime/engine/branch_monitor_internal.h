@@ -24,6 +24,12 @@ inline double Metric(const Program& p, const Workspace& ws, const std::vector<Ve
   return s;
 }
 
+// The tangent space's kinetic metric at y (closed loops, rolling contacts): beta (nu x nind,
+// Derivative's, with its partition), Mr = beta^T M beta, and r = beta^T M (u_raw - u_y) when
+// raw is given (else 0). Nonzero when y is not valid. In change_point_measures.cpp.
+int TangentMetric(const Program& p, Workspace& ws, double t, const double* y, const double* raw, Eigen::MatrixXd* beta,
+                  Eigen::MatrixXd* Mr, Eigen::VectorXd* r);
+
 struct BranchMonitor {
   std::unique_ptr<Workspace, void (*)(Workspace*)> ws{nullptr, [](Workspace*) {}};
   bool have_ref = false, in_zone = false;

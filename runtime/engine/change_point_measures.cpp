@@ -38,16 +38,20 @@ int ProjectByPartition(const Program& p, Workspace& ws, double t, const double* 
   return 0;
 }
 
-// The correction is taken through the bodies' velocities: for the free speeds x, the
-// differences of the mass-centre and angular velocities from those of y's speeds (the
-// prescribed speeds and the time terms cancel), so that beta's columns and raw - u_y enter
-// the kinetic metric (Metric) as the motions they are.
-int ProjectSpeedsInKineticMetric(const Program& p, Workspace& ws, double t, const double* raw, double* y) {
+// The tangent space's kinetic metric at y: beta (nu x nind, from Derivative, with its
+// partition) and Mr = beta^T M beta, and r = beta^T M (u_raw - u_y) when raw is given. Taken
+// through the bodies' velocities: for the free speeds x, the differences of the mass-centre
+// and angular velocities from those of y's speeds (the prescribed speeds and the time terms
+// cancel), so that beta's columns and raw - u_y enter the metric (Metric) as the motions they are.
+int TangentMetric(const Program& p, Workspace& ws, double t, const double* y, const double* raw, Eigen::MatrixXd* beta,
+                  Eigen::MatrixXd* Mr, Eigen::VectorXd* r) {
   const int nq = p.nq, nu = p.nu, n = StateSize(p);
   std::vector<double> f(static_cast<size_t>(n));
   if (Derivative(p, ws, t, y, f.data()) != 0) return 1;  // beta at y, with its partition
-  const Eigen::MatrixXd beta = ws.beta;
-  const int nind = static_cast<int>(beta.cols());
+  *beta = ws.beta;
+  const int nind = static_cast<int>(beta->cols());
+  Mr->resize(nind, nind);
+  r->setZero(nind);
   if (nind == 0) return 0;
   if (UnpackState(p, ws, t, y) != 0) return 1;
   PositionKinematics(p, ws);
@@ -61,28 +65,37 @@ int ProjectSpeedsInKineticMetric(const Program& p, Workspace& ws, double t, cons
   std::vector<double> uy(y + nq, y + nq + nu), x(uy);
   std::vector<Vec3> v0, w0, vd, wd;
   velocities(uy, &v0, &w0);
-  for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = raw[nq + i];
-  velocities(x, &vd, &wd);
-  for (size_t L = 0; L < K; ++L) {
-    vd[L] -= v0[L];
-    wd[L] -= w0[L];
+  if (raw != nullptr) {
+    for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = raw[nq + i];
+    velocities(x, &vd, &wd);
+    for (size_t L = 0; L < K; ++L) {
+      vd[L] -= v0[L];
+      wd[L] -= w0[L];
+    }
   }
   std::vector<std::vector<Vec3>> vc(static_cast<size_t>(nind)), wc(static_cast<size_t>(nind));
   for (int c = 0; c < nind; ++c) {
-    for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = uy[static_cast<size_t>(i)] + beta(i, c);
+    for (int i = 0; i < nu; ++i) x[static_cast<size_t>(i)] = uy[static_cast<size_t>(i)] + (*beta)(i, c);
     velocities(x, &vc[static_cast<size_t>(c)], &wc[static_cast<size_t>(c)]);
     for (size_t L = 0; L < K; ++L) {
       vc[static_cast<size_t>(c)][L] -= v0[L];
       wc[static_cast<size_t>(c)][L] -= w0[L];
     }
   }
-  Eigen::MatrixXd Mr(nind, nind);
-  Eigen::VectorXd r(nind);
   for (int c = 0; c < nind; ++c) {
     const auto uc = static_cast<size_t>(c);
-    r[c] = Metric(p, ws, vc[uc], wc[uc], vd, wd);
-    for (int d = 0; d < nind; ++d) Mr(c, d) = Metric(p, ws, vc[uc], wc[uc], vc[static_cast<size_t>(d)], wc[static_cast<size_t>(d)]);
+    if (raw != nullptr) (*r)[c] = Metric(p, ws, vc[uc], wc[uc], vd, wd);
+    for (int d = 0; d < nind; ++d) (*Mr)(c, d) = Metric(p, ws, vc[uc], wc[uc], vc[static_cast<size_t>(d)], wc[static_cast<size_t>(d)]);
   }
+  return 0;
+}
+
+int ProjectSpeedsInKineticMetric(const Program& p, Workspace& ws, double t, const double* raw, double* y) {
+  const int nq = p.nq, nu = p.nu, n = StateSize(p);
+  Eigen::MatrixXd beta, Mr;
+  Eigen::VectorXd r;
+  if (TangentMetric(p, ws, t, y, raw, &beta, &Mr, &r) != 0) return 1;
+  if (beta.cols() == 0) return 0;
   Eigen::LLT<Eigen::MatrixXd> llt(Mr);
   if (llt.info() != Eigen::Success) return 1;
   const Eigen::VectorXd z = llt.solve(r);

@@ -6,11 +6,17 @@
 
 #include <Eigen/Dense>
 
+#include "runtime/engine/branch_monitor_internal.h"
 #include "runtime/kane/kane.h"
 #include "runtime/program/program.h"
 #include "runtime/runtime.h"
 
 namespace kanesim::rt {
+
+namespace {
+// A speed whose constrained response is below this fraction of the largest is fixed by the rows.
+constexpr double kDeadPoint = 1e-10;
+}  // namespace
 
 std::vector<EndStop> EndStops(const Program& p) {
   std::vector<EndStop> out;
@@ -28,15 +34,44 @@ std::vector<EndStop> EndStops(const Program& p) {
   return out;
 }
 
+// Closed loops and rolling contacts: the impulse e_k lambda plus the rows' reactions A^T mu
+// keeping A du = 0 (M du = A^T mu + e_k lambda) moves the speeds in the tangent space,
+// du = beta z with (beta^T M beta) z = beta^T e_k: x = beta Mr^-1 beta_k^T. x_k ~ 0 where the
+// rows fix speed k (a dead point): -1, the jump it would need is unbounded.
+static int ConstrainedColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
+  Eigen::MatrixXd beta, Mr;
+  Eigen::VectorXd r;
+  if (TangentMetric(p, ws, t, y, nullptr, &beta, &Mr, &r) != 0) return 1;
+  if (beta.rows() != p.nu) {
+    ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
+    return -1;
+  }
+  std::fill(x, x + p.nu, 0.0);
+  const Eigen::LLT<Eigen::MatrixXd> llt(Mr);
+  if (beta.cols() == 0 || llt.info() != Eigen::Success) {
+    ws.error = "the closed loops or contacts leave no motion at time " + std::to_string(t);
+    return -1;
+  }
+  const Eigen::MatrixXd W = beta * llt.solve(beta.transpose());  // the constrained inverse mass
+  const double scale = W.diagonal().cwiseAbs().maxCoeff();
+  if (!(W(k, k) > kDeadPoint * scale)) {
+    ws.error = "the closed loops or contacts fix '" + StateNames(p)[static_cast<size_t>(p.nq + k)] +
+               "' here (a dead point: its jump would need an unbounded impulse)";
+    return -1;
+  }
+  for (int i = 0; i < p.nu; ++i) x[i] = W(i, k);
+  return 0;
+}
+
 // A column of M^-1 from the assembled mass matrix (Cholesky). A difference of two
 // accelerations (applied unit force vs none) lost the column to rounding where the
 // accelerations were large, as at an integrator's trial stage far from the solution.
 int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
-  if (!p.rows.empty() || FrictionReadsNormalForce(p)) {
-    ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction mu N is not supported yet"
-                              : "an impulse in a mechanism with closed loops or contacts is not supported yet";
+  if (FrictionReadsNormalForce(p)) {
+    ws.error = "an impulse in a mechanism with Coulomb friction mu N is not supported yet";
     return -1;
   }
+  if (!p.rows.empty()) return ConstrainedColumn(p, ws, t, y, k, x);
   Eigen::MatrixXd M(p.nu, p.nu);
   if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
   const Eigen::LLT<Eigen::MatrixXd> llt(M);
