@@ -38,7 +38,8 @@ std::vector<EndStop> EndStops(const Program& p) {
 // keeping A du = 0 (M du = A^T mu + e_k lambda) moves the speeds in the tangent space,
 // du = beta z with (beta^T M beta) z = beta^T e_k: x = beta Mr^-1 beta_k^T. x_k ~ 0 where the
 // rows fix speed k (a dead point): -1, the jump it would need is unbounded.
-static int ConstrainedColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
+static int ConstrainedColumns(const Program& p, Workspace& ws, double t, const double* y, const int* ks, int m,
+                              double* X) {
   Eigen::MatrixXd beta, Mr;
   Eigen::VectorXd r;
   if (TangentMetric(p, ws, t, y, nullptr, &beta, &Mr, &r) != 0) return 1;
@@ -46,7 +47,8 @@ static int ConstrainedColumn(const Program& p, Workspace& ws, double t, const do
     ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
     return -1;
   }
-  std::fill(x, x + p.nu, 0.0);
+  ++ws.inverse_mass_factorizations;
+  std::fill(X, X + static_cast<size_t>(p.nu) * static_cast<size_t>(m), 0.0);
   const Eigen::LLT<Eigen::MatrixXd> llt(Mr);
   if (beta.cols() == 0 || llt.info() != Eigen::Success) {
     ws.error = "the closed loops or contacts leave no motion at time " + std::to_string(t);
@@ -54,37 +56,60 @@ static int ConstrainedColumn(const Program& p, Workspace& ws, double t, const do
   }
   const Eigen::MatrixXd W = beta * llt.solve(beta.transpose());  // the constrained inverse mass
   const double scale = W.diagonal().cwiseAbs().maxCoeff();
-  if (!(W(k, k) > kDeadPoint * scale)) {
-    ws.error = "the closed loops or contacts fix '" + StateNames(p)[static_cast<size_t>(p.nq + k)] +
-               "' here (a dead point: its jump would need an unbounded impulse)";
-    return -1;
+  for (int j = 0; j < m; ++j) {
+    const int k = ks[j];
+    if (!(W(k, k) > kDeadPoint * scale)) {
+      ws.error = "the closed loops or contacts fix '" + StateNames(p)[static_cast<size_t>(p.nq + k)] +
+                 "' here (a dead point: its jump would need an unbounded impulse)";
+      return -1;
+    }
+    for (int i = 0; i < p.nu; ++i) X[static_cast<size_t>(j) * static_cast<size_t>(p.nu) + static_cast<size_t>(i)] = W(i, k);
   }
-  for (int i = 0; i < p.nu; ++i) x[i] = W(i, k);
   return 0;
 }
 
-// A column of M^-1 from the assembled mass matrix (Cholesky). A difference of two
-// accelerations (applied unit force vs none) lost the column to rounding where the
-// accelerations were large, as at an integrator's trial stage far from the solution.
-int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
+// Columns of M^-1 from the assembled mass matrix (Cholesky), one factorization for all. A
+// difference of two accelerations (applied unit force vs none) lost the column to rounding
+// where the accelerations were large, as at an integrator's trial stage far from the solution.
+int InverseMassColumns(const Program& p, Workspace& ws, double t, const double* y, const int* ks, int m, double* X) {
   if (FrictionReadsNormalForce(p)) {
     ws.error = "an impulse in a mechanism with Coulomb friction mu N is not supported yet";
     return -1;
   }
-  if (!p.rows.empty()) return ConstrainedColumn(p, ws, t, y, k, x);
-  Eigen::MatrixXd M(p.nu, p.nu);
-  if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
-  const Eigen::LLT<Eigen::MatrixXd> llt(M);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(p.nu);
-  e[k] = 1.0;
-  Eigen::VectorXd col = Eigen::VectorXd::Zero(p.nu);
-  if (llt.info() == Eigen::Success) col = llt.solve(e);
-  if (!(col[k] > 0.0) || !col.allFinite()) {  // M is positive definite: (M^-1)_kk > 0
-    ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k) + " at time " + std::to_string(t);
-    return 1;  // recoverable: a trial stage may probe a state far from the solution
+  if (m == 0) return 0;
+  if (!p.rows.empty()) return ConstrainedColumns(p, ws, t, y, ks, m, X);
+  // M depends on t and q only: the factor of the last call is kept for the same (t, q) (the
+  // event functions after a right-hand side at that state, the stops' after the friction's).
+  std::vector<double>& at = ws.inverse_mass_at;
+  if (at.size() != static_cast<size_t>(p.nq) + 1 || at[0] != t || !std::equal(y, y + p.nq, at.begin() + 1)) {
+    at.clear();  // (a failed evaluation keeps no factor)
+    Eigen::MatrixXd M(p.nu, p.nu);
+    if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
+    ++ws.inverse_mass_factorizations;
+    ws.inverse_mass_llt.compute(M);
+    at.push_back(t);
+    at.insert(at.end(), y, y + p.nq);
   }
-  std::copy(col.data(), col.data() + p.nu, x);
+  const Eigen::LLT<Eigen::MatrixXd>& llt = ws.inverse_mass_llt;
+  for (int j = 0; j < m; ++j) {
+    const int k = ks[j];
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(p.nu);
+    e[k] = 1.0;
+    Eigen::VectorXd col = Eigen::VectorXd::Zero(p.nu);
+    if (llt.info() == Eigen::Success) col = llt.solve(e);  // column by column: each as alone
+    if (!(col[k] > 0.0) || !col.allFinite()) {  // M is positive definite: (M^-1)_kk > 0
+      ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k) + " at time " + std::to_string(t);
+      return 1;  // recoverable: a trial stage may probe a state far from the solution
+    }
+    std::copy(col.data(), col.data() + p.nu, X + static_cast<size_t>(j) * static_cast<size_t>(p.nu));
+  }
   return 0;
 }
+
+int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
+  return InverseMassColumns(p, ws, t, y, &k, 1, x);
+}
+
+EvalCounts Counts(const Workspace& ws) { return {ws.derivatives, ws.inverse_mass_factorizations}; }
 
 }  // namespace kanesim::rt
