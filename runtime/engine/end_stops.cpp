@@ -45,6 +45,10 @@ int ConstrainedInverseMassTimes(const Program& p, Workspace& ws, double t, const
                                 const std::string& what, double* x) {
   Eigen::MatrixXd beta, Mr;
   Eigen::VectorXd r;
+  if (p.solver == SolverPath::Sparse) {  // the multiplier form has no tangent basis
+    ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
+    return -1;
+  }
   if (TangentMetric(p, ws, t, y, nullptr, &beta, &Mr, &r) != 0) return 1;
   if (beta.rows() != p.nu) {
     ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";

@@ -176,5 +176,47 @@ TEST(LoopStops, PlasticImpactRestsOnTheStopOnTheLoop) {
   }
 }
 
+// If this fails, an end stop in a mechanism with a joint coupling (a gear, q2 = -q1 / 2: one
+// degree of freedom) was refused (K318, before this change) or its impact left the follower
+// off the coupling's velocity row u2 = -u1 / 2, or the kinetic energy was not scaled by e^2.
+TEST(LoopStops, CoupledJointsBounceTogether) {
+  const std::string text =
+      "model GearStop\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  Revolute j1(axis = {0, 0, 1}, q(start = 0), q_min = -1.9, restitution = 0.5);\n"
+      "  Rod r1(L = 1, m = 1);\n"
+      "  FixedTranslation base(r = {2, 0, 0});\n"
+      "  Revolute j2(axis = {0, 0, 1});\n"
+      "  Rod r2(L = 0.5, m = 2);\n"
+      "  JointCoupling gear(ratio = -0.5);\n"
+      "equation\n"
+      "  connect(world.frame_b, j1.frame_a);\n"
+      "  connect(j1.frame_b, r1.frame_a);\n"
+      "  connect(world.frame_b, base.frame_a);\n"
+      "  connect(base.frame_b, j2.frame_a);\n"
+      "  connect(j2.frame_b, r2.frame_a);\n"
+      "  connect(j1.drive, gear.flange_a);\n"
+      "  connect(j2.drive, gear.flange_b);\n"
+      "end GearStop;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 1.2, 0.1, {"j1.q", "j1.u", "j2.u", "kinetic_energy"}, &r, 1e-11);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_EQ(r.stats.events.size(), 1u) << how.name;
+    size_t i = 0;
+    while (i + 1 < s.times.size() && s.times[i] != s.times[i + 1]) ++i;
+    ASSERT_LT(i + 1, s.times.size()) << how.name;
+    const std::vector<double>& b = s.rows[i];
+    const std::vector<double>& a = s.rows[i + 1];
+    EXPECT_NEAR(a[0], -1.9, 1e-9) << how.name;
+    EXPECT_LT(b[1], -1.0) << how.name;
+    EXPECT_NEAR(a[1], -0.5 * b[1], 1e-9 * std::abs(b[1])) << how.name << ": Newton's law";
+    EXPECT_NEAR(a[2], -0.5 * a[1], 1e-12 * std::abs(b[1])) << how.name << ": the coupling's velocity row";
+    EXPECT_NEAR(a[3], 0.25 * b[3], 1e-9 * b[3]) << how.name << ": T+ = e^2 T-";
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::test
