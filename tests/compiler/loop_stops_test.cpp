@@ -218,5 +218,30 @@ TEST(LoopStops, CoupledJointsBounceTogether) {
   }
 }
 
+// If this fails, the rocker's bounces on its stop (e = 1/2) did not accumulate to rest at the
+// sum of their geometric series: near the stop the gap's acceleration is nearly constant, so
+// each flight is e times the last and the rest comes at t_n + (t_n - t_{n-1}) e / (1 - e)
+// after the last two impacts; after it the loop rests on the stop, on its constraints.
+TEST(LoopStops, BouncesAccumulateToRestAtTheGeometricSum) {
+  const double e = 0.5;
+  auto l = LoadModel(FourBar(", q_max = " + Num(kStop) + ", restitution = " + Num(e)), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 1.3, 0.1, kSignals, &r, 1e-11);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    const std::vector<sim::EventRecord>& ev = r.stats.events;
+    ASSERT_GE(ev.size(), 4u) << how.name;
+    EXPECT_NE(ev.back().kind.find("accumulation point"), std::string::npos) << how.name << ": " << ev.back().kind;
+    const size_t n = ev.size() - 2;  // the last impact
+    const double t_sum = ev[n].time + (ev[n].time - ev[n - 1].time) * e / (1 - e);
+    EXPECT_NEAR(ev.back().time, t_sum, 1e-6) << how.name;
+    const std::vector<double>& y = s.rows.back();
+    EXPECT_NEAR(y[4], kStop, 1e-10) << how.name;
+    for (int k : {1, 3, 5}) EXPECT_LE(std::abs(y[static_cast<size_t>(k)]), 1e-9) << how.name;
+    EXPECT_LE(Closure(y[0], y[0] + y[2], y[4]), 1e-10) << how.name;
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::test
