@@ -7,7 +7,7 @@ side by side, medians of fresh processes (docs/benchmarks.md, "URDF robots: the 
    example-robot-data URDF without <visual>/<collision> (MuJoCo would compile the collision
    meshes; kanesim ignores them), <limit> widened to +-1e6 (kanesim's importer does not model
    stops, MuJoCo would), without <mimic> (MuJoCo makes it soft, kanesim exact), <dynamics
-   friction> 0 (kanesim: tanh(u/1e-3), stiff on Talos; MuJoCo: frictionloss, a soft constraint);
+   friction> 0 (kanesim: exact stick-slip; MuJoCo: frictionloss, a soft constraint);
    Solo12 and Talos get a `floating` root_joint from a `world` link. <dynamics> damping kept.
 2. One random start (bench/reference/urdf_robots.py's random_state, fixed seed), the reference
    q(1 s) from SciPy's DOP853 on Pinocchio's aba at 1e-13 (spread to a 1e-12 run printed).
@@ -64,7 +64,7 @@ def race_urdf(name, src, floating):
         elif el.tag == "joint":
             for c in [c for c in el if c.tag in ("mimic", "safety_controller", "calibration")]:
                 el.remove(c)
-            for c in el.findall("dynamics"):  # tanh(u/1e-3) in kanesim, a soft constraint in MuJoCo
+            for c in el.findall("dynamics"):  # exact stick-slip in kanesim, a soft constraint in MuJoCo
                 if c.get("friction") is not None:
                     c.set("friction", "0")
             for c in el.findall("limit"):  # a range nothing reaches: no stop in either tool
