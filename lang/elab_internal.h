@@ -189,7 +189,6 @@ struct Node {
   // all the copies.
   mutable std::int32_t unit_slot = -1;
   std::string name;  // "links[2]" for array elements
-  std::string path;  // "robot.links[2]"
   Node* parent = nullptr;
   const ast::Component* decl = nullptr;  // null for the root and array elements' owner copy
   Mod mod;
@@ -199,6 +198,14 @@ struct Node {
   // instantiation through Modifiers().
   const Mod* shared_mod = nullptr;
   const Mod& Modifiers() const { return shared_mod ? *shared_mod : mod; }
+  // "robot.links[2]" (the root's is empty), made when asked for: most nodes' paths are
+  // only read by a diagnostic, and a string kept in each cost an allocation and its free.
+  std::string Path() const {
+    std::string p;
+    AppendPath(p);
+    return p;
+  }
+  void AppendPath(std::string& out) const { AppendPathFrom(out, out.size()); }
 
   // kClass
   const ast::ClassDef* cls = nullptr;
@@ -228,6 +235,12 @@ struct Node {
   std::vector<std::unique_ptr<Node>> elems;
 
   static constexpr size_t kScanChildren = 16;
+  void AppendPathFrom(std::string& out, size_t start) const {
+    if (!parent) return;
+    parent->AppendPathFrom(out, start);
+    if (out.size() > start) out += '.';
+    out += name;
+  }
   static constexpr size_t kScanBudget = 256;  // names a larger class's scans compare before it gets an index
   Node* Child(const std::string& n) const {
     // Most classes have a handful of elements: a scan beats hashing. A larger one gets an
@@ -275,9 +288,6 @@ class SourcePlaces {
 // Element `index` (0-based) of `v`, an array value of `count` elements along its first
 // dimension (lang/elab_modifiers.cpp).
 Value ElementOf(const Value& v, int index, int count);
-
-// "prefix.name", or "name" at the root (lang/elab_instantiate.cpp).
-std::string JoinPath(const std::string& prefix, const std::string& name);
 
 // Modelica-style attribute names accepted on variables.
 bool IsVarAttribute(const std::string& name);

@@ -207,7 +207,6 @@ std::unique_ptr<Node> Instantiator::CloneInstance(const Node& src, Node* parent,
   auto n = std::make_unique<Node>();
   n->kind = src.kind;
   n->name = name;
-  n->path = JoinPath(parent->path, name);
   n->parent = parent;
   n->decl = src.decl;
   n->enabled = src.enabled;
@@ -304,7 +303,6 @@ void Instantiator::InstantiateArray(Node* node, Node* array, const ast::Componen
     auto el = std::make_unique<Node>();
     el->parent = node;  // elements resolve names in the same scope as the array
     el->decl = &comp;
-    el->path = JoinPath(node->path, name);
     el->name = std::move(name);
     el->depth = array->depth;
     el->mod = SliceMod(array->mod, i, n, eval_, diags_);
