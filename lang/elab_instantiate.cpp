@@ -242,8 +242,8 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
 
 // The child node of element c, its modifier merged: outer (the instance's) over the
 // extends clause's over the declaration's.
-std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
-  auto child = std::make_unique<Node>();
+NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
+  auto child = tree_.arena.New();
   child->parent = node;
   child->decl = c.comp;
   child->name = c.comp->name;

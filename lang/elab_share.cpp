@@ -202,9 +202,9 @@ bool Instantiator::SameInEveryElement(const Mod& m, const ShareBinding& b) const
   return true;
 }
 
-std::unique_ptr<Node> Instantiator::CloneInstance(const Node& src, Node* parent, const std::string& name,
+NodePtr Instantiator::CloneInstance(const Node& src, Node* parent, const std::string& name,
                                                   ShareBinding& b) {
-  auto n = std::make_unique<Node>();
+  auto n = tree_.arena.New();
   n->kind = src.kind;
   n->name = name;
   n->parent = parent;
@@ -300,7 +300,7 @@ void Instantiator::InstantiateArray(Node* node, Node* array, const ast::Componen
     name.reserve(comp.name.size() + index.size() + 2);
     name.append(comp.name).append("[").append(index).append("]");
     if (i > 0 && ShareElement(share, node, array, name, i, n)) continue;
-    auto el = std::make_unique<Node>();
+    auto el = tree_.arena.New();
     el->parent = node;  // elements resolve names in the same scope as the array
     el->decl = &comp;
     el->name = std::move(name);
