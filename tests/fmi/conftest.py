@@ -15,15 +15,18 @@ EXAMPLES = os.path.join(SOURCE, "examples")
 # FMPy's FMI 2 logger proxy (fmpy/logging) keeps ONE Python logger for the whole process:
 # simulate_fmu(logger=...) and a master's own proxied callbacks replace it, and once that
 # callback is freed, every later FMU that logs through FMPy's default callbacks crashes
-# the process. After each test, the default printer is put back (and kept alive here).
-_DEFAULT_LOGGER = fmi2CallbackFunctions()
-_DEFAULT_LOGGER.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+# the process. After each test, the default printer (kept alive here) is put back. Each
+# time through a fresh struct: addLoggerProxy replaces the struct's logger by the native
+# proxy, so handing it the same struct twice makes the proxy call itself.
+_PRINT_LOG = fmi2CallbackLoggerTYPE(printLogMessage)
 
 
 @pytest.fixture(autouse=True)
 def restore_fmpy_logger():
     yield
-    addLoggerProxy(byref(_DEFAULT_LOGGER))
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = _PRINT_LOG
+    addLoggerProxy(byref(callbacks))
 
 
 def kanesim(*args, check=True):
