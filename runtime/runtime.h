@@ -214,6 +214,9 @@ std::vector<FrictionJoint> FrictionJoints(const Program& program);
 void SetFrictionMode(Workspace& ws, int i, int mode, double tau);
 // Friction joint i's normal force N in the last evaluation of ws.
 double FrictionNormal(const Workspace& ws, int i);
+// Friction joint i's speed as the last evaluation took it: beside constraint rows a dependent
+// speed is solved from the independent ones, not read from y.
+double FrictionSpeed(const Program& program, const Workspace& ws, int i);
 
 // Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
 // when the program has none. runtime/engine/plane_contacts.cpp
