@@ -162,7 +162,7 @@ Value Evaluator::InputValue(Node* var, Span use_span) {
 const ModValue* Evaluator::VarBinding(Node* var) {
   const ModValue* binding = nullptr;
   if (var->eq_binding) binding = &*var->eq_binding;
-  if (const Mod& mods = var->Modifiers(); mods.value) {
+  if (const ModView mods = var->Modifiers(); mods.value) {
     if (binding) {
       auto& d = diags_.Error(DiagCode::ConflictingEquation, var->eq_binding->span,
                              "'" + var->Path() + "' already has a value from its declaration or a modifier");
@@ -307,7 +307,7 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
 
 Evaluator::ParamAttributes Evaluator::ReadParamAttributes(Node* var) {
   ParamAttributes attrs;
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   auto attr_num = [&](const char* key, double* out) {
     auto it = mods.sub.find(key);
     if (it == mods.sub.end() || !it->second.value) return;
