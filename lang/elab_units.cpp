@@ -149,6 +149,8 @@ class UnitChecker {
   void SpringUnits(const InstanceTree& tree, const Links& links);
   // A variable's unit: declared, or inferred (from its binding or from its uses).
   UVal VarUnit(const Node* var);
+  // The units inferred for variables that declare none, by path ("" none).
+  std::unordered_map<std::string_view, std::string> InferredByPath() const;
 
  private:
   struct Declared {
@@ -465,6 +467,14 @@ UVal UnitChecker::VarUnit(const Node* var) {
   return v;
 }
 
+std::unordered_map<std::string_view, std::string> UnitChecker::InferredByPath() const {
+  std::unordered_map<std::string_view, std::string> out;
+  for (const auto& [n, slot] : inferred_)
+    if (slot.val.kind == UVal::Known && !slot.val.soft && n->shape.empty())
+      out.emplace(n->path, slot.val.text ? *slot.val.text : slot.val.unit.ToString());
+  return out;
+}
+
 void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at) {
   if (!e || e->kind != ast::ExprKind::Ref || u.kind != UVal::Known || !scope) return;
   const Node* n = scope;
@@ -493,7 +503,7 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   }
   slot.val = u;
   slot.val.origin = n;
-  slot.val.text = nullptr;
+  // u.text stays: the unit as declared where it came from ("N", not "m.kg/s2")
   slot.from_use = true;
   slot.where = at;
 }
@@ -625,7 +635,12 @@ void UnitChecker::Element(const ast::Expr& x, const Node* scope, const Iters* it
 UVal UnitChecker::Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at,
                        const char* what, const Node* scope) {
   if (a.kind == UVal::Known && b.kind == UVal::Known) {
-    if (a.unit.Agrees(b.unit) || b.soft) return a;
+    if (a.unit.Agrees(b.unit) || b.soft) {
+      if (a.text || !b.text || b.soft || a.unit.twice != b.unit.twice) return a;
+      UVal r = a;  // -k * x + F: the sum shown as F's declared unit ("N"), not in SI form
+      r.text = b.text;
+      return r;
+    }
     if (a.soft) return b;
     if (ReportConflict(a, b, at) || ReportConflict(b, a, at)) return UVal{};
     auto& d = diags_.Error(DiagCode::UnitMismatch, at, std::string(what) + " have different units: " + Shown(a) + " and " + Shown(b));
@@ -846,6 +861,17 @@ void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mecha
     for (; i < m->outputs.size() && named(m->outputs[i].name); ++i)
       if (u.kind == UVal::Known) m->outputs[i].unit = u.text ? *u.text : u.unit.ToString();
   }
+  // Parameters and inputs that declare no unit take the inferred one (an FMU's variables and
+  // UnitDefinitions, --emit flat, check): one pass, and only when something was inferred.
+  const auto inferred = checker_->InferredByPath();
+  if (inferred.empty()) return;
+  for (size_t k = 0; k < m->params.size(); ++k) {
+    flat::Param& p = m->params[k];
+    if (!p.unit.empty() || p.type != flat::ParamType::Real) continue;
+    if (auto it = inferred.find(m->ParamName(k)); it != inferred.end()) p.unit = it->second;
+  }
+  for (flat::Input& in : m->inputs)
+    if (auto it = inferred.find(in.name); in.unit.empty() && it != inferred.end()) in.unit = it->second;
 }
 
 }  // namespace kanesim::lang::elab
