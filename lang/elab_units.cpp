@@ -192,7 +192,14 @@ class UnitChecker {
             const Node* scope);
   UVal NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result);
   // An undeclared scalar variable read bare in `e` takes unit u from this use.
-  void InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at);
+  // A variable with a unit from an earlier use is E238 when `report` (else left as it is).
+  void InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at, bool report = true);
+  // An expression of no known unit used as u: each undeclared variable it is a sum, a
+  // difference, a negation or an if-branch of takes u (`L = 1 + k` makes k a length).
+  // Products are not entered: a number there is a factor, or open in an equation. Inside,
+  // a variable that has a unit already is not reported again: the sum would have had
+  // that unit, so it had none because of a mismatch already reported.
+  void InferDown(const ast::Expr* e, const UVal& u, const Node* scope, Span at, int depth = 0);
   void NoteOrigin(Diagnostic& d, const UVal& v);
   // `inferred` is the unit an undeclared variable took from an earlier use, and `other`
   // disagrees: E238 (true) instead of a plain mismatch.
@@ -349,7 +356,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   UVal got = where ? BoundOnce(mv, !is_equation, where, &reused) : Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
-    InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
+    InferDown(mv.expr, want, mv.scope, mv.expr->span);
     return;
   }
   if (got.soft) return;
@@ -475,7 +482,28 @@ std::unordered_map<std::string_view, std::string> UnitChecker::InferredByPath() 
   return out;
 }
 
-void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at) {
+void UnitChecker::InferDown(const ast::Expr* e, const UVal& u, const Node* scope, Span at, int depth) {
+  if (!e || depth + depth_ >= kMaxCheckDepth) return;  // as deep as Expr went, no deeper
+  const Tok op = static_cast<Tok>(e->op);
+  switch (e->kind) {
+    case ast::ExprKind::Ref: InferFromUse(e, u, scope, at, depth == 0); return;
+    case ast::ExprKind::Unary:
+      if (op == Tok::Minus || op == Tok::Plus)
+        for (const auto& x : e->args) InferDown(x.get(), u, scope, at, depth + 1);
+      return;
+    case ast::ExprKind::Binary:
+      if (op == Tok::Plus || op == Tok::Minus)
+        for (const auto& x : e->args) InferDown(x.get(), u, scope, at, depth + 1);
+      return;
+    case ast::ExprKind::If:  // the branches (odd positions and the last), not the conditions
+      for (size_t i = 0; i < e->args.size(); ++i)
+        if (i % 2 == 1 || i + 1 == e->args.size()) InferDown(e->args[i].get(), u, scope, at, depth + 1);
+      return;
+    default: return;
+  }
+}
+
+void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at, bool report) {
   if (!e || e->kind != ast::ExprKind::Ref || u.kind != UVal::Known || !scope) return;
   const Node* n = scope;
   for (const auto& p : e->parts) {
@@ -493,7 +521,7 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   if (n->unit_slot == kInferring) slot.busy = true;
   n->unit_slot = kInferred;
   if (slot.val.kind == UVal::Known) {
-    if (!slot.from_use || slot.val.unit.Agrees(u.unit)) return;
+    if (!slot.from_use || slot.val.unit.Agrees(u.unit) || !report) return;
     auto& d = diags_.Error(DiagCode::UnitConflict, at,
                            "'" + n->path + "' has no unit and is used here as " + Shown(u) + ", but earlier as " +
                                Shown(slot.val));
@@ -651,11 +679,11 @@ UVal UnitChecker::Same(const UVal& a, const ast::Expr* ea, const UVal& b, const 
     return UVal{};
   }
   if (a.kind == UVal::Known) {
-    InferFromUse(eb, a, scope, at);
+    InferDown(eb, a, scope, at);
     return a;
   }
   if (b.kind == UVal::Known) {
-    InferFromUse(ea, b, scope, at);
+    InferDown(ea, b, scope, at);
     return b;
   }
   return a.kind == UVal::Literal && b.kind == UVal::Literal ? UVal::Lit() : UVal{};

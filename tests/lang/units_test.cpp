@@ -227,7 +227,15 @@ INSTANTIATE_TEST_SUITE_P(
              Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"rad\") = 1;\n"
                       "  parameter Real k = 0.5;\n  Revolute i(q(start = b + k));",
                       "Rod rod(L = a + k);"),
-             "m.mech:8:15: error[E238]: 'k' has no unit and is used here as \"m\", but earlier as \"rad\""}),
+             "m.mech:8:15: error[E238]: 'k' has no unit and is used here as \"m\", but earlier as \"rad\""},
+        // The use may be inside a sum or a branch given a unit as a whole: `L2 = 1 + k` bound
+        // to a length makes k a length, so k as an angle afterwards is a conflict.
+        Rule{"InferenceThroughASum",
+             Pendulum("  parameter Real k = 0.5;\n  parameter Real L2(unit = \"m\") = 1 + k;\n"
+                      "  parameter Real L3(unit = \"m\") = if L2 > 1 then -k else k + 2;"),
+             Pendulum("  parameter Real b(unit = \"rad\") = 1;\n  parameter Real k = 0.5;\n"
+                      "  parameter Real L2(unit = \"m\") = 1 + k;\n  Revolute i(q(start = b + k));"),
+             "m.mech:5:24: error[E238]: 'k' has no unit and is used here as \"rad\", but earlier as \"m\""}),
     [](const ::testing::TestParamInfo<Rule>& i) { return std::string(i.param.name); });
 
 TEST(UnitCheck, AMismatchNamesBothDeclarations) {
