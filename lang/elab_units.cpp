@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -150,7 +151,12 @@ class UnitChecker {
   // A variable's unit: declared, or inferred (from its binding or from its uses).
   UVal VarUnit(const Node* var);
   // The units inferred for variables that declare none, by path ("" none).
-  std::unordered_map<std::string_view, std::string> InferredByPath() const;
+  struct PathHash {  // looked up by std::string_view (Mechanism::ParamName) without a copy
+    using is_transparent = void;
+    size_t operator()(std::string_view s) const { return std::hash<std::string_view>()(s); }
+  };
+  using ByPath = std::unordered_map<std::string, std::string, PathHash, std::equal_to<>>;
+  ByPath InferredByPath() const;
 
  private:
   struct Declared {
@@ -474,11 +480,11 @@ UVal UnitChecker::VarUnit(const Node* var) {
   return v;
 }
 
-std::unordered_map<std::string_view, std::string> UnitChecker::InferredByPath() const {
-  std::unordered_map<std::string_view, std::string> out;
+UnitChecker::ByPath UnitChecker::InferredByPath() const {
+  ByPath out;
   for (const auto& [n, slot] : inferred_)
     if (slot.val.kind == UVal::Known && !slot.val.soft && n->shape.empty())
-      out.emplace(n->path, slot.val.text ? *slot.val.text : slot.val.unit.ToString());
+      out.emplace(n->Path(), slot.val.text ? *slot.val.text : slot.val.unit.ToString());
   return out;
 }
 
