@@ -111,7 +111,7 @@ TEST(WhenFriction, SliderOnACarrierSticksOrSlidesByTheClosedForm) {
 // event, shared by all five), or exact stick-slip (friction_exact, mu_s) does not stick the
 // joint by its static coefficient and keep it stuck after the jump.
 TEST(WhenFriction, EveryIntegratorAndExactStickSlipTakeTheSameImpulse) {
-  const double V = 1.9;  // slides with mu = 0.4 (V > 1.668); sticks with mu_s = 0.6 (V < 2.03)
+  const double V = 1.9;  // slides with mu = 0.4 (V > 1.668); sticks with mu_s = 0.6 (V < 2.055)
   for (const IntegratorChoice& how : AllIntegrators()) {
     Jump j;
     ASSERT_TRUE(RunJump(Slider(0.0, 1.0, Num(V)), &j, how)) << how.name;
@@ -151,6 +151,68 @@ TEST(WhenFriction, StoppingTheCarrierNeverRaisesTheEnergy) {
       const double T1 = 0.5 * kMs * j.us_after * j.us_after;
       EXPECT_LE(T1, T0 * (1 + 1e-14)) << U << " " << us;
     }
+}
+
+// A carrier (m_c) on an x rail with friction mu carries two point masses on hinges about z:
+// A (m_A at l_A, angle a) and B (m_B at l_B, angle b), no gravity, the carrier moving at U.
+// Setting A's rate to W: B's hinge takes no impulse (m_B l_B (l_B dw_B - sin b du_c) = 0), the
+// rail's along x, M' du_c - k0 = P (M' = m_c + m_A + m_B cos^2 b, k0 = m_A l_A W sin a), its
+// normal impulse across x N = |n0 + n1 du_c| (n0 = m_A l_A W cos a, n1 = m_B sin b cos b):
+// N depends on the friction impulse, through B. The cases solved by hand: stick (du_c = -U,
+// |P| <= mu N) or slide s (P = -s mu N, s (U + du_c) >= 0), the abs by its sign.
+// If this fails, the sliding impulse is not the fixed point of its own normal impulse (a
+// normal force taken before the friction's response), or the rail sticks or slides wrongly.
+TEST(WhenFriction, RailWhoseNormalImpulseDependsOnItsFrictionByTheClosedForm) {
+  const double mc = 1, mA = 0.7, lA = 0.5, mB = 1.2, lB = 0.8, a = -1.0, b = -2.2, mu = 0.5;
+  const double Mp = mc + mA + mB * std::cos(b) * std::cos(b), n1 = mB * std::sin(b) * std::cos(b);
+  int kinds[3] = {0, 0, 0};
+  for (double U : {1.0, 0.1, -0.4})
+    for (double W : {-6.0, -2.0, -0.5, 0.5, 0.7, 2.0, 6.0}) {
+      const double k0 = mA * lA * W * std::sin(a), n0 = mA * lA * W * std::cos(a);
+      double want = NAN;  // the rail's speed after
+      if (std::abs(-Mp * U - k0) <= mu * std::abs(n0 - n1 * U)) want = 0.0;
+      for (double sgn : {1.0, -1.0})
+        for (double sigma : {1.0, -1.0}) {
+          const double x = (k0 - mu * sgn * sigma * n0) / (Mp + mu * sgn * sigma * n1);
+          if (std::isnan(want) && sigma * (n0 + n1 * x) >= 0 && sgn * (U + x) > 0) want = U + x;
+        }
+      ASSERT_FALSE(std::isnan(want)) << U << " " << W;
+      ++kinds[want == 0.0 ? 0 : want > 0 ? 1 : 2];
+      const std::string text =
+          "model R\n"
+          "  World world(g = {0, 0, 0});\n"
+          "  Prismatic rail(axis = {1, 0, 0}, u(start = " + Num(U) + "), mu = " + Num(mu) + ");\n"
+          "  Body carrier(m = " + Num(mc) + ");\n"
+          "  Revolute ha(axis = {0, 0, 1}, q(start = " + Num(a) + "));\n"
+          "  Body pa(m = " + Num(mA) + ", r_CM = {" + Num(lA) + ", 0, 0});\n"
+          "  Revolute hb(axis = {0, 0, 1}, q(start = " + Num(b) + "));\n"
+          "  Body pb(m = " + Num(mB) + ", r_CM = {" + Num(lB) + ", 0, 0});\n"
+          "equation\n"
+          "  connect(world.frame_b, rail.frame_a);\n"
+          "  connect(rail.frame_b, carrier.frame_a);\n"
+          "  connect(carrier.frame_a, ha.frame_a);\n"
+          "  connect(ha.frame_b, pa.frame_a);\n"
+          "  connect(carrier.frame_a, hb.frame_a);\n"
+          "  connect(hb.frame_b, pb.frame_a);\n"
+          "  when time > 0.1 then\n"
+          "    reinit(ha.u, " + Num(W) + ");\n"
+          "  end when;\n"
+          "end R;\n";
+      auto l = LoadModel(text, {}, {}, true);
+      ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+      sim::SimResult r;
+      RunWith(*l->prog, AllIntegrators()[0], 0.2, 0.1, {"rail.u"}, &r, 1e-11);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << r.message;
+      EXPECT_EQ(Speed(r, "rail.u", false, U), U);
+      const double got = Speed(r, "rail.u", true, U);
+      EXPECT_NEAR(got, want, 1e-10 * (1 + std::abs(want))) << "U = " << U << ", W = " << W;
+      // B's hinge took no impulse: its generalized momentum l_B w_B - sin b u_c is kept (0 before).
+      const double wb = Speed(r, "hb.u", true, 0.0);
+      EXPECT_NEAR(lB * wb - std::sin(b) * got, -std::sin(b) * U, 1e-10) << "U = " << U << ", W = " << W;
+    }
+  EXPECT_GT(kinds[0], 0);
+  EXPECT_GT(kinds[1], 0);
+  EXPECT_GT(kinds[2], 0);
 }
 
 // If this fails, a speed reinit with mu friction in a mechanism with closed loops or rolling
