@@ -133,9 +133,8 @@ class Writer {
     link_frame_.assign(r_.links.size(), "");
     joint_name_.assign(r_.joints.size(), "");
     decl_ << "  World world(g = {0, 0, -9.81}) \"URDF: z up, standard gravity\";\n";
-    // The compiler takes no end stops in a mechanism with joint couplings (K318): a robot
-    // whose <mimic>s are kept gets its limits as comments only.
     for (const Joint& j : r_.joints) coupled_ = coupled_ || (o_.mimic && j.has_mimic);
+    if (coupled_) MimicGroups();
     Root();
     for (int j : r_.order) JointAndChild(j);
     if (o_.mimic) Mimics();
@@ -279,11 +278,62 @@ class Writer {
     return name + ".frame_b";
   }
 
-  // Whether the joint's <limit> becomes end stops: a revolute or prismatic joint's proper
-  // range, unless --limits ignore or the model's couplings forbid stops.
+  // A joint's <limit> as a range that can stop it: a revolute or prismatic joint's.
+  static bool Limited(const Joint& j) {
+    return j.has_limit && (j.type == JointType::kRevolute || j.type == JointType::kPrismatic);
+  }
+
+  // <mimic> chains: each coupled joint's root leader R and q = a q_R + b. A group's limits
+  // all become end stops of R, the intersection of their ranges mapped to q_R: stops on the
+  // follower too would be rows dependent on the leader's where the ranges agree (the impulse
+  // that holds both is not unique), and the follower keeps q = a q_R + b within its range.
+  void MimicGroups() {
+    const std::size_t n = r_.joints.size();
+    root_.assign(n, -1);
+    for (std::size_t j = 0; j < n; ++j) {
+      double a = 1, b = 0;
+      int at = static_cast<int>(j);
+      for (std::size_t steps = 0; steps <= n && r_.joints[static_cast<std::size_t>(at)].has_mimic; ++steps) {
+        const Joint& x = r_.joints[static_cast<std::size_t>(at)];
+        b += a * x.offset, a *= x.multiplier;  // q = a (m q_l + c) + b
+        at = x.mimic_leader;
+      }
+      if (r_.joints[static_cast<std::size_t>(at)].has_mimic) continue;  // a cycle: the compiler says so
+      if (at == static_cast<int>(j)) continue;
+      root_[j] = at;
+      const Joint& x = r_.joints[j];
+      if (!Limited(x) || !o_.stops || a == 0 || !(x.lower < x.upper)) continue;
+      double lo = (x.lower - b) / a, hi = (x.upper - b) / a;
+      if (lo > hi) std::swap(lo, hi);
+      Range& g = group_[at];
+      if (g.members == 0 && Limited(r_.joints[static_cast<std::size_t>(at)]) &&
+          r_.joints[static_cast<std::size_t>(at)].lower < r_.joints[static_cast<std::size_t>(at)].upper) {
+        g.lower = r_.joints[static_cast<std::size_t>(at)].lower, g.upper = r_.joints[static_cast<std::size_t>(at)].upper;
+        g.members = 1;
+      }
+      g.lower = g.members == 0 ? lo : std::max(g.lower, lo);
+      g.upper = g.members == 0 ? hi : std::min(g.upper, hi);
+      ++g.members;
+    }
+  }
+
+  // The range the joint's end stops hold, if it has stops: its own <limit> or, for a <mimic>
+  // root, its group's (MimicGroups).
+  bool StopRange(const Joint& j, double* lower, double* upper) const {
+    if (!o_.stops || (j.type != JointType::kRevolute && j.type != JointType::kContinuous && j.type != JointType::kPrismatic))
+      return false;
+    const int ji = static_cast<int>(&j - r_.joints.data());
+    if (coupled_ && root_[static_cast<std::size_t>(ji)] >= 0) return false;  // a follower: its root holds it
+    if (auto g = group_.find(ji); g != group_.end()) {
+      *lower = g->second.lower, *upper = g->second.upper;
+      return *lower < *upper;
+    }
+    *lower = j.lower, *upper = j.upper;
+    return Limited(j) && j.lower < j.upper;
+  }
   bool Stops(const Joint& j) const {
-    return j.has_limit && (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) && o_.stops &&
-           !coupled_ && j.lower < j.upper;
+    double lo = 0, hi = 0;
+    return StopRange(j, &lo, &hi);
   }
 
   // The <limit> in the joint's comment, and what became of it (counted for the notes).
@@ -291,10 +341,14 @@ class Writer {
     if (!j.has_limit) return "";
     std::string fate = "recorded";
     if (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) {
-      if (Stops(j)) fate = "the end stops q_min, q_max", ++stops_;
-      else if (!o_.stops) fate = "recorded: --limits ignore", ++limits_;
-      else if (coupled_) fate = "recorded: no end stops with <mimic> couplings", ++limits_;
-      else fate = "recorded: lower >= upper is no range", ++empty_ranges_;
+      const int ji = static_cast<int>(&j - r_.joints.data());
+      const int root = coupled_ ? root_[static_cast<std::size_t>(ji)] : -1;
+      if (!o_.stops) fate = "recorded: --limits ignore", ++limits_;
+      else if (!(j.lower < j.upper)) fate = "recorded: lower >= upper is no range", ++empty_ranges_;
+      else if (root >= 0 && Stops(r_.joints[static_cast<std::size_t>(root)]))
+        fate = "held by the end stops of '" + Shown(r_.joints[static_cast<std::size_t>(root)].name) + "' through the <mimic>", ++stops_;
+      else if (Stops(j)) fate = group_.count(ji) ? "the end stops q_min, q_max, with its <mimic> followers'" : "the end stops q_min, q_max", ++stops_;
+      else fate = "recorded: the <mimic> group's ranges have no common part", ++empty_ranges_;
     }
     return "; limit lower " + Num(j.lower) + " upper " + Num(j.upper) + " effort " + Num(j.effort) + " velocity " +
            Num(j.velocity) + " (" + fate + ")";
@@ -303,13 +357,15 @@ class Writer {
   // The joint's end stops as modifiers; a start of q = 0 outside them moves onto the nearer
   // limit (the simulator refuses a start past a stop), with a note.
   std::string StopModifiers(const Joint& j) {
-    if (!Stops(j)) return "";
-    std::string mods = ", q_min = " + Num(j.lower) + ", q_max = " + Num(j.upper);
-    if (0 < j.lower || 0 > j.upper) {
-      const double start = 0 < j.lower ? j.lower : j.upper;
+    double lower = 0, upper = 0;
+    if (!StopRange(j, &lower, &upper)) return "";
+    std::string mods = ", q_min = " + Num(lower) + ", q_max = " + Num(upper);
+    if (0 < lower || 0 > upper) {
+      const double start = 0 < lower ? lower : upper;
       mods += ", q(start = " + Num(start) + ")";
-      d_.Note(j.line, "joint '" + Shown(j.name) + "': q = 0 is outside its <limit> [" + Num(j.lower) + ", " +
-                          Num(j.upper) + "]: it starts at " + Num(start) + ", on the nearer stop",
+      d_.Note(j.line, "joint '" + Shown(j.name) + "': q = 0 is outside its " +
+                          (group_.count(static_cast<int>(&j - r_.joints.data())) ? "<mimic> group's <limit>s " : "<limit> ") +
+                          "[" + Num(lower) + ", " + Num(upper) + "]: it starts at " + Num(start) + ", on the nearer stop",
               "<limit");
     }
     return mods;
@@ -490,8 +546,7 @@ class Writer {
     if (stops_ > 0) header_.push_back(std::to_string(stops_) + " joint <limit>s as end stops (q_min, q_max; restitution 0)");
     if (limits_ > 0) {
       header_.push_back(std::to_string(limits_) + " joint <limit>s recorded in comments, not end stops (" +
-                        (o_.stops ? "the compiler takes no end stops with the <mimic> couplings, K318" : "--limits ignore") +
-                        ")");
+                        "--limits ignore)");
       d_.Note(0, header_.back());
     }
     if (empty_ranges_ > 0) {
@@ -517,6 +572,12 @@ class Writer {
   std::unordered_map<std::string, int> link_index_;
   int collisions_ = 0, missing_meshes_ = 0, limits_ = 0, stops_ = 0, empty_ranges_ = 0, mimics_ignored_ = 0;
   bool coupled_ = false;  // the model has JointCouplings (kept <mimic>s)
+  struct Range {
+    double lower = 0, upper = 0;
+    int members = 0;  // limits intersected
+  };
+  std::vector<int> root_;                  // per joint: its <mimic> root leader, or -1 (MimicGroups)
+  std::unordered_map<int, Range> group_;  // per root with limits in its group: their common range in q_root
 };
 
 }  // namespace

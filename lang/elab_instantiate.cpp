@@ -37,7 +37,7 @@ const ast::ClassDef* Instantiator::ResolveShort(const ast::ClassDef* cls, Node* 
       return nullptr;
     }
     if (cls->short_mod)
-      MergeMods(*mod, BuildMod(cls->short_mod.get(), node, nullptr, diags_), node ? node->path : cls->name, diags_);
+      MergeMods(*mod, BuildMod(cls->short_mod.get(), node, nullptr, diags_), node ? MergeWhat(node) : MergeWhat(cls->name), diags_);
     cls = base;
   }
   return cls;
@@ -76,7 +76,7 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       Mod em = BuildMod(ex.mod.get(), node, nullptr, diags_);
       Mod effective;
       if (ext_mod) effective = *ext_mod;
-      MergeMods(effective, std::move(em), ast::JoinName(ex.base), diags_);
+      MergeMods(effective, std::move(em), &ex.base, diags_);
       // Short class as a base: fold its modifiers in.
       base = ResolveShort(base, node, &effective);
       if (!base) continue;
@@ -123,14 +123,6 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
 }
 
 // "prefix.name", or "name" at the root; one allocation (paths are made for every instance).
-std::string JoinPath(const std::string& prefix, const std::string& name) {
-  if (prefix.empty()) return name;
-  std::string p;
-  p.reserve(prefix.size() + 1 + name.size());
-  p.append(prefix).append(".").append(name);
-  return p;
-}
-
 static Prim PrimFromName(const std::string& s) {
   if (s == "frame") return Prim::Frame;
   if (s == "flange") return Prim::Flange;
@@ -159,7 +151,7 @@ void Instantiator::RegisterPrimitive(Node* node, const ast::ClassDef* cls) {
   } else if (node->prim == Prim::Joint) {
     node->prim_index = static_cast<int>(tree_.joints.size());
     flat::Joint j;
-    j.name = node->path;
+    j.name = node->Path();
     if (!flat::JointTypeFromName(node->prim_kind, &j.type))
       diags_.Error(DiagCode::BadPrimitive, cls->name_span, "unknown joint kind '" + node->prim_kind + "'");
     j.loc = places_.Loc(node->decl ? node->decl->name_span : cls->name_span);
@@ -250,12 +242,11 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
 
 // The child node of element c, its modifier merged: outer (the instance's) over the
 // extends clause's over the declaration's.
-std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
-  auto child = std::make_unique<Node>();
+NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
+  auto child = tree_.arena.New();
   child->parent = node;
   child->decl = c.comp;
   child->name = c.comp->name;
-  child->path = JoinPath(node->path, c.comp->name);
   child->depth = node->depth + 1;
   auto it = node->mod.sub.find(c.comp->name);
   if (it == node->mod.sub.end() && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final && !c.ext_mod.each) {
@@ -269,18 +260,18 @@ std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
   if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
   if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
     Span at = outer.value ? outer.value->span : outer.span;
-    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
+    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->Path() + "' is final and cannot be modified");
     d.notes.push_back({c.comp->span, "declared final here"});
     outer = Mod{};
   }
-  MergeMods(outer, std::move(c.ext_mod), child->path, diags_);  // Expand reads c's other fields only
+  MergeMods(outer, std::move(c.ext_mod), child.get(), diags_);  // Expand reads c's other fields only
   Mod decl = BuildMod(c.comp->mod.get(), node, nullptr, diags_);
   if (c.is_final) {
     decl.is_final = true;
     decl.final_span = c.comp->span;
     if (decl.value) decl.value->is_final = true;
   }
-  MergeMods(outer, std::move(decl), child->path, diags_);
+  MergeMods(outer, std::move(decl), child.get(), diags_);
   child->mod = std::move(outer);
   child->is_final_decl = c.is_final;
   return child;
@@ -436,7 +427,7 @@ bool Instantiator::ResolveComponentType(Node* node, Node* child, const Collected
 bool Instantiator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* t) {
   if (!c.replaceable) {
     auto& d = diags_.Error(DiagCode::NotReplaceable, child->mod.redeclare->span,
-                           "'" + child->path + "' is not replaceable");
+                           "'" + child->Path() + "' is not replaceable");
     d.notes.push_back({c.comp->span, "declared here without 'replaceable'"});
     return true;
   }
@@ -484,7 +475,7 @@ bool Instantiator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Compon
   int guard = 0;
   while (cls && cls->is_short && ++guard < kMaxExtendsDepth) {
     if (cls->short_mod)
-      MergeMods(tm, BuildMod(cls->short_mod.get(), node, nullptr, diags_), child->path, diags_);
+      MergeMods(tm, BuildMod(cls->short_mod.get(), node, nullptr, diags_), child, diags_);
     if (BuiltinTypeNamed(ast::JoinName(cls->short_base), &t->builtin)) {
       t->is_builtin = true;
       break;
@@ -496,7 +487,7 @@ bool Instantiator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Compon
                  "type '" + t->Name(comp) + "' is not a Real/Integer/Boolean/String");
     return false;
   }
-  MergeMods(child->mod, tm, child->path, diags_);
+  MergeMods(child->mod, tm, child, diags_);
   t->cls = nullptr;
   return true;
 }
@@ -527,7 +518,7 @@ void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
     if (IsVarAttribute(key) || sub.set_only) continue;
     auto& d = diags_.Error(DiagCode::UnknownModifier, sub.span,
                            "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
-                               var->path + "'");
+                               var->Path() + "'");
     std::string best = ClosestName(key, {"start", "fixed", "unit", "min", "max", "displayUnit", "quantity", "nominal"});
     d.hint = best.empty() ? "attributes are start, fixed, unit, min, max, displayUnit, quantity, nominal"
                           : "did you mean '" + best + "'?";

@@ -24,7 +24,8 @@ class Evaluator;
 
 // The instance tree and its primitives' ids.
 struct InstanceTree {
-  std::unique_ptr<Node> root;
+  NodeArena arena;  // before root: the nodes end before their memory
+  NodePtr root;
   std::vector<Node*> frames;        // provisional frame id (Node::prim_index) -> its Frame node
   std::vector<Node*> flanges;       // flange id -> its Flange node
   std::vector<flat::Joint> joints;  // joint id -> the joint as far as instantiation knows it (name, type, place)
@@ -75,7 +76,7 @@ class Instantiator {
   void CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems,
                            const CollectedNames& names);
   const ClassPrim& PrimitiveAnnotation(const ast::ClassDef* cls);
-  std::unique_ptr<Node> MakeChild(Node* node, Collected& c);
+  NodePtr MakeChild(Node* node, Collected& c);
   const Mod* DeclarationMod(Node* node, const ast::Component& comp);
   void Expand(Node* node, Node* child, const Collected& c);
   // Expand's steps.
@@ -101,7 +102,7 @@ class Instantiator {
   struct ArrayShare;
   void InstantiateFirst(Node* el, const ast::ClassDef* tcls, ArrayShare* share);
   bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index, int count);
-  std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
+  NodePtr CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
   Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
   bool SameInEveryElement(const Mod& m, const ShareBinding& b) const;
 

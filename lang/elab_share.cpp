@@ -202,12 +202,11 @@ bool Instantiator::SameInEveryElement(const Mod& m, const ShareBinding& b) const
   return true;
 }
 
-std::unique_ptr<Node> Instantiator::CloneInstance(const Node& src, Node* parent, const std::string& name,
+NodePtr Instantiator::CloneInstance(const Node& src, Node* parent, const std::string& name,
                                                   ShareBinding& b) {
-  auto n = std::make_unique<Node>();
+  auto n = tree_.arena.New();
   n->kind = src.kind;
   n->name = name;
-  n->path = JoinPath(parent->path, name);
   n->parent = parent;
   n->decl = src.decl;
   n->enabled = src.enabled;
@@ -301,10 +300,9 @@ void Instantiator::InstantiateArray(Node* node, Node* array, const ast::Componen
     name.reserve(comp.name.size() + index.size() + 2);
     name.append(comp.name).append("[").append(index).append("]");
     if (i > 0 && ShareElement(share, node, array, name, i, n)) continue;
-    auto el = std::make_unique<Node>();
+    auto el = tree_.arena.New();
     el->parent = node;  // elements resolve names in the same scope as the array
     el->decl = &comp;
-    el->path = JoinPath(node->path, name);
     el->name = std::move(name);
     el->depth = array->depth;
     el->mod = SliceMod(array->mod, i, n, eval_, diags_);

@@ -290,7 +290,7 @@ void UnitChecker::CheckElement(Node* var, const ast::Expr& e, const ModValue& mv
   if (text.empty() || !ParseUnit(text, &want, &error)) return;
   const UVal got = Bound(e, mv, *what != 0);
   if (got.kind != UVal::Known || got.soft || got.unit.Agrees(want)) return;
-  const std::string name = "'" + var->path + "[" + std::to_string(k + 1) + "]'";
+  const std::string name = "'" + var->Path() + "[" + std::to_string(k + 1) + "]'";
   auto& d = diags_.Error(DiagCode::UnitMismatch, e.span,
                          (*what ? std::string("the start value of ") + name : "the equation of " + name) + " has unit " +
                              Shown(got) + ", not \"" + text + "\"");
@@ -353,7 +353,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   if (got.soft) return;
   if (want.unit.Agrees(got.unit)) return;
   if (reused && where < 0) got = Bound(*mv.expr, mv, !is_equation);  // the notes name this copy's declarations
-  const std::string name = "'" + var->path + "'";
+  const std::string name = "'" + var->Path() + "'";
   std::string msg = is_equation ? "the two sides of the equation have different units: " + name + " is " + Shown(want) +
                                       ", the right side " + Shown(got)
                     : std::string(what) == "the value of"
@@ -365,14 +365,14 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   NoteOrigin(d, got);
   d.hint = want.unit.SameDimension(got.unit)
                ? "same dimension, different scale: convert the value to " + Shown(want)
-               : "the value must be in " + Shown(want) + (got.origin ? "; check the unit of '" + got.origin->path + "'" : "");
+               : "the value must be in " + Shown(want) + (got.origin ? "; check the unit of '" + got.origin->Path() + "'" : "");
 }
 
 void UnitChecker::NoteOrigin(Diagnostic& d, const UVal& v) {
   if (!v.origin || !v.origin->decl) return;
   auto it = inferred_.find(v.origin);
   const std::string how = it != inferred_.end() ? " (inferred)" : "";
-  d.notes.push_back({v.origin->decl->name_span, "'" + v.origin->path + "' has unit " + Shown(VarUnit(v.origin)) + how});
+  d.notes.push_back({v.origin->decl->name_span, "'" + v.origin->Path() + "' has unit " + Shown(VarUnit(v.origin)) + how});
 }
 
 const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
@@ -485,7 +485,7 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   if (slot.val.kind == UVal::Known) {
     if (!slot.from_use || slot.val.unit.Agrees(u.unit)) return;
     auto& d = diags_.Error(DiagCode::UnitConflict, at,
-                           "'" + n->path + "' has no unit and is used here as " + Shown(u) + ", but earlier as " +
+                           "'" + n->Path() + "' has no unit and is used here as " + Shown(u) + ", but earlier as " +
                                Shown(slot.val));
     d.notes.push_back({slot.where, "used as " + Shown(slot.val) + " here"});
     d.hint = "declare its unit: " + n->name + "(unit = \"...\")";
@@ -652,7 +652,7 @@ bool UnitChecker::ReportConflict(const UVal& inferred, const UVal& other, Span a
   if (it == inferred_.end() || !it->second.from_use || !it->second.val.unit.Agrees(inferred.unit)) return false;
   const Node* n = inferred.origin;
   auto& d = diags_.Error(DiagCode::UnitConflict, at,
-                         "'" + n->path + "' has no unit and is used here as " + Shown(other) + ", but earlier as " +
+                         "'" + n->Path() + "' has no unit and is used here as " + Shown(other) + ", but earlier as " +
                              Shown(inferred));
   d.notes.push_back({it->second.where, "used as " + Shown(inferred) + " here"});
   NoteOrigin(d, other);
@@ -839,9 +839,9 @@ void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mecha
   for (const auto& c : root->children) {
     if (!c->enabled || c->kind != Node::kVar || c->causality != ast::Causality::Output) continue;
     const UVal u = checker_->VarUnit(c.get());
+    const std::string path = c->Path();
     auto named = [&](const std::string& n) {
-      return n == c->path || (n.size() > c->path.size() && n.compare(0, c->path.size(), c->path) == 0 &&
-                              n[c->path.size()] == '[');
+      return n == path || (n.size() > path.size() && n.compare(0, path.size(), path) == 0 && n[path.size()] == '[');
     };
     for (; i < m->outputs.size() && named(m->outputs[i].name); ++i)
       if (u.kind == UVal::Known) m->outputs[i].unit = u.text ? *u.text : u.unit.ToString();

@@ -40,10 +40,10 @@ flat::ParamType ParamTypeOf(VType t) {
                                : flat::ParamType::String;
 }
 
-// The flat name of element k (row-major) of `path` of `shape`, "p" or "p[1,2]" (1-based),
-// appended to `name`. `idx` is scratch of shape.size() entries.
-void AppendElementName(std::string& name, const std::string& path, const Dims& shape, size_t k, Dims& idx) {
-  name.append(path);
+// The flat name of element k (row-major) of variable `var` of `shape`, "p" or "p[1,2]"
+// (1-based), appended to `name`. `idx` is scratch of shape.size() entries.
+void AppendElementName(std::string& name, const Node* var, const Dims& shape, size_t k, Dims& idx) {
+  var->AppendPath(name);
   if (shape.empty()) return;
   size_t rem = k;
   for (size_t d = shape.size(); d-- > 0;) {
@@ -59,10 +59,9 @@ void AppendElementName(std::string& name, const std::string& path, const Dims& s
   name += ']';
 }
 
-std::string ElementName(const std::string& path, const Dims& shape, size_t k, Dims& idx) {
+std::string ElementName(const Node* var, const Dims& shape, size_t k, Dims& idx) {
   std::string name;
-  name.reserve(path.size() + 12 * shape.size() + 2);
-  AppendElementName(name, path, shape, k, idx);
+  AppendElementName(name, var, shape, k, idx);
   return name;
 }
 
@@ -86,7 +85,7 @@ void Evaluator::ReserveParams(size_t n) {
 const Value& Evaluator::GetVar(Node* var, Span use_span) {
   if (var->state == EvalState::Done) return var->value;
   if (var->state == EvalState::Evaluating) {
-    auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->path + "' is defined in terms of itself");
+    auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->Path() + "' is defined in terms of itself");
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     var->state = EvalState::Done;
     var->value = Value::Invalid();
@@ -130,13 +129,13 @@ Value Evaluator::JointStateValue(Node* var) {
 Value Evaluator::InputValue(Node* var, Span use_span) {
   const Span at = var->decl ? var->decl->name_span : use_span;
   if (var->vtype != VType::Real) {
-    diags_.Error(DiagCode::TypeMismatch, at, "input '" + var->path + "' is " + VTypeName(var->vtype) + "; inputs are Real")
+    diags_.Error(DiagCode::TypeMismatch, at, "input '" + var->Path() + "' is " + VTypeName(var->vtype) + "; inputs are Real")
         .hint = "declare it 'input Real " + var->name + ";'";
     return Value::Invalid();
   }
   for (long d : var->shape)
     if (d < 0) {
-      diags_.Error(DiagCode::SizeMismatch, at, "input '" + var->path + "' needs a fixed size")
+      diags_.Error(DiagCode::SizeMismatch, at, "input '" + var->Path() + "' needs a fixed size")
           .hint = "give its size, as in 'input Real f[3];'";
       return Value::Invalid();
     }
@@ -149,7 +148,7 @@ Value Evaluator::InputValue(Node* var, Span use_span) {
   const flat::SourceLoc loc = places_.Loc(at);
   const std::string unit = ReadParamAttributes(var).unit;  // the unit check reads it from the declaration too
   for (size_t k = 0; k < count; ++k) {
-    m_->inputs.push_back({ElementName(var->path, var->shape, k, idx), loc, unit});
+    m_->inputs.push_back({ElementName(var, var->shape, k, idx), loc, unit});
     v.elements.push_back(m_->exprs.Input(static_cast<int>(m_->inputs.size() - 1)));
   }
   return v;
@@ -161,7 +160,7 @@ const ModValue* Evaluator::VarBinding(Node* var) {
   if (const Mod& mods = var->Modifiers(); mods.value) {
     if (binding) {
       auto& d = diags_.Error(DiagCode::ConflictingEquation, var->eq_binding->span,
-                             "'" + var->path + "' already has a value from its declaration or a modifier");
+                             "'" + var->Path() + "' already has a value from its declaration or a modifier");
       d.notes.push_back({mods.value->span, "value given here"});
     }
     binding = &*mods.value;
@@ -179,7 +178,7 @@ Value Evaluator::UnboundValue(Node* var, Span use_span) {
     for (size_t k = 0; k < count; ++k) {
       if (var->eq_elem_binding.count(static_cast<int>(k))) continue;
       auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                             "element " + std::to_string(k + 1) + " of '" + var->path + "' has no equation");
+                             "element " + std::to_string(k + 1) + " of '" + var->Path() + "' has no equation");
       d.hint = "give every element an equation, or bind the whole variable";
       break;
     }
@@ -193,8 +192,8 @@ Value Evaluator::UnboundValue(Node* var, Span use_span) {
     return v;
   }
   auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                         std::string(is_param ? "parameter" : "variable") + " '" + var->path + "' has no value");
-  d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->path + "=..."
+                         std::string(is_param ? "parameter" : "variable") + " '" + var->Path() + "' has no value");
+  d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->Path() + "=..."
                     : "bind it in its declaration (Real x = ...;) or with an equation 'x = ...;'";
   if (use_span.valid() && var->decl && use_span.begin != var->decl->name_span.begin)
     d.notes.push_back({use_span, "used here"});
@@ -215,7 +214,7 @@ Value Evaluator::BoundValue(Node* var, const ModValue& binding) {
   }
   if (!shape_ok) {
     auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::SizeMismatch, where,
-                           "'" + var->path + "' has size " + ShapeText(var->shape) + " but its value has size " +
+                           "'" + var->Path() + "' has size " + ShapeText(var->shape) + " but its value has size " +
                                ShapeText(v.shape));
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     return Value::Invalid();
@@ -233,7 +232,7 @@ bool Evaluator::CheckValueType(Node* var, const ModValue& binding, const Value& 
   }
   if (ok) return true;
   auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::TypeMismatch, where,
-                         "'" + var->path + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
+                         "'" + var->Path() + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
   if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
   if (var->vtype == VType::Integer) d.hint = "use a whole number, or integer(...)";
   return false;
@@ -257,7 +256,7 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
   for (ExprId x : v.elements) {
     if (x >= 0 && m_->exprs.DependsOnTimeOrState(x)) {
       auto& d = diags_.Error(DiagCode::NotConstantExpr, binding ? binding->span : use_span,
-                             "the value of parameter '" + var->path + "' depends on time or on the motion");
+                             "the value of parameter '" + var->Path() + "' depends on time or on the motion");
       d.hint = "parameters are fixed before the simulation; use a variable (Real x = ...) instead";
       return Value::Invalid();
     }
@@ -272,7 +271,7 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
   std::string folded_name;
   for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
     flat::Param folded_param;
-    auto write_name = [&](std::string& out) { AppendElementName(out, var->path, var->shape, k, idx); };
+    auto write_name = [&](std::string& out) { AppendElementName(out, var, var->shape, k, idx); };
     if (folded) folded_name.clear(), write_name(folded_name);
     flat::Param& p = folded ? folded_param : m_->AddParamWith(write_name);
     p.type = ParamTypeOf(var->vtype);
@@ -350,7 +349,7 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
     const ast::RefPart& part = ref.parts[pi];
     if (pi > 0 && n->kind == Node::kArray) {
       auto& d = diags_.Error(DiagCode::TypeMismatch, ref.parts[pi - 1].span,
-                             "'" + n->path + "' is an array of components; index it before '." + part.name + "'");
+                             "'" + n->Path() + "' is an array of components; index it before '." + part.name + "'");
       d.hint = "write " + ref.parts[pi - 1].name + "[i]." + part.name + " inside a for-loop";
       return nullptr;
     }
@@ -363,7 +362,7 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
         for (auto& c : where->children) cands.push_back(c->name);
       auto& d = diags_.Error(DiagCode::UnknownName, part.span,
                              pi == 0 ? "unknown name '" + part.name + "'"
-                                     : "'" + n->path + "' has no member '" + part.name + "'");
+                                     : "'" + n->Path() + "' has no member '" + part.name + "'");
       std::string best = ClosestName(part.name, cands);
       if (!best.empty()) d.hint = "did you mean '" + best + "'?";
       return nullptr;
@@ -381,14 +380,14 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
         if (k < 1 || k > static_cast<long>(n->elems.size())) {
           diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
                        "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
-                           " of '" + n->path + "'");
+                           " of '" + n->Path() + "'");
           return nullptr;
         }
         n = n->elems[static_cast<size_t>(k - 1)].get();
       } else if (n->kind == Node::kVar && pi + 1 == ref.parts.size()) {
         size_t flatk = 0, stride = 1;
         if (part.subscripts.size() != n->shape.size()) {
-          diags_.Error(DiagCode::IndexOutOfRange, part.span, "'" + n->path + "' needs " +
+          diags_.Error(DiagCode::IndexOutOfRange, part.span, "'" + n->Path() + "' needs " +
                                                                 std::to_string(n->shape.size()) + " subscript(s)");
           return nullptr;
         }
@@ -406,7 +405,7 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
         }
         if (elem) *elem = static_cast<int>(flatk);
       } else {
-        diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
+        diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->Path() + "' is not an array");
         return nullptr;
       }
     }

@@ -106,6 +106,10 @@ const std::string& ErrorMessage(const Workspace& ws);
 // For trees; -1 on a program with constraint rows (ErrorMessage says so). Lesser's diagonal
 // speeds (sim/diagonal_speeds.h) factor it.
 int MassMatrix(const Program& program, Workspace& ws, double t, const double* y, double* M);
+// The same M where the program has constraint rows A u = 0 (closed loops, rolling contacts,
+// couplings): the tree's, the rows' reactions not in it (M du = A^T mu + F; sim/end_stops.cpp
+// scales its reactions' round-off by it).
+int UnconstrainedMassMatrix(const Program& program, Workspace& ws, double t, const double* y, double* M);
 
 // Closed loops through singular configurations (runtime/engine/branch_monitor.cpp;
 // docs/constraints.md "Singular configurations"). After each accepted step, CheckBranch(y)

@@ -3,6 +3,8 @@
 // and the mass matrix's response to an impulse.
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -34,13 +36,19 @@ std::vector<EndStop> EndStops(const Program& p) {
   return out;
 }
 
-// Closed loops and rolling contacts: the impulse e_k lambda plus the rows' reactions A^T mu
-// keeping A du = 0 (M du = A^T mu + e_k lambda) moves the speeds in the tangent space,
-// du = beta z with (beta^T M beta) z = beta^T e_k: x = beta Mr^-1 beta_k^T. x_k ~ 0 where the
-// rows fix speed k (a dead point): -1, the jump it would need is unbounded.
-static int ConstrainedColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
+// Closed loops and rolling contacts: the impulse F lambda plus the rows' reactions A^T mu
+// keeping A du = 0 (M du = A^T mu + F lambda) moves the speeds in the tangent space,
+// du = beta z with (beta^T M beta) z = beta^T F: x = W F, W = beta Mr^-1 beta^T. F^T W F ~ 0
+// where the rows fix the motion F acts on (a dead point): -1, the jump would need an
+// unbounded impulse. `what` names that motion in the message.
+int ConstrainedInverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F,
+                                const std::string& what, double* x) {
   Eigen::MatrixXd beta, Mr;
   Eigen::VectorXd r;
+  if (p.solver == SolverPath::Sparse) {  // the multiplier form has no tangent basis
+    ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
+    return -1;
+  }
   if (TangentMetric(p, ws, t, y, nullptr, &beta, &Mr, &r) != 0) return 1;
   if (beta.rows() != p.nu) {
     ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
@@ -53,13 +61,14 @@ static int ConstrainedColumn(const Program& p, Workspace& ws, double t, const do
     return -1;
   }
   const Eigen::MatrixXd W = beta * llt.solve(beta.transpose());  // the constrained inverse mass
+  const Eigen::Map<const Eigen::VectorXd> f(F, p.nu);
+  const Eigen::VectorXd col = W * f;
   const double scale = W.diagonal().cwiseAbs().maxCoeff();
-  if (!(W(k, k) > kDeadPoint * scale)) {
-    ws.error = "the closed loops or contacts fix '" + StateNames(p)[static_cast<size_t>(p.nq + k)] +
-               "' here (a dead point: its jump would need an unbounded impulse)";
+  if (!(f.dot(col) > kDeadPoint * scale * f.squaredNorm())) {
+    ws.error = "the closed loops or contacts fix " + what + " here (a dead point: its jump would need an unbounded impulse)";
     return -1;
   }
-  for (int i = 0; i < p.nu; ++i) x[i] = W(i, k);
+  for (int i = 0; i < p.nu; ++i) x[i] = col[i];
   return 0;
 }
 
@@ -71,7 +80,11 @@ int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y
     ws.error = "an impulse in a mechanism with Coulomb friction mu N is not supported yet";
     return -1;
   }
-  if (!p.rows.empty()) return ConstrainedColumn(p, ws, t, y, k, x);
+  if (!p.rows.empty()) {
+    std::vector<double> e(static_cast<size_t>(p.nu), 0.0);
+    e[static_cast<size_t>(k)] = 1.0;
+    return ConstrainedInverseMassTimes(p, ws, t, y, e.data(), "'" + StateNames(p)[static_cast<size_t>(p.nq + k)] + "'", x);
+  }
   Eigen::MatrixXd M(p.nu, p.nu);
   if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
   const Eigen::LLT<Eigen::MatrixXd> llt(M);
