@@ -711,7 +711,7 @@ bool UnitChecker::ReportConflict(const UVal& inferred, const UVal& other, Span a
 
 UVal UnitChecker::NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result) {
   if (a.kind == UVal::Literal) return UVal::Lit();
-  if (a.kind == UVal::Known && a.soft) return UVal{};
+  if (a.kind == UVal::Known && a.soft) return result;  // sin(time): time read as a number, the sine one
   if (a.kind == UVal::Known && !(a.unit.Dimensionless() && a.unit.Agrees(Unit::One()) )) {
     // An angle in rad is dimensionless; one in deg is not a number sin can take (scale pi/180).
     Unit plain = a.unit;

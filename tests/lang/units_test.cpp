@@ -172,6 +172,11 @@ INSTANTIATE_TEST_SUITE_P(
              Pendulum(kSine, "Rod rod(L = 1);", "  j.tau = T * sin(w);"),
              "m.mech:10:19: error[E237]: 'sin' needs a dimensionless argument (an angle in rad is one), but this has unit "
              "\"rad/s\""},
+        // sin of time alone (a test signal reading time as a number) is still a number: a
+        // length times it is a length, a mass times it is not.
+        Rule{"SineOfTime", Pendulum("  parameter Real len(unit = \"m\") = 1;\n  output Real y(unit = \"m\") = len * sin(time);"),
+             Pendulum("  parameter Real mass(unit = \"kg\") = 1;\n  output Real y(unit = \"m\") = mass * sin(time);"),
+             "m.mech:3:31: error[E237]: 'y' has unit \"m\" but its value has unit \"kg\""},
         // An angle and a number agree (rad = 1, a false alarm elsewhere); an angle in deg is
         // not an angle in rad.
         Rule{"Angles", Pendulum("  parameter Real a(unit = \"1\") = 0.3;", "Revolute k(q(start = a));\n  Rod rod(L = 1);"),
