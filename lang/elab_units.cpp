@@ -249,7 +249,7 @@ void UnitChecker::Show(Node* var) {
   // there: checked once, on element 1, which was shown first (and parsed their unit).
   if (!var->shared_mod || var->mod_from_decl) {
     DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
-    const Mod& mods = var->Modifiers();
+    const ModView mods = var->Modifiers();
     const ModValue* attrs[3] = {};  // start, min, max: one pass over the few attributes
     for (const auto& [key, sub] : mods.sub) {
       if (!sub.value) continue;
@@ -400,7 +400,7 @@ const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
 }
 
 const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   if (mods.sub.empty()) return nullptr;
   // "unit" sorts after every other attribute's name: when there, it is nearly always last.
   const Mod* unit = nullptr;
