@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -149,6 +150,13 @@ class UnitChecker {
   void SpringUnits(const InstanceTree& tree, const Links& links);
   // A variable's unit: declared, or inferred (from its binding or from its uses).
   UVal VarUnit(const Node* var);
+  // The units inferred for variables that declare none, by path ("" none).
+  struct PathHash {  // looked up by std::string_view (Mechanism::ParamName) without a copy
+    using is_transparent = void;
+    size_t operator()(std::string_view s) const { return std::hash<std::string_view>()(s); }
+  };
+  using ByPath = std::unordered_map<std::string, std::string, PathHash, std::equal_to<>>;
+  ByPath InferredByPath() const;
 
  private:
   struct Declared {
@@ -190,7 +198,14 @@ class UnitChecker {
             const Node* scope);
   UVal NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result);
   // An undeclared scalar variable read bare in `e` takes unit u from this use.
-  void InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at);
+  // A variable with a unit from an earlier use is E238 when `report` (else left as it is).
+  void InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at, bool report = true);
+  // An expression of no known unit used as u: each undeclared variable it is a sum, a
+  // difference, a negation or an if-branch of takes u (`L = 1 + k` makes k a length).
+  // Products are not entered: a number there is a factor, or open in an equation. Inside,
+  // a variable that has a unit already is not reported again: the sum would have had
+  // that unit, so it had none because of a mismatch already reported.
+  void InferDown(const ast::Expr* e, const UVal& u, const Node* scope, Span at, int depth = 0);
   void NoteOrigin(Diagnostic& d, const UVal& v);
   // `inferred` is the unit an undeclared variable took from an earlier use, and `other`
   // disagrees: E238 (true) instead of a plain mismatch.
@@ -234,7 +249,7 @@ void UnitChecker::Show(Node* var) {
   // there: checked once, on element 1, which was shown first (and parsed their unit).
   if (!var->shared_mod || var->mod_from_decl) {
     DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
-    const Mod& mods = var->Modifiers();
+    const ModView mods = var->Modifiers();
     const ModValue* attrs[3] = {};  // start, min, max: one pass over the few attributes
     for (const auto& [key, sub] : mods.sub) {
       if (!sub.value) continue;
@@ -347,7 +362,7 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   UVal got = where ? BoundOnce(mv, !is_equation, where, &reused) : Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
-    InferFromUse(mv.expr, want, mv.scope, mv.expr->span);
+    InferDown(mv.expr, want, mv.scope, mv.expr->span);
     return;
   }
   if (got.soft) return;
@@ -385,7 +400,7 @@ const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
 }
 
 const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   if (mods.sub.empty()) return nullptr;
   // "unit" sorts after every other attribute's name: when there, it is nearly always last.
   const Mod* unit = nullptr;
@@ -465,7 +480,36 @@ UVal UnitChecker::VarUnit(const Node* var) {
   return v;
 }
 
-void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at) {
+UnitChecker::ByPath UnitChecker::InferredByPath() const {
+  ByPath out;
+  for (const auto& [n, slot] : inferred_)
+    if (slot.val.kind == UVal::Known && !slot.val.soft && n->shape.empty())
+      out.emplace(n->Path(), slot.val.text ? *slot.val.text : slot.val.unit.ToString());
+  return out;
+}
+
+void UnitChecker::InferDown(const ast::Expr* e, const UVal& u, const Node* scope, Span at, int depth) {
+  if (!e || depth + depth_ >= kMaxCheckDepth) return;  // as deep as Expr went, no deeper
+  const Tok op = static_cast<Tok>(e->op);
+  switch (e->kind) {
+    case ast::ExprKind::Ref: InferFromUse(e, u, scope, at, depth == 0); return;
+    case ast::ExprKind::Unary:
+      if (op == Tok::Minus || op == Tok::Plus)
+        for (const auto& x : e->args) InferDown(x.get(), u, scope, at, depth + 1);
+      return;
+    case ast::ExprKind::Binary:
+      if (op == Tok::Plus || op == Tok::Minus)
+        for (const auto& x : e->args) InferDown(x.get(), u, scope, at, depth + 1);
+      return;
+    case ast::ExprKind::If:  // the branches (odd positions and the last), not the conditions
+      for (size_t i = 0; i < e->args.size(); ++i)
+        if (i % 2 == 1 || i + 1 == e->args.size()) InferDown(e->args[i].get(), u, scope, at, depth + 1);
+      return;
+    default: return;
+  }
+}
+
+void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* scope, Span at, bool report) {
   if (!e || e->kind != ast::ExprKind::Ref || u.kind != UVal::Known || !scope) return;
   const Node* n = scope;
   for (const auto& p : e->parts) {
@@ -483,7 +527,7 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   if (n->unit_slot == kInferring) slot.busy = true;
   n->unit_slot = kInferred;
   if (slot.val.kind == UVal::Known) {
-    if (!slot.from_use || slot.val.unit.Agrees(u.unit)) return;
+    if (!slot.from_use || slot.val.unit.Agrees(u.unit) || !report) return;
     auto& d = diags_.Error(DiagCode::UnitConflict, at,
                            "'" + n->Path() + "' has no unit and is used here as " + Shown(u) + ", but earlier as " +
                                Shown(slot.val));
@@ -493,7 +537,7 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
   }
   slot.val = u;
   slot.val.origin = n;
-  slot.val.text = nullptr;
+  // u.text stays: the unit as declared where it came from ("N", not "m.kg/s2")
   slot.from_use = true;
   slot.where = at;
 }
@@ -625,7 +669,12 @@ void UnitChecker::Element(const ast::Expr& x, const Node* scope, const Iters* it
 UVal UnitChecker::Same(const UVal& a, const ast::Expr* ea, const UVal& b, const ast::Expr* eb, Span at,
                        const char* what, const Node* scope) {
   if (a.kind == UVal::Known && b.kind == UVal::Known) {
-    if (a.unit.Agrees(b.unit) || b.soft) return a;
+    if (a.unit.Agrees(b.unit) || b.soft) {
+      if (a.text || !b.text || b.soft || a.unit.twice != b.unit.twice) return a;
+      UVal r = a;  // -k * x + F: the sum shown as F's declared unit ("N"), not in SI form
+      r.text = b.text;
+      return r;
+    }
     if (a.soft) return b;
     if (ReportConflict(a, b, at) || ReportConflict(b, a, at)) return UVal{};
     auto& d = diags_.Error(DiagCode::UnitMismatch, at, std::string(what) + " have different units: " + Shown(a) + " and " + Shown(b));
@@ -636,11 +685,11 @@ UVal UnitChecker::Same(const UVal& a, const ast::Expr* ea, const UVal& b, const 
     return UVal{};
   }
   if (a.kind == UVal::Known) {
-    InferFromUse(eb, a, scope, at);
+    InferDown(eb, a, scope, at);
     return a;
   }
   if (b.kind == UVal::Known) {
-    InferFromUse(ea, b, scope, at);
+    InferDown(ea, b, scope, at);
     return b;
   }
   return a.kind == UVal::Literal && b.kind == UVal::Literal ? UVal::Lit() : UVal{};
@@ -662,7 +711,7 @@ bool UnitChecker::ReportConflict(const UVal& inferred, const UVal& other, Span a
 
 UVal UnitChecker::NeedDimensionless(const UVal& a, const ast::Expr& arg, const std::string& fn, UVal result) {
   if (a.kind == UVal::Literal) return UVal::Lit();
-  if (a.kind == UVal::Known && a.soft) return UVal{};
+  if (a.kind == UVal::Known && a.soft) return result;  // sin(time): time read as a number, the sine one
   if (a.kind == UVal::Known && !(a.unit.Dimensionless() && a.unit.Agrees(Unit::One()) )) {
     // An angle in rad is dimensionless; one in deg is not a number sin can take (scale pi/180).
     Unit plain = a.unit;
@@ -846,6 +895,17 @@ void UnitCheck::Finish(const InstanceTree& tree, Diagnostics& diags, flat::Mecha
     for (; i < m->outputs.size() && named(m->outputs[i].name); ++i)
       if (u.kind == UVal::Known) m->outputs[i].unit = u.text ? *u.text : u.unit.ToString();
   }
+  // Parameters and inputs that declare no unit take the inferred one (an FMU's variables and
+  // UnitDefinitions, --emit flat, check): one pass, and only when something was inferred.
+  const auto inferred = checker_->InferredByPath();
+  if (inferred.empty()) return;
+  for (size_t k = 0; k < m->params.size(); ++k) {
+    flat::Param& p = m->params[k];
+    if (!p.unit.empty() || p.type != flat::ParamType::Real) continue;
+    if (auto it = inferred.find(m->ParamName(k)); it != inferred.end()) p.unit = it->second;
+  }
+  for (flat::Input& in : m->inputs)
+    if (auto it = inferred.find(in.name); in.unit.empty() && it != inferred.end()) in.unit = it->second;
 }
 
 }  // namespace kanesim::lang::elab

@@ -163,13 +163,18 @@ def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
 
 # Units of every kind of variable, from the model's unit check: a spherical joint's quaternion
 # ("1") and rates, a prismatic joint, parameters in N.m/rad and mm (a factor), an output
-# whose unit is inferred (m), an input's unit attribute (N).
+# whose unit is inferred (m), an input's unit attribute (N); and, declaring none, a parameter
+# whose unit is inferred from its binding (half_gap: mm), a parameter and an input inferred
+# from their use beside a force (preload, nudge: N).
 UNITS = """
 model Units
   input Real push(unit = "N");
+  input Real nudge;
   parameter Real k(unit = "N/m") = 2;
   parameter Real c(unit = "N.m/rad") = 0.5;
   parameter Real gap(unit = "mm") = 5;
+  parameter Real half_gap = gap / 2;
+  parameter Real preload = 0.1;
   World world;
   Spherical ball;
   Rod rod(L = 1, m = 1);
@@ -183,7 +188,7 @@ equation
   connect(ball.frame_b, hub.frame_a);
   connect(world.frame_b, slide.frame_a);
   connect(slide.frame_b, b.frame_a);
-  slide.tau = -k * slide.q + push;
+  slide.tau = -k * slide.q + push + preload + nudge;
 end Units;
 """
 
@@ -198,6 +203,8 @@ def test_units_and_their_definitions_come_from_the_unit_check(export, write_mode
     assert unit["ball.u[2]"] == "rad/s" and unit["der(ball.u[2])"] == "rad/s2"
     assert unit["slide.q"] == "m" and unit["der(slide.u)"] == "m/s2"
     assert unit["c"] == "N.m/rad" and unit["gap"] == "mm" and unit["height"] == "m" and unit["push"] == "N"
+    # Declared nowhere, inferred by the check (without it an FMI tool shows them unitless).
+    assert unit["half_gap"] == "mm" and unit["preload"] == "N" and unit["nudge"] == "N"
     base = {u.name: u.baseUnit for u in md.unitDefinitions}
     exps = lambda b: {a: int(getattr(b, a)) for a in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
                       if getattr(b, a) not in (None, 0, "0")}
