@@ -210,5 +210,30 @@ TEST(EventsCsv, AReinitFlingsAJointOffItsStop) {
   EXPECT_NEAR(std::stod(hit->after), -1.0, 1e-8);  // restitution 1/2
 }
 
+// `kanesim run` of a ball written by hand (when p.q < 0 then reinit(p.u, -e pre(p.u))): its
+// bounces accumulate at t_inf = t1 (1 + e) / (1 - e), t1 = sqrt(2 h / g). If this fails, the
+// run ends in a step-size underflow (DOP853) or falls through the floor (the others) instead
+// of exit 2 naming the clause and t_inf, with the rows up to it on disk.
+TEST(EventsCsv, AccumulatingWhenEventsExitTwoAtTheirAccumulationPoint) {
+  const std::string d = Work("when_zeno");
+  Write(d + "/ball.mech",
+        "model Ball\n  parameter Real e = 0.8;\n  World world(g = {0, -9.81, 0});\n"
+        "  Prismatic p(axis = {0, 1, 0}, q(start = 1));\n  Body b(m = 1);\nequation\n"
+        "  connect(world.frame_b, p.frame_a);\n  connect(p.frame_b, b.frame_a);\n"
+        "  when p.q < 0 then\n    reinit(p.u, -e * pre(p.u));\n  end when;\n"
+        "  annotation(experiment(StopTime = 10, Interval = 0.1, Tolerance = 1e-12));\nend Ball;\n");
+  const double t_inf = std::sqrt(2 / 9.81) * 1.8 / 0.2;
+  for (const char* integrator : {"dop853", "cvode", "ida"}) {
+    Result r = Kanesim(std::string("run ball.mech --integrator ") + integrator + " -o rows.csv", d);
+    EXPECT_EQ(r.rc, 2) << integrator << ": " << r.err;
+    EXPECT_TRUE(Has(r.err, "when (ball.mech:9)")) << r.err;
+    EXPECT_TRUE(Has(r.err, "PlaneContact")) << r.err;
+    const size_t at = r.err.find("accumulation point at t = ");
+    ASSERT_NE(at, std::string::npos) << r.err;
+    EXPECT_NEAR(std::stod(r.err.substr(at + 26)), t_inf, 1e-6 * t_inf) << integrator;
+    EXPECT_GE(CsvRows(d + "/rows.csv"), 41) << integrator << ": the grid's rows up to t_inf (0, 0.1, ..., 4.0)";
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::clitest
