@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include "runtime/program/program.h"  // Program::whens
+#include "sim/friction_impulse.h"
 #include "sim/impulse.h"
 
 namespace kanesim::sim {
@@ -16,6 +17,7 @@ namespace kanesim::sim {
 WhenEvents::WhenEvents(const rt::Program& program) : program_(program) {
   nq_ = rt::NumQ(program);
   nu_ = rt::NumU(program);
+  friction_ = HasFrictionImpulses(program);
   for (size_t c = 0; c < program.whens.size(); ++c)
     for (int root : program.whens[c].indicators) {
       clause_of_.push_back(static_cast<int>(c));
@@ -70,7 +72,15 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
   if (!rows.empty()) {
     std::vector<double> du(static_cast<size_t>(nu_));
     const std::string said = rt::ErrorMessage(ws);  // a new message: a column's reason (a dead point)
-    const int s = solve ? solve(rows, targets, du.data()) : SpeedJump(program_, ws, t, y, rows, targets, du.data());
+    std::vector<int> stuck;  // joints whose friction impulse stops them (sim/friction_impulse.h)
+    std::string why;
+    const int s = solve       ? solve(rows, targets, du.data())
+                  : friction_ ? FrictionSpeedJump(program_, ws, t, y, rows, targets, du.data(), &stuck, &why)
+                              : SpeedJump(program_, ws, t, y, rows, targets, du.data());
+    if (s != 0 && !why.empty()) {
+      error_ = w.name + ": " + why;
+      return s;
+    }
     if (s != 0) {
       if (s == -1)
         error_ = rt::ErrorMessage(ws) != said && !rt::ErrorMessage(ws).empty() ? w.name + ": " + rt::ErrorMessage(ws)
@@ -80,6 +90,7 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
     for (size_t k = 0; k < w.reinits.size(); ++k)  // exactly the values written (du's round-off aside)
       if (w.reinits[k].speed) y[w.reinits[k].state] = value[k];
+    for (int f : stuck) y[nq_ + f] = 0.0;  // at rest exactly (du's round-off aside)
   }
   if (w.terminate) {
     terminated_ = true;

@@ -25,7 +25,7 @@ class WhenEvents {
   using JumpSolver = std::function<int(const std::vector<int>& rows, const std::vector<double>& targets, double* du)>;
   // Indicator i crossed at (t, y): its clause's reinits, every value taken at the left limit;
   // coordinates set, then the speeds by one impulse: `solve` (null: SpeedJump, the impulse
-  // on those speeds alone; EndStopEvents::HeldJump also holds the resting contacts). y jumps
+  // on those speeds alone, with Coulomb friction impulses where a joint has mu: FrictionSpeedJump; EndStopEvents::HeldJump also holds the resting contacts). y jumps
   // in place.
   int Event(rt::Workspace& ws, double t, double* y, int i, const JumpSolver& solve = nullptr);
   // The entries of y that indicator i's clause sets (coordinates and speeds).
@@ -45,6 +45,7 @@ class WhenEvents {
   const rt::Program& program_;
   std::vector<int> clause_of_, root_of_;  // per indicator: its clause, its tape root
   int nq_ = 0, nu_ = 0;
+  bool friction_ = false;  // a joint with mu: the jump takes friction impulses (sim/friction_impulse.h)
   bool terminated_ = false;
   std::string message_, error_;
   EventRecord last_;
