@@ -235,5 +235,31 @@ TEST(EventsCsv, AccumulatingWhenEventsExitTwoAtTheirAccumulationPoint) {
   }
 }
 
+// `kanesim run --events` of a reinit in a mechanism with Coulomb friction mu (docs/events.md
+// "Friction in a jump"): a slider on an axis at 0.6 rad on a carrier whose speed is set from
+// 0 to 3 slides on with u+ = 1 - 3 cos 0.6 + 0.4 (3 sin 0.6) (its normal impulse m_s 3 sin 0.6).
+// If this fails, the reinit is refused (K321, before) or the row lacks the slider's speed.
+TEST(EventsCsv, AReinitWithMuFrictionTakesTheFrictionImpulse) {
+  const std::string d = Work("when_mu");
+  Write(d + "/s.mech",
+        "model S\n  World world(g = {0, 0, 0});\n  Prismatic cx(axis = {1, 0, 0});\n  Body carrier(m = 2);\n"
+        "  Prismatic s(axis = {cos(0.6), sin(0.6), 0}, u(start = 1), mu = 0.4);\n  Body slider(m = 0.5);\n"
+        "equation\n  connect(world.frame_b, cx.frame_a);\n  connect(cx.frame_b, carrier.frame_a);\n"
+        "  connect(carrier.frame_a, s.frame_a);\n  connect(s.frame_b, slider.frame_a);\n"
+        "  when time > 0.1 then\n    reinit(cx.u, 3);\n  end when;\n"
+        "  annotation(experiment(StopTime = 0.2, Interval = 0.1, Tolerance = 1e-10));\nend S;\n");
+  Result r = Kanesim("run s.mech -o rows.csv --events ev.csv", d);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const double want = 1 - 3 * std::cos(0.6) + 0.4 * 3 * std::sin(0.6);
+  bool seen = false;
+  for (const EventRow& row : ReadEvents(d + "/ev.csv"))
+    if (row.signal == "s.u") {
+      seen = true;
+      EXPECT_EQ(std::stod(row.before), 1.0);
+      EXPECT_NEAR(std::stod(row.after), want, 1e-12);
+    }
+  EXPECT_TRUE(seen);
+}
+
 }  // namespace
 }  // namespace kanesim::clitest
