@@ -240,6 +240,13 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
   }
 }
 
+// An outer modifier that gives a value and nothing else (`m = 2.5`): merged over a literal
+// declaration's, it replaces the value and leaves the attributes as declared.
+static bool OnlyAValue(const Mod& m) {
+  return m.value && !m.value->is_final && m.sub.empty() && m.order.empty() && !m.each && !m.is_final &&
+         !m.redeclare && !m.set_only;
+}
+
 // The child node of element c, its modifier merged: outer (the instance's) over the
 // extends clause's over the declaration's.
 NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
@@ -249,10 +256,16 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
   child->name = c.comp->name;
   child->depth = node->depth + 1;
   auto it = node->mod.sub.find(c.comp->name);
-  if (it == node->mod.sub.end() && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final && !c.ext_mod.each) {
+  const bool found = it != node->mod.sub.end();
+  if ((!found || OnlyAValue(it->second)) && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final &&
+      !c.ext_mod.each) {
     if (const Mod* shared = DeclarationMod(node, *c.comp)) {
       child->shared_mod = shared;
       child->mod_from_decl = true;
+      if (found) {  // the outer value over the declaration's attributes (Node::mod_over_decl)
+        child->mod = std::move(it->second);
+        child->mod_over_decl = true;
+      }
       return child;
     }
   }
@@ -512,7 +525,7 @@ void Instantiator::ExpandVariable(Node* child, const ast::Component& comp, VType
 }
 
 void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   for (const auto& key : mods.order) {
     const Mod& sub = mods.sub.find(key)->second;
     if (IsVarAttribute(key) || sub.set_only) continue;

@@ -139,12 +139,12 @@ constexpr int kInferring = -5;         // its binding is being read (a cycle rea
 
 // A variable's `unit` attribute, or null. "unit" sorts after every other attribute's name:
 // when there, it is nearly always last.
-const Mod* UnitMod(const Mod& mods) {
-  if (mods.sub.empty()) return nullptr;
-  if (const auto& last = *mods.sub.rbegin(); Is(last.first, "unit")) return &last.second;
-  if (std::string_view(mods.sub.rbegin()->first) < std::string_view("unit")) return nullptr;
-  auto it = mods.sub.find(std::string_view("unit"));
-  return it != mods.sub.end() ? &it->second : nullptr;
+const Mod* UnitMod(const std::map<std::string, Mod, std::less<>>& attrs) {
+  if (attrs.empty()) return nullptr;
+  if (const auto& last = *attrs.rbegin(); Is(last.first, "unit")) return &last.second;
+  if (std::string_view(attrs.rbegin()->first) < std::string_view("unit")) return nullptr;
+  auto it = attrs.find(std::string_view("unit"));
+  return it != attrs.end() ? &it->second : nullptr;
 }
 
 // var, an element of `scope`, has no unit, or its unit is written in the text of scope's class
@@ -154,7 +154,7 @@ const Mod* UnitMod(const Mod& mods) {
 bool UnitFromClass(const Node* var, const Node* scope) {
   if (var->kind != Node::kVar) return false;
   if (var->mod_from_decl) return true;  // its declaration's literals, not modified (DeclarationMod)
-  const Mod* unit = UnitMod(var->Modifiers());
+  const Mod* unit = UnitMod(var->Modifiers().sub);
   if (!unit || !unit->value) return true;
   const ModValue& v = *unit->value;
   const Span at = v.expr ? v.expr->span : v.span;
@@ -300,17 +300,19 @@ class UnitChecker {
 void UnitChecker::Show(Node* var) {
   if ((var->vtype != VType::Real && var->vtype != VType::Integer) || diags_.Full()) return;
   if (var->mod_from_decl) {
-    // Literals only (Instantiator::DeclarationMod): a number, string or array of numbers has
-    // no unit to check and infers none; only the declared unit is parsed (E236), once per
-    // declaration (the other instances share the modifier; read when named).
+    // The declaration's literals (Instantiator::DeclarationMod): a number, string or array of
+    // numbers has no unit to check and infers none; only the declared unit is parsed (E236),
+    // once per declaration (the other instances share the modifier; read when named). A value
+    // given from outside (Node::mod_over_decl) is checked.
     auto& seen = seen_decl_[(reinterpret_cast<std::uintptr_t>(var->shared_mod) >> 4) % seen_decl_.size()];
     if (seen != var->shared_mod) {
       DeclaredUnit(var);
       seen = var->shared_mod;
     }
+    if (const ModValue* v = var->mod_over_decl ? var->Modifiers().value : nullptr) Pend(var, v, "the value of", false);
   } else if (!var->shared_mod) {  // (an array element's shared with element 1: checked there, lang/elab_share.cpp)
     DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
-    const Mod& mods = var->Modifiers();
+    const ModView mods = var->Modifiers();
     const ModValue* attrs[3] = {};  // start, min, max: one pass over the few attributes
     for (const auto& [key, sub] : mods.sub) {
       if (!sub.value) continue;
@@ -480,7 +482,7 @@ const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
 }
 
 const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
-  const Mod* unit = UnitMod(var->Modifiers());
+  const Mod* unit = UnitMod(var->Modifiers().sub);
   if (!unit || !unit->value || !unit->value->expr) return nullptr;
   const ast::Expr* e = unit->value->expr;
   // A direct-mapped cache in front of declared_: a model has a few dozen unit strings.
