@@ -339,6 +339,20 @@ TEST(UnitCheck, AnInstanceGivenAnotherUnitFromOutsideIsCheckedOnItsOwn) {
   EXPECT_NE(errors.find("check the unit of 'q.a'"), std::string::npos) << errors;
 }
 
+// A declaration of literals only is shared by its instances (Instantiator::DeclarationMod);
+// a value given from outside over it (Node::mod_over_decl) is checked in each.
+TEST(UnitCheck, AValueGivenOverASharedDeclarationIsChecked) {
+  const std::string errors = Check("model P\n  parameter Real a(unit = \"m\") = 1;\nend P;\nmodel M\n"
+                                   "  parameter Real b(unit = \"s\") = 2;\n  P p1(a = b);\n  P p2;\n  P p3(a = b);\n"
+                                   "  World world;\nend M;\n")
+                                 .errors;
+  EXPECT_NE(errors.find("m.mech:6:12: error[E237]: 'p1.a' has unit \"m\" but its value has unit \"s\""),
+            std::string::npos) << errors;
+  EXPECT_NE(errors.find("m.mech:8:12: error[E237]: 'p3.a' has unit \"m\" but its value has unit \"s\""),
+            std::string::npos) << errors;
+  EXPECT_EQ(errors.find("p2.a"), std::string::npos) << errors;
+}
+
 // The check reads declared units as the emitter shows each variable and the values in
 // batches (lang/elab_units.cpp, UnitChecker::Flush): the messages still come in the order
 // of the declarations, a unit string's own error (E236) where it is first read.
