@@ -100,6 +100,24 @@ bool IsNumber(const ast::Expr& e) {
          e.args[0]->kind == ast::ExprKind::Number;
 }
 
+// Numbers alone, in arrays and matrices too ({0, 1, 0}, [1, 0; 0, 1]): never a unit, so
+// nothing to check and nothing inferred (Expr gives them Literal at most). Nested deeper
+// than `depth` allows: false (left to Expr).
+bool IsLiteral(const ast::Expr& e, int depth = 0) {
+  if (IsNumber(e)) return true;
+  if (depth > 8 || !e.named_args.empty()) return false;
+  if (e.kind == ast::ExprKind::Array) {
+    for (const auto& a : e.args)
+      if (!a || !IsLiteral(*a, depth + 1)) return false;
+    return true;
+  }
+  if (e.kind != ast::ExprKind::Matrix) return false;
+  for (const auto& row : e.rows)
+    for (const auto& x : row)
+      if (!x || !IsLiteral(*x, depth + 1)) return false;
+  return true;
+}
+
 // Expressions nested deeper than this are left unchecked instead of recursed into (the
 // parser allows 100,000 levels; the native stack does not).
 constexpr int kMaxCheckDepth = 200;
@@ -118,6 +136,31 @@ constexpr int kNoUnit = -2;            // nothing tried yet
 constexpr int kInferred = -3;          // it has an entry in UnitChecker::inferred_
 constexpr int kInferredNothing = -4;   // its binding gave no unit, and no use gave one yet
 constexpr int kInferring = -5;         // its binding is being read (a cycle reads no unit)
+
+// A variable's `unit` attribute, or null. "unit" sorts after every other attribute's name:
+// when there, it is nearly always last.
+const Mod* UnitMod(const std::map<std::string, Mod, std::less<>>& attrs) {
+  if (attrs.empty()) return nullptr;
+  if (const auto& last = *attrs.rbegin(); Is(last.first, "unit")) return &last.second;
+  if (std::string_view(attrs.rbegin()->first) < std::string_view("unit")) return nullptr;
+  auto it = attrs.find(std::string_view("unit"));
+  return it != attrs.end() ? &it->second : nullptr;
+}
+
+// var, an element of `scope`, has no unit, or its unit is written in the text of scope's class
+// (its declaration there, or a modifier in it, of the instance itself): the same in every
+// instance of that class of which this holds. Not so: a unit from a modifier outside the
+// instance, or from a short class definition (`model C2 = C(x(unit = "mm"))`), or a base.
+bool UnitFromClass(const Node* var, const Node* scope) {
+  if (var->kind != Node::kVar) return false;
+  if (var->mod_from_decl) return true;  // its declaration's literals, not modified (DeclarationMod)
+  const Mod* unit = UnitMod(var->Modifiers().sub);
+  if (!unit || !unit->value) return true;
+  const ModValue& v = *unit->value;
+  const Span at = v.expr ? v.expr->span : v.span;
+  const Span& c = scope->cls->span;
+  return v.scope == scope && at.file == c.file && at.begin >= c.begin && at.end <= c.end;
+}
 
 Unit Seconds() {
   Unit s;
@@ -186,7 +229,13 @@ class UnitChecker {
   UVal Bound(const ast::Expr& e, const ModValue& mv, bool binding);
   // Bound of a binding read alike by several variables (`where`: see CheckBinding); *hit
   // when an earlier answer was reused.
-  UVal BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, bool* hit);
+  // `within`: the binding's scope when the key is its class (see CheckBinding); the answer
+  // is then kept only if it read the units of `within`'s own variables alone, each from the
+  // class's text, and is reused in another instance whose same variables have them too.
+  UVal BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, const Node* within, bool* hit);
+  // In BoundOnce's class-keyed reading: var's unit is the same in every instance of the class
+  // of within_ that passes this test too (recorded for that test).
+  bool ReadInClass(const Node* var);
   UVal Ref(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Call(const ast::Expr& e, const Node* scope, const Iters* iters);
   UVal Operator(const ast::Expr& e, const Node* scope, const Iters* iters);
@@ -215,13 +264,16 @@ class UnitChecker {
   std::unordered_map<const ast::Expr*, Declared> declared_;  // unit string literal -> parsed
   std::vector<const Declared*> table_;                        // declared_'s parsed units, by index
   std::array<std::pair<const ast::Expr*, const Declared*>, 64> recent_{};  // FindDeclaredUnit's
+  std::array<const Mod*, 64> seen_decl_{};  // Show's: declarations' shared modifiers whose unit was parsed
   std::unordered_map<const Node*, Inferred> inferred_;       // undeclared variables
   std::unordered_map<const Node*, Declared> implied_;        // a spring's c, d, phi_rel0 from its joint
+  using Reads = std::vector<std::pair<int, const ast::Component*>>;  // index in within_->children, declaration
   struct Reuse {
     UVal val;
     const Iters* iters = nullptr;
     bool binding = false;
     bool valid = false;
+    Reads reads;  // class keys: the scope's variables read (ReadInClass)
   };
   struct ReuseHash {
     size_t operator()(const std::pair<const ast::Expr*, std::intptr_t>& k) const {
@@ -230,6 +282,8 @@ class UnitChecker {
   };
   std::unordered_map<std::pair<const ast::Expr*, std::intptr_t>, Reuse, ReuseHash> reused_;  // BoundOnce's
   long impure_ = 0;  // reads of inferred or implied units (BoundOnce keeps no answer that made one)
+  const Node* within_ = nullptr;  // BoundOnce's class-keyed scope (ReadInClass)
+  Reads reads_;                   // ReadInClass's variables
   struct Pending {
     Node* var;
     const ModValue* mv;  // null: the joint coordinates of var (CheckCoordinates)
@@ -245,9 +299,18 @@ class UnitChecker {
 
 void UnitChecker::Show(Node* var) {
   if ((var->vtype != VType::Real && var->vtype != VType::Integer) || diags_.Full()) return;
-  // An array element's modifiers shared with element 1 (lang/elab_share.cpp) mean the same
-  // there: checked once, on element 1, which was shown first (and parsed their unit).
-  if (!var->shared_mod || var->mod_from_decl) {
+  if (var->mod_from_decl) {
+    // The declaration's literals (Instantiator::DeclarationMod): a number, string or array of
+    // numbers has no unit to check and infers none; only the declared unit is parsed (E236),
+    // once per declaration (the other instances share the modifier; read when named). A value
+    // given from outside (Node::mod_over_decl) is checked.
+    auto& seen = seen_decl_[(reinterpret_cast<std::uintptr_t>(var->shared_mod) >> 4) % seen_decl_.size()];
+    if (seen != var->shared_mod) {
+      DeclaredUnit(var);
+      seen = var->shared_mod;
+    }
+    if (const ModValue* v = var->mod_over_decl ? var->Modifiers().value : nullptr) Pend(var, v, "the value of", false);
+  } else if (!var->shared_mod) {  // (an array element's shared with element 1: checked there, lang/elab_share.cpp)
     DeclaredUnit(var);  // parses a declared unit (E236) even when nothing is bound
     const ModView mods = var->Modifiers();
     const ModValue* attrs[3] = {};  // start, min, max: one pass over the few attributes
@@ -263,16 +326,20 @@ void UnitChecker::Show(Node* var) {
     if (attrs[2]) Pend(var, attrs[2], "max", false);
   }
   if (var->eq_binding) Pend(var, &*var->eq_binding, "", true);
-  for (const auto& [k, mv] : var->eq_elem_binding) Pend(var, &mv, "", !mv.from_set);
-  if (var->parent && var->parent->prim == Prim::Joint && (Is(var->name, "q") || Is(var->name, "u")) &&
-      !var->shape.empty())
+  if (!var->eq_elem_binding.empty())
+    for (const auto& [k, mv] : var->eq_elem_binding) Pend(var, &mv, "", !mv.from_set);
+  if (!var->shape.empty() && (Is(var->name, "q") || Is(var->name, "u")) && var->parent &&
+      var->parent->prim == Prim::Joint)
     pending_.push_back({var, nullptr, nullptr, false});  // its coordinates, unless it declares one unit
   if (pending_.size() >= kBatch) Flush();
 }
 
 void UnitChecker::Pend(Node* var, const ModValue* mv, const char* what, bool is_equation) {
-  // A number takes the unit it is given (min = 0): nothing to check, nothing to infer.
-  if (mv->expr && !IsNumber(*mv->expr)) pending_.push_back({var, mv, what, is_equation});
+  // A number takes the unit it is given (min = 0), numbers in an array none: nothing to
+  // check, nothing to infer (a variable's own binding is read by its first value checked).
+  if (!mv->expr || IsNumber(*mv->expr)) return;
+  if ((mv->expr->kind != ast::ExprKind::Array && mv->expr->kind != ast::ExprKind::Matrix) || !IsLiteral(*mv->expr))
+    pending_.push_back({var, mv, what, is_equation});
 }
 
 void UnitChecker::Flush() {
@@ -354,12 +421,20 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   const bool own = &mv == (var->Modifiers().value ? &*var->Modifiers().value : var->eq_binding ? &*var->eq_binding : nullptr);
   if (want.kind != UVal::Known && own && var->shape.empty()) return;
   // Where the answer may be reused: the scope of a slice, or the copy id (negative).
-  const std::intptr_t where = mv.pre ? reinterpret_cast<std::intptr_t>(mv.scope)
-                              : mv.scope && mv.scope->kind == Node::kClass && mv.scope->unit_slot >= 0
-                                  ? -1 - static_cast<std::intptr_t>(mv.scope->unit_slot)
-                                  : 0;
+  // Else, inside an instance of a class (not the model's root), that class: a binding written
+  // in a library model reads the same declared units in each of its instances.
+  const Node* cls = nullptr;
+  std::intptr_t where = 0;
+  if (mv.pre) {
+    where = reinterpret_cast<std::intptr_t>(mv.scope);
+  } else if (mv.scope && mv.scope->kind == Node::kClass && mv.scope->unit_slot >= 0) {
+    where = -1 - static_cast<std::intptr_t>(mv.scope->unit_slot);
+  } else if (mv.scope && mv.scope->kind == Node::kClass && mv.scope->parent && mv.scope->cls) {
+    cls = mv.scope;
+    where = reinterpret_cast<std::intptr_t>(cls->cls);
+  }
   bool reused = false;
-  UVal got = where ? BoundOnce(mv, !is_equation, where, &reused) : Bound(*mv.expr, mv, !is_equation);
+  UVal got = where ? BoundOnce(mv, !is_equation, where, cls, &reused) : Bound(*mv.expr, mv, !is_equation);
   if (want.kind != UVal::Known) return;
   if (got.kind != UVal::Known) {
     InferDown(mv.expr, want, mv.scope, mv.expr->span);
@@ -367,7 +442,14 @@ void UnitChecker::CheckBinding(Node* var, const ModValue& mv, const char* what, 
   }
   if (got.soft) return;
   if (want.unit.Agrees(got.unit)) return;
-  if (reused && where < 0) got = Bound(*mv.expr, mv, !is_equation);  // the notes name this copy's declarations
+  if (reused && (where < 0 || cls)) {  // read again: the notes name this instance's declarations
+    got = Bound(*mv.expr, mv, !is_equation);
+    if (got.kind != UVal::Known) {
+      InferDown(mv.expr, want, mv.scope, mv.expr->span);
+      return;
+    }
+    if (got.soft || want.unit.Agrees(got.unit)) return;
+  }
   const std::string name = "'" + var->Path() + "'";
   std::string msg = is_equation ? "the two sides of the equation have different units: " + name + " is " + Shown(want) +
                                       ", the right side " + Shown(got)
@@ -400,15 +482,7 @@ const UnitChecker::Declared* UnitChecker::DeclaredUnit(const Node* var) {
 }
 
 const UnitChecker::Declared* UnitChecker::FindDeclaredUnit(const Node* var) {
-  const ModView mods = var->Modifiers();
-  if (mods.sub.empty()) return nullptr;
-  // "unit" sorts after every other attribute's name: when there, it is nearly always last.
-  const Mod* unit = nullptr;
-  if (const auto& last = *mods.sub.rbegin(); Is(last.first, "unit")) {
-    unit = &last.second;
-  } else if (std::string_view(last.first) > std::string_view("unit")) {
-    if (auto it = mods.sub.find(std::string_view("unit")); it != mods.sub.end()) unit = &it->second;
-  }
+  const Mod* unit = UnitMod(var->Modifiers().sub);
   if (!unit || !unit->value || !unit->value->expr) return nullptr;
   const ast::Expr* e = unit->value->expr;
   // A direct-mapped cache in front of declared_: a model has a few dozen unit strings.
@@ -441,12 +515,14 @@ UVal UnitChecker::VarUnit(const Node* var) {
       ++impure_;  // from the joint the spring acts on: may differ between array elements
     }
   if (d) {
+    if (within_ && !ReadInClass(var)) ++impure_;
     UVal v = UVal::Of(d->unit);
     v.origin = var;
     v.text = &d->text;
     return v;
   }
-  ++impure_;
+  // An array of no unit has none (nothing is inferred for arrays).
+  if (!within_ || var->shape.empty() || !ReadInClass(var)) ++impure_;
   const int state = var->unit_slot;
   if (state == kInferredNothing || state == kInferring) return UVal{};
   if (state == kInferred) {
@@ -547,15 +623,42 @@ void UnitChecker::InferFromUse(const ast::Expr* e, const UVal& u, const Node* sc
 // every element; a binding read inside an array element copied from element 1 reads names
 // of the same declared units in every copy (Node::unit_slot). Reused while it read only
 // declared units and reported nothing (inferred units may change, implied ones differ).
-UVal UnitChecker::BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, bool* hit) {
+UVal UnitChecker::BoundOnce(const ModValue& mv, bool binding, std::intptr_t where, const Node* within, bool* hit) {
   Reuse& r = reused_[{mv.expr, where}];
   *hit = r.valid && r.iters == mv.iters.get() && r.binding == binding;
+  if (*hit && within) {  // this instance's variables read there: their units from the class too
+    const auto& kids = within->children;
+    for (const auto& [k, decl] : r.reads) {
+      const Node* var = static_cast<size_t>(k) < kids.size() ? kids[static_cast<size_t>(k)].get() : nullptr;
+      if (!var || var->decl != decl || !UnitFromClass(var, within)) *hit = false;
+    }
+  }
   if (*hit) return r.val;
   const long impure = impure_;
   const size_t reported = diags_.All().size();
+  within_ = within;
+  reads_.clear();
   const UVal v = Bound(*mv.expr, mv, binding);
-  r = Reuse{v, mv.iters.get(), binding, impure_ == impure && diags_.All().size() == reported};
+  within_ = nullptr;
+  r.val = v;
+  r.iters = mv.iters.get();
+  r.binding = binding;
+  r.valid = impure_ == impure && diags_.All().size() == reported;
+  if (within) r.reads = reads_;
   return v;
+}
+
+bool UnitChecker::ReadInClass(const Node* var) {
+  if (var->parent != within_ || !UnitFromClass(var, within_)) return false;
+  const auto& kids = within_->children;
+  for (size_t k = 0; k < kids.size(); ++k)
+    if (kids[k].get() == var) {
+      for (const auto& r : reads_)
+        if (r.first == static_cast<int>(k)) return true;  // c[1] * c[2]: once
+      reads_.emplace_back(static_cast<int>(k), var->decl);
+      return true;
+    }
+  return false;
 }
 
 UVal UnitChecker::Bound(const ast::Expr& e, const ModValue& mv, bool binding) {
@@ -632,12 +735,14 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
       return t;
     }
     if (e.parts.size() == 1 && head.name == "pi") return UVal::Lit();
+    if (within_) ++impure_;  // the other instances' trees are not read: only units are compared
     return UVal{};
   }
   for (size_t i = 0; i < e.parts.size(); ++i) {
     if (i > 0) {
       const std::string& name = e.parts[i].name;
       if (n->kind == Node::kClass && n->prim == Prim::Frame) {
+        if (within_) ++impure_;  // a redeclared component may be a frame in one instance only
         if (name == "r") return UVal::Of(Metres(1));
         if (name == "v") return UVal::Of(Metres(1) / Seconds());
         if (name == "w") return UVal::Of(Radians() / Seconds());
@@ -645,10 +750,16 @@ UVal UnitChecker::Ref(const ast::Expr& e, const Node* scope, const Iters* iters)
       }
       if (n->kind != Node::kClass) return UVal{};
       n = n->Child(name);
-      if (!n) return UVal{};
+      if (!n) {
+        if (within_) ++impure_;
+        return UVal{};
+      }
     }
     if (n->kind == Node::kArray) {
-      if (n->elems.empty()) return UVal{};
+      if (n->elems.empty()) {
+        if (within_) ++impure_;  // an array sized 0 in this instance only
+        return UVal{};
+      }
       n = n->elems[0].get();
     }
     if (n->kind == Node::kVar) return VarUnit(n);
