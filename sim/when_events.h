@@ -16,6 +16,10 @@ namespace kanesim::sim {
 class WhenEvents {
  public:
   explicit WhenEvents(const rt::Program& program);
+  // The run's relative tolerance: the accumulation of a clause's events is taken as reached
+  // when less than kZenoTimes of it (times max(1, |t|)) is left to the accumulation point.
+  void SetTolerance(double rtol) { rtol_ = rtol; }
+  static constexpr double kZenoTimes = 100.0;
   bool Active() const { return !clause_of_.empty(); }
   int Count() const { return static_cast<int>(clause_of_.size()); }
   // g_i = -h_i for every indicator of every clause, in order. 0, or Derivative's codes.
@@ -42,6 +46,17 @@ class WhenEvents {
 
  private:
   std::string SingularJump(const std::string& clause) const;
+  // Clause c fires at t: "" or why the run stops there (its events accumulate).
+  std::string Accumulation(int c, double t);
+  // Per clause: its last fire times and, once they shrink geometrically, the ratio and the
+  // accumulation point of the series (sim/when_events.cpp "Accumulation").
+  struct History {
+    std::vector<double> times;
+    bool geometric = false;
+    double ratio = 0.0, t_inf = 0.0, since = 0.0;  // since: the first time of the geometric stretch
+  };
+  std::vector<History> history_;
+  double rtol_ = 1e-6;
   const rt::Program& program_;
   std::vector<int> clause_of_, root_of_;  // per indicator: its clause, its tape root
   int nq_ = 0, nu_ = 0;
