@@ -604,6 +604,14 @@ bool DependentBlockBanded(const Program& p) {
   VelocityKinematics(p, ws);  // the partial velocities the Jacobian is made of
   return FactorConstraintsAsIs(p, ws) == 0 && ws.dep_banded;
 }
+
+// A when clause that sets a speed (an impulse, like an impact).
+bool ReinitsASpeed(const Program& p) {
+  for (const WhenModel& w : p.whens)
+    for (const WhenReinit& r : w.reinits)
+      if (r.speed) return true;
+  return false;
+}
 }  // namespace
 
 // The path for a scene with constraints (after AssembleLoops: it needs the redundant
@@ -629,6 +637,10 @@ void ChooseLoopSolver(Program& p) {
     blocked = "--reactions min-norm needs the reduced path";
   if (!p.redundant_rows.empty() && !p.friction_joints.empty())
     blocked = "Coulomb friction with redundant constraints reads the minimum-norm normal force of the reduced path";
+  // An impulse keeps the rows through the tangent basis beta (rt::InverseMassColumn); the
+  // multiplier form has none, so it would fail at the first impact instead of running.
+  if (!p.stop_joints.empty() || !p.plane_contacts.empty() || ReinitsASpeed(p))
+    blocked = "impacts (end stops, plane contacts, reinit of a speed) need the reduced form's tangent basis";
   const SolverPath want = p.options.solver;
   const bool banded = want == SolverPath::Auto && blocked.empty() && p.nu >= kSparseLoopMinSpeeds &&
                       DependentBlockBanded(p);

@@ -1,8 +1,8 @@
 // Compile stage: plane contacts (stdlib PlaneContact). A unilateral contact is not a
 // constraint row: the integrators' events handle it (sim/end_stops.h), impacts through the
-// mass matrix of the tree. So it, like an end stop, needs a mechanism whose impulse response
-// is M^-1 alone: no constraint rows and no Coulomb friction that reads a normal force (a
-// constant friction, friction_torque / friction_force, is allowed; docs/stdlib.md "PlaneContact").
+// mass matrix with the constraint rows' reactions (closed loops, rolling contacts). It, like
+// an end stop, needs no Coulomb friction that reads a normal force (a constant friction,
+// friction_torque / friction_force, is allowed; docs/stdlib.md "PlaneContact").
 #include <cmath>
 
 #include "compiler/compile_internal.h"
@@ -14,9 +14,8 @@ namespace {
 
 // Why the events cannot run on this program ("" when they can).
 std::string EventsRefused(const Program& p) {
-  if (!p.loops.empty()) return "closed loops";
-  if (!p.contacts.empty()) return "rolling contacts";
-  if (!p.couplings.empty()) return "joint couplings";
+  // Closed loops', rolling contacts' and couplings' rows join the impulse and the reactions
+  // by their own reactions (rt::InverseMassColumn through the tangent basis).
   // A constant friction is a bounded force: no impulse, no term in the reactions. mu N is not.
   for (int b : p.friction_joints)
     if (p.joints[static_cast<size_t>(b)].mu != 0.0) return "Coulomb friction proportional to the normal force (mu) on joints";
@@ -68,20 +67,10 @@ void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMe
     }
     p.plane_contacts.push_back(c);
   }
-  bool exact_friction = false;
-  for (int b : p.friction_joints) exact_friction = exact_friction || p.joints[static_cast<size_t>(b)].friction_exact;
-  if (exact_friction && !p.rows.empty())
-    for (int b : p.friction_joints)
-      if (p.joints[static_cast<size_t>(b)].friction_exact)
-        errors->push_back(Msg(flat::DiagCode::BadFriction,
-                              "joint '" + p.joints[static_cast<size_t>(b)].name +
-                                  "': exact stick-slip friction in a mechanism with closed loops or rolling contacts is "
-                                  "not supported",
-                              p.joints[static_cast<size_t>(b)].loc, "use the regularized law (friction_exact = false)"));
   if (p.plane_contacts.empty() && p.stop_joints.empty()) return;
   const std::string refused = EventsRefused(p);
   if (refused.empty()) return;
-  const std::string hint = "impacts and resting contact are supported on open chains and trees without friction";
+  const std::string hint = "impacts and resting contact are supported without Coulomb friction mu N";
   for (const PlaneContactModel& c : p.plane_contacts)
     errors->push_back(Msg(flat::DiagCode::BadContact,
                           "contact '" + c.name + "': a plane contact in a mechanism with " + refused + " is not supported",

@@ -76,7 +76,7 @@ struct Param {
   double value = 0.0;        // evaluated value (Integer/Boolean as 0/1/n)
   std::string string_value;  // String parameters only
   ExprId binding = kNoExpr;  // expression over earlier params; kNoExpr = literal leaf
-  std::string unit;          // "" when none declared
+  std::string unit;          // declared, or inferred by the unit check (lang/elab_units.h); ""
   double min = -1e300, max = 1e300;
   bool is_constant = false;  // `constant`: never changed by --set or a sweep
   bool structural = false;   // sizes an array, gates a component or an if/for: changing
@@ -249,7 +249,7 @@ struct WhenClause {
 struct Input {
   std::string name;
   SourceLoc loc;     // the declaration
-  std::string unit;  // its unit attribute (input Real tau(unit = "N.m")); "" when none
+  std::string unit;  // its unit attribute (input Real tau(unit = "N.m")), else inferred; ""
 };
 
 struct Experiment {

@@ -133,9 +133,8 @@ class Writer {
     link_frame_.assign(r_.links.size(), "");
     joint_name_.assign(r_.joints.size(), "");
     decl_ << "  World world(g = {0, 0, -9.81}) \"URDF: z up, standard gravity\";\n";
-    // The compiler takes no end stops in a mechanism with joint couplings (K318): a robot
-    // whose <mimic>s are kept gets its limits as comments only.
     for (const Joint& j : r_.joints) coupled_ = coupled_ || (o_.mimic && j.has_mimic);
+    if (coupled_) MimicGroups();
     Root();
     for (int j : r_.order) JointAndChild(j);
     if (o_.mimic) Mimics();
@@ -279,11 +278,73 @@ class Writer {
     return name + ".frame_b";
   }
 
-  // Whether the joint's <limit> becomes end stops: a revolute or prismatic joint's proper
-  // range, unless --limits ignore or the model's couplings forbid stops.
+  static bool OneCoordinate(const Joint& j) {
+    return j.type == JointType::kRevolute || j.type == JointType::kContinuous || j.type == JointType::kPrismatic;
+  }
+  // A <mimic> follower whose friction its root's exact friction holds (MimicGroups).
+  bool Reflected(const Joint& j) const {
+    return coupled_ && root_[static_cast<std::size_t>(&j - r_.joints.data())] >= 0;
+  }
+
+  // A joint's <limit> as a range that can stop it: a revolute or prismatic joint's.
+  static bool Limited(const Joint& j) {
+    return j.has_limit && (j.type == JointType::kRevolute || j.type == JointType::kPrismatic);
+  }
+
+  // <mimic> chains: each coupled joint's root leader R and q = a q_R + b. A group's limits
+  // all become end stops of R, the intersection of their ranges mapped to q_R: stops on the
+  // follower too would be rows dependent on the leader's where the ranges agree (the impulse
+  // that holds both is not unique), and the follower keeps q = a q_R + b within its range.
+  void MimicGroups() {
+    const std::size_t n = r_.joints.size();
+    root_.assign(n, -1);
+    for (std::size_t j = 0; j < n; ++j) {
+      double a = 1, b = 0;
+      int at = static_cast<int>(j);
+      for (std::size_t steps = 0; steps <= n && r_.joints[static_cast<std::size_t>(at)].has_mimic; ++steps) {
+        const Joint& x = r_.joints[static_cast<std::size_t>(at)];
+        b += a * x.offset, a *= x.multiplier;  // q = a (m q_l + c) + b
+        at = x.mimic_leader;
+      }
+      if (r_.joints[static_cast<std::size_t>(at)].has_mimic) continue;  // a cycle: the compiler says so
+      if (at == static_cast<int>(j)) continue;
+      root_[j] = at;
+      const Joint& x = r_.joints[j];
+      // Its constant friction reflected onto the root: tau_f dq_f = (a tau_f) dq_R with
+      // |tau_f| <= c_f, and sign(u_f) = sign(a u_R) while they slide together.
+      if (x.friction != 0 && OneCoordinate(x)) friction_[at] += std::abs(a) * x.friction;
+      if (!Limited(x) || !o_.stops || a == 0 || !(x.lower < x.upper)) continue;
+      double lo = (x.lower - b) / a, hi = (x.upper - b) / a;
+      if (lo > hi) std::swap(lo, hi);
+      Range& g = group_[at];
+      if (g.members == 0 && Limited(r_.joints[static_cast<std::size_t>(at)]) &&
+          r_.joints[static_cast<std::size_t>(at)].lower < r_.joints[static_cast<std::size_t>(at)].upper) {
+        g.lower = r_.joints[static_cast<std::size_t>(at)].lower, g.upper = r_.joints[static_cast<std::size_t>(at)].upper;
+        g.members = 1;
+      }
+      g.lower = g.members == 0 ? lo : std::max(g.lower, lo);
+      g.upper = g.members == 0 ? hi : std::min(g.upper, hi);
+      ++g.members;
+    }
+  }
+
+  // The range the joint's end stops hold, if it has stops: its own <limit> or, for a <mimic>
+  // root, its group's (MimicGroups).
+  bool StopRange(const Joint& j, double* lower, double* upper) const {
+    if (!o_.stops || (j.type != JointType::kRevolute && j.type != JointType::kContinuous && j.type != JointType::kPrismatic))
+      return false;
+    const int ji = static_cast<int>(&j - r_.joints.data());
+    if (coupled_ && root_[static_cast<std::size_t>(ji)] >= 0) return false;  // a follower: its root holds it
+    if (auto g = group_.find(ji); g != group_.end()) {
+      *lower = g->second.lower, *upper = g->second.upper;
+      return *lower < *upper;
+    }
+    *lower = j.lower, *upper = j.upper;
+    return Limited(j) && j.lower < j.upper;
+  }
   bool Stops(const Joint& j) const {
-    return j.has_limit && (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) && o_.stops &&
-           !coupled_ && j.lower < j.upper;
+    double lo = 0, hi = 0;
+    return StopRange(j, &lo, &hi);
   }
 
   // The <limit> in the joint's comment, and what became of it (counted for the notes).
@@ -291,10 +352,14 @@ class Writer {
     if (!j.has_limit) return "";
     std::string fate = "recorded";
     if (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) {
-      if (Stops(j)) fate = "the end stops q_min, q_max", ++stops_;
-      else if (!o_.stops) fate = "recorded: --limits ignore", ++limits_;
-      else if (coupled_) fate = "recorded: no end stops with <mimic> couplings", ++limits_;
-      else fate = "recorded: lower >= upper is no range", ++empty_ranges_;
+      const int ji = static_cast<int>(&j - r_.joints.data());
+      const int root = coupled_ ? root_[static_cast<std::size_t>(ji)] : -1;
+      if (!o_.stops) fate = "recorded: --limits ignore", ++limits_;
+      else if (!(j.lower < j.upper)) fate = "recorded: lower >= upper is no range", ++empty_ranges_;
+      else if (root >= 0 && Stops(r_.joints[static_cast<std::size_t>(root)]))
+        fate = "held by the end stops of '" + Shown(r_.joints[static_cast<std::size_t>(root)].name) + "' through the <mimic>", ++stops_;
+      else if (Stops(j)) fate = group_.count(ji) ? "the end stops q_min, q_max, with its <mimic> followers'" : "the end stops q_min, q_max", ++stops_;
+      else fate = "recorded: the <mimic> group's ranges have no common part", ++empty_ranges_;
     }
     return "; limit lower " + Num(j.lower) + " upper " + Num(j.upper) + " effort " + Num(j.effort) + " velocity " +
            Num(j.velocity) + " (" + fate + ")";
@@ -303,13 +368,15 @@ class Writer {
   // The joint's end stops as modifiers; a start of q = 0 outside them moves onto the nearer
   // limit (the simulator refuses a start past a stop), with a note.
   std::string StopModifiers(const Joint& j) {
-    if (!Stops(j)) return "";
-    std::string mods = ", q_min = " + Num(j.lower) + ", q_max = " + Num(j.upper);
-    if (0 < j.lower || 0 > j.upper) {
-      const double start = 0 < j.lower ? j.lower : j.upper;
+    double lower = 0, upper = 0;
+    if (!StopRange(j, &lower, &upper)) return "";
+    std::string mods = ", q_min = " + Num(lower) + ", q_max = " + Num(upper);
+    if (0 < lower || 0 > upper) {
+      const double start = 0 < lower ? lower : upper;
       mods += ", q(start = " + Num(start) + ")";
-      d_.Note(j.line, "joint '" + Shown(j.name) + "': q = 0 is outside its <limit> [" + Num(j.lower) + ", " +
-                          Num(j.upper) + "]: it starts at " + Num(start) + ", on the nearer stop",
+      d_.Note(j.line, "joint '" + Shown(j.name) + "': q = 0 is outside its " +
+                          (group_.count(static_cast<int>(&j - r_.joints.data())) ? "<mimic> group's <limit>s " : "<limit> ") +
+                          "[" + Num(lower) + ", " + Num(upper) + "]: it starts at " + Num(start) + ", on the nearer stop",
               "<limit");
     }
     return mods;
@@ -332,7 +399,7 @@ class Writer {
     std::string from = parent;
     const std::string name = Unique(j.name, &renamed);
     decl_ << "  // joint '" << Shown(j.name) << "' (" << Where(j.line) << "): " << kTypeNames[static_cast<int>(j.type)]
-          << renamed << Limits(j) << IgnoredMimic(j) << "\n";
+          << renamed << Limits(j) << ReflectedFriction(j) << IgnoredMimic(j) << "\n";
     if (!j.origin.IsIdentity()) from = FixedFrame(Unique(j.name + "_origin", nullptr), j.origin, parent, "joint '" + j.name + "' <origin>");
     joint_name_[static_cast<std::size_t>(ji)] = name;
     switch (j.type) {
@@ -387,32 +454,39 @@ class Writer {
   }
 
   // <dynamics friction> (a constant torque or force) as the joint's exact Coulomb friction
-  // (stick-slip as events, docs/stdlib.md "Revolute"); with <mimic> couplings (constraint rows,
-  // where exact friction is refused) regularized instead: Dynamics writes it as a force law.
-  bool ExactFriction(const Joint& j) const { return j.friction != 0 && !coupled_; }
+  // (stick-slip as events, docs/stdlib.md "Revolute"); a <mimic> group's all on its root,
+  // the followers' reflected through the coupling (MimicGroups): stuck joints whose motions
+  // the coupling makes dependent would have no unique friction forces.
+  double ExactFriction(const Joint& j) const {
+    if (Reflected(j)) return 0.0;
+    const auto g = friction_.find(static_cast<int>(&j - r_.joints.data()));
+    return j.friction + (g == friction_.end() ? 0.0 : g->second);
+  }
   std::string FrictionModifiers(const Joint& j) const {
-    if (!ExactFriction(j)) return "";
-    return std::string(j.type == JointType::kPrismatic ? ", friction_force = " : ", friction_torque = ") +
-           Num(j.friction) + ", friction_exact = true";
+    const double c = ExactFriction(j);
+    if (c == 0) return "";
+    return std::string(j.type == JointType::kPrismatic ? ", friction_force = " : ", friction_torque = ") + Num(c) +
+           ", friction_exact = true";
+  }
+  // The comment of a follower whose friction its root holds.
+  std::string ReflectedFriction(const Joint& j) const {
+    if (j.friction == 0 || !Reflected(j)) return "";
+    return "; <dynamics friction " + Num(j.friction) + "> on the exact friction of '" +
+           Shown(r_.joints[static_cast<std::size_t>(root_[static_cast<std::size_t>(&j - r_.joints.data())])].name) +
+           "' through the <mimic>";
   }
 
-  // <dynamics damping friction> as the joint's force law: viscous damping, and Coulomb
-  // friction that is not exact (FrictionModifiers) regularized as the standard library's
-  // joints do (tanh(u / 1e-3)).
+  // <dynamics damping> as the joint's force law (viscous damping).
   void Dynamics(const Joint& j, const std::string& name) {
     if (j.damping == 0 && j.friction == 0) return;
-    if (j.type != JointType::kRevolute && j.type != JointType::kContinuous && j.type != JointType::kPrismatic) {
+    if (!OneCoordinate(j)) {
       d_.Note(j.line, "<dynamics> of the " + std::string(j.type == JointType::kPlanar ? "planar" : "floating") +
                           " joint '" + Shown(j.name) + "' is not imported (only one-coordinate joints take it)");
       return;
     }
-    std::string law;
-    if (j.damping != 0) law = Num(j.damping) + " * " + name + ".u";
-    if (j.friction != 0 && !ExactFriction(j))
-      law += (law.empty() ? "" : " + ") + Num(j.friction) + " * tanh(" + name + ".u / 0.001)";
-    if (law.empty()) return;
-    eq_ << "  " << name << ".tau = -(" << law << ");  // <dynamics damping friction> of joint '" << Shown(j.name)
-        << "'\n";
+    if (j.damping == 0) return;
+    eq_ << "  " << name << ".tau = -(" << Num(j.damping) << " * " << name << ".u);  // <dynamics damping> of joint '"
+        << Shown(j.name) << "'\n";
   }
 
   int LinkIndex(const std::string& name) {
@@ -490,8 +564,7 @@ class Writer {
     if (stops_ > 0) header_.push_back(std::to_string(stops_) + " joint <limit>s as end stops (q_min, q_max; restitution 0)");
     if (limits_ > 0) {
       header_.push_back(std::to_string(limits_) + " joint <limit>s recorded in comments, not end stops (" +
-                        (o_.stops ? "the compiler takes no end stops with the <mimic> couplings, K318" : "--limits ignore") +
-                        ")");
+                        "--limits ignore)");
       d_.Note(0, header_.back());
     }
     if (empty_ranges_ > 0) {
@@ -517,6 +590,13 @@ class Writer {
   std::unordered_map<std::string, int> link_index_;
   int collisions_ = 0, missing_meshes_ = 0, limits_ = 0, stops_ = 0, empty_ranges_ = 0, mimics_ignored_ = 0;
   bool coupled_ = false;  // the model has JointCouplings (kept <mimic>s)
+  struct Range {
+    double lower = 0, upper = 0;
+    int members = 0;  // limits intersected
+  };
+  std::vector<int> root_;                  // per joint: its <mimic> root leader, or -1 (MimicGroups)
+  std::unordered_map<int, Range> group_;  // per root with limits in its group: their common range in q_root
+  std::unordered_map<int, double> friction_;  // per root: its followers' friction reflected onto it
 };
 
 }  // namespace

@@ -82,7 +82,7 @@ void EquationWalker::ProcessConnect(Node* node, const ast::Equation& eq, const I
   if (!IsConnector(a) || !IsConnector(b) || a->prim != b->prim) {
     Node* badn = !IsConnector(a) ? a : b;
     auto& d = diags_.Error(DiagCode::BadConnect, (badn == a ? eq.lhs : eq.rhs)->span,
-                           !IsConnector(a) || !IsConnector(b) ? "'" + badn->path + "' is not a connector"
+                           !IsConnector(a) || !IsConnector(b) ? "'" + badn->Path() + "' is not a connector"
                                                               : "cannot connect a Frame to a Flange");
     d.hint = "connect frames (frame_a, frame_b of bodies and joints) or flanges (drive, support)";
     return;
@@ -141,12 +141,12 @@ void EquationWalker::ProcessEquality(Node* node, const ast::Equation& eq, const 
   Node* v = eval_.ResolveNode(*eq.lhs, Ctx{node, iters.get()}, &elem);
   if (!v || !v->enabled) return;
   if (v->kind != Node::kVar) {
-    diags_.Error(DiagCode::BadEquation, eq.lhs->span, "'" + v->path + "' is a component, not a variable");
+    diags_.Error(DiagCode::BadEquation, eq.lhs->span, "'" + v->Path() + "' is a component, not a variable");
     return;
   }
   if (v->variability != ast::Variability::None) {
     auto& d = diags_.Error(DiagCode::BadEquation, eq.lhs->span,
-                           "'" + v->path + "' is a parameter; equations define variables");
+                           "'" + v->Path() + "' is a parameter; equations define variables");
     d.hint = "give parameters values in their declaration, with a modifier, or with --set";
     return;
   }
@@ -163,7 +163,7 @@ void EquationWalker::BindEquation(Node* v, int elem, const ast::Equation& eq, Mo
     auto it = v->eq_elem_binding.find(elem);
     if (it != v->eq_elem_binding.end()) {
       auto& d = diags_.Error(DiagCode::ConflictingEquation, eq.span,
-                             "element " + std::to_string(elem + 1) + " of '" + v->path + "' has two equations");
+                             "element " + std::to_string(elem + 1) + " of '" + v->Path() + "' has two equations");
       d.notes.push_back({it->second.span, "first equation here"});
       return;
     }
@@ -171,7 +171,7 @@ void EquationWalker::BindEquation(Node* v, int elem, const ast::Equation& eq, Mo
     return;
   }
   if (v->eq_binding) {
-    auto& d = diags_.Error(DiagCode::ConflictingEquation, eq.span, "'" + v->path + "' has two equations");
+    auto& d = diags_.Error(DiagCode::ConflictingEquation, eq.span, "'" + v->Path() + "' has two equations");
     d.notes.push_back({v->eq_binding->span, "first equation here"});
     return;
   }
@@ -201,12 +201,12 @@ Connections Connect(const InstanceTree& tree, const Links& links, const SourcePl
       out.frame[r] = static_cast<int>(m->frames.size());
       flat::Frame f;
       const Node* first = tree.frames[r];
-      f.name = first->path;
+      f.name = first->Path();
       f.loc = places.Loc(first->decl ? first->decl->name_span : Span{});
       m->frames.push_back(std::move(f));
     }
     out.frame[i] = out.frame[r];
-    m->frames[static_cast<size_t>(out.frame[i])].aliases.push_back(tree.frames[i]->path);
+    m->frames[static_cast<size_t>(out.frame[i])].aliases.push_back(tree.frames[i]->Path());
   }
   out.frame_set_size.resize(n);
   for (size_t i = 0; i < n; ++i) out.frame_set_size[i] = set_size[static_cast<size_t>(uf.Find(static_cast<int>(i)))];

@@ -47,7 +47,7 @@ class Emitter {
     Node* c = n->Child(name);
     if (!c || c->prim != Prim::Frame) {
       diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
-                   "primitive '" + n->path + "' lacks the Frame '" + name + "'");
+                   "primitive '" + n->Path() + "' lacks the Frame '" + name + "'");
       return -1;
     }
     const size_t pid = static_cast<size_t>(c->prim_index);
@@ -55,11 +55,11 @@ class Emitter {
     const bool leaf_ok = n->prim == Prim::World || (n->prim == Prim::Fixed && std::string(name) == "frame_b");
     if (sets_.frame_set_size[pid] == 1 && !leaf_ok) {
       auto& d = diags_.Warning(DiagCode::UnconnectedFrame, n->decl ? n->decl->name_span : Span{},
-                               "'" + c->path + "' is not connected to anything");
+                               "'" + c->Path() + "' is not connected to anything");
       // A joint's frame_b goes to the body it moves (to the world it would lock the joint: W316).
       d.hint = std::string(name) == "frame_b" && n->prim == Prim::Joint
-                   ? "connect it to the body the joint moves, e.g. connect(" + c->path + ", body.frame_a)"
-                   : "connect it, e.g. connect(" + c->path + ", world.frame_b)";
+                   ? "connect it to the body the joint moves, e.g. connect(" + c->Path() + ", body.frame_a)"
+                   : "connect it, e.g. connect(" + c->Path() + ", world.frame_b)";
     }
     return sets_.frame[pid];
   }
@@ -70,13 +70,13 @@ class Emitter {
     Node* c = n->Child(name);
     if (!c || c->kind != Node::kVar) {
       diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
-                   "primitive '" + n->path + "' lacks '" + name + "'");
+                   "primitive '" + n->Path() + "' lacks '" + name + "'");
       return invalid_;
     }
     const Value& v = eval_.GetVar(c, c->decl ? c->decl->name_span : Span{});
     if (v.valid && !std::equal(v.shape.begin(), v.shape.end(), shape.begin(), shape.end())) {
       diags_.Error(DiagCode::SizeMismatch, c->decl ? c->decl->name_span : Span{},
-                   "'" + c->path + "' has the wrong size for its primitive");
+                   "'" + c->Path() + "' has the wrong size for its primitive");
       return invalid_;
     }
     return v;
@@ -178,7 +178,7 @@ class Emitter {
 
   void EmitBody(Node* n, const flat::SourceLoc& loc) {
     flat::Body b;
-    b.name = n->path;
+    b.name = n->Path();
     b.frame = FrameOf(n, "frame_a");
     b.mass = AsScalar(Field(n, "m", {}));
     b.r_cm = AsVec3(Field(n, "r_CM", {3}));
@@ -189,7 +189,7 @@ class Emitter {
 
   void EmitFixed(Node* n, const flat::SourceLoc& loc) {
     flat::Fixed f;
-    f.name = n->path;
+    f.name = n->Path();
     f.frame_a = FrameOf(n, "frame_a");
     f.frame_b = FrameOf(n, "frame_b");
     f.r = AsVec3(Field(n, "r", {3}));
@@ -207,7 +207,7 @@ class Emitter {
       if (v.valid && v.type == VType::String && !v.strings.empty() &&
           !flat::RotationCoordsFromName(v.strings[0], &j.rotation)) {
         auto& d = diags_.Error(DiagCode::BadValue, c->Modifiers().value ? c->Modifiers().value->span : Span{},
-                               "unknown coordinates \"" + v.strings[0] + "\" for joint '" + n->path + "'");
+                               "unknown coordinates \"" + v.strings[0] + "\" for joint '" + n->Path() + "'");
         std::string best = ClosestName(v.strings[0], {"quaternion", "cardan_xyz", "euler_zyz"});
         d.hint = "use \"quaternion\", \"cardan_xyz\" or \"euler_zyz\"" +
                  (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)");
@@ -261,7 +261,7 @@ class Emitter {
     };
     if (nq > 0 && (!q || !u || !tau || size_of(q) != nq || size_of(u) != nu || size_of(tau) != nu)) {
       diags_.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
-                   "joint primitive '" + n->path + "' needs q[" + std::to_string(nq) + "], u[" +
+                   "joint primitive '" + n->Path() + "' needs q[" + std::to_string(nq) + "], u[" +
                        std::to_string(nu) + "] and tau[" + std::to_string(nu) + "]");
       return;
     }
@@ -278,7 +278,7 @@ class Emitter {
 
   // The `start` (and `fixed`) modifiers of a joint's q or u.
   void StartOf(Node* var, std::vector<ExprId>* out, std::vector<bool>* fixed) {
-    const Mod& mods = var->Modifiers();
+    const ModView mods = var->Modifiers();
     auto it = mods.sub.find("start");
     if (it != mods.sub.end() && it->second.value) {
       Span where;
@@ -290,7 +290,7 @@ class Emitter {
           for (size_t k = 0; k < out->size(); ++k) (*out)[k] = v.elements[k];
         } else {
           diags_.Error(DiagCode::SizeMismatch, where,
-                       "start value of '" + var->path + "' needs " + std::to_string(out->size()) + " element(s)");
+                       "start value of '" + var->Path() + "' needs " + std::to_string(out->size()) + " element(s)");
         }
         for (ExprId x : *out)
           if (x >= 0 && pool.DependsOnTimeOrState(x)) {
@@ -317,7 +317,7 @@ class Emitter {
     if (which == u) {
       diags_.Error(DiagCode::BadEquation, u->eq_binding ? u->eq_binding->span : Span{},
                    "prescribe the coordinate q, not the speed u")
-          .hint = "write '" + n->path + ".q = f(time)'; its speed and acceleration follow";
+          .hint = "write '" + n->Path() + ".q = f(time)'; its speed and acceleration follow";
       return;
     }
     if ((j.type == flat::JointType::Spherical || j.type == flat::JointType::Free) &&
@@ -339,14 +339,14 @@ class Emitter {
                 : nq == 1 ? v.shape.empty()
                           : v.elements.size() == static_cast<size_t>(nq);
       if (!ok) {
-        diags_.Error(DiagCode::SizeMismatch, where, "prescribed motion of '" + q->path + "' has the wrong size");
+        diags_.Error(DiagCode::SizeMismatch, where, "prescribed motion of '" + q->Path() + "' has the wrong size");
         continue;
       }
       for (size_t e = 0; e < v.elements.size(); ++e) {
         if (pool.DependsOnState(v.elements[e])) {
           diags_.Error(DiagCode::BadEquation, where,
-                       "prescribed motion of '" + q->path + "' must depend on time and parameters only")
-              .hint = "to drive a joint with a force law, write '" + n->path + ".tau = ...' instead";
+                       "prescribed motion of '" + q->Path() + "' must depend on time and parameters only")
+              .hint = "to drive a joint with a force law, write '" + n->Path() + ".tau = ...' instead";
           break;
         }
         j.prescribed[static_cast<size_t>(k >= 0 ? k : static_cast<int>(e))] = v.elements[e];
@@ -356,7 +356,7 @@ class Emitter {
 
   void EmitLineForce(Node* n, const flat::SourceLoc& loc) {
     flat::LineForce l;
-    l.name = n->path;
+    l.name = n->Path();
     l.frame_a = FrameOf(n, "frame_a");
     l.frame_b = FrameOf(n, "frame_b");
     l.k = AsScalar(Field(n, "c", {}));
@@ -368,7 +368,7 @@ class Emitter {
 
   void EmitWrench(Node* n, const flat::SourceLoc& loc) {
     flat::Wrench w;
-    w.name = n->path;
+    w.name = n->Path();
     w.frame = FrameOf(n, "frame_b");
     w.force = AsVec3(Field(n, "force", {3}));
     w.torque = AsVec3(Field(n, "torque", {3}));
@@ -379,7 +379,7 @@ class Emitter {
 
   void EmitContact(Node* n, const flat::SourceLoc& loc) {
     flat::Contact c;
-    c.name = n->path;
+    c.name = n->Path();
     if (n->prim_kind == "rolling_disk") c.type = flat::ContactType::RollingDisk;
     else if (n->prim_kind == "rolling_sphere") c.type = flat::ContactType::RollingSphere;
     else if (n->prim_kind == "knife_edge") c.type = flat::ContactType::KnifeEdge;
@@ -410,7 +410,7 @@ class Emitter {
     *joint = -1;
     Node* f = s->Child(name);
     if (!f || f->prim != Prim::Flange) {
-      diags_.Error(DiagCode::BadPrimitive, s->cls ? s->cls->name_span : Span{}, "'" + s->path + "' lacks the flange '" + name + "'");
+      diags_.Error(DiagCode::BadPrimitive, s->cls ? s->cls->name_span : Span{}, "'" + s->Path() + "' lacks the flange '" + name + "'");
       return false;
     }
     const int set = sets_.flange_set[static_cast<size_t>(f->prim_index)];
@@ -423,7 +423,7 @@ class Emitter {
     }
     if (found > 1) {
       diags_.Error(DiagCode::BadConnect, s->decl ? s->decl->name_span : Span{},
-                   "'" + f->path + "' is connected to the drive flanges of more than one joint");
+                   "'" + f->Path() + "' is connected to the drive flanges of more than one joint");
       return false;
     }
     return true;
@@ -439,7 +439,7 @@ class Emitter {
       if (!end_of("flange_a", &a) || !end_of("flange_b", &b)) continue;
       if (a.joint < 0 && b.joint < 0) {
         diags_.Warning(DiagCode::UnconnectedFrame, s->decl ? s->decl->name_span : Span{},
-                       "'" + s->path + "' is not connected to any joint's drive flange; it does nothing");
+                       "'" + s->Path() + "' is not connected to any joint's drive flange; it does nothing");
         continue;
       }
       for (int j : {a.joint, b.joint}) {
@@ -494,11 +494,11 @@ class Emitter {
       const Span at = s->decl ? s->decl->name_span : Span{};
       if (c.leader < 0 || c.follower < 0 || c.leader == c.follower) {
         auto& d = diags_.Error(DiagCode::BadConnect, at,
-                               "'" + s->path + "' must join the drive flanges of two different joints");
-        d.hint = "connect(leader.drive, " + s->path + ".flange_a); connect(follower.drive, " + s->path + ".flange_b);";
+                               "'" + s->Path() + "' must join the drive flanges of two different joints");
+        d.hint = "connect(leader.drive, " + s->Path() + ".flange_a); connect(follower.drive, " + s->Path() + ".flange_b);";
         continue;
       }
-      c.name = s->path;
+      c.name = s->Path();
       c.ratio = AsScalar(Field(s, "ratio", {}));
       c.offset = AsScalar(Field(s, "offset", {}));
       c.loc = places_.Loc(places_.UserSpan(s));
@@ -518,7 +518,7 @@ class Emitter {
       }
       for (size_t k = 0; k < v.elements.size(); ++k) {
         flat::Output o;
-        o.name = c->path + (v.elements.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
+        o.name = c->Path() + (v.elements.size() > 1 ? "[" + std::to_string(k + 1) + "]" : "");
         o.expr = v.elements[k];
         o.loc = places_.Loc(c->decl->name_span);
         m_->outputs.push_back(std::move(o));

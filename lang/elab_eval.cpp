@@ -190,7 +190,7 @@ Value Evaluator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
     }
     if (!n->enabled) {
       diags_.Error(DiagCode::UnknownName, part.span,
-                   "'" + n->path + "' is disabled by its condition and cannot be used");
+                   "'" + n->Path() + "' is disabled by its condition and cannot be used");
       return Value::Invalid();
     }
     if (n->kind == Node::kArray) {
@@ -200,12 +200,12 @@ Value Evaluator::EvalRef(const ast::Expr& e, const Ctx& ctx) {
     }
     if (n->kind == Node::kVar) return VarReference(e, pi, n, ctx);
     if (!part.subscripts.empty()) {
-      diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
+      diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->Path() + "' is not an array");
       return Value::Invalid();
     }
   }
   diags_.Error(DiagCode::TypeMismatch, e.span,
-               "'" + n->path + "' is a component, not a value")
+               "'" + n->Path() + "' is a component, not a value")
       .hint = "components are used in connect(); their parameters and variables are values";
   return Value::Invalid();
 }
@@ -293,7 +293,7 @@ Value Evaluator::SubscriptFrameMotion(const Value& v, const ast::RefPart& part, 
 
 Node* Evaluator::Member(Node* n, const ast::RefPart& part) {
   if (n->kind != Node::kClass) {
-    diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
+    diags_.Error(DiagCode::UnknownName, part.span, "'" + n->Path() + "' has no member '" + part.name + "'");
     return nullptr;
   }
   Node* c = n->Child(part.name);
@@ -301,7 +301,7 @@ Node* Evaluator::Member(Node* n, const ast::RefPart& part) {
   std::vector<std::string> cands;
   for (auto& ch : n->children) cands.push_back(ch->decl ? ch->decl->name : ch->name);
   if (n->prim == Prim::Frame) cands.insert(cands.end(), {"r", "R", "v", "w"});
-  auto& d = diags_.Error(DiagCode::UnknownName, part.span, "'" + n->path + "' has no member '" + part.name + "'");
+  auto& d = diags_.Error(DiagCode::UnknownName, part.span, "'" + n->Path() + "' has no member '" + part.name + "'");
   std::string best = ClosestName(part.name, cands);
   if (!best.empty()) d.hint = "did you mean '" + best + "'?";
   return nullptr;
@@ -310,7 +310,7 @@ Node* Evaluator::Member(Node* n, const ast::RefPart& part) {
 Node* Evaluator::ArrayElement(Node* array, const ast::RefPart& part, const Ctx& ctx) {
   if (part.subscripts.size() != 1) {
     diags_.Error(DiagCode::TypeMismatch, part.span,
-                 "'" + array->path + "' is an array of components; index it with one subscript");
+                 "'" + array->Path() + "' is an array of components; index it with one subscript");
     return nullptr;
   }
   long k = 0;
@@ -321,7 +321,7 @@ Node* Evaluator::ArrayElement(Node* array, const ast::RefPart& part, const Ctx& 
   if (k < 1 || k > static_cast<long>(array->elems.size())) {
     diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
                  "index " + std::to_string(k) + " is out of range 1.." + std::to_string(array->elems.size()) +
-                     " of '" + array->path + "'");
+                     " of '" + array->Path() + "'");
     return nullptr;
   }
   return array->elems[static_cast<size_t>(k - 1)].get();
@@ -332,7 +332,7 @@ Value Evaluator::VarReference(const ast::Expr& e, size_t pi, Node* var, const Ct
   Value v = GetVar(var, part.span);
   if (!v.valid) return v;
   if (pi + 1 != e.parts.size()) {
-    diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + var->path + "' is a variable and has no members");
+    diags_.Error(DiagCode::UnknownName, e.parts[pi + 1].span, "'" + var->Path() + "' is a variable and has no members");
     return Value::Invalid();
   }
   if (part.subscripts.empty()) return v;
@@ -342,7 +342,7 @@ Value Evaluator::VarReference(const ast::Expr& e, size_t pi, Node* var, const Ct
 Value Evaluator::SubscriptValue(const Value& v, const ast::RefPart& part, const Node* var, const Ctx& ctx) {
   if (part.subscripts.size() > v.shape.size()) {
     diags_.Error(DiagCode::IndexOutOfRange, part.span,
-                 "'" + var->path + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
+                 "'" + var->Path() + "' has " + std::to_string(v.shape.size()) + " dimension(s)");
     return Value::Invalid();
   }
   // Each dimension's 0-based indices, one list after another in `all` (dimension d's from
@@ -405,7 +405,7 @@ bool Evaluator::SubscriptIndices(const ast::Expr& s, int size, const Node* var, 
     if (!(kd == std::floor(kd) && kd >= 1 && kd <= size)) {
       diags_.Error(DiagCode::IndexOutOfRange, s.span,
                    "index " + ShortNumber(kd) + " is out of range 1.." + std::to_string(size) + " of '" +
-                       var->path + "'");
+                       var->Path() + "'");
       return false;
     }
     list->push_back(static_cast<int>(kd) - 1);

@@ -37,10 +37,30 @@ const ast::ClassDef* Instantiator::ResolveShort(const ast::ClassDef* cls, Node* 
       return nullptr;
     }
     if (cls->short_mod)
-      MergeMods(*mod, BuildMod(cls->short_mod.get(), node, nullptr, diags_), node ? node->path : cls->name, diags_);
+      MergeMods(*mod, BuildMod(cls->short_mod.get(), node, nullptr, diags_), node ? MergeWhat(node) : MergeWhat(cls->name), diags_);
     cls = base;
   }
   return cls;
+}
+
+long Instantiator::CollectedNames::Find(std::string_view name, const std::vector<Collected>& out) const {
+  if (!index_.empty()) {
+    auto it = index_.find(name);
+    return it == index_.end() ? -1 : static_cast<long>(it->second);
+  }
+  for (size_t i = 0; i < out.size(); ++i)
+    if (out[i].comp->name == name) return static_cast<long>(i);
+  return -1;
+}
+
+void Instantiator::CollectedNames::Added(const std::vector<Collected>& out) {
+  if (out.size() <= kScan) return;
+  if (index_.empty()) {  // past the scan's size: every element so far
+    index_.reserve(2 * out.size());
+    for (size_t i = 0; i < out.size(); ++i) index_.emplace(out[i].comp->name, i);
+    return;
+  }
+  index_.emplace(out.back().comp->name, out.size() - 1);
 }
 
 void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
@@ -76,7 +96,7 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       Mod em = BuildMod(ex.mod.get(), node, nullptr, diags_);
       Mod effective;
       if (ext_mod) effective = *ext_mod;
-      MergeMods(effective, std::move(em), ast::JoinName(ex.base), diags_);
+      MergeMods(effective, std::move(em), &ex.base, diags_);
       // Short class as a base: fold its modifiers in.
       base = ResolveShort(base, node, &effective);
       if (!base) continue;
@@ -95,8 +115,8 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       if (it != ext_mod->sub.end()) c.ext_mod = it->second;
     }
     bool replaced = false;
-    if (auto found = names.find(comp.name); found != names.end()) {
-      Collected& prev = out[found->second];
+    if (const long found = names.Find(comp.name, out); found >= 0) {
+      Collected& prev = out[static_cast<size_t>(found)];
       if (comp.redeclare) {
         if (!prev.replaceable) {
           auto& d = diags_.Error(DiagCode::NotReplaceable, comp.name_span,
@@ -114,8 +134,8 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       if (comp.redeclare)
         diags_.Error(DiagCode::NotReplaceable, comp.name_span,
                      "'redeclare " + comp.name + "' replaces nothing: no inherited element has that name");
-      names.emplace(comp.name, out.size());
       out.push_back(std::move(c));
+      names.Added(out);
     }
   }
   for (const auto& eq : cls->equations) eqs.push_back({&eq, cls});
@@ -123,14 +143,6 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
 }
 
 // "prefix.name", or "name" at the root; one allocation (paths are made for every instance).
-std::string JoinPath(const std::string& prefix, const std::string& name) {
-  if (prefix.empty()) return name;
-  std::string p;
-  p.reserve(prefix.size() + 1 + name.size());
-  p.append(prefix).append(".").append(name);
-  return p;
-}
-
 static Prim PrimFromName(const std::string& s) {
   if (s == "frame") return Prim::Frame;
   if (s == "flange") return Prim::Flange;
@@ -159,7 +171,7 @@ void Instantiator::RegisterPrimitive(Node* node, const ast::ClassDef* cls) {
   } else if (node->prim == Prim::Joint) {
     node->prim_index = static_cast<int>(tree_.joints.size());
     flat::Joint j;
-    j.name = node->path;
+    j.name = node->Path();
     if (!flat::JointTypeFromName(node->prim_kind, &j.type))
       diags_.Error(DiagCode::BadPrimitive, cls->name_span, "unknown joint kind '" + node->prim_kind + "'");
     j.loc = places_.Loc(node->decl ? node->decl->name_span : cls->name_span);
@@ -194,7 +206,6 @@ void Instantiator::Instantiate(Node* node, const ast::ClassDef* cls) {
   elems.reserve(cls->elements.size());  // enough unless cls extends another class
   node->equations.reserve(cls->equations.size());
   CollectedNames names;
-  names.reserve(elems.capacity());
   Collect(cls, node, nullptr, elems, names, node->equations, 0);
   CheckOuterModifiers(node, cls, elems, names);
 
@@ -226,8 +237,8 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
                                        const CollectedNames& names) {
   for (const auto& key : node->mod.order) {
     bool found = false;
-    if (auto at = names.find(key); at != names.end()) {
-      const Collected& c = elems[at->second];
+    if (const long at = names.Find(key, elems); at >= 0) {
+      const Collected& c = elems[static_cast<size_t>(at)];
       found = true;
       const Mod& pm = node->mod.sub[key];
       if (c.comp->is_protected && !(pm.value && pm.value->from_set)) {
@@ -248,20 +259,32 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
   }
 }
 
+// An outer modifier that gives a value and nothing else (`m = 2.5`): merged over a literal
+// declaration's, it replaces the value and leaves the attributes as declared.
+static bool OnlyAValue(const Mod& m) {
+  return m.value && !m.value->is_final && m.sub.empty() && m.order.empty() && !m.each && !m.is_final &&
+         !m.redeclare && !m.set_only;
+}
+
 // The child node of element c, its modifier merged: outer (the instance's) over the
 // extends clause's over the declaration's.
-std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
-  auto child = std::make_unique<Node>();
+NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
+  auto child = tree_.arena.New();
   child->parent = node;
   child->decl = c.comp;
   child->name = c.comp->name;
-  child->path = JoinPath(node->path, c.comp->name);
   child->depth = node->depth + 1;
   auto it = node->mod.sub.find(c.comp->name);
-  if (it == node->mod.sub.end() && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final && !c.ext_mod.each) {
+  const bool found = it != node->mod.sub.end();
+  if ((!found || OnlyAValue(it->second)) && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final &&
+      !c.ext_mod.each) {
     if (const Mod* shared = DeclarationMod(node, *c.comp)) {
       child->shared_mod = shared;
       child->mod_from_decl = true;
+      if (found) {  // the outer value over the declaration's attributes (Node::mod_over_decl)
+        child->mod = std::move(it->second);
+        child->mod_over_decl = true;
+      }
       return child;
     }
   }
@@ -269,18 +292,18 @@ std::unique_ptr<Node> Instantiator::MakeChild(Node* node, Collected& c) {
   if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
   if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
     Span at = outer.value ? outer.value->span : outer.span;
-    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->path + "' is final and cannot be modified");
+    auto& d = diags_.Error(DiagCode::FinalOverride, at, "'" + child->Path() + "' is final and cannot be modified");
     d.notes.push_back({c.comp->span, "declared final here"});
     outer = Mod{};
   }
-  MergeMods(outer, std::move(c.ext_mod), child->path, diags_);  // Expand reads c's other fields only
+  MergeMods(outer, std::move(c.ext_mod), child.get(), diags_);  // Expand reads c's other fields only
   Mod decl = BuildMod(c.comp->mod.get(), node, nullptr, diags_);
   if (c.is_final) {
     decl.is_final = true;
     decl.final_span = c.comp->span;
     if (decl.value) decl.value->is_final = true;
   }
-  MergeMods(outer, std::move(decl), child->path, diags_);
+  MergeMods(outer, std::move(decl), child.get(), diags_);
   child->mod = std::move(outer);
   child->is_final_decl = c.is_final;
   return child;
@@ -436,7 +459,7 @@ bool Instantiator::ResolveComponentType(Node* node, Node* child, const Collected
 bool Instantiator::ApplyRedeclare(Node* child, const Collected& c, ComponentType* t) {
   if (!c.replaceable) {
     auto& d = diags_.Error(DiagCode::NotReplaceable, child->mod.redeclare->span,
-                           "'" + child->path + "' is not replaceable");
+                           "'" + child->Path() + "' is not replaceable");
     d.notes.push_back({c.comp->span, "declared here without 'replaceable'"});
     return true;
   }
@@ -484,7 +507,7 @@ bool Instantiator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Compon
   int guard = 0;
   while (cls && cls->is_short && ++guard < kMaxExtendsDepth) {
     if (cls->short_mod)
-      MergeMods(tm, BuildMod(cls->short_mod.get(), node, nullptr, diags_), child->path, diags_);
+      MergeMods(tm, BuildMod(cls->short_mod.get(), node, nullptr, diags_), child, diags_);
     if (BuiltinTypeNamed(ast::JoinName(cls->short_base), &t->builtin)) {
       t->is_builtin = true;
       break;
@@ -496,7 +519,7 @@ bool Instantiator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Compon
                  "type '" + t->Name(comp) + "' is not a Real/Integer/Boolean/String");
     return false;
   }
-  MergeMods(child->mod, tm, child->path, diags_);
+  MergeMods(child->mod, tm, child, diags_);
   t->cls = nullptr;
   return true;
 }
@@ -521,13 +544,13 @@ void Instantiator::ExpandVariable(Node* child, const ast::Component& comp, VType
 }
 
 void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   for (const auto& key : mods.order) {
     const Mod& sub = mods.sub.find(key)->second;
     if (IsVarAttribute(key) || sub.set_only) continue;
     auto& d = diags_.Error(DiagCode::UnknownModifier, sub.span,
                            "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
-                               var->path + "'");
+                               var->Path() + "'");
     std::string best = ClosestName(key, {"start", "fixed", "unit", "min", "max", "displayUnit", "quantity", "nominal"});
     d.hint = best.empty() ? "attributes are start, fixed, unit, min, max, displayUnit, quantity, nominal"
                           : "did you mean '" + best + "'?";

@@ -24,7 +24,8 @@ class Evaluator;
 
 // The instance tree and its primitives' ids.
 struct InstanceTree {
-  std::unique_ptr<Node> root;
+  NodeArena arena;  // before root: the nodes end before their memory
+  NodePtr root;
   std::vector<Node*> frames;        // provisional frame id (Node::prim_index) -> its Frame node
   std::vector<Node*> flanges;       // flange id -> its Flange node
   std::vector<flat::Joint> joints;  // joint id -> the joint as far as instantiation knows it (name, type, place)
@@ -50,8 +51,19 @@ class Instantiator {
     bool is_final = false, replaceable = false;
   };
   // `names` indexes `out` by element name (the AST owns the names), so that a class of n
-  // elements is collected in O(n), not O(n^2) (issue 38: 123 000 parameters).
-  using CollectedNames = std::unordered_map<std::string_view, size_t>;
+  // elements is collected in O(n), not O(n^2) (issue 38: 123 000 parameters). A class of a
+  // few elements (nearly every instance) is scanned instead: no hash node per element.
+  class CollectedNames {
+   public:
+    // The index of the element named `name` in `out`, or -1.
+    long Find(std::string_view name, const std::vector<Collected>& out) const;
+    // After out.push_back: the new last element is indexed (once out is past kScan).
+    void Added(const std::vector<Collected>& out);
+
+   private:
+    static constexpr size_t kScan = 32;
+    std::unordered_map<std::string_view, size_t> index_;
+  };
   struct ComponentType {  // what a component's declared (or redeclared) type turned out to be
     const ast::ClassDef* cls = nullptr;  // a class type; null for a builtin
     VType builtin = VType::Real;
@@ -75,7 +87,7 @@ class Instantiator {
   void CheckOuterModifiers(Node* node, const ast::ClassDef* cls, const std::vector<Collected>& elems,
                            const CollectedNames& names);
   const ClassPrim& PrimitiveAnnotation(const ast::ClassDef* cls);
-  std::unique_ptr<Node> MakeChild(Node* node, Collected& c);
+  NodePtr MakeChild(Node* node, Collected& c);
   const Mod* DeclarationMod(Node* node, const ast::Component& comp);
   void Expand(Node* node, Node* child, const Collected& c);
   // Expand's steps.
@@ -101,7 +113,7 @@ class Instantiator {
   struct ArrayShare;
   void InstantiateFirst(Node* el, const ast::ClassDef* tcls, ArrayShare* share);
   bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index, int count);
-  std::unique_ptr<Node> CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
+  NodePtr CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
   Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
   bool SameInEveryElement(const Mod& m, const ShareBinding& b) const;
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <new>
 #include <optional>
 #include <set>
 #include <string>
@@ -130,6 +131,29 @@ class LazyMap {
 
 struct Node;
 
+// Ends a node made by a NodeArena: runs its destructor; its memory goes with the arena's.
+struct NodeRelease {
+  void operator()(Node* n) const;
+};
+using NodePtr = std::unique_ptr<Node, NodeRelease>;
+
+// Where an instance tree's nodes live: blocks of nodes handed out in order and given back
+// all at once when the tree ends (one allocation per kBlockNodes nodes instead of one
+// each). Blocks stay small enough for malloc to reuse them (no fresh pages for compile).
+class NodeArena {
+ public:
+  NodeArena() = default;
+  NodeArena(const NodeArena&) = delete;
+  NodeArena& operator=(const NodeArena&) = delete;
+  ~NodeArena();
+  NodePtr New();
+
+ private:
+  static constexpr size_t kBlockNodes = 64;
+  std::vector<void*> blocks_;
+  size_t used_ = kBlockNodes;  // nodes handed out from the last block
+};
+
 // One binding written somewhere in the source: an expression, where to evaluate it, and
 // the loop iterators in force there; or a value already computed (array slicing).
 struct ModValue {
@@ -163,6 +187,15 @@ struct Mod {
   bool empty() const { return !value && sub.empty() && !Redeclared(); }
 };
 
+// A variable's modifiers as Node::Modifiers() reads them: its value and its attributes
+// (start, unit, min, ...), which may be held in two places (Node::mod_over_decl).
+struct ModView {
+  const ModValue* value;  // null: none
+  const std::map<std::string, Mod, std::less<>>& sub;
+  const std::vector<std::string>& order;
+  bool is_final;
+};
+
 // Shape: a stdlib part drawn as what it is (kind "rod", "box", "cylinder", "sphere", "mesh";
 // lang/elab_shapes.cpp); it only describes, its Body does the physics.
 enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring, Coupling, Shape };
@@ -177,8 +210,12 @@ struct Node {
   bool enabled = true;
   bool is_final_decl = false;  // kVar
   // kVar: shared_mod is its declaration's modifier, shared by every instance not modified
-  // from outside (Instantiator::DeclarationMod), read as its own (not an array element's copy).
+  // from outside or only given a value (Instantiator::DeclarationMod), read as its own (not
+  // an array element's copy).
   bool mod_from_decl = false;
+  // kVar: two-level modifiers. `mod` holds only the value given from outside (`m = 2.5`),
+  // shared_mod (its declaration's) the attributes: no merged copy of them per instance.
+  bool mod_over_decl = false;
   mutable std::uint16_t scans = 0;  // Child()'s scans of a class above kScanChildren elements
   int depth = 0;
   // For the unit check (lang/elab_units.cpp), in the padding before `name` (the node does
@@ -189,7 +226,6 @@ struct Node {
   // all the copies.
   mutable std::int32_t unit_slot = -1;
   std::string name;  // "links[2]" for array elements
-  std::string path;  // "robot.links[2]"
   Node* parent = nullptr;
   const ast::Component* decl = nullptr;  // null for the root and array elements' owner copy
   Mod mod;
@@ -198,11 +234,37 @@ struct Node {
   // reads element 1's instead of a copy: `mod` then stays empty. Read modifiers after
   // instantiation through Modifiers().
   const Mod* shared_mod = nullptr;
-  const Mod& Modifiers() const { return shared_mod ? *shared_mod : mod; }
+  ModView Modifiers() const {
+    const Mod& attrs = shared_mod ? *shared_mod : mod;
+    const Boxed<ModValue>& v = mod_over_decl ? mod.value : attrs.value;
+    return {v ? &*v : nullptr, attrs.sub, attrs.order, attrs.is_final};
+  }
+  // The modifiers as the node's own, to change (a --set of one instance): shared ones
+  // copied first, as the merge of the outer value over the declaration would have made them.
+  Mod& OwnMod() {
+    if (!shared_mod) return mod;
+    Mod whole = *shared_mod;
+    if (mod_over_decl) {
+      whole.value = std::move(mod.value);
+      if (mod.span.valid()) whole.span = mod.span;
+    }
+    mod = std::move(whole);
+    shared_mod = nullptr;
+    mod_over_decl = false;
+    return mod;
+  }
+  // "robot.links[2]" (the root's is empty), made when asked for: most nodes' paths are
+  // only read by a diagnostic, and a string kept in each cost an allocation and its free.
+  std::string Path() const {
+    std::string p;
+    AppendPath(p);
+    return p;
+  }
+  void AppendPath(std::string& out) const { AppendPathFrom(out, out.size()); }
 
   // kClass
   const ast::ClassDef* cls = nullptr;
-  std::vector<std::unique_ptr<Node>> children;
+  std::vector<NodePtr> children;
   mutable std::unique_ptr<std::unordered_map<std::string, Node*>> by_name;  // index of `children`, built by
                                                                            // Child() for large classes
   struct EqSource {
@@ -225,9 +287,15 @@ struct Node {
   LazyMap<int, ModValue> eq_elem_binding;        // from `x[k] = expr`
 
   // kArray
-  std::vector<std::unique_ptr<Node>> elems;
+  std::vector<NodePtr> elems;
 
   static constexpr size_t kScanChildren = 16;
+  void AppendPathFrom(std::string& out, size_t start) const {
+    if (!parent) return;
+    parent->AppendPathFrom(out, start);
+    if (out.size() > start) out += '.';
+    out += name;
+  }
   static constexpr size_t kScanBudget = 256;  // names a larger class's scans compare before it gets an index
   Node* Child(const std::string& n) const {
     // Most classes have a handful of elements: a scan beats hashing. A larger one gets an
@@ -249,6 +317,22 @@ struct Node {
     return it == by_name->end() ? nullptr : it->second;
   }
 };
+
+inline void NodeRelease::operator()(Node* n) const { n->~Node(); }
+
+inline NodeArena::~NodeArena() {
+  for (void* b : blocks_) ::operator delete(b, kBlockNodes * sizeof(Node));
+}
+
+inline NodePtr NodeArena::New() {
+  static_assert(alignof(Node) <= __STDCPP_DEFAULT_NEW_ALIGNMENT__);
+  if (used_ == kBlockNodes) {
+    blocks_.push_back(::operator new(kBlockNodes * sizeof(Node)));
+    used_ = 0;
+  }
+  void* at = static_cast<char*>(blocks_.back()) + used_++ * sizeof(Node);
+  return NodePtr(new (at) Node());
+}
 
 // Where an expression is evaluated: the instance it names things in, and the loop
 // iterators in force there.
@@ -275,9 +359,6 @@ class SourcePlaces {
 // Element `index` (0-based) of `v`, an array value of `count` elements along its first
 // dimension (lang/elab_modifiers.cpp).
 Value ElementOf(const Value& v, int index, int count);
-
-// "prefix.name", or "name" at the root (lang/elab_instantiate.cpp).
-std::string JoinPath(const std::string& prefix, const std::string& name);
 
 // Modelica-style attribute names accepted on variables.
 bool IsVarAttribute(const std::string& name);

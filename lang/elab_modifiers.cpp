@@ -74,14 +74,14 @@ namespace {
 using MergeKeys = SmallVec<const std::string*, 8>;
 
 template <class InnerRef>
-void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const std::string& what, MergeKeys& keys) {
+void MergeModsImpl(Diagnostics& diags, Mod& outer, InnerRef&& inner, const MergeWhat& what, MergeKeys& keys) {
   constexpr bool kMove = !std::is_lvalue_reference_v<InnerRef>;
   auto take = [](auto& x) -> decltype(auto) {
     if constexpr (kMove) return std::move(x);
     else return static_cast<const std::remove_reference_t<decltype(x)>&>(x);
   };
   auto name = [&] {
-    std::string s = what;
+    std::string s = what.Str();
     for (const std::string* k : keys) s += "." + *k;
     return s;
   };
@@ -158,7 +158,13 @@ void NormalizeMerged(Mod& m) {
 
 }  // namespace
 
-void MergeMods(Mod& outer, const Mod& inner, const std::string& what, Diagnostics& diags) {
+std::string MergeWhat::Str() const {
+  if (node_) return node_->Path();
+  if (parts_) return ast::JoinName(*parts_);
+  return text_ ? *text_ : std::string();
+}
+
+void MergeMods(Mod& outer, const Mod& inner, MergeWhat what, Diagnostics& diags) {
   if (Pristine(inner)) return;
   MergeKeys keys;
   MergeModsImpl(diags, outer, inner, what, keys);
@@ -166,7 +172,7 @@ void MergeMods(Mod& outer, const Mod& inner, const std::string& what, Diagnostic
 
 // Merging into a pristine modifier (an element without outer modifiers, the common case)
 // moves the inner tree instead of rebuilding it node by node: no diagnostic can arise.
-void MergeMods(Mod& outer, Mod&& inner, const std::string& what, Diagnostics& diags) {
+void MergeMods(Mod& outer, Mod&& inner, MergeWhat what, Diagnostics& diags) {
   if (Pristine(inner)) return;
   if (Pristine(outer) && OrderMatchesSubs(inner)) {
     outer = std::move(inner);

@@ -187,7 +187,7 @@ Node* SetOverrides::Member(const SetOverride& so, size_t i, Node* n) {
   Span at = At(so, p.begin, p.end);
   if (n->kind != Node::kClass) {
     diags_.Error(DiagCode::UnknownName, at,
-                 "--set " + so.name + ": '" + n->path + "' is a variable and has no member '" + p.name + "'");
+                 "--set " + so.name + ": '" + n->Path() + "' is a variable and has no member '" + p.name + "'");
     return nullptr;
   }
   Node* next = n->Child(p.name);
@@ -196,7 +196,7 @@ Node* SetOverrides::Member(const SetOverride& so, size_t i, Node* n) {
   for (const auto& c : n->children) names.push_back(c->name);
   auto& d = diags_.Error(DiagCode::UnknownName, at,
                          "--set " + so.name + ": no such parameter" +
-                             (n == root_ ? "" : " ('" + n->path + "' has no element '" + p.name + "')"));
+                             (n == root_ ? "" : " ('" + n->Path() + "' has no element '" + p.name + "')"));
   std::string best = ClosestName(p.name, names);
   if (!best.empty()) d.hint = "did you mean '" + (i == 0 ? best : PartText(so.parts, i - 1) + "." + best) + "'?";
   return nullptr;
@@ -213,14 +213,14 @@ Node* SetOverrides::ArrayElement(const SetOverride& so, size_t i, Node* array) {
   }
   if (p.subs.size() != 1) {
     diags_.Error(DiagCode::BadSet, At(so, p.sub_spans[1].first, p.sub_spans.back().second),
-                 "--set " + so.name + ": '" + array->path + "' is an array of components and takes one index");
+                 "--set " + so.name + ": '" + array->Path() + "' is an array of components and takes one index");
     return nullptr;
   }
   long k = p.subs[0];
   if (k < 1 || k > static_cast<long>(array->elems.size())) {
     diags_.Error(DiagCode::IndexOutOfRange, At(so, p.sub_spans[0].first, p.sub_spans[0].second),
                  "--set " + so.name + ": index " + std::to_string(k) + " is out of range 1.." +
-                     std::to_string(array->elems.size()) + " of '" + array->path + "'")
+                     std::to_string(array->elems.size()) + " of '" + array->Path() + "'")
         .hint = "indices are 1-based";
     return nullptr;
   }
@@ -234,16 +234,16 @@ bool SetOverrides::VarElement(const SetOverride& so, size_t i, const Node* n, in
   const std::string& full = so.name;
   const Span subs_span = At(so, p.sub_spans[0].first, p.sub_spans.back().second);
   if (n->kind != Node::kVar) {
-    diags_.Error(DiagCode::BadSet, subs_span, "--set " + full + ": '" + n->path + "' is not an array and takes no index");
+    diags_.Error(DiagCode::BadSet, subs_span, "--set " + full + ": '" + n->Path() + "' is not an array and takes no index");
     return false;
   }
   if (n->shape.empty()) {
-    diags_.Error(DiagCode::BadSet, subs_span, "--set " + full + ": '" + n->path + "' is a scalar and takes no index");
+    diags_.Error(DiagCode::BadSet, subs_span, "--set " + full + ": '" + n->Path() + "' is a scalar and takes no index");
     return false;
   }
   if (p.subs.size() != n->shape.size()) {
     diags_.Error(DiagCode::BadSet, subs_span,
-                 "--set " + full + ": '" + n->path + "' has " + std::to_string(n->shape.size()) +
+                 "--set " + full + ": '" + n->Path() + "' has " + std::to_string(n->shape.size()) +
                      " dimension(s) but " + std::to_string(p.subs.size()) + " indices are given");
     return false;
   }
@@ -254,7 +254,7 @@ bool SetOverrides::VarElement(const SetOverride& so, size_t i, const Node* n, in
     if (k < 1 || k > size) {
       diags_.Error(DiagCode::IndexOutOfRange, At(so, p.sub_spans[d].first, p.sub_spans[d].second),
                    "--set " + full + ": index " + std::to_string(k) + " is out of range 1.." + std::to_string(size) +
-                       " of '" + n->path + "'")
+                       " of '" + n->Path() + "'")
           .hint = "indices are 1-based";
       return false;
     }
@@ -262,7 +262,7 @@ bool SetOverrides::VarElement(const SetOverride& so, size_t i, const Node* n, in
   }
   if (i + 1 != so.parts.size()) {
     diags_.Error(DiagCode::UnknownName, At(so, so.parts[i + 1].begin, so.parts[i + 1].end),
-                 "--set " + full + ": '" + n->path + "' is a variable and has no members");
+                 "--set " + full + ": '" + n->Path() + "' is a variable and has no members");
     return false;
   }
   *elem = static_cast<int>(flat);
@@ -291,33 +291,30 @@ void SetOverrides::Bind() {
                              n->variability == ast::Variability::None && n->parent && !n->parent->parent;
     if (!model_input && (n->kind != Node::kVar || n->variability != ast::Variability::Parameter)) {
       auto& d = diags_.Error(DiagCode::NotParameter, whole,
-                             "--set " + full + ": '" + n->path + "' is not a parameter" +
+                             "--set " + full + ": '" + n->Path() + "' is not a parameter" +
                                  (n->variability == ast::Variability::Constant ? " (it is a constant)" : ""));
       if (n->decl) d.notes.push_back({n->decl->name_span, "declared here"});
       continue;
     }
     if (n->decl && n->decl->is_protected) {
-      auto& d = diags_.Error(DiagCode::NotParameter, whole, "--set " + full + ": '" + n->path + "' is protected");
+      auto& d = diags_.Error(DiagCode::NotParameter, whole, "--set " + full + ": '" + n->Path() + "' is protected");
       d.notes.push_back({n->decl->name_span, "declared protected here"});
       continue;
     }
     if (n->is_final_decl || n->Modifiers().is_final) {
-      auto& d = diags_.Error(DiagCode::FinalOverride, whole, "--set " + full + ": '" + n->path + "' is final");
+      auto& d = diags_.Error(DiagCode::FinalOverride, whole, "--set " + full + ": '" + n->Path() + "' is final");
       if (n->decl) d.notes.push_back({n->decl->name_span, "declared final here"});
       continue;
     }
     if (!so.subscripted) continue;  // bound as a modifier before instantiation
     if (n->state == EvalState::Done) {
       diags_.Error(DiagCode::BadSet, so.value->span,
-                   "--set " + full + ": '" + n->path + "' sizes the model and was fixed before this override")
+                   "--set " + full + ": '" + n->Path() + "' sizes the model and was fixed before this override")
           .hint = "set the parameter it depends on instead";
       continue;
     }
     if (elem >= 0) n->eq_elem_binding[elem] = Binding(so);
-    else {
-      if (n->shared_mod) n->mod = *n->shared_mod, n->shared_mod = nullptr;  // its own copy, to change
-      n->mod.value = Binding(so);
-    }
+    else n->OwnMod().value = Binding(so);  // its own copy, to change
   }
 }
 
@@ -326,21 +323,20 @@ void SetOverrides::Bind() {
 void SetOverrides::BindStart(const SetOverride& so, Node* var, Span whole) {
   if (var->variability == ast::Variability::Parameter || var->variability == ast::Variability::Constant) {
     auto& d = diags_.Error(DiagCode::NotParameter, whole,
-                           "--set " + so.name + ": '" + var->path + "' is a " +
+                           "--set " + so.name + ": '" + var->Path() + "' is a " +
                                (var->variability == ast::Variability::Constant ? "constant" : "parameter") +
                                "; set its value, not its start");
-    d.hint = "--set " + var->path + "=VALUE";
+    d.hint = "--set " + var->Path() + "=VALUE";
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     return;
   }
   if (var->decl && var->decl->is_protected) {
-    auto& d = diags_.Error(DiagCode::NotParameter, whole, "--set " + so.name + ": '" + var->path + "' is protected");
+    auto& d = diags_.Error(DiagCode::NotParameter, whole, "--set " + so.name + ": '" + var->Path() + "' is protected");
     d.notes.push_back({var->decl->name_span, "declared protected here"});
     return;
   }
   if (!so.subscripted) return;
-  if (var->shared_mod) var->mod = *var->shared_mod, var->shared_mod = nullptr;  // its own copy, to change
-  Mod& m = var->mod.sub["start"];
+  Mod& m = var->OwnMod().sub["start"];  // its own copy, to change
   m.value = Binding(so);
   m.span = so.value->span;
 }
@@ -362,21 +358,21 @@ bool SetOverrides::SplitUnit(const ParamOverride& ov, const Program& program, Se
 
 // The factor from the written unit to the target's declared one (same dimension).
 bool SetOverrides::ConvertUnit(const SetOverride& so, Node* var) {
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   auto it = mods.sub.find("unit");
   const ast::Expr* ue = it != mods.sub.end() && it->second.value ? it->second.value->expr : nullptr;
   Unit declared;
   std::string error;
   if (var->kind != Node::kVar || !ue || ue->kind != ast::ExprKind::String || !ParseUnit(ue->text, &declared, &error)) {
     auto& d = diags_.Error(DiagCode::UnitMismatch, so.unit_span,
-                           "--set " + so.name + ": '" + var->path + "' declares no unit to convert to");
+                           "--set " + so.name + ": '" + var->Path() + "' declares no unit to convert to");
     d.hint = "give the value in the unit the model uses, without [..]";
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     return false;
   }
   if (!declared.SameDimension(so.unit)) {
     auto& d = diags_.Error(DiagCode::UnitMismatch, so.unit_span,
-                           "--set " + so.name + ": '" + var->path + "' has unit \"" + ue->text +
+                           "--set " + so.name + ": '" + var->Path() + "' has unit \"" + ue->text +
                                "\", which \"" + diags_.Sources().Text(so.unit_span.file) + "\" cannot be converted to");
     d.notes.push_back({ue->span, "unit declared here"});
     d.hint = "SI form: \"" + declared.ToString() + "\" against \"" + so.unit.ToString() + "\"";
@@ -384,7 +380,7 @@ bool SetOverrides::ConvertUnit(const SetOverride& so, Node* var) {
   }
   if (var->state == EvalState::Done && declared.scale != so.unit.scale) {
     diags_.Error(DiagCode::BadSet, so.unit_span,
-                 "--set " + so.name + ": '" + var->path + "' sizes the model and was fixed before its unit was converted")
+                 "--set " + so.name + ": '" + var->Path() + "' sizes the model and was fixed before its unit was converted")
         .hint = "give the value in \"" + ue->text + "\"";
     return false;
   }

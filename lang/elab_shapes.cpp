@@ -62,7 +62,7 @@ void EmitShape(Node* n, Evaluator& eval, const SourcePlaces& places, Diagnostics
     return;
   }
   flat::Shape s;
-  s.name = n->path;
+  s.name = n->Path();
   s.kind = row->shape;
   s.loc = places.Loc(n->decl ? n->decl->name_span : Span{});
   for (int i = 0; i < 3; ++i) {
@@ -70,7 +70,7 @@ void EmitShape(Node* n, Evaluator& eval, const SourcePlaces& places, Diagnostics
     Node* c = n->Child(row->size[i]);
     if (!c || c->kind != Node::kVar) {
       diags.Error(DiagCode::BadPrimitive, n->cls ? n->cls->name_span : Span{},
-                   "shape '" + n->path + "' lacks '" + row->size[i] + "'");
+                   "shape '" + n->Path() + "' lacks '" + row->size[i] + "'");
       return;
     }
     Value v = eval.GetVar(c, c->decl ? c->decl->name_span : Span{});

@@ -40,29 +40,33 @@ flat::ParamType ParamTypeOf(VType t) {
                                : flat::ParamType::String;
 }
 
-// The flat name of element k (row-major) of `path` of `shape`, "p" or "p[1,2]" (1-based),
-// appended to `name`. `idx` is scratch of shape.size() entries.
-void AppendElementName(std::string& name, const std::string& path, const Dims& shape, size_t k, Dims& idx) {
-  name.append(path);
+// The subscript of element k (row-major) of an array of `shape`, "[1,2]" (1-based),
+// appended to `name`; nothing for a scalar. `idx` is scratch of shape.size() entries.
+void AppendSubscript(std::string& name, const Dims& shape, size_t k, Dims& idx) {
   if (shape.empty()) return;
   size_t rem = k;
   for (size_t d = shape.size(); d-- > 0;) {
     idx[d] = static_cast<int>(rem % static_cast<size_t>(shape[d])) + 1;
     rem /= static_cast<size_t>(shape[d]);
   }
-  char buf[16];
-  name += '[';
+  // Written into a buffer and appended at once (a name per element: thousands of them).
+  char buf[64];
+  size_t n = 0;
+  buf[n++] = '[';
   for (size_t d = 0; d < idx.size(); ++d) {
-    if (d) name += ',';
-    name.append(buf, static_cast<size_t>(std::to_chars(buf, buf + sizeof buf, idx[d]).ptr - buf));
+    if (n > sizeof buf - 13) name.append(buf, n), n = 0;  // room for ',' and an int, then ']'
+    if (d) buf[n++] = ',';
+    n = static_cast<size_t>(std::to_chars(buf + n, buf + sizeof buf, idx[d]).ptr - buf);
   }
-  name += ']';
+  buf[n++] = ']';
+  name.append(buf, n);
 }
 
-std::string ElementName(const std::string& path, const Dims& shape, size_t k, Dims& idx) {
+// The flat name of element k of variable `var` of `shape`: "p" or "p[1,2]".
+std::string ElementName(const Node* var, const Dims& shape, size_t k, Dims& idx) {
   std::string name;
-  name.reserve(path.size() + 12 * shape.size() + 2);
-  AppendElementName(name, path, shape, k, idx);
+  var->AppendPath(name);
+  AppendSubscript(name, shape, k, idx);
   return name;
 }
 
@@ -86,7 +90,7 @@ void Evaluator::ReserveParams(size_t n) {
 const Value& Evaluator::GetVar(Node* var, Span use_span) {
   if (var->state == EvalState::Done) return var->value;
   if (var->state == EvalState::Evaluating) {
-    auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->path + "' is defined in terms of itself");
+    auto& d = diags_.Error(DiagCode::Circular, use_span, "'" + var->Path() + "' is defined in terms of itself");
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     var->state = EvalState::Done;
     var->value = Value::Invalid();
@@ -130,13 +134,13 @@ Value Evaluator::JointStateValue(Node* var) {
 Value Evaluator::InputValue(Node* var, Span use_span) {
   const Span at = var->decl ? var->decl->name_span : use_span;
   if (var->vtype != VType::Real) {
-    diags_.Error(DiagCode::TypeMismatch, at, "input '" + var->path + "' is " + VTypeName(var->vtype) + "; inputs are Real")
+    diags_.Error(DiagCode::TypeMismatch, at, "input '" + var->Path() + "' is " + VTypeName(var->vtype) + "; inputs are Real")
         .hint = "declare it 'input Real " + var->name + ";'";
     return Value::Invalid();
   }
   for (long d : var->shape)
     if (d < 0) {
-      diags_.Error(DiagCode::SizeMismatch, at, "input '" + var->path + "' needs a fixed size")
+      diags_.Error(DiagCode::SizeMismatch, at, "input '" + var->Path() + "' needs a fixed size")
           .hint = "give its size, as in 'input Real f[3];'";
       return Value::Invalid();
     }
@@ -149,7 +153,7 @@ Value Evaluator::InputValue(Node* var, Span use_span) {
   const flat::SourceLoc loc = places_.Loc(at);
   const std::string unit = ReadParamAttributes(var).unit;  // the unit check reads it from the declaration too
   for (size_t k = 0; k < count; ++k) {
-    m_->inputs.push_back({ElementName(var->path, var->shape, k, idx), loc, unit});
+    m_->inputs.push_back({ElementName(var, var->shape, k, idx), loc, unit});
     v.elements.push_back(m_->exprs.Input(static_cast<int>(m_->inputs.size() - 1)));
   }
   return v;
@@ -158,10 +162,10 @@ Value Evaluator::InputValue(Node* var, Span use_span) {
 const ModValue* Evaluator::VarBinding(Node* var) {
   const ModValue* binding = nullptr;
   if (var->eq_binding) binding = &*var->eq_binding;
-  if (const Mod& mods = var->Modifiers(); mods.value) {
+  if (const ModView mods = var->Modifiers(); mods.value) {
     if (binding) {
       auto& d = diags_.Error(DiagCode::ConflictingEquation, var->eq_binding->span,
-                             "'" + var->path + "' already has a value from its declaration or a modifier");
+                             "'" + var->Path() + "' already has a value from its declaration or a modifier");
       d.notes.push_back({mods.value->span, "value given here"});
     }
     binding = &*mods.value;
@@ -179,7 +183,7 @@ Value Evaluator::UnboundValue(Node* var, Span use_span) {
     for (size_t k = 0; k < count; ++k) {
       if (var->eq_elem_binding.count(static_cast<int>(k))) continue;
       auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                             "element " + std::to_string(k + 1) + " of '" + var->path + "' has no equation");
+                             "element " + std::to_string(k + 1) + " of '" + var->Path() + "' has no equation");
       d.hint = "give every element an equation, or bind the whole variable";
       break;
     }
@@ -193,8 +197,8 @@ Value Evaluator::UnboundValue(Node* var, Span use_span) {
     return v;
   }
   auto& d = diags_.Error(DiagCode::MissingValue, var->decl ? var->decl->name_span : use_span,
-                         std::string(is_param ? "parameter" : "variable") + " '" + var->path + "' has no value");
-  d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->path + "=..."
+                         std::string(is_param ? "parameter" : "variable") + " '" + var->Path() + "' has no value");
+  d.hint = is_param ? "give it a binding (parameter Real x = 1;), a modifier, or --set " + var->Path() + "=..."
                     : "bind it in its declaration (Real x = ...;) or with an equation 'x = ...;'";
   if (use_span.valid() && var->decl && use_span.begin != var->decl->name_span.begin)
     d.notes.push_back({use_span, "used here"});
@@ -215,7 +219,7 @@ Value Evaluator::BoundValue(Node* var, const ModValue& binding) {
   }
   if (!shape_ok) {
     auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::SizeMismatch, where,
-                           "'" + var->path + "' has size " + ShapeText(var->shape) + " but its value has size " +
+                           "'" + var->Path() + "' has size " + ShapeText(var->shape) + " but its value has size " +
                                ShapeText(v.shape));
     if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
     return Value::Invalid();
@@ -233,7 +237,7 @@ bool Evaluator::CheckValueType(Node* var, const ModValue& binding, const Value& 
   }
   if (ok) return true;
   auto& d = diags_.Error(binding.from_set ? DiagCode::BadSet : DiagCode::TypeMismatch, where,
-                         "'" + var->path + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
+                         "'" + var->Path() + "' is " + VTypeName(var->vtype) + " but its value is " + VTypeName(v.type));
   if (var->decl) d.notes.push_back({var->decl->name_span, "declared here"});
   if (var->vtype == VType::Integer) d.hint = "use a whole number, or integer(...)";
   return false;
@@ -257,7 +261,7 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
   for (ExprId x : v.elements) {
     if (x >= 0 && m_->exprs.DependsOnTimeOrState(x)) {
       auto& d = diags_.Error(DiagCode::NotConstantExpr, binding ? binding->span : use_span,
-                             "the value of parameter '" + var->path + "' depends on time or on the motion");
+                             "the value of parameter '" + var->Path() + "' depends on time or on the motion");
       d.hint = "parameters are fixed before the simulation; use a variable (Real x = ...) instead";
       return Value::Invalid();
     }
@@ -270,9 +274,17 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
   // A constant is folded (no flat parameter); the others are made in place in the table.
   const bool folded = var->vtype != VType::String && var->variability == ast::Variability::Constant;
   std::string folded_name;
+  // The variable's path, walked up the tree once for all its elements. Nothing below
+  // evaluates (the attributes were read above), so the scratch is not reused meanwhile.
+  std::string& path = path_scratch_;
+  path.clear();
+  var->AppendPath(path);
   for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
     flat::Param folded_param;
-    auto write_name = [&](std::string& out) { AppendElementName(out, var->path, var->shape, k, idx); };
+    auto write_name = [&](std::string& out) {
+      out += path;
+      AppendSubscript(out, var->shape, k, idx);
+    };
     if (folded) folded_name.clear(), write_name(folded_name);
     flat::Param& p = folded ? folded_param : m_->AddParamWith(write_name);
     p.type = ParamTypeOf(var->vtype);
@@ -295,7 +307,7 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
 
 Evaluator::ParamAttributes Evaluator::ReadParamAttributes(Node* var) {
   ParamAttributes attrs;
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   auto attr_num = [&](const char* key, double* out) {
     auto it = mods.sub.find(key);
     if (it == mods.sub.end() || !it->second.value) return;
@@ -350,7 +362,7 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
     const ast::RefPart& part = ref.parts[pi];
     if (pi > 0 && n->kind == Node::kArray) {
       auto& d = diags_.Error(DiagCode::TypeMismatch, ref.parts[pi - 1].span,
-                             "'" + n->path + "' is an array of components; index it before '." + part.name + "'");
+                             "'" + n->Path() + "' is an array of components; index it before '." + part.name + "'");
       d.hint = "write " + ref.parts[pi - 1].name + "[i]." + part.name + " inside a for-loop";
       return nullptr;
     }
@@ -363,7 +375,7 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
         for (auto& c : where->children) cands.push_back(c->name);
       auto& d = diags_.Error(DiagCode::UnknownName, part.span,
                              pi == 0 ? "unknown name '" + part.name + "'"
-                                     : "'" + n->path + "' has no member '" + part.name + "'");
+                                     : "'" + n->Path() + "' has no member '" + part.name + "'");
       std::string best = ClosestName(part.name, cands);
       if (!best.empty()) d.hint = "did you mean '" + best + "'?";
       return nullptr;
@@ -381,14 +393,14 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
         if (k < 1 || k > static_cast<long>(n->elems.size())) {
           diags_.Error(DiagCode::IndexOutOfRange, part.subscripts[0]->span,
                        "index " + std::to_string(k) + " is out of range 1.." + std::to_string(n->elems.size()) +
-                           " of '" + n->path + "'");
+                           " of '" + n->Path() + "'");
           return nullptr;
         }
         n = n->elems[static_cast<size_t>(k - 1)].get();
       } else if (n->kind == Node::kVar && pi + 1 == ref.parts.size()) {
         size_t flatk = 0, stride = 1;
         if (part.subscripts.size() != n->shape.size()) {
-          diags_.Error(DiagCode::IndexOutOfRange, part.span, "'" + n->path + "' needs " +
+          diags_.Error(DiagCode::IndexOutOfRange, part.span, "'" + n->Path() + "' needs " +
                                                                 std::to_string(n->shape.size()) + " subscript(s)");
           return nullptr;
         }
@@ -406,7 +418,7 @@ Node* Evaluator::ResolveNode(const ast::Expr& ref, const Ctx& ctx, int* elem) {
         }
         if (elem) *elem = static_cast<int>(flatk);
       } else {
-        diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->path + "' is not an array");
+        diags_.Error(DiagCode::TypeMismatch, part.span, "'" + n->Path() + "' is not an array");
         return nullptr;
       }
     }

@@ -115,7 +115,7 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   elab::Evaluator eval(out, places, diags);
   eval.ReadDataFrom(options.data_files);
   elab::InstanceTree tree;
-  tree.root = std::make_unique<elab::Node>();
+  tree.root = tree.arena.New();
   elab::SetOverrides sets(diags);
   if (!sets.Parse(options.overrides, program, tree.root.get())) return false;
   // Kept to the end with its per-class caches: freeing them between the phases fragments

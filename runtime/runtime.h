@@ -106,6 +106,10 @@ const std::string& ErrorMessage(const Workspace& ws);
 // For trees; -1 on a program with constraint rows (ErrorMessage says so). Lesser's diagonal
 // speeds (sim/diagonal_speeds.h) factor it.
 int MassMatrix(const Program& program, Workspace& ws, double t, const double* y, double* M);
+// The same M where the program has constraint rows A u = 0 (closed loops, rolling contacts,
+// couplings): the tree's, the rows' reactions not in it (M du = A^T mu + F; sim/end_stops.cpp
+// scales its reactions' round-off by it).
+int UnconstrainedMassMatrix(const Program& program, Workspace& ws, double t, const double* y, double* M);
 
 // Closed loops through singular configurations (runtime/engine/branch_monitor.cpp;
 // docs/constraints.md "Singular configurations"). After each accepted step, CheckBranch(y)
@@ -220,6 +224,15 @@ std::vector<FrictionJoint> FrictionJoints(const Program& program);
 void SetFrictionMode(Workspace& ws, int i, int mode, double tau);
 // Friction joint i's normal force N in the last evaluation of ws.
 double FrictionNormal(const Workspace& ws, int i);
+// Friction joint i's speed as the last evaluation took it: beside constraint rows a dependent
+// speed is solved from the independent ones, not read from y.
+double FrictionSpeed(const Program& program, const Workspace& ws, int i);
+// The friction joints' normal impulses in a jump du of the free speeds (nu entries) at (t, y):
+// per friction joint i, P[3i..3i+2] the impulse its parent side gives the subtree below it
+// (sum of m dv_cm) across its axis, world axes; |P_i| is mu N's impulsive N. Trees only: 0,
+// UnpackState's codes, or -1 (ErrorMessage says why). runtime/engine/friction_impulse.cpp
+int FrictionImpulseNormals(const Program& program, Workspace& ws, double t, const double* y, const double* du,
+                           double* P);
 
 // Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
 // when the program has none. runtime/engine/plane_contacts.cpp

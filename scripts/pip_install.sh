@@ -56,7 +56,7 @@ else
   "$build_dir/pyvenv-numpy2/bin/python" -m pip install "${pip_quiet[@]}" --upgrade numpy pytest pandas
   held="$build_dir/pyvenv/numpy-constraint.txt"
   echo "numpy==$("$build_dir/pyvenv/bin/python" -c 'import numpy; print(numpy.__version__)')" > "$held"
-  "$build_dir/pyvenv/bin/python" -m pip install "${pip_quiet[@]}" -c "$held" pandas pint  # pint: tests/lang/units_oracle.py
+  "$build_dir/pyvenv/bin/python" -m pip install "${pip_quiet[@]}" -c "$held" pandas
 fi
 for venv in "${venvs[@]}"; do
   echo "pip_install: $venv: kanesim with NumPy $("$venv/bin/python" -c 'import numpy; print(numpy.__version__)')"

@@ -18,6 +18,6 @@ cmake --build "$build_dir" -j"$jobs"
 if compgen -G "$build_dir/python/kanesim/_kanesim*.so" >/dev/null; then
   BUILD_DIR="$build_dir" scripts/pip_install.sh
 fi
-# FMPy for the FMU tests (tests/fmi), in $build_dir/fmpyvenv.
+# FMPy for the FMU tests (tests/fmi) and pint for lang.units_against_pint, in $build_dir/fmpyvenv.
 BUILD_DIR="$build_dir" scripts/fmpy_venv.sh
 ctest --test-dir "$build_dir" --output-on-failure -j"$jobs"

@@ -11,7 +11,8 @@
 // and the side rests from the impact on, its rest logged at t_inf (a time event).
 #include "sim/end_stops.h"
 
-#include "sim/impulse.h"  // SolveSmall
+#include "runtime/program/program.h"  // Program::rows
+#include "sim/impulse.h"                // SolveSmall
 
 #include <algorithm>
 #include <cmath>
@@ -217,7 +218,7 @@ int EndStopEvents::ReactionNoise(rt::Workspace& ws, double t, const double* y, c
                                  const std::vector<double>& bias, std::vector<double>* noise) {
   const size_t nu = static_cast<size_t>(nu_);
   M_.resize(nu * nu);
-  if (int s = rt::MassMatrix(program_, ws, t, y, M_.data()); s != 0) return s;
+  if (int s = rt::UnconstrainedMassMatrix(program_, ws, t, y, M_.data()); s != 0) return s;
   std::vector<double> Ma(nu, 0.0);  // |M| |a|
   for (size_t j = 0; j < nu; ++j)
     for (size_t i = 0; i < nu; ++i) Ma[i] += std::abs(M_[j * nu + i] * a_[j]);
@@ -302,6 +303,12 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
     const std::vector<char> before = RestingSet();
     side.resting = false;
     return Settle(ws, t, y, before);
+  }
+  // Closed loops, rolling contacts: the impulse keeps A u = 0, so the state is first put on
+  // the constraints (else the integrator's drift off them, ~tolerance, stays after it).
+  if (!program_.rows.empty()) {
+    std::vector<double> z(static_cast<size_t>(nq_ + nu_));
+    if (rt::ProjectByPartition(program_, ws, t, y, z.data()) == 0) std::copy(z.begin(), z.end(), y);
   }
   double gap = 0.0, c = 0.0;
   if (int s = Row(ws, t, y, side, &gap, J_.data(), &c); s != 0) return s;

@@ -142,6 +142,11 @@ class EngineOde final : public OdeSystem {
         });
         events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
       }
+      if (stick_ && s == 0) {  // exact friction: a joint the jump set moving slides, one it stopped decides
+        const size_t logged_stick = stick_->Log().size();
+        s = stick_->Refresh(ws_, t, y, before.data(), stops_ ? stops_->RestSpeed() : 0.0);
+        events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged_stick), stick_->Log().end());
+      }
     }
     if (s == 0 && i >= NumStops() && bridge_ && bridge_->monitor) rt::ForgetBranchReference(*bridge_->monitor);
     if (s == 0 && first < events_.size()) AddChanges(state_names_, before.data(), y, &events_[first], &events_.back());
@@ -166,6 +171,7 @@ class EngineOde final : public OdeSystem {
     if (from_monitor_) return BridgeError(*bridge_);
     if (stops_ && !stops_->Error().empty()) return stops_->Error();  // an impulse or reaction without solution
     if (whens_ && !whens_->Error().empty()) return whens_->Error();
+    if (stick_ && !stick_->Error().empty()) return stick_->Error();  // stuck joints the constraints make dependent
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }

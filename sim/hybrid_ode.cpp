@@ -21,7 +21,9 @@ struct HybridOde::Impl {
         lift(*program),
         stick(*program),
         whens(std::make_unique<WhenEvents>(*program)),
-        ode(*program, *ws, /*row_energy=*/false) {
+        ode(*program, *ws, /*row_energy=*/false),
+        run_rtol(rtol) {
+    whens->SetTolerance(rtol);
     rt::SetInputSource(*ws, &inputs);
     ode.SetInputs(&inputs);
     if (stops.Active()) ode.SetStops(&stops);
@@ -40,6 +42,7 @@ struct HybridOde::Impl {
   detail::EngineOde ode;
   std::vector<double> g;  // every event function, the graze guards too (scratch)
   std::vector<EventRecord> start_events;  // Start's, with their jumps
+  double run_rtol;                        // the when clauses' accumulation test
 };
 
 HybridOde::HybridOde(std::shared_ptr<const rt::Program> program, double rtol, double atol)
@@ -93,7 +96,8 @@ std::string HybridOde::StartModes(double t0, double* y0) {
   }
   if (m.lift.Active())
     if (std::string why = m.lift.Cause(t0, y0, -1); !why.empty()) return why;
-  if (m.stick.Active() && m.stick.Start(*m.ws, t0, y0) != 0) return "friction at the start: " + rt::ErrorMessage(*m.ws);
+  if (m.stick.Active() && m.stick.Start(*m.ws, t0, y0) != 0)
+    return "friction at the start: " + (m.stick.Error().empty() ? rt::ErrorMessage(*m.ws) : m.stick.Error());
   return "";
 }
 
@@ -149,6 +153,7 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   m.stops.SetResting(std::vector<double>(modes.begin(), modes.begin() + static_cast<long>(n_stops)));
   m.stick.SetModes(std::vector<double>(modes.begin() + static_cast<long>(n_stops), modes.end()));
   m.whens = std::make_unique<WhenEvents>(*m.program);  // no terminate fired in the restored state
+  m.whens->SetTolerance(m.run_rtol);
   if (m.whens->Active()) m.ode.SetWhens(m.whens.get());
   return true;
 }

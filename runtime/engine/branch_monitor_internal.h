@@ -30,6 +30,12 @@ inline double Metric(const Program& p, const Workspace& ws, const std::vector<Ve
 int TangentMetric(const Program& p, Workspace& ws, double t, const double* y, const double* raw, Eigen::MatrixXd* beta,
                   Eigen::MatrixXd* Mr, Eigen::VectorXd* r);
 
+// x = W F, the speeds' jump for the impulse F with the rows' reactions (W = beta Mr^-1
+// beta^T, the constrained inverse mass); -1 naming `what` where the rows fix F's motion.
+// In end_stops.cpp.
+int ConstrainedInverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F,
+                                const std::string& what, double* x);
+
 struct BranchMonitor {
   std::unique_ptr<Workspace, void (*)(Workspace*)> ws{nullptr, [](Workspace*) {}};
   bool have_ref = false, in_zone = false;

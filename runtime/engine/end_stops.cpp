@@ -3,6 +3,8 @@
 // and the mass matrix's response to an impulse.
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -34,14 +36,19 @@ std::vector<EndStop> EndStops(const Program& p) {
   return out;
 }
 
-// Closed loops and rolling contacts: the impulse e_k lambda plus the rows' reactions A^T mu
-// keeping A du = 0 (M du = A^T mu + e_k lambda) moves the speeds in the tangent space,
-// du = beta z with (beta^T M beta) z = beta^T e_k: x = beta Mr^-1 beta_k^T. x_k ~ 0 where the
-// rows fix speed k (a dead point): -1, the jump it would need is unbounded.
-static int ConstrainedColumns(const Program& p, Workspace& ws, double t, const double* y, const int* ks, int m,
-                              double* X) {
+// Closed loops and rolling contacts: the impulse F lambda plus the rows' reactions A^T mu
+// keeping A du = 0 (M du = A^T mu + F lambda) moves the speeds in the tangent space,
+// du = beta z with (beta^T M beta) z = beta^T F: x = W F, W = beta Mr^-1 beta^T. F^T W F ~ 0
+// where the rows fix the motion F acts on (a dead point): -1, the jump would need an
+// unbounded impulse. `what` names that motion in the message.
+int ConstrainedInverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F,
+                                const std::string& what, double* x) {
   Eigen::MatrixXd beta, Mr;
   Eigen::VectorXd r;
+  if (p.solver == SolverPath::Sparse) {  // the multiplier form has no tangent basis
+    ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
+    return -1;
+  }
   if (TangentMetric(p, ws, t, y, nullptr, &beta, &Mr, &r) != 0) return 1;
   if (beta.rows() != p.nu) {
     ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
@@ -55,16 +62,14 @@ static int ConstrainedColumns(const Program& p, Workspace& ws, double t, const d
     return -1;
   }
   const Eigen::MatrixXd W = beta * llt.solve(beta.transpose());  // the constrained inverse mass
+  const Eigen::Map<const Eigen::VectorXd> f(F, p.nu);
+  const Eigen::VectorXd col = W * f;
   const double scale = W.diagonal().cwiseAbs().maxCoeff();
-  for (int j = 0; j < m; ++j) {
-    const int k = ks[j];
-    if (!(W(k, k) > kDeadPoint * scale)) {
-      ws.error = "the closed loops or contacts fix '" + StateNames(p)[static_cast<size_t>(p.nq + k)] +
-                 "' here (a dead point: its jump would need an unbounded impulse)";
-      return -1;
-    }
-    for (int i = 0; i < p.nu; ++i) X[static_cast<size_t>(j) * static_cast<size_t>(p.nu) + static_cast<size_t>(i)] = W(i, k);
+  if (!(f.dot(col) > kDeadPoint * scale * f.squaredNorm())) {
+    ws.error = "the closed loops or contacts fix " + what + " here (a dead point: its jump would need an unbounded impulse)";
+    return -1;
   }
+  for (int i = 0; i < p.nu; ++i) x[i] = col[i];
   return 0;
 }
 
@@ -77,7 +82,19 @@ int InverseMassColumns(const Program& p, Workspace& ws, double t, const double* 
     return -1;
   }
   if (m == 0) return 0;
-  if (!p.rows.empty()) return ConstrainedColumns(p, ws, t, y, ks, m, X);
+  if (!p.rows.empty()) {  // (one factorization per column: TangentMetric's basis for each)
+    for (int j = 0; j < m; ++j) {
+      std::vector<double> e(static_cast<size_t>(p.nu), 0.0);
+      e[static_cast<size_t>(ks[j])] = 1.0;
+      ++ws.inverse_mass_factorizations;
+      if (int s = ConstrainedInverseMassTimes(p, ws, t, y, e.data(),
+                                              "'" + StateNames(p)[static_cast<size_t>(p.nq + ks[j])] + "'",
+                                              X + static_cast<size_t>(j) * static_cast<size_t>(p.nu));
+          s != 0)
+        return s;
+    }
+    return 0;
+  }
   // M depends on t and q only: the factor of the last call is kept for the same (t, q) (the
   // event functions after a right-hand side at that state, the stops' after the friction's).
   std::vector<double>& at = ws.inverse_mass_at;

@@ -139,6 +139,10 @@ int MassMatrix(const Program& p, Workspace& ws, double t, const double* y, doubl
     ws.error = "the mass matrix of the free speeds is available for trees only (closed loops and contacts: TODO(#44))";
     return -1;
   }
+  return UnconstrainedMassMatrix(p, ws, t, y, M);
+}
+
+int UnconstrainedMassMatrix(const Program& p, Workspace& ws, double t, const double* y, double* M) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   PositionKinematics(p, ws);
   VelocityKinematics(p, ws);

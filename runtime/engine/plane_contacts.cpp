@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "runtime/engine/branch_monitor_internal.h"
 #include "runtime/kane/kane.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/program.h"
@@ -49,9 +50,8 @@ int PlaneContactRow(const Program& p, Workspace& ws, double t, const double* y, 
 // = s M^-1 F exactly. The second pass takes s so large that the difference is not lost
 // in the rounding of udot(Q) (relative error ~ 1e-3 eps).
 int InverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F, double* x) {
-  if (!p.rows.empty() || FrictionReadsNormalForce(p)) {
-    ws.error = p.rows.empty() ? "an impulse in a mechanism with Coulomb friction mu N is not supported yet"
-                              : "an impulse in a mechanism with closed loops or contacts is not supported yet";
+  if (FrictionReadsNormalForce(p)) {
+    ws.error = "an impulse in a mechanism with Coulomb friction mu N is not supported yet";
     return -1;
   }
   double f_max = 0.0;
@@ -60,6 +60,7 @@ int InverseMassTimes(const Program& p, Workspace& ws, double t, const double* y,
     std::fill(x, x + p.nu, 0.0);
     return f_max == 0.0 ? 0 : -1;
   }
+  if (!p.rows.empty()) return ConstrainedInverseMassTimes(p, ws, t, y, F, "the motion along a contact's normal", x);
   std::vector<double> ydot(static_cast<size_t>(p.nq + p.nu));
   if (int s = Derivative(p, ws, t, y, ydot.data()); s != 0) return s;
   const double* a0 = ydot.data() + p.nq;

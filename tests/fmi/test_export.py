@@ -14,6 +14,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from conftest import EXAMPLES, kanesim
+from fmu_models import single_pendulum
 
 DDP = os.path.join(EXAMPLES, "damped_driven_pendulum.mech")
 DOUBLE = os.path.join(EXAMPLES, "double_pendulum.mech")
@@ -127,16 +128,7 @@ def test_fmi3_lists_time_as_the_independent_variable_and_derivatives_by_value_re
         assert "binaries/x86_64-linux/DampedDrivenPendulum.so" in z.namelist()
 
 
-STOPPED = """
-model Stopped "A pendulum that hits an end stop"
-  World world;
-  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3), q_min = -0.5, q_max = 0.5);
-  Rod rod(L = 1, m = 1);
-equation
-  connect(world.frame_b, hinge.frame_a);
-  connect(hinge.frame_b, rod.frame_a);
-end Stopped;
-"""
+STOPPED = single_pendulum("Stopped", "A pendulum that hits an end stop", q_min=-0.5, q_max=0.5)
 
 
 def test_end_stops_are_handled_in_co_simulation(export, write_model, tmp_path):
@@ -163,13 +155,18 @@ def test_kanesim_export_rejects_what_it_cannot_export(tmp_path):
 
 # Units of every kind of variable, from the model's unit check: a spherical joint's quaternion
 # ("1") and rates, a prismatic joint, parameters in N.m/rad and mm (a factor), an output
-# whose unit is inferred (m), an input's unit attribute (N).
+# whose unit is inferred (m), an input's unit attribute (N); and, declaring none, a parameter
+# whose unit is inferred from its binding (half_gap: mm), a parameter and an input inferred
+# from their use beside a force (preload, nudge: N).
 UNITS = """
 model Units
   input Real push(unit = "N");
+  input Real nudge;
   parameter Real k(unit = "N/m") = 2;
   parameter Real c(unit = "N.m/rad") = 0.5;
   parameter Real gap(unit = "mm") = 5;
+  parameter Real half_gap = gap / 2;
+  parameter Real preload = 0.1;
   World world;
   Spherical ball;
   Rod rod(L = 1, m = 1);
@@ -183,7 +180,7 @@ equation
   connect(ball.frame_b, hub.frame_a);
   connect(world.frame_b, slide.frame_a);
   connect(slide.frame_b, b.frame_a);
-  slide.tau = -k * slide.q + push;
+  slide.tau = -k * slide.q + push + preload + nudge;
 end Units;
 """
 
@@ -198,6 +195,8 @@ def test_units_and_their_definitions_come_from_the_unit_check(export, write_mode
     assert unit["ball.u[2]"] == "rad/s" and unit["der(ball.u[2])"] == "rad/s2"
     assert unit["slide.q"] == "m" and unit["der(slide.u)"] == "m/s2"
     assert unit["c"] == "N.m/rad" and unit["gap"] == "mm" and unit["height"] == "m" and unit["push"] == "N"
+    # Declared nowhere, inferred by the check (without it an FMI tool shows them unitless).
+    assert unit["half_gap"] == "mm" and unit["preload"] == "N" and unit["nudge"] == "N"
     base = {u.name: u.baseUnit for u in md.unitDefinitions}
     exps = lambda b: {a: int(getattr(b, a)) for a in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
                       if getattr(b, a) not in (None, 0, "0")}

@@ -154,7 +154,7 @@ TEST(ImportText, KeepsNamesAndSaysWhatItDropsOrCannotImpose) {
   import::Result r = Import(ReadText(kData + "/every_joint.urdf"));
   ASSERT_TRUE(r.ok) << r.diagnostics;
   // Names that are not identifiers: sanitized, the URDF name in a comment.
-  EXPECT_NE(r.mech.find("Revolute rev_1(axis = {0, 0.6, 0.8})"), std::string::npos) << r.mech;
+  EXPECT_NE(r.mech.find("Revolute rev_1(axis = {0, 0.6, 0.8}, q_min = -2, q_max = 2)"), std::string::npos) << r.mech;
   EXPECT_NE(r.mech.find("(URDF name 'rev-1')"), std::string::npos);
   EXPECT_NE(r.mech.find("BodyShape arm_1(m = 2.5"), std::string::npos);  // drawn by its visual, not its inertia box
   EXPECT_NE(r.mech.find("model every_joint "), std::string::npos);
@@ -169,8 +169,10 @@ TEST(ImportText, KeepsNamesAndSaysWhatItDropsOrCannotImpose) {
             std::string::npos);
   EXPECT_EQ(r.diagnostics.find("warning"), std::string::npos) << r.diagnostics;
   // <dynamics>, limits, collisions and the missing mesh.
-  EXPECT_NE(r.mech.find("slide.tau = -(0.2 * slide.u + 0.1 * tanh(slide.u / 0.001));"), std::string::npos);
-  EXPECT_NE(r.mech.find("limit lower 0 upper 0.2 effort 100 velocity 1 (recorded"), std::string::npos);
+  EXPECT_NE(r.mech.find("slide.tau = -(0.2 * slide.u);"), std::string::npos) << r.mech;
+  EXPECT_NE(r.mech.find("friction_force = 0.1, friction_exact = true"), std::string::npos) << r.mech;
+  EXPECT_NE(r.mech.find("limit lower 0 upper 0.2 effort 100 velocity 1 (the end stops q_min, q_max, with its <mimic> followers')"),
+            std::string::npos);
   EXPECT_NE(r.diagnostics.find("note: 1 <collision> elements ignored"), std::string::npos) << r.diagnostics;
   EXPECT_NE(r.diagnostics.find("note: mesh 'package://no_such_package/meshes/arm2.stl' not found"), std::string::npos);
   // Visual primitives: the URDF's centred shapes moved onto the stdlib's end-face frames.

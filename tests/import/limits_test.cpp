@@ -1,7 +1,7 @@
 // URDF <limit lower upper> as end stops (stdlib q_min, q_max; docs/import.md), `--limits
 // ignore`, and <mimic> elements on fixed joints (ignored, as Pinocchio and MuJoCo do). If
-// these fail, an imported joint passes through its limits, a robot with couplings becomes a
-// refused model (K318), `ignore` changes the motion, or Talos's grippers are refused again.
+// these fail, an imported joint passes through its limits, a <mimic> follower passes its
+// limit, `ignore` changes the motion, or Talos's grippers are refused again.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -132,23 +132,93 @@ TEST(UrdfLimits, IgnoreEqualsTheFileWithoutLimits) {
   EXPECT_NE(RunUrdf(slider, false).rows, RunUrdf(slider, true).rows);
 }
 
-// A robot whose <mimic>s are kept as couplings takes no end stops (K318): the limits stay
-// comments, with one note, and the model loads.
-TEST(UrdfLimits, CoupledRobotKeepsLimitsAsCommentsAndLoads) {
+// A robot whose <mimic>s are kept as couplings: its limits become end stops of each group's
+// root leader, the intersection of the members' ranges mapped through q = m q_l + c (stops
+// on the follower too would be rows dependent on the leader's). every_joint.urdf: 'slide'
+// in [0, 0.2], 'follow' = -slide + 0.01 in [-0.2, 0], so slide in [0.01, 0.2].
+TEST(UrdfLimits, CoupledRobotGetsItsLimitsAsTheLeadersStops) {
   import::Options o;
   o.use_ros_package_path = false;
   const std::string path = kData + "/every_joint.urdf";
   const import::Result r = import::UrdfToMech(path, ReadText(path), o);
   ASSERT_TRUE(r.ok) << r.diagnostics;
-  EXPECT_EQ(r.mech.find("q_min"), std::string::npos) << r.mech;
-  EXPECT_NE(r.mech.find("limit lower 0 upper 0.2 effort 100 velocity 1 (recorded: no end stops with <mimic> couplings)"),
-            std::string::npos);
-  EXPECT_NE(r.diagnostics.find("note: 3 joint <limit>s recorded in comments, not end stops (the compiler takes no end "
-                               "stops with the <mimic> couplings, K318)"),
+  EXPECT_NE(r.mech.find("q_min = 0.01, q_max = 0.2, q(start = 0.01)"), std::string::npos) << r.mech;
+  EXPECT_NE(r.mech.find("limit lower -0.2 upper 0 effort 100 velocity 1 (held by the end stops of 'slide' through the <mimic>)"),
             std::string::npos)
-      << r.diagnostics;
+      << r.mech;
+  EXPECT_EQ(r.mech.find("recorded: no end stops"), std::string::npos) << r.mech;
   pipeline::LoadResult lr = pipeline::LoadModel(pipeline::Source::Text("every_joint.urdf.mech", r.mech), {}, {});
   EXPECT_TRUE(lr.model) << lr.diagnostics;
+}
+
+void CheckLiftFallsOntoTheFingersLimit(const sim::MemorySink& rows, double accel);
+
+// A lift (prismatic, z) carrying a finger (prismatic, x) that mimics it, q_f = 2 q_l + 0.1;
+// the finger's lower limit -0.7 is the binding one (q_l = -0.4; the lift's own is -0.5).
+// Equal masses m: T = (m + m + 4 m) u_l^2 / 2 against the weight 2 m g, so the lift falls
+// with g / 3 from rest and meets q_l = -0.4 at t = sqrt(2 0.4 / (g / 3)), then rests. If this
+// fails, a follower's limit was not a stop (the finger passes -0.7), the stop let the
+// coupling go (q_f != 2 q_l + 0.1), or the impact is not at the closed-form time.
+TEST(UrdfLimits, MimicFollowerDrivenIntoItsLimitStopsThere) {
+  const std::string link = "><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" iyy=\"0.01\" izz=\"0.01\"/></inertial></link>\n";
+  const std::string urdf =
+      "<robot name=\"grip\">\n  <link name=\"base\"/>\n  <link name=\"a\"" + link + "  <link name=\"b\"" + link +
+      "  <joint name=\"lift\" type=\"prismatic\"><parent link=\"base\"/><child link=\"a\"/><axis xyz=\"0 0 1\"/>"
+      "<limit lower=\"-0.5\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/></joint>\n"
+      "  <joint name=\"finger\" type=\"prismatic\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"1 0 0\"/>"
+      "<limit lower=\"-0.7\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/>"
+      "<mimic joint=\"lift\" multiplier=\"2\" offset=\"0.1\"/></joint>\n</robot>\n";
+  const sim::MemorySink rows = RunUrdf(urdf, true);
+  ASSERT_GT(rows.rows.size(), 100u);
+  CheckLiftFallsOntoTheFingersLimit(rows, kG / 3);
+}
+
+// The lift and finger of MimicFollowerDrivenIntoItsLimitStopsThere with <dynamics friction>:
+// 2 N on the lift, c_f on the finger. The importer puts the group's friction on the lift as
+// exact friction, 2 + |2| c_f (virtual work through q_f = 2 q_l + 0.1). c_f = 10: 22 N holds the
+// weight 2 m g = 19.62 N, stuck for good; c_f = 5: 12 N, it slides down with (2 m g - 12) / 6 m
+// onto the finger's limit. If this fails, the follower's friction was not reflected through the
+// ratio (or was kept as the stiff tanh law), or exact friction beside the coupling misbehaves.
+TEST(UrdfLimits, MimicGroupFrictionIsExactOnTheLeader) {
+  auto urdf = [](const std::string& finger_friction) {
+    const std::string link = "><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" iyy=\"0.01\" izz=\"0.01\"/></inertial></link>\n";
+    return "<robot name=\"grip\">\n  <link name=\"base\"/>\n  <link name=\"a\"" + link + "  <link name=\"b\"" + link +
+           "  <joint name=\"lift\" type=\"prismatic\"><parent link=\"base\"/><child link=\"a\"/><axis xyz=\"0 0 1\"/>"
+           "<limit lower=\"-0.5\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/><dynamics friction=\"2\"/></joint>\n"
+           "  <joint name=\"finger\" type=\"prismatic\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"1 0 0\"/>"
+           "<limit lower=\"-0.7\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/><dynamics friction=\"" + finger_friction +
+           "\"/><mimic joint=\"lift\" multiplier=\"2\" offset=\"0.1\"/></joint>\n</robot>\n";
+  };
+  import::Options o;
+  o.use_ros_package_path = false;
+  const import::Result r = import::UrdfToMech("grip.urdf", urdf("5"), o);
+  ASSERT_TRUE(r.ok) << r.diagnostics;
+  EXPECT_NE(r.mech.find("friction_force = 12, friction_exact = true"), std::string::npos) << r.mech;
+  EXPECT_NE(r.mech.find("<dynamics friction 5> on the exact friction of 'lift' through the <mimic>"), std::string::npos)
+      << r.mech;
+  EXPECT_EQ(r.mech.find("tanh"), std::string::npos) << r.mech;
+  const sim::MemorySink held = RunUrdf(urdf("10"), true);
+  ASSERT_GT(held.rows.size(), 100u);
+  for (const std::vector<double>& y : held.rows) EXPECT_EQ(y[Col(held, "lift.q")], 0.0);
+  CheckLiftFallsOntoTheFingersLimit(RunUrdf(urdf("5"), true), (2 * kG - 12) / 6);
+}
+
+// The lift falls from rest with `accel` onto q_l = -0.4 (the finger's limit -0.7 through the
+// coupling) at t = sqrt(0.8 / accel) and rests there; q_f = 2 q_l + 0.1 in every row.
+void CheckLiftFallsOntoTheFingersLimit(const sim::MemorySink& rows, double accel) {
+  ASSERT_GT(rows.rows.size(), 100u);
+  const std::size_t ql = Col(rows, "lift.q"), qf = Col(rows, "finger.q"), ul = Col(rows, "lift.u");
+  double hit = -1;
+  for (std::size_t i = 0; i < rows.rows.size(); ++i) {
+    const std::vector<double>& y = rows.rows[i];
+    EXPECT_GE(y[qf], -0.7 - 1e-12) << "row " << i << " at t = " << rows.times[i];
+    EXPECT_NEAR(y[qf], 2 * y[ql] + 0.1, 1e-12) << "row " << i << " at t = " << rows.times[i];
+    if (i > 0 && rows.times[i] == rows.times[i - 1] && hit < 0) hit = rows.times[i];
+  }
+  EXPECT_NEAR(hit, std::sqrt(2 * 0.4 / accel), 1e-8);
+  EXPECT_NEAR(rows.rows.back()[ql], -0.4, 1e-12);
+  EXPECT_NEAR(rows.rows.back()[qf], -0.7, 1e-12);
+  EXPECT_EQ(rows.rows.back()[ul], 0.0);
 }
 
 // <mimic> on a fixed joint, or naming a fixed leader (Talos's grippers): nothing to couple,

@@ -32,10 +32,13 @@ std::string ReadText(const std::string& path) {
   return ss.str();
 }
 
-// The imported URDF with `joint`'s start q and u, run for 1 s at rtol = atol = 1e-12.
+// The imported URDF with `joint`'s start q and u, run for 1 s at rtol = atol = 1e-12, its
+// <limit>s ignored (the reduced models have none; the gripper would reach the right finger's
+// lower limit at t = 0.93: tests/import/limits_test.cpp tests limits with <mimic>s).
 sim::MemorySink RunImported(const std::string& file, const std::string& joint, double q0, double u0) {
   import::Options o;
   o.use_ros_package_path = false;
+  o.stops = false;
   const std::string urdf = kData + "/" + file;
   import::Result imp = import::UrdfToMech(urdf, ReadText(urdf), o);
   EXPECT_TRUE(imp.ok) << imp.diagnostics;

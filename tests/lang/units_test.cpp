@@ -89,6 +89,30 @@ TEST(UnitCheck, TheStandardLibraryAndEveryExampleAreUnitClean) {
 }
 
 
+// Every model of the standard library, each instantiated on its own beside a World (the
+// examples leave some out): its declarations, modifiers and equations raise no unit error.
+// Elaboration must succeed, else the check's messages would not be reported at all.
+TEST(UnitCheck, EveryStandardLibraryModelIsUnitClean) {
+  const std::string mesh = (fs::path(KANESIM_SOURCE_DIR) / "examples" / "meshes" / "rod.stl").string();
+  int n = 0;
+  for (const auto& [path, text] : stdlib::Files()) {
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.rfind("model ", 0) != 0) continue;  // "partial model" and connectors are not instances
+      const std::string name = line.substr(6, line.find_first_of(" \"", 6) - 6);
+      const std::string mods = name == "MeshBody" || name == "BodyShape" ? "(file = \"" + mesh + "\")" : "";
+      std::string model = name == "World" ? "model M\n  World world;\nend M;\n"
+                                          : "model M\n  World world;\n  " + name + " x" + mods + ";\nend M;\n";
+      if (name == "JointCoupling")  // it must join two joints' drives (E212)
+        model = "model M\n  World world;\n  Revolute a;\n  Revolute b;\n  JointCoupling x(ratio = 2);\nequation\n"
+                "  connect(a.drive, x.flange_a);\n  connect(b.drive, x.flange_b);\nend M;\n";
+      EXPECT_EQ(Check(model).errors, "") << path << ": " << name;
+      ++n;
+    }
+  }
+  EXPECT_GE(n, 28);
+}
+
 // One rule: a model that passes, and one that fails with this first line.
 struct Rule {
   const char* name;
@@ -148,6 +172,11 @@ INSTANTIATE_TEST_SUITE_P(
              Pendulum(kSine, "Rod rod(L = 1);", "  j.tau = T * sin(w);"),
              "m.mech:10:19: error[E237]: 'sin' needs a dimensionless argument (an angle in rad is one), but this has unit "
              "\"rad/s\""},
+        // sin of time alone (a test signal reading time as a number) is still a number: a
+        // length times it is a length, a mass times it is not.
+        Rule{"SineOfTime", Pendulum("  parameter Real len(unit = \"m\") = 1;\n  output Real y(unit = \"m\") = len * sin(time);"),
+             Pendulum("  parameter Real mass(unit = \"kg\") = 1;\n  output Real y(unit = \"m\") = mass * sin(time);"),
+             "m.mech:3:31: error[E237]: 'y' has unit \"m\" but its value has unit \"kg\""},
         // An angle and a number agree (rad = 1, a false alarm elsewhere); an angle in deg is
         // not an angle in rad.
         Rule{"Angles", Pendulum("  parameter Real a(unit = \"1\") = 0.3;", "Revolute k(q(start = a));\n  Rod rod(L = 1);"),
@@ -203,7 +232,15 @@ INSTANTIATE_TEST_SUITE_P(
              Pendulum("  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"rad\") = 1;\n"
                       "  parameter Real k = 0.5;\n  Revolute i(q(start = b + k));",
                       "Rod rod(L = a + k);"),
-             "m.mech:8:15: error[E238]: 'k' has no unit and is used here as \"m\", but earlier as \"rad\""}),
+             "m.mech:8:15: error[E238]: 'k' has no unit and is used here as \"m\", but earlier as \"rad\""},
+        // The use may be inside a sum or a branch given a unit as a whole: `L2 = 1 + k` bound
+        // to a length makes k a length, so k as an angle afterwards is a conflict.
+        Rule{"InferenceThroughASum",
+             Pendulum("  parameter Real k = 0.5;\n  parameter Real L2(unit = \"m\") = 1 + k;\n"
+                      "  parameter Real L3(unit = \"m\") = if L2 > 1 then -k else k + 2;"),
+             Pendulum("  parameter Real b(unit = \"rad\") = 1;\n  parameter Real k = 0.5;\n"
+                      "  parameter Real L2(unit = \"m\") = 1 + k;\n  Revolute i(q(start = b + k));"),
+             "m.mech:5:24: error[E238]: 'k' has no unit and is used here as \"rad\", but earlier as \"m\""}),
     [](const ::testing::TestParamInfo<Rule>& i) { return std::string(i.param.name); });
 
 TEST(UnitCheck, AMismatchNamesBothDeclarations) {
@@ -273,6 +310,47 @@ TEST(UnitCheck, EachArrayElementIsCheckedWithItsOwnNames) {
       << spring_errors;
   EXPECT_EQ(spring_errors.find("cells[1]"), std::string::npos) << spring_errors;
   EXPECT_EQ(spring_errors.find("cells[2]"), std::string::npos) << spring_errors;
+}
+
+// A binding written in a class is read once for all its instances whose variables take
+// their units from the class's text (lang/elab_units.cpp, BoundOnce): an instance given
+// another unit from outside, by a short class definition, or on an array of no unit, is
+// read again, and a mismatch there names its own declarations.
+TEST(UnitCheck, AnInstanceGivenAnotherUnitFromOutsideIsCheckedOnItsOwn) {
+  const std::string errors =
+      Check("model P\n  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"m\") = 2 * a;\n"
+            "  parameter Real[2] v = {1, 2};\n  parameter Real[2] w(each unit = \"m\") = v;\nend P;\n"
+            "model P2 = P(a(unit = \"kg\"));\n"
+            "model M\n  P p1;\n  P p2;\n  P p3(a(unit = \"s\"));\n  P p4;\n  P p5(v(each unit = \"N\"));\n  P2 q;\n"
+            "  World world;\nend M;\n")
+          .errors;
+  std::string firsts;
+  for (size_t at = errors.find("m.mech:"); at != std::string::npos; at = errors.find("\nm.mech:", at + 1)) {
+    const size_t b = errors[at] == '\n' ? at + 1 : at;
+    const std::string line = errors.substr(b, errors.find('\n', b) - b);
+    if (line.find(": error[") != std::string::npos) firsts += line + "\n";
+  }
+  EXPECT_EQ(firsts,
+            "m.mech:3:34: error[E237]: 'p3.b' has unit \"m\" but its value has unit \"s\"\n"
+            "m.mech:5:42: error[E237]: 'p5.w' has unit \"m\" but its value has unit \"N\"\n"
+            "m.mech:3:34: error[E237]: 'q.b' has unit \"m\" but its value has unit \"kg\"\n")
+      << errors;
+  EXPECT_NE(errors.find("note: 'p3.a' has unit \"s\""), std::string::npos) << errors;
+  EXPECT_NE(errors.find("check the unit of 'q.a'"), std::string::npos) << errors;
+}
+
+// A declaration of literals only is shared by its instances (Instantiator::DeclarationMod);
+// a value given from outside over it (Node::mod_over_decl) is checked in each.
+TEST(UnitCheck, AValueGivenOverASharedDeclarationIsChecked) {
+  const std::string errors = Check("model P\n  parameter Real a(unit = \"m\") = 1;\nend P;\nmodel M\n"
+                                   "  parameter Real b(unit = \"s\") = 2;\n  P p1(a = b);\n  P p2;\n  P p3(a = b);\n"
+                                   "  World world;\nend M;\n")
+                                 .errors;
+  EXPECT_NE(errors.find("m.mech:6:12: error[E237]: 'p1.a' has unit \"m\" but its value has unit \"s\""),
+            std::string::npos) << errors;
+  EXPECT_NE(errors.find("m.mech:8:12: error[E237]: 'p3.a' has unit \"m\" but its value has unit \"s\""),
+            std::string::npos) << errors;
+  EXPECT_EQ(errors.find("p2.a"), std::string::npos) << errors;
 }
 
 // The check reads declared units as the emitter shows each variable and the values in
