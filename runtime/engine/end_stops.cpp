@@ -54,8 +54,7 @@ int ConstrainedInverseMassTimes(const Program& p, Workspace& ws, double t, const
     ws.error = "an impulse in a mechanism with closed loops or contacts needs the reduced form (not --solver sparse)";
     return -1;
   }
-  ++ws.inverse_mass_factorizations;
-  std::fill(X, X + static_cast<size_t>(p.nu) * static_cast<size_t>(m), 0.0);
+  std::fill(x, x + p.nu, 0.0);
   const Eigen::LLT<Eigen::MatrixXd> llt(Mr);
   if (beta.cols() == 0 || llt.info() != Eigen::Success) {
     ws.error = "the closed loops or contacts leave no motion at time " + std::to_string(t);
