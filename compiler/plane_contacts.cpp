@@ -84,7 +84,7 @@ void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMe
                                   "not supported",
                               p.joints[static_cast<size_t>(b)].loc, "use the regularized law (friction_exact = false)"));
   if (p.plane_contacts.empty() && p.stop_joints.empty()) return;
-  const std::string hint = "impacts and resting contact are supported without Coulomb friction mu N";
+  const std::string hint = "end stops take Coulomb friction mu N in a tree (no closed loops, rolling contacts or couplings)";
   for (const PlaneContactModel& c : p.plane_contacts)
     if (const std::string refused = EventsRefused(p, true); !refused.empty())
       errors->push_back(Msg(flat::DiagCode::BadContact,
