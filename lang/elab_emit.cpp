@@ -278,7 +278,7 @@ class Emitter {
 
   // The `start` (and `fixed`) modifiers of a joint's q or u.
   void StartOf(Node* var, std::vector<ExprId>* out, std::vector<bool>* fixed) {
-    const Mod& mods = var->Modifiers();
+    const ModView mods = var->Modifiers();
     auto it = mods.sub.find("start");
     if (it != mods.sub.end() && it->second.value) {
       Span where;

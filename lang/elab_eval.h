@@ -158,6 +158,7 @@ class Evaluator {
   StackGuard stack_;    // made with the Evaluator: the base of its evaluation
   bool depth_reported_ = false;
   std::vector<int> end_stack_;  // size of the dimension being subscripted (for `end`)
+  std::string path_scratch_;    // ParameterValue's variable path, kept between calls
   // EvalOperators' explicit stacks (lang/elab_operators.cpp), kept between calls.
   struct OpItem {
     const ast::Expr* e;

@@ -43,6 +43,26 @@ const ast::ClassDef* Instantiator::ResolveShort(const ast::ClassDef* cls, Node* 
   return cls;
 }
 
+long Instantiator::CollectedNames::Find(std::string_view name, const std::vector<Collected>& out) const {
+  if (!index_.empty()) {
+    auto it = index_.find(name);
+    return it == index_.end() ? -1 : static_cast<long>(it->second);
+  }
+  for (size_t i = 0; i < out.size(); ++i)
+    if (out[i].comp->name == name) return static_cast<long>(i);
+  return -1;
+}
+
+void Instantiator::CollectedNames::Added(const std::vector<Collected>& out) {
+  if (out.size() <= kScan) return;
+  if (index_.empty()) {  // past the scan's size: every element so far
+    index_.reserve(2 * out.size());
+    for (size_t i = 0; i < out.size(); ++i) index_.emplace(out[i].comp->name, i);
+    return;
+  }
+  index_.emplace(out.back().comp->name, out.size() - 1);
+}
+
 void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_mod, std::vector<Collected>& out,
                            CollectedNames& names, std::vector<Node::EqSource>& eqs, int depth) {
   for (const ast::ClassDef* c : extends_stack_) {
@@ -95,8 +115,8 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       if (it != ext_mod->sub.end()) c.ext_mod = it->second;
     }
     bool replaced = false;
-    if (auto found = names.find(comp.name); found != names.end()) {
-      Collected& prev = out[found->second];
+    if (const long found = names.Find(comp.name, out); found >= 0) {
+      Collected& prev = out[static_cast<size_t>(found)];
       if (comp.redeclare) {
         if (!prev.replaceable) {
           auto& d = diags_.Error(DiagCode::NotReplaceable, comp.name_span,
@@ -114,8 +134,8 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       if (comp.redeclare)
         diags_.Error(DiagCode::NotReplaceable, comp.name_span,
                      "'redeclare " + comp.name + "' replaces nothing: no inherited element has that name");
-      names.emplace(comp.name, out.size());
       out.push_back(std::move(c));
+      names.Added(out);
     }
   }
   for (const auto& eq : cls->equations) eqs.push_back({&eq, cls});
@@ -186,7 +206,6 @@ void Instantiator::Instantiate(Node* node, const ast::ClassDef* cls) {
   elems.reserve(cls->elements.size());  // enough unless cls extends another class
   node->equations.reserve(cls->equations.size());
   CollectedNames names;
-  names.reserve(elems.capacity());
   Collect(cls, node, nullptr, elems, names, node->equations, 0);
   CheckOuterModifiers(node, cls, elems, names);
 
@@ -218,8 +237,8 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
                                        const CollectedNames& names) {
   for (const auto& key : node->mod.order) {
     bool found = false;
-    if (auto at = names.find(key); at != names.end()) {
-      const Collected& c = elems[at->second];
+    if (const long at = names.Find(key, elems); at >= 0) {
+      const Collected& c = elems[static_cast<size_t>(at)];
       found = true;
       const Mod& pm = node->mod.sub[key];
       if (c.comp->is_protected && !(pm.value && pm.value->from_set)) {
@@ -240,6 +259,13 @@ void Instantiator::CheckOuterModifiers(Node* node, const ast::ClassDef* cls, con
   }
 }
 
+// An outer modifier that gives a value and nothing else (`m = 2.5`): merged over a literal
+// declaration's, it replaces the value and leaves the attributes as declared.
+static bool OnlyAValue(const Mod& m) {
+  return m.value && !m.value->is_final && m.sub.empty() && m.order.empty() && !m.each && !m.is_final &&
+         !m.redeclare && !m.set_only;
+}
+
 // The child node of element c, its modifier merged: outer (the instance's) over the
 // extends clause's over the declaration's.
 NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
@@ -249,10 +275,16 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
   child->name = c.comp->name;
   child->depth = node->depth + 1;
   auto it = node->mod.sub.find(c.comp->name);
-  if (it == node->mod.sub.end() && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final && !c.ext_mod.each) {
+  const bool found = it != node->mod.sub.end();
+  if ((!found || OnlyAValue(it->second)) && !c.is_final && c.ext_mod.empty() && !c.ext_mod.is_final &&
+      !c.ext_mod.each) {
     if (const Mod* shared = DeclarationMod(node, *c.comp)) {
       child->shared_mod = shared;
       child->mod_from_decl = true;
+      if (found) {  // the outer value over the declaration's attributes (Node::mod_over_decl)
+        child->mod = std::move(it->second);
+        child->mod_over_decl = true;
+      }
       return child;
     }
   }
@@ -512,7 +544,7 @@ void Instantiator::ExpandVariable(Node* child, const ast::Component& comp, VType
 }
 
 void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   for (const auto& key : mods.order) {
     const Mod& sub = mods.sub.find(key)->second;
     if (IsVarAttribute(key) || sub.set_only) continue;

@@ -51,8 +51,19 @@ class Instantiator {
     bool is_final = false, replaceable = false;
   };
   // `names` indexes `out` by element name (the AST owns the names), so that a class of n
-  // elements is collected in O(n), not O(n^2) (issue 38: 123 000 parameters).
-  using CollectedNames = std::unordered_map<std::string_view, size_t>;
+  // elements is collected in O(n), not O(n^2) (issue 38: 123 000 parameters). A class of a
+  // few elements (nearly every instance) is scanned instead: no hash node per element.
+  class CollectedNames {
+   public:
+    // The index of the element named `name` in `out`, or -1.
+    long Find(std::string_view name, const std::vector<Collected>& out) const;
+    // After out.push_back: the new last element is indexed (once out is past kScan).
+    void Added(const std::vector<Collected>& out);
+
+   private:
+    static constexpr size_t kScan = 32;
+    std::unordered_map<std::string_view, size_t> index_;
+  };
   struct ComponentType {  // what a component's declared (or redeclared) type turned out to be
     const ast::ClassDef* cls = nullptr;  // a class type; null for a builtin
     VType builtin = VType::Real;

@@ -187,6 +187,15 @@ struct Mod {
   bool empty() const { return !value && sub.empty() && !Redeclared(); }
 };
 
+// A variable's modifiers as Node::Modifiers() reads them: its value and its attributes
+// (start, unit, min, ...), which may be held in two places (Node::mod_over_decl).
+struct ModView {
+  const ModValue* value;  // null: none
+  const std::map<std::string, Mod, std::less<>>& sub;
+  const std::vector<std::string>& order;
+  bool is_final;
+};
+
 // Shape: a stdlib part drawn as what it is (kind "rod", "box", "cylinder", "sphere", "mesh";
 // lang/elab_shapes.cpp); it only describes, its Body does the physics.
 enum class Prim { None, Frame, Flange, World, Body, Fixed, Joint, LineForce, Wrench, Contact, RotSpring, Coupling, Shape };
@@ -201,8 +210,12 @@ struct Node {
   bool enabled = true;
   bool is_final_decl = false;  // kVar
   // kVar: shared_mod is its declaration's modifier, shared by every instance not modified
-  // from outside (Instantiator::DeclarationMod), read as its own (not an array element's copy).
+  // from outside or only given a value (Instantiator::DeclarationMod), read as its own (not
+  // an array element's copy).
   bool mod_from_decl = false;
+  // kVar: two-level modifiers. `mod` holds only the value given from outside (`m = 2.5`),
+  // shared_mod (its declaration's) the attributes: no merged copy of them per instance.
+  bool mod_over_decl = false;
   mutable std::uint16_t scans = 0;  // Child()'s scans of a class above kScanChildren elements
   int depth = 0;
   // For the unit check (lang/elab_units.cpp), in the padding before `name` (the node does
@@ -221,7 +234,25 @@ struct Node {
   // reads element 1's instead of a copy: `mod` then stays empty. Read modifiers after
   // instantiation through Modifiers().
   const Mod* shared_mod = nullptr;
-  const Mod& Modifiers() const { return shared_mod ? *shared_mod : mod; }
+  ModView Modifiers() const {
+    const Mod& attrs = shared_mod ? *shared_mod : mod;
+    const Boxed<ModValue>& v = mod_over_decl ? mod.value : attrs.value;
+    return {v ? &*v : nullptr, attrs.sub, attrs.order, attrs.is_final};
+  }
+  // The modifiers as the node's own, to change (a --set of one instance): shared ones
+  // copied first, as the merge of the outer value over the declaration would have made them.
+  Mod& OwnMod() {
+    if (!shared_mod) return mod;
+    Mod whole = *shared_mod;
+    if (mod_over_decl) {
+      whole.value = std::move(mod.value);
+      if (mod.span.valid()) whole.span = mod.span;
+    }
+    mod = std::move(whole);
+    shared_mod = nullptr;
+    mod_over_decl = false;
+    return mod;
+  }
   // "robot.links[2]" (the root's is empty), made when asked for: most nodes' paths are
   // only read by a diagnostic, and a string kept in each cost an allocation and its free.
   std::string Path() const {

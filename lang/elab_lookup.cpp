@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <functional>
 #include <sstream>
+#include <string_view>
 
 #include "lang/library_cache.h"
 
@@ -69,7 +70,20 @@ const ast::StoredDefinition* ClassLookup::FileOf(const ast::ClassDef* c) const {
   return it == file_of_.end() ? nullptr : it->second;
 }
 
+size_t ClassLookup::FoundHash::Of(const ast::ClassDef* from, const std::vector<std::string>& parts) {
+  size_t h = std::hash<const void*>()(from);
+  for (const std::string& p : parts) h = h * 31 + std::hash<std::string_view>()(p);
+  return h;
+}
+
 const ast::ClassDef* ClassLookup::FindClass(const std::vector<std::string>& parts, const ast::ClassDef* from) const {
+  if (auto it = found_.find(FoundRef{from, parts}); it != found_.end()) return it->second;
+  const ast::ClassDef* c = Resolve(parts, from);
+  found_.emplace(FoundKey{from, parts}, c);
+  return c;
+}
+
+const ast::ClassDef* ClassLookup::Resolve(const std::vector<std::string>& parts, const ast::ClassDef* from) const {
   if (parts.empty()) return nullptr;
   auto nested = [&](const ast::ClassDef* c, const std::string& n) -> const ast::ClassDef* {
     for (const auto& el : c->elements)

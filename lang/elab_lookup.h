@@ -45,6 +45,8 @@ class ClassLookup {
   bool CheckImports(const ast::StoredDefinition& f);
 
  private:
+  // FindClass's lookup itself: the scope's nested classes and imports, then the registry.
+  const ast::ClassDef* Resolve(const std::vector<std::string>& parts, const ast::ClassDef* from) const;
   const ast::StoredDefinition* FileOf(const ast::ClassDef* c) const;
   void LoadWholeLibrary() const;
   void Register(const ast::ClassDef* c, const std::string& prefix, const ast::StoredDefinition* file) const;
@@ -60,6 +62,32 @@ class ClassLookup {
   mutable std::map<std::string, ClassInfo> classes_;  // qualified name -> class
   mutable std::unordered_map<const ast::ClassDef*, const ast::StoredDefinition*> file_of_;
   mutable std::unordered_map<const ast::ClassDef*, std::string> qualified_of_;
+
+  // FindClass's answers by (scope, name), each found once: a model's components name a few
+  // classes many times over, and a lookup walks the scope's elements and the registry. An
+  // answer never changes: the registry answers as if the whole library were registered.
+  struct FoundKey {
+    const ast::ClassDef* from;
+    std::vector<std::string> parts;
+  };
+  struct FoundRef {  // a key to look up without copying the name
+    const ast::ClassDef* from;
+    const std::vector<std::string>& parts;
+  };
+  struct FoundHash {
+    using is_transparent = void;
+    size_t operator()(const FoundKey& k) const { return Of(k.from, k.parts); }
+    size_t operator()(const FoundRef& k) const { return Of(k.from, k.parts); }
+    static size_t Of(const ast::ClassDef* from, const std::vector<std::string>& parts);
+  };
+  struct FoundEq {
+    using is_transparent = void;
+    template <class A, class B>
+    bool operator()(const A& a, const B& b) const {
+      return a.from == b.from && a.parts == b.parts;
+    }
+  };
+  mutable std::unordered_map<FoundKey, const ast::ClassDef*, FoundHash, FoundEq> found_;
 };
 
 }  // namespace kanesim::lang::elab

@@ -314,10 +314,7 @@ void SetOverrides::Bind() {
       continue;
     }
     if (elem >= 0) n->eq_elem_binding[elem] = Binding(so);
-    else {
-      if (n->shared_mod) n->mod = *n->shared_mod, n->shared_mod = nullptr;  // its own copy, to change
-      n->mod.value = Binding(so);
-    }
+    else n->OwnMod().value = Binding(so);  // its own copy, to change
   }
 }
 
@@ -339,8 +336,7 @@ void SetOverrides::BindStart(const SetOverride& so, Node* var, Span whole) {
     return;
   }
   if (!so.subscripted) return;
-  if (var->shared_mod) var->mod = *var->shared_mod, var->shared_mod = nullptr;  // its own copy, to change
-  Mod& m = var->mod.sub["start"];
+  Mod& m = var->OwnMod().sub["start"];  // its own copy, to change
   m.value = Binding(so);
   m.span = so.value->span;
 }
@@ -362,7 +358,7 @@ bool SetOverrides::SplitUnit(const ParamOverride& ov, const Program& program, Se
 
 // The factor from the written unit to the target's declared one (same dimension).
 bool SetOverrides::ConvertUnit(const SetOverride& so, Node* var) {
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   auto it = mods.sub.find("unit");
   const ast::Expr* ue = it != mods.sub.end() && it->second.value ? it->second.value->expr : nullptr;
   Unit declared;

@@ -229,11 +229,22 @@ NodePtr Instantiator::CloneInstance(const Node& src, Node* parent, const std::st
       if (id < 0) id = tree_.copies++;
       n->unit_slot = id;
     }
+  } else if (src.mod_over_decl) {
+    // Its declaration's attributes (literals) are every element's; its own value is element
+    // 1's when that means the same in every element, else bound to element k. Shared, it
+    // is checked on element 1 alone, as a shared whole modifier below.
+    if (b.visit >= b.same_mod->size()) b.same_mod->resize(b.visit + 1, -1);
+    signed char& same = (*b.same_mod)[b.visit];
+    if (same < 0) same = !subscripted_sets_ && SameInEveryElement(src.mod, b);
+    n->shared_mod = src.shared_mod;
+    n->mod_over_decl = true;
+    n->mod_from_decl = !same;
+    n->mod = same ? src.mod : BoundCopy(src.mod, b, true);
   } else {
     // A variable's modifiers (its value and attributes) are shared with element 1 when they
     // mean the same there, copied and bound to element k otherwise. Not shared when a
     // subscripted --set may later change one element's (SetOverrides::Bind).
-    const Mod& sm = src.Modifiers();
+    const Mod& sm = src.shared_mod ? *src.shared_mod : src.mod;
     if (b.visit >= b.same_mod->size()) b.same_mod->resize(b.visit + 1, -1);
     signed char& same = (*b.same_mod)[b.visit];
     if (same < 0) same = !subscripted_sets_ && SameInEveryElement(sm, b);

@@ -40,28 +40,33 @@ flat::ParamType ParamTypeOf(VType t) {
                                : flat::ParamType::String;
 }
 
-// The flat name of element k (row-major) of variable `var` of `shape`, "p" or "p[1,2]"
-// (1-based), appended to `name`. `idx` is scratch of shape.size() entries.
-void AppendElementName(std::string& name, const Node* var, const Dims& shape, size_t k, Dims& idx) {
-  var->AppendPath(name);
+// The subscript of element k (row-major) of an array of `shape`, "[1,2]" (1-based),
+// appended to `name`; nothing for a scalar. `idx` is scratch of shape.size() entries.
+void AppendSubscript(std::string& name, const Dims& shape, size_t k, Dims& idx) {
   if (shape.empty()) return;
   size_t rem = k;
   for (size_t d = shape.size(); d-- > 0;) {
     idx[d] = static_cast<int>(rem % static_cast<size_t>(shape[d])) + 1;
     rem /= static_cast<size_t>(shape[d]);
   }
-  char buf[16];
-  name += '[';
+  // Written into a buffer and appended at once (a name per element: thousands of them).
+  char buf[64];
+  size_t n = 0;
+  buf[n++] = '[';
   for (size_t d = 0; d < idx.size(); ++d) {
-    if (d) name += ',';
-    name.append(buf, static_cast<size_t>(std::to_chars(buf, buf + sizeof buf, idx[d]).ptr - buf));
+    if (n > sizeof buf - 13) name.append(buf, n), n = 0;  // room for ',' and an int, then ']'
+    if (d) buf[n++] = ',';
+    n = static_cast<size_t>(std::to_chars(buf + n, buf + sizeof buf, idx[d]).ptr - buf);
   }
-  name += ']';
+  buf[n++] = ']';
+  name.append(buf, n);
 }
 
+// The flat name of element k of variable `var` of `shape`: "p" or "p[1,2]".
 std::string ElementName(const Node* var, const Dims& shape, size_t k, Dims& idx) {
   std::string name;
-  AppendElementName(name, var, shape, k, idx);
+  var->AppendPath(name);
+  AppendSubscript(name, shape, k, idx);
   return name;
 }
 
@@ -157,7 +162,7 @@ Value Evaluator::InputValue(Node* var, Span use_span) {
 const ModValue* Evaluator::VarBinding(Node* var) {
   const ModValue* binding = nullptr;
   if (var->eq_binding) binding = &*var->eq_binding;
-  if (const Mod& mods = var->Modifiers(); mods.value) {
+  if (const ModView mods = var->Modifiers(); mods.value) {
     if (binding) {
       auto& d = diags_.Error(DiagCode::ConflictingEquation, var->eq_binding->span,
                              "'" + var->Path() + "' already has a value from its declaration or a modifier");
@@ -269,9 +274,17 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
   // A constant is folded (no flat parameter); the others are made in place in the table.
   const bool folded = var->vtype != VType::String && var->variability == ast::Variability::Constant;
   std::string folded_name;
+  // The variable's path, walked up the tree once for all its elements. Nothing below
+  // evaluates (the attributes were read above), so the scratch is not reused meanwhile.
+  std::string& path = path_scratch_;
+  path.clear();
+  var->AppendPath(path);
   for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
     flat::Param folded_param;
-    auto write_name = [&](std::string& out) { AppendElementName(out, var, var->shape, k, idx); };
+    auto write_name = [&](std::string& out) {
+      out += path;
+      AppendSubscript(out, var->shape, k, idx);
+    };
     if (folded) folded_name.clear(), write_name(folded_name);
     flat::Param& p = folded ? folded_param : m_->AddParamWith(write_name);
     p.type = ParamTypeOf(var->vtype);
@@ -294,7 +307,7 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
 
 Evaluator::ParamAttributes Evaluator::ReadParamAttributes(Node* var) {
   ParamAttributes attrs;
-  const Mod& mods = var->Modifiers();
+  const ModView mods = var->Modifiers();
   auto attr_num = [&](const char* key, double* out) {
     auto it = mods.sub.find(key);
     if (it == mods.sub.end() || !it->second.value) return;

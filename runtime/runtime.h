@@ -214,6 +214,12 @@ std::vector<FrictionJoint> FrictionJoints(const Program& program);
 void SetFrictionMode(Workspace& ws, int i, int mode, double tau);
 // Friction joint i's normal force N in the last evaluation of ws.
 double FrictionNormal(const Workspace& ws, int i);
+// The friction joints' normal impulses in a jump du of the free speeds (nu entries) at (t, y):
+// per friction joint i, P[3i..3i+2] the impulse its parent side gives the subtree below it
+// (sum of m dv_cm) across its axis, world axes; |P_i| is mu N's impulsive N. Trees only: 0,
+// UnpackState's codes, or -1 (ErrorMessage says why). runtime/engine/friction_impulse.cpp
+int FrictionImpulseNormals(const Program& program, Workspace& ws, double t, const double* y, const double* du,
+                           double* P);
 
 // Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
 // when the program has none. runtime/engine/plane_contacts.cpp

@@ -142,6 +142,11 @@ class EngineOde final : public OdeSystem {
         });
         events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
       }
+      if (stick_ && s == 0) {  // exact friction: a joint the jump set moving slides, one it stopped decides
+        const size_t logged_stick = stick_->Log().size();
+        s = stick_->Refresh(ws_, t, y, before.data(), stops_ ? stops_->RestSpeed() : 0.0);
+        events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged_stick), stick_->Log().end());
+      }
     }
     if (s == 0 && i >= NumStops() && bridge_ && bridge_->monitor) rt::ForgetBranchReference(*bridge_->monitor);
     if (s == 0 && first < events_.size()) AddChanges(state_names_, before.data(), y, &events_[first], &events_.back());

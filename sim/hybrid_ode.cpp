@@ -21,7 +21,9 @@ struct HybridOde::Impl {
         lift(*program),
         stick(*program),
         whens(std::make_unique<WhenEvents>(*program)),
-        ode(*program, *ws, /*row_energy=*/false) {
+        ode(*program, *ws, /*row_energy=*/false),
+        run_rtol(rtol) {
+    whens->SetTolerance(rtol);
     rt::SetInputSource(*ws, &inputs);
     ode.SetInputs(&inputs);
     if (stops.Active()) ode.SetStops(&stops);
@@ -40,6 +42,7 @@ struct HybridOde::Impl {
   detail::EngineOde ode;
   std::vector<double> g;  // every event function, the graze guards too (scratch)
   std::vector<EventRecord> start_events;  // Start's, with their jumps
+  double run_rtol;                        // the when clauses' accumulation test
 };
 
 HybridOde::HybridOde(std::shared_ptr<const rt::Program> program, double rtol, double atol)
@@ -149,6 +152,7 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   m.stops.SetResting(std::vector<double>(modes.begin(), modes.begin() + static_cast<long>(n_stops)));
   m.stick.SetModes(std::vector<double>(modes.begin() + static_cast<long>(n_stops), modes.end()));
   m.whens = std::make_unique<WhenEvents>(*m.program);  // no terminate fired in the restored state
+  m.whens->SetTolerance(m.run_rtol);
   if (m.whens->Active()) m.ode.SetWhens(m.whens.get());
   return true;
 }

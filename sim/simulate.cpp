@@ -275,6 +275,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (lift.Active()) ode.SetLiftOff(&lift);
   if (stick.Active()) ode.SetStickSlip(&stick);
   WhenEvents whens(program);  // when clauses (sim/when_events.h)
+  whens.SetTolerance(iopt.rtol);
   if (whens.Active()) ode.SetWhens(&whens);
   if (hooks.rhs_fault) ode.SetFault(hooks.rhs_fault);
   ode.SetHoldRows(hooks.hold_zone_rows);

@@ -16,6 +16,10 @@ namespace kanesim::sim {
 class WhenEvents {
  public:
   explicit WhenEvents(const rt::Program& program);
+  // The run's relative tolerance: the accumulation of a clause's events is taken as reached
+  // when less than kZenoTimes of it (times max(1, |t|)) is left to the accumulation point.
+  void SetTolerance(double rtol) { rtol_ = rtol; }
+  static constexpr double kZenoTimes = 100.0;
   bool Active() const { return !clause_of_.empty(); }
   int Count() const { return static_cast<int>(clause_of_.size()); }
   // g_i = -h_i for every indicator of every clause, in order. 0, or Derivative's codes.
@@ -25,7 +29,7 @@ class WhenEvents {
   using JumpSolver = std::function<int(const std::vector<int>& rows, const std::vector<double>& targets, double* du)>;
   // Indicator i crossed at (t, y): its clause's reinits, every value taken at the left limit;
   // coordinates set, then the speeds by one impulse: `solve` (null: SpeedJump, the impulse
-  // on those speeds alone; EndStopEvents::HeldJump also holds the resting contacts). y jumps
+  // on those speeds alone, with Coulomb friction impulses where a joint has mu: FrictionSpeedJump; EndStopEvents::HeldJump also holds the resting contacts). y jumps
   // in place.
   int Event(rt::Workspace& ws, double t, double* y, int i, const JumpSolver& solve = nullptr);
   // The entries of y that indicator i's clause sets (coordinates and speeds).
@@ -42,9 +46,21 @@ class WhenEvents {
 
  private:
   std::string SingularJump(const std::string& clause) const;
+  // Clause c fires at t: "" or why the run stops there (its events accumulate).
+  std::string Accumulation(int c, double t);
+  // Per clause: its last fire times and, once they shrink geometrically, the ratio and the
+  // accumulation point of the series (sim/when_events.cpp "Accumulation").
+  struct History {
+    std::vector<double> times;
+    bool geometric = false;
+    double ratio = 0.0, t_inf = 0.0, since = 0.0;  // since: the first time of the geometric stretch
+  };
+  std::vector<History> history_;
+  double rtol_ = 1e-6;
   const rt::Program& program_;
   std::vector<int> clause_of_, root_of_;  // per indicator: its clause, its tape root
   int nq_ = 0, nu_ = 0;
+  bool friction_ = false;  // a joint with mu: the jump takes friction impulses (sim/friction_impulse.h)
   bool terminated_ = false;
   std::string message_, error_;
   EventRecord last_;

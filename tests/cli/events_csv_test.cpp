@@ -210,5 +210,56 @@ TEST(EventsCsv, AReinitFlingsAJointOffItsStop) {
   EXPECT_NEAR(std::stod(hit->after), -1.0, 1e-8);  // restitution 1/2
 }
 
+// `kanesim run` of a ball written by hand (when p.q < 0 then reinit(p.u, -e pre(p.u))): its
+// bounces accumulate at t_inf = t1 (1 + e) / (1 - e), t1 = sqrt(2 h / g). If this fails, the
+// run ends in a step-size underflow (DOP853) or falls through the floor (the others) instead
+// of exit 2 naming the clause and t_inf, with the rows up to it on disk.
+TEST(EventsCsv, AccumulatingWhenEventsExitTwoAtTheirAccumulationPoint) {
+  const std::string d = Work("when_zeno");
+  Write(d + "/ball.mech",
+        "model Ball\n  parameter Real e = 0.8;\n  World world(g = {0, -9.81, 0});\n"
+        "  Prismatic p(axis = {0, 1, 0}, q(start = 1));\n  Body b(m = 1);\nequation\n"
+        "  connect(world.frame_b, p.frame_a);\n  connect(p.frame_b, b.frame_a);\n"
+        "  when p.q < 0 then\n    reinit(p.u, -e * pre(p.u));\n  end when;\n"
+        "  annotation(experiment(StopTime = 10, Interval = 0.1, Tolerance = 1e-12));\nend Ball;\n");
+  const double t_inf = std::sqrt(2 / 9.81) * 1.8 / 0.2;
+  for (const char* integrator : {"dop853", "cvode", "ida"}) {
+    Result r = Kanesim(std::string("run ball.mech --integrator ") + integrator + " -o rows.csv", d);
+    EXPECT_EQ(r.rc, 2) << integrator << ": " << r.err;
+    EXPECT_TRUE(Has(r.err, "when (ball.mech:9)")) << r.err;
+    EXPECT_TRUE(Has(r.err, "PlaneContact")) << r.err;
+    const size_t at = r.err.find("accumulation point at t = ");
+    ASSERT_NE(at, std::string::npos) << r.err;
+    EXPECT_NEAR(std::stod(r.err.substr(at + 26)), t_inf, 1e-6 * t_inf) << integrator;
+    EXPECT_GE(CsvRows(d + "/rows.csv"), 41) << integrator << ": the grid's rows up to t_inf (0, 0.1, ..., 4.0)";
+  }
+}
+
+// `kanesim run --events` of a reinit in a mechanism with Coulomb friction mu (docs/events.md
+// "Friction in a jump"): a slider on an axis at 0.6 rad on a carrier whose speed is set from
+// 0 to 3 slides on with u+ = 1 - 3 cos 0.6 + 0.4 (3 sin 0.6) (its normal impulse m_s 3 sin 0.6).
+// If this fails, the reinit is refused (K321, before) or the row lacks the slider's speed.
+TEST(EventsCsv, AReinitWithMuFrictionTakesTheFrictionImpulse) {
+  const std::string d = Work("when_mu");
+  Write(d + "/s.mech",
+        "model S\n  World world(g = {0, 0, 0});\n  Prismatic cx(axis = {1, 0, 0});\n  Body carrier(m = 2);\n"
+        "  Prismatic s(axis = {cos(0.6), sin(0.6), 0}, u(start = 1), mu = 0.4);\n  Body slider(m = 0.5);\n"
+        "equation\n  connect(world.frame_b, cx.frame_a);\n  connect(cx.frame_b, carrier.frame_a);\n"
+        "  connect(carrier.frame_a, s.frame_a);\n  connect(s.frame_b, slider.frame_a);\n"
+        "  when time > 0.1 then\n    reinit(cx.u, 3);\n  end when;\n"
+        "  annotation(experiment(StopTime = 0.2, Interval = 0.1, Tolerance = 1e-10));\nend S;\n");
+  Result r = Kanesim("run s.mech -o rows.csv --events ev.csv", d);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const double want = 1 - 3 * std::cos(0.6) + 0.4 * 3 * std::sin(0.6);
+  bool seen = false;
+  for (const EventRow& row : ReadEvents(d + "/ev.csv"))
+    if (row.signal == "s.u") {
+      seen = true;
+      EXPECT_EQ(std::stod(row.before), 1.0);
+      EXPECT_NEAR(std::stod(row.after), want, 1e-12);
+    }
+  EXPECT_TRUE(seen);
+}
+
 }  // namespace
 }  // namespace kanesim::clitest

@@ -239,5 +239,53 @@ TEST(WhenEvents, SensitivitiesRefuseWhenClauses) {
   EXPECT_TRUE(sink.rows.empty());
 }
 
+// The accumulation point a run's message names ("... at t = 4.06... (estimated"), or NaN.
+double AccumulationTime(const std::string& message) {
+  const size_t at = message.find("accumulation point at t = ");
+  return at == std::string::npos ? NAN : std::stod(message.substr(at + 26));
+}
+
+// A ball written by hand, when p.q < 0 then reinit(p.u, -e pre(p.u)): its impacts accumulate
+// at t_inf = t1 (1 + e) / (1 - e). If this fails, the run ended in a step-size underflow at
+// t_inf (DOP853), or fell through the floor after a missed crossing (CVODE, IDA, ARKODE ran
+// on to the stop time with the ball below the floor), instead of stopping (exit 2) there with
+// a message naming the clause and t_inf, the rows before it kept.
+TEST(WhenEvents, AccumulatingBouncesStopAtTheirAccumulationPoint) {
+  const double h = 1.0, t1 = std::sqrt(2 * h / kG);
+  for (double e : {0.8, 0.5}) {
+    const double t_inf = t1 * (1 + e) / (1 - e);
+    auto l = LoadModel(Ball(h, "  when p.q < 0 then\n    reinit(p.u, -" + Num(e) + " * pre(p.u));\n  end when;\n"), {},
+                       {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    for (double tol : {1e-12, 1e-10})
+      for (const IntegratorChoice& how : AllIntegrators()) {
+        sim::SimResult r;
+        sim::MemorySink s = RunWith(*l->prog, how, 2 * t_inf, 0.05, {"p.q", "p.u"}, &r, tol);
+        ASSERT_EQ(r.status, sim::SimResult::Status::kNumericalFailure) << how.name << " e " << e << ": " << r.message;
+        EXPECT_NE(r.message.find("when (") , std::string::npos) << r.message;
+        EXPECT_NE(r.message.find("accumulate"), std::string::npos) << r.message;
+        EXPECT_NE(r.message.find("PlaneContact"), std::string::npos) << r.message;
+        const double est = AccumulationTime(r.message);
+        EXPECT_NEAR(est, t_inf, (tol < 1e-11 ? 1e-6 : 1e-5) * t_inf) << how.name << " e " << e << " tol " << tol;
+        // Every row before it: the grid up to t_inf (and the events' pairs), none below the floor.
+        ASSERT_FALSE(s.times.empty());
+        EXPECT_LT(s.times.back(), t_inf) << how.name;
+        EXPECT_GT(s.times.back(), t_inf - 0.05 - 1e-9) << how.name;
+        for (size_t i = 0; i < s.rows.size(); ++i) EXPECT_GE(s.rows[i][0], -1e-6) << how.name << " t = " << s.times[i];
+      }
+  }
+}
+
+// If this fails, a clause whose events slow down or keep their pace (a ball bouncing with
+// e = 1; a clock) was taken for accumulating.
+TEST(WhenEvents, EventsAtAnEvenPaceDoNotAccumulate) {
+  auto l = LoadModel(Ball(1.0, "  when p.q < 0 then\n    reinit(p.u, -pre(p.u));\n  end when;\n"), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  sim::SimResult r;
+  RunWith(*l->prog, AllIntegrators()[0], 10.0, 0.1, {"p.q"}, &r, 1e-10);
+  EXPECT_EQ(r.status, sim::SimResult::Status::kOk) << r.message;
+  EXPECT_EQ(r.stats.events.size(), 11u);  // at t1, 3 t1, ..., 21 t1 < 10 (t1 = 0.4515)
+}
+
 }  // namespace
 }  // namespace kanesim::test

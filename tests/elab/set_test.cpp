@@ -183,5 +183,41 @@ TEST(Set, OneInstanceOfASharedDeclarationChangesAlone) {
   EXPECT_EQ(bad->errors.find("'j1.restitution'"), std::string::npos) << bad->errors;
 }
 
+// A value given from outside over a declaration of literals (Revolute's
+// `friction_torque(unit = "N.m", min = 0) = 0` given `friction_torque = 0.5`, a Rod's
+// `body(m = m)`) is the instance's own, read under the declaration's attributes
+// (Node::mod_over_decl). If this fails, an instance read another's value, a --set of one
+// instance (or one array element) reached the others, or the declaration's bound was lost.
+TEST(Set, AValueGivenFromOutsideKeepsTheDeclarationsAttributes) {
+  const std::string model =
+      ModelWith("  Revolute j1(friction_torque = 0.5), j2(friction_torque = 0.125), j3;\n  Rod links[3](each L = 2);");
+  auto e = ElaborateText(model, {{"j2.friction_torque", "0.25"}, {"links[2].m", "5"}, {"links[3].body.m", "4"}});
+  ASSERT_TRUE(e->ok) << e->errors;
+  EXPECT_DOUBLE_EQ(e->P("j1.friction_torque"), 0.5);
+  EXPECT_DOUBLE_EQ(e->P("j1.friction_torque_s"), 0.5);  // bound to friction_torque in the declaration
+  EXPECT_DOUBLE_EQ(e->P("j2.friction_torque"), 0.25);
+  EXPECT_DOUBLE_EQ(e->P("j2.friction_torque_s"), 0.25);
+  EXPECT_DOUBLE_EQ(e->P("j3.friction_torque"), 0);
+  const double body_m[3] = {1, 5, 4};
+  for (int k = 0; k < 3; ++k) {
+    const std::string el = "links[" + std::to_string(k + 1) + "]";
+    EXPECT_DOUBLE_EQ(e->P(el + ".body.m"), body_m[k]) << el;
+    EXPECT_DOUBLE_EQ(e->P(el + ".tip.r[1]"), 2) << el;
+  }
+  // The declaration's bound (min = 0) holds under a value from the file and from --set,
+  // for the instance given it alone.
+  auto bad = ElaborateText(ModelWith("  Revolute j1(friction_torque = -1), j2(friction_torque = 1);"));
+  EXPECT_FALSE(bad->ok);
+  EXPECT_NE(bad->errors.find("'j1.friction_torque' = -1.000000 is outside its range [0.000000, inf]"),
+            std::string::npos)
+      << bad->errors;
+  EXPECT_EQ(bad->errors.find("'j2.friction_torque'"), std::string::npos) << bad->errors;
+  auto bad_set = ElaborateText(ModelWith("  Rod links[3];"), {{"links[3].body.m", "-2"}});
+  EXPECT_FALSE(bad_set->ok);
+  EXPECT_NE(bad_set->errors.find("'links[3].body.m' = -2.000000 is outside its range"), std::string::npos)
+      << bad_set->errors;
+  EXPECT_EQ(bad_set->errors.find("'links[2].body.m'"), std::string::npos) << bad_set->errors;
+}
+
 }  // namespace
 }  // namespace kanesim::lang::test

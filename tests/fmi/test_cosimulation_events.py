@@ -8,10 +8,11 @@ import math
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description, simulate_fmu
+from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
-from test_events import G, LIFT, SLIDER, WHEN_BALL, on_grid, run
+from conftest import open_instance
+from test_events import G, LIFT, SLIDER, WHEN_BALL, assert_grid_rows_equal, run
 
 with open(WHEN_BALL) as f:  # the model's text (test_events.py names its file)
     WHEN_TEXT = f.read().replace("Interval = 0.1, Tolerance = 1e-12", "Interval = 0.01, Tolerance = 1e-10")
@@ -28,9 +29,7 @@ def test_when_clauses_in_fmi2_co_simulation_equal_run_and_terminate_at_its_time(
                      output=["p.q", "p.u"], logger=lambda c, n, status, cat, m: messages.append(m.decode()))
     assert r["time"][-1] == pytest.approx(2.0, abs=1e-9) and r["time"][-1] == ref["time"][-1]
     assert any("terminate at t = 2" in m and "two seconds" in m for m in messages), messages
-    fmu_q, run_q = on_grid(r, "p.q"), on_grid(ref, "p.q")
-    common = sorted(set(fmu_q) & set(run_q))
-    assert len(common) > 150 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-7
+    assert_grid_rows_equal(r, ref, "p.q", 150, 1e-7)
     # The bounces happened inside the steps: the speed after each is -e times the one before,
     # so the rows on the grid hold the run's rebounds (3 fires before t = 2).
     assert len([e for e in events if e["kind"] == "fires"]) >= 3
@@ -38,19 +37,11 @@ def test_when_clauses_in_fmi2_co_simulation_equal_run_and_terminate_at_its_time(
 
 
 def test_when_clauses_in_fmi3_co_simulation_signal_terminate_simulation(export, write_model, tmp_path):
-    from fmpy.fmi3 import FMU3Slave
-
     path = write_model("when.mech", WHEN_TEXT)
     ref, _ = run(path)
     fmu = export(path, fmi=3, kind="cs")
     assert validate_fmu(fmu) == []
-    d = extract(fmu, unzipdir=str(tmp_path / "u3"))
-    md = read_model_description(d)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    s = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier)
-    s.instantiate()
-    s.enterInitializationMode(tolerance=1e-10, startTime=0.0)
-    s.exitInitializationMode()
+    s, _, vr = open_instance(fmu, tmp_path / "u3", 3, "cs", tolerance=1e-10)
     t, h = 0.0, 0.03
     for _ in range(200):
         event, terminate, early, last = s.doStep(t, h)
@@ -79,9 +70,7 @@ def test_exact_friction_in_co_simulation_slides_then_sticks_as_run(export, write
     ref, _ = run(path)
     r = simulate_fmu(fmu, fmi_type="CoSimulation", stop_time=1.5, output_interval=0.01, relative_tolerance=1e-10,
                      output=["slide.q", "slide.u"])
-    fmu_q, run_q = on_grid(r, "slide.q"), on_grid(ref, "slide.q")
-    common = sorted(set(fmu_q) & set(run_q))
-    assert len(common) > 140 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-8
+    assert_grid_rows_equal(r, ref, "slide.q", 140, 1e-8)
     c, w = 0.3 * G / 10, math.sqrt(10.0)
     stuck = r["time"] > math.pi / w + 1e-6
     assert np.max(np.abs(r["slide.q"][stuck] - (2 * c - 1))) < 1e-9
@@ -92,17 +81,9 @@ def test_a_saved_state_in_co_simulation_continues_across_the_stick_bit_for_bit(e
     # Saved while sliding (before the stick at pi / w = 0.993) and while stuck: the FMU state
     # holds the friction's mode and holding force, so the continuation, from the state and from
     # its serialized bytes, is the same bit for bit.
-    from fmpy.fmi2 import FMU2Slave
-
     fmu = export(write_model("slider.mech", SLIDER), fmi=2, kind="cs")
-    d = extract(fmu, unzipdir=str(tmp_path / "u2"))
-    md = read_model_description(d)
-    vr = [v.valueReference for v in md.modelVariables if v.name in ("slide.q", "slide.u")]
-    s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier)
-    s.instantiate()
-    s.setupExperiment(tolerance=1e-10, startTime=0.0)
-    s.enterInitializationMode()
-    s.exitInitializationMode()
+    s, _, vrs = open_instance(fmu, tmp_path / "u2", 2, "cs", tolerance=1e-10)
+    vr = [vrs["slide.q"], vrs["slide.u"]]
 
     def steps(k0, n):
         out = []

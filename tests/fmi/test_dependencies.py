@@ -7,39 +7,20 @@ from ctypes import POINTER, c_double
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Model
-from fmpy.fmi3 import FMU3Model
+from fmpy import read_model_description
 
-from conftest import EXAMPLES
+from conftest import EXAMPLES, open_instance
+from fmu_models import link, pendulums
 
 # Two pendulums: each one's input, states and outputs stay its own, but for the first's torque,
 # which reads where the second's tip is (its joints' coordinates, not their speeds).
-PAIR = """
-model Pair "Two pendulums, each driven by its own input"
-  input Real ta;
-  input Real tb;
-  World world;
-  Revolute ja(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.8));
-  Rod ra(L = 1, m = 1);
-  Revolute jb(axis = {0, 0, 1}, q(start = -0.2), u(start = 0.5));
-  Rod rb(L = 0.7, m = 0.6);
-  Revolute jc(axis = {0, 0, 1}, q(start = 0.4), u(start = -0.3));
-  Rod rc(L = 0.5, m = 0.4);
-  output Real xa = ra.frame_b.r[1];
-  output Real pb = jb.u * tb;
-  output Real vc = rc.frame_b.v[2];
-equation
-  connect(world.frame_b, ja.frame_a);
-  connect(ja.frame_b, ra.frame_a);
-  connect(world.frame_b, jb.frame_a);
-  connect(jb.frame_b, rb.frame_a);
-  connect(rb.frame_b, jc.frame_a);
-  connect(jc.frame_b, rc.frame_a);
-  ja.tau = ta + 0.2 * rc.frame_b.r[2];
-  jc.tau = tb - 0.1 * jc.u;
-end Pair;
-"""
+PAIR = pendulums("Pair", "Two pendulums, each driven by its own input",
+                 [[link("ja", "ra", 1, 1, 0.3, 0.8)],
+                  [link("jb", "rb", 0.7, 0.6, -0.2, 0.5), link("jc", "rc", 0.5, 0.4, 0.4, -0.3)]],
+                 declarations=["input Real ta;", "input Real tb;"],
+                 outputs=["output Real xa = ra.frame_b.r[1];", "output Real pb = jb.u * tb;",
+                          "output Real vc = rc.frame_b.v[2];"],
+                 equations=["ja.tau = ta + 0.2 * rc.frame_b.r[2];", "jc.tau = tb - 0.1 * jc.u;"])
 
 # Rotations: a body on a free joint (quaternion) pushed by an input force, and a pendulum
 # on a Cardan-angle spherical joint driven by an input torque; a spring between them
@@ -100,18 +81,8 @@ class Probe:
     """An ME instance at a state and inputs; the derivatives and outputs as one vector."""
 
     def __init__(self, fmu, tmp_path, fmi):
-        d = extract(fmu, unzipdir=str(tmp_path / f"probe{fmi}_{os.path.basename(fmu)}"))
-        self.md = md = read_model_description(d)
-        Model = FMU2Model if fmi == 2 else FMU3Model
-        self.m = m = Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier)
-        m.instantiate()
-        if fmi == 2:
-            m.setupExperiment(startTime=0.0)
-            m.enterInitializationMode()
-        else:
-            m.enterInitializationMode(startTime=0.0)
-        m.exitInitializationMode()
-        m.enterContinuousTimeMode()
+        m, md, _ = open_instance(fmu, tmp_path / f"probe{fmi}_{os.path.basename(fmu)}", fmi, "me")
+        self.m, self.md = m, md
         self.set_real = m.setReal if fmi == 2 else m.setFloat64
         self.get_real = m.getReal if fmi == 2 else m.getFloat64
         self.get_der = m.getDerivatives if fmi == 2 else m.getContinuousStateDerivatives

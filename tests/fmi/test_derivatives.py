@@ -10,56 +10,22 @@ from ctypes import POINTER, c_double
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Model
-from fmpy.fmi3 import FMU3Model
 
-from conftest import EXAMPLES, kanesim
+from conftest import EXAMPLES, kanesim, open_instance
+from fmu_models import double_pendulum
 
 # A double pendulum moving (velocity terms in A), driven by an input torque at its base.
-DOUBLE = """
-model Double "A double pendulum with an input torque"
-  input Real tau;
-  World world;
-  Revolute j1(axis = {0, 0, 1}, q(start = 0.3), u(start = 0.8));
-  Rod rod1(L = 1, m = 1);
-  Revolute j2(axis = {0, 0, 1}, q(start = 0.5), u(start = -0.4));
-  Rod rod2(L = 0.7, m = 0.6);
-  output Real tip = rod2.frame_b.r[2];
-equation
-  connect(world.frame_b, j1.frame_a);
-  connect(j1.frame_b, rod1.frame_a);
-  connect(rod1.frame_b, j2.frame_a);
-  connect(j2.frame_b, rod2.frame_a);
-  j1.tau = tau;
-end Double;
-"""
+DOUBLE = double_pendulum("Double", "A double pendulum with an input torque", 0.3, 0.8, 0.5, -0.4,
+                         declarations=["input Real tau;"], outputs=["output Real tip = rod2.frame_b.r[2];"],
+                         equations=["j1.tau = tau;"])
 TAU = 0.7
 
 
 def me_instance(fmu, tmp_path, fmi):
-    d = extract(fmu, unzipdir=str(tmp_path / f"fmu{fmi}"))
-    md = read_model_description(d)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    if fmi == 2:
-        m = FMU2Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier)
-        m.instantiate()
-        m.setupExperiment(startTime=0.0)
-        m.enterInitializationMode()
-        m.setReal([vr["tau"]], [TAU])
-        m.exitInitializationMode()
-        m.enterContinuousTimeMode()
-        set_input = lambda v: m.setReal([vr["tau"]], [v])
-        get_out = lambda: m.getReal([vr["tip"]])[0]
-    else:
-        m = FMU3Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier)
-        m.instantiate()
-        m.enterInitializationMode(startTime=0.0)
-        m.setFloat64([vr["tau"]], [TAU])
-        m.exitInitializationMode()
-        m.enterContinuousTimeMode()
-        set_input = lambda v: m.setFloat64([vr["tau"]], [v])
-        get_out = lambda: m.getFloat64([vr["tip"]])[0]
+    m, md, vr = open_instance(fmu, tmp_path / f"fmu{fmi}", fmi, "me", sets={"tau": TAU})
+    set_real, get_real = (m.setReal, m.getReal) if fmi == 2 else (m.setFloat64, m.getFloat64)
+    set_input = lambda v: set_real([vr["tau"]], [v])
+    get_out = lambda: get_real([vr["tip"]])[0]
     states = [v.name for v in md.modelVariables if v.name in ("j1.q", "j2.q", "j1.u", "j2.u")]
     return m, md, vr, states, set_input, get_out
 
@@ -137,22 +103,10 @@ def test_directional_derivatives_of_a_tree_and_a_closed_loop_equal_central_diffe
     # The examples as exported (a tree; a four-bar whose derivative projects onto its loop):
     # every column d der(y) / d y_j against central differences of fmi*GetDerivatives.
     fmu = export(os.path.join(EXAMPLES, name), fmi=fmi, kind="both")
-    d = extract(fmu, unzipdir=str(tmp_path / f"ex{fmi}"))
-    md = read_model_description(d)
-    me = md.modelExchange
-    caps = ET.parse(os.path.join(d, "modelDescription.xml")).getroot().find("ModelExchange").attrib
+    m, md, _ = open_instance(fmu, tmp_path / f"ex{fmi}", fmi, "me")
+    caps = ET.parse(tmp_path / f"ex{fmi}" / "modelDescription.xml").getroot().find("ModelExchange").attrib
     assert caps["providesDirectionalDerivative" if fmi == 2 else "providesDirectionalDerivatives"] == "true"
     assert fmi == 2 or caps["providesAdjointDerivatives"] == "true"
-    Model = FMU2Model if fmi == 2 else FMU3Model
-    m = Model(guid=md.guid, unzipDirectory=d, modelIdentifier=me.modelIdentifier)
-    m.instantiate()
-    if fmi == 2:
-        m.setupExperiment(startTime=0.0)
-        m.enterInitializationMode()
-    else:
-        m.enterInitializationMode(startTime=0.0)
-    m.exitInitializationMode()
-    m.enterContinuousTimeMode()
     ptr = lambda a: a.ctypes.data_as(POINTER(c_double))
     n = len(md.derivatives)
     x0 = np.zeros(n)

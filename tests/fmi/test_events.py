@@ -62,6 +62,24 @@ def on_grid(r, name, interval=0.01):
     return out
 
 
+def assert_grid_rows_equal(r, ref, name, at_least, tol):
+    """More than `at_least` rows on the grid common to the FMU's `r` and the run's `ref`, and
+    their `name` within `tol`."""
+    fmu_q, run_q = on_grid(r, name), on_grid(ref, name)
+    common = sorted(set(fmu_q) & set(run_q))
+    assert len(common) > at_least and max(abs(fmu_q[k] - run_q[k]) for k in common) < tol
+
+
+def exported_copy(export, write_model, source, name, fmi):
+    """The model file `source` copied to the test's folder as `name` (run() writes its events
+    CSV beside it), its path and its Model Exchange FMU, which FMPy validates."""
+    with open(source) as f:
+        path = write_model(name, f.read())
+    fmu = export(path, fmi=fmi, kind="me")
+    assert validate_fmu(fmu) == []
+    return path, fmu
+
+
 def impact_times(events):
     """The run's impact times: the events CSV has a row per state entry an event changed (an
     impact that also puts q exactly on its stop has two), so one time per impact."""
@@ -101,17 +119,12 @@ def test_a_bouncing_ball_through_fmpy_model_exchange_equals_run_and_the_closed_f
     after = r["time"] > rest + 0.01
     assert np.max(np.abs(r["lift.q"][after])) < 1e-7 and np.max(np.abs(r["lift.u"][after])) < 1e-7
     # The rows on the output grid equal the run's.
-    fmu_q, run_q = on_grid(r, "lift.q"), on_grid(ref, "lift.q")
-    common = sorted(set(fmu_q) & set(run_q))
-    assert len(common) > 200 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+    assert_grid_rows_equal(r, ref, "lift.q", 200, 1e-6)
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_a_pendulum_on_end_stops_through_fmpy_model_exchange_equals_run(export, write_model, fmi):
-    with open(STOPPED) as f:
-        path = write_model("stopped.mech", f.read())  # run() writes its events CSV beside it
-    fmu = export(path, fmi=fmi, kind="me")
-    assert validate_fmu(fmu) == []
+    path, fmu = exported_copy(export, write_model, STOPPED, "stopped.mech", fmi)
     assert read_model_description(fmu).numberOfEventIndicators == 4  # q_min, q_max, their graze guards
     ref, events = run(path)
     r = me(fmu, 2, ["hinge.q", "hinge.u"])
@@ -124,19 +137,14 @@ def test_a_pendulum_on_end_stops_through_fmpy_model_exchange_equals_run(export, 
     # Then at rest on q_min, held there by its reaction (gravity pulls it on), as in the run.
     after = r["time"] > impacts[-1] + 0.01
     assert np.max(np.abs(r["hinge.q"][after] + 0.5)) < 1e-7 and np.max(np.abs(r["hinge.u"][after])) < 1e-7
-    fmu_q, run_q = on_grid(r, "hinge.q"), on_grid(ref, "hinge.q")
-    common = sorted(set(fmu_q) & set(run_q))
-    assert len(common) > 150 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+    assert_grid_rows_equal(r, ref, "hinge.q", 150, 1e-6)
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_when_clauses_reinit_and_terminate_through_fmpy_model_exchange(export, write_model, fmi):
     # reinit(p.u, -e pre(p.u)) at p.q = 0, terminate at t = 2: the run's events, the closed
     # form's impact times t_1 (1 + 2 e + ... + 2 e^(k-1)), and the simulation ends at 2.
-    with open(WHEN_BALL) as f:
-        path = write_model("when.mech", f.read())  # run() writes its events CSV beside it
-    fmu = export(path, fmi=fmi, kind="me")
-    assert validate_fmu(fmu) == []
+    path, fmu = exported_copy(export, write_model, WHEN_BALL, "when.mech", fmi)
     ref, events = run(path)
     r = me(fmu, 3, ["p.q", "p.u"])
     assert r["time"][-1] == pytest.approx(2.0, abs=1e-9) and ref["time"][-1] == pytest.approx(2.0, abs=1e-9)
@@ -149,7 +157,6 @@ def test_when_clauses_reinit_and_terminate_through_fmpy_model_exchange(export, w
     assert r["p.u"][-1] == pytest.approx(ref["p.u"][-1], abs=1e-6)
 
 
-
 RESTING = os.path.join(SOURCE, "tests", "data", "resting_reinit.mech")
 
 
@@ -158,9 +165,7 @@ def test_a_reinit_that_flings_a_resting_joint_off_its_stop_through_fmpy_model_ex
     # The rod rests on q_max = -2 until a when clause sets its speed to -2 at t = 1: the FMU's
     # event update releases it as the run does (docs/events.md), so it swings free and strikes
     # the stop again at the run's time, at speed 2 (energy kept), bouncing back at -1.
-    with open(RESTING) as f:
-        path = write_model("resting.mech", f.read())  # run() writes its events CSV beside it
-    fmu = export(path, fmi=fmi, kind="me")
+    path, fmu = exported_copy(export, write_model, RESTING, "resting.mech", fmi)
     ref, events = run(path)
     r = me(fmu, 2, ["j1.q", "j1.u"])
     t, q, u = r["time"], r["j1.q"], r["j1.u"]
@@ -171,9 +176,7 @@ def test_a_reinit_that_flings_a_resting_joint_off_its_stop_through_fmpy_model_ex
     assert len(got) >= 2 and abs(got[0] - 1) < 1e-9 and abs(got[1] - impacts[0]) < 1e-7
     k = int(np.nonzero(t == got[1])[0][0])
     assert u[k] == pytest.approx(2, abs=1e-6) and u[k + 1] == pytest.approx(-1, abs=1e-6)
-    fmu_q, run_q = on_grid(r, "j1.q"), on_grid(ref, "j1.q")
-    common = sorted(set(fmu_q) & set(run_q))
-    assert len(common) > 150 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+    assert_grid_rows_equal(r, ref, "j1.q", 150, 1e-6)
 
 
 SLIDER = _text("coulomb_slider.mech")
@@ -225,8 +228,6 @@ def test_a_bouncing_ball_in_co_simulation_equals_run(export, write_model, fmi):
     r = simulate_fmu(export(path, fmi=fmi, kind="cs"), fmi_type="CoSimulation", stop_time=2.5, output_interval=0.01,
                      relative_tolerance=1e-10, output=["lift.q", "lift.u"])
     assert np.min(r["lift.q"]) > -1e-7
-    fmu_q, run_q = on_grid(r, "lift.q"), on_grid(ref, "lift.q")
-    common = sorted(set(fmu_q) & set(run_q))
-    assert len(common) > 200 and max(abs(fmu_q[k] - run_q[k]) for k in common) < 1e-6
+    assert_grid_rows_equal(r, ref, "lift.q", 200, 1e-6)
     after = r["time"] > 1.9  # at rest from the accumulation point 1.806 on
     assert np.max(np.abs(r["lift.q"][after])) < 1e-7 and np.max(np.abs(r["lift.u"][after])) < 1e-7

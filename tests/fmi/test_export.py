@@ -14,6 +14,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from conftest import EXAMPLES, kanesim
+from fmu_models import single_pendulum
 
 DDP = os.path.join(EXAMPLES, "damped_driven_pendulum.mech")
 DOUBLE = os.path.join(EXAMPLES, "double_pendulum.mech")
@@ -127,16 +128,7 @@ def test_fmi3_lists_time_as_the_independent_variable_and_derivatives_by_value_re
         assert "binaries/x86_64-linux/DampedDrivenPendulum.so" in z.namelist()
 
 
-STOPPED = """
-model Stopped "A pendulum that hits an end stop"
-  World world;
-  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3), q_min = -0.5, q_max = 0.5);
-  Rod rod(L = 1, m = 1);
-equation
-  connect(world.frame_b, hinge.frame_a);
-  connect(hinge.frame_b, rod.frame_a);
-end Stopped;
-"""
+STOPPED = single_pendulum("Stopped", "A pendulum that hits an end stop", q_min=-0.5, q_max=0.5)
 
 
 def test_end_stops_are_handled_in_co_simulation(export, write_model, tmp_path):

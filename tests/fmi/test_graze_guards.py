@@ -10,7 +10,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from test_events import G, run
+from test_events import G, impact_times, jumps, run
 
 DELTA = 1e-6  # the apex above the ceiling: the gap is negative for 2 sqrt(2 DELTA / g) = 0.9 ms
 V0 = math.sqrt(2 * G * (1 + DELTA))
@@ -39,15 +39,14 @@ def test_a_graze_inside_a_master_step_is_the_runs_impact(export, write_model):
     assert "graze guard" in [v for v in md.modelVariables if v.name == "eventIndicator[2]"][0].description
     ref, events = run(path)
     t_hit = (V0 - math.sqrt(V0 ** 2 - 2 * G)) / G  # y = 1 on the way up (closed form)
-    impacts = sorted({float(e["time"]) for e in events if e["kind"].startswith("impact")})
+    impacts = impact_times(events)
     assert len(impacts) == 1 and impacts[0] == pytest.approx(t_hit, abs=1e-9)
     r = simulate_fmu(fmu, fmi_type="ModelExchange", stop_time=1, output_interval=0.01, relative_tolerance=1e-10,
                      record_events=True, output=["lift.q", "lift.u"])
-    t, u = r["time"], r["lift.u"]
-    jumps = [t[k] for k in range(1, len(t)) if t[k] == t[k - 1] and u[k] != u[k - 1]]
+    got = jumps(r, "lift.u")
     # The master's CVODE locates the gap's crossing to its own error there: ~1e-10 m in the
     # gap over the gap's rate sqrt(2 g DELTA) = 4.4e-3 m/s, about 2e-8 s.
-    assert len(jumps) == 1 and jumps[0] == pytest.approx(t_hit, abs=1e-7)
+    assert len(got) == 1 and got[0] == pytest.approx(t_hit, abs=1e-7)
     assert np.max(r["lift.q"]) < 1 + 1e-9  # never through the ceiling
     # Then 0.55 s of fall: the located time's 2e-8 s moves the rebound by g dt (1 + e), ~2e-7 m.
     assert r["lift.q"][-1] == pytest.approx(ref["lift.q"][-1], abs=1e-6)

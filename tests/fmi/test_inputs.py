@@ -3,34 +3,25 @@ equals `kanesim run --input-file` of the same table, and a PD controller in a Py
 1 kHz reproduces the same controller written in the .mech file, its difference shrinking
 with the sampling period as a zero-order hold's must (first order)."""
 import io
-import os
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description, simulate_fmu
-from fmpy.fmi2 import FMU2Slave
+from fmpy import simulate_fmu
 
-from conftest import kanesim
+from conftest import kanesim, open_instance
+from fmu_models import single_pendulum
 
-DRIVEN = """
-model Driven "A pendulum driven by an input torque"
-  input Real tau;
-  World world;
-  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3));
-  Rod rod(L = 1, m = 1);
-  output Real tip = rod.frame_b.r[2];
-equation
-  connect(world.frame_b, hinge.frame_a);
-  connect(hinge.frame_b, rod.frame_a);
-  hinge.tau = tau;
-  annotation(experiment(StopTime = 2, Tolerance = 1e-9, Interval = 0.01));
-end Driven;
-"""
+def driven(name, torque, parameters=()):
+    """The pendulum driven by the input tau, its torque `torque`."""
+    return single_pendulum(name, "A pendulum driven by an input torque", declarations=["input Real tau;", *parameters],
+                           outputs=["output Real tip = rod.frame_b.r[2];"], equations=[f"hinge.tau = {torque};"],
+                           annotation="StopTime = 2, Tolerance = 1e-9, Interval = 0.01")
+
+
+DRIVEN = driven("Driven", "tau")
 
 # The same pendulum under a PD law toward q = 1 written in the model.
-PD = DRIVEN.replace("model Driven", "model DrivenPD").replace("end Driven;", "end DrivenPD;").replace(
-    "hinge.tau = tau;", "hinge.tau = tau + KP * (1 - hinge.q) - KD * hinge.u;").replace(
-    "  input Real tau;", "  input Real tau;\n  parameter Real KP = 40;\n  parameter Real KD = 8;")
+PD = driven("DrivenPD", "tau + KP * (1 - hinge.q) - KD * hinge.u", ["parameter Real KP = 40;", "parameter Real KD = 8;"])
 KP, KD = 40.0, 8.0
 
 
@@ -58,14 +49,7 @@ def test_an_input_table_through_fmpy_equals_run_input_file(export, write_model, 
 
 def pd_master(fmu, tmp_path, rate):
     """The PD law in Python, sampled at `rate` Hz, its torque held over each step."""
-    d = extract(fmu, unzipdir=str(tmp_path / f"pd{rate}"))
-    md = read_model_description(d)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier)
-    s.instantiate()
-    s.setupExperiment(tolerance=1e-9, startTime=0.0)
-    s.enterInitializationMode()
-    s.exitInitializationMode()
+    s, _, vr = open_instance(fmu, tmp_path / f"pd{rate}", 2, "cs", tolerance=1e-9)
     h, n = 1.0 / rate, int(round(2.0 * rate))
     q = []
     for k in range(n):

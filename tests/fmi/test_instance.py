@@ -3,18 +3,18 @@
 process do not see each other, and hostile calls and numerical failures come back as
 fmi2Error with the reason through the logger, never as a crash of the master."""
 import os
-import shutil
 from ctypes import POINTER, byref, c_double
 
 import numpy as np
 import pytest
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                       fmi2CallbackLoggerTYPE)
 from fmpy.fmi1 import calloc, free
 from fmpy.logging import addLoggerProxy
 
-from conftest import EXAMPLES
+from conftest import EXAMPLES, initialize, instantiate, open_instance
+from fmu_models import single_pendulum
 
 DDP = os.path.join(EXAMPLES, "damped_driven_pendulum.mech")
 
@@ -42,19 +42,18 @@ class Master:
         return cb
 
     def slave(self, name="a", params=None, initialize=True):
-        s = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir, modelIdentifier=self.md.coSimulation.modelIdentifier,
-                      instanceName=name)
-        s.instantiate(callbacks=self.callbacks())
+        s = instantiate(self.dir, self.md, 2, "cs", name, callbacks=self.callbacks())
         if initialize:
-            s.setupExperiment(tolerance=1e-8, startTime=0.0)
-            for k, v in (params or {}).items():
-                s.setReal([self.vr[k]], [v])
-            s.enterInitializationMode()
-            s.exitInitializationMode()
+            start(s, self.vr, params)
         return s
 
     def get(self, s, names=("hinge.q", "hinge.u", "tip_height")):
         return s.getReal([self.vr[n] for n in names])
+
+
+def start(s, vr=None, params=None):
+    """Initialized at the tolerance every instance here runs at, `params` set on the way."""
+    initialize(s, 2, vr, params, tolerance=1e-8)
 
 
 def steps(master, s, t0, t1, h=0.01):
@@ -96,9 +95,7 @@ def test_reset_starts_over_bit_for_bit(master):
     s = master.slave()
     first = steps(master, s, 0.0, 0.3)
     s.reset()
-    s.setupExperiment(tolerance=1e-8, startTime=0.0)
-    s.enterInitializationMode()
-    s.exitInitializationMode()
+    start(s)
     assert np.array_equal(steps(master, s, 0.0, 0.3), first)
     s.terminate()
     s.freeInstance()
@@ -152,11 +149,8 @@ def test_hostile_calls_are_errors_not_crashes(master):
 
 def test_a_model_exchange_instance_refuses_nan_states(export, tmp_path):
     m = Master(export(DDP), tmp_path)
-    fmu = FMU2Model(guid=m.md.guid, unzipDirectory=m.dir, modelIdentifier=m.md.modelExchange.modelIdentifier)
-    fmu.instantiate(callbacks=m.callbacks())
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.exitInitializationMode()
+    fmu = instantiate(m.dir, m.md, 2, "me", callbacks=m.callbacks())
+    initialize(fmu, 2)
     fmu.enterContinuousTimeMode()
     x = np.array([np.nan, 0.0])
     expect_error(m, lambda: fmu.setContinuousStates(x.ctypes.data_as(POINTER(c_double)), 2), "cannot be nan")
@@ -165,17 +159,8 @@ def test_a_model_exchange_instance_refuses_nan_states(export, tmp_path):
     fmu.freeInstance()
 
 
-NAN_AFTER_HALF = """
-model Fails "A joint torque that is NaN after t = 0.5"
-  World world;
-  Revolute hinge(axis = {0, 0, 1}, q(start = 0.3));
-  Rod rod(L = 1, m = 1);
-equation
-  connect(world.frame_b, hinge.frame_a);
-  connect(hinge.frame_b, rod.frame_a);
-  hinge.tau = sqrt(0.5 - time);
-end Fails;
-"""
+NAN_AFTER_HALF = single_pendulum("Fails", "A joint torque that is NaN after t = 0.5",
+                                 equations=["hinge.tau = sqrt(0.5 - time);"])
 
 
 def test_a_numerical_failure_in_do_step_is_an_error_with_its_cause(export, write_model, tmp_path):
@@ -192,17 +177,9 @@ def test_a_numerical_failure_in_do_step_is_an_error_with_its_cause(export, write
 
 
 def test_fmi3_state_continues_bit_for_bit_and_a_step_backwards_is_an_error(export, tmp_path):
-    from fmpy.fmi3 import FMU3Slave
-
-    fmu = export(DDP, fmi=3, kind="cs")
-    d = extract(fmu, unzipdir=str(tmp_path / "u3"))
-    md = read_model_description(d)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
     messages = []
-    s = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier)
-    s.instantiate(logMessage=lambda env, status, category, message: messages.append(message.decode()))
-    s.enterInitializationMode(tolerance=1e-8, startTime=0.0)
-    s.exitInitializationMode()
+    s, _, vr = open_instance(export(DDP, fmi=3, kind="cs"), tmp_path / "u3", 3, "cs", tolerance=1e-8,
+                             logMessage=lambda env, status, category, message: messages.append(message.decode()))
     names = [vr["hinge.q"], vr["hinge.u"], vr["tip_height"], vr["time"]]
 
     def run(t0, n):

@@ -7,27 +7,14 @@ import os
 
 import pytest
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Model
-from fmpy.fmi3 import FMU3Model
 
-from conftest import EXAMPLES
+from conftest import EXAMPLES, initialize, instantiate
+from fmu_models import double_pendulum
 
-STARTS = """
-model Starts "A start from a parameter, literal starts, a start speed from a parameter"
-  parameter Real phi0(unit = "rad") = 0.3;
-  parameter Real w0(unit = "rad/s") = 0.5;
-  World world;
-  Revolute j1(axis = {0, 0, 1}, q(start = phi0), u(start = 0.8));
-  Rod rod1(L = 1, m = 1);
-  Revolute j2(axis = {0, 0, 1}, q(start = 0.5), u(start = 2 * w0));
-  Rod rod2(L = 0.7, m = 0.6);
-equation
-  connect(world.frame_b, j1.frame_a);
-  connect(j1.frame_b, rod1.frame_a);
-  connect(rod1.frame_b, j2.frame_a);
-  connect(j2.frame_b, rod2.frame_a);
-end Starts;
-"""
+STARTS = double_pendulum("Starts", "A start from a parameter, literal starts, a start speed from a parameter",
+                         "phi0", 0.8, 0.5, "2 * w0",
+                         declarations=['parameter Real phi0(unit = "rad") = 0.3;',
+                                       'parameter Real w0(unit = "rad/s") = 0.5;'])
 
 
 class Master:
@@ -37,9 +24,7 @@ class Master:
         d = extract(fmu, unzipdir=str(tmp_path / f"{os.path.basename(fmu)}_{fmi}"))
         self.md = md = read_model_description(d)
         self.fmi = fmi
-        Model = FMU2Model if fmi == 2 else FMU3Model
-        self.m = Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier)
-        self.m.instantiate()
+        self.m = instantiate(d, md, fmi, "me")
         self.states = [u.variable.derivative for u in md.derivatives]
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.fresh = True
@@ -49,14 +34,7 @@ class Master:
         if not self.fresh:
             m.reset()
         self.fresh = False
-        if self.fmi == 2:
-            m.setupExperiment(startTime=0.0)
-            m.enterInitializationMode()
-        else:
-            m.enterInitializationMode(startTime=0.0)
-        for name, value in sets.items():
-            (m.setReal if self.fmi == 2 else m.setFloat64)([self.vr[name]], [value])
-        m.exitInitializationMode()
+        initialize(m, self.fmi, self.vr, sets)
         values = (m.getReal if self.fmi == 2 else m.getFloat64)([s.valueReference for s in self.states])
         return dict(zip([s.name for s in self.states], values))
 

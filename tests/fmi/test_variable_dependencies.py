@@ -7,9 +7,9 @@ from ctypes import byref, c_size_t
 
 import pytest
 from fmpy import extract, read_model_description
-from fmpy.fmi3 import FMU3Model, fmi3DependencyKind, fmi3ValueReference
+from fmpy.fmi3 import fmi3DependencyKind, fmi3ValueReference
 
-from conftest import EXAMPLES
+from conftest import EXAMPLES, instantiate
 from test_dependencies import CART, PAIR
 
 KIND = {1: "constant", 5: "dependent"}  # fmi3Constant, fmi3Dependent
@@ -54,8 +54,7 @@ def answered(m, vr):
 def check_api_equals_description(fmu, tmp_path):
     d = extract(fmu, unzipdir=str(tmp_path / os.path.basename(fmu)))
     md = read_model_description(d)
-    m = FMU3Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier)
-    m.instantiate()
+    m = instantiate(d, md, 3, "me")
     checked = 0
     for phase in ("instantiated", "initialization", "runtime"):
         if phase == "initialization":

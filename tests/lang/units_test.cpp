@@ -312,6 +312,47 @@ TEST(UnitCheck, EachArrayElementIsCheckedWithItsOwnNames) {
   EXPECT_EQ(spring_errors.find("cells[2]"), std::string::npos) << spring_errors;
 }
 
+// A binding written in a class is read once for all its instances whose variables take
+// their units from the class's text (lang/elab_units.cpp, BoundOnce): an instance given
+// another unit from outside, by a short class definition, or on an array of no unit, is
+// read again, and a mismatch there names its own declarations.
+TEST(UnitCheck, AnInstanceGivenAnotherUnitFromOutsideIsCheckedOnItsOwn) {
+  const std::string errors =
+      Check("model P\n  parameter Real a(unit = \"m\") = 1;\n  parameter Real b(unit = \"m\") = 2 * a;\n"
+            "  parameter Real[2] v = {1, 2};\n  parameter Real[2] w(each unit = \"m\") = v;\nend P;\n"
+            "model P2 = P(a(unit = \"kg\"));\n"
+            "model M\n  P p1;\n  P p2;\n  P p3(a(unit = \"s\"));\n  P p4;\n  P p5(v(each unit = \"N\"));\n  P2 q;\n"
+            "  World world;\nend M;\n")
+          .errors;
+  std::string firsts;
+  for (size_t at = errors.find("m.mech:"); at != std::string::npos; at = errors.find("\nm.mech:", at + 1)) {
+    const size_t b = errors[at] == '\n' ? at + 1 : at;
+    const std::string line = errors.substr(b, errors.find('\n', b) - b);
+    if (line.find(": error[") != std::string::npos) firsts += line + "\n";
+  }
+  EXPECT_EQ(firsts,
+            "m.mech:3:34: error[E237]: 'p3.b' has unit \"m\" but its value has unit \"s\"\n"
+            "m.mech:5:42: error[E237]: 'p5.w' has unit \"m\" but its value has unit \"N\"\n"
+            "m.mech:3:34: error[E237]: 'q.b' has unit \"m\" but its value has unit \"kg\"\n")
+      << errors;
+  EXPECT_NE(errors.find("note: 'p3.a' has unit \"s\""), std::string::npos) << errors;
+  EXPECT_NE(errors.find("check the unit of 'q.a'"), std::string::npos) << errors;
+}
+
+// A declaration of literals only is shared by its instances (Instantiator::DeclarationMod);
+// a value given from outside over it (Node::mod_over_decl) is checked in each.
+TEST(UnitCheck, AValueGivenOverASharedDeclarationIsChecked) {
+  const std::string errors = Check("model P\n  parameter Real a(unit = \"m\") = 1;\nend P;\nmodel M\n"
+                                   "  parameter Real b(unit = \"s\") = 2;\n  P p1(a = b);\n  P p2;\n  P p3(a = b);\n"
+                                   "  World world;\nend M;\n")
+                                 .errors;
+  EXPECT_NE(errors.find("m.mech:6:12: error[E237]: 'p1.a' has unit \"m\" but its value has unit \"s\""),
+            std::string::npos) << errors;
+  EXPECT_NE(errors.find("m.mech:8:12: error[E237]: 'p3.a' has unit \"m\" but its value has unit \"s\""),
+            std::string::npos) << errors;
+  EXPECT_EQ(errors.find("p2.a"), std::string::npos) << errors;
+}
+
 // The check reads declared units as the emitter shows each variable and the values in
 // batches (lang/elab_units.cpp, UnitChecker::Flush): the messages still come in the order
 // of the declarations, a unit string's own error (E236) where it is first read.
