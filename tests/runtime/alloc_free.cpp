@@ -85,9 +85,10 @@ TEST(AllocFree, TapeBuilderGivenNoRootAllocatesNothing) {
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
   // Given a root, it still folds and records that root's sub-DAG.
+  const flat::ExprId product = pool.Binary(Op::Mul, pool.Constant(3), pool.Constant(4));
   rt::TapeBuilder builder(pool, params);
   double v = 0;
-  EXPECT_TRUE(builder.Fold(pool.Binary(Op::Mul, pool.Constant(3), pool.Constant(4)), &v));
+  EXPECT_TRUE(builder.Fold(product, &v));
   EXPECT_EQ(v, 12.0);
   builder.AddRoot(last_sum, "last sum", "999 + time");
   const rt::Tape tape = builder.Finish();
