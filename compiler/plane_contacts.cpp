@@ -67,16 +67,6 @@ void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMe
     }
     p.plane_contacts.push_back(c);
   }
-  bool exact_friction = false;
-  for (int b : p.friction_joints) exact_friction = exact_friction || p.joints[static_cast<size_t>(b)].friction_exact;
-  if (exact_friction && !p.rows.empty())
-    for (int b : p.friction_joints)
-      if (p.joints[static_cast<size_t>(b)].friction_exact)
-        errors->push_back(Msg(flat::DiagCode::BadFriction,
-                              "joint '" + p.joints[static_cast<size_t>(b)].name +
-                                  "': exact stick-slip friction in a mechanism with closed loops or rolling contacts is "
-                                  "not supported",
-                              p.joints[static_cast<size_t>(b)].loc, "use the regularized law (friction_exact = false)"));
   if (p.plane_contacts.empty() && p.stop_joints.empty()) return;
   const std::string refused = EventsRefused(p);
   if (refused.empty()) return;

@@ -278,6 +278,14 @@ class Writer {
     return name + ".frame_b";
   }
 
+  static bool OneCoordinate(const Joint& j) {
+    return j.type == JointType::kRevolute || j.type == JointType::kContinuous || j.type == JointType::kPrismatic;
+  }
+  // A <mimic> follower whose friction its root's exact friction holds (MimicGroups).
+  bool Reflected(const Joint& j) const {
+    return coupled_ && root_[static_cast<std::size_t>(&j - r_.joints.data())] >= 0;
+  }
+
   // A joint's <limit> as a range that can stop it: a revolute or prismatic joint's.
   static bool Limited(const Joint& j) {
     return j.has_limit && (j.type == JointType::kRevolute || j.type == JointType::kPrismatic);
@@ -302,6 +310,9 @@ class Writer {
       if (at == static_cast<int>(j)) continue;
       root_[j] = at;
       const Joint& x = r_.joints[j];
+      // Its constant friction reflected onto the root: tau_f dq_f = (a tau_f) dq_R with
+      // |tau_f| <= c_f, and sign(u_f) = sign(a u_R) while they slide together.
+      if (x.friction != 0 && OneCoordinate(x)) friction_[at] += std::abs(a) * x.friction;
       if (!Limited(x) || !o_.stops || a == 0 || !(x.lower < x.upper)) continue;
       double lo = (x.lower - b) / a, hi = (x.upper - b) / a;
       if (lo > hi) std::swap(lo, hi);
@@ -388,7 +399,7 @@ class Writer {
     std::string from = parent;
     const std::string name = Unique(j.name, &renamed);
     decl_ << "  // joint '" << Shown(j.name) << "' (" << Where(j.line) << "): " << kTypeNames[static_cast<int>(j.type)]
-          << renamed << Limits(j) << IgnoredMimic(j) << "\n";
+          << renamed << Limits(j) << ReflectedFriction(j) << IgnoredMimic(j) << "\n";
     if (!j.origin.IsIdentity()) from = FixedFrame(Unique(j.name + "_origin", nullptr), j.origin, parent, "joint '" + j.name + "' <origin>");
     joint_name_[static_cast<std::size_t>(ji)] = name;
     switch (j.type) {
@@ -443,32 +454,39 @@ class Writer {
   }
 
   // <dynamics friction> (a constant torque or force) as the joint's exact Coulomb friction
-  // (stick-slip as events, docs/stdlib.md "Revolute"); with <mimic> couplings (constraint rows,
-  // where exact friction is refused) regularized instead: Dynamics writes it as a force law.
-  bool ExactFriction(const Joint& j) const { return j.friction != 0 && !coupled_; }
+  // (stick-slip as events, docs/stdlib.md "Revolute"); a <mimic> group's all on its root,
+  // the followers' reflected through the coupling (MimicGroups): stuck joints whose motions
+  // the coupling makes dependent would have no unique friction forces.
+  double ExactFriction(const Joint& j) const {
+    if (Reflected(j)) return 0.0;
+    const auto g = friction_.find(static_cast<int>(&j - r_.joints.data()));
+    return j.friction + (g == friction_.end() ? 0.0 : g->second);
+  }
   std::string FrictionModifiers(const Joint& j) const {
-    if (!ExactFriction(j)) return "";
-    return std::string(j.type == JointType::kPrismatic ? ", friction_force = " : ", friction_torque = ") +
-           Num(j.friction) + ", friction_exact = true";
+    const double c = ExactFriction(j);
+    if (c == 0) return "";
+    return std::string(j.type == JointType::kPrismatic ? ", friction_force = " : ", friction_torque = ") + Num(c) +
+           ", friction_exact = true";
+  }
+  // The comment of a follower whose friction its root holds.
+  std::string ReflectedFriction(const Joint& j) const {
+    if (j.friction == 0 || !Reflected(j)) return "";
+    return "; <dynamics friction " + Num(j.friction) + "> on the exact friction of '" +
+           Shown(r_.joints[static_cast<std::size_t>(root_[static_cast<std::size_t>(&j - r_.joints.data())])].name) +
+           "' through the <mimic>";
   }
 
-  // <dynamics damping friction> as the joint's force law: viscous damping, and Coulomb
-  // friction that is not exact (FrictionModifiers) regularized as the standard library's
-  // joints do (tanh(u / 1e-3)).
+  // <dynamics damping> as the joint's force law (viscous damping).
   void Dynamics(const Joint& j, const std::string& name) {
     if (j.damping == 0 && j.friction == 0) return;
-    if (j.type != JointType::kRevolute && j.type != JointType::kContinuous && j.type != JointType::kPrismatic) {
+    if (!OneCoordinate(j)) {
       d_.Note(j.line, "<dynamics> of the " + std::string(j.type == JointType::kPlanar ? "planar" : "floating") +
                           " joint '" + Shown(j.name) + "' is not imported (only one-coordinate joints take it)");
       return;
     }
-    std::string law;
-    if (j.damping != 0) law = Num(j.damping) + " * " + name + ".u";
-    if (j.friction != 0 && !ExactFriction(j))
-      law += (law.empty() ? "" : " + ") + Num(j.friction) + " * tanh(" + name + ".u / 0.001)";
-    if (law.empty()) return;
-    eq_ << "  " << name << ".tau = -(" << law << ");  // <dynamics damping friction> of joint '" << Shown(j.name)
-        << "'\n";
+    if (j.damping == 0) return;
+    eq_ << "  " << name << ".tau = -(" << Num(j.damping) << " * " << name << ".u);  // <dynamics damping> of joint '"
+        << Shown(j.name) << "'\n";
   }
 
   int LinkIndex(const std::string& name) {
@@ -578,6 +596,7 @@ class Writer {
   };
   std::vector<int> root_;                  // per joint: its <mimic> root leader, or -1 (MimicGroups)
   std::unordered_map<int, Range> group_;  // per root with limits in its group: their common range in q_root
+  std::unordered_map<int, double> friction_;  // per root: its followers' friction reflected onto it
 };
 
 }  // namespace

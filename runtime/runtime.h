@@ -214,6 +214,9 @@ std::vector<FrictionJoint> FrictionJoints(const Program& program);
 void SetFrictionMode(Workspace& ws, int i, int mode, double tau);
 // Friction joint i's normal force N in the last evaluation of ws.
 double FrictionNormal(const Workspace& ws, int i);
+// Friction joint i's speed as the last evaluation took it: beside constraint rows a dependent
+// speed is solved from the independent ones, not read from y.
+double FrictionSpeed(const Program& program, const Workspace& ws, int i);
 // The friction joints' normal impulses in a jump du of the free speeds (nu entries) at (t, y):
 // per friction joint i, P[3i..3i+2] the impulse its parent side gives the subtree below it
 // (sum of m dv_cm) across its axis, world axes; |P_i| is mu N's impulsive N. Trees only: 0,

@@ -171,6 +171,7 @@ class EngineOde final : public OdeSystem {
     if (from_monitor_) return BridgeError(*bridge_);
     if (stops_ && !stops_->Error().empty()) return stops_->Error();  // an impulse or reaction without solution
     if (whens_ && !whens_->Error().empty()) return whens_->Error();
+    if (stick_ && !stick_->Error().empty()) return stick_->Error();  // stuck joints the constraints make dependent
     const std::string& m = rt::ErrorMessage(ws_);
     return m.empty() ? "the equations of motion could not be evaluated" : m;
   }

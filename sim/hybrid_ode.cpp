@@ -96,7 +96,8 @@ std::string HybridOde::StartModes(double t0, double* y0) {
   }
   if (m.lift.Active())
     if (std::string why = m.lift.Cause(t0, y0, -1); !why.empty()) return why;
-  if (m.stick.Active() && m.stick.Start(*m.ws, t0, y0) != 0) return "friction at the start: " + rt::ErrorMessage(*m.ws);
+  if (m.stick.Active() && m.stick.Start(*m.ws, t0, y0) != 0)
+    return "friction at the start: " + (m.stick.Error().empty() ? rt::ErrorMessage(*m.ws) : m.stick.Error());
   return "";
 }
 

@@ -187,7 +187,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (stick.Active() && stops.Active()) stick.SetStops(&stops);  // a joint resting on its stop is the stop's
   if (stick.Active() && y_given.empty()) y_given = y0;
   if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
-    return UsageResult("friction at the start: " + rt::ErrorMessage(*ws_rhs));
+    return UsageResult("friction at the start: " + (stick.Error().empty() ? rt::ErrorMessage(*ws_rhs) : stick.Error()));
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 

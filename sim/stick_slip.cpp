@@ -22,6 +22,31 @@ namespace {
 // (1 + the largest acceleration): the round-off level of a fresh Newton step, about.
 constexpr double kChordTol = 1e-12;
 constexpr int kChordSteps = 3;  // chord steps before X is made afresh
+// Beside constraint rows: a pivot of X, scaled by the tree's inverse mass (X_kk <= (M^-1)_kk),
+// below this is a motion the rows fix (as rt::InverseMassColumn's dead point).
+constexpr double kDependent = 1e-10;
+
+// Gaussian elimination with complete pivoting on the m x m row-major A: the index (in A) of
+// the first pivot column below tol, or -1 when every pivot is above it.
+int FirstDependent(std::vector<double> A, size_t m, double tol) {
+  std::vector<size_t> col(m);
+  for (size_t k = 0; k < m; ++k) col[k] = k;
+  for (size_t k = 0; k < m; ++k) {
+    size_t pr = k, pc = k;
+    for (size_t r = k; r < m; ++r)
+      for (size_t c = k; c < m; ++c)
+        if (std::abs(A[r * m + c]) > std::abs(A[pr * m + pc])) pr = r, pc = c;
+    if (!(std::abs(A[pr * m + pc]) > tol)) return static_cast<int>(col[k]);
+    for (size_t c = 0; c < m; ++c) std::swap(A[k * m + c], A[pr * m + c]);
+    for (size_t r = 0; r < m; ++r) std::swap(A[r * m + k], A[r * m + pc]);
+    std::swap(col[k], col[pc]);
+    for (size_t r = k + 1; r < m; ++r) {
+      const double f = A[r * m + k] / A[k * m + k];
+      for (size_t c = k; c < m; ++c) A[r * m + c] -= f * A[k * m + c];
+    }
+  }
+  return -1;
+}
 }  // namespace
 
 StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program) {
@@ -32,6 +57,7 @@ StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program)
     if (all[i].exact) joints_.push_back({all[i], static_cast<int>(i), 0, 0.0});
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   col_.resize(ydot_.size());
+  rows_ = !joints_.empty() && rt::Summarize(program).dof < nu_;
 }
 
 void StickSlipEvents::Apply(rt::Workspace& ws) const {
@@ -118,8 +144,8 @@ int StickSlipEvents::Functions(rt::Workspace& ws, double t, const double* y, dou
     const Joint& j = joints_[i];
     if (HeldByStop(j, resting)) {
       g[i] = 1.0;  // the stop's: its own event function watches it
-    } else if (j.mode != 0) {
-      g[i] = j.mode * y[nq_ + j.f.u];
+    } else if (j.mode != 0) {  // (beside rows a dependent speed is the evaluation's, not y's)
+      g[i] = j.mode * (rows_ ? rt::FrictionSpeed(program_, ws, j.index) : y[nq_ + j.f.u]);
     } else {
       g[i] = StaticBound(ws, j) - std::abs(j.tau);
     }
@@ -128,12 +154,27 @@ int StickSlipEvents::Functions(rt::Workspace& ws, double t, const double* y, dou
 }
 
 int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
-  y[nq_ + j.f.u] = 0.0;
   const int was = j.mode;
   j.mode = 0;
+  if (rows_)
+    if (int s = StopOnRows(ws, t, y, j); s != 0) return s;
+  y[nq_ + j.f.u] = 0.0;
+  char buf[200];
+  if (const int c = rows_ ? CheckRows(ws, t, y, j) : 0; c != 0) {
+    if (c < 0) return c;
+    // The rows fix its motion here (a dead point): it moves on as they drive it.
+    j.mode = 1;
+    Apply(ws);
+    if (int s = Eval(ws, t, y, ydot_.data()); s != 0) return s;
+    j.mode = ydot_[static_cast<size_t>(nq_ + j.f.u)] < 0.0 ? -1 : 1;
+    std::snprintf(buf, sizeof buf, "slides %s (the constraints fix its motion here: a dead point, no sticking)",
+                  j.mode > 0 ? "forwards" : "backwards");
+    log_.push_back({t, j.f.joint, buf});
+    Apply(ws);
+    return 0;
+  }
   if (int s = Solve(ws, t, y, nullptr); s != 0) return s;
   const double bound = StaticBound(ws, j);
-  char buf[200];
   if (std::abs(j.tau) <= bound) {
     std::snprintf(buf, sizeof buf, "sticks (friction %.17g within %.17g)", j.tau, bound);
   } else {
@@ -161,6 +202,68 @@ int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   log_.push_back({t, j.f.joint, buf});
   Apply(ws);
   return 0;
+}
+
+int StickSlipEvents::StopOnRows(rt::Workspace& ws, double t, double* y, const Joint& j) {
+  // The root leaves j's speed at the tolerance's level, and beside rows zeroing y's entry
+  // alone would leave the independent speeds that carry it (a creep): the jump
+  // du = W e_j lambda with the rows' reactions (W e_j: the accelerations' response to j's
+  // force, by a difference as in MakeX) takes it to zero and keeps the rows.
+  Apply(ws);
+  if (int s = Eval(ws, t, y, ydot_.data()); s != 0) return s;
+  const double u = rt::FrictionSpeed(program_, ws, j.index);
+  if (u == 0.0) return 0;
+  double a_max = 0.0;
+  for (int i = 0; i < nu_; ++i) a_max = std::max(a_max, std::abs(ydot_[static_cast<size_t>(nq_ + i)]));
+  const double step = 1e3 * (1.0 + std::abs(j.tau) + a_max);
+  rt::SetFrictionMode(ws, j.index, 2, j.tau + step);
+  const int s = Eval(ws, t, y, col_.data());
+  Apply(ws);
+  if (s != 0) return s;
+  const double wj = (col_[static_cast<size_t>(nq_ + j.f.u)] - ydot_[static_cast<size_t>(nq_ + j.f.u)]) / step;
+  if (!(std::abs(wj) > 0.0)) return 0;  // a dead point: CheckRows decides
+  for (int i = 0; i < nu_; ++i)
+    y[nq_ + i] -= (col_[static_cast<size_t>(nq_ + i)] - ydot_[static_cast<size_t>(nq_ + i)]) / step * u / wj;
+  return 0;
+}
+
+int StickSlipEvents::CheckRows(rt::Workspace& ws, double t, const double* y, const Joint& j) {
+  std::vector<Joint*> stuck;
+  std::vector<int> ids;
+  const std::vector<int> resting = RestingSpeeds();
+  size_t at = 0;
+  for (Joint& k : joints_)
+    if (k.mode == 0 && !HeldByStop(k, resting)) {
+      if (&k == &j) at = stuck.size();
+      stuck.push_back(&k);
+      ids.push_back(k.index);
+    }
+  Apply(ws);
+  if (int s = Eval(ws, t, y, ydot_.data()); s != 0) return s;
+  if (int s = MakeX(ws, t, y, stuck, ydot_.data()); s != 0) return s;
+  x_ids_ = ids;  // Solve goes on from this X
+  const size_t m = stuck.size(), nu = static_cast<size_t>(nu_);
+  std::vector<double> M(nu * nu), d(m), x;
+  if (int s = rt::UnconstrainedMassMatrix(program_, ws, t, y, M.data()); s != 0) return s;
+  for (size_t k = 0; k < m; ++k) {  // (M^-1)_kk, the scale of X_kk without the rows
+    std::vector<double> e(nu, 0.0);
+    e[static_cast<size_t>(stuck[k]->f.u)] = 1.0;
+    if (!SolveSmall(M, e, &x)) return -1;
+    d[k] = x[static_cast<size_t>(stuck[k]->f.u)];
+  }
+  std::vector<double> N(m * m);
+  for (size_t r = 0; r < m; ++r)
+    for (size_t k = 0; k < m; ++k) N[r * m + k] = x_[r * m + k] / std::sqrt(d[r] * d[k]);
+  if (!(N[at * m + at] > kDependent)) return 1;
+  const int dep = FirstDependent(N, m, kDependent);
+  if (dep < 0) return 0;
+  std::string who;
+  for (size_t k = 0; k < m; ++k) who += (k == 0 ? "'" : k + 1 == m ? "' and '" : "', '") + stuck[k]->f.joint;
+  error_ = "joints " + who + "' stick together, but the constraints make their motions dependent ('" +
+           stuck[static_cast<size_t>(dep)]->f.joint +
+           "' cannot move without the others): the friction forces that hold them are not unique; keep exact "
+           "friction on one of them (through a coupling, the other's reflected by the ratio)";
+  return -1;
 }
 
 std::string StickSlipEvents::SettleAt(rt::Workspace& ws, double t, const double* y, double tol) {

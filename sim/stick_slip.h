@@ -44,6 +44,8 @@ class StickSlipEvents {
   // The friction laws of the run into another workspace (the output rows').
   void Sync(rt::Workspace& ws) const;
   const std::vector<EventRecord>& Log() const { return log_; }
+  // Why the last call failed where the equations could be evaluated ("" otherwise).
+  const std::string& Error() const { return error_; }
   // Joint i's free speed and its mode (+1 / -1 sliding that way, 0 stuck).
   int SpeedOf(int i) const { return joints_[static_cast<size_t>(i)].f.u; }
   int ModeOf(int i) const { return joints_[static_cast<size_t>(i)].mode; }
@@ -94,8 +96,16 @@ class StickSlipEvents {
   std::vector<int> RestingSpeeds() const;
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
   int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
+  // Constraint rows (closed loops, couplings, rolling contacts): X is the constrained inverse
+  // mass of the stuck speeds, which the rows may make singular. 0 when X is regular (it is
+  // kept for Solve), 1 when j alone cannot be held (a dead point: the rows move it), -1 with
+  // error_ when stuck joints' motions are dependent (their forces not unique).
+  int CheckRows(rt::Workspace& ws, double t, const double* y, const Joint& j);
+  // Beside rows: j's evaluated speed to zero by the jump that keeps the rows (stick_slip.cpp).
+  int StopOnRows(rt::Workspace& ws, double t, double* y, const Joint& j);
 
   const rt::Program& program_;
+  bool rows_ = false;               // constraint rows: CheckRows at each stick decision
   EndStopEvents* stops_ = nullptr;  // SetStops (null: none)
   std::vector<Joint> joints_;
   int nq_ = 0, nu_ = 0;
@@ -103,6 +113,7 @@ class StickSlipEvents {
   std::vector<double> x_;     // X of the stuck set x_ids_ (friction joint indices), m x m row-major
   std::vector<int> x_ids_;
   std::vector<EventRecord> log_;
+  std::string error_;
 };
 
 }  // namespace kanesim::sim

@@ -33,4 +33,8 @@ void SetFrictionMode(Workspace& ws, int i, int mode, double tau) {
 
 double FrictionNormal(const Workspace& ws, int i) { return ws.friction_N[static_cast<size_t>(i)]; }
 
+double FrictionSpeed(const Program& p, const Workspace& ws, int i) {
+  return ws.u[p.joints[static_cast<size_t>(p.friction_joints[static_cast<size_t>(i)])].u0];
+}
+
 }  // namespace kanesim::rt

@@ -151,6 +151,8 @@ TEST(UrdfLimits, CoupledRobotGetsItsLimitsAsTheLeadersStops) {
   EXPECT_TRUE(lr.model) << lr.diagnostics;
 }
 
+void CheckLiftFallsOntoTheFingersLimit(const sim::MemorySink& rows, double accel);
+
 // A lift (prismatic, z) carrying a finger (prismatic, x) that mimics it, q_f = 2 q_l + 0.1;
 // the finger's lower limit -0.7 is the binding one (q_l = -0.4; the lift's own is -0.5).
 // Equal masses m: T = (m + m + 4 m) u_l^2 / 2 against the weight 2 m g, so the lift falls
@@ -168,6 +170,43 @@ TEST(UrdfLimits, MimicFollowerDrivenIntoItsLimitStopsThere) {
       "<mimic joint=\"lift\" multiplier=\"2\" offset=\"0.1\"/></joint>\n</robot>\n";
   const sim::MemorySink rows = RunUrdf(urdf, true);
   ASSERT_GT(rows.rows.size(), 100u);
+  CheckLiftFallsOntoTheFingersLimit(rows, kG / 3);
+}
+
+// The lift and finger of MimicFollowerDrivenIntoItsLimitStopsThere with <dynamics friction>:
+// 2 N on the lift, c_f on the finger. The importer puts the group's friction on the lift as
+// exact friction, 2 + |2| c_f (virtual work through q_f = 2 q_l + 0.1). c_f = 10: 22 N holds the
+// weight 2 m g = 19.62 N, stuck for good; c_f = 5: 12 N, it slides down with (2 m g - 12) / 6 m
+// onto the finger's limit. If this fails, the follower's friction was not reflected through the
+// ratio (or was kept as the stiff tanh law), or exact friction beside the coupling misbehaves.
+TEST(UrdfLimits, MimicGroupFrictionIsExactOnTheLeader) {
+  auto urdf = [](const std::string& finger_friction) {
+    const std::string link = "><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" iyy=\"0.01\" izz=\"0.01\"/></inertial></link>\n";
+    return "<robot name=\"grip\">\n  <link name=\"base\"/>\n  <link name=\"a\"" + link + "  <link name=\"b\"" + link +
+           "  <joint name=\"lift\" type=\"prismatic\"><parent link=\"base\"/><child link=\"a\"/><axis xyz=\"0 0 1\"/>"
+           "<limit lower=\"-0.5\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/><dynamics friction=\"2\"/></joint>\n"
+           "  <joint name=\"finger\" type=\"prismatic\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"1 0 0\"/>"
+           "<limit lower=\"-0.7\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/><dynamics friction=\"" + finger_friction +
+           "\"/><mimic joint=\"lift\" multiplier=\"2\" offset=\"0.1\"/></joint>\n</robot>\n";
+  };
+  import::Options o;
+  o.use_ros_package_path = false;
+  const import::Result r = import::UrdfToMech("grip.urdf", urdf("5"), o);
+  ASSERT_TRUE(r.ok) << r.diagnostics;
+  EXPECT_NE(r.mech.find("friction_force = 12, friction_exact = true"), std::string::npos) << r.mech;
+  EXPECT_NE(r.mech.find("<dynamics friction 5> on the exact friction of 'lift' through the <mimic>"), std::string::npos)
+      << r.mech;
+  EXPECT_EQ(r.mech.find("tanh"), std::string::npos) << r.mech;
+  const sim::MemorySink held = RunUrdf(urdf("10"), true);
+  ASSERT_GT(held.rows.size(), 100u);
+  for (const std::vector<double>& y : held.rows) EXPECT_EQ(y[Col(held, "lift.q")], 0.0);
+  CheckLiftFallsOntoTheFingersLimit(RunUrdf(urdf("5"), true), (2 * kG - 12) / 6);
+}
+
+// The lift falls from rest with `accel` onto q_l = -0.4 (the finger's limit -0.7 through the
+// coupling) at t = sqrt(0.8 / accel) and rests there; q_f = 2 q_l + 0.1 in every row.
+void CheckLiftFallsOntoTheFingersLimit(const sim::MemorySink& rows, double accel) {
+  ASSERT_GT(rows.rows.size(), 100u);
   const std::size_t ql = Col(rows, "lift.q"), qf = Col(rows, "finger.q"), ul = Col(rows, "lift.u");
   double hit = -1;
   for (std::size_t i = 0; i < rows.rows.size(); ++i) {
@@ -176,7 +215,7 @@ TEST(UrdfLimits, MimicFollowerDrivenIntoItsLimitStopsThere) {
     EXPECT_NEAR(y[qf], 2 * y[ql] + 0.1, 1e-12) << "row " << i << " at t = " << rows.times[i];
     if (i > 0 && rows.times[i] == rows.times[i - 1] && hit < 0) hit = rows.times[i];
   }
-  EXPECT_NEAR(hit, std::sqrt(2 * 0.4 / (kG / 3)), 1e-8);
+  EXPECT_NEAR(hit, std::sqrt(2 * 0.4 / accel), 1e-8);
   EXPECT_NEAR(rows.rows.back()[ql], -0.4, 1e-12);
   EXPECT_NEAR(rows.rows.back()[qf], -0.7, 1e-12);
   EXPECT_EQ(rows.rows.back()[ul], 0.0);
