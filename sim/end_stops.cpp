@@ -12,6 +12,7 @@
 #include "sim/end_stops.h"
 
 #include "runtime/program/program.h"  // Program::rows
+#include "sim/friction_impulse.h"       // HasFrictionImpulses
 #include "sim/impulse.h"                // SolveSmall
 
 #include <algorithm>
@@ -40,6 +41,7 @@ EndStopEvents::EndStopEvents(const rt::Program& program, double rtol, double ato
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   a_.resize(static_cast<size_t>(nu_));
   J_.resize(static_cast<size_t>(nu_));
+  mu_ = !sides_.empty() && HasFrictionImpulses(program);
 }
 
 int EndStopEvents::Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c) {
@@ -91,6 +93,13 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
                            const std::vector<int>& rows, const std::vector<double>& targets, double* du,
                            std::vector<double>* c) {
   const size_t n = speeds.size(), m = n + rows.size(), nu = static_cast<size_t>(nu_);
+  if (mu_) {  // (a friction mu N: the joints' stuck rows are the friction's own Newton, never here)
+    if (n > 0) {
+      error_ = "stuck joints' rows beside a friction mu N";
+      return -1;
+    }
+    return ImpulseMu(ws, t, y, rows, targets, du, c);
+  }
   x_.resize(m * nu);
   Jrows_.assign(m * nu, 0.0);
   std::vector<double>& J = Jrows_;
@@ -166,6 +175,19 @@ int EndStopEvents::Held(rt::Workspace& ws, double t, const double* y, const doub
     double gap = 0.0, c = 0.0;
     if (int s = Row(ws, t, y, sides_[i], &gap, J_.data(), &c); s != 0) return s;
     bias.push_back(c);
+  }
+  if (mu_ && !rows.empty()) {  // the accelerations are not affine in the reactions
+    if (!speeds.empty()) {
+      error_ = "stuck joints' rows beside a friction mu N";
+      return -1;
+    }
+    std::vector<double> c, a_mu(static_cast<size_t>(nu_));
+    if (int s = ReactionsMu(ws, t, y, rows, bias, &c, a_mu.data()); s != 0) return s;
+    for (size_t j = 0; j < rows.size(); ++j) (*lambda)[static_cast<size_t>(rows[j])] = c[j];
+    if (noise)
+      if (int s = ReactionNoise(ws, t, y, rows, bias, noise); s != 0) return s;
+    if (a_held) std::copy(a_mu.begin(), a_mu.end(), a_held);
+    return 0;
   }
   const size_t n = speeds.size();
   std::vector<double> targets(n + rows.size()), c;
@@ -359,6 +381,7 @@ int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::strin
 
 int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                             const std::vector<double>& targets, double* du) {
+  if (mu_) return HeldJumpMu(ws, t, y, speeds, targets, du);
   const size_t n = speeds.size(), nu = static_cast<size_t>(nu_);
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
