@@ -1,5 +1,6 @@
 #include "flat/expr.h"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 
@@ -239,10 +240,12 @@ std::string ExprPool::ToString(ExprId id, const ExprNames& names, std::size_t ma
       AppendLeaf(n, names, &out);
       continue;
     }
-    // Pieces in reading order; pushed reversed below.
-    std::vector<PrintItem> parts;
-    auto text = [&](const char* t) { parts.push_back({kNoExpr, t, 0}); };
-    auto child = [&](ExprId c) { parts.push_back({c, nullptr, it.depth + 1}); };
+    // Pieces in reading order (at most 7, an if-expression's), pushed reversed below; a
+    // fixed array, as a vector here cost up to four allocations per node.
+    std::array<PrintItem, 7> parts;
+    std::size_t num_parts = 0;
+    auto text = [&](const char* t) { parts[num_parts++] = {kNoExpr, t, 0}; };
+    auto child = [&](ExprId c) { parts[num_parts++] = {c, nullptr, it.depth + 1}; };
     bool infix = arity == 2 && (n.op <= Op::Or && n.op >= Op::Add);
     if (n.op == Op::IfElse) {
       text("(if "), child(n.a), text(" then "), child(n.b), text(" else "), child(n.c), text(")");
@@ -257,7 +260,7 @@ std::string ExprPool::ToString(ExprId id, const ExprNames& names, std::size_t ma
       if (arity == 2) text(", "), child(n.b);
       text(")");
     }
-    stack.insert(stack.end(), parts.rbegin(), parts.rend());
+    while (num_parts > 0) stack.push_back(parts[--num_parts]);
   }
   return out;
 }

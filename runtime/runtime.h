@@ -197,6 +197,11 @@ int InverseMassColumn(const Program& program, Workspace& ws, double t, const dou
 // The same for any generalized impulse F on the free speeds (nu entries): x = M(q)^-1 F.
 // runtime/engine/plane_contacts.cpp
 int InverseMassTimes(const Program& program, Workspace& ws, double t, const double* y, const double* F, double* x);
+// ydot at (t, y) with the generalized forces F (nu entries) added on the free speeds: the
+// resting contacts' reactions where Coulomb friction mu N makes the accelerations depend on
+// them (sim/end_stops_friction.cpp). A tree only (-1 with constraint rows).
+int DerivativeWithForces(const Program& program, Workspace& ws, double t, const double* y, const double* F,
+                         double* ydot);
 
 // Coulomb friction joints (stdlib `mu` on Revolute and Prismatic), in the order of the
 // workspace's laws; runtime/engine/friction_modes.cpp.

@@ -12,6 +12,7 @@
 #include "sim/end_stops.h"
 
 #include "runtime/program/program.h"  // Program::rows
+#include "sim/friction_impulse.h"       // HasFrictionImpulses
 #include "sim/impulse.h"                // SolveSmall
 
 #include <algorithm>
@@ -40,6 +41,7 @@ EndStopEvents::EndStopEvents(const rt::Program& program, double rtol, double ato
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   a_.resize(static_cast<size_t>(nu_));
   J_.resize(static_cast<size_t>(nu_));
+  mu_ = !sides_.empty() && HasFrictionImpulses(program);
 }
 
 int EndStopEvents::Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c) {
@@ -89,6 +91,7 @@ std::string EndStopEvents::CheckStart(rt::Workspace& ws, double t0, const double
 
 int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                            const std::vector<double>& targets, double* du, std::vector<double>* c) {
+  if (mu_) return ImpulseMu(ws, t, y, rows, targets, du, c);
   const size_t m = rows.size(), nu = static_cast<size_t>(nu_);
   x_.resize(m * nu);
   Jrows_.resize(m * nu);
@@ -152,6 +155,15 @@ int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::
     bias.push_back(c);
   }
   if (int s = rt::Derivative(program_, ws, t, y, ydot_.data()); s != 0) return s;
+  if (mu_ && !rows.empty()) {  // the accelerations are not affine in the reactions
+    std::vector<double> c, a(static_cast<size_t>(nu_));
+    if (int s = ReactionsMu(ws, t, y, rows, bias, &c, a.data()); s != 0) return s;
+    for (size_t j = 0; j < rows.size(); ++j) (*lambda)[static_cast<size_t>(rows[j])] = c[j];
+    if (noise)
+      if (int s = ReactionNoise(ws, t, y, rows, bias, noise); s != 0) return s;
+    if (a_held) std::copy(a.begin(), a.end(), a_held);
+    return 0;
+  }
   const double* a = ydot_.data() + nq_;
   std::vector<double> targets(rows.size()), c;
   std::vector<double> da(static_cast<size_t>(nu_), 0.0);
@@ -336,6 +348,7 @@ int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::strin
 
 int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                             const std::vector<double>& targets, double* du) {
+  if (mu_) return HeldJumpMu(ws, t, y, speeds, targets, du);
   const size_t n = speeds.size(), nu = static_cast<size_t>(nu_);
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)

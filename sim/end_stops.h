@@ -180,6 +180,16 @@ class EndStopEvents {
   int Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before);
   // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
+  // With Coulomb friction mu N (a tree; sim/end_stops_friction.cpp): the resting sides'
+  // reactions c (rows, targets as Reactions builds them) and the held accelerations a (nu),
+  // by the tree's fixed point with the reactions included; an impulse on stop rows with the
+  // friction joints' impulses (sim/friction_impulse.h).
+  int ReactionsMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                  const std::vector<double>& bias, std::vector<double>* c, double* a);
+  int ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                const std::vector<double>& targets, double* du, std::vector<double>* c);
+  int HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
+                 const std::vector<double>& targets, double* du);
 
   const rt::Program& program_;
   std::vector<rt::EndStop> stops_;
@@ -189,6 +199,7 @@ class EndStopEvents {
   double rtol_ = 0.0, atol_ = 0.0;
   std::vector<double> ydot_, x_, a_, J_, Jrows_, M_;  // scratch
   std::vector<EventRecord> log_;
+  bool mu_ = false;  // friction joints with mu (sim/friction_impulse.h)
   std::string error_;
 };
 

@@ -100,4 +100,19 @@ int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y
   return 0;
 }
 
+// Derivative's evaluation, then the accelerations solved again with F on the speeds (the
+// friction's normal-force iteration included, as InverseMassTimes does).
+int DerivativeWithForces(const Program& p, Workspace& ws, double t, const double* y, const double* F, double* ydot) {
+  if (!p.rows.empty()) {
+    ws.error = "resting contacts with Coulomb friction mu N in a mechanism with closed loops are not supported";
+    return -1;
+  }
+  if (int s = Derivative(p, ws, t, y, ydot); s != 0) return s;
+  if (int s = AppliedForces(p, ws); s != 0) return s;
+  for (int i = 0; i < p.nu; ++i) ws.Q[p.u_free[static_cast<size_t>(i)]] += F[i];
+  if (int s = SolveAccelerations(p, ws); s != 0) return s;
+  for (int i = 0; i < p.nu; ++i) ydot[p.nq + i] = ws.udot[p.u_free[static_cast<size_t>(i)]];
+  return 0;
+}
+
 }  // namespace kanesim::rt

@@ -1,5 +1,6 @@
 #include "runtime/program/tape.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace kanesim::rt {
@@ -8,16 +9,29 @@ using flat::ExprId;
 using flat::ExprNode;
 using flat::Op;
 
+namespace {
+
+// The per-node tables are made on the first node asked for (covering the pool, as a node's
+// children have smaller ids than it): a builder asked for nothing (a model without outputs
+// or whens) clears no tables.
+void Cover(const flat::ExprPool& pool, ExprId id, std::vector<int>& reg, std::vector<signed char>& known,
+           std::vector<double>& value) {
+  if (static_cast<size_t>(id) < known.size()) return;
+  const size_t n = std::max(pool.size(), static_cast<size_t>(id) + 1);
+  reg.resize(n, -1);
+  known.resize(n, -1);
+  value.resize(n, 0.0);
+}
+
+}  // namespace
+
 TapeBuilder::TapeBuilder(const flat::ExprPool& pool, const std::vector<double>& param_values)
-    : pool_(pool),
-      params_(param_values),
-      reg_(pool.size(), -1),
-      const_(pool.size(), -1),
-      value_(pool.size(), 0.0) {}
+    : pool_(pool), params_(param_values) {}
 
 // Post-order over the sub-DAG of `id` (children have smaller ids, so an explicit stack
 // terminates); a node folds when it reads neither time nor state.
 bool TapeBuilder::Fold(ExprId id, double* value) {
+  Cover(pool_, id, reg_, const_, value_);
   std::vector<ExprId>& stack = stack_;
   stack.assign(1, id);
   while (!stack.empty()) {
@@ -77,8 +91,9 @@ bool TapeBuilder::Fold(ExprId id, double* value) {
 
 int TapeBuilder::RegisterOf(ExprId id) {
   double unused;
-  Fold(id, &unused);
-  std::vector<ExprId> stack{id};
+  Fold(id, &unused);  // also makes the tables
+  std::vector<ExprId>& stack = stack_;  // Fold left it empty
+  stack.assign(1, id);
   while (!stack.empty()) {
     ExprId e = stack.back();
     auto ue = static_cast<size_t>(e);

@@ -70,5 +70,33 @@ TEST(AllocFree, CounterSeesAllocations) {
   EXPECT_GT(g_allocations.load() - before, 0);
 }
 
+TEST(AllocFree, TapeBuilderGivenNoRootAllocatesNothing) {
+  // If this fails, a tape builder clears per-node tables of the whole expression pool
+  // though it is given no root: compile pays for a model's empty output and when tapes.
+  flat::ExprPool pool;
+  flat::ExprId last_sum = flat::kNoExpr;
+  for (int i = 0; i < 1000; ++i) last_sum = pool.Binary(Op::Add, pool.Constant(i), pool.Time());
+  const std::vector<double> params;
+  const long before = g_allocations.load();
+  {
+    rt::TapeBuilder builder(pool, params);
+    const rt::Tape tape = builder.Finish();
+    EXPECT_TRUE(tape.code.empty());
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  // Given a root, it still folds and records that root's sub-DAG.
+  const flat::ExprId product = pool.Binary(Op::Mul, pool.Constant(3), pool.Constant(4));
+  rt::TapeBuilder builder(pool, params);
+  double v = 0;
+  EXPECT_TRUE(builder.Fold(product, &v));
+  EXPECT_EQ(v, 12.0);
+  builder.AddRoot(last_sum, "last sum", "999 + time");
+  const rt::Tape tape = builder.Finish();
+  std::vector<double> regs = tape.init;
+  regs[static_cast<size_t>(tape.time_reg)] = 0.5;
+  tape.Eval(regs.data());
+  EXPECT_EQ(regs[static_cast<size_t>(tape.roots[0])], 999.5);
+}
+
 }  // namespace
 }  // namespace kanesim
