@@ -82,6 +82,9 @@ class EngineOde final : public OdeSystem {
   int NumStops() const { return FirstStick() + (stick_ ? stick_->Count() : 0); }
   // Then the stops' and plane contacts' graze guards (OdeSystem::Paired): minus each gap's rate.
   int NumEvents() const override { return FirstGuard() + (stops_ ? stops_->Count() : 0); }
+  bool Holding() const override {
+    return (stick_ && stick_->AnyStuck()) || (stops_ && stops_->AnyResting());
+  }
   int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
   int EventFunctions(double t, const double* y, double* g) override {
     if (stick_)  // first: it solves the stuck joints' forces the stops' reactions read

@@ -189,6 +189,13 @@ using detail::AddStats;
 IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid& grid,
                           const IntegratorOptions& given, const RowCallback& row) {
   IntegratorOptions options = given;  // the method changes when a stiff DOP853 hands over
+  // Each solver made while a row is held steps at most one output interval (OdeSystem::Holding).
+  auto bounded = [&]() -> const IntegratorOptions& {
+    options.max_step = given.max_step;
+    if (system.Holding() && (options.max_step <= 0.0 || options.max_step > grid.interval))
+      options.max_step = grid.interval;
+    return options;
+  };
   IntegrateResult result;
   auto fail = [&result](double t, std::string cause) {
     result.ok = false;
@@ -220,7 +227,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
   }
 
   std::string error;
-  std::unique_ptr<detail::Stepper> stepper = detail::MakeStepper(rhs, grid.start, y0, grid.stop, options, &error);
+  std::unique_ptr<detail::Stepper> stepper = detail::MakeStepper(rhs, grid.start, y0, grid.stop, bounded(), &error);
   if (!stepper) {
     if (rhs.failed)
       fail(rhs.fail_time, rhs.cause);
@@ -301,7 +308,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
       stepper.reset();
       if (te < grid.stop) {
         rhs.Reset();
-        stepper = detail::MakeStepper(rhs, te, y.data(), grid.stop, options, &error);
+        stepper = detail::MakeStepper(rhs, te, y.data(), grid.stop, bounded(), &error);
         if (!stepper) {
           fail(rhs.failed ? rhs.fail_time : te, rhs.failed ? rhs.cause : error);
           result.stats = done;
@@ -362,7 +369,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
       }
       AddStats(&done, stepper->Stats());
       stepper.reset();
-      stepper = detail::MakeStepper(rhs, t_b, yb.data(), grid.stop, options, &error);
+      stepper = detail::MakeStepper(rhs, t_b, yb.data(), grid.stop, bounded(), &error);
       if (!stepper) {
         if (rhs.failed)
           fail(rhs.fail_time, rhs.cause);

@@ -49,6 +49,11 @@ class StickSlipEvents {
   // Joint i's free speed and its mode (+1 / -1 sliding that way, 0 stuck).
   int SpeedOf(int i) const { return joints_[static_cast<size_t>(i)].f.u; }
   int ModeOf(int i) const { return joints_[static_cast<size_t>(i)].mode; }
+  bool AnyStuck() const {
+    for (const Joint& j : joints_)
+      if (j.mode == 0) return true;
+    return false;
+  }
   // linearize's operating point (docs/linearize.md): a joint moving (|u| > tol) slides that
   // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
   // friction passes mu_s r N slips at once: no smooth state).
