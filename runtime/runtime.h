@@ -194,6 +194,16 @@ std::vector<EndStop> EndStops(const Program& program);
 // 0, or Derivative's status codes; -1 (ErrorMessage says why) with Coulomb friction, on the
 // multiplier form (--solver sparse), or where the rows fix speed k (a dead point).
 int InverseMassColumn(const Program& program, Workspace& ws, double t, const double* y, int k, double* x);
+// Columns ks[0..m) of the same inverse mass from one factorization, X nu x m column-major
+// (each column as InverseMassColumn gives it). m = 0: nothing evaluated.
+int InverseMassColumns(const Program& program, Workspace& ws, double t, const double* y, const int* ks, int m,
+                       double* X);
+// What ws evaluated so far: Derivative's evaluations, and the (constrained) inverse masses
+// InverseMassColumn(s) factored (a factor is kept for the same t and q).
+struct EvalCounts {
+  long derivatives = 0, inverse_mass_factorizations = 0;
+};
+EvalCounts Counts(const Workspace& ws);
 // The same for any generalized impulse F on the free speeds (nu entries): x = M(q)^-1 F.
 // runtime/engine/plane_contacts.cpp
 int InverseMassTimes(const Program& program, Workspace& ws, double t, const double* y, const double* F, double* x);

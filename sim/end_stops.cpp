@@ -89,27 +89,41 @@ std::string EndStopEvents::CheckStart(rt::Workspace& ws, double t0, const double
   return {};
 }
 
-int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-                           const std::vector<double>& targets, double* du, std::vector<double>* c) {
-  if (mu_) return ImpulseMu(ws, t, y, rows, targets, du, c);
-  const size_t m = rows.size(), nu = static_cast<size_t>(nu_);
+int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
+                           const std::vector<int>& rows, const std::vector<double>& targets, double* du,
+                           std::vector<double>* c) {
+  const size_t n = speeds.size(), m = n + rows.size(), nu = static_cast<size_t>(nu_);
+  if (mu_) {  // (a friction mu N: the joints' stuck rows are the friction's own Newton, never here)
+    if (n > 0) {
+      error_ = "stuck joints' rows beside a friction mu N";
+      return -1;
+    }
+    return ImpulseMu(ws, t, y, rows, targets, du, c);
+  }
   x_.resize(m * nu);
-  Jrows_.resize(m * nu);
+  Jrows_.assign(m * nu, 0.0);
   std::vector<double>& J = Jrows_;
-  for (size_t j = 0; j < m; ++j) {
+  // The speed rows (e_k: the given speeds, then the stops' +-e_k) from one factorization.
+  std::vector<int> ks(speeds), at;
+  for (size_t j = 0; j < n; ++j) J[j * nu + static_cast<size_t>(speeds[j])] = 1.0, at.push_back(static_cast<int>(j));
+  for (size_t j = 0; j < rows.size(); ++j) {
     const Side& s = sides_[static_cast<size_t>(rows[j])];
     double gap = 0.0, bias = 0.0;
-    if (int r = Row(ws, t, y, s, &gap, J.data() + j * nu, &bias); r != 0) return r;
-    double* x = x_.data() + j * nu;
-    if (s.plane >= 0) {
-      if (int r = rt::InverseMassTimes(program_, ws, t, y, J.data() + j * nu, x); r != 0) return r;
-    } else {  // J = +-e_k: a column of M^-1, its sign flipped exactly
-      const int k = stops_[static_cast<size_t>(s.stop)].u;
-      if (int r = rt::InverseMassColumn(program_, ws, t, y, k, x); r != 0) return r;
-      if (s.upper)
-        for (size_t i = 0; i < nu; ++i) x[i] = -x[i];
-    }
+    if (int r = Row(ws, t, y, s, &gap, J.data() + (n + j) * nu, &bias); r != 0) return r;
+    if (s.plane < 0) ks.push_back(stops_[static_cast<size_t>(s.stop)].u), at.push_back(static_cast<int>(n + j));
   }
+  cols_.resize(ks.size() * nu);
+  if (int r = rt::InverseMassColumns(program_, ws, t, y, ks.data(), static_cast<int>(ks.size()), cols_.data()); r != 0)
+    return r;
+  for (size_t j = 0; j < ks.size(); ++j) {  // J = +-e_k: a column of M^-1, its sign flipped exactly
+    const bool flip = at[j] >= static_cast<int>(n) && sides_[static_cast<size_t>(rows[at[j] - n])].upper;
+    double* x = x_.data() + static_cast<size_t>(at[j]) * nu;
+    for (size_t i = 0; i < nu; ++i) x[i] = flip ? -cols_[j * nu + i] : cols_[j * nu + i];
+  }
+  for (size_t j = 0; j < rows.size(); ++j)
+    if (sides_[static_cast<size_t>(rows[j])].plane >= 0)
+      if (int r = rt::InverseMassTimes(program_, ws, t, y, J.data() + (n + j) * nu, x_.data() + (n + j) * nu); r != 0)
+        return r;
   std::vector<double> A(m * m);
   for (size_t r = 0; r < m; ++r)
     for (size_t j = 0; j < m; ++j) {
@@ -119,6 +133,7 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
     }
   if (!SolveSmall(A, targets, c)) {
     error_ = SingularRows(rows);
+    if (n > 0) error_ += " (with the joints their friction holds)";
     return -1;
   }
   error_.clear();
@@ -143,6 +158,13 @@ std::string EndStopEvents::SingularRows(const std::vector<int>& rows) const {
 
 int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda,
                              double* a_held, std::vector<double>* noise) {
+  if (int s = rt::Derivative(program_, ws, t, y, ydot_.data()); s != 0) return s;
+  return Held(ws, t, y, ydot_.data() + nq_, {}, lambda, a_held, noise, nullptr);
+}
+
+int EndStopEvents::Held(rt::Workspace& ws, double t, const double* y, const double* a, const std::vector<int>& speeds,
+                        std::vector<double>* lambda, double* a_held, std::vector<double>* noise,
+                        std::vector<double>* forces) {
   lambda->assign(sides_.size(), 0.0);
   if (noise) noise->assign(sides_.size(), 0.0);
   std::vector<int> rows;
@@ -154,36 +176,58 @@ int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::
     if (int s = Row(ws, t, y, sides_[i], &gap, J_.data(), &c); s != 0) return s;
     bias.push_back(c);
   }
-  if (int s = rt::Derivative(program_, ws, t, y, ydot_.data()); s != 0) return s;
   if (mu_ && !rows.empty()) {  // the accelerations are not affine in the reactions
-    std::vector<double> c, a(static_cast<size_t>(nu_));
-    if (int s = ReactionsMu(ws, t, y, rows, bias, &c, a.data()); s != 0) return s;
+    if (!speeds.empty()) {
+      error_ = "stuck joints' rows beside a friction mu N";
+      return -1;
+    }
+    std::vector<double> c, a_mu(static_cast<size_t>(nu_));
+    if (int s = ReactionsMu(ws, t, y, rows, bias, &c, a_mu.data()); s != 0) return s;
     for (size_t j = 0; j < rows.size(); ++j) (*lambda)[static_cast<size_t>(rows[j])] = c[j];
     if (noise)
       if (int s = ReactionNoise(ws, t, y, rows, bias, noise); s != 0) return s;
-    if (a_held) std::copy(a.begin(), a.end(), a_held);
+    if (a_held) std::copy(a_mu.begin(), a_mu.end(), a_held);
     return 0;
   }
-  const double* a = ydot_.data() + nq_;
-  std::vector<double> targets(rows.size()), c;
+  const size_t n = speeds.size();
+  std::vector<double> targets(n + rows.size()), c;
   std::vector<double> da(static_cast<size_t>(nu_), 0.0);
-  if (!rows.empty()) {
+  if (forces) forces->assign(n, 0.0);
+  if (n + rows.size() > 0) {
     std::copy(a, a + nu_, a_.begin());  // Row's and Impulse's calls overwrite ydot_ and J_
+    for (size_t j = 0; j < n; ++j) targets[j] = -a_[static_cast<size_t>(speeds[j])];
     for (size_t j = 0; j < rows.size(); ++j) {
       double gap = 0.0, cj = 0.0;
       if (int s = Row(ws, t, y, sides_[static_cast<size_t>(rows[j])], &gap, J_.data(), &cj); s != 0) return s;
       double Ja = 0.0;
       for (int k = 0; k < nu_; ++k) Ja += J_[static_cast<size_t>(k)] * a_[static_cast<size_t>(k)];
-      targets[j] = -(Ja + bias[j]);
+      targets[n + j] = -(Ja + bias[j]);
     }
-    if (int s = Impulse(ws, t, y, rows, targets, da.data(), &c); s != 0) return s;
-    for (size_t j = 0; j < rows.size(); ++j) (*lambda)[static_cast<size_t>(rows[j])] = c[j];
-    if (noise)
+    if (int s = Impulse(ws, t, y, speeds, rows, targets, da.data(), &c); s != 0) return s;
+    for (size_t j = 0; j < n; ++j) (*forces)[j] = c[j];
+    for (size_t j = 0; j < rows.size(); ++j) (*lambda)[static_cast<size_t>(rows[j])] = c[n + j];
+    if (noise && n == 0)  // (the stuck joints' forces solved first: Functions' order)
       if (int s = ReactionNoise(ws, t, y, rows, bias, noise); s != 0) return s;
     a = a_.data();
   }
   if (a_held)
     for (int i = 0; i < nu_; ++i) a_held[i] = a[i] + da[static_cast<size_t>(i)];
+  return 0;
+}
+
+int EndStopEvents::HoldWith(rt::Workspace& ws, double t, const double* y, double* ydot, const std::vector<int>& speeds,
+                            std::vector<double>* forces) {
+  bool any = !speeds.empty();
+  for (const Side& s : sides_) any = any || s.resting;
+  if (!any) return 0;
+  std::vector<double> lambda;
+  if (int s = Held(ws, t, y, ydot + nq_, speeds, &lambda, ydot + nq_, nullptr, forces); s != 0) return s;
+  for (const Side& s : sides_) {
+    if (!s.resting || s.stop < 0) continue;
+    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];  // held exactly
+    ydot[st.q] = 0.0;
+    ydot[nq_ + st.u] = 0.0;
+  }
   return 0;
 }
 
@@ -214,18 +258,7 @@ int EndStopEvents::ReactionNoise(rt::Workspace& ws, double t, const double* y, c
 }
 
 int EndStopEvents::Hold(rt::Workspace& ws, double t, const double* y, double* ydot) {
-  bool any = false;
-  for (const Side& s : sides_) any = any || s.resting;
-  if (!any) return 0;
-  std::vector<double> lambda;
-  if (int s = Reactions(ws, t, y, &lambda, ydot + nq_); s != 0) return s;
-  for (const Side& s : sides_) {
-    if (!s.resting || s.stop < 0) continue;
-    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];  // held exactly
-    ydot[st.q] = 0.0;
-    ydot[nq_ + st.u] = 0.0;
-  }
-  return 0;
+  return HoldWith(ws, t, y, ydot, {}, nullptr);
 }
 
 std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y) {
@@ -428,7 +461,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   for (size_t k = 0; k < sides_.size(); ++k)
     if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
   std::vector<double> du(static_cast<size_t>(nu_)), c;
-  if (int s = Impulse(ws, t, y, rows, targets, du.data(), &c); s != 0) return s;
+  if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
   for (int k = 0; k < nu_; ++k) u[k] += du[static_cast<size_t>(k)];
   if (st) u[st->u] = rest ? 0.0 : -e * before;  // exactly Newton's law (du's round-off aside)
   for (const Side& s : sides_)
@@ -524,7 +557,7 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
     for (int k = 0; k < n; ++k)
       if (sides_[static_cast<size_t>(k)].resting) rows.push_back(k), targets.push_back(0.0);
     std::vector<double> du(static_cast<size_t>(nu_));
-    if (int r = Impulse(ws, t, y, rows, targets, du.data(), &c); r != 0) return r;
+    if (int r = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); r != 0) return r;
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
     if (s.stop >= 0) {
       const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];

@@ -35,6 +35,12 @@ class EndStopEvents {
   // ydot (from rt::Derivative at (t, y)) with the resting contacts held: their gaps'
   // accelerations made zero by their reactions. 0, or Derivative's status codes.
   int Hold(rt::Workspace& ws, double t, const double* y, double* ydot);
+  // Hold with more rows: the free speeds `speeds` (joints stuck by their friction) held at zero
+  // acceleration by generalized forces on them (*forces, their increments over the forces in
+  // ydot), solved with the resting contacts' reactions as one system from one factorization
+  // of the inverse mass (M udot = f + A^T lambda, A udot = b).
+  int HoldWith(rt::Workspace& ws, double t, const double* y, double* ydot, const std::vector<int>& speeds,
+               std::vector<double>* forces);
   // g_i: a free side's gap, a resting one's reaction (pushing: > 0), an accumulating one's
   // time left to its accumulation point. guards (may be null): a free side's graze guard,
   // minus its gap's rate (crossing zero downwards where the gap has a minimum); 1 for the others.
@@ -158,14 +164,19 @@ class EndStopEvents {
   std::string Element(const Side& s) const;
   std::string Who(const Side& s) const { return (s.plane >= 0 ? "contact '" : "joint '") + Element(s) + "'"; }
   std::string Where(const Side& s) const;  // "q_min", "q_max", "the plane"
-  // Speeds' jump du = X c with J_r du = target_r for the sides `rows` (X = M^-1 J^T columns).
-  // 0, or Derivative's codes.
-  int Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+  // Speeds' jump du = X c with J_r du = target_r for the rows: e_k for each k in `speeds`
+  // (first), then the sides `rows` (X = M^-1 J^T columns, the speed rows' from one
+  // factorization). 0, or Derivative's codes.
+  int Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds, const std::vector<int>& rows,
               const std::vector<double>& targets, double* du, std::vector<double>* c);
   // Resting sides' reactions at (t, y) (in the order of sides_, 0 where not resting) and
   // the held accelerations (nu, may be null).
   int Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda, double* a_held,
                 std::vector<double>* noise = nullptr);
+  // Reactions from the free accelerations a (nu) at (t, y), with the rows of `speeds` first
+  // (HoldWith; *forces their forces, may be null when there are none; noise only without them).
+  int Held(rt::Workspace& ws, double t, const double* y, const double* a, const std::vector<int>& speeds,
+           std::vector<double>* lambda, double* a_held, std::vector<double>* noise, std::vector<double>* forces);
   // *noise: per resting side (rows, their biases), the round-off scale of its reaction; uses
   // Impulse's last columns (x_, Jrows_) and the accelerations in a_.
   int ReactionNoise(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
@@ -197,7 +208,7 @@ class EndStopEvents {
   std::vector<Side> sides_;
   int nq_ = 0, nu_ = 0;
   double rtol_ = 0.0, atol_ = 0.0;
-  std::vector<double> ydot_, x_, a_, J_, Jrows_, M_;  // scratch
+  std::vector<double> ydot_, x_, a_, J_, Jrows_, M_, cols_;  // scratch
   std::vector<EventRecord> log_;
   bool mu_ = false;  // friction joints with mu (sim/friction_impulse.h)
   std::string error_;

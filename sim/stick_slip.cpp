@@ -1,6 +1,10 @@
 // Exact Coulomb friction on joints as events (sim/stick_slip.h). With the stuck joints' set
-// S fixed, the accelerations are affine in their friction forces tau_S (Kane's equations
-// with those forces as applied forces), so
+// S fixed and constant friction, Kane's equations with their friction forces tau_S as applied
+// forces and the resting stops' reactions are one constrained system,
+//   M udot = f + E_S^T tau_S + A^T lambda,   udot_S = 0,   A udot = b                    (2)
+// solved from one factorization of M (EndStopEvents::HoldWith; HoldSpeeds without stops).
+// With a friction mu N (which reads the joint reactions, so the accelerations are only
+// nearly affine in tau_S), and beside constraint rows (CheckRows reads X), the accelerations are
 //   a_S(tau) = a_S(tau_0) + X (tau - tau_0),  X_jk = d a_j / d tau_k                     (1)
 // and one Newton step from the last forces solves a_S = 0; X by differences with steps so
 // large that the difference is not lost in the rounding of a (as rt::InverseMassColumn).
@@ -53,11 +57,15 @@ StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program)
   nq_ = rt::NumQ(program);
   nu_ = rt::NumU(program);
   const std::vector<rt::FrictionJoint> all = rt::FrictionJoints(program);
-  for (size_t i = 0; i < all.size(); ++i)
+  direct_ = true;
+  for (size_t i = 0; i < all.size(); ++i) {
     if (all[i].exact) joints_.push_back({all[i], static_cast<int>(i), 0, 0.0});
+    direct_ = direct_ && all[i].mu == 0.0;  // a friction mu N: the accelerations are not affine in tau
+  }
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   col_.resize(ydot_.size());
   rows_ = !joints_.empty() && rt::Summarize(program).dof < nu_;
+  direct_ = direct_ && !rows_;  // beside rows: Newton (1), whose X CheckRows reads for dependent stuck joints
 }
 
 void StickSlipEvents::Apply(rt::Workspace& ws) const {
@@ -88,6 +96,51 @@ int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double*
     if (j.mode == 0 && !HeldByStop(j, resting)) stuck.push_back(&j);
   Apply(ws);
   double* out = ydot ? ydot : ydot_.data();
+  if (!direct_) return SolveNewton(ws, t, y, out, stuck);
+  std::vector<int> speeds;
+  for (const Joint* j : stuck) speeds.push_back(j->f.u);
+  // The event functions and decisions take one more pass from the solved forces (the same
+  // factorization): the round-off of M^-1 left a force needed exactly at its bound an ulp
+  // past it, and the joint slipped (the right-hand side zeroes the held rows anyway).
+  const int passes = ydot || stuck.empty() ? 1 : 2;
+  for (int pass = 0; pass < passes; ++pass) {
+    if (int s = rt::Derivative(program_, ws, t, y, out); s != 0) return s;
+    std::vector<double> dtau;
+    if (stops_) {
+      if (int s = stops_->HoldWith(ws, t, y, out, speeds, &dtau); s != 0) return s;
+    } else if (!stuck.empty()) {
+      if (int s = HoldSpeeds(ws, t, y, speeds, out + nq_, &dtau); s != 0) return s;
+    }
+    if (stuck.empty()) return 0;
+    for (size_t k = 0; k < stuck.size(); ++k) stuck[k]->tau += dtau[k];
+    Apply(ws);
+  }
+  for (const Joint* j : stuck) {  // held exactly
+    out[j->f.q] = 0.0;
+    out[nq_ + j->f.u] = 0.0;
+  }
+  return 0;
+}
+
+// (2): X = M^-1 [e_k] for the stuck speeds k, then X_SS dtau = -a_S and a += X dtau.
+int StickSlipEvents::HoldSpeeds(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds, double* a,
+                                std::vector<double>* dtau) {
+  const size_t m = speeds.size(), nu = static_cast<size_t>(nu_);
+  col_.resize(m * nu);
+  if (int s = rt::InverseMassColumns(program_, ws, t, y, speeds.data(), static_cast<int>(m), col_.data()); s != 0) return s;
+  std::vector<double> A(m * m), rhs(m);
+  for (size_t r = 0; r < m; ++r) {
+    rhs[r] = -a[speeds[r]];
+    for (size_t k = 0; k < m; ++k) A[r * m + k] = col_[k * nu + static_cast<size_t>(speeds[r])];
+  }
+  if (!SolveSmall(A, rhs, dtau)) return -1;
+  for (size_t i = 0; i < nu; ++i)
+    for (size_t k = 0; k < m; ++k) a[i] += col_[k * nu + i] * (*dtau)[k];
+  return 0;
+}
+
+int StickSlipEvents::SolveNewton(rt::Workspace& ws, double t, const double* y, double* out,
+                                 const std::vector<Joint*>& stuck) {
   if (int s = Eval(ws, t, y, out); s != 0) return s;
   if (stuck.empty()) return 0;
   const size_t m = stuck.size();

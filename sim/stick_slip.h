@@ -90,6 +90,12 @@ class StickSlipEvents {
   // The stuck joints' friction forces at (t, y) (Newton on their accelerations, which are
   // affine in them), the modes applied to ws; ydot (may be null) the held motion.
   int Solve(rt::Workspace& ws, double t, const double* y, double* ydot);
+  // (2) of stick_slip.cpp without stops: the stuck speeds' rows from one factorization; a (nu)
+  // the free accelerations, made the held ones; *dtau the forces' increments.
+  int HoldSpeeds(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds, double* a,
+                 std::vector<double>* dtau);
+  // (1) of stick_slip.cpp (a friction mu N): Newton on the stuck accelerations; out the held motion.
+  int SolveNewton(rt::Workspace& ws, double t, const double* y, double* out, const std::vector<Joint*>& stuck);
   void Apply(rt::Workspace& ws) const;
   // The stuck joint's bound mu_s r N + C_s, N from ws's last evaluation.
   double StaticBound(const rt::Workspace& ws, const Joint& j) const;
@@ -114,6 +120,7 @@ class StickSlipEvents {
   EndStopEvents* stops_ = nullptr;  // SetStops (null: none)
   std::vector<Joint> joints_;
   int nq_ = 0, nu_ = 0;
+  bool direct_ = true;  // constant friction on a tree: (2) of stick_slip.cpp, else Newton (1)
   std::vector<double> ydot_, col_;  // scratch (col_: MakeX's evaluations)
   std::vector<double> x_;     // X of the stuck set x_ids_ (friction joint indices), m x m row-major
   std::vector<int> x_ids_;

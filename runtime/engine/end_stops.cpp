@@ -72,33 +72,61 @@ int ConstrainedInverseMassTimes(const Program& p, Workspace& ws, double t, const
   return 0;
 }
 
-// A column of M^-1 from the assembled mass matrix (Cholesky). A difference of two
-// accelerations (applied unit force vs none) lost the column to rounding where the
-// accelerations were large, as at an integrator's trial stage far from the solution.
-int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
+// Columns of M^-1 from the assembled mass matrix (Cholesky), one factorization for all. A
+// difference of two accelerations (applied unit force vs none) lost the column to rounding
+// where the accelerations were large, as at an integrator's trial stage far from the solution.
+int InverseMassColumns(const Program& p, Workspace& ws, double t, const double* y, const int* ks, int m, double* X) {
   if (FrictionReadsNormalForce(p)) {
     ws.error = "an impulse in a mechanism with Coulomb friction mu N is not supported yet";
     return -1;
   }
-  if (!p.rows.empty()) {
-    std::vector<double> e(static_cast<size_t>(p.nu), 0.0);
-    e[static_cast<size_t>(k)] = 1.0;
-    return ConstrainedInverseMassTimes(p, ws, t, y, e.data(), "'" + StateNames(p)[static_cast<size_t>(p.nq + k)] + "'", x);
+  if (m == 0) return 0;
+  if (!p.rows.empty()) {  // (one factorization per column: TangentMetric's basis for each)
+    for (int j = 0; j < m; ++j) {
+      std::vector<double> e(static_cast<size_t>(p.nu), 0.0);
+      e[static_cast<size_t>(ks[j])] = 1.0;
+      ++ws.inverse_mass_factorizations;
+      if (int s = ConstrainedInverseMassTimes(p, ws, t, y, e.data(),
+                                              "'" + StateNames(p)[static_cast<size_t>(p.nq + ks[j])] + "'",
+                                              X + static_cast<size_t>(j) * static_cast<size_t>(p.nu));
+          s != 0)
+        return s;
+    }
+    return 0;
   }
-  Eigen::MatrixXd M(p.nu, p.nu);
-  if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
-  const Eigen::LLT<Eigen::MatrixXd> llt(M);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(p.nu);
-  e[k] = 1.0;
-  Eigen::VectorXd col = Eigen::VectorXd::Zero(p.nu);
-  if (llt.info() == Eigen::Success) col = llt.solve(e);
-  if (!(col[k] > 0.0) || !col.allFinite()) {  // M is positive definite: (M^-1)_kk > 0
-    ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k) + " at time " + std::to_string(t);
-    return 1;  // recoverable: a trial stage may probe a state far from the solution
+  // M depends on t and q only: the factor of the last call is kept for the same (t, q) (the
+  // event functions after a right-hand side at that state, the stops' after the friction's).
+  std::vector<double>& at = ws.inverse_mass_at;
+  if (at.size() != static_cast<size_t>(p.nq) + 1 || at[0] != t || !std::equal(y, y + p.nq, at.begin() + 1)) {
+    at.clear();  // (a failed evaluation keeps no factor)
+    Eigen::MatrixXd M(p.nu, p.nu);
+    if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
+    ++ws.inverse_mass_factorizations;
+    ws.inverse_mass_llt.compute(M);
+    at.push_back(t);
+    at.insert(at.end(), y, y + p.nq);
   }
-  std::copy(col.data(), col.data() + p.nu, x);
+  const Eigen::LLT<Eigen::MatrixXd>& llt = ws.inverse_mass_llt;
+  for (int j = 0; j < m; ++j) {
+    const int k = ks[j];
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(p.nu);
+    e[k] = 1.0;
+    Eigen::VectorXd col = Eigen::VectorXd::Zero(p.nu);
+    if (llt.info() == Eigen::Success) col = llt.solve(e);  // column by column: each as alone
+    if (!(col[k] > 0.0) || !col.allFinite()) {  // M is positive definite: (M^-1)_kk > 0
+      ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k) + " at time " + std::to_string(t);
+      return 1;  // recoverable: a trial stage may probe a state far from the solution
+    }
+    std::copy(col.data(), col.data() + p.nu, X + static_cast<size_t>(j) * static_cast<size_t>(p.nu));
+  }
   return 0;
 }
+
+int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
+  return InverseMassColumns(p, ws, t, y, &k, 1, x);
+}
+
+EvalCounts Counts(const Workspace& ws) { return {ws.derivatives, ws.inverse_mass_factorizations}; }
 
 // Derivative's evaluation, then the accelerations solved again with F on the speeds (the
 // friction's normal-force iteration included, as InverseMassTimes does).

@@ -64,6 +64,7 @@ int SolveAccelerations(const Program& p, Workspace& ws) {
 //   constraints] -> qdot = N(q) u -> bias accelerations -> applied forces -> Kane's
 //   equations M udot = f (dense, sparse, recursive, or reduced on the constrained basis).
 int Derivative(const Program& p, Workspace& ws, double t, const double* y, double* ydot) {
+  ++ws.derivatives;
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
   const bool step_projection = ws.step_projection && StepProjectionAvailable(p);
   if (p.rows.empty() || step_projection) {

@@ -444,6 +444,10 @@ struct Workspace {
   std::vector<double> friction_tau; // friction force per friction joint, last converged  (nfric)  filled by SolveWithFriction
   std::vector<double> friction_Q0;  // the joint's applied force without friction  (nfric)  filled by SolveWithFriction
   long friction_iterations = 0;     // fixed-point iterations so far  filled by SolveWithFriction
+  long derivatives = 0;                   // Derivative's evaluations so far (rt::Counts)
+  long inverse_mass_factorizations = 0;  // InverseMassColumns' factorizations so far (rt::Counts)
+  Eigen::LLT<Eigen::MatrixXd> inverse_mass_llt;  // InverseMassColumns' last factor of M  filled by InverseMassColumns
+  std::vector<double> inverse_mass_at;            // its (t, q), empty: none
   // The law per friction joint (SetFrictionMode): 0 tanh(u / v), +1 / -1 sliding that way,
   // 2 the force friction_fixed (stuck)  (nfric)  set by sim/stick_slip.cpp
   std::vector<int> friction_mode;

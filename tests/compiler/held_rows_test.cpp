@@ -1,0 +1,94 @@
+// Joints stuck by exact friction beside joints resting on their stops (issue 41): the stuck
+// joints' forces and the stops' reactions are the multipliers of one constrained system
+// (M udot = f + A^T lambda, A udot = b; sim/stick_slip.cpp (2)), solved from one
+// factorization of the inverse mass per evaluation.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "sim/end_stops.h"
+#include "sim/stick_slip.h"
+#include "tests/compiler/compile_test_util.h"
+
+namespace kanesim::test {
+namespace {
+
+constexpr double kG = 9.81;
+
+// A double pendulum in the vertical plane (gravity -y): link 1 (m1 = 1, centre c1 = 0.5 on
+// x, length L1 = 1) on joint j1 with friction_torque 100 (it sticks), link 2 (m2 = 0.5,
+// centre c2 = 0.4) on joint j2 with a stop q_min = q2, started at rest at (q1, q2). Gravity
+// turns j2 towards q_min: it rests there. At rest (u = 0, no velocity terms) the statics give
+//   lambda_2 = m2 g c2 cos(q1 + q2)                                  (the stop's reaction)
+//   tau_1 = g ((m1 c1 + m2 L1) cos q1 + m2 c2 cos(q1 + q2))          (j1's friction)
+// the generalized gravity forces each row balances.
+std::string DoublePendulum(double q1, double q2) {
+  return "model DP\n"
+         "  World world(g = {0, -9.81, 0});\n"
+         "  Revolute j1(axis = {0, 0, 1}, q(start = " + Num(q1) + "), friction_torque = 100, friction_exact = true);\n"
+         "  Body b1(m = 1, r_CM = {0.5, 0, 0}, I = [0.001, 0, 0; 0, 0.1, 0; 0, 0, 0.1]);\n"
+         "  FixedTranslation elbow(r = {1, 0, 0});\n"
+         "  Revolute j2(axis = {0, 0, 1}, q(start = " + Num(q2) + "), q_min = " + Num(q2) + ");\n"
+         "  Body b2(m = 0.5, r_CM = {0.4, 0, 0}, I = [0.001, 0, 0; 0, 0.02, 0; 0, 0, 0.02]);\n"
+         "equation\n"
+         "  connect(world.frame_b, j1.frame_a);\n"
+         "  connect(j1.frame_b, b1.frame_a);\n"
+         "  connect(j1.frame_b, elbow.frame_a);\n"
+         "  connect(elbow.frame_b, j2.frame_a);\n"
+         "  connect(j2.frame_b, b2.frame_a);\n"
+         "end DP;\n";
+}
+
+// If this fails, the stuck joint's friction or the stop's reaction is not the statics' (the
+// combined rows solve a different system), the held accelerations are not zero, or an
+// evaluation with both kinds of rows evaluates the accelerations or factors the inverse mass
+// more than once (it evaluated them four times and factored three: Newton on the stuck
+// joint's force, the stop's rows held in each of its evaluations), or the event functions at
+// the state of the last evaluation factor it again.
+TEST(HeldRows, StuckJointAndRestingStopShareOneFactorization) {
+  const double m1 = 1, c1 = 0.5, L1 = 1, m2 = 0.5, c2 = 0.4;
+  for (double q1 : {0.3, -0.4, 1.1})
+    for (double q2 : {-0.5, 0.2}) {
+      auto l = LoadModel(DoublePendulum(q1, q2), {}, {}, true);
+      ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+      const rt::Program& p = *l->prog;
+      const std::vector<std::string> names = rt::StateNames(p);
+      ASSERT_EQ(names.size(), 4u);
+      std::vector<double> y(4);
+      rt::InitialState(p, y.data());
+      auto ws = rt::MakeWorkspace(p);
+      sim::EndStopEvents stops(p, 0.0, 1e-12);  // rtol 0: the leave margin only round-off
+      sim::StickSlipEvents stick(p);
+      stick.SetStops(&stops);
+      ASSERT_EQ(stick.Start(*ws, 0.0, y.data()), 0);  // (first: a free j1 would fall, pulling j2 off its stop)
+      ASSERT_EQ(stick.Modes()[0], 0.0) << "j1 sticks";
+      ASSERT_EQ(stops.Start(*ws, 0.0, y.data()), 0);
+      ASSERT_EQ(stops.RestingSpeeds().size(), 1u) << "q1 = " << q1 << " q2 = " << q2;
+      const double lambda2 = m2 * kG * c2 * std::cos(q1 + q2);
+      const double tau1 = kG * ((m1 * c1 + m2 * L1) * std::cos(q1) + m2 * c2 * std::cos(q1 + q2));
+      ASSERT_GT(lambda2, 0.0);  // it pushes: the stop holds
+      // At a later time (a state not yet evaluated; the model does not depend on time).
+      const double t = 0.5;
+      const rt::EvalCounts before = rt::Counts(*ws);
+      std::vector<double> ydot(4, 1.0);
+      ASSERT_EQ(stick.Rhs(*ws, t, y.data(), ydot.data()), 0);
+      EXPECT_EQ(rt::Counts(*ws).derivatives - before.derivatives, 1) << "one evaluation of the free accelerations";
+      EXPECT_EQ(rt::Counts(*ws).inverse_mass_factorizations - before.inverse_mass_factorizations, 1)
+          << "one factorization per evaluation";
+      for (double v : ydot) EXPECT_EQ(v, 0.0);  // both joints held, at rest
+      EXPECT_NEAR(stick.Modes()[1], tau1, 1e-12 * (1 + std::abs(tau1))) << "q1 = " << q1 << " q2 = " << q2;
+      std::vector<double> g(static_cast<size_t>(stops.Count() + stick.Count()));
+      ASSERT_EQ(stick.Functions(*ws, t, y.data(), g.data() + stops.Count()), 0);
+      ASSERT_EQ(stops.Functions(*ws, t, y.data(), g.data()), 0);
+      EXPECT_EQ(rt::Counts(*ws).inverse_mass_factorizations - before.inverse_mass_factorizations, 1)
+          << "the event functions at the same state reuse it";
+      EXPECT_NEAR(g[0], lambda2, 1e-12 * (1 + lambda2)) << "the stop's reaction (plus its round-off margin)";
+      EXPECT_NEAR(g[1], 100.0 - std::abs(tau1), 1e-10) << "j1's margin to its static bound";
+    }
+}
+
+}  // namespace
+}  // namespace kanesim::test
