@@ -321,7 +321,8 @@ struct Node {
 inline void NodeRelease::operator()(Node* n) const { n->~Node(); }
 
 inline NodeArena::~NodeArena() {
-  for (void* b : blocks_) ::operator delete(b, kBlockNodes * sizeof(Node));
+  // Unsized: clang 14 (the fuzz build) declares the sized form only with -fsized-deallocation.
+  for (void* b : blocks_) ::operator delete(b);
 }
 
 inline NodePtr NodeArena::New() {
