@@ -66,4 +66,20 @@ inline const rt::CompileMessage* Find(const std::vector<rt::CompileMessage>& ms,
 // The summary of a compiled model.
 inline rt::ProgramSummary SummaryOf(const Loaded& l) { return rt::Summarize(*l.prog); }
 
+// The geared pair of the loop tests: rods on j1 at the origin and j2 two metres along x,
+// coupled q2 = -q1 / 2 (JointCoupling); `j1_mods`, `j2_mods` go into the joints' modifiers,
+// `equations` after the connections, `g` is the gravity vector's text.
+inline std::string GearedPair(const std::string& name, const std::string& g, const std::string& j1_mods,
+                              const std::string& j2_mods, const std::string& equations = "") {
+  return "model " + name + "\n  World world(g = " + g + ");\n  Revolute j1(axis = {0, 0, 1}" + j1_mods +
+         ");\n  Rod r1(L = 1, m = 1);\n  FixedTranslation base(r = {2, 0, 0});\n  Revolute j2(axis = {0, 0, 1}" +
+         j2_mods +
+         ");\n  Rod r2(L = 0.5, m = 2);\n  JointCoupling gear(ratio = -0.5);\nequation\n"
+         "  connect(world.frame_b, j1.frame_a);\n  connect(j1.frame_b, r1.frame_a);\n"
+         "  connect(world.frame_b, base.frame_a);\n  connect(base.frame_b, j2.frame_a);\n"
+         "  connect(j2.frame_b, r2.frame_a);\n  connect(j1.drive, gear.flange_a);\n"
+         "  connect(j2.drive, gear.flange_b);\n" +
+         equations + "end " + name + ";\n";
+}
+
 }  // namespace kanesim::test

@@ -15,25 +15,8 @@ namespace {
 
 // A gear pair in the horizontal plane (gravity along the axes: no work), exact friction 0.2 on
 // the driving joint, the drive 0.3 sin(3t): stuck at rest until 0.3 sin(3t) reaches 0.2.
-const char* kGeared =
-    "model Geared\n"
-    "  World world(g = {0, 0, -9.81});\n"
-    "  Revolute j1(axis = {0, 0, 1}, friction_torque = 0.2, friction_exact = true);\n"
-    "  Rod r1(L = 1, m = 1);\n"
-    "  FixedTranslation base(r = {2, 0, 0});\n"
-    "  Revolute j2(axis = {0, 0, 1});\n"
-    "  Rod r2(L = 0.5, m = 2);\n"
-    "  JointCoupling gear(ratio = -0.5);\n"
-    "equation\n"
-    "  connect(world.frame_b, j1.frame_a);\n"
-    "  connect(j1.frame_b, r1.frame_a);\n"
-    "  connect(world.frame_b, base.frame_a);\n"
-    "  connect(base.frame_b, j2.frame_a);\n"
-    "  connect(j2.frame_b, r2.frame_a);\n"
-    "  connect(j1.drive, gear.flange_a);\n"
-    "  connect(j2.drive, gear.flange_b);\n"
-    "  j1.tau = 0.3 * sin(3 * time);\n"
-    "end Geared;\n";
+const std::string kGeared = GearedPair("Geared", "{0, 0, -9.81}", ", friction_torque = 0.2, friction_exact = true", "",
+                                        "  j1.tau = 0.3 * sin(3 * time);\n");
 
 // If this fails, an integrator stepped over the slip window of a stuck joint (its first event
 // after the stick at the start is not the slip at asin(2/3)/3), or the joint moved while stuck.

@@ -154,23 +154,7 @@ TEST(LoopFriction, DependentStuckJointsAreRefusedWithTheReason) {
 TEST(LoopFriction, GearedPairEqualsTheReducedModelWithReflectedFriction) {
   const std::string drive = "  j1.tau = 0.3 * sin(time);\n";
   const std::string geared =
-      "model Geared\n"
-      "  World world(g = {0, 0, -9.81});\n"
-      "  Revolute j1(axis = {0, 0, 1});\n"
-      "  Rod r1(L = 1, m = 1);\n"
-      "  FixedTranslation base(r = {2, 0, 0});\n"
-      "  Revolute j2(axis = {0, 0, 1}, friction_torque = 0.4, friction_exact = true);\n"
-      "  Rod r2(L = 0.5, m = 2);\n"
-      "  JointCoupling gear(ratio = -0.5);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, r1.frame_a);\n"
-      "  connect(world.frame_b, base.frame_a);\n"
-      "  connect(base.frame_b, j2.frame_a);\n"
-      "  connect(j2.frame_b, r2.frame_a);\n"
-      "  connect(j1.drive, gear.flange_a);\n"
-      "  connect(j2.drive, gear.flange_b);\n" +
-      drive + "end Geared;\n";
+      GearedPair("Geared", "{0, 0, -9.81}", "", ", friction_torque = 0.4, friction_exact = true", drive);
   const std::string reduced =
       "model Reduced\n"
       "  World world(g = {0, 0, -9.81});\n"

@@ -180,24 +180,7 @@ TEST(LoopStops, PlasticImpactRestsOnTheStopOnTheLoop) {
 // degree of freedom) was refused (K318, before this change) or its impact left the follower
 // off the coupling's velocity row u2 = -u1 / 2, or the kinetic energy was not scaled by e^2.
 TEST(LoopStops, CoupledJointsBounceTogether) {
-  const std::string text =
-      "model GearStop\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Revolute j1(axis = {0, 0, 1}, q(start = 0), q_min = -1.9, restitution = 0.5);\n"
-      "  Rod r1(L = 1, m = 1);\n"
-      "  FixedTranslation base(r = {2, 0, 0});\n"
-      "  Revolute j2(axis = {0, 0, 1});\n"
-      "  Rod r2(L = 0.5, m = 2);\n"
-      "  JointCoupling gear(ratio = -0.5);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, r1.frame_a);\n"
-      "  connect(world.frame_b, base.frame_a);\n"
-      "  connect(base.frame_b, j2.frame_a);\n"
-      "  connect(j2.frame_b, r2.frame_a);\n"
-      "  connect(j1.drive, gear.flange_a);\n"
-      "  connect(j2.drive, gear.flange_b);\n"
-      "end GearStop;\n";
+  const std::string text = GearedPair("GearStop", "{0, -9.81, 0}", ", q(start = 0), q_min = -1.9, restitution = 0.5", "");
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   for (const IntegratorChoice& how : AllIntegrators()) {
