@@ -59,6 +59,8 @@ class EndStopEvents {
   // sign Settle's test would leave to round-off; the gap, from exactly 0, would then close
   // without a crossing for the root finding.)
   int RestOn(rt::Workspace& ws, double t, double* y, int u, int dir);
+  // The same beside constraint rows, for every closed stop the slide moves (sim/end_stops.cpp).
+  int RestOnRows(rt::Workspace& ws, double t, double* y, int u, int dir);
   std::vector<char> RestingSet() const;
   // A speed this small after an event is a rest (kRestSpeeds (atol)).
   double RestSpeed() const { return kRestSpeeds * atol_; }
@@ -191,7 +193,7 @@ class EndStopEvents {
   int Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before);
   // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
-  // With Coulomb friction mu N (a tree; sim/end_stops_friction.cpp): the resting sides'
+  // With Coulomb friction mu N (sim/end_stops_friction.cpp): the resting sides'
   // reactions c (rows, targets as Reactions builds them) and the held accelerations a (nu),
   // by the tree's fixed point with the reactions included; an impulse on stop rows with the
   // friction joints' impulses (sim/friction_impulse.h).
@@ -199,6 +201,8 @@ class EndStopEvents {
                   const std::vector<double>& bias, std::vector<double>* c, double* a);
   int ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                 const std::vector<double>& targets, double* du, std::vector<double>* c);
+  int ImpulseMuOnRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                      const std::vector<double>& targets, double* du, std::vector<double>* c);
   int HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                  const std::vector<double>& targets, double* du);
 
@@ -211,6 +215,7 @@ class EndStopEvents {
   std::vector<double> ydot_, x_, a_, J_, Jrows_, M_, cols_;  // scratch
   std::vector<EventRecord> log_;
   bool mu_ = false;  // friction joints with mu (sim/friction_impulse.h)
+  std::vector<int> opening_;  // RestOnRows: closed sides the slide opens (not joined by the next Settle)
   std::string error_;
 };
 
