@@ -5,11 +5,24 @@
 #include <cstring>
 #include <new>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include "cli/cmd_linearize.h"
 #include "cli/common.h"
 #include "cli/scene.h"
 
 int main(int argc, char** argv) {
+#ifdef __GLIBC__
+  // Fresh memory is the front end's largest cost after its instructions (each new page
+  // 1.5-4 us here, docs/benchmarks/2026-11-29_front_end_pass7.md). By default malloc maps
+  // each block over 128 KB apart and unmaps it when freed, so every doubling of a large
+  // vector (the expression pool, the parameters, the tokens) touches new pages and the old
+  // ones are given back; on the heap they are reused by what is allocated next.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 64 << 20);
+#endif
   CLI::App app{"kanesim: mechanisms in a Modelica-like language, simulated by Kane's method"};
   app.set_version_flag("--version", std::string("kanesim ") + KANESIM_VERSION);
   app.require_subcommand(1);
