@@ -4,11 +4,15 @@
 // normal force: no friction before the jump), so the speeds before are the start values.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include <Eigen/Dense>
+
+#include "sim/friction_impulse.h"
 #include "tests/compiler/compile_test_util.h"
 
 namespace kanesim::test {
@@ -189,6 +193,105 @@ TEST(WhenLoopFriction, FourBarOnARailSticksOrSlidesByTheMomentumBalance) {
   EXPECT_GT(kinds[0], 0);
   EXPECT_GT(kinds[1], 0);
   EXPECT_GT(kinds[2], 0);
+}
+
+
+// The four-bar at rest on the ground (no gravity, d = 0.6), mu on the coupler's pin
+// (crank_coupler) and the rocker's pivot, its crank's rate set to W (sim::FrictionJump with
+// the row e_crank). Planar Newton-Euler of the three rods in impulses, the unknowns the four
+// pins' impulses R1 (ground on crank), R2 (crank on coupler), R3 (coupler on rocker, the cut
+// joint's), R4 (ground on rocker) and the reinit's c:
+//   crank   m_a dv_a = R1 - R2   I_a dw2 = c - t_cc + (O2 - G_a) x R1 - (A - G_a) x R2
+//   coupler m_b dv_b = R2 - R3   I_b dw3 = t_cc + (A - G_b) x R2 - (B - G_b) x R3
+//   rocker  m_c dv_c = R4 + R3   I_c dw4 = t_4 + (O4 - G_c) x R4 + (B - G_c) x R3
+// (I = m L^2 / 12), the joints sliding (one degree of freedom: the rates follow W), their
+// friction impulses t_cc = -mu r |R2| sign(W (w3 - 1)), t_4 = -mu r |R4| sign(W w4) solved
+// by fixed-point iteration. The normal impulses are the pins' impulses on each joint's
+// subtree: R2 (coupler) and R4 (rocker), R2 carrying the cut joint's R3.
+// If this fails, the loop's impulses do not enter the normal impulses (or the friction, the
+// reinit's impulse or the jump disagree with Newton-Euler).
+TEST(WhenLoopFriction, FourBarImpulsesMatchNewtonEulerWithTheCutJointsImpulse) {
+  const double d = 0.6, mu = 0.3, r = 0.05, W = 3.0;
+  std::ifstream in(kRoot + "/examples/fourbar.mech");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  std::string text = buf.str();
+  auto put = [&](const std::string& from, const std::string& to) {
+    ASSERT_NE(text.find(from), std::string::npos) << from;
+    text.replace(text.find(from), from.size(), to);
+  };
+  put("\"rad/s\") = 6", "\"rad/s\") = 0");
+  put("g = {0, -9.81, 0}", "g = {0, 0, 0}");
+  const std::string f = ", mu = " + Num(mu) + ", friction_radius = " + Num(r);
+  put("q(start = 1.6)", "q(start = 1.6)" + f);
+  put("q(start = 1.0)", "q(start = 1.0)" + f);
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  const rt::Program& p = *l->prog;
+  const std::vector<std::string> names = rt::StateNames(p);
+  auto at = [&](const std::string& n) { return static_cast<int>(std::find(names.begin(), names.end(), n) - names.begin()); };
+  const int nq = rt::NumQ(p), nu = rt::NumU(p);
+  std::vector<double> y(names.size());
+  rt::InitialState(p, y.data());
+  auto ws = rt::MakeWorkspace(p);
+  std::vector<double> J(static_cast<size_t>(nu), 0.0);
+  J[static_cast<size_t>(at("crank_pivot.u") - nq)] = 1.0;
+  sim::FrictionJumpResult res;
+  std::string why;
+  ASSERT_EQ(sim::FrictionJump(p, *ws, 0.0, y.data(), J, {W}, &res, &why), 0) << why;
+
+  const double t2 = y[static_cast<size_t>(at("crank_pivot.q"))];
+  const double t3 = t2 + y[static_cast<size_t>(at("crank_coupler.q"))], t4 = y[static_cast<size_t>(at("rocker_pivot.q"))];
+  double w3, w4, px, py;
+  LoopRates(t2, t3, t4, &w3, &w4, &px, &py);
+  auto e = [](double t) { return Eigen::Vector2d(std::cos(t), std::sin(t)); };
+  auto ep = [](double t) { return Eigen::Vector2d(-std::sin(t), std::cos(t)); };
+  const Eigen::Vector2d O2(0, 0), A = kA * e(t2), Ga = kA / 2 * e(t2), Gb = A + kB / 2 * e(t3), B = A + kB * e(t3);
+  const Eigen::Vector2d O4(d, 0), Gc = O4 + kC / 2 * e(t4);
+  const Eigen::Vector2d dva = W * kA / 2 * ep(t2), dvb = W * (kA * ep(t2) + kB / 2 * w3 * ep(t3)),
+                        dvc = W * kC / 2 * w4 * ep(t4);
+  const double Ia = kMa * kA * kA / 12, Ib = kMb * kB * kB / 12, Ic = kMcr * kC * kC / 12;
+  double tcc = 0.0, t4f = 0.0;
+  Eigen::VectorXd x;  // R1, R2, R3, R4 (x, y each), c
+  for (int it = 0; it < 100; ++it) {
+    Eigen::MatrixXd E = Eigen::MatrixXd::Zero(9, 9);
+    Eigen::VectorXd rhs(9);
+    auto force = [&](int row, int R, double sign) {  // sign R_R into the momentum rows row, row + 1
+      E(row, 2 * R) += sign, E(row + 1, 2 * R + 1) += sign;
+    };
+    auto moment = [&](int row, int R, const Eigen::Vector2d& arm, double sign) {  // sign arm x R_R
+      E(row, 2 * R) += -sign * arm.y(), E(row, 2 * R + 1) += sign * arm.x();
+    };
+    force(0, 0, 1), force(0, 1, -1), rhs.segment<2>(0) = kMa * dva;
+    moment(2, 0, O2 - Ga, 1), moment(2, 1, A - Ga, -1), E(2, 8) = 1, rhs[2] = Ia * W + tcc;
+    force(3, 1, 1), force(3, 2, -1), rhs.segment<2>(3) = kMb * dvb;
+    moment(5, 1, A - Gb, 1), moment(5, 2, B - Gb, -1), rhs[5] = Ib * W * w3 - tcc;
+    force(6, 3, 1), force(6, 2, 1), rhs.segment<2>(6) = kMcr * dvc;
+    moment(8, 3, O4 - Gc, 1), moment(8, 2, B - Gc, 1), rhs[8] = Ic * W * w4 - t4f;
+    x = E.fullPivLu().solve(rhs);
+    const double tcc1 = -mu * r * x.segment<2>(2).norm() * (W * (w3 - 1) > 0 ? 1 : -1);
+    const double t41 = -mu * r * x.segment<2>(6).norm() * (W * w4 > 0 ? 1 : -1);
+    const bool done = std::abs(tcc1 - tcc) + std::abs(t41 - t4f) < 1e-16;
+    tcc = tcc1, t4f = t41;
+    if (done) break;
+  }
+  const std::vector<rt::FrictionJoint> fj = rt::FrictionJoints(p);
+  ASSERT_EQ(fj.size(), 2u);
+  for (size_t i = 0; i < fj.size(); ++i) {
+    const bool rocker = fj[i].joint == "rocker_pivot";
+    const double N = (rocker ? x.segment<2>(6) : x.segment<2>(2)).norm();
+    EXPECT_NEAR(res.normal[i], N, 1e-10 * N) << fj[i].joint;
+    EXPECT_NEAR(res.friction[i], rocker ? t4f : tcc, 1e-10 * N * mu * r) << fj[i].joint;
+  }
+  EXPECT_NEAR(res.impulse.at(0), x[8], 1e-10 * std::abs(x[8]));
+  EXPECT_TRUE(res.stuck.empty());
+  EXPECT_NEAR(res.du[static_cast<size_t>(at("rocker_pivot.u") - nq)], W * w4, 1e-12);
+  EXPECT_NEAR(res.du[static_cast<size_t>(at("crank_coupler.u") - nq)], W * (w3 - 1), 1e-12);
+  // The friction changes the reinit's impulse by its work per unit crank rate (virtual work).
+  EXPECT_NEAR(x[8] + tcc * (w3 - 1) + t4f * w4, (Ia + kMa * kA * kA / 4) * W +
+                  kMb * (kA * ep(t2) + kB / 2 * w3 * ep(t3)).squaredNorm() * W + Ib * w3 * w3 * W +
+                  (Ic + kMcr * kC * kC / 4) * w4 * w4 * W, 1e-10 * std::abs(x[8]));
+  (void)px, (void)py;
 }
 
 }  // namespace
