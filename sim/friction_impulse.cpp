@@ -118,6 +118,10 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
                  const std::vector<double>& targets, FrictionJumpResult* out, std::string* why) {
   const int nq = rt::NumQ(program), nu = rt::NumU(program);
   const auto m = static_cast<Eigen::Index>(targets.size());
+  if (J.size() != targets.size() * static_cast<size_t>(nu)) {
+    *why = "internal: the jump's rows J are not m x nu";
+    return -1;
+  }
   const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jm(J.data(), m, nu);
   const std::vector<rt::FrictionJoint> joints = rt::FrictionJoints(program);
   std::vector<ActiveJoint> act;
