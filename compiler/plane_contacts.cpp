@@ -18,9 +18,8 @@ std::string EventsRefused(const Program& p, bool planes) {
   // Closed loops', rolling contacts' and couplings' rows join the impulse and the reactions
   // by their own reactions (rt::InverseMassColumn through the tangent basis).
   // A constant friction is a bounded force: no impulse, no term in the reactions. mu N is
-  // one beside end stops (sim/end_stops_friction.cpp), whose rows are speed rows; beside
-  // constraint rows an impact stops the run at its time with the reason (the friction
-  // impulses need the rows' impulsive reactions), resting and sliding run.
+  // one beside end stops (sim/end_stops_friction.cpp), whose rows are speed rows (with
+  // constraint rows too: their impulses enter the friction's normal impulses).
   bool mu = false;
   for (int b : p.friction_joints) mu = mu || p.joints[static_cast<size_t>(b)].mu != 0.0;
   if (!mu) return "";

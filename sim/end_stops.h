@@ -201,8 +201,7 @@ class EndStopEvents {
                   const std::vector<double>& bias, std::vector<double>* c, double* a);
   int ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                 const std::vector<double>& targets, double* du, std::vector<double>* c);
-  int ImpulseMuOnRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-                      const std::vector<double>& targets, double* du, std::vector<double>* c);
+  bool SpeedRowsMu(const std::vector<int>& speeds, const std::vector<int>& rows, std::vector<double>* J);
   int HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                  const std::vector<double>& targets, double* du);
 

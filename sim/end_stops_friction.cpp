@@ -4,18 +4,16 @@
 // the accelerations the rows' reactions lambda, so the accelerations are not affine in
 // lambda. The rows' residual r(lambda) = J a(lambda) + c is brought to zero by the chord
 // iteration
-//   lambda <- lambda - (J M^-1 J^T)^-1 r(lambda)                                         (1)
-// (exact without mu; with mu it converges at the rate the tree's fixed point of
+//   lambda <- lambda - (J W J^T)^-1 r(lambda)                                            (1)
+// W the inverse mass without the friction (M^-1 on a tree, with constraint rows the
+// constrained one; exact without mu; with mu it converges at the rate the fixed point of
 // runtime/kane/friction.cpp (3) does, each a(lambda) solving that fixed point with lambda
 // applied). Impacts: the stops' rows are speed rows (J = +-e_k), so the jump is
-// sim/friction_impulse.h's, whose normal impulses carry the stops' impulses.
-#include <Eigen/Dense>
+// sim/friction_impulse.h's, whose normal impulses carry the stops' and the rows' impulses.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
-#include "runtime/program/program.h"
 #include "sim/end_stops.h"
 #include "sim/friction_impulse.h"
 #include "sim/impulse.h"  // SolveSmall
@@ -89,133 +87,68 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
   return 1;  // recoverable: the integrator retries with a smaller step
 }
 
-int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-                             const std::vector<double>& targets, double* du, std::vector<double>* c) {
-  if (!program_.rows.empty()) return ImpulseMuOnRows(ws, t, y, rows, targets, du, c);
-  std::vector<int> speeds;
-  std::vector<double> jumps, sign;
+// The rows J (m x nu) of the sides `rows` (stops: +-e_k) and of the set speeds `speeds` (e_k,
+// first); false with error_ for a plane contact (refused beside mu by the compiler).
+bool EndStopEvents::SpeedRowsMu(const std::vector<int>& speeds, const std::vector<int>& rows, std::vector<double>* J) {
+  const size_t nu = static_cast<size_t>(nu_), n = speeds.size();
+  J->assign((n + rows.size()) * nu, 0.0);
+  for (size_t j = 0; j < n; ++j) (*J)[j * nu + static_cast<size_t>(speeds[j])] = 1.0;
   for (size_t j = 0; j < rows.size(); ++j) {
     const Side& s = sides_[static_cast<size_t>(rows[j])];
     if (s.plane >= 0) {
-      error_ = "an impact of a plane contact beside Coulomb friction mu N is not supported";
-      return -1;
+      error_ = "a plane contact beside Coulomb friction mu N is not supported";
+      return false;
     }
-    sign.push_back(s.upper ? -1.0 : 1.0);
-    speeds.push_back(stops_[static_cast<size_t>(s.stop)].u);
-    jumps.push_back(sign.back() * targets[j]);  // J du = +-du_k
+    (*J)[(n + j) * nu + static_cast<size_t>(stops_[static_cast<size_t>(s.stop)].u)] = s.upper ? -1.0 : 1.0;
   }
-  std::vector<int> stuck;
+  return true;
+}
+
+// The friction impulse law's jump (sim/friction_impulse.h) with the stops' rows: in a tree
+// and beside constraint rows alike (their impulses in the joints' normal impulses).
+int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                             const std::vector<double>& targets, double* du, std::vector<double>* c) {
+  std::vector<double> J;
+  if (!SpeedRowsMu({}, rows, &J)) return -1;
+  FrictionJumpResult res;
   std::string why;
-  if (int s = FrictionSpeedJump(program_, ws, t, y, speeds, jumps, du, &stuck, &why); s != 0) {
+  if (int s = FrictionJump(program_, ws, t, y, J, targets, &res, &why); s != 0) {
     error_ = why.empty() ? rt::ErrorMessage(ws) : why;
     return s;
   }
-  // The stops' impulses: (M du)_k on a stop's speed (no friction impulse acts there).
-  Eigen::MatrixXd M(nu_, nu_);
-  if (int s = rt::MassMatrix(program_, ws, t, y, M.data()); s != 0) return s;
-  const Eigen::VectorXd p = M * Eigen::Map<const Eigen::VectorXd>(du, nu_);
-  c->resize(rows.size());
-  for (size_t j = 0; j < rows.size(); ++j) (*c)[j] = sign[j] * p[speeds[j]];
+  std::copy(res.du.begin(), res.du.end(), du);
+  *c = res.impulse;
   error_.clear();
   return 0;
 }
 
-// Beside constraint rows the joints' normal impulses need the rows' impulsive reactions,
-// which the friction impulse law (sim/friction_impulse.h) does not take yet. A jump as small
-// as a rest's (the root finding's residual gap rate, or a joint reaching its stop at rest)
-// has friction impulses of its own size, within the run's tolerance of none: it is solved
-// without them, through the rows (J W J^T c = targets). A larger one, an impact, stops the
-// run with the reason rather than leave out the friction.
-int EndStopEvents::ImpulseMuOnRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-                                   const std::vector<double>& targets, double* du, std::vector<double>* c) {
-  const size_t m = rows.size(), nu = static_cast<size_t>(nu_);
-  double largest = 0.0;
-  for (double v : targets) largest = std::max(largest, std::abs(v));
-  if (largest > RestSpeed()) {
-    const Side& s = sides_[static_cast<size_t>(rows[0])];
-    char buf[500];
-    std::snprintf(buf, sizeof buf,
-                  "%s strikes %s at time %.9g (gap rate %.3g): an impact beside Coulomb friction mu N in a mechanism "
-                  "with closed loops, rolling contacts or couplings is not supported yet (the joints' friction "
-                  "impulses need the constraints' impulsive reactions); a constant friction_torque is",
-                  Who(s).c_str(), Where(s).c_str(), t, -targets[0]);
-    error_ = buf;
-    return -1;
-  }
-  std::vector<int> ks(m);
-  std::vector<double> sign(m);
-  for (size_t j = 0; j < m; ++j) {
-    const Side& s = sides_[static_cast<size_t>(rows[j])];
-    if (s.stop < 0) {
-      error_ = "an impact of a plane contact beside Coulomb friction mu N is not supported";
-      return -1;
-    }
-    ks[j] = stops_[static_cast<size_t>(s.stop)].u;
-    sign[j] = s.upper ? -1.0 : 1.0;
-  }
-  cols_.resize(m * nu);
-  if (int s = rt::FrictionlessInverseMassColumns(program_, ws, t, y, ks.data(), static_cast<int>(m), cols_.data());
-      s != 0) {
-    error_ = rt::ErrorMessage(ws);
-    return s;
-  }
-  std::vector<double> A(m * m);
-  for (size_t i = 0; i < m; ++i)
-    for (size_t j = 0; j < m; ++j) A[i * m + j] = sign[i] * sign[j] * cols_[j * nu + static_cast<size_t>(ks[i])];
-  if (!SolveSmall(A, targets, c)) {
-    error_ = SingularRows(rows);
-    return -1;
-  }
-  for (size_t k = 0; k < nu; ++k) {
-    double d = 0.0;
-    for (size_t j = 0; j < m; ++j) d += sign[j] * cols_[j * nu + k] * (*c)[j];
-    du[k] = d;
-  }
-  error_.clear();
-  return 0;
-}
-
-// HeldJump's jump with the friction impulses: the resting stops are speed rows (target 0)
-// beside the set speeds; one whose impulse would pull leaves (the most pulling first).
+// HeldJump's jump with the friction impulses: the resting stops are rows (target 0) beside
+// the set speeds; one whose impulse would pull leaves (the most pulling first).
 int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                               const std::vector<double>& targets, double* du) {
-  if (!program_.rows.empty()) {  // (the compiler refuses a reinit of a speed there: K321)
-    error_ = "a jump beside Coulomb friction mu N in a mechanism with constraint rows is not supported";
-    return -1;
-  }
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
     if (sides_[i].resting) held.push_back(static_cast<int>(i));
+  const size_t n = speeds.size();
   for (;;) {
-    std::vector<int> rows = speeds;
-    std::vector<double> b = targets;
-    for (int h : held) {
-      const Side& s = sides_[static_cast<size_t>(h)];
-      if (s.plane >= 0) {
-        error_ = "a jump with a plane contact at rest beside Coulomb friction mu N is not supported";
-        return -1;
-      }
-      rows.push_back(stops_[static_cast<size_t>(s.stop)].u);
-      b.push_back(0.0);
-    }
-    std::vector<int> stuck;
+    std::vector<double> J, b = targets;
+    if (!SpeedRowsMu(speeds, held, &J)) return -1;
+    b.resize(n + held.size(), 0.0);
+    FrictionJumpResult res;
     std::string why;
-    if (int s = FrictionSpeedJump(program_, ws, t, y, rows, b, du, &stuck, &why); s != 0) {
+    if (int s = FrictionJump(program_, ws, t, y, J, b, &res, &why); s != 0) {
       error_ = why.empty() ? rt::ErrorMessage(ws) : why;
       return s;
     }
-    Eigen::MatrixXd M(nu_, nu_);
-    if (int s = rt::MassMatrix(program_, ws, t, y, M.data()); s != 0) return s;
-    const Eigen::VectorXd p = M * Eigen::Map<const Eigen::VectorXd>(du, nu_);
+    std::copy(res.du.begin(), res.du.end(), du);
     double scale = 0.0;
-    for (int k : rows) scale = std::max(scale, std::abs(p[k]));
+    for (double v : res.impulse) scale = std::max(scale, std::abs(v));
     size_t pull = held.size();
-    double pull_c = 0.0;
     for (size_t h = 0; h < held.size(); ++h) {
-      const Side& s = sides_[static_cast<size_t>(held[h])];
-      const double c = (s.upper ? -1.0 : 1.0) * p[stops_[static_cast<size_t>(s.stop)].u];
-      if (c < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == held.size() || c < pull_c))
-        pull = h, pull_c = c;
+      const double c = res.impulse[n + h];
+      if (c < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale &&
+          (pull == held.size() || c < res.impulse[n + pull]))
+        pull = h;
     }
     if (pull == held.size()) {
       error_.clear();

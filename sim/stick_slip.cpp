@@ -415,10 +415,10 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
       continue;  // (a joint that has just slipped from rest keeps sliding)
     } else if (j.mode == 0 && std::abs(u) <= v_rest) {
       u = 0.0;  // a rest's impulse on another joint: no real slip
-    } else if (u != 0.0) {
+    } else if (std::abs(u) > v_rest) {
       j.mode = u > 0.0 ? 1 : -1;  // a finite friction does not resist an impulse
     } else if (j.mode != 0) {
-      stopped.push_back(&j);
+      stopped.push_back(&j);  // at rest but for round-off (a graze's impulse beside rows): decides
     }
   }
   for (Joint* j : stopped)

@@ -25,11 +25,12 @@ constexpr double kMeff = kM1 + kR * kR * kM2;
 constexpr double kC = 0.5 * kMu * kM2 * kG;  // |r| mu m2 g
 
 // The rack pair; `j2_law` in joint 2's modifiers after mu, `q0`, `u0` block 1's start.
-std::string RackPair(const std::string& j2_law, double q0 = 0.0, double u0 = 0.0, const std::string& drive = "") {
+std::string RackPair(const std::string& j2_law, double q0 = 0.0, double u0 = 0.0, const std::string& drive = "",
+                     double e = 0.0) {
   return "model Rack\n"
          "  World world(g = {0, " + Num(-kG) + ", 0});\n"
-         "  Prismatic j1(axis = {1, 0, 0}, q_min = 0, q_max = 5, q(start = " + Num(q0) + "), u(start = " + Num(u0) +
-         "));\n"
+         "  Prismatic j1(axis = {1, 0, 0}, q_min = 0, q_max = 5, restitution = " + Num(e) + ", q(start = " + Num(q0) +
+         "), u(start = " + Num(u0) + "));\n"
          "  Body b1(m = " + Num(kM1) + ");\n"
          "  FixedTranslation base(r = {0, 1, 0});\n"
          "  Prismatic j2(axis = {1, 0, 0}, mu = " + Num(kMu) + j2_law + ");\n"
@@ -154,26 +155,43 @@ TEST(LoopStopFriction, RackPairEqualsTheReducedModelWithReflectedFriction) {
   }
 }
 
-// An impact at a stop beside mu N with constraint rows needs friction impulses through the
-// rows' impulsive reactions, which the impulse law does not take yet: the run stops at the
-// impact (exit 2) with the reason, its rows before it kept, never a frictionless bounce. Block
-// 1 starts at q1 = 0.02 moving towards its stop at 1 m/s, undriven: it strikes it at the
-// time the reflected friction's deceleration C / (m1 + r^2 m2) gives.
-TEST(LoopStopFriction, AnImpactBesideMuInALoopStopsTheRunWithTheReason) {
-  auto l = LoadModel(RackPair(", friction_exact = true", 0.02, -1.0, "  j1.tau = 0;\n"), {}, {}, true);
+// An impact at the stop beside mu N with constraint rows (the friction impulse law with the
+// rows' impulses in the normal impulses): block 1 starts at q1 = 0.02 moving at -1 m/s
+// towards its stop (restitution 1/2), undriven, decelerated by the reflected friction
+// a = C / (m1 + r^2 m2): it strikes at t1 = (1 - sqrt(1 - 2 a 0.02)) / a with speed
+// -v = -sqrt(1 - 2 a 0.02), leaves at v / 2 (block 2's joint meets no impulse across its
+// axis, so no friction impulse), and stops for good at t1 + v / (2 a), at q1 = v^2 / (8 a).
+// If this fails, the impact beside mu in a loop is refused (before this change) or its
+// impulse is not Newton's law through the coupling.
+TEST(LoopStopFriction, RackPairStrikesItsStopAtTheClosedFormTimeAndSticks) {
+  auto l = LoadModel(RackPair(", friction_exact = true", 0.02, -1.0, "  j1.tau = 0;\n", 0.5), {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
-  const double a = kC / kMeff;  // decelerating
-  const double t_hit = (1.0 - std::sqrt(1.0 - 2.0 * a * 0.02)) / a;
+  const double a = kC / kMeff, v = std::sqrt(1.0 - 2.0 * a * 0.02);
+  const double t1 = (1.0 - v) / a, t2 = t1 + v / (2.0 * a);
   for (const IntegratorChoice& how : AllIntegrators()) {
     sim::SimResult r;
-    const sim::MemorySink s = RunWith(*l->prog, how, 1.0, 0.001, {"j1.q"}, &r, 1e-11);
-    EXPECT_EQ(r.status, sim::SimResult::Status::kNumericalFailure) << how.name << ": " << r.message;
-    EXPECT_NE(r.message.find("joint 'j1' strikes q_min"), std::string::npos) << r.message;
-    EXPECT_NE(r.message.find("not supported yet"), std::string::npos) << r.message;
-    EXPECT_NEAR(r.fail_time, t_hit, 1e-8) << how.name;
-    ASSERT_FALSE(s.times.empty()) << how.name;
-    EXPECT_LE(s.times.back(), r.fail_time) << how.name;
-    EXPECT_GT(s.times.back(), t_hit - 0.0015) << how.name;  // the rows before it kept
+    const sim::MemorySink s = RunWith(*l->prog, how, 0.5, 0.05, {"j1.q", "j1.u", "j2.u"}, &r, 1e-11);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    const std::vector<sim::EventRecord>& ev = r.stats.events;
+    ASSERT_EQ(ev.size(), 2u) << how.name;
+    EXPECT_EQ(ev[0].element, "j1");
+    EXPECT_EQ(ev[0].kind.rfind("impact at q_min", 0), 0u) << ev[0].kind;
+    EXPECT_NEAR(ev[0].time, t1, 1e-8) << how.name;
+    EXPECT_EQ(ev[1].element, "j2");
+    EXPECT_EQ(ev[1].kind.rfind("sticks", 0), 0u) << ev[1].kind;
+    EXPECT_NEAR(ev[1].time, t2, 1e-8) << how.name;
+    for (const sim::EventChange& c : ev[0].changes)
+      if (c.name == "j1.u") {
+        EXPECT_NEAR(c.before, -v, 1e-8) << how.name;
+        EXPECT_NEAR(c.after, 0.5 * v, 1e-8) << how.name;  // Newton's law at the stop
+      }
+    for (size_t i = 0; i < s.times.size(); ++i) {
+      // No row past the stop (the impact's left limit: located within the tolerance).
+      EXPECT_GE(s.rows[i][0], -1e-12) << how.name << " t = " << s.times[i];
+      EXPECT_NEAR(s.rows[i][2], kR * s.rows[i][1], 1e-10) << how.name;
+    }
+    EXPECT_NEAR(s.rows.back()[0], v * v / (8.0 * a), 1e-8) << how.name;
+    EXPECT_LE(std::abs(s.rows.back()[1]), 1e-12) << how.name;
   }
 }
 
