@@ -4,9 +4,10 @@
 // Mechanics, 2000, for the impulse form): per friction joint i, with w_i = mu_i r_i (r the
 // pin radius of a revolute, 1 for a prismatic) and N_i = |P_N,i| its normal impulse,
 //   stick: u_i+ = 0 and |P_f,i| <= w_s,i N_i          slide: P_f,i = -s_i w_i N_i, s_i u_i+ >= 0
-// The jump is M du = E c + sum_i P_f,i e_i (E the rows of the reinit'ed speeds and of the
-// sticking joints, c their impulses: rows change by their targets), and N_i is the norm of
-// a vector affine in the sliding impulses (rt::FrictionImpulseNormals of du, linear in du).
+// The jump is M du = E c + sum_i P_f,i e_i (E the rows of the reinit'ed speeds, of the
+// sticking joints and of plane contacts, c their impulses: rows change by their targets), and
+// N_i is the norm of a vector affine in the sliding impulses (rt::FrictionImpulseNormals of
+// du less the contacts' impulses across the axis, rt::PlaneImpulseNormals: linear in du, c).
 // Method: exact case enumeration. Each joint sticks or slides either way (3^n cases, in order
 // of fewer sliding joints first); in a case the sticking rows make the jump linear, the
 // sliding impulses solve p_i = -s_i w_i |a_i + sum_l B_il p_l| (Newton from p = 0), and the
@@ -31,30 +32,43 @@ struct ActiveJoint {
   double w = 0.0, w_s = 0.0;  // mu r, mu_s r
 };
 
-// A jump at one state: M^-1, the speeds before, the normal impulses' evaluations.
+// A jump at one state: M^-1, the speeds before, the plane rows, the normal impulses' evaluations.
 class FrictionJump {
  public:
-  FrictionJump(const rt::Program& p, rt::Workspace& ws, double t, const double* y, Eigen::MatrixXd minv)
-      : p_(p), ws_(ws), t_(t), y_(y), minv_(std::move(minv)), nf_(rt::FrictionJoints(p).size()) {}
+  FrictionJump(const rt::Program& p, rt::Workspace& ws, double t, const double* y, Eigen::MatrixXd minv,
+               const std::vector<PlaneJumpRow>& planes)
+      : p_(p), ws_(ws), t_(t), y_(y), minv_(std::move(minv)), nf_(rt::FrictionJoints(p).size()), planes_(planes) {
+    for (const PlaneJumpRow& r : planes_) x_planes_.push_back(minv_ * Eigen::Map<const Eigen::VectorXd>(r.J.data(), minv_.rows()));
+  }
 
-  // du = M^-1 (sum F) + X c with X = M^-1 E_R and (du)_R = b; c the rows' impulses.
-  bool Linear(const std::vector<int>& R, const std::vector<double>& b, int f_speed, Eigen::VectorXd* du,
-              std::vector<double>* c) const {
-    const size_t m = R.size();
+  // du = M^-1 (sum F) + X c with X = M^-1 [E_R, J_planes^T], (du)_R = b and J_planes du = the
+  // planes' targets (zero with zero_planes); c the rows' impulses (R, then the planes).
+  bool Linear(const std::vector<int>& R, const std::vector<double>& b, bool zero_planes, int f_speed,
+              Eigen::VectorXd* du, std::vector<double>* c) const {
+    const size_t n = R.size(), m = n + planes_.size();
     *du = f_speed >= 0 ? Eigen::VectorXd(minv_.col(f_speed)) : Eigen::VectorXd::Zero(minv_.rows());
+    auto X = [&](size_t j) { return j < n ? Eigen::VectorXd(minv_.col(R[j])) : x_planes_[j - n]; };
+    auto Row = [&](size_t r, const Eigen::VectorXd& v) {
+      return r < n ? v[R[r]] : Eigen::Map<const Eigen::VectorXd>(planes_[r - n].J.data(), v.size()).dot(v);
+    };
     std::vector<double> A(m * m), rhs(m);
     for (size_t r = 0; r < m; ++r) {
-      rhs[r] = b[r] - (*du)[R[r]];
-      for (size_t j = 0; j < m; ++j) A[r * m + j] = minv_(R[r], R[j]);
+      rhs[r] = (r < n ? b[r] : zero_planes ? 0.0 : planes_[r - n].target) - Row(r, *du);
+      for (size_t j = 0; j < m; ++j) A[r * m + j] = Row(r, X(j));
     }
     if (!SolveSmall(A, rhs, c)) return false;
-    for (size_t j = 0; j < m; ++j) *du += (*c)[j] * minv_.col(R[j]);
+    for (size_t j = 0; j < m; ++j) *du += (*c)[j] * X(j);
     return true;
   }
-  // Every friction joint's normal impulse vector for du (3 per joint).
-  int Normals(const Eigen::VectorXd& du, std::vector<double>* P) const {
+  // Every friction joint's normal impulse vector for du and the rows' impulses c (3 per joint).
+  int Normals(const Eigen::VectorXd& du, const std::vector<double>& c, std::vector<double>* P) const {
     P->assign(3 * nf_, 0.0);
-    return rt::FrictionImpulseNormals(p_, ws_, t_, y_, du.data(), P->data());
+    if (int s = rt::FrictionImpulseNormals(p_, ws_, t_, y_, du.data(), P->data()); s != 0) return s;
+    if (planes_.empty()) return 0;
+    std::vector<double> Lambda(rt::PlaneContacts(p_).size(), 0.0);
+    const size_t n = c.size() - planes_.size();
+    for (size_t j = 0; j < planes_.size(); ++j) Lambda[static_cast<size_t>(planes_[j].contact)] += c[n + j];
+    return rt::PlaneImpulseNormals(p_, ws_, t_, y_, Lambda.data(), P->data());
   }
   size_t NumFriction() const { return nf_; }
 
@@ -65,6 +79,8 @@ class FrictionJump {
   const double* y_;
   Eigen::MatrixXd minv_;
   size_t nf_;
+  const std::vector<PlaneJumpRow>& planes_;
+  std::vector<Eigen::VectorXd> x_planes_;  // M^-1 J^T of each plane row
 };
 
 Eigen::Vector3d At(const std::vector<double>& P, int i) {
@@ -111,7 +127,8 @@ bool HasFrictionImpulses(const rt::Program& program) {
 
 int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
                       const std::vector<int>& rows, const std::vector<double>& targets, double* du_out,
-                      std::vector<int>* stuck_out, std::string* why) {
+                      std::vector<int>* stuck_out, std::string* why, const std::vector<PlaneJumpRow>& planes,
+                      std::vector<double>* impulses) {
   const int nq = rt::NumQ(program), nu = rt::NumU(program);
   stuck_out->clear();
   const std::vector<rt::FrictionJoint> joints = rt::FrictionJoints(program);
@@ -121,7 +138,8 @@ int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, c
     if (f.mu > 0.0 && f.u >= 0 && std::find(rows.begin(), rows.end(), f.u) == rows.end())
       act.push_back({static_cast<int>(i), f.u, f.mu * f.radius, (f.exact ? f.mu_s : f.mu) * f.radius});
   }
-  if (act.empty()) return SpeedJump(program, ws, t, y, rows, targets, du_out);  // a bounded friction: no impulse
+  if (act.empty() && planes.empty() && !impulses)  // a bounded friction: no impulse
+    return SpeedJump(program, ws, t, y, rows, targets, du_out);
   if (static_cast<int>(act.size()) > kMaxFrictionImpulseJoints) {
     *why = "the jump meets " + std::to_string(act.size()) + " joints with Coulomb friction mu (at most " +
            std::to_string(kMaxFrictionImpulseJoints) + " are solved, by enumerating their 3^n stick/slide cases)";
@@ -137,7 +155,7 @@ int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, c
     *why = "the mass matrix is singular for an impulse";
     return -1;
   }
-  const FrictionJump jump(program, ws, t, y, llt.solve(Eigen::MatrixXd::Identity(nu, nu)));
+  const FrictionJump jump(program, ws, t, y, llt.solve(Eigen::MatrixXd::Identity(nu, nu)), planes);
   const double* u0 = y + nq;
   const size_t n = act.size();
   int cases = 1;
@@ -161,16 +179,16 @@ int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, c
       }
       Eigen::VectorXd du;
       std::vector<double> c, P0;
-      if (!jump.Linear(R, b, -1, &du, &c)) continue;  // dependent rows: no case of this kind
-      if (int s = jump.Normals(du, &P0); s != 0) {
+      if (!jump.Linear(R, b, false, -1, &du, &c)) continue;  // dependent rows: no case of this kind
+      if (int s = jump.Normals(du, c, &P0); s != 0) {
         *why = rt::ErrorMessage(ws);
         return s;
       }
       std::vector<Eigen::VectorXd> d(slide.size());
       std::vector<std::vector<double>> dc(slide.size()), dP(slide.size());
       for (size_t l = 0; l < slide.size(); ++l) {
-        jump.Linear(R, std::vector<double>(R.size(), 0.0), act[slide[l]].u, &d[l], &dc[l]);
-        if (int s = jump.Normals(d[l], &dP[l]); s != 0) return s;
+        jump.Linear(R, std::vector<double>(R.size(), 0.0), true, act[slide[l]].u, &d[l], &dc[l]);
+        if (int s = jump.Normals(d[l], dc[l], &dP[l]); s != 0) return s;
       }
       std::vector<Eigen::Vector3d> A;
       std::vector<std::vector<Eigen::Vector3d>> B;
@@ -205,6 +223,10 @@ int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, c
       std::copy(du.data(), du.data() + nu, du_out);
       for (size_t i = 0; i < n; ++i)
         if (mode[i] == 0) stuck_out->push_back(act[i].u);
+      if (impulses) {  // (c: rows, sticking joints, planes)
+        impulses->assign(c.begin(), c.begin() + static_cast<long>(rows.size()));
+        impulses->insert(impulses->end(), c.end() - static_cast<long>(planes.size()), c.end());
+      }
       return 0;
     }
   }

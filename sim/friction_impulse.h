@@ -24,8 +24,17 @@ bool HasFrictionImpulses(const rt::Program& program);
 // *stuck: the free speeds of the joints that stick (their speed after the jump is 0).
 // 0, Derivative's codes, or -1 with *why (no case satisfies the law, too many joints, a
 // singular mass matrix).
+// planes: plane contacts' rows J du = target (an impact or a resting contact), their impulses
+// c J^T acting at the contacts, so the joints between a contact and the ground carry them in
+// their normal impulses. *impulses (may be null): the rows' impulses, `rows` then `planes`.
+struct PlaneJumpRow {
+  int contact = -1;       // index among rt::PlaneContacts
+  std::vector<double> J;  // nu entries
+  double target = 0.0;
+};
 int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
                       const std::vector<int>& rows, const std::vector<double>& targets, double* du,
-                      std::vector<int>* stuck, std::string* why);
+                      std::vector<int>* stuck, std::string* why, const std::vector<PlaneJumpRow>& planes = {},
+                      std::vector<double>* impulses = nullptr);
 
 }  // namespace kanesim::sim
