@@ -114,8 +114,8 @@ TEST(PlaneFriction, DrivenCarriageSticksAndSlipsAtTheHandTimes) {
   }
 }
 
-// If this fails, the floor's force is not in the rail's normal force, or the tip does not
-// leave where that force turns tensile (lambda = m_l (g + a cot phi) = 0).
+// If this fails, the floor's force is not in the rail's normal force (the speeds off (1)), or
+// the tip does not leave where that force turns tensile (lambda = m_l (g + a cot phi) = 0).
 TEST(PlaneFriction, TipLiftsOffWhereTheFloorsForceVanishes) {
   const double k = 20.0, u0 = 5.0, c = kMu * kMc * kG, D = kMc + kMl - kMu * kMl * kCot;
   const double t_lift = (D * kG * std::tan(kPhi) - c) / k;  // (1) with F = -k t at a = -g tan phi
@@ -127,8 +127,13 @@ TEST(PlaneFriction, TipLiftsOffWhereTheFloorsForceVanishes) {
       auto l = LoadModel(Leg(kG, u0, kPhi + 1e-12, 0.0, 0.0, law, "  cx.tau = " + Num(-k) + " * time;\n"), {}, {}, true);
       ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
       sim::SimResult r;
-      RunWith(*l->prog, how, t_lift + 0.02, 0.05, {"cx.u"}, &r, 1e-11);
+      const sim::MemorySink s = RunWith(*l->prog, how, t_lift + 0.02, 0.05, {"cx.u"}, &r, 1e-11);
       ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << who << ": " << r.message;
+      for (size_t i = 0; i < s.times.size(); ++i)  // resting: (1) integrated
+        if (s.times[i] > 1e-3 && s.times[i] <= t_lift) {
+          const double t = s.times[i];
+          EXPECT_NEAR(s.rows[i][0], u0 + (-0.5 * k * t * t - c * t) / D, 1e-8) << who << " t = " << t;
+        }
       const std::vector<double> leaves = Times(r, "foot", "leaves");
       ASSERT_EQ(leaves.size(), 1u) << who;
       EXPECT_NEAR(leaves[0], t_lift, 1e-8) << who;
