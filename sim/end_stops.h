@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "runtime/runtime.h"
-#include "sim/friction_impulse.h"  // PlaneJumpRow
 #include "sim/simulate.h"
 
 namespace kanesim::sim {
@@ -202,11 +201,9 @@ class EndStopEvents {
                 const std::vector<double>& targets, double* du, std::vector<double>* c);
   int HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                  const std::vector<double>& targets, double* du);
-  // The sides `rows` as FrictionSpeedJump's rows: stops' speed rows (*sign +-1), planes' (0).
-  int JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-               const std::vector<double>& targets, std::vector<int>* speeds, std::vector<double>* jumps,
-               std::vector<PlaneJumpRow>* planes, std::vector<double>* sign);
-  void RowImpulses(const std::vector<double>& sign, const std::vector<double>& impulses, std::vector<double>* c) const;
+  // The sides `rows` appended as FrictionJump's rows J and their own normal impulses.
+  int JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows, std::vector<double>* J,
+               std::vector<double>* row_normals);
 
   const rt::Program& program_;
   std::vector<rt::EndStop> stops_;

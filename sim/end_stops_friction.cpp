@@ -87,53 +87,40 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
   return 1;  // recoverable: the integrator retries with a smaller step
 }
 
-// The sides' rows for FrictionSpeedJump: a stop's speed row (J = +-e_k: the jump of u_k is
-// +-target), a plane contact's row J. *sign: +-1 for a stop, 0 for a plane.
+// The sides `rows` as FrictionJump's rows, appended to *J (row-major, nu columns): a stop's
+// +-e_k, a plane contact's J; *row_normals (3 nf per row): a plane's impulse, acting at its
+// point, in the normal impulses of the joints between it and the ground (a stop's: none).
 int EndStopEvents::JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-                            const std::vector<double>& targets, std::vector<int>* speeds, std::vector<double>* jumps,
-                            std::vector<PlaneJumpRow>* planes, std::vector<double>* sign) {
-  for (size_t j = 0; j < rows.size(); ++j) {
-    const Side& s = sides_[static_cast<size_t>(rows[j])];
-    if (s.plane >= 0) {
-      PlaneJumpRow r;
-      r.contact = s.plane;
-      r.J.resize(static_cast<size_t>(nu_));
-      r.target = targets[j];
-      double gap = 0.0, c = 0.0;
-      if (int st = Row(ws, t, y, s, &gap, r.J.data(), &c); st != 0) return st;
-      planes->push_back(std::move(r));
-      sign->push_back(0.0);
-      continue;
-    }
-    sign->push_back(s.upper ? -1.0 : 1.0);
-    speeds->push_back(stops_[static_cast<size_t>(s.stop)].u);
-    jumps->push_back(sign->back() * targets[j]);  // J du = +-du_k
+                            std::vector<double>* J, std::vector<double>* row_normals) {
+  const size_t nu = static_cast<size_t>(nu_), nf = 3 * rt::FrictionJoints(program_).size();
+  for (int i : rows) {
+    const Side& s = sides_[static_cast<size_t>(i)];
+    J->resize(J->size() + nu, 0.0);
+    row_normals->resize(row_normals->size() + nf, 0.0);
+    double gap = 0.0, c = 0.0;
+    if (int st = Row(ws, t, y, s, &gap, J->data() + J->size() - nu, &c); st != 0) return st;
+    if (s.plane < 0) continue;
+    std::vector<double> Lambda(planes_.size(), 0.0);
+    Lambda[static_cast<size_t>(s.plane)] = 1.0;
+    if (int st = rt::PlaneImpulseNormals(program_, ws, t, y, Lambda.data(), row_normals->data() + row_normals->size() - nf);
+        st != 0)
+      return st;
   }
   return 0;
 }
 
-// The jump's impulses in the order of `rows` (the solve's: stops, then planes).
-void EndStopEvents::RowImpulses(const std::vector<double>& sign, const std::vector<double>& impulses,
-                                std::vector<double>* c) const {
-  size_t n = 0;
-  for (double s : sign) n += s != 0.0;
-  c->resize(sign.size());
-  for (size_t j = 0, k = 0, l = n; j < sign.size(); ++j) (*c)[j] = sign[j] != 0.0 ? sign[j] * impulses[k++] : impulses[l++];
-}
-
 int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                              const std::vector<double>& targets, double* du, std::vector<double>* c) {
-  std::vector<int> speeds;
-  std::vector<double> jumps, sign, impulses;
-  std::vector<PlaneJumpRow> planes;
-  if (int s = JumpRows(ws, t, y, rows, targets, &speeds, &jumps, &planes, &sign); s != 0) return s;
-  std::vector<int> stuck;
+  std::vector<double> J, row_normals;
+  if (int s = JumpRows(ws, t, y, rows, &J, &row_normals); s != 0) return s;
+  FrictionJumpResult jump;
   std::string why;
-  if (int s = FrictionSpeedJump(program_, ws, t, y, speeds, jumps, du, &stuck, &why, planes, &impulses); s != 0) {
+  if (int s = FrictionJump(program_, ws, t, y, J, targets, &jump, &why, row_normals); s != 0) {
     error_ = why.empty() ? rt::ErrorMessage(ws) : why;
     return s;
   }
-  RowImpulses(sign, impulses, c);
+  std::copy(jump.du.begin(), jump.du.end(), du);
+  *c = jump.impulse;  // (a side's row pushes with c > 0)
   error_.clear();
   return 0;
 }
@@ -142,25 +129,25 @@ int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const
 // set speeds; one whose impulse would pull leaves (the most pulling first).
 int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                               const std::vector<double>& targets, double* du) {
+  const size_t n = speeds.size(), nu = static_cast<size_t>(nu_), nf = 3 * rt::FrictionJoints(program_).size();
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
     if (sides_[i].resting) held.push_back(static_cast<int>(i));
   for (;;) {
-    std::vector<int> rows = speeds, stop_speeds;
-    std::vector<double> b = targets, sign, impulses, c;
-    std::vector<PlaneJumpRow> planes;
-    if (int s = JumpRows(ws, t, y, held, std::vector<double>(held.size(), 0.0), &stop_speeds, &b, &planes, &sign); s != 0)
-      return s;
-    rows.insert(rows.end(), stop_speeds.begin(), stop_speeds.end());
-    std::vector<int> stuck;
+    std::vector<double> J(n * nu, 0.0), row_normals(n * nf, 0.0), b = targets;
+    for (size_t j = 0; j < n; ++j) J[j * nu + static_cast<size_t>(speeds[j])] = 1.0;
+    if (int s = JumpRows(ws, t, y, held, &J, &row_normals); s != 0) return s;
+    b.resize(n + held.size(), 0.0);
+    FrictionJumpResult jump;
     std::string why;
-    if (int s = FrictionSpeedJump(program_, ws, t, y, rows, b, du, &stuck, &why, planes, &impulses); s != 0) {
+    if (int s = FrictionJump(program_, ws, t, y, J, b, &jump, &why, row_normals); s != 0) {
       error_ = why.empty() ? rt::ErrorMessage(ws) : why;
       return s;
     }
+    std::copy(jump.du.begin(), jump.du.end(), du);
     double scale = 0.0;
-    for (double v : impulses) scale = std::max(scale, std::abs(v));
-    RowImpulses(sign, std::vector<double>(impulses.begin() + static_cast<long>(speeds.size()), impulses.end()), &c);
+    for (double v : jump.impulse) scale = std::max(scale, std::abs(v));
+    const double* c = jump.impulse.data() + n;
     size_t pull = held.size();
     for (size_t h = 0; h < held.size(); ++h)
       if (c[h] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == held.size() || c[h] < c[pull]))
