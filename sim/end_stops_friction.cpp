@@ -1,15 +1,18 @@
-// End stops beside Coulomb friction mu N (sim/end_stops.h; docs/events.md "Friction beside
-// stops"). Not with plane contacts (the compiler refuses them beside mu).
-// Resting: the friction forces follow the joints' normal forces N, N the accelerations, and
-// the accelerations the rows' reactions lambda, so the accelerations are not affine in
-// lambda. The rows' residual r(lambda) = J a(lambda) + c is brought to zero by the chord
-// iteration
+// End stops and plane contacts beside Coulomb friction mu N (sim/end_stops.h; docs/events.md
+// "Friction beside stops"). Plane contacts in a tree only (the compiler refuses them beside
+// closed loops); end stops anywhere.
+// Resting: the friction forces follow the joints' normal forces N, N the accelerations and
+// the reactions (a plane contact's force acts at its point, so the joints between it and the
+// ground carry it: rt::DerivativeWithPlaneForces), and the accelerations the rows' reactions
+// lambda, so the accelerations are not affine in lambda. The rows' residual
+// r(lambda) = J a(lambda) + c is brought to zero by the chord iteration
 //   lambda <- lambda - (J W J^T)^-1 r(lambda)                                            (1)
 // W the inverse mass without the friction (M^-1 on a tree, with constraint rows the
 // constrained one; exact without mu; with mu it converges at the rate the fixed point of
 // runtime/kane/friction.cpp (3) does, each a(lambda) solving that fixed point with lambda
-// applied). Impacts: the stops' rows are speed rows (J = +-e_k), so the jump is
-// sim/friction_impulse.h's, whose normal impulses carry the stops' and the rows' impulses.
+// applied). Impacts and jumps: sim/friction_impulse.h's law, whose normal impulses carry the
+// stops' (along their joints: none across) and the plane contacts' impulses.
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -30,27 +33,34 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
   const size_t m = rows.size(), nu = static_cast<size_t>(nu_);
   std::copy(ydot_.begin() + nq_, ydot_.end(), a_.begin());  // the free accelerations (ReactionNoise)
   // The chord's columns x_j = W J_j^T: W the inverse mass without the friction, with the
-  // constraint rows' reactions where there are rows (the stops' rows are +-e_k).
+  // constraint rows' reactions where there are rows (a stop's row is +-e_k: a column of W; a
+  // plane contact's, in a tree only, W J^T from all of W's columns).
   Jrows_.assign(m * nu, 0.0);
   x_.assign(m * nu, 0.0);
-  std::vector<int> ks(m);
+  bool planes = false;
   for (size_t j = 0; j < m; ++j) {
+    double gap = 0.0, cj = 0.0;
     const Side& s = sides_[static_cast<size_t>(rows[j])];
-    if (s.stop < 0) {
-      error_ = "a plane contact at rest beside Coulomb friction mu N is not supported";
-      return -1;
-    }
-    ks[j] = stops_[static_cast<size_t>(s.stop)].u;
-    Jrows_[j * nu + static_cast<size_t>(ks[j])] = s.upper ? -1.0 : 1.0;
+    if (int st = Row(ws, t, y, s, &gap, Jrows_.data() + j * nu, &cj); st != 0) return st;
+    planes = planes || s.plane >= 0;
   }
-  cols_.resize(m * nu);
-  if (int s = rt::FrictionlessInverseMassColumns(program_, ws, t, y, ks.data(), static_cast<int>(m), cols_.data());
+  std::vector<int> ks;
+  if (planes)
+    for (int k = 0; k < nu_; ++k) ks.push_back(k);
+  else
+    for (int r : rows) ks.push_back(stops_[static_cast<size_t>(sides_[static_cast<size_t>(r)].stop)].u);
+  cols_.resize(ks.size() * nu);
+  if (int s = rt::FrictionlessInverseMassColumns(program_, ws, t, y, ks.data(), static_cast<int>(ks.size()), cols_.data());
       s != 0) {
     error_ = rt::ErrorMessage(ws);
     return s;
   }
   for (size_t j = 0; j < m; ++j)
-    for (size_t k = 0; k < nu; ++k) x_[j * nu + k] = Jrows_[j * nu + static_cast<size_t>(ks[j])] * cols_[j * nu + k];
+    for (size_t c2 = 0; c2 < ks.size(); ++c2) {
+      const double Jk = planes ? Jrows_[j * nu + c2] : (c2 == j ? Jrows_[j * nu + static_cast<size_t>(ks[j])] : 0.0);
+      if (Jk != 0.0)
+        for (size_t k = 0; k < nu; ++k) x_[j * nu + k] += Jk * cols_[c2 * nu + k];
+    }
   std::vector<double> A(m * m), r(m), dc, F(nu), yd(ydot_.size());
   for (size_t i = 0; i < m; ++i)
     for (size_t j = 0; j < m; ++j) {
@@ -59,11 +69,21 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
       A[i * m + j] = s;
     }
   c->assign(m, 0.0);
+  std::vector<double> lambda(planes_.size());  // the plane contacts' forces, applied at their points
   for (int it = 0; it < kMaxIterations; ++it) {
     std::fill(F.begin(), F.end(), 0.0);
-    for (size_t j = 0; j < m; ++j)
-      for (size_t k = 0; k < nu; ++k) F[k] += (*c)[j] * Jrows_[j * nu + k];
-    if (int s = rt::DerivativeWithForces(program_, ws, t, y, F.data(), yd.data()); s != 0) return s;
+    std::fill(lambda.begin(), lambda.end(), 0.0);
+    for (size_t j = 0; j < m; ++j) {
+      const Side& s = sides_[static_cast<size_t>(rows[j])];
+      if (s.plane >= 0) lambda[static_cast<size_t>(s.plane)] = (*c)[j];
+      else
+        for (size_t k = 0; k < nu; ++k) F[k] += (*c)[j] * Jrows_[j * nu + k];
+    }
+    // (with only stops' rows: DerivativeWithForces, which takes constraint rows too)
+    if (int s = planes ? rt::DerivativeWithPlaneForces(program_, ws, t, y, F.data(), lambda.data(), yd.data())
+                       : rt::DerivativeWithForces(program_, ws, t, y, F.data(), yd.data());
+        s != 0)
+      return s;
     const double* acc = yd.data() + nq_;
     double r_max = 0.0, scale = 1.0;
     for (size_t j = 0; j < m; ++j) {
@@ -87,69 +107,71 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
   return 1;  // recoverable: the integrator retries with a smaller step
 }
 
-// The rows J (m x nu) of the sides `rows` (stops: +-e_k) and of the set speeds `speeds` (e_k,
-// first); false with error_ for a plane contact (refused beside mu by the compiler).
-bool EndStopEvents::SpeedRowsMu(const std::vector<int>& speeds, const std::vector<int>& rows, std::vector<double>* J) {
-  const size_t nu = static_cast<size_t>(nu_), n = speeds.size();
-  J->assign((n + rows.size()) * nu, 0.0);
-  for (size_t j = 0; j < n; ++j) (*J)[j * nu + static_cast<size_t>(speeds[j])] = 1.0;
-  for (size_t j = 0; j < rows.size(); ++j) {
-    const Side& s = sides_[static_cast<size_t>(rows[j])];
-    if (s.plane >= 0) {
-      error_ = "a plane contact beside Coulomb friction mu N is not supported";
-      return false;
-    }
-    (*J)[(n + j) * nu + static_cast<size_t>(stops_[static_cast<size_t>(s.stop)].u)] = s.upper ? -1.0 : 1.0;
+// The sides `rows` as FrictionJump's rows, appended to *J (row-major, nu columns): a stop's
+// +-e_k, a plane contact's J; *row_normals (3 nf per row): a plane's impulse, acting at its
+// point, in the normal impulses of the joints between it and the ground (a stop's: none).
+int EndStopEvents::JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                            std::vector<double>* J, std::vector<double>* row_normals) {
+  const size_t nu = static_cast<size_t>(nu_), nf = 3 * rt::FrictionJoints(program_).size();
+  for (int i : rows) {
+    const Side& s = sides_[static_cast<size_t>(i)];
+    J->resize(J->size() + nu, 0.0);
+    row_normals->resize(row_normals->size() + nf, 0.0);
+    double gap = 0.0, c = 0.0;
+    if (int st = Row(ws, t, y, s, &gap, J->data() + J->size() - nu, &c); st != 0) return st;
+    if (s.plane < 0) continue;
+    std::vector<double> Lambda(planes_.size(), 0.0);
+    Lambda[static_cast<size_t>(s.plane)] = 1.0;
+    if (int st = rt::PlaneImpulseNormals(program_, ws, t, y, Lambda.data(), row_normals->data() + row_normals->size() - nf);
+        st != 0)
+      return st;
   }
-  return true;
+  return 0;
 }
 
-// The friction impulse law's jump (sim/friction_impulse.h) with the stops' rows: in a tree
-// and beside constraint rows alike (their impulses in the joints' normal impulses).
 int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                              const std::vector<double>& targets, double* du, std::vector<double>* c) {
-  std::vector<double> J;
-  if (!SpeedRowsMu({}, rows, &J)) return -1;
-  FrictionJumpResult res;
+  std::vector<double> J, row_normals;
+  if (int s = JumpRows(ws, t, y, rows, &J, &row_normals); s != 0) return s;
+  FrictionJumpResult jump;
   std::string why;
-  if (int s = FrictionJump(program_, ws, t, y, J, targets, &res, &why); s != 0) {
+  if (int s = FrictionJump(program_, ws, t, y, J, targets, &jump, &why, row_normals); s != 0) {
     error_ = why.empty() ? rt::ErrorMessage(ws) : why;
     return s;
   }
-  std::copy(res.du.begin(), res.du.end(), du);
-  *c = res.impulse;
+  std::copy(jump.du.begin(), jump.du.end(), du);
+  *c = jump.impulse;  // (a side's row pushes with c > 0)
   error_.clear();
   return 0;
 }
 
-// HeldJump's jump with the friction impulses: the resting stops are rows (target 0) beside
-// the set speeds; one whose impulse would pull leaves (the most pulling first).
+// HeldJump's jump with the friction impulses: the resting sides are rows (target 0) beside the
+// set speeds; one whose impulse would pull leaves (the most pulling first).
 int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                               const std::vector<double>& targets, double* du) {
+  const size_t n = speeds.size(), nu = static_cast<size_t>(nu_), nf = 3 * rt::FrictionJoints(program_).size();
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
     if (sides_[i].resting) held.push_back(static_cast<int>(i));
-  const size_t n = speeds.size();
   for (;;) {
-    std::vector<double> J, b = targets;
-    if (!SpeedRowsMu(speeds, held, &J)) return -1;
+    std::vector<double> J(n * nu, 0.0), row_normals(n * nf, 0.0), b = targets;
+    for (size_t j = 0; j < n; ++j) J[j * nu + static_cast<size_t>(speeds[j])] = 1.0;
+    if (int s = JumpRows(ws, t, y, held, &J, &row_normals); s != 0) return s;
     b.resize(n + held.size(), 0.0);
-    FrictionJumpResult res;
+    FrictionJumpResult jump;
     std::string why;
-    if (int s = FrictionJump(program_, ws, t, y, J, b, &res, &why); s != 0) {
+    if (int s = FrictionJump(program_, ws, t, y, J, b, &jump, &why, row_normals); s != 0) {
       error_ = why.empty() ? rt::ErrorMessage(ws) : why;
       return s;
     }
-    std::copy(res.du.begin(), res.du.end(), du);
+    std::copy(jump.du.begin(), jump.du.end(), du);
     double scale = 0.0;
-    for (double v : res.impulse) scale = std::max(scale, std::abs(v));
+    for (double v : jump.impulse) scale = std::max(scale, std::abs(v));
+    const double* c = jump.impulse.data() + n;
     size_t pull = held.size();
-    for (size_t h = 0; h < held.size(); ++h) {
-      const double c = res.impulse[n + h];
-      if (c < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale &&
-          (pull == held.size() || c < res.impulse[n + pull]))
+    for (size_t h = 0; h < held.size(); ++h)
+      if (c[h] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == held.size() || c[h] < c[pull]))
         pull = h;
-    }
     if (pull == held.size()) {
       error_.clear();
       return 0;
