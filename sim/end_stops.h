@@ -7,6 +7,7 @@
 // their accumulation time.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <utility>
@@ -157,6 +158,9 @@ class EndStopEvents {
   // of them): after a jump, the other joints' friction laws are stale until
   // StickSlipEvents::Refresh has set them (sim/engine_ode.h settles again then).
   void DeferFrictionReleases(bool on) { defer_ = on; }
+  bool HoldsWithFriction() const {  // a stop whose joint has exact (static) friction
+    return std::any_of(friction_of_.begin(), friction_of_.end(), [](int f) { return f >= 0; });
+  }
   // A resting side leaves where its reaction pulls by more than this many round-offs (plus
   // rtol) of the terms it is computed from (ReactionNoise): a reaction that is zero in exact
   // arithmetic (a floating robot in free fall on its stops) has a sign set by round-off and

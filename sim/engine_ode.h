@@ -245,6 +245,7 @@ class EngineOde final : public OdeSystem {
   // their stops with their friction (deferred in the jump's own Settle, which saw the old
   // laws) leave where the pull passes the static friction, with the stuck forces solved anew.
   int SettleHeldAtStops(double t, double* y) {
+    if (!stops_->HoldsWithFriction()) return 0;
     if (int s = stick_->Resolve(ws_, t, y); s != 0) return s;
     const std::vector<char> was = stops_->RestingSet();
     const std::vector<double> settled(y, y + Size());
