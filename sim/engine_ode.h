@@ -85,6 +85,16 @@ class EngineOde final : public OdeSystem {
   bool Holding() const override {
     return (stick_ && stick_->AnyStuck()) || (stops_ && stops_->AnyResting());
   }
+  void HeldEvents(std::vector<int>* events) const override {
+    events->clear();
+    if (stops_) {
+      const std::vector<char> resting = stops_->RestingSet();
+      for (size_t i = 0; i < resting.size(); ++i)
+        if (resting[i]) events->push_back(static_cast<int>(i));
+    }
+    for (int k = 0; stick_ && k < stick_->Count(); ++k)
+      if (stick_->ModeOf(k) == 0) events->push_back(FirstStick() + k);
+  }
   int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
   int EventFunctions(double t, const double* y, double* g) override {
     if (stick_)  // first: it solves the stuck joints' forces the stops' reactions read
