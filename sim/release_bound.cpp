@@ -14,7 +14,10 @@ constexpr double kScales = 2.0;     // steps of at most this many T
 // makes of them are zero (a constant g stays unbounded).
 constexpr double kNoise = 1e-11;
 constexpr double kInf = HUGE_VAL;
-constexpr double kAgree = 0.1;  // derivatives over d and 2d this close (relative) are g's own
+constexpr double kAgree = 0.1;
+// The history's model is trusted (no samples around t) while its bound and time scale are at
+// least this many times the span of the last two steps.
+constexpr double kHistoryRoom = 4.0;  // derivatives over d and 2d this close (relative) are g's own
 
 // The positive roots of g + g1 s + g2 s^2 / 2, ascending (at most two); *n how many.
 void PositiveRoots(double g, double g1, double g2, double* r, int* n) {
@@ -72,6 +75,38 @@ void ReleaseBound::Init(OdeSystem& system) {
   g_.resize(held_.size());
   g1_.resize(held_.size());
   g2_.resize(held_.size());
+  ga_.resize(held_.size());
+  gb_.resize(held_.size());
+  history_ = 0;
+}
+
+double ReleaseBound::FromHistory(double t) {
+  if (history_ < 2 || !(t > ta_ && ta_ > tb_)) return 0.0;
+  const double a = t - ta_, span = t - tb_;
+  double h = kInf, scale = kInf;
+  for (size_t k = 0; k < held_.size(); ++k) {
+    const double g = g0_[static_cast<size_t>(held_[k])];
+    const double big = std::max({std::abs(g), std::abs(ga_[k]), std::abs(gb_[k])});
+    const double d01 = (g - ga_[k]) / a, d12 = (ga_[k] - gb_[k]) / (ta_ - tb_), c = (d01 - d12) / span;
+    double g1 = d01 + c * a, g2 = 2.0 * c;  // the interpolating quadratic's slope, curvature at t
+    if (std::abs(g1) < kNoise * big / a) g1 = 0.0;
+    if (std::abs(g2) < 4.0 * kNoise * big / (a * span)) g2 = 0.0;
+    double s = kInf;
+    h = std::min(h, HeldRowBound(g, g1, g2, &s));
+    scale = std::min(scale, s);
+  }
+  return h >= kHistoryRoom * span && scale >= kHistoryRoom * span ? h : 0.0;
+}
+
+void ReleaseBound::Remember(double t) {
+  if (history_ > 0 && !(t > ta_)) return;
+  for (size_t k = 0; k < held_.size(); ++k) {
+    gb_[k] = ga_[k];
+    ga_[k] = g0_[static_cast<size_t>(held_[k])];
+  }
+  tb_ = ta_;
+  ta_ = t;
+  history_ = std::min(history_ + 1, 2);
 }
 
 bool ReleaseBound::Differences(double t, const double* y, double d) {
@@ -106,7 +141,11 @@ bool ReleaseBound::Differences(double t, const double* y, double d) {
 double ReleaseBound::Next(double t, const double* y, double h_last) {
   if (held_.empty()) return kInf;
   const double unit = std::max(1.0, std::abs(t));
-  if (system_->Rhs(t, y, yd_.data()) != 0 || system_->EventFunctions(t, y, g0_.data()) != 0) return kInf;
+  if (system_->EventFunctions(t, y, g0_.data()) != 0) return kInf;
+  const double cheap = FromHistory(t);
+  Remember(t);
+  if (cheap > 0.0) return cheap;  // far from any release by the last steps' g: no sampling
+  if (system_->Rhs(t, y, yd_.data()) != 0) return kInf;
   double d = h_last > 0.0 ? kDiff * h_last : 1e-6 * unit;
   double h = kInf;
   for (int pass = 0; pass < 3; ++pass) {

@@ -5,7 +5,10 @@
 // step longer than the window where g < 0 steps over the release and the run silently stays
 // held. Each solver asks Next after every accepted step; the next step is at most its answer.
 //
-// For each held row, g, its rate g' and curvature g'' along the motion at (t, y) are central
+// First, g, g' and g'' of the quadratic through g at t and the last two accepted steps (one
+// event-function evaluation): while its bound and T are at least 4 times those two steps, that
+// bound is the answer (no release foretold soon). Otherwise, and within two steps of Init,
+// for each held row, g, its rate g' and curvature g'' along the motion at (t, y) are central
 // differences at t -+ d of g(t -+ d, y -+ d y' + d^2/2 y'') (y'' from a forward difference of
 // f), d = 1e-3 of the last step or of g's time scale T, whichever is smaller; a derivative
 // that differs by more than 10 % from the same over 2d is round-off (a reaction zero in exact
@@ -52,6 +55,11 @@ class ReleaseBound {
  private:
   // g, g', g'' of every held row with differences of half-width d; false when f or g fails.
   bool Differences(double t, const double* y, double d);
+  // The bound from the quadratic through g at this and the last two accepted steps (no right-
+  // hand side, no sample more); +0 when that history is too short or predicts a release
+  // within the next few steps (then Next samples around t).
+  double FromHistory(double t);
+  void Remember(double t);
 
   OdeSystem* system_ = nullptr;
   std::vector<int> held_;           // the held rows' event functions (OdeSystem::HeldEvents)
@@ -60,6 +68,9 @@ class ReleaseBound {
   std::vector<double> g0_, gm_, gp_;  // all event functions at t, t - d, t + d  (NumEvents)
   std::vector<double> gmm_, gpp_;     // ... at t - 2d, t + 2d
   std::vector<double> g_, g1_, g2_;   // per held row: g, g', g''
+  std::vector<double> ga_, gb_;       // per held row: g at the last two accepted steps ...
+  double ta_ = 0.0, tb_ = 0.0;        // ... at these times (ta_ the later)
+  int history_ = 0;                   // how many of them are set (0 after Init)
 };
 
 // One held row's bound from g, g' and g'' (Eq. 1-2 above); *scale := T of Eq. (2).

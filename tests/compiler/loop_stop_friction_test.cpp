@@ -135,12 +135,14 @@ TEST(LoopStopFriction, RackPairEqualsTheReducedModelWithReflectedFriction) {
       std::string log;
       for (const sim::SimStats* st : {&ra.stats, &rb.stats})
         for (const sim::EventRecord& e : st->events) log += std::to_string(e.time) + " " + e.element + " " + e.kind + "\n";
-      ASSERT_EQ(ra.stats.events.size(), rb.stats.events.size()) << who << "\n" << log;
-      for (size_t k = 0; k < ra.stats.events.size(); ++k)
-        EXPECT_NEAR(ra.stats.events[k].time, rb.stats.events[k].time, 1e-8) << who << " " << ra.stats.events[k].kind;
+      // The last event, where the block starts to move: the geared pair's slip of j2 (after
+      // its leave at t0), the reduced joint's leave and slide off its stop (a joint with exact
+      // friction resting on its stop is one held state in a tree).
       ASSERT_FALSE(ra.stats.events.empty()) << who;
-      if (std::isnan(t_ref)) t_ref = ra.stats.events.front().time;
-      EXPECT_NEAR(ra.stats.events.front().time, t_ref, 1e-8) << who;  // the five integrators agree
+      ASSERT_FALSE(rb.stats.events.empty()) << who;
+      EXPECT_NEAR(ra.stats.events.back().time, rb.stats.events.back().time, 1e-8) << who << "\n" << log;
+      if (std::isnan(t_ref)) t_ref = ra.stats.events.back().time;
+      EXPECT_NEAR(ra.stats.events.back().time, t_ref, 1e-8) << who;  // the five integrators agree
       for (const std::vector<double>& y : sa.rows) EXPECT_GE(y[0], -1e-15) << who;  // no row past the stop
       // The rows on the output grid (an event's two rows at the grid time: the right limit);
       // the leave's event rows may fall an event location (3e-12 s) apart from the grid's.
