@@ -2,9 +2,9 @@
 // values into the event tape, and what a reinit may set. A speed is set by an impulse through
 // the mass matrix (sim/when_events.cpp; resting stops and plane contacts held by
 // sim/end_stops.cpp; closed loops' and rolling contacts' rows by their reactions,
-// rt::InverseMassColumn; Coulomb friction's impulses by sim/friction_impulse.cpp, on trees
-// only); a coordinate is set as it is, which needs a tree and a coordinate that is not a
-// quaternion's.
+// rt::InverseMassColumn; Coulomb friction's impulses by sim/friction_impulse.cpp, the rows'
+// impulses in the normal impulses); a coordinate is set as it is, which needs a tree and a
+// coordinate that is not a quaternion's.
 #include <algorithm>
 #include <string>
 
@@ -26,14 +26,6 @@ std::string ReinitRefusal(const Program& p, const flat::StateRef& ref, int* stat
            "would break (reinit a speed: the others follow through the rows)";
   const TreeJoint& j = p.joints[static_cast<size_t>(tj)];
   if (speed) {
-    // A jump's friction impulses need the joints' impulsive normal forces, found on trees only
-    // (rt::FrictionImpulseNormals: the loops' and rolling contacts' impulses would join them).
-    if (!p.rows.empty())
-      for (int b : p.friction_joints)
-        if (p.joints[static_cast<size_t>(b)].mu != 0.0)
-          return "the mechanism has closed loops or rolling contacts and Coulomb friction proportional to the normal "
-                 "force (mu on joint '" + p.joints[static_cast<size_t>(b)].name +
-                 "'), whose impulses in a jump are not modelled (on a tree they are)";
     const int f = p.u_free_of[static_cast<size_t>(j.u0 + ref.k)];
     if (f < 0) return "the joint's motion is prescribed";
     *state = p.nq + f;

@@ -232,12 +232,16 @@ double FrictionNormal(const Workspace& ws, int i);
 // Friction joint i's speed as the last evaluation took it: beside constraint rows a dependent
 // speed is solved from the independent ones, not read from y.
 double FrictionSpeed(const Program& program, const Workspace& ws, int i);
-// The friction joints' normal impulses in a jump du of the free speeds (nu entries) at (t, y):
-// per friction joint i, P[3i..3i+2] the impulse its parent side gives the subtree below it
-// (sum of m dv_cm) across its axis, world axes; |P_i| is mu N's impulsive N. Trees only: 0,
-// UnpackState's codes, or -1 (ErrorMessage says why). runtime/engine/friction_impulse.cpp
-int FrictionImpulseNormals(const Program& program, Workspace& ws, double t, const double* y, const double* du,
-                           double* P);
+// The response to a generalized impulse F on the free speeds (nu entries) at (t, y), with the
+// constraint rows' impulsive reactions (closed loops, rolling contacts, couplings: the jump
+// keeps A du = 0): W (nu x nu, column-major), du = W F (M^-1 on a tree, the constrained
+// inverse mass beta (beta^T M beta)^-1 beta^T with rows); N (3 nf x nu, column-major, nf the
+// friction joints), per friction joint i, P[3i..3i+2] = (N F)[3i..3i+2] the impulse its
+// parent side gives the subtree below it across its axis (world axes; the bodies' momentum
+// jumps less the rows' impulses on the subtree): |P_i| is mu N's impulsive N. 0, Derivative's
+// codes, or -1 (ErrorMessage says why: a singular mass, --solver sparse with rows, no motion
+// left). runtime/engine/friction_impulse.cpp
+int ImpulseResponse(const Program& program, Workspace& ws, double t, const double* y, double* W, double* N);
 
 // Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
 // when the program has none. runtime/engine/plane_contacts.cpp

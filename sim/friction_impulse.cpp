@@ -1,75 +1,45 @@
-// Coulomb friction in a when clause's speed jump (sim/friction_impulse.h; docs/events.md
-// "Friction in a jump"). The impulse law is the one of rigid-body impact with friction
-// (Pfeiffer & Glocker, Multibody Dynamics with Unilateral Contacts, 1996; Stronge, Impact
-// Mechanics, 2000, for the impulse form): per friction joint i, with w_i = mu_i r_i (r the
-// pin radius of a revolute, 1 for a prismatic) and N_i = |P_N,i| its normal impulse,
+// Coulomb friction in a jump of the speeds (sim/friction_impulse.h; docs/events.md "Friction
+// in a jump"). The impulse law is the one of rigid-body impact with friction (Pfeiffer &
+// Glocker, Multibody Dynamics with Unilateral Contacts, 1996; Stronge, Impact Mechanics,
+// 2000, for the impulse form): per friction joint i, with w_i = mu_i r_i (r the pin radius
+// of a revolute, 1 for a prismatic) and N_i = |P_N,i| its normal impulse,
 //   stick: u_i+ = 0 and |P_f,i| <= w_s,i N_i          slide: P_f,i = -s_i w_i N_i, s_i u_i+ >= 0
-// The jump is M du = E c + sum_i P_f,i e_i (E the rows of the reinit'ed speeds and of the
-// sticking joints, c their impulses: rows change by their targets), and N_i is the norm of
-// a vector affine in the sliding impulses (rt::FrictionImpulseNormals of du, linear in du).
+// The jump is du = W F with F = J_R^T c + sum_slide P_f,i e_i the joints' generalized
+// impulse (R: the caller's rows and the sticking joints' rows e_i, c their impulses) and W
+// the constrained inverse mass (rt::ImpulseResponse: the loops' and contacts' reactions keep
+// A du = 0); the normal impulses are linear in F, P = N F (the rows' impulses included).
 // Method: exact case enumeration. Each joint sticks or slides either way (3^n cases, in order
-// of fewer sliding joints first); in a case the sticking rows make the jump linear, the
-// sliding impulses solve p_i = -s_i w_i |a_i + sum_l B_il p_l| (Newton from p = 0), and the
-// case is taken when every joint's inequality holds. Limits: n <= kMaxFrictionImpulseJoints;
-// where more than one case holds (possible for large mu, as Painleve's paradoxes in impact)
-// the first in that order is taken; where none does, the run stops (-1).
+// of fewer sliding joints first); in a case the rows R make the jump linear, the sliding
+// impulses solve p_i = -s_i w_i |a_i + sum_l B_il p_l| (Newton from p = 0), and the case is
+// taken when every joint's inequality holds. A case whose rows R are dependent (a stuck
+// joint whose speed the loops tie to a row's, as a geared pair's two joints) is no case:
+// such a joint's speed follows from the others', and its sliding cases (u+ = 0 either way)
+// hold the cone's extremes, so where the joints can be held at rest a case holds. Limits:
+// n <= kMaxFrictionImpulseJoints; where more than one case holds (possible for large mu, as
+// Painleve's paradoxes in impact, and for stuck joints tied by the loops) the first in that
+// order is taken; where none does, the run stops (-1).
 #include "sim/friction_impulse.h"
+
+#include "runtime/program/program.h"  // Program::rows
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
-#include "sim/impulse.h"
-
 namespace kanesim::sim {
 
 namespace {
 
+// A pivot of the rows' block J W J^T below this fraction of the largest: dependent rows.
+constexpr double kDependentRows = 1e-10;
+
 struct ActiveJoint {
-  int index = 0;            // among rt::FrictionJoints (the program's friction joints)
-  int u = 0;                // its free speed
+  int index = 0;              // among rt::FrictionJoints (the program's friction joints)
+  int u = 0;                  // its free speed
   double w = 0.0, w_s = 0.0;  // mu r, mu_s r
 };
 
-// A jump at one state: M^-1, the speeds before, the normal impulses' evaluations.
-class FrictionJump {
- public:
-  FrictionJump(const rt::Program& p, rt::Workspace& ws, double t, const double* y, Eigen::MatrixXd minv)
-      : p_(p), ws_(ws), t_(t), y_(y), minv_(std::move(minv)), nf_(rt::FrictionJoints(p).size()) {}
-
-  // du = M^-1 (sum F) + X c with X = M^-1 E_R and (du)_R = b; c the rows' impulses.
-  bool Linear(const std::vector<int>& R, const std::vector<double>& b, int f_speed, Eigen::VectorXd* du,
-              std::vector<double>* c) const {
-    const size_t m = R.size();
-    *du = f_speed >= 0 ? Eigen::VectorXd(minv_.col(f_speed)) : Eigen::VectorXd::Zero(minv_.rows());
-    std::vector<double> A(m * m), rhs(m);
-    for (size_t r = 0; r < m; ++r) {
-      rhs[r] = b[r] - (*du)[R[r]];
-      for (size_t j = 0; j < m; ++j) A[r * m + j] = minv_(R[r], R[j]);
-    }
-    if (!SolveSmall(A, rhs, c)) return false;
-    for (size_t j = 0; j < m; ++j) *du += (*c)[j] * minv_.col(R[j]);
-    return true;
-  }
-  // Every friction joint's normal impulse vector for du (3 per joint).
-  int Normals(const Eigen::VectorXd& du, std::vector<double>* P) const {
-    P->assign(3 * nf_, 0.0);
-    return rt::FrictionImpulseNormals(p_, ws_, t_, y_, du.data(), P->data());
-  }
-  size_t NumFriction() const { return nf_; }
-
- private:
-  const rt::Program& p_;
-  rt::Workspace& ws_;
-  double t_;
-  const double* y_;
-  Eigen::MatrixXd minv_;
-  size_t nf_;
-};
-
-Eigen::Vector3d At(const std::vector<double>& P, int i) {
-  return {P[3 * static_cast<size_t>(i)], P[3 * static_cast<size_t>(i) + 1], P[3 * static_cast<size_t>(i) + 2]};
-}
+Eigen::Vector3d At(const Eigen::VectorXd& P, int i) { return P.segment<3>(3 * i); }
 
 // The sliding impulses p_i = -s_i w_i |A_i + sum_l B_il p_l| by Newton's method (the map is
 // piecewise smooth; from p = 0 the first step is the fixed point's). False when it does not
@@ -81,7 +51,7 @@ bool SlidingImpulses(const std::vector<Eigen::Vector3d>& A, const std::vector<st
   if (n == 0) return true;
   for (int it = 0; it < 100; ++it) {
     Eigen::VectorXd G(n);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Identity(n, n);
+    Eigen::MatrixXd Jac = Eigen::MatrixXd::Identity(n, n);
     double p_max = 0.0;
     for (size_t i = 0; i < n; ++i) {
       Eigen::Vector3d a = A[i];
@@ -89,10 +59,10 @@ bool SlidingImpulses(const std::vector<Eigen::Vector3d>& A, const std::vector<st
       const double N = a.norm();
       G[i] = (*p)[i] + sw[i] * N;
       if (N > 0.0)
-        for (size_t l = 0; l < n; ++l) J(i, l) += sw[i] * a.dot(B[i][l]) / N;
+        for (size_t l = 0; l < n; ++l) Jac(i, l) += sw[i] * a.dot(B[i][l]) / N;
       p_max = std::max(p_max, std::abs((*p)[i]));
     }
-    const Eigen::VectorXd d = J.partialPivLu().solve(G);
+    const Eigen::VectorXd d = Jac.partialPivLu().solve(G);
     if (!d.allFinite()) return false;
     double d_max = 0.0;
     for (size_t i = 0; i < n; ++i) (*p)[i] -= d[i], d_max = std::max(d_max, std::abs(d[i]));
@@ -100,6 +70,20 @@ bool SlidingImpulses(const std::vector<Eigen::Vector3d>& A, const std::vector<st
   }
   return false;
 }
+
+// The rows' block factored; false when the rows are dependent.
+bool FactorRows(const Eigen::MatrixXd& JR, const Eigen::MatrixXd& W, Eigen::FullPivLU<Eigen::MatrixXd>* lu) {
+  if (JR.rows() == 0) return true;
+  lu->compute(JR * W * JR.transpose());
+  lu->setThreshold(kDependentRows);
+  return lu->rank() == JR.rows();
+}
+
+// One stick/slide case: the jump, the rows' impulses and the normal impulses.
+struct JumpCase {
+  Eigen::VectorXd du, c, P;
+  std::vector<double> p;  // the sliders' impulses
+};
 
 }  // namespace
 
@@ -109,36 +93,40 @@ bool HasFrictionImpulses(const rt::Program& program) {
   return false;
 }
 
-int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
-                      const std::vector<int>& rows, const std::vector<double>& targets, double* du_out,
-                      std::vector<int>* stuck_out, std::string* why) {
+int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y, const std::vector<double>& J,
+                 const std::vector<double>& targets, FrictionJumpResult* out, std::string* why) {
   const int nq = rt::NumQ(program), nu = rt::NumU(program);
-  stuck_out->clear();
+  const auto m = static_cast<Eigen::Index>(targets.size());
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jm(J.data(), m, nu);
   const std::vector<rt::FrictionJoint> joints = rt::FrictionJoints(program);
   std::vector<ActiveJoint> act;
   for (size_t i = 0; i < joints.size(); ++i) {
     const rt::FrictionJoint& f = joints[i];
-    if (f.mu > 0.0 && f.u >= 0 && std::find(rows.begin(), rows.end(), f.u) == rows.end())
+    bool own_row = false;  // a row +-e_k on the joint's speed: its friction merges with the row's impulse
+    for (Eigen::Index r = 0; r < m && f.u >= 0; ++r)
+      own_row = own_row || (Jm(r, f.u) != 0.0 && Jm.row(r).cwiseAbs().sum() == std::abs(Jm(r, f.u)));
+    if (f.mu > 0.0 && f.u >= 0 && !own_row)
       act.push_back({static_cast<int>(i), f.u, f.mu * f.radius, (f.exact ? f.mu_s : f.mu) * f.radius});
   }
-  if (act.empty()) return SpeedJump(program, ws, t, y, rows, targets, du_out);  // a bounded friction: no impulse
   if (static_cast<int>(act.size()) > kMaxFrictionImpulseJoints) {
     *why = "the jump meets " + std::to_string(act.size()) + " joints with Coulomb friction mu (at most " +
            std::to_string(kMaxFrictionImpulseJoints) + " are solved, by enumerating their 3^n stick/slide cases)";
     return -1;
   }
-  Eigen::MatrixXd M(nu, nu);
-  if (int s = rt::MassMatrix(program, ws, t, y, M.data()); s != 0) {
+  Eigen::MatrixXd W(nu, nu), N(static_cast<Eigen::Index>(3 * joints.size()), nu);
+  if (int s = rt::ImpulseResponse(program, ws, t, y, W.data(), N.data()); s != 0) {
     *why = rt::ErrorMessage(ws);
     return s;
   }
-  const Eigen::LLT<Eigen::MatrixXd> llt(M);
-  if (llt.info() != Eigen::Success) {
-    *why = "the mass matrix is singular for an impulse";
+  Eigen::FullPivLU<Eigen::MatrixXd> lu;
+  if (!FactorRows(Jm, W, &lu)) {
+    *why = "the jump has no unique solution: the speeds it sets" +
+           std::string(program.rows.empty() ? "" : " (through the closed loops' or contacts' rows, or at their dead point)") +
+           " and the contacts held constrain the same motion";
     return -1;
   }
-  const FrictionJump jump(program, ws, t, y, llt.solve(Eigen::MatrixXd::Identity(nu, nu)));
-  const double* u0 = y + nq;
+  const Eigen::Map<const Eigen::VectorXd> u0(y + nq, nu);
+  const Eigen::Map<const Eigen::VectorXd> b0(targets.data(), m);
   const size_t n = act.size();
   int cases = 1;
   for (size_t i = 0; i < n; ++i) cases *= 3;
@@ -151,66 +139,94 @@ int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, c
         count += mode[i] != 0;
       }
       if (count != sliding) continue;
-      // The linear pieces: rows, sticking joints' rows (speed to 0), one unit impulse per slider.
-      std::vector<int> R = rows;
-      std::vector<double> b = targets;
-      std::vector<size_t> slide;
-      for (size_t i = 0; i < n; ++i) {
-        if (mode[i] == 0) R.push_back(act[i].u), b.push_back(-u0[act[i].u]);
-        else slide.push_back(i);
+      // The rows R: the caller's, then the sticking joints' (speed to 0); the sliders' unit impulses.
+      std::vector<size_t> slide, stick;
+      for (size_t i = 0; i < n; ++i) (mode[i] == 0 ? stick : slide).push_back(i);
+      const auto mR = m + static_cast<Eigen::Index>(stick.size());
+      Eigen::MatrixXd JR = Eigen::MatrixXd::Zero(mR, nu);
+      Eigen::VectorXd bR(mR);
+      JR.topRows(m) = Jm;
+      bR.head(m) = b0;
+      for (size_t k = 0; k < stick.size(); ++k) {
+        JR(m + static_cast<Eigen::Index>(k), act[stick[k]].u) = 1.0;
+        bR[m + static_cast<Eigen::Index>(k)] = -u0[act[stick[k]].u];
       }
-      Eigen::VectorXd du;
-      std::vector<double> c, P0;
-      if (!jump.Linear(R, b, -1, &du, &c)) continue;  // dependent rows: no case of this kind
-      if (int s = jump.Normals(du, &P0); s != 0) {
-        *why = rt::ErrorMessage(ws);
-        return s;
-      }
-      std::vector<Eigen::VectorXd> d(slide.size());
-      std::vector<std::vector<double>> dc(slide.size()), dP(slide.size());
+      if (!FactorRows(JR, W, &lu)) continue;  // dependent rows: no case of this kind
+      auto solve = [&](const Eigen::VectorXd& rhs) { return mR == 0 ? Eigen::VectorXd(rhs) : Eigen::VectorXd(lu.solve(rhs)); };
+      JumpCase base;
+      base.c = solve(bR);
+      Eigen::VectorXd F = JR.transpose() * base.c;
+      base.du = W * F;
+      base.P = N * F;
+      std::vector<JumpCase> unit(slide.size());  // per slider: the response to its unit impulse
       for (size_t l = 0; l < slide.size(); ++l) {
-        jump.Linear(R, std::vector<double>(R.size(), 0.0), act[slide[l]].u, &d[l], &dc[l]);
-        if (int s = jump.Normals(d[l], &dP[l]); s != 0) return s;
+        Eigen::VectorXd e = Eigen::VectorXd::Zero(nu);
+        e[act[slide[l]].u] = 1.0;
+        unit[l].c = -solve(JR * (W * e));
+        F = e + JR.transpose() * unit[l].c;
+        unit[l].du = W * F;
+        unit[l].P = N * F;
       }
       std::vector<Eigen::Vector3d> A;
       std::vector<std::vector<Eigen::Vector3d>> B;
       std::vector<double> sw, p;
       for (size_t i : slide) {
-        A.push_back(At(P0, act[i].index));
+        A.push_back(At(base.P, act[i].index));
         B.emplace_back();
-        for (size_t l = 0; l < slide.size(); ++l) B.back().push_back(At(dP[l], act[i].index));
+        for (size_t l = 0; l < slide.size(); ++l) B.back().push_back(At(unit[l].P, act[i].index));
         sw.push_back(mode[i] * act[i].w);
       }
       if (!SlidingImpulses(A, B, sw, &p)) continue;
       for (size_t l = 0; l < slide.size(); ++l) {
-        du += p[l] * d[l];
-        for (size_t r = 0; r < c.size(); ++r) c[r] += p[l] * dc[l][r];
-        for (size_t k = 0; k < P0.size(); ++k) P0[k] += p[l] * dP[l][k];
+        base.du += p[l] * unit[l].du;
+        base.c += p[l] * unit[l].c;
+        base.P += p[l] * unit[l].P;
       }
       // The case holds when the sticking impulses are inside their cones and the sliders
       // move the way their friction assumed.
-      double u_scale = 0.0, p_scale = 0.0;
-      for (int k = 0; k < nu; ++k) u_scale = std::max({u_scale, std::abs(u0[k]), std::abs(u0[k] + du[k])});
-      for (double x : c) p_scale = std::max(p_scale, std::abs(x));
+      const double u_scale = std::max(u0.cwiseAbs().maxCoeff(), (u0 + base.du).cwiseAbs().maxCoeff());
+      double p_scale = mR > 0 ? base.c.cwiseAbs().maxCoeff() : 0.0;
       for (double x : p) p_scale = std::max(p_scale, std::abs(x));
       bool holds = true;
-      for (size_t i = 0, r = rows.size(); i < n && holds; ++i) {
-        const double N = At(P0, act[i].index).norm();
-        if (mode[i] == 0)
-          holds = std::abs(c[r++]) <= act[i].w_s * N * (1.0 + 1e-10) + 1e-14 * p_scale;
-        else
-          holds = mode[i] * (u0[act[i].u] + du[act[i].u]) >= -1e-12 * u_scale;
+      for (size_t k = 0; k < stick.size() && holds; ++k) {
+        const ActiveJoint& a = act[stick[k]];
+        holds = std::abs(base.c[m + static_cast<Eigen::Index>(k)]) <=
+                a.w_s * At(base.P, a.index).norm() * (1.0 + 1e-10) + 1e-14 * p_scale;
       }
+      for (size_t l = 0; l < slide.size() && holds; ++l)
+        holds = mode[slide[l]] * (u0[act[slide[l]].u] + base.du[act[slide[l]].u]) >= -1e-12 * u_scale;
       if (!holds) continue;
-      std::copy(du.data(), du.data() + nu, du_out);
-      for (size_t i = 0; i < n; ++i)
-        if (mode[i] == 0) stuck_out->push_back(act[i].u);
+      out->du.assign(base.du.data(), base.du.data() + nu);
+      out->impulse.assign(base.c.data(), base.c.data() + m);
+      out->stuck.clear();
+      out->friction.assign(joints.size(), 0.0);
+      out->normal.assign(joints.size(), 0.0);
+      for (size_t i = 0; i < joints.size(); ++i) out->normal[i] = At(base.P, static_cast<int>(i)).norm();
+      for (size_t k = 0; k < stick.size(); ++k) {
+        out->stuck.push_back(act[stick[k]].u);
+        out->friction[static_cast<size_t>(act[stick[k]].index)] = base.c[m + static_cast<Eigen::Index>(k)];
+      }
+      for (size_t l = 0; l < slide.size(); ++l) out->friction[static_cast<size_t>(act[slide[l]].index)] = p[l];
       return 0;
     }
   }
   *why = "no friction impulse satisfies Coulomb's law in the joints with mu (every stick/slide case tried; "
          "a friction coefficient too large for this configuration?)";
   return -1;
+}
+
+int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
+                      const std::vector<int>& rows, const std::vector<double>& targets, double* du,
+                      std::vector<int>* stuck, std::string* why) {
+  const auto nu = static_cast<size_t>(rt::NumU(program));
+  std::vector<double> J(rows.size() * nu, 0.0);
+  for (size_t r = 0; r < rows.size(); ++r) J[r * nu + static_cast<size_t>(rows[r])] = 1.0;
+  FrictionJumpResult res;
+  stuck->clear();
+  if (int s = FrictionJump(program, ws, t, y, J, targets, &res, why); s != 0) return s;
+  std::copy(res.du.begin(), res.du.end(), du);
+  *stuck = res.stuck;
+  return 0;
 }
 
 }  // namespace kanesim::sim

@@ -1,9 +1,11 @@
-// A when clause's speed jump in a mechanism with Coulomb friction proportional to the
-// normal force (`mu` of Revolute and Prismatic; docs/events.md "Friction in a jump"). The
-// jump's impulse carries an impulsive normal force in the joints, so their friction acts
-// impulsively too: a joint's friction impulse P_f obeys Coulomb's law on impulses,
-// |P_f| <= mu_s r |P_N| where the joint ends at rest (it sticks), P_f = -mu r |P_N| sign(u+)
-// where it slides on (u+ its speed after the jump), P_N the joint's normal impulse.
+// A jump of the speeds in a mechanism with Coulomb friction proportional to the normal force
+// (`mu` of Revolute and Prismatic; docs/events.md "Friction in a jump"): a when clause's
+// reinit of a speed, an end stop's impact. The jump's impulse carries an impulsive normal
+// force in the joints, so their friction acts impulsively too: a joint's friction impulse
+// P_f obeys Coulomb's law on impulses, |P_f| <= mu_s r |P_N| where the joint ends at rest
+// (it sticks), P_f = -mu r |P_N| sign(u+) where it slides on (u+ its speed after the jump),
+// P_N the joint's normal impulse. Trees, closed loops, joint couplings and rolling contacts
+// alike: the constraint rows' impulses keep A du = 0 and enter the normal impulses.
 #pragma once
 
 #include <string>
@@ -19,11 +21,26 @@ constexpr int kMaxFrictionImpulseJoints = 6;
 // True when a jump in `program` meets friction impulses (a joint with mu > 0).
 bool HasFrictionImpulses(const rt::Program& program);
 
-// du (nu entries): the free speeds `rows` change by `targets`, the friction joints (mu > 0,
-// not among `rows`) by their Coulomb impulses, every other speed follows through M^-1.
-// *stuck: the free speeds of the joints that stick (their speed after the jump is 0).
-// 0, Derivative's codes, or -1 with *why (no case satisfies the law, too many joints, a
-// singular mass matrix).
+struct FrictionJumpResult {
+  std::vector<double> du;       // nu: the free speeds' jump (A du = 0 with constraint rows)
+  std::vector<double> impulse;  // per row of J: its impulse c (the rows' generalized impulse J^T c)
+  std::vector<int> stuck;       // the free speeds of the friction joints that stick (u+ = 0)
+  std::vector<double> friction, normal;  // per friction joint (rt::FrictionJoints order): P_f, |P_N|
+};
+
+// The jump at (t, y) whose rows J (m x nu, row-major, on the free speeds) change by
+// `targets` (J du = targets) by the impulse J^T c, the friction joints (mu > 0, prescribed
+// ones and those whose speed is itself a row, +-e_k, left out) by their Coulomb impulses,
+// the constraint rows (closed loops, couplings, rolling contacts) by their reactions:
+//   M du = J^T c + sum_i P_f,i e_i + A^T mu,   A du = 0,   J du = targets.
+// A row for an end stop's impact is +-e_k (its impulse c >= 0 pushes: the caller's check);
+// a reinit's is e_k. 0, Derivative's codes, or -1 with *why (the rows constrain the same
+// motion, a dead point of the loops, no case satisfies the law, too many joints).
+int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
+                 const std::vector<double>& J, const std::vector<double>& targets, FrictionJumpResult* out,
+                 std::string* why);
+
+// FrictionJump for rows e_k, k in `rows` (free-speed indices): du (nu entries) and *stuck.
 int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
                       const std::vector<int>& rows, const std::vector<double>& targets, double* du,
                       std::vector<int>* stuck, std::string* why);
