@@ -71,13 +71,34 @@ bool SlidingImpulses(const std::vector<Eigen::Vector3d>& A, const std::vector<st
   return false;
 }
 
-// The rows' block factored; false when the rows are dependent.
-bool FactorRows(const Eigen::MatrixXd& JR, const Eigen::MatrixXd& W, Eigen::FullPivLU<Eigen::MatrixXd>* lu) {
-  if (JR.rows() == 0) return true;
-  lu->compute(JR * W * JR.transpose());
-  lu->setThreshold(kDependentRows);
-  return lu->rank() == JR.rows();
-}
+// The rows' block G = J W J^T, scaled to a unit diagonal (so that rows of very different
+// masses are not taken for dependent), factored; c = G^-1 b by Solve. Dependent: a row the
+// constraints fix (G_rr below kDependentRows of its response without them, J_r M^-1 J_r^T:
+// a dead point) or rows at a relative pivot below kDependentRows.
+class RowBlock {
+ public:
+  bool Factor(const Eigen::MatrixXd& JR, const Eigen::MatrixXd& W, const Eigen::MatrixXd& Minv) {
+    const Eigen::Index m = JR.rows();
+    if (m == 0) return true;
+    const Eigen::MatrixXd G = JR * W * JR.transpose();
+    s_.resize(m);
+    for (Eigen::Index r = 0; r < m; ++r) {
+      if (!(G(r, r) > kDependentRows * JR.row(r).dot(Minv * JR.row(r).transpose()))) return false;
+      s_[r] = 1.0 / std::sqrt(G(r, r));
+    }
+    lu_.compute(s_.asDiagonal() * G * s_.asDiagonal());
+    lu_.setThreshold(kDependentRows);
+    return lu_.rank() == m;
+  }
+  Eigen::VectorXd Solve(const Eigen::VectorXd& b) const {
+    if (b.size() == 0) return b;
+    return s_.asDiagonal() * lu_.solve(Eigen::VectorXd(s_.asDiagonal() * b));
+  }
+
+ private:
+  Eigen::VectorXd s_;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu_;
+};
 
 // One stick/slide case: the jump, the rows' impulses and the normal impulses.
 struct JumpCase {
@@ -94,9 +115,14 @@ bool HasFrictionImpulses(const rt::Program& program) {
 }
 
 int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y, const std::vector<double>& J,
-                 const std::vector<double>& targets, FrictionJumpResult* out, std::string* why) {
+                 const std::vector<double>& targets, FrictionJumpResult* out, std::string* why,
+                 const std::vector<double>& row_normals) {
   const int nq = rt::NumQ(program), nu = rt::NumU(program);
   const auto m = static_cast<Eigen::Index>(targets.size());
+  if (J.size() != targets.size() * static_cast<size_t>(nu)) {
+    *why = "internal: the jump's rows J are not m x nu";
+    return -1;
+  }
   const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jm(J.data(), m, nu);
   const std::vector<rt::FrictionJoint> joints = rt::FrictionJoints(program);
   std::vector<ActiveJoint> act;
@@ -118,8 +144,25 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
     *why = rt::ErrorMessage(ws);
     return s;
   }
-  Eigen::FullPivLU<Eigen::MatrixXd> lu;
-  if (!FactorRows(Jm, W, &lu)) {
+  Eigen::MatrixXd Nr = Eigen::MatrixXd::Zero(N.rows(), m);  // the rows' own share in the normal impulses
+  if (!row_normals.empty()) {
+    if (row_normals.size() != static_cast<size_t>(N.rows() * m)) {
+      *why = "internal: the rows' normal impulses are not 3 nf x m";
+      return -1;
+    }
+    Nr = Eigen::Map<const Eigen::MatrixXd>(row_normals.data(), N.rows(), m);
+  }
+  Eigen::MatrixXd Minv = W;  // a tree's W is M^-1
+  if (!program.rows.empty()) {
+    Eigen::MatrixXd M(nu, nu);
+    if (int s = rt::UnconstrainedMassMatrix(program, ws, t, y, M.data()); s != 0) {
+      *why = rt::ErrorMessage(ws);
+      return s;
+    }
+    Minv = M.llt().solve(Eigen::MatrixXd::Identity(nu, nu));
+  }
+  RowBlock block;
+  if (!block.Factor(Jm, W, Minv)) {
     *why = "the jump has no unique solution: the speeds it sets" +
            std::string(program.rows.empty() ? "" : " (through the closed loops' or contacts' rows, or at their dead point)") +
            " and the contacts held constrain the same motion";
@@ -151,13 +194,13 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
         JR(m + static_cast<Eigen::Index>(k), act[stick[k]].u) = 1.0;
         bR[m + static_cast<Eigen::Index>(k)] = -u0[act[stick[k]].u];
       }
-      if (!FactorRows(JR, W, &lu)) continue;  // dependent rows: no case of this kind
-      auto solve = [&](const Eigen::VectorXd& rhs) { return mR == 0 ? Eigen::VectorXd(rhs) : Eigen::VectorXd(lu.solve(rhs)); };
+      if (!block.Factor(JR, W, Minv)) continue;  // dependent rows: no case of this kind
+      auto solve = [&](const Eigen::VectorXd& rhs) { return block.Solve(rhs); };
       JumpCase base;
       base.c = solve(bR);
       Eigen::VectorXd F = JR.transpose() * base.c;
       base.du = W * F;
-      base.P = N * F;
+      base.P = N * F + Nr * base.c.head(m);
       std::vector<JumpCase> unit(slide.size());  // per slider: the response to its unit impulse
       for (size_t l = 0; l < slide.size(); ++l) {
         Eigen::VectorXd e = Eigen::VectorXd::Zero(nu);
@@ -165,7 +208,7 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
         unit[l].c = -solve(JR * (W * e));
         F = e + JR.transpose() * unit[l].c;
         unit[l].du = W * F;
-        unit[l].P = N * F;
+        unit[l].P = N * F + Nr * unit[l].c.head(m);
       }
       std::vector<Eigen::Vector3d> A;
       std::vector<std::vector<Eigen::Vector3d>> B;

@@ -75,9 +75,11 @@ int ImpulseResponse(const Program& p, Workspace& ws, double t, const double* y, 
   if (nf == 0) return 0;
   // UnconstrainedMassMatrix left the positions and velocities of y in ws.
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> rows_t;
+  bool rows = false;  // active rows carrying impulses
   if (!p.rows.empty()) {
     ConstraintJacobian(p, ws);
-    rows_t.compute(ws.A.transpose());  // (2) minimum-norm
+    rows = ws.A.rows() > 0;
+    if (rows) rows_t.compute(ws.A.transpose());  // (2) minimum-norm
   }
   const std::vector<Vec3> v0 = ws.v_WBcm;
   const Eigen::VectorXd u_y = ws.u;
@@ -91,7 +93,7 @@ int ImpulseResponse(const Program& p, Workspace& ws, double t, const double* y, 
     for (size_t L = 0; L < K; ++L) mom[L] = p.bodies[L].mass * (ws.v_WBcm[L] - v0[L]);
     for (size_t L = K; L-- > 0;)  // (1): children before parents (tree order reversed)
       if (const int parent = p.joints[L].parent; parent >= 0) mom[static_cast<size_t>(parent)] += mom[L];
-    if (!p.rows.empty()) {
+    if (rows) {
       Eigen::VectorXd g = M * du;
       g[k] -= 1.0;  // F = e_k
       const Eigen::VectorXd mu = rows_t.solve(g);

@@ -294,5 +294,113 @@ TEST(WhenLoopFriction, FourBarImpulsesMatchNewtonEulerWithTheCutJointsImpulse) {
   (void)px, (void)py;
 }
 
+
+// The four-bar on its carrier (FourBarOnARail, the rail without friction), its crank turning
+// at w0, mu only on the rocker's pivot (radius r), the carrier stopped from U (the row
+// e_rail, target -U; sim::FrictionJump at the start state). Newton-Euler of the rods as in
+// the test above, their mass-centre jumps now du_c e_x + dw v_rel (v_rel per unit crank
+// rate), the crank's pivot free: unknowns R1..R4 and either dw (sliding: t_4 = -mu r |R4|
+// sign(w4 (w0 + dw)), fixed point) or t_4 (stuck: dw = -w0, held while |t_4| <= mu r |R4|).
+// Energy: T- = M U^2 / 2 + U w0 px + Mr w0^2 / 2, T+ = Mr (w0 + dw)^2 / 2 (Mr the loop's
+// inertia about the crank), never above T-.
+// If this fails, the loop does not stick by its pivot's friction where Newton-Euler holds it,
+// slides by another impulse, or the jump raises the energy.
+TEST(WhenLoopFriction, FourBarStoppedWithItsCarrierSticksOrSlidesByNewtonEuler) {
+  const double d = 0.6, mu = 0.5, r = 0.2;
+  int kinds[2] = {0, 0};
+  const double free = -2.9259073;  // w0 / U for which the free jump stops the loop (-px / Mr, by hand)
+  for (double U : {2.0, -1.0, 0.3})
+    for (double w0 : {1.0, -4.0, 0.97 * free * U, 1.1 * free * U}) {
+      std::string text = FourBarOnARail(U, 1.0);
+      auto put = [&](const std::string& from, const std::string& to) {
+        ASSERT_NE(text.find(from), std::string::npos) << from;
+        text.replace(text.find(from), from.size(), to);
+      };
+      put("\"rad/s\") = 0", "\"rad/s\") = " + Num(w0));
+      put(", mu = " + Num(kMuRail), "");
+      put("mu = 0.2, friction_radius = 0.03", "mu = " + Num(mu) + ", friction_radius = " + Num(r));
+      auto l = LoadModel(text, {}, {}, true);
+      ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+      const rt::Program& p = *l->prog;
+      const std::vector<std::string> names = rt::StateNames(p);
+      auto at = [&](const std::string& n) { return static_cast<size_t>(std::find(names.begin(), names.end(), n) - names.begin()); };
+      const auto nq = static_cast<size_t>(rt::NumQ(p)), nu = static_cast<size_t>(rt::NumU(p));
+      std::vector<double> y(names.size());
+      rt::InitialState(p, y.data());
+      ASSERT_NEAR(y[at("crank_pivot.u")], w0, 1e-12);
+      ASSERT_NEAR(y[at("rail.u")], U, 1e-12);
+      auto ws = rt::MakeWorkspace(p);
+      std::vector<double> J(nu, 0.0);
+      J[at("rail.u") - nq] = 1.0;
+      sim::FrictionJumpResult res;
+      std::string why;
+      ASSERT_EQ(sim::FrictionJump(p, *ws, 0.0, y.data(), J, {-U}, &res, &why), 0) << why;
+
+      const double t2 = y[at("crank_pivot.q")], t3 = t2 + y[at("crank_coupler.q")], t4 = y[at("rocker_pivot.q")];
+      double w3, w4, px, py;
+      LoopRates(t2, t3, t4, &w3, &w4, &px, &py);
+      auto e = [](double t) { return Eigen::Vector2d(std::cos(t), std::sin(t)); };
+      auto ep = [](double t) { return Eigen::Vector2d(-std::sin(t), std::cos(t)); };
+      const Eigen::Vector2d O2(0, 0), A = kA * e(t2), Ga = kA / 2 * e(t2), Gb = A + kB / 2 * e(t3), B = A + kB * e(t3);
+      const Eigen::Vector2d O4(d, 0), Gc = O4 + kC / 2 * e(t4), ex(1, 0);
+      const Eigen::Vector2d va = kA / 2 * ep(t2), vb = kA * ep(t2) + kB / 2 * w3 * ep(t3), vc = kC / 2 * w4 * ep(t4);
+      const double Ia = kMa * kA * kA / 12, Ib = kMb * kB * kB / 12, Ic = kMcr * kC * kC / 12, dU = -U;
+      // stick: z = t_4 (dw = -w0); slide: z = dw with t_4 given.
+      auto solve = [&](bool stick, double t4f) {
+        Eigen::MatrixXd E = Eigen::MatrixXd::Zero(9, 9);
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(9);
+        auto force = [&](int row, int R, double sign) { E(row, 2 * R) += sign, E(row + 1, 2 * R + 1) += sign; };
+        auto moment = [&](int row, int R, const Eigen::Vector2d& arm, double sign) {
+          E(row, 2 * R) += -sign * arm.y(), E(row, 2 * R + 1) += sign * arm.x();
+        };
+        force(0, 0, 1), force(0, 1, -1), moment(2, 0, O2 - Ga, 1), moment(2, 1, A - Ga, -1);
+        force(3, 1, 1), force(3, 2, -1), moment(5, 1, A - Gb, 1), moment(5, 2, B - Gb, -1);
+        force(6, 3, 1), force(6, 2, 1), moment(8, 3, O4 - Gc, 1), moment(8, 2, B - Gc, 1);
+        const double m[3] = {kMa, kMb, kMcr}, I[3] = {Ia, Ib, Ic}, w[3] = {1.0, w3, w4};
+        const Eigen::Vector2d v[3] = {va, vb, vc};
+        for (int k = 0; k < 3; ++k) {
+          rhs.segment<2>(3 * k) = m[k] * dU * ex;
+          if (stick) {
+            rhs.segment<2>(3 * k) += m[k] * -w0 * v[k];
+            rhs[3 * k + 2] = I[k] * w[k] * -w0;
+          } else {
+            E.block<2, 1>(3 * k, 8) = -m[k] * v[k];
+            E(3 * k + 2, 8) = -I[k] * w[k];
+          }
+        }
+        if (stick) E(8, 8) = 1.0;
+        else rhs[8] = -t4f;
+        return Eigen::VectorXd(E.fullPivLu().solve(rhs));
+      };
+      Eigen::VectorXd x = solve(true, 0.0);
+      double dw = -w0, t4f = x[8];
+      const bool stuck = std::abs(t4f) <= mu * r * x.segment<2>(6).norm();
+      if (!stuck) {
+        t4f = 0.0;
+        for (int it = 0; it < 200; ++it) {
+          x = solve(false, t4f);
+          const double next = -mu * r * x.segment<2>(6).norm() * (w4 * (w0 + x[8]) > 0 ? 1 : -1);
+          const bool done = std::abs(next - t4f) < 1e-15;
+          t4f = next;
+          if (done) break;
+        }
+        x = solve(false, t4f);
+        dw = x[8];
+        ASSERT_GT(w4 * (w0 + dw) * (t4f < 0 ? 1 : -1), 0.0) << "the slide's sign";
+      }
+      ++kinds[stuck ? 0 : 1];
+      const size_t rocker = rt::FrictionJoints(p).at(0).joint == "rocker_pivot" ? 0 : 1;
+      EXPECT_NEAR(res.du[at("crank_pivot.u") - nq], dw, 1e-10 * (1 + std::abs(w0))) << "U = " << U << ", w0 = " << w0;
+      EXPECT_NEAR(res.friction.at(rocker), t4f, 1e-10 * (1 + std::abs(t4f))) << "U = " << U << ", w0 = " << w0;
+      EXPECT_EQ(res.stuck.size(), stuck ? 1u : 0u) << "U = " << U << ", w0 = " << w0;
+      const double Mr = Ia + kMa * kA * kA / 4 + kMb * vb.squaredNorm() + Ib * w3 * w3 + (Ic + kMcr * kC * kC / 4) * w4 * w4;
+      const double M = kCarrier + kMa + kMb + kMcr;
+      const double T0 = 0.5 * M * U * U + U * w0 * px + 0.5 * Mr * w0 * w0, T1 = 0.5 * Mr * (w0 + dw) * (w0 + dw);
+      EXPECT_LE(T1, T0 * (1 + 1e-14)) << "U = " << U << ", w0 = " << w0;
+    }
+  EXPECT_GT(kinds[0], 0);
+  EXPECT_GT(kinds[1], 0);
+}
+
 }  // namespace
 }  // namespace kanesim::test
