@@ -96,7 +96,7 @@ int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const
   }
   std::vector<int> stuck;
   std::string why;
-  if (int s = FrictionSpeedJump(program_, ws, t, y, speeds, jumps, du, &stuck, &why); s != 0) {
+  if (int s = FrictionSpeedJump(program_, ws, t, y, speeds, jumps, du, &stuck, &why, &impulse_F_); s != 0) {
     error_ = why.empty() ? rt::ErrorMessage(ws) : why;
     return s;
   }
@@ -113,7 +113,7 @@ int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const
 // HeldJump's jump with the friction impulses: the resting stops are speed rows (target 0)
 // beside the set speeds; one whose impulse would pull leaves (the most pulling first).
 int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
-                              const std::vector<double>& targets, double* du) {
+                              const std::vector<double>& targets, double* du, std::vector<double>* F) {
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
     if (sides_[i].resting) held.push_back(static_cast<int>(i));
@@ -131,7 +131,7 @@ int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, cons
     }
     std::vector<int> stuck;
     std::string why;
-    if (int s = FrictionSpeedJump(program_, ws, t, y, rows, b, du, &stuck, &why); s != 0) {
+    if (int s = FrictionSpeedJump(program_, ws, t, y, rows, b, du, &stuck, &why, F); s != 0) {
       error_ = why.empty() ? rt::ErrorMessage(ws) : why;
       return s;
     }
