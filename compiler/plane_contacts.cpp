@@ -1,9 +1,10 @@
 // Compile stage: plane contacts (stdlib PlaneContact). A unilateral contact is not a
 // constraint row: the integrators' events handle it (sim/end_stops.h), impacts through the
-// mass matrix with the constraint rows' reactions (closed loops, rolling contacts). It, like
-// an end stop in a closed loop, needs no Coulomb friction that reads a normal force (a constant
-// friction, friction_torque / friction_force, is allowed; docs/stdlib.md "PlaneContact"). End
-// stops in a tree take mu (sim/end_stops_friction.cpp).
+// mass matrix with the constraint rows' reactions (closed loops, rolling contacts). Beside
+// Coulomb friction that reads a normal force (mu), plane contacts and end stops need a tree:
+// a resting contact's force and an impact's impulse enter the joints' normal forces
+// (sim/end_stops_friction.cpp); a constant friction (friction_torque / friction_force) is
+// allowed anywhere (docs/stdlib.md "PlaneContact").
 #include <cmath>
 
 #include "compiler/compile_internal.h"
@@ -13,17 +14,15 @@ namespace kanesim::rt {
 
 namespace {
 
-// Why the events cannot run on this program ("" when they can); `planes`: for its plane contacts.
-std::string EventsRefused(const Program& p, bool planes) {
+// Why the events cannot run on this program ("" when they can).
+std::string EventsRefused(const Program& p) {
   // Closed loops', rolling contacts' and couplings' rows join the impulse and the reactions
   // by their own reactions (rt::InverseMassColumn through the tangent basis).
   // A constant friction is a bounded force: no impulse, no term in the reactions. mu N is
-  // one in a tree beside end stops (sim/end_stops_friction.cpp), whose rows are speed rows.
+  // one in a tree (sim/end_stops_friction.cpp), whose reactions are the subtrees'.
   bool mu = false;
   for (int b : p.friction_joints) mu = mu || p.joints[static_cast<size_t>(b)].mu != 0.0;
-  if (!mu) return "";
-  if (planes) return "Coulomb friction proportional to the normal force (mu) on joints";
-  if (!p.rows.empty())
+  if (mu && !p.rows.empty())
     return "closed loops or rolling contacts and Coulomb friction proportional to the normal force (mu) on joints";
   return "";
 }
@@ -74,14 +73,14 @@ void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMe
     p.plane_contacts.push_back(c);
   }
   if (p.plane_contacts.empty() && p.stop_joints.empty()) return;
-  const std::string hint = "end stops take Coulomb friction mu N in a tree (no closed loops, rolling contacts or couplings)";
-  for (const PlaneContactModel& c : p.plane_contacts)
-    if (const std::string refused = EventsRefused(p, true); !refused.empty())
-      errors->push_back(Msg(flat::DiagCode::BadContact,
-                            "contact '" + c.name + "': a plane contact in a mechanism with " + refused + " is not supported",
-                            c.loc, "end stops are supported beside mu in a tree; plane contacts only without mu"));
-  const std::string refused = EventsRefused(p, false);
+  const std::string refused = EventsRefused(p);
   if (refused.empty()) return;
+  const std::string hint = "end stops and plane contacts take Coulomb friction mu N in a tree (no closed loops, rolling "
+                           "contacts or couplings)";
+  for (const PlaneContactModel& c : p.plane_contacts)
+    errors->push_back(Msg(flat::DiagCode::BadContact,
+                          "contact '" + c.name + "': a plane contact in a mechanism with " + refused + " is not supported",
+                          c.loc, hint));
   for (int b : p.stop_joints) {
     const TreeJoint& j = p.joints[static_cast<size_t>(b)];
     errors->push_back(Msg(flat::DiagCode::BadStop,

@@ -260,6 +260,16 @@ std::vector<PlaneContact> PlaneContacts(const Program& program);
 // entries: dg/dt = J u) and its bias c (d2g/dt2 = J udot + c). 0, or UnpackState's codes.
 int PlaneContactRow(const Program& program, Workspace& ws, double t, const double* y, int i, double* gap, double* J,
                     double* bias);
+// DerivativeWithForces with, besides F, contact i's normal force lambda[i] (one per contact,
+// pushing: > 0) applied at its point: with Coulomb friction mu N the joints between its body
+// and the ground carry it in their normal forces. A tree only (-1 with constraint rows).
+int DerivativeWithPlaneForces(const Program& program, Workspace& ws, double t, const double* y, const double* F,
+                              const double* lambda, double* ydot);
+// The contacts' impulses Lambda (one per contact, pushing: > 0) in the friction joints'
+// normal impulses: P (3 per friction joint, FrictionImpulseNormals') less each Lambda_c n_c
+// across the axis of every friction joint between contact c's body and the ground.
+int PlaneImpulseNormals(const Program& program, Workspace& ws, double t, const double* y, const double* Lambda,
+                        double* P);
 
 // When clauses (Program::whens; docs/events.md): the event tape evaluated at (t, y), its
 // roots' values then in ws.event_regs[program.event_tape.roots[i]]. 0, or Derivative's

@@ -71,11 +71,16 @@ std::string EndStopEvents::Element(const Side& s) const {
 
 std::string EndStopEvents::Where(const Side& s) const { return s.plane >= 0 ? "the plane" : SideName(s.upper); }
 
+// A start on a plane or a stop is often computed (a point placed on the floor through a
+// chain's kinematics), and round-off puts it a few ulps either side: within this much of the
+// contact (relative to its scale) the start touches it, neither past it nor in flight.
+constexpr double kStartGap = 1e-13;
+
 std::string EndStopEvents::CheckStart(rt::Workspace& ws, double t0, const double* y0) {
   for (const Side& s : sides_) {
     double gap = 0.0, c = 0.0;
     if (Row(ws, t0, y0, s, &gap, J_.data(), &c) != 0) return "the start state cannot be evaluated: " + rt::ErrorMessage(ws);
-    if (!(gap < 0.0)) continue;
+    if (!(gap < -kStartGap * Scale(s))) continue;
     char buf[300];
     if (s.plane >= 0) {
       std::snprintf(buf, sizeof buf, "contact '%s' starts %.17g below its plane", Element(s).c_str(), -gap);
@@ -660,7 +665,7 @@ int EndStopEvents::Start(rt::Workspace& ws, double t0, double* y0) {
     if (int r = Row(ws, t0, y0, s, &gap, J_.data(), &c); r != 0) return r;
     double v = 0.0;
     for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y0[nq_ + k];
-    if (gap == 0.0 && v <= 0.0)
+    if (std::abs(gap) <= kStartGap * Scale(s) && v <= 0.0)
       if (int r = Impact(ws, t0, y0, i, v, true); r != 0) return r;
   }
   return 0;

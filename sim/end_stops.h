@@ -194,14 +194,17 @@ class EndStopEvents {
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
   // With Coulomb friction mu N (a tree; sim/end_stops_friction.cpp): the resting sides'
   // reactions c (rows, targets as Reactions builds them) and the held accelerations a (nu),
-  // by the tree's fixed point with the reactions included; an impulse on stop rows with the
-  // friction joints' impulses (sim/friction_impulse.h).
+  // by the tree's fixed point with the reactions included; an impulse on the sides' rows with
+  // the friction joints' impulses (sim/friction_impulse.h).
   int ReactionsMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                   const std::vector<double>& bias, std::vector<double>* c, double* a);
   int ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                 const std::vector<double>& targets, double* du, std::vector<double>* c);
   int HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                  const std::vector<double>& targets, double* du, std::vector<double>* F);
+  // The sides `rows` appended as FrictionJump's rows J and their own normal impulses.
+  int JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows, std::vector<double>* J,
+               std::vector<double>* row_normals);
 
   const rt::Program& program_;
   std::vector<rt::EndStop> stops_;

@@ -1,14 +1,15 @@
-// End stops beside Coulomb friction mu N (sim/end_stops.h; docs/events.md "Friction beside
-// stops"). A tree only (the compiler refuses closed loops with them, and plane contacts).
-// Resting: the friction forces follow the joints' normal forces N, N the accelerations, and
-// the accelerations the rows' reactions lambda, so the accelerations are not affine in
-// lambda. The rows' residual r(lambda) = J a(lambda) + c is brought to zero by the chord
-// iteration
+// End stops and plane contacts beside Coulomb friction mu N (sim/end_stops.h; docs/events.md
+// "Friction beside stops"). A tree only (the compiler refuses closed loops with them).
+// Resting: the friction forces follow the joints' normal forces N, N the accelerations and
+// the reactions (a plane contact's force acts at its point, so the joints between it and the
+// ground carry it: rt::DerivativeWithPlaneForces), and the accelerations the rows' reactions
+// lambda, so the accelerations are not affine in lambda. The rows' residual
+// r(lambda) = J a(lambda) + c is brought to zero by the chord iteration
 //   lambda <- lambda - (J M^-1 J^T)^-1 r(lambda)                                         (1)
 // (exact without mu; with mu it converges at the rate the tree's fixed point of
 // runtime/kane/friction.cpp (3) does, each a(lambda) solving that fixed point with lambda
-// applied). Impacts: the stops' rows are speed rows (J = +-e_k), so the jump is
-// sim/friction_impulse.h's, whose normal impulses carry the stops' impulses.
+// applied). Impacts and jumps: sim/friction_impulse.h's law, whose normal impulses carry the
+// stops' (along their joints: none across) and the plane contacts' impulses.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -52,11 +53,17 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
       A[i * m + j] = s;
     }
   c->assign(m, 0.0);
+  std::vector<double> lambda(planes_.size());  // the plane contacts' forces, applied at their points
   for (int it = 0; it < kMaxIterations; ++it) {
     std::fill(F.begin(), F.end(), 0.0);
-    for (size_t j = 0; j < m; ++j)
-      for (size_t k = 0; k < nu; ++k) F[k] += (*c)[j] * Jrows_[j * nu + k];
-    if (int s = rt::DerivativeWithForces(program_, ws, t, y, F.data(), yd.data()); s != 0) return s;
+    std::fill(lambda.begin(), lambda.end(), 0.0);
+    for (size_t j = 0; j < m; ++j) {
+      const Side& s = sides_[static_cast<size_t>(rows[j])];
+      if (s.plane >= 0) lambda[static_cast<size_t>(s.plane)] = (*c)[j];
+      else
+        for (size_t k = 0; k < nu; ++k) F[k] += (*c)[j] * Jrows_[j * nu + k];
+    }
+    if (int s = rt::DerivativeWithPlaneForces(program_, ws, t, y, F.data(), lambda.data(), yd.data()); s != 0) return s;
     const double* acc = yd.data() + nq_;
     double r_max = 0.0, scale = 1.0;
     for (size_t j = 0; j < m; ++j) {
@@ -80,75 +87,74 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
   return 1;  // recoverable: the integrator retries with a smaller step
 }
 
+// The sides `rows` as FrictionJump's rows, appended to *J (row-major, nu columns): a stop's
+// +-e_k, a plane contact's J; *row_normals (3 nf per row): a plane's impulse, acting at its
+// point, in the normal impulses of the joints between it and the ground (a stop's: none).
+int EndStopEvents::JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
+                            std::vector<double>* J, std::vector<double>* row_normals) {
+  const size_t nu = static_cast<size_t>(nu_), nf = 3 * rt::FrictionJoints(program_).size();
+  for (int i : rows) {
+    const Side& s = sides_[static_cast<size_t>(i)];
+    J->resize(J->size() + nu, 0.0);
+    row_normals->resize(row_normals->size() + nf, 0.0);
+    double gap = 0.0, c = 0.0;
+    if (int st = Row(ws, t, y, s, &gap, J->data() + J->size() - nu, &c); st != 0) return st;
+    if (s.plane < 0) continue;
+    std::vector<double> Lambda(planes_.size(), 0.0);
+    Lambda[static_cast<size_t>(s.plane)] = 1.0;
+    if (int st = rt::PlaneImpulseNormals(program_, ws, t, y, Lambda.data(), row_normals->data() + row_normals->size() - nf);
+        st != 0)
+      return st;
+  }
+  return 0;
+}
+
 int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                              const std::vector<double>& targets, double* du, std::vector<double>* c) {
-  std::vector<int> speeds;
-  std::vector<double> jumps, sign;
-  for (size_t j = 0; j < rows.size(); ++j) {
-    const Side& s = sides_[static_cast<size_t>(rows[j])];
-    if (s.plane >= 0) {
-      error_ = "an impact of a plane contact beside Coulomb friction mu N is not supported";
-      return -1;
-    }
-    sign.push_back(s.upper ? -1.0 : 1.0);
-    speeds.push_back(stops_[static_cast<size_t>(s.stop)].u);
-    jumps.push_back(sign.back() * targets[j]);  // J du = +-du_k
-  }
-  std::vector<int> stuck;
+  std::vector<double> J, row_normals;
+  if (int s = JumpRows(ws, t, y, rows, &J, &row_normals); s != 0) return s;
+  FrictionJumpResult jump;
   std::string why;
-  if (int s = FrictionSpeedJump(program_, ws, t, y, speeds, jumps, du, &stuck, &why, &impulse_F_); s != 0) {
+  if (int s = FrictionJump(program_, ws, t, y, J, targets, &jump, &why, row_normals); s != 0) {
     error_ = why.empty() ? rt::ErrorMessage(ws) : why;
     return s;
   }
-  // The stops' impulses: (M du)_k on a stop's speed (no friction impulse acts there).
-  Eigen::MatrixXd M(nu_, nu_);
-  if (int s = rt::MassMatrix(program_, ws, t, y, M.data()); s != 0) return s;
-  const Eigen::VectorXd p = M * Eigen::Map<const Eigen::VectorXd>(du, nu_);
-  c->resize(rows.size());
-  for (size_t j = 0; j < rows.size(); ++j) (*c)[j] = sign[j] * p[speeds[j]];
+  std::copy(jump.du.begin(), jump.du.end(), du);
+  impulse_F_ = jump.generalized;
+  *c = jump.impulse;  // (a side's row pushes with c > 0)
   error_.clear();
   return 0;
 }
 
-// HeldJump's jump with the friction impulses: the resting stops are speed rows (target 0)
-// beside the set speeds; one whose impulse would pull leaves (the most pulling first).
+// HeldJump's jump with the friction impulses: the resting sides are rows (target 0) beside the
+// set speeds; one whose impulse would pull leaves (the most pulling first).
 int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                               const std::vector<double>& targets, double* du, std::vector<double>* F) {
+  const size_t n = speeds.size(), nu = static_cast<size_t>(nu_), nf = 3 * rt::FrictionJoints(program_).size();
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
     if (sides_[i].resting) held.push_back(static_cast<int>(i));
   for (;;) {
-    std::vector<int> rows = speeds;
-    std::vector<double> b = targets;
-    for (int h : held) {
-      const Side& s = sides_[static_cast<size_t>(h)];
-      if (s.plane >= 0) {
-        error_ = "a jump with a plane contact at rest beside Coulomb friction mu N is not supported";
-        return -1;
-      }
-      rows.push_back(stops_[static_cast<size_t>(s.stop)].u);
-      b.push_back(0.0);
-    }
-    std::vector<int> stuck;
+    std::vector<double> J(n * nu, 0.0), row_normals(n * nf, 0.0), b = targets;
+    for (size_t j = 0; j < n; ++j) J[j * nu + static_cast<size_t>(speeds[j])] = 1.0;
+    if (int s = JumpRows(ws, t, y, held, &J, &row_normals); s != 0) return s;
+    b.resize(n + held.size(), 0.0);
+    FrictionJumpResult jump;
     std::string why;
-    if (int s = FrictionSpeedJump(program_, ws, t, y, rows, b, du, &stuck, &why, F); s != 0) {
+    if (int s = FrictionJump(program_, ws, t, y, J, b, &jump, &why, row_normals); s != 0) {
       error_ = why.empty() ? rt::ErrorMessage(ws) : why;
       return s;
     }
-    Eigen::MatrixXd M(nu_, nu_);
-    if (int s = rt::MassMatrix(program_, ws, t, y, M.data()); s != 0) return s;
-    const Eigen::VectorXd p = M * Eigen::Map<const Eigen::VectorXd>(du, nu_);
+    std::copy(jump.du.begin(), jump.du.end(), du);
     double scale = 0.0;
-    for (int k : rows) scale = std::max(scale, std::abs(p[k]));
+    for (double v : jump.impulse) scale = std::max(scale, std::abs(v));
+    const double* c = jump.impulse.data() + n;
     size_t pull = held.size();
-    double pull_c = 0.0;
-    for (size_t h = 0; h < held.size(); ++h) {
-      const Side& s = sides_[static_cast<size_t>(held[h])];
-      const double c = (s.upper ? -1.0 : 1.0) * p[stops_[static_cast<size_t>(s.stop)].u];
-      if (c < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == held.size() || c < pull_c))
-        pull = h, pull_c = c;
-    }
+    for (size_t h = 0; h < held.size(); ++h)
+      if (c[h] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == held.size() || c[h] < c[pull]))
+        pull = h;
     if (pull == held.size()) {
+      if (F) *F = jump.generalized;
       error_.clear();
       return 0;
     }

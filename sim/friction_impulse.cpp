@@ -115,7 +115,8 @@ bool HasFrictionImpulses(const rt::Program& program) {
 }
 
 int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y, const std::vector<double>& J,
-                 const std::vector<double>& targets, FrictionJumpResult* out, std::string* why) {
+                 const std::vector<double>& targets, FrictionJumpResult* out, std::string* why,
+                 const std::vector<double>& row_normals) {
   const int nq = rt::NumQ(program), nu = rt::NumU(program);
   const auto m = static_cast<Eigen::Index>(targets.size());
   if (J.size() != targets.size() * static_cast<size_t>(nu)) {
@@ -142,6 +143,14 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
   if (int s = rt::ImpulseResponse(program, ws, t, y, W.data(), N.data()); s != 0) {
     *why = rt::ErrorMessage(ws);
     return s;
+  }
+  Eigen::MatrixXd Nr = Eigen::MatrixXd::Zero(N.rows(), m);  // the rows' own share in the normal impulses
+  if (!row_normals.empty()) {
+    if (row_normals.size() != static_cast<size_t>(N.rows() * m)) {
+      *why = "internal: the rows' normal impulses are not 3 nf x m";
+      return -1;
+    }
+    Nr = Eigen::Map<const Eigen::MatrixXd>(row_normals.data(), N.rows(), m);
   }
   Eigen::MatrixXd Minv = W;  // a tree's W is M^-1
   if (!program.rows.empty()) {
@@ -191,7 +200,7 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
       base.c = solve(bR);
       Eigen::VectorXd F = JR.transpose() * base.c;
       base.du = W * F;
-      base.P = N * F;
+      base.P = N * F + Nr * base.c.head(m);
       std::vector<JumpCase> unit(slide.size());  // per slider: the response to its unit impulse
       for (size_t l = 0; l < slide.size(); ++l) {
         Eigen::VectorXd e = Eigen::VectorXd::Zero(nu);
@@ -199,7 +208,7 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
         unit[l].c = -solve(JR * (W * e));
         F = e + JR.transpose() * unit[l].c;
         unit[l].du = W * F;
-        unit[l].P = N * F;
+        unit[l].P = N * F + Nr * unit[l].c.head(m);
       }
       std::vector<Eigen::Vector3d> A;
       std::vector<std::vector<Eigen::Vector3d>> B;

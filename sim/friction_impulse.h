@@ -37,9 +37,12 @@ struct FrictionJumpResult {
 // A row for an end stop's impact is +-e_k (its impulse c >= 0 pushes: the caller's check);
 // a reinit's is e_k. 0, Derivative's codes, or -1 with *why (the rows constrain the same
 // motion, a dead point of the loops, no case satisfies the law, too many joints).
+// row_normals (3 nf x m, column-major; empty: none): per row, what its unit impulse adds to the
+// friction joints' normal impulses beyond N J^T (a plane contact's impulse acts at its point,
+// so every joint between it and the ground carries it: rt::PlaneImpulseNormals).
 int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
                  const std::vector<double>& J, const std::vector<double>& targets, FrictionJumpResult* out,
-                 std::string* why);
+                 std::string* why, const std::vector<double>& row_normals = {});
 
 // FrictionJump for rows e_k, k in `rows` (free-speed indices): du (nu entries) and *stuck.
 int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,

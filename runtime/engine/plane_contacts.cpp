@@ -5,6 +5,9 @@
 //   dg/dt = J u,      J_s = n . (H^v_s + H^w_s x (p_WO - p_WJs))   (J_s: the joint of speed s)   (2)
 //   d2g/dt2 = J udot + c,  c = n . (a_o + alpha x r + w x (v_O - v_o)) with free udot = 0,
 //             r = p_WO - p_WB (o: the origin of O's body B)                           (3)
+// With Coulomb friction mu N a contact's normal force lambda n (or impulse) is a force at O on
+// B, not only the generalized force J^T lambda: every joint between B and the ground carries
+// it in its reaction, so it enters those joints' normal forces N (friction.cpp (1)).
 #include <algorithm>
 #include <cmath>
 
@@ -43,6 +46,53 @@ int PlaneContactRow(const Program& p, Workspace& ws, double t, const double* y, 
   const auto B = static_cast<size_t>(c.body);
   const Vec3 r = p_WO - ws.p_WB[B];
   *bias = n.dot(ws.a_bias_o[B] + ws.alpha_bias[B].cross(r) + ws.w_WB[B].cross(v_WO - ws.v_WBo[B]));  // (3)
+  return 0;
+}
+
+int DerivativeWithPlaneForces(const Program& p, Workspace& ws, double t, const double* y, const double* F,
+                              const double* lambda, double* ydot) {
+  if (!p.rows.empty()) {
+    ws.error = "resting contacts with Coulomb friction mu N in a mechanism with closed loops are not supported";
+    return -1;
+  }
+  if (int s = Derivative(p, ws, t, y, ydot); s != 0) return s;  // (the kinematics at (t, y))
+  if (int s = AppliedForces(p, ws); s != 0) return s;
+  for (int i = 0; i < p.nu; ++i) ws.Q[p.u_free[static_cast<size_t>(i)]] += F[i];
+  for (size_t i = 0; i < p.plane_contacts.size(); ++i) {
+    if (lambda[i] == 0.0) continue;
+    const PlaneContactModel& c = p.plane_contacts[i];
+    Vec3 p_WO;
+    Mat3 R_WO;
+    FramePose(p, ws, c.frame, &p_WO, &R_WO);
+    const auto B = static_cast<size_t>(c.body);
+    const Vec3 f = lambda[i] * c.n_W;  // at O: its generalized force is J^T lambda (2)
+    ws.F_W[B] += f;
+    ws.T_W[B] += (p_WO - ws.p_WBcm[B]).cross(f);
+  }
+  if (int s = SolveAccelerations(p, ws); s != 0) return s;
+  for (int i = 0; i < p.nu; ++i) ydot[p.nq + i] = ws.udot[p.u_free[static_cast<size_t>(i)]];
+  return 0;
+}
+
+// Impulsive: the parent side of joint L gives L's subtree its momentum jump less the external
+// impulses on it (friction_impulse.cpp (1)); a contact's impulse Lambda n is one on every
+// subtree that holds its body.
+int PlaneImpulseNormals(const Program& p, Workspace& ws, double t, const double* y, const double* Lambda, double* P) {
+  if (int s = UnpackState(p, ws, t, y); s != 0) return s;
+  PositionKinematics(p, ws);
+  std::vector<int> friction_of(p.bodies.size(), -1);
+  for (size_t i = 0; i < p.friction_joints.size(); ++i) friction_of[static_cast<size_t>(p.friction_joints[i])] = static_cast<int>(i);
+  for (size_t c = 0; c < p.plane_contacts.size(); ++c) {
+    if (Lambda[c] == 0.0) continue;
+    const Vec3 f = Lambda[c] * p.plane_contacts[c].n_W;
+    for (int L = p.plane_contacts[c].body; L >= 0; L = p.joints[static_cast<size_t>(L)].parent) {
+      const int i = friction_of[static_cast<size_t>(L)];
+      if (i < 0) continue;
+      const Vec3 a = ws.R_WB[static_cast<size_t>(L)] * p.joints[static_cast<size_t>(L)].axis;
+      const Vec3 n = f - f.dot(a) * a;  // across the axis, as friction_impulse.cpp (2)
+      for (int k = 0; k < 3; ++k) P[3 * static_cast<size_t>(i) + static_cast<size_t>(k)] -= n[k];
+    }
+  }
   return 0;
 }
 

@@ -261,5 +261,31 @@ TEST(EventsCsv, AReinitWithMuFrictionTakesTheFrictionImpulse) {
   EXPECT_TRUE(seen);
 }
 
+// `kanesim run --events` of a carriage on a rail with mu whose leg rests on the floor
+// (docs/stdlib.md "PlaneContact"): the floor carries the leg's weight, so the rail's normal
+// force is the carriage's m_c g alone and the drive 8 sin 3t slips it where
+// 8 sin 3t = mu m_c g (tests/compiler/plane_friction_test.cpp has the rest of the motion).
+// If this fails, the contact beside mu is refused (K311, before) or its force is left out of N.
+TEST(EventsCsv, ACarriageWhoseLegRestsOnTheFloorSlipsAtTheHandTime) {
+  const std::string d = Work("plane_mu");
+  Write(d + "/l.mech",
+        "model L\n  World world(g = {0, -9.81, 0});\n"
+        "  Prismatic cx(axis = {1, 0, 0}, mu = 0.3, friction_exact = true);\n  Body carriage(m = 2);\n"
+        "  Revolute leg(axis = {0, 0, 1}, q(start = 0.600000000001));\n  FixedTranslation rod(r = {0, -1, 0});\n"
+        "  Body tip(m = 0.5);\n  PlaneContact foot(n = {0, 1, 0}, d = -cos(0.6));\nequation\n"
+        "  connect(world.frame_b, cx.frame_a);\n  connect(cx.frame_b, carriage.frame_a);\n"
+        "  connect(carriage.frame_a, leg.frame_a);\n  connect(leg.frame_b, rod.frame_a);\n"
+        "  connect(rod.frame_b, tip.frame_a);\n  connect(rod.frame_b, foot.frame_a);\n"
+        "  cx.tau = 8 * sin(3 * time);\n"
+        "  annotation(experiment(StopTime = 0.5, Interval = 0.1, Tolerance = 1e-11));\nend L;\n");
+  Result r = Kanesim("run l.mech -o rows.csv --events ev.csv", d);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  std::vector<double> slips;
+  for (const EventRow& row : ReadEvents(d + "/ev.csv"))
+    if (row.element == "cx" && row.kind.rfind("slips", 0) == 0) slips.push_back(row.time);
+  ASSERT_EQ(slips.size(), 1u);
+  EXPECT_NEAR(slips[0], std::asin(0.3 * 2 * 9.81 / 8) / 3, 1e-8);
+}
+
 }  // namespace
 }  // namespace kanesim::clitest

@@ -142,6 +142,15 @@ TEST(LoopStops, PlaneContactOnTheRockerTipAsItsStop) {
   }
 }
 
+// A plane contact beside Coulomb friction mu N needs a tree (its force and impulse enter the
+// normal forces through the subtrees' reactions): in a closed loop it stays K311.
+TEST(LoopStops, PlaneContactBesideMuInALoopIsRefusedWithK311) {
+  const std::string wall = "  PlaneContact wall(n = {1, 0, 0}, d = " + Num(kD + kC * std::cos(kStop)) + ");\n";
+  auto l = LoadModel(FourBar(", mu = 0.1", wall, "  connect(rocker.frame_b, wall.frame_a);\n"), {}, {}, true);
+  ASSERT_TRUE(l);
+  EXPECT_NE(Find(l->errors, "K311", "closed loops or rolling contacts and Coulomb friction"), nullptr) << Messages(l->errors);
+}
+
 // If this fails, the plastic impact (e = 0) did not bring the loop to rest on the stop, or
 // the rest let the rocker leave while gravity presses it on, or the loop's rows drifted.
 TEST(LoopStops, PlasticImpactRestsOnTheStopOnTheLoop) {

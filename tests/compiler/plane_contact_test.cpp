@@ -135,6 +135,39 @@ TEST(PlaneContact, RestsUntilTheReactionWouldPullThenLiftsOff) {
   }
 }
 
+// A ball placed on a floor whose height is computed, d = 0.1 + 0.2, at q = 0.3: the gap is
+// -5.6e-17, round-off. It starts touching and rests there; a start 1e-9 below the plane is
+// still refused. If this fails, a round-off gap at the start is an exit 1 ("starts below its
+// plane"), or the ball does not rest (it sinks or bounces), or a real overlap is accepted.
+TEST(PlaneContact, AStartWithinRoundOffOfThePlaneRestsOnIt) {
+  auto On = [](const std::string& d) {
+    std::string text = Ball(0.3, 0.0);
+    text.replace(text.find("d = 0"), 5, "d = " + d);
+    return text;
+  };
+  ASSERT_LT(0.3 - (0.1 + 0.2), 0.0);  // the test's premise: the computed floor is above q
+  auto l = LoadModel(On("0.1 + 0.2"), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 1.0, 0.1, {"lift.q", "lift.u"}, &r, kTol);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    ASSERT_EQ(r.stats.events.size(), 1u) << how.name;
+    EXPECT_EQ(r.stats.events[0].kind, "rests on the plane") << how.name;
+    EXPECT_EQ(r.stats.events[0].time, 0.0) << how.name;
+    for (const auto& row : s.rows) {
+      EXPECT_NEAR(row[0], 0.3, 1e-15) << how.name;
+      EXPECT_NEAR(row[1], 0.0, 1e-15) << how.name;
+    }
+  }
+  auto past = LoadModel(On("0.300000001"), {}, {}, true);
+  ASSERT_TRUE(past && past->prog) << (past ? Messages(past->errors) : "");
+  sim::SimResult r;
+  RunWith(*past->prog, AllIntegrators()[0], 1.0, 0.1, {"lift.q"}, &r, kTol);
+  EXPECT_NE(r.status, sim::SimResult::Status::kOk);
+  EXPECT_TRUE(Has(r.message, "below its plane")) << r.message;
+}
+
 // A spinning free body whose contact point is off its mass centre hits a tilted plane. The
 // plane pushes along its normal only, at the contact point. If this fails, the impulse is
 // not M du = J^T lambda with J the contact's normal row: the normal speed after is not -e

@@ -111,15 +111,5 @@ TEST(StopFriction, ImpactAtTheStopSticksOrSlidesTheSliderByTheClosedForm) {
         }
 }
 
-// Plane contacts stay refused beside mu (their impacts' rows are not speed rows).
-TEST(StopFriction, PlaneContactBesideMuIsStillRefusedWithK311) {
-  std::string text = Carrier(kG, 0.0, 0.0, 0.0, 0.0, "");
-  text.insert(text.find("equation\n"), "  PlaneContact foot(n = {0, 1, 0}, d = -1);\n");
-  text.insert(text.find("end C;"), "  connect(slider.frame_a, foot.frame_a);\n");
-  auto l = LoadModel(text, {}, {}, true);
-  ASSERT_TRUE(l);
-  EXPECT_NE(Find(l->errors, "K311", "Coulomb friction proportional to the normal force"), nullptr) << Messages(l->errors);
-}
-
 }  // namespace
 }  // namespace kanesim::test
