@@ -8,7 +8,11 @@
 // kZenoHeights of the tolerance, under a gap acceleration a < 0, accumulate: their flights
 // 2 v / |a|, 2 e v / |a|, ... sum to
 //   t_inf - t = 2 v / (|a| (1 - e))       (v the rebound speed e |J u|)               (2)
-// and the side rests from the impact on, its rest logged at t_inf (a time event).
+// and the side rests from the impact on, its rest logged at t_inf (a time event). A joint
+// with exact friction resting on its stop is held by the stop's reaction lambda >= 0 and its
+// friction |tau| <= B (B = mu_s r N + C_s) together: one state, left only where
+//   lambda + B < 0                        (the pull away beyond the static friction)      (3)
+// and then it slides away (its friction sliding); a reaction near 0 is no event.
 #include "sim/end_stops.h"
 
 #include "runtime/program/program.h"  // Program::rows
@@ -42,6 +46,37 @@ EndStopEvents::EndStopEvents(const rt::Program& program, double rtol, double ato
   a_.resize(static_cast<size_t>(nu_));
   J_.resize(static_cast<size_t>(nu_));
   mu_ = !sides_.empty() && HasFrictionImpulses(program);
+  frictions_ = rt::FrictionJoints(program);
+  friction_of_.assign(stops_.size(), -1);
+  for (size_t s = 0; s < stops_.size(); ++s)
+    for (size_t f = 0; f < frictions_.size(); ++f)
+      if (frictions_[f].exact && frictions_[f].u == stops_[s].u && (frictions_[f].c_s > 0.0 || frictions_[f].mu_s > 0.0))
+        friction_of_[s] = static_cast<int>(f);
+}
+
+double EndStopEvents::StaticFriction(const rt::Workspace& ws, const Side& s) const {
+  if (s.stop < 0 || friction_of_[static_cast<size_t>(s.stop)] < 0) return 0.0;
+  const int f = friction_of_[static_cast<size_t>(s.stop)];
+  const rt::FrictionJoint& j = frictions_[static_cast<size_t>(f)];
+  return j.mu_s * j.radius * rt::FrictionNormal(ws, f) + j.c_s;
+}
+
+void EndStopEvents::Leave(rt::Workspace& ws, int i) {
+  Side& s = sides_[static_cast<size_t>(i)];
+  s.resting = false;
+  s.accumulates_at = 0.0;
+  if (s.stop < 0 || friction_of_[static_cast<size_t>(s.stop)] < 0) return;
+  // Pulled off beyond its static friction: it slides away, its sliding friction acting from
+  // now (the reactions that follow in Settle see it).
+  const int dir = s.upper ? -1 : 1;
+  rt::SetFrictionMode(ws, friction_of_[static_cast<size_t>(s.stop)], dir, 0.0);
+  released_.emplace_back(stops_[static_cast<size_t>(s.stop)].u, dir);
+}
+
+bool EndStopEvents::Released(const Side& s) const {
+  if (s.stop < 0) return false;
+  const int u = stops_[static_cast<size_t>(s.stop)].u;
+  return std::any_of(released_.begin(), released_.end(), [&](const std::pair<int, int>& r) { return r.first == u; });
 }
 
 int EndStopEvents::Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c) {
@@ -305,7 +340,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
     if (s.accumulates_at > 0.0) {
       g[i] = s.accumulates_at - t;
     } else if (s.resting) {
-      g[i] = lambda[i] + noise[i];  // leaves where the reaction pulls beyond its round-off
+      g[i] = lambda[i] + LeaveMargin(ws, s, noise[i]);  // leaves where the reaction pulls beyond it
     } else {
       double c = 0.0;
       if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
@@ -321,6 +356,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
 
 int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   if (i < 0 || i >= Count()) return 0;
+  released_.clear();  // (each call's own: StickSlipEvents::Refresh takes them)
   Side& side = sides_[static_cast<size_t>(i)];
   if (side.accumulates_at > 0.0) {  // the accumulation point of its bounces: at rest from now
     side.accumulates_at = 0.0;
@@ -329,7 +365,7 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   }
   if (side.resting) {  // the reaction would pull: the contact leaves (and others may follow)
     const std::vector<char> before = RestingSet();
-    side.resting = false;
+    Leave(ws, i);
     return Settle(ws, t, y, before);
   }
   // Closed loops, rolling contacts: the impulse keeps A u = 0, so the state is first put on
@@ -347,6 +383,7 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
 
 int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::string& clause,
                         const std::vector<int>& states, const std::function<int()>& jump) {
+  released_.clear();
   const std::vector<char> before = RestingSet();
   const bool coordinate = std::any_of(states.begin(), states.end(), [&](int k) { return k < nq_; });
   for (Side& s : sides_) {
@@ -536,21 +573,25 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
   std::vector<double> lambda, noise, a_held(static_cast<size_t>(nu_));
   for (int it = 0; it < 16 * n + 16; ++it) {  // pivots and impacts; the LCP (M positive definite) has one solution
     if (int s = Reactions(ws, t, y, &lambda, a_held.data(), &noise); s != 0) return s;
-    int leave = -1;  // the side pulled hardest beyond its round-off
-    for (int i = 0; i < n; ++i)
-      if (sides_[static_cast<size_t>(i)].resting && lambda[static_cast<size_t>(i)] + noise[static_cast<size_t>(i)] < 0.0 &&
-          (leave < 0 || lambda[static_cast<size_t>(i)] < lambda[static_cast<size_t>(leave)]))
-        leave = i;
+    int leave = -1;  // the side pulled hardest beyond its round-off, or its static friction
+    double pull_leave = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const Side& s = sides_[static_cast<size_t>(i)];
+      const double pull = lambda[static_cast<size_t>(i)] + StaticFriction(ws, s);
+      if (defer_ && s.stop >= 0 && friction_of_[static_cast<size_t>(s.stop)] >= 0) continue;
+      if (s.resting && lambda[static_cast<size_t>(i)] + LeaveMargin(ws, s, noise[static_cast<size_t>(i)]) < 0.0 &&
+          (leave < 0 || pull < pull_leave))
+        leave = i, pull_leave = pull;
+    }
     if (leave >= 0) {
-      sides_[static_cast<size_t>(leave)].resting = false;
-      sides_[static_cast<size_t>(leave)].accumulates_at = 0.0;
+      Leave(ws, leave);
       continue;
     }
     int join = -1, strike = -1;
     double a_join = 0.0, v_join = 0.0;
     for (int i = 0; i < n; ++i) {
       const Side& s = sides_[static_cast<size_t>(i)];
-      if (s.resting) continue;
+      if (s.resting || Released(s)) continue;  // (one pulled off slides away from it)
       double gap = 0.0, c = 0.0;
       if (int r = Row(ws, t, y, s, &gap, J_.data(), &c); r != 0) return r;
       double v = 0.0, a = c;
@@ -589,7 +630,8 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
   for (int i = 0; i < n; ++i) {
     const Side& s = sides_[static_cast<size_t>(i)];
     if (s.resting && !before[static_cast<size_t>(i)] && !(s.accumulates_at > 0.0)) log_.push_back({t, Element(s), "rests on " + Where(s)});
-    if (!s.resting && before[static_cast<size_t>(i)]) log_.push_back({t, Element(s), "leaves " + Where(s)});
+    if (!s.resting && before[static_cast<size_t>(i)])
+      log_.push_back({t, Element(s), "leaves " + Where(s) + (Released(s) ? ", slides (pulled beyond its static friction)" : "")});
   }
   return 0;
 }
@@ -632,7 +674,7 @@ std::string EndStopEvents::SettleAt(rt::Workspace& ws, double t, const double* y
   std::vector<double> lambda;
   if (Reactions(ws, t, y, &lambda, nullptr) != 0) return "the operating point cannot be evaluated: " + rt::ErrorMessage(ws);
   for (size_t i = 0; i < sides_.size(); ++i)
-    if (sides_[i].resting && !(lambda[i] > 0.0)) {
+    if (sides_[i].resting && !(lambda[i] + StaticFriction(ws, sides_[i]) > 0.0)) {
       char buf[300];
       std::snprintf(buf, sizeof buf,
                     "%s is on %s at rest, but the reaction that would hold it pulls (%.3g): it leaves at once, no "
@@ -658,6 +700,7 @@ std::vector<std::string> EndStopEvents::HeldNames() const {
 }
 
 int EndStopEvents::Start(rt::Workspace& ws, double t0, double* y0) {
+  released_.clear();
   for (int i = 0; i < Count(); ++i) {
     const Side& s = sides_[static_cast<size_t>(i)];
     if (s.resting) continue;  // brought to rest by an earlier side's Settle

@@ -7,6 +7,7 @@
 // their accumulation time.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <utility>
@@ -52,7 +53,10 @@ class EndStopEvents {
   // stuck): the resting set made consistent as after an event (a joint slipping into the stop
   // it sits on rests there; a resting side now pulled leaves). y jumps in place.
   // `before`: the resting set to log the changes against (RestingSet() before the change).
-  int Resettle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before) { return Settle(ws, t, y, before); }
+  int Resettle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before) {
+    released_.clear();
+    return Settle(ws, t, y, before);
+  }
   // The joint of free speed u started to slide in direction dir (+1 / -1) from rest: on the
   // stop it slides into (its gap within the tolerance) it rests at once (Resettle then).
   // (Where its static and sliding friction are equal it slips with zero acceleration, whose
@@ -143,6 +147,21 @@ class EndStopEvents {
   // the gap's free acceleration a towards the contact) is at most this many (atol + rtol
   // max(1, |limit|)): lower flights are not resolved by the root finding.
   static constexpr double kZenoHeights = 100.0;
+  // The joints a Settle took off their stops with their friction at its static bound (a
+  // pull beyond it; sim/end_stops.cpp (3)): (free speed, the direction
+  // it slides, +1 / -1). Cleared by the call; StickSlipEvents::Refresh sets them sliding.
+  std::vector<std::pair<int, int>> TakeReleased() {
+    std::vector<std::pair<int, int>> r;
+    r.swap(released_);
+    return r;
+  }
+  // While on: Settle keeps the joints held at their stops with their friction (releases none
+  // of them): after a jump, the other joints' friction laws are stale until
+  // StickSlipEvents::Refresh has set them (sim/engine_ode.h settles again then).
+  void DeferFrictionReleases(bool on) { defer_ = on; }
+  bool HoldsWithFriction() const {  // a stop whose joint has exact (static) friction
+    return std::any_of(friction_of_.begin(), friction_of_.end(), [](int f) { return f >= 0; });
+  }
   // A resting side leaves where its reaction pulls by more than this many round-offs (plus
   // rtol) of the terms it is computed from (ReactionNoise): a reaction that is zero in exact
   // arithmetic (a floating robot in free fall on its stops) has a sign set by round-off and
@@ -202,6 +221,15 @@ class EndStopEvents {
                 const std::vector<double>& targets, double* du, std::vector<double>* c);
   int HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                  const std::vector<double>& targets, double* du, std::vector<double>* F);
+  // Held at the stop (sim/end_stops.cpp (3)): the static friction mu_s r N + C_s of the
+  // side's joint with exact friction (N from ws's last evaluation), the most it adds to the
+  // stop's reaction against a pull; 0 without. A resting side's margin before it leaves: that
+  // bound and its reaction's round-off noise (a pull exactly at the bound holds).
+  double StaticFriction(const rt::Workspace& ws, const Side& s) const;
+  double LeaveMargin(const rt::Workspace& ws, const Side& s, double noise) const { return StaticFriction(ws, s) + noise; }
+  // Side i stops resting; one held with its friction slides away from it (released_).
+  void Leave(rt::Workspace& ws, int i);
+  bool Released(const Side& s) const;  // its joint in released_
   // The sides `rows` appended as FrictionJump's rows J and their own normal impulses.
   int JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows, std::vector<double>* J,
                std::vector<double>* row_normals);
@@ -216,6 +244,10 @@ class EndStopEvents {
   std::vector<double> impulse_F_;  // Impulse(Mu)'s generalized impulse on the free speeds (PullingContact)
   std::vector<EventRecord> log_;
   bool mu_ = false;  // friction joints with mu (sim/friction_impulse.h)
+  std::vector<rt::FrictionJoint> frictions_;  // the program's (rt::FrictionJoints)
+  std::vector<int> friction_of_;              // per stop: its joint's exact friction (index), or -1
+  std::vector<std::pair<int, int>> released_;  // TakeReleased
+  bool defer_ = false;                          // DeferFrictionReleases
   std::string error_;
 };
 

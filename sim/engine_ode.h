@@ -85,6 +85,16 @@ class EngineOde final : public OdeSystem {
   bool Holding() const override {
     return (stick_ && stick_->AnyStuck()) || (stops_ && stops_->AnyResting());
   }
+  void HeldEvents(std::vector<int>* events) const override {
+    events->clear();
+    if (stops_) {
+      const std::vector<char> resting = stops_->RestingSet();
+      for (size_t i = 0; i < resting.size(); ++i)
+        if (resting[i]) events->push_back(static_cast<int>(i));
+    }
+    for (int k = 0; stick_ && k < stick_->Count(); ++k)
+      if (stick_->ModeOf(k) == 0) events->push_back(FirstStick() + k);
+  }
   int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
   int EventFunctions(double t, const double* y, double* g) override {
     if (stick_)  // first: it solves the stuck joints' forces the stops' reactions read
@@ -104,14 +114,16 @@ class EngineOde final : public OdeSystem {
     const size_t first = events_.size();
     int s = 0;
     if (i < FirstStick()) {
-      const size_t logged = stops_->Log().size();
+      const size_t logged = stops_->Log().size(), logged_stick = stick_ ? stick_->Log().size() : 0;
+      stops_->DeferFrictionReleases(stick_ != nullptr);
       s = stops_->Event(ws_, t, y, i);
-      events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
-      if (stick_ && s == 0) {  // an impulse sets stuck joints moving; a rest takes its joint
-        const size_t logged_stick = stick_->Log().size();
+      stops_->DeferFrictionReleases(false);
+      if (stick_ && s == 0)  // an impulse sets stuck joints moving; a rest takes its joint
         s = stick_->Refresh(ws_, t, y, before.data(), stops_->RestSpeed());
+      if (stick_ && s == 0) s = SettleHeldAtStops(t, y);
+      events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+      if (stick_)
         events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged_stick), stick_->Log().end());
-      }
     } else if (i < NumStops()) {
       const size_t logged = stick_->Log().size(), logged_stops = stops_ ? stops_->Log().size() : 0;
       s = stick_->Event(ws_, t, y, i - FirstStick());
@@ -130,27 +142,31 @@ class EngineOde final : public OdeSystem {
         events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged_stops), stops_->Log().end());
     } else {
       const int w = i - NumStops();
+      const size_t logged = stops_ ? stops_->Log().size() : 0;
       if (!stops_) {
         s = whens_->Event(ws_, t, y, w, {});
         events_.push_back(whens_->Last());
       } else {  // the contacts it sets leave their rest, the others held (EndStopEvents::Jump, HeldJump)
-        const size_t logged = stops_->Log().size();
         auto held = [&](const std::vector<int>& rows, const std::vector<double>& targets, double* du,
                         std::vector<double>* F) {
           return stops_->HeldJump(ws_, t, y, rows, targets, du, F);
         };
+        stops_->DeferFrictionReleases(stick_ != nullptr);
         s = stops_->Jump(ws_, t, y, whens_->Name(w), whens_->States(w), [&]() {
           const int r = whens_->Event(ws_, t, y, w, held);
           events_.push_back(whens_->Last());
           return r;
         });
-        events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+        stops_->DeferFrictionReleases(false);
       }
       if (stick_ && s == 0) {  // exact friction: a joint the jump set moving slides, one it stopped decides
         const size_t logged_stick = stick_->Log().size();
         s = stick_->Refresh(ws_, t, y, before.data(), stops_ ? stops_->RestSpeed() : 0.0);
+        if (stops_ && s == 0) s = SettleHeldAtStops(t, y);
         events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged_stick), stick_->Log().end());
       }
+      if (stops_)
+        events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
     }
     if (s == 0 && i >= NumStops() && bridge_ && bridge_->monitor) rt::ForgetBranchReference(*bridge_->monitor);
     if (s == 0 && first < events_.size()) AddChanges(state_names_, before.data(), y, &events_[first], &events_.back());
@@ -236,6 +252,17 @@ class EngineOde final : public OdeSystem {
   }
 
  private:
+  // After a jump and the friction laws it set (StickSlipEvents::Refresh): the joints held at
+  // their stops with their friction (deferred in the jump's own Settle, which saw the old
+  // laws) leave where the pull passes the static friction, with the stuck forces solved anew.
+  int SettleHeldAtStops(double t, double* y) {
+    if (!stops_->HoldsWithFriction()) return 0;
+    if (int s = stick_->Resolve(ws_, t, y); s != 0) return s;
+    const std::vector<char> was = stops_->RestingSet();
+    const std::vector<double> settled(y, y + Size());
+    if (int s = stops_->Resettle(ws_, t, y, was); s != 0) return s;
+    return stick_->Refresh(ws_, t, y, settled.data(), stops_->RestSpeed());
+  }
   int FirstGuard() const { return NumStops() + (whens_ ? whens_->Count() : 0); }
   int FirstStick() const { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> Fresh() const {

@@ -133,6 +133,11 @@ class OdeSystem {
   // hold must end is not stepped over (a stuck gear's slip at 0.243 s, DOP853 steps growing
   // six-fold: tests/compiler/held_step_test.cpp).
   virtual bool Holding() const { return false; }
+  // The event functions of the held rows (a stuck joint's friction bound minus its needed
+  // force, a resting stop's or contact's reaction), ascending; empty when none is held. Every
+  // solver then bounds each step by what their values, rates and curvatures foretell
+  // (sim/release_bound.h), in a run and in the stepping API alike.
+  virtual void HeldEvents(std::vector<int>* events) const { events->clear(); }
   virtual bool HasEnergy() const { return false; }
   virtual int Energy(double /*t*/, const double* /*y*/, double* /*T*/, double* /*V*/) { return -1; }
 };

@@ -82,7 +82,7 @@ class ArkodeStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    if (rhs_.ChecksSteps()) return AdvanceChecked(tout, y);
+    if (StepsOneByOne()) return AdvanceChecked(tout, y);
     for (;;) {  // (a graze guard that found no dip: on)
       int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL);
       while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret);
@@ -130,7 +130,7 @@ class ArkodeStepper final : public SundialsStepper {
       if (watch_.drifted && !ResetProjected()) return ARK_ILL_INPUT;
       int flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
       while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, tret, ARK_ONE_STEP);
-      if (flag == ARK_ERR_FAILURE && ResetAfterErrorTest()) flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
+      if (flag == ARK_ERR_FAILURE && rhs_.ChecksSteps() && ResetAfterErrorTest()) flag = ERKStepEvolve(mem_, tout, s_.y, tret, ARK_ONE_STEP);
       if (flag >= 0 && flag != ARK_ROOT_RETURN) MeasureDrift(*tret);
       return flag;
     }, [&](int* f) { ERKStepGetRootInfo(mem_, f); });

@@ -122,7 +122,7 @@ class CvodeStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    if (!rhs_.ChecksSteps()) {
+    if (!StepsOneByOne()) {
       for (;;) {  // (a graze guard that found no dip: on)
         const int flag = CVode(mem_, tout, s_.y, &tret, CV_NORMAL);
         if (flag != CV_ROOT_RETURN) return CopyOut(flag, y);

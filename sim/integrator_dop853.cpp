@@ -59,6 +59,7 @@
 #include "sim/dop853_stiffness.h"
 #include "sim/dop853_tableau.h"
 #include "sim/illinois.h"
+#include "sim/release_bound.h"
 #include "sim/stepper.h"
 
 namespace kanesim::sim::detail {
@@ -134,6 +135,8 @@ class Dop853Stepper final : public Stepper {
       return false;
     }
     if (options_.max_step > 0.0) h_ = std::min(h_, options_.max_step);
+    release_.Init(rhs_.System());  // held rows: each step bounded by their release (sim/release_bound.h)
+    if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), 0.0);
     return true;
   }
 
@@ -176,6 +179,7 @@ class Dop853Stepper final : public Stepper {
       int flag = Step(tout);
       if (flag != kOk) return flag;
       if (!g_old_.empty() && (flag = LocateEvent()) != kOk) return flag;
+      if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), h_last_);
     }
   }
 
@@ -285,10 +289,11 @@ class Dop853Stepper final : public Stepper {
     for (;;) {
       double h = h_;
       if (options_.max_step > 0.0) h = std::min(h, options_.max_step);
+      h = std::min(h, held_bound_);
       // Never past stop_; onto it when it is within 1% of h and within max_step (up to
       // the rounding of t_ + h + h + ..., so that fixed steps that divide the span end on it).
       bool last = false;
-      const double limit = options_.max_step > 0.0 ? options_.max_step * (1.0 + kMaxStepSlack) : INFINITY;
+      const double limit = std::min(options_.max_step > 0.0 ? options_.max_step : INFINITY, held_bound_) * (1.0 + kMaxStepSlack);
       if (stop_ - t_ <= std::min(tab::kStretch * h, limit)) {
         h = stop_ - t_;
         last = true;
@@ -671,6 +676,8 @@ class Dop853Stepper final : public Stepper {
   double t_old_ = 0.0;           // start of the last accepted step
   double h_ = 0.0;               // size of the next step to try
   double h_last_ = 0.0;          // size of the last accepted step
+  ReleaseBound release_;         // held rows' release functions (none: no bound, no cost)
+  double held_bound_ = INFINITY; // ... the next step's bound from them (ReleaseBound::Next)
   std::vector<double> y_;        // state at t_  (n)
   std::vector<double> y_old_;    // state at t_old_  (n)
   std::vector<double> y_new_;    // candidate y1 of Eq. (1)  (n)

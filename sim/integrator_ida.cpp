@@ -119,7 +119,7 @@ class IdaStepper final : public SundialsStepper {
 
   int Advance(double tout, double* y) override {
     double tret = 0.0;
-    if (!rhs_.ChecksSteps()) {
+    if (!StepsOneByOne()) {
       for (;;) {  // (a graze guard that found no dip: on)
         const int flag = IDASolve(mem_, tout, &tret, s_.y, s_.yp, IDA_NORMAL);
         if (flag != IDA_ROOT_RETURN) return CopyOut(flag, y);

@@ -34,6 +34,9 @@ class GuardedRhs {
   int StepAccepted(double t, const double* y);
   // The system's energy of a state (OdeSystem::HasEnergy, Energy), for checking rows.
   int NumEvents() const { return system_.NumEvents(); }
+  // The system itself, for evaluations aside that are no solver's (ReleaseBound): their
+  // failures are not recorded.
+  OdeSystem& System() { return system_; }
   int EventFunctions(double t, const double* y, double* g) { return system_.EventFunctions(t, y, g); }
   int Paired(int i) const { return system_.Paired(i); }
   bool HasEnergy() const { return system_.HasEnergy(); }

@@ -353,6 +353,7 @@ std::vector<std::string> StickSlipEvents::StuckNames() const {
 
 int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
   const std::vector<int> resting = RestingSpeeds();
+  if (stops_) stops_->TakeReleased();  // (a joint pulled off at the start decides below)
   for (Joint& j : joints_) {
     const double u = y0[nq_ + j.f.u];
     j.mode = u > 0.0 ? 1 : u < 0.0 ? -1 : 0;
@@ -366,6 +367,12 @@ int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
 
 int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const double* y_before, double v_rest) {
   const std::vector<int> resting = RestingSpeeds();
+  // Pulled off its stop beyond the static friction (EndStopEvents::Leave): it slides away,
+  // not stuck (a decision at the bound would be round-off's).
+  if (stops_)
+    for (const auto& [u, dir] : stops_->TakeReleased())
+      for (Joint& j : joints_)
+        if (j.f.u == u && !HeldByStop(j, resting)) j.mode = dir, j.tau = 0.0;
   std::vector<Joint*> stopped;
   for (Joint& j : joints_) {
     double& u = y[nq_ + j.f.u];

@@ -24,7 +24,8 @@ class StickSlipEvents {
   // End stops in the same model (constant friction only; compiler/plane_contacts.cpp): every
   // evaluation holds their resting sides too (EndStopEvents::Hold), so the stuck joints'
   // forces and the stops' reactions are solved together; a joint resting on its stop is held
-  // by the stop alone (its friction 0, not a second row on the same speed).
+  // by the stop alone (its friction 0, not a second row on the same speed), until the pull
+  // away passes its static friction (sim/end_stops.cpp (3)): then it slides away.
   void SetStops(EndStopEvents* stops) { stops_ = stops; }
   // After an impact or a rest on a stop took y_before to y at t: a joint the impulse set moving
   // faster than v_rest slides that way (a stuck one slower stays stuck, its speed zeroed), one
@@ -32,6 +33,8 @@ class StickSlipEvents {
   // whose speed the event left alone keeps its law.
   int Refresh(rt::Workspace& ws, double t, double* y, const double* y_before, double v_rest);
   int Count() const { return static_cast<int>(joints_.size()); }
+  // The stuck joints' forces solved again at (t, y) (after a jump changed the speeds).
+  int Resolve(rt::Workspace& ws, double t, const double* y) { return Solve(ws, t, y, nullptr); }
   // The start: a joint moving slides that way; at rest it sticks or slides (the stick test).
   int Start(rt::Workspace& ws, double t0, double* y0);
   // ydot at (t, y) with every exact joint's law applied: sliding ones by their sign, stuck

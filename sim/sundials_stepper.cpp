@@ -35,6 +35,8 @@ bool SundialsStepper::SetCommonOptions(double stop, const IntegratorOptions& opt
     return Fail(error, WithDetail(module + ": setting the initial step failed", messages_.last));
   options_ = options;
   check_rows_ = options.row_energy_check && rhs_.HasEnergy();
+  stop_given_ = stop;
+  release_.Init(rhs_.System());
   return true;
 }
 

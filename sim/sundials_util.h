@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/release_bound.h"
 #include "sim/stepper.h"
 
 namespace kanesim::sim::detail {
@@ -140,6 +141,7 @@ class SundialsStepper : public Stepper {
   double CurrentTime() const override;
   void SetStopTime(double t) override {
     module_.stop_time(mem_, t);
+    stop_given_ = t;
     StopMoved(t);
   }
   double NextStep() const override {
@@ -214,6 +216,7 @@ class SundialsStepper : public Stepper {
         return flag >= 0 && check_rows_ ? CheckRow(tout, y, flag) : flag;
       }
       if (!stepped_ && check_rows_) MarkStep(CurrentTime(), N_VGetArrayPointer(s_.y));
+      if (release_.Active()) BoundHeldStep();
       const int flag = one_step(&tret);
       if (flag < 0) return flag;
       stepped_ = true;
@@ -226,13 +229,31 @@ class SundialsStepper : public Stepper {
         continue;
       }
       const double* ys = N_VGetArrayPointer(s_.y);
-      if (rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
+      if (rhs_.ChecksSteps() && rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
       if (check_rows_) MarkStep(tret, ys);
+      if (release_.Active()) {
+        double h = 0.0;
+        module_.last_step(mem_, &h);
+        held_bound_ = release_.Next(tret, ys, std::abs(h));
+      }
       StepChecked(tret, ys);
     }
   }
   // The end of an accepted step (t, y), the start of the next (RowEnergy).
   void MarkStep(double t, const double* y);
+  // Held rows (ReleaseBound): one step at a time (AdvanceCheckedSteps, also where no step is
+  // checked), each ending by the bound: the module's stop time moved to it (a maximum step
+  // set after a step would act one step late: the next step's size is chosen at the end of
+  // the last).
+  bool StepsOneByOne() const { return rhs_.ChecksSteps() || release_.Active(); }
+  void BoundHeldStep() {
+    const double t = CurrentTime();
+    if (!bound_known_) {  // the first step: from the start
+      held_bound_ = release_.Next(t, N_VGetArrayPointer(s_.y), 0.0);
+      bound_known_ = true;
+    }
+    module_.stop_time(mem_, std::min(stop_given_, t + held_bound_));
+  }
   // The output instant y(tout) from the interpolant, checked against the energies of the
   // last step's ends (RowEnergy); where off, integrated again from the step's start to tout
   // by DOP853 (no interpolation); still off: kRowEnergyFailed. Else flag.
@@ -254,6 +275,10 @@ class SundialsStepper : public Stepper {
   SundialsMessages messages_;
   void* mem_ = nullptr;  // the module's memory, freed by module_.free
   bool stepped_ = false;  // one step taken in one-step mode (checked steps): an interpolant exists
+  double stop_given_ = 0.0;        // the stop time (SetCommonOptions, SetStopTime): never past it
+  ReleaseBound release_;           // held rows' release functions (none: no bound, no cost)
+  double held_bound_ = HUGE_VAL;   // ... the next step's bound from them
+  bool bound_known_ = false;       // ... computed once from the start
   // CV_ROOT_RETURN, ARK_ROOT_RETURN, IDA_ROOT_RETURN (all 2).
   static constexpr int kRootReturn = 2;
   bool pending_event_ = false;  // a root found past tout: y there (event_time, event_index set)

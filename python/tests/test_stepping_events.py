@@ -142,3 +142,57 @@ def test_a_rolling_contact_that_would_pull_fails_the_step_where_the_run_stops():
     with pytest.raises(kanesim.SimulationError, match="normal force turns tensile") as e:
         step_to(sim, 6.0, 0.5)
     assert e.value.time == pytest.approx(G / 2, abs=1e-7) and sim.time == 4.5
+
+
+# A geared pair stuck by exact friction 0.2, its drive c t sin(31 t) passing the bound by 2 % in
+# a window of about 0.013 s near t = 1.064 (tests/compiler/held_step_test.cpp builds the same).
+PULSE = """model Pulse
+  World world(g = {0, 0, -9.81});
+  Revolute j1(axis = {0, 0, 1}, friction_torque = 0.2, friction_exact = true);
+  Rod r1(L = 1, m = 1);
+  FixedTranslation base(r = {2, 0, 0});
+  Revolute j2(axis = {0, 0, 1});
+  Rod r2(L = 0.5, m = 2);
+  JointCoupling gear(ratio = -0.5);
+equation
+  connect(world.frame_b, j1.frame_a);
+  connect(j1.frame_b, r1.frame_a);
+  connect(world.frame_b, base.frame_a);
+  connect(base.frame_b, j2.frame_a);
+  connect(j2.frame_b, r2.frame_a);
+  connect(j1.drive, gear.flange_a);
+  connect(j2.drive, gear.flange_b);
+  j1.tau = 0.191713 * time * sin(31 * time);
+end Pulse;
+"""
+
+
+def bisect(f, a, b):
+    up = f(a) < 0
+    for _ in range(200):
+        m = 0.5 * (a + b)
+        if m in (a, b):
+            break
+        if (f(m) < 0) == up:
+            a = m
+        else:
+            b = m
+    return 0.5 * (a + b)
+
+
+@pytest.mark.parametrize("integrator", ["dop853", "cvode", "cvode-bdf", "ida", "arkode"])
+def test_a_slip_window_shorter_than_the_step_is_found_inside_it(integrator):
+    # The joint slips where c t sin(31 t) = 0.2 and sticks where the drive's impulse since then
+    # equals the friction's (F(t) = 0 below): inside one step of 0.5 s. If this fails, the
+    # stepping core stepped over the window (no error estimate bounds a step while stuck).
+    c, w, peak = 0.191713, 31.0, (math.pi / 2 + 10 * math.pi) / 31.0
+    ts = bisect(lambda t: c * t * math.sin(w * t) - 0.2, peak - 0.02, peak)
+    prim = lambda s: c * (math.sin(w * s) / w ** 2 - s * math.cos(w * s) / w)
+    te = bisect(lambda t: prim(t) - prim(ts) - 0.2 * (t - ts), peak + 1e-3, peak + 0.05)
+    sim = kanesim.loads(PULSE, name="pulse.mech").simulator(rtol=1e-11, atol=1e-11, integrator=integrator)
+    for t in (0.5, 1.0, 1.15):
+        sim.advance_to(t)
+    kinds = [e["kind"].split()[0].rstrip(",") for e in sim.events]
+    assert kinds == ["sticks", "slips", "sticks"], kinds
+    assert abs(sim.events[1]["time"] - ts) < 1e-8
+    assert abs(sim.events[2]["time"] - te) < 1e-8
