@@ -318,7 +318,9 @@ std::string Instance::Evaluate() {
     return "at t = " + Number(t_) + ": " + hybrid_->FailureCause();
   if (outputs_plan_) {
     std::vector<double> y = y_;
-    hybrid_->ForOutputs(*ws_, y.data());  // the mode's friction laws, resting joints on their stops: a run's rows
+    // The resting joints on their stops, the mode's friction laws and held rows: a run's rows.
+    if (std::string why = hybrid_->ForOutputs(*ws_, t_, y.data()); !why.empty())
+      return "the outputs at t = " + Number(t_) + ": " + why;
     if (rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), out_.data()) != 0)
       return "the outputs at t = " + Number(t_) + ": " + rt::ErrorMessage(*ws_);
   }
@@ -361,6 +363,9 @@ std::string Instance::DirectionalDerivative(const unsigned* unknowns, size_t n_u
     if (!u.empty()) rt::SetInputValues(*ws_, u.data());
     hybrid_->SetInputs(u);
     if (n_ > 0 && hybrid_->Derivatives(t_, y.data(), ydot.data()) != 0) return {2, hybrid_->FailureCause()};
+    if (outputs_plan_)
+      if (std::string why = hybrid_->ForOutputs(*ws_, t_, y.data(), /*snap=*/false); !why.empty())
+        return {2, "the outputs: " + why};
     if (outputs_plan_ && rt::EvalSignals(*program_, *outputs_plan_, *ws_, t_, y.data(), o.data()) != 0)
       return {2, "the outputs: " + rt::ErrorMessage(*ws_)};
     f->resize(Eigen::Index(ydot.size() + o.size()));

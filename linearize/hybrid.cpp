@@ -43,7 +43,14 @@ Status Hybrid::Init(const rt::Program& p, const OperatingPoint& op, const std::v
 int Hybrid::Derivative(rt::Workspace& ws, double t, const double* y, double* ydot) {
   int s = stick_ ? stick_->Rhs(ws, t, y, ydot) : rt::Derivative(*p_, ws, t, y, ydot);  // stick_: stops held
   if (s == 0 && stops_ && !stick_) s = stops_->Hold(ws, t, y, ydot);
-  return s;
+  if (s != 0 || (!stops_ && !stick_)) return s;
+  // The held rows' reactions for the output signals EvalSignals reads next on ws (C and D).
+  const std::vector<int> stuck = stick_ ? stick_->StuckSpeeds() : std::vector<int>{};
+  if (stops_)
+    stops_->LoadSignals(ws, stuck);
+  else
+    rt::SetHeldLoads(*p_, ws, nullptr, {}, stuck);
+  return 0;
 }
 
 }  // namespace kanesim::lin

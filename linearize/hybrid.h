@@ -32,7 +32,8 @@ class Hybrid {
   const std::vector<HeldRow>& held() const { return held_; }
   const std::vector<std::string>& held_names() const { return names_; }
   // ydot at (t, y) with the laws decided at op (the held rows' reactions, the sliding joints'
-  // directions). 0, or rt::Derivative's codes.
+  // directions), the held rows' reactions left in ws for rt::EvalSignals (the outputs of the
+  // held motion: rt::SetHeldLoads). 0, or rt::Derivative's codes.
   int Derivative(rt::Workspace& ws, double t, const double* y, double* ydot);
 
  private:

@@ -289,6 +289,15 @@ std::shared_ptr<const SignalPlan> PlanSignals(const Program& program, const std:
                                               std::string* error);
 int EvalSignals(const Program& program, const SignalPlan& plan, Workspace& ws, double t, const double* y,
                 double* out);
+// The held contacts of a hybrid run (sim/end_stops.h, sim/stick_slip.h) in what EvalSignals
+// computes on ws from now on: F (nu entries, null: none) generalized forces on the free speeds
+// (a resting stop's reaction), `planes` (plane contact i, its normal force on its frame's
+// origin), and the free `speeds` held at zero acceleration exactly. The accelerations, body
+// accelerations, joint reactions and contact forces are then the held motion's, not the free
+// one's (docs/events.md "Outputs"). Derivative never reads them. runtime/engine/end_stops.cpp
+void SetHeldLoads(const Program& program, Workspace& ws, const double* F,
+                  const std::vector<std::pair<int, double>>& planes, const std::vector<int>& speeds);
+void ClearHeldLoads(Workspace& ws);
 
 // Output rows near a change point (runtime/engine/output_rows.cpp; docs/constraints.md
 // "Rows near a change point"). Whether the state y at time t is near one (some loop's

@@ -260,9 +260,9 @@ int EndStopEvents::HoldWith(rt::Workspace& ws, double t, const double* y, double
                             std::vector<double>* forces) {
   bool any = !speeds.empty();
   for (const Side& s : sides_) any = any || s.resting;
+  held_lambda_.clear();
   if (!any) return 0;
-  std::vector<double> lambda;
-  if (int s = Held(ws, t, y, ydot + nq_, speeds, &lambda, ydot + nq_, nullptr, forces); s != 0) return s;
+  if (int s = Held(ws, t, y, ydot + nq_, speeds, &held_lambda_, ydot + nq_, nullptr, forces); s != 0) return s;
   for (const Side& s : sides_) {
     if (!s.resting || s.stop < 0) continue;
     const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];  // held exactly
@@ -300,6 +300,23 @@ int EndStopEvents::ReactionNoise(rt::Workspace& ws, double t, const double* y, c
 
 int EndStopEvents::Hold(rt::Workspace& ws, double t, const double* y, double* ydot) {
   return HoldWith(ws, t, y, ydot, {}, nullptr);
+}
+
+void EndStopEvents::LoadSignals(rt::Workspace& ws, std::vector<int> speeds) const {
+  std::vector<double> F(static_cast<size_t>(nu_), 0.0);
+  std::vector<std::pair<int, double>> planes;
+  for (size_t i = 0; i < sides_.size() && i < held_lambda_.size(); ++i) {
+    const Side& s = sides_[i];
+    if (!s.resting) continue;
+    if (s.plane >= 0) {
+      planes.emplace_back(s.plane, held_lambda_[i]);
+      continue;
+    }
+    const int u = stops_[static_cast<size_t>(s.stop)].u;  // J = +-e_u: the reaction J^T lambda
+    F[static_cast<size_t>(u)] += s.upper ? -held_lambda_[i] : held_lambda_[i];
+    speeds.push_back(u);
+  }
+  rt::SetHeldLoads(program_, ws, F.data(), planes, speeds);
 }
 
 std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y) {

@@ -91,6 +91,15 @@ class EndStopEvents {
       if (s.resting && s.stop >= 0) return true;
     return false;
   }
+  // A stop or a plane contact at rest.
+  bool AnyHeld() const {
+    for (const Side& s : sides_)
+      if (s.resting) return true;
+    return false;
+  }
+  // The resting sides' reactions of the last Hold / HoldWith into ws for its output signals
+  // (rt::SetHeldLoads), with the free `speeds` (stuck joints') held too.
+  void LoadSignals(rt::Workspace& ws, std::vector<int> speeds) const;
   // An output row's state: the joints resting on their stops exactly there, at speed 0 (the
   // integrator holds them so; its interpolant between steps may miss by an ulp).
   void SnapResting(double* y) const {
@@ -243,6 +252,7 @@ class EndStopEvents {
   std::vector<double> ydot_, x_, a_, J_, Jrows_, M_, cols_;  // scratch
   std::vector<double> impulse_F_;  // Impulse(Mu)'s generalized impulse on the free speeds (PullingContact)
   std::vector<EventRecord> log_;
+  std::vector<double> held_lambda_;  // the last HoldWith's reactions per side (empty: none resting)
   bool mu_ = false;  // friction joints with mu (sim/friction_impulse.h)
   std::vector<rt::FrictionJoint> frictions_;  // the program's (rt::FrictionJoints)
   std::vector<int> friction_of_;              // per stop: its joint's exact friction (index), or -1

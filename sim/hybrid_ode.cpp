@@ -6,6 +6,7 @@
 
 #include "runtime/program/program.h"  // Program::whens
 #include "sim/engine_ode.h"
+#include "sim/held_outputs.h"
 #include "sim/input_table.h"
 
 namespace kanesim::sim {
@@ -22,7 +23,8 @@ struct HybridOde::Impl {
         stick(*program),
         whens(std::make_unique<WhenEvents>(*program)),
         ode(*program, *ws, /*row_energy=*/false),
-        run_rtol(rtol) {
+        run_rtol(rtol),
+        run_atol(atol) {
     whens->SetTolerance(rtol);
     rt::SetInputSource(*ws, &inputs);
     ode.SetInputs(&inputs);
@@ -43,6 +45,8 @@ struct HybridOde::Impl {
   std::vector<double> g;  // every event function, the graze guards too (scratch)
   std::vector<EventRecord> start_events;  // Start's, with their jumps
   double run_rtol;                        // the when clauses' accumulation test
+  double run_atol;                        // the stops' (HeldOutputs, with run_rtol)
+  std::unique_ptr<HeldOutputs> held;      // ForOutputs' held rows (made at its first call)
 };
 
 HybridOde::HybridOde(std::shared_ptr<const rt::Program> program, double rtol, double atol)
@@ -164,9 +168,14 @@ std::vector<EventRecord> HybridOde::StartEvents() const { return impl_->start_ev
 
 const std::vector<EventRecord>& HybridOde::Events() const { return impl_->ode.Events(); }
 
-void HybridOde::ForOutputs(rt::Workspace& ws, double* y) const {
-  if (impl_->stick.Active()) impl_->stick.Sync(ws);
-  if (impl_->stops.AnyResting()) impl_->stops.SnapResting(y);
+std::string HybridOde::ForOutputs(rt::Workspace& ws, double t, double* y, bool snap) {
+  Impl& m = *impl_;
+  if (snap && m.stops.AnyResting()) m.stops.SnapResting(y);
+  if (!m.stops.Active() && !m.stick.Active()) return "";
+  if (!m.held) m.held = std::make_unique<HeldOutputs>(*m.program, m.run_rtol, m.run_atol);
+  if (m.held->Prepare(&m.stops, &m.stick, ws, t, y) == 0) return "";
+  const std::string why = m.held->Error().empty() ? rt::ErrorMessage(ws) : m.held->Error();
+  return why.empty() ? "the held contacts' reactions could not be evaluated" : why;
 }
 
 }  // namespace kanesim::sim

@@ -63,9 +63,11 @@ class HybridOde {
   // The events handled: the start's, then every Event's, in time order, with their jumps.
   std::vector<EventRecord> StartEvents() const;
   const std::vector<EventRecord>& Events() const;
-  // What an output row sees at (t, y), as the run's rows: the mode's friction laws in ws, the
-  // joints resting on their stops exactly there (y may move by the interpolant's round-off).
-  void ForOutputs(rt::Workspace& ws, double* y) const;
+  // What an output row sees at (t, y), as the run's rows: the joints resting on their stops
+  // exactly there (with `snap`; y may move by the interpolant's round-off), the mode's friction
+  // laws and the held rows' motion in ws (sim/held_outputs.h). "", or why the held rows have
+  // no solution.
+  std::string ForOutputs(rt::Workspace& ws, double t, double* y, bool snap = true);
 
  private:
   std::string StartModes(double t0, double* y0);  // Start without its log

@@ -10,6 +10,7 @@
 
 #include "sim/change_point_bridge.h"
 #include "sim/end_stops.h"
+#include "sim/held_outputs.h"
 #include "sim/when_events.h"
 #include "sim/engine_ode.h"
 #include "sim/lift_off.h"
@@ -188,6 +189,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   if (stick.Active() && y_given.empty()) y_given = y0;
   if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
     return UsageResult("friction at the start: " + (stick.Error().empty() ? rt::ErrorMessage(*ws_rhs) : stick.Error()));
+  // The output rows' view of the held rows (resting contacts, stuck joints), on copies of their events.
+  std::unique_ptr<HeldOutputs> held;
+  if (stops.Active() || stick.Active()) held = std::make_unique<HeldOutputs>(program, options.rtol, options.atol);
   std::vector<double> values(n_written + (energy.Active() ? EnergyGuard::Signals().size() : 0)), zone_values(values.size());
   const bool multiplier_form = rt::Summarize(program).solver == rt::SolverPath::Sparse;
 
@@ -204,7 +208,6 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   std::vector<double> y_row(y0.size()), row_values(n_written + n_diag);
   RowCallback row = [&](double t, const double* y_in, std::string* cause) -> int {
     Clock::time_point t0 = Clock::now();
-    if (stick.Active()) stick.Sync(*ws_out);  // the outputs see the friction laws of the run
     const double* y = y_in;
     int status = 0;
     bool converted = true;  // z = [q; w] -> y = [q; u] (diagonal speeds)
@@ -218,6 +221,8 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       stops.SnapResting(y_row.data());
       y = y_row.data();
     }
+    // The friction laws of the run, and the held rows' motion at this row (sim/held_outputs.h).
+    if (status == 0 && held) status = held->Prepare(&stops, &stick, *ws_out, t, y);
     if (status == 0) status = rt::EvalSignals(program, *plan, *ws_out, t, y, values.data());
     // A row near a change point whose projection moved the speeds too far: projected in the
     // kinetic metric instead, in a workspace of its own (docs/constraints.md "Rows near a
@@ -235,7 +240,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       // tolerances), the partition's projection, which keeps the independent speeds the
       // integrator integrates, stays. The multiplier form's projection is already the
       // kinetic metric's, without the truncation.
-      if (rt::RowNearChangePoint(program, *ws_zone, t, y) &&
+      if (rt::RowNearChangePoint(program, *ws_zone, t, y) && (!held || held->Prepare(&stops, &stick, *ws_zone, t, y) == 0) &&
           rt::EvalSignalsNearChangePoint(program, *plan, *ws_zone, t, y, zone_values.data()) == 0 &&
           (multiplier_form || rt::SpeedMove(program, *ws_zone, y, options.rtol, options.atol) * kRowGain < move)) {
         values.swap(zone_values);
@@ -245,7 +250,7 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
     if (!converted) {
       *cause = diagonal->FailureCause();
     } else if (status != 0) {
-      const std::string& m = rt::ErrorMessage(*ws_out);
+      const std::string& m = held && !held->Error().empty() ? held->Error() : rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
     } else if (stops.Active() && !(past_stop = stops.CheckRow(*ws_out, t, y)).empty()) {
       *cause = past_stop;

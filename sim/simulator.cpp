@@ -251,7 +251,10 @@ StepResult Simulator::AdvanceTo(double t) {
 bool Simulator::Outputs(double* values, std::string* error) {
   Impl& m = *impl_;
   m.y_out = y_;
-  m.hybrid->ForOutputs(*m.ws_out, m.y_out.data());  // as the run's rows see the modes
+  if (std::string why = m.hybrid->ForOutputs(*m.ws_out, t_, m.y_out.data()); !why.empty()) {  // as the run's rows
+    *error = why;
+    return false;
+  }
   if (rt::EvalSignals(*m.program, *m.plan, *m.ws_out, t_, m.y_out.data(), values) != 0) {
     *error = rt::ErrorMessage(*m.ws_out);
     if (error->empty()) *error = "an output signal could not be evaluated";

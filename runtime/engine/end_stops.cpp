@@ -143,4 +143,18 @@ int DerivativeWithForces(const Program& p, Workspace& ws, double t, const double
   return 0;
 }
 
+void SetHeldLoads(const Program& p, Workspace& ws, const double* F, const std::vector<std::pair<int, double>>& planes,
+                  const std::vector<int>& speeds) {
+  ws.held_F.clear();
+  if (F) ws.held_F.assign(F, F + p.nu);
+  ws.held_planes = planes;
+  ws.held_speeds = speeds;
+}
+
+void ClearHeldLoads(Workspace& ws) {
+  ws.held_F.clear();
+  ws.held_planes.clear();
+  ws.held_speeds.clear();
+}
+
 }  // namespace kanesim::rt

@@ -368,6 +368,22 @@ std::vector<std::string> IndeterminateSignals(const Program& p, const std::vecto
 }
 
 namespace {
+// SetHeldLoads' reactions among the applied forces (after AppliedForces): a stop's on its
+// speed, a plane's at its contact point (a force on the body, so that the joint reactions
+// above it carry it as the plane's, not as a joint's own force).
+void AddHeldLoads(const Program& p, Workspace& ws) {
+  for (size_t i = 0; i < ws.held_F.size(); ++i) ws.Q[p.u_free[i]] += ws.held_F[i];
+  for (const auto& [i, lambda] : ws.held_planes) {
+    const PlaneContactModel& c = p.plane_contacts[static_cast<size_t>(i)];
+    Vec3 x;
+    Mat3 R;
+    FramePose(p, ws, c.frame, &x, &R);
+    const auto B = static_cast<size_t>(c.body);
+    ws.F_W[B] += lambda * c.n_W;
+    ws.T_W[B] += (x - ws.p_WBcm[B]).cross(lambda * c.n_W);
+  }
+}
+
 int EvalSignalsBy(const Program& p, const SignalPlan& plan, Workspace& ws, double t, const double* y, double* out,
                   bool near_change_point) {
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
@@ -389,7 +405,9 @@ int EvalSignalsBy(const Program& p, const SignalPlan& plan, Workspace& ws, doubl
     // The accelerations: the right-hand side's stages, then the body accelerations.
     BiasAccelerations(p, ws);
     if (int s = AppliedForces(p, ws); s != 0) return s;
+    AddHeldLoads(p, ws);
     if (int s = SolveAccelerations(p, ws); s != 0) return s;
+    for (int k : ws.held_speeds) ws.udot[p.u_free[static_cast<size_t>(k)]] = 0.0;  // held exactly
     BiasAccelerations(p, ws, /*include_free=*/true);
     if (plan.reactions) {
       LoopMultipliers(p, ws);

@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/program/compile_options.h"
@@ -453,6 +454,11 @@ struct Workspace {
   std::vector<int> friction_mode;
   std::vector<double> friction_fixed;  // mode 2's force  (nfric)
   std::vector<double> friction_N;      // normal force N of the last solve  (nfric)  filled by SolveWithFriction
+  // Held contacts' reactions, read by EvalSignals only (runtime/runtime.h SetHeldLoads): generalized
+  // forces on the free speeds (nu; empty: none), plane contacts' normal forces, held speeds' indices.
+  std::vector<double> held_F;
+  std::vector<std::pair<int, double>> held_planes;
+  std::vector<int> held_speeds;
 
   std::string error;                // why the last call failed  filled by Derivative/EvalSignals
   std::vector<double> inputs;       // the model's inputs at t  (mech.inputs)  filled by UnpackState (input_source) or SetInputValues

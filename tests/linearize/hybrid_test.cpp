@@ -58,6 +58,28 @@ TEST(LinearizeHybrid, StuckCoulombJointRemovesItsDegreeOfFreedom) {
   ExpectSecondRodAlone(*l->prog, "j1 stuck");
 }
 
+// The outputs of the held motion (sim::HeldOutputs in linearize/hybrid.cpp): j1's
+// acceleration is 0 whatever j2 does (C's row 0), and j2's is A's speed row (the held motion's
+// acceleration; with the stop's reaction left out it was 5.5 q2 against A's -18.4 q2).
+// If this fails, linearize's output matrices read the free motion at a held point.
+TEST(LinearizeHybrid, OutputsOfAHeldJointAreTheHeldMotions) {
+  for (const std::string& law : {std::string(", q_min = -0.3"), std::string(", mu = 0.5, friction_radius = 2, friction_exact = true")}) {
+    auto l = LoadModel(Rods(law, -0.3), {}, {}, true);
+    ASSERT_TRUE(l && l->prog);
+    lin::LinearizeOptions o;
+    o.outputs = {"j1.a", "j2.a"};
+    lin::LinearModel m;
+    const lin::Status s = lin::Linearize(*l->prog, lin::StartPoint(*l->prog), o, &m);
+    ASSERT_TRUE(s.ok()) << s.message;
+    ASSERT_EQ(m.C.rows(), 2) << law;
+    ASSERT_EQ(m.C.cols(), 2) << law;
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_EQ(m.C(0, k), 0.0) << law;
+      EXPECT_NEAR(m.C(1, k), m.A(1, k), 1e-7 * (1 + std::abs(m.A(1, k)))) << law;
+    }
+  }
+}
+
 // If this fails, a point that slips at once (the needed friction above mu_s r N) is
 // linearized with some law instead of refused.
 TEST(LinearizeHybrid, JointAboutToSlipIsRefused) {

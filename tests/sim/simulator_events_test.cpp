@@ -11,6 +11,7 @@
 
 #include "sim/simulator.h"
 #include "tests/support/load_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::sim {
 namespace {
@@ -135,6 +136,41 @@ TEST(SimulatorEvents, ExactFrictionSticksAtPiOverOmega) {
     EXPECT_NEAR(s->Events().back().time, M_PI / w, 1e-8) << MethodName(m);
     EXPECT_NEAR(s->State()[0], 2 * c - 1, 1e-8) << MethodName(m);
     EXPECT_EQ(s->State()[1], 0.0) << MethodName(m);
+  }
+}
+
+// A rod (L = 1, m = 1) resting on its stop q_min = 0.2 under gravity, driven by tau = 10 t:
+// the outputs read the held motion (a = 0, the hinge's axial reaction the static torque
+// m g (L/2) cos 0.2), then after the leave at t* = m g (L/2) cos 0.2 / 10 the free one,
+// a = (10 t - m g (L/2) cos q) / (m L^2 / 3). If this fails, stepping's outputs (Python's
+// simulator(), an FMU's) read the free motion on the stop.
+TEST(SimulatorEvents, OutputsOnAStopAreTheHeldMotions) {
+  const std::string text = test::PendulumText{.mods = ", q(start = 0.2), q_min = 0.2, tau = 10 * time"}.Text();
+  const double statics = 9.81 * 0.5 * std::cos(0.2), t_leave = statics / 10;
+  for (rt::Integrator m : kAll) {
+    auto l = test::LoadModel(text, {}, {}, /*is_text=*/true);
+    ASSERT_TRUE(l && l->prog);
+    SimulatorOptions o;
+    o.integrator = m;
+    o.rtol = o.atol = 1e-10;
+    o.signals = {"j1.q", "j1.a", "j1.reaction_torque[3]"};
+    std::string error;
+    auto s = Simulator::Make(l->prog, o, &error);
+    ASSERT_TRUE(s) << error;
+    for (int k = 1; k <= 7; ++k) {
+      const double t = 0.1 * k;
+      ASSERT_TRUE(s->AdvanceTo(t).ok) << MethodName(m);
+      double v[3];
+      ASSERT_TRUE(s->Outputs(v, &error)) << error;
+      if (t < t_leave) {
+        EXPECT_EQ(v[1], 0.0) << MethodName(m) << " t = " << t;
+        EXPECT_NEAR(v[2], statics, 1e-12) << MethodName(m) << " t = " << t;
+      } else {
+        const double a = (10 * t - statics / std::cos(0.2) * std::cos(v[0])) * 3;
+        EXPECT_NEAR(v[1], a, 1e-8 * (1 + std::abs(a))) << MethodName(m) << " t = " << t;
+        EXPECT_NEAR(v[2], 10 * t, 1e-9) << MethodName(m) << " t = " << t;
+      }
+    }
   }
 }
 
