@@ -246,6 +246,12 @@ double FrictionSpeed(const Program& program, const Workspace& ws, int i);
 // codes, or -1 (ErrorMessage says why: a singular mass, --solver sparse with rows, no motion
 // left). runtime/engine/friction_impulse.cpp
 int ImpulseResponse(const Program& program, Workspace& ws, double t, const double* y, double* W, double* N);
+// Per rolling contact (Program::contacts order), the normal impulse P[i] (the plane pushing:
+// > 0) of the jump du (nu) at (t, y) by the generalized impulse F (nu) on the free speeds:
+// the rows' impulses mu of M du = F + A^T mu along the contact's normal. 0 or Derivative's
+// codes. runtime/engine/friction_impulse.cpp
+int ContactNormalImpulses(const Program& program, Workspace& ws, double t, const double* y, const double* du,
+                          const double* F, double* P);
 
 // Plane contacts (stdlib PlaneContact; docs/stdlib.md): one entry each, in source order; empty
 // when the program has none. runtime/engine/plane_contacts.cpp

@@ -177,9 +177,10 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
     return -1;
   }
   error_.clear();
+  impulse_F_.assign(nu, 0.0);
   for (size_t i = 0; i < nu; ++i) {
     double d = 0.0;
-    for (size_t j = 0; j < m; ++j) d += x_[j * nu + i] * (*c)[j];
+    for (size_t j = 0; j < m; ++j) d += x_[j * nu + i] * (*c)[j], impulse_F_[i] += J[j * nu + i] * (*c)[j];
     du[i] = d;
   }
   return 0;
@@ -439,8 +440,8 @@ int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::strin
 }
 
 int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
-                            const std::vector<double>& targets, double* du) {
-  if (mu_) return HeldJumpMu(ws, t, y, speeds, targets, du);
+                            const std::vector<double>& targets, double* du, std::vector<double>* F) {
+  if (mu_) return HeldJumpMu(ws, t, y, speeds, targets, du, F);
   const size_t n = speeds.size(), nu = static_cast<size_t>(nu_);
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
@@ -491,6 +492,11 @@ int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const 
       for (size_t j = 0; j < m; ++j) d += X[j * nu + i] * c[j];
       du[i] = d;
     }
+    if (F) {
+      F->assign(nu, 0.0);
+      for (size_t j = 0; j < m; ++j)
+        for (size_t i = 0; i < nu; ++i) (*F)[i] += J[j * nu + i] * c[j];
+    }
     return 0;
   }
 }
@@ -531,6 +537,14 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
   std::vector<double> du(static_cast<size_t>(nu_)), c;
   if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
+  // A rolling contact whose impulse would pull: the run stops at the impact.
+  if (impulse_F_.size() == du.size()) {
+    int status = 0;
+    if (std::string pull = PullingContact(program_, ws, t, y, du, impulse_F_, &status); !pull.empty()) {
+      error_ = "impact at " + Where(side) + ": " + pull;
+      return status != 0 ? status : -1;
+    }
+  }
   for (int k = 0; k < nu_; ++k) u[k] += du[static_cast<size_t>(k)];
   if (st) u[st->u] = rest ? 0.0 : -e * before;  // exactly Newton's law (du's round-off aside)
   for (const Side& s : sides_)

@@ -82,8 +82,9 @@ class EndStopEvents {
   // resting contacts' gap rates held at zero by impulses that push; one whose impulse would
   // pull leaves its rest (the Settle after the jump logs it). 0, Derivative's codes, or -1
   // (Error(): the rows are dependent).
+  // F (non-null): the jump's generalized impulse on the free speeds (PullingContact's input).
   int HeldJump(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
-               const std::vector<double>& targets, double* du);
+               const std::vector<double>& targets, double* du, std::vector<double>* F = nullptr);
   const std::vector<EventRecord>& Log() const { return log_; }
   // Why the last impulse or reaction had no solution ("" after one that had).
   const std::string& Error() const { return error_; }
@@ -230,7 +231,7 @@ class EndStopEvents {
   int ImpulseMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
                 const std::vector<double>& targets, double* du, std::vector<double>* c);
   int HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
-                 const std::vector<double>& targets, double* du);
+                 const std::vector<double>& targets, double* du, std::vector<double>* F);
   // Held at the stop (sim/end_stops.cpp (3)): the static friction mu_s r N + C_s of the
   // side's joint with exact friction (N from ws's last evaluation), the most it adds to the
   // stop's reaction against a pull; 0 without. A resting side's margin before it leaves: that
@@ -251,6 +252,7 @@ class EndStopEvents {
   int nq_ = 0, nu_ = 0;
   double rtol_ = 0.0, atol_ = 0.0;
   std::vector<double> ydot_, x_, a_, J_, Jrows_, M_, cols_;  // scratch
+  std::vector<double> impulse_F_;  // Impulse(Mu)'s generalized impulse on the free speeds (PullingContact)
   std::vector<EventRecord> log_;
   std::vector<double> held_lambda_;  // the last HoldWith's reactions per side (empty: none resting)
   bool mu_ = false;  // friction joints with mu (sim/friction_impulse.h)

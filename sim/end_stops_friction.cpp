@@ -140,6 +140,7 @@ int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const
     return s;
   }
   std::copy(jump.du.begin(), jump.du.end(), du);
+  impulse_F_ = jump.generalized;
   *c = jump.impulse;  // (a side's row pushes with c > 0)
   error_.clear();
   return 0;
@@ -148,7 +149,7 @@ int EndStopEvents::ImpulseMu(rt::Workspace& ws, double t, const double* y, const
 // HeldJump's jump with the friction impulses: the resting sides are rows (target 0) beside the
 // set speeds; one whose impulse would pull leaves (the most pulling first).
 int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
-                              const std::vector<double>& targets, double* du) {
+                              const std::vector<double>& targets, double* du, std::vector<double>* F) {
   const size_t n = speeds.size(), nu = static_cast<size_t>(nu_), nf = 3 * rt::FrictionJoints(program_).size();
   std::vector<int> held;
   for (size_t i = 0; i < sides_.size(); ++i)
@@ -173,6 +174,7 @@ int EndStopEvents::HeldJumpMu(rt::Workspace& ws, double t, const double* y, cons
       if (c[h] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == held.size() || c[h] < c[pull]))
         pull = h;
     if (pull == held.size()) {
+      if (F) *F = jump.generalized;
       error_.clear();
       return 0;
     }

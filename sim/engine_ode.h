@@ -147,8 +147,9 @@ class EngineOde final : public OdeSystem {
         s = whens_->Event(ws_, t, y, w, {});
         events_.push_back(whens_->Last());
       } else {  // the contacts it sets leave their rest, the others held (EndStopEvents::Jump, HeldJump)
-        auto held = [&](const std::vector<int>& rows, const std::vector<double>& targets, double* du) {
-          return stops_->HeldJump(ws_, t, y, rows, targets, du);
+        auto held = [&](const std::vector<int>& rows, const std::vector<double>& targets, double* du,
+                        std::vector<double>* F) {
+          return stops_->HeldJump(ws_, t, y, rows, targets, du, F);
         };
         stops_->DeferFrictionReleases(stick_ != nullptr);
         s = stops_->Jump(ws_, t, y, whens_->Name(w), whens_->States(w), [&]() {

@@ -240,6 +240,9 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
         holds = mode[slide[l]] * (u0[act[slide[l]].u] + base.du[act[slide[l]].u]) >= -1e-12 * u_scale;
       if (!holds) continue;
       out->du.assign(base.du.data(), base.du.data() + nu);
+      Eigen::VectorXd Fg = JR.transpose() * base.c;
+      for (size_t l = 0; l < slide.size(); ++l) Fg[act[slide[l]].u] += p[l];
+      out->generalized.assign(Fg.data(), Fg.data() + nu);
       out->impulse.assign(base.c.data(), base.c.data() + m);
       out->stuck.clear();
       out->friction.assign(joints.size(), 0.0);
@@ -260,7 +263,7 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
 
 int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
                       const std::vector<int>& rows, const std::vector<double>& targets, double* du,
-                      std::vector<int>* stuck, std::string* why) {
+                      std::vector<int>* stuck, std::string* why, std::vector<double>* F) {
   const auto nu = static_cast<size_t>(rt::NumU(program));
   std::vector<double> J(rows.size() * nu, 0.0);
   for (size_t r = 0; r < rows.size(); ++r) J[r * nu + static_cast<size_t>(rows[r])] = 1.0;
@@ -269,6 +272,7 @@ int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, c
   if (int s = FrictionJump(program, ws, t, y, J, targets, &res, why); s != 0) return s;
   std::copy(res.du.begin(), res.du.end(), du);
   *stuck = res.stuck;
+  if (F) *F = res.generalized;
   return 0;
 }
 

@@ -26,6 +26,7 @@ struct FrictionJumpResult {
   std::vector<double> impulse;  // per row of J: its impulse c (the rows' generalized impulse J^T c)
   std::vector<int> stuck;       // the free speeds of the friction joints that stick (u+ = 0)
   std::vector<double> friction, normal;  // per friction joint (rt::FrictionJoints order): P_f, |P_N|
+  std::vector<double> generalized;       // nu: the joints' generalized impulse J^T c + sum P_f e_i
 };
 
 // The jump at (t, y) whose rows J (m x nu, row-major, on the free speeds) change by
@@ -46,6 +47,6 @@ int FrictionJump(const rt::Program& program, rt::Workspace& ws, double t, const 
 // FrictionJump for rows e_k, k in `rows` (free-speed indices): du (nu entries) and *stuck.
 int FrictionSpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
                       const std::vector<int>& rows, const std::vector<double>& targets, double* du,
-                      std::vector<int>* stuck, std::string* why);
+                      std::vector<int>* stuck, std::string* why, std::vector<double>* F = nullptr);
 
 }  // namespace kanesim::sim

@@ -1,9 +1,18 @@
 #include "sim/impulse.h"
 
+#include "runtime/program/program.h"  // Program::contacts
+
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 namespace kanesim::sim {
+
+namespace {
+// A contact's normal impulse below -kPullTolerance times the jump's largest impulse pulls.
+constexpr double kPullTolerance = 1e-9;
+}  // namespace
 
 bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double>* c) {
   const size_t m = b.size();
@@ -30,7 +39,7 @@ bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double
 }
 
 int SpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-              const std::vector<double>& targets, double* du) {
+              const std::vector<double>& targets, double* du, std::vector<double>* F) {
   const size_t m = rows.size(), nu = static_cast<size_t>(rt::NumU(program));
   for (size_t i = 0; i < nu; ++i) du[i] = 0.0;
   if (m == 0) return 0;
@@ -42,7 +51,40 @@ int SpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const dou
   if (!SolveSmall(A, targets, &c)) return -1;
   for (size_t i = 0; i < nu; ++i)
     for (size_t j = 0; j < m; ++j) du[i] += X[j * nu + i] * c[j];
+  if (F) {
+    F->assign(nu, 0.0);
+    for (size_t j = 0; j < m; ++j) (*F)[static_cast<size_t>(rows[j])] += c[j];
+  }
   return 0;
+}
+
+std::string PullingContact(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
+                           const std::vector<double>& du, const std::vector<double>& F, int* status) {
+  *status = 0;
+  const size_t nc = program.contacts.size();
+  if (nc == 0) return "";
+  std::vector<double> P(nc);
+  if ((*status = rt::ContactNormalImpulses(program, ws, t, y, du.data(), F.data(), P.data())) != 0)
+    return rt::ErrorMessage(ws);
+  // Round-off: the impulses' scale (the contacts' and the joints' own) times a few ulps of
+  // the least-squares solve.
+  double scale = 0.0;
+  for (double v : P) scale = std::max(scale, std::abs(v));
+  for (double v : F) scale = std::max(scale, std::abs(v));
+  for (size_t i = 0; i < nc; ++i) {
+    // A normal impulse the equations do not determine (a row redundant with a joint) says
+    // nothing about pulling, as LiftOffGuard leaves its force unguarded.
+    if (!program.contact_indeterminate.empty() && (program.contact_indeterminate[i] & 1u) != 0) continue;
+    if (P[i] >= -kPullTolerance * scale) continue;
+    char buf[400];
+    std::snprintf(buf, sizeof buf,
+                  "contact '%s': its normal impulse in the speed jump is tensile (%.6g N s: the plane would have to "
+                  "pull the body onto it); a rolling contact cannot lift off (docs/events.md \"Rolling contacts in a "
+                  "jump\")",
+                  program.contacts[i].name.c_str(), P[i]);
+    return buf;
+  }
+  return "";
 }
 
 }  // namespace kanesim::sim

@@ -3,6 +3,7 @@
 // changes to given targets, every other speed following (docs/events.md).
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "runtime/runtime.h"
@@ -17,7 +18,16 @@ namespace kanesim::sim {
 // pivoting. False when A is singular.
 bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double>* c);
 
+// F (non-null): the jump's generalized impulse on the free speeds (nu entries), sum c_j e_rows_j.
 int SpeedJump(const rt::Program& program, rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
-              const std::vector<double>& targets, double* du);
+              const std::vector<double>& targets, double* du, std::vector<double>* F = nullptr);
+
+// A jump du by the generalized impulse F (nu entries each) at (t, y) whose rolling contact
+// (RollingDisk, RollingSphere, KnifeEdge) takes a tensile normal impulse beyond round-off:
+// the plane would pull the body onto it, as the continuous case's LiftOffGuard stops for.
+// "" when none does (or the program has no contacts); else the cause naming the contact.
+// *status: 0, or Derivative's codes (then the cause is ErrorMessage's).
+std::string PullingContact(const rt::Program& program, rt::Workspace& ws, double t, const double* y,
+                           const std::vector<double>& du, const std::vector<double>& F, int* status);
 
 }  // namespace kanesim::sim

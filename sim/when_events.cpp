@@ -143,9 +143,10 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
     const std::string said = rt::ErrorMessage(ws);  // a new message: a column's reason (a dead point)
     std::vector<int> stuck;  // joints whose friction impulse stops them (sim/friction_impulse.h)
     std::string why;
-    const int s = solve       ? solve(rows, targets, du.data())
-                  : friction_ ? FrictionSpeedJump(program_, ws, t, y, rows, targets, du.data(), &stuck, &why)
-                              : SpeedJump(program_, ws, t, y, rows, targets, du.data());
+    std::vector<double> F;  // the jump's generalized impulse: the contacts' normal impulses follow
+    const int s = solve       ? solve(rows, targets, du.data(), &F)
+                  : friction_ ? FrictionSpeedJump(program_, ws, t, y, rows, targets, du.data(), &stuck, &why, &F)
+                              : SpeedJump(program_, ws, t, y, rows, targets, du.data(), &F);
     if (s != 0 && !why.empty()) {
       error_ = w.name + ": " + why;
       return s;
@@ -155,6 +156,14 @@ int WhenEvents::Event(rt::Workspace& ws, double t, double* y, int i, const JumpS
         error_ = rt::ErrorMessage(ws) != said && !rt::ErrorMessage(ws).empty() ? w.name + ": " + rt::ErrorMessage(ws)
                                                                                : SingularJump(w.name);
       return s;
+    }
+    // A rolling contact whose impulse would pull: the run stops at the event (the rows before kept).
+    if (F.size() == du.size()) {
+      int status = 0;
+      if (std::string pull = PullingContact(program_, ws, t, y, du, F, &status); !pull.empty()) {
+        error_ = w.name + ": " + pull;
+        return status != 0 ? status : -1;
+      }
     }
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
     for (size_t k = 0; k < w.reinits.size(); ++k)  // exactly the values written (du's round-off aside)

@@ -26,7 +26,8 @@ class WhenEvents {
   int Functions(rt::Workspace& ws, double t, const double* y, double* g);
   // The speeds' jump du (nu entries) that changes the free speeds `rows` by `targets`:
   // 0, Derivative's codes, or -1 when it has no unique solution.
-  using JumpSolver = std::function<int(const std::vector<int>& rows, const std::vector<double>& targets, double* du)>;
+  using JumpSolver = std::function<int(const std::vector<int>& rows, const std::vector<double>& targets, double* du,
+                                       std::vector<double>* F)>;
   // Indicator i crossed at (t, y): its clause's reinits, every value taken at the left limit;
   // coordinates set, then the speeds by one impulse: `solve` (null: SpeedJump, the impulse
   // on those speeds alone, with Coulomb friction impulses where a joint has mu: FrictionSpeedJump; EndStopEvents::HeldJump also holds the resting contacts). y jumps

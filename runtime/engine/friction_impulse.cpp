@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "runtime/constraints/constraints.h"
+#include "runtime/constraints/contacts.h"  // ContactAt, ContactRowDirection
 #include "runtime/constraints/reactions.h"
 #include "runtime/engine/branch_monitor_internal.h"  // TangentMetric
 #include "runtime/kinematics/kinematics.h"
@@ -111,6 +112,38 @@ int ImpulseResponse(const Program& p, Workspace& ws, double t, const double* y, 
   }
   ws.u = u_y;
   VelocityKinematics(p, ws);
+  return 0;
+}
+
+}  // namespace kanesim::rt
+
+namespace kanesim::rt {
+
+// The rows' impulses of a jump du by the generalized impulse F: A^T mu = M du - F (2),
+// minimum-norm; each contact's normal impulse is n . sum_rows mu_r d_r (its rows' directions,
+// as ContactForce sums the forces' multipliers).
+int ContactNormalImpulses(const Program& p, Workspace& ws, double t, const double* y, const double* du,
+                          const double* F, double* P) {
+  const size_t nc = p.contacts.size();
+  std::fill(P, P + nc, 0.0);
+  if (nc == 0) return 0;
+  const int nu = p.nu;
+  Eigen::MatrixXd M(nu, nu);
+  if (int s = UnconstrainedMassMatrix(p, ws, t, y, M.data()); s != 0) return s;
+  ConstraintJacobian(p, ws);  // at y's positions and velocities, which UnconstrainedMassMatrix left
+  if (ws.A.rows() == 0) return 0;
+  const Eigen::VectorXd g = M * Eigen::Map<const Eigen::VectorXd>(du, nu) - Eigen::Map<const Eigen::VectorXd>(F, nu);
+  const Eigen::VectorXd mu = Eigen::MatrixXd(ws.A.transpose()).completeOrthogonalDecomposition().solve(g);
+  Eigen::VectorXd lambda = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p.rows.size()));
+  for (size_t r = 0; r < p.active_rows.size(); ++r) lambda[p.active_rows[r]] = mu[static_cast<Eigen::Index>(r)];
+  for (size_t i = 0; i < nc; ++i) {
+    const ContactModel& c = p.contacts[i];
+    const ContactPoint cp = ContactAt(p, ws, c);
+    Vec3 imp = Vec3::Zero();
+    for (int r = c.row0; r < c.row0 + c.nrows; ++r)
+      imp += lambda[r] * ContactRowDirection(c, p.rows[static_cast<size_t>(r)], cp, nullptr);
+    P[i] = imp.dot(c.n_W);
+  }
   return 0;
 }
 
