@@ -1,10 +1,10 @@
 // Compile stage: plane contacts (stdlib PlaneContact). A unilateral contact is not a
 // constraint row: the integrators' events handle it (sim/end_stops.h), impacts through the
 // mass matrix with the constraint rows' reactions (closed loops, rolling contacts). Beside
-// Coulomb friction that reads a normal force (mu), plane contacts and end stops need a tree:
-// a resting contact's force and an impact's impulse enter the joints' normal forces
-// (sim/end_stops_friction.cpp); a constant friction (friction_torque / friction_force) is
-// allowed anywhere (docs/stdlib.md "PlaneContact").
+// Coulomb friction that reads a normal force (mu), plane contacts need a tree: a resting
+// contact's force and an impact's impulse enter the joints' normal forces
+// (sim/end_stops_friction.cpp); end stops take mu anywhere, and a constant friction
+// (friction_torque / friction_force) is allowed anywhere (docs/stdlib.md "PlaneContact").
 #include <cmath>
 
 #include "compiler/compile_internal.h"
@@ -19,7 +19,8 @@ std::string EventsRefused(const Program& p) {
   // Closed loops', rolling contacts' and couplings' rows join the impulse and the reactions
   // by their own reactions (rt::InverseMassColumn through the tangent basis).
   // A constant friction is a bounded force: no impulse, no term in the reactions. mu N is
-  // one in a tree (sim/end_stops_friction.cpp), whose reactions are the subtrees'.
+  // one in a tree (sim/end_stops_friction.cpp), whose reactions are the subtrees'; beside
+  // constraint rows for end stops (speed rows; the rows' impulses enter the normal impulses).
   bool mu = false;
   for (int b : p.friction_joints) mu = mu || p.joints[static_cast<size_t>(b)].mu != 0.0;
   if (mu && !p.rows.empty())
@@ -72,21 +73,15 @@ void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMe
     }
     p.plane_contacts.push_back(c);
   }
-  if (p.plane_contacts.empty() && p.stop_joints.empty()) return;
+  if (p.plane_contacts.empty()) return;
   const std::string refused = EventsRefused(p);
   if (refused.empty()) return;
-  const std::string hint = "end stops and plane contacts take Coulomb friction mu N in a tree (no closed loops, rolling "
-                           "contacts or couplings)";
+  const std::string hint = "plane contacts take Coulomb friction mu N in a tree (no closed loops, rolling contacts or "
+                           "couplings); end stops take it anywhere";
   for (const PlaneContactModel& c : p.plane_contacts)
     errors->push_back(Msg(flat::DiagCode::BadContact,
                           "contact '" + c.name + "': a plane contact in a mechanism with " + refused + " is not supported",
                           c.loc, hint));
-  for (int b : p.stop_joints) {
-    const TreeJoint& j = p.joints[static_cast<size_t>(b)];
-    errors->push_back(Msg(flat::DiagCode::BadStop,
-                          "joint '" + j.name + "': end stops in a mechanism with " + refused + " are not supported", j.loc,
-                          hint));
-  }
 }
 
 }  // namespace kanesim::rt

@@ -198,6 +198,10 @@ int InverseMassColumn(const Program& program, Workspace& ws, double t, const dou
 // (each column as InverseMassColumn gives it). m = 0: nothing evaluated.
 int InverseMassColumns(const Program& program, Workspace& ws, double t, const double* y, const int* ks, int m,
                        double* X);
+// The same columns with the friction mu N left out (the response to a force were it
+// frictionless: a chord for the resting reactions beside mu, sim/end_stops_friction.cpp).
+int FrictionlessInverseMassColumns(const Program& program, Workspace& ws, double t, const double* y, const int* ks,
+                                   int m, double* X);
 // What ws evaluated so far: Derivative's evaluations, and the (constrained) inverse masses
 // InverseMassColumn(s) factored (a factor is kept for the same t and q).
 struct EvalCounts {
@@ -209,7 +213,7 @@ EvalCounts Counts(const Workspace& ws);
 int InverseMassTimes(const Program& program, Workspace& ws, double t, const double* y, const double* F, double* x);
 // ydot at (t, y) with the generalized forces F (nu entries) added on the free speeds: the
 // resting contacts' reactions where Coulomb friction mu N makes the accelerations depend on
-// them (sim/end_stops_friction.cpp). A tree only (-1 with constraint rows).
+// them (sim/end_stops_friction.cpp); with constraint rows their reactions follow F too.
 int DerivativeWithForces(const Program& program, Workspace& ws, double t, const double* y, const double* F,
                          double* ydot);
 

@@ -520,6 +520,16 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
       rest = true;
     }
   }
+  // Beside constraint rows, a touch at rest (the gap's round-off drift while stuck joints hold
+  // the mechanism) whose gap accelerates away is a graze: its rate zeroed, no rest (a rest
+  // would be held by the friction the touch's instant has, whose sliding share vanishes
+  // once the stop holds the joints: its reaction would then pull with no crossing).
+  bool graze = false;
+  if (!program_.rows.empty() && std::abs(v) <= kRestSpeeds * atol_) {
+    double a = 0.0;
+    if (int s = GapAcceleration(ws, t, y, i, &a); s != 0) return s;
+    graze = a > -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * (1.0 + std::abs(a));  // (0: held by friction)
+  }
   // The side's gap rate change, the resting sides' held at zero.
   std::vector<int> rows = {i};
   std::vector<double> targets = {rest ? -v : -(1.0 + e) * v};
@@ -558,7 +568,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   // At rest on the contact: held while it pushes; the impulse may also have made other
   // resting sides pull, or brought sides on their contact to rest.
   const std::vector<char> was = RestingSet();
-  if (rest) {
+  if (rest && !graze) {
     side.resting = true;
     if (t_inf > t) side.accumulates_at = t_inf;  // its rest is logged there (Functions: a time event)
   }
@@ -566,6 +576,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
 }
 
 int EndStopEvents::RestOn(rt::Workspace& ws, double t, double* y, int u, int dir) {
+  if (!program_.rows.empty()) return RestOnRows(ws, t, y, u, dir);
   for (Side& s : sides_) {
     if (s.stop < 0 || s.resting || stops_[static_cast<size_t>(s.stop)].u != u || s.upper != (dir > 0)) continue;
     double gap = 0.0, c = 0.0;
@@ -575,6 +586,38 @@ int EndStopEvents::RestOn(rt::Workspace& ws, double t, double* y, int u, int dir
     y[st.q] = s.upper ? st.q_max : st.q_min;
     y[nq_ + st.u] = 0.0;
     s.resting = true;
+  }
+  return 0;
+}
+
+// Beside rows the joint's slide moves other joints' stops: its direction decides, through
+// the gap rates' response to a force on it (W e_u), which closed stops it presses (they rest
+// at once) and which it leaves (no rest there at this instant, whatever the round-off of the
+// gap's acceleration, zero where the static and sliding friction are equal, says).
+int EndStopEvents::RestOnRows(rt::Workspace& ws, double t, double* y, int u, int dir) {
+  std::vector<double> x(static_cast<size_t>(nu_));
+  bool have = false;
+  for (size_t i = 0; i < sides_.size(); ++i) {
+    Side& s = sides_[i];
+    if (s.stop < 0 || s.resting) continue;
+    double gap = 0.0, c = 0.0;
+    if (int r = Row(ws, t, y, s, &gap, J_.data(), &c); r != 0) return r;
+    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(s)))) continue;
+    if (!have) {
+      if (int r = rt::FrictionlessInverseMassColumns(program_, ws, t, y, &u, 1, x.data()); r != 0) return r;
+      have = true;
+    }
+    double rate = 0.0;
+    for (int k = 0; k < nu_; ++k) rate += J_[static_cast<size_t>(k)] * x[static_cast<size_t>(k)];
+    rate *= dir;
+    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+    if (rate < 0.0) {
+      y[st.q] = s.upper ? st.q_max : st.q_min;
+      y[nq_ + st.u] = 0.0;
+      s.resting = true;
+    } else if (rate > 0.0) {
+      opening_.push_back(static_cast<int>(i));
+    }
   }
   return 0;
 }
@@ -621,7 +664,9 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
         strike = i, v_join = v;        // from g = 0 would be missed by the root finding)
         break;
       }
-      if (std::abs(v) <= kRestSpeeds * atol_ && a < 0.0 && (join < 0 || a < a_join)) join = i, a_join = a, v_join = v;
+      const bool opens = std::find(opening_.begin(), opening_.end(), i) != opening_.end();
+      if (std::abs(v) <= kRestSpeeds * atol_ && a < 0.0 && !opens && (join < 0 || a < a_join))
+        join = i, a_join = a, v_join = v;
     }
     if (strike >= 0) {
       if (int r = Impact(ws, t, y, strike, v_join, false); r != 0) return r;
@@ -644,6 +689,7 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
       if ((r.resting || &r == &s) && r.stop >= 0) y[nq_ + stops_[static_cast<size_t>(r.stop)].u] = 0.0;
     s.resting = true;
   }
+  opening_.clear();
   for (int i = 0; i < n; ++i) {
     const Side& s = sides_[static_cast<size_t>(i)];
     if (s.resting && !before[static_cast<size_t>(i)] && !(s.accumulates_at > 0.0)) log_.push_back({t, Element(s), "rests on " + Where(s)});

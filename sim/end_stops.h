@@ -63,6 +63,8 @@ class EndStopEvents {
   // sign Settle's test would leave to round-off; the gap, from exactly 0, would then close
   // without a crossing for the root finding.)
   int RestOn(rt::Workspace& ws, double t, double* y, int u, int dir);
+  // The same beside constraint rows, for every closed stop the slide moves (sim/end_stops.cpp).
+  int RestOnRows(rt::Workspace& ws, double t, double* y, int u, int dir);
   std::vector<char> RestingSet() const;
   // A speed this small after an event is a rest (kRestSpeeds (atol)).
   double RestSpeed() const { return kRestSpeeds * atol_; }
@@ -220,7 +222,7 @@ class EndStopEvents {
   int Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before);
   // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
-  // With Coulomb friction mu N (a tree; sim/end_stops_friction.cpp): the resting sides'
+  // With Coulomb friction mu N (sim/end_stops_friction.cpp): the resting sides'
   // reactions c (rows, targets as Reactions builds them) and the held accelerations a (nu),
   // by the tree's fixed point with the reactions included; an impulse on the sides' rows with
   // the friction joints' impulses (sim/friction_impulse.h).
@@ -254,6 +256,7 @@ class EndStopEvents {
   std::vector<EventRecord> log_;
   std::vector<double> held_lambda_;  // the last HoldWith's reactions per side (empty: none resting)
   bool mu_ = false;  // friction joints with mu (sim/friction_impulse.h)
+  std::vector<int> opening_;  // RestOnRows: closed sides the slide opens (not joined by the next Settle)
   std::vector<rt::FrictionJoint> frictions_;  // the program's (rt::FrictionJoints)
   std::vector<int> friction_of_;              // per stop: its joint's exact friction (index), or -1
   std::vector<std::pair<int, int>> released_;  // TakeReleased

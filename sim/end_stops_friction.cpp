@@ -1,12 +1,14 @@
 // End stops and plane contacts beside Coulomb friction mu N (sim/end_stops.h; docs/events.md
-// "Friction beside stops"). A tree only (the compiler refuses closed loops with them).
+// "Friction beside stops"). Plane contacts in a tree only (the compiler refuses them beside
+// closed loops); end stops anywhere.
 // Resting: the friction forces follow the joints' normal forces N, N the accelerations and
 // the reactions (a plane contact's force acts at its point, so the joints between it and the
 // ground carry it: rt::DerivativeWithPlaneForces), and the accelerations the rows' reactions
 // lambda, so the accelerations are not affine in lambda. The rows' residual
 // r(lambda) = J a(lambda) + c is brought to zero by the chord iteration
-//   lambda <- lambda - (J M^-1 J^T)^-1 r(lambda)                                         (1)
-// (exact without mu; with mu it converges at the rate the tree's fixed point of
+//   lambda <- lambda - (J W J^T)^-1 r(lambda)                                            (1)
+// W the inverse mass without the friction (M^-1 on a tree, with constraint rows the
+// constrained one; exact without mu; with mu it converges at the rate the fixed point of
 // runtime/kane/friction.cpp (3) does, each a(lambda) solving that fixed point with lambda
 // applied). Impacts and jumps: sim/friction_impulse.h's law, whose normal impulses carry the
 // stops' (along their joints: none across) and the plane contacts' impulses.
@@ -30,21 +32,35 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
                                const std::vector<double>& bias, std::vector<double>* c, double* a) {
   const size_t m = rows.size(), nu = static_cast<size_t>(nu_);
   std::copy(ydot_.begin() + nq_, ydot_.end(), a_.begin());  // the free accelerations (ReactionNoise)
-  Eigen::MatrixXd M(nu_, nu_);
-  if (int s = rt::MassMatrix(program_, ws, t, y, M.data()); s != 0) return s;
-  const Eigen::LLT<Eigen::MatrixXd> llt(M);
-  if (llt.info() != Eigen::Success) {
-    error_ = "the mass matrix is singular for the resting contacts' reactions";
-    return -1;
-  }
+  // The chord's columns x_j = W J_j^T: W the inverse mass without the friction, with the
+  // constraint rows' reactions where there are rows (a stop's row is +-e_k: a column of W; a
+  // plane contact's, in a tree only, W J^T from all of W's columns).
   Jrows_.assign(m * nu, 0.0);
   x_.assign(m * nu, 0.0);
+  bool planes = false;
   for (size_t j = 0; j < m; ++j) {
     double gap = 0.0, cj = 0.0;
-    if (int s = Row(ws, t, y, sides_[static_cast<size_t>(rows[j])], &gap, Jrows_.data() + j * nu, &cj); s != 0) return s;
-    const Eigen::VectorXd x = llt.solve(Eigen::Map<const Eigen::VectorXd>(Jrows_.data() + j * nu, nu_));
-    std::copy(x.data(), x.data() + nu_, x_.data() + j * nu);
+    const Side& s = sides_[static_cast<size_t>(rows[j])];
+    if (int st = Row(ws, t, y, s, &gap, Jrows_.data() + j * nu, &cj); st != 0) return st;
+    planes = planes || s.plane >= 0;
   }
+  std::vector<int> ks;
+  if (planes)
+    for (int k = 0; k < nu_; ++k) ks.push_back(k);
+  else
+    for (int r : rows) ks.push_back(stops_[static_cast<size_t>(sides_[static_cast<size_t>(r)].stop)].u);
+  cols_.resize(ks.size() * nu);
+  if (int s = rt::FrictionlessInverseMassColumns(program_, ws, t, y, ks.data(), static_cast<int>(ks.size()), cols_.data());
+      s != 0) {
+    error_ = rt::ErrorMessage(ws);
+    return s;
+  }
+  for (size_t j = 0; j < m; ++j)
+    for (size_t c2 = 0; c2 < ks.size(); ++c2) {
+      const double Jk = planes ? Jrows_[j * nu + c2] : (c2 == j ? Jrows_[j * nu + static_cast<size_t>(ks[j])] : 0.0);
+      if (Jk != 0.0)
+        for (size_t k = 0; k < nu; ++k) x_[j * nu + k] += Jk * cols_[c2 * nu + k];
+    }
   std::vector<double> A(m * m), r(m), dc, F(nu), yd(ydot_.size());
   for (size_t i = 0; i < m; ++i)
     for (size_t j = 0; j < m; ++j) {
@@ -63,7 +79,11 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
       else
         for (size_t k = 0; k < nu; ++k) F[k] += (*c)[j] * Jrows_[j * nu + k];
     }
-    if (int s = rt::DerivativeWithPlaneForces(program_, ws, t, y, F.data(), lambda.data(), yd.data()); s != 0) return s;
+    // (with only stops' rows: DerivativeWithForces, which takes constraint rows too)
+    if (int s = planes ? rt::DerivativeWithPlaneForces(program_, ws, t, y, F.data(), lambda.data(), yd.data())
+                       : rt::DerivativeWithForces(program_, ws, t, y, F.data(), yd.data());
+        s != 0)
+      return s;
     const double* acc = yd.data() + nq_;
     double r_max = 0.0, scale = 1.0;
     for (size_t j = 0; j < m; ++j) {

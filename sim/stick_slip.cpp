@@ -81,7 +81,38 @@ void StickSlipEvents::Sync(rt::Workspace& ws) const { Apply(ws); }
 std::vector<int> StickSlipEvents::RestingSpeeds() const { return stops_ ? stops_->RestingSpeeds() : std::vector<int>{}; }
 
 bool StickSlipEvents::HeldByStop(const Joint& j, const std::vector<int>& resting) const {
-  return std::find(resting.begin(), resting.end(), j.f.u) != resting.end();
+  return j.by_stops || std::find(resting.begin(), resting.end(), j.f.u) != resting.end();
+}
+
+int StickSlipEvents::MarkHeldByStops(rt::Workspace& ws, double t, const double* y, double v_rest) {
+  for (Joint& j : joints_) j.by_stops = false;
+  const std::vector<int> resting = RestingSpeeds();
+  if (!rows_ || resting.empty()) return 0;
+  Apply(ws);
+  std::vector<double> held(ydot_.size()), free(ydot_.size());
+  for (Joint& j : joints_) {
+    if (HeldByStop(j, resting) || std::abs(y[nq_ + j.f.u]) > v_rest) continue;
+    // j's acceleration's response to its own force, with the stops held and without them
+    // (by differences, as MakeX): the stops fix it where only the first vanishes.
+    const int mode = j.mode;
+    double response[2] = {0.0, 0.0};
+    for (int with = 0; with < 2; ++with) {
+      auto eval = [&](double* out) { return with ? Eval(ws, t, y, out) : rt::Derivative(program_, ws, t, y, out); };
+      rt::SetFrictionMode(ws, j.index, 2, 0.0);
+      if (int s = eval(held.data()); s != 0) return s;
+      double a_max = 0.0;
+      for (int i = 0; i < nu_; ++i) a_max = std::max(a_max, std::abs(held[static_cast<size_t>(nq_ + i)]));
+      const double step = 1e3 * (1.0 + a_max);
+      rt::SetFrictionMode(ws, j.index, 2, step);
+      if (int s = eval(free.data()); s != 0) return s;
+      response[with] = (free[static_cast<size_t>(nq_ + j.f.u)] - held[static_cast<size_t>(nq_ + j.f.u)]) / step;
+    }
+    j.mode = mode;
+    j.by_stops = response[0] > 0.0 && std::abs(response[1]) <= kDependent * response[0];
+    if (j.by_stops) j.mode = 0, j.tau = 0.0;
+    Apply(ws);
+  }
+  return 0;
 }
 
 int StickSlipEvents::Eval(rt::Workspace& ws, double t, const double* y, double* ydot) {
@@ -235,7 +266,9 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
     std::snprintf(buf, sizeof buf, "%s %s (friction needed %.17g, at most %.17g)",
                   was == 0 ? "slips," : "reverses, slides", j.mode > 0 ? "forwards" : "backwards", j.tau, bound);
   }
-  log_.push_back({t, j.f.joint, buf});
+  // Sliding on the way it slid: its speed's zero was round-off's (beside rows, a dependent
+  // speed just after a slip with zero acceleration), no change of law to log.
+  if (was == 0 || j.mode != was) log_.push_back({t, j.f.joint, buf});
   Apply(ws);  // the decided law, for what reads ws next (the stops' Resettle)
   return 0;
 }
@@ -248,6 +281,11 @@ int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   // again here found it within the bound by the root's last bits and kept it stuck, with
   // its event function then negative for good.)
   if (int s = Solve(ws, t, y, nullptr); s != 0) return s;
+  // Beside rows j's evaluated speed is the rows' round-off, not y's held zero: zeroed, else
+  // where its sliding friction equals the static (a zero acceleration at the slip) that
+  // round-off's sign made a second event, a reversal into the same direction.
+  if (rows_)
+    if (int s = StopOnRows(ws, t, y, j); s != 0) return s;
   j.mode = j.tau > 0.0 ? -1 : 1;
   char buf[200];
   std::snprintf(buf, sizeof buf, "slips, %s (friction needed %.17g, at most %.17g)", j.mode > 0 ? "forwards" : "backwards",
@@ -352,13 +390,14 @@ std::vector<std::string> StickSlipEvents::StuckNames() const {
 }
 
 int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
-  const std::vector<int> resting = RestingSpeeds();
   if (stops_) stops_->TakeReleased();  // (a joint pulled off at the start decides below)
   for (Joint& j : joints_) {
     const double u = y0[nq_ + j.f.u];
     j.mode = u > 0.0 ? 1 : u < 0.0 ? -1 : 0;
     j.tau = 0.0;
   }
+  if (int s = MarkHeldByStops(ws, t0, y0, 0.0); s != 0) return s;
+  const std::vector<int> resting = RestingSpeeds();
   for (Joint& j : joints_)
     if (j.mode == 0 && !HeldByStop(j, resting))
       if (int s = Decide(ws, t0, y0, j); s != 0) return s;
@@ -366,6 +405,7 @@ int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
 }
 
 int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const double* y_before, double v_rest) {
+  if (int s = MarkHeldByStops(ws, t, y, v_rest); s != 0) return s;
   const std::vector<int> resting = RestingSpeeds();
   // Pulled off its stop beyond the static friction (EndStopEvents::Leave): it slides away,
   // not stuck (a decision at the bound would be round-off's).
@@ -382,10 +422,10 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
       continue;  // (a joint that has just slipped from rest keeps sliding)
     } else if (j.mode == 0 && std::abs(u) <= v_rest) {
       u = 0.0;  // a rest's impulse on another joint: no real slip
-    } else if (u != 0.0) {
+    } else if (std::abs(u) > v_rest) {
       j.mode = u > 0.0 ? 1 : -1;  // a finite friction does not resist an impulse
     } else if (j.mode != 0) {
-      stopped.push_back(&j);
+      stopped.push_back(&j);  // at rest but for round-off (a graze's impulse beside rows): decides
     }
   }
   for (Joint* j : stopped)

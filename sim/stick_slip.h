@@ -89,6 +89,7 @@ class StickSlipEvents {
     int index = 0;     // among the program's friction joints (rt::FrictionJoints)
     int mode = 0;      // +1 / -1 sliding that way, 0 stuck
     double tau = 0.0;  // stuck: the friction force holding it (last solved)
+    bool by_stops = false;  // at rest with its motion fixed by resting stops through the rows
   };
   // The stuck joints' friction forces at (t, y) (Newton on their accelerations, which are
   // affine in them), the modes applied to ws; ydot (may be null) the held motion.
@@ -115,6 +116,10 @@ class StickSlipEvents {
   // kept for Solve), 1 when j alone cannot be held (a dead point: the rows move it), -1 with
   // error_ when stuck joints' motions are dependent (their forces not unique).
   int CheckRows(rt::Workspace& ws, double t, const double* y, const Joint& j);
+  // Beside rows with stops resting: marks the joints at rest (|u| <= v_rest) whose motion the
+  // resting stops fix through the rows (a gear's follower when its leader rests): held by the
+  // stops as a stop's own joint is, their friction force not determined, so zero.
+  int MarkHeldByStops(rt::Workspace& ws, double t, const double* y, double v_rest);
   // Beside rows: j's evaluated speed to zero by the jump that keeps the rows (stick_slip.cpp).
   int StopOnRows(rt::Workspace& ws, double t, double* y, const Joint& j);
 

@@ -80,6 +80,11 @@ int InverseMassColumns(const Program& p, Workspace& ws, double t, const double* 
     ws.error = "an impulse in a mechanism with Coulomb friction mu N is not supported yet";
     return -1;
   }
+  return FrictionlessInverseMassColumns(p, ws, t, y, ks, m, X);
+}
+
+int FrictionlessInverseMassColumns(const Program& p, Workspace& ws, double t, const double* y, const int* ks, int m,
+                                   double* X) {
   if (m == 0) return 0;
   if (!p.rows.empty()) {  // (one factorization per column: TangentMetric's basis for each)
     for (int j = 0; j < m; ++j) {
@@ -128,19 +133,14 @@ int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y
 
 EvalCounts Counts(const Workspace& ws) { return {ws.derivatives, ws.inverse_mass_factorizations}; }
 
-// Derivative's evaluation, then the accelerations solved again with F on the speeds (the
-// friction's normal-force iteration included, as InverseMassTimes does).
+// Derivative's evaluation with F on the speeds beside the applied forces (the friction's
+// normal-force iteration and, with constraint rows, their reactions and the pull to the
+// manifold included, as for any force).
 int DerivativeWithForces(const Program& p, Workspace& ws, double t, const double* y, const double* F, double* ydot) {
-  if (!p.rows.empty()) {
-    ws.error = "resting contacts with Coulomb friction mu N in a mechanism with closed loops are not supported";
-    return -1;
-  }
-  if (int s = Derivative(p, ws, t, y, ydot); s != 0) return s;
-  if (int s = AppliedForces(p, ws); s != 0) return s;
-  for (int i = 0; i < p.nu; ++i) ws.Q[p.u_free[static_cast<size_t>(i)]] += F[i];
-  if (int s = SolveAccelerations(p, ws); s != 0) return s;
-  for (int i = 0; i < p.nu; ++i) ydot[p.nq + i] = ws.udot[p.u_free[static_cast<size_t>(i)]];
-  return 0;
+  ws.added_forces = F;
+  const int s = Derivative(p, ws, t, y, ydot);
+  ws.added_forces = nullptr;
+  return s;
 }
 
 void SetHeldLoads(const Program& p, Workspace& ws, const double* F, const std::vector<std::pair<int, double>>& planes,

@@ -82,6 +82,8 @@ int Derivative(const Program& p, Workspace& ws, double t, const double* y, doubl
     BiasAccelerations(p, ws);
   }
   if (int s = AppliedForces(p, ws); s != 0) return s;
+  if (ws.added_forces)
+    for (int i = 0; i < p.nu; ++i) ws.Q[p.u_free[static_cast<size_t>(i)]] += ws.added_forces[i];
   if (int s = SolveAccelerations(p, ws); s != 0) return s;
   for (int i = 0; i < p.nq; ++i) ydot[i] = ws.qdot[p.q_free[static_cast<size_t>(i)]];
   for (int i = 0; i < p.nu; ++i) {
