@@ -530,13 +530,27 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     if (int s = GapAcceleration(ws, t, y, i, &a); s != 0) return s;
     graze = a > -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * (1.0 + std::abs(a));  // (0: held by friction)
   }
-  // The side's gap rate change, the resting sides' held at zero.
+  // The side's gap rate change, the resting sides' held at zero. A resting side can only push:
+  // one whose impulse would pull (the blow lifts the mechanism off it) leaves, the most pulling
+  // first, and the impulse is solved again without it (the impact's complementarity).
   std::vector<int> rows = {i};
   std::vector<double> targets = {rest ? -v : -(1.0 + e) * v};
   for (size_t k = 0; k < sides_.size(); ++k)
     if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
   std::vector<double> du(static_cast<size_t>(nu_)), c;
-  if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
+  for (;;) {
+    if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
+    double scale = 0.0;
+    for (double x : c) scale = std::max(scale, std::abs(x));
+    size_t pull = 0;  // (0: none; the struck side's own impulse is the impact's)
+    for (size_t j = 1; j < rows.size(); ++j)
+      if (c[j] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == 0 || c[j] < c[pull]))
+        pull = j;
+    if (pull == 0) break;
+    Leave(ws, rows[pull]);
+    rows.erase(rows.begin() + static_cast<long>(pull));
+    targets.erase(targets.begin() + static_cast<long>(pull));
+  }
   // A rolling contact whose impulse would pull: the run stops at the impact.
   if (impulse_F_.size() == du.size()) {
     int status = 0;
