@@ -65,6 +65,7 @@ void EndStopEvents::Leave(rt::Workspace& ws, int i) {
   Side& s = sides_[static_cast<size_t>(i)];
   s.resting = false;
   s.accumulates_at = 0.0;
+  s.shift = 0.0;
   if (s.stop < 0 || friction_of_[static_cast<size_t>(s.stop)] < 0) return;
   // Pulled off beyond its static friction: it slides away, its sliding friction acting from
   // now (the reactions that follow in Settle see it).
@@ -361,6 +362,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
     } else {
       double c = 0.0;
       if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
+      g[i] += s.shift;
       if (guards) {
         double v = 0.0;
         for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
@@ -568,6 +570,9 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     double gap = 0.0, cc = 0.0;
     if (int s = Row(ws, t, y, side, &gap, J_.data(), &cc); s != 0) return s;
     for (int k = 0; k < nu_; ++k) after += J_[static_cast<size_t>(k)] * u[k];
+    // (Side::shift: the event function gap + shift at the impact, where it was located, is
+    // round-off either side of 0; one below 0 is turned positive.)
+    if (const double g = gap + side.shift; !rest && g < 0.0) side.shift -= 2.0 * g;
   }
   char buf[200];
   std::snprintf(buf, sizeof buf, "impact at %s, speed %.17g -> %.17g", Where(side).c_str(), before, after);

@@ -186,6 +186,13 @@ class EndStopEvents {
     bool upper = false;  // a stop's q_max (else q_min)
     bool resting = false;
     double accumulates_at = 0.0;  // resting through accumulated bounces until then (0: not)
+    // After a rebound whose state is past the contact by round-off (a plane's gap is a
+    // function of all coordinates: -2e-16 .. 0 at y = 0.1 where the impact left it): the
+    // event function is gap + shift, shift turning the function's value at the impact
+    // positive (so it stays round-off's size, never fed back). Otherwise a flight shorter
+    // than one step (late bounces: an explicit method steps over a free fall's parabola in
+    // one step) begins and ends below zero, and its impact is missed. 0 again on leaving.
+    double shift = 0.0;
   };
   // Side i's gap, row J (nu) and bias c (d2g/dt2 = J udot + c) at (t, y).
   int Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c);
