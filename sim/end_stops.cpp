@@ -65,7 +65,7 @@ void EndStopEvents::Leave(rt::Workspace& ws, int i) {
   Side& s = sides_[static_cast<size_t>(i)];
   s.resting = false;
   s.accumulates_at = 0.0;
-  s.shift = 0.0;
+  s.lift = 0.0;
   if (s.stop < 0 || friction_of_[static_cast<size_t>(s.stop)] < 0) return;
   // Pulled off beyond its static friction: it slides away, its sliding friction acting from
   // now (the reactions that follow in Settle see it).
@@ -362,7 +362,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
     } else {
       double c = 0.0;
       if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
-      g[i] += s.shift;
+      g[i] += LiftAt(s, t);
       if (guards) {
         double v = 0.0;
         for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
@@ -397,7 +397,30 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   if (int s = Row(ws, t, y, side, &gap, J_.data(), &c); s != 0) return s;
   double v = 0.0;
   for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+  // A plane's crossing while it separates is round-off's (the gap's noise right after its
+  // rebound): no impact, its event function lifted again (Side::lift).
+  if (side.plane >= 0 && v > kRestSpeeds * atol_) {
+    Lift(side, t, gap, v);
+    return 0;
+  }
   return Impact(ws, t, y, i, v, true);
+}
+
+// Side::lift at a rebound (gap rate `rate` > 0): the event function lifted to kLiftRoundoffs
+// round-offs of the gap's terms above 0, the lift gone once the gap has risen twice as much.
+void EndStopEvents::Lift(Side& s, double t, double gap, double rate) {
+  const double d = s.plane >= 0 ? program_.plane_contacts[static_cast<size_t>(s.plane)].d : 0.0;
+  const double margin = kLiftRoundoffs * std::numeric_limits<double>::epsilon() * (std::abs(gap + d) + std::abs(d));
+  s.lift = 0.0;
+  if (!(rate > 0.0)) return;
+  s.lift = std::max(0.0, -gap) + margin;
+  s.lift_at = t;
+  s.lift_for = 2.0 * s.lift / rate;
+}
+
+double EndStopEvents::LiftAt(const Side& s, double t) {
+  if (s.lift == 0.0) return 0.0;
+  return s.lift * std::clamp(1.0 - (t - s.lift_at) / s.lift_for, 0.0, 1.0);
 }
 
 int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::string& clause,
@@ -570,9 +593,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     double gap = 0.0, cc = 0.0;
     if (int s = Row(ws, t, y, side, &gap, J_.data(), &cc); s != 0) return s;
     for (int k = 0; k < nu_; ++k) after += J_[static_cast<size_t>(k)] * u[k];
-    // (Side::shift: the event function gap + shift at the impact, where it was located, is
-    // round-off either side of 0; one below 0 is turned positive.)
-    if (const double g = gap + side.shift; !rest && g < 0.0) side.shift -= 2.0 * g;
+    if (!rest) Lift(side, t, gap, after);
   }
   char buf[200];
   std::snprintf(buf, sizeof buf, "impact at %s, speed %.17g -> %.17g", Where(side).c_str(), before, after);
