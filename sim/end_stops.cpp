@@ -563,6 +563,8 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   for (size_t k = 0; k < sides_.size(); ++k)
     if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
   std::vector<double> du(static_cast<size_t>(nu_)), c;
+  std::vector<int> left;  // the resting sides the impulse lifted off
+  const std::vector<char> was = RestingSet();  // (Settle logs the changes: rests, leaves)
   for (;;) {
     if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
     double scale = 0.0;
@@ -573,6 +575,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
         pull = j;
     if (pull == 0) break;
     Leave(ws, rows[pull]);
+    left.push_back(rows[pull]);
     rows.erase(rows.begin() + static_cast<long>(pull));
     targets.erase(targets.begin() + static_cast<long>(pull));
   }
@@ -585,6 +588,15 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     }
   }
   for (int k = 0; k < nu_; ++k) u[k] += du[static_cast<size_t>(k)];
+  // A side lifted off leaves from where its rest left it (a plane's gap drifts by the
+  // tolerance while held): its flight starts above 0 as a rebound's (Side::lift).
+  for (int k : left) {
+    Side& s = sides_[static_cast<size_t>(k)];
+    double gap = 0.0, cc = 0.0, rate = 0.0;
+    if (int r = Row(ws, t, y, s, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) rate += J_[static_cast<size_t>(j)] * u[j];
+    Lift(s, t, gap, rate);
+  }
   if (st) u[st->u] = rest ? 0.0 : -e * before;  // exactly Newton's law (du's round-off aside)
   for (const Side& s : sides_)
     if (s.resting && s.stop >= 0) u[stops_[static_cast<size_t>(s.stop)].u] = 0.0;
@@ -607,7 +619,6 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   if (std::abs(v) > kRestSpeeds * atol_) log_.push_back({t, Element(side), kind});
   // At rest on the contact: held while it pushes; the impulse may also have made other
   // resting sides pull, or brought sides on their contact to rest.
-  const std::vector<char> was = RestingSet();
   if (rest && !graze) {
     side.resting = true;
     if (t_inf > t) side.accumulates_at = t_inf;  // its rest is logged there (Functions: a time event)
