@@ -558,8 +558,29 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   // The side's gap rate change, the resting sides' held at zero. A resting side can only push:
   // one whose impulse would pull (the blow lifts the mechanism off it) leaves, the most pulling
   // first, and the impulse is solved again without it (the impact's complementarity).
+  // Sides that strike together with it (on their contact within the tolerance's reach and
+  // closing: a box landing flat on its corners) take their own Newton's law in the same
+  // impulse, not one after another (an impulse at one corner alone would set the box
+  // rocking): each its target, its log entry, its rest.
+  std::vector<Strike> with;
+  for (size_t k = 0; k < sides_.size(); ++k) {
+    const Side& o = sides_[k];
+    if (static_cast<int>(k) == i || o.resting || Released(o)) continue;
+    double gap = 0.0, cc = 0.0, vk = 0.0;
+    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) vk += J_[static_cast<size_t>(j)] * u[j];
+    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(o))) || !(vk < -kRestSpeeds * atol_)) continue;
+    const double ek = Restitution(o);
+    const bool rk = ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
+    const double bk = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : vk;
+    with.push_back({static_cast<int>(k), vk, bk, rk});
+  }
   std::vector<int> rows = {i};
   std::vector<double> targets = {rest ? -v : -(1.0 + e) * v};
+  for (const Strike& w : with) {
+    rows.push_back(w.side);
+    targets.push_back(w.rest ? -w.v : -(1.0 + Restitution(sides_[static_cast<size_t>(w.side)])) * w.v);
+  }
   for (size_t k = 0; k < sides_.size(); ++k)
     if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
   std::vector<double> du(static_cast<size_t>(nu_)), c;
@@ -574,8 +595,13 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
       if (c[j] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == 0 || c[j] < c[pull]))
         pull = j;
     if (pull == 0) break;
-    Leave(ws, rows[pull]);
-    left.push_back(rows[pull]);
+    const auto w = std::find_if(with.begin(), with.end(), [&](const Strike& x) { return x.side == rows[pull]; });
+    if (w != with.end()) {
+      with.erase(w);  // the others' blow opens it: not struck now (Settle sees it after)
+    } else {
+      Leave(ws, rows[pull]);
+      left.push_back(rows[pull]);
+    }
     rows.erase(rows.begin() + static_cast<long>(pull));
     targets.erase(targets.begin() + static_cast<long>(pull));
   }
@@ -598,8 +624,29 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     Lift(s, t, gap, rate);
   }
   if (st) u[st->u] = rest ? 0.0 : -e * before;  // exactly Newton's law (du's round-off aside)
+  for (const Strike& w : with) {
+    const Side& o = sides_[static_cast<size_t>(w.side)];
+    if (o.stop < 0) continue;
+    const rt::EndStop& so = stops_[static_cast<size_t>(o.stop)];
+    y[so.q] = o.upper ? so.q_max : so.q_min;
+    u[so.u] = w.rest ? 0.0 : -Restitution(o) * w.before;
+  }
   for (const Side& s : sides_)
     if (s.resting && s.stop >= 0) u[stops_[static_cast<size_t>(s.stop)].u] = 0.0;
+  // The companions' speeds after, their log entries (after the impact's own), rests and lifts.
+  decltype(log_) struck;
+  for (const Strike& w : with) {
+    Side& o = sides_[static_cast<size_t>(w.side)];
+    double gap = 0.0, cc = 0.0, rate = 0.0;
+    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) rate += J_[static_cast<size_t>(j)] * u[j];
+    const double after_o = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : rate;
+    char line[200];
+    std::snprintf(line, sizeof line, "impact at %s, speed %.17g -> %.17g", Where(o).c_str(), w.before, after_o);
+    struck.push_back({t, Element(o), line});
+    if (w.rest) o.resting = true;
+    else if (o.plane >= 0) Lift(o, t, gap, rate);
+  }
   double after = st ? u[st->u] : 0.0;
   if (!st) {
     double gap = 0.0, cc = 0.0;
@@ -617,6 +664,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   // Closing slower than the tolerance's reach (a touch at rest, at the start or after a drift
   // of round-off): no impact, only the rest or the leave that Settle logs.
   if (std::abs(v) > kRestSpeeds * atol_) log_.push_back({t, Element(side), kind});
+  log_.insert(log_.end(), struck.begin(), struck.end());
   // At rest on the contact: held while it pushes; the impulse may also have made other
   // resting sides pull, or brought sides on their contact to rest.
   if (rest && !graze) {

@@ -200,6 +200,13 @@ class EndStopEvents {
   };
   // Side i's gap, row J (nu) and bias c (d2g/dt2 = J udot + c) at (t, y).
   int Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c);
+  // A side struck together with the impact's own (Impact): its gap rate and logged speed
+  // before, and whether it rests after.
+  struct Strike {
+    int side = -1;
+    double v = 0.0, before = 0.0;
+    bool rest = false;
+  };
   void Lift(Side& s, double t, double gap, double rate);  // Side::lift after a rebound at t
   static double LiftAt(const Side& s, double t);         // its value at t
   double Restitution(const Side& s) const;

@@ -238,6 +238,63 @@ TEST(PlaneContact, BarTumblesToRestOnBothEnds) {
   }
 }
 
+// A box (FreeMotion) released level at y = 0.2 with three corner contacts 0.05 below its
+// origin, restitution 0: the corners strike the floor together at sqrt(2 0.15 / g) with
+// -g t1, and a plastic impact of the three at once stops the box (its speeds 0: the three
+// rows fix the normal motion and both tilts), at rest on the three from then on.
+// If this fails, simultaneous impacts are taken one after another: the first corner's
+// impulse alone sets the box rocking (a second impact of it at 0.2965 s, -0.38 m/s, before
+// the fix) where the plastic landing stops it.
+TEST(PlaneContact, ABoxLandingFlatOnThreeCornersStopsAtOnce) {
+  const std::string text =
+      "model Tri\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  FreeMotion free(q(start = {0, 0.2, 0, 1, 0, 0, 0}));\n"
+      "  Body box(m = 1, I = diagonal({0.01, 0.02, 0.01}));\n"
+      "  FixedTranslation c1(r = {0.1, -0.05, 0.1});\n"
+      "  FixedTranslation c2(r = {-0.1, -0.05, 0.1});\n"
+      "  FixedTranslation c3(r = {0, -0.05, -0.1});\n"
+      "  PlaneContact p1;\n"
+      "  PlaneContact p2;\n"
+      "  PlaneContact p3;\n"
+      "equation\n"
+      "  connect(world.frame_b, free.frame_a);\n"
+      "  connect(free.frame_b, box.frame_a);\n"
+      "  connect(free.frame_b, c1.frame_a);\n"
+      "  connect(c1.frame_b, p1.frame_a);\n"
+      "  connect(free.frame_b, c2.frame_a);\n"
+      "  connect(c2.frame_b, p2.frame_a);\n"
+      "  connect(free.frame_b, c3.frame_a);\n"
+      "  connect(c3.frame_b, p3.frame_a);\n"
+      "end Tri;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  const double t1 = std::sqrt(2 * 0.15 / kG);
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 1.0, 0.05,
+                                {"free.q[2]", "free.u[1]", "free.u[2]", "free.u[3]", "free.u[4]", "free.u[5]", "free.u[6]"},
+                                &r, 1e-10);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    int impacts = 0, rests = 0;
+    for (const sim::EventRecord& ev : r.stats.events) {
+      EXPECT_NEAR(ev.time, t1, 1e-9) << how.name << ": " << ev.element << " " << ev.kind;
+      impacts += Has(ev.kind, "impact") ? 1 : 0;
+      rests += Has(ev.kind, "rests on") ? 1 : 0;
+    }
+    EXPECT_EQ(impacts, 3) << how.name;
+    EXPECT_EQ(rests, 3) << how.name;
+    ASSERT_FALSE(r.stats.events.empty());
+    const double te = r.stats.events[0].time;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      // From the impact's right limit on (the second of the two rows at te).
+      if (s.times[i] < te || (s.times[i] == te && i + 1 < s.rows.size() && s.times[i + 1] == te)) continue;
+      EXPECT_NEAR(s.rows[i][0], 0.05, 1e-9) << how.name << " t = " << s.times[i];
+      for (int k = 1; k <= 6; ++k) EXPECT_NEAR(s.rows[i][static_cast<size_t>(k)], 0.0, 1e-12) << how.name << " t = " << s.times[i] << " u" << k;
+    }
+  }
+}
+
 // A ball (m = 2) resting on the plane, pulled up by a force 4 t: the plane's reaction
 // m g - 4 t pushes until t_l = m g / 4, then the ball lifts off and rises by
 // y = (2/3)(t - t_l)^3 / m (from y'' = (4 t - m g) / m = 4 (t - t_l) / m).
