@@ -569,9 +569,11 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     double gap = 0.0, cc = 0.0, vk = 0.0;
     if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
     for (int j = 0; j < nu_; ++j) vk += J_[static_cast<size_t>(j)] * u[j];
-    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(o))) || !(vk < -kRestSpeeds * atol_)) continue;
+    // (On its contact closing, or touching it at rest: the impulse may press it in, which a
+    // row of its own forbids; one it would pull is dropped below.)
+    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(o))) || !(vk <= kRestSpeeds * atol_)) continue;
     const double ek = Restitution(o);
-    const bool rk = ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
+    const bool rk = !(vk < 0.0) || ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
     const double bk = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : vk;
     with.push_back({static_cast<int>(k), vk, bk, rk});
   }
@@ -643,7 +645,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     const double after_o = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : rate;
     char line[200];
     std::snprintf(line, sizeof line, "impact at %s, speed %.17g -> %.17g", Where(o).c_str(), w.before, after_o);
-    struck.push_back({t, Element(o), line});
+    if (std::abs(w.v) > kRestSpeeds * atol_) struck.push_back({t, Element(o), line});  // (a touch: its rest only)
     if (w.rest) o.resting = true;
     else if (o.plane >= 0) Lift(o, t, gap, rate);
   }
