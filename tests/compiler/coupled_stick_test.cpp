@@ -97,9 +97,9 @@ void ExpectOneJoint(const std::string& pair, const std::string& one, double stop
 
 // The one-joint model of GearedPair: rod 1 (I1 = 1/3) and a rod of rod 2's inertia times
 // k^2 (m = 2 / 4: I = 1/24), friction torque `friction` (B1 + |k| B2).
-std::string OneJoint(double friction, const std::string& equations) {
-  return "model One\n  World world(g = {0, 0, -9.81});\n  Revolute j1(axis = {0, 0, 1}, friction_torque = " +
-         Num(friction) +
+std::string OneJoint(double friction, const std::string& equations, double u0 = 0.0) {
+  return "model One\n  World world(g = {0, 0, -9.81});\n  Revolute j1(axis = {0, 0, 1}, u(start = " + Num(u0) +
+         "), friction_torque = " + Num(friction) +
          ", friction_exact = true);\n  Rod r1(L = 1, m = 1);\n  Rod r2(L = 0.5, m = 0.5);\nequation\n"
          "  connect(world.frame_b, j1.frame_a);\n  connect(j1.frame_b, r1.frame_a);\n"
          "  connect(j1.frame_b, r2.frame_a);\n" +
@@ -122,20 +122,23 @@ TEST(CoupledStick, GearedPairWithFrictionOnBothJointsIsOneJointWithTheReflectedF
   ExpectOneJoint(pair, OneJoint(0.2, drive), 10.0, 4, {s, M_PI + s, 2 * M_PI + s}, 3e-7);
 }
 
-// A reinit stops the sliding pair (j1.u to 0; j2 follows through the coupling) at t = 2.9,
+// The pair (friction 0.15 on j1, 0.1 on j2: 0.15 + 0.1 / 2 = 0.2 again) slides from the start
+// (u1 = 2) until a reinit stops it (j1.u to 0; j2 follows through the coupling) at t = 2.9,
 // where the drive 0.3 sin 2.9 = 0.072 is below the pair's 0.2: both joints are stuck right
 // after the jump, held as one until the drive passes -0.2 (t = pi + asin(2/3)). If this
-// fails, the pair stuck after a velocity jump stops the run (exit 2: before this change), or
-// it slips at another time than the one joint.
+// fails, the pair stuck after a velocity jump stops the run (exit 2 at the reinit, "the
+// constraints make their motions dependent": before this change), or it slips at another
+// time than the one joint.
 TEST(CoupledStick, PairStoppedByAReinitSticksAsOneJoint) {
   const std::string eqs = "  j1.tau = 0.3 * sin(time);\n  when time > 2.9 then\n    reinit(j1.u, 0);\n  end when;\n";
   const std::string pair =
-      GearedPair("Pair", "{0, 0, -9.81}", ", friction_torque = 0.05, friction_exact = true",
-                 ", friction_torque = 0.3, friction_exact = true", eqs);
-  const double s = std::asin(0.2 / 0.3);
-  ExpectOneJoint(pair, OneJoint(0.2, eqs), 5.0, 2, {s, M_PI + s}, 1e-7);
+      GearedPair("Pair", "{0, 0, -9.81}", ", u(start = 2), friction_torque = 0.15, friction_exact = true",
+                 ", friction_torque = 0.1, friction_exact = true", eqs);
+  ExpectOneJoint(pair, OneJoint(0.2, eqs, 2.0), 5.0, 1, {M_PI + std::asin(0.2 / 0.3)}, 1e-7);
 }
 
+// (Before this change the sliding start below was a silent wrong answer: after the jump j1
+// stuck alone, j2 kept its sliding friction at zero speed, and the pair slipped at 2.93.)
 // A carrier on an x rail, pushed by a constant force F (acceleration a = F / (m_c + m1 + m2)),
 // carries a gear pair of discs centred on their axes, both with exact friction mu (pin
 // radii r1, r2): each disc's joint carries m_i a across its axis, N_i = m_i a whatever the
@@ -146,23 +149,23 @@ TEST(CoupledStick, PairStoppedByAReinitSticksAsOneJoint) {
 constexpr double kMc = 1.5, kM1 = 2.0, kM2 = 3.0, kI1 = 0.3, kI2 = 0.8, kMu1 = 0.4, kMu2 = 0.6, kR1 = 0.05,
                  kR2 = 0.08, kF = 13.0;
 
-std::string GearOnCarrier(bool one, const std::string& equations) {
+std::string GearOnCarrier(bool one, const std::string& equations, double u0) {
   const double mu_one = (kMu1 * kR1 * kM1 + std::abs(kRatio) * kMu2 * kR2 * kM2) / (kR1 * kM1);
   auto disc = [](const std::string& name, double m, double i) {
     return "  Body " + name + "(m = " + Num(m) + ", I = diagonal({" + Num(i) + ", " + Num(i) + ", " + Num(i) + "}));\n";
   };
-  auto joint = [](const std::string& name, double mu, double r) {
-    return "  Revolute " + name + "(axis = {0, 0, 1}, mu = " + Num(mu) + ", friction_radius = " + Num(r) +
-           ", friction_exact = true);\n";
+  auto joint = [](const std::string& name, double mu, double r, double u) {
+    return "  Revolute " + name + "(axis = {0, 0, 1}, u(start = " + Num(u) + "), mu = " + Num(mu) +
+           ", friction_radius = " + Num(r) + ", friction_exact = true);\n";
   };
   std::string t = "model G\n  World world(g = {0, 0, 0});\n  Prismatic rail(axis = {1, 0, 0});\n  Body carrier(m = " +
                   Num(kMc) + ");\n";
   if (one) {
-    t += joint("j1", mu_one, kR1) + disc("d1", kM1, kI1 + kRatio * kRatio * kI2) + disc("d2", kM2, 0.0) +
+    t += joint("j1", mu_one, kR1, u0) + disc("d1", kM1, kI1 + kRatio * kRatio * kI2) + disc("d2", kM2, 0.0) +
          "equation\n  connect(carrier.frame_a, d2.frame_a);\n";
   } else {
-    t += joint("j1", kMu1, kR1) + disc("d1", kM1, kI1) + "  FixedTranslation base(r = {2, 0, 0});\n" +
-         joint("j2", kMu2, kR2) + disc("d2", kM2, kI2) + "  JointCoupling gear(ratio = " + Num(kRatio) +
+    t += joint("j1", kMu1, kR1, u0) + disc("d1", kM1, kI1) + "  FixedTranslation base(r = {2, 0, 0});\n" +
+         joint("j2", kMu2, kR2, kRatio * u0) + disc("d2", kM2, kI2) + "  JointCoupling gear(ratio = " + Num(kRatio) +
          ");\nequation\n  connect(carrier.frame_a, base.frame_a);\n  connect(base.frame_b, j2.frame_a);\n"
          "  connect(j2.frame_b, d2.frame_a);\n  connect(j1.drive, gear.flange_a);\n  connect(j2.drive, gear.flange_b);\n";
   }
@@ -171,9 +174,9 @@ std::string GearOnCarrier(bool one, const std::string& equations) {
          Num(kF) + ";\n" + equations + "end G;\n";
 }
 
-// The pair's bound is 0.4 0.05 2 a + 0.5 0.6 0.08 3 a = 0.112 a (a = 2 m/s^2: 0.224); the
-// drive 0.3 sin t passes it at asin(0.224 / 0.3) = 0.843 and, stuck after the jump at 2.9,
-// at pi + 0.843. If this fails, the pair's mu N bound is not the sum
+// The pair's bound is 0.4 0.05 2 a + 0.5 0.6 0.08 3 a = 0.112 a (a = 2 m/s^2: 0.224). From
+// rest the drive 0.3 sin t passes it at asin(0.224 / 0.3) = 0.843; sliding from the start
+// (u1 = 2) and stuck by the reinit at 2.9, at pi + 0.843. If this fails, the pair's mu N bound is not the sum
 // of the joints' reflected (B1 + |k| B2, N of each joint), or the pair stuck after the
 // jump's friction impulses stops the run (exit 2: before this change).
 TEST(CoupledStick, GearOnACarrierWithMuNIsOneJointWithTheReflectedFriction) {
@@ -181,7 +184,8 @@ TEST(CoupledStick, GearOnACarrierWithMuNIsOneJointWithTheReflectedFriction) {
   const double bound = (kMu1 * kR1 * kM1 + std::abs(kRatio) * kMu2 * kR2 * kM2) * kF / (kMc + kM1 + kM2);
   ASSERT_NEAR(bound, 0.224, 1e-15);
   const double s = std::asin(bound / 0.3);
-  ExpectOneJoint(GearOnCarrier(false, eqs), GearOnCarrier(true, eqs), 5.0, 2, {s, M_PI + s}, 1e-7);
+  ExpectOneJoint(GearOnCarrier(false, eqs, 0.0), GearOnCarrier(true, eqs, 0.0), 5.0, 2, {s, M_PI + s}, 1e-7);
+  ExpectOneJoint(GearOnCarrier(false, eqs, 2.0), GearOnCarrier(true, eqs, 2.0), 5.0, 1, {M_PI + s}, 1e-7);
 }
 
 }  // namespace
