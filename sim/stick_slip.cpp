@@ -64,7 +64,9 @@ StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program)
   }
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   col_.resize(ydot_.size());
-  rows_ = !joints_.empty() && rt::Summarize(program).dof < nu_;
+  dof_ = rt::Summarize(program).dof;
+  rows_ = !joints_.empty() && dof_ < nu_;
+  scleronomic_ = program.q_prescribed.empty();
   direct_ = direct_ && !rows_;  // beside rows: Newton (1), whose X CheckRows reads for dependent stuck joints
 }
 
@@ -155,6 +157,15 @@ void StickSlipEvents::Sync(rt::Workspace& ws) const { Apply(ws); }
 
 std::vector<int> StickSlipEvents::RestingSpeeds() const { return stops_ ? stops_->RestingSpeeds() : std::vector<int>{}; }
 
+bool StickSlipEvents::AllHeld() const {
+  if (!rows_ || !scleronomic_) return false;
+  const std::vector<int> resting = RestingSpeeds();
+  int held = static_cast<int>(resting.size());
+  for (const Joint& j : joints_)
+    held += j.mode == 0 && j.leader < 0 && !HeldByStop(j, resting) ? 1 : 0;
+  return held >= dof_;
+}
+
 bool StickSlipEvents::HeldByStop(const Joint& j, const std::vector<int>& resting) const {
   return j.by_stops || std::find(resting.begin(), resting.end(), j.f.u) != resting.end();
 }
@@ -207,6 +218,7 @@ int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double*
     const int s = SolveNewton(ws, t, y, out, stuck);
     for (const Joint& p : joints_)
       if (s == 0 && p.leader >= 0) out[p.f.q] = 0.0, out[nq_ + p.f.u] = 0.0;  // held exactly with their leader
+    if (s == 0 && !stuck.empty() && AllHeld()) std::fill(out, out + nq_ + nu_, 0.0);
     return s;
   }
   std::vector<int> speeds;
@@ -349,6 +361,7 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
   if (l.mode == 0)
     for (const Joint& k : joints_)  // a sliding member pulled in is at rest exactly, as j
       if (&k == &l || (k.leader >= 0 && &joints_[static_cast<size_t>(k.leader)] == &l)) y[nq_ + k.f.u] = 0.0;
+  if (l.mode == 0 && AllHeld()) std::fill(y + nq_, y + nq_ + nu_, 0.0);  // the whole mechanism at rest
   SettleGroup(ws, t, l, before, &j);
   Apply(ws);  // the decided law, for what reads ws next (the stops' Resettle)
   return 0;
@@ -567,6 +580,7 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
   for (Joint* j : stopped)  // (one decided with an earlier one's group is not decided again)
     if (j->stamp <= from)
       if (int s = Decide(ws, t, y, *j); s != 0) return s;
+  if (AllHeld()) std::fill(y + nq_, y + nq_ + nu_, 0.0);
   Apply(ws);
   return 0;
 }

@@ -136,6 +136,11 @@ class StickSlipEvents {
   // rt::Derivative with the stops' resting sides held.
   int Eval(rt::Workspace& ws, double t, const double* y, double* ydot);
   bool HeldByStop(const Joint& j, const std::vector<int>& resting) const;
+  // Beside rows: the stuck joints' rows (leaders') and the resting stops' hold every degree of
+  // freedom, and nothing is prescribed: u = 0 is the motion, all of it, exactly (on the reduced
+  // form a dependent stuck speed is the others' round-off, on the multiplier form the
+  // projection's drift moved it: 1e-17 to 1e-11 a creep, before).
+  bool AllHeld() const;
   std::vector<int> RestingSpeeds() const;
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
   int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
@@ -157,6 +162,8 @@ class StickSlipEvents {
   bool grouped_ = false;            // some joint is a passenger (Joint::leader)
   long decisions_ = 0;              // Decide's count (Joint::stamp)
   bool rows_ = false;               // constraint rows: CheckRows at each stick decision
+  int dof_ = 0;                     // the degrees of freedom (rt::ProgramSummary::dof)
+  bool scleronomic_ = false;        // no prescribed motion: held rows leave u = 0 the only motion
   EndStopEvents* stops_ = nullptr;  // SetStops (null: none)
   std::vector<Joint> joints_;
   int nq_ = 0, nu_ = 0;
