@@ -218,7 +218,6 @@ int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double*
     const int s = SolveNewton(ws, t, y, out, stuck);
     for (const Joint& p : joints_)
       if (s == 0 && p.leader >= 0) out[p.f.q] = 0.0, out[nq_ + p.f.u] = 0.0;  // held exactly with their leader
-    if (s == 0 && !stuck.empty() && AllHeld()) std::fill(out, out + nq_ + nu_, 0.0);
     return s;
   }
   std::vector<int> speeds;
@@ -580,7 +579,6 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
   for (Joint* j : stopped)  // (one decided with an earlier one's group is not decided again)
     if (j->stamp <= from)
       if (int s = Decide(ws, t, y, *j); s != 0) return s;
-  if (AllHeld()) std::fill(y + nq_, y + nq_ + nu_, 0.0);
   Apply(ws);
   return 0;
 }

@@ -137,9 +137,11 @@ class StickSlipEvents {
   int Eval(rt::Workspace& ws, double t, const double* y, double* ydot);
   bool HeldByStop(const Joint& j, const std::vector<int>& resting) const;
   // Beside rows: the stuck joints' rows (leaders') and the resting stops' hold every degree of
-  // freedom, and nothing is prescribed: u = 0 is the motion, all of it, exactly (on the reduced
-  // form a dependent stuck speed is the others' round-off, on the multiplier form the
-  // projection's drift moved it: 1e-17 to 1e-11 a creep, before).
+  // freedom, and nothing is prescribed: u = 0 is the motion, all of it. A decision that
+  // sticks then sets every speed to 0 exactly (StopOnRows leaves the others' round-off, which
+  // the multiplier form's projection spread to the stuck speed: 5e-11, before). The rates are
+  // left as solved (their round-off, 1e-17): f exactly 0 made DOP853 in the stepping API step
+  // over a narrow slip window (HeldStep.ANarrowSlipWindowIsFoundInsideLargeStepsOfTheSimulator).
   bool AllHeld() const;
   std::vector<int> RestingSpeeds() const;
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
