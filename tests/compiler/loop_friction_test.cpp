@@ -10,11 +10,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -25,15 +24,11 @@ constexpr double kMa = 0.5, kMb = 1.0, kMc = 0.8, kG = 9.81;  // their masses (u
 // examples/fourbar.mech at rest (omega0 = 0) with `crank_mods` on the crank's joint and
 // `rocker_mods` on the rocker's.
 std::string FourBarAtRest(const std::string& crank_mods, const std::string& rocker_mods = "") {
-  std::ifstream in(kRoot + "/examples/fourbar.mech");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string text = buf.str();
-  auto put = [&](const std::string& from, const std::string& to) { text.replace(text.find(from), from.size(), to); };
-  put("\"rad/s\") = 6", "\"rad/s\") = 0");
-  put("u(start = omega0)", "u(start = omega0)" + crank_mods);
-  put("q(start = 1.6)", "q(start = 1.6)" + rocker_mods);
-  return text;
+  FourBarText bar;
+  bar.omega0 = 0;
+  bar.crank_mods = crank_mods;
+  bar.rocker_mods = rocker_mods;
+  return bar.Text();
 }
 
 // dV/d(theta2): the torque that holds the crank at rest against gravity through the loop, by
