@@ -61,23 +61,27 @@ class StickSlipEvents {
   // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
   // friction passes mu_s r N slips at once: no smooth state).
   std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol);
-  // Per joint its mode (+1, -1 sliding that way, 0 stuck), holding force, leader (-1: none)
-  // and ratio (Joint), kModeValues numbers a joint: what a saved state needs (sim/hybrid_ode.h).
+  // Per joint its mode (+1, -1 sliding that way, 0 stuck, 2 held by resting stops through the
+  // rows: MarkHeldByStops), holding force, leader (-1: none) and ratio (Joint), kModeValues
+  // numbers a joint: what a saved state and the output rows' held solve
+  // (sim/held_outputs.cpp) need (sim/hybrid_ode.h).
   static constexpr size_t kModeValues = 4;
   std::vector<double> Modes() const {
     std::vector<double> m;
     for (const Joint& j : joints_)
-      m.insert(m.end(), {static_cast<double>(j.mode), j.tau, static_cast<double>(j.leader), j.ratio});
+      m.insert(m.end(), {j.by_stops ? 2.0 : static_cast<double>(j.mode), j.tau, static_cast<double>(j.leader), j.ratio});
     return m;
   }
   void SetModes(const std::vector<double>& m) {
     grouped_ = false;
     for (size_t i = 0; i < joints_.size() && kModeValues * i + kModeValues - 1 < m.size(); ++i) {
       const double* v = m.data() + kModeValues * i;
-      joints_[i].mode = static_cast<int>(v[0]);
+      joints_[i].by_stops = v[0] == 2.0;
+      joints_[i].mode = joints_[i].by_stops ? 0 : static_cast<int>(v[0]);
       joints_[i].tau = v[1];
       const int leader = static_cast<int>(v[2]);
-      joints_[i].leader = leader >= 0 && leader < Count() && joints_[i].mode == 0 ? leader : -1;
+      joints_[i].leader =
+          leader >= 0 && leader < Count() && joints_[i].mode == 0 && !joints_[i].by_stops ? leader : -1;
       joints_[i].ratio = v[3];
       grouped_ = grouped_ || joints_[i].leader >= 0;
     }
