@@ -147,12 +147,16 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   if (modes.size() != n_stops + m.stick.Modes().size()) return false;
   // Values from outside (a master's serialized state): a side rests or not, accumulates
   // until a finite time, a joint slides either way, sticks with a finite force or is held by
-  // resting stops (2).
+  // resting stops (2) (and a leader: -1 or a joint's index, StickSlipEvents::Modes).
+  const size_t per = StickSlipEvents::kModeValues;
+  const auto n_joints = static_cast<double>((modes.size() - n_stops) / per);
   for (size_t i = 0; i < modes.size(); ++i) {
     const double v = modes[i];
-    const bool flag = i < n_stops ? i % 2 == 0 : (i - n_stops) % 2 == 0;
+    const bool flag = i < n_stops ? i % 2 == 0 : (i - n_stops) % per == 0;
+    const bool leader = i >= n_stops && (i - n_stops) % per == 2;
     if (!std::isfinite(v) || (flag && i < n_stops && v != 0.0 && v != 1.0) ||
-        (flag && i >= n_stops && v != 0.0 && v != 1.0 && v != -1.0 && v != 2.0))
+        (flag && i >= n_stops && v != 0.0 && v != 1.0 && v != -1.0 && v != 2.0) ||
+        (leader && (v != std::floor(v) || v < -1.0 || v >= n_joints)))
       return false;
   }
   m.stops.SetResting(std::vector<double>(modes.begin(), modes.begin() + static_cast<long>(n_stops)));

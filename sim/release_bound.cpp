@@ -14,10 +14,10 @@ constexpr double kScales = 2.0;     // steps of at most this many T
 // makes of them are zero (a constant g stays unbounded).
 constexpr double kNoise = 1e-11;
 constexpr double kInf = HUGE_VAL;
-constexpr double kAgree = 0.1;
+constexpr double kAgree = 0.1;  // derivatives over d and 2d this close (relative) are g's own
 // The history's model is trusted (no samples around t) while its bound and time scale are at
 // least this many times the span of the last two steps.
-constexpr double kHistoryRoom = 4.0;  // derivatives over d and 2d this close (relative) are g's own
+constexpr double kHistoryRoom = 4.0;
 
 // The positive roots of g + g1 s + g2 s^2 / 2, ascending (at most two); *n how many.
 void PositiveRoots(double g, double g1, double g2, double* r, int* n) {

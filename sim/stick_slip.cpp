@@ -10,6 +10,25 @@
 // large that the difference is not lost in the rounding of a (as rt::InverseMassColumn).
 // X costs m evaluations; it changes only with q, so it is kept for the same stuck set and
 // reused (chord steps) while they bring a_S within kChordTol of zero, else made afresh.
+//
+// Beside rows the stuck speeds may be dependent: a geared pair's two joints, each with
+// friction (u_2 = k u_1 by the coupling), a four-bar's crank and rocker (one degree of
+// freedom). Their rows u_S = 0 and A u = 0 are then dependent (X singular) and the forces
+// that hold them not unique. Where u_p = k_p u_l for every motion the rows allow, the
+// forces' power is (tau_l + sum_p k_p tau_p) u_l: only
+//   T = tau_l + sum_p k_p tau_p,   and the group sticks while   |T| <= B_g = B_l + sum_p |k_p| B_p   (4)
+// (each k_p tau_p ranges over [-|k_p| B_p, |k_p| B_p], B = mu_s r N + C_s: some split holds
+// the group exactly then). The stuck set is reduced to independent leaders l (greedy in the
+// joints' order, on X scaled by the tree's inverse mass: a Schur complement below kDependent
+// is a dependent speed, k_p = (X_pL X_LL^-1)_l) whose rows hold T as one reaction; each
+// member carries the same fraction |T| / B_g of its bound, tau_l = T B_l / B_g and
+// tau_p = sign(k_p) T B_p / B_g. Where |T| reaches B_g the group slips together, each
+// passenger the way its ratio takes it; a sliding joint whose speed the rows tie to stuck
+// ones is at rest with them and joins. Exact with constant friction and wherever N does not
+// depend on the split (a coupling's reaction acts along the joints' axes, not across them);
+// in a closed loop with mu N the split moves the loop's forces and so the N's: B_g is then
+// that of the equal-fraction split (another split could hold a little longer). A speed tied
+// to two groups' leaders (a differential) is not solved: exit 2, naming the joints.
 #include "sim/stick_slip.h"
 
 #include "sim/end_stops.h"
@@ -29,28 +48,9 @@ constexpr int kChordSteps = 3;  // chord steps before X is made afresh
 // Beside constraint rows: a pivot of X, scaled by the tree's inverse mass (X_kk <= (M^-1)_kk),
 // below this is a motion the rows fix (as rt::InverseMassColumn's dead point).
 constexpr double kDependent = 1e-10;
-
-// Gaussian elimination with complete pivoting on the m x m row-major A: the index (in A) of
-// the first pivot column below tol, or -1 when every pivot is above it.
-int FirstDependent(std::vector<double> A, size_t m, double tol) {
-  std::vector<size_t> col(m);
-  for (size_t k = 0; k < m; ++k) col[k] = k;
-  for (size_t k = 0; k < m; ++k) {
-    size_t pr = k, pc = k;
-    for (size_t r = k; r < m; ++r)
-      for (size_t c = k; c < m; ++c)
-        if (std::abs(A[r * m + c]) > std::abs(A[pr * m + pc])) pr = r, pc = c;
-    if (!(std::abs(A[pr * m + pc]) > tol)) return static_cast<int>(col[k]);
-    for (size_t c = 0; c < m; ++c) std::swap(A[k * m + c], A[pr * m + c]);
-    for (size_t r = 0; r < m; ++r) std::swap(A[r * m + k], A[r * m + pc]);
-    std::swap(col[k], col[pc]);
-    for (size_t r = k + 1; r < m; ++r) {
-      const double f = A[r * m + k] / A[k * m + k];
-      for (size_t c = k; c < m; ++c) A[r * m + c] -= f * A[k * m + c];
-    }
-  }
-  return -1;
-}
+// (4): a dependent speed's scaled ratio to a leader's ((X_pL X_LL^-1)_l on the scaled X)
+// above this ties it to that leader; the differences' round-off leaves ~1e-13.
+constexpr double kTied = 1e-8;
 }  // namespace
 
 StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program) {
@@ -64,21 +64,107 @@ StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program)
   }
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   col_.resize(ydot_.size());
-  rows_ = !joints_.empty() && rt::Summarize(program).dof < nu_;
+  dof_ = rt::Summarize(program).dof;
+  rows_ = !joints_.empty() && dof_ < nu_;
+  scleronomic_ = program.q_prescribed.empty();
   direct_ = direct_ && !rows_;  // beside rows: Newton (1), whose X CheckRows reads for dependent stuck joints
 }
 
 void StickSlipEvents::Apply(rt::Workspace& ws) const {
-  for (const Joint& j : joints_) rt::SetFrictionMode(ws, j.index, j.mode == 0 ? 2 : j.mode, j.tau);
+  for (const Joint& j : joints_)
+    rt::SetFrictionMode(ws, j.index, j.mode == 0 ? 2 : j.mode, j.mode == 0 ? Applied(ws, j) : j.tau);
 }
 
 double StickSlipEvents::StaticBound(const rt::Workspace& ws, const Joint& j) const {
   return j.f.mu_s * j.f.radius * rt::FrictionNormal(ws, j.index) + j.f.c_s;
 }
 
+bool StickSlipEvents::Leads(const Joint& j) const {
+  if (!grouped_) return false;
+  const int i = static_cast<int>(&j - joints_.data());
+  for (const Joint& p : joints_)
+    if (p.leader == i) return true;
+  return false;
+}
+
+double StickSlipEvents::GroupBound(const rt::Workspace& ws, const Joint& l) const {
+  double B = StaticBound(ws, l);  // (4)
+  const int i = static_cast<int>(&l - joints_.data());
+  for (const Joint& p : joints_)
+    if (grouped_ && p.leader == i) B += std::abs(p.ratio) * StaticBound(ws, p);
+  return B;
+}
+
+double StickSlipEvents::Applied(const rt::Workspace& ws, const Joint& j) const {
+  if (!grouped_) return j.tau;
+  if (j.leader >= 0) {  // (4): tau_p = sign(k_p) T B_p / B_g
+    const Joint& l = joints_[static_cast<size_t>(j.leader)];
+    const double B = GroupBound(ws, l);
+    return B > 0.0 ? l.tau * (j.ratio < 0.0 ? -1.0 : 1.0) * StaticBound(ws, j) / B : 0.0;
+  }
+  if (!Leads(j)) return j.tau;
+  const double B = GroupBound(ws, j);  // (4): tau_l = T B_l / B_g
+  return B > 0.0 ? j.tau * StaticBound(ws, j) / B : j.tau;
+}
+
+void StickSlipEvents::Ungroup() {
+  const std::vector<int> resting = RestingSpeeds();
+  grouped_ = false;
+  for (Joint& p : joints_) {
+    if (p.leader < 0) continue;
+    const Joint& l = joints_[static_cast<size_t>(p.leader)];
+    if (p.mode != 0 || l.mode != 0 || l.leader >= 0 || HeldByStop(l, resting) || HeldByStop(p, resting)) p.leader = -1;
+    grouped_ = grouped_ || p.leader >= 0;
+  }
+}
+
+void StickSlipEvents::SettleGroup(const rt::Workspace& ws, double t, Joint& l, const std::vector<int>& before,
+                                  const Joint* j) {
+  const int li = static_cast<int>(&l - joints_.data());
+  std::vector<Joint*> group{&l};
+  for (Joint& p : joints_)
+    if (grouped_ && p.leader == li) group.push_back(&p);
+  const double T = l.tau, B = GroupBound(ws, l);
+  for (Joint* k : group) {
+    const double r = k == &l ? 1.0 : k->ratio;  // u_k = r u_l, so T and B_g reflected onto k: / r
+    if (k != &l) k->mode = l.mode == 0 ? 0 : (r < 0.0 ? -l.mode : l.mode);
+    const bool undecided = k->stamp == 0;  // (at the start: its first law)
+    k->stamp = decisions_;
+    const int was = before[static_cast<size_t>(k - joints_.data())];
+    // Sliding on the way it slid: its speed's zero was round-off's (beside rows, a dependent
+    // speed just after a slip with zero acceleration), no change of law to log.
+    if (!(k == j ? was == 0 || k->mode != was : k->mode != was || undecided)) continue;
+    std::string with;
+    for (const Joint* o : group)
+      if (o != k) with += (with.empty() ? "; held as one with '" : "', '") + o->f.joint;
+    if (!with.empty()) with += "' (the constraints tie their speeds)";
+    char buf[400];
+    if (k->mode == 0)
+      std::snprintf(buf, sizeof buf, "sticks (friction %.17g within %.17g%s)", T / r, B / std::abs(r), with.c_str());
+    else
+      std::snprintf(buf, sizeof buf, "%s %s (friction needed %.17g, at most %.17g%s)",
+                    was == 0 ? "slips," : "reverses, slides", k->mode > 0 ? "forwards" : "backwards", T / r,
+                    B / std::abs(r), with.c_str());
+    log_.push_back({t, k->f.joint, buf});
+  }
+  if (l.mode != 0 && group.size() > 1) {
+    for (Joint* k : group) k->leader = -1;
+    Ungroup();
+  }
+}
+
 void StickSlipEvents::Sync(rt::Workspace& ws) const { Apply(ws); }
 
 std::vector<int> StickSlipEvents::RestingSpeeds() const { return stops_ ? stops_->RestingSpeeds() : std::vector<int>{}; }
+
+bool StickSlipEvents::AllHeld() const {
+  if (!rows_ || !scleronomic_) return false;
+  const std::vector<int> resting = RestingSpeeds();
+  int held = static_cast<int>(resting.size());
+  for (const Joint& j : joints_)
+    held += j.mode == 0 && j.leader < 0 && !HeldByStop(j, resting) ? 1 : 0;
+  return held >= dof_;
+}
 
 bool StickSlipEvents::HeldByStop(const Joint& j, const std::vector<int>& resting) const {
   return j.by_stops || std::find(resting.begin(), resting.end(), j.f.u) != resting.end();
@@ -109,7 +195,7 @@ int StickSlipEvents::MarkHeldByStops(rt::Workspace& ws, double t, const double* 
     }
     j.mode = mode;
     j.by_stops = response[0] > 0.0 && std::abs(response[1]) <= kDependent * response[0];
-    if (j.by_stops) j.mode = 0, j.tau = 0.0;
+    if (j.by_stops) j.mode = 0, j.tau = 0.0, j.leader = -1;
     Apply(ws);
   }
   return 0;
@@ -121,13 +207,19 @@ int StickSlipEvents::Eval(rt::Workspace& ws, double t, const double* y, double* 
 }
 
 int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double* ydot) {
-  std::vector<Joint*> stuck;
+  if (grouped_) Ungroup();
+  std::vector<Joint*> stuck;  // their rows: the passengers' speeds follow their leaders' (4)
   const std::vector<int> resting = RestingSpeeds();
   for (Joint& j : joints_)
-    if (j.mode == 0 && !HeldByStop(j, resting)) stuck.push_back(&j);
+    if (j.mode == 0 && !HeldByStop(j, resting) && j.leader < 0) stuck.push_back(&j);
   Apply(ws);
   double* out = ydot ? ydot : ydot_.data();
-  if (!direct_) return SolveNewton(ws, t, y, out, stuck);
+  if (!direct_) {
+    const int s = SolveNewton(ws, t, y, out, stuck);
+    for (const Joint& p : joints_)
+      if (s == 0 && p.leader >= 0) out[p.f.q] = 0.0, out[nq_ + p.f.u] = 0.0;  // held exactly with their leader
+    return s;
+  }
   std::vector<int> speeds;
   for (const Joint* j : stuck) speeds.push_back(j->f.u);
   // The event functions and decisions take one more pass from the solved forces (the same
@@ -209,7 +301,7 @@ int StickSlipEvents::MakeX(rt::Workspace& ws, double t, const double* y, const s
   double a_max = 0.0;
   for (const Joint* j : stuck) a_max = std::max(a_max, std::abs(a0[nq_ + j->f.u]));
   for (size_t k = 0; k < m; ++k) {  // (1): column k of X
-    const double tau0 = stuck[k]->tau, step = 1e3 * (1.0 + std::abs(tau0) + a_max);
+    const double tau0 = Applied(ws, *stuck[k]), step = 1e3 * (1.0 + std::abs(tau0) + a_max);
     rt::SetFrictionMode(ws, stuck[k]->index, 2, tau0 + step);
     if (int s = Eval(ws, t, y, col_.data()); s != 0) return s;
     rt::SetFrictionMode(ws, stuck[k]->index, 2, tau0);
@@ -226,24 +318,26 @@ int StickSlipEvents::Functions(rt::Workspace& ws, double t, const double* y, dou
   const std::vector<int> resting = RestingSpeeds();
   for (size_t i = 0; i < joints_.size(); ++i) {
     const Joint& j = joints_[i];
-    if (HeldByStop(j, resting)) {
-      g[i] = 1.0;  // the stop's: its own event function watches it
+    if (HeldByStop(j, resting) || j.leader >= 0) {
+      g[i] = 1.0;  // the stop's, or a passenger (4): its own, or its leader's, event function watches it
     } else if (j.mode != 0) {  // (beside rows a dependent speed is the evaluation's, not y's)
       g[i] = j.mode * (rows_ ? rt::FrictionSpeed(program_, ws, j.index) : y[nq_ + j.f.u]);
     } else {
-      g[i] = StaticBound(ws, j) - std::abs(j.tau);
+      g[i] = GroupBound(ws, j) - std::abs(j.tau);
     }
   }
   return 0;
 }
 
 int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
-  const int was = j.mode;
+  std::vector<int> before;  // the laws before: SettleGroup logs the members' changes
+  for (const Joint& k : joints_) before.push_back(k.mode);
   j.mode = 0;
+  j.leader = -1;
+  j.stamp = ++decisions_;
   if (rows_)
     if (int s = StopOnRows(ws, t, y, j); s != 0) return s;
   y[nq_ + j.f.u] = 0.0;
-  char buf[200];
   if (const int c = rows_ ? CheckRows(ws, t, y, j) : 0; c != 0) {
     if (c < 0) return c;
     // The rows fix its motion here (a dead point): it moves on as they drive it.
@@ -251,6 +345,7 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
     Apply(ws);
     if (int s = Eval(ws, t, y, ydot_.data()); s != 0) return s;
     j.mode = ydot_[static_cast<size_t>(nq_ + j.f.u)] < 0.0 ? -1 : 1;
+    char buf[200];
     std::snprintf(buf, sizeof buf, "slides %s (the constraints fix its motion here: a dead point, no sticking)",
                   j.mode > 0 ? "forwards" : "backwards");
     log_.push_back({t, j.f.joint, buf});
@@ -258,17 +353,15 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
     return 0;
   }
   if (int s = Solve(ws, t, y, nullptr); s != 0) return s;
-  const double bound = StaticBound(ws, j);
-  if (std::abs(j.tau) <= bound) {
-    std::snprintf(buf, sizeof buf, "sticks (friction %.17g within %.17g)", j.tau, bound);
-  } else {
-    j.mode = j.tau > 0.0 ? -1 : 1;  // it slides where the force it needed pulls it
-    std::snprintf(buf, sizeof buf, "%s %s (friction needed %.17g, at most %.17g)",
-                  was == 0 ? "slips," : "reverses, slides", j.mode > 0 ? "forwards" : "backwards", j.tau, bound);
-  }
-  // Sliding on the way it slid: its speed's zero was round-off's (beside rows, a dependent
-  // speed just after a slip with zero acceleration), no change of law to log.
-  if (was == 0 || j.mode != was) log_.push_back({t, j.f.joint, buf});
+  // (4): j's group (j alone without rows tying it) sticks while its force is within B_g, else
+  // slides where the force it needed pulls it.
+  Joint& l = j.leader >= 0 ? joints_[static_cast<size_t>(j.leader)] : j;
+  if (std::abs(l.tau) > GroupBound(ws, l)) l.mode = l.tau > 0.0 ? -1 : 1;
+  if (l.mode == 0)
+    for (const Joint& k : joints_)  // a sliding member pulled in is at rest exactly, as j
+      if (&k == &l || (k.leader >= 0 && &joints_[static_cast<size_t>(k.leader)] == &l)) y[nq_ + k.f.u] = 0.0;
+  if (l.mode == 0 && AllHeld()) std::fill(y + nq_, y + nq_ + nu_, 0.0);  // the whole mechanism at rest
+  SettleGroup(ws, t, l, before, &j);
   Apply(ws);  // the decided law, for what reads ws next (the stops' Resettle)
   return 0;
 }
@@ -276,6 +369,7 @@ int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
 int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   if (i < 0 || i >= Count()) return 0;
   Joint& j = joints_[static_cast<size_t>(i)];
+  if (j.leader >= 0) return 0;  // a passenger: its leader's function watches it (4)
   if (j.mode != 0) return Decide(ws, t, y, j);
   // A stuck joint's force needed reached its bound and grows past it: it slips. (Deciding
   // again here found it within the bound by the root's last bits and kept it stuck, with
@@ -286,11 +380,11 @@ int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   // round-off's sign made a second event, a reversal into the same direction.
   if (rows_)
     if (int s = StopOnRows(ws, t, y, j); s != 0) return s;
+  std::vector<int> before;
+  for (const Joint& k : joints_) before.push_back(k.mode);
   j.mode = j.tau > 0.0 ? -1 : 1;
-  char buf[200];
-  std::snprintf(buf, sizeof buf, "slips, %s (friction needed %.17g, at most %.17g)", j.mode > 0 ? "forwards" : "backwards",
-                j.tau, StaticBound(ws, j));
-  log_.push_back({t, j.f.joint, buf});
+  ++decisions_;
+  SettleGroup(ws, t, j, before, &j);  // (its passengers slide with it)
   Apply(ws);
   return 0;
 }
@@ -306,8 +400,8 @@ int StickSlipEvents::StopOnRows(rt::Workspace& ws, double t, double* y, const Jo
   if (u == 0.0) return 0;
   double a_max = 0.0;
   for (int i = 0; i < nu_; ++i) a_max = std::max(a_max, std::abs(ydot_[static_cast<size_t>(nq_ + i)]));
-  const double step = 1e3 * (1.0 + std::abs(j.tau) + a_max);
-  rt::SetFrictionMode(ws, j.index, 2, j.tau + step);
+  const double tau0 = Applied(ws, j), step = 1e3 * (1.0 + std::abs(tau0) + a_max);
+  rt::SetFrictionMode(ws, j.index, 2, tau0 + step);
   const int s = Eval(ws, t, y, col_.data());
   Apply(ws);
   if (s != 0) return s;
@@ -319,42 +413,89 @@ int StickSlipEvents::StopOnRows(rt::Workspace& ws, double t, double* y, const Jo
 }
 
 int StickSlipEvents::CheckRows(rt::Workspace& ws, double t, const double* y, const Joint& j) {
-  std::vector<Joint*> stuck;
-  std::vector<int> ids;
   const std::vector<int> resting = RestingSpeeds();
-  size_t at = 0;
+  std::vector<Joint*> cand;  // the stuck joints (j among them) in the joints' order, then the sliding ones
   for (Joint& k : joints_)
-    if (k.mode == 0 && !HeldByStop(k, resting)) {
-      if (&k == &j) at = stuck.size();
-      stuck.push_back(&k);
-      ids.push_back(k.index);
-    }
+    if (k.mode == 0 && !HeldByStop(k, resting)) cand.push_back(&k);
+  const size_t n_stuck = cand.size();
+  for (Joint& k : joints_)
+    if (k.mode != 0 && !HeldByStop(k, resting)) cand.push_back(&k);
+  const size_t m = cand.size(), nu = static_cast<size_t>(nu_);
+  const size_t at = static_cast<size_t>(std::find(cand.begin(), cand.end(), &j) - cand.begin());
+  // X of (1) over all candidates, each at a fixed force (a stuck one's applied, a sliding one's 0).
   Apply(ws);
-  if (int s = Eval(ws, t, y, ydot_.data()); s != 0) return s;
-  if (int s = MakeX(ws, t, y, stuck, ydot_.data()); s != 0) return s;
-  x_ids_ = ids;  // Solve goes on from this X
-  const size_t m = stuck.size(), nu = static_cast<size_t>(nu_);
+  std::vector<double> base(m), X(m * m);
+  for (size_t k = 0; k < m; ++k) {
+    base[k] = k < n_stuck ? Applied(ws, *cand[k]) : 0.0;
+    rt::SetFrictionMode(ws, cand[k]->index, 2, base[k]);
+  }
+  int status = Eval(ws, t, y, ydot_.data());
+  double a_max = 0.0;
+  for (int i = 0; i < nu_; ++i) a_max = std::max(a_max, std::abs(ydot_[static_cast<size_t>(nq_ + i)]));
+  for (size_t k = 0; k < m && status == 0; ++k) {
+    const double step = 1e3 * (1.0 + std::abs(base[k]) + a_max);
+    rt::SetFrictionMode(ws, cand[k]->index, 2, base[k] + step);
+    status = Eval(ws, t, y, col_.data());
+    rt::SetFrictionMode(ws, cand[k]->index, 2, base[k]);
+    for (size_t r = 0; r < m; ++r)
+      X[r * m + k] = (col_[static_cast<size_t>(nq_ + cand[r]->f.u)] - ydot_[static_cast<size_t>(nq_ + cand[r]->f.u)]) / step;
+  }
+  Apply(ws);
+  if (status != 0) return status;
+  x_ids_.clear();  // Solve makes the leaders' X afresh
   std::vector<double> M(nu * nu), d(m), x;
   if (int s = rt::UnconstrainedMassMatrix(program_, ws, t, y, M.data()); s != 0) return s;
   for (size_t k = 0; k < m; ++k) {  // (M^-1)_kk, the scale of X_kk without the rows
     std::vector<double> e(nu, 0.0);
-    e[static_cast<size_t>(stuck[k]->f.u)] = 1.0;
+    e[static_cast<size_t>(cand[k]->f.u)] = 1.0;
     if (!SolveSmall(M, e, &x)) return -1;
-    d[k] = x[static_cast<size_t>(stuck[k]->f.u)];
+    d[k] = x[static_cast<size_t>(cand[k]->f.u)];
   }
-  std::vector<double> N(m * m);
-  for (size_t r = 0; r < m; ++r)
-    for (size_t k = 0; k < m; ++k) N[r * m + k] = x_[r * m + k] / std::sqrt(d[r] * d[k]);
-  if (!(N[at * m + at] > kDependent)) return 1;
-  const int dep = FirstDependent(N, m, kDependent);
-  if (dep < 0) return 0;
-  std::string who;
-  for (size_t k = 0; k < m; ++k) who += (k == 0 ? "'" : k + 1 == m ? "' and '" : "', '") + stuck[k]->f.joint;
-  error_ = "joints " + who + "' stick together, but the constraints make their motions dependent ('" +
-           stuck[static_cast<size_t>(dep)]->f.joint +
-           "' cannot move without the others): the friction forces that hold them are not unique; keep exact "
-           "friction on one of them (through a coupling, the other's reflected by the ratio)";
-  return -1;
+  auto Xn = [&](size_t r, size_t k) { return X[r * m + k] / std::sqrt(d[r] * d[k]); };
+  if (!(Xn(at, at) > kDependent)) return 1;
+  // (4): leaders L greedily; a candidate whose Schur complement on L vanishes is tied to L.
+  std::vector<size_t> L;
+  for (size_t c = 0; c < m; ++c) {
+    const size_t nl = L.size();
+    std::vector<double> A(nl * nl), b(nl), kn;
+    for (size_t r = 0; r < nl; ++r) {
+      b[r] = Xn(c, L[r]);
+      for (size_t k = 0; k < nl; ++k) A[r * nl + k] = Xn(L[k], L[r]);  // (X_LL^T: kn = (X_cL X_LL^-1)^T)
+    }
+    if (nl > 0 && !SolveSmall(A, b, &kn)) return -1;
+    double schur = Xn(c, c);
+    for (size_t r = 0; r < nl; ++r) schur -= kn[r] * Xn(L[r], c);
+    Joint& k = *cand[c];
+    if (schur > kDependent) {  // independent: a stuck one leads (its own row), a sliding one slides on
+      if (c < n_stuck) {
+        if (k.leader >= 0) k.tau = 0.0;
+        k.leader = -1;
+        L.push_back(c);
+      }
+      continue;
+    }
+    std::vector<size_t> ties;
+    for (size_t r = 0; r < nl; ++r)
+      if (std::abs(kn[r]) > kTied) ties.push_back(r);
+    if (c >= n_stuck && (ties.size() != 1 || !(Xn(c, c) > kDependent))) continue;  // (moved by the rows alone)
+    if (ties.size() != 1 || !(Xn(c, c) > kDependent)) {
+      std::string who;
+      for (size_t r : ties) who += (who.empty() ? "'" : "', '") + cand[L[r]]->f.joint;
+      error_ = ties.empty() ? "joint '" + k.f.joint + "' sticks where the constraints fix its motion (a dead point)"
+                            : "joint '" + k.f.joint + "' sticks, and the constraints tie its speed to those of several " +
+                                  "stuck joints (" + who + "'): how their friction forces share the holding is not " +
+                                  "solved; keep exact friction off one of them";
+      return -1;
+    }
+    const size_t l = L[ties[0]];
+    k.mode = 0;
+    k.leader = static_cast<int>(cand[l] - joints_.data());
+    k.ratio = kn[ties[0]] * std::sqrt(d[c] / d[l]);  // the scaled ratio back: u_k = ratio u_l
+    k.tau = 0.0;
+    grouped_ = true;
+  }
+  Ungroup();
+  return 0;
 }
 
 std::string StickSlipEvents::SettleAt(rt::Workspace& ws, double t, const double* y, double tol) {
@@ -364,9 +505,12 @@ std::string StickSlipEvents::SettleAt(rt::Workspace& ws, double t, const double*
     const double u = at[static_cast<size_t>(nq_ + j.f.u)];
     j.mode = u > tol ? 1 : u < -tol ? -1 : 0;
     j.tau = 0.0;
+    j.leader = -1;
+    j.stamp = 0;
   }
+  grouped_ = false;
   for (Joint& j : joints_)
-    if (j.mode == 0 && !HeldByStop(j, resting)) {
+    if (j.mode == 0 && !HeldByStop(j, resting) && j.stamp == 0) {  // (a passenger decided with its leader)
       if (Decide(ws, t, at.data(), j) != 0) return "the operating point cannot be evaluated: " + rt::ErrorMessage(ws);
       if (j.mode != 0) return "joint '" + j.f.joint + "' is at rest but " + log_.back().kind + ": it slips at once, no smooth state";
     }
@@ -376,8 +520,8 @@ std::string StickSlipEvents::SettleAt(rt::Workspace& ws, double t, const double*
 std::vector<int> StickSlipEvents::StuckSpeeds() const {
   std::vector<int> out;
   const std::vector<int> resting = RestingSpeeds();
-  for (const Joint& j : joints_)
-    if (j.mode == 0 && !HeldByStop(j, resting)) out.push_back(j.f.u);
+  for (const Joint& j : joints_)  // (a passenger's row is its leader's, (4))
+    if (j.mode == 0 && !HeldByStop(j, resting) && j.leader < 0) out.push_back(j.f.u);
   return out;
 }
 
@@ -385,7 +529,7 @@ std::vector<std::string> StickSlipEvents::StuckNames() const {
   std::vector<std::string> out;
   const std::vector<int> resting = RestingSpeeds();
   for (const Joint& j : joints_)
-    if (j.mode == 0 && !HeldByStop(j, resting)) out.push_back(j.f.joint + " stuck");
+    if (j.mode == 0 && !HeldByStop(j, resting) && j.leader < 0) out.push_back(j.f.joint + " stuck");
   return out;
 }
 
@@ -395,11 +539,14 @@ int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
     const double u = y0[nq_ + j.f.u];
     j.mode = u > 0.0 ? 1 : u < 0.0 ? -1 : 0;
     j.tau = 0.0;
+    j.leader = -1;
+    j.stamp = 0;
   }
+  grouped_ = false;
   if (int s = MarkHeldByStops(ws, t0, y0, 0.0); s != 0) return s;
   const std::vector<int> resting = RestingSpeeds();
   for (Joint& j : joints_)
-    if (j.mode == 0 && !HeldByStop(j, resting))
+    if (j.mode == 0 && !HeldByStop(j, resting) && j.stamp == 0)  // (a passenger decided with its leader)
       if (int s = Decide(ws, t0, y0, j); s != 0) return s;
   return 0;
 }
@@ -417,7 +564,7 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
   for (Joint& j : joints_) {
     double& u = y[nq_ + j.f.u];
     if (HeldByStop(j, resting)) {
-      j.mode = 0, j.tau = 0.0;
+      j.mode = 0, j.tau = 0.0, j.leader = -1;
     } else if (u == y_before[nq_ + j.f.u]) {
       continue;  // (a joint that has just slipped from rest keeps sliding)
     } else if (j.mode == 0 && std::abs(u) <= v_rest) {
@@ -428,8 +575,10 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
       stopped.push_back(&j);  // at rest but for round-off (a graze's impulse beside rows): decides
     }
   }
-  for (Joint* j : stopped)
-    if (int s = Decide(ws, t, y, *j); s != 0) return s;
+  const long from = decisions_;
+  for (Joint* j : stopped)  // (one decided with an earlier one's group is not decided again)
+    if (j->stamp <= from)
+      if (int s = Decide(ws, t, y, *j); s != 0) return s;
   Apply(ws);
   return 0;
 }

@@ -62,18 +62,28 @@ class StickSlipEvents {
   // friction passes mu_s r N slips at once: no smooth state).
   std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol);
   // Per joint its mode (+1, -1 sliding that way, 0 stuck, 2 held by resting stops through the
-  // rows: MarkHeldByStops) and holding force, two numbers a joint: what a saved state and the
-  // output rows' held solve (sim/held_outputs.cpp) need (sim/hybrid_ode.h).
+  // rows: MarkHeldByStops), holding force, leader (-1: none) and ratio (Joint), kModeValues
+  // numbers a joint: what a saved state and the output rows' held solve
+  // (sim/held_outputs.cpp) need (sim/hybrid_ode.h).
+  static constexpr size_t kModeValues = 4;
   std::vector<double> Modes() const {
     std::vector<double> m;
-    for (const Joint& j : joints_) m.insert(m.end(), {j.by_stops ? 2.0 : static_cast<double>(j.mode), j.tau});
+    for (const Joint& j : joints_)
+      m.insert(m.end(), {j.by_stops ? 2.0 : static_cast<double>(j.mode), j.tau, static_cast<double>(j.leader), j.ratio});
     return m;
   }
   void SetModes(const std::vector<double>& m) {
-    for (size_t i = 0; i < joints_.size() && 2 * i + 1 < m.size(); ++i) {
-      joints_[i].by_stops = m[2 * i] == 2.0;
-      joints_[i].mode = joints_[i].by_stops ? 0 : static_cast<int>(m[2 * i]);
-      joints_[i].tau = m[2 * i + 1];
+    grouped_ = false;
+    for (size_t i = 0; i < joints_.size() && kModeValues * i + kModeValues - 1 < m.size(); ++i) {
+      const double* v = m.data() + kModeValues * i;
+      joints_[i].by_stops = v[0] == 2.0;
+      joints_[i].mode = joints_[i].by_stops ? 0 : static_cast<int>(v[0]);
+      joints_[i].tau = v[1];
+      const int leader = static_cast<int>(v[2]);
+      joints_[i].leader =
+          leader >= 0 && leader < Count() && joints_[i].mode == 0 && !joints_[i].by_stops ? leader : -1;
+      joints_[i].ratio = v[3];
+      grouped_ = grouped_ || joints_[i].leader >= 0;
     }
   }
   std::vector<std::string> JointNames() const {
@@ -90,8 +100,16 @@ class StickSlipEvents {
     rt::FrictionJoint f;
     int index = 0;     // among the program's friction joints (rt::FrictionJoints)
     int mode = 0;      // +1 / -1 sliding that way, 0 stuck
-    double tau = 0.0;  // stuck: the friction force holding it (last solved)
+    // stuck: the friction force holding it (last solved); a leader's: its group's, reflected
+    // onto it (T of stick_slip.cpp (4)), which Applied shares out
+    double tau = 0.0;
     bool by_stops = false;  // at rest with its motion fixed by resting stops through the rows
+    // A stuck joint whose speed the rows tie to another stuck joint's (a passenger): that
+    // joint's index in joints_ (its leader, whose row holds both), else -1; ratio: the
+    // passenger's u = ratio u_leader (stick_slip.cpp (4)).
+    int leader = -1;
+    double ratio = 0.0;
+    long stamp = 0;  // the Decide that last set its law (Refresh and Start decide each joint once)
   };
   // The stuck joints' friction forces at (t, y) (Newton on their accelerations, which are
   // affine in them), the modes applied to ws; ydot (may be null) the held motion.
@@ -105,18 +123,39 @@ class StickSlipEvents {
   void Apply(rt::Workspace& ws) const;
   // The stuck joint's bound mu_s r N + C_s, N from ws's last evaluation.
   double StaticBound(const rt::Workspace& ws, const Joint& j) const;
+  // A leader's group bound B_g of (4) in stick_slip.cpp (StaticBound without passengers).
+  double GroupBound(const rt::Workspace& ws, const Joint& leader) const;
+  // The force Apply gives stuck joint j: its tau, or its share of its group's (4).
+  double Applied(const rt::Workspace& ws, const Joint& j) const;
+  bool Leads(const Joint& j) const;
+  // Passengers whose leader no longer holds them (it slid, or rests on a stop) lose it.
+  void Ungroup();
+  // The group of leader l (l and its passengers) slides the way l's mode says (each passenger
+  // the way its ratio takes it) or stays stuck; logs each member whose law changed from
+  // `before` (modes per joint), j (the joint that decided, null: none) whatever it was.
+  void SettleGroup(const rt::Workspace& ws, double t, Joint& l, const std::vector<int>& before, const Joint* j);
+
   // X of (1) in stick_slip.cpp at (t, y) for the stuck joints, a0 their accelerations (ydot).
   int MakeX(rt::Workspace& ws, double t, const double* y, const std::vector<Joint*>& stuck, const double* a0);
   // rt::Derivative with the stops' resting sides held.
   int Eval(rt::Workspace& ws, double t, const double* y, double* ydot);
   bool HeldByStop(const Joint& j, const std::vector<int>& resting) const;
+  // Beside rows: the stuck joints' rows (leaders') and the resting stops' hold every degree of
+  // freedom, and nothing is prescribed: u = 0 is the motion, all of it. A decision that
+  // sticks then sets every speed to 0 exactly (StopOnRows leaves the others' round-off, which
+  // the multiplier form's projection spread to the stuck speed: 5e-11, before). The rates are
+  // left as solved (their round-off, 1e-17): f exactly 0 made DOP853 in the stepping API step
+  // over a narrow slip window (HeldStep.ANarrowSlipWindowIsFoundInsideLargeStepsOfTheSimulator).
+  bool AllHeld() const;
   std::vector<int> RestingSpeeds() const;
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
   int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
   // Constraint rows (closed loops, couplings, rolling contacts): X is the constrained inverse
-  // mass of the stuck speeds, which the rows may make singular. 0 when X is regular (it is
-  // kept for Solve), 1 when j alone cannot be held (a dead point: the rows move it), -1 with
-  // error_ when stuck joints' motions are dependent (their forces not unique).
+  // mass of the stuck speeds, which the rows may make singular. The stuck joints, j among
+  // them, and the sliding ones the rows tie to them are grouped by (4) of stick_slip.cpp (a
+  // sliding joint tied to stuck ones is at rest with them: it joins). 0 when grouped, 1 when
+  // j alone cannot be held (a dead point: the rows move it), -1 with error_ where a speed is
+  // tied to several groups' (their shares not solved) or a stuck joint's is fixed by the rows.
   int CheckRows(rt::Workspace& ws, double t, const double* y, const Joint& j);
   // Beside rows with stops resting: marks the joints at rest (|u| <= v_rest) whose motion the
   // resting stops fix through the rows (a gear's follower when its leader rests): held by the
@@ -126,7 +165,11 @@ class StickSlipEvents {
   int StopOnRows(rt::Workspace& ws, double t, double* y, const Joint& j);
 
   const rt::Program& program_;
+  bool grouped_ = false;            // some joint is a passenger (Joint::leader)
+  long decisions_ = 0;              // Decide's count (Joint::stamp)
   bool rows_ = false;               // constraint rows: CheckRows at each stick decision
+  int dof_ = 0;                     // the degrees of freedom (rt::ProgramSummary::dof)
+  bool scleronomic_ = false;        // no prescribed motion: held rows leave u = 0 the only motion
   EndStopEvents* stops_ = nullptr;  // SetStops (null: none)
   std::vector<Joint> joints_;
   int nq_ = 0, nu_ = 0;

@@ -10,11 +10,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -25,15 +24,11 @@ constexpr double kMa = 0.5, kMb = 1.0, kMc = 0.8, kG = 9.81;  // their masses (u
 // examples/fourbar.mech at rest (omega0 = 0) with `crank_mods` on the crank's joint and
 // `rocker_mods` on the rocker's.
 std::string FourBarAtRest(const std::string& crank_mods, const std::string& rocker_mods = "") {
-  std::ifstream in(kRoot + "/examples/fourbar.mech");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string text = buf.str();
-  auto put = [&](const std::string& from, const std::string& to) { text.replace(text.find(from), from.size(), to); };
-  put("\"rad/s\") = 6", "\"rad/s\") = 0");
-  put("u(start = omega0)", "u(start = omega0)" + crank_mods);
-  put("q(start = 1.6)", "q(start = 1.6)" + rocker_mods);
-  return text;
+  FourBarText bar;
+  bar.omega0 = 0;
+  bar.crank_mods = crank_mods;
+  bar.rocker_mods = rocker_mods;
+  return bar.Text();
 }
 
 // dV/d(theta2): the torque that holds the crank at rest against gravity through the loop, by
@@ -129,21 +124,56 @@ TEST(LoopFriction, FourBarCrankSlipsAboveItsBoundAndSticksWhereGravityNeedsLess)
   }
 }
 
-// If this fails, two stuck joints whose motions the loop makes dependent (the four-bar's crank
-// and rocker: one degree of freedom) were held by forces that are not unique (garbage), not
-// refused with the reason.
-TEST(LoopFriction, DependentStuckJointsAreRefusedWithTheReason) {
-  auto l = LoadModel(FourBarAtRest(", friction_torque = 0.5, friction_exact = true",
-                                   ", friction_torque = 0.3, friction_exact = true"),
-                     {}, {}, true);
-  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
-  sim::SimResult r;
-  RunWith(*l->prog, AllIntegrators()[0], 1.0, 0.1, kSignals, &r, 1e-11);
-  EXPECT_NE(r.status, sim::SimResult::Status::kOk);
-  EXPECT_NE(r.message.find("joints 'crank_pivot' and 'rocker_pivot' stick together, but the constraints make their "
-                           "motions dependent"),
-            std::string::npos)
-      << r.message;
+// The rocker's rate per unit crank rate (w4 of HoldingTorque) at crank, coupler, rocker angles.
+double RockerRate(double t2, double t3, double t4) {
+  const double det = -kB * std::cos(t3) * kC * std::sin(t4) + kC * std::cos(t4) * kB * std::sin(t3);
+  return (-kB * std::cos(t3) * kA * std::sin(t2) + kA * std::cos(t2) * kB * std::sin(t3)) / det;
+}
+
+// Crank (0.5) and rocker (friction F) both with exact friction at rest: the loop makes their
+// motions dependent (one degree of freedom, u_rocker = w4 u_crank), so they are held as one
+// (sim/stick_slip.cpp (4)): the torque gravity needs at the crank by virtual work against
+// 0.5 + |w4| F, sticking for F = 3 (bound 2.2 > 1.41) and slipping for F = 0.3 (0.80),
+// each joint logging the torque and bound reflected onto itself. If this fails, two stuck
+// joints whose motions the loop makes dependent stop the run (exit 2: before this change) or
+// are held by forces other than the loop's virtual work and their combined bound.
+TEST(LoopFriction, DependentStuckJointsAreHeldAsOneWithinTheirCombinedBound) {
+  for (double F : {3.0, 0.3}) {
+    auto l = LoadModel(FourBarAtRest(", friction_torque = 0.5, friction_exact = true",
+                                     ", friction_torque = " + Num(F) + ", friction_exact = true"),
+                       {}, {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      sim::SimResult r;
+      sim::MemorySink s = RunWith(*l->prog, how, F > 1.0 ? 1.0 : 0.2, 0.1, kSignals, &r, 1e-11);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+      const std::vector<double>& y0 = s.rows.front();
+      const double tau = HoldingTorque(y0[0], y0[0] + y0[2], y0[4]), w4 = RockerRate(y0[0], y0[0] + y0[2], y0[4]);
+      const double bound = 0.5 + std::abs(w4) * F;
+      ASSERT_GE(r.stats.events.size(), 2u) << how.name;
+      const sim::EventRecord &crank = r.stats.events[0], &rocker = r.stats.events[1];
+      EXPECT_EQ(crank.time, 0.0);
+      EXPECT_EQ(rocker.time, 0.0);
+      EXPECT_EQ(crank.element, "crank_pivot");
+      EXPECT_EQ(rocker.element, "rocker_pivot");
+      const char* law = tau <= bound ? "sticks" : "slips";
+      EXPECT_EQ(crank.kind.rfind(law, 0), 0u) << how.name << ": " << crank.kind;
+      EXPECT_EQ(rocker.kind.rfind(law, 0), 0u) << how.name << ": " << rocker.kind;
+      EXPECT_NE(crank.kind.find("held as one with 'rocker_pivot'"), std::string::npos) << crank.kind;
+      EXPECT_NEAR(LoggedFriction(crank.kind), tau, 1e-9 * tau) << how.name;
+      EXPECT_NEAR(LoggedFriction(rocker.kind), tau / w4, 1e-9 * std::abs(tau / w4)) << how.name;
+      EXPECT_NE(crank.kind.find(Num(bound).substr(0, 12)), std::string::npos) << bound << " " << crank.kind;
+      if (tau <= bound) {
+        ASSERT_EQ(r.stats.events.size(), 2u) << how.name;
+        for (const std::vector<double>& y : s.rows) {
+          for (int k : {0, 2, 4}) EXPECT_EQ(y[static_cast<size_t>(k)], y0[static_cast<size_t>(k)]) << how.name;
+          for (int k : {1, 3, 5}) EXPECT_EQ(y[static_cast<size_t>(k)], 0.0) << how.name;
+        }
+      } else {
+        EXPECT_LT(s.rows.back()[0], y0[0]) << how.name;  // the crank falls back
+      }
+    }
+  }
 }
 
 // A gear pair (JointCoupling, q2 = -q1 / 2) in the horizontal plane (gravity along the axes:

@@ -11,11 +11,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -203,16 +202,12 @@ constexpr double kDrive = 2.0;
 constexpr double kHold = 1.4109147004724838;  // the torque gravity needs at the crank (LoopFriction, virtual work)
 
 std::string FourBarOnStop(const std::string& rocker_law) {
-  std::ifstream in(kRoot + "/examples/fourbar.mech");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string text = buf.str();
-  auto put = [&](const std::string& from, const std::string& to) { text.replace(text.find(from), from.size(), to); };
-  put("\"rad/s\") = 6", "\"rad/s\") = 0");
-  put("u(start = omega0)", "u(start = omega0), q_min = 0.3");
-  put("q(start = 1.6)", "q(start = 1.6)" + rocker_law);
-  put("  annotation(experiment", "  crank_pivot.tau = " + Num(kDrive) + " * time;\n  annotation(experiment");
-  return text;
+  FourBarText bar;
+  bar.omega0 = 0;
+  bar.crank_mods = ", q_min = 0.3";
+  bar.rocker_mods = rocker_law;
+  bar.equations = "  crank_pivot.tau = " + Num(kDrive) + " * time;\n";
+  return bar.Text();
 }
 
 // The crank rests on its stop, gravity pressing it on through the loop with the torque kHold,

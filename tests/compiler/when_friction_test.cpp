@@ -10,12 +10,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <utility>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -252,15 +251,10 @@ TEST(WhenFriction, LoopsWithMuFrictionTakeTheJumpConstantFrictionNone) {
   // (the constant friction slowed both before the jump: its speeds before from the record)
   EXPECT_NEAR(j.us_after, j.us_before - (2.0 - j.uc_before) * std::cos(kTh), 1e-12) << "a bounded friction has no impulse";
 
-  std::ifstream in(kRoot + "/examples/fourbar.mech");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string bar = buf.str();
-  const std::string joint = "Revolute rocker_pivot(axis = {0, 0, 1},";
-  ASSERT_NE(bar.find(joint), std::string::npos);
-  bar.replace(bar.find(joint), joint.size(), joint + " mu = 0.1,");
-  bar.insert(bar.find("  annotation(experiment"), "  when time > 0.3 then\n    reinit(crank_pivot.u, 2);\n  end when;\n");
-  auto loop = LoadModel(bar, {}, {}, true);
+  FourBarText bar;
+  bar.rocker_mods = ", mu = 0.1";
+  bar.equations = "  when time > 0.3 then\n    reinit(crank_pivot.u, 2);\n  end when;\n";
+  auto loop = LoadModel(bar.Text(), {}, {}, true);
   ASSERT_TRUE(loop && loop->prog) << (loop ? Messages(loop->errors) : "");
   sim::SimResult r;
   sim::MemorySink out = RunWith(*loop->prog, AllIntegrators()[0], 0.3, 0.3,

@@ -6,14 +6,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include <Eigen/Dense>
 
 #include "sim/friction_impulse.h"
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -122,25 +121,16 @@ TEST(WhenLoopFriction, GearedPairOnACarrierEqualsTheReducedModelWithReflectedFri
 constexpr double kA = 0.2, kB = 0.6, kC = 0.5, kMa = 0.5, kMb = 1.0, kMcr = 0.8, kCarrier = 1.2, kMuRail = 0.3;
 
 std::string FourBarOnARail(double U, double W) {
-  std::ifstream in(kRoot + "/examples/fourbar.mech");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string text = buf.str();
-  auto put = [&](const std::string& from, const std::string& to) {
-    ASSERT_NE(text.find(from), std::string::npos) << from;
-    text.replace(text.find(from), from.size(), to);
-  };
-  put("\"rad/s\") = 6", "\"rad/s\") = 0");
-  put("g = {0, -9.81, 0}", "g = {0, 0, 0}");
-  put("q(start = 1.6)", "q(start = 1.6), mu = 0.2, friction_radius = 0.03");
-  put("connect(world.frame_b, crank_pivot.frame_a)", "connect(carrier.frame_a, crank_pivot.frame_a)");
-  put("connect(world.frame_b, ground.frame_a)", "connect(carrier.frame_a, ground.frame_a)");
-  put("equation\n", "  Prismatic rail(axis = {1, 0, 0}, u(start = " + Num(U) + "), mu = " + Num(kMuRail) +
-                        ");\n  Body carrier(m = " + Num(kCarrier) + ");\nequation\n"
-                        "  connect(world.frame_b, rail.frame_a);\n  connect(rail.frame_b, carrier.frame_a);\n");
-  put("  annotation(experiment", "  when time > 0.1 then\n    reinit(crank_pivot.u, " + Num(W) +
-                                     ");\n  end when;\n  annotation(experiment");
-  return text;
+  FourBarText bar;
+  bar.omega0 = 0;
+  bar.gravity = false;
+  bar.rocker_mods = ", mu = 0.2, friction_radius = 0.03";
+  bar.base = "carrier.frame_a";
+  bar.decls = "  Prismatic rail(axis = {1, 0, 0}, u(start = " + Num(U) + "), mu = " + Num(kMuRail) +
+              ");\n  Body carrier(m = " + Num(kCarrier) + ");\n";
+  bar.connects = "  connect(world.frame_b, rail.frame_a);\n  connect(rail.frame_b, carrier.frame_a);\n";
+  bar.equations = "  when time > 0.1 then\n    reinit(crank_pivot.u, " + Num(W) + ");\n  end when;\n";
+  return bar.Text();
 }
 
 // The loop's rates per unit crank rate at absolute angles t2, t3, t4 (Cramer), and the rods'
@@ -212,19 +202,11 @@ TEST(WhenLoopFriction, FourBarOnARailSticksOrSlidesByTheMomentumBalance) {
 // reinit's impulse or the jump disagree with Newton-Euler).
 TEST(WhenLoopFriction, FourBarImpulsesMatchNewtonEulerWithTheCutJointsImpulse) {
   const double d = 0.6, mu = 0.3, r = 0.05, W = 3.0;
-  std::ifstream in(kRoot + "/examples/fourbar.mech");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string text = buf.str();
-  auto put = [&](const std::string& from, const std::string& to) {
-    ASSERT_NE(text.find(from), std::string::npos) << from;
-    text.replace(text.find(from), from.size(), to);
-  };
-  put("\"rad/s\") = 6", "\"rad/s\") = 0");
-  put("g = {0, -9.81, 0}", "g = {0, 0, 0}");
-  const std::string f = ", mu = " + Num(mu) + ", friction_radius = " + Num(r);
-  put("q(start = 1.6)", "q(start = 1.6)" + f);
-  put("q(start = 1.0)", "q(start = 1.0)" + f);
+  FourBarText bar;
+  bar.omega0 = 0;
+  bar.gravity = false;
+  bar.rocker_mods = bar.coupler_mods = ", mu = " + Num(mu) + ", friction_radius = " + Num(r);
+  const std::string text = bar.Text();
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   const rt::Program& p = *l->prog;

@@ -3,7 +3,12 @@
 // or a .mech file; each suite adds its joint's modifiers, declarations and equations.
 #pragma once
 
+#include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
+
+#include "tests/support/load_util.h"  // kRoot
 
 namespace kanesim::test {
 
@@ -45,5 +50,45 @@ inline std::string TwoRodText(const std::string& j1_mods, const std::string& j2_
          "  connect(j2.frame_b, rod2.frame_a);\n" + equations +
          "end D;\n";
 }
+
+// examples/fourbar.mech (crank a = 0.2, coupler b = 0.6, rocker c = 0.5: uniform rods of
+// 0.5, 1.0, 0.8 kg; ground d = 0.6; crank at theta0 = 0.3, fixed; gravity along -y) with the
+// loop suites' edits, the example itself the one text. "" when the example lost a piece an
+// edit needs (the suite's LoadModel then fails).
+struct FourBarText {
+  double omega0 = 6;                    // the crank's start rate (rad/s)
+  bool gravity = true;                  // false: g = {0, 0, 0}
+  std::string crank_mods{};             // after the crank pivot's u(start = omega0): ", q_min = 0.3"
+  std::string coupler_mods{};           // after crank_coupler's q(start = 1.0)
+  std::string rocker_mods{};            // after rocker_pivot's q(start = 1.6)
+  std::string base = "world.frame_b";   // the frame the crank's pivot and the ground hang on
+  std::string decls{};                  // declarations before `equation` ("  Body carrier(m = 1);\n")
+  std::string connects{};               // lines right after `equation`
+  std::string equations{};              // lines before the annotation (drives, when clauses)
+  std::string Text() const {
+    std::ifstream in(kRoot + "/examples/fourbar.mech");
+    std::stringstream buf;
+    buf << in.rdbuf();
+    std::string text = buf.str();
+    bool ok = true;
+    auto put = [&](const std::string& from, const std::string& to) {
+      const size_t at = text.find(from);
+      ok = ok && at != std::string::npos;
+      if (at != std::string::npos) text.replace(at, from.size(), to);
+    };
+    char w[40];
+    std::snprintf(w, sizeof w, "%.17g", omega0);
+    if (omega0 != 6) put("\"rad/s\") = 6", std::string("\"rad/s\") = ") + w);
+    if (!gravity) put("g = {0, -9.81, 0}", "g = {0, 0, 0}");
+    put("u(start = omega0)", "u(start = omega0)" + crank_mods);
+    put("q(start = 1.0)", "q(start = 1.0)" + coupler_mods);
+    put("q(start = 1.6)", "q(start = 1.6)" + rocker_mods);
+    put("connect(world.frame_b, crank_pivot.frame_a)", "connect(" + base + ", crank_pivot.frame_a)");
+    put("connect(world.frame_b, ground.frame_a)", "connect(" + base + ", ground.frame_a)");
+    put("equation\n", decls + "equation\n" + connects);
+    put("  annotation(experiment", equations + "  annotation(experiment");
+    return ok ? text : "";
+  }
+};
 
 }  // namespace kanesim::test
