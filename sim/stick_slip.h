@@ -116,8 +116,8 @@ class StickSlipEvents {
   // kept for Solve), 1 when j alone cannot be held (a dead point: the rows move it), -1 with
   // error_ when stuck joints' motions are dependent (their forces not unique).
   int CheckRows(rt::Workspace& ws, double t, const double* y, const Joint& j);
-  // Beside rows with stops resting: marks the joints at rest (|u| <= v_rest) whose motion the
-  // resting stops fix through the rows (a gear's follower when its leader rests): held by the
+  // Beside rows with stops or plane contacts resting: marks the joints at rest (|u| <= v_rest)
+  // whose motion they fix through the rows (a gear's follower when its leader rests): held by the
   // stops as a stop's own joint is, their friction force not determined, so zero.
   int MarkHeldByStops(rt::Workspace& ws, double t, const double* y, double v_rest);
   // Beside rows: j's evaluated speed to zero by the jump that keeps the rows (stick_slip.cpp).
