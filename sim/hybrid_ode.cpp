@@ -146,8 +146,8 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   const size_t n_stops = m.stops.Resting().size();
   if (modes.size() != n_stops + m.stick.Modes().size()) return false;
   // Values from outside (a master's serialized state): a side rests or not, accumulates
-  // until a finite time, a joint slides either way or sticks with a finite force (2: held
-  // through the rows by the resting contacts, StickSlipEvents::Modes).
+  // until a finite time, a joint slides either way, sticks with a finite force or is held by
+  // resting stops or plane contacts (2).
   for (size_t i = 0; i < modes.size(); ++i) {
     const double v = modes[i];
     const bool flag = i < n_stops ? i % 2 == 0 : (i - n_stops) % 2 == 0;

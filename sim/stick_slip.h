@@ -61,9 +61,9 @@ class StickSlipEvents {
   // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
   // friction passes mu_s r N slips at once: no smooth state).
   std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol);
-  // Per joint its mode (+1, -1 sliding that way, 0 stuck, 2 at rest held through the rows by
-  // resting stops or plane contacts: MarkHeldByStops) and holding force, two numbers a joint:
-  // what a saved state and the output rows' copy (sim/held_outputs.cpp) need (sim/hybrid_ode.h).
+  // Per joint its mode (+1, -1 sliding that way, 0 stuck, 2 held by resting stops or plane
+  // contacts through the rows: MarkHeldByStops) and holding force, two numbers a joint: what a
+  // saved state and the output rows' held solve (sim/held_outputs.cpp) need (sim/hybrid_ode.h).
   std::vector<double> Modes() const {
     std::vector<double> m;
     for (const Joint& j : joints_) m.insert(m.end(), {j.by_stops ? 2.0 : static_cast<double>(j.mode), j.tau});
