@@ -1,34 +1,15 @@
 // Compile stage: plane contacts (stdlib PlaneContact). A unilateral contact is not a
 // constraint row: the integrators' events handle it (sim/end_stops.h), impacts through the
-// mass matrix with the constraint rows' reactions (closed loops, rolling contacts). Beside
-// Coulomb friction that reads a normal force (mu), plane contacts need a tree: a resting
-// contact's force and an impact's impulse enter the joints' normal forces
-// (sim/end_stops_friction.cpp); end stops take mu anywhere, and a constant friction
-// (friction_torque / friction_force) is allowed anywhere (docs/stdlib.md "PlaneContact").
+// mass matrix with the constraint rows' reactions (closed loops, rolling contacts,
+// couplings). Beside Coulomb friction that reads a normal force (mu), in a tree or beside
+// constraint rows, a resting contact's force and an impact's impulse enter the joints'
+// normal forces (sim/end_stops_friction.cpp; docs/stdlib.md "PlaneContact").
 #include <cmath>
 
 #include "compiler/compile_internal.h"
 #include "runtime/kinematics/joint_kinematics.h"
 
 namespace kanesim::rt {
-
-namespace {
-
-// Why the events cannot run on this program ("" when they can).
-std::string EventsRefused(const Program& p) {
-  // Closed loops', rolling contacts' and couplings' rows join the impulse and the reactions
-  // by their own reactions (rt::InverseMassColumn through the tangent basis).
-  // A constant friction is a bounded force: no impulse, no term in the reactions. mu N is
-  // one in a tree (sim/end_stops_friction.cpp), whose reactions are the subtrees'; beside
-  // constraint rows for end stops (speed rows; the rows' impulses enter the normal impulses).
-  bool mu = false;
-  for (int b : p.friction_joints) mu = mu || p.joints[static_cast<size_t>(b)].mu != 0.0;
-  if (mu && !p.rows.empty())
-    return "closed loops or rolling contacts and Coulomb friction proportional to the normal force (mu) on joints";
-  return "";
-}
-
-}  // namespace
 
 void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
@@ -73,15 +54,6 @@ void CompilePlaneContacts(Program& p, TapeBuilder& folder, std::vector<CompileMe
     }
     p.plane_contacts.push_back(c);
   }
-  if (p.plane_contacts.empty()) return;
-  const std::string refused = EventsRefused(p);
-  if (refused.empty()) return;
-  const std::string hint = "plane contacts take Coulomb friction mu N in a tree (no closed loops, rolling contacts or "
-                           "couplings); end stops take it anywhere";
-  for (const PlaneContactModel& c : p.plane_contacts)
-    errors->push_back(Msg(flat::DiagCode::BadContact,
-                          "contact '" + c.name + "': a plane contact in a mechanism with " + refused + " is not supported",
-                          c.loc, hint));
 }
 
 }  // namespace kanesim::rt

@@ -266,7 +266,8 @@ int PlaneContactRow(const Program& program, Workspace& ws, double t, const doubl
                     double* bias);
 // DerivativeWithForces with, besides F, contact i's normal force lambda[i] (one per contact,
 // pushing: > 0) applied at its point: with Coulomb friction mu N the joints between its body
-// and the ground carry it in their normal forces. A tree only (-1 with constraint rows).
+// and the ground carry it in their normal forces (with constraint rows, as the rows'
+// reactions share it).
 int DerivativeWithPlaneForces(const Program& program, Workspace& ws, double t, const double* y, const double* F,
                               const double* lambda, double* ydot);
 // The contacts' impulses Lambda (one per contact, pushing: > 0) in the friction joints'
@@ -274,6 +275,12 @@ int DerivativeWithPlaneForces(const Program& program, Workspace& ws, double t, c
 // across the axis of every friction joint between contact c's body and the ground.
 int PlaneImpulseNormals(const Program& program, Workspace& ws, double t, const double* y, const double* Lambda,
                         double* P);
+// x = W F for a generalized force F (nu) on the free speeds, W the inverse mass with the
+// friction mu N left out (M^-1 on a tree, the constrained inverse mass with constraint rows):
+// the resting reactions' chord beside mu (sim/end_stops_friction.cpp). -1 where the rows fix
+// F's motion (a dead point).
+int FrictionlessInverseMassTimes(const Program& program, Workspace& ws, double t, const double* y, const double* F,
+                                 double* x);
 
 // When clauses (Program::whens; docs/events.md): the event tape evaluated at (t, y), its
 // roots' values then in ws.event_regs[program.event_tape.roots[i]]. 0, or Derivative's

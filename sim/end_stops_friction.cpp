@@ -1,6 +1,6 @@
 // End stops and plane contacts beside Coulomb friction mu N (sim/end_stops.h; docs/events.md
-// "Friction beside stops"). Plane contacts in a tree only (the compiler refuses them beside
-// closed loops); end stops anywhere.
+// "Friction beside stops"), in trees and beside constraint rows (closed loops, couplings,
+// rolling contacts).
 // Resting: the friction forces follow the joints' normal forces N, N the accelerations and
 // the reactions (a plane contact's force acts at its point, so the joints between it and the
 // ground carry it: rt::DerivativeWithPlaneForces), and the accelerations the rows' reactions
@@ -34,7 +34,8 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
   std::copy(ydot_.begin() + nq_, ydot_.end(), a_.begin());  // the free accelerations (ReactionNoise)
   // The chord's columns x_j = W J_j^T: W the inverse mass without the friction, with the
   // constraint rows' reactions where there are rows (a stop's row is +-e_k: a column of W; a
-  // plane contact's, in a tree only, W J^T from all of W's columns).
+  // plane contact's W J^T from all of W's columns in a tree, by rt::FrictionlessInverseMassTimes
+  // with rows).
   Jrows_.assign(m * nu, 0.0);
   x_.assign(m * nu, 0.0);
   bool planes = false;
@@ -45,17 +46,25 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
     planes = planes || s.plane >= 0;
   }
   std::vector<int> ks;
-  if (planes)
+  if (planes && !program_.rows.empty()) {  // W J^T for each row: one constrained inverse mass a row
+    for (size_t j = 0; j < m; ++j)
+      if (int s = rt::FrictionlessInverseMassTimes(program_, ws, t, y, Jrows_.data() + j * nu, x_.data() + j * nu);
+          s != 0) {
+        error_ = rt::ErrorMessage(ws);
+        return s;
+      }
+  } else if (planes) {
     for (int k = 0; k < nu_; ++k) ks.push_back(k);
-  else
+  } else {
     for (int r : rows) ks.push_back(stops_[static_cast<size_t>(sides_[static_cast<size_t>(r)].stop)].u);
+  }
   cols_.resize(ks.size() * nu);
   if (int s = rt::FrictionlessInverseMassColumns(program_, ws, t, y, ks.data(), static_cast<int>(ks.size()), cols_.data());
       s != 0) {
     error_ = rt::ErrorMessage(ws);
     return s;
   }
-  for (size_t j = 0; j < m; ++j)
+  for (size_t j = 0; j < m && !ks.empty(); ++j)
     for (size_t c2 = 0; c2 < ks.size(); ++c2) {
       const double Jk = planes ? Jrows_[j * nu + c2] : (c2 == j ? Jrows_[j * nu + static_cast<size_t>(ks[j])] : 0.0);
       if (Jk != 0.0)

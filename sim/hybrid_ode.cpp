@@ -147,7 +147,8 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   if (modes.size() != n_stops + m.stick.Modes().size()) return false;
   // Values from outside (a master's serialized state): a side rests or not, accumulates
   // until a finite time, a joint slides either way, sticks with a finite force or is held by
-  // resting stops (2) (and a leader: -1 or a joint's index, StickSlipEvents::Modes).
+  // resting stops or plane contacts (2) (and a leader: -1 or a joint's index,
+  // StickSlipEvents::Modes).
   const size_t per = StickSlipEvents::kModeValues;
   const auto n_joints = static_cast<double>((modes.size() - n_stops) / per);
   for (size_t i = 0; i < modes.size(); ++i) {

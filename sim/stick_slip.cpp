@@ -173,7 +173,7 @@ bool StickSlipEvents::HeldByStop(const Joint& j, const std::vector<int>& resting
 int StickSlipEvents::MarkHeldByStops(rt::Workspace& ws, double t, const double* y, double v_rest) {
   for (Joint& j : joints_) j.by_stops = false;
   const std::vector<int> resting = RestingSpeeds();
-  if (!rows_ || resting.empty()) return 0;
+  if (!rows_ || !stops_ || !stops_->AnyHeld()) return 0;  // (a resting plane contact may fix joints through the rows too)
   Apply(ws);
   std::vector<double> held(ydot_.size()), free(ydot_.size());
   for (Joint& j : joints_) {

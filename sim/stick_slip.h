@@ -61,9 +61,9 @@ class StickSlipEvents {
   // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
   // friction passes mu_s r N slips at once: no smooth state).
   std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol);
-  // Per joint its mode (+1, -1 sliding that way, 0 stuck, 2 held by resting stops through the
-  // rows: MarkHeldByStops), holding force, leader (-1: none) and ratio (Joint), kModeValues
-  // numbers a joint: what a saved state and the output rows' held solve
+  // Per joint its mode (+1, -1 sliding that way, 0 stuck, 2 held by resting stops or plane
+  // contacts through the rows: MarkHeldByStops), holding force, leader (-1: none) and ratio
+  // (Joint), kModeValues numbers a joint: what a saved state and the output rows' held solve
   // (sim/held_outputs.cpp) need (sim/hybrid_ode.h).
   static constexpr size_t kModeValues = 4;
   std::vector<double> Modes() const {
@@ -157,8 +157,8 @@ class StickSlipEvents {
   // j alone cannot be held (a dead point: the rows move it), -1 with error_ where a speed is
   // tied to several groups' (their shares not solved) or a stuck joint's is fixed by the rows.
   int CheckRows(rt::Workspace& ws, double t, const double* y, const Joint& j);
-  // Beside rows with stops resting: marks the joints at rest (|u| <= v_rest) whose motion the
-  // resting stops fix through the rows (a gear's follower when its leader rests): held by the
+  // Beside rows with stops or plane contacts resting: marks the joints at rest (|u| <= v_rest)
+  // whose motion they fix through the rows (a gear's follower when its leader rests): held by the
   // stops as a stop's own joint is, their friction force not determined, so zero.
   int MarkHeldByStops(rt::Workspace& ws, double t, const double* y, double v_rest);
   // Beside rows: j's evaluated speed to zero by the jump that keeps the rows (stick_slip.cpp).

@@ -36,6 +36,12 @@ int TangentMetric(const Program& p, Workspace& ws, double t, const double* y, co
 int ConstrainedInverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F,
                                 const std::string& what, double* x);
 
+// The plane contacts' normal forces lambda (one per contact, pushing: > 0) on their bodies at
+// their points, among the applied forces (after AppliedForces): the joint reactions between a
+// contact's body and the ground, and the constraint rows' where there are rows, carry them.
+// In plane_contacts.cpp.
+void AddPlaneForces(const Program& p, Workspace& ws, const double* lambda);
+
 struct BranchMonitor {
   std::unique_ptr<Workspace, void (*)(Workspace*)> ws{nullptr, [](Workspace*) {}};
   bool have_ref = false, in_zone = false;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "runtime/constraints/constraints.h"
+#include "runtime/engine/branch_monitor_internal.h"  // AddPlaneForces
 #include "runtime/kane/kane.h"
 #include "runtime/kinematics/kinematics.h"
 #include "runtime/program/program.h"
@@ -84,6 +85,7 @@ int Derivative(const Program& p, Workspace& ws, double t, const double* y, doubl
   if (int s = AppliedForces(p, ws); s != 0) return s;
   if (ws.added_forces)
     for (int i = 0; i < p.nu; ++i) ws.Q[p.u_free[static_cast<size_t>(i)]] += ws.added_forces[i];
+  if (ws.added_plane_forces) AddPlaneForces(p, ws, ws.added_plane_forces);
   if (int s = SolveAccelerations(p, ws); s != 0) return s;
   for (int i = 0; i < p.nq; ++i) ydot[i] = ws.qdot[p.q_free[static_cast<size_t>(i)]];
   for (int i = 0; i < p.nu; ++i) {

@@ -10,6 +10,7 @@
 // it in its reaction, so it enters those joints' normal forces N (friction.cpp (1)).
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "runtime/engine/branch_monitor_internal.h"
 #include "runtime/kane/kane.h"
@@ -29,7 +30,7 @@ int PlaneContactRow(const Program& p, Workspace& ws, double t, const double* y, 
                     double* bias) {
   const PlaneContactModel& c = p.plane_contacts[static_cast<size_t>(i)];
   if (int s = UnpackState(p, ws, t, y); s != 0) return s;
-  MotionKinematics(p, ws);  // a tree (CompilePlaneContacts refuses constraint rows)
+  MotionKinematics(p, ws);
   Vec3 p_WO, v_WO, w_WB;
   Mat3 R_WO;
   FramePose(p, ws, c.frame, &p_WO, &R_WO);
@@ -49,15 +50,7 @@ int PlaneContactRow(const Program& p, Workspace& ws, double t, const double* y, 
   return 0;
 }
 
-int DerivativeWithPlaneForces(const Program& p, Workspace& ws, double t, const double* y, const double* F,
-                              const double* lambda, double* ydot) {
-  if (!p.rows.empty()) {
-    ws.error = "resting contacts with Coulomb friction mu N in a mechanism with closed loops are not supported";
-    return -1;
-  }
-  if (int s = Derivative(p, ws, t, y, ydot); s != 0) return s;  // (the kinematics at (t, y))
-  if (int s = AppliedForces(p, ws); s != 0) return s;
-  for (int i = 0; i < p.nu; ++i) ws.Q[p.u_free[static_cast<size_t>(i)]] += F[i];
+void AddPlaneForces(const Program& p, Workspace& ws, const double* lambda) {
   for (size_t i = 0; i < p.plane_contacts.size(); ++i) {
     if (lambda[i] == 0.0) continue;
     const PlaneContactModel& c = p.plane_contacts[i];
@@ -69,8 +62,31 @@ int DerivativeWithPlaneForces(const Program& p, Workspace& ws, double t, const d
     ws.F_W[B] += f;
     ws.T_W[B] += (p_WO - ws.p_WBcm[B]).cross(f);
   }
-  if (int s = SolveAccelerations(p, ws); s != 0) return s;
-  for (int i = 0; i < p.nu; ++i) ydot[p.nq + i] = ws.udot[p.u_free[static_cast<size_t>(i)]];
+}
+
+// Derivative's stages with F on the speeds and the contacts' forces on their bodies (with
+// constraint rows: at the state projected onto them, their reactions following the forces,
+// the pull to the manifold included, as for any applied force).
+int DerivativeWithPlaneForces(const Program& p, Workspace& ws, double t, const double* y, const double* F,
+                              const double* lambda, double* ydot) {
+  ws.added_forces = F;
+  ws.added_plane_forces = lambda;
+  const int s = Derivative(p, ws, t, y, ydot);
+  ws.added_forces = nullptr;
+  ws.added_plane_forces = nullptr;
+  return s;
+}
+
+int FrictionlessInverseMassTimes(const Program& p, Workspace& ws, double t, const double* y, const double* F, double* x) {
+  if (!p.rows.empty()) return ConstrainedInverseMassTimes(p, ws, t, y, F, "the motion along a contact's normal", x);
+  std::vector<int> ks(static_cast<size_t>(p.nu));
+  for (int k = 0; k < p.nu; ++k) ks[static_cast<size_t>(k)] = k;
+  std::vector<double> cols(static_cast<size_t>(p.nu) * static_cast<size_t>(p.nu));
+  if (int s = FrictionlessInverseMassColumns(p, ws, t, y, ks.data(), p.nu, cols.data()); s != 0) return s;
+  std::fill(x, x + p.nu, 0.0);
+  for (int k = 0; k < p.nu; ++k)
+    if (F[k] != 0.0)
+      for (int i = 0; i < p.nu; ++i) x[i] += F[k] * cols[static_cast<size_t>(k) * static_cast<size_t>(p.nu) + static_cast<size_t>(i)];
   return 0;
 }
 

@@ -346,6 +346,7 @@ struct Workspace {
   double t = 0.0;                   // time of the last evaluation  ()  filled by UnpackState
   bool step_projection = false;     // the solver projects its steps (runtime/runtime.h SetStepProjection)
   const double* added_forces = nullptr;  // DerivativeWithForces' forces on the free speeds (nu), else null
+  const double* added_plane_forces = nullptr;  // DerivativeWithPlaneForces' normal forces (one per plane contact), else null
   bool newton_to_round_off = false;  // position Newton to round-off below a pivot ratio of 0.5 for every block size (the branch monitor's bridge)
   Eigen::VectorXd q, u;             // full coordinates, speeds  (nq_all), (nu_all)  filled by UnpackState
   Eigen::VectorXd udot;             // full accelerations; prescribed ones from the jet (nu_all)  filled by UnpackState/Solve*
