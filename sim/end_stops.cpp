@@ -300,7 +300,9 @@ int EndStopEvents::ReactionNoise(rt::Workspace& ws, double t, const double* y, c
                                  const std::vector<double>& bias, std::vector<double>* noise) {
   const size_t nu = static_cast<size_t>(nu_);
   M_.resize(nu * nu);
-  if (int s = rt::UnconstrainedMassMatrix(program_, ws, t, y, M_.data()); s != 0) return s;
+  // (On a tree M is the one Impulse's columns were just solved from, kept with their factor.)
+  if (!rt::KeptMassMatrix(program_, ws, t, y, M_.data()))
+    if (int s = rt::UnconstrainedMassMatrix(program_, ws, t, y, M_.data()); s != 0) return s;
   std::vector<double> Ma(nu, 0.0);  // |M| |a|
   for (size_t j = 0; j < nu; ++j)
     for (size_t i = 0; i < nu; ++i) Ma[i] += std::abs(M_[j * nu + i] * a_[j]);

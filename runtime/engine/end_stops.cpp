@@ -112,6 +112,7 @@ int FrictionlessInverseMassColumns(const Program& p, Workspace& ws, double t, co
     if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
     ++ws.inverse_mass_factorizations;
     ws.inverse_mass_llt.compute(M);
+    ws.inverse_mass_M.assign(M.data(), M.data() + M.size());
     at.push_back(t);
     at.insert(at.end(), y, y + p.nq);
     ws.inverse_mass_cols.resize(nu * nu);
@@ -136,6 +137,14 @@ int FrictionlessInverseMassColumns(const Program& p, Workspace& ws, double t, co
     std::copy(kept, kept + nu, X + static_cast<size_t>(j) * nu);
   }
   return 0;
+}
+
+bool KeptMassMatrix(const Program& p, const Workspace& ws, double t, const double* y, double* M) {
+  const std::vector<double>& at = ws.inverse_mass_at;
+  if (!p.rows.empty() || at.size() != static_cast<size_t>(p.nq) + 1 || at[0] != t || !std::equal(y, y + p.nq, at.begin() + 1))
+    return false;
+  std::copy(ws.inverse_mass_M.begin(), ws.inverse_mass_M.end(), M);
+  return true;
 }
 
 int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {
