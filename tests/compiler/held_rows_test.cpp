@@ -90,10 +90,11 @@ TEST(HeldRows, StuckJointAndRestingStopShareOneFactorization) {
     }
 }
 
-// InverseMassColumns keeps the columns it solved for the kept factor (same t and q). If this
-// fails, a column kept from another state is returned (the cache not dropped when q or t
-// moved), or a kept column is not M^-1's (M x = e_k, M from rt::MassMatrix: an independent
-// product), or differs in any bit from the column a fresh workspace solves.
+// InverseMassColumns keeps the columns it solved for the kept factor (same t and q), and the
+// M it factored (rt::KeptMassMatrix). If this fails, a column or M kept from another state is
+// returned (the cache not dropped when q or t moved), or a kept column is not M^-1's
+// (M x = e_k, M from rt::MassMatrix: an independent product), or a kept column or M differs
+// in any bit from what a fresh workspace evaluates.
 TEST(HeldRows, InverseMassColumnsKeptOnlyForTheirState) {
   auto l = LoadModel(DoublePendulum(0.3, -0.5), {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
@@ -119,6 +120,12 @@ TEST(HeldRows, InverseMassColumnsKeptOnlyForTheirState) {
         for (size_t k = 0; k < nu; ++k) Mx += M[k * nu + i] * X[j * nu + k];
         EXPECT_NEAR(Mx, i == static_cast<size_t>(ks[j]) ? 1.0 : 0.0, 1e-12) << "state " << s << " column " << ks[j];
       }
+    std::vector<double> kept(nu * nu, -1.0);
+    ASSERT_TRUE(rt::KeptMassMatrix(p, *ws, t, y.data(), kept.data())) << "state " << s;
+    EXPECT_EQ(kept, M) << "state " << s;
+    const std::vector<double> other = {y[0] + 0.1, y[1], 0, 0};
+    EXPECT_FALSE(rt::KeptMassMatrix(p, *ws, t, other.data(), kept.data())) << "another q";
+    EXPECT_FALSE(rt::KeptMassMatrix(p, *ws, t + 1.0, y.data(), kept.data())) << "another t";
   }
 }
 
