@@ -174,6 +174,7 @@ int RunCheck(const CheckArgs& args) {
 
 void AddCheckCommand(CLI::App& app, int* exit_code, bool options) {
   auto args = std::make_shared<CheckArgs>();
+  args->load.leave_to_exit = true;  // one model, then the process ends
   CLI::App* cmd = app.add_subcommand("check", "Check a model: diagnostics, or a summary of the mechanism");
   if (!options) return;  // only its name and description (main.cpp)
   cmd->add_option("file", args->load.path, "The .mech file")->required();

@@ -247,6 +247,7 @@ int RunCommand(const RunArgs& a) {
 
 void AddRunCommand(CLI::App& app, int* exit_code, bool options) {
   auto a = std::make_shared<RunArgs>();
+  a->load.leave_to_exit = true;  // one model, then the process ends
   CLI::App* run = app.add_subcommand("run", "Simulate a model and write its motion as CSV");
   if (!options) return;  // only its name and description (main.cpp)
   run->add_option("file", a->load.path, "The .mech file")->required();

@@ -34,6 +34,7 @@ struct LoadOptions {
   bool stops = true;                                     // a URDF file: --limits stops|ignore
   std::vector<std::string> package_paths;                // a URDF file: --package-path
   std::vector<std::string> input_files;                  // --input-file: tables of the model's inputs
+  bool leave_to_exit = false;  // loaded once, the process ends after: pipeline::LoadOptions::leave_to_exit
 };
 
 // The most threads -j may ask for.

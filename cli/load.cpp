@@ -50,6 +50,7 @@ std::unique_ptr<pipeline::Model> LoadAndCompile(const LoadOptions& options, cons
   lo.urdf.floating = options.floating;
   lo.urdf.stops = options.stops;
   lo.urdf.package_paths = options.package_paths;
+  lo.leave_to_exit = options.leave_to_exit;
   pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(options.path), lo, spec);
   std::cerr << r.diagnostics;
   return std::move(r.model);

@@ -545,9 +545,15 @@ void Instantiator::ExpandVariable(Node* child, const ast::Component& comp, VType
 
 void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
   const ModView mods = var->Modifiers();
+  // A shared modifier's attributes are those of every instance sharing it: one check when
+  // they are all sound (a wrong one is reported in each instance, as before).
+  const Mod* shared = var->shared_mod;
+  if (shared && attributes_ok_.count(shared)) return;
+  bool ok = true;
   for (const auto& key : mods.order) {
     const Mod& sub = mods.sub.find(key)->second;
     if (IsVarAttribute(key) || sub.set_only) continue;
+    ok = false;
     auto& d = diags_.Error(DiagCode::UnknownModifier, sub.span,
                            "'" + key + "' is not an attribute of " + std::string(VTypeName(builtin)) + " variable '" +
                                var->Path() + "'");
@@ -555,6 +561,7 @@ void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
     d.hint = best.empty() ? "attributes are start, fixed, unit, min, max, displayUnit, quantity, nominal"
                           : "did you mean '" + best + "'?";
   }
+  if (shared && ok) attributes_ok_.insert(shared);
 }
 
 // A component of class type (or an array of them).

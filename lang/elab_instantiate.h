@@ -12,6 +12,7 @@
 #include <string>
 #include <string_view>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -130,6 +131,9 @@ class Instantiator {
   std::unordered_map<const ast::Component*, std::pair<const ast::ClassDef*, const ast::ClassDef*>> component_type_;
   // DeclarationMod's: per declaration, its shared modifier (null: not shareable).
   std::unordered_map<const ast::Component*, const Mod*> decl_mods_;
+  // CheckVarAttributes': the shared modifiers (Node::shared_mod) already found to name
+  // attributes only, checked once instead of in every instance that shares them.
+  std::unordered_set<const Mod*> attributes_ok_;
 };
 
 }  // namespace kanesim::lang::elab

@@ -265,8 +265,9 @@ struct Node {
   // kClass
   const ast::ClassDef* cls = nullptr;
   std::vector<NodePtr> children;
-  mutable std::unique_ptr<std::unordered_map<std::string, Node*>> by_name;  // index of `children`, built by
-                                                                           // Child() for large classes
+  // The index of `children` Child() builds for a large class, keyed by the children's names
+  // (views of Node::name, which outlives it).
+  mutable std::unique_ptr<std::unordered_map<std::string_view, Node*>> by_name;
   struct EqSource {
     const ast::Equation* eq;
     const ast::ClassDef* cls;  // for lookups
@@ -297,7 +298,8 @@ struct Node {
     out += name;
   }
   static constexpr size_t kScanBudget = 256;  // names a larger class's scans compare before it gets an index
-  Node* Child(const std::string& n) const {
+  // By view: the emitter's and the evaluator's names are literals (no string made per call).
+  Node* Child(std::string_view n) const {
     // Most classes have a handful of elements: a scan beats hashing. A larger one gets an
     // index once its scans would have compared kScanBudget names: at once for a model of
     // many declarations (lookups stay O(1)), never for an instance looked up a few times
@@ -310,7 +312,7 @@ struct Node {
       return nullptr;
     }
     if (!by_name || by_name->size() != children.size()) {
-      by_name = std::make_unique<std::unordered_map<std::string, Node*>>();
+      by_name = std::make_unique<std::unordered_map<std::string_view, Node*>>();
       for (const auto& c : children) (*by_name)[c->name] = c.get();
     }
     auto it = by_name->find(n);

@@ -12,9 +12,18 @@
 
 namespace kanesim::lang::elab {
 
-bool IsVarAttribute(const std::string& n) {
-  return n == "start" || n == "fixed" || n == "unit" || n == "min" || n == "max" || n == "displayUnit" ||
-         n == "quantity" || n == "nominal" || n == "stateSelect";
+bool IsVarAttribute(const std::string& name) {
+  // By length first: each variable's attributes are checked in every instance.
+  const std::string_view n = name;
+  switch (n.size()) {
+    case 3: return n == "min" || n == "max";
+    case 4: return n == "unit";
+    case 5: return n == "start" || n == "fixed";
+    case 7: return n == "nominal";
+    case 8: return n == "quantity";
+    case 11: return n == "displayUnit" || n == "stateSelect";
+    default: return false;
+  }
 }
 Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters,
              Diagnostics& diags) {

@@ -308,24 +308,34 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
 Evaluator::ParamAttributes Evaluator::ReadParamAttributes(Node* var) {
   ParamAttributes attrs;
   const ModView mods = var->Modifiers();
-  auto attr_num = [&](const char* key, double* out) {
-    auto it = mods.sub.find(key);
-    if (it == mods.sub.end() || !it->second.value) return;
-    if (IsLiteral(*it->second.value, ast::ExprKind::Number)) {
-      *out = it->second.value->expr->number;
+  // One pass over the few modifiers a variable has, instead of a search per attribute
+  // (every parameter element of the model comes here); read in the order min, max, unit.
+  const ModValue* min = nullptr;
+  const ModValue* max = nullptr;
+  const ModValue* unit = nullptr;
+  for (const auto& [key, sub] : mods.sub) {
+    if (!sub.value) continue;
+    const std::string_view k = key;
+    if (k == "min") min = &*sub.value;
+    else if (k == "max") max = &*sub.value;
+    else if (k == "unit") unit = &*sub.value;
+  }
+  auto attr_num = [&](const ModValue* mv, const char* key, double* out) {
+    if (!mv) return;
+    if (IsLiteral(*mv, ast::ExprKind::Number)) {
+      *out = mv->expr->number;
       return;
     }
-    Value a = EvalModValue(*it->second.value, nullptr);
-    if (a.valid && a.shape.empty() && a.type != VType::String)
-      Structural(a, it->second.value->span, out, key);
+    Value a = EvalModValue(*mv, nullptr);
+    if (a.valid && a.shape.empty() && a.type != VType::String) Structural(a, mv->span, out, key);
   };
-  attr_num("min", &attrs.min);
-  attr_num("max", &attrs.max);
-  if (auto it = mods.sub.find("unit"); it != mods.sub.end() && it->second.value) {
-    if (IsLiteral(*it->second.value, ast::ExprKind::String)) {
-      attrs.unit = it->second.value->expr->text;
+  attr_num(min, "min", &attrs.min);
+  attr_num(max, "max", &attrs.max);
+  if (unit) {
+    if (IsLiteral(*unit, ast::ExprKind::String)) {
+      attrs.unit = unit->expr->text;
     } else {
-      Value a = EvalModValue(*it->second.value, nullptr);
+      Value a = EvalModValue(*unit, nullptr);
       if (a.valid && a.type == VType::String && !a.strings.empty()) attrs.unit = a.strings[0];
     }
   }

@@ -3,6 +3,7 @@
 
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "lang/elab_connect.h"
 #include "lang/elab_emit.h"
@@ -95,6 +96,13 @@ flat::SourceLoc SourcePlaces::Loc(Span s) const {
 
 }  // namespace elab
 
+// An elaboration's object kept to the process's exit (ElaborateOptions::leave_to_exit).
+template <class T>
+static void LeaveToExit(std::unique_ptr<T> object) {
+  static auto* kept = new std::vector<std::shared_ptr<void>>();
+  kept->emplace_back(std::move(object));
+}
+
 // The phases, in order (each declared in its header, lang/elab_*.h): lookup picks the
 // model and checks the imports; --set overrides become the root's modifiers; instantiate
 // builds the instance tree, asking evaluate for sizes and conditions; the subscripted
@@ -114,15 +122,16 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   elab::SourcePlaces places(program.sources);
   elab::Evaluator eval(out, places, diags);
   eval.ReadDataFrom(options.data_files);
-  elab::InstanceTree tree;
+  auto tree_owner = std::make_unique<elab::InstanceTree>();
+  elab::InstanceTree& tree = *tree_owner;
   tree.root = tree.arena.New();
   elab::SetOverrides sets(diags);
   if (!sets.Parse(options.overrides, program, tree.root.get())) return false;
   // Kept to the end with its per-class caches: freeing them between the phases fragments
   // the heap, and repeated loads in one process then peak higher
   // (docs/benchmarks/2026-11-28_elaborator_phases.md).
-  elab::Instantiator instantiator(lookup, eval, places, diags, sets.AnySubscripted(), &tree);
-  instantiator.Run(top);
+  auto instantiator = std::make_unique<elab::Instantiator>(lookup, eval, places, diags, sets.AnySubscripted(), &tree);
+  instantiator->Run(top);
   sets.Bind();
   if (diags.HasErrors()) return false;
 
@@ -144,6 +153,10 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
                           "'" + top->name + "' has " + std::to_string(out->worlds.size()) +
                               " World components; a mechanism needs exactly one");
     if (out->worlds.empty()) d.hint = "add 'World world;' and connect the first joint to world.frame_b";
+  }
+  if (options.leave_to_exit) {
+    LeaveToExit(std::move(instantiator));
+    LeaveToExit(std::move(tree_owner));
   }
   return !diags.HasErrors();
 }

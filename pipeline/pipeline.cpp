@@ -44,6 +44,7 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
   lang::ElaborateOptions eo;
   eo.model = options.model;
   eo.data_files = options.data_files;
+  eo.leave_to_exit = options.leave_to_exit;
   for (const std::string& s : options.sets) {
     lang::ParamOverride o;
     if (!lang::ParseSetArgument(s, &o)) {

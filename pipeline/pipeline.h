@@ -139,6 +139,8 @@ struct LoadOptions {
   // The data files (meshes) read from elsewhere (lang::ElaborateOptions::data_files): an
   // FMU's resources. Null: as the model names them.
   const std::map<std::string, std::string>* data_files = nullptr;
+  // The process ends after this model's command: lang::ElaborateOptions::leave_to_exit.
+  bool leave_to_exit = false;
 };
 
 // A loaded model. Immutable once loaded; the program may be shared across threads.

@@ -65,6 +65,7 @@ void EndStopEvents::Leave(rt::Workspace& ws, int i) {
   Side& s = sides_[static_cast<size_t>(i)];
   s.resting = false;
   s.accumulates_at = 0.0;
+  s.lift = 0.0;
   if (s.stop < 0 || friction_of_[static_cast<size_t>(s.stop)] < 0) return;
   // Pulled off beyond its static friction: it slides away, its sliding friction acting from
   // now (the reactions that follow in Settle see it).
@@ -382,6 +383,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
     } else {
       double c = 0.0;
       if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
+      g[i] += LiftAt(s, t);
       if (guards) {
         double v = 0.0;
         for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
@@ -416,7 +418,30 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   if (int s = Row(ws, t, y, side, &gap, J_.data(), &c); s != 0) return s;
   double v = 0.0;
   for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+  // A plane's crossing while it separates is round-off's (the gap's noise right after its
+  // rebound): no impact, its event function lifted again (Side::lift).
+  if (side.plane >= 0 && v > kRestSpeeds * atol_) {
+    Lift(side, t, gap, v);
+    return 0;
+  }
   return Impact(ws, t, y, i, v, true);
+}
+
+// Side::lift at a rebound (gap rate `rate` > 0): the event function lifted to kLiftRoundoffs
+// round-offs of the gap's terms above 0, the lift gone once the gap has risen twice as much.
+void EndStopEvents::Lift(Side& s, double t, double gap, double rate) {
+  const double d = s.plane >= 0 ? program_.plane_contacts[static_cast<size_t>(s.plane)].d : 0.0;
+  const double margin = kLiftRoundoffs * std::numeric_limits<double>::epsilon() * (std::abs(gap + d) + std::abs(d));
+  s.lift = 0.0;
+  if (!(rate > 0.0)) return;
+  s.lift = std::max(0.0, -gap) + margin;
+  s.lift_at = t;
+  s.lift_for = 2.0 * s.lift / rate;
+}
+
+double EndStopEvents::LiftAt(const Side& s, double t) {
+  if (s.lift == 0.0) return 0.0;
+  return s.lift * std::clamp(1.0 - (t - s.lift_at) / s.lift_for, 0.0, 1.0);
 }
 
 int EndStopEvents::Jump(rt::Workspace& ws, double t, double* y, const std::string& clause,
@@ -551,13 +576,56 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     if (int s = GapAcceleration(ws, t, y, i, &a); s != 0) return s;
     graze = a > -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * (1.0 + std::abs(a));  // (0: held by friction)
   }
-  // The side's gap rate change, the resting sides' held at zero.
+  // The side's gap rate change, the resting sides' held at zero. A resting side can only push:
+  // one whose impulse would pull (the blow lifts the mechanism off it) leaves, the most pulling
+  // first, and the impulse is solved again without it (the impact's complementarity).
+  // Sides that strike together with it (on their contact within the tolerance's reach and
+  // closing: a box landing flat on its corners) take their own Newton's law in the same
+  // impulse, not one after another (an impulse at one corner alone would set the box
+  // rocking): each its target, its log entry, its rest.
+  std::vector<Strike> with;
+  for (size_t k = 0; k < sides_.size(); ++k) {
+    const Side& o = sides_[k];
+    if (static_cast<int>(k) == i || o.resting || Released(o)) continue;
+    double gap = 0.0, cc = 0.0, vk = 0.0;
+    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) vk += J_[static_cast<size_t>(j)] * u[j];
+    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(o))) || !(vk < -kRestSpeeds * atol_)) continue;
+    const double ek = Restitution(o);
+    const bool rk = ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
+    const double bk = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : vk;
+    with.push_back({static_cast<int>(k), vk, bk, rk});
+  }
   std::vector<int> rows = {i};
   std::vector<double> targets = {rest ? -v : -(1.0 + e) * v};
+  for (const Strike& w : with) {
+    rows.push_back(w.side);
+    targets.push_back(w.rest ? -w.v : -(1.0 + Restitution(sides_[static_cast<size_t>(w.side)])) * w.v);
+  }
   for (size_t k = 0; k < sides_.size(); ++k)
     if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
   std::vector<double> du(static_cast<size_t>(nu_)), c;
-  if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
+  std::vector<int> left;  // the resting sides the impulse lifted off
+  const std::vector<char> was = RestingSet();  // (Settle logs the changes: rests, leaves)
+  for (;;) {
+    if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
+    double scale = 0.0;
+    for (double x : c) scale = std::max(scale, std::abs(x));
+    size_t pull = 0;  // (0: none; the struck side's own impulse is the impact's)
+    for (size_t j = 1; j < rows.size(); ++j)
+      if (c[j] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == 0 || c[j] < c[pull]))
+        pull = j;
+    if (pull == 0) break;
+    const auto w = std::find_if(with.begin(), with.end(), [&](const Strike& x) { return x.side == rows[pull]; });
+    if (w != with.end()) {
+      with.erase(w);  // the others' blow opens it: not struck now (Settle sees it after)
+    } else {
+      Leave(ws, rows[pull]);
+      left.push_back(rows[pull]);
+    }
+    rows.erase(rows.begin() + static_cast<long>(pull));
+    targets.erase(targets.begin() + static_cast<long>(pull));
+  }
   // A rolling contact whose impulse would pull: the run stops at the impact.
   if (impulse_F_.size() == du.size()) {
     int status = 0;
@@ -567,14 +635,45 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     }
   }
   for (int k = 0; k < nu_; ++k) u[k] += du[static_cast<size_t>(k)];
+  // A side lifted off leaves from where its rest left it (a plane's gap drifts by the
+  // tolerance while held): its flight starts above 0 as a rebound's (Side::lift).
+  for (int k : left) {
+    Side& s = sides_[static_cast<size_t>(k)];
+    double gap = 0.0, cc = 0.0, rate = 0.0;
+    if (int r = Row(ws, t, y, s, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) rate += J_[static_cast<size_t>(j)] * u[j];
+    Lift(s, t, gap, rate);
+  }
   if (st) u[st->u] = rest ? 0.0 : -e * before;  // exactly Newton's law (du's round-off aside)
+  for (const Strike& w : with) {
+    const Side& o = sides_[static_cast<size_t>(w.side)];
+    if (o.stop < 0) continue;
+    const rt::EndStop& so = stops_[static_cast<size_t>(o.stop)];
+    y[so.q] = o.upper ? so.q_max : so.q_min;
+    u[so.u] = w.rest ? 0.0 : -Restitution(o) * w.before;
+  }
   for (const Side& s : sides_)
     if (s.resting && s.stop >= 0) u[stops_[static_cast<size_t>(s.stop)].u] = 0.0;
+  // The companions' speeds after, their log entries (after the impact's own), rests and lifts.
+  decltype(log_) struck;
+  for (const Strike& w : with) {
+    Side& o = sides_[static_cast<size_t>(w.side)];
+    double gap = 0.0, cc = 0.0, rate = 0.0;
+    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) rate += J_[static_cast<size_t>(j)] * u[j];
+    const double after_o = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : rate;
+    char line[200];
+    std::snprintf(line, sizeof line, "impact at %s, speed %.17g -> %.17g", Where(o).c_str(), w.before, after_o);
+    struck.push_back({t, Element(o), line});
+    if (w.rest) o.resting = true;
+    else if (o.plane >= 0) Lift(o, t, gap, rate);
+  }
   double after = st ? u[st->u] : 0.0;
   if (!st) {
     double gap = 0.0, cc = 0.0;
     if (int s = Row(ws, t, y, side, &gap, J_.data(), &cc); s != 0) return s;
     for (int k = 0; k < nu_; ++k) after += J_[static_cast<size_t>(k)] * u[k];
+    if (!rest) Lift(side, t, gap, after);
   }
   char buf[200];
   std::snprintf(buf, sizeof buf, "impact at %s, speed %.17g -> %.17g", Where(side).c_str(), before, after);
@@ -586,9 +685,9 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   // Closing slower than the tolerance's reach (a touch at rest, at the start or after a drift
   // of round-off): no impact, only the rest or the leave that Settle logs.
   if (std::abs(v) > kRestSpeeds * atol_) log_.push_back({t, Element(side), kind});
+  log_.insert(log_.end(), struck.begin(), struck.end());
   // At rest on the contact: held while it pushes; the impulse may also have made other
   // resting sides pull, or brought sides on their contact to rest.
-  const std::vector<char> was = RestingSet();
   if (rest && !graze) {
     side.resting = true;
     if (t_inf > t) side.accumulates_at = t_inf;  // its rest is logged there (Functions: a time event)

@@ -152,6 +152,7 @@ class EndStopEvents {
 
   // A rebound speed at most this many times (atol + rtol |speed before|) ends in rest.
   static constexpr double kRestSpeeds = 100.0;
+  static constexpr double kLiftRoundoffs = 64.0;  // Side::lift (the gap's noise measured: ~6)
   // An output row past a stop by more than this many (atol + rtol max(1, |limit|)) stops the run.
   static constexpr double kPastRows = 10.0;
   // Bounces accumulate (Zeno) when the next flight's height v^2 / (2 |a|) (rebound speed v,
@@ -186,9 +187,28 @@ class EndStopEvents {
     bool upper = false;  // a stop's q_max (else q_min)
     bool resting = false;
     double accumulates_at = 0.0;  // resting through accumulated bounces until then (0: not)
+    // After a rebound the state is a round-off from the contact (a plane's gap is a function
+    // of all coordinates: -2e-14 .. 2e-14 at |n . x| ~ 0.35 where the impact left it), and the
+    // gap's own noise over the next 1e-14 s is as large as its change. Otherwise a flight
+    // shorter than one step (late bounces: an explicit method steps over a free fall's
+    // parabola in one step) begins and ends below zero and its impact is missed, or the
+    // noise makes a crossing at once. So the event function is gap + lift, the lift from
+    // `lift` at `lift_at` (the gap's deficit and kLiftRoundoffs round-offs of its terms) to 0
+    // over `lift_for` (the time the rebound takes to rise twice the lift): positive from the
+    // rebound on, and exactly the gap once the flight is on its way (no offset kept).
+    double lift = 0.0, lift_at = 0.0, lift_for = 0.0;
   };
   // Side i's gap, row J (nu) and bias c (d2g/dt2 = J udot + c) at (t, y).
   int Row(rt::Workspace& ws, double t, const double* y, const Side& s, double* gap, double* J, double* c);
+  // A side struck together with the impact's own (Impact): its gap rate and logged speed
+  // before, and whether it rests after.
+  struct Strike {
+    int side = -1;
+    double v = 0.0, before = 0.0;
+    bool rest = false;
+  };
+  void Lift(Side& s, double t, double gap, double rate);  // Side::lift after a rebound at t
+  static double LiftAt(const Side& s, double t);         // its value at t
   double Restitution(const Side& s) const;
   std::string SingularRows(const std::vector<int>& rows) const;  // error_ of a singular impulse
   double Scale(const Side& s) const;  // the gap's length scale for the tolerances

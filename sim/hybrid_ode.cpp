@@ -146,12 +146,13 @@ bool HybridOde::SetModes(const std::vector<double>& modes) {
   const size_t n_stops = m.stops.Resting().size();
   if (modes.size() != n_stops + m.stick.Modes().size()) return false;
   // Values from outside (a master's serialized state): a side rests or not, accumulates
-  // until a finite time, a joint slides either way or sticks with a finite force.
+  // until a finite time, a joint slides either way, sticks with a finite force or is held by
+  // resting stops (2).
   for (size_t i = 0; i < modes.size(); ++i) {
     const double v = modes[i];
     const bool flag = i < n_stops ? i % 2 == 0 : (i - n_stops) % 2 == 0;
     if (!std::isfinite(v) || (flag && i < n_stops && v != 0.0 && v != 1.0) ||
-        (flag && i >= n_stops && v != 0.0 && v != 1.0 && v != -1.0))
+        (flag && i >= n_stops && v != 0.0 && v != 1.0 && v != -1.0 && v != 2.0))
       return false;
   }
   m.stops.SetResting(std::vector<double>(modes.begin(), modes.begin() + static_cast<long>(n_stops)));

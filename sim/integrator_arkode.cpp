@@ -85,7 +85,8 @@ class ArkodeStepper final : public SundialsStepper {
     if (StepsOneByOne()) return AdvanceChecked(tout, y);
     for (;;) {  // (a graze guard that found no dip: on)
       int flag = ERKStepEvolve(mem_, tout, s_.y, &tret, ARK_NORMAL);
-      while (flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) flag = Restart(tout, &tret);
+      while ((flag == ARK_UNREC_RHSFUNC_ERR && rhs_.failed && !rhs_.fatal) || (flag == ARK_ERR_FAILURE && RetryErrorTest()))
+        flag = Restart(tout, &tret);
       if (flag >= 0 && !hooked_) {  // the restart point until the hook keeps accepted steps
         const double* ys = N_VGetArrayPointer(s_.y);
         t_accepted_ = tret;
@@ -220,7 +221,24 @@ class ArkodeStepper final : public SundialsStepper {
     return ERKStepEvolve(mem_, tout, s_.y, tret, mode);
   }
 
+  // The error test failed repeatedly (ARK_ERR_FAILURE) on an open tree: ERKStep again from
+  // the last accepted step (Restart: a quarter of its step, the controller's history
+  // cleared), at most kErrorTestRetries times from one point; then the failure stands.
+  // Measured on the chain of EndStopEvents.ChainWithManyStopsRestsAndStrikesTogether (a
+  // light damped tip: DOP853 finds it stiff, h|lambda| ~ 6 at h ~ 2e-4), where ERKStep failed
+  // seven tests in a row down to h ~ 5e-7 in smooth motion: the restart carried the run
+  // through at rtol 1e-6 and 1e-7, not at 1e-5, 1e-8, 1e-9 (there the stiff solvers are the
+  // answer: docs/integrators.md).
+  bool RetryErrorTest() {
+    if (rhs_.ChecksSteps()) return false;  // (closed loops: ResetAfterErrorTest)
+    if (retry_at_ != t_accepted_) retry_at_ = t_accepted_, retries_ = 0;
+    return retries_++ < kErrorTestRetries;
+  }
+
   static constexpr double kRhsShrink = 0.25;  // as DOP853 after a failure of f
+  static constexpr int kErrorTestRetries = 2;
+  double retry_at_ = -INFINITY;  // t_accepted_ of the last RetryErrorTest, and the retries there
+  int retries_ = 0;
 
   double stop_ = 0.0;
   void StopMoved(double t) override { stop_ = t; }

@@ -61,16 +61,18 @@ class StickSlipEvents {
   // way, one at rest sticks; "" when that holds, else why not (a joint at rest whose needed
   // friction passes mu_s r N slips at once: no smooth state).
   std::string SettleAt(rt::Workspace& ws, double t, const double* y, double tol);
-  // Per joint its mode (+1, -1 sliding that way, 0 stuck) and holding force, two numbers a
-  // joint: what a saved state needs (sim/hybrid_ode.h).
+  // Per joint its mode (+1, -1 sliding that way, 0 stuck, 2 held by resting stops through the
+  // rows: MarkHeldByStops) and holding force, two numbers a joint: what a saved state and the
+  // output rows' held solve (sim/held_outputs.cpp) need (sim/hybrid_ode.h).
   std::vector<double> Modes() const {
     std::vector<double> m;
-    for (const Joint& j : joints_) m.insert(m.end(), {static_cast<double>(j.mode), j.tau});
+    for (const Joint& j : joints_) m.insert(m.end(), {j.by_stops ? 2.0 : static_cast<double>(j.mode), j.tau});
     return m;
   }
   void SetModes(const std::vector<double>& m) {
     for (size_t i = 0; i < joints_.size() && 2 * i + 1 < m.size(); ++i) {
-      joints_[i].mode = static_cast<int>(m[2 * i]);
+      joints_[i].by_stops = m[2 * i] == 2.0;
+      joints_[i].mode = joints_[i].by_stops ? 0 : static_cast<int>(m[2 * i]);
       joints_[i].tau = m[2 * i + 1];
     }
   }

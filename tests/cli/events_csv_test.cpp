@@ -21,18 +21,6 @@ struct EventRow {
   std::string element, kind, signal, before, after;
 };
 
-// Fields of one CSV line (quoted fields may hold commas).
-std::vector<std::string> Fields(const std::string& line) {
-  std::vector<std::string> out(1);
-  bool quoted = false;
-  for (char c : line) {
-    if (c == '"') quoted = !quoted;
-    else if (c == ',' && !quoted) out.emplace_back();
-    else out.back() += c;
-  }
-  return out;
-}
-
 std::vector<EventRow> ReadEvents(const std::string& path) {
   std::ifstream in(path);
   std::string line;
@@ -40,7 +28,7 @@ std::vector<EventRow> ReadEvents(const std::string& path) {
   EXPECT_EQ(line, "time,element,kind,signal,before,after");
   std::vector<EventRow> rows;
   while (std::getline(in, line)) {
-    std::vector<std::string> f = Fields(line);
+    std::vector<std::string> f = CsvFields(line);
     if (f.size() != 6) {
       ADD_FAILURE() << "bad row: " << line;
       continue;
@@ -93,7 +81,7 @@ TEST(EventsCsv, EndStopRowsCarryTheSpeedsTheyChanged) {
     double q2 = NAN;
     std::getline(rows, line);
     while (std::getline(rows, line))
-      if (std::stod(Fields(line)[0]) == ev[0].time) q2 = std::stod(Fields(line)[1]);
+      if (std::stod(CsvFields(line)[0]) == ev[0].time) q2 = std::stod(CsvFields(line)[1]);
     ASSERT_FALSE(std::isnan(q2));
     const double M12 = m2 * (L2 * L2 / 3 + L1 * L2 * std::cos(q2) / 2), M22 = m2 * L2 * L2 / 3;
     EXPECT_NEAR(u2p - u2, -M12 / M22 * (u1p - u1), 1e-9 * (std::abs(u1) + std::abs(u2)));

@@ -221,6 +221,49 @@ TEST(EndStopEvents, AccumulatingImpactsPassToRest) {
   }
 }
 
+// A carriage (jA, m = 1) thrust up by 39.62 N towards a ceiling (q_max = 0.15, restitution e)
+// carries a block (jB, m = 1) resting on it (q_min = 0): both rise at a = 10, pressed together,
+// and reach the ceiling at t1 = sqrt(0.03) with speed sqrt(3). The blow on the carriage pulls
+// it down, away from the block; the block's stop can only push, so it leaves: the carriage's
+// speed becomes -e sqrt(3), the block keeps its sqrt(3) (uB = (1 + e) sqrt(3), relative). If
+// this fails, an impact holds a resting side whose impulse pulls: the block is dragged down
+// with the carriage (uB stays 0), a silent wrong answer.
+TEST(EndStopEvents, AnImpactNeverPullsOnARestingStop) {
+  for (double e : {0.0, 0.5, 1.0}) {
+    const std::string text =
+        "model Carriage\n"
+        "  World world(g = {0, -9.81, 0});\n"
+        "  Prismatic jA(axis = {0, 1, 0}, q_max = 0.15, restitution = " + Num(e) + ");\n"
+        "  Body carriage(m = 1);\n"
+        "  Prismatic jB(axis = {0, 1, 0}, q_min = 0, restitution = 0);\n"
+        "  Body box(m = 1);\n"
+        "equation\n"
+        "  jA.tau = 39.62;\n"
+        "  connect(world.frame_b, jA.frame_a);\n"
+        "  connect(jA.frame_b, carriage.frame_a);\n"
+        "  connect(jA.frame_b, jB.frame_a);\n"
+        "  connect(jB.frame_b, box.frame_a);\n"
+        "end Carriage;\n";
+    auto l = LoadModel(text, {}, {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    const double t1 = std::sqrt(0.03), v = std::sqrt(3.0);
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      sim::SimResult r;
+      sim::MemorySink s = RunWith(*l->prog, how, 0.25, 0.01, {"jA.q", "jA.u", "jB.q", "jB.u"}, &r, 1e-11);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+      const std::vector<size_t> at = EventRows(s);
+      ASSERT_GE(at.size(), 1u) << how.name;
+      const size_t i = at[0];
+      EXPECT_NEAR(s.times[i], t1, 1e-9) << how.name << " e = " << e;
+      EXPECT_NEAR(s.rows[i][1], v, 1e-9) << how.name;
+      EXPECT_NEAR(s.rows[i][3], 0.0, 1e-12) << how.name << ": resting on the carriage before";
+      EXPECT_NEAR(s.rows[i + 1][1], -e * v, 1e-9) << how.name << " e = " << e;
+      EXPECT_NEAR(s.rows[i + 1][3], (1 + e) * v, 1e-9) << how.name << " e = " << e << ": the block keeps its speed";
+      for (size_t k = 0; k < s.rows.size(); ++k) EXPECT_GE(s.rows[k][2], -1e-12) << how.name << " row " << k;
+    }
+  }
+}
+
 // A five-link chain (heavy links, then a light damped tip) with plastic stops on four joints:
 // several joints come to rest on their stops at once, an impact on one pushes another that
 // sits on its stop, and the tip is stiff (a small inertia, damped). If this fails, a column

@@ -195,5 +195,60 @@ TEST(HeldSignals, RodOnAFloorReadsTheHeldMotion) {
   }
 }
 
+// A rack pair: block 1 (m1 = 1) on a stop q1 >= 0, driven by tau1 = 5 (t - 0.5); block 2
+// (m2 = 2, mu = 0.3 exact) geared to it, q2 = -0.5 q1. Until t = 0.5 the stop holds block 1
+// and, through the gear, block 2 (held by the stop: its friction force undetermined, zero),
+// so nothing acts along the axes: both axial reactions 0. From 0.5 to the slip at
+// 0.5 + 0.3 * 2 g / 10 block 2's friction holds the pair: block 1's axial reaction is its
+// drive's 5 (t - 0.5), block 2's the gear's force tau1 / 0.5 = 10 (t - 0.5).
+// If this fails, the output rows' held solve treats the follower as stuck by its own friction
+// beside the stop's row (dependent rows): before the fix the reactions read -26.7 N at
+// t = 0.2 and the event row's acceleration 1.6e21.
+TEST(HeldSignals, FollowerHeldThroughAGearByARestingStopReadsTheStatics) {
+  const std::string text =
+      "model Rack\n"
+      "  World world(g = {0, -9.81, 0});\n"
+      "  Prismatic j1(axis = {1, 0, 0}, q_min = 0, restitution = 0);\n"
+      "  Body b1(m = 1);\n"
+      "  FixedTranslation base(r = {0, 1, 0});\n"
+      "  Prismatic j2(axis = {1, 0, 0}, mu = 0.3, friction_exact = true);\n"
+      "  Body b2(m = 2);\n"
+      "  JointCoupling gear(ratio = -0.5);\n"
+      "equation\n"
+      "  connect(world.frame_b, j1.frame_a);\n"
+      "  connect(j1.frame_b, b1.frame_a);\n"
+      "  connect(world.frame_b, base.frame_a);\n"
+      "  connect(base.frame_b, j2.frame_a);\n"
+      "  connect(j2.frame_b, b2.frame_a);\n"
+      "  connect(j1.drive, gear.flange_a);\n"
+      "  connect(j2.drive, gear.flange_b);\n"
+      "  j1.tau = 5 * (time - 0.5);\n"
+      "end Rack;\n";
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  const double t_slip = 0.5 + 0.3 * 2 * kG / 10;
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 1.0, 0.05,
+                                {"j1.a", "j2.a", "j1.reaction_force[1]", "j2.reaction_force[1]"}, &r, 1e-10);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    size_t resting = 0, stuck = 0;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      const double t = s.times[i];
+      const std::vector<double>& row = s.rows[i];
+      EXPECT_NEAR(row[0], 0.0, 1e-12) << how.name << " t = " << t;
+      EXPECT_NEAR(row[1], 0.0, 1e-12) << how.name << " t = " << t;
+      const double f = t < 0.5 ? 0.0 : 5 * (t - 0.5);
+      EXPECT_NEAR(row[2], f, 1e-9) << how.name << " t = " << t;
+      EXPECT_NEAR(std::abs(row[3]), 2 * f, 1e-9) << how.name << " t = " << t;
+      (t < 0.5 ? resting : stuck) += 1;
+    }
+    EXPECT_EQ(s.times.back(), 1.0) << how.name;
+    EXPECT_LT(1.0, t_slip);
+    EXPECT_GE(resting, 10u) << how.name;
+    EXPECT_GE(stuck, 10u) << how.name;
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::test

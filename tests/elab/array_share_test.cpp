@@ -155,5 +155,41 @@ TEST(ArrayShare, BoundReadingTheElementCheckedPerElement) {
   EXPECT_EQ(e->errors.find("'ps[1].b'"), std::string::npos) << e->errors;
 }
 
+// If this fails, leaving the elaboration's instance tree to the process's exit (what
+// `kanesim check` and `run` ask for, ElaborateOptions::leave_to_exit) changed the flat
+// mechanism: the same model elaborated both ways, arrays shared and not, must print alike.
+TEST(LeaveToExit, SameMechanismAsFreeingTheTree) {
+  const std::string parts =
+      "  Rod links[3](L = {0.5, 0.7, 0.9}, m = {1, 2, 3}, each color = \"red\",\n"
+      "               body(I = {diagonal({1, 1, 1}), diagonal({2, 2, 2}), diagonal({3, 3, 3})}));\n";
+  const std::string text = ArrayChain("", kJoints, parts, "links");
+  std::string flat[2];
+  for (int keep = 0; keep < 2; ++keep) {
+    Program program;
+    flat::Mechanism mech;
+    Diagnostics diags(&program.sources);
+    ElaborateOptions options;
+    options.leave_to_exit = keep == 1;
+    ASSERT_TRUE(LoadProgramFromText("test.mech", text, stdlib::Files(), &program, diags));
+    ASSERT_TRUE(Elaborate(program, options, &mech, diags)) << diags.RenderAll();
+    flat[keep] = flat::DumpFlat(mech);
+  }
+  EXPECT_EQ(flat[0], flat[1]);
+  EXPECT_NE(flat[0].find("links[3].L"), std::string::npos) << flat[0];
+}
+
+// If this fails, a wrong attribute of a declaration shared by every instance (checked once
+// when sound, Instantiator::CheckVarAttributes) was reported in one instance only.
+TEST(LeaveToExit, WrongAttributeOfASharedDeclarationInEveryInstance) {
+  const std::string cls = "model P\n  parameter Real c(bogus = 1) = 2;\nend P;\n";
+  auto e = ElaborateText(cls + ModelWith("  P p1;\n  P p2;\n  P p3;\n"));
+  EXPECT_FALSE(e->ok);
+  size_t count = 0;
+  for (size_t at = e->errors.find("'bogus' is not an attribute"); at != std::string::npos;
+       at = e->errors.find("'bogus' is not an attribute", at + 1))
+    ++count;
+  EXPECT_EQ(count, 3u) << e->errors;
+}
+
 }  // namespace
 }  // namespace kanesim::lang::test

@@ -1,8 +1,9 @@
 // The stepping core with events (sim/simulator.h over sim/hybrid_ode.h), in all five
 // integrators: a when clause's reinit located inside the steps at the bouncing ball's closed
 // form, its terminate ending the step there; exact friction's stick; states saved before an
-// event and in a mode continuing bit for bit. If these fail, stepping integrates through the
-// events, ends a step at the wrong time or loses a mode in GetState / SetState.
+// event and in a mode (a follower held by a resting stop too) continuing bit for bit. If
+// these fail, stepping integrates through the events, ends a step at the wrong time or loses
+// a mode in GetState / SetState.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -42,6 +43,29 @@ equation
   connect(slide.frame_b, box.frame_a);
   slide.tau = -10 * slide.q;
 end Slider;
+)";
+
+// A rack pair (tests/compiler/held_signals_test.cpp): block 1 rests on its stop until 0.5
+// and holds block 2 through the gear (held by the stop, not by its friction); both stuck by
+// block 2's friction until 1.0886, then sliding.
+constexpr char kRackOnStop[] = R"(model Rack
+  World world(g = {0, -9.81, 0});
+  Prismatic j1(axis = {1, 0, 0}, q_min = 0, restitution = 0);
+  Body b1(m = 1);
+  FixedTranslation base(r = {0, 1, 0});
+  Prismatic j2(axis = {1, 0, 0}, mu = 0.3, friction_exact = true);
+  Body b2(m = 2);
+  JointCoupling gear(ratio = -0.5);
+equation
+  connect(world.frame_b, j1.frame_a);
+  connect(j1.frame_b, b1.frame_a);
+  connect(world.frame_b, base.frame_a);
+  connect(base.frame_b, j2.frame_a);
+  connect(j2.frame_b, b2.frame_a);
+  connect(j1.drive, gear.flange_a);
+  connect(j2.drive, gear.flange_b);
+  j1.tau = 5 * (time - 0.5);
+end Rack;
 )";
 
 const rt::Integrator kAll[] = {rt::Integrator::Dop853, rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf,
@@ -98,10 +122,11 @@ TEST(SimulatorEvents, AWhenBallFiresAtTheClosedFormAndTerminatesInsideTheStep) {
 
 TEST(SimulatorEvents, StatesSavedBeforeAnEventAndInAModeContinueBitForBit) {
   for (rt::Integrator m : kAll) {
-    for (const char* text : {kWhenBall, kSlider}) {
+    for (const char* text : {kWhenBall, kSlider, kRackOnStop}) {
       auto s = Make(text, m);
       ASSERT_TRUE(s);
-      // Before the first bounce (0.45) / the stick (0.99), and between bounces / stuck.
+      // Before the first bounce (0.45) / the stick (0.99) / the leave (0.5: the follower held by
+      // the stop), and between bounces / stuck / sliding.
       for (double at : {0.4, 1.2}) {
         Steps(*s, at);
         const SimulatorState saved = s->GetState();

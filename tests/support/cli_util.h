@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 namespace kanesim::clitest {
 
@@ -67,6 +68,18 @@ inline int CsvRows(const std::string& path) {
   while (std::getline(in, line))
     if (!line.empty() && line[0] != '#') ++n;
   return n < 0 ? 0 : n;
+}
+
+// Fields of one CSV line (quoted fields may hold commas; the quotes are dropped).
+inline std::vector<std::string> CsvFields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"') quoted = !quoted;
+    else if (c == ',' && !quoted) out.emplace_back();
+    else out.back() += c;
+  }
+  return out;
 }
 
 }  // namespace kanesim::clitest
