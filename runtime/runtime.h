@@ -202,6 +202,10 @@ int InverseMassColumns(const Program& program, Workspace& ws, double t, const do
 // frictionless: a chord for the resting reactions beside mu, sim/end_stops_friction.cpp).
 int FrictionlessInverseMassColumns(const Program& program, Workspace& ws, double t, const double* y, const int* ks,
                                    int m, double* X);
+// The mass matrix M (nu x nu, column-major, as MassMatrix) that InverseMassColumns factored
+// last in ws, when that was at t and y's coordinates (a tree): true, and M is MassMatrix's to
+// the bit, without evaluating (ws's kinematics are left as they are); else false, M untouched.
+bool KeptMassMatrix(const Program& program, const Workspace& ws, double t, const double* y, double* M);
 // What ws evaluated so far: Derivative's evaluations, and the (constrained) inverse masses
 // InverseMassColumn(s) factored (a factor is kept for the same t and q).
 struct EvalCounts {

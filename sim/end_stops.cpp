@@ -165,13 +165,32 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
     if (sides_[static_cast<size_t>(rows[j])].plane >= 0)
       if (int r = rt::InverseMassTimes(program_, ws, t, y, J.data() + (n + j) * nu, x_.data() + (n + j) * nu); r != 0)
         return r;
+  // A = J X: most rows of J are +-e_k (a speed's, a stop's), so only J's nonzero entries
+  // enter the products. A term 0 x with x finite is +-0, which leaves the sum as it is (a sum
+  // that starts at +0 is never -0), so the products are the full loops' to the bit; a column
+  // with an entry not finite takes the full loop (0 inf is NaN).
+  std::vector<size_t>& nz = nonzero_;
+  std::vector<size_t> first(m + 1, 0);
+  nz.clear();
+  for (size_t r = 0; r < m; ++r) {
+    for (size_t i = 0; i < nu; ++i)
+      if (J[r * nu + i] != 0.0) nz.push_back(i);
+    first[r + 1] = nz.size();
+  }
   std::vector<double> A(m * m);
-  for (size_t r = 0; r < m; ++r)
-    for (size_t j = 0; j < m; ++j) {
+  for (size_t j = 0; j < m; ++j) {
+    const double* x = x_.data() + j * nu;
+    const bool finite = std::all_of(x, x + nu, [](double v) { return std::isfinite(v); });
+    for (size_t r = 0; r < m; ++r) {
       double a = 0.0;
-      for (size_t i = 0; i < nu; ++i) a += J[r * nu + i] * x_[j * nu + i];
+      if (finite) {
+        for (size_t e = first[r]; e < first[r + 1]; ++e) a += J[r * nu + nz[e]] * x[nz[e]];
+      } else {
+        for (size_t i = 0; i < nu; ++i) a += J[r * nu + i] * x[i];
+      }
       A[r * m + j] = a;
     }
+  }
   if (!SolveSmall(A, targets, c)) {
     error_ = SingularRows(rows);
     if (n > 0) error_ += " (with the joints their friction holds)";
@@ -282,7 +301,9 @@ int EndStopEvents::ReactionNoise(rt::Workspace& ws, double t, const double* y, c
                                  const std::vector<double>& bias, std::vector<double>* noise) {
   const size_t nu = static_cast<size_t>(nu_);
   M_.resize(nu * nu);
-  if (int s = rt::UnconstrainedMassMatrix(program_, ws, t, y, M_.data()); s != 0) return s;
+  // (On a tree M is the one Impulse's columns were just solved from, kept with their factor.)
+  if (!rt::KeptMassMatrix(program_, ws, t, y, M_.data()))
+    if (int s = rt::UnconstrainedMassMatrix(program_, ws, t, y, M_.data()); s != 0) return s;
   std::vector<double> Ma(nu, 0.0);  // |M| |a|
   for (size_t j = 0; j < nu; ++j)
     for (size_t i = 0; i < nu; ++i) Ma[i] += std::abs(M_[j * nu + i] * a_[j]);

@@ -272,6 +272,7 @@ class EndStopEvents {
   int nq_ = 0, nu_ = 0;
   double rtol_ = 0.0, atol_ = 0.0;
   std::vector<double> ydot_, x_, a_, J_, Jrows_, M_, cols_;  // scratch
+  std::vector<size_t> nonzero_;  // Impulse: the nonzero entries of each row of J (scratch)
   std::vector<double> impulse_F_;  // Impulse(Mu)'s generalized impulse on the free speeds (PullingContact)
   std::vector<EventRecord> log_;
   std::vector<double> held_lambda_;  // the last HoldWith's reactions per side (empty: none resting)

@@ -100,7 +100,11 @@ int FrictionlessInverseMassColumns(const Program& p, Workspace& ws, double t, co
     return 0;
   }
   // M depends on t and q only: the factor of the last call is kept for the same (t, q) (the
-  // event functions after a right-hand side at that state, the stops' after the friction's).
+  // event functions after a right-hand side at that state, the stops' after the friction's),
+  // and so is each column solved from it: a held solve asks for the same columns several
+  // times at one state (the friction's two passes, then the stops' reactions), and a column
+  // solved again from the same factor is the same to the bit.
+  const size_t nu = static_cast<size_t>(p.nu);
   std::vector<double>& at = ws.inverse_mass_at;
   if (at.size() != static_cast<size_t>(p.nq) + 1 || at[0] != t || !std::equal(y, y + p.nq, at.begin() + 1)) {
     at.clear();  // (a failed evaluation keeps no factor)
@@ -108,23 +112,39 @@ int FrictionlessInverseMassColumns(const Program& p, Workspace& ws, double t, co
     if (int s = MassMatrix(p, ws, t, y, M.data()); s != 0) return s;
     ++ws.inverse_mass_factorizations;
     ws.inverse_mass_llt.compute(M);
+    ws.inverse_mass_M.assign(M.data(), M.data() + M.size());
     at.push_back(t);
     at.insert(at.end(), y, y + p.nq);
+    ws.inverse_mass_cols.resize(nu * nu);
+    ws.inverse_mass_known.assign(nu, 0);
   }
   const Eigen::LLT<Eigen::MatrixXd>& llt = ws.inverse_mass_llt;
   for (int j = 0; j < m; ++j) {
     const int k = ks[j];
-    Eigen::VectorXd e = Eigen::VectorXd::Zero(p.nu);
-    e[k] = 1.0;
-    Eigen::VectorXd col = Eigen::VectorXd::Zero(p.nu);
-    if (llt.info() == Eigen::Success) col = llt.solve(e);  // column by column: each as alone
-    if (!(col[k] > 0.0) || !col.allFinite()) {  // M is positive definite: (M^-1)_kk > 0
-      ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k) + " at time " + std::to_string(t);
-      return 1;  // recoverable: a trial stage may probe a state far from the solution
+    double* kept = ws.inverse_mass_cols.data() + static_cast<size_t>(k) * nu;
+    if (!ws.inverse_mass_known[static_cast<size_t>(k)]) {
+      Eigen::VectorXd e = Eigen::VectorXd::Zero(p.nu);
+      e[k] = 1.0;
+      Eigen::VectorXd col = Eigen::VectorXd::Zero(p.nu);
+      if (llt.info() == Eigen::Success) col = llt.solve(e);  // column by column: each as alone
+      if (!(col[k] > 0.0) || !col.allFinite()) {  // M is positive definite: (M^-1)_kk > 0
+        ws.error = "the mass matrix is singular for an impulse on speed " + std::to_string(k) + " at time " + std::to_string(t);
+        return 1;  // recoverable: a trial stage may probe a state far from the solution
+      }
+      std::copy(col.data(), col.data() + p.nu, kept);
+      ws.inverse_mass_known[static_cast<size_t>(k)] = 1;
     }
-    std::copy(col.data(), col.data() + p.nu, X + static_cast<size_t>(j) * static_cast<size_t>(p.nu));
+    std::copy(kept, kept + nu, X + static_cast<size_t>(j) * nu);
   }
   return 0;
+}
+
+bool KeptMassMatrix(const Program& p, const Workspace& ws, double t, const double* y, double* M) {
+  const std::vector<double>& at = ws.inverse_mass_at;
+  if (!p.rows.empty() || at.size() != static_cast<size_t>(p.nq) + 1 || at[0] != t || !std::equal(y, y + p.nq, at.begin() + 1))
+    return false;
+  std::copy(ws.inverse_mass_M.begin(), ws.inverse_mass_M.end(), M);
+  return true;
 }
 
 int InverseMassColumn(const Program& p, Workspace& ws, double t, const double* y, int k, double* x) {

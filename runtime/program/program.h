@@ -451,6 +451,10 @@ struct Workspace {
   long inverse_mass_factorizations = 0;  // InverseMassColumns' factorizations so far (rt::Counts)
   Eigen::LLT<Eigen::MatrixXd> inverse_mass_llt;  // InverseMassColumns' last factor of M  filled by InverseMassColumns
   std::vector<double> inverse_mass_at;            // its (t, q), empty: none
+  // Columns of M^-1 solved from that factor, column k at k nu  (nu x nu)  filled by InverseMassColumns
+  std::vector<double> inverse_mass_cols;
+  std::vector<char> inverse_mass_known;  // column k of inverse_mass_cols solved for this factor  (nu)
+  std::vector<double> inverse_mass_M;     // the M factored, column-major  (nu x nu)  filled by InverseMassColumns
   // The law per friction joint (SetFrictionMode): 0 tanh(u / v), +1 / -1 sliding that way,
   // 2 the force friction_fixed (stuck)  (nfric)  set by sim/stick_slip.cpp
   std::vector<int> friction_mode;

@@ -90,6 +90,45 @@ TEST(HeldRows, StuckJointAndRestingStopShareOneFactorization) {
     }
 }
 
+// InverseMassColumns keeps the columns it solved for the kept factor (same t and q), and the
+// M it factored (rt::KeptMassMatrix). If this fails, a column or M kept from another state is
+// returned (the cache not dropped when q or t moved), or a kept column is not M^-1's
+// (M x = e_k, M from rt::MassMatrix: an independent product), or a kept column or M differs
+// in any bit from what a fresh workspace evaluates.
+TEST(HeldRows, InverseMassColumnsKeptOnlyForTheirState) {
+  auto l = LoadModel(DoublePendulum(0.3, -0.5), {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  const rt::Program& p = *l->prog;
+  const size_t nu = 2;
+  auto ws = rt::MakeWorkspace(p);
+  const std::vector<std::vector<double>> states = {{0.3, -0.5, 0, 0}, {0.3, -0.5, 0, 0}, {1.2, 0.7, 0, 0}, {0.3, -0.5, 0, 0}};
+  const std::vector<double> times = {0.0, 0.0, 0.0, 0.25};
+  const std::vector<std::vector<int>> asked = {{1}, {0, 1}, {1, 0}, {0, 1}};
+  for (size_t s = 0; s < states.size(); ++s) {
+    const double t = times[s];
+    const std::vector<double>& y = states[s];
+    const std::vector<int>& ks = asked[s];
+    std::vector<double> X(ks.size() * nu), fresh_X(ks.size() * nu), M(nu * nu);
+    ASSERT_EQ(rt::InverseMassColumns(p, *ws, t, y.data(), ks.data(), static_cast<int>(ks.size()), X.data()), 0);
+    auto fresh = rt::MakeWorkspace(p);
+    ASSERT_EQ(rt::InverseMassColumns(p, *fresh, t, y.data(), ks.data(), static_cast<int>(ks.size()), fresh_X.data()), 0);
+    ASSERT_EQ(rt::MassMatrix(p, *fresh, t, y.data(), M.data()), 0);
+    for (size_t j = 0; j < ks.size(); ++j)
+      for (size_t i = 0; i < nu; ++i) {
+        EXPECT_EQ(X[j * nu + i], fresh_X[j * nu + i]) << "state " << s << " column " << ks[j] << " entry " << i;
+        double Mx = 0.0;
+        for (size_t k = 0; k < nu; ++k) Mx += M[k * nu + i] * X[j * nu + k];
+        EXPECT_NEAR(Mx, i == static_cast<size_t>(ks[j]) ? 1.0 : 0.0, 1e-12) << "state " << s << " column " << ks[j];
+      }
+    std::vector<double> kept(nu * nu, -1.0);
+    ASSERT_TRUE(rt::KeptMassMatrix(p, *ws, t, y.data(), kept.data())) << "state " << s;
+    EXPECT_EQ(kept, M) << "state " << s;
+    const std::vector<double> other = {y[0] + 0.1, y[1], 0, 0};
+    EXPECT_FALSE(rt::KeptMassMatrix(p, *ws, t, other.data(), kept.data())) << "another q";
+    EXPECT_FALSE(rt::KeptMassMatrix(p, *ws, t + 1.0, y.data(), kept.data())) << "another t";
+  }
+}
+
 // A pendulum (j1: m = 1, centre c = 0.5 on x, I_zz = 0.1) resting on its stop q_min = 0
 // under gravity (-y), with exact friction C = 1 (static C_s = 1.5) at j1 and a drive
 // tau = 4 t pulling it off; beside it, a block on its own rail (s2, m = 1, friction 1, static
