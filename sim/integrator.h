@@ -20,11 +20,10 @@
 //   iteration: no Jacobian, no linear solves; for non-stiff scenes.
 // - CVODE BDF: variable-order (1-5) BDF, Newton with dense LU and DQ Jacobian (IDA's grouped
 //   difference quotients where they cost fewer evaluations: integrator_cvode.cpp).
-// - ARKODE ERK: explicit Runge-Kutta (ERKStep), Fehlberg 8(7) (13 stages, order 8, the
-//   highest-order table in SUNDIALS 6.4.1) by default. Dense output is ARKODE's Hermite
-//   interpolant of degree 5, which costs ~4 extra evaluations of f per output instant
-//   (the table and the interpolant chosen by measurement: docs/benchmarks.md, "ARKODE's
-//   table and interpolant").
+// - ARKODE ERK: explicit Runge-Kutta (ERKStep), Verner 6(5) (8 stages, order 6) by
+//   default, made first-same-as-last (SUNDIALS 6.4 reused a stale first stage otherwise).
+//   Each output instant ends a step; events are located on ARKODE's Hermite interpolant of
+//   degree 5, too low for Fehlberg 8(7)'s steps (docs/benchmarks/2026-11-29_arkode_fsal.md).
 // - DOP853: our own Dormand-Prince 8(5,3) (sim/integrator_dop853.cpp; Hairer,
 //   Norsett & Wanner, Solving ODEs I, sec. II.10): 12 evaluations of f per step (the
 //   13th stage is the next step's first), error estimate from its 5th- and 3rd-order
@@ -165,7 +164,7 @@ struct IntegratorOptions {
   long max_steps = 100000;         // internal steps allowed between two output instants
   double max_step = 0.0;           // |h| bound; 0 = none
   double initial_step = 0.0;       // 0 = the solver's estimate
-  ErkTable erk_table = ErkTable::Fehlberg87;
+  ErkTable erk_table = ErkTable::Verner65;
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;
   bool project_steps = false;      // DOP853: project accepted steps (OdeSystem::Project)
   std::vector<int> coupling;       // per state: its group (empty: one group, a dense df/dy)

@@ -205,13 +205,14 @@ class SundialsStepper : public Stepper {
   template <class OneStep, class Info>
   int AdvanceCheckedSteps(double tout, double* y, OneStep one_step, Info info) {
     double tret = 0.0;
+    double reached = -HUGE_VAL;  // the last stop time returned at (the module's t may lie a rounding short of it)
     for (;;) {
       if (pending_event_ && event_time <= tout) {
         pending_event_ = false;
         std::copy(pending_y_.begin(), pending_y_.end(), y);
         return kEventReached;
       }
-      if (stepped_ && CurrentTime() >= tout) {
+      if (stepped_ && std::max(CurrentTime(), reached) >= tout) {
         const int flag = CopyOut(module_.dky(mem_, tout, 0, s_.y), y);
         return flag >= 0 && check_rows_ ? CheckRow(tout, y, flag) : flag;
       }
@@ -220,6 +221,7 @@ class SundialsStepper : public Stepper {
       const int flag = one_step(&tret);
       if (flag < 0) return flag;
       stepped_ = true;
+      if (flag == kTstopReturn) reached = tret;
       if (flag == kRootReturn) {  // s_.y at the root inside the step; the step's end is checked next call
         if (const int r = EventReached(tret, y, info); r != kNoEvent) {
           if (event_time <= tout) return r;
@@ -252,7 +254,7 @@ class SundialsStepper : public Stepper {
       held_bound_ = release_.Next(t, N_VGetArrayPointer(s_.y), 0.0);
       bound_known_ = true;
     }
-    module_.stop_time(mem_, std::min(stop_given_, t + held_bound_));
+    module_.stop_time(mem_, std::min({stop_given_, t + held_bound_, row_stop_}));
   }
   // The output instant y(tout) from the interpolant, checked against the energies of the
   // last step's ends (RowEnergy); where off, integrated again from the step's start to tout
@@ -278,9 +280,11 @@ class SundialsStepper : public Stepper {
   double stop_given_ = 0.0;        // the stop time (SetCommonOptions, SetStopTime): never past it
   ReleaseBound release_;           // held rows' release functions (none: no bound, no cost)
   double held_bound_ = HUGE_VAL;   // ... the next step's bound from them
+  double row_stop_ = HUGE_VAL;     // the next output instant where a module's steps end there (ARKODE)
   bool bound_known_ = false;       // ... computed once from the start
-  // CV_ROOT_RETURN, ARK_ROOT_RETURN, IDA_ROOT_RETURN (all 2).
+  // CV_ROOT_RETURN, ARK_ROOT_RETURN, IDA_ROOT_RETURN (all 2); CV_, ARK_, IDA_TSTOP_RETURN (all 1).
   static constexpr int kRootReturn = 2;
+  static constexpr int kTstopReturn = 1;
   bool pending_event_ = false;  // a root found past tout: y there (event_time, event_index set)
   std::vector<double> pending_y_;
   // Rows checked against the energy (CheckRow).
