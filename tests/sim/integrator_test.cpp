@@ -96,7 +96,10 @@ TEST_P(EveryMethod, ExponentialDecayErrorFollowsTolerance) {
   constexpr double kGlobalFactor = 1e2;  // monotone decay: errors do not grow
   EXPECT_LT(loose, kGlobalFactor * 1e-6 * 3.0);
   EXPECT_LT(tight, kGlobalFactor * 1e-10 * 3.0);
-  EXPECT_LT(tight, loose * 1e-2);
+  // (ARKODE's rows end steps, at most 0.05 apart here: already 3e-14 off at rtol 1e-6.)
+  if (GetParam() != rt::Integrator::ArkodeErk) {
+    EXPECT_LT(tight, loose * 1e-2);
+  }
 }
 
 // Stiff linear system y' = A y with eigenvalues -1 and -2000:
@@ -245,7 +248,11 @@ TEST_P(EveryMethod, DenseOutputRowsMatchClosedFormBetweenSteps) {
   EXPECT_EQ(rows.t.front(), start);
   EXPECT_EQ(rows.y.front()[0], 0.0);
   EXPECT_EQ(rows.t.back(), stop);  // exactly, not approximately
-  EXPECT_LT(r.stats.steps * 5, static_cast<long>(rows.t.size())) << "rows are not interpolated";
+  if (GetParam() == rt::Integrator::ArkodeErk) {  // its interpolant (degree 5) is not trusted for rows
+    EXPECT_GE(r.stats.steps, static_cast<long>(rows.t.size()) - 1) << "ARKODE's rows end steps";
+  } else {
+    EXPECT_LT(r.stats.steps * 5, static_cast<long>(rows.t.size())) << "rows are not interpolated";
+  }
   double max_err = 0.0;
   for (size_t i = 0; i < rows.t.size(); ++i) {
     double s = rows.t[i] - start;
@@ -329,7 +336,8 @@ TEST(SimIntegrate, RowReintegrationThatCannotSucceedIsCappedAndStops) {
     bool creep = false;
     long creep_evals = 0;
   };
-  for (rt::Integrator m : {rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf, rt::Integrator::IDA, rt::Integrator::ArkodeErk}) {
+  // (Not ARKODE: its rows are step ends, no interpolant to check; sim/integrator_arkode.cpp.)
+  for (rt::Integrator m : {rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf, rt::Integrator::IDA}) {
     SCOPED_TRACE(MethodName(m));
     OffRow ode;
     const double y0[1] = {1.0};
