@@ -17,7 +17,7 @@
 
 #include "runtime/program/program.h"  // Program::rows
 #include "sim/friction_impulse.h"       // HasFrictionImpulses
-#include "sim/impulse.h"                // SolveSmall
+#include "sim/impulse.h"                // SolveHeld
 
 #include <algorithm>
 #include <cmath>
@@ -132,7 +132,7 @@ std::string EndStopEvents::CheckStart(rt::Workspace& ws, double t0, const double
 
 int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                            const std::vector<int>& rows, const std::vector<double>& targets, double* du,
-                           std::vector<double>* c) {
+                           std::vector<double>* c, double slack) {
   const size_t n = speeds.size(), m = n + rows.size(), nu = static_cast<size_t>(nu_);
   if (mu_) {  // (a friction mu N: the joints' stuck rows are the friction's own Newton, never here)
     if (n > 0) {
@@ -191,7 +191,7 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
       A[r * m + j] = a;
     }
   }
-  if (!SolveSmall(A, targets, c)) {
+  if (!SolveHeld(A, targets, c, nullptr, slack)) {  // (dependent rows: the least impulses; docs/events.md)
     error_ = SingularRows(rows);
     if (n > 0) error_ += " (with the joints their friction holds)";
     return -1;
@@ -214,7 +214,8 @@ std::string EndStopEvents::SingularRows(const std::vector<int>& rows) const {
   }
   return who +
          " are held together, but their rows are dependent (J M^-1 J^T is singular: they constrain the same "
-         "motion), so the impulse or reaction that holds them is not unique; remove one of them";
+         "motion) and their targets disagree beyond round-off, so no impulse or reaction meets them all (dependent "
+         "contacts striking with different restitutions?); give them one restitution or remove one of them";
 }
 
 int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda,
@@ -405,7 +406,19 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   }
   if (side.resting) {  // the reaction would pull: the contact leaves (and others may follow)
     const std::vector<char> before = RestingSet();
+    // Sides whose reactions cross with this one's leave with it: dependent contacts sharing a
+    // load have one event function between them (two coincident planes: (m g - F) / 2 each),
+    // and the root finding hands over one index. Left alone, the other's reaction would be
+    // 0 exactly at the crossing and never cross again (Settle leaves only beyond the noise;
+    // a side wrongly left rejoins there).
+    std::vector<double> g(sides_.size());
+    if (int s = Functions(ws, t, y, g.data(), nullptr); s != 0) return s;
     Leave(ws, i);
+    for (size_t k = 0; k < sides_.size(); ++k) {
+      const Side& o = sides_[k];
+      if (o.resting && !(o.accumulates_at > 0.0) && g[k] <= 0.0 && StaticFriction(ws, o) == 0.0)
+        Leave(ws, static_cast<int>(k));
+    }
     return Settle(ws, t, y, before);
   }
   // Closed loops, rolling contacts: the impulse keeps A u = 0, so the state is first put on
@@ -513,7 +526,7 @@ int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const 
         for (size_t i = 0; i < nu; ++i) a += J[r * nu + i] * X[j * nu + i];
         A[r * m + j] = a;
       }
-    if (!SolveSmall(A, b, &c)) {
+    if (!SolveHeld(A, b, &c, nullptr, kRestSpeeds * atol_)) {
       std::vector<int> rows(held);
       error_ = SingularRows(rows) + " (with the speeds a when clause sets)";
       return -1;
@@ -594,7 +607,13 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     // row of its own forbids; one it would pull is dropped below.)
     if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(o))) || !(vk <= kRestSpeeds * atol_)) continue;
     const double ek = Restitution(o);
-    const bool rk = !(vk < 0.0) || ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
+    bool rk = !(vk < 0.0) || ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
+    if (!rk && ek < 1.0 && t_inf > 0.0) {  // its bounces accumulate with the side's (2): a flat
+      double ak = 0.0;                     // box's four corners pass to rest together
+      if (int r = GapAcceleration(ws, t, y, static_cast<int>(k), &ak); r != 0) return r;
+      const double rebound = ek * std::abs(vk);
+      rk = ak < 0.0 && rebound * rebound / (2.0 * -ak) <= kZenoHeights * (atol_ + rtol_ * Scale(o));
+    }
     const double bk = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : vk;
     with.push_back({static_cast<int>(k), vk, bk, rk});
   }
@@ -610,7 +629,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   std::vector<int> left;  // the resting sides the impulse lifted off
   const std::vector<char> was = RestingSet();  // (Settle logs the changes: rests, leaves)
   for (;;) {
-    if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
+    if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c, kRestSpeeds * atol_); s != 0) return s;
     double scale = 0.0;
     for (double x : c) scale = std::max(scale, std::abs(x));
     size_t pull = 0;  // (0: none; the struck side's own impulse is the impact's)
@@ -801,7 +820,7 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
     for (int k = 0; k < n; ++k)
       if (sides_[static_cast<size_t>(k)].resting) rows.push_back(k), targets.push_back(0.0);
     std::vector<double> du(static_cast<size_t>(nu_));
-    if (int r = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); r != 0) return r;
+    if (int r = Impulse(ws, t, y, {}, rows, targets, du.data(), &c, kRestSpeeds * atol_); r != 0) return r;
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
     if (s.stop >= 0) {
       const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];

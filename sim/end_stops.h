@@ -217,9 +217,11 @@ class EndStopEvents {
   std::string Where(const Side& s) const;  // "q_min", "q_max", "the plane"
   // Speeds' jump du = X c with J_r du = target_r for the rows: e_k for each k in `speeds`
   // (first), then the sides `rows` (X = M^-1 J^T columns, the speed rows' from one
-  // factorization). 0, or Derivative's codes.
+  // factorization). Dependent rows take the least impulses (SolveHeld) where the targets
+  // agree to `slack` (their round-off: a jump's is the speeds' kRestSpeeds atol). 0, or
+  // Derivative's codes.
   int Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds, const std::vector<int>& rows,
-              const std::vector<double>& targets, double* du, std::vector<double>* c);
+              const std::vector<double>& targets, double* du, std::vector<double>* c, double slack = 0.0);
   // Resting sides' reactions at (t, y) (in the order of sides_, 0 where not resting) and
   // the held accelerations (nu, may be null).
   int Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda, double* a_held,
