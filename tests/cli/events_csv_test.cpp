@@ -135,7 +135,7 @@ TEST(EventsCsv, SingularImpulsesNameTheirCause) {
   EXPECT_EQ(r.rc, 2) << r.err;
   EXPECT_TRUE(Has(r.err, "numerical failure at t = 0.2019")) << r.err;
   EXPECT_TRUE(Has(r.err, "contact 'c1'") && Has(r.err, "contact 'c2'") && Has(r.err, "targets disagree")) << r.err;
-  EXPECT_EQ(CsvRows(d + "/mixed.csv"), 3);  // t = 0, 0.1, 0.2
+  EXPECT_EQ(CsvRows(d + "/mixed.csv"), 4);  // t = 0, 0.1, 0.2 and the landing's left limit
 }
 
 // `--stats` lists the run's events (issue 41: "an events log (time, element, kind) in
