@@ -207,6 +207,13 @@ class EndStopEvents {
     double v = 0.0, before = 0.0;
     bool rest = false;
   };
+  // Impact's parts: the sides striking with side i, the complementary impulse, the
+  // companions' speeds after and their log entries (sim/end_stops.cpp).
+  int Companions(rt::Workspace& ws, double t, const double* y, int i, double t_inf, std::vector<Strike>* with);
+  int Complementary(rt::Workspace& ws, double t, const double* y, std::vector<int>* rows, std::vector<double>* targets,
+                    std::vector<Strike>* with, std::vector<double>* du, std::vector<int>* left);
+  int StruckWith(rt::Workspace& ws, double t, const double* y, const std::vector<Strike>& with,
+                 std::vector<EventRecord>* struck);
   void Lift(Side& s, double t, double gap, double rate);  // Side::lift after a rebound at t
   static double LiftAt(const Side& s, double t);         // its value at t
   double Restitution(const Side& s) const;
