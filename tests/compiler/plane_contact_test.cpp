@@ -65,14 +65,6 @@ std::string CornerBox(double y0, double e, const std::vector<std::pair<double, d
 }
 const std::vector<std::pair<double, double>> kFourCorners = {{0.1, 0.1}, {-0.1, 0.1}, {0.1, -0.1}, {-0.1, -0.1}};
 
-// The pairs of rows at one time (an event's left and right limits): index of the left row.
-std::vector<size_t> EventRows(const sim::MemorySink& s) {
-  std::vector<size_t> at;
-  for (size_t i = 0; i + 1 < s.times.size(); ++i)
-    if (s.times[i] == s.times[i + 1]) at.push_back(i);
-  return at;
-}
-
 bool Has(const std::string& s, const char* part) { return s.find(part) != std::string::npos; }
 
 // Ball dropped from h with restitution e: t_1 = sqrt(2 h / g), t_{k+1} - t_k = 2 e^k t_1,
