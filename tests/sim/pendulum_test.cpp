@@ -185,7 +185,7 @@ TEST(SimPendulum, LargeAmplitudePeriodMatchesEllipticIntegral) {
 // the bound is a multiple of rtol per period. BDF (IDA, CVODE-BDF) damps oscillations,
 // so E decays about linearly; measured at rtol = atol = 1e-8 over 100 periods:
 //   IDA 1.6e-5 (16 rtol/period), CVODE-BDF 2.5e-5 (25), CVODE-Adams 2.4e-6 (2.4),
-//   ARKODE Fehlberg 8(7) 1.7e-7 (0.17), DOP853 4.0e-7 (0.40).
+//   ARKODE Verner 6(5) 1.7e-6 (1.7; Fehlberg 8(7) 1.7e-7 before 2026-11-30), DOP853 4.0e-7 (0.40).
 // (BDF's drift is not proportional to rtol: 3.1, 16, 21 rtol/period for IDA at
 // rtol 1e-6, 1e-8, 1e-10.) If this fails, the integrators or Kane's equations gained
 // or lost energy beyond what the method's own damping explains.
@@ -214,8 +214,8 @@ TEST(SimPendulum, EnergyDriftOver100PeriodsIsBoundedByRtolPerPeriod) {
 // The automatic choice for a conservative scene keeps energy: the compiler picks DOP853
 // (smooth, non-stiff), and the relative energy drift over 100 periods is then a small
 // multiple of rtol for the whole run, not per period (measured at rtol 1e-8: DOP853 40 rtol,
-// ARKODE 17 rtol; BDF's 1600-2500 rtol is the reason the compiler avoids
-// it here).
+// ARKODE 17 rtol with Fehlberg 8(7), 172 with Verner 6(5); BDF's 1600-2500 rtol is the
+// reason the compiler avoids it here).
 TEST(SimPendulum, AutomaticChoiceKeepsEnergyOver100PeriodsWithinASmallMultipleOfRtol) {
   const double T = ExactPeriod(kAmplitude);
   const double scale = kMass * kG * kD * (1 - std::cos(kAmplitude));
