@@ -418,7 +418,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
   std::vector<double> lambda, noise;
   if (any)
     if (int s = Reactions(ws, t, y, &lambda, nullptr, &noise); s != 0) return s;
-  if (guards && RestingSet() != pinned_for_)
+  if (guards && !PinnedFor())
     if (int s = Pinned(ws, t, y); s != 0) return s;
   for (size_t i = 0; i < sides_.size(); ++i) {
     const Side& s = sides_[i];

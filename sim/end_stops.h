@@ -267,6 +267,12 @@ class EndStopEvents {
   int ZeroRestingRates(rt::Workspace& ws, double t, double* y);
   // pinned_ for the resting set at (t, y) (Functions computes it where the set changed).
   int Pinned(rt::Workspace& ws, double t, const double* y);
+  bool PinnedFor() const {  // pinned_ is the current resting set's (RestingSet() == pinned_for_)
+    if (pinned_for_.size() != sides_.size()) return false;
+    for (size_t i = 0; i < sides_.size(); ++i)
+      if ((sides_[i].resting ? 1 : 0) != pinned_for_[i]) return false;
+    return true;
+  }
   // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
   // With Coulomb friction mu N (sim/end_stops_friction.cpp): the resting sides'

@@ -31,7 +31,9 @@ struct Toss {
   std::vector<std::string> sets;  // --set NAME=VALUE of the model's parameters
 };
 
-// The tosses (parameters of models/tossed_cube.mech) whose ARKODE runs missed an impact.
+// The tosses (parameters of models/tossed_cube.mech) whose ARKODE runs missed an impact. Run
+// to 4 s: the first one's e = 0.8 chatter lands a face at 3.365 s, where dependent corners
+// strike with Newton's laws that disagree unless they rest together (sim/end_stops.cpp Impact).
 const Toss kTosses[] = {
     {"e=0.8 spin", {"e=0.8", "h=0.6029369475335373", "th=2.3630682556196203", "ax=-0.9957878932977786",
                     "ay=-0.10922561189039715", "az=0.44308006468156513", "wx=-4.339804459672758", "wy=7.124331128862757",
@@ -61,7 +63,7 @@ TEST(CubeToss, EveryIntegratorKeepsWhatTheFloorCannotChange) {
     for (const std::string& s : toss.sets)
       if (s.rfind("vx=", 0) == 0) vx = std::stod(s.substr(3));
     for (const char* how : {"dop853", "cvode", "ida", "arkode"}) {
-      std::vector<std::string> args = {"--integrator", how, "--stop-time", "2", "--rtol", "1e-8",
+      std::vector<std::string> args = {"--integrator", how, "--stop-time", "4", "--rtol", "1e-8",
                                        "--output", "free.frame_b.v[1]", "--output", "free.frame_b.v[3]",
                                        "--output", "free.frame_b.w[2]"};
       for (int k = 1; k <= 8; ++k) args.insert(args.end(), {"--output", "c" + std::to_string(k) + ".frame_b.r[2]"});
