@@ -368,12 +368,58 @@ std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y
   return "";
 }
 
+// Side i's row J_i in the span of the resting sides' rows (their rates held at 0, so its
+// own is 0 too: its gap cannot move while they rest). Modified Gram-Schmidt on the rows
+// (twice, for the round-off), J_i dependent where its residual is below 1e-8 of its norm:
+// exactly dependent rows (a flat box's top corner above a bottom one, a joint's q_max beside
+// its resting q_min) leave round-off, ~1e-16.
+int EndStopEvents::Pinned(rt::Workspace& ws, double t, const double* y) {
+  pinned_for_ = RestingSet();
+  pinned_.assign(sides_.size(), 0);
+  const size_t nu = static_cast<size_t>(nu_);
+  std::vector<double> basis;  // orthonormal rows (nu each)
+  auto residual = [&](std::vector<double>& x) {
+    for (int pass = 0; pass < 2; ++pass)
+      for (size_t b = 0; b < basis.size(); b += nu) {
+        double d = 0.0;
+        for (size_t k = 0; k < nu; ++k) d += basis[b + k] * x[k];
+        for (size_t k = 0; k < nu; ++k) x[k] -= d * basis[b + k];
+      }
+    double n = 0.0;
+    for (double v : x) n += v * v;
+    return std::sqrt(n);
+  };
+  std::vector<double> x(nu);
+  double gap = 0.0, c = 0.0;
+  for (const Side& s : sides_) {
+    if (!s.resting) continue;
+    if (int r = Row(ws, t, y, s, &gap, x.data(), &c); r != 0) return r;
+    double norm = 0.0;
+    for (double v : x) norm += v * v;
+    norm = std::sqrt(norm);
+    const double rest = residual(x);
+    if (!(rest > kPinnedRows * norm)) continue;
+    for (double v : x) basis.push_back(v / rest);
+  }
+  if (basis.empty()) return 0;
+  for (size_t i = 0; i < sides_.size(); ++i) {
+    if (sides_[i].resting) continue;
+    if (int r = Row(ws, t, y, sides_[i], &gap, x.data(), &c); r != 0) return r;
+    double norm = 0.0;
+    for (double v : x) norm += v * v;
+    pinned_[i] = residual(x) <= kPinnedRows * std::sqrt(norm) ? 1 : 0;
+  }
+  return 0;
+}
+
 int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g, double* guards) {
   bool any = false;
   for (const Side& s : sides_) any = any || s.resting;
   std::vector<double> lambda, noise;
   if (any)
     if (int s = Reactions(ws, t, y, &lambda, nullptr, &noise); s != 0) return s;
+  if (guards && !PinnedFor())
+    if (int s = Pinned(ws, t, y); s != 0) return s;
   for (size_t i = 0; i < sides_.size(); ++i) {
     const Side& s = sides_[i];
     if (guards) guards[i] = 1.0;
@@ -385,7 +431,7 @@ int EndStopEvents::Functions(rt::Workspace& ws, double t, const double* y, doubl
       double c = 0.0;
       if (int r = Row(ws, t, y, s, &g[i], J_.data(), &c); r != 0) return r;
       g[i] += LiftAt(s, t);
-      if (guards) {
+      if (guards && !pinned_[i]) {  // (a pinned side's rate is 0 while the others rest: no graze)
         double v = 0.0;
         for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
         guards[i] = -v;
@@ -685,7 +731,21 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   std::vector<double> du(static_cast<size_t>(nu_));
   std::vector<int> left;  // the resting sides the impulse lifted off
   const std::vector<char> was = RestingSet();  // (Settle logs the changes: rests, leaves)
-  if (int r = Complementary(ws, t, y, &rows, &targets, &with, &du, &left); r != 0) return r;
+  const std::vector<int> rows_in = rows;
+  const std::vector<Strike> with_in = with;
+  if (int r = Complementary(ws, t, y, &rows, &targets, &with, &du, &left); r != 0) {
+    // Dependent rows whose Newton's laws disagree because the side's bounces accumulate and
+    // a companion's do not (a box's face landing in a chatter, each corner its own rebound):
+    // they pass to rest together (targets -v), as where both accumulate.
+    const bool bounce = std::any_of(with_in.begin(), with_in.end(), [](const Strike& w) { return !w.rest; });
+    if (r != -1 || !(t_inf > 0.0) || !bounce) return r;
+    for (int k : left) sides_[static_cast<size_t>(k)].resting = true, sides_[static_cast<size_t>(k)].lift = 0.0;
+    left.clear();
+    rows = rows_in, with = with_in, targets.assign(1, -v);
+    for (Strike& w : with) w.rest = true, targets.push_back(-w.v);
+    targets.resize(rows.size(), 0.0);
+    if (int r2 = Complementary(ws, t, y, &rows, &targets, &with, &du, &left); r2 != 0) return r2;
+  }
   // A rolling contact whose impulse would pull: the run stops at the impact.
   if (impulse_F_.size() == du.size()) {
     int status = 0;
@@ -833,7 +893,10 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
         break;
       }
       const bool opens = std::find(opening_.begin(), opening_.end(), i) != opening_.end();
-      if (std::abs(v) <= kRestSpeeds * atol_ && a < 0.0 && !opens && (join < 0 || a < a_join))
+      // At rest on it (a rest speed), or leaving it on a flight lower than the tolerance's
+      // reach (Unresolved): it comes back at once, and its bounces accumulate here.
+      const bool low = std::abs(v) <= kRestSpeeds * atol_ || Unresolved(s, v, a);
+      if (low && a < 0.0 && !opens && (join < 0 || a < a_join))
         join = i, a_join = a, v_join = v;
     }
     if (strike >= 0) {
@@ -858,12 +921,37 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
     s.resting = true;
   }
   opening_.clear();
+  if (int r = ZeroRestingRates(ws, t, y); r != 0) return r;
   for (int i = 0; i < n; ++i) {
     const Side& s = sides_[static_cast<size_t>(i)];
     if (s.resting && !before[static_cast<size_t>(i)] && !(s.accumulates_at > 0.0)) log_.push_back({t, Element(s), "rests on " + Where(s)});
     if (!s.resting && before[static_cast<size_t>(i)])
       log_.push_back({t, Element(s), "leaves " + Where(s) + (Released(s) ? ", slides (pulled beyond its static friction)" : "")});
   }
+  return 0;
+}
+
+int EndStopEvents::ZeroRestingRates(rt::Workspace& ws, double t, double* y) {
+  if (mu_) return 0;
+  std::vector<int> rows;
+  std::vector<double> targets, c;
+  bool planes = false;
+  for (int i = 0; i < Count(); ++i) {
+    const Side& s = sides_[static_cast<size_t>(i)];
+    if (!s.resting) continue;
+    double gap = 0.0, cc = 0.0, v = 0.0;
+    if (int r = Row(ws, t, y, s, &gap, J_.data(), &cc); r != 0) return r;
+    for (int k = 0; k < nu_; ++k) v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+    rows.push_back(i);
+    targets.push_back(-v);
+    planes = planes || s.plane >= 0;
+  }
+  if (!planes) return 0;  // (a stop's speed is set to 0 exactly where it rests)
+  std::vector<double> du(static_cast<size_t>(nu_));
+  if (int r = Impulse(ws, t, y, {}, rows, targets, du.data(), &c, kRestSpeeds * atol_); r != 0) return r;
+  for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
+  for (const Side& s : sides_)
+    if (s.resting && s.stop >= 0) y[nq_ + stops_[static_cast<size_t>(s.stop)].u] = 0.0;
   return 0;
 }
 

@@ -144,6 +144,7 @@ class EndStopEvents {
     return r;
   }
   void SetResting(const std::vector<double>& r) {
+    pinned_for_.clear();  // (computed again for the state restored)
     for (size_t i = 0; i < sides_.size() && 2 * i + 1 < r.size(); ++i) {
       sides_[i].resting = r[2 * i] != 0.0;
       sides_[i].accumulates_at = r[2 * i + 1];
@@ -179,6 +180,8 @@ class EndStopEvents {
   // arithmetic (a floating robot in free fall on its stops) has a sign set by round-off and
   // the state's error, and leaving on it made the joint leave and strike again every step.
   static constexpr double kLeaveRoundoffs = 100.0;
+  // A row whose residual against the resting rows is below this part of its norm is pinned.
+  static constexpr double kPinnedRows = 1e-8;
 
  private:
   struct Side {
@@ -214,6 +217,11 @@ class EndStopEvents {
                     std::vector<Strike>* with, std::vector<double>* du, std::vector<int>* left);
   int StruckWith(rt::Workspace& ws, double t, const double* y, const std::vector<Strike>& with,
                  std::vector<EventRecord>* struck);
+  // A flight leaving the contact at gap rate v > 0 under the gap acceleration a < 0 rises
+  // v^2 / (2 |a|): at most kZenoHeights of the tolerance, the root finding cannot resolve it.
+  bool Unresolved(const Side& s, double v, double a) const {
+    return v > 0.0 && a < 0.0 && v * v / (2.0 * -a) <= kZenoHeights * (atol_ + rtol_ * Scale(s));
+  }
   void Lift(Side& s, double t, double gap, double rate);  // Side::lift after a rebound at t
   static double LiftAt(const Side& s, double t);         // its value at t
   double Restitution(const Side& s) const;
@@ -249,6 +257,22 @@ class EndStopEvents {
   // contact at rest (gap, gap rate within the tolerances) whose gap would close -> they rest
   // (their gap rate zeroed by an impulse, the others held). Logs the changes since `before`.
   int Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before);
+  // The resting plane contacts' gap rates set to 0 at (t, y) by one impulse (the others
+  // resting held with them; Settle's last step, so at every event): the held rows keep the
+  // gap accelerations at 0, not the rates, and a rate the integration left in a row when it
+  // came to rest would otherwise stay and move the gap through the plane at that rate for
+  // the whole rest (a velocity projection in the mass metric, as Simbody projects u onto its
+  // constraints; here at the restarts only, where the rows change). No friction mu N (its
+  // impulse is a friction law's, not a projection's).
+  int ZeroRestingRates(rt::Workspace& ws, double t, double* y);
+  // pinned_ for the resting set at (t, y) (Functions computes it where the set changed).
+  int Pinned(rt::Workspace& ws, double t, const double* y);
+  bool PinnedFor() const {  // pinned_ is the current resting set's (RestingSet() == pinned_for_)
+    if (pinned_for_.size() != sides_.size()) return false;
+    for (size_t i = 0; i < sides_.size(); ++i)
+      if ((sides_[i].resting ? 1 : 0) != pinned_for_[i]) return false;
+    return true;
+  }
   // Side i's gap acceleration at (t, y) were it free (the other resting sides held).
   int GapAcceleration(rt::Workspace& ws, double t, const double* y, int i, double* a);
   // With Coulomb friction mu N (sim/end_stops_friction.cpp): the resting sides'
@@ -290,6 +314,9 @@ class EndStopEvents {
   std::vector<rt::FrictionJoint> frictions_;  // the program's (rt::FrictionJoints)
   std::vector<int> friction_of_;              // per stop: its joint's exact friction (index), or -1
   std::vector<std::pair<int, int>> released_;  // TakeReleased
+  // Per side: its row is in the span of the resting sides' rows (Pinned), for the resting
+  // set pinned_for_: its gap rate is held at 0 with theirs, its graze guard constant 1.
+  std::vector<char> pinned_, pinned_for_;
   bool defer_ = false;                          // DeferFrictionReleases
   std::string error_;
 };
