@@ -58,7 +58,7 @@
 #include "sim/dop853_control.h"
 #include "sim/dop853_stiffness.h"
 #include "sim/dop853_tableau.h"
-#include "sim/illinois.h"
+#include "sim/regula_falsi.h"
 #include "sim/release_bound.h"
 #include "sim/stepper.h"
 
@@ -496,7 +496,7 @@ class Dop853Stepper final : public Stepper {
       return true;
     };
     bool failed = false;
-    const double root = IllinoisRoot(a, ga, b, gb, 4.0 * kEps, eval, &failed);
+    const double root = RegulaFalsiRoot(a, ga, b, gb, 4.0 * kEps, eval, &failed);
     return failed ? NAN : root;
   }
 
