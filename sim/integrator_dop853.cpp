@@ -137,7 +137,7 @@ class Dop853Stepper final : public Stepper {
     }
     if (options_.max_step > 0.0) h_ = std::min(h_, options_.max_step);
     release_.Init(rhs_.System());  // held rows: each step bounded by their release (sim/release_bound.h)
-    if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), 0.0);
+    if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), 0.0, g_old_.data(), K(0));
     return true;
   }
 
@@ -180,7 +180,8 @@ class Dop853Stepper final : public Stepper {
       int flag = Step(tout);
       if (flag != kOk) return flag;
       if (!g_old_.empty() && (flag = LocateEvent()) != kOk) return flag;
-      if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), h_last_);
+      // The functions at t_ (LocateEvent's, now in g_old_) and f there (the FSAL stage).
+      if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), h_last_, g_old_.data(), K(tab::kStages));
     }
   }
 
