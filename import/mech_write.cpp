@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -26,9 +27,11 @@ namespace {
 namespace fs = std::filesystem;
 using Mat3 = std::array<std::array<double, 3>, 3>;
 
-// The shortest text that reads back as the same double.
+// The shortest text that reads back as the same double. A computed value below the normal
+// range (an inertia rotated by a tiny angle: 1e-300 kg m^2 times sin 1e-10) is written as 0,
+// an absolute change below 2.3e-308: the language refuses such literals (L004).
 std::string Num(double x) {
-  if (x == 0) return "0";  // also -0
+  if (std::fabs(x) < std::numeric_limits<double>::min()) return "0";  // also -0
   char buf[32];
   auto r = std::to_chars(buf, buf + sizeof buf, x);
   return std::string(buf, r.ptr);

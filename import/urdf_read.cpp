@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 
@@ -49,11 +50,17 @@ class Reader {
       while (j < s.size() && !(s[j] == ' ' || s[j] == '\t' || s[j] == '\n' || s[j] == '\r')) ++j;
       double x = 0;
       if (count >= n || !ParseNumber(s.substr(i, j - i), &x)) return BadNumber(e, attr, v, n);
-      if (!std::isfinite(x) || std::fabs(x) > kMaxMagnitude || (non_negative && x < 0)) {
+      // Below the normal range (0 < |x| < 2.2e-308) too: the language refuses such literals
+      // (L004), so the written model would not load; no robot's SI value is that small.
+      const bool subnormal = x != 0 && std::fabs(x) < std::numeric_limits<double>::min();
+      if (!std::isfinite(x) || std::fabs(x) > kMaxMagnitude || (non_negative && x < 0) || subnormal) {
         d_.Error(DiagCode::UrdfBadNumber, e->GetLineNum(), std::string(attr) + "=",
                  std::string("<") + e->Name() + "> " + attr + "=\"" + Clip(v) + "\": " +
-                     (non_negative && x < 0 ? "a negative value" : "not a finite number of at most 1e9 in magnitude"),
+                     (non_negative && x < 0 ? "a negative value"
+                      : subnormal           ? "a number below the normal range of doubles (2.2e-308)"
+                                            : "not a finite number of at most 1e9 in magnitude"),
                  non_negative && x < 0 ? "masses, lengths and radii are not negative"
+                 : subnormal           ? "write 0 for zero; URDF values are in SI units (m, kg, kg m^2, rad)"
                                        : "URDF values are in SI units (m, kg, kg m^2, rad)");
         return false;
       }

@@ -17,7 +17,7 @@
 
 #include "runtime/program/program.h"  // Program::rows
 #include "sim/friction_impulse.h"       // HasFrictionImpulses
-#include "sim/impulse.h"                // SolveSmall
+#include "sim/impulse.h"                // SolveHeld
 
 #include <algorithm>
 #include <cmath>
@@ -132,7 +132,7 @@ std::string EndStopEvents::CheckStart(rt::Workspace& ws, double t0, const double
 
 int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds,
                            const std::vector<int>& rows, const std::vector<double>& targets, double* du,
-                           std::vector<double>* c) {
+                           std::vector<double>* c, double slack) {
   const size_t n = speeds.size(), m = n + rows.size(), nu = static_cast<size_t>(nu_);
   if (mu_) {  // (a friction mu N: the joints' stuck rows are the friction's own Newton, never here)
     if (n > 0) {
@@ -191,7 +191,7 @@ int EndStopEvents::Impulse(rt::Workspace& ws, double t, const double* y, const s
       A[r * m + j] = a;
     }
   }
-  if (!SolveSmall(A, targets, c)) {
+  if (!SolveHeld(A, targets, c, nullptr, slack)) {  // (dependent rows: the least impulses; docs/events.md)
     error_ = SingularRows(rows);
     if (n > 0) error_ += " (with the joints their friction holds)";
     return -1;
@@ -214,7 +214,8 @@ std::string EndStopEvents::SingularRows(const std::vector<int>& rows) const {
   }
   return who +
          " are held together, but their rows are dependent (J M^-1 J^T is singular: they constrain the same "
-         "motion), so the impulse or reaction that holds them is not unique; remove one of them";
+         "motion) and their targets disagree beyond round-off, so no impulse or reaction meets them all (dependent "
+         "contacts striking with different restitutions?); give them one restitution or remove one of them";
 }
 
 int EndStopEvents::Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda,
@@ -405,7 +406,19 @@ int EndStopEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
   }
   if (side.resting) {  // the reaction would pull: the contact leaves (and others may follow)
     const std::vector<char> before = RestingSet();
+    // Sides whose reactions cross with this one's leave with it: dependent contacts sharing a
+    // load have one event function between them (two coincident planes: (m g - F) / 2 each),
+    // and the root finding hands over one index. Left alone, the other's reaction would be
+    // 0 exactly at the crossing and never cross again (Settle leaves only beyond the noise;
+    // a side wrongly left rejoins there).
+    std::vector<double> g(sides_.size());
+    if (int s = Functions(ws, t, y, g.data(), nullptr); s != 0) return s;
     Leave(ws, i);
+    for (size_t k = 0; k < sides_.size(); ++k) {
+      const Side& o = sides_[k];
+      if (o.resting && !(o.accumulates_at > 0.0) && g[k] <= 0.0 && StaticFriction(ws, o) == 0.0)
+        Leave(ws, static_cast<int>(k));
+    }
     return Settle(ws, t, y, before);
   }
   // Closed loops, rolling contacts: the impulse keeps A u = 0, so the state is first put on
@@ -513,7 +526,7 @@ int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const 
         for (size_t i = 0; i < nu; ++i) a += J[r * nu + i] * X[j * nu + i];
         A[r * m + j] = a;
       }
-    if (!SolveSmall(A, b, &c)) {
+    if (!SolveHeld(A, b, &c, nullptr, kRestSpeeds * atol_)) {
       std::vector<int> rows(held);
       error_ = SingularRows(rows) + " (with the speeds a when clause sets)";
       return -1;
@@ -547,6 +560,86 @@ int EndStopEvents::HeldJump(rt::Workspace& ws, double t, const double* y, const 
   }
 }
 
+// The sides that strike together with side i (Impact): on their contact within the
+// tolerance's reach and closing, or touching it at rest (the impulse may press it in, which a
+// row of its own forbids; one it would pull is dropped by Complementary), each with its
+// approach speed, its logged speed and whether it rests (its own Newton's law, or the
+// accumulation of its bounces with side i's when those accumulate at t_inf > 0).
+int EndStopEvents::Companions(rt::Workspace& ws, double t, const double* y, int i, double t_inf,
+                              std::vector<Strike>* with) {
+  const double* u = y + nq_;
+  for (size_t k = 0; k < sides_.size(); ++k) {
+    const Side& o = sides_[k];
+    if (static_cast<int>(k) == i || o.resting || Released(o)) continue;
+    double gap = 0.0, cc = 0.0, vk = 0.0;
+    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) vk += J_[static_cast<size_t>(j)] * u[j];
+    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(o))) || !(vk <= kRestSpeeds * atol_)) continue;
+    const double ek = Restitution(o);
+    bool rk = !(vk < 0.0) || ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
+    if (!rk && ek < 1.0 && t_inf > 0.0) {  // its bounces accumulate with the side's (2): a flat
+      double ak = 0.0;                     // box's four corners pass to rest together
+      if (int r = GapAcceleration(ws, t, y, static_cast<int>(k), &ak); r != 0) return r;
+      const double rebound = ek * std::abs(vk);
+      rk = ak < 0.0 && rebound * rebound / (2.0 * -ak) <= kZenoHeights * (atol_ + rtol_ * Scale(o));
+    }
+    const double bk = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : vk;
+    with->push_back({static_cast<int>(k), vk, bk, rk});
+  }
+  return 0;
+}
+
+// The impact's impulse du for the rows' targets (the struck side first, its companions, the
+// resting sides), complementary: a resting side whose impulse would pull (the blow lifts the
+// mechanism off it) leaves (*left), a companion's is not struck now (dropped from *with), the
+// most pulling first, and the impulse is solved again without it.
+int EndStopEvents::Complementary(rt::Workspace& ws, double t, const double* y, std::vector<int>* rows_in,
+                                 std::vector<double>* targets_in, std::vector<Strike>* with, std::vector<double>* du,
+                                 std::vector<int>* left) {
+  std::vector<int>& rows = *rows_in;
+  std::vector<double>& targets = *targets_in;
+  std::vector<double> c;
+  for (;;) {
+    if (int s = Impulse(ws, t, y, {}, rows, targets, du->data(), &c, kRestSpeeds * atol_); s != 0) return s;
+    double scale = 0.0;
+    for (double x : c) scale = std::max(scale, std::abs(x));
+    size_t pull = 0;  // (0: none; the struck side's own impulse is the impact's)
+    for (size_t j = 1; j < rows.size(); ++j)
+      if (c[j] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == 0 || c[j] < c[pull]))
+        pull = j;
+    if (pull == 0) break;
+    const auto w = std::find_if(with->begin(), with->end(), [&](const Strike& x) { return x.side == rows[pull]; });
+    if (w != with->end()) {
+      with->erase(w);  // the others' blow opens it: not struck now (Settle sees it after)
+    } else {
+      Leave(ws, rows[pull]);
+      left->push_back(rows[pull]);
+    }
+    rows.erase(rows.begin() + static_cast<long>(pull));
+    targets.erase(targets.begin() + static_cast<long>(pull));
+  }
+  return 0;
+}
+
+// The companions' speeds after the impact, their log entries (*struck), rests and lifts.
+int EndStopEvents::StruckWith(rt::Workspace& ws, double t, const double* y, const std::vector<Strike>& with,
+                              std::vector<EventRecord>* struck) {
+  const double* u = y + nq_;
+  for (const Strike& w : with) {
+    Side& o = sides_[static_cast<size_t>(w.side)];
+    double gap = 0.0, cc = 0.0, rate = 0.0;
+    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
+    for (int j = 0; j < nu_; ++j) rate += J_[static_cast<size_t>(j)] * u[j];
+    const double after_o = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : rate;
+    char line[200];
+    std::snprintf(line, sizeof line, "impact at %s, speed %.17g -> %.17g", Where(o).c_str(), w.before, after_o);
+    if (std::abs(w.v) > kRestSpeeds * atol_) struck->push_back({t, Element(o), line});  // (a touch: its rest only)
+    if (w.rest) o.resting = true;
+    else if (o.plane >= 0) Lift(o, t, gap, rate);
+  }
+  return 0;
+}
+
 int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double v, bool settle) {
   Side& side = sides_[static_cast<size_t>(i)];
   const rt::EndStop* st = side.stop >= 0 ? &stops_[static_cast<size_t>(side.stop)] : nullptr;
@@ -576,28 +669,11 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     if (int s = GapAcceleration(ws, t, y, i, &a); s != 0) return s;
     graze = a > -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * (1.0 + std::abs(a));  // (0: held by friction)
   }
-  // The side's gap rate change, the resting sides' held at zero. A resting side can only push:
-  // one whose impulse would pull (the blow lifts the mechanism off it) leaves, the most pulling
-  // first, and the impulse is solved again without it (the impact's complementarity).
-  // Sides that strike together with it (on their contact within the tolerance's reach and
-  // closing: a box landing flat on its corners) take their own Newton's law in the same
-  // impulse, not one after another (an impulse at one corner alone would set the box
-  // rocking): each its target, its log entry, its rest.
+  // The side's gap rate change, with the sides that strike together with it (a box landing
+  // flat on its corners: each corner's Newton's law in one impulse, not one after another,
+  // which would set the box rocking), the resting sides' rates held, complementary.
   std::vector<Strike> with;
-  for (size_t k = 0; k < sides_.size(); ++k) {
-    const Side& o = sides_[k];
-    if (static_cast<int>(k) == i || o.resting || Released(o)) continue;
-    double gap = 0.0, cc = 0.0, vk = 0.0;
-    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
-    for (int j = 0; j < nu_; ++j) vk += J_[static_cast<size_t>(j)] * u[j];
-    // (On its contact closing, or touching it at rest: the impulse may press it in, which a
-    // row of its own forbids; one it would pull is dropped below.)
-    if (!(gap <= kPastRows * (atol_ + rtol_ * Scale(o))) || !(vk <= kRestSpeeds * atol_)) continue;
-    const double ek = Restitution(o);
-    const bool rk = !(vk < 0.0) || ek * std::abs(vk) <= kRestSpeeds * (atol_ + rtol_ * std::abs(vk));
-    const double bk = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : vk;
-    with.push_back({static_cast<int>(k), vk, bk, rk});
-  }
+  if (int r = Companions(ws, t, y, i, t_inf, &with); r != 0) return r;
   std::vector<int> rows = {i};
   std::vector<double> targets = {rest ? -v : -(1.0 + e) * v};
   for (const Strike& w : with) {
@@ -606,28 +682,10 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   }
   for (size_t k = 0; k < sides_.size(); ++k)
     if (sides_[k].resting) rows.push_back(static_cast<int>(k)), targets.push_back(0.0);
-  std::vector<double> du(static_cast<size_t>(nu_)), c;
+  std::vector<double> du(static_cast<size_t>(nu_));
   std::vector<int> left;  // the resting sides the impulse lifted off
   const std::vector<char> was = RestingSet();  // (Settle logs the changes: rests, leaves)
-  for (;;) {
-    if (int s = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); s != 0) return s;
-    double scale = 0.0;
-    for (double x : c) scale = std::max(scale, std::abs(x));
-    size_t pull = 0;  // (0: none; the struck side's own impulse is the impact's)
-    for (size_t j = 1; j < rows.size(); ++j)
-      if (c[j] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == 0 || c[j] < c[pull]))
-        pull = j;
-    if (pull == 0) break;
-    const auto w = std::find_if(with.begin(), with.end(), [&](const Strike& x) { return x.side == rows[pull]; });
-    if (w != with.end()) {
-      with.erase(w);  // the others' blow opens it: not struck now (Settle sees it after)
-    } else {
-      Leave(ws, rows[pull]);
-      left.push_back(rows[pull]);
-    }
-    rows.erase(rows.begin() + static_cast<long>(pull));
-    targets.erase(targets.begin() + static_cast<long>(pull));
-  }
+  if (int r = Complementary(ws, t, y, &rows, &targets, &with, &du, &left); r != 0) return r;
   // A rolling contact whose impulse would pull: the run stops at the impact.
   if (impulse_F_.size() == du.size()) {
     int status = 0;
@@ -656,20 +714,8 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   }
   for (const Side& s : sides_)
     if (s.resting && s.stop >= 0) u[stops_[static_cast<size_t>(s.stop)].u] = 0.0;
-  // The companions' speeds after, their log entries (after the impact's own), rests and lifts.
-  decltype(log_) struck;
-  for (const Strike& w : with) {
-    Side& o = sides_[static_cast<size_t>(w.side)];
-    double gap = 0.0, cc = 0.0, rate = 0.0;
-    if (int r = Row(ws, t, y, o, &gap, J_.data(), &cc); r != 0) return r;
-    for (int j = 0; j < nu_; ++j) rate += J_[static_cast<size_t>(j)] * u[j];
-    const double after_o = o.stop >= 0 ? u[stops_[static_cast<size_t>(o.stop)].u] : rate;
-    char line[200];
-    std::snprintf(line, sizeof line, "impact at %s, speed %.17g -> %.17g", Where(o).c_str(), w.before, after_o);
-    if (std::abs(w.v) > kRestSpeeds * atol_) struck.push_back({t, Element(o), line});  // (a touch: its rest only)
-    if (w.rest) o.resting = true;
-    else if (o.plane >= 0) Lift(o, t, gap, rate);
-  }
+  decltype(log_) struck;  // the companions' log entries (after the impact's own)
+  if (int r = StruckWith(ws, t, y, with, &struck); r != 0) return r;
   double after = st ? u[st->u] : 0.0;
   if (!st) {
     double gap = 0.0, cc = 0.0;
@@ -801,7 +847,7 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
     for (int k = 0; k < n; ++k)
       if (sides_[static_cast<size_t>(k)].resting) rows.push_back(k), targets.push_back(0.0);
     std::vector<double> du(static_cast<size_t>(nu_));
-    if (int r = Impulse(ws, t, y, {}, rows, targets, du.data(), &c); r != 0) return r;
+    if (int r = Impulse(ws, t, y, {}, rows, targets, du.data(), &c, kRestSpeeds * atol_); r != 0) return r;
     for (int k = 0; k < nu_; ++k) y[nq_ + k] += du[static_cast<size_t>(k)];
     if (s.stop >= 0) {
       const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];

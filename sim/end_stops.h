@@ -207,6 +207,13 @@ class EndStopEvents {
     double v = 0.0, before = 0.0;
     bool rest = false;
   };
+  // Impact's parts: the sides striking with side i, the complementary impulse, the
+  // companions' speeds after and their log entries (sim/end_stops.cpp).
+  int Companions(rt::Workspace& ws, double t, const double* y, int i, double t_inf, std::vector<Strike>* with);
+  int Complementary(rt::Workspace& ws, double t, const double* y, std::vector<int>* rows, std::vector<double>* targets,
+                    std::vector<Strike>* with, std::vector<double>* du, std::vector<int>* left);
+  int StruckWith(rt::Workspace& ws, double t, const double* y, const std::vector<Strike>& with,
+                 std::vector<EventRecord>* struck);
   void Lift(Side& s, double t, double gap, double rate);  // Side::lift after a rebound at t
   static double LiftAt(const Side& s, double t);         // its value at t
   double Restitution(const Side& s) const;
@@ -217,9 +224,11 @@ class EndStopEvents {
   std::string Where(const Side& s) const;  // "q_min", "q_max", "the plane"
   // Speeds' jump du = X c with J_r du = target_r for the rows: e_k for each k in `speeds`
   // (first), then the sides `rows` (X = M^-1 J^T columns, the speed rows' from one
-  // factorization). 0, or Derivative's codes.
+  // factorization). Dependent rows take the least impulses (SolveHeld) where the targets
+  // agree to `slack` (their round-off: a jump's is the speeds' kRestSpeeds atol). 0, or
+  // Derivative's codes.
   int Impulse(rt::Workspace& ws, double t, const double* y, const std::vector<int>& speeds, const std::vector<int>& rows,
-              const std::vector<double>& targets, double* du, std::vector<double>* c);
+              const std::vector<double>& targets, double* du, std::vector<double>* c, double slack = 0.0);
   // Resting sides' reactions at (t, y) (in the order of sides_, 0 where not resting) and
   // the held accelerations (nu, may be null).
   int Reactions(rt::Workspace& ws, double t, const double* y, std::vector<double>* lambda, double* a_held,

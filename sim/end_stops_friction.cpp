@@ -19,7 +19,7 @@
 
 #include "sim/end_stops.h"
 #include "sim/friction_impulse.h"
-#include "sim/impulse.h"  // SolveSmall
+#include "sim/impulse.h"  // SolveHeld
 
 namespace kanesim::sim {
 
@@ -106,7 +106,7 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
       error_.clear();
       return 0;
     }
-    if (!SolveSmall(A, r, &dc)) {
+    if (!SolveHeld(A, r, &dc, nullptr, kTol * scale)) {  // (dependent rows: the least correction)
       error_ = SingularRows(rows);
       return -1;
     }

@@ -2,6 +2,8 @@
 
 #include "runtime/program/program.h"  // Program::contacts
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +14,12 @@ namespace kanesim::sim {
 namespace {
 // A contact's normal impulse below -kPullTolerance times the jump's largest impulse pulls.
 constexpr double kPullTolerance = 1e-9;
+// Held rows scaled to a unit diagonal whose elimination meets a pivot below this are
+// dependent (the exactly dependent four corners of a flat box give about 1e-16; rows this
+// close to dependent would need impulses 1e10 times their scale, which say nothing).
+constexpr double kDependentPivot = 1e-10;
+// Dependent held rows are consistent when A c = b is met to this much of its terms.
+constexpr double kConsistentRows = 1e-8;
 }  // namespace
 
 bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double>* c) {
@@ -34,6 +42,60 @@ bool SolveSmall(std::vector<double> A, std::vector<double> b, std::vector<double
     double s = b[k];
     for (size_t j = k + 1; j < m; ++j) s -= A[k * m + j] * (*c)[j];
     (*c)[k] = s / A[k * m + k];
+  }
+  return true;
+}
+
+bool SolveHeld(const std::vector<double>& A, const std::vector<double>& b, std::vector<double>* c, bool* dependent,
+               double slack) {
+  const size_t m = b.size();
+  if (dependent) *dependent = false;
+  // The rows scaled to a unit diagonal (a scale-free test: a stop's row in N m beside a
+  // plane's in N, a light link's beside a heavy one's), then eliminated: a pivot below
+  // kDependentPivot means a row is a combination of the others to round-off.
+  std::vector<double> d(m);
+  bool singular = false;
+  for (size_t i = 0; i < m; ++i) {
+    const double a = A[i * m + i];
+    if (!std::isfinite(a)) return false;
+    singular = singular || !(a > 0.0);
+    d[i] = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
+  }
+  Eigen::MatrixXd S(m, m);
+  for (size_t r = 0; r < m; ++r)
+    for (size_t j = 0; j < m; ++j) S(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) = d[r] * A[r * m + j] * d[j];
+  if (!S.allFinite()) return false;
+  if (!singular) {
+    Eigen::MatrixXd U = S;  // Gaussian elimination, partial pivoting (A is symmetric: no growth)
+    const Eigen::Index n = U.rows();
+    for (Eigen::Index k = 0; k < n && !singular; ++k) {
+      Eigen::Index p = k;
+      U.col(k).tail(n - k).cwiseAbs().maxCoeff(&p);
+      p += k;
+      if (!(std::abs(U(p, k)) > kDependentPivot)) {
+        singular = true;
+        break;
+      }
+      U.row(k).swap(U.row(p));
+      for (Eigen::Index r = k + 1; r < n; ++r) U.row(r).tail(n - k) -= U(r, k) / U(k, k) * U.row(k).tail(n - k);
+    }
+  }
+  if (!singular) return SolveSmall(A, b, c);
+  if (dependent) *dependent = true;
+  Eigen::VectorXd sb(m);
+  for (size_t i = 0; i < m; ++i) sb(static_cast<Eigen::Index>(i)) = d[i] * b[i];
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
+  cod.setThreshold(kDependentPivot);
+  cod.compute(S);
+  const Eigen::VectorXd y = cod.solve(sb);
+  c->resize(m);
+  for (size_t i = 0; i < m; ++i) (*c)[i] = d[i] * y(static_cast<Eigen::Index>(i));
+  // Consistent: the targets are in the rows' range (they are where each comes from the same
+  // motion: a flat box's four corners approach the floor at one speed), to round-off.
+  for (size_t r = 0; r < m; ++r) {
+    double Ac = 0.0, terms = std::abs(b[r]);
+    for (size_t j = 0; j < m; ++j) Ac += A[r * m + j] * (*c)[j], terms += std::abs(A[r * m + j] * (*c)[j]);
+    if (!(std::abs(Ac - b[r]) <= kConsistentRows * terms + slack)) return false;
   }
   return true;
 }

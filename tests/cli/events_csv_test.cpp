@@ -104,11 +104,12 @@ TEST(EventsCsv, EndStopRowsCarryTheSpeedsTheyChanged) {
 
 // A jump that cannot be applied names its cause. A when clause setting a joint past its stop
 // (where no impact law says what follows) stops the run with exit 2 at the event's time, the
-// rows before kept; two plane contacts at one point on the plane at the start are a usage
-// error (exit 1) naming both. If this fails, the cause is empty or generic ("contacts at the
-// start: ", "the equations of motion could not be evaluated", as before), or the run goes on
-// with the joint through its stop. (A reinit of a resting joint is handled:
-// tests/compiler/when_rest_test.cpp.)
+// rows before kept. If this fails, the cause is empty or generic ("the equations of motion
+// could not be evaluated", as before), or the run goes on with the joint through its stop.
+// Two plane contacts at one point (dependent rows) share the load
+// (PlaneContact.TwoCoincidentPlanesShareTheLoadAndLeaveTogether) unless their impact laws
+// contradict each other: then exit 2 at the landing, naming both. (A reinit of a resting
+// joint is handled: tests/compiler/when_rest_test.cpp.)
 TEST(EventsCsv, SingularImpulsesNameTheirCause) {
   const std::string d = Work("singular_impulse");
   Write(d + "/rw.mech",
@@ -122,14 +123,19 @@ TEST(EventsCsv, SingularImpulsesNameTheirCause) {
   EXPECT_TRUE(Has(r.err, "numerical failure at t = 1:")) << r.err;
   EXPECT_TRUE(Has(r.err, "when (rw.mech:8) sets joint 'j1' past q_min by 0.3")) << r.err;
   EXPECT_EQ(CsvRows(d + "/rw.csv"), 11);  // t = 0, 0.1, ..., 1
-  Write(d + "/dup.mech",
-        "model Dup\n  World world(g = {0, -9.81, 0});\n  Prismatic p(axis = {0, 1, 0});\n"
-        "  Body b(m = 1, I = diagonal({1, 1, 1}));\n  PlaneContact c1;\n  PlaneContact c2(n = {0, 2, 0});\nequation\n"
-        "  connect(world.frame_b, p.frame_a);\n  connect(p.frame_b, b.frame_a);\n"
-        "  connect(p.frame_b, c1.frame_a);\n  connect(p.frame_b, c2.frame_a);\nend Dup;\n");
-  r = Kanesim("run dup.mech -o dup.csv", d);
-  EXPECT_EQ(r.rc, 1) << r.err;
-  EXPECT_TRUE(Has(r.err, "contact 'c1'") && Has(r.err, "contact 'c2'") && Has(r.err, "dependent")) << r.err;
+  // Two coincident plane contacts (dependent rows) with different restitutions: at the
+  // landing (t = sqrt(2 0.2 / g) = 0.2019 s) Newton's laws contradict each other.
+  Write(d + "/mixed.mech",
+        "model Mixed\n  World world(g = {0, -9.81, 0});\n  Prismatic p(axis = {0, 1, 0}, q(start = 0.2));\n"
+        "  Body b(m = 1, I = diagonal({1, 1, 1}));\n  PlaneContact c1(restitution = 0.5);\n  PlaneContact c2(n = {0, 2, 0});\n"
+        "equation\n  connect(world.frame_b, p.frame_a);\n  connect(p.frame_b, b.frame_a);\n"
+        "  connect(p.frame_b, c1.frame_a);\n  connect(p.frame_b, c2.frame_a);\n"
+        "  annotation(experiment(StopTime = 1, Interval = 0.1));\nend Mixed;\n");
+  r = Kanesim("run mixed.mech -o mixed.csv", d);
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_TRUE(Has(r.err, "numerical failure at t = 0.2019")) << r.err;
+  EXPECT_TRUE(Has(r.err, "contact 'c1'") && Has(r.err, "contact 'c2'") && Has(r.err, "targets disagree")) << r.err;
+  EXPECT_EQ(CsvRows(d + "/mixed.csv"), 4);  // t = 0, 0.1, 0.2 and the landing's left limit
 }
 
 // `--stats` lists the run's events (issue 41: "an events log (time, element, kind) in

@@ -1,10 +1,12 @@
-// The hybrid examples (examples/bouncing_ball.mech, stick_slip.mech, pendulum_stop.mech) run
-// by the command as their headers say, in all five integrators, against the closed forms
-// their headers quote: the ball's impact times t1 + 2 t1 (e + ... + e^(k-1)) and its rest at
-// t1 (1 + e) / (1 - e); the Coulomb oscillator's reversals at k pi / w and its stick at
-// 6 pi / w at x0 - 12 F / k; the stop's Newton law. If these fail, an example no longer runs
-// (a missed impact: exit 2, as the ball on a plane offset from the origin before the fix of
-// EndStopEvents' Side::shift), or it runs to other numbers than its header promises.
+// The hybrid examples (examples/bouncing_ball.mech, stick_slip.mech, pendulum_stop.mech,
+// tumbling_cube.mech) run by the command as their headers say, in all five integrators,
+// against the closed forms and invariants their headers quote: the ball's impact times
+// t1 + 2 t1 (e + ... + e^(k-1)) and its rest at t1 (1 + e) / (1 - e); the Coulomb
+// oscillator's reversals at k pi / w and its stick at 6 pi / w at x0 - 12 F / k; the stop's
+// Newton law; the cube's speed along the floor and vertical spin. If these fail, an example
+// no longer runs (a missed impact: exit 2, as the ball on a plane offset from the origin
+// before the fix of EndStopEvents' Side::shift), or it runs to other numbers than its header
+// promises.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -156,6 +158,70 @@ TEST(HybridExamples, PendulumStopKeepsNewtonsLawAndItsStop) {
     if (first.empty()) first = times;
     ASSERT_EQ(times.size(), first.size()) << how;
     for (size_t i = 0; i < times.size(); ++i) EXPECT_NEAR(times[i], first[i], 1e-6) << how << " event " << i;
+  }
+}
+
+// The tumbling cube: the floor pushes only along its normal (vertical forces at the corners),
+// so its impulses and reactions change neither the horizontal momentum nor the angular
+// momentum about the vertical through the centre of mass; the cube's inertia is isotropic,
+// so the world angular velocity's vertical component stays at its start value, and the speed
+// along the floor at 0.5 m/s, in every row, through every impact. Energy
+// (1/2 m |v|^2 + 1/2 J |w|^2 + m g y) never rises at an event (e = 0.3 < 1, resting and
+// leaving do no work), no corner goes below the floor, and the cube ends flat on a face
+// (its centre at a = 0.1 with four corners on the floor, those resting among them).
+// If this fails, dependent corner contacts (a face on the floor: four rows of rank three)
+// stop the run (exit 2 before redundant contacts were solved), or an impulse acts along the
+// floor or turns the cube about the vertical, or an impact gains energy.
+TEST(HybridExamples, TumblingCubeKeepsWhatTheFloorCannotChangeAndSettlesOnAFace) {
+  const std::string d = Work("hybrid_examples_cube");
+  const double m = 1, a = 0.1, J = m * (2 * a) * (2 * a) / 6, g = 9.81;
+  std::string corners;
+  std::vector<std::string> names = {"height", "free.frame_b.v[1]", "free.frame_b.v[2]", "free.frame_b.v[3]",
+                                    "free.frame_b.w[1]", "free.frame_b.w[2]", "free.frame_b.w[3]"};
+  for (int k = 1; k <= 8; ++k) {
+    names.push_back("c" + std::to_string(k) + ".frame_b.r[2]");
+    corners += " --output c" + std::to_string(k) + ".frame_b.r[2]";
+  }
+  for (const char* how : kIntegrators) {
+    std::string outputs;
+    for (size_t i = 0; i < 7; ++i) outputs += " --output " + names[i];
+    Result r = Kanesim("run " + kSrc + "/examples/tumbling_cube.mech --integrator " + how + outputs + corners +
+                           " -o cube.csv --events cube_ev.csv",
+                       d);
+    ASSERT_EQ(r.rc, 0) << how << ": " << r.err;
+    const std::vector<std::vector<double>> rows = Rows(d + "/cube.csv", names);
+    ASSERT_GT(rows.size(), 300u) << how;
+    const double spin = rows[0][6];
+    EXPECT_NEAR(spin, -2.4362436, 1e-7);  // R(q0) (3, -2, 5), the header's value
+    double e_prev = INFINITY, t_prev = -1;
+    for (const std::vector<double>& row : rows) {
+      EXPECT_NEAR(row[2], 0.5, 1e-9) << how << " t = " << row[0];
+      EXPECT_NEAR(row[4], 0.0, 1e-9) << how << " t = " << row[0];
+      EXPECT_NEAR(row[6], spin, 1e-7) << how << " t = " << row[0];
+      for (size_t k = 8; k < 16; ++k) EXPECT_GE(row[k], -1e-8) << how << " t = " << row[0] << " corner " << k - 7;
+      double energy = m * g * row[1];
+      for (size_t k = 2; k < 8; ++k) energy += 0.5 * (k < 5 ? m : J) * row[k] * row[k];
+      if (row[0] == t_prev) {  // an event's right limit after its left: no energy gained
+        EXPECT_LE(energy, e_prev + 1e-9 * (1 + std::abs(e_prev))) << how << " t = " << row[0];
+      }
+      e_prev = energy, t_prev = row[0];
+    }
+    EXPECT_EQ(rows.back()[0], 3.0) << how;
+    EXPECT_NEAR(rows.back()[1], a, 1e-6) << how << ": flat on a face";
+    int on_floor = 0;
+    for (size_t k = 8; k < 16; ++k) on_floor += std::abs(rows.back()[k]) < 1e-6 ? 1 : 0;
+    EXPECT_EQ(on_floor, 4) << how;
+    const std::vector<Event> ev = Events(d + "/cube_ev.csv");
+    std::vector<std::string> resting;
+    for (const Event& x : ev) {
+      if (x.kind.rfind("rests on", 0) == 0 && std::find(resting.begin(), resting.end(), x.element) == resting.end())
+        resting.push_back(x.element);
+      if (x.kind.rfind("leaves", 0) == 0) resting.erase(std::remove(resting.begin(), resting.end(), x.element), resting.end());
+    }
+    // Three or four rest: a fourth corner touching at zero speed takes no load where three
+    // already hold the face (its row dependent, its gap acceleration 0: nothing to join for).
+    EXPECT_GE(resting.size(), 3u) << how;
+    for (const std::string& c : resting) EXPECT_LT(std::abs(rows.back()[7 + std::stoul(c.substr(1))]), 1e-6) << how << " " << c;
   }
 }
 

@@ -4,11 +4,12 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdio>
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "tests/support/load_util.h"
+#include "tests/support/model_texts.h"  // Num
 #include "compiler/compiler.h"
 
 namespace kanesim::test {
@@ -41,13 +42,6 @@ inline sim::MemorySink RunWith(const rt::Program& p, const IntegratorChoice& how
   return sink;
 }
 
-// x in a model text, every digit kept (%.17g).
-inline std::string Num(double x) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
-
 // "K310: message\n" for every compile message, for failure output.
 inline std::string Messages(const std::vector<rt::CompileMessage>& ms) {
   std::string s;
@@ -65,6 +59,58 @@ inline const rt::CompileMessage* Find(const std::vector<rt::CompileMessage>& ms,
 
 // The summary of a compiled model.
 inline rt::ProgramSummary SummaryOf(const Loaded& l) { return rt::Summarize(*l.prog); }
+
+// The pairs of rows at one time (an event's left and right limits): index of the left row.
+inline std::vector<size_t> EventRows(const sim::MemorySink& s) {
+  std::vector<size_t> at;
+  for (size_t i = 0; i + 1 < s.times.size(); ++i)
+    if (s.times[i] == s.times[i + 1]) at.push_back(i);
+  return at;
+}
+
+// The times of the events of element `who` whose kind starts with `kind`.
+inline std::vector<double> EventTimes(const sim::SimResult& r, const std::string& who, const std::string& kind) {
+  std::vector<double> t;
+  for (const sim::EventRecord& e : r.stats.events)
+    if (e.element == who && e.kind.rfind(kind, 0) == 0) t.push_back(e.time);
+  return t;
+}
+
+// "time element kind" a line per event, for failure output.
+inline std::string EventLog(const sim::SimResult& r) {
+  std::string log;
+  for (const sim::EventRecord& e : r.stats.events) log += Num(e.time) + " " + e.element + " " + e.kind + "\n";
+  return log;
+}
+
+// Variable `name` before or after event `e` (its record's changes; unchanged: `fallback`).
+inline double ChangeOf(const sim::EventRecord& e, const std::string& name, bool after, double fallback = NAN) {
+  for (const sim::EventChange& c : e.changes)
+    if (c.name == name) return after ? c.after : c.before;
+  return fallback;
+}
+
+// The state's speed `name` before or after the run's first event, from its record's changes
+// (the state itself, not an output row's speeds solved again from the independent ones); a
+// failure when the event did not change it.
+inline double StateSpeed(const sim::SimResult& r, const std::string& name, bool after) {
+  for (const sim::EventChange& c : r.stats.events.at(0).changes)
+    if (c.name == name) return after ? c.after : c.before;
+  ADD_FAILURE() << name << " did not change";
+  return NAN;
+}
+
+// The root of f in [a, b] (f(a), f(b) of opposite signs), by bisection to the last bit.
+template <class F>
+double Bisect(F f, double a, double b) {
+  const bool up = f(a) < 0.0;
+  for (int k = 0; k < 200 && b - a > 0.0; ++k) {
+    const double m = 0.5 * (a + b);
+    if (m == a || m == b) break;
+    ((f(m) < 0.0) == up ? a : b) = m;
+  }
+  return 0.5 * (a + b);
+}
 
 // The geared pair of the loop tests: rods on j1 at the origin and j2 two metres along x,
 // coupled q2 = -q1 / 2 (JointCoupling); `j1_mods`, `j2_mods` go into the joints' modifiers,

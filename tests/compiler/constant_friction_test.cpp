@@ -9,23 +9,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <functional>
 #include <string>
 
 #include "sim/stick_slip.h"
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
 
 constexpr double kG = 9.81;
-
-std::string Num(double x) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
 
 // The output row at time t (an event's left-limit row is the first one there).
 size_t RowAt(const sim::MemorySink& s, double t) {
@@ -211,21 +205,9 @@ TEST(ConstantFriction, StuckJointOfADoublePendulumHoldsLagrangesTorqueAndSlipsAt
     return M12 * (-G1 / M11) + m2 * L1 * c2 * std::sin(q2) * u1 * u1 + G2;
   };
   const std::string text =
-      "model DP\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Revolute j1(axis = {0, 0, 1});\n"
-      "  Body b1(m = 1, r_CM = {0.5, 0, 0}, I = [0.001, 0, 0; 0, " + Num(I1) + ", 0; 0, 0, " + Num(I1) + "]);\n"
-      "  FixedTranslation elbow(r = {1, 0, 0});\n"
-      "  Revolute j2(axis = {0, 0, 1}, q(start = 0.5), friction_torque = 1.5, friction_torque_s = 2, "
-      "friction_exact = true);\n"
-      "  Body b2(m = 0.5, r_CM = {0.4, 0, 0}, I = [0.001, 0, 0; 0, 0.02, 0; 0, 0, 0.02]);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, b1.frame_a);\n"
-      "  connect(j1.frame_b, elbow.frame_a);\n"
-      "  connect(elbow.frame_b, j2.frame_a);\n"
-      "  connect(j2.frame_b, b2.frame_a);\n"
-      "end DP;\n";
+      ElbowPendulumText{.i1 = Num(I1),
+                        .j2_mods = ", q(start = 0.5), friction_torque = 1.5, friction_torque_s = 2, friction_exact = true"}
+          .Text();
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   const rt::Program& p = *l->prog;

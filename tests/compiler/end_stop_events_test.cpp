@@ -32,14 +32,6 @@ double SwingTime(double phi0, double phi) {
   return (std::comp_ellint_1(k) + std::ellint_1(k, std::asin(std::sin(std::abs(phi) / 2) / k))) / kW;
 }
 
-// The pairs of rows at one time (an event's left and right limits): index of the left row.
-std::vector<size_t> EventRows(const sim::MemorySink& s) {
-  std::vector<size_t> at;
-  for (size_t i = 0; i + 1 < s.times.size(); ++i)
-    if (s.times[i] == s.times[i + 1]) at.push_back(i);
-  return at;
-}
-
 // If this fails, an impact on a stop is not located where the exact motion reaches it, the
 // speed after is not -e times the speed before, the location depends on the integrator or
 // the output grid, a row passes the stop, or the energy rises at an impact.

@@ -12,6 +12,7 @@
 #include "sim/end_stops.h"
 #include "sim/stick_slip.h"
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
@@ -26,20 +27,9 @@ constexpr double kG = 9.81;
 //   tau_1 = g ((m1 c1 + m2 L1) cos q1 + m2 c2 cos(q1 + q2))          (j1's friction)
 // the generalized gravity forces each row balances.
 std::string DoublePendulum(double q1, double q2) {
-  return "model DP\n"
-         "  World world(g = {0, -9.81, 0});\n"
-         "  Revolute j1(axis = {0, 0, 1}, q(start = " + Num(q1) + "), friction_torque = 100, friction_exact = true);\n"
-         "  Body b1(m = 1, r_CM = {0.5, 0, 0}, I = [0.001, 0, 0; 0, 0.1, 0; 0, 0, 0.1]);\n"
-         "  FixedTranslation elbow(r = {1, 0, 0});\n"
-         "  Revolute j2(axis = {0, 0, 1}, q(start = " + Num(q2) + "), q_min = " + Num(q2) + ");\n"
-         "  Body b2(m = 0.5, r_CM = {0.4, 0, 0}, I = [0.001, 0, 0; 0, 0.02, 0; 0, 0, 0.02]);\n"
-         "equation\n"
-         "  connect(world.frame_b, j1.frame_a);\n"
-         "  connect(j1.frame_b, b1.frame_a);\n"
-         "  connect(j1.frame_b, elbow.frame_a);\n"
-         "  connect(elbow.frame_b, j2.frame_a);\n"
-         "  connect(j2.frame_b, b2.frame_a);\n"
-         "end DP;\n";
+  return ElbowPendulumText{.j1_mods = ", q(start = " + Num(q1) + "), friction_torque = 100, friction_exact = true",
+                           .j2_mods = ", q(start = " + Num(q2) + "), q_min = " + Num(q2)}
+      .Text();
 }
 
 // If this fails, the stuck joint's friction or the stop's reaction is not the statics' (the

@@ -205,25 +205,7 @@ TEST(HeldSignals, RodOnAFloorReadsTheHeldMotion) {
 // beside the stop's row (dependent rows): before the fix the reactions read -26.7 N at
 // t = 0.2 and the event row's acceleration 1.6e21.
 TEST(HeldSignals, FollowerHeldThroughAGearByARestingStopReadsTheStatics) {
-  const std::string text =
-      "model Rack\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Prismatic j1(axis = {1, 0, 0}, q_min = 0, restitution = 0);\n"
-      "  Body b1(m = 1);\n"
-      "  FixedTranslation base(r = {0, 1, 0});\n"
-      "  Prismatic j2(axis = {1, 0, 0}, mu = 0.3, friction_exact = true);\n"
-      "  Body b2(m = 2);\n"
-      "  JointCoupling gear(ratio = -0.5);\n"
-      "equation\n"
-      "  connect(world.frame_b, j1.frame_a);\n"
-      "  connect(j1.frame_b, b1.frame_a);\n"
-      "  connect(world.frame_b, base.frame_a);\n"
-      "  connect(base.frame_b, j2.frame_a);\n"
-      "  connect(j2.frame_b, b2.frame_a);\n"
-      "  connect(j1.drive, gear.flange_a);\n"
-      "  connect(j2.drive, gear.flange_b);\n"
-      "  j1.tau = 5 * (time - 0.5);\n"
-      "end Rack;\n";
+  const std::string text = RackPairText{}.Text();
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   const double t_slip = 0.5 + 0.3 * 2 * kG / 10;

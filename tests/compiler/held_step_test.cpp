@@ -57,17 +57,6 @@ constexpr double kC = 0.191713;  // 0.2 * 1.02 / kPeak
 const std::string kPulse = GearedPair("Pulse", "{0, 0, -9.81}", ", friction_torque = 0.2, friction_exact = true", "",
                                       "  j1.tau = 0.191713 * time * sin(31 * time);\n");
 
-// The root of f in [a, b] (f(a), f(b) of opposite signs), by bisection to the last bit.
-template <class F>
-double Bisect(F f, double a, double b) {
-  const bool up = f(a) < 0.0;
-  for (int k = 0; k < 200 && b - a > 0.0; ++k) {
-    const double m = 0.5 * (a + b);
-    if (m == a || m == b) break;
-    ((f(m) < 0.0) == up ? a : b) = m;
-  }
-  return 0.5 * (a + b);
-}
 double Drive(double t) { return kC * t * std::sin(kW * t); }
 double SlipTime() { return Bisect([](double t) { return Drive(t) - 0.2; }, kPeak - 0.02, kPeak); }
 double StickTime() {

@@ -19,31 +19,19 @@
 namespace kanesim::test {
 namespace {
 
-constexpr double kM1 = 1.0, kM2 = 2.0, kR = -0.5, kMu = 0.3, kG = 9.81, kK = 5.0, kT0 = 0.5;
+constexpr double kM1 = RackPairText::kM1, kM2 = RackPairText::kM2, kR = RackPairText::kR, kMu = RackPairText::kMu;
+constexpr double kG = RackPairText::kG, kK = 5.0, kT0 = 0.5;
 constexpr double kMeff = kM1 + kR * kR * kM2;
 constexpr double kC = 0.5 * kMu * kM2 * kG;  // |r| mu m2 g
 
 // The rack pair; `j2_law` in joint 2's modifiers after mu, `q0`, `u0` block 1's start.
 std::string RackPair(const std::string& j2_law, double q0 = 0.0, double u0 = 0.0, const std::string& drive = "",
                      double e = 0.0) {
-  return "model Rack\n"
-         "  World world(g = {0, " + Num(-kG) + ", 0});\n"
-         "  Prismatic j1(axis = {1, 0, 0}, q_min = 0, q_max = 5, restitution = " + Num(e) + ", q(start = " + Num(q0) +
-         "), u(start = " + Num(u0) + "));\n"
-         "  Body b1(m = " + Num(kM1) + ");\n"
-         "  FixedTranslation base(r = {0, 1, 0});\n"
-         "  Prismatic j2(axis = {1, 0, 0}, mu = " + Num(kMu) + j2_law + ");\n"
-         "  Body b2(m = " + Num(kM2) + ");\n"
-         "  JointCoupling gear(ratio = " + Num(kR) + ");\n"
-         "equation\n"
-         "  connect(world.frame_b, j1.frame_a);\n"
-         "  connect(j1.frame_b, b1.frame_a);\n"
-         "  connect(world.frame_b, base.frame_a);\n"
-         "  connect(base.frame_b, j2.frame_a);\n"
-         "  connect(j2.frame_b, b2.frame_a);\n"
-         "  connect(j1.drive, gear.flange_a);\n"
-         "  connect(j2.drive, gear.flange_b);\n" +
-         (drive.empty() ? "  j1.tau = " + Num(kK) + " * (time - " + Num(kT0) + ");\n" : drive) + "end Rack;\n";
+  return RackPairText{.j1_mods = ", q_max = 5, restitution = " + Num(e) + ", q(start = " + Num(q0) + "), u(start = " +
+                                 Num(u0) + ")",
+                      .j2_law = j2_law,
+                      .equations = drive.empty() ? "  j1.tau = " + Num(kK) + " * (time - " + Num(kT0) + ");\n" : drive}
+      .Text();
 }
 
 // The reduced model: one block, the friction reflected.

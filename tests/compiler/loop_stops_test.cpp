@@ -71,14 +71,6 @@ double FreeTime(const IntegratorChoice& how) {
   return r.stats.terminated ? r.stats.terminate_time : NAN;
 }
 
-// The state's speed `name` before or after the run's first event (its record's changes).
-double StateSpeed(const sim::SimResult& r, const std::string& name, bool after) {
-  for (const sim::EventChange& c : r.stats.events.at(0).changes)
-    if (c.name == name) return after ? c.after : c.before;
-  ADD_FAILURE() << name << " did not change";
-  return NAN;
-}
-
 // Checks the first event of `r` (rows `s`) as the rocker's impact on kStop at t_free with
 // restitution e.
 void CheckImpact(const sim::SimResult& r, const sim::MemorySink& s, double t_free, double e, const std::string& who) {

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/compiler/compile_test_util.h"
 #include "tests/support/model_texts.h"
@@ -40,13 +42,28 @@ std::string Ball(double h, double e, double d = 0.0) {
          "end Ball;\n";
 }
 
-// The pairs of rows at one time (an event's left and right limits): index of the left row.
-std::vector<size_t> EventRows(const sim::MemorySink& s) {
-  std::vector<size_t> at;
-  for (size_t i = 0; i + 1 < s.times.size(); ++i)
-    if (s.times[i] == s.times[i + 1]) at.push_back(i);
-  return at;
+// A box (FreeMotion, m = 1, I = diag(0.01, 0.02, 0.01)) released level with its origin at
+// height y0, with PlaneContacts p1, p2, ... (restitution e) at corners (x, z) 0.05 below its
+// origin; `decls` and `eqs` add declarations and equations.
+std::string CornerBox(double y0, double e, const std::vector<std::pair<double, double>>& corners,
+                      const std::string& decls = "", const std::string& eqs = "") {
+  std::string d, q;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const std::string k = std::to_string(i + 1);
+    d += "  FixedTranslation c" + k + "(r = {" + Num(corners[i].first) + ", -0.05, " + Num(corners[i].second) + "});\n"
+         "  PlaneContact p" + k + "(restitution = " + Num(e) + ");\n";
+    q += "  connect(free.frame_b, c" + k + ".frame_a);\n  connect(c" + k + ".frame_b, p" + k + ".frame_a);\n";
+  }
+  return "model Box\n"
+         "  World world(g = {0, -9.81, 0});\n"
+         "  FreeMotion free(q(start = {0, " + Num(y0) + ", 0, 1, 0, 0, 0}));\n"
+         "  Body box(m = 1, I = diagonal({0.01, 0.02, 0.01}));\n" + d + decls +
+         "equation\n"
+         "  connect(world.frame_b, free.frame_a);\n"
+         "  connect(free.frame_b, box.frame_a);\n" + q + eqs +
+         "end Box;\n";
 }
+const std::vector<std::pair<double, double>> kFourCorners = {{0.1, 0.1}, {-0.1, 0.1}, {0.1, -0.1}, {-0.1, -0.1}};
 
 bool Has(const std::string& s, const char* part) { return s.find(part) != std::string::npos; }
 
@@ -246,27 +263,7 @@ TEST(PlaneContact, BarTumblesToRestOnBothEnds) {
 // impulse alone sets the box rocking (a second impact of it at 0.2965 s, -0.38 m/s, before
 // the fix) where the plastic landing stops it.
 TEST(PlaneContact, ABoxLandingFlatOnThreeCornersStopsAtOnce) {
-  const std::string text =
-      "model Tri\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  FreeMotion free(q(start = {0, 0.2, 0, 1, 0, 0, 0}));\n"
-      "  Body box(m = 1, I = diagonal({0.01, 0.02, 0.01}));\n"
-      "  FixedTranslation c1(r = {0.1, -0.05, 0.1});\n"
-      "  FixedTranslation c2(r = {-0.1, -0.05, 0.1});\n"
-      "  FixedTranslation c3(r = {0, -0.05, -0.1});\n"
-      "  PlaneContact p1;\n"
-      "  PlaneContact p2;\n"
-      "  PlaneContact p3;\n"
-      "equation\n"
-      "  connect(world.frame_b, free.frame_a);\n"
-      "  connect(free.frame_b, box.frame_a);\n"
-      "  connect(free.frame_b, c1.frame_a);\n"
-      "  connect(c1.frame_b, p1.frame_a);\n"
-      "  connect(free.frame_b, c2.frame_a);\n"
-      "  connect(c2.frame_b, p2.frame_a);\n"
-      "  connect(free.frame_b, c3.frame_a);\n"
-      "  connect(c3.frame_b, p3.frame_a);\n"
-      "end Tri;\n";
+  const std::string text = CornerBox(0.2, 0.0, {{0.1, 0.1}, {-0.1, 0.1}, {0, -0.1}});
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   const double t1 = std::sqrt(2 * 0.15 / kG);
@@ -295,6 +292,101 @@ TEST(PlaneContact, ABoxLandingFlatOnThreeCornersStopsAtOnce) {
   }
 }
 
+// The box on four corner contacts: four rows of rank three (a parallelogram's corners,
+// r1 - r2 - r3 + r4 = 0, give J1 - J2 - J3 + J4 = 0 in every pose), so the motion is
+// determined and the reactions are not; the least ones are taken (docs/events.md
+// "Redundant contacts"). Dropped level from 0.15 above the floor with e = 1/2, the four
+// strike together at the ball's closed-form times t_1 = sqrt(2 0.15 / g), t_{k+1} - t_k =
+// 2 e^k t_1, rebound e^k g t_1 each time, never tilting, and pass to rest at t_1 (1 + e) /
+// (1 - e); with e = 0 the first landing stops the box.
+// If this fails, dependent resting or striking contacts stop the run ("their rows are
+// dependent ... remove one of them", exit 2 at the first landing before this change), the
+// corners strike one after another (the box rocks), or the rest is not at the closed form.
+TEST(PlaneContact, ABoxOnFourCornersBouncesToRestAtTheClosedFormTimes) {
+  const double t1 = std::sqrt(2 * 0.15 / kG);
+  for (double e : {0.0, 0.5}) {
+    auto l = LoadModel(CornerBox(0.2, e, kFourCorners), {}, {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    const double t_inf = e > 0 ? t1 * (1 + e) / (1 - e) : t1;
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      sim::SimResult r;
+      sim::MemorySink s = RunWith(*l->prog, how, 1.0, 0.01,
+                                  {"free.q[2]", "free.u[4]", "free.u[5]", "free.u[6]", "free.u[2]"}, &r, kTol);
+      ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << " e = " << e << ": " << r.message;
+      std::vector<double> impacts[4];
+      int rests = 0;
+      double accumulates = 0;
+      for (const sim::EventRecord& ev : r.stats.events) {
+        ASSERT_EQ(ev.element.size(), 2u) << ev.element;
+        if (Has(ev.kind, "impact")) impacts[ev.element[1] - '1'].push_back(ev.time);
+        if (Has(ev.kind, "rests on")) ++rests;
+        if (const size_t at = ev.kind.find("accumulate at t = "); at != std::string::npos)
+          accumulates = std::stod(ev.kind.substr(at + 18));
+      }
+      EXPECT_EQ(rests, 4) << how.name << " e = " << e;
+      ASSERT_GE(impacts[0].size(), e > 0 ? 5u : 1u) << how.name;
+      double tk = t1;
+      for (size_t k = 0; k < 5 && k < impacts[0].size(); ++k) {
+        for (int c = 0; c < 4; ++c) {
+          ASSERT_GT(impacts[c].size(), k) << how.name << " corner " << c + 1;
+          EXPECT_NEAR(impacts[c][k], tk, Exact(how) ? 1e-9 : 1e-6) << how.name << " e = " << e << " impact " << k;
+        }
+        tk += 2 * std::pow(e, static_cast<double>(k + 1)) * t1;
+      }
+      if (e > 0) {
+        EXPECT_NEAR(accumulates, t_inf, Exact(how) ? 1e-9 : 1e-5 * t_inf) << how.name;  // (as the ball's)
+      }
+      for (size_t i = 0; i < s.rows.size(); ++i) {
+        EXPECT_GE(s.rows[i][0], 0.05 - 1e-9) << how.name << " t = " << s.times[i];  // no corner below the floor
+        for (size_t k : {1u, 2u, 3u})  // level: no turning (the angular speeds)
+          EXPECT_NEAR(s.rows[i][k], 0.0, 1e-10) << how.name << " t = " << s.times[i] << " u" << k;
+        if (s.times[i] > t_inf + 1e-6) {
+          EXPECT_NEAR(s.rows[i][4], 0.0, 1e-10) << how.name << " t = " << s.times[i];
+        }
+      }
+      EXPECT_NEAR(s.rows.back()[0], 0.05, 1e-9) << how.name;
+    }
+  }
+}
+
+// The box resting on its four corners, pushed along x by F = 10 t at 0.1 above its centre
+// of mass (a frictionless floor: it slides). Resting, it neither turns nor sinks, so the
+// moments about the centre balance: 0.1 (N_front - N_back) = 0.1 F, N_front + N_back = m g
+// (each the sum of a pair), and the back pair's reaction m g / 2 - F / 2 reaches zero at
+// t = m g / 10 = 0.981 s; there the back corners leave together and the box tips on its front
+// edge. If this fails, a box resting on four corners stops the run (exit 2 at t = 0 before
+// this change), leaves at another time (reactions not balancing the moments), or the pair
+// does not leave together.
+TEST(PlaneContact, ABoxOnFourCornersTipsWhenThePushUnloadsTheBackPair) {
+  auto l = LoadModel(CornerBox(0.05, 0.0, kFourCorners,
+                               "  FixedTranslation top(r = {0, 0.1, 0});\n  WorldForce push(force = {10 * time, 0, 0});\n",
+                               "  connect(free.frame_b, top.frame_a);\n  connect(top.frame_b, push.frame_b);\n"),
+                     {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  const double t_l = kG / 10;
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, 1.2, 0.01, {"c2.frame_b.r[2]", "c1.frame_b.r[2]", "free.u[6]"}, &r, 1e-10);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    std::vector<std::string> left;
+    for (const sim::EventRecord& ev : r.stats.events)
+      if (Has(ev.kind, "leaves")) {
+        left.push_back(ev.element);
+        EXPECT_NEAR(ev.time, t_l, 1e-8) << how.name << " " << ev.element;
+      }
+    EXPECT_EQ(left, (std::vector<std::string>{"p2", "p4"})) << how.name;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      EXPECT_GE(s.rows[i][1], -1e-9) << how.name << " t = " << s.times[i];
+      if (s.times[i] < t_l - 1e-6) {
+        EXPECT_NEAR(s.rows[i][0], 0.0, 1e-9) << how.name << " t = " << s.times[i];
+        EXPECT_NEAR(s.rows[i][2], 0.0, 1e-10) << how.name << " t = " << s.times[i];
+      }
+    }
+    EXPECT_GT(s.rows.back()[0], 1e-4) << how.name << ": the back corner rises";
+    EXPECT_NEAR(s.rows.back()[1], 0.0, 1e-8) << how.name << ": the front corner stays on the floor";
+  }
+}
+
 // A ball (m = 2) resting on the plane, pulled up by a force 4 t: the plane's reaction
 // m g - 4 t pushes until t_l = m g / 4, then the ball lifts off and rises by
 // y = (2/3)(t - t_l)^3 / m (from y'' = (4 t - m g) / m = 4 (t - t_l) / m).
@@ -320,6 +412,39 @@ TEST(PlaneContact, RestsUntilTheReactionWouldPullThenLiftsOff) {
       const double t = s.times[i];
       const double y = t < t_l ? 0.0 : (2.0 / 3.0) * std::pow(t - t_l, 3) / m;
       EXPECT_NEAR(s.rows[i][0], y, 1e-8) << how.name << " t = " << t;
+    }
+  }
+}
+
+// The ball of the test above on two coincident planes (n = (0, 1, 0) and (0, 2, 0), which
+// normalizes to the same): two dependent rows. They share the reaction, (m g - 4 t) / 2 each,
+// which reaches 0 for both at once: both leave at t_l = m g / 4 and the ball rises as on
+// one plane. If this fails, the pair is refused (exit 1 at the start: "their rows are
+// dependent", before this change), or one plane keeps holding the ball after the other
+// left (its share is 0 exactly at the crossing and never crosses again: the ball stays on
+// the floor).
+TEST(PlaneContact, TwoCoincidentPlanesShareTheLoadAndLeaveTogether) {
+  const double m = 2, t_l = m * kG / 4;
+  std::string text = Ball(0.0, 0.0);
+  text.replace(text.find("equation\n"), 9,
+               "  PlaneContact twin(n = {0, 2, 0});\n  WorldForce pull(force = {0, 4 * time, 0});\nequation\n"
+               "  connect(lift.frame_b, pull.frame_b);\n  connect(lift.frame_b, twin.frame_a);\n");
+  auto l = LoadModel(text, {}, {}, true);
+  ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+  for (const IntegratorChoice& how : AllIntegrators()) {
+    sim::SimResult r;
+    sim::MemorySink s = RunWith(*l->prog, how, t_l + 1.0, 0.05, {"lift.q"}, &r, kTol);
+    ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
+    std::vector<std::string> left;
+    for (const sim::EventRecord& ev : r.stats.events)
+      if (Has(ev.kind, "leaves")) {
+        left.push_back(ev.element);
+        EXPECT_NEAR(ev.time, t_l, 1e-9) << how.name << " " << ev.element;
+      }
+    EXPECT_EQ(left.size(), 2u) << how.name;
+    for (size_t i = 0; i < s.rows.size(); ++i) {
+      const double rise = s.times[i] > t_l ? (2.0 / 3.0) * std::pow(s.times[i] - t_l, 3) / m : 0.0;
+      EXPECT_NEAR(s.rows[i][0], rise, 1e-8) << how.name << " t = " << s.times[i];
     }
   }
 }

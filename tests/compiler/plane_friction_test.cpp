@@ -18,53 +18,20 @@
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
 
-constexpr double kMc = 2.0, kMl = 0.5, kL = 1.0, kPhi = 0.6, kG = 9.81, kMu = 0.3;
+constexpr double kMc = CarriageLegText::kMc, kMl = CarriageLegText::kMl, kL = CarriageLegText::kL;
+constexpr double kPhi = CarriageLegText::kPhi, kMu = CarriageLegText::kMu, kG = 9.81;
 const double kCot = 1.0 / std::tan(kPhi);
 
 std::string Leg(double g, double uc0, double q0, double w0, double e, const std::string& law, const std::string& drive) {
-  return "model L\n"
-         "  World world(g = {0, " + Num(-g) + ", 0});\n"
-         "  Prismatic cx(axis = {1, 0, 0}, u(start = " + Num(uc0) + "), mu = " + Num(kMu) + law + ");\n"
-         "  Body carriage(m = " + Num(kMc) + ");\n"
-         "  Revolute leg(axis = {0, 0, 1}, q(start = " + Num(q0) + "), u(start = " + Num(w0) + "));\n"
-         "  FixedTranslation rod(r = {0, " + Num(-kL) + ", 0});\n"
-         "  Body tip(m = " + Num(kMl) + ");\n"
-         "  PlaneContact foot(n = {0, 1, 0}, d = " + Num(-kL * std::cos(kPhi)) + ", restitution = " + Num(e) + ");\n"
-         "equation\n"
-         "  connect(world.frame_b, cx.frame_a);\n"
-         "  connect(cx.frame_b, carriage.frame_a);\n"
-         "  connect(carriage.frame_a, leg.frame_a);\n"
-         "  connect(leg.frame_b, rod.frame_a);\n"
-         "  connect(rod.frame_b, tip.frame_a);\n"
-         "  connect(rod.frame_b, foot.frame_a);\n" +
-         drive + "end L;\n";
+  return CarriageLegText{.g = g, .uc0 = uc0, .q0 = q0, .w0 = w0, .e = e, .law = law, .equations = drive}.Text();
 }
 
 const std::vector<std::string> kLaws = {", friction_v = 1e-9", ", friction_exact = true"};
-
-// The root of f in [a, b] (f(a), f(b) of opposite signs) by bisection to round-off.
-template <class F>
-double Root(F f, double a, double b) {
-  const bool up = f(a) < 0.0;
-  for (int i = 0; i < 200 && b - a > 0.0; ++i) {
-    const double m = 0.5 * (a + b);
-    if ((f(m) < 0.0) == up) a = m;
-    else b = m;
-  }
-  return 0.5 * (a + b);
-}
-
-// The events of element `who` whose kind starts with `kind`.
-std::vector<double> Times(const sim::SimResult& r, const std::string& who, const std::string& kind) {
-  std::vector<double> t;
-  for (const sim::EventRecord& e : r.stats.events)
-    if (e.element == who && e.kind.rfind(kind, 0) == 0) t.push_back(e.time);
-  return t;
-}
 
 // If this fails, the floor's force is left out of the rail's normal force (the leg's weight
 // counted in N: a bound mu (m_c + m_l) g, a later slip), or the acceleration's share of N
@@ -75,9 +42,9 @@ TEST(PlaneFriction, DrivenCarriageSticksAndSlipsAtTheHandTimes) {
   auto bracket = [&](double ta, double s) {
     return [=](double t) { return F0 * (std::cos(w * ta) - std::cos(w * t)) / w - s * c * (t - ta); };  // (2)
   };
-  const double t2 = Root(bracket(t1, 1.0), t1 + 0.5, t1 + 1.0);  // stops (F(t2) within the bound: sticks)
-  const double t3 = (M_PI + std::asin(c / F0)) / w;             // F reaches -mu m_c g: slips backwards
-  const double t4 = Root(bracket(t3, -1.0), t3 + 0.5, t3 + 1.0);
+  const double t2 = Bisect(bracket(t1, 1.0), t1 + 0.5, t1 + 1.0);  // stops (F(t2) within the bound: sticks)
+  const double t3 = (M_PI + std::asin(c / F0)) / w;               // F reaches -mu m_c g: slips backwards
+  const double t4 = Bisect(bracket(t3, -1.0), t3 + 0.5, t3 + 1.0);
   ASSERT_LT(std::abs(F0 * std::sin(w * t2)), c);
   ASSERT_LT(std::abs(F0 * std::sin(w * t4)), c);
   auto speed = [&](double t) {  // (1) integrated
@@ -92,9 +59,9 @@ TEST(PlaneFriction, DrivenCarriageSticksAndSlipsAtTheHandTimes) {
     sim::SimResult r;
     const sim::MemorySink s = RunWith(*l->prog, how, 2.3, 0.05, {"cx.u", "leg.q"}, &r, 1e-11);
     ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << how.name << ": " << r.message;
-    const std::vector<double> slips = Times(r, "cx", "slips");
+    const std::vector<double> slips = EventTimes(r, "cx", "slips");
     std::vector<double> sticks;  // (after the start's)
-    for (double t : Times(r, "cx", "sticks"))
+    for (double t : EventTimes(r, "cx", "sticks"))
       if (t > 0.1) sticks.push_back(t);
     ASSERT_EQ(slips.size(), 2u) << how.name;
     ASSERT_EQ(sticks.size(), 2u) << how.name;
@@ -102,7 +69,7 @@ TEST(PlaneFriction, DrivenCarriageSticksAndSlipsAtTheHandTimes) {
     EXPECT_NEAR(sticks[0], t2, 1e-8) << how.name;
     EXPECT_NEAR(slips[1], t3, 1e-8) << how.name;
     EXPECT_NEAR(sticks[1], t4, 1e-8) << how.name;
-    EXPECT_TRUE(Times(r, "foot", "leaves").empty()) << how.name;
+    EXPECT_TRUE(EventTimes(r, "foot", "leaves").empty()) << how.name;
     for (size_t i = 0; i < s.times.size(); ++i) {
       // (the start 1e-12 above the floor: the tip lands at 1e-6 s with a tiny impact, whose
       // friction impulse moves the carriage by ~1e-7 until it sticks again)
@@ -112,12 +79,6 @@ TEST(PlaneFriction, DrivenCarriageSticksAndSlipsAtTheHandTimes) {
       EXPECT_NEAR(s.rows[i][1], kPhi, 1e-9) << how.name << " t = " << s.times[i];
     }
   }
-}
-
-double Change(const sim::EventRecord& e, const std::string& name, bool after) {
-  for (const sim::EventChange& c : e.changes)
-    if (c.name == name) return after ? c.after : c.before;
-  return NAN;
 }
 
 // If this fails, the floor's force is not in the rail's normal force (the speeds off (1)), or
@@ -138,18 +99,18 @@ TEST(PlaneFriction, TipLiftsOffWhereTheFloorsForceVanishes) {
       // Resting from the landing (t_r, u_r: the start 1e-12 above the floor, a tiny impact at
       // t_r ~ 1e-6 s): (1) integrated.
       ASSERT_FALSE(r.stats.events.empty()) << who;
-      const double t_r = r.stats.events[0].time, u_r = Change(r.stats.events[0], "cx.u", true);
+      const double t_r = r.stats.events[0].time, u_r = ChangeOf(r.stats.events[0], "cx.u", true);
       ASSERT_LT(t_r, 1e-4) << who;
       for (size_t i = 0; i < s.times.size(); ++i)
         if (s.times[i] > t_r && s.times[i] <= t_lift) {
           const double t = s.times[i];
           EXPECT_NEAR(s.rows[i][0], u_r + (-0.5 * k * (t * t - t_r * t_r) - c * (t - t_r)) / D, 1e-8) << who << " t = " << t;
         }
-      const std::vector<double> leaves = Times(r, "foot", "leaves");
+      const std::vector<double> leaves = EventTimes(r, "foot", "leaves");
       ASSERT_EQ(leaves.size(), 1u) << who;
       EXPECT_NEAR(leaves[0], t_lift, 1e-8) << who;
-      ASSERT_FALSE(Times(r, "foot", "rests").empty()) << who;
-      EXPECT_LT(Times(r, "foot", "rests")[0], 1e-4) << who;
+      ASSERT_FALSE(EventTimes(r, "foot", "rests").empty()) << who;
+      EXPECT_LT(EventTimes(r, "foot", "rests")[0], 1e-4) << who;
     }
 }
 
@@ -179,12 +140,12 @@ TEST(PlaneFriction, ImpactOfTheTipSlowsTheCarriageByTheFrictionImpulse) {
         ASSERT_FALSE(r.stats.events.empty()) << who;
         const sim::EventRecord& ev = r.stats.events[0];
         ASSERT_EQ(ev.element, "foot") << who << ": " << ev.kind;
-        const double u = Change(ev, "cx.u", false), qd = Change(ev, "leg.u", false);
+        const double u = ChangeOf(ev, "cx.u", false), qd = ChangeOf(ev, "leg.u", false);
         const double wq = -(1.0 + e) * qd, M = kMc + kMl;
         const double Pf = -kMu * kMl * kMc * wq * kL * std::cos(kPhi) * kCot / (M + kMu * kMl * kCot);
-        EXPECT_NEAR(Change(ev, "leg.u", true), -e * qd, 1e-9) << who;
-        EXPECT_NEAR(Change(ev, "cx.u", true), u + (Pf - kMl * wq * kL * std::cos(kPhi)) / M, 1e-9) << who;
-        EXPECT_LT(Kinetic(Change(ev, "cx.u", true), Change(ev, "leg.u", true)), Kinetic(u, qd)) << who;
+        EXPECT_NEAR(ChangeOf(ev, "leg.u", true), -e * qd, 1e-9) << who;
+        EXPECT_NEAR(ChangeOf(ev, "cx.u", true), u + (Pf - kMl * wq * kL * std::cos(kPhi)) / M, 1e-9) << who;
+        EXPECT_LT(Kinetic(ChangeOf(ev, "cx.u", true), ChangeOf(ev, "leg.u", true)), Kinetic(u, qd)) << who;
         size_t i = 0;  // the event's rows: energy never rises
         while (i + 1 < s.times.size() && s.times[i] != s.times[i + 1]) ++i;
         ASSERT_LT(i + 1, s.times.size()) << who;

@@ -26,11 +26,13 @@
 #include <vector>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
 
-constexpr double kMc = 2.0, kMl = 0.5, kM2 = 0.8, kL = 1.0, kPhi = 0.6, kG = 9.81, kMu = 0.3;
+constexpr double kMc = CarriageLegText::kMc, kMl = CarriageLegText::kMl, kL = CarriageLegText::kL;
+constexpr double kPhi = CarriageLegText::kPhi, kMu = CarriageLegText::kMu, kM2 = 0.8, kG = 9.81;
 const double kCot = 1.0 / std::tan(kPhi);
 
 constexpr double kMw = 0.6, kIw = 0.009, kRw = 0.3;  // the rolling wheel: mass, inertia, radius
@@ -49,93 +51,34 @@ const std::vector<Tie> kTies = {{"loop", 1.0}, {"coupling", -0.5}, {"rolling", 1
 // the force on px as a function of time.
 std::string Carriage(const Tie& tie, double g, double uc0, double q0, double w0, double e, const std::string& law,
                      const std::string& drive) {
+  CarriageLegText text{.model = "C", .g = g, .uc0 = uc0, .q0 = q0, .w0 = w0, .e = e, .law = law};
+  if (tie.name == "rolling") {
+    text.decls = "  Prismatic wy(axis = {0, 1, 0});\n"
+                 "  Revolute spin(axis = {0, 0, 1}, u(start = " + Num(-uc0 / kRw) + "));\n"
+                 "  Body wheel(m = " + Num(kMw) + ", I = {{" + Num(kIw) + ", 0, 0}, {0, " + Num(kIw) + ", 0}, {0, 0, " + Num(kIw) + "}});\n"
+                 "  RollingDisk roll(radius = " + Num(kRw) + ", axis = {0, 0, 1}, n = {0, 1, 0}, p = {0, " + Num(-kRw) + ", 0});\n";
+    text.equations = "  connect(carriage.frame_a, wy.frame_a);\n"
+                     "  connect(wy.frame_b, spin.frame_a);\n"
+                     "  connect(spin.frame_b, wheel.frame_a);\n"
+                     "  connect(spin.frame_b, roll.frame_a);\n"
+                     "  cx.tau = " + drive + ";\n";
+    return text.Text();
+  }
   const bool loop = tie.name == "loop";
-  if (tie.name == "rolling")
-    return "model C\n"
-           "  World world(g = {0, " + Num(-g) + ", 0});\n"
-           "  Prismatic cx(axis = {1, 0, 0}, u(start = " + Num(uc0) + "), mu = " + Num(kMu) + law + ");\n"
-           "  Body carriage(m = " + Num(kMc) + ");\n"
-           "  Revolute leg(axis = {0, 0, 1}, q(start = " + Num(q0) + "), u(start = " + Num(w0) + "));\n"
-           "  FixedTranslation rod(r = {0, " + Num(-kL) + ", 0});\n"
-           "  Body tip(m = " + Num(kMl) + ");\n"
-           "  PlaneContact foot(n = {0, 1, 0}, d = " + Num(-kL * std::cos(kPhi)) + ", restitution = " + Num(e) + ");\n"
-           "  Prismatic wy(axis = {0, 1, 0});\n"
-           "  Revolute spin(axis = {0, 0, 1}, u(start = " + Num(-uc0 / kRw) + "));\n"
-           "  Body wheel(m = " + Num(kMw) + ", I = {{" + Num(kIw) + ", 0, 0}, {0, " + Num(kIw) + ", 0}, {0, 0, " + Num(kIw) + "}});\n"
-           "  RollingDisk roll(radius = " + Num(kRw) + ", axis = {0, 0, 1}, n = {0, 1, 0}, p = {0, " + Num(-kRw) + ", 0});\n"
-           "equation\n"
-           "  connect(world.frame_b, cx.frame_a);\n"
-           "  connect(cx.frame_b, carriage.frame_a);\n"
-           "  connect(carriage.frame_a, leg.frame_a);\n"
-           "  connect(leg.frame_b, rod.frame_a);\n"
-           "  connect(rod.frame_b, tip.frame_a);\n"
-           "  connect(rod.frame_b, foot.frame_a);\n"
-           "  connect(carriage.frame_a, wy.frame_a);\n"
-           "  connect(wy.frame_b, spin.frame_a);\n"
-           "  connect(spin.frame_b, wheel.frame_a);\n"
-           "  connect(spin.frame_b, roll.frame_a);\n"
-           "  cx.tau = " + drive + ";\n"
-           "end C;\n";
-  return "model C\n"
-         "  World world(g = {0, " + Num(-g) + ", 0});\n"
-         "  Prismatic cx(axis = {1, 0, 0}, u(start = " + Num(uc0) + "), mu = " + Num(kMu) + law + ");\n"
-         "  Body carriage(m = " + Num(kMc) + ");\n"
-         "  Revolute leg(axis = {0, 0, 1}, q(start = " + Num(q0) + "), u(start = " + Num(w0) + "));\n"
-         "  FixedTranslation rod(r = {0, " + Num(-kL) + ", 0});\n"
-         "  Body tip(m = " + Num(kMl) + ");\n"
-         "  PlaneContact foot(n = {0, 1, 0}, d = " + Num(-kL * std::cos(kPhi)) + ", restitution = " + Num(e) + ");\n"
-         "  FixedTranslation base(r = {0, 2, " + (loop ? "0" : "1") + "});\n"
-         "  Prismatic px(axis = {1, 0, 0}, u(start = " + Num(uc0 / tie.r) + "));\n"
-         "  Body slider(m = " + Num(kM2) + ");\n" +
-         (loop ? "  Prismatic link(axis = {0, 1, 0}, cut = true);\n" : "  JointCoupling gear(ratio = " + Num(tie.r) + ");\n") +
-         "equation\n"
-         "  connect(world.frame_b, cx.frame_a);\n"
-         "  connect(cx.frame_b, carriage.frame_a);\n"
-         "  connect(carriage.frame_a, leg.frame_a);\n"
-         "  connect(leg.frame_b, rod.frame_a);\n"
-         "  connect(rod.frame_b, tip.frame_a);\n"
-         "  connect(rod.frame_b, foot.frame_a);\n"
-         "  connect(world.frame_b, base.frame_a);\n"
-         "  connect(base.frame_b, px.frame_a);\n"
-         "  connect(px.frame_b, slider.frame_a);\n" +
-         (loop ? "  connect(slider.frame_a, link.frame_a);\n  connect(carriage.frame_a, link.frame_b);\n"
-               : "  connect(px.drive, gear.flange_a);\n  connect(cx.drive, gear.flange_b);\n") +
-         "  px.tau = " + Num(tie.r) + " * (" + drive + ");\n"
-         "end C;\n";
+  text.decls = "  FixedTranslation base(r = {0, 2, " + std::string(loop ? "0" : "1") + "});\n"
+               "  Prismatic px(axis = {1, 0, 0}, u(start = " + Num(uc0 / tie.r) + "));\n"
+               "  Body slider(m = " + Num(kM2) + ");\n" +
+               (loop ? "  Prismatic link(axis = {0, 1, 0}, cut = true);\n" : "  JointCoupling gear(ratio = " + Num(tie.r) + ");\n");
+  text.equations = "  connect(world.frame_b, base.frame_a);\n"
+                   "  connect(base.frame_b, px.frame_a);\n"
+                   "  connect(px.frame_b, slider.frame_a);\n" +
+                   std::string(loop ? "  connect(slider.frame_a, link.frame_a);\n  connect(carriage.frame_a, link.frame_b);\n"
+                                    : "  connect(px.drive, gear.flange_a);\n  connect(cx.drive, gear.flange_b);\n") +
+                   "  px.tau = " + Num(tie.r) + " * (" + drive + ");\n";
+  return text.Text();
 }
 
 const std::vector<std::string> kLaws = {", friction_v = 1e-9", ", friction_exact = true"};
-
-// The root of f in [a, b] (f(a), f(b) of opposite signs) by bisection to round-off.
-template <class F>
-double Root(F f, double a, double b) {
-  const bool up = f(a) < 0.0;
-  for (int i = 0; i < 200 && b - a > 0.0; ++i) {
-    const double m = 0.5 * (a + b);
-    if ((f(m) < 0.0) == up) a = m;
-    else b = m;
-  }
-  return 0.5 * (a + b);
-}
-
-std::vector<double> Times(const sim::SimResult& r, const std::string& who, const std::string& kind) {
-  std::vector<double> t;
-  for (const sim::EventRecord& e : r.stats.events)
-    if (e.element == who && e.kind.rfind(kind, 0) == 0) t.push_back(e.time);
-  return t;
-}
-
-std::string Log(const sim::SimResult& r) {
-  std::string log;
-  for (const sim::EventRecord& e : r.stats.events) log += Num(e.time) + " " + e.element + " " + e.kind + "\n";
-  return log;
-}
-
-double Change(const sim::EventRecord& e, const std::string& name, bool after) {
-  for (const sim::EventChange& c : e.changes)
-    if (c.name == name) return after ? c.after : c.before;
-  return NAN;
-}
 
 // If this fails, plane contacts beside mu with constraint rows are refused (K311, before this
 // change), the floor's force is left out of the rail's normal force beside the rows (a bound
@@ -147,9 +90,9 @@ TEST(PlaneLoopFriction, DrivenCarriageSticksAndSlipsAtTheHandTimes) {
   auto bracket = [&](double ta, double s) {
     return [=](double t) { return F0 * (std::cos(w * ta) - std::cos(w * t)) / w - s * c * (t - ta); };  // (2)
   };
-  const double t2 = Root(bracket(t1, 1.0), t1 + 0.5, t1 + 1.0);  // stops (F_e(t2) within the bound: sticks)
-  const double t3 = (M_PI + std::asin(c / F0)) / w;             // F_e reaches -mu m_c g: slips backwards
-  const double t4 = Root(bracket(t3, -1.0), t3 + 0.5, t3 + 1.0);
+  const double t2 = Bisect(bracket(t1, 1.0), t1 + 0.5, t1 + 1.0);  // stops (F_e(t2) within the bound: sticks)
+  const double t3 = (M_PI + std::asin(c / F0)) / w;               // F_e reaches -mu m_c g: slips backwards
+  const double t4 = Bisect(bracket(t3, -1.0), t3 + 0.5, t3 + 1.0);
   ASSERT_LT(std::abs(F0 * std::sin(w * t2)), c);
   ASSERT_LT(std::abs(F0 * std::sin(w * t4)), c);
   const std::string drive = Num(F0) + " * sin(" + Num(w) + " * time)";
@@ -166,17 +109,17 @@ TEST(PlaneLoopFriction, DrivenCarriageSticksAndSlipsAtTheHandTimes) {
       sim::SimResult r;
       const sim::MemorySink s = RunWith(*l->prog, how, 2.3, 0.05, {"cx.u", "leg.q", tie.Other()}, &r, 1e-11);
       ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << who << ": " << r.message;
-      const std::vector<double> slips = Times(r, "cx", "slips");
+      const std::vector<double> slips = EventTimes(r, "cx", "slips");
       std::vector<double> sticks;  // (after the start's)
-      for (double t : Times(r, "cx", "sticks"))
+      for (double t : EventTimes(r, "cx", "sticks"))
         if (t > 0.1) sticks.push_back(t);
-      ASSERT_EQ(slips.size(), 2u) << who << "\n" << Log(r);
-      ASSERT_EQ(sticks.size(), 2u) << who << "\n" << Log(r);
+      ASSERT_EQ(slips.size(), 2u) << who << "\n" << EventLog(r);
+      ASSERT_EQ(sticks.size(), 2u) << who << "\n" << EventLog(r);
       EXPECT_NEAR(slips[0], t1, 1e-8) << who;
       EXPECT_NEAR(sticks[0], t2, 1e-8) << who;
       EXPECT_NEAR(slips[1], t3, 1e-8) << who;
       EXPECT_NEAR(sticks[1], t4, 1e-8) << who;
-      EXPECT_TRUE(Times(r, "foot", "leaves").empty()) << who << "\n" << Log(r);
+      EXPECT_TRUE(EventTimes(r, "foot", "leaves").empty()) << who << "\n" << EventLog(r);
       for (size_t i = 0; i < s.times.size(); ++i) {
         // (the start 1e-12 above the floor: a tiny landing impact at ~1e-6 s)
         if (s.times[i] > 1e-3) {
@@ -208,18 +151,18 @@ TEST(PlaneLoopFriction, TipLiftsOffWhereTheFloorsForceVanishes) {
         const sim::MemorySink s = RunWith(*l->prog, how, t_lift + 0.02, 0.05, {"cx.u"}, &r, 1e-11);
         ASSERT_EQ(r.status, sim::SimResult::Status::kOk) << who << ": " << r.message;
         ASSERT_FALSE(r.stats.events.empty()) << who;
-        const double t_r = r.stats.events[0].time, u_r = Change(r.stats.events[0], "cx.u", true);
+        const double t_r = r.stats.events[0].time, u_r = ChangeOf(r.stats.events[0], "cx.u", true);
         ASSERT_LT(t_r, 1e-4) << who;
         for (size_t i = 0; i < s.times.size(); ++i)
           if (s.times[i] > t_r && s.times[i] <= t_lift) {
             const double t = s.times[i];
             EXPECT_NEAR(s.rows[i][0], u_r + (-0.5 * k * (t * t - t_r * t_r) - c * (t - t_r)) / D, 1e-8) << who << " t = " << t;
           }
-        const std::vector<double> leaves = Times(r, "foot", "leaves");
-        ASSERT_EQ(leaves.size(), 1u) << who << "\n" << Log(r);
+        const std::vector<double> leaves = EventTimes(r, "foot", "leaves");
+        ASSERT_EQ(leaves.size(), 1u) << who << "\n" << EventLog(r);
         EXPECT_NEAR(leaves[0], t_lift, 1e-8) << who;
-        ASSERT_FALSE(Times(r, "foot", "rests").empty()) << who;
-        EXPECT_LT(Times(r, "foot", "rests")[0], 1e-4) << who;
+        ASSERT_FALSE(EventTimes(r, "foot", "rests").empty()) << who;
+        EXPECT_LT(EventTimes(r, "foot", "rests")[0], 1e-4) << who;
       }
     }
   }
@@ -249,12 +192,12 @@ TEST(PlaneLoopFriction, ImpactOfTheTipSlowsTheCarriageByTheFrictionImpulse) {
         ASSERT_FALSE(r.stats.events.empty()) << who;
         const sim::EventRecord& ev = r.stats.events[0];
         ASSERT_EQ(ev.element, "foot") << who << ": " << ev.kind;
-        const double u = Change(ev, "cx.u", false), qd = Change(ev, "leg.u", false);
+        const double u = ChangeOf(ev, "cx.u", false), qd = ChangeOf(ev, "leg.u", false);
         const double wq = -(1.0 + e) * qd, M = kMc + tie.Me() + kMl;
         const double Pf = -kMu * kMl * (kMc + tie.Me()) * wq * kL * std::cos(kPhi) * kCot / (M + kMu * kMl * kCot);
-        EXPECT_NEAR(Change(ev, "leg.u", true), -e * qd, 1e-9) << who;
-        EXPECT_NEAR(Change(ev, "cx.u", true), u + (Pf - kMl * wq * kL * std::cos(kPhi)) / M, 1e-9) << who;
-        EXPECT_NEAR(tie.K() * Change(ev, tie.Other(), true), Change(ev, "cx.u", true), 1e-9) << who;
+        EXPECT_NEAR(ChangeOf(ev, "leg.u", true), -e * qd, 1e-9) << who;
+        EXPECT_NEAR(ChangeOf(ev, "cx.u", true), u + (Pf - kMl * wq * kL * std::cos(kPhi)) / M, 1e-9) << who;
+        EXPECT_NEAR(tie.K() * ChangeOf(ev, tie.Other(), true), ChangeOf(ev, "cx.u", true), 1e-9) << who;
         size_t i = 0;  // the event's rows: energy never rises
         while (i + 1 < s.times.size() && s.times[i] != s.times[i + 1]) ++i;
         ASSERT_LT(i + 1, s.times.size()) << who;
@@ -304,14 +247,14 @@ TEST(PlaneLoopFriction, FourBarRestsOnTheWallWithBothPivotsHeldThroughTheLoop) {
     sim::SimResult ra, rb;
     const sim::MemorySink sa = RunWith(*a->prog, how, 1.5, 0.05, sig, &ra, 1e-11);
     RunWith(*b->prog, how, 1.5, 0.05, sig, &rb, 1e-11);
-    ASSERT_EQ(ra.status, sim::SimResult::Status::kOk) << who << ": " << ra.message << "\n" << Log(ra);
+    ASSERT_EQ(ra.status, sim::SimResult::Status::kOk) << who << ": " << ra.message << "\n" << EventLog(ra);
     ASSERT_EQ(rb.status, sim::SimResult::Status::kOk) << who << ": " << rb.message;
-    const std::vector<double> impacts = Times(ra, "wall", "impact"), stops = Times(rb, "rocker_pivot", "impact");
-    ASSERT_EQ(impacts.size(), 1u) << who << "\n" << Log(ra);
-    ASSERT_EQ(stops.size(), 1u) << who << "\n" << Log(rb);
+    const std::vector<double> impacts = EventTimes(ra, "wall", "impact"), stops = EventTimes(rb, "rocker_pivot", "impact");
+    ASSERT_EQ(impacts.size(), 1u) << who << "\n" << EventLog(ra);
+    ASSERT_EQ(stops.size(), 1u) << who << "\n" << EventLog(rb);
     EXPECT_NEAR(impacts[0], stops[0], 1e-9) << who;
-    ASSERT_EQ(Times(ra, "wall", "rests").size(), 1u) << who << "\n" << Log(ra);
-    EXPECT_TRUE(Times(ra, "wall", "leaves").empty()) << who << "\n" << Log(ra);
+    ASSERT_EQ(EventTimes(ra, "wall", "rests").size(), 1u) << who << "\n" << EventLog(ra);
+    EXPECT_TRUE(EventTimes(ra, "wall", "leaves").empty()) << who << "\n" << EventLog(ra);
     for (size_t i = 0; i < sa.times.size(); ++i)
       if (sa.times[i] > impacts[0]) {
         EXPECT_LE(std::abs(sa.rows[i][0]), 1e-10) << who << " t = " << sa.times[i];

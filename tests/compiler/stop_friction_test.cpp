@@ -15,27 +15,22 @@
 #include <string>
 
 #include "tests/compiler/compile_test_util.h"
+#include "tests/support/model_texts.h"
 
 namespace kanesim::test {
 namespace {
 
-constexpr double kTh = 0.9, kMc = 2.0, kMs = 0.5, kMu = 0.3, kG = 9.81;
+constexpr double kTh = 0.9, kMc = CarrierSliderText::kMc, kMs = CarrierSliderText::kMs, kMu = 0.3, kG = 9.81;
 
 std::string Carrier(double g, double q0, double uc0, double us0, double e, const std::string& friction) {
-  return "model C\n"
-         "  World world(g = {0, " + Num(-g) + ", 0});\n"
-         "  Prismatic cx(axis = {1, 0, 0}, q_max = 0.1, restitution = " + Num(e) + ", q(start = " + Num(q0) +
-         "), u(start = " + Num(uc0) + "));\n"
-         "  Body carrier(m = " + Num(kMc) + ");\n"
-         "  Prismatic s(axis = {cos(" + Num(kTh) + "), sin(" + Num(kTh) + "), 0}, u(start = " + Num(us0) +
-         "), mu = " + Num(kMu) + friction + ");\n"
-         "  Body slider(m = " + Num(kMs) + ");\n"
-         "equation\n"
-         "  connect(world.frame_b, cx.frame_a);\n"
-         "  connect(cx.frame_b, carrier.frame_a);\n"
-         "  connect(carrier.frame_a, s.frame_a);\n"
-         "  connect(s.frame_b, slider.frame_a);\n"
-         "end C;\n";
+  return CarrierSliderText{.gy = Num(-g),
+                           .cx_mods = ", q_max = 0.1, restitution = " + Num(e) + ", q(start = " + Num(q0) +
+                                      "), u(start = " + Num(uc0) + ")",
+                           .th = kTh,
+                           .mu = kMu,
+                           .us0 = us0,
+                           .friction = friction}
+      .Text();
 }
 
 const std::vector<std::string> kSignals = {"cx.q", "cx.u", "s.u", "kinetic_energy"};

@@ -21,14 +21,6 @@ constexpr double kG = 9.81;
 const double kHalfPi = std::acos(0.0);
 const double kW = std::sqrt(1.5 * kG);  // the rod pendulum's w^2 = 3 g / (2 L), L = 1
 
-// The pairs of rows at one time (an event's left and right limits): index of the left row.
-std::vector<size_t> EventRows(const sim::MemorySink& s) {
-  std::vector<size_t> at;
-  for (size_t i = 0; i + 1 < s.times.size(); ++i)
-    if (s.times[i] == s.times[i + 1]) at.push_back(i);
-  return at;
-}
-
 // A point mass on a vertical slider dropped from h; `body` the when clauses.
 std::string Ball(double h, const std::string& body) {
   return "model Ball\n"

@@ -19,25 +19,17 @@
 namespace kanesim::test {
 namespace {
 
-constexpr double kTh = 0.6, kMc = 2.0, kMs = 0.5, kMu = 0.4;
+constexpr double kTh = 0.6, kMc = CarrierSliderText::kMc, kMs = CarrierSliderText::kMs, kMu = 0.4;
 
 std::string Slider(double uc0, double us0, const std::string& value, const std::string& friction = "") {
-  return "model S\n"
-         "  World world(g = {0, 0, 0});\n"
-         "  Prismatic cx(axis = {1, 0, 0}, u(start = " + Num(uc0) + "));\n"
-         "  Body carrier(m = " + Num(kMc) + ");\n"
-         "  Prismatic s(axis = {cos(" + Num(kTh) + "), sin(" + Num(kTh) + "), 0}, u(start = " + Num(us0) +
-         "), mu = " + Num(kMu) + friction + ");\n"
-         "  Body slider(m = " + Num(kMs) + ");\n"
-         "equation\n"
-         "  connect(world.frame_b, cx.frame_a);\n"
-         "  connect(cx.frame_b, carrier.frame_a);\n"
-         "  connect(carrier.frame_a, s.frame_a);\n"
-         "  connect(s.frame_b, slider.frame_a);\n"
-         "  when time > 0.1 then\n"
-         "    reinit(cx.u, " + value + ");\n"
-         "  end when;\n"
-         "end S;\n";
+  return CarrierSliderText{.model = "S",
+                           .cx_mods = ", u(start = " + Num(uc0) + ")",
+                           .th = kTh,
+                           .mu = kMu,
+                           .us0 = us0,
+                           .friction = friction,
+                           .equations = "  when time > 0.1 then\n    reinit(cx.u, " + value + ");\n  end when;\n"}
+      .Text();
 }
 
 // Speed `name` before or after the run's one event (its record; unchanged: `fallback`).
@@ -175,6 +167,36 @@ TEST(WhenFriction, MassesOfVeryDifferentScalesKeepTheClosedForm) {
   }
 }
 
+// The rail of the two tests below: a carrier (m_c) on a prismatic joint `rail` along x with
+// friction mu, moving at U, carrying point masses A (m_A at l_A, angle a) and B (m_B at l_B,
+// angle b) on hinges ha, hb about z; no gravity; A's rate set to W at t = 0.1. `hb_mods`
+// follow B's start angle, `equations` the six connects.
+struct Rail {
+  double mc, mA, lA, mB, lB, a, b, mu;
+};
+std::string RailText(const Rail& p, double U, double W, const std::string& hb_mods, const std::string& equations) {
+  return "model R\n"
+         "  World world(g = {0, 0, 0});\n"
+         "  Prismatic rail(axis = {1, 0, 0}, u(start = " + Num(U) + "), mu = " + Num(p.mu) + ");\n"
+         "  Body carrier(m = " + Num(p.mc) + ");\n"
+         "  Revolute ha(axis = {0, 0, 1}, q(start = " + Num(p.a) + "));\n"
+         "  Body pa(m = " + Num(p.mA) + ", r_CM = {" + Num(p.lA) + ", 0, 0});\n"
+         "  Revolute hb(axis = {0, 0, 1}, q(start = " + Num(p.b) + ")" + hb_mods + ");\n"
+         "  Body pb(m = " + Num(p.mB) + ", r_CM = {" + Num(p.lB) + ", 0, 0});\n"
+         "equation\n"
+         "  connect(world.frame_b, rail.frame_a);\n"
+         "  connect(rail.frame_b, carrier.frame_a);\n"
+         "  connect(carrier.frame_a, ha.frame_a);\n"
+         "  connect(ha.frame_b, pa.frame_a);\n"
+         "  connect(carrier.frame_a, hb.frame_a);\n"
+         "  connect(hb.frame_b, pb.frame_a);\n" +
+         equations +
+         "  when time > 0.1 then\n"
+         "    reinit(ha.u, " + Num(W) + ");\n"
+         "  end when;\n"
+         "end R;\n";
+}
+
 // A carrier (m_c) on an x rail with friction mu carries two point masses on hinges about z:
 // A (m_A at l_A, angle a) and B (m_B at l_B, angle b), no gravity, the carrier moving at U.
 // Setting A's rate to W: B's hinge takes no impulse (m_B l_B (l_B dw_B - sin b du_c) = 0), the
@@ -200,26 +222,7 @@ TEST(WhenFriction, RailWhoseNormalImpulseDependsOnItsFrictionByTheClosedForm) {
         }
       ASSERT_FALSE(std::isnan(want)) << U << " " << W;
       ++kinds[want == 0.0 ? 0 : want > 0 ? 1 : 2];
-      const std::string text =
-          "model R\n"
-          "  World world(g = {0, 0, 0});\n"
-          "  Prismatic rail(axis = {1, 0, 0}, u(start = " + Num(U) + "), mu = " + Num(mu) + ");\n"
-          "  Body carrier(m = " + Num(mc) + ");\n"
-          "  Revolute ha(axis = {0, 0, 1}, q(start = " + Num(a) + "));\n"
-          "  Body pa(m = " + Num(mA) + ", r_CM = {" + Num(lA) + ", 0, 0});\n"
-          "  Revolute hb(axis = {0, 0, 1}, q(start = " + Num(b) + "));\n"
-          "  Body pb(m = " + Num(mB) + ", r_CM = {" + Num(lB) + ", 0, 0});\n"
-          "equation\n"
-          "  connect(world.frame_b, rail.frame_a);\n"
-          "  connect(rail.frame_b, carrier.frame_a);\n"
-          "  connect(carrier.frame_a, ha.frame_a);\n"
-          "  connect(ha.frame_b, pa.frame_a);\n"
-          "  connect(carrier.frame_a, hb.frame_a);\n"
-          "  connect(hb.frame_b, pb.frame_a);\n"
-          "  when time > 0.1 then\n"
-          "    reinit(ha.u, " + Num(W) + ");\n"
-          "  end when;\n"
-          "end R;\n";
+      const std::string text = RailText({mc, mA, lA, mB, lB, a, b, mu}, U, W, "", "");
       auto l = LoadModel(text, {}, {}, true);
       ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
       sim::SimResult r;
@@ -303,27 +306,7 @@ TEST(WhenFriction, RailBesideAJointRestingOnItsStopByTheClosedForm) {
         ASSERT_FALSE(std::isnan(want));
       }
       (holds ? held : left)++;
-      const std::string text =
-          "model R\n"
-          "  World world(g = {0, 0, 0});\n"
-          "  Prismatic rail(axis = {1, 0, 0}, u(start = " + Num(U) + "), mu = " + Num(mu) + ");\n"
-          "  Body carrier(m = " + Num(mc) + ");\n"
-          "  Revolute ha(axis = {0, 0, 1}, q(start = " + Num(a) + "));\n"
-          "  Body pa(m = " + Num(mA) + ", r_CM = {" + Num(lA) + ", 0, 0});\n"
-          "  Revolute hb(axis = {0, 0, 1}, q(start = " + Num(b) + "), q_max = " + Num(b) + ");\n"
-          "  Body pb(m = " + Num(mB) + ", r_CM = {" + Num(lB) + ", 0, 0});\n"
-          "equation\n"
-          "  connect(world.frame_b, rail.frame_a);\n"
-          "  connect(rail.frame_b, carrier.frame_a);\n"
-          "  connect(carrier.frame_a, ha.frame_a);\n"
-          "  connect(ha.frame_b, pa.frame_a);\n"
-          "  connect(carrier.frame_a, hb.frame_a);\n"
-          "  connect(hb.frame_b, pb.frame_a);\n"
-          "  hb.tau = 1;\n"
-          "  when time > 0.1 then\n"
-          "    reinit(ha.u, " + Num(W) + ");\n"
-          "  end when;\n"
-          "end R;\n";
+      const std::string text = RailText({mc, mA, lA, mB, lB, a, b, mu}, U, W, ", q_max = " + Num(b), "  hb.tau = 1;\n");
       auto l = LoadModel(text, {}, {}, true);
       ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
       sim::SimResult r;

@@ -66,15 +66,6 @@ bool OneEvent(const sim::MemorySink& s, Limits* out) {
   return n == 1;
 }
 
-// The state's speed `name` after (or before) the run's one event, from its record's changes
-// (the state itself, not an output row's speeds solved again from the independent ones).
-double StateSpeed(const sim::SimResult& r, const std::string& name, bool after) {
-  for (const sim::EventChange& c : r.stats.events.at(0).changes)
-    if (c.name == name) return after ? c.after : c.before;
-  ADD_FAILURE() << name << " did not change";
-  return NAN;
-}
-
 // If this fails, reinit(crank.u, w) in a four-bar was refused (K321, before this change) or
 // left the coupler's and rocker's speeds off the loop's velocity equations (stale or not
 // following through the rows), or the energy was not that of the new speed.

@@ -23,14 +23,6 @@ const double kHalfPi = std::acos(0.0);
 const double kW = std::sqrt(1.5 * kG);  // the rod pendulum's w^2 = 3 g / (2 L), L = 1
 constexpr double kStop = -2.0;          // q_max: gravity presses the rod (hanging at -pi/2) onto it
 
-// The pairs of rows at one time (an event's left and right limits): index of the left row.
-std::vector<size_t> EventRows(const sim::MemorySink& s) {
-  std::vector<size_t> at;
-  for (size_t i = 0; i + 1 < s.times.size(); ++i)
-    if (s.times[i] == s.times[i + 1]) at.push_back(i);
-  return at;
-}
-
 // The rod pendulum swinging with amplitude phi_a (angle from hanging): the time from the
 // turning point to the angle phi, (K(k) - F(psi, k)) / w, k = sin(phi_a / 2), sin psi = sin(|phi| / 2) / k.
 double FromTurn(double phi, double phi_a) {

@@ -92,6 +92,10 @@ INSTANTIATE_TEST_SUITE_P(
         Hostile{"NaN", NumberIn("0 nan 0"), "U404", "bad.urdf:4:78"},
         Hostile{"infinite", NumberIn("0 0 inf"), "U404", "bad.urdf:4:78"},
         Hostile{"huge", NumberIn("1e300 0 0"), "U404", "bad.urdf:4:78"},
+        Hostile{"below the normal range", NumberIn("0 1e-315 0"), "U404", "bad.urdf:4:78"},  // fuzz_urdf
+        Hostile{"tiny mass",
+                "<robot name=\"r\">\n  <link name=\"a\"><inertial><mass value=\"1e-309\"/></inertial></link>\n</robot>\n",
+                "U404", "bad.urdf:2:34"},
         Hostile{"two numbers", NumberIn("1 2"), "U404", "bad.urdf:4:78"},
         Hostile{"junk number", NumberIn("1 2 3x"), "U404", "bad.urdf:4:78"},
         Hostile{"negative mass",
@@ -193,6 +197,22 @@ TEST(ImportText, NamesCannotInjectModelText) {
   pipeline::LoadResult lr = pipeline::LoadModel(pipeline::Source::Text("inject.urdf.mech", r.mech), {}, {});
   EXPECT_TRUE(lr.model) << lr.diagnostics << "\n" << r.mech;  // one World, and the text parses
   EXPECT_NE(r.mech.find("(URDF name 'j?World second;?//')"), std::string::npos) << r.mech;
+}
+
+// A value the importer computes below the normal range of doubles is written as 0: the
+// language refuses such literals (L004), and the fuzzer found the written model refused.
+// Here the inertia turned by a tiny angle has off-diagonal terms of about 1e-310 kg m^2.
+TEST(ImportText, ComputedValuesBelowTheNormalRangeAreWrittenAsZero) {
+  const std::string urdf =
+      "<robot name=\"r\">\n  <link name=\"a\"><inertial><mass value=\"1\"/><origin rpy=\"1e-10 0 0\"/>"
+      "<inertia ixx=\"3e-300\" iyy=\"2e-300\" izz=\"1e-300\"/></inertial></link>\n</robot>\n";
+  import::Result r = Import(urdf);
+  ASSERT_TRUE(r.ok) << r.diagnostics;
+  EXPECT_NE(r.mech.find("I = [3e-300, 0, 0; 0, 2e-300, 0; 0, 0, 1e-300]"), std::string::npos) << r.mech;
+  // The text parses; the compiler then refuses inertias this small (K317), as it should.
+  pipeline::LoadResult lr = pipeline::LoadModel(pipeline::Source::Text("tiny.urdf.mech", r.mech), {}, {});
+  EXPECT_EQ(lr.diagnostics.find("error[L"), std::string::npos) << lr.diagnostics << "\n" << r.mech;
+  EXPECT_NE(lr.diagnostics.find("error[K317]"), std::string::npos) << lr.diagnostics;
 }
 
 TEST(ImportText, FloatingGivesTheRootAFreeBase) {

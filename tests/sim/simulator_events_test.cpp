@@ -45,28 +45,10 @@ equation
 end Slider;
 )";
 
-// A rack pair (tests/compiler/held_signals_test.cpp): block 1 rests on its stop until 0.5
-// and holds block 2 through the gear (held by the stop, not by its friction); both stuck by
-// block 2's friction until 1.0886, then sliding.
-constexpr char kRackOnStop[] = R"(model Rack
-  World world(g = {0, -9.81, 0});
-  Prismatic j1(axis = {1, 0, 0}, q_min = 0, restitution = 0);
-  Body b1(m = 1);
-  FixedTranslation base(r = {0, 1, 0});
-  Prismatic j2(axis = {1, 0, 0}, mu = 0.3, friction_exact = true);
-  Body b2(m = 2);
-  JointCoupling gear(ratio = -0.5);
-equation
-  connect(world.frame_b, j1.frame_a);
-  connect(j1.frame_b, b1.frame_a);
-  connect(world.frame_b, base.frame_a);
-  connect(base.frame_b, j2.frame_a);
-  connect(j2.frame_b, b2.frame_a);
-  connect(j1.drive, gear.flange_a);
-  connect(j2.drive, gear.flange_b);
-  j1.tau = 5 * (time - 0.5);
-end Rack;
-)";
+// The rack pair (tests/support/model_texts.h, as in tests/compiler/held_signals_test.cpp):
+// block 1 rests on its stop until 0.5 and holds block 2 through the gear (held by the stop,
+// not by its friction); both stuck by block 2's friction until 1.0886, then sliding.
+const std::string kRackOnStop = test::RackPairText{}.Text();
 
 const rt::Integrator kAll[] = {rt::Integrator::Dop853, rt::Integrator::CvodeAdams, rt::Integrator::CvodeBdf,
                                rt::Integrator::IDA, rt::Integrator::ArkodeErk};
@@ -122,7 +104,7 @@ TEST(SimulatorEvents, AWhenBallFiresAtTheClosedFormAndTerminatesInsideTheStep) {
 
 TEST(SimulatorEvents, StatesSavedBeforeAnEventAndInAModeContinueBitForBit) {
   for (rt::Integrator m : kAll) {
-    for (const char* text : {kWhenBall, kSlider, kRackOnStop}) {
+    for (const std::string& text : {std::string(kWhenBall), std::string(kSlider), kRackOnStop}) {
       auto s = Make(text, m);
       ASSERT_TRUE(s);
       // Before the first bounce (0.45) / the stick (0.99) / the leave (0.5: the follower held by

@@ -1,8 +1,12 @@
-// The test models that suites kept writing out again: a rod (L = 1, m = 1) hung on one joint
-// in gravity along -y, and the two-rod pendulum below it. Text for LoadModel(text, ..., true)
-// or a .mech file; each suite adds its joint's modifiers, declarations and equations.
+// The test models that suites kept writing out again, one builder each with a comment saying
+// what the model is: a rod (L = 1, m = 1) hung on one joint in gravity along -y, the two-rod
+// pendulum below it, the four-bar example, the plane-friction carriage and leg, the rack pair,
+// the carrier with an inclined slider, the double pendulum with an elbow.
+// Text for LoadModel(text, ..., true) or a .mech file; each suite adds its joint's modifiers,
+// declarations and equations.
 #pragma once
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -11,6 +15,13 @@
 #include "tests/support/load_util.h"  // kRoot
 
 namespace kanesim::test {
+
+// x in a model text, every digit kept (%.17g).
+inline std::string Num(double x) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", x);
+  return b;
+}
 
 // model <model>
 // <decls>  World world(g = {0, -9.81, 0});
@@ -76,9 +87,7 @@ struct FourBarText {
       ok = ok && at != std::string::npos;
       if (at != std::string::npos) text.replace(at, from.size(), to);
     };
-    char w[40];
-    std::snprintf(w, sizeof w, "%.17g", omega0);
-    if (omega0 != 6) put("\"rad/s\") = 6", std::string("\"rad/s\") = ") + w);
+    if (omega0 != 6) put("\"rad/s\") = 6", "\"rad/s\") = " + Num(omega0));
     if (!gravity) put("g = {0, -9.81, 0}", "g = {0, 0, 0}");
     put("u(start = omega0)", "u(start = omega0)" + crank_mods);
     put("q(start = 1.0)", "q(start = 1.0)" + coupler_mods);
@@ -88,6 +97,133 @@ struct FourBarText {
     put("equation\n", decls + "equation\n" + connects);
     put("  annotation(experiment", equations + "  annotation(experiment");
     return ok ? text : "";
+  }
+};
+
+// The plane-friction suites' carriage and leg (docs/stdlib.md "PlaneContact"): a carriage
+// (m_c = 2) on a prismatic joint cx along x with Coulomb friction mu = 0.3, on it a revolute
+// leg about z at the carriage's origin, a massless rod of length L = 1 and a point mass
+// m_l = 0.5 at its tip, which touches the floor y = -L cos(phi) (PlaneContact foot, phi = 0.6)
+// at the leg's angle q = phi; gravity g along -y. `decls` follow the foot, `equations` the
+// six connects (a second path's connects, the drive).
+struct CarriageLegText {
+  static constexpr double kMc = 2.0, kMl = 0.5, kL = 1.0, kPhi = 0.6, kMu = 0.3;
+  std::string model = "L";
+  double g = 9.81;
+  double uc0 = 0;      // cx's start speed
+  double q0 = kPhi;    // the leg's start angle
+  double w0 = 0;       // ... and rate
+  double e = 0;        // the foot's restitution
+  std::string law{};   // cx's modifiers after mu: ", friction_exact = true"
+  std::string decls{};
+  std::string equations{};
+  std::string Text() const {
+    return "model " + model + "\n"
+           "  World world(g = {0, " + Num(-g) + ", 0});\n"
+           "  Prismatic cx(axis = {1, 0, 0}, u(start = " + Num(uc0) + "), mu = " + Num(kMu) + law + ");\n"
+           "  Body carriage(m = " + Num(kMc) + ");\n"
+           "  Revolute leg(axis = {0, 0, 1}, q(start = " + Num(q0) + "), u(start = " + Num(w0) + "));\n"
+           "  FixedTranslation rod(r = {0, " + Num(-kL) + ", 0});\n"
+           "  Body tip(m = " + Num(kMl) + ");\n"
+           "  PlaneContact foot(n = {0, 1, 0}, d = " + Num(-kL * std::cos(kPhi)) + ", restitution = " + Num(e) + ");\n" +
+           decls +
+           "equation\n"
+           "  connect(world.frame_b, cx.frame_a);\n"
+           "  connect(cx.frame_b, carriage.frame_a);\n"
+           "  connect(carriage.frame_a, leg.frame_a);\n"
+           "  connect(leg.frame_b, rod.frame_a);\n"
+           "  connect(rod.frame_b, tip.frame_a);\n"
+           "  connect(rod.frame_b, foot.frame_a);\n" +
+           equations + "end " + model + ";\n";
+  }
+};
+
+// model Rack, the rack pair: two blocks on prismatic joints along x geared q2 = r q1
+// (JointCoupling, r = -1/2), gravity g = 9.81 along -y; block 1 (m1 = 1) on j1 at the origin
+// with a stop q_min = 0, block 2 (m2 = 2) on j2 one metre above with Coulomb friction
+// mu = 0.3; by default driven by tau1 = 5 (t - 0.5).
+struct RackPairText {
+  // the numbers in the text, for the suites' hand statics
+  static constexpr double kM1 = 1.0, kM2 = 2.0, kR = -0.5, kMu = 0.3, kG = 9.81;
+  std::string j1_mods = ", restitution = 0";       // after j1's q_min = 0
+  std::string j2_law = ", friction_exact = true";  // after j2's mu
+  std::string equations = "  j1.tau = 5 * (time - 0.5);\n";
+  std::string Text() const {
+    return "model Rack\n"
+           "  World world(g = {0, -9.81, 0});\n"
+           "  Prismatic j1(axis = {1, 0, 0}, q_min = 0" + j1_mods + ");\n"
+           "  Body b1(m = 1);\n"
+           "  FixedTranslation base(r = {0, 1, 0});\n"
+           "  Prismatic j2(axis = {1, 0, 0}, mu = 0.3" + j2_law + ");\n"
+           "  Body b2(m = 2);\n"
+           "  JointCoupling gear(ratio = -0.5);\n"
+           "equation\n"
+           "  connect(world.frame_b, j1.frame_a);\n"
+           "  connect(j1.frame_b, b1.frame_a);\n"
+           "  connect(world.frame_b, base.frame_a);\n"
+           "  connect(base.frame_b, j2.frame_a);\n"
+           "  connect(j2.frame_b, b2.frame_a);\n"
+           "  connect(j1.drive, gear.flange_a);\n"
+           "  connect(j2.drive, gear.flange_b);\n" +
+           equations + "end Rack;\n";
+  }
+};
+
+// model <model>: a carrier (m_c = 2) on a prismatic joint cx along x and on it a slider
+// (m_s = 0.5) on a prismatic joint s along (cos th, sin th, 0) with Coulomb friction mu, whose
+// normal force comes from the carrier's motion and gravity (gravity's y component `gy`, a
+// text). `cx_mods` follow cx's axis (", u(start = 1)"), `friction` s's mu, `equations` the
+// four connects.
+struct CarrierSliderText {
+  static constexpr double kMc = 2.0, kMs = 0.5;
+  std::string model = "C";
+  std::string gy = "0";
+  std::string cx_mods{};
+  double th = 0.6;      // the slider's axis angle from x (rad)
+  double mu = 0.4;
+  double us0 = 0;       // the slider's start speed
+  std::string friction{};
+  std::string equations{};
+  std::string Text() const {
+    return "model " + model + "\n"
+           "  World world(g = {0, " + gy + ", 0});\n"
+           "  Prismatic cx(axis = {1, 0, 0}" + cx_mods + ");\n"
+           "  Body carrier(m = " + Num(kMc) + ");\n"
+           "  Prismatic s(axis = {cos(" + Num(th) + "), sin(" + Num(th) + "), 0}, u(start = " + Num(us0) +
+           "), mu = " + Num(mu) + friction + ");\n"
+           "  Body slider(m = " + Num(kMs) + ");\n"
+           "equation\n"
+           "  connect(world.frame_b, cx.frame_a);\n"
+           "  connect(cx.frame_b, carrier.frame_a);\n"
+           "  connect(carrier.frame_a, s.frame_a);\n"
+           "  connect(s.frame_b, slider.frame_a);\n" +
+           equations + "end " + model + ";\n";
+  }
+};
+
+// model DP, a double pendulum in the vertical plane (gravity along -y): body b1 (m = 1, centre
+// 0.5 along x, I_zz = `i1`, a text) on a revolute j1 about z at the origin, an elbow 1 along x,
+// and b2 (m = 0.5, centre 0.4, I_zz = 0.02) on a revolute j2 about z there. `j1_mods`,
+// `j2_mods` follow the joints' axes.
+struct ElbowPendulumText {
+  std::string j1_mods{};
+  std::string i1 = "0.1";
+  std::string j2_mods{};
+  std::string Text() const {
+    return "model DP\n"
+           "  World world(g = {0, -9.81, 0});\n"
+           "  Revolute j1(axis = {0, 0, 1}" + j1_mods + ");\n"
+           "  Body b1(m = 1, r_CM = {0.5, 0, 0}, I = [0.001, 0, 0; 0, " + i1 + ", 0; 0, 0, " + i1 + "]);\n"
+           "  FixedTranslation elbow(r = {1, 0, 0});\n"
+           "  Revolute j2(axis = {0, 0, 1}" + j2_mods + ");\n"
+           "  Body b2(m = 0.5, r_CM = {0.4, 0, 0}, I = [0.001, 0, 0; 0, 0.02, 0; 0, 0, 0.02]);\n"
+           "equation\n"
+           "  connect(world.frame_b, j1.frame_a);\n"
+           "  connect(j1.frame_b, b1.frame_a);\n"
+           "  connect(j1.frame_b, elbow.frame_a);\n"
+           "  connect(elbow.frame_b, j2.frame_a);\n"
+           "  connect(j2.frame_b, b2.frame_a);\n"
+           "end DP;\n";
   }
 };
 
