@@ -59,7 +59,7 @@
 #include "sim/dop853_control.h"
 #include "sim/dop853_stiffness.h"
 #include "sim/dop853_tableau.h"
-#include "sim/regula_falsi.h"
+#include "sim/illinois.h"
 #include "sim/release_bound.h"
 #include "sim/stepper.h"
 
@@ -411,8 +411,8 @@ class Dop853Stepper final : public Stepper {
 
   // Events (OdeSystem::NumEvents) in the last accepted step: each function that went from
   // positive at its start to <= 0 at its end, and the earliest crossing is pending (Advance
-  // stops there). Crossings are located on the dense output by regula falsi
-  // (sim/regula_falsi.h) to a few units of round-off in t; the time kept is the bracket's
+  // stops there). Crossings are located on the dense output by the Illinois
+  // variant of regula falsi (sim/illinois.h) to a few units of round-off in t; the time kept is the bracket's
   // right end, where g <= 0. Only the earliest is needed: once one is located, a function
   // still positive there crosses later and is not located (its crossing is found again in
   // the step after the event, if it is still there), and one already <= 0 there is located in
@@ -525,7 +525,7 @@ class Dop853Stepper final : public Stepper {
       return true;
     };
     bool failed = false;
-    const double root = RegulaFalsiRoot(a, ga, b, gb, 4.0 * kEps, eval, &failed);
+    const double root = IllinoisRoot(a, ga, b, gb, 4.0 * kEps, eval, &failed);
     return failed ? NAN : root;
   }
 

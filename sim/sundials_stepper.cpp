@@ -7,7 +7,7 @@
 #include <vector>
 #include <algorithm>
 
-#include "sim/regula_falsi.h"
+#include "sim/illinois.h"
 #include "sim/sundials_util.h"
 
 namespace kanesim::sim::detail {
@@ -129,7 +129,7 @@ int SundialsStepper::Graze(int p, double tret, double* y) {
   double a = std::min(tn - std::abs(h), tret), ga = 0.0;
   if (eval(a, &ga) && ga > 0.0) {
     bool failed = false;
-    b = RegulaFalsiRoot(a, ga, b, gb, 4e-16, eval, &failed);  // a failed evaluation keeps the bracket so far
+    b = IllinoisRoot(a, ga, b, gb, 4e-16, eval, &failed);  // a failed evaluation keeps the bracket so far
     if (b < tret && module_.dky(mem_, b, 0, v) == 0) {
       std::copy(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + n, y);
       event_time = b;
