@@ -418,14 +418,31 @@ CompileResult Compile(std::shared_ptr<const flat::Mechanism> mech, const Compile
   return CompileWithParams(std::move(mech), std::move(pv), options, nullptr);
 }
 
-CompileResult Rebind(const Program& program, const std::vector<double>& param_values) {
-  if (param_values.size() != program.mech->params.size()) {
-    CompileResult r;
-    r.errors.push_back(Msg(flat::DiagCode::RebindCount, "Rebind: " + std::to_string(param_values.size()) + " parameter values for " +
-                                       std::to_string(program.mech->params.size()) + " parameters",
+namespace {
+
+// A refusal of `count` values for the parameters of `mech`; empty when they match.
+CompileResult WrongValueCount(const char* who, size_t count, const flat::Mechanism& mech) {
+  CompileResult r;
+  if (count != mech.params.size())
+    r.errors.push_back(Msg(flat::DiagCode::RebindCount, std::string(who) + ": " + std::to_string(count) +
+                                                            " parameter values for " +
+                                                            std::to_string(mech.params.size()) + " parameters",
                            {}));
-    return r;
-  }
+  return r;
+}
+
+}  // namespace
+
+CompileResult Compile(std::shared_ptr<const flat::Mechanism> mech, std::vector<double> param_values,
+                      const CompileOptions& options) {
+  CompileResult wrong = WrongValueCount("Compile", param_values.size(), *mech);
+  if (!wrong.errors.empty()) return wrong;
+  return CompileWithParams(std::move(mech), std::move(param_values), options, nullptr);
+}
+
+CompileResult Rebind(const Program& program, const std::vector<double>& param_values) {
+  CompileResult wrong = WrongValueCount("Rebind", param_values.size(), *program.mech);
+  if (!wrong.errors.empty()) return wrong;
   return CompileWithParams(program.mech, param_values, program.options, &program);
 }
 

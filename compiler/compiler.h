@@ -35,6 +35,11 @@ CompileResult Compile(const flat::Mechanism& mech, const CompileOptions& options
 // The same without a copy of the mechanism: the program shares `mech` (Program::mech).
 // The first form copies it once into the program; pipeline::LoadModel uses this one.
 CompileResult Compile(std::shared_ptr<const flat::Mechanism> mech, const CompileOptions& options);
+// The same with the parameters' values given (index-aligned with mech->params) instead of
+// evaluated (flat::EvaluateParams): a mechanism just elaborated has them already
+// (flat::ElaboratedParamValues). A wrong number of values is an error, as Rebind's.
+CompileResult Compile(std::shared_ptr<const flat::Mechanism> mech, std::vector<double> param_values,
+                      const CompileOptions& options);
 
 // Same structure, new numeric parameter values (index-aligned with mech.params);
 // reuses every pattern and symbolic analysis. Used by sweeps. On failure (a negative

@@ -193,6 +193,13 @@ std::vector<double> EvaluateParams(const Mechanism& m, const std::map<size_t, do
   return pv;
 }
 
+std::vector<double> ElaboratedParamValues(const Mechanism& m) {
+  std::vector<double> pv;
+  pv.reserve(m.params.size());
+  for (const Param& p : m.params) pv.push_back(p.value);
+  return pv;
+}
+
 static std::string LocStr(const SourceLoc& l) {
   std::ostringstream os;
   os << l.file << ":" << l.line << ":" << l.col;

@@ -321,6 +321,11 @@ struct Mechanism {
 // bindings after them see the new values (a sweep's scenario, a sensitivity's step).
 std::vector<double> EvaluateParams(const Mechanism& m);
 std::vector<double> EvaluateParams(const Mechanism& m, const std::map<size_t, double>& overrides);
+// The values the elaboration left in the parameters (Param::value, --set values included):
+// what EvaluateParams(m) gives, bit for bit, for a mechanism not changed since it was
+// elaborated (the elaborator evaluated each binding over the same pool, reading the same
+// earlier values), without evaluating them again.
+std::vector<double> ElaboratedParamValues(const Mechanism& m);
 
 // Evaluates an expression that depends only on parameters.
 double EvalParamExpr(const Mechanism& m, const std::vector<double>& param_values, ExprId id);

@@ -107,6 +107,17 @@ bool Evaluator::StructuralInt(const Value& v, Span span, long* out, const char* 
   return true;
 }
 
+bool Evaluator::LiteralStructuralInt(const ast::Expr& e, long* out) {
+  if (e.kind != ast::ExprKind::Number || !e.is_integer || std::fabs(e.number) > 9e15) return false;
+  if (budget_.Exhausted() || eval_depth_ >= kMaxEvalDepth || stack_.Exceeded()) return false;
+  // What EvalNested does with it: a constant node, charged as a one-element value. The
+  // node reads no parameter (nothing to mark structural) and is its own value.
+  m_->exprs.Constant(e.number);
+  ChargeSteps(2, e.span);
+  *out = static_cast<long>(e.number);
+  return true;
+}
+
 std::vector<double> Evaluator::StructuralList(const Value& v, Span span, const char* what) {
   std::vector<double> out;
   if (!v.valid) return out;

@@ -42,6 +42,11 @@ class Evaluator {
   // subscripts); marks the parameters it reads as structural.
   bool Structural(const Value& v, Span span, double* out, const char* what);
   bool StructuralInt(const Value& v, Span span, long* out, const char* what);
+  // StructuralInt(Eval(e, ...)) for an integer literal `e` (array sizes: Real r[3], nearly
+  // all of them), read from the syntax: the same pool node and the same charge to the work
+  // budget, no Value. False, with nothing done, for any other expression, and where the
+  // evaluation would refuse (budget or depth used up): then evaluate it.
+  bool LiteralStructuralInt(const ast::Expr& e, long* out);
   std::vector<double> StructuralList(const Value& v, Span span, const char* what);
   // Work budget (elab_budget.cpp): false once the elaboration has used it up.
   bool ChargeSteps(std::int64_t steps, Span where);

@@ -400,7 +400,7 @@ void Instantiator::Expand(Node* node, Node* child, const Collected& c) {
   if (comp.condition && !ComponentEnabled(node, child, comp)) return;
   // Dimensions: type dims then declaration dims (Real[3] x[2] is 2x3 in Modelica: the
   // declaration dims come first).
-  std::vector<int> dims;
+  Dims dims;
   AppendDims(comp.dims, node, &dims);
   AppendDims(comp.type_dims, node, &dims);
   ComponentType type;
@@ -420,7 +420,7 @@ bool Instantiator::ComponentEnabled(Node* node, Node* child, const ast::Componen
   return child->enabled;
 }
 
-void Instantiator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std::vector<int>* dims) {
+void Instantiator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, Dims* dims) {
   const Ctx ctx{node, nullptr};
   for (const auto& d : ds) {
     if (d->kind == ast::ExprKind::Colon) {
@@ -428,7 +428,8 @@ void Instantiator::AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, s
       continue;
     }
     long n = 0;
-    if (!eval_.StructuralInt(eval_.Eval(*d, ctx), d->span, &n, "an array size")) {
+    if (!eval_.LiteralStructuralInt(*d, &n) &&
+        !eval_.StructuralInt(eval_.Eval(*d, ctx), d->span, &n, "an array size")) {
       dims->push_back(0);
       continue;
     }
@@ -525,7 +526,7 @@ bool Instantiator::ShortTypeToBuiltin(Node* node, Node* child, const ast::Compon
 }
 
 void Instantiator::ExpandVariable(Node* child, const ast::Component& comp, VType builtin,
-                                  const std::vector<int>& dims) {
+                                  const Dims& dims) {
   child->kind = Node::kVar;
   child->vtype = builtin;
   child->variability = comp.variability;
@@ -566,7 +567,7 @@ void Instantiator::CheckVarAttributes(Node* var, VType builtin) {
 
 // A component of class type (or an array of them).
 void Instantiator::ExpandComponent(Node* node, Node* child, const Collected& c, const ComponentType& t,
-                                   const std::vector<int>& dims) {
+                                   const Dims& dims) {
   const ast::Component& comp = *c.comp;
   if (t.cls->kind == ast::ClassKind::Package || t.cls->kind == ast::ClassKind::Function) {
     diags_.Error(DiagCode::TypeMismatch, comp.type_span, "'" + t.Name(comp) + "' is a package or function, not a model");

@@ -93,16 +93,16 @@ class Instantiator {
   void Expand(Node* node, Node* child, const Collected& c);
   // Expand's steps.
   bool ComponentEnabled(Node* node, Node* child, const ast::Component& comp);  // its condition
-  void AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, std::vector<int>* dims);
+  void AppendDims(const std::vector<ast::ExprPtr>& ds, Node* node, Dims* dims);
   bool ResolveComponentType(Node* node, Node* child, const Collected& c, ComponentType* t);
   bool ApplyRedeclare(Node* child, const Collected& c, ComponentType* t);
   const ast::ClassDef* DeclaredClass(const ast::Component& comp, const ast::ClassDef* owner);
   void ReportUnknownType(const ast::Component& comp, const ComponentType& t);
   bool ShortTypeToBuiltin(Node* node, Node* child, const ast::Component& comp, ComponentType* t);
-  void ExpandVariable(Node* child, const ast::Component& comp, VType builtin, const std::vector<int>& dims);
+  void ExpandVariable(Node* child, const ast::Component& comp, VType builtin, const Dims& dims);
   void CheckVarAttributes(Node* var, VType builtin);
   void ExpandComponent(Node* node, Node* child, const Collected& c, const ComponentType& t,
-                       const std::vector<int>& dims);
+                       const Dims& dims);
   void RegisterPrimitive(Node* node, const ast::ClassDef* cls);
   const ast::ClassDef* ResolveShort(const ast::ClassDef* cls, Node* node, Mod* mod);
   bool TooLarge() const;  // past kMaxInstances, or the evaluator over its work budget

@@ -315,8 +315,10 @@ ExprPtr Parser::ArrayConstructor() {
       Expect(Tok::KwIn, "after the iterator");
       e->args.push_back(Expression());
     } else {
-      e->args.push_back(std::move(first));
-      while (Accept(Tok::Comma)) e->args.push_back(Expression());
+      const size_t from = elements_.size();
+      elements_.push_back(std::move(first));
+      while (Accept(Tok::Comma)) elements_.push_back(Expression());
+      e->args = TakeElements(from);
     }
   }
   ExpectClose(Tok::RBrace, open);
@@ -334,9 +336,11 @@ ExprPtr Parser::MatrixConstructor() {
   e->rows.emplace_back();
   if (!At(Tok::RBracket)) {
     do {
+      const size_t from = elements_.size();
       do {
-        e->rows.back().push_back(Expression());
+        elements_.push_back(Expression());
       } while (Accept(Tok::Comma));
+      e->rows.back() = TakeElements(from);
       if (At(Tok::Semicolon)) e->rows.emplace_back();
     } while (Accept(Tok::Semicolon));
   }

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstddef>
 #include <cstdint>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <utility>
@@ -169,6 +171,16 @@ class Parser {
     }
     return ErrorExpr(e->span);
   }
+  // The elements of the lists being parsed (arrays, matrix rows), the innermost list's on
+  // top. A list moves its own out when it closes, into a vector of their final size: one
+  // allocation, where a vector grown element by element allocates at 1, 2 and 4 (the
+  // arrays and rows of a model are mostly of three).
+  std::vector<ExprPtr> TakeElements(size_t from) {
+    std::vector<ExprPtr> out(std::make_move_iterator(elements_.begin() + static_cast<std::ptrdiff_t>(from)),
+                             std::make_move_iterator(elements_.end()));
+    elements_.erase(elements_.begin() + static_cast<std::ptrdiff_t>(from), elements_.end());
+    return out;
+  }
   // Binary node `lhs op rhs`, finished.
   ExprPtr MakeBinary(Tok op, ExprPtr lhs, ExprPtr rhs, const Span& begin, const Span& op_span) {
     auto e = std::make_unique<Expr>();
@@ -239,6 +251,7 @@ class Parser {
   int subscript_depth_ = 0;  // > 0 inside [...] subscripts, where `end` is an expression
   bool depth_reported_ = false;
   bool expr_depth_reported_ = false;
+  std::vector<ExprPtr> elements_;  // of the open lists (TakeElements)
 };
 
 }  // namespace kanesim::lang::parsing

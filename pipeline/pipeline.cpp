@@ -95,8 +95,9 @@ bool ParseAndElaborate(const Source& source, const LoadOptions& options, Model* 
 
 // Stage 3. The compiler's errors are capped like the language's (Diagnostics::kMaxErrors):
 // a model with thousands of unconnected bodies gives 50 messages and a count.
+// The mechanism was elaborated just before: its parameters hold their values.
 bool CompileStage(const RunSpec& spec, Model* m, std::string* text) {
-  rt::CompileResult r = rt::Compile(m->mech, CompileOptionsFor(spec));
+  rt::CompileResult r = rt::Compile(m->mech, flat::ElaboratedParamValues(*m->mech), CompileOptionsFor(spec));
   if (r.errors.empty()) {
     m->program = std::move(r.program);
     return true;

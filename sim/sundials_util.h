@@ -205,22 +205,29 @@ class SundialsStepper : public Stepper {
   template <class OneStep, class Info>
   int AdvanceCheckedSteps(double tout, double* y, OneStep one_step, Info info) {
     double tret = 0.0;
+    long steps = 0;  // as the module's own limit in its NORMAL mode, which ONE_STEP calls skip
     for (;;) {
       if (pending_event_ && event_time <= tout) {
         pending_event_ = false;
         std::copy(pending_y_.begin(), pending_y_.end(), y);
         return kEventReached;
       }
-      if (stepped_ && CurrentTime() >= tout) {
+      if (stepped_ && CurrentTime() >= tout && tout <= roots_checked_to_) {
         const int flag = CopyOut(module_.dky(mem_, tout, 0, s_.y), y);
         return flag >= 0 && check_rows_ ? CheckRow(tout, y, flag) : flag;
       }
       if (!stepped_ && check_rows_) MarkStep(CurrentTime(), N_VGetArrayPointer(s_.y));
       if (release_.Active()) BoundHeldStep();
+      if (++steps > options_.max_steps) return kTooMuchWork;  // (a step bound that creeps)
       const int flag = one_step(&tret);
       if (flag < 0) return flag;
       stepped_ = true;
       if (flag == kRootReturn) {  // s_.y at the root inside the step; the step's end is checked next call
+        // The rest of the step, (tret, its end], has not been searched for roots: rows past
+        // tret come from the next call, which searches it (a graze guard's root, no event,
+        // before a contact's crossing later in the same step: the crossing was missed and
+        // the row below the plane stopped the run).
+        roots_checked_to_ = tret;
         if (const int r = EventReached(tret, y, info); r != kNoEvent) {
           if (event_time <= tout) return r;
           pending_event_ = true;
@@ -228,6 +235,7 @@ class SundialsStepper : public Stepper {
         }
         continue;
       }
+      roots_checked_to_ = INFINITY;  // (the step's end: searched to it)
       const double* ys = N_VGetArrayPointer(s_.y);
       if (rhs_.ChecksSteps() && rhs_.StepAccepted(tret, ys) != 0) return kStepCheckFailed;
       if (check_rows_) MarkStep(tret, ys);
@@ -281,7 +289,10 @@ class SundialsStepper : public Stepper {
   bool bound_known_ = false;       // ... computed once from the start
   // CV_ROOT_RETURN, ARK_ROOT_RETURN, IDA_ROOT_RETURN (all 2).
   static constexpr int kRootReturn = 2;
+  // CV_TOO_MUCH_WORK, ARK_TOO_MUCH_WORK, IDA_TOO_MUCH_WORK (all -1).
+  static constexpr int kTooMuchWork = -1;
   bool pending_event_ = false;  // a root found past tout: y there (event_time, event_index set)
+  double roots_checked_to_ = INFINITY;  // after a root inside the step: the step searched to here
   std::vector<double> pending_y_;
   // Rows checked against the energy (CheckRow).
   struct StepEnd {

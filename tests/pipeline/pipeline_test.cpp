@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "lang/diagnostics.h"
+#include "flat/mechanism.h"
 #include "flat/file_name.h"
 #include "runtime/program/program.h"
 #include "sim/csv.h"
@@ -206,6 +208,52 @@ TEST(PipelineLoad, TheProgramSharesTheModelsMechanism) {
   ASSERT_TRUE(copied.program);
   EXPECT_NE(copied.program->mech.get(), r.model->mech.get());
   EXPECT_EQ(copied.program->mech->params.size(), r.model->mech->params.size());
+}
+
+// The values the elaborator left in the parameters are what evaluating every binding again
+// gives, bit for bit (the compile stage of LoadModel takes them instead of evaluating them
+// twice): for examples, the chain, UR5's URDF, and --set values read by other bindings. If this
+// fails, a model loaded by the pipeline runs with other parameter values than the same
+// mechanism compiled by rt::Compile.
+TEST(PipelineLoad, ElaboratedParameterValuesAreTheEvaluatedOnes) {
+  std::vector<std::pair<pipeline::Source, std::vector<std::string>>> models;
+  for (const char* name : {"chain", "double_pendulum", "slider_crank", "fourbar", "spring_mass"})
+    models.push_back({pipeline::Source::File(kRoot + "/examples/" + name + ".mech"), {}});
+  models.push_back({pipeline::Source::File(kRoot + "/examples/chain.mech"), {"N=25", "L=0.25", "m=3"}});
+  models.push_back({pipeline::Source::Text("osc.mech", Oscillator()), {"cart.m=5"}});
+  models.push_back({pipeline::Source::File(kRoot + "/tests/import/data/ur5_robot.urdf"), {}});
+  size_t compared = 0;
+  for (auto& [source, sets] : models) {
+    pipeline::LoadOptions o;
+    o.sets = sets;
+    pipeline::LoadResult r = pipeline::LoadModel(source, o, {});
+    ASSERT_TRUE(r.model) << source.path << "\n" << r.diagnostics;
+    const std::vector<double> evaluated = flat::EvaluateParams(*r.model->mech);
+    const std::vector<double> elaborated = flat::ElaboratedParamValues(*r.model->mech);
+    ASSERT_EQ(elaborated.size(), evaluated.size()) << source.path;
+    for (size_t i = 0; i < evaluated.size(); ++i)
+      EXPECT_EQ(std::memcmp(&elaborated[i], &evaluated[i], sizeof(double)), 0)
+          << source.path << " " << r.model->mech->ParamName(i) << ": " << elaborated[i] << " vs " << evaluated[i];
+    ASSERT_TRUE(r.model->program) << r.diagnostics;
+    EXPECT_EQ(std::memcmp(r.model->program->param_values.data(), evaluated.data(), evaluated.size() * sizeof(double)), 0)
+        << source.path;
+    compared += evaluated.size();
+  }
+  EXPECT_GT(compared, 1000u);  // the chain alone has thousands
+}
+
+// Values for the parameters given to Compile are counted as Rebind's are.
+TEST(PipelineLoad, CompileWithValuesRefusesAWrongCount) {
+  pipeline::LoadOptions o;
+  o.compile = false;
+  pipeline::LoadResult r = pipeline::LoadModel(pipeline::Source::File(kRoot + "/examples/chain.mech"), o, {});
+  ASSERT_TRUE(r.model) << r.diagnostics;
+  std::vector<double> values = flat::ElaboratedParamValues(*r.model->mech);
+  values.pop_back();
+  rt::CompileResult c = rt::Compile(r.model->mech, values, {});
+  EXPECT_FALSE(c.program);
+  ASSERT_EQ(c.errors.size(), 1u);
+  EXPECT_NE(c.errors[0].message.find("parameter values for"), std::string::npos) << c.errors[0].message;
 }
 
 // File names are interned: equal names are one entry (from any thread), different names
