@@ -411,48 +411,60 @@ class Dop853Stepper final : public Stepper {
 
   // Events (OdeSystem::NumEvents) in the last accepted step: each function that went from
   // positive at its start to <= 0 at its end, and the earliest crossing is pending (Advance
-  // stops there). Crossings are located on the dense output by the Illinois
-  // variant of regula falsi (sim/illinois.h) to a few units of round-off in t; the time kept is the bracket's
-  // right end, where g <= 0. Only the earliest is needed: once one is located, a function
-  // still positive there crosses later and is not located (its crossing is found again in
-  // the step after the event, if it is still there), and one already <= 0 there is located in
-  // the bracket up to it. Functions that start the step at zero (a restart on a contact) come
-  // after the others, so their samples past the earliest crossing so far are skipped.
+  // stops there). Crossings are located on the dense output by the Illinois variant of
+  // regula falsi (sim/illinois.h) to a few units of round-off in t; the time kept is the
+  // bracket's right end, where g <= 0. Only the earliest is needed: once one is located at
+  // event_t_, the candidates are the functions positive at the step's start and <= 0 at
+  // event_t_ (g_event_), each searched in the bracket up to it; a function still positive
+  // there crosses later and is found again in the step after the event, if it is still
+  // there. A function that dips below zero and is back above it by the step's end is one
+  // of them too (its graze guard's crossing, the gap's minimum, may come after event_t_):
+  // each earlier crossing found makes the scan run again over the functions not yet
+  // searched. Functions that start the step at zero (a restart on a contact) come after the
+  // others, so their samples past the earliest crossing so far are skipped.
   int LocateEvent() {
     if (rhs_.EventFunctions(t_, y_.data(), g_new_.data()) != 0) return kRhsFatal;
     event_pending_ = false;
     g_event_ = g_new_;  // the functions at the earliest crossing so far (at t_ while none)
     samples_ = 0;
-    for (int pass = 0; pass < 2; ++pass) {
-      for (size_t i = 0; i < g_new_.size(); ++i) {
-        double a = t_old_, ga = g_old_[i];
-        const bool from_zero = ga == 0.0 && g_new_[i] < 0.0;
-        if (from_zero != (pass == 1)) continue;
-        if (from_zero) {  // did it rise first?
+    searched_.assign(g_new_.size(), 0);
+    for (bool again = true; again;) {
+      again = false;
+      for (int pass = 0; pass < 2; ++pass) {
+        for (size_t i = 0; i < g_new_.size(); ++i) {
+          if (searched_[i]) continue;
+          double a = t_old_, ga = g_old_[i];
+          const bool from_zero = ga == 0.0 && g_new_[i] < 0.0;
+          if (from_zero != (pass == 1)) continue;
+          const double b = event_pending_ ? event_t_ : t_, gb = g_event_[i];
+          if (gb > 0.0 || !(a < b)) continue;  // no crossing before the earliest one so far
+          if (from_zero) {  // did it rise first?
+            if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
+            const int rose = RiseFromZero(static_cast<int>(i), &a, &ga);
+            if (rose < 0) return kRhsFatal;
+            searched_[i] = 1;
+            if (rose == 0) continue;
+          }
+          if (!(ga > 0.0)) continue;
+          searched_[i] = 1;
           if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-          const int rose = RiseFromZero(static_cast<int>(i), &a, &ga);
-          if (rose < 0) return kRhsFatal;
-          if (rose == 0) continue;
-        }
-        if (!(ga > 0.0 && g_new_[i] <= 0.0)) continue;
-        const double b = event_pending_ ? event_t_ : t_, gb = g_event_[i];
-        if (gb > 0.0 || !(a < b)) continue;  // it crosses after the earliest crossing so far
-        if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-        g_root_ = g_event_;
-        double root = Crossing(static_cast<int>(i), a, ga, b, gb, &g_root_);
-        if (std::isnan(root)) return kRhsFatal;
-        int which = static_cast<int>(i);
-        if (const int p = rhs_.Paired(which); p >= 0) {  // a graze guard: did function p dip below zero?
-          const int dip = Dip(p, &root);
-          if (dip < 0) return kRhsFatal;
-          if (dip == 0) continue;
-          which = p;
-        }
-        if (!event_pending_ || root < event_t_) {
-          event_pending_ = true;
-          event_t_ = root;
-          event_i_ = which;
-          g_event_.swap(g_root_);
+          g_root_ = g_event_;
+          double root = Crossing(static_cast<int>(i), a, ga, b, gb, &g_root_);
+          if (std::isnan(root)) return kRhsFatal;
+          int which = static_cast<int>(i);
+          if (const int p = rhs_.Paired(which); p >= 0) {  // a graze guard: did function p dip below zero?
+            const int dip = Dip(p, &root);
+            if (dip < 0) return kRhsFatal;
+            if (dip == 0) continue;
+            which = p;
+          }
+          if (!event_pending_ || root < event_t_) {
+            event_pending_ = true;
+            event_t_ = root;
+            event_i_ = which;
+            g_event_.swap(g_root_);
+            again = true;
+          }
         }
       }
     }
@@ -734,6 +746,7 @@ class Dop853Stepper final : public Stepper {
   std::vector<double> g_scratch_;  // ... at Crossing's last point
   std::vector<double> sample_g_;   // ... at RiseFromZero's samples k = 1 .. 48, row k - 1  (48 x events)
   uint64_t samples_ = 0;           // bit k: sample k evaluated in this step
+  std::vector<char> searched_;     // LocateEvent: function i searched in this step
   bool event_pending_ = false;   // an event function crossed zero at event_t_ in the last step
   double event_t_ = 0.0;
   int event_i_ = -1;
