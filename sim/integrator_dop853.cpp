@@ -50,6 +50,7 @@
 // the run stopped with exit 2.)
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -136,7 +137,7 @@ class Dop853Stepper final : public Stepper {
     }
     if (options_.max_step > 0.0) h_ = std::min(h_, options_.max_step);
     release_.Init(rhs_.System());  // held rows: each step bounded by their release (sim/release_bound.h)
-    if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), 0.0);
+    if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), 0.0, g_old_.data(), K(0));
     return true;
   }
 
@@ -179,7 +180,8 @@ class Dop853Stepper final : public Stepper {
       int flag = Step(tout);
       if (flag != kOk) return flag;
       if (!g_old_.empty() && (flag = LocateEvent()) != kOk) return flag;
-      if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), h_last_);
+      // The functions at t_ (LocateEvent's, now in g_old_) and f there (the FSAL stage).
+      if (release_.Active()) held_bound_ = release_.Next(t_, y_.data(), h_last_, g_old_.data(), K(tab::kStages));
     }
   }
 
@@ -408,35 +410,62 @@ class Dop853Stepper final : public Stepper {
   }
 
   // Events (OdeSystem::NumEvents) in the last accepted step: each function that went from
-  // positive at its start to <= 0 at its end, its crossing located on the dense output by
-  // the Illinois variant of regula falsi to a few units of round-off in t; the earliest one
-  // is pending (Advance stops there). The time kept is the bracket's right end, where g <= 0.
+  // positive at its start to <= 0 at its end, and the earliest crossing is pending (Advance
+  // stops there). Crossings are located on the dense output by the Illinois variant of
+  // regula falsi (sim/illinois.h) to a few units of round-off in t; the time kept is the
+  // bracket's right end, where g <= 0. Only the earliest is needed: once one is located at
+  // event_t_, the candidates are the functions positive at the step's start and <= 0 at
+  // event_t_ (g_event_), each searched in the bracket up to it; a function still positive
+  // there crosses later and is found again in the step after the event, if it is still
+  // there. A function that dips below zero and is back above it by the step's end is one
+  // of them too (its graze guard's crossing, the gap's minimum, may come after event_t_):
+  // each earlier crossing found makes the scan run again over the functions not yet
+  // searched. Functions that start the step at zero (a restart on a contact) come after the
+  // others, so their samples past the earliest crossing so far are skipped.
   int LocateEvent() {
     if (rhs_.EventFunctions(t_, y_.data(), g_new_.data()) != 0) return kRhsFatal;
     event_pending_ = false;
-    for (size_t i = 0; i < g_new_.size(); ++i) {
-      double a = t_old_, ga = g_old_[i];
-      if (ga == 0.0 && g_new_[i] < 0.0) {  // from zero (a restart on a contact): did it rise first?
-        if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-        const int rose = RiseFromZero(static_cast<int>(i), &a, &ga);
-        if (rose < 0) return kRhsFatal;
-        if (rose == 0) continue;
-      }
-      if (!(ga > 0.0 && g_new_[i] <= 0.0)) continue;
-      if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-      double root = Crossing(static_cast<int>(i), a, ga, t_, g_new_[i]);
-      if (std::isnan(root)) return kRhsFatal;
-      int which = static_cast<int>(i);
-      if (const int p = rhs_.Paired(which); p >= 0) {  // a graze guard: did function p dip below zero?
-        const int dip = Dip(p, &root);
-        if (dip < 0) return kRhsFatal;
-        if (dip == 0) continue;
-        which = p;
-      }
-      if (!event_pending_ || root < event_t_) {
-        event_pending_ = true;
-        event_t_ = root;
-        event_i_ = which;
+    g_event_ = g_new_;  // the functions at the earliest crossing so far (at t_ while none)
+    samples_ = 0;
+    searched_.assign(g_new_.size(), 0);
+    for (bool again = true; again;) {
+      again = false;
+      for (int pass = 0; pass < 2; ++pass) {
+        for (size_t i = 0; i < g_new_.size(); ++i) {
+          if (searched_[i]) continue;
+          double a = t_old_, ga = g_old_[i];
+          const bool from_zero = ga == 0.0 && g_new_[i] < 0.0;
+          if (from_zero != (pass == 1)) continue;
+          const double b = event_pending_ ? event_t_ : t_, gb = g_event_[i];
+          if (gb > 0.0 || !(a < b)) continue;  // no crossing before the earliest one so far
+          if (from_zero) {  // did it rise first?
+            if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
+            const int rose = RiseFromZero(static_cast<int>(i), &a, &ga);
+            if (rose < 0) return kRhsFatal;
+            searched_[i] = 1;
+            if (rose == 0) continue;
+          }
+          if (!(ga > 0.0)) continue;
+          searched_[i] = 1;
+          if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
+          g_root_ = g_event_;
+          double root = Crossing(static_cast<int>(i), a, ga, b, gb, &g_root_);
+          if (std::isnan(root)) return kRhsFatal;
+          int which = static_cast<int>(i);
+          if (const int p = rhs_.Paired(which); p >= 0) {  // a graze guard: did function p dip below zero?
+            const int dip = Dip(p, &root);
+            if (dip < 0) return kRhsFatal;
+            if (dip == 0) continue;
+            which = p;
+          }
+          if (!event_pending_ || root < event_t_) {
+            event_pending_ = true;
+            event_t_ = root;
+            event_i_ = which;
+            g_event_.swap(g_root_);
+            again = true;
+          }
+        }
       }
     }
     g_prev_ = g_old_;
@@ -446,22 +475,31 @@ class Dop853Stepper final : public Stepper {
 
   // Event function i, zero at the step's start and negative at its end, sampled on the dense
   // output at h/2, h/4, ... h/2^kSamples: a step longer than a flight from a contact (a short
-  // rebound) rises and falls back inside it, however short the flight. 1 with *a, *ga a
-  // positive sample, 0 when none is, -1 on failure.
+  // rebound) rises and falls back inside it, however short the flight. Samples at or past a
+  // pending event are skipped; the functions at each sample are kept for the other functions
+  // that start the step at zero (sample_g_). 1 with *a, *ga a positive sample, 0 when none
+  // is, -1 on failure.
   int RiseFromZero(int i, double* a, double* ga) {
     constexpr int kSamples = 48;
+    const size_t ng = g_new_.size();
     std::vector<double>& y = event_y_;
     y.resize(static_cast<size_t>(n_));
-    std::vector<double> g(g_new_.size());
+    sample_g_.resize(static_cast<size_t>(kSamples) * ng);
     double f = 1.0;
     for (int k = 1; k <= kSamples; ++k) {
       f *= 0.5;
       const double t = t_old_ + (t_ - t_old_) * f;
       if (!(t > t_old_)) break;
-      Interpolate(t, y.data());
-      if (rhs_.EventFunctions(t, y.data(), g.data()) != 0) return -1;
-      if (g[static_cast<size_t>(i)] > 0.0) {
-        *a = t, *ga = g[static_cast<size_t>(i)];
+      if (event_pending_ && t >= event_t_) continue;
+      double* gs = sample_g_.data() + static_cast<size_t>(k - 1) * ng;
+      if (!(samples_ & (uint64_t{1} << k))) {  // not yet evaluated in this step
+        Interpolate(t, y.data());
+        if (rhs_.EventFunctions(t, y.data(), gs) != 0) return -1;
+        samples_ |= uint64_t{1} << k;
+      }
+      const double gk = gs[i];
+      if (gk > 0.0) {
+        *a = t, *ga = gk;
         return 1;
       }
     }
@@ -469,30 +507,33 @@ class Dop853Stepper final : public Stepper {
   }
 
   // Function p at *t (a minimum, located by its graze guard): 0 when positive there (no event);
-  // 1 when not, *t then its crossing in [t_old_, *t]; -1 on failure.
+  // 1 when not, *t then its crossing in [t_old_, *t] and g_root_ the functions there; -1 on
+  // failure.
   int Dip(int p, double* t) {
     std::vector<double>& y = event_y_;
     y.resize(static_cast<size_t>(n_));
-    std::vector<double> g(g_new_.size());
     Interpolate(*t, y.data());
-    if (rhs_.EventFunctions(*t, y.data(), g.data()) != 0) return -1;
-    const double gp = g[static_cast<size_t>(p)], g0 = g_old_[static_cast<size_t>(p)];
+    if (rhs_.EventFunctions(*t, y.data(), g_root_.data()) != 0) return -1;
+    const double gp = g_root_[static_cast<size_t>(p)], g0 = g_old_[static_cast<size_t>(p)];
     if (gp > 0.0 || !(g0 > 0.0)) return 0;  // (from zero: RiseFromZero's case)
-    const double root = Crossing(p, t_old_, g0, *t, gp);
+    const double root = Crossing(p, t_old_, g0, *t, gp, &g_root_);
     if (std::isnan(root)) return -1;
     *t = root;
     return 1;
   }
 
   // Event function i's zero in [a, b] (ga > 0 >= gb there); NaN when it cannot be evaluated.
-  double Crossing(int i, double a, double ga, double b, double gb) {
+  // *g_b: the functions at b on entry, at the zero returned on exit.
+  double Crossing(int i, double a, double ga, double b, double gb, std::vector<double>* g_b) {
     std::vector<double>& y = event_y_;
     y.resize(static_cast<size_t>(n_));
-    std::vector<double> g(g_new_.size());
+    std::vector<double>& g = g_scratch_;
+    g.resize(g_new_.size());
     auto eval = [&](double t, double* gt) {
       Interpolate(t, y.data());
       if (rhs_.EventFunctions(t, y.data(), g.data()) != 0) return false;
       *gt = g[static_cast<size_t>(i)];
+      if (*gt <= 0.0) g_b->swap(g);  // the new right end
       return true;
     };
     bool failed = false;
@@ -700,6 +741,12 @@ class Dop853Stepper final : public Stepper {
   std::vector<double> g_old_, g_new_;  // event functions at the last accepted step's end, and scratch
   std::vector<double> g_prev_;   // ... at its start
   std::vector<double> event_y_;  // Crossing's interpolated states  (n)
+  std::vector<double> g_event_;  // the event functions at event_t_ (at t_ while none is pending)
+  std::vector<double> g_root_;   // ... at the zero Crossing returned
+  std::vector<double> g_scratch_;  // ... at Crossing's last point
+  std::vector<double> sample_g_;   // ... at RiseFromZero's samples k = 1 .. 48, row k - 1  (48 x events)
+  uint64_t samples_ = 0;           // bit k: sample k evaluated in this step
+  std::vector<char> searched_;     // LocateEvent: function i searched in this step
   bool event_pending_ = false;   // an event function crossed zero at event_t_ in the last step
   double event_t_ = 0.0;
   int event_i_ = -1;

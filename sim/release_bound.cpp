@@ -138,14 +138,22 @@ bool ReleaseBound::Differences(double t, const double* y, double d) {
   return true;
 }
 
-double ReleaseBound::Next(double t, const double* y, double h_last) {
+double ReleaseBound::Next(double t, const double* y, double h_last, const double* g_t, const double* f_t) {
   if (held_.empty()) return kInf;
   const double unit = std::max(1.0, std::abs(t));
-  if (system_->EventFunctions(t, y, g0_.data()) != 0) return kInf;
+  if (g_t != nullptr) {
+    std::copy(g_t, g_t + g0_.size(), g0_.begin());
+  } else if (system_->EventFunctions(t, y, g0_.data()) != 0) {
+    return kInf;
+  }
   const double cheap = FromHistory(t);
   Remember(t);
   if (cheap > 0.0) return cheap;  // far from any release by the last steps' g: no sampling
-  if (system_->Rhs(t, y, yd_.data()) != 0) return kInf;
+  if (f_t != nullptr) {
+    std::copy(f_t, f_t + yd_.size(), yd_.begin());
+  } else if (system_->Rhs(t, y, yd_.data()) != 0) {
+    return kInf;
+  }
   double d = h_last > 0.0 ? kDiff * h_last : 1e-6 * unit;
   double h = kInf;
   for (int pass = 0; pass < 3; ++pass) {

@@ -48,7 +48,9 @@ class ReleaseBound {
   bool Active() const { return !held_.empty(); }
   // The largest next step from (t, y), an accepted step's end; h_last the step that led there
   // (0: none yet). +inf when no held row is near its release or g cannot be evaluated.
-  double Next(double t, const double* y, double h_last);
+  // g_t, f_t: the event functions (NumEvents) and f (Size) at (t, y) when the solver has them
+  // (DOP853: its step-end functions and its FSAL stage); nullptr: evaluated here.
+  double Next(double t, const double* y, double h_last, const double* g_t = nullptr, const double* f_t = nullptr);
 
   static constexpr double kFloor = 1e-9;  // relative to max(1, |t|): the smallest bound
 
