@@ -56,6 +56,23 @@ std::vector<std::string> FloorOutputs() {
   return args;
 }
 
+// In every row of a run with FloorOutputs(): the speed along the floor vx, 0 across, the
+// vertical spin as at the start; no corner below the floor beyond the tolerance's reach.
+void ExpectWhatTheFloorCannotChange(const RunResult& r, double vx, const std::string& what) {
+  const std::vector<double> v1 = r.Column("free.frame_b.v[1]"), v3 = r.Column("free.frame_b.v[3]"),
+                            w2 = r.Column("free.frame_b.w[2]");
+  ASSERT_GT(w2.size(), 100u) << what;
+  double low = 0.0;
+  for (int k = 1; k <= 8; ++k)
+    for (double y : r.Column("c" + std::to_string(k) + ".frame_b.r[2]")) low = std::min(low, y);
+  for (size_t i = 0; i < w2.size(); ++i) {
+    EXPECT_NEAR(v1[i], vx, 1e-9) << what << " row " << i;
+    EXPECT_NEAR(v3[i], 0.0, 1e-9) << what << " row " << i;
+    EXPECT_NEAR(w2[i], w2[0], 1e-6) << what << " row " << i;
+  }
+  EXPECT_GE(low, -2e-7) << what << ": a corner below the floor";
+}
+
 const char* const kIntegrators[] = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
 
 TEST(CubeToss, EveryIntegratorKeepsWhatTheFloorCannotChange) {
@@ -64,25 +81,12 @@ TEST(CubeToss, EveryIntegratorKeepsWhatTheFloorCannotChange) {
     for (const std::string& s : toss.sets)
       if (s.rfind("vx=", 0) == 0) vx = std::stod(s.substr(3));
     for (const char* how : {"dop853", "cvode", "ida", "arkode"}) {
-      std::vector<std::string> args = {"--integrator", how, "--stop-time", "4", "--rtol", "1e-8",
-                                       "--output", "free.frame_b.v[1]", "--output", "free.frame_b.v[3]",
-                                       "--output", "free.frame_b.w[2]"};
-      for (int k = 1; k <= 8; ++k) args.insert(args.end(), {"--output", "c" + std::to_string(k) + ".frame_b.r[2]"});
-      for (const std::string& s : toss.sets) args.insert(args.end(), {"--set", s});
+      std::vector<std::string> args = {"--integrator", how, "--stop-time", "4", "--rtol", "1e-8"};
+      for (const std::string& o : FloorOutputs()) args.push_back(o);
+      for (const std::string& x : toss.sets) args.insert(args.end(), {"--set", x});
       const RunResult r = RunKanesim("tests/stress/models/tossed_cube.mech", args);
       ASSERT_EQ(r.exit_code, 0) << toss.what << " " << how << ": " << r.stderr_text;
-      const std::vector<double> v1 = r.Column("free.frame_b.v[1]"), v3 = r.Column("free.frame_b.v[3]"),
-                                w2 = r.Column("free.frame_b.w[2]");
-      ASSERT_GT(w2.size(), 100u);
-      double low = 0.0;
-      for (int k = 1; k <= 8; ++k)
-        for (double y : r.Column("c" + std::to_string(k) + ".frame_b.r[2]")) low = std::min(low, y);
-      for (size_t i = 0; i < w2.size(); ++i) {
-        EXPECT_NEAR(v1[i], vx, 1e-9) << toss.what << " " << how << " row " << i;
-        EXPECT_NEAR(v3[i], 0.0, 1e-9) << toss.what << " " << how << " row " << i;
-        EXPECT_NEAR(w2[i], w2[0], 1e-6) << toss.what << " " << how << " row " << i;
-      }
-      EXPECT_GE(low, -2e-7) << toss.what << " " << how << ": a corner below the floor";
+      ExpectWhatTheFloorCannotChange(r, vx, std::string(toss.what) + " " + how);
     }
   }
 }
@@ -197,10 +201,8 @@ TEST(CubeToss, AnEdgeRockingToRestNeitherCreepsNorChatters) {
                                          "wy=0.03307667592057406", "wz=6.419324759951152", "vx=0.7420659367359408"};
   const double vx = 0.7420659367359408;
   for (const char* how : {"cvode", "dop853", "ida", "arkode"}) {
-    std::vector<std::string> args = {"--integrator", how, "--stop-time", "4", "--rtol", "1e-8", "--stats",
-                                     "--output", "free.frame_b.v[1]", "--output", "free.frame_b.v[3]",
-                                     "--output", "free.frame_b.w[2]"};
-    for (int k = 1; k <= 8; ++k) args.insert(args.end(), {"--output", "c" + std::to_string(k) + ".frame_b.r[2]"});
+    std::vector<std::string> args = {"--integrator", how, "--stop-time", "4", "--rtol", "1e-8", "--stats"};
+    for (const std::string& o : FloorOutputs()) args.push_back(o);
     for (const std::string& s : sets) args.insert(args.end(), {"--set", s});
     const RunResult r = RunKanesim("tests/stress/models/tossed_cube.mech", args);
     ASSERT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
@@ -208,18 +210,7 @@ TEST(CubeToss, AnEdgeRockingToRestNeitherCreepsNorChatters) {
     ASSERT_GT(steps, 0) << how << ": " << r.stderr_text;
     EXPECT_LT(steps, 20000) << how << ": the steps crept";
     EXPECT_LT(events, 1000) << how << ": events chatter";
-    const std::vector<double> v1 = r.Column("free.frame_b.v[1]"), v3 = r.Column("free.frame_b.v[3]"),
-                              w2 = r.Column("free.frame_b.w[2]");
-    ASSERT_GT(w2.size(), 100u);
-    double low = 0.0;
-    for (int k = 1; k <= 8; ++k)
-      for (double y : r.Column("c" + std::to_string(k) + ".frame_b.r[2]")) low = std::min(low, y);
-    for (size_t i = 0; i < w2.size(); ++i) {
-      EXPECT_NEAR(v1[i], vx, 1e-9) << how << " row " << i;
-      EXPECT_NEAR(v3[i], 0.0, 1e-9) << how << " row " << i;
-      EXPECT_NEAR(w2[i], w2[0], 1e-6) << how << " row " << i;
-    }
-    EXPECT_GE(low, -2e-7) << how << ": a corner below the floor";
+    ExpectWhatTheFloorCannotChange(r, vx, how);
   }
 }
 
