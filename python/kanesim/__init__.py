@@ -208,6 +208,8 @@ class LinearModel:
     .modes             one dict per eigenvalue: eigenvalue, natural_frequency, frequency_hz,
                        damping_ratio, dominant [(state, weight)], shape (complex array)
     .ignorable         coordinates no other state reads (each gives a zero eigenvalue)
+    .held              the rows held at the operating point, e.g. "j1 on q_min", "j1 stuck",
+                       "floor on the plane" (their coordinate and speed are not states)
     .accuracy          {"step", "A", "BCD", "unsteady", "widened"}: the achieved accuracy of A
                        and of B, C, D, how much A changes along the motion (0 at an
                        equilibrium), and {column: step used} for the columns whose step was
@@ -229,6 +231,7 @@ class LinearModel:
         self.eigenvalues: np.ndarray = data["eigenvalues"]
         self.modes: List[Dict[str, Any]] = list(data["modes"])
         self.ignorable: List[str] = list(data["ignorable"])
+        self.held: List[str] = list(data["held"])
         self.accuracy: Dict[str, Any] = dict(data["accuracy"])
         self.time: float = data["time"]
         self.equilibrium: Optional[Dict[str, Any]] = data["equilibrium"]

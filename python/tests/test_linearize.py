@@ -54,6 +54,7 @@ def _assert_same_as_cli(lm, d):
         assert [list(x) for x in mine["dominant"]] == theirs["dominant"]
         np.testing.assert_array_equal(mine["shape"], np.array([complex(re, im) for re, im in theirs["shape"]]))
     assert lm.ignorable == d["ignorable"]
+    assert lm.held == d["held"]
     for key in ("step", "A", "BCD", "unsteady", "widened"):
         assert lm.accuracy[key] == d["accuracy"][key], key
 
@@ -204,3 +205,33 @@ def test_a_model_input_without_a_value_or_an_unknown_one_is_a_model_error(source
         model.linearize(equilibrium=True)
     with pytest.raises(kanesim.ModelError, match="'nosuch' is not one of the model's inputs"):
         model.linearize(equilibrium=True, inputs={"tau": 1.0, "nosuch": 2.0})
+
+
+# Two rods, the first resting on its stop (gravity presses it onto q_min = 0), the second
+# hanging: the held joint is no state, and the second rod swings alone about the first's tip,
+# omega^2 = m g (L2 / 2) / (m L2^2 / 3) = 3 g / (2 L2) (tests/linearize/hybrid_test.cpp's model).
+HELD = """model Held
+  World world(g = {0, -9.81, 0});
+  Revolute j1(axis = {0, 0, 1}, q(start = 0), q_min = 0);
+  Rod r1(L = 1, m = 1);
+  Revolute j2(axis = {0, 0, 1}, q(start = -1.5707963267948966));
+  Rod r2(L = 0.8, m = 0.7);
+equation
+  connect(world.frame_b, j1.frame_a);
+  connect(j1.frame_b, r1.frame_a);
+  connect(r1.frame_b, j2.frame_a);
+  connect(j2.frame_b, r2.frame_a);
+end Held;
+"""
+
+
+def test_a_joint_resting_on_its_stop_is_held_and_no_state(kanesim_exe, tmp_path):
+    path = tmp_path / "held.mech"
+    path.write_text(HELD)
+    lm = kanesim.load(path).linearize()
+    assert lm.held == ["j1 on q_min"]
+    assert lm.states == ["j2.q", "j2.u"]
+    w = math.sqrt(3 * 9.81 / (2 * 0.8))
+    assert sorted(lm.eigenvalues.imag) == pytest.approx([-w, w], rel=1e-7)
+    assert np.all(np.abs(lm.eigenvalues.real) < 1e-7 * w)
+    _assert_same_as_cli(lm, _cli_json(kanesim_exe, tmp_path, path))

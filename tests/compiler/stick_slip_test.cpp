@@ -111,5 +111,56 @@ TEST(StickSlip, BlockOnAnInclineStaysStuckWhileTanThetaBelowMuS) {
   }
 }
 
+// A rod (m = 1.5, L = 0.2) on a pin with exact friction, released at rest at an angle phi off
+// the vertical. Stuck, the pin carries the weight (N = m g) and must hold the torque
+// m g (L / 2) sin(phi); it stays stuck while that is within mu_s N r (static coefficient mu_s,
+// pin radius r = 0.05), else slips with mu N r. sin(phi) = 0.2 needs 0.2943 N m: within
+// mu_s = 0.5's bound 0.3679, beyond mu = 0.3's 0.2207 (so it sticks only by mu_s, and slips
+// where mu_s is left at mu); sin(phi) = 0.3 needs 0.4415 and slips either way. If this fails,
+// a Revolute's static coefficient or its normal force is not the closed form's.
+TEST(StickSlip, RodOnAPinStaysStuckWhileItsTorqueIsWithinMuSNr) {
+  const double m = 1.5, L = 0.2, r = 0.05, mu = 0.3, pi = std::acos(-1.0);
+  struct Case {
+    double sin_phi, mu_s;
+    bool stuck;
+  };
+  for (const Case& c : {Case{0.2, 0.5, true}, Case{0.2, 0.3, false}, Case{0.3, 0.5, false}}) {
+    const double q0 = -pi / 2 + std::asin(c.sin_phi);
+    const std::string text =
+        "model R\n"
+        "  World world(g = {0, -9.81, 0});\n"
+        "  Revolute pin(axis = {0, 0, 1}, q(start = " + Num(q0) + "), mu = " + Num(mu) + ", mu_s = " + Num(c.mu_s) +
+        ", friction_radius = " + Num(r) + ", friction_exact = true);\n"
+        "  Rod rod(L = " + Num(L) + ", m = " + Num(m) + ");\n"
+        "equation\n"
+        "  connect(world.frame_b, pin.frame_a);\n"
+        "  connect(pin.frame_b, rod.frame_a);\n"
+        "end R;\n";
+    auto l = LoadModel(text, {}, {}, true);
+    ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
+    const double needed = m * kG * (L / 2) * c.sin_phi, bound = c.mu_s * m * kG * r;
+    for (const IntegratorChoice& how : AllIntegrators()) {
+      SCOPED_TRACE(std::string(how.name) + " sin(phi) " + Num(c.sin_phi) + " mu_s " + Num(c.mu_s));
+      sim::SimResult res;
+      sim::MemorySink s = RunWith(*l->prog, how, 0.2, 0.01, {"pin.q"}, &res, 1e-10);
+      ASSERT_EQ(res.status, sim::SimResult::Status::kOk) << res.message;
+      ASSERT_GE(res.stats.events.size(), 1u);
+      const std::string& kind = res.stats.events[0].kind;
+      EXPECT_EQ(res.stats.events[0].time, 0.0);
+      double a = 0.0, b = 0.0;
+      if (c.stuck) {
+        ASSERT_EQ(std::sscanf(kind.c_str(), "sticks (friction %lf within %lf", &a, &b), 2) << kind;
+        EXPECT_EQ(res.stats.events.size(), 1u);
+        for (size_t i = 0; i < s.rows.size(); ++i) EXPECT_EQ(s.rows[i][0], q0) << "t = " << s.times[i];
+      } else {
+        ASSERT_EQ(std::sscanf(kind.c_str(), "slips, backwards (friction needed %lf, at most %lf", &a, &b), 2) << kind;
+        EXPECT_LT(s.rows.back()[0], q0 - 1e-3);  // it swings down
+      }
+      EXPECT_NEAR(a, needed, 1e-12 * needed);
+      EXPECT_NEAR(b, bound, 1e-12 * bound);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::test
