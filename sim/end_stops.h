@@ -214,6 +214,9 @@ class EndStopEvents {
     int side = -1;
     double v = 0.0, before = 0.0;
     bool rest = false;
+    // Its gap rate after the impact (Newton's -e v, 0 for a rest; 0 for a side Complementary
+    // brings in because the others' blow would press it through its contact).
+    double after = 0.0;
   };
   // Impact's parts: the sides striking with side i, the complementary impulse, the
   // companions' speeds after and their log entries (sim/end_stops.cpp).
@@ -222,6 +225,9 @@ class EndStopEvents {
                     std::vector<Strike>* with, std::vector<double>* du, std::vector<int>* left);
   int StruckWith(rt::Workspace& ws, double t, const double* y, const std::vector<Strike>& with,
                  std::vector<EventRecord>* struck);
+  // The kinetic energy's change by the speeds' jump du at (t, y), and the scale of its terms.
+  int KineticChange(rt::Workspace& ws, double t, const double* y, const std::vector<double>& du, double* dT,
+                    double* ref);
   // A flight leaving the contact at gap rate v > 0 under the gap acceleration a < 0 rises
   // v^2 / (2 |a|): at most kUnresolvedHeights of the tolerance, within the gap's own error,
   // the root finding cannot resolve it.
