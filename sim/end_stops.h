@@ -8,7 +8,9 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -102,13 +104,17 @@ class EndStopEvents {
   // The resting sides' reactions of the last Hold / HoldWith into ws for its output signals
   // (rt::SetHeldLoads), with the free `speeds` (stuck joints') held too.
   void LoadSignals(rt::Workspace& ws, std::vector<int> speeds) const;
-  // An output row's state: the joints resting on their stops exactly there, at speed 0 (the
-  // integrator holds them so; its interpolant between steps may miss by an ulp).
+  // An output row's state: the joints resting on their stops at speed 0 (the integrator holds
+  // them so; its interpolant between steps may miss by an ulp), exactly on the stop where they
+  // rest on it to round-off or past it. A joint that came to rest short of its stop by the tolerance's
+  // reach rests there (OntoStop), and its rows say so.
   void SnapResting(double* y) const {
     for (const Side& s : sides_)
       if (s.resting && s.stop >= 0) {
         const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
-        y[st.q] = s.upper ? st.q_max : st.q_min;
+        const double limit = s.upper ? st.q_max : st.q_min;
+        const double short_by = s.upper ? limit - y[st.q] : y[st.q] - limit;
+        if (short_by <= 16.0 * std::numeric_limits<double>::epsilon() * (1.0 + std::abs(limit))) y[st.q] = limit;
         y[nq_ + st.u] = 0.0;
       }
   }
@@ -225,6 +231,8 @@ class EndStopEvents {
                     std::vector<Strike>* with, std::vector<double>* du, std::vector<int>* left);
   int StruckWith(rt::Workspace& ws, double t, const double* y, const std::vector<Strike>& with,
                  std::vector<EventRecord>* struck);
+  // Moves side s's joint onto its stop if it is past it (sim/end_stops.cpp).
+  void OntoStop(const Side& s, double* y) const;
   // The kinetic energy's change by the speeds' jump du at (t, y), and the scale of its terms.
   int KineticChange(rt::Workspace& ws, double t, const double* y, const std::vector<double>& du, double* dT,
                     double* ref);
