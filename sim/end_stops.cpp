@@ -653,7 +653,7 @@ int EndStopEvents::Companions(rt::Workspace& ws, double t, const double* y, int 
 // most pulling first, and the impulse is solved again without it.
 int EndStopEvents::Complementary(rt::Workspace& ws, double t, const double* y, std::vector<int>* rows_in,
                                  std::vector<double>* targets_in, std::vector<Strike>* with, std::vector<double>* du,
-                                 std::vector<int>* left) {
+                                 std::vector<int>* left, bool join_closing) {
   std::vector<int>& rows = *rows_in;
   std::vector<double>& targets = *targets_in;
   std::vector<double> c;
@@ -667,6 +667,7 @@ int EndStopEvents::Complementary(rt::Workspace& ws, double t, const double* y, s
     for (size_t j = 1; j < rows.size(); ++j)
       if (c[j] < -kLeaveRoundoffs * std::numeric_limits<double>::epsilon() * scale && (pull == 0 || c[j] < c[pull]))
         pull = j;
+    if (pull == 0 && !join_closing) break;
     if (pull == 0) {
       // No row pulls. A side on its contact outside the rows (separating from it, or a
       // companion dropped above) that the impulse would leave approaching it joins them
@@ -790,18 +791,32 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   const std::vector<char> was = RestingSet();  // (Settle logs the changes: rests, leaves)
   const std::vector<int> rows_in = rows;
   const std::vector<Strike> with_in = with;
-  if (int r = Complementary(ws, t, y, &rows, &targets, &with, &du, &left); r != 0) {
+  const std::vector<double> targets_in = targets;
+  const std::vector<Side> sides_in = sides_;  // (Complementary leaves sides: restored for each retry)
+  // Sides the impulse would leave closing on their contacts join it; where that finds no
+  // impulse (dependent rows whose targets then disagree: a box's face, its fourth corner
+  // joined at rate 0 beside three rebounding; or the pivoting cycles), the impulse is solved
+  // without joins, and Settle strikes what is left closing.
+  bool join = true;
+  int solved = Complementary(ws, t, y, &rows, &targets, &with, &du, &left, join);
+  if (solved == -1) {
+    sides_ = sides_in, left.clear();
+    rows = rows_in, with = with_in, targets = targets_in;
+    join = false;
+    solved = Complementary(ws, t, y, &rows, &targets, &with, &du, &left, join);
+  }
+  if (solved != 0) {
     // Dependent rows whose Newton's laws disagree because the side's bounces accumulate and
     // a companion's do not (a box's face landing in a chatter, each corner its own rebound):
     // they pass to rest together (targets -v), as where both accumulate.
     const bool bounce = std::any_of(with_in.begin(), with_in.end(), [](const Strike& w) { return !w.rest; });
-    if (r != -1 || !(t_inf > 0.0) || !bounce) return r;
+    if (solved != -1 || !(t_inf > 0.0) || !bounce) return solved;
     for (int k : left) sides_[static_cast<size_t>(k)].resting = true, sides_[static_cast<size_t>(k)].lift = 0.0;
     left.clear();
     rows = rows_in, with = with_in, targets.assign(1, -v);
     for (Strike& w : with) w.rest = true, targets.push_back(-w.v);
     targets.resize(rows.size(), 0.0);
-    if (int r2 = Complementary(ws, t, y, &rows, &targets, &with, &du, &left); r2 != 0) return r2;
+    if (int r2 = Complementary(ws, t, y, &rows, &targets, &with, &du, &left, join); r2 != 0) return r2;
   }
   // Newton's laws of sides struck together need not dissipate (a side joined at rate 0 beside
   // others rebounding: a folded chain of 8 rods at e = 0.7 gained 0.36 J at one instant).
@@ -820,7 +835,6 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
     bool up = false;
     if (int r = rises(du, &up); r != 0) return r;
     if (up) {
-      const std::vector<Side> sides_in = sides_;  // (Complementary leaves sides: restored each trial)
       const auto trial = [&](double f, bool* adds) -> int {
         sides_ = sides_in;
         left.clear();
@@ -833,7 +847,7 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
           targets.push_back(w.rest ? -w.v : -(1.0 + ek) * w.v);
         }
         targets.resize(rows.size(), 0.0);
-        if (int r = Complementary(ws, t, y, &rows, &targets, &with, &du, &left); r != 0) return r;
+        if (int r2 = Complementary(ws, t, y, &rows, &targets, &with, &du, &left, join); r2 != 0) return r2;
         if (f == 0.0)
           for (Strike& w : with) w.rest = true, w.after = 0.0;
         return rises(du, adds);

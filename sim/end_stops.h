@@ -228,7 +228,8 @@ class EndStopEvents {
   // companions' speeds after and their log entries (sim/end_stops.cpp).
   int Companions(rt::Workspace& ws, double t, const double* y, int i, double t_inf, std::vector<Strike>* with);
   int Complementary(rt::Workspace& ws, double t, const double* y, std::vector<int>* rows, std::vector<double>* targets,
-                    std::vector<Strike>* with, std::vector<double>* du, std::vector<int>* left);
+                    std::vector<Strike>* with, std::vector<double>* du, std::vector<int>* left,
+                    bool join_closing);
   int StruckWith(rt::Workspace& ws, double t, const double* y, const std::vector<Strike>& with,
                  std::vector<EventRecord>* struck);
   // Moves side s's joint onto its stop if it is past it (sim/end_stops.cpp).

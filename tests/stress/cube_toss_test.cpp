@@ -45,6 +45,17 @@ const Toss kTosses[] = {
     {"e=0.2 low", {"e=0.2", "h=0.6630747984661014", "th=1.740209380812975", "ax=-0.14781864062369965",
                    "ay=-0.8877534049585192", "az=0.7400203103532796", "wx=1.119989342022084", "wy=-4.802569277165711",
                    "wz=0.07552747886181344", "vx=-0.030149775544531687"}},
+    // Two landings that stopped a branch joining every corner the impulse would leave closing
+    // on the floor (sim/end_stops.cpp Complementary, for a folded chain's stops): a face's
+    // fourth corner joined at rate 0 beside three with Newton's laws, rows dependent and
+    // targets disagreeing, exit 2 at t = 0.8668 in all five integrators; and e = 0 pivoting
+    // that cycled (t = 0.2823). Where joining finds no impulse, it is solved without joins.
+    {"e=0 pivots", {"e=0", "h=0.3641093511835515", "th=1.1192781693491825", "ax=-0.6618327686791126",
+                    "ay=0.6179240892787337", "az=0.7076687709709473", "wx=-3.9746672384805493", "wy=-4.60449902930239",
+                    "wz=-7.428248932218073", "vx=0.3624923699853251"}},
+    {"e=0.5 face", {"e=0.5", "h=0.47138238457831183", "th=0.6524847099565041", "ax=0.7611635187325598",
+                    "ay=-0.15416470322060793", "az=0.43392219780995056", "wx=-7.490030877972078",
+                    "wy=-2.2022894191481495", "wz=-5.249904125988282", "vx=0.34553088282708355"}},
 };
 
 // The run's outputs for the checks below: the speeds along the floor, the vertical spin, the
