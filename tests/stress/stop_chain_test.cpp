@@ -97,5 +97,40 @@ TEST(StopChain, SimultaneousStrikesAddNoEnergy) {
   }
 }
 
+// A chain of 4 rods with exact Coulomb friction on every joint (mu = 0.05 on 5 cm pins) and
+// stops on the inner ones (models/friction_stop_chain.mech), from a random sweep of stops
+// with friction. At t = 1.77861 j[3], stuck, needs a friction torque that grows past its
+// bound (by 6e-15 N m at the slip: its acceleration after it ~0) and slips forwards. Four
+// integrators agree on that instant to 4e-7 s and go on. CVODE-BDF found the slip again and
+// again, every 4e-14 s (its speed's event function crossing back on the solver's error):
+// 23 875 events over 6.7e-10 s in 5 s of a run that never ended. Now 1000 events within
+// rtol max(1, |t|) of one another stop the run, exit 2 with the time and cause, the rows
+// before it kept (sim/integrator.cpp). What must hold: the four complete, slipping at one
+// instant; CVODE-BDF stops there, says why, and its rows reach it.
+TEST(StopChain, EventsWithoutProgressStopTheRunNeverHangIt) {
+  double first = 0.0, last = 0.0;
+  for (const char* how : {"dop853", "cvode", "ida", "arkode"}) {
+    const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
+                                   {"--integrator", how, "--stop-time", "3", "--rtol", "1e-8", "--stats"});
+    ASSERT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
+    std::smatch m;
+    const std::regex slip("t = (1\\.7786[0-9]*)\\s+j\\[3\\]: slips, forwards");
+    ASSERT_TRUE(std::regex_search(r.stderr_text, m, slip)) << how << ": no slip of j[3] near t = 1.7786";
+    const double t = std::stod(m[1]);
+    first = first == 0.0 ? t : std::min(first, t), last = std::max(last, t);
+  }
+  EXPECT_LT(last - first, 1e-6);
+  const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
+                                 {"--integrator", "cvode-bdf", "--stop-time", "3", "--rtol", "1e-8"});
+  EXPECT_EQ(r.exit_code, 2) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("the events make no progress"), std::string::npos) << r.stderr_text;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.stderr_text, m, std::regex("numerical failure at t = ([0-9.]+)"))) << r.stderr_text;
+  const double t_fail = std::stod(m[1]);
+  EXPECT_NEAR(t_fail, 0.5 * (first + last), 1e-5);
+  ASSERT_FALSE(r.rows.empty());
+  EXPECT_GT(r.rows.back()[0], t_fail - 1e-5) << "the rows before the failure were not kept";
+}
+
 }  // namespace
 }  // namespace kanesim::stress
