@@ -383,8 +383,8 @@ CompileResult CompileWithParams(std::shared_ptr<const flat::Mechanism> mech, std
   CompileContacts(p, c.folder_, &out.errors);
   CompileCouplings(p, c.folder_, &out.errors);
   CompilePlaneContacts(p, c.folder_, &out.errors);
-  CompileForcesAndOutputs(p, &out.errors);
-  CompileWhens(p, &out.errors);
+  CompileForcesAndOutputs(p, c.folder_, &out.errors);
+  CompileWhens(p, c.folder_, &out.errors);
   CheckMovesMass(p, &out.errors);
   if (!out.errors.empty()) return out;
   ChooseSolver(p);

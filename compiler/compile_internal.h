@@ -40,7 +40,7 @@ void EnsurePathSpeeds(Program& p, int body);
 
 // When clauses -> Program::whens and the event tape (compiler/whens.cpp); K321 for a reinit
 // the mechanism cannot take. After the loops, contacts and forces.
-void CompileWhens(Program& p, std::vector<CompileMessage>* errors);
+void CompileWhens(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 
 // Cut joints (flat indices) -> Program::loops and ::rows (their constrained directions).
 void CompileLoops(Program& p, const std::vector<int>& cut_flat, TapeBuilder& folder,
@@ -94,7 +94,7 @@ std::string LengthOutOfRange(const std::string& what, const Vec3& r);
 const char* RangeHint();
 
 // Gravity, joint forces, line forces, wrenches (force tape) and outputs (output tape).
-void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors);
+void CompileForcesAndOutputs(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors);
 
 // The solution path and the integrator, with reasons (Summarize prints them).
 void ChooseSolver(Program& p);

@@ -19,10 +19,10 @@ constexpr double kStiffRate = 1e3;
 
 }  // namespace
 
-void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
+void CompileForcesAndOutputs(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
   auto text = [&](flat::ExprId id) { return m.ExprText(id); };  // of a force or output
-  TapeBuilder forces(m.exprs, p.param_values);
+  TapeBuilder forces = TapeBuilder::SharingFolds(folder);
   auto scalar = [&](flat::ExprId id, const std::string& label) {
     Scalar s;
     if (id == kNoExpr) return s;
@@ -82,7 +82,7 @@ void CompileForcesAndOutputs(Program& p, std::vector<CompileMessage>* errors) {
   }
   p.force_tape = forces.Finish();
 
-  TapeBuilder outputs(m.exprs, p.param_values);
+  TapeBuilder outputs = TapeBuilder::SharingFolds(folder);
   for (const auto& o : m.outputs) outputs.AddRoot(o.expr, "output '" + o.name + "'", text(o.expr));
   p.output_tape = outputs.Finish();
 

@@ -70,7 +70,7 @@ void CompileJointsAndState(Program& p, TapeBuilder& folder, std::vector<CompileM
                 num(e[2], 0.0, what, none, "", loc));
   };
 
-  TapeBuilder presc(m.exprs, p.param_values);
+  TapeBuilder presc = TapeBuilder::SharingFolds(folder);
   std::vector<double> q_start_all, u_start_all;
   for (TreeJoint& j : p.joints) {
     const flat::Joint& fj = m.joints[static_cast<size_t>(j.flat_index)];

@@ -42,10 +42,10 @@ std::string ReinitRefusal(const Program& p, const flat::StateRef& ref, int* stat
 
 }  // namespace
 
-void CompileWhens(Program& p, std::vector<CompileMessage>* errors) {
+void CompileWhens(Program& p, TapeBuilder& folder, std::vector<CompileMessage>* errors) {
   const flat::Mechanism& m = *p.mech;
   if (m.whens.empty()) return;
-  TapeBuilder tape(m.exprs, p.param_values);
+  TapeBuilder tape = TapeBuilder::SharingFolds(folder);
   for (const flat::WhenClause& w : m.whens) {
     WhenModel out;
     const std::string& file = w.loc.file.str();

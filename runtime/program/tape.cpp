@@ -14,13 +14,10 @@ namespace {
 // The per-node tables are made on the first node asked for (covering the pool, as a node's
 // children have smaller ids than it): a builder asked for nothing (a model without outputs
 // or whens) clears no tables.
-void Cover(const flat::ExprPool& pool, ExprId id, std::vector<int>& reg, std::vector<signed char>& known,
-           std::vector<double>& value) {
-  if (static_cast<size_t>(id) < known.size()) return;
-  const size_t n = std::max(pool.size(), static_cast<size_t>(id) + 1);
-  reg.resize(n, -1);
-  known.resize(n, -1);
-  value.resize(n, 0.0);
+template <class T>
+void Cover(const flat::ExprPool& pool, ExprId id, std::vector<T>& table, T fill) {
+  if (static_cast<size_t>(id) < table.size()) return;
+  table.resize(std::max(pool.size(), static_cast<size_t>(id) + 1), fill);
 }
 
 }  // namespace
@@ -28,23 +25,33 @@ void Cover(const flat::ExprPool& pool, ExprId id, std::vector<int>& reg, std::ve
 TapeBuilder::TapeBuilder(const flat::ExprPool& pool, const std::vector<double>& param_values)
     : pool_(pool), params_(param_values) {}
 
+TapeBuilder TapeBuilder::SharingFolds(TapeBuilder& folds_of) {
+  TapeBuilder b(folds_of.pool_, folds_of.params_);
+  b.shared_ = &folds_of.folds();
+  return b;
+}
+
 // Post-order over the sub-DAG of `id` (children have smaller ids, so an explicit stack
 // terminates); a node folds when it reads neither time nor state.
 bool TapeBuilder::Fold(ExprId id, double* value) {
-  Cover(pool_, id, reg_, const_, value_);
-  std::vector<ExprId>& stack = stack_;
+  Folds& f = folds();
+  Cover(pool_, id, f.known, static_cast<signed char>(-1));
+  Cover(pool_, id, f.value, 0.0);
+  std::vector<signed char>& known = f.known;
+  std::vector<double>& folded = f.value;
+  std::vector<ExprId>& stack = f.stack;
   stack.assign(1, id);
   while (!stack.empty()) {
     ExprId e = stack.back();
     auto ue = static_cast<size_t>(e);
-    if (const_[ue] >= 0) {
+    if (known[ue] >= 0) {
       stack.pop_back();
       continue;
     }
     const ExprNode& n = pool_[e];
     bool ready = true;
     for (ExprId ch : {n.a, n.b, n.c})
-      if (ch >= 0 && const_[static_cast<size_t>(ch)] < 0) {
+      if (ch >= 0 && known[static_cast<size_t>(ch)] < 0) {
         stack.push_back(ch);
         ready = false;
       }
@@ -52,47 +59,50 @@ bool TapeBuilder::Fold(ExprId id, double* value) {
     stack.pop_back();
     switch (n.op) {
       case Op::Const:
-        const_[ue] = 1;
-        value_[ue] = n.value;
+        known[ue] = 1;
+        folded[ue] = n.value;
         break;
       case Op::Param:
-        const_[ue] = 1;
-        value_[ue] = (n.index >= 0 && static_cast<size_t>(n.index) < params_.size())
+        known[ue] = 1;
+        folded[ue] = (n.index >= 0 && static_cast<size_t>(n.index) < params_.size())
                          ? params_[static_cast<size_t>(n.index)]
                          : std::nan("");
         break;
       case Op::Time:
       case Op::State:
-      case Op::Input: const_[ue] = 0; break;
+      case Op::Input: known[ue] = 0; break;
       default: {
         bool all = true;
         double v[3] = {0.0, 0.0, 0.0};
         const ExprId ch[3] = {n.a, n.b, n.c};
         for (int i = 0; i < 3; ++i)
           if (ch[i] >= 0) {
-            all = all && const_[static_cast<size_t>(ch[i])] == 1;
-            v[i] = value_[static_cast<size_t>(ch[i])];
+            all = all && known[static_cast<size_t>(ch[i])] == 1;
+            v[i] = folded[static_cast<size_t>(ch[i])];
           }
         // if-then-else with a constant condition folds to the taken branch's status.
-        if (n.op == Op::IfElse && const_[static_cast<size_t>(n.a)] == 1) {
+        if (n.op == Op::IfElse && known[static_cast<size_t>(n.a)] == 1) {
           ExprId taken = v[0] != 0.0 ? n.b : n.c;
-          const_[ue] = const_[static_cast<size_t>(taken)];
-          value_[ue] = value_[static_cast<size_t>(taken)];
+          known[ue] = known[static_cast<size_t>(taken)];
+          folded[ue] = folded[static_cast<size_t>(taken)];
           break;
         }
-        const_[ue] = all ? 1 : 0;
-        if (all) value_[ue] = flat::ApplyOp(n.op, v[0], v[1], v[2]);
+        known[ue] = all ? 1 : 0;
+        if (all) folded[ue] = flat::ApplyOp(n.op, v[0], v[1], v[2]);
       }
     }
   }
-  *value = value_[static_cast<size_t>(id)];
-  return const_[static_cast<size_t>(id)] == 1;
+  *value = folded[static_cast<size_t>(id)];
+  return known[static_cast<size_t>(id)] == 1;
 }
 
 int TapeBuilder::RegisterOf(ExprId id) {
   double unused;
-  Fold(id, &unused);  // also makes the tables
-  std::vector<ExprId>& stack = stack_;  // Fold left it empty
+  Fold(id, &unused);  // also makes the fold tables
+  Cover(pool_, id, reg_, -1);
+  const std::vector<signed char>& known = folds().known;
+  const std::vector<double>& folded = folds().value;
+  std::vector<ExprId>& stack = stack_;
   stack.assign(1, id);
   while (!stack.empty()) {
     ExprId e = stack.back();
@@ -102,9 +112,9 @@ int TapeBuilder::RegisterOf(ExprId id) {
       continue;
     }
     const ExprNode& n = pool_[e];
-    if (const_[ue] == 1) {
+    if (known[ue] == 1) {
       reg_[ue] = static_cast<int>(tape_.init.size());
-      tape_.init.push_back(value_[ue]);
+      tape_.init.push_back(folded[ue]);
       stack.pop_back();
       continue;
     }
@@ -144,8 +154,8 @@ int TapeBuilder::RegisterOf(ExprId id) {
       continue;
     }
     // A constant-condition if folds to the taken branch.
-    if (n.op == Op::IfElse && const_[static_cast<size_t>(n.a)] == 1) {
-      ExprId taken = value_[static_cast<size_t>(n.a)] != 0.0 ? n.b : n.c;
+    if (n.op == Op::IfElse && known[static_cast<size_t>(n.a)] == 1) {
+      ExprId taken = folded[static_cast<size_t>(n.a)] != 0.0 ? n.b : n.c;
       if (reg_[static_cast<size_t>(taken)] < 0) {
         stack.push_back(taken);
         continue;

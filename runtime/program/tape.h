@@ -42,6 +42,10 @@ struct Tape {
 class TapeBuilder {
  public:
   TapeBuilder(const flat::ExprPool& pool, const std::vector<double>& param_values);
+  // A builder of another tape over the same pool and parameters that shares `folds_of`'s
+  // folded values (a node folds to the same value in every tape): the compiler's tapes fold
+  // each node once and make the per-node fold tables once. `folds_of` must outlive it.
+  static TapeBuilder SharingFolds(TapeBuilder& folds_of);
   // Returns the root index in the finished tape.
   int AddRoot(flat::ExprId id, std::string label, std::string text);
   // True when `id` folds to a constant; *value receives it.
@@ -49,13 +53,20 @@ class TapeBuilder {
   Tape Finish();
 
  private:
+  // What folding learnt per node, for any tape of the pool.
+  struct Folds {
+    std::vector<signed char> known;    // -1 unknown, 0 not constant, 1 constant
+    std::vector<double> value;         // folded value where known == 1
+    std::vector<flat::ExprId> stack;   // Fold's explicit stack, kept between calls
+  };
+  Folds& folds() { return shared_ ? *shared_ : own_; }
   int RegisterOf(flat::ExprId id);
   const flat::ExprPool& pool_;
   const std::vector<double>& params_;
-  std::vector<int> reg_;        // per expr node: register or -1
-  std::vector<signed char> const_;  // -1 unknown, 0 no, 1 yes
-  std::vector<double> value_;   // folded value when const_ == 1
-  std::vector<flat::ExprId> stack_;  // Fold's explicit stack, kept between calls
+  Folds own_;
+  Folds* shared_ = nullptr;          // another builder's folds, or null for own_
+  std::vector<int> reg_;             // per expr node: register or -1
+  std::vector<flat::ExprId> stack_;  // RegisterOf's explicit stack
   Tape tape_;
 };
 

@@ -98,5 +98,43 @@ TEST(AllocFree, TapeBuilderGivenNoRootAllocatesNothing) {
   EXPECT_EQ(regs[static_cast<size_t>(tape.roots[0])], 999.5);
 }
 
+TEST(AllocFree, TapeBuilderSharingFoldsReusesThemAndBuildsTheSameTape) {
+  // If this fails, the compiler's tapes (forces, outputs, whens, prescribed motions) each
+  // clear and fill per-node fold tables of the whole pool again, or a tape built with
+  // shared folds differs from one built alone.
+  flat::ExprPool pool;
+  const std::vector<double> params = {2.5};
+  const flat::ExprId k = pool.Binary(Op::Mul, pool.Parameter(0), pool.Constant(4));  // folds to 10
+  const flat::ExprId force = pool.Binary(Op::Add, pool.Binary(Op::Mul, k, pool.Time()), pool.Constant(1));
+  rt::TapeBuilder first(pool, params);
+  double v = 0;
+  ASSERT_TRUE(first.Fold(k, &v));
+  EXPECT_EQ(v, 10.0);
+  EXPECT_FALSE(first.Fold(force, &v));  // reads time; every node of the pool is now folded
+  rt::TapeBuilder shared = rt::TapeBuilder::SharingFolds(first);
+  const long before = g_allocations.load();
+  EXPECT_FALSE(shared.Fold(force, &v));
+  ASSERT_TRUE(shared.Fold(k, &v));
+  EXPECT_EQ(v, 10.0);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  shared.AddRoot(force, "force", "k*time + 1");
+  rt::TapeBuilder alone(pool, params);
+  alone.AddRoot(force, "force", "k*time + 1");
+  const rt::Tape a = shared.Finish(), b = alone.Finish();
+  ASSERT_EQ(a.code.size(), b.code.size());
+  for (size_t i = 0; i < a.code.size(); ++i) {
+    EXPECT_EQ(a.code[i].op, b.code[i].op);
+    EXPECT_EQ(a.code[i].dst, b.code[i].dst);
+    EXPECT_EQ(a.code[i].a, b.code[i].a);
+    EXPECT_EQ(a.code[i].b, b.code[i].b);
+  }
+  EXPECT_EQ(a.init, b.init);
+  EXPECT_EQ(a.time_reg, b.time_reg);
+  std::vector<double> regs = a.init;
+  regs[static_cast<size_t>(a.time_reg)] = 0.5;
+  a.Eval(regs.data());
+  EXPECT_EQ(regs[static_cast<size_t>(a.roots[0])], 6.0);  // 10 * 0.5 + 1
+}
+
 }  // namespace
 }  // namespace kanesim
