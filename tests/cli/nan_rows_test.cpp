@@ -71,6 +71,29 @@ TEST(NaNRows, EveryRowBeforeATimeNaNIsKeptByEveryIntegratorAndPath) {
       }
 }
 
+// The message names the expression that turned NaN, as the model's text prints it: a
+// joint force, an output and a prescribed motion (each tape keeps its roots' texts).
+TEST(NaNRows, TheMessageNamesTheExpressionThatTurnedNaN) {
+  std::string d = Work("nan_text");
+  Write(d + "/force.mech", Model("sqrt((c - time) / ts)"));
+  const std::string rest =
+      "  parameter Real c(unit = \"s\") = 0.35;\n  parameter Real ts(unit = \"s\") = 1;\n  World world;\n"
+      "  Revolute hinge(axis = {0, 0, 1}, q(start = 0));\n  Rod rod(L = 1, m = 1);\n";
+  const std::string joints = "  connect(world.frame_b, hinge.frame_a);\n  connect(hinge.frame_b, rod.frame_a);\n";
+  const std::string end = "  annotation(experiment(StopTime = 1, Interval = 0.1));\nend M;\n";
+  Write(d + "/output.mech", "model M\n" + rest + "  output Real y = sqrt((c - time) / ts);\nequation\n" + joints + end);
+  Write(d + "/motion.mech", "model M\n" + rest + "equation\n" + joints + "  hinge.q = sqrt((c - time) / ts);\n" + end);
+  const std::pair<const char*, const char*> cases[] = {
+      {"force.mech", "NaN from expression: force of joint 'hinge' tau = (k * sqrt(((c - time) / ts))) at time "},
+      {"output.mech", "NaN from expression: output 'y' = sqrt(((c - time) / ts)) at time "},
+      {"motion.mech", "NaN from expression: prescribed motion hinge.q = sqrt(((c - time) / ts)) at time "}};
+  for (const auto& [file, message] : cases) {
+    Result r = Kanesim(std::string("run ") + file + " -o out.csv", d);
+    EXPECT_EQ(r.rc, 2) << file << "\n" << r.err;
+    EXPECT_TRUE(Has(r.err, message)) << file << "\n" << r.err;
+  }
+}
+
 // A run killed from outside (SIGKILL: no handler, no flush) leaves its rows so far in the
 // temporary beside the output (out.csv.tmp.<host>.<pid>: recognizably not a finished output;
 // out.csv itself appears only when a run ends, issue 38), and they are whole rows, in order,
