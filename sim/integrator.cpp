@@ -401,6 +401,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
   if (!held_t.empty()) write_held(INFINITY);
   result.stats = stepper ? stepper->Stats() : IntegratorStats{};
   AddStats(&result.stats, done);
+  result.stats.event_evals = rhs.event_evals;
   return result;
 }
 

@@ -183,6 +183,8 @@ struct IntegratorStats {
   long steps = 0;
   long rhs_evals = 0;          // f evaluations by the method itself
   long rhs_evals_jac = 0;      // f evaluations spent on difference-quotient Jacobians
+  long event_evals = 0;        // evaluations of the event functions by the solvers (root finding,
+                               // DOP853's search of its dense output, graze guards); 0 without events
   long jac_evals = 0;          // Jacobian (re)computations
   long lin_setups = 0;         // linear-solver setups = LU factorizations
   long err_test_fails = 0;     // local error test failures
