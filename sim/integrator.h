@@ -164,7 +164,7 @@ struct IntegratorOptions {
   long max_steps = 100000;         // internal steps allowed between two output instants
   double max_step = 0.0;           // |h| bound; 0 = none
   double initial_step = 0.0;       // 0 = the solver's estimate
-  bool after_event = false;        // a fresh solver at an event's right limit (CVODE: CarefulStart)
+  bool after_event = false;        // a fresh solver at an event's right limit (CVODE-Adams: CarefulFirstStep)
   ErkTable erk_table = ErkTable::Verner65;
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;
   bool project_steps = false;      // DOP853: project accepted steps (OdeSystem::Project)

@@ -34,6 +34,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -206,7 +207,7 @@ class CvodeStepper final : public SundialsStepper {
   // Not BDF: its error after a restart is its own step growth (order 2 keeps about 1/6 of
   // the weights per step while the step grows), which a smaller first step only lengthens
   // (measured 3.9e-7 -> 9.6e-8 at 1e-6 of the weights, 3.9e-7 again at 1e-12);
-  // docs/events.md "Location and its limits". Two evaluations of f aside, counted in Stats.
+  // docs/events.md "Restarts". Two evaluations of f aside, counted in Stats.
   static constexpr double kFirstError = 1e-12;
   static constexpr double kEtaAfterFirst = 10.0;
   double CarefulFirstStep(double t0, const double* y0, double stop, const IntegratorOptions& options) {
@@ -225,8 +226,9 @@ class CvodeStepper final : public SundialsStepper {
     }
     const double ydd = std::sqrt(sum / static_cast<double>(n));  // ||y''||_w, CVODE's WRMS norm
     if (!(ydd > 0.0) || !std::isfinite(ydd)) return 0.0;
-    // (a step that t + h still tells from t: 1e3 ulps of t)
-    const double h0 = std::max(std::sqrt(2 * kFirstError / ydd), 1e3 * 2.2e-16 * std::max(1.0, std::abs(t0)));  // Eq. (1)
+    // (at least a step that t + h still tells from t: 1e3 ulps of t)
+    const double ulps = 1e3 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t0));
+    const double h0 = std::max(std::sqrt(2 * kFirstError / ydd), ulps);  // Eq. (1)
     return std::min(h0, std::abs(stop - t0));
   }
   long start_evals_ = 0;  // f evaluations of CarefulFirstStep
