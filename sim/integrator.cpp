@@ -326,7 +326,9 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
       stepper.reset();
       if (te < grid.stop) {
         rhs.Reset();
-        stepper = detail::MakeStepper(rhs, te, y.data(), grid.stop, bounded(), &error);
+        IntegratorOptions fresh = bounded();
+        fresh.after_event = true;
+        stepper = detail::MakeStepper(rhs, te, y.data(), grid.stop, fresh, &error);
         if (!stepper) {
           fail(rhs.failed ? rhs.fail_time : te, rhs.failed ? rhs.cause : error);
           result.stats = done;
@@ -417,6 +419,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
   if (!held_t.empty()) write_held(INFINITY);
   result.stats = stepper ? stepper->Stats() : IntegratorStats{};
   AddStats(&result.stats, done);
+  result.stats.event_evals = rhs.event_evals;
   return result;
 }
 

@@ -164,6 +164,7 @@ struct IntegratorOptions {
   long max_steps = 100000;         // internal steps allowed between two output instants
   double max_step = 0.0;           // |h| bound; 0 = none
   double initial_step = 0.0;       // 0 = the solver's estimate
+  bool after_event = false;        // a fresh solver at an event's right limit (CVODE-Adams: CarefulFirstStep)
   ErkTable erk_table = ErkTable::Verner65;
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;
   bool project_steps = false;      // DOP853: project accepted steps (OdeSystem::Project)
@@ -182,6 +183,8 @@ struct IntegratorStats {
   long steps = 0;
   long rhs_evals = 0;          // f evaluations by the method itself
   long rhs_evals_jac = 0;      // f evaluations spent on difference-quotient Jacobians
+  long event_evals = 0;        // evaluations of the event functions by the solvers (root finding,
+                               // DOP853's search of its dense output, graze guards); 0 without events
   long jac_evals = 0;          // Jacobian (re)computations
   long lin_setups = 0;         // linear-solver setups = LU factorizations
   long err_test_fails = 0;     // local error test failures

@@ -232,7 +232,9 @@ StepResult Simulator::AdvanceTo(double t) {
       }
       if (te >= t) return {};
       m.rhs->Reset();
-      m.stepper = detail::MakeStepper(*m.rhs, te, y_.data(), t, m.iopt, &error);
+      IntegratorOptions io = m.iopt;  // (an event at t itself: the next call's solver starts as any restart,
+      io.after_event = true;          // so that GetState and SetState continue it bit for bit)
+      m.stepper = detail::MakeStepper(*m.rhs, te, y_.data(), t, io, &error);
       if (!m.stepper) return Fail(m.rhs->failed ? m.rhs->fail_time : te, m.rhs->failed ? m.rhs->cause : error);
       continue;
     }

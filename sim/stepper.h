@@ -37,7 +37,10 @@ class GuardedRhs {
   // The system itself, for evaluations aside that are no solver's (ReleaseBound): their
   // failures are not recorded.
   OdeSystem& System() { return system_; }
-  int EventFunctions(double t, const double* y, double* g) { return system_.EventFunctions(t, y, g); }
+  int EventFunctions(double t, const double* y, double* g) {
+    ++event_evals;
+    return system_.EventFunctions(t, y, g);
+  }
   int Paired(int i) const { return system_.Paired(i); }
   bool HasEnergy() const { return system_.HasEnergy(); }
   int Energy(double t, const double* y, double* T, double* V) { return system_.Energy(t, y, T, V); }
@@ -56,6 +59,7 @@ class GuardedRhs {
     OdeSystem& system_;
   };
 
+  long event_evals = 0;    // EventFunctions calls over the run (IntegratorStats::event_evals)
   bool failed = false;     // an evaluation failed since the last ClearFailure()
   bool fatal = false;      // an evaluation returned < 0: latched, every later call fails
                            // without calling f, so no solver can creep up to it again

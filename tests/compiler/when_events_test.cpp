@@ -50,7 +50,7 @@ TEST(WhenEvents, BouncingBallFiresAtTheClosedFormTimes) {
       ASSERT_EQ(at.size(), 3u) << how.name;
       ASSERT_EQ(r.stats.events.size(), 3u) << how.name;
       for (size_t k = 0; k < 3; ++k) {
-        EXPECT_NEAR(s.times[at[k]], times[k], 1e-9) << how.name << " interval " << interval << " impact " << k;
+        EXPECT_NEAR(s.times[at[k]], times[k], 1e-10 * times[k]) << how.name << " interval " << interval << " impact " << k;
         EXPECT_EQ(s.rows[at[k] + 1][1], -0.8 * s.rows[at[k]][1]) << how.name;
         EXPECT_EQ(r.stats.events[k].time, s.times[at[k]]);
         ASSERT_EQ(r.stats.events[k].changes.size(), 1u);
@@ -257,8 +257,13 @@ TEST(WhenEvents, AccumulatingBouncesStopAtTheirAccumulationPoint) {
         EXPECT_NE(r.message.find("when (") , std::string::npos) << r.message;
         EXPECT_NE(r.message.find("accumulate"), std::string::npos) << r.message;
         EXPECT_NE(r.message.find("PlaneContact"), std::string::npos) << r.message;
+        // t_inf from the events' geometric series: to the 1e-10 relative (measured
+        // <= 1.2e-11; CVODE-Adams 2e-7 before its careful restart after each event);
+        // CVODE-BDF's restarts leave each flight about atol off (measured 5.6e-7 at 1e-12,
+        // 5.9e-6 at 1e-10; docs/events.md "Location and its limits").
         const double est = AccumulationTime(r.message);
-        EXPECT_NEAR(est, t_inf, (tol < 1e-11 ? 1e-6 : 1e-5) * t_inf) << how.name << " e " << e << " tol " << tol;
+        const double rel = how.kind != rt::Integrator::CvodeBdf ? 1e-10 : tol < 1e-11 ? 1e-6 : 1e-5;
+        EXPECT_NEAR(est, t_inf, rel * t_inf) << how.name << " e " << e << " tol " << tol;
         // Every row before it: the grid up to t_inf (and the events' pairs), none below the floor.
         ASSERT_FALSE(s.times.empty());
         EXPECT_LT(s.times.back(), t_inf) << how.name;
