@@ -132,5 +132,47 @@ TEST(StopChain, EventsWithoutProgressStopTheRunNeverHangIt) {
   EXPECT_GT(r.rows.back()[0], t_fail - 1e-5) << "the rows before the failure were not kept";
 }
 
+// The friction chain (models/friction_stop_chain.mech) with N = 6 rods, e = 1, mu = 0.2 on
+// 1 cm pins, from a random sweep of stops with friction (/work/wt/fchain.py, issue 41: "Energy
+// never rises at an impact with e <= 1"). j[1] strikes q_max alone at t = 0.66179, 15.3869 ->
+// -15.3869 rad/s: Newton's law beside the other joints' friction impulses added 0.045 J
+// (0.016 J at t = 0.60867, j[4]), the energy gain of Newton's kinematic restitution with
+// friction (Kane & Levinson; sim/end_stops.cpp (4)). Now its restitution is scaled by the
+// largest factor that adds none, as where sides strike together. What must hold, in every
+// integrator: the run completes; across every event instant (the two rows at one time) the
+// energy does not rise beyond round-off; no rebound is faster than its approach (e = 1), and
+// some are slower (the scaled ones).
+TEST(StopChain, ImpactsBesideFrictionImpulsesAddNoEnergy) {
+  for (const char* how : {"dop853", "cvode", "cvode-bdf", "ida", "arkode"}) {
+    const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
+                                   {"--integrator", how, "--stop-time", "3", "--rtol", "1e-8", "--stats", "--output",
+                                    "kinetic_energy", "--output", "potential_energy", "--set", "N=6", "--set", "e=1.0",
+                                    "--set", "bend=0.427278", "--set", "mu=0.2", "--set", "r=0.01", "--set", "tq=0.0",
+                                    "--set", "j1.q.start=1.10413592142989"});
+    ASSERT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
+    const std::vector<double> t = r.Column("time"), T = r.Column("kinetic_energy"), V = r.Column("potential_energy");
+    int instants = 0;
+    for (size_t i = 1; i < t.size(); ++i) {
+      if (t[i] != t[i - 1]) continue;
+      ++instants;
+      const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
+      EXPECT_LE(E1 - E0, 1e-12 * std::abs(E0)) << how << " at t = " << t[i];
+    }
+    EXPECT_GT(instants, 50) << how;
+    const std::regex line("t = [0-9.eE+-]+\\s+j\\[[0-9]\\]: impact at q_m(?:ax|in), speed ([0-9.eE+-]+) -> ([0-9.eE+-]+)");
+    int impacts = 0, scaled = 0;
+    for (auto it = std::sregex_iterator(r.stderr_text.begin(), r.stderr_text.end(), line); it != std::sregex_iterator();
+         ++it) {
+      const double ratio = -std::stod((*it)[2]) / std::stod((*it)[1]);
+      ++impacts;
+      EXPECT_GE(ratio, 0.0) << how;
+      EXPECT_LE(ratio, 1.0 + 1e-9) << how;
+      if (ratio < 1.0 - 1e-6) ++scaled;
+    }
+    EXPECT_GT(impacts, 50) << how;
+    EXPECT_GE(scaled, 1) << how << ": no impact with its restitution scaled";
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::stress
