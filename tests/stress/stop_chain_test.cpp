@@ -18,6 +18,7 @@
 #include <cmath>
 #include <map>
 #include <regex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -139,9 +140,11 @@ TEST(StopChain, EventsWithoutProgressStopTheRunNeverHangIt) {
 // (0.016 J at t = 0.60867, j[4]), the energy gain of Newton's kinematic restitution with
 // friction (Kane & Levinson; sim/end_stops.cpp (4)). Now its restitution is scaled by the
 // largest factor that adds none, as where sides strike together. What must hold, in every
-// integrator: the run completes; across every event instant (the two rows at one time) the
-// energy does not rise beyond round-off; no rebound is faster than its approach (e = 1), and
-// some are slower (the scaled ones).
+// integrator: the run completes; across every impact's instant (the two rows at one time)
+// the energy does not rise beyond round-off, 1e-12 relative (at the other event instants,
+// reversals of a sliding joint, its speed set to 0 from the event location's residual moves
+// T by up to 5e-12 relative through M's cross terms: 1e-9 there); no rebound is faster than
+// its approach (e = 1), and some are slower (the scaled ones).
 TEST(StopChain, ImpactsBesideFrictionImpulsesAddNoEnergy) {
   for (const char* how : {"dop853", "cvode", "cvode-bdf", "ida", "arkode"}) {
     const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
@@ -151,14 +154,20 @@ TEST(StopChain, ImpactsBesideFrictionImpulsesAddNoEnergy) {
                                     "--set", "j1.q.start=1.10413592142989"});
     ASSERT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
     const std::vector<double> t = r.Column("time"), T = r.Column("kinetic_energy"), V = r.Column("potential_energy");
+    std::set<double> struck;  // the impacts' instants (--stats's event log: "  t = 0.66...  j[1]: impact ...")
+    const std::regex at("t = ([0-9.eE+-]+)\\s+\\S+: impact");
+    for (auto it = std::sregex_iterator(r.stderr_text.begin(), r.stderr_text.end(), at); it != std::sregex_iterator();
+         ++it)
+      struck.insert(std::stod((*it)[1]));
     int instants = 0;
     for (size_t i = 1; i < t.size(); ++i) {
       if (t[i] != t[i - 1]) continue;
-      ++instants;
+      const bool impact = struck.count(t[i]) > 0;
+      instants += impact;
       const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
-      EXPECT_LE(E1 - E0, 1e-12 * std::abs(E0)) << how << " at t = " << t[i];
+      EXPECT_LE(E1 - E0, (impact ? 1e-12 : 1e-9) * std::abs(E0)) << how << " at t = " << t[i];
     }
-    EXPECT_GT(instants, 50) << how;
+    EXPECT_GT(instants, 50) << how << " impact instants";
     const std::regex line("t = [0-9.eE+-]+\\s+j\\[[0-9]\\]: impact at q_m(?:ax|in), speed ([0-9.eE+-]+) -> ([0-9.eE+-]+)");
     int impacts = 0, scaled = 0;
     for (auto it = std::sregex_iterator(r.stderr_text.begin(), r.stderr_text.end(), line); it != std::sregex_iterator();
