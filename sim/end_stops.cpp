@@ -828,8 +828,8 @@ int EndStopEvents::Impact(rt::Workspace& ws, double t, double* y, int i, double 
   }
   // Newton's laws of sides struck together need not dissipate (a side joined at rate 0 beside
   // others rebounding: a folded chain of 8 rods at e = 0.7 gained 0.36 J at one instant), nor
-  // does one side's beside friction impulses (docs/events.md "Energy at an impact with friction impulses"). With
-  // P = M du = J^T c + sum_i P_f,i e_i + A^T mu_A the impact's generalized impulse,
+  // does one side's beside friction impulses (docs/events.md "Energy at an impact with friction
+  // impulses"). With P = M du = J^T c + sum_i P_f,i e_i + A^T mu_A the impact's generalized impulse,
   //   T(u+) - T(u-) = P^T u+ - |du|_M^2 / 2
   //                 = sum_j c_j (J_j u+) + sum_i P_f,i u_i+ - |du|_M^2 / 2                (4)
   // (A u+ = 0: the constraint rows do no work), where a struck row's J_j u+ = -e_j v_j,
