@@ -146,9 +146,16 @@ TEST(StopChain, EventsWithoutProgressStopTheRunNeverHangIt) {
 // T by up to 5e-12 relative through M's cross terms: 1e-9 there); no rebound is faster than
 // its approach (e = 1), and some are slower (the scaled ones).
 TEST(StopChain, ImpactsBesideFrictionImpulsesAddNoEnergy) {
+#ifdef KANESIM_STRESS_SHORT  // sanitizers (~30x slower): the first second, 47 impacts (t = 0.4727, 0.6087, 0.6618 among them)
+  const char* stop = "1";
+  const int least = 15;
+#else
+  const char* stop = "3";
+  const int least = 50;
+#endif
   for (const char* how : {"dop853", "cvode", "cvode-bdf", "ida", "arkode"}) {
     const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
-                                   {"--integrator", how, "--stop-time", "3", "--rtol", "1e-8", "--stats", "--output",
+                                   {"--integrator", how, "--stop-time", stop, "--rtol", "1e-8", "--stats", "--output",
                                     "kinetic_energy", "--output", "potential_energy", "--set", "N=6", "--set", "e=1.0",
                                     "--set", "bend=0.427278", "--set", "mu=0.2", "--set", "r=0.01", "--set", "tq=0.0",
                                     "--set", "j1.q.start=1.10413592142989"});
@@ -167,7 +174,7 @@ TEST(StopChain, ImpactsBesideFrictionImpulsesAddNoEnergy) {
       const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
       EXPECT_LE(E1 - E0, (impact ? 1e-12 : 1e-9) * std::abs(E0)) << how << " at t = " << t[i];
     }
-    EXPECT_GT(instants, 50) << how << " impact instants";
+    EXPECT_GT(instants, least) << how << " impact instants";
     const std::regex line("t = [0-9.eE+-]+\\s+j\\[[0-9]\\]: impact at q_m[a-z]+, speed ([0-9.eE+-]+) -> ([0-9.eE+-]+)");
     int impacts = 0, scaled = 0;
     for (auto it = std::sregex_iterator(r.stderr_text.begin(), r.stderr_text.end(), line); it != std::sregex_iterator();
