@@ -187,6 +187,8 @@ TEST(StopChain, ImpactsBesideFrictionImpulsesAddNoEnergy) {
     }
     EXPECT_GT(impacts, 50) << how;
     EXPECT_GE(scaled, 1) << how << ": no impact with its restitution scaled";
+  }
+}
 
 // The same chain of six with mu = 1 on pins of r = 0.2 m (mu r = 0.2 m on 0.5 m links),
 // released at rest with j1 at -0.0593: at the start j1 and j[1] slip and the friction
