@@ -545,10 +545,12 @@ int StickSlipEvents::Start(rt::Workspace& ws, double t0, double* y0) {
   grouped_ = false;
   if (int s = MarkHeldByStops(ws, t0, y0, 0.0); s != 0) return s;
   const std::vector<int> resting = RestingSpeeds();
+  const long from = decisions_;
   for (Joint& j : joints_)
     if (j.mode == 0 && !HeldByStop(j, resting) && j.stamp == 0)  // (a passenger decided with its leader)
       if (int s = Decide(ws, t0, y0, j); s != 0) return s;
-  return CheckSlides(ws, t0, y0);
+  // (one decision alone was made with every other law final)
+  return direct_ || decisions_ - from < 2 ? 0 : CheckSlides(ws, t0, y0);
 }
 
 int StickSlipEvents::CheckSlides(rt::Workspace& ws, double t, double* y) {
