@@ -26,7 +26,7 @@ std::string SlidingAgainstItsLaw(const StickSlipEvents& stick, const rt::Program
                                  const SimOptions& options) {
   for (int i = 0; i < stick.Count(); ++i) {
     const int mode = stick.ModeOf(i);
-    if (mode == 0) continue;
+    if (mode == 0 || !stick.Watched(i)) continue;
     const double u = y[program.nq + stick.SpeedOf(i)];
     if (mode * u < -1e3 * (options.atol + options.rtol)) {
       char buf[300];
