@@ -52,6 +52,11 @@ class StickSlipEvents {
   // Joint i's free speed and its mode (+1 / -1 sliding that way, 0 stuck).
   int SpeedOf(int i) const { return joints_[static_cast<size_t>(i)].f.u; }
   int ModeOf(int i) const { return joints_[static_cast<size_t>(i)].mode; }
+  // Joint i's own law watches it (Functions): not a passenger, not resting on its stop.
+  bool Watched(int i) const {
+    const Joint& j = joints_[static_cast<size_t>(i)];
+    return j.leader < 0 && !HeldByStop(j, RestingSpeeds());
+  }
   bool AnyStuck() const {
     for (const Joint& j : joints_)
       if (j.mode == 0) return true;
