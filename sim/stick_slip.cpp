@@ -45,6 +45,13 @@ namespace {
 // (1 + the largest acceleration): the round-off level of a fresh Newton step, about.
 constexpr double kChordTol = 1e-12;
 constexpr int kChordSteps = 3;  // chord steps before X is made afresh
+// (1) with a friction mu N: Newton steps at most, the residual accepted at the mu N
+// iteration's noise (runtime/kane/friction.cpp kTol, through gains near 1), and X's
+// difference step per unit of (1 + |tau| + |a|max): small against N's curvature, large
+// against that noise (the step of 1e3 of the affine case left X a secant).
+constexpr int kNewtonSteps = 20;
+constexpr double kNewtonNoise = 1e-9;
+constexpr double kStepMuN = 1e-3;
 // Beside constraint rows: a pivot of X, scaled by the tree's inverse mass (X_kk <= (M^-1)_kk),
 // below this is a motion the rows fix (as rt::InverseMassColumn's dead point).
 constexpr double kDependent = 1e-10;
@@ -61,6 +68,7 @@ StickSlipEvents::StickSlipEvents(const rt::Program& program) : program_(program)
   for (size_t i = 0; i < all.size(); ++i) {
     if (all[i].exact) joints_.push_back({all[i], static_cast<int>(i), 0, 0.0});
     direct_ = direct_ && all[i].mu == 0.0;  // a friction mu N: the accelerations are not affine in tau
+    reads_N_ = reads_N_ || all[i].mu != 0.0;
   }
   ydot_.resize(static_cast<size_t>(nq_ + nu_));
   col_.resize(ydot_.size());
@@ -271,20 +279,42 @@ int StickSlipEvents::SolveNewton(rt::Workspace& ws, double t, const double* y, d
   for (const Joint* j : stuck) ids.push_back(j->index);
   bool fresh = ids != x_ids_;
   std::vector<double> rhs(m), dtau;
-  for (int chord = 0;; ++chord) {
-    if (fresh)
+  // Newton (1) with X made afresh every kChordSteps steps, until the stuck accelerations are
+  // within kChordTol: with a friction mu N they are only nearly affine in tau, and X by a
+  // difference over a step of 1e3 N m was a secant, not a slope. One such step left them
+  // ~1e-3 from zero and the forces ~4e-5 off, by an amount that depended on the last call's
+  // forces: the right-hand side depended on its history, CVODE-BDF's difference-quotient
+  // Jacobian of it was garbage, and it froze a slipping joint's speed near zero (a silent
+  // 42.9 J instead of 23.4 J: issue 41). Where the mu N iteration's own tolerance leaves
+  // noise above kChordTol (~1e-11 of the accelerations), a step that no longer halves the
+  // residual ends it within kNewtonNoise; a residual above that is a failure (recoverable).
+  double residual = HUGE_VAL, scale = 1.0;
+  for (int step = 0, chord = 0;; ++step, ++chord) {
+    if (fresh) {
       if (int s = MakeX(ws, t, y, stuck, out); s != 0) return s;
+      chord = 0;
+    }
     x_ids_ = ids;
     for (size_t r = 0; r < m; ++r) rhs[r] = -out[nq_ + stuck[r]->f.u];
     if (!SolveSmall(x_, rhs, &dtau)) return -1;
     for (size_t k = 0; k < m; ++k) stuck[k]->tau += dtau[k];
     Apply(ws);
     if (int s = Eval(ws, t, y, out); s != 0) return s;
-    if (fresh) break;  // (1) exact up to round-off
-    double residual = 0.0, scale = 1.0;
+    const double last = residual;
+    residual = 0.0, scale = 1.0;
     for (const Joint* j : stuck) residual = std::max(residual, std::abs(out[nq_ + j->f.u]));
     for (int i = 0; i < nu_; ++i) scale = std::max(scale, 1.0 + std::abs(out[nq_ + i]));
     if (residual <= kChordTol * scale) break;
+    if (residual <= kNewtonNoise * scale && residual > 0.5 * last) break;  // (the noise floor)
+    if (step + 1 >= kNewtonSteps) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf,
+                    "the stuck joints' friction forces did not converge (their accelerations %.3g from zero after %d "
+                    "Newton steps)",
+                    residual, kNewtonSteps);
+      error_ = buf;
+      return 1;  // (recoverable: the integrator retries with a smaller step)
+    }
     fresh = chord + 1 >= kChordSteps;
   }
   for (const Joint* j : stuck) {  // held exactly
@@ -301,7 +331,7 @@ int StickSlipEvents::MakeX(rt::Workspace& ws, double t, const double* y, const s
   double a_max = 0.0;
   for (const Joint* j : stuck) a_max = std::max(a_max, std::abs(a0[nq_ + j->f.u]));
   for (size_t k = 0; k < m; ++k) {  // (1): column k of X
-    const double tau0 = Applied(ws, *stuck[k]), step = 1e3 * (1.0 + std::abs(tau0) + a_max);
+    const double tau0 = Applied(ws, *stuck[k]), step = (reads_N_ ? kStepMuN : 1e3) * (1.0 + std::abs(tau0) + a_max);
     rt::SetFrictionMode(ws, stuck[k]->index, 2, tau0 + step);
     if (int s = Eval(ws, t, y, col_.data()); s != 0) return s;
     rt::SetFrictionMode(ws, stuck[k]->index, 2, tau0);
@@ -311,7 +341,10 @@ int StickSlipEvents::MakeX(rt::Workspace& ws, double t, const double* y, const s
   return 0;
 }
 
-int StickSlipEvents::Rhs(rt::Workspace& ws, double t, const double* y, double* ydot) { return Solve(ws, t, y, ydot); }
+int StickSlipEvents::Rhs(rt::Workspace& ws, double t, const double* y, double* ydot) {
+  error_.clear();  // (a recoverable failure's cause is the last call's only)
+  return Solve(ws, t, y, ydot);
+}
 
 int StickSlipEvents::Functions(rt::Workspace& ws, double t, const double* y, double* g) {
   if (int s = Solve(ws, t, y, nullptr); s != 0) return s;

@@ -181,6 +181,7 @@ class StickSlipEvents {
   EndStopEvents* stops_ = nullptr;  // SetStops (null: none)
   std::vector<Joint> joints_;
   int nq_ = 0, nu_ = 0;
+  bool reads_N_ = false;  // some exact joint's friction mu N follows its normal force
   bool direct_ = true;  // constant friction on a tree: (2) of stick_slip.cpp, else Newton (1)
   std::vector<double> ydot_, col_;  // scratch (col_: MakeX's evaluations)
   std::vector<double> x_;     // X of the stuck set x_ids_ (friction joint indices), m x m row-major
