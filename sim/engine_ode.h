@@ -95,6 +95,7 @@ class EngineOde final : public OdeSystem {
     for (int k = 0; stick_ && k < stick_->Count(); ++k)
       if (stick_->ModeOf(k) == 0) events->push_back(FirstStick() + k);
   }
+  bool IteratedRhs() const override { return stick_ && stick_->ReadsNormalForce(); }
   int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
   int EventFunctions(double t, const double* y, double* g) override {
     if (stick_)  // first: it solves the stuck joints' forces the stops' reactions read

@@ -43,6 +43,8 @@ class StickSlipEvents {
   int Rhs(rt::Workspace& ws, double t, const double* y, double* ydot);
   int Functions(rt::Workspace& ws, double t, const double* y, double* g);
   // Joint i stopped (sliding) or its needed force reached mu_s r N (stuck); y jumps in place.
+  // Then the laws at rest are made consistent together (CheckLaws): -1 with Error() where
+  // none is (Painleve-type).
   int Event(rt::Workspace& ws, double t, double* y, int i);
   // The friction laws of the run into another workspace (the output rows').
   void Sync(rt::Workspace& ws) const;
@@ -57,6 +59,8 @@ class StickSlipEvents {
     const Joint& j = joints_[static_cast<size_t>(i)];
     return j.leader < 0 && !HeldByStop(j, RestingSpeeds());
   }
+  // Some exact joint's friction follows its normal force (mu N): Rhs iterates (OdeSystem::IteratedRhs).
+  bool ReadsNormalForce() const { return reads_N_; }
   bool AnyStuck() const {
     for (const Joint& j : joints_)
       if (j.mode == 0) return true;
@@ -153,11 +157,19 @@ class StickSlipEvents {
   // over a narrow slip window (HeldStep.ANarrowSlipWindowIsFoundInsideLargeStepsOfTheSimulator).
   bool AllHeld() const;
   std::vector<int> RestingSpeeds() const;
+  // Event's own switch of joint i's law.
+  int Switch(rt::Workspace& ws, double t, double* y, int i);
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
   int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
-  // After the decisions at rest: each joint sliding from rest accelerates its own way (else
-  // decided again with the others' final laws); -1 with error_ where that does not settle.
-  int CheckSlides(rt::Workspace& ws, double t, double* y);
+  // After decisions at rest (the start, a slip, a stop, a jump): the laws of the joints at
+  // rest consistent together ((5) of stick_slip_laws.cpp: stuck ones within their bounds,
+  // sliding ones accelerating their way), else enumerated; the decisions since `from`
+  // (Joint::stamp) first; `slipped`, whose needed force has just passed its bound (its event),
+  // is not stuck again. -1 with error_ where no choice is consistent (Painleve-type).
+  int CheckLaws(rt::Workspace& ws, double t, double* y, long from, const Joint* slipped = nullptr);
+  // (5)'s violators among at_rest under the laws as they are (*status: Solve's).
+  std::vector<Joint*> Inconsistent(rt::Workspace& ws, double t, double* y, const std::vector<Joint*>& at_rest,
+                                   int* status);
   // Constraint rows (closed loops, couplings, rolling contacts): X is the constrained inverse
   // mass of the stuck speeds, which the rows may make singular. The stuck joints, j among
   // them, and the sliding ones the rows tie to them are grouped by (4) of stick_slip.cpp (a

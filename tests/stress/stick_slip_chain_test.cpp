@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,86 @@ TEST(StickSlipChain, EveryIntegratorAgreesAfterADegenerateSlip) {
     EXPECT_NEAR(E_end, E_ref, kAgreeAtEnd * std::abs(E_ref)) << how << ": T + V at t = 3";
   }
   EXPECT_FALSE(std::isnan(T_ref)) << "no integrator ran to the end";
+}
+
+// A rod on a pin whose normal force follows its own acceleration (models/painleve_pin.mech:
+// m = 1 kg, L = 0.5 m, d = L/2, I_p = m L^2/3, released horizontal at rest, exact friction
+// mu on a pin of radius r, torque tau = drive - m g d about the pin). By hand at rest: the
+// pin's reaction is m (g + d udot) across the rod, N its size, and sliding backwards
+//   udot = (tau + mu r m g) / (I_p - mu r m d)              while g + d udot > 0,       (a)
+//   udot = (tau - mu r m g) / (I_p + mu r m d)              once the reaction reverses. (b)
+// Below the threshold mu r m d < I_p (mu r < 1/3 m) (a) is negative: consistent. Above it
+// (a) is positive, against the slide, and only (b) is consistent (the friction's normal
+// force falls to zero and reverses as the rod accelerates down faster than g): the one
+// joint always has a consistent law (stick_slip_laws.cpp: phi changes sign between the
+// needed force and 0), so no Painleve refusal, the acceleration jumps to (b). What would be
+// wrong if this failed: the friction's fixed point taken on the wrong branch, or a refusal
+// of a state that has a consistent law. All five integrators, j.a at t = 0 to 1e-9.
+TEST(StickSlipChain, APinWhoseNormalForceFollowsItsAccelerationSlidesByTheClosedForm) {
+  const double m = 1.0, L = 0.5, d = L / 2, g = 9.81, I = m * L * L / 3;
+  struct Case {
+    const char* r;
+    const char* drive;
+    double mu_r, tau;
+    bool reversed;  // (b), above the threshold
+  };
+  for (const Case& c : {Case{"0.2", "0", 0.2, -m * g * d, false}, Case{"0.3", "-0.6475", 0.3, -3.1, false},
+                        Case{"0.4", "-2.5475", 0.4, -5.0, true}}) {
+    const double a = c.reversed ? (c.tau - c.mu_r * m * g) / (I + c.mu_r * m * d)
+                                : (c.tau + c.mu_r * m * g) / (I - c.mu_r * m * d);
+    ASSERT_LT(a, 0.0);
+    ASSERT_EQ(c.reversed, g + d * a < 0.0) << c.r;
+    for (const char* how : {"dop853", "cvode", "cvode-bdf", "ida", "arkode"}) {
+      const RunResult r = RunKanesim("tests/stress/models/painleve_pin.mech",
+                                     {"--integrator", how, "--rtol", "1e-10", "--stop-time", "0.01", "--interval",
+                                      "0.005", "--output", "j.a", "--set", std::string("r=") + c.r, "--set",
+                                      std::string("drive=") + c.drive});
+      ASSERT_EQ(r.exit_code, 0) << how << " r = " << c.r << ": " << r.stderr_text;
+      EXPECT_NEAR(r.Column("j.a").front(), a, 1e-9 * std::abs(a)) << how << " r = " << c.r;
+    }
+  }
+}
+
+// Sliding friction above the static one (mu = 1, mu_s = 0.5, r = 0.2 m on the same pin):
+// held, then pulled by the torque ramp until the force needed, 0.9525 + t N m, passes the
+// static bound mu_s r m g = 0.981 at t = 0.0285: then stuck is inconsistent (beyond its
+// bound), and sliding backwards the sliding bound mu r N = 1.962 exceeds the pull, so it
+// accelerates forwards, and sliding forwards accelerates backwards: no law is consistent.
+// The run stops there (exit 2) naming the joint, the rows before it kept. Before: it slid
+// on against its friction (silent on main; refused as "its reversal was missed" at the next
+// row by exp/bdf's check). With mu_s = mu (the threshold) it runs on and slips at 1.0095,
+// where the needed force reaches mu r m g = 1.962, its acceleration 0 there and growing:
+// CVODE-BDF kept its speed at -2e-11 rad/s (the others -0.1228 at 1.1 s), its difference
+// quotients over increments of 2e-22 at the restart at rest measuring the friction
+// iteration's noise (df/dy -1e11, sim/integrator.h IteratedRhs). All five integrators, the
+// speed at 1.1 s to 1e-7 of DOP853's.
+TEST(StickSlipChain, NoConsistentLawStopsTheRunWhereItArises) {
+  double u_ref = NAN;
+  for (const char* how : {"dop853", "cvode", "cvode-bdf", "ida", "arkode"}) {
+    const std::vector<std::string> common{"--integrator", how,   "--rtol", "1e-10", "--set", "r=0.2",
+                                          "--set",        "drive=1.5", "--set", "ramp=-1", "--interval", "0.01"};
+    std::vector<std::string> args = common;
+    args.insert(args.end(), {"--set", "mu_s=0.5", "--stop-time", "0.1"});
+    const RunResult r = RunKanesim("tests/stress/models/painleve_pin.mech", args);
+    EXPECT_EQ(r.exit_code, 2) << how << ": " << r.stderr_text;
+    EXPECT_NE(r.stderr_text.find("neither sticking nor sliding is consistent"), std::string::npos) << how << r.stderr_text;
+    std::smatch at;
+    ASSERT_TRUE(std::regex_search(r.stderr_text, at, std::regex("numerical failure at t = ([0-9.]+)"))) << how;
+    EXPECT_NEAR(std::stod(at[1]), 0.0285, 1e-9) << how;
+    ASSERT_FALSE(r.rows.empty()) << how;
+    EXPECT_NEAR(r.rows.back()[0], 0.0285, 1e-9) << how << ": the rows before the refusal were not kept";
+    args = common;
+    args.insert(args.end(), {"--set", "mu_s=1", "--stop-time", "1.1", "--stats", "--output", "j.u"});
+    const RunResult ok = RunKanesim("tests/stress/models/painleve_pin.mech", args);
+    ASSERT_EQ(ok.exit_code, 0) << how << ": " << ok.stderr_text;
+    const double u = ok.Column("j.u").back();
+    if (std::isnan(u_ref)) u_ref = u;
+    EXPECT_LT(u, -0.1) << how;
+    EXPECT_NEAR(u, u_ref, 1e-7 * std::abs(u_ref)) << how;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(ok.stderr_text, m, std::regex("t = ([0-9.]+)\\s+j: slips, backwards"))) << how;
+    EXPECT_NEAR(std::stod(m[1]), 1.0095, 1e-6) << how;
+  }
 }
 
 }  // namespace
