@@ -362,6 +362,15 @@ int StickSlipEvents::Functions(rt::Workspace& ws, double t, const double* y, dou
   return 0;
 }
 
+void StickSlipEvents::Guards(double* g) const {
+  const std::vector<int> resting = RestingSpeeds();
+  for (size_t i = 0; i < joints_.size(); ++i) {
+    const Joint& j = joints_[i];
+    const bool watched = j.mode != 0 && !rows_ && j.leader < 0 && !HeldByStop(j, resting);
+    g[i] = watched ? -j.mode * ydot_[static_cast<size_t>(nq_ + j.f.u)] : 1.0;
+  }
+}
+
 int StickSlipEvents::Decide(rt::Workspace& ws, double t, double* y, Joint& j) {
   std::vector<int> before;  // the laws before: SettleGroup logs the members' changes
   for (const Joint& k : joints_) before.push_back(k.mode);

@@ -42,6 +42,11 @@ class StickSlipEvents {
   // Derivative's ydot. 0, or Derivative's codes.
   int Rhs(rt::Workspace& ws, double t, const double* y, double* ydot);
   int Functions(rt::Workspace& ws, double t, const double* y, double* g);
+  // The graze guards of the last Functions' evaluation (OdeSystem::Paired): a sliding joint's
+  // -s udot, crossing where its speed s u has a minimum (a dip below zero and back inside
+  // one step, which the speed's signs at the step's ends do not show); 1 for the others
+  // (and beside constraint rows, where a dependent speed's rate is not solved).
+  void Guards(double* g) const;
   // Joint i stopped (sliding) or its needed force reached mu_s r N (stuck); y jumps in place.
   // Then the laws at rest are made consistent together (CheckLaws): -1 with Error() where
   // none is (Painleve-type).
