@@ -112,8 +112,7 @@ int StickSlipEvents::CheckLaws(rt::Workspace& ws, double t, double* y, long from
       }
       if (excluded) continue;
       wrong = Inconsistent(ws, t, y, at_rest, &status);
-      if (status != 0) break;  // (this choice cannot be evaluated: the next may)
-      if (!wrong.empty()) continue;
+      if (status != 0 || !wrong.empty()) continue;  // (one that cannot be evaluated has no unique forces)
       for (Joint* j : at_rest) {  // the changes, logged
         const size_t i = static_cast<size_t>(j - joints_.data());
         if (j->mode == before[i]) continue;
