@@ -45,6 +45,9 @@ namespace {
 // (1 + the largest acceleration): the round-off level of a fresh Newton step, about.
 constexpr double kChordTol = 1e-12;
 constexpr int kChordSteps = 3;  // chord steps before X is made afresh
+// A sliding joint's stop this close to its own slip (relative to max(1, |t|)) is its echo
+// (Switch): the solver's error on a speed that starts from rest with no acceleration.
+constexpr double kSlipEcho = 1e-9;
 // (1) with a friction mu N: Newton steps at most, the residual accepted at the mu N
 // iteration's noise (runtime/kane/friction.cpp kTol, through gains near 1), and X's
 // difference step per unit of (1 + |tau| + |a|max): small against N's curvature, large
@@ -420,6 +423,15 @@ int StickSlipEvents::Event(rt::Workspace& ws, double t, double* y, int i) {
 int StickSlipEvents::Switch(rt::Workspace& ws, double t, double* y, int i) {
   Joint& j = joints_[static_cast<size_t>(i)];
   if (j.leader >= 0) return 0;  // a passenger: its leader's function watches it (4)
+  // A stop found within kSlipEcho of the joint's own slip: where the force needed passed
+  // its bound with the acceleration after the slip ~0, the speed's first steps are the
+  // solver's error, and its event function or graze guard found a stop 3e-14 s later
+  // (ARKODE); deciding then stuck it at its bound, where its stuck function starts at zero
+  // and its next slip is never found. It slides on from rest.
+  if (j.mode != 0 && !rows_ && std::abs(t - j.slipped_at) <= kSlipEcho * std::max(1.0, std::abs(t))) {
+    y[nq_ + j.f.u] = 0.0;
+    return 0;
+  }
   if (j.mode != 0) return Decide(ws, t, y, j);
   // A stuck joint's force needed reached its bound and grows past it: it slips. (Deciding
   // again here found it within the bound by the root's last bits and kept it stuck, with
@@ -433,6 +445,7 @@ int StickSlipEvents::Switch(rt::Workspace& ws, double t, double* y, int i) {
   std::vector<int> before;
   for (const Joint& k : joints_) before.push_back(k.mode);
   j.mode = j.tau > 0.0 ? -1 : 1;
+  j.slipped_at = t;
   ++decisions_;
   SettleGroup(ws, t, j, before, &j);  // (its passengers slide with it)
   Apply(ws);

@@ -7,6 +7,7 @@
 // function: s u while sliding in direction s, mu_s r N + C_s - |tau| while stuck.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -124,6 +125,7 @@ class StickSlipEvents {
     int leader = -1;
     double ratio = 0.0;
     long stamp = 0;  // the Decide that last set its law (Refresh and Start decide each joint once)
+    double slipped_at = -HUGE_VAL;  // when its needed force last passed its bound (Switch)
   };
   // The stuck joints' friction forces at (t, y) (Newton on their accelerations, which are
   // affine in them), the modes applied to ws; ydot (may be null) the held motion.
