@@ -274,7 +274,9 @@ struct Node {
   std::vector<NodePtr> children;
   // The index of `children` Child() builds for a large class, keyed by the children's names
   // (views of Node::name, which outlives it).
-  mutable std::unique_ptr<std::unordered_map<std::string_view, Node*>> by_name;
+  using ChildIndex = std::unordered_map<std::string_view, Node*, std::hash<std::string_view>,
+                                        std::equal_to<>, PoolAllocator<std::pair<const std::string_view, Node*>>>;
+  mutable std::unique_ptr<ChildIndex> by_name;  // its entries from a pool (lang/node_pool.h)
   struct EqSource {
     const ast::Equation* eq;
     const ast::ClassDef* cls;  // for lookups
@@ -319,7 +321,8 @@ struct Node {
       return nullptr;
     }
     if (!by_name || by_name->size() != children.size()) {
-      by_name = std::make_unique<std::unordered_map<std::string_view, Node*>>();
+      by_name = std::make_unique<ChildIndex>();
+      by_name->reserve(children.size());
       for (const auto& c : children) (*by_name)[c->name] = c.get();
     }
     auto it = by_name->find(n);
