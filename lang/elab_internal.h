@@ -316,8 +316,11 @@ struct Node {
     const size_t count = children.size();
     if (count <= kScanChildren || (!by_name && count * (scans + 1u) <= kScanBudget)) {
       if (count > kScanChildren) ++scans;
-      for (size_t i = count; i-- > 0;)
-        if (children[i]->name == n) return children[i].get();
+      for (size_t i = count; i-- > 0;) {  // lengths first: most names differ in length
+        const std::string& c = children[i]->name;
+        if (c.size() == n.size() && std::char_traits<char>::compare(c.data(), n.data(), n.size()) == 0)
+          return children[i].get();
+      }
       return nullptr;
     }
     if (!by_name || by_name->size() != children.size()) {
