@@ -119,6 +119,11 @@ class ExprPool {
   ExprId Binary(Op op, ExprId a, ExprId b);
   ExprId IfElse(ExprId cond, ExprId then_e, ExprId else_e);
 
+  // Room for n nodes in all, made ahead (the elaborator knows about how many it will push).
+  void Reserve(size_t n) {
+    nodes_.reserve(n);
+    reads_.reserve(n);
+  }
   const ExprNode& operator[](ExprId id) const { return nodes_[static_cast<size_t>(id)]; }
   size_t size() const { return nodes_.size(); }
   const std::vector<ExprNode>& nodes() const { return nodes_; }

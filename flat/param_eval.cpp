@@ -16,8 +16,8 @@ double ParamEvaluator::Eval(ExprId id) {
   const auto uid = static_cast<size_t>(id);
   if (uid < known_.size() && known_[uid]) return value_[uid];
   if (pool_[id].op == Op::Const) return pool_[id].value;  // a literal: nothing to walk or keep
-  if (known_.size() < pool_.size()) {  // grown by half at least: the pool grows between calls
-    const size_t n = std::max(pool_.size(), known_.size() + known_.size() / 2);
+  if (known_.size() < pool_.size()) {  // doubled at least: the pool grows between calls
+    const size_t n = std::max(pool_.size(), 2 * known_.size());
     known_.resize(n, 0);
     value_.resize(n, 0.0);
   }

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "lang/node_pool.h"
 #include "lang/source.h"
 
 namespace kanesim::lang::ast {
@@ -54,6 +55,7 @@ struct Expr {
   Expr(const Expr&) = delete;
   Expr& operator=(const Expr&) = delete;
   ~Expr();  // iterative: frees any depth of children without recursion
+  KANESIM_POOLED_NODE(Expr)  // thousands per model file (lang/node_pool.h)
 
   ExprKind kind = ExprKind::Number;
   Span span;
@@ -98,6 +100,7 @@ struct Argument {
 };
 
 struct Modification {
+  KANESIM_POOLED_NODE(Modification)
   std::vector<Argument> args;  // class modification "( ... )"
   bool has_args = false;
   ExprPtr value;               // "= expr"

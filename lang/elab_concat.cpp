@@ -166,9 +166,10 @@ Value Evaluator::EvalCat(const ast::Expr& e, const std::vector<Value>& args) {
 // [a, b; c, d]: ',' joins side by side (cat(2, ...)), ';' stacks the rows (cat(1, ...)).
 Value Evaluator::EvalMatrix(const ast::Expr& e, const Ctx& ctx) {
   std::vector<std::vector<Value>> rows;
+  rows.reserve(e.rows.size());  // at their final sizes: a 3 x 3 inertia is 4 allocations, not 12
   size_t ndims = 2;
   for (const auto& row : e.rows) {
-    rows.emplace_back();
+    rows.emplace_back().reserve(row.size());
     for (const auto& x : row) {
       Value v = Eval(*x, ctx);
       if (!v.valid) return Value::Invalid();

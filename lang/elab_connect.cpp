@@ -98,7 +98,7 @@ void EquationWalker::ProcessFor(Node* node, const ast::Equation& eq, const std::
     diags_.Error(DiagCode::ArrayTooLarge, eq.range->span, "for-loop range too large");
     return;
   }
-  std::vector<double> xs = eval_.StructuralList(r, eq.range->span, "a for-loop range");
+  const Evaluator::Numbers xs = eval_.StructuralList(r, eq.range->span, "a for-loop range");
   std::shared_ptr<Iters> local;
   for (double x : xs) {
     if (!eval_.ChargeSteps(1, eq.range->span)) return;

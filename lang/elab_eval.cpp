@@ -118,8 +118,8 @@ bool Evaluator::LiteralStructuralInt(const ast::Expr& e, long* out) {
   return true;
 }
 
-std::vector<double> Evaluator::StructuralList(const Value& v, Span span, const char* what) {
-  std::vector<double> out;
+Evaluator::Numbers Evaluator::StructuralList(const Value& v, Span span, const char* what) {
+  Numbers out;
   if (!v.valid) return out;
   if (v.type == VType::String) {
     diags_.Error(DiagCode::TypeMismatch, span, std::string(what) + " must be numbers");
@@ -408,7 +408,7 @@ bool Evaluator::SubscriptIndices(const ast::Expr& s, int size, const Node* var, 
   Value sv = Eval(s, ctx);
   end_stack_.pop_back();
   if (!sv.valid) return false;
-  std::vector<double> ks = StructuralList(sv, s.span, "a subscript");
+  const Numbers ks = StructuralList(sv, s.span, "a subscript");
   if (ks.empty()) return false;
   *keep = !sv.shape.empty();
   for (double kd : ks) {
@@ -473,7 +473,7 @@ Value Evaluator::EvalComprehension(const ast::Expr& e, const Ctx& ctx) {
                      std::to_string(kMaxArraySize));
     return Value::Invalid();
   }
-  std::vector<double> xs = StructuralList(range, e.args[1]->span, "the iteration range");
+  const Numbers xs = StructuralList(range, e.args[1]->span, "the iteration range");
   Iters local = ctx.iters ? *ctx.iters : Iters{};
   Value r;
   r.type = VType::Integer;

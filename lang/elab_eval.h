@@ -47,7 +47,9 @@ class Evaluator {
   // budget, no Value. False, with nothing done, for any other expression, and where the
   // evaluation would refuse (budget or depth used up): then evaluate it.
   bool LiteralStructuralInt(const ast::Expr& e, long* out);
-  std::vector<double> StructuralList(const Value& v, Span span, const char* what);
+  // The values of an array of structural numbers (subscripts, ranges): a few inline.
+  using Numbers = SmallVec<double, 4>;
+  Numbers StructuralList(const Value& v, Span span, const char* what);
   // Work budget (elab_budget.cpp): false once the elaboration has used it up.
   bool ChargeSteps(std::int64_t steps, Span where);
   // Whether the work budget ran out (reported once): the other phases stop then.

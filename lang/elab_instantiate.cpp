@@ -96,7 +96,7 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       Mod em = BuildMod(ex.mod.get(), node, nullptr, diags_);
       Mod effective;
       if (ext_mod) effective = *ext_mod;
-      MergeMods(effective, std::move(em), &ex.base, diags_);
+      MergeBuiltMod(effective, std::move(em), &ex.base, diags_);
       // Short class as a base: fold its modifiers in.
       base = ResolveShort(base, node, &effective);
       if (!base) continue;
@@ -115,7 +115,9 @@ void Instantiator::Collect(const ast::ClassDef* cls, Node* node, const Mod* ext_
       if (it != ext_mod->sub.end()) c.ext_mod = it->second;
     }
     bool replaced = false;
-    if (const long found = names.Find(comp.name, out); found >= 0) {
+    if (comp.redeclare) names.repeated = true;
+    if (const long found = names.known_distinct ? -1 : names.Find(comp.name, out); found >= 0) {
+      names.repeated = true;
       Collected& prev = out[static_cast<size_t>(found)];
       if (comp.redeclare) {
         if (!prev.replaceable) {
@@ -206,7 +208,10 @@ void Instantiator::Instantiate(Node* node, const ast::ClassDef* cls) {
   elems.reserve(cls->elements.size());  // enough unless cls extends another class
   node->equations.reserve(cls->equations.size());
   CollectedNames names;
+  auto [distinct, first] = distinct_elements_.try_emplace(cls, false);
+  names.known_distinct = distinct->second;
   Collect(cls, node, nullptr, elems, names, node->equations, 0);
+  if (first) distinct->second = !names.repeated;
   CheckOuterModifiers(node, cls, elems, names);
 
   node->children.reserve(elems.size());
@@ -303,7 +308,7 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
     decl.final_span = c.comp->span;
     if (decl.value) decl.value->is_final = true;
   }
-  MergeMods(outer, std::move(decl), child.get(), diags_);
+  MergeBuiltMod(outer, std::move(decl), child.get(), diags_);
   child->mod = std::move(outer);
   child->is_final_decl = c.is_final;
   return child;

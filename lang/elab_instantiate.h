@@ -60,6 +60,11 @@ class Instantiator {
     long Find(std::string_view name, const std::vector<Collected>& out) const;
     // After out.push_back: the new last element is indexed (once out is past kScan).
     void Added(const std::vector<Collected>& out);
+    // Set by Instantiate when the class's elements are known to have distinct names and no
+    // redeclare (its first instance found so): Collect then asks Find nothing per element.
+    bool known_distinct = false;
+    // Set by Collect when an element repeats a name or is a redeclare.
+    bool repeated = false;
 
    private:
     static constexpr size_t kScan = 32;
@@ -127,6 +132,9 @@ class Instantiator {
   bool too_large_ = false;  // past kMaxInstances (reported once)
   std::vector<const ast::ClassDef*> extends_stack_;
   std::unordered_map<const ast::ClassDef*, ClassPrim> primitive_annotation_;
+  // Per class: its collected elements have distinct names and none is a redeclare (what the
+  // elements are depends on the class alone, so its first instance tells for all).
+  std::unordered_map<const ast::ClassDef*, bool> distinct_elements_;
   // A component's declared type, with the class it was looked up from.
   std::unordered_map<const ast::Component*, std::pair<const ast::ClassDef*, const ast::ClassDef*>> component_type_;
   // DeclarationMod's: per declaration, its shared modifier (null: not shareable).

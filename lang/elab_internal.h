@@ -20,6 +20,7 @@
 #include "lang/diagnostics.h"
 #include "lang/elab_small_vec.h"
 #include "lang/elaborate.h"
+#include "lang/node_pool.h"
 #include "flat/mechanism.h"
 
 namespace kanesim::lang::elab {
@@ -157,6 +158,7 @@ class NodeArena {
 // One binding written somewhere in the source: an expression, where to evaluate it, and
 // the loop iterators in force there; or a value already computed (array slicing).
 struct ModValue {
+  KANESIM_POOLED_NODE(ModValue)  // one per modifier value of every instance (lang/node_pool.h)
   const ast::Expr* expr = nullptr;
   Node* scope = nullptr;
   std::shared_ptr<const Iters> iters;
@@ -167,9 +169,14 @@ struct ModValue {
 };
 
 // A merged modification tree (Modelica "modification environment").
+struct Mod;
+// A modifier's sub-modifiers by name; transparent: find("unit") makes no string. Its nodes
+// come from a pool (thousands per model, made one at a time: lang/node_pool.h).
+using ModMap = std::map<std::string, Mod, std::less<>, PoolAllocator<std::pair<const std::string, Mod>>>;
+
 struct Mod {
   Boxed<ModValue> value;
-  std::map<std::string, Mod, std::less<>> sub;  // transparent: find("unit") makes no string
+  ModMap sub;
   std::vector<std::string> order;   // sub keys in the order written
   bool each = false;
   bool is_final = false;
@@ -191,7 +198,7 @@ struct Mod {
 // (start, unit, min, ...), which may be held in two places (Node::mod_over_decl).
 struct ModView {
   const ModValue* value;  // null: none
-  const std::map<std::string, Mod, std::less<>>& sub;
+  const ModMap& sub;
   const std::vector<std::string>& order;
   bool is_final;
 };
@@ -267,7 +274,9 @@ struct Node {
   std::vector<NodePtr> children;
   // The index of `children` Child() builds for a large class, keyed by the children's names
   // (views of Node::name, which outlives it).
-  mutable std::unique_ptr<std::unordered_map<std::string_view, Node*>> by_name;
+  using ChildIndex = std::unordered_map<std::string_view, Node*, std::hash<std::string_view>,
+                                        std::equal_to<>, PoolAllocator<std::pair<const std::string_view, Node*>>>;
+  mutable std::unique_ptr<ChildIndex> by_name;  // its entries from a pool (lang/node_pool.h)
   struct EqSource {
     const ast::Equation* eq;
     const ast::ClassDef* cls;  // for lookups
@@ -307,12 +316,16 @@ struct Node {
     const size_t count = children.size();
     if (count <= kScanChildren || (!by_name && count * (scans + 1u) <= kScanBudget)) {
       if (count > kScanChildren) ++scans;
-      for (size_t i = count; i-- > 0;)
-        if (children[i]->name == n) return children[i].get();
+      for (size_t i = count; i-- > 0;) {  // lengths first: most names differ in length
+        const std::string& c = children[i]->name;
+        if (c.size() == n.size() && std::char_traits<char>::compare(c.data(), n.data(), n.size()) == 0)
+          return children[i].get();
+      }
       return nullptr;
     }
     if (!by_name || by_name->size() != children.size()) {
-      by_name = std::make_unique<std::unordered_map<std::string_view, Node*>>();
+      by_name = std::make_unique<ChildIndex>();
+      by_name->reserve(children.size());
       for (const auto& c : children) (*by_name)[c->name] = c.get();
     }
     auto it = by_name->find(n);

@@ -192,6 +192,17 @@ void MergeMods(Mod& outer, Mod&& inner, MergeWhat what, Diagnostics& diags) {
   MergeModsImpl(diags, outer, std::move(inner), what, keys);
 }
 
+void MergeBuiltMod(Mod& outer, Mod&& built, MergeWhat what, Diagnostics& diags) {
+  if (Pristine(built)) return;
+  if (Pristine(outer)) {  // OrderMatchesSubs(built) holds: BuildMod adds a key to both at once
+    outer = std::move(built);
+    NormalizeMerged(outer);
+    return;
+  }
+  MergeKeys keys;
+  MergeModsImpl(diags, outer, std::move(built), what, keys);
+}
+
 Value ElementOf(const Value& v, int index, int count) {
   Value s;
   s.type = v.type;

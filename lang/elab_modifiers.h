@@ -36,6 +36,9 @@ class MergeWhat {
 // second form gives up `inner`: its values move instead of being copied.
 void MergeMods(Mod& outer, const Mod& inner, MergeWhat what, Diagnostics& diags);
 void MergeMods(Mod& outer, Mod&& inner, MergeWhat what, Diagnostics& diags);
+// The second form for a modifier BuildMod made, which lists each of its keys once in
+// `order` at every level by construction: the same result, without walking it to check.
+void MergeBuiltMod(Mod& outer, Mod&& built, MergeWhat what, Diagnostics& diags);
 // Element `index` (0-based) of an array of `count` components' modifier.
 Mod SliceMod(const Mod& mod, int index, int count, Evaluator& eval, Diagnostics& diags);
 // Evaluates the non-`each` values of an array component's modifier once, checking their

@@ -141,7 +141,7 @@ inline constexpr int kInferring = -5;         // its binding is being read (a cy
 
 // A variable's `unit` attribute, or null. "unit" sorts after every other attribute's name:
 // when there, it is nearly always last.
-inline const Mod* UnitMod(const std::map<std::string, Mod, std::less<>>& attrs) {
+inline const Mod* UnitMod(const ModMap& attrs) {
   if (attrs.empty()) return nullptr;
   if (const auto& last = *attrs.rbegin(); Is(last.first, "unit")) return &last.second;
   if (std::string_view(attrs.rbegin()->first) < std::string_view("unit")) return nullptr;

@@ -82,6 +82,9 @@ Value Evaluator::EvalModValue(const ModValue& mv, Span* where) {
 
 
 void Evaluator::ReserveParams(size_t n) {
+  // About two pool nodes per instance by the end of the emitter (Talos 6,596 for 3,638
+  // instances, the chain of 100 9,422 for 5,909): pushed without the vector's regrowth.
+  m_->exprs.Reserve(m_->exprs.size() + 2 * n);
   m_->params.reserve(n);
   m_->param_names.reserve(n * 24);  // about a name's length in the library's parts
   pvals_.reserve(n);

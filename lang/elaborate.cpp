@@ -37,20 +37,26 @@ static void AddStdlib(const std::vector<std::pair<std::string, std::string>>& st
   for (const auto& [name, text] : stdlib_files) ParseInto(program, program->sources.Add(name, text), diags);
 }
 
-bool LoadProgramFromText(const std::string& name, const std::string& text,
-                         const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
-                         Diagnostics& diags, std::string_view stdlib_image) {
-  int f = program->sources.Add(name, text);
+// The model file `f`, already in program->sources, parsed, then the standard library added.
+static bool ParseWithStdlib(int f, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
+                            Program* program, Diagnostics& diags, std::string_view stdlib_image) {
   ParseInto(program, f, diags);
   AddStdlib(stdlib_files, stdlib_image, program, diags);
   return !diags.HasErrors();
+}
+
+bool LoadProgramFromText(const std::string& name, const std::string& text,
+                         const std::vector<std::pair<std::string, std::string>>& stdlib_files, Program* program,
+                         Diagnostics& diags, std::string_view stdlib_image) {
+  return ParseWithStdlib(program->sources.Add(name, text), stdlib_files, program, diags, stdlib_image);
 }
 
 bool LoadProgram(const std::string& path, const std::vector<std::pair<std::string, std::string>>& stdlib_files,
                  Program* program, Diagnostics& diags, std::string_view stdlib_image) {
   std::string text, message;
   switch (ReadSourceFile(path, &text, &message)) {
-    case ReadStatus::Ok: return LoadProgramFromText(path, text, stdlib_files, program, diags, stdlib_image);
+    case ReadStatus::Ok:  // the text read moves into the sources, not copied
+      return ParseWithStdlib(program->sources.Add(path, std::move(text)), stdlib_files, program, diags, stdlib_image);
     case ReadStatus::TooLarge:
       diags.Error(DiagCode::FileTooLarge, Span{}, message).hint = "split the model into several files";
       return false;
