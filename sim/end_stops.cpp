@@ -382,7 +382,8 @@ std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y
 
 std::string EndStopEvents::Unseen(rt::Workspace& ws, double t, const double* y, const double* ydot) {
   double scale = 1.0;  // the accelerations' scale: a gap acceleration below its rtol is noise
-  for (int k = 0; k < nu_; ++k) scale = std::max(scale, std::abs(ydot[nq_ + k]));
+  if (ydot)
+    for (int k = 0; k < nu_; ++k) scale = std::max(scale, std::abs(ydot[nq_ + k]));
   for (const Side& s : sides_) {
     if (s.resting || s.accumulates_at > 0.0) continue;
     double gap = 0.0, c = 0.0;
@@ -391,11 +392,11 @@ std::string EndStopEvents::Unseen(rt::Workspace& ws, double t, const double* y, 
     double v = 0.0, a = c;
     for (int k = 0; k < nu_; ++k) {
       v += J_[static_cast<size_t>(k)] * y[nq_ + k];
-      a += J_[static_cast<size_t>(k)] * ydot[nq_ + k];
+      if (ydot) a += J_[static_cast<size_t>(k)] * ydot[nq_ + k];
     }
-    if (gap + LiftAt(s, t) > kPastRows * (atol_ + rtol_ * Scale(s)) || std::abs(v) > kRestSpeeds * atol_ ||
-        !(a < -(kLeaveRoundoffs * std::numeric_limits<double>::epsilon() + rtol_) * scale))
-      continue;
+    if (gap + LiftAt(s, t) > kPastRows * (atol_ + rtol_ * Scale(s)) || std::abs(v) > kRestSpeeds * atol_) continue;
+    if (!ydot) return "?";  // (a side to check: the caller evaluates ydot)
+    if (!(a < -(kLeaveRoundoffs * std::numeric_limits<double>::epsilon() + rtol_) * scale)) continue;
     char buf[400];
     std::snprintf(buf, sizeof buf,
                   "%s is at %s at rest after the event at time %.17g and accelerates into it (%.6g) without resting "

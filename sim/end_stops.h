@@ -36,7 +36,8 @@ class EndStopEvents {
   // contact (gap within the tolerance's reach, rate a rest speed) whose gap accelerates into
   // it under ydot (the laws the event left, every stuck force solved): its event function
   // starts at 0 and falls, a crossing the root finding never sees (a joint let go from its
-  // stop with its friction that slides back into it).
+  // stop with its friction that slides back into it). ydot null: "?" where some free side is
+  // at rest on its contact (ydot is needed), else "".
   std::string Unseen(rt::Workspace& ws, double t, const double* y, const double* ydot);
   // The start on a contact: a gap closed and closing, or at rest pressed shut, handled as an
   // event at t0 (no rows).

@@ -273,10 +273,17 @@ class EngineOde final : public OdeSystem {
   // After an event, under the laws it left: no free side at rest on its contact closing on
   // it (EndStopEvents::Unseen), whose crossing the root finding would never see; else -1
   // (the run stops with exit 2 at the event, naming the side). Where the motion cannot be
-  // evaluated there, the fresh solver's first evaluation reports it.
+  // evaluated there, the fresh solver's first evaluation reports it. The stuck joints' laws
+  // and forces are left as the event set them (the evaluation's warm start moved the rack
+  // pair's stuck follower in LoopStopFriction.* to another path).
   int CheckUnseen(double t, const double* y) {
+    event_cause_.clear();
+    if (stops_->Unseen(ws_, t, y, nullptr).empty()) return 0;  // (no side to check: no evaluation)
     std::vector<double> ydot(static_cast<size_t>(Size()));
-    if (Rhs(t, y, ydot.data()) != 0) return 0;
+    const std::vector<double> modes = stick_ ? stick_->Modes() : std::vector<double>{};
+    const int st = Rhs(t, y, ydot.data());
+    if (stick_) stick_->SetModes(modes);
+    if (st != 0) return 0;
     event_cause_ = stops_->Unseen(ws_, t, y, ydot.data());
     return event_cause_.empty() ? 0 : -1;
   }
