@@ -75,7 +75,7 @@ int DqJacobian::Form(GuardedRhs& rhs, double t, const double* y, const double* y
       any = true;
       double inc = 0.0;
       if (cvode) {
-        inc = std::max(srur * std::fabs(y[j]), min_inc / w[j]);
+        inc = std::max(srur * std::fabs(y[j]), (floor_ ? std::max(min_inc, 1.0) : min_inc) / w[j]);
       } else {
         inc = std::max(srur * std::max(std::fabs(y[j]), std::fabs(h * yp[j])), 1.0 / w[j]);
         if (h * yp[j] < 0.0) inc = -inc;

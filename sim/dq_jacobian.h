@@ -32,6 +32,8 @@ class DqJacobian {
   enum class Increment { kIda, kCvode };
   // Groups from coupling (per state: its group; empty or of the wrong size: one group).
   void Build(int n, const std::vector<int>& coupling, Increment rule);
+  // kCvode's increments at least 1/w (OdeSystem::IteratedRhs). Before Form.
+  void SetIncrementFloor(bool on) { floor_ = on; }
   // Where df/dy is held: sparse, in the CSC block pattern (Nonzeros() entries); else dense,
   // column-major n x n. Before Form.
   void SetLayout(bool sparse);
@@ -67,6 +69,7 @@ class DqJacobian {
   std::vector<double> f1_, y1_, inc_;
   long evals_ = 0;
   Increment rule_ = Increment::kIda;
+  bool floor_ = false;  // SetIncrementFloor
 };
 
 }  // namespace kanesim::sim::detail

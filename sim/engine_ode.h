@@ -80,8 +80,9 @@ class EngineOde final : public OdeSystem {
   // The first events: the stops' and plane contacts' or lift-off's (never both in one model),
   // then stick-slip's (with stops: constant friction only); then the when clauses'.
   int NumStops() const { return FirstStick() + (stick_ ? stick_->Count() : 0); }
-  // Then the stops' and plane contacts' graze guards (OdeSystem::Paired): minus each gap's rate.
-  int NumEvents() const override { return FirstGuard() + (stops_ ? stops_->Count() : 0); }
+  // Then the stops' and plane contacts' graze guards (OdeSystem::Paired): minus each gap's rate;
+  // then exact friction's: minus each sliding joint's acceleration along its slide.
+  int NumEvents() const override { return FirstStickGuard() + (stick_ ? stick_->Count() : 0); }
   bool Holding() const override {
     return (stick_ && stick_->AnyStuck()) || (stops_ && stops_->AnyResting());
   }
@@ -95,10 +96,16 @@ class EngineOde final : public OdeSystem {
     for (int k = 0; stick_ && k < stick_->Count(); ++k)
       if (stick_->ModeOf(k) == 0) events->push_back(FirstStick() + k);
   }
-  int Paired(int i) const override { return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1; }
+  bool IteratedRhs() const override { return stick_ && stick_->ReadsNormalForce(); }
+  int Paired(int i) const override {
+    if (stick_ && i >= FirstStickGuard()) return FirstStick() + i - FirstStickGuard();
+    return stops_ && i >= FirstGuard() ? i - FirstGuard() : -1;
+  }
   int EventFunctions(double t, const double* y, double* g) override {
-    if (stick_)  // first: it solves the stuck joints' forces the stops' reactions read
+    if (stick_) {  // first: it solves the stuck joints' forces the stops' reactions read
       if (const int s = stick_->Functions(ws_, t, y, g + FirstStick()); s != 0) return s;
+      stick_->Guards(g + FirstStickGuard());
+    }
     if (FirstStick() > 0) {
       const int s = stops_ ? stops_->Functions(ws_, t, y, g, g + FirstGuard()) : lift_->Functions(t, y, g);
       if (s != 0) return s;
@@ -288,6 +295,7 @@ class EngineOde final : public OdeSystem {
     return event_cause_.empty() ? 0 : -1;
   }
   int FirstGuard() const { return NumStops() + (whens_ ? whens_->Count() : 0); }
+  int FirstStickGuard() const { return FirstGuard() + (stops_ ? stops_->Count() : 0); }
   int FirstStick() const { return stops_ ? stops_->Count() : lift_ ? lift_->Count() : 0; }
   std::unique_ptr<rt::Workspace, void (*)(rt::Workspace*)> Fresh() const {
     auto ws = rt::MakeWorkspace(program_);

@@ -73,6 +73,8 @@ std::vector<std::string> HybridOde::IndicatorNames() const {
     for (size_t k = 0; k < w.indicators.size(); ++k) names.push_back("condition of " + w.name);
   if (m.stops.Active())
     for (int i = 0; i < m.stops.Count(); ++i) names.push_back("graze guard of " + m.stops.Describe(i));
+  if (m.stick.Active())
+    for (const std::string& j : m.stick.JointNames()) names.push_back("graze guard of exact friction of joint '" + j + "'");
   return names;
 }
 

@@ -137,6 +137,12 @@ class OdeSystem {
   // solver then bounds each step by what their values, rates and curvatures foretell
   // (sim/release_bound.h), in a run and in the stepping API alike.
   virtual void HeldEvents(std::vector<int>* events) const { events->clear(); }
+  // Rhs ends an inner iteration at a tolerance, not at round-off (exact friction's mu N fixed
+  // point, runtime/kane/friction.cpp: ~1e-11 of the friction forces, depending on the last
+  // call's): a difference quotient's increment must then be at least the error weights'
+  // scale 1/w (IDA's rule), never CVODE's own (min_inc / w: 2e-22 at a restart at rest, where
+  // that noise made df/dy -1e11 and CVODE-BDF froze a slipping joint's speed near zero).
+  virtual bool IteratedRhs() const { return false; }
   virtual bool HasEnergy() const { return false; }
   virtual int Energy(double /*t*/, const double* /*y*/, double* /*T*/, double* /*V*/) { return -1; }
 };

@@ -272,7 +272,8 @@ class CvodeStepper final : public SundialsStepper {
   bool SetJacobian(double t0, const double* y0, const IntegratorOptions& options, std::string* error) {
     const int n = rhs_.Size();
     dq_.Build(n, options.coupling, DqJacobian::Increment::kCvode);
-    bool own = dq_.Colours() < n;
+    dq_.SetIncrementFloor(rhs_.System().IteratedRhs());
+    bool own = dq_.Colours() < n || rhs_.System().IteratedRhs();
     if (!own && rhs_.ChecksSteps() && !project_) {
       // f at y0 chooses the partition (CVODE's first evaluation is there too).
       std::vector<double> f(static_cast<size_t>(n));

@@ -19,6 +19,26 @@
 
 namespace kanesim::sim {
 namespace {
+// A joint sliding one way (exact friction, its law +1 or -1) whose speed is the other way
+// beyond the tolerance's reach: its reversal's crossing was missed, and its friction now
+// pushes along its motion (energy from nowhere). The row is refused (exit 2).
+std::string SlidingAgainstItsLaw(const StickSlipEvents& stick, const rt::Program& program, double t, const double* y,
+                                 const SimOptions& options) {
+  for (int i = 0; i < stick.Count(); ++i) {
+    const int mode = stick.ModeOf(i);
+    if (mode == 0 || !stick.Watched(i)) continue;
+    const double u = y[program.nq + stick.SpeedOf(i)];
+    if (mode * u < -1e3 * (options.atol + options.rtol)) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf,
+                    "a joint sliding %s (exact friction, speed %d) moves the other way at %.3g at time %.9g: its "
+                    "reversal was missed",
+                    mode > 0 ? "forwards" : "backwards", stick.SpeedOf(i), u, t);
+      return buf;
+    }
+  }
+  return "";
+}
 
 using detail::EngineOde;
 using Clock = std::chrono::steady_clock;
@@ -260,6 +280,9 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
       const std::string& m = held && !held->Error().empty() ? held->Error() : rt::ErrorMessage(*ws_out);
       *cause = m.empty() ? "an output signal could not be evaluated" : m;
     } else if (stops.Active() && !(past_stop = stops.CheckRow(*ws_out, t, y)).empty()) {
+      *cause = past_stop;
+      status = -1;  // the row is not written: the rows before it are on disk
+    } else if (stick.Active() && program.rows.empty() && !(past_stop = SlidingAgainstItsLaw(stick, program, t, y, options)).empty()) {
       *cause = past_stop;
       status = -1;  // the row is not written: the rows before it are on disk
     } else if (energy.Active() && energy.Row(t, values[n_written], values[n_written + 1], cause) != 0) {

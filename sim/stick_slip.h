@@ -7,6 +7,7 @@
 // function: s u while sliding in direction s, mu_s r N + C_s - |tau| while stuck.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -42,7 +43,14 @@ class StickSlipEvents {
   // Derivative's ydot. 0, or Derivative's codes.
   int Rhs(rt::Workspace& ws, double t, const double* y, double* ydot);
   int Functions(rt::Workspace& ws, double t, const double* y, double* g);
+  // The graze guards of the last Functions' evaluation (OdeSystem::Paired): a sliding joint's
+  // -s udot, crossing where its speed s u has a minimum (a dip below zero and back inside
+  // one step, which the speed's signs at the step's ends do not show); 1 for the others
+  // (and beside constraint rows, where a dependent speed's rate is not solved).
+  void Guards(double* g) const;
   // Joint i stopped (sliding) or its needed force reached mu_s r N (stuck); y jumps in place.
+  // Then the laws at rest are made consistent together (CheckLaws): -1 with Error() where
+  // none is (Painleve-type).
   int Event(rt::Workspace& ws, double t, double* y, int i);
   // The friction laws of the run into another workspace (the output rows').
   void Sync(rt::Workspace& ws) const;
@@ -52,6 +60,13 @@ class StickSlipEvents {
   // Joint i's free speed and its mode (+1 / -1 sliding that way, 0 stuck).
   int SpeedOf(int i) const { return joints_[static_cast<size_t>(i)].f.u; }
   int ModeOf(int i) const { return joints_[static_cast<size_t>(i)].mode; }
+  // Joint i's own law watches it (Functions): not a passenger, not resting on its stop.
+  bool Watched(int i) const {
+    const Joint& j = joints_[static_cast<size_t>(i)];
+    return j.leader < 0 && !HeldByStop(j, RestingSpeeds());
+  }
+  // Some exact joint's friction follows its normal force (mu N): Rhs iterates (OdeSystem::IteratedRhs).
+  bool ReadsNormalForce() const { return reads_N_; }
   bool AnyStuck() const {
     for (const Joint& j : joints_)
       if (j.mode == 0) return true;
@@ -110,6 +125,7 @@ class StickSlipEvents {
     int leader = -1;
     double ratio = 0.0;
     long stamp = 0;  // the Decide that last set its law (Refresh and Start decide each joint once)
+    double slipped_at = -HUGE_VAL;  // when its needed force last passed its bound (Switch)
   };
   // The stuck joints' friction forces at (t, y) (Newton on their accelerations, which are
   // affine in them), the modes applied to ws; ydot (may be null) the held motion.
@@ -148,11 +164,19 @@ class StickSlipEvents {
   // over a narrow slip window (HeldStep.ANarrowSlipWindowIsFoundInsideLargeStepsOfTheSimulator).
   bool AllHeld() const;
   std::vector<int> RestingSpeeds() const;
+  // Event's own switch of joint i's law.
+  int Switch(rt::Workspace& ws, double t, double* y, int i);
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
   int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
-  // After the decisions at rest: each joint sliding from rest accelerates its own way (else
-  // decided again with the others' final laws); -1 with error_ where that does not settle.
-  int CheckSlides(rt::Workspace& ws, double t, double* y);
+  // After decisions at rest (the start, a slip, a stop, a jump): the laws of the joints at
+  // rest consistent together ((5) of stick_slip_laws.cpp: stuck ones within their bounds,
+  // sliding ones accelerating their way), else enumerated; the decisions since `from`
+  // (Joint::stamp) first; `slipped`, whose needed force has just passed its bound (its event),
+  // is not stuck again. -1 with error_ where no choice is consistent (Painleve-type).
+  int CheckLaws(rt::Workspace& ws, double t, double* y, long from, const Joint* slipped = nullptr);
+  // (5)'s violators among at_rest under the laws as they are (*status: Solve's).
+  std::vector<Joint*> Inconsistent(rt::Workspace& ws, double t, double* y, const std::vector<Joint*>& at_rest,
+                                   int* status);
   // Constraint rows (closed loops, couplings, rolling contacts): X is the constrained inverse
   // mass of the stuck speeds, which the rows may make singular. The stuck joints, j among
   // them, and the sliding ones the rows tie to them are grouped by (4) of stick_slip.cpp (a
@@ -176,6 +200,7 @@ class StickSlipEvents {
   EndStopEvents* stops_ = nullptr;  // SetStops (null: none)
   std::vector<Joint> joints_;
   int nq_ = 0, nu_ = 0;
+  bool reads_N_ = false;  // some exact joint's friction mu N follows its normal force
   bool direct_ = true;  // constant friction on a tree: (2) of stick_slip.cpp, else Newton (1)
   std::vector<double> ydot_, col_;  // scratch (col_: MakeX's evaluations)
   std::vector<double> x_;     // X of the stuck set x_ids_ (friction joint indices), m x m row-major
