@@ -10,13 +10,16 @@ rtol 1e-8 and reports what must not happen:
            1e-7 max(1, |E|); "instant" is the largest rise across an event (two rows at
            one time), which no impact may have; a rise between rows is integration error
   EDRIFT   (chain, e = 1, no friction) the energy's change over the run beyond 1e-5
+  STOPVIOL (chain, friction) an output row with a joint past its end stop: j[k].q outside
+           [-bend, bend] by more than 1e-9 (an impact missed, a silent wrong answer)
   NOTFLAT, SPIN  (cube) not at rest flat on a face after 4 s (e < 0.8), or the vertical
            spin changed (the frictionless floor cannot change it)
 
     python3 bench/event_sweeps.py chain|cube|friction SEED TRIALS [--kanesim BUILD/cli/kanesim]
 
 The models: bench/models/stop_chain.mech, tests/stress/models/tossed_cube.mech,
-tests/stress/models/friction_stop_chain.mech. Prints "bad N" (FAIL + TIMEOUT) at the end.
+tests/stress/models/friction_stop_chain.mech. Prints "bad N" (FAIL + TIMEOUT + STOPVIOL) at
+the end.
 """
 import argparse
 import csv
@@ -65,14 +68,16 @@ def main():
         outputs = ["free.q[2]", "free.frame_b.w[2]"]
     else:
         outputs = ["kinetic_energy", "potential_energy"]
+    stop_tol = 1e-9  # a row's joint past its stop by more than this: an impact was missed
     bad = 0
     out = os.path.join(tempfile.gettempdir(), "event_sweeps_%d.csv" % os.getpid())
     for trial in range(a.trials):
         p, starts = draw(a.kind, rng)
         sets = sum([["--set", f"{k}={v!r}"] for k, v in {**p, **starts}.items()], [])
+        stopped = [] if a.kind == "cube" else ["j[%d].q" % k for k in range(1, p["N"])]
         for how in integrators:
             cmd = [a.kanesim, "run", model, "--integrator", how, "--stop-time", stop, "--rtol", "1e-8", "-o", out]
-            for o in outputs:
+            for o in outputs + stopped:
                 cmd += ["--output", o]
             try:
                 r = subprocess.run(cmd + sets, capture_output=True, text=True, timeout=a.timeout)
@@ -96,6 +101,12 @@ def main():
                 if spin > 1e-5:
                     print("SPIN", trial, how, spin, p, flush=True)
                 continue
+            worst = max([(abs(float(x[c])) - p["bend"], c, float(x["time"])) for x in rows for c in stopped]
+                        or [(0.0, "", 0.0)])
+            if worst[0] > stop_tol:
+                print("STOPVIOL", trial, how, worst[1], "past its stop by", worst[0], "at t", worst[2], p, starts,
+                      flush=True)
+                bad += 1
             E = [float(x["kinetic_energy"]) + float(x["potential_energy"]) for x in rows]
             scale = max(1.0, max(abs(x) for x in E))
             rise = max(E[i + 1] - E[i] for i in range(len(E) - 1))

@@ -380,6 +380,34 @@ std::string EndStopEvents::CheckRow(rt::Workspace& ws, double t, const double* y
   return "";
 }
 
+std::string EndStopEvents::Unseen(rt::Workspace& ws, double t, const double* y, const double* ydot) {
+  double scale = 1.0;  // the accelerations' scale: a gap acceleration below its rtol is noise
+  if (ydot)
+    for (int k = 0; k < nu_; ++k) scale = std::max(scale, std::abs(ydot[nq_ + k]));
+  for (const Side& s : sides_) {
+    if (s.resting || s.accumulates_at > 0.0) continue;
+    double gap = 0.0, c = 0.0;
+    if (Row(ws, t, y, s, &gap, J_.data(), &c) != 0)
+      return "the state after the event cannot be evaluated: " + rt::ErrorMessage(ws);
+    double v = 0.0, a = c;
+    for (int k = 0; k < nu_; ++k) {
+      v += J_[static_cast<size_t>(k)] * y[nq_ + k];
+      if (ydot) a += J_[static_cast<size_t>(k)] * ydot[nq_ + k];
+    }
+    if (gap + LiftAt(s, t) > kPastRows * (atol_ + rtol_ * Scale(s)) || std::abs(v) > kRestSpeeds * atol_) continue;
+    if (!ydot) return "?";  // (a side to check: the caller evaluates ydot)
+    if (!(a < -(kLeaveRoundoffs * std::numeric_limits<double>::epsilon() + rtol_) * scale)) continue;
+    char buf[400];
+    std::snprintf(buf, sizeof buf,
+                  "%s is at %s at rest after the event at time %.17g and accelerates into it (%.6g) without resting "
+                  "on it: the laws the event left are not consistent (a joint let go from its stop with its friction "
+                  "that slides back into it), and the crossing would not be seen",
+                  Who(s).c_str(), Where(s).c_str(), t, a);
+    return buf;
+  }
+  return "";
+}
+
 // Side i's row J_i in the span of the resting sides' rows (their rates held at 0, so its
 // own is 0 too: its gap cannot move while they rest). Modified Gram-Schmidt on the rows
 // (twice, for the round-off), J_i dependent where its residual is below 1e-8 of its norm:

@@ -32,6 +32,13 @@ class EndStopEvents {
   // tolerance's reach, which an event missed (a graze inside one step). The run then stops
   // (exit 2) rather than write a motion through the stop or the plane.
   std::string CheckRow(rt::Workspace& ws, double t, const double* y);
+  // Why the state after an event cannot go on ("" when it can): a free side at rest on its
+  // contact (gap within the tolerance's reach, rate a rest speed) whose gap accelerates into
+  // it under ydot (the laws the event left, every stuck force solved): its event function
+  // starts at 0 and falls, a crossing the root finding never sees (a joint let go from its
+  // stop with its friction that slides back into it). ydot null: "?" where some free side is
+  // at rest on its contact (ydot is needed), else "".
+  std::string Unseen(rt::Workspace& ws, double t, const double* y, const double* ydot);
   // The start on a contact: a gap closed and closing, or at rest pressed shut, handled as an
   // event at t0 (no rows).
   int Start(rt::Workspace& ws, double t0, double* y0);
