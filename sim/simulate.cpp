@@ -187,8 +187,15 @@ SimResult Simulate(const rt::Program& program, const SimOptions& options, Signal
   StickSlipEvents stick(program);
   if (stick.Active() && stops.Active()) stick.SetStops(&stops);  // a joint resting on its stop is the stop's
   if (stick.Active() && y_given.empty()) y_given = y0;
-  if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0)
-    return UsageResult("friction at the start: " + (stick.Error().empty() ? rt::ErrorMessage(*ws_rhs) : stick.Error()));
+  // Its failure is the start state's physics found by evaluating it (no consistent friction
+  // force, a joint the rows fix), not the input's form: exit 2 at t0, as a failure later on.
+  if (stick.Active() && stick.Start(*ws_rhs, grid.start, y0.data()) != 0) {
+    SimResult r;
+    r.status = SimResult::Status::kNumericalFailure;
+    r.fail_time = grid.start;
+    r.message = "friction at the start: " + (stick.Error().empty() ? rt::ErrorMessage(*ws_rhs) : stick.Error());
+    return r;
+  }
   // The output rows' view of the held rows (resting contacts, stuck joints), on copies of their events.
   std::unique_ptr<HeldOutputs> held;
   if (stops.Active() || stick.Active()) held = std::make_unique<HeldOutputs>(program, options.rtol, options.atol);

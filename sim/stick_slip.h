@@ -150,6 +150,9 @@ class StickSlipEvents {
   std::vector<int> RestingSpeeds() const;
   // At rest (u = 0): stuck when the force that holds it is within mu_s r N, else sliding.
   int Decide(rt::Workspace& ws, double t, double* y, Joint& j);
+  // After the decisions at rest: each joint sliding from rest accelerates its own way (else
+  // decided again with the others' final laws); -1 with error_ where that does not settle.
+  int CheckSlides(rt::Workspace& ws, double t, double* y);
   // Constraint rows (closed loops, couplings, rolling contacts): X is the constrained inverse
   // mass of the stuck speeds, which the rows may make singular. The stuck joints, j among
   // them, and the sliding ones the rows tie to them are grouped by (4) of stick_slip.cpp (a
