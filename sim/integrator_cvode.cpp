@@ -256,13 +256,11 @@ class CvodeStepper final : public SundialsStepper {
   // a row at order 2 or more: the motion's own step reached, where the error is the step's
   // own and not the restart's), after kMaxSteps steps, or at a step that fails its error
   // test or Newton iteration repeatedly under (1) (a kink of f, which no step makes smooth
-  // at that tolerance: the step is taken again under CVODE's weights; Step). Measured
-  // (docs/benchmarks/2026-11-30_bdf_restart_weights.md): the PlaneContact ball's impact times
-  // 3.8e-7 -> 1.1e-11 relative at rtol 1e-11, 860 -> 1378 steps. After an event that does
-  // not jump the state (a law's change: a slip, a stick, a lift-off) the restart is left
-  // alone: there the swing's own error dominates (a pendulum with friction's reversals, no
-  // gain measured) and changing those restarts moved chaotic friction runs onto other paths.
-  // Runs without events never take this path (NoEventMachinery.*).
+  // at that tolerance: the step is taken again under CVODE's weights; Step). After an event
+  // that does not jump the state (a law's change: a slip, a stick, a lift-off) the restart is
+  // left alone: no gain was measured there, and chaotic friction runs moved onto other paths.
+  // Numbers: docs/benchmarks/2026-11-30_bdf_restart_weights.md. Runs without events never
+  // take this path (NoEventMachinery.*).
   struct RestartWeighting {
     static constexpr double kScale = 1e-6;
     static constexpr double kUlps = 100.0;
@@ -298,10 +296,9 @@ class CvodeStepper final : public SundialsStepper {
     for (;;) {
       const int flag = CVode(mem_, tout, s_.y, t, mode);
       if ((flag != CV_ERR_FAILURE && flag != CV_CONV_FAILURE) || !restart_.on) return flag;
-      EndRestart();
+      restart_.on = false;
     }
   }
-  void EndRestart() { restart_.on = false; }
 
   // Called with each step's weights (CVODE sets them once before every step).
   void UpdateRestart() {
@@ -317,7 +314,7 @@ class CvodeStepper final : public SundialsStepper {
     CVodeGetLastOrder(mem_, &order);
     r.kept = order >= 2 && h == r.last_h ? r.kept + 1 : 0;
     r.last_h = h;
-    if (r.kept >= RestartWeighting::kKept || steps >= RestartWeighting::kMaxSteps) EndRestart();
+    if (r.kept >= RestartWeighting::kKept || steps >= RestartWeighting::kMaxSteps) r.on = false;
   }
 
   // CVODE-BDF's projection (CVodeSetProjFn), called on each step whose Newton iteration
