@@ -72,6 +72,12 @@ long OutputGrid::Count() const {
   return static_cast<long>(std::ceil(n - kMergeFraction)) + 1;
 }
 
+bool StateJumped(const double* before, const double* after, size_t n, double rtol, double atol) {
+  for (size_t i = 0; i < n; ++i)
+    if (std::abs(after[i] - before[i]) > rtol * std::abs(before[i]) + atol) return true;
+  return false;
+}
+
 double OutputGrid::Time(long k) const {
   if (k >= Count() - 1) return k == 0 ? start : stop;
   // t_k by multiplication, not accumulation, so that rounding does not drift. When the
@@ -238,6 +244,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
 
   IntegratorStats done;  // of the solvers before the last bridge
   std::vector<double> yb(y.size());
+  std::vector<double> y_left(y.size());  // an event's left limit (StateJumped)
   // Rows of accepted steps inside a near-singular zone (OdeSystem::InZone), held until the
   // zone is left or bridged: a solver creeping towards a crossing can have a state whose
   // T + V is right while the loops' speeds are apart (DOP853, chain of ten, multiplier form,
@@ -292,6 +299,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
         break;
       }
       ++result.rows;
+      std::copy(y.begin(), y.end(), y_left.begin());
       if (system.Event(te, y.data(), stepper->event_index) != 0) {
         fail(te, system.FailureCause());
         break;
@@ -328,6 +336,7 @@ IntegrateResult Integrate(OdeSystem& system, const double* y0, const OutputGrid&
         rhs.Reset();
         IntegratorOptions fresh = bounded();
         fresh.after_event = true;
+        fresh.after_jump = StateJumped(y_left.data(), y.data(), y.size(), options.rtol, options.atol);
         stepper = detail::MakeStepper(rhs, te, y.data(), grid.stop, fresh, &error);
         if (!stepper) {
           fail(rhs.failed ? rhs.fail_time : te, rhs.failed ? rhs.cause : error);

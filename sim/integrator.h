@@ -171,6 +171,8 @@ struct IntegratorOptions {
   double max_step = 0.0;           // |h| bound; 0 = none
   double initial_step = 0.0;       // 0 = the solver's estimate
   bool after_event = false;        // a fresh solver at an event's right limit (CVODE-Adams: CarefulFirstStep)
+  bool after_jump = false;         // ... where the event jumped the state beyond its tolerance (StateJumped;
+                                   // CVODE-BDF: RestartWeights)
   ErkTable erk_table = ErkTable::Verner65;
   IdaLinearSolver ida_linear_solver = IdaLinearSolver::Auto;
   bool project_steps = false;      // DOP853: project accepted steps (OdeSystem::Project)
@@ -183,6 +185,11 @@ struct IntegratorOptions {
   double run_end = -INFINITY;      // ... where the whole run ends when later than the solver's stop time
                                    // (the stepping core, whose stop is each step's end: +inf, unknown)
 };
+
+// Whether an event moved some entry of y from `before` by more than the error test's
+// tolerance rtol |y_i| + atol (an impact's or a reinit's jump; not a law's change, nor a
+// speed set to zero from its location's residual).
+bool StateJumped(const double* before, const double* after, size_t n, double rtol, double atol);
 
 // Counters from the solver (cumulative over the run).
 struct IntegratorStats {

@@ -92,6 +92,11 @@ class CvodeStepper final : public SundialsStepper {
     if (CaptureMessages() != CV_SUCCESS || CVodeInit(mem_, &CvodeStepper::Rhs, t0, s_.y) != CV_SUCCESS)
       return Fail(error, WithDetail("CVODE setup failed", messages_.last));
     if (!SetCommonOptions(stop, options, error)) return false;
+    rtol_ = options.rtol;
+    atol_ = options.atol;
+    restart_.on = bdf && options.after_jump;  // RestartWeights
+    if (restart_.on && CVodeWFtolerances(mem_, &CvodeStepper::RestartWeights) != CV_SUCCESS)
+      return Fail(error, WithDetail("CVODE: setting the error weights failed", messages_.last));
     if (!InitRoots([&](int count) { return CVodeRootInit(mem_, count, &SundialsStepper::Roots); },
                    [&](int* d) { return CVodeSetRootDirection(mem_, d) | CVodeSetNoInactiveRootWarn(mem_); }, error))
       return false;
@@ -124,8 +129,6 @@ class CvodeStepper final : public SundialsStepper {
         return Fail(error, WithDetail("CVODE: setting the initial step failed", messages_.last));
     }
     stop_ = stop;
-    rtol_ = options.rtol;
-    atol_ = options.atol;
     return true;
   }
 
@@ -133,14 +136,14 @@ class CvodeStepper final : public SundialsStepper {
     double tret = 0.0;
     if (!StepsOneByOne()) {
       for (;;) {  // (a graze guard that found no dip: on)
-        const int flag = CVode(mem_, tout, s_.y, &tret, CV_NORMAL);
+        const int flag = Step(tout, &tret, CV_NORMAL);
         if (flag != CV_ROOT_RETURN) return CopyOut(flag, y);
         if (int r = EventReached(tret, y, [&](int* f) { CVodeGetRootInfo(mem_, f); }); r != kNoEvent) return r;
       }
     }
     return AdvanceCheckedSteps(tout, y, [&](double* t) {
       if (watch_.drifted && !ResetProjected()) return CV_ILL_INPUT;
-      const int flag = CVode(mem_, tout, s_.y, t, CV_ONE_STEP);
+      const int flag = Step(tout, t, CV_ONE_STEP);
       if (flag >= 0 && flag != CV_ROOT_RETURN && !project_) MeasureDrift(*t);
       return flag;
     }, [&](int* f) { CVodeGetRootInfo(mem_, f); });
@@ -232,6 +235,87 @@ class CvodeStepper final : public SundialsStepper {
     return std::min(h0, std::abs(stop - t0));
   }
   long start_evals_ = 0;  // f evaluations of CarefulFirstStep
+
+  // CVODE-BDF's error weights after a jump of the state (IntegratorOptions::after_jump: an
+  // impact, a reinit; CVodeWFtolerances). A fresh BDF starts at order 1 with a step of about
+  // sqrt(atol / |y''|) and grows it to the motion's own step, often ten decades larger (a
+  // ball's flight: 1e-12 s to 0.3 s). From order 2 on, CVODE's fixed-leading-coefficient
+  // BDF integrates a quadratic exactly only from an exact history; the history its order-1
+  // start leaves is off, each order-2 step damps that by about 1/3 at a constant step, and a
+  // step grown by eta multiplies its effect on the next step by eta^2. So the controller
+  // settles on the growth (eta ~ 1.75) at which each step adds what its error test allows,
+  // about 1/20 of the weights, for the twenty-odd steps of the growth: each restart left the
+  // state about atol off (a ball's gap 1e-11 at atol 1e-11, measured on y = (q, u),
+  // f = (u, -g) alone), which a slow bounce magnifies by g/v (the ball's impact times 3.8e-7
+  // relative off at rtol 1e-11). A smaller first step or a bounded growth only moves where
+  // that equilibrium begins. Here, while the step still grows, the weights are
+  //   w_i = 1 / max(kScale (rtol |y_i| + atol), kUlps eps |y_i|),                   (1)
+  // (never finer than kUlps units in the last place of y_i, which round-off would fail), so
+  // the equilibrium holds the history about kScale times closer, at a few more steps; CVODE's
+  // own weights return once the step has stopped growing (its size kept over kKept steps in
+  // a row at order 2 or more: the motion's own step reached, where the error is the step's
+  // own and not the restart's), after kMaxSteps steps, or at a step that fails its error
+  // test or Newton iteration repeatedly under (1) (a kink of f, which no step makes smooth
+  // at that tolerance: the step is taken again under CVODE's weights; Step). After an event
+  // that does not jump the state (a law's change: a slip, a stick, a lift-off) the restart is
+  // left alone: no gain was measured there, and chaotic friction runs moved onto other paths.
+  // Numbers: docs/benchmarks/2026-11-30_bdf_restart_weights.md. Runs without events never
+  // take this path (NoEventMachinery.*).
+  struct RestartWeighting {
+    static constexpr double kScale = 1e-6;
+    static constexpr double kUlps = 100.0;
+    static constexpr int kKept = 5;
+    static constexpr long kMaxSteps = 60;
+    bool on = false;        // the weights of (1) for the steps so far
+    long seen_steps = -1;   // CVODE's step count at the last weights
+    double last_h = 0.0;    // ... its last step
+    int kept = 0;           // steps in a row at order >= 2 whose size CVODE kept
+  };
+  RestartWeighting restart_;
+
+  static int RestartWeights(N_Vector ycur, N_Vector ewt, void* user_data) {
+    auto* self = static_cast<CvodeStepper*>(static_cast<SundialsStepper*>(user_data));
+    self->UpdateRestart();
+    const size_t n = static_cast<size_t>(self->rhs_.Size());
+    const double* y = N_VGetArrayPointer(ycur);
+    double* w = N_VGetArrayPointer(ewt);
+    const double eps = std::numeric_limits<double>::epsilon();
+    for (size_t i = 0; i < n; ++i) {
+      double tol = self->rtol_ * std::abs(y[i]) + self->atol_;
+      if (self->restart_.on)  // Eq. (1)
+        tol = std::max(RestartWeighting::kScale * tol, RestartWeighting::kUlps * eps * std::abs(y[i]));
+      if (!(tol > 0.0)) return -1;  // (as CVODE's own weights: atol 0 and y_i 0)
+      w[i] = 1.0 / tol;
+    }
+    return 0;
+  }
+
+  // CVode, where a step that fails (CVODE's repeated error-test or Newton failures) under
+  // the restart's weights ends them and is taken again under CVODE's own (RestartWeights).
+  int Step(double tout, double* t, int mode) {
+    for (;;) {
+      const int flag = CVode(mem_, tout, s_.y, t, mode);
+      if ((flag != CV_ERR_FAILURE && flag != CV_CONV_FAILURE) || !restart_.on) return flag;
+      restart_.on = false;
+    }
+  }
+
+  // Called with each step's weights (CVODE sets them once before every step).
+  void UpdateRestart() {
+    RestartWeighting& r = restart_;
+    long steps = 0;
+    CVodeGetNumSteps(mem_, &steps);
+    if (!r.on || steps == r.seen_steps) return;
+    r.seen_steps = steps;
+    if (steps == 0) return;
+    double h = 0.0;
+    int order = 0;
+    CVodeGetLastStep(mem_, &h);
+    CVodeGetLastOrder(mem_, &order);
+    r.kept = order >= 2 && h == r.last_h ? r.kept + 1 : 0;
+    r.last_h = h;
+    if (r.kept >= RestartWeighting::kKept || steps >= RestartWeighting::kMaxSteps) r.on = false;
+  }
 
   // CVODE-BDF's projection (CVodeSetProjFn), called on each step whose Newton iteration
   // converged, before the error test: corr = y* - y, y* the multiplier form's projection

@@ -217,6 +217,7 @@ StepResult Simulator::AdvanceTo(double t) {
     if (flag == detail::kEventReached) {  // the run's jump, then a fresh solver from the right limit
       const double te = m.stepper->event_time;
       const size_t logged = m.hybrid->Events().size();
+      const std::vector<double> left = y_;  // the left limit (StateJumped)
       if (m.hybrid->System().Event(te, y_.data(), m.stepper->event_index) != 0)
         return Fail(te, m.hybrid->FailureCause());
       events_.insert(events_.end(), m.hybrid->Events().begin() + static_cast<long>(logged), m.hybrid->Events().end());
@@ -234,6 +235,7 @@ StepResult Simulator::AdvanceTo(double t) {
       m.rhs->Reset();
       IntegratorOptions io = m.iopt;  // (an event at t itself: the next call's solver starts as any restart,
       io.after_event = true;          // so that GetState and SetState continue it bit for bit)
+      io.after_jump = StateJumped(left.data(), y_.data(), y_.size(), io.rtol, io.atol);
       m.stepper = detail::MakeStepper(*m.rhs, te, y_.data(), t, io, &error);
       if (!m.stepper) return Fail(m.rhs->failed ? m.rhs->fail_time : te, m.rhs->failed ? m.rhs->cause : error);
       continue;
