@@ -201,9 +201,11 @@ TEST(StickSlipChain, ASlidingSpeedThatDipsBelowZeroInsideOneStepStops) {
 // was refused the same way at 1.4828 in all five. What must hold: the five complete with the
 // same events at the same times (measured: 27 events each, within 4e-7 s and 3.5e-6 s).
 TEST(StickSlipChain, AStopFoundRightAfterADegenerateSlipIsItsEcho) {
+#ifndef KANESIM_STRESS_SHORT  // sanitizers: trial 7 alone (about 100 s for both under ASan)
   ExpectTheSameEvents({"--set", "N=6", "--set", "e=0.7", "--set", "bend=0.566968", "--set", "mu=1.0", "--set", "r=0.2",
                        "--set", "tq=0.1", "--set", "j1.q.start=1.203623392490841"},
                       1e-4);
+#endif
   ExpectTheSameEvents({"--set", "N=5", "--set", "e=0.3", "--set", "bend=0.957186", "--set", "mu=1.0", "--set", "r=0.2",
                        "--set", "tq=0.5", "--set", "j1.q.start=0.4647329344679947"},
                       1e-4);
