@@ -1044,7 +1044,7 @@ std::vector<char> EndStopEvents::RestingSet() const {
 int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vector<char>& before) {
   const int n = Count();
   std::vector<double> lambda, noise, a_held(static_cast<size_t>(nu_));
-  bool settled = false;
+  bool settled = false, together = false;
   for (int it = 0; it < 16 * n + 16; ++it) {  // pivots and impacts; the LCP (M positive definite) has one solution
     if (int s = Reactions(ws, t, y, &lambda, a_held.data(), &noise); s != 0) return s;
     int leave = -1;  // the side pulled hardest beyond its round-off, or its static friction
@@ -1058,6 +1058,13 @@ int EndStopEvents::Settle(rt::Workspace& ws, double t, double* y, const std::vec
         leave = i, pull_leave = pull;
     }
     if (leave >= 0) {
+      // Joints held with their friction: released together, once (sim/stop_releases.cpp (4)).
+      if (!together && stick_ && HeldWithFriction(sides_[static_cast<size_t>(leave)])) {
+        together = true;
+        bool released = false;
+        if (int r = ReleaseTogether(ws, t, y, &released); r != 0) return r;
+        if (released) continue;
+      }
       Leave(ws, leave);
       continue;
     }

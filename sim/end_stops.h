@@ -20,6 +20,8 @@
 
 namespace kanesim::sim {
 
+class StickSlipEvents;
+
 class EndStopEvents {
  public:
   // rtol, atol: the run's; a rebound slower than kRestSpeeds of them rests on the stop.
@@ -190,6 +192,10 @@ class EndStopEvents {
   // of them): after a jump, the other joints' friction laws are stale until
   // StickSlipEvents::Refresh has set them (sim/engine_ode.h settles again then).
   void DeferFrictionReleases(bool on) { defer_ = on; }
+  // Exact friction beside the stops (set by the engine, sim/engine_ode.h): Settle then
+  // releases the joints held at their stops with their friction together, each choice with
+  // the stuck joints' forces solved for it (ReleaseTogether). Null: one at a time.
+  void SetStickSlip(StickSlipEvents* stick) { stick_ = stick; }
   bool HoldsWithFriction() const {  // a stop whose joint has exact (static) friction
     return std::any_of(friction_of_.begin(), friction_of_.end(), [](int f) { return f >= 0; });
   }
@@ -321,6 +327,14 @@ class EndStopEvents {
   double LeaveMargin(const rt::Workspace& ws, const Side& s, double noise) const { return StaticFriction(ws, s) + noise; }
   // Side i stops resting; one held with its friction slides away from it (released_).
   void Leave(rt::Workspace& ws, int i);
+  // Settle's release of the joints held at their stops with their friction (sim/
+  // stop_releases.cpp): the set released decided together, consistent with every stuck
+  // force solved for it, left (Leave; *released). *released false where no set is
+  // consistent or the sides are too many (Settle lets them go one at a time). 0, or the
+  // status of an evaluation that failed.
+  int ReleaseTogether(rt::Workspace& ws, double t, const double* y, bool* released);
+  // A held side with friction (its joint's exact friction holds it beside the stop).
+  bool HeldWithFriction(const Side& s) const { return s.stop >= 0 && friction_of_[static_cast<size_t>(s.stop)] >= 0; }
   bool Released(const Side& s) const;  // its joint in released_
   // The sides `rows` appended as FrictionJump's rows J and their own normal impulses.
   int JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows, std::vector<double>* J,
@@ -346,6 +360,7 @@ class EndStopEvents {
   // set pinned_for_: its gap rate is held at 0 with theirs, its graze guard constant 1.
   std::vector<char> pinned_, pinned_for_;
   bool defer_ = false;                          // DeferFrictionReleases
+  StickSlipEvents* stick_ = nullptr;            // SetStickSlip (not owned; null: none)
   std::string error_;
 };
 

@@ -60,6 +60,7 @@ class EngineOde final : public OdeSystem {
   void SetStops(EndStopEvents* stops) {
     stops_ = stops;
     if (stick_) stick_->SetStops(stops_);
+    if (stops_) stops_->SetStickSlip(stick_);
     state_names_ = rt::StateNames(program_);
   }
   void SetLiftOff(LiftOffGuard* lift) {
@@ -70,6 +71,7 @@ class EngineOde final : public OdeSystem {
   void SetStickSlip(StickSlipEvents* stick) {
     stick_ = stick;
     if (stick_) stick_->SetStops(stops_);
+    if (stops_) stops_->SetStickSlip(stick_);
     state_names_ = rt::StateNames(program_);
   }
   // When clauses (sim/when_events.h): their events after those above.

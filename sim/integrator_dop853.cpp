@@ -434,9 +434,12 @@ class Dop853Stepper final : public Stepper {
         for (size_t i = 0; i < g_new_.size(); ++i) {
           if (searched_[i]) continue;
           double a = t_old_, ga = g_old_[i];
-          const bool from_zero = ga == 0.0 && g_new_[i] < 0.0;
-          if (from_zero != (pass == 1)) continue;
           const double b = event_pending_ ? event_t_ : t_, gb = g_event_[i];
+          // (Below zero at the bracket's right end, not only at the step's: a sliding speed
+          // from its reversal's restart that rises, falls back through zero and rises again by
+          // the step's end is found where another function's crossing shortened the bracket.)
+          const bool from_zero = ga == 0.0 && gb < 0.0;
+          if (from_zero != (pass == 1)) continue;
           if (gb > 0.0 || !(a < b)) continue;  // no crossing before the earliest one so far
           if (from_zero) {  // did it rise first?
             if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/runtime.h"
@@ -36,6 +37,10 @@ class StickSlipEvents {
   int Count() const { return static_cast<int>(joints_.size()); }
   // The stuck joints' forces solved again at (t, y) (after a jump changed the speeds).
   int Resolve(rt::Workspace& ws, double t, const double* y) { return Solve(ws, t, y, nullptr); }
+  // The joints of `laws` (free speed, law: 0 held by its resting stop, +1 / -1 sliding that
+  // way off it) set so, and the stuck joints' forces solved again at (t, y): one trial of
+  // EndStopEvents::ReleaseTogether (sim/stop_releases.cpp).
+  int AtStops(rt::Workspace& ws, double t, const double* y, const std::vector<std::pair<int, int>>& laws);
   // The start: a joint moving slides that way; at rest it sticks or slides (the stick test).
   int Start(rt::Workspace& ws, double t0, double* y0);
   // ydot at (t, y) with every exact joint's law applied: sliding ones by their sign, stuck

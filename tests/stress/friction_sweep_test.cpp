@@ -117,5 +117,122 @@ TEST(FrictionSweep, ReactionsAtAStopWithSlowlyConvergingFrictionAreSolved) {
   }
 }
 
+// The checks every run of the chain must pass, whatever happened at its events: exit 0 at
+// t_end, no row with a joint past its stop by more than 1e-9 rad, T + V not rising across an
+// event instant (two rows at one time) beyond 1e-9 relative nor between rows beyond the
+// integration's error (1e-6 relative); returns T + V at the end (NAN where the run failed).
+double CheckedEndEnergy(const RunResult& r, const char* how, int N, double bend, double t_end) {
+  EXPECT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
+  if (r.exit_code != 0) return NAN;
+  const std::vector<double> t = r.Column("time"), T = r.Column("kinetic_energy"), V = r.Column("potential_energy");
+  EXPECT_GE(t.back(), t_end - 1e-12) << how;
+  for (int k = 1; k < N; ++k) {
+    const std::vector<double> q = r.Column("j[" + std::to_string(k) + "].q");
+    for (size_t i = 0; i < q.size(); ++i)
+      EXPECT_LE(std::abs(q[i]), bend + 1e-9) << how << " j[" << k << "] past its stop at t = " << t[i];
+  }
+  for (size_t i = 1; i < t.size(); ++i) {
+    const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
+    EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::abs(E0)) << how << " at t = " << t[i];
+  }
+  return T.back() + V.back();
+}
+
+std::vector<std::string> ChainArgs(const char* how, const char* rtol, const char* stop, int N,
+                                   const std::vector<std::string>& sets, const std::vector<std::string>& outputs) {
+  std::vector<std::string> args = {"--integrator", how,     "--stop-time", stop, "--rtol", rtol, "--output",
+                                   "kinetic_energy", "--output", "potential_energy"};
+  for (int k = 1; k < N; ++k) args.insert(args.end(), {"--output", "j[" + std::to_string(k) + "].q"});
+  for (const std::string& o : outputs) args.insert(args.end(), {"--output", o});
+  for (const std::string& s : sets) args.insert(args.end(), {"--set", s});
+  return args;
+}
+
+// Sweep seed 6, trial 7: N = 6, e = 0, bend = 0.135203, mu = 0.2 on 1 cm pins, tq = 0.1 N m.
+// At t = 0.2916333 j[1] strikes q_max plastically beside j[2], which rests on q_max held by the
+// stop and its friction. Both were pulled beyond their static friction with the stuck forces
+// from before, and Settle let them go one at a time: j[1] first, then j[2] with j[1]'s sliding
+// friction but the other stuck forces not solved again; with everything solved for both
+// released, j[2] accelerated into its stop (-0.077 rad/s^2): exit 2 ("accelerates into it
+// without resting on it") in all five integrators. Decided together (sim/stop_releases.cpp),
+// releasing j[1] alone is consistent: it slides away (j[1].a = -8.42 rad/s^2) and j[2] stays
+// held (its reaction and friction within their bound). What must hold: the checks above; at
+// the instant's right limit j[1] accelerates away from q_max and j[2] is held on it (a = 0,
+// q = bend) and stays there to t = 0.4 (the reference's events: j[4] and j[1] strike, j[2]
+// none); T + V at t = 0.4 within 1e-6 J of DOP853's at rtol 1e-11 (measured: 5e-8 J, IDA).
+TEST(FrictionSweep, JointsHeldAtTheirStopsWithFrictionAreReleasedTogether) {
+  const int N = 6;
+  const double bend = 0.135203, t_event = 0.2916333, t_end = 0.4;
+  const std::vector<std::string> sets = {"N=6",    "e=0",    "bend=0.135203", "mu=0.2",
+                                         "r=0.01", "tq=0.1", "j1.q.start=-0.5631580192073434"};
+#ifdef KANESIM_STRESS_SHORT  // sanitizers: two integrators against the Release reference (1.9 s in Release for all)
+  const std::vector<const char*> integrators = {"dop853", "cvode"};
+  const double E_ref = -48.0841298527;  // DOP853 at rtol 1e-11, Release
+#else
+  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
+  const double E_ref = CheckedEndEnergy(
+      RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs("dop853", "1e-11", "0.4", N, sets, {})),
+      "dop853 at rtol 1e-11", N, bend, t_end);
+#endif
+  for (const char* how : integrators) {
+    const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
+                                   ChainArgs(how, "1e-8", "0.4", N, sets, {"j[1].a", "j[2].a"}));
+    const double E = CheckedEndEnergy(r, how, N, bend, t_end);
+    if (std::isnan(E)) continue;
+    EXPECT_NEAR(E, E_ref, 1e-6) << how << " against DOP853 at rtol 1e-11, t = 0.4";
+    const std::vector<double> t = r.Column("time"), a1 = r.Column("j[1].a"), a2 = r.Column("j[2].a"),
+                              q2 = r.Column("j[2].q");
+    size_t right = 0;  // the instant's right limit: the second of its two rows
+    for (size_t i = 1; i < t.size(); ++i)
+      if (t[i] == t[i - 1] && std::abs(t[i] - t_event) < 1e-6) right = i;
+    ASSERT_GT(right, 0u) << how << ": no event rows at t = " << t_event;
+    EXPECT_LT(a1[right], -1.0) << how << ": j[1] does not leave q_max";
+    EXPECT_EQ(a2[right], 0.0) << how << ": j[2] is not held on q_max";
+    for (size_t i = right; i < t.size(); ++i)
+      EXPECT_NEAR(q2[i], bend, 1e-12) << how << " j[2] left q_max at t = " << t[i];
+  }
+}
+
+// Sweep seed 4, trial 6: N = 4, e = 0.7, bend = 0.855642, mu = 0.2 on 5 cm pins, tq = 0.5 N m.
+// At t = 2.2468551 j[2] reverses (slides backwards from u = 0 exactly), at 2.2508777 its speed
+// is back at 0 and it sticks, at 2.2517429 j[3] reverses. DOP853's step from the reversal's
+// restart was 0.0226 s long: j[2]'s event function s u started it at 0, rose, fell through 0
+// at the stick and rose again by the step's end, so it was not searched (a function from zero
+// was only one negative at the step's end); j[3]'s crossing shortened the step, and the row
+// there had j[2] moving forwards under its backwards friction: exit 2 ("its reversal was
+// missed") at 2.2517415 in DOP853 alone. A function from zero is now searched where it is
+// below zero at the bracket's right end (the earliest crossing so far). What must hold: every
+// integrator's checks above; j[2] at rest (u = 0 exactly) on the left limit of j[3]'s reversal
+// (stuck since 2.25088); T + V at t = 2.4 within 1e-5 J of DOP853's at rtol 1e-11 (measured:
+// 2.3e-6 J, CVODE-BDF; DOP853 at 1e-8 4e-8 J).
+TEST(FrictionSweep, Dop853FindsAStickInsideTheStepFromAReversal) {
+  const int N = 4;
+  const double bend = 0.855642, t_reversal = 2.2517429, t_end = 2.4;
+  const std::vector<std::string> sets = {"N=4",    "e=0.7",  "bend=0.855642", "mu=0.2",
+                                         "r=0.05", "tq=0.5", "j1.q.start=0.2967374165699683"};
+#ifdef KANESIM_STRESS_SHORT  // sanitizers: DOP853 alone against the Release reference (0.7 s in Release for all)
+  const std::vector<const char*> integrators = {"dop853"};
+  const double E_ref = -6.2053834057;  // DOP853 at rtol 1e-11, Release
+#else
+  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
+  const double E_ref = CheckedEndEnergy(
+      RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs("dop853", "1e-11", "2.4", N, sets, {})),
+      "dop853 at rtol 1e-11", N, bend, t_end);
+#endif
+  for (const char* how : integrators) {
+    const RunResult r =
+        RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs(how, "1e-8", "2.4", N, sets, {"j[2].u"}));
+    const double E = CheckedEndEnergy(r, how, N, bend, t_end);
+    if (std::isnan(E)) continue;
+    EXPECT_NEAR(E, E_ref, 1e-5) << how << " against DOP853 at rtol 1e-11, t = 2.4";
+    const std::vector<double> t = r.Column("time"), u2 = r.Column("j[2].u");
+    size_t left = 0;  // the reversal's left limit: the first of its two rows
+    for (size_t i = 1; i < t.size() && left == 0; ++i)
+      if (t[i] == t[i - 1] && std::abs(t[i] - t_reversal) < 1e-5) left = i - 1;
+    ASSERT_GT(left, 0u) << how << ": no event rows at t = " << t_reversal;
+    EXPECT_EQ(u2[left], 0.0) << how << ": j[2] is not stuck at j[3]'s reversal";
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::stress
