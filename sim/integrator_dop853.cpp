@@ -129,6 +129,9 @@ class Dop853Stepper final : public Stepper {
       g_old_.resize(static_cast<size_t>(ne));
       g_new_.resize(static_cast<size_t>(ne));
       if (rhs_.EventFunctions(t_, y_.data(), g_old_.data()) != 0) return false;
+      guarded_.assign(static_cast<size_t>(ne), 0);
+      for (int j = 0; j < ne; ++j)
+        if (const int p = rhs_.Paired(j); p >= 0) guarded_[static_cast<size_t>(p)] = 1;
     }
     if (options_.initial_step > 0.0) {
       h_ = options_.initial_step;
@@ -434,13 +437,13 @@ class Dop853Stepper final : public Stepper {
         for (size_t i = 0; i < g_new_.size(); ++i) {
           if (searched_[i]) continue;
           double a = t_old_, ga = g_old_[i];
-          const double b = event_pending_ ? event_t_ : t_, gb = g_event_[i];
-          // (Below zero at the bracket's right end, not only at the step's: a sliding speed
-          // from its reversal's restart that rises, falls back through zero and rises again by
-          // the step's end is found where another function's crossing shortened the bracket.)
+          double b = event_pending_ ? event_t_ : t_, gb = g_event_[i];
+          // From zero: below zero at the bracket's right end (the step's, or the earliest
+          // crossing so far), or above it there with a graze guard (DipFromZero).
           const bool from_zero = ga == 0.0 && gb < 0.0;
-          if (from_zero != (pass == 1)) continue;
-          if (gb > 0.0 || !(a < b)) continue;  // no crossing before the earliest one so far
+          const bool dip_from_zero = ga == 0.0 && gb > 0.0 && guarded_[i];
+          if ((from_zero || dip_from_zero) != (pass == 1)) continue;
+          if ((gb > 0.0 && !dip_from_zero) || !(a < b)) continue;  // no crossing before the earliest one so far
           if (from_zero) {  // did it rise first?
             if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
             const int rose = RiseFromZero(static_cast<int>(i), &a, &ga);
@@ -448,10 +451,16 @@ class Dop853Stepper final : public Stepper {
             searched_[i] = 1;
             if (rose == 0) continue;
           }
+          if (dip_from_zero) {  // did it rise and fall back?
+            if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
+            const int fell = DipFromZero(static_cast<int>(i), &a, &ga, &b, &gb);
+            if (fell < 0) return kRhsFatal;
+            if (fell == 0) continue;  // (searched again where an earlier crossing moves b)
+          }
           if (!(ga > 0.0)) continue;
           searched_[i] = 1;
           if (!dense_ready_ && PrepareDense() != 0) return kRhsFatal;
-          g_root_ = g_event_;
+          if (!dip_from_zero) g_root_ = g_event_;  // (DipFromZero left the functions at its b)
           double root = Crossing(static_cast<int>(i), a, ga, b, gb, &g_root_);
           if (std::isnan(root)) return kRhsFatal;
           int which = static_cast<int>(i);
@@ -503,6 +512,36 @@ class Dop853Stepper final : public Stepper {
       const double gk = gs[i];
       if (gk > 0.0) {
         *a = t, *ga = gk;
+        return 1;
+      }
+    }
+    return 0;
+  }
+
+  // Event function i (one with a graze guard), zero at the step's start and above zero at the
+  // bracket's right end *b: sampled at kDipSamples - 1 even points before *b for a fall to <= 0
+  // after a rise, which the signs at the ends do not show. A sliding joint's s u from its
+  // reversal's restart rose, fell through zero where the joint stops and rose again by the
+  // end of DOP853's first step (0.0226 s; issue 41, friction sweep seed 4 trial 6): the stop
+  // was missed. 1 with [*a, *b] bracketing that crossing (*ga > 0 >= *gb) and g_root_ the
+  // functions at *b; 0 when no sample shows one; -1 on failure.
+  int DipFromZero(int i, double* a, double* ga, double* b, double* gb) {
+    constexpr int kDipSamples = 8;
+    std::vector<double>& y = event_y_;
+    y.resize(static_cast<size_t>(n_));
+    dip_g_.resize(g_new_.size());
+    const double t0 = t_old_, t1 = *b;
+    bool rose = false;
+    for (int k = 1; k < kDipSamples; ++k) {
+      const double t = t0 + (t1 - t0) * k / kDipSamples;
+      Interpolate(t, y.data());
+      if (rhs_.EventFunctions(t, y.data(), dip_g_.data()) != 0) return -1;
+      const double gk = dip_g_[static_cast<size_t>(i)];
+      if (gk > 0.0) {
+        rose = true, *a = t, *ga = gk;
+      } else if (rose) {
+        *b = t, *gb = gk;
+        g_root_ = dip_g_;
         return 1;
       }
     }
@@ -749,6 +788,8 @@ class Dop853Stepper final : public Stepper {
   std::vector<double> g_scratch_;  // ... at Crossing's last point
   std::vector<double> sample_g_;   // ... at RiseFromZero's samples k = 1 .. 48, row k - 1  (48 x events)
   uint64_t samples_ = 0;           // bit k: sample k evaluated in this step
+  std::vector<double> dip_g_;      // ... at DipFromZero's last sample  (events)
+  std::vector<char> guarded_;      // function i has a graze guard (OdeSystem::Paired)  (events)
   std::vector<char> searched_;     // LocateEvent: function i searched in this step
   bool event_pending_ = false;   // an event function crossed zero at event_t_ in the last step
   double event_t_ = 0.0;

@@ -619,11 +619,13 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
   if (int s = MarkHeldByStops(ws, t, y, v_rest); s != 0) return s;
   const std::vector<int> resting = RestingSpeeds();
   // Pulled off its stop beyond the static friction (EndStopEvents::Leave): it slides away,
-  // not stuck (a decision at the bound would be round-off's).
+  // not stuck (a decision at the bound would be round-off's). A release moves the forces the
+  // joints at rest need, as a decision does: their laws are checked together after it.
+  bool released = false;
   if (stops_)
     for (const auto& [u, dir] : stops_->TakeReleased())
       for (Joint& j : joints_)
-        if (j.f.u == u && !HeldByStop(j, resting)) j.mode = dir, j.tau = 0.0;
+        if (j.f.u == u && !HeldByStop(j, resting)) j.mode = dir, j.tau = 0.0, released = true;
   std::vector<Joint*> stopped;
   for (Joint& j : joints_) {
     double& u = y[nq_ + j.f.u];
@@ -644,7 +646,7 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
     if (j->stamp <= from)
       if (int s = Decide(ws, t, y, *j); s != 0) return s;
   Apply(ws);
-  return decisions_ > from ? CheckLaws(ws, t, y, from) : 0;
+  return decisions_ > from || released ? CheckLaws(ws, t, y, from) : 0;
 }
 
 }  // namespace kanesim::sim

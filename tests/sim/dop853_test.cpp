@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/integrator.h"
@@ -331,6 +332,51 @@ TEST(SimDop853, DoublePendulumKeepsEnergyAndMatchesCvode) {
   std::printf("[ dop853 ] double pendulum q over 2 s: DOP853 at %.0e vs CVODE at 1e-12: %.2e\n", kRtol, diff);
   constexpr double kAgreementPerRtol = 100;  // 2 s of a chaotic system: a few swings
   EXPECT_LT(diff, kAgreementPerRtol * kRtol);
+}
+
+// An event function g = y = t (t - a)(t - b) (y' = 3t^2 - 2(a + b) t + ab, y(0) = 0, exact for
+// DOP853, so one first step of 1 spans it) from zero at the start: it rises, falls through
+// zero at t = a and rises again by the step's end, with its graze guard -y' negative at both
+// ends. The signs at the step's ends show nothing; the crossing at a is the event. (A sliding
+// joint's s u from its reversal's restart did this in a friction chain, issue 41: its stop was
+// missed.) If this fails, a function that starts a step at zero is only searched where it ends
+// the step below zero.
+TEST(SimDop853, AFunctionFromZeroThatFallsThroughZeroInsideTheStepIsAnEvent) {
+  constexpr double a = 0.2, b = 0.5;
+  class Cubic final : public OdeSystem {
+   public:
+    int Size() const override { return 1; }
+    int Rhs(double t, const double*, double* yd) override {
+      yd[0] = 3.0 * t * t - 2.0 * (a + b) * t + a * b;
+      return 0;
+    }
+    std::string FailureCause() const override { return "test failure cause"; }
+    int NumEvents() const override { return 2; }
+    int EventFunctions(double t, const double* y, double* g) override {
+      double yd = 0.0;
+      Rhs(t, y, &yd);
+      g[0] = y[0];
+      g[1] = -yd;  // the graze guard of g[0]
+      return 0;
+    }
+    int Paired(int i) const override { return i == 1 ? 0 : -1; }
+    int Event(double t, double*, int i) override {
+      events.emplace_back(t, i);
+      return 0;
+    }
+    std::vector<std::pair<double, int>> events;
+  } ode;
+  IntegratorOptions opt;
+  opt.method = rt::Integrator::Dop853;
+  opt.rtol = opt.atol = 1e-10;
+  opt.initial_step = 1.0;
+  const double y0[1] = {0.0};
+  const IntegrateResult r =
+      Integrate(ode, y0, OutputGrid{0.0, 1.0, 1.0}, opt, [](double, const double*, std::string*) { return 0; });
+  EXPECT_TRUE(r.ok) << r.cause;
+  ASSERT_FALSE(ode.events.empty()) << "the crossing at t = a was not seen";
+  EXPECT_EQ(ode.events.front().second, 0);
+  EXPECT_NEAR(ode.events.front().first, a, 1e-12);
 }
 
 }  // namespace

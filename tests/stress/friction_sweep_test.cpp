@@ -234,5 +234,50 @@ TEST(FrictionSweep, Dop853FindsAStickInsideTheStepFromAReversal) {
   }
 }
 
+// Sweep seed 8, trial 6: N = 6, e = 0, bend = 0.514233, mu = 0.2 on 1 cm pins, tq = 0.5 N m.
+// At t = 0.3201901 j[3] reverses (its friction needed beyond its bound: slides forwards from
+// u = 0), and with its new law j[1], resting on q_max with its friction, is pulled beyond its
+// bound and released. j[3]'s law had been decided with j[1] held; with j[1] sliding away it
+// accelerated backwards, against its slide from u = 0 exactly (no crossing): exit 2 ("its
+// reversal was missed") at the row t = 0.324 in all five integrators. The laws at rest are now
+// checked together after a release too (StickSlipEvents::Refresh): j[3] sticks there (its
+// friction -0.492 within 0.526) and slips at 0.32540. What must hold: the checks above; at the
+// instant's right limit j[1] accelerates away from q_max and j[3] is stuck (u = a = 0) and
+// stays so to t = 0.325; T + V at t = 0.4 within 1e-5 J of DOP853's at rtol 1e-11 (measured:
+// 1.1e-6 J, CVODE-BDF).
+TEST(FrictionSweep, AReleaseFromAStopDecidesTheLawsAtRestAgain) {
+  const int N = 6;
+  const double bend = 0.514233, t_event = 0.3201901, t_end = 0.4;
+  const std::vector<std::string> sets = {"N=6",    "e=0",    "bend=0.514233", "mu=0.2",
+                                         "r=0.01", "tq=0.5", "j1.q.start=0.6868243795119158"};
+#ifdef KANESIM_STRESS_SHORT  // sanitizers: two integrators against the Release reference (2 s in Release for all)
+  const std::vector<const char*> integrators = {"dop853", "cvode"};
+  const double E_ref = 54.680264170884;  // DOP853 at rtol 1e-11, Release
+#else
+  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
+  const double E_ref = CheckedEndEnergy(
+      RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs("dop853", "1e-11", "0.4", N, sets, {})),
+      "dop853 at rtol 1e-11", N, bend, t_end);
+#endif
+  for (const char* how : integrators) {
+    const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
+                                   ChainArgs(how, "1e-8", "0.4", N, sets, {"j[1].a", "j[3].u", "j[3].a"}));
+    const double E = CheckedEndEnergy(r, how, N, bend, t_end);
+    if (std::isnan(E)) continue;
+    EXPECT_NEAR(E, E_ref, 1e-5) << how << " against DOP853 at rtol 1e-11, t = 0.4";
+    const std::vector<double> t = r.Column("time"), a1 = r.Column("j[1].a"), u3 = r.Column("j[3].u"),
+                              a3 = r.Column("j[3].a");
+    size_t right = 0;  // the instant's right limit: the last of its rows
+    for (size_t i = 1; i < t.size(); ++i)
+      if (t[i] == t[i - 1] && std::abs(t[i] - t_event) < 1e-6) right = i;
+    ASSERT_GT(right, 0u) << how << ": no event rows at t = " << t_event;
+    EXPECT_LT(a1[right], -1.0) << how << ": j[1] does not leave q_max";
+    for (size_t i = right; i < t.size() && t[i] < 0.325; ++i) {
+      EXPECT_EQ(u3[i], 0.0) << how << ": j[3] moves at t = " << t[i];
+      EXPECT_EQ(a3[i], 0.0) << how << ": j[3] is not held at t = " << t[i];
+    }
+  }
+}
+
 }  // namespace
 }  // namespace kanesim::stress
