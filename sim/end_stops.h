@@ -334,7 +334,9 @@ class EndStopEvents {
   // status of an evaluation that failed.
   int ReleaseTogether(rt::Workspace& ws, double t, const double* y, bool* released);
   // A held side with friction (its joint's exact friction holds it beside the stop).
-  bool HeldWithFriction(const Side& s) const { return s.stop >= 0 && friction_of_[static_cast<size_t>(s.stop)] >= 0; }
+  bool HeldWithFriction(const Side& s) const {
+    return s.stop >= 0 && friction_of_[static_cast<size_t>(s.stop)] >= 0;
+  }
   bool Released(const Side& s) const;  // its joint in released_
   // The sides `rows` appended as FrictionJump's rows J and their own normal impulses.
   int JumpRows(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows, std::vector<double>* J,

@@ -16,6 +16,7 @@
 // friction_stop_chain.mech, issue 41) were both let go at 0.2916 s, and j[2], with j[1]
 // sliding, then accelerated into its stop (exit 2 in all five integrators).
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -28,7 +29,8 @@ namespace {
 constexpr size_t kMaxTogether = 8;  // 2^8 - 1 choices at most
 }  // namespace
 
-int StickSlipEvents::AtStops(rt::Workspace& ws, double t, const double* y, const std::vector<std::pair<int, int>>& laws) {
+int StickSlipEvents::AtStops(rt::Workspace& ws, double t, const double* y,
+                             const std::vector<std::pair<int, int>>& laws) {
   for (const auto& [u, law] : laws)
     for (Joint& j : joints_)
       if (j.f.u == u) j.mode = law, j.tau = 0.0, j.leader = -1;
@@ -44,13 +46,15 @@ int EndStopEvents::ReleaseTogether(rt::Workspace& ws, double t, const double* y,
   for (int i = 0; i < Count(); ++i)
     if (sides_[static_cast<size_t>(i)].resting && HeldWithFriction(sides_[static_cast<size_t>(i)])) H.push_back(i);
   if (H.size() < 2 || H.size() > kMaxTogether) return 0;
-  const auto pull = [&](int i) { return lambda[static_cast<size_t>(i)] + StaticFriction(ws, sides_[static_cast<size_t>(i)]); };
+  const auto pull = [&](int i) {
+    return lambda[static_cast<size_t>(i)] + StaticFriction(ws, sides_[static_cast<size_t>(i)]);
+  };
   std::stable_sort(H.begin(), H.end(), [&](int a, int b) { return pull(a) < pull(b); });
   const size_t n = H.size();
   std::vector<unsigned> choices;  // bit k: H[k] released
   for (unsigned c = 1; c < (1u << n); ++c) choices.push_back(c);
   std::stable_sort(choices.begin(), choices.end(), [](unsigned a, unsigned b) {
-    const int pa = __builtin_popcount(a), pb = __builtin_popcount(b);
+    const int pa = std::popcount(a), pb = std::popcount(b);
     return pa != pb ? pa < pb : a < b;  // (bit 0 the hardest pulled: a < b prefers it)
   });
   const auto laws = [&](unsigned c) {
