@@ -251,7 +251,12 @@ class CvodeStepper final : public SundialsStepper {
   // that equilibrium begins. Here, while the step still grows, the weights are
   //   w_i = 1 / max(kScale (rtol |y_i| + atol), kUlps eps |y_i|),                   (1)
   // (never finer than kUlps units in the last place of y_i, which round-off would fail), so
-  // the equilibrium holds the history about kScale times closer, at a few more steps; CVODE's
+  // the equilibrium holds the history about kScale times closer, at a few more steps (about
+  // four a restart for each factor 100 of kScale). A restart then leaves the state about
+  // 2.4 kScale atol off, which must stay below the motion's own scale after the jump: a
+  // when-clause ball's last flights before its accumulation point are 1e-17 m high at atol
+  // 1e-12 (kScale 1e-6 left them 1.5e-18 m off each, its accumulation point 5.6e-10
+  // relative; 1e-9: 2.4e-21 m, 1.9e-11). CVODE's
   // own weights return once the step has stopped growing (its size kept over kKept steps in
   // a row at order 2 or more: the motion's own step reached, where the error is the step's
   // own and not the restart's), after kMaxSteps steps, or at a step that fails its error
@@ -262,7 +267,7 @@ class CvodeStepper final : public SundialsStepper {
   // Numbers: docs/benchmarks/2026-11-30_bdf_restart_weights.md. Runs without events never
   // take this path (NoEventMachinery.*).
   struct RestartWeighting {
-    static constexpr double kScale = 1e-6;
+    static constexpr double kScale = 1e-9;
     static constexpr double kUlps = 100.0;
     static constexpr int kKept = 5;
     static constexpr long kMaxSteps = 60;

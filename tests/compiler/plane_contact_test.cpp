@@ -22,9 +22,9 @@ constexpr double kG = 9.81;
 constexpr double kTol = 1e-11;
 constexpr double kEventTol = 1e-10;
 
-// CVODE-BDF, whose restart after each impact holds the error to 1e-6 of the weights while
+// CVODE-BDF, whose restart after each impact holds the error to 1e-9 of the weights while
 // its step grows (sim/integrator_cvode.cpp, RestartWeights): a free flight near a plane at 0
-// is then ~1e-17 m off, but no closer than 100 ulps of the coordinate (2e-15 m at 0.1 m) or
+// is then ~1e-20 m off, but no closer than 100 ulps of the coordinate (2e-15 m at 0.1 m) or
 // of the motion's own error at rtol 1e-10. The others' motion of a point under constant
 // acceleration is exact to round-off (explicit Runge-Kutta, IDA, CVODE-Adams since its
 // careful first step after an event).
