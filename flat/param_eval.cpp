@@ -8,6 +8,11 @@ namespace kanesim::flat {
 ParamEvaluator::ParamEvaluator(const ExprPool& pool, const std::vector<double>& param_values)
     : pool_(pool), params_(param_values) {}
 
+void ParamEvaluator::Reserve(size_t n) {
+  known_.reserve(n);
+  value_.reserve(n);
+}
+
 // Post-order over the not yet known part of the sub-DAG, with an explicit stack
 // (children have smaller ids than parents, so it terminates; no recursion over the
 // expression's depth). A node is pushed again only while its children are pending.
@@ -17,7 +22,7 @@ double ParamEvaluator::Eval(ExprId id) {
   if (uid < known_.size() && known_[uid]) return value_[uid];
   if (pool_[id].op == Op::Const) return pool_[id].value;  // a literal: nothing to walk or keep
   if (known_.size() < pool_.size()) {  // doubled at least: the pool grows between calls
-    const size_t n = std::max(pool_.size(), 2 * known_.size());
+    const size_t n = std::max({pool_.size(), 2 * known_.size(), known_.capacity()});
     known_.resize(n, 0);
     value_.resize(n, 0.0);
   }

@@ -315,11 +315,14 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
 }
 
 // The builtin type `name` names (Real, Integer, Boolean, String), in *out; false if none.
-static bool BuiltinTypeNamed(const std::string& name, VType* out) {
-  if (name == "Real") *out = VType::Real;
-  else if (name == "Integer") *out = VType::Integer;
-  else if (name == "Boolean") *out = VType::Boolean;
-  else if (name == "String") *out = VType::String;
+// Compared as views, lengths first (every component's type comes here: a std::string
+// compared with a literal measured the literal and called memcmp each time).
+static bool BuiltinTypeNamed(std::string_view name, VType* out) {
+  using namespace std::string_view_literals;
+  if (name == "Real"sv) *out = VType::Real;
+  else if (name == "Integer"sv) *out = VType::Integer;
+  else if (name == "Boolean"sv) *out = VType::Boolean;
+  else if (name == "String"sv) *out = VType::String;
   else return false;
   return true;
 }
