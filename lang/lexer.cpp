@@ -4,7 +4,6 @@
 #include <cfloat>
 #include <charconv>
 #include <cmath>
-#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
@@ -216,55 +215,9 @@ constexpr CharClasses kClasses;  // built at compile time: usable from any stati
 
 bool Is(char c, unsigned char cls) { return (kClasses.of[static_cast<unsigned char>(c)] & cls) != 0; }
 
-// The value of a short decimal literal p[0, n) (digits, '.', digits, an optional exponent
-// of up to two digits) in *out, by Clinger's fast path: with at most 15 significant
-// digits the digits are an exact double m, and 10^k is exact for k <= 22, so m * 10^k or
-// m / 10^k rounds once, correctly: the value std::from_chars gives. False (nothing
-// written) for any other text, which takes the general path.
-bool ShortDecimalValue(const char* p, size_t n, double* out) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                                      1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  std::uint64_t m = 0;
-  int digits = 0;  // significant digits in m (leading zeros not counted)
-  int scale = 0;   // m * 10^-scale is the mantissa's value
-  size_t i = 0;
-  bool any = false;
-  for (; i < n && p[i] >= '0' && p[i] <= '9'; ++i, any = true) {
-    if (m != 0 || p[i] != '0') ++digits;
-    m = m * 10 + static_cast<std::uint64_t>(p[i] - '0');
-  }
-  if (i < n && p[i] == '.') {
-    for (++i; i < n && p[i] >= '0' && p[i] <= '9'; ++i, any = true) {
-      if (m != 0 || p[i] != '0') ++digits;
-      m = m * 10 + static_cast<std::uint64_t>(p[i] - '0');
-      ++scale;
-    }
-  }
-  if (!any || digits > 15 || scale > 22) return false;
-  int exp10 = 0;
-  if (i < n && (p[i] == 'e' || p[i] == 'E')) {
-    ++i;
-    const bool negative = i < n && p[i] == '-';
-    if (i < n && (p[i] == '+' || p[i] == '-')) ++i;
-    const size_t first = i;
-    for (; i < n && p[i] >= '0' && p[i] <= '9' && i - first < 2; ++i) exp10 = exp10 * 10 + (p[i] - '0');
-    if (i == first) return false;
-    if (negative) exp10 = -exp10;
-  }
-  if (i != n) return false;
-  const int k = exp10 - scale;
-  const double dm = static_cast<double>(m);
-  if (m == 0) *out = 0.0;
-  else if (k >= 0 && k <= 22) *out = dm * kPow10[k];
-  else if (k < 0 && k >= -22) *out = dm / kPow10[-k];
-  else return false;
-  return true;
-}
-
 // The value of a number literal s[b, e) (its text is already checked by the caller).
 double NumberValue(const std::string& s, std::int32_t b, std::int32_t e, bool* out_of_range) {
   *out_of_range = false;
-  if (double v = 0; ShortDecimalValue(s.data() + b, static_cast<size_t>(e - b), &v)) return v;
   // std::from_chars rounds correctly (the value strtod gives) without copying the text or
   // consulting the locale. Overflow, underflow and subnormals go to strtod below, whose
   // ERANGE decides what is out of range, as flat::ParseNumber decides it for --set.
