@@ -264,8 +264,15 @@ struct Node {
   // only read by a diagnostic, and a string kept in each cost an allocation and its free.
   std::string Path() const {
     std::string p;
+    p.reserve(PathSize());  // one allocation: appended part by part, a long path regrew twice
     AppendPath(p);
     return p;
+  }
+  // The length of Path(), read up the tree without writing it.
+  size_t PathSize() const {
+    size_t n = 0;
+    for (const Node* a = this; a->parent; a = a->parent) n += a->name.size() + 1;
+    return n > 0 ? n - 1 : 0;
   }
   void AppendPath(std::string& out) const { AppendPathFrom(out, out.size()); }
 
