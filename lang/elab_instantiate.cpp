@@ -293,7 +293,7 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
       return child;
     }
   }
-  Mod outer;
+  Mod& outer = child->mod;  // merged in place (the merges read the child only for its path)
   if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
   if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
     Span at = outer.value ? outer.value->span : outer.span;
@@ -309,7 +309,6 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
     if (decl.value) decl.value->is_final = true;
   }
   MergeBuiltMod(outer, std::move(decl), child.get(), diags_);
-  child->mod = std::move(outer);
   child->is_final_decl = c.is_final;
   return child;
 }
