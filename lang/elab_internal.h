@@ -354,7 +354,9 @@ inline NodePtr NodeArena::New() {
     used_ = 0;
   }
   void* at = static_cast<char*>(blocks_.back()) + used_++ * sizeof(Node);
-  return NodePtr(new (at) Node());
+  // Default-initialized: every field has its initializer. `Node()` would zero the whole
+  // ~500 bytes first (value-initialization of a class without a user-provided constructor).
+  return NodePtr(new (at) Node);
 }
 
 // Where an expression is evaluated: the instance it names things in, and the loop
