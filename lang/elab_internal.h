@@ -175,6 +175,9 @@ struct Mod;
 using ModMap = std::map<std::string, Mod, std::less<>, PoolAllocator<std::pair<const std::string, Mod>>>;
 
 struct Mod {
+  // User-provided, so that value-initialization (a map's try_emplace, Mod{}) runs the
+  // member initializers only and does not zero the whole struct first.
+  Mod() {}  // NOLINT(modernize-use-equals-default)
   Boxed<ModValue> value;
   ModMap sub;
   std::vector<std::string> order;   // sub keys in the order written
