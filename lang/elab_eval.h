@@ -121,7 +121,9 @@ class Evaluator {
     if (static_cast<std::int64_t>(m_->exprs.size()) + more <= kMaxExprNodes) return true;
     return NodesRanOut(where);
   }
-  bool Charge(const Value& v, Span where) { return ChargeSteps(static_cast<std::int64_t>(v.elements.size()) + 1, where); }
+  bool Charge(const Value& v, Span where) {
+    return ChargeSteps(static_cast<std::int64_t>(v.elements.size()) + 1, where);
+  }
   bool StepsRanOut(Span where);  // ChargeSteps's report, once; false
   bool NodesRanOut(Span where);  // ChargeNodes's report, once; false
   // GetVar's stages (elab_vars.cpp): the value from the binding, checked, then for a

@@ -76,7 +76,10 @@ void AppendSubscript(std::string& name, const Dims& shape, size_t k, Dims& idx) 
   // Written into a buffer and appended at once (a name per element: thousands of them).
   *p++ = '[';
   for (size_t d = 0; d < idx.size(); ++d) {
-    if (p > buf + sizeof buf - 13) name.append(buf, static_cast<size_t>(p - buf)), p = buf;  // room for ',' and an int, then ']'
+    if (p > buf + sizeof buf - 13) {  // room for ',' and an int, then ']'
+      name.append(buf, static_cast<size_t>(p - buf));
+      p = buf;
+    }
     if (d) *p++ = ',';
     p = WriteIndex(p, idx[d]);
   }
