@@ -37,18 +37,22 @@ ExprId ExprPool::Push(const ExprNode& n) {
   return static_cast<ExprId>(nodes_.size() - 1);
 }
 
+// Constants and parameters (most of the pool) are leaves that read neither time nor
+// state: pushed without Push's look at children.
 ExprId ExprPool::Constant(double v) {
-  ExprNode n;
+  ExprNode& n = nodes_.emplace_back();
   n.op = Op::Const;
   n.value = v;
-  return Push(n);
+  reads_.push_back(0);
+  return static_cast<ExprId>(nodes_.size() - 1);
 }
 
 ExprId ExprPool::Parameter(std::int32_t index) {
-  ExprNode n;
+  ExprNode& n = nodes_.emplace_back();
   n.op = Op::Param;
   n.index = index;
-  return Push(n);
+  reads_.push_back(0);
+  return static_cast<ExprId>(nodes_.size() - 1);
 }
 
 ExprId ExprPool::Time() {

@@ -68,6 +68,9 @@ bool RotationCoordsFromName(const std::string& s, RotationCoords* out);
 enum class ParamType : std::uint8_t { Real, Integer, Boolean, String };
 
 struct Param {
+  // User-provided: params.emplace_back() then runs the member initializers only instead of
+  // zeroing the struct first (value-initialization of an implicit constructor).
+  Param() {}  // NOLINT(modernize-use-equals-default)
   // Its name (dotted, scalarized: "links[2].L", "world.g[2]") is Mechanism::ParamName(i):
   // one text of all the names (a model has thousands of parameters; a string each cost an
   // allocation and a page in ten of the front end's).

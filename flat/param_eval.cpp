@@ -8,6 +8,11 @@ namespace kanesim::flat {
 ParamEvaluator::ParamEvaluator(const ExprPool& pool, const std::vector<double>& param_values)
     : pool_(pool), params_(param_values) {}
 
+void ParamEvaluator::Reserve(size_t n) {
+  known_.reserve(n);
+  value_.reserve(n);
+}
+
 // Post-order over the not yet known part of the sub-DAG, with an explicit stack
 // (children have smaller ids than parents, so it terminates; no recursion over the
 // expression's depth). A node is pushed again only while its children are pending.
@@ -15,9 +20,13 @@ double ParamEvaluator::Eval(ExprId id) {
   if (id < 0) return 0.0;
   const auto uid = static_cast<size_t>(id);
   if (uid < known_.size() && known_[uid]) return value_[uid];
-  if (pool_[id].op == Op::Const) return pool_[id].value;  // a literal: nothing to walk or keep
+  const ExprNode& node = pool_[id];
+  if (node.op == Op::Const) return node.value;  // a literal: nothing to walk or keep
+  // A parameter (a binding to another: `m = m`): its value, which never changes once read.
+  if (node.op == Op::Param && node.index >= 0 && static_cast<size_t>(node.index) < params_.size())
+    return params_[static_cast<size_t>(node.index)];
   if (known_.size() < pool_.size()) {  // doubled at least: the pool grows between calls
-    const size_t n = std::max(pool_.size(), 2 * known_.size());
+    const size_t n = std::max({pool_.size(), 2 * known_.size(), known_.capacity()});
     known_.resize(n, 0);
     value_.resize(n, 0.0);
   }

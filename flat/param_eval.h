@@ -20,6 +20,9 @@ class ParamEvaluator {
   ParamEvaluator(const ExprPool& pool, const std::vector<double>& param_values);
   // Value of `id`; NaN where it reads time or state, 0 for kNoExpr.
   double Eval(ExprId id);
+  // Room for a pool of n nodes, made ahead (the elaborator knows about how many it pushes):
+  // the tables are then filled once instead of doubled and copied as the pool grows.
+  void Reserve(size_t n);
 
  private:
   const ExprPool& pool_;

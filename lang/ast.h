@@ -50,7 +50,9 @@ struct NamedArg {
 // and Dump use explicit stacks; the parser records each node's depth and bounds it by
 // kMaxExprDepth (lang/parser.h).
 struct Expr {
-  Expr() = default;
+  // User-provided: make_unique<Expr>() then runs the member initializers only instead of
+  // zeroing the node first (value-initialization of a defaulted constructor).
+  Expr() {}  // NOLINT(modernize-use-equals-default)
   Expr(Expr&&) = default;
   Expr(const Expr&) = delete;
   Expr& operator=(const Expr&) = delete;

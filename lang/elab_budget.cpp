@@ -12,8 +12,7 @@ namespace kanesim::lang::elab {
 
 // Reports the first time the budget runs out, at the place being evaluated; after that
 // every evaluation returns an invalid value at once and every loop stops.
-bool Evaluator::ChargeSteps(std::int64_t steps, Span where) {
-  if (budget_.Spend(steps)) return ChargeNodes(0, where);
+bool Evaluator::StepsRanOut(Span where) {
   if (!budget_reported_) {
     budget_reported_ = true;
     auto& d = diags_.Error(DiagCode::WorkLimit, where,
@@ -30,8 +29,7 @@ bool Evaluator::ChargeSteps(std::int64_t steps, Span where) {
 // vector that doubles: up to three times that while it grows); bounding the nodes bounds
 // the memory, which the steps alone do not (a product of two n x n matrices is n^3 steps
 // but 2 n^3 nodes). `more` nodes about to be made are counted before they are made.
-bool Evaluator::ChargeNodes(std::int64_t more, Span where) {
-  if (static_cast<std::int64_t>(m_->exprs.size()) + more <= kMaxExprNodes) return true;
+bool Evaluator::NodesRanOut(Span where) {
   if (!budget_reported_) {
     budget_reported_ = true;
     budget_.Spend(budget_.Limit() + 1);  // every evaluation stops from here on
@@ -46,10 +44,6 @@ bool Evaluator::ChargeNodes(std::int64_t more, Span where) {
     budget_.Spend(budget_.Limit() + 1);
   }
   return false;
-}
-
-bool Evaluator::Charge(const Value& v, Span where) {
-  return ChargeSteps(static_cast<std::int64_t>(v.elements.size()) + 1, where);
 }
 
 // The native stack this thread has left below `frame`; 0 when unknown. The main thread's

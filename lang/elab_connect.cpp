@@ -206,7 +206,8 @@ Connections Connect(const InstanceTree& tree, const Links& links, const SourcePl
       m->frames.push_back(std::move(f));
     }
     out.frame[i] = out.frame[r];
-    m->frames[static_cast<size_t>(out.frame[i])].aliases.push_back(tree.frames[i]->Path());
+    flat::Frame& f = m->frames[static_cast<size_t>(out.frame[i])];
+    f.aliases.push_back(i == r ? f.name : tree.frames[i]->Path());  // the first's path is the name
   }
   out.frame_set_size.resize(n);
   for (size_t i = 0; i < n; ++i) out.frame_set_size[i] = set_size[static_cast<size_t>(uf.Find(static_cast<int>(i)))];

@@ -50,8 +50,12 @@ class Evaluator {
   // The values of an array of structural numbers (subscripts, ranges): a few inline.
   using Numbers = SmallVec<double, 4>;
   Numbers StructuralList(const Value& v, Span span, const char* what);
-  // Work budget (elab_budget.cpp): false once the elaboration has used it up.
-  bool ChargeSteps(std::int64_t steps, Span where);
+  // Work budget: false once the elaboration has used it up. Inline: charged for every value
+  // made; the report when it runs out is StepsRanOut's (elab_budget.cpp).
+  bool ChargeSteps(std::int64_t steps, Span where) {
+    if (budget_.Spend(steps)) return ChargeNodes(0, where);
+    return StepsRanOut(where);
+  }
   // Whether the work budget ran out (reported once): the other phases stop then.
   bool OverBudget() const { return budget_reported_; }
   // Room for `n` parameters, made once instead of by doubling (each step moving every Param).
@@ -112,9 +116,16 @@ class Evaluator {
   Value BinaryOp(const ast::Expr& e, const Value& a, const Value& b);
   Value MatrixProduct(const ast::Expr& e, const Value& a, const Value& b);
   Value Comparison(const ast::Expr& e, const Value& a, const Value& b);
-  // Work budget (elab_budget.cpp).
-  bool ChargeNodes(std::int64_t more, Span where);  // false once the pool would pass kMaxExprNodes
-  bool Charge(const Value& v, Span where);
+  // Work budget (the reports in elab_budget.cpp). False once the pool would pass kMaxExprNodes.
+  bool ChargeNodes(std::int64_t more, Span where) {
+    if (static_cast<std::int64_t>(m_->exprs.size()) + more <= kMaxExprNodes) return true;
+    return NodesRanOut(where);
+  }
+  bool Charge(const Value& v, Span where) {
+    return ChargeSteps(static_cast<std::int64_t>(v.elements.size()) + 1, where);
+  }
+  bool StepsRanOut(Span where);  // ChargeSteps's report, once; false
+  bool NodesRanOut(Span where);  // ChargeNodes's report, once; false
   // GetVar's stages (elab_vars.cpp): the value from the binding, checked, then for a
   // parameter its flat parameters.
   Value EvaluateVar(Node* var, Span use_span);

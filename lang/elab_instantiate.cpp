@@ -293,7 +293,7 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
       return child;
     }
   }
-  Mod outer;
+  Mod& outer = child->mod;  // merged in place (the merges read the child only for its path)
   if (it != node->mod.sub.end()) outer = std::move(it->second);  // read nowhere else: Collect dropped duplicates
   if (c.is_final && !outer.empty() && !(outer.value && outer.value->from_set)) {
     Span at = outer.value ? outer.value->span : outer.span;
@@ -309,17 +309,19 @@ NodePtr Instantiator::MakeChild(Node* node, Collected& c) {
     if (decl.value) decl.value->is_final = true;
   }
   MergeBuiltMod(outer, std::move(decl), child.get(), diags_);
-  child->mod = std::move(outer);
   child->is_final_decl = c.is_final;
   return child;
 }
 
 // The builtin type `name` names (Real, Integer, Boolean, String), in *out; false if none.
-static bool BuiltinTypeNamed(const std::string& name, VType* out) {
-  if (name == "Real") *out = VType::Real;
-  else if (name == "Integer") *out = VType::Integer;
-  else if (name == "Boolean") *out = VType::Boolean;
-  else if (name == "String") *out = VType::String;
+// Compared as views, lengths first (every component's type comes here: a std::string
+// compared with a literal measured the literal and called memcmp each time).
+static bool BuiltinTypeNamed(std::string_view name, VType* out) {
+  using namespace std::string_view_literals;
+  if (name == "Real"sv) *out = VType::Real;
+  else if (name == "Integer"sv) *out = VType::Integer;
+  else if (name == "Boolean"sv) *out = VType::Boolean;
+  else if (name == "String"sv) *out = VType::String;
   else return false;
   return true;
 }

@@ -25,10 +25,13 @@ bool IsVarAttribute(const std::string& name) {
     default: return false;
   }
 }
-Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters,
-             Diagnostics& diags) {
-  Mod out;
-  if (!m) return out;
+namespace {
+
+// BuildMod into `out`, a Mod as default-constructed: a sub-modifier seen for the first time
+// is built in its map node, not built apart and moved there.
+void BuildModInto(Mod& out, const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters,
+                  Diagnostics& diags) {
+  if (!m) return;
   out.span = m->span;
   out.order.reserve(m->args.size());
   if (m->value) {
@@ -52,17 +55,25 @@ Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<cons
         target = &next;
         continue;
       }
-      Mod built = BuildMod(a.mod.get(), scope, iters, diags);
-      built.span = a.name_span;
-      built.each = a.each;
-      if (a.is_final) {
-        built.is_final = true;
-        built.final_span = a.span;
-        if (built.value) built.value->is_final = true;
+      auto build = [&](Mod& into) {
+        BuildModInto(into, a.mod.get(), scope, iters, diags);
+        into.span = a.name_span;
+        into.each = a.each;
+        if (a.is_final) {
+          into.is_final = true;
+          into.final_span = a.span;
+          if (into.value) into.value->is_final = true;
+        }
+        if (a.redeclare) {
+          into.redeclare = Mod::Redeclare{a.redeclare_type, scope && scope->cls ? scope->cls : nullptr, a.span};
+        }
+      };
+      if (added) {  // a new key: built in place
+        build(next);
+        continue;
       }
-      if (a.redeclare) {
-        built.redeclare = Mod::Redeclare{a.redeclare_type, scope && scope->cls ? scope->cls : nullptr, a.span};
-      }
+      Mod built;  // a key met before: built apart, checked, then moved in
+      build(built);
       if (next.value || !next.sub.empty()) {
         auto& d = diags.Error(DiagCode::Duplicate, a.name_span, "'" + ast::JoinName(a.path) + "' is modified twice");
         d.notes.push_back({next.span, "first modified here"});
@@ -70,6 +81,14 @@ Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<cons
       next = std::move(built);
     }
   }
+}
+
+}  // namespace
+
+Mod BuildMod(const ast::Modification* m, Node* scope, const std::shared_ptr<const Iters>& iters,
+             Diagnostics& diags) {
+  Mod out;
+  BuildModInto(out, m, scope, iters, diags);
   return out;
 }
 

@@ -21,6 +21,22 @@ bool IsOperator(const ast::Expr& e) { return e.kind == ast::ExprKind::Unary || e
 // that are not operators are evaluated by EvalNested. Operands are evaluated left to
 // right, as a recursive evaluator would, so diagnostics come in source order.
 Value Evaluator::EvalOperators(const ast::Expr& root, const Ctx& ctx) {
+  // One operator over operands that are not operators (-0.5, L / 2, m * g: nearly all of
+  // them): evaluated here, in the loop's order and with its charges, without its stacks.
+  const auto& args = root.args;
+  if (root.kind == ast::ExprKind::Unary && args.size() == 1 && args[0] && !IsOperator(*args[0])) {
+    Value r = UnaryOp(root, EvalNested(*args[0], ctx));
+    Charge(r, root.span);
+    return r;
+  }
+  if (root.kind == ast::ExprKind::Binary && args.size() == 2 && args[0] && args[1] && !IsOperator(*args[0]) &&
+      !IsOperator(*args[1])) {
+    const Value a = EvalNested(*args[0], ctx);
+    const Value b = EvalNested(*args[1], ctx);
+    Value r = BinaryOp(root, a, b);
+    Charge(r, root.span);
+    return r;
+  }
   // The stacks are the Evaluator's, shared with the evaluations this one nests (an
   // operand may hold an operator chain of its own): this call owns what lies above the
   // sizes they had on entry, and leaves them at those sizes.

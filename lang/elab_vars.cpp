@@ -40,26 +40,51 @@ flat::ParamType ParamTypeOf(VType t) {
                                : flat::ParamType::String;
 }
 
+// The decimal digits of v >= 0 at p; returns their end. Subscripts are nearly all below
+// 100: written without std::to_chars's general path.
+char* WriteIndex(char* p, int v) {
+  if (v < 10) {
+    *p++ = static_cast<char>('0' + v);
+    return p;
+  }
+  if (v < 100) {
+    *p++ = static_cast<char>('0' + v / 10);
+    *p++ = static_cast<char>('0' + v % 10);
+    return p;
+  }
+  return std::to_chars(p, p + 12, v).ptr;
+}
+
 // The subscript of element k (row-major) of an array of `shape`, "[1,2]" (1-based),
 // appended to `name`; nothing for a scalar. `idx` is scratch of shape.size() entries.
 void AppendSubscript(std::string& name, const Dims& shape, size_t k, Dims& idx) {
   if (shape.empty()) return;
+  char buf[64];
+  char* p = buf;
+  if (shape.size() == 1) {  // a vector (most arrays): its index is k + 1
+    *p++ = '[';
+    p = WriteIndex(p, static_cast<int>(k) + 1);
+    *p++ = ']';
+    name.append(buf, static_cast<size_t>(p - buf));
+    return;
+  }
   size_t rem = k;
   for (size_t d = shape.size(); d-- > 0;) {
     idx[d] = static_cast<int>(rem % static_cast<size_t>(shape[d])) + 1;
     rem /= static_cast<size_t>(shape[d]);
   }
   // Written into a buffer and appended at once (a name per element: thousands of them).
-  char buf[64];
-  size_t n = 0;
-  buf[n++] = '[';
+  *p++ = '[';
   for (size_t d = 0; d < idx.size(); ++d) {
-    if (n > sizeof buf - 13) name.append(buf, n), n = 0;  // room for ',' and an int, then ']'
-    if (d) buf[n++] = ',';
-    n = static_cast<size_t>(std::to_chars(buf + n, buf + sizeof buf, idx[d]).ptr - buf);
+    if (p > buf + sizeof buf - 13) {  // room for ',' and an int, then ']'
+      name.append(buf, static_cast<size_t>(p - buf));
+      p = buf;
+    }
+    if (d) *p++ = ',';
+    p = WriteIndex(p, idx[d]);
   }
-  buf[n++] = ']';
-  name.append(buf, n);
+  *p++ = ']';
+  name.append(buf, static_cast<size_t>(p - buf));
 }
 
 // The flat name of element k of variable `var` of `shape`: "p" or "p[1,2]".
@@ -85,6 +110,7 @@ void Evaluator::ReserveParams(size_t n) {
   // About two pool nodes per instance by the end of the emitter (Talos 6,596 for 3,638
   // instances, the chain of 100 9,422 for 5,909): pushed without the vector's regrowth.
   m_->exprs.Reserve(m_->exprs.size() + 2 * n);
+  param_eval_.Reserve(m_->exprs.size() + 2 * n);
   m_->params.reserve(n);
   m_->param_names.reserve(n * 24);  // about a name's length in the library's parts
   pvals_.reserve(n);
@@ -282,8 +308,9 @@ Value Evaluator::ParameterValue(Node* var, const ModValue* binding, Span use_spa
   std::string& path = path_scratch_;
   path.clear();
   var->AppendPath(path);
+  flat::Param folded_param;  // a constant's element: reset for each (made once, not per element)
   for (size_t k = 0; k < v.elements.size(); ++k) {  // element k is read before it is replaced
-    flat::Param folded_param;
+    if (folded) folded_param = flat::Param{};
     auto write_name = [&](std::string& out) {
       out += path;
       AppendSubscript(out, var->shape, k, idx);

@@ -263,7 +263,9 @@ struct Cursor {
   std::int32_t i = 0;
 
   char At(std::int32_t k) const { return s[static_cast<size_t>(k)]; }
-  bool AtIs(std::int32_t k, unsigned char cls) const { return k < n && Is(At(k), cls); }
+  // k <= n: s[n] is the string's terminating '\0', which is in no class, so a scan stops
+  // there without comparing k with n at every character.
+  bool AtIs(std::int32_t k, unsigned char cls) const { return Is(s.data()[k], cls); }
   Span SpanOf(std::int32_t b, std::int32_t e) const { return Span{file, b, e}; }
   std::string_view View(std::int32_t b, std::int32_t e) const {
     return std::string_view(s.data() + b, static_cast<size_t>(e - b));
