@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <utility>
 
@@ -70,6 +71,14 @@ std::vector<double> RunResult::Column(const std::string& name) const {
   if (i < 0) return out;
   for (const auto& row : rows) out.push_back(row[static_cast<size_t>(i)]);
   return out;
+}
+
+std::vector<std::pair<double, std::string>> RunResult::Events() const {
+  std::vector<std::pair<double, std::string>> events;
+  const std::regex line("t = ([0-9.eE+-]+)\\s+(\\S+):");
+  for (auto it = std::sregex_iterator(stderr_text.begin(), stderr_text.end(), line); it != std::sregex_iterator(); ++it)
+    events.push_back({std::stod((*it)[1]), (*it)[2]});
+  return events;
 }
 
 const std::vector<double>& RunResult::RowAt(double t) const {

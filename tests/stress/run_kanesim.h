@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kanesim::stress {
@@ -18,6 +19,8 @@ struct RunResult {
   // The row whose time is closest to t.
   const std::vector<double>& RowAt(double t) const;
   int Index(const std::string& name) const;  // -1 if absent
+  // The events `--stats` listed on stderr ("  t = 0.16...  j[3]: slips, ..."): (time, element).
+  std::vector<std::pair<double, std::string>> Events() const;
 };
 
 // `kanesim run <model> <args...> -o <tmp.csv>`; model is relative to the source tree.

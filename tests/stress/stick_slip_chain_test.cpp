@@ -173,11 +173,7 @@ void ExpectTheSameEvents(const std::vector<std::string>& sets, double tol) {
     args.insert(args.end(), sets.begin(), sets.end());
     const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech", args);
     ASSERT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
-    std::vector<std::pair<double, std::string>> events;
-    const std::regex line("t = ([0-9.eE+-]+)\\s+(\\S+):");
-    for (auto it = std::sregex_iterator(r.stderr_text.begin(), r.stderr_text.end(), line); it != std::sregex_iterator();
-         ++it)
-      events.push_back({std::stod((*it)[1]), (*it)[2]});
+    const std::vector<std::pair<double, std::string>> events = r.Events();
     if (reference.empty()) reference = events;
     ASSERT_EQ(events.size(), reference.size()) << how << ": " << r.stderr_text;
     for (size_t k = 0; k < events.size(); ++k) {

@@ -125,11 +125,7 @@ TEST(StopChain, EventsWithoutProgressStopTheRunNeverHangIt) {
                                    {"--integrator", how, "--stop-time", "3", "--rtol", "1e-8", "--stats", "--output",
                                     "kinetic_energy", "--output", "potential_energy"});
     ASSERT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
-    std::vector<std::pair<double, std::string>> events;  // --stats: "  t = 0.16...  j[3]: slips, ..."
-    const std::regex line("t = ([0-9.eE+-]+)\\s+(\\S+):");
-    for (auto it = std::sregex_iterator(r.stderr_text.begin(), r.stderr_text.end(), line); it != std::sregex_iterator();
-         ++it)
-      events.push_back({std::stod((*it)[1]), (*it)[2]});
+    const std::vector<std::pair<double, std::string>> events = r.Events();
     if (reference.empty()) reference = events;
     ASSERT_EQ(events.size(), reference.size()) << how << ": " << r.stderr_text;
     for (size_t k = 0; k < events.size(); ++k) {
