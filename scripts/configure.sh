@@ -16,6 +16,10 @@ build_dir=$2
 shift 2
 launcher=()
 if command -v ccache >/dev/null 2>&1; then
-  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  # The test programs' precompiled headers (tests/CMakeLists.txt) are cached only with this
+  # sloppiness (ccache's manual, "Precompiled headers"); ccache 4.7 takes it from the
+  # environment only.
+  ccache_launcher="env;CCACHE_SLOPPINESS=pch_defines,time_macros;ccache"
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER="$ccache_launcher" -DCMAKE_CXX_COMPILER_LAUNCHER="$ccache_launcher")
 fi
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "${targets[@]}" "$@"

@@ -36,6 +36,10 @@ settings=()
 cache_value() { sed -n "s/^$1:[A-Z]*=//p" "$build_dir/CMakeCache.txt" 2>/dev/null | head -1; }
 for var in CMAKE_C_COMPILER CMAKE_CXX_COMPILER CMAKE_C_COMPILER_LAUNCHER CMAKE_CXX_COMPILER_LAUNCHER; do
   value=$(cache_value "$var")
+  # The launcher's last word only (ccache): scripts/configure.sh's env CCACHE_SLOPPINESS=...
+  # serves the test programs' precompiled headers, which pip does not build; ccache's keys
+  # do not depend on it, so the objects build/ compiled still hit.
+  [[ "$var" == *LAUNCHER ]] && value=${value##*;}
   [ -n "$value" ] && settings+=("--config-settings=cmake.define.$var=$value")
 done
 

@@ -141,9 +141,9 @@ void ExpectOnTheBranch(const Outcome& o, double rtol) {
   ExpectAccurateRows(o, rtol);
 }
 
-// Under AddressSanitizer the runs take ~30x longer; there the two tests below run half
-// their cells (the same code paths: every integrator, both forms in the 1e-12 test), and the
-// Release build runs them all. Saves ~60 s of CI's sanitizer stage.
+// Under AddressSanitizer the runs take ~30x longer; there the two tests below run a half and
+// a quarter of their cells (the same code paths: every integrator, both forms in the 1e-12
+// test), and the Release build runs them all. Saves ~75 s of CI's sanitizer stage.
 #if defined(__SANITIZE_ADDRESS__)
 constexpr bool kSanitized = true;
 #else
@@ -176,7 +176,10 @@ bool Required(const Cell& c, const char* a) {
 TEST(ChangePointBridge, AtRtol1e12EveryIntegratorBothForms) {
   for (const char* a : {"0.5", "0.6"})
     for (const Cell& c : kCells) {
-      if (kSanitized && std::string(a) == "0.5") continue;
+      // Under the sanitizers a = 0.6 only, each integrator on one form (DOP853, CVODE-BDF
+      // and ARKODE reduced; CVODE and IDA on the multiplier form), both forms.
+      const size_t i = &c - kCells;
+      if (kSanitized && (std::string(a) == "0.5" || (i % 5) % 2 != i / 5)) continue;
       SCOPED_TRACE(std::string(c.name) + " a = " + a);
       ExpectOnTheBranch(RunParallelogram(a, c.solver, c.integrator, 1e-12, true), 1e-12);
     }

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "run_kanesim.h"
+#include "tests/support/sanitizer_cases.h"
 
 namespace kanesim::stress {
 namespace {
@@ -81,7 +82,9 @@ const Cell kBricardCells[] = {
 TEST(Overconstrained, BricardFollowsTheReducedOneCoordinateModel) {
   const RunResult& ref = BricardReference();
   const auto t_ref = ref.Column("time"), x_ref = ref.Column("j1.q");
+  test::FirstOfEachKind sanitized;  // under the sanitizers: each integrator and each form once
   for (const Cell& c : kBricardCells) {
+    if (!sanitized.Runs({c.integrator, c.solver})) continue;
     SCOPED_TRACE(std::string(c.integrator) + " " + c.solver + " rtol " + c.rtol);
     const RunResult r = RunKanesim("tests/stress/models/bricard.mech",
                                    Args(c, {"j1.q", "j2.q", "j3.q", "j4.q", "j5.q", "kinetic_energy", "potential_energy"}));
@@ -267,7 +270,9 @@ TEST(TurningPoints, RockingFourBarFollowsAnIndependentIntegration) {
       {{"arkode", "sparse", "1e-12"}, 2e-6},    // 4.0e-7
       {{"ida", "sparse", "1e-12"}, 1.5e-6},     // 2.7e-7
   };
+  test::FirstOfEachKind sanitized;  // under the sanitizers: each integrator and each form once
   for (const Case& c : cases) {
+    if (!sanitized.Runs({c.cell.integrator, c.cell.solver})) continue;
     SCOPED_TRACE(std::string(c.cell.integrator) + " " + c.cell.solver + " rtol " + c.cell.rtol);
     std::vector<std::string> args = Args(c.cell, {joints[0], joints[1], joints[2]});
     for (const std::string& s : kRocker) args.insert(args.end(), {"--set", s});

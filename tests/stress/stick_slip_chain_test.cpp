@@ -43,7 +43,11 @@ TEST(StickSlipChain, EveryIntegratorAgreesAfterADegenerateSlip) {
   // The rows' T + V rose by at most 1.7e-11 of |E| (round-off and the integration error).
   constexpr double kEnergyRise = 1e-9;
   double T_ref = NAN, E_ref = NAN;
+#ifdef KANESIM_STRESS_SHORT  // sanitizers: DOP853 (the reference) and ARKODE (the one that stopped)
+  for (const char* how : {"dop853", "arkode"}) {
+#else
   for (const char* how : {"dop853", "cvode", "cvode-bdf", "ida", "arkode"}) {
+#endif
     std::vector<std::string> args{"--integrator", how,   "--rtol",   "1e-8",           "--stop-time",     "3",
                                   "--interval",   "0.01", "--output", "kinetic_energy", "--output", "potential_energy"};
     args.insert(args.end(), kReproducer.begin(), kReproducer.end());
