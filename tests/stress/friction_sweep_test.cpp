@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -148,6 +149,41 @@ std::vector<std::string> ChainArgs(const char* how, const char* rtol, const char
   return args;
 }
 
+// One sweep case (`sets` with N links, stops at +-bend) run to `stop` s at rtol 1e-8 by each
+// integrator: CheckedEndEnergy's checks, T + V at the end within `tol` of DOP853's at rtol
+// 1e-11, then `check` on every run that completed. Under the sanitizers only `short_how` run,
+// against `short_E_ref` (DOP853 at rtol 1e-11, measured in Release).
+struct SweepCase {
+  int N;
+  double bend;
+  const char* stop;
+  std::vector<std::string> sets, outputs;
+  double tol;
+  std::vector<const char*> short_how;
+  double short_E_ref;
+};
+
+void RunSweepCase(const SweepCase& c, const std::function<void(const char*, const RunResult&)>& check) {
+  const double t_end = std::stod(c.stop);
+#ifdef KANESIM_STRESS_SHORT
+  const std::vector<const char*> integrators = c.short_how;
+  const double E_ref = c.short_E_ref;
+#else
+  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
+  const double E_ref = CheckedEndEnergy(RunKanesim("tests/stress/models/friction_stop_chain.mech",
+                                                   ChainArgs("dop853", "1e-11", c.stop, c.N, c.sets, {})),
+                                        "dop853 at rtol 1e-11", c.N, c.bend, t_end);
+#endif
+  for (const char* how : integrators) {
+    const RunResult r =
+        RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs(how, "1e-8", c.stop, c.N, c.sets, c.outputs));
+    const double E = CheckedEndEnergy(r, how, c.N, c.bend, t_end);
+    if (std::isnan(E)) continue;
+    EXPECT_NEAR(E, E_ref, c.tol) << how << " against DOP853 at rtol 1e-11, t = " << c.stop;
+    check(how, r);
+  }
+}
+
 // Sweep seed 6, trial 7: N = 6, e = 0, bend = 0.135203, mu = 0.2 on 1 cm pins, tq = 0.1 N m.
 // At t = 0.2916333 j[1] strikes q_max plastically beside j[2], which rests on q_max held by the
 // stop and its friction. Both were pulled beyond their static friction with the stuck forces
@@ -161,25 +197,12 @@ std::vector<std::string> ChainArgs(const char* how, const char* rtol, const char
 // q = bend) and stays there to t = 0.4 (the reference's events: j[4] and j[1] strike, j[2]
 // none); T + V at t = 0.4 within 1e-6 J of DOP853's at rtol 1e-11 (measured: 5e-8 J, IDA).
 TEST(FrictionSweep, JointsHeldAtTheirStopsWithFrictionAreReleasedTogether) {
-  const int N = 6;
-  const double bend = 0.135203, t_event = 0.2916333, t_end = 0.4;
-  const std::vector<std::string> sets = {"N=6",    "e=0",    "bend=0.135203", "mu=0.2",
-                                         "r=0.01", "tq=0.1", "j1.q.start=-0.5631580192073434"};
-#ifdef KANESIM_STRESS_SHORT  // sanitizers: two integrators against the Release reference (1.9 s in Release for all)
-  const std::vector<const char*> integrators = {"dop853", "cvode"};
-  const double E_ref = -48.0841298527;  // DOP853 at rtol 1e-11, Release
-#else
-  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
-  const double E_ref = CheckedEndEnergy(
-      RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs("dop853", "1e-11", "0.4", N, sets, {})),
-      "dop853 at rtol 1e-11", N, bend, t_end);
-#endif
-  for (const char* how : integrators) {
-    const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
-                                   ChainArgs(how, "1e-8", "0.4", N, sets, {"j[1].a", "j[2].a"}));
-    const double E = CheckedEndEnergy(r, how, N, bend, t_end);
-    if (std::isnan(E)) continue;
-    EXPECT_NEAR(E, E_ref, 1e-6) << how << " against DOP853 at rtol 1e-11, t = 0.4";
+  const double bend = 0.135203, t_event = 0.2916333;
+  // Sanitizers: two integrators (1.9 s in Release for all five).
+  const SweepCase c{6, bend, "0.4", {"N=6", "e=0", "bend=0.135203", "mu=0.2", "r=0.01", "tq=0.1",
+                    "j1.q.start=-0.5631580192073434"}, {"j[1].a", "j[2].a"}, 1e-6, {"dop853", "cvode"},
+                    -48.0841298527};
+  RunSweepCase(c, [&](const char* how, const RunResult& r) {
     const std::vector<double> t = r.Column("time"), a1 = r.Column("j[1].a"), a2 = r.Column("j[2].a"),
                               q2 = r.Column("j[2].q");
     size_t right = 0;  // the instant's right limit: the second of its two rows
@@ -190,7 +213,7 @@ TEST(FrictionSweep, JointsHeldAtTheirStopsWithFrictionAreReleasedTogether) {
     EXPECT_EQ(a2[right], 0.0) << how << ": j[2] is not held on q_max";
     for (size_t i = right; i < t.size(); ++i)
       EXPECT_NEAR(q2[i], bend, 1e-12) << how << " j[2] left q_max at t = " << t[i];
-  }
+  });
 }
 
 // Sweep seed 4, trial 6: N = 4, e = 0.7, bend = 0.855642, mu = 0.2 on 5 cm pins, tq = 0.5 N m.
@@ -206,32 +229,18 @@ TEST(FrictionSweep, JointsHeldAtTheirStopsWithFrictionAreReleasedTogether) {
 // (stuck since 2.25088); T + V at t = 2.4 within 1e-5 J of DOP853's at rtol 1e-11 (measured:
 // 2.3e-6 J, CVODE-BDF; DOP853 at 1e-8 4e-8 J).
 TEST(FrictionSweep, Dop853FindsAStickInsideTheStepFromAReversal) {
-  const int N = 4;
-  const double bend = 0.855642, t_reversal = 2.2517429, t_end = 2.4;
-  const std::vector<std::string> sets = {"N=4",    "e=0.7",  "bend=0.855642", "mu=0.2",
-                                         "r=0.05", "tq=0.5", "j1.q.start=0.2967374165699683"};
-#ifdef KANESIM_STRESS_SHORT  // sanitizers: DOP853 alone against the Release reference (0.7 s in Release for all)
-  const std::vector<const char*> integrators = {"dop853"};
-  const double E_ref = -6.2053834057;  // DOP853 at rtol 1e-11, Release
-#else
-  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
-  const double E_ref = CheckedEndEnergy(
-      RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs("dop853", "1e-11", "2.4", N, sets, {})),
-      "dop853 at rtol 1e-11", N, bend, t_end);
-#endif
-  for (const char* how : integrators) {
-    const RunResult r =
-        RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs(how, "1e-8", "2.4", N, sets, {"j[2].u"}));
-    const double E = CheckedEndEnergy(r, how, N, bend, t_end);
-    if (std::isnan(E)) continue;
-    EXPECT_NEAR(E, E_ref, 1e-5) << how << " against DOP853 at rtol 1e-11, t = 2.4";
+  const double t_reversal = 2.2517429;
+  // Sanitizers: DOP853 alone (0.7 s in Release for all five).
+  const SweepCase c{4, 0.855642, "2.4", {"N=4", "e=0.7", "bend=0.855642", "mu=0.2", "r=0.05", "tq=0.5",
+                    "j1.q.start=0.2967374165699683"}, {"j[2].u"}, 1e-5, {"dop853"}, -6.2053834057};
+  RunSweepCase(c, [&](const char* how, const RunResult& r) {
     const std::vector<double> t = r.Column("time"), u2 = r.Column("j[2].u");
     size_t left = 0;  // the reversal's left limit: the first of its two rows
     for (size_t i = 1; i < t.size() && left == 0; ++i)
       if (t[i] == t[i - 1] && std::abs(t[i] - t_reversal) < 1e-5) left = i - 1;
     ASSERT_GT(left, 0u) << how << ": no event rows at t = " << t_reversal;
     EXPECT_EQ(u2[left], 0.0) << how << ": j[2] is not stuck at j[3]'s reversal";
-  }
+  });
 }
 
 // Sweep seed 8, trial 6: N = 6, e = 0, bend = 0.514233, mu = 0.2 on 1 cm pins, tq = 0.5 N m.
@@ -246,25 +255,12 @@ TEST(FrictionSweep, Dop853FindsAStickInsideTheStepFromAReversal) {
 // stays so to t = 0.325; T + V at t = 0.4 within 1e-5 J of DOP853's at rtol 1e-11 (measured:
 // 1.1e-6 J, CVODE-BDF).
 TEST(FrictionSweep, AReleaseFromAStopDecidesTheLawsAtRestAgain) {
-  const int N = 6;
-  const double bend = 0.514233, t_event = 0.3201901, t_end = 0.4;
-  const std::vector<std::string> sets = {"N=6",    "e=0",    "bend=0.514233", "mu=0.2",
-                                         "r=0.01", "tq=0.5", "j1.q.start=0.6868243795119158"};
-#ifdef KANESIM_STRESS_SHORT  // sanitizers: two integrators against the Release reference (2 s in Release for all)
-  const std::vector<const char*> integrators = {"dop853", "cvode"};
-  const double E_ref = 54.680264170884;  // DOP853 at rtol 1e-11, Release
-#else
-  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
-  const double E_ref = CheckedEndEnergy(
-      RunKanesim("tests/stress/models/friction_stop_chain.mech", ChainArgs("dop853", "1e-11", "0.4", N, sets, {})),
-      "dop853 at rtol 1e-11", N, bend, t_end);
-#endif
-  for (const char* how : integrators) {
-    const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech",
-                                   ChainArgs(how, "1e-8", "0.4", N, sets, {"j[1].a", "j[3].u", "j[3].a"}));
-    const double E = CheckedEndEnergy(r, how, N, bend, t_end);
-    if (std::isnan(E)) continue;
-    EXPECT_NEAR(E, E_ref, 1e-5) << how << " against DOP853 at rtol 1e-11, t = 0.4";
+  const double t_event = 0.3201901;
+  // Sanitizers: two integrators (2 s in Release for all five).
+  const SweepCase c{6, 0.514233, "0.4", {"N=6", "e=0", "bend=0.514233", "mu=0.2", "r=0.01", "tq=0.5",
+                    "j1.q.start=0.6868243795119158"}, {"j[1].a", "j[3].u", "j[3].a"}, 1e-5, {"dop853", "cvode"},
+                    54.680264170884};
+  RunSweepCase(c, [&](const char* how, const RunResult& r) {
     const std::vector<double> t = r.Column("time"), a1 = r.Column("j[1].a"), u3 = r.Column("j[3].u"),
                               a3 = r.Column("j[3].a");
     size_t right = 0;  // the instant's right limit: the last of its rows
@@ -276,7 +272,7 @@ TEST(FrictionSweep, AReleaseFromAStopDecidesTheLawsAtRestAgain) {
       EXPECT_EQ(u3[i], 0.0) << how << ": j[3] moves at t = " << t[i];
       EXPECT_EQ(a3[i], 0.0) << how << ": j[3] is not held at t = " << t[i];
     }
-  }
+  });
 }
 
 }  // namespace
