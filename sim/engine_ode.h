@@ -283,19 +283,20 @@ class EngineOde final : public OdeSystem {
       const std::vector<double> settled(y, y + Size());
       if (int s = stops_->Resettle(ws_, t, y, was); s != 0) return s;
       if (int s = stick_->Refresh(ws_, t, y, settled.data(), stops_->RestSpeed()); s != 0) return s;
-      if (pass + 1 == kSettlePasses || !ClosesUnseen(t, y)) return 0;
+      if (pass + 1 == kSettlePasses || UnseenSide(t, y).empty()) return 0;
     }
   }
   static constexpr int kSettlePasses = 4;
   // A free side at rest on its contact accelerating into it under the present laws
   // (EndStopEvents::Unseen); the laws and forces are left as they are.
-  bool ClosesUnseen(double t, const double* y) {
-    if (stops_->Unseen(ws_, t, y, nullptr).empty()) return false;  // (no side to check: no evaluation)
+  // Its description, or "" (also where the motion cannot be evaluated there).
+  std::string UnseenSide(double t, const double* y) {
+    if (stops_->Unseen(ws_, t, y, nullptr).empty()) return "";  // (no side to check: no evaluation)
     std::vector<double> ydot(static_cast<size_t>(Size()));
     const std::vector<double> modes = stick_ ? stick_->Modes() : std::vector<double>{};
     const int st = Rhs(t, y, ydot.data());
     if (stick_) stick_->SetModes(modes);
-    return st == 0 && !stops_->Unseen(ws_, t, y, ydot.data()).empty();
+    return st == 0 ? stops_->Unseen(ws_, t, y, ydot.data()) : std::string();
   }
   // After an event, under the laws it left: no free side at rest on its contact closing on
   // it (EndStopEvents::Unseen), whose crossing the root finding would never see; else -1
@@ -304,14 +305,7 @@ class EngineOde final : public OdeSystem {
   // and forces are left as the event set them (the evaluation's warm start moved the rack
   // pair's stuck follower in LoopStopFriction.* to another path).
   int CheckUnseen(double t, const double* y) {
-    event_cause_.clear();
-    if (stops_->Unseen(ws_, t, y, nullptr).empty()) return 0;  // (no side to check: no evaluation)
-    std::vector<double> ydot(static_cast<size_t>(Size()));
-    const std::vector<double> modes = stick_ ? stick_->Modes() : std::vector<double>{};
-    const int st = Rhs(t, y, ydot.data());
-    if (stick_) stick_->SetModes(modes);
-    if (st != 0) return 0;
-    event_cause_ = stops_->Unseen(ws_, t, y, ydot.data());
+    event_cause_ = UnseenSide(t, y);
     return event_cause_.empty() ? 0 : -1;
   }
   int FirstGuard() const { return NumStops() + (whens_ ? whens_->Count() : 0); }
