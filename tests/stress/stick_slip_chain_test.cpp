@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <regex>
 #include <string>
 #include <utility>
@@ -166,9 +167,16 @@ TEST(StickSlipChain, NoConsistentLawStopsTheRunWhereItArises) {
 // the same 51 events (the same joints in the same order) at the same times.
 // The five integrators' --stats event lists of the friction chain with `sets`, compared: the
 // same events (joints, in order) at the same times (within tol s).
-void ExpectTheSameEvents(const std::vector<std::string>& sets, double tol) {
+// Under the sanitizers `short_how` instead of the five (the other tests of this file run
+// each integrator there).
+void ExpectTheSameEvents(const std::vector<std::string>& sets, double tol,
+                         std::initializer_list<const char*> short_how = {"dop853", "cvode", "ida", "arkode", "cvode-bdf"}) {
   std::vector<std::pair<double, std::string>> reference;
+#ifdef KANESIM_STRESS_SHORT
+  for (const char* how : short_how) {
+#else
   for (const char* how : {"dop853", "cvode", "ida", "arkode", "cvode-bdf"}) {
+#endif
     std::vector<std::string> args{"--integrator", how, "--rtol", "1e-8", "--stop-time", "3", "--stats"};
     args.insert(args.end(), sets.begin(), sets.end());
     const RunResult r = RunKanesim("tests/stress/models/friction_stop_chain.mech", args);
@@ -208,7 +216,7 @@ TEST(StickSlipChain, AStopFoundRightAfterADegenerateSlipIsItsEcho) {
 #endif
   ExpectTheSameEvents({"--set", "N=5", "--set", "e=0.3", "--set", "bend=0.957186", "--set", "mu=1.0", "--set", "r=0.2",
                        "--set", "tq=0.5", "--set", "j1.q.start=0.4647329344679947"},
-                      1e-4);
+                      1e-4, {"dop853", "arkode"});  // sanitizers: the reference and the one refused
 }
 
 }  // namespace
