@@ -627,9 +627,16 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
       for (Joint& j : joints_)
         if (j.f.u == u && !HeldByStop(j, resting)) j.mode = dir, j.tau = 0.0, released = true;
   std::vector<Joint*> stopped;
+  // A joint that slid and now rests on its stop moves the forces the joints at rest need, as
+  // a release does: the laws at rest are checked again (friction sweep seed 21 trial 3: j[4]
+  // decided to slide forwards from rest beside j[1] sliding backwards; j[1] then came to rest
+  // on q_min, and j[4] accelerated backwards: "its reversal was missed", exit 2 in four
+  // integrators).
+  bool held_now = false;
   for (Joint& j : joints_) {
     double& u = y[nq_ + j.f.u];
     if (HeldByStop(j, resting)) {
+      held_now = held_now || j.mode != 0;
       j.mode = 0, j.tau = 0.0, j.leader = -1;
     } else if (u == y_before[nq_ + j.f.u]) {
       continue;  // (a joint that has just slipped from rest keeps sliding)
@@ -646,7 +653,7 @@ int StickSlipEvents::Refresh(rt::Workspace& ws, double t, double* y, const doubl
     if (j->stamp <= from)
       if (int s = Decide(ws, t, y, *j); s != 0) return s;
   Apply(ws);
-  return decisions_ > from || released ? CheckLaws(ws, t, y, from) : 0;
+  return decisions_ > from || released || held_now ? CheckLaws(ws, t, y, from) : 0;
 }
 
 }  // namespace kanesim::sim

@@ -63,7 +63,7 @@ TEST(FrictionSweep, AJointItsStopHoldsWithFrictionIsNotLetGoIntoIt) {
     for (size_t i = 1; i < t.size(); ++i) {
       const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
       if (t[i] == t[i - 1]) ++instants;
-      EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::abs(E0)) << how << " at t = " << t[i];
+      EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::max(1.0, std::abs(E0))) << how << " at t = " << t[i];
     }
     EXPECT_GT(instants, 50) << how;
     const double E = T.back() + V.back();
@@ -110,7 +110,7 @@ TEST(FrictionSweep, ReactionsAtAStopWithSlowlyConvergingFrictionAreSolved) {
     }
     for (size_t i = 1; i < t.size(); ++i) {
       const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
-      EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::abs(E0)) << how << " at t = " << t[i];
+      EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::max(1.0, std::abs(E0))) << how << " at t = " << t[i];
     }
     const double E = T.back() + V.back();
     if (std::isnan(E_ref)) E_ref = E;
@@ -121,7 +121,10 @@ TEST(FrictionSweep, ReactionsAtAStopWithSlowlyConvergingFrictionAreSolved) {
 // The checks every run of the chain must pass, whatever happened at its events: exit 0 at
 // t_end, no row with a joint past its stop by more than 1e-9 rad, T + V not rising across an
 // event instant (two rows at one time) beyond 1e-9 relative nor between rows beyond the
-// integration's error (1e-6 relative); returns T + V at the end (NAN where the run failed).
+// integration's error (1e-6 relative); relative to max(1 J, |T + V|), as
+// bench/event_sweeps.py (T + V passes near zero in some runs: seed 21 trial 3 rose 3.7e-12 J
+// across an event at E = -7.4e-4 J, round-off). Returns T + V at the end (NAN where the run
+// failed).
 double CheckedEndEnergy(const RunResult& r, const char* how, int N, double bend, double t_end) {
   EXPECT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
   if (r.exit_code != 0) return NAN;
@@ -134,7 +137,7 @@ double CheckedEndEnergy(const RunResult& r, const char* how, int N, double bend,
   }
   for (size_t i = 1; i < t.size(); ++i) {
     const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
-    EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::abs(E0)) << how << " at t = " << t[i];
+    EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::max(1.0, std::abs(E0))) << how << " at t = " << t[i];
   }
   return T.back() + V.back();
 }
@@ -308,6 +311,22 @@ TEST(FrictionSweep, AJointStoppedInACascadeThatSlidesBackRestsOnItsStop) {
 TEST(FrictionSweep, AJointPulledOffItsStopAndDrivenBackInTheSameCascadeStrikesIt) {
   const SweepCase c{6, 0.154654, "2.0", {"N=6", "e=0.7", "bend=0.154654", "mu=0.05", "r=0.01", "tq=0.5",
                     "j1.q.start=0.9455582666336415"}, {}, 4e-2, {"dop853"}, 62.763414747};
+  RunSweepCase(c, [](const char*, const RunResult&) {});
+}
+
+// Sweep seed 21, trial 3: N = 5, e = 1, bend = 0.082367, mu = 0.5 on 20 cm pins, tq = 0.5.
+// Exposed by the change for seed 17 (which moved this run's cascades); it passed before it.
+// At t = 1.6555426 j[1] reverses and slides backwards; decided together with it, j[4] slides
+// forwards from rest (accelerating 1.36 rad/s^2 that way). Then j[1] comes to rest on q_min,
+// which moves the force j[4] needs, and j[4] accelerated backwards: exit 2 at t = 1.6558 in
+// four integrators ("a joint sliding forwards ... moves the other way: its reversal was
+// missed"). A joint that comes to rest on its stop now has the laws at rest checked again
+// (StickSlipEvents::Refresh), as a release from a stop already had. What must hold: the
+// checks above in all five; T + V at t = 1.8 within 1e-3 J of DOP853's at rtol 1e-11
+// (measured: 6.6e-4 J, IDA; CVODE-BDF 2.2e-4 J).
+TEST(FrictionSweep, AJointThatComesToRestOnItsStopHasTheLawsAtRestDecidedAgain) {
+  const SweepCase c{5, 0.082367, "1.8", {"N=5", "e=1.0", "bend=0.082367", "mu=0.5", "r=0.2", "tq=0.5",
+                    "j1.q.start=0.5817462157266542"}, {}, 1e-3, {"dop853"}, -2.445987810};
   RunSweepCase(c, [](const char*, const RunResult&) {});
 }
 
