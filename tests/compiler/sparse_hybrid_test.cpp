@@ -14,9 +14,6 @@
 namespace kanesim::test {
 namespace {
 
-// `text` compiled for the default path and for --solver sparse; both runs' events and rows
-// agree to `tol` (times absolute; rows, accelerations among them, to 100 tol relative to 1 + |value|), and the sparse program takes
-// the sparse path. At least `min_events` events. ARKODE to `arkode_tol` where given.
 // Under the sanitizers a call runs the integrators `part` selects (RunsCase over the test's
 // `parts` calls: each integrator in one of them); the Release build runs all five each time.
 struct Part {
@@ -26,6 +23,9 @@ struct Part {
   }
 };
 
+// `text` compiled for the default path and for --solver sparse; both runs' events and rows
+// agree to `tol` (times absolute; rows, accelerations among them, to 100 tol relative to 1 + |value|), and the sparse program takes
+// the sparse path. At least `min_events` events. ARKODE to `arkode_tol` where given.
 void ExpectSparseLikeDefault(const std::string& text, double stop, const std::vector<std::string>& signals,
                              double rtol, double tol_all, size_t min_events, double arkode_tol = 0.0, Part part = {}) {
   auto dflt = LoadModel(text, {}, {}, true);

@@ -17,6 +17,18 @@
 namespace kanesim::stress {
 namespace {
 
+// T + V never rises across an event instant (two rows at one time) beyond 1e-9 nor between
+// rows beyond the integration's error (1e-6), relative to max(1 J, |T + V|) as
+// bench/event_sweeps.py (T + V passes near zero in some runs: seed 21 trial 3 rose 3.7e-12 J
+// across an event at E = -7.4e-4 J, round-off).
+void ExpectNoEnergyRise(const std::vector<double>& t, const std::vector<double>& T, const std::vector<double>& V,
+                        const char* how) {
+  for (size_t i = 1; i < t.size(); ++i) {
+    const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
+    EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::max(1.0, std::abs(E0))) << how << " at t = " << t[i];
+  }
+}
+
 // Sweep seed 6, trial 3: N = 6, e = 0, bend = 0.852068, mu = 0.5 on 1 cm pins, tq = 0.1 N m.
 // At t = 1.8165815 j1 reverses (slides forwards) while j[4] rests on q_max, held there by the
 // stop with its friction, and j[5] is stuck by its friction. The stop's reaction was solved
@@ -60,11 +72,8 @@ TEST(FrictionSweep, AJointItsStopHoldsWithFrictionIsNotLetGoIntoIt) {
       }
     }
     int instants = 0;
-    for (size_t i = 1; i < t.size(); ++i) {
-      const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
-      if (t[i] == t[i - 1]) ++instants;
-      EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::max(1.0, std::abs(E0))) << how << " at t = " << t[i];
-    }
+    for (size_t i = 1; i < t.size(); ++i) instants += t[i] == t[i - 1];
+    ExpectNoEnergyRise(t, T, V, how);
     EXPECT_GT(instants, 50) << how;
     const double E = T.back() + V.back();
     if (std::isnan(E_ref)) E_ref = E;
@@ -108,10 +117,7 @@ TEST(FrictionSweep, ReactionsAtAStopWithSlowlyConvergingFrictionAreSolved) {
         EXPECT_LE(std::abs(q[i]), bend + 1e-9) << how << " j[" << k << "] past its stop at t = " << t[i];
       }
     }
-    for (size_t i = 1; i < t.size(); ++i) {
-      const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
-      EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::max(1.0, std::abs(E0))) << how << " at t = " << t[i];
-    }
+    ExpectNoEnergyRise(t, T, V, how);
     const double E = T.back() + V.back();
     if (std::isnan(E_ref)) E_ref = E;
     EXPECT_NEAR(E, E_ref, 1e-4) << how << " against DOP853 at t = 2";
@@ -120,11 +126,8 @@ TEST(FrictionSweep, ReactionsAtAStopWithSlowlyConvergingFrictionAreSolved) {
 
 // The checks every run of the chain must pass, whatever happened at its events: exit 0 at
 // t_end, no row with a joint past its stop by more than 1e-9 rad, T + V not rising across an
-// event instant (two rows at one time) beyond 1e-9 relative nor between rows beyond the
-// integration's error (1e-6 relative); relative to max(1 J, |T + V|), as
-// bench/event_sweeps.py (T + V passes near zero in some runs: seed 21 trial 3 rose 3.7e-12 J
-// across an event at E = -7.4e-4 J, round-off). Returns T + V at the end (NAN where the run
-// failed).
+// event instant nor between rows (ExpectNoEnergyRise). Returns T + V at the end (NAN where the
+// run failed).
 double CheckedEndEnergy(const RunResult& r, const char* how, int N, double bend, double t_end) {
   EXPECT_EQ(r.exit_code, 0) << how << ": " << r.stderr_text;
   if (r.exit_code != 0) return NAN;
@@ -135,10 +138,7 @@ double CheckedEndEnergy(const RunResult& r, const char* how, int N, double bend,
     for (size_t i = 0; i < q.size(); ++i)
       EXPECT_LE(std::abs(q[i]), bend + 1e-9) << how << " j[" << k << "] past its stop at t = " << t[i];
   }
-  for (size_t i = 1; i < t.size(); ++i) {
-    const double E0 = T[i - 1] + V[i - 1], E1 = T[i] + V[i];
-    EXPECT_LE(E1 - E0, (t[i] == t[i - 1] ? 1e-9 : 1e-6) * std::max(1.0, std::abs(E0))) << how << " at t = " << t[i];
-  }
+  ExpectNoEnergyRise(t, T, V, how);
   return T.back() + V.back();
 }
 
