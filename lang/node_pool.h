@@ -9,6 +9,11 @@
 // tree alive at once) and stay reachable from the pool, so leak checkers count nothing.
 // Under AddressSanitizer the nodes come from the global heap, so that a use after free
 // is still caught.
+//
+// One lock serves every pool. A program that forks while other threads may be freeing
+// nodes (the Python module: a model dropped on one thread while a sweep forks a worker on
+// another) holds it across the fork (NodePoolsLock in pthread_atfork's prepare,
+// NodePoolsUnlock in parent and child), so that the child does not start with it taken by a thread that does not exist there.
 #pragma once
 
 #include <cstddef>
@@ -24,6 +29,15 @@ inline constexpr bool kNodePoolEnabled = false;
 inline constexpr bool kNodePoolEnabled = true;
 #endif
 
+// Held for a few instructions only (a std::mutex cost more than the work it guards);
+// other threads parsing or freeing at the same moment wait their turn.
+inline std::atomic_flag g_node_pools_busy = ATOMIC_FLAG_INIT;
+
+inline void NodePoolsLock() {
+  while (g_node_pools_busy.test_and_set(std::memory_order_acquire)) std::this_thread::yield();
+}
+inline void NodePoolsUnlock() { g_node_pools_busy.clear(std::memory_order_release); }
+
 template <std::size_t kSize, std::size_t kAlign>
 class NodePool {
   static_assert(kSize >= sizeof(void*) && kAlign <= alignof(std::max_align_t));
@@ -32,7 +46,7 @@ class NodePool {
   static void* Allocate() {
     if constexpr (!kNodePoolEnabled) return ::operator new(kSize);
     State& s = Get();
-    const Lock lock(s.busy);
+    const Lock lock;
     if (s.free) {
       void* p = s.free;
       s.free = *static_cast<void**>(p);
@@ -47,7 +61,7 @@ class NodePool {
     if (!p) return;
     if constexpr (!kNodePoolEnabled) return ::operator delete(p);
     State& s = Get();
-    const Lock lock(s.busy);
+    const Lock lock;
     *static_cast<void**>(p) = s.free;
     s.free = p;
   }
@@ -56,18 +70,14 @@ class NodePool {
   static constexpr std::size_t kStride = (kSize + kAlign - 1) / kAlign * kAlign;
   static constexpr std::size_t kFirstChunk = 64, kMaxChunk = 4096;  // blocks per chunk
 
-  // A chunk: a link to the previous chunk (so every chunk stays reachable), then blocks.
-  // Held for a few instructions only (a std::mutex cost more than the work it guards);
-  // other threads parsing at the same moment wait their turn.
   struct Lock {
-    std::atomic_flag& busy;
-    explicit Lock(std::atomic_flag& b) : busy(b) {
-      while (busy.test_and_set(std::memory_order_acquire)) std::this_thread::yield();
-    }
-    ~Lock() { busy.clear(std::memory_order_release); }
+    Lock() { NodePoolsLock(); }
+    ~Lock() { NodePoolsUnlock(); }
+    Lock(const Lock&) = delete;
+    Lock& operator=(const Lock&) = delete;
   };
+  // A chunk: a link to the previous chunk (so every chunk stays reachable), then blocks.
   struct State {
-    std::atomic_flag busy = ATOMIC_FLAG_INIT;
     void* free = nullptr;        // freed blocks, each holding the next one's address
     char* next = nullptr;        // the current chunk's first unused block
     char* end = nullptr;         // its end

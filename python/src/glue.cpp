@@ -23,6 +23,7 @@
 #include "sim/signal_select.h"
 #include "pipeline/pipeline.h"
 #include "compiler/compiler.h"
+#include "lang/node_pool.h"
 
 namespace kanesim::py {
 namespace {
@@ -288,12 +289,24 @@ namespace {
 // Forking from the interpreter's process: the worker runs C++ only (the scenario, and the
 // front end for a structural variant) and leaves with _exit; the calling thread holds no
 // GIL (released by module.cpp). A lock another thread holds at the fork stays locked in the
-// worker forever: the front end's (g_load_mutex, the one way into it here) is taken around
-// every fork (pthread_atfork), so the worker starts with it free.
+// worker forever. Two are taken around every fork (pthread_atfork), so the worker starts
+// with them free: the front end's (g_load_mutex, the one way into it here), then the
+// syntax-tree nodes' (lang/node_pool.h), which a thread dropping a model takes outside
+// the front end (the worker then spun on it until the scenario's timeout). That order is
+// the front end's own, so no thread holds the second while waiting for the first.
 void ForkGuards() {
   static std::once_flag once;
   std::call_once(once, [] {
-    ::pthread_atfork([] { g_load_mutex.lock(); }, [] { g_load_mutex.unlock(); }, [] { g_load_mutex.unlock(); });
+    const auto unlock = [] {
+      lang::NodePoolsUnlock();
+      g_load_mutex.unlock();
+    };
+    ::pthread_atfork(
+        [] {
+          g_load_mutex.lock();
+          lang::NodePoolsLock();
+        },
+        unlock, unlock);
   });
 }
 
