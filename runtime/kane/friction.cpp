@@ -80,15 +80,22 @@ int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program
     }
     return path(p, ws);
   }
-  double change_1 = 0.0, change_2 = 0.0, gain = 0.0, w = 1.0;  // the last two changes; w of (3')
+  double change_1 = 0.0, change_2 = 0.0, ratio = 0.0, w = 1.0;  // the last two changes; w of (3')
   int growths = 0;
+  // For the report: the residual Q_f(...) - Q_f^(k) of (3')'s largest entry (its joint and
+  // sign) in the last two iterations, and whether that joint's residual kept its sign.
+  double res = 0.0, res_1 = 0.0, res_2 = 0.0, lead_r = 0.0;
+  size_t lead = 0;
+  bool same_sign = true;
   for (int it = 0; it < kMaxIterations; ++it) {
     if (int st = path(p, ws); st != 0) return st;
     ++ws.friction_iterations;
     BiasAccelerations(p, ws, /*include_free=*/true);
     LoopMultipliers(p, ws);
     JointReactions(p, ws);
-    double change = 0.0;
+    double change = 0.0, next_lead_r = 0.0;
+    size_t next_lead = 0;
+    res = 0.0;
     for (size_t i = 0; i < nf; ++i) {
       const auto L = static_cast<size_t>(p.friction_joints[i]);
       const TreeJoint& j = p.joints[L];
@@ -97,7 +104,14 @@ int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program
       const double N = (F - F.dot(a) * a).norm();  // (1)
       const double tau = FrictionForce(j, ws, i, N);  // (2)
       ws.friction_N[i] = N;
-      change = std::max(change, std::fabs(tau - ws.friction_tau[i]) / (1.0 + std::fabs(tau)));
+      const double r = tau - ws.friction_tau[i];
+      change = std::max(change, std::fabs(r) / (1.0 + std::fabs(tau)));
+      if (i == lead) same_sign = r * lead_r >= 0.0;
+      if (std::fabs(r) > res) {
+        res = std::fabs(r);
+        next_lead = i;
+        next_lead_r = r;
+      }
       ws.friction_tau[i] += w * (tau - ws.friction_tau[i]);  // (3')
       ws.Q[j.u0] = ws.friction_Q0[i] + ws.friction_tau[i];
     }
@@ -107,23 +121,32 @@ int SolveWithFriction(const Program& p, Workspace& ws, int (*path)(const Program
       ws.error = "Coulomb friction: the normal-force iteration met a non-finite friction force or normal force";
       return 1;
     }
+    lead = next_lead;
+    lead_r = next_lead_r;
     // Over two iterations (a 2-cycle's change repeats; a contraction's may rise once).
-    if (it > 1) gain = change / change_2;
+    if (it > 1) ratio = change / change_2;
     change_2 = change_1;
     change_1 = change;
-    growths = it > 1 && gain >= kStagnant ? growths + 1 : 0;
+    res_2 = res_1;
+    res_1 = res;
+    growths = it > 1 && ratio >= kStagnant ? growths + 1 : 0;
     if (growths < kDiverging) continue;
     if (w <= kMinRelax) break;
     w *= 0.5;
     growths = 0;
   }
+  // The map's gain g from the relaxed iteration: near a linear map its residual is
+  // multiplied by rho = 1 + w (g - 1) per iteration, with rho < 0 where the leading joint's
+  // residual flips sign every iteration.
+  const double rho = res_2 > 0.0 ? res_1 / res_2 : 1.0;
+  const double map_gain = same_sign ? 1.0 + (rho - 1.0) / w : 1.0 - (1.0 + rho) / w;
   char buf[400];
   std::snprintf(buf, sizeof buf,
                 "Coulomb friction: no consistent friction force: the friction forces' feedback through the joints' "
-                "normal forces has a gain >= 1 (the normal-force iteration diverges, its change growing %.3g-fold per two "
-                "iterations under relaxation %.3g: mu r too large for this state, a self-locking joint or a "
+                "normal forces has a gain of about %.3g (the normal-force iteration does not converge under "
+                "relaxation %.3g; a gain of 1 or more: mu r too large for this state, a self-locking joint or a "
                 "Painleve-type inconsistency)",
-                gain, w);
+                map_gain, w);
   ws.error = buf;
   return 1;
 }
