@@ -23,7 +23,7 @@
 #include "sim/signal_select.h"
 #include "pipeline/pipeline.h"
 #include "compiler/compiler.h"
-#include "lang/node_pool.h"
+#include "lang/lang.h"  // lang::NodePoolsLock / NodePoolsUnlock (lang/node_pool.h)
 
 namespace kanesim::py {
 namespace {
