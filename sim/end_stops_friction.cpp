@@ -10,7 +10,7 @@
 // W the inverse mass without the friction (M^-1 on a tree, with constraint rows the
 // constrained one; exact without mu; with mu it converges at the rate the fixed point of
 // runtime/kane/friction.cpp (3) does, each a(lambda) solving that fixed point with lambda
-// applied). Impacts and jumps: sim/friction_impulse.h's law, whose normal impulses carry the
+// applied; where its residual flips sign it overshoots, and its step is relaxed). Impacts and jumps: sim/friction_impulse.h's law, whose normal impulses carry the
 // stops' (along their joints: none across) and the plane contacts' impulses.
 #include <Eigen/Dense>
 #include <algorithm>
@@ -32,6 +32,7 @@ constexpr double kTol = 1e-11;  // residual / (1 + largest |a|): a few times the
 constexpr int kMaxIterations = 2000;
 constexpr int kWindow = 10;
 constexpr double kShrink = 0.9;
+constexpr double kMinRelax = 1.0 / 64;
 }  // namespace
 
 int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, const std::vector<int>& rows,
@@ -86,6 +87,13 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
   c->assign(m, 0.0);
   std::vector<double> lambda(planes_.size());  // the plane contacts' forces, applied at their points
   double r_window = HUGE_VAL;  // the residual kWindow iterations ago
+  // The step of (1) relaxed by w where it overshoots: the leading row's residual flipping
+  // sign at most iterations of a window that did not shrink (sweep seeds 44 and 48: one stop
+  // row, the chord 2-cycling at a gain of -1.02 and erratically; exit 2 in all five
+  // integrators). w is halved down to kMinRelax; a residual keeping its sign is not helped.
+  double w = 1.0, lead_r = 0.0;
+  size_t lead = 0;
+  int flips = 0;
   for (int it = 0; it < kMaxIterations; ++it) {
     std::fill(F.begin(), F.end(), 0.0);
     std::fill(lambda.begin(), lambda.end(), 0.0);
@@ -102,11 +110,23 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
       return s;
     const double* acc = yd.data() + nq_;
     double r_max = 0.0, scale = 1.0;
+    size_t next_lead = 0;
     for (size_t j = 0; j < m; ++j) {
       r[j] = -bias[j];
       for (size_t k = 0; k < nu; ++k) r[j] -= Jrows_[j * nu + k] * acc[k];
+      if (std::abs(r[j]) > r_max) next_lead = j;
       r_max = std::max(r_max, std::abs(r[j]));
     }
+    if (it > 0 && r[lead] * lead_r < 0.0) {
+      // Alternating: the chord overshoots. Its gain g along the leading row, from this
+      // residual over the last (rho = 1 + w (g - 1)), gives the step that would remove that
+      // mode, w / (1 - rho) (the secant step on one row; with several rows each mode's rate
+      // stays below 1 in size when g is the most negative gain).
+      ++flips;
+      w = std::clamp(w / (1.0 - r[lead] / lead_r), kMinRelax, 1.0);
+    }
+    lead = next_lead;
+    lead_r = r[lead];
     for (size_t k = 0; k < nu; ++k) scale = std::max(scale, 1.0 + std::abs(acc[k]));
     if (r_max <= kTol * scale) {
       std::copy(acc, acc + nu_, a);
@@ -114,14 +134,19 @@ int EndStopEvents::ReactionsMu(rt::Workspace& ws, double t, const double* y, con
       return 0;
     }
     if (it % kWindow == 0) {
-      if (!(r_max < kShrink * r_window)) break;  // not shrinking (NaN too)
+      const bool overshoots = 2 * flips > kWindow && w > kMinRelax;
+      flips = 0;
+      if (!(r_max < kShrink * r_window)) {  // not shrinking (NaN too)
+        if (!overshoots || !std::isfinite(r_max)) break;
+        w *= 0.5;
+      }
       r_window = r_max;
     }
     if (!SolveHeld(A, r, &dc, nullptr, kTol * scale)) {  // (dependent rows: the least correction)
       error_ = SingularRows(rows);
       return -1;
     }
-    for (size_t j = 0; j < m; ++j) (*c)[j] += dc[j];  // (1)
+    for (size_t j = 0; j < m; ++j) (*c)[j] += w * dc[j];  // (1), relaxed
   }
   ws.error = "the resting contacts' reactions with Coulomb friction mu N did not converge (self-locking joint?)";
   return 1;  // recoverable: the integrator retries with a smaller step

@@ -165,6 +165,7 @@ struct SweepCase {
   double tol;
   std::vector<const char*> short_how;
   double short_E_ref;
+  std::vector<const char*> how = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};  // in Release
 };
 
 void RunSweepCase(const SweepCase& c, const std::function<void(const char*, const RunResult&)>& check) {
@@ -173,7 +174,7 @@ void RunSweepCase(const SweepCase& c, const std::function<void(const char*, cons
   const std::vector<const char*> integrators = c.short_how;
   const double E_ref = c.short_E_ref;
 #else
-  const std::vector<const char*> integrators = {"dop853", "cvode", "cvode-bdf", "ida", "arkode"};
+  const std::vector<const char*> integrators = c.how;
   const double E_ref = CheckedEndEnergy(RunKanesim("tests/stress/models/friction_stop_chain.mech",
                                                    ChainArgs("dop853", "1e-11", c.stop, c.N, c.sets, {})),
                                         "dop853 at rtol 1e-11", c.N, c.bend, t_end);
@@ -329,6 +330,32 @@ TEST(FrictionSweep, AJointThatComesToRestOnItsStopHasTheLawsAtRestDecidedAgain) 
   const SweepCase c{5, 0.082367, "1.8", {"N=5", "e=1.0", "bend=0.082367", "mu=0.5", "r=0.2", "tq=0.5",
                     "j1.q.start=0.5817462157266542"}, {}, 1e-3, {"dop853"}, -2.445987810};
   RunSweepCase(c, [](const char*, const RunResult&) {});
+}
+
+// Sweep seeds 44 (trial 1: N = 6, e = 0, bend = 0.145171, mu = 0.5 on 20 cm pins, tq = 0.5)
+// and 48 (trial 0: N = 6, e = 0.7, bend = 0.175297, mu = 0.5 on 20 cm pins, tq = 0). One joint
+// rests on its stop with friction, and the chord iteration for the stop's reaction
+// (sim/end_stops_friction.cpp (1)) overshot: its residual flipped sign every iteration, at a
+// gain of -1.02 (seed 44, t = 0.1921210) or erratically (seed 48, t = 1.5778865), and never
+// shrank: exit 2 in all five integrators ("the resting contacts' reactions with Coulomb
+// friction mu N did not converge"). Its step is now relaxed by the secant estimate where the
+// residual alternates (seed 44: 0.2 s of simulation in 0.35 s with DOP853, where relaxing by
+// halving alone took 3.6 s at ~470 iterations a solve). What must hold: the checks above in
+// all five for seed 44, and T + V of DOP853's at rtol 1e-11 within 5e-6 J at t = 0.2
+// (measured: 1.7e-6 J CVODE-BDF, the others 6e-8 J); for seed 48 in four, and within 1e-3 J
+// at t = 1.6 (impacts at e = 0.7 whose order at rtol 1e-8 differs from the reference's;
+// measured 4.2e-4 J DOP853). Seed 48 with CVODE-BDF runs too (7.5e-4 J off), but at
+// t = 0.5288658, before the state fixed here, its T + V rises 7.0e-7 J (1.5e-8 relative)
+// across the instant where j[2] sticks and j[3] rests on its stop, after a chatter of j[3]
+// between resting and sliding; not explained yet (open, issue 41).
+TEST(FrictionSweep, AStopReactionWhoseChordOvershootsIsRelaxed) {
+  const SweepCase seed44{6, 0.145171, "0.2", {"N=6", "e=0", "bend=0.145171", "mu=0.5", "r=0.2", "tq=0.5",
+                         "j1.q.start=0.2729915322001517"}, {}, 5e-6, {"cvode"}, 23.2306089737};
+  RunSweepCase(seed44, [](const char*, const RunResult&) {});
+  const SweepCase seed48{6, 0.175297, "1.6", {"N=6", "e=0.7", "bend=0.175297", "mu=0.5", "r=0.2", "tq=0.0",
+                         "j1.q.start=0.641602764174007"}, {}, 1e-3, {"cvode"}, 6.6757207409,
+                         {"dop853", "cvode", "ida", "arkode"}};
+  RunSweepCase(seed48, [](const char*, const RunResult&) {});
 }
 
 // Sweep seed 53, trial 0: N = 6, e = 0.3, bend = 0.483663, mu = 1 on 20 cm pins, tq = 0.1.
