@@ -13,7 +13,8 @@
 // One lock serves every pool. A program that forks while other threads may be freeing
 // nodes (the Python module: a model dropped on one thread while a sweep forks a worker on
 // another) holds it across the fork (NodePoolsLock in pthread_atfork's prepare,
-// NodePoolsUnlock in parent and child), so that the child does not start with it taken by a thread that does not exist there.
+// NodePoolsUnlock in parent and child), so that the child does not start with it taken
+// by a thread that does not exist there.
 #pragma once
 
 #include <cstddef>

@@ -10,8 +10,9 @@
 // W the inverse mass without the friction (M^-1 on a tree, with constraint rows the
 // constrained one; exact without mu; with mu it converges at the rate the fixed point of
 // runtime/kane/friction.cpp (3) does, each a(lambda) solving that fixed point with lambda
-// applied; where its residual flips sign it overshoots, and its step is relaxed). Impacts and jumps: sim/friction_impulse.h's law, whose normal impulses carry the
-// stops' (along their joints: none across) and the plane contacts' impulses.
+// applied; where its residual flips sign it overshoots, and its step is relaxed). Impacts
+// and jumps: sim/friction_impulse.h's law, whose normal impulses carry the stops' (along
+// their joints: none across) and the plane contacts' impulses.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>

@@ -198,7 +198,8 @@ class StickSlipEvents {
   // Refresh in a tree: the free speeds `moving` (stuck joints at a rest speed) brought to
   // rest by impulses on them, the other stuck joints and the speeds `resting` (held by their
   // stops) kept at rest: energy taken, never added, as zeroing them alone could.
-  int BackToRest(rt::Workspace& ws, double t, double* y, const std::vector<int>& moving, const std::vector<int>& resting);
+  int BackToRest(rt::Workspace& ws, double t, double* y, const std::vector<int>& moving,
+                 const std::vector<int>& resting);
 
   const rt::Program& program_;
   bool grouped_ = false;            // some joint is a passenger (Joint::leader)
