@@ -6,19 +6,24 @@ rtol 1e-8 and reports what must not happen:
 
   FAIL     exit code other than 0 (with the last line of stderr)
   TIMEOUT  a run longer than --timeout seconds
-  ERISE    (e < 1, or friction) the energy T + V rising between two rows by more than
+  ERISE    (e < 1, friction, robots) the energy T + V rising between two rows by more than
            1e-7 max(1, |E|); "instant" is the largest rise across an event (two rows at
            one time), which no impact may have; a rise between rows is integration error
   EDRIFT   (chain, e = 1, no friction) the energy's change over the run beyond 1e-5
-  STOPVIOL (chain, friction) an output row with a joint past its end stop: j[k].q outside
-           [-bend, bend] by more than 1e-9 (an impact missed, a silent wrong answer)
+  STOPVIOL (chain, friction, robot) an output row with a joint past its end stop (j[k].q
+           outside [-bend, bend], a robot joint outside its drawn <limit>) by more than 1e-9
+           (an impact missed, a silent wrong answer)
   NOTFLAT, SPIN  (cube) not at rest flat on a face after 4 s (e < 0.8), or the vertical
            spin changed (the frictionless floor cannot change it)
 
-    python3 bench/event_sweeps.py chain|cube|friction SEED TRIALS [--kanesim BUILD/cli/kanesim]
+    python3 bench/event_sweeps.py chain|cube|friction|robot SEED TRIALS [--kanesim BUILD/cli/kanesim]
+                                  [--timeout S] [--stop-time S]
 
 The models: bench/models/stop_chain.mech, tests/stress/models/tossed_cube.mech,
-tests/stress/models/friction_stop_chain.mech. Prints "bad N" (FAIL + TIMEOUT + STOPVIOL) at
+tests/stress/models/friction_stop_chain.mech; robot: Panda, UR5 or Solo12 (fixed base) from
+tests/import/data, run as URDF with every joint's exact friction, damping and limits redrawn
+(limits shrunk about their middle to 1, 0.3 or 0.1 of their range; starts inside them, speeds
++-2 rad/s). Prints "bad N" (FAIL + TIMEOUT + STOPVIOL) at
 the end.
 """
 import argparse
@@ -33,11 +38,42 @@ MODELS = {
     "chain": "bench/models/stop_chain.mech",
     "cube": "tests/stress/models/tossed_cube.mech",
     "friction": "tests/stress/models/friction_stop_chain.mech",
+    "robot": "tests/import/data",  # one of ROBOTS, its URDF rewritten per trial (robot_urdf)
 }
+ROBOTS = ["panda", "ur5_robot", "solo12"]
+
+
+def robot_urdf(robot, p, rng):
+    """A robot's URDF with every revolute or prismatic joint's <dynamics> and <limit> redrawn:
+    exact Coulomb friction p["fric"], damping p["damp"], the limits shrunk about their middle by
+    p["shrink"]. Returns the text, the moving joints' names with their limits, and the starts:
+    q inside the limits, u in +-2 (a mimic follower is set by its leader)."""
+    import xml.etree.ElementTree as ET
+    tree = ET.parse(os.path.join(ROOT, MODELS["robot"], robot + ".urdf"))
+    joints, starts = [], {}
+    for j in tree.getroot().iter("joint"):
+        if j.get("type") not in ("revolute", "prismatic"):
+            continue
+        for d in j.findall("dynamics"):
+            j.remove(d)
+        ET.SubElement(j, "dynamics", damping=repr(p["damp"]), friction=repr(p["fric"]))
+        lim = j.find("limit")
+        lo, hi = float(lim.get("lower")), float(lim.get("upper"))
+        mid, half = (lo + hi) / 2, (hi - lo) / 2 * p["shrink"]
+        lim.set("lower", repr(mid - half))
+        lim.set("upper", repr(mid + half))
+        joints.append((j.get("name"), mid - half, mid + half))
+        if j.find("mimic") is None:
+            starts[j.get("name") + ".q.start"] = rng.uniform(mid - 0.9 * half, mid + 0.9 * half)
+            starts[j.get("name") + ".u.start"] = rng.uniform(-2, 2) * (1 if j.get("type") == "revolute" else 0.05)
+    return ET.tostring(tree.getroot(), encoding="unicode"), joints, starts
 
 
 def draw(kind, rng):
     """One trial's parameters (--set NAME=VALUE), by kind."""
+    if kind == "robot":
+        return dict(robot=rng.choice(ROBOTS), fric=rng.choice([0.0, 0.1, 0.5, 2.0]),
+                    damp=rng.choice([0.0, 0.01, 0.3]), shrink=rng.choice([1.0, 0.3, 0.1])), {}
     if kind == "cube":
         p = dict(e=rng.choice([0, 0.2, 0.5, 0.8]), h=rng.uniform(0.3, 1.0), th=rng.uniform(0, 3.1),
                  ax=rng.uniform(-1, 1), ay=rng.uniform(-1, 1), az=rng.uniform(-1, 1), wx=rng.uniform(-8, 8),
@@ -58,12 +94,13 @@ def main():
     ap.add_argument("trials", type=int)
     ap.add_argument("--kanesim", default=os.path.join(ROOT, "build", "cli", "kanesim"))
     ap.add_argument("--timeout", type=float, default=60.0)
+    ap.add_argument("--stop-time", default=None, help="seconds simulated (default 4 for cubes, 3 otherwise)")
     a = ap.parse_args()
     rng = random.Random(a.seed)
     model = os.path.join(ROOT, MODELS[a.kind])
     integrators = ["dop853", "cvode", "ida", "arkode"] if a.kind == "cube" else \
         ["dop853", "cvode", "cvode-bdf", "ida", "arkode"]
-    stop = "4" if a.kind == "cube" else "3"
+    stop = a.stop_time or ("4" if a.kind == "cube" else "3")
     if a.kind == "cube":
         outputs = ["free.q[2]", "free.frame_b.w[2]"]
     else:
@@ -71,10 +108,22 @@ def main():
     stop_tol = 1e-9  # a row's joint past its stop by more than this: an impact was missed
     bad = 0
     out = os.path.join(tempfile.gettempdir(), "event_sweeps_%d.csv" % os.getpid())
+    urdf = os.path.join(tempfile.gettempdir(), "event_sweeps_%d.urdf" % os.getpid())
     for trial in range(a.trials):
         p, starts = draw(a.kind, rng)
-        sets = sum([["--set", f"{k}={v!r}"] for k, v in {**p, **starts}.items()], [])
-        stopped = [] if a.kind == "cube" else ["j[%d].q" % k for k in range(1, p["N"])]
+        limits = {}
+        if a.kind == "robot":
+            text, joints, starts = robot_urdf(p["robot"], p, rng)
+            with open(urdf, "w") as f:
+                f.write(text)
+            model = urdf
+            limits = {name + ".q": (lo, hi) for name, lo, hi in joints}
+            sets = sum([["--set", f"{k}={v!r}"] for k, v in starts.items()], [])
+        else:
+            sets = sum([["--set", f"{k}={v!r}"] for k, v in {**p, **starts}.items()], [])
+            if a.kind != "cube":
+                limits = {"j[%d].q" % k: (-p["bend"], p["bend"]) for k in range(1, p["N"])}
+        stopped = list(limits)
         for how in integrators:
             cmd = [a.kanesim, "run", model, "--integrator", how, "--stop-time", stop, "--rtol", "1e-8", "-o", out]
             for o in outputs + stopped:
@@ -101,8 +150,8 @@ def main():
                 if spin > 1e-5:
                     print("SPIN", trial, how, spin, p, flush=True)
                 continue
-            worst = max([(abs(float(x[c])) - p["bend"], c, float(x["time"])) for x in rows for c in stopped]
-                        or [(0.0, "", 0.0)])
+            worst = max([(max(limits[c][0] - float(x[c]), float(x[c]) - limits[c][1]), c, float(x["time"]))
+                         for x in rows for c in stopped] or [(0.0, "", 0.0)])
             if worst[0] > stop_tol:
                 print("STOPVIOL", trial, how, worst[1], "past its stop by", worst[0], "at t", worst[2], p, starts,
                       flush=True)
@@ -111,12 +160,13 @@ def main():
             scale = max(1.0, max(abs(x) for x in E))
             rise = max(E[i + 1] - E[i] for i in range(len(E) - 1))
             instant = max([E[i + 1] - E[i] for i in range(len(E) - 1) if t[i + 1] == t[i]] or [0.0])
-            if (p["e"] < 1 or a.kind == "friction") and rise > 1e-7 * scale:
+            if (a.kind in ("friction", "robot") or p["e"] < 1) and rise > 1e-7 * scale:
                 print("ERISE", trial, how, rise, "instant", instant, p, starts, flush=True)
             if a.kind == "chain" and p["e"] == 1 and abs(E[-1] - E[0]) > 1e-5 * scale:
                 print("EDRIFT", trial, how, E[-1] - E[0], p, starts, flush=True)
-    if os.path.exists(out):
-        os.remove(out)
+    for f in (out, urdf):
+        if os.path.exists(f):
+            os.remove(f)
     print("bad", bad)
 
 

@@ -107,7 +107,8 @@ bool Parser::WhenEquation(Equation& eq) {
     if (At(Tok::Ident) && Peek().text == "elsewhen") {
       diags_.Error(DiagCode::ExpectedToken, Peek().span, "'elsewhen' is not supported").hint =
           "write a second 'when' clause";
-      return false;
+      while (!At(Tok::KwEnd) && !At(Tok::Eof)) Advance();  // the branch, to the clause's `end when`
+      break;
     }
     size_t before = pos_;
     Equation st;

@@ -1,7 +1,7 @@
 // linearize at hybrid operating points (issue 41; linearize/hybrid.h): a joint resting on
 // its stop, a joint stuck by exact Coulomb friction and a body resting on a plane are
 // constraint rows (their coordinates and speeds leave the states); impacts, contacts about
-// to leave and joints about to slip are refused.
+// to leave, joints about to slip and rolling contacts that would pull are refused.
 //
 // Two rods (L1 = 1, m1 = 1; L2 = 0.8, m2 = 0.7), the first held (on its stop or stuck): the
 // second swings about a fixed pin, A = [[0, 1], [-3 g / (2 L2), 0]] about hanging.      (1)
@@ -119,25 +119,83 @@ TEST(LinearizeHybrid, ImpactsPullsAndPointsPastAStopAreRefused) {
   EXPECT_EQ(lin::FindEquilibrium(*l->prog, lin::StartPoint(*l->prog), &eq).code, 1);
 }
 
+// A mass on a spring along x over the floor y = 0 (eq. (2)); py's start and gravity given.
+std::string Floor(const std::string& py_start, double g_y) {
+  return "model Floor\n"
+         "  parameter Real k(unit = \"N/m\") = 8;\n"
+         "  World world(g = {0, " + std::to_string(g_y) + ", 0});\n"
+         "  Prismatic px(axis = {1, 0, 0});\n"
+         "  Prismatic py(axis = {0, 1, 0}, " + py_start + ");\n"
+         "  Body b(m = 2);\n"
+         "  PlaneContact floor(n = {0, 1, 0}, d = 0);\n"
+         "equation\n"
+         "  connect(world.frame_b, px.frame_a);\n"
+         "  connect(px.frame_b, py.frame_a);\n"
+         "  connect(py.frame_b, b.frame_a);\n"
+         "  connect(py.frame_b, floor.frame_a);\n"
+         "  px.tau = -k * px.q;\n"
+         "end Floor;\n";
+}
+
+// If this fails, a plane contact at an impact or lift-off instant, or resting where the plane
+// would have to pull (gravity upwards), gets a linear model, or a point below the plane is
+// not refused as bad input (exit 1).
+TEST(LinearizeHybrid, PlaneContactsMovingPullingOrPenetratedAreRefused) {
+  struct Case {
+    std::string py_start;
+    double g_y;
+    int code;
+    std::string says;
+  };
+  for (const Case& c : {Case{"q(start = 0), u(start = -1)", -9.81, 2, "is on the plane and moving into it"},
+                        Case{"q(start = 0), u(start = 1)", -9.81, 2, "is on the plane and leaving it"},
+                        Case{"q(start = 0)", 9.81, 2, "is on the plane at rest, but the reaction that would hold it pulls"},
+                        Case{"q(start = -0.01)", -9.81, 1, "is past the plane by 0.01"}}) {
+    auto l = LoadModel(Floor(c.py_start, c.g_y), {}, {}, true);
+    ASSERT_TRUE(l && l->prog);
+    lin::LinearModel m;
+    const lin::Status s = lin::Linearize(*l->prog, lin::StartPoint(*l->prog), {}, &m);
+    EXPECT_EQ(s.code, c.code) << c.py_start << ": " << s.message;
+    EXPECT_NE(s.message.find(c.says), std::string::npos) << s.message;
+  }
+}
+
+// A sphere rolling on y = 0 (bilateral rows) pulled up by F: its normal force m g - F turns
+// tensile above F = 9.81 N. If this fails, linearize gives a model of a contact that would
+// have to pull (F = 20), or refuses one that presses (F = 5).
+TEST(LinearizeHybrid, ARollingContactWhoseNormalForceIsTensileIsRefused) {
+  for (double F : {5.0, 20.0}) {
+    const std::string text =
+        "model Lift\n"
+        "  World world(g = {0, -9.81, 0});\n"
+        "  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {0, 0, 0, 0, 0, 0}));\n"
+        "  Sphere ball(radius = 0.1, m = 1);\n"
+        "  RollingSphere contact(radius = 0.1, n = {0, 1, 0});\n"
+        "  WorldForce pull(force = {0, " + std::to_string(F) + ", 0});\n"
+        "equation\n"
+        "  connect(world.frame_b, free.frame_a);\n"
+        "  connect(free.frame_b, ball.frame_a);\n"
+        "  connect(free.frame_b, contact.frame_a);\n"
+        "  connect(free.frame_b, pull.frame_b);\n"
+        "end Lift;\n";
+    auto l = LoadModel(text, {}, {}, true);
+    ASSERT_TRUE(l && l->prog);
+    lin::LinearModel m;
+    const lin::Status s = lin::Linearize(*l->prog, lin::StartPoint(*l->prog), {}, &m);
+    if (F < 9.81) {
+      EXPECT_TRUE(s.ok()) << s.message;
+    } else {
+      EXPECT_EQ(s.code, 2) << s.message;
+      EXPECT_NE(s.message.find("contact 'contact': its normal force turns tensile"), std::string::npos) << s.message;
+      EXPECT_NE(s.message.find("no linear model of a contact that pulls"), std::string::npos) << s.message;
+    }
+  }
+}
+
 // Eq. (2). If this fails, a body resting on a plane contact is linearized as free (it falls:
 // not an equilibrium) instead of with the contact's row.
 TEST(LinearizeHybrid, MassOnAFloorIsTheSpringAlong) {
-  const std::string text =
-      "model Floor\n"
-      "  parameter Real k(unit = \"N/m\") = 8;\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  Prismatic px(axis = {1, 0, 0});\n"
-      "  Prismatic py(axis = {0, 1, 0}, q(start = 0));\n"
-      "  Body b(m = 2);\n"
-      "  PlaneContact floor(n = {0, 1, 0}, d = 0);\n"
-      "equation\n"
-      "  connect(world.frame_b, px.frame_a);\n"
-      "  connect(px.frame_b, py.frame_a);\n"
-      "  connect(py.frame_b, b.frame_a);\n"
-      "  connect(py.frame_b, floor.frame_a);\n"
-      "  px.tau = -k * px.q;\n"
-      "end Floor;\n";
-  auto l = LoadModel(text, {}, {}, true);
+  auto l = LoadModel(Floor("q(start = 0)", -9.81), {}, {}, true);
   ASSERT_TRUE(l && l->prog);
   lin::LinearModel m;
   const lin::Status s = lin::Linearize(*l->prog, lin::StartPoint(*l->prog), {}, &m);

@@ -33,7 +33,8 @@ world matrices with the display rotation undone).
   events     --page P --csv C  a page from `kanesim view` of a model with events: one tick per
                                event time of the `--events` CSV C of the same run, in order,
                                where the time line puts that time, titled with the element
-                               and kind; a click on a tick seeks there
+                               and kind; a click on a tick seeks there; an orange line
+                               across the plot at each event
 Exit 0 when every check passes; 1 with the failures listed.
 """
 import argparse
@@ -589,6 +590,27 @@ def run_units(args):
         check_requests(page, [url, "data:", "blob:"], "units page")
 
 
+# Of 17 rows of the plot canvas across the middle of plot %s (3 px apart), how many have an
+# orange pixel (red above green above blue, by 30) within a pixel of time %r's x plus %d px.
+EVENT_LINE_ROWS = """((name, t, dx) => {
+  const p = kanesimViewer.plotPoint(name, t);
+  if (!p) return null;
+  let rows = 0;
+  for (const c of document.querySelectorAll('.plot-graph canvas')) {
+    const r = c.getBoundingClientRect();
+    if (p[0] < r.left || p[0] > r.right || p[1] < r.top || p[1] > r.bottom) continue;
+    const sx = c.width / r.width, sy = c.height / r.height, ctx = c.getContext('2d');
+    for (let k = -8; k <= 8; ++k) {
+      const x = Math.round((p[0] + dx - r.left) * sx), y = Math.round((p[1] + 3 * k - r.top) * sy);
+      const d = ctx.getImageData(x - 1, y, 3, 1).data;
+      for (let i = 0; i < 12; i += 4)
+        if (d[i] > d[i + 1] + 30 && d[i + 1] > d[i + 2] + 30) { ++rows; break; }
+    }
+  }
+  return rows;
+})(%s, %r, %d)"""
+
+
 def run_events(args):
     import csv
     with open(args.csv, newline="") as f:
@@ -616,6 +638,17 @@ def run_events(args):
             title = next((m["title"] for m in marks if m["t"] == float(r["time"])), "")
             check(r["element"] in title and r["kind"] in title,
                   f"events: the tick of t={r['time']} says {title!r}, not {r['element']}: {r['kind']}")
+        # Each event is a thin orange line across the plots: orange pixels from the plot's top
+        # to its bottom at the event's x, none 5 px beside it (where no other event is near).
+        name = page.evaluate("kanesimViewer.plotted()")[0]
+        t_px = (t1 - t0) / max(1.0, page.evaluate(f"kanesimViewer.plotPoint({name!r}, {t1})[0]")
+                               - page.evaluate(f"kanesimViewer.plotPoint({name!r}, {t0})[0]"))
+        for t in times:
+            if min([abs(t - u) for u in times if u != t] or [1e9]) < 12 * t_px:
+                continue
+            on, beside = (page.evaluate(EVENT_LINE_ROWS % (repr(name), t, dx)) for dx in (0, 5))
+            check(on is not None and on >= 14, f"events: the plot {name} has an orange line at t={t} in {on} of 17 rows")
+            check(beside == 0, f"events: the plot {name} is orange 5 px beside the event at t={t} in {beside} rows")
         for m in marks[:3]:
             page.click(m["x"], m["y"])
             wait_frames(page)
