@@ -184,6 +184,11 @@ class SundialsStepper : public Stepper {
     event_index = static_cast<int>(std::find_if(found.begin(), found.end(), [](int f) { return f != 0; }) - found.begin());
     event_time = tret;
     CopyOut(0, y);
+    // A root return that names no function (CVODE's root finding filters each crossing by
+    // its direction only after it has stopped at one: robot sweep 26 trial 0, Solo12 in
+    // CVODE-BDF at t = 0.1211) is no event: the module goes on. (Before, event index
+    // NumEvents() was taken for a when clause's and the run crashed.)
+    if (event_index == rhs_.NumEvents()) return kNoEvent;
     if (const int p = rhs_.Paired(event_index); p >= 0) return Graze(p, tret, y);
     return kEventReached;
   }
