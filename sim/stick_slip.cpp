@@ -214,7 +214,14 @@ int StickSlipEvents::MarkHeldByStops(rt::Workspace& ws, double t, const double* 
 
 int StickSlipEvents::Eval(rt::Workspace& ws, double t, const double* y, double* ydot) {
   if (int s = rt::Derivative(program_, ws, t, y, ydot); s != 0) return s;
+  NoteSpeeds(ws);
   return stops_ ? stops_->Hold(ws, t, y, ydot) : 0;
+}
+
+void StickSlipEvents::NoteSpeeds(const rt::Workspace& ws) {
+  if (!rows_) return;
+  u_eval_.resize(joints_.size());
+  for (size_t i = 0; i < joints_.size(); ++i) u_eval_[i] = rt::FrictionSpeed(program_, ws, joints_[i].index);
 }
 
 int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double* ydot) {
@@ -239,6 +246,7 @@ int StickSlipEvents::Solve(rt::Workspace& ws, double t, const double* y, double*
   const int passes = ydot || stuck.empty() ? 1 : 2;
   for (int pass = 0; pass < passes; ++pass) {
     if (int s = rt::Derivative(program_, ws, t, y, out); s != 0) return s;
+    NoteSpeeds(ws);
     std::vector<double> dtau;
     if (stops_) {
       if (int s = stops_->HoldWith(ws, t, y, out, speeds, &dtau); s != 0) return s;
@@ -357,7 +365,7 @@ int StickSlipEvents::Functions(rt::Workspace& ws, double t, const double* y, dou
     if (HeldByStop(j, resting) || j.leader >= 0) {
       g[i] = 1.0;  // the stop's, or a passenger (4): its own, or its leader's, event function watches it
     } else if (j.mode != 0) {  // (beside rows a dependent speed is the evaluation's, not y's)
-      g[i] = j.mode * (rows_ ? rt::FrictionSpeed(program_, ws, j.index) : y[nq_ + j.f.u]);
+      g[i] = j.mode * (rows_ ? u_eval_[i] : y[nq_ + j.f.u]);
     } else {
       g[i] = GroupBound(ws, j) - std::abs(j.tau);
     }
@@ -459,7 +467,7 @@ int StickSlipEvents::StopOnRows(rt::Workspace& ws, double t, double* y, const Jo
   // force, by a difference as in MakeX) takes it to zero and keeps the rows.
   Apply(ws);
   if (int s = Eval(ws, t, y, ydot_.data()); s != 0) return s;
-  const double u = rt::FrictionSpeed(program_, ws, j.index);
+  const double u = u_eval_[static_cast<size_t>(&j - joints_.data())];
   if (u == 0.0) return 0;
   double a_max = 0.0;
   for (int i = 0; i < nu_; ++i) a_max = std::max(a_max, std::abs(ydot_[static_cast<size_t>(nq_ + i)]));

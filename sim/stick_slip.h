@@ -213,6 +213,12 @@ class StickSlipEvents {
   bool reads_N_ = false;  // some exact joint's friction mu N follows its normal force
   bool direct_ = true;  // constant friction on a tree: (2) of stick_slip.cpp, else Newton (1)
   std::vector<double> ydot_, col_;  // scratch (col_: MakeX's evaluations)
+  // Beside rows: each joint's speed as the last plain evaluation of the state solved it
+  // (NoteSpeeds). The workspace's speeds after the stops' holding columns are those
+  // columns' own (a unit speed: robot sweep 29, trial 3, read Panda's finger, at rest, at
+  // 1 m/s and its slip's StopOnRows set both fingers moving at -1 m/s, +0.015 J).
+  std::vector<double> u_eval_;
+  void NoteSpeeds(const rt::Workspace& ws);
   std::vector<double> x_;     // X of the stuck set x_ids_ (friction joint indices), m x m row-major
   std::vector<int> x_ids_;
   std::vector<EventRecord> log_;

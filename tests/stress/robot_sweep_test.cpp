@@ -186,5 +186,29 @@ TEST(RobotSweep, AGrazeGuardsRoundOffZeroIsNotARootTwice) {
            1.0, 0.13, 1e-7, 1e-7, 8);
 }
 
+// Sweep seed 29, trial 3: friction 0.1 N m (0.2 N on the fingers' leader, holding both), no
+// damping, the URDF's limits. At t = 0.6499711 the fingers, stuck, slip. The slip's
+// StopOnRows took the finger's speed "as the last evaluation solved it" from the workspace,
+// but that evaluation had ended in the resting stops' holding columns, whose unit speed it
+// held: 1 m/s for a finger at rest, and the correction set both fingers moving at -1 m/s,
+// +0.015 J across the instant in all five integrators (the sliding joints' event functions
+// beside rows read the same). The speeds are now noted from the plain evaluation.
+TEST(RobotSweep, ASlipBesideRowsReadsItsJointsSpeedNotAHoldingColumns) {
+  RunRobot("panda_friction_stops.mech", kPanda, {
+      "fric=0.1", "damp=0.0", "fric_f=0.1", "damp_f=0.0", "panda_joint2.q_min=-1.7628", "panda_joint2.q_max=1.7628",
+      "panda_joint4.q_min=-3.0718", "panda_joint4.q_max=-0.06979999999999986",
+      "panda_joint6.q_min=-0.01750000000000007", "panda_joint6.q_max=3.7525", "panda_finger_joint1.q_min=0.0",
+      "panda_finger_joint1.q_max=0.04", "panda_joint1.q.start=1.2612471690910452",
+      "panda_joint1.u.start=1.375985504200656", "panda_joint2.q.start=0.46871692980937696",
+      "panda_joint2.u.start=-0.48664045734329564", "panda_joint3.q.start=-1.4427834151196677",
+      "panda_joint3.u.start=-1.1865868379476598", "panda_joint4.q.start=-0.5756318722986808",
+      "panda_joint4.u.start=0.12911701928419506", "panda_joint5.q.start=2.311918752822619",
+      "panda_joint5.u.start=-1.0921928619917165", "panda_joint6.q.start=2.967655613751086",
+      "panda_joint6.u.start=-1.995632093514034", "panda_joint7.q.start=-2.00631550176019",
+      "panda_joint7.u.start=0.8195511869488037", "panda_finger_joint1.q.start=0.01108534341554826",
+      "panda_finger_joint1.u.start=-0.05373962717470764"},
+           0.8, 0.66, 5e-5, 1e-4, 6);
+}
+
 }  // namespace
 }  // namespace kanesim::stress
