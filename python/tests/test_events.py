@@ -1,7 +1,8 @@
 """Events in the Python result (docs/events.md): r.events against the closed form of a
 bouncing ball (impact times t1 = sqrt(2h/g), t_{k+1} - t_k = 2 e^k t1) and against the command
 line's --events file, and terminate's (time, message) in r.terminated; the stepping core
-(model.simulator()) through a pendulum's impacts on its end stops."""
+(model.simulator()) through a pendulum's impacts on its end stops; kanesim.sweep over a
+PlaneContact ball's restitution and height against its closed form and single runs."""
 import csv
 import math
 import subprocess
@@ -67,3 +68,32 @@ def test_the_stepping_core_takes_end_stops_as_a_run_does(source_dir):
             worst = max(worst, abs(qk - grid[k]))
     assert worst < 1e-8
     assert s.state[0] == -0.5 and s.state[1] == 0.0  # at rest on q_min at the end, held there
+
+
+def test_a_sweep_of_bounces_has_each_scenarios_events(source_dir):
+    # kanesim.sweep over the restitution and the drop height of examples/bouncing_ball.mech
+    # (a PlaneContact): each scenario's first impact at t1 = sqrt(2h/g) (cross:height=0 is the
+    # event row's own time), its ball at rest on the floor after t_inf = t1 (1 + e)/(1 - e)
+    # (final height and vertical speed 0), in forked workers as on threads and as a single
+    # run. If this fails, a sweep's scenario loses its events or its rest (a ball still
+    # bouncing or through the floor at the end), or a worker runs events otherwise than a run.
+    model = kanesim.load(source_dir / "examples" / "bouncing_ball.mech")
+    grid = {"e": [0.3, 0.5, 0.7], "h": [0.5, 1.0]}
+    metrics = ["cross:height=0", "final:height", "final:free.u[2]", "min:height"]
+    tables = [kanesim.sweep(model, grid=grid, metrics=metrics, stop_time=6, threads=2, isolation=how)
+              for how in ("process", "thread")]
+    for t in tables:
+        assert len(t) == 6 and t.failed == 0 and list(t["status"]) == ["ok"] * 6
+    process, thread = tables
+    for k in range(6):
+        e, h = process["e"][k], process["h"][k]
+        t1 = math.sqrt(2 * h / 9.81)
+        assert t1 * (1 + e) / (1 - e) < 6  # at rest before the end
+        assert abs(process["cross:height=0"][k] - t1) < 1e-9 * t1, (e, h)
+        assert abs(process["final:height"][k]) < 1e-9 and abs(process["final:free.u[2]"][k]) < 1e-12, (e, h)
+        assert process["min:height"][k] > -1e-9, (e, h)  # never through the floor
+        for c in metrics:
+            assert process[c][k] == thread[c][k], (c, e, h)
+        single = model.run(set={"e": e, "h": h}, stop_time=6)
+        impacts = [ev["time"] for ev in single.events if ev["kind"].startswith("impact")]
+        assert impacts[0] == process["cross:height=0"][k], (e, h)
