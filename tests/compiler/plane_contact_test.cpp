@@ -609,19 +609,7 @@ TEST(PlaneContact, ChatteringJointRestsAtTheAccumulationPoint) {
 // rows before.
 TEST(RollingContact, ATensileNormalForceStopsTheRun) {
   const double t_pull = kG / 2;
-  const std::string text =
-      "model Lift\n"
-      "  World world(g = {0, -9.81, 0});\n"
-      "  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {1, 0, 0, 0, 0, -10}));\n"
-      "  Sphere ball(radius = 0.1, m = 1);\n"
-      "  RollingSphere contact(radius = 0.1, n = {0, 1, 0});\n"
-      "  WorldForce pull(force = {0, 2 * time, 0});\n"
-      "equation\n"
-      "  connect(world.frame_b, free.frame_a);\n"
-      "  connect(free.frame_b, ball.frame_a);\n"
-      "  connect(free.frame_b, contact.frame_a);\n"
-      "  connect(free.frame_b, pull.frame_b);\n"
-      "end Lift;\n";
+  const std::string text = PulledSphereText("2 * time");
   auto l = LoadModel(text, {}, {}, true);
   ASSERT_TRUE(l && l->prog) << (l ? Messages(l->errors) : "");
   for (const IntegratorChoice& how : AllIntegrators()) {

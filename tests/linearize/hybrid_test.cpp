@@ -165,19 +165,7 @@ TEST(LinearizeHybrid, PlaneContactsMovingPullingOrPenetratedAreRefused) {
 // have to pull (F = 20), or refuses one that presses (F = 5).
 TEST(LinearizeHybrid, ARollingContactWhoseNormalForceIsTensileIsRefused) {
   for (double F : {5.0, 20.0}) {
-    const std::string text =
-        "model Lift\n"
-        "  World world(g = {0, -9.81, 0});\n"
-        "  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = {0, 0, 0, 0, 0, 0}));\n"
-        "  Sphere ball(radius = 0.1, m = 1);\n"
-        "  RollingSphere contact(radius = 0.1, n = {0, 1, 0});\n"
-        "  WorldForce pull(force = {0, " + std::to_string(F) + ", 0});\n"
-        "equation\n"
-        "  connect(world.frame_b, free.frame_a);\n"
-        "  connect(free.frame_b, ball.frame_a);\n"
-        "  connect(free.frame_b, contact.frame_a);\n"
-        "  connect(free.frame_b, pull.frame_b);\n"
-        "end Lift;\n";
+    const std::string text = PulledSphereText(std::to_string(F), "{0, 0, 0, 0, 0, 0}");
     auto l = LoadModel(text, {}, {}, true);
     ASSERT_TRUE(l && l->prog);
     lin::LinearModel m;

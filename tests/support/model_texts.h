@@ -227,4 +227,21 @@ struct ElbowPendulumText {
   }
 };
 
+// model Lift: a sphere (m = 1, radius 0.1) on a FreeMotion, rolling on the plane y = 0
+// (RollingSphere `contact`), pulled by the world force {0, pull, 0} (an expression: "2 * time").
+inline std::string PulledSphereText(const std::string& pull, const std::string& u_start = "{1, 0, 0, 0, 0, -10}") {
+  return "model Lift\n"
+         "  World world(g = {0, -9.81, 0});\n"
+         "  FreeMotion free(q(start = {0, 0.1, 0, 1, 0, 0, 0}), u(start = " + u_start + "));\n"
+         "  Sphere ball(radius = 0.1, m = 1);\n"
+         "  RollingSphere contact(radius = 0.1, n = {0, 1, 0});\n"
+         "  WorldForce pull(force = {0, " + pull + ", 0});\n"
+         "equation\n"
+         "  connect(world.frame_b, free.frame_a);\n"
+         "  connect(free.frame_b, ball.frame_a);\n"
+         "  connect(free.frame_b, contact.frame_a);\n"
+         "  connect(free.frame_b, pull.frame_b);\n"
+         "end Lift;\n";
+}
+
 }  // namespace kanesim::test
