@@ -3,7 +3,6 @@
 #pragma once
 
 #include <functional>
-#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -113,14 +112,6 @@ class EngineOde final : public OdeSystem {
       const int s = stops_ ? stops_->Functions(ws_, t, y, g, g + FirstGuard()) : lift_->Functions(t, y, g);
       if (s != 0) return s;
     }
-    // A graze guard (minus a gap's or a sliding speed's rate) is a difference of accelerations
-    // whose round-off is exactly 0 over ~1e-15 s around its root: SUNDIALS, having returned
-    // that root (a minimum, no event), found the guard 0 again a small step later and stopped
-    // with "Root found at and very near t" (CV_ILL_INPUT; robot sweep 11 trial 3, Solo12's
-    // FL_HAA decelerating to a steady slide, CVODE-BDF and IDA). Exact zeros are taken as just
-    // past the minimum (a guard identically 0, a stuck joint's, stays below zero: no crossing).
-    for (int i = FirstGuard(), n = NumEvents(); i < n; ++i)
-      if (g[i] == 0.0) g[i] = -std::numeric_limits<double>::denorm_min();
     return whens_ ? whens_->Functions(ws_, t, y, g + NumStops()) : 0;
   }
   int Event(double t, double* y, int i) override {

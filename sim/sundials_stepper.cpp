@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -191,7 +192,18 @@ StepFailure SundialsStepper::Explain(int flag) const {
 
 int SundialsStepper::Roots(double t, N_Vector y, double* g, void* user_data) {
   auto* self = static_cast<SundialsStepper*>(user_data);
-  return self->rhs_.EventFunctions(t, N_VGetArrayPointer(y), g);
+  const int s = self->rhs_.EventFunctions(t, N_VGetArrayPointer(y), g);
+  // A graze guard (minus a gap's or a sliding speed's rate) is a difference of accelerations
+  // whose round-off is exactly 0 over ~1e-15 s around its root: SUNDIALS, having returned
+  // that root (a minimum, no event), found the guard 0 again a small step later and stopped
+  // with "Root found at and very near t" (CV_ILL_INPUT; robot sweep 11 trial 3, Solo12's
+  // FL_HAA decelerating to a steady slide, CVODE-BDF and IDA). Here exact zeros are taken as
+  // just past the minimum (a guard identically 0, a stuck joint's, stays below zero: no
+  // crossing). Only for SUNDIALS' root finding: an FMU's event indicators are the functions
+  // themselves (FMPy takes a 0 to a positive value for no event, a tiny negative one for one).
+  for (int i : self->guards_)
+    if (g[i] == 0.0) g[i] = -std::numeric_limits<double>::denorm_min();
+  return s;
 }
 
 int SundialsStepper::RootsIda(double t, N_Vector y, N_Vector /*yp*/, double* g, void* user_data) {

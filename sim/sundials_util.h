@@ -171,6 +171,9 @@ class SundialsStepper : public Stepper {
     const int n = rhs_.NumEvents();
     if (n == 0) return true;
     std::vector<int> down(static_cast<size_t>(n), -1);
+    guards_.clear();
+    for (int i = 0; i < n; ++i)
+      if (rhs_.Paired(i) >= 0) guards_.push_back(i);
     if (init(n) != 0 || direction(down.data()) != 0)
       return Fail(error, WithDetail(std::string(module_.module) + ": root finding setup failed", messages_.last));
     return true;
@@ -197,6 +200,7 @@ class SundialsStepper : public Stepper {
   // located on the last step's interpolant.
   int Graze(int p, double tret, double* y);
   static constexpr int kNoEvent = kEventReached + 1;
+  std::vector<int> guards_;  // the graze guards among the event functions (OdeSystem::Paired)
   // The event functions for CVODE and ARKODE (user data: this), and for IDA.
   static int Roots(double t, N_Vector y, double* g, void* user_data);
   static int RootsIda(double t, N_Vector y, N_Vector yp, double* g, void* user_data);
