@@ -17,14 +17,15 @@ rtol 1e-8 and reports what must not happen:
            spin changed (the frictionless floor cannot change it)
 
     python3 bench/event_sweeps.py chain|cube|friction|robot SEED TRIALS [--kanesim BUILD/cli/kanesim]
-                                  [--timeout S] [--stop-time S]
+                                  [--timeout S] [--stop-time S] [--robots panda,ur5_robot,solo12,talos]
+                                  [--floating]
 
 The models: bench/models/stop_chain.mech, tests/stress/models/tossed_cube.mech,
 tests/stress/models/friction_stop_chain.mech; robot: Panda, UR5 or Solo12 (fixed base) from
 tests/import/data, run as URDF with every joint's exact friction, damping and limits redrawn
 (limits shrunk about their middle to 1, 0.3 or 0.1 of their range; starts inside them, speeds
-+-2 rad/s). Prints "bad N" (FAIL + TIMEOUT + STOPVIOL) at
-the end.
++-2 rad/s); --robots adds Talos (32 moving joints) from the bench venv, --floating frees the
+base. Prints "bad N" (FAIL + TIMEOUT + STOPVIOL) at the end.
 """
 import argparse
 import csv
@@ -41,6 +42,15 @@ MODELS = {
     "robot": "tests/import/data",  # one of ROBOTS, its URDF rewritten per trial (robot_urdf)
 }
 ROBOTS = ["panda", "ur5_robot", "solo12"]
+# Talos (32 moving joints, example-robot-data 6.0.0's talos_reduced.urdf) from the bench venv
+# (bench/setup_venv.sh), only when named in --robots.
+TALOS = "bench/.venv/lib/python3.11/site-packages/cmeel.prefix/share/example-robot-data/robots/talos_data/robots/talos_reduced.urdf"
+
+
+def robot_file(robot):
+    if robot == "talos":
+        return os.path.join(ROOT, TALOS)
+    return os.path.join(ROOT, MODELS["robot"], robot + ".urdf")
 
 
 def robot_urdf(robot, p, rng):
@@ -49,7 +59,7 @@ def robot_urdf(robot, p, rng):
     p["shrink"]. Returns the text, the moving joints' names with their limits, and the starts:
     q inside the limits, u in +-2 (a mimic follower is set by its leader)."""
     import xml.etree.ElementTree as ET
-    tree = ET.parse(os.path.join(ROOT, MODELS["robot"], robot + ".urdf"))
+    tree = ET.parse(robot_file(robot))
     joints, starts = [], {}
     for j in tree.getroot().iter("joint"):
         if j.get("type") not in ("revolute", "prismatic"):
@@ -69,10 +79,10 @@ def robot_urdf(robot, p, rng):
     return ET.tostring(tree.getroot(), encoding="unicode"), joints, starts
 
 
-def draw(kind, rng):
+def draw(kind, rng, robots=ROBOTS):
     """One trial's parameters (--set NAME=VALUE), by kind."""
     if kind == "robot":
-        return dict(robot=rng.choice(ROBOTS), fric=rng.choice([0.0, 0.1, 0.5, 2.0]),
+        return dict(robot=rng.choice(robots), fric=rng.choice([0.0, 0.1, 0.5, 2.0]),
                     damp=rng.choice([0.0, 0.01, 0.3]), shrink=rng.choice([1.0, 0.3, 0.1])), {}
     if kind == "cube":
         p = dict(e=rng.choice([0, 0.2, 0.5, 0.8]), h=rng.uniform(0.3, 1.0), th=rng.uniform(0, 3.1),
@@ -95,7 +105,14 @@ def main():
     ap.add_argument("--kanesim", default=os.path.join(ROOT, "build", "cli", "kanesim"))
     ap.add_argument("--timeout", type=float, default=60.0)
     ap.add_argument("--stop-time", default=None, help="seconds simulated (default 4 for cubes, 3 otherwise)")
+    ap.add_argument("--robots", default=",".join(ROBOTS),
+                    help="robot: the robots drawn from (default %(default)s; also talos, from bench/.venv)")
+    ap.add_argument("--floating", action="store_true", help="robot: a free-flying base (kanesim run --floating)")
     a = ap.parse_args()
+    robots = a.robots.split(",")
+    for r in robots:
+        if not os.path.exists(robot_file(r)):
+            ap.error("no URDF for robot '%s' (%s)" % (r, robot_file(r)))
     rng = random.Random(a.seed)
     model = os.path.join(ROOT, MODELS[a.kind])
     integrators = ["dop853", "cvode", "ida", "arkode"] if a.kind == "cube" else \
@@ -110,7 +127,7 @@ def main():
     out = os.path.join(tempfile.gettempdir(), "event_sweeps_%d.csv" % os.getpid())
     urdf = os.path.join(tempfile.gettempdir(), "event_sweeps_%d.urdf" % os.getpid())
     for trial in range(a.trials):
-        p, starts = draw(a.kind, rng)
+        p, starts = draw(a.kind, rng, robots)
         limits = {}
         if a.kind == "robot":
             text, joints, starts = robot_urdf(p["robot"], p, rng)
@@ -126,6 +143,8 @@ def main():
         stopped = list(limits)
         for how in integrators:
             cmd = [a.kanesim, "run", model, "--integrator", how, "--stop-time", stop, "--rtol", "1e-8", "-o", out]
+            if a.floating and a.kind == "robot":
+                cmd.append("--floating")
             for o in outputs + stopped:
                 cmd += ["--output", o]
             try:
