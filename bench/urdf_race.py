@@ -172,6 +172,7 @@ def stays_below(points):
 
 def build_driver():
     mj = glob.glob(os.path.join(HERE, ".venv", "lib", "python3*", "site-packages", "mujoco"))[0]
+    os.makedirs(OUT, exist_ok=True)  # a fresh clone has no results/race yet
     exe = os.path.join(OUT, "mujoco_urdf_driver")
     lib = glob.glob(os.path.join(mj, "libmujoco.so.*"))[0]
     subprocess.run(["cc", "-O2", "-o", exe, os.path.join(HERE, "mujoco_urdf_driver.c"), "-I", os.path.join(mj, "include"),

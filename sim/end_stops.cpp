@@ -1043,6 +1043,40 @@ int EndStopEvents::RestOnRows(rt::Workspace& ws, double t, double* y, int u, int
   return 0;
 }
 
+bool EndStopEvents::StopsAtRest(double t, const double* y, std::vector<StopAtRest>* out) const {
+  out->clear();
+  for (size_t i = 0; i < sides_.size(); ++i) {
+    const Side& s = sides_[i];
+    if (s.accumulates_at > 0.0) return false;
+    if (s.plane >= 0) {
+      if (s.resting) return false;
+      continue;  // (a free plane contact: its gap is not read here; Unseen checks it after)
+    }
+    const rt::EndStop& st = stops_[static_cast<size_t>(s.stop)];
+    const double gap = s.upper ? st.q_max - y[st.q] : y[st.q] - st.q_min;
+    if (!s.resting && (gap + LiftAt(s, t) > kPastRows * (atol_ + rtol_ * Scale(s)) ||
+                       std::abs(y[nq_ + st.u]) > kRestSpeeds * atol_))
+      continue;
+    out->push_back({static_cast<int>(i), st.u, s.upper, s.resting});
+  }
+  return true;
+}
+
+void EndStopEvents::SetRestingSides(double t, double* y, const std::vector<char>& resting, const char* why) {
+  for (size_t i = 0; i < sides_.size() && i < resting.size(); ++i) {
+    Side& s = sides_[i];
+    if (s.resting == (resting[i] != 0)) continue;
+    s.resting = resting[i] != 0;
+    s.lift = 0.0;
+    if (s.resting && s.stop >= 0) {
+      OntoStop(s, y);
+      y[nq_ + stops_[static_cast<size_t>(s.stop)].u] = 0.0;
+    }
+    if (why) log_.push_back({t, Element(s), (s.resting ? "rests on " : "leaves ") + Where(s) + " (" + why + ")"});
+  }
+  pinned_for_.clear();
+}
+
 std::vector<char> EndStopEvents::RestingSet() const {
   std::vector<char> r(sides_.size());
   for (size_t i = 0; i < sides_.size(); ++i) r[i] = sides_[i].resting ? 1 : 0;

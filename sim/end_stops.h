@@ -77,6 +77,19 @@ class EndStopEvents {
   // The same beside constraint rows, for every closed stop the slide moves (sim/end_stops.cpp).
   int RestOnRows(rt::Workspace& ws, double t, double* y, int u, int dir);
   std::vector<char> RestingSet() const;
+  // The laws at rest solved together (StickSlipEvents::LawsWithStops): the stops' sides at
+  // rest at (t, y), resting ones and free ones on their stop (the gap within kPastRows of the
+  // tolerance, the joint's speed a rest speed, as Unseen reads them). False where a plane
+  // contact or an accumulation of bounces takes part (their rows are not one speed's).
+  struct StopAtRest {
+    int side = -1, u = -1;  // the side, its joint's free speed
+    bool upper = false, resting = false;
+  };
+  bool StopsAtRest(double t, const double* y, std::vector<StopAtRest>* out) const;
+  // The sides rest as `resting` says (per side) from t, each change logged with `why` (null:
+  // not logged); a side set resting has its joint's speed 0 and its coordinate on the stop
+  // where it was past it.
+  void SetRestingSides(double t, double* y, const std::vector<char>& resting, const char* why);
   // A speed this small after an event is a rest (kRestSpeeds (atol)).
   double RestSpeed() const { return kRestSpeeds * atol_; }
   // A when clause's jump at (t, y) (sim/when_events.h, docs/events.md "Statements"): the

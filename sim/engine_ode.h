@@ -189,6 +189,7 @@ class EngineOde final : public OdeSystem {
       if (stops_)
         events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
     }
+    if (s == 0 && stops_ && stick_ && !UnseenSide(t, y).empty()) s = SettleTogether(t, y);
     if (s == 0 && stops_) s = CheckUnseen(t, y);
     if (s == 0 && i >= NumStops() && bridge_ && bridge_->monitor) rt::ForgetBranchReference(*bridge_->monitor);
     if (s == 0 && first < events_.size()) AddChanges(state_names_, before.data(), y, &events_[first], &events_.back());
@@ -293,6 +294,17 @@ class EngineOde final : public OdeSystem {
     }
   }
   static constexpr int kSettlePasses = 4;
+  // Where the settling above left a side at rest accelerating into its stop (the laws decided
+  // in turns, friction's and the stops'), all of them as one problem, with constant friction
+  // in a tree (StickSlipEvents::LawsWithStops); CheckUnseen then reads the laws it set.
+  int SettleTogether(double t, double* y) {
+    const size_t logged = stops_->Log().size(), logged_stick = stick_->Log().size();
+    bool solved = false;
+    const int s = stick_->LawsWithStops(ws_, t, y, &solved);
+    events_.insert(events_.end(), stops_->Log().begin() + static_cast<long>(logged), stops_->Log().end());
+    events_.insert(events_.end(), stick_->Log().begin() + static_cast<long>(logged_stick), stick_->Log().end());
+    return s;
+  }
   // A free side at rest on its contact accelerating into it under the present laws
   // (EndStopEvents::Unseen); the laws and forces are left as they are.
   // Its description, or "" (also where the motion cannot be evaluated there).

@@ -13,6 +13,7 @@
 #include "sim/held_outputs.h"
 #include "sim/when_events.h"
 #include "sim/engine_ode.h"
+#include "runtime/program/program.h"  // Program::nq, rows
 #include "sim/lift_off.h"
 #include "sim/stick_slip.h"
 #include "sim/test_hooks.h"

@@ -57,6 +57,13 @@ class StickSlipEvents {
   // Then the laws at rest are made consistent together (CheckLaws): -1 with Error() where
   // none is (Painleve-type).
   int Event(rt::Workspace& ws, double t, double* y, int i);
+  // With constant friction (direct_) and end stops, in a tree: every speed at rest, the
+  // stuck and sliding joints' and the joints' on their stops (resting or not), decided as the
+  // one box LCP (6) of stick_slip_laws.cpp, the stops' sides and the friction laws set from
+  // it where they then meet (5) and no resting side pulls beyond its margin (*solved, the
+  // changes logged; y's speeds set resting are zeroed); else all left as they were. After an
+  // event whose sequential settling left a side at rest accelerating into its stop.
+  int LawsWithStops(rt::Workspace& ws, double t, double* y, bool* solved);
   // The friction laws of the run into another workspace (the output rows').
   void Sync(rt::Workspace& ws) const;
   const std::vector<EventRecord>& Log() const { return log_; }
@@ -179,6 +186,11 @@ class StickSlipEvents {
   // (Joint::stamp) first; `slipped`, whose needed force has just passed its bound (its event),
   // is not stuck again. -1 with error_ where no choice is consistent (Painleve-type).
   int CheckLaws(rt::Workspace& ws, double t, double* y, long from, const Joint* slipped = nullptr);
+  // With constant friction (direct_): the laws of at_rest as the one box LCP (6) of
+  // stick_slip_laws.cpp, set and logged where they meet (5) (*solved), else left to the caller
+  // (before: the modes to log against). 0, or an evaluation's status.
+  int LawsAtRestTogether(rt::Workspace& ws, double t, double* y, const std::vector<Joint*>& at_rest,
+                         const Joint* slipped, const std::vector<int>& before, bool* solved);
   // (5)'s violators among at_rest under the laws as they are (*status: Solve's).
   std::vector<Joint*> Inconsistent(rt::Workspace& ws, double t, double* y, const std::vector<Joint*>& at_rest,
                                    int* status);
