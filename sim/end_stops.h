@@ -375,6 +375,7 @@ class EndStopEvents {
   // set pinned_for_: its gap rate is held at 0 with theirs, its graze guard constant 1.
   std::vector<char> pinned_, pinned_for_;
   bool defer_ = false;                          // DeferFrictionReleases
+  bool plastic_tail_ = false;                   // Settle's second round: every restitution 0
   StickSlipEvents* stick_ = nullptr;            // SetStickSlip (not owned; null: none)
   std::string error_;
 };
