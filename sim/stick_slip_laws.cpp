@@ -390,6 +390,15 @@ int StickSlipEvents::LawsWithStops(rt::Workspace& ws, double t, double* y, bool*
   }
   const std::vector<double> new_modes = Modes();
   stops_->SetResting(resting);
+  // A side set resting at a rest speed: stopped by an impulse (the others at rest held), not
+  // zeroed alone, which changes T by u (M u)_k (Refresh's stopped joints: a95c8f5).
+  std::vector<int> moving;
+  for (size_t r = 0; r < m; ++r)
+    if (v[r].side >= 0 && rest_after[static_cast<size_t>(v[r].side)] && y[nq_ + v[r].u] != 0.0) moving.push_back(v[r].u);
+  if (int s = BackToRest(ws, t, y, moving, stops_->RestingSpeeds()); s != 0) {
+    restore();
+    return s;
+  }
   stops_->SetRestingSides(t, y, rest_after, nullptr);
   // Checked as they are: the stuck forces solved (5), no resting side pulling beyond its margin.
   std::vector<Joint*> at_rest;
