@@ -12,12 +12,13 @@
 namespace kanesim::lang::elab {
 
 Instantiator::Instantiator(const ClassLookup& lookup, Evaluator& eval, const SourcePlaces& places,
-                           Diagnostics& diags, bool subscripted_sets, InstanceTree* tree)
+                           Diagnostics& diags, bool subscripted_sets, bool share_siblings, InstanceTree* tree)
     : lookup_(lookup),
       eval_(eval),
       places_(places),
       diags_(diags),
       subscripted_sets_(subscripted_sets),
+      share_siblings_(share_siblings),
       tree_(*tree) {}
 
 void Instantiator::Run(const ast::ClassDef* top) { Instantiate(tree_.root.get(), top); }
@@ -594,7 +595,7 @@ void Instantiator::ExpandComponent(Node* node, Node* child, const Collected& c, 
   }
   if (dims.empty()) {
     child->kind = Node::kClass;
-    Instantiate(child, t.cls);
+    InstantiateScalar(node, child, t.cls);
     return;
   }
   child->kind = Node::kArray;

@@ -2,15 +2,18 @@
 // becomes a tree of instance nodes. Extends copies the base's elements and equations; each
 // element gets a node with its merged modifier (lang/elab_modifiers.h); arrays of
 // components get one node per element (element 1's tree shared when provably the same,
-// lang/elab_share.cpp); conditional components are dropped when false. Array sizes and
+// lang/elab_share.cpp), and so do scalar components of one class side by side, modified
+// alike (the first one's tree); conditional components are dropped when false. Array sizes and
 // conditions are asked of the evaluator. Frames, flanges and joints get their ids here,
 // in the order of instantiation. Files: lang/elab_instantiate.cpp, elab_share.cpp.
 #pragma once
 
 #include <deque>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -38,9 +41,10 @@ struct InstanceTree {
 class Instantiator {
  public:
   // `subscripted_sets`: a --set names an array element (bound after instantiation), so no
-  // element may share its variables' modifiers with element 1.
+  // element may share its variables' modifiers with element 1, and no component is a copy
+  // of a sibling. `share_siblings` (ElaborateOptions): siblings may be copies.
   Instantiator(const ClassLookup& lookup, Evaluator& eval, const SourcePlaces& places, Diagnostics& diags,
-               bool subscripted_sets, InstanceTree* tree);
+               bool subscripted_sets, bool share_siblings, InstanceTree* tree);
   // Instantiates `top` into tree->root (made by the caller, holding the --set modifiers).
   void Run(const ast::ClassDef* top);
 
@@ -120,14 +124,25 @@ class Instantiator {
   void InstantiateFirst(Node* el, const ast::ClassDef* tcls, ArrayShare* share);
   bool ShareElement(const ArrayShare& share, Node* node, Node* array, const std::string& name, int index, int count);
   NodePtr CloneInstance(const Node& src, Node* parent, const std::string& name, ShareBinding& b);
+  void CloneInto(Node* n, const Node& src, ShareBinding& b, bool root);
   Mod BoundCopy(const Mod& src, ShareBinding& b, bool with_sub);
   bool SameInEveryElement(const Mod& m, const ShareBinding& b) const;
+
+  // Scalar components (elab_share.cpp): a component of class `cls` whose modifier has the
+  // form of an earlier sibling's (same keys, values in the same places) is a copy of that
+  // sibling's tree holding its own values, when that is provably the same; else instantiated.
+  void InstantiateScalar(Node* node, Node* child, const ast::ClassDef* cls);
+  struct SiblingShare;
+  // (parent node, class, the modifier's form) -> the first sibling of that form.
+  using SiblingKey = std::tuple<const Node*, const ast::ClassDef*, std::string>;
+  std::map<SiblingKey, std::shared_ptr<SiblingShare>> siblings_;  // shared: SiblingShare is incomplete here
 
   const ClassLookup& lookup_;
   Evaluator& eval_;
   const SourcePlaces& places_;
   Diagnostics& diags_;
   const bool subscripted_sets_;
+  const bool share_siblings_;
   InstanceTree& tree_;
   bool too_large_ = false;  // past kMaxInstances (reported once)
   std::vector<const ast::ClassDef*> extends_stack_;

@@ -136,7 +136,8 @@ bool Elaborate(const Program& program, const ElaborateOptions& options, flat::Me
   // Kept to the end with its per-class caches: freeing them between the phases fragments
   // the heap, and repeated loads in one process then peak higher
   // (docs/benchmarks/2026-11-28_elaborator_phases.md).
-  auto instantiator = std::make_unique<elab::Instantiator>(lookup, eval, places, diags, sets.AnySubscripted(), &tree);
+  auto instantiator = std::make_unique<elab::Instantiator>(lookup, eval, places, diags, sets.AnySubscripted(),
+                                                            options.share_siblings, &tree);
   instantiator->Run(top);
   sets.Bind();
   if (diags.HasErrors()) return false;

@@ -56,6 +56,10 @@ struct ElaborateOptions {
   // front end), reachable from a static so that leak checkers do not count them. Never in a
   // process that elaborates again and again (a sweep, Python): each would stay.
   bool leave_to_exit = false;
+  // Scalar components of one class side by side, modified alike, copy the first one's
+  // instance tree when that is provably the same (lang/elab_share.cpp). Off only in the
+  // tests that compare with instantiating each (tests/elab/sibling_share_test.cpp).
+  bool share_siblings = true;
 };
 
 // Parsed program: the user's file(s) plus the standard library.

@@ -32,11 +32,15 @@ struct Elaborated {
   }
 };
 
-inline std::unique_ptr<Elaborated> ElaborateText(const std::string& text, std::vector<ParamOverride> sets = {}) {
+// `share_siblings` off: every scalar component instantiated (ElaborateOptions), the
+// reference of tests/elab/sibling_share_test.cpp.
+inline std::unique_ptr<Elaborated> ElaborateText(const std::string& text, std::vector<ParamOverride> sets = {},
+                                                 bool share_siblings = true) {
   auto e = std::make_unique<Elaborated>();
   Diagnostics diags(&e->program.sources);
   ElaborateOptions options;
   options.overrides = std::move(sets);
+  options.share_siblings = share_siblings;
   const bool loaded = LoadProgramFromText("test.mech", text, stdlib::Files(), &e->program, diags);
   e->ok = loaded && Elaborate(e->program, options, &e->mech, diags);
   e->errors = diags.RenderAll();
